@@ -1,0 +1,44 @@
+"""iwan-element: Segalman's four-parameter Iwan bolted-joint model.
+
+The physics core (this package's top level) depends only on numpy and scipy. The Exudyn
+connector lives in :mod:`iwan_element.exudyn`, which is the only module importing exudyn.
+"""
+from .closed_form import (
+    backbone,
+    backbone_work,
+    dissipation,
+    dissipation_slope,
+    force_amplitude,
+    masing_ascending,
+    masing_descending,
+    masing_loop,
+    normalized_backbone,
+    secant_stiffness,
+    tangent_stiffness,
+)
+from .discrete import DiscreteIwan, slider_distribution
+from .joint import IwanJoint
+from .parameters import IwanParameters
+from .protocol import JointElement, check_element
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "IwanParameters",
+    "IwanJoint",
+    "DiscreteIwan",
+    "slider_distribution",
+    "JointElement",
+    "check_element",
+    "backbone",
+    "backbone_work",
+    "tangent_stiffness",
+    "secant_stiffness",
+    "force_amplitude",
+    "dissipation",
+    "dissipation_slope",
+    "masing_loop",
+    "normalized_backbone",
+    "masing_descending",
+    "masing_ascending",
+]

@@ -1,0 +1,63 @@
+"""Input checks shared by the package: every message names the argument and its allowed range."""
+from __future__ import annotations
+
+import math
+from numbers import Real
+
+import numpy as np
+
+
+def check_scalar(name: str, value, *, low: float | None = None, high: float | None = None,
+                 low_open: bool = False, high_open: bool = False) -> float:
+    """Return ``value`` as a finite float inside the given range, else raise ``ValueError``.
+
+    ``low_open=True`` excludes the lower bound itself (``value > low``).
+    """
+    if isinstance(value, bool) or not isinstance(value, (Real, np.floating, np.integer)):
+        raise ValueError(f"{name} must be a real number, got {value!r}")
+    x = float(value)
+    if not math.isfinite(x):
+        raise ValueError(f"{name} must be finite, got {x}")
+    rng = _range_text(low, high, low_open, high_open)
+    if low is not None and (x < low or (low_open and x == low)):
+        raise ValueError(f"{name} must be in {rng}, got {x}")
+    if high is not None and (x > high or (high_open and x == high)):
+        raise ValueError(f"{name} must be in {rng}, got {x}")
+    return x
+
+
+def _range_text(low, high, low_open, high_open) -> str:
+    left = "(" if (low is None or low_open) else "["
+    right = ")" if (high is None or high_open) else "]"
+    lo = "-inf" if low is None else f"{low:g}"
+    hi = "inf" if high is None else f"{high:g}"
+    return f"{left}{lo}, {hi}{right}"
+
+
+def finite_array(name: str, value, *, ndim: int | None = 1, min_size: int = 1) -> np.ndarray:
+    """Return a new float array copy of ``value``; reject NaN/inf, wrong rank or too few entries.
+
+    The copy guarantees that nothing the caller passed is mutated downstream.
+    """
+    try:
+        arr = np.array(value, dtype=float, copy=True)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{name} must be numeric array-like ({exc})") from None
+    if ndim is not None and arr.ndim != ndim:
+        raise ValueError(f"{name} must be a {ndim}-D array, got shape {arr.shape}")
+    if arr.size < min_size:
+        raise ValueError(f"{name} must have at least {min_size} entries, got {arr.size}")
+    bad = ~np.isfinite(arr)
+    if bad.any():
+        first = int(np.flatnonzero(bad.ravel())[0])
+        raise ValueError(f"{name} contains NaN or infinite values (first at index {first})")
+    return arr
+
+
+def same_length(**arrays: np.ndarray) -> int:
+    """Raise ``ValueError`` unless all the named 1-D arrays have the same length; return it."""
+    sizes = {k: len(v) for k, v in arrays.items()}
+    if len(set(sizes.values())) > 1:
+        desc = ", ".join(f"{k} has {n}" for k, n in sizes.items())
+        raise ValueError(f"arrays must have the same length: {desc}")
+    return next(iter(sizes.values()))

@@ -1,0 +1,148 @@
+"""The four parameters of Segalman's Iwan joint model and the quantities derived from them.
+
+References
+----------
+Segalman, D. J. (2005), "A four-parameter Iwan model for lap-type joints",
+J. Appl. Mech. 72, 752-760 (cited as "Segalman 2005").
+Li, Cai, Ruan, Cai, "Hysteresis modelling and identification of bolted joints with the Iwan
+model" (the seed paper, cited as "paper eq. N"). Its eq. (8) prints ``phi_max**(chi+2)`` in
+``S``; the correct power is 1 (see ``S`` below).
+"""
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import asdict, dataclass, field
+from os import PathLike
+from pathlib import Path
+
+from ._validation import check_scalar
+
+__all__ = ["IwanParameters"]
+
+
+@dataclass(frozen=True)
+class IwanParameters:
+    """Segalman's four-parameter Iwan model (paper eqs. 3-11, Segalman 2005 eqs. 9-17).
+
+    The slider density over slip displacement ``phi`` [m] is (paper eq. 3)::
+
+        rho(phi) = R phi**chi [H(phi) - H(phi - phi_max)] + S delta(phi - phi_max)
+
+    Parameters
+    ----------
+    Fs : float
+        Macroslip (joint slip) force [N], ``Fs > 0``.
+    KT : float
+        Tangential stiffness of the unslipped joint [N/m], ``KT > 0``.
+    chi : float
+        Exponent of the power-law slider density [-], ``chi > -1``. Physical joints have
+        ``-1 < chi <= 0`` (dissipation grows with force amplitude to the power 2..3).
+    beta : float
+        Ratio of the spike strength to the continuous part (paper eq. 6) [-], ``beta >= 0``.
+
+    Raises
+    ------
+    ValueError
+        If a value is not finite or outside its range; the message names the argument.
+
+    Examples
+    --------
+    >>> p = IwanParameters(Fs=3.0, KT=2.0, chi=-0.1, beta=0.1)
+    >>> round(p.phi_max, 5)
+    2.87615
+    """
+
+    Fs: float
+    KT: float
+    chi: float
+    beta: float
+    _derived: tuple = field(init=False, repr=False, compare=False, hash=False)
+
+    def __post_init__(self) -> None:
+        Fs = check_scalar("Fs", self.Fs, low=0.0, low_open=True)
+        KT = check_scalar("KT", self.KT, low=0.0, low_open=True)
+        chi = check_scalar("chi", self.chi, low=-1.0, low_open=True)
+        beta = check_scalar("beta", self.beta, low=0.0)
+        for name, val in (("Fs", Fs), ("KT", KT), ("chi", chi), ("beta", beta)):
+            object.__setattr__(self, name, val)
+        c = beta + (chi + 1.0) / (chi + 2.0)
+        phi_max = Fs * (1.0 + beta) / (KT * c)                      # paper eq. 11
+        R = Fs * (chi + 1.0) / (phi_max ** (chi + 2.0) * c)         # paper eq. 7
+        S = (Fs / phi_max) * beta / c                               # paper eq. 8, corrected
+        if not all(math.isfinite(v) and v >= 0.0 for v in (phi_max, R, S)) or phi_max == 0.0:
+            raise ValueError(
+                f"IwanParameters(Fs={Fs}, KT={KT}, chi={chi}, beta={beta}) give a degenerate "
+                f"slider density (phi_max={phi_max}, R={R}, S={S}); use values of ordinary scale")
+        object.__setattr__(self, "_derived", (phi_max, R, S))
+
+    # ------------------------------------------------------------------ derived
+    @property
+    def phi_max(self) -> float:
+        """Slip displacement of the strongest slider [m] (paper eq. 11)."""
+        return self._derived[0]
+
+    @property
+    def R(self) -> float:
+        """Coefficient of the power-law density [N m**(-chi-2)] (paper eq. 7)."""
+        return self._derived[1]
+
+    @property
+    def S(self) -> float:
+        """Strength of the Dirac spike at ``phi_max`` [N/m] (paper eq. 8, corrected:
+        ``S = (Fs/phi_max) beta / (beta + (chi+1)/(chi+2))``)."""
+        return self._derived[2]
+
+    @property
+    def macroslip_displacement(self) -> float:
+        """Displacement at which the virgin curve reaches ``Fs`` [m] (equals ``phi_max``)."""
+        return self._derived[0]
+
+    # ------------------------------------------------------------------ I/O
+    def to_dict(self) -> dict:
+        """JSON-safe dict of the four parameters, with units."""
+        return {"Fs": self.Fs, "KT": self.KT, "chi": self.chi, "beta": self.beta,
+                "units": {"Fs": "N", "KT": "N/m", "chi": "1", "beta": "1"}}
+
+    @classmethod
+    def from_dict(cls, data: dict) -> "IwanParameters":
+        """Build from a dict as written by :meth:`to_dict` (extra keys other than ``units``
+        are rejected so that a misspelt key is not silently ignored)."""
+        if not isinstance(data, dict):
+            raise ValueError(f"data must be a dict, got {type(data).__name__}")
+        allowed = {"Fs", "KT", "chi", "beta", "units"}
+        unknown = set(data) - allowed
+        if unknown:
+            raise ValueError(f"unknown keys in parameter dict: {sorted(unknown)}; "
+                             f"allowed are {sorted(allowed)}")
+        missing = {"Fs", "KT", "chi", "beta"} - set(data)
+        if missing:
+            raise ValueError(f"parameter dict lacks {sorted(missing)}")
+        units = data.get("units")
+        if units is not None:
+            expected = {"Fs": "N", "KT": "N/m", "chi": "1", "beta": "1"}
+            for k, v in units.items():
+                if k in expected and v != expected[k]:
+                    raise ValueError(f"units[{k!r}] must be {expected[k]!r} (SI), got {v!r}")
+        return cls(data["Fs"], data["KT"], data["chi"], data["beta"])
+
+    def save(self, path: str | PathLike) -> Path:
+        """Write the parameters as JSON to ``path``; return the path."""
+        p = Path(path)
+        p.write_text(json.dumps(self.to_dict(), indent=2) + "\n")
+        return p
+
+    @classmethod
+    def load(cls, path: str | PathLike) -> "IwanParameters":
+        """Read parameters written by :meth:`save`."""
+        return cls.from_dict(json.loads(Path(path).read_text()))
+
+    def replace(self, **changes: float) -> "IwanParameters":
+        """Return a copy with some of ``Fs, KT, chi, beta`` changed (validated again)."""
+        fields = {"Fs", "KT", "chi", "beta"}
+        bad = set(changes) - fields
+        if bad:
+            raise ValueError(f"unknown parameter names {sorted(bad)}; allowed are {sorted(fields)}")
+        d = {k: v for k, v in asdict(self).items() if k in fields}
+        d.update(changes)
+        return IwanParameters(**d)

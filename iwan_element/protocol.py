@@ -1,0 +1,60 @@
+"""The element protocol every joint model in this package follows.
+
+A joint element is a history-dependent force law in the style of an OpenSees uniaxial
+material. Evaluation never commits: a solver may call :meth:`trial` many times per step
+(Newton iterations, finite-difference Jacobians, Runge-Kutta stages, rejected steps) and
+calls :meth:`commit` once per accepted step.
+"""
+from __future__ import annotations
+
+from typing import Protocol, runtime_checkable
+
+__all__ = ["JointElement", "check_element"]
+
+
+@runtime_checkable
+class JointElement(Protocol):
+    """Structural type of a joint element.
+
+    Methods
+    -------
+    trial(u, v=0.0) -> (force [N], stiffness [N/m])
+        Evaluate at displacement ``u`` [m] and velocity ``v`` [m/s]; changes no committed state.
+    commit()
+        Accept the last trial.
+    revert()
+        Discard the last trial.
+    reset()
+        Return to the virgin state; energy counters to zero.
+
+    Attributes (read-only, committed state)
+    ---------------------------------------
+    work, stored_energy, dissipated_energy : float
+        Energies [J] since the last reset; ``work = stored_energy + dissipated_energy``.
+    """
+
+    def trial(self, u: float, v: float = 0.0) -> tuple[float, float]: ...
+
+    def commit(self) -> None: ...
+
+    def revert(self) -> None: ...
+
+    def reset(self) -> None: ...
+
+    @property
+    def work(self) -> float: ...
+
+    @property
+    def stored_energy(self) -> float: ...
+
+    @property
+    def dissipated_energy(self) -> float: ...
+
+
+def check_element(obj, name: str = "joint") -> None:
+    """Raise ``ValueError`` naming ``name`` unless ``obj`` follows :class:`JointElement`."""
+    missing = [m for m in ("trial", "commit", "revert", "reset", "work", "stored_energy",
+                           "dissipated_energy") if not hasattr(obj, m)]
+    if missing:
+        raise ValueError(f"{name} must follow the joint element protocol (trial, commit, revert, "
+                         f"reset and energy read-outs); {type(obj).__name__} lacks {missing}")
