@@ -17,6 +17,8 @@ from .closed_form import (
     tangent_stiffness,
 )
 from .discrete import DiscreteIwan, slider_distribution
+from .effects import (EFFECTS, AsymmetricSlip, Backlash, PinningStiffness, SlipDegradation,
+                      ViscousDamping, base_joint, make_effect)
 from .joint import IwanJoint
 from .parameters import IwanParameters
 from .protocol import JointElement, check_element
@@ -30,6 +32,14 @@ __all__ = [
     "slider_distribution",
     "JointElement",
     "check_element",
+    "EFFECTS",
+    "make_effect",
+    "base_joint",
+    "ViscousDamping",
+    "PinningStiffness",
+    "Backlash",
+    "SlipDegradation",
+    "AsymmetricSlip",
     "backbone",
     "backbone_work",
     "tangent_stiffness",

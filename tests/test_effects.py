@@ -1,0 +1,212 @@
+"""The effect library: exact reduction to the Iwan joint, each force law against its own
+closed form or an independent route, energy bookkeeping, stacking and bad input."""
+import math
+
+import numpy as np
+import pytest
+
+from iwan_element import IwanJoint, IwanParameters, backbone, dissipation
+from iwan_element.effects import (EFFECTS, AsymmetricSlip, Backlash, PinningStiffness,
+                                  SlipDegradation, ViscousDamping, base_joint, make_effect)
+
+P = IwanParameters(1000.0, 1e6, -0.5, 0.2)
+A = P.phi_max
+ZERO = {"viscous_damping": {"c": 0.0}, "pinning_stiffness": {"k_p": 0.0, "delta": 0.0},
+        "backlash": {"gap": 0.0}, "slip_degradation": {"rate": 0.0},
+        "asymmetric_slip": {"asymmetry": 0.0}}
+
+
+def history(n_cycles=4, amps=(0.3, 1.5, 0.05, 0.8), per_cycle=80):
+    t = np.linspace(0, n_cycles, n_cycles * per_cycle + 1)
+    amp = np.repeat(np.array(amps) * A, per_cycle)
+    amp = np.append(amp, amp[-1])
+    return t, amp * np.sin(2 * np.pi * t)
+
+
+def run(el, u, v=None):
+    v = np.zeros_like(u) if v is None else v
+    F = np.empty_like(u)
+    W, D = np.empty_like(u), np.empty_like(u)
+    for i, (a, b) in enumerate(zip(u, v)):
+        F[i] = el.trial(a, b)[0]
+        el.commit()
+        W[i], D[i] = el.work, el.dissipated_energy
+    return F, W, D
+
+
+def test_names_are_the_fixed_ones():
+    assert set(EFFECTS) == {"viscous_damping", "pinning_stiffness", "backlash",
+                            "slip_degradation", "asymmetric_slip"}
+
+
+@pytest.mark.parametrize("name", sorted(ZERO))
+def test_zero_extra_parameters_reduce_exactly_to_iwan(name):
+    _, u = history()
+    el = make_effect(name, IwanJoint(P), **ZERO[name])
+    F, W, D = run(el, u)
+    ref = IwanJoint(P)
+    F_ref, W_ref, D_ref = run(ref, u)
+    np.testing.assert_allclose(F, F_ref, rtol=0, atol=1e-12 * P.Fs)
+    np.testing.assert_allclose(D, D_ref, rtol=1e-12, atol=1e-15)
+    np.testing.assert_allclose(W, W_ref, rtol=1e-12, atol=1e-15)
+
+
+def test_viscous_damping_force_and_energy():
+    t, u = history()
+    v = np.gradient(u, t)
+    c = 50.0
+    el = ViscousDamping(IwanJoint(P), c=c)
+    F, W, D = run(el, u, v)
+    np.testing.assert_allclose(F, IwanJoint(P).force_history(u) + c * v, rtol=1e-13, atol=1e-9)
+    assert np.all(np.diff(D) >= 0)
+    # dashpot part of the dissipation: trapezoid of c v du
+    D_iwan = run(IwanJoint(P), u)[2][-1]
+    visc = np.sum(c * 0.5 * (v[1:] + v[:-1]) * np.diff(u)) + c * 0.5 * v[0] * u[0]
+    assert D[-1] == pytest.approx(D_iwan + visc, rel=1e-12)
+    assert el.trial(0.0, 2.0)[0] - el.trial(0.0, 0.0)[0] == pytest.approx(2 * c)
+
+
+@pytest.mark.parametrize("delta", [0.0, 0.5 * A])
+def test_pinning_stiffness_virgin_curve_and_tangent(delta):
+    k_p = 2e5
+    el = PinningStiffness(IwanJoint(P), k_p=k_p, delta=delta)
+    u = np.linspace(0, 3 * A, 301)
+    F = el.force_history(u)
+    expected = backbone(u, P) + k_p * np.maximum(u - delta, 0.0)
+    np.testing.assert_allclose(F, expected, rtol=1e-12, atol=1e-9)
+    el.trial(2 * A)
+    el.commit()
+    assert el.trial(2.5 * A)[1] == pytest.approx(k_p)          # macroslip: only the pin
+    assert el.stored_energy >= 0.5 * k_p * (2 * A - delta) ** 2 * (1 - 1e-12)
+
+
+@pytest.mark.parametrize("r", [0.3, 2.0])
+def test_backlash_loop_area_and_zero_force_plateau(r):
+    g = 0.2 * A
+    u0 = r * A + g
+    u = u0 * np.cos(np.linspace(0, 4 * np.pi, 4001))
+    el = Backlash(IwanJoint(P), gap=g)
+    F, W, D = run(el, u)
+    half = 2000
+    # the joint itself sees amplitude u0 - g: loop area = dissipation(u0 - g)
+    assert W[-1] - W[half] == pytest.approx(dissipation(u0 - g, P), rel=1e-9)
+    assert D[-1] - D[half] == pytest.approx(dissipation(u0 - g, P), rel=1e-9)
+    # independent route: trapezoid area of the sampled loop
+    assert np.trapezoid(F[half:], u[half:]) == pytest.approx(dissipation(u0 - g, P), rel=2e-4)
+    # a zero-force plateau of width about 2 g on each pass
+    zero = np.abs(F[half:]) < 1e-9 * P.Fs
+    du = np.abs(np.diff(u[half:]))
+    width = np.sum(du[zero[1:] & zero[:-1]]) / 2
+    assert width == pytest.approx(2 * g, rel=0.02)
+    assert np.all(np.diff(D) >= -1e-12 * P.Fs * A)
+
+
+def test_backlash_virgin_gap_then_contact():
+    g = 0.1 * A
+    el = Backlash(IwanJoint(P), gap=g)
+    assert el.trial(0.5 * g)[0] == 0.0
+    assert el.trial(g + 0.3 * A)[0] == pytest.approx(backbone(0.3 * A, P), rel=1e-12)
+    assert el.trial(-g - 0.3 * A)[0] == pytest.approx(-backbone(0.3 * A, P), rel=1e-12)
+
+
+def test_slip_degradation_shrinks_later_cycles():
+    rate = 2.0 / dissipation(A, P)           # lambda = exp(-2) after one macroslip cycle's energy
+    el = SlipDegradation(IwanJoint(P), rate=rate)
+    t = np.linspace(0, 6, 6 * 80 + 1)
+    u = 0.5 * A * np.sin(2 * np.pi * t)
+    F, W, D = run(el, u)
+    peaks = [F[(t >= k) & (t < k + 1)].max() for k in range(6)]
+    assert all(b < a for a, b in zip(peaks[1:], peaks[2:]))
+    inner = base_joint(el)
+    assert el.capacity_factor == pytest.approx(math.exp(-rate * inner.dissipated_energy))
+    # a trial after the last commit uses the updated lambda on the joint's committed force
+    assert el.trial(u[-1])[0] == pytest.approx(el.capacity_factor * inner.force, rel=1e-12)
+    el.revert()
+    assert np.all(np.diff(D) >= -1e-12 * P.Fs * A)
+    assert el.work == pytest.approx(el.stored_energy + el.dissipated_energy)
+
+
+def test_asymmetric_slip_capacities_and_cycle_energy():
+    a = 0.3
+    el = AsymmetricSlip(IwanJoint(P), asymmetry=a)
+    t = np.linspace(0, 3, 3 * 2000 + 1)
+    u = 2.0 * A * np.sin(2 * np.pi * t)
+    F, W, D = run(el, u)
+    assert F.max() == pytest.approx((1 + a) * P.Fs, rel=1e-12)
+    assert F.min() == pytest.approx(-(1 - a) * P.Fs, rel=1e-12)
+    # closed steady cycle: work equals the trapezoid loop area of the sampled forces
+    i0, i1 = 2000, 4000
+    area = np.trapezoid(F[i0:i1 + 1], u[i0:i1 + 1])
+    assert W[i1] - W[i0] == pytest.approx(area, rel=1e-5)
+    assert D[i1] - D[i0] == pytest.approx(W[i1] - W[i0], rel=1e-9)
+
+
+def test_effects_stack_and_describe():
+    el = ViscousDamping(PinningStiffness(IwanJoint(P), k_p=1e5), c=10.0)
+    assert "viscous_damping" in el.describe() and "pinning_stiffness" in el.describe()
+    assert base_joint(el).params == P
+    F, K = el.trial(2 * A, 1.0)
+    assert F == pytest.approx(P.Fs + 1e5 * 2 * A + 10.0)
+    el.commit()
+    bl = Backlash(ViscousDamping(IwanJoint(P), c=0.0), gap=0.1 * A)
+    _, u = history()
+    np.testing.assert_allclose(bl.force_history(u), Backlash(IwanJoint(P), gap=0.1 * A).force_history(u),
+                               atol=1e-12 * P.Fs)
+
+
+def test_trial_commits_nothing():
+    for name, extra in [("viscous_damping", {"c": 10.0}), ("pinning_stiffness", {"k_p": 1e5}),
+                        ("backlash", {"gap": 0.1 * A}), ("slip_degradation", {"rate": 1.0}),
+                        ("asymmetric_slip", {"asymmetry": 0.2})]:
+        el = make_effect(name, IwanJoint(P), **extra)
+        el.trial(0.7 * A, 0.1)
+        el.commit()
+        state = (el.force, el.work, el.dissipated_energy)
+        F_probe = el.trial(-0.2 * A, 0.0)[0]
+        el.trial(1.9 * A, 0.3)
+        el.trial(-3 * A, -0.3)
+        el.revert()
+        assert (el.force, el.work, el.dissipated_energy) == state, name
+        assert el.trial(-0.2 * A, 0.0)[0] == F_probe, name
+
+
+@pytest.mark.parametrize("call,match", [
+    (lambda: make_effect("friction", IwanJoint(P)), "unknown effect"),
+    (lambda: make_effect("backlash", IwanJoint(P), gap=1e-5, c=1.0), "takes parameters"),
+    (lambda: ViscousDamping(IwanJoint(P), c=-1.0), "c must be"),
+    (lambda: PinningStiffness(IwanJoint(P), k_p=1.0, delta=-1.0), "delta"),
+    (lambda: Backlash(IwanJoint(P), gap=math.nan), "gap"),
+    (lambda: SlipDegradation(IwanJoint(P), rate=-0.1), "rate"),
+    (lambda: AsymmetricSlip(IwanJoint(P), asymmetry=1.0), "asymmetry"),
+    (lambda: ViscousDamping(object(), c=1.0), "inner"),
+])
+def test_bad_input(call, match):
+    with pytest.raises(ValueError, match=match):
+        call()
+
+
+@pytest.mark.parametrize("name,extra", [
+    ("pinning_stiffness", {"k_p": 2e5, "delta": 0.3 * A}),
+    ("backlash", {"gap": 0.15 * A}),
+    ("asymmetric_slip", {"asymmetry": 0.3}),
+])
+def test_rate_independence_with_coarse_steps(name, extra):
+    """Coarse steps (crossing the whole gap or a force zero in one step) give the same forces
+    as the same piecewise-linear path sub-stepped 50 times."""
+    rng = np.random.default_rng(4)
+    pts = np.concatenate([[0.0], rng.uniform(-2.5, 2.5, 40) * A])
+    fine = np.concatenate([np.linspace(a, b, 51)[1:] for a, b in zip(pts[:-1], pts[1:])])
+    el = make_effect(name, IwanJoint(P), **extra)
+    np.testing.assert_allclose(el.force_history(fine)[49::50], el.force_history(pts[1:]),
+                               rtol=0, atol=1e-9 * P.Fs)
+
+
+def test_asymmetric_work_exact_with_coarse_steps():
+    a = 0.3
+    rng = np.random.default_rng(8)
+    pts = np.concatenate([[0.0], rng.uniform(-2.0, 2.0, 30) * A])
+    coarse = AsymmetricSlip(IwanJoint(P), asymmetry=a)
+    run(coarse, pts[1:])
+    fine = np.concatenate([[0.0]] + [np.linspace(x, y, 4001)[1:] for x, y in zip(pts[:-1], pts[1:])])
+    F_fine = AsymmetricSlip(IwanJoint(P), asymmetry=a).force_history(fine)
+    assert coarse.work == pytest.approx(np.trapezoid(F_fine, fine), rel=1e-6)
