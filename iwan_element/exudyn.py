@@ -105,18 +105,23 @@ class _PostStepDispatcher:
         self.accepts = []          # bound IwanConnector._accept methods, in creation order
         self.connectors = []
         self.last_t = _NAN
+        self.running = False
         accepts = self.accepts
         disp = self
 
         def post_step_dispatcher(mbs, t):
-            if t != disp.last_t:   # a user function that chains us by hand must not commit twice
-                disp.last_t = t
-                for accept in accepts:
-                    accept(t)
-            f = disp.chained
-            if f is None:
+            if disp.running:       # re-entered through a user function that calls us by hand
                 return True
-            return f(mbs, t)
+            disp.running = True
+            try:
+                if t != disp.last_t:           # never commit twice at the same time
+                    disp.last_t = t
+                    for accept in accepts:
+                        accept(t)
+                f = disp.chained
+                return True if f is None else f(mbs, t)
+            finally:
+                disp.running = False
 
         post_step_dispatcher._iwan_dispatcher = self
         self.callback = post_step_dispatcher
