@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import math
 
+import exudyn as exu
 import numpy as np
 import pytest
 from _connector_models import SOLVERS, Chain, CommitOnTrial, newmark_reference, settings
@@ -181,9 +182,17 @@ def test_history_holds_accepted_states_for_every_solver(solver, kw):
     n = int(round(0.04 / h))
     chain = Chain([1.0], v0=[3.0])
     chain.spring(-1, 0, 2e5)
+    accepted = []                           # Exudyn's accepted states, read independently
+
+    def user_post_step(mbs, t):
+        accepted.append(mbs.GetNodeOutput(chain.nodes[0], exu.OutputVariableType.Coordinates))
+        return True
+
+    chain.mbs.SetPostStepUserFunction(user_post_step)
     conn = chain.joint(-1, 0, IwanJoint(P))
     chain.solve(settings(h, n, **kw), solver)
     u = conn.slip
+    assert np.array_equal(u, np.array(accepted))           # committed exactly at accepted states
     assert np.max(np.abs(u)) > P.phi_max and len(_reversal_indices(u)) >= 8
     assert np.max(np.abs(IwanJoint(P).force_history(u) - conn.force)) / P.Fs < 1e-12
     assert conn.time[0] == 0.0 and conn.time[-1] == pytest.approx(0.04, rel=1e-9)

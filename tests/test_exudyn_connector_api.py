@@ -256,3 +256,29 @@ def test_quickstart_example_runs():
                          env=env, capture_output=True, text=True, timeout=120)
     assert out.returncode == 0, out.stderr
     assert "dissipated" in out.stdout and "peak slip" in out.stdout
+
+
+# ---------------------------------------------------------------------------- offset
+def test_offset_shifts_the_unloaded_position():
+    d, h, n = 1e-3, 5e-5, 300
+    runs = {}
+    for offset in (0.0, d):
+        chain = Chain([1.0], x0=[offset], v0=[3.0])
+        conn = chain.joint(-1, 0, IwanJoint(P), offset=offset)
+        positions = []
+        chain.mbs.SetPostStepUserFunction(lambda mbs, t: positions.append(
+            mbs.GetNodeOutput(chain.nodes[0], exu.OutputVariableType.Coordinates)) or True)
+        chain.solve(settings(h, n))
+        runs[offset] = (conn.slip, np.array(positions))
+    (u0, x0), (ud, xd) = runs[0.0], runs[d]
+    assert conn.slip[0] == 0.0 and np.max(np.abs(u0)) > P.phi_max
+    assert np.max(np.abs(ud - u0)) < 1e-12 * np.max(np.abs(u0)) + 1e-15
+    assert np.allclose(xd - d, x0, rtol=0, atol=1e-12 * np.max(np.abs(x0)) + 1e-15)
+    # position markers: the offset is measured along the axis
+    a = np.array([0.6, 0.8, 0.0])
+    SC, mbs, node, m_ground, m_body = _point_mass_system(3.0 * a)
+    conn = add_iwan_connector(mbs, [m_ground, m_body], IwanJoint(P), axis=a, offset=-d)
+    mbs.Assemble()
+    mbs.SolveDynamic(settings(h, n))
+    assert conn.slip[0] == pytest.approx(d, rel=1e-12)               # u = a.(p1 - p0) - offset
+    assert conn.force[0] == pytest.approx(IwanJoint(P).trial(d)[0], rel=1e-12)
