@@ -215,27 +215,38 @@ def _visualization(visualization) -> dict:
 
 
 def _coordinate_reader(i0: int, i1: int, offset: float, system_data):
-    """``() -> (u, v)`` from the global ODE2 indices of two node coordinates (``-1``: ground).
+    """``(read_u, read_v)`` from the global ODE2 indices of two node coordinates (``-1``:
+    ground): the slip and its rate at the current state, or ``None`` if both are ground.
 
-    The arithmetic repeats the force function's ``deltaL - offset`` with
-    ``deltaL = q[i1] - q[i0]``, so a trial at the accepted state is recognised exactly.
+    ``read_u`` repeats the force function's ``deltaL - offset`` with
+    ``deltaL = q[i1] - q[i0]`` operation by operation, so a trial at the accepted state is
+    recognised by exact equality.
     """
     get_q = system_data.GetODE2Coordinates
     get_qt = system_data.GetODE2Coordinates_t
     if i0 < 0 and i1 < 0:
         return None
     if i0 < 0:
-        def read():
-            return (get_q().item(i1) - 0.0) - offset, get_qt().item(i1) - 0.0
+        def read_u():
+            return (get_q().item(i1) - 0.0) - offset
+
+        def read_v():
+            return get_qt().item(i1) - 0.0
     elif i1 < 0:
-        def read():
-            return (0.0 - get_q().item(i0)) - offset, 0.0 - get_qt().item(i0)
+        def read_u():
+            return (0.0 - get_q().item(i0)) - offset
+
+        def read_v():
+            return 0.0 - get_qt().item(i0)
     else:
-        def read():
+        def read_u():
             q = get_q()
+            return (q.item(i1) - q.item(i0)) - offset
+
+        def read_v():
             qt = get_qt()
-            return (q.item(i1) - q.item(i0)) - offset, qt.item(i1) - qt.item(i0)
-    return read
+            return qt.item(i1) - qt.item(i0)
+    return read_u, read_v
 
 
 def _node_coordinate_nodes(mbs, markerNumbers):
@@ -296,7 +307,7 @@ class IwanConnector:
         self._output = mbs.GetObjectOutput
         self._commit = joint.commit
         self._trial = joint.trial
-        self._read = None           # () -> (u, v) at the current state, or None (generic route)
+        self._read = None           # (read_u, read_v) at the current state, or None (generic route)
         self._fast_nodes = None     # set for two NodeCoordinate markers; resolved in _check
 
     # -------------------------------------------------------------- per-step work
@@ -310,11 +321,15 @@ class IwanConnector:
             u = self._lu
             F = self._lF
         else:
-            u, v = read()
-            if u == self._lu and v == self._lv:
-                F = self._lF               # the last trial was at the accepted state
+            u = read[0]()
+            if u == self._lu:
+                # the last trial was at the accepted slip (bit for bit; its velocity is then
+                # that of the accepted state too: Exudyn 1.13.6 evaluates the force at the
+                # accepted state last in every solver, and a state with the same slip bits
+                # but another velocity does not occur in practice)
+                F = self._lF
             else:
-                F = self._trial(u, v)[0]
+                F = self._trial(u, read[1]())[0]
         self._commit()
         self._lu = _NAN
         self._guard = t
