@@ -323,10 +323,11 @@ class IwanConnector:
         else:
             u = read[0]()
             if u == self._lu:
-                # the last trial was at the accepted slip (bit for bit; its velocity is then
-                # that of the accepted state too: Exudyn 1.13.6 evaluates the force at the
-                # accepted state last in every solver, and a state with the same slip bits
-                # but another velocity does not occur in practice)
+                # the last trial was at the accepted slip, bit for bit (Exudyn 1.13.6 ends
+                # every step with a force evaluation at the accepted state, unless explicit
+                # solvers run with computeEndOfStepAccelerations=False); its velocity is
+                # taken to be the accepted one too: a stage with the same slip bits but
+                # another velocity does not occur in practice
                 F = self._lF
             else:
                 F = self._trial(u, read[1]())[0]
