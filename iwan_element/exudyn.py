@@ -18,9 +18,11 @@ Exudyn evaluates a connector's force many times per step: Newton iterations and
 finite-difference Jacobians of the implicit solvers, the stages of explicit Runge-Kutta
 methods, and attempts that an adaptive solver rejects. The force user function therefore
 only calls ``joint.trial(u, v)`` (which never changes the joint's history). Once per
-*accepted* step a post-step dispatcher re-evaluates every connector at the accepted state
-(through ``mbs.GetObjectOutput``, which calls the user function there), calls
-``joint.commit()`` and appends a row to the connector's record. Exudyn calls the post-step
+*accepted* step a post-step dispatcher brings every joint to the accepted state, calls
+``joint.commit()`` and appends a row to the connector's record. For two node coordinates
+it reads the accepted slip from the system coordinates and evaluates a new trial only if
+the last one was elsewhere; otherwise it calls ``mbs.GetObjectOutput``, which evaluates
+the force function at the accepted state. Exudyn calls the post-step
 function only after accepted steps (and once at the start of a run, which commits the
 initial state: an initial slip is reached by monotone virgin loading); rejected attempts
 leave no trace. ``SolveStatic`` calls it after every load step, so a static run commits
@@ -299,6 +301,7 @@ class IwanConnector:
         self._record_on = record
         self._rec = array("d")
         self._guard = _INF          # force evaluations at t < _guard check the set-up first
+        self._t_acc = -_INF         # time of the last accepted step
         self._lu = _NAN             # cache of the last trial: (u, v) -> F
         self._lv = _NAN
         self._lF = 0.0
@@ -331,16 +334,30 @@ class IwanConnector:
                 F = self._lF
             else:
                 F = self._trial(u, read[1]())[0]
+        if t < self._t_acc:
+            self._new_run(t, u)
         self._commit()
         self._lu = _NAN
         self._guard = t
+        self._t_acc = t
         if self._record_on:
             j = self.joint
             self._rec.extend((t, u, F, j.dissipated_energy, j.work))
 
+    def _new_run(self, t, u):
+        """A run restarts before the last accepted time: warn if it starts from another slip
+        than the joint holds (a forgotten reset, not a continuation such as static ->
+        dynamic)."""
+        held = self.joint.displacement
+        if u != held:
+            _log.warning(
+                "Iwan connector %s: a new run starts at t=%g, before the end (t=%g) of the "
+                "history the joint holds, and the slip jumps from %g to %g; call reset() "
+                "before starting a fresh run", self.objectNumber, t, self._t_acc, held, u)
+
     def _check(self, mbs, t, u):
-        """First force evaluation of a run: make sure the dispatcher runs; warn about a run
-        that restarts earlier in time on top of an old history."""
+        """First force evaluation of a run: resolve coordinate indices and make sure the
+        dispatcher runs (a post-step function set later would have replaced it)."""
         if self._fast_nodes is not None:     # global indices exist only after Assemble
             idx = [-1 if node is None else mbs.GetNodeODE2Index(node) + coord
                    for node, coord in self._fast_nodes]
@@ -350,13 +367,6 @@ class IwanConnector:
             _log.debug("connector %s: post-step function was replaced; chaining it behind the "
                        "connector dispatcher", self.objectNumber)
             d.install(mbs)
-        rec = self._rec
-        if len(rec) and t < rec[-_NCOL] and u != self.joint.displacement:
-            _log.warning(
-                "Iwan connector %s: a new run starts at t=%g, before the end (t=%g) of the "
-                "history it holds, and the slip jumps from %g to %g; call reset() before "
-                "starting a fresh run", self.objectNumber, t, rec[-_NCOL],
-                self.joint.displacement, u)
         self._guard = t
 
     # -------------------------------------------------------------- user API
@@ -372,6 +382,7 @@ class IwanConnector:
         self._lu = _NAN
         self._lv = _NAN
         self._guard = _INF
+        self._t_acc = -_INF
         if self._dispatcher is not None:
             self._dispatcher.last_t = _NAN
 

@@ -244,9 +244,33 @@ def test_reset_gives_an_identical_second_run_and_a_forgotten_reset_is_reported(c
     second = conn.records()
     for key in first:
         assert np.array_equal(first[key], second[key]), key
+    for solver in (exu.DynamicSolverType.GeneralizedAlpha, exu.DynamicSolverType.RK44):
+        caplog.clear()
+        with caplog.at_level(logging.WARNING, logger="iwan_element.exudyn"):
+            chain.mbs.SolveDynamic(sim, solverType=solver)         # no reset: history continues
+        assert any("call reset()" in r.getMessage() for r in caplog.records), solver
+    caplog.clear()
+    conn.reset()
     with caplog.at_level(logging.WARNING, logger="iwan_element.exudyn"):
-        chain.mbs.SolveDynamic(sim)                               # no reset: history continues
-    assert any("call reset()" in r.getMessage() for r in caplog.records)
+        chain.mbs.SolveDynamic(sim)
+    assert not caplog.records
+
+
+def test_generic_route_equals_the_node_coordinate_shortcut():
+    """Coordinate markers other than MarkerNodeCoordinate take the generic route (Exudyn
+    evaluates the force at the accepted state); forced onto it, a run is unchanged."""
+    results = []
+    for generic in (False, True):
+        chain = Chain([1.0], v0=[3.0])
+        chain.spring(-1, 0, 2e5)
+        conn = chain.joint(-1, 0, IwanJoint(P))
+        if generic:
+            conn._fast_nodes = None
+        chain.solve(settings(1e-4, 300), exu.DynamicSolverType.RK44)
+        assert (conn._read is None) == generic
+        results.append(conn.records())
+    for key in results[0]:
+        assert np.array_equal(results[0][key], results[1][key]), key
 
 
 # ---------------------------------------------------------------------------- example
