@@ -272,32 +272,18 @@ class IwanConnector:
     The records hold one row per accepted step (plus one for the initial state of each
     run), appended after the joint was committed.
 
-    Attributes
-    ----------
-    objectNumber : exudyn ObjectIndex
-        The underlying Exudyn connector object.
-    markerNumbers : list
-        The two markers, as given.
-    joint : JointElement
-        The joint element; its committed state is the state at the last accepted step.
-    kind : {"coordinate", "position"}
-        Which Exudyn connector carries the joint.
-    axis : tuple of 3 floats or None
-        Unit axis (global, or in the frame of ``axisMarker``); ``None`` for coordinate markers.
-    axisMarker : int or None
-        Marker whose orientation carries ``axis``; ``None`` for a global axis.
-    offset : float
-        Slip offset [m] (or [rad] for rotation coordinates).
+    All attributes are read-only; the geometry (markers, axis, offset) is fixed when the
+    connector is created.
     """
 
     def __init__(self, mbs, markerNumbers, joint, kind, axis, axisMarker, offset, record):
         self._mbs = mbs
-        self.markerNumbers = list(markerNumbers)
-        self.joint = joint
-        self.kind = kind
-        self.axis = axis
-        self.axisMarker = axisMarker
-        self.offset = offset
+        self._markers = tuple(markerNumbers)
+        self._joint = joint
+        self._kind = kind
+        self._axis = axis
+        self._axis_marker = axisMarker
+        self._offset = offset
         self._record_on = record
         self._rec = array("d")
         self._guard = _INF          # force evaluations at t < _guard check the set-up first
@@ -305,7 +291,7 @@ class IwanConnector:
         self._lu = _NAN             # cache of the last trial: (u, v) -> F
         self._lv = _NAN
         self._lF = 0.0
-        self.objectNumber = None
+        self._object = None
         self._dispatcher = None
         self._output = mbs.GetObjectOutput
         self._commit = joint.commit
@@ -320,7 +306,7 @@ class IwanConnector:
         if read is None:
             # generic route: Exudyn calls the force function at the accepted state, which
             # leaves (u, F) of that state in the cache
-            self._output(self.objectNumber, _FORCE)
+            self._output(self._object, _FORCE)
             u = self._lu
             F = self._lF
         else:
@@ -341,14 +327,14 @@ class IwanConnector:
         self._guard = t
         self._t_acc = t
         if self._record_on:
-            j = self.joint
+            j = self._joint
             self._rec.extend((t, u, F, j.dissipated_energy, j.work))
 
     def _new_run(self, t, u):
         """A run restarts before the last accepted time: warn if it starts from another slip
         than the joint holds (a forgotten reset, not a continuation such as static ->
         dynamic)."""
-        held = self.joint.displacement
+        held = self._joint.displacement
         if u != held:
             _log.warning(
                 "Iwan connector %s: a new run starts at t=%g, before the end (t=%g) of the "
@@ -361,13 +347,52 @@ class IwanConnector:
         if self._fast_nodes is not None:     # global indices exist only after Assemble
             idx = [-1 if node is None else mbs.GetNodeODE2Index(node) + coord
                    for node, coord in self._fast_nodes]
-            self._read = _coordinate_reader(idx[0], idx[1], self.offset, mbs.systemData)
+            self._read = _coordinate_reader(idx[0], idx[1], self._offset, mbs.systemData)
         d = self._dispatcher
         if not d.reachable_from(_installed_post_step(mbs)):
             _log.debug("connector %s: post-step function was replaced; chaining it behind the "
                        "connector dispatcher", self.objectNumber)
             d.install(mbs)
         self._guard = t
+
+    # -------------------------------------------------------------- read-only set-up
+    @property
+    def objectNumber(self):
+        """The underlying Exudyn connector object (``ObjectIndex``)."""
+        return self._object
+
+    @property
+    def markerNumbers(self) -> tuple:
+        """The two markers ``(m0, m1)``, as given."""
+        return self._markers
+
+    @property
+    def joint(self):
+        """The joint element; its committed state is the state at the last accepted step."""
+        return self._joint
+
+    @property
+    def kind(self) -> str:
+        """``"coordinate"`` (ObjectConnectorCoordinateSpringDamper) or ``"position"``
+        (ObjectConnectorCartesianSpringDamper)."""
+        return self._kind
+
+    @property
+    def axis(self):
+        """Unit axis, tuple of 3 floats (global, or in the frame of :attr:`axisMarker`);
+        ``None`` for coordinate markers."""
+        return self._axis
+
+    @property
+    def axisMarker(self):
+        """Marker whose orientation carries :attr:`axis`; ``None`` for a global axis."""
+        return self._axis_marker
+
+    @property
+    def offset(self) -> float:
+        """Slip at which the virgin joint is unloaded [m] (or [rad] for rotation
+        coordinates)."""
+        return self._offset
 
     # -------------------------------------------------------------- user API
     def reset(self) -> None:
@@ -377,7 +402,7 @@ class IwanConnector:
         such a run unless the run continues from the state the joint holds (e.g. a
         dynamic run started from a static solution).
         """
-        self.joint.reset()
+        self._joint.reset()
         del self._rec[:]
         self._lu = _NAN
         self._lv = _NAN
@@ -551,7 +576,7 @@ def add_iwan_connector(mbs, markerNumbers, joint, *, axis=None, axisMarker=None,
 
     dispatcher = _dispatcher_for(mbs)
     for other in dispatcher.connectors:
-        if other.joint is joint:
+        if other._joint is joint:
             raise ValueError(f"joint is already used by connector {other.objectNumber}; "
                              "give every connector its own element instance")
 
@@ -572,7 +597,7 @@ def add_iwan_connector(mbs, markerNumbers, joint, *, axis=None, axisMarker=None,
         item = ObjectConnectorCartesianSpringDamper(
             name=name, markerNumbers=list(markerNumbers), springForceUserFunction=uf,
             visualization=vis)
-    conn.objectNumber = mbs.AddObject(item)
+    conn._object = mbs.AddObject(item)
     dispatcher.add(conn)
     _log.debug("added %r", conn)
     return conn
@@ -583,10 +608,11 @@ def add_iwan_connector(mbs, markerNumbers, joint, *, axis=None, axisMarker=None,
 # read the connector's small state by attribute access and call the bound trial method;
 # no numpy and no allocation beyond the return value.
 def _coordinate_force_function(conn: IwanConnector):
-    trial = conn.joint.trial
+    trial = conn._joint.trial
+    off = conn._offset               # fixed at creation (the object's own offset is not read)
 
     def iwan_coordinate_force(mbs, t, itemNumber, deltaL, deltaL_t, stiffness, damping, offset):
-        u = deltaL - offset
+        u = deltaL - off
         if t < conn._guard:
             conn._check(mbs, t, u)
         if u == conn._lu and deltaL_t == conn._lv:
@@ -601,9 +627,9 @@ def _coordinate_force_function(conn: IwanConnector):
 
 
 def _position_force_function(conn: IwanConnector):
-    trial = conn.joint.trial
-    a0, a1, a2 = conn.axis
-    off = conn.offset
+    trial = conn._joint.trial
+    a0, a1, a2 = conn._axis
+    off = conn._offset
 
     def iwan_position_force(mbs, t, itemNumber, displacement, velocity, stiffness, damping, offset):
         u = displacement[0] * a0 + displacement[1] * a1 + displacement[2] * a2 - off
@@ -623,10 +649,10 @@ def _position_force_function(conn: IwanConnector):
 
 
 def _rotating_axis_force_function(conn: IwanConnector):
-    trial = conn.joint.trial
-    l0, l1, l2 = conn.axis
-    off = conn.offset
-    marker = conn.axisMarker
+    trial = conn._joint.trial
+    l0, l1, l2 = conn._axis
+    off = conn._offset
+    marker = conn._axis_marker
     get = conn._mbs.GetMarkerOutput
 
     def iwan_rotating_axis_force(mbs, t, itemNumber, displacement, velocity, stiffness, damping,

@@ -195,6 +195,10 @@ def test_visualization_and_name_reach_the_exudyn_object(parts):
     assert obj["VdrawSize"] == pytest.approx(0.01, rel=1e-6)          # stored as float32
     assert obj["objectType"] == "ConnectorCoordinateSpringDamper"
     assert isinstance(conn, IwanConnector)
+    assert conn.markerNumbers == (parts["coord0"], parts["coord1"])
+    for attribute in ("offset", "joint", "axis", "markerNumbers", "objectNumber"):
+        with pytest.raises(AttributeError):                  # the set-up is read-only
+            setattr(conn, attribute, None)
 
 
 # ---------------------------------------------------------------------------- chaining, reset
