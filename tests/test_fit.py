@@ -334,3 +334,31 @@ def test_fit_on_the_shipped_example_is_fast_and_close():
     assert r.params.KT == pytest.approx(truth.KT, rel=0.01)
     assert r.params.chi == pytest.approx(truth.chi, abs=0.02)
     assert r.params.beta == pytest.approx(truth.beta, rel=0.1)
+
+
+# ------------------------------------------------------------------ plots
+def test_fit_plots_return_artists():
+    pytest.importorskip("matplotlib")
+    from matplotlib.figure import Figure
+
+    from iwan_element.plotting import plot_dissipation_fit, plot_fitted_loops
+
+    p = SETS[1]
+    d = simulate_test(p, np.array(MACRO) * p.phi_max, cycles=2, sample_rate=5)
+    r = _quiet(fit_loops, d.u, d.F)
+    tab = d.amplitude_table()
+    u_in = d.u.copy()
+    fig = Figure()
+    ax1, ax2 = fig.add_subplot(121), fig.add_subplot(122)
+    lines = plot_fitted_loops(d.u, d.F, r, ax=ax1)
+    assert len(lines) == 2 and lines[0].axes is ax1
+    # the fitted line is the exact joint in mm/kN
+    assert np.allclose(lines[1].get_ydata(), IwanJoint(r.params).force_history(d.u) * 1e-3)
+    arts = plot_dissipation_fit(tab["F0"], tab["D"], r.params, ax=ax2)
+    assert len(arts) == 4 and arts[0].axes is ax2 and arts[2].axes is not ax2   # slope: twin axis
+    assert np.array_equal(d.u, u_in)
+    assert len(plot_dissipation_fit(tab["F0"], tab["D"], r, ax=ax2, slope=False)) == 2
+    with pytest.raises(ValueError, match="must be > 0"):
+        plot_dissipation_fit(-tab["F0"], tab["D"], r, ax=ax2)
+    with pytest.raises(ValueError, match="IwanParameters or a FitResult"):
+        plot_fitted_loops(d.u, d.F, {"Fs": 1}, ax=ax1)
