@@ -813,7 +813,8 @@ def _fit_seed(F0, D, u0, Fs, *, t0):
     def resid(th):
         counter[0] += 1
         Dm, Km = _seed_model(F0, u0, Fs, math.exp(th[0]), th[1], math.expm1(th[2]))
-        return np.concatenate([np.log(Dm) - lnD, np.log(Km) - lnK])
+        with np.errstate(invalid="ignore", divide="ignore"):   # NaN marks an invalid step
+            return np.concatenate([np.log(Dm) - lnD, np.log(Km) - lnK])
 
     theta = np.array([math.log(KT), chi, math.log1p(beta)])
     th_eval = theta.copy()
@@ -840,6 +841,11 @@ def _fit_seed(F0, D, u0, Fs, *, t0):
         warns.append(msg)
     Dm, Km = _seed_model(F0, u0, Fs, KT, chi, beta)
     nrmse = math.sqrt(np.mean(np.concatenate([Dm / D - 1.0, Km / (F0 / u0) - 1.0]) ** 2))
+    if beta < 1e-6:
+        warns.append(f"beta is at its bound 0: if the given Fs exceeds the largest slip force "
+                     f"compatible with the data (the beta = 0 one), no beta can compensate and KT "
+                     f"and chi come out distorted; compare the NRMSE ({100 * nrmse:.3g} %) with "
+                     "the noise or use method='least_squares'")
     se_ok = all(math.isfinite(stderr[k]) for k in ("KT", "chi", "beta"))
     result = FitResult(params=params, stderr=stderr, correlation=corr,
                        identified={"Fs": False, "KT": True, "chi": True, "beta": False},

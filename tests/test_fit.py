@@ -362,3 +362,16 @@ def test_fit_plots_return_artists():
         plot_dissipation_fit(-tab["F0"], tab["D"], r, ax=ax2)
     with pytest.raises(ValueError, match="IwanParameters or a FitResult"):
         plot_fitted_loops(d.u, d.F, {"Fs": 1}, ax=ax1)
+
+
+def test_seed_with_too_large_fs_is_flagged():
+    """beta = 0 data: any Fs above the beta = 0 slip force has no compatible beta."""
+    p = SETS[0]
+    u0 = np.array(MICRO) * p.phi_max
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)           # no numpy noise either
+        warnings.simplefilter("ignore", IdentifiabilityWarning)
+        r = fit_dissipation(force_amplitude(u0, p), dissipation(u0, p), u0=u0, method="seed",
+                            Fs=1.1 * p.Fs)
+    assert any("beta is at its bound 0" in w for w in r.warnings)
+    assert r.nrmse > 0.01                                        # and the misfit shows
