@@ -628,7 +628,8 @@ def fit_loops(u, F, *, t=None, sigma=None, smooth: int = 0, max_samples: int | N
     ------
     ValueError
         NaN/inf, unequal lengths, non-increasing ``t``, an all-zero force, a constant
-        displacement, fewer than two cycles, or an option out of range.
+        displacement, a force of the opposite sign convention, fewer than two cycles, or an
+        option out of range.
 
     Warns
     -----
@@ -645,6 +646,9 @@ def fit_loops(u, F, *, t=None, sigma=None, smooth: int = 0, max_samples: int | N
         raise ValueError("F is all zero: there is no force to fit")
     if np.ptp(uu) == 0.0:
         raise ValueError("u is constant: the displacement must vary")
+    if np.dot(uu - uu.mean(), FF - FF.mean()) <= 0.0:
+        raise ValueError("F does not increase with u (they are anti-correlated): the joint force "
+                         "must have the sign of the displacement; flip the sign of one of them")
     if sigma is None:
         w_full = np.ones(n)
     elif np.ndim(sigma) == 0:

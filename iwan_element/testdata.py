@@ -546,7 +546,7 @@ def load_test(path: str | PathLike, *, displacement_unit: str = "mm", force_unit
     ft = _unit_factor("time", time_unit, TIME_UNITS)
     p = Path(path)
     try:
-        text = p.read_text()
+        text = p.read_text(encoding="utf-8-sig")       # tolerate a byte-order mark
     except (OSError, UnicodeDecodeError) as exc:
         raise ValueError(f"cannot read {str(p)!r}: {exc}") from None
     lines = [(k + 1, ln) for k, ln in enumerate(text.splitlines())

@@ -210,6 +210,8 @@ def test_loop_fit_bad_inputs_and_no_mutation():
         fit_loops(u, 0 * F)
     with pytest.raises(ValueError, match="u is constant"):
         fit_loops(0 * u + 1e-4, F)
+    with pytest.raises(ValueError, match="sign of the displacement"):
+        fit_loops(u, -F)
     with pytest.raises(ValueError, match="at least 2 are needed"):
         fit_loops(u[:150], F[:150])                    # one and a half periods
     for kwargs, match in [({"sigma": -1.0}, "sigma"), ({"max_samples": 5}, "max_samples"),

@@ -100,6 +100,12 @@ def test_load_test_columns_by_index_and_other_units(tmp_path, clean):
     assert np.allclose(data.F, clean.F, rtol=1e-8)
 
 
+def test_load_test_accepts_a_byte_order_mark(tmp_path, clean):
+    path = _write_csv(tmp_path / "bom.csv", clean.t, clean.u * 1e3, clean.F * 1e-3, comment="")
+    path.write_bytes(b"\xef\xbb\xbf" + path.read_bytes())
+    assert len(load_test(path).cycles) == len(clean.cycles)
+
+
 def test_load_test_columns_by_name(tmp_path, clean):
     path = _write_csv(tmp_path / "c.csv", clean.t, clean.u * 1e3, clean.F * 1e-3,
                       header="seconds,ext_mm,load_kN")
