@@ -374,6 +374,6 @@ def test_seed_with_too_large_fs_is_flagged():
         warnings.simplefilter("error", RuntimeWarning)           # no numpy noise either
         warnings.simplefilter("ignore", IdentifiabilityWarning)
         r = fit_dissipation(force_amplitude(u0, p), dissipation(u0, p), u0=u0, method="seed",
-                            Fs=1.1 * p.Fs)
+                            Fs=1.05 * p.Fs)
     assert any("beta is at its bound 0" in w for w in r.warnings)
     assert r.nrmse > 0.01                                        # and the misfit shows
