@@ -59,7 +59,7 @@ from ._history import History
 from ._validation import check_scalar, finite_array, same_length
 from .closed_form import backbone, dissipation, force_amplitude
 from .parameters import IwanParameters
-from .testdata import _check_time, _noise_sigma, split_cycles
+from .testdata import _check_int, _check_time, _noise_sigma, split_cycles
 
 __all__ = ["FitResult", "IdentifiabilityWarning", "fit_dissipation", "fit_loops", "PARAM_NAMES"]
 
@@ -391,16 +391,37 @@ def _fd_jacobian(fun, theta, steps):
     return np.column_stack(cols)
 
 
-def _covariance(J, r, n_par):
-    m = r.size
-    dof = max(m - n_par, 1)
-    s2 = float(r @ r) / dof
-    JTJ = J.T @ J
+def _uncertainty(fun, theta, r, scale, *, at_lower_bound=None):
+    """Standard errors and correlations from the Jacobian (see the module docstring).
+
+    ``fun`` maps the transformed parameters ``theta`` to residuals, ``r`` are the residuals at
+    the optimum and ``scale = |d p / d theta|`` is the (diagonal) delta-method factor. A
+    parameter whose index is ``at_lower_bound`` is evaluated one step inside its bound 0.
+    Returns ``(stderr of p, correlation)``.
+    """
+    h = 1e-5
+    th = np.array(theta, float)
+    if at_lower_bound is not None:
+        th[at_lower_bound] = max(th[at_lower_bound], h)
+    J = _fd_jacobian(fun, th, np.full(th.size, h))
+    s2 = float(r @ r) / max(r.size - th.size, 1)
     try:
-        cov = s2 * np.linalg.pinv(JTJ, rcond=1e-12, hermitian=True)
+        cov = s2 * np.linalg.pinv(J.T @ J, rcond=1e-12, hermitian=True)
     except np.linalg.LinAlgError:
-        return np.full((n_par, n_par), np.nan)
-    return cov
+        cov = np.full((th.size, th.size), np.nan)
+    se_t = np.sqrt(np.clip(np.diag(cov), 0, None))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        corr = cov / np.outer(se_t, se_t)
+    return se_t * np.asarray(scale, float), corr
+
+
+def _range_warnings(params: IwanParameters) -> list[str]:
+    out = []
+    if params.chi > 0:
+        out.append(f"chi = {params.chi:.3g} > 0 is outside the physical range -1 < chi <= 0")
+    if any(abs(params.chi - b) < 1e-6 for b in _CHI_BOUNDS):
+        out.append(f"chi reached the end of its search range {_CHI_BOUNDS}")
+    return out
 
 
 def _poorly_determined(name, value, se) -> str | None:
@@ -458,7 +479,6 @@ def _identify(prob: _Problem, *, n_starts: int, rng: np.random.Generator, alpha:
                "p_value": p_value, "alpha": alpha, "macroslip_residuals": n_macro,
                "macroslip_reached": bool(macro), "starts": len(starts)}
     warns: list[str] = []
-    nan4 = np.full((4, 4), np.nan)
     if macro:
         Fs, chi, beta = Fs_f, chi_f, beta_f
         KT = Fs * _unit_params(phi_f, chi, beta).KT
@@ -470,19 +490,7 @@ def _identify(prob: _Problem, *, n_starts: int, rng: np.random.Generator, alpha:
             return prob.residual(IwanParameters(math.exp(th[0]), math.exp(th[1]), th[2],
                                                 math.expm1(th[3])))
 
-        steps = np.array([1e-5, 1e-5, 1e-5, 1e-5])
-        if theta[3] < steps[3]:                 # beta at its bound: one-sided room
-            theta_eval = theta.copy()
-            theta_eval[3] = steps[3]
-        else:
-            theta_eval = theta
-        J = _fd_jacobian(fun, theta_eval, steps)
-        cov = _covariance(J, r, 4)
-        se_t = np.sqrt(np.clip(np.diag(cov), 0, None))
-        scale = np.array([Fs, KT, 1.0, 1.0 + beta])          # delta method: d p / d theta
-        se = se_t * scale
-        with np.errstate(invalid="ignore", divide="ignore"):
-            corr = cov / np.outer(se_t, se_t)
+        se, corr = _uncertainty(fun, theta, r, [Fs, KT, 1.0, 1.0 + beta], at_lower_bound=3)
         stderr = dict(zip(PARAM_NAMES, se.tolist()))
         identified = dict.fromkeys(PARAM_NAMES, True)
         ranges = {}
@@ -508,20 +516,16 @@ def _identify(prob: _Problem, *, n_starts: int, rng: np.random.Generator, alpha:
             return prob.residual(IwanParameters(KT_ * phi_ * (chi_ + 1.0) / (chi_ + 2.0), KT_,
                                                 chi_, 0.0))
 
-        J = _fd_jacobian(fun, theta, np.array([1e-5, 1e-5, 1e-5]))
-        cov3 = _covariance(J, r, 3)
-        se3 = np.sqrt(np.clip(np.diag(cov3), 0, None))
-        stderr = {"Fs": math.nan, "KT": KT * se3[0], "chi": se3[1], "beta": math.nan}
-        corr = nan4.copy()
-        with np.errstate(invalid="ignore", divide="ignore"):
-            c3 = cov3 / np.outer(se3, se3)
+        se3, c3 = _uncertainty(fun, theta, r, [KT, 1.0, R])
+        stderr = {"Fs": math.nan, "KT": se3[0], "chi": se3[1], "beta": math.nan}
+        corr = np.full((4, 4), np.nan)
         corr[1:3, 1:3] = c3[:2, :2]
         identified = {"Fs": False, "KT": True, "chi": True, "beta": False}
         # family members that fit equally: phi_max in [x_max, phi0], beta = (phi0/phi)^(chi+1) - 1
         beta_hi = (phi0 / xm) ** (chi + 1.0) - 1.0
         Fs_lo = backbone(xm, params)             # phi_max = x_max: Fs is the force reached
         ranges = {"Fs": (Fs_lo, Fs0), "beta": (0.0, beta_hi)}
-        details.update({"R": R, "stderr_R": R * se3[2], "corr_KT_chi_R": c3})
+        details.update({"R": R, "stderr_R": se3[2], "corr_KT_chi_R": c3})
         if n_macro >= prob.min_macro and phi_f < xm:
             why = (f"the four-parameter fit puts macroslip in the data but does not improve "
                    f"the residual significantly (p = {p_value:.2g} >= {alpha:g})")
@@ -540,38 +544,30 @@ def _identify(prob: _Problem, *, n_starts: int, rng: np.random.Generator, alpha:
             warns.append("the microslip fit sits at its bound phi_max = x_max: the backbone's "
                          "tangent vanishes at the largest excursion; more data near macroslip "
                          "would settle Fs")
-    if params.chi > 0:
-        warns.append(f"chi = {params.chi:.3g} > 0 is outside the physical range -1 < chi <= 0")
-    if any(abs(params.chi - b) < 1e-6 for b in _CHI_BOUNDS):
-        warns.append(f"chi reached the end of its search range {_CHI_BOUNDS}")
+    warns += _range_warnings(params)
     return {"params": params, "stderr": stderr, "correlation": corr, "identified": identified,
             "ranges": ranges, "res": res, "r": r, "warnings": warns, "details": details}
 
 
-def _finish(method, out, prob, *, nrmse, t0, extra_warnings=(), fixed=()) -> FitResult:
-    res = out["res"]
+def _finish(method, out, *, converged, message, nfev, nrmse, t0, extra_warnings=(),
+            fixed=(), stacklevel=3) -> FitResult:
+    """Build the FitResult from the dict of :func:`_identify` (or its seed-method twin) and
+    issue one IdentifiabilityWarning carrying every warning."""
     warns = list(extra_warnings) + out["warnings"]
     se_ok = all(math.isfinite(out["stderr"][k]) for k in PARAM_NAMES
                 if out["identified"][k] and k not in fixed)
-    success = bool(res.status > 0) and se_ok
-    if not res.status > 0:
-        warns.append(f"the optimiser did not converge: {res.message}")
+    if not converged:
+        warns.append(f"the optimiser did not converge: {message}")
     result = FitResult(params=out["params"], stderr=out["stderr"], correlation=out["correlation"],
                        identified=out["identified"], fixed=tuple(fixed), ranges=out["ranges"],
                        residual_norm=float(np.sqrt(out["r"] @ out["r"])), nrmse=float(nrmse),
-                       success=success, message=str(res.message), nfev=int(prob.nfev),
+                       success=bool(converged and se_ok), message=str(message), nfev=int(nfev),
                        method=method, n_data=int(out["r"].size), warnings=tuple(warns),
                        wall_time=time.perf_counter() - t0, details=_json(out["details"]))
     if warns:
         warnings.warn("Iwan identification: " + " | ".join(warns), IdentifiabilityWarning,
-                      stacklevel=3)
+                      stacklevel=stacklevel)
     return result
-
-
-def _check_int(name, value, low):
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < low:
-        raise ValueError(f"{name} must be an integer >= {low}, got {value!r}")
-    return int(value)
 
 
 # ================================================================== loop fit
@@ -703,7 +699,8 @@ def fit_loops(u, F, *, t=None, sigma=None, smooth: int = 0, max_samples: int | N
                            "model_samples": int(hist.index.size), "reversal_depth": hist.depth,
                            "cycles": len(cycles), "weighted": sigma is not None,
                            "smooth": smooth, "displacement_noise": sigma_u})
-    return _finish("loops", out, prob, nrmse=nrmse, t0=t0, extra_warnings=warns)
+    return _finish("loops", out, converged=out["res"].status > 0, message=out["res"].message,
+                   nfev=prob.nfev, nrmse=nrmse, t0=t0, extra_warnings=warns)
 
 
 # ================================================================== dissipation fits
@@ -788,25 +785,29 @@ def _seed_solve(F0, D, u0, Fs, counter, *, max_newton=50):
 
 def _fit_seed(F0, D, u0, Fs, *, t0):
     """The seed paper's identification (sec. 2) with a microslip guard: cycles with
-    ``F0 >= 0.99 Fs`` (at or near the macroslip plateau) are left out, and cycles whose measured ``u0`` exceeds the fitted
-    ``phi_max`` are dropped and the fit repeated (eqs. 17 and 20 hold only in microslip)."""
+    ``F0 >= 0.99 Fs`` (at or near the macroslip plateau) are left out, and cycles whose
+    measured ``u0`` exceeds the fitted ``phi_max`` are dropped and the fit repeated (up to three
+    times): eqs. 17 and 20 hold only in microslip."""
     counter = [0]
     warns = []
     keep = F0 < (1.0 - _SEED_PLATEAU) * Fs
     if not keep.all():
         warns.append(f"{int((~keep).sum())} cycle(s) with F0 >= {1 - _SEED_PLATEAU:g} Fs were left "
                      "out: eqs. 17 and 20 of the seed method hold only in microslip")
-    for _ in range(4):
+    for round_ in range(4):
         if keep.sum() < 2:
-            raise ValueError(f"method='seed' needs at least 2 microslip cycles (F0 < Fs = {Fs:g} N, "
-                             f"u0 < phi_max), got {int(keep.sum())}")
+            raise ValueError(f"method='seed' needs at least 2 microslip cycles (F0 < 0.99 Fs = "
+                             f"{0.99 * Fs:g} N, u0 < phi_max), got {int(keep.sum())}")
         KT, chi, beta, converged, msg, it = _seed_solve(F0[keep], D[keep], u0[keep], Fs, counter)
         phi = IwanParameters(Fs, KT, chi, beta).phi_max
         macro = keep & (u0 > phi)
         if not macro.any():
             break
-        warns.append(f"{int(macro.sum())} cycle(s) with u0 > phi_max = {phi * 1e3:.4g} mm (macroslip) "
-                     "were left out and the fit repeated")
+        if round_ == 3:
+            warns.append(f"{int(macro.sum())} cycle(s) still have u0 > phi_max = {phi * 1e3:.4g} mm")
+            break
+        warns.append(f"{int(macro.sum())} cycle(s) with u0 > phi_max = {phi * 1e3:.4g} mm "
+                     "(macroslip) were left out and the fit repeated")
         keep = keep & ~macro
     F0, D, u0 = F0[keep], D[keep], u0[keep]
     params = IwanParameters(Fs, KT, chi, beta)
@@ -821,17 +822,11 @@ def _fit_seed(F0, D, u0, Fs, *, t0):
             return np.concatenate([np.log(Dm) - lnD, np.log(Km) - lnK])
 
     theta = np.array([math.log(KT), chi, math.log1p(beta)])
-    th_eval = theta.copy()
-    th_eval[2] = max(th_eval[2], 1e-5)                # beta at its bound: one-sided room
     r = resid(theta)
-    J = _fd_jacobian(resid, th_eval, np.array([1e-5, 1e-5, 1e-5]))
-    cov = _covariance(J, r, 3)
-    se_t = np.sqrt(np.clip(np.diag(cov), 0, None))
-    se = se_t * np.array([KT, 1.0, 1.0 + beta])        # delta method
+    se, c3 = _uncertainty(resid, theta, r, [KT, 1.0, 1.0 + beta], at_lower_bound=2)
     stderr = {"Fs": math.nan, "KT": float(se[0]), "chi": float(se[1]), "beta": float(se[2])}
     corr = np.full((4, 4), np.nan)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        corr[1:, 1:] = cov / np.outer(se_t, se_t)
+    corr[1:, 1:] = c3
     warns.append(f"beta = {beta:.4g} follows from the given Fs = {Fs:.6g} N: microslip data "
                  f"determine only KT, chi and R = {params.R:.5g}; a different Fs gives a "
                  "different beta with the same fit")
@@ -839,10 +834,7 @@ def _fit_seed(F0, D, u0, Fs, *, t0):
         m = _poorly_determined(k, getattr(params, k), stderr[k])
         if m:
             warns.append(m)
-    if chi > 0:
-        warns.append(f"chi = {chi:.3g} > 0 is outside the physical range -1 < chi <= 0")
-    if not converged:
-        warns.append(msg)
+    warns += _range_warnings(params)
     Dm, Km = _seed_model(F0, u0, Fs, KT, chi, beta)
     nrmse = math.sqrt(np.mean(np.concatenate([Dm / D - 1.0, Km / (F0 / u0) - 1.0]) ** 2))
     if beta < 1e-6:
@@ -850,18 +842,12 @@ def _fit_seed(F0, D, u0, Fs, *, t0):
                      f"compatible with the data (the beta = 0 one), no beta can compensate and KT "
                      f"and chi come out distorted; compare the NRMSE ({100 * nrmse:.3g} %) with "
                      "the noise or use method='least_squares'")
-    se_ok = all(math.isfinite(stderr[k]) for k in ("KT", "chi", "beta"))
-    result = FitResult(params=params, stderr=stderr, correlation=corr,
-                       identified={"Fs": False, "KT": True, "chi": True, "beta": False},
-                       fixed=("Fs",), ranges={}, residual_norm=float(np.sqrt(r @ r)),
-                       nrmse=float(nrmse), success=bool(converged and se_ok), message=msg,
-                       nfev=int(counter[0]), method="seed", n_data=int(2 * n),
-                       warnings=tuple(warns), wall_time=time.perf_counter() - t0,
-                       details=_json({"newton_iterations": it, "cycles_used": n,
-                                      "x_max": float(u0.max())}))
-    warnings.warn("Iwan identification: " + " | ".join(warns), IdentifiabilityWarning,
-                  stacklevel=3)
-    return result
+    out = {"params": params, "stderr": stderr, "correlation": corr,
+           "identified": {"Fs": False, "KT": True, "chi": True, "beta": False}, "ranges": {},
+           "r": r, "warnings": warns,
+           "details": {"newton_iterations": it, "cycles_used": n, "x_max": float(u0.max())}}
+    return _finish("seed", out, converged=converged, message=msg, nfev=counter[0], nrmse=nrmse,
+                   t0=t0, fixed=("Fs",), stacklevel=4)
 
 
 def fit_dissipation(F0, D, *, u0, method: str = "least_squares", Fs: float | None = None,
@@ -939,4 +925,5 @@ def fit_dissipation(F0, D, *, u0, method: str = "least_squares", Fs: float | Non
     fit = unit(out["params"])
     nrmse = math.sqrt(np.mean((fit / prob.y - 1.0) ** 2))
     out["details"]["cycles"] = int(ua.size)
-    return _finish("least_squares", out, prob, nrmse=nrmse, t0=t0)
+    return _finish("least_squares", out, converged=out["res"].status > 0,
+                   message=out["res"].message, nfev=prob.nfev, nrmse=nrmse, t0=t0)

@@ -88,6 +88,7 @@ def plot_loop(u0: float, params: IwanParameters, *, n: int = 401, ax=None,
 # ------------------------------------------------------------------ identification (fit.py)
 from ._validation import finite_array, same_length  # noqa: E402  (kept with the section below)
 from .closed_form import dissipation, dissipation_slope, force_amplitude  # noqa: E402
+from .testdata import _check_int  # noqa: E402
 
 __all__ += ["plot_fitted_loops", "plot_dissipation_fit"]
 
@@ -126,8 +127,7 @@ def plot_fitted_loops(u, F, params, *, ax=None, max_points: int = 20000):
     uu = finite_array("u", u, ndim=1, min_size=2)
     FF = finite_array("F", F, ndim=1, min_size=2)
     same_length(u=uu, F=FF)
-    if isinstance(max_points, bool) or not isinstance(max_points, (int, np.integer)) or max_points < 10:
-        raise ValueError(f"max_points must be an integer >= 10, got {max_points!r}")
+    max_points = _check_int("max_points", max_points, 10)
     F_fit = IwanJoint(p).force_history(uu)
     step = max(1, -(-uu.size // max_points))
     ax = _axes(ax)
@@ -172,8 +172,7 @@ def plot_dissipation_fit(F0, D, params, *, ax=None, slope: bool = True, n: int =
     same_length(F0=F0a, D=Da)
     if np.any(F0a <= 0) or np.any(Da <= 0):
         raise ValueError("F0 and D must be > 0 for a log-log plot")
-    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 10:
-        raise ValueError(f"n must be an integer >= 10, got {n!r}")
+    n = _check_int("n", n, 10)
     lo = 0.5 * min(F0a.min() / p.KT, p.phi_max)
     u_grid = np.geomspace(lo, p.phi_max * (1 - 1e-9), n)
     ax = _axes(ax)

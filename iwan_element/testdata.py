@@ -60,6 +60,13 @@ _NAME_HINTS = {
 }
 
 
+def _check_int(name: str, value, low: int) -> int:
+    """Return ``value`` as an int ``>= low``, else raise ``ValueError`` naming ``name``."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < low:
+        raise ValueError(f"{name} must be an integer >= {low}, got {value!r}")
+    return int(value)
+
+
 def _unit_factor(kind: str, unit, table: dict) -> float:
     name = f"{kind}_unit"
     if unit is None or (isinstance(unit, str) and not unit.strip()):
@@ -431,8 +438,7 @@ class TestData:
             If fewer than ``min_cycles`` cycles close without drifting; the message lists why
             the others were rejected.
         """
-        if isinstance(min_cycles, bool) or not isinstance(min_cycles, (int, np.integer)) or min_cycles < 1:
-            raise ValueError(f"min_cycles must be an integer >= 1, got {min_cycles!r}")
+        _check_int("min_cycles", min_cycles, 1)
         good = self.usable_cycles()
         if len(good) < min_cycles:
             bad = [f"cycle {c.index}: {', '.join(c.flags)}" for c in self.cycles if not c.usable]
@@ -645,8 +651,7 @@ def simulate_test(params: IwanParameters, amplitudes, *, cycles: int = 3, freque
     amps = finite_array("amplitudes", amplitudes, ndim=1)
     if np.any(amps <= 0.0):
         raise ValueError("amplitudes must all be > 0 [m]")
-    if isinstance(cycles, bool) or not isinstance(cycles, (int, np.integer)) or cycles < 1:
-        raise ValueError(f"cycles must be an integer >= 1, got {cycles!r}")
+    cycles = _check_int("cycles", cycles, 1)
     f = check_scalar("frequency", frequency, low=0.0, low_open=True)
     fs = check_scalar("sample_rate", sample_rate, low=16.0 * f)
     sf = check_scalar("force_noise", force_noise, low=0.0)
