@@ -424,14 +424,18 @@ def _range_warnings(params: IwanParameters) -> list[str]:
     return out
 
 
-def _poorly_determined(name, value, se) -> str | None:
-    if not math.isfinite(se):
-        return f"{name}: no standard error (singular Jacobian)"
-    limit = {"Fs": 0.1 * abs(value), "KT": 0.1 * abs(value), "chi": 0.05,
-             "beta": 0.25 * max(abs(value), 0.2)}[name]
-    if se > limit:
-        return f"{name} is poorly determined by the data (std. error {se:.3g})"
-    return None
+def _poorly_determined(params: IwanParameters, stderr: dict, names) -> list[str]:
+    """Warnings for the named parameters whose standard error is missing or large."""
+    out = []
+    for name in names:
+        value, se = getattr(params, name), stderr[name]
+        limit = {"Fs": 0.1 * abs(value), "KT": 0.1 * abs(value), "chi": 0.05,
+                 "beta": 0.25 * max(abs(value), 0.2)}[name]
+        if not math.isfinite(se):
+            out.append(f"{name}: no standard error (singular Jacobian)")
+        elif se > limit:
+            out.append(f"{name} is poorly determined by the data (std. error {se:.3g})")
+    return out
 
 
 def _identify(prob: _Problem, *, n_starts: int, rng: np.random.Generator, alpha: float,
@@ -494,10 +498,7 @@ def _identify(prob: _Problem, *, n_starts: int, rng: np.random.Generator, alpha:
         stderr = dict(zip(PARAM_NAMES, se.tolist()))
         identified = dict.fromkeys(PARAM_NAMES, True)
         ranges = {}
-        for k in PARAM_NAMES:
-            msg = _poorly_determined(k, getattr(params, k), stderr[k])
-            if msg:
-                warns.append(msg)
+        warns += _poorly_determined(params, stderr, PARAM_NAMES)
         if beta_f <= 1e-9:
             warns.append("beta is at its lower bound 0; its standard error is one-sided")
         details["macroslip_fraction"] = n_macro / m
@@ -536,10 +537,7 @@ def _identify(prob: _Problem, *, n_starts: int, rng: np.random.Generator, alpha:
                      f"and R = {R:.5g}. Any Fs in [{Fs_lo:.5g}, {Fs0:.5g}] N with beta in "
                      f"[0, {beta_hi:.4g}] fits equally; params reports the beta = 0 member. "
                      "Test to larger amplitudes to identify them.")
-        for k in ("KT", "chi"):
-            msg = _poorly_determined(k, getattr(params, k), stderr[k])
-            if msg:
-                warns.append(msg)
+        warns += _poorly_determined(params, stderr, ("KT", "chi"))
         if phi0 <= xm * (1 + 1e-9):
             warns.append("the microslip fit sits at its bound phi_max = x_max: the backbone's "
                          "tangent vanishes at the largest excursion; more data near macroslip "
@@ -830,10 +828,7 @@ def _fit_seed(F0, D, u0, Fs, *, t0):
     warns.append(f"beta = {beta:.4g} follows from the given Fs = {Fs:.6g} N: microslip data "
                  f"determine only KT, chi and R = {params.R:.5g}; a different Fs gives a "
                  "different beta with the same fit")
-    for k in ("KT", "chi"):
-        m = _poorly_determined(k, getattr(params, k), stderr[k])
-        if m:
-            warns.append(m)
+    warns += _poorly_determined(params, stderr, ("KT", "chi"))
     warns += _range_warnings(params)
     Dm, Km = _seed_model(F0, u0, Fs, KT, chi, beta)
     nrmse = math.sqrt(np.mean(np.concatenate([Dm / D - 1.0, Km / (F0 / u0) - 1.0]) ** 2))
