@@ -525,7 +525,7 @@ def _identify(prob: _Problem, *, n_starts: int, rng: np.random.Generator, alpha:
         # family members that fit equally: phi_max in [x_max, phi0], beta = (phi0/phi)^(chi+1) - 1
         beta_hi = (phi0 / xm) ** (chi + 1.0) - 1.0
         Fs_lo = backbone(xm, params)             # phi_max = x_max: Fs is the force reached
-        ranges = {"Fs": (Fs_lo, Fs0), "beta": (0.0, beta_hi)}
+        ranges = {"Fs": (float(Fs_lo), float(Fs0)), "beta": (0.0, float(beta_hi))}
         details.update({"R": R, "stderr_R": se3[2], "corr_KT_chi_R": c3})
         if n_macro >= prob.min_macro and phi_f < xm:
             why = (f"the four-parameter fit puts macroslip in the data but does not improve "
@@ -576,9 +576,10 @@ def fit_loops(u, F, *, t=None, sigma=None, smooth: int = 0, max_samples: int | N
 
     The exact :class:`IwanJoint` is driven by the measured displacement from the virgin,
     unloaded state, and the squared force residuals are minimised by bounded least squares
-    (``scipy.optimize.least_squares``, trust-region reflective) in the transformed parameters
-    ``(ln phi_max, chi, ln(1 + beta))`` with ``Fs`` eliminated in closed form, from
-    ``n_starts`` starts. See the module docstring for identifiability and uncertainties.
+    (a box-bounded Levenberg-Marquardt, checked against ``scipy.optimize.least_squares``) in
+    the transformed parameters ``(ln phi_max, chi, ln(1 + beta))`` with ``Fs`` eliminated in
+    closed form, from ``n_starts`` starts. See the module docstring for identifiability and
+    uncertainties.
 
     Parameters
     ----------
