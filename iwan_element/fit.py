@@ -52,7 +52,8 @@ from dataclasses import dataclass, field
 from typing import Callable
 
 import numpy as np
-from scipy import optimize, stats
+from scipy import optimize
+from scipy.special import fdtrc
 from scipy.signal import savgol_filter
 
 from ._history import History
@@ -475,7 +476,7 @@ def _identify(prob: _Problem, *, n_starts: int, rng: np.random.Generator, alpha:
     n_macro = prob.n_macro(phi_f)
     if ssr_f > 0 and m > 4:
         F_stat = max(ssr_m - ssr_f, 0.0) / (ssr_f / (m - 4))
-        p_value = float(stats.f.sf(F_stat, 1, m - 4))
+        p_value = float(fdtrc(1, m - 4, F_stat))          # F-distribution survival
     else:
         F_stat, p_value = (math.inf, 0.0) if ssr_m > ssr_f else (0.0, 1.0)
     macro = (phi_f < xm and n_macro >= prob.min_macro and p_value < alpha)
