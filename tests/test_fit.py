@@ -170,6 +170,11 @@ def test_loop_fit_is_reproducible_and_json_safe():
     for key in ("KT   [N/m]", "correlation", "NRMSE", "identified"):
         assert key in rep
     assert isinstance(a, FitResult) and a.nfev > 0 and a.n_data == d.u.size
+    # a constant sigma only rescales the residuals: same parameters and standard errors
+    w = _quiet(fit_loops, d.u, d.F, seed=42, n_starts=8, sigma=np.full(d.u.size, 50.0))
+    assert w.params.KT == pytest.approx(a.params.KT, rel=1e-8)
+    assert w.stderr["KT"] == pytest.approx(a.stderr["KT"], rel=1e-6)
+    assert w.residual_norm == pytest.approx(a.residual_norm / 50.0, rel=1e-8)
 
 
 def test_decimation_keeps_reversals_and_accuracy():
