@@ -19,9 +19,11 @@ from .closed_form import (
 from .discrete import DiscreteIwan, slider_distribution
 from .effects import (EFFECTS, AsymmetricSlip, Backlash, PinningStiffness, SlipDegradation,
                       ViscousDamping, base_joint, make_effect)
+from .fit import FitResult, IdentifiabilityWarning, fit_dissipation, fit_loops
 from .joint import IwanJoint
 from .parameters import IwanParameters
 from .protocol import JointElement, check_element
+from .testdata import Cycle, TestData, find_reversals, load_test, simulate_test, split_cycles
 
 __version__ = "0.1.0"
 
@@ -51,4 +53,14 @@ __all__ = [
     "normalized_backbone",
     "masing_descending",
     "masing_ascending",
+    "load_test",
+    "split_cycles",
+    "find_reversals",
+    "simulate_test",
+    "TestData",
+    "Cycle",
+    "fit_loops",
+    "fit_dissipation",
+    "FitResult",
+    "IdentifiabilityWarning",
 ]

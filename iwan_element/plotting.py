@@ -83,3 +83,124 @@ def plot_loop(u0: float, params: IwanParameters, *, n: int = 401, ax=None,
     ax.set_ylabel("force [kN]")
     ax.grid(True, alpha=0.3)
     return lines
+
+
+# ------------------------------------------------------------------ identification (fit.py)
+from ._validation import finite_array, same_length  # noqa: E402  (kept with the section below)
+from .closed_form import dissipation, dissipation_slope, force_amplitude  # noqa: E402
+from .testdata import _check_int  # noqa: E402
+
+__all__ += ["plot_fitted_loops", "plot_dissipation_fit"]
+
+
+def _fit_params(params) -> IwanParameters:
+    p = getattr(params, "params", params)             # a FitResult or IwanParameters
+    if not isinstance(p, IwanParameters):
+        raise ValueError(f"params must be IwanParameters or a FitResult, got {type(params).__name__}")
+    return p
+
+
+def plot_fitted_loops(u, F, params, *, ax=None, max_points: int = 20000):
+    """Measured against fitted force-displacement loops, in mm and kN (paper Fig. 8).
+
+    The fitted force is the exact :class:`~iwan_element.IwanJoint` driven by the measured
+    displacement from the virgin state.
+
+    Parameters
+    ----------
+    u, F : array_like, shape (n,)
+        Measured displacement [m] and force [N]. Not modified.
+    params : IwanParameters or FitResult
+        The fitted joint.
+    ax : matplotlib Axes, optional, keyword-only
+    max_points : int, keyword-only
+        Most points drawn per curve (evenly thinned), ``>= 10``.
+
+    Returns
+    -------
+    list of matplotlib.lines.Line2D
+        ``[measured, fitted]``.
+    """
+    from .joint import IwanJoint
+
+    p = _fit_params(params)
+    uu = finite_array("u", u, ndim=1, min_size=2)
+    FF = finite_array("F", F, ndim=1, min_size=2)
+    same_length(u=uu, F=FF)
+    max_points = _check_int("max_points", max_points, 10)
+    F_fit = IwanJoint(p).force_history(uu)
+    step = max(1, -(-uu.size // max_points))
+    ax = _axes(ax)
+    (meas,) = ax.plot(uu[::step] * 1e3, FF[::step] * 1e-3, ".", ms=1.5, color="0.55",
+                      label="measured")
+    (fit,) = ax.plot(uu[::step] * 1e3, F_fit[::step] * 1e-3, "-", lw=1.0, color="C3",
+                     label=(f"Iwan fit: Fs={p.Fs * 1e-3:.4g} kN, KT={p.KT * 1e-6:.4g} kN/mm, "
+                            f"chi={p.chi:.3f}, beta={p.beta:.3f}"))
+    ax.set_xlabel("displacement [mm]")
+    ax.set_ylabel("force [kN]")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=7, loc="upper left")
+    return [meas, fit]
+
+
+def plot_dissipation_fit(F0, D, params, *, ax=None, slope: bool = True, n: int = 200):
+    """Log-log dissipation per cycle against force amplitude with the fitted curve (Fig. 7).
+
+    The curve is the exact relation ``(F0(u0), D(u0))`` of the fitted joint (vertical at
+    ``F0 = Fs`` in macroslip); with ``slope=True`` its local slope ``d ln D / d ln F0`` (paper eq. 21, which
+    tends to ``chi + 3`` only as ``F0 -> 0``) is drawn on a second y axis with the asymptote.
+
+    Parameters
+    ----------
+    F0, D : array_like, shape (m,)
+        Measured force amplitudes [N] and dissipation per cycle [J], ``> 0``. Not modified.
+    params : IwanParameters or FitResult
+    ax : matplotlib Axes, optional, keyword-only
+    slope : bool, keyword-only
+    n : int, keyword-only
+        Points on the fitted curve, ``>= 10``.
+
+    Returns
+    -------
+    list of matplotlib artists
+        ``[data, curve]`` plus ``[slope, asymptote]`` with ``slope=True`` (those live on
+        ``ax.twinx()``).
+    """
+    p = _fit_params(params)
+    F0a = finite_array("F0", F0, ndim=1)
+    Da = finite_array("D", D, ndim=1)
+    same_length(F0=F0a, D=Da)
+    if np.any(F0a <= 0) or np.any(Da <= 0):
+        raise ValueError("F0 and D must be > 0 for a log-log plot")
+    n = _check_int("n", n, 10)
+    lo = 0.5 * min(F0a.min() / p.KT, p.phi_max)
+    u_grid = np.geomspace(lo, p.phi_max * (1 - 1e-9), n)
+    ax = _axes(ax)
+    (data,) = ax.loglog(F0a * 1e-3, Da * 1e3, "o", ms=4, mfc="none", color="k",
+                        label="measured cycles")
+    F_curve = force_amplitude(u_grid, p)
+    D_curve = dissipation(u_grid, p)
+    if Da.max() > D_curve[-1]:          # macroslip: F0 stays at Fs while D keeps growing
+        F_curve = np.append(F_curve, p.Fs)
+        D_curve = np.append(D_curve, Da.max())
+    (curve,) = ax.loglog(F_curve * 1e-3, D_curve * 1e3, "-", color="C3",
+                         label="Iwan fit (exact)")
+    ax.set_xlabel("force amplitude F0 [kN]")
+    ax.set_ylabel("dissipation per cycle D [mJ]")
+    ax.grid(True, which="both", alpha=0.3)
+    artists = [data, curve]
+    if slope:
+        ax2 = ax.twinx()
+        (sl,) = ax2.semilogx(force_amplitude(u_grid, p) * 1e-3, dissipation_slope(u_grid, p),
+                             "--", color="C0", lw=1.0, label="local slope d ln D / d ln F0")
+        asym = ax2.axhline(p.chi + 3.0, color="C0", lw=0.8, ls=":",
+                           label=f"chi + 3 = {p.chi + 3:.3f} (F0 -> 0)")
+        ax2.set_ylabel("local slope [-]")
+        ax2.set_ylim(max(0.0, p.chi + 2.5), p.chi + 5.0)
+        artists += [sl, asym]
+        h1, l1 = ax.get_legend_handles_labels()
+        h2, l2 = ax2.get_legend_handles_labels()
+        ax.legend(h1 + h2, l1 + l2, fontsize=7, loc="upper left")
+    else:
+        ax.legend(fontsize=7, loc="upper left")
+    return artists

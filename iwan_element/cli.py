@@ -1,0 +1,176 @@
+"""Command line: ``iwan-element <subcommand> ...``.
+
+Subcommands
+-----------
+fit
+    Identify the four Iwan parameters from a CSV test record and print the report::
+
+        iwan-element fit data.csv --units mm,kN [--method loops|dissipation|seed]
+                     [--slip-force 9] [--plot out.png] [--json result.json]
+
+Exit status: 0 on success, 1 on bad input (one line on stderr saying why), 2 on a usage error,
+3 when the optimiser did not converge (the report is still printed).
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import warnings
+from pathlib import Path
+
+__all__ = ["main", "build_parser"]
+
+PROG = "iwan-element"
+EXIT_OK, EXIT_INPUT, EXIT_USAGE, EXIT_NOT_CONVERGED = 0, 1, 2, 3
+
+
+class _UsageError(Exception):
+    pass
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse with one-line errors (no usage dump) that main() turns into exit status 2."""
+
+    def error(self, message):
+        raise _UsageError(message)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser (subcommands; more will be added, e.g. ``diagnose``)."""
+    from . import __version__
+
+    parser = _Parser(prog=PROG, description="Segalman's four-parameter Iwan bolted-joint model.")
+    parser.add_argument("--version", action="version", version=f"{PROG} {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="<command>", parser_class=_Parser)
+    sub.required = True
+    fit = sub.add_parser(
+        "fit", help="identify Fs, KT, chi, beta from a quasi-static test record (CSV)",
+        description="Identify the four Iwan parameters from a CSV of time, displacement and "
+                    "force and print the report. Methods: 'loops' fits the measured force "
+                    "history with the exact model (default); 'dissipation' fits the per-cycle "
+                    "force amplitude and dissipation by least squares; 'seed' is the seed "
+                    "paper's procedure (needs --slip-force).")
+    fit.add_argument("csv", type=Path, help="test record: time, displacement, force columns")
+    fit.add_argument("--units", required=True, metavar="DISP,FORCE[,TIME]",
+                     help="units of the displacement, force (and time) columns, e.g. mm,kN "
+                          "(displacement: m, mm, um, in; force: N, kN, MN, lbf, kip; "
+                          "time: s, ms, min; default time unit s)")
+    fit.add_argument("--method", choices=("loops", "dissipation", "seed"), default="loops")
+    fit.add_argument("--slip-force", type=float, metavar="FS",
+                     help="slip force Fs in the force unit of --units (method 'seed' only)")
+    fit.add_argument("--columns", metavar="T,U,F",
+                     help="names or 0-based indices of the time, displacement, force columns")
+    fit.add_argument("--delimiter", help="field separator (default: guessed)")
+    fit.add_argument("--smooth", type=int, default=0, metavar="N",
+                     help="Savitzky-Golay window (odd, samples) for the displacement that "
+                          "drives the model (method 'loops'; default 0 = none)")
+    fit.add_argument("--seed", type=int, default=0, help="seed of the random starts (default 0)")
+    fit.add_argument("--starts", type=int, default=6, help="optimiser starts (default 6)")
+    fit.add_argument("--plot", type=Path, metavar="PNG",
+                     help="write measured vs fitted loops and the dissipation plot")
+    fit.add_argument("--json", type=Path, metavar="FILE",
+                     help="write the result as JSON (params loadable with "
+                          "IwanParameters.from_dict(d['params']))")
+    return parser
+
+
+def _parse_units(text: str) -> tuple[str, str, str]:
+    parts = [s.strip() for s in text.split(",")]
+    if len(parts) not in (2, 3) or not all(parts):
+        raise ValueError(f"--units must be DISP,FORCE or DISP,FORCE,TIME (e.g. mm,kN), got {text!r}")
+    return parts[0], parts[1], parts[2] if len(parts) == 3 else "s"
+
+
+def _parse_columns(text: str | None):
+    if text is None:
+        return None
+    parts = [s.strip() for s in text.split(",")]
+    if len(parts) != 3 or not all(parts):
+        raise ValueError(f"--columns must name three columns T,U,F, got {text!r}")
+    return tuple(int(p) if p.lstrip("-").isdigit() else p for p in parts)
+
+
+def _write_plot(path: Path, data, result) -> None:
+    from matplotlib.figure import Figure
+
+    from .plotting import plot_dissipation_fit, plot_fitted_loops
+
+    try:
+        table = data.amplitude_table()
+    except ValueError:
+        table = None
+    fig = Figure(figsize=(11, 4.5) if table is not None else (6, 4.5))
+    ax1 = fig.add_subplot(1, 2 if table is not None else 1, 1)
+    plot_fitted_loops(data.u, data.F, result, ax=ax1)
+    ax1.set_title("measured vs fitted loops", fontsize=9)
+    if table is not None:
+        ax2 = fig.add_subplot(1, 2, 2)
+        plot_dissipation_fit(table["F0"], table["D"], result, ax=ax2)
+        ax2.set_title("dissipation per cycle", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+
+
+def _run_fit(args) -> int:
+    from .fit import fit_dissipation, fit_loops
+    from .testdata import FORCE_UNITS, load_test
+
+    du, fu, tu = _parse_units(args.units)
+    data = load_test(args.csv, displacement_unit=du, force_unit=fu, time_unit=tu,
+                     columns=_parse_columns(args.columns), delimiter=args.delimiter)
+    if args.method != "seed" and args.slip_force is not None:
+        raise ValueError("--slip-force is only used by --method seed")
+    with warnings.catch_warnings(record=True):       # the report lists every warning
+        warnings.simplefilter("always")
+        if args.method == "loops":
+            result = fit_loops(data.u, data.F, t=data.t, smooth=args.smooth, seed=args.seed,
+                               n_starts=args.starts)
+        else:
+            if args.smooth:
+                raise ValueError("--smooth is only used by --method loops")
+            table = data.amplitude_table()
+            if args.method == "seed":
+                if args.slip_force is None:
+                    raise ValueError("--method seed needs --slip-force (the paper takes Fs as "
+                                     "known)")
+                result = fit_dissipation(table["F0"], table["D"], u0=table["u0"], method="seed",
+                                         Fs=args.slip_force * FORCE_UNITS[fu])
+            else:
+                result = fit_dissipation(table["F0"], table["D"], u0=table["u0"],
+                                         method="least_squares", seed=args.seed,
+                                         n_starts=args.starts)
+    print(f"{data.source}: {len(data.u)} samples, {len(data.cycles)} cycles "
+          f"({len(data.usable_cycles())} usable), units {du}, {fu}, {tu} (converted to SI)")
+    print(result.report())
+    if args.json is not None:
+        out = result.to_dict()
+        out["data"] = {"source": data.source, "units": data.units, "samples": len(data.u),
+                       "cycles": len(data.cycles), "usable_cycles": len(data.usable_cycles())}
+        args.json.write_text(json.dumps(out, indent=2, allow_nan=False) + "\n")
+        print(f"wrote {args.json}")
+    if args.plot is not None:
+        _write_plot(args.plot, data, result)
+        print(f"wrote {args.plot}")
+    return EXIT_OK if result.success else EXIT_NOT_CONVERGED
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the command line; return the exit status (see the module docstring)."""
+    parser = build_parser()
+    try:
+        args = parser.parse_args(argv)
+    except _UsageError as exc:
+        print(f"{PROG}: error: {exc} (see {PROG} --help)", file=sys.stderr)
+        return EXIT_USAGE
+    try:
+        if args.command == "fit":
+            return _run_fit(args)
+    except (ValueError, OSError) as exc:
+        print(f"{PROG}: error: {' '.join(str(exc).split())}", file=sys.stderr)
+        return EXIT_INPUT
+    raise AssertionError(f"unhandled command {args.command!r}")  # pragma: no cover
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())
