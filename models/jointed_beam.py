@@ -285,8 +285,8 @@ def _beam(mbs, cfg: JointedBeamConfig, x0: float, y0: float):
     nodes = [mbs.AddNode(NodePoint2DSlope1(referenceCoordinates=[x0 + i * Le, y0, 1.0, 0.0]))
              for i in range(n + 1)]
     elems = [mbs.AddObject(ObjectANCFCable2D(
-        physicsMassPerLength=cfg.mass_per_length, physicsBendingStiffness=cfg.EI,
-        physicsAxialStiffness=cfg.EA, physicsLength=Le, nodeNumbers=[nodes[i], nodes[i + 1]]))
+        massPerLength=cfg.mass_per_length, bendingStiffness=cfg.EI,
+        axialStiffness=cfg.EA, length=Le, nodeNumbers=[nodes[i], nodes[i + 1]]))
         for i in range(n)]
     return nodes, elems, Le
 
