@@ -98,6 +98,10 @@ class JointedBeamConfig:
     preload : float
         Bolt preload [N]; it is not used by the mechanics (its effect is in ``joint``) and is
         recorded in the metadata.
+    rayleigh_beta : float
+        Stiffness-proportional material damping of the beams [s], ``>= 0``: Cable2D bending
+        and axial damping ``beta EI`` and ``beta EA``, giving a modal damping ratio
+        ``beta w / 2``. Default 0, so that the joint is the only dissipation (energy checks).
     """
 
     beam_length: float = 0.2
@@ -116,6 +120,7 @@ class JointedBeamConfig:
     rigid_stiffness: float = 1.0e11
     boundary: str = "clamped-free"
     preload: float = 30.0e3
+    rayleigh_beta: float = 0.0
 
     def __post_init__(self):
         for name in ("beam_length", "width", "thickness", "youngs_modulus", "density", "overlap",
@@ -132,6 +137,9 @@ class JointedBeamConfig:
             raise ValueError(f"n_contact_points must be an integer >= 1, got {self.n_contact_points!r}")
         if not (isinstance(self.n_elements, int) and self.n_elements >= 2):
             raise ValueError(f"n_elements must be an integer >= 2, got {self.n_elements!r}")
+        if not (isinstance(self.rayleigh_beta, (int, float)) and math.isfinite(self.rayleigh_beta)
+                and self.rayleigh_beta >= 0):
+            raise ValueError(f"rayleigh_beta must be >= 0 [s], got {self.rayleigh_beta!r}")
         if not (math.isfinite(self.contact_spacing) and self.contact_spacing >= 0):
             raise ValueError(f"contact_spacing must be >= 0, got {self.contact_spacing!r}")
         if not isinstance(self.joint, IwanParameters):
@@ -286,7 +294,8 @@ def _beam(mbs, cfg: JointedBeamConfig, x0: float, y0: float):
              for i in range(n + 1)]
     elems = [mbs.AddObject(ObjectANCFCable2D(
         massPerLength=cfg.mass_per_length, bendingStiffness=cfg.EI,
-        axialStiffness=cfg.EA, length=Le, nodeNumbers=[nodes[i], nodes[i + 1]]))
+        axialStiffness=cfg.EA, bendingDamping=cfg.rayleigh_beta * cfg.EI,
+        axialDamping=cfg.rayleigh_beta * cfg.EA, length=Le, nodeNumbers=[nodes[i], nodes[i + 1]]))
         for i in range(n)]
     return nodes, elems, Le
 

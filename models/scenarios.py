@@ -634,7 +634,7 @@ def forced_response(config: JointedBeamConfig | None = None, *, force_levels=(0.
         s_tip = mbs.AddSensor(SensorNode(nodeNumber=model.tip_node, outputVariableType=_OVT.Displacement,
                                          storeInternal=True))
         mbs.Assemble()
-        sim = _settings(force_scale=F0)
+        sim = _settings(force_scale=_bending_force_scale(cfg, 1e-3))
         sim.timeIntegration.generalizedAlpha.spectralRadius = 0.98
         t_now = 0.0
         for j, f in enumerate(freqs):

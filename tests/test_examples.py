@@ -20,3 +20,14 @@ def test_seed_figure3(tmp_path):
     proc = run_example("seed_figure3.py", "--out", str(out))
     assert out.stat().st_size > 10_000
     assert "wrote" in proc.stdout
+
+
+def test_jointed_beam_main_job_quick(tmp_path):
+    import json
+    proc = run_example("jointed_beam.py", "--quick", "--forced", "--out", str(tmp_path))
+    for name in ("fig8_quasi_static.png", "free_decay.png", "forced_response.png", "summary.json"):
+        assert (tmp_path / name).stat().st_size > 1000, name
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert summary["data"]["synthetic"] is True
+    assert abs(summary["identified"]["params"]["Fs"] / 9000.0 - 1) < 0.01
+    assert "zeta pred" in proc.stdout
