@@ -261,7 +261,8 @@ def modal_analysis(config: JointedBeamConfig | None = None, *, n_modes: int = 3)
     shapes = np.array(shapes)
     tip = shapes[model.tip_index(1), :]
     solver = exu.MainSolverStatic()
-    solver.InitializeSolver(mbs, exu.SimulationSettings())
+    quiet = _settings(force_scale=1.0, static=True)          # no solution file
+    solver.InitializeSolver(mbs, quiet)
     solver.ComputeMassMatrix(mbs)
     mass = np.array(solver.GetSystemMassMatrix())
     scale = 1e-6                                      # evaluate the slip in the linear range
