@@ -862,3 +862,373 @@ def diagnose(t, u, F, *, candidates=None, max_effects: int = 2, noise: float | N
         warnings=tuple(warns), force_before=ro(F_base), force_after=ro(np.array(F_after)),
         t=ro(np.arange(n, dtype=float) if tt is None else tt), u=ro(uu), F=ro(FF),
         details=_json(details))
+
+
+# =============================================================================== vibration
+_VIB_EFFECTS = ("viscous_damping", "pinning_stiffness")
+_VIB_UNITS = {"zeta_v": "1", "k_p_per_mass": "1/s^2", "delta": "m"}
+
+
+def _dead_zone_gain(X, delta):
+    """Describing function of ``sign(u) max(|u| - delta, 0)`` at amplitude ``X``: the
+    equivalent linear stiffness per unit ``k_p`` [-] (1 for ``delta = 0``)."""
+    r = np.clip(delta / X, 0.0, 1.0)
+    return 1.0 - (2.0 / np.pi) * (np.arcsin(r) + r * np.sqrt(1.0 - r * r))
+
+
+def _vib_model(names, vals, fp, zp, X, zeta0):
+    """Frequency [Hz] and damping ratio with the named effects added to a prediction."""
+    f, z = fp, zp
+    if "pinning_stiffness" in names:
+        d = vals["pinning_stiffness"]
+        f = np.sqrt(fp * fp + d["k_p_per_mass"] * _dead_zone_gain(X, d["delta"]) / (4 * np.pi ** 2))
+        z = zeta0 + (zp - zeta0) * (fp / f) ** 2     # same dissipation, stiffer mode
+    if "viscous_damping" in names:
+        z = z + vals["viscous_damping"]["zeta_v"]
+    return f, z
+
+
+@dataclass(frozen=True, eq=False)
+class VibrationDiagnosis:
+    """Measured against predicted amplitude-dependent frequency and damping: what is missing.
+
+    Attributes
+    ----------
+    effect : str
+        ``"viscous_damping"``, ``"pinning_stiffness"`` or ``"none"`` (the first one named).
+    effects : tuple of str
+        All effects named, in order.
+    ambiguous_with : tuple of str
+        Effects explaining the first step nearly as well.
+    where : str
+        Where measured and predicted curves disagree beyond the noise.
+    parameters : dict
+        Fitted magnitudes: ``viscous_damping: {"zeta_v"}`` (added modal viscous damping
+        ratio [-]); ``pinning_stiffness: {"k_p_per_mass" [1/s^2], "delta" [m]}`` (added modal
+        stiffness over modal mass, and the clearance in amplitude units).
+    error_before, error_after : float
+        RMS relative mismatch of frequency and damping together [-] (log residuals).
+    noise_level : float
+        RMS relative noise of the two curves [-].
+    frequency_noise, damping_noise : float
+        Relative noise of each curve [-] (estimated or given).
+    amplitude, frequency, damping, predicted_frequency, predicted_damping : ndarray, shape (n,)
+        The inputs (read-only copies).
+    model_frequency, model_damping : ndarray, shape (n,)
+        The prediction with the named effects added.
+    steps : tuple of dict
+    details : dict
+    """
+
+    effect: str
+    effects: tuple
+    ambiguous_with: tuple
+    where: str
+    parameters: dict
+    error_before: float
+    error_after: float
+    noise_level: float
+    frequency_noise: float
+    damping_noise: float
+    amplitude: np.ndarray
+    frequency: np.ndarray
+    damping: np.ndarray
+    predicted_frequency: np.ndarray
+    predicted_damping: np.ndarray
+    model_frequency: np.ndarray
+    model_damping: np.ndarray
+    steps: tuple
+    details: dict = field(default_factory=dict)
+
+    def augment(self, joint, *, modal_mass: float, slip_per_amplitude: float = 1.0):
+        """Wrap a joint element with the named effects, converted from modal to joint terms.
+
+        Parameters
+        ----------
+        joint : joint element
+        modal_mass : float, keyword-only
+            Modal mass [kg] of the mode the curves describe, ``> 0``.
+        slip_per_amplitude : float, keyword-only
+            Joint slip per unit modal amplitude ``r`` [-], ``> 0``: a joint spring ``k`` adds
+            ``k r^2`` to the modal stiffness, a dashpot ``c`` adds ``c r^2``.
+
+        Returns
+        -------
+        joint element
+            ``PinningStiffness(k_p = kappa m / r^2, delta = delta r)`` and/or
+            ``ViscousDamping(c = 2 zeta_v omega_0 m / r^2)`` around ``joint``, with
+            ``omega_0`` the measured angular frequency at the smallest amplitude.
+        """
+        m = check_scalar("modal_mass", modal_mass, low=0.0, low_open=True)
+        r = check_scalar("slip_per_amplitude", slip_per_amplitude, low=0.0, low_open=True)
+        el = joint
+        for name in self.effects:
+            d = self.parameters[name]
+            if name == "pinning_stiffness":
+                el = EFFECTS[name](el, k_p=d["k_p_per_mass"] * m / r ** 2, delta=d["delta"] * r)
+            else:
+                w0 = 2 * np.pi * float(self.frequency[np.argmin(self.amplitude)])
+                el = EFFECTS[name](el, c=2.0 * d["zeta_v"] * w0 * m / r ** 2)
+        return el
+
+    def to_dict(self) -> dict:
+        """JSON-safe dict."""
+        return _json({k: getattr(self, k) for k in (
+            "effect", "effects", "ambiguous_with", "where", "parameters", "error_before",
+            "error_after", "noise_level", "frequency_noise", "damping_noise", "amplitude",
+            "frequency", "damping", "predicted_frequency", "predicted_damping",
+            "model_frequency", "model_damping", "steps", "details")})
+
+    def report(self) -> str:
+        """Human-readable account."""
+        lines = ["Vibration diagnosis (amplitude-dependent frequency and damping)",
+                 f"  {self.amplitude.size} amplitudes, {self.amplitude.min():.3g} .. "
+                 f"{self.amplitude.max():.3g} m; noise: frequency {100 * self.frequency_noise:.2g} %, "
+                 f"damping {100 * self.damping_noise:.2g} % ({self.details['noise_from']})",
+                 f"  where: {self.where}"]
+        for k, st in enumerate(self.steps):
+            lines.append(f"  step {k + 1}: candidates on {' + '.join(st['on']) or 'prediction'}")
+            for c in st["candidates"]:
+                lines.append(f"    {c['name']:<18} mismatch {100 * c['error']:7.3g} %  dAIC "
+                             f"{c['dAIC']:8.1f}  p {c['p']:9.2g}  {c['verdict']}")
+        if self.effects:
+            lines.append(f"  named: {', '.join(self.effects)}" + (
+                f" (nearly as good: {', '.join(self.ambiguous_with)})" if self.ambiguous_with else ""))
+            for name, d in self.parameters.items():
+                lines.append("    " + name + ": " + ", ".join(
+                    f"{k} = {v:.4g} {_VIB_UNITS[k]}" for k, v in d.items()))
+        else:
+            lines.append("  named: none")
+        lines.append(f"  mismatch before {100 * self.error_before:.3g} % -> after "
+                     f"{100 * self.error_after:.3g} % (noise {100 * self.noise_level:.3g} %)")
+        return "\n".join(lines)
+
+    def plot(self, ax=None):
+        """Frequency and damping against amplitude: measured, predicted, augmented.
+
+        ``ax``: ``None`` (new figure, two panels) or a pair of Axes. Returns the artists."""
+        if ax is None:
+            import matplotlib.pyplot as plt
+            _, ax = plt.subplots(1, 2, figsize=(11, 4.2))
+        if not isinstance(ax, (list, tuple, np.ndarray)) or len(ax) != 2:
+            raise ValueError("ax must be None or a pair of Axes (frequency, damping)")
+        a1, a2 = ax
+        X = self.amplitude
+        o = np.argsort(X)
+        arts = a1.semilogx(X[o], self.frequency[o], "o", ms=3, mfc="none", color="k", label="measured")
+        arts += a1.semilogx(X[o], self.predicted_frequency[o], "-", color="C0", label="predicted")
+        arts += a1.semilogx(X[o], self.model_frequency[o], "--", color="C3",
+                            label="+ " + (" + ".join(self.effects) or "nothing"))
+        a1.set_xlabel("amplitude [m]")
+        a1.set_ylabel("frequency [Hz]")
+        arts += a2.loglog(X[o], self.damping[o], "o", ms=3, mfc="none", color="k", label="measured")
+        arts += a2.loglog(X[o], self.predicted_damping[o], "-", color="C0", label="predicted")
+        arts += a2.loglog(X[o], self.model_damping[o], "--", color="C3",
+                          label="+ " + (" + ".join(self.effects) or "nothing"))
+        a2.set_xlabel("amplitude [m]")
+        a2.set_ylabel("damping ratio [-]")
+        for a in (a1, a2):
+            a.grid(True, which="both", alpha=0.3)
+            a.legend(fontsize=7)
+        return arts
+
+
+def _curve_noise(r):
+    """Relative noise of a curve from its second differences along amplitude (MAD, robust
+    to a smooth systematic mismatch)."""
+    d2 = r[:-2] - 2 * r[1:-1] + r[2:]
+    return float(1.4826 * np.median(np.abs(d2 - np.median(d2))) / math.sqrt(6.0))
+
+
+def diagnose_vibration(amplitude, frequency, damping, *, predicted_frequency, predicted_damping,
+                       frequency_noise: float | None = None, damping_noise: float | None = None,
+                       predicted_zeta0: float = 0.0, alpha: float = 1e-3,
+                       ambiguity: float = 10.0, max_effects: int = 2) -> VibrationDiagnosis:
+    """Compare measured and predicted amplitude-dependent frequency and damping; name what the
+    jointed model misses.
+
+    Two effects are tried, alone and one after the other:
+
+    * ``viscous_damping``: a constant added modal damping ratio ``zeta_v`` (a damping floor:
+      measured damping levels off at low amplitude where the joint's hysteresis fades);
+    * ``pinning_stiffness``: an added modal stiffness ``k_p`` per modal mass engaging beyond a
+      clearance ``delta`` (harmonic-balance gain of the dead-zone spring), which raises the
+      frequency (a frequency floor / stiffening at high amplitude, where the joint slips) and
+      lowers the hysteretic damping ratio by ``(f_pred / f)^2`` (same dissipation, stiffer mode).
+
+    Residuals are the log ratios of measured to modelled frequency and damping, weighted by
+    their relative noise; the tests are as in :func:`diagnose` (F-tests against the noise, an
+    information criterion, ``ambiguity``).
+
+    Parameters
+    ----------
+    amplitude : array_like, shape (n,)
+        Response amplitude [m] (joint slip or modal amplitude), ``> 0``; ``n >= 8``.
+    frequency, damping : array_like, shape (n,)
+        Measured (or reference) frequency [Hz] and damping ratio [-], ``> 0``.
+    predicted_frequency, predicted_damping : array_like, shape (n,), keyword-only
+        The model's prediction at the same amplitudes (e.g. the jointed-beam simulation or the
+        single-mode closed form), ``> 0``.
+    frequency_noise, damping_noise : float, optional, keyword-only
+        Relative noise standard deviations [-], ``> 0``; default: estimated from the scatter of
+        the curves (second differences along amplitude, robust).
+    predicted_zeta0 : float, keyword-only
+        Viscous damping ratio already in the prediction [-], ``>= 0`` (not rescaled by a
+        pinning stiffness).
+    alpha, ambiguity, max_effects : keyword-only
+        As in :func:`diagnose` (``max_effects`` at most 2).
+
+    Returns
+    -------
+    VibrationDiagnosis
+
+    Raises
+    ------
+    ValueError
+        Non-positive or non-finite values, unequal lengths, fewer than 8 amplitudes without
+        given noise levels, or an option out of range.
+    """
+    from scipy.optimize import least_squares
+
+    X = finite_array("amplitude", amplitude, ndim=1, min_size=3)
+    fm = finite_array("frequency", frequency, ndim=1, min_size=3)
+    zm = finite_array("damping", damping, ndim=1, min_size=3)
+    fp = finite_array("predicted_frequency", predicted_frequency, ndim=1, min_size=3)
+    zp = finite_array("predicted_damping", predicted_damping, ndim=1, min_size=3)
+    n = same_length(amplitude=X, frequency=fm, damping=zm, predicted_frequency=fp,
+                    predicted_damping=zp)
+    for nm, a in (("amplitude", X), ("frequency", fm), ("damping", zm),
+                  ("predicted_frequency", fp), ("predicted_damping", zp)):
+        if np.any(a <= 0):
+            raise ValueError(f"{nm} must be > 0 everywhere")
+    zeta0 = check_scalar("predicted_zeta0", predicted_zeta0, low=0.0)
+    alpha = check_scalar("alpha", alpha, low=0.0, high=0.5, low_open=True, high_open=True)
+    ambiguity = check_scalar("ambiguity", ambiguity, low=0.0)
+    max_effects = _check_int("max_effects", max_effects, 1)
+    o = np.argsort(X)
+    rf0 = np.log(fm / fp)
+    rz0 = np.log(zm / zp)
+    if frequency_noise is None or damping_noise is None:
+        if n < 8:
+            raise ValueError(f"too little data to estimate the noise from {n} amplitudes (at least "
+                             "8 are needed); pass frequency_noise= and damping_noise=")
+        noise_from = "estimated from the scatter of the curves"
+        dof = 0.37 * (n - 2)                     # efficiency of the MAD for Gaussian data
+    else:
+        noise_from = "given"
+        dof = 1e7
+    sf = (check_scalar("frequency_noise", frequency_noise, low=0.0, low_open=True)
+          if frequency_noise is not None else max(_curve_noise(rf0[o]), 1e-12))
+    sz = (check_scalar("damping_noise", damping_noise, low=0.0, low_open=True)
+          if damping_noise is not None else max(_curve_noise(rz0[o]), 1e-12))
+    noise_level = math.sqrt(0.5 * (sf * sf + sz * sz))
+    dof_all = 2 * dof
+    Xmax = float(X.max())
+    f2min = float(np.min(fp)) ** 2
+
+    def decode(names, z):
+        vals, k = {}, 0
+        for nm in names:
+            if nm == "viscous_damping":
+                vals[nm] = {"zeta_v": float(z[k]) * float(np.median(zp))}
+                k += 1
+            else:
+                vals[nm] = {"k_p_per_mass": float(z[k]) * 4 * np.pi ** 2 * f2min,
+                            "delta": float(z[k + 1]) * Xmax}
+                k += 2
+        return vals
+
+    def resid(names, z):
+        f, zz = _vib_model(names, decode(names, z), fp, zp, X, zeta0)
+        return np.concatenate([np.log(fm / f) / sf, np.log(zm / zz) / sz])
+
+    def err(names, z):
+        f, zz = _vib_model(names, decode(names, z), fp, zp, X, zeta0)
+        return math.sqrt(np.mean(np.concatenate([np.log(fm / f), np.log(zm / zz)]) ** 2))
+
+    specs = {"viscous_damping": ([0.0], [100.0], [[0.0], [0.5], [5.0]]),
+             "pinning_stiffness": ([0.0, 0.0], [10.0, 0.99], [[0.0, 0.0], [0.05, 0.0], [0.05, 0.3]])}
+    chi_b = float(np.sum(resid((), np.zeros(0)) ** 2))
+    N = 2 * n
+    misfit_ratio = chi_b / N
+    p0 = float(fdtrc(N, dof_all, misfit_ratio))
+    misfit = p0 < alpha
+    # where
+    parts = []
+    for label, r, s in (("frequency", rf0, sf), ("damping", rz0, sz)):
+        big = np.abs(r) > 3 * s
+        if big.sum() >= 2:
+            xs = X[big]
+            sign = "above" if np.median(r[big]) > 0 else "below"
+            lo_hi = ("at low amplitudes" if xs.max() <= np.median(X) else
+                     "at high amplitudes" if xs.min() >= np.median(X) else "over most amplitudes")
+            parts.append(f"measured {label} is {sign} the prediction {lo_hi} "
+                         f"({xs.min():.3g} .. {xs.max():.3g} m, up to "
+                         f"{100 * np.max(np.abs(r[big])):.3g} %)")
+    where = ("; ".join(parts) if (misfit and parts) else
+             "measured and predicted curves agree within the noise") + "."
+    where = where[0].upper() + where[1:]
+    named, ambiguous, steps = [], (), []
+    cur_names, cur_z, cur_chi, cur_q = (), np.zeros(0), chi_b, 0
+    while misfit and len(named) < min(max_effects, 2):
+        if cur_names and float(fdtrc(N - cur_q, dof_all, cur_chi / (N - cur_q))) >= alpha:
+            break
+        rows = []
+        for nm in _VIB_EFFECTS:
+            if nm in named:
+                continue
+            names = cur_names + (nm,)
+            lo, hi, starts = specs[nm]
+            lower = np.concatenate([np.zeros(cur_z.size), lo])
+            upper = np.concatenate([np.full(cur_z.size, np.inf), hi])
+            if cur_names:
+                lower[:cur_z.size] = np.concatenate([specs[c][0] for c in cur_names])
+                upper[:cur_z.size] = np.concatenate([specs[c][1] for c in cur_names])
+            best = None
+            for s0 in starts:
+                z0 = np.clip(np.concatenate([cur_z, s0]), lower, upper - 1e-12)
+                res = least_squares(lambda z: resid(names, z), z0, bounds=(lower, upper),
+                                    method="trf", x_scale="jac")
+                if best is None or res.cost < best.cost:
+                    best = res
+            chi2 = 2 * best.cost
+            q = len(lo)
+            gain = max(cur_chi - chi2, 0.0)
+            p = float(fdtrc(q, dof_all, gain / q))
+            rows.append({"name": nm, "names": names, "z": best.x, "chi2": chi2, "q": q, "p": p,
+                         "aic": chi2 + 2 * q, "error": err(names, best.x)})
+        if not rows:
+            break
+        a_lim = alpha / len(rows)
+        ok = [r for r in rows if r["p"] < a_lim]
+        best = min(ok, key=lambda r: r["aic"]) if ok else None
+        best_aic = min(r["aic"] for r in rows)
+        for r in rows:
+            r["dAIC"] = r["aic"] - best_aic
+            r["verdict"] = ("NAMED" if r is best else "not significant" if r["p"] >= a_lim else
+                            "nearly as good" if r["aic"] - best["aic"] < ambiguity else "worse")
+        steps.append({"on": list(cur_names), "candidates": [
+            {k: r[k] for k in ("name", "error", "p", "dAIC", "verdict")} for r in rows]})
+        if best is None:
+            break
+        if not named:
+            ambiguous = tuple(r["name"] for r in rows if r["verdict"] == "nearly as good")
+        named.append(best["name"])
+        cur_names, cur_z, cur_chi, cur_q = best["names"], best["z"], best["chi2"], cur_q + best["q"]
+    params = decode(cur_names, cur_z)
+    f_new, z_new = _vib_model(cur_names, params, fp, zp, X, zeta0)
+    ro = lambda a: (a.setflags(write=False), a)[1]  # noqa: E731
+    details = {"noise_from": noise_from, "misfit_ratio": misfit_ratio, "misfit_p": p0,
+               "alpha": alpha, "chi2_before": chi_b, "chi2_after": cur_chi,
+               "frequency_error_before": float(np.sqrt(np.mean(rf0 ** 2))),
+               "damping_error_before": float(np.sqrt(np.mean(rz0 ** 2))),
+               "frequency_error_after": float(np.sqrt(np.mean(np.log(fm / f_new) ** 2))),
+               "damping_error_after": float(np.sqrt(np.mean(np.log(zm / z_new) ** 2)))}
+    return VibrationDiagnosis(
+        effect=named[0] if named else "none", effects=tuple(named), ambiguous_with=ambiguous,
+        where=where, parameters=params,
+        error_before=float(math.sqrt(np.mean(np.concatenate([rf0, rz0]) ** 2))),
+        error_after=err(cur_names, cur_z), noise_level=noise_level, frequency_noise=sf,
+        damping_noise=sz, amplitude=ro(X), frequency=ro(fm), damping=ro(zm),
+        predicted_frequency=ro(fp), predicted_damping=ro(zp), model_frequency=ro(f_new),
+        model_damping=ro(z_new), steps=tuple(_json(s) for s in steps), details=_json(details))

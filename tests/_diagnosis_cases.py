@@ -82,3 +82,31 @@ def record(name, magnitude, protocol, seed, *, colour=0.0, waveform="sine", el=N
     return simulate_element_test(el, np.array(PROTOCOLS[protocol]) * P.phi_max,
                                  force_noise=SIGMA, noise_correlation=colour, seed=seed,
                                  waveform=waveform)
+
+
+# ----------------------------------------------------------------------------- vibration
+MODAL = IwanParameters(400.0, 2.5266e5, -0.5, 1.0)     # REFERENCE.md sec. 5, modal Iwan
+K_INF, M_MODAL, ZETA0 = 1.4212e5, 1.0, 1e-4
+
+
+def modal_curves(X, *, zeta_v=0.0, k_p=0.0, delta=0.0):
+    """Single-mode modal Iwan (REFERENCE.md sec. 5): frequency [Hz] and damping ratio at
+    amplitudes X [m], with a hidden viscous ratio ``zeta_v`` and/or a pinning spring
+    ``k_p`` [N/m] beyond ``delta`` [m] (harmonic-balance stiffness of the dead-zone spring)."""
+    from iwan_element import dissipation, secant_stiffness
+    r = np.clip(delta / X, 0.0, 1.0)
+    k_eq = k_p * (1 - (2 / np.pi) * (np.arcsin(r) + r * np.sqrt(1 - r * r)))
+    wn2 = (K_INF + secant_stiffness(X, MODAL) + k_eq) / M_MODAL
+    zeta = dissipation(X, MODAL) / (2 * np.pi * M_MODAL * wn2 * X ** 2) + ZETA0 + zeta_v
+    return np.sqrt(wn2) / (2 * np.pi), zeta
+
+
+def vibration_case(seed, *, n=30, zeta_v=0.0, k_p=0.0, delta=0.0, f_noise=2e-4, z_noise=0.02):
+    """(X, f_meas, z_meas, f_pred, z_pred): measured = hidden effect + relative noise."""
+    rng = np.random.default_rng(seed)
+    X = np.geomspace(1e-3, 3.0, n) * MODAL.phi_max
+    fp, zp = modal_curves(X)
+    fm, zm = modal_curves(X, zeta_v=zeta_v, k_p=k_p, delta=delta)
+    fm = fm * np.exp(f_noise * rng.normal(size=n))
+    zm = zm * np.exp(z_noise * rng.normal(size=n))
+    return X, fm, zm, fp, zp
