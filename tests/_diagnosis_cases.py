@@ -56,23 +56,22 @@ def effect_rms(name, value, protocol):
 
 @functools.lru_cache(maxsize=None)
 def calibrated(name, magnitude, protocol):
-    """Effect parameter whose added force has RMS ``magnitude * SIGMA`` on ``protocol``."""
+    """Effect parameter whose added force has RMS ``magnitude * SIGMA`` on ``protocol`` (to
+    0.5 %), by secant steps on ``log rms`` against ``log parameter``."""
     target = magnitude * SIGMA
-    guess = {"c": 1.0, "k_p": 1e4, "gap": 1e-5, "rate": 1e-3, "asymmetry": 0.01}[SHAPES[name][0]]
-    lo = hi = guess
-    while effect_rms(name, hi, protocol) < target:
-        hi *= 2.0
-    while effect_rms(name, lo, protocol) > target:
-        lo /= 2.0
-    for _ in range(30):                      # bisection in log space, to 0.1 %
-        mid = math.sqrt(lo * hi)
-        if effect_rms(name, mid, protocol) < target:
-            lo = mid
-        else:
-            hi = mid
-        if hi / lo < 1.001:
-            break
-    return math.sqrt(lo * hi)
+    x0 = {"c": 1.0, "k_p": 1e4, "gap": 1e-5, "rate": 1e-3, "asymmetry": 0.01}[SHAPES[name][0]]
+    y0 = effect_rms(name, x0, protocol)
+    x1 = x0 * target / y0
+    y1 = effect_rms(name, x1, protocol)
+    for _ in range(20):
+        if abs(y1 / target - 1.0) < 5e-3:
+            return x1
+        slope = math.log(y1 / y0) / math.log(x1 / x0) if x1 != x0 else 1.0
+        slope = min(max(slope, 0.2), 3.0)
+        x0, y0 = x1, y1
+        x1 = x1 * (target / y1) ** (1.0 / slope)
+        y1 = effect_rms(name, x1, protocol)
+    raise RuntimeError(f"calibration of {name} did not converge")
 
 
 def record(name, magnitude, protocol, seed, *, colour=0.0, waveform="sine", el=None):
