@@ -36,6 +36,10 @@ def main(argv=None):
     ap.add_argument("--seeds", type=int, default=2)
     ap.add_argument("--clean-seeds", type=int, default=20)
     ap.add_argument("--colour", type=float, default=0.8, help="AR(1) coefficient of coloured noise")
+    ap.add_argument("--magnitudes", type=float, nargs="+", default=list(MAGNITUDES),
+                    help="effect RMS / noise RMS (default 2 4 8)")
+    ap.add_argument("--effect-colour", type=float, default=0.0,
+                    help="AR(1) coefficient of the noise on the records with an effect")
     args = ap.parse_args(argv)
     times = []
     rows = []
@@ -43,13 +47,13 @@ def main(argv=None):
           f"{'after/noise med':>15} {'max':>6} {'<=1.1':>6}")
     total = right_all = within_all = 0
     for name in SHAPES:
-        for mag in MAGNITUDES:
+        for mag in args.magnitudes:
             right = amb = within = 0
             other = {}
             ratios = []
             for proto in PROTOCOLS:
                 for seed in range(args.seeds):
-                    d = record(name, mag, proto, 100 + seed)
+                    d = record(name, mag, proto, 100 + seed, colour=args.effect_colour)
                     t0 = time.perf_counter()
                     g = diagnose(d.t, d.u, d.F)
                     times.append(time.perf_counter() - t0)
@@ -66,7 +70,7 @@ def main(argv=None):
             right_all += right
             within_all += within
             oth = ",".join(f"{k}:{v}" for k, v in other.items()) or "-"
-            print(f"{name:<18} {mag:4.0f} {right:>5}/{n:<5} {oth:>18} {amb:>6} "
+            print(f"{name:<18} {mag:4.3g} {right:>5}/{n:<5} {oth:>18} {amb:>6} "
                   f"{statistics.median(ratios):15.3f} {max(ratios):6.3f} {within:>3}/{n}")
             rows.append((name, mag, right, n))
     print(f"\nhidden effect named: {right_all}/{total} = {100 * right_all / total:.1f} %; "

@@ -852,7 +852,9 @@ def diagnose(t, u, F, *, candidates=None, max_effects: int = 2, noise: float | N
         warns.append(f"misfit beyond the noise remains after {' + '.join(named)} "
                      f"({error_after / (sigma / span):.3g} x noise)")
     if misfit and not named and not any("no testable effect" in w for w in warns):
-        warns.append("the misfit is more than noise but no candidate effect explains it")
+        warns.append("the misfit is more than noise but no tested effect explains it"
+                     + (f"; this record cannot reveal {', '.join(untestable)} (see above)"
+                        if untestable else ""))
     ro = lambda a: (a.setflags(write=False), a)[1]  # noqa: E731
     details = {"samples": n, "cycles": len(cycles), "fitted_samples": nf, "tau": tau,
                "noise_samples": m_noise if noise is None else None, "noise_groups": groups,
