@@ -21,8 +21,6 @@ Both routes are checked against the elements in ``tests/test_diagnosis.py``.
 """
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from ._history import History
@@ -221,7 +219,3 @@ class Evaluator:
         u0 = np.concatenate([[0.0], self.u[:-1]])
         v0 = np.concatenate([[0.0], self.v[:-1]])
         return np.cumsum(c * 0.5 * (v0 + self.v) * (self.u - u0))
-
-
-def _check_finite(x: float) -> bool:
-    return math.isfinite(x)
