@@ -8,6 +8,14 @@ fit
         iwan-element fit data.csv --units mm,kN [--method loops|dissipation|seed]
                      [--slip-force 9] [--plot out.png] [--json result.json]
 
+diagnose
+    Fit the Iwan model, decide whether its misfit is more than the noise, and name the effect
+    that explains it (viscous damping, pinning stiffness, backlash, slip degradation,
+    asymmetric slip)::
+
+        iwan-element diagnose data.csv --units mm,kN [--plot out.png] [--json out.json]
+                     [--max-effects 2] [--noise SIGMA]
+
 Exit status: 0 on success, 1 on bad input (one line on stderr saying why), 2 on a usage error,
 3 when the optimiser did not converge (the report is still printed).
 """
@@ -72,7 +80,53 @@ def build_parser() -> argparse.ArgumentParser:
     fit.add_argument("--json", type=Path, metavar="FILE",
                      help="write the result as JSON (params loadable with "
                           "IwanParameters.from_dict(d['params']))")
+    dg = sub.add_parser(
+        "diagnose", help="find which physical effect the Iwan fit misses (CSV test record)",
+        description="Fit the four-parameter Iwan model, estimate the force noise from repeated "
+                    "cycles, decide whether the misfit is more than noise, locate it, refit with "
+                    "each candidate effect and name the one the data support (or none).")
+    dg.add_argument("csv", type=Path, help="test record: time, displacement, force columns")
+    dg.add_argument("--units", required=True, metavar="DISP,FORCE[,TIME]",
+                    help="units of the displacement, force (and time) columns, e.g. mm,kN")
+    dg.add_argument("--columns", metavar="T,U,F",
+                    help="names or 0-based indices of the time, displacement, force columns")
+    dg.add_argument("--delimiter", help="field separator (default: guessed)")
+    dg.add_argument("--max-effects", type=int, default=2, metavar="N",
+                    help="most effects named one after the other (default 2)")
+    dg.add_argument("--noise", type=float, metavar="SIGMA",
+                    help="force noise standard deviation in the force unit of --units "
+                         "(default: estimated from repeated cycles)")
+    dg.add_argument("--seed", type=int, default=0, help="seed of the base fit's random starts")
+    dg.add_argument("--plot", type=Path, metavar="PNG",
+                    help="write data, base and augmented fit and the residuals before/after")
+    dg.add_argument("--json", type=Path, metavar="FILE", help="write the diagnosis as JSON")
     return parser
+
+
+def _run_diagnose(args) -> int:
+    from .diagnosis import diagnose
+    from .testdata import FORCE_UNITS, load_test
+
+    du, fu, tu = _parse_units(args.units)
+    data = load_test(args.csv, displacement_unit=du, force_unit=fu, time_unit=tu,
+                     columns=_parse_columns(args.columns), delimiter=args.delimiter)
+    noise = None if args.noise is None else args.noise * FORCE_UNITS[fu]
+    result = diagnose(data.t, data.u, data.F, max_effects=args.max_effects, noise=noise,
+                      seed=args.seed)
+    print(f"{data.source}: {len(data.u)} samples, {len(data.cycles)} cycles, units {du}, {fu}, "
+          f"{tu} (converted to SI)")
+    print(result.report())
+    if args.json is not None:
+        args.json.write_text(json.dumps(result.to_dict(), indent=2, allow_nan=False) + "\n")
+        print(f"wrote {args.json}")
+    if args.plot is not None:
+        from matplotlib.figure import Figure
+        fig = Figure(figsize=(11, 4.5))
+        result.plot(ax=[fig.add_subplot(1, 2, 1), fig.add_subplot(1, 2, 2)])
+        fig.tight_layout()
+        fig.savefig(args.plot, dpi=120)
+        print(f"wrote {args.plot}")
+    return EXIT_OK if result.fit.success or not result.effects else EXIT_NOT_CONVERGED
 
 
 def _parse_units(text: str) -> tuple[str, str, str]:
@@ -166,6 +220,8 @@ def main(argv: list[str] | None = None) -> int:
     try:
         if args.command == "fit":
             return _run_fit(args)
+        if args.command == "diagnose":
+            return _run_diagnose(args)
     except (ValueError, OSError) as exc:
         print(f"{PROG}: error: {' '.join(str(exc).split())}", file=sys.stderr)
         return EXIT_INPUT

@@ -1,0 +1,300 @@
+"""diagnose / diagnose_vibration: exact fast evaluation, detection of hidden effects (reduced
+matrix; benchmarks/bench_diagnosis.py runs the full one), no false positives on clean data,
+two effects in two steps, the augmented model in the Exudyn connector, bad input."""
+import json
+import math
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from _diagnosis_cases import (MAGNITUDES, MODAL, P, PROTOCOLS, SHAPES, SIGMA, ZETA0, calibrated,
+                              effect_rms, element, modal_curves, record, vibration_case)
+from iwan_element import (AsymmetricSlip, IwanJoint, IwanParameters, PinningStiffness,
+                          ViscousDamping, make_effect)
+from iwan_element._effect_eval import (Evaluator, build_element, dissipation_segments,
+                                       unit_params)
+from iwan_element.diagnosis import (CANDIDATES, diagnose, diagnose_vibration,
+                                    simulate_element_test)
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+# ----------------------------------------------------------------------------- machinery
+def test_fast_evaluation_equals_the_elements():
+    rng = np.random.default_rng(3)
+    t = np.linspace(0, 8, 1601)
+    u = P.phi_max * np.sin(2 * np.pi * t) * np.append(np.repeat([0.3, 1.5, 0.5, 1.1], 400), 1.1)
+    u = u + 2e-6 * rng.normal(size=u.size)              # jitter: many small reversals
+    v = np.gradient(u, t)
+    keep = np.arange(0, u.size, 3)
+    ev = Evaluator(u, v, keep, np.array([], dtype=np.intp))
+    shape = (P.phi_max, P.chi, P.beta)
+    cases = [((), ()), (("viscous_damping",), ({"c": 0.01},)),
+             (("pinning_stiffness",), ({"k_p": 300.0, "delta": 1e-3},)),
+             (("asymmetric_slip",), ({"asymmetry": 0.2},)),
+             (("slip_degradation",), ({"rate": 30.0},)),
+             (("viscous_damping", "slip_degradation"), ({"c": 0.01}, {"rate": 30.0})),
+             (("slip_degradation", "asymmetric_slip"), ({"rate": 30.0}, {"asymmetry": 0.2}))]
+    for names, vals in cases:
+        assert ev.fast(names)
+        fast = ev.unit_force(shape, names, vals)
+        el = build_element(unit_params(*shape), names, vals)
+        ref = (el.force_history(u, v) if names else el.force_history(u))[keep]
+        np.testing.assert_allclose(fast, ref, rtol=0, atol=1e-12)
+    assert not ev.fast(("backlash",)) and not ev.fast(("asymmetric_slip", "slip_degradation"))
+
+
+def test_dissipation_segments_give_the_joint_dissipation():
+    rng = np.random.default_rng(0)
+    u = np.cumsum(rng.normal(size=3000)) * 1e-5
+    j = IwanJoint(P)
+    D = []
+    for x in u:
+        j.trial(x)
+        j.commit()
+        D.append(j.dissipated_energy)
+    ev = Evaluator(u, np.zeros_like(u), np.arange(u.size), np.array([], dtype=np.intp))
+    p1 = unit_params(P.phi_max, P.chi, P.beta)
+    np.testing.assert_allclose(ev._unit_dissipation(p1) * P.Fs, D, rtol=1e-10, atol=1e-15)
+    step, virgin, xa, xb = dissipation_segments(u, 0.0)
+    assert step.size >= u.size - 1 and np.all(np.diff(step) >= 0)
+
+
+def test_calibrated_magnitude_is_the_added_force_rms():
+    for name in SHAPES:
+        x = calibrated(name, 2.0, "ladder")
+        assert effect_rms(name, x, "ladder") == pytest.approx(2.0 * SIGMA, rel=6e-3)
+
+
+# ----------------------------------------------------------------------------- detection
+def _cases():
+    """Every effect at every magnitude; protocol and seed vary across the cases."""
+    out = []
+    protos = list(PROTOCOLS)
+    for i, name in enumerate(SHAPES):
+        for j, mag in enumerate(MAGNITUDES):
+            out.append((name, mag, protos[(i + j) % 2], 7 + i + j))
+    return out
+
+
+def test_hidden_effects_are_named_and_fitted_to_the_noise():
+    right = within = 0
+    lines = []
+    for name, mag, proto, seed in _cases():
+        d = record(name, mag, proto, seed)
+        g = diagnose(d.t, d.u, d.F)
+        ratio = g.error_after / g.noise_level
+        right += g.effect == name
+        within += ratio <= 1.1
+        lines.append(f"{name} {mag} {proto}: {g.effect} {ratio:.3f}")
+        assert g.misfit and g.error_after < g.error_before
+        assert abs(g.noise_sigma / SIGMA - 1) < 0.2
+    n = len(_cases())
+    assert right >= 0.9 * n, lines
+    assert within >= 0.9 * n, lines
+
+
+def test_clean_data_never_name_an_effect():
+    for seed in range(20):
+        proto = list(PROTOCOLS)[seed % 2]
+        colour = 0.8 if seed % 4 >= 2 else 0.0
+        d = record(None, 0, proto, 500 + seed, colour=colour)
+        g = diagnose(d.t, d.u, d.F)
+        assert g.effect == "none" and g.effects == () and not g.misfit, (seed, g.where)
+        assert g.model.params == g.base_fit.params and g.fit is g.base_fit
+        assert "consistent with the noise" in g.where
+    # the coloured noise is recognised as such (correlation time > 1)
+    assert g.details["tau"] > 3
+
+
+def test_two_hidden_effects_are_named_in_two_steps():
+    el = AsymmetricSlip(ViscousDamping(IwanJoint(P), c=calibrated("viscous_damping", 6.0, "ladder")),
+                        asymmetry=calibrated("asymmetric_slip", 6.0, "ladder"))
+    d = record(None, 0, "ladder", 11, el=el)
+    g = diagnose(d.t, d.u, d.F)
+    assert set(g.effects) == {"viscous_damping", "asymmetric_slip"}, g.report()
+    assert len(g.steps) == 2 and g.effect == g.effects[0]
+    assert g.error_after / g.noise_level <= 1.1
+    assert type(g.model).__name__ == {"viscous_damping": "ViscousDamping",
+                                      "asymmetric_slip": "AsymmetricSlip"}[g.effects[1]]
+    # stopping after one effect leaves a misfit and says so
+    g1 = diagnose(d.t, d.u, d.F, max_effects=1)
+    assert len(g1.effects) == 1 and any("remains" in w for w in g1.warnings)
+
+
+def test_result_reports_serialises_and_plots(tmp_path):
+    d = record("slip_degradation", 8.0, "ladder", 3)
+    u0, F0 = d.u.copy(), d.F.copy()
+    g = diagnose(d.t, d.u, d.F)
+    np.testing.assert_array_equal(d.u, u0)
+    np.testing.assert_array_equal(d.F, F0)
+    assert g.effect == "slip_degradation"
+    assert "cycle to cycle" in g.where
+    rep = g.report()
+    assert "NAMED" in rep and "rate =" in rep and "error before" in rep
+    js = json.loads(json.dumps(g.to_dict(), allow_nan=False))
+    assert js["effect"] == "slip_degradation" and js["fit"]["method"] == "loops+slip_degradation"
+    rate = g.fit.details["effects"][0]["parameters"]["rate"]
+    true = calibrated("slip_degradation", 8.0, "ladder")
+    se = g.fit.details["effects"][0]["stderr"]["rate"]
+    assert abs(rate - true) < 5 * se + 0.05 * true
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    arts = g.plot()
+    assert len(arts) >= 6
+    plt.gcf().savefig(tmp_path / "d.png")
+    plt.close("all")
+    with pytest.raises(ValueError, match="ax"):
+        g.plot(ax=[1, 2, 3])
+
+
+# ----------------------------------------------------------------------------- bad input
+def test_bad_input():
+    d = record(None, 0, "ladder", 0)
+    with pytest.raises(ValueError, match="complete cycle"):
+        diagnose(d.t[:150], d.u[:150], d.F[:150])               # one cycle and a bit
+    one = simulate_element_test(IwanJoint(P), np.array([0.3, 0.6, 1.0, 1.5]) * P.phi_max,
+                                cycles=1, force_noise=SIGMA)
+    with pytest.raises(ValueError, match="too little data to estimate the noise"):
+        diagnose(one.t, one.u, one.F)
+    g = diagnose(one.t, one.u, one.F, noise=SIGMA)              # given noise: works
+    assert g.effect == "none" and g.details["noise_from"] == "given"
+    with pytest.raises(ValueError, match="candidates"):
+        diagnose(d.t, d.u, d.F, candidates=["friction"])
+    with pytest.raises(ValueError, match="max_effects"):
+        diagnose(d.t, d.u, d.F, max_effects=0)
+    with pytest.raises(ValueError, match="alpha"):
+        diagnose(d.t, d.u, d.F, alpha=0.7)
+    with pytest.raises(ValueError, match="same length"):
+        diagnose(d.t, d.u, d.F[:-1])
+    with pytest.raises(ValueError, match="strictly increasing"):
+        diagnose(d.t[::-1], d.u, d.F)
+
+
+def test_protocols_that_cannot_reveal_an_effect_say_so():
+    # constant loading rate: a dashpot is a dry-friction offset; nothing is guessed
+    c = calibrated("viscous_damping", 8.0, "ladder")
+    d = record(None, 0, "ladder", 2, el=ViscousDamping(IwanJoint(P), c=c), waveform="triangle")
+    g = diagnose(d.t, d.u, d.F)
+    assert "viscous_damping" in g.untestable and "constant" in g.untestable["viscous_damping"]
+    assert g.misfit and g.effect == "none", g.report()
+    assert "cannot test viscous_damping" in g.report()
+    # no time vector: the velocity is unknown
+    g = diagnose(None, d.u, d.F)
+    assert "viscous_damping" in g.untestable and g.effect == "none"
+    # pinning without clearance in microslip is exactly a stiffer Iwan joint
+    el = PinningStiffness(IwanJoint(P), k_p=2e5, delta=0.0)
+    micro = simulate_element_test(el, np.array([0.1, 0.2, 0.35]) * P.phi_max, force_noise=SIGMA)
+    g = diagnose(micro.t, micro.u, micro.F)
+    assert g.effect == "none" and any("pinning stiffness" in w for w in g.warnings)
+
+
+# ----------------------------------------------------------------------------- connector
+@pytest.mark.parametrize("name", ["backlash", "slip_degradation"])
+def test_augmented_model_in_the_exudyn_connector_reproduces_the_fit(name):
+    from _connector_models import Chain, settings
+
+    d = simulate_element_test(element(name, calibrated(name, 8.0, "ladder")),
+                              np.array([0.3, 1.0, 1.5]) * P.phi_max, samples_per_cycle=48,
+                              force_noise=SIGMA, seed=4)
+    g = diagnose(d.t, d.u, d.F)
+    assert g.effect == name
+    chain = Chain([1.0])
+    tt, uu = np.array(d.t), np.array(d.u)
+    chain.prescribe(0, lambda t: float(np.interp(t, tt, uu)))
+    conn = chain.joint(-1, 0, g.model)
+    h = float(tt[1] - tt[0])
+    chain.solve(settings(h, tt.size - 1))
+    assert conn.n_records == tt.size
+    np.testing.assert_allclose(conn.slip, uu, rtol=0, atol=1e-12 * np.abs(uu).max())
+    np.testing.assert_allclose(conn.force, g.force_after, rtol=0, atol=1e-8 * np.abs(d.F).max())
+
+
+# ----------------------------------------------------------------------------- vibration
+def test_modal_curves_match_the_reference_vector():
+    f, z = modal_curves(np.array([1e-3, 0.1, 1.0]) * MODAL.phi_max)
+    np.testing.assert_allclose(f, [99.6616, 96.5675, 88.6937], rtol=2e-6)
+    np.testing.assert_allclose(z, [9.64789e-4, 9.31094e-3, 3.46287e-2], rtol=2e-5)
+
+
+@pytest.mark.parametrize("hidden, name", [
+    ({"zeta_v": 1e-3}, "viscous_damping"), ({"zeta_v": 3e-4}, "viscous_damping"),
+    ({"k_p": 3e4}, "pinning_stiffness"), ({"k_p": 1e4, "delta": 0.5 * MODAL.phi_max},
+                                          "pinning_stiffness")])
+def test_vibration_floor_is_named_and_sized(hidden, name):
+    for seed in (1, 2):
+        X, fm, zm, fp, zp = vibration_case(seed, **hidden)
+        g = diagnose_vibration(X, fm, zm, predicted_frequency=fp, predicted_damping=zp,
+                               predicted_zeta0=ZETA0)
+        assert g.effects == (name,), g.report()
+        par = g.parameters[name]
+        if name == "viscous_damping":
+            assert par["zeta_v"] == pytest.approx(hidden["zeta_v"], rel=0.1)
+            assert "damping is above the prediction, most at low amplitudes" in g.where
+        else:
+            assert par["k_p_per_mass"] == pytest.approx(hidden["k_p"], rel=0.05)
+            assert par["delta"] == pytest.approx(hidden.get("delta", 0.0), abs=0.1 * MODAL.phi_max)
+            assert "frequency is above the prediction, most at high amplitudes" in g.where
+        truth = math.sqrt(0.5 * (2e-4 ** 2 + 0.02 ** 2))
+        assert g.error_after <= 1.25 * truth and g.error_after < g.error_before
+
+
+def test_vibration_two_effects_clean_curves_and_augment():
+    X, fm, zm, fp, zp = vibration_case(5, zeta_v=1e-3, k_p=3e4)
+    g = diagnose_vibration(X, fm, zm, predicted_frequency=fp, predicted_damping=zp,
+                           predicted_zeta0=ZETA0)
+    assert set(g.effects) == {"viscous_damping", "pinning_stiffness"}
+    el = g.augment(IwanJoint(MODAL), modal_mass=1.0)
+    kinds = {type(el).__name__, type(el.inner).__name__}
+    assert kinds == {"ViscousDamping", "PinningStiffness"}
+    pin = el if isinstance(el, PinningStiffness) else el.inner
+    assert pin.k_p == pytest.approx(3e4, rel=0.05)
+    json.dumps(g.to_dict(), allow_nan=False)
+    assert "named: " in g.report()
+    for seed in range(20):
+        X, fm, zm, fp, zp = vibration_case(100 + seed)
+        g = diagnose_vibration(X, fm, zm, predicted_frequency=fp, predicted_damping=zp)
+        assert g.effect == "none", (seed, g.report())
+    with pytest.raises(ValueError, match="too little data"):
+        diagnose_vibration(X[:5], fm[:5], zm[:5], predicted_frequency=fp[:5],
+                           predicted_damping=zp[:5])
+    with pytest.raises(ValueError, match="damping must be > 0"):
+        diagnose_vibration(X, fm, -zm, predicted_frequency=fp, predicted_damping=zp)
+
+
+# ----------------------------------------------------------------------------- CLI, example
+def _csv(tmp_path, d):
+    path = tmp_path / "t.csv"
+    rows = "\n".join(f"{a:.6f},{b:.8f},{c:.7f}" for a, b, c in zip(d.t, d.u * 1e3, d.F * 1e-3))
+    path.write_text("time [s],displacement [mm],force [kN]\n" + rows + "\n")
+    return path
+
+
+def test_cli_diagnose(tmp_path, capsys):
+    from iwan_element.cli import main
+    d = record("asymmetric_slip", 8.0, "ladder", 5)
+    path = _csv(tmp_path, d)
+    js, png = tmp_path / "d.json", tmp_path / "d.png"
+    assert main(["diagnose", str(path), "--units", "mm,kN", "--json", str(js), "--plot", str(png)]) == 0
+    out = capsys.readouterr()
+    assert "named: asymmetric_slip" in out.out and out.err == ""
+    assert json.loads(js.read_text())["effect"] == "asymmetric_slip"
+    assert png.read_bytes()[:4] == b"\x89PNG"
+    assert main(["diagnose", str(path), "--units", "mm,kN", "--max-effects", "0"]) == 1
+    err = capsys.readouterr().err
+    assert err.startswith("iwan-element: error:") and "max_effects" in err and err.count("\n") == 1
+    assert main(["diagnose", str(path)]) == 2
+
+
+def test_example_runs(tmp_path):
+    out = tmp_path / "diag.png"
+    proc = subprocess.run([sys.executable, str(ROOT / "examples" / "diagnose_missing_effect.py"),
+                           "--quick", "--out", str(out)], capture_output=True, text=True,
+                          timeout=120, env={**os.environ, "MPLBACKEND": "Agg"})
+    assert proc.returncode == 0, proc.stderr
+    assert "named: backlash" in proc.stdout and out.stat().st_size > 10_000
