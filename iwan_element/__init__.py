@@ -16,6 +16,8 @@ from .closed_form import (
     secant_stiffness,
     tangent_stiffness,
 )
+from .diagnosis import (CANDIDATES, Diagnosis, VibrationDiagnosis, diagnose, diagnose_vibration,
+                        simulate_element_test)
 from .discrete import DiscreteIwan, slider_distribution
 from .effects import (EFFECTS, AsymmetricSlip, Backlash, PinningStiffness, SlipDegradation,
                       ViscousDamping, base_joint, make_effect)
@@ -63,4 +65,10 @@ __all__ = [
     "fit_dissipation",
     "FitResult",
     "IdentifiabilityWarning",
+    "diagnose",
+    "diagnose_vibration",
+    "Diagnosis",
+    "VibrationDiagnosis",
+    "simulate_element_test",
+    "CANDIDATES",
 ]
