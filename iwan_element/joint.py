@@ -14,7 +14,10 @@ displacement history (Segalman 2005, sec. 3; paper eqs. 13-15).
   and the dissipation is ``2 dI_H`` with ``I_H(y) = int_0^y int_0^q phi rho(phi)``; the stored
   (slider spring) energy is their difference. All three are exact closed forms.
 
-The cost per call is O(1) amortised: only the top of the reversal stack is touched.
+The cost per call is O(1) amortised: only the top of the reversal stack is touched. A
+trial that continues the current branch without closing a loop (most trials and commits of
+a time integration) takes a shortcut that gives bit-for-bit the numbers of the general walk;
+its commit reuses ``G`` and ``I_H`` at the committed point, kept from the previous commit.
 """
 from __future__ import annotations
 
@@ -62,7 +65,7 @@ class IwanJoint:
 
     __slots__ = ("_p", "_tol", "_KT", "_Fs", "_pm", "_e1", "_e3", "_a", "_b", "_g_pm", "_ih_c",
                  "_ih_pm", "_u", "_F", "_K", "_us", "_Fr", "_W", "_D",
-                 "_tu", "_tF", "_tK", "_tn", "_te", "_teF", "_has_trial")
+                 "_tu", "_tF", "_tK", "_tn", "_te", "_teF", "_has_trial", "_tfast", "_Gc", "_IHc")
 
     def __init__(self, params: IwanParameters, *, reversal_tol: float = 1e-12):
         if not isinstance(params, IwanParameters):
@@ -99,11 +102,14 @@ class IwanJoint:
         self._Fr = []
         self._W = 0.0
         self._D = 0.0
+        self._Gc = 0.0          # G and I_H at the committed point, in the coordinate of the
+        self._IHc = 0.0         # branch it lies on (|u| virgin, |u - u_r|/2 otherwise)
         self.revert()
 
     def revert(self) -> None:
         """Discard the last trial; the committed state is unchanged."""
         self._has_trial = False
+        self._tfast = False
         self._tu = self._u
         self._tF = self._F
         self._tK = self._K
@@ -126,8 +132,49 @@ class IwanJoint:
             Consistent tangent ``dF/du`` [N/m] for motion from the committed state to ``u``.
         """
         u = float(u)
-        if u != u or u in (math.inf, -math.inf):
+        if not -math.inf < u < math.inf:
             raise ValueError(f"u must be finite, got {u}")
+        # Fast path, the usual case: u continues the current branch without reaching the
+        # point where its loop closes; it gives the same numbers as the general walk.
+        us = self._us
+        uc = self._u
+        du = u - uc
+        if us:
+            ur = us[-1]
+            if (uc - ur) * du > 0.0 and (u - (us[-2] if len(us) >= 2 else -ur)) * du < 0.0:
+                x = u - ur
+                h = 0.5 * abs(x)
+                if h < self._pm:
+                    q = h ** self._e1
+                    f = h * (self._KT - self._a * q)
+                    K = self._KT - self._b * q
+                else:
+                    f = self._Fs
+                    K = 0.0
+                Fr = self._Fr[-1]
+                F = Fr + 2.0 * f if x >= 0.0 else Fr - 2.0 * f
+                self._tu = u
+                self._tF = F
+                self._tK = K
+                self._tfast = True
+                self._has_trial = True
+                return F, K
+        elif uc * du > 0.0:                          # outwards on the virgin curve
+            h = abs(u)
+            if h < self._pm:
+                q = h ** self._e1
+                f = h * (self._KT - self._a * q)
+                K = self._KT - self._b * q
+            else:
+                f = self._Fs
+                K = 0.0
+            F = f if u >= 0.0 else -f
+            self._tu = u
+            self._tF = F
+            self._tK = K
+            self._tfast = True
+            self._has_trial = True
+            return F, K
         n, e, eF, F, K = self._walk(u, None)
         self._tu = u
         self._tF = F
@@ -135,6 +182,7 @@ class IwanJoint:
         self._tn = n
         self._te = e
         self._teF = eF
+        self._tfast = False
         self._has_trial = True
         return F, K
 
@@ -142,7 +190,30 @@ class IwanJoint:
         """Accept the last trial as the new committed state (no-op if there is none)."""
         if not self._has_trial:
             return
-        acc = [0.0, 0.0]
+        if self._tfast:             # one segment on the current branch (see trial)
+            u = self._tu
+            us = self._us
+            if us:
+                ur = us[-1]
+                xb = 0.5 * abs(u - ur)
+                Gb = self._G(xb)
+                Ib = self._IH(xb)
+                self._W += self._Fr[-1] * (u - self._u) + 4.0 * (Gb - self._Gc)
+                self._D += 2.0 * (Ib - self._IHc)
+            else:
+                xb = abs(u)
+                Gb = self._G(xb)
+                Ib = self._IH(xb)
+                self._W += Gb - self._Gc
+                self._D += max(Ib - self._IHc, 0.0)
+            self._Gc = Gb
+            self._IHc = Ib
+            self._u = u
+            self._F = self._tF
+            self._K = self._tK
+            self._has_trial = False
+            return
+        acc = [0.0, 0.0, self._Gc, self._IHc]
         self._walk(self._tu, acc)
         n = self._tn
         del self._us[n:]
@@ -155,6 +226,8 @@ class IwanJoint:
         self._K = self._tK
         self._W += acc[0]
         self._D += acc[1]
+        self._Gc = acc[2]
+        self._IHc = acc[3]
         self._has_trial = False
 
     # ------------------------------------------------------------------ state read-out
@@ -235,22 +308,29 @@ class IwanJoint:
 
     def _segment(self, ur, Fr, ua, ub, acc) -> None:
         """Add work and dissipation of a monotone move ``ua -> ub`` on the branch from ``ur``
-        (``ur is None`` for the virgin curve) to ``acc = [W, D]``."""
+        (``ur is None`` for the virgin curve) to ``acc = [W, D, G, I_H]`` and put ``G`` and
+        ``I_H`` at ``ub`` (in the branch's coordinate) in its last two entries."""
         if ur is None:
-            acc[0] += self._G(abs(ub)) - self._G(abs(ua))
-            acc[1] += max(self._IH(abs(ub)) - self._IH(abs(ua)), 0.0)
+            Gb = self._G(abs(ub))
+            Ib = self._IH(abs(ub))
+            acc[0] += Gb - self._G(abs(ua))
+            acc[1] += max(Ib - self._IH(abs(ua)), 0.0)
         else:
             xa = 0.5 * abs(ua - ur)
             xb = 0.5 * abs(ub - ur)
-            acc[0] += Fr * (ub - ua) + 4.0 * (self._G(xb) - self._G(xa))
-            acc[1] += 2.0 * (self._IH(xb) - self._IH(xa))
+            Gb = self._G(xb)
+            Ib = self._IH(xb)
+            acc[0] += Fr * (ub - ua) + 4.0 * (Gb - self._G(xa))
+            acc[1] += 2.0 * (Ib - self._IH(xa))
+        acc[2] = Gb                 # the last segment of a walk ends at its target
+        acc[3] = Ib
 
     def _walk(self, u: float, acc):
         """Move from the committed state to ``u``.
 
         Returns ``(n, e, eF, F, K)``: the new stack is the first ``n`` committed entries plus
-        the new reversal ``(e, eF)`` if ``e is not None``. With ``acc = [W, D]`` the work and
-        dissipation of the move are added to it.
+        the new reversal ``(e, eF)`` if ``e is not None``. With ``acc = [W, D, G, I_H]`` the
+        work and dissipation of the move are added to it (see :meth:`_segment`).
         """
         us = self._us
         Fr = self._Fr
