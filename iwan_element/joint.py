@@ -30,6 +30,9 @@ from .parameters import IwanParameters
 
 __all__ = ["IwanJoint"]
 
+_INF = math.inf
+_NINF = -math.inf
+
 
 class IwanJoint:
     """Exact time-domain Iwan joint with reversal-point memory (element protocol).
@@ -132,7 +135,7 @@ class IwanJoint:
             Consistent tangent ``dF/du`` [N/m] for motion from the committed state to ``u``.
         """
         u = float(u)
-        if not -math.inf < u < math.inf:
+        if not _NINF < u < _INF:
             raise ValueError(f"u must be finite, got {u}")
         # Fast path, the usual case: u continues the current branch without reaching the
         # point where its loop closes; it gives the same numbers as the general walk.
@@ -193,17 +196,18 @@ class IwanJoint:
         if self._tfast:             # one segment on the current branch (see trial)
             u = self._tu
             us = self._us
+            xb = 0.5 * abs(u - us[-1]) if us else abs(u)
+            if xb < self._pm:       # _G(xb) and _IH(xb), inlined, sharing the power
+                p3 = xb ** self._e3
+                Gb = 0.5 * self._KT * xb * xb - self._a * p3 / self._e3
+                Ib = self._ih_c * p3
+            else:
+                Gb = self._g_pm + self._Fs * (xb - self._pm)
+                Ib = self._ih_pm + self._Fs * (xb - self._pm)
             if us:
-                ur = us[-1]
-                xb = 0.5 * abs(u - ur)
-                Gb = self._G(xb)
-                Ib = self._IH(xb)
                 self._W += self._Fr[-1] * (u - self._u) + 4.0 * (Gb - self._Gc)
                 self._D += 2.0 * (Ib - self._IHc)
             else:
-                xb = abs(u)
-                Gb = self._G(xb)
-                Ib = self._IH(xb)
                 self._W += Gb - self._Gc
                 self._D += max(Ib - self._IHc, 0.0)
             self._Gc = Gb
