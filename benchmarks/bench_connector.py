@@ -6,27 +6,43 @@ Exudyn's default settings, fixed step 10 us, one thread, no solution file. Varia
 
 * ``builtin``      ObjectConnectorCoordinateSpringDamper, stiffness KT (the reference, 1.0)
 * ``python-lin``   the same object with a Python user function returning ``k * deltaL``
+* ``python-lin+post``    the same plus an empty post-step function
+* ``python-nonlin+post`` a Python user function with the Iwan *virgin backbone* only (no
+                   history, nothing to commit) plus an empty post-step function: a nonlinear
+                   law, so generalized-alpha needs two Newton iterations (three calls) per
+                   step as with the joint; the floor of any Python force law with a
+                   once-per-step post-step function in this solver
 * ``conn-linear``  :func:`add_iwan_connector` with a trivial linear element: the cost of
                    the connector machinery alone (trial-only force function, post-step
                    dispatcher, commit, records)
 * ``conn-iwan``    :func:`add_iwan_connector` with :class:`IwanJoint` (records on / off)
 * ``conn-discrete`` :func:`add_iwan_connector` with :class:`DiscreteIwan`, 100 sliders
 
-Wall time is the best of ``--repeat`` runs of ``mbs.SolveDynamic`` only. Force evaluations
-per step come from a separate counting run (not timed).
+With ``--compare-with DIR`` the ``conn-*`` variants are also run with the package found in
+``DIR/iwan_element`` (e.g. an older revision: ``git archive <rev> iwan_element | tar -x -C
+DIR``), interleaved with the current one, rows marked ``@base``.
 
-Run: ``python benchmarks/bench_connector.py [--steps 100000] [--repeat 3]``
+Wall time is the best of ``--repeat`` runs of ``mbs.SolveDynamic`` only, the variants
+interleaved in each round (the machine is shared: compare ratios within one run). Force
+evaluations per step come from a separate counting run (not timed).
+
+Run: ``python benchmarks/bench_connector.py [--steps 100000] [--repeat 5] [--compare-with DIR]``
 """
 from __future__ import annotations
 
 import argparse
+import importlib.util
+import math
+import sys
 import time
+from pathlib import Path
 
 import exudyn as exu
 from exudyn.itemInterface import CoordinateSpringDamper, Mass1D, MarkerNodeCoordinate, Node1D, NodePointGround
 
-from iwan_element import DiscreteIwan, IwanJoint, IwanParameters
-from iwan_element.exudyn import add_iwan_connector
+import iwan_element
+import iwan_element.exudyn  # noqa: F401  (the connector module)
+from iwan_element import IwanParameters
 
 P = IwanParameters(Fs=1000.0, KT=1e6, chi=-0.5, beta=0.2)
 H = 1e-5
@@ -86,6 +102,35 @@ class Counting:
     force = property(lambda self: self.element.force)
 
 
+def load_package(directory):
+    """Import ``directory/iwan_element`` under the name ``iwan_element_base``."""
+    path = Path(directory).resolve() / "iwan_element"
+    spec = importlib.util.spec_from_file_location(
+        "iwan_element_base", path / "__init__.py", submodule_search_locations=[str(path)])
+    module = importlib.util.module_from_spec(spec)
+    sys.modules["iwan_element_base"] = module
+    spec.loader.exec_module(module)
+    importlib.import_module("iwan_element_base.exudyn")
+    return module
+
+
+PACKAGES = {"": iwan_element}
+
+
+def backbone_law():
+    """Python force law: the virgin backbone only (nonlinear, no history)."""
+    KT, Fs, pm = P.KT, P.Fs, P.phi_max
+    e1 = P.chi + 1.0
+    a = P.R / ((P.chi + 1.0) * (P.chi + 2.0))
+    copysign = math.copysign
+
+    def backbone(mbs_, t, itemNumber, deltaL, deltaL_t, stiffness, damping, offset):
+        x = abs(deltaL)
+        return copysign(x * (KT - a * x ** e1) if x < pm else Fs, deltaL)
+
+    return backbone
+
+
 def build(variant, counter=None):
     SC = exu.SystemContainer()
     mbs = SC.AddSystem()
@@ -96,19 +141,26 @@ def build(variant, counter=None):
     m1 = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=node, coordinate=0))
     if variant == "builtin":
         mbs.AddObject(CoordinateSpringDamper(markerNumbers=[m0, m1], stiffness=P.KT))
-    elif variant == "python-lin":
+    elif variant.startswith("python-"):
         def linear(mbs_, t, itemNumber, deltaL, deltaL_t, stiffness, damping, offset):
             return stiffness * deltaL
+        law = backbone_law() if variant.startswith("python-nonlin") else linear
         mbs.AddObject(CoordinateSpringDamper(markerNumbers=[m0, m1], stiffness=P.KT,
-                                             springForceUserFunction=linear))
+                                             springForceUserFunction=law))
+        if variant.endswith("+post"):
+            mbs.SetPostStepUserFunction(lambda mbs_, t: True)
     else:
+        name, _, tag = variant.partition("@")
+        pkg = PACKAGES[tag]
+        params = pkg.IwanParameters(Fs=P.Fs, KT=P.KT, chi=P.chi, beta=P.beta)
         element = {"conn-linear": lambda: LinearElement(P.KT),
-                   "conn-iwan": lambda: IwanJoint(P),
-                   "conn-iwan-norecord": lambda: IwanJoint(P),
-                   "conn-discrete": lambda: DiscreteIwan(P, 100)}[variant]()
+                   "conn-iwan": lambda: pkg.IwanJoint(params),
+                   "conn-iwan-norecord": lambda: pkg.IwanJoint(params),
+                   "conn-discrete": lambda: pkg.DiscreteIwan(params, 100)}[name]()
         if counter is not None:
             element = Counting(element, counter)
-        add_iwan_connector(mbs, [m0, m1], element, record=(variant != "conn-iwan-norecord"))
+        pkg.exudyn.add_iwan_connector(mbs, [m0, m1], element,
+                                      record=(name != "conn-iwan-norecord"))
     mbs.Assemble()
     return SC, mbs
 
@@ -123,41 +175,59 @@ def settings(steps):
     return sim
 
 
-def run(variant, steps, repeat):
-    best = float("inf")
-    for _ in range(repeat):
-        SC, mbs = build(variant)
-        sim = settings(steps)
-        t0 = time.perf_counter()
-        mbs.SolveDynamic(sim)
-        best = min(best, time.perf_counter() - t0)
-        newton = mbs.sys["dynamicSolver"].it.newtonStepsCount / steps
-    evals = float("nan")
-    if variant.startswith("conn"):
-        counter = [0]
-        SC, mbs = build(variant, counter)
-        mbs.SolveDynamic(settings(min(steps, 20000)))
-        evals = counter[0] / min(steps, 20000)
-    return best, newton, evals
+def timed_run(variant, steps):
+    SC, mbs = build(variant)
+    sim = settings(steps)
+    t0 = time.perf_counter()
+    mbs.SolveDynamic(sim)
+    wall = time.perf_counter() - t0
+    return wall, mbs.sys["dynamicSolver"].it.newtonStepsCount / steps
+
+
+def count_trials(variant, steps):
+    if not variant.startswith("conn"):
+        return float("nan")
+    counter = [0]
+    n = min(steps, 20000)
+    SC, mbs = build(variant, counter)
+    mbs.SolveDynamic(settings(n))
+    return counter[0] / n
 
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--steps", type=int, default=100_000)
-    ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--repeat", type=int, default=5)
+    ap.add_argument("--compare-with", metavar="DIR",
+                    help="also run the conn-* variants with DIR/iwan_element (rows '@base')")
+    ap.add_argument("--no-discrete", action="store_true", help="skip the slow conn-discrete")
     args = ap.parse_args(argv)
-    variants = ["builtin", "python-lin", "conn-linear", "conn-iwan", "conn-iwan-norecord",
-                "conn-discrete"]
-    rows = {v: run(v, args.steps, args.repeat if v != "conn-discrete" else max(1, args.repeat - 1))
-            for v in variants}
-    base = rows["builtin"][0]
+    conn = ["conn-linear", "conn-iwan", "conn-iwan-norecord"]
+    if not args.no_discrete:
+        conn.append("conn-discrete")
+    if args.compare_with:
+        PACKAGES["base"] = load_package(args.compare_with)
+        conn = [c for v in conn for c in (v + "@base", v)]
+    variants = ["builtin", "python-lin", "python-lin+post", "python-nonlin+post"] + conn
+    best = {v: (math.inf, math.nan) for v in variants}
+    for _ in range(args.repeat):           # interleaved rounds: load changes hit all variants
+        for v in variants:
+            if v.startswith("conn-discrete") and _ > 1:
+                continue
+            wall, newton = timed_run(v, args.steps)
+            if wall < best[v][0]:
+                best[v] = (wall, newton)
+    base = best["builtin"][0]
     print(f"one mass, {args.steps} steps, generalized-alpha (default settings), h = {H:g} s, "
-          f"exudyn {exu.__version__}")
-    print(f"{'variant':<20} {'wall [s]':>9} {'ratio':>7} {'us/step':>8} {'Newton it/step':>15} "
+          f"exudyn {exu.__version__}, best of {args.repeat} interleaved rounds")
+    print(f"{'variant':<24} {'wall [s]':>9} {'ratio':>7} {'us/step':>8} {'Newton it/step':>15} "
           f"{'trials/step':>12}")
-    for v, (t, newton, evals) in rows.items():
+    for v in variants:
+        t, newton = best[v]
+        evals = count_trials(v, args.steps)
         ev = "-" if evals != evals else f"{evals:.2f}"
-        print(f"{v:<20} {t:9.3f} {t / base:7.1f} {1e6 * t / args.steps:8.2f} {newton:15.2f} {ev:>12}")
+        print(f"{v:<24} {t:9.3f} {t / base:7.1f} {1e6 * t / args.steps:8.2f} {newton:15.2f} "
+              f"{ev:>12}")
 
 
 if __name__ == "__main__":

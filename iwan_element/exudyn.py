@@ -20,9 +20,10 @@ methods, and attempts that an adaptive solver rejects. The force user function t
 only calls ``joint.trial(u, v)`` (which never changes the joint's history). Once per
 *accepted* step a post-step dispatcher brings every joint to the accepted state, calls
 ``joint.commit()`` and appends a row to the connector's record. For two node coordinates
-it reads the accepted slip from the system coordinates and evaluates a new trial only if
-the last one was elsewhere; otherwise it calls ``mbs.GetObjectOutput``, which evaluates
-the force function at the accepted state. Exudyn calls the post-step
+it reads the accepted slip and its rate through views of Exudyn's coordinate vectors (no
+copy; renewed at the start of every run and when an ``Assemble`` changed the number of
+coordinates) and evaluates a new trial only if the last one was elsewhere; otherwise it
+calls ``mbs.GetObjectOutput``, which evaluates the force function at the accepted state. Exudyn calls the post-step
 function only after accepted steps (and once at the start of a run, which commits the
 initial state: an initial slip is reached by monotone virgin loading); rejected attempts
 leave no trace. ``SolveStatic`` calls it after every load step, so a static run commits
@@ -51,11 +52,15 @@ Exudyn settings to remember
   which allocates; on long runs Exudyn may then print a harmless "large amount of memory
   allocations" warning.
 
-Cost (``benchmarks/bench_connector.py``, one mass, generalized-alpha, 100k steps): with an
-:class:`~iwan_element.IwanJoint` about 5 us per step, 20 times Exudyn's built-in linear
-connector; a Python linear law alone is 2.4 times, the connector machinery with a
-zero-cost element 8 times. The rest is ``trial`` (about 0.4 us, three evaluations per
-step at two modified-Newton iterations) and ``commit``.
+Cost (``benchmarks/bench_connector.py``, one mass, generalized-alpha with default settings,
+100k steps; ratios to Exudyn's built-in linear connector, measured side by side): with an
+:class:`~iwan_element.IwanJoint` about 3.3 us per step, 12 times; the connector machinery
+with a zero-cost element 7 times. A stateless Python *nonlinear* law with an empty post-step
+function already costs 4.5 times: Exudyn's modified Newton keeps the Jacobian from the
+start of the run, so any nonlinear law takes two iterations, i.e. three Python force calls
+per step (a linear one two). On top of that floor come three ``trial`` calls (about
+0.22 us each on a branch, more in the solver loop), one ``commit`` (about 0.35 us), the
+post-step dispatcher reading the accepted state through coordinate views, and the records.
 """
 from __future__ import annotations
 
@@ -90,6 +95,7 @@ _ORIENTATION_MARKERS = frozenset({"BodyRigid", "NodeRigid", "SuperElementRigid",
 _POSITION_MARKERS = frozenset({"BodyPosition", "NodePosition", "SuperElementPosition"}) | _ORIENTATION_MARKERS
 _VISUALIZATION_KEYS = ("show", "drawSize", "color")
 _NCOL = 5                   # recorded per step: time, slip, force, dissipated energy, work
+_BLOCK = 5 * 1024           # record values buffered in a list before moving them to the array
 
 
 # ---------------------------------------------------------------------------- dispatcher
@@ -111,24 +117,34 @@ class _PostStepDispatcher:
     """Commits every connector of one system once per accepted step, then calls the
     previously installed post-step function (``chained``)."""
 
-    def __init__(self, chained):
+    def __init__(self, chained, mbs):
         self.chained = chained
-        self.accepts = []          # bound IwanConnector._accept methods, in creation order
-        self.connectors = []
+        self.connectors = []       # in creation order
         self.last_t = _NAN
         self.running = False
-        accepts = self.accepts
+        self.n_ode2 = -1           # ODE2 size when the connectors took their coordinate views
+        conns = self.connectors
         disp = self
+        ode2_size = mbs.systemData.ODE2Size
 
         def post_step_dispatcher(mbs, t):
             if disp.running:       # re-entered through a user function that calls us by hand
                 return True
             disp.running = True
             try:
-                if t != disp.last_t:           # never commit twice at the same time
+                if t > disp.last_t:            # the usual case: the next accepted step
                     disp.last_t = t
-                    for accept in accepts:
-                        accept(t)
+                    if disp.n_ode2 >= 0 and ode2_size() != disp.n_ode2:
+                        disp.refresh(mbs)      # re-assembled with more coordinates
+                    for c in conns:
+                        c._accept(t)
+                elif t != disp.last_t:         # a new run (never commit twice at one time)
+                    disp.last_t = t
+                    disp.refresh(mbs)
+                    for c in conns:
+                        c._accept(t)
+                else:                          # a run continuing from the last accepted time
+                    disp.refresh(mbs)
                 f = disp.chained
                 return True if f is None else f(mbs, t)
             finally:
@@ -139,7 +155,20 @@ class _PostStepDispatcher:
 
     def add(self, connector: "IwanConnector") -> None:
         self.connectors.append(connector)
-        self.accepts.append(connector._accept)
+
+    def refresh(self, mbs) -> None:
+        """Let every connector take fresh views of the system coordinates.
+
+        Exudyn keeps its coordinate vectors in place during a run and across runs; only an
+        ``Assemble`` that makes them longer moves them (exudyn 1.13.6). So the views are
+        renewed at the start of every run and whenever the number of ODE2 coordinates
+        differs from the one at the last renewal (checked once per accepted step).
+        """
+        fast = False
+        for c in self.connectors:
+            c._refresh(mbs)
+            fast = fast or c._read is not None
+        self.n_ode2 = mbs.systemData.ODE2Size() if fast else -1
 
     @staticmethod
     def of(obj):
@@ -173,7 +202,7 @@ def _dispatcher_for(mbs) -> _PostStepDispatcher:
     d = _PostStepDispatcher.of(current)
     if d is not None:
         return d
-    d = _PostStepDispatcher(current)
+    d = _PostStepDispatcher(current, mbs)
     mbs.SetPostStepUserFunction(d.callback)
     return d
 
@@ -225,41 +254,6 @@ def _visualization(visualization) -> dict:
     return vis
 
 
-def _coordinate_reader(i0: int, i1: int, offset: float, system_data):
-    """``(read_u, read_v)`` from the global ODE2 indices of two node coordinates (``-1``:
-    ground): the slip and its rate at the current state, or ``None`` if both are ground.
-
-    ``read_u`` repeats the force function's ``deltaL - offset`` with
-    ``deltaL = q[i1] - q[i0]`` operation by operation, so a trial at the accepted state is
-    recognised by exact equality.
-    """
-    get_q = system_data.GetODE2Coordinates
-    get_qt = system_data.GetODE2Coordinates_t
-    if i0 < 0 and i1 < 0:
-        return None
-    if i0 < 0:
-        def read_u():
-            return (get_q().item(i1) - 0.0) - offset
-
-        def read_v():
-            return get_qt().item(i1) - 0.0
-    elif i1 < 0:
-        def read_u():
-            return (0.0 - get_q().item(i0)) - offset
-
-        def read_v():
-            return 0.0 - get_qt().item(i0)
-    else:
-        def read_u():
-            q = get_q()
-            return (q.item(i1) - q.item(i0)) - offset
-
-        def read_v():
-            qt = get_qt()
-            return qt.item(i1) - qt.item(i0)
-    return read_u, read_v
-
-
 def _node_coordinate_nodes(mbs, markerNumbers):
     """For two ``NodeCoordinate`` markers: ``[(node, coordinate), ...]`` with ``node = None``
     for a ground node (its coordinate is always 0); ``None`` for other marker types."""
@@ -294,7 +288,9 @@ class IwanConnector:
         self._axis_marker = axisMarker
         self._offset = offset
         self._record_on = record
-        self._rec = array("d")
+        self._rec = array("d")      # the records, row-major, _NCOL values per row
+        self._buf = []              # newest rows, moved to _rec in blocks (list.extend is
+                                    # ~4x faster than array.extend with a tuple)
         self._guard = _INF          # force evaluations at t < _guard check the set-up first
         self._t_acc = -_INF         # time of the last accepted step
         self._lu = _NAN             # cache of the last trial: (u, v) -> F
@@ -302,42 +298,76 @@ class IwanConnector:
         self._lF = 0.0
         self._object = None
         self._dispatcher = None
-        self._output = mbs.GetObjectOutput
-        self._commit = joint.commit
-        self._trial = joint.trial
-        self._read = None           # (read_u, read_v) at the current state, or None (generic route)
-        self._fast_nodes = None     # set for two NodeCoordinate markers; resolved in _check
+        self._read = None           # (q, q_t, i0, i1) on the fast route, else None (generic)
+        self._fast_nodes = None     # set for two NodeCoordinate markers; resolved in _refresh
+        self._accept = self._generic_accept
 
     # -------------------------------------------------------------- per-step work
-    def _accept(self, t):
-        """Post-step: commit the joint at the accepted state and record a row."""
-        read = self._read
-        if read is None:
-            # generic route: Exudyn calls the force function at the accepted state, which
-            # leaves (u, F) of that state in the cache
-            self._output(self._object, _FORCE)
-            u = self._lu
-            F = self._lF
-        else:
-            u = read[0]()
-            if u == self._lu:
-                # the last trial was at the accepted slip, bit for bit (Exudyn 1.13.6 ends
-                # every step with a force evaluation at the accepted state, unless explicit
-                # solvers run with computeEndOfStepAccelerations=False); its velocity is
-                # taken to be the accepted one too: a stage with the same slip bits but
-                # another velocity does not occur in practice
-                F = self._lF
-            else:
-                F = self._trial(u, read[1]())[0]
+    def _generic_accept(self, t):
+        """Post-step (generic route): Exudyn evaluates the force function at the accepted
+        state, which leaves (u, F) of that state in the cache; commit and record."""
+        self._mbs.GetObjectOutput(self._object, _FORCE)
+        u = self._lu
+        F = self._lF
         if t < self._t_acc:
             self._new_run(t, u)
-        self._commit()
+        j = self._joint
+        j.commit()
         self._lu = _NAN
         self._guard = t
         self._t_acc = t
         if self._record_on:
-            j = self._joint
-            self._rec.extend((t, u, F, j.dissipated_energy, j.work))
+            buf = self._buf
+            buf.extend((t, u, F, j.dissipated_energy, j.work))
+            if len(buf) >= _BLOCK:
+                self._flush()
+
+    def _fast_accept(self, q, qt, i0, i1):
+        """Post-step function for two node coordinates: reads the accepted slip and its rate
+        through views ``q``, ``q_t`` of Exudyn's current system coordinates (no copy) and
+        evaluates a new trial only if the last one was elsewhere."""
+        conn = self
+        joint = self._joint
+        trial = joint.trial
+        commit = joint.commit
+        off = self._offset
+        buf = self._buf
+        extend = buf.extend if self._record_on else None
+        flush = self._flush
+        item = q.item
+        item_t = qt.item
+
+        def accept(t):
+            # the same operations as the force function's u = deltaL - offset with
+            # deltaL = q[i1] - q[i0] (0.0 for ground), so a trial at the accepted state is
+            # recognised by exact equality
+            u = ((item(i1) if i1 >= 0 else 0.0) - (item(i0) if i0 >= 0 else 0.0)) - off
+            v = (item_t(i1) if i1 >= 0 else 0.0) - (item_t(i0) if i0 >= 0 else 0.0)
+            if u == conn._lu and v == conn._lv:
+                # the last trial was at the accepted state, bit for bit (the implicit solvers
+                # and explicit ones with end-of-step accelerations end every step there)
+                F = conn._lF
+            else:                   # e.g. an explicit solver whose last call was a stage
+                F = trial(u, v)[0]
+            if t < conn._t_acc:
+                conn._new_run(t, u)
+            commit()
+            conn._lu = _NAN
+            conn._guard = t
+            conn._t_acc = t
+            if extend is not None:
+                extend((t, u, F, joint.dissipated_energy, joint.work))
+                if len(buf) >= _BLOCK:
+                    flush()
+
+        return accept
+
+    def _flush(self) -> None:
+        """Move the buffered record rows to the array."""
+        buf = self._buf
+        if buf:
+            self._rec.fromlist(buf)
+            buf.clear()
 
     def _new_run(self, t, u):
         """A run restarts before the last accepted time: warn if it starts from another slip
@@ -350,14 +380,27 @@ class IwanConnector:
                 "history the joint holds, and the slip jumps from %g to %g; call reset() "
                 "before starting a fresh run", self.objectNumber, t, self._t_acc, held, u)
 
+    def _refresh(self, mbs):
+        """Start of a run: resolve the global coordinate indices and take fresh views of the
+        system coordinates (Assemble may have moved them); the views stay valid during a
+        run (checked at every accepted step for all solvers, see the tests)."""
+        if self._fast_nodes is None:
+            self._read = None
+            self._accept = self._generic_accept
+            return
+        i0, i1 = [-1 if node is None else mbs.GetNodeODE2Index(node) + coord
+                  for node, coord in self._fast_nodes]
+        sd = mbs.systemData
+        q = sd.GetODE2Coordinates(copy=False)
+        qt = sd.GetODE2Coordinates_t(copy=False)
+        self._read = (q, qt, i0, i1)
+        self._accept = self._fast_accept(q, qt, i0, i1)
+
     def _check(self, mbs, t, u):
-        """First force evaluation of a run: resolve coordinate indices and make sure the
+        """First force evaluation of a run: take fresh coordinate views and make sure the
         dispatcher runs (a post-step function set later would have replaced it)."""
-        if self._fast_nodes is not None:     # global indices exist only after Assemble
-            idx = [-1 if node is None else mbs.GetNodeODE2Index(node) + coord
-                   for node, coord in self._fast_nodes]
-            self._read = _coordinate_reader(idx[0], idx[1], self._offset, mbs.systemData)
         d = self._dispatcher
+        d.refresh(mbs)
         if not d.reachable_from(_installed_post_step(mbs)):
             _log.debug("connector %s: post-step function was replaced; chaining it behind the "
                        "connector dispatcher", self.objectNumber)
@@ -413,6 +456,7 @@ class IwanConnector:
         """
         self._joint.reset()
         del self._rec[:]
+        self._buf.clear()
         self._lu = _NAN
         self._lv = _NAN
         self._guard = _INF
@@ -421,12 +465,13 @@ class IwanConnector:
             self._dispatcher.last_t = _NAN
 
     def _column(self, i: int) -> np.ndarray:
+        self._flush()
         return np.array(self._rec[i::_NCOL], dtype=float)
 
     @property
     def n_records(self) -> int:
         """Number of recorded rows."""
-        return len(self._rec) // _NCOL
+        return (len(self._rec) + len(self._buf)) // _NCOL
 
     @property
     def time(self) -> np.ndarray:
@@ -463,6 +508,7 @@ class IwanConnector:
     def records(self) -> dict:
         """All records as a dict of arrays of shape (n,): ``time [s], slip [m], force [N],
         stored_energy [J], dissipated_energy [J], work [J]``."""
+        self._flush()
         data = np.array(self._rec, dtype=float).reshape(-1, _NCOL)
         return {"time": data[:, 0].copy(), "slip": data[:, 1].copy(),
                 "force": data[:, 2].copy(), "stored_energy": data[:, 4] - data[:, 3],

@@ -14,7 +14,11 @@ displacement history (Segalman 2005, sec. 3; paper eqs. 13-15).
   and the dissipation is ``2 dI_H`` with ``I_H(y) = int_0^y int_0^q phi rho(phi)``; the stored
   (slider spring) energy is their difference. All three are exact closed forms.
 
-The cost per call is O(1) amortised: only the top of the reversal stack is touched.
+The cost per call is O(1) amortised: only the top of the reversal stack is touched. A
+trial that continues the current branch without closing a loop (most trials and commits of
+a time integration) takes a shortcut (an interval test against the cached branch) that gives
+bit-for-bit the numbers of the general walk; its commit reuses ``G`` and ``I_H`` at the
+committed point, kept from the previous commit.
 """
 from __future__ import annotations
 
@@ -26,6 +30,9 @@ from ._validation import check_scalar, finite_array
 from .parameters import IwanParameters
 
 __all__ = ["IwanJoint"]
+
+_INF = math.inf
+_NINF = -math.inf
 
 
 class IwanJoint:
@@ -62,7 +69,8 @@ class IwanJoint:
 
     __slots__ = ("_p", "_tol", "_KT", "_Fs", "_pm", "_e1", "_e3", "_a", "_b", "_g_pm", "_ih_c",
                  "_ih_pm", "_u", "_F", "_K", "_us", "_Fr", "_W", "_D",
-                 "_tu", "_tF", "_tK", "_tn", "_te", "_teF", "_has_trial")
+                 "_tu", "_tF", "_tK", "_tn", "_te", "_teF", "_has_trial", "_tfast", "_Gc", "_IHc",
+                 "_blo", "_bhi", "_bur", "_bFr", "_bc1", "_bc2", "_bdir")
 
     def __init__(self, params: IwanParameters, *, reversal_tol: float = 1e-12):
         if not isinstance(params, IwanParameters):
@@ -99,11 +107,15 @@ class IwanJoint:
         self._Fr = []
         self._W = 0.0
         self._D = 0.0
+        self._Gc = 0.0          # G and I_H at the committed point, in the coordinate of the
+        self._IHc = 0.0         # branch it lies on (|u| virgin, |u - u_r|/2 otherwise)
+        self._set_branch()
         self.revert()
 
     def revert(self) -> None:
         """Discard the last trial; the committed state is unchanged."""
         self._has_trial = False
+        self._tfast = False
         self._tu = self._u
         self._tF = self._F
         self._tK = self._K
@@ -126,7 +138,26 @@ class IwanJoint:
             Consistent tangent ``dF/du`` [N/m] for motion from the committed state to ``u``.
         """
         u = float(u)
-        if u != u or u in (math.inf, -math.inf):
+        if self._blo < u < self._bhi:
+            # Fast path, the usual case: u continues the current branch without reaching the
+            # point where its loop closes (see _set_branch); the same numbers as the walk.
+            x = u - self._bur
+            h = self._bc1 * abs(x)
+            if h < self._pm:
+                q = h ** self._e1
+                f = h * (self._KT - self._a * q)
+                K = self._KT - self._b * q
+            else:
+                f = self._Fs
+                K = 0.0
+            F = self._bFr + self._bc2 * f if x >= 0.0 else self._bFr - self._bc2 * f
+            self._tu = u
+            self._tF = F
+            self._tK = K
+            self._tfast = True
+            self._has_trial = True
+            return F, K
+        if not _NINF < u < _INF:
             raise ValueError(f"u must be finite, got {u}")
         n, e, eF, F, K = self._walk(u, None)
         self._tu = u
@@ -135,6 +166,7 @@ class IwanJoint:
         self._tn = n
         self._te = e
         self._teF = eF
+        self._tfast = False
         self._has_trial = True
         return F, K
 
@@ -142,7 +174,34 @@ class IwanJoint:
         """Accept the last trial as the new committed state (no-op if there is none)."""
         if not self._has_trial:
             return
-        acc = [0.0, 0.0]
+        if self._tfast:             # one segment on the current branch (see trial)
+            u = self._tu
+            xb = self._bc1 * abs(u - self._bur)
+            if xb < self._pm:       # _G(xb) and _IH(xb), inlined, sharing the power
+                p3 = xb ** self._e3
+                Gb = 0.5 * self._KT * xb * xb - self._a * p3 / self._e3
+                Ib = self._ih_c * p3
+            else:
+                Gb = self._g_pm + self._Fs * (xb - self._pm)
+                Ib = self._ih_pm + self._Fs * (xb - self._pm)
+            if self._bc2 == 2.0:    # a branch from a reversal point
+                self._W += self._bFr * (u - self._u) + 4.0 * (Gb - self._Gc)
+                self._D += 2.0 * (Ib - self._IHc)
+            else:                   # the virgin curve
+                self._W += Gb - self._Gc
+                self._D += max(Ib - self._IHc, 0.0)
+            self._Gc = Gb
+            self._IHc = Ib
+            self._u = u
+            self._F = self._tF
+            self._K = self._tK
+            self._has_trial = False
+            if self._bdir > 0:      # the fast interval now starts at u
+                self._blo = u
+            else:
+                self._bhi = u
+            return
+        acc = [0.0, 0.0, self._Gc, self._IHc]
         self._walk(self._tu, acc)
         n = self._tn
         del self._us[n:]
@@ -155,7 +214,46 @@ class IwanJoint:
         self._K = self._tK
         self._W += acc[0]
         self._D += acc[1]
+        self._Gc = acc[2]
+        self._IHc = acc[3]
         self._has_trial = False
+        self._set_branch()
+
+    def _set_branch(self) -> None:
+        """Cache the branch through the committed state for the fast path of :meth:`trial`.
+
+        The walk leaves the branch unchanged (no reversal, no loop closed) exactly when
+        ``u`` lies strictly between the committed ``u_c`` and, in the branch's direction,
+        the point where its loop closes (the reversal below the top one, or ``-u_r`` for the
+        last one; none on the virgin curve): the open interval ``(_blo, _bhi)``. (The walk
+        decides with products of differences; the two agree unless such a product
+        underflows, for displacements below ~1e-160.) On that branch the force is
+        ``F_r + c2 F_bb(c1 |u - u_r|)`` with the sign of ``u - u_r``: ``c1, c2 = 1/2, 2``
+        from a reversal point, ``1, 1`` with ``u_r = F_r = 0`` on the virgin curve.
+        """
+        us = self._us
+        uc = self._u
+        if us:
+            ur = us[-1]
+            d = uc - ur
+            bound = us[-2] if len(us) >= 2 else -ur
+            self._bur = ur
+            self._bFr = self._Fr[-1]
+            self._bc1 = 0.5
+            self._bc2 = 2.0
+        else:
+            d = uc
+            bound = math.copysign(_INF, uc)
+            self._bur = 0.0
+            self._bFr = 0.0
+            self._bc1 = 1.0
+            self._bc2 = 1.0
+        if d > 0.0:
+            self._blo, self._bhi, self._bdir = uc, bound, 1
+        elif d < 0.0:
+            self._blo, self._bhi, self._bdir = bound, uc, -1
+        else:                       # no direction yet: always the general walk
+            self._blo, self._bhi, self._bdir = 0.0, 0.0, 0
 
     # ------------------------------------------------------------------ state read-out
     @property
@@ -235,22 +333,29 @@ class IwanJoint:
 
     def _segment(self, ur, Fr, ua, ub, acc) -> None:
         """Add work and dissipation of a monotone move ``ua -> ub`` on the branch from ``ur``
-        (``ur is None`` for the virgin curve) to ``acc = [W, D]``."""
+        (``ur is None`` for the virgin curve) to ``acc = [W, D, G, I_H]`` and put ``G`` and
+        ``I_H`` at ``ub`` (in the branch's coordinate) in its last two entries."""
         if ur is None:
-            acc[0] += self._G(abs(ub)) - self._G(abs(ua))
-            acc[1] += max(self._IH(abs(ub)) - self._IH(abs(ua)), 0.0)
+            Gb = self._G(abs(ub))
+            Ib = self._IH(abs(ub))
+            acc[0] += Gb - self._G(abs(ua))
+            acc[1] += max(Ib - self._IH(abs(ua)), 0.0)
         else:
             xa = 0.5 * abs(ua - ur)
             xb = 0.5 * abs(ub - ur)
-            acc[0] += Fr * (ub - ua) + 4.0 * (self._G(xb) - self._G(xa))
-            acc[1] += 2.0 * (self._IH(xb) - self._IH(xa))
+            Gb = self._G(xb)
+            Ib = self._IH(xb)
+            acc[0] += Fr * (ub - ua) + 4.0 * (Gb - self._G(xa))
+            acc[1] += 2.0 * (Ib - self._IH(xa))
+        acc[2] = Gb                 # the last segment of a walk ends at its target
+        acc[3] = Ib
 
     def _walk(self, u: float, acc):
         """Move from the committed state to ``u``.
 
         Returns ``(n, e, eF, F, K)``: the new stack is the first ``n`` committed entries plus
-        the new reversal ``(e, eF)`` if ``e is not None``. With ``acc = [W, D]`` the work and
-        dissipation of the move are added to it.
+        the new reversal ``(e, eF)`` if ``e is not None``. With ``acc = [W, D, G, I_H]`` the
+        work and dissipation of the move are added to it (see :meth:`_segment`).
         """
         us = self._us
         Fr = self._Fr

@@ -214,6 +214,63 @@ def test_history_holds_accepted_states_for_every_solver(solver, kw, end_of_step_
     assert np.all(np.diff(conn.time) > 0)
 
 
+class _RateRecorder:
+    """A linear spring-dashpot element that remembers the (u, v) of every commit."""
+
+    def __init__(self, k, c):
+        self.k, self.c = k, c
+        self.committed = []
+        self.work = self.stored_energy = self.dissipated_energy = 0.0
+        self.displacement = self.force = 0.0
+        self._t = (0.0, 0.0)
+
+    def trial(self, u, v=0.0):
+        self._t = (u, v)
+        return self.k * u + self.c * v, self.k
+
+    def commit(self):
+        self.committed.append(self._t)
+        self.displacement = self._t[0]
+
+    def revert(self):
+        pass
+
+    def reset(self):
+        self.committed.clear()
+
+
+@pytest.mark.parametrize("solver, end_of_step_acc", [
+    (SOLVERS.GeneralizedAlpha, True),
+    (SOLVERS.RK44, True),
+    (SOLVERS.RK44, False),
+    (SOLVERS.ExplicitEuler, False),
+    (SOLVERS.DOPRI5, True),
+], ids=["GA", "RK44", "RK44-no-end-acc", "explicit-Euler-no-end-acc", "DOPRI5"])
+def test_rate_dependent_element_commits_the_accepted_velocity(solver, end_of_step_acc):
+    """Between two masses: the element commits (u, v) of the accepted state, velocity
+    included, also when the solver's last force evaluation of a step was a stage."""
+    h, n = 1e-4, 300
+    chain = Chain([1.0, 2.0], v0=[3.0, -1.0])
+    chain.spring(-1, 0, 2e5)
+    accepted = []
+
+    def user_post_step(mbs, t):
+        x = [mbs.GetNodeOutput(nd, exu.OutputVariableType.Coordinates) for nd in chain.nodes]
+        v = [mbs.GetNodeOutput(nd, exu.OutputVariableType.Coordinates_t) for nd in chain.nodes]
+        accepted.append((x[1] - x[0], v[1] - v[0]))
+        return True
+
+    chain.mbs.SetPostStepUserFunction(user_post_step)
+    element = _RateRecorder(1e5, 30.0)
+    chain.joint(0, 1, element)
+    sim = settings(h, n)
+    sim.timeIntegration.explicit.computeEndOfStepAccelerations = end_of_step_acc
+    chain.solve(sim, solver)
+    assert len(element.committed) >= n + 1
+    assert element.committed == accepted
+    assert len({v for _, v in accepted}) > n // 2      # the velocity really varies
+
+
 # ---------------------------------------------------------------------------- several joints
 def test_two_connectors_with_different_parameters_and_user_functions():
     pa = P

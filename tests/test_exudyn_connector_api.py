@@ -12,9 +12,10 @@ import exudyn as exu
 import numpy as np
 import pytest
 from _connector_models import Chain, settings
-from exudyn.itemInterface import (CoordinateConstraint, MarkerBodyPosition, MarkerBodyRigid,
+from exudyn.itemInterface import (CoordinateConstraint, Mass1D, MarkerBodyPosition, MarkerBodyRigid,
                                   MarkerNodeCoordinate, MarkerNodePosition, MassPoint, Node1D,
-                                  NodePoint, NodePointGround, NodeRigidBody2D, ObjectRigidBody2D)
+                                  NodePoint, NodePointGround, NodeRigidBody2D, ObjectRigidBody2D,
+                                  SensorNode)
 
 from iwan_element import DiscreteIwan, IwanJoint, IwanParameters
 from iwan_element.exudyn import IwanConnector, add_iwan_connector
@@ -310,3 +311,45 @@ def test_offset_shifts_the_unloaded_position():
     mbs.SolveDynamic(settings(h, n))
     assert conn.slip[0] == pytest.approx(d, rel=1e-12)               # u = a.(p1 - p0) - offset
     assert conn.force[0] == pytest.approx(IwanJoint(P).trial(d)[0], rel=1e-12)
+
+
+# ---------------------------------------------------------------------------- coordinate views
+def test_continued_run_after_reassemble_reads_the_moved_coordinates():
+    """The node-coordinate route reads the accepted state through views of Exudyn's
+    coordinate vectors taken at the start of each run. A run continuing at the last
+    accepted time, after items were added and the system re-assembled (which may move those
+    vectors), must still commit exactly the accepted states."""
+    chain = Chain([1.0], v0=[3.0])
+    chain.spring(-1, 0, 2e5)
+    conn = chain.joint(-1, 0, IwanJoint(P))
+    h, n = 1e-4, 200
+    chain.solve(settings(h, n))
+    mbs = chain.mbs
+    q_end = mbs.systemData.GetODE2Coordinates()
+    v_end = mbs.systemData.GetODE2Coordinates_t()
+    for _ in range(50):                      # grow the coordinate vectors
+        nd = mbs.AddNode(Node1D(referenceCoordinates=[0.0]))
+        mbs.AddObject(Mass1D(mass=1.0, nodeNumber=nd))
+    mbs.Assemble()
+    q0 = mbs.systemData.GetODE2Coordinates(configuration=exu.ConfigurationType.Initial)
+    v0 = mbs.systemData.GetODE2Coordinates_t(configuration=exu.ConfigurationType.Initial)
+    q0[:q_end.size] = q_end
+    v0[:v_end.size] = v_end
+    mbs.systemData.SetODE2Coordinates(q0, configuration=exu.ConfigurationType.Initial)
+    mbs.systemData.SetODE2Coordinates_t(v0, configuration=exu.ConfigurationType.Initial)
+    sensor = mbs.AddSensor(SensorNode(nodeNumber=chain.nodes[0], storeInternal=True,
+                                      outputVariableType=exu.OutputVariableType.Coordinates))
+    mbs.Assemble()
+    sim = settings(h, n)
+    sim.timeIntegration.startTime = n * h
+    sim.timeIntegration.endTime = 2 * n * h
+    sim.solution.sensors.writePeriod = h
+    n_before = conn.n_records
+    mbs.SolveDynamic(sim)
+    accepted = mbs.GetSensorStoredData(sensor)
+    u = conn.slip
+    k = conn.n_records - n_before       # n steps, plus the initial state if the start time
+    assert k in (n, n + 1)              # differs in the last bit from the last accepted time
+    assert np.array_equal(conn.time[n_before:], accepted[-k:, 0])
+    assert np.array_equal(u[n_before:], accepted[-k:, 1])
+    assert np.max(np.abs(IwanJoint(P).force_history(u) - conn.force)) / P.Fs < 1e-12

@@ -284,3 +284,26 @@ def test_bad_construction():
         IwanJoint(PARAMS[0], reversal_tol=-1.0)
     with pytest.raises(ValueError, match="reversal_tol"):
         IwanJoint(PARAMS[0], reversal_tol=0.1)
+
+
+@pytest.mark.parametrize("p", PARAMS)
+def test_fast_paths_equal_the_general_walk_bit_for_bit(p):
+    """trial() and commit() take a shortcut when the motion continues the current branch;
+    force, tangent, work and dissipation must be exactly those of the general walk."""
+    rng = np.random.default_rng(5)
+    j = IwanJoint(p)
+    u = np.concatenate([random_history(rng, p), p.phi_max * 1.5 * np.sin(np.arange(3000) / 40.0)
+                        * np.exp(-np.arange(3000) / 1500.0)])
+    fast = 0
+    for i, x in enumerate(u.tolist()):
+        step = abs(x - j.displacement) + 1e-9 * p.phi_max
+        for y in [x + step * z for z in rng.normal(scale=0.5, size=2)] + [x]:
+            n, e, eF, F, K = j._walk(y, None)
+            assert j.trial(y) == (F, K)
+        fast += j._tfast
+        acc = [0.0, 0.0, 0.0, 0.0]
+        j._walk(x, acc)
+        W, D = j.work + acc[0], j.dissipated_energy + acc[1]
+        j.commit()
+        assert (j.work, j.dissipated_energy) == (W, D), i
+    assert 0.3 * len(u) < fast < len(u)        # both routes were exercised
