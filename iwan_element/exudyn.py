@@ -398,14 +398,20 @@ class IwanConnector:
 
     def _check(self, mbs, t, u):
         """First force evaluation of a run: take fresh coordinate views and make sure the
-        dispatcher runs (a post-step function set later would have replaced it)."""
+        dispatcher runs (a post-step function set later would have replaced it).
+
+        A run is recognised by a force evaluation at or before the last accepted time: a new
+        run from an earlier time, or a continued run, whose first evaluation (generalized-alpha's
+        initial accelerations, an explicit method's first stage) is at that time. Within a run
+        only explicit methods evaluate there again (their first stage of every step), at the
+        cost of one check per step."""
         d = self._dispatcher
         d.refresh(mbs)
         if not d.reachable_from(_installed_post_step(mbs)):
             _log.debug("connector %s: post-step function was replaced; chaining it behind the "
                        "connector dispatcher", self.objectNumber)
             d.install(mbs)
-        self._guard = t
+        self._guard = math.nextafter(t, -math.inf)     # no second check at this same time
 
     # -------------------------------------------------------------- read-only set-up
     @property
@@ -669,7 +675,7 @@ def _coordinate_force_function(conn: IwanConnector):
 
     def iwan_coordinate_force(mbs, t, itemNumber, deltaL, deltaL_t, stiffness, damping, offset):
         u = deltaL - off
-        if t < conn._guard:
+        if t <= conn._guard:
             conn._check(mbs, t, u)
         if u == conn._lu and deltaL_t == conn._lv:
             return conn._lF
@@ -689,7 +695,7 @@ def _position_force_function(conn: IwanConnector):
 
     def iwan_position_force(mbs, t, itemNumber, displacement, velocity, stiffness, damping, offset):
         u = displacement[0] * a0 + displacement[1] * a1 + displacement[2] * a2 - off
-        if t < conn._guard:
+        if t <= conn._guard:
             conn._check(mbs, t, u)
         v = velocity[0] * a0 + velocity[1] * a1 + velocity[2] * a2
         if u == conn._lu and v == conn._lv:
@@ -718,7 +724,7 @@ def _rotating_axis_force_function(conn: IwanConnector):
         a1 = A[3] * l0 + A[4] * l1 + A[5] * l2
         a2 = A[6] * l0 + A[7] * l1 + A[8] * l2
         u = displacement[0] * a0 + displacement[1] * a1 + displacement[2] * a2 - off
-        if t < conn._guard:
+        if t <= conn._guard:
             conn._check(mbs, t, u)
         v = velocity[0] * a0 + velocity[1] * a1 + velocity[2] * a2
         if u == conn._lu and v == conn._lv:
