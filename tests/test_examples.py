@@ -4,6 +4,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 ROOT = Path(__file__).resolve().parents[1]
 
 
@@ -31,3 +33,15 @@ def test_jointed_beam_main_job_quick(tmp_path):
     assert summary["data"]["synthetic"] is True
     assert abs(summary["identified"]["params"]["Fs"] / 9000.0 - 1) < 0.01
     assert "zeta pred" in proc.stdout
+
+
+@pytest.mark.parametrize("effect,name", [("viscous", "viscous_damping"), ("pinning", "pinning_stiffness")])
+def test_diagnose_beam_vibration_names_and_shrinks_the_gap(tmp_path, effect, name):
+    import json
+    run_example("diagnose_beam_vibration.py", "--effect", effect, "--quick", "--out", str(tmp_path))
+    s = json.loads((tmp_path / f"diagnose_beam_{effect}.json").read_text())
+    assert s["effect_named"] == name
+    before, after = s["mismatch_before_ppm_percent"], s["mismatch_after_ppm_percent"]
+    assert after[1] < 0.2 * before[1]                     # damping mismatch shrinks 5x or more
+    if effect == "pinning":
+        assert after[0] < 0.5 * before[0]                 # and the frequency mismatch halves
