@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._history import History
+from ._history import History, walk
 from .effects import EFFECTS
 from .joint import IwanJoint
 from .parameters import IwanParameters
@@ -35,69 +35,18 @@ EFFECT_PARAMS = {name: cls.parameter_names for name, cls in EFFECTS.items()}
 
 
 def dissipation_segments(u: np.ndarray, tol: float):
-    """Branch segments walked by the Iwan joint along ``u`` (mirrors ``IwanJoint._walk``).
+    """Branch segments walked by the Iwan joint along ``u`` (the walk of
+    :func:`iwan_element._history.walk`, which mirrors ``IwanJoint._walk``).
 
     Returns ``(step, virgin, xa, xb)``: step index of each segment, True for a segment on the
     virgin curve (dissipation ``I_H(xb) - I_H(xa)``, clipped at 0) and False on a branch
     (``2 (I_H(xb) - I_H(xa))``), and the backbone arguments at its ends [m].
     """
-    us: list[float] = []
-    uc = 0.0
-    step, virgin, xa, xb = [], [], [], []
-
-    def seg(i, ur, ua, ub):
-        step.append(i)
-        if ur is None:
-            virgin.append(True)
-            xa.append(abs(ua))
-            xb.append(abs(ub))
-        else:
-            virgin.append(False)
-            xa.append(0.5 * abs(ua - ur))
-            xb.append(0.5 * abs(ub - ur))
-
-    for i, ui in enumerate(u.tolist()):
-        n = len(us)
-        du = ui - uc
-        e = None
-        if du != 0.0:
-            d = uc - us[n - 1] if n else uc
-            if d * du < 0.0:
-                if abs(d) <= tol:
-                    if n:
-                        n -= 1
-                else:
-                    e = uc
-            pos = uc
-            while True:
-                if e is not None:
-                    top, bound = e, (us[n - 1] if n else -e)
-                elif n:
-                    top, bound = us[n - 1], (us[n - 2] if n >= 2 else -us[n - 1])
-                else:
-                    break
-                if (ui - bound) * du < 0.0:
-                    break
-                seg(i, top, pos, bound)
-                pos = bound
-                if e is not None:
-                    e = None
-                    if n:
-                        n -= 1
-                else:
-                    n -= 2 if n >= 2 else 1
-            if e is not None:
-                seg(i, e, pos, ui)
-            elif n:
-                seg(i, us[n - 1], pos, ui)
-            else:
-                seg(i, None, pos, ui)
-        del us[n:]
-        if e is not None:
-            us.append(e)
-        uc = ui
-    return (np.array(step, dtype=np.intp), np.array(virgin, dtype=bool), np.array(xa),
-            np.array(xb))
+    _, (step, anchor, ua, ub) = walk(u, tol, segments=True)
+    virgin = anchor < 0
+    ur = np.where(virgin, 0.0, u[np.maximum(anchor, 0)])
+    scale = np.where(virgin, 1.0, 0.5)
+    return step, virgin, scale * np.abs(ua - ur), scale * np.abs(ub - ur)
 
 
 def unit_params(phi_max: float, chi: float, beta: float) -> IwanParameters:

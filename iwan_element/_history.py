@@ -28,19 +28,32 @@ from .parameters import IwanParameters
 __all__: list[str] = []
 
 
-def _structure(u: np.ndarray, tol: float) -> tuple[np.ndarray, np.ndarray]:
-    """Anchor index (``-1`` = virgin curve) and nesting level of every sample of ``u``.
+def walk(u: np.ndarray, tol: float, *, segments: bool = False):
+    """Reversal structure of the history ``u`` [m] from the virgin state.
 
-    Mirrors ``IwanJoint._walk``/``commit`` with the absolute reversal tolerance ``tol`` [m]
-    (``IwanJoint`` uses ``reversal_tol * phi_max``).
+    Mirrors ``IwanJoint._walk``/``commit`` step for step with the absolute reversal tolerance
+    ``tol`` [m] (``IwanJoint`` uses ``reversal_tol * phi_max``); the element keeps its own
+    inline copy because it is the hot path of every simulation.
+
+    Returns
+    -------
+    anchor : ndarray of int, shape (n,)
+        Sample index of the reversal each sample's branch leaves (``-1``: virgin curve).
+    segs : tuple of ndarray or None
+        With ``segments=True``, the monotone branch segments walked by each step, as
+        ``(step, anchor, ua, ub)``: the step index, the reversal sample the segment's branch
+        leaves (``-1``: virgin curve) and its end displacements [m].
     """
     vals = u.tolist()
     n_s = len(vals)
     anchor = [0] * n_s
-    level = [0] * n_s
     st: list[int] = []          # stack of reversal sample indices
     c = -1                      # committed sample (-1: virgin origin, u = 0)
     uc = 0.0
+    s_step: list[int] = []
+    s_anchor: list[int] = []
+    s_a: list[float] = []
+    s_b: list[float] = []
     for i in range(n_s):
         ui = vals[i]
         n = len(st)
@@ -54,31 +67,57 @@ def _structure(u: np.ndarray, tol: float) -> tuple[np.ndarray, np.ndarray]:
                         n -= 1
                 else:
                     e = c
+            pos = uc
             while True:
                 if e >= 0:
+                    top = e
                     bound = vals[st[n - 1]] if n else -vals[e]
                 elif n:
+                    top = st[n - 1]
                     bound = vals[st[n - 2]] if n >= 2 else -vals[st[n - 1]]
                 else:
                     break
                 if (ui - bound) * du < 0.0:
                     break
+                if segments:
+                    s_step.append(i)
+                    s_anchor.append(top)
+                    s_a.append(pos)
+                    s_b.append(bound)
+                    pos = bound
                 if e >= 0:
                     e = -1
                     if n:
                         n -= 1
                 else:
                     n -= 2 if n >= 2 else 1
+            if segments:
+                s_step.append(i)
+                s_anchor.append(e if e >= 0 else (st[n - 1] if n else -1))
+                s_a.append(pos)
+                s_b.append(ui)
         if n < len(st):
             del st[n:]
         if e >= 0:
             st.append(e)
-        a = st[-1] if st else -1
-        anchor[i] = a
-        level[i] = level[a] + 1 if a >= 0 else 0
+        anchor[i] = st[-1] if st else -1
         c = i
         uc = ui
-    return np.array(anchor, dtype=np.intp), np.array(level, dtype=np.intp)
+    segs = None
+    if segments:
+        segs = (np.array(s_step, dtype=np.intp), np.array(s_anchor, dtype=np.intp),
+                np.array(s_a), np.array(s_b))
+    return np.array(anchor, dtype=np.intp), segs
+
+
+def _structure(u: np.ndarray, tol: float) -> tuple[np.ndarray, np.ndarray]:
+    """Anchor index (``-1`` = virgin curve) and nesting level of every sample of ``u``."""
+    anchor, _ = walk(u, tol)
+    level = np.zeros(len(anchor), dtype=np.intp)
+    for i, a in enumerate(anchor.tolist()):        # anchors precede their samples
+        if a >= 0:
+            level[i] = level[a] + 1
+    return anchor, level
 
 
 class History:
