@@ -25,6 +25,7 @@ name                      force law
 from __future__ import annotations
 
 import copy
+import inspect
 import math
 
 import numpy as np
@@ -76,7 +77,7 @@ class _Effect:
     parameter_names: tuple = ()
 
     def __init__(self, inner):
-        check_element(inner, "inner")
+        check_element(inner, name="inner")
         self._inner = inner
         self._W = self._D = self._F = self._u = 0.0
         self._has_trial = False
@@ -470,6 +471,11 @@ def make_effect(name: str, inner, **parameters: float):
     if unknown:
         raise ValueError(f"effect {name!r} takes parameters {list(cls.parameter_names)}, "
                          f"not {sorted(unknown)}")
+    sig = inspect.signature(cls.__init__).parameters
+    missing = [p for p in cls.parameter_names
+               if sig[p].default is inspect.Parameter.empty and p not in parameters]
+    if missing:
+        raise ValueError(f"effect {name!r} needs parameter(s) {missing}")
     return cls(inner, **parameters)
 
 

@@ -594,7 +594,7 @@ def add_iwan_connector(mbs, markerNumbers, joint, *, axis=None, axisMarker=None,
     if isinstance(markerNumbers, (str, bytes)) or not hasattr(markerNumbers, "__len__") \
             or len(markerNumbers) != 2:
         raise ValueError(f"markerNumbers must be a list of two marker numbers, got {markerNumbers!r}")
-    check_element(joint, "joint")
+    check_element(joint, name="joint")
     missing = [a for a in ("displacement", "force") if not hasattr(joint, a)]
     if missing:
         raise ValueError(f"joint must expose the committed {missing} (element protocol); "

@@ -119,6 +119,8 @@ class IwanParameters:
         if missing:
             raise ValueError(f"parameter dict lacks {sorted(missing)}")
         units = data.get("units")
+        if units is not None and not isinstance(units, dict):
+            raise ValueError(f"units must be a dict such as {{'Fs': 'N', 'KT': 'N/m'}}, got {units!r}")
         if units is not None:
             expected = {"Fs": "N", "KT": "N/m", "chi": "1", "beta": "1"}
             for k, v in units.items():

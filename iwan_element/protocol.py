@@ -31,6 +31,8 @@ class JointElement(Protocol):
     ---------------------------------------
     work, stored_energy, dissipated_energy : float
         Energies [J] since the last reset; ``work = stored_energy + dissipated_energy``.
+    force, displacement : float
+        Committed force [N] and displacement [m].
     """
 
     def trial(self, u: float, v: float = 0.0) -> tuple[float, float]: ...
@@ -50,11 +52,21 @@ class JointElement(Protocol):
     @property
     def dissipated_energy(self) -> float: ...
 
+    @property
+    def force(self) -> float: ...
 
-def check_element(obj, name: str = "joint") -> None:
+    @property
+    def displacement(self) -> float: ...
+
+
+_PROTOCOL = ("trial", "commit", "revert", "reset", "work", "stored_energy", "dissipated_energy",
+             "force", "displacement")
+
+
+def check_element(obj, *, name: str = "joint") -> None:
     """Raise ``ValueError`` naming ``name`` unless ``obj`` follows :class:`JointElement`."""
-    missing = [m for m in ("trial", "commit", "revert", "reset", "work", "stored_energy",
-                           "dissipated_energy") if not hasattr(obj, m)]
+    missing = [m for m in _PROTOCOL if not hasattr(obj, m)]
     if missing:
         raise ValueError(f"{name} must follow the joint element protocol (trial, commit, revert, "
-                         f"reset and energy read-outs); {type(obj).__name__} lacks {missing}")
+                         f"reset, force, displacement and energy read-outs); "
+                         f"{type(obj).__name__} lacks {missing}")

@@ -36,7 +36,7 @@ Everything here uses only the public API of :mod:`iwan_element` and Exudyn.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field, fields, replace
 
 import exudyn as exu
 import numpy as np
@@ -140,7 +140,8 @@ class JointedBeamConfig:
         if not (isinstance(self.rayleigh_beta, (int, float)) and math.isfinite(self.rayleigh_beta)
                 and self.rayleigh_beta >= 0):
             raise ValueError(f"rayleigh_beta must be >= 0 [s], got {self.rayleigh_beta!r}")
-        if not (math.isfinite(self.contact_spacing) and self.contact_spacing >= 0):
+        if not (isinstance(self.contact_spacing, (int, float)) and math.isfinite(self.contact_spacing)
+                and self.contact_spacing >= 0):
             raise ValueError(f"contact_spacing must be >= 0, got {self.contact_spacing!r}")
         if not isinstance(self.joint, IwanParameters):
             raise ValueError(f"joint must be IwanParameters, got {type(self.joint).__name__}")
@@ -194,7 +195,12 @@ class JointedBeamConfig:
         return self.density * self.width * self.thickness
 
     def replace(self, **changes) -> "JointedBeamConfig":
-        """A copy with some fields changed (validated again)."""
+        """A copy with some fields changed (validated again); unknown names raise ValueError."""
+        names = {f.name for f in fields(self)}
+        unknown = set(changes) - names
+        if unknown:
+            raise ValueError(f"unknown JointedBeamConfig fields {sorted(unknown)}; "
+                             f"fields are {sorted(names)}")
         return replace(self, **changes)
 
 

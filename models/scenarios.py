@@ -47,6 +47,21 @@ log = logging.getLogger(__name__)
 _OVT = exu.OutputVariableType
 
 
+def _check_count(name: str, value, low: int) -> int:
+    """An integer option ``>= low`` (bools and fractional values are rejected)."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < low:
+        raise ValueError(f"{name} must be an integer >= {low}, got {value!r}")
+    return int(value)
+
+
+def _check_positive(name: str, values) -> np.ndarray:
+    """A non-empty 1-D array of finite values > 0."""
+    arr = np.atleast_1d(np.asarray(values, dtype=float))
+    if arr.ndim != 1 or arr.size == 0 or not np.all(np.isfinite(arr)) or np.any(arr <= 0):
+        raise ValueError(f"{name} must be a non-empty sequence of finite values > 0, got {values!r}")
+    return arr
+
+
 def _settings(*, force_scale: float, static: bool = False) -> exu.SimulationSettings:
     """Solver settings: no files, one thread, Newton tolerances in force units.
 
@@ -149,14 +164,18 @@ def quasi_static_test(config: JointedBeamConfig | None = None, *, amplitude: flo
         Number of cycles and static load steps per cycle.
     joint_factory : callable, optional, keyword-only
         Passed to :func:`build_jointed_beam`.
+
+    Returns
+    -------
+    QuasiStaticResult
     """
     cfg = (config or JointedBeamConfig()).replace(boundary="clamped-driven")
     if not (math.isfinite(amplitude) and amplitude > 0):
         raise ValueError(f"amplitude must be > 0 [m], got {amplitude!r}")
     if not (math.isfinite(frequency) and frequency > 0):
         raise ValueError(f"frequency must be > 0 [Hz], got {frequency!r}")
-    if int(cycles) < 1 or int(steps_per_cycle) < 8:
-        raise ValueError("cycles must be >= 1 and steps_per_cycle >= 8")
+    cycles = _check_count("cycles", cycles, 1)
+    steps_per_cycle = _check_count("steps_per_cycle", steps_per_cycle, 8)
     w = 2.0 * math.pi * frequency
 
     def drive(t):
@@ -167,7 +186,7 @@ def quasi_static_test(config: JointedBeamConfig | None = None, *, amplitude: flo
     s_force = mbs.AddSensor(SensorObject(objectNumber=model.drive, outputVariableType=_OVT.Force,
                                          storeInternal=True))
     mbs.Assemble()
-    n = int(cycles) * int(steps_per_cycle)
+    n = cycles * steps_per_cycle
     duration = cycles / frequency
     sim = _settings(force_scale=cfg.joint.Fs, static=True)
     sim.staticSolver.numberOfLoadSteps = n
@@ -214,12 +233,12 @@ class ModalResult:
     mass_matrix: np.ndarray
     config: JointedBeamConfig
 
-    def modal_coordinates(self, x, mode: int = 0) -> np.ndarray:
+    def modal_coordinates(self, x, *, mode: int = 0) -> np.ndarray:
         """Modal coordinate history ``q(t) = phi^T M x(t)`` of a mode [sqrt(kg) m]; ``x`` has
         shape (n_times, n_coordinates). Exact modal filtering for the linearised system."""
         return np.asarray(x) @ (self.mass_matrix @ self.shapes[:, mode])
 
-    def predict(self, tip_amplitude, mode: int = 0):
+    def predict(self, tip_amplitude, *, mode: int = 0):
         """Amplitude-dependent frequency [Hz] and damping ratio [-] of a mode from the joint's
         closed forms, at tip amplitudes [m] (array_like).
 
@@ -367,7 +386,10 @@ class FreeDecayResult:
     metadata: dict = field(default_factory=dict)
 
     def curves(self, which: str = "iwan"):
-        """Concatenated (amplitude, frequency, damping) of all runs, sorted by amplitude."""
+        """Concatenated (amplitude, frequency, damping) of all runs of ``which`` (``"iwan"``
+        or ``"linear"``), sorted by amplitude."""
+        if which not in ("iwan", "linear"):
+            raise ValueError(f"which must be 'iwan' or 'linear', got {which!r}")
         runs = self.runs if which == "iwan" else self.linear_runs
         a = np.concatenate([r.amplitude for r in runs])
         f = np.concatenate([r.frequency for r in runs])
@@ -610,17 +632,36 @@ def forced_response(config: JointedBeamConfig | None = None, *, force_levels=(0.
 
     Parameters
     ----------
+    config : JointedBeamConfig, optional
+        Its ``boundary`` is set to ``"clamped-free"``; for a response that settles give the
+        beams some material damping (``rayleigh_beta``).
     force_levels : sequence of float, keyword-only
-        Force amplitudes [N].
+        Force amplitudes [N], ``> 0``.
     frequencies : array_like, optional, keyword-only
-        [Hz]; default 15 frequencies within +-3 % of the linearised first mode.
+        [Hz], ``> 0``; default 15 frequencies from -3 % to +1 % of the linearised first mode.
+    settle_cycles, measure_cycles : int, keyword-only
+        Cycles run before measuring, and measured, at each frequency (``>= 1``).
+    steps_per_period : int, keyword-only
+        Time steps per excitation period (``>= 8``).
+    joint_factory : callable, optional, keyword-only
+        Joint element per contact point (default exact Iwan).
+    progress : callable, optional, keyword-only
+        ``progress(message)`` is called at each frequency.
+
+    Returns
+    -------
+    ForcedResponseResult
     """
     cfg = (config or JointedBeamConfig()).replace(boundary="clamped-free")
+    levels = _check_positive("force_levels", force_levels)
+    if frequencies is not None:
+        frequencies = _check_positive("frequencies", frequencies)
+    settle_cycles = _check_count("settle_cycles", settle_cycles, 1)
+    measure_cycles = _check_count("measure_cycles", measure_cycles, 1)
+    steps_per_period = _check_count("steps_per_period", steps_per_period, 8)
     modal = modal_analysis(cfg, n_modes=1)
     f_lin = modal.frequencies[0]
-    freqs = (np.linspace(0.97, 1.01, 15) * f_lin if frequencies is None
-             else np.asarray(frequencies, dtype=float))
-    levels = np.asarray(force_levels, dtype=float)
+    freqs = np.linspace(0.97, 1.01, 15) * f_lin if frequencies is None else frequencies
     amp = np.zeros((len(levels), len(freqs)))
     for i, F0 in enumerate(levels):
         model = build_jointed_beam(cfg, joint_factory=joint_factory)

@@ -210,3 +210,27 @@ def test_asymmetric_work_exact_with_coarse_steps():
     fine = np.concatenate([[0.0]] + [np.linspace(x, y, 4001)[1:] for x, y in zip(pts[:-1], pts[1:])])
     F_fine = AsymmetricSlip(IwanJoint(P), asymmetry=a).force_history(fine)
     assert coarse.work == pytest.approx(np.trapezoid(F_fine, fine), rel=1e-6)
+
+
+def test_make_effect_missing_parameter_and_bare_element():
+    with pytest.raises(ValueError, match="needs parameter"):
+        make_effect("backlash", IwanJoint(P))
+    assert make_effect("pinning_stiffness", IwanJoint(P), k_p=1.0).delta == 0.0   # delta defaults
+
+    class Bare:                           # energies but no force/displacement read-outs
+        work = stored_energy = dissipated_energy = 0.0
+
+        def trial(self, u, v=0.0):
+            return 0.0, 0.0
+
+        def commit(self):
+            pass
+
+        def revert(self):
+            pass
+
+        def reset(self):
+            pass
+
+    with pytest.raises(ValueError, match="force"):
+        AsymmetricSlip(Bare(), asymmetry=0.1)

@@ -205,3 +205,17 @@ def test_modal_slip_participation_is_antisymmetric_in_bending():
     g = m.slip_per_q[:, 0]
     assert g[0] * g[1] < 0          # the two sides of the bolt slip in opposite directions
     assert isinstance(m.config.point_joint, IwanParameters)
+
+
+def test_scenario_and_config_options_are_validated():
+    with pytest.raises(ValueError, match="unknown JointedBeamConfig fields"):
+        JointedBeamConfig().replace(overlapp=0.01)
+    with pytest.raises(ValueError, match="contact_spacing"):
+        JointedBeamConfig(contact_spacing="a")
+    with pytest.raises(ValueError, match="cycles"):
+        quasi_static_test(cycles=2.5)
+    from iwan_element.models.scenarios import forced_response
+    with pytest.raises(ValueError, match="frequencies"):
+        forced_response(frequencies=[0.0])
+    with pytest.raises(ValueError, match="force_levels"):
+        forced_response(force_levels=[])

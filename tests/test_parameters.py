@@ -82,3 +82,8 @@ def test_replace_validates():
         p.replace(chi=-2.0)
     with pytest.raises(ValueError, match="unknown"):
         p.replace(Kt=1.0)
+
+
+def test_from_dict_units_must_be_a_dict():
+    with pytest.raises(ValueError, match="units"):
+        IwanParameters.from_dict({"Fs": 1, "KT": 1, "chi": -0.5, "beta": 0, "units": "SI"})
