@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._history import History, walk
+from ._history import History, unit_params, walk
 from .effects import EFFECTS
 from .joint import IwanJoint
 from .parameters import IwanParameters
@@ -47,12 +47,6 @@ def dissipation_segments(u: np.ndarray, tol: float):
     ur = np.where(virgin, 0.0, u[np.maximum(anchor, 0)])
     scale = np.where(virgin, 1.0, 0.5)
     return step, virgin, scale * np.abs(ua - ur), scale * np.abs(ub - ur)
-
-
-def unit_params(phi_max: float, chi: float, beta: float) -> IwanParameters:
-    """Iwan parameters with ``Fs = 1`` and the given shape."""
-    c = beta + (chi + 1.0) / (chi + 2.0)
-    return IwanParameters(1.0, (1.0 + beta) / (phi_max * c), chi, beta)
 
 
 def scale_effect(name: str, values: dict, Fs: float, *, to_unit: bool) -> dict:

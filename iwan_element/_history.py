@@ -28,6 +28,12 @@ from .parameters import IwanParameters
 __all__: list[str] = []
 
 
+def unit_params(phi_max: float, chi: float, beta: float) -> IwanParameters:
+    """Parameters with ``Fs = 1`` and the given ``phi_max`` [m] (paper eq. 11 solved for KT)."""
+    c = beta + (chi + 1.0) / (chi + 2.0)
+    return IwanParameters(1.0, (1.0 + beta) / (phi_max * c), chi, beta)
+
+
 def walk(u: np.ndarray, tol: float, *, segments: bool = False):
     """Reversal structure of the history ``u`` [m] from the virgin state.
 

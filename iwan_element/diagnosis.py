@@ -3,12 +3,13 @@
 :func:`diagnose` works on a displacement-driven test record (time, displacement, force):
 
 1. it fits the plain Iwan model (:func:`~iwan_element.fit_loops`);
-2. it estimates the force noise *from the data*: the base-fit residuals of consecutive cycles
-   at the same amplitude share the model error but not the noise, so their second difference
-   across three cycles (first difference across two) is noise only (a slow drift from cycle
-   to cycle cancels in the second difference). The same differences give the noise's
-   correlation time ``tau`` (integrated autocorrelation), so coloured noise counts
-   ``n / tau`` independent samples;
+2. it estimates the force noise *from the data*: the base-fit residuals of two consecutive
+   closed cycles at the same amplitude share the model error but not the noise, so their
+   difference (over non-overlapping pairs, divided by sqrt 2) is noise only; a slow drift of
+   the force from one cycle to the next (slip degradation) is projected out of each
+   difference along the model force. The same differences give the noise's correlation time
+   ``tau`` (integrated autocorrelation), so coloured noise counts ``n / tau`` independent
+   samples;
 3. it tests whether the base misfit exceeds that noise (F-test of ``SSR / (n sigma^2)`` with
    ``n/tau`` and ``m/tau`` degrees of freedom, level ``alpha``); if not, it names nothing;
 4. otherwise it locates the misfit (which part of the cycle, which amplitudes, which cycles,
@@ -30,8 +31,8 @@ from __future__ import annotations
 
 import logging
 import math
+import inspect
 import time
-import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -40,7 +41,8 @@ from scipy.special import fdtrc
 from ._effect_eval import Evaluator, build_element, scale_effect, unit_params
 from ._validation import check_scalar, finite_array, same_length
 from .effects import EFFECTS
-from .fit import (PARAM_NAMES, FitResult, IdentifiabilityWarning, _json, _lsq_box, fit_loops)
+from .fit import (_BETA_MAX, _CHI_BOUNDS, _PHI_RANGE, PARAM_NAMES, FitResult, _json, _lsq_box,
+                  _quiet, fit_loops)
 from .joint import IwanJoint
 from .parameters import IwanParameters
 from .testdata import TestData, _check_int, _check_time, find_reversals, split_cycles
@@ -54,9 +56,6 @@ log = logging.getLogger(__name__)
 CANDIDATES = ("viscous_damping", "pinning_stiffness", "backlash", "slip_degradation",
               "asymmetric_slip")
 _UNITS = {"c": "N s/m", "k_p": "N/m", "delta": "m", "gap": "m", "rate": "1/J", "asymmetry": "1"}
-_CHI_BOUNDS = (-0.98, 1.0)
-_BETA_MAX = 100.0
-_PHI_RANGE = (1e-3, 1e4)
 _EXPLAIN_FRACTION = 0.25   # a named effect removes at least this share of the excess misfit
 
 
@@ -120,9 +119,9 @@ def simulate_element_test(element, amplitudes, *, cycles: int = 3, frequency: fl
     u = np.concatenate(blocks + [np.zeros(1)])
     t = np.arange(u.size) / (n_per * f)
     v = np.gradient(u, t)
-    try:
+    if "v" in inspect.signature(element.force_history).parameters:
         F = element.force_history(u, v)
-    except TypeError:
+    else:                        # IwanJoint/DiscreteIwan: rate independent, no velocity
         F = element.force_history(u)
     if sf > 0.0:
         e = rng.normal(0.0, 1.0, u.size)
@@ -311,7 +310,7 @@ def _uncertainty(model: _Model, z, r):
         p, effs = _physical(model, th[1:])
         scale = math.exp(th[0]) / p.Fs
         p = IwanParameters(p.Fs * scale, p.KT * scale, p.chi, p.beta)
-        effs = [_rescale(nm, d, scale) for nm, d in zip(model.names, effs)]
+        effs = [scale_effect(nm, d, scale, to_unit=False) for nm, d in zip(model.names, effs)]
         return _flat(p, effs, model.names)[0]
 
     cols, pcols = [], []
@@ -331,18 +330,6 @@ def _uncertainty(model: _Model, z, r):
     with np.errstate(invalid="ignore", divide="ignore"):
         corr = cov / np.outer(se, se)
     return se, corr, 2 * theta.size
-
-
-def _rescale(name, d, scale):
-    """Effect parameters when the whole force is multiplied by ``scale``."""
-    out = dict(d)
-    if name == "viscous_damping":
-        out["c"] = d["c"] * scale
-    elif name == "pinning_stiffness":
-        out["k_p"] = d["k_p"] * scale
-    elif name == "slip_degradation":
-        out["rate"] = d["rate"] / scale
-    return out
 
 
 # =============================================================================== result
@@ -687,10 +674,9 @@ def diagnose(t, u, F, *, candidates=None, max_effects: int = 2, noise: float | N
         raise ValueError(f"u contains {len(cycles)} complete cycle(s): a single cycle cannot "
                          "separate model error from noise; at least 2 (better 3 per amplitude) "
                          "are needed")
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", IdentifiabilityWarning)
+    with _quiet():                       # its warnings are reported with the diagnosis
         base = fit_loops(uu, FF, t=tt, seed=seed)
-    warns = []
+    warns = [f"base fit: {w}" for w in base.warnings]
     F_base = IwanJoint(base.params).force_history(uu)
     r0 = FF - F_base
     span = float(np.ptp(FF))
@@ -1112,6 +1098,9 @@ def diagnose_vibration(amplitude, frequency, damping, *, predicted_frequency, pr
     alpha = check_scalar("alpha", alpha, low=0.0, high=0.5, low_open=True, high_open=True)
     ambiguity = check_scalar("ambiguity", ambiguity, low=0.0)
     max_effects = _check_int("max_effects", max_effects, 1)
+    if max_effects > 2:
+        raise ValueError(f"max_effects must be 1 or 2 for vibration curves (two candidate "
+                         f"effects), got {max_effects}")
     o = np.argsort(X)
     rf0 = np.log(fm / fp)
     rz0 = np.log(zm / zp)
@@ -1177,7 +1166,7 @@ def diagnose_vibration(amplitude, frequency, damping, *, predicted_frequency, pr
     where = where[0].upper() + where[1:]
     named, ambiguous, steps = [], (), []
     cur_names, cur_z, cur_chi, cur_q = (), np.zeros(0), chi_b, 0
-    while misfit and len(named) < min(max_effects, 2):
+    while misfit and len(named) < max_effects:
         if cur_names and float(fdtrc(N - cur_q, dof_all, cur_chi / (N - cur_q))) >= alpha:
             break
         rows = []

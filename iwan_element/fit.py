@@ -48,6 +48,8 @@ import logging
 import math
 import time
 import warnings
+from contextlib import contextmanager
+from contextvars import ContextVar
 from dataclasses import dataclass, field
 from typing import Callable
 
@@ -55,7 +57,7 @@ import numpy as np
 from scipy import optimize
 from scipy.special import fdtrc
 
-from ._history import History
+from ._history import History, unit_params
 from ._validation import check_scalar, finite_array, same_length
 from .closed_form import backbone, dissipation, force_amplitude
 from .parameters import IwanParameters
@@ -229,12 +231,6 @@ class FitResult:
 
 
 # ================================================================== shared machinery
-def _unit_params(phi_max: float, chi: float, beta: float) -> IwanParameters:
-    """Parameters with ``Fs = 1`` and the given ``phi_max`` [m] (paper eq. 11 solved for KT)."""
-    c = beta + (chi + 1.0) / (chi + 2.0)
-    return IwanParameters(1.0, (1.0 + beta) / (phi_max * c), chi, beta)
-
-
 class _Problem:
     """Data ``y`` modelled as ``Fs * g(phi_max, chi, beta)``.
 
@@ -257,7 +253,7 @@ class _Problem:
 
     def g(self, phi_max, chi, beta):
         self.nfev += 1
-        return self.unit(_unit_params(phi_max, chi, beta))
+        return self.unit(unit_params(phi_max, chi, beta))
 
     def projected(self, phi_max, chi, beta):
         """Best ``Fs`` for the shape ``(phi_max, chi, beta)`` and the residuals."""
@@ -485,7 +481,7 @@ def _identify(prob: _Problem, *, n_starts: int, rng: np.random.Generator, alpha:
     warns: list[str] = []
     if macro:
         Fs, chi, beta = Fs_f, chi_f, beta_f
-        KT = Fs * _unit_params(phi_f, chi, beta).KT
+        KT = Fs * unit_params(phi_f, chi, beta).KT
         params = IwanParameters(Fs, KT, chi, beta)
         res, r = res_f, r_f
         theta = np.array([math.log(Fs), math.log(KT), chi, math.log1p(beta)])
@@ -504,7 +500,7 @@ def _identify(prob: _Problem, *, n_starts: int, rng: np.random.Generator, alpha:
         details["macroslip_fraction"] = n_macro / m
     else:
         Fs0, phi0, chi = Fs_m, phi_m, chi_m
-        KT = Fs0 * _unit_params(phi0, chi, 0.0).KT
+        KT = Fs0 * unit_params(phi0, chi, 0.0).KT
         params = IwanParameters(Fs0, KT, chi, 0.0)
         R = params.R
         res, r = res_m, r_m
@@ -562,10 +558,26 @@ def _finish(method, out, *, converged, message, nfev, nrmse, t0, extra_warnings=
                        success=bool(converged and se_ok), message=str(message), nfev=int(nfev),
                        method=method, n_data=int(out["r"].size), warnings=tuple(warns),
                        wall_time=time.perf_counter() - t0, details=_json(out["details"]))
-    if warns:
+    if warns and _EMIT.get():
         warnings.warn("Iwan identification: " + " | ".join(warns), IdentifiabilityWarning,
                       stacklevel=stacklevel)
     return result
+
+
+# Whether fits issue their IdentifiabilityWarning (the warnings stay in FitResult.warnings).
+# Library callers that report the warnings themselves switch it off for their own context
+# only, instead of changing the process-wide warning filters.
+_EMIT: ContextVar[bool] = ContextVar("iwan_fit_emit_warnings", default=True)
+
+
+@contextmanager
+def _quiet():
+    """Within this context (thread / task), fits do not call ``warnings.warn``."""
+    token = _EMIT.set(False)
+    try:
+        yield
+    finally:
+        _EMIT.reset(token)
 
 
 # ================================================================== loop fit

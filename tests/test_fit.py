@@ -382,3 +382,16 @@ def test_seed_with_too_large_fs_is_flagged():
                             Fs=1.05 * p.Fs)
     assert any("beta is at its bound 0" in w for w in r.warnings)
     assert r.nrmse > 0.01                                        # and the misfit shows
+
+
+def test_quiet_context_silences_only_its_own_context_and_keeps_the_warnings_in_the_result():
+    p = SETS[0]
+    d = simulate_test(p, np.array(MICRO) * p.phi_max, cycles=2, sample_rate=5)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        with fitmod._quiet():
+            quiet = fit_loops(d.u, d.F, t=d.t)
+        assert not [w for w in caught if issubclass(w.category, IdentifiabilityWarning)]
+        loud = fit_loops(d.u, d.F, t=d.t)              # back to normal after the context
+        assert [w for w in caught if issubclass(w.category, IdentifiabilityWarning)]
+    assert quiet.warnings and quiet.warnings == loud.warnings   # microslip: Fs, beta not identified
