@@ -61,3 +61,23 @@ def same_length(**arrays: np.ndarray) -> int:
         desc = ", ".join(f"{k} has {n}" for k, n in sizes.items())
         raise ValueError(f"arrays must have the same length: {desc}")
     return next(iter(sizes.values()))
+
+
+def _check_int(name: str, value, low: int) -> int:
+    """Return ``value`` as an int ``>= low``, else raise ``ValueError`` naming ``name``."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < low:
+        raise ValueError(f"{name} must be an integer >= {low}, got {value!r}")
+    return int(value)
+
+
+def _check_time(t, n: int, name: str = "t") -> np.ndarray:
+    """Return ``t`` as a new finite, strictly increasing array of length ``n``."""
+    tt = finite_array(name, t, ndim=1)
+    if tt.size != n:
+        raise ValueError(f"{name} must have the same length as the data ({n}), got {tt.size}")
+    bad = np.flatnonzero(np.diff(tt) <= 0.0)
+    if bad.size:
+        i = int(bad[0])
+        raise ValueError(f"{name} (time) must be strictly increasing; it goes from {tt[i]:g} to "
+                         f"{tt[i + 1]:g} at samples {i}..{i + 1}")
+    return tt

@@ -58,10 +58,10 @@ from scipy import optimize
 from scipy.special import fdtrc
 
 from ._history import History, unit_params
-from ._validation import check_scalar, finite_array, same_length
 from .closed_form import backbone, dissipation, force_amplitude
 from .parameters import IwanParameters
-from .testdata import _check_int, _check_time, _noise_sigma, split_cycles
+from ._validation import _check_int, _check_time, check_scalar, finite_array, same_length
+from .testdata import _noise_sigma, split_cycles
 
 __all__ = ["FitResult", "IdentifiabilityWarning", "fit_dissipation", "fit_loops", "PARAM_NAMES"]
 

@@ -8,11 +8,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from .closed_form import (masing_ascending, masing_descending, masing_loop,
-                          normalized_backbone)
+from ._validation import _check_int, finite_array, same_length
+from .closed_form import (dissipation, dissipation_slope, force_amplitude, masing_ascending,
+                          masing_descending, masing_loop, normalized_backbone)
 from .parameters import IwanParameters
 
-__all__ = ["plot_normalized_loops", "plot_loop"]
+__all__ = ["plot_normalized_loops", "plot_loop", "plot_fitted_loops", "plot_dissipation_fit"]
 
 
 def _pyplot():
@@ -86,11 +87,6 @@ def plot_loop(u0: float, params: IwanParameters, *, n: int = 401, ax=None,
 
 
 # ------------------------------------------------------------------ identification (fit.py)
-from ._validation import finite_array, same_length  # noqa: E402  (kept with the section below)
-from .closed_form import dissipation, dissipation_slope, force_amplitude  # noqa: E402
-from .testdata import _check_int  # noqa: E402
-
-__all__ += ["plot_fitted_loops", "plot_dissipation_fit"]
 
 
 def _fit_params(params) -> IwanParameters:

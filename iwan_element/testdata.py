@@ -29,7 +29,7 @@ from typing import Sequence
 
 import numpy as np
 
-from ._validation import check_scalar, finite_array, same_length
+from ._validation import _check_int, _check_time, check_scalar, finite_array, same_length
 from .joint import IwanJoint
 from .parameters import IwanParameters
 
@@ -58,13 +58,6 @@ _NAME_HINTS = {
     "displacement": ("displacement", "disp", "u", "x", "extension", "position"),
     "force": ("force", "load", "f"),
 }
-
-
-def _check_int(name: str, value, low: int) -> int:
-    """Return ``value`` as an int ``>= low``, else raise ``ValueError`` naming ``name``."""
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < low:
-        raise ValueError(f"{name} must be an integer >= {low}, got {value!r}")
-    return int(value)
 
 
 def _unit_factor(kind: str, unit, table: dict) -> float:
@@ -319,18 +312,6 @@ def split_cycles(u, F, *, t=None, hysteresis: float | None = None, close_tol: fl
                             closure=float(closure), closed=bool(closure <= close_tol),
                             drifting=bool(drifting)))
     return tuple(cycles)
-
-
-def _check_time(t, n: int, name: str = "t") -> np.ndarray:
-    tt = finite_array(name, t, ndim=1)
-    if tt.size != n:
-        raise ValueError(f"{name} must have the same length as the data ({n}), got {tt.size}")
-    bad = np.flatnonzero(np.diff(tt) <= 0.0)
-    if bad.size:
-        i = int(bad[0])
-        raise ValueError(f"{name} (time) must be strictly increasing; it goes from {tt[i]!r} to "
-                         f"{tt[i + 1]!r} at samples {i}..{i + 1}")
-    return tt
 
 
 # --------------------------------------------------------------------------- test record

@@ -33,6 +33,8 @@ import numpy as np
 from iwan_element import IwanParameters
 from iwan_element.testdata import simulate_test
 
+__all__ = ["main", "PARAMS", "AMPLITUDES_MM"]
+
 HERE = Path(__file__).resolve().parent
 PARAMS = IwanParameters(Fs=9.0e3, KT=5.0e7, chi=-0.5, beta=0.5)          # SI: N, N/m
 AMPLITUDES_MM = [0.025, 0.05, 0.075, 0.1, 0.15, 0.2, 0.3, 0.45]
