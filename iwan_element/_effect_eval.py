@@ -24,6 +24,7 @@ from __future__ import annotations
 import numpy as np
 
 from ._history import History, unit_params, walk
+from .closed_form import _slip_energy
 from .effects import EFFECTS
 from .joint import IwanJoint
 from .parameters import IwanParameters
@@ -114,15 +115,7 @@ class Evaluator:
         if self._segs is None:
             self._segs = dissipation_segments(self.u, self._tol)
         step, virgin, xa, xb = self._segs
-        e3 = p1.chi + 3.0
-        c = p1.R / ((p1.chi + 2.0) * e3)
-        pm = p1.phi_max
-        ih_pm = c * pm ** e3
-
-        def IH(y):
-            return np.where(y < pm, c * np.minimum(y, pm) ** e3, ih_pm + (y - pm))
-
-        d = IH(xb) - IH(xa)
+        d = _slip_energy(xb, p1) - _slip_energy(xa, p1)
         d = np.where(virgin, np.maximum(d, 0.0), 2.0 * d)
         per_step = np.bincount(step, weights=d, minlength=self.u.size)
         return np.cumsum(per_step)

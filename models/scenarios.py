@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import logging
 import math
+import time
 from dataclasses import dataclass, field
 
 import exudyn as exu
@@ -424,27 +425,6 @@ def _bending_force_scale(cfg: JointedBeamConfig, tip: float) -> float:
     return 3.0 * cfg.EI * tip / cfg.total_length ** 3
 
 
-def _bandpass(x: np.ndarray, h: float, f_lo: float, f_hi: float) -> np.ndarray:
-    """Zero-phase FFT band-pass (mean removed) of a uniformly sampled record."""
-    X = np.fft.rfft(x - x.mean())
-    f = np.fft.rfftfreq(len(x), h)
-    X[(f < f_lo) | (f > f_hi)] = 0.0
-    return np.fft.irfft(X, len(x))
-
-
-def _tip_stiffness(cfg: JointedBeamConfig) -> float:
-    """Static transverse tip stiffness of the assembly with the joint at KT [N/m]."""
-    model = _linear_model(cfg)
-    mbs = model.mbs
-    mk = mbs.AddMarker(MarkerNodePosition(nodeNumber=model.tip_node))
-    P = _bending_force_scale(cfg, 1e-4)
-    mbs.AddLoad(LoadForceVector(markerNumber=mk, loadVector=[0.0, P, 0.0]))
-    mbs.Assemble()
-    sim = _settings(force_scale=P, static=True)
-    mbs.SolveStatic(sim)
-    return P / mbs.GetNodeOutput(model.tip_node, _OVT.Displacement)[1]
-
-
 def _decay_run(cfg, level, modal, *, cycles, steps_per_period, joint_factory,
                record_energy, energy_every, release_time):
     """Static deflection of about ``level`` at the tip in the shape of the first mode (load
@@ -455,25 +435,20 @@ def _decay_run(cfg, level, modal, *, cycles, steps_per_period, joint_factory,
     period, so mode 1 is released, but long against the periods of the axial and contact
     modes (kHz), which therefore follow quasi-statically instead of ringing undamped.
     """
-    import time as _time
     model = build_jointed_beam(cfg.replace(boundary="clamped-free"), joint_factory=joint_factory)
     mbs = model.mbs
     # static load pattern w1^2 M phi1: its linear static deflection is the first mode exactly
     pattern = (2 * math.pi * modal.frequencies[0]) ** 2 * (modal.mass_matrix @ modal.shapes[:, 0])
     pattern *= level / modal.tip[0]
     loads = []
-    n2 = mbs.systemData.ODE2Size()
-    node_of = {}
+    clamped = set(model.clamped_coordinates)
     for node in model.nodes_a + model.nodes_b:
         i0 = mbs.GetNodeODE2Index(node)
         for c in range(4):
-            node_of[i0 + c] = (node, c)
-    for i in range(n2):
-        if i in node_of and abs(pattern[i]) > 0.0 and i not in model.clamped_coordinates:
-            node, c = node_of[i]
-            mk = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=node, coordinate=c))
-            loads.append((mbs.AddLoad(LoadCoordinate(markerNumber=mk, load=float(pattern[i]))),
-                          float(pattern[i])))
+            value = float(pattern[i0 + c])
+            if value != 0.0 and i0 + c not in clamped:
+                mk = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=node, coordinate=c))
+                loads.append((mbs.AddLoad(LoadCoordinate(markerNumber=mk, load=value)), value))
     ramp = {"T": 0.0, "active": False, "done": False}
 
     def pre_step(mbs_, t):
@@ -522,22 +497,21 @@ def _decay_run(cfg, level, modal, *, cycles, steps_per_period, joint_factory,
     sim.timeIntegration.numberOfSteps = n
     sim.timeIntegration.endTime = n * h
     sim.solution.sensors.writePeriod = h
-    t0 = _time.perf_counter()
+    t0 = time.perf_counter()
     mbs.SolveDynamic(sim)
-    wall = _time.perf_counter() - t0
+    wall = time.perf_counter() - t0
     d = mbs.GetSensorStoredData(s_tip)
     free = d[:, 0] >= release_time - 1e-12 * h
     t, tip = d[free, 0], d[free, 2]
     # mode 1 by modal filtering, expressed as the tip displacement it carries
     q1 = modal.modal_coordinates(np.array(coords)[-len(d):][free]) * abs(modal.tip[0])
     amp, freq, damp = decay_analysis(t, q1)
-    keep = slice(None)
     slips = np.array([c.slip for c in model.connectors]) if model.connectors else np.empty((0, len(t)))
     if model.connectors:
         slips = slips[:, -len(t):]        # the free-vibration part of the records
     return DecayRun(level=float(d[0, 2]), t=t, tip=tip, slips=slips,
                     energy={k: np.array(v) for k, v in energy.items()},
-                    amplitude=amp[keep], frequency=freq[keep], damping=damp[keep],
+                    amplitude=amp, frequency=freq, damping=damp,
                     wall_time=wall), model
 
 
