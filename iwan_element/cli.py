@@ -44,6 +44,18 @@ class _Parser(argparse.ArgumentParser):
         raise _UsageError(message)
 
 
+def _add_record_args(parser) -> None:
+    """The arguments that locate and read a test record (shared by the subcommands)."""
+    parser.add_argument("csv", type=Path, help="test record: time, displacement, force columns")
+    parser.add_argument("--units", required=True, metavar="DISP,FORCE[,TIME]",
+                        help="units of the displacement, force (and time) columns, e.g. mm,kN "
+                             "(displacement: m, mm, um, in; force: N, kN, MN, lbf, kip; "
+                             "time: s, ms, min; default time unit s)")
+    parser.add_argument("--columns", metavar="T,U,F",
+                        help="names or 0-based indices of the time, displacement, force columns")
+    parser.add_argument("--delimiter", help="field separator (default: guessed)")
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser (subcommands; more will be added, e.g. ``diagnose``)."""
     from . import __version__
@@ -59,17 +71,10 @@ def build_parser() -> argparse.ArgumentParser:
                     "history with the exact model (default); 'dissipation' fits the per-cycle "
                     "force amplitude and dissipation by least squares; 'seed' is the seed "
                     "paper's procedure (needs --slip-force).")
-    fit.add_argument("csv", type=Path, help="test record: time, displacement, force columns")
-    fit.add_argument("--units", required=True, metavar="DISP,FORCE[,TIME]",
-                     help="units of the displacement, force (and time) columns, e.g. mm,kN "
-                          "(displacement: m, mm, um, in; force: N, kN, MN, lbf, kip; "
-                          "time: s, ms, min; default time unit s)")
+    _add_record_args(fit)
     fit.add_argument("--method", choices=("loops", "dissipation", "seed"), default="loops")
     fit.add_argument("--slip-force", type=float, metavar="FS",
                      help="slip force Fs in the force unit of --units (method 'seed' only)")
-    fit.add_argument("--columns", metavar="T,U,F",
-                     help="names or 0-based indices of the time, displacement, force columns")
-    fit.add_argument("--delimiter", help="field separator (default: guessed)")
     fit.add_argument("--smooth", type=int, default=0, metavar="N",
                      help="Savitzky-Golay window (odd, samples) for the displacement that "
                           "drives the model (method 'loops'; default 0 = none)")
@@ -85,12 +90,7 @@ def build_parser() -> argparse.ArgumentParser:
         description="Fit the four-parameter Iwan model, estimate the force noise from repeated "
                     "cycles, decide whether the misfit is more than noise, locate it, refit with "
                     "each candidate effect and name the one the data support (or none).")
-    dg.add_argument("csv", type=Path, help="test record: time, displacement, force columns")
-    dg.add_argument("--units", required=True, metavar="DISP,FORCE[,TIME]",
-                    help="units of the displacement, force (and time) columns, e.g. mm,kN")
-    dg.add_argument("--columns", metavar="T,U,F",
-                    help="names or 0-based indices of the time, displacement, force columns")
-    dg.add_argument("--delimiter", help="field separator (default: guessed)")
+    _add_record_args(dg)
     dg.add_argument("--max-effects", type=int, default=2, metavar="N",
                     help="most effects named one after the other (default 2)")
     dg.add_argument("--noise", type=float, metavar="SIGMA",
