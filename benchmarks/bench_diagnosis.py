@@ -1,4 +1,4 @@
-"""Benchmark: the full detection matrix of :func:`iwan_element.diagnosis.diagnose`.
+"""Benchmark: the full detection matrix of :func:`iwan_element.diagnose.diagnose`.
 
 Synthetic records (``tests/_diagnosis_cases.py``: REFERENCE.md test vector (1000 N, 1e6 N/m,
 -0.5, 0.2), two loading protocols, three cycles of 96 samples per amplitude, 5 N force
@@ -28,7 +28,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
 from _diagnosis_cases import MAGNITUDES, PROTOCOLS, SHAPES, record  # noqa: E402
 
-from iwan_element.diagnosis import diagnose  # noqa: E402
+from iwan_element.diagnose import diagnose  # noqa: E402
 
 
 def main(argv=None):

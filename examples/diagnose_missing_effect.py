@@ -13,7 +13,7 @@ import argparse
 import numpy as np
 
 from iwan_element import Backlash, IwanJoint, IwanParameters
-from iwan_element.diagnosis import diagnose, simulate_element_test
+from iwan_element.diagnose import diagnose, simulate_element_test
 
 ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
 ap.add_argument("--out", default="diagnosis.png", help="PNG for the before/after plot")

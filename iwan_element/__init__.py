@@ -3,7 +3,7 @@
 The physics core (this package's top level) depends only on numpy and scipy. The Exudyn
 connector lives in :mod:`iwan_element.exudyn`, which is the only module importing exudyn.
 """
-from .closed_form import (
+from .core.closed_form import (
     backbone,
     backbone_work,
     dissipation,
@@ -16,16 +16,17 @@ from .closed_form import (
     secant_stiffness,
     tangent_stiffness,
 )
-from .diagnosis import (CANDIDATES, Diagnosis, VibrationDiagnosis, diagnose, diagnose_vibration,
+from .diagnose import (CANDIDATES, Diagnosis, VibrationDiagnosis, diagnose, diagnose_vibration,
                         simulate_element_test)
-from .discrete import DiscreteIwan, slider_distribution
+from .core.discrete import DiscreteIwan, slider_distribution
 from .effects import (EFFECTS, AsymmetricSlip, Backlash, PinningStiffness, SlipDegradation,
                       ViscousDamping, base_joint, make_effect)
-from .fit import FitResult, IdentifiabilityWarning, fit_dissipation, fit_loops
-from .joint import IwanJoint
-from .parameters import IwanParameters
-from .protocol import JointElement, check_element
-from .testdata import Cycle, TestData, find_reversals, load_test, simulate_test, split_cycles
+from .identify.fit import FitResult, IdentifiabilityWarning, fit_dissipation, fit_loops
+from .core.joint import IwanJoint
+from .core.parameters import IwanParameters
+from .core.protocol import JointElement, check_element
+from .identify.curves import AmplitudeCurve
+from .identify.testdata import Cycle, TestData, find_reversals, load_test, simulate_test, split_cycles
 
 __version__ = "0.1.0"
 
@@ -61,6 +62,7 @@ __all__ = [
     "simulate_test",
     "TestData",
     "Cycle",
+    "AmplitudeCurve",
     "fit_loops",
     "fit_dissipation",
     "FitResult",

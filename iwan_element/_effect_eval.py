@@ -1,13 +1,13 @@
 """Fast force evaluation of a stack of effects on the Iwan joint over a fixed displacement history.
 
-Private module used by :mod:`iwan_element.diagnosis`. A model is a tuple of effect names,
+Private module used by :mod:`iwan_element.diagnose`. A model is a tuple of effect names,
 innermost first (``("viscous_damping", "asymmetric_slip")`` is
 ``AsymmetricSlip(ViscousDamping(IwanJoint))``). Every model in the library is homogeneous of
 degree one in the force scale: with ``Fs = 1`` and the effect parameters scaled to it
 (``c/Fs``, ``k_p/Fs``, ``rate Fs``; ``gap``, ``delta``, ``asymmetry`` unchanged) the force is
 ``Fs`` times the unit force. The unit force is evaluated
 
-* vectorised (exact, via :class:`~iwan_element._history.History`) when the stack contains no
+* vectorised (exact, via :class:`~iwan_element.core._history.History`) when the stack contains no
   ``backlash`` and no ``asymmetric_slip`` below a ``slip_degradation``. The slip-degradation
   factor needs the dissipated energy of the wrapped element after every committed step; for the
   Iwan joint it is a sum of closed-form terms ``2 (I_H(x_b) - I_H(x_a))`` over branch segments
@@ -23,11 +23,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._history import History, unit_params, walk
-from .closed_form import _slip_energy
+from .core._history import History, unit_params, walk
+from .core.closed_form import _slip_energy
 from .effects import EFFECTS
-from .joint import IwanJoint
-from .parameters import IwanParameters
+from .core.joint import IwanJoint
+from .core.parameters import IwanParameters
 
 __all__: list[str] = []
 
@@ -37,7 +37,7 @@ EFFECT_PARAMS = {name: cls.parameter_names for name, cls in EFFECTS.items()}
 
 def dissipation_segments(u: np.ndarray, tol: float):
     """Branch segments walked by the Iwan joint along ``u`` (the walk of
-    :func:`iwan_element._history.walk`, which mirrors ``IwanJoint._walk``).
+    :func:`iwan_element.core._history.walk`, which mirrors ``IwanJoint._walk``).
 
     Returns ``(step, virgin, xa, xb)``: step index of each segment, True for a segment on the
     virgin curve (dissipation ``I_H(xb) - I_H(xa)``, clipped at 0) and False on a branch

@@ -104,8 +104,8 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _run_diagnose(args) -> int:
-    from .diagnosis import diagnose
-    from .testdata import FORCE_UNITS, load_test
+    from .diagnose import diagnose
+    from .identify.testdata import FORCE_UNITS, load_test
 
     du, fu, tu = _parse_units(args.units)
     data = load_test(args.csv, displacement_unit=du, force_unit=fu, time_unit=tu,
@@ -167,8 +167,8 @@ def _write_plot(path: Path, data, result) -> None:
 
 
 def _run_fit(args) -> int:
-    from .fit import fit_dissipation, fit_loops
-    from .testdata import FORCE_UNITS, load_test
+    from .identify.fit import fit_dissipation, fit_loops
+    from .identify.testdata import FORCE_UNITS, load_test
 
     du, fu, tu = _parse_units(args.units)
     data = load_test(args.csv, displacement_unit=du, force_unit=fu, time_unit=tu,

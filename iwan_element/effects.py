@@ -30,8 +30,8 @@ import math
 
 import numpy as np
 
-from ._validation import check_scalar, finite_array, same_length
-from .protocol import check_element
+from .core._validation import check_scalar, finite_array, same_length
+from .core.protocol import check_element
 
 __all__ = [
     "EFFECTS",

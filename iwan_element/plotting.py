@@ -8,10 +8,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._validation import _check_int, finite_array, same_length
-from .closed_form import (dissipation, dissipation_slope, force_amplitude, masing_ascending,
+from .core._validation import _check_int, finite_array, same_length
+from .core.closed_form import (dissipation, dissipation_slope, force_amplitude, masing_ascending,
                           masing_descending, masing_loop, normalized_backbone)
-from .parameters import IwanParameters
+from .core.parameters import IwanParameters
 
 __all__ = ["plot_normalized_loops", "plot_loop", "plot_fitted_loops", "plot_dissipation_fit"]
 
@@ -117,7 +117,7 @@ def plot_fitted_loops(u, F, params, *, ax=None, max_points: int = 20000):
     list of matplotlib.lines.Line2D
         ``[measured, fitted]``.
     """
-    from .joint import IwanJoint
+    from .core.joint import IwanJoint
 
     p = _fit_params(params)
     uu = finite_array("u", u, ndim=1, min_size=2)

@@ -16,7 +16,7 @@ import math
 import numpy as np
 
 from iwan_element import IwanJoint, IwanParameters, make_effect
-from iwan_element.diagnosis import simulate_element_test
+from iwan_element.diagnose import simulate_element_test
 
 P = IwanParameters(1000.0, 1e6, -0.5, 0.2)
 SIGMA = 5.0

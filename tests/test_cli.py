@@ -12,7 +12,7 @@ import pytest
 
 from iwan_element import IwanParameters
 from iwan_element.cli import main
-from iwan_element.testdata import simulate_test
+from iwan_element.identify.testdata import simulate_test
 
 P = IwanParameters(9e3, 5e7, -0.5, 0.5)
 

@@ -17,7 +17,7 @@ from iwan_element import (AsymmetricSlip, IwanJoint, IwanParameters, PinningStif
                           ViscousDamping, make_effect)
 from iwan_element._effect_eval import (Evaluator, build_element, dissipation_segments,
                                        unit_params)
-from iwan_element.diagnosis import (CANDIDATES, diagnose, diagnose_vibration,
+from iwan_element.diagnose import (CANDIDATES, diagnose, diagnose_vibration,
                                     simulate_element_test)
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -21,10 +21,10 @@ from scipy import optimize
 
 from iwan_element import (IwanJoint, IwanParameters, dissipation, force_amplitude,
                           secant_stiffness)
-from iwan_element import fit as fitmod
-from iwan_element._history import History
-from iwan_element.fit import FitResult, IdentifiabilityWarning, fit_dissipation, fit_loops
-from iwan_element.testdata import load_test, simulate_test
+from iwan_element.identify import fit as fitmod
+from iwan_element.core._history import History
+from iwan_element.identify.fit import FitResult, IdentifiabilityWarning, fit_dissipation, fit_loops
+from iwan_element.identify.testdata import load_test, simulate_test
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "models" / "example_test_30kN.csv"
 

@@ -38,14 +38,14 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.special import fdtrc
 
-from ._effect_eval import Evaluator, build_element, scale_effect, unit_params
-from ._validation import _check_int, _check_time, check_scalar, finite_array, same_length
-from .effects import EFFECTS
-from .fit import (_BETA_MAX, _CHI_BOUNDS, _PHI_RANGE, PARAM_NAMES, FitResult, _json, _lsq_box,
+from .._effect_eval import Evaluator, build_element, scale_effect, unit_params
+from ..core._validation import _check_int, _check_time, check_scalar, finite_array, same_length
+from ..effects import EFFECTS
+from ..identify.fit import (_BETA_MAX, _CHI_BOUNDS, _PHI_RANGE, PARAM_NAMES, FitResult, _json, _lsq_box,
                   _quiet, fit_loops)
-from .joint import IwanJoint
-from .parameters import IwanParameters
-from .testdata import TestData, find_reversals, split_cycles
+from ..core.joint import IwanJoint
+from ..core.parameters import IwanParameters
+from ..identify.testdata import TestData, find_reversals, split_cycles
 
 __all__ = ["CANDIDATES", "Diagnosis", "VibrationDiagnosis", "diagnose", "diagnose_vibration",
            "simulate_element_test"]

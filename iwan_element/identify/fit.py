@@ -16,7 +16,7 @@ Two fitters return one result type, :class:`FitResult`:
 How the loop fit is made fast
     For a displacement-driven record the reversal points, and so the Masing branch each
     sample lies on, do not depend on the parameters; they are found once and each evaluation
-    is a few numpy operations (:mod:`iwan_element._history`, verified against
+    is a few numpy operations (:mod:`iwan_element.core._history`, verified against
     ``IwanJoint.force_history`` to round-off). The fitted samples are decimated to
     ``max_samples`` but the reversal points of the full record are kept. At fixed
     ``(phi_max, chi, beta)`` the force is linear in ``Fs`` (the backbone is ``Fs f(u/phi_max)``,
@@ -57,10 +57,10 @@ import numpy as np
 from scipy import optimize
 from scipy.special import fdtrc
 
-from ._history import History, unit_params
-from .closed_form import backbone, dissipation, force_amplitude
-from .parameters import IwanParameters
-from ._validation import _check_int, _check_time, check_scalar, finite_array, same_length
+from ..core._history import History, unit_params
+from ..core.closed_form import backbone, dissipation, force_amplitude
+from ..core.parameters import IwanParameters
+from ..core._validation import _check_int, _check_time, check_scalar, finite_array, same_length
 from .testdata import _noise_sigma, split_cycles
 
 __all__ = ["FitResult", "IdentifiabilityWarning", "fit_dissipation", "fit_loops", "PARAM_NAMES"]
@@ -620,7 +620,7 @@ def fit_loops(u, F, *, t=None, sigma=None, smooth: int = 0, max_samples: int | N
     alpha : float, keyword-only
         Significance level of the test that the data reach macroslip, in ``(0, 0.5)``.
     hysteresis : float, optional, keyword-only
-        Dead band [m] to count cycles (see :func:`iwan_element.testdata.find_reversals`).
+        Dead band [m] to count cycles (see :func:`iwan_element.identify.testdata.find_reversals`).
     initial : IwanParameters, optional, keyword-only
         An extra start (for instance a previous fit).
     max_nfev : int, keyword-only

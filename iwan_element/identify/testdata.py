@@ -29,9 +29,9 @@ from typing import Sequence
 
 import numpy as np
 
-from ._validation import _check_int, _check_time, check_scalar, finite_array, same_length
-from .joint import IwanJoint
-from .parameters import IwanParameters
+from ..core._validation import _check_int, _check_time, check_scalar, finite_array, same_length
+from ..core.joint import IwanJoint
+from ..core.parameters import IwanParameters
 
 __all__ = [
     "DISPLACEMENT_UNITS",

@@ -16,7 +16,7 @@ The per-sample backbone terms ``G`` are the only parameter-dependent part; the b
 ``(phi_max, chi, beta)``. Only the samples that are fitted and their chains of anchors are
 kept, so a decimated fit still uses the exact reversal points of the full record.
 
-Private module: used by :mod:`iwan_element.fit`; verified against ``IwanJoint.force_history``.
+Private module: used by :mod:`iwan_element.identify.fit`; verified against ``IwanJoint.force_history``.
 """
 from __future__ import annotations
 

@@ -74,8 +74,8 @@ import numpy as np
 from exudyn.itemInterface import (ObjectConnectorCartesianSpringDamper,
                                   ObjectConnectorCoordinateSpringDamper)
 
-from ._validation import check_scalar
-from .protocol import check_element
+from ..core._validation import check_scalar
+from ..core.protocol import check_element
 
 __all__ = ["add_iwan_connector", "IwanConnector"]
 

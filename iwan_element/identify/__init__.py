@@ -1,0 +1,1 @@
+"""Identification: test records and units, loop and dissipation fits."""

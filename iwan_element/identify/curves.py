@@ -1,0 +1,180 @@
+"""Amplitude-dependent modal properties: the one result type shared by every vibration route.
+
+A vibration test of a jointed structure (hammer ring-down, stepped sine, a quasi-static modal
+analysis of a model, a transient simulation) ends as three curves against response amplitude:
+the natural frequency f(X) [Hz], the damping ratio zeta(X) [-] and, where known, their
+uncertainty. :class:`AmplitudeCurve` holds them, validated, with the noise floor below which
+the measurement stops and a statement of how it was made.
+"""
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..core._validation import finite_array
+
+__all__ = ["AmplitudeCurve"]
+
+
+def _optional_std(value, n: int, name: str) -> np.ndarray:
+    """A per-point standard deviation: ``None`` means unknown (NaN), else finite and >= 0."""
+    if value is None:
+        return np.full(n, np.nan)
+    arr = np.array(value, dtype=float, copy=True)
+    if arr.ndim == 0:
+        arr = np.full(n, float(arr))
+    if arr.shape != (n,):
+        raise ValueError(f"{name} must have one value per amplitude ({n}), got shape {arr.shape}")
+    known = arr[~np.isnan(arr)]
+    if np.any(~np.isfinite(known)) or np.any(known < 0):
+        raise ValueError(f"{name} must be >= 0 and finite (NaN for unknown)")
+    arr.flags.writeable = False
+    return arr
+
+
+@dataclass(frozen=True)
+class AmplitudeCurve:
+    """Natural frequency and damping ratio against response amplitude.
+
+    Parameters
+    ----------
+    amplitude : array_like, shape (n,)
+        Displacement amplitude at the sensor point [m] (> 0).
+    frequency : array_like, shape (n,)
+        Damped natural frequency [Hz] (> 0).
+    damping_ratio : array_like, shape (n,)
+        Equivalent viscous damping ratio [-] (finite; a value above 1 is refused as a likely
+        percentage).
+    amplitude_std, frequency_std, damping_std : array_like or float, optional
+        Standard uncertainty of each point in the same units; ``None`` (the default) means
+        unknown and is stored as NaN.
+    noise_floor : float, optional
+        Amplitude [m] below which the signal is noise and the curve stops (NaN if unknown).
+    method : str
+        How the curve was made (for example ``"hilbert"``, ``"stepped-sine"``, ``"qsma"``).
+    notes : str
+        Free text: trimming of filter end effects, sensor point, mode number.
+    warnings : tuple of str
+        What the maker of the curve could not vouch for.
+
+    The arrays are copied and made read-only; nothing the caller passed is changed.
+    """
+
+    amplitude: np.ndarray
+    frequency: np.ndarray
+    damping_ratio: np.ndarray
+    amplitude_std: np.ndarray | None = None
+    frequency_std: np.ndarray | None = None
+    damping_std: np.ndarray | None = None
+    noise_floor: float = float("nan")
+    method: str = ""
+    notes: str = ""
+    warnings: tuple = field(default_factory=tuple)
+
+    def __post_init__(self):
+        amp = finite_array("amplitude", self.amplitude).copy()
+        if amp.ndim != 1 or amp.size == 0:
+            raise ValueError(f"amplitude must be a non-empty 1-D array, got shape {amp.shape}")
+        n = amp.size
+        arrays = {"amplitude": amp}
+        for name in ("frequency", "damping_ratio"):
+            arr = finite_array(name, getattr(self, name)).copy()
+            if arr.shape != (n,):
+                raise ValueError(f"{name} must have the shape of amplitude ({n},), got {arr.shape}")
+            arrays[name] = arr
+        if np.any(amp <= 0):
+            raise ValueError("amplitude must be > 0 [m]")
+        if np.any(arrays["frequency"] <= 0):
+            raise ValueError("frequency must be > 0 [Hz]")
+        if np.any(arrays["damping_ratio"] > 1):
+            raise ValueError("damping_ratio must be a ratio (<= 1); values above 1 look like percent")
+        for name, arr in arrays.items():
+            arr.flags.writeable = False
+            object.__setattr__(self, name, arr)
+        for name in ("amplitude_std", "frequency_std", "damping_std"):
+            object.__setattr__(self, name, _optional_std(getattr(self, name), n, name))
+        floor = float(self.noise_floor)
+        if not (np.isnan(floor) or (np.isfinite(floor) and floor >= 0)):
+            raise ValueError(f"noise_floor must be >= 0 [m] or NaN, got {self.noise_floor!r}")
+        object.__setattr__(self, "noise_floor", floor)
+        object.__setattr__(self, "warnings", tuple(str(w) for w in self.warnings))
+
+    def __len__(self) -> int:
+        return int(self.amplitude.size)
+
+    def sorted(self) -> "AmplitudeCurve":
+        """The same curve with the points in increasing amplitude."""
+        order = np.argsort(self.amplitude, kind="stable")
+        return AmplitudeCurve(
+            self.amplitude[order], self.frequency[order], self.damping_ratio[order],
+            amplitude_std=self.amplitude_std[order], frequency_std=self.frequency_std[order],
+            damping_std=self.damping_std[order], noise_floor=self.noise_floor,
+            method=self.method, notes=self.notes, warnings=self.warnings)
+
+    def to_dict(self) -> dict:
+        """Plain JSON-ready dictionary (NaN written as ``None``)."""
+        def clean(a):
+            return [None if np.isnan(x) else float(x) for x in np.asarray(a, dtype=float)]
+        return {
+            "amplitude": clean(self.amplitude), "frequency": clean(self.frequency),
+            "damping_ratio": clean(self.damping_ratio),
+            "amplitude_std": clean(self.amplitude_std), "frequency_std": clean(self.frequency_std),
+            "damping_std": clean(self.damping_std),
+            "noise_floor": None if np.isnan(self.noise_floor) else self.noise_floor,
+            "method": self.method, "notes": self.notes, "warnings": list(self.warnings),
+        }
+
+    def to_json(self) -> str:
+        return json.dumps(self.to_dict(), indent=2)
+
+    def report(self) -> str:
+        """A short table of the curve: amplitude, frequency and damping with uncertainties."""
+        lines = [f"Amplitude curve ({self.method or 'unspecified method'}), {len(self)} points"]
+        if self.notes:
+            lines.append(f"  {self.notes}")
+        if not np.isnan(self.noise_floor):
+            lines.append(f"  noise floor: {self.noise_floor:.3e} m")
+        lines.append(f"  {'X [m]':>11} {'f [Hz]':>12} {'+-':>9} {'zeta [-]':>11} {'+-':>9}")
+        for i in range(len(self)):
+            lines.append(f"  {self.amplitude[i]:11.4e} {self.frequency[i]:12.6g} "
+                         f"{self.frequency_std[i]:9.2e} {self.damping_ratio[i]:11.4e} "
+                         f"{self.damping_std[i]:9.2e}")
+        lines += [f"  warning: {w}" for w in self.warnings]
+        return "\n".join(lines)
+
+    def plot(self, ax=None, *, label=None, **kwargs):
+        """Frequency and damping ratio against amplitude on log amplitude axes.
+
+        Parameters
+        ----------
+        ax : pair of matplotlib Axes, optional
+            ``(ax_frequency, ax_damping)``; a new figure with two panels if omitted.
+        label : str, optional
+            Legend label.
+
+        Returns
+        -------
+        list
+            The matplotlib artists drawn.
+        """
+        if ax is None:
+            import matplotlib.pyplot as plt
+            _, ax = plt.subplots(2, 1, sharex=True, figsize=(6, 6))
+        ax_f, ax_z = ax
+        kw = {"marker": "o", "ms": 3, "ls": "-"}
+        kw.update(kwargs)
+        artists = []
+        for a, y, s in ((ax_f, self.frequency, self.frequency_std),
+                        (ax_z, self.damping_ratio, self.damping_std)):
+            if np.all(np.isnan(s)):
+                artists += a.plot(self.amplitude, y, label=label, **kw)
+            else:
+                artists.append(a.errorbar(self.amplitude, y, yerr=np.nan_to_num(s), label=label,
+                                          **kw))
+            a.set_xscale("log")
+        ax_f.set_ylabel("frequency [Hz]")
+        ax_z.set_ylabel("damping ratio [-]")
+        ax_z.set_xlabel("amplitude [m]")
+        return artists
