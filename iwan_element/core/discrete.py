@@ -51,21 +51,27 @@ def slider_distribution(params: IwanParameters, n_sliders: int = 100, *, spacing
     if isinstance(n_sliders, bool) or not isinstance(n_sliders, (int, np.integer)) or n_sliders < 1:
         raise ValueError(f"n_sliders must be an integer >= 1, got {n_sliders!r}")
     p = params
-    pm, R, c = p.phi_max, p.R, p.chi
+    # Written in s = phi/phi_max so that no power of phi_max appears (it overflows for large
+    # chi): R phi**chi dphi = (chi+1) K_slider s**chi ds, with K_slider = KT/(1+beta).
+    pm, c, Ks = p.phi_max, p.chi, p.K_slider
     if spacing == "uniform":
-        dphi = pm / n_sliders
-        phi = (np.arange(n_sliders) + 0.5) * dphi
-        k = R * phi ** c * dphi
+        ds = 1.0 / n_sliders
+        s_mid = (np.arange(n_sliders) + 0.5) * ds
+        phi = pm * s_mid
+        k = (c + 1.0) * Ks * s_mid ** c * ds
     elif spacing == "log":
         lo = check_scalar("lowest_edge", lowest_edge, low=0.0, high=1.0, low_open=True, high_open=True)
         if n_sliders == 1:
-            edges = np.array([0.0, pm])
+            edges = np.array([0.0, 1.0])
         else:
-            edges = np.concatenate([[0.0], pm * np.geomspace(lo, 1.0, n_sliders)])
+            edges = np.concatenate([[0.0], np.geomspace(lo, 1.0, n_sliders)])
         m0 = edges[1:] ** (c + 1.0) - edges[:-1] ** (c + 1.0)
         m1 = edges[1:] ** (c + 2.0) - edges[:-1] ** (c + 2.0)
-        k = R * m0 / (c + 1.0)
-        phi = (c + 1.0) / (c + 2.0) * m1 / m0
+        k = Ks * m0
+        with np.errstate(invalid="ignore", divide="ignore"):
+            centre = (c + 1.0) / (c + 2.0) * m1 / m0
+        # a bin whose weight underflows (large chi) carries no force: place it at its edge
+        phi = pm * np.where(m0 > 0.0, centre, edges[1:])
     else:
         raise ValueError(f"spacing must be 'log' or 'uniform', got {spacing!r}")
     if p.S > 0.0:
