@@ -1,6 +1,10 @@
 """Accuracy and cost of the exact Iwan joint against discretised slider models.
 
-Run:  python benchmarks/bench_core.py [--quick]
+Run:  python benchmarks/bench_core.py [--quick] [--baseline DIR]
+
+``--baseline DIR`` also times the exact joint of another checkout (DIR holds its
+``iwan_element`` package, e.g. from ``git archive <commit> iwan_element | tar -x -C DIR``)
+side by side in the same run: the before/after figure for a change to the hot path.
 
 (a) Relative error of the dissipation per steady cycle, measured as the closed-path work
     (loop area) of a simulated cycle, against the closed form ``dissipation()``, at
@@ -23,9 +27,33 @@ PARAMS = IwanParameters(Fs=1000.0, KT=1e6, chi=-0.5, beta=0.1)
 RATIOS = [1e-5, 1e-4, 1e-3, 4.9e-3, 5.1e-3, 1e-2, 0.1, 0.5, 1.0, 2.0, 10.0]
 
 
+_BASELINE = {}
+
+
+def load_baseline(src: str):
+    """Import the ``iwan_element`` package under ``src`` as ``iwan_element_baseline``."""
+    import importlib.util
+    import sys
+    from pathlib import Path
+
+    init = Path(src) / "iwan_element" / "__init__.py"
+    spec = importlib.util.spec_from_file_location(
+        "iwan_element_baseline", init, submodule_search_locations=[str(init.parent)])
+    mod = importlib.util.module_from_spec(spec)
+    sys.modules["iwan_element_baseline"] = mod
+    spec.loader.exec_module(mod)
+    return mod
+
+
 def elements():
+    base = {}
+    if "mod" in _BASELINE:
+        m = _BASELINE["mod"]
+        p = m.IwanParameters(PARAMS.Fs, PARAMS.KT, PARAMS.chi, PARAMS.beta)
+        base = {"baseline IwanJoint": m.IwanJoint(p)}
     return {
         "exact IwanJoint": IwanJoint(PARAMS),
+        **base,
         "100 uniform sliders": DiscreteIwan(PARAMS, 100, spacing="uniform"),
         "100 log sliders": DiscreteIwan(PARAMS, 100, spacing="log"),
     }
@@ -104,7 +132,11 @@ def cost_table(n_steps: int, repeats: int):
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="fewer timing samples")
+    ap.add_argument("--baseline", metavar="DIR",
+                    help="also time the IwanJoint of the iwan_element package under DIR")
     args = ap.parse_args(argv)
+    if args.baseline:
+        _BASELINE["mod"] = load_baseline(args.baseline)
     names, rows = accuracy_table()
     print(f"Parameters: {PARAMS}  (phi_max = {PARAMS.phi_max:.4g} m)")
     print(f"python {platform.python_version()}, numpy {np.__version__}, {platform.machine()}\n")

@@ -176,6 +176,9 @@ def _run_fit(args) -> int:
                      columns=_parse_columns(args.columns), delimiter=args.delimiter)
     if args.method != "seed" and args.slip_force is not None:
         raise ValueError("--slip-force is only used by --method seed")
+    if args.slip_force is not None:
+        from .core._validation import check_scalar
+        check_scalar("--slip-force", args.slip_force, low=0.0, low_open=True)
     with warnings.catch_warnings(record=True):       # the report lists every warning
         warnings.simplefilter("always")
         if args.method == "loops":

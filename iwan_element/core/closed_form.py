@@ -122,7 +122,7 @@ def secant_stiffness(u0, params: IwanParameters):
         raise ValueError("u0 (displacement amplitude) must be >= 0")
     r = np.minimum(x / p.phi_max, 1.0)
     micro = p.KT * (1.0 - r ** (p.chi + 1.0) / ((p.chi + 2.0) * (1.0 + p.beta)))
-    with np.errstate(divide="ignore", invalid="ignore"):
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):   # used above phi_max only
         macro = p.Fs / x
     k = np.where(x <= p.phi_max, micro, macro)
     return _out(k, u0)
@@ -217,8 +217,8 @@ def masing_loop(u0: float, params: IwanParameters, *, n: int = 401):
     """
     p = _check_params(params)
     u0 = check_scalar("u0", u0, low=0.0, low_open=True)
-    if not isinstance(n, (int, np.integer)) or n < 3:
-        raise ValueError(f"n must be an integer >= 3, got {n!r}")
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or not 3 <= n <= 10_000_000:
+        raise ValueError(f"n must be an integer in [3, 1e7], got {n!r}")
     F0 = backbone(u0, p)
     down = np.linspace(u0, -u0, n)
     up = np.linspace(-u0, u0, n)[1:]

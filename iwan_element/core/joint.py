@@ -153,8 +153,12 @@ class IwanJoint:
         stiffness : float
             Consistent tangent ``dF/du`` [N/m] for motion from the committed state to ``u``.
         """
-        u = float(u)
-        if self._blo < u < self._bhi:
+        try:                        # text, complex, None and arrays fail here, at no cost
+            fast = self._blo < u < self._bhi
+            u = float(u)
+        except (TypeError, ValueError):
+            raise ValueError(f"u must be a real number (displacement [m]), got {u!r:.40}") from None
+        if fast:
             # Fast path, the usual case: u continues the current branch without reaching the
             # point where its loop closes (see _set_branch); the same numbers as the walk.
             x = u - self._bur
