@@ -2,8 +2,8 @@
 
 The number of examples is bounded by a settings profile so that the suite stays fast:
 ``ci`` (default, 40 examples, no deadline) or ``long`` (1000 examples), selected with the
-environment variable ``IWAN_HYPOTHESIS_PROFILE``; ``benchmarks/bench_properties.py`` runs the
-long profile.
+environment variable ``IWAN_HYPOTHESIS_PROFILE`` (or any count with ``IWAN_HYPOTHESIS_EXAMPLES``);
+``benchmarks/bench_properties.py`` runs them with many more examples.
 """
 from __future__ import annotations
 
@@ -22,7 +22,12 @@ settings.register_profile("ci", max_examples=40, deadline=None, derandomize=True
                           suppress_health_check=[HealthCheck.too_slow])
 settings.register_profile("long", max_examples=1000, deadline=None,
                           suppress_health_check=[HealthCheck.too_slow])
-settings.load_profile(os.environ.get("IWAN_HYPOTHESIS_PROFILE", "ci"))
+if os.environ.get("IWAN_HYPOTHESIS_EXAMPLES"):              # benchmarks/bench_properties.py
+    settings.register_profile("custom", max_examples=int(os.environ["IWAN_HYPOTHESIS_EXAMPLES"]),
+                              deadline=None, suppress_health_check=[HealthCheck.too_slow])
+    settings.load_profile("custom")
+else:
+    settings.load_profile(os.environ.get("IWAN_HYPOTHESIS_PROFILE", "ci"))
 
 
 def _log_uniform(lo, hi):
@@ -65,13 +70,14 @@ def _state(j):
 
 
 # ---------------------------------------------------------------- the element
-def _slider_bank(p, n=3000, lowest=1e-9):
-    """An independent dense bank: log bins on [0, phi_max] (first bin [0, lowest phi_max]) with
-    weights = integral of rho over the bin and slip at the bin's centroid (REFERENCE sec. 4),
-    plus the spike. Returns (k, phi, bound): ``bound`` is sum k_i (hi_i - lo_i), the largest
-    force error of the bank (a stop operator's output is 1-Lipschitz in its threshold, so moving
-    each slider's threshold inside its bin changes its force by at most k_i (hi_i - lo_i))."""
-    e = np.concatenate([[0.0], np.geomspace(lowest, 1.0, n)])
+def _slider_bank(p, n=20000):
+    """An independent dense bank: ``n`` equal bins in ``s = phi/phi_max`` with weight = the
+    integral of rho over the bin and slip at the bin's centroid (moment matching, REFERENCE
+    sec. 4), plus the spike. Returns (k, phi, bound): ``bound = sum k_i (hi_i - lo_i)
+    = K_slider phi_max / n`` is the largest force error of the bank, since a slider's force is
+    1-Lipschitz in its slip threshold (moving each threshold inside its bin changes the force
+    by at most k_i (hi_i - lo_i))."""
+    e = np.linspace(0.0, 1.0, n + 1)
     c = p.chi
     m0 = e[1:] ** (c + 1) - e[:-1] ** (c + 1)               # int_lo^hi (c+1) s^c ds
     m1 = e[1:] ** (c + 2) - e[:-1] ** (c + 2)
