@@ -85,6 +85,28 @@ def test_reversal_tol_range_is_validated_and_named():
     IwanJoint(P, reversal_tol=1e-9)
 
 
+@pytest.mark.parametrize("u", [
+    [-2.0e-2, 1.09804343e-230, 0.0, 1.09804343e-230],
+    [0.0, -2e-2, 0.0, -1e-2, -1.043442e-224, -5e-3, 1e-300, -1e-300, 3e-3],
+])
+def test_reversals_of_any_magnitude_are_seen(u):
+    """Found by the long property run: the walk tested ``d * du < 0``, which underflows to
+    -0.0 for displacements of ~1e-230, so a reversal there was missed and the loop-closing
+    test then popped the whole memory (force 1e-228 N instead of 0.5 N). Checked against an
+    independent slider bank (exact here: chi = 0, beta = 0 gives uniform slip thresholds)."""
+    p = IwanParameters(Fs=1.0, KT=100.0, chi=0.0, beta=0.0)     # phi_max = 0.02 m
+    F = _forces(IwanJoint(p, reversal_tol=0.0), np.array(u))
+    n = 4000
+    phi = (np.arange(n) + 0.5) / n * p.phi_max                  # rho = R: equal weights
+    k = np.full(n, p.KT / n)
+    x = np.zeros(n)
+    bank = []
+    for ui in u:
+        x = np.clip(x, ui - phi, ui + phi)
+        bank.append(np.dot(k, ui - x))
+    assert np.allclose(F, bank, atol=p.KT * p.phi_max / n)
+
+
 # ---------------------------------------------------------------- extreme parameters
 @pytest.mark.parametrize("chi", [120.0, 500.0, 1e6])
 @pytest.mark.parametrize("Fs, KT", [(1e3, 1e6), (1e-3, 1e9), (1e6, 1e3)])

@@ -246,8 +246,8 @@ class IwanJoint:
         ``u`` lies strictly between the committed ``u_c`` and, in the branch's direction,
         the point where its loop closes (the reversal below the top one, or ``-u_r`` for the
         last one; none on the virgin curve): the open interval ``(_blo, _bhi)``. (The walk
-        decides with products of differences; the two agree unless such a product
-        underflows, for displacements below ~1e-160.) On that branch the force is
+        decides with the same sign comparisons, so the two agree at any magnitude.) On that
+        branch the force is
         ``F_r + c2 F_bb(c1 |u - u_r|)`` with the sign of ``u - u_r``: ``c1, c2 = 1/2, 2``
         from a reversal point, ``1, 1`` with ``u_r = F_r = 0`` on the virgin curve.
         """
@@ -387,7 +387,8 @@ class IwanJoint:
         eF = 0.0
         if du != 0.0:
             d = uc - us[n - 1] if n else uc          # direction of the current branch
-            if d * du < 0.0:                         # the motion reverses at uc
+            up = du > 0.0                            # signs, not products: d * du underflows
+            if (d < 0.0) if up else (d > 0.0):       # the motion reverses at uc
                 if abs(d) <= self._tol:
                     if n:
                         n -= 1                       # ignore a negligible excursion
@@ -404,7 +405,7 @@ class IwanJoint:
                     bound = us[n - 2] if n >= 2 else -top
                 else:
                     break
-                if (u - bound) * du < 0.0:
+                if (u < bound) if up else (u > bound):   # bound not reached
                     break
                 if acc is not None:
                     self._segment(top, topF, pos, bound, acc)
