@@ -239,3 +239,34 @@ def test_invalid_parameters_give_a_clear_error(name, bad):
     kw[name] = bad
     with pytest.raises(ValueError, match=name):
         IwanParameters(**kw)
+
+
+_wide_params = st.tuples(_log_uniform(1e-120, 1e120), _log_uniform(1e-120, 1e120),
+                         st.one_of(st.floats(-0.999999, 2.0), _log_uniform(1.0, 1e6)),
+                         st.one_of(st.just(0.0), _log_uniform(1e-12, 1e12)))
+
+
+@given(_wide_params)
+def test_extreme_valid_parameters_compute_or_are_refused_clearly(vals):
+    """Any (Fs, KT, chi, beta) in range either builds, and then every closed form and the
+    element are finite without numpy overflow warnings, or is refused with a ValueError
+    saying which derived quantity leaves the float range."""
+    import warnings
+    try:
+        p = IwanParameters(*vals)
+    except ValueError as exc:
+        assert "outside the float range" in str(exc)
+        return
+    u = _r * p.phi_max
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)
+        out = [backbone(u, p), tangent_stiffness(u, p), secant_stiffness(u, p),
+               dissipation(u, p), backbone_work(u, p), dissipation_slope(u[1:50], p)]
+        j = IwanJoint(p)
+        for x in (0.5, -0.3, 2.0, -2.0, 0.1):
+            out.append(np.array(j.trial(x * p.phi_max)))
+            j.commit()
+        out.append(np.array([j.work, j.dissipated_energy]))
+    for v in out:
+        assert np.all(np.isfinite(v))
+    assert abs(backbone(2.0 * p.phi_max, p)) == p.Fs
