@@ -75,7 +75,7 @@ class IwanJoint:
     """
 
     __slots__ = ("_p", "_tol", "_KT", "_Fs", "_pm", "_e1", "_e3", "_a", "_b", "_g_pm", "_ih_c",
-                 "_ipm", "_KTpm", "_g2", "_g3", "_Fspm",
+                 "_ipm", "_KTpm", "_g2", "_g3", "_Fspm", "_rtol",
                  "_ih_pm", "_u", "_F", "_K", "_us", "_Fr", "_W", "_D",
                  "_tu", "_tF", "_tK", "_tn", "_te", "_teF", "_has_trial", "_tfast", "_Gc", "_IHc",
                  "_blo", "_bhi", "_bur", "_bFr", "_bc1", "_bc2", "_bdir")
@@ -86,6 +86,7 @@ class IwanJoint:
         tol = check_scalar("reversal_tol", reversal_tol, low=0.0, high=REVERSAL_TOL_MAX)
         self._p = params
         p = params
+        self._rtol = tol
         self._tol = tol * p.phi_max
         self._KT = p.KT
         self._Fs = p.Fs
@@ -320,7 +321,7 @@ class IwanJoint:
         state. Each sample is committed in turn on a private copy; this element is untouched.
         """
         arr = finite_array("u", u, ndim=1)
-        j = IwanJoint(self._p, reversal_tol=self._tol / self._pm)
+        j = IwanJoint(self._p, reversal_tol=self._rtol)
         out = np.empty_like(arr)
         trial, commit = j.trial, j.commit
         for i, ui in enumerate(arr.tolist()):
