@@ -155,29 +155,29 @@ class IwanJoint:
             Consistent tangent ``dF/du`` [N/m] for motion from the committed state to ``u``.
         """
         try:                        # text, complex, None and arrays fail here, at no cost
-            fast = self._blo < u < self._bhi
+            if self._blo < u < self._bhi:
+                # Fast path, the usual case: u continues the current branch without reaching
+                # the point where its loop closes (see _set_branch); the numbers of the walk.
+                u = float(u)
+                x = u - self._bur
+                h = self._bc1 * abs(x)          # r = |x|/phi_max on the branch's scale
+                if h < 1.0:
+                    q = h ** self._e1
+                    f = h * (self._KTpm - self._a * q)
+                    K = self._KT - self._b * q
+                else:
+                    f = self._Fs
+                    K = 0.0
+                F = self._bFr + self._bc2 * f if x >= 0.0 else self._bFr - self._bc2 * f
+                self._tu = u
+                self._tF = F
+                self._tK = K
+                self._tfast = True
+                self._has_trial = True
+                return F, K
             u = float(u)
         except (TypeError, ValueError):
             raise ValueError(f"u must be a real number (displacement [m]), got {u!r:.40}") from None
-        if fast:
-            # Fast path, the usual case: u continues the current branch without reaching the
-            # point where its loop closes (see _set_branch); the same numbers as the walk.
-            x = u - self._bur
-            h = self._bc1 * abs(x)              # r = |x|/phi_max on the branch's scale
-            if h < 1.0:
-                q = h ** self._e1
-                f = h * (self._KTpm - self._a * q)
-                K = self._KT - self._b * q
-            else:
-                f = self._Fs
-                K = 0.0
-            F = self._bFr + self._bc2 * f if x >= 0.0 else self._bFr - self._bc2 * f
-            self._tu = u
-            self._tF = F
-            self._tK = K
-            self._tfast = True
-            self._has_trial = True
-            return F, K
         if not _NINF < u < _INF:
             raise ValueError(f"u must be finite, got {u}")
         n, e, eF, F, K = self._walk(u, None)
