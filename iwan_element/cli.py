@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 import warnings
 from pathlib import Path
@@ -113,20 +114,20 @@ def _run_diagnose(args) -> int:
     noise = None if args.noise is None else args.noise * FORCE_UNITS[fu]
     result = diagnose(data.t, data.u, data.F, max_effects=args.max_effects, noise=noise,
                       seed=args.seed)
-    print(f"{data.source}: {len(data.u)} samples, {len(data.cycles)} cycles, units {du}, {fu}, "
-          f"{tu} (converted to SI)")
-    print(result.report())
+    wrote = []                  # files first: a closed stdout must not cost the outputs
     if args.json is not None:
         args.json.write_text(json.dumps(result.to_dict(), indent=2, allow_nan=False) + "\n")
-        print(f"wrote {args.json}")
+        wrote.append(f"wrote {args.json}")
     if args.plot is not None:
         from matplotlib.figure import Figure
         fig = Figure(figsize=(11, 4.5))
         result.plot(ax=[fig.add_subplot(1, 2, 1), fig.add_subplot(1, 2, 2)])
         fig.tight_layout()
         fig.savefig(args.plot, dpi=120)
-        print(f"wrote {args.plot}")
-    return EXIT_OK if result.fit.success or not result.effects else EXIT_NOT_CONVERGED
+        wrote.append(f"wrote {args.plot}")
+    status = EXIT_OK if result.fit.success or not result.effects else EXIT_NOT_CONVERGED
+    return status, [f"{data.source}: {len(data.u)} samples, {len(data.cycles)} cycles, units "
+                    f"{du}, {fu}, {tu} (converted to SI)", result.report()] + wrote
 
 
 def _parse_units(text: str) -> tuple[str, str, str]:
@@ -175,6 +176,9 @@ def _run_fit(args) -> int:
                      columns=_parse_columns(args.columns), delimiter=args.delimiter)
     if args.method != "seed" and args.slip_force is not None:
         raise ValueError("--slip-force is only used by --method seed")
+    if args.slip_force is not None:
+        from .core._validation import check_scalar
+        check_scalar("--slip-force", args.slip_force, low=0.0, low_open=True)
     with warnings.catch_warnings(record=True):       # the report lists every warning
         warnings.simplefilter("always")
         if args.method == "loops":
@@ -194,19 +198,19 @@ def _run_fit(args) -> int:
                 result = fit_dissipation(table["F0"], table["D"], u0=table["u0"],
                                          method="least_squares", seed=args.seed,
                                          n_starts=args.starts)
-    print(f"{data.source}: {len(data.u)} samples, {len(data.cycles)} cycles "
-          f"({len(data.usable_cycles())} usable), units {du}, {fu}, {tu} (converted to SI)")
-    print(result.report())
+    wrote = []                  # files first: a closed stdout must not cost the outputs
     if args.json is not None:
         out = result.to_dict()
         out["data"] = {"source": data.source, "units": data.units, "samples": len(data.u),
                        "cycles": len(data.cycles), "usable_cycles": len(data.usable_cycles())}
         args.json.write_text(json.dumps(out, indent=2, allow_nan=False) + "\n")
-        print(f"wrote {args.json}")
+        wrote.append(f"wrote {args.json}")
     if args.plot is not None:
         _write_plot(args.plot, data, result)
-        print(f"wrote {args.plot}")
-    return EXIT_OK if result.success else EXIT_NOT_CONVERGED
+        wrote.append(f"wrote {args.plot}")
+    head = (f"{data.source}: {len(data.u)} samples, {len(data.cycles)} cycles "
+            f"({len(data.usable_cycles())} usable), units {du}, {fu}, {tu} (converted to SI)")
+    return EXIT_OK if result.success else EXIT_NOT_CONVERGED, [head, result.report()] + wrote
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -217,15 +221,33 @@ def main(argv: list[str] | None = None) -> int:
     except _UsageError as exc:
         print(f"{PROG}: error: {exc} (see {PROG} --help)", file=sys.stderr)
         return EXIT_USAGE
+    runners = {"fit": _run_fit, "diagnose": _run_diagnose}
     try:
-        if args.command == "fit":
-            return _run_fit(args)
-        if args.command == "diagnose":
-            return _run_diagnose(args)
+        status, lines = runners[args.command](args)
     except (ValueError, OSError) as exc:
-        print(f"{PROG}: error: {' '.join(str(exc).split())}", file=sys.stderr)
+        _print_or_drop(f"{PROG}: error: {' '.join(str(exc).split())}", sys.stderr)
         return EXIT_INPUT
-    raise AssertionError(f"unhandled command {args.command!r}")  # pragma: no cover
+    _print_or_drop("\n".join(lines), sys.stdout)
+    return status
+
+
+def _print_or_drop(text: str, stream) -> None:
+    """Print ``text``; if the reader has gone (``| head -1``, ``| true``), drop the rest quietly.
+
+    The runners write their files before anything is printed, so a closed pipe only loses the
+    printed copy. The stream's descriptor is pointed at /dev/null so that the interpreter's
+    final flush does not raise ``BrokenPipeError`` again.
+    """
+    try:
+        print(text, file=stream)
+        stream.flush()
+    except BrokenPipeError:
+        try:
+            devnull = os.open(os.devnull, os.O_WRONLY)
+            os.dup2(devnull, stream.fileno())
+            os.close(devnull)
+        except (OSError, ValueError, AttributeError):   # not a real file (e.g. captured)
+            pass
 
 
 if __name__ == "__main__":  # pragma: no cover

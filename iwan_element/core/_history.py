@@ -67,7 +67,8 @@ def walk(u: np.ndarray, tol: float, *, segments: bool = False):
         e = -1
         if du != 0.0:
             d = uc - vals[st[n - 1]] if n else uc
-            if d * du < 0.0:
+            up = du > 0.0                # signs, not products (d * du underflows)
+            if (d < 0.0) if up else (d > 0.0):
                 if abs(d) <= tol:
                     if n:
                         n -= 1
@@ -83,7 +84,7 @@ def walk(u: np.ndarray, tol: float, *, segments: bool = False):
                     bound = vals[st[n - 2]] if n >= 2 else -vals[st[n - 1]]
                 else:
                     break
-                if (ui - bound) * du < 0.0:
+                if (ui < bound) if up else (ui > bound):
                     break
                 if segments:
                     s_step.append(i)

@@ -13,7 +13,7 @@ def check_scalar(name: str, value, *, low: float | None = None, high: float | No
 
     ``low_open=True`` excludes the lower bound itself (``value > low``).
     """
-    if isinstance(value, bool) or not isinstance(value, (Real, np.floating, np.integer)):
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (Real, np.floating, np.integer)):
         raise ValueError(f"{name} must be a real number, got {value!r}")
     x = float(value)
     if not math.isfinite(x):
@@ -39,6 +39,7 @@ def finite_array(name: str, value, *, ndim: int | None = 1, min_size: int = 1) -
 
     The copy guarantees that nothing the caller passed is mutated downstream.
     """
+    _reject_non_real(name, value)
     try:
         arr = np.array(value, dtype=float, copy=True)
     except (TypeError, ValueError) as exc:
@@ -52,6 +53,19 @@ def finite_array(name: str, value, *, ndim: int | None = 1, min_size: int = 1) -
         first = int(np.flatnonzero(bad.ravel())[0])
         raise ValueError(f"{name} contains NaN or infinite values (first at index {first})")
     return arr
+
+
+def _reject_non_real(name: str, value) -> None:
+    """Raise ``ValueError`` for text, complex or non-numeric object input, which numpy would
+    otherwise parse (``"1.5"``) or truncate (``1+2j -> 1``) silently."""
+    if isinstance(value, (str, bytes)):
+        raise ValueError(f"{name} must be numeric array-like, got text {value!r:.40}")
+    kind = np.asarray(value).dtype.kind if not isinstance(value, np.ndarray) else value.dtype.kind
+    if kind in "USc" or (kind == "O" and any(
+            isinstance(v, (str, bytes, complex)) or v is None
+            for v in np.asarray(value, dtype=object).ravel().tolist())):
+        raise ValueError(f"{name} must be real numbers, got an array of "
+                         f"{'complex' if kind == 'c' else 'text or objects'}")
 
 
 def same_length(**arrays: np.ndarray) -> int:

@@ -12,7 +12,7 @@ import warnings
 import numpy as np
 
 from ._validation import check_scalar, finite_array
-from .parameters import IwanParameters
+from .parameters import CHI_MAX, IwanParameters
 
 __all__ = [
     "backbone",
@@ -40,6 +40,21 @@ def _check_params(params) -> IwanParameters:
     return params
 
 
+def _ratio(a, p: IwanParameters):
+    """``min(a/phi_max, 1)``: every power in the closed forms is a power of this ratio, never
+    of ``phi_max`` (whose unit power overflows for large ``chi``; see ``IwanParameters.R``)."""
+    with np.errstate(over="ignore"):
+        return np.minimum(a / p.phi_max, 1.0)
+
+
+def _finite(name, value, what):
+    """Raise ``ValueError`` naming ``name`` if an energy overflowed (input far beyond macroslip)."""
+    if not np.all(np.isfinite(value)):
+        raise ValueError(f"{name} is too large: the {what} overflows the float range "
+                         f"(|{name}| must be below about 1e300 m / Fs)")
+    return value
+
+
 def _out(x, like):
     """Return a float for scalar input, an array otherwise."""
     return float(x) if np.ndim(like) == 0 else x
@@ -65,8 +80,9 @@ def backbone(u, params: IwanParameters):
     p = _check_params(params)
     x = _as_array("u", u)
     a = np.abs(x)
-    m = np.minimum(a, p.phi_max)
-    micro = m * (p.KT - p.R * m ** (p.chi + 1.0) / ((p.chi + 1.0) * (p.chi + 2.0)))
+    r = _ratio(a, p)
+    # R |u|**(chi+2)/((chi+1)(chi+2)) = KT |u| r**(chi+1)/((1+beta)(chi+2)): no power of phi_max
+    micro = p.phi_max * r * (p.KT - p.K_slider * r ** (p.chi + 1.0) / (p.chi + 2.0))
     f = np.where(a < p.phi_max, micro, p.Fs) * np.sign(x)
     return _out(f, u)
 
@@ -80,8 +96,8 @@ def tangent_stiffness(u, params: IwanParameters):
     p = _check_params(params)
     x = _as_array("u", u)
     a = np.abs(x)
-    m = np.minimum(a, p.phi_max)
-    k = np.where(a < p.phi_max, p.KT - p.R * m ** (p.chi + 1.0) / (p.chi + 1.0), 0.0)
+    r = _ratio(a, p)
+    k = np.where(a < p.phi_max, p.KT - p.K_slider * r ** (p.chi + 1.0), 0.0)
     return _out(k, u)
 
 
@@ -106,7 +122,7 @@ def secant_stiffness(u0, params: IwanParameters):
         raise ValueError("u0 (displacement amplitude) must be >= 0")
     r = np.minimum(x / p.phi_max, 1.0)
     micro = p.KT * (1.0 - r ** (p.chi + 1.0) / ((p.chi + 2.0) * (1.0 + p.beta)))
-    with np.errstate(divide="ignore", invalid="ignore"):
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):   # used above phi_max only
         macro = p.Fs / x
     k = np.where(x <= p.phi_max, micro, macro)
     return _out(k, u0)
@@ -117,9 +133,9 @@ def _slip_energy(y, p: IwanParameters):
 
     ``R y**(chi+3)/((chi+2)(chi+3))`` below ``phi_max``, growing by ``Fs`` per metre beyond.
     """
-    m = np.minimum(y, p.phi_max)
-    base = p.R * m ** (p.chi + 3.0) / ((p.chi + 2.0) * (p.chi + 3.0))
-    return base + p.Fs * np.maximum(y - p.phi_max, 0.0)
+    r = _ratio(y, p)
+    e = p.KT * p.phi_max * p.phi_max * (p.chi + 1.0) / ((1.0 + p.beta) * (p.chi + 2.0) * (p.chi + 3.0))
+    return e * r ** (p.chi + 3.0) + p.Fs * np.maximum(y - p.phi_max, 0.0)
 
 
 def dissipation(u0, params: IwanParameters):
@@ -143,7 +159,7 @@ def dissipation(u0, params: IwanParameters):
     x = _as_array("u0", u0)
     if np.any(x < 0):
         raise ValueError("u0 (displacement amplitude) must be >= 0")
-    return _out(4.0 * _slip_energy(x, p), u0)
+    return _finite("u0", _out(4.0 * _slip_energy(x, p), u0), "dissipation")
 
 
 def dissipation_slope(u0, params: IwanParameters):
@@ -172,11 +188,11 @@ def backbone_work(u, params: IwanParameters):
     """
     p = _check_params(params)
     x = np.abs(_as_array("u", u))
-    m = np.minimum(x, p.phi_max)
-    a = p.R / ((p.chi + 1.0) * (p.chi + 2.0))
-    g = 0.5 * p.KT * m * m - a * m ** (p.chi + 3.0) / (p.chi + 3.0)
+    r = _ratio(x, p)
+    e = p.K_slider * p.phi_max * p.phi_max / ((p.chi + 2.0) * (p.chi + 3.0))
+    g = 0.5 * p.KT * p.phi_max * p.phi_max * r * r - e * r ** (p.chi + 3.0)
     g = g + p.Fs * np.maximum(x - p.phi_max, 0.0)
-    return _out(g, u)
+    return _finite("u", _out(g, u), "backbone work")
 
 
 def masing_loop(u0: float, params: IwanParameters, *, n: int = 401):
@@ -201,8 +217,8 @@ def masing_loop(u0: float, params: IwanParameters, *, n: int = 401):
     """
     p = _check_params(params)
     u0 = check_scalar("u0", u0, low=0.0, low_open=True)
-    if not isinstance(n, (int, np.integer)) or n < 3:
-        raise ValueError(f"n must be an integer >= 3, got {n!r}")
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or not 3 <= n <= 10_000_000:
+        raise ValueError(f"n must be an integer in [3, 1e7], got {n!r}")
     F0 = backbone(u0, p)
     down = np.linspace(u0, -u0, n)
     up = np.linspace(-u0, u0, n)[1:]
@@ -213,8 +229,8 @@ def masing_loop(u0: float, params: IwanParameters, *, n: int = 401):
 
 # ---------------------------------------------------------------- dimensionless (paper eqs. 12-15)
 def _dimensionless_check(chi, beta):
-    chi = check_scalar("chi", chi, low=-1.0, low_open=True)
-    beta = check_scalar("beta", beta)
+    chi = check_scalar("chi", chi, low=-1.0, low_open=True, high=CHI_MAX)
+    beta = check_scalar("beta", beta, low=-1e300 / (abs(chi) + 2.0), high=1e300 / (abs(chi) + 2.0))
     den = beta * chi + 2.0 * beta + chi + 1.0
     if den == 0.0:
         raise ValueError(f"(chi, beta) = ({chi}, {beta}) make the denominator of eq. 12 zero")

@@ -31,6 +31,10 @@ from .parameters import IwanParameters
 
 __all__ = ["IwanJoint"]
 
+#: Largest accepted ``reversal_tol`` (relative to ``phi_max``): it only guards against
+#: round-off, see :class:`IwanJoint`.
+REVERSAL_TOL_MAX = 1e-9
+
 _INF = math.inf
 _NINF = -math.inf
 
@@ -48,10 +52,13 @@ class IwanJoint:
     params : IwanParameters
         Joint parameters (SI units).
     reversal_tol : float, keyword-only
-        Reversals whose excursion from the previous reversal is at most
-        ``reversal_tol * phi_max`` are ignored (default ``1e-12``, range ``[0, 1e-3]``).
-        Such a loop changes the force by at most ``KT * reversal_tol * phi_max``; ignoring
-        it keeps the stack from filling with round-off jitter near turning points.
+        Round-off guard, relative to ``phi_max`` [-], range ``[0, 1e-9]`` (default ``1e-12``).
+        A reversal whose excursion from the previous reversal is at most
+        ``reversal_tol * phi_max`` is ignored. Ignoring it changes the force by at most
+        ``KT * reversal_tol * phi_max`` (``<= 1e-9 KT phi_max = 1e-9 Fs (1+beta)/c``), and
+        keeps the stack of a slow decay from growing once its amplitude is at round-off
+        level. ``0`` is exact for every history. Larger values are refused: they would
+        silently erase small real reversals (and their loops) from the history.
 
     Notes
     -----
@@ -68,6 +75,7 @@ class IwanJoint:
     """
 
     __slots__ = ("_p", "_tol", "_KT", "_Fs", "_pm", "_e1", "_e3", "_a", "_b", "_g_pm", "_ih_c",
+                 "_ipm", "_KTpm", "_g2", "_g3", "_Fspm", "_rtol",
                  "_ih_pm", "_u", "_F", "_K", "_us", "_Fr", "_W", "_D",
                  "_tu", "_tF", "_tK", "_tn", "_te", "_teF", "_has_trial", "_tfast", "_Gc", "_IHc",
                  "_blo", "_bhi", "_bur", "_bFr", "_bc1", "_bc2", "_bdir")
@@ -75,21 +83,30 @@ class IwanJoint:
     def __init__(self, params: IwanParameters, *, reversal_tol: float = 1e-12):
         if not isinstance(params, IwanParameters):
             raise ValueError(f"params must be an IwanParameters instance, got {type(params).__name__}")
-        tol = check_scalar("reversal_tol", reversal_tol, low=0.0, high=1e-3)
+        tol = check_scalar("reversal_tol", reversal_tol, low=0.0, high=REVERSAL_TOL_MAX)
         self._p = params
         p = params
+        self._rtol = tol
         self._tol = tol * p.phi_max
         self._KT = p.KT
         self._Fs = p.Fs
         self._pm = p.phi_max
         self._e1 = p.chi + 1.0
         self._e3 = p.chi + 3.0
-        self._a = p.R / ((p.chi + 1.0) * (p.chi + 2.0))      # backbone: x (KT - a x^(chi+1))
-        self._b = p.R / (p.chi + 1.0)                         # tangent:  KT - b x^(chi+1)
+        # Everything is written in r = x/phi_max <= 1 (REFERENCE sec. 2): powers of phi_max
+        # itself overflow for large chi (IwanParameters.R). With Ks = KT/(1+beta):
         pm = p.phi_max
-        self._g_pm = 0.5 * p.KT * pm * pm - self._a * pm ** self._e3 / self._e3
-        self._ih_c = p.R / ((p.chi + 2.0) * (p.chi + 3.0))
-        self._ih_pm = self._ih_c * pm ** self._e3
+        Ks = p.K_slider
+        self._ipm = 1.0 / pm
+        self._KTpm = p.KT * pm                                # backbone: r (KT pm - a r^(chi+1))
+        self._a = Ks * pm / (p.chi + 2.0)
+        self._b = Ks                                          # tangent:  KT - b r^(chi+1)
+        self._g2 = 0.5 * p.KT * pm * pm                       # G = g2 r^2 - g3 r^(chi+3)
+        self._g3 = Ks * pm * pm / ((p.chi + 2.0) * (p.chi + 3.0))
+        self._g_pm = self._g2 - self._g3
+        self._ih_c = (p.chi + 1.0) * self._g3                 # I_H = ih_c r^(chi+3)
+        self._ih_pm = self._ih_c
+        self._Fspm = p.Fs * pm
         self.reset()
 
     # ------------------------------------------------------------------ public protocol
@@ -137,26 +154,30 @@ class IwanJoint:
         stiffness : float
             Consistent tangent ``dF/du`` [N/m] for motion from the committed state to ``u``.
         """
-        u = float(u)
-        if self._blo < u < self._bhi:
-            # Fast path, the usual case: u continues the current branch without reaching the
-            # point where its loop closes (see _set_branch); the same numbers as the walk.
-            x = u - self._bur
-            h = self._bc1 * abs(x)
-            if h < self._pm:
-                q = h ** self._e1
-                f = h * (self._KT - self._a * q)
-                K = self._KT - self._b * q
-            else:
-                f = self._Fs
-                K = 0.0
-            F = self._bFr + self._bc2 * f if x >= 0.0 else self._bFr - self._bc2 * f
-            self._tu = u
-            self._tF = F
-            self._tK = K
-            self._tfast = True
-            self._has_trial = True
-            return F, K
+        try:                        # text, complex, None and arrays fail here, at no cost
+            if self._blo < u < self._bhi:
+                # Fast path, the usual case: u continues the current branch without reaching
+                # the point where its loop closes (see _set_branch); the numbers of the walk.
+                u = float(u)
+                x = u - self._bur
+                h = self._bc1 * abs(x)          # r = |x|/phi_max on the branch's scale
+                if h < 1.0:
+                    q = h ** self._e1
+                    f = h * (self._KTpm - self._a * q)
+                    K = self._KT - self._b * q
+                else:
+                    f = self._Fs
+                    K = 0.0
+                F = self._bFr + self._bc2 * f if x >= 0.0 else self._bFr - self._bc2 * f
+                self._tu = u
+                self._tF = F
+                self._tK = K
+                self._tfast = True
+                self._has_trial = True
+                return F, K
+            u = float(u)
+        except (TypeError, ValueError):
+            raise ValueError(f"u must be a real number (displacement [m]), got {u!r:.40}") from None
         if not _NINF < u < _INF:
             raise ValueError(f"u must be finite, got {u}")
         n, e, eF, F, K = self._walk(u, None)
@@ -177,13 +198,13 @@ class IwanJoint:
         if self._tfast:             # one segment on the current branch (see trial)
             u = self._tu
             xb = self._bc1 * abs(u - self._bur)
-            if xb < self._pm:       # _G(xb) and _IH(xb), inlined, sharing the power
+            if xb < 1.0:            # _G(xb) and _IH(xb), inlined, sharing the power
                 p3 = xb ** self._e3
-                Gb = 0.5 * self._KT * xb * xb - self._a * p3 / self._e3
+                Gb = self._g2 * xb * xb - self._g3 * p3
                 Ib = self._ih_c * p3
             else:
-                Gb = self._g_pm + self._Fs * (xb - self._pm)
-                Ib = self._ih_pm + self._Fs * (xb - self._pm)
+                Gb = self._g_pm + self._Fspm * (xb - 1.0)
+                Ib = self._ih_pm + self._Fspm * (xb - 1.0)
             if self._bc2 == 2.0:    # a branch from a reversal point
                 self._W += self._bFr * (u - self._u) + 4.0 * (Gb - self._Gc)
                 self._D += 2.0 * (Ib - self._IHc)
@@ -226,8 +247,8 @@ class IwanJoint:
         ``u`` lies strictly between the committed ``u_c`` and, in the branch's direction,
         the point where its loop closes (the reversal below the top one, or ``-u_r`` for the
         last one; none on the virgin curve): the open interval ``(_blo, _bhi)``. (The walk
-        decides with products of differences; the two agree unless such a product
-        underflows, for displacements below ~1e-160.) On that branch the force is
+        decides with the same sign comparisons, so the two agree at any magnitude.) On that
+        branch the force is
         ``F_r + c2 F_bb(c1 |u - u_r|)`` with the sign of ``u - u_r``: ``c1, c2 = 1/2, 2``
         from a reversal point, ``1, 1`` with ``u_r = F_r = 0`` on the virgin curve.
         """
@@ -239,14 +260,14 @@ class IwanJoint:
             bound = us[-2] if len(us) >= 2 else -ur
             self._bur = ur
             self._bFr = self._Fr[-1]
-            self._bc1 = 0.5
+            self._bc1 = 0.5 * self._ipm
             self._bc2 = 2.0
         else:
             d = uc
             bound = math.copysign(_INF, uc)
             self._bur = 0.0
             self._bFr = 0.0
-            self._bc1 = 1.0
+            self._bc1 = self._ipm
             self._bc2 = 1.0
         if d > 0.0:
             self._blo, self._bhi, self._bdir = uc, bound, 1
@@ -300,7 +321,7 @@ class IwanJoint:
         state. Each sample is committed in turn on a private copy; this element is untouched.
         """
         arr = finite_array("u", u, ndim=1)
-        j = IwanJoint(self._p, reversal_tol=self._tol / self._pm)
+        j = IwanJoint(self._p, reversal_tol=self._rtol)
         out = np.empty_like(arr)
         trial, commit = j.trial, j.commit
         for i, ui in enumerate(arr.tolist()):
@@ -312,37 +333,38 @@ class IwanJoint:
         return f"IwanJoint({self._p!r}, depth={len(self._us)}, u={self._u:.6g})"
 
     # ------------------------------------------------------------------ kernel
-    def _bb(self, x: float) -> tuple[float, float]:
-        """Backbone force and tangent at ``x >= 0``."""
-        if x < self._pm:
-            q = x ** self._e1
-            return x * (self._KT - self._a * q), self._KT - self._b * q
+    def _bb(self, r: float) -> tuple[float, float]:
+        """Backbone force and tangent at ``x = r phi_max >= 0``."""
+        if r < 1.0:
+            q = r ** self._e1
+            return r * (self._KTpm - self._a * q), self._KT - self._b * q
         return self._Fs, 0.0
 
-    def _G(self, x: float) -> float:
-        """``int_0^x F_bb`` for ``x >= 0``."""
-        if x < self._pm:
-            return 0.5 * self._KT * x * x - self._a * x ** self._e3 / self._e3
-        return self._g_pm + self._Fs * (x - self._pm)
+    def _G(self, r: float) -> float:
+        """``int_0^x F_bb`` for ``x = r phi_max >= 0``."""
+        if r < 1.0:
+            return self._g2 * r * r - self._g3 * r ** self._e3
+        return self._g_pm + self._Fspm * (r - 1.0)
 
-    def _IH(self, y: float) -> float:
-        """``int_0^y int_0^q phi rho(phi) dphi dq`` for ``y >= 0``."""
-        if y < self._pm:
-            return self._ih_c * y ** self._e3
-        return self._ih_pm + self._Fs * (y - self._pm)
+    def _IH(self, r: float) -> float:
+        """``int_0^y int_0^q phi rho(phi) dphi dq`` for ``y = r phi_max >= 0``."""
+        if r < 1.0:
+            return self._ih_c * r ** self._e3
+        return self._ih_pm + self._Fspm * (r - 1.0)
 
     def _segment(self, ur, Fr, ua, ub, acc) -> None:
         """Add work and dissipation of a monotone move ``ua -> ub`` on the branch from ``ur``
         (``ur is None`` for the virgin curve) to ``acc = [W, D, G, I_H]`` and put ``G`` and
         ``I_H`` at ``ub`` (in the branch's coordinate) in its last two entries."""
+        s = self._ipm
         if ur is None:
-            Gb = self._G(abs(ub))
-            Ib = self._IH(abs(ub))
-            acc[0] += Gb - self._G(abs(ua))
-            acc[1] += max(Ib - self._IH(abs(ua)), 0.0)
+            Gb = self._G(s * abs(ub))
+            Ib = self._IH(s * abs(ub))
+            acc[0] += Gb - self._G(s * abs(ua))
+            acc[1] += max(Ib - self._IH(s * abs(ua)), 0.0)
         else:
-            xa = 0.5 * abs(ua - ur)
-            xb = 0.5 * abs(ub - ur)
+            xa = 0.5 * s * abs(ua - ur)
+            xb = 0.5 * s * abs(ub - ur)
             Gb = self._G(xb)
             Ib = self._IH(xb)
             acc[0] += Fr * (ub - ua) + 4.0 * (Gb - self._G(xa))
@@ -366,7 +388,8 @@ class IwanJoint:
         eF = 0.0
         if du != 0.0:
             d = uc - us[n - 1] if n else uc          # direction of the current branch
-            if d * du < 0.0:                         # the motion reverses at uc
+            up = du > 0.0                            # signs, not products: d * du underflows
+            if (d < 0.0) if up else (d > 0.0):       # the motion reverses at uc
                 if abs(d) <= self._tol:
                     if n:
                         n -= 1                       # ignore a negligible excursion
@@ -383,7 +406,7 @@ class IwanJoint:
                     bound = us[n - 2] if n >= 2 else -top
                 else:
                     break
-                if (u - bound) * du < 0.0:
+                if (u < bound) if up else (u > bound):   # bound not reached
                     break
                 if acc is not None:
                     self._segment(top, topF, pos, bound, acc)
@@ -406,8 +429,8 @@ class IwanJoint:
         elif n:
             ur, Fr_r = us[n - 1], Fr[n - 1]
         else:
-            f, k = self._bb(abs(u))
+            f, k = self._bb(self._ipm * abs(u))
             return n, e, eF, (f if u >= 0.0 else -f), k
         x = u - ur
-        f, k = self._bb(0.5 * abs(x))
+        f, k = self._bb(0.5 * self._ipm * abs(x))
         return n, e, eF, (Fr_r + 2.0 * f if x >= 0.0 else Fr_r - 2.0 * f), k

@@ -12,13 +12,50 @@ from __future__ import annotations
 
 import json
 import math
+import sys
 from dataclasses import asdict, dataclass, field
 from os import PathLike
 from pathlib import Path
 
+import numpy as np
+
 from ._validation import check_scalar
 
 __all__ = ["IwanParameters"]
+
+#: Largest accepted ``chi``. Physical joints have ``-1 < chi <= 0``; at ``chi = 1e6`` the
+#: continuous density already sits within 1e-4 phi_max of phi_max (a spike), and beyond
+#: ~1e150 the products ``(chi+2)(chi+3)`` of the closed forms overflow.
+CHI_MAX = 1e6
+
+_LOG_HUGE = math.log(sys.float_info.max)
+_LOG_TINY = math.log(sys.float_info.min)
+
+
+def _derived(Fs: float, KT: float, chi: float, beta: float) -> tuple[float, float]:
+    """``phi_max`` [m] and ``S`` [N/m] (paper eqs. 8, 11), checked for float range.
+
+    Every derived quantity the package uses is a product of ``phi_max``, ``KT``, ``Fs`` and
+    powers ``r**(chi+k)`` of ``r = u/phi_max <= 1`` (never of ``phi_max`` itself), so finite,
+    normal ``phi_max``, ``1/phi_max``, ``KT phi_max`` and ``KT phi_max**2`` are enough for all
+    closed forms and the time-domain elements to stay finite.
+    """
+    c = beta + (chi + 1.0) / (chi + 2.0)                    # in (0, inf); ratio below <= 1/c
+    ratio = (1.0 + beta) / c
+    with np.errstate(all="ignore"):
+        phi_max = float(np.float64(Fs) / np.float64(KT) * np.float64(ratio))  # paper eq. 11
+        checks = {"phi_max = Fs (1+beta)/(KT c)": phi_max,
+                  "1/phi_max": 1.0 / phi_max if phi_max else math.inf,
+                  "KT phi_max": KT * phi_max,
+                  "KT phi_max**2": KT * phi_max * phi_max}
+    for what, v in checks.items():
+        if not (math.isfinite(v) and v >= sys.float_info.min):
+            raise ValueError(
+                f"IwanParameters(Fs={Fs}, KT={KT}, chi={chi}, beta={beta}) are outside the "
+                f"float range: {what} = {v}; rescale the units (e.g. mm and kN) so that Fs, "
+                f"KT and Fs/KT are between about 1e-150 and 1e150")
+    S = KT * (beta / (1.0 + beta))                          # = (Fs/phi_max) beta / c
+    return phi_max, S
 
 
 @dataclass(frozen=True)
@@ -36,15 +73,18 @@ class IwanParameters:
     KT : float
         Tangential stiffness of the unslipped joint [N/m], ``KT > 0``.
     chi : float
-        Exponent of the power-law slider density [-], ``chi > -1``. Physical joints have
-        ``-1 < chi <= 0`` (dissipation grows with force amplitude to the power 2..3).
+        Exponent of the power-law slider density [-], ``-1 < chi <= 1e6``. Physical joints
+        have ``-1 < chi <= 0`` (dissipation grows with force amplitude to the power 2..3).
+        Large ``chi`` is computed without overflow (all powers are of ``u/phi_max``).
     beta : float
         Ratio of the spike strength to the continuous part (paper eq. 6) [-], ``beta >= 0``.
 
     Raises
     ------
     ValueError
-        If a value is not finite or outside its range; the message names the argument.
+        If a value is not finite or outside its range (the message names the argument), or
+        if ``phi_max``, ``1/phi_max``, ``KT phi_max`` or ``KT phi_max**2`` fall outside the
+        normal float range (units far from SI scale; the message says which).
 
     Examples
     --------
@@ -62,19 +102,12 @@ class IwanParameters:
     def __post_init__(self) -> None:
         Fs = check_scalar("Fs", self.Fs, low=0.0, low_open=True)
         KT = check_scalar("KT", self.KT, low=0.0, low_open=True)
-        chi = check_scalar("chi", self.chi, low=-1.0, low_open=True)
+        chi = check_scalar("chi", self.chi, low=-1.0, low_open=True, high=CHI_MAX)
         beta = check_scalar("beta", self.beta, low=0.0)
         for name, val in (("Fs", Fs), ("KT", KT), ("chi", chi), ("beta", beta)):
             object.__setattr__(self, name, val)
-        c = beta + (chi + 1.0) / (chi + 2.0)
-        phi_max = Fs * (1.0 + beta) / (KT * c)                      # paper eq. 11
-        R = Fs * (chi + 1.0) / (phi_max ** (chi + 2.0) * c)         # paper eq. 7
-        S = (Fs / phi_max) * beta / c                               # paper eq. 8, corrected
-        if not all(math.isfinite(v) and v >= 0.0 for v in (phi_max, R, S)) or phi_max == 0.0:
-            raise ValueError(
-                f"IwanParameters(Fs={Fs}, KT={KT}, chi={chi}, beta={beta}) give a degenerate "
-                f"slider density (phi_max={phi_max}, R={R}, S={S}); use values of ordinary scale")
-        object.__setattr__(self, "_derived", (phi_max, R, S))
+        phi_max, S = _derived(Fs, KT, chi, beta)
+        object.__setattr__(self, "_derived", (phi_max, S))
 
     # ------------------------------------------------------------------ derived
     @property
@@ -83,15 +116,38 @@ class IwanParameters:
         return self._derived[0]
 
     @property
+    def K_slider(self) -> float:
+        """Stiffness of the continuous part of the density, ``KT - S = KT/(1+beta)`` [N/m]
+        (so that ``R phi_max**(chi+1) = (chi+1) K_slider``, free of overflow)."""
+        return self.KT / (1.0 + self.beta)
+
+    @property
     def R(self) -> float:
-        """Coefficient of the power-law density [N m**(-chi-2)] (paper eq. 7)."""
-        return self._derived[1]
+        """Coefficient of the power-law density [N m**(-chi-2)] (paper eq. 7).
+
+        ``R = (chi+1) KT / ((1+beta) phi_max**(chi+1))`` (REFERENCE sec. 2,
+        ``KT = R phi_max**(chi+1)/(chi+1) + S``). Its unit depends on ``chi``, so for large
+        ``chi`` or ``phi_max`` far from 1 m it may not be representable as a float; the
+        closed forms never use it (they use ``r = u/phi_max``). Raises ``ValueError`` then.
+        """
+        pm, chi = self._derived[0], self.chi
+        log_r = (math.log(chi + 1.0) + math.log(self.KT) - math.log1p(self.beta)
+                 - (chi + 1.0) * math.log(pm))
+        if not _LOG_TINY < log_r < _LOG_HUGE:
+            raise ValueError(
+                f"R = 10**{log_r / math.log(10.0):.1f} N m**(-chi-2) is outside the float range "
+                f"for chi={chi}, phi_max={pm:g} m; the model itself is well defined (use "
+                f"K_slider and phi_max: R phi_max**(chi+1) = (chi+1) K_slider)")
+        try:
+            return (chi + 1.0) * self.K_slider / pm ** (chi + 1.0)
+        except (OverflowError, ZeroDivisionError):     # R fits but phi_max**(chi+1) does not
+            return math.exp(log_r)
 
     @property
     def S(self) -> float:
         """Strength of the Dirac spike at ``phi_max`` [N/m] (paper eq. 8, corrected:
-        ``S = (Fs/phi_max) beta / (beta + (chi+1)/(chi+2))``)."""
-        return self._derived[2]
+        ``S = (Fs/phi_max) beta / (beta + (chi+1)/(chi+2)) = KT beta/(1+beta)``)."""
+        return self._derived[1]
 
     @property
     def macroslip_displacement(self) -> float:

@@ -63,7 +63,7 @@ _PROTOCOL = ("trial", "commit", "revert", "reset", "work", "stored_energy", "dis
              "force", "displacement")
 
 
-def check_element(obj, *, name: str = "joint") -> None:
+def check_element(obj, *, name: str = "obj") -> None:
     """Raise ``ValueError`` naming ``name`` unless ``obj`` follows :class:`JointElement`."""
     missing = [m for m in _PROTOCOL if not hasattr(obj, m)]
     if missing:

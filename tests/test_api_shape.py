@@ -1,0 +1,122 @@
+"""One API shape (issue 14): plotting functions take ``ax=`` and return the artists they drew
+on it; result objects have ``report()``, a JSON-safe ``to_dict()``, ``warnings`` and
+``plot(ax=)`` returning artists; time-series functions take time first."""
+from __future__ import annotations
+
+import inspect
+import json
+import warnings
+
+import matplotlib
+
+matplotlib.use("Agg")
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+from matplotlib.figure import Figure  # noqa: E402
+
+import iwan_element as ie  # noqa: E402
+from iwan_element import plotting  # noqa: E402
+
+P = ie.IwanParameters(9e3, 5e7, -0.5, 0.5)
+
+
+def _record():
+    return ie.simulate_test(P, np.array([0.05, 0.1, 0.2, 0.3]) * 1e-3, cycles=3, sample_rate=4,
+                            force_noise=5.0, seed=0)
+
+
+PLOTS = {
+    "plot_normalized_loops": lambda ax: plotting.plot_normalized_loops([(0.0, 0.5)], ax=ax),
+    "plot_loop": lambda ax: plotting.plot_loop(1e-4, P, ax=ax),
+    "plot_fitted_loops": lambda ax: plotting.plot_fitted_loops(
+        np.linspace(0, 1e-4, 50), ie.backbone(np.linspace(0, 1e-4, 50), P), P, ax=ax),
+    "plot_dissipation_fit": lambda ax: plotting.plot_dissipation_fit(
+        ie.force_amplitude(np.geomspace(1e-5, 1e-4, 5), P),
+        ie.dissipation(np.geomspace(1e-5, 1e-4, 5), P), P, ax=ax),
+}
+
+
+def test_every_plotting_function_is_covered():
+    public = {n for n, f in vars(plotting).items()
+              if n.startswith("plot_") and inspect.isfunction(f)}
+    assert public == set(PLOTS)
+
+
+@pytest.mark.parametrize("name", sorted(PLOTS))
+def test_plotting_functions_take_ax_and_return_its_artists(name):
+    assert "ax" in inspect.signature(getattr(plotting, name)).parameters
+    assert inspect.signature(getattr(plotting, name)).parameters["ax"].kind == \
+        inspect.Parameter.KEYWORD_ONLY
+    ax = Figure().add_subplot()
+    artists = PLOTS[name](ax)
+    twins = ax.get_shared_x_axes().get_siblings(ax)     # a twinx() of ax counts as ax
+    assert len(artists) > 0 and all(a.axes is ax or a.axes in twins for a in artists)
+
+
+# result objects: how to build one cheaply
+def _fit():
+    d = _record()
+    names = list(inspect.signature(ie.fit_loops).parameters)
+    if names[0] == "t":
+        return ie.fit_loops(d.t, d.u, d.F, n_starts=1, max_nfev=30)
+    return ie.fit_loops(d.u, d.F, t=d.t, n_starts=1, max_nfev=30)
+
+
+def _curve():
+    a = np.geomspace(1e-5, 1e-3, 8)
+    return ie.AmplitudeCurve(a, 100 - 5 * a / a[-1], 1e-3 + 0.01 * a / a[-1])
+
+
+def _vib():
+    c = _curve()
+    return ie.diagnose_vibration(c.amplitude, c.frequency, c.damping_ratio,
+                                 predicted_frequency=c.frequency + 0.01,
+                                 predicted_damping=c.damping_ratio,
+                                 frequency_noise=0.01, damping_noise=1e-4)
+
+
+def _diag():
+    d = _record()
+    return ie.diagnose(d.t, d.u, d.F, max_samples=300, max_effects=1, noise=5.0)
+
+
+RESULTS = {"FitResult": _fit, "AmplitudeCurve": _curve, "VibrationDiagnosis": _vib,
+           "Diagnosis": _diag}
+#: Known gaps in files other helpers own (listed in /work/notes/robust.md for the lead).
+PENDING = {("FitResult", "plot"): "identify/fit.py: FitResult has no plot(ax=) (plotting."
+                                  "plot_fitted_loops/plot_dissipation_fit can back it)",
+           ("VibrationDiagnosis", "warnings"): "diagnose/diagnosis.py: no warnings attribute"}
+
+
+@pytest.mark.parametrize("name", sorted(RESULTS))
+@pytest.mark.parametrize("part", ["report", "to_dict", "warnings", "plot"])
+def test_result_objects_have_one_shape(name, part, request):
+    if (name, part) in PENDING:
+        request.applymarker(pytest.mark.xfail(strict=True, reason=PENDING[(name, part)]))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")         # identifiability warnings of the short record
+        res = RESULTS[name]()
+    if part == "report":
+        assert isinstance(res.report(), str) and res.report().strip()
+    elif part == "to_dict":
+        json.dumps(res.to_dict(), allow_nan=False)
+    elif part == "warnings":
+        assert isinstance(res.warnings, tuple)
+    else:
+        fig = Figure()
+        axes = [fig.add_subplot(1, 2, 1), fig.add_subplot(1, 2, 2)]
+        try:
+            artists = res.plot(ax=axes)
+        except (TypeError, ValueError):
+            artists = res.plot(ax=axes[0])
+        assert len(artists) > 0 and all(a.axes in axes for a in artists)
+
+
+@pytest.mark.parametrize("fn", [ie.diagnose, ie.fit_loops, ie.split_cycles, ie.TestData])
+def test_time_series_functions_take_time_first(fn, request):
+    names = list(inspect.signature(fn).parameters)
+    if "t" not in names[:1] and fn in (ie.fit_loops, ie.split_cycles):
+        request.applymarker(pytest.mark.xfail(
+            strict=True, reason="identify/ owner: fit_loops(u, F, t=...) and split_cycles(u, F, "
+                                "t=...) are not time first yet (issue 14)"))
+    assert names[:3] == ["t", "u", "F"]

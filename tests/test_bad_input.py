@@ -1,0 +1,414 @@
+"""Fuzz suite: every public name in ``iwan_element.__all__`` and the CLI fed bad input.
+
+Structure: ``REGISTRY`` maps each public name to an :class:`Entry` whose ``build()`` returns the
+callable and a dict of valid keyword arguments, and which names the arguments to fuzz and how
+(``data``: a 1-D record, ``time``: a time vector, ``shape_free``: an array of any shape such as
+a closed form's ``u``, ``scalar``: a number). Each argument is replaced by bad values, one at a
+time. A *must-fail* input (NaN, inf, strings, complex, objects, wrong rank, mismatched lengths,
+non-monotonic time; empty records) must raise ``ValueError``/``TypeError`` whose message names
+the argument; a *questionable* input (one sample, huge, tiny, wrong units by 1000) may also
+compute, but then its numbers must be finite. Every call must leave what the caller gave
+unchanged (compared with a deep copy). ``test_registry_covers_public_api`` fails when a name
+is added to ``__all__`` without an entry here.
+"""
+from __future__ import annotations
+
+import copy
+import inspect
+import math
+import warnings
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+import pytest
+
+import iwan_element as ie
+from iwan_element import IwanJoint, IwanParameters
+
+P = IwanParameters(9e3, 5e7, -0.5, 0.5)
+
+
+@dataclass
+class Entry:
+    """How to call one public name with valid arguments and which of them to fuzz."""
+    build: Callable[[], tuple[Callable, dict]] | None = None
+    fuzz: dict = field(default_factory=dict)     # argument name -> kind
+    skip: str | None = None                      # reason when there is nothing to call
+    nonfinite: str | None = None                 # why an inf/nan result is documented and right
+
+
+# ---------------------------------------------------------------- shared valid inputs
+_CACHE: dict = {}
+
+
+def _record():
+    """A short synthetic quasi-static test record (3 cycles per amplitude), cached."""
+    if "rec" not in _CACHE:
+        _CACHE["rec"] = ie.simulate_test(P, np.array([0.05, 0.1, 0.2, 0.3]) * 1e-3, cycles=3,
+                                         sample_rate=4, force_noise=5.0, seed=0)
+    return _CACHE["rec"]
+
+
+def _table():
+    return _record().amplitude_table()
+
+
+def _fit_loops_kwargs():
+    d = _record()
+    names = list(inspect.signature(ie.fit_loops).parameters)
+    kw = dict(u=d.u.copy(), F=d.F.copy(), t=d.t.copy(), n_starts=1, max_nfev=30)
+    return {k: v for k, v in kw.items() if k in names}
+
+
+def _fit_loops_fuzz():
+    return {"t": "time", "u": "data", "F": "data"}
+
+
+def _csv(tmp_dir):
+    from pathlib import Path
+    d = _record()
+    path = Path(tmp_dir) / "rec.csv"
+    rows = "\n".join(f"{a:.3f},{b:.7f},{c:.6f}" for a, b, c in zip(d.t, d.u * 1e3, d.F * 1e-3))
+    path.write_text("time [s],displacement [mm],force [kN]\n" + rows + "\n")
+    return path
+
+
+def _curve():
+    a = np.geomspace(1e-5, 1e-3, 8)
+    return dict(amplitude=a, frequency=100.0 - 5.0 * a / a[-1], damping=1e-3 + 0.01 * a / a[-1])
+
+
+REGISTRY: dict[str, Entry] = {
+    "IwanParameters": Entry(lambda: (IwanParameters, dict(Fs=9e3, KT=5e7, chi=-0.5, beta=0.5)),
+                            {"Fs": "scalar", "KT": "scalar", "chi": "scalar", "beta": "scalar"}),
+    "IwanJoint": Entry(lambda: (IwanJoint, dict(params=P, reversal_tol=1e-12)),
+                       {"params": "object", "reversal_tol": "scalar"}),
+    "DiscreteIwan": Entry(lambda: (ie.DiscreteIwan, dict(params=P, n_sliders=20)),
+                          {"params": "object", "n_sliders": "count"}),
+    "slider_distribution": Entry(lambda: (ie.slider_distribution, dict(params=P, n_sliders=20)),
+                                 {"params": "object", "n_sliders": "count"}),
+    "JointElement": Entry(skip="a typing.Protocol (no behaviour); check_element is fuzzed"),
+    "check_element": Entry(lambda: (ie.check_element, dict(obj=IwanJoint(P))), {"obj": "object"}),
+    "EFFECTS": Entry(skip="a constant dict of effect classes; make_effect is fuzzed"),
+    "make_effect": Entry(lambda: (ie.make_effect, dict(name="viscous_damping", inner=IwanJoint(P), c=10.0)),
+                         {"inner": "object", "c": "scalar"}),
+    "base_joint": Entry(lambda: (ie.base_joint, dict(element=IwanJoint(P))), {"element": "object"}),
+    "ViscousDamping": Entry(lambda: (ie.ViscousDamping, dict(inner=IwanJoint(P), c=10.0)),
+                            {"inner": "object", "c": "scalar"}),
+    "PinningStiffness": Entry(lambda: (ie.PinningStiffness, dict(inner=IwanJoint(P), k_p=1e6)),
+                              {"inner": "object", "k_p": "scalar"}),
+    "Backlash": Entry(lambda: (ie.Backlash, dict(inner=IwanJoint(P), gap=1e-5)),
+                      {"inner": "object", "gap": "scalar"}),
+    "SlipDegradation": Entry(lambda: (ie.SlipDegradation, dict(inner=IwanJoint(P), rate=0.1)),
+                             {"inner": "object", "rate": "scalar"}),
+    "AsymmetricSlip": Entry(lambda: (ie.AsymmetricSlip, dict(inner=IwanJoint(P), asymmetry=0.1)),
+                            {"inner": "object", "asymmetry": "scalar"}),
+    "backbone": Entry(lambda: (ie.backbone, dict(u=np.linspace(-1e-3, 1e-3, 11), params=P)),
+                      {"u": "shape_free", "params": "object"}),
+    "backbone_work": Entry(lambda: (ie.backbone_work, dict(u=np.linspace(-1e-3, 1e-3, 11), params=P)),
+                           {"u": "shape_free", "params": "object"}),
+    "tangent_stiffness": Entry(lambda: (ie.tangent_stiffness,
+                                        dict(u=np.linspace(-1e-3, 1e-3, 11), params=P)),
+                               {"u": "shape_free", "params": "object"}),
+    "secant_stiffness": Entry(lambda: (ie.secant_stiffness, dict(u0=np.geomspace(1e-6, 1e-3, 7),
+                                                                 params=P)),
+                              {"u0": "shape_free", "params": "object"}),
+    "force_amplitude": Entry(lambda: (ie.force_amplitude, dict(u0=np.geomspace(1e-6, 1e-3, 7),
+                                                               params=P)),
+                             {"u0": "shape_free", "params": "object"}),
+    "dissipation": Entry(lambda: (ie.dissipation, dict(u0=np.geomspace(1e-6, 1e-3, 7), params=P)),
+                         {"u0": "shape_free", "params": "object"}),
+    "dissipation_slope": Entry(lambda: (ie.dissipation_slope, dict(u0=np.geomspace(1e-6, 1e-4, 7),
+                                                                   params=P)),
+                               {"u0": "shape_free", "params": "object"},
+                               nonfinite="inf in macroslip is documented: F0 = Fs is constant there"),
+    "masing_loop": Entry(lambda: (ie.masing_loop, dict(u0=1e-4, params=P, n=11)),
+                         {"u0": "scalar", "params": "object", "n": "count"}),
+    "normalized_backbone": Entry(lambda: (ie.normalized_backbone,
+                                          dict(s=np.linspace(-2, 2, 9), chi=-0.5, beta=0.5)),
+                                 {"s": "shape_free", "chi": "scalar", "beta": "scalar"}),
+    "masing_descending": Entry(lambda: (ie.masing_descending,
+                                        dict(s=np.linspace(-1, 1, 9), s0=1.0, chi=-0.5, beta=0.5)),
+                               {"s": "shape_free", "s0": "scalar", "chi": "scalar", "beta": "scalar"}),
+    "masing_ascending": Entry(lambda: (ie.masing_ascending,
+                                       dict(s=np.linspace(-1, 1, 9), s0=1.0, chi=-0.5, beta=0.5)),
+                              {"s": "shape_free", "s0": "scalar", "chi": "scalar", "beta": "scalar"}),
+    "load_test": Entry(skip="reads a file: fuzzed through the CLI and test_load_test_bad_files"),
+    "split_cycles": Entry(lambda: (ie.split_cycles, dict(u=_record().u.copy(), F=_record().F.copy(),
+                                                         t=_record().t.copy())),
+                          {"u": "data", "F": "data", "t": "time"}),
+    "find_reversals": Entry(lambda: (ie.find_reversals, dict(u=_record().u.copy())), {"u": "values"}),
+    "simulate_test": Entry(lambda: (ie.simulate_test, dict(params=P, amplitudes=np.array([1e-4, 2e-4]),
+                                                           cycles=2, sample_rate=2.0)),
+                           {"params": "object", "amplitudes": "values", "sample_rate": "scalar"}),
+    "TestData": Entry(lambda: (ie.TestData, dict(t=_record().t.copy(), u=_record().u.copy(),
+                                                 F=_record().F.copy(), cycles=_record().cycles)),
+                      {"t": "time", "u": "data", "F": "data"}),
+    "Cycle": Entry(skip="a record built by split_cycles (fuzzed through split_cycles)"),
+    "AmplitudeCurve": Entry(lambda: (ie.AmplitudeCurve, dict(amplitude=_curve()["amplitude"],
+                                                             frequency=_curve()["frequency"],
+                                                             damping_ratio=_curve()["damping"])),
+                            {"amplitude": "data", "frequency": "data", "damping_ratio": "data"}),
+    "fit_loops": Entry(lambda: (ie.fit_loops, _fit_loops_kwargs()), _fit_loops_fuzz()),
+    "fit_dissipation": Entry(lambda: (ie.fit_dissipation, dict(F0=_table()["F0"], D=_table()["D"],
+                                                               u0=_table()["u0"], n_starts=1)),
+                             {"F0": "data", "D": "data", "u0": "data"}),
+    "FitResult": Entry(skip="a result object built by the fits (fuzzed through fit_loops)"),
+    "IdentifiabilityWarning": Entry(skip="a warning class"),
+    "diagnose": Entry(lambda: (ie.diagnose, dict(t=_record().t.copy(), u=_record().u.copy(),
+                                                 F=_record().F.copy(), max_samples=300,
+                                                 max_effects=1, noise=5.0)),
+                      {"t": "time", "u": "data", "F": "data", "noise": "scalar"}),
+    "diagnose_vibration": Entry(lambda: (ie.diagnose_vibration, dict(
+        amplitude=_curve()["amplitude"], frequency=_curve()["frequency"], damping=_curve()["damping"],
+        predicted_frequency=_curve()["frequency"] + 0.01, predicted_damping=_curve()["damping"],
+        frequency_noise=0.01, damping_noise=1e-4)),
+        {"amplitude": "data", "frequency": "data", "damping": "data"}),
+    "Diagnosis": Entry(skip="a result object built by diagnose"),
+    "VibrationDiagnosis": Entry(skip="a result object built by diagnose_vibration"),
+    "simulate_element_test": Entry(lambda: (ie.simulate_element_test, dict(
+        element=IwanJoint(P), amplitudes=np.array([1e-4, 2e-4]), cycles=2, samples_per_cycle=16,
+        force_noise=1.0)),
+        {"element": "object", "amplitudes": "values", "force_noise": "scalar"}),
+    "CANDIDATES": Entry(skip="a constant tuple of effect names"),
+}
+
+#: Known failures in files owned by other helpers (see /work/notes/robust.md, "for other
+#: owners"): (name, argument, bad input) -> reason. The lead removes an entry when its fix lands.
+_FIT = "identify/ owner (helper fit): "
+_DIAG = "diagnose/ owner (helper diag): "
+_EFF = "effects.py owner: "
+PENDING: dict[tuple[str, str, str], str] = {
+    **{("TestData", a, lab): _FIT + "TestData(t, u, F, cycles) does not validate its arrays "
+                                    "(NaN, text, 2-D, mismatched lengths, unsorted t are accepted)"
+       for a in ("t", "u", "F") for lab in ("nan", "inf", "strings", "text", "complex", "object",
+                                            "empty", "2-D", "one sample", "shorter",
+                                            "non-monotonic", "constant")},
+    ("simulate_test", "amplitudes", "huge"): _FIT + "overflow RuntimeWarning instead of a "
+                                             "ValueError naming amplitudes",
+    ("simulate_test", "sample_rate", "huge"): _FIT + "numpy 'Maximum allowed size exceeded' "
+                                              "does not name sample_rate",
+    ("fit_dissipation", "u0", "huge"): _FIT + "error names KT ('KT must be in (0, inf)'), not u0",
+    ("fit_dissipation", "u0", "tiny"): _FIT + "error names KT ('KT must be finite'), not u0",
+    ("diagnose", "t", "huge"): _DIAG + "overflow RuntimeWarnings instead of a clear error",
+    ("diagnose", "t", "tiny"): _DIAG + "divide-by-zero RuntimeWarnings instead of a clear error",
+    ("diagnose", "noise", "tiny"): _DIAG + "noise=1e-300: ZeroDivisionError (issue 14 item)",
+    ("simulate_element_test", "element", "*"): _DIAG + "element=None: AttributeError "
+                                               "'NoneType' has no attribute 'force_history'",
+    ("base_joint", "element", "*"): _EFF + "base_joint(None/'x'/3.0/dict) returns its argument "
+                                    "instead of rejecting a non-element",
+}
+
+
+# ---------------------------------------------------------------- bad values
+def _mutations(kind, value):
+    """(label, bad value, must_fail) for an argument of the given kind."""
+    out = []
+    if kind in ("data", "time", "shape_free", "values"):
+        a = np.asarray(value, dtype=float)
+        flat = a.ravel()
+        nan = flat.copy()
+        nan[len(nan) // 2] = np.nan
+        inf = flat.copy()
+        inf[0] = np.inf
+        out += [("nan", nan.reshape(a.shape), True), ("inf", inf.reshape(a.shape), True),
+                ("strings", np.array(["a"] * flat.size, dtype=object).reshape(a.shape), True),
+                ("text", "1,2,3", True),
+                ("complex", a + 1j, True),
+                ("object", np.array([None] * flat.size, dtype=object).reshape(a.shape), True),
+                ("huge", a * 1e300, False), ("tiny", a * 1e-300, False),
+                ("x1000", a * 1000.0, False), ("x0.001", a * 1e-3, False)]
+        if kind != "shape_free":
+            out += [("empty", np.array([]), True), ("2-D", np.stack([flat, flat], axis=1), True)]
+        if kind in ("data", "time"):            # records paired with other records
+            out += [("one sample", flat[:1].copy(), True), ("shorter", flat[:-1].copy(), True)]
+        if kind == "time":
+            shuffled = flat.copy()
+            shuffled[[1, 2]] = shuffled[[2, 1]]
+            out += [("non-monotonic", shuffled, True), ("constant", np.zeros_like(flat), True)]
+    elif kind == "scalar":
+        v = float(value)
+        out += [("nan", math.nan, True), ("inf", math.inf, True), ("-inf", -math.inf, True),
+                ("string", "1.0", True), ("complex", complex(v, 1.0), True),
+                ("array", np.array([v, v]), True),
+                ("huge", v * 1e300 if v else 1e300, False), ("tiny", v * 1e-300 if v else 1e-300, False),
+                ("negative", -abs(v) if v else -1.0, False)]
+    elif kind == "count":
+        out += [("zero", 0, True), ("negative", -3, True), ("float", 2.5, True), ("nan", math.nan, True),
+                ("string", "3", True), ("huge", 10 ** 30, False)]
+    elif kind == "object":
+        out += [("None", None, True), ("string", "x", True), ("dict", {"Fs": 1.0}, True),
+                ("number", 3.0, True)]
+    return out
+
+
+def _cases():
+    for name, entry in REGISTRY.items():
+        if entry.build is None:
+            continue
+        for arg, kind in entry.fuzz.items():
+            for label, _, _ in _mutations(kind, 1.0 if kind == "scalar" else np.zeros(4)):
+                yield pytest.param(name, arg, label, id=f"{name}-{arg}-{label}")
+
+
+def _equal(a, b) -> bool:
+    if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
+        return (isinstance(a, np.ndarray) and isinstance(b, np.ndarray) and a.shape == b.shape
+                and a.dtype == b.dtype
+                and (np.array_equal(a, b, equal_nan=a.dtype.kind in "fc") if a.dtype != object
+                     else all(x is y or x == y for x, y in zip(a.ravel(), b.ravel()))))
+    if isinstance(a, float) and isinstance(b, float) and math.isnan(a) and math.isnan(b):
+        return True
+    if isinstance(a, (IwanJoint, ie.DiscreteIwan)):
+        return repr(a) == repr(b) and a.force == b.force and a.work == b.work
+    try:
+        return bool(a == b)
+    except Exception:                           # noqa: BLE001 - objects without ==
+        return True
+
+
+def _finite_numbers(result) -> bool:
+    """True if every number in a returned float/array/tuple is finite."""
+    if isinstance(result, (float, np.floating)):
+        return math.isfinite(result)
+    if isinstance(result, np.ndarray) and result.dtype.kind in "fc":
+        return bool(np.all(np.isfinite(result)))
+    if isinstance(result, tuple):
+        return all(_finite_numbers(r) for r in result)
+    return True
+
+
+@pytest.mark.parametrize("name, arg, label", list(_cases()))
+def test_bad_input_gets_a_clear_error_and_mutates_nothing(name, arg, label):
+    fn, kwargs = REGISTRY[name].build()
+    kind = REGISTRY[name].fuzz[arg]
+    (bad, must_fail), = [(v, m) for lab, v, m in _mutations(kind, kwargs[arg]) if lab == label]
+    kwargs[arg] = bad
+    pending = next((PENDING[k] for k in ((name, arg, label), (name, arg, "*"), (name, "*", label),
+                                         (name, "*", "*")) if k in PENDING), None)
+    if pending is None:
+        _check_call(name, fn, kwargs, arg, label, must_fail)
+        return
+    try:                            # strict: once the owner's fix lands this case must pass
+        _check_call(name, fn, kwargs, arg, label, must_fail)
+    except (AssertionError, Exception):      # noqa: BLE001 - the known failure, still failing
+        pytest.xfail(pending)
+    pytest.fail(f"[XPASS(strict)] {name}({arg}={label}) now passes: remove it from PENDING "
+                f"({pending})")
+
+
+def _check_call(name, fn, kwargs, arg, label, must_fail):
+    before = copy.deepcopy(kwargs)
+    caught = []
+    try:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            result = fn(**kwargs)
+    except (ValueError, TypeError) as exc:
+        msg = str(exc)
+        assert arg in msg or arg.lower() in msg.lower(), (
+            f"{name}({arg}={label}) raised {type(exc).__name__} without naming {arg!r}: {msg}")
+    else:
+        assert not must_fail, f"{name}({arg}={label}) was accepted silently"
+        numpy_noise = [w for w in caught if w.category is RuntimeWarning]   # overflow, 0/0
+        assert not numpy_noise, f"{name}({arg}={label}): numpy warned {numpy_noise[0].message}"
+        assert _finite_numbers(result) or caught or REGISTRY[name].nonfinite, (
+            f"{name}({arg}={label}) returned non-finite numbers")
+    for k in kwargs:
+        assert _equal(kwargs[k], before[k]), f"{name} mutated its argument {k!r}"
+
+
+def test_registry_covers_public_api():
+    missing = sorted(set(ie.__all__) - set(REGISTRY))
+    assert not missing, f"public names without a fuzz entry in tests/test_bad_input.py: {missing}"
+    for name, entry in REGISTRY.items():
+        assert (entry.build is None) != (entry.skip is None), name
+
+
+# ---------------------------------------------------------------- the element's methods
+@pytest.mark.parametrize("cls", [IwanJoint, ie.DiscreteIwan])
+@pytest.mark.parametrize("bad", [math.nan, math.inf, "1e-4", 1e-4 + 1j, None, np.array([1e-4, 2e-4])])
+def test_element_trial_rejects_bad_displacement(cls, bad):
+    j = cls(P)
+    j.trial(1e-4)
+    j.commit()
+    state = (j.displacement, j.force, j.work)
+    with pytest.raises((ValueError, TypeError), match="u"):
+        j.trial(bad)
+    assert (j.displacement, j.force, j.work) == state
+    with pytest.raises((ValueError, TypeError), match="u"):
+        j.force_history([0.0, bad] if not isinstance(bad, np.ndarray) else [[0.0, 1.0]])
+
+
+# ---------------------------------------------------------------- files and the CLI
+def _write(path, text):
+    path.write_text(text)
+    return str(path)
+
+
+@pytest.mark.parametrize("label, text, match", [
+    ("empty", "", ""),
+    ("header only", "time,displacement,force\n", ""),
+    ("one row", "time,displacement,force\n0,0.1,1\n", ""),
+    ("nan", "time,displacement,force\n0,0,0\n1,nan,1\n2,0.1,2\n", "displacement"),
+    ("strings", "time,displacement,force\n0,a,0\n1,b,1\n2,c,2\n", ""),
+    ("non-monotonic", "time,displacement,force\n" + "".join(
+        f"{[0, 2, 1, 3][i % 4] + 4 * (i // 4)},{0.1 * math.sin(i / 5)},{math.sin(i / 5)}\n"
+        for i in range(400)), "time"),
+    ("two columns", "time,displacement\n" + "".join(f"{i},{i}\n" for i in range(50)), ""),
+    ("zero displacement", "time,displacement,force\n" + "".join(
+        f"{i},0,{math.sin(i / 5)}\n" for i in range(400)), "displacement"),
+])
+def test_cli_bad_files_exit_1_with_one_line(tmp_path, capsys, label, text, match):
+    from iwan_element.cli import main
+    path = _write(tmp_path / "bad.csv", text)
+    for cmd in (["fit", path, "--units", "mm,kN"], ["diagnose", path, "--units", "mm,kN"]):
+        code = main(cmd)
+        err = capsys.readouterr().err
+        assert code == 1, (label, cmd[0], err)
+        assert err.startswith("iwan-element: error:") and err.strip().count("\n") == 0, err
+        assert match in err, (label, err)
+
+
+@pytest.mark.parametrize("argv, match", [
+    (["fit", "{csv}", "--units", "mm,kN", "--starts", "0"], "start"),
+    (["fit", "{csv}", "--units", "mm,kN", "--smooth", "-3"], "smooth"),
+    (["fit", "{csv}", "--units", "mm,kN", "--method", "seed", "--slip-force", "nan"], "slip"),
+    (["fit", "{csv}", "--units", "mm,kN", "--method", "seed", "--slip-force", "-9"], "slip"),
+    (["fit", "{csv}", "--units", "mm,kN", "--columns", "0,1"], "columns"),
+    (["fit", "{csv}", "--units", "mm,kN", "--columns", "0,1,7"], "column"),
+    (["fit", "{csv}", "--units", "parsec,kN"], "unit"),
+    (["diagnose", "{csv}", "--units", "mm,kN", "--noise", "nan"], "noise"),
+    (["diagnose", "{csv}", "--units", "mm,kN", "--noise", "-1"], "noise"),
+    (["diagnose", "{csv}", "--units", "mm,kN", "--max-effects", "-1"], "max_effects"),
+])
+def test_cli_bad_options_exit_nonzero_with_one_line(tmp_path, capsys, argv, match):
+    from iwan_element.cli import main
+    csv = str(_csv(tmp_path))
+    argv = [a.replace("{csv}", csv) for a in argv]
+    code = main(argv)
+    err = capsys.readouterr().err
+    assert code in (1, 2), err
+    assert err.startswith("iwan-element: error:") and err.strip().count("\n") == 0, err
+    assert match.lower() in err.lower(), err
+
+
+def test_cli_wrong_units_by_1000_is_flagged(tmp_path, capsys):
+    """The record is in mm and kN; calling it m (1000x too large) is caught by the label
+    check of the header or warned in the report."""
+    from iwan_element.cli import main
+    csv = str(_csv(tmp_path))
+    code = main(["fit", csv, "--units", "m,kN"])
+    out = capsys.readouterr()
+    assert code == 1 and "mm" in out.err
+
+
+@pytest.mark.parametrize("label, text, match", [
+    ("empty", "", ""),
+    ("nan", "time,displacement,force\n0,0,0\n1,nan,1\n2,0.1,2\n", "displacement"),
+])
+def test_load_test_bad_files(tmp_path, label, text, match):
+    path = _write(tmp_path / "bad.csv", text)
+    with pytest.raises(ValueError, match=match or None):
+        ie.load_test(path, displacement_unit="mm", force_unit="kN")
