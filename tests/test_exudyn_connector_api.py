@@ -184,8 +184,26 @@ def test_options_are_keyword_only_and_typos_are_rejected(parts):
 def test_a_joint_instance_serves_one_connector_only(parts):
     j = IwanJoint(P)
     add_iwan_connector(parts["mbs"], [parts["coord0"], parts["coord1"]], j)
-    with pytest.raises(ValueError, match="already used by connector"):
+    with pytest.raises(ValueError, match="already attached"):
         add_iwan_connector(parts["mbs"], [parts["coord1"], parts["coord0"]], j)
+
+
+def test_a_joint_instance_is_refused_by_a_second_system():
+    """Issue 14: the same element in two systems would share its history."""
+    j = IwanJoint(P)
+    systems = []
+    for _ in range(2):
+        SC = exu.SystemContainer()
+        mbs = SC.AddSystem()
+        g = mbs.AddNode(NodePointGround())
+        n = mbs.AddNode(Node1D(referenceCoordinates=[0.0]))
+        mbs.AddObject(Mass1D(mass=1.0, nodeNumber=n))
+        ms = [mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=k, coordinate=0)) for k in (g, n)]
+        systems.append((SC, mbs, ms))
+    conn = add_iwan_connector(systems[0][1], systems[0][2], j)
+    with pytest.raises(ValueError, match="already attached"):
+        add_iwan_connector(systems[1][1], systems[1][2], j)
+    assert conn.joint is j
 
 
 def test_visualization_and_name_reach_the_exudyn_object(parts):

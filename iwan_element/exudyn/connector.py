@@ -66,6 +66,7 @@ from __future__ import annotations
 
 import logging
 import math
+import weakref
 from array import array
 from collections.abc import Mapping
 
@@ -205,6 +206,26 @@ def _dispatcher_for(mbs) -> _PostStepDispatcher:
     d = _PostStepDispatcher(current, mbs)
     mbs.SetPostStepUserFunction(d.callback)
     return d
+
+
+# ---------------------------------------------------------------------------- ownership
+_ATTACHED: dict = {}        # id(element) -> (weakref to its connector, the element)
+
+
+def _claim(joint, handle) -> None:
+    """Refuse an element that a live connector (of any system) already uses: its history
+    would be shared by two force laws."""
+    key = id(joint)
+    got = _ATTACHED.get(key)
+    if got is not None and got[1] is joint:
+        owner = got[0]()
+        if owner is not None:
+            raise ValueError(
+                f"joint is already attached to {owner!r} (possibly in another system); its "
+                "history would be shared: give every connector its own element instance")
+    _ATTACHED[key] = (weakref.ref(handle), joint)
+    for k in [k for k, (ref, _) in _ATTACHED.items() if ref() is None]:
+        del _ATTACHED[k]
 
 
 # ---------------------------------------------------------------------------- validation
@@ -637,12 +658,8 @@ def add_iwan_connector(mbs, markerNumbers, joint, *, axis=None, axisMarker=None,
             axis_marker = int(axisMarker)
 
     dispatcher = _dispatcher_for(mbs)
-    for other in dispatcher.connectors:
-        if other._joint is joint:
-            raise ValueError(f"joint is already used by connector {other.objectNumber}; "
-                             "give every connector its own element instance")
-
     conn = IwanConnector(mbs, markerNumbers, joint, kind, unit, axis_marker, offset, record)
+    _claim(joint, conn)
     conn._dispatcher = dispatcher
     if kind == "coordinate":
         conn._fast_nodes = _node_coordinate_nodes(mbs, markerNumbers)
