@@ -47,7 +47,7 @@ Exudyn settings to remember
 * Use ``simulationSettings.parallel.numberOfThreads = 1``: with two threads Exudyn 1.13.6
   was observed to hang with about 20 or more Python-function connectors.
 * A user-function connector reports no potential energy to Exudyn; use the connector's
-  records (:attr:`IwanConnector.stored_energy`, ...).
+  records (:attr:`IwanConnector.stored_energy_history`, ...).
 * For position markers the accepted state is obtained through ``mbs.GetObjectOutput``,
   which allocates; on long runs Exudyn may then print a harmless "large amount of memory
   allocations" warning.
@@ -76,7 +76,9 @@ from exudyn.itemInterface import (ObjectConnectorCartesianSpringDamper,
                                   ObjectConnectorCoordinateSpringDamper)
 
 from ..core._validation import check_scalar
+from ..core.joint import IwanJoint
 from ..core.protocol import check_element
+from . import _symbolic_connector as _symbolic
 
 __all__ = ["add_iwan_connector", "IwanConnector"]
 
@@ -322,6 +324,10 @@ class IwanConnector:
         self._read = None           # (q, q_t, i0, i1) on the fast route, else None (generic)
         self._fast_nodes = None     # set for two NodeCoordinate markers; resolved in _refresh
         self._accept = self._generic_accept
+        self._route = "python"
+        self._state = None          # symbolic route: the law's variables
+        self._held = []             # symbolic route: the stack last written to them
+        self._overflows = []
 
     # -------------------------------------------------------------- per-step work
     def _generic_accept(self, t):
@@ -405,6 +411,9 @@ class IwanConnector:
         """Start of a run: resolve the global coordinate indices and take fresh views of the
         system coordinates (Assemble may have moved them); the views stay valid during a
         run (checked at every accepted step for all solvers, see the tests)."""
+        if self._route == "symbolic":
+            _symbolic.symbolic_refresh(self, mbs)
+            return
         if self._fast_nodes is None:
             self._read = None
             self._accept = self._generic_accept
@@ -482,6 +491,8 @@ class IwanConnector:
         dynamic run started from a static solution).
         """
         self._joint.reset()
+        if self._route == "symbolic":
+            _symbolic.reset_state(self)
         del self._rec[:]
         self._buf.clear()
         self._lu = _NAN
@@ -491,7 +502,31 @@ class IwanConnector:
         if self._dispatcher is not None:
             self._dispatcher.last_t = _NAN
 
+    def _check_running(self) -> None:
+        """The symbolic route has no Python force function to notice a replaced post-step
+        function; refuse to return records of a run in which the joint was not committed."""
+        d = self._dispatcher
+        if self._route == "symbolic" and d is not None \
+                and not d.reachable_from(_installed_post_step(self._mbs)):
+            raise RuntimeError(
+                "the connector's post-step dispatcher was replaced by another post-step user "
+                "function, so the joint was not committed; set your post-step function before "
+                "add_iwan_connector (it is then chained) and run again")
+
+    @property
+    def route(self) -> str:
+        """``"symbolic"`` (the exact Iwan law as an Exudyn symbolic expression) or
+        ``"python"`` (a Python force function calling ``joint.trial``)."""
+        return self._route
+
+    @property
+    def overflow_times(self) -> np.ndarray:
+        """Symbolic route: times [s] of accepted steps that read an older reversal point
+        than the law holds (not exact; raise ``depth``). Empty in a sound run."""
+        return np.array(self._overflows)
+
     def _column(self, i: int) -> np.ndarray:
+        self._check_running()
         self._flush()
         return np.array(self._rec[i::_NCOL], dtype=float)
 
@@ -506,28 +541,28 @@ class IwanConnector:
         return self._column(0)
 
     @property
-    def slip(self) -> np.ndarray:
+    def slip_history(self) -> np.ndarray:
         """Joint slip ``u`` at the accepted steps [m], shape (n,)."""
         return self._column(1)
 
     @property
-    def force(self) -> np.ndarray:
+    def force_history(self) -> np.ndarray:
         """Joint force at the accepted steps [N], shape (n,); positive when it pulls
         marker 1 back towards marker 0 (resists positive slip)."""
         return self._column(2)
 
     @property
-    def dissipated_energy(self) -> np.ndarray:
+    def dissipated_energy_history(self) -> np.ndarray:
         """Energy dissipated by the joint since the last reset [J], shape (n,)."""
         return self._column(3)
 
     @property
-    def work(self) -> np.ndarray:
+    def work_history(self) -> np.ndarray:
         """Work done on the joint, ``int F du`` since the last reset [J], shape (n,)."""
         return self._column(4)
 
     @property
-    def stored_energy(self) -> np.ndarray:
+    def stored_energy_history(self) -> np.ndarray:
         """Elastic energy stored in the joint [J], shape (n,): ``work - dissipated_energy``
         (the element protocol's identity; only these two are recorded per step)."""
         return self._column(4) - self._column(3)
@@ -535,6 +570,7 @@ class IwanConnector:
     def records(self) -> dict:
         """All records as a dict of arrays of shape (n,): ``time [s], slip [m], force [N],
         stored_energy [J], dissipated_energy [J], work [J]``."""
+        self._check_running()
         self._flush()
         data = np.array(self._rec, dtype=float).reshape(-1, _NCOL)
         return {"time": data[:, 0].copy(), "slip": data[:, 1].copy(),
@@ -549,7 +585,7 @@ class IwanConnector:
 
 def add_iwan_connector(mbs, markerNumbers, joint, *, axis=None, axisMarker=None,
                        offset: float = 0.0, name: str = "", visualization=None,
-                       record: bool = True) -> IwanConnector:
+                       record: bool = True, law: str = "auto", depth: int = 8) -> IwanConnector:
     """Add a history-dependent joint element between two markers of an Exudyn system.
 
     Parameters
@@ -584,7 +620,19 @@ def add_iwan_connector(mbs, markerNumbers, joint, *, axis=None, axisMarker=None,
     visualization : dict, optional, keyword-only
         Keys among ``show``, ``drawSize``, ``color`` (as for Exudyn's spring-dampers).
     record : bool, keyword-only
-        Record time, slip, force and energies at every accepted step (default ``True``).
+        Record time, slip, force and energies at every accepted step (default ``True``);
+        ``False`` stores nothing.
+    law : {"auto", "symbolic", "python"}, keyword-only
+        How the force is evaluated. ``"symbolic"``: the exact Iwan law as an Exudyn symbolic
+        expression (no Python call per force evaluation; thread-safe); only for an
+        :class:`~iwan_element.IwanJoint` on two ``MarkerNodeCoordinate`` markers or on
+        position markers with a global axis. ``"python"``: a Python force function calling
+        ``joint.trial`` (any element). ``"auto"`` (default) picks ``"symbolic"`` where it
+        applies.
+    depth : int, keyword-only
+        Reversal points the symbolic law holds (default 8, range [2, 64]); a step that
+        needs more (``depth // 2`` loop closures inside one step) is logged and listed in
+        :attr:`IwanConnector.overflow_times`.
 
     Returns
     -------
@@ -625,6 +673,10 @@ def add_iwan_connector(mbs, markerNumbers, joint, *, axis=None, axisMarker=None,
         raise ValueError(f"name must be a str, got {type(name).__name__}")
     if not isinstance(record, bool):
         raise ValueError(f"record must be True or False, got {record!r}")
+    if law not in ("auto", "symbolic", "python"):
+        raise ValueError(f"law must be 'auto', 'symbolic' or 'python', got {law!r}")
+    if isinstance(depth, bool) or not isinstance(depth, (int, np.integer)) or not 2 <= depth <= 64:
+        raise ValueError(f"depth must be an int in [2, 64], got {depth!r}")
     vis = _visualization(visualization)
 
     t0 = _marker_type(mbs, markerNumbers[0], "markerNumbers[0]")
@@ -663,7 +715,13 @@ def add_iwan_connector(mbs, markerNumbers, joint, *, axis=None, axisMarker=None,
     conn._dispatcher = dispatcher
     if kind == "coordinate":
         conn._fast_nodes = _node_coordinate_nodes(mbs, markerNumbers)
-    if kind == "coordinate":
+    route = _choose_route(law, joint, kind, conn._fast_nodes, axis_marker)
+    if route == "symbolic":
+        conn._route = "symbolic"
+        item = _symbolic.symbolic_item(conn, int(depth), name, vis)
+        _symbolic.sync_stack(conn)
+        conn._state.set_uc(joint.displacement)
+    elif kind == "coordinate":
         uf = _coordinate_force_function(conn)
         item = ObjectConnectorCoordinateSpringDamper(
             name=name, markerNumbers=list(markerNumbers), stiffness=0.0, damping=0.0,
@@ -680,6 +738,21 @@ def add_iwan_connector(mbs, markerNumbers, joint, *, axis=None, axisMarker=None,
     dispatcher.add(conn)
     _log.debug("added %r", conn)
     return conn
+
+
+def _choose_route(law, joint, kind, fast_nodes, axis_marker) -> str:
+    why = None
+    if type(joint) is not IwanJoint:
+        why = f"the joint is a {type(joint).__name__} (the symbolic law is the IwanJoint's)"
+    elif kind == "coordinate" and fast_nodes is None:
+        why = "the coordinate markers are not both MarkerNodeCoordinate"
+    elif axis_marker is not None:
+        why = "the axis rotates with axisMarker"
+    if law == "symbolic" and why is not None:
+        raise ValueError(f"law='symbolic' is not available here: {why}; use law='python'")
+    if law == "python" or why is not None:
+        return "python"
+    return "symbolic"
 
 
 # ---------------------------------------------------------------------------- force functions

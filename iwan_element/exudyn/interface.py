@@ -36,6 +36,7 @@ from ..core.joint_bank import IwanJointBank
 from ..core.parameters import IwanParameters
 from ..core._validation import check_scalar
 from ._records import InterfaceRecords
+from ._slip_map import SlipMap
 from ._symbolic_law import SymbolicIwanState
 from .connector import (_COORDINATE_MARKERS, _POSITION_MARKERS, _claim, _dispatcher_for,
                         _installed_post_step, _marker_type, _unit_axis, add_iwan_connector)
@@ -43,8 +44,6 @@ from .connector import (_COORDINATE_MARKERS, _POSITION_MARKERS, _claim, _dispatc
 __all__ = ["add_iwan_interface", "IwanInterface"]
 
 _log = logging.getLogger(__name__)
-_POSITION = exu.OutputVariableType.Position
-_CURRENT = exu.ConfigurationType.Current
 _HIDDEN = {"show": False, "drawSize": -1.0, "color": [-1.0, -1.0, -1.0, -1.0]}
 
 
@@ -71,7 +70,7 @@ class IwanInterface:
         self._overflows = []
         self._t_acc = -math.inf
         self._dispatcher = None
-        self._read = None           # the dispatcher's per-step re-assembly check stays off
+        self._read = None           # the slip map, once a run started
         self._map = None
         self._joints = ()
 
@@ -201,7 +200,8 @@ class IwanInterface:
     # ------------------------------------------------------------------ per-step work
     def _refresh(self, mbs) -> None:
         """Start of a run: the affine map from the system coordinates to the slips."""
-        self._map = _SlipMap(mbs, self)
+        self._map = SlipMap(mbs, self._pairs, self._kind, self._axis, self._offsets)
+        self._read = self._map      # the dispatcher then checks for a re-assembly per step
 
     def _accept(self, t) -> None:
         u = self._map.slips()
@@ -226,111 +226,6 @@ class IwanInterface:
         self._t_acc = t
         if self._rec.on:
             self._rec.append(t, u, bank.F, bank.W.sum(), bank.D.sum())
-
-
-class _SlipMap:
-    """Accepted slips ``u = C q + c`` of all points from a view of the ODE2 coordinates.
-
-    Exact for markers whose position is affine in the coordinates (node coordinates, point
-    nodes, mass points, ANCF cable elements); checked at set-up with two perturbations.
-    Points with other markers are read with ``GetMarkerOutput`` (post-step only).
-    """
-
-    def __init__(self, mbs, iface):
-        sd = mbs.systemData
-        self.q = sd.GetODE2Coordinates(copy=False)
-        n = len(iface._pairs)
-        rows = [self._row(mbs, iface, i) for i in range(n)]
-        width = max(1, max(len(r[0]) for r in rows if r is not None) if any(rows) else 1)
-        self.idx = np.zeros((n, width), dtype=np.intp)
-        self.coef = np.zeros((n, width))
-        self.c = np.zeros(n)
-        self.generic = [i for i, r in enumerate(rows) if r is None]
-        for i, r in enumerate(rows):
-            if r is not None:
-                k = len(r[0])
-                self.idx[i, :k] = r[0]
-                self.coef[i, :k] = r[1]
-                self.c[i] = r[2]
-        self.mbs = mbs
-        self.iface = iface
-
-    @staticmethod
-    def _row(mbs, iface, i):
-        m0, m1 = (int(m) for m in iface._pairs[i])
-        off = iface._offsets[i]
-        if iface._kind == "coordinate":
-            idx, coef = [], []
-            for m, sgn in ((m0, -1.0), (m1, 1.0)):
-                mk = mbs.GetMarker(m)
-                node = int(mk["nodeNumber"])
-                if mbs.GetNode(node)["nodeType"] != "PointGround":
-                    idx.append(mbs.GetNodeODE2Index(node) + int(mk["coordinate"]))
-                    coef.append(sgn)
-            return idx, coef, -off
-        return _affine_position_row(mbs, m0, m1, iface._axis, off)
-
-    def slips(self) -> np.ndarray:
-        u = (self.q[self.idx] * self.coef).sum(axis=1) + self.c
-        if self.generic:
-            a = np.array(self.iface._axis)
-            get = self.mbs.GetMarkerOutput
-            for i in self.generic:
-                m0, m1 = self.iface._pairs[i]
-                u[i] = float(a @ (get(int(m1), _POSITION) - get(int(m0), _POSITION))) \
-                    - self.iface._offsets[i]
-        return u
-
-
-def _marker_coordinates(mbs, m):
-    mk = mbs.GetMarker(m)
-    sd = mbs.systemData
-    if "bodyNumber" in mk:
-        return list(sd.GetObjectLTGODE2(int(mk["bodyNumber"])))
-    if "nodeNumber" in mk:
-        return list(sd.GetNodeLTGODE2(int(mk["nodeNumber"])))
-    return None
-
-
-def _affine_position_row(mbs, m0, m1, axis, off):
-    """``(indices, coefficients, constant)`` with ``a . (p1 - p0) - off = coef . q[idx] + c``,
-    found by perturbing the current coordinates (restored after), or ``None`` if the map is
-    not affine (e.g. a rigid body's rotation)."""
-    sd = mbs.systemData
-    cols = []
-    for m in (m0, m1):
-        got = _marker_coordinates(mbs, m)
-        if got is None:
-            return None
-        cols += got
-    cols = sorted(set(int(c) for c in cols))
-    a = np.array(axis)
-
-    def proj():
-        return float(a @ (mbs.GetMarkerOutput(m1, _POSITION, _CURRENT)
-                          - mbs.GetMarkerOutput(m0, _POSITION, _CURRENT)))
-
-    q0 = sd.GetODE2Coordinates(_CURRENT)
-    base = proj()
-    coef = []
-    affine = True
-    try:
-        for c in cols:
-            for step, store in ((1.0, True), (-2.0, False)):
-                q = q0.copy()
-                q[c] += step
-                sd.SetODE2Coordinates(q, _CURRENT)
-                val = proj() - base
-                if store:
-                    coef.append(val)
-                elif abs(val + 2.0 * coef[-1]) > 1e-9 * (1.0 + abs(coef[-1])):
-                    affine = False
-    finally:
-        sd.SetODE2Coordinates(q0, _CURRENT)
-    if not affine:
-        return None
-    c0 = base - float(np.dot(coef, q0[cols])) - off if cols else base - off
-    return cols, coef, c0
 
 
 def add_iwan_interface(mbs, markerPairs, joints, *, axis=None, axisMarker=None, offsets=None,
