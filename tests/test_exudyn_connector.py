@@ -139,7 +139,7 @@ def _check_adaptive_rejections(element):
         return True
 
     chain.mbs.SetPreStepUserFunction(user_pre_step)
-    conn = chain.joint(-1, 0, element)
+    conn = chain.joint(-1, 0, element, allow_adaptive_explicit=True)
     chain.solve(settings(1e-4, 500, adaptive=True, tol=1e-6), SOLVERS.DOPRI5)
     accepted = conn.n_records - 1
     assert attempts[0] > accepted                                 # some attempts were rejected
@@ -202,7 +202,7 @@ def test_history_holds_accepted_states_for_every_solver(solver, kw, end_of_step_
 
     chain.mbs.SetPostStepUserFunction(user_post_step)
     chain.mbs.SetPreStepUserFunction(guard_pre_step)
-    conn = chain.joint(-1, 0, IwanJoint(P))
+    conn = chain.joint(-1, 0, IwanJoint(P), allow_adaptive_explicit=True)
     sim = settings(h, n, **kw)
     sim.timeIntegration.explicit.computeEndOfStepAccelerations = end_of_step_acc
     chain.solve(sim, solver)
@@ -262,7 +262,7 @@ def test_rate_dependent_element_commits_the_accepted_velocity(solver, end_of_ste
 
     chain.mbs.SetPostStepUserFunction(user_post_step)
     element = _RateRecorder(1e5, 30.0)
-    chain.joint(0, 1, element)
+    chain.joint(0, 1, element, allow_adaptive_explicit=True)
     sim = settings(h, n)
     sim.timeIntegration.explicit.computeEndOfStepAccelerations = end_of_step_acc
     chain.solve(sim, solver)

@@ -44,8 +44,10 @@ Exudyn settings to remember
 * Newton's ``absoluteTolerance`` is a residual in force units; for stiff joints use a
   tight ``relativeTolerance`` (the default 1e-8 of the step's initial residual is fine
   for plots, use ~1e-10 or below for energy checks).
-* Use ``simulationSettings.parallel.numberOfThreads = 1``: with two threads Exudyn 1.13.6
-  was observed to hang with about 20 or more Python-function connectors.
+* Several solver threads are refused (``ValueError`` at the start of the run) for
+  connectors with the Python force law: with two threads Exudyn 1.13.6 was observed to hang
+  with about 20 or more Python-function connectors. The symbolic law is allowed.
+* ODE23/DOPRI5 with automatic step size are refused (see :func:`check_settings`).
 * A user-function connector reports no potential energy to Exudyn; use the connector's
   records (:attr:`IwanConnector.stored_energy_history`, ...).
 * For position markers the accepted state is obtained through ``mbs.GetObjectOutput``,
@@ -125,20 +127,22 @@ class _PostStepDispatcher:
         self.connectors = []       # in creation order
         self.last_t = _NAN
         self.running = False
-        self.n_ode2 = -1           # ODE2 size when the connectors took their coordinate views
+        self.solvers = (None, None)    # the solver objects of the run the views belong to
         conns = self.connectors
         disp = self
-        ode2_size = mbs.systemData.ODE2Size
+        sysd = mbs.sys             # Exudyn's SolveDynamic/SolveStatic store their solver here
 
         def post_step_dispatcher(mbs, t):
             if disp.running:       # re-entered through a user function that calls us by hand
                 return True
             disp.running = True
             try:
+                solvers = (sysd.get("dynamicSolver"), sysd.get("staticSolver"))
+                if solvers[0] is not disp.solvers[0] or solvers[1] is not disp.solvers[1]:
+                    disp.solvers = solvers     # a new solve (maybe after an Assemble)
+                    disp.new_solve(mbs)
                 if t > disp.last_t:            # the usual case: the next accepted step
                     disp.last_t = t
-                    if disp.n_ode2 >= 0 and ode2_size() != disp.n_ode2:
-                        disp.refresh(mbs)      # re-assembled with more coordinates
                     for c in conns:
                         c._accept(t)
                 elif t != disp.last_t:         # a new run (never commit twice at one time)
@@ -164,14 +168,18 @@ class _PostStepDispatcher:
 
         Exudyn keeps its coordinate vectors in place during a run and across runs; only an
         ``Assemble`` that makes them longer moves them (exudyn 1.13.6). So the views are
-        renewed at the start of every run and whenever the number of ODE2 coordinates
-        differs from the one at the last renewal (checked once per accepted step).
+        renewed at the start of every run: a new solver object in ``mbs.sys`` (each
+        ``SolveDynamic``/``SolveStatic`` stores one), or an accepted time not after the last.
         """
-        fast = False
         for c in self.connectors:
             c._refresh(mbs)
-            fast = fast or c._read is not None
-        self.n_ode2 = mbs.systemData.ODE2Size() if fast else -1
+
+    def new_solve(self, mbs) -> None:
+        """Start of a solve: refuse settings the connectors cannot serve, then refresh."""
+        settings = mbs.sys.get("simulationSettings")
+        if settings is not None:
+            check_settings(settings, self.connectors)
+        self.refresh(mbs)
 
     @staticmethod
     def of(obj):
@@ -198,6 +206,42 @@ class _PostStepDispatcher:
             return
         self.chained = current
         mbs.SetPostStepUserFunction(self.callback)
+
+
+def check_settings(settings, connectors) -> None:
+    """Refuse, before the first step, solver settings the joints cannot serve exactly.
+
+    * more than one solver thread with a Python force law: with two threads Exudyn 1.13.6
+      was seen to hang with about 20 or more Python-function connectors (the symbolic law
+      runs without Python and is allowed);
+    * an explicit solver with automatic step size (ODE23, DOPRI5): the joint's history is
+      committed once per accepted step, so a reversal inside a step is not seen by the
+      solver's error estimate; measured on the 1-DOF free-decay model (tests), DOPRI5 at
+      tolerances 1e-6, 1e-8 and 1e-10 missed the converged implicit result by 7e-3, 1e-4 and
+      8e-3 of the amplitude. Fixed-step explicit methods converge as the step falls and are
+      allowed; pass ``allow_adaptive_explicit=True`` to the connector to run anyway.
+    """
+    python = [c for c in connectors if getattr(c, "_route", "python") == "python"]
+    threads = settings.parallel.numberOfThreads
+    if python and threads > 1:
+        raise ValueError(
+            f"simulationSettings.parallel.numberOfThreads = {threads}: {len(python)} Iwan "
+            "connector(s) use a Python force law, which is not safe with several solver "
+            "threads (Exudyn was seen to hang); set numberOfThreads = 1, or use IwanJoint "
+            "elements (symbolic law, law='auto') or add_iwan_interface")
+    ti = settings.timeIntegration
+    if ti.solverType in ADAPTIVE_EXPLICIT and ti.automaticStepSize:
+        strict = [c for c in connectors if not getattr(c, "_allow_adaptive_explicit", False)]
+        if strict:
+            raise ValueError(
+                f"solverType {ti.solverType} with automaticStepSize = True is refused for Iwan "
+                "joints: a reversal inside a step is invisible to its error estimate, and the "
+                "result does not converge with the tolerance (errors of 1e-4 to 1e-2 of the "
+                "amplitude were measured); use GeneralizedAlpha, or a fixed step "
+                "(automaticStepSize = False), or pass allow_adaptive_explicit=True")
+
+
+ADAPTIVE_EXPLICIT = frozenset({exu.DynamicSolverType.ODE23, exu.DynamicSolverType.DOPRI5})
 
 
 def _dispatcher_for(mbs) -> _PostStepDispatcher:
@@ -585,7 +629,8 @@ class IwanConnector:
 
 def add_iwan_connector(mbs, markerNumbers, joint, *, axis=None, axisMarker=None,
                        offset: float = 0.0, name: str = "", visualization=None,
-                       record: bool = True, law: str = "auto", depth: int = 8) -> IwanConnector:
+                       record: bool = True, law: str = "auto", depth: int = 8,
+                       allow_adaptive_explicit: bool = False) -> IwanConnector:
     """Add a history-dependent joint element between two markers of an Exudyn system.
 
     Parameters
@@ -633,6 +678,10 @@ def add_iwan_connector(mbs, markerNumbers, joint, *, axis=None, axisMarker=None,
         Reversal points the symbolic law holds (default 8, range [2, 64]); a step that
         needs more (``depth // 2`` loop closures inside one step) is logged and listed in
         :attr:`IwanConnector.overflow_times`.
+    allow_adaptive_explicit : bool, keyword-only
+        Run with ODE23/DOPRI5 and automatic step size, which are refused by default
+        (a run starting with them raises ``ValueError``): a reversal inside a step is not
+        seen by their error estimate and the result does not converge with the tolerance.
 
     Returns
     -------
@@ -673,6 +722,9 @@ def add_iwan_connector(mbs, markerNumbers, joint, *, axis=None, axisMarker=None,
         raise ValueError(f"name must be a str, got {type(name).__name__}")
     if not isinstance(record, bool):
         raise ValueError(f"record must be True or False, got {record!r}")
+    if not isinstance(allow_adaptive_explicit, bool):
+        raise ValueError(f"allow_adaptive_explicit must be True or False, got "
+                         f"{allow_adaptive_explicit!r}")
     if law not in ("auto", "symbolic", "python"):
         raise ValueError(f"law must be 'auto', 'symbolic' or 'python', got {law!r}")
     if isinstance(depth, bool) or not isinstance(depth, (int, np.integer)) or not 2 <= depth <= 64:
@@ -713,6 +765,7 @@ def add_iwan_connector(mbs, markerNumbers, joint, *, axis=None, axisMarker=None,
     conn = IwanConnector(mbs, markerNumbers, joint, kind, unit, axis_marker, offset, record)
     _claim(joint, conn)
     conn._dispatcher = dispatcher
+    conn._allow_adaptive_explicit = allow_adaptive_explicit
     if kind == "coordinate":
         conn._fast_nodes = _node_coordinate_nodes(mbs, markerNumbers)
     route = _choose_route(law, joint, kind, conn._fast_nodes, axis_marker)

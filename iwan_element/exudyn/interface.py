@@ -61,6 +61,7 @@ class IwanInterface:
         self._pairs = tuple(pairs)
         self._kind = kind
         self._route = route
+        self._allow_adaptive_explicit = False
         self._rec = InterfaceRecords(len(pairs), record)
         self._objects = []
         self._connectors = []       # python route
@@ -230,7 +231,7 @@ class IwanInterface:
 
 def add_iwan_interface(mbs, markerPairs, joints, *, axis=None, axisMarker=None, offsets=None,
                        record: bool = True, depth: int = 8, reversal_tol: float = 1e-12,
-                       name: str = "") -> IwanInterface:
+                       name: str = "", allow_adaptive_explicit: bool = False) -> IwanInterface:
     """Add a joint at each of many contact points, committed together once per step.
 
     Parameters
@@ -261,6 +262,9 @@ def add_iwan_interface(mbs, markerPairs, joints, *, axis=None, axisMarker=None, 
         Relative reversal tolerance of the exact joints (as ``IwanJoint``), default 1e-12.
     name : str, keyword-only
         Prefix of the Exudyn object names.
+    allow_adaptive_explicit : bool, keyword-only
+        Allow ODE23/DOPRI5 with automatic step size (refused by default, as for
+        :func:`~iwan_element.exudyn.add_iwan_connector`).
 
     Returns
     -------
@@ -293,8 +297,9 @@ def add_iwan_interface(mbs, markerPairs, joints, *, axis=None, axisMarker=None, 
     all_params = all(isinstance(j, IwanParameters) for j in joints)
     if not all_params or axisMarker is not None:
         return _python_interface(mbs, pairs, joints, kind, axis, axisMarker, offs, record,
-                                 reversal_tol, name)
+                                 reversal_tol, name, allow_adaptive_explicit)
     iface = IwanInterface(mbs, pairs, kind, "symbolic", record)
+    iface._allow_adaptive_explicit = bool(allow_adaptive_explicit)
     iface._offsets = offs
     iface._axis = _unit_axis(axis, "axis") if kind == "position" else None
     bank = IwanJointBank(joints, reversal_tol=reversal_tol)
@@ -389,7 +394,8 @@ def esym_zero():
     return exu.symbolic.Real(0.0)
 
 
-def _python_interface(mbs, pairs, joints, kind, axis, axisMarker, offs, record, tol, name):
+def _python_interface(mbs, pairs, joints, kind, axis, axisMarker, offs, record, tol, name,
+                      allow_adaptive_explicit):
     from ..core.joint import IwanJoint
     iface = IwanInterface(mbs, pairs, kind, "python", record)
     iface._offsets = offs
@@ -398,7 +404,8 @@ def _python_interface(mbs, pairs, joints, kind, axis, axisMarker, offs, record, 
         kw = {} if kind == "coordinate" else {"axis": axis, "axisMarker": axisMarker}
         try:
             c = add_iwan_connector(mbs, [m0, m1], el, offset=offs[i], record=record,
-                                   name=f"{name}{i}" if name else "", **kw)
+                                   name=f"{name}{i}" if name else "",
+                                   allow_adaptive_explicit=bool(allow_adaptive_explicit), **kw)
         except ValueError as err:
             raise ValueError(f"joints[{i}]: {err}") from None
         iface._connectors.append(c)
