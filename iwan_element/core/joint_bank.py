@@ -109,9 +109,7 @@ class IwanJointBank:
         self._c4 = np.ones(n)                  # 4 on a branch from a reversal, 1 virgin
         self._up = np.zeros(n, dtype=bool)     # the branch runs towards larger u
         self._down = np.zeros(n, dtype=bool)   # ... towards smaller u
-        self.n_before = np.zeros(n, dtype=np.intp)   # for the points of the last commit's
-        self.n_kept = np.zeros(n, dtype=np.intp)     # events: stack length before, and how
-        for i in range(n):                            # many of its oldest points it kept
+        for i in range(n):
             self._set_branch(i)
 
     @property
@@ -267,8 +265,6 @@ class IwanJointBank:
                 self._segment(i, us[n - 1], Fr[n - 1], pos, u, acc)
             else:
                 self._segment(i, None, 0.0, pos, u, acc)
-        self.n_before[i] = len(us)
-        self.n_kept[i] = n
         del us[n:]
         del Fr[n:]
         if e is not None:

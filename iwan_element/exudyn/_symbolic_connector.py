@@ -71,29 +71,19 @@ def symbolic_refresh(conn, mbs) -> None:
     conn._accept = _accept_function(conn, smap)
 
 
-def _common_prefix(a, b) -> int:
-    n = 0
-    for x, y in zip(a, b):
-        if x != y:
-            break
-        n += 1
-    return n
-
-
 def sync_stack(conn, t=None) -> None:
     """Write the joint's committed reversal stack to the law's variables (and check that
     the step just committed read no point deeper than the expression holds)."""
-    us, Fr = conn._joint.reversal_points()
+    joint = conn._joint
+    us, Fr = joint.reversal_points()
     us, Fr = us.tolist(), Fr.tolist()
     st = conn._state
-    old = conn._held
-    if t is not None and st.overflows(len(old), _common_prefix(old, us)):
+    if t is not None and st.disagrees(joint.displacement, joint.force):
         conn._overflows.append(t)
         _log.warning("Iwan connector %s at t=%g: the step closed loops beyond the %d reversal "
                      "points the symbolic law holds; that step's force was not exact (raise "
                      "depth)", conn.objectNumber, t, st.depth)
     st.set_stack(us, Fr)
-    conn._held = us
 
 
 def _accept_function(conn, smap):
@@ -124,9 +114,9 @@ def _accept_function(conn, smap):
             conn._new_run(t, u)
         depth = joint.reversal_depth
         commit()
-        set_uc(u)
-        if joint.reversal_depth != depth:
+        if joint.reversal_depth != depth:     # the stack changed (see sync_stack)
             sync_stack(conn, t)
+        set_uc(u)
         conn._t_acc = t
         if extend is not None:
             extend((t, u, F, joint.dissipated_energy, joint.work))
@@ -140,6 +130,5 @@ def reset_state(conn) -> None:
     """Virgin state of the law's variables (after ``joint.reset()``)."""
     conn._state.set_stack([], [])
     conn._state.set_uc(0.0)
-    conn._held = []
     conn._overflows.clear()
     conn._t_acc = -math.inf

@@ -19,8 +19,8 @@ expression costs nothing until a step closes loops). The variables are set by th
 commit once per accepted step: ``u_c`` at every step, the stack only when it changed.
 
 Exactness: the expression is exact as long as a step reads no reversal point older than the
-``depth`` it holds. :meth:`SymbolicIwanState.overflows` tells, from the exact commit of the
-bank, whether an accepted step did (see the interface for how that is handled).
+``depth`` it holds. :meth:`SymbolicIwanState.disagrees` checks, after the exact commit and
+only for steps whose stack changed, that the law gave the exact force at the accepted slip.
 """
 from __future__ import annotations
 
@@ -64,7 +64,8 @@ class SymbolicIwanState:
         self.e1 = float(params.chi + 1.0)
         self.a = float(params.R / ((params.chi + 1.0) * (params.chi + 2.0)))
         self.tol = float(tol)
-        self._held = -1          # stack length last written to the variables
+        self._probe_u = esym.Real(f"iwan{uid}_probe", 0.0)
+        self._probe = None       # the law at _probe_u, built on first use
 
     # ------------------------------------------------------------------ state transfer
     def set_stack(self, us, Fr) -> None:
@@ -76,15 +77,19 @@ class SymbolicIwanState:
         for k in range(m):                   # r[0] is the newest point
             self.r[k].SetValue(us[n - 1 - k])
             self.R[k].SetValue(Fr[n - 1 - k])
-        self._held = n
 
     def set_uc(self, u: float) -> None:
         self.uc.SetValue(u)
 
-    def overflows(self, n_old: int, n_kept: int) -> bool:
-        """True if a step from a stack of ``n_old`` points that kept its ``n_kept`` oldest
-        read a point the expression does not hold (its result was not exact)."""
-        return max(n_kept - 2, 0) < n_old - self.depth
+    def disagrees(self, u: float, force: float) -> bool:
+        """True if the law, with the variables as they are (the state before the step just
+        committed), does not give the exact ``force`` [N] at the accepted slip ``u`` [m]:
+        the step needed an older reversal point than the expression holds. Evaluated only
+        for steps whose reversal stack changed."""
+        if self._probe is None:
+            self._probe = self.force(self._probe_u)
+        self._probe_u.SetValue(u)
+        return not abs(self._probe.Evaluate() - force) <= 1e-9 * self.Fs
 
     # ------------------------------------------------------------------ the law
     def backbone(self, x):

@@ -370,7 +370,6 @@ class IwanConnector:
         self._accept = self._generic_accept
         self._route = "python"
         self._state = None          # symbolic route: the law's variables
-        self._held = []             # symbolic route: the stack last written to them
         self._overflows = []
 
     # -------------------------------------------------------------- per-step work

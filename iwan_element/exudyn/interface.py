@@ -16,8 +16,9 @@ lap joint). Two routes, chosen automatically:
   same records in the handle.
 
 Exactness of the symbolic route: the expression holds the newest ``depth`` reversal points
-of each point; a step that closes so many loops that it reads an older point is detected at
-the exact commit (which is always exact: the bank walks the full stack). Such a step is
+of each point; a step that closes so many loops that it needs an older point is detected
+after the exact commit (the bank walks the full stack), by evaluating the law at the
+accepted slip with the previous state (only for points whose stack changed). Such a step is
 logged as a warning and its time is listed in :attr:`IwanInterface.overflow_times`; raise
 ``depth`` if that happens (it needs ``depth // 2`` loop closures inside one time step).
 """
@@ -216,7 +217,7 @@ class IwanInterface:
         if events.size:
             for i in events.tolist():
                 s = states[i]
-                if s.overflows(int(bank.n_before[i]), int(bank.n_kept[i])):
+                if s.disagrees(float(u[i]), float(bank.F[i])):
                     self._overflows.append(t)
                     _log.warning("Iwan interface point %d at t=%g: the step closed loops beyond "
                                  "the %d reversal points the symbolic law holds; that step's "
