@@ -39,8 +39,9 @@ from ..core._validation import check_scalar
 from ._records import InterfaceRecords
 from ._slip_map import SlipMap
 from ._symbolic_law import SymbolicIwanState
-from .connector import (_COORDINATE_MARKERS, _POSITION_MARKERS, _claim, _dispatcher_for,
-                        _installed_post_step, _marker_type, _unit_axis, add_iwan_connector)
+from ._dispatch import _dispatcher_for, _installed_post_step
+from ._markers import _COORDINATE_MARKERS, _POSITION_MARKERS, _marker_type, _unit_axis
+from .connector import add_iwan_connector
 
 __all__ = ["add_iwan_interface", "IwanInterface"]
 
