@@ -100,8 +100,10 @@ def main(argv=None):
     ap.add_argument("--points", type=int, default=10)
     ap.add_argument("--bound", type=int, default=65536, help="allowed growth [bytes]")
     ap.add_argument("--compare-with", metavar="DIR")
+    ap.add_argument("--variants", default="connector-symbolic,connector-python,interface",
+                    help="comma-separated among connector-symbolic, connector-python, interface")
     args = ap.parse_args(argv)
-    variants = ["connector-symbolic", "connector-python", "interface"]
+    variants = args.variants.split(",")
     if args.compare_with:
         PACKAGES["base"] = load_package(args.compare_with)
         variants = ["connector@base"] + variants

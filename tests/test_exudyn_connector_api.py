@@ -221,13 +221,28 @@ def test_visualization_and_name_reach_the_exudyn_object(parts):
 
 
 # ---------------------------------------------------------------------------- chaining, reset
+@pytest.mark.parametrize("law", ["symbolic", "python"])
+def test_post_step_function_set_after_the_connector_is_chained_by_the_next_solve(law):
+    chain = Chain([1.0], v0=[3.0])
+    conn = chain.joint(-1, 0, IwanJoint(P), law=law)
+    calls = []
+    chain.mbs.SetPostStepUserFunction(lambda mbs, t: calls.append(t) or True)
+    chain.solve(settings(1e-4, 50))
+    assert len(calls) == 51 and conn.n_records == 51
+    replay = IwanJoint(P).force_history(conn.slip_history)
+    assert np.max(np.abs(replay - conn.force_history)) < 1e-12 * P.Fs
+
+
 def test_symbolic_route_refuses_records_when_its_post_step_was_replaced():
-    """No Python force function notices a post-step function set later: say so, loudly."""
+    """Without a solver stored in mbs.sys (storeSolver=False) nothing re-chains the
+    dispatcher before the run, and the symbolic law has no Python call that could: the
+    records are refused instead of returning an uncommitted history."""
     chain = Chain([1.0], v0=[3.0])
     conn = chain.joint(-1, 0, IwanJoint(P))
     assert conn.route == "symbolic"
     chain.mbs.SetPostStepUserFunction(lambda mbs, t: True)
-    chain.solve(settings(1e-4, 50))
+    chain.mbs.Assemble()
+    chain.mbs.SolveDynamic(settings(1e-4, 50), storeSolver=False)
     with pytest.raises(RuntimeError, match="post-step dispatcher was replaced"):
         conn.slip_history
 

@@ -38,13 +38,14 @@ class _PostStepDispatcher:
         self.solvers = (None, None)    # the solver objects of the run the views belong to
         conns = self.connectors
         disp = self
-        sysd = mbs.sys             # Exudyn's SolveDynamic/SolveStatic store their solver here
+        self.sysd = mbs.sys        # Exudyn's SolveDynamic/SolveStatic store their solver here
 
         def post_step_dispatcher(mbs, t):
             if disp.running:       # re-entered through a user function that calls us by hand
                 return True
             disp.running = True
             try:
+                sysd = disp.sysd
                 solvers = (sysd.get("dynamicSolver"), sysd.get("staticSolver"))
                 if solvers[0] is not disp.solvers[0] or solvers[1] is not disp.solvers[1]:
                     disp.solvers = solvers     # a new solve (maybe after an Assemble)
@@ -107,6 +108,10 @@ class _PostStepDispatcher:
             seen += 1
         return False
 
+    def rebind(self, sysd) -> None:
+        """Read the solver objects from ``sysd`` (the hook that replaced ``mbs.sys``)."""
+        self.sysd = sysd
+
     def install(self, mbs) -> None:
         """Put this dispatcher in front of whatever post-step function is installed now."""
         current = _installed_post_step(mbs)
@@ -152,6 +157,20 @@ def check_settings(settings, connectors) -> None:
 ADAPTIVE_EXPLICIT = frozenset({exu.DynamicSolverType.ODE23, exu.DynamicSolverType.DOPRI5})
 
 
+class _SolveHook(dict):
+    """Replaces ``mbs.sys`` (same content): ``SolveDynamic``/``SolveStatic`` store their solver
+    in it before the first step, which puts every dispatcher of the system back in front of
+    a post-step function set after the connectors (it is then chained, not lost)."""
+
+    def __setitem__(self, key, value):
+        super().__setitem__(key, value)
+        if key in ("dynamicSolver", "staticSolver"):
+            mbs = self.mbs
+            for d in self.dispatchers:
+                if not d.reachable_from(_installed_post_step(mbs)):
+                    d.install(mbs)
+
+
 def _dispatcher_for(mbs) -> _PostStepDispatcher:
     current = _installed_post_step(mbs)
     d = _PostStepDispatcher.of(current)
@@ -159,6 +178,14 @@ def _dispatcher_for(mbs) -> _PostStepDispatcher:
         return d
     d = _PostStepDispatcher(current, mbs)
     mbs.SetPostStepUserFunction(d.callback)
+    hook = mbs.sys
+    if not isinstance(hook, _SolveHook):
+        hook = _SolveHook(hook)
+        hook.mbs = mbs
+        hook.dispatchers = []
+        mbs.sys = hook
+        d.rebind(hook)
+    hook.dispatchers.append(d)
     return d
 
 

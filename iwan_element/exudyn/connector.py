@@ -16,18 +16,35 @@ How the history is kept
 -----------------------
 Exudyn evaluates a connector's force many times per step: Newton iterations and
 finite-difference Jacobians of the implicit solvers, the stages of explicit Runge-Kutta
-methods, and attempts that an adaptive solver rejects. The force user function therefore
-only calls ``joint.trial(u, v)`` (which never changes the joint's history). Once per
-*accepted* step a post-step dispatcher brings every joint to the accepted state, calls
-``joint.commit()`` and appends a row to the connector's record. For two node coordinates
-it reads the accepted slip and its rate through views of Exudyn's coordinate vectors (no
-copy; renewed at the start of every run and when an ``Assemble`` changed the number of
-coordinates) and evaluates a new trial only if the last one was elsewhere; otherwise it
-calls ``mbs.GetObjectOutput``, which evaluates the force function at the accepted state. Exudyn calls the post-step
-function only after accepted steps (and once at the start of a run, which commits the
-initial state: an initial slip is reached by monotone virgin loading); rejected attempts
-leave no trace. ``SolveStatic`` calls it after every load step, so a static run commits
-a quasi-static loading history.
+methods, and attempts that an adaptive solver rejects. The force law therefore never
+changes the joint's history; once per *accepted* step a post-step dispatcher brings every
+joint to the accepted state, commits it and appends a row to the connector's record.
+
+Two force laws (``law=``), chosen automatically:
+
+* **symbolic** (an :class:`~iwan_element.IwanJoint` on two ``MarkerNodeCoordinate`` markers
+  or on position markers with a global axis): the exact Iwan law as an Exudyn symbolic
+  expression (:mod:`._symbolic_law`), evaluated in C++ without Python and without Exudyn
+  API calls (safe with several solver threads). Its state (the committed slip and the newest
+  ``depth`` reversal points) lives in named symbolic variables; the post-step commits the
+  ``IwanJoint`` (the reference, holding the energies) at the accepted slip, read through
+  views of Exudyn's coordinate vectors, and writes the committed slip (every step) and the
+  reversal stack (only when it changed) to the variables. A step that needed an older
+  reversal point than the law holds is detected (the law is evaluated at the accepted slip
+  with the previous state and compared with the exact force), logged, and listed in
+  :attr:`IwanConnector.overflow_times`.
+* **python** (any element, e.g. the effects, or a rotating ``axisMarker``): a Python force
+  function calling ``joint.trial(u, v)``. For two node coordinates the post-step reads the
+  accepted slip and its rate through coordinate views and evaluates a new trial only if the
+  last one was elsewhere; otherwise it calls ``mbs.GetObjectOutput``, which evaluates the
+  force function at the accepted state.
+
+Exudyn calls the post-step function only after accepted steps (and once at the start of a
+run, which commits the initial state: an initial slip is reached by monotone virgin
+loading); rejected attempts leave no trace. ``SolveStatic`` calls it after every load step,
+so a static run commits a quasi-static loading history. A new solve is recognised by the
+solver object that ``SolveDynamic``/``SolveStatic`` store in ``mbs.sys`` (the coordinate
+views are then renewed and the settings checked, see :func:`._dispatch.check_settings`).
 
 Post-step chaining
 ------------------
@@ -50,19 +67,19 @@ Exudyn settings to remember
 * ODE23/DOPRI5 with automatic step size are refused (see :func:`check_settings`).
 * A user-function connector reports no potential energy to Exudyn; use the connector's
   records (:attr:`IwanConnector.stored_energy_history`, ...).
-* For position markers the accepted state is obtained through ``mbs.GetObjectOutput``,
-  which allocates; on long runs Exudyn may then print a harmless "large amount of memory
-  allocations" warning.
+* Python law with position markers: the accepted state is obtained through
+  ``mbs.GetObjectOutput``, which allocates; on long runs Exudyn may then print a harmless
+  "large amount of memory allocations" warning.
+* A post-step function set *after* the connectors is chained at the next ``SolveDynamic``
+  / ``SolveStatic``: they store their solver in ``mbs.sys``, which the connectors replace by
+  a dict that re-installs the dispatcher in front of it (the Python law also re-chains at
+  its first force evaluation). With ``storeSolver=False`` or a hand-made solver object only
+  the Python law notices; with the symbolic law reading the records then raises
+  ``RuntimeError`` instead of returning an uncommitted history.
 
-Cost (``benchmarks/bench_connector.py``, one mass, generalized-alpha with default settings,
-100k steps; ratios to Exudyn's built-in linear connector, measured side by side): with an
-:class:`~iwan_element.IwanJoint` about 3.3 us per step, 12 times; the connector machinery
-with a zero-cost element 7 times. A stateless Python *nonlinear* law with an empty post-step
-function already costs 4.5 times: Exudyn's modified Newton keeps the Jacobian from the
-start of the run, so any nonlinear law takes two iterations, i.e. three Python force calls
-per step (a linear one two). On top of that floor come three ``trial`` calls (about
-0.22 us each on a branch, more in the solver loop), one ``commit`` (about 0.35 us), the
-post-step dispatcher reading the accepted state through coordinate views, and the records.
+Cost: see ``benchmarks/bench_connector.py`` and the README's performance table (the
+symbolic law removes the Python force calls; what remains per step is one Python post-step
+with a ``trial``/``commit`` of the joint and one variable update).
 """
 from __future__ import annotations
 
