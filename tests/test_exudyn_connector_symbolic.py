@@ -66,7 +66,13 @@ def test_auto_picks_symbolic_for_an_iwan_joint_and_python_otherwise():
 def _state_expression(depth):
     st = SymbolicIwanState(P, depth, 1e-12 * P.phi_max)
     u = esym.Real("u_trial_test", 0.0)
-    return st, u, st.force(u)
+    expr = st.force(u)
+
+    def probe(x):
+        u.SetValue(x)
+        return expr.Evaluate()
+    st.probe = probe
+    return st, u, expr
 
 
 def _random_walk(rng, n):

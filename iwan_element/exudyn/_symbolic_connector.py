@@ -18,7 +18,7 @@ from exudyn.itemInterface import (ObjectConnectorCartesianSpringDamper,
                                   ObjectConnectorCoordinateSpringDamper)
 
 from ._slip_map import SlipMap
-from ._symbolic_law import SymbolicIwanState
+from ._symbolic_law import SymbolicIwanState, make_probe
 
 __all__: list[str] = []
 
@@ -56,6 +56,7 @@ def symbolic_item(conn, depth: int, name: str, vis):
         item = ObjectConnectorCartesianSpringDamper(
             name=name, markerNumbers=m, springForceUserFunction=fn, visualization=vis)
     conn._function = fn          # keep the expression tree alive
+    st.probe = make_probe(conn._mbs, fn, conn._kind, conn._axis, off)
     return item
 
 

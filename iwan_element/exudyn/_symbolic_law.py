@@ -64,8 +64,7 @@ class SymbolicIwanState:
         self.e1 = float(params.chi + 1.0)
         self.a = float(params.R / ((params.chi + 1.0) * (params.chi + 2.0)))
         self.tol = float(tol)
-        self._probe_u = esym.Real(f"iwan{uid}_probe", 0.0)
-        self._probe = None       # the law at _probe_u, built on first use
+        self.probe = None        # u -> F through the owner's symbolic user function
 
     # ------------------------------------------------------------------ state transfer
     def set_stack(self, us, Fr) -> None:
@@ -85,11 +84,9 @@ class SymbolicIwanState:
         """True if the law, with the variables as they are (the state before the step just
         committed), does not give the exact ``force`` [N] at the accepted slip ``u`` [m]:
         the step needed an older reversal point than the expression holds. Evaluated only
-        for steps whose reversal stack changed."""
-        if self._probe is None:
-            self._probe = self.force(self._probe_u)
-        self._probe_u.SetValue(u)
-        return not abs(self._probe.Evaluate() - force) <= 1e-9 * self.Fs
+        for steps whose reversal stack changed, through :attr:`probe` (``u -> F``, set by
+        the owner to evaluate its symbolic user function)."""
+        return not abs(self.probe(u) - force) <= 1e-9 * self.Fs
 
     # ------------------------------------------------------------------ the law
     def backbone(self, x):
@@ -135,3 +132,17 @@ class SymbolicIwanState:
         f_small = esym.IfThenElse(n >= 0.5, chain(held[1:], n - 1.0, 0), self._virgin(u))
         f_rev = esym.IfThenElse(esym.abs(d) <= self.tol, f_small, f_new)
         return esym.IfThenElse(d * du < 0.0, f_rev, f_cont)
+
+
+def make_probe(mbs, fn, kind, axis, off):
+    """``u -> F`` through the symbolic user function ``fn`` (no new expression)."""
+    if kind == "coordinate":
+        return lambda u: fn.Evaluate(mbs, 0.0, 0, u + off, 0.0, 0.0, 0.0, 0.0)
+    a = axis
+    zero = [0.0, 0.0, 0.0]
+
+    def probe(u):
+        d = u + off
+        f = fn.Evaluate(mbs, 0.0, 0, [d * a[0], d * a[1], d * a[2]], zero, zero, zero, zero)
+        return a[0] * f[0] + a[1] * f[1] + a[2] * f[2]
+    return probe

@@ -38,7 +38,7 @@ from ..core.parameters import IwanParameters
 from ..core._validation import check_scalar
 from ._records import InterfaceRecords
 from ._slip_map import SlipMap
-from ._symbolic_law import SymbolicIwanState
+from ._symbolic_law import SymbolicIwanState, make_probe
 from ._dispatch import _dispatcher_for, _installed_post_step
 from ._markers import _COORDINATE_MARKERS, _POSITION_MARKERS, _marker_type, _unit_axis
 from .connector import add_iwan_connector
@@ -389,6 +389,7 @@ def _symbolic_object(mbs, iface, i, st, name):
             name=name, markerNumbers=[m0, m1], springForceUserFunction=fn,
             visualization=_HIDDEN)
     iface._functions.append(fn)
+    st.probe = make_probe(mbs, fn, iface._kind, iface._axis, off)
     return mbs.AddObject(item)
 
 
