@@ -18,7 +18,7 @@ from exudyn.itemInterface import (ObjectConnectorCartesianSpringDamper,
                                   ObjectConnectorCoordinateSpringDamper)
 
 from ._slip_map import SlipMap
-from ._symbolic_law import SymbolicIwanState, make_probe
+from ._symbolic_law import SymbolicIwanState, cartesian_law, coordinate_law, make_probe
 
 __all__: list[str] = []
 
@@ -33,25 +33,14 @@ def symbolic_item(conn, depth: int, name: str, vis):
     off = conn._offset
     m = [int(x) for x in conn._markers]
     if conn._kind == "coordinate":
-        def law(mbs, t, itemNumber, deltaL, deltaL_t, stiffness, damping, offset):
-            return st.force(deltaL - off if off else deltaL)
-        fn = CreateSymbolicUserFunction(conn._mbs, law, "springForceUserFunction",
+        fn = CreateSymbolicUserFunction(conn._mbs, coordinate_law(st, off), "springForceUserFunction",
                                         itemTypeName="ObjectConnectorCoordinateSpringDamper")
         item = ObjectConnectorCoordinateSpringDamper(
             name=name, markerNumbers=m, stiffness=0.0, damping=0.0, offset=off,
             springForceUserFunction=fn, visualization=vis)
     else:
-        a = conn._axis
-
-        def law(mbs, t, itemNumber, displacement, velocity, stiffness, damping, offset):
-            u = None
-            for k in range(3):
-                if a[k] != 0.0:
-                    term = displacement[k] if a[k] == 1.0 else displacement[k] * a[k]
-                    u = term if u is None else u + term
-            F = st.force(u - off if off else u)
-            return [F if a[k] == 1.0 else F * a[k] for k in range(3)]
-        fn = CreateSymbolicUserFunction(conn._mbs, law, "springForceUserFunction",
+        fn = CreateSymbolicUserFunction(conn._mbs, cartesian_law(st, conn._axis, off),
+                                        "springForceUserFunction",
                                         itemTypeName="ObjectConnectorCartesianSpringDamper")
         item = ObjectConnectorCartesianSpringDamper(
             name=name, markerNumbers=m, springForceUserFunction=fn, visualization=vis)

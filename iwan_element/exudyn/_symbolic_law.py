@@ -146,3 +146,26 @@ def make_probe(mbs, fn, kind, axis, off):
         f = fn.Evaluate(mbs, 0.0, 0, [d * a[0], d * a[1], d * a[2]], zero, zero, zero, zero)
         return a[0] * f[0] + a[1] * f[1] + a[2] * f[2]
     return probe
+
+
+def coordinate_law(st: SymbolicIwanState, off: float):
+    """Spring-force user function (ObjectConnectorCoordinateSpringDamper) to be traced."""
+    def law(mbs, t, itemNumber, deltaL, deltaL_t, stiffness, damping, offset):
+        return st.force(deltaL - off if off else deltaL)
+    return law
+
+
+def cartesian_law(st: SymbolicIwanState, a, off: float):
+    """Spring-force user function (ObjectConnectorCartesianSpringDamper) along the unit
+    axis ``a``; components with ``a_k = 0`` are constant zeros (a shared sub-expression is
+    evaluated once per appearance, so the law appears only in the non-zero components)."""
+    def law(mbs, t, itemNumber, displacement, velocity, stiffness, damping, offset):
+        u = None
+        for k in range(3):
+            if a[k] != 0.0:
+                term = displacement[k] if a[k] == 1.0 else displacement[k] * a[k]
+                u = term if u is None else u + term
+        F = st.force(u - off if off else u)
+        return [esym.Real(0.0) if a[k] == 0.0 else (F if a[k] == 1.0 else F * a[k])
+                for k in range(3)]
+    return law

@@ -38,7 +38,7 @@ from ..core.parameters import IwanParameters
 from ..core._validation import check_scalar
 from ._records import InterfaceRecords
 from ._slip_map import SlipMap
-from ._symbolic_law import SymbolicIwanState, make_probe
+from ._symbolic_law import SymbolicIwanState, cartesian_law, coordinate_law, make_probe
 from ._dispatch import _dispatcher_for, _installed_post_step
 from ._markers import _COORDINATE_MARKERS, _POSITION_MARKERS, _marker_type, _unit_axis
 from .connector import add_iwan_connector
@@ -364,26 +364,14 @@ def _symbolic_object(mbs, iface, i, st, name):
     m0, m1 = (int(m) for m in iface._pairs[i])
     off = iface._offsets[i]
     if iface._kind == "coordinate":
-        def law(mbs, t, itemNumber, deltaL, deltaL_t, stiffness, damping, offset):
-            return st.force(deltaL - off if off else deltaL)
-        fn = CreateSymbolicUserFunction(mbs, law, "springForceUserFunction",
+        fn = CreateSymbolicUserFunction(mbs, coordinate_law(st, off), "springForceUserFunction",
                                         itemTypeName="ObjectConnectorCoordinateSpringDamper")
         item = ObjectConnectorCoordinateSpringDamper(
             name=name, markerNumbers=[m0, m1], stiffness=0.0, damping=0.0,
             springForceUserFunction=fn, visualization=_HIDDEN)
     else:
-        a = iface._axis
-
-        def law(mbs, t, itemNumber, displacement, velocity, stiffness, damping, offset):
-            terms = [displacement[k] * a[k] if a[k] != 1.0 else displacement[k]
-                     for k in range(3) if a[k] != 0.0]
-            u = terms[0]
-            for term in terms[1:]:
-                u = u + term
-            F = st.force(u - off if off else u)
-            return [F * a[k] if a[k] not in (0.0, 1.0) else (F if a[k] == 1.0 else esym_zero())
-                    for k in range(3)]
-        fn = CreateSymbolicUserFunction(mbs, law, "springForceUserFunction",
+        fn = CreateSymbolicUserFunction(mbs, cartesian_law(st, iface._axis, off),
+                                        "springForceUserFunction",
                                         itemTypeName="ObjectConnectorCartesianSpringDamper")
         item = ObjectConnectorCartesianSpringDamper(
             name=name, markerNumbers=[m0, m1], springForceUserFunction=fn,
@@ -391,10 +379,6 @@ def _symbolic_object(mbs, iface, i, st, name):
     iface._functions.append(fn)
     st.probe = make_probe(mbs, fn, iface._kind, iface._axis, off)
     return mbs.AddObject(item)
-
-
-def esym_zero():
-    return exu.symbolic.Real(0.0)
 
 
 def _python_interface(mbs, pairs, joints, kind, axis, axisMarker, offs, record, tol, name,
