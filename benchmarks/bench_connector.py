@@ -211,7 +211,7 @@ def count_trials(variant, steps):
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--steps", type=int, default=100_000)
+    ap.add_argument("--steps", type=int, default=100_000, help="1-mass table (0: skip it)")
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--compare-with", metavar="DIR",
                     help="also run the conn-* variants with DIR/iwan_element (rows '@base')")
@@ -225,6 +225,9 @@ def main(argv=None):
     if args.compare_with:
         PACKAGES["base"] = load_package(args.compare_with)
         conn = [c for v in conn for c in (v + "@base", v)]
+    if args.steps <= 0:                    # only the contact table
+        contact_table(args.contacts, args.contact_steps, args.repeat)
+        return
     variants = ["builtin", "python-lin", "python-lin+post", "python-nonlin+post"] + conn
     best = {v: (math.inf, math.nan) for v in variants}
     for _ in range(args.repeat):           # interleaved rounds: load changes hit all variants
