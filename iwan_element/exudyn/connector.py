@@ -16,18 +16,35 @@ How the history is kept
 -----------------------
 Exudyn evaluates a connector's force many times per step: Newton iterations and
 finite-difference Jacobians of the implicit solvers, the stages of explicit Runge-Kutta
-methods, and attempts that an adaptive solver rejects. The force user function therefore
-only calls ``joint.trial(u, v)`` (which never changes the joint's history). Once per
-*accepted* step a post-step dispatcher brings every joint to the accepted state, calls
-``joint.commit()`` and appends a row to the connector's record. For two node coordinates
-it reads the accepted slip and its rate through views of Exudyn's coordinate vectors (no
-copy; renewed at the start of every run and when an ``Assemble`` changed the number of
-coordinates) and evaluates a new trial only if the last one was elsewhere; otherwise it
-calls ``mbs.GetObjectOutput``, which evaluates the force function at the accepted state. Exudyn calls the post-step
-function only after accepted steps (and once at the start of a run, which commits the
-initial state: an initial slip is reached by monotone virgin loading); rejected attempts
-leave no trace. ``SolveStatic`` calls it after every load step, so a static run commits
-a quasi-static loading history.
+methods, and attempts that an adaptive solver rejects. The force law therefore never
+changes the joint's history; once per *accepted* step a post-step dispatcher brings every
+joint to the accepted state, commits it and appends a row to the connector's record.
+
+Two force laws (``law=``), chosen automatically:
+
+* **symbolic** (an :class:`~iwan_element.IwanJoint` on two ``MarkerNodeCoordinate`` markers
+  or on position markers with a global axis): the exact Iwan law as an Exudyn symbolic
+  expression (:mod:`._symbolic_law`), evaluated in C++ without Python and without Exudyn
+  API calls (safe with several solver threads). Its state (the committed slip and the newest
+  ``depth`` reversal points) lives in named symbolic variables; the post-step commits the
+  ``IwanJoint`` (the reference, holding the energies) at the accepted slip, read through
+  views of Exudyn's coordinate vectors, and writes the committed slip (every step) and the
+  reversal stack (only when it changed) to the variables. A step that needed an older
+  reversal point than the law holds is detected (the law is evaluated at the accepted slip
+  with the previous state and compared with the exact force), logged, and listed in
+  :attr:`IwanConnector.overflow_times`.
+* **python** (any element, e.g. the effects, or a rotating ``axisMarker``): a Python force
+  function calling ``joint.trial(u, v)``. For two node coordinates the post-step reads the
+  accepted slip and its rate through coordinate views and evaluates a new trial only if the
+  last one was elsewhere; otherwise it calls ``mbs.GetObjectOutput``, which evaluates the
+  force function at the accepted state.
+
+Exudyn calls the post-step function only after accepted steps (and once at the start of a
+run, which commits the initial state: an initial slip is reached by monotone virgin
+loading); rejected attempts leave no trace. ``SolveStatic`` calls it after every load step,
+so a static run commits a quasi-static loading history. A new solve is recognised by the
+solver object that ``SolveDynamic``/``SolveStatic`` store in ``mbs.sys`` (the coordinate
+views are then renewed and the settings checked, see :func:`._dispatch.check_settings`).
 
 Post-step chaining
 ------------------
@@ -44,30 +61,31 @@ Exudyn settings to remember
 * Newton's ``absoluteTolerance`` is a residual in force units; for stiff joints use a
   tight ``relativeTolerance`` (the default 1e-8 of the step's initial residual is fine
   for plots, use ~1e-10 or below for energy checks).
-* Use ``simulationSettings.parallel.numberOfThreads = 1``: with two threads Exudyn 1.13.6
-  was observed to hang with about 20 or more Python-function connectors.
+* Several solver threads are refused (``ValueError`` at the start of the run) for
+  connectors with the Python force law: with two threads Exudyn 1.13.6 was observed to hang
+  with about 20 or more Python-function connectors. The symbolic law is allowed.
+* ODE23/DOPRI5 with automatic step size are refused (see :func:`check_settings`).
 * A user-function connector reports no potential energy to Exudyn; use the connector's
-  records (:attr:`IwanConnector.stored_energy`, ...).
-* For position markers the accepted state is obtained through ``mbs.GetObjectOutput``,
-  which allocates; on long runs Exudyn may then print a harmless "large amount of memory
-  allocations" warning.
+  records (:attr:`IwanConnector.stored_energy_history`, ...).
+* Python law with position markers: the accepted state is obtained through
+  ``mbs.GetObjectOutput``, which allocates; on long runs Exudyn may then print a harmless
+  "large amount of memory allocations" warning.
+* A post-step function set *after* the connectors is chained at the next ``SolveDynamic``
+  / ``SolveStatic``: they store their solver in ``mbs.sys``, which the connectors replace by
+  a dict that re-installs the dispatcher in front of it (the Python law also re-chains at
+  its first force evaluation). With ``storeSolver=False`` or a hand-made solver object only
+  the Python law notices; with the symbolic law reading the records then raises
+  ``RuntimeError`` instead of returning an uncommitted history.
 
-Cost (``benchmarks/bench_connector.py``, one mass, generalized-alpha with default settings,
-100k steps; ratios to Exudyn's built-in linear connector, measured side by side): with an
-:class:`~iwan_element.IwanJoint` about 3.3 us per step, 12 times; the connector machinery
-with a zero-cost element 7 times. A stateless Python *nonlinear* law with an empty post-step
-function already costs 4.5 times: Exudyn's modified Newton keeps the Jacobian from the
-start of the run, so any nonlinear law takes two iterations, i.e. three Python force calls
-per step (a linear one two). On top of that floor come three ``trial`` calls (about
-0.22 us each on a branch, more in the solver loop), one ``commit`` (about 0.35 us), the
-post-step dispatcher reading the accepted state through coordinate views, and the records.
+Cost: see ``benchmarks/bench_connector.py`` and the README's performance table (the
+symbolic law removes the Python force calls; what remains per step is one Python post-step
+with a ``trial``/``commit`` of the joint and one variable update).
 """
 from __future__ import annotations
 
 import logging
 import math
 from array import array
-from collections.abc import Mapping
 
 import exudyn as exu
 import numpy as np
@@ -75,197 +93,25 @@ from exudyn.itemInterface import (ObjectConnectorCartesianSpringDamper,
                                   ObjectConnectorCoordinateSpringDamper)
 
 from ..core._validation import check_scalar
+from ..core.joint import IwanJoint
 from ..core.protocol import check_element
+from . import _symbolic_connector as _symbolic
+from ._dispatch import _claim, _dispatcher_for, _installed_post_step
+from ._markers import (_COORDINATE_MARKERS, _ORIENTATION_MARKERS, _POSITION_MARKERS,
+                       _marker_type, _node_coordinate_nodes, _unit_axis, _visualization)
+from ._python_law import (_coordinate_force_function, _position_force_function,
+                          _rotating_axis_force_function)
 
 __all__ = ["add_iwan_connector", "IwanConnector"]
 
 _log = logging.getLogger(__name__)
 
 _FORCE = exu.OutputVariableType.Force
-_ROTATION_MATRIX = exu.OutputVariableType.RotationMatrix
 _NAN = math.nan
 _INF = math.inf
 
-# Marker types (the ``markerType`` entry of ``mbs.GetMarker``) by what they provide.
-_COORDINATE_MARKERS = frozenset({
-    "NodeCoordinate", "NodeRotationCoordinate",
-    "BodiesRelativeTranslationCoordinate", "BodiesRelativeRotationCoordinate",
-})
-_ORIENTATION_MARKERS = frozenset({"BodyRigid", "NodeRigid", "SuperElementRigid", "KinematicTreeRigid"})
-_POSITION_MARKERS = frozenset({"BodyPosition", "NodePosition", "SuperElementPosition"}) | _ORIENTATION_MARKERS
-_VISUALIZATION_KEYS = ("show", "drawSize", "color")
 _NCOL = 5                   # recorded per step: time, slip, force, dissipated energy, work
 _BLOCK = 5 * 1024           # record values buffered in a list before moving them to the array
-
-
-# ---------------------------------------------------------------------------- dispatcher
-def _installed_post_step(mbs):
-    """The Python object currently set as post-step user function, or ``None``.
-
-    Exudyn 1.13.6 returns ``0`` when none is set and a dict ``{'function': f, 'type': ...}``
-    otherwise (older versions returned ``f`` itself); both forms are accepted.
-    """
-    got = mbs.GetPostStepUserFunction()
-    if isinstance(got, dict):
-        got = got.get("function", 0)
-    if got is None or (isinstance(got, int) and got == 0):
-        return None
-    return got
-
-
-class _PostStepDispatcher:
-    """Commits every connector of one system once per accepted step, then calls the
-    previously installed post-step function (``chained``)."""
-
-    def __init__(self, chained, mbs):
-        self.chained = chained
-        self.connectors = []       # in creation order
-        self.last_t = _NAN
-        self.running = False
-        self.n_ode2 = -1           # ODE2 size when the connectors took their coordinate views
-        conns = self.connectors
-        disp = self
-        ode2_size = mbs.systemData.ODE2Size
-
-        def post_step_dispatcher(mbs, t):
-            if disp.running:       # re-entered through a user function that calls us by hand
-                return True
-            disp.running = True
-            try:
-                if t > disp.last_t:            # the usual case: the next accepted step
-                    disp.last_t = t
-                    if disp.n_ode2 >= 0 and ode2_size() != disp.n_ode2:
-                        disp.refresh(mbs)      # re-assembled with more coordinates
-                    for c in conns:
-                        c._accept(t)
-                elif t != disp.last_t:         # a new run (never commit twice at one time)
-                    disp.last_t = t
-                    disp.refresh(mbs)
-                    for c in conns:
-                        c._accept(t)
-                else:                          # a run continuing from the last accepted time
-                    disp.refresh(mbs)
-                f = disp.chained
-                return True if f is None else f(mbs, t)
-            finally:
-                disp.running = False
-
-        post_step_dispatcher._iwan_dispatcher = self
-        self.callback = post_step_dispatcher
-
-    def add(self, connector: "IwanConnector") -> None:
-        self.connectors.append(connector)
-
-    def refresh(self, mbs) -> None:
-        """Let every connector take fresh views of the system coordinates.
-
-        Exudyn keeps its coordinate vectors in place during a run and across runs; only an
-        ``Assemble`` that makes them longer moves them (exudyn 1.13.6). So the views are
-        renewed at the start of every run and whenever the number of ODE2 coordinates
-        differs from the one at the last renewal (checked once per accepted step).
-        """
-        fast = False
-        for c in self.connectors:
-            c._refresh(mbs)
-            fast = fast or c._read is not None
-        self.n_ode2 = mbs.systemData.ODE2Size() if fast else -1
-
-    @staticmethod
-    def of(obj):
-        """The dispatcher whose callback ``obj`` is, else ``None``."""
-        return getattr(obj, "_iwan_dispatcher", None)
-
-    def reachable_from(self, fn) -> bool:
-        """True if this dispatcher runs when ``fn`` is the installed post-step function."""
-        seen = 0
-        while fn is not None and seen < 1000:
-            d = _PostStepDispatcher.of(fn)
-            if d is None:
-                return False
-            if d is self:
-                return True
-            fn = d.chained
-            seen += 1
-        return False
-
-    def install(self, mbs) -> None:
-        """Put this dispatcher in front of whatever post-step function is installed now."""
-        current = _installed_post_step(mbs)
-        if current is self.callback:
-            return
-        self.chained = current
-        mbs.SetPostStepUserFunction(self.callback)
-
-
-def _dispatcher_for(mbs) -> _PostStepDispatcher:
-    current = _installed_post_step(mbs)
-    d = _PostStepDispatcher.of(current)
-    if d is not None:
-        return d
-    d = _PostStepDispatcher(current, mbs)
-    mbs.SetPostStepUserFunction(d.callback)
-    return d
-
-
-# ---------------------------------------------------------------------------- validation
-def _marker_type(mbs, marker, label: str) -> str:
-    if isinstance(marker, bool):
-        raise ValueError(f"{label} must be a marker number, got {marker!r}")
-    try:
-        idx = int(marker)
-    except (TypeError, ValueError):
-        raise ValueError(f"{label} must be a marker number (int or exudyn MarkerIndex), "
-                         f"got {marker!r}") from None
-    n = mbs.systemData.NumberOfMarkers()
-    if not 0 <= idx < n:
-        raise ValueError(f"{label} = {idx} is not a marker of this system: allowed range is "
-                         f"[0, {n - 1}]" if n else f"{label} = {idx}: the system has no markers yet")
-    return mbs.GetMarker(idx)["markerType"]
-
-
-def _unit_axis(axis, name: str) -> tuple[float, float, float]:
-    try:
-        a = np.array(axis, dtype=float).ravel()
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a vector of 2 or 3 numbers, got {axis!r}") from None
-    if a.size == 2:
-        a = np.append(a, 0.0)
-    if a.size != 3 or not np.all(np.isfinite(a)):
-        raise ValueError(f"{name} must be a finite vector of 2 or 3 numbers, got {axis!r}")
-    norm = float(np.linalg.norm(a))
-    if norm == 0.0:
-        raise ValueError(f"{name} must be a non-zero vector, got {axis!r}")
-    a = a / norm
-    return float(a[0]), float(a[1]), float(a[2])
-
-
-def _visualization(visualization) -> dict:
-    vis = {"show": True, "drawSize": -1.0, "color": [-1.0, -1.0, -1.0, -1.0]}
-    if visualization is None:
-        return vis
-    if not isinstance(visualization, Mapping):
-        raise ValueError("visualization must be a dict with keys among "
-                         f"{list(_VISUALIZATION_KEYS)}, got {type(visualization).__name__}")
-    bad = set(visualization) - set(_VISUALIZATION_KEYS)
-    if bad:
-        raise ValueError(f"unknown visualization keys {sorted(bad)}; allowed are "
-                         f"{list(_VISUALIZATION_KEYS)}")
-    vis.update(visualization)
-    return vis
-
-
-def _node_coordinate_nodes(mbs, markerNumbers):
-    """For two ``NodeCoordinate`` markers: ``[(node, coordinate), ...]`` with ``node = None``
-    for a ground node (its coordinate is always 0); ``None`` for other marker types."""
-    out = []
-    for m in markerNumbers:
-        mk = mbs.GetMarker(int(m))
-        if mk["markerType"] != "NodeCoordinate":
-            return None
-        node = int(mk["nodeNumber"])
-        ground = mbs.GetNode(node)["nodeType"] == "PointGround"
-        out.append((None if ground else node, int(mk["coordinate"])))
-    return out
 
 
 # ---------------------------------------------------------------------------- public API
@@ -301,6 +147,9 @@ class IwanConnector:
         self._read = None           # (q, q_t, i0, i1) on the fast route, else None (generic)
         self._fast_nodes = None     # set for two NodeCoordinate markers; resolved in _refresh
         self._accept = self._generic_accept
+        self._route = "python"
+        self._state = None          # symbolic route: the law's variables
+        self._overflows = []
 
     # -------------------------------------------------------------- per-step work
     def _generic_accept(self, t):
@@ -384,6 +233,9 @@ class IwanConnector:
         """Start of a run: resolve the global coordinate indices and take fresh views of the
         system coordinates (Assemble may have moved them); the views stay valid during a
         run (checked at every accepted step for all solvers, see the tests)."""
+        if self._route == "symbolic":
+            _symbolic.symbolic_refresh(self, mbs)
+            return
         if self._fast_nodes is None:
             self._read = None
             self._accept = self._generic_accept
@@ -461,6 +313,8 @@ class IwanConnector:
         dynamic run started from a static solution).
         """
         self._joint.reset()
+        if self._route == "symbolic":
+            _symbolic.reset_state(self)
         del self._rec[:]
         self._buf.clear()
         self._lu = _NAN
@@ -470,7 +324,31 @@ class IwanConnector:
         if self._dispatcher is not None:
             self._dispatcher.last_t = _NAN
 
+    def _check_running(self) -> None:
+        """The symbolic route has no Python force function to notice a replaced post-step
+        function; refuse to return records of a run in which the joint was not committed."""
+        d = self._dispatcher
+        if self._route == "symbolic" and d is not None \
+                and not d.reachable_from(_installed_post_step(self._mbs)):
+            raise RuntimeError(
+                "the connector's post-step dispatcher was replaced by another post-step user "
+                "function, so the joint was not committed; set your post-step function before "
+                "add_iwan_connector (it is then chained) and run again")
+
+    @property
+    def route(self) -> str:
+        """``"symbolic"`` (the exact Iwan law as an Exudyn symbolic expression) or
+        ``"python"`` (a Python force function calling ``joint.trial``)."""
+        return self._route
+
+    @property
+    def overflow_times(self) -> np.ndarray:
+        """Symbolic route: times [s] of accepted steps that read an older reversal point
+        than the law holds (not exact; raise ``depth``). Empty in a sound run."""
+        return np.array(self._overflows)
+
     def _column(self, i: int) -> np.ndarray:
+        self._check_running()
         self._flush()
         return np.array(self._rec[i::_NCOL], dtype=float)
 
@@ -485,28 +363,28 @@ class IwanConnector:
         return self._column(0)
 
     @property
-    def slip(self) -> np.ndarray:
+    def slip_history(self) -> np.ndarray:
         """Joint slip ``u`` at the accepted steps [m], shape (n,)."""
         return self._column(1)
 
     @property
-    def force(self) -> np.ndarray:
+    def force_history(self) -> np.ndarray:
         """Joint force at the accepted steps [N], shape (n,); positive when it pulls
         marker 1 back towards marker 0 (resists positive slip)."""
         return self._column(2)
 
     @property
-    def dissipated_energy(self) -> np.ndarray:
+    def dissipated_energy_history(self) -> np.ndarray:
         """Energy dissipated by the joint since the last reset [J], shape (n,)."""
         return self._column(3)
 
     @property
-    def work(self) -> np.ndarray:
+    def work_history(self) -> np.ndarray:
         """Work done on the joint, ``int F du`` since the last reset [J], shape (n,)."""
         return self._column(4)
 
     @property
-    def stored_energy(self) -> np.ndarray:
+    def stored_energy_history(self) -> np.ndarray:
         """Elastic energy stored in the joint [J], shape (n,): ``work - dissipated_energy``
         (the element protocol's identity; only these two are recorded per step)."""
         return self._column(4) - self._column(3)
@@ -514,6 +392,7 @@ class IwanConnector:
     def records(self) -> dict:
         """All records as a dict of arrays of shape (n,): ``time [s], slip [m], force [N],
         stored_energy [J], dissipated_energy [J], work [J]``."""
+        self._check_running()
         self._flush()
         data = np.array(self._rec, dtype=float).reshape(-1, _NCOL)
         return {"time": data[:, 0].copy(), "slip": data[:, 1].copy(),
@@ -528,7 +407,8 @@ class IwanConnector:
 
 def add_iwan_connector(mbs, markerNumbers, joint, *, axis=None, axisMarker=None,
                        offset: float = 0.0, name: str = "", visualization=None,
-                       record: bool = True) -> IwanConnector:
+                       record: bool = True, law: str = "auto", depth: int = 8,
+                       allow_adaptive_explicit: bool = False) -> IwanConnector:
     """Add a history-dependent joint element between two markers of an Exudyn system.
 
     Parameters
@@ -563,7 +443,23 @@ def add_iwan_connector(mbs, markerNumbers, joint, *, axis=None, axisMarker=None,
     visualization : dict, optional, keyword-only
         Keys among ``show``, ``drawSize``, ``color`` (as for Exudyn's spring-dampers).
     record : bool, keyword-only
-        Record time, slip, force and energies at every accepted step (default ``True``).
+        Record time, slip, force and energies at every accepted step (default ``True``);
+        ``False`` stores nothing.
+    law : {"auto", "symbolic", "python"}, keyword-only
+        How the force is evaluated. ``"symbolic"``: the exact Iwan law as an Exudyn symbolic
+        expression (no Python call per force evaluation; thread-safe); only for an
+        :class:`~iwan_element.IwanJoint` on two ``MarkerNodeCoordinate`` markers or on
+        position markers with a global axis. ``"python"``: a Python force function calling
+        ``joint.trial`` (any element). ``"auto"`` (default) picks ``"symbolic"`` where it
+        applies.
+    depth : int, keyword-only
+        Reversal points the symbolic law holds (default 8, range [2, 64]); a step that
+        needs more (``depth // 2`` loop closures inside one step) is logged and listed in
+        :attr:`IwanConnector.overflow_times`.
+    allow_adaptive_explicit : bool, keyword-only
+        Run with ODE23/DOPRI5 and automatic step size, which are refused by default
+        (a run starting with them raises ``ValueError``): a reversal inside a step is not
+        seen by their error estimate and the result does not converge with the tolerance.
 
     Returns
     -------
@@ -604,6 +500,13 @@ def add_iwan_connector(mbs, markerNumbers, joint, *, axis=None, axisMarker=None,
         raise ValueError(f"name must be a str, got {type(name).__name__}")
     if not isinstance(record, bool):
         raise ValueError(f"record must be True or False, got {record!r}")
+    if not isinstance(allow_adaptive_explicit, bool):
+        raise ValueError(f"allow_adaptive_explicit must be True or False, got "
+                         f"{allow_adaptive_explicit!r}")
+    if law not in ("auto", "symbolic", "python"):
+        raise ValueError(f"law must be 'auto', 'symbolic' or 'python', got {law!r}")
+    if isinstance(depth, bool) or not isinstance(depth, (int, np.integer)) or not 2 <= depth <= 64:
+        raise ValueError(f"depth must be an int in [2, 64], got {depth!r}")
     vis = _visualization(visualization)
 
     t0 = _marker_type(mbs, markerNumbers[0], "markerNumbers[0]")
@@ -637,16 +540,19 @@ def add_iwan_connector(mbs, markerNumbers, joint, *, axis=None, axisMarker=None,
             axis_marker = int(axisMarker)
 
     dispatcher = _dispatcher_for(mbs)
-    for other in dispatcher.connectors:
-        if other._joint is joint:
-            raise ValueError(f"joint is already used by connector {other.objectNumber}; "
-                             "give every connector its own element instance")
-
     conn = IwanConnector(mbs, markerNumbers, joint, kind, unit, axis_marker, offset, record)
+    _claim(joint, conn)
     conn._dispatcher = dispatcher
+    conn._allow_adaptive_explicit = allow_adaptive_explicit
     if kind == "coordinate":
         conn._fast_nodes = _node_coordinate_nodes(mbs, markerNumbers)
-    if kind == "coordinate":
+    route = _choose_route(law, joint, kind, conn._fast_nodes, axis_marker)
+    if route == "symbolic":
+        conn._route = "symbolic"
+        item = _symbolic.symbolic_item(conn, int(depth), name, vis)
+        _symbolic.sync_stack(conn)
+        conn._state.set_uc(joint.displacement)
+    elif kind == "coordinate":
         uf = _coordinate_force_function(conn)
         item = ObjectConnectorCoordinateSpringDamper(
             name=name, markerNumbers=list(markerNumbers), stiffness=0.0, damping=0.0,
@@ -665,75 +571,16 @@ def add_iwan_connector(mbs, markerNumbers, joint, *, axis=None, axisMarker=None,
     return conn
 
 
-# ---------------------------------------------------------------------------- force functions
-# These closures are the hot path: they run at every force evaluation of the solver. They
-# read the connector's small state by attribute access and call the bound trial method;
-# no numpy and no allocation beyond the return value.
-def _coordinate_force_function(conn: IwanConnector):
-    trial = conn._joint.trial
-    off = conn._offset               # fixed at creation (the object's own offset is not read)
-
-    def iwan_coordinate_force(mbs, t, itemNumber, deltaL, deltaL_t, stiffness, damping, offset):
-        u = deltaL - off
-        if t <= conn._guard:
-            conn._check(mbs, t, u)
-        if u == conn._lu and deltaL_t == conn._lv:
-            return conn._lF
-        F = trial(u, deltaL_t)[0]
-        conn._lu = u
-        conn._lv = deltaL_t
-        conn._lF = F
-        return F
-
-    return iwan_coordinate_force
-
-
-def _position_force_function(conn: IwanConnector):
-    trial = conn._joint.trial
-    a0, a1, a2 = conn._axis
-    off = conn._offset
-
-    def iwan_position_force(mbs, t, itemNumber, displacement, velocity, stiffness, damping, offset):
-        u = displacement[0] * a0 + displacement[1] * a1 + displacement[2] * a2 - off
-        if t <= conn._guard:
-            conn._check(mbs, t, u)
-        v = velocity[0] * a0 + velocity[1] * a1 + velocity[2] * a2
-        if u == conn._lu and v == conn._lv:
-            F = conn._lF
-        else:
-            F = trial(u, v)[0]
-            conn._lu = u
-            conn._lv = v
-            conn._lF = F
-        return [F * a0, F * a1, F * a2]
-
-    return iwan_position_force
-
-
-def _rotating_axis_force_function(conn: IwanConnector):
-    trial = conn._joint.trial
-    l0, l1, l2 = conn._axis
-    off = conn._offset
-    marker = conn._axis_marker
-    get = conn._mbs.GetMarkerOutput
-
-    def iwan_rotating_axis_force(mbs, t, itemNumber, displacement, velocity, stiffness, damping,
-                                 offset):
-        A = get(marker, _ROTATION_MATRIX).tolist()      # row-major 3x3, current configuration
-        a0 = A[0] * l0 + A[1] * l1 + A[2] * l2
-        a1 = A[3] * l0 + A[4] * l1 + A[5] * l2
-        a2 = A[6] * l0 + A[7] * l1 + A[8] * l2
-        u = displacement[0] * a0 + displacement[1] * a1 + displacement[2] * a2 - off
-        if t <= conn._guard:
-            conn._check(mbs, t, u)
-        v = velocity[0] * a0 + velocity[1] * a1 + velocity[2] * a2
-        if u == conn._lu and v == conn._lv:
-            F = conn._lF
-        else:
-            F = trial(u, v)[0]
-            conn._lu = u
-            conn._lv = v
-            conn._lF = F
-        return [F * a0, F * a1, F * a2]
-
-    return iwan_rotating_axis_force
+def _choose_route(law, joint, kind, fast_nodes, axis_marker) -> str:
+    why = None
+    if type(joint) is not IwanJoint:
+        why = f"the joint is a {type(joint).__name__} (the symbolic law is the IwanJoint's)"
+    elif kind == "coordinate" and fast_nodes is None:
+        why = "the coordinate markers are not both MarkerNodeCoordinate"
+    elif axis_marker is not None:
+        why = "the axis rotates with axisMarker"
+    if law == "symbolic" and why is not None:
+        raise ValueError(f"law='symbolic' is not available here: {why}; use law='python'")
+    if law == "python" or why is not None:
+        return "python"
+    return "symbolic"
