@@ -26,6 +26,7 @@ from .core.joint import IwanJoint
 from .core.parameters import IwanParameters
 from .core.protocol import JointElement, check_element
 from .identify.curves import AmplitudeCurve
+from .identify.noise import NoiseEstimate, estimate_noise
 from .identify.testdata import Cycle, TestData, find_reversals, load_test, simulate_test, split_cycles
 
 __version__ = "0.1.0"
@@ -63,6 +64,8 @@ __all__ = [
     "TestData",
     "Cycle",
     "AmplitudeCurve",
+    "estimate_noise",
+    "NoiseEstimate",
     "fit_loops",
     "fit_dissipation",
     "FitResult",
