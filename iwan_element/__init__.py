@@ -27,6 +27,7 @@ from .core.parameters import IwanParameters
 from .core.protocol import JointElement, check_element
 from .identify.curves import AmplitudeCurve
 from .identify.noise import NoiseEstimate, estimate_noise
+from .identify.model_fit import ModelFit, fit_force_model
 from .identify.testdata import Cycle, TestData, find_reversals, load_test, simulate_test, split_cycles
 
 __version__ = "0.1.0"
@@ -66,6 +67,8 @@ __all__ = [
     "AmplitudeCurve",
     "estimate_noise",
     "NoiseEstimate",
+    "fit_force_model",
+    "ModelFit",
     "fit_loops",
     "fit_dissipation",
     "FitResult",

@@ -675,7 +675,7 @@ def diagnose(t, u, F, *, candidates=None, max_effects: int = 2, noise: float | N
                          "separate model error from noise; at least 2 (better 3 per amplitude) "
                          "are needed")
     with _quiet():                       # its warnings are reported with the diagnosis
-        base = fit_loops(uu, FF, t=tt, seed=seed)
+        base = fit_loops(tt, uu, FF, seed=seed)
     warns = [f"base fit: {w}" for w in base.warnings]
     F_base = IwanJoint(base.params).force_history(uu)
     r0 = FF - F_base
