@@ -408,3 +408,147 @@ def test_quiet_context_silences_only_its_own_context_and_keeps_the_warnings_in_t
         loud = fit_loops(d.t, d.u, d.F)              # back to normal after the context
         assert [w for w in caught if issubclass(w.category, IdentifiabilityWarning)]
     assert quiet.warnings and quiet.warnings == loud.warnings   # microslip: Fs, beta not identified
+
+
+# ------------------------------------------------------------------ offsets, noise, honesty
+def _exact_record(p, amps, *, fs_per_period=400):
+    """A record made by the exact element (IwanJoint, not the fitter's vectorised history),
+    ramped up from rest, two cycles per amplitude."""
+    ph = np.sin(2 * np.pi * np.arange(2 * fs_per_period) / fs_per_period)
+    u = np.concatenate([a * ph for a in amps] + [[0.0]])
+    return np.arange(u.size) * 0.05, u, IwanJoint(p).force_history(u)
+
+
+@pytest.mark.parametrize("dF0,du0", [(50.0, 5e-6), (-300.0, 20e-6), (180.0, -12e-6)])
+def test_sensor_offsets_are_absorbed_and_reported(dF0, du0):
+    p = IwanParameters(2000.0, 2e7, -0.5, 0.5)               # phi_max = 0.15 mm
+    # ramped up from rest: each new peak runs up the virgin curve in microslip, which is what
+    # fixes the displacement zero; the last amplitude reaches macroslip
+    amps = np.array([0.3, 0.6, 1.0, 1.6]) * p.phi_max
+    t, u, F = _exact_record(p, amps)
+    rng = np.random.default_rng(1)
+    Fm = F + dF0 + rng.normal(0, 2.0, F.size)
+    um = u + du0 + rng.normal(0, 0.1e-6, u.size)
+    Fm0, um0 = Fm.copy(), um.copy()
+    r = _quiet(fit_loops, t, um, Fm)
+    assert np.array_equal(Fm, Fm0) and np.array_equal(um, um0)
+    (f, sf), (d, sd) = r.offsets["force"], r.offsets["displacement"]
+    assert abs(f - dF0) < max(4 * sf, 3.0) and abs(d - du0) < max(4 * sd, 0.5e-6)
+    assert r.success and all(r.identified.values())
+    assert abs(r.params.Fs / p.Fs - 1) < 0.01 and abs(r.params.KT / p.KT - 1) < 0.03
+    assert abs(r.params.chi - p.chi) < 0.03
+    text = " ".join(r.warnings)
+    assert "at rest" not in text and "drift" not in text
+    rep = r.report()
+    assert "dF0 [N]" in rep and "du0 [um]" in rep and "Fs   [N]" in rep
+
+
+def test_offset_of_a_record_that_does_not_start_at_rest():
+    """A record cut from the middle of a test: the joint's start state is unknown. The residuals
+    start after one full sweep, so it costs nothing but an offset."""
+    p = SETS[1]
+    d = simulate_test(p, np.full(4, 1.5 * p.phi_max), cycles=2, sample_rate=5)
+    i0 = d.u.size // 5 + 37                                   # somewhere inside a cycle
+    r = _quiet(fit_loops, d.t[i0:], d.u[i0:], d.F[i0:] + 120.0)
+    assert r.params.KT == pytest.approx(p.KT, rel=1e-6) and r.params.Fs == pytest.approx(p.Fs, rel=1e-6)
+    assert not any("rest" in w for w in r.warnings)
+
+
+def test_pure_noise_force_identifies_nothing():
+    p = SETS[1]
+    d = simulate_test(p, np.array(MACRO) * p.phi_max, cycles=2, sample_rate=5)
+    for seed in range(3):
+        F = np.random.default_rng(seed).normal(0.0, 100.0, d.u.size)
+        r = _quiet(fit_loops, d.t, d.u, F)
+        assert not r.success and not any(r.identified.values())
+        assert any("indistinguishable from noise" in w for w in r.warnings)
+        rows = [ln for ln in r.report().splitlines() if ln.strip()[:5] in ("Fs   ", "KT   ", "chi  ", "beta ") and "[" in ln]
+        assert len(rows) == 4 and all("NOT identified" in ln for ln in rows)
+
+
+def test_status_column_success_and_warnings_agree():
+    """A microslip-only record with chi near its bound: whatever is not identified is NOT
+    identified in the report, in ``identified`` and in the warnings alike."""
+    p = IwanParameters(9e3, 5e7, -0.97, 0.2)
+    d = simulate_test(p, np.array(MICRO[:3]) * p.phi_max, cycles=2, sample_rate=5,
+                      force_noise=0.05 * p.Fs * 0.1, seed=4)
+    r = _quiet(fit_loops, d.t, d.u, d.F)
+    for k in ("Fs", "KT", "chi", "beta"):
+        se, v = r.stderr[k], getattr(r.params, k)
+        scale = abs(v + 1) if k == "chi" else abs(v)
+        if r.identified[k]:
+            assert math.isfinite(se) and se <= 0.5 * scale
+        line = next(ln for ln in r.report().splitlines() if ln.strip().startswith(k + " "))
+        assert ("NOT identified" in line) is (not r.identified[k])
+    assert r.success is (r.identified["KT"] and r.identified["chi"])
+
+
+def test_systematic_misfit_widens_the_stated_uncertainty():
+    """A joint with backlash fitted by a plain Iwan joint: the residual is correlated, tau is
+    large and the standard errors grow by sqrt(tau) against white-residual ones."""
+    p = SETS[1]
+    d = simulate_test(p, np.array(MACRO) * p.phi_max, cycles=2, sample_rate=5, force_noise=20.0)
+    gap = 0.1 * p.phi_max
+    ub = np.sign(d.u) * np.maximum(np.abs(d.u) - gap, 0.0)    # a crude dead zone
+    F = IwanJoint(p).force_history(ub) + np.random.default_rng(0).normal(0, 20.0, d.u.size)
+    r = _quiet(fit_loops, d.t, d.u, F)
+    assert r.noise["tau"] > 5.0
+    assert any("correlated over" in w for w in r.warnings)
+    clean = _quiet(fit_loops, d.t, d.u, d.F)
+    assert clean.noise["tau"] < 2.0
+
+
+def test_fit_result_api_shape():
+    pytest.importorskip("matplotlib")
+    from matplotlib.figure import Figure
+    p = SETS[1]
+    d = simulate_test(p, np.array(MACRO) * p.phi_max, cycles=2, sample_rate=5, force_noise=10.0)
+    r = _quiet(fit_loops, d.t, d.u, d.F)
+    ax = Figure().add_subplot()
+    arts = r.plot(ax=ax)
+    assert len(arts) == 2 and all(a.axes is ax for a in arts)
+    dd = r.to_dict()
+    json.dumps(dd, allow_nan=False)
+    assert set(dd["offsets"]) == {"force", "displacement"} and dd["noise"]["force"] > 0
+    assert isinstance(r.warnings, tuple)
+    tab = d.amplitude_table()
+    rd = _quiet(fit_dissipation, tab["F0"], tab["D"], u0=tab["u0"])
+    assert len(rd.plot(ax=Figure().add_subplot())) == 2 and "Fs   [N]" in rd.report()
+
+
+def test_dissipation_fit_refuses_one_amplitude_and_fails_a_gross_misfit():
+    p = SETS[1]
+    u0 = np.full(4, 0.5 * p.phi_max) * np.array([1.0, 1.001, 0.999, 1.002])
+    F0, D = force_amplitude(u0, p), dissipation(u0, p)
+    with pytest.raises(ValueError, match="u0 holds 1 distinct amplitude"):
+        fit_dissipation(F0, D, u0=u0)
+    with pytest.raises(ValueError, match="u0 holds 1 distinct amplitude"):
+        fit_dissipation(F0, D, u0=u0, method="seed", Fs=p.Fs)
+    # a table no Iwan joint makes: dissipation falling with amplitude
+    u0 = np.array(MACRO) * p.phi_max
+    D_bad = dissipation(u0, p)[::-1]
+    r = _quiet(fit_dissipation, force_amplitude(u0, p), D_bad, u0=u0)
+    assert r.nrmse > 0.25 and not r.success and not any(r.identified.values())
+    assert any("does not describe the data" in w for w in r.warnings)
+
+
+def test_fit_force_model_recovers_a_model_with_offsets():
+    from iwan_element import fit_force_model
+    p = IwanParameters(1000.0, 2e6, -0.5, 0.3)
+    d = simulate_test(p, [0.5e-3, 1.5e-3, 2e-3], cycles=2, sample_rate=3, force_noise=3.0, seed=2)
+
+    def model(u, th):
+        return IwanJoint(IwanParameters(*th)).force_history(u)
+
+    r = fit_force_model(d.t, d.u + 15e-6, d.F + 200.0, model, [800, 1.5e6, -0.3, 0.5],
+                        lower=[1, 1, -0.98, 0], upper=[1e5, 1e9, 0.5, 50],
+                        names=["Fs", "KT", "chi", "beta"])
+    assert r.success and r.names[-2:] == ("dF0", "du0")
+    for k, true in (("Fs", p.Fs), ("KT", p.KT), ("chi", p.chi), ("beta", p.beta),
+                    ("dF0", 200.0), ("du0", 15e-6)):
+        assert abs(r.values[k] - true) < 4 * r.stderr[k] + 1e-12 * abs(true), k
+    assert json.dumps(r.to_dict(), allow_nan=False) and "dF0" in r.report()
+    with pytest.raises(ValueError, match="model must be callable"):
+        fit_force_model(d.t, d.u, d.F, None, [1.0])
+    with pytest.raises(ValueError, match="names must have"):
+        fit_force_model(d.t, d.u, d.F, model, [1.0, 2.0], names=["a"])

@@ -180,3 +180,33 @@ def test_simulate_test_validates():
         simulate_test(P, [1e-4], sample_rate=0.1)
     with pytest.raises(ValueError, match="cycles must be an integer"):
         simulate_test(P, [1e-4], cycles=0)
+
+
+def test_all_zero_displacement_says_it_does_not_vary():
+    """Issue 14: was "hysteresis must be in (0, inf), got 0.0"."""
+    from iwan_element import find_reversals
+    z = np.zeros(200)
+    F = np.sin(np.arange(200) / 5.0)
+    for call in (lambda: split_cycles(z, F), lambda: find_reversals(z),
+                 lambda: TestData.from_arrays(np.arange(200.0), z, F)):
+        with pytest.raises(ValueError, match=r"u \(displacement\) does not vary"):
+            call()
+
+
+def test_clean_coarsely_sampled_record_shows_no_displacement_noise(tmp_path):
+    """Issue 14: the curvature of a clean record sampled 50 times a period was taken for
+    displacement noise (second differences), and the fit warned about it."""
+    import warnings as _w
+    from iwan_element import fit_loops
+    p = IwanParameters(9e3, 5e7, -0.5, 0.5)
+    d = simulate_test(p, np.array([0.2, 0.5, 1.0, 1.5]) * p.phi_max, cycles=2, sample_rate=1.0)
+    path = tmp_path / "clean.csv"
+    np.savetxt(path, np.c_[d.t, d.u * 1e3, d.F * 1e-3], delimiter=",",
+               header="time [s],displacement [mm],force [kN]", comments="")
+    with _w.catch_warnings(record=True) as caught:
+        _w.simplefilter("always")
+        data = load_test(path)
+        r = fit_loops(data.t, data.u, data.F, smooth=0)
+    assert not any("noise" in str(c.message) for c in caught)
+    assert r.noise["displacement"] < 1e-4 * data.cycles[0].u0
+    assert r.details["smooth"] == 0

@@ -236,13 +236,20 @@ def fit_loops(t, u, F, *, sigma=None, smooth="auto", max_samples: int | None = 2
     hist, prob = _setup(u_drive, FF, w_full, keep, tol)
     out = _identify(prob, n_starts=n_starts, rng=rng, alpha=alpha, max_nfev=max_nfev,
                     initial=initial)
-    du0, se_du0 = _displacement_offset(hist, u_drive, prob, out, amp)
-    if math.isfinite(se_du0) and abs(du0) > 2e-3 * amp:      # large: refit on the shifted record
-        hist, prob = _setup(u_drive - du0, FF, w_full, keep, tol)
-        out = _identify(prob, n_starts=n_starts, rng=rng, alpha=alpha, max_nfev=max_nfev,
-                        initial=out["params"])
-        d2, se_du0 = _displacement_offset(hist, u_drive - du0, prob, out, amp)
-        du0 += d2
+    du0, se_du0 = 0.0, math.nan
+    for _ in range(4):                     # Gauss-Newton on du0, refitting the joint each time
+        step, se_du0 = _displacement_offset(hist, u_drive - du0, prob, out, amp)
+        if not math.isfinite(se_du0) or abs(step) <= max(0.1 * se_du0, 1e-5 * amp):
+            break
+        trial = _setup(u_drive - du0 - step, FF, w_full, keep, tol)
+        out_t = _identify(trial[1], n_starts=1, rng=rng, alpha=alpha, max_nfev=max_nfev,
+                          initial=out["params"])
+        if out_t["ssr"] >= out["ssr"]:
+            break                          # the shift does not improve the fit: keep what we have
+        du0 += step
+        (hist, prob), out = trial, out_t
+    if not math.isfinite(se_du0):
+        du0 = 0.0 if du0 == 0.0 else du0   # reported as not determined (stderr NaN)
     p_noise, r2 = _explains(out, prob)
     dF0, se_dF0 = out["dF0"]
     if p_noise >= alpha:
@@ -250,13 +257,13 @@ def fit_loops(t, u, F, *, sigma=None, smooth="auto", max_samples: int | None = 2
         warns.append(f"the force is indistinguishable from noise: the joint explains "
                      f"{100 * r2:.2g} % of its variance, not significantly more than a constant "
                      f"(p = {p_noise:.2g} >= {alpha:g}); nothing is identified")
-    if out["tau"] > 3.0:
-        warns.append(f"the residuals are correlated over {out['tau']:.3g} samples (a systematic "
-                     f"misfit or coloured noise): the std. errors are widened by "
-                     f"sqrt(tau) = {math.sqrt(out['tau']):.3g}")
     F_fit = hist.forces(out["params"])
     y = prob.y
     nrmse = math.sqrt(np.mean((y - dF0 - F_fit) ** 2)) / float(np.ptp(y))
+    if out["tau"] > 3.0 and nrmse > 1e-6:
+        warns.append(f"the residuals are correlated over {out['tau']:.3g} samples (a systematic "
+                     f"misfit or coloured noise): the std. errors are widened by "
+                     f"sqrt(tau) = {math.sqrt(out['tau']):.3g}")
     out["details"].update({"samples": n, "fitted_samples": int(keep.size), "burn_in": int(b),
                            "model_samples": int(hist.index.size), "reversal_depth": hist.depth,
                            "cycles": len(cycles), "weighted": sigma is not None,

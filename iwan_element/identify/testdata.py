@@ -32,6 +32,7 @@ import numpy as np
 from ..core._validation import _check_int, _check_time, check_scalar, finite_array, same_length
 from ..core.joint import IwanJoint
 from ..core.parameters import IwanParameters
+from .noise import estimate_noise
 
 __all__ = [
     "DISPLACEMENT_UNITS",
@@ -133,11 +134,23 @@ class Cycle:
 
 
 def _noise_sigma(u: np.ndarray) -> float:
-    """Robust white-noise standard deviation of a slowly varying signal (MAD of 2nd differences)."""
+    """Robust noise standard deviation of a slowly varying signal.
+
+    :func:`~iwan_element.identify.noise.estimate_noise` (Savitzky-Golay residual, per sample);
+    below 32 samples the MAD of the second differences. The second differences alone mistook
+    the curvature of a clean, coarsely sampled record for noise."""
     if u.size < 5:
         return 0.0
+    if u.size >= 32:
+        return estimate_noise(np.arange(u.size, dtype=float), u).sigma
     d2 = np.diff(u, 2)
     return float(1.4826 * np.median(np.abs(d2 - np.median(d2))) / math.sqrt(6.0))
+
+
+def _check_varies(u: np.ndarray) -> None:
+    if u.size and np.ptp(u) == 0.0:
+        raise ValueError(f"u (displacement) does not vary: it is {u[0]:g} m everywhere; cycles "
+                         "need a displacement that goes up and down (check the column and its unit)")
 
 
 def _default_hysteresis(u: np.ndarray) -> float:
@@ -168,6 +181,7 @@ def find_reversals(u, *, hysteresis: float | None = None) -> np.ndarray:
         record counts only if the record comes back from it by more than the dead band.
     """
     x = finite_array("u", u, ndim=1, min_size=2)
+    _check_varies(x)
     h = _default_hysteresis(x) if hysteresis is None else check_scalar(
         "hysteresis", hysteresis, low=0.0, low_open=True)
     vals = x.tolist()
@@ -269,6 +283,7 @@ def split_cycles(u, F, *, t=None, hysteresis: float | None = None, close_tol: fl
     uu = finite_array("u", u, ndim=1, min_size=2)
     FF = finite_array("F", F, ndim=1, min_size=2)
     same_length(u=uu, F=FF)
+    _check_varies(uu)
     tt = np.arange(uu.size, dtype=float) if t is None else _check_time(t, uu.size)
     close_tol = check_scalar("close_tol", close_tol, low=0.0, high=1.0, low_open=True, high_open=True)
     drift_tol = check_scalar("drift_tol", drift_tol, low=0.0, high=1.0, low_open=True, high_open=True)
@@ -384,8 +399,7 @@ class TestData:
         tt = _check_time(t, uu.size)
         if not np.any(FF != 0.0):
             raise ValueError("F (force) is all zero: check the force column and its unit")
-        if np.ptp(uu) == 0.0:
-            raise ValueError("u (displacement) is constant: check the displacement column")
+        _check_varies(uu)
         h = _default_hysteresis(uu) if hysteresis is None else check_scalar(
             "hysteresis", hysteresis, low=0.0, low_open=True)
         cycles = split_cycles(uu, FF, t=tt, hysteresis=h, close_tol=close_tol, drift_tol=drift_tol)
