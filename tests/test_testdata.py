@@ -73,7 +73,7 @@ def test_drift_is_flagged():
     u = 1e-4 * np.sin(2 * np.pi * 0.02 * t)
     F = IwanJoint(P).force_history(u)
     F = F + np.where(t > 100.0, 0.3 * np.abs(F).max(), 0.0) * np.clip((t - 100) / 50, 0, 1)
-    cyc = split_cycles(u, F, t=t)
+    cyc = split_cycles(t, u, F)
     assert not cyc[0].drifting and cyc[-1].drifting
     assert "centre drifts" in cyc[-1].flags
 
@@ -164,7 +164,7 @@ def test_unclosed_loops_give_a_clear_error():
 def test_inputs_are_not_modified(clean):
     t, u, F = clean.t.copy(), clean.u.copy(), clean.F.copy()
     t0, u0, F0 = t.copy(), u.copy(), F.copy()
-    split_cycles(u, F, t=t)
+    split_cycles(t, u, F)
     data = TestData.from_arrays(t, u, F)
     assert np.array_equal(t, t0) and np.array_equal(u, u0) and np.array_equal(F, F0)
     assert u.flags.writeable and data.u is not u
@@ -187,7 +187,7 @@ def test_all_zero_displacement_says_it_does_not_vary():
     from iwan_element import find_reversals
     z = np.zeros(200)
     F = np.sin(np.arange(200) / 5.0)
-    for call in (lambda: split_cycles(z, F), lambda: find_reversals(z),
+    for call in (lambda: split_cycles(None, z, F), lambda: find_reversals(z),
                  lambda: TestData.from_arrays(np.arange(200.0), z, F)):
         with pytest.raises(ValueError, match=r"u \(displacement\) does not vary"):
             call()

@@ -196,11 +196,17 @@ def _fd_jacobian(fun, theta, steps):
     return np.column_stack(cols)
 
 
-def _uncertainty(fun, theta, r, scale, *, at_lower_bound=None, tau: float = 1.0):
+def _uncertainty(fun, theta, r, scale, *, at_lower_bound=None, tau: float = 1.0,
+                 timeseries: bool = False):
     """Standard errors and correlations from the Jacobian (see :mod:`.identifiability`).
 
     ``cov = tau s^2 (J^T J)^-1``: ``tau`` (the residuals' integrated autocorrelation time)
-    widens it when the residuals are correlated (systematic misfit, coloured noise).
+    widens it when the residuals are correlated (systematic misfit, coloured noise). For a
+    time series (``timeseries=True``) the block sandwich
+    ``(J^T J)^-1 [sum_b (J_b^T r_b)(J_b^T r_b)^T] (J^T J)^-1`` over consecutive blocks of
+    ``max(20, 4 tau)`` residuals is also formed; it follows residuals whose size changes
+    along the record (displacement noise times a tangent stiffness that jumps at every
+    reversal) and their correlation with the Jacobian. Each variance is the larger of the two.
 
     ``fun`` maps the transformed parameters ``theta`` to residuals, ``r`` are the residuals at
     the optimum and ``scale = |d p / d theta|`` is the (diagonal) delta-method factor. A
@@ -212,14 +218,25 @@ def _uncertainty(fun, theta, r, scale, *, at_lower_bound=None, tau: float = 1.0)
     if at_lower_bound is not None:
         th[at_lower_bound] = max(th[at_lower_bound], h)
     J = _fd_jacobian(fun, th, np.full(th.size, h))
-    s2 = float(r @ r) / max(r.size - th.size, 1)
+    m, p = J.shape
+    s2 = float(np.einsum("i,i->", r, r)) / max(m - p, 1)
     try:
-        cov = tau * s2 * np.linalg.pinv(J.T @ J, rcond=1e-12, hermitian=True)
+        A_inv = np.linalg.pinv(np.einsum("ij,ik->jk", J, J), rcond=1e-12, hermitian=True)
     except np.linalg.LinAlgError:
-        cov = np.full((th.size, th.size), np.nan)
+        A_inv = np.full((p, p), np.nan)
+    cov = tau * s2 * A_inv
+    if timeseries and m > 4 * p:
+        L = int(max(20, math.ceil(4.0 * tau)))
+        nb = m // L
+        if nb >= 4 * p:
+            sc = np.einsum("bij,bi->bj", J[:nb * L].reshape(nb, L, p), r[:nb * L].reshape(nb, L))
+            S = np.einsum("bj,bk->jk", sc, sc) * (m / (nb * L)) * m / max(m - p, 1)
+            cov_s = A_inv @ S @ A_inv
+            ds, dt = np.diag(cov_s), np.diag(cov)
+            if np.all(ds > 0) and np.all(np.isfinite(ds)):
+                big = np.sqrt(np.maximum(ds, dt) / ds)
+                cov = cov_s * np.outer(big, big)
     se_t = np.sqrt(np.clip(np.diag(cov), 0, None))
     with np.errstate(invalid="ignore", divide="ignore"):
         corr = cov / np.outer(se_t, se_t)
     return se_t * np.asarray(scale, float), corr
-
-

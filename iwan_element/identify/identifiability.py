@@ -118,7 +118,8 @@ def _identify(prob: _Problem, *, n_starts: int, rng: np.random.Generator, alpha:
                                                 math.expm1(th[3])), th[4] if off else 0.0)
 
         se, corr = _uncertainty(fun, theta, r, [Fs, KT, 1.0, 1.0 + beta] + ([1.0] if off else []),
-                                at_lower_bound=3, tau=tau)
+                                at_lower_bound=3, tau=tau,
+                                timeseries=prob.timeseries)
         stderr = dict(zip(PARAM_NAMES, se[:4].tolist()))
         se_off = float(se[4]) if off else math.nan
         corr = corr[:4, :4]
@@ -147,7 +148,8 @@ def _identify(prob: _Problem, *, n_starts: int, rng: np.random.Generator, alpha:
             return prob.residual(IwanParameters(KT_ * phi_ * (chi_ + 1.0) / (chi_ + 2.0), KT_,
                                                 chi_, 0.0), th[3] if off else 0.0)
 
-        se3, c3 = _uncertainty(fun, theta, r, [KT, 1.0, R] + ([1.0] if off else []), tau=tau)
+        se3, c3 = _uncertainty(fun, theta, r, [KT, 1.0, R] + ([1.0] if off else []), tau=tau,
+                               timeseries=prob.timeseries)
         se_off = float(se3[3]) if off else math.nan
         stderr = {"Fs": math.nan, "KT": se3[0], "chi": se3[1], "beta": math.nan}
         corr = np.full((4, 4), np.nan)

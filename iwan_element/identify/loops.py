@@ -39,7 +39,7 @@ from ..core._validation import _check_int, _check_time, check_scalar, finite_arr
 from ..core.parameters import IwanParameters
 from ._solver import _Problem
 from .identifiability import _identify
-from .model_fit import burn_in_index, drive_displacement, integrated_time
+from .model_fit import burn_in_index, drive_displacement
 from .noise import estimate_noise
 from .result import FitResult, _finish
 from .testdata import split_cycles
@@ -212,7 +212,7 @@ def fit_loops(t, u, F, *, sigma=None, smooth="auto", max_samples: int | None = 2
     if initial is not None and not isinstance(initial, IwanParameters):
         raise ValueError(f"initial must be an IwanParameters or None, got {type(initial).__name__}")
     rng = np.random.default_rng(seed)
-    cycles = split_cycles(uu, FF, t=tt, hysteresis=hysteresis)
+    cycles = split_cycles(tt, uu, FF, hysteresis=hysteresis)
     if len(cycles) < 2:
         raise ValueError(f"u contains {len(cycles)} complete cycle(s); at least 2 are needed")
     warns = []
