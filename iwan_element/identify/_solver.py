@@ -39,6 +39,7 @@ class _Problem:
         self.log = log_space
         self.offset = bool(offset) and not log_space
         self.timeseries = bool(timeseries)   # residuals in time order: their correlation counts
+        self.block = 0                        # residuals per half cycle (block sandwich)
         self.entry_x = entry_x
         self.x_max = float(entry_x.max())
         self.min_macro = min_macro
@@ -197,16 +198,18 @@ def _fd_jacobian(fun, theta, steps):
 
 
 def _uncertainty(fun, theta, r, scale, *, at_lower_bound=None, tau: float = 1.0,
-                 timeseries: bool = False):
+                 timeseries: bool = False, block: int = 0):
     """Standard errors and correlations from the Jacobian (see :mod:`.identifiability`).
 
     ``cov = tau s^2 (J^T J)^-1``: ``tau`` (the residuals' integrated autocorrelation time)
     widens it when the residuals are correlated (systematic misfit, coloured noise). For a
     time series (``timeseries=True``) the block sandwich
     ``(J^T J)^-1 [sum_b (J_b^T r_b)(J_b^T r_b)^T] (J^T J)^-1`` over consecutive blocks of
-    ``max(20, 4 tau)`` residuals is also formed; it follows residuals whose size changes
-    along the record (displacement noise times a tangent stiffness that jumps at every
-    reversal) and their correlation with the Jacobian. Each variance is the larger of the two.
+    ``max(20, 4 tau, block)`` residuals is also formed (``block``: a half cycle); it follows
+    residuals whose size changes along the record (displacement noise times a tangent
+    stiffness that jumps at every reversal) and errors shared by a whole branch (a turning
+    point displaced by the displacement noise moves every force of the branch that leaves
+    it). Each variance is the larger of the two.
 
     ``fun`` maps the transformed parameters ``theta`` to residuals, ``r`` are the residuals at
     the optimum and ``scale = |d p / d theta|`` is the (diagonal) delta-method factor. A
@@ -226,9 +229,9 @@ def _uncertainty(fun, theta, r, scale, *, at_lower_bound=None, tau: float = 1.0,
         A_inv = np.full((p, p), np.nan)
     cov = tau * s2 * A_inv
     if timeseries and m > 4 * p:
-        L = int(max(20, math.ceil(4.0 * tau)))
+        L = int(max(20, math.ceil(4.0 * tau), block))
         nb = m // L
-        if nb >= 4 * p:
+        if nb >= 2 * p:
             sc = np.einsum("bij,bi->bj", J[:nb * L].reshape(nb, L, p), r[:nb * L].reshape(nb, L))
             S = np.einsum("bj,bk->jk", sc, sc) * (m / (nb * L)) * m / max(m - p, 1)
             cov_s = A_inv @ S @ A_inv

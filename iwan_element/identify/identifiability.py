@@ -119,7 +119,7 @@ def _identify(prob: _Problem, *, n_starts: int, rng: np.random.Generator, alpha:
 
         se, corr = _uncertainty(fun, theta, r, [Fs, KT, 1.0, 1.0 + beta] + ([1.0] if off else []),
                                 at_lower_bound=3, tau=tau,
-                                timeseries=prob.timeseries)
+                                timeseries=prob.timeseries, block=prob.block)
         stderr = dict(zip(PARAM_NAMES, se[:4].tolist()))
         se_off = float(se[4]) if off else math.nan
         corr = corr[:4, :4]
@@ -149,7 +149,7 @@ def _identify(prob: _Problem, *, n_starts: int, rng: np.random.Generator, alpha:
                                                 chi_, 0.0), th[3] if off else 0.0)
 
         se3, c3 = _uncertainty(fun, theta, r, [KT, 1.0, R] + ([1.0] if off else []), tau=tau,
-                               timeseries=prob.timeseries)
+                               timeseries=prob.timeseries, block=prob.block)
         se_off = float(se3[3]) if off else math.nan
         stderr = {"Fs": math.nan, "KT": se3[0], "chi": se3[1], "beta": math.nan}
         corr = np.full((4, 4), np.nan)

@@ -232,8 +232,13 @@ def fit_loops(t, u, F, *, sigma=None, smooth="auto", max_samples: int | None = 2
     b = burn_in_index(u_drive, hysteresis=hysteresis)
     m_all = n - b
     keep = b + np.unique(np.round(np.linspace(0, m_all - 1, min(m_all, max_samples))).astype(np.intp))
-    tol = 1e-12 * float(np.abs(u_drive).max())
+    # reversals smaller than the noise left in the driving displacement are noise, not the
+    # joint's: a dead band of 3 sigma keeps them from adding stiff micro-loops (errors in
+    # variables: they bias KT low and chi high)
+    tol = max(1e-12 * float(np.abs(u_drive).max()), 3.0 * dinfo["drive_noise"])
     hist, prob = _setup(u_drive, FF, w_full, keep, tol)
+    half = int(keep.size / max(2 * len(cycles), 1))
+    prob.block = half
     out = _identify(prob, n_starts=n_starts, rng=rng, alpha=alpha, max_nfev=max_nfev,
                     initial=initial)
     du0, se_du0 = 0.0, math.nan
@@ -242,6 +247,7 @@ def fit_loops(t, u, F, *, sigma=None, smooth="auto", max_samples: int | None = 2
         if not math.isfinite(se_du0) or abs(step) <= max(0.1 * se_du0, 1e-5 * amp):
             break
         trial = _setup(u_drive - du0 - step, FF, w_full, keep, tol)
+        trial[1].block = half
         out_t = _identify(trial[1], n_starts=1, rng=rng, alpha=alpha, max_nfev=max_nfev,
                           initial=out["params"])
         if out_t["ssr"] >= out["ssr"]:

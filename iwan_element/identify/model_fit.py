@@ -41,7 +41,7 @@ from typing import Callable, Sequence
 
 import numpy as np
 from scipy import optimize
-from scipy.signal import savgol_filter
+from scipy.signal import savgol_coeffs, savgol_filter
 
 from ..core._validation import _check_int, _check_time, finite_array, same_length
 from .noise import _correlation_time, estimate_noise
@@ -87,7 +87,8 @@ def drive_displacement(t, u, smooth="auto"):
     -------
     u_drive : ndarray
     info : dict
-        ``smooth`` (window used, 0 for none) and ``displacement_noise`` [m].
+        ``smooth`` (window used, 0 for none), ``displacement_noise`` [m] and ``drive_noise``
+        [m], the noise left in ``u_drive``.
     """
     n = u.size
     ne = estimate_noise(t, u) if n >= 32 else None
@@ -106,7 +107,9 @@ def drive_displacement(t, u, smooth="auto"):
             raise ValueError(f"smooth must be 'auto', 0 or an odd window of at least 7 samples "
                              f"below the record length {n}, got {smooth}")
     u_drive = savgol_filter(u, w, 5) if w else u
-    return u_drive, {"smooth": int(w), "displacement_noise": float(sig)}
+    left = sig * math.sqrt(float(savgol_coeffs(w, 5)[w // 2])) if w else sig
+    return u_drive, {"smooth": int(w), "displacement_noise": float(sig),
+                     "drive_noise": float(left)}
 
 
 @dataclass(frozen=True, eq=False)
