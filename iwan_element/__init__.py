@@ -27,6 +27,8 @@ from .core.joint_bank import IwanJointBank
 from .core.parameters import IwanParameters
 from .core.protocol import JointElement, check_element
 from .identify.curves import AmplitudeCurve
+from .identify.noise import NoiseEstimate, estimate_noise
+from .identify.model_fit import ModelFit, fit_force_model
 from .identify.testdata import Cycle, TestData, find_reversals, load_test, simulate_test, split_cycles
 
 __version__ = "0.1.0"
@@ -65,6 +67,10 @@ __all__ = [
     "TestData",
     "Cycle",
     "AmplitudeCurve",
+    "estimate_noise",
+    "NoiseEstimate",
+    "fit_force_model",
+    "ModelFit",
     "fit_loops",
     "fit_dissipation",
     "FitResult",
