@@ -26,6 +26,8 @@ from .core.joint import IwanJoint
 from .core.parameters import IwanParameters
 from .core.protocol import JointElement, check_element
 from .identify.curves import AmplitudeCurve
+from .core.modal import harmonic_stiffness, modal_iwan_curve, modal_ringdown
+from .identify.vibration import amplitude_curve
 from .identify.testdata import Cycle, TestData, find_reversals, load_test, simulate_test, split_cycles
 
 __version__ = "0.1.0"
@@ -63,6 +65,10 @@ __all__ = [
     "TestData",
     "Cycle",
     "AmplitudeCurve",
+    "modal_iwan_curve",
+    "harmonic_stiffness",
+    "modal_ringdown",
+    "amplitude_curve",
     "fit_loops",
     "fit_dissipation",
     "FitResult",
