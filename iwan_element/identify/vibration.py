@@ -5,7 +5,9 @@ free decay) into an :class:`~iwan_element.identify.curves.AmplitudeCurve`:
 
 1. The record is band-pass filtered around one mode with a zero-phase Butterworth filter
    (``scipy.signal.butter`` as second-order sections, ``scipy.signal.sosfiltfilt``).
-2. Its analytic signal ``z(t)`` comes from the Hilbert transform (``scipy.signal.hilbert``).
+2. Its analytic signal ``z(t)`` comes from the Hilbert transform (``scipy.signal.hilbert``,
+   zero-padded to at least twice the length so that the FFT's wrap-around does not carry the
+   large start of the record into its quiet end).
    For a slowly decaying mode ``z = A(t) exp(i theta(t))``: the envelope ``A`` and the
    unwrapped phase ``theta``.
 3. In consecutive, non-overlapping windows (default 20 periods) straight lines are fitted
@@ -214,7 +216,9 @@ def amplitude_curve(t, y, *, quantity: str = "acceleration", band, n_periods: fl
     f_peak = _check_mode(yy, fs, lo, hi)
     sos = signal.butter(int(order), [lo, hi], btype="bandpass", fs=fs, output="sos")
     yf = signal.sosfiltfilt(sos, yy)
-    z = signal.hilbert(yf)
+    # zero padding to >= 2n: the FFT-based transform is circular, and without padding the
+    # large start of a ring-down would leak into its quiet end
+    z = signal.hilbert(yf, N=int(2 ** math.ceil(math.log2(2 * n))))[:n]
     env = np.abs(z)
     phase = np.unwrap(np.angle(z))
     n_trim = _filter_extent(sos, fs, lo, hi)
@@ -231,46 +235,53 @@ def amplitude_curve(t, y, *, quantity: str = "acceleration", band, n_periods: fl
         raise ValueError(f"record too short: after trimming {n_trim / fs:.3g} s of filter end "
                          f"effects at each end, {max(i1 - i0, 0) / fs:.3g} s remain, less than "
                          f"one window ({nw / fs:.3g} s); give a longer record or a wider band")
-    thresh = snr_min * noise if math.isfinite(noise) else 0.0
-    n_block = max(1, int(round(fs / f_peak)))
-    rows = []
-    for s in range(i0, i1 - nw + 1, nw):
-        sl = slice(s, s + nw)
-        if np.mean(env[sl]) < thresh:
-            break
-        tc = tt[s] + 0.5 * (nw - 1) * dt
-        (ca, sa), (cp, sp) = _window_fit(tt[sl] - tc, np.log(env[sl]), phase[sl], n_block)
-        sigma, wd = -ca[1], cp[1]
-        wn = math.hypot(sigma, wd)
-        amp = math.exp(ca[0]) / wn ** k_pow
-        f_std = math.hypot(sigma * sa[1], wd * sp[1]) / wn / (2 * math.pi)
-        rows.append((amp, wn / (2 * math.pi), sigma / wn, amp * sa[0], f_std, sa[1] / wn))
+    noise = max(noise if math.isfinite(noise) else 0.0, 1e-7 * float(env.max()))
+    rows, stop = _windows(tt, env, phase, i0, i1, nw, snr_min * noise, k_pow, f_peak, (lo, hi))
     if not rows:
-        raise ValueError(f"the signal never rises above {snr_min:g} times the in-band noise "
-                         f"({noise:.3g} in units of y) after the trimmed start; nothing to "
-                         "analyse in this band")
+        raise ValueError(f"no usable window in band ({lo:g}, {hi:g}) Hz after the trimmed start: "
+                         f"{stop}; the signal does not rise above {snr_min:g} x the in-band noise "
+                         f"({noise:.3g} in units of y) or holds no decaying mode there")
     a = np.array(rows)
     warns = []
     if a.shape[0] < 3:
         warns.append(f"only {a.shape[0]} window(s) above the noise floor; the curve is too "
                      "short to show an amplitude dependence")
-    if np.any(a[:, 2] <= 0):
-        warns.append(f"{int(np.sum(a[:, 2] <= 0))} window(s) showed a growing envelope "
-                     "(negative damping) and were dropped: the band may hold beating modes or "
-                     "forcing")
-    w_ref = 2 * math.pi * float(np.median(a[:, 1]))
-    floor = thresh / w_ref ** k_pow if thresh > 0 else float("nan")
+    if stop.startswith("window"):
+        warns.append(f"the curve stopped early: {stop}")
+    w_ref = 2 * math.pi * float(a[-1, 1])
+    floor = snr_min * noise / w_ref ** k_pow
     notes = (f"band {lo:g}-{hi:g} Hz, Butterworth order {order} zero-phase (sosfiltfilt); "
              f"mode at {f_peak:.4g} Hz; trimmed {n_trim / fs:.4g} s after the envelope peak "
              f"(t = {tt[i0 - n_trim]:.4g} s) and {n_trim / fs:.4g} s before the end; "
              f"{a.shape[0]} windows of {nw / fs:.4g} s; in-band noise RMS {noise:.3g} "
-             f"({quantity}), curve stops at {snr_min:g} x noise")
+             f"({quantity}); stopped: {stop}")
     log.debug("amplitude_curve: %s", notes)
-    pos = a[:, 2] > 0
-    if not np.all(pos):
-        a = a[pos]
-        if a.shape[0] == 0:
-            raise ValueError("no window shows a decaying envelope in this band")
     return AmplitudeCurve(a[:, 0], a[:, 1], a[:, 2], amplitude_std=a[:, 3],
                           frequency_std=a[:, 4], damping_std=a[:, 5], noise_floor=floor,
                           method="hilbert", notes=notes, warnings=tuple(warns))
+
+
+def _windows(tt, env, phase, i0, i1, nw, thresh, k_pow, f_peak, band):
+    """Window estimates in time order until the signal meets the noise or stops being a mode.
+
+    Returns the rows ``(X, f, zeta, X_std, f_std, zeta_std)`` and why the walk stopped.
+    """
+    dt = tt[1] - tt[0]
+    n_block = max(1, int(round(1.0 / (f_peak * dt))))
+    rows = []
+    for s in range(i0, i1 - nw + 1, nw):
+        sl = slice(s, s + nw)
+        if np.mean(env[sl]) < thresh:
+            return rows, f"envelope below the noise threshold at t = {tt[s]:.4g} s"
+        tc = tt[s] + 0.5 * (nw - 1) * dt
+        (ca, sa), (cp, sp) = _window_fit(tt[sl] - tc, np.log(env[sl]), phase[sl], n_block)
+        sigma, wd = -ca[1], cp[1]
+        wn = math.hypot(sigma, wd)
+        f, zeta = wn / (2 * math.pi), sigma / wn
+        if not (band[0] < f < band[1]) or not (0.0 < zeta < 0.5):
+            return rows, (f"window at t = {tc:.4g} s gives f = {f:.4g} Hz, zeta = {zeta:.3g} "
+                          "(outside the band or not a decaying mode: beating, forcing or noise)")
+        amp = math.exp(ca[0]) / wn ** k_pow
+        f_std = math.hypot(sigma * sa[1], wd * sp[1]) / wn / (2 * math.pi)
+        rows.append((amp, f, zeta, amp * sa[0], f_std, sa[1] / wn))
+    return rows, "end of the record (after trimming)"
