@@ -78,6 +78,8 @@ def harmonic_stiffness(Q, params: IwanParameters):
     q = np.atleast_1d(x).ravel()
     out = np.full(q.shape, p.KT)
     pos = q > 0
+    if not np.any(pos):
+        return float(p.KT) if np.ndim(Q) == 0 else out.reshape(np.shape(x))
     qq = q[pos][:, None]
     # kink of the branch where (Q - u)/2 = phi_max, i.e. cos(theta_k) = 1 - 2 phi_max / Q
     ck = np.clip(1.0 - 2.0 * p.phi_max / qq, -1.0, 1.0)

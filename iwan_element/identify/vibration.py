@@ -10,8 +10,10 @@ free decay) into an :class:`~iwan_element.identify.curves.AmplitudeCurve`:
    large start of the record into its quiet end).
    For a slowly decaying mode ``z = A(t) exp(i theta(t))``: the envelope ``A`` and the
    unwrapped phase ``theta``.
-3. In consecutive, non-overlapping windows (default 20 periods) straight lines are fitted
-   to ``ln A`` and ``theta``: their slopes are ``-sigma`` (decay rate) and ``w_d`` (damped
+3. In consecutive, non-overlapping windows (default 20 periods, shortened to at least three
+   periods where the envelope would fall by more than ``e**0.5`` within one, so that the
+   amplitude at the window centre stands for the window) straight lines are fitted to
+   ``ln A`` and ``theta``: their slopes are ``-sigma`` (decay rate) and ``w_d`` (damped
    angular frequency). Then ``w_n = sqrt(sigma**2 + w_d**2)`` (the undamped natural
    frequency, reported as ``frequency``), ``zeta = sigma / w_n`` and the amplitude at the
    window centre is ``A / w_n**k`` (k = 2 for acceleration, 1 for velocity, 0 for
@@ -253,7 +255,7 @@ def amplitude_curve(t, y, *, quantity: str = "acceleration", band, n_periods: fl
     notes = (f"band {lo:g}-{hi:g} Hz, Butterworth order {order} zero-phase (sosfiltfilt); "
              f"mode at {f_peak:.4g} Hz; trimmed {n_trim / fs:.4g} s after the envelope peak "
              f"(t = {tt[i0 - n_trim]:.4g} s) and {n_trim / fs:.4g} s before the end; "
-             f"{a.shape[0]} windows of {nw / fs:.4g} s; in-band noise RMS {noise:.3g} "
+             f"{a.shape[0]} windows of up to {nw / fs:.4g} s; in-band noise RMS {noise:.3g} "
              f"({quantity}); stopped: {stop}")
     log.debug("amplitude_curve: %s", notes)
     return AmplitudeCurve(a[:, 0], a[:, 1], a[:, 2], amplitude_std=a[:, 3],
@@ -269,13 +271,20 @@ def _windows(tt, env, phase, i0, i1, nw, thresh, k_pow, f_peak, band):
     dt = tt[1] - tt[0]
     n_block = max(1, int(round(1.0 / (f_peak * dt))))
     rows = []
-    for s in range(i0, i1 - nw + 1, nw):
-        sl = slice(s, s + nw)
-        if np.mean(env[sl]) < thresh:
+    s = i0
+    while s + nw <= i1:
+        n_w = nw
+        if np.mean(env[s:s + n_w]) < thresh:
             return rows, f"envelope below the noise threshold at t = {tt[s]:.4g} s"
-        tc = tt[s] + 0.5 * (nw - 1) * dt
-        (ca, sa), (cp, sp) = _window_fit(tt[sl] - tc, np.log(env[sl]), phase[sl], n_block)
-        sigma, wd = -ca[1], cp[1]
+        for _ in range(2):       # shorten the window where the envelope falls by > e**0.5
+            sl = slice(s, s + n_w)
+            tc = tt[s] + 0.5 * (n_w - 1) * dt
+            (ca, sa), (cp, sp) = _window_fit(tt[sl] - tc, np.log(env[sl]), phase[sl], n_block)
+            sigma, wd = -ca[1], cp[1]
+            n_short = max(int(0.5 / (abs(sigma) * dt)), 3 * n_block, 16)
+            if n_short >= n_w:
+                break
+            n_w = n_short
         wn = math.hypot(sigma, wd)
         f, zeta = wn / (2 * math.pi), sigma / wn
         if not (band[0] < f < band[1]) or not (0.0 < zeta < 0.5):
@@ -284,4 +293,5 @@ def _windows(tt, env, phase, i0, i1, nw, thresh, k_pow, f_peak, band):
         amp = math.exp(ca[0]) / wn ** k_pow
         f_std = math.hypot(sigma * sa[1], wd * sp[1]) / wn / (2 * math.pi)
         rows.append((amp, f, zeta, amp * sa[0], f_std, sa[1] / wn))
+        s += n_w
     return rows, "end of the record (after trimming)"
