@@ -21,14 +21,20 @@ free decay) into an :class:`~iwan_element.identify.curves.AmplitudeCurve`:
 4. Per-point uncertainty: the regression standard errors, computed from the residuals
    averaged over blocks of one period (the block means drop the deterministic ripple that
    harmonics of a nonlinear response leave in envelope and phase, and are nearly
-   independent samples of the noise).
+   independent samples of the noise); when the filter's noise bandwidth ``B`` is below the
+   mode frequency the blocks are ``1 / B`` long, the noise's correlation time.
 5. End effects: the filter's impulse response (``sosfilt`` of a unit impulse) is taken to
    last until it stays below 1e-3 of its peak; that time is cut after the envelope's maximum
    (the impact, or the release at the start of the record) and before the end of the record.
 6. Noise floor: the noise spectral density is the median of the Welch spectrum outside the
    band (``[f_lo/2, f_lo]`` and ``[f_hi, 2 f_hi]``, after the impact), times the filter's
-   noise bandwidth gives the in-band noise RMS ``s_n``; the curve stops where the envelope
-   falls below ``snr_min * s_n``. That amplitude (as displacement) is ``noise_floor``.
+   noise bandwidth gives the in-band noise RMS ``s_n``; when the record has at least 64
+   samples before its largest sample (a pre-trigger), their RMS as white noise through the
+   same bandwidth is a second estimate and the smaller one is used (the out-of-band level
+   also holds the tails of the modes, so it can only overstate the noise); the curve stops where the envelope
+   falls below ``snr_min * s_n``, or at the first window whose damping ratio has a relative
+   standard uncertainty (step 4) above ``max_damping_std``. The larger of the two amplitudes
+   (as displacement) is ``noise_floor``.
 
 The band must hold one clear mode: a Welch spectrum peak inside it, not at its edges, at
 least 10 times the band's median level, with no second peak above a tenth of it.
@@ -157,7 +163,8 @@ def _window_fit(tw, lnA, ph, n_block):
 
 
 def amplitude_curve(t, y, *, quantity: str = "acceleration", band, n_periods: float = 20.0,
-                    window: float | None = None, order: int = 4, snr_min: float = 10.0):
+                    window: float | None = None, order: int = 4, snr_min: float = 10.0,
+                    max_damping_std: float = 0.01):
     """Frequency and damping ratio against amplitude from a free-decay record of one mode.
 
     Band-pass (zero-phase Butterworth, ``scipy.signal.sosfiltfilt``) and Hilbert transform
@@ -184,6 +191,9 @@ def amplitude_curve(t, y, *, quantity: str = "acceleration", band, n_periods: fl
     snr_min : float, keyword-only
         The curve stops where the envelope is below ``snr_min`` times the in-band noise RMS
         (default 10, range [2, 1e6]).
+    max_damping_std : float, keyword-only
+        The curve also stops at the first window whose damping ratio has a relative standard
+        uncertainty above this (default 0.01, range (0, 1]).
 
     Returns
     -------
@@ -214,6 +224,8 @@ def amplitude_curve(t, y, *, quantity: str = "acceleration", band, n_periods: fl
         raise ValueError(f"order must be an integer in [1, 10], got {order!r}")
     n_periods = check_scalar("n_periods", n_periods, low=3.0, high=1000.0)
     snr_min = check_scalar("snr_min", snr_min, low=2.0, high=1e6)
+    max_damping_std = check_scalar("max_damping_std", max_damping_std, low=0.0, high=1.0,
+                                   low_open=True)
     yy = yy - yy.mean()
     f_peak = _check_mode(yy, fs, lo, hi)
     sos = signal.butter(int(order), [lo, hi], btype="bandpass", fs=fs, output="sos")
@@ -227,6 +239,10 @@ def amplitude_curve(t, y, *, quantity: str = "acceleration", band, n_periods: fl
     i0 = int(np.argmax(env)) + n_trim
     i1 = n - n_trim
     noise, bandwidth = _noise_rms(yy[min(i0, n - 1):], fs, sos, lo, hi)
+    pre = yy[:max(0, int(np.argmax(np.abs(yy))) - 8)]      # pre-trigger record, if any
+    if pre.size >= 64 and math.isfinite(bandwidth):
+        quiet = float(np.std(pre)) * math.sqrt(2.0 * bandwidth / fs)
+        noise = quiet if not math.isfinite(noise) else min(noise, quiet)
     if window is not None:
         window = check_scalar("window", window, low=0.0, low_open=True)
         nw = int(round(window * fs))
@@ -238,7 +254,9 @@ def amplitude_curve(t, y, *, quantity: str = "acceleration", band, n_periods: fl
                          f"effects at each end, {max(i1 - i0, 0) / fs:.3g} s remain, less than "
                          f"one window ({nw / fs:.3g} s); give a longer record or a wider band")
     noise = max(noise if math.isfinite(noise) else 0.0, 1e-7 * float(env.max()))
-    rows, stop = _windows(tt, env, phase, i0, i1, nw, snr_min * noise, k_pow, f_peak, (lo, hi))
+    bw = bandwidth if math.isfinite(bandwidth) else hi - lo
+    rows, stop, x_stop = _windows(tt, env, phase, (i0, i1, nw), (noise, snr_min, bw), k_pow,
+                                  f_peak, (lo, hi), max_damping_std)
     if not rows:
         raise ValueError(f"no usable window in band ({lo:g}, {hi:g}) Hz after the trimmed start: "
                          f"{stop}; the signal does not rise above {snr_min:g} x the in-band noise "
@@ -251,7 +269,7 @@ def amplitude_curve(t, y, *, quantity: str = "acceleration", band, n_periods: fl
     if stop.startswith("window"):
         warns.append(f"the curve stopped early: {stop}")
     w_ref = 2 * math.pi * float(a[-1, 1])
-    floor = snr_min * noise / w_ref ** k_pow
+    floor = max(snr_min * noise / w_ref ** k_pow, x_stop)
     notes = (f"band {lo:g}-{hi:g} Hz, Butterworth order {order} zero-phase (sosfiltfilt); "
              f"mode at {f_peak:.4g} Hz; trimmed {n_trim / fs:.4g} s after the envelope peak "
              f"(t = {tt[i0 - n_trim]:.4g} s) and {n_trim / fs:.4g} s before the end; "
@@ -263,19 +281,24 @@ def amplitude_curve(t, y, *, quantity: str = "acceleration", band, n_periods: fl
                           method="hilbert", notes=notes, warnings=tuple(warns))
 
 
-def _windows(tt, env, phase, i0, i1, nw, thresh, k_pow, f_peak, band):
+def _windows(tt, env, phase, span, noise_spec, k_pow, f_peak, band, max_zstd):
     """Window estimates in time order until the signal meets the noise or stops being a mode.
 
-    Returns the rows ``(X, f, zeta, X_std, f_std, zeta_std)`` and why the walk stopped.
+    Returns the rows ``(X, f, zeta, X_std, f_std, zeta_std)``, why the walk stopped and the
+    amplitude of the window that stopped it (0 if none).
     """
+    i0, i1, nw = span
+    noise, snr_min, bw = noise_spec
+    thresh = snr_min * noise
     dt = tt[1] - tt[0]
-    n_block = max(1, int(round(1.0 / (f_peak * dt))))
+    # blocks of one period, or of the noise correlation time 1/B if longer
+    n_block = max(1, int(round(1.0 / (f_peak * dt))), int(round(1.0 / (bw * dt))))
     rows = []
     s = i0
     while s + nw <= i1:
         n_w = nw
         if np.mean(env[s:s + n_w]) < thresh:
-            return rows, f"envelope below the noise threshold at t = {tt[s]:.4g} s"
+            return rows, f"envelope below the noise threshold at t = {tt[s]:.4g} s", 0.0
         for _ in range(2):       # shorten the window where the envelope falls by > e**0.5
             sl = slice(s, s + n_w)
             tc = tt[s] + 0.5 * (n_w - 1) * dt
@@ -289,9 +312,13 @@ def _windows(tt, env, phase, i0, i1, nw, thresh, k_pow, f_peak, band):
         f, zeta = wn / (2 * math.pi), sigma / wn
         if not (band[0] < f < band[1]) or not (0.0 < zeta < 0.5):
             return rows, (f"window at t = {tc:.4g} s gives f = {f:.4g} Hz, zeta = {zeta:.3g} "
-                          "(outside the band or not a decaying mode: beating, forcing or noise)")
+                          "(outside the band or not a decaying mode: beating, forcing or "
+                          "noise)"), 0.0
         amp = math.exp(ca[0]) / wn ** k_pow
         f_std = math.hypot(sigma * sa[1], wd * sp[1]) / wn / (2 * math.pi)
+        if sa[1] > max_zstd * sigma:
+            return rows, (f"damping ratio known to worse than {100 * max_zstd:g} % at "
+                          f"t = {tc:.4g} s (noise)"), amp
         rows.append((amp, f, zeta, amp * sa[0], f_std, sa[1] / wn))
         s += n_w
-    return rows, "end of the record (after trimming)"
+    return rows, "end of the record (after trimming)", 0.0
