@@ -243,6 +243,7 @@ class ModalIwanFit:
         if ax is None:
             import matplotlib.pyplot as plt
             _, ax = plt.subplots(2, 1, sharex=True, figsize=(6, 6))
+        from matplotlib.ticker import NullFormatter
         d = self.data
         X = np.geomspace(d["amplitude"].min(), d["amplitude"].max(), 200)
         f, z, fb, zb = self.predict(X, band=band)
@@ -255,6 +256,7 @@ class ModalIwanFit:
             artists.append(a.fill_between(X, b[0], b[1], color="r", alpha=0.25,
                                           label=f"{100 * band:.0f} % band"))
             a.set_xscale("log")
+            a.xaxis.set_minor_formatter(NullFormatter())
         ax[0].set_ylabel("frequency [Hz]")
         ax[1].set_ylabel("damping ratio [-]")
         ax[1].set_xlabel("amplitude at the sensor [m]")

@@ -67,7 +67,7 @@ def _solve(regime, x0, lb, ub, X, f, z, sf, sz, x_ref, stiffness, floor):
         return np.concatenate([(fm - f) / sf, (zm - z) / sz])
     x0 = np.clip(x0, lb + 1e-9 * (ub - lb), ub - 1e-9 * (ub - lb))
     return optimize.least_squares(resid, x0, bounds=(lb, ub), x_scale="jac", method="trf",
-                                  xtol=1e-12, ftol=1e-12, gtol=1e-12, max_nfev=3000)
+                                  xtol=1e-10, ftol=1e-12, gtol=1e-12, max_nfev=400)
 
 
 def _fit_micro(X, f, z, sf, sz, x_ref, stiffness, floor):
@@ -91,7 +91,7 @@ def _fit_full(micro, X, f, z, sf, sz, x_ref, stiffness, floor):
     ub = np.array([2.0 * f.max(), 0.999, 1.0, 1.0 - 1e-9, math.log(1e3 * xmax), 100.0])
     best = None
     for ratio in (0.3, 1.0, 3.0):
-        for beta in (0.1, 1.0):
+        for beta in (0.5,):
             phimax = ratio * xmax
             kappa = delta * (chi + 2.0) * (1.0 + beta) * (phimax / x_ref) ** (chi + 1.0)
             if not 0.0 < kappa < 1.0:

@@ -33,8 +33,12 @@ free decay) into an :class:`~iwan_element.identify.curves.AmplitudeCurve`:
    same bandwidth is a second estimate and the smaller one is used (the out-of-band level
    also holds the tails of the modes, so it can only overstate the noise); the curve stops where the envelope
    falls below ``snr_min * s_n``, or at the first window whose damping ratio has a relative
-   standard uncertainty (step 4) above ``max_damping_std``. The larger of the two amplitudes
-   (as displacement) is ``noise_floor``.
+   standard uncertainty (step 4) above ``max_damping_std`` where the noise could be the
+   cause (the decay-rate error that noise ``s_n / A`` on ``B T`` independent samples gives,
+   ``sqrt(12) (s_n / A) / (T sqrt(B T))``, is above a third of that limit; a scatter that
+   the noise cannot explain, such as the change of damping within a window at large
+   amplitude, does not stop the curve). The larger of the two amplitudes (as displacement)
+   is ``noise_floor``.
 
 The band must hold one clear mode: a Welch spectrum peak inside it, not at its edges, at
 least 10 times the band's median level, with no second peak above a tenth of it.
@@ -316,7 +320,9 @@ def _windows(tt, env, phase, span, noise_spec, k_pow, f_peak, band, max_zstd):
                           "noise)"), 0.0
         amp = math.exp(ca[0]) / wn ** k_pow
         f_std = math.hypot(sigma * sa[1], wd * sp[1]) / wn / (2 * math.pi)
-        if sa[1] > max_zstd * sigma:
+        T = n_w * dt           # decay-rate error that the noise alone would cause
+        sd_noise = math.sqrt(12.0) * noise / math.exp(ca[0]) / (T * math.sqrt(max(bw * T, 3.0)))
+        if sa[1] > max_zstd * sigma and 3.0 * sd_noise > max_zstd * sigma:
             return rows, (f"damping ratio known to worse than {100 * max_zstd:g} % at "
                           f"t = {tc:.4g} s (noise)"), amp
         rows.append((amp, f, zeta, amp * sa[0], f_std, sa[1] / wn))
