@@ -89,7 +89,7 @@ def test_harmonic_stiffness_against_quadrature_and_gamma_form(p):
 @pytest.fixture(scope="module")
 def ringdown():
     p, k_inf = _modal_joint()
-    t = np.arange(0.0, 24.0, 1 / 400.0)
+    t = np.arange(0.0, 16.0, 1 / 400.0)
     q, v, a = modal_ringdown(t, p, K_inf=k_inf, q0=0.6e-3, zeta0=2e-3)
     return p, k_inf, t, q, v, a
 

@@ -67,7 +67,7 @@ def _solve(regime, x0, lb, ub, X, f, z, sf, sz, x_ref, stiffness, floor):
         return np.concatenate([(fm - f) / sf, (zm - z) / sz])
     x0 = np.clip(x0, lb + 1e-9 * (ub - lb), ub - 1e-9 * (ub - lb))
     return optimize.least_squares(resid, x0, bounds=(lb, ub), x_scale="jac", method="trf",
-                                  xtol=1e-10, ftol=1e-12, gtol=1e-12, max_nfev=400)
+                                  xtol=1e-10, ftol=1e-12, gtol=1e-12, max_nfev=200)
 
 
 def _fit_micro(X, f, z, sf, sz, x_ref, stiffness, floor):
