@@ -30,9 +30,9 @@ import math
 import numpy as np
 from scipy import optimize, stats
 
-from ..core._validation import check_scalar, finite_array
+from ..core._validation import check_scalar
 from .curves import AmplitudeCurve
-from ._modal_result import FULL, MICRO, ModalIwanFit, model_curve
+from ._modal_result import ModalIwanFit, model_curve
 
 __all__ = ["fit_modal_iwan", "ModalIwanFit"]
 
