@@ -29,6 +29,10 @@ from .core.protocol import JointElement, check_element
 from .identify.curves import AmplitudeCurve
 from .identify.noise import NoiseEstimate, estimate_noise
 from .identify.model_fit import ModelFit, fit_force_model
+from .core.modal import harmonic_stiffness, modal_iwan_curve, modal_ringdown
+from .identify.vibration import amplitude_curve
+from .identify.modal_fit import ModalIwanFit, fit_modal_iwan
+from .identify.stepped_sine import stepped_sine_curve
 from .identify.testdata import Cycle, TestData, find_reversals, load_test, simulate_test, split_cycles
 
 __version__ = "0.1.0"
@@ -71,6 +75,13 @@ __all__ = [
     "NoiseEstimate",
     "fit_force_model",
     "ModelFit",
+    "modal_iwan_curve",
+    "harmonic_stiffness",
+    "modal_ringdown",
+    "amplitude_curve",
+    "fit_modal_iwan",
+    "stepped_sine_curve",
+    "ModalIwanFit",
     "fit_loops",
     "fit_dissipation",
     "FitResult",

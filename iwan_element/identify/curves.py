@@ -43,7 +43,9 @@ class AmplitudeCurve:
     amplitude : array_like, shape (n,)
         Displacement amplitude at the sensor point [m] (> 0).
     frequency : array_like, shape (n,)
-        Damped natural frequency [Hz] (> 0).
+        Natural frequency [Hz] (> 0). :func:`~iwan_element.amplitude_curve` and
+        :func:`~iwan_element.stepped_sine_curve` give the undamped one (``w_n / 2 pi``); at
+        the damping of bolted joints the damped one differs by ``zeta**2 / 2``.
     damping_ratio : array_like, shape (n,)
         Equivalent viscous damping ratio [-] (finite; a value above 1 is refused as a likely
         percentage).
