@@ -26,6 +26,8 @@ from .core.joint import IwanJoint
 from .core.parameters import IwanParameters
 from .core.protocol import JointElement, check_element
 from .identify.curves import AmplitudeCurve
+from .ensemble import (EnsembleResult, ParameterUncertainty, PredictionBands, SingleModeSystem,
+                       parameter_grid, parameter_samples, propagate_uncertainty, run_ensemble)
 from .identify.testdata import Cycle, TestData, find_reversals, load_test, simulate_test, split_cycles
 
 __version__ = "0.1.0"
@@ -73,4 +75,12 @@ __all__ = [
     "VibrationDiagnosis",
     "simulate_element_test",
     "CANDIDATES",
+    "run_ensemble",
+    "EnsembleResult",
+    "ParameterUncertainty",
+    "PredictionBands",
+    "propagate_uncertainty",
+    "SingleModeSystem",
+    "parameter_grid",
+    "parameter_samples",
 ]
