@@ -28,6 +28,9 @@ from .core.protocol import JointElement, check_element
 from .identify.curves import AmplitudeCurve
 from .ensemble import (EnsembleResult, ParameterUncertainty, PredictionBands, SingleModeSystem,
                        parameter_grid, parameter_samples, propagate_uncertainty, run_ensemble)
+from .core.modal import harmonic_stiffness, modal_iwan_curve, modal_ringdown
+from .identify.vibration import amplitude_curve
+from .identify.modal_fit import ModalIwanFit, fit_modal_iwan
 from .identify.testdata import Cycle, TestData, find_reversals, load_test, simulate_test, split_cycles
 
 __version__ = "0.1.0"
@@ -65,6 +68,12 @@ __all__ = [
     "TestData",
     "Cycle",
     "AmplitudeCurve",
+    "modal_iwan_curve",
+    "harmonic_stiffness",
+    "modal_ringdown",
+    "amplitude_curve",
+    "fit_modal_iwan",
+    "ModalIwanFit",
     "fit_loops",
     "fit_dissipation",
     "FitResult",

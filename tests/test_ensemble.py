@@ -14,7 +14,13 @@ import pytest
 import iwan_element as ie
 from iwan_element.ensemble import (ParameterUncertainty, SingleModeSystem, modal_curve,
                                    parameter_grid, parameter_samples, peak_response,
-                                   propagate_uncertainty, ring_down, run_ensemble)
+                                   propagate_uncertainty, run_ensemble)
+from iwan_element.ensemble.oscillator import _integrate
+
+
+def ring_down(joint, system, *, x0, cycles, steps_per_period):
+    h = 1.0 / (system.linear_frequency(joint) * steps_per_period)
+    return _integrate(joint, system, h=h, n=cycles * steps_per_period, load=lambda t: 0.0, x0=x0)
 
 JOINT = ie.IwanParameters(Fs=9e3, KT=5e7, chi=-0.5, beta=0.5)
 SYSTEM = SingleModeSystem(mass=10.0, stiffness=2.5e7, zeta0=1e-3)
@@ -216,6 +222,15 @@ def test_closed_form_curve_matches_a_transient_ring_down():
     assert len(bias) >= 6 and np.all(np.diff(bias) < 0) and bias[-1] < 0.035
 
 
+def test_transient_integrator_matches_an_independent_one():
+    """Newmark + Newton (this module) against central differences (iwan_element.modal_ringdown)."""
+    t, x = ring_down(JOINT, SYSTEM, x0=1e-4, cycles=12, steps_per_period=400)
+    q, _, _ = ie.modal_ringdown(t, JOINT, K_inf=SYSTEM.stiffness, q0=1e-4, zeta0=SYSTEM.zeta0,
+                                mass=SYSTEM.mass, max_phase_step=0.005)
+    assert x.min() < -0.3e-4                   # it swung: a real nonlinear decay
+    np.testing.assert_allclose(x, q, atol=2e-3 * 1e-4)
+
+
 def test_peak_response_matches_the_linear_solution_at_small_force():
     from scipy.integrate import solve_ivp
     m, k, KT = SYSTEM.mass, SYSTEM.stiffness, JOINT.KT
@@ -362,3 +377,29 @@ def test_parameter_grid_and_samples():
         parameter_samples(3, mu=(0.5, 0.1))
     with pytest.raises(ValueError, match="method"):
         parameter_samples(3, method="grid", mu=(0.1, 0.5))
+
+
+def test_modal_fit_is_propagated_in_its_own_coordinates():
+    p = ie.IwanParameters(Fs=0.6, KT=1.2e5, chi=-0.4, beta=0.8)      # unit modal mass
+    X = np.geomspace(0.05, 3, 14) * p.phi_max
+    f, z = ie.modal_iwan_curve(X, p, K_inf=2.8e5, zeta0=0.002, stiffness="harmonic",
+                               floor="dashpot")
+    rng = np.random.default_rng(0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        fit = ie.fit_modal_iwan(X, f * (1 + 2e-5 * rng.normal(size=14)),
+                                z * (1 + 2e-3 * rng.normal(size=14)))
+    assert fit.regime == "macroslip"
+    Xb = X[::3]
+    bands = propagate_uncertainty(fit, amplitudes=Xb, n_samples=200, seed=2, executor="serial",
+                                  force=5.0, cycles=4, level=0.9)
+    assert bands.system is None and "modal fit" in bands.report()
+    f_fit, z_fit, fb, zb = fit.predict(Xb, band=0.9)
+    np.testing.assert_allclose(bands.nominal["frequency"], f_fit, rtol=1e-12)
+    np.testing.assert_allclose(bands.nominal["damping"], z_fit, rtol=1e-12)
+    lo, _, hi = bands.band("damping")
+    assert np.all(lo < z_fit) and np.all(z_fit < hi)
+    # sampling and the fit's own delta-method band agree to first order for the damping
+    ratio = (zb[1] - zb[0]) / (hi - lo)
+    assert np.all((ratio > 0.8) & (ratio < 1.25)), ratio
+    assert bands.peak.shape == (200,) and np.all(bands.peak > 0)

@@ -14,7 +14,7 @@ from .oscillator import SingleModeSystem, modal_curve, peak_response
 from .runner import EnsembleResult, run_ensemble
 from .uncertainty import ParameterUncertainty
 
-__all__ = ["PredictionBands", "propagate_uncertainty", "response_task"]
+__all__ = ["PredictionBands", "propagate_uncertainty", "response_task", "modal_fit_task"]
 
 
 def response_task(params: dict, rng, *, system: SingleModeSystem, amplitudes, force=None,
@@ -26,6 +26,25 @@ def response_task(params: dict, rng, *, system: SingleModeSystem, amplitudes, fo
     f, z = modal_curve(p, system, amplitudes)
     out = {"frequency": f, "damping": z}
     if force is not None:
+        out["peak"] = peak_response(p, system, force=force, cycles=cycles,
+                                    steps_per_period=steps_per_period)
+    return out
+
+
+def modal_fit_task(params: dict, rng, *, names, regime: str, conventions: dict, amplitudes,
+                   force=None, cycles: int = 30, steps_per_period: int = 64) -> dict:
+    """One ensemble task for a modal Iwan fit (:func:`iwan_element.fit_modal_iwan`): its model
+    curve at ``amplitudes`` for one sampled fit vector and, in the macroslip regime with
+    ``force`` [N per unit modal mass], the peak transient displacement [m] of the fitted
+    single-mode oscillator (fixed dashpot ``2 zeta0 w0``)."""
+    from ..identify._modal_result import full_parameters, model_curve
+    theta = np.array([params[n] for n in names], dtype=float)
+    f, z = model_curve(theta, np.asarray(amplitudes, float), regime, conventions["x_ref"],
+                       conventions["stiffness"], conventions["floor"])
+    out = {"frequency": np.asarray(f, float), "damping": np.asarray(z, float)}
+    if force is not None:
+        p, k_inf = full_parameters(theta)
+        system = SingleModeSystem(mass=1.0, stiffness=max(k_inf, 0.0), zeta0=theta[1])
         out["peak"] = peak_response(p, system, force=force, cycles=cycles,
                                     steps_per_period=steps_per_period)
     return out
@@ -49,8 +68,10 @@ class PredictionBands:
         Central probability of the bands (0.9: 5 % .. 95 % quantiles).
     force : float or None
         Forcing amplitude of the transient run [N].
-    system : SingleModeSystem
-    uncertainty : ParameterUncertainty
+    system : SingleModeSystem or None
+        ``None`` for a modal fit (the fit carries its own single-mode structure).
+    uncertainty : ParameterUncertainty or ModalIwanFit
+        The sampled distribution.
     ensemble : EnsembleResult
         The runs, with the sampled parameters (``to_csv`` writes them).
     warnings : tuple of str
@@ -63,10 +84,15 @@ class PredictionBands:
     nominal: dict
     level: float
     force: float | None
-    system: SingleModeSystem
-    uncertainty: ParameterUncertainty
+    system: SingleModeSystem | None
+    uncertainty: object
     ensemble: EnsembleResult
     warnings: tuple = field(default_factory=tuple)
+
+    @property
+    def _source(self) -> str:
+        return getattr(self.uncertainty, "source", None) or \
+            f"modal fit ({getattr(self.uncertainty, 'regime', '?')})"
 
     def band(self, name: str):
         """``(low, median, high)`` quantiles of ``"frequency"``, ``"damping"`` or ``"peak"``."""
@@ -79,7 +105,7 @@ class PredictionBands:
         return tuple(np.quantile(data, q, axis=0))
 
     def report(self) -> str:
-        lines = [f"Prediction bands ({100 * self.level:.0f} % central) from {self.uncertainty.source}: "
+        lines = [f"Prediction bands ({100 * self.level:.0f} % central) from {self._source}: "
                  f"{self.frequency.shape[0]} samples on {self.ensemble.executor}, "
                  f"{len(self.ensemble.errors)} failed",
                  f"  {'X [m]':>10} {'f nominal':>11} {'f low':>11} {'f high':>11} "
@@ -104,9 +130,11 @@ class PredictionBands:
         return _json({"amplitudes": self.amplitudes, "level": self.level, "force": self.force,
                       "samples": int(self.frequency.shape[0]),
                       "failed": len(self.ensemble.errors), "bands": q,
-                      "system": {"mass": self.system.mass, "stiffness": self.system.stiffness,
-                                 "zeta0": self.system.zeta0},
-                      "uncertainty": self.uncertainty.to_dict(), "warnings": list(self.warnings)})
+                      "system": None if self.system is None else
+                      {"mass": self.system.mass, "stiffness": self.system.stiffness,
+                       "zeta0": self.system.zeta0},
+                      "source": self._source, "uncertainty": self.uncertainty.to_dict(),
+                      "warnings": list(self.warnings)})
 
     def plot(self, ax=None, *, color="C0", label=None):
         """Bands (shaded) with the median (dashed) and the nominal curve (solid).
@@ -154,19 +182,22 @@ class PredictionBands:
         return artists
 
 
-def propagate_uncertainty(source, *, system: SingleModeSystem, amplitudes, n_samples: int = 200,
-                          force: float | None = None, cycles: int = 30,
+def propagate_uncertainty(source, *, system: SingleModeSystem | None = None, amplitudes,
+                          n_samples: int = 200, force: float | None = None, cycles: int = 30,
                           steps_per_period: int = 64, level: float = 0.9, seed=None,
                           executor=None, progress: bool = False) -> PredictionBands:
     """Sample the parameters of a fit and return prediction bands of the response.
 
     Parameters
     ----------
-    source : FitResult or ParameterUncertainty
-        A loop or dissipation fit (see :meth:`ParameterUncertainty.from_fit`) or a prepared
-        distribution (for instance :meth:`ParameterUncertainty.from_mean_cov`).
+    source : FitResult, ModalIwanFit or ParameterUncertainty
+        A loop or dissipation fit (see :meth:`ParameterUncertainty.from_fit`), a modal Iwan
+        fit (:func:`iwan_element.fit_modal_iwan`, sampled with its own
+        ``sample_parameters`` in its fit coordinates), or a prepared distribution (for
+        instance :meth:`ParameterUncertainty.from_mean_cov`).
     system : SingleModeSystem, keyword-only
-        The structure the joint sits in.
+        The structure the joint sits in (not used with a modal fit, which carries its own
+        single-mode structure: unit modal mass, sensor coordinate).
     amplitudes : array_like, keyword-only
         Displacement amplitudes [m] of the f(X), zeta(X) bands, ``> 0``.
     n_samples : int, keyword-only
@@ -187,9 +218,6 @@ def propagate_uncertainty(source, *, system: SingleModeSystem, amplitudes, n_sam
     -------
     PredictionBands
     """
-    unc = source if isinstance(source, ParameterUncertainty) else ParameterUncertainty.from_fit(source)
-    if not isinstance(system, SingleModeSystem):
-        raise ValueError(f"system must be a SingleModeSystem, got {type(system).__name__}")
     X = finite_array("amplitudes", amplitudes)
     if np.any(X <= 0):
         raise ValueError("amplitudes must be > 0 [m]")
@@ -199,20 +227,30 @@ def propagate_uncertainty(source, *, system: SingleModeSystem, amplitudes, n_sam
         force = check_scalar("force", force, low=0.0, low_open=True)
     if seed is None:
         seed = int(np.random.SeedSequence().entropy)
-    sets, rejected = unc.sample(n_samples, rng=np.random.default_rng(seed))
-    warns = list(unc.warnings)
-    if rejected > 0.01:
-        warns.append(f"{100 * rejected:.1f} % of the draws fell outside the model's range "
-                     "(beta < 0 or chi <= -1) and were rejected: the bands are those of the "
-                     "truncated distribution")
-    if X.max() > unc.valid_amplitude:
-        warns.append(f"amplitudes above {unc.valid_amplitude:.4g} m are beyond the tested range: "
-                     "the fit cannot constrain the joint there (Fs, beta not identified)")
-    kwargs = dict(system=system, amplitudes=X, force=force, cycles=cycles,
-                  steps_per_period=steps_per_period)
-    task = functools.partial(response_task, **kwargs)
-    nominal = response_task({k: getattr(unc.nominal, k) for k in ("Fs", "KT", "chi", "beta")},
-                            None, **kwargs)
+    rng = np.random.default_rng(seed)
+    if hasattr(source, "sample_parameters") and hasattr(source, "regime"):
+        task, nominal_set, sets, unc, warns = _modal_fit_setup(source, X, force, cycles,
+                                                               steps_per_period, n_samples, rng)
+        system = None
+    else:
+        unc = source if isinstance(source, ParameterUncertainty) else \
+            ParameterUncertainty.from_fit(source)
+        if not isinstance(system, SingleModeSystem):
+            raise ValueError(f"system must be a SingleModeSystem, got {type(system).__name__}")
+        sets, rejected = unc.sample(n_samples, rng=rng)
+        warns = list(unc.warnings)
+        if rejected > 0.01:
+            warns.append(f"{100 * rejected:.1f} % of the draws fell outside the model's range "
+                         "(beta < 0 or chi <= -1) and were rejected: the bands are those of the "
+                         "truncated distribution")
+        if X.max() > unc.valid_amplitude:
+            warns.append(f"amplitudes above {unc.valid_amplitude:.4g} m are beyond the tested "
+                         "range: the fit cannot constrain the joint there (Fs, beta not "
+                         "identified)")
+        task = functools.partial(response_task, system=system, amplitudes=X, force=force,
+                                 cycles=cycles, steps_per_period=steps_per_period)
+        nominal_set = {k: getattr(unc.nominal, k) for k in ("Fs", "KT", "chi", "beta")}
+    nominal = task(nominal_set, None)
     ens = run_ensemble(task, sets, executor=executor, seed=seed, progress=progress)
     warns += list(ens.warnings)
     ok = ens.ok
@@ -224,3 +262,21 @@ def propagate_uncertainty(source, *, system: SingleModeSystem, amplitudes, n_sam
                            damping=ens.column("damping")[ok], peak=peak, nominal=nominal,
                            level=level, force=force, system=system, uncertainty=unc,
                            ensemble=ens, warnings=tuple(warns))
+
+
+def _modal_fit_setup(fit, X, force, cycles, steps_per_period, n_samples, rng):
+    """Task, nominal set, samples and warnings for a modal Iwan fit."""
+    warns = [f"the fit reports: {w}" for w in fit.warnings]
+    if force is not None and fit.regime != "macroslip":
+        raise ValueError(f"a peak response needs the whole joint, which a {fit.regime} modal fit "
+                         "does not determine; call without force")
+    task = functools.partial(modal_fit_task, names=tuple(fit.names), regime=fit.regime,
+                             conventions=dict(fit.conventions), amplitudes=X, force=force,
+                             cycles=cycles, steps_per_period=steps_per_period)
+    span = fit.data["amplitude"]
+    if X.max() > 1.001 * np.max(span) or X.min() < 0.999 * np.min(span):
+        warns.append(f"amplitudes outside the fitted data ({np.min(span):.3g} .. "
+                     f"{np.max(span):.3g} m) are an extrapolation of the modal model")
+    sets = fit.sample_parameters(n_samples, rng=rng)
+    sets = [{k: float(v) for k, v in s.items()} for s in sets]
+    return task, dict(zip(fit.names, map(float, fit.values))), sets, fit, warns

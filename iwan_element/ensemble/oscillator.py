@@ -7,7 +7,8 @@ joint and a viscous dashpot (REFERENCE.md sec. 7, modal Iwan, in physical units)
     w0^2 = (K_inf + KT) / m.
 
 At displacement amplitude ``X`` (single-mode equivalent linearisation, REFERENCE.md sec. 7,
-secant stiffness paper eq. 24, joint dissipation paper eq. 17)::
+secant stiffness paper eq. 24, joint dissipation paper eq. 17; evaluated by
+:func:`iwan_element.modal_iwan_curve` with ``floor="dashpot"``)::
 
     w(X)^2  = (K_inf + K_sec(X)) / m
     zeta(X) = zeta0 w0 / w(X) + D(X) / (2 pi m w(X)^2 X^2)
@@ -25,11 +26,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..core._validation import _check_int, check_scalar, finite_array
-from ..core.closed_form import dissipation, secant_stiffness
 from ..core.joint import IwanJoint
+from ..core.modal import modal_iwan_curve
 from ..core.parameters import IwanParameters
 
-__all__ = ["SingleModeSystem", "modal_curve", "peak_response", "ring_down"]
+__all__ = ["SingleModeSystem", "modal_curve", "peak_response"]
 
 
 @dataclass(frozen=True)
@@ -62,10 +63,12 @@ class SingleModeSystem:
         return math.sqrt((self.stiffness + joint.KT) / self.mass) / (2.0 * math.pi)
 
 
-def modal_curve(joint: IwanParameters, system: SingleModeSystem, amplitudes):
+def modal_curve(joint: IwanParameters, system: SingleModeSystem, amplitudes, *,
+                stiffness: str = "secant"):
     """Closed-form frequency [Hz] and damping ratio [-] at displacement amplitudes [m].
 
-    See the module docstring for the formulas.
+    :func:`iwan_element.modal_iwan_curve` with the system's mass, ``K_inf`` and a fixed
+    dashpot (``floor="dashpot"``, the damping :func:`peak_response` integrates).
 
     Parameters
     ----------
@@ -73,6 +76,9 @@ def modal_curve(joint: IwanParameters, system: SingleModeSystem, amplitudes):
     system : SingleModeSystem
     amplitudes : array_like, shape (n,)
         Displacement amplitudes ``X`` [m], ``> 0``.
+    stiffness : {"secant", "harmonic"}, keyword-only
+        Secant (QSMA, REFERENCE.md sec. 7) or first-harmonic stiffness (what a ring-down
+        measures).
 
     Returns
     -------
@@ -83,12 +89,8 @@ def modal_curve(joint: IwanParameters, system: SingleModeSystem, amplitudes):
         raise ValueError("amplitudes must be > 0 [m]")
     if not isinstance(system, SingleModeSystem):
         raise ValueError(f"system must be a SingleModeSystem, got {type(system).__name__}")
-    m = system.mass
-    k = system.stiffness + secant_stiffness(X, joint)
-    w = np.sqrt(k / m)
-    w0 = math.sqrt((system.stiffness + joint.KT) / m)
-    zeta = system.zeta0 * w0 / w + dissipation(X, joint) / (2.0 * math.pi * k * X * X)
-    return w / (2.0 * math.pi), zeta
+    return modal_iwan_curve(X, joint, K_inf=system.stiffness, zeta0=system.zeta0,
+                            mass=system.mass, stiffness=stiffness, floor="dashpot")
 
 
 def peak_response(joint: IwanParameters, system: SingleModeSystem, *, force: float,
@@ -130,26 +132,11 @@ def peak_response(joint: IwanParameters, system: SingleModeSystem, *, force: flo
     return (peak, t, xs) if return_history else peak
 
 
-def ring_down(joint: IwanParameters, system: SingleModeSystem, *, x0: float, cycles: int = 20,
-              steps_per_period: int = 64):
-    """Free vibration released from rest at displacement ``x0`` [m] (virgin joint loaded
-    along its backbone first is not modelled: the joint starts unloaded at ``x0``'s state
-    reached monotonically from 0, i.e. on its backbone).
-
-    Returns
-    -------
-    t, x : ndarray
-        Time [s] and displacement [m], ``steps_per_period`` samples per linear period.
-    """
-    x0 = check_scalar("x0", x0, low=0.0, low_open=True)
-    cycles = _check_int("cycles", cycles, 1)
-    steps_per_period = _check_int("steps_per_period", steps_per_period, 16)
-    h = 1.0 / (system.linear_frequency(joint) * steps_per_period)
-    return _integrate(joint, system, h=h, n=cycles * steps_per_period, load=lambda t_: 0.0, x0=x0)
-
-
 def _integrate(joint, system, *, h, n, load, x0=0.0):
-    """Average-acceleration Newmark with Newton on the joint; returns ``(t, x)``."""
+    """Average-acceleration Newmark with Newton on the joint; returns ``(t, x)``.
+
+    ``x0 > 0`` starts from rest at ``x0`` with the joint loaded along its backbone (a free
+    decay, used by the tests against :func:`iwan_element.modal_ringdown`)."""
     m, k = system.mass, system.stiffness
     c = 2.0 * system.zeta0 * math.sqrt((k + joint.KT) * m)
     j = IwanJoint(joint)
