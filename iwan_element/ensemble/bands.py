@@ -136,7 +136,7 @@ class PredictionBands:
                       "source": self._source, "uncertainty": self.uncertainty.to_dict(),
                       "warnings": list(self.warnings)})
 
-    def plot(self, ax=None, *, color="C0", label=None):
+    def plot(self, ax=None, *, color="C0", label=None, relative: bool = False):
         """Bands (shaded) with the median (dashed) and the nominal curve (solid).
 
         Parameters
@@ -144,6 +144,11 @@ class PredictionBands:
         ax : sequence of matplotlib Axes, optional
             ``(ax_frequency, ax_damping)`` or, with a peak response,
             ``(ax_frequency, ax_damping, ax_peak)``; new axes if omitted.
+        color, label : keyword-only
+            Colour and legend label of the bands.
+        relative : bool, keyword-only
+            Plot the deviation from the nominal curve in per cent (narrow bands become
+            visible); the peak panel is unchanged.
 
         Returns
         -------
@@ -160,16 +165,20 @@ class PredictionBands:
         X = self.amplitudes
         pct = f"{100 * self.level:.0f} % band"
         artists = []
-        for a, name, ylabel in ((ax[0], "frequency", "frequency [Hz]"),
-                                (ax[1], "damping", "damping ratio [-]")):
+        for a, name, ylabel in ((ax[0], "frequency", "frequency"),
+                                (ax[1], "damping", "damping ratio")):
+            nom = np.asarray(self.nominal[name], float)
             lo, med, hi = self.band(name)
+            if relative:
+                lo, med, hi, nom = (100.0 * (v / nom - 1.0) for v in (lo, med, hi, nom))
             artists.append(a.fill_between(X, lo, hi, color=color, alpha=0.3,
                                           label=f"{label + ': ' if label else ''}{pct}"))
             artists += a.plot(X, med, "--", color=color, lw=1, label="median")
-            artists += a.plot(X, self.nominal[name], "-", color=color, lw=1.5, label="nominal fit")
+            artists += a.plot(X, nom, "-", color=color, lw=1.5, label="nominal fit")
             a.set_xscale("log")
             a.set_xlabel("displacement amplitude X [m]")
-            a.set_ylabel(ylabel)
+            unit = "[Hz]" if name == "frequency" else "[-]"
+            a.set_ylabel(f"{ylabel}: deviation from nominal [%]" if relative else f"{ylabel} {unit}")
         ax[0].legend(fontsize=8)
         if self.peak is not None and len(ax) > 2:
             lo, _, hi = self.band("peak")
