@@ -116,11 +116,14 @@ def main() -> None:
             cluster.close()
     w0 = args.workers[0]
     print(f"\n{'workers':>8} {'best [s]':>9} {'median [s]':>11} {'speed-up (best)':>16} "
-          f"{'speed-up (median)':>18}")
+          f"{'speed-up (median)':>18} {'paired speed-up':>16}")
     for w in args.workers:
+        paired = np.median(np.array(walls[w0]) / np.array(walls[w]))
         print(f"{w:8d} {min(walls[w]):9.2f} {np.median(walls[w]):11.2f} "
               f"{min(walls[w0]) / min(walls[w]):16.2f} "
-              f"{np.median(walls[w0]) / np.median(walls[w]):18.2f}")
+              f"{np.median(walls[w0]) / np.median(walls[w]):18.2f} {paired:16.2f}")
+    print("paired speed-up: median over the repeats of (wall with the first worker count) / "
+          "(wall of the run right after it); it cancels slow drifts of the machine's load")
     print("results identical across worker counts and repeats: yes")
 
 

@@ -152,6 +152,8 @@ def test_inputs_are_validated():
         run_ensemble(3, [{}])
     with pytest.raises(ValueError, match="sequence"):
         run_ensemble(failing_task, {"x": 1})
+    with pytest.raises(ValueError, match="empty"):
+        run_ensemble(failing_task, [])
     with pytest.raises(ValueError, match=r"parameter_sets\[1\] must be a dict"):
         run_ensemble(failing_task, [{"x": 1}, 2])
     with pytest.raises(ValueError, match="seed"):
@@ -403,3 +405,25 @@ def test_modal_fit_is_propagated_in_its_own_coordinates():
     ratio = (zb[1] - zb[0]) / (hi - lo)
     assert np.all((ratio > 0.8) & (ratio < 1.25)), ratio
     assert bands.peak.shape == (200,) and np.all(bands.peak > 0)
+
+
+def echo_task(params, rng):
+    return {"y": params["x"] * 2.0, "r": rng.uniform()}
+
+
+def test_rows_follow_the_input_order_on_any_executor():
+    from hypothesis import given, settings
+    from hypothesis import strategies as st
+
+    @settings(max_examples=25, deadline=None)
+    @given(st.lists(st.floats(-1e6, 1e6), min_size=1, max_size=12), st.integers(0, 2**32))
+    def check(xs, seed):
+        sets = [{"x": x} for x in xs]
+        with cf.ThreadPoolExecutor(3) as pool:
+            threaded = run_ensemble(echo_task, sets, executor=pool, seed=seed)
+        serial = run_ensemble(echo_task, sets, executor="serial", seed=seed)
+        assert [r["x"] for r in threaded.rows] == xs
+        assert threaded.column("y").tolist() == [2.0 * x for x in xs]
+        assert threaded.column("r").tolist() == serial.column("r").tolist()
+
+    check()

@@ -234,6 +234,8 @@ def _check_sets(parameter_sets) -> list[dict]:
         if bad:
             raise ValueError(f"parameter_sets[{i}] has non-str keys {bad!r}")
         sets.append(dict(s))                     # a copy: nothing the caller gave is mutated
+    if not sets:
+        raise ValueError("parameter_sets is empty: give at least one parameter set")
     return sets
 
 
