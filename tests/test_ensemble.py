@@ -427,3 +427,22 @@ def test_rows_follow_the_input_order_on_any_executor():
         assert threaded.column("r").tolist() == serial.column("r").tolist()
 
     check()
+
+
+def test_dissipation_fits_are_propagated_and_a_given_fs_is_held():
+    data = ie.simulate_test(JOINT, [5e-5, 1e-4, 2e-4, 3e-4, 4e-4, 6e-4], cycles=2,
+                            sample_rate=2.0, force_noise=10.0, seed=5)
+    table = data.amplitude_table()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        lsq = ie.fit_dissipation(table["F0"], table["D"], u0=table["u0"])
+        seed = ie.fit_dissipation(table["F0"], table["D"], u0=table["u0"], method="seed",
+                                  Fs=9e3)
+    unc = ParameterUncertainty.from_fit(lsq)
+    assert unc.source == "fit (least_squares)" and "KT" in unc.names
+    unc_seed = ParameterUncertainty.from_fit(seed)
+    assert "Fs" not in unc_seed.names
+    assert any("Fs" in w and "held" in w for w in unc_seed.warnings)
+    sets, _ = unc_seed.sample(50, rng=np.random.default_rng(0))
+    assert all(s["Fs"] == seed.params.Fs for s in sets)
+    assert len({s["KT"] for s in sets}) == 50

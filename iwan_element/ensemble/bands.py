@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 import functools
-import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -178,7 +177,8 @@ class PredictionBands:
             a.set_xscale("log")
             a.set_xlabel("displacement amplitude X [m]")
             unit = "[Hz]" if name == "frequency" else "[-]"
-            a.set_ylabel(f"{ylabel}: deviation from nominal [%]" if relative else f"{ylabel} {unit}")
+            a.set_ylabel(f"{ylabel}: deviation from nominal [%]" if relative
+                         else f"{ylabel} {unit}")
         ax[0].legend(fontsize=8)
         if self.peak is not None and len(ax) > 2:
             lo, _, hi = self.band("peak")

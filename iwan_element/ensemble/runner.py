@@ -223,7 +223,8 @@ def _run_task(func, index: int, params: dict, seed_seq: np.random.SeedSequence):
 
 # ================================================================== input checks
 def _check_sets(parameter_sets) -> list[dict]:
-    if isinstance(parameter_sets, (str, bytes, Mapping)) or not isinstance(parameter_sets, Sequence):
+    if isinstance(parameter_sets, (str, bytes, Mapping)) or \
+            not isinstance(parameter_sets, Sequence):
         raise ValueError("parameter_sets must be a sequence (list or tuple) of dicts, got "
                          f"{type(parameter_sets).__name__}")
     sets = []
@@ -333,7 +334,8 @@ def _progress_bar(progress, n):
     try:
         from tqdm.auto import tqdm
     except ImportError:
-        raise ImportError("progress=True needs tqdm: pip install 'iwan-element[progress]'") from None
+        raise ImportError("progress=True needs tqdm: "
+                          "pip install 'iwan-element[progress]'") from None
     return tqdm(total=n, desc="ensemble", unit="task")
 
 
@@ -355,7 +357,8 @@ def _dispatch(func, sets, children, executor, bar):
         _check_picklable(func)
         workers = max(1, min(os.cpu_count() or 1, n))
         with cf.ProcessPoolExecutor(max_workers=workers) as pool:
-            return _collect(pool, func, sets, children, bar), f"processes ({workers} workers)", warns
+            raw = _collect(pool, func, sets, children, bar)
+        return raw, f"processes ({workers} workers)", warns
     if _is_dask_client(executor):
         info = executor.scheduler_info() if hasattr(executor, "scheduler_info") else {}
         desc = f"dask ({len(info.get('workers', {}))} workers at {info.get('address', '?')})"

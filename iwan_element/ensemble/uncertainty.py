@@ -112,7 +112,8 @@ class ParameterUncertainty:
             raise ValueError("cov must be symmetric")
         ev = np.linalg.eigvalsh(C)
         if ev.min() < -1e-10 * max(ev.max(), 1e-300):
-            raise ValueError(f"cov must be positive semi-definite (smallest eigenvalue {ev.min():.3g})")
+            raise ValueError("cov must be positive semi-definite (smallest eigenvalue "
+                             f"{ev.min():.3g})")
         values = values or {n: getattr(nominal, n) for n in names}
         mean = np.array([_to_theta(n, values[n]) for n in names])
         return cls(nominal=nominal, names=tuple(names), mean=mean, cov=C, source=source,
@@ -206,7 +207,8 @@ class ParameterUncertainty:
         se = np.sqrt(np.diag(self.cov))
         lines = [f"Parameter uncertainty from {self.source}; nominal {self.nominal}",
                  "  coordinate        mean       std"]
-        lines += [f"  {_COORD[n]:<12} {m:10.5g} {s:9.3g}" for n, m, s in zip(self.names, self.mean, se)]
+        lines += [f"  {_COORD[n]:<12} {m:10.5g} {s:9.3g}"
+                  for n, m, s in zip(self.names, self.mean, se)]
         return "\n".join(lines + [f"  warning: {w}" for w in self.warnings])
 
     def to_dict(self) -> dict:
