@@ -62,6 +62,10 @@ def make(task: str, n: int):
     return func, sets
 
 
+def warm_up(func, params):
+    func(params, np.random.default_rng(0))
+
+
 def start(workers: int):
     from distributed import Client, LocalCluster
     with warnings.catch_warnings():
@@ -97,8 +101,8 @@ def main() -> None:
     walls = {w: [] for w in args.workers}
     ref = None
     try:
-        for w, (_, client) in clusters.items():
-            run_ensemble(func, sets[:w], executor=client, seed=args.seed)      # warm-up
+        for _, client in clusters.values():      # warm-up on every worker (imports, caches)
+            client.run(warm_up, func, sets[0])
         for r in range(args.repeat):
             for w, (_, client) in clusters.items():
                 res, wall, l0, l1 = timed(client, func, sets, args.seed)

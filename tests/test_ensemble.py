@@ -293,7 +293,7 @@ def test_from_fit_uses_the_fit_covariance():
                             force_noise=20.0, seed=3)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        fit = ie.fit_loops(data.u, data.F, t=data.t)
+        fit = ie.fit_loops(t=data.t, u=data.u, F=data.F)
     assert all(fit.identified.values())
     unc = ParameterUncertainty.from_fit(fit)
     assert unc.names == ("Fs", "KT", "chi", "beta")
@@ -308,7 +308,7 @@ def test_microslip_fit_samples_the_kt_chi_r_family():
                             force_noise=5.0, seed=4)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        fit = ie.fit_loops(data.u, data.F, t=data.t)
+        fit = ie.fit_loops(t=data.t, u=data.u, F=data.F)
     assert not fit.identified["Fs"]
     unc = ParameterUncertainty.from_fit(fit)
     assert unc.names == ("KT", "chi", "R") and unc.valid_amplitude < 1e-4
