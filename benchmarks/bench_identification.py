@@ -43,7 +43,7 @@ EXAMPLE = Path(__file__).resolve().parents[1] / "models" / "example_test_30kN.cs
 def _run(method, data, table, p):
     t0 = time.perf_counter()
     if method == "loops":
-        r = fit_loops(data.u, data.F, max_samples=None)
+        r = fit_loops(data.t, data.u, data.F, max_samples=None)
     elif method == "least_sq":
         r = fit_dissipation(table["F0"], table["D"], u0=table["u0"])
     else:
@@ -108,7 +108,7 @@ def bench_example(repeats: int = 5) -> list[str]:
         walls, cpus = [], []
         for _ in range(repeats):
             t0, c0 = time.perf_counter(), time.process_time()
-            r = fit_loops(data.u, data.F, t=data.t, **kwargs)
+            r = fit_loops(data.t, data.u, data.F, **kwargs)
             walls.append(time.perf_counter() - t0)
             cpus.append(time.process_time() - c0)
         q = r.params

@@ -42,7 +42,7 @@ def progress(msg: str) -> None:
 
 def identify(path: Path):
     data = load_test(path, displacement_unit="mm", force_unit="kN")
-    fit = fit_loops(data.u, data.F, t=data.t, smooth=15, seed=0)
+    fit = fit_loops(data.t, data.u, data.F, smooth=15, seed=0)
     return data, fit
 
 

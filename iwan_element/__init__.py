@@ -31,6 +31,8 @@ from .ensemble import (EnsembleResult, ParameterUncertainty, PredictionBands, Si
 from .core.modal import harmonic_stiffness, modal_iwan_curve, modal_ringdown
 from .identify.vibration import amplitude_curve
 from .identify.modal_fit import ModalIwanFit, fit_modal_iwan
+from .identify.noise import NoiseEstimate, estimate_noise
+from .identify.model_fit import ModelFit, fit_force_model
 from .identify.testdata import Cycle, TestData, find_reversals, load_test, simulate_test, split_cycles
 
 __version__ = "0.1.0"
@@ -74,6 +76,10 @@ __all__ = [
     "amplitude_curve",
     "fit_modal_iwan",
     "ModalIwanFit",
+    "estimate_noise",
+    "NoiseEstimate",
+    "fit_force_model",
+    "ModelFit",
     "fit_loops",
     "fit_dissipation",
     "FitResult",

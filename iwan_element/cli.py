@@ -75,9 +75,10 @@ def build_parser() -> argparse.ArgumentParser:
     fit.add_argument("--method", choices=("loops", "dissipation", "seed"), default="loops")
     fit.add_argument("--slip-force", type=float, metavar="FS",
                      help="slip force Fs in the force unit of --units (method 'seed' only)")
-    fit.add_argument("--smooth", type=int, default=0, metavar="N",
-                     help="Savitzky-Golay window (odd, samples) for the displacement that "
-                          "drives the model (method 'loops'; default 0 = none)")
+    fit.add_argument("--smooth", type=int, default=None, metavar="N",
+                     help="Savitzky-Golay window (odd, samples, >= 7; 0 = none) for the "
+                          "displacement that drives the model (method 'loops'; default: "
+                          "automatic, from the estimated displacement noise)")
     fit.add_argument("--seed", type=int, default=0, help="seed of the random starts (default 0)")
     fit.add_argument("--starts", type=int, default=6, help="optimiser starts (default 6)")
     fit.add_argument("--plot", type=Path, metavar="PNG",
@@ -178,10 +179,12 @@ def _run_fit(args) -> int:
     with warnings.catch_warnings(record=True):       # the report lists every warning
         warnings.simplefilter("always")
         if args.method == "loops":
-            result = fit_loops(data.u, data.F, t=data.t, smooth=args.smooth, seed=args.seed,
+            result = fit_loops(data.t, data.u, data.F,
+                               smooth="auto" if args.smooth is None else args.smooth,
+                               seed=args.seed,
                                n_starts=args.starts)
         else:
-            if args.smooth:
+            if args.smooth is not None:
                 raise ValueError("--smooth is only used by --method loops")
             table = data.amplitude_table()
             if args.method == "seed":

@@ -73,7 +73,7 @@ def test_drift_is_flagged():
     u = 1e-4 * np.sin(2 * np.pi * 0.02 * t)
     F = IwanJoint(P).force_history(u)
     F = F + np.where(t > 100.0, 0.3 * np.abs(F).max(), 0.0) * np.clip((t - 100) / 50, 0, 1)
-    cyc = split_cycles(u, F, t=t)
+    cyc = split_cycles(t, u, F)
     assert not cyc[0].drifting and cyc[-1].drifting
     assert "centre drifts" in cyc[-1].flags
 
@@ -164,7 +164,7 @@ def test_unclosed_loops_give_a_clear_error():
 def test_inputs_are_not_modified(clean):
     t, u, F = clean.t.copy(), clean.u.copy(), clean.F.copy()
     t0, u0, F0 = t.copy(), u.copy(), F.copy()
-    split_cycles(u, F, t=t)
+    split_cycles(t, u, F)
     data = TestData.from_arrays(t, u, F)
     assert np.array_equal(t, t0) and np.array_equal(u, u0) and np.array_equal(F, F0)
     assert u.flags.writeable and data.u is not u
@@ -180,3 +180,33 @@ def test_simulate_test_validates():
         simulate_test(P, [1e-4], sample_rate=0.1)
     with pytest.raises(ValueError, match="cycles must be an integer"):
         simulate_test(P, [1e-4], cycles=0)
+
+
+def test_all_zero_displacement_says_it_does_not_vary():
+    """Issue 14: was "hysteresis must be in (0, inf), got 0.0"."""
+    from iwan_element import find_reversals
+    z = np.zeros(200)
+    F = np.sin(np.arange(200) / 5.0)
+    for call in (lambda: split_cycles(None, z, F), lambda: find_reversals(z),
+                 lambda: TestData.from_arrays(np.arange(200.0), z, F)):
+        with pytest.raises(ValueError, match=r"u \(displacement\) does not vary"):
+            call()
+
+
+def test_clean_coarsely_sampled_record_shows_no_displacement_noise(tmp_path):
+    """Issue 14: the curvature of a clean record sampled 50 times a period was taken for
+    displacement noise (second differences), and the fit warned about it."""
+    import warnings as _w
+    from iwan_element import fit_loops
+    p = IwanParameters(9e3, 5e7, -0.5, 0.5)
+    d = simulate_test(p, np.array([0.2, 0.5, 1.0, 1.5]) * p.phi_max, cycles=2, sample_rate=1.0)
+    path = tmp_path / "clean.csv"
+    np.savetxt(path, np.c_[d.t, d.u * 1e3, d.F * 1e-3], delimiter=",",
+               header="time [s],displacement [mm],force [kN]", comments="")
+    with _w.catch_warnings(record=True) as caught:
+        _w.simplefilter("always")
+        data = load_test(path)
+        r = fit_loops(data.t, data.u, data.F, smooth=0)
+    assert not any("noise" in str(c.message) for c in caught)
+    assert r.noise["displacement"] < 1e-4 * data.cycles[0].u0
+    assert r.details["smooth"] == 0

@@ -669,13 +669,13 @@ def diagnose(t, u, F, *, candidates=None, max_effects: int = 2, noise: float | N
     max_samples = _check_int("max_samples", max_samples, 100)
     if noise is not None:
         noise = check_scalar("noise", noise, low=0.0, low_open=True)
-    cycles = split_cycles(uu, FF, t=tt)
+    cycles = split_cycles(tt, uu, FF)
     if len(cycles) < 2:
         raise ValueError(f"u contains {len(cycles)} complete cycle(s): a single cycle cannot "
                          "separate model error from noise; at least 2 (better 3 per amplitude) "
                          "are needed")
     with _quiet():                       # its warnings are reported with the diagnosis
-        base = fit_loops(uu, FF, t=tt, seed=seed)
+        base = fit_loops(np.arange(n, dtype=float) if tt is None else tt, uu, FF, seed=seed)
     warns = [f"base fit: {w}" for w in base.warnings]
     F_base = IwanJoint(base.params).force_history(uu)
     r0 = FF - F_base

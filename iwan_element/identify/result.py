@@ -1,0 +1,314 @@
+"""The result of an Iwan identification: :class:`FitResult`, its report, dict and plot."""
+from __future__ import annotations
+
+import math
+import time
+import warnings
+from contextlib import contextmanager
+from contextvars import ContextVar
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..core.parameters import IwanParameters
+
+__all__ = ["FitResult", "IdentifiabilityWarning", "PARAM_NAMES"]
+
+#: Order of the parameters in ``FitResult.correlation``.
+PARAM_NAMES = ("Fs", "KT", "chi", "beta")
+_UNITS = {"Fs": "N", "KT": "N/m", "chi": "1", "beta": "1"}
+
+
+def status_text(identified: bool, nuisance: bool = False) -> str:
+    """The report's status column; it follows ``identified`` and nothing else."""
+    if nuisance:
+        return "nuisance (fitted)" if identified else "nuisance, not determined"
+    return "identified" if identified else "NOT identified"
+
+
+class IdentifiabilityWarning(UserWarning):
+    """A parameter is not, or only poorly, determined by the data (see ``FitResult.warnings``)."""
+
+
+def _json(x):
+    """Recursively convert to JSON-safe Python types (NaN and inf become None)."""
+    if isinstance(x, dict):
+        return {str(k): _json(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple, np.ndarray)):
+        return [_json(v) for v in (x.tolist() if isinstance(x, np.ndarray) else x)]
+    if isinstance(x, (bool, np.bool_)):
+        return bool(x)
+    if isinstance(x, (int, np.integer)):
+        return int(x)
+    if isinstance(x, (float, np.floating)):
+        return float(x) if math.isfinite(x) else None
+    if x is None or isinstance(x, str):
+        return x
+    return str(x)
+
+
+@dataclass(frozen=True, eq=False)
+class FitResult:
+    """Identified Iwan parameters with uncertainties and diagnostics.
+
+    Attributes
+    ----------
+    params : IwanParameters
+        The fitted joint. When ``Fs`` and ``beta`` are not identified (no macroslip in the
+        data) this is the ``beta = 0`` member of the family that fits the data equally well;
+        ``identified`` and ``ranges`` say so.
+    stderr : dict
+        Standard error of each parameter (``Fs`` [N], ``KT`` [N/m], ``chi``, ``beta``); NaN
+        where the parameter is not identified or was given.
+    correlation : ndarray, shape (4, 4)
+        Correlation matrix in the order of :data:`PARAM_NAMES`; NaN rows/columns for
+        parameters without a standard error.
+    identified : dict
+        ``True`` for each parameter the data determine.
+    fixed : tuple of str
+        Parameters that were given, not fitted (``("Fs",)`` for ``method="seed"``).
+    ranges : dict
+        For parameters that are not identified: ``(low, high)`` range that fits the data
+        equally well.
+    residual_norm : float
+        Euclidean norm of the residual vector that was minimised (loop fit: force residuals
+        [N], divided by ``sigma`` if given; dissipation fits: log residuals [-]).
+    nrmse : float
+        Normalised RMS error [-]: for loop fits the RMS force error over the force range
+        ``max F - min F``; for dissipation fits the RMS relative error of the fitted quantities.
+    success : bool
+        The optimiser converged and the covariance could be computed.
+    message : str
+        Optimiser message.
+    nfev : int
+        Model evaluations (all starts, the Jacobian and the identifiability check included).
+    method : str
+        ``"loops"``, ``"seed"`` or ``"least_squares"``.
+    n_data : int
+        Number of residuals fitted.
+    warnings : tuple of str
+        Everything a user should know before trusting the numbers.
+    wall_time : float
+        Time taken [s].
+    details : dict
+        JSON-safe extras (largest backbone argument, macroslip test statistics, starts, ...).
+    offsets : dict
+        Loop fits: the sensor zero offsets fitted as nuisance parameters, ``{"force": (dF0,
+        stderr) [N], "displacement": (du0, stderr) [m]}`` (stderr NaN: not determined by the
+        data). ``measured = model(u - du0) + dF0``. Empty for dissipation fits.
+    noise : dict
+        Loop fits: ``{"force": sigma [N], "displacement": sigma [m]}`` from
+        :func:`~iwan_element.identify.noise.estimate_noise`, and ``"tau"``, the residuals'
+        integrated autocorrelation time [samples] by which the variances were multiplied.
+    """
+
+    params: IwanParameters
+    stderr: dict
+    correlation: np.ndarray
+    identified: dict
+    fixed: tuple
+    ranges: dict
+    residual_norm: float
+    nrmse: float
+    success: bool
+    message: str
+    nfev: int
+    method: str
+    n_data: int
+    warnings: tuple
+    wall_time: float
+    details: dict = field(default_factory=dict)
+    offsets: dict = field(default_factory=dict)
+    noise: dict = field(default_factory=dict)
+    _curves: dict = field(default_factory=dict, repr=False)
+
+    def to_dict(self) -> dict:
+        """JSON-safe dict (NaN and inf become ``None``). ``IwanParameters.from_dict(d["params"])``
+        rebuilds the parameters."""
+        return _json({
+            "method": self.method,
+            "params": self.params.to_dict(),
+            "stderr": dict(self.stderr),
+            "correlation": {"order": list(PARAM_NAMES), "matrix": self.correlation},
+            "identified": dict(self.identified),
+            "fixed": list(self.fixed),
+            "ranges": {k: list(v) for k, v in self.ranges.items()},
+            "residual_norm": self.residual_norm,
+            "nrmse": self.nrmse,
+            "success": self.success,
+            "message": self.message,
+            "nfev": self.nfev,
+            "n_data": self.n_data,
+            "warnings": list(self.warnings),
+            "wall_time": self.wall_time,
+            "details": self.details,
+            "offsets": {k: list(v) for k, v in self.offsets.items()},
+            "noise": dict(self.noise),
+        })
+
+    def plot(self, ax=None):
+        """Loop fits: measured and fitted force [kN] vs displacement [mm]; dissipation fits:
+        measured and fitted ``D`` [J] vs ``F0`` [N] (log-log). Returns the list of artists."""
+        from ..plotting import _axes
+        ax = _axes(ax)
+        c = self._curves
+        if not c:
+            raise ValueError("this result carries no data to plot (rebuilt from a dict?)")
+        if self.method == "loops":
+            step = max(1, c["u"].size // 20000)
+            arts = ax.plot(c["u"][::step] * 1e3, c["F"][::step] * 1e-3, ".", ms=1.5,
+                           color="0.55", label="measured")
+            arts += ax.plot(c["u"][::step] * 1e3, c["F_fit"][::step] * 1e-3, "-", lw=1.0,
+                            color="C3", label="fit (offsets removed from the data)")
+            ax.set_xlabel("u [mm]")
+            ax.set_ylabel("F [kN]")
+        else:
+            arts = ax.loglog(c["F0"], c["D"], "o", label="measured")
+            arts += ax.loglog(c["F0_fit"], c["D_fit"], "-", label="fit")
+            ax.set_xlabel("F0 [N]")
+            ax.set_ylabel("D [J]")
+        ax.legend()
+        return arts
+
+    def report(self) -> str:
+        """Human-readable summary: parameters with standard errors, correlations, fit quality
+        and warnings."""
+        p = self.params
+        title = {"loops": "loop fit (exact IwanJoint on the measured displacement)",
+                 "seed": "dissipation fit, seed-paper procedure (Nelder-Mead + Newton on KT)",
+                 "least_squares": "dissipation fit, least squares on the exact F0(u0), D(u0)"}
+        lines = [f"Iwan joint identification: {title.get(self.method, self.method)}",
+                 f"  {self.n_data} residuals, {self.nfev} model evaluations, {self.wall_time:.2f} s, "
+                 f"{'success' if self.success else 'NOT successful'} (optimiser: {self.message})",
+                 "",
+                 "  parameter        value        std. error   status"]
+        fmt = {"Fs": ("Fs   [N]  ", "{:.6g}"), "KT": ("KT   [N/m]", "{:.6g}"),
+               "chi": ("chi  [-]  ", "{:.4f}"), "beta": ("beta [-]  ", "{:.4f}")}
+        for k in PARAM_NAMES:
+            label, f = fmt[k]
+            v = getattr(p, k)
+            se = self.stderr.get(k, math.nan)
+            se_txt = f.format(se) if math.isfinite(se) else "n/a"
+            if k in self.fixed:
+                status, se_txt = "given (not fitted)", ""
+            elif not self.identified.get(k, False):
+                lo, hi = self.ranges.get(k, (math.nan, math.nan))
+                status = status_text(False) + (
+                    f" (data fit equally for {f.format(lo)} .. {f.format(hi)})" if k in self.ranges
+                    else "")
+            else:
+                rel = f" {100 * se / abs(v):.2g} %" if v != 0 and k in ("Fs", "KT") else ""
+                status = status_text(True) + rel
+            lines.append(f"  {label}  {f.format(v):>12}  {se_txt:>12}   {status}")
+        for name, (key, unit, scale) in {"dF0 [N]  ": ("force", "N", 1.0),
+                                         "du0 [um] ": ("displacement", "um", 1e6)}.items():
+            if key in self.offsets:
+                v, se = self.offsets[key]
+                se_txt = f"{se * scale:.4g}" if math.isfinite(se) else "n/a"
+                lines.append(f"  {name}   {v * scale:>12.5g}  {se_txt:>12}   "
+                             f"{status_text(math.isfinite(se), nuisance=True)}")
+        lines.append(f"  derived: phi_max = {p.phi_max * 1e3:.5g} mm, R = {p.R:.5g}, "
+                     f"S = {p.S:.5g} N/m")
+        have = [k for k in PARAM_NAMES if math.isfinite(self.stderr.get(k, math.nan))]
+        if len(have) > 1:
+            lines += ["", "  correlation     " + "".join(f"{k:>8}" for k in have)]
+            for i, k in enumerate(PARAM_NAMES):
+                if k in have:
+                    row = "".join(f"{self.correlation[i, PARAM_NAMES.index(j)]:8.3f}" for j in have)
+                    lines.append(f"  {k:<15} {row}")
+        unit = "[-]" if self.method != "loops" else "[N]" if not self.details.get("weighted") else "[-]"
+        lines += ["", f"  residual norm {self.residual_norm:.4g} {unit}, NRMSE {100 * self.nrmse:.3g} %"]
+        if self.noise:
+            lines.append(f"  noise: force {self.noise.get('force', math.nan):.3g} N, displacement "
+                         f"{self.noise.get('displacement', math.nan):.3g} m; residual correlation "
+                         f"time {self.noise.get('tau', math.nan):.3g} samples (variances x tau)")
+        if self.warnings:
+            lines += ["", "  warnings:"] + [f"  - {w}" for w in self.warnings]
+        return "\n".join(lines)
+
+
+def _settle(out: dict, fixed) -> tuple[dict, list[str]]:
+    """The identification verdict, one rule for every fit: a fitted parameter is identified
+    only with a finite standard error of at most half its magnitude (for ``chi``: of
+    ``chi + 1``, the exponent of the slider density, since ``chi = 0`` is a valid value) and
+    not at a bound of its search range."""
+    ident = dict(out["identified"])
+    warns = []
+    for k in PARAM_NAMES:
+        if k in fixed or not ident.get(k, False):
+            continue
+        v = getattr(out["params"], k)
+        se = out["stderr"].get(k, math.nan)
+        scale = abs(v + 1.0) if k == "chi" else abs(v)
+        what = "chi + 1" if k == "chi" else "its value"
+        if k in out.get("at_bound", ()):
+            ident[k] = False
+            extra = ""
+            if k == "beta" and v < 1e-6:
+                hi = 1.96 * se if math.isfinite(se) else math.nan
+                out["ranges"]["beta"] = (0.0, hi)
+                extra = f"; the data are compatible with beta in [0, {hi:.3g}] (95 %)"
+            warns.append(f"{k} = {v:.4g} is at a bound of its search range: NOT identified"
+                         + extra)
+        elif not math.isfinite(se):
+            ident[k] = False
+            warns.append(f"{k} has no standard error (singular Jacobian): NOT identified")
+        elif se > 0.5 * scale:
+            ident[k] = False
+            floor = {"chi": -1.0}.get(k, 0.0)
+            out["ranges"].setdefault(k, (max(floor, v - 1.96 * se), v + 1.96 * se))
+            warns.append(f"{k}: std. error {se:.3g} exceeds half of {what} ({scale:.3g}): "
+                         "NOT identified")
+    return ident, warns
+
+
+def _finish(method, out, *, converged, message, nfev, nrmse, t0, extra_warnings=(),
+            fixed=(), stacklevel=3, required=("KT", "chi"), offsets=None, noise=None,
+            curves=None) -> FitResult:
+    """Build the FitResult from the dict of :func:`_identify` (or its seed-method twin) and
+    issue one IdentifiabilityWarning carrying every warning.
+
+    ``success`` means: the optimiser converged, the data are more than noise
+    (``out["explains"]``, default True) and every parameter in ``required`` (not given) is
+    identified by the rule of :func:`_settle`; so ``success``, the report's status column and
+    the warnings say the same.
+    """
+    ident, settle_warns = _settle(out, fixed)
+    warns = list(extra_warnings) + out["warnings"] + settle_warns
+    if not converged:
+        warns.append(f"the optimiser did not converge: {message}")
+    explains = out.get("explains", True)
+    if not explains:
+        ident = {k: False for k in ident}
+    success = bool(converged and explains and all(ident.get(k, False) for k in required
+                                                  if k not in fixed))
+    result = FitResult(params=out["params"], stderr=out["stderr"], correlation=out["correlation"],
+                       identified=ident, fixed=tuple(fixed), ranges=out["ranges"],
+                       residual_norm=float(np.sqrt(out["r"] @ out["r"])), nrmse=float(nrmse),
+                       success=success, message=str(message), nfev=int(nfev),
+                       method=method, n_data=int(out["r"].size), warnings=tuple(warns),
+                       wall_time=time.perf_counter() - t0, details=_json(out["details"]),
+                       offsets=dict(offsets or {}), noise=dict(noise or {}),
+                       _curves=dict(curves or {}))
+    if warns and _EMIT.get():
+        warnings.warn("Iwan identification: " + " | ".join(warns), IdentifiabilityWarning,
+                      stacklevel=stacklevel)
+    return result
+
+
+# Whether fits issue their IdentifiabilityWarning (the warnings stay in FitResult.warnings).
+# Library callers that report the warnings themselves switch it off for their own context
+# only, instead of changing the process-wide warning filters.
+_EMIT: ContextVar[bool] = ContextVar("iwan_fit_emit_warnings", default=True)
+
+
+@contextmanager
+def _quiet():
+    """Within this context (thread / task), fits do not call ``warnings.warn``."""
+    token = _EMIT.set(False)
+    try:
+        yield
+    finally:
+        _EMIT.reset(token)
+
+
