@@ -205,8 +205,10 @@ def test_smoothing_reduces_the_displacement_noise_bias():
         raw = fit_loops(d.t, d.u, d.F, smooth=0)
     smooth = _quiet(fit_loops, d.t, d.u, d.F)                # smooth="auto" is the default
     assert smooth.details["smooth"] >= 7
-    assert abs(smooth.params.chi - p.chi) < 0.5 * abs(raw.params.chi - p.chi)
-    assert abs(smooth.params.KT / p.KT - 1) < 0.5 * abs(raw.params.KT / p.KT - 1)
+    # the de-noised drive and the dead band of 3 sigma against noise reversals remove the
+    # errors-in-variables bias (KT low, chi high) that unfiltered noise used to cause
+    for r in (raw, smooth):
+        assert abs(r.params.chi - p.chi) < 0.01 and abs(r.params.KT / p.KT - 1) < 0.01
     assert not any("displacement noise" in w for w in smooth.warnings)
 
 

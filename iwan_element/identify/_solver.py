@@ -209,7 +209,8 @@ def _uncertainty(fun, theta, r, scale, *, at_lower_bound=None, tau: float = 1.0,
     residuals whose size changes along the record (displacement noise times a tangent
     stiffness that jumps at every reversal) and errors shared by a whole branch (a turning
     point displaced by the displacement noise moves every force of the branch that leaves
-    it). Each variance is the larger of the two.
+    it), with the small-sample factor ``nb / (nb - p)`` for ``nb`` blocks and ``p``
+    parameters. Each variance is the larger of the two.
 
     ``fun`` maps the transformed parameters ``theta`` to residuals, ``r`` are the residuals at
     the optimum and ``scale = |d p / d theta|`` is the (diagonal) delta-method factor. A
@@ -233,7 +234,8 @@ def _uncertainty(fun, theta, r, scale, *, at_lower_bound=None, tau: float = 1.0,
         nb = m // L
         if nb >= 2 * p:
             sc = np.einsum("bij,bi->bj", J[:nb * L].reshape(nb, L, p), r[:nb * L].reshape(nb, L))
-            S = np.einsum("bj,bk->jk", sc, sc) * (m / (nb * L)) * m / max(m - p, 1)
+            # small-sample factor nb / (nb - p): p parameters were fitted from nb block scores
+            S = np.einsum("bj,bk->jk", sc, sc) * (m / (nb * L)) * nb / (nb - p)
             cov_s = A_inv @ S @ A_inv
             ds, dt = np.diag(cov_s), np.diag(cov)
             if np.all(ds > 0) and np.all(np.isfinite(ds)):

@@ -227,8 +227,8 @@ def fit_loops(t, u, F, *, sigma=None, smooth="auto", max_samples: int | None = 2
     amp = 0.5 * float(np.ptp(uu))
     if dinfo["smooth"] == 0 and sigma_u > 1e-3 * amp:
         warns.append(f"displacement noise ({sigma_u:.2g} m, {100 * sigma_u / amp:.2g} % of the "
-                     "half range) drives the model unfiltered and biases KT low and chi high; "
-                     "use smooth='auto'")
+                     "half range) drives the model unfiltered (only a dead band of 3 sigma keeps "
+                     "its reversals out); use smooth='auto'")
     b = burn_in_index(u_drive, hysteresis=hysteresis)
     m_all = n - b
     keep = b + np.unique(np.round(np.linspace(0, m_all - 1, min(m_all, max_samples))).astype(np.intp))
