@@ -27,6 +27,8 @@ from .core.joint_bank import IwanJointBank
 from .core.parameters import IwanParameters
 from .core.protocol import JointElement, check_element
 from .identify.curves import AmplitudeCurve
+from .ensemble import (EnsembleResult, ParameterUncertainty, PredictionBands, SingleModeSystem,
+                       parameter_grid, parameter_samples, propagate_uncertainty, run_ensemble)
 from .identify.noise import NoiseEstimate, estimate_noise
 from .identify.model_fit import ModelFit, fit_force_model
 from .core.modal import harmonic_stiffness, modal_iwan_curve, modal_ringdown
@@ -92,4 +94,12 @@ __all__ = [
     "VibrationDiagnosis",
     "simulate_element_test",
     "CANDIDATES",
+    "run_ensemble",
+    "EnsembleResult",
+    "ParameterUncertainty",
+    "PredictionBands",
+    "propagate_uncertainty",
+    "SingleModeSystem",
+    "parameter_grid",
+    "parameter_samples",
 ]

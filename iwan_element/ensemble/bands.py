@@ -1,0 +1,291 @@
+"""Prediction bands: a fit's parameter uncertainty run through the structure's response."""
+from __future__ import annotations
+
+import functools
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..core._validation import _check_int, check_scalar, finite_array
+from ..core.parameters import IwanParameters
+from ..identify.fit import _json
+from .oscillator import SingleModeSystem, modal_curve, peak_response
+from .runner import EnsembleResult, run_ensemble
+from .uncertainty import ParameterUncertainty
+
+__all__ = ["PredictionBands", "propagate_uncertainty", "response_task", "modal_fit_task"]
+
+
+def response_task(params: dict, rng, *, system: SingleModeSystem, amplitudes, force=None,
+                  cycles: int = 30, steps_per_period: int = 64) -> dict:
+    """One ensemble task: ``frequency`` [Hz] and ``damping`` [-] at ``amplitudes`` and, with
+    ``force`` [N], the ``peak`` transient displacement [m] (see :mod:`.oscillator`).
+    ``params`` holds ``Fs, KT, chi, beta``; ``rng`` is unused (the model is deterministic)."""
+    p = IwanParameters(params["Fs"], params["KT"], params["chi"], params["beta"])
+    f, z = modal_curve(p, system, amplitudes)
+    out = {"frequency": f, "damping": z}
+    if force is not None:
+        out["peak"] = peak_response(p, system, force=force, cycles=cycles,
+                                    steps_per_period=steps_per_period)
+    return out
+
+
+def modal_fit_task(params: dict, rng, *, names, regime: str, conventions: dict, amplitudes,
+                   force=None, cycles: int = 30, steps_per_period: int = 64) -> dict:
+    """One ensemble task for a modal Iwan fit (:func:`iwan_element.fit_modal_iwan`): its model
+    curve at ``amplitudes`` for one sampled fit vector and, in the macroslip regime with
+    ``force`` [N per unit modal mass], the peak transient displacement [m] of the fitted
+    single-mode oscillator (fixed dashpot ``2 zeta0 w0``)."""
+    from ..identify._modal_result import full_parameters, model_curve
+    theta = np.array([params[n] for n in names], dtype=float)
+    f, z = model_curve(theta, np.asarray(amplitudes, float), regime, conventions["x_ref"],
+                       conventions["stiffness"], conventions["floor"])
+    out = {"frequency": np.asarray(f, float), "damping": np.asarray(z, float)}
+    if force is not None:
+        p, k_inf = full_parameters(theta)
+        system = SingleModeSystem(mass=1.0, stiffness=max(k_inf, 0.0), zeta0=theta[1])
+        out["peak"] = peak_response(p, system, force=force, cycles=cycles,
+                                    steps_per_period=steps_per_period)
+    return out
+
+
+@dataclass(frozen=True, eq=False)
+class PredictionBands:
+    """Quantile bands of the predicted response over the sampled parameter sets.
+
+    Attributes
+    ----------
+    amplitudes : ndarray, shape (m,)
+        Displacement amplitudes [m].
+    frequency, damping : ndarray, shape (n_ok, m)
+        Per successful sample: frequency [Hz] and damping ratio [-] against amplitude.
+    peak : ndarray, shape (n_ok,) or None
+        Peak transient displacement [m] at ``force``.
+    nominal : dict
+        The same outputs for the nominal (fitted) parameters.
+    level : float
+        Central probability of the bands (0.9: 5 % .. 95 % quantiles).
+    force : float or None
+        Forcing amplitude of the transient run [N].
+    system : SingleModeSystem or None
+        ``None`` for a modal fit (the fit carries its own single-mode structure).
+    uncertainty : ParameterUncertainty or ModalIwanFit
+        The sampled distribution.
+    ensemble : EnsembleResult
+        The runs, with the sampled parameters (``to_csv`` writes them).
+    warnings : tuple of str
+    """
+
+    amplitudes: np.ndarray
+    frequency: np.ndarray
+    damping: np.ndarray
+    peak: np.ndarray | None
+    nominal: dict
+    level: float
+    force: float | None
+    system: SingleModeSystem | None
+    uncertainty: object
+    ensemble: EnsembleResult
+    warnings: tuple = field(default_factory=tuple)
+
+    @property
+    def _source(self) -> str:
+        return getattr(self.uncertainty, "source", None) or \
+            f"modal fit ({getattr(self.uncertainty, 'regime', '?')})"
+
+    def band(self, name: str):
+        """``(low, median, high)`` quantiles of ``"frequency"``, ``"damping"`` or ``"peak"``."""
+        if name not in ("frequency", "damping", "peak"):
+            raise ValueError(f"name must be 'frequency', 'damping' or 'peak', got {name!r}")
+        data = getattr(self, name)
+        if data is None:
+            raise ValueError("no peak response: propagate_uncertainty was called without force")
+        q = [(1 - self.level) / 2, 0.5, (1 + self.level) / 2]
+        return tuple(np.quantile(data, q, axis=0))
+
+    def report(self) -> str:
+        lines = [f"Prediction bands ({100 * self.level:.0f} % central) from {self._source}: "
+                 f"{self.frequency.shape[0]} samples on {self.ensemble.executor}, "
+                 f"{len(self.ensemble.errors)} failed",
+                 f"  {'X [m]':>10} {'f nominal':>11} {'f low':>11} {'f high':>11} "
+                 f"{'zeta nom.':>10} {'zeta low':>10} {'zeta high':>10}"]
+        fl, _, fh = self.band("frequency")
+        zl, _, zh = self.band("damping")
+        for i, X in enumerate(self.amplitudes):
+            lines.append(f"  {X:10.3e} {self.nominal['frequency'][i]:11.6g} {fl[i]:11.6g} "
+                         f"{fh[i]:11.6g} {self.nominal['damping'][i]:10.4e} {zl[i]:10.4e} "
+                         f"{zh[i]:10.4e}")
+        if self.peak is not None:
+            pl, pm, ph = self.band("peak")
+            lines.append(f"  peak displacement at F0 = {self.force:g} N: nominal "
+                         f"{self.nominal['peak']:.5g} m, band {pl:.5g} .. {ph:.5g} m")
+        return "\n".join(lines + [f"  warning: {w}" for w in self.warnings])
+
+    def to_dict(self) -> dict:
+        q = {}
+        for name in ("frequency", "damping") + (("peak",) if self.peak is not None else ()):
+            lo, med, hi = self.band(name)
+            q[name] = {"low": lo, "median": med, "high": hi, "nominal": self.nominal[name]}
+        return _json({"amplitudes": self.amplitudes, "level": self.level, "force": self.force,
+                      "samples": int(self.frequency.shape[0]),
+                      "failed": len(self.ensemble.errors), "bands": q,
+                      "system": None if self.system is None else
+                      {"mass": self.system.mass, "stiffness": self.system.stiffness,
+                       "zeta0": self.system.zeta0},
+                      "source": self._source, "uncertainty": self.uncertainty.to_dict(),
+                      "warnings": list(self.warnings)})
+
+    def plot(self, ax=None, *, color="C0", label=None, relative: bool = False):
+        """Bands (shaded) with the median (dashed) and the nominal curve (solid).
+
+        Parameters
+        ----------
+        ax : sequence of matplotlib Axes, optional
+            ``(ax_frequency, ax_damping)`` or, with a peak response,
+            ``(ax_frequency, ax_damping, ax_peak)``; new axes if omitted.
+        color, label : keyword-only
+            Colour and legend label of the bands.
+        relative : bool, keyword-only
+            Plot the deviation from the nominal curve in per cent (narrow bands become
+            visible); the peak panel is unchanged.
+
+        Returns
+        -------
+        list
+            The artists drawn.
+        """
+        n_ax = 3 if self.peak is not None else 2
+        if ax is None:
+            import matplotlib.pyplot as plt
+            _, ax = plt.subplots(1, n_ax, figsize=(4.2 * n_ax, 3.8), layout="constrained")
+        ax = list(np.atleast_1d(ax))
+        if len(ax) < 2:
+            raise ValueError("ax must hold at least two Axes (frequency, damping)")
+        X = self.amplitudes
+        pct = f"{100 * self.level:.0f} % band"
+        artists = []
+        for a, name, ylabel in ((ax[0], "frequency", "frequency"),
+                                (ax[1], "damping", "damping ratio")):
+            nom = np.asarray(self.nominal[name], float)
+            lo, med, hi = self.band(name)
+            if relative:
+                lo, med, hi, nom = (100.0 * (v / nom - 1.0) for v in (lo, med, hi, nom))
+            artists.append(a.fill_between(X, lo, hi, color=color, alpha=0.3,
+                                          label=f"{label + ': ' if label else ''}{pct}"))
+            artists += a.plot(X, med, "--", color=color, lw=1, label="median")
+            artists += a.plot(X, nom, "-", color=color, lw=1.5, label="nominal fit")
+            a.set_xscale("log")
+            a.set_xlabel("displacement amplitude X [m]")
+            unit = "[Hz]" if name == "frequency" else "[-]"
+            a.set_ylabel(f"{ylabel}: deviation from nominal [%]" if relative
+                         else f"{ylabel} {unit}")
+        ax[0].legend(fontsize=8)
+        if self.peak is not None and len(ax) > 2:
+            lo, _, hi = self.band("peak")
+            artists.append(ax[2].hist(self.peak, bins=min(30, max(5, self.peak.size // 5)),
+                                      color=color, alpha=0.6)[2])
+            for v, ls in ((lo, ":"), (hi, ":"), (self.nominal["peak"], "-")):
+                artists.append(ax[2].axvline(v, color="k", ls=ls, lw=1))
+            ax[2].set_xlabel(f"peak displacement at F0 = {self.force:g} N [m]")
+            ax[2].set_ylabel("samples")
+        return artists
+
+
+def propagate_uncertainty(source, *, system: SingleModeSystem | None = None, amplitudes,
+                          n_samples: int = 200, force: float | None = None, cycles: int = 30,
+                          steps_per_period: int = 64, level: float = 0.9, seed=None,
+                          executor=None, progress: bool = False) -> PredictionBands:
+    """Sample the parameters of a fit and return prediction bands of the response.
+
+    Parameters
+    ----------
+    source : FitResult, ModalIwanFit or ParameterUncertainty
+        A loop or dissipation fit (see :meth:`ParameterUncertainty.from_fit`), a modal Iwan
+        fit (:func:`iwan_element.fit_modal_iwan`, sampled with its own
+        ``sample_parameters`` in its fit coordinates), or a prepared distribution (for
+        instance :meth:`ParameterUncertainty.from_mean_cov`).
+    system : SingleModeSystem, keyword-only
+        The structure the joint sits in (not used with a modal fit, which carries its own
+        single-mode structure: unit modal mass, sensor coordinate).
+    amplitudes : array_like, keyword-only
+        Displacement amplitudes [m] of the f(X), zeta(X) bands, ``> 0``.
+    n_samples : int, keyword-only
+        Parameter sets drawn, ``>= 2``.
+    force : float, optional, keyword-only
+        Forcing amplitude [N] of the transient run (harmonic at the nominal linear frequency
+        for ``cycles`` periods from rest); its peak displacement gets a band. ``None`` skips it.
+    cycles, steps_per_period : int, keyword-only
+        Length and resolution of the transient run.
+    level : float, keyword-only
+        Central probability of the bands, in ``(0, 1)``.
+    seed : int or None, keyword-only
+        Seeds the parameter draws and the ensemble.
+    executor, progress : keyword-only
+        As in :func:`~iwan_element.ensemble.run_ensemble`.
+
+    Returns
+    -------
+    PredictionBands
+    """
+    X = finite_array("amplitudes", amplitudes)
+    if np.any(X <= 0):
+        raise ValueError("amplitudes must be > 0 [m]")
+    n_samples = _check_int("n_samples", n_samples, 2)
+    level = check_scalar("level", level, low=0.0, high=1.0, low_open=True, high_open=True)
+    if force is not None:
+        force = check_scalar("force", force, low=0.0, low_open=True)
+    if seed is None:
+        seed = int(np.random.SeedSequence().entropy)
+    rng = np.random.default_rng(seed)
+    if hasattr(source, "sample_parameters") and hasattr(source, "regime"):
+        task, nominal_set, sets, unc, warns = _modal_fit_setup(source, X, force, cycles,
+                                                               steps_per_period, n_samples, rng)
+        system = None
+    else:
+        unc = source if isinstance(source, ParameterUncertainty) else \
+            ParameterUncertainty.from_fit(source)
+        if not isinstance(system, SingleModeSystem):
+            raise ValueError(f"system must be a SingleModeSystem, got {type(system).__name__}")
+        sets, rejected = unc.sample(n_samples, rng=rng)
+        warns = list(unc.warnings)
+        if rejected > 0.01:
+            warns.append(f"{100 * rejected:.1f} % of the draws fell outside the model's range "
+                         "(beta < 0 or chi <= -1) and were rejected: the bands are those of the "
+                         "truncated distribution")
+        if X.max() > unc.valid_amplitude:
+            warns.append(f"amplitudes above {unc.valid_amplitude:.4g} m are beyond the tested "
+                         "range: the fit cannot constrain the joint there (Fs, beta not "
+                         "identified)")
+        task = functools.partial(response_task, system=system, amplitudes=X, force=force,
+                                 cycles=cycles, steps_per_period=steps_per_period)
+        nominal_set = {k: getattr(unc.nominal, k) for k in ("Fs", "KT", "chi", "beta")}
+    nominal = task(nominal_set, None)
+    ens = run_ensemble(task, sets, executor=executor, seed=seed, progress=progress)
+    warns += list(ens.warnings)
+    ok = ens.ok
+    if ok.sum() < 2:
+        raise RuntimeError(f"only {int(ok.sum())} of {n_samples} runs succeeded; first error: "
+                           f"{ens.errors[0].message if ens.errors else '?'}")
+    peak = ens.column("peak")[ok] if force is not None else None
+    return PredictionBands(amplitudes=X, frequency=ens.column("frequency")[ok],
+                           damping=ens.column("damping")[ok], peak=peak, nominal=nominal,
+                           level=level, force=force, system=system, uncertainty=unc,
+                           ensemble=ens, warnings=tuple(warns))
+
+
+def _modal_fit_setup(fit, X, force, cycles, steps_per_period, n_samples, rng):
+    """Task, nominal set, samples and warnings for a modal Iwan fit."""
+    warns = [f"the fit reports: {w}" for w in fit.warnings]
+    if force is not None and fit.regime != "macroslip":
+        raise ValueError(f"a peak response needs the whole joint, which a {fit.regime} modal fit "
+                         "does not determine; call without force")
+    task = functools.partial(modal_fit_task, names=tuple(fit.names), regime=fit.regime,
+                             conventions=dict(fit.conventions), amplitudes=X, force=force,
+                             cycles=cycles, steps_per_period=steps_per_period)
+    span = fit.data["amplitude"]
+    if X.max() > 1.001 * np.max(span) or X.min() < 0.999 * np.min(span):
+        warns.append(f"amplitudes outside the fitted data ({np.min(span):.3g} .. "
+                     f"{np.max(span):.3g} m) are an extrapolation of the modal model")
+    sets = fit.sample_parameters(n_samples, rng=rng)
+    sets = [{k: float(v) for k, v in s.items()} for s in sets]
+    return task, dict(zip(fit.names, map(float, fit.values))), sets, fit, warns

@@ -1,0 +1,284 @@
+"""Exudyn model of a :class:`~iwan_element.models.specimens.Specimen` and its linear matrices.
+
+Beams: ``ObjectANCFCable2D`` (Bernoulli-Euler, geometrically exact) as in
+:mod:`~iwan_element.models.jointed_beam` (REFERENCE sec. 6: Cable2D accepts markers offset to
+the beam surfaces). Each beam has lap elements of height ``lap_thickness`` and outer elements
+of height ``thickness``; beam A's axis is at ``y = 0``, beam B's at ``y = lap_thickness``, and
+the interface at the surfaces ``+-lap_thickness/2``. Simplification: for stepped halves
+(Brake-Reuss) the axis is kept straight through the step, so the outer part's bending
+stiffness is that of the full section but the eccentricity of its axis (``thickness/4``
+for the BRB) is neglected; this changes axial-bending coupling only.
+
+Interface: at each contact point (:func:`~iwan_element.models.interface.contact_points`) a
+built-in normal spring ``k_n,i`` and a tangential element: the Iwan element (``"iwan"``),
+a linear spring ``KT_i`` (``"linear"``) or nothing (``"none"``, used to extract the linear
+matrices without the tangential stiffness).
+
+The Iwan elements are attached by :func:`_add_interface`, one
+:func:`iwan_element.exudyn.add_iwan_connector` per point (exact, one Python call per point
+per force evaluation); see ``/work/notes/beam.md`` for the switch to the vectorised
+multi-contact interface.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from functools import lru_cache
+
+import exudyn as exu
+import numpy as np
+from exudyn.itemInterface import (CoordinateConstraint, MarkerBodyPosition, MarkerNodeCoordinate,
+                                  NodePoint2DSlope1, NodePointGround, ObjectANCFCable2D,
+                                  ObjectConnectorCartesianSpringDamper, ObjectGround)
+
+from iwan_element import IwanJoint
+from iwan_element.exudyn import add_iwan_connector
+
+from .interface import ContactPoints, contact_points
+from .specimens import Specimen
+
+__all__ = ["SpecimenModel", "build_specimen_model", "LinearSystem", "linear_system"]
+
+_OVT = exu.OutputVariableType
+
+
+@dataclass
+class SpecimenModel:
+    """An assembled Exudyn system of a specimen and handles into it."""
+
+    specimen: Specimen
+    SC: object
+    mbs: object
+    points: ContactPoints
+    elements: list
+    nodes: list
+    marker_pairs: list
+    springs: list
+    connectors: list
+    joints: list
+    sensor_marker: int
+    fixed_coordinates: list
+    beam_damping: float = 0.0
+    extra: dict = field(default_factory=dict)
+
+    def beam_energy(self) -> tuple[float, float]:
+        """(kinetic, strain) energy of the beams [J]."""
+        get = self.mbs.GetObjectOutputBody
+        kin = sum(get(e, _OVT.KineticEnergy, localPosition=[0, 0, 0]) for e in self.elements)
+        pot = sum(get(e, _OVT.PotentialEnergy, localPosition=[0, 0, 0]) for e in self.elements)
+        return float(kin), float(pot)
+
+    def spring_energy(self) -> float:
+        """Potential energy of the built-in springs [J]."""
+        return float(sum(self.mbs.GetObjectOutput(s, _OVT.PotentialEnergy) for s in self.springs))
+
+    def joint_energy(self) -> tuple[float, float]:
+        """(stored, dissipated) energy of the interface's Iwan elements, committed [J]."""
+        return (float(sum(j.stored_energy for j in self.joints)),
+                float(sum(j.dissipated_energy for j in self.joints)))
+
+    def sensor_displacement(self) -> float:
+        """Current transverse displacement at the sensor point [m]."""
+        return float(self.mbs.GetMarkerOutput(self.sensor_marker, _OVT.Position)[1]
+                     - self.extra["sensor_y0"])
+
+    def slips(self) -> np.ndarray:
+        """Current tangential slip ``x_B - x_A`` at each contact point [m]."""
+        pos = self.mbs.GetMarkerOutput
+        return np.array([pos(b, _OVT.Position)[0] - pos(a, _OVT.Position)[0]
+                         for a, b in self.marker_pairs])
+
+
+def _add_interface(mbs, marker_pairs, params):
+    """One Iwan element per contact point along x; returns (connectors, joints).
+
+    The single place where the interface is attached, so that a vectorised multi-contact
+    interface can replace the per-point connectors without touching the rest.
+    """
+    conns, joints = [], []
+    for (ma, mb), p in zip(marker_pairs, params):
+        j = IwanJoint(p)
+        conns.append(add_iwan_connector(mbs, [ma, mb], j, axis=[1.0, 0.0, 0.0]))
+        joints.append(j)
+    return conns, joints
+
+
+def _mesh(specimen: Specimen):
+    """Element boundaries (from the beam's own start) and heights of one beam, lap first for
+    beam B and last for beam A."""
+    s = specimen
+    n_lap = max(4, int(round(s.n_elements * s.overlap / s.beam_length)))
+    n_out = max(2, s.n_elements - n_lap)
+    out = np.linspace(0.0, s.lap_start, n_out + 1)
+    lap = np.linspace(0.0, s.overlap, n_lap + 1)
+    a_edges = np.concatenate([out, s.lap_start + lap[1:]])
+    a_h = [s.thickness] * n_out + [s.lap_thickness] * n_lap
+    b_edges = np.concatenate([lap, s.overlap + out[1:]])
+    b_h = [s.lap_thickness] * n_lap + [s.thickness] * n_out
+    return (a_edges, a_h), (b_edges, b_h)
+
+
+def _beam(mbs, s: Specimen, x0, y0, edges, heights, beta):
+    nodes = [mbs.AddNode(NodePoint2DSlope1(referenceCoordinates=[x0 + e, y0, 1.0, 0.0]))
+             for e in edges]
+    elems = []
+    for i, h in enumerate(heights):
+        EI = s.youngs_modulus * s.width * h ** 3 / 12.0
+        EA = s.youngs_modulus * s.width * h
+        elems.append(mbs.AddObject(ObjectANCFCable2D(
+            massPerLength=s.density * s.width * h, bendingStiffness=EI, axialStiffness=EA,
+            bendingDamping=beta * EI, axialDamping=beta * EA, length=float(edges[i + 1] - edges[i]),
+            nodeNumbers=[nodes[i], nodes[i + 1]])))
+    return nodes, elems
+
+
+def _marker_at(mbs, elems, edges, x0, x, y_local):
+    i = int(np.clip(np.searchsorted(edges, x - x0, side="right") - 1, 0, len(elems) - 1))
+    return mbs.AddMarker(MarkerBodyPosition(bodyNumber=elems[i],
+                                            localPosition=[x - x0 - edges[i], y_local, 0.0]))
+
+
+def build_specimen_model(specimen: Specimen, *, tangential: str = "iwan",
+                         beam_damping: float = 0.0) -> SpecimenModel:
+    """Build and assemble the Exudyn system of a specimen.
+
+    Parameters
+    ----------
+    specimen : Specimen
+    tangential : {"iwan", "linear", "none"}, keyword-only
+        Tangential law of the contact points (module docstring).
+    beam_damping : float, keyword-only
+        Stiffness-proportional damping of the beams [s] (Cable2D bending and axial damping
+        ``beam_damping * EI``, ``beam_damping * EA``), ``>= 0``.
+    """
+    if not isinstance(specimen, Specimen):
+        raise ValueError(f"specimen must be a Specimen, got {type(specimen).__name__}")
+    if tangential not in ("iwan", "linear", "none"):
+        raise ValueError(f"tangential must be 'iwan', 'linear' or 'none', got {tangential!r}")
+    if not (math.isfinite(beam_damping) and beam_damping >= 0):
+        raise ValueError(f"beam_damping must be >= 0 [s], got {beam_damping!r}")
+    s = specimen
+    pts = contact_points(s)
+    SC = exu.SystemContainer()
+    mbs = SC.AddSystem()
+    (ae, ah), (be, bh) = _mesh(s)
+    tl = s.lap_thickness
+    na, ea = _beam(mbs, s, 0.0, 0.0, ae, ah, beam_damping)
+    nb, eb = _beam(mbs, s, s.lap_start, tl, be, bh, beam_damping)
+    ground = mbs.AddNode(NodePointGround(referenceCoordinates=[0, 0, 0]))
+    mg = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=ground, coordinate=0))
+    fixed_nodes = []
+    if s.boundary in ("clamped-free", "clamped-driven"):
+        fixed_nodes.append((na[0], (0, 1, 3)))
+    if s.boundary == "clamped-driven":
+        fixed_nodes.append((nb[-1], (0, 1, 3)))
+    for node, coords in fixed_nodes:
+        for c in coords:
+            m = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=node, coordinate=c))
+            mbs.AddObject(CoordinateConstraint(markerNumbers=[mg, m]))
+    pairs, springs = [], []
+    for x, p, kn in zip(pts.x, pts.params, pts.normal_stiffness):
+        ma = _marker_at(mbs, ea, ae, 0.0, x, +0.5 * tl)
+        mb = _marker_at(mbs, eb, be, s.lap_start, x, -0.5 * tl)
+        pairs.append((ma, mb))
+        kt = p.KT if tangential == "linear" else 0.0
+        springs.append(mbs.AddObject(ObjectConnectorCartesianSpringDamper(
+            markerNumbers=[ma, mb], stiffness=[kt, float(kn), 0.0], damping=[0.0, 0.0, 0.0])))
+    conns, joints = ([], [])
+    if tangential == "iwan":
+        conns, joints = _add_interface(mbs, pairs, pts.params)
+    xs = s.sensor_position
+    if xs <= s.beam_length:
+        sm = _marker_at(mbs, ea, ae, 0.0, xs, 0.0)
+    else:
+        sm = _marker_at(mbs, eb, be, s.lap_start, xs, 0.0)
+    mbs.AddObject(ObjectGround())
+    mbs.Assemble()
+    fixed = []
+    for node, coords in fixed_nodes:
+        i0 = mbs.GetNodeODE2Index(node)
+        fixed += [i0 + c for c in coords]
+    model = SpecimenModel(specimen=s, SC=SC, mbs=mbs, points=pts, elements=ea + eb,
+                          nodes=na + nb, marker_pairs=pairs, springs=springs, connectors=conns,
+                          joints=joints, sensor_marker=sm, fixed_coordinates=fixed,
+                          beam_damping=beam_damping)
+    model.extra["sensor_y0"] = float(mbs.GetMarkerOutput(sm, _OVT.Position,
+                                                         configuration=exu.ConfigurationType.Reference)[1])
+    return model
+
+
+@dataclass(frozen=True)
+class LinearSystem:
+    """Linear matrices of a specimen on its free coordinates (clamped ones removed).
+
+    ``K0`` holds the beams and the normal contact springs but no tangential interface
+    stiffness; ``G`` maps coordinates to the tangential slips of the contact points and ``S``
+    to the sensor's transverse displacement; ``Kb`` is the beams' part of ``K0`` (for the
+    stiffness-proportional damping floor). ``free`` are the Exudyn ODE2 indices kept.
+    """
+
+    M: np.ndarray
+    K0: np.ndarray
+    Kb: np.ndarray
+    G: np.ndarray
+    S: np.ndarray
+    free: np.ndarray
+    n_coordinates: int
+
+
+def _structure_key(specimen: Specimen) -> Specimen:
+    """The specimen with the fields that do not change K0, G, M normalised (cache key)."""
+    return specimen.replace(friction=1.0, chi=0.0, beta=0.0, damping_floor=0.0,
+                            stiffness_per_area=1.0, amplitude_range=(1.0, 2.0))
+
+
+def linear_system(specimen: Specimen) -> LinearSystem:
+    """Linear matrices of a specimen (cached on its geometry, material and contact layout)."""
+    return _linear_system(_structure_key(specimen))
+
+
+@lru_cache(maxsize=16)
+def _linear_system(key: Specimen) -> LinearSystem:
+    model = build_specimen_model(key, tangential="none")
+    mbs = model.mbs
+    sim = exu.SimulationSettings()
+    sim.solution.file.write = False
+    sim.parallel.numberOfThreads = 1
+    solver = exu.MainSolverStatic()
+    solver.InitializeSolver(mbs, sim)
+    solver.ComputeMassMatrix(mbs)
+    M = np.array(solver.GetSystemMassMatrix())
+    solver.ComputeJacobianODE2RHS(mbs)
+    K = -np.array(solver.GetSystemJacobian())[:M.shape[0], :M.shape[0]]
+    n = M.shape[0]
+    # slips and sensor by central differences of the marker positions (linearisation)
+    pos = mbs.GetMarkerOutput
+    cur = exu.ConfigurationType.Current
+    q0 = np.zeros(n)
+    eps = 1e-8
+    G = np.zeros((len(model.marker_pairs), n))
+    Gn = np.zeros_like(G)
+    S = np.zeros(n)
+
+    def read():
+        a = np.array([pos(m, _OVT.Position)[:2] for m, _ in model.marker_pairs])
+        b = np.array([pos(m, _OVT.Position)[:2] for _, m in model.marker_pairs])
+        return b - a, pos(model.sensor_marker, _OVT.Position)[1]
+
+    for k in range(n):
+        out = []
+        for sgn in (1.0, -1.0):
+            q = q0.copy()
+            q[k] = sgn * eps
+            mbs.systemData.SetODE2Coordinates(q, configuration=cur)
+            out.append(read())
+        d = (out[0][0] - out[1][0]) / (2 * eps)
+        G[:, k], Gn[:, k] = d[:, 0], d[:, 1]
+        S[k] = (out[0][1] - out[1][1]) / (2 * eps)
+    mbs.systemData.SetODE2Coordinates(q0, configuration=cur)
+    K = 0.5 * (K + K.T)
+    Kb = K - Gn.T @ (model.points.normal_stiffness[:, None] * Gn)
+    free = np.setdiff1d(np.arange(n), model.fixed_coordinates)
+    ix = np.ix_(free, free)
+    return LinearSystem(M=M[ix], K0=K[ix], Kb=Kb[ix], G=G[:, free], S=S[free], free=free,
+                        n_coordinates=n)

@@ -1,0 +1,325 @@
+"""Two-beam lap-joint specimens: one validated description, and published presets.
+
+A :class:`Specimen` says everything the models need about a bolted lap-jointed beam: the two
+beams (length, width, thickness outside and inside the lap), material, overlap, bolts
+(positions, preload, washer), friction coefficient, boundary conditions, excitation and sensor
+points, the amplitude range a test covers, and the contact-interface model
+(:class:`InterfaceModel`). Coordinates run along the assembly from the free or clamped end of
+beam A (``x = 0``); beam A occupies ``[0, L]``, beam B ``[L - overlap, 2L - overlap]``.
+
+Presets (:func:`preset`; REFERENCE.md sec. 7 for every published number):
+
+``"example"``
+    Today's example: two 200 x 40 x 10 mm steel beams, 50 mm lap, one M16 bolt at 30 kN in the
+    lap centre, clamped-free (the seed paper's specimen size; synthetic).
+``"brake-reuss"``
+    The thin Brake-Reuss beam of Chen et al. (MSSP 166:108401, 2022) measured in
+    ``shared/data/brb-hammer``: 720 mm long, 12.7 mm high, 25.4 mm wide, 120 mm lap with
+    each half 6.35 mm thick in it, three 5/16 in bolts at the lap centre and +-30 mm,
+    washers 17.46 mm OD; free-free; hammer and sensor (acc3) 76.2 mm from one end; first
+    bending mode about 80.4 Hz; measured range 2-60 um at acc3. Material 304 stainless
+    (E = 192.31 GPa as in tmdsimpy's BRB model; density 8000 kg/m^3 assumed). Bolt preload
+    12 kN (the classic BRB's measured mean is 12.25 kN; the thin BRB's torque is not
+    verified). The interface parameters are the calibration of ``calibration.py`` (see
+    ``/work/notes/beam.md``).
+``"two-bolt-aluminium"``
+    Two aluminium beams 270 x 25.4 x 6.35 mm (UNESP-BERT data set, shm-unesp/DATASET_BOLTEDBEAM),
+    clamped-free, shaker 85 mm from the clamp, laser vibrometer at the free end. The data set
+    states only the 5 N m torque; the lap length (50.8 mm), two M6 bolts at +-12.7 mm from the
+    lap centre and the preload from the torque (Shigley's T = K F d, nut factor K = 0.2:
+    F = 5 / (0.2 x 0.006) = 4.17 kN) are ASSUMPTIONS, stated here.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, fields, replace
+
+__all__ = ["InterfaceModel", "Excitation", "Specimen", "preset", "PRESETS"]
+
+_BOUNDARIES = ("free-free", "clamped-free", "clamped-driven")
+_EXCITATIONS = ("hammer", "shaker", "base")
+_PRESSURE = ("linear-cone", "uniform-cone")
+_INTERFACE = ("distributed", "lumped")
+
+
+def _pos(name, v, *, zero=False):
+    if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) \
+            or v < 0 or (v == 0 and not zero):
+        raise ValueError(f"{name} must be a finite number {'>=' if zero else '>'} 0, got {v!r}")
+    return float(v)
+
+
+@dataclass(frozen=True)
+class InterfaceModel:
+    """Contact interface of the lap: how pressure becomes Iwan elements.
+
+    Parameters
+    ----------
+    model : {"distributed", "lumped"}
+        ``"distributed"``: ``n_points`` contact points along the lap, each an Iwan element with
+        ``Fs_i = mu N_i`` (``N_i`` the normal force of its strip from the pressure cones) and
+        ``KT_i = stiffness_per_area * A_i * (p_i / p_mean)**stiffness_pressure_exponent``
+        (``A_i`` the strip's contact area, ``p_i = N_i / A_i``). ``"lumped"``: two points per
+        bolt at +-r_c/2, each with half the bolt's slip force ``mu P`` and half its cone area.
+    n_points : int
+        Contact points (strips) along the lap, ``>= 2``.
+    stiffness_per_area : float
+        Tangential stiffness per unit contact area [N/m^3] (Pa/m). Assumption: a flat
+        stuck contact has a stiffness per area set by roughness and material (Mindlin's
+        tangential compliance of asperities), independent of pressure unless
+        ``stiffness_pressure_exponent`` > 0; it is calibrated, not predicted.
+    stiffness_pressure_exponent : float
+        ``m`` above, ``>= 0`` (0: stiffness follows area only).
+    normal_stiffness_per_area : float
+        Normal contact stiffness per unit area [N/m^3].
+    chi, beta : float
+        Iwan exponent and spike ratio of every point (REFERENCE sec. 2 ranges).
+    damping_floor : float
+        Modal damping ratio of the linear mode from material and boundaries [-], ``>= 0``
+        (a viscous floor, REFERENCE sec. 7: it adds to the joint's).
+    pressure : {"linear-cone", "uniform-cone"}
+        Pressure shape inside each bolt's cone (zero in the hole and beyond ``r_c``):
+        decreasing linearly from the hole edge to zero at ``r_c``, or uniform.
+    cone_angle_deg : float
+        Half-apex angle of the pressure frustum [deg] (Shigley: 30; Osgood: 25-33).
+    """
+
+    model: str = "distributed"
+    n_points: int = 40
+    stiffness_per_area: float = 1.0e12
+    stiffness_pressure_exponent: float = 0.0
+    normal_stiffness_per_area: float = 1.0e13
+    chi: float = -0.5
+    beta: float = 0.1
+    damping_floor: float = 0.0
+    pressure: str = "linear-cone"
+    cone_angle_deg: float = 30.0
+
+    def __post_init__(self):
+        if self.model not in _INTERFACE:
+            raise ValueError(f"interface model must be one of {_INTERFACE}, got {self.model!r}")
+        if isinstance(self.n_points, bool) or not isinstance(self.n_points, int) or self.n_points < 2:
+            raise ValueError(f"n_points must be an integer >= 2, got {self.n_points!r}")
+        _pos("stiffness_per_area", self.stiffness_per_area)
+        _pos("normal_stiffness_per_area", self.normal_stiffness_per_area)
+        _pos("stiffness_pressure_exponent", self.stiffness_pressure_exponent, zero=True)
+        _pos("damping_floor", self.damping_floor, zero=True)
+        if self.damping_floor >= 0.2:
+            raise ValueError(f"damping_floor is a ratio < 0.2, got {self.damping_floor!r}")
+        if not (isinstance(self.chi, (int, float)) and -1.0 < self.chi <= 1.0):
+            raise ValueError(f"chi must be in (-1, 1], got {self.chi!r}")
+        _pos("beta", self.beta, zero=True)
+        if self.pressure not in _PRESSURE:
+            raise ValueError(f"pressure must be one of {_PRESSURE}, got {self.pressure!r}")
+        if not (isinstance(self.cone_angle_deg, (int, float)) and 5.0 <= self.cone_angle_deg <= 60.0):
+            raise ValueError(f"cone_angle_deg must be in [5, 60], got {self.cone_angle_deg!r}")
+
+
+@dataclass(frozen=True)
+class Excitation:
+    """How the test excites the specimen: ``kind`` in {"hammer", "shaker", "base"} and the
+    ``position`` [m] along the assembly (ignored for base motion)."""
+
+    kind: str = "hammer"
+    position: float = 0.0
+
+    def __post_init__(self):
+        if self.kind not in _EXCITATIONS:
+            raise ValueError(f"excitation kind must be one of {_EXCITATIONS}, got {self.kind!r}")
+        _pos("excitation position", self.position, zero=True)
+
+
+@dataclass(frozen=True)
+class Specimen:
+    """A two-beam bolted lap-joint specimen (SI units). See the module docstring.
+
+    Parameters
+    ----------
+    name : str
+    beam_length : float
+        Length of each beam [m].
+    width : float
+        [m].
+    thickness : float
+        Beam height (bending direction) outside the lap [m].
+    lap_thickness : float
+        Height of each beam inside the lap [m] (``thickness`` for two plain stacked bars,
+        ``thickness/2`` for the Brake-Reuss beam's stepped halves).
+    youngs_modulus, density : float
+        [Pa], [kg/m^3].
+    overlap : float
+        Lap length [m], ``< beam_length``.
+    bolt_positions : tuple of float
+        Bolt centres from the start of the lap [m], inside ``(0, overlap)``.
+    preload : float
+        Preload per bolt [N].
+    bolt_diameter, washer_diameter : float
+        [m]; the washer (or head) diameter starts the pressure cone.
+    friction : float
+        Friction coefficient mu of the interface [-].
+    boundary : {"free-free", "clamped-free", "clamped-driven"}
+        Clamped means beam A clamped at ``x = 0``; driven means beam B's far end held
+        transversely and driven axially (the quasi-static test).
+    excitation : Excitation
+    sensor_position : float
+        Where the response amplitude is read [m] along the assembly (transverse displacement).
+    amplitude_range : tuple of 2 floats
+        Documented (measured, for published specimens) displacement amplitude range at the
+        sensor [m].
+    interface : InterfaceModel
+    n_elements : int
+        Beam elements per beam (split between the lap and the rest by length), ``>= 4``.
+    reference : str
+        Where the numbers come from.
+    """
+
+    name: str = "custom"
+    beam_length: float = 0.2
+    width: float = 0.04
+    thickness: float = 0.01
+    lap_thickness: float = 0.01
+    youngs_modulus: float = 2.1e11
+    density: float = 7850.0
+    overlap: float = 0.05
+    bolt_positions: tuple = (0.025,)
+    preload: float = 30.0e3
+    bolt_diameter: float = 0.016
+    washer_diameter: float = 0.030
+    friction: float = 0.3
+    boundary: str = "clamped-free"
+    excitation: Excitation = field(default_factory=Excitation)
+    sensor_position: float = 0.35
+    amplitude_range: tuple = (1e-6, 1e-4)
+    interface: InterfaceModel = field(default_factory=InterfaceModel)
+    n_elements: int = 16
+    reference: str = ""
+
+    def __post_init__(self):
+        for n in ("beam_length", "width", "thickness", "lap_thickness", "youngs_modulus",
+                  "density", "overlap", "preload", "bolt_diameter", "washer_diameter", "friction"):
+            _pos(n, getattr(self, n))
+        if self.overlap >= self.beam_length:
+            raise ValueError(f"overlap must be < beam_length ({self.beam_length}), got {self.overlap}")
+        if self.lap_thickness > self.thickness:
+            raise ValueError("lap_thickness must be <= thickness")
+        if self.washer_diameter <= self.bolt_diameter:
+            raise ValueError("washer_diameter must be > bolt_diameter")
+        bp = tuple(float(b) for b in self.bolt_positions)
+        if not bp or any(not (0.0 < b < self.overlap) for b in bp):
+            raise ValueError(f"bolt_positions must be a non-empty sequence inside (0, overlap="
+                             f"{self.overlap}) [m], got {self.bolt_positions!r}")
+        object.__setattr__(self, "bolt_positions", bp)
+        if self.boundary not in _BOUNDARIES:
+            raise ValueError(f"boundary must be one of {_BOUNDARIES}, got {self.boundary!r}")
+        if not isinstance(self.excitation, Excitation):
+            raise ValueError("excitation must be an Excitation")
+        if not isinstance(self.interface, InterfaceModel):
+            raise ValueError("interface must be an InterfaceModel")
+        if not 0.0 <= self.sensor_position <= self.total_length:
+            raise ValueError(f"sensor_position must be in [0, {self.total_length}] m, "
+                             f"got {self.sensor_position!r}")
+        if self.excitation.position > self.total_length:
+            raise ValueError("excitation position must lie on the assembly")
+        ar = tuple(float(a) for a in self.amplitude_range)
+        if len(ar) != 2 or not (0 < ar[0] < ar[1]) or not all(map(math.isfinite, ar)):
+            raise ValueError(f"amplitude_range must be (low, high) with 0 < low < high [m], "
+                             f"got {self.amplitude_range!r}")
+        object.__setattr__(self, "amplitude_range", ar)
+        if isinstance(self.n_elements, bool) or not isinstance(self.n_elements, int) \
+                or self.n_elements < 4:
+            raise ValueError(f"n_elements must be an integer >= 4, got {self.n_elements!r}")
+
+    @property
+    def total_length(self) -> float:
+        """Assembly length [m]."""
+        return 2.0 * self.beam_length - self.overlap
+
+    @property
+    def lap_start(self) -> float:
+        """x of the start of the lap (= start of beam B) [m]."""
+        return self.beam_length - self.overlap
+
+    @property
+    def cone_radius(self) -> float:
+        """Radius of the pressure cone at the interface, ``D_w/2 + t tan(a)`` [m]
+        (REFERENCE sec. 7; ``t`` the lap thickness of one beam)."""
+        a = math.radians(self.interface.cone_angle_deg)
+        return 0.5 * self.washer_diameter + self.lap_thickness * math.tan(a)
+
+    def replace(self, **changes) -> "Specimen":
+        """A validated copy with fields changed; interface fields may be given by name too."""
+        names = {f.name for f in fields(self)}
+        inames = {f.name for f in fields(InterfaceModel)}
+        unknown = set(changes) - names - inames
+        if unknown:
+            raise ValueError(f"unknown Specimen fields {sorted(unknown)}")
+        ichanges = {k: changes.pop(k) for k in list(changes) if k in inames and k not in names}
+        if ichanges:
+            changes["interface"] = replace(changes.get("interface", self.interface), **ichanges)
+        return replace(self, **changes)
+
+
+def _example() -> Specimen:
+    return Specimen(
+        name="example", beam_length=0.2, width=0.04, thickness=0.01, lap_thickness=0.01,
+        youngs_modulus=2.1e11, density=7850.0, overlap=0.05, bolt_positions=(0.025,),
+        preload=30.0e3, bolt_diameter=0.016, washer_diameter=0.030, friction=0.3,
+        boundary="clamped-free", excitation=Excitation("hammer", 0.35), sensor_position=0.35,
+        amplitude_range=(1e-6, 3e-4),
+        interface=InterfaceModel(n_points=24, stiffness_per_area=2.0e12, chi=-0.5, beta=0.1,
+                                 damping_floor=5e-4),
+        n_elements=16,
+        reference="the project's example: seed paper specimen size (M16 10.9, 30 kN), synthetic")
+
+
+def _brake_reuss() -> Specimen:
+    # Calibrated interface: see calibration.py and /work/notes/beam.md (fitted on the thin
+    # BRB hammer ring-down, shared/data/brb-hammer/hammer_acc3.csv).
+    return Specimen(
+        name="brake-reuss", beam_length=0.42, width=0.0254, thickness=0.0127,
+        lap_thickness=0.00635, youngs_modulus=192.31e9, density=8000.0, overlap=0.12,
+        bolt_positions=(0.03, 0.06, 0.09), preload=12.0e3, bolt_diameter=0.0079375,
+        washer_diameter=0.01746, friction=0.2, boundary="free-free",
+        excitation=Excitation("hammer", 0.72 - 0.0762), sensor_position=0.72 - 0.0762,
+        amplitude_range=(2e-6, 60e-6),
+        interface=InterfaceModel(n_points=40, stiffness_per_area=2.0e12, chi=-0.3, beta=0.1,
+                                 damping_floor=1.3e-3),
+        n_elements=20,
+        reference="thin BRB, Chen et al. MSSP 166:108401 (2022); classic BRB bolts/washers "
+                  "(Balaji, Abaqus4Joints); E from Porter & Brake MSSP 192:110210 (2023)")
+
+
+def _two_bolt_aluminium() -> Specimen:
+    return Specimen(
+        name="two-bolt-aluminium", beam_length=0.27, width=0.0254, thickness=0.00635,
+        lap_thickness=0.00635, youngs_modulus=70.0e9, density=2700.0, overlap=0.0508,
+        bolt_positions=(0.0127, 0.0381), preload=4.17e3, bolt_diameter=0.006,
+        washer_diameter=0.012, friction=0.5, boundary="clamped-free",
+        excitation=Excitation("shaker", 0.085), sensor_position=2 * 0.27 - 0.0508,
+        amplitude_range=(5e-6, 5e-4),
+        interface=InterfaceModel(n_points=32, stiffness_per_area=1.0e12, chi=-0.5, beta=0.1,
+                                 damping_floor=1e-3),
+        n_elements=16,
+        reference="UNESP-BERT (shm-unesp/DATASET_BOLTEDBEAM): beams, cantilever, shaker at 85 mm; "
+                  "lap 50.8 mm, two M6 bolts, preload from 5 N m with K = 0.2: assumed")
+
+
+PRESETS = {"example": _example, "brake-reuss": _brake_reuss,
+           "two-bolt-aluminium": _two_bolt_aluminium}
+
+
+def preset(name: str) -> Specimen:
+    """The specimen description of a named preset (see the module docstring).
+
+    Parameters
+    ----------
+    name : {"example", "brake-reuss", "two-bolt-aluminium"}
+
+    Returns
+    -------
+    Specimen
+        Frozen; ``specimen.replace(...)`` or ``dataclasses.replace`` makes variants.
+    """
+    if name not in PRESETS:
+        raise ValueError(f"unknown preset {name!r}; presets are {sorted(PRESETS)}")
+    return PRESETS[name]()
