@@ -15,7 +15,9 @@ Exudyn's default settings, fixed step 10 us, one thread, no solution file. Varia
 * ``conn-linear``  :func:`add_iwan_connector` with a trivial linear element: the cost of
                    the connector machinery alone (trial-only force function, post-step
                    dispatcher, commit, records)
-* ``conn-iwan``    :func:`add_iwan_connector` with :class:`IwanJoint` (records on / off)
+* ``conn-iwan``    :func:`add_iwan_connector` with :class:`IwanJoint`: the default route, the
+                   exact symbolic law (records on / ``-norecord`` off)
+* ``conn-iwan-python`` the same with ``law="python"`` (the Python force function)
 * ``conn-discrete`` :func:`add_iwan_connector` with :class:`DiscreteIwan`, 100 sliders
 
 With ``--compare-with DIR`` the ``conn-*`` variants are also run with the package found in
@@ -26,7 +28,15 @@ Wall time is the best of ``--repeat`` runs of ``mbs.SolveDynamic`` only, the var
 interleaved in each round (the machine is shared: compare ratios within one run). Force
 evaluations per step come from a separate counting run (not timed).
 
-Run: ``python benchmarks/bench_connector.py [--steps 100000] [--repeat 5] [--compare-with DIR]``
+A second table (``--contacts N``, default 50; 0 skips it): a chain of N unit masses, each
+joined to the previous one (the first to ground) along one axis, initial velocities
+3 m/s * k/N, with Exudyn's built-in linear springs (``builtin``), with
+:func:`add_iwan_interface` (``interface``: N symbolic laws, one vectorised commit), with N
+symbolic connectors (``connectors-symbolic``) and with N Python-law connectors
+(``connectors-python``). The interface's trajectory is compared with the Python-law run.
+
+Run: ``python benchmarks/bench_connector.py [--steps 100000] [--repeat 5] [--contacts 50]
+[--contact-steps 20000] [--compare-with DIR]``
 """
 from __future__ import annotations
 
@@ -38,6 +48,7 @@ import time
 from pathlib import Path
 
 import exudyn as exu
+import numpy as np
 from exudyn.itemInterface import CoordinateSpringDamper, Mass1D, MarkerNodeCoordinate, Node1D, NodePointGround
 
 import iwan_element
@@ -156,11 +167,15 @@ def build(variant, counter=None):
         element = {"conn-linear": lambda: LinearElement(P.KT),
                    "conn-iwan": lambda: pkg.IwanJoint(params),
                    "conn-iwan-norecord": lambda: pkg.IwanJoint(params),
+                   "conn-iwan-python": lambda: pkg.IwanJoint(params),
                    "conn-discrete": lambda: pkg.DiscreteIwan(params, 100)}[name]()
         if counter is not None:
             element = Counting(element, counter)
+        kw = {}
+        if not tag:                        # the law keyword is new
+            kw["law"] = "python" if name == "conn-iwan-python" else "auto"
         pkg.exudyn.add_iwan_connector(mbs, [m0, m1], element,
-                                      record=(name != "conn-iwan-norecord"))
+                                      record=(name != "conn-iwan-norecord"), **kw)
     mbs.Assemble()
     return SC, mbs
 
@@ -201,8 +216,10 @@ def main(argv=None):
     ap.add_argument("--compare-with", metavar="DIR",
                     help="also run the conn-* variants with DIR/iwan_element (rows '@base')")
     ap.add_argument("--no-discrete", action="store_true", help="skip the slow conn-discrete")
+    ap.add_argument("--contacts", type=int, default=50, help="contacts of the chain table (0: skip)")
+    ap.add_argument("--contact-steps", type=int, default=20_000)
     args = ap.parse_args(argv)
-    conn = ["conn-linear", "conn-iwan", "conn-iwan-norecord"]
+    conn = ["conn-linear", "conn-iwan", "conn-iwan-norecord", "conn-iwan-python"]
     if not args.no_discrete:
         conn.append("conn-discrete")
     if args.compare_with:
@@ -228,6 +245,58 @@ def main(argv=None):
         ev = "-" if evals != evals else f"{evals:.2f}"
         print(f"{v:<24} {t:9.3f} {t / base:7.1f} {1e6 * t / args.steps:8.2f} {newton:15.2f} "
               f"{ev:>12}")
+    if args.contacts > 0:
+        contact_table(args.contacts, args.contact_steps, args.repeat)
+
+
+def build_chain(variant, n):
+    """N unit masses in a chain along one axis, joined by springs or Iwan joints."""
+    SC = exu.SystemContainer()
+    mbs = SC.AddSystem()
+    ground = mbs.AddNode(NodePointGround())
+    markers = [mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=ground, coordinate=0))]
+    for k in range(n):
+        node = mbs.AddNode(Node1D(referenceCoordinates=[0.0],
+                                  initialVelocities=[V0 * (k + 1) / n]))
+        mbs.AddObject(Mass1D(mass=1.0, nodeNumber=node))
+        markers.append(mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=node, coordinate=0)))
+    pairs = [(markers[k], markers[k + 1]) for k in range(n)]
+    handle = None
+    if variant == "builtin":
+        for m0, m1 in pairs:
+            mbs.AddObject(CoordinateSpringDamper(markerNumbers=[m0, m1], stiffness=P.KT))
+    elif variant == "interface":
+        handle = iwan_element.exudyn.add_iwan_interface(mbs, pairs, [P] * n)
+    else:
+        law = "python" if variant == "connectors-python" else "symbolic"
+        handle = [iwan_element.exudyn.add_iwan_connector(mbs, list(pr), iwan_element.IwanJoint(P),
+                                                         law=law) for pr in pairs]
+    mbs.Assemble()
+    return SC, mbs, handle
+
+
+def contact_table(n, steps, repeat):
+    variants = ["builtin", "interface", "connectors-symbolic", "connectors-python"]
+    best = {v: math.inf for v in variants}
+    slips = {}
+    for _ in range(repeat):
+        for v in variants:
+            SC, mbs, handle = build_chain(v, n)
+            t0 = time.perf_counter()
+            mbs.SolveDynamic(settings(steps))
+            best[v] = min(best[v], time.perf_counter() - t0)
+            if v == "interface":
+                slips[v] = handle.slip_history
+            elif v.startswith("connectors"):
+                slips[v] = np.stack([c.slip_history for c in handle], axis=1)
+    base = best["builtin"]
+    amp = float(np.max(np.abs(slips["connectors-python"])))
+    print(f"\nchain of {n} masses and {n} contacts, {steps} steps, h = {H:g} s, best of {repeat} "
+          "interleaved rounds")
+    print(f"{'variant':<24} {'wall [s]':>9} {'ratio':>7} {'us/step':>8} {'max |slip - python| / amp':>26}")
+    for v in variants:
+        dev = "-" if v not in slips else f"{np.max(np.abs(slips[v] - slips['connectors-python'])) / amp:.1e}"
+        print(f"{v:<24} {best[v]:9.3f} {best[v] / base:7.2f} {1e6 * best[v] / steps:8.2f} {dev:>26}")
 
 
 if __name__ == "__main__":

@@ -24,5 +24,5 @@ sim = exu.SimulationSettings()
 sim.timeIntegration.numberOfSteps, sim.timeIntegration.endTime = steps, steps * 1e-5
 sim.timeIntegration.verboseMode, sim.solution.file.write = 0, False
 mbs.SolveDynamic(sim)
-print(f"peak slip {1e3 * abs(joint.slip).max():.4f} mm (phi_max {1e3 * params.phi_max:.4f} mm), "
-      f"dissipated {joint.dissipated_energy[-1]:.4f} J, stored {joint.stored_energy[-1]:.4f} J")
+print(f"peak slip {1e3 * abs(joint.slip_history).max():.4f} mm (phi_max {1e3 * params.phi_max:.4f} mm), "
+      f"dissipated {joint.dissipated_energy_history[-1]:.4f} J, stored {joint.stored_energy_history[-1]:.4f} J")

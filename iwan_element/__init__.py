@@ -23,6 +23,7 @@ from .effects import (EFFECTS, AsymmetricSlip, Backlash, PinningStiffness, SlipD
                       ViscousDamping, base_joint, make_effect)
 from .identify.fit import FitResult, IdentifiabilityWarning, fit_dissipation, fit_loops
 from .core.joint import IwanJoint
+from .core.joint_bank import IwanJointBank
 from .core.parameters import IwanParameters
 from .core.protocol import JointElement, check_element
 from .identify.curves import AmplitudeCurve
@@ -33,6 +34,7 @@ __version__ = "0.1.0"
 __all__ = [
     "IwanParameters",
     "IwanJoint",
+    "IwanJointBank",
     "DiscreteIwan",
     "slider_distribution",
     "JointElement",

@@ -200,9 +200,9 @@ def quasi_static_test(config: JointedBeamConfig | None = None, *, amplitude: flo
     F_machine = np.interp(t, data[:, 0], data[:, 1])
     return QuasiStaticResult(
         t=t, machine_displacement=amplitude * np.sin(w * t), machine_force=F_machine,
-        joint_slip=np.array([c.slip for c in model.connectors]),
-        joint_force=np.array([c.force for c in model.connectors]),
-        joint_dissipation=np.array([c.dissipated_energy for c in model.connectors]),
+        joint_slip=np.array([c.slip_history for c in model.connectors]),
+        joint_force=np.array([c.force_history for c in model.connectors]),
+        joint_dissipation=np.array([c.dissipated_energy_history for c in model.connectors]),
         config=cfg, metadata={"amplitude": amplitude, "frequency": frequency, "cycles": cycles,
                               "steps_per_cycle": steps_per_cycle, "solver": "SolveStatic"})
 
@@ -506,7 +506,7 @@ def _decay_run(cfg, level, modal, *, cycles, steps_per_period, joint_factory,
     # mode 1 by modal filtering, expressed as the tip displacement it carries
     q1 = modal.modal_coordinates(np.array(coords)[-len(d):][free]) * abs(modal.tip[0])
     amp, freq, damp = decay_analysis(t, q1)
-    slips = np.array([c.slip for c in model.connectors]) if model.connectors else np.empty((0, len(t)))
+    slips = np.array([c.slip_history for c in model.connectors]) if model.connectors else np.empty((0, len(t)))
     if model.connectors:
         slips = slips[:, -len(t):]        # the free-vibration part of the records
     return DecayRun(level=float(d[0, 2]), t=t, tip=tip, slips=slips,

@@ -211,8 +211,8 @@ def test_augmented_model_in_the_exudyn_connector_reproduces_the_fit(name):
     h = float(tt[1] - tt[0])
     chain.solve(settings(h, tt.size - 1))
     assert conn.n_records == tt.size
-    np.testing.assert_allclose(conn.slip, uu, rtol=0, atol=1e-12 * np.abs(uu).max())
-    np.testing.assert_allclose(conn.force, g.force_after, rtol=0, atol=1e-8 * np.abs(d.F).max())
+    np.testing.assert_allclose(conn.slip_history, uu, rtol=0, atol=1e-12 * np.abs(uu).max())
+    np.testing.assert_allclose(conn.force_history, g.force_after, rtol=0, atol=1e-8 * np.abs(d.F).max())
 
 
 # ----------------------------------------------------------------------------- vibration

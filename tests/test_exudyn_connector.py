@@ -76,7 +76,7 @@ def test_displacement_driven_loop_area_equals_dissipation(ratio):
     conn = chain.joint(-1, 0, IwanJoint(P))
     chain.solve(settings(h, n_cycle + n_cycle // 4))
 
-    u, F, W = conn.slip, conn.force, conn.work
+    u, F, W = conn.slip_history, conn.force_history, conn.work_history
     assert u[n_cycle // 4] == pytest.approx(u0, rel=1e-12)
     i0, i1 = n_cycle // 4, n_cycle // 4 + n_cycle         # one full cycle, peak to peak
     du = np.diff(u[i0:i1 + 1])
@@ -115,7 +115,7 @@ def test_matches_independent_newmark_integration(make, solver):
     conn, chain, t, x, v = _forced_one_mass(make(), h=5e-5, n=2000, solver=solver)
     assert np.max(np.abs(x)) > 1.5 * P.phi_max                  # the run reaches macroslip
     assert np.allclose(conn.time, t, rtol=0, atol=1e-12)
-    assert _max_rel(conn.slip, x) < 1e-8
+    assert _max_rel(conn.slip_history, x) < 1e-8
     assert abs(chain.velocity(0) - v[-1]) / np.max(np.abs(v)) < 1e-8
 
 
@@ -123,7 +123,7 @@ def test_matches_independent_newmark_integration(make, solver):
 def _check_large_steps(element):
     """Generalized-alpha with ~11 steps per period: must equal the reference."""
     conn, _, _, x, _ = _forced_one_mass(element, h=5e-4, n=100)
-    assert _max_rel(conn.slip, x) < 1e-8
+    assert _max_rel(conn.slip_history, x) < 1e-8
 
 
 def _check_adaptive_rejections(element):
@@ -139,18 +139,18 @@ def _check_adaptive_rejections(element):
         return True
 
     chain.mbs.SetPreStepUserFunction(user_pre_step)
-    conn = chain.joint(-1, 0, element)
+    conn = chain.joint(-1, 0, element, allow_adaptive_explicit=True)
     chain.solve(settings(1e-4, 500, adaptive=True, tol=1e-6), SOLVERS.DOPRI5)
     accepted = conn.n_records - 1
     assert attempts[0] > accepted                                 # some attempts were rejected
     replay = IwanJoint(P)
-    forces = replay.force_history(conn.slip)
-    assert np.max(np.abs(forces - conn.force)) / P.Fs < 1e-12
+    forces = replay.force_history(conn.slip_history)
+    assert np.max(np.abs(forces - conn.force_history)) / P.Fs < 1e-12
     j = IwanJoint(P)
-    for ui in conn.slip:
+    for ui in conn.slip_history:
         j.trial(ui)
         j.commit()
-    assert j.dissipated_energy == pytest.approx(conn.dissipated_energy[-1], rel=1e-12)
+    assert j.dissipated_energy == pytest.approx(conn.dissipated_energy_history[-1], rel=1e-12)
 
 
 def test_large_steps_correct():
@@ -202,14 +202,14 @@ def test_history_holds_accepted_states_for_every_solver(solver, kw, end_of_step_
 
     chain.mbs.SetPostStepUserFunction(user_post_step)
     chain.mbs.SetPreStepUserFunction(guard_pre_step)
-    conn = chain.joint(-1, 0, IwanJoint(P))
+    conn = chain.joint(-1, 0, IwanJoint(P), allow_adaptive_explicit=True)
     sim = settings(h, n, **kw)
     sim.timeIntegration.explicit.computeEndOfStepAccelerations = end_of_step_acc
     chain.solve(sim, solver)
-    u = conn.slip
+    u = conn.slip_history
     assert np.array_equal(u, np.array(accepted))           # committed exactly at accepted states
     assert np.max(np.abs(u)) > P.phi_max and len(_reversal_indices(u)) >= 8
-    assert np.max(np.abs(IwanJoint(P).force_history(u) - conn.force)) / P.Fs < 1e-12
+    assert np.max(np.abs(IwanJoint(P).force_history(u) - conn.force_history)) / P.Fs < 1e-12
     assert conn.time[0] == 0.0 and conn.time[-1] == pytest.approx(0.04, rel=1e-9)
     assert np.all(np.diff(conn.time) > 0)
 
@@ -262,7 +262,7 @@ def test_rate_dependent_element_commits_the_accepted_velocity(solver, end_of_ste
 
     chain.mbs.SetPostStepUserFunction(user_post_step)
     element = _RateRecorder(1e5, 30.0)
-    chain.joint(0, 1, element)
+    chain.joint(0, 1, element, allow_adaptive_explicit=True)
     sim = settings(h, n)
     sim.timeIntegration.explicit.computeEndOfStepAccelerations = end_of_step_acc
     chain.solve(sim, solver)
@@ -303,10 +303,10 @@ def test_two_connectors_with_different_parameters_and_user_functions():
                                 springs=[(-1, 0, k1)], h=h, n_steps=n,
                                 force=lambda tt: np.array([0.0, f0 * math.sin(om * tt)]))
     assert calls == {"pre": n, "post": n + 1}
-    assert _max_rel(conns[0].slip, x[:, 0]) < 1e-8
-    assert _max_rel(conns[1].slip, x[:, 1] - x[:, 0]) < 1e-8
+    assert _max_rel(conns[0].slip_history, x[:, 0]) < 1e-8
+    assert _max_rel(conns[1].slip_history, x[:, 1] - x[:, 0]) < 1e-8
     assert np.max(np.abs(x[:, 1] - x[:, 0])) > pb.phi_max     # joint B also reaches macroslip
-    assert conns[0].dissipated_energy[-1] > 0 and conns[1].dissipated_energy[-1] > 0
+    assert conns[0].dissipated_energy_history[-1] > 0 and conns[1].dissipated_energy_history[-1] > 0
 
 
 def test_static_solver_commits_load_steps():
@@ -322,8 +322,8 @@ def test_static_solver_commits_load_steps():
     sim.staticSolver.newton.relativeTolerance = 1e-12
     sim.staticSolver.verboseMode = 0
     chain.mbs.SolveStatic(sim)
-    u = conn.slip[-1]
+    u = conn.slip_history[-1]
     assert conn.n_records == 6
     assert backbone(u, P) + k * u == pytest.approx(F, rel=1e-9)
-    assert conn.force[-1] == pytest.approx(backbone(u, P), rel=1e-12)
-    assert np.all(np.diff(conn.slip) > 0)                      # monotone quasi-static loading
+    assert conn.force_history[-1] == pytest.approx(backbone(u, P), rel=1e-12)
+    assert np.all(np.diff(conn.slip_history) > 0)                      # monotone quasi-static loading

@@ -40,7 +40,7 @@ def _one_dof_slip(v_axis, h, n):
     chain = Chain([1.0], v0=[v_axis])
     conn = chain.joint(-1, 0, IwanJoint(P))
     chain.solve(settings(h, n))
-    return conn.slip
+    return conn.slip_history
 
 
 def test_position_markers_with_global_axis_equal_the_coordinate_joint():
@@ -54,10 +54,10 @@ def test_position_markers_with_global_axis_equal_the_coordinate_joint():
     mbs.SolveDynamic(settings(h, n))
     reference = _one_dof_slip(3.0, h, n)
     assert np.max(np.abs(reference)) > P.phi_max
-    assert np.max(np.abs(conn.slip - reference)) / np.max(np.abs(reference)) < 1e-9
+    assert np.max(np.abs(conn.slip_history - reference)) / np.max(np.abs(reference)) < 1e-9
     p_end = np.array(mbs.GetNodeOutput(node, exu.OutputVariableType.Position))
     assert p_end @ b == pytest.approx(0.5 * n * h, rel=1e-9)     # free motion across the axis
-    assert p_end @ a == pytest.approx(conn.slip[-1], rel=1e-12)
+    assert p_end @ a == pytest.approx(conn.slip_history[-1], rel=1e-12)
 
 
 def _rigid_frame(mbs, angle, rotation=None):
@@ -91,7 +91,7 @@ def test_axis_in_a_rotated_body_frame_equals_the_rotated_global_axis():
             conn = add_iwan_connector(mbs, [m_ground, m_body], IwanJoint(P), axis=a)
         mbs.Assemble()
         mbs.SolveDynamic(settings(h, n))
-        slips.append(conn.slip)
+        slips.append(conn.slip_history)
     assert np.max(np.abs(slips[0])) > P.phi_max
     assert np.max(np.abs(slips[1] - slips[0])) / np.max(np.abs(slips[0])) < 1e-9
 
@@ -116,7 +116,7 @@ def test_rotating_axis_slip_is_the_projection_on_the_current_axis():
     axes = np.stack([np.cos(angle0 + spin * t), np.sin(angle0 + spin * t)], axis=1)
     projected = np.sum(p[:, :2] * axes, axis=1)
     assert len(p) == len(t)
-    assert np.max(np.abs(conn.slip - projected)) < 1e-12 * max(1.0, np.max(np.abs(projected)))
+    assert np.max(np.abs(conn.slip_history - projected)) < 1e-12 * max(1.0, np.max(np.abs(projected)))
     assert np.ptp(angle0 + spin * t) > 0.3                     # the axis really turned
 
 
@@ -184,8 +184,26 @@ def test_options_are_keyword_only_and_typos_are_rejected(parts):
 def test_a_joint_instance_serves_one_connector_only(parts):
     j = IwanJoint(P)
     add_iwan_connector(parts["mbs"], [parts["coord0"], parts["coord1"]], j)
-    with pytest.raises(ValueError, match="already used by connector"):
+    with pytest.raises(ValueError, match="already attached"):
         add_iwan_connector(parts["mbs"], [parts["coord1"], parts["coord0"]], j)
+
+
+def test_a_joint_instance_is_refused_by_a_second_system():
+    """Issue 14: the same element in two systems would share its history."""
+    j = IwanJoint(P)
+    systems = []
+    for _ in range(2):
+        SC = exu.SystemContainer()
+        mbs = SC.AddSystem()
+        g = mbs.AddNode(NodePointGround())
+        n = mbs.AddNode(Node1D(referenceCoordinates=[0.0]))
+        mbs.AddObject(Mass1D(mass=1.0, nodeNumber=n))
+        ms = [mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=k, coordinate=0)) for k in (g, n)]
+        systems.append((SC, mbs, ms))
+    conn = add_iwan_connector(systems[0][1], systems[0][2], j)
+    with pytest.raises(ValueError, match="already attached"):
+        add_iwan_connector(systems[1][1], systems[1][2], j)
+    assert conn.joint is j
 
 
 def test_visualization_and_name_reach_the_exudyn_object(parts):
@@ -203,9 +221,20 @@ def test_visualization_and_name_reach_the_exudyn_object(parts):
 
 
 # ---------------------------------------------------------------------------- chaining, reset
-def test_post_step_function_set_after_the_connectors_is_chained_and_can_stop_the_run():
+def test_symbolic_route_refuses_records_when_its_post_step_was_replaced():
+    """No Python force function notices a post-step function set later: say so, loudly."""
     chain = Chain([1.0], v0=[3.0])
     conn = chain.joint(-1, 0, IwanJoint(P))
+    assert conn.route == "symbolic"
+    chain.mbs.SetPostStepUserFunction(lambda mbs, t: True)
+    chain.solve(settings(1e-4, 50))
+    with pytest.raises(RuntimeError, match="post-step dispatcher was replaced"):
+        conn.slip_history
+
+
+def test_post_step_function_set_after_the_connectors_is_chained_and_can_stop_the_run():
+    chain = Chain([1.0], v0=[3.0])
+    conn = chain.joint(-1, 0, IwanJoint(P), law="python")
     seen = []
 
     def user_post_step(mbs, t):
@@ -221,7 +250,7 @@ def test_post_step_function_set_after_the_connectors_is_chained_and_can_stop_the
 
 def test_user_function_that_calls_the_previous_one_by_hand_does_not_commit_twice():
     chain = Chain([1.0], v0=[3.0])
-    conn = chain.joint(-1, 0, IwanJoint(P))
+    conn = chain.joint(-1, 0, IwanJoint(P), law="python")
     got = chain.mbs.GetPostStepUserFunction()
     previous = got["function"] if isinstance(got, dict) else got
     calls = [0]
@@ -268,7 +297,7 @@ def test_generic_route_equals_the_node_coordinate_shortcut():
     for generic in (False, True):
         chain = Chain([1.0], v0=[3.0])
         chain.spring(-1, 0, 2e5)
-        conn = chain.joint(-1, 0, IwanJoint(P))
+        conn = chain.joint(-1, 0, IwanJoint(P), law="python")
         if generic:
             conn._fast_nodes = None
         chain.solve(settings(1e-4, 300), exu.DynamicSolverType.RK44)
@@ -293,14 +322,14 @@ def test_offset_shifts_the_unloaded_position():
     runs = {}
     for offset in (0.0, d):
         chain = Chain([1.0], x0=[offset], v0=[3.0])
-        conn = chain.joint(-1, 0, IwanJoint(P), offset=offset)
+        conn = chain.joint(-1, 0, IwanJoint(P), offset=offset, law="python")
         positions = []
         chain.mbs.SetPostStepUserFunction(lambda mbs, t: positions.append(
             mbs.GetNodeOutput(chain.nodes[0], exu.OutputVariableType.Coordinates)) or True)
         chain.solve(settings(h, n))
-        runs[offset] = (conn.slip, np.array(positions))
+        runs[offset] = (conn.slip_history, np.array(positions))
     (u0, x0), (ud, xd) = runs[0.0], runs[d]
-    assert conn.slip[0] == 0.0 and np.max(np.abs(u0)) > P.phi_max
+    assert conn.slip_history[0] == 0.0 and np.max(np.abs(u0)) > P.phi_max
     assert np.max(np.abs(ud - u0)) < 1e-12 * np.max(np.abs(u0)) + 1e-15
     assert np.allclose(xd - d, x0, rtol=0, atol=1e-12 * np.max(np.abs(x0)) + 1e-15)
     # position markers: the offset is measured along the axis
@@ -309,8 +338,8 @@ def test_offset_shifts_the_unloaded_position():
     conn = add_iwan_connector(mbs, [m_ground, m_body], IwanJoint(P), axis=a, offset=-d)
     mbs.Assemble()
     mbs.SolveDynamic(settings(h, n))
-    assert conn.slip[0] == pytest.approx(d, rel=1e-12)               # u = a.(p1 - p0) - offset
-    assert conn.force[0] == pytest.approx(IwanJoint(P).trial(d)[0], rel=1e-12)
+    assert conn.slip_history[0] == pytest.approx(d, rel=1e-12)               # u = a.(p1 - p0) - offset
+    assert conn.force_history[0] == pytest.approx(IwanJoint(P).trial(d)[0], rel=1e-12)
 
 
 # ---------------------------------------------------------------------------- coordinate views
@@ -347,12 +376,12 @@ def test_continued_run_after_reassemble_reads_the_moved_coordinates():
     n_before = conn.n_records
     mbs.SolveDynamic(sim)
     accepted = mbs.GetSensorStoredData(sensor)
-    u = conn.slip
+    u = conn.slip_history
     k = conn.n_records - n_before       # n steps, plus the initial state if the start time
     assert k in (n, n + 1)              # differs in the last bit from the last accepted time
     assert np.array_equal(conn.time[n_before:], accepted[-k:, 0])
     assert np.array_equal(u[n_before:], accepted[-k:, 1])
-    assert np.max(np.abs(IwanJoint(P).force_history(u) - conn.force)) / P.Fs < 1e-12
+    assert np.max(np.abs(IwanJoint(P).force_history(u) - conn.force_history)) / P.Fs < 1e-12
 
 
 @pytest.mark.parametrize("solver", [exu.DynamicSolverType.GeneralizedAlpha, exu.DynamicSolverType.RK44])
@@ -361,7 +390,7 @@ def test_post_step_function_set_between_runs_of_a_continued_simulation_is_chaine
     connector must keep committing (its dispatcher put back in front) and the user's function
     must run."""
     chain = Chain([1.0], v0=[3.0])
-    conn = chain.joint(-1, 0, IwanJoint(P))
+    conn = chain.joint(-1, 0, IwanJoint(P), law="python")
     sim = settings(1e-4, 200)
     chain.solve(sim, solver)
     n1, t1 = conn.n_records, conn.time[-1]

@@ -4,5 +4,6 @@
 :mod:`iwan_element.exudyn.connector`.
 """
 from .connector import IwanConnector, add_iwan_connector
+from .interface import IwanInterface, add_iwan_interface
 
-__all__ = ["add_iwan_connector", "IwanConnector"]
+__all__ = ["add_iwan_connector", "IwanConnector", "add_iwan_interface", "IwanInterface"]

@@ -44,10 +44,12 @@ Exudyn settings to remember
 * Newton's ``absoluteTolerance`` is a residual in force units; for stiff joints use a
   tight ``relativeTolerance`` (the default 1e-8 of the step's initial residual is fine
   for plots, use ~1e-10 or below for energy checks).
-* Use ``simulationSettings.parallel.numberOfThreads = 1``: with two threads Exudyn 1.13.6
-  was observed to hang with about 20 or more Python-function connectors.
+* Several solver threads are refused (``ValueError`` at the start of the run) for
+  connectors with the Python force law: with two threads Exudyn 1.13.6 was observed to hang
+  with about 20 or more Python-function connectors. The symbolic law is allowed.
+* ODE23/DOPRI5 with automatic step size are refused (see :func:`check_settings`).
 * A user-function connector reports no potential energy to Exudyn; use the connector's
-  records (:attr:`IwanConnector.stored_energy`, ...).
+  records (:attr:`IwanConnector.stored_energy_history`, ...).
 * For position markers the accepted state is obtained through ``mbs.GetObjectOutput``,
   which allocates; on long runs Exudyn may then print a harmless "large amount of memory
   allocations" warning.
@@ -66,6 +68,7 @@ from __future__ import annotations
 
 import logging
 import math
+import weakref
 from array import array
 from collections.abc import Mapping
 
@@ -75,7 +78,9 @@ from exudyn.itemInterface import (ObjectConnectorCartesianSpringDamper,
                                   ObjectConnectorCoordinateSpringDamper)
 
 from ..core._validation import check_scalar
+from ..core.joint import IwanJoint
 from ..core.protocol import check_element
+from . import _symbolic_connector as _symbolic
 
 __all__ = ["add_iwan_connector", "IwanConnector"]
 
@@ -122,20 +127,22 @@ class _PostStepDispatcher:
         self.connectors = []       # in creation order
         self.last_t = _NAN
         self.running = False
-        self.n_ode2 = -1           # ODE2 size when the connectors took their coordinate views
+        self.solvers = (None, None)    # the solver objects of the run the views belong to
         conns = self.connectors
         disp = self
-        ode2_size = mbs.systemData.ODE2Size
+        sysd = mbs.sys             # Exudyn's SolveDynamic/SolveStatic store their solver here
 
         def post_step_dispatcher(mbs, t):
             if disp.running:       # re-entered through a user function that calls us by hand
                 return True
             disp.running = True
             try:
+                solvers = (sysd.get("dynamicSolver"), sysd.get("staticSolver"))
+                if solvers[0] is not disp.solvers[0] or solvers[1] is not disp.solvers[1]:
+                    disp.solvers = solvers     # a new solve (maybe after an Assemble)
+                    disp.new_solve(mbs)
                 if t > disp.last_t:            # the usual case: the next accepted step
                     disp.last_t = t
-                    if disp.n_ode2 >= 0 and ode2_size() != disp.n_ode2:
-                        disp.refresh(mbs)      # re-assembled with more coordinates
                     for c in conns:
                         c._accept(t)
                 elif t != disp.last_t:         # a new run (never commit twice at one time)
@@ -161,14 +168,18 @@ class _PostStepDispatcher:
 
         Exudyn keeps its coordinate vectors in place during a run and across runs; only an
         ``Assemble`` that makes them longer moves them (exudyn 1.13.6). So the views are
-        renewed at the start of every run and whenever the number of ODE2 coordinates
-        differs from the one at the last renewal (checked once per accepted step).
+        renewed at the start of every run: a new solver object in ``mbs.sys`` (each
+        ``SolveDynamic``/``SolveStatic`` stores one), or an accepted time not after the last.
         """
-        fast = False
         for c in self.connectors:
             c._refresh(mbs)
-            fast = fast or c._read is not None
-        self.n_ode2 = mbs.systemData.ODE2Size() if fast else -1
+
+    def new_solve(self, mbs) -> None:
+        """Start of a solve: refuse settings the connectors cannot serve, then refresh."""
+        settings = mbs.sys.get("simulationSettings")
+        if settings is not None:
+            check_settings(settings, self.connectors)
+        self.refresh(mbs)
 
     @staticmethod
     def of(obj):
@@ -197,6 +208,42 @@ class _PostStepDispatcher:
         mbs.SetPostStepUserFunction(self.callback)
 
 
+def check_settings(settings, connectors) -> None:
+    """Refuse, before the first step, solver settings the joints cannot serve exactly.
+
+    * more than one solver thread with a Python force law: with two threads Exudyn 1.13.6
+      was seen to hang with about 20 or more Python-function connectors (the symbolic law
+      runs without Python and is allowed);
+    * an explicit solver with automatic step size (ODE23, DOPRI5): the joint's history is
+      committed once per accepted step, so a reversal inside a step is not seen by the
+      solver's error estimate; measured on the 1-DOF free-decay model (tests), DOPRI5 at
+      tolerances 1e-6, 1e-8 and 1e-10 missed the converged implicit result by 7e-3, 1e-4 and
+      8e-3 of the amplitude. Fixed-step explicit methods converge as the step falls and are
+      allowed; pass ``allow_adaptive_explicit=True`` to the connector to run anyway.
+    """
+    python = [c for c in connectors if getattr(c, "_route", "python") == "python"]
+    threads = settings.parallel.numberOfThreads
+    if python and threads > 1:
+        raise ValueError(
+            f"simulationSettings.parallel.numberOfThreads = {threads}: {len(python)} Iwan "
+            "connector(s) use a Python force law, which is not safe with several solver "
+            "threads (Exudyn was seen to hang); set numberOfThreads = 1, or use IwanJoint "
+            "elements (symbolic law, law='auto') or add_iwan_interface")
+    ti = settings.timeIntegration
+    if ti.solverType in ADAPTIVE_EXPLICIT and ti.automaticStepSize:
+        strict = [c for c in connectors if not getattr(c, "_allow_adaptive_explicit", False)]
+        if strict:
+            raise ValueError(
+                f"solverType {ti.solverType} with automaticStepSize = True is refused for Iwan "
+                "joints: a reversal inside a step is invisible to its error estimate, and the "
+                "result does not converge with the tolerance (errors of 1e-4 to 1e-2 of the "
+                "amplitude were measured); use GeneralizedAlpha, or a fixed step "
+                "(automaticStepSize = False), or pass allow_adaptive_explicit=True")
+
+
+ADAPTIVE_EXPLICIT = frozenset({exu.DynamicSolverType.ODE23, exu.DynamicSolverType.DOPRI5})
+
+
 def _dispatcher_for(mbs) -> _PostStepDispatcher:
     current = _installed_post_step(mbs)
     d = _PostStepDispatcher.of(current)
@@ -205,6 +252,26 @@ def _dispatcher_for(mbs) -> _PostStepDispatcher:
     d = _PostStepDispatcher(current, mbs)
     mbs.SetPostStepUserFunction(d.callback)
     return d
+
+
+# ---------------------------------------------------------------------------- ownership
+_ATTACHED: dict = {}        # id(element) -> (weakref to its connector, the element)
+
+
+def _claim(joint, handle) -> None:
+    """Refuse an element that a live connector (of any system) already uses: its history
+    would be shared by two force laws."""
+    key = id(joint)
+    got = _ATTACHED.get(key)
+    if got is not None and got[1] is joint:
+        owner = got[0]()
+        if owner is not None:
+            raise ValueError(
+                f"joint is already attached to {owner!r} (possibly in another system); its "
+                "history would be shared: give every connector its own element instance")
+    _ATTACHED[key] = (weakref.ref(handle), joint)
+    for k in [k for k, (ref, _) in _ATTACHED.items() if ref() is None]:
+        del _ATTACHED[k]
 
 
 # ---------------------------------------------------------------------------- validation
@@ -301,6 +368,9 @@ class IwanConnector:
         self._read = None           # (q, q_t, i0, i1) on the fast route, else None (generic)
         self._fast_nodes = None     # set for two NodeCoordinate markers; resolved in _refresh
         self._accept = self._generic_accept
+        self._route = "python"
+        self._state = None          # symbolic route: the law's variables
+        self._overflows = []
 
     # -------------------------------------------------------------- per-step work
     def _generic_accept(self, t):
@@ -384,6 +454,9 @@ class IwanConnector:
         """Start of a run: resolve the global coordinate indices and take fresh views of the
         system coordinates (Assemble may have moved them); the views stay valid during a
         run (checked at every accepted step for all solvers, see the tests)."""
+        if self._route == "symbolic":
+            _symbolic.symbolic_refresh(self, mbs)
+            return
         if self._fast_nodes is None:
             self._read = None
             self._accept = self._generic_accept
@@ -461,6 +534,8 @@ class IwanConnector:
         dynamic run started from a static solution).
         """
         self._joint.reset()
+        if self._route == "symbolic":
+            _symbolic.reset_state(self)
         del self._rec[:]
         self._buf.clear()
         self._lu = _NAN
@@ -470,7 +545,31 @@ class IwanConnector:
         if self._dispatcher is not None:
             self._dispatcher.last_t = _NAN
 
+    def _check_running(self) -> None:
+        """The symbolic route has no Python force function to notice a replaced post-step
+        function; refuse to return records of a run in which the joint was not committed."""
+        d = self._dispatcher
+        if self._route == "symbolic" and d is not None \
+                and not d.reachable_from(_installed_post_step(self._mbs)):
+            raise RuntimeError(
+                "the connector's post-step dispatcher was replaced by another post-step user "
+                "function, so the joint was not committed; set your post-step function before "
+                "add_iwan_connector (it is then chained) and run again")
+
+    @property
+    def route(self) -> str:
+        """``"symbolic"`` (the exact Iwan law as an Exudyn symbolic expression) or
+        ``"python"`` (a Python force function calling ``joint.trial``)."""
+        return self._route
+
+    @property
+    def overflow_times(self) -> np.ndarray:
+        """Symbolic route: times [s] of accepted steps that read an older reversal point
+        than the law holds (not exact; raise ``depth``). Empty in a sound run."""
+        return np.array(self._overflows)
+
     def _column(self, i: int) -> np.ndarray:
+        self._check_running()
         self._flush()
         return np.array(self._rec[i::_NCOL], dtype=float)
 
@@ -485,28 +584,28 @@ class IwanConnector:
         return self._column(0)
 
     @property
-    def slip(self) -> np.ndarray:
+    def slip_history(self) -> np.ndarray:
         """Joint slip ``u`` at the accepted steps [m], shape (n,)."""
         return self._column(1)
 
     @property
-    def force(self) -> np.ndarray:
+    def force_history(self) -> np.ndarray:
         """Joint force at the accepted steps [N], shape (n,); positive when it pulls
         marker 1 back towards marker 0 (resists positive slip)."""
         return self._column(2)
 
     @property
-    def dissipated_energy(self) -> np.ndarray:
+    def dissipated_energy_history(self) -> np.ndarray:
         """Energy dissipated by the joint since the last reset [J], shape (n,)."""
         return self._column(3)
 
     @property
-    def work(self) -> np.ndarray:
+    def work_history(self) -> np.ndarray:
         """Work done on the joint, ``int F du`` since the last reset [J], shape (n,)."""
         return self._column(4)
 
     @property
-    def stored_energy(self) -> np.ndarray:
+    def stored_energy_history(self) -> np.ndarray:
         """Elastic energy stored in the joint [J], shape (n,): ``work - dissipated_energy``
         (the element protocol's identity; only these two are recorded per step)."""
         return self._column(4) - self._column(3)
@@ -514,6 +613,7 @@ class IwanConnector:
     def records(self) -> dict:
         """All records as a dict of arrays of shape (n,): ``time [s], slip [m], force [N],
         stored_energy [J], dissipated_energy [J], work [J]``."""
+        self._check_running()
         self._flush()
         data = np.array(self._rec, dtype=float).reshape(-1, _NCOL)
         return {"time": data[:, 0].copy(), "slip": data[:, 1].copy(),
@@ -528,7 +628,8 @@ class IwanConnector:
 
 def add_iwan_connector(mbs, markerNumbers, joint, *, axis=None, axisMarker=None,
                        offset: float = 0.0, name: str = "", visualization=None,
-                       record: bool = True) -> IwanConnector:
+                       record: bool = True, law: str = "auto", depth: int = 8,
+                       allow_adaptive_explicit: bool = False) -> IwanConnector:
     """Add a history-dependent joint element between two markers of an Exudyn system.
 
     Parameters
@@ -563,7 +664,23 @@ def add_iwan_connector(mbs, markerNumbers, joint, *, axis=None, axisMarker=None,
     visualization : dict, optional, keyword-only
         Keys among ``show``, ``drawSize``, ``color`` (as for Exudyn's spring-dampers).
     record : bool, keyword-only
-        Record time, slip, force and energies at every accepted step (default ``True``).
+        Record time, slip, force and energies at every accepted step (default ``True``);
+        ``False`` stores nothing.
+    law : {"auto", "symbolic", "python"}, keyword-only
+        How the force is evaluated. ``"symbolic"``: the exact Iwan law as an Exudyn symbolic
+        expression (no Python call per force evaluation; thread-safe); only for an
+        :class:`~iwan_element.IwanJoint` on two ``MarkerNodeCoordinate`` markers or on
+        position markers with a global axis. ``"python"``: a Python force function calling
+        ``joint.trial`` (any element). ``"auto"`` (default) picks ``"symbolic"`` where it
+        applies.
+    depth : int, keyword-only
+        Reversal points the symbolic law holds (default 8, range [2, 64]); a step that
+        needs more (``depth // 2`` loop closures inside one step) is logged and listed in
+        :attr:`IwanConnector.overflow_times`.
+    allow_adaptive_explicit : bool, keyword-only
+        Run with ODE23/DOPRI5 and automatic step size, which are refused by default
+        (a run starting with them raises ``ValueError``): a reversal inside a step is not
+        seen by their error estimate and the result does not converge with the tolerance.
 
     Returns
     -------
@@ -604,6 +721,13 @@ def add_iwan_connector(mbs, markerNumbers, joint, *, axis=None, axisMarker=None,
         raise ValueError(f"name must be a str, got {type(name).__name__}")
     if not isinstance(record, bool):
         raise ValueError(f"record must be True or False, got {record!r}")
+    if not isinstance(allow_adaptive_explicit, bool):
+        raise ValueError(f"allow_adaptive_explicit must be True or False, got "
+                         f"{allow_adaptive_explicit!r}")
+    if law not in ("auto", "symbolic", "python"):
+        raise ValueError(f"law must be 'auto', 'symbolic' or 'python', got {law!r}")
+    if isinstance(depth, bool) or not isinstance(depth, (int, np.integer)) or not 2 <= depth <= 64:
+        raise ValueError(f"depth must be an int in [2, 64], got {depth!r}")
     vis = _visualization(visualization)
 
     t0 = _marker_type(mbs, markerNumbers[0], "markerNumbers[0]")
@@ -637,16 +761,19 @@ def add_iwan_connector(mbs, markerNumbers, joint, *, axis=None, axisMarker=None,
             axis_marker = int(axisMarker)
 
     dispatcher = _dispatcher_for(mbs)
-    for other in dispatcher.connectors:
-        if other._joint is joint:
-            raise ValueError(f"joint is already used by connector {other.objectNumber}; "
-                             "give every connector its own element instance")
-
     conn = IwanConnector(mbs, markerNumbers, joint, kind, unit, axis_marker, offset, record)
+    _claim(joint, conn)
     conn._dispatcher = dispatcher
+    conn._allow_adaptive_explicit = allow_adaptive_explicit
     if kind == "coordinate":
         conn._fast_nodes = _node_coordinate_nodes(mbs, markerNumbers)
-    if kind == "coordinate":
+    route = _choose_route(law, joint, kind, conn._fast_nodes, axis_marker)
+    if route == "symbolic":
+        conn._route = "symbolic"
+        item = _symbolic.symbolic_item(conn, int(depth), name, vis)
+        _symbolic.sync_stack(conn)
+        conn._state.set_uc(joint.displacement)
+    elif kind == "coordinate":
         uf = _coordinate_force_function(conn)
         item = ObjectConnectorCoordinateSpringDamper(
             name=name, markerNumbers=list(markerNumbers), stiffness=0.0, damping=0.0,
@@ -663,6 +790,21 @@ def add_iwan_connector(mbs, markerNumbers, joint, *, axis=None, axisMarker=None,
     dispatcher.add(conn)
     _log.debug("added %r", conn)
     return conn
+
+
+def _choose_route(law, joint, kind, fast_nodes, axis_marker) -> str:
+    why = None
+    if type(joint) is not IwanJoint:
+        why = f"the joint is a {type(joint).__name__} (the symbolic law is the IwanJoint's)"
+    elif kind == "coordinate" and fast_nodes is None:
+        why = "the coordinate markers are not both MarkerNodeCoordinate"
+    elif axis_marker is not None:
+        why = "the axis rotates with axisMarker"
+    if law == "symbolic" and why is not None:
+        raise ValueError(f"law='symbolic' is not available here: {why}; use law='python'")
+    if law == "python" or why is not None:
+        return "python"
+    return "symbolic"
 
 
 # ---------------------------------------------------------------------------- force functions

@@ -1,0 +1,328 @@
+"""A bank of independent exact Iwan joints committed in one vectorised call.
+
+Each point ``i`` is an exact four-parameter Iwan joint with its own parameters and its own
+reversal-point memory (the extended Masing rules of :mod:`iwan_element.core.joint`,
+REFERENCE.md section 2, paper eqs. 13-15). :meth:`IwanJointBank.commit` moves every point to a
+new displacement at once:
+
+* points that continue their current branch without a reversal and without closing a loop
+  (nearly all points at nearly all steps of a time integration) are updated with numpy
+  operations on the whole bank: force from the branch formula, work and dissipation from the
+  closed forms ``G`` and ``I_H`` (the same formulas as ``IwanJoint``'s fast path);
+* the few points with an event (a reversal, a closed loop, the first move) walk their reversal
+  stack one by one, exactly as ``IwanJoint`` does.
+
+The bank is the committed state of a multi-contact interface; it never evaluates trials for
+a solver (the solver's trial forces come from the symbolic law of
+:mod:`iwan_element.exudyn._symbolic_law`, which reads the state this bank exposes).
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ._validation import check_scalar, finite_array
+from .parameters import IwanParameters
+
+__all__ = ["IwanJointBank"]
+
+_INF = math.inf
+
+
+class IwanJointBank:
+    """``n`` exact Iwan joints with vectorised commits.
+
+    Parameters
+    ----------
+    params : sequence of IwanParameters
+        One parameter set per point (SI units).
+    reversal_tol : float, keyword-only
+        Relative reversal tolerance, as for :class:`~iwan_element.IwanJoint` (default 1e-12,
+        range ``[0, 1e-3]``); the absolute tolerance of point ``i`` is
+        ``reversal_tol * phi_max_i``.
+
+    Notes
+    -----
+    The forces, energies and reversal stacks equal those of ``n`` separate
+    :class:`~iwan_element.IwanJoint` objects driven by the same displacements (tested to
+    round-off).
+    """
+
+    def __init__(self, params, *, reversal_tol: float = 1e-12):
+        params = list(params)
+        if not params:
+            raise ValueError("params must hold at least one IwanParameters, got an empty sequence")
+        for i, p in enumerate(params):
+            if not isinstance(p, IwanParameters):
+                raise ValueError(f"params[{i}] must be an IwanParameters instance, "
+                                 f"got {type(p).__name__}")
+        tol = check_scalar("reversal_tol", reversal_tol, low=0.0, high=1e-3)
+        self._params = tuple(params)
+        self._rtol = tol
+        f = np.array
+        self.KT = f([p.KT for p in params], dtype=float)
+        self.Fs = f([p.Fs for p in params], dtype=float)
+        self.pm = f([p.phi_max for p in params], dtype=float)
+        chi = f([p.chi for p in params], dtype=float)
+        R = f([p.R for p in params], dtype=float)
+        self.e1 = chi + 1.0
+        self.e3 = chi + 3.0
+        self.a = R / ((chi + 1.0) * (chi + 2.0))      # backbone x (KT - a x^(chi+1))
+        self.b = R / (chi + 1.0)                       # tangent KT - b x^(chi+1)
+        self.g_pm = 0.5 * self.KT * self.pm ** 2 - self.a * self.pm ** self.e3 / self.e3
+        self.ih_c = R / ((chi + 2.0) * (chi + 3.0))
+        self.ih_pm = self.ih_c * self.pm ** self.e3
+        self.tol = tol * self.pm
+        self._halfKT = 0.5 * self.KT
+        self._a_e3 = self.a / self.e3
+        self._e1s = float(self.e1[0]) if np.all(self.e1 == self.e1[0]) else None
+        self._scal = [(float(self.KT[i]), float(self.Fs[i]), float(self.pm[i]), float(self.e1[i]),
+                       float(self.e3[i]), float(self.a[i]), float(self.g_pm[i]),
+                       float(self.ih_c[i]), float(self.ih_pm[i]), float(self.tol[i]))
+                      for i in range(len(params))]
+        self.reset()
+
+    # ------------------------------------------------------------------ state
+    @property
+    def n_points(self) -> int:
+        """Number of joints in the bank."""
+        return len(self._params)
+
+    @property
+    def params(self) -> tuple:
+        """The parameter sets, one per point."""
+        return self._params
+
+    def reset(self) -> None:
+        """Return every point to the virgin, unloaded state; energies to zero."""
+        n = self.n_points
+        z = np.zeros(n)
+        self.u, self.F, self.W, self.D = z.copy(), z.copy(), z.copy(), z.copy()
+        self.Gc, self.IHc = z.copy(), z.copy()
+        self.us = [[] for _ in range(n)]      # reversal stacks, oldest first
+        self.Fr = [[] for _ in range(n)]
+        self.bur, self.bFr = z.copy(), z.copy()
+        self.bc1, self.bc2 = np.ones(n), np.ones(n)
+        self.blo, self.bhi = z.copy(), z.copy()
+        self.bdir = np.zeros(n)
+        self._c4 = np.ones(n)                  # 4 on a branch from a reversal, 1 virgin
+        self._up = np.zeros(n, dtype=bool)     # the branch runs towards larger u
+        self._down = np.zeros(n, dtype=bool)   # ... towards smaller u
+        for i in range(n):
+            self._set_branch(i)
+
+    @property
+    def stored_energy(self) -> np.ndarray:
+        """Stored (slider spring) energy of every point [J], shape (n_points,)."""
+        return self.W - self.D
+
+    def depth(self, i: int) -> int:
+        """Number of reversal points remembered by point ``i``."""
+        return len(self.us[i])
+
+    # ------------------------------------------------------------------ commit
+    def commit(self, u) -> np.ndarray:
+        """Move every point to the displacements ``u`` [m] (shape (n_points,)) and commit.
+
+        Returns
+        -------
+        ndarray of int
+            Indices of the points whose branch changed (a reversal or a closed loop): their
+            reversal stacks differ from before the call.
+        """
+        u = np.asarray(u, dtype=float)
+        fast = (self.blo < u) & (u < self.bhi)
+        if np.count_nonzero(fast) == len(fast):
+            self._fast(u, slice(None))
+            return np.empty(0, dtype=np.intp)
+        idx = np.flatnonzero(fast)
+        if idx.size:
+            self._fast(u, idx)
+        slow = np.flatnonzero(~fast)
+        if not np.all(np.isfinite(u[slow])):
+            bad = slow[~np.isfinite(u[slow])][0]
+            raise ValueError(f"u must be finite, got u[{bad}] = {u[bad]}")
+        for i in slow.tolist():
+            self._walk_commit(i, float(u[i]))
+        return slow
+
+    def _fast(self, u, s) -> None:
+        """Branch continuation for the points ``s`` (numpy on the whole selection; the same
+        formulas as ``IwanJoint``'s fast path, written with as few array operations as
+        possible because for tens of points their fixed cost dominates)."""
+        uu = u[s]
+        x = uu - self.bur[s]
+        h = self.bc1[s] * np.abs(x)
+        pm = self.pm[s]
+        micro = h < pm
+        if np.count_nonzero(micro) == len(micro):
+            q = h ** (self._e1s if self._e1s is not None else self.e1[s])
+            f = h * (self.KT[s] - self.a[s] * q)
+            p3 = q * h * h                        # h ** e3
+            Gb = h * h * self._halfKT[s] - self._a_e3[s] * p3
+            Ib = self.ih_c[s] * p3
+        else:
+            hm = np.where(micro, h, pm)
+            q = hm ** self.e1[s]
+            f = np.where(micro, hm * (self.KT[s] - self.a[s] * q), self.Fs[s])
+            p3 = q * hm * hm
+            Gb = np.where(micro, hm * hm * self._halfKT[s] - self._a_e3[s] * p3,
+                          self.g_pm[s] + self.Fs[s] * (h - pm))
+            Ib = np.where(micro, self.ih_c[s] * p3, self.ih_pm[s] + self.Fs[s] * (h - pm))
+        bFr = self.bFr[s]
+        F = bFr + np.copysign(self.bc2[s] * f, x)
+        dI = Ib - self.IHc[s]
+        self.W[s] += bFr * (uu - self.u[s]) + self._c4[s] * (Gb - self.Gc[s])
+        self.D[s] += self.bc2[s] * np.maximum(dI, 0.0)
+        self.Gc[s] = Gb
+        self.IHc[s] = Ib
+        self.u[s] = uu
+        self.F[s] = F
+        if isinstance(s, slice):
+            np.copyto(self.blo, uu, where=self._up)
+            np.copyto(self.bhi, uu, where=self._down)
+        else:
+            up = self._up[s]
+            self.blo[s] = np.where(up, uu, self.blo[s])
+            self.bhi[s] = np.where(up, self.bhi[s], uu)
+
+    # ------------------------------------------------------------------ one point
+    def _bb(self, i, x):
+        KT, Fs, pm, e1 = self._scal[i][:4]
+        a = self._scal[i][5]
+        if x < pm:
+            return x * (KT - a * x ** e1)
+        return Fs
+
+    def _G(self, i, x):
+        KT, Fs, pm, _, e3, a, g_pm = self._scal[i][:7]
+        if x < pm:
+            return 0.5 * KT * x * x - a * x ** e3 / e3
+        return g_pm + Fs * (x - pm)
+
+    def _IH(self, i, y):
+        s = self._scal[i]
+        if y < s[2]:
+            return s[7] * y ** s[4]
+        return s[8] + s[1] * (y - s[2])
+
+    def _segment(self, i, ur, Fr, ua, ub, acc) -> None:
+        """Work and dissipation of a monotone move ``ua -> ub`` on the branch from ``ur``
+        (``None``: the virgin curve), REFERENCE.md section 2 energy forms."""
+        if ur is None:
+            Gb, Ib = self._G(i, abs(ub)), self._IH(i, abs(ub))
+            acc[0] += Gb - self._G(i, abs(ua))
+            acc[1] += max(Ib - self._IH(i, abs(ua)), 0.0)
+        else:
+            xa, xb = 0.5 * abs(ua - ur), 0.5 * abs(ub - ur)
+            Gb, Ib = self._G(i, xb), self._IH(i, xb)
+            acc[0] += Fr * (ub - ua) + 4.0 * (Gb - self._G(i, xa))
+            acc[1] += 2.0 * (Ib - self._IH(i, xa))
+        acc[2] = Gb
+        acc[3] = Ib
+
+    def _walk_commit(self, i: int, u: float) -> None:
+        """Exact Masing walk of point ``i`` from its committed state to ``u``, committed."""
+        us, Fr = self.us[i], self.Fr[i]
+        n = len(us)
+        uc = float(self.u[i])
+        du = u - uc
+        e = None
+        eF = 0.0
+        acc = [0.0, 0.0, float(self.Gc[i]), float(self.IHc[i])]
+        if du != 0.0:
+            d = uc - us[n - 1] if n else uc
+            if d * du < 0.0:
+                if abs(d) <= self._scal[i][9]:
+                    if n:
+                        n -= 1
+                else:
+                    e, eF = uc, float(self.F[i])
+            pos = uc
+            while True:
+                if e is not None:
+                    top, topF = e, eF
+                    bound = us[n - 1] if n else -e
+                elif n:
+                    top, topF = us[n - 1], Fr[n - 1]
+                    bound = us[n - 2] if n >= 2 else -top
+                else:
+                    break
+                if (u - bound) * du < 0.0:
+                    break
+                self._segment(i, top, topF, pos, bound, acc)
+                pos = bound
+                if e is not None:
+                    e = None
+                    if n:
+                        n -= 1
+                else:
+                    n -= 2 if n >= 2 else 1
+            if e is not None:
+                self._segment(i, e, eF, pos, u, acc)
+            elif n:
+                self._segment(i, us[n - 1], Fr[n - 1], pos, u, acc)
+            else:
+                self._segment(i, None, 0.0, pos, u, acc)
+        del us[n:]
+        del Fr[n:]
+        if e is not None:
+            us.append(e)
+            Fr.append(eF)
+        if us:
+            x = u - us[-1]
+            f = 2.0 * self._bb(i, 0.5 * abs(x))
+            F = Fr[-1] + f if x >= 0.0 else Fr[-1] - f
+        else:
+            f = self._bb(i, abs(u))
+            F = f if u >= 0.0 else -f
+        self.u[i] = u
+        self.F[i] = F
+        self.W[i] += acc[0]
+        self.D[i] += acc[1]
+        self.Gc[i] = acc[2]
+        self.IHc[i] = acc[3]
+        self._set_branch(i)
+
+    def _set_branch(self, i: int) -> None:
+        """Cache the branch through the committed state of point ``i`` (see
+        ``IwanJoint._set_branch``): the open interval ``(blo, bhi)`` of displacements that
+        continue it without a reversal or a closed loop."""
+        us = self.us[i]
+        uc = float(self.u[i])
+        if us:
+            ur = us[-1]
+            d = uc - ur
+            bound = us[-2] if len(us) >= 2 else -ur
+            self.bur[i], self.bFr[i], self.bc1[i], self.bc2[i] = ur, self.Fr[i][-1], 0.5, 2.0
+            self._c4[i] = 4.0
+        else:
+            d = uc
+            bound = math.copysign(_INF, uc)
+            self.bur[i], self.bFr[i], self.bc1[i], self.bc2[i] = 0.0, 0.0, 1.0, 1.0
+            self._c4[i] = 1.0
+        self._up[i] = d > 0.0
+        self._down[i] = d < 0.0
+        if d > 0.0:
+            self.blo[i], self.bhi[i], self.bdir[i] = uc, bound, 1.0
+        elif d < 0.0:
+            self.blo[i], self.bhi[i], self.bdir[i] = bound, uc, -1.0
+        else:
+            self.blo[i], self.bhi[i], self.bdir[i] = 0.0, 0.0, 0.0
+
+    def force_history(self, u) -> np.ndarray:
+        """Forces [N] of every point for a displacement history ``u`` [m] of shape
+        (n_steps, n_points), from the virgin state, on a private copy (this bank is untouched)."""
+        arr = finite_array("u", u, ndim=2)
+        if arr.shape[1] != self.n_points:
+            raise ValueError(f"u must have shape (n_steps, {self.n_points}), got {arr.shape}")
+        bank = IwanJointBank(self._params, reversal_tol=self._rtol)
+        out = np.empty_like(arr)
+        for k in range(arr.shape[0]):
+            bank.commit(arr[k])
+            out[k] = bank.F
+        return out
+
+    def __repr__(self) -> str:
+        return f"IwanJointBank(n_points={self.n_points})"
