@@ -27,6 +27,10 @@ from .core.joint_bank import IwanJointBank
 from .core.parameters import IwanParameters
 from .core.protocol import JointElement, check_element
 from .identify.curves import AmplitudeCurve
+from .core.modal import harmonic_stiffness, modal_iwan_curve, modal_ringdown
+from .identify.vibration import amplitude_curve
+from .identify.modal_fit import ModalIwanFit, fit_modal_iwan
+from .identify.stepped_sine import stepped_sine_curve
 from .identify.testdata import Cycle, TestData, find_reversals, load_test, simulate_test, split_cycles
 
 __version__ = "0.1.0"
@@ -65,6 +69,13 @@ __all__ = [
     "TestData",
     "Cycle",
     "AmplitudeCurve",
+    "modal_iwan_curve",
+    "harmonic_stiffness",
+    "modal_ringdown",
+    "amplitude_curve",
+    "fit_modal_iwan",
+    "stepped_sine_curve",
+    "ModalIwanFit",
     "fit_loops",
     "fit_dissipation",
     "FitResult",

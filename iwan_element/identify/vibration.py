@@ -1,0 +1,297 @@
+"""From a measured free decay to frequency and damping against amplitude.
+
+:func:`amplitude_curve` turns a ring-down record (hammer impact, release test, a simulated
+free decay) into an :class:`~iwan_element.identify.curves.AmplitudeCurve`:
+
+1. The record is band-pass filtered around one mode with a zero-phase Butterworth filter
+   (``scipy.signal.butter`` as second-order sections, ``scipy.signal.sosfiltfilt``).
+2. Its analytic signal ``z(t)`` comes from the Hilbert transform (``scipy.signal.hilbert``,
+   zero-padded to at least twice the length so that the FFT's wrap-around does not carry the
+   large start of the record into its quiet end).
+   For a slowly decaying mode ``z = A(t) exp(i theta(t))``: the envelope ``A`` and the
+   unwrapped phase ``theta``.
+3. In consecutive, non-overlapping windows (default 20 periods, shortened to at least three
+   periods where the envelope would fall by more than ``e**0.5`` within one, so that the
+   amplitude at the window centre stands for the window) straight lines are fitted to
+   ``ln A`` and ``theta``: their slopes are ``-sigma`` (decay rate) and ``w_d`` (damped
+   angular frequency). Then ``w_n = sqrt(sigma**2 + w_d**2)`` (the undamped natural
+   frequency, reported as ``frequency``), ``zeta = sigma / w_n`` and the amplitude at the
+   window centre is ``A / w_n**k`` (k = 2 for acceleration, 1 for velocity, 0 for
+   displacement): the displacement amplitude at the sensor.
+4. Per-point uncertainty: the regression standard errors, computed from the residuals
+   averaged over blocks of one period (the block means drop the deterministic ripple that
+   harmonics of a nonlinear response leave in envelope and phase, and are nearly
+   independent samples of the noise).
+5. End effects: the filter's impulse response (``sosfilt`` of a unit impulse) is taken to
+   last until it stays below 1e-3 of its peak; that time is cut after the envelope's maximum
+   (the impact, or the release at the start of the record) and before the end of the record.
+6. Noise floor: the noise spectral density is the median of the Welch spectrum outside the
+   band (``[f_lo/2, f_lo]`` and ``[f_hi, 2 f_hi]``, after the impact), times the filter's
+   noise bandwidth gives the in-band noise RMS ``s_n``; the curve stops where the envelope
+   falls below ``snr_min * s_n``. That amplitude (as displacement) is ``noise_floor``.
+
+The band must hold one clear mode: a Welch spectrum peak inside it, not at its edges, at
+least 10 times the band's median level, with no second peak above a tenth of it.
+"""
+from __future__ import annotations
+
+import logging
+import math
+
+import numpy as np
+from scipy import signal
+
+from ..core._validation import check_scalar, finite_array
+from .curves import AmplitudeCurve
+
+__all__ = ["amplitude_curve"]
+
+log = logging.getLogger(__name__)
+
+_QUANTITY_POWER = {"displacement": 0, "velocity": 1, "acceleration": 2}
+
+
+def _check_uniform_time(t, n):
+    tt = finite_array("t", t)
+    if tt.size != n:
+        raise ValueError(f"t must have the same length as y ({n}), got {tt.size}")
+    d = np.diff(tt)
+    if np.any(d <= 0):
+        i = int(np.flatnonzero(d <= 0)[0])
+        raise ValueError(f"t (time) must be strictly increasing; it goes from {tt[i]:g} to "
+                         f"{tt[i + 1]:g} at samples {i}..{i + 1}")
+    idx = np.arange(n)
+    dt = (tt[-1] - tt[0]) / (n - 1)
+    jitter = np.max(np.abs(tt - (tt[0] + idx * dt)))
+    if jitter > 0.05 * dt:
+        raise ValueError(f"t must be uniformly sampled: it departs from a uniform grid by "
+                         f"{jitter:.3g} s, more than 5 % of the mean step {dt:.3g} s; resample first")
+    return tt, dt
+
+
+def _check_band(band, fs):
+    try:
+        lo, hi = (float(b) for b in band)
+    except (TypeError, ValueError):
+        raise ValueError(f"band must be a pair (f_lo, f_hi) in Hz, got {band!r}") from None
+    nyq = 0.5 * fs
+    if not (math.isfinite(lo) and math.isfinite(hi) and 0.0 < lo < hi < nyq):
+        raise ValueError(f"band must satisfy 0 < f_lo < f_hi < Nyquist ({nyq:g} Hz), got "
+                         f"({lo:g}, {hi:g}) Hz")
+    return lo, hi
+
+
+def _check_mode(y, fs, lo, hi):
+    """Welch spectrum of the record: the frequency of the one clear mode in the band."""
+    nper = int(min(y.size, 2 ** math.ceil(math.log2(fs / ((hi - lo) / 64.0)))))
+    f, P = signal.welch(y, fs=fs, nperseg=nper)
+    inb = np.flatnonzero((f >= lo) & (f <= hi))
+    if inb.size < 8:
+        raise ValueError(f"band ({lo:g}, {hi:g}) Hz is too narrow for the record length "
+                         f"({y.size / fs:.3g} s): it holds {inb.size} spectral lines; widen it")
+    Pb = P[inb]
+    k = int(np.argmax(Pb))
+    med = float(np.median(Pb))
+    where = f"in band ({lo:g}, {hi:g}) Hz"
+    if k < 2 or k > inb.size - 3:
+        raise ValueError(f"no clear mode {where}: the strongest content is at its edge "
+                         f"({f[inb[k]]:.4g} Hz); move or widen the band around one mode")
+    if Pb[k] < 10.0 * med:
+        raise ValueError(f"no clear mode {where}: the spectral peak at {f[inb[k]]:.4g} Hz is "
+                         f"only {Pb[k] / max(med, 1e-300):.3g} times the band's median level "
+                         "(needs 10)")
+    peaks, _ = signal.find_peaks(Pb, prominence=0.05 * Pb[k])
+    others = [int(j) for j in peaks if abs(int(j) - k) > 3 and Pb[j] > 0.1 * Pb[k]]
+    if others:
+        raise ValueError(f"band ({lo:g}, {hi:g}) Hz holds more than one mode (peaks at "
+                         f"{f[inb[k]]:.4g} Hz and {f[inb[others[0]]]:.4g} Hz); narrow it to one")
+    return float(f[inb[k]])
+
+
+def _filter_extent(sos, fs, lo, hi):
+    """Samples until the filter's impulse response stays below 1e-3 of its peak."""
+    n = int(max(64, 40.0 * fs / (hi - lo)))
+    imp = np.zeros(n)
+    imp[0] = 1.0
+    h = np.abs(signal.sosfilt(sos, imp))
+    above = np.flatnonzero(h > 1e-3 * h.max())
+    return int(above[-1]) + 1
+
+
+def _noise_rms(y, fs, sos, lo, hi):
+    """In-band noise RMS from the median out-of-band Welch level and the filter's bandwidth."""
+    nper = int(min(y.size, max(256, 2 ** math.ceil(math.log2(8.0 * fs / lo)))))
+    f, P = signal.welch(y, fs=fs, nperseg=nper)
+    out = ((f >= 0.5 * lo) & (f < lo)) | ((f > hi) & (f <= min(2.0 * hi, 0.98 * fs / 2)))
+    if np.count_nonzero(out) < 3:
+        return float("nan"), float("nan")
+    level = float(np.median(P[out]))
+    w, H = signal.sosfreqz(sos, worN=8192, fs=fs)
+    gain2 = np.abs(H) ** 4                       # sosfiltfilt applies |H|**2 in power twice
+    bandwidth = float(np.trapezoid(gain2, w))   # noise bandwidth [Hz]
+    return math.sqrt(level * bandwidth), bandwidth
+
+
+def _window_fit(tw, lnA, ph, n_block):
+    """Straight lines through ln A and phase: coefficients and their standard errors.
+
+    The lines are fitted to every sample; the standard errors come from the residuals
+    averaged over blocks of ``n_block`` samples (about one period): the average removes the
+    deterministic ripple of a non-sinusoidal response (harmonics leave a ripple at twice the
+    frequency that does not bias the slope) and leaves the noise, whose block means are
+    nearly independent.
+    """
+    X = np.column_stack([np.ones_like(tw), tw])
+    nb = max(tw.size // n_block, 3)
+    edges = np.linspace(0, tw.size, nb + 1).astype(int)
+    tb = np.add.reduceat(tw, edges[:-1]) / np.diff(edges)
+    Xb = np.column_stack([np.ones_like(tb), tb])
+    Xb_inv = np.linalg.inv(Xb.T @ Xb)
+    out = []
+    for yv in (lnA, ph):
+        coef, *_ = np.linalg.lstsq(X, yv, rcond=None)
+        res = np.add.reduceat(yv - X @ coef, edges[:-1]) / np.diff(edges)
+        s2 = float(res @ res) / (nb - 2)
+        out.append((coef, np.sqrt(np.diag(Xb_inv * s2))))
+    return out
+
+
+def amplitude_curve(t, y, *, quantity: str = "acceleration", band, n_periods: float = 20.0,
+                    window: float | None = None, order: int = 4, snr_min: float = 10.0):
+    """Frequency and damping ratio against amplitude from a free-decay record of one mode.
+
+    Band-pass (zero-phase Butterworth, ``scipy.signal.sosfiltfilt``) and Hilbert transform
+    (``scipy.signal.hilbert``), straight-line fits of log-envelope and phase in windows; see
+    the module docstring for every step.
+
+    Parameters
+    ----------
+    t : array_like, shape (n,)
+        Sample times [s], strictly increasing and uniform (jitter up to 5 % of the step from
+        rounded time stamps is accepted).
+    y : array_like, shape (n,)
+        Response at the sensor, in SI units of ``quantity``.
+    quantity : {"acceleration", "velocity", "displacement"}, keyword-only
+        What ``y`` is: [m/s^2], [m/s] or [m].
+    band : (float, float), keyword-only
+        Pass band ``(f_lo, f_hi)`` [Hz] around one mode, inside ``(0, fs/2)``.
+    n_periods : float, keyword-only
+        Window length in periods of the mode (default 20, range [3, 1000]).
+    window : float, optional
+        Window length [s]; overrides ``n_periods``.
+    order : int, keyword-only
+        Butterworth order (default 4, range 1..10); zero-phase doubles it.
+    snr_min : float, keyword-only
+        The curve stops where the envelope is below ``snr_min`` times the in-band noise RMS
+        (default 10, range [2, 1e6]).
+
+    Returns
+    -------
+    AmplitudeCurve
+        ``amplitude`` [m] (displacement at the sensor), ``frequency`` [Hz] (undamped natural
+        frequency ``sqrt(sigma**2 + w_d**2) / 2 pi``), ``damping_ratio`` [-], their standard
+        uncertainties, ``noise_floor`` [m], ``method="hilbert"``; ``notes`` state the filter,
+        the trimming and the windows. Points are in time order (decreasing amplitude).
+
+    Raises
+    ------
+    ValueError
+        Bad input (NaN, non-uniform or non-increasing ``t``, too short a record, a band
+        outside the Nyquist range), a band holding no clear mode or more than one, or a
+        signal that never rises above ``snr_min`` times the noise.
+    """
+    yy = finite_array("y", y)
+    n = yy.size
+    if n < 64:
+        raise ValueError(f"y must have at least 64 samples, got {n}")
+    tt, dt = _check_uniform_time(t, n)
+    fs = 1.0 / dt
+    if quantity not in _QUANTITY_POWER:
+        raise ValueError(f"quantity must be one of {sorted(_QUANTITY_POWER)}, got {quantity!r}")
+    k_pow = _QUANTITY_POWER[quantity]
+    lo, hi = _check_band(band, fs)
+    if isinstance(order, bool) or not isinstance(order, (int, np.integer)) or not 1 <= order <= 10:
+        raise ValueError(f"order must be an integer in [1, 10], got {order!r}")
+    n_periods = check_scalar("n_periods", n_periods, low=3.0, high=1000.0)
+    snr_min = check_scalar("snr_min", snr_min, low=2.0, high=1e6)
+    yy = yy - yy.mean()
+    f_peak = _check_mode(yy, fs, lo, hi)
+    sos = signal.butter(int(order), [lo, hi], btype="bandpass", fs=fs, output="sos")
+    yf = signal.sosfiltfilt(sos, yy)
+    # zero padding to >= 2n: the FFT-based transform is circular, and without padding the
+    # large start of a ring-down would leak into its quiet end
+    z = signal.hilbert(yf, N=int(2 ** math.ceil(math.log2(2 * n))))[:n]
+    env = np.abs(z)
+    phase = np.unwrap(np.angle(z))
+    n_trim = _filter_extent(sos, fs, lo, hi)
+    i0 = int(np.argmax(env)) + n_trim
+    i1 = n - n_trim
+    noise, bandwidth = _noise_rms(yy[min(i0, n - 1):], fs, sos, lo, hi)
+    if window is not None:
+        window = check_scalar("window", window, low=0.0, low_open=True)
+        nw = int(round(window * fs))
+    else:
+        nw = int(round(n_periods * fs / f_peak))
+    nw = max(nw, 16)
+    if i1 - i0 < nw:
+        raise ValueError(f"record too short: after trimming {n_trim / fs:.3g} s of filter end "
+                         f"effects at each end, {max(i1 - i0, 0) / fs:.3g} s remain, less than "
+                         f"one window ({nw / fs:.3g} s); give a longer record or a wider band")
+    noise = max(noise if math.isfinite(noise) else 0.0, 1e-7 * float(env.max()))
+    rows, stop = _windows(tt, env, phase, i0, i1, nw, snr_min * noise, k_pow, f_peak, (lo, hi))
+    if not rows:
+        raise ValueError(f"no usable window in band ({lo:g}, {hi:g}) Hz after the trimmed start: "
+                         f"{stop}; the signal does not rise above {snr_min:g} x the in-band noise "
+                         f"({noise:.3g} in units of y) or holds no decaying mode there")
+    a = np.array(rows)
+    warns = []
+    if a.shape[0] < 3:
+        warns.append(f"only {a.shape[0]} window(s) above the noise floor; the curve is too "
+                     "short to show an amplitude dependence")
+    if stop.startswith("window"):
+        warns.append(f"the curve stopped early: {stop}")
+    w_ref = 2 * math.pi * float(a[-1, 1])
+    floor = snr_min * noise / w_ref ** k_pow
+    notes = (f"band {lo:g}-{hi:g} Hz, Butterworth order {order} zero-phase (sosfiltfilt); "
+             f"mode at {f_peak:.4g} Hz; trimmed {n_trim / fs:.4g} s after the envelope peak "
+             f"(t = {tt[i0 - n_trim]:.4g} s) and {n_trim / fs:.4g} s before the end; "
+             f"{a.shape[0]} windows of up to {nw / fs:.4g} s; in-band noise RMS {noise:.3g} "
+             f"({quantity}); stopped: {stop}")
+    log.debug("amplitude_curve: %s", notes)
+    return AmplitudeCurve(a[:, 0], a[:, 1], a[:, 2], amplitude_std=a[:, 3],
+                          frequency_std=a[:, 4], damping_std=a[:, 5], noise_floor=floor,
+                          method="hilbert", notes=notes, warnings=tuple(warns))
+
+
+def _windows(tt, env, phase, i0, i1, nw, thresh, k_pow, f_peak, band):
+    """Window estimates in time order until the signal meets the noise or stops being a mode.
+
+    Returns the rows ``(X, f, zeta, X_std, f_std, zeta_std)`` and why the walk stopped.
+    """
+    dt = tt[1] - tt[0]
+    n_block = max(1, int(round(1.0 / (f_peak * dt))))
+    rows = []
+    s = i0
+    while s + nw <= i1:
+        n_w = nw
+        if np.mean(env[s:s + n_w]) < thresh:
+            return rows, f"envelope below the noise threshold at t = {tt[s]:.4g} s"
+        for _ in range(2):       # shorten the window where the envelope falls by > e**0.5
+            sl = slice(s, s + n_w)
+            tc = tt[s] + 0.5 * (n_w - 1) * dt
+            (ca, sa), (cp, sp) = _window_fit(tt[sl] - tc, np.log(env[sl]), phase[sl], n_block)
+            sigma, wd = -ca[1], cp[1]
+            n_short = max(int(0.5 / (abs(sigma) * dt)), 3 * n_block, 16)
+            if n_short >= n_w:
+                break
+            n_w = n_short
+        wn = math.hypot(sigma, wd)
+        f, zeta = wn / (2 * math.pi), sigma / wn
+        if not (band[0] < f < band[1]) or not (0.0 < zeta < 0.5):
+            return rows, (f"window at t = {tc:.4g} s gives f = {f:.4g} Hz, zeta = {zeta:.3g} "
+                          "(outside the band or not a decaying mode: beating, forcing or noise)")
+        amp = math.exp(ca[0]) / wn ** k_pow
+        f_std = math.hypot(sigma * sa[1], wd * sp[1]) / wn / (2 * math.pi)
+        rows.append((amp, f, zeta, amp * sa[0], f_std, sa[1] / wn))
+        s += n_w
+    return rows, "end of the record (after trimming)"
