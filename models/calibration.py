@@ -25,9 +25,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-from scipy import optimize, signal
+from scipy import optimize
 
-from iwan_element import AmplitudeCurve, IwanParameters
+from iwan_element import AmplitudeCurve, IwanParameters, amplitude_curve
 
 from .interface import contact_points
 from .qsma import linear_modes, modal_amplitude_curve
@@ -42,38 +42,19 @@ _BOUNDS = {"stiffness_per_area": (1e9, 1e15), "friction": (1e-3, 3.0), "chi": (-
 
 
 def measured_amplitude_curve(path, *, band=(60.0, 120.0), window: float = 0.25,
-                             step: float = 0.125, start: float = 0.2) -> AmplitudeCurve:
+                             start: float = 0.0) -> AmplitudeCurve:
     """f(X), zeta(X) of one mode from a ring-down acceleration record (CSV: t [s], a [m/s^2]).
 
-    Zero-phase 4th-order Butterworth band-pass, analytic signal (Hilbert); in windows of
-    ``window`` seconds every ``step`` seconds, from ``start`` s after the maximum, straight
-    lines through ``ln|z|`` and the unwrapped phase give ``sigma`` and ``w_d``;
-    ``w_n = sqrt(sigma^2 + w_d^2)``, ``zeta = sigma / w_n``, ``X = |z| / w_n^2``.
-    (A minimal reader for the calibration; the vibration helpers' ``amplitude_curve`` is
-    the general tool.)
+    Reads the file and calls :func:`iwan_element.amplitude_curve` (band-pass, Hilbert,
+    windowed fits; it trims the filter's end effects itself) on the record from ``start``
+    seconds after its largest sample (the impact).
     """
     data = np.loadtxt(Path(path), delimiter=",", skiprows=1)
     if data.ndim != 2 or data.shape[1] < 2 or data.shape[0] < 1000:
         raise ValueError(f"{path}: expected a CSV of t [s], a [m/s^2] with >= 1000 rows")
     t, a = data[:, 0], data[:, 1]
-    fs = 1.0 / np.median(np.diff(t))
-    sos = signal.butter(4, band, btype="bandpass", fs=fs, output="sos")
-    z = signal.hilbert(signal.sosfiltfilt(sos, a))
-    t_peak = t[np.argmax(np.abs(a))]
-    amp, freq, zeta = [], [], []
-    t0 = t_peak + start
-    while t0 + window <= t[-1]:
-        m = (t >= t0) & (t < t0 + window)
-        tm = t[m] - t[m].mean()
-        sig = -np.polyfit(tm, np.log(np.abs(z[m])), 1)[0]
-        wd = np.polyfit(tm, np.unwrap(np.angle(z[m])), 1)[0]
-        wn = math.hypot(sig, wd)
-        amp.append(np.exp(np.mean(np.log(np.abs(z[m])))) / wn ** 2)
-        freq.append(wn / (2 * math.pi))
-        zeta.append(sig / wn)
-        t0 += step
-    return AmplitudeCurve(np.array(amp), np.array(freq), np.array(zeta), method="hilbert",
-                          notes=f"{Path(path).name}: band {band} Hz, {window} s windows")
+    keep = t >= t[np.argmax(np.abs(a))] + start
+    return amplitude_curve(t[keep], a[keep], quantity="acceleration", band=band, window=window)
 
 
 @dataclass
