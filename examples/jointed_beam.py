@@ -145,7 +145,8 @@ def plot_ringdown(rd, qsma_curve, path: Path):
     fig = plt.figure(figsize=(13, 4.5))
     gs = fig.add_gridspec(2, 3)
     a0 = fig.add_subplot(gs[:, :2])
-    a0.plot(rd.t, rd.sensor * 1e6, lw=0.5, color="C0", label="sensor (acc3 position)")
+    a0.plot(rd.t, rd.modal * 1e6, lw=0.5, color="C0",
+            label="mode 1 at the sensor (acc3 position), modal filtering")
     env = np.abs(hilbert(rd.modal))
     trim = (rd.t > rd.t[-1] * 0.03) & (rd.t < rd.t[-1] * 0.97)      # Hilbert end effects
     a0.plot(rd.t[trim], env[trim] * 1e6, lw=1.5, color="C3", label="mode 1 envelope")

@@ -7,9 +7,10 @@ and the closed-form Iwan backbones of the contact points:
 1. preload: the normal preload does not load the tangential elements here (no Poisson
    coupling), so ``x0 = 0`` and the stuck tangent is ``K = K0 + G^T diag(KT_i) G``;
 2. mass-normalised eigenpair ``(w_k, phi)`` of ``(K, M)`` for the requested elastic mode;
-3. static load ``alpha M phi``: Newton on ``K0 x + G^T F(G x) = alpha M phi`` with
-   ``F_i`` the virgin backbone of point ``i`` (REFERENCE sec. 2) and its tangent, bordered
-   with ``S x = X`` so that each requested sensor amplitude ``X`` is hit exactly;
+3. static load ``alpha M phi``: ``K0 x + G^T F(G x) = alpha M phi`` with ``F_i`` the virgin
+   backbone of point ``i`` (REFERENCE sec. 2), condensed statically onto the contact slips
+   ``u = G x`` and solved by Newton with the backbones' tangents, bordered with ``S x = X`` so
+   that each requested sensor amplitude ``X`` is hit exactly;
 4. ``q = phi^T M x`` and secant ``w^2 = alpha / q``;
 5. Masing damping from the sum of the contact points' dissipations at their slip
    amplitudes ``u_i = |G_i x|`` (closed form, REFERENCE sec. 2) rather than the modal
