@@ -1,19 +1,23 @@
-"""Cost of the jointed-beam runs: Iwan connector vs linear joint, and the main job's profile.
+"""Cost of the jointed-beam routes: distributed Iwan interface vs linear springs, and QSMA.
 
-Run:  python benchmarks/bench_beam.py [--repeat 3] [--no-profile]
+Run:  python benchmarks/bench_beam.py [--points 50] [--cycles 20] [--repeat 3] [--profile]
 
-(a) The same free-decay run (first bending mode, 30 periods, 100 steps per period,
-    generalized-alpha at spectral radius 1, static pre-load excluded) with the exact Iwan
-    joint in the two contact-point connectors, and with built-in linear springs of stiffness
-    KT/2 in their place; wall time of ``SolveDynamic`` only, best of ``--repeat``.
-(b) The main job ``examples/jointed_beam.py`` on defaults under cProfile: total wall time
-    and where it goes.
+(a) The Brake-Reuss specimen with ``--points`` contact strips (the points inside the pressure
+    cones get an element), released from 60 um at the sensor, ``--cycles`` periods at 48
+    steps per period (generalized-alpha, spectral radius 1): wall time of ``SolveDynamic``
+    with the compiled multi-contact Iwan interface (``add_iwan_interface``), with one Python
+    ``IwanJoint`` connector per point (reference route), and with built-in linear springs
+    ``KT_i`` in their place; best of ``--repeat``.
+(b) A QSMA f(X), zeta(X) curve of 20 amplitudes: first call (including the extraction of the
+    linear matrices from Exudyn) and a repeated call on a changed friction coefficient.
+(c) With ``--profile``, the main job ``examples/jointed_beam.py --quick`` under cProfile.
 """
 from __future__ import annotations
 
 import argparse
 import cProfile
 import io
+import math
 import pstats
 import runpy
 import sys
@@ -21,55 +25,84 @@ import tempfile
 import time
 from pathlib import Path
 
-from iwan_element.models.jointed_beam import JointedBeamConfig
-from iwan_element.models.scenarios import free_decay
+import exudyn as exu
+import numpy as np
+
+from iwan_element.models import modal_amplitude_curve, preset
+from iwan_element.models.assembly import build_specimen_model
+from iwan_element.models.qsma import static_modal_load
+from iwan_element.models.scenarios import _settings
 
 
-def transient_ratio(repeat: int):
-    best = {"iwan": float("inf"), "linear": float("inf")}
-    steps = 0
-    for _ in range(repeat):
-        res = free_decay(JointedBeamConfig(), levels=(2e-3,), cycles=30, steps_per_period=100)
-        best["iwan"] = min(best["iwan"], res.runs[0].wall_time)
-        best["linear"] = min(best["linear"], res.linear_runs[0].wall_time)
-        steps = len(res.runs[0].t) - 1
-    return best, steps
-
-
-def profile_main_job(top: int = 14):
-    script = Path(__file__).resolve().parents[1] / "examples" / "jointed_beam.py"
-    out = Path(tempfile.mkdtemp()) / "jb"
-    argv = sys.argv
-    sys.argv = [str(script), "--out", str(out)]
-    prof = cProfile.Profile()
+def transient(spec, route: str, cycles: float, spp: int = 48) -> tuple[float, int, int]:
+    """(wall of SolveDynamic [s], steps, contact points) for one route."""
+    st = static_modal_load(spec, [60e-6])
+    L, w0 = st["system"], st["omega0"]
+    if route == "linear":
+        model = build_specimen_model(spec, tangential="linear")
+    else:
+        model = build_specimen_model(spec, tangential="iwan", joint_elements=(route == "python"))
+    x0 = np.zeros(L.n_coordinates)
+    x0[L.free] = st["x"][0]
+    for cfg in (exu.ConfigurationType.Initial, exu.ConfigurationType.Current):
+        model.mbs.systemData.SetODE2Coordinates(x0, configuration=cfg)
+    h = 2 * math.pi / (w0 * spp)
+    n = int(round(cycles * spp))
+    sim = _settings(force_scale=float(np.max(np.abs(L.K0 @ st["x"][0]))))
+    sim.timeIntegration.numberOfSteps = n
+    sim.timeIntegration.endTime = n * h
     t0 = time.perf_counter()
-    try:
-        prof.enable()
-        runpy.run_path(str(script), run_name="__main__")
-        prof.disable()
-    finally:
-        sys.argv = argv
-    wall = time.perf_counter() - t0
-    s = io.StringIO()
-    pstats.Stats(prof, stream=s).sort_stats("tottime").print_stats(top)
-    return wall, s.getvalue()
+    model.mbs.SolveDynamic(sim)
+    return time.perf_counter() - t0, n, len(model.points)
 
 
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--points", type=int, default=50)
+    ap.add_argument("--cycles", type=float, default=20)
     ap.add_argument("--repeat", type=int, default=3)
-    ap.add_argument("--no-profile", action="store_true")
+    ap.add_argument("--profile", action="store_true")
     args = ap.parse_args(argv)
-    best, steps = transient_ratio(args.repeat)
-    print(f"(a) free decay, {steps} steps, 2 contact points, 136 coordinates")
-    print("| joint | wall [s] | us per step | ratio |")
+    spec = preset("brake-reuss").replace(n_points=args.points, damping_floor=0.0)
+    best = {}
+    for route in ("linear", "compiled", "python"):
+        walls = [transient(spec, route, args.cycles) for _ in range(args.repeat)]
+        best[route] = min(w[0] for w in walls)
+        steps, npts = walls[0][1], walls[0][2]
+    print(f"(a) Brake-Reuss ring-down, {npts} contact points with an element "
+          f"({args.points} strips), {steps} steps")
+    print("| interface | wall [s] | us per step | ratio to linear |")
     print("|---|---|---|---|")
-    for k in ("linear", "iwan"):
-        print(f"| {k} | {best[k]:.3f} | {best[k] / steps * 1e6:.0f} | {best[k] / best['linear']:.2f} |")
-    if not args.no_profile:
-        wall, table = profile_main_job()
-        print(f"\n(b) main job on defaults: {wall:.1f} s wall (under cProfile)\n")
-        print(table)
+    for k in ("linear", "compiled", "python"):
+        print(f"| {k} | {best[k]:.3f} | {best[k] / steps * 1e6:.0f} | "
+              f"{best[k] / best['linear']:.2f} |")
+    amps = np.geomspace(2e-6, 60e-6, 20)
+    fresh = spec.replace(n_points=args.points + 1)          # not in the matrix cache yet
+    t0 = time.perf_counter()
+    modal_amplitude_curve(fresh, amplitudes=amps)
+    cold = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    modal_amplitude_curve(fresh.replace(friction=0.3), amplitudes=amps)
+    warm = time.perf_counter() - t0
+    print(f"\n(b) QSMA, 20 amplitudes, {args.points + 1} strips: first call {cold:.3f} s "
+          f"(matrix extraction included), changed friction {warm:.3f} s")
+    if args.profile:
+        script = Path(__file__).resolve().parents[1] / "examples" / "jointed_beam.py"
+        out = Path(tempfile.mkdtemp()) / "jb"
+        argv0 = sys.argv
+        sys.argv = [str(script), "--quick", "--out", str(out)]
+        prof = cProfile.Profile()
+        t0 = time.perf_counter()
+        try:
+            prof.enable()
+            runpy.run_path(str(script), run_name="__main__")
+            prof.disable()
+        finally:
+            sys.argv = argv0
+        s = io.StringIO()
+        pstats.Stats(prof, stream=s).sort_stats("tottime").print_stats(14)
+        print(f"\n(c) main job --quick: {time.perf_counter() - t0:.1f} s wall under cProfile\n")
+        print(s.getvalue())
 
 
 if __name__ == "__main__":

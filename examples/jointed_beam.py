@@ -1,16 +1,21 @@
-"""The main job: from a (synthetic) joint test to the vibrating bolted beam.
+"""The main job: from a (synthetic) joint test to bolted beams whose modes soften and damp.
 
-Run:  python examples/jointed_beam.py [--out out/jointed_beam] [--quick] [--forced]
+Run:  python examples/jointed_beam.py [--out out/jointed_beam] [--quick] [--forced] [--data CSV]
 
 1. Loads the shipped example test record (SYNTHETIC, see models/README.md) and identifies the
    four Iwan parameters with ``fit_loops``.
-2. Builds the two-beam lap-joint model in Exudyn with them and runs the paper's quasi-static
-   test (machine amplitude set so that the joint slips 0.1 mm), overlaid on the test record
-   (the paper's Fig. 8).
-3. Runs free decays of the first bending mode at several levels, with the identified joint and
-   with the bolt's slip force reduced to a loose bolt (preload 0.5 kN), each next to the
-   closed-form prediction and to a linear joint of stiffness KT.
-4. With ``--forced``, a stepped-sine forced response through the first resonance.
+2. Builds the original (lumped) two-beam lap-joint model in Exudyn with them and runs the
+   paper's quasi-static test, overlaid on the test record (the paper's Fig. 8).
+3. Amplitude-dependent modal properties f(X), zeta(X) by quasi-static modal analysis of
+   three lap-jointed specimens with a distributed contact interface (pressure cones from the
+   bolt preloads, one Iwan element per contact point): the example specimen with the
+   identified joint mapped onto its interface, the two-bolt aluminium cantilever and the
+   Brake-Reuss beam calibrated on its measured hammer ring-down (plotted against the
+   measurement when ``../shared/data/brb-hammer`` is present; GPL-3.0, read only).
+4. A transient ring-down of the Brake-Reuss beam in Exudyn from 60 um at the sensor: the
+   decay you can see, and its f(X), zeta(X) next to the QSMA curve.
+5. With ``--forced``, a stepped-sine forced response of the lumped model through its first
+   resonance.
 
 Writes PNG plots and ``summary.json`` to the output folder and prints a short table.
 """
@@ -27,11 +32,22 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter  # noqa: E402
+from scipy.signal import hilbert  # noqa: E402
+
 from iwan_element import fit_loops, load_test  # noqa: E402
-from iwan_element.models import example_test_path  # noqa: E402
+from iwan_element.models import (example_test_path, modal_amplitude_curve, preset,  # noqa: E402
+                                 ringdown)
+from iwan_element.models.calibration import (interface_from_joint,  # noqa: E402
+                                             measured_amplitude_curve)
 from iwan_element.models.jointed_beam import JointedBeamConfig  # noqa: E402
-from iwan_element.models.scenarios import (forced_response, free_decay,  # noqa: E402
+from iwan_element.models.qsma import linear_modes  # noqa: E402
+from iwan_element.models.scenarios import (forced_response, modal_analysis,  # noqa: E402
                                            quasi_static_test)
+
+ROOT = Path(__file__).resolve().parents[1]
+BRB_DATA = [ROOT.parent / "shared" / "data" / "brb-hammer" / "hammer_acc3.csv",
+            ROOT.parents[1] / "shared" / "data" / "brb-hammer" / "hammer_acc3.csv"]
 
 T0 = time.perf_counter()
 
@@ -82,31 +98,73 @@ def plot_quasi_static(qs, u_meas, F_meas, path: Path):
     plt.close(fig)
 
 
-def plot_decay(results: dict, path: Path):
-    fig, axes = plt.subplots(len(results), 3, figsize=(14, 4 * len(results)), squeeze=False)
-    for row, (label, res) in zip(axes, results.items()):
-        run = res.runs[-1]
-        row[0].plot(run.t, run.tip * 1e3, lw=0.6)
-        row[0].set(xlabel="t [s]", ylabel="tip [mm]", title=f"{label}: largest level")
-        a, f, z = res.curves()
-        al, fl, zl = res.curves("linear")
-        grid = np.geomspace(a.min(), a.max(), 50)
-        fp, zp = res.modal.predict(grid)
-        # shifts relative to the linear joint: the simulation against its own linear-joint run
-        # (this removes the integrator's period error), the prediction against the eigenvalue
-        f0_sim, f0_eig = np.median(fl), res.modal.frequencies[0]
-        row[1].semilogx(a * 1e3, 100 * (f / f0_sim - 1), "o", ms=3, label="Iwan joint (simulated)")
-        row[1].semilogx(grid * 1e3, 100 * (fp / f0_eig - 1), "-", label="closed-form prediction")
-        row[1].semilogx(al * 1e3, 100 * (fl / f0_sim - 1), "x", ms=3, label="linear joint KT")
-        row[1].set(xlabel="tip amplitude of mode 1 [mm]",
-                   ylabel=f"frequency shift from {f0_eig:.2f} Hz [%]")
-        row[2].loglog(a * 1e3, z, "o", ms=3, label="Iwan joint (simulated)")
-        row[2].loglog(grid * 1e3, zp, "-", label="closed-form prediction")
-        row[2].set(xlabel="tip amplitude of mode 1 [mm]", ylabel="joint damping ratio")
-        for ax in row:
+def log_axis(axis, *, scale=1.0):
+    """Readable log axis: ticks at 1, 2, 5 x 10^k only, plain numbers, no minor labels."""
+    axis.set_major_locator(LogLocator(base=10, subs=(1.0, 2.0, 5.0), numticks=12))
+    axis.set_major_formatter(FuncFormatter(lambda v, _: f"{v * scale:g}"))
+    axis.set_minor_formatter(NullFormatter())
+
+
+def plot_modal(curves: dict, measured, path: Path):
+    """f(X) and zeta(X): one column per specimen, frequency change on top, damping below."""
+    fig, axes = plt.subplots(2, len(curves), figsize=(5.0 * len(curves), 7.5), squeeze=False)
+    for col, (name, entries) in enumerate(curves.items()):
+        af, az = axes[0, col], axes[1, col]
+        for label, curve, f_lin in entries:
+            X = curve.amplitude * 1e6
+            ls = "--" if "identified" in label else "-"
+            af.plot(X, 100 * (curve.frequency / f_lin - 1), ls, lw=1.8,
+                    label=f"{label} ({f_lin:.1f} Hz)")
+            az.plot(X, 100 * curve.damping_ratio, ls, lw=1.8, label=label)
+        if name == "brake-reuss" and measured is not None:
+            f_lin = entries[0][2]
+            lo, hi = entries[0][1].amplitude[[0, -1]]
+            m = measured.sorted()
+            keep = (m.amplitude >= 0.8 * lo) & (m.amplitude <= 1.1 * hi)
+            af.plot(m.amplitude[keep] * 1e6, 100 * (m.frequency[keep] / f_lin - 1), "o",
+                    ms=4, color="k", label="measured (Chen et al. 2022)")
+            az.plot(m.amplitude[keep] * 1e6, 100 * m.damping_ratio[keep], "o", ms=4,
+                    color="k", label="measured")
+        af.set(title=name, ylabel="frequency change from stuck interface [%]")
+        az.set(xlabel="displacement amplitude at the sensor [um]", ylabel="damping ratio [%]")
+        zs = np.concatenate([c.damping_ratio for _, c, _ in entries])
+        if zs.max() > 3 * zs.min():             # log only where the range spans a decade or so
+            az.set_yscale("log")
+            log_axis(az.yaxis)
+        for ax in (af, az):
+            ax.set_xscale("log")
+            log_axis(ax.xaxis)
             ax.grid(True, which="both", alpha=0.3)
-        row[1].legend(fontsize=8)
-        row[2].legend(fontsize=8)
+        af.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def plot_ringdown(rd, qsma_curve, path: Path):
+    fig = plt.figure(figsize=(13, 4.5))
+    gs = fig.add_gridspec(2, 3)
+    a0 = fig.add_subplot(gs[:, :2])
+    a0.plot(rd.t, rd.modal * 1e6, lw=0.5, color="C0",
+            label="mode 1 at the sensor (acc3 position), modal filtering")
+    env = np.abs(hilbert(rd.modal))
+    trim = (rd.t > rd.t[-1] * 0.03) & (rd.t < rd.t[-1] * 0.97)      # Hilbert end effects
+    a0.plot(rd.t[trim], env[trim] * 1e6, lw=1.5, color="C3", label="mode 1 envelope")
+    a0.set(xlabel="time [s]", ylabel="displacement [um]",
+           title="Brake-Reuss beam: Exudyn ring-down from 60 um (distributed Iwan interface)")
+    a0.grid(True, alpha=0.3)
+    a0.legend(fontsize=8, loc="upper right")
+    a1, a2 = fig.add_subplot(gs[0, 2]), fig.add_subplot(gs[1, 2])
+    c = rd.curve
+    a1.plot(c.amplitude * 1e6, c.frequency, ".", ms=3, label="ring-down")
+    a1.plot(qsma_curve.amplitude * 1e6, qsma_curve.frequency, "-", label="QSMA")
+    a2.plot(c.amplitude * 1e6, 100 * c.damping_ratio, ".", ms=3, label="ring-down")
+    a2.plot(qsma_curve.amplitude * 1e6, 100 * qsma_curve.damping_ratio, "-", label="QSMA")
+    a1.set(ylabel="f [Hz]")
+    a2.set(ylabel="zeta [%]", xlabel="amplitude at the sensor [um]")
+    for ax in (a1, a2):
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=7)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
@@ -130,6 +188,8 @@ def main(argv=None) -> dict:
     ap.add_argument("--out", type=Path, default=Path("out/jointed_beam"), help="output folder")
     ap.add_argument("--quick", action="store_true", help="small settings (used by the tests)")
     ap.add_argument("--forced", action="store_true", help="also run the forced response")
+    ap.add_argument("--data", type=Path, default=None,
+                    help="measured BRB ring-down CSV (default: ../shared/data/brb-hammer/hammer_acc3.csv)")
     args = ap.parse_args(argv)
     args.out.mkdir(parents=True, exist_ok=True)
     quick = args.quick
@@ -146,20 +206,47 @@ def main(argv=None) -> dict:
     u_m, F_m = measured_cycle(data, 1e-4)
     plot_quasi_static(qs, u_m, F_m, args.out / "fig8_quasi_static.png")
 
-    levels = (1e-3, 4e-3) if quick else (5e-4, 2e-3, 8e-3)
-    cycles = 12 if quick else 30
-    decays = {}
-    for label, c in [("identified joint (30 kN preload)", cfg),
-                     ("loose bolt (0.5 kN preload)", cfg.replace(joint=p.replace(Fs=p.Fs * 0.5 / 30)))]:
-        decays[label] = free_decay(c, levels=levels, cycles=cycles, steps_per_period=60 if quick else 100,
-                                   progress=progress)
-    plot_decay(decays, args.out / "free_decay.png")
+    n_amp = 10 if quick else 20
+    progress("quasi-static modal analysis of three lap-jointed specimens (distributed interface)")
+    example = interface_from_joint(preset("example"), p)       # the identified joint, mapped
+    specimens = {"example": (preset("example"), (1, 2)),
+                 "two-bolt-aluminium": (preset("two-bolt-aluminium"), (1, 2)),
+                 "brake-reuss": (preset("brake-reuss"), (1,))}
+    curves = {}
+    for name, (spec, modes) in specimens.items():
+        amps = np.geomspace(*spec.amplitude_range, n_amp)
+        curves[name] = []
+        for mode in modes:
+            f_lin = linear_modes(spec, mode=mode)[0] / (2 * np.pi)
+            curves[name].append((f"mode {mode}", modal_amplitude_curve(spec, mode=mode,
+                                                                      amplitudes=amps), f_lin))
+    # the identified (loop-fitted) joint mapped onto the example's interface: mu = Fs / sum P,
+    # k_t = KT / contact area
+    amps = np.geomspace(*example.amplitude_range, n_amp)
+    curves["example"].append(("mode 2, identified joint", modal_amplitude_curve(
+        example, mode=2, amplitudes=amps), linear_modes(example, mode=2)[0] / (2 * np.pi)))
+    data_path = args.data or next((q for q in BRB_DATA if q.exists()), None)
+    measured = None
+    if data_path is not None and Path(data_path).exists():
+        measured = measured_amplitude_curve(data_path)
+        progress(f"measured BRB ring-down read from {data_path} (GPL-3.0, not copied)")
+    else:
+        progress("measured BRB ring-down not found (../shared absent): model curves only")
+    plot_modal(curves, measured, args.out / "modal_amplitude.png")
+
+    brb = specimens["brake-reuss"][0]
+    progress(f"transient ring-down of the Brake-Reuss beam in Exudyn "
+             f"({len(curves['brake-reuss'][0][1])} QSMA points for comparison)")
+    rd = ringdown(brb, amplitude=60e-6, cycles=16 if quick else 60, steps_per_period=48)
+    q_rd = modal_amplitude_curve(brb, amplitudes=np.geomspace(rd.curve.amplitude.min(),
+                                                              rd.curve.amplitude.max(), 20))
+    plot_ringdown(rd, q_rd, args.out / "free_decay.png")
 
     forced = None
     if args.forced:
         # a loose bolt plus 0.5 % material damping of mode 1 (beta = 2 zeta / w1), so that the
         # stepped sine settles within the cycles given
-        w1 = 2 * np.pi * decays["identified joint (30 kN preload)"].modal.frequencies[0]
+        w1 = 2 * np.pi * modal_analysis(cfg, n_modes=1).frequencies[0]
         forced = forced_response(cfg.replace(joint=p.replace(Fs=p.Fs * 0.5 / 30),
                                              rayleigh_beta=2 * 5e-3 / w1),
                                  force_levels=(0.2, 1.0), settle_cycles=20 if quick else 60,
@@ -171,24 +258,37 @@ def main(argv=None) -> dict:
                  "samples": int(len(data.t))},
         "identified": fit.to_dict(),
         "quasi_static": qs.summary(),
-        "free_decay": {k: v.summary() for k, v in decays.items()},
+        "modal_curves": {name: {label: c.to_dict() for label, c, _ in entries}
+                         for name, entries in curves.items()},
+        "example_interface": {"friction": example.friction,
+                              "stiffness_per_area": example.interface.stiffness_per_area,
+                              "chi": example.interface.chi, "beta": example.interface.beta},
+        "measured_brb": None if measured is None else measured.to_dict(),
+        "ringdown_brb": {"curve": rd.curve.to_dict(), "wall_time_s": rd.wall_time,
+                         "n_points": rd.metadata["n_points"]},
         "forced_response": None if forced is None else forced.summary(),
         "wall_time_s": time.perf_counter() - T0,
     }
     (args.out / "summary.json").write_text(json.dumps(summary, indent=2))
 
-    print("\n  case                               tip [mm]   f [Hz]    f pred    zeta       zeta pred")
-    for label, res in decays.items():
-        for run in res.runs:
-            i = len(run.amplitude) // 2
-            fp, zp = res.modal.predict(run.amplitude[i])
-            print(f"  {label:34s} {run.amplitude[i] * 1e3:7.3f}  {run.frequency[i]:8.3f}  "
-                  f"{fp[0]:8.3f}  {run.damping[i]:.3e}  {zp[0]:.3e}")
+    print("\n  f(X), zeta(X) by QSMA (first and last amplitude of each curve)")
+    print("  specimen             mode   X [um]      f [Hz]     zeta")
+    for name, entries in curves.items():
+        for label, c, _ in entries:
+            for i in (0, -1):
+                print(f"  {name:20s} {label[-1]:>4s} {c.amplitude[i] * 1e6:8.2f} "
+                      f"{c.frequency[i]:11.4f}  {c.damping_ratio[i]:.3e}")
+    print("\n  Brake-Reuss ring-down vs QSMA")
+    print("  X [um]    f ring [Hz]  f pred [Hz]  zeta ring  zeta pred")
+    qp = modal_amplitude_curve(brb, amplitudes=rd.curve.amplitude)
+    for i in np.linspace(0, len(qp) - 1, 5).astype(int):
+        print(f"  {rd.curve.amplitude[i] * 1e6:7.2f}  {rd.curve.frequency[i]:11.4f}  "
+              f"{qp.frequency[i]:11.4f}  {rd.curve.damping_ratio[i]:.3e}  {qp.damping_ratio[i]:.3e}")
     qsum = summary["quasi_static"]
     print(f"\n  quasi-static: machine amplitude {qsum['amplitude_m'] * 1e3:.4f} mm, machine force "
           f"{qsum['machine_force_amplitude_N'] * 1e-3:.3f} kN, joint dissipation per cycle "
           f"{sum(qsum['joint_dissipation_per_cycle_J']):.4g} J")
-    progress(f"wrote {args.out}/fig8_quasi_static.png, free_decay.png"
+    progress(f"wrote {args.out}/fig8_quasi_static.png, modal_amplitude.png, free_decay.png"
              f"{', forced_response.png' if forced else ''} and summary.json")
     return summary
 

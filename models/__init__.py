@@ -1,13 +1,27 @@
 """Models built on iwan_element's public API; installed as ``iwan_element.models``.
 
-* :mod:`iwan_element.models.jointed_beam` - the two-beam bolted lap joint in Exudyn;
+* :mod:`~iwan_element.models.specimens` - two-beam lap-joint specimens and presets
+  (:func:`preset`: ``"example"``, ``"brake-reuss"``, ``"two-bolt-aluminium"``);
+* :mod:`~iwan_element.models.interface` - contact pressure cones and the distributed
+  interface's Iwan elements;
+* :mod:`~iwan_element.models.assembly` - the Exudyn model of a specimen and its linear matrices;
+* :mod:`~iwan_element.models.qsma` - quasi-static modal analysis (:func:`modal_amplitude_curve`);
+* :mod:`~iwan_element.models.transient` - the transient route (:func:`ringdown`);
+* :mod:`~iwan_element.models.calibration` - interface calibration from vibration data and
+  from joint / modal Iwan fits;
+* :mod:`~iwan_element.models.jointed_beam` - the original lumped two-beam lap-joint model;
 * ``example_test_30kN.csv`` - a SYNTHETIC quasi-static test of the seed paper's specimen
   (see ``README.md`` here and ``make_example_test.py``); :func:`example_test_path` finds it.
 """
 from importlib import resources
 from pathlib import Path
 
-__all__ = ["example_test_path"]
+from .qsma import modal_amplitude_curve
+from .transient import RingdownResult, ringdown
+from .specimens import Excitation, InterfaceModel, Specimen, preset
+
+__all__ = ["example_test_path", "preset", "modal_amplitude_curve", "ringdown", "Specimen",
+           "InterfaceModel", "Excitation", "RingdownResult"]
 
 
 def example_test_path() -> Path:

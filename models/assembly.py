@@ -14,10 +14,10 @@ built-in normal spring ``k_n,i`` and a tangential element: the Iwan element (``"
 a linear spring ``KT_i`` (``"linear"``) or nothing (``"none"``, used to extract the linear
 matrices without the tangential stiffness).
 
-The Iwan elements are attached by :func:`_add_interface`, one
-:func:`iwan_element.exudyn.add_iwan_connector` per point (exact, one Python call per point
-per force evaluation); see ``/work/notes/beam.md`` for the switch to the vectorised
-multi-contact interface.
+The Iwan elements are attached by :func:`iwan_element.exudyn.add_iwan_interface`: the exact
+law of every point as a compiled (symbolic) Exudyn expression and one vectorised commit of all
+points per accepted step. ``joint_elements=True`` attaches :class:`~iwan_element.IwanJoint`
+elements instead (one Python connector per point; the reference route).
 """
 from __future__ import annotations
 
@@ -32,7 +32,7 @@ from exudyn.itemInterface import (CoordinateConstraint, MarkerBodyPosition, Mark
                                   ObjectConnectorCartesianSpringDamper, ObjectGround)
 
 from iwan_element import IwanJoint
-from iwan_element.exudyn import add_iwan_connector
+from iwan_element.exudyn import add_iwan_interface
 
 from .interface import ContactPoints, contact_points
 from .specimens import Specimen
@@ -54,8 +54,7 @@ class SpecimenModel:
     nodes: list
     marker_pairs: list
     springs: list
-    connectors: list
-    joints: list
+    interface: object
     sensor_marker: int
     fixed_coordinates: list
     beam_damping: float = 0.0
@@ -73,9 +72,12 @@ class SpecimenModel:
         return float(sum(self.mbs.GetObjectOutput(s, _OVT.PotentialEnergy) for s in self.springs))
 
     def joint_energy(self) -> tuple[float, float]:
-        """(stored, dissipated) energy of the interface's Iwan elements, committed [J]."""
-        return (float(sum(j.stored_energy for j in self.joints)),
-                float(sum(j.dissipated_energy for j in self.joints)))
+        """(stored, dissipated) energy of the interface's Iwan elements at the last accepted
+        step [J] (0 before the first record or without an Iwan interface)."""
+        itf = self.interface
+        if itf is None or itf.n_records == 0:
+            return 0.0, 0.0
+        return (float(itf.stored_energy_history[-1]), float(itf.dissipated_energy_history[-1]))
 
     def sensor_displacement(self) -> float:
         """Current transverse displacement at the sensor point [m]."""
@@ -87,20 +89,6 @@ class SpecimenModel:
         pos = self.mbs.GetMarkerOutput
         return np.array([pos(b, _OVT.Position)[0] - pos(a, _OVT.Position)[0]
                          for a, b in self.marker_pairs])
-
-
-def _add_interface(mbs, marker_pairs, params):
-    """One Iwan element per contact point along x; returns (connectors, joints).
-
-    The single place where the interface is attached, so that a vectorised multi-contact
-    interface can replace the per-point connectors without touching the rest.
-    """
-    conns, joints = [], []
-    for (ma, mb), p in zip(marker_pairs, params):
-        j = IwanJoint(p)
-        conns.append(add_iwan_connector(mbs, [ma, mb], j, axis=[1.0, 0.0, 0.0]))
-        joints.append(j)
-    return conns, joints
 
 
 def _mesh(specimen: Specimen):
@@ -139,7 +127,8 @@ def _marker_at(mbs, elems, edges, x0, x, y_local):
 
 
 def build_specimen_model(specimen: Specimen, *, tangential: str = "iwan",
-                         beam_damping: float = 0.0) -> SpecimenModel:
+                         beam_damping: float = 0.0, post_step=None,
+                         joint_elements: bool = False) -> SpecimenModel:
     """Build and assemble the Exudyn system of a specimen.
 
     Parameters
@@ -150,6 +139,11 @@ def build_specimen_model(specimen: Specimen, *, tangential: str = "iwan",
     beam_damping : float, keyword-only
         Stiffness-proportional damping of the beams [s] (Cable2D bending and axial damping
         ``beam_damping * EI``, ``beam_damping * EA``), ``>= 0``.
+    post_step : callable, optional, keyword-only
+        ``post_step(mbs, t) -> bool``, installed before the interface (which chains it).
+    joint_elements : bool, keyword-only
+        Attach :class:`~iwan_element.IwanJoint` elements (Python route) instead of the
+        compiled per-point law.
     """
     if not isinstance(specimen, Specimen):
         raise ValueError(f"specimen must be a Specimen, got {type(specimen).__name__}")
@@ -184,9 +178,12 @@ def build_specimen_model(specimen: Specimen, *, tangential: str = "iwan",
         kt = p.KT if tangential == "linear" else 0.0
         springs.append(mbs.AddObject(ObjectConnectorCartesianSpringDamper(
             markerNumbers=[ma, mb], stiffness=[kt, float(kn), 0.0], damping=[0.0, 0.0, 0.0])))
-    conns, joints = ([], [])
+    if post_step is not None:
+        mbs.SetPostStepUserFunction(post_step)
+    iface = None
     if tangential == "iwan":
-        conns, joints = _add_interface(mbs, pairs, pts.params)
+        joints = [IwanJoint(p) for p in pts.params] if joint_elements else list(pts.params)
+        iface = add_iwan_interface(mbs, pairs, joints, axis=[1.0, 0.0, 0.0])
     xs = s.sensor_position
     if xs <= s.beam_length:
         sm = _marker_at(mbs, ea, ae, 0.0, xs, 0.0)
@@ -199,8 +196,8 @@ def build_specimen_model(specimen: Specimen, *, tangential: str = "iwan",
         i0 = mbs.GetNodeODE2Index(node)
         fixed += [i0 + c for c in coords]
     model = SpecimenModel(specimen=s, SC=SC, mbs=mbs, points=pts, elements=ea + eb,
-                          nodes=na + nb, marker_pairs=pairs, springs=springs, connectors=conns,
-                          joints=joints, sensor_marker=sm, fixed_coordinates=fixed,
+                          nodes=na + nb, marker_pairs=pairs, springs=springs, interface=iface,
+                          sensor_marker=sm, fixed_coordinates=fixed,
                           beam_damping=beam_damping)
     model.extra["sensor_y0"] = float(mbs.GetMarkerOutput(sm, _OVT.Position,
                                                          configuration=exu.ConfigurationType.Reference)[1])

@@ -313,7 +313,7 @@ def _surface_marker(mbs, elems, Le, x0, x, y_local):
 
 
 def build_jointed_beam(config: JointedBeamConfig | None = None, *, joint_factory=None,
-                       drive_function=None) -> JointedBeamModel:
+                       drive_function=None, post_step=None) -> JointedBeamModel:
     """Build the jointed-beam system in a new Exudyn SystemContainer.
 
     Parameters
@@ -327,6 +327,9 @@ def build_jointed_beam(config: JointedBeamConfig | None = None, *, joint_factory
     drive_function : callable, optional, keyword-only
         ``f(t) -> u`` [m], the machine displacement for ``boundary="clamped-driven"``
         (default: none, the grip is held at zero).
+    post_step : callable, optional, keyword-only
+        ``post_step(mbs, t) -> bool``; installed before the joint connectors, which chain it
+        (a post-step function set after them would replace their commit).
 
     Returns
     -------
@@ -376,6 +379,8 @@ def build_jointed_beam(config: JointedBeamConfig | None = None, *, joint_factory
     kn = cfg.normal_stiffness / n
     kt = {"iwan": 0.0, "linear": pj.KT, "rigid": cfg.rigid_stiffness}[cfg.joint_model]
     markers_a, markers_b, springs, connectors, joints = [], [], [], [], []
+    if post_step is not None:
+        mbs.SetPostStepUserFunction(post_step)
     for x in cfg.contact_x():
         ma = _surface_marker(mbs, elems_a, Le, 0.0, x, +0.5 * h)
         mb = _surface_marker(mbs, elems_b, Le, xb0, x, -0.5 * h)

@@ -7,9 +7,10 @@ and the closed-form Iwan backbones of the contact points:
 1. preload: the normal preload does not load the tangential elements here (no Poisson
    coupling), so ``x0 = 0`` and the stuck tangent is ``K = K0 + G^T diag(KT_i) G``;
 2. mass-normalised eigenpair ``(w_k, phi)`` of ``(K, M)`` for the requested elastic mode;
-3. static load ``alpha M phi``: Newton on ``K0 x + G^T F(G x) = alpha M phi`` with
-   ``F_i`` the virgin backbone of point ``i`` (REFERENCE sec. 2) and its tangent, bordered
-   with ``S x = X`` so that each requested sensor amplitude ``X`` is hit exactly;
+3. static load ``alpha M phi``: ``K0 x + G^T F(G x) = alpha M phi`` with ``F_i`` the virgin
+   backbone of point ``i`` (REFERENCE sec. 2), condensed statically onto the contact slips
+   ``u = G x`` and solved by Newton with the backbones' tangents, bordered with ``S x = X`` so
+   that each requested sensor amplitude ``X`` is hit exactly;
 4. ``q = phi^T M x`` and secant ``w^2 = alpha / q``;
 5. Masing damping from the sum of the contact points' dissipations at their slip
    amplitudes ``u_i = |G_i x|`` (closed form, REFERENCE sec. 2) rather than the modal
@@ -25,6 +26,7 @@ from __future__ import annotations
 
 import logging
 import math
+from functools import lru_cache
 
 import numpy as np
 import scipy.linalg as sla
@@ -66,18 +68,22 @@ def linear_modes(specimen: Specimen, *, mode: int = 1):
     L = linear_system(specimen)
     pts = contact_points(specimen)
     K = L.K0 + L.G.T @ (pts.KT[:, None] * L.G)
-    w2, V = sla.eigh(K, L.M)
-    rigid_mask = w2 < (2 * math.pi * 0.5) ** 2
-    elastic = np.flatnonzero(~rigid_mask)
-    if mode > elastic.size:
-        raise ValueError(f"mode must be <= {elastic.size}, got {mode}")
-    k = elastic[mode - 1]
+    n_rigid = 3 if specimen.boundary == "free-free" else 0
+    top = min(n_rigid + mode + 2, K.shape[0]) - 1
+    w2, V = sla.eigh(K, L.M, subset_by_index=[0, top])
+    n_low = int(np.sum(w2 < (2 * math.pi * 0.5) ** 2))
+    if n_low > n_rigid:
+        log.warning("%d elastic mode(s) below 0.5 Hz (the interface lets the beams slide "
+                    "almost freely); mode numbers count from the next one", n_low - n_rigid)
+    k = max(n_low, n_rigid) + mode - 1
+    if k >= w2.size:
+        raise ValueError(f"mode must be <= {w2.size - max(n_low, n_rigid)}, got {mode}")
     phi = V[:, k] / math.sqrt(V[:, k] @ L.M @ V[:, k])
     if L.S @ phi < 0:
         phi = -phi
     if abs(L.S @ phi) < 1e-9 * np.max(np.abs(phi)):
         log.warning("the sensor sits at a node of mode %d", mode)
-    return math.sqrt(w2[k]), phi, V[:, rigid_mask], L, pts
+    return math.sqrt(abs(w2[k])), phi, V[:, :n_rigid], L, pts
 
 
 def _interface_law(u, Fs, KT, phimax, chi, beta):
@@ -89,61 +95,93 @@ def _interface_law(u, Fs, KT, phimax, chi, beta):
     return F, kt
 
 
+def _prepare_key(specimen: Specimen, mode: int):
+    return (specimen.replace(friction=1.0, chi=0.0, beta=0.0, damping_floor=0.0,
+                             amplitude_range=(1.0, 2.0)), mode)
+
+
+@lru_cache(maxsize=32)
+def _condensed(key):
+    """Static condensation onto the contact slips (depends on geometry and KT_i only).
+
+    With the stuck tangent ``A = K0 + G^T diag(KT) G`` (plus the rigid-body penalty) and
+    the interface force deficit ``d(u) = F(u) - KT u``, every static state is
+    ``x = alpha A^-1 M phi - A^-1 G^T d(u)`` and ``A^-1 M phi = phi / w0^2``.
+    """
+    specimen, mode = key
+    w0, phi, R, L, pts = linear_modes(specimen, mode=mode)
+    A = L.K0 + L.G.T @ (pts.KT[:, None] * L.G)
+    if R.size:
+        MR = L.M @ R
+        A = A + w0 * w0 * (MR @ MR.T)
+    YG = sla.cho_solve(sla.cho_factor(A), L.G.T)
+    Yb = phi / (w0 * w0)
+    Mphi = L.M @ phi
+    return {"w0": w0, "phi": phi, "L": L, "Yb": Yb, "YG": YG, "C": L.G @ YG, "ub": L.G @ Yb,
+            "sb": float(L.S @ Yb), "sG": L.S @ YG, "qb": float(Mphi @ Yb), "qG": Mphi @ YG}
+
+
 def static_modal_load(specimen: Specimen, amplitudes, *, mode: int = 1,
-                      tol: float = 1e-10, max_iter: int = 60):
+                      tol: float = 1e-12, max_iter: int = 60):
     """Nonlinear static solutions under ``alpha M phi`` reaching sensor amplitudes ``X``.
+
+    Newton on the condensed equations (:func:`_condensed`) in the contact slips ``u`` and
+    the load factor ``alpha``, bordered with ``S x = X``.
 
     Returns
     -------
     dict
-        ``alpha`` (n,), ``x`` (n, n_free), ``q`` (n,), ``slip`` (n, n_points), ``omega0``,
-        ``phi``, ``system`` (LinearSystem), ``points`` (ContactPoints), ``warnings``.
+        ``amplitude`` (n,), ``alpha`` (n,), ``x`` (n, n_free), ``q`` (n,), ``slip``
+        (n, n_points), ``omega0``, ``phi``, ``system`` (LinearSystem), ``points``
+        (ContactPoints), ``warnings``.
     """
     X = _amplitudes(specimen, amplitudes)
-    w0, phi, R, L, pts = linear_modes(specimen, mode=mode)
+    mode = _check_mode(mode)
+    c = _condensed(_prepare_key(specimen, mode))
+    pts = contact_points(specimen)
     itf = specimen.interface
     Fs, KT, pm = pts.Fs, pts.KT, pts.phi_max
-    A = L.K0.copy()
-    if R.size:
-        MR = L.M @ R
-        A += w0 * w0 * (MR @ MR.T)
-    b = L.M @ phi
-    G, S = L.G, L.S
-    n = A.shape[0]
-    order = np.argsort(X)
-    out_x = np.zeros((X.size, n))
+    C, ub, sb, sG = c["C"], c["ub"], c["sb"], c["sG"]
+    n = len(KT)
+    eye = np.eye(n)
+    out_u = np.zeros((X.size, n))
     out_a = np.zeros(X.size)
     warns = []
-    x = np.zeros(n)
-    alpha = 0.0
-    for j in order:
+    u, alpha = None, 0.0
+    for j in np.argsort(X):
         Xt = X[j]
-        scale = Xt / (S @ phi)
-        if alpha == 0.0:
-            x, alpha = phi * scale, w0 * w0 * scale
+        if u is None:
+            alpha = Xt / sb
+            u = alpha * ub
         else:
-            r = Xt / (S @ x)
-            x, alpha = x * r, alpha * r
-        for it in range(max_iter):
-            u = G @ x
+            r = Xt / X_prev
+            u, alpha = u * r, alpha * r
+        for _ in range(max_iter):
             F, kt = _interface_law(u, Fs, KT, pm, itf.chi, itf.beta)
-            res = np.concatenate([A @ x + G.T @ F - alpha * b, [S @ x - Xt]])
-            J = np.zeros((n + 1, n + 1))
-            J[:n, :n] = A + G.T @ (kt[:, None] * G)
-            J[:n, n] = -b
-            J[n, :n] = S
-            d = np.linalg.solve(J, -res)
-            x += d[:n]
-            alpha += d[n]
-            if np.linalg.norm(d[:n]) <= tol * np.linalg.norm(x):
+            d = F - KT * u
+            res = np.concatenate([u - alpha * ub + C @ d, [alpha * sb - sG @ d - Xt]])
+            J = np.empty((n + 1, n + 1))
+            J[:n, :n] = eye + C * (kt - KT)[None, :]
+            J[:n, n] = -ub
+            J[n, :n] = -sG * (kt - KT)
+            J[n, n] = sb
+            step = np.linalg.solve(J, -res)
+            u += step[:n]
+            alpha += step[n]
+            if np.max(np.abs(step[:n])) <= tol * max(np.max(np.abs(u)), 1e-300) and \
+                    abs(step[n]) <= tol * abs(alpha):
                 break
         else:
             warns.append(f"static solve at X = {Xt:.3e} m did not converge in {max_iter} "
                          "Newton iterations")
-        out_x[j], out_a[j] = x, alpha
-    q = out_x @ (L.M @ phi)
-    return {"amplitude": X, "alpha": out_a, "x": out_x, "q": q, "slip": out_x @ G.T,
-            "omega0": w0, "phi": phi, "system": L, "points": pts, "warnings": warns}
+        out_u[j], out_a[j], X_prev = u, alpha, Xt
+    F, _ = _interface_law(out_u, Fs, KT, pm, itf.chi, itf.beta)
+    d = F - KT * out_u
+    x = out_a[:, None] * c["Yb"][None, :] - d @ c["YG"].T
+    q = out_a * c["qb"] - d @ c["qG"]
+    return {"amplitude": X, "alpha": out_a, "x": x, "q": q, "slip": out_u,
+            "omega0": c["w0"], "phi": c["phi"], "system": c["L"], "points": pts,
+            "warnings": warns}
 
 
 def modal_amplitude_curve(specimen: Specimen, *, mode: int = 1, amplitudes=None) -> AmplitudeCurve:

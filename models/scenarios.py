@@ -435,7 +435,26 @@ def _decay_run(cfg, level, modal, *, cycles, steps_per_period, joint_factory,
     period, so mode 1 is released, but long against the periods of the axial and contact
     modes (kHz), which therefore follow quasi-statically instead of ringing undamped.
     """
-    model = build_jointed_beam(cfg.replace(boundary="clamped-free"), joint_factory=joint_factory)
+    energy = {k: [] for k in ("t", "kinetic", "strain", "springs", "joint_stored", "joint_dissipated")}
+    coords = []
+    counter = [0]
+    handle = {}
+
+    def post_step(mbs_, t):
+        coords.append(mbs_.systemData.GetODE2Coordinates())
+        if record_energy and counter[0] % energy_every == 0:
+            m = handle["model"]
+            kin, pot = m.beam_energy()
+            st, ds = m.joint_energy()
+            for k, v in zip(energy, (t, kin, pot, m.spring_energy(), st, ds)):
+                energy[k].append(v)
+        counter[0] += 1
+        return True
+
+    # the post-step goes in before the joint connectors, which chain it
+    model = build_jointed_beam(cfg.replace(boundary="clamped-free"), joint_factory=joint_factory,
+                               post_step=post_step)
+    handle["model"] = model
     mbs = model.mbs
     # static load pattern w1^2 M phi1: its linear static deflection is the first mode exactly
     pattern = (2 * math.pi * modal.frequencies[0]) ** 2 * (modal.mass_matrix @ modal.shapes[:, 0])
@@ -464,22 +483,6 @@ def _decay_run(cfg, level, modal, *, cycles, steps_per_period, joint_factory,
     mbs.SetPreStepUserFunction(pre_step)
     s_tip = mbs.AddSensor(SensorNode(nodeNumber=model.tip_node, outputVariableType=_OVT.Displacement,
                                      storeInternal=True))
-    energy = {k: [] for k in ("t", "kinetic", "strain", "springs", "joint_stored", "joint_dissipated")}
-    coords = []
-    counter = [0]
-    get_q = mbs.systemData.GetODE2Coordinates
-
-    def post_step(mbs_, t):
-        coords.append(get_q())
-        if record_energy and counter[0] % energy_every == 0:
-            kin, pot = model.beam_energy()
-            st, ds = model.joint_energy()
-            for k, v in zip(energy, (t, kin, pot, model.spring_energy(), st, ds)):
-                energy[k].append(v)
-        counter[0] += 1
-        return True
-
-    mbs.SetPostStepUserFunction(post_step)
     mbs.Assemble()
     scale = _bending_force_scale(cfg, level)
     static = _settings(force_scale=scale, static=True)

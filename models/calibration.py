@@ -1,0 +1,220 @@
+"""Calibration of a specimen's interface, both ways.
+
+* From vibration data: :func:`calibrate` fits interface parameters (by default the
+  tangential stiffness per area, the friction coefficient, chi and the modal damping floor)
+  so that the QSMA curve (:func:`~iwan_element.models.qsma.modal_amplitude_curve`) matches a
+  measured :class:`~iwan_element.AmplitudeCurve` (frequency and damping against amplitude at
+  the specimen's sensor point). Nonlinear least squares (``scipy.optimize.least_squares``,
+  log-parameters, bounded), residuals ``(f/f_meas - 1)/f_tol`` and ``(zeta/zeta_meas - 1)/z_tol``;
+  standard errors from the Jacobian at the optimum.
+* From a joint or modal Iwan fit: :func:`interface_from_joint` maps a lumped joint
+  (``Fs, KT, chi, beta``, e.g. from ``fit_loops`` of a lap-shear test) onto the distributed
+  interface: ``mu = Fs / sum(preloads)`` (in a shear test every point slips at
+  ``mu N_i``, and ``sum N_i = sum P``) and ``k_t = KT / A_contact``; chi and beta carry over.
+  :func:`interface_from_modal_iwan` maps a modal Iwan model (modal units, Segalman 2005,
+  REFERENCE sec. 7, ``w0^2 = K_inf + KT``): ``k_t`` such that the stuck mode's
+  ``w^2`` exceeds that of the tangentially free lap (``K_inf``, macroslip) by ``KT_modal``,
+  and ``mu`` such that the points' slip forces weighted by the mode's slip shape
+  ``g_i = du_i/dq`` sum to the modal macroslip force, ``sum |g_i| mu N_i = Fs_modal``
+  (an approximation: the points do not all reach macroslip at once).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from scipy import optimize
+
+from iwan_element import AmplitudeCurve, IwanParameters, amplitude_curve
+
+from .interface import contact_points
+from .qsma import linear_modes, modal_amplitude_curve
+from .specimens import Specimen
+
+__all__ = ["measured_amplitude_curve", "CalibrationResult", "calibrate", "interface_from_joint",
+           "interface_from_modal_iwan"]
+
+_FIT = ("stiffness_per_area", "friction", "chi", "damping_floor", "beta")
+_BOUNDS = {"stiffness_per_area": (1e9, 1e15), "friction": (1e-3, 3.0), "chi": (-0.95, 0.0),
+           "damping_floor": (1e-6, 0.05), "beta": (1e-4, 10.0)}
+
+
+def measured_amplitude_curve(path, *, band=(60.0, 120.0), window: float = 0.25,
+                             start: float = 0.0) -> AmplitudeCurve:
+    """f(X), zeta(X) of one mode from a ring-down acceleration record (CSV: t [s], a [m/s^2]).
+
+    Reads the file and calls :func:`iwan_element.amplitude_curve` (band-pass, Hilbert,
+    windowed fits; it trims the filter's end effects itself) on the record from ``start``
+    seconds after its largest sample (the impact).
+    """
+    data = np.loadtxt(Path(path), delimiter=",", skiprows=1)
+    if data.ndim != 2 or data.shape[1] < 2 or data.shape[0] < 1000:
+        raise ValueError(f"{path}: expected a CSV of t [s], a [m/s^2] with >= 1000 rows")
+    t, a = data[:, 0], data[:, 1]
+    keep = t >= t[np.argmax(np.abs(a))] + start
+    return amplitude_curve(t[keep], a[keep], quantity="acceleration", band=band, window=window)
+
+
+@dataclass
+class CalibrationResult:
+    """Result of :func:`calibrate`."""
+
+    specimen: Specimen
+    params: dict
+    stderr: dict
+    measured: AmplitudeCurve
+    model: AmplitudeCurve
+    max_frequency_error: float
+    max_damping_error: float
+    success: bool
+    warnings: list = field(default_factory=list)
+
+    def report(self) -> str:
+        lines = [f"Interface calibration of {self.specimen.name!r} "
+                 f"({'converged' if self.success else 'NOT converged'})"]
+        for k, v in self.params.items():
+            lines.append(f"  {k:20s} = {v:.6g} +- {self.stderr[k]:.2g}")
+        lines.append(f"  max |f/f_meas - 1|      = {self.max_frequency_error:.2e}")
+        lines.append(f"  max |zeta/zeta_meas - 1| = {self.max_damping_error:.3f}")
+        lines += [f"  warning: {w}" for w in self.warnings]
+        return "\n".join(lines)
+
+    def to_dict(self) -> dict:
+        return {"params": self.params, "stderr": self.stderr, "success": self.success,
+                "max_frequency_error": self.max_frequency_error,
+                "max_damping_error": self.max_damping_error, "warnings": list(self.warnings),
+                "model": self.model.to_dict(), "measured": self.measured.to_dict()}
+
+    def plot(self, ax=None):
+        """Measured and model f(X), zeta(X) on ``ax = (ax_f, ax_z)``; returns the artists."""
+        arts = self.measured.plot(ax, label="measured", ls="none")
+        if ax is None:
+            ax = (arts[0].axes, arts[1].axes)
+        arts += self.model.plot(ax, label="model (QSMA)", marker="", ls="-")
+        return arts
+
+
+def _with(specimen: Specimen, names, values) -> Specimen:
+    return specimen.replace(**{n: float(v) for n, v in zip(names, values)})
+
+
+def calibrate(specimen: Specimen, measured: AmplitudeCurve, *, fit=("stiffness_per_area",
+              "friction", "chi", "damping_floor"), mode: int = 1, f_tol: float = 2e-4,
+              z_tol: float = 0.05) -> CalibrationResult:
+    """Fit interface parameters so the QSMA curve matches a measured amplitude curve.
+
+    Parameters
+    ----------
+    specimen : Specimen
+        Geometry and the starting values of the fitted parameters.
+    measured : AmplitudeCurve
+        Measured curve (amplitude at ``specimen.sensor_position``); points outside
+        ``specimen.amplitude_range`` are ignored.
+    fit : sequence of str, keyword-only
+        Parameters to fit, from ``stiffness_per_area``, ``friction``, ``chi``,
+        ``damping_floor``, ``beta``.
+    f_tol, z_tol : float, keyword-only
+        Residual scales of the relative frequency and damping errors.
+    """
+    fit = tuple(fit)
+    bad = [n for n in fit if n not in _FIT]
+    if bad or not fit:
+        raise ValueError(f"fit must name parameters from {_FIT}, got {fit!r}")
+    lo, hi = specimen.amplitude_range
+    m = (measured.amplitude >= lo * (1 - 1e-9)) & (measured.amplitude <= hi * (1 + 1e-9))
+    if m.sum() < len(fit) + 2:
+        raise ValueError(f"the measured curve has {m.sum()} points in the specimen's amplitude "
+                         f"range; need at least {len(fit) + 2}")
+    X, fm, zm = measured.amplitude[m], measured.frequency[m], measured.damping_ratio[m]
+
+    def get(s, n):
+        return getattr(s, n) if n == "friction" else getattr(s.interface, n)
+
+    def transform(n, v, inverse=False):
+        if n == "chi":
+            return v
+        return math.exp(v) if inverse else math.log(v)
+
+    x0 = np.array([transform(n, min(max(get(specimen, n), _BOUNDS[n][0] * 1.01), _BOUNDS[n][1]))
+                   for n in fit])
+    lb = np.array([transform(n, _BOUNDS[n][0]) for n in fit])
+    ub = np.array([transform(n, _BOUNDS[n][1]) for n in fit])
+
+    def model(x):
+        s = _with(specimen, fit, [transform(n, v, True) for n, v in zip(fit, x)])
+        return modal_amplitude_curve(s, mode=mode, amplitudes=X)
+
+    def resid(x):
+        c = model(x)
+        return np.concatenate([(c.frequency / fm - 1) / f_tol, (c.damping_ratio / zm - 1) / z_tol])
+
+    sol = optimize.least_squares(resid, x0, bounds=(lb, ub), x_scale=1.0, diff_step=1e-4,
+                                 max_nfev=200)
+    vals = [transform(n, v, True) for n, v in zip(fit, sol.x)]
+    fitted = _with(specimen, fit, vals)
+    curve = modal_amplitude_curve(fitted, mode=mode, amplitudes=X)
+    warns = []
+    try:
+        dof = max(1, sol.fun.size - len(fit))
+        cov = np.linalg.inv(sol.jac.T @ sol.jac) * (2 * sol.cost / dof)
+        se_t = np.sqrt(np.diag(cov))
+    except np.linalg.LinAlgError:
+        se_t = np.full(len(fit), np.nan)
+        warns.append("the Jacobian is singular: some parameters are not identifiable")
+    stderr = {n: (float(s) if n == "chi" else float(v * s)) for n, v, s in zip(fit, vals, se_t)}
+    ferr = float(np.max(np.abs(curve.frequency / fm - 1)))
+    zerr = float(np.max(np.abs(curve.damping_ratio / zm - 1)))
+    for n, v in zip(fit, sol.x):
+        if min(v - lb[fit.index(n)], ub[fit.index(n)] - v) < 1e-3:
+            warns.append(f"{n} ended on its bound")
+    return CalibrationResult(specimen=fitted, params=dict(zip(fit, map(float, vals))),
+                             stderr=stderr, measured=measured, model=curve,
+                             max_frequency_error=ferr, max_damping_error=zerr,
+                             success=bool(sol.success) and not warns, warnings=warns)
+
+
+def interface_from_joint(specimen: Specimen, joint: IwanParameters) -> Specimen:
+    """Distributed interface carrying a lumped joint's parameters (module docstring).
+
+    ``joint`` describes the whole lap in shear (``Fs`` [N], ``KT`` [N/m]), e.g. a loop fit.
+    """
+    if not isinstance(joint, IwanParameters):
+        raise ValueError("joint must be IwanParameters")
+    pts = contact_points(specimen.replace(stiffness_pressure_exponent=0.0))
+    return specimen.replace(friction=joint.Fs / pts.normal_force.sum(),
+                            stiffness_per_area=joint.KT / pts.area.sum(),
+                            stiffness_pressure_exponent=0.0, chi=joint.chi, beta=joint.beta)
+
+
+def interface_from_modal_iwan(specimen: Specimen, modal: IwanParameters, *,
+                              mode: int = 1) -> Specimen:
+    """Distributed interface reproducing a modal Iwan joint (modal units, module docstring).
+
+    ``modal.KT`` [1/s^2, i.e. N/m per kg with mass-normalised modes] is the joint's share of
+    the mode's stiffness and ``modal.Fs`` its macroslip modal force; the slip shape of the
+    stuck mode distributes them over the contact points.
+    """
+    if not isinstance(modal, IwanParameters):
+        raise ValueError("modal must be IwanParameters (modal units)")
+    # the joint's modal stiffness is what it adds to the mode, KT_modal = w_stuck^2 - K_inf,
+    # with K_inf = w^2 of the tangentially free lap (macroslip); w_stuck rises monotonically
+    # with k_t (eigenvalue monotonicity), so k_t follows by bracketing
+    k0 = math.log(specimen.interface.stiffness_per_area)
+    w_inf, *_ = linear_modes(specimen.replace(stiffness_per_area=math.exp(k0 - 25.0)), mode=mode)
+
+    def modal_stiffness(log_kt):
+        sp = specimen.replace(stiffness_per_area=math.exp(log_kt))
+        w, phi, _, L, pts = linear_modes(sp, mode=mode)
+        return w * w - w_inf * w_inf, float(np.sum(np.abs(L.G @ phi) * pts.normal_force))
+
+    lo, hi = k0 - 8.0, k0 + 8.0
+    f_lo, f_hi = modal_stiffness(lo)[0] - modal.KT, modal_stiffness(hi)[0] - modal.KT
+    if f_lo > 0 or f_hi < 0:
+        raise ValueError(f"modal.KT = {modal.KT:.4g} is outside what this interface can carry "
+                         f"in mode {mode} ({f_lo + modal.KT:.4g} .. {f_hi + modal.KT:.4g})")
+    log_kt = optimize.brentq(lambda v: modal_stiffness(v)[0] - modal.KT, lo, hi, xtol=1e-10)
+    _, gN = modal_stiffness(log_kt)
+    return specimen.replace(friction=modal.Fs / gN, stiffness_per_area=math.exp(log_kt),
+                            chi=modal.chi, beta=modal.beta)

@@ -1,0 +1,91 @@
+"""Quasi-static modal analysis against the transient ring-down (two independent routes)."""
+import math
+
+import numpy as np
+import pytest
+
+from iwan_element import AmplitudeCurve, dissipation
+from iwan_element.models import modal_amplitude_curve, preset, ringdown
+from iwan_element.models.qsma import linear_modes, static_modal_load
+
+NAMES = ("example", "brake-reuss", "two-bolt-aluminium")
+
+
+def _compare(name, mode, amplitude, cycles, **changes):
+    s = preset(name).replace(**changes) if changes else preset(name)
+    r = ringdown(s, mode=mode, amplitude=amplitude, cycles=cycles, steps_per_period=48)
+    tr = r.curve
+    q = modal_amplitude_curve(s, mode=mode, amplitudes=tr.amplitude)
+    return s, tr, q
+
+
+@pytest.mark.parametrize("name,mode", [("example", 2), ("brake-reuss", 1), ("two-bolt-aluminium", 2)])
+def test_qsma_agrees_with_the_transient_ring_down_at_the_top_of_the_range(name, mode):
+    s = preset(name)
+    s, tr, q = _compare(name, mode, s.amplitude_range[1], 12)
+    assert tr.amplitude.max() / tr.amplitude.min() > 1.02          # it really decayed
+    np.testing.assert_array_less(np.abs(tr.frequency / q.frequency - 1), 1e-3)
+    np.testing.assert_array_less(np.abs(tr.damping_ratio / q.damping_ratio - 1), 0.10)
+    # the joint's share is a visible part of the damping (the test could fail on it)
+    assert q.damping_ratio.max() > 1.2 * s.interface.damping_floor
+
+
+def test_energy_closes_with_the_distributed_interface():
+    s = preset("brake-reuss").replace(damping_floor=0.0, n_points=24)
+    r = ringdown(s, amplitude=60e-6, cycles=8, steps_per_period=48, record_energy=True)
+    err = r.energy_error()
+    dissipated = r.energy["joint_dissipated"][-1] - r.energy["joint_dissipated"][0]
+    assert dissipated > 0.05 * r.initial_energy                       # the joint did work
+    assert np.max(np.abs(err)) < 1e-3
+
+
+def test_small_amplitudes_tend_to_the_stuck_linear_mode_and_the_floor():
+    s = preset("brake-reuss")
+    w0, *_ = linear_modes(s)
+    # the joint's share falls as X**(chi+1) (REFERENCE sec. 7): slowly, so go far down
+    c = modal_amplitude_curve(s, amplitudes=[1e-15, 1e-13])
+    f0 = w0 / (2 * math.pi)
+    assert c.frequency[0] == pytest.approx(f0, rel=1e-7)
+    assert c.damping_ratio[0] == pytest.approx(s.interface.damping_floor, rel=1e-4)
+    ratio = (1 - c.frequency[1] / f0) / (1 - c.frequency[0] / f0)
+    assert ratio == pytest.approx(100 ** (s.interface.chi + 1), rel=0.05)
+
+
+def test_qsma_curve_softens_and_damps_more_with_amplitude_and_hits_the_asked_amplitudes():
+    s = preset("brake-reuss")
+    c = modal_amplitude_curve(s)
+    assert isinstance(c, AmplitudeCurve) and c.method == "qsma" and len(c) == 20
+    np.testing.assert_allclose(c.amplitude[[0, -1]], s.amplitude_range)
+    assert np.all(np.diff(c.frequency) < 0) and np.all(np.diff(c.damping_ratio) > 0)
+    st = static_modal_load(s, c.amplitude)
+    np.testing.assert_allclose(st["x"] @ st["system"].S, c.amplitude, rtol=1e-9)
+    # the damping is the sum of the points' closed-form dissipations (sec. 2) over 2 pi alpha q
+    D = sum(dissipation(np.abs(st["slip"][:, i]), p) for i, p in enumerate(st["points"].params))
+    z = s.interface.damping_floor + D / (2 * math.pi * st["alpha"] * st["q"])
+    np.testing.assert_allclose(c.damping_ratio, z, rtol=1e-12)
+
+
+def test_looser_bolts_and_lower_friction_damp_more():
+    s = preset("brake-reuss")
+    X = [1e-5, 5e-5]
+    base = modal_amplitude_curve(s, amplitudes=X).damping_ratio
+    assert np.all(modal_amplitude_curve(s.replace(preload=s.preload / 2), amplitudes=X)
+                  .damping_ratio > base)
+    assert np.all(modal_amplitude_curve(s.replace(friction=s.friction / 2), amplitudes=X)
+                  .damping_ratio > base)
+
+
+@pytest.mark.parametrize("kw,match", [({"amplitudes": [-1e-6]}, "amplitudes"),
+                                      ({"amplitudes": [np.nan]}, "amplitudes"),
+                                      ({"mode": 0}, "mode"), ({"mode": 1.5}, "mode")])
+def test_bad_qsma_input_is_refused(kw, match):
+    with pytest.raises(ValueError, match=match):
+        modal_amplitude_curve(preset("example"), **kw)
+
+
+@pytest.mark.parametrize("kw,match", [({"amplitude": -1.0}, "amplitude"),
+                                      ({"amplitude": 1e-5, "cycles": 1}, "cycles"),
+                                      ({"amplitude": 1e-5, "steps_per_period": 4}, "steps_per_period")])
+def test_bad_ringdown_input_is_refused(kw, match):
+    with pytest.raises(ValueError, match=match):
+        ringdown(preset("example"), **kw)
