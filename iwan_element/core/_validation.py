@@ -86,7 +86,7 @@ def _check_int(name: str, value, low: int) -> int:
 
 def _check_time(t, n: int, name: str = "t") -> np.ndarray:
     """Return ``t`` as a new finite, strictly increasing array of length ``n``."""
-    tt = finite_array(name, t, ndim=1)
+    tt = check_magnitude(name, finite_array(name, t, ndim=1), unit="s")
     if tt.size != n:
         raise ValueError(f"{name} must have the same length as the data ({n}), got {tt.size}")
     bad = np.flatnonzero(np.diff(tt) <= 0.0)
@@ -95,3 +95,27 @@ def _check_time(t, n: int, name: str = "t") -> np.ndarray:
         raise ValueError(f"{name} (time) must be strictly increasing; it goes from {tt[i]:g} to "
                          f"{tt[i + 1]:g} at samples {i}..{i + 1}")
     return tt
+
+
+#: Magnitude range accepted for measured records and amplitudes (in SI units). Far outside any
+#: physical joint test (nm..km, uN..GN), and far enough inside the float range that the squares,
+#: products and sums of squares the identification forms (up to ~1e200 / 1e-200 for a record of
+#: 1e8 samples) neither overflow nor fall below float resolution.
+MAGNITUDE_RANGE = (1e-100, 1e100)
+
+
+def check_magnitude(name: str, arr: np.ndarray, *, unit: str = "") -> np.ndarray:
+    """Return ``arr`` unchanged if its largest magnitude is 0 or inside :data:`MAGNITUDE_RANGE`.
+
+    Raise ``ValueError`` naming ``name`` and the allowed range otherwise: values whose squares
+    or products overflow (``> 1e100``), or a record that is entirely below ``1e-100`` in
+    magnitude (its squares and quotients underflow to 0 and divide by zero). An all-zero array
+    passes here; whether it may be constant is for the caller to decide.
+    """
+    lo, hi = MAGNITUDE_RANGE
+    peak = float(np.max(np.abs(arr))) if np.size(arr) else 0.0
+    if peak > hi or 0.0 < peak < lo:
+        u = f" {unit}" if unit else ""
+        raise ValueError(f"{name} must have magnitudes in [{lo:g}, {hi:g}]{u} (largest |{name}| "
+                         f"is {peak:g}{u}); rescale the units")
+    return arr

@@ -39,12 +39,14 @@ import numpy as np
 from scipy.special import fdtrc
 
 from .._effect_eval import Evaluator, build_element, scale_effect, unit_params
-from ..core._validation import _check_int, _check_time, check_scalar, finite_array, same_length
+from ..core._validation import (_check_int, _check_time, check_magnitude, check_scalar, finite_array,
+                                same_length)
 from ..effects import EFFECTS
 from ..identify.fit import (_BETA_MAX, _CHI_BOUNDS, _PHI_RANGE, PARAM_NAMES, FitResult, _json, _lsq_box,
                   _quiet, fit_loops)
 from ..core.joint import IwanJoint
 from ..core.parameters import IwanParameters
+from ..core.protocol import check_element
 from ..identify.testdata import TestData, find_reversals, split_cycles
 
 __all__ = ["CANDIDATES", "Diagnosis", "VibrationDiagnosis", "diagnose", "diagnose_vibration",
@@ -96,7 +98,11 @@ def simulate_element_test(element, amplitudes, *, cycles: int = 3, frequency: fl
     -------
     TestData
     """
-    amps = finite_array("amplitudes", amplitudes, ndim=1)
+    check_element(element, name="element")
+    if not callable(getattr(element, "force_history", None)):
+        raise ValueError(f"element must have a force_history(u[, v]) method; "
+                         f"{type(element).__name__} has none")
+    amps = check_magnitude("amplitudes", finite_array("amplitudes", amplitudes, ndim=1), unit="m")
     if np.any(amps <= 0.0):
         raise ValueError("amplitudes must all be > 0 [m]")
     cycles = _check_int("cycles", cycles, 1)
@@ -104,7 +110,7 @@ def simulate_element_test(element, amplitudes, *, cycles: int = 3, frequency: fl
     n_per = _check_int("samples_per_cycle", samples_per_cycle, 16)
     if waveform not in ("sine", "triangle"):
         raise ValueError(f"waveform must be 'sine' or 'triangle', got {waveform!r}")
-    sf = check_scalar("force_noise", force_noise, low=0.0)
+    sf = check_scalar("force_noise", force_noise, low=0.0, high=1e100)
     phi = check_scalar("noise_correlation", noise_correlation, low=0.0, high=1.0, high_open=True)
     rng = np.random.default_rng(seed)
     if waveform == "sine":
@@ -658,8 +664,8 @@ def diagnose(t, u, F, *, candidates=None, max_effects: int = 2, noise: float | N
         (and no ``noise`` given), or an option out of range.
     """
     t_start = time.perf_counter()
-    uu = finite_array("u", u, ndim=1, min_size=10)
-    FF = finite_array("F", F, ndim=1, min_size=10)
+    uu = check_magnitude("u", finite_array("u", u, ndim=1, min_size=10), unit="m")
+    FF = check_magnitude("F", finite_array("F", F, ndim=1, min_size=10), unit="N")
     n = same_length(u=uu, F=FF)
     tt = None if t is None else _check_time(t, n)
     cand = _check_candidates(candidates)

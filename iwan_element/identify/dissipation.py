@@ -21,7 +21,7 @@ import time
 import numpy as np
 from scipy import optimize
 
-from ..core._validation import _check_int, check_scalar, finite_array, same_length
+from ..core._validation import _check_int, check_magnitude, check_scalar, finite_array, same_length
 from ..core.closed_form import dissipation, force_amplitude
 from ..core.parameters import IwanParameters
 from ._solver import _Problem, _uncertainty
@@ -238,9 +238,9 @@ def fit_dissipation(F0, D, *, u0, method: str = "least_squares", Fs: float | Non
         given ``Fs``.
     """
     t0 = time.perf_counter()
-    F0a = finite_array("F0", F0, ndim=1, min_size=2)
-    Da = finite_array("D", D, ndim=1, min_size=2)
-    ua = finite_array("u0", u0, ndim=1, min_size=2)
+    F0a = check_magnitude("F0", finite_array("F0", F0, ndim=1, min_size=2), unit="N")
+    Da = check_magnitude("D", finite_array("D", D, ndim=1, min_size=2), unit="J")
+    ua = check_magnitude("u0", finite_array("u0", u0, ndim=1, min_size=2), unit="m")
     same_length(F0=F0a, D=Da, u0=ua)
     for name, arr in (("F0", F0a), ("D", Da), ("u0", ua)):
         if np.any(arr <= 0):

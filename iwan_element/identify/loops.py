@@ -35,7 +35,8 @@ import numpy as np
 from scipy.special import fdtrc
 
 from ..core._history import History
-from ..core._validation import _check_int, _check_time, check_scalar, finite_array, same_length
+from ..core._validation import (_check_int, _check_time, check_magnitude, check_scalar, finite_array,
+                                same_length)
 from ..core.parameters import IwanParameters
 from ._solver import _Problem
 from .identifiability import _identify
@@ -48,8 +49,8 @@ __all__ = ["fit_loops"]
 
 
 def _check_record(t, u, F):
-    uu = finite_array("u", u, ndim=1, min_size=32)
-    FF = finite_array("F", F, ndim=1, min_size=32)
+    uu = check_magnitude("u", finite_array("u", u, ndim=1, min_size=32), unit="m")
+    FF = check_magnitude("F", finite_array("F", F, ndim=1, min_size=32), unit="N")
     n = same_length(u=uu, F=FF)
     tt = _check_time(t, n)
     if not np.any(FF != 0.0):

@@ -23,7 +23,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..core._validation import _check_int, _check_time, check_scalar, finite_array, same_length
+from ..core._validation import (_check_int, _check_time, check_magnitude, check_scalar, finite_array,
+                                same_length)
 from ..core.joint import IwanJoint
 from ..core.parameters import IwanParameters
 from .noise import estimate_noise
@@ -150,7 +151,7 @@ def find_reversals(u, *, hysteresis: float | None = None) -> np.ndarray:
         Sample indices of the confirmed turning points, in time order. The last extremum of the
         record counts only if the record comes back from it by more than the dead band.
     """
-    x = finite_array("u", u, ndim=1, min_size=2)
+    x = check_magnitude("u", finite_array("u", u, ndim=1, min_size=2), unit="m")
     _check_varies(x)
     h = _default_hysteresis(x) if hysteresis is None else check_scalar(
         "hysteresis", hysteresis, low=0.0, low_open=True)
@@ -250,8 +251,8 @@ def split_cycles(t, u, F, *, hysteresis: float | None = None, close_tol: float =
     tuple of Cycle
         Possibly empty; the first loading from rest and a trailing half cycle are no cycles.
     """
-    uu = finite_array("u", u, ndim=1, min_size=2)
-    FF = finite_array("F", F, ndim=1, min_size=2)
+    uu = check_magnitude("u", finite_array("u", u, ndim=1, min_size=2), unit="m")
+    FF = check_magnitude("F", finite_array("F", F, ndim=1, min_size=2), unit="N")
     same_length(u=uu, F=FF)
     _check_varies(uu)
     tt = np.arange(uu.size, dtype=float) if t is None else _check_time(t, uu.size)
@@ -457,13 +458,13 @@ def simulate_test(params: IwanParameters, amplitudes, *, cycles: int = 3, freque
     """
     if not isinstance(params, IwanParameters):
         raise ValueError(f"params must be an IwanParameters instance, got {type(params).__name__}")
-    amps = finite_array("amplitudes", amplitudes, ndim=1)
+    amps = check_magnitude("amplitudes", finite_array("amplitudes", amplitudes, ndim=1), unit="m")
     if np.any(amps <= 0.0):
         raise ValueError("amplitudes must all be > 0 [m]")
     cycles = _check_int("cycles", cycles, 1)
     f = check_scalar("frequency", frequency, low=0.0, low_open=True)
     fs = check_scalar("sample_rate", sample_rate, low=16.0 * f)
-    sf = check_scalar("force_noise", force_noise, low=0.0)
+    sf = check_scalar("force_noise", force_noise, low=0.0, high=1e100)
     su = check_scalar("displacement_noise", displacement_noise, low=0.0)
     rng = np.random.default_rng(seed)
     n_per = int(round(fs / f))
