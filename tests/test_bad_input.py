@@ -174,6 +174,110 @@ REGISTRY: dict[str, Entry] = {
     "CANDIDATES": Entry(skip="a constant tuple of effect names"),
 }
 
+# ---------------------------------------------------------------- vibration, modal, ensemble
+def _ringdown_signal():
+    """A clean 20 Hz ring-down (zeta 1 %) sampled at 400 Hz for 3 s (1200 samples), cached."""
+    if "ring" not in _CACHE:
+        t = np.arange(1200) / 400.0
+        w = 2 * np.pi * 20.0
+        _CACHE["ring"] = (t, np.exp(-0.01 * w * t) * np.sin(w * np.sqrt(1 - 1e-4) * t))
+    return _CACHE["ring"]
+
+
+_MODAL = IwanParameters(50.0, 4e5, -0.4, 0.3)          # modal joint, unit modal mass
+
+
+def _modal_curve():
+    """Amplitude curve of the modal Iwan oscillator (harmonic stiffness, dashpot floor)."""
+    Q = np.geomspace(2e-5, 2e-4, 12)
+    f, z = ie.modal_iwan_curve(Q, _MODAL, K_inf=4e6, zeta0=2e-3, stiffness="harmonic",
+                               floor="dashpot")
+    return dict(amplitude=Q, frequency=f, damping_ratio=z)
+
+
+def _levels():
+    """Three force-controlled stepped-sine levels of a linear mode (receptance FRF)."""
+    wr, zeta = 2 * np.pi * 50.0, 0.01
+    out = []
+    for k, F in enumerate((1.0, 2.0, 4.0)):
+        f = np.linspace(47.0, 53.0, 13)
+        w = 2 * np.pi * f
+        wk = wr * (1 - 0.01 * k)
+        out.append((f, 1.0 / (wk ** 2 - w ** 2 + 2j * zeta * (1 + 0.2 * k) * wk * w), F))
+    return out
+
+
+def _spring_model(u, theta):
+    """A linear spring F = k u (module level: the fit may pickle it)."""
+    return theta[0] * np.asarray(u)
+
+
+def _ensemble_task(params, rng):
+    """A cheap ensemble task: the backbone force at 0.1 mm of the given joint."""
+    p = IwanParameters(params["Fs"], 5e7, -0.5, 0.5)
+    return {"F": float(ie.backbone(1e-4, p)), "noise": float(rng.normal())}
+
+
+def _uncertainty():
+    return ie.ParameterUncertainty.from_mean_cov(P, np.diag([(0.05 * 9e3) ** 2, (0.05 * 5e7) ** 2]),
+                                                 names=("Fs", "KT"))
+
+
+_RESULT = "a result object built by {} (fuzzed through it)"
+REGISTRY.update({
+    "IwanJointBank": Entry(lambda: (ie.IwanJointBank, dict(params=[P, _MODAL], reversal_tol=1e-12)),
+                           {"params": "object", "reversal_tol": "scalar"}),
+    "estimate_noise": Entry(lambda: (ie.estimate_noise, dict(t=_record().t.copy(),
+                                                             y=_record().F.copy())),
+                            {"t": "time", "y": "data"}),
+    "NoiseEstimate": Entry(skip=_RESULT.format("estimate_noise")),
+    "fit_force_model": Entry(lambda: (ie.fit_force_model, dict(
+        t=_record().t.copy(), u=_record().u.copy(), F=_record().F.copy(), model=_spring_model,
+        theta0=np.array([1e7]), max_nfev=20)),
+        {"t": "time", "u": "data", "F": "data", "model": "object", "theta0": "values"}),
+    "ModelFit": Entry(skip=_RESULT.format("fit_force_model")),
+    "harmonic_stiffness": Entry(lambda: (ie.harmonic_stiffness, dict(
+        Q=np.geomspace(1e-6, 1e-3, 7), params=_MODAL)), {"Q": "shape_free", "params": "object"}),
+    "modal_iwan_curve": Entry(lambda: (ie.modal_iwan_curve, dict(
+        Q=np.geomspace(1e-6, 1e-3, 7), params=_MODAL, K_inf=4e6, zeta0=2e-3, mass=1.0)),
+        {"Q": "shape_free", "params": "object", "K_inf": "scalar", "zeta0": "scalar",
+         "mass": "scalar"}),
+    "modal_ringdown": Entry(lambda: (ie.modal_ringdown, dict(
+        t=np.arange(200) * 2e-4, params=_MODAL, K_inf=4e6, q0=1e-4, zeta0=2e-3)),
+        {"t": "time", "params": "object", "K_inf": "scalar", "q0": "scalar"}),
+    "amplitude_curve": Entry(lambda: (ie.amplitude_curve, dict(
+        t=_ringdown_signal()[0].copy(), y=_ringdown_signal()[1].copy(), quantity="displacement",
+        band=(10.0, 40.0), n_periods=10.0)),
+        {"t": "time", "y": "data", "n_periods": "scalar"}),
+    "fit_modal_iwan": Entry(lambda: (ie.fit_modal_iwan, _modal_curve()),
+                            {"amplitude": "data", "frequency": "data", "damping_ratio": "data"}),
+    "ModalIwanFit": Entry(skip=_RESULT.format("fit_modal_iwan")),
+    "stepped_sine_curve": Entry(lambda: (ie.stepped_sine_curve, dict(levels=_levels(),
+                                                                     peak_fraction=0.5)),
+                                {"levels": "object", "peak_fraction": "scalar"}),
+    "run_ensemble": Entry(lambda: (ie.run_ensemble, dict(
+        func=_ensemble_task, parameter_sets=[{"Fs": 9e3}, {"Fs": 1e4}], executor="serial", seed=0)),
+        {"func": "object", "parameter_sets": "object"}),
+    "EnsembleResult": Entry(skip=_RESULT.format("run_ensemble")),
+    "parameter_grid": Entry(lambda: (ie.parameter_grid, dict(Fs=np.array([8e3, 9e3]),
+                                                             KT=np.array([4e7, 5e7]))),
+                            {"Fs": "values", "KT": "values"}),
+    "parameter_samples": Entry(lambda: (ie.parameter_samples, dict(n=4, seed=0, Fs=(8e3, 1e4),
+                                                                   KT=(4e7, 6e7))),
+                               {"n": "count", "Fs": "object"}),
+    "ParameterUncertainty": Entry(lambda: (ie.ParameterUncertainty.from_mean_cov, dict(
+        mean=P, cov=np.diag([(0.05 * 9e3) ** 2, (0.05 * 5e7) ** 2]), names=("Fs", "KT"))),
+        {"mean": "object", "cov": "object"}),
+    "SingleModeSystem": Entry(lambda: (ie.SingleModeSystem, dict(mass=1.0, stiffness=4e6, zeta0=2e-3)),
+                              {"mass": "scalar", "stiffness": "scalar", "zeta0": "scalar"}),
+    "propagate_uncertainty": Entry(lambda: (ie.propagate_uncertainty, dict(
+        source=_uncertainty(), system=ie.SingleModeSystem(1.0, 4e6, 2e-3),
+        amplitudes=np.array([1e-5, 1e-4]), n_samples=2, executor="serial", seed=0)),
+        {"source": "object", "system": "object", "amplitudes": "values", "n_samples": "count"}),
+    "PredictionBands": Entry(skip=_RESULT.format("propagate_uncertainty")),
+})
+
+
 #: Known failures in files owned by other helpers (see /work/notes/robust.md, "for other
 #: owners"): (name, argument, bad input) -> reason. The lead removes an entry when its fix lands.
 _FIT = "identify/ owner (helper fit): "

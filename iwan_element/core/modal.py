@@ -161,6 +161,10 @@ def modal_iwan_curve(Q, params: IwanParameters, *, K_inf: float, zeta0: float = 
     return f, zeta
 
 
+#: Most time steps modal_ringdown integrates (about a minute of the exact joint).
+_MAX_RINGDOWN_STEPS = 2e7
+
+
 def modal_ringdown(t, params: IwanParameters, *, K_inf: float, q0: float, v0: float = 0.0,
                    zeta0: float = 0.0, mass: float = 1.0, max_phase_step: float = 0.01):
     """Free decay of the single-mode modal Iwan oscillator, with the exact :class:`IwanJoint`.
@@ -200,6 +204,11 @@ def modal_ringdown(t, params: IwanParameters, *, K_inf: float, q0: float, v0: fl
     mass = check_scalar("mass", mass, low=0.0, low_open=True)
     dphi = check_scalar("max_phase_step", max_phase_step, low=0.0, high=0.2, low_open=True)
     w0 = math.sqrt((K_inf + p.KT) / mass)
+    steps = w0 * (tt[-1] - tt[0]) / dphi
+    if steps > _MAX_RINGDOWN_STEPS:
+        raise ValueError(f"t spans {tt[-1] - tt[0]:g} s = {steps:.3g} integration steps of "
+                         f"max_phase_step/w0 = {dphi / w0:.3g} s; at most "
+                         f"{_MAX_RINGDOWN_STEPS:.0e} are allowed (check the unit of t)")
     n_sub = max(1, math.ceil(w0 * dt.mean() / dphi))
     h = dt.mean() / n_sub
     c = 2.0 * zeta0 * mass * w0
