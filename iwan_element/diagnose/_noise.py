@@ -1,0 +1,102 @@
+"""Noise of a measured signal without repeated cycles: the estimator used by the diagnoses.
+
+The package's estimator is :func:`iwan_element.identify.noise.estimate_noise` (helper
+``fit``'s, same signature). Until that module is present this private stand-in is used; it
+follows the same contract, ``estimate_noise(t, y, *, method="auto") -> NoiseEstimate``.
+
+Method (``"local-polynomial"``): the residual ``r`` of a cubic Savitzky-Golay smoother over
+9 samples (scipy.signal) removes any signal that is smooth over 9 samples, whatever the
+protocol (constant, ramped, swept or random amplitude). Its robust scale (MAD, insensitive
+to the few samples at sharp corners) and its lag-one correlation are matched to those the
+same filter produces from AR(1) noise, ``r = (I - H) e``: that gives the noise's standard
+deviation ``sigma`` and lag-one correlation ``rho`` together (white noise: ``rho = 0``), and
+its integrated correlation time ``tau = (1 + rho)/(1 - rho)`` samples, so coloured noise
+counts ``n / tau`` independent samples.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.optimize import brentq
+from scipy.signal import savgol_coeffs, savgol_filter
+
+__all__ = ["NoiseEstimate", "estimate_noise", "noise_estimate"]
+
+_W = 9
+
+
+@dataclass(frozen=True)
+class NoiseEstimate:
+    """Noise level of a signal: ``sigma`` [signal units], ``method``, ``tau`` [samples],
+    ``n_eff`` (independent samples) and ``warnings``."""
+
+    sigma: float
+    method: str
+    tau: float = 1.0
+    n_eff: float = 0.0
+    warnings: tuple = field(default_factory=tuple)
+
+
+def _ar1_moments(rho: float) -> tuple[float, float]:
+    """Variance and lag-one autocovariance of ``(I - H) e`` for unit AR(1) noise ``e``."""
+    c = -savgol_coeffs(_W, 3)
+    c[_W // 2] += 1.0
+    lag = np.arange(-(_W + 1), _W + 2)
+    acf = rho ** np.abs(lag)
+    full = np.convolve(np.convolve(c, c[::-1]), np.ones(1))   # autocorrelation of c
+    mid = full.size // 2
+    var = sum(full[mid + k] * acf[np.abs(lag) == abs(k)][0] for k in range(-mid, mid + 1))
+    cov1 = sum(full[mid + k] * rho ** abs(k + 1) for k in range(-mid, mid + 1))
+    return float(var), float(cov1)
+
+
+def _fallback(t, y) -> NoiseEstimate:
+    y = np.asarray(y, float)
+    if y.size < 4 * _W:
+        raise ValueError(f"y has {y.size} samples: at least {4 * _W} are needed to estimate "
+                         "its noise; pass the noise level explicitly")
+    r = y - savgol_filter(y, _W, 3)
+    s = 1.4826 * float(np.median(np.abs(r - np.median(r))))
+    warns = []
+    if s == 0.0:
+        return NoiseEstimate(0.0, "local-polynomial", 1.0, float(y.size),
+                             ("the signal is smooth to machine precision (no noise found)",))
+    ok = np.abs(r) < 4 * s
+    both = ok[1:] & ok[:-1]
+    c1 = float(np.mean(r[1:][both] * r[:-1][both])) / float(np.mean(r[ok] ** 2))
+
+    def mismatch(rho):
+        v, c = _ar1_moments(rho)
+        return c / v - c1
+    lo, hi = -0.9, 0.995
+    if mismatch(lo) > 0:
+        rho = lo
+    elif mismatch(hi) < 0:
+        rho = hi
+        warns.append("the noise is strongly correlated (lag-one correlation near 1); its level "
+                     "is uncertain")
+    else:
+        rho = brentq(mismatch, lo, hi)
+    var, _ = _ar1_moments(rho)
+    sigma = s / math.sqrt(var)
+    tau = max((1.0 + rho) / (1.0 - rho), 1.0)
+    return NoiseEstimate(float(sigma), "local-polynomial", float(tau), y.size / tau, tuple(warns))
+
+
+def estimate_noise(t, y, *, method: str = "auto"):
+    """The package's noise estimator (see the module docstring)."""
+    try:
+        from ..identify.noise import estimate_noise as _shared
+    except ImportError:
+        return _fallback(t, y)
+    return _shared(t, y, method=method)
+
+
+def noise_estimate(t, y) -> tuple[float, float, str, tuple]:
+    """``(sigma, tau, method, warnings)`` from whichever estimator is installed."""
+    est = estimate_noise(t, y)
+    tau = float(getattr(est, "tau", None) or 1.0)
+    return float(est.sigma), max(tau, 1.0), str(getattr(est, "method", "auto")), \
+        tuple(getattr(est, "warnings", ()))
