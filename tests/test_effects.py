@@ -170,7 +170,7 @@ def test_slip_degradation_lowers_capacity_keeps_stiffness():
     lam = el.capacity_factor
     assert lam == pytest.approx(math.exp(-rate * el.dissipated_energy), rel=1e-5)
     assert F.max() <= P.Fs * (1 + 1e-9)
-    assert peaks[-1] == pytest.approx(lam * P.Fs, rel=0.01)   # macroslip at lambda Fs
+    assert lam * P.Fs * (1 - 1e-9) <= peaks[-1] < peaks[-2]     # macroslip at the current lambda Fs
     # the elastic stiffness after a reversal is still KT (not lambda KT)
     el.trial(u[-1] - 1e-6 * A)
     K = el.trial(u[-1] - 1e-6 * A)[1]
