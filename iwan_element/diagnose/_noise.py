@@ -63,9 +63,11 @@ def _fallback(t, y) -> NoiseEstimate:
     if s == 0.0:
         return NoiseEstimate(0.0, "local-polynomial", 1.0, float(y.size),
                              ("the signal is smooth to machine precision (no noise found)",))
-    ok = np.abs(r) < 4 * s
-    both = ok[1:] & ok[:-1]
-    c1 = float(np.mean(r[1:][both] * r[:-1][both])) / float(np.mean(r[ok] ** 2))
+    # robust lag-one correlation from the MAD scales of sums and differences (a corner of
+    # the signal is an outlier for both and moves neither median)
+    mad = lambda x: float(np.median(np.abs(x - np.median(x))))  # noqa: E731
+    S, D = mad(r[1:] + r[:-1]) ** 2, mad(r[1:] - r[:-1]) ** 2
+    c1 = (S - D) / (S + D) if S + D > 0 else 0.0
 
     def mismatch(rho):
         v, c = _ar1_moments(rho)

@@ -32,7 +32,7 @@ from scipy.signal import butter, sosfiltfilt
 from ..core._history import REVERSAL_TOL, unit_params
 from ..core._validation import _check_int, _check_time, check_scalar, finite_array, same_length
 from ..effects import EFFECTS
-from ..effects._evaluate import Evaluator, build_element, has_vector_form, order_stack
+from ..effects._evaluate import Evaluator, build_element, order_stack
 from ..identify.testdata import find_reversals, split_cycles
 from . import _model as M
 from ._locate import _check_candidates, _locate, _untestable
@@ -52,7 +52,7 @@ _SLOW_FIT_SAMPLES = 500          # samples fitted for stacks without a vectorise
 
 def _rest_index(u, noise_u):
     """Samples before the motion starts (at least 1)."""
-    thr = max(0.01 * float(np.ptp(u)), 5.0 * noise_u)
+    thr = max(1e-6 * float(np.ptp(u)), 5.0 * noise_u)
     moved = np.flatnonzero(np.abs(u - u[0]) > thr)
     return max(int(moved[0]) if moved.size else 1, 1)
 
@@ -87,11 +87,13 @@ def _filter(tt, x, lp):
     return sosfiltfilt(sos, x)
 
 
-def _noise_level(tt, FF, uu, noise, lp):
-    """``(sigma [N], tau [samples], text, warnings)`` of the force as fitted."""
+def _noise_level(tt, r, noise, lp):
+    """``(sigma [N], tau [samples], text, warnings)`` of the force as fitted, from the
+    residual ``r`` of the plain fit to the raw force (the model removes the loops' corners,
+    the estimator the smooth rest of any model error)."""
     if noise is not None:
         return noise, 1.0, "given", ()
-    sigma, tau, method, warns = noise_estimate(tt, FF)
+    sigma, tau, method, warns = noise_estimate(tt, r)
     text = f"estimated from the record ({method})"
     if lp is not None:                       # white noise through the low-pass
         fs = 1.0 / float(np.median(np.diff(tt)))
@@ -100,7 +102,7 @@ def _noise_level(tt, FF, uu, noise, lp):
         tau = max(tau, 1.0 / frac)
         text += f", reduced to the {lp:g} Hz band"
     if not sigma > 0:
-        sigma = 1e-9 * float(np.max(np.abs(FF)))
+        sigma = 1e-9 * float(np.max(np.abs(r))) or 1e-300
         warns = tuple(warns) + ("no noise found in the force: a floor of 1e-9 x max|F| is "
                                 "used",)
     return sigma, tau, text, tuple(warns)
@@ -143,13 +145,13 @@ class _Fitter:
         self.nfev = 0
 
     def model(self, names, *, full=True):
-        fast = all(has_vector_form(nm) for nm in names)
+        fast = Evaluator.fast(names)
         if full or fast:
             return M.LoopModel(self.ev, self.y, names, self.scales)
         return M.LoopModel(self.ev_slow, self.y_sub, names, self.scales)
 
     def run(self, names, starts):
-        fast = all(has_vector_form(nm) for nm in names)
+        fast = Evaluator.fast(names)
         mdl = self.model(names, full=False)
         res, nfev = M.fit(mdl, starts, max_nfev=200 if fast else 25)
         self.nfev += nfev
@@ -289,17 +291,19 @@ def diagnose(t, u, F, *, candidates=None, max_effects: int = 2, noise: float | N
     alpha = check_scalar("alpha", alpha, low=0.0, high=0.5, low_open=True, high_open=True)
     ambiguity = check_scalar("ambiguity", ambiguity, low=0.0)
     max_samples = _check_int("max_samples", max_samples, 100)
-    sigma, tau, noise_text, nwarn = _noise_level(tt, FF_in, uu, noise, lp)
     FF = FF_in if lp is None else _filter(tt, FF_in, lp)
-    i_rest = _rest_index(uu, 0.0)
-    u_off = float(np.mean(uu[:i_rest]))
+    u_off = float(np.mean(uu[:_rest_index(uu, noise_estimate(tt, uu)[0])]))
     uj = uu - u_off
     v = np.zeros(n) if tt is None else np.gradient(uj, tt)
     ev, ev_slow, keep, sub = _evaluators(uj, v, max_samples)
     fitter = _Fitter(ev, ev_slow, FF, keep, sub, {"u_max": float(np.abs(uj).max()), "1": 1.0,
                                                   "v_rms": float(np.sqrt(np.mean(v ** 2))) or 1.0,
-                                                  "D_ref": 1.0}, sigma)
+                                                  "D_ref": 1.0}, 1.0)
     base = _fit_base(fitter, ev, _base_start(tt, uj, FF, seed))
+    r_raw = FF_in - _record_force(base, uj, v)[0]
+    sigma, tau, noise_text, nwarn = _noise_level(tt, r_raw, noise, lp)
+    fitter.s2 = sigma * sigma
+    base["chi2"] /= fitter.s2
     shape_b, _ = base["model"].decode(base["z"])
     fitter.scales["D_ref"] = float(ev.unit_dissipation(unit_params(*shape_b))[-1]) or 1.0
     tau_k = max(1.0, tau * keep.size / n)

@@ -110,8 +110,11 @@ class Evaluator:
 
     @staticmethod
     def fast(names) -> bool:
-        """True if the stack can be evaluated vectorised."""
-        return all(has_vector_form(n) for n in names)
+        """True if the stack can be evaluated without running the elements step by step
+        (vector forms, and at most one innermost slider-level effect, whose correction bank
+        runs on the drive samples)."""
+        return all(has_vector_form(n) or (EFFECTS[n].slider_level and i == 0)
+                   for i, n in enumerate(names))
 
     def unit_dissipation(self, p1: IwanParameters) -> np.ndarray:
         """Dissipated energy of the plain unit Iwan joint after each step of the record."""
@@ -133,5 +136,13 @@ class Evaluator:
             return F[self.drive_pos]
         F = self.hist.forces(p1)
         for name, vals in zip(names, values):
-            F = EFFECTS[name].vector_force(F, self.uk, self.vk, **vals)
+            cls = EFFECTS[name]
+            if cls.slider_level:
+                el = cls(IwanJoint(p1), **vals)
+                D = None
+                if cls.needs_energy:
+                    D = self.unit_dissipation(p1)[self.drive]
+                F = F + el.correction_history(self.u[self.drive], D)[self.drive_pos]
+            else:
+                F = cls.vector_force(F, self.uk, self.vk, **vals)
         return F

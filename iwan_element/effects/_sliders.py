@@ -59,11 +59,12 @@ class _SliderEffect(_Effect):
         an array of positive stretches [m] (``down`` is the magnitude for negative force)."""
         raise NotImplementedError
 
-    def _all_caps(self):
+    def _refresh_caps(self) -> None:
+        """Cache the thresholds of both banks (call after they change)."""
         su, sd, ku, kd = self._caps()
         p = self._phi
-        return (np.concatenate([su, p]), np.concatenate([sd, p]),
-                np.concatenate([ku, p]), np.concatenate([kd, p]))
+        self._cap_up = (np.concatenate([su, p]), np.concatenate([ku, p]))
+        self._cap_dn = (np.concatenate([sd, p]), np.concatenate([kd, p]))
 
     def _reset_own(self):
         self._e = np.zeros(2 * self._n)          # slider stretches [m]
@@ -71,6 +72,8 @@ class _SliderEffect(_Effect):
         self._Wb = 0.0                           # work of (modified - plain) bank [J]
         self._Db = 0.0
         self._ub = 0.0
+        self._last = None
+        self._refresh_caps()
 
     def _step(self, du: float):
         """Stretches, slip states and work per slider for a linear move ``du`` [m]."""
@@ -78,8 +81,7 @@ class _SliderEffect(_Effect):
         if du == 0.0:
             return e.copy(), s.copy(), np.zeros_like(e)
         d = 1.0 if du > 0.0 else -1.0
-        su, sd, ku, kd = self._all_caps()
-        cs, ck = (su, ku) if d > 0 else (sd, kd)
+        cs, ck = self._cap_up if d > 0 else self._cap_dn
         ep = d * e                               # stretch in the direction of motion
         sliding = s == d
         end = ep + abs(du)
@@ -99,7 +101,8 @@ class _SliderEffect(_Effect):
     def trial(self, u: float, v: float = 0.0) -> tuple[float, float]:
         """Force [N] and tangent [N/m]."""
         F, K = self._inner.trial(u, v)
-        e, s, _ = self._step(float(u) - self._ub)
+        e, s, work = self._step(float(u) - self._ub)
+        self._last = (float(u), e, s, work)
         sk = self._sign * self._k
         F += float(sk @ e)
         K += float(sk @ (s == 0.0))
@@ -109,7 +112,12 @@ class _SliderEffect(_Effect):
     def _commit(self) -> None:
         inner = self._inner
         inner.commit()
-        e, s, work = self._step(float(self._tu) - self._ub)
+        last = self._last
+        if last is not None and last[0] == float(self._tu):
+            _, e, s, work = last
+        else:
+            e, s, work = self._step(float(self._tu) - self._ub)
+        self._last = None
         self._e, self._slip = e, s
         self._Wb += float(self._sign @ work)
         self._ub = float(self._tu)
@@ -119,3 +127,45 @@ class _SliderEffect(_Effect):
 
     def _after_commit(self) -> None:
         pass
+
+    #: True if the thresholds depend on the dissipated energy (the fast loop then tracks it).
+    needs_energy = False
+
+    def correction_history(self, u, D_inner=None) -> np.ndarray:
+        """Force correction ``F_bank(modified) - F_bank(plain)`` [N] along a displacement
+        history ``u`` [m] from the virgin state, on a private state (this element is
+        untouched). ``D_inner``: dissipated energy of the wrapped joint after each step [J],
+        needed when :attr:`needs_energy`. The same slider steps as :meth:`trial`/
+        :meth:`commit`, with the bookkeeping the force does not need left out."""
+        state = (self._e, self._slip, self._Wb, self._Db, self._ub, self._last)
+        lam = getattr(self, "_lam", None)
+        try:
+            self._reset_own()
+            sk = self._sign * self._k
+            out = np.empty(len(u))
+            e, s, prev = self._e, self._slip, 0.0
+            for i, x in enumerate(np.asarray(u, float).tolist()):
+                du = x - prev
+                if du != 0.0:
+                    d = 1.0 if du > 0.0 else -1.0
+                    cs, ck = self._cap_up if d > 0 else self._cap_dn
+                    if self.needs_energy:
+                        self._e, self._slip = e, s
+                        e, s, work = self._step(du)
+                        self._e, self._slip = e, s
+                        self._Wb += float(self._sign @ work)
+                        self._after_commit_energy(D_inner[i])
+                        e = self._e
+                    else:
+                        end = d * e + abs(du)
+                        mv = (s == d) | (end > cs)
+                        e = d * np.where(mv, ck, end)
+                        s = np.where(mv, d, 0.0)
+                    prev = x
+                out[i] = float(sk @ e)
+            return out
+        finally:
+            self._e, self._slip, self._Wb, self._Db, self._ub, self._last = state
+            if lam is not None:
+                self._lam = lam
+            self._refresh_caps()

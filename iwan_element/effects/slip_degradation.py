@@ -44,8 +44,8 @@ class SlipDegradation(_SliderEffect):
         self._reset_own()
 
     def _reset_own(self):
-        super()._reset_own()
         self._lam = 1.0
+        super()._reset_own()
 
     @property
     def capacity_factor(self) -> float:
@@ -56,9 +56,16 @@ class SlipDegradation(_SliderEffect):
         c = self._lam * self._phi
         return c, c, c, c
 
+    needs_energy = True
+
     def _after_commit(self) -> None:
-        D = self._inner.dissipated_energy + self._Wb - self._stored(self._e)
+        self._after_commit_energy(self._inner.dissipated_energy)
+
+    def _after_commit_energy(self, D_inner: float) -> None:
+        """Update ``lambda`` from the joint's dissipated energy and clip the stretches."""
+        D = D_inner + self._Wb - self._stored(self._e)
         self._lam = math.exp(-self.rate * max(D, 0.0))
         n = self._n
         cap = self._lam * self._phi
         self._e[:n] = np.clip(self._e[:n], -cap, cap)
+        self._refresh_caps()
