@@ -154,8 +154,11 @@ class _SliderEffect(_Effect):
                         e, s, work = self._step(du)
                         self._e, self._slip = e, s
                         self._Wb += float(self._sign @ work)
-                        self._after_commit_energy(D_inner[i])
+                        out[i] = float(sk @ e)          # the step's force, before the commit
+                        self._after_commit_energy(D_inner[i])   # lowers the thresholds
                         e = self._e
+                        prev = x
+                        continue
                     else:
                         end = d * e + abs(du)
                         mv = (s == d) | (end > cs)
