@@ -26,8 +26,9 @@ class LoopModel:
     """Transformed vector ``z = (ln(phi_max/x_max), chi, ln(1+beta), effect variables...)``;
     the force is ``Fs g(z) + F0`` with ``(Fs, F0)`` from linear least squares."""
 
-    def __init__(self, ev: Evaluator, y, names, scales):
+    def __init__(self, ev: Evaluator, y, names, scales, F0=None):
         self.ev, self.y, self.names, self.scales = ev, y, tuple(names), scales
+        self.F0 = F0                     # a force offset measured at rest, or None: fitted
         lo = [math.log(PHI_RANGE[0]), CHI_BOUNDS[0], 0.0]
         hi = [math.log(PHI_RANGE[1]), CHI_BOUNDS[1], math.log1p(BETA_MAX)]
         for nm in self.names:
@@ -61,9 +62,13 @@ class LoopModel:
         return self.ev.unit_force(shape, self.names, vals)
 
     def linear(self, g):
-        """``(Fs, F0)`` minimising ``|y - Fs g - F0|`` (``Fs > 0``)."""
-        A = np.column_stack([g, np.ones_like(g)])
-        (Fs, F0), *_ = np.linalg.lstsq(A, self.y, rcond=None)
+        """``(Fs, F0)`` minimising ``|y - Fs g - F0|`` (``Fs > 0``; ``F0`` fixed if measured)."""
+        if self.F0 is not None:
+            gg = float(g @ g)
+            Fs, F0 = (float(g @ (self.y - self.F0)) / gg if gg > 0 else 0.0), self.F0
+        else:
+            A = np.column_stack([g, np.ones_like(g)])
+            (Fs, F0), *_ = np.linalg.lstsq(A, self.y, rcond=None)
         if not Fs > 0:
             Fs, F0 = 1e-12 * math.sqrt(self.yy / self.y.size + 1.0), float(np.mean(self.y))
         return float(Fs), float(F0)
@@ -130,6 +135,7 @@ def uncertainty(model: LoopModel, z, r):
     correlation time (a correlated, systematic misfit is not treated as independent noise)."""
     Fs, F0 = model.linear(model.unit(z))
     theta = np.concatenate([z, [Fs, F0]])
+    fixed = model.F0 is not None
     lo = np.concatenate([model.lower, [0.0, -np.inf]])
     hi = np.concatenate([model.upper, [np.inf, np.inf]])
 
@@ -144,7 +150,7 @@ def uncertainty(model: LoopModel, z, r):
         return flat(p, effs, model.names, th[-1])[0]
 
     cols, pcols = [], []
-    for j in range(theta.size):
+    for j in range(theta.size - (1 if fixed else 0)):
         h = 1e-5 * max(abs(theta[j]), 1.0) if j >= theta.size - 2 else 1e-5
         tp, tm = theta.copy(), theta.copy()
         tp[j] = min(theta[j] + h, hi[j])

@@ -2,10 +2,11 @@
 
 :func:`diagnose` works on a record (time, displacement, force):
 
-1. the joint's unloaded state is the rest position the record starts from (displacement
-   offset, estimated from the samples before the motion starts); the force offset is fitted
-   with every model (linear, eliminated in closed form with ``Fs``). Offsets are nuisance
-   parameters: reported, never named as an effect;
+1. the joint's unloaded state is the rest position the record starts from: the displacement
+   offset is the mean displacement before the motion starts, and the force offset the mean
+   force there (the unloaded joint carries no force) when at least 10 rest samples exist;
+   otherwise the force offset is fitted with every model (linear, eliminated in closed form
+   with ``Fs``). Offsets are nuisance parameters: reported, never named as an effect;
 2. the force noise and its correlation time are estimated from the record itself
    (:func:`iwan_element.identify.noise.estimate_noise`; no repeated cycles needed, so
    ramped, swept and random-amplitude protocols work), unless ``noise`` is given;
@@ -47,7 +48,8 @@ log = logging.getLogger(__name__)
 #: Candidate effects tried by :func:`diagnose`, in the order they are reported.
 CANDIDATES = ("viscous_damping", "pinning_stiffness", "backlash", "slip_degradation",
               "asymmetric_slip", "breakaway")
-_SLOW_FIT_SAMPLES = 500          # samples fitted for stacks without a vectorised form
+_SLOW_FIT_SAMPLES = 300          # samples fitted for stacks without a vectorised form
+_MIN_REST = 10                   # rest samples needed to measure the force offset there
 
 
 def _rest_index(u, noise_u):
@@ -124,12 +126,14 @@ def _base_start(tt, uj, FF, seed):
     """Shape start ``(phi_max, chi, beta)`` from the plain loop fit, or None."""
     from ..identify.fit import fit_loops, _quiet
     import inspect
+    sig = inspect.signature(fit_loops).parameters
+    opts = {k: v for k, v in (("max_samples", 3000), ("n_starts", 3)) if k in sig}
     try:
         with _quiet():
-            if next(iter(inspect.signature(fit_loops).parameters)) == "t":
-                res = fit_loops(tt, uj, FF, seed=seed)
+            if next(iter(sig)) == "t":
+                res = fit_loops(tt, uj, FF, seed=seed, **opts)
             else:
-                res = fit_loops(uj, FF, t=tt, seed=seed)
+                res = fit_loops(uj, FF, t=tt, seed=seed, **opts)
         p = res.params
         return (p.phi_max, p.chi, p.beta)
     except (ValueError, FloatingPointError, ZeroDivisionError):
@@ -139,21 +143,22 @@ def _base_start(tt, uj, FF, seed):
 class _Fitter:
     """Fits stacks on one record; scores them as noise-normalised chi2 on the full keep set."""
 
-    def __init__(self, ev, ev_slow, FF, keep, sub, scales, sigma):
+    def __init__(self, ev, ev_slow, FF, keep, sub, scales, sigma, F0=None):
         self.ev, self.ev_slow, self.scales, self.s2 = ev, ev_slow, scales, sigma * sigma
+        self.F0 = F0
         self.y, self.y_sub = FF[keep], FF[sub]
         self.nfev = 0
 
     def model(self, names, *, full=True):
         fast = Evaluator.fast(names)
         if full or fast:
-            return M.LoopModel(self.ev, self.y, names, self.scales)
-        return M.LoopModel(self.ev_slow, self.y_sub, names, self.scales)
+            return M.LoopModel(self.ev, self.y, names, self.scales, self.F0)
+        return M.LoopModel(self.ev_slow, self.y_sub, names, self.scales, self.F0)
 
     def run(self, names, starts):
         fast = Evaluator.fast(names)
         mdl = self.model(names, full=False)
-        res, nfev = M.fit(mdl, starts, max_nfev=200 if fast else 25)
+        res, nfev = M.fit(mdl, starts if fast else starts[:2], max_nfev=200 if fast else 20)
         self.nfev += nfev
         full = self.model(names)
         r = full.residual(res.x)
@@ -292,13 +297,15 @@ def diagnose(t, u, F, *, candidates=None, max_effects: int = 2, noise: float | N
     ambiguity = check_scalar("ambiguity", ambiguity, low=0.0)
     max_samples = _check_int("max_samples", max_samples, 100)
     FF = FF_in if lp is None else _filter(tt, FF_in, lp)
-    u_off = float(np.mean(uu[:_rest_index(uu, noise_estimate(tt, uu)[0])]))
+    i_rest = _rest_index(uu, noise_estimate(tt, uu)[0])
+    u_off = float(np.mean(uu[:i_rest]))
+    F_rest = float(np.mean(FF[:i_rest])) if i_rest >= _MIN_REST else None
     uj = uu - u_off
     v = np.zeros(n) if tt is None else np.gradient(uj, tt)
     ev, ev_slow, keep, sub = _evaluators(uj, v, max_samples)
     fitter = _Fitter(ev, ev_slow, FF, keep, sub, {"u_max": float(np.abs(uj).max()), "1": 1.0,
                                                   "v_rms": float(np.sqrt(np.mean(v ** 2))) or 1.0,
-                                                  "D_ref": 1.0}, 1.0)
+                                                  "D_ref": 1.0}, 1.0, F_rest)
     base = _fit_base(fitter, ev, _base_start(tt, uj, FF, seed))
     r_raw = FF_in - _record_force(base, uj, v)[0]
     sigma, tau, noise_text, nwarn = _noise_level(tt, r_raw, noise, lp)

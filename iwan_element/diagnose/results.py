@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..core._validation import check_scalar
 from ..effects import EFFECTS
 
 __all__ = ["Diagnosis", "VibrationDiagnosis"]

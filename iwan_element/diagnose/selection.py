@@ -15,8 +15,9 @@ The rule, stated once:
   evidence threshold that grows with the data) and
 * **"explains little" guard**: it removes at least ``explain_fraction`` (default 25 %) of the
   *excess* misfit ``chi2 / tau - (n_eff - q)`` of the current model (a real but tiny gain on a
-  large unexplained misfit is not a diagnosis), and, for the vibration curves, it lowers the
-  unweighted mismatch (``guard`` callback).
+  large unexplained misfit is not a diagnosis); a caller may add a condition (``guard``).
+  The vibration diagnosis also drops a named set that leaves its unweighted mismatch higher
+  than before.
 * Among eligible candidates the lowest IC is named; others within ``ambiguity`` IC units are
   reported as nearly as good. The loop then continues on top of the named effect, until the
   rest is noise, nothing is eligible, or ``max_effects`` effects are named.

@@ -220,13 +220,16 @@ def diagnose_vibration(amplitude, frequency, damping, *, predicted_frequency, pr
         return {"names": names, "chi2": 2 * float(res.cost), "state": res.x,
                 "q": len(EFFECTS[name].modal_specs), "error": vib.error(names, res.x)}
 
-    def guard(cur, row):            # never name what raises the unweighted mismatch
-        return row["error"] < vib.error(cur["names"], cur["state"])
-
-    sel = stepwise_select(fit_candidate, vibration_candidates(),
-                          {"names": (), "chi2": chi_b, "q": 0, "state": np.zeros(0)},
-                          tau=1.0, n_eff=2.0 * n, alpha=alpha, max_effects=max_effects,
-                          ambiguity=ambiguity, guard=guard)
+    base = {"names": (), "chi2": chi_b, "q": 0, "state": np.zeros(0)}
+    sel = stepwise_select(fit_candidate, vibration_candidates(), base, tau=1.0, n_eff=2.0 * n,
+                          alpha=alpha, max_effects=max_effects, ambiguity=ambiguity)
+    # never name a set of effects that leaves the unweighted mismatch higher than before
+    while sel.named and vib.error(sel.final["names"], sel.final["state"]) >= err_b:
+        warns.append(f"{' + '.join(sel.named)} lowers the noise-weighted misfit but raises the "
+                     "mismatch; not named")
+        sel.named, sel.ambiguous = [], ()
+        sel.final = base
+        sel.p_after = sel.p_before
     return _vib_result(vib, sel, chi_b, err_b, rf0, rz0, warns, alpha, f"{src_f}; {src_z}")
 
 
