@@ -34,10 +34,16 @@ def run(path, lowpass):
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--data", default=str(ROOT.parent / "shared" / "data" / "arts-damper"))
+    ap.add_argument("--data", default=None,
+                    help="folder of the records (default: ../shared/data/arts-damper next to "
+                         "the repository or the current directory)")
     ap.add_argument("--lowpass", type=float, default=20.0)
     ap.add_argument("--jobs", type=int, default=1)
     args = ap.parse_args(argv)
+    if args.data is None:
+        where = [p / "shared" / "data" / "arts-damper"
+                 for p in (Path.cwd().parent, ROOT.parent, ROOT.parent.parent)]
+        args.data = str(next((p for p in where if p.is_dir()), where[0]))
     files = sorted(Path(args.data).glob("*.csv"))
     if not files:
         print(f"no records in {args.data} (the shared data folder is absent): skipped")
