@@ -69,19 +69,23 @@ def calibrated(name, magnitude, protocol):
 
 
 def _calibrate(rms, x0, target):
-    """Parameter ``x`` with ``rms(x) = target`` (to 0.5 %), secant steps in log-log."""
-    y0 = rms(x0)
-    x1 = x0 * target / y0
-    y1 = rms(x1)
-    for _ in range(20):
-        if abs(y1 / target - 1.0) < 5e-3:
-            return x1
-        slope = math.log(y1 / y0) / math.log(x1 / x0) if x1 != x0 else 1.0
-        slope = min(max(slope, 0.2), 3.0)
-        x0, y0 = x1, y1
-        x1 = x1 * (target / y1) ** (1.0 / slope)
-        y1 = rms(x1)
-    raise RuntimeError("calibration did not converge")
+    """Parameter ``x`` with ``rms(x) = target`` (to 0.5 %): bracket by factors of 4 from
+    ``x0``, then Brent's method on ``log rms - log target`` in ``log x`` (rms increases with x)."""
+    from scipy.optimize import brentq
+
+    def g(lx):
+        return math.log(max(rms(math.exp(lx)), 1e-300) / target)
+    lo = hi = math.log(x0)
+    glo = ghi = g(lo)
+    while glo > 0:
+        lo -= math.log(4.0)
+        glo = g(lo)
+    while ghi < 0:
+        hi += math.log(4.0)
+        ghi = g(hi)
+    if lo == hi:
+        return x0
+    return math.exp(brentq(g, lo, hi, xtol=1e-3, rtol=1e-4))
 
 
 def record(name, magnitude, protocol, seed, *, colour=0.0, waveform="sine", el=None):

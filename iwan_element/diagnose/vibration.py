@@ -56,6 +56,13 @@ def _noise(r, stated, n, name):
     return s, f"{name}: {src}"
 
 
+def _curve_level(name, r, given, stated, n):
+    """Noise of one curve: ``given`` if set, else max(scatter, stated uncertainty)."""
+    if given is not None:
+        return check_scalar(f"{name}_noise", given, low=0.0, low_open=True), f"{name}: given"
+    return _noise(r, _stated(f"{name}_uncertainty", stated, n), n, name)
+
+
 def _stated(name, value, n):
     if value is None:
         return None
@@ -195,18 +202,8 @@ def diagnose_vibration(amplitude, frequency, damping, *, predicted_frequency, pr
     o = np.argsort(X)
     rf0, rz0 = np.log(fm / fp), np.log(zm / zp)
     warns = []
-    uf = _stated("frequency_uncertainty", frequency_uncertainty, n)
-    uz = _stated("damping_uncertainty", damping_uncertainty, n)
-    if frequency_noise is None:
-        sf, src_f = _noise(rf0[o], uf, n, "frequency")
-    else:
-        sf, src_f = check_scalar("frequency_noise", frequency_noise, low=0.0, low_open=True), \
-            "frequency: given"
-    if damping_noise is None:
-        sz, src_z = _noise(rz0[o], uz, n, "damping")
-    else:
-        sz, src_z = check_scalar("damping_noise", damping_noise, low=0.0, low_open=True), \
-            "damping: given"
+    sf, src_f = _curve_level("frequency", rf0[o], frequency_noise, frequency_uncertainty, n)
+    sz, src_z = _curve_level("damping", rz0[o], damping_noise, damping_uncertainty, n)
     if (frequency_noise is None or damping_noise is None) and n < 12:
         warns.append(f"only {n} amplitudes: the noise taken from their scatter is uncertain "
                      "(state the per-point uncertainty or the noise levels)")

@@ -36,7 +36,7 @@ class BreakAway(_SliderEffect):
 
     effect = "breakaway"
     specs = (ParamSpec("ratio", "1", "static over kinetic slip threshold", lower=1.0,
-                       fit_bounds=(1.0, 3.0), fit_starts=(1.0, 1.3)),)
+                       fit_bounds=(1.0, 3.0), fit_starts=(1.0, 1.2, 1.5, 2.0)),)
 
     def __init__(self, inner, *, ratio: float, n_sliders: int = 128):
         super().__init__(inner, n_sliders=n_sliders)
