@@ -119,6 +119,11 @@ def test_pure_noise_names_nothing_and_fails():
     g = diagnose(d.t, d.u, rng.normal(0.0, SIGMA, d.F.size))
     assert g.effects == () and not g.success
     assert any("indistinguishable from noise" in w for w in g.warnings)
+    # with rest samples (force offset measured there) and a ramped envelope too
+    r = simulate_element_test(IwanJoint(P), np.array([0.15, 1.9]) * P.phi_max, envelope="linear",
+                              cycles=5, samples_per_cycle=128, rest_samples=20)
+    g = diagnose(r.t, r.u, 100.0 + rng.normal(0.0, SIGMA, r.F.size))
+    assert g.effects == () and not g.success
 
 
 def test_ramped_and_triangular_envelopes_are_not_refused():

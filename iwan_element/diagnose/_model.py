@@ -70,7 +70,8 @@ class LoopModel:
             A = np.column_stack([g, np.ones_like(g)])
             (Fs, F0), *_ = np.linalg.lstsq(A, self.y, rcond=None)
         if not Fs > 0:
-            Fs, F0 = 1e-12 * math.sqrt(self.yy / self.y.size + 1.0), float(np.mean(self.y))
+            Fs = 1e-12 * math.sqrt(self.yy / self.y.size + 1.0)
+            F0 = self.F0 if self.F0 is not None else float(np.mean(self.y))
         return float(Fs), float(F0)
 
     def residual(self, z):
@@ -152,6 +153,8 @@ def uncertainty(model: LoopModel, z, r):
     cols, pcols = [], []
     for j in range(theta.size - (1 if fixed else 0)):
         h = 1e-5 * max(abs(theta[j]), 1.0) if j >= theta.size - 2 else 1e-5
+        if j == theta.size - 2:                  # Fs: a relative step that stays positive
+            h = 1e-5 * theta[j]
         tp, tm = theta.copy(), theta.copy()
         tp[j] = min(theta[j] + h, hi[j])
         tm[j] = max(theta[j] - h, lo[j])
