@@ -98,7 +98,11 @@ def estimate_noise(t, y, *, method: str = "auto"):
 
 def noise_estimate(t, y) -> tuple[float, float, str, tuple]:
     """``(sigma, tau, method, warnings)`` from whichever estimator is installed."""
-    est = estimate_noise(t, y)
-    tau = float(getattr(est, "tau", None) or 1.0)
+    y = np.asarray(y, float)
+    est = estimate_noise(np.arange(y.size, dtype=float) if t is None else t, y)
+    if getattr(est, "n_eff", None) and getattr(est, "n", None):
+        tau = float(est.n) / float(est.n_eff)          # helper fit's estimator: samples
+    else:
+        tau = float(getattr(est, "tau", None) or 1.0)
     return float(est.sigma), max(tau, 1.0), str(getattr(est, "method", "auto")), \
         tuple(getattr(est, "warnings", ()))

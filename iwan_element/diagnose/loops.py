@@ -326,7 +326,11 @@ def diagnose(t, u, F, *, candidates=None, max_effects: int = 2, noise: float | N
 def _select(fitter, base, cand, tt, v, uj, FF, tau_k, n_eff, alpha, max_effects, ambiguity):
     """Run the shared selection rule over the testable candidates."""
     try:
-        cycles = split_cycles(uj, FF, t=tt)
+        import inspect
+        if next(iter(inspect.signature(split_cycles).parameters)) == "t":   # time first
+            cycles = split_cycles(np.arange(uj.size, dtype=float) if tt is None else tt, uj, FF)
+        else:
+            cycles = split_cycles(uj, FF, t=tt)
     except ValueError:
         cycles = []
     untestable = {k: why for k, why in _untestable(tt, v, cycles).items() if k in cand}
