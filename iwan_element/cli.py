@@ -89,15 +89,18 @@ def build_parser() -> argparse.ArgumentParser:
                           "IwanParameters.from_dict(d['params']))")
     dg = sub.add_parser(
         "diagnose", help="find which physical effect the Iwan fit misses (CSV test record)",
-        description="Fit the four-parameter Iwan model, estimate the force noise from repeated "
-                    "cycles, decide whether the misfit is more than noise, locate it, refit with "
-                    "each candidate effect and name the one the data support (or none).")
+        description="Fit the four-parameter Iwan model with the sensor offsets as nuisance "
+                    "parameters, estimate the force noise from the record, decide whether the "
+                    "misfit is more than noise, locate it, refit with each candidate effect and "
+                    "name the ones the data support (or none).")
     _add_record_args(dg)
     dg.add_argument("--max-effects", type=int, default=2, metavar="N",
                     help="most effects named one after the other (default 2)")
     dg.add_argument("--noise", type=float, metavar="SIGMA",
                     help="force noise standard deviation in the force unit of --units "
-                         "(default: estimated from repeated cycles)")
+                         "(default: estimated from the record)")
+    dg.add_argument("--lowpass", type=float, metavar="HZ",
+                    help="zero-phase low-pass [Hz] removing test-rig ringing before fitting")
     dg.add_argument("--seed", type=int, default=0, help="seed of the base fit's random starts")
     dg.add_argument("--plot", type=Path, metavar="PNG",
                     help="write data, base and augmented fit and the residuals before/after")
@@ -114,7 +117,7 @@ def _run_diagnose(args) -> int:
                      columns=_parse_columns(args.columns), delimiter=args.delimiter)
     noise = None if args.noise is None else args.noise * FORCE_UNITS[fu]
     result = diagnose(data.t, data.u, data.F, max_effects=args.max_effects, noise=noise,
-                      seed=args.seed)
+                      lowpass=args.lowpass, seed=args.seed)
     wrote = []                  # files first: a closed stdout must not cost the outputs
     if args.json is not None:
         args.json.write_text(json.dumps(result.to_dict(), indent=2, allow_nan=False) + "\n")

@@ -32,6 +32,7 @@ SHAPES = {
     "backlash": ("gap", {}),
     "slip_degradation": ("rate", {}),
     "asymmetric_slip": ("asymmetry", {}),
+    "breakaway": ("ratio", {}),
 }
 
 
@@ -59,19 +60,32 @@ def calibrated(name, magnitude, protocol):
     """Effect parameter whose added force has RMS ``magnitude * SIGMA`` on ``protocol`` (to
     0.5 %), by secant steps on ``log rms`` against ``log parameter``."""
     target = magnitude * SIGMA
-    x0 = {"c": 1.0, "k_p": 1e4, "gap": 1e-5, "rate": 1e-3, "asymmetry": 0.01}[SHAPES[name][0]]
-    y0 = effect_rms(name, x0, protocol)
-    x1 = x0 * target / y0
-    y1 = effect_rms(name, x1, protocol)
-    for _ in range(20):
-        if abs(y1 / target - 1.0) < 5e-3:
-            return x1
-        slope = math.log(y1 / y0) / math.log(x1 / x0) if x1 != x0 else 1.0
-        slope = min(max(slope, 0.2), 3.0)
-        x0, y0 = x1, y1
-        x1 = x1 * (target / y1) ** (1.0 / slope)
-        y1 = effect_rms(name, x1, protocol)
-    raise RuntimeError(f"calibration of {name} did not converge")
+    key = SHAPES[name][0]
+    if key == "ratio":                   # break-away: the size is ratio - 1
+        x = _calibrate(lambda y: effect_rms(name, 1.0 + y, protocol), 0.05, target)
+        return 1.0 + x
+    x0 = {"c": 1.0, "k_p": 1e4, "gap": 1e-5, "rate": 1e-3, "asymmetry": 0.01}[key]
+    return _calibrate(lambda y: effect_rms(name, y, protocol), x0, target)
+
+
+def _calibrate(rms, x0, target):
+    """Parameter ``x`` with ``rms(x) = target`` (to 0.5 %): bracket by factors of 4 from
+    ``x0``, then Brent's method on ``log rms - log target`` in ``log x`` (rms increases with x)."""
+    from scipy.optimize import brentq
+
+    def g(lx):
+        return math.log(max(rms(math.exp(lx)), 1e-300) / target)
+    lo = hi = math.log(x0)
+    glo = ghi = g(lo)
+    while glo > 0:
+        lo -= math.log(4.0)
+        glo = g(lo)
+    while ghi < 0:
+        hi += math.log(4.0)
+        ghi = g(hi)
+    if lo == hi:
+        return x0
+    return math.exp(brentq(g, lo, hi, xtol=1e-3, rtol=1e-4))
 
 
 def record(name, magnitude, protocol, seed, *, colour=0.0, waveform="sine", el=None):
@@ -106,6 +120,40 @@ def vibration_case(seed, *, n=30, zeta_v=0.0, k_p=0.0, delta=0.0, f_noise=2e-4, 
     X = np.geomspace(1e-3, 3.0, n) * MODAL.phi_max
     fp, zp = modal_curves(X)
     fm, zm = modal_curves(X, zeta_v=zeta_v, k_p=k_p, delta=delta)
+    fm = fm * np.exp(f_noise * rng.normal(size=n))
+    zm = zm * np.exp(z_noise * rng.normal(size=n))
+    return X, fm, zm, fp, zp
+
+
+def modal_curves_from_elements(X, *, k_p=0.0, delta=0.0, zeta_v=0.0, n=720):
+    """Single-mode curves by an independent route: the time-domain elements
+    (``PinningStiffness(IwanJoint(MODAL))``) driven from rest into a steady sinusoidal cycle at
+    each amplitude; harmonic balance with the first-harmonic stiffness
+    ``(1/(pi X)) int F sin(theta) dtheta`` and the loop area, both by quadrature of the
+    simulated force. No closed form and no describing function is used."""
+    from iwan_element import PinningStiffness
+    th = np.linspace(0.0, 0.5 * np.pi + 2 * np.pi, n // 4 + n + 1)
+    f_out, z_out = [], []
+    for x in np.atleast_1d(X):
+        el = PinningStiffness(IwanJoint(MODAL), k_p=k_p, delta=delta)
+        u = x * np.sin(th)
+        F = el.force_history(u)
+        Fc, uc, thc = F[-(n + 1):], u[-(n + 1):], th[-(n + 1):]
+        k1 = np.trapezoid(Fc * np.sin(thc), thc) / (np.pi * x)
+        D = abs(np.trapezoid(Fc, uc))
+        wn2 = (K_INF + k1) / M_MODAL
+        f_out.append(np.sqrt(wn2) / (2 * np.pi))
+        z_out.append(D / (2 * np.pi * M_MODAL * wn2 * x ** 2) + ZETA0 + zeta_v)
+    return np.array(f_out), np.array(z_out)
+
+
+def vibration_case_elements(seed, *, n=30, zeta_v=0.0, k_p=0.0, delta=0.0, f_noise=2e-4,
+                            z_noise=0.02):
+    """As :func:`vibration_case`, prediction and measurement both from the elements."""
+    rng = np.random.default_rng(seed)
+    X = np.geomspace(1e-3, 3.0, n) * MODAL.phi_max
+    fp, zp = modal_curves_from_elements(X)
+    fm, zm = modal_curves_from_elements(X, zeta_v=zeta_v, k_p=k_p, delta=delta)
     fm = fm * np.exp(f_noise * rng.normal(size=n))
     zm = zm * np.exp(z_noise * rng.normal(size=n))
     return X, fm, zm, fp, zp

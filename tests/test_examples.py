@@ -45,3 +45,20 @@ def test_diagnose_beam_vibration_names_and_shrinks_the_gap(tmp_path, effect, nam
     assert after[1] < 0.2 * before[1]                     # damping mismatch shrinks 5x or more
     if effect == "pinning":
         assert after[0] < 0.5 * before[0]                 # and the frequency mismatch halves
+
+
+def test_real_damper_records_carry_their_licence():
+    """The copied ARTS records keep their CC BY-SA 4.0 attribution, and load as SI records
+    with the README's sample rate (the full example takes minutes: run
+    examples/real_damper.py or benchmarks/bench_real_damper.py)."""
+    import numpy as np
+    data = Path(__file__).resolve().parents[1] / "examples" / "data"
+    text = (data / "README.md").read_text()
+    assert "CC BY-SA 4.0" in text and "Coble" in text and "Changes from the original" in text
+    files = sorted(data.glob("*.csv"))
+    assert 2 <= len(files) <= 3
+    for f in files:
+        assert f.name in text
+        t, u, F = np.loadtxt(f, delimiter=",", skiprows=1).T
+        assert np.allclose(np.diff(t), 1 / 1024, atol=1e-5)
+        assert 0.02 < np.abs(u).max() < 0.03 and 5e3 < np.abs(F).max() < 2e4

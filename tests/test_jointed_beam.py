@@ -168,7 +168,15 @@ def test_free_decay_trends_slope_and_prediction(loose_decay):
     # measured curves against the closed-form single-mode prediction
     fp, zp = res.modal.predict(a)
     np.testing.assert_allclose(z, zp, rtol=0.05)
-    np.testing.assert_allclose(f, fp, rtol=0.05)
+    # the frequency itself changes by ~1e-6 relative, so an rtol on f cannot fail; compare
+    # the amplitude-dependent *shift* from the linear frequency, per point, against the
+    # predicted shift (measured shift: minus the linear-joint run's frequency, which removes
+    # the integrator's period error), to a quarter of the largest predicted shift
+    shift_meas = f - np.median(f_lin)
+    shift_pred = fp - res.modal.frequencies[0]
+    assert np.max(np.abs(shift_pred)) > 0
+    np.testing.assert_allclose(shift_meas, shift_pred, rtol=0,
+                               atol=0.25 * np.max(np.abs(shift_pred)))
     # the frequency drop itself, with the integrator's period error removed via the
     # linear-joint run, within 20 %
     f0_meas = np.median(f_lin)

@@ -27,6 +27,11 @@ from .parameters import IwanParameters
 
 __all__: list[str] = []
 
+#: The package's one reversal tolerance, relative to the displacement scale (``phi_max`` in
+#: :class:`~iwan_element.IwanJoint`, the largest |u| of a record in the fits): smaller
+#: excursions from a turning point are not reversals.
+REVERSAL_TOL = 1e-12
+
 
 def unit_params(phi_max: float, chi: float, beta: float) -> IwanParameters:
     """Parameters with ``Fs = 1`` and the given ``phi_max`` [m] (paper eq. 11 solved for KT)."""

@@ -27,6 +27,7 @@ import math
 import numpy as np
 
 from ._validation import check_scalar, finite_array
+from ._history import REVERSAL_TOL
 from .parameters import IwanParameters
 
 __all__ = ["IwanJoint"]
@@ -80,7 +81,7 @@ class IwanJoint:
                  "_tu", "_tF", "_tK", "_tn", "_te", "_teF", "_has_trial", "_tfast", "_Gc", "_IHc",
                  "_blo", "_bhi", "_bur", "_bFr", "_bc1", "_bc2", "_bdir")
 
-    def __init__(self, params: IwanParameters, *, reversal_tol: float = 1e-12):
+    def __init__(self, params: IwanParameters, *, reversal_tol: float = REVERSAL_TOL):
         if not isinstance(params, IwanParameters):
             raise ValueError(f"params must be an IwanParameters instance, got {type(params).__name__}")
         tol = check_scalar("reversal_tol", reversal_tol, low=0.0, high=REVERSAL_TOL_MAX)

@@ -1,6 +1,13 @@
-"""Model-discrepancy diagnosis: which physical effect the Iwan model misses."""
-from .diagnosis import (CANDIDATES, Diagnosis, VibrationDiagnosis, diagnose, diagnose_vibration,
-                        simulate_element_test)
+"""Model-discrepancy diagnosis: which physical effect the Iwan model misses.
+
+Modules: :mod:`.loops` (force-displacement records), :mod:`.vibration` (amplitude-dependent
+frequency and damping), :mod:`.selection` (the one selection rule both use),
+:mod:`.results` (result objects), :mod:`.generator` (the synthetic test generator).
+"""
+from .generator import simulate_element_test
+from .loops import CANDIDATES, diagnose
+from .results import Diagnosis, VibrationDiagnosis
+from .vibration import diagnose_vibration
 
 __all__ = ["CANDIDATES", "Diagnosis", "VibrationDiagnosis", "diagnose", "diagnose_vibration",
            "simulate_element_test"]

@@ -34,7 +34,7 @@ import time
 import numpy as np
 from scipy.special import fdtrc
 
-from ..core._history import History
+from ..core._history import REVERSAL_TOL, History
 from ..core._validation import (_check_int, _check_time, check_magnitude, check_scalar, finite_array,
                                 same_length)
 from ..core.parameters import IwanParameters
@@ -236,7 +236,7 @@ def fit_loops(t, u, F, *, sigma=None, smooth="auto", max_samples: int | None = 2
     # reversals smaller than the noise left in the driving displacement are noise, not the
     # joint's: a dead band of 3 sigma keeps them from adding stiff micro-loops (errors in
     # variables: they bias KT low and chi high)
-    tol = max(1e-12 * float(np.abs(u_drive).max()), 3.0 * dinfo["drive_noise"])
+    tol = max(REVERSAL_TOL * float(np.abs(u_drive).max()), 3.0 * dinfo["drive_noise"])
     hist, prob = _setup(u_drive, FF, w_full, keep, tol)
     half = int(keep.size / max(2 * len(cycles), 1))
     prob.block = half

@@ -1,0 +1,182 @@
+"""The loop model every diagnosis step fits: an effect stack on the Iwan joint with the
+force offset and ``Fs`` eliminated in closed form, its fit and its uncertainty."""
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+from scipy.optimize import least_squares
+
+from ..core._history import unit_params
+from ..core.parameters import IwanParameters
+from ..effects import EFFECTS
+from ..effects._evaluate import Evaluator, scale_effect
+from ..identify.fit import FitResult
+
+__all__: list[str] = []
+
+PARAM_NAMES = ("Fs", "KT", "chi", "beta")
+CHI_BOUNDS = (-0.98, 1.0)
+BETA_MAX = 100.0
+PHI_RANGE = (1e-3, 1e4)           # phi_max / x_max
+
+
+class LoopModel:
+    """Transformed vector ``z = (ln(phi_max/x_max), chi, ln(1+beta), effect variables...)``;
+    the force is ``Fs g(z) + F0`` with ``(Fs, F0)`` from linear least squares."""
+
+    def __init__(self, ev: Evaluator, y, names, scales, F0=None):
+        self.ev, self.y, self.names, self.scales = ev, y, tuple(names), scales
+        self.F0 = F0                     # a force offset measured at rest, or None: fitted
+        lo = [math.log(PHI_RANGE[0]), CHI_BOUNDS[0], 0.0]
+        hi = [math.log(PHI_RANGE[1]), CHI_BOUNDS[1], math.log1p(BETA_MAX)]
+        for nm in self.names:
+            for sp in EFFECTS[nm].specs:
+                lo.append(sp.fit_bounds[0])
+                hi.append(sp.fit_bounds[1])
+        self.lower, self.upper = np.array(lo), np.array(hi)
+        self.yy = float(y @ y)
+
+    def starts(self, z_prev):
+        """Start vectors: the previous model's ``z`` with each of the new effect's starts."""
+        new = EFFECTS[self.names[-1]].specs
+        k = max(len(s.fit_starts) for s in new)
+        return [np.concatenate([z_prev, [s.fit_starts[min(j, len(s.fit_starts) - 1)]
+                                         for s in new]]) for j in range(k)]
+
+    def decode(self, z):
+        xm = self.ev.x_max
+        shape = (xm * math.exp(z[0]), float(z[1]), math.expm1(z[2]))
+        vals, k = [], 3
+        for nm in self.names:
+            d = {}
+            for sp in EFFECTS[nm].specs:
+                d[sp.name] = float(z[k]) / self.scales[sp.ref] ** sp.ref_power
+                k += 1
+            vals.append(d)
+        return shape, vals
+
+    def unit(self, z):
+        shape, vals = self.decode(z)
+        return self.ev.unit_force(shape, self.names, vals)
+
+    def linear(self, g):
+        """``(Fs, F0)`` minimising ``|y - Fs g - F0|`` (``Fs > 0``; ``F0`` fixed if measured)."""
+        if self.F0 is not None:
+            gg = float(g @ g)
+            Fs, F0 = (float(g @ (self.y - self.F0)) / gg if gg > 0 else 0.0), self.F0
+        else:
+            A = np.column_stack([g, np.ones_like(g)])
+            (Fs, F0), *_ = np.linalg.lstsq(A, self.y, rcond=None)
+        if not Fs > 0:
+            Fs = 1e-12 * math.sqrt(self.yy / self.y.size + 1.0)
+            F0 = self.F0 if self.F0 is not None else float(np.mean(self.y))
+        return float(Fs), float(F0)
+
+    def residual(self, z):
+        try:
+            g = self.unit(z)
+        except (ValueError, ZeroDivisionError, OverflowError, FloatingPointError):
+            return np.full(self.y.size, 1e6 * math.sqrt(self.yy / self.y.size + 1.0))
+        Fs, F0 = self.linear(g)
+        return self.y - Fs * g - F0
+
+    def physical(self, z):
+        """``(IwanParameters, [effect dicts in SI], F0)``."""
+        shape, vals = self.decode(z)
+        Fs, F0 = self.linear(self.unit(z))
+        p1 = unit_params(*shape)
+        p = IwanParameters(Fs, Fs * p1.KT, p1.chi, p1.beta)
+        return p, [scale_effect(nm, v, Fs, to_unit=False) for nm, v in zip(self.names, vals)], F0
+
+
+def fit(model: LoopModel, starts, *, max_nfev: int):
+    """Bounded trust-region least squares from each start; the best result and total nfev."""
+    best, nfev = None, 0
+    for z0 in starts:
+        z0 = np.clip(np.asarray(z0, float), model.lower, model.upper)
+        res = least_squares(model.residual, z0, bounds=(model.lower, model.upper), method="trf",
+                            x_scale="jac", max_nfev=max_nfev, diff_step=1e-6)
+        nfev += res.nfev
+        if best is None or res.cost < best.cost:
+            best = res
+    return best, nfev
+
+
+def flat(p: IwanParameters, effs, names, F0):
+    out = [p.Fs, p.KT, p.chi, p.beta]
+    labels = list(PARAM_NAMES)
+    for nm, d in zip(names, effs):
+        for k in EFFECTS[nm].parameter_names:
+            out.append(d[k])
+            labels.append(f"{nm}.{k}")
+    return np.array(out + [F0]), labels + ["force_offset"]
+
+
+def residual_tau(r) -> float:
+    """Integrated autocorrelation time of a residual [samples] (initial positive sequence):
+    a systematic misfit is correlated and widens the stated uncertainty by this factor."""
+    r = r - r.mean()
+    v = float(r @ r)
+    if v <= 0:
+        return 1.0
+    tau = 1.0
+    for k in range(1, min(200, r.size // 4)):
+        rho = float(r[:-k] @ r[k:]) / v
+        if rho <= 0.02:
+            break
+        tau += 2.0 * rho
+    return tau
+
+
+def uncertainty(model: LoopModel, z, r):
+    """Standard errors and correlation of (Fs, KT, chi, beta, effect params, F0): delta method
+    from the Jacobian in ``(z, Fs, F0)``, with the residual variance inflated by its
+    correlation time (a correlated, systematic misfit is not treated as independent noise)."""
+    Fs, F0 = model.linear(model.unit(z))
+    theta = np.concatenate([z, [Fs, F0]])
+    fixed = model.F0 is not None
+    lo = np.concatenate([model.lower, [0.0, -np.inf]])
+    hi = np.concatenate([model.upper, [np.inf, np.inf]])
+
+    def resid(th):
+        return model.y - th[-2] * model.unit(th[:-2]) - th[-1]
+
+    def phys(th):
+        p, effs, _ = model.physical(th[:-2])
+        s = th[-2] / p.Fs
+        p = IwanParameters(th[-2], p.KT * s, p.chi, p.beta)
+        effs = [scale_effect(nm, d, s, to_unit=False) for nm, d in zip(model.names, effs)]
+        return flat(p, effs, model.names, th[-1])[0]
+
+    cols, pcols = [], []
+    for j in range(theta.size - (1 if fixed else 0)):
+        h = 1e-5 * max(abs(theta[j]), 1.0) if j >= theta.size - 2 else 1e-5
+        if j == theta.size - 2:                  # Fs: a relative step that stays positive
+            h = 1e-5 * theta[j]
+        tp, tm = theta.copy(), theta.copy()
+        tp[j] = min(theta[j] + h, hi[j])
+        tm[j] = max(theta[j] - h, lo[j])
+        dh = tp[j] - tm[j]
+        cols.append((resid(tp) - resid(tm)) / dh)
+        pcols.append((phys(tp) - phys(tm)) / dh)
+    J, Jp = np.column_stack(cols), np.column_stack(pcols)
+    s2 = float(r @ r) / max(r.size - theta.size, 1) * residual_tau(r)
+    cov = Jp @ (s2 * np.linalg.pinv(J.T @ J, rcond=1e-12, hermitian=True)) @ Jp.T
+    se = np.sqrt(np.clip(np.diag(cov), 0.0, None))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        corr = cov / np.outer(se, se)
+    return se, corr
+
+
+def make_fit_result(**kw) -> FitResult:
+    """A :class:`FitResult` from the fields this module knows (others left at None/defaults),
+    so a change of the fit module's result fields does not break the diagnosis."""
+    args = {}
+    for f in dataclasses.fields(FitResult):
+        if f.name in kw:
+            args[f.name] = kw[f.name]
+        elif f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING:
+            args[f.name] = None
+    return FitResult(**args)

@@ -1,0 +1,421 @@
+"""Loop diagnosis: what the four-parameter Iwan model misses in a displacement-driven test.
+
+:func:`diagnose` works on a record (time, displacement, force):
+
+1. the joint's unloaded state is the rest position the record starts from: the displacement
+   offset is the mean displacement before the motion starts, and the force offset the mean
+   force there (the unloaded joint carries no force) when at least 10 rest samples exist;
+   otherwise the force offset is fitted with every model (linear, eliminated in closed form
+   with ``Fs``). Offsets are nuisance parameters: reported, never named as an effect;
+2. the force noise and its correlation time are estimated from the record itself
+   (:func:`iwan_element.identify.noise.estimate_noise`; no repeated cycles needed, so
+   ramped, swept and random-amplitude protocols work), unless ``noise`` is given;
+3. the plain Iwan model is fitted, then effects of :data:`~iwan_element.EFFECTS` are tried
+   one after the other with the selection rule of :mod:`iwan_element.diagnose.selection`
+   (information criterion on the noise-normalised residual with ``n / tau`` independent
+   samples, an "explains little" guard, and "no effect" when the rest is noise);
+4. the augmented model is refitted on the whole record and its uncertainty stated (delta
+   method, residual variance inflated by the residual's correlation time).
+
+A property of the test rig is not an effect of the joint: ``lowpass`` removes structural
+ringing of the rig (e.g. the 40-50 Hz ringing of the ARTS damper rig after each break-away),
+with a zero-phase Butterworth filter on both channels, stating the reason in the result.
+"""
+from __future__ import annotations
+
+import logging
+import math
+import time
+
+import numpy as np
+from scipy.signal import butter, sosfiltfilt
+
+from ..core._history import REVERSAL_TOL, unit_params
+from ..core._validation import (_check_int, _check_time, check_magnitude, check_scalar, finite_array,
+                                same_length)
+from ..effects import EFFECTS
+from ..effects._evaluate import Evaluator, build_element, order_stack
+from ..identify.testdata import find_reversals, split_cycles
+from . import _model as M
+from ._locate import _check_candidates, _locate, _untestable
+from ._noise import noise_estimate
+from .results import Diagnosis, _json
+from .selection import criterion_text, misfit_p, stepwise_select
+
+__all__ = ["CANDIDATES", "diagnose"]
+
+log = logging.getLogger(__name__)
+
+#: Candidate effects tried by :func:`diagnose`, in the order they are reported.
+CANDIDATES = ("viscous_damping", "pinning_stiffness", "backlash", "slip_degradation",
+              "asymmetric_slip", "breakaway")
+_SLOW_FIT_SAMPLES = 300          # samples fitted for stacks without a vectorised form
+_MIN_REST = 10                   # rest samples needed to measure the force offset there
+
+
+def _rest_index(u, noise_u):
+    """Samples before the motion starts (at least 1)."""
+    thr = max(1e-6 * float(np.ptp(u)), 5.0 * noise_u)
+    moved = np.flatnonzero(np.abs(u - u[0]) > thr)
+    return max(int(moved[0]) if moved.size else 1, 1)
+
+
+def _prepare(t, u, F, noise, lowpass):
+    uu = check_magnitude("u", finite_array("u", u, ndim=1, min_size=40), unit="m")
+    FF = check_magnitude("F", finite_array("F", F, ndim=1, min_size=40), unit="N")
+    n = same_length(u=uu, F=FF)
+    tt = None if t is None else _check_time(t, n)
+    if not np.ptp(uu) > 0:
+        raise ValueError("u never moves: a displacement-driven test is needed")
+    scale_F = max(float(np.max(np.abs(FF))), 1e-300)
+    if noise is not None:
+        noise = check_scalar("noise", noise, low=0.0, low_open=True)
+        if noise < 1e-9 * scale_F:
+            raise ValueError(f"noise = {noise:g} N is below the floating-point resolution of the "
+                             f"force record (1e-9 x max|F| = {1e-9 * scale_F:.3g} N); give a "
+                             "realistic noise level or leave noise=None to estimate it")
+    lp = None
+    if lowpass is not None:
+        if tt is None:
+            raise ValueError("lowpass needs the time vector t")
+        fs = 1.0 / float(np.median(np.diff(tt)))
+        lp = check_scalar("lowpass", lowpass, low=0.0, high=0.5 * fs, low_open=True,
+                          high_open=True)
+    return uu, FF, tt, n, noise, lp
+
+
+def _filter(tt, x, lp):
+    fs = 1.0 / float(np.median(np.diff(tt)))
+    sos = butter(4, lp, fs=fs, output="sos")
+    return sosfiltfilt(sos, x)
+
+
+def _noise_level(tt, r, noise, lp):
+    """``(sigma [N], tau [samples], text, warnings)`` of the force as fitted, from the
+    residual ``r`` of the plain fit to the raw force (the model removes the loops' corners,
+    the estimator the smooth rest of any model error)."""
+    if noise is not None:
+        return noise, 1.0, "given", ()
+    sigma, tau, method, warns = noise_estimate(tt, r)
+    text = f"estimated from the record ({method})"
+    if lp is not None:                       # white noise through the low-pass
+        fs = 1.0 / float(np.median(np.diff(tt)))
+        frac = min(2.0 * lp / fs, 1.0)
+        sigma *= math.sqrt(frac)
+        tau = max(tau, 1.0 / frac)
+        text += f", reduced to the {lp:g} Hz band"
+    if not sigma > 0:
+        sigma = 1e-9 * float(np.max(np.abs(r))) or 1e-300
+        warns = tuple(warns) + ("no noise found in the force: a floor of 1e-9 x max|F| is "
+                                "used",)
+    return sigma, tau, text, tuple(warns)
+
+
+def _evaluators(uj, v, max_samples):
+    n = uj.size
+    rev = find_reversals(uj) if n > 2 else np.zeros(0, np.intp)
+    tol = REVERSAL_TOL * float(np.abs(uj).max())
+    keep = np.unique(np.round(np.linspace(0, n - 1, min(n, max_samples))).astype(np.intp))
+    ev = Evaluator(uj, v, keep, rev, tol=tol)
+    sub = keep[np.unique(np.round(np.linspace(0, keep.size - 1,
+                                              min(keep.size, _SLOW_FIT_SAMPLES))).astype(np.intp))]
+    ev_slow = Evaluator(uj, v, sub, rev, tol=tol)
+    return ev, ev_slow, keep, sub
+
+
+def _base_start(tt, uj, FF, seed):
+    """Shape start ``(phi_max, chi, beta)`` from the plain loop fit, or None."""
+    from ..identify.fit import fit_loops, _quiet
+    import inspect
+    sig = inspect.signature(fit_loops).parameters
+    opts = {k: v for k, v in (("max_samples", 3000), ("n_starts", 3)) if k in sig}
+    try:
+        with _quiet():
+            if next(iter(sig)) == "t":
+                res = fit_loops(tt, uj, FF, seed=seed, **opts)
+            else:
+                res = fit_loops(uj, FF, t=tt, seed=seed, **opts)
+        p = res.params
+        return (p.phi_max, p.chi, p.beta)
+    except (ValueError, FloatingPointError, ZeroDivisionError):
+        return None
+
+
+class _Fitter:
+    """Fits stacks on one record; scores them as noise-normalised chi2 on the full keep set."""
+
+    def __init__(self, ev, ev_slow, FF, keep, sub, scales, sigma, F0=None):
+        self.ev, self.ev_slow, self.scales, self.s2 = ev, ev_slow, scales, sigma * sigma
+        self.F0 = F0
+        self.y, self.y_sub = FF[keep], FF[sub]
+        self.nfev = 0
+
+    def model(self, names, *, full=True):
+        fast = Evaluator.fast(names)
+        if full or fast:
+            return M.LoopModel(self.ev, self.y, names, self.scales, self.F0)
+        return M.LoopModel(self.ev_slow, self.y_sub, names, self.scales, self.F0)
+
+    def run(self, names, starts):
+        fast = Evaluator.fast(names)
+        mdl = self.model(names, full=False)
+        res, nfev = M.fit(mdl, starts if fast else starts[:2], max_nfev=200 if fast else 20)
+        self.nfev += nfev
+        full = self.model(names)
+        r = full.residual(res.x)
+        return {"names": tuple(names), "chi2": float(r @ r) / self.s2, "z": res.x,
+                "status": int(res.status), "message": str(res.message), "model": full}
+
+
+def _z_start(names, prev_names, prev_z, which):
+    """Start vector for ``names`` from a previous fit (effects it had keep their values)."""
+    z = list(prev_z[:3])
+    k_prev, pos = 3, {}
+    for nm in prev_names:
+        q = len(EFFECTS[nm].specs)
+        pos[nm] = prev_z[k_prev:k_prev + q]
+        k_prev += q
+    for nm in names:
+        if nm in pos:
+            z.extend(pos[nm])
+        else:
+            z.extend(s.fit_starts[min(which, len(s.fit_starts) - 1)] for s in EFFECTS[nm].specs)
+    return np.array(z, float)
+
+
+def _allowed(names, cand):
+    """At most one slider-level effect per stack (each rebuilds the joint's sliders)."""
+    return not (EFFECTS[cand].slider_level and any(EFFECTS[n].slider_level for n in names))
+
+
+def _fit_base(fitter, ev, shape0):
+    """The plain Iwan model (with the force offset), from the loop fit's shape and defaults."""
+    starts = [np.array([0.0, -0.5, math.log1p(0.5)]), np.array([-1.0, -0.8, math.log1p(3.0)])]
+    if shape0 is not None:
+        phi, chi, beta = shape0
+        starts.insert(0, np.array([math.log(min(max(phi / ev.x_max, M.PHI_RANGE[0]),
+                                                    M.PHI_RANGE[1])),
+                                   min(max(chi, M.CHI_BOUNDS[0]), M.CHI_BOUNDS[1]),
+                                   math.log1p(min(max(beta, 0.0), M.BETA_MAX))]))
+    return fitter.run((), starts)
+
+
+def _fit_result(row, fitter, FF, F_model, t_start, base_identified=None, extra_warns=()):
+    """FitResult of a fitted stack on the whole record, with stderr and identification."""
+    mdl, z = row["model"], row["z"]
+    p, effs, F0 = mdl.physical(z)
+    r = mdl.residual(z)
+    se, corr = M.uncertainty(mdl, z, r)
+    vals, labels = M.flat(p, effs, mdl.names, F0)
+    stderr = dict(zip(M.PARAM_NAMES, se[:4].tolist()))
+    at_bound = np.isclose(z, mdl.lower, atol=1e-6) | np.isclose(z, mdl.upper, atol=1e-6)
+    ident = {k: bool(np.isfinite(stderr[k]) and stderr[k] <= 0.5 * abs(getattr(p, k)))
+             for k in M.PARAM_NAMES}
+    ident["chi"] &= not at_bound[1]
+    ident["beta"] &= not at_bound[2]
+    eff_out, k0 = [], 4
+    for nm, d in zip(mdl.names, effs):
+        q = len(EFFECTS[nm].specs)
+        eff_out.append({"name": nm, "parameters": dict(d),
+                        "stderr": dict(zip(EFFECTS[nm].parameter_names, se[k0:k0 + q].tolist())),
+                        "units": {s.name: s.unit for s in EFFECTS[nm].specs}})
+        k0 += q
+    warns = list(extra_warns)
+    warns += [f"{k} is not identified (at a bound or stderr above half its value)"
+              for k, ok in ident.items() if not ok]
+    if row["status"] <= 0:
+        warns.append(f"the fit did not converge: {row['message']}")
+    span = float(np.ptp(FF)) or 1.0
+    return M.make_fit_result(
+        params=p, stderr=stderr, correlation=corr[:4, :4], identified=ident, fixed=(),
+        ranges={}, residual_norm=math.sqrt(float(r @ r)),
+        nrmse=float(np.sqrt(np.mean((FF - F_model) ** 2)) / span),
+        success=bool(row["status"] > 0 and ident["Fs"]), message=row["message"],
+        nfev=int(fitter.nfev), method="loops+" + "+".join(mdl.names) if mdl.names else "loops",
+        n_data=int(r.size), warnings=tuple(warns), wall_time=time.perf_counter() - t_start,
+        details=_json({"effects": eff_out, "labels": labels, "force_offset": F0,
+                       "force_offset_stderr": float(se[-1]), "correlation_all": corr}))
+
+
+def _record_force(row, uj, v):
+    """Force [N] of a fitted stack on the whole record, offset included, and the element."""
+    p, effs, F0 = row["model"].physical(row["z"])
+    el = build_element(p, row["names"], effs)
+    F = el.force_history(uj, v) if row["names"] else el.force_history(uj)
+    return F + F0, el
+
+
+def diagnose(t, u, F, *, candidates=None, max_effects: int = 2, noise: float | None = None,
+             alpha: float = 1e-3, ambiguity: float = 10.0, max_samples: int = 1500,
+             lowpass: float | None = None, seed=0) -> Diagnosis:
+    """Find what the four-parameter Iwan model misses in a displacement-driven test.
+
+    See the module docstring for the procedure.
+
+    Parameters
+    ----------
+    t : array_like, shape (n,), or None
+        Time [s], strictly increasing. Needed for velocity-dependent effects and ``lowpass``;
+        with ``None`` viscous damping is reported as untestable. Not modified.
+    u, F : array_like, shape (n,)
+        Measured displacement [m] and force [N], ``n >= 40``, starting at rest (any sensor
+        zero offsets are absorbed as nuisance parameters). Not modified.
+    candidates : sequence of str, optional, keyword-only
+        Effects to try (default :data:`CANDIDATES`).
+    max_effects : int, keyword-only
+        Most effects named one after the other, ``>= 1`` (default 2).
+    noise : float, optional, keyword-only
+        Force noise standard deviation [N], ``> 1e-9 max|F|``, taken as white. Default:
+        estimated from the record.
+    alpha : float, keyword-only
+        Level of the "rest is noise" test, in ``(0, 0.5)`` (default 1e-3).
+    ambiguity : float, keyword-only
+        Criterion difference below which another effect counts as nearly as good, ``>= 0``.
+    max_samples : int, keyword-only
+        Samples scored per model (evenly spaced; every turning point is kept), ``>= 100``.
+    lowpass : float, optional, keyword-only
+        Cut-off [Hz] of a zero-phase low-pass applied to both channels before fitting, to
+        remove test-rig dynamics (structural ringing) that is not joint behaviour; in
+        ``(0, sample rate / 2)``. Needs ``t``. Default: none.
+    seed : int or numpy.random.Generator, keyword-only
+        Seed of the starting loop fit's random starts.
+
+    Returns
+    -------
+    Diagnosis
+
+    Raises
+    ------
+    ValueError
+        Bad arrays (NaN, unequal lengths, fewer than 40 samples, no motion), a noise level
+        below the record's resolution, or an option out of range.
+    """
+    t_start = time.perf_counter()
+    uu, FF_in, tt, n, noise, lp = _prepare(t, u, F, noise, lowpass)
+    cand = _check_candidates(candidates, CANDIDATES)
+    max_effects = _check_int("max_effects", max_effects, 1)
+    alpha = check_scalar("alpha", alpha, low=0.0, high=0.5, low_open=True, high_open=True)
+    ambiguity = check_scalar("ambiguity", ambiguity, low=0.0)
+    max_samples = _check_int("max_samples", max_samples, 100)
+    FF = FF_in if lp is None else _filter(tt, FF_in, lp)
+    i_rest = _rest_index(uu, noise_estimate(tt, uu)[0])
+    u_off = float(np.mean(uu[:i_rest]))
+    F_rest = float(np.mean(FF[:i_rest])) if i_rest >= _MIN_REST else None
+    uj = uu - u_off
+    v = np.zeros(n) if tt is None else np.gradient(uj, tt)
+    ev, ev_slow, keep, sub = _evaluators(uj, v, max_samples)
+    fitter = _Fitter(ev, ev_slow, FF, keep, sub, {"u_max": float(np.abs(uj).max()), "1": 1.0,
+                                                  "v_rms": float(np.sqrt(np.mean(v ** 2))) or 1.0,
+                                                  "D_ref": 1.0}, 1.0, F_rest)
+    base = _fit_base(fitter, ev, _base_start(tt, uj, FF, seed))
+    r_raw = FF_in - _record_force(base, uj, v)[0]
+    sigma, tau, noise_text, nwarn = _noise_level(tt, r_raw, noise, lp)
+    fitter.s2 = sigma * sigma
+    base["chi2"] /= fitter.s2
+    shape_b, _ = base["model"].decode(base["z"])
+    fitter.scales["D_ref"] = float(ev.unit_dissipation(unit_params(*shape_b))[-1]) or 1.0
+    tau_k = max(1.0, tau * keep.size / n)
+    n_eff = keep.size / tau_k
+    sel = _select(fitter, base, cand, tt, v, uj, FF, tau_k, n_eff, alpha, max_effects, ambiguity)
+    ctx = dict(t_start=t_start, uu=uu, FF_in=FF_in, FF=FF, tt=tt, n=n, noise=noise, lp=lp,
+               sigma=sigma, tau=tau, noise_text=noise_text, nwarn=nwarn, u_off=u_off, uj=uj,
+               v=v, keep=keep, fitter=fitter, base=base, tau_k=tau_k, n_eff=n_eff, sel=sel,
+               alpha=alpha, ambiguity=ambiguity, cand=cand)
+    return _assemble(ctx)
+
+
+def _select(fitter, base, cand, tt, v, uj, FF, tau_k, n_eff, alpha, max_effects, ambiguity):
+    """Run the shared selection rule over the testable candidates."""
+    try:
+        import inspect
+        if next(iter(inspect.signature(split_cycles).parameters)) == "t":   # time first
+            cycles = split_cycles(np.arange(uj.size, dtype=float) if tt is None else tt, uj, FF)
+        else:
+            cycles = split_cycles(uj, FF, t=tt)
+    except ValueError:
+        cycles = []
+    untestable = {k: why for k, why in _untestable(tt, v, cycles).items() if k in cand}
+    testable = tuple(c for c in cand if c not in untestable)
+    span = float(np.ptp(FF)) or 1.0
+    nf = fitter.y.size
+
+    def fit_candidate(cur, name):
+        names = order_stack(cur["names"] + (name,))
+        k = max(len(s.fit_starts) for s in EFFECTS[name].specs)
+        starts = [_z_start(names, cur["names"], cur["state"]["z"], j) for j in range(k)]
+        row = fitter.run(names, starts)
+        q = len(EFFECTS[name].specs)
+        ssr = row["chi2"] * fitter.s2
+        return {"names": names, "chi2": row["chi2"], "q": q, "state": row,
+                "nrmse": math.sqrt(ssr / nf) / span,
+                "ratio": math.sqrt(row["chi2"] / max(nf - 5 - q, 1)),
+                "message": row["message"]}
+
+    base_state = {"names": (), "chi2": base["chi2"], "q": 5, "state": base}
+    sel = stepwise_select(fit_candidate, testable, base_state, tau=tau_k, n_eff=n_eff,
+                          alpha=alpha, max_effects=max_effects, ambiguity=ambiguity,
+                          allowed=_allowed)
+    sel.untestable = untestable
+    sel.cycles = cycles
+    return sel
+
+
+def _pure_noise(FF, keep, base, sigma, tau_k, n_eff) -> bool:
+    """True when the Iwan model explains no more than a constant force would (BIC)."""
+    y = FF[keep]
+    chi0 = float(np.sum((y - y.mean()) ** 2)) / sigma ** 2
+    return (chi0 - base["chi2"]) / tau_k < 4.0 * math.log(max(n_eff, 2.0))
+
+
+def _assemble(c) -> Diagnosis:
+    """Refit, forces, location, warnings and the result object."""
+    sel, fitter, FF, uj, v = c["sel"], c["fitter"], c["FF"], c["uj"], c["v"]
+    warns = [f"noise estimate: {w}" for w in c["nwarn"]]
+    base = c["base"]
+    F_base, _ = _record_force(base, uj, v)
+    noise_only = _pure_noise(FF, c["keep"], base, c["sigma"], c["tau_k"], c["n_eff"])
+    if noise_only:                       # nothing is identified from noise
+        sel.named, sel.ambiguous = [], ()
+    final = sel.final["state"] if sel.named else base
+    F_after, model = _record_force(final, uj, v)
+    if noise_only:
+        warns.append("the force is indistinguishable from noise (the Iwan model explains no "
+                     "more than a constant): nothing is identified")
+    base_fit = _fit_result(base, fitter, FF, F_base, c["t_start"])
+    fit = base_fit if not sel.named else _fit_result(final, fitter, FF, F_after, c["t_start"])
+    misfit = sel.p_before < c["alpha"] and not noise_only
+    r0 = FF - F_base
+    where, loc = _locate(c["tt"], uj, FF, F_base, r0, sel.cycles, c["sigma"], c["tau"]) \
+        if sel.cycles else ("", {})
+    if not misfit:
+        where = (f"The residual is consistent with the noise (RMS {np.sqrt(np.mean(r0 ** 2)):.3g} "
+                 f"N vs {c['sigma']:.3g} N); there is no misfit to explain.")
+    if misfit and sel.named and sel.p_after < c["alpha"]:
+        warns.append(f"misfit beyond the noise remains after {' + '.join(sel.named)}")
+    if misfit and not sel.named:
+        warns.append("the misfit is more than noise but no tested effect explains it" + (
+            f"; this record cannot reveal {', '.join(sel.untestable)}" if sel.untestable else ""))
+    span = float(np.ptp(FF)) or 1.0
+    steps = [{"on": st["on"], "candidates": [
+        {k: r.get(k) for k in ("name", "nrmse", "ratio", "dIC", "explained", "verdict", "message")}
+        for r in st["rows"]]} for st in sel.steps]
+    F0 = fit.details["force_offset"]
+    ro = lambda a: (a.setflags(write=False), a)[1]  # noqa: E731
+    details = {"samples": c["n"], "fitted_samples": int(c["keep"].size), "tau": c["tau"],
+               "n_eff": c["n_eff"], "noise_from": c["noise_text"], "misfit_p": sel.p_before,
+               "misfit_p_after": sel.p_after, "alpha": c["alpha"], "ambiguity": c["ambiguity"],
+               "criterion": criterion_text(), "location": loc, "lowpass": c["lp"],
+               "lowpass_reason": "rig dynamics removed before fitting" if c["lp"] else None,
+               "wall_time": time.perf_counter() - c["t_start"]}
+    return Diagnosis(
+        effect=sel.named[0] if sel.named else "none", effects=tuple(sel.named),
+        ambiguous_with=sel.ambiguous, where=where,
+        success=bool(not noise_only and fit.success), offsets={"force": F0, "displacement": c["u_off"]},
+        error_before=float(np.sqrt(np.mean(r0 ** 2)) / span),
+        error_after=float(np.sqrt(np.mean((FF - F_after) ** 2)) / span),
+        noise_level=c["sigma"] / span, noise_sigma=float(c["sigma"]), misfit=bool(misfit),
+        base_fit=base_fit, fit=fit, model=model, steps=tuple(_json(s) for s in steps),
+        untestable=sel.untestable, warnings=tuple(warns), force_before=ro(F_base),
+        force_after=ro(np.array(F_after)),
+        t=ro(np.arange(c["n"], dtype=float) if c["tt"] is None else c["tt"]),
+        u=ro(c["uu"]), F=ro(FF), details=_json(details))

@@ -1,0 +1,373 @@
+"""Result objects of the two diagnoses: :class:`Diagnosis` (loops) and
+:class:`VibrationDiagnosis` (amplitude-dependent frequency and damping)."""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..core._validation import check_scalar
+from ..effects import EFFECTS
+
+__all__ = ["Diagnosis", "VibrationDiagnosis"]
+
+
+def _json(x):
+    """Recursively convert to JSON-safe Python types (NaN and inf become None)."""
+    if isinstance(x, dict):
+        return {str(k): _json(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple, np.ndarray)):
+        return [_json(v) for v in (x.tolist() if isinstance(x, np.ndarray) else x)]
+    if hasattr(x, "to_dict"):
+        return x.to_dict()
+    if isinstance(x, (np.floating, float)):
+        return float(x) if math.isfinite(float(x)) else None
+    if isinstance(x, (np.integer,)):
+        return int(x)
+    if isinstance(x, np.bool_):
+        return bool(x)
+    return x
+
+
+def _unit(name: str, key: str, modal: bool = False) -> str:
+    specs = EFFECTS[name].modal_specs if modal else EFFECTS[name].specs
+    return next((s.unit for s in specs if s.name == key), "")
+
+
+@dataclass(frozen=True, eq=False)
+class Diagnosis:
+    """What the four-parameter Iwan fit misses in a test record, and the augmented model.
+
+    Attributes
+    ----------
+    effect : str
+        The first effect named (a name of :data:`~iwan_element.EFFECTS`) or ``"none"``.
+    effects : tuple of str
+        All effects named, in the order they were added (innermost first).
+    ambiguous_with : tuple of str
+        Effects that explain the first step's misfit nearly as well as ``effect``.
+    where : str
+        Where the base misfit lies (part of the cycle, amplitudes, cycles, direction).
+    success : bool
+        False when nothing could be identified (a record that is pure noise) or the
+        augmented fit did not converge; ``warnings`` says why.
+    offsets : dict
+        Sensor offsets treated as nuisance parameters (never named as effects):
+        ``force`` [N] (fitted with the model, linear) and ``displacement`` [m] (the rest
+        position the record starts from, which the joint takes as its unloaded state).
+    error_before, error_after : float
+        NRMSE of the force [-] (RMS residual over ``max F - min F``) of the base and the
+        augmented model on the whole record.
+    noise_level : float
+        Estimated noise standard deviation on the same scale [-].
+    noise_sigma : float
+        Estimated noise standard deviation [N].
+    misfit : bool
+        True if the base misfit is significantly more than noise.
+    base_fit, fit : FitResult
+        The plain Iwan fit and the augmented fit (``fit.details["effects"]`` holds the effect
+        parameters with standard errors; ``fit is base_fit`` when nothing is named).
+    model : joint element
+        The augmented element (an ``IwanJoint`` when nothing is named), ready for
+        :func:`iwan_element.exudyn.add_iwan_connector`.
+    steps : tuple of dict
+        Per step: every candidate's NRMSE, information-criterion difference, p-value and why
+        it was or was not named.
+    untestable : dict
+        Effects this record cannot reveal, with the reason.
+    warnings : tuple of str
+    force_before, force_after : ndarray, shape (n,)
+        Forces [N] of the base and the augmented model on the measured displacement.
+    t, u, F : ndarray, shape (n,)
+        The data (read-only copies; ``t`` is the sample index if no time was given).
+    details : dict
+        Test statistics (JSON-safe).
+    """
+
+    effect: str
+    effects: tuple
+    ambiguous_with: tuple
+    where: str
+    success: bool
+    offsets: dict
+    error_before: float
+    error_after: float
+    noise_level: float
+    noise_sigma: float
+    misfit: bool
+    base_fit: FitResult
+    fit: FitResult
+    model: object
+    steps: tuple
+    untestable: dict
+    warnings: tuple
+    force_before: np.ndarray
+    force_after: np.ndarray
+    t: np.ndarray
+    u: np.ndarray
+    F: np.ndarray
+    details: dict = field(default_factory=dict)
+
+    def to_dict(self) -> dict:
+        """JSON-safe dict (NaN/inf become None); the fits as :meth:`FitResult.to_dict`."""
+        return _json({
+            "effect": self.effect, "effects": list(self.effects),
+            "ambiguous_with": list(self.ambiguous_with), "where": self.where,
+            "success": self.success, "offsets": dict(self.offsets),
+            "error_before": self.error_before, "error_after": self.error_after,
+            "noise_level": self.noise_level, "noise_sigma": self.noise_sigma,
+            "misfit": self.misfit, "steps": list(self.steps), "untestable": dict(self.untestable),
+            "warnings": list(self.warnings), "base_fit": self.base_fit.to_dict(),
+            "fit": self.fit.to_dict(), "model": _describe(self.model), "details": self.details,
+        })
+
+    def report(self) -> str:
+        """Human-readable account: noise, misfit, where, candidates, verdict, before/after."""
+        d = self.details
+        p = self.base_fit.params
+        lines = ["Iwan model diagnosis",
+                 f"  {d['samples']} samples; noise {d['noise_from']}, correlation time "
+                 f"{d['tau']:.3g} samples ({d['n_eff']:.0f} independent samples fitted)",
+                 f"  offsets (nuisance): force {self.offsets['force']:.4g} N, displacement "
+                 f"{self.offsets['displacement']:.4g} m" + (
+                     f"; low-pass {d['lowpass']:g} Hz ({d['lowpass_reason']})"
+                     if d.get("lowpass") else ""),
+                 f"  noise: sigma = {self.noise_sigma:.4g} N (NRMSE {100 * self.noise_level:.3g} %)",
+                 f"  base Iwan fit: Fs={p.Fs:.5g} N, KT={p.KT:.5g} N/m, chi={p.chi:.4f}, "
+                 f"beta={p.beta:.4f}; NRMSE {100 * self.error_before:.3g} % "
+                 f"= {self.error_before / self.noise_level:.3g} x noise "
+                 f"(misfit p-value {d['misfit_p']:.2g}, level {d['alpha']:g})",
+                 f"  selection: {d['criterion']}",
+                 f"  where: {self.where}"]
+        for k, st in enumerate(self.steps):
+            lines.append(f"  step {k + 1}: candidates on {' + '.join(st['on']) or 'Iwan'}")
+            lines.append("    effect               NRMSE[%]  x noise      dIC  explains  verdict")
+            for c in st["candidates"]:
+                lines.append(f"    {c['name']:<20} {100 * c['nrmse']:8.3g} {c['ratio']:8.3g} "
+                             f"{c['dIC']:8.1f} {100 * c['explained']:7.3g} %  {c['verdict']}")
+        for name, why in self.untestable.items():
+            lines.append(f"  cannot test {name}: {why}")
+        if self.effects:
+            lines.append(f"  named: {', '.join(self.effects)}"
+                         + (f" (nearly as good: {', '.join(self.ambiguous_with)})"
+                            if self.ambiguous_with else ""))
+            for e in self.fit.details.get("effects", []):
+                ps = ", ".join(f"{k} = {v:.4g} {_unit(e['name'], k)} (+- {e['stderr'][k]:.2g})"
+                               for k, v in e["parameters"].items())
+                lines.append(f"    {e['name']}: {ps}")
+            q = self.fit.params
+            lines.append(f"    Iwan part: Fs={q.Fs:.5g} N, KT={q.KT:.5g} N/m, chi={q.chi:.4f}, "
+                         f"beta={q.beta:.4f}")
+        else:
+            lines.append("  named: none")
+        lines.append(f"  error before {100 * self.error_before:.3g} % -> after "
+                     f"{100 * self.error_after:.3g} % (noise {100 * self.noise_level:.3g} %)")
+        if self.warnings:
+            lines += ["  warnings:"] + [f"  - {w}" for w in self.warnings]
+        return "\n".join(lines)
+
+    def plot(self, ax=None):
+        """Data, base fit and augmented fit (force-displacement, mm and kN) and the residual
+        before and after against time.
+
+        Parameters
+        ----------
+        ax : None, a pair of Axes, or one Axes
+            ``None``: a new figure with two panels; one Axes: the loops there and the
+            residuals in an inset.
+
+        Returns
+        -------
+        list of matplotlib artists
+        """
+        if ax is None:
+            import matplotlib.pyplot as plt
+            _, (a1, a2) = plt.subplots(1, 2, figsize=(11, 4.5))
+        elif isinstance(ax, (list, tuple, np.ndarray)):
+            if len(ax) != 2:
+                raise ValueError(f"ax must be None, one Axes or two Axes, got {len(ax)}")
+            a1, a2 = ax
+        else:
+            a1 = ax
+            a2 = ax.inset_axes([0.6, 0.07, 0.38, 0.3])
+        step = max(1, self.u.size // 20000)
+        u, F = self.u[::step] * 1e3, self.F[::step] * 1e-3
+        arts = a1.plot(u, F, ".", ms=1.5, color="0.6", label="measured")
+        arts += a1.plot(u, self.force_before[::step] * 1e-3, "-", lw=0.9, color="C0",
+                        label=f"Iwan fit ({100 * self.error_before:.2g} %)")
+        lab = " + ".join(self.effects) if self.effects else "no effect named"
+        arts += a1.plot(u, self.force_after[::step] * 1e-3, "--", lw=0.9, color="C3",
+                        label=f"augmented: {lab} ({100 * self.error_after:.2g} %)")
+        a1.set_xlabel("displacement [mm]")
+        a1.set_ylabel("force [kN]")
+        a1.grid(True, alpha=0.3)
+        a1.legend(fontsize=7, loc="upper left")
+        tt = self.t[::step]
+        arts += a2.plot(tt, (self.F - self.force_before)[::step], "-", lw=0.6, color="C0",
+                        label="residual before")
+        arts += a2.plot(tt, (self.F - self.force_after)[::step], "-", lw=0.6, color="C3",
+                        label="residual after")
+        arts.append(a2.axhspan(-2 * self.noise_sigma, 2 * self.noise_sigma, color="0.85",
+                               zorder=0, label="+-2 noise"))
+        a2.set_xlabel("time [s]", fontsize=7)
+        a2.set_ylabel("residual [N]", fontsize=7)
+        a2.tick_params(labelsize=6)
+        a2.legend(fontsize=6, loc="upper right")
+        return arts
+
+
+
+def _describe(model) -> str:
+    return model.describe() if hasattr(model, "describe") else repr(model.params)
+
+
+@dataclass(frozen=True, eq=False)
+class VibrationDiagnosis:
+    """Measured against predicted amplitude-dependent frequency and damping: what is missing.
+
+    Attributes
+    ----------
+    effect : str
+        ``"viscous_damping"``, ``"pinning_stiffness"`` or ``"none"`` (the first one named).
+    effects : tuple of str
+        All effects named, in order.
+    ambiguous_with : tuple of str
+        Effects explaining the first step nearly as well.
+    where : str
+        Where measured and predicted curves disagree beyond the noise.
+    parameters : dict
+        Fitted magnitudes: ``viscous_damping: {"zeta_v"}`` (added modal viscous damping
+        ratio [-]); ``pinning_stiffness: {"k_p_per_mass" [1/s^2], "delta" [m]}`` (added modal
+        stiffness over modal mass, and the clearance in amplitude units).
+    error_before, error_after : float
+        RMS relative mismatch of frequency and damping together [-] (log residuals).
+    noise_level : float
+        RMS relative noise of the two curves [-].
+    frequency_noise, damping_noise : float
+        Relative noise of each curve [-] (estimated or given).
+    amplitude, frequency, damping, predicted_frequency, predicted_damping : ndarray, shape (n,)
+        The inputs (read-only copies).
+    model_frequency, model_damping : ndarray, shape (n,)
+        The prediction with the named effects added.
+    steps : tuple of dict
+    warnings : tuple of str
+        What the data cannot support (few amplitudes for a noise estimate, a mismatch left
+        beyond the noise).
+    details : dict
+    """
+
+    effect: str
+    effects: tuple
+    ambiguous_with: tuple
+    where: str
+    parameters: dict
+    error_before: float
+    error_after: float
+    noise_level: float
+    frequency_noise: float
+    damping_noise: float
+    amplitude: np.ndarray
+    frequency: np.ndarray
+    damping: np.ndarray
+    predicted_frequency: np.ndarray
+    predicted_damping: np.ndarray
+    model_frequency: np.ndarray
+    model_damping: np.ndarray
+    steps: tuple
+    warnings: tuple = ()
+    details: dict = field(default_factory=dict)
+
+    def augment(self, joint, *, modal_mass: float, slip_per_amplitude: float = 1.0):
+        """Wrap a joint element with the named effects, converted from modal to joint terms.
+
+        Parameters
+        ----------
+        joint : joint element
+        modal_mass : float, keyword-only
+            Modal mass [kg] of the mode the curves describe, ``> 0``.
+        slip_per_amplitude : float, keyword-only
+            Joint slip per unit modal amplitude ``r`` [-], ``> 0``: a joint spring ``k`` adds
+            ``k r^2`` to the modal stiffness, a dashpot ``c`` adds ``c r^2``.
+
+        Returns
+        -------
+        joint element
+            ``PinningStiffness(k_p = kappa m / r^2, delta = delta r)`` and/or
+            ``ViscousDamping(c = 2 zeta_v omega_0 m / r^2)`` around ``joint``, with
+            ``omega_0`` the measured angular frequency at the smallest amplitude.
+        """
+        m = check_scalar("modal_mass", modal_mass, low=0.0, low_open=True)
+        r = check_scalar("slip_per_amplitude", slip_per_amplitude, low=0.0, low_open=True)
+        el = joint
+        w0 = 2 * np.pi * float(self.frequency[np.argmin(self.amplitude)])
+        for name in self.effects:
+            cls = EFFECTS[name]
+            el = cls(el, **cls.modal_to_joint(self.parameters[name], modal_mass=m,
+                                              slip_per_amplitude=r, omega0=w0))
+        return el
+
+    def to_dict(self) -> dict:
+        """JSON-safe dict."""
+        return _json({k: getattr(self, k) for k in (
+            "effect", "effects", "ambiguous_with", "where", "parameters", "error_before",
+            "error_after", "noise_level", "frequency_noise", "damping_noise", "amplitude",
+            "frequency", "damping", "predicted_frequency", "predicted_damping",
+            "model_frequency", "model_damping", "steps", "warnings", "details")})
+
+    def report(self) -> str:
+        """Human-readable account."""
+        lines = ["Vibration diagnosis (amplitude-dependent frequency and damping)",
+                 f"  {self.amplitude.size} amplitudes, {self.amplitude.min():.3g} .. "
+                 f"{self.amplitude.max():.3g} m; noise: frequency {100 * self.frequency_noise:.2g} %, "
+                 f"damping {100 * self.damping_noise:.2g} % ({self.details['noise_from']})",
+                 f"  where: {self.where}"]
+        for k, st in enumerate(self.steps):
+            lines.append(f"  step {k + 1}: candidates on {' + '.join(st['on']) or 'prediction'}")
+            for c in st["candidates"]:
+                lines.append(f"    {c['name']:<18} mismatch {100 * c['error']:7.3g} %  dIC "
+                             f"{c['dIC']:8.1f}  explains {100 * c['explained']:5.3g} %  "
+                             f"{c['verdict']}")
+        if self.effects:
+            lines.append(f"  named: {', '.join(self.effects)}" + (
+                f" (nearly as good: {', '.join(self.ambiguous_with)})" if self.ambiguous_with else ""))
+            for name, d in self.parameters.items():
+                lines.append("    " + name + ": " + ", ".join(
+                    f"{k} = {v:.4g} {_unit(name, k, modal=True)}" for k, v in d.items()))
+        else:
+            lines.append("  named: none")
+        lines.append(f"  mismatch before {100 * self.error_before:.3g} % -> after "
+                     f"{100 * self.error_after:.3g} % (noise {100 * self.noise_level:.3g} %)")
+        if self.warnings:
+            lines += ["  warnings:"] + [f"  - {w}" for w in self.warnings]
+        return "\n".join(lines)
+
+    def plot(self, ax=None):
+        """Frequency and damping against amplitude: measured, predicted, augmented.
+
+        ``ax``: ``None`` (new figure, two panels) or a pair of Axes. Returns the artists."""
+        if ax is None:
+            import matplotlib.pyplot as plt
+            _, ax = plt.subplots(1, 2, figsize=(11, 4.2))
+        if not isinstance(ax, (list, tuple, np.ndarray)) or len(ax) != 2:
+            raise ValueError("ax must be None or a pair of Axes (frequency, damping)")
+        a1, a2 = ax
+        X = self.amplitude
+        o = np.argsort(X)
+        arts = a1.semilogx(X[o], self.frequency[o], "o", ms=3, mfc="none", color="k", label="measured")
+        arts += a1.semilogx(X[o], self.predicted_frequency[o], "-", color="C0", label="predicted")
+        arts += a1.semilogx(X[o], self.model_frequency[o], "--", color="C3",
+                            label="+ " + (" + ".join(self.effects) or "nothing"))
+        a1.set_xlabel("amplitude [m]")
+        a1.set_ylabel("frequency [Hz]")
+        arts += a2.loglog(X[o], self.damping[o], "o", ms=3, mfc="none", color="k", label="measured")
+        arts += a2.loglog(X[o], self.predicted_damping[o], "-", color="C0", label="predicted")
+        arts += a2.loglog(X[o], self.model_damping[o], "--", color="C3",
+                          label="+ " + (" + ".join(self.effects) or "nothing"))
+        a2.set_xlabel("amplitude [m]")
+        a2.set_ylabel("damping ratio [-]")
+        for a in (a1, a2):
+            a.grid(True, which="both", alpha=0.3)
+            a.legend(fontsize=7)
+        return arts
+

@@ -1,0 +1,262 @@
+"""Vibration diagnosis: measured against predicted amplitude-dependent frequency and damping.
+
+The candidates are the effects of :data:`~iwan_element.EFFECTS` that have an
+amplitude-domain (modal) form (``modal_form``: today viscous damping, a damping floor, and
+pinning stiffness, a frequency floor/stiffening); the selection rule is the one shared with
+the loop diagnosis (:mod:`iwan_element.diagnose.selection`), on the log residuals of
+frequency and damping divided by their noise. The noise is the larger of the scatter the
+data show about a smooth curve (robust, from second differences along amplitude) and the
+per-point uncertainty the caller states; with too few amplitudes to trust a scatter
+estimate a warning says so.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy.optimize import least_squares
+
+from ..core._validation import _check_int, check_scalar, finite_array, same_length
+from ..effects import EFFECTS
+from .results import VibrationDiagnosis, _json
+from .selection import criterion_text, stepwise_select
+
+__all__ = ["diagnose_vibration", "vibration_candidates"]
+
+
+def vibration_candidates() -> tuple:
+    """Names of the effects with a modal form."""
+    return tuple(n for n, c in EFFECTS.items() if c.modal_specs)
+
+
+def _curve_noise(r):
+    """Relative noise of a curve from its second differences along amplitude (MAD)."""
+    d2 = r[:-2] - 2 * r[1:-1] + r[2:]
+    return float(1.4826 * np.median(np.abs(d2 - np.median(d2))) / math.sqrt(6.0))
+
+
+def _check_units(fm, fp, zm):
+    """Clear errors for rad/s given as Hz and percent given as a ratio."""
+    ratio = float(np.median(fm / fp))
+    for k, name, other in ((2 * np.pi, "frequency", "predicted_frequency"),
+                           (1 / (2 * np.pi), "predicted_frequency", "frequency")):
+        if abs(ratio / k - 1.0) < 0.15:
+            raise ValueError(f"{name} is {ratio if k > 1 else 1 / ratio:.3g} x {other}, close to "
+                             f"2 pi: {name} looks like rad/s; give both in Hz")
+    if np.any(zm > 1.0):
+        raise ValueError(f"damping has values above 1 (max {zm.max():.3g}): a damping ratio is "
+                         "dimensionless and below 1; it looks like percent (divide by 100)")
+
+
+def _noise(r, stated, n, name):
+    """Noise of one log-residual curve [-]: max(scatter, stated); and its source text."""
+    scatter = _curve_noise(r) if n >= 5 else 0.0
+    s = max(scatter, float(np.median(stated)) if stated is not None else 0.0, 1e-12)
+    src = "scatter" if stated is None or scatter >= float(np.median(stated)) else "stated"
+    return s, f"{name}: {src}"
+
+
+def _curve_level(name, r, given, stated, n):
+    """Noise of one curve: ``given`` if set, else max(scatter, stated uncertainty)."""
+    if given is not None:
+        return check_scalar(f"{name}_noise", given, low=0.0, low_open=True), f"{name}: given"
+    return _noise(r, _stated(f"{name}_uncertainty", stated, n), n, name)
+
+
+def _stated(name, value, n):
+    if value is None:
+        return None
+    a = np.broadcast_to(finite_array(name, value, ndim=None), (n,)).astype(float)
+    if np.any(a <= 0):
+        raise ValueError(f"{name} must be > 0 (relative standard uncertainty [-])")
+    return a
+
+
+class _Vib:
+    """Modal forms of a stack on the prediction, and its noise-normalised residual."""
+
+    def __init__(self, X, fm, zm, fp, zp, zeta0, sf, sz):
+        self.X, self.fm, self.zm, self.fp, self.zp, self.zeta0 = X, fm, zm, fp, zp, zeta0
+        self.sf, self.sz = sf, sz
+        self.refs = {"zeta_ref": float(np.median(zp)), "X_max": float(X.max()),
+                     "omega2_ref": 4 * np.pi ** 2 * float(np.min(fp)) ** 2, "1": 1.0}
+
+    def decode(self, names, z):
+        vals, k = {}, 0
+        for nm in names:
+            vals[nm] = {}
+            for sp in EFFECTS[nm].modal_specs:
+                vals[nm][sp.name] = float(z[k]) / self.refs[sp.ref] ** sp.ref_power
+                k += 1
+        return vals
+
+    def curves(self, names, z):
+        f, zz = self.fp, self.zp
+        vals = self.decode(names, z)
+        for nm in names:
+            f, zz = EFFECTS[nm].modal_form(self.X, f, zz, self.zeta0, **vals[nm])
+        return f, zz
+
+    def resid(self, names, z):
+        f, zz = self.curves(names, z)
+        return np.concatenate([np.log(self.fm / f) / self.sf, np.log(self.zm / zz) / self.sz])
+
+    def error(self, names, z):
+        f, zz = self.curves(names, z)
+        return math.sqrt(np.mean(np.concatenate([np.log(self.fm / f), np.log(self.zm / zz)]) ** 2))
+
+    def fit(self, names, z_prev):
+        specs = [s for nm in names for s in EFFECTS[nm].modal_specs]
+        lo = np.array([s.fit_bounds[0] for s in specs])
+        hi = np.array([s.fit_bounds[1] for s in specs])
+        new = EFFECTS[names[-1]].modal_specs
+        best = None
+        for j in range(max(len(s.fit_starts) for s in new)):
+            z0 = np.concatenate([z_prev, [s.fit_starts[min(j, len(s.fit_starts) - 1)] for s in new]])
+            z0 = np.clip(z0, lo, hi - 1e-12)
+            res = least_squares(lambda z: self.resid(names, z), z0, bounds=(lo, hi), method="trf",
+                                x_scale="jac")
+            if best is None or res.cost < best.cost:
+                best = res
+        return best
+
+
+def _where(X, rf0, rz0, sf, sz, misfit):
+    parts = []
+    for label, r, s in (("frequency", rf0, sf), ("damping", rz0, sz)):
+        big = np.abs(r) > 3 * s
+        if big.sum() >= 2:
+            xs = X[big]
+            sign = "above" if np.median(r[big]) > 0 else "below"
+            top = float(X[np.argmax(np.abs(r))])
+            lo_hi = "low" if top <= np.median(X) else "high"
+            parts.append(f"measured {label} is {sign} the prediction, most at {lo_hi} amplitudes "
+                         f"(beyond 3 x noise from {xs.min():.3g} to {xs.max():.3g} m, up to "
+                         f"{100 * np.max(np.abs(r[big])):.3g} % at {top:.3g} m)")
+    where = ("; ".join(parts) if (misfit and parts) else
+             "measured and predicted curves agree within the noise") + "."
+    return where[0].upper() + where[1:]
+
+
+def _inputs(amplitude, frequency, damping, predicted_frequency, predicted_damping):
+    arrs = {}
+    for nm, a in (("amplitude", amplitude), ("frequency", frequency), ("damping", damping),
+                  ("predicted_frequency", predicted_frequency),
+                  ("predicted_damping", predicted_damping)):
+        arrs[nm] = finite_array(nm, a, ndim=1, min_size=3)
+    n = same_length(**arrs)
+    for nm, a in arrs.items():
+        if np.any(a <= 0):
+            raise ValueError(f"{nm} must be > 0 everywhere")
+    _check_units(arrs["frequency"], arrs["predicted_frequency"], arrs["damping"])
+    if np.any(arrs["predicted_damping"] > 1.0):
+        raise ValueError("predicted_damping has values above 1: it looks like percent "
+                         "(divide by 100)")
+    return n, arrs
+
+
+def diagnose_vibration(amplitude, frequency, damping, *, predicted_frequency, predicted_damping,
+                       frequency_noise: float | None = None, damping_noise: float | None = None,
+                       frequency_uncertainty=None, damping_uncertainty=None,
+                       predicted_zeta0: float = 0.0, alpha: float = 1e-3,
+                       ambiguity: float = 10.0, max_effects: int = 2) -> VibrationDiagnosis:
+    """Compare measured and predicted amplitude-dependent frequency and damping; name what the
+    jointed model misses (see the module docstring).
+
+    Parameters
+    ----------
+    amplitude : array_like, shape (n,)
+        Response amplitude [m], ``> 0``.
+    frequency, damping : array_like, shape (n,)
+        Measured frequency [Hz] and damping ratio [-] (``< 1``), ``> 0``.
+    predicted_frequency, predicted_damping : array_like, shape (n,), keyword-only
+        The model's prediction at the same amplitudes [Hz], [-].
+    frequency_noise, damping_noise : float, optional, keyword-only
+        Relative noise standard deviations [-], ``> 0``; when given they are used as they are.
+    frequency_uncertainty, damping_uncertainty : float or array_like, optional, keyword-only
+        Stated per-point relative standard uncertainty [-] (e.g. from
+        :class:`~iwan_element.AmplitudeCurve`); the noise is never taken below it.
+    predicted_zeta0 : float, keyword-only
+        Viscous damping ratio already in the prediction [-], ``>= 0``.
+    alpha, ambiguity, max_effects : keyword-only
+        As in :func:`~iwan_element.diagnose`.
+
+    Returns
+    -------
+    VibrationDiagnosis
+
+    Raises
+    ------
+    ValueError
+        Non-positive or non-finite values, unequal lengths, a frequency that is about
+        ``2 pi`` times the prediction (rad/s for Hz) or the other way round, a damping ratio
+        above 1 (percent), or an option out of range.
+    """
+    n, a = _inputs(amplitude, frequency, damping, predicted_frequency, predicted_damping)
+    X, fm, zm, fp, zp = (a[k] for k in ("amplitude", "frequency", "damping",
+                                         "predicted_frequency", "predicted_damping"))
+    zeta0 = check_scalar("predicted_zeta0", predicted_zeta0, low=0.0)
+    alpha = check_scalar("alpha", alpha, low=0.0, high=0.5, low_open=True, high_open=True)
+    ambiguity = check_scalar("ambiguity", ambiguity, low=0.0)
+    max_effects = _check_int("max_effects", max_effects, 1)
+    o = np.argsort(X)
+    rf0, rz0 = np.log(fm / fp), np.log(zm / zp)
+    warns = []
+    sf, src_f = _curve_level("frequency", rf0[o], frequency_noise, frequency_uncertainty, n)
+    sz, src_z = _curve_level("damping", rz0[o], damping_noise, damping_uncertainty, n)
+    if (frequency_noise is None or damping_noise is None) and n < 12:
+        warns.append(f"only {n} amplitudes: the noise taken from their scatter is uncertain "
+                     "(state the per-point uncertainty or the noise levels)")
+    vib = _Vib(X, fm, zm, fp, zp, zeta0, sf, sz)
+    chi_b = float(np.sum(vib.resid((), np.zeros(0)) ** 2))
+    err_b = vib.error((), np.zeros(0))
+
+    def fit_candidate(cur, name):
+        names = cur["names"] + (name,)
+        res = vib.fit(names, cur["state"])
+        return {"names": names, "chi2": 2 * float(res.cost), "state": res.x,
+                "q": len(EFFECTS[name].modal_specs), "error": vib.error(names, res.x)}
+
+    base = {"names": (), "chi2": chi_b, "q": 0, "state": np.zeros(0)}
+    sel = stepwise_select(fit_candidate, vibration_candidates(), base, tau=1.0, n_eff=2.0 * n,
+                          alpha=alpha, max_effects=max_effects, ambiguity=ambiguity)
+    # never name a set of effects that leaves the unweighted mismatch higher than before
+    while sel.named and vib.error(sel.final["names"], sel.final["state"]) >= err_b:
+        warns.append(f"{' + '.join(sel.named)} lowers the noise-weighted misfit but raises the "
+                     "mismatch; not named")
+        sel.named, sel.ambiguous = [], ()
+        sel.final = base
+        sel.p_after = sel.p_before
+    return _vib_result(vib, sel, chi_b, err_b, rf0, rz0, warns, alpha, f"{src_f}; {src_z}")
+
+
+def _vib_result(vib, sel, chi_b, err_b, rf0, rz0, warns, alpha, noise_from):
+    names, z = sel.final["names"], sel.final["state"]
+    params = vib.decode(names, z)
+    f_new, z_new = vib.curves(names, z)
+    misfit = sel.p_before < alpha
+    if misfit and sel.p_after < alpha:
+        warns.append("mismatch beyond the noise remains" + (
+            f" after {' + '.join(sel.named)}" if sel.named else
+            "; no effect with a modal form explains it"))
+    steps = [{"on": st["on"], "candidates": [
+        {k: r.get(k) for k in ("name", "error", "dIC", "explained", "verdict")}
+        for r in st["rows"]]} for st in sel.steps]
+    ro = lambda a: (a.setflags(write=False), a)[1]  # noqa: E731
+    details = {"noise_from": noise_from, "misfit_p": sel.p_before, "misfit_p_after": sel.p_after,
+               "alpha": alpha, "chi2_before": chi_b, "chi2_after": sel.final["chi2"],
+               "criterion": criterion_text(),
+               "frequency_error_before": float(np.sqrt(np.mean(rf0 ** 2))),
+               "damping_error_before": float(np.sqrt(np.mean(rz0 ** 2))),
+               "frequency_error_after": float(np.sqrt(np.mean(np.log(vib.fm / f_new) ** 2))),
+               "damping_error_after": float(np.sqrt(np.mean(np.log(vib.zm / z_new) ** 2)))}
+    return VibrationDiagnosis(
+        effect=sel.named[0] if sel.named else "none", effects=tuple(sel.named),
+        ambiguous_with=sel.ambiguous,
+        where=_where(vib.X, rf0, rz0, vib.sf, vib.sz, misfit), parameters=params,
+        error_before=err_b, error_after=vib.error(names, z),
+        noise_level=math.sqrt(0.5 * (vib.sf ** 2 + vib.sz ** 2)), frequency_noise=vib.sf,
+        damping_noise=vib.sz, amplitude=ro(vib.X), frequency=ro(vib.fm), damping=ro(vib.zm),
+        predicted_frequency=ro(vib.fp), predicted_damping=ro(vib.zp), model_frequency=ro(f_new),
+        model_damping=ro(z_new), steps=tuple(_json(s) for s in steps), warnings=tuple(warns),
+        details=_json(details))

@@ -1,0 +1,229 @@
+"""Shared plumbing of the effect plug-ins: the element protocol around a wrapped joint, the
+parameter description every effect declares, and a safeguarded zero finder.
+
+Private module; the public names live in :mod:`iwan_element.effects`.
+"""
+from __future__ import annotations
+
+import copy
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..core._validation import check_scalar, finite_array, same_length
+from ..core.protocol import check_element
+
+__all__ = ["ParamSpec", "_Effect", "_find_zero"]
+
+
+@dataclass(frozen=True)
+class ParamSpec:
+    """One named parameter of an effect.
+
+    Attributes
+    ----------
+    name : str
+        Keyword of the effect's constructor.
+    unit : str
+        SI unit.
+    meaning : str
+        One line of physics.
+    lower, upper : float
+        Allowed range of the physical value (``upper = inf`` for none).
+    default : float or None
+        Default value (``None``: the parameter is required).
+    fs_power : int
+        How the value scales with the joint's force scale ``Fs`` when every force is
+        multiplied by ``Fs`` (``+1`` for a stiffness or dashpot, ``-1`` for a rate per joule,
+        ``0`` for a length or a ratio). Used by fitting, which eliminates ``Fs`` in closed form.
+    ref : str
+        Reference scale of the dimensionless fitting variable: ``"u_max"`` (largest |u|),
+        ``"v_rms"``, ``"D_ref"`` (energy dissipated by the plain unit-``Fs`` fit over the
+        record) or ``"1"`` for loops; ``"zeta_ref"``, ``"omega2_ref"``, ``"X_max"`` for
+        modal forms. The fit works on ``z = (value / Fs**fs_power) * ref**ref_power``.
+    ref_power : int
+        Exponent of ``ref`` in the fitting variable.
+    fit_bounds : tuple of float
+        Bounds of that dimensionless fitting variable.
+    fit_starts : tuple of float
+        Starting values of that fitting variable (the first is the "no effect" value).
+    """
+
+    name: str
+    unit: str
+    meaning: str
+    lower: float = 0.0
+    upper: float = math.inf
+    default: float | None = None
+    fs_power: int = 0
+    ref: str = "1"
+    ref_power: int = 1
+    fit_bounds: tuple = (0.0, 1.0)
+    fit_starts: tuple = (0.0,)
+
+
+def _find_zero(trial, a: float, Fa: float, b: float, Fb: float, *, rtol: float = 1e-13,
+               max_iter: int = 100) -> float:
+    """Zero of a force monotone along the path ``a -> b`` (``Fa``, ``Fb`` of opposite sign),
+    by Newton steps on the element's tangent, safeguarded by bisection. ``trial(x)`` returns
+    ``(force, tangent)`` for the move from the committed state to ``x``."""
+    lo, hi = (a, b) if Fa < 0.0 else (b, a)          # F(lo) < 0 < F(hi)
+    x = a
+    F = Fa
+    K = trial(a + 1e-9 * (b - a))[1]
+    scale = max(abs(Fa), abs(Fb))
+    for _ in range(max_iter):
+        x_new = x - F / K if K > 0.0 else 0.5 * (lo + hi)
+        if not (min(lo, hi) < x_new < max(lo, hi)):
+            x_new = 0.5 * (lo + hi)
+        x = x_new
+        F, K = trial(x)
+        if abs(F) <= rtol * scale or abs(hi - lo) <= 1e-15 * max(abs(a), abs(b), 1e-300):
+            break
+        if F < 0.0:
+            lo = x
+        else:
+            hi = x
+    return x
+
+
+class _Effect:
+    """Shared plumbing: the wrapped element, energy counters and a generic force history."""
+
+    effect = ""
+    #: ParamSpec of each parameter, in the constructor's order.
+    specs: tuple = ()
+    #: True for effects acting on the sliders of the joint (they must wrap a plain joint).
+    slider_level = False
+    #: Parameters of the amplitude-domain (modal) form, or () if the effect has none.
+    modal_specs: tuple = ()
+
+    def __init_subclass__(cls, **kw):
+        super().__init_subclass__(**kw)
+        cls.parameter_names = tuple(s.name for s in cls.specs)
+
+    def __init__(self, inner):
+        check_element(inner, name="inner")
+        self._inner = inner
+        self._W = self._D = self._F = self._u = 0.0
+        self._has_trial = False
+
+    @property
+    def inner(self):
+        """The wrapped joint element."""
+        return self._inner
+
+    @property
+    def parameters(self) -> dict:
+        """The effect's own parameters (SI units)."""
+        return {k: getattr(self, k) for k in self.parameter_names}
+
+    @property
+    def params(self):
+        """Parameters of the underlying Iwan joint."""
+        return self._inner.params
+
+    def describe(self) -> str:
+        """One line naming this effect and every effect below it."""
+        own = ", ".join(f"{k}={v:.4g}" for k, v in self.parameters.items())
+        below = self._inner.describe() if isinstance(self._inner, _Effect) else repr(self._inner.params)
+        return f"{self.effect}({own}) on {below}"
+
+    def reset(self) -> None:
+        """Virgin state, energy counters zero (the wrapped element too)."""
+        self._inner.reset()
+        self._W = 0.0
+        self._D = 0.0
+        self._F = 0.0
+        self._u = 0.0
+        self._reset_own()
+        self.revert()
+
+    def _reset_own(self) -> None:
+        pass
+
+    def _set_parameters(self, values: dict) -> None:
+        """Validate and store the parameters against :attr:`specs`."""
+        for sp in self.specs:
+            val = values[sp.name]
+            if val is None:
+                raise ValueError(f"effect {self.effect!r} needs parameter {sp.name!r}")
+            lo_open = sp.name == "asymmetry"
+            setattr(self, sp.name, check_scalar(
+                sp.name, val, low=sp.lower, high=None if math.isinf(sp.upper) else sp.upper,
+                low_open=lo_open, high_open=lo_open))
+
+    @classmethod
+    def vector_force(cls, F, u, v, **values):
+        """Force of this effect around an inner force history ``F`` [N] at displacements ``u``
+        [m] and velocities ``v`` [m/s] (arrays), or ``None`` when the effect has no
+        history-free vectorised form (the evaluator then runs the element itself)."""
+        return None
+
+    def revert(self) -> None:
+        """Discard the last trial."""
+        self._inner.revert()
+        self._has_trial = False
+
+    def _set_trial(self, u: float, v: float, F: float) -> None:
+        self._tu = float(u)
+        self._tv = float(v)
+        self._tF = F
+        self._has_trial = True
+
+    def commit(self) -> None:
+        """Accept the last trial (no-op if there is none)."""
+        if not self._has_trial:
+            return
+        self._commit()
+        self._F = self._tF
+        self._u = self._tu
+        self._has_trial = False
+
+    def _commit(self) -> None:
+        raise NotImplementedError
+
+    @property
+    def force(self) -> float:
+        """Committed force [N]."""
+        return self._F
+
+    @property
+    def displacement(self) -> float:
+        """Committed displacement [m]."""
+        return self._u
+
+    @property
+    def work(self) -> float:
+        """Work done on the element since the last reset [J]."""
+        return self._W
+
+    @property
+    def dissipated_energy(self) -> float:
+        """Energy dissipated since the last reset [J]."""
+        return self._D
+
+    @property
+    def stored_energy(self) -> float:
+        """Recoverable energy [J]: work minus dissipation."""
+        return self._W - self._D
+
+    def force_history(self, u, v=None) -> np.ndarray:
+        """Forces [N] for a history ``u`` [m] (and velocities ``v`` [m/s], default zero), shape
+        (n,), from the virgin state, on a private copy; this element is untouched."""
+        uu = finite_array("u", u, ndim=1)
+        vv = np.zeros_like(uu) if v is None else finite_array("v", v, ndim=1)
+        same_length(u=uu, v=vv)
+        el = copy.deepcopy(self)
+        el.reset()
+        out = np.empty_like(uu)
+        for i, (a, b) in enumerate(zip(uu.tolist(), vv.tolist())):
+            out[i] = el.trial(a, b)[0]
+            el.commit()
+        return out
+
+    def __repr__(self) -> str:
+        return f"<{type(self).__name__} {self.describe()}>"
+
+

@@ -1,0 +1,148 @@
+"""Fast force evaluation of an effect stack on the Iwan joint over a fixed displacement history.
+
+Private module used by :mod:`iwan_element.diagnose`. A model is a tuple of effect names,
+innermost first (``("asymmetric_slip", "viscous_damping")`` is
+``ViscousDamping(AsymmetricSlip(IwanJoint))``); :func:`order_stack` puts slider-level
+effects innermost. Every effect is homogeneous of degree one in the force scale: with
+``Fs = 1`` and each effect parameter divided by ``Fs**fs_power`` (its
+:class:`~iwan_element.effects.ParamSpec`) the force is ``Fs`` times the unit force. The unit
+force is evaluated
+
+* vectorised and exact (the Iwan joint through :class:`~iwan_element.core._history.History`,
+  then each effect's ``vector_force``) when every effect of the stack has a history-free
+  vectorised form (viscous damping, pinning stiffness);
+* otherwise by the effect elements' own ``force_history`` on the displacement decimated to
+  the fitted samples plus every turning point of the record (exact for these
+  rate-independent elements, whose state depends only on the turning points; a dashpot in
+  such a stack sees the velocity at the drive samples).
+
+Both routes are checked against the elements in ``tests/test_diagnosis.py``.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..core._history import History, unit_params, walk
+from ..core.closed_form import _slip_energy
+from ..core.joint import IwanJoint
+from ..core.parameters import IwanParameters
+from . import EFFECTS
+from ._base import _Effect
+
+__all__: list[str] = []
+
+
+def order_stack(names) -> tuple:
+    """``names`` with the slider-level effects first (they wrap the joint directly)."""
+    names = tuple(names)
+    return (tuple(n for n in names if EFFECTS[n].slider_level)
+            + tuple(n for n in names if not EFFECTS[n].slider_level))
+
+
+def has_vector_form(name: str) -> bool:
+    """True if the effect has a history-free vectorised force."""
+    return EFFECTS[name].vector_force.__func__ is not _Effect.vector_force.__func__
+
+
+def dissipation_segments(u: np.ndarray, tol: float):
+    """Branch segments walked by the Iwan joint along ``u`` (the walk of
+    :func:`iwan_element.core._history.walk`, which mirrors ``IwanJoint._walk``).
+
+    Returns ``(step, virgin, xa, xb)``: step index of each segment, True for a segment on the
+    virgin curve (dissipation ``I_H(xb) - I_H(xa)``, clipped at 0) and False on a branch
+    (``2 (I_H(xb) - I_H(xa))``), and the backbone arguments at its ends [m].
+    """
+    _, (step, anchor, ua, ub) = walk(u, tol, segments=True)
+    virgin = anchor < 0
+    ur = np.where(virgin, 0.0, u[np.maximum(anchor, 0)])
+    scale = np.where(virgin, 1.0, 0.5)
+    return step, virgin, scale * np.abs(ua - ur), scale * np.abs(ub - ur)
+
+
+def scale_effect(name: str, values: dict, Fs: float, *, to_unit: bool) -> dict:
+    """Convert effect parameters between physical and unit-``Fs`` form (``fs_power``)."""
+    out = dict(values)
+    for sp in EFFECTS[name].specs:
+        if sp.fs_power and sp.name in out:
+            f = Fs ** sp.fs_power
+            out[sp.name] = values[sp.name] / f if to_unit else values[sp.name] * f
+    return out
+
+
+def build_element(params: IwanParameters, names, values):
+    """The effect stack ``names`` (innermost first) on ``IwanJoint(params)``."""
+    el = IwanJoint(params)
+    for name, vals in zip(names, values):
+        el = EFFECTS[name](el, **vals)
+    return el
+
+
+class Evaluator:
+    """Unit forces of effect stacks on one record at the samples ``keep``.
+
+    Parameters
+    ----------
+    u, v : ndarray, shape (n,)
+        Displacement [m] (from the joint's rest position) and velocity [m/s] of the record.
+    keep : ndarray of int
+        Sample indices whose forces are wanted (sorted).
+    drive_extra : ndarray of int
+        Further samples (turning points) the element route must pass through.
+    tol : float
+        Absolute reversal tolerance [m] (the package-wide ``REVERSAL_TOL`` times the scale).
+    """
+
+    def __init__(self, u: np.ndarray, v: np.ndarray, keep: np.ndarray, drive_extra: np.ndarray,
+                 *, tol: float):
+        self.u = u
+        self.v = v
+        self.keep = keep
+        self.hist = History(u, keep=keep, tol=tol)
+        self.x_max = self.hist.x_max
+        self._tol = tol
+        self._segs = None
+        drive = np.union1d(keep, drive_extra)
+        self.drive = drive
+        self.drive_pos = np.searchsorted(drive, keep)
+        self.uk = u[keep]
+        self.vk = v[keep]
+        self.n_eval = 0
+
+    @staticmethod
+    def fast(names) -> bool:
+        """True if the stack can be evaluated without running the elements step by step
+        (vector forms, and at most one innermost slider-level effect, whose correction bank
+        runs on the drive samples)."""
+        return all(has_vector_form(n) or (EFFECTS[n].slider_level and i == 0)
+                   for i, n in enumerate(names))
+
+    def unit_dissipation(self, p1: IwanParameters) -> np.ndarray:
+        """Dissipated energy of the plain unit Iwan joint after each step of the record."""
+        if self._segs is None:
+            self._segs = dissipation_segments(self.u, self._tol)
+        step, virgin, xa, xb = self._segs
+        d = _slip_energy(xb, p1) - _slip_energy(xa, p1)
+        d = np.where(virgin, np.maximum(d, 0.0), 2.0 * d)
+        return np.cumsum(np.bincount(step, weights=d, minlength=self.u.size))
+
+    def unit_force(self, shape, names, values) -> np.ndarray:
+        """Force with ``Fs = 1`` at the kept samples. ``shape = (phi_max, chi, beta)``;
+        ``values``: unit-``Fs`` parameter dicts, one per effect (innermost first)."""
+        self.n_eval += 1
+        p1 = unit_params(*shape)
+        if not self.fast(names):
+            el = build_element(p1, names, values)
+            F = el.force_history(self.u[self.drive], self.v[self.drive])
+            return F[self.drive_pos]
+        F = self.hist.forces(p1)
+        for name, vals in zip(names, values):
+            cls = EFFECTS[name]
+            if cls.slider_level:
+                el = cls(IwanJoint(p1), **vals)
+                D = None
+                if cls.needs_energy:
+                    D = self.unit_dissipation(p1)[self.drive]
+                F = F + el.correction_history(self.u[self.drive], D)[self.drive_pos]
+            else:
+                F = cls.vector_force(F, self.uk, self.vk, **vals)
+        return F

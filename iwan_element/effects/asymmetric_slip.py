@@ -1,0 +1,48 @@
+"""Asymmetric slip: different slip thresholds in the two directions.
+
+Physics: a contact whose friction differs with the direction of sliding (a directional
+surface lay, a wedge or an inclined contact where a constant load component adds to the
+friction one way and subtracts the other, a band brake whose self-energising wrap angle
+favours one direction). Every slider of the joint slips forward at ``(1 + a) phi_i`` and
+back at ``-(1 - a) phi_i``; its stiffness is unchanged. The macroslip forces are therefore
+``(1 + a) Fs`` and ``-(1 - a) Fs`` and the initial stiffness is ``KT`` in both directions.
+This is *not* a force offset: in steady cycling a full-slip loop is the symmetric loop
+shifted by ``a Fs``, but the shift only builds up as sliders slip (a microslip loop shifts
+by ``a`` times the slipped capacity only) and the virgin curves differ forward and back,
+whereas a load-cell offset shifts every force by the same constant from the first sample.
+"""
+from __future__ import annotations
+
+from ._base import ParamSpec
+from ._sliders import _SliderEffect
+
+__all__ = ["AsymmetricSlip"]
+
+
+class AsymmetricSlip(_SliderEffect):
+    """Slip thresholds ``(1 + a) phi_i`` forward and ``(1 - a) phi_i`` back on every slider.
+
+    Parameters
+    ----------
+    inner : IwanJoint or DiscreteIwan
+        The joint whose sliders are affected (a plain joint; put other effects around this).
+    asymmetry : float, keyword-only
+        ``a`` [-], in ``(-1, 1)``; macroslip forces ``Fs (1 + a)`` and ``-Fs (1 - a)``.
+    n_sliders : int, keyword-only
+        Sliders of the correction bank (see :mod:`iwan_element.effects._sliders`).
+    """
+
+    effect = "asymmetric_slip"
+    specs = (ParamSpec("asymmetry", "1", "relative difference of the forward and backward "
+                       "slip thresholds", lower=-1.0, upper=1.0, fit_bounds=(-0.9, 0.9),
+                       fit_starts=(0.0, 0.1, -0.1)),)
+
+    def __init__(self, inner, *, asymmetry: float, n_sliders: int = 128):
+        super().__init__(inner, n_sliders=n_sliders)
+        self._set_parameters({"asymmetry": asymmetry})
+        self._reset_own()
+
+    def _caps(self):
+        up = (1.0 + self.asymmetry) * self._phi
+        dn = (1.0 - self.asymmetry) * self._phi
+        return up, dn, up, dn
