@@ -84,8 +84,7 @@ RESULTS = {"FitResult": _fit, "AmplitudeCurve": _curve, "VibrationDiagnosis": _v
            "Diagnosis": _diag}
 #: Known gaps in files other helpers own (listed in /work/notes/robust.md for the lead).
 PENDING = {("FitResult", "plot"): "identify/fit.py: FitResult has no plot(ax=) (plotting."
-                                  "plot_fitted_loops/plot_dissipation_fit can back it)",
-           ("VibrationDiagnosis", "warnings"): "diagnose/diagnosis.py: no warnings attribute"}
+                                  "plot_fitted_loops/plot_dissipation_fit can back it)"}
 
 
 @pytest.mark.parametrize("name", sorted(RESULTS))

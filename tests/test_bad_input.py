@@ -14,6 +14,7 @@ is added to ``__all__`` without an entry here.
 from __future__ import annotations
 
 import copy
+import dataclasses
 import inspect
 import math
 import warnings
@@ -242,9 +243,10 @@ REGISTRY.update({
         Q=np.geomspace(1e-6, 1e-3, 7), params=_MODAL, K_inf=4e6, zeta0=2e-3, mass=1.0)),
         {"Q": "shape_free", "params": "object", "K_inf": "scalar", "zeta0": "scalar",
          "mass": "scalar"}),
-    "modal_ringdown": Entry(lambda: (ie.modal_ringdown, dict(
-        t=np.arange(200) * 2e-4, params=_MODAL, K_inf=4e6, q0=1e-4, zeta0=2e-3)),
-        {"t": "time", "params": "object", "K_inf": "scalar", "q0": "scalar"}),
+    "modal_ringdown": Entry(lambda: (ie.modal_ringdown, dict(      # w0 = 210 rad/s, 40 ms
+        t=np.arange(20) * 2e-3, params=_MODAL, K_inf=4e6, q0=1e-4, zeta0=2e-3, mass=100.0,
+        max_phase_step=0.2)),
+        {"t": "values", "params": "object", "K_inf": "scalar", "q0": "scalar", "mass": "scalar"}),
     "amplitude_curve": Entry(lambda: (ie.amplitude_curve, dict(
         t=_ringdown_signal()[0].copy(), y=_ringdown_signal()[1].copy(), quantity="displacement",
         band=(10.0, 40.0), n_periods=10.0)),
@@ -259,9 +261,8 @@ REGISTRY.update({
         func=_ensemble_task, parameter_sets=[{"Fs": 9e3}, {"Fs": 1e4}], executor="serial", seed=0)),
         {"func": "object", "parameter_sets": "object"}),
     "EnsembleResult": Entry(skip=_RESULT.format("run_ensemble")),
-    "parameter_grid": Entry(lambda: (ie.parameter_grid, dict(Fs=np.array([8e3, 9e3]),
-                                                             KT=np.array([4e7, 5e7]))),
-                            {"Fs": "values", "KT": "values"}),
+    "parameter_grid": Entry(skip="its axis values are free-form (whatever run_ensemble's func "
+                                 "accepts, text included): nothing to refuse"),
     "parameter_samples": Entry(lambda: (ie.parameter_samples, dict(n=4, seed=0, Fs=(8e3, 1e4),
                                                                    KT=(4e7, 6e7))),
                                {"n": "count", "Fs": "object"}),
@@ -275,6 +276,8 @@ REGISTRY.update({
         amplitudes=np.array([1e-5, 1e-4]), n_samples=2, executor="serial", seed=0)),
         {"source": "object", "system": "object", "amplitudes": "values", "n_samples": "count"}),
     "PredictionBands": Entry(skip=_RESULT.format("propagate_uncertainty")),
+    "BreakAway": Entry(lambda: (ie.BreakAway, dict(inner=IwanJoint(P), ratio=1.5, n_sliders=16)),
+                       {"inner": "object", "ratio": "scalar", "n_sliders": "count"}),
 })
 
 
@@ -291,7 +294,9 @@ PENDING: dict[tuple[str, str, str], str] = {
                                             "non-monotonic", "constant")},
     ("simulate_test", "sample_rate", "huge"): _FIT + "numpy 'Maximum allowed size exceeded' "
                                               "does not name sample_rate",
-    ("diagnose", "noise", "tiny"): _DIAG + "noise=1e-300: ZeroDivisionError (issue 14 item)",
+    ("fit_force_model", "theta0", "huge"): "identify/model_fit.py: theta0 x1e300 gives scipy's "
+                                            "'array must not contain infs or NaNs', not naming "
+                                            "theta0 (the model's force overflows)",
     ("base_joint", "element", "*"): _EFF + "base_joint(None/'x'/3.0/dict) returns its argument "
                                     "instead of rejecting a non-element",
 }
@@ -356,6 +361,8 @@ def _equal(a, b) -> bool:
                      else all(x is y or x == y for x, y in zip(a.ravel(), b.ravel()))))
     if isinstance(a, float) and isinstance(b, float) and math.isnan(a) and math.isnan(b):
         return True
+    if dataclasses.is_dataclass(a) and type(a) is type(b) and not isinstance(a, type):
+        return all(_equal(getattr(a, f.name), getattr(b, f.name)) for f in dataclasses.fields(a))
     if isinstance(a, (IwanJoint, ie.DiscreteIwan)):
         return repr(a) == repr(b) and a.force == b.force and a.work == b.work
     try:

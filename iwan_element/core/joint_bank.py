@@ -50,6 +50,8 @@ class IwanJointBank:
     """
 
     def __init__(self, params, *, reversal_tol: float = 1e-12):
+        if isinstance(params, (str, bytes, dict)) or not hasattr(params, "__iter__"):
+            raise ValueError(f"params must be a sequence of IwanParameters, got {type(params).__name__}")
         params = list(params)
         if not params:
             raise ValueError("params must hold at least one IwanParameters, got an empty sequence")

@@ -33,7 +33,7 @@ import math
 
 import numpy as np
 
-from ._validation import check_scalar, finite_array
+from ._validation import check_magnitude, check_scalar, finite_array
 from .closed_form import backbone, dissipation, secant_stiffness
 from .joint import IwanJoint
 from .parameters import IwanParameters
@@ -72,7 +72,7 @@ def harmonic_stiffness(Q, params: IwanParameters):
         Stiffness [N/m]; ``KT`` at ``Q = 0``.
     """
     p = _check(params)
-    x = finite_array("Q", Q, ndim=None)
+    x = check_magnitude("Q", finite_array("Q", Q, ndim=None), unit="m")
     if np.any(x < 0):
         raise ValueError("Q (displacement amplitude) must be >= 0")
     q = np.atleast_1d(x).ravel()
@@ -138,7 +138,7 @@ def modal_iwan_curve(Q, params: IwanParameters, *, K_inf: float, zeta0: float = 
         Equivalent viscous damping ratio [-].
     """
     p = _check(params)
-    x = finite_array("Q", Q, ndim=None)
+    x = check_magnitude("Q", finite_array("Q", Q, ndim=None), unit="m")
     if np.any(x <= 0):
         raise ValueError("Q (modal displacement amplitude) must be > 0")
     K_inf = check_scalar("K_inf", K_inf, low=0.0)
@@ -193,7 +193,7 @@ def modal_ringdown(t, params: IwanParameters, *, K_inf: float, q0: float, v0: fl
         Displacement [m], velocity [m/s] and acceleration [m/s^2] at ``t``.
     """
     p = _check(params)
-    tt = finite_array("t", t, min_size=2)
+    tt = check_magnitude("t", finite_array("t", t, min_size=2), unit="s")
     dt = np.diff(tt)
     if np.any(dt <= 0) or np.ptp(dt) > 1e-6 * dt.mean():
         raise ValueError("t must be uniformly spaced and strictly increasing")
@@ -207,7 +207,7 @@ def modal_ringdown(t, params: IwanParameters, *, K_inf: float, q0: float, v0: fl
     steps = w0 * (tt[-1] - tt[0]) / dphi
     if steps > _MAX_RINGDOWN_STEPS:
         raise ValueError(f"t spans {tt[-1] - tt[0]:g} s = {steps:.3g} integration steps of "
-                         f"max_phase_step/w0 = {dphi / w0:.3g} s; at most "
+                         f"max_phase_step/w0 (w0 = sqrt((K_inf + KT)/mass)) = {dphi / w0:.3g} s; at most "
                          f"{_MAX_RINGDOWN_STEPS:.0e} are allowed (check the unit of t)")
     n_sub = max(1, math.ceil(w0 * dt.mean() / dphi))
     h = dt.mean() / n_sub

@@ -8,6 +8,7 @@ import numpy as np
 from scipy.signal import lfilter
 
 from ..core._validation import _check_int, check_magnitude, check_scalar, finite_array
+from ..core.protocol import check_element
 from ..identify.testdata import TestData
 
 __all__ = ["simulate_element_test"]
@@ -86,6 +87,10 @@ def simulate_element_test(element, amplitudes, *, cycles: int = 3, frequency: fl
         The measured record (the element sees the true displacement and the velocity
         ``np.gradient(u, t)``).
     """
+    check_element(element, name="element")
+    if not callable(getattr(element, "force_history", None)):
+        raise ValueError(f"element must have a force_history(u[, v]) method; "
+                         f"{type(element).__name__} has none")
     amps = check_magnitude("amplitudes", finite_array("amplitudes", amplitudes, ndim=1), unit="m")
     if np.any(amps <= 0.0):
         raise ValueError("amplitudes must all be > 0 [m]")

@@ -31,8 +31,8 @@ import numpy as np
 from scipy.signal import butter, sosfiltfilt
 
 from ..core._history import REVERSAL_TOL, unit_params
-from ..core._validation import (_check_int, _check_time, check_magnitude, check_scalar, finite_array,
-                                same_length)
+from ..core._validation import (MAGNITUDE_RANGE, _check_int, _check_time, check_magnitude,
+                                check_scalar, finite_array, same_length)
 from ..effects import EFFECTS
 from ..effects._evaluate import Evaluator, build_element, order_stack
 from ..identify.testdata import find_reversals, split_cycles
@@ -69,7 +69,7 @@ def _prepare(t, u, F, noise, lowpass):
         raise ValueError("u never moves: a displacement-driven test is needed")
     scale_F = max(float(np.max(np.abs(FF))), 1e-300)
     if noise is not None:
-        noise = check_scalar("noise", noise, low=0.0, low_open=True)
+        noise = check_scalar("noise", noise, low=MAGNITUDE_RANGE[0], high=MAGNITUDE_RANGE[1])
         if noise < 1e-9 * scale_F:
             raise ValueError(f"noise = {noise:g} N is below the floating-point resolution of the "
                              f"force record (1e-9 x max|F| = {1e-9 * scale_F:.3g} N); give a "

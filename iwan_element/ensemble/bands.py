@@ -6,7 +6,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..core._validation import _check_int, check_scalar, finite_array
+from ..core._validation import _check_int, check_magnitude, check_scalar, finite_array
 from ..core.parameters import IwanParameters
 from ..identify.fit import _json
 from .oscillator import SingleModeSystem, modal_curve, peak_response
@@ -191,6 +191,10 @@ class PredictionBands:
         return artists
 
 
+#: Most parameter sets propagate_uncertainty draws (each is one simulation).
+_MAX_SAMPLES = 10 ** 7
+
+
 def propagate_uncertainty(source, *, system: SingleModeSystem | None = None, amplitudes,
                           n_samples: int = 200, force: float | None = None, cycles: int = 30,
                           steps_per_period: int = 64, level: float = 0.9, seed=None,
@@ -227,10 +231,12 @@ def propagate_uncertainty(source, *, system: SingleModeSystem | None = None, amp
     -------
     PredictionBands
     """
-    X = finite_array("amplitudes", amplitudes)
+    X = check_magnitude("amplitudes", finite_array("amplitudes", amplitudes), unit="m")
     if np.any(X <= 0):
         raise ValueError("amplitudes must be > 0 [m]")
     n_samples = _check_int("n_samples", n_samples, 2)
+    if n_samples > _MAX_SAMPLES:
+        raise ValueError(f"n_samples must be in [2, {_MAX_SAMPLES:.0e}], got {n_samples}")
     level = check_scalar("level", level, low=0.0, high=1.0, low_open=True, high_open=True)
     if force is not None:
         force = check_scalar("force", force, low=0.0, low_open=True)
@@ -242,6 +248,9 @@ def propagate_uncertainty(source, *, system: SingleModeSystem | None = None, amp
                                                                steps_per_period, n_samples, rng)
         system = None
     else:
+        if not isinstance(source, ParameterUncertainty) and not hasattr(source, "params"):
+            raise ValueError("source must be a FitResult, a ModalIwanFit or a "
+                             f"ParameterUncertainty, got {type(source).__name__}")
         unc = source if isinstance(source, ParameterUncertainty) else \
             ParameterUncertainty.from_fit(source)
         if not isinstance(system, SingleModeSystem):

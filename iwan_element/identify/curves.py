@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..core._validation import finite_array
+from ..core._validation import check_magnitude, finite_array
 
 __all__ = ["AmplitudeCurve"]
 
@@ -76,13 +76,13 @@ class AmplitudeCurve:
     warnings: tuple = field(default_factory=tuple)
 
     def __post_init__(self):
-        amp = finite_array("amplitude", self.amplitude).copy()
+        amp = check_magnitude("amplitude", finite_array("amplitude", self.amplitude).copy(), unit="m")
         if amp.ndim != 1 or amp.size == 0:
             raise ValueError(f"amplitude must be a non-empty 1-D array, got shape {amp.shape}")
         n = amp.size
         arrays = {"amplitude": amp}
         for name in ("frequency", "damping_ratio"):
-            arr = finite_array(name, getattr(self, name)).copy()
+            arr = check_magnitude(name, finite_array(name, getattr(self, name)).copy())
             if arr.shape != (n,):
                 raise ValueError(f"{name} must have the shape of amplitude ({n},), got {arr.shape}")
             arrays[name] = arr

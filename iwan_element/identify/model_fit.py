@@ -43,7 +43,7 @@ import numpy as np
 from scipy import optimize
 from scipy.signal import savgol_coeffs, savgol_filter
 
-from ..core._validation import _check_int, _check_time, finite_array, same_length
+from ..core._validation import _check_int, _check_time, check_magnitude, finite_array, same_length
 from .noise import _correlation_time, estimate_noise
 
 __all__ = ["ModelFit", "fit_force_model", "drive_displacement", "burn_in_index",
@@ -257,8 +257,8 @@ def fit_force_model(t, u, F, model: Callable, theta0, *, lower=None, upper=None,
     ModelFit
     """
     t_start = time.perf_counter()
-    uu = finite_array("u", u, ndim=1, min_size=32)
-    FF = finite_array("F", F, ndim=1, min_size=32)
+    uu = check_magnitude("u", finite_array("u", u, ndim=1, min_size=32), unit="m")
+    FF = check_magnitude("F", finite_array("F", F, ndim=1, min_size=32), unit="N")
     n = same_length(u=uu, F=FF)
     tt = _check_time(t, n)
     if not callable(model):

@@ -35,7 +35,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.signal import savgol_coeffs, savgol_filter
 
-from ..core._validation import _check_time, finite_array, same_length
+from ..core._validation import _check_time, check_magnitude, finite_array, same_length
 
 __all__ = ["NoiseEstimate", "estimate_noise"]
 
@@ -176,7 +176,7 @@ def estimate_noise(t, y, *, method: str = "auto") -> NoiseEstimate:
     """
     if method not in ("auto", "savgol", "difference"):
         raise ValueError(f"method must be 'auto', 'savgol' or 'difference', got {method!r}")
-    yy = finite_array("y", y, ndim=1, min_size=32)
+    yy = check_magnitude("y", finite_array("y", y, ndim=1, min_size=32))
     tt = finite_array("t", t, ndim=1, min_size=32)
     n = same_length(t=tt, y=yy)
     tt = _check_time(tt, n)

@@ -193,6 +193,9 @@ def stepped_sine_curve(levels, *, quantity: str = "displacement", control: str =
     frac = check_scalar("peak_fraction", peak_fraction, low=0.1, high=0.95)
     A_given = None if modal_constant is None else check_scalar(
         "modal_constant", modal_constant, low=0.0, low_open=True)
+    if isinstance(levels, (str, bytes, dict)) or not hasattr(levels, "__iter__"):
+        raise ValueError(f"levels must be a sequence of (frequency, frf, amplitude) triples, "
+                         f"got {type(levels).__name__}")
     levels = list(levels)
     if not levels:
         raise ValueError("levels must hold at least one (frequency, frf, amplitude) triple")

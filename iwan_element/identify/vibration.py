@@ -51,7 +51,7 @@ import math
 import numpy as np
 from scipy import signal
 
-from ..core._validation import check_scalar, finite_array
+from ..core._validation import check_magnitude, check_scalar, finite_array
 from .curves import AmplitudeCurve
 
 __all__ = ["amplitude_curve"]
@@ -214,7 +214,7 @@ def amplitude_curve(t, y, *, quantity: str = "acceleration", band, n_periods: fl
         outside the Nyquist range), a band holding no clear mode or more than one, or a
         signal that never rises above ``snr_min`` times the noise.
     """
-    yy = finite_array("y", y)
+    yy = check_magnitude("y", finite_array("y", y))
     n = yy.size
     if n < 64:
         raise ValueError(f"y must have at least 64 samples, got {n}")
