@@ -32,6 +32,7 @@ import numpy as np
 import scipy.linalg as sla
 
 from iwan_element import AmplitudeCurve, dissipation, normalized_backbone
+from iwan_element.core._validation import check_magnitude, finite_array
 
 from .assembly import linear_system
 from .interface import contact_points
@@ -52,7 +53,8 @@ def _amplitudes(specimen: Specimen, amplitudes) -> np.ndarray:
     if amplitudes is None:
         lo, hi = specimen.amplitude_range
         return np.geomspace(lo, hi, 20)
-    a = np.atleast_1d(np.asarray(amplitudes, dtype=float))
+    a = check_magnitude("amplitudes", finite_array("amplitudes", amplitudes, ndim=None), unit="m")
+    a = np.atleast_1d(a)
     if a.ndim != 1 or a.size == 0 or not np.all(np.isfinite(a)) or np.any(a <= 0):
         raise ValueError("amplitudes must be a non-empty 1-D sequence of finite values > 0 [m]")
     return a

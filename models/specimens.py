@@ -320,6 +320,6 @@ def preset(name: str) -> Specimen:
     Specimen
         Frozen; ``specimen.replace(...)`` or ``dataclasses.replace`` makes variants.
     """
-    if name not in PRESETS:
-        raise ValueError(f"unknown preset {name!r}; presets are {sorted(PRESETS)}")
+    if not isinstance(name, str) or name not in PRESETS:
+        raise ValueError(f"name must be one of {sorted(PRESETS)}, got {name!r}")
     return PRESETS[name]()

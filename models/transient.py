@@ -25,6 +25,7 @@ import exudyn as exu
 import numpy as np
 
 from iwan_element import AmplitudeCurve
+from iwan_element.core._validation import check_scalar
 
 from .assembly import build_specimen_model
 from .qsma import static_modal_load
@@ -107,8 +108,7 @@ def ringdown(specimen: Specimen, *, mode: int = 1, amplitude: float, cycles: flo
         raise ValueError(f"specimen must be a Specimen, got {type(specimen).__name__}")
     if not (isinstance(amplitude, (int, float)) and math.isfinite(amplitude) and amplitude > 0):
         raise ValueError(f"amplitude must be a finite displacement > 0 [m], got {amplitude!r}")
-    if not (math.isfinite(cycles) and cycles > 2):
-        raise ValueError(f"cycles must be > 2, got {cycles!r}")
+    cycles = check_scalar("cycles", cycles, low=2.0, low_open=True)
     if isinstance(steps_per_period, bool) or not isinstance(steps_per_period, int) \
             or steps_per_period < 16:
         raise ValueError(f"steps_per_period must be an integer >= 16, got {steps_per_period!r}")

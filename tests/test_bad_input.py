@@ -534,3 +534,45 @@ def test_magnitude_check_refuses_only_what_floats_cannot_carry():
         ie.split_cycles(d.t, d.u, d.F * 1e-200)
     with pytest.raises(ValueError, match="t must have magnitudes"):
         ie.split_cycles(d.t * 1e200, d.u, d.F)
+
+
+# ---------------------------------------------------------------- models (the lap-jointed specimens)
+def _models():
+    pytest.importorskip("exudyn", reason="iwan_element.models needs exudyn")
+    import iwan_element.models as models
+    return models
+
+
+#: name -> (build, {argument: kind}, must_fail_only). ringdown is a transient Exudyn run: only
+#: its validation paths (the must-fail inputs, refused before any simulation) are fuzzed.
+MODEL_REGISTRY = {
+    "preset": (lambda m: (m.preset, dict(name="example")), {"name": "object"}, False),
+    "modal_amplitude_curve": (lambda m: (m.modal_amplitude_curve, dict(
+        specimen=m.preset("example"), amplitudes=np.geomspace(1e-6, 1e-4, 4))),
+        {"specimen": "object", "amplitudes": "values"}, False),
+    "ringdown": (lambda m: (m.ringdown, dict(specimen=m.preset("example"), amplitude=1e-5,
+                                             cycles=3, steps_per_period=16)),
+                 {"specimen": "object", "amplitude": "scalar", "cycles": "scalar"}, True),
+}
+
+
+def _model_cases():
+    for name, (_, fuzz, must_fail_only) in MODEL_REGISTRY.items():
+        for arg, kind in fuzz.items():
+            for label, _, must in _mutations(kind, 1.0 if kind == "scalar" else np.zeros(4)):
+                if must or not must_fail_only:
+                    yield pytest.param(name, arg, label, id=f"models.{name}-{arg}-{label}")
+
+
+@pytest.mark.parametrize("name, arg, label", list(_model_cases()))
+def test_models_bad_input_gets_a_clear_error(name, arg, label):
+    build, fuzz, _ = MODEL_REGISTRY[name]
+    fn, kwargs = build(_models())
+    (bad, must_fail), = [(v, m) for lab, v, m in _mutations(fuzz[arg], kwargs[arg]) if lab == label]
+    kwargs[arg] = bad
+    _check_call(name, fn, kwargs, arg, label, must_fail)
+
+
+def test_models_preset_unknown_name_is_named():
+    with pytest.raises(ValueError, match="name"):
+        _models().preset("no-such-specimen")
