@@ -576,3 +576,16 @@ def test_models_bad_input_gets_a_clear_error(name, arg, label):
 def test_models_preset_unknown_name_is_named():
     with pytest.raises(ValueError, match="name"):
         _models().preset("no-such-specimen")
+
+
+def test_modal_ringdown_refuses_a_span_it_cannot_integrate_instead_of_hanging():
+    """t in ms given as s (or any span needing > 2e7 steps of max_phase_step/w0) used to run
+    for hours; it is refused at once, naming t and the step it would need."""
+    import time
+    start = time.process_time()
+    with pytest.raises(ValueError, match=r"t spans .* integration steps"):
+        ie.modal_ringdown(np.arange(200) * 2.0, _MODAL, K_inf=4e6, q0=1e-4)   # 400 s at 334 Hz
+    assert time.process_time() - start < 1.0
+    q, v, a = ie.modal_ringdown(np.arange(20) * 2e-3, _MODAL, K_inf=4e6, q0=1e-4, mass=100.0,
+                                max_phase_step=0.2)
+    assert q[0] == 1e-4 and np.all(np.isfinite(q)) and np.abs(q).max() <= 1e-4 * (1 + 1e-9)
