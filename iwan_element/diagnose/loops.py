@@ -265,7 +265,7 @@ def diagnose(t, u, F, *, candidates=None, max_effects: int = 2, noise: float | N
     max_effects : int, keyword-only
         Most effects named one after the other, ``>= 1`` (default 2).
     noise : float, optional, keyword-only
-        Force noise standard deviation [N], ``> 1e-9 max|F|``, taken as white. Default:
+        Force noise standard deviation [N], ``> 1e-9 max|F|`` and in ``[1e-100, 1e100]``, taken as white. Default:
         estimated from the record.
     alpha : float, keyword-only
         Level of the "rest is noise" test, in ``(0, 0.5)`` (default 1e-3).
