@@ -265,8 +265,8 @@ def diagnose(t, u, F, *, candidates=None, max_effects: int = 2, noise: float | N
     max_effects : int, keyword-only
         Most effects named one after the other, ``>= 1`` (default 2).
     noise : float, optional, keyword-only
-        Force noise standard deviation [N], ``> 1e-9 max|F|`` and in ``[1e-100, 1e100]``, taken as white. Default:
-        estimated from the record.
+        Force noise standard deviation [N], ``> 1e-9 max|F|`` and in ``[1e-100, 1e100]``,
+        taken as white. Default: estimated from the record.
     alpha : float, keyword-only
         Level of the "rest is noise" test, in ``(0, 0.5)`` (default 1e-3).
     ambiguity : float, keyword-only
