@@ -128,18 +128,57 @@ def _filter_extent(sos, fs, lo, hi):
     return int(above[-1]) + 1
 
 
-def _noise_rms(y, fs, sos, lo, hi):
-    """In-band noise RMS from the median out-of-band Welch level and the filter's bandwidth."""
-    nper = int(min(y.size, max(256, 2 ** math.ceil(math.log2(8.0 * fs / lo)))))
-    f, P = signal.welch(y, fs=fs, nperseg=nper)
-    out = ((f >= 0.5 * lo) & (f < lo)) | ((f > hi) & (f <= min(2.0 * hi, 0.98 * fs / 2)))
-    if np.count_nonzero(out) < 3:
-        return float("nan"), float("nan")
-    level = float(np.median(P[out]))
+def _noise_bandwidth(sos, fs):
+    """Noise bandwidth [Hz] of the zero-phase filter (``sosfiltfilt`` applies ``|H|**2``)."""
     w, H = signal.sosfreqz(sos, worN=8192, fs=fs)
-    gain2 = np.abs(H) ** 4                       # sosfiltfilt applies |H|**2 in power twice
-    bandwidth = float(np.trapezoid(gain2, w))   # noise bandwidth [Hz]
-    return math.sqrt(level * bandwidth), bandwidth
+    return float(np.trapezoid(np.abs(H) ** 4, w))
+
+
+def _residual_noise(z, i0, i1, nw):
+    """Upper bound on the in-band noise RMS from the analytic signal itself (step 6).
+
+    In consecutive windows of ``nw`` samples, ``z`` is compared with its local model
+    ``exp(a + b t + i (c + d t))`` (straight lines through ``ln |z|`` and the phase); the RMS
+    of ``|z - model|`` and of ``|z|`` (the whole in-band content, the bound where the mode has
+    decayed) are each at least the noise's, which for band-limited real noise of RMS ``s``
+    is ``sqrt(2) s`` in the analytic signal. Model error (a drifting frequency, harmonics in
+    the band) can only add. Returns the per-window bounds ``min(rms|z - model|, rms|z|) /
+    sqrt(2)``.
+    """
+    out = []
+    tw = np.arange(nw) - 0.5 * (nw - 1)
+    for s in range(i0, i1 - nw + 1, nw):
+        zw = z[s:s + nw]
+        mag = np.abs(zw)
+        ca = np.polyfit(tw, np.log(np.maximum(mag, 1e-300)), 1)
+        cp = np.polyfit(tw, np.unwrap(np.angle(zw)), 1)
+        model = np.exp(np.polyval(ca, tw) + 1j * np.polyval(cp, tw))
+        res = float(np.sqrt(np.mean(np.abs(zw - model) ** 2)))
+        total = float(np.sqrt(np.mean(mag ** 2)))
+        # where noise dominates, the fitted phase line follows the noise's own slow phase
+        # and the residual understates it: there the whole content is the bound
+        out.append((res if res < 0.3 * total else total) / math.sqrt(2.0))
+    return np.array(out)
+
+
+def _noise_rms(yf, z, fs, span, f_peak):
+    """In-band noise RMS of the band-passed record and how it was found (step 6)."""
+    i_pk, i0, i1, n_trim, nw = span
+    bounds = _residual_noise(z, i0, i1, nw)
+    how = []
+    noise = float("inf")
+    if bounds.size:
+        # each window is a noisy upper bound (a few B T samples): the median of the lower half
+        low = np.sort(bounds)[:(bounds.size + 1) // 2]
+        noise = float(np.median(low))
+        how.append(f"residual of the analytic signal about its local decaying-sinusoid model "
+                   f"(median of the lower half of {bounds.size} windows): {noise:.3g}")
+    pre = yf[n_trim:max(n_trim, i_pk - n_trim)]
+    if pre.size >= max(64, 3.0 * fs / f_peak):
+        quiet = float(np.sqrt(np.mean(pre ** 2)))
+        how.append(f"pre-trigger ({pre.size / fs:.3g} s): {quiet:.3g}")
+        noise = min(noise, quiet)
+    return noise, "; ".join(how)
 
 
 def _window_fit(tw, lnA, ph, n_block):
@@ -235,18 +274,21 @@ def amplitude_curve(t, y, *, quantity: str = "acceleration", band, n_periods: fl
     sos = signal.butter(int(order), [lo, hi], btype="bandpass", fs=fs, output="sos")
     yf = signal.sosfiltfilt(sos, yy)
     # zero padding to >= 2n: the FFT-based transform is circular, and without padding the
-    # large start of a ring-down would leak into its quiet end
-    z = signal.hilbert(yf, N=int(2 ** math.ceil(math.log2(2 * n))))[:n]
+    # large start of a ring-down would leak into its quiet end. The first and last n_trim
+    # samples (cut anyway) are tapered: a record cropped at the impact starts abruptly, and
+    # the Hilbert kernel's slow 1/t decay would spread that step over the whole record.
+    n_trim = _filter_extent(sos, fs, lo, hi)
+    i_pk = int(np.argmax(np.abs(yf)))
+    m = min(n_trim, n // 4)
+    ramp = 0.5 - 0.5 * np.cos(np.pi * (np.arange(m) + 0.5) / m)
+    yt = yf.copy()
+    yt[:m] *= ramp
+    yt[n - m:] *= ramp[::-1]
+    z = signal.hilbert(yt, N=int(2 ** math.ceil(math.log2(2 * n))))[:n]
     env = np.abs(z)
     phase = np.unwrap(np.angle(z))
-    n_trim = _filter_extent(sos, fs, lo, hi)
-    i0 = int(np.argmax(env)) + n_trim
+    i0 = i_pk + n_trim
     i1 = n - n_trim
-    noise, bandwidth = _noise_rms(yy[min(i0, n - 1):], fs, sos, lo, hi)
-    pre = yy[:max(0, int(np.argmax(np.abs(yy))) - 8)]      # pre-trigger record, if any
-    if pre.size >= 64 and math.isfinite(bandwidth):
-        quiet = float(np.std(pre)) * math.sqrt(2.0 * bandwidth / fs)
-        noise = quiet if not math.isfinite(noise) else min(noise, quiet)
     if window is not None:
         window = check_scalar("window", window, low=0.0, low_open=True)
         nw = int(round(window * fs))
@@ -257,8 +299,9 @@ def amplitude_curve(t, y, *, quantity: str = "acceleration", band, n_periods: fl
         raise ValueError(f"record too short: after trimming {n_trim / fs:.3g} s of filter end "
                          f"effects at each end, {max(i1 - i0, 0) / fs:.3g} s remain, less than "
                          f"one window ({nw / fs:.3g} s); give a longer record or a wider band")
-    noise = max(noise if math.isfinite(noise) else 0.0, 1e-7 * float(env.max()))
-    bw = bandwidth if math.isfinite(bandwidth) else hi - lo
+    noise, how = _noise_rms(yf, z, fs, (i0 - n_trim, i0, i1, n_trim, nw), f_peak)
+    noise = max(noise, 1e-7 * float(env.max()))
+    bw = _noise_bandwidth(sos, fs)
     rows, stop, x_stop = _windows(tt, env, phase, (i0, i1, nw), (noise, snr_min, bw), k_pow,
                                   f_peak, (lo, hi), max_damping_std)
     if not rows:
@@ -270,15 +313,19 @@ def amplitude_curve(t, y, *, quantity: str = "acceleration", band, n_periods: fl
     if a.shape[0] < 3:
         warns.append(f"only {a.shape[0]} window(s) above the noise floor; the curve is too "
                      "short to show an amplitude dependence")
-    if stop.startswith("window"):
-        warns.append(f"the curve stopped early: {stop}")
     w_ref = 2 * math.pi * float(a[-1, 1])
-    floor = max(snr_min * noise / w_ref ** k_pow, x_stop)
+    floor = snr_min * noise / w_ref ** k_pow
+    x_last = float(a[-1, 0])
+    if stop.startswith("window"):
+        warns.append(f"the curve stopped early at {x_last:.3g} m ({x_last / floor:.3g} x the "
+                     f"noise floor), not because of noise: {stop}")
     notes = (f"band {lo:g}-{hi:g} Hz, Butterworth order {order} zero-phase (sosfiltfilt); "
              f"mode at {f_peak:.4g} Hz; trimmed {n_trim / fs:.4g} s after the envelope peak "
              f"(t = {tt[i0 - n_trim]:.4g} s) and {n_trim / fs:.4g} s before the end; "
              f"{a.shape[0]} windows of up to {nw / fs:.4g} s; in-band noise RMS {noise:.3g} "
-             f"({quantity}); stopped: {stop}")
+             f"({quantity}) from {how}; noise floor {floor:.3g} m ({snr_min:g} x noise); "
+             f"last point at {x_last:.3g} m; stopped: {stop}"
+             + (f" (at {x_stop:.3g} m)" if x_stop > 0 else ""))
     log.debug("amplitude_curve: %s", notes)
     return AmplitudeCurve(a[:, 0], a[:, 1], a[:, 2], amplitude_std=a[:, 3],
                           frequency_std=a[:, 4], damping_std=a[:, 5], noise_floor=floor,
@@ -322,7 +369,7 @@ def _windows(tt, env, phase, span, noise_spec, k_pow, f_peak, band, max_zstd):
         f_std = math.hypot(sigma * sa[1], wd * sp[1]) / wn / (2 * math.pi)
         T = n_w * dt           # decay-rate error that the noise alone would cause
         sd_noise = math.sqrt(12.0) * noise / math.exp(ca[0]) / (T * math.sqrt(max(bw * T, 3.0)))
-        if sa[1] > max_zstd * sigma and 3.0 * sd_noise > max_zstd * sigma:
+        if len(rows) >= 3 and sa[1] > max_zstd * sigma and sd_noise > max_zstd * sigma:
             return rows, (f"damping ratio known to worse than {100 * max_zstd:g} % at "
                           f"t = {tc:.4g} s (noise)"), amp
         rows.append((amp, f, zeta, amp * sa[0], f_std, sa[1] / wn))
