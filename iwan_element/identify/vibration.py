@@ -24,21 +24,37 @@ free decay) into an :class:`~iwan_element.identify.curves.AmplitudeCurve`:
    independent samples of the noise); when the filter's noise bandwidth ``B`` is below the
    mode frequency the blocks are ``1 / B`` long, the noise's correlation time.
 5. End effects: the filter's impulse response (``sosfilt`` of a unit impulse) is taken to
-   last until it stays below 1e-3 of its peak; that time is cut after the envelope's maximum
-   (the impact, or the release at the start of the record) and before the end of the record.
-6. Noise floor: the noise spectral density is the median of the Welch spectrum outside the
-   band (``[f_lo/2, f_lo]`` and ``[f_hi, 2 f_hi]``, after the impact), times the filter's
-   noise bandwidth gives the in-band noise RMS ``s_n``; when the record has at least 64
-   samples before its largest sample (a pre-trigger), their RMS as white noise through the
-   same bandwidth is a second estimate and the smaller one is used (the out-of-band level
-   also holds the tails of the modes, so it can only overstate the noise); the curve stops where the envelope
-   falls below ``snr_min * s_n``, or at the first window whose damping ratio has a relative
-   standard uncertainty (step 4) above ``max_damping_std`` where the noise could be the
-   cause (the decay-rate error that noise ``s_n / A`` on ``B T`` independent samples gives,
-   ``sqrt(12) (s_n / A) / (T sqrt(B T))``, is above a third of that limit; a scatter that
+   last until it stays below 1e-3 of its peak; that time is cut after the largest sample of
+   the band-passed record (the impact, or the release at the start of the record) and before
+   the end of the record. Those cut stretches are tapered (half-Hann) before the Hilbert
+   transform: a record cropped at the impact starts abruptly, and the transform's slowly
+   decaying ``1/t`` kernel would otherwise spread that step over the whole record.
+6. Noise, from the in-band signal itself (no pre-trigger needed, not fooled by other modes
+   outside the band). In consecutive windows after the impact the analytic signal ``z`` is
+   compared with its local free-decay model ``exp(a + b t + i (c + d t))`` (straight lines
+   through ``ln |z|`` and the phase). In-band real noise of RMS ``s`` adds ``sqrt(2) s`` RMS
+   to ``z``, so ``rms|z - model| / sqrt(2)`` is an upper bound on ``s`` (model error, such as
+   a frequency drifting within the window, only adds); where the mode has decayed into the
+   noise (the residual is above 0.3 of ``rms|z|``) the whole in-band content
+   ``rms|z| / sqrt(2)`` is the bound (the record's late tail). Each window's bound rests on
+   only ``B T`` independent samples, so the estimate is the median of the lower half of the
+   windows' bounds. When the record has a pre-trigger of at least three periods clear of the
+   filter's end effects, the RMS of the band-passed pre-trigger is a direct estimate, and the
+   smaller of the two is used: no estimate can exceed what a clean stretch of the signal
+   allows (an envelope that fits an exponential to 1e-3 bounds the noise at 1e-3 of it).
+   The out-of-band spectral level is not used: on an impact test it holds the tails of the
+   other modes and overstates the in-band noise by orders of magnitude.
+7. Stop and noise floor: ``noise_floor`` is the noise-based amplitude floor, the
+   displacement amplitude at which the envelope would be ``snr_min`` times the in-band noise
+   RMS ``s_n``. The curve stops where the envelope falls below that, or at the end of the
+   record, or (after at least three points) at the first window whose damping ratio has a
+   relative standard uncertainty (step 4) above ``max_damping_std`` while the noise alone
+   would cause that much (the decay-rate error that noise ``s_n / A`` on ``B T`` independent
+   samples gives, ``sqrt(12) (s_n / A) / (T sqrt(B T))``, is above the limit; a scatter that
    the noise cannot explain, such as the change of damping within a window at large
-   amplitude, does not stop the curve). The larger of the two amplitudes (as displacement)
-   is ``noise_floor``.
+   amplitude, does not stop the curve). Why and at which amplitude the curve stopped is in
+   ``notes``; a stop for a reason other than noise (a window that is not a decaying mode in
+   the band) is also a warning.
 
 The band must hold one clear mode: a Welch spectrum peak inside it, not at its edges, at
 least 10 times the band's median level, with no second peak above a tenth of it.
@@ -235,16 +251,20 @@ def amplitude_curve(t, y, *, quantity: str = "acceleration", band, n_periods: fl
         The curve stops where the envelope is below ``snr_min`` times the in-band noise RMS
         (default 10, range [2, 1e6]).
     max_damping_std : float, keyword-only
-        The curve also stops at the first window whose damping ratio has a relative standard
-        uncertainty above this (default 0.01, range (0, 1]).
+        After at least three points, the curve also stops at the first window whose damping
+        ratio has a relative standard uncertainty above this while the noise alone would
+        cause that much (default 0.01, range (0, 1]); points before it keep their stated
+        uncertainty.
 
     Returns
     -------
     AmplitudeCurve
         ``amplitude`` [m] (displacement at the sensor), ``frequency`` [Hz] (undamped natural
         frequency ``sqrt(sigma**2 + w_d**2) / 2 pi``), ``damping_ratio`` [-], their standard
-        uncertainties, ``noise_floor`` [m], ``method="hilbert"``; ``notes`` state the filter,
-        the trimming and the windows. Points are in time order (decreasing amplitude).
+        uncertainties, ``noise_floor`` [m] (the displacement amplitude at which the signal would
+        be ``snr_min`` times the in-band noise), ``method="hilbert"``; ``notes`` state the
+        filter, the trimming, the windows, the noise estimate and where and why the curve
+        stopped. Points are in time order (decreasing amplitude).
 
     Raises
     ------
