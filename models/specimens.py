@@ -279,11 +279,11 @@ def _brake_reuss() -> Specimen:
         name="brake-reuss", beam_length=0.42, width=0.0254, thickness=0.0127,
         lap_thickness=0.00635, youngs_modulus=192.31e9, density=8000.0, overlap=0.12,
         bolt_positions=(0.03, 0.06, 0.09), preload=12.0e3, bolt_diameter=0.0079375,
-        washer_diameter=0.01746, friction=0.4284, boundary="free-free",
+        washer_diameter=0.01746, friction=0.3823, boundary="free-free",
         excitation=Excitation("hammer", 0.72 - 0.0762), sensor_position=0.72 - 0.0762,
         amplitude_range=(2e-6, 60e-6),
-        interface=InterfaceModel(n_points=40, stiffness_per_area=6.912e11, chi=-0.4857,
-                                 beta=0.1, damping_floor=1.2921e-3),
+        interface=InterfaceModel(n_points=40, stiffness_per_area=6.905e11, chi=-0.4687,
+                                 beta=0.1, damping_floor=1.2941e-3),
         n_elements=20,
         reference="thin BRB, Chen et al. MSSP 166:108401 (2022); classic BRB bolts/washers "
                   "(Balaji, Abaqus4Joints); E from Porter & Brake MSSP 192:110210 (2023)")

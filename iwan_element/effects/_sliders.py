@@ -141,34 +141,65 @@ class _SliderEffect(_Effect):
         lam = getattr(self, "_lam", None)
         try:
             self._reset_own()
-            sk = self._sign * self._k
-            out = np.empty(len(u))
-            e, s, prev = self._e, self._slip, 0.0
-            for i, x in enumerate(np.asarray(u, float).tolist()):
-                du = x - prev
-                if du != 0.0:
-                    d = 1.0 if du > 0.0 else -1.0
-                    cs, ck = self._cap_up if d > 0 else self._cap_dn
-                    if self.needs_energy:
-                        self._e, self._slip = e, s
-                        e, s, work = self._step(du)
-                        self._e, self._slip = e, s
-                        self._Wb += float(self._sign @ work)
-                        out[i] = float(sk @ e)          # the step's force, before the commit
-                        self._after_commit_energy(D_inner[i])   # lowers the thresholds
-                        e = self._e
-                        prev = x
-                        continue
-                    else:
-                        end = d * e + abs(du)
-                        mv = (s == d) | (end > cs)
-                        e = d * np.where(mv, ck, end)
-                        s = np.where(mv, d, 0.0)
-                    prev = x
-                out[i] = float(sk @ e)
-            return out
+            uu = np.asarray(u, float)
+            if self.needs_energy:
+                return self._correction_energy(uu, D_inner)
+            return self._correction_segments(uu)
         finally:
             self._e, self._slip, self._Wb, self._Db, self._ub, self._last = state
             if lam is not None:
                 self._lam = lam
             self._refresh_caps()
+
+    def _correction_segments(self, u: np.ndarray) -> np.ndarray:
+        """Thresholds fixed per direction: one vectorised step per monotone run of ``u``.
+
+        Within a run of direction ``d`` starting at ``u_s`` every slider's stretch in the
+        direction of motion is ``ep0 + d (u - u_s)`` until it passes the static threshold,
+        then the kinetic one for the rest of the run (the motion is monotone, so a slider
+        that broke away keeps sliding): the per-step rule of :meth:`_step`, summed."""
+        sk = self._sign * self._k
+        out = np.zeros(u.size)
+        du = np.diff(u, prepend=0.0)
+        sgn = np.sign(du)
+        nz = np.flatnonzero(sgn)
+        if nz.size == 0:
+            return out
+        # direction of the last nonzero step at every sample (0 before the first move)
+        last = np.zeros(u.size, dtype=np.intp)
+        last[nz] = nz
+        last = np.maximum.accumulate(last)
+        d_at = np.where(np.arange(u.size) >= nz[0], sgn[last], 0.0)
+        starts = nz[np.flatnonzero(np.diff(sgn[nz], prepend=0.0))]
+        ends = np.append(starts[1:], u.size)
+        e, s = self._e, self._slip
+        for a, b in zip(starts, ends):
+            d = d_at[a]
+            cs, ck = self._cap_up if d > 0 else self._cap_dn
+            u_s = u[a - 1] if a > 0 else 0.0
+            delta = d * (u[a:b] - u_s)                       # >= 0, non-decreasing
+            ep = d * e
+            end = ep[None, :] + delta[:, None]
+            mv = (s == d)[None, :] | (end > cs[None, :])
+            e_run = d * np.where(mv, ck[None, :], end)
+            out[a:b] = e_run @ sk
+            e, s = e_run[-1], np.where(mv[-1], d, 0.0)
+        return out
+
+    def _correction_energy(self, u: np.ndarray, D_inner) -> np.ndarray:
+        """Thresholds that fall with the dissipated energy: step by step."""
+        sk = self._sign * self._k
+        out = np.empty(u.size)
+        prev = 0.0
+        for i, x in enumerate(u.tolist()):
+            du = x - prev
+            if du != 0.0:
+                e, s, work = self._step(du)
+                self._e, self._slip = e, s
+                self._Wb += float(self._sign @ work)
+                out[i] = float(sk @ e)          # the step's force, before the commit
+                self._after_commit_energy(D_inner[i])   # lowers the thresholds
+                prev = x
+            else:
+                out[i] = float(sk @ self._e)
+        return out

@@ -24,21 +24,37 @@ free decay) into an :class:`~iwan_element.identify.curves.AmplitudeCurve`:
    independent samples of the noise); when the filter's noise bandwidth ``B`` is below the
    mode frequency the blocks are ``1 / B`` long, the noise's correlation time.
 5. End effects: the filter's impulse response (``sosfilt`` of a unit impulse) is taken to
-   last until it stays below 1e-3 of its peak; that time is cut after the envelope's maximum
-   (the impact, or the release at the start of the record) and before the end of the record.
-6. Noise floor: the noise spectral density is the median of the Welch spectrum outside the
-   band (``[f_lo/2, f_lo]`` and ``[f_hi, 2 f_hi]``, after the impact), times the filter's
-   noise bandwidth gives the in-band noise RMS ``s_n``; when the record has at least 64
-   samples before its largest sample (a pre-trigger), their RMS as white noise through the
-   same bandwidth is a second estimate and the smaller one is used (the out-of-band level
-   also holds the tails of the modes, so it can only overstate the noise); the curve stops where the envelope
-   falls below ``snr_min * s_n``, or at the first window whose damping ratio has a relative
-   standard uncertainty (step 4) above ``max_damping_std`` where the noise could be the
-   cause (the decay-rate error that noise ``s_n / A`` on ``B T`` independent samples gives,
-   ``sqrt(12) (s_n / A) / (T sqrt(B T))``, is above a third of that limit; a scatter that
+   last until it stays below 1e-3 of its peak; that time is cut after the largest sample of
+   the band-passed record (the impact, or the release at the start of the record) and before
+   the end of the record. Those cut stretches are tapered (half-Hann) before the Hilbert
+   transform: a record cropped at the impact starts abruptly, and the transform's slowly
+   decaying ``1/t`` kernel would otherwise spread that step over the whole record.
+6. Noise, from the in-band signal itself (no pre-trigger needed, not fooled by other modes
+   outside the band). In consecutive windows after the impact the analytic signal ``z`` is
+   compared with its local free-decay model ``exp(a + b t + i (c + d t))`` (straight lines
+   through ``ln |z|`` and the phase). In-band real noise of RMS ``s`` adds ``sqrt(2) s`` RMS
+   to ``z``, so ``rms|z - model| / sqrt(2)`` is an upper bound on ``s`` (model error, such as
+   a frequency drifting within the window, only adds); where the mode has decayed into the
+   noise (the residual is above 0.3 of ``rms|z|``) the whole in-band content
+   ``rms|z| / sqrt(2)`` is the bound (the record's late tail). Each window's bound rests on
+   only ``B T`` independent samples, so the estimate is the median of the lower half of the
+   windows' bounds. When the record has a pre-trigger of at least three periods clear of the
+   filter's end effects, the RMS of the band-passed pre-trigger is a direct estimate, and the
+   smaller of the two is used: no estimate can exceed what a clean stretch of the signal
+   allows (an envelope that fits an exponential to 1e-3 bounds the noise at 1e-3 of it).
+   The out-of-band spectral level is not used: on an impact test it holds the tails of the
+   other modes and overstates the in-band noise by orders of magnitude.
+7. Stop and noise floor: ``noise_floor`` is the noise-based amplitude floor, the
+   displacement amplitude at which the envelope would be ``snr_min`` times the in-band noise
+   RMS ``s_n``. The curve stops where the envelope falls below that, or at the end of the
+   record, or (after at least three points) at the first window whose damping ratio has a
+   relative standard uncertainty (step 4) above ``max_damping_std`` while the noise alone
+   would cause that much (the decay-rate error that noise ``s_n / A`` on ``B T`` independent
+   samples gives, ``sqrt(12) (s_n / A) / (T sqrt(B T))``, is above the limit; a scatter that
    the noise cannot explain, such as the change of damping within a window at large
-   amplitude, does not stop the curve). The larger of the two amplitudes (as displacement)
-   is ``noise_floor``.
+   amplitude, does not stop the curve). Why and at which amplitude the curve stopped is in
+   ``notes``; a stop for a reason other than noise (a window that is not a decaying mode in
+   the band) is also a warning.
 
 The band must hold one clear mode: a Welch spectrum peak inside it, not at its edges, at
 least 10 times the band's median level, with no second peak above a tenth of it.
@@ -128,18 +144,57 @@ def _filter_extent(sos, fs, lo, hi):
     return int(above[-1]) + 1
 
 
-def _noise_rms(y, fs, sos, lo, hi):
-    """In-band noise RMS from the median out-of-band Welch level and the filter's bandwidth."""
-    nper = int(min(y.size, max(256, 2 ** math.ceil(math.log2(8.0 * fs / lo)))))
-    f, P = signal.welch(y, fs=fs, nperseg=nper)
-    out = ((f >= 0.5 * lo) & (f < lo)) | ((f > hi) & (f <= min(2.0 * hi, 0.98 * fs / 2)))
-    if np.count_nonzero(out) < 3:
-        return float("nan"), float("nan")
-    level = float(np.median(P[out]))
+def _noise_bandwidth(sos, fs):
+    """Noise bandwidth [Hz] of the zero-phase filter (``sosfiltfilt`` applies ``|H|**2``)."""
     w, H = signal.sosfreqz(sos, worN=8192, fs=fs)
-    gain2 = np.abs(H) ** 4                       # sosfiltfilt applies |H|**2 in power twice
-    bandwidth = float(np.trapezoid(gain2, w))   # noise bandwidth [Hz]
-    return math.sqrt(level * bandwidth), bandwidth
+    return float(np.trapezoid(np.abs(H) ** 4, w))
+
+
+def _residual_noise(z, i0, i1, nw):
+    """Upper bound on the in-band noise RMS from the analytic signal itself (step 6).
+
+    In consecutive windows of ``nw`` samples, ``z`` is compared with its local model
+    ``exp(a + b t + i (c + d t))`` (straight lines through ``ln |z|`` and the phase); the RMS
+    of ``|z - model|`` and of ``|z|`` (the whole in-band content, the bound where the mode has
+    decayed) are each at least the noise's, which for band-limited real noise of RMS ``s``
+    is ``sqrt(2) s`` in the analytic signal. Model error (a drifting frequency, harmonics in
+    the band) can only add. Returns the per-window bounds ``min(rms|z - model|, rms|z|) /
+    sqrt(2)``.
+    """
+    out = []
+    tw = np.arange(nw) - 0.5 * (nw - 1)
+    for s in range(i0, i1 - nw + 1, nw):
+        zw = z[s:s + nw]
+        mag = np.abs(zw)
+        ca = np.polyfit(tw, np.log(np.maximum(mag, 1e-300)), 1)
+        cp = np.polyfit(tw, np.unwrap(np.angle(zw)), 1)
+        model = np.exp(np.polyval(ca, tw) + 1j * np.polyval(cp, tw))
+        res = float(np.sqrt(np.mean(np.abs(zw - model) ** 2)))
+        total = float(np.sqrt(np.mean(mag ** 2)))
+        # where noise dominates, the fitted phase line follows the noise's own slow phase
+        # and the residual understates it: there the whole content is the bound
+        out.append((res if res < 0.3 * total else total) / math.sqrt(2.0))
+    return np.array(out)
+
+
+def _noise_rms(yf, z, fs, span, f_peak):
+    """In-band noise RMS of the band-passed record and how it was found (step 6)."""
+    i_pk, i0, i1, n_trim, nw = span
+    bounds = _residual_noise(z, i0, i1, nw)
+    how = []
+    noise = float("inf")
+    if bounds.size:
+        # each window is a noisy upper bound (a few B T samples): the median of the lower half
+        low = np.sort(bounds)[:(bounds.size + 1) // 2]
+        noise = float(np.median(low))
+        how.append(f"residual of the analytic signal about its local decaying-sinusoid model "
+                   f"(median of the lower half of {bounds.size} windows): {noise:.3g}")
+    pre = yf[n_trim:max(n_trim, i_pk - n_trim)]
+    if pre.size >= max(64, 3.0 * fs / f_peak):
+        quiet = float(np.sqrt(np.mean(pre ** 2)))
+        how.append(f"pre-trigger ({pre.size / fs:.3g} s): {quiet:.3g}")
+        noise = min(noise, quiet)
+    return noise, "; ".join(how)
 
 
 def _window_fit(tw, lnA, ph, n_block):
@@ -196,16 +251,20 @@ def amplitude_curve(t, y, *, quantity: str = "acceleration", band, n_periods: fl
         The curve stops where the envelope is below ``snr_min`` times the in-band noise RMS
         (default 10, range [2, 1e6]).
     max_damping_std : float, keyword-only
-        The curve also stops at the first window whose damping ratio has a relative standard
-        uncertainty above this (default 0.01, range (0, 1]).
+        After at least three points, the curve also stops at the first window whose damping
+        ratio has a relative standard uncertainty above this while the noise alone would
+        cause that much (default 0.01, range (0, 1]); points before it keep their stated
+        uncertainty.
 
     Returns
     -------
     AmplitudeCurve
         ``amplitude`` [m] (displacement at the sensor), ``frequency`` [Hz] (undamped natural
         frequency ``sqrt(sigma**2 + w_d**2) / 2 pi``), ``damping_ratio`` [-], their standard
-        uncertainties, ``noise_floor`` [m], ``method="hilbert"``; ``notes`` state the filter,
-        the trimming and the windows. Points are in time order (decreasing amplitude).
+        uncertainties, ``noise_floor`` [m] (the displacement amplitude at which the signal would
+        be ``snr_min`` times the in-band noise), ``method="hilbert"``; ``notes`` state the
+        filter, the trimming, the windows, the noise estimate and where and why the curve
+        stopped. Points are in time order (decreasing amplitude).
 
     Raises
     ------
@@ -235,18 +294,21 @@ def amplitude_curve(t, y, *, quantity: str = "acceleration", band, n_periods: fl
     sos = signal.butter(int(order), [lo, hi], btype="bandpass", fs=fs, output="sos")
     yf = signal.sosfiltfilt(sos, yy)
     # zero padding to >= 2n: the FFT-based transform is circular, and without padding the
-    # large start of a ring-down would leak into its quiet end
-    z = signal.hilbert(yf, N=int(2 ** math.ceil(math.log2(2 * n))))[:n]
+    # large start of a ring-down would leak into its quiet end. The first and last n_trim
+    # samples (cut anyway) are tapered: a record cropped at the impact starts abruptly, and
+    # the Hilbert kernel's slow 1/t decay would spread that step over the whole record.
+    n_trim = _filter_extent(sos, fs, lo, hi)
+    i_pk = int(np.argmax(np.abs(yf)))
+    m = min(n_trim, n // 4)
+    ramp = 0.5 - 0.5 * np.cos(np.pi * (np.arange(m) + 0.5) / m)
+    yt = yf.copy()
+    yt[:m] *= ramp
+    yt[n - m:] *= ramp[::-1]
+    z = signal.hilbert(yt, N=int(2 ** math.ceil(math.log2(2 * n))))[:n]
     env = np.abs(z)
     phase = np.unwrap(np.angle(z))
-    n_trim = _filter_extent(sos, fs, lo, hi)
-    i0 = int(np.argmax(env)) + n_trim
+    i0 = i_pk + n_trim
     i1 = n - n_trim
-    noise, bandwidth = _noise_rms(yy[min(i0, n - 1):], fs, sos, lo, hi)
-    pre = yy[:max(0, int(np.argmax(np.abs(yy))) - 8)]      # pre-trigger record, if any
-    if pre.size >= 64 and math.isfinite(bandwidth):
-        quiet = float(np.std(pre)) * math.sqrt(2.0 * bandwidth / fs)
-        noise = quiet if not math.isfinite(noise) else min(noise, quiet)
     if window is not None:
         window = check_scalar("window", window, low=0.0, low_open=True)
         nw = int(round(window * fs))
@@ -257,8 +319,9 @@ def amplitude_curve(t, y, *, quantity: str = "acceleration", band, n_periods: fl
         raise ValueError(f"record too short: after trimming {n_trim / fs:.3g} s of filter end "
                          f"effects at each end, {max(i1 - i0, 0) / fs:.3g} s remain, less than "
                          f"one window ({nw / fs:.3g} s); give a longer record or a wider band")
-    noise = max(noise if math.isfinite(noise) else 0.0, 1e-7 * float(env.max()))
-    bw = bandwidth if math.isfinite(bandwidth) else hi - lo
+    noise, how = _noise_rms(yf, z, fs, (i0 - n_trim, i0, i1, n_trim, nw), f_peak)
+    noise = max(noise, 1e-7 * float(env.max()))
+    bw = _noise_bandwidth(sos, fs)
     rows, stop, x_stop = _windows(tt, env, phase, (i0, i1, nw), (noise, snr_min, bw), k_pow,
                                   f_peak, (lo, hi), max_damping_std)
     if not rows:
@@ -270,15 +333,19 @@ def amplitude_curve(t, y, *, quantity: str = "acceleration", band, n_periods: fl
     if a.shape[0] < 3:
         warns.append(f"only {a.shape[0]} window(s) above the noise floor; the curve is too "
                      "short to show an amplitude dependence")
-    if stop.startswith("window"):
-        warns.append(f"the curve stopped early: {stop}")
     w_ref = 2 * math.pi * float(a[-1, 1])
-    floor = max(snr_min * noise / w_ref ** k_pow, x_stop)
+    floor = snr_min * noise / w_ref ** k_pow
+    x_last = float(a[-1, 0])
+    if stop.startswith("window"):
+        warns.append(f"the curve stopped early at {x_last:.3g} m ({x_last / floor:.3g} x the "
+                     f"noise floor), not because of noise: {stop}")
     notes = (f"band {lo:g}-{hi:g} Hz, Butterworth order {order} zero-phase (sosfiltfilt); "
              f"mode at {f_peak:.4g} Hz; trimmed {n_trim / fs:.4g} s after the envelope peak "
              f"(t = {tt[i0 - n_trim]:.4g} s) and {n_trim / fs:.4g} s before the end; "
              f"{a.shape[0]} windows of up to {nw / fs:.4g} s; in-band noise RMS {noise:.3g} "
-             f"({quantity}); stopped: {stop}")
+             f"({quantity}) from {how}; noise floor {floor:.3g} m ({snr_min:g} x noise); "
+             f"last point at {x_last:.3g} m; stopped: {stop}"
+             + (f" (at {x_stop:.3g} m)" if x_stop > 0 else ""))
     log.debug("amplitude_curve: %s", notes)
     return AmplitudeCurve(a[:, 0], a[:, 1], a[:, 2], amplitude_std=a[:, 3],
                           frequency_std=a[:, 4], damping_std=a[:, 5], noise_floor=floor,
@@ -322,7 +389,7 @@ def _windows(tt, env, phase, span, noise_spec, k_pow, f_peak, band, max_zstd):
         f_std = math.hypot(sigma * sa[1], wd * sp[1]) / wn / (2 * math.pi)
         T = n_w * dt           # decay-rate error that the noise alone would cause
         sd_noise = math.sqrt(12.0) * noise / math.exp(ca[0]) / (T * math.sqrt(max(bw * T, 3.0)))
-        if sa[1] > max_zstd * sigma and 3.0 * sd_noise > max_zstd * sigma:
+        if len(rows) >= 3 and sa[1] > max_zstd * sigma and sd_noise > max_zstd * sigma:
             return rows, (f"damping ratio known to worse than {100 * max_zstd:g} % at "
                           f"t = {tc:.4g} s (noise)"), amp
         rows.append((amp, f, zeta, amp * sa[0], f_std, sa[1] / wn))
