@@ -1,4 +1,5 @@
 """Every example runs as a script (small settings) and writes what it promises."""
+import csv
 import os
 import subprocess
 import sys
@@ -62,3 +63,31 @@ def test_real_damper_records_carry_their_licence():
         t, u, F = np.loadtxt(f, delimiter=",", skiprows=1).T
         assert np.allclose(np.diff(t), 1 / 1024, atol=1e-5)
         assert 0.02 < np.abs(u).max() < 0.03 and 5e3 < np.abs(F).max() < 2e4
+
+
+# ---------------------------------------------------------------- ensemble examples
+def test_uncertainty_bands_quick(tmp_path):
+    out = tmp_path / "bands.png"
+    proc = run_example("uncertainty_bands.py", "--quick", "--out", str(out))
+    assert out.stat().st_size > 20_000
+    assert "Prediction bands (90 % central)" in proc.stdout and "peak displacement" in proc.stdout
+    with open(out.with_suffix(".csv"), newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    assert len(rows) == 16 and all(r["ok"] == "True" for r in rows)
+    # the sampled slip forces scatter around the fitted 9 kN of the synthetic record
+    Fs = [float(r["Fs"]) for r in rows]
+    assert len(set(Fs)) == 16 and all(abs(f / 9000.0 - 1) < 0.01 for f in Fs)
+
+
+def test_preload_sweep_quick(tmp_path):
+    out = tmp_path / "sweep.png"
+    proc = run_example("preload_sweep.py", "--quick", "--out", str(out))
+    assert out.stat().st_size > 20_000
+    assert "3 succeeded, 0 failed" in proc.stdout
+    with open(out.with_suffix(".csv"), newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    # a lower preload slips more: larger frequency drop and more damping at the top amplitude
+    drop = [float(r["frequency_drop"]) for r in rows]
+    zmax = [float(r["damping_max"]) for r in rows]
+    assert [float(r["preload"]) for r in rows] == [5e3, 15e3, 30e3]
+    assert drop[0] > drop[1] > drop[2] > 0 and zmax[0] > zmax[1] > zmax[2]
