@@ -25,9 +25,12 @@ def _pyplot():
 
 
 def _axes(ax):
+    """One matplotlib Axes: ``ax`` itself, or a new figure's if ``None``."""
     if ax is None:
         plt = _pyplot()
         _, ax = plt.subplots()
+    elif not hasattr(ax, "plot"):
+        raise TypeError(f"ax must be one matplotlib Axes, got {type(ax).__name__}")
     return ax
 
 

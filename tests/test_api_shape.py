@@ -83,8 +83,7 @@ def _diag():
 RESULTS = {"FitResult": _fit, "AmplitudeCurve": _curve, "VibrationDiagnosis": _vib,
            "Diagnosis": _diag}
 #: Known gaps in files other helpers own (listed in /work/notes/robust.md for the lead).
-PENDING = {("FitResult", "plot"): "identify/fit.py: FitResult has no plot(ax=) (plotting."
-                                  "plot_fitted_loops/plot_dissipation_fit can back it)"}
+PENDING = {}
 
 
 @pytest.mark.parametrize("name", sorted(RESULTS))
