@@ -241,6 +241,7 @@ def _linear_system(key: Specimen) -> LinearSystem:
     sim = exu.SimulationSettings()
     sim.solution.file.write = False
     sim.parallel.numberOfThreads = 1
+    sim.staticSolver.verboseMode = 0          # no solver banner on stdout
     solver = exu.MainSolverStatic()
     solver.InitializeSolver(mbs, sim)
     solver.ComputeMassMatrix(mbs)
