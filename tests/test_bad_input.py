@@ -287,18 +287,11 @@ _FIT = "identify/ owner (helper fit): "
 _DIAG = "diagnose/ owner (helper diag): "
 _EFF = "effects.py owner: "
 PENDING: dict[tuple[str, str, str], str] = {
-    **{("TestData", a, lab): _FIT + "TestData(t, u, F, cycles) does not validate its arrays "
-                                    "(NaN, text, 2-D, mismatched lengths, unsorted t are accepted)"
-       for a in ("t", "u", "F") for lab in ("nan", "inf", "strings", "text", "complex", "object",
-                                            "empty", "2-D", "one sample", "shorter",
-                                            "non-monotonic", "constant")},
     ("simulate_test", "sample_rate", "huge"): _FIT + "numpy 'Maximum allowed size exceeded' "
                                               "does not name sample_rate",
     ("fit_force_model", "theta0", "huge"): "identify/model_fit.py: theta0 x1e300 gives scipy's "
                                             "'array must not contain infs or NaNs', not naming "
                                             "theta0 (the model's force overflows)",
-    ("base_joint", "element", "*"): _EFF + "base_joint(None/'x'/3.0/dict) returns its argument "
-                                    "instead of rejecting a non-element",
 }
 
 

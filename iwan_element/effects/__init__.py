@@ -32,6 +32,7 @@ import importlib
 import inspect
 import pkgutil
 
+from ..core.protocol import check_element
 from ._base import ParamSpec, _Effect
 from .asymmetric_slip import AsymmetricSlip
 from .backlash import Backlash
@@ -93,7 +94,9 @@ def make_effect(name: str, inner, **parameters: float):
 
 
 def base_joint(element):
-    """The innermost element below any stack of effects."""
+    """The innermost element below any stack of effects (``ValueError`` if ``element`` is no
+    joint element)."""
+    check_element(element, name="element")
     while isinstance(element, _Effect):
         element = element.inner
     return element

@@ -341,6 +341,16 @@ class TestData:
     source: str | None = None
     hysteresis: float = 0.0
 
+    def __post_init__(self):
+        # the same checks as from_arrays, on read-only copies (the caller's arrays stay as given)
+        uu = finite_array("u (displacement)", self.u, ndim=1, min_size=4).copy()
+        FF = finite_array("F (force)", self.F, ndim=1, min_size=4).copy()
+        same_length(t=np.asarray(self.t).ravel(), u=uu, F=FF)
+        tt = np.array(_check_time(self.t, uu.size), dtype=float)
+        _check_varies(uu)
+        for name, arr in (("t", tt), ("u", uu), ("F", FF)):
+            object.__setattr__(self, name, _readonly(arr))
+
     @classmethod
     def from_arrays(cls, t, u, F, *, units: dict | None = None, source: str | None = None,
                     hysteresis: float | None = None, close_tol: float = 0.02,
