@@ -290,3 +290,18 @@ def test_bank_equals_separate_joints_on_random_histories():
     np.testing.assert_allclose(bank.D, [j.dissipated_energy for j in joints], rtol=1e-11)
     assert [bank.depth(i) for i in range(4)] == [j.reversal_depth for j in joints]
     np.testing.assert_allclose(bank.force_history(u)[-1], bank.F, rtol=0, atol=1e-12)
+
+
+def test_bank_keeps_tiny_reversals_and_the_joint_tolerance_bound():
+    """The bank walks reversals like IwanJoint: by signs, not products (the product of two
+    differences of ~1e-160 m underflows and lost the reversal), and with the joint's bound on
+    reversal_tol (a larger tolerance erases real reversals)."""
+    p = IwanParameters(Fs=1.0, KT=1e160, chi=-0.5, beta=0.2)       # phi_max = 2.25e-160 m
+    j, bank = IwanJoint(p), IwanJointBank([p])
+    for r in (0.3, 0.3 + 1e-7, 0.3 - 1e-7, -0.1, 0.25, -0.2, 0.1):
+        j.trial(r * p.phi_max)
+        j.commit()
+        bank.commit(np.array([r * p.phi_max]))
+        assert bank.F[0] == pytest.approx(j.force, rel=1e-12, abs=0.0)
+    with pytest.raises(ValueError, match="reversal_tol"):
+        IwanJointBank([P], reversal_tol=1e-3)

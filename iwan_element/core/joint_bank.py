@@ -22,7 +22,9 @@ import math
 
 import numpy as np
 
+from ._history import REVERSAL_TOL
 from ._validation import check_scalar, finite_array
+from .joint import REVERSAL_TOL_MAX
 from .parameters import IwanParameters
 
 __all__ = ["IwanJointBank"]
@@ -39,7 +41,7 @@ class IwanJointBank:
         One parameter set per point (SI units).
     reversal_tol : float, keyword-only
         Relative reversal tolerance, as for :class:`~iwan_element.IwanJoint` (default 1e-12,
-        range ``[0, 1e-3]``); the absolute tolerance of point ``i`` is
+        range ``[0, 1e-9]``); the absolute tolerance of point ``i`` is
         ``reversal_tol * phi_max_i``.
 
     Notes
@@ -49,7 +51,7 @@ class IwanJointBank:
     round-off).
     """
 
-    def __init__(self, params, *, reversal_tol: float = 1e-12):
+    def __init__(self, params, *, reversal_tol: float = REVERSAL_TOL):
         if isinstance(params, (str, bytes, dict)) or not hasattr(params, "__iter__"):
             raise ValueError(f"params must be a sequence of IwanParameters, got {type(params).__name__}")
         params = list(params)
@@ -59,7 +61,7 @@ class IwanJointBank:
             if not isinstance(p, IwanParameters):
                 raise ValueError(f"params[{i}] must be an IwanParameters instance, "
                                  f"got {type(p).__name__}")
-        tol = check_scalar("reversal_tol", reversal_tol, low=0.0, high=1e-3)
+        tol = check_scalar("reversal_tol", reversal_tol, low=0.0, high=REVERSAL_TOL_MAX)
         self._params = tuple(params)
         self._rtol = tol
         f = np.array
@@ -235,7 +237,8 @@ class IwanJointBank:
         acc = [0.0, 0.0, float(self.Gc[i]), float(self.IHc[i])]
         if du != 0.0:
             d = uc - us[n - 1] if n else uc
-            if d * du < 0.0:
+            up = du > 0.0                    # signs, not products: d * du underflows
+            if (d < 0.0) if up else (d > 0.0):
                 if abs(d) <= self._scal[i][9]:
                     if n:
                         n -= 1
@@ -251,7 +254,7 @@ class IwanJointBank:
                     bound = us[n - 2] if n >= 2 else -top
                 else:
                     break
-                if (u - bound) * du < 0.0:
+                if (u < bound) if up else (u > bound):   # bound not reached
                     break
                 self._segment(i, top, topF, pos, bound, acc)
                 pos = bound
