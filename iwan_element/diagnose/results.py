@@ -35,6 +35,15 @@ def _unit(name: str, key: str, modal: bool = False) -> str:
     return next((s.unit for s in specs if s.name == key), "")
 
 
+
+def _verdict_lines(word: str, result) -> list:
+    """The closing lines of a diagnosis report: misfit before and after, noise, warnings."""
+    lines = [f"  {word} before {100 * result.error_before:.3g} % -> after "
+             f"{100 * result.error_after:.3g} % (noise {100 * result.noise_level:.3g} %)"]
+    if result.warnings:
+        lines += ["  warnings:"] + [f"  - {w}" for w in result.warnings]
+    return lines
+
 @dataclass(frozen=True, eq=False)
 class Diagnosis:
     """What the four-parameter Iwan fit misses in a test record, and the augmented model.
@@ -161,11 +170,7 @@ class Diagnosis:
                          f"beta={q.beta:.4f}")
         else:
             lines.append("  named: none")
-        lines.append(f"  error before {100 * self.error_before:.3g} % -> after "
-                     f"{100 * self.error_after:.3g} % (noise {100 * self.noise_level:.3g} %)")
-        if self.warnings:
-            lines += ["  warnings:"] + [f"  - {w}" for w in self.warnings]
-        return "\n".join(lines)
+        return "\n".join(lines + _verdict_lines("error", self))
 
     def plot(self, ax=None):
         """Data, base fit and augmented fit (force-displacement, mm and kN) and the residual
@@ -336,11 +341,7 @@ class VibrationDiagnosis:
                     f"{k} = {v:.4g} {_unit(name, k, modal=True)}" for k, v in d.items()))
         else:
             lines.append("  named: none")
-        lines.append(f"  mismatch before {100 * self.error_before:.3g} % -> after "
-                     f"{100 * self.error_after:.3g} % (noise {100 * self.noise_level:.3g} %)")
-        if self.warnings:
-            lines += ["  warnings:"] + [f"  - {w}" for w in self.warnings]
-        return "\n".join(lines)
+        return "\n".join(lines + _verdict_lines("mismatch", self))
 
     def plot(self, ax=None):
         """Frequency and damping against amplitude: measured, predicted, augmented.
