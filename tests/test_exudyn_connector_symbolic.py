@@ -122,6 +122,10 @@ def _prescribed_nested_then_jump(depth, law="symbolic"):
 
 
 def test_overflowing_step_is_detected_logged_and_listed(caplog):
+    """A prescribed jump across two loop closures in one step, from a quiet branch: far
+    beyond the margin at which the post-Newton re-solve is armed (ten times the step
+    increments of the branch), so it is not re-solved; it is detected, logged and listed,
+    and the joint's committed history stays exact."""
     conn, t_jump = _prescribed_nested_then_jump(depth=2)
     assert conn.overflow_times == pytest.approx([t_jump])
     assert "beyond the 2 reversal points" in caplog.text

@@ -13,12 +13,16 @@ _NAN = math.nan
 
 # ---------------------------------------------------------------------------- dispatcher
 def _installed_post_step(mbs):
-    """The Python object currently set as post-step user function, or ``None``.
+    """The Python object currently set as post-step user function, or ``None``."""
+    return _installed(mbs.GetPostStepUserFunction())
+
+
+def _installed(got):
+    """A user function as Exudyn's getters return it, or ``None``.
 
     Exudyn 1.13.6 returns ``0`` when none is set and a dict ``{'function': f, 'type': ...}``
     otherwise (older versions returned ``f`` itself); both forms are accepted.
     """
-    got = mbs.GetPostStepUserFunction()
     if isinstance(got, dict):
         got = got.get("function", 0)
     if got is None or (isinstance(got, int) and got == 0):
@@ -28,49 +32,120 @@ def _installed_post_step(mbs):
 
 class _PostStepDispatcher:
     """Commits every connector of one system once per accepted step, then calls the
-    previously installed post-step function (``chained``)."""
+    previously installed post-step function (``chained``).
+
+    The per-step path is one comparison of times, a flag and the connectors' accept
+    functions; a new solve is announced by the ``mbs.sys`` hook (:class:`_SolveHook`) or
+    recognised by an accepted time not after the last one.
+    """
 
     def __init__(self, chained, mbs):
         self.chained = chained
         self.connectors = []       # in creation order
+        self.accepts = ()          # their accept functions, renewed with the views
         self.last_t = _NAN
         self.running = False
+        self.stale = True          # a new solve was announced: check settings, renew views
         self.solvers = (None, None)    # the solver objects of the run the views belong to
-        conns = self.connectors
+        self.risky = []            # connectors whose stack is deeper than their law holds
+        self.pn_prev = None        # post-Newton function found when ours was installed
+        self.pn_big = 1e10         # "discontinuous error" that asks for a re-solve
+        self.mbs = mbs
         disp = self
         self.sysd = mbs.sys        # Exudyn's SolveDynamic/SolveStatic store their solver here
 
         def post_step_dispatcher(mbs, t):
-            if disp.running:       # re-entered through a user function that calls us by hand
-                return True
+            if t > disp.last_t and not disp.stale and not disp.running:
+                disp.last_t = t    # the usual case: the next accepted step of this run
+                for a in disp.accepts:
+                    a(t)
+                f = disp.chained
+                if f is None:
+                    return True
+            else:
+                if disp.running:   # re-entered through a user function that calls us by hand
+                    return True
+                disp.slow_step(mbs, t)
+                f = disp.chained
+                if f is None:
+                    return True
             disp.running = True
             try:
-                sysd = disp.sysd
-                solvers = (sysd.get("dynamicSolver"), sysd.get("staticSolver"))
-                if solvers[0] is not disp.solvers[0] or solvers[1] is not disp.solvers[1]:
-                    disp.solvers = solvers     # a new solve (maybe after an Assemble)
-                    disp.new_solve(mbs)
-                if t > disp.last_t:            # the usual case: the next accepted step
-                    disp.last_t = t
-                    for c in conns:
-                        c._accept(t)
-                elif t != disp.last_t:         # a new run (never commit twice at one time)
-                    disp.last_t = t
-                    disp.refresh(mbs)
-                    for c in conns:
-                        c._accept(t)
-                else:                          # a run continuing from the last accepted time
-                    disp.refresh(mbs)
-                f = disp.chained
-                return True if f is None else f(mbs, t)
+                return f(mbs, t)
             finally:
                 disp.running = False
 
+        def post_newton(mbs, t):
+            err = 0.0
+            for c in disp.risky:
+                err = max(err, c._newton_check(disp.pn_big))
+            f = disp.pn_prev
+            if f is None:
+                return [err, -1.0]
+            got = f(mbs, t)
+            return [max(err, float(got[0])), float(got[1])]
+
         post_step_dispatcher._iwan_dispatcher = self
+        post_newton._iwan_dispatcher = self
         self.callback = post_step_dispatcher
+        self.post_newton = post_newton
+
+    def slow_step(self, mbs, t) -> None:
+        """A step that is not the plain next one: a new solve, a new run, a continued run."""
+        sysd = self.sysd
+        solvers = (sysd.get("dynamicSolver"), sysd.get("staticSolver"))
+        if self.stale or solvers[0] is not self.solvers[0] or solvers[1] is not self.solvers[1]:
+            self.solvers = solvers     # a new solve (maybe after an Assemble)
+            self.stale = False
+            self.new_solve(mbs)
+            self.last_t = t
+            for a in self.accepts:
+                a(t)
+        elif t > self.last_t:
+            self.last_t = t
+            for a in self.accepts:
+                a(t)
+        elif t != self.last_t:         # a new run (never commit twice at one time)
+            self.last_t = t
+            self.refresh(mbs)
+            for a in self.accepts:
+                a(t)
+        else:                          # a run continuing from the last accepted time
+            self.refresh(mbs)
+
+    def lazy_until(self) -> float:
+        """Accepted steps before this time may commit joints lazily: the last step of the
+        dynamic run being solved, known only if the ``mbs.sys`` hook saw it start and no
+        other post-step function (which might read the joints) is chained; else never."""
+        sysd = self.sysd
+        if self.chained is not None or getattr(sysd, "kind", None) != "dynamicSolver":
+            return -math.inf
+        settings = sysd.get("simulationSettings")
+        if settings is None:
+            return -math.inf
+        ti = settings.timeIntegration
+        h = (ti.endTime - ti.startTime) / max(1, ti.numberOfSteps)
+        return ti.endTime - 0.5 * abs(h)
+
+    def set_risky(self, connector, risky: bool) -> None:
+        """Install the post-Newton check while some connector's committed stack is deeper
+        than its law holds (only then can a step need points the law does not hold)."""
+        if risky and connector not in self.risky:
+            self.risky.append(connector)
+        elif not risky and connector in self.risky:
+            self.risky.remove(connector)
+        mbs = self.mbs
+        current = _installed(mbs.GetPostNewtonUserFunction())
+        if self.risky and current is not self.post_newton:
+            self.pn_prev = current
+            mbs.SetPostNewtonUserFunction(self.post_newton)
+        elif not self.risky and current is self.post_newton:
+            mbs.SetPostNewtonUserFunction(0 if self.pn_prev is None else self.pn_prev)
+            self.pn_prev = None
 
     def add(self, connector: "IwanConnector") -> None:
         self.connectors.append(connector)
+        self.stale = True
 
     def refresh(self, mbs) -> None:
         """Let every connector take fresh views of the system coordinates.
@@ -80,14 +155,21 @@ class _PostStepDispatcher:
         renewed at the start of every run: a new solver object in ``mbs.sys`` (each
         ``SolveDynamic``/``SolveStatic`` stores one), or an accepted time not after the last.
         """
+        lazy = self.lazy_until()
         for c in self.connectors:
-            c._refresh(mbs)
+            if getattr(c, "_lazy", False):
+                c._refresh(mbs, lazy)
+            else:
+                c._refresh(mbs)
+        self.accepts = tuple(c._accept for c in self.connectors)
 
     def new_solve(self, mbs) -> None:
         """Start of a solve: refuse settings the connectors cannot serve, then refresh."""
-        settings = mbs.sys.get("simulationSettings")
+        settings = self.sysd.get("simulationSettings")
         if settings is not None:
             check_settings(settings, self.connectors)
+            tol = settings.timeIntegration.discontinuous.iterationTolerance
+            self.pn_big = max(1e10, 1e3 * abs(tol))
         self.refresh(mbs)
 
     @staticmethod
@@ -165,8 +247,10 @@ class _SolveHook(dict):
     def __setitem__(self, key, value):
         super().__setitem__(key, value)
         if key in ("dynamicSolver", "staticSolver"):
+            self.kind = key            # the solve about to start
             mbs = self.mbs
             for d in self.dispatchers:
+                d.stale = True
                 if not d.reachable_from(_installed_post_step(mbs)):
                     d.install(mbs)
 

@@ -2,17 +2,35 @@
 
 The force law is the exact Iwan law as an Exudyn symbolic expression
 (:mod:`._symbolic_law`): no Python call and no Exudyn API call per force evaluation, so it
-is safe with several solver threads. Once per accepted step the connector's post-step work
-reads the accepted slip (views of the system coordinates), brings the ``IwanJoint`` to it
-(``trial`` + ``commit``: the joint stays the exact reference and holds the energies), writes
-the committed slip to the law's variable and, only when the joint's reversal stack changed,
-the stack.
+is safe with several solver threads. Once per accepted step the post-step work reads the
+accepted slip (a view of the system coordinates) and writes it to the law's variable
+``u_c``. That is all it does while the slip moves on along the current branch without
+closing a loop (one interval test, the usual step): the joint's state on one branch is a
+function of the end point alone (force, stored and dissipated energy are closed forms of
+the branch, REFERENCE.md section 2), so the ``IwanJoint`` is committed there only lazily —
+at the next reversal or loop closure (then it is brought to the last point of the branch,
+then walks the event exactly), at the end of the run and whenever the connector is read.
+Only such events rewrite the law's reversal stack.
+
+Records hold ``(t, u)`` per accepted step; force and energies are replayed from a copy of
+the joint taken when the records start (the same ``trial``/``commit`` sequence, so the
+same numbers as a per-step commit) when they are read.
+
+Depth overflow (a step needs an older reversal point than the expression holds) can only
+happen while the committed stack is deeper than ``depth``. Only then a post-Newton user
+function is installed (no cost otherwise): after each Newton solve it compares the law with
+the exact joint at the converged slip; if they differ it writes to the variables the state
+the joint would have after passing part of the step's loop closures (a state on the same
+path, exact around the converged slip) and asks Exudyn for a discontinuous iteration, which
+re-solves the step with it. See :func:`newton_check`.
 """
 from __future__ import annotations
 
+import copy
 import logging
 import math
 
+import numpy as np
 from exudyn.advancedUtilities import CreateSymbolicUserFunction
 from exudyn.itemInterface import (ObjectConnectorCartesianSpringDamper,
                                   ObjectConnectorCoordinateSpringDamper)
@@ -23,6 +41,7 @@ from ._symbolic_law import SymbolicIwanState, cartesian_law, coordinate_law, mak
 __all__: list[str] = []
 
 _log = logging.getLogger(__name__)
+_INF = math.inf
 
 
 def symbolic_item(conn, depth: int, name: str, vis):
@@ -46,6 +65,7 @@ def symbolic_item(conn, depth: int, name: str, vis):
             name=name, markerNumbers=m, springForceUserFunction=fn, visualization=vis)
     conn._function = fn          # keep the expression tree alive
     st.probe = make_probe(conn._mbs, fn, conn._kind, conn._axis, off)
+    conn._snapshot = copy.deepcopy(joint)     # the records start from this state
     return item
 
 
@@ -54,11 +74,159 @@ def joint_tolerance(joint) -> float:
     return float(joint._tol)
 
 
-def symbolic_refresh(conn, mbs) -> None:
-    """Start of a run: the slip reader, and the accept function bound to it."""
+def symbolic_refresh(conn, mbs, lazy_until=-_INF) -> None:
+    """Start of a run: the slip reader, and the accept function bound to it. Steps at
+    ``t < lazy_until`` may commit the joint lazily (see the module docstring)."""
+    conn._flush_joint()
     smap = SlipMap(mbs, [conn._markers], conn._kind, conn._axis, [conn._offset])
     conn._read = smap              # the dispatcher then checks for a re-assembly per step
-    conn._accept = _accept_function(conn, smap)
+    conn._slip = _slip_reader(smap)
+    conn._accept = _accept_function(conn, lazy_until)
+
+
+def _slip_reader(smap):
+    """``() -> u``: the accepted slip from the view of the ODE2 coordinates (no copy)."""
+    if smap.generic:
+        return lambda: float(smap.slips()[0])
+    item = smap.q.item
+    terms = [(int(i), float(c)) for i, c in zip(smap.idx[0], smap.coef[0]) if c != 0.0]
+    c0 = float(smap.c[0])
+    if len(terms) == 1 and terms[0][1] == 1.0:
+        i = terms[0][0]
+        read = lambda: c0 + item(i)      # noqa: E731
+        read.single = (c0, i)
+        return read
+    if len(terms) == 2 and terms[0][1] == -1.0 and terms[1][1] == 1.0:
+        i0, i1 = terms[0][0], terms[1][0]
+        return lambda: c0 + item(i1) - item(i0)
+
+    def read():
+        u = c0
+        for i, c in terms:
+            u += c * item(i)
+        return u
+    return read
+
+
+def branch_interval(joint) -> tuple[float, float, bool]:
+    """``(lo, hi, up)``: the open interval of slips that continue the joint's current branch
+    without a reversal or a loop closure (the extended Masing rules: between the committed
+    slip and, ahead, the point where the branch's loop closes; the interval of
+    ``IwanJoint``'s own shortcut), and the branch's direction; empty before the first
+    motion."""
+    us, _ = joint.reversal_points()
+    uc = joint.displacement
+    if len(us):
+        d = uc - us[-1]
+        bound = float(us[-2]) if len(us) >= 2 else -float(us[-1])
+    else:
+        d = uc
+        bound = math.copysign(_INF, uc)
+    if d > 0.0:
+        return uc, bound, True
+    if d < 0.0:
+        return bound, uc, False
+    return 0.0, 0.0, True
+
+
+def law_window(joint, depth: int) -> tuple[float, float]:
+    """Open interval of slips at which the law, holding the newest ``depth`` reversal points
+    of the joint's committed stack, is exact for the next step: ends at the ``depth // 2``-th
+    loop-closing point the walk passes either way (REFERENCE.md section 2); the whole line
+    when the stack fits."""
+    us, Fr = joint.reversal_points()
+    if len(us) <= depth:
+        return -_INF, _INF
+    us, Fr = us.tolist(), Fr.tolist()
+    uc, Fc, tol = joint.displacement, joint.force, joint_tolerance(joint)
+    k = depth // 2 - 1
+    ends = []
+    for far in (-1e300, 1e300):
+        states = walk_states(us, Fr, uc, Fc, far, tol)
+        ends.append(states[k][0] if len(states) > k else far)
+    return ends[0], ends[1]
+
+
+#: The post-Newton check is armed when the slip comes closer to the end of the law's exact
+#: window than this many times the largest slip increment of one step on the current branch
+#: segment (and the step that started it).
+ARM_MARGIN = 10.0
+
+
+def _accept_function(conn, lazy_until):
+    """The per-step work of one connector (see the module docstring)."""
+    joint = conn._joint
+    depth = conn._state.depth
+    set_uc = conn._state.uc.SetValue
+    read = conn._slip
+    rec = conn._rec.append if conn._record_on else None
+    lo = hi = 0.0               # the open interval of plain continuations (empty: slow path)
+    up = True
+    prev = None                 # last accepted slip, and the largest step increment
+    dmax = 0.0
+
+    def event(t, u):
+        nonlocal lo, hi, up, prev, dmax
+        if t < conn._t_acc:
+            conn._new_run(t, u)
+        if prev is not None:
+            dmax = max(dmax, abs(u - prev))
+        prev = u
+        margin = ARM_MARGIN * dmax
+        dmax = 0.0                   # the next branch segment starts its own count
+        conn._flush_joint()
+        n = joint.reversal_depth
+        joint.trial(u)
+        joint.commit()
+        if joint.reversal_depth != n or conn._window:
+            sync_stack(conn, t)
+        set_uc(u)
+        conn._t_acc = t
+        wa, wb = law_window(joint, depth)
+        risky = not wa + margin < u < wb - margin
+        if risky != conn._risky:
+            conn._risky = risky
+            conn._dispatcher.set_risky(conn, risky)
+        if t < lazy_until and not risky:
+            lo, hi, up = branch_interval(joint)
+            lo, hi = max(lo, wa + margin), min(hi, wb - margin)
+        else:
+            lo = hi = 0.0
+
+    single = getattr(read, "single", None)      # (c0, i): u = c0 + q[i]
+    c0, i = single if single is not None else (0.0, 0)
+    item = conn._read.q.item
+
+    def accept(t):
+        nonlocal lo, hi, prev, dmax
+        u = c0 + item(i) if single is not None else read()
+        if lo < u < hi and t < lazy_until:
+            if up:
+                if u - lo > dmax:
+                    dmax = u - lo
+                lo = prev = u
+            else:
+                if hi - u > dmax:
+                    dmax = hi - u
+                hi = prev = u
+            conn._pending = u
+            set_uc(u)
+        else:
+            event(t, u)
+        if rec is not None:
+            rec(t)
+            rec(u)
+
+    return accept
+
+
+def flush_joint(conn) -> None:
+    """Commit the joint at the last accepted slip if that was left pending."""
+    u = conn._pending
+    if u is not None:
+        conn._pending = None
+        conn._joint.trial(u)
+        conn._joint.commit()
 
 
 def sync_stack(conn, t=None) -> None:
@@ -71,54 +239,119 @@ def sync_stack(conn, t=None) -> None:
     if t is not None and st.disagrees(joint.displacement, joint.force):
         conn._overflows.append(t)
         _log.warning("Iwan connector %s at t=%g: the step closed loops beyond the %d reversal "
-                     "points the symbolic law holds; that step's force was not exact (raise "
-                     "depth)", conn.objectNumber, t, st.depth)
+                     "points the symbolic law holds and could not be re-solved exactly; that "
+                     "step's force was not exact (raise depth)", conn.objectNumber, t, st.depth)
     st.set_stack(us, Fr)
+    conn._window = False
 
 
-def _accept_function(conn, smap):
-    joint = conn._joint
-    trial = joint.trial
-    commit = joint.commit
-    set_uc = conn._state.uc.SetValue
-    buf = conn._buf
-    extend = buf.extend if conn._record_on else None
-    flush = conn._flush
-    q = smap.q
-    idx = smap.idx[0].tolist()
-    coef = smap.coef[0].tolist()
-    c0 = float(smap.c[0])
-    simple = not smap.generic
-    item = q.item
-    terms = list(zip(idx, coef))
+# ---------------------------------------------------------------------------- overflow
+def walk_states(us, Fr, uc, Fc, u, tol):
+    """The committed states the joint passes through on the monotone move ``uc -> u``.
 
-    def accept(t):
-        if simple:
-            u = c0
-            for i, c in terms:
-                u += c * item(i)
+    Mirrors :meth:`IwanJoint._walk` (extended Masing rules, REFERENCE.md section 2): a
+    reversal at ``uc`` if the move turns back, then one state per loop the move closes.
+    Returns a list of ``(p, stack_u, stack_F)``: the slip ``p`` at which a loop closes
+    and the reversal stack (oldest first) right after it.
+    """
+    n = len(us)
+    du = u - uc
+    if du == 0.0:
+        return []
+    up = du > 0.0
+    d = uc - us[n - 1] if n else uc
+    e = None
+    if (d < 0.0) if up else (d > 0.0):
+        if abs(d) <= tol:
+            if n:
+                n -= 1
         else:
-            u = float(smap.slips()[0])
-        F = trial(u)[0]
-        if t < conn._t_acc:
-            conn._new_run(t, u)
-        depth = joint.reversal_depth
-        commit()
-        if joint.reversal_depth != depth:     # the stack changed (see sync_stack)
-            sync_stack(conn, t)
-        set_uc(u)
-        conn._t_acc = t
-        if extend is not None:
-            extend((t, u, F, joint.dissipated_energy, joint.work))
-            if len(buf) >= 5 * 1024:
-                flush()
+            e = uc
+    out = []
+    while True:
+        if e is not None:
+            bound = us[n - 1] if n else -e
+        elif n:
+            bound = us[n - 2] if n >= 2 else -us[n - 1]
+        else:
+            break
+        if (u < bound) if up else (u > bound):
+            break
+        if e is not None:
+            e = None
+            if n:
+                n -= 1
+        else:
+            n -= 2 if n >= 2 else 1
+        out.append((bound, list(us[:n]), list(Fr[:n])))
+    return out
 
-    return accept
+
+def newton_check(conn, big: float) -> float:
+    """Post-Newton check of one connector whose stack is deeper than the law holds.
+
+    Compares the law (variables as they are) with the exact joint at the converged slip.
+    Equal: returns 0. Different (the step closed loops beyond the points held): writes to the
+    variables the joint's state after passing some of the step's loop closures, so that the
+    law is exact from there on for the next ``depth // 2 - 1`` closures, and returns ``big``
+    (larger than Exudyn's discontinuous ``iterationTolerance``): Exudyn then re-solves the
+    step with it. The state is chosen ``depth // 2 - 2`` closures before the last one passed,
+    so a re-solved slip a little before or after it is still exact.
+    """
+    joint = conn._joint
+    st = conn._state
+    u = conn._slip()
+    F = joint.trial(u)[0]
+    joint.revert()
+    if abs(st.probe(u) - F) <= 1e-9 * st.Fs:
+        return 0.0
+    us, Fr = joint.reversal_points()
+    states = walk_states(us.tolist(), Fr.tolist(), joint.displacement, joint.force, u,
+                         joint_tolerance(joint))
+    if not states:
+        return 0.0                   # nothing to re-solve with (cannot happen in depth)
+    k = max(0, len(states) - 1 - max(0, st.depth // 2 - 2))
+    p, su, sF = states[k]
+    st.set_stack(su, sF)
+    st.set_uc(p)
+    conn._window = True
+    conn._n_resolved += 1
+    _log.debug("Iwan connector %s: a step closes %d loops; re-solved from the state at u=%g",
+               conn.objectNumber, len(states), p)
+    return big
+
+
+# ---------------------------------------------------------------------------- records
+def replay_records(conn) -> np.ndarray:
+    """The records as rows ``(t, u, F, dissipated, work)``: the pairs ``(t, u)`` replayed
+    on a copy of the joint taken where the records start (cached, extended incrementally)."""
+    raw = conn._rec
+    n = len(raw) // 2
+    cache = conn._replay
+    if cache is None or cache[1] > n:
+        cache = conn._replay = [copy.deepcopy(conn._snapshot), 0, np.empty((0, 5))]
+    j, done, table = cache
+    if done < n:
+        new = np.empty((n - done, 5))
+        pairs = raw[2 * done:2 * n].tolist()
+        trial, commit = j.trial, j.commit
+        for k in range(n - done):
+            t, u = pairs[2 * k], pairs[2 * k + 1]
+            F = trial(u)[0]
+            commit()
+            new[k] = (t, u, F, j.dissipated_energy, j.work)
+        table = np.concatenate([table, new]) if done else new
+        cache[1], cache[2] = n, table
+    return table
 
 
 def reset_state(conn) -> None:
     """Virgin state of the law's variables (after ``joint.reset()``)."""
-    conn._state.set_stack([], [])
+    conn._pending = None
+    conn._window = False
+    sync_stack(conn)
     conn._state.set_uc(0.0)
     conn._overflows.clear()
     conn._t_acc = -math.inf
+    conn._snapshot = copy.deepcopy(conn._joint)
+    conn._replay = None

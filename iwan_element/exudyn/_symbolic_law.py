@@ -58,6 +58,10 @@ class SymbolicIwanState:
         self.n = esym.Real(f"iwan{uid}_n", 0.0)
         self.r = [esym.Real(f"iwan{uid}_r{k}", 0.0) for k in range(depth)]
         self.R = [esym.Real(f"iwan{uid}_R{k}", 0.0) for k in range(depth)]
+        # derived from the stack (set with it): direction of the branch from the newest
+        # reversal point (0 on the virgin curve) and the slip where its loop closes
+        self.s = esym.Real(f"iwan{uid}_s", 0.0)
+        self.b = esym.Real(f"iwan{uid}_b", 0.0)
         self.KT = float(params.KT)
         self.Fs = float(params.Fs)
         self.pm = float(params.phi_max)
@@ -76,6 +80,16 @@ class SymbolicIwanState:
         for k in range(m):                   # r[0] is the newest point
             self.r[k].SetValue(us[n - 1 - k])
             self.R[k].SetValue(Fr[n - 1 - k])
+        # the branch from r0 heads for the point where its loop closes (the point below
+        # it, or -r0 for the last one): Masing's rule, REFERENCE.md section 2
+        if n:
+            b = float(us[n - 2]) if n >= 2 else -float(us[n - 1])
+            d = b - float(us[n - 1])
+            self.s.SetValue(1.0 if d > 0.0 else (-1.0 if d < 0.0 else 0.0))
+            self.b.SetValue(b)
+        else:
+            self.s.SetValue(0.0)
+            self.b.SetValue(0.0)
 
     def set_uc(self, u: float) -> None:
         self.uc.SetValue(u)
@@ -131,7 +145,18 @@ class SymbolicIwanState:
         f_new = chain([(uc, Fc)] + held, n + 1.0, 0)
         f_small = esym.IfThenElse(n >= 0.5, chain(held[1:], n - 1.0, 0), self._virgin(u))
         f_rev = esym.IfThenElse(esym.abs(d) <= self.tol, f_small, f_new)
-        return esym.IfThenElse(d * du < 0.0, f_rev, f_cont)
+        general = esym.IfThenElse(d * du < 0.0, f_rev, f_cont)
+        # the usual trial continues the branch from r0 strictly between u_c and the point b
+        # where its loop closes (IwanJoint's own shortcut): the branch alone, with
+        # y = |u - r0| = (u - r0) s and 2 F_bb(y/2) = y (KT - a 2^-(chi+1) y^(chi+1))
+        s, b = self.s, self.b
+        fast = ((u - uc) * s > 0.0) * ((b - u) * s > 0.0)
+        y = (u - self.r[0]) * s
+        a2 = self.a * 0.5 ** self.e1
+        f_fast = self.R[0] + esym.IfThenElse(y < 2.0 * self.pm,
+                                             s * (y * (self.KT - a2 * esym.pow(y, self.e1))),
+                                             s * (2.0 * self.Fs))
+        return esym.IfThenElse(fast, f_fast, general)
 
 
 def make_probe(mbs, fn, kind, axis, off):

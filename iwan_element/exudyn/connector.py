@@ -150,6 +150,13 @@ class IwanConnector:
         self._route = "python"
         self._state = None          # symbolic route: the law's variables
         self._overflows = []
+        self._pending = None        # symbolic route: accepted slip not yet committed (lazy)
+        self._window = False        # the law's variables hold a post-Newton window
+        self._risky = False         # the committed stack is deeper than the law holds
+        self._snapshot = None       # copy of the joint where the records start
+        self._replay = None         # cache of the replayed records
+        self._slip = None           # () -> accepted slip (symbolic route)
+        self._n_resolved = 0        # post-Newton re-solves of steps beyond the law's depth
 
     # -------------------------------------------------------------- per-step work
     def _generic_accept(self, t):
@@ -211,8 +218,18 @@ class IwanConnector:
 
         return accept
 
+    def _newton_check(self, big: float) -> float:
+        return _symbolic.newton_check(self, big)
+
+    def _flush_joint(self) -> None:
+        """Symbolic route: commit the joint at the last accepted slip if that was left
+        pending (the joint is committed lazily along a branch)."""
+        if self._pending is not None:
+            _symbolic.flush_joint(self)
+
     def _flush(self) -> None:
         """Move the buffered record rows to the array."""
+        self._flush_joint()
         buf = self._buf
         if buf:
             self._rec.fromlist(buf)
@@ -229,12 +246,12 @@ class IwanConnector:
                 "history the joint holds, and the slip jumps from %g to %g; call reset() "
                 "before starting a fresh run", self.objectNumber, t, self._t_acc, held, u)
 
-    def _refresh(self, mbs):
+    def _refresh(self, mbs, lazy_until=-_INF):
         """Start of a run: resolve the global coordinate indices and take fresh views of the
         system coordinates (Assemble may have moved them); the views stay valid during a
         run (checked at every accepted step for all solvers, see the tests)."""
         if self._route == "symbolic":
-            _symbolic.symbolic_refresh(self, mbs)
+            _symbolic.symbolic_refresh(self, mbs, lazy_until)
             return
         if self._fast_nodes is None:
             self._read = None
@@ -278,7 +295,13 @@ class IwanConnector:
 
     @property
     def joint(self):
-        """The joint element; its committed state is the state at the last accepted step."""
+        """The joint element; its committed state is the state at the last accepted step.
+
+        Symbolic route: during a run the element is committed lazily (at every reversal or
+        loop closure, at the last step of a run and when read through the connector); a
+        Python function that reads the element itself during a run should read it through
+        this property."""
+        self._flush_joint()
         return self._joint
 
     @property
@@ -312,6 +335,7 @@ class IwanConnector:
         such a run unless the run continues from the state the joint holds (e.g. a
         dynamic run started from a static solution).
         """
+        self._pending = None
         self._joint.reset()
         if self._route == "symbolic":
             _symbolic.reset_state(self)
@@ -347,14 +371,22 @@ class IwanConnector:
         than the law holds (not exact; raise ``depth``). Empty in a sound run."""
         return np.array(self._overflows)
 
-    def _column(self, i: int) -> np.ndarray:
+    def _table(self) -> np.ndarray:
+        """All records, shape (n, 5): time, slip, force, dissipated energy, work."""
         self._check_running()
         self._flush()
-        return np.array(self._rec[i::_NCOL], dtype=float)
+        if self._route == "symbolic":
+            return _symbolic.replay_records(self)
+        return np.array(self._rec, dtype=float).reshape(-1, _NCOL)
+
+    def _column(self, i: int) -> np.ndarray:
+        return self._table()[:, i].copy()
 
     @property
     def n_records(self) -> int:
         """Number of recorded rows."""
+        if self._route == "symbolic":
+            return len(self._rec) // 2
         return (len(self._rec) + len(self._buf)) // _NCOL
 
     @property
@@ -392,9 +424,7 @@ class IwanConnector:
     def records(self) -> dict:
         """All records as a dict of arrays of shape (n,): ``time [s], slip [m], force [N],
         stored_energy [J], dissipated_energy [J], work [J]``."""
-        self._check_running()
-        self._flush()
-        data = np.array(self._rec, dtype=float).reshape(-1, _NCOL)
+        data = self._table()
         return {"time": data[:, 0].copy(), "slip": data[:, 1].copy(),
                 "force": data[:, 2].copy(), "stored_energy": data[:, 4] - data[:, 3],
                 "dissipated_energy": data[:, 3].copy(), "work": data[:, 4].copy()}
@@ -549,7 +579,9 @@ def add_iwan_connector(mbs, markerNumbers, joint, *, axis=None, axisMarker=None,
     route = _choose_route(law, joint, kind, conn._fast_nodes, axis_marker)
     if route == "symbolic":
         conn._route = "symbolic"
+        conn._lazy = True
         item = _symbolic.symbolic_item(conn, int(depth), name, vis)
+        conn._dispatcher = dispatcher
         _symbolic.sync_stack(conn)
         conn._state.set_uc(joint.displacement)
     elif kind == "coordinate":
