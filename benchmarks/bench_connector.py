@@ -12,6 +12,10 @@ Exudyn's default settings, fixed step 10 us, one thread, no solution file. Varia
                    law, so generalized-alpha needs two Newton iterations (three calls) per
                    step as with the joint; the floor of any Python force law with a
                    once-per-step post-step function in this solver
+* ``symbolic-nonlin+set`` the Iwan virgin backbone as an Exudyn *symbolic* law (no history)
+                   plus a Python post-step function that writes one named symbolic variable
+                   per step: the floor of the symbolic connector's design (three symbolic
+                   force evaluations, one Python post-step call, one ``SetValue``)
 * ``conn-linear``  :func:`add_iwan_connector` with a trivial linear element: the cost of
                    the connector machinery alone (trial-only force function, post-step
                    dispatcher, commit, records)
@@ -49,7 +53,9 @@ from pathlib import Path
 
 import exudyn as exu
 import numpy as np
-from exudyn.itemInterface import CoordinateSpringDamper, Mass1D, MarkerNodeCoordinate, Node1D, NodePointGround
+from exudyn.advancedUtilities import CreateSymbolicUserFunction
+from exudyn.itemInterface import (CoordinateSpringDamper, Mass1D, MarkerNodeCoordinate, Node1D,
+                                  NodePointGround, ObjectConnectorCoordinateSpringDamper)
 
 import iwan_element
 import iwan_element.exudyn  # noqa: F401  (the connector module)
@@ -142,6 +148,27 @@ def backbone_law():
     return backbone
 
 
+_KEEP = []
+
+
+def symbolic_backbone(mbs):
+    """The virgin backbone as an Exudyn symbolic law, and a variable set once per step."""
+    esym = exu.symbolic
+    KT, Fs, pm = P.KT, P.Fs, P.phi_max
+    e1 = P.chi + 1.0
+    a = P.R / ((P.chi + 1.0) * (P.chi + 2.0))
+    var = esym.Real(f"bench_uc_{id(mbs)}", 0.0)
+
+    def law(mbs_, t, itemNumber, deltaL, deltaL_t, stiffness, damping, offset):
+        x = esym.abs(deltaL)
+        return esym.sign(deltaL) * esym.IfThenElse(x < pm, x * (KT - a * esym.pow(x, e1)),
+                                                   esym.Real(Fs))
+
+    fn = CreateSymbolicUserFunction(mbs, law, "springForceUserFunction",
+                                    itemTypeName="ObjectConnectorCoordinateSpringDamper")
+    return fn, var
+
+
 def build(variant, counter=None):
     SC = exu.SystemContainer()
     mbs = SC.AddSystem()
@@ -152,6 +179,21 @@ def build(variant, counter=None):
     m1 = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=node, coordinate=0))
     if variant == "builtin":
         mbs.AddObject(CoordinateSpringDamper(markerNumbers=[m0, m1], stiffness=P.KT))
+    elif variant == "symbolic-nonlin+set":
+        fn, var = symbolic_backbone(mbs)
+        mbs.AddObject(ObjectConnectorCoordinateSpringDamper(
+            markerNumbers=[m0, m1], stiffness=0.0, damping=0.0, springForceUserFunction=fn))
+        set_value = var.SetValue
+        item = None
+
+        def post(mbs_, t):
+            set_value(item(0))
+            return True
+        mbs.SetPostStepUserFunction(post)
+        mbs.Assemble()
+        item = mbs.systemData.GetODE2Coordinates(copy=False).item
+        _KEEP[:] = [fn, var]           # the expression must outlive the run
+        return SC, mbs
     elif variant.startswith("python-"):
         def linear(mbs_, t, itemNumber, deltaL, deltaL_t, stiffness, damping, offset):
             return stiffness * deltaL
@@ -228,7 +270,8 @@ def main(argv=None):
     if args.steps <= 0:                    # only the contact table
         contact_table(args.contacts, args.contact_steps, args.repeat)
         return
-    variants = ["builtin", "python-lin", "python-lin+post", "python-nonlin+post"] + conn
+    variants = ["builtin", "python-lin", "python-lin+post", "python-nonlin+post",
+                "symbolic-nonlin+set"] + conn
     best = {v: (math.inf, math.nan) for v in variants}
     for _ in range(args.repeat):           # interleaved rounds: load changes hit all variants
         for v in variants:

@@ -142,7 +142,7 @@ def law_window(joint, depth: int) -> tuple[float, float]:
     k = depth // 2 - 1
     ends = []
     for far in (-1e300, 1e300):
-        states = walk_states(us, Fr, uc, Fc, far, tol)
+        states = walk_states(us, Fr, uc, Fc, far, tol, limit=k + 1)
         ends.append(states[k][0] if len(states) > k else far)
     return ends[0], ends[1]
 
@@ -246,13 +246,13 @@ def sync_stack(conn, t=None) -> None:
 
 
 # ---------------------------------------------------------------------------- overflow
-def walk_states(us, Fr, uc, Fc, u, tol):
+def walk_states(us, Fr, uc, Fc, u, tol, limit=None):
     """The committed states the joint passes through on the monotone move ``uc -> u``.
 
     Mirrors :meth:`IwanJoint._walk` (extended Masing rules, REFERENCE.md section 2): a
     reversal at ``uc`` if the move turns back, then one state per loop the move closes.
     Returns a list of ``(p, stack_u, stack_F)``: the slip ``p`` at which a loop closes
-    and the reversal stack (oldest first) right after it.
+    and the reversal stack (oldest first) right after it; at most ``limit`` states.
     """
     n = len(us)
     du = u - uc
@@ -283,8 +283,10 @@ def walk_states(us, Fr, uc, Fc, u, tol):
                 n -= 1
         else:
             n -= 2 if n >= 2 else 1
-        out.append((bound, list(us[:n]), list(Fr[:n])))
-    return out
+        out.append((bound, n))
+        if limit is not None and len(out) >= limit:
+            break
+    return [(p, list(us[:k]), list(Fr[:k])) for p, k in out]
 
 
 def newton_check(conn, big: float) -> float:

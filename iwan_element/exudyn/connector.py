@@ -26,12 +26,19 @@ Two force laws (``law=``), chosen automatically:
   or on position markers with a global axis): the exact Iwan law as an Exudyn symbolic
   expression (:mod:`._symbolic_law`), evaluated in C++ without Python and without Exudyn
   API calls (safe with several solver threads). Its state (the committed slip and the newest
-  ``depth`` reversal points) lives in named symbolic variables; the post-step commits the
-  ``IwanJoint`` (the reference, holding the energies) at the accepted slip, read through
-  views of Exudyn's coordinate vectors, and writes the committed slip (every step) and the
-  reversal stack (only when it changed) to the variables. A step that needed an older
-  reversal point than the law holds is detected (the law is evaluated at the accepted slip
-  with the previous state and compared with the exact force), logged, and listed in
+  ``depth`` reversal points) lives in named symbolic variables. Per accepted step the
+  post-step reads the slip through a view of Exudyn's coordinates and writes it to one
+  variable; while the slip continues the current branch (one interval test) nothing else
+  happens: the ``IwanJoint`` (the reference, holding the energies) is committed lazily, at
+  the next reversal or loop closure, at the last step of the run, and when read through
+  the connector (:mod:`._symbolic_connector`). Records hold ``(t, u)`` per step; force and
+  energies are replayed on a copy of the joint when read. A step that needs an older
+  reversal point than the law holds (possible only while the stack is deeper than
+  ``depth``) is re-solved exactly: near the end of the law's exact window a post-Newton
+  function compares the law with the joint and, if they differ, writes a state on the
+  step's path and asks Exudyn for a discontinuous iteration. A step that jumps past that
+  window from far away (more than ten times the branch's step increments) is still
+  detected (the law at the accepted slip against the exact force), logged, and listed in
   :attr:`IwanConnector.overflow_times`.
 * **python** (any element, e.g. the effects, or a rotating ``axisMarker``): a Python force
   function calling ``joint.trial(u, v)``. For two node coordinates the post-step reads the
@@ -368,7 +375,8 @@ class IwanConnector:
     @property
     def overflow_times(self) -> np.ndarray:
         """Symbolic route: times [s] of accepted steps that read an older reversal point
-        than the law holds (not exact; raise ``depth``). Empty in a sound run."""
+        than the law holds and could not be re-solved (a jump from far outside the window
+        at which the re-solve is armed; not exact: raise ``depth``). Empty in a sound run."""
         return np.array(self._overflows)
 
     def _table(self) -> np.ndarray:
@@ -483,8 +491,10 @@ def add_iwan_connector(mbs, markerNumbers, joint, *, axis=None, axisMarker=None,
         ``joint.trial`` (any element). ``"auto"`` (default) picks ``"symbolic"`` where it
         applies.
     depth : int, keyword-only
-        Reversal points the symbolic law holds (default 8, range [2, 64]); a step that
-        needs more (``depth // 2`` loop closures inside one step) is logged and listed in
+        Reversal points the symbolic law holds (default 8, range [2, 64]). A step that
+        needs more (``depth // 2`` loop closures inside one step) is re-solved exactly
+        (post-Newton discontinuous iteration, armed near the end of the held window); one
+        that jumps there from far is logged and listed in
         :attr:`IwanConnector.overflow_times`.
     allow_adaptive_explicit : bool, keyword-only
         Run with ODE23/DOPRI5 and automatic step size, which are refused by default
@@ -513,7 +523,7 @@ def add_iwan_connector(mbs, markerNumbers, joint, *, axis=None, axisMarker=None,
     --------
     >>> conn = add_iwan_connector(mbs, [mGround, mMass], IwanJoint(params))   # doctest: +SKIP
     >>> mbs.Assemble(); mbs.SolveDynamic(simulationSettings)                  # doctest: +SKIP
-    >>> conn.dissipated_energy[-1]                                            # doctest: +SKIP
+    >>> conn.dissipated_energy_history[-1]                                    # doctest: +SKIP
     """
     if not isinstance(mbs, exu.MainSystem):
         raise ValueError(f"mbs must be an exudyn.MainSystem, got {type(mbs).__name__}")
