@@ -162,16 +162,19 @@ def _accept_function(conn, lazy_until):
     rec = conn._rec.append if conn._record_on else None
     lo = hi = 0.0               # the open interval of plain continuations (empty: slow path)
     up = True
-    prev = None                 # last accepted slip, and the largest step increment
-    dmax = 0.0
+    dmax = 0.0                  # largest slip increment of one step on this branch segment
+    at_event = None             # slip of the last step that took the slow path
 
     def event(t, u):
-        nonlocal lo, hi, up, prev, dmax
+        nonlocal lo, hi, up, dmax, at_event
         if t < conn._t_acc:
             conn._new_run(t, u)
+        prev = last_accepted()
+        if prev is None:
+            prev = at_event
         if prev is not None:
             dmax = max(dmax, abs(u - prev))
-        prev = u
+        at_event = u
         margin = ARM_MARGIN * dmax
         dmax = 0.0                   # the next branch segment starts its own count
         conn._flush_joint()
@@ -194,22 +197,25 @@ def _accept_function(conn, lazy_until):
             lo = hi = 0.0
 
     single = getattr(read, "single", None)      # (c0, i): u = c0 + q[i]
-    c0, i = single if single is not None else (0.0, 0)
-    item = conn._read.q.item
+    if single is not None:
+        c0, i = single
+        item = conn._read.q.item
+    else:
+        c0, i = 0.0, 0
+        item = lambda _: read()                 # noqa: E731
 
     def accept(t):
-        nonlocal lo, hi, prev, dmax
-        u = c0 + item(i) if single is not None else read()
+        nonlocal lo, hi, dmax
+        u = c0 + item(i)
         if lo < u < hi and t < lazy_until:
             if up:
                 if u - lo > dmax:
                     dmax = u - lo
-                lo = prev = u
+                lo = u
             else:
                 if hi - u > dmax:
                     dmax = hi - u
-                hi = prev = u
-            conn._pending = u
+                hi = u
             set_uc(u)
         else:
             event(t, u)
@@ -217,14 +223,20 @@ def _accept_function(conn, lazy_until):
             rec(t)
             rec(u)
 
+    def last_accepted():
+        """The last accepted slip while steps are left uncommitted, else ``None``."""
+        if lo < hi:
+            return lo if up else hi
+        return None
+
+    conn._lazy_last = last_accepted
     return accept
 
 
 def flush_joint(conn) -> None:
     """Commit the joint at the last accepted slip if that was left pending."""
-    u = conn._pending
-    if u is not None:
-        conn._pending = None
+    u = conn._lazy_last()
+    if u is not None and u != conn._joint.displacement:
         conn._joint.trial(u)
         conn._joint.commit()
 
@@ -347,9 +359,13 @@ def replay_records(conn) -> np.ndarray:
     return table
 
 
+def _none():
+    return None
+
+
 def reset_state(conn) -> None:
     """Virgin state of the law's variables (after ``joint.reset()``)."""
-    conn._pending = None
+    conn._lazy_last = _none
     conn._window = False
     sync_stack(conn)
     conn._state.set_uc(0.0)

@@ -121,6 +121,10 @@ _NCOL = 5                   # recorded per step: time, slip, force, dissipated e
 _BLOCK = 5 * 1024           # record values buffered in a list before moving them to the array
 
 
+def _no_pending():
+    return None
+
+
 # ---------------------------------------------------------------------------- public API
 class IwanConnector:
     """Handle of a joint element placed in an Exudyn system (made by :func:`add_iwan_connector`).
@@ -157,7 +161,8 @@ class IwanConnector:
         self._route = "python"
         self._state = None          # symbolic route: the law's variables
         self._overflows = []
-        self._pending = None        # symbolic route: accepted slip not yet committed (lazy)
+        self._lazy_last = _no_pending   # symbolic route: () -> accepted slip not yet
+                                        # committed (lazy), or None
         self._window = False        # the law's variables hold a post-Newton window
         self._risky = False         # the committed stack is deeper than the law holds
         self._snapshot = None       # copy of the joint where the records start
@@ -231,7 +236,7 @@ class IwanConnector:
     def _flush_joint(self) -> None:
         """Symbolic route: commit the joint at the last accepted slip if that was left
         pending (the joint is committed lazily along a branch)."""
-        if self._pending is not None:
+        if self._route == "symbolic":
             _symbolic.flush_joint(self)
 
     def _flush(self) -> None:
@@ -342,7 +347,7 @@ class IwanConnector:
         such a run unless the run continues from the state the joint holds (e.g. a
         dynamic run started from a static solution).
         """
-        self._pending = None
+        self._lazy_last = _no_pending
         self._joint.reset()
         if self._route == "symbolic":
             _symbolic.reset_state(self)
