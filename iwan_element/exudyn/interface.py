@@ -36,10 +36,10 @@ from exudyn.itemInterface import (ObjectConnectorCartesianSpringDamper,
 from ..core.joint_bank import IwanJointBank
 from ..core.parameters import IwanParameters
 from ..core._validation import check_scalar
-from ._records import InterfaceRecords
 from ._slip_map import SlipMap
 from ._symbolic_law import SymbolicIwanState, cartesian_law, coordinate_law, make_probe
 from ._dispatch import _dispatcher_for, _installed_post_step
+from ._interface_law import CHUNK, VIRGIN, InterfacePointLaw, committed_slip_vectors
 from ._markers import _COORDINATE_MARKERS, _POSITION_MARKERS, _marker_type, _unit_axis
 from .connector import add_iwan_connector
 
@@ -64,7 +64,8 @@ class IwanInterface:
         self._kind = kind
         self._route = route
         self._allow_adaptive_explicit = False
-        self._rec = InterfaceRecords(len(pairs), record)
+        self._rec = _SlipRecords(len(pairs), record)
+        self._laws = []
         self._objects = []
         self._connectors = []       # python route
         self._bank = None           # symbolic route
@@ -129,10 +130,7 @@ class IwanInterface:
                     "force": np.stack([r["force"][:n] for r in recs], axis=1),
                     "work": sum(r["work"][:n] for r in recs),
                     "diss": sum(r["dissipated_energy"][:n] for r in recs)}
-        r = self._rec
-        n = r.n
-        return {"time": r.t[:n].copy(), "slip": r.slip[:n].copy(), "force": r.force[:n].copy(),
-                "work": r.work[:n].copy(), "diss": r.diss[:n].copy()}
+        return self._rec.table(self._bank)
 
     @property
     def n_records(self) -> int:
@@ -187,9 +185,11 @@ class IwanInterface:
                 c.reset()
             return
         self._bank.reset()
-        for s in self._states:
+        for s, law in zip(self._states, self._laws):
             s.set_stack([], [])
-            s.set_uc(0.0)
+            law.set_branch(*VIRGIN)
+        for v in self._uc_vectors:
+            v.SetVector([0.0] * v.NumberOfItems())
         self._rec.clear()
         self._overflows.clear()
         self._t_acc = -math.inf
@@ -203,32 +203,110 @@ class IwanInterface:
     # ------------------------------------------------------------------ per-step work
     def _refresh(self, mbs) -> None:
         """Start of a run: the affine map from the system coordinates to the slips."""
-        self._map = SlipMap(mbs, self._pairs, self._kind, self._axis, self._offsets)
-        self._read = self._map      # the dispatcher then checks for a re-assembly per step
+        self._map = m = SlipMap(mbs, self._pairs, self._kind, self._axis, self._offsets)
+        self._read = m              # the dispatcher then checks for a re-assembly per step
+        cols = np.unique(m.idx[m.coef != 0.0])
+        self._cols = cols
+        self._qsub = np.empty(cols.size)
+        C = np.zeros((self.n_points, max(cols.size, 1)))
+        for i in range(self.n_points):
+            for k, cf in zip(m.idx[i], m.coef[i]):
+                if cf != 0.0:
+                    C[i, np.searchsorted(cols, k)] += cf
+        self._C = C[:, :cols.size]
+        self._ubuf = np.empty(self.n_points)
+
+    def _slips(self) -> np.ndarray:
+        """Accepted slips of all points (a buffer reused at every step)."""
+        m, u = self._map, self._ubuf
+        m.q.take(self._cols, out=self._qsub)
+        np.dot(self._C, self._qsub, out=u)
+        u += m.c
+        if m.generic:
+            u[m.generic] = m.slips()[m.generic]
+        return u
 
     def _accept(self, t) -> None:
-        u = self._map.slips()
+        u = self._slips()
         bank = self._bank
         if t < self._t_acc and self._rec.n:
             _log.warning("Iwan interface: a new run starts at t=%g before the end (t=%g) of the "
                          "history the joints hold; call reset() before a fresh run", t,
                          self._t_acc)
         events = bank.commit(u)
-        states = self._states
         if events.size:
-            for i in events.tolist():
-                s = states[i]
-                if s.disagrees(float(u[i]), float(bank.F[i])):
-                    self._overflows.append(t)
-                    _log.warning("Iwan interface point %d at t=%g: the step closed loops beyond "
-                                 "the %d reversal points the symbolic law holds; that step's "
-                                 "force was not exact (raise depth)", i, t, s.depth)
-                s.set_stack(bank.us[i], bank.Fr[i])
-        for f, x in zip(self._set_uc, u.tolist()):
-            f(x)
+            self._events(t, u, events)
+        ul = u.tolist()
+        for f, a, b in self._set_uc:
+            f(ul[a:b])
         self._t_acc = t
         if self._rec.on:
-            self._rec.append(t, u, bank.F, bank.W.sum(), bank.D.sum())
+            self._rec.append(t, u)
+
+    def _events(self, t, u, events) -> None:
+        """Points that left their branch: check the step (overflow), write their new branch
+        and reversal stack to the symbolic variables."""
+        bank = self._bank
+        F = bank.F
+        for i in events.tolist():
+            s = self._states[i]
+            if s.disagrees(float(u[i]), float(F[i])):
+                self._overflows.append(t)
+                _log.warning("Iwan interface point %d at t=%g: the step closed loops beyond "
+                             "the %d reversal points the symbolic law holds; that step's "
+                             "force was not exact (raise depth)", i, t, s.depth)
+            s.set_stack(bank.us[i], bank.Fr[i])
+            self._laws[i].set_branch(float(bank.bur[i]), float(bank.bFr[i]), float(bank.bc1[i]),
+                                     float(bank.bc2[i]), float(bank.bdir[i]),
+                                     float(bank.bound[i]))
+
+
+class _SlipRecords:
+    """Rows ``(t, slip[n_points])`` in preallocated, geometrically growing arrays; forces and
+    energies are recomputed from the slips on reading (an exact replay of the commits in a
+    fresh bank), so the per-step cost is one row copy. ``on=False`` stores nothing."""
+
+    def __init__(self, n_points: int, on: bool):
+        self.on = on
+        self.n_points = n_points
+        self.clear()
+
+    def clear(self) -> None:
+        cap = 1024 if self.on else 0
+        self.n = 0
+        self.t = np.empty(cap)
+        self.slip = np.empty((cap, self.n_points))
+        self._cache = None
+
+    def append(self, t, u) -> None:
+        k = self.n
+        if k == len(self.t):
+            cap = 2 * max(k, 512)
+            t_new, s_new = np.empty(cap), np.empty((cap, self.n_points))
+            t_new[:k], s_new[:k] = self.t[:k], self.slip[:k]
+            self.t, self.slip = t_new, s_new
+        self.t[k] = t
+        self.slip[k] = u
+        self.n = k + 1
+
+    def table(self, bank) -> dict:
+        n = self.n
+        if self._cache is not None and self._cache[0] == n:
+            got = self._cache[1]
+        else:
+            replay = IwanJointBank(bank.params, reversal_tol=bank._rtol)
+            force = np.empty((n, self.n_points))
+            work, diss = np.empty(n), np.empty(n)
+            for k in range(n):
+                replay.commit(self.slip[k])
+                force[k] = replay.F
+                work[k] = replay.W.sum()
+                diss[k] = replay.D.sum()
+            got = {"force": force, "work": work, "diss": diss}
+            self._cache = (n, got)
+        return {"time": self.t[:n].copy(), "slip": self.slip[:n].copy(),
+                "force": got["force"].copy(), "work": got["work"].copy(),
+                "diss": got["diss"].copy()}
 
 
 def add_iwan_interface(mbs, markerPairs, joints, *, axis=None, axisMarker=None, offsets=None,
@@ -308,11 +386,16 @@ def add_iwan_interface(mbs, markerPairs, joints, *, axis=None, axisMarker=None, 
     iface._bank = bank
     dispatcher = _dispatcher_for(mbs)
     iface._dispatcher = dispatcher
+    vecs = committed_slip_vectors(len(joints))
+    iface._uc_vectors = vecs
     for i, p in enumerate(joints):
         st = SymbolicIwanState(p, int(depth), float(bank.tol[i]))
+        law = InterfacePointLaw(st, vecs[i // CHUNK][i % CHUNK])
         iface._states.append(st)
-        iface._objects.append(_symbolic_object(mbs, iface, i, st, f"{name}{i}" if name else ""))
-    iface._set_uc = [s.uc.SetValue for s in iface._states]
+        iface._laws.append(law)
+        iface._objects.append(_symbolic_object(mbs, iface, i, law, f"{name}{i}" if name else ""))
+    iface._set_uc = [(v.SetVector, k * CHUNK, k * CHUNK + v.NumberOfItems())
+                     for k, v in enumerate(vecs)]
     dispatcher.add(iface)
     _log.debug("added %r", iface)
     return iface
@@ -360,7 +443,8 @@ def _pair_kind(mbs, pairs, axis, axisMarker) -> str:
     return kind
 
 
-def _symbolic_object(mbs, iface, i, st, name):
+def _symbolic_object(mbs, iface, i, law, name):
+    st = law
     m0, m1 = (int(m) for m in iface._pairs[i])
     off = iface._offsets[i]
     if iface._kind == "coordinate":
@@ -377,7 +461,7 @@ def _symbolic_object(mbs, iface, i, st, name):
             name=name, markerNumbers=[m0, m1], springForceUserFunction=fn,
             visualization=_HIDDEN)
     iface._functions.append(fn)
-    st.probe = make_probe(mbs, fn, iface._kind, iface._axis, off)
+    law.state.probe = make_probe(mbs, fn, iface._kind, iface._axis, off)
     return mbs.AddObject(item)
 
 
