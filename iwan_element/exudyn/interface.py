@@ -37,6 +37,7 @@ from ..core.joint_bank import IwanJointBank
 from ..core.parameters import IwanParameters
 from ..core._validation import check_scalar
 from ._slip_map import SlipMap
+from ._surface_slips import SurfaceSlips
 from ._symbolic_law import SymbolicIwanState, cartesian_law, coordinate_law, make_probe
 from ._dispatch import _dispatcher_for, _installed_post_step
 from ._interface_law import CHUNK, VIRGIN, InterfacePointLaw, committed_slip_vectors
@@ -46,6 +47,7 @@ from .connector import add_iwan_connector
 __all__ = ["add_iwan_interface", "IwanInterface"]
 
 _log = logging.getLogger(__name__)
+_POSITION = exu.OutputVariableType.Position
 _HIDDEN = {"show": False, "drawSize": -1.0, "color": [-1.0, -1.0, -1.0, -1.0]}
 
 
@@ -66,6 +68,7 @@ class IwanInterface:
         self._allow_adaptive_explicit = False
         self._rec = _SlipRecords(len(pairs), record)
         self._laws = []
+        self._held = [0] * len(pairs)   # stack length the symbolic variables hold, per point
         self._objects = []
         self._connectors = []       # python route
         self._bank = None           # symbolic route
@@ -188,6 +191,7 @@ class IwanInterface:
         for s, law in zip(self._states, self._laws):
             s.set_stack([], [])
             law.set_branch(*VIRGIN)
+        self._held = [0] * self.n_points
         for v in self._uc_vectors:
             v.SetVector([0.0] * v.NumberOfItems())
         self._rec.clear()
@@ -215,6 +219,14 @@ class IwanInterface:
                     C[i, np.searchsorted(cols, k)] += cf
         self._C = C[:, :cols.size]
         self._ubuf = np.empty(self.n_points)
+        self._surface = None
+        self._generic = list(m.generic)
+        if m.generic and self._kind == "position":
+            sf = SurfaceSlips(mbs, self._pairs, m.generic, self._axis, self._offsets, m.q)
+            if sf.points.size:
+                self._surface = sf
+                done = set(sf.points.tolist())
+                self._generic = [i for i in m.generic if i not in done]
 
     def _slips(self) -> np.ndarray:
         """Accepted slips of all points (a buffer reused at every step)."""
@@ -222,8 +234,16 @@ class IwanInterface:
         m.q.take(self._cols, out=self._qsub)
         np.dot(self._C, self._qsub, out=u)
         u += m.c
-        if m.generic:
-            u[m.generic] = m.slips()[m.generic]
+        sf = self._surface
+        if sf is not None:
+            u[sf.points] = sf.slips()
+        if self._generic:
+            a = self._axis
+            get = self._mbs.GetMarkerOutput
+            for i in self._generic:
+                m0, m1 = self._pairs[i]
+                u[i] = float(a @ (get(int(m1), _POSITION) - get(int(m0), _POSITION))) \
+                    - self._offsets[i]
         return u
 
     def _accept(self, t) -> None:
@@ -245,17 +265,28 @@ class IwanInterface:
 
     def _events(self, t, u, events) -> None:
         """Points that left their branch: check the step (overflow), write their new branch
-        and reversal stack to the symbolic variables."""
+        and reversal stack to the symbolic variables.
+
+        A walk pushes at most one reversal point and pops two per closed loop (one when it
+        returns to the virgin curve or meets a reversal point within the tolerance), so a
+        stack that did not get shorter means no closed loop: a plain reversal (one more
+        point) or no change of the stack at all (same length). The law held every point such
+        a step reads, so only steps that shortened the stack are checked against the exact
+        force, and an unchanged stack is not written again."""
         bank = self._bank
         F = bank.F
+        held = self._held
         for i in events.tolist():
             s = self._states[i]
-            if s.disagrees(float(u[i]), float(F[i])):
+            n1 = len(bank.us[i])
+            if n1 < held[i] and s.disagrees(float(u[i]), float(F[i])):
                 self._overflows.append(t)
                 _log.warning("Iwan interface point %d at t=%g: the step closed loops beyond "
                              "the %d reversal points the symbolic law holds; that step's "
                              "force was not exact (raise depth)", i, t, s.depth)
-            s.set_stack(bank.us[i], bank.Fr[i])
+            if n1 != held[i]:
+                s.set_stack(bank.us[i], bank.Fr[i])
+                held[i] = n1
             self._laws[i].set_branch(float(bank.bur[i]), float(bank.bFr[i]), float(bank.bc1[i]),
                                      float(bank.bc2[i]), float(bank.bdir[i]),
                                      float(bank.bound[i]))
