@@ -118,6 +118,7 @@ class IwanJointBank:
         self._up = np.zeros(n, dtype=bool)     # the branch runs towards larger u
         self._down = np.zeros(n, dtype=bool)   # ... towards smaller u
         self._stale = False                    # F, W, D lag behind u (see _sync)
+        self._nst = np.zeros(n, dtype=np.intp)  # stack lengths
         self._fast_buf = np.zeros(n, dtype=bool)
         self._above_buf = np.zeros(n, dtype=bool)
         for i in range(n):
@@ -191,10 +192,68 @@ class IwanJointBank:
         np.copyto(self.u, u, where=fast)
         np.copyto(self.blo, u, where=fast & self._up)
         np.copyto(self.bhi, u, where=fast & self._down)
-        for i in slow.tolist():
+        rest = self._reversals(u, slow) if slow.size > 2 else slow
+        for i in rest.tolist():
             self._walk_commit(i, float(u[i]))
         self._stale = True
         return slow
+
+    def _reversals(self, u, slow) -> np.ndarray:
+        """Commit the plain reversals among ``slow`` at once and return the other points.
+
+        A plain reversal leaves its branch backwards (beyond the reversal tolerance) and does
+        not reach the bound of the new branch from ``(u_c, F_c)`` (the newest older reversal
+        point, or ``-u_c`` on the virgin curve): ``IwanJoint``'s walk then pushes ``(u_c, F_c)``
+        and moves on the new branch, ``F = F_c + 2 F_bb(x/2)``, work ``F_c x + 4 G(|x|/2)``,
+        dissipation ``2 I_H(|x|/2)`` with ``x = u - u_c`` (REFERENCE.md section 2)."""
+        uu = u[slow]
+        uc = self.u[slow]
+        du = uu - uc
+        dr = self.bdir[slow]
+        bound = np.where(self._nst[slow] > 0, self.bur[slow], -uc)
+        up = du > 0.0
+        plain = (np.sign(du) == -dr) & (dr != 0.0)          # signs: du * dr may underflow
+        plain &= np.abs(uc - self.bur[slow]) > self.tol[slow]
+        plain &= np.where(up, uu < bound, uu > bound)
+        if not plain.any():
+            return slow
+        idx = slow[plain]
+        e, ub, bnd, upi = uc[plain], uu[plain], bound[plain], up[plain]
+        eF = self._F[idx]
+        x = ub - e
+        f, Gb, Ib = self._curves(0.5 * np.abs(x), idx)
+        W = self._W[idx] + (eF * x + 4.0 * Gb)          # as the walk sums it
+        D = self._D[idx] + 2.0 * Ib
+        self.u[idx] = ub
+        self._F[idx] = eF + np.copysign(2.0 * f, x)
+        self._W[idx], self._D[idx], self._Gc[idx], self._IHc[idx] = W, D, Gb, Ib
+        self.u0[idx], self.W0[idx], self.D0[idx], self.G0[idx], self.I0[idx] = ub, W, D, Gb, Ib
+        self.bur[idx], self.bFr[idx] = e, eF
+        self.bc1[idx], self.bc2[idx], self._c4[idx] = 0.5, 2.0, 4.0
+        self.bdir[idx] = np.where(upi, 1.0, -1.0)
+        self.bound[idx] = bnd
+        self._up[idx], self._down[idx] = upi, ~upi
+        self.blo[idx] = np.where(upi, ub, bnd)
+        self.bhi[idx] = np.where(upi, bnd, ub)
+        self._nst[idx] += 1
+        us, Fr = self.us, self.Fr
+        for i, ei, Fi in zip(idx.tolist(), e.tolist(), eF.tolist()):
+            us[i].append(ei)
+            Fr[i].append(Fi)
+        return slow[~plain]
+
+    def _curves(self, h, s):
+        """Backbone ``F_bb(h)``, ``G(h)`` and ``I_H(h)`` for ``h >= 0`` at the points ``s``."""
+        pm = self.pm[s]
+        micro = h < pm
+        hm = np.where(micro, h, pm)
+        q = hm ** self.e1[s]
+        f = np.where(micro, hm * (self.KT[s] - self.a[s] * q), self.Fs[s])
+        p3 = q * hm * hm
+        G = np.where(micro, hm * hm * self._halfKT[s] - self._a_e3[s] * p3,
+                     self.g_pm[s] + self.Fs[s] * (h - pm))
+        I = np.where(micro, self.ih_c[s] * p3, self.ih_pm[s] + self.Fs[s] * (h - pm))
+        return f, G, I
 
     def _sync(self) -> None:
         """Force and energies of every point at its committed ``u`` from its branch: the branch
@@ -324,6 +383,7 @@ class IwanJointBank:
         self._D[i] += acc[1]
         self._Gc[i] = acc[2]
         self._IHc[i] = acc[3]
+        self._nst[i] = len(us)
         self._set_branch(i)
 
     def _set_branch(self, i: int) -> None:
