@@ -6,11 +6,15 @@ REFERENCE.md section 2, paper eqs. 13-15). :meth:`IwanJointBank.commit` moves ev
 new displacement at once:
 
 * points that continue their current branch without a reversal and without closing a loop
-  (nearly all points at nearly all steps of a time integration) are updated with numpy
-  operations on the whole bank: force from the branch formula, work and dissipation from the
-  closed forms ``G`` and ``I_H`` (the same formulas as ``IwanJoint``'s fast path);
-* the few points with an event (a reversal, a closed loop, the first move) walk their reversal
-  stack one by one, exactly as ``IwanJoint`` does.
+  (nearly all points at nearly all steps of a time integration) only record the new
+  displacement (three numpy operations for the whole bank); their force, work and
+  dissipation follow in closed form from the branch and the values where it started
+  (branch formula, ``G`` and ``I_H``: the same formulas as ``IwanJoint``'s fast path) and are
+  evaluated for all points at once when :attr:`IwanJointBank.F`, ``W`` or ``D`` is read;
+* plain reversals (a new branch that reaches no older reversal point in the step) are
+  committed for all such points at once with numpy;
+* the few points that close a loop (or start from rest) walk their reversal stack one by
+  one, exactly as ``IwanJoint`` does.
 
 The bank is the committed state of a multi-contact interface; it never evaluates trials for
 a solver (the solver's trial forces come from the symbolic law of

@@ -4,13 +4,16 @@
 lap joint). Two routes, chosen automatically:
 
 * **symbolic** (every joint given as :class:`~iwan_element.IwanParameters`, a global axis or
-  coordinate markers): each point's force is an Exudyn symbolic expression of the exact Iwan
-  law (:mod:`._symbolic_law`), evaluated in C++ with no Python call and no Exudyn API call;
-  its committed state lives in named symbolic variables. Once per accepted step one Python
-  post-step reads the accepted slips of all points with one vectorised product of a view of
-  the system coordinates, commits all points at once in an
-  :class:`~iwan_element.core.joint_bank.IwanJointBank`, writes ``u_c`` of every point (and the
-  reversal stack of the few points whose branch changed) to the variables and records a row.
+  coordinate markers): each point's force is an Exudyn symbolic expression evaluated in C++
+  with no Python call and no Exudyn API call (:mod:`._interface_law`: the Masing branch
+  formula while the trial slip continues the point's branch, else the full exact law of
+  :mod:`._symbolic_law`). Once per accepted step one Python post-step reads the accepted
+  slips of all points (one product of a view of the system coordinates; ANCF Cable2D
+  surface points by :mod:`._surface_slips`), commits all points at once in an
+  :class:`~iwan_element.core.joint_bank.IwanJointBank`, writes the committed slips to
+  symbolic vectors of 6 (one ``SetVector`` per 6 points), and only for the points that
+  left their branch the new branch and reversal stack. The records keep the slips; forces
+  and energies are recomputed from them when read (an exact replay of the same commits).
 * **python** (joints given as elements following the protocol, e.g. effects, or a rotating
   ``axisMarker``): one :func:`~iwan_element.exudyn.add_iwan_connector` per point, with the
   same records in the handle.
@@ -18,9 +21,10 @@ lap joint). Two routes, chosen automatically:
 Exactness of the symbolic route: the expression holds the newest ``depth`` reversal points
 of each point; a step that closes so many loops that it needs an older point is detected
 after the exact commit (the bank walks the full stack), by evaluating the law at the
-accepted slip with the previous state (only for points whose stack changed). Such a step is
-logged as a warning and its time is listed in :attr:`IwanInterface.overflow_times`; raise
-``depth`` if that happens (it needs ``depth // 2`` loop closures inside one time step).
+accepted slip with the previous state (only for points whose stack got shorter, i.e. that
+closed a loop). Such a step is logged as a warning and its time is listed in
+:attr:`IwanInterface.overflow_times`; raise ``depth`` if that happens (it needs
+``depth // 2`` loop closures inside one time step).
 """
 from __future__ import annotations
 
