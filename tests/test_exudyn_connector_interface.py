@@ -377,3 +377,27 @@ def test_reset_between_different_solves_equals_a_fresh_interface():
     for key in want:
         np.testing.assert_allclose(again[key], want[key], rtol=0,
                                    atol=1e-12 * np.max(np.abs(want[key])) + 1e-300)
+
+
+def test_records_read_during_the_run_equal_records_read_once():
+    """The forces and energies are replayed from the recorded slips when read; reading them
+    during the run (incremental replay) gives what one read at the end gives."""
+    seen = []
+    holder = {}
+
+    def post_step(mbs, t):
+        if "iface" in holder and holder["iface"].n_records % 97 == 5:
+            seen.append(holder["iface"].dissipated_energy_history[-1])
+        return True
+
+    chain, iface = _chain(3, interface=True, post_step=post_step)
+    holder["iface"] = iface
+    chain.solve(settings(1e-5, 1500))
+    once_chain, once = _chain(3, interface=True)
+    once_chain.solve(settings(1e-5, 1500))
+    assert len(seen) >= 10 and seen[-1] > 0.0
+    a, b = iface.records(), once.records()
+    for key in b:
+        np.testing.assert_array_equal(a[key], b[key])
+    idx = [k - 1 for k in range(1, iface.n_records + 1) if k % 97 == 5][:len(seen)]   # row k-1
+    np.testing.assert_array_equal(np.array(seen), b["dissipated_energy"][idx])

@@ -41,6 +41,7 @@ from ..core.joint_bank import IwanJointBank
 from ..core.parameters import IwanParameters
 from ..core._validation import check_scalar
 from ._slip_map import SlipMap
+from ._slip_records import SlipRecords
 from ._surface_slips import SurfaceSlips
 from ._symbolic_law import SymbolicIwanState, cartesian_law, coordinate_law, make_probe
 from ._dispatch import _dispatcher_for, _installed_post_step
@@ -70,7 +71,7 @@ class IwanInterface:
         self._kind = kind
         self._route = route
         self._allow_adaptive_explicit = False
-        self._rec = _SlipRecords(len(pairs), record)
+        self._rec = SlipRecords(len(pairs), record)
         self._laws = []
         self._held = [0] * len(pairs)   # stack length the symbolic variables hold, per point
         self._objects = []
@@ -294,54 +295,6 @@ class IwanInterface:
             self._laws[i].set_branch(float(bank.bur[i]), float(bank.bFr[i]), float(bank.bc1[i]),
                                      float(bank.bc2[i]), float(bank.bdir[i]),
                                      float(bank.bound[i]))
-
-
-class _SlipRecords:
-    """Rows ``(t, slip[n_points])`` in preallocated, geometrically growing arrays; forces and
-    energies are recomputed from the slips on reading (an exact replay of the commits in a
-    fresh bank), so the per-step cost is one row copy. ``on=False`` stores nothing."""
-
-    def __init__(self, n_points: int, on: bool):
-        self.on = on
-        self.n_points = n_points
-        self.clear()
-
-    def clear(self) -> None:
-        cap = 1024 if self.on else 0
-        self.n = 0
-        self.t = np.empty(cap)
-        self.slip = np.empty((cap, self.n_points))
-        self._cache = None
-
-    def append(self, t, u) -> None:
-        k = self.n
-        if k == len(self.t):
-            cap = 2 * max(k, 512)
-            t_new, s_new = np.empty(cap), np.empty((cap, self.n_points))
-            t_new[:k], s_new[:k] = self.t[:k], self.slip[:k]
-            self.t, self.slip = t_new, s_new
-        self.t[k] = t
-        self.slip[k] = u
-        self.n = k + 1
-
-    def table(self, bank) -> dict:
-        n = self.n
-        if self._cache is not None and self._cache[0] == n:
-            got = self._cache[1]
-        else:
-            replay = IwanJointBank(bank.params, reversal_tol=bank._rtol)
-            force = np.empty((n, self.n_points))
-            work, diss = np.empty(n), np.empty(n)
-            for k in range(n):
-                replay.commit(self.slip[k])
-                force[k] = replay.F
-                work[k] = replay.W.sum()
-                diss[k] = replay.D.sum()
-            got = {"force": force, "work": work, "diss": diss}
-            self._cache = (n, got)
-        return {"time": self.t[:n].copy(), "slip": self.slip[:n].copy(),
-                "force": got["force"].copy(), "work": got["work"].copy(),
-                "diss": got["diss"].copy()}
 
 
 def add_iwan_interface(mbs, markerPairs, joints, *, axis=None, axisMarker=None, offsets=None,
