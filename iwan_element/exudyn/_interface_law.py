@@ -7,16 +7,17 @@ section 2, paper eqs. 13-15): on the branch that left ``(u_r, F_r)`` in the dire
 ``F = s F_bb(s u)``, written ``F_r + s2 F_bb(s1 (u - u_r))`` with ``s1 = c1 s``,
 ``s2 = c2 s`` (``c1, c2 = 1/2, 2`` from a reversal point, ``1, 1`` virgin). On that branch
 ``sign(u - u_r) = s``, so this is bit for bit the formula of the exact law. It is taken while
-the trial slip lies strictly inside the open interval ``(lo, hi)``: from the committed slip
-in the branch direction to the branch's bound (the older reversal point it would close on,
-or infinity). Every other trial falls through to the full exact law of
-:mod:`._symbolic_law` (``SymbolicIwanState.force``), which reads the committed slip as
-``lo`` or ``hi``.
+the trial slip lies beyond the committed slip ``u_c`` in the branch direction and before the
+branch's bound (the older reversal point it would close on, ``-u_r`` for the return to the
+virgin curve, or infinity on the virgin curve): ``((u - u_c) s > 0) ((bound - u) s > 0)``.
+Every other trial (a reversal, a loop closure, a point at rest with ``s = 0``) falls
+through to the full exact law of :mod:`._symbolic_law` (``SymbolicIwanState.force``).
 
-State: named ``esym.Real`` variables per point. Per accepted step the interface writes only
-the committed slip, to ``lo`` (branch running up) or ``hi`` (running down); the branch
-(``u_r, F_r, s1, s2, s, lo, hi``) and the reversal stack are written only when a point
-leaves its branch.
+State: the branch ``(u_r, F_r, s1, s2, s, bound)`` of each point in named ``esym.Real``
+variables, written only when the point leaves its branch; the committed slips of all points
+in symbolic ``Vector``s of 6 (:func:`committed_slip_vectors`; one ``SetVector`` per 6 points
+per accepted step; Exudyn 1.13.6 crashed on a 50-entry symbolic vector indexed in an
+expression). The full law reads ``u_c`` from the same vector entry.
 """
 from __future__ import annotations
 
