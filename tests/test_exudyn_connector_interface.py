@@ -305,3 +305,99 @@ def test_bank_keeps_tiny_reversals_and_the_joint_tolerance_bound():
         assert bank.F[0] == pytest.approx(j.force, rel=1e-12, abs=0.0)
     with pytest.raises(ValueError, match="reversal_tol"):
         IwanJointBank([P], reversal_tol=1e-3)
+
+
+def _two_tone(n, *, interface, amplitude=1.0):
+    """n oscillators on a joint and a spring to ground, each driven by its own two-frequency
+    force: the points reverse at different steps and close inner loops (the fast symbolic
+    path and the lazy bank must hand every such step to the exact law)."""
+    chain = Chain([1.0] * n)
+    for k in range(n):
+        chain.spring(-1, k, 2e5)
+        chain.harmonic_force(k, amplitude * 1400.0 * (1.0 + 0.15 * k), 700.0 * (1.0 + 0.07 * k))
+        chain.harmonic_force(k, amplitude * 600.0, 4100.0 + 300.0 * k)
+    params = [PARAMS[k % len(PARAMS)] for k in range(n)]
+    pairs = [(chain.marker(-1), chain.marker(k)) for k in range(n)]
+    if interface:
+        handle = add_iwan_interface(chain.mbs, pairs, params)
+    else:
+        handle = [add_iwan_connector(chain.mbs, list(pr), IwanJoint(p), law="python")
+                  for pr, p in zip(pairs, params)]
+    chain.mbs.Assemble()
+    return chain, handle, params
+
+
+def _events(u, p):
+    """(steps with a new reversal point, steps that closed a loop) of an IwanJoint driven
+    through the slips ``u``."""
+    j = IwanJoint(p)
+    rev, closed = [], []
+    for k, x in enumerate(u):
+        d0 = j.reversal_depth
+        j.trial(float(x))
+        j.commit()
+        if j.reversal_depth > d0:
+            rev.append(k)
+        elif j.reversal_depth < d0:
+            closed.append(k)
+    return rev, closed
+
+
+def test_points_reversing_at_different_steps_and_closing_inner_loops_equal_the_python_law():
+    n, steps = 4, 1500
+    chain, iface, params = _two_tone(n, interface=True, amplitude=0.15)   # microslip loops
+    chain.mbs.SolveDynamic(settings(3e-5, steps))
+    ref, conns, _ = _two_tone(n, interface=False, amplitude=0.15)
+    ref.mbs.SolveDynamic(settings(3e-5, steps))
+    u_ref = np.stack([c.slip_history for c in conns], axis=1)
+    amp = np.max(np.abs(u_ref))
+    assert np.max(np.abs(iface.slip_history - u_ref)) <= 1e-9 * amp
+    F_ref = np.stack([c.force_history for c in conns], axis=1)
+    assert np.max(np.abs(iface.force_history - F_ref)) <= 1e-9 * max(p.Fs for p in params)
+    ev = [_events(u_ref[:, k], params[k]) for k in range(n)]
+    first = [e[0][:3] for e in ev]
+    assert len({tuple(f) for f in first}) == n               # each point reverses on its own steps
+    assert sum(len(e[1]) for e in ev) >= n                    # inner loops were closed
+    assert amp < max(p.phi_max for p in params)               # ... in microslip
+    assert len(iface.overflow_times) == 0
+
+
+def test_reset_between_different_solves_equals_a_fresh_interface():
+    n, steps = 3, 800
+    chain, iface, _ = _two_tone(n, interface=True)
+    chain.mbs.SolveDynamic(settings(1e-5, steps))
+    iface.reset()
+    chain.mbs.SolveDynamic(settings(5e-6, 2 * steps))        # another run, other step
+    again = iface.records()
+    assert len(iface.overflow_times) == 0                     # every step of the new run exact
+    fresh_chain, fresh, _ = _two_tone(n, interface=True)
+    fresh_chain.mbs.SolveDynamic(settings(5e-6, 2 * steps))
+    want = fresh.records()
+    assert np.max(np.abs(want["slip"])) > min(p.phi_max for p in PARAMS[:n]) * 0.1
+    for key in want:
+        np.testing.assert_allclose(again[key], want[key], rtol=0,
+                                   atol=1e-12 * np.max(np.abs(want[key])) + 1e-300)
+
+
+def test_records_read_during_the_run_equal_records_read_once():
+    """The forces and energies are replayed from the recorded slips when read; reading them
+    during the run (incremental replay) gives what one read at the end gives."""
+    seen = []
+    holder = {}
+
+    def post_step(mbs, t):
+        if "iface" in holder and holder["iface"].n_records % 97 == 5:
+            seen.append(holder["iface"].dissipated_energy_history[-1])
+        return True
+
+    chain, iface = _chain(3, interface=True, post_step=post_step)
+    holder["iface"] = iface
+    chain.solve(settings(1e-5, 1500))
+    once_chain, once = _chain(3, interface=True)
+    once_chain.solve(settings(1e-5, 1500))
+    assert len(seen) >= 10 and seen[-1] > 0.0
+    a, b = iface.records(), once.records()
+    for key in b:
+        np.testing.assert_array_equal(a[key], b[key])
+    idx = [k - 1 for k in range(1, iface.n_records + 1) if k % 97 == 5][:len(seen)]   # row k-1
+    np.testing.assert_array_equal(np.array(seen), b["dissipated_energy"][idx])

@@ -6,11 +6,15 @@ REFERENCE.md section 2, paper eqs. 13-15). :meth:`IwanJointBank.commit` moves ev
 new displacement at once:
 
 * points that continue their current branch without a reversal and without closing a loop
-  (nearly all points at nearly all steps of a time integration) are updated with numpy
-  operations on the whole bank: force from the branch formula, work and dissipation from the
-  closed forms ``G`` and ``I_H`` (the same formulas as ``IwanJoint``'s fast path);
-* the few points with an event (a reversal, a closed loop, the first move) walk their reversal
-  stack one by one, exactly as ``IwanJoint`` does.
+  (nearly all points at nearly all steps of a time integration) only record the new
+  displacement (three numpy operations for the whole bank); their force, work and
+  dissipation follow in closed form from the branch and the values where it started
+  (branch formula, ``G`` and ``I_H``: the same formulas as ``IwanJoint``'s fast path) and are
+  evaluated for all points at once when :attr:`IwanJointBank.F`, ``W`` or ``D`` is read;
+* plain reversals (a new branch that reaches no older reversal point in the step) are
+  committed for all such points at once with numpy;
+* the few points that close a loop (or start from rest) walk their reversal stack one by
+  one, exactly as ``IwanJoint`` does.
 
 The bank is the committed state of a multi-contact interface; it never evaluates trials for
 a solver (the solver's trial forces come from the symbolic law of
@@ -30,6 +34,7 @@ from .parameters import IwanParameters
 __all__ = ["IwanJointBank"]
 
 _INF = math.inf
+_NONE = np.empty(0, dtype=np.intp)
 
 
 class IwanJointBank:
@@ -102,19 +107,48 @@ class IwanJointBank:
         """Return every point to the virgin, unloaded state; energies to zero."""
         n = self.n_points
         z = np.zeros(n)
-        self.u, self.F, self.W, self.D = z.copy(), z.copy(), z.copy(), z.copy()
-        self.Gc, self.IHc = z.copy(), z.copy()
+        self.u = z.copy()
+        self._F, self._W, self._D = z.copy(), z.copy(), z.copy()
+        self._Gc, self._IHc = z.copy(), z.copy()
+        # the branch through the committed state and the values where it started
+        self.u0, self.W0, self.D0, self.G0, self.I0 = z.copy(), z.copy(), z.copy(), z.copy(), z.copy()
         self.us = [[] for _ in range(n)]      # reversal stacks, oldest first
         self.Fr = [[] for _ in range(n)]
         self.bur, self.bFr = z.copy(), z.copy()
         self.bc1, self.bc2 = np.ones(n), np.ones(n)
         self.blo, self.bhi = z.copy(), z.copy()
-        self.bdir = np.zeros(n)
+        self.bdir, self.bound = z.copy(), z.copy()
         self._c4 = np.ones(n)                  # 4 on a branch from a reversal, 1 virgin
         self._up = np.zeros(n, dtype=bool)     # the branch runs towards larger u
         self._down = np.zeros(n, dtype=bool)   # ... towards smaller u
+        self._stale = False                    # F, W, D lag behind u (see _sync)
+        self._nst = np.zeros(n, dtype=np.intp)  # stack lengths
+        self._fast_buf = np.zeros(n, dtype=bool)
+        self._above_buf = np.zeros(n, dtype=bool)
         for i in range(n):
             self._set_branch(i)
+
+    # ------------------------------------------------------------------ committed values
+    @property
+    def F(self) -> np.ndarray:
+        """Committed force of every point [N], shape (n_points,) (resists positive slip)."""
+        if self._stale:
+            self._sync()
+        return self._F
+
+    @property
+    def W(self) -> np.ndarray:
+        """Work done on every point since the reset [J], shape (n_points,)."""
+        if self._stale:
+            self._sync()
+        return self._W
+
+    @property
+    def D(self) -> np.ndarray:
+        """Energy dissipated by every point since the reset [J], shape (n_points,)."""
+        if self._stale:
+            self._sync()
+        return self._D
 
     @property
     def stored_energy(self) -> np.ndarray:
@@ -132,64 +166,129 @@ class IwanJointBank:
         Returns
         -------
         ndarray of int
-            Indices of the points whose branch changed (a reversal or a closed loop): their
-            reversal stacks differ from before the call.
+            Indices of the points that left their branch (a reversal, a closed loop, or no
+            move): their reversal stacks may differ from before the call.
+
+        Notes
+        -----
+        A point that continues its branch only records ``u``; its force and energies follow
+        in closed form from the branch and the values where the branch started (the Masing
+        branch formula, and the telescoped sums of ``G`` and ``I_H``, REFERENCE.md section 2),
+        evaluated for all points at once when :attr:`F`, :attr:`W` or :attr:`D` is read.
         """
         u = np.asarray(u, dtype=float)
-        fast = (self.blo < u) & (u < self.bhi)
-        if np.count_nonzero(fast) == len(fast):
-            self._fast(u, slice(None))
-            return np.empty(0, dtype=np.intp)
-        idx = np.flatnonzero(fast)
-        if idx.size:
-            self._fast(u, idx)
+        fast, above = self._fast_buf, self._above_buf
+        np.less(self.blo, u, out=fast)
+        np.less(u, self.bhi, out=above)
+        fast &= above
+        if np.count_nonzero(fast) == fast.size:
+            np.copyto(self.u, u)
+            np.copyto(self.blo, u, where=self._up)
+            np.copyto(self.bhi, u, where=self._down)
+            self._stale = True
+            return _NONE
+        if self._stale:
+            self._sync()                       # the walks start from the committed values
         slow = np.flatnonzero(~fast)
         if not np.all(np.isfinite(u[slow])):
             bad = slow[~np.isfinite(u[slow])][0]
             raise ValueError(f"u must be finite, got u[{bad}] = {u[bad]}")
-        for i in slow.tolist():
+        np.copyto(self.u, u, where=fast)
+        np.copyto(self.blo, u, where=fast & self._up)
+        np.copyto(self.bhi, u, where=fast & self._down)
+        rest = self._reversals(u, slow) if slow.size > 2 else slow
+        for i in rest.tolist():
             self._walk_commit(i, float(u[i]))
+        self._stale = True
         return slow
 
-    def _fast(self, u, s) -> None:
-        """Branch continuation for the points ``s`` (numpy on the whole selection; the same
-        formulas as ``IwanJoint``'s fast path, written with as few array operations as
-        possible because for tens of points their fixed cost dominates)."""
-        uu = u[s]
-        x = uu - self.bur[s]
-        h = self.bc1[s] * np.abs(x)
+    def _reversals(self, u, slow) -> np.ndarray:
+        """Commit the plain reversals among ``slow`` at once and return the other points.
+
+        A plain reversal leaves its branch backwards (beyond the reversal tolerance) and does
+        not reach the bound of the new branch from ``(u_c, F_c)`` (the newest older reversal
+        point, or ``-u_c`` on the virgin curve): ``IwanJoint``'s walk then pushes ``(u_c, F_c)``
+        and moves on the new branch, ``F = F_c + 2 F_bb(x/2)``, work ``F_c x + 4 G(|x|/2)``,
+        dissipation ``2 I_H(|x|/2)`` with ``x = u - u_c`` (REFERENCE.md section 2)."""
+        uu = u[slow]
+        uc = self.u[slow]
+        du = uu - uc
+        dr = self.bdir[slow]
+        bound = np.where(self._nst[slow] > 0, self.bur[slow], -uc)
+        up = du > 0.0
+        plain = (np.sign(du) == -dr) & (dr != 0.0)          # signs: du * dr may underflow
+        plain &= np.abs(uc - self.bur[slow]) > self.tol[slow]
+        plain &= np.where(up, uu < bound, uu > bound)
+        if not plain.any():
+            return slow
+        idx = slow[plain]
+        e, ub, bnd, upi = uc[plain], uu[plain], bound[plain], up[plain]
+        eF = self._F[idx]
+        x = ub - e
+        f, Gb, Ib = self._curves(0.5 * np.abs(x), idx)
+        W = self._W[idx] + (eF * x + 4.0 * Gb)          # as the walk sums it
+        D = self._D[idx] + 2.0 * Ib
+        self.u[idx] = ub
+        self._F[idx] = eF + np.copysign(2.0 * f, x)
+        self._W[idx], self._D[idx], self._Gc[idx], self._IHc[idx] = W, D, Gb, Ib
+        self.u0[idx], self.W0[idx], self.D0[idx], self.G0[idx], self.I0[idx] = ub, W, D, Gb, Ib
+        self.bur[idx], self.bFr[idx] = e, eF
+        self.bc1[idx], self.bc2[idx], self._c4[idx] = 0.5, 2.0, 4.0
+        self.bdir[idx] = np.where(upi, 1.0, -1.0)
+        self.bound[idx] = bnd
+        self._up[idx], self._down[idx] = upi, ~upi
+        self.blo[idx] = np.where(upi, ub, bnd)
+        self.bhi[idx] = np.where(upi, bnd, ub)
+        self._nst[idx] += 1
+        us, Fr = self.us, self.Fr
+        for i, ei, Fi in zip(idx.tolist(), e.tolist(), eF.tolist()):
+            us[i].append(ei)
+            Fr[i].append(Fi)
+        return slow[~plain]
+
+    def _curves(self, h, s):
+        """Backbone ``F_bb(h)``, ``G(h)`` and ``I_H(h)`` for ``h >= 0`` at the points ``s``."""
         pm = self.pm[s]
         micro = h < pm
-        if np.count_nonzero(micro) == len(micro):
-            q = h ** (self._e1s if self._e1s is not None else self.e1[s])
-            f = h * (self.KT[s] - self.a[s] * q)
+        hm = np.where(micro, h, pm)
+        q = hm ** self.e1[s]
+        f = np.where(micro, hm * (self.KT[s] - self.a[s] * q), self.Fs[s])
+        p3 = q * hm * hm
+        G = np.where(micro, hm * hm * self._halfKT[s] - self._a_e3[s] * p3,
+                     self.g_pm[s] + self.Fs[s] * (h - pm))
+        I = np.where(micro, self.ih_c[s] * p3, self.ih_pm[s] + self.Fs[s] * (h - pm))
+        return f, G, I
+
+    def _sync(self) -> None:
+        """Force and energies of every point at its committed ``u`` from its branch: the branch
+        formula ``F_r + c2 sign(x) F_bb(c1 |x|)`` and the closed-form work and dissipation since
+        the branch started (the same formulas as ``IwanJoint``'s fast path)."""
+        u = self.u
+        x = u - self.bur
+        h = self.bc1 * np.abs(x)
+        pm = self.pm
+        micro = h < pm
+        if micro.all():
+            q = h ** (self._e1s if self._e1s is not None else self.e1)
+            f = h * (self.KT - self.a * q)
             p3 = q * h * h                        # h ** e3
-            Gb = h * h * self._halfKT[s] - self._a_e3[s] * p3
-            Ib = self.ih_c[s] * p3
+            Gb = h * h * self._halfKT - self._a_e3 * p3
+            Ib = self.ih_c * p3
         else:
             hm = np.where(micro, h, pm)
-            q = hm ** self.e1[s]
-            f = np.where(micro, hm * (self.KT[s] - self.a[s] * q), self.Fs[s])
+            q = hm ** self.e1
+            f = np.where(micro, hm * (self.KT - self.a * q), self.Fs)
             p3 = q * hm * hm
-            Gb = np.where(micro, hm * hm * self._halfKT[s] - self._a_e3[s] * p3,
-                          self.g_pm[s] + self.Fs[s] * (h - pm))
-            Ib = np.where(micro, self.ih_c[s] * p3, self.ih_pm[s] + self.Fs[s] * (h - pm))
-        bFr = self.bFr[s]
-        F = bFr + np.copysign(self.bc2[s] * f, x)
-        dI = Ib - self.IHc[s]
-        self.W[s] += bFr * (uu - self.u[s]) + self._c4[s] * (Gb - self.Gc[s])
-        self.D[s] += self.bc2[s] * np.maximum(dI, 0.0)
-        self.Gc[s] = Gb
-        self.IHc[s] = Ib
-        self.u[s] = uu
-        self.F[s] = F
-        if isinstance(s, slice):
-            np.copyto(self.blo, uu, where=self._up)
-            np.copyto(self.bhi, uu, where=self._down)
-        else:
-            up = self._up[s]
-            self.blo[s] = np.where(up, uu, self.blo[s])
-            self.bhi[s] = np.where(up, self.bhi[s], uu)
+            Gb = np.where(micro, hm * hm * self._halfKT - self._a_e3 * p3,
+                          self.g_pm + self.Fs * (h - pm))
+            Ib = np.where(micro, self.ih_c * p3, self.ih_pm + self.Fs * (h - pm))
+        bFr = self.bFr
+        self._F = bFr + np.copysign(self.bc2 * f, x)
+        self._W = self.W0 + bFr * (u - self.u0) + self._c4 * (Gb - self.G0)
+        self._D = self.D0 + self.bc2 * np.maximum(Ib - self.I0, 0.0)
+        self._Gc = Gb
+        self._IHc = Ib
+        self._stale = False
 
     # ------------------------------------------------------------------ one point
     def _bb(self, i, x):
@@ -234,7 +333,7 @@ class IwanJointBank:
         du = u - uc
         e = None
         eF = 0.0
-        acc = [0.0, 0.0, float(self.Gc[i]), float(self.IHc[i])]
+        acc = [0.0, 0.0, float(self._Gc[i]), float(self._IHc[i])]
         if du != 0.0:
             d = uc - us[n - 1] if n else uc
             up = du > 0.0                    # signs, not products: d * du underflows
@@ -243,7 +342,7 @@ class IwanJointBank:
                     if n:
                         n -= 1
                 else:
-                    e, eF = uc, float(self.F[i])
+                    e, eF = uc, float(self._F[i])
             pos = uc
             while True:
                 if e is not None:
@@ -283,11 +382,12 @@ class IwanJointBank:
             f = self._bb(i, abs(u))
             F = f if u >= 0.0 else -f
         self.u[i] = u
-        self.F[i] = F
-        self.W[i] += acc[0]
-        self.D[i] += acc[1]
-        self.Gc[i] = acc[2]
-        self.IHc[i] = acc[3]
+        self._F[i] = F
+        self._W[i] += acc[0]
+        self._D[i] += acc[1]
+        self._Gc[i] = acc[2]
+        self._IHc[i] = acc[3]
+        self._nst[i] = len(us)
         self._set_branch(i)
 
     def _set_branch(self, i: int) -> None:
@@ -296,6 +396,8 @@ class IwanJointBank:
         continue it without a reversal or a closed loop."""
         us = self.us[i]
         uc = float(self.u[i])
+        self.u0[i], self.W0[i], self.D0[i] = uc, self._W[i], self._D[i]
+        self.G0[i], self.I0[i] = self._Gc[i], self._IHc[i]
         if us:
             ur = us[-1]
             d = uc - ur
@@ -310,11 +412,11 @@ class IwanJointBank:
         self._up[i] = d > 0.0
         self._down[i] = d < 0.0
         if d > 0.0:
-            self.blo[i], self.bhi[i], self.bdir[i] = uc, bound, 1.0
+            self.blo[i], self.bhi[i], self.bdir[i], self.bound[i] = uc, bound, 1.0, bound
         elif d < 0.0:
-            self.blo[i], self.bhi[i], self.bdir[i] = bound, uc, -1.0
+            self.blo[i], self.bhi[i], self.bdir[i], self.bound[i] = bound, uc, -1.0, bound
         else:
-            self.blo[i], self.bhi[i], self.bdir[i] = 0.0, 0.0, 0.0
+            self.blo[i], self.bhi[i], self.bdir[i], self.bound[i] = uc, uc, 0.0, 0.0
 
     def force_history(self, u) -> np.ndarray:
         """Forces [N] of every point for a displacement history ``u`` [m] of shape

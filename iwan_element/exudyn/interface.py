@@ -4,13 +4,16 @@
 lap joint). Two routes, chosen automatically:
 
 * **symbolic** (every joint given as :class:`~iwan_element.IwanParameters`, a global axis or
-  coordinate markers): each point's force is an Exudyn symbolic expression of the exact Iwan
-  law (:mod:`._symbolic_law`), evaluated in C++ with no Python call and no Exudyn API call;
-  its committed state lives in named symbolic variables. Once per accepted step one Python
-  post-step reads the accepted slips of all points with one vectorised product of a view of
-  the system coordinates, commits all points at once in an
-  :class:`~iwan_element.core.joint_bank.IwanJointBank`, writes ``u_c`` of every point (and the
-  reversal stack of the few points whose branch changed) to the variables and records a row.
+  coordinate markers): each point's force is an Exudyn symbolic expression evaluated in C++
+  with no Python call and no Exudyn API call (:mod:`._interface_law`: the Masing branch
+  formula while the trial slip continues the point's branch, else the full exact law of
+  :mod:`._symbolic_law`). Once per accepted step one Python post-step reads the accepted
+  slips of all points (one product of a view of the system coordinates; ANCF Cable2D
+  surface points by :mod:`._surface_slips`), commits all points at once in an
+  :class:`~iwan_element.core.joint_bank.IwanJointBank`, writes the committed slips to
+  symbolic vectors of 6 (one ``SetVector`` per 6 points), and only for the points that
+  left their branch the new branch and reversal stack. The records keep the slips; forces
+  and energies are recomputed from them when read (an exact replay of the same commits).
 * **python** (joints given as elements following the protocol, e.g. effects, or a rotating
   ``axisMarker``): one :func:`~iwan_element.exudyn.add_iwan_connector` per point, with the
   same records in the handle.
@@ -18,9 +21,10 @@ lap joint). Two routes, chosen automatically:
 Exactness of the symbolic route: the expression holds the newest ``depth`` reversal points
 of each point; a step that closes so many loops that it needs an older point is detected
 after the exact commit (the bank walks the full stack), by evaluating the law at the
-accepted slip with the previous state (only for points whose stack changed). Such a step is
-logged as a warning and its time is listed in :attr:`IwanInterface.overflow_times`; raise
-``depth`` if that happens (it needs ``depth // 2`` loop closures inside one time step).
+accepted slip with the previous state (only for points whose stack got shorter, i.e. that
+closed a loop). Such a step is logged as a warning and its time is listed in
+:attr:`IwanInterface.overflow_times`; raise ``depth`` if that happens (it needs
+``depth // 2`` loop closures inside one time step).
 """
 from __future__ import annotations
 
@@ -36,16 +40,19 @@ from exudyn.itemInterface import (ObjectConnectorCartesianSpringDamper,
 from ..core.joint_bank import IwanJointBank
 from ..core.parameters import IwanParameters
 from ..core._validation import check_scalar
-from ._records import InterfaceRecords
 from ._slip_map import SlipMap
+from ._slip_records import SlipRecords
+from ._surface_slips import SurfaceSlips
 from ._symbolic_law import SymbolicIwanState, cartesian_law, coordinate_law, make_probe
 from ._dispatch import _dispatcher_for, _installed_post_step
+from ._interface_law import CHUNK, VIRGIN, InterfacePointLaw, committed_slip_vectors
 from ._markers import _COORDINATE_MARKERS, _POSITION_MARKERS, _marker_type, _unit_axis
 from .connector import add_iwan_connector
 
 __all__ = ["add_iwan_interface", "IwanInterface"]
 
 _log = logging.getLogger(__name__)
+_POSITION = exu.OutputVariableType.Position
 _HIDDEN = {"show": False, "drawSize": -1.0, "color": [-1.0, -1.0, -1.0, -1.0]}
 
 
@@ -64,7 +71,9 @@ class IwanInterface:
         self._kind = kind
         self._route = route
         self._allow_adaptive_explicit = False
-        self._rec = InterfaceRecords(len(pairs), record)
+        self._rec = SlipRecords(len(pairs), record)
+        self._laws = []
+        self._held = [0] * len(pairs)   # stack length the symbolic variables hold, per point
         self._objects = []
         self._connectors = []       # python route
         self._bank = None           # symbolic route
@@ -129,10 +138,7 @@ class IwanInterface:
                     "force": np.stack([r["force"][:n] for r in recs], axis=1),
                     "work": sum(r["work"][:n] for r in recs),
                     "diss": sum(r["dissipated_energy"][:n] for r in recs)}
-        r = self._rec
-        n = r.n
-        return {"time": r.t[:n].copy(), "slip": r.slip[:n].copy(), "force": r.force[:n].copy(),
-                "work": r.work[:n].copy(), "diss": r.diss[:n].copy()}
+        return self._rec.table(self._bank)
 
     @property
     def n_records(self) -> int:
@@ -187,9 +193,12 @@ class IwanInterface:
                 c.reset()
             return
         self._bank.reset()
-        for s in self._states:
+        for s, law in zip(self._states, self._laws):
             s.set_stack([], [])
-            s.set_uc(0.0)
+            law.set_branch(*VIRGIN)
+        self._held = [0] * self.n_points
+        for v in self._uc_vectors:
+            v.SetVector([0.0] * v.NumberOfItems())
         self._rec.clear()
         self._overflows.clear()
         self._t_acc = -math.inf
@@ -203,32 +212,89 @@ class IwanInterface:
     # ------------------------------------------------------------------ per-step work
     def _refresh(self, mbs) -> None:
         """Start of a run: the affine map from the system coordinates to the slips."""
-        self._map = SlipMap(mbs, self._pairs, self._kind, self._axis, self._offsets)
-        self._read = self._map      # the dispatcher then checks for a re-assembly per step
+        self._map = m = SlipMap(mbs, self._pairs, self._kind, self._axis, self._offsets)
+        self._read = m              # the dispatcher then checks for a re-assembly per step
+        cols = np.unique(m.idx[m.coef != 0.0])
+        self._cols = cols
+        self._qsub = np.empty(cols.size)
+        C = np.zeros((self.n_points, max(cols.size, 1)))
+        for i in range(self.n_points):
+            for k, cf in zip(m.idx[i], m.coef[i]):
+                if cf != 0.0:
+                    C[i, np.searchsorted(cols, k)] += cf
+        self._C = C[:, :cols.size]
+        self._ubuf = np.empty(self.n_points)
+        self._surface = None
+        self._generic = list(m.generic)
+        if m.generic and self._kind == "position":
+            sf = SurfaceSlips(mbs, self._pairs, m.generic, self._axis, self._offsets, m.q)
+            if sf.points.size:
+                self._surface = sf
+                done = set(sf.points.tolist())
+                self._generic = [i for i in m.generic if i not in done]
+
+    def _slips(self) -> np.ndarray:
+        """Accepted slips of all points (a buffer reused at every step)."""
+        m, u = self._map, self._ubuf
+        m.q.take(self._cols, out=self._qsub)
+        np.dot(self._C, self._qsub, out=u)
+        u += m.c
+        sf = self._surface
+        if sf is not None:
+            u[sf.points] = sf.slips()
+        if self._generic:
+            a = self._axis
+            get = self._mbs.GetMarkerOutput
+            for i in self._generic:
+                m0, m1 = self._pairs[i]
+                u[i] = float(a @ (get(int(m1), _POSITION) - get(int(m0), _POSITION))) \
+                    - self._offsets[i]
+        return u
 
     def _accept(self, t) -> None:
-        u = self._map.slips()
+        u = self._slips()
         bank = self._bank
         if t < self._t_acc and self._rec.n:
             _log.warning("Iwan interface: a new run starts at t=%g before the end (t=%g) of the "
                          "history the joints hold; call reset() before a fresh run", t,
                          self._t_acc)
         events = bank.commit(u)
-        states = self._states
         if events.size:
-            for i in events.tolist():
-                s = states[i]
-                if s.disagrees(float(u[i]), float(bank.F[i])):
-                    self._overflows.append(t)
-                    _log.warning("Iwan interface point %d at t=%g: the step closed loops beyond "
-                                 "the %d reversal points the symbolic law holds; that step's "
-                                 "force was not exact (raise depth)", i, t, s.depth)
-                s.set_stack(bank.us[i], bank.Fr[i])
-        for f, x in zip(self._set_uc, u.tolist()):
-            f(x)
+            self._events(t, u, events)
+        ul = u.tolist()
+        for f, a, b in self._set_uc:
+            f(ul[a:b])
         self._t_acc = t
         if self._rec.on:
-            self._rec.append(t, u, bank.F, bank.W.sum(), bank.D.sum())
+            self._rec.append(t, u)
+
+    def _events(self, t, u, events) -> None:
+        """Points that left their branch: check the step (overflow), write their new branch
+        and reversal stack to the symbolic variables.
+
+        A walk pushes at most one reversal point and pops two per closed loop (one when it
+        returns to the virgin curve or meets a reversal point within the tolerance), so a
+        stack that did not get shorter means no closed loop: a plain reversal (one more
+        point) or no change of the stack at all (same length). The law held every point such
+        a step reads, so only steps that shortened the stack are checked against the exact
+        force, and an unchanged stack is not written again."""
+        bank = self._bank
+        F = bank.F
+        held = self._held
+        for i in events.tolist():
+            s = self._states[i]
+            n1 = len(bank.us[i])
+            if n1 < held[i] and s.disagrees(float(u[i]), float(F[i])):
+                self._overflows.append(t)
+                _log.warning("Iwan interface point %d at t=%g: the step closed loops beyond "
+                             "the %d reversal points the symbolic law holds; that step's "
+                             "force was not exact (raise depth)", i, t, s.depth)
+            if n1 != held[i]:
+                s.set_stack(bank.us[i], bank.Fr[i])
+                held[i] = n1
+            self._laws[i].set_branch(float(bank.bur[i]), float(bank.bFr[i]), float(bank.bc1[i]),
+                                     float(bank.bc2[i]), float(bank.bdir[i]),
+                                     float(bank.bound[i]))
 
 
 def add_iwan_interface(mbs, markerPairs, joints, *, axis=None, axisMarker=None, offsets=None,
@@ -308,11 +374,16 @@ def add_iwan_interface(mbs, markerPairs, joints, *, axis=None, axisMarker=None, 
     iface._bank = bank
     dispatcher = _dispatcher_for(mbs)
     iface._dispatcher = dispatcher
+    vecs = committed_slip_vectors(len(joints))
+    iface._uc_vectors = vecs
     for i, p in enumerate(joints):
         st = SymbolicIwanState(p, int(depth), float(bank.tol[i]))
+        law = InterfacePointLaw(st, vecs[i // CHUNK][i % CHUNK])
         iface._states.append(st)
-        iface._objects.append(_symbolic_object(mbs, iface, i, st, f"{name}{i}" if name else ""))
-    iface._set_uc = [s.uc.SetValue for s in iface._states]
+        iface._laws.append(law)
+        iface._objects.append(_symbolic_object(mbs, iface, i, law, f"{name}{i}" if name else ""))
+    iface._set_uc = [(v.SetVector, k * CHUNK, k * CHUNK + v.NumberOfItems())
+                     for k, v in enumerate(vecs)]
     dispatcher.add(iface)
     _log.debug("added %r", iface)
     return iface
@@ -360,7 +431,8 @@ def _pair_kind(mbs, pairs, axis, axisMarker) -> str:
     return kind
 
 
-def _symbolic_object(mbs, iface, i, st, name):
+def _symbolic_object(mbs, iface, i, law, name):
+    st = law
     m0, m1 = (int(m) for m in iface._pairs[i])
     off = iface._offsets[i]
     if iface._kind == "coordinate":
@@ -377,7 +449,7 @@ def _symbolic_object(mbs, iface, i, st, name):
             name=name, markerNumbers=[m0, m1], springForceUserFunction=fn,
             visualization=_HIDDEN)
     iface._functions.append(fn)
-    st.probe = make_probe(mbs, fn, iface._kind, iface._axis, off)
+    law.state.probe = make_probe(mbs, fn, iface._kind, iface._axis, off)
     return mbs.AddObject(item)
 
 
