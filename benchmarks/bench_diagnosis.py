@@ -102,8 +102,12 @@ def main(argv=None):
     ap.add_argument("--envelopes", nargs="+", default=list(ENVELOPES))
     ap.add_argument("--clean", type=int, default=6, help="clean and pure-noise records each")
     ap.add_argument("--jobs", type=int, default=1)
+    ap.add_argument("--seed", type=int, default=1000,
+                    help="first seed of the effect cases (clean: seed + 1000, noise: + 2000)")
+    ap.add_argument("--cases", type=int, default=None,
+                    help="run only every k-th case so that about this many run (default all)")
     args = ap.parse_args(argv)
-    cases, seed = [], 1000
+    cases, seed = [], args.seed
     joints = list(JOINTS)
     for i, name in enumerate(args.effects):
         for j, env in enumerate(args.envelopes):
@@ -112,8 +116,11 @@ def main(argv=None):
                 cases.append(("effect", joints[(i + j) % 2], env, name, size, seed))
     for k in range(args.clean):
         env = list(ENVELOPES)[k % 3]
-        cases.append(("clean", joints[k % 2], env, None, 0.0, 2000 + k))
-        cases.append(("noise", joints[k % 2], env, None, 0.0, 3000 + k))
+        cases.append(("clean", joints[k % 2], env, None, 0.0, args.seed + 1000 + k))
+        cases.append(("noise", joints[k % 2], env, None, 0.0, args.seed + 2000 + k))
+    if args.cases is not None and args.cases < len(cases):
+        step = len(cases) / args.cases
+        cases = [cases[int(i * step)] for i in range(args.cases)]
     with ProcessPoolExecutor(args.jobs) as ex:
         rows = list(ex.map(one, cases))
     print(f"{'hidden':<18} {'joint':<6} {'envelope':<10} {'size':>5} {'named':<36} "

@@ -90,13 +90,13 @@ def _filter(tt, x, lp):
     return sosfiltfilt(sos, x)
 
 
-def _noise_level(tt, r, noise, lp):
+def _noise_level(tt, r, noise, lp, channel=None):
     """``(sigma [N], tau [samples], text, warnings)`` of the force as fitted, from the
     residual ``r`` of the plain fit to the raw force (the model removes the loops' corners,
     the estimator the smooth rest of any model error)."""
     if noise is not None:
         return noise, 1.0, "given", ()
-    sigma, tau, method, warns = noise_estimate(tt, r)
+    sigma, tau, method, warns = noise_estimate(tt, r, channel)
     text = f"estimated from the record ({method})"
     if lp is not None:                       # white noise through the low-pass
         fs = 1.0 / float(np.median(np.diff(tt)))
@@ -309,7 +309,7 @@ def diagnose(t, u, F, *, candidates=None, max_effects: int = 2, noise: float | N
                                                   "D_ref": 1.0}, 1.0, F_rest)
     base = _fit_base(fitter, ev, _base_start(tt, uj, FF, seed))
     r_raw = FF_in - _record_force(base, uj, v)[0]
-    sigma, tau, noise_text, nwarn = _noise_level(tt, r_raw, noise, lp)
+    sigma, tau, noise_text, nwarn = _noise_level(tt, r_raw, noise, lp, FF_in)
     fitter.s2 = sigma * sigma
     base["chi2"] /= fitter.s2
     shape_b, _ = base["model"].decode(base["z"])
