@@ -201,11 +201,11 @@ def test_slip_degradation_run_solver_equals_the_per_sample_steps(rate_x):
         ref_el = SlipDegradation(IwanJoint(P), rate=rate)
         ref = _SliderEffect._correction_energy(ref_el, u, D)
         np.testing.assert_allclose(fast, ref, rtol=0, atol=1e-11 * P.Fs)
-        F_el = run(SlipDegradation(IwanJoint(P), rate=rate), u)[0]
-        F_in = run(IwanJoint(P), u)[0]
-        # (the element also commits at a pause, which re-reads the energy after the clip: a
-        # 1e-8 difference there)
-        np.testing.assert_allclose(F_in + fast, F_el, rtol=0, atol=1e-6 * P.Fs)
+        if u is u2:      # the element route (trial/commit), on a record without pauses (the
+            # element also commits at a pause and re-reads the energy after its clip there)
+            F_el = run(SlipDegradation(IwanJoint(P), rate=rate), u)[0]
+            F_in = run(IwanJoint(P), u)[0]
+            np.testing.assert_allclose(F_in + fast, F_el, rtol=0, atol=1e-9 * P.Fs)
 
 
 def test_asymmetric_slip_thresholds_not_a_scaled_force():
