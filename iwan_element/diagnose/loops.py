@@ -3,10 +3,10 @@
 :func:`diagnose` works on a record (time, displacement, force):
 
 1. the joint's unloaded state is the rest position the record starts from: the displacement
-   offset is the mean displacement before the motion starts, and the force offset the mean
-   force there (the unloaded joint carries no force) when at least 10 rest samples exist;
-   otherwise the force offset is fitted with every model (linear, eliminated in closed form
-   with ``Fs``). Offsets are nuisance parameters: reported, never named as an effect;
+   offset is the mean displacement before the motion starts; the force offset is fitted with
+   every model (linear, eliminated in closed form with ``Fs``), the rest samples (where the
+   unloaded joint carries no force) being part of the fitted data. Offsets are nuisance
+   parameters: reported, never named as an effect;
 2. the force noise and its correlation time are estimated from the record itself
    (:func:`iwan_element.identify.noise.estimate_noise`; no repeated cycles needed, so
    ramped, swept and random-amplitude protocols work), unless ``noise`` is given;
@@ -39,6 +39,7 @@ from ..identify.testdata import find_reversals, split_cycles
 from . import _model as M
 from ._locate import _check_candidates, _locate, _untestable
 from ._noise import noise_estimate
+from ..identify.result import _settle
 from .results import Diagnosis, _json
 from .selection import criterion_text, misfit_p, stepwise_select
 
@@ -50,7 +51,6 @@ log = logging.getLogger(__name__)
 CANDIDATES = ("viscous_damping", "pinning_stiffness", "backlash", "slip_degradation",
               "asymmetric_slip", "breakaway")
 _SLOW_FIT_SAMPLES = 300          # samples fitted for stacks without a vectorised form
-_MIN_REST = 10                   # rest samples needed to measure the force offset there
 
 
 def _rest_index(u, noise_u):
@@ -209,10 +209,13 @@ def _fit_result(row, fitter, FF, F_model, t_start, base_identified=None, extra_w
     vals, labels = M.flat(p, effs, mdl.names, F0)
     stderr = dict(zip(M.PARAM_NAMES, se[:4].tolist()))
     at_bound = np.isclose(z, mdl.lower, atol=1e-6) | np.isclose(z, mdl.upper, atol=1e-6)
-    ident = {k: bool(np.isfinite(stderr[k]) and stderr[k] <= 0.5 * abs(getattr(p, k)))
-             for k in M.PARAM_NAMES}
-    ident["chi"] &= not at_bound[1]
-    ident["beta"] &= not at_bound[2]
+    # the package's one identification rule (identify.result._settle): finite stderr of at
+    # most half the value (chi: of chi + 1), not at a bound (phi_max's bound is KT's)
+    ranges = {}
+    ident, settle_warns = _settle({"identified": dict.fromkeys(M.PARAM_NAMES, True),
+                                   "params": p, "stderr": stderr, "ranges": ranges,
+                                   "at_bound": {k for k, b in zip(("KT", "chi", "beta"),
+                                                                  at_bound[:3]) if b}}, ())
     eff_out, k0 = [], 4
     for nm, d in zip(mdl.names, effs):
         q = len(EFFECTS[nm].specs)
@@ -220,17 +223,16 @@ def _fit_result(row, fitter, FF, F_model, t_start, base_identified=None, extra_w
                         "stderr": dict(zip(EFFECTS[nm].parameter_names, se[k0:k0 + q].tolist())),
                         "units": {s.name: s.unit for s in EFFECTS[nm].specs}})
         k0 += q
-    warns = list(extra_warns)
-    warns += [f"{k} is not identified (at a bound or stderr above half its value)"
-              for k, ok in ident.items() if not ok]
+    warns = list(extra_warns) + settle_warns
     if row["status"] <= 0:
         warns.append(f"the fit did not converge: {row['message']}")
     span = float(np.ptp(FF)) or 1.0
     return M.make_fit_result(
         params=p, stderr=stderr, correlation=corr[:4, :4], identified=ident, fixed=(),
-        ranges={}, residual_norm=math.sqrt(float(r @ r)),
+        ranges=ranges, residual_norm=math.sqrt(float(r @ r)),
         nrmse=float(np.sqrt(np.mean((FF - F_model) ** 2)) / span),
-        success=bool(row["status"] > 0 and ident["Fs"]), message=row["message"],
+        success=bool(row["status"] > 0 and all(ident[k] for k in ("Fs", "KT", "chi"))),
+        message=row["message"],
         nfev=int(fitter.nfev), method="loops+" + "+".join(mdl.names) if mdl.names else "loops",
         n_data=int(r.size), warnings=tuple(warns), wall_time=time.perf_counter() - t_start,
         details=_json({"effects": eff_out, "labels": labels, "force_offset": F0,
@@ -300,7 +302,10 @@ def diagnose(t, u, F, *, candidates=None, max_effects: int = 2, noise: float | N
     FF = FF_in if lp is None else _filter(tt, FF_in, lp)
     i_rest = _rest_index(uu, noise_estimate(tt, uu)[0])
     u_off = float(np.mean(uu[:i_rest]))
-    F_rest = float(np.mean(FF[:i_rest])) if i_rest >= _MIN_REST else None
+    # the force offset is always fitted (linear, with Fs), the rest samples being part of the
+    # fitted data: a mean over a few rest samples has an error of sigma/sqrt(n_rest) that a
+    # fixed offset would leave in the residual as a constant misfit (a false "effect")
+    F_rest = None
     uj = uu - u_off
     v = np.zeros(n) if tt is None else np.gradient(uj, tt)
     ev, ev_slow, keep, sub = _evaluators(uj, v, max_samples)
