@@ -200,7 +200,8 @@ def _fit_base(fitter, ev, shape0):
     return fitter.run((), starts)
 
 
-def _fit_result(row, fitter, FF, F_model, t_start, base_identified=None, extra_warns=()):
+def _fit_result(row, fitter, FF, F_model, t_start, base_identified=None, extra_warns=(),
+                noise_only=False):
     """FitResult of a fitted stack on the whole record, with stderr and identification."""
     mdl, z = row["model"], row["z"]
     p, effs, F0 = mdl.physical(z)
@@ -224,6 +225,9 @@ def _fit_result(row, fitter, FF, F_model, t_start, base_identified=None, extra_w
                         "units": {s.name: s.unit for s in EFFECTS[nm].specs}})
         k0 += q
     warns = list(extra_warns) + settle_warns
+    if noise_only:                       # a force that is noise identifies nothing
+        ident = dict.fromkeys(M.PARAM_NAMES, False)
+        warns.append("the force is indistinguishable from noise: no parameter is identified")
     if row["status"] <= 0:
         warns.append(f"the fit did not converge: {row['message']}")
     span = float(np.ptp(FF)) or 1.0
@@ -386,7 +390,7 @@ def _assemble(c) -> Diagnosis:
     if noise_only:
         warns.append("the force is indistinguishable from noise (the Iwan model explains no "
                      "more than a constant): nothing is identified")
-    base_fit = _fit_result(base, fitter, FF, F_base, c["t_start"])
+    base_fit = _fit_result(base, fitter, FF, F_base, c["t_start"], noise_only=noise_only)
     fit = base_fit if not sel.named else _fit_result(final, fitter, FF, F_after, c["t_start"])
     misfit = sel.p_before < c["alpha"] and not noise_only
     r0 = FF - F_base

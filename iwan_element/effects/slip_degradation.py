@@ -21,9 +21,11 @@ from ._sliders import _SliderEffect
 __all__ = ["SlipDegradation"]
 
 _MAX_ITER = 80
+_LAM_TOL = 1e-14          # capacity change [-] at which the run's fixed point is accepted
+_SHORT_RUN = 8            # runs of fewer steps go through the per-sample loop (cheaper there)
 
 
-def _run_fixed_point(x0, xp0, lam0, rate, phi, k, step, D_in, Wb0):
+def _run_fixed_point(x0, xp0, lam0, rate, phi, k, step, D_in, Wb0, D_in0=None):
     """One monotone run of the correction bank, all samples at once.
 
     In the coordinate of the motion (``x``: modified sliders, ``xp``: plain sliders) a step
@@ -39,6 +41,7 @@ def _run_fixed_point(x0, xp0, lam0, rate, phi, k, step, D_in, Wb0):
     lambda_end, Wb_end, force after the clip)``.
     """
     delta = np.cumsum(step)
+    D_in0 = D_in[0] if D_in0 is None else D_in0
     # plain bank: fixed thresholds phi
     Xp = np.minimum(xp0[None, :] + delta[:, None], phi[None, :])
     Xp_prev = np.vstack([xp0[None, :], Xp[:-1]])
@@ -46,7 +49,9 @@ def _run_fixed_point(x0, xp0, lam0, rate, phi, k, step, D_in, Wb0):
           + phi[None, :] * np.maximum(Xp_prev + step[:, None] - phi[None, :], 0.0)) @ k
     Fp = Xp @ k
     G = D_in - (np.cumsum(wp) - 0.5 * (Xp ** 2) @ k) + Wb0
-    lam = np.full(step.size, lam0)
+    # start from the capacities the wrapped joint's own dissipation would give (the bank's
+    # correction changes them by its discretisation error and the effect's feedback only)
+    lam = lam0 * np.exp(-rate * np.maximum(D_in - D_in0, 0.0))
     for _ in range(_MAX_ITER):
         c = lam[:, None] * phi[None, :]
         c_prev = np.vstack([lam0 * phi[None, :], c[:-1]])
@@ -58,7 +63,7 @@ def _run_fixed_point(x0, xp0, lam0, rate, phi, k, step, D_in, Wb0):
              + c_prev * np.maximum(X_prev + step[:, None] - c_prev, 0.0)) @ k
         D = G + np.cumsum(w) - 0.5 * (y ** 2) @ k
         lam_new = np.exp(-rate * np.maximum(D, 0.0))
-        done = np.array_equal(lam_new, lam)
+        done = float(np.max(np.abs(lam_new - lam))) <= _LAM_TOL
         lam = lam_new
         if done:
             break
@@ -131,10 +136,14 @@ class SlipDegradation(_SliderEffect):
             a = idx[0]
             b = nz[seg[-1] + 1] if seg[-1] + 1 < nz.size else u.size
             d = float(sgn[seg[0]])
-            res = _run_fixed_point(d * self._e[:n], d * self._e[n:], self._lam, self.rate,
-                                   self._phi, k, np.abs(du[idx]), D_inner[idx], self._Wb)
-            if res is None:                      # reference: sample by sample
-                self._slip = np.zeros(2 * n)     # flags of the other direction: irrelevant
+            res = None
+            if idx.size >= _SHORT_RUN:
+                res = _run_fixed_point(d * self._e[:n], d * self._e[n:], self._lam, self.rate,
+                                       self._phi, k, np.abs(du[idx]), D_inner[idx], self._Wb,
+                                       D_inner[a - 1] if a > 0 else 0.0)
+            if res is None:                      # short run or no monotone fixed point:
+                # the reference, sample by sample (flags of the other direction: irrelevant)
+                self._slip = np.zeros(2 * n)
                 out[a:b] = super()._correction_energy(u[a:b], D_inner[a:b], prev=u[a] - du[a])
                 continue
             F_run, x_end, xp_end, lam_end, Wb_end, F_post = res
