@@ -4,9 +4,11 @@
 AR(1) noise model matched to the residual's robust autocorrelation) is applied to the
 *residual of the plain fit*, which on clean data is the noise itself. A residual's own
 spectrum says nothing about the loading, so the smoothing window comes from the measured
-channel: twice its signal window (``1/4`` of the fastest loading period), which keeps the
-AR(1) model well conditioned for noise correlated over a few samples while the smooth part of
-any model error is still removed (its corners are outliers for the robust scale).
+channel: its signal window (``1/8`` of the fastest loading period, at least 25 samples, which
+keeps the AR(1) model well conditioned for noise correlated over a few samples), so the smooth
+part of any model error is removed (its corners are outliers for the robust scale). A large
+misfit still leaks in: :func:`iwan_element.diagnose` then re-reads the noise from the
+residual of the model it selected.
 """
 from __future__ import annotations
 
@@ -16,15 +18,17 @@ from ..identify.noise import _MIN_WINDOW, _signal_window, estimate_noise
 
 __all__ = ["noise_estimate"]
 
+_RESIDUAL_MIN = 25               # samples: the AR(1) match is poorly conditioned below
+
 
 def noise_estimate(t, y, channel=None) -> tuple[float, float, str, tuple]:
     """``(sigma [units of y], tau [samples], method, warnings)`` of ``y``; with ``channel``
-    (the measured signal ``y`` is the fit residual of) the window is twice the channel's."""
+    (the measured signal ``y`` is the fit residual of) the window is the channel's."""
     y = np.asarray(y, float)
     tt = np.arange(y.size, dtype=float) if t is None else np.asarray(t, float)
     window = None
     if channel is not None:
-        w = min(2 * _signal_window(np.asarray(channel, float)), y.size // 4)
+        w = min(max(_signal_window(np.asarray(channel, float)), _RESIDUAL_MIN), y.size // 4)
         w = w if w % 2 else w - 1
         if w >= _MIN_WINDOW:
             window = w * float(np.median(np.diff(tt)))
