@@ -25,8 +25,10 @@ Method (``method="savgol"``, what ``"auto"`` uses)
       [samples] and ``n_eff = n / tau`` the effective number of independent samples (white
       noise: ``tau = 1``). Noise correlated over much longer than the window cannot be told
       from the signal (a warning says so when ``rho`` reaches 0.98). The estimate is repeated
-      with half the window: if the two differ by more than 25 % a warning says the noise is
-      not AR(1)-like on the window's time scale (or the signal leaks into the residual).
+      with half the window: AR(1) noise reads the same through both, so when the two differ
+      by more than 25 % and the halved window reads less, signal (or a model's misfit) leaks
+      into the longer window's residual and the halved window's estimate is used (a warning
+      says so; when the halved window reads more, the noise is not AR(1)-like there).
     * A fit residual (the diagnoses pass the residual of the plain fit) is estimated the same
       way with the window of the measured channel (``window=``): the residual holds the noise
       and whatever the model misses; the smooth part of the misfit is removed by the filter,
@@ -278,11 +280,18 @@ def estimate_noise(t, y, *, method: str = "auto", window: float | None = None) -
     s, rho, capped = _savgol_sigma(yy, w)
     w2 = max(_MIN_WINDOW, (w // 2) | 1)
     if w2 < w and s > 0:
-        s2 = _savgol_sigma(yy, w2)[0]
+        s2, rho2, capped2 = _savgol_sigma(yy, w2)
         if abs(s2 - s) > 0.25 * s:
+            # AR(1) noise reads the same through both windows (the model accounts for the
+            # filter); what the longer window adds is signal (or misfit) leaking in
+            use = s2 < s
             warns.append(f"the estimate changes from {s:.3g} to {s2:.3g} when the window is "
-                         f"halved ({w} -> {w2} samples): the noise is not AR(1)-like on the "
-                         "window's time scale, or the signal leaks into the residual")
+                         f"halved ({w} -> {w2} samples): "
+                         + ("the signal leaks into the longer window's residual; the halved "
+                            "window is used" if use else "the noise is not AR(1)-like on the "
+                            "window's time scale"))
+            if use:
+                s, rho, capped, w = s2, rho2, capped2, w2
     if s == 0.0:
         warns.append("more than half of the residual is exactly zero: the channel is "
                      "quantised more coarsely than its noise, or noise-free")
