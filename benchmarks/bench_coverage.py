@@ -9,7 +9,7 @@ truth (target 90-98 %), and how often the parameter was reported identified.
 
 Run::
 
-    python benchmarks/bench_coverage.py --cases 60 --workers 2
+    python benchmarks/bench_coverage.py --cases 60 --workers 2 [--start 100] [--save out.json]
 """
 from __future__ import annotations
 
@@ -64,15 +64,22 @@ def main(argv=None):
     ap.add_argument("--disp-noise", type=float, default=0.002,
                     help="displacement noise, fraction of the largest amplitude (default 0.002)")
     ap.add_argument("--workers", type=int, default=1)
+    ap.add_argument("--start", type=int, default=0,
+                    help="first case number (case k uses seed 1000 + k; default 0)")
+    ap.add_argument("--save", default=None, help="write the per-case results to this JSON file")
     a = ap.parse_args(argv)
     t0 = time.perf_counter()
-    args = [(k, a.force_noise, a.disp_noise) for k in range(a.cases)]
+    args = [(k, a.force_noise, a.disp_noise) for k in range(a.start, a.start + a.cases)]
     if a.workers > 1:
         with ProcessPoolExecutor(a.workers) as ex:
             res = list(ex.map(one_case, *zip(*args)))
     else:
         res = [one_case(*x) for x in args]
-    print(f"{a.cases} cases, force noise {a.force_noise:g} x F0max, displacement noise "
+    if a.save:
+        import json
+        with open(a.save, "w") as fh:
+            json.dump(res, fh)
+    print(f"{a.cases} cases (from case {a.start}), force noise {a.force_noise:g} x F0max, displacement noise "
           f"{a.disp_noise:g} x u0max, offsets 50-300 N and 5-20 um (scaled to phi_max = 1 mm)")
     print(f"{'parameter':>10} {'coverage 95%':>13} {'identified':>11} {'rms z':>7}")
     for n in NAMES:

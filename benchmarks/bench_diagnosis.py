@@ -12,7 +12,8 @@ samples. Clean records (offsets only) and pure-noise forces must name nothing.
 Pass criteria per hidden effect: the effect named first is the hidden one, and the RMS
 residual after is within 1.3 x the noise RMS.
 
-    python benchmarks/bench_diagnosis.py [--sizes 0.5 3] [--jobs 2] [--effects ...]
+    python benchmarks/bench_diagnosis.py [--sizes 0.5 3] [--jobs 2] [--effects ...] [--seed 1000]
+                                         [--cases N] [--timing REPEATS]
 """
 from __future__ import annotations
 
@@ -94,6 +95,36 @@ def one(case):
     return case, g.effect, g.effects, ratio, g.success, time.perf_counter() - t0
 
 
+def timing(repeats: int) -> None:
+    """Diagnosis time with the slip-degradation bank solved per monotone run (as shipped) vs
+    the per-sample reference loop, interleaved (A, B, A, B, ...), minimum per variant; the
+    named effects and the residual after must be the same."""
+    from iwan_element.effects import SlipDegradation
+    from iwan_element.effects._sliders import _SliderEffect
+    fast = SlipDegradation._correction_energy
+    recs = []
+    for joint, env, seed in (("soft", "constant", 1), ("stiff", "ramped", 2),
+                             ("soft", "triangular", 3)):
+        p = JOINTS[joint]
+        el = _element(p, "slip_degradation", _parameter(p, env, "slip_degradation", 3.0))
+        recs.append((joint, env, _record(p, env, el, seed)))
+    print(f"{'record':<18} {'n':>5} {'per-run [s]':>12} {'per-sample [s]':>15} {'ratio':>6}  same")
+    for joint, env, (t, u, F) in recs:
+        times, out = {"run": [], "sample": []}, {}
+        for _ in range(repeats):
+            for tag, meth in (("run", fast), ("sample", _SliderEffect._correction_energy)):
+                SlipDegradation._correction_energy = meth
+                t0 = time.perf_counter()
+                g = diagnose(t, u, F, candidates=("slip_degradation", "asymmetric_slip"))
+                times[tag].append(time.perf_counter() - t0)
+                out[tag] = (g.effects, g.error_after)
+        SlipDegradation._correction_energy = fast
+        a, b = min(times["run"]), min(times["sample"])
+        same = out["run"][0] == out["sample"][0] and abs(out["run"][1] - out["sample"][1]) \
+            <= 1e-9 * out["sample"][1]
+        print(f"{joint + ' ' + env:<18} {u.size:5d} {a:12.2f} {b:15.2f} {b / a:6.1f}  {same}")
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sizes", type=float, nargs="+", default=[0.5, 1.0, 3.0],
@@ -102,8 +133,18 @@ def main(argv=None):
     ap.add_argument("--envelopes", nargs="+", default=list(ENVELOPES))
     ap.add_argument("--clean", type=int, default=6, help="clean and pure-noise records each")
     ap.add_argument("--jobs", type=int, default=1)
+    ap.add_argument("--seed", type=int, default=1000,
+                    help="first seed of the effect cases (clean: seed + 1000, noise: + 2000)")
+    ap.add_argument("--cases", type=int, default=None,
+                    help="run only every k-th case so that about this many run (default all)")
+    ap.add_argument("--timing", type=int, default=0, metavar="REPEATS",
+                    help="only time diagnose with the slip-degradation run solver vs the "
+                         "per-sample loop (interleaved, this many repeats) and exit")
     args = ap.parse_args(argv)
-    cases, seed = [], 1000
+    if args.timing:
+        timing(args.timing)
+        return 0
+    cases, seed = [], args.seed
     joints = list(JOINTS)
     for i, name in enumerate(args.effects):
         for j, env in enumerate(args.envelopes):
@@ -112,8 +153,11 @@ def main(argv=None):
                 cases.append(("effect", joints[(i + j) % 2], env, name, size, seed))
     for k in range(args.clean):
         env = list(ENVELOPES)[k % 3]
-        cases.append(("clean", joints[k % 2], env, None, 0.0, 2000 + k))
-        cases.append(("noise", joints[k % 2], env, None, 0.0, 3000 + k))
+        cases.append(("clean", joints[k % 2], env, None, 0.0, args.seed + 1000 + k))
+        cases.append(("noise", joints[k % 2], env, None, 0.0, args.seed + 2000 + k))
+    if args.cases is not None and args.cases < len(cases):
+        step = len(cases) / args.cases
+        cases = [cases[int(i * step)] for i in range(args.cases)]
     with ProcessPoolExecutor(args.jobs) as ex:
         rows = list(ex.map(one, cases))
     print(f"{'hidden':<18} {'joint':<6} {'envelope':<10} {'size':>5} {'named':<36} "

@@ -102,15 +102,22 @@ def test_clean_data_and_offsets_never_name_an_effect():
                                   displacement_offset=(5e-6, -20e-6, 12e-6)[seed % 3],
                                   rest_samples=20)
         g = diagnose(d.t, d.u, d.F)
-        # nothing is named; the misfit flag itself can be raised when the stand-in noise
-        # estimator reads coloured noise ~20 % low (notes/diag.md)
         assert g.effect == "none" and g.effects == (), (seed, g.report())
         assert g.fit is g.base_fit and g.success
+        # success, the status and the warnings agree (one rule): every parameter of a clean
+        # record is identified, with a stderr of at most half its value (chi: of chi + 1)
+        f = g.fit
+        assert all(f.identified[k] for k in ("Fs", "KT", "chi")), f.report()
+        for k, ok in f.identified.items():
+            scale = abs(getattr(f.params, k) + (1.0 if k == "chi" else 0.0))
+            assert not ok or f.stderr[k] <= 0.5 * scale, (k, f.report())
+            assert ok or any(k in w for w in f.warnings), (k, f.warnings)
         assert g.offsets["force"] == pytest.approx((50.0, -300.0, 120.0)[seed % 3], abs=5.0)
         assert g.offsets["displacement"] == pytest.approx((5e-6, -20e-6, 12e-6)[seed % 3],
                                                           abs=1e-9)
-        if colour:                                      # coloured noise recognised as such
-            assert g.details["tau"] > 1.5
+        if colour:              # coloured noise (AR(1) 0.5: tau = 3 samples) recognised as such
+            assert 2.0 < g.details["tau"] < 4.5, g.details["tau"]
+            assert abs(g.noise_sigma / SIGMA - 1) < 0.2, g.noise_sigma
 
 
 def test_pure_noise_names_nothing_and_fails():
@@ -119,6 +126,7 @@ def test_pure_noise_names_nothing_and_fails():
     g = diagnose(d.t, d.u, rng.normal(0.0, SIGMA, d.F.size))
     assert g.effects == () and not g.success
     assert any("indistinguishable from noise" in w for w in g.warnings)
+    assert not any(g.fit.identified.values()) and not g.fit.success     # nothing identified
     # with rest samples (force offset measured there) and a ramped envelope too
     r = simulate_element_test(IwanJoint(P), np.array([0.15, 1.9]) * P.phi_max, envelope="linear",
                               cycles=5, samples_per_cycle=128, rest_samples=20)

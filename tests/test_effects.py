@@ -181,6 +181,33 @@ def test_slip_degradation_lowers_capacity_keeps_stiffness():
     assert el.work == pytest.approx(el.stored_energy + el.dissipated_energy)
 
 
+@pytest.mark.parametrize("rate_x", [0.0, 0.05, 2.0, 40.0])
+def test_slip_degradation_run_solver_equals_the_per_sample_steps(rate_x):
+    """The correction bank solved per monotone run (fixed point of the capacities) gives the
+    forces of the per-sample reference loop, on a cyclic ramp with a pause and on a random
+    walk (many short runs, where capacities may fall back to the reference), also through the
+    element route (trial/commit): a wrong run formula (clip order, pre-clip force, pauses)
+    fails this."""
+    from iwan_element.effects._sliders import _SliderEffect
+    rng = np.random.default_rng(11)
+    t = np.arange(900) / 100.0
+    u1 = A * np.interp(t, [0, t[-1]], [0.2, 2.5]) * np.sin(2 * np.pi * t)
+    u1[100:112] = u1[100]                                  # a pause inside a run
+    u2 = np.cumsum(rng.normal(size=400)) * 0.15 * A
+    rate = rate_x / dissipation(A, P)
+    for u in (u1, u2):
+        D = run(IwanJoint(P), u)[2]
+        fast = SlipDegradation(IwanJoint(P), rate=rate).correction_history(u, D)
+        ref_el = SlipDegradation(IwanJoint(P), rate=rate)
+        ref = _SliderEffect._correction_energy(ref_el, u, D)
+        np.testing.assert_allclose(fast, ref, rtol=0, atol=1e-11 * P.Fs)
+        if u is u2:      # the element route (trial/commit), on a record without pauses (the
+            # element also commits at a pause and re-reads the energy after its clip there)
+            F_el = run(SlipDegradation(IwanJoint(P), rate=rate), u)[0]
+            F_in = run(IwanJoint(P), u)[0]
+            np.testing.assert_allclose(F_in + fast, F_el, rtol=0, atol=1e-9 * P.Fs)
+
+
 def test_asymmetric_slip_thresholds_not_a_scaled_force():
     a = 0.3
     el = AsymmetricSlip(IwanJoint(P), asymmetry=a)

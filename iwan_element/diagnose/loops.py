@@ -3,10 +3,10 @@
 :func:`diagnose` works on a record (time, displacement, force):
 
 1. the joint's unloaded state is the rest position the record starts from: the displacement
-   offset is the mean displacement before the motion starts, and the force offset the mean
-   force there (the unloaded joint carries no force) when at least 10 rest samples exist;
-   otherwise the force offset is fitted with every model (linear, eliminated in closed form
-   with ``Fs``). Offsets are nuisance parameters: reported, never named as an effect;
+   offset is the mean displacement before the motion starts; the force offset is fitted with
+   every model (linear, eliminated in closed form with ``Fs``), the rest samples (where the
+   unloaded joint carries no force) being part of the fitted data. Offsets are nuisance
+   parameters: reported, never named as an effect;
 2. the force noise and its correlation time are estimated from the record itself
    (:func:`iwan_element.identify.noise.estimate_noise`; no repeated cycles needed, so
    ramped, swept and random-amplitude protocols work), unless ``noise`` is given;
@@ -39,6 +39,7 @@ from ..identify.testdata import find_reversals, split_cycles
 from . import _model as M
 from ._locate import _check_candidates, _locate, _untestable
 from ._noise import noise_estimate
+from ..identify.result import _settle
 from .results import Diagnosis, _json
 from .selection import criterion_text, misfit_p, stepwise_select
 
@@ -50,7 +51,6 @@ log = logging.getLogger(__name__)
 CANDIDATES = ("viscous_damping", "pinning_stiffness", "backlash", "slip_degradation",
               "asymmetric_slip", "breakaway")
 _SLOW_FIT_SAMPLES = 300          # samples fitted for stacks without a vectorised form
-_MIN_REST = 10                   # rest samples needed to measure the force offset there
 
 
 def _rest_index(u, noise_u):
@@ -90,13 +90,14 @@ def _filter(tt, x, lp):
     return sosfiltfilt(sos, x)
 
 
-def _noise_level(tt, r, noise, lp):
+def _noise_level(tt, r, noise, lp, channel=None):
     """``(sigma [N], tau [samples], text, warnings)`` of the force as fitted, from the
-    residual ``r`` of the plain fit to the raw force (the model removes the loops' corners,
-    the estimator the smooth rest of any model error)."""
+    residual ``r`` of a fit to the raw force (the model removes the loops' corners, the
+    estimator the smooth rest of any model error); ``channel``: the measured force, whose
+    loading time scale sets the estimator's window."""
     if noise is not None:
         return noise, 1.0, "given", ()
-    sigma, tau, method, warns = noise_estimate(tt, r)
+    sigma, tau, method, warns = noise_estimate(tt, r, channel)
     text = f"estimated from the record ({method})"
     if lp is not None:                       # white noise through the low-pass
         fs = 1.0 / float(np.median(np.diff(tt)))
@@ -157,14 +158,19 @@ class _Fitter:
         return M.LoopModel(self.ev_slow, self.y_sub, names, self.scales, self.F0)
 
     def run(self, names, starts):
-        fast = Evaluator.fast(names)
-        mdl = self.model(names, full=False)
-        res, nfev = M.fit(mdl, starts if fast else starts[:2], max_nfev=200 if fast else 20)
-        self.nfev += nfev
-        full = self.model(names)
-        r = full.residual(res.x)
-        return {"names": tuple(names), "chi2": float(r @ r) / self.s2, "z": res.x,
-                "status": int(res.status), "message": str(res.message), "model": full}
+        key = (tuple(names), b"".join(np.asarray(z, float).tobytes() for z in starts))
+        row = self._memo.get(key) if hasattr(self, "_memo") else None
+        if row is None:                  # fits do not depend on sigma: a re-selection reuses them
+            fast = Evaluator.fast(names)
+            mdl = self.model(names, full=False)
+            res, nfev = M.fit(mdl, starts if fast else starts[:2], max_nfev=200 if fast else 20)
+            self.nfev += nfev
+            full = self.model(names)
+            r = full.residual(res.x)
+            row = {"names": tuple(names), "ssr": float(r @ r), "z": res.x,
+                   "status": int(res.status), "message": str(res.message), "model": full}
+            self.__dict__.setdefault("_memo", {})[key] = row
+        return dict(row, chi2=row["ssr"] / self.s2)
 
 
 def _z_start(names, prev_names, prev_z, which):
@@ -200,7 +206,8 @@ def _fit_base(fitter, ev, shape0):
     return fitter.run((), starts)
 
 
-def _fit_result(row, fitter, FF, F_model, t_start, base_identified=None, extra_warns=()):
+def _fit_result(row, fitter, FF, F_model, t_start, base_identified=None, extra_warns=(),
+                noise_only=False):
     """FitResult of a fitted stack on the whole record, with stderr and identification."""
     mdl, z = row["model"], row["z"]
     p, effs, F0 = mdl.physical(z)
@@ -209,10 +216,13 @@ def _fit_result(row, fitter, FF, F_model, t_start, base_identified=None, extra_w
     vals, labels = M.flat(p, effs, mdl.names, F0)
     stderr = dict(zip(M.PARAM_NAMES, se[:4].tolist()))
     at_bound = np.isclose(z, mdl.lower, atol=1e-6) | np.isclose(z, mdl.upper, atol=1e-6)
-    ident = {k: bool(np.isfinite(stderr[k]) and stderr[k] <= 0.5 * abs(getattr(p, k)))
-             for k in M.PARAM_NAMES}
-    ident["chi"] &= not at_bound[1]
-    ident["beta"] &= not at_bound[2]
+    # the package's one identification rule (identify.result._settle): finite stderr of at
+    # most half the value (chi: of chi + 1), not at a bound (phi_max's bound is KT's)
+    ranges = {}
+    ident, settle_warns = _settle({"identified": dict.fromkeys(M.PARAM_NAMES, True),
+                                   "params": p, "stderr": stderr, "ranges": ranges,
+                                   "at_bound": {k for k, b in zip(("KT", "chi", "beta"),
+                                                                  at_bound[:3]) if b}}, ())
     eff_out, k0 = [], 4
     for nm, d in zip(mdl.names, effs):
         q = len(EFFECTS[nm].specs)
@@ -220,17 +230,19 @@ def _fit_result(row, fitter, FF, F_model, t_start, base_identified=None, extra_w
                         "stderr": dict(zip(EFFECTS[nm].parameter_names, se[k0:k0 + q].tolist())),
                         "units": {s.name: s.unit for s in EFFECTS[nm].specs}})
         k0 += q
-    warns = list(extra_warns)
-    warns += [f"{k} is not identified (at a bound or stderr above half its value)"
-              for k, ok in ident.items() if not ok]
+    warns = list(extra_warns) + settle_warns
+    if noise_only:                       # a force that is noise identifies nothing
+        ident = dict.fromkeys(M.PARAM_NAMES, False)
+        warns.append("the force is indistinguishable from noise: no parameter is identified")
     if row["status"] <= 0:
         warns.append(f"the fit did not converge: {row['message']}")
     span = float(np.ptp(FF)) or 1.0
     return M.make_fit_result(
         params=p, stderr=stderr, correlation=corr[:4, :4], identified=ident, fixed=(),
-        ranges={}, residual_norm=math.sqrt(float(r @ r)),
+        ranges=ranges, residual_norm=math.sqrt(float(r @ r)),
         nrmse=float(np.sqrt(np.mean((FF - F_model) ** 2)) / span),
-        success=bool(row["status"] > 0 and ident["Fs"]), message=row["message"],
+        success=bool(row["status"] > 0 and all(ident[k] for k in ("Fs", "KT", "chi"))),
+        message=row["message"],
         nfev=int(fitter.nfev), method="loops+" + "+".join(mdl.names) if mdl.names else "loops",
         n_data=int(r.size), warnings=tuple(warns), wall_time=time.perf_counter() - t_start,
         details=_json({"effects": eff_out, "labels": labels, "force_offset": F0,
@@ -300,7 +312,10 @@ def diagnose(t, u, F, *, candidates=None, max_effects: int = 2, noise: float | N
     FF = FF_in if lp is None else _filter(tt, FF_in, lp)
     i_rest = _rest_index(uu, noise_estimate(tt, uu)[0])
     u_off = float(np.mean(uu[:i_rest]))
-    F_rest = float(np.mean(FF[:i_rest])) if i_rest >= _MIN_REST else None
+    # the force offset is always fitted (linear, with Fs), the rest samples being part of the
+    # fitted data: a mean over a few rest samples has an error of sigma/sqrt(n_rest) that a
+    # fixed offset would leave in the residual as a constant misfit (a false "effect")
+    F_rest = None
     uj = uu - u_off
     v = np.zeros(n) if tt is None else np.gradient(uj, tt)
     ev, ev_slow, keep, sub = _evaluators(uj, v, max_samples)
@@ -309,14 +324,32 @@ def diagnose(t, u, F, *, candidates=None, max_effects: int = 2, noise: float | N
                                                   "D_ref": 1.0}, 1.0, F_rest)
     base = _fit_base(fitter, ev, _base_start(tt, uj, FF, seed))
     r_raw = FF_in - _record_force(base, uj, v)[0]
-    sigma, tau, noise_text, nwarn = _noise_level(tt, r_raw, noise, lp)
+    sigma, tau, noise_text, nwarn = _noise_level(tt, r_raw, noise, lp, FF_in)
     fitter.s2 = sigma * sigma
-    base["chi2"] /= fitter.s2
+    base["chi2"] = base["ssr"] / fitter.s2
     shape_b, _ = base["model"].decode(base["z"])
     fitter.scales["D_ref"] = float(ev.unit_dissipation(unit_params(*shape_b))[-1]) or 1.0
     tau_k = max(1.0, tau * keep.size / n)
     n_eff = keep.size / tau_k
     sel = _select(fitter, base, cand, tt, v, uj, FF, tau_k, n_eff, alpha, max_effects, ambiguity)
+    for _ in range(2 if noise is None else 0):
+        # a large misfit leaks into the plain fit's residual and inflates the noise estimate,
+        # which can hide a further effect: the noise is re-read from the residual of the
+        # model selected, and the selection is repeated with it (the fits are reused)
+        if not sel.named:
+            break
+        r_fin = FF_in - _record_force(sel.final["state"], uj, v)[0]
+        s_new, t_new, noise_text, nwarn = _noise_level(tt, r_fin, noise, lp, FF_in)
+        if abs(s_new - sigma) <= 0.05 * sigma and abs(t_new - tau) <= 0.1 * tau:
+            break
+        sigma, tau = s_new, t_new
+        noise_text += ", from the residual of the model selected"
+        fitter.s2 = sigma * sigma
+        base["chi2"] = base["ssr"] / fitter.s2
+        tau_k = max(1.0, tau * keep.size / n)
+        n_eff = keep.size / tau_k
+        sel = _select(fitter, base, cand, tt, v, uj, FF, tau_k, n_eff, alpha, max_effects,
+                      ambiguity)
     ctx = dict(t_start=t_start, uu=uu, FF_in=FF_in, FF=FF, tt=tt, n=n, noise=noise, lp=lp,
                sigma=sigma, tau=tau, noise_text=noise_text, nwarn=nwarn, u_off=u_off, uj=uj,
                v=v, keep=keep, fitter=fitter, base=base, tau_k=tau_k, n_eff=n_eff, sel=sel,
@@ -381,7 +414,7 @@ def _assemble(c) -> Diagnosis:
     if noise_only:
         warns.append("the force is indistinguishable from noise (the Iwan model explains no "
                      "more than a constant): nothing is identified")
-    base_fit = _fit_result(base, fitter, FF, F_base, c["t_start"])
+    base_fit = _fit_result(base, fitter, FF, F_base, c["t_start"], noise_only=noise_only)
     fit = base_fit if not sel.named else _fit_result(final, fitter, FF, F_after, c["t_start"])
     misfit = sel.p_before < c["alpha"] and not noise_only
     r0 = FF - F_base

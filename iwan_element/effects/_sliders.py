@@ -186,11 +186,12 @@ class _SliderEffect(_Effect):
             e, s = e_run[-1], np.where(mv[-1], d, 0.0)
         return out
 
-    def _correction_energy(self, u: np.ndarray, D_inner) -> np.ndarray:
-        """Thresholds that fall with the dissipated energy: step by step."""
+    def _correction_energy(self, u: np.ndarray, D_inner, prev: float = 0.0) -> np.ndarray:
+        """Thresholds that fall with the dissipated energy: step by step (the reference;
+        :class:`~iwan_element.effects.SlipDegradation` solves it per monotone run).
+        ``prev``: the displacement the state was committed at [m]."""
         sk = self._sign * self._k
         out = np.empty(u.size)
-        prev = 0.0
         for i, x in enumerate(u.tolist()):
             du = x - prev
             if du != 0.0:

@@ -14,15 +14,25 @@ Method (``method="savgol"``, what ``"auto"`` uses)
       projection), so the factor makes the estimate unbiased; the median absolute deviation
       ignores the few samples where the signal has a kink (a reversal of the force, a
       break-away peak) or a short burst of load-frame chatter.
-    * Coloured noise: noise correlated over fewer samples than the window is captured almost
-      completely (its variance is what ``sigma`` reports); noise correlated over longer times
-      than the window is indistinguishable from the signal and is not counted. The estimate
-      is repeated with half the window: if the two differ by more than 25 % a warning says the
-      noise is coloured on the window's time scale (or the signal leaks into the residual).
-    * Correlation: the residual's autocorrelation, summed over its initial positive sequence
-      (Geyer 1992), gives the integrated correlation time ``tau`` [samples];
-      ``n_eff = n / tau`` is the effective number of independent samples. White noise gives
-      ``tau ~ 1``.
+    * Coloured noise: the filter also removes the slow part of correlated noise, and its
+      residual of white noise is itself anti-correlated, so neither the residual's variance nor
+      its autocorrelation is the noise's. The noise is modelled as AR(1) (lag-one correlation
+      ``rho``): the residual's robust lag-one correlation (from the MAD scales of sums and
+      differences of neighbouring samples within the clean blocks) is matched to the one the
+      same filter ``r = (I - H) e`` produces from AR(1) noise, which gives ``rho``; the scale
+      is then divided by the filter's exact variance factor for that ``rho`` (``1 - h0`` for
+      white noise). The integrated correlation time is ``tau = (1 + rho)/(1 - rho)``
+      [samples] and ``n_eff = n / tau`` the effective number of independent samples (white
+      noise: ``tau = 1``). Noise correlated over much longer than the window cannot be told
+      from the signal (a warning says so when ``rho`` reaches 0.98). The estimate is repeated
+      with half the window: AR(1) noise reads the same through both, so when the two differ
+      by more than 25 % and the halved window reads less, signal (or a model's misfit) leaks
+      into the longer window's residual and the halved window's estimate is used (a warning
+      says so; when the halved window reads more, the noise is not AR(1)-like there).
+    * A fit residual (the diagnoses pass the residual of the plain fit) is estimated the same
+      way with the window of the measured channel (``window=``): the residual holds the noise
+      and whatever the model misses; the smooth part of the misfit is removed by the filter,
+      its corners by the robust scale.
 
 ``method="difference"``: ``1.4826 MAD`` of the second differences divided by ``sqrt(6)``
 (white noise only; kept for comparison). The result is in the units of ``y``.
@@ -33,15 +43,20 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy.optimize import minimize_scalar
 from scipy.signal import savgol_coeffs, savgol_filter
 
-from ..core._validation import _check_time, check_magnitude, finite_array, same_length
+from ..core._validation import (_check_time, check_magnitude, check_scalar, finite_array,
+                                same_length)
 
 __all__ = ["NoiseEstimate", "estimate_noise"]
 
 _MAD = 1.482602218505602          # 1 / Phi^-1(3/4): MAD -> standard deviation of a Gaussian
 _POLY = 5
 _MIN_WINDOW = 9
+
+
+_RHO_MAX = 0.98
 
 
 @dataclass(frozen=True)
@@ -53,7 +68,7 @@ class NoiseEstimate:
     sigma : float
         Noise standard deviation, in the units of ``y``.
     method : str
-        ``"savgol"`` or ``"difference"``.
+        ``"savgol+ar1"`` or ``"difference"``.
     correlation_time : float
         Integrated autocorrelation time of the noise residual [s] (``tau * dt``).
     n : int
@@ -64,6 +79,8 @@ class NoiseEstimate:
         Smoothing window [s] (``savgol``; one sample step for ``difference``).
     warnings : tuple of str
         What limits the estimate.
+    lag_one : float
+        Lag-one correlation ``rho`` of the AR(1) noise model (0: white).
     """
 
     sigma: float
@@ -73,18 +90,25 @@ class NoiseEstimate:
     n_eff: float
     window: float
     warnings: tuple = field(default_factory=tuple)
+    lag_one: float = 0.0
+
+    @property
+    def tau(self) -> float:
+        """Integrated correlation time in samples (``n / n_eff``, at least 1)."""
+        return max(float(self.n) / float(self.n_eff), 1.0) if self.n_eff > 0 else 1.0
 
     def to_dict(self) -> dict:
         """JSON-safe dict."""
         return {"sigma": float(self.sigma), "method": self.method,
                 "correlation_time": float(self.correlation_time), "n": int(self.n),
                 "n_eff": float(self.n_eff), "window": float(self.window),
-                "warnings": list(self.warnings)}
+                "lag_one": float(self.lag_one), "warnings": list(self.warnings)}
 
     def report(self) -> str:
         """One-paragraph summary."""
         lines = [f"noise sigma = {self.sigma:.4g} (method {self.method}, window "
-                 f"{self.window:.4g} s), correlation time {self.correlation_time:.3g} s, "
+                 f"{self.window:.4g} s), correlation time {self.correlation_time:.3g} s "
+                 f"(lag-one correlation {self.lag_one:.2f}), "
                  f"{self.n_eff:.4g} effective of {self.n} samples"]
         lines += [f"  - {w}" for w in self.warnings]
         return "\n".join(lines)
@@ -118,13 +142,59 @@ def _clean_blocks(r: np.ndarray, L: int) -> np.ndarray:
     return B[sc <= 1.5 * med] if med > 0 else B
 
 
-def _savgol_sigma(y: np.ndarray, w: int) -> tuple[float, np.ndarray]:
-    """Noise sigma from the Savitzky-Golay residual; also returns its clean blocks."""
+def _filtered_ar1_acf(w: int, rho: float, lags: int) -> np.ndarray:
+    """Autocovariance at lags ``0..lags`` of ``(I - H) e`` (interior of the record) for
+    unit-variance AR(1) noise ``e`` of lag-one correlation ``rho``; ``H``: the quintic
+    Savitzky-Golay smoother over ``w`` samples."""
+    c = -savgol_coeffs(w, _POLY)
+    c[w // 2] += 1.0
+    a = np.correlate(c, c, mode="full")          # filter autocorrelation, lags -(w-1)..w-1
+    lag = np.arange(-(w - 1), w)
+    return np.array([float(a @ rho ** np.abs(lag + k)) for k in range(lags + 1)])
+
+
+def _block_acf(B: np.ndarray, lags: int) -> np.ndarray:
+    """Robust autocorrelation at lags ``0..lags`` of the residual blocks ``B`` (shape (m, L)):
+    ``(S - D)/(S + D)`` with ``S``, ``D`` the squared MAD scales of the sums and differences of
+    samples ``k`` apart within a block (a kink, a spike or a chatter burst moves neither
+    median; for Gaussian noise it is the ordinary correlation)."""
+    out = np.ones(lags + 1)
+    for k in range(1, lags + 1):
+        a, b = B[:, k:].ravel(), B[:, :B.shape[1] - k].ravel()
+        S = float(np.median(np.abs(a + b - np.median(a + b)))) ** 2
+        D = float(np.median(np.abs(a - b - np.median(a - b)))) ** 2
+        out[k] = (S - D) / (S + D) if S + D > 0 else 0.0
+    return out
+
+
+def _ar1_match(w: int, rho_hat: np.ndarray) -> tuple[float, float, bool]:
+    """``(rho, variance factor, capped)``: the AR(1) noise whose filtered residual has the
+    autocorrelation ``rho_hat`` (lags ``0..K``, least squares over lags ``1..K``)."""
+    K = rho_hat.size - 1
+
+    def cost(rho):
+        m = _filtered_ar1_acf(w, rho, K)
+        return float(np.sum((m[1:] / m[0] - rho_hat[1:]) ** 2))
+    grid = np.linspace(-0.9, _RHO_MAX, 38)
+    j = int(np.argmin([cost(r) for r in grid]))
+    lo, hi = grid[max(j - 1, 0)], grid[min(j + 1, grid.size - 1)]
+    rho = float(minimize_scalar(cost, bounds=(lo, hi), method="bounded",
+                                options={"xatol": 1e-5}).x) if hi > lo else float(grid[j])
+    capped = rho > _RHO_MAX - 1e-3
+    return rho, _filtered_ar1_acf(w, rho, 0)[0], capped
+
+
+def _savgol_sigma(y: np.ndarray, w: int) -> tuple[float, float, bool]:
+    """``(sigma, rho, capped)`` of AR(1) noise from the Savitzky-Golay residual."""
     r = y - savgol_filter(y, w, _POLY, mode="interp")
-    h0 = float(savgol_coeffs(w, _POLY)[w // 2])
-    B = _clean_blocks(r, max(w, 64) if r.size >= 4 * max(w, 64) else max(r.size // 4, 8))
-    s = _MAD * float(np.median(np.abs(B))) / math.sqrt(1.0 - h0)
-    return s, B
+    L = max(w, 64)
+    B = _clean_blocks(r, L if r.size >= 4 * L else max(r.size // 4, 8))
+    s_r = _MAD * float(np.median(np.abs(B)))
+    if s_r == 0.0:
+        return 0.0, 0.0, False
+    K = int(min(max(w // 2, 2), 6, B.shape[1] // 2))
+    rho, var, capped = _ar1_match(w, _block_acf(B, K))
+    return s_r / math.sqrt(var), rho, capped
 
 
 def _correlation_time(B: np.ndarray, sigma: float) -> float:
@@ -151,7 +221,7 @@ def _correlation_time(B: np.ndarray, sigma: float) -> float:
     return max(tau, 1.0)
 
 
-def estimate_noise(t, y, *, method: str = "auto") -> NoiseEstimate:
+def estimate_noise(t, y, *, method: str = "auto", window: float | None = None) -> NoiseEstimate:
     """Estimate the noise standard deviation of one measured channel (see the module docstring).
 
     Parameters
@@ -161,7 +231,11 @@ def estimate_noise(t, y, *, method: str = "auto") -> NoiseEstimate:
     y : array_like, shape (n,)
         The channel (displacement [m], force [N], ...), ``n >= 32``. Not modified.
     method : {"auto", "savgol", "difference"}, keyword-only
-        ``"auto"`` (default) is ``"savgol"``.
+        ``"auto"`` (default) is ``"savgol"`` (reported as ``"savgol+ar1"``).
+    window : float, optional, keyword-only
+        Smoothing window [s], 9 samples to a quarter of the record. Default: ``1/8`` of the
+        fastest loading period of ``y``. Give the measured channel's window when ``y`` is a
+        fit residual (whose own spectrum says nothing about the loading).
 
     Returns
     -------
@@ -187,7 +261,7 @@ def estimate_noise(t, y, *, method: str = "auto") -> NoiseEstimate:
         warns.append("the sampling is not uniform (time steps vary by more than 5 %); the "
                      "estimate treats the samples as equally spaced")
     if np.ptp(yy) == 0.0:
-        return NoiseEstimate(0.0, "savgol" if method != "difference" else "difference", dt, n,
+        return NoiseEstimate(0.0, "savgol+ar1" if method != "difference" else "difference", dt, n,
                              float(n), dt, tuple(warns + ["y is constant: no noise is visible "
                                                           "(a quantised or switched-off channel?)"]))
     if method == "difference":
@@ -195,20 +269,36 @@ def estimate_noise(t, y, *, method: str = "auto") -> NoiseEstimate:
         s = _MAD * float(np.median(np.abs(d2 - np.median(d2)))) / math.sqrt(6.0)
         tau = _correlation_time(_clean_blocks(d2, min(64, d2.size // 4)), s * math.sqrt(6.0))
         return NoiseEstimate(s, "difference", tau * dt, n, n / tau, dt, tuple(warns))
-    w = _signal_window(yy)
-    s, blocks = _savgol_sigma(yy, w)
+    if window is None:
+        w = _signal_window(yy)
+    else:
+        win = check_scalar("window", window, low=0.0, low_open=True)
+        w = int(round(win / dt)) | 1
+        if not _MIN_WINDOW <= w <= n // 4:
+            raise ValueError(f"window = {win:g} s is {w} samples; it must span "
+                             f"{_MIN_WINDOW} to {n // 4} samples (a quarter of the record)")
+    s, rho, capped = _savgol_sigma(yy, w)
     w2 = max(_MIN_WINDOW, (w // 2) | 1)
-    if w2 < w:
-        s2, _ = _savgol_sigma(yy, w2)
-        if s > 0 and abs(s2 - s) > 0.25 * s:
+    if w2 < w and s > 0:
+        s2, rho2, capped2 = _savgol_sigma(yy, w2)
+        if abs(s2 - s) > 0.25 * s:
+            # AR(1) noise reads the same through both windows (the model accounts for the
+            # filter); what the longer window adds is signal (or misfit) leaking in
+            use = s2 < s
             warns.append(f"the estimate changes from {s:.3g} to {s2:.3g} when the window is "
-                         f"halved ({w} -> {w2} samples): the noise is coloured on the window's "
-                         "time scale, or the signal leaks into the residual")
+                         f"halved ({w} -> {w2} samples): "
+                         + ("the signal leaks into the longer window's residual; the halved "
+                            "window is used" if use else "the noise is not AR(1)-like on the "
+                            "window's time scale"))
+            if use:
+                s, rho, capped, w = s2, rho2, capped2, w2
     if s == 0.0:
         warns.append("more than half of the residual is exactly zero: the channel is "
                      "quantised more coarsely than its noise, or noise-free")
-    tau = _correlation_time(blocks, s)
-    if tau > 0.25 * w:
-        warns.append(f"the noise is correlated over {tau:.3g} samples, a sizeable part of the "
-                     f"{w}-sample window: noise slower than the window is not counted")
-    return NoiseEstimate(s, "savgol", tau * dt, n, n / tau, w * dt, tuple(warns))
+    if capped:
+        warns.append(f"the noise is strongly correlated (lag-one correlation >= {_RHO_MAX}): "
+                     f"noise slower than the {w}-sample window is not counted and the level "
+                     "is uncertain")
+    tau = (1.0 + rho) / (1.0 - rho) if rho > 0.0 else 1.0
+    return NoiseEstimate(s, "savgol+ar1", tau * dt, n, n / tau, w * dt, tuple(warns),
+                         lag_one=float(rho))
