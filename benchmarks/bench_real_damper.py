@@ -3,7 +3,10 @@
 Per record: the effect(s) named, the RMS misfit in the band |F| < 0.25 max|F| (where backlash
 acts) before and after, and their ratio. The rig's 40-50 Hz ringing is removed first by a
 zero-phase low-pass (``--lowpass``, default 20 Hz; the joint is driven at 0.5-1 Hz), and the
-band misfit is measured on that low-passed force.
+band misfit is measured on that low-passed force. The last column is the force-channel lag
+[samples] that would minimise the band misfit after (the fitted force shifted by -10..10
+samples) and the band misfit after at that lag: a channel time lag is a nuisance worth fitting
+only if that misfit is much smaller than the unshifted one.
 
     python benchmarks/bench_real_damper.py [--data DIR] [--lowpass 20] [--jobs 1]
 """
@@ -25,11 +28,15 @@ def run(path, lowpass):
     try:
         g = diagnose(t, u, F, lowpass=lowpass)
     except ValueError as exc:                     # a refusal is a result, reported as such
-        return path.name, f"REFUSED: {exc}", np.nan, np.nan, time.perf_counter() - t0
+        return path.name, f"REFUSED: {exc}", np.nan, np.nan, time.perf_counter() - t0, (0, np.nan)
     band = np.abs(g.F) < 0.25 * np.abs(g.F).max()
     rb = float(np.sqrt(np.mean((g.F - g.force_before)[band] ** 2)))
     ra = float(np.sqrt(np.mean((g.F - g.force_after)[band] ** 2)))
-    return path.name, " + ".join(g.effects) or "none", rb, ra, time.perf_counter() - t0
+    lags = np.arange(-10, 11)
+    shifted = [np.sqrt(np.mean((g.F - np.interp(g.t - k / fs, g.t, g.force_after))[band] ** 2))
+               for fs in [1.0 / float(np.median(np.diff(g.t)))] for k in lags]
+    lag = (int(lags[int(np.argmin(shifted))]), float(np.min(shifted)))
+    return path.name, " + ".join(g.effects) or "none", rb, ra, time.perf_counter() - t0, lag
 
 
 def main(argv=None):
@@ -51,10 +58,10 @@ def main(argv=None):
     with ProcessPoolExecutor(args.jobs) as ex:
         rows = list(ex.map(run, files, [args.lowpass] * len(files)))
     print(f"{'record':<22} {'named':<34} {'band before [N]':>15} {'after [N]':>10} "
-          f"{'ratio':>6} {'time [s]':>8}")
+          f"{'ratio':>6} {'time [s]':>8} {'lag':>4} {'at lag [N]':>10}")
     ok = 0
-    for name, eff, rb, ra, dt in rows:
-        print(f"{name:<22} {eff:<34} {rb:15.0f} {ra:10.0f} {ra / rb:6.2f} {dt:8.0f}")
+    for name, eff, rb, ra, dt, lag in rows:
+        print(f"{name:<22} {eff:<34} {rb:15.0f} {ra:10.0f} {ra / rb:6.2f} {dt:8.0f} {lag[0]:4d} {lag[1]:10.0f}")
         ok += ("backlash" in eff) and ra <= 0.5 * rb
     print(f"{ok}/{len(rows)} records: backlash named and band misfit at least halved")
     return 0

@@ -10,7 +10,12 @@ displacement with a tapered envelope. The workflow:
 2. ``diagnose`` fits the Iwan model with the sensor offsets as nuisance parameters, estimates
    the noise from the record itself (the envelope never repeats an amplitude), and names what
    the model misses;
-3. force vs displacement and the residual vs time, before and after, are saved as PNGs.
+3. force vs displacement and the residual vs time, before and after, are saved as PNGs, and a
+   third figure overlays the force after every reversal against the travel since that
+   reversal (measured and fitted): the measured curves collapse onto one shape, which shows
+   what the gap model gets right (plateau width) and what it does not (the measured
+   re-engagement after the gap is convex, stiffening with load, where the Iwan branch is
+   concave).
 
     python examples/real_damper.py [--record PATH] [--out out/]
 """
@@ -66,4 +71,25 @@ ax.grid(True, alpha=0.3)
 ax.legend(fontsize=7)
 fig.tight_layout()
 fig.savefig(out / f"{name}_residual.png", dpi=120)
-print(f"wrote {out / (name + '_loops.png')} and {out / (name + '_residual.png')}")
+from scipy.signal import find_peaks                                   # noqa: E402
+
+fig = Figure(figsize=(9, 3.8))
+axes = fig.subplots(1, 2, sharey=True)
+span = 0.4 * float(np.ptp(u))                  # travel shown after each reversal
+for sgn, ax in zip((1, -1), axes):
+    for k in find_peaks(sgn * u, prominence=0.02 * np.ptp(u))[0]:
+        x = -sgn * (u[k:] - u[k])
+        back = x < np.maximum.accumulate(x) - 0.005 * span     # the next reversal
+        stop = np.flatnonzero((x > span) | back)
+        m = np.arange(x.size) < (stop[0] if stop.size else x.size)
+        F0 = result.offsets["force"]
+        ax.plot(x[m] * 1e3, -sgn * (result.F[k:][m] - F0) * 1e-3, color="0.5", lw=0.6)
+        ax.plot(x[m] * 1e3, -sgn * (result.force_after[k:][m] - F0) * 1e-3, color="C3", lw=0.6)
+    ax.set_xlabel("travel since the reversal [mm]")
+    ax.set_title("after a maximum of u" if sgn > 0 else "after a minimum of u", fontsize=8)
+    ax.grid(True, alpha=0.3)
+axes[0].set_ylabel("force toward the new direction [kN]\n(grey measured, red fitted)")
+fig.tight_layout()
+fig.savefig(out / f"{name}_reversals.png", dpi=120)
+print(f"wrote {out / (name + '_loops.png')}, {out / (name + '_residual.png')} and "
+      f"{out / (name + '_reversals.png')}")

@@ -104,6 +104,70 @@ def fit(model: LoopModel, starts, *, max_nfev: int):
     return best, nfev
 
 
+def var_index(names, name: str) -> int:
+    """Position of the first fitting variable of effect ``name`` in a model's ``z``."""
+    k = 3
+    for nm in names:
+        if nm == name:
+            return k
+        k += len(EFFECTS[nm].specs)
+    raise KeyError(name)
+
+
+def scan_starts(model: LoopModel, z_base, k: int, grid, *, keep: int = 2):
+    """Start vectors from a 1-D scan of the newest effect's first fitting variable.
+
+    Some effects make the least-squares objective flat or piecewise constant in one
+    variable: a break-away ratio moves the break from one sample to the next (the objective
+    is a staircase in the ratio, so a gradient step stays where it starts), and a backlash
+    gap must first land near the data's zero-force plateau before the shape can follow.
+    ``z_base`` is a full start vector; its entry ``k`` (see :func:`var_index`) takes each value of
+    ``grid`` (fitting units, clipped to the bounds) and the ``keep`` values with the lowest
+    residual norm are returned as starts, best first. Costs ``len(grid)`` evaluations.
+    """
+    costs = []
+    for g in grid:
+        z = np.array(z_base, float)
+        z[k] = min(max(float(g), model.lower[k]), model.upper[k])
+        r = model.residual(z)
+        costs.append((float(r @ r), z))
+    costs.sort(key=lambda c: c[0])
+    return [z for _, z in costs[:keep]]
+
+
+def refine_scanned(model: LoopModel, res, k: int, grid, *, max_nfev: int = 30):
+    """Polish the scanned variable of a least-squares result by a bounded scalar search
+    between its grid neighbours (the other variables fixed), then one more least-squares
+    pass on all variables from there. Returns the better of ``res`` and the polished fit."""
+    from scipy.optimize import minimize_scalar
+    g = np.sort(np.clip(np.asarray(grid, float), model.lower[k], model.upper[k]))
+    x = float(res.x[k])
+    lo = float(g[g < x][-1]) if np.any(g < x) else float(model.lower[k])
+    hi = float(g[g > x][0]) if np.any(g > x) else float(model.upper[k])
+    if not hi > lo:
+        return res
+
+    def cost(val):
+        z = res.x.copy()
+        z[k] = val
+        r = model.residual(z)
+        return float(r @ r)
+
+    opt = minimize_scalar(cost, bounds=(lo, hi), method="bounded",
+                          options={"xatol": 1e-4 * (hi - lo) + 1e-12, "maxiter": 30})
+    if not 0.5 * opt.fun < res.cost:
+        return res
+    z = res.x.copy()
+    z[k] = opt.x
+    res2, _ = fit(model, [z], max_nfev=max_nfev)
+    return res2 if res2.cost < 0.5 * opt.fun else _with_x(res, z, 0.5 * opt.fun)
+
+
+def _with_x(res, z, cost):
+    res.x, res.cost = z, cost
+    return res
+
+
 def flat(p: IwanParameters, effs, names, F0):
     out = [p.Fs, p.KT, p.chi, p.beta]
     labels = list(PARAM_NAMES)
@@ -150,11 +214,19 @@ def uncertainty(model: LoopModel, z, r):
         effs = [scale_effect(nm, d, s, to_unit=False) for nm, d in zip(model.names, effs)]
         return flat(p, effs, model.names, th[-1])[0]
 
+    coarse, k = {}, 3                            # variables whose force is a staircase
+    for nm in model.names:
+        cls = EFFECTS[nm]
+        if getattr(cls, "fit_scan_refine", False):
+            coarse[k] = 0.5 * float(np.min(np.diff(np.sort(cls.fit_scan))))
+        k += len(cls.specs)
     cols, pcols = [], []
     for j in range(theta.size - (1 if fixed else 0)):
         h = 1e-5 * max(abs(theta[j]), 1.0) if j >= theta.size - 2 else 1e-5
         if j == theta.size - 2:                  # Fs: a relative step that stays positive
             h = 1e-5 * theta[j]
+        elif j in coarse:                        # staircase objective: a secant over the steps
+            h = coarse[j]
         tp, tm = theta.copy(), theta.copy()
         tp[j] = min(theta[j] + h, hi[j])
         tm[j] = max(theta[j] - h, lo[j])

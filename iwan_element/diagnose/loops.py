@@ -157,19 +157,30 @@ class _Fitter:
             return M.LoopModel(self.ev, self.y, names, self.scales, self.F0)
         return M.LoopModel(self.ev_slow, self.y_sub, names, self.scales, self.F0)
 
-    def run(self, names, starts):
-        key = (tuple(names), b"".join(np.asarray(z, float).tobytes() for z in starts))
-        row = self._memo.get(key) if hasattr(self, "_memo") else None
-        if row is None:                  # fits do not depend on sigma: a re-selection reuses them
+    def run(self, names, starts, scan=None):
+        """Fit ``names`` from ``starts``; ``scan``: the newly added effect, whose ``fit_scan``
+        grid (if it has one) seeds the starts by a 1-D scan (:func:`_model.scan_starts`).
+        Fits do not depend on sigma, so a re-selection reuses them (memo)."""
+        key = (tuple(names), scan, b"".join(np.asarray(z, float).tobytes() for z in starts))
+        row = self.__dict__.setdefault("_memo", {}).get(key)
+        if row is None:
             fast = Evaluator.fast(names)
             mdl = self.model(names, full=False)
-            res, nfev = M.fit(mdl, starts if fast else starts[:2], max_nfev=200 if fast else 20)
+            grid = getattr(EFFECTS[scan], "fit_scan", None) if scan else None
+            if grid is not None:
+                k = M.var_index(names, scan)
+                starts = M.scan_starts(mdl, starts[0], k, grid) + list(starts[:1])
+                self.nfev += len(grid)
+            res, nfev = M.fit(mdl, starts if fast else starts[:2],
+                              max_nfev=200 if fast else 60)
+            if grid is not None and getattr(EFFECTS[scan], "fit_scan_refine", False):
+                res = M.refine_scanned(mdl, res, k, grid)
             self.nfev += nfev
             full = self.model(names)
             r = full.residual(res.x)
             row = {"names": tuple(names), "ssr": float(r @ r), "z": res.x,
                    "status": int(res.status), "message": str(res.message), "model": full}
-            self.__dict__.setdefault("_memo", {})[key] = row
+            self._memo[key] = row
         return dict(row, chi2=row["ssr"] / self.s2)
 
 
@@ -376,7 +387,7 @@ def _select(fitter, base, cand, tt, v, uj, FF, tau_k, n_eff, alpha, max_effects,
         names = order_stack(cur["names"] + (name,))
         k = max(len(s.fit_starts) for s in EFFECTS[name].specs)
         starts = [_z_start(names, cur["names"], cur["state"]["z"], j) for j in range(k)]
-        row = fitter.run(names, starts)
+        row = fitter.run(names, starts, scan=name)
         q = len(EFFECTS[name].specs)
         ssr = row["chi2"] * fitter.s2
         return {"names": names, "chi2": row["chi2"], "q": q, "state": row,

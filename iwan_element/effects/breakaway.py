@@ -37,6 +37,11 @@ class BreakAway(_SliderEffect):
     effect = "breakaway"
     specs = (ParamSpec("ratio", "1", "static over kinetic slip threshold", lower=1.0,
                        fit_bounds=(1.0, 3.0), fit_starts=(1.0, 1.2, 1.5, 2.0)),)
+    #: Ratios scanned for a start: the force is a staircase in the ratio (a slider breaks at
+    #: one sample or the next), so the least-squares step cannot move it; the best grid value
+    #: is then polished by a bounded scalar search between its neighbours.
+    fit_scan = tuple(1.0 + 0.1 * k for k in range(21))
+    fit_scan_refine = True
 
     def __init__(self, inner, *, ratio: float, n_sliders: int = 128):
         super().__init__(inner, n_sliders=n_sliders)
