@@ -57,13 +57,18 @@ class SlipMap:
     def slips(self) -> np.ndarray:
         u = (self.q[self.idx] * self.coef).sum(axis=1) + self.c
         if self.generic:
-            a = np.array(self.axis)
-            get = self.mbs.GetMarkerOutput
-            for i in self.generic:
-                m0, m1 = self.pairs[i]
-                u[i] = float(a @ (get(int(m1), _POSITION) - get(int(m0), _POSITION))) \
-                    - self.offsets[i]
+            self.marker_slips(u, self.generic)
         return u
+
+    def marker_slips(self, u: np.ndarray, points) -> None:
+        """Write into ``u`` the slips of ``points`` read from Exudyn's marker positions
+        (pairs with no affine row; one ``GetMarkerOutput`` per marker)."""
+        a = np.asarray(self.axis, float)
+        get = self.mbs.GetMarkerOutput
+        for i in points:
+            m0, m1 = self.pairs[i]
+            u[i] = float(a @ (get(int(m1), _POSITION) - get(int(m0), _POSITION))) \
+                - self.offsets[i]
 
 
 def _marker_coordinates(mbs, m):

@@ -52,7 +52,6 @@ from .connector import add_iwan_connector
 __all__ = ["add_iwan_interface", "IwanInterface"]
 
 _log = logging.getLogger(__name__)
-_POSITION = exu.OutputVariableType.Position
 _HIDDEN = {"show": False, "drawSize": -1.0, "color": [-1.0, -1.0, -1.0, -1.0]}
 
 
@@ -243,12 +242,7 @@ class IwanInterface:
         if sf is not None:
             u[sf.points] = sf.slips()
         if self._generic:
-            a = self._axis
-            get = self._mbs.GetMarkerOutput
-            for i in self._generic:
-                m0, m1 = self._pairs[i]
-                u[i] = float(a @ (get(int(m1), _POSITION) - get(int(m0), _POSITION))) \
-                    - self._offsets[i]
+            m.marker_slips(u, self._generic)
         return u
 
     def _accept(self, t) -> None:
