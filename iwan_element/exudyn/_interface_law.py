@@ -11,7 +11,8 @@ the trial slip lies beyond the committed slip ``u_c`` in the branch direction an
 branch's bound (the older reversal point it would close on, ``-u_r`` for the return to the
 virgin curve, or infinity on the virgin curve): ``((u - u_c) s > 0) ((bound - u) s > 0)``.
 Every other trial (a reversal, a loop closure, a point at rest with ``s = 0``) falls
-through to the full exact law of :mod:`._symbolic_law` (``SymbolicIwanState.force``).
+through to the full exact law of :mod:`._symbolic_law` (``SymbolicIwanState.exact``, not
+``force``, whose own shortcut is a subset of this one).
 
 State: the branch ``(u_r, F_r, s1, s2, s, bound)`` of each point in named ``esym.Real``
 variables, written only when the point leaves its branch; the committed slips of all points
@@ -71,4 +72,4 @@ class InterfacePointLaw:
         ur, Fr, s1, s2, dr, bound = self.vars
         cont = Fr + s2 * st.backbone(s1 * (u - ur))
         fast = ((u - st.uc) * dr > 0.0) * ((bound - u) * dr > 0.0)
-        return esym.IfThenElse(fast, cont, st.force(u))
+        return esym.IfThenElse(fast, cont, st.exact(u))  # its own shortcut already tried

@@ -115,9 +115,9 @@ class SymbolicIwanState:
         x = u - r
         return R + esym.sign(x) * (2.0 * self.backbone(0.5 * esym.abs(x)))
 
-    def force(self, u):
-        """Trial force [N] at the symbolic slip ``u`` (an expression of the solver's marker
-        quantities)."""
+    def exact(self, u):
+        """Trial force [N] at the symbolic slip ``u`` by the full reversal-point law (no
+        shortcut; a caller with its own branch shortcut, the interface, wraps this)."""
         uc, n = self.uc, self.n
         du = u - uc
         moving = du != 0.0
@@ -145,7 +145,12 @@ class SymbolicIwanState:
         f_new = chain([(uc, Fc)] + held, n + 1.0, 0)
         f_small = esym.IfThenElse(n >= 0.5, chain(held[1:], n - 1.0, 0), self._virgin(u))
         f_rev = esym.IfThenElse(esym.abs(d) <= self.tol, f_small, f_new)
-        general = esym.IfThenElse(d * du < 0.0, f_rev, f_cont)
+        return esym.IfThenElse(d * du < 0.0, f_rev, f_cont)
+
+    def force(self, u):
+        """Trial force [N] at the symbolic slip ``u`` (an expression of the solver's marker
+        quantities): the branch shortcut in front of :meth:`exact`."""
+        uc = self.uc
         # the usual trial continues the branch from r0 strictly between u_c and the point b
         # where its loop closes (IwanJoint's own shortcut): the branch alone, with
         # y = |u - r0| = (u - r0) s and 2 F_bb(y/2) = y (KT - a 2^-(chi+1) y^(chi+1))
@@ -156,7 +161,7 @@ class SymbolicIwanState:
         f_fast = self.R[0] + esym.IfThenElse(y < 2.0 * self.pm,
                                              s * (y * (self.KT - a2 * esym.pow(y, self.e1))),
                                              s * (2.0 * self.Fs))
-        return esym.IfThenElse(fast, f_fast, general)
+        return esym.IfThenElse(fast, f_fast, self.exact(u))
 
 
 def make_probe(mbs, fn, kind, axis, off):
