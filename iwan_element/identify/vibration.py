@@ -221,6 +221,45 @@ def _window_fit(tw, lnA, ph, n_block):
     return out
 
 
+def _analytic_signal(yy, fs, lo, hi, order):
+    """Zero-phase band-passed signal and its analytic signal.
+
+    Returns ``(sos, yf, z, n_trim, i_pk)``: the filter, the filtered signal, its Hilbert
+    transform, the number of samples spoiled by the filter's end effects at each end and the
+    index of the largest filtered sample.
+    """
+    n = yy.size
+    sos = signal.butter(order, [lo, hi], btype="bandpass", fs=fs, output="sos")
+    yf = signal.sosfiltfilt(sos, yy)
+    # zero padding to >= 2n: the FFT-based transform is circular, and without padding the
+    # large start of a ring-down would leak into its quiet end. The first and last n_trim
+    # samples (cut anyway) are tapered: a record cropped at the impact starts abruptly, and
+    # the Hilbert kernel's slow 1/t decay would spread that step over the whole record.
+    n_trim = _filter_extent(sos, fs, lo, hi)
+    i_pk = int(np.argmax(np.abs(yf)))
+    m = min(n_trim, n // 4)
+    ramp = 0.5 - 0.5 * np.cos(np.pi * (np.arange(m) + 0.5) / m)
+    yt = yf.copy()
+    yt[:m] *= ramp
+    yt[n - m:] *= ramp[::-1]
+    z = signal.hilbert(yt, N=int(2 ** math.ceil(math.log2(2 * n))))[:n]
+    return sos, yf, z, n_trim, i_pk
+
+
+def _curve_warnings(a, stop, floor):
+    """Warnings on a finished curve: too few points, or stopped early for a reason other
+    than noise."""
+    warns = []
+    if a.shape[0] < 3:
+        warns.append(f"only {a.shape[0]} window(s) above the noise floor; the curve is too "
+                     "short to show an amplitude dependence")
+    x_last = float(a[-1, 0])
+    if stop.startswith("window"):
+        warns.append(f"the curve stopped early at {x_last:.3g} m ({x_last / floor:.3g} x the "
+                     f"noise floor), not because of noise: {stop}")
+    return warns
+
+
 def amplitude_curve(t, y, *, quantity: str = "acceleration", band, n_periods: float = 20.0,
                     window: float | None = None, order: int = 4, snr_min: float = 10.0,
                     max_damping_std: float = 0.01):
@@ -291,20 +330,7 @@ def amplitude_curve(t, y, *, quantity: str = "acceleration", band, n_periods: fl
                                    low_open=True)
     yy = yy - yy.mean()
     f_peak = _check_mode(yy, fs, lo, hi)
-    sos = signal.butter(int(order), [lo, hi], btype="bandpass", fs=fs, output="sos")
-    yf = signal.sosfiltfilt(sos, yy)
-    # zero padding to >= 2n: the FFT-based transform is circular, and without padding the
-    # large start of a ring-down would leak into its quiet end. The first and last n_trim
-    # samples (cut anyway) are tapered: a record cropped at the impact starts abruptly, and
-    # the Hilbert kernel's slow 1/t decay would spread that step over the whole record.
-    n_trim = _filter_extent(sos, fs, lo, hi)
-    i_pk = int(np.argmax(np.abs(yf)))
-    m = min(n_trim, n // 4)
-    ramp = 0.5 - 0.5 * np.cos(np.pi * (np.arange(m) + 0.5) / m)
-    yt = yf.copy()
-    yt[:m] *= ramp
-    yt[n - m:] *= ramp[::-1]
-    z = signal.hilbert(yt, N=int(2 ** math.ceil(math.log2(2 * n))))[:n]
+    sos, yf, z, n_trim, i_pk = _analytic_signal(yy, fs, lo, hi, int(order))
     env = np.abs(z)
     phase = np.unwrap(np.angle(z))
     i0 = i_pk + n_trim
@@ -329,16 +355,10 @@ def amplitude_curve(t, y, *, quantity: str = "acceleration", band, n_periods: fl
                          f"{stop}; the signal does not rise above {snr_min:g} x the in-band noise "
                          f"({noise:.3g} in units of y) or holds no decaying mode there")
     a = np.array(rows)
-    warns = []
-    if a.shape[0] < 3:
-        warns.append(f"only {a.shape[0]} window(s) above the noise floor; the curve is too "
-                     "short to show an amplitude dependence")
     w_ref = 2 * math.pi * float(a[-1, 1])
     floor = snr_min * noise / w_ref ** k_pow
     x_last = float(a[-1, 0])
-    if stop.startswith("window"):
-        warns.append(f"the curve stopped early at {x_last:.3g} m ({x_last / floor:.3g} x the "
-                     f"noise floor), not because of noise: {stop}")
+    warns = _curve_warnings(a, stop, floor)
     notes = (f"band {lo:g}-{hi:g} Hz, Butterworth order {order} zero-phase (sosfiltfilt); "
              f"mode at {f_peak:.4g} Hz; trimmed {n_trim / fs:.4g} s after the envelope peak "
              f"(t = {tt[i0 - n_trim]:.4g} s) and {n_trim / fs:.4g} s before the end; "
