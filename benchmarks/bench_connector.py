@@ -153,7 +153,7 @@ def backbone_law():
 _KEEP = []
 
 
-def symbolic_backbone(mbs):
+def symbolic_backbone_with_variable(mbs):
     """The virgin backbone as an Exudyn symbolic law, and a variable set once per step."""
     esym = exu.symbolic
     KT, Fs, pm = P.KT, P.Fs, P.phi_max
@@ -182,7 +182,7 @@ def build(variant, counter=None):
     if variant == "builtin":
         mbs.AddObject(CoordinateSpringDamper(markerNumbers=[m0, m1], stiffness=P.KT))
     elif variant == "symbolic-nonlin+set":
-        fn, var = symbolic_backbone(mbs)
+        fn, var = symbolic_backbone_with_variable(mbs)
         mbs.AddObject(ObjectConnectorCoordinateSpringDamper(
             markerNumbers=[m0, m1], stiffness=0.0, damping=0.0, springForceUserFunction=fn))
         set_value = var.SetValue

@@ -91,8 +91,7 @@ def test_symbolic_expression_equals_trial_when_within_depth_and_overflow_is_dete
         overflows = 0
         for du in _random_walk(rng, 3000):
             us, Fr = j.reversal_points()
-            st.set_stack(us.tolist(), Fr.tolist())
-            st.set_uc(j.displacement)
+            st.set_state(us.tolist(), Fr.tolist(), j.displacement)
             target = j.displacement + du
             uvar.SetValue(target)
             got = expr.Evaluate()

@@ -36,7 +36,8 @@ from exudyn.itemInterface import (ObjectConnectorCartesianSpringDamper,
                                   ObjectConnectorCoordinateSpringDamper)
 
 from ._slip_map import SlipMap
-from ._symbolic_law import SymbolicIwanState, cartesian_law, coordinate_law, make_probe
+from ._symbolic_law import (SymbolicIwanState, branch_of, cartesian_law, coordinate_law,
+                            make_probe)
 
 __all__: list[str] = []
 
@@ -156,8 +157,9 @@ ARM_MARGIN = 10.0
 def _accept_function(conn, lazy_until):
     """The per-step work of one connector (see the module docstring)."""
     joint = conn._joint
-    depth = conn._state.depth
-    set_uc = conn._state.uc.SetValue
+    st = conn._state
+    depth = st.depth
+    set_uc = st.uc.SetValue
     read = conn._slip
     rec = conn._rec.append if conn._record_on else None
     lo = hi = 0.0               # the open interval of plain continuations (empty: slow path)
@@ -183,7 +185,10 @@ def _accept_function(conn, lazy_until):
         joint.commit()
         if joint.reversal_depth != n or conn._window:
             sync_stack(conn, t)
-        set_uc(u)
+        else:                        # same stack; the branch may start (from rest)
+            us, Fr = joint.reversal_points()
+            st.set_branch(*branch_of(us, Fr, u))
+            set_uc(u)
         conn._t_acc = t
         wa, wb = law_window(joint, depth)
         risky = not wa + margin < u < wb - margin
@@ -242,18 +247,20 @@ def flush_joint(conn) -> None:
 
 
 def sync_stack(conn, t=None) -> None:
-    """Write the joint's committed reversal stack to the law's variables (and check that
-    the step just committed read no point deeper than the expression holds)."""
+    """Write the joint's committed state (reversal stack, slip and the branch through it) to
+    the law's variables, and check that the step just committed read no point deeper than
+    the expression holds (possible only from a stack deeper than ``depth``)."""
     joint = conn._joint
     us, Fr = joint.reversal_points()
     us, Fr = us.tolist(), Fr.tolist()
     st = conn._state
-    if t is not None and st.disagrees(joint.displacement, joint.force):
+    if t is not None and (st.held > st.depth or conn._window) \
+            and st.disagrees(joint.displacement, joint.force):
         conn._overflows.append(t)
         _log.warning("Iwan connector %s at t=%g: the step closed loops beyond the %d reversal "
                      "points the symbolic law holds and could not be re-solved exactly; that "
                      "step's force was not exact (raise depth)", conn.objectNumber, t, st.depth)
-    st.set_stack(us, Fr)
+    st.set_state(us, Fr, joint.displacement)
     conn._window = False
 
 
@@ -326,8 +333,7 @@ def newton_check(conn, big: float) -> float:
         return 0.0                   # nothing to re-solve with (cannot happen in depth)
     k = max(0, len(states) - 1 - max(0, st.depth // 2 - 2))
     p, su, sF = states[k]
-    st.set_stack(su, sF)
-    st.set_uc(p)
+    st.set_state(su, sF, p)
     conn._window = True
     conn._n_resolved += 1
     _log.debug("Iwan connector %s: a step closes %d loops; re-solved from the state at u=%g",

@@ -11,20 +11,42 @@ extended Masing rules (REFERENCE.md section 2; paper eqs. 13-15):
 * on the branch that leaves ``(u_r, F_r)`` the force is ``F_r + 2 F_bb((u - u_r)/2)``,
   on the virgin curve ``F_bb(u)``, with the odd backbone ``F_bb``.
 
-:class:`SymbolicIwanState` holds the committed state of one point in named ``esym.Real``
-variables: the committed slip ``u_c``, the stack depth ``n`` and the newest ``depth``
-reversal points ``(r_k, R_k)``. :func:`iwan_force_expression` builds the trial force from
-them with nested ``IfThenElse`` (Exudyn evaluates only the branch taken, so a deep
-expression costs nothing until a step closes loops). The variables are set by the Python
-commit once per accepted step: ``u_c`` at every step, the stack only when it changed.
+:class:`SymbolicIwanState` holds the committed state of one point in named symbolic
+variables and builds the law on them (one form for the connector and the interface):
+
+* the **branch shortcut** (:meth:`SymbolicIwanState.force`): at nearly every evaluation the
+  trial continues the branch through the committed state, and the force is the Masing
+  branch formula alone, ``F = F_r + s2 F_bb(s1 (u - u_r))`` with ``s1 = c1 s``,
+  ``s2 = c2 s`` (``c1, c2 = 1/2, 2`` from a reversal point, ``1, 1`` virgin) and the branch
+  direction ``s = +-1``; on that branch ``sign(u - u_r) = s``, so this is the formula of the
+  exact law. It is taken while the trial lies beyond ``u_c`` in the branch direction and
+  before the branch's bound (the older reversal point it would close on, ``-u_r`` for the
+  return to the virgin curve, infinity on the virgin curve):
+  ``((u - u_c) s > 0) ((bound - u) s > 0)``;
+* every other trial (a reversal, a loop closure, a point at rest with ``s = 0``) falls
+  through to the full reversal-point law (:meth:`SymbolicIwanState.exact`, nested
+  ``IfThenElse``: Exudyn evaluates only the branch taken, so a deep expression costs nothing
+  until a step leaves its branch).
+
+State, in symbolic ``Vector``s of at most 6 entries (:data:`CHUNK`; Exudyn 1.13.6 crashed on
+longer ones indexed in an expression; one ``SetVector`` costs about as much as two
+``SetValue``): the branch ``(u_r, F_r, s1, s2, s, bound)`` in one vector, the stack depth
+``n`` and the newest ``depth`` reversal points ``(r_k, R_k)`` interleaved in
+``ceil((2 depth + 1) / 6)`` vectors (only those holding live entries are written), and the
+committed slip ``u_c`` (a named ``Real`` of the connector, or an entry of the interface's
+committed-slip vectors). The Python commit writes ``u_c`` at every accepted step and the
+rest only when the point leaves its branch.
 
 Exactness: the expression is exact as long as a step reads no reversal point older than the
-``depth`` it holds. :meth:`SymbolicIwanState.disagrees` checks, after the exact commit and
-only for steps whose stack changed, that the law gave the exact force at the accepted slip.
+``depth`` it holds, i.e. always while the committed stack holds at most ``depth`` points.
+:meth:`SymbolicIwanState.disagrees` checks, after the exact commit, that the law gave the
+exact force at the accepted slip (needed only for steps that started from a deeper stack and
+closed a loop).
 """
 from __future__ import annotations
 
 import itertools
+import math
 
 import exudyn as exu
 
@@ -32,14 +54,43 @@ __all__: list[str] = []
 
 esym = exu.symbolic
 _IDS = itertools.count()
+CHUNK = 6                     # entries per symbolic Vector (longer ones crash Exudyn 1.13.6)
+VIRGIN = (0.0, 0.0, 1.0, 1.0, 0.0, 0.0)     # the branch of an unloaded virgin point
 
 
 def _const(x: float):
     return esym.Real(float(x))
 
 
+def committed_slip_vectors(n: int) -> list:
+    """Symbolic vectors holding the committed slips of ``n`` points, ``CHUNK`` per vector."""
+    uid = next(_IDS)
+    return [esym.Vector(f"iwanuc{uid}_{k}", [0.0] * min(CHUNK, n - k * CHUNK))
+            for k in range((n + CHUNK - 1) // CHUNK)]
+
+
+def branch_of(us, Fr, uc: float) -> tuple:
+    """``(u_r, F_r, c1, c2, s, bound)``: the branch through the committed slip ``uc`` of a
+    joint with the reversal stack ``us``, ``Fr`` (oldest first; the same branch as
+    ``IwanJoint._set_branch`` and ``IwanJointBank._set_branch``)."""
+    if len(us):
+        ur = float(us[-1])
+        d = uc - ur
+        bound = float(us[-2]) if len(us) >= 2 else -ur
+        head = (ur, float(Fr[-1]), 0.5, 2.0)
+    else:
+        d = uc
+        bound = math.copysign(math.inf, uc)
+        head = VIRGIN[:4]
+    if d > 0.0:
+        return head + (1.0, bound)
+    if d < 0.0:
+        return head + (-1.0, bound)
+    return head + (0.0, 0.0)
+
+
 class SymbolicIwanState:
-    """Named symbolic variables of one Iwan point, and the law built on them.
+    """Symbolic variables of one Iwan point, and the law built on them.
 
     Parameters
     ----------
@@ -49,19 +100,27 @@ class SymbolicIwanState:
         Number of reversal points the expression holds (>= 2).
     tol : float
         Absolute reversal tolerance [m] (``reversal_tol * phi_max``).
+    uc : esym expression, optional
+        Where the committed slip is held (an entry of the interface's committed-slip
+        vectors); default: a named ``Real`` of its own (:meth:`set_uc` writes it).
     """
 
-    def __init__(self, params, depth: int, tol: float):
+    def __init__(self, params, depth: int, tol: float, uc=None):
         uid = next(_IDS)
         self.depth = depth
-        self.uc = esym.Real(f"iwan{uid}_uc", 0.0)
-        self.n = esym.Real(f"iwan{uid}_n", 0.0)
-        self.r = [esym.Real(f"iwan{uid}_r{k}", 0.0) for k in range(depth)]
-        self.R = [esym.Real(f"iwan{uid}_R{k}", 0.0) for k in range(depth)]
-        # derived from the stack (set with it): direction of the branch from the newest
-        # reversal point (0 on the virgin curve) and the slip where its loop closes
-        self.s = esym.Real(f"iwan{uid}_s", 0.0)
-        self.b = esym.Real(f"iwan{uid}_b", 0.0)
+        self.uc = esym.Real(f"iwan{uid}_uc", 0.0) if uc is None else uc
+        width = 2 * depth + 1                 # n, then (r_k, R_k) newest first
+        self._stack = [esym.Vector(f"iwan{uid}_st{k}", [0.0] * min(CHUNK, width - k * CHUNK))
+                       for k in range((width + CHUNK - 1) // CHUNK)]
+        self._stack_set = [v.SetVector for v in self._stack]
+        self._stack_len = [v.NumberOfItems() for v in self._stack]
+        entry = [v[k] for v in self._stack for k in range(v.NumberOfItems())]
+        self.n = entry[0]
+        self.r = entry[1::2]
+        self.R = entry[2::2]
+        self._branch = esym.Vector(f"iwan{uid}_br", list(VIRGIN))
+        self._branch_set = self._branch.SetVector
+        self.held = 0            # stack length the variables hold
         self.KT = float(params.KT)
         self.Fs = float(params.Fs)
         self.pm = float(params.phi_max)
@@ -73,33 +132,45 @@ class SymbolicIwanState:
     # ------------------------------------------------------------------ state transfer
     def set_stack(self, us, Fr) -> None:
         """Write the newest ``depth`` reversal points of the stack (oldest first) and its
-        length to the variables."""
+        length (only the vectors holding live entries)."""
         n = len(us)
-        self.n.SetValue(float(n))
         m = min(n, self.depth)
+        vals = [float(n)]
         for k in range(m):                   # r[0] is the newest point
-            self.r[k].SetValue(us[n - 1 - k])
-            self.R[k].SetValue(Fr[n - 1 - k])
-        # the branch from r0 heads for the point where its loop closes (the point below
-        # it, or -r0 for the last one): Masing's rule, REFERENCE.md section 2
-        if n:
-            b = float(us[n - 2]) if n >= 2 else -float(us[n - 1])
-            d = b - float(us[n - 1])
-            self.s.SetValue(1.0 if d > 0.0 else (-1.0 if d < 0.0 else 0.0))
-            self.b.SetValue(b)
-        else:
-            self.s.SetValue(0.0)
-            self.b.SetValue(0.0)
+            vals.append(us[n - 1 - k])
+            vals.append(Fr[n - 1 - k])
+        end = len(vals)
+        for k, (f, w) in enumerate(zip(self._stack_set, self._stack_len)):
+            a = k * CHUNK
+            if a >= end:
+                break
+            chunk = vals[a:a + w]
+            if len(chunk) < w:
+                chunk += [0.0] * (w - len(chunk))
+            f(chunk)
+        self.held = n
+
+    def set_branch(self, ur, Fr, c1, c2, direction, bound) -> None:
+        """Write the branch through the committed state (``direction`` +1, -1 or 0)."""
+        self._branch_set([ur, Fr, c1 * direction, c2 * direction, direction, bound])
 
     def set_uc(self, u: float) -> None:
+        """Write the committed slip (own ``Real`` only)."""
         self.uc.SetValue(u)
+
+    def set_state(self, us, Fr, uc: float) -> None:
+        """Write the whole committed state: stack ``us``, ``Fr`` (oldest first), slip ``uc``
+        and the branch through it."""
+        self.set_stack(us, Fr)
+        self.set_uc(uc)
+        self.set_branch(*branch_of(us, Fr, uc))
 
     def disagrees(self, u: float, force: float) -> bool:
         """True if the law, with the variables as they are (the state before the step just
         committed), does not give the exact ``force`` [N] at the accepted slip ``u`` [m]:
-        the step needed an older reversal point than the expression holds. Evaluated only
-        for steps whose reversal stack changed, through :attr:`probe` (``u -> F``, set by
-        the owner to evaluate its symbolic user function)."""
+        the step needed an older reversal point than the expression holds. Only a step from
+        a stack deeper than ``depth`` can (:attr:`held`); evaluated through :attr:`probe`
+        (``u -> F``, set by the owner to evaluate its symbolic user function)."""
         return not abs(self.probe(u) - force) <= 1e-9 * self.Fs
 
     # ------------------------------------------------------------------ the law
@@ -111,13 +182,13 @@ class SymbolicIwanState:
     def _virgin(self, u):
         return esym.sign(u) * self.backbone(esym.abs(u))
 
-    def _branch(self, r, R, u):
+    def _branch_force(self, r, R, u):
         x = u - r
         return R + esym.sign(x) * (2.0 * self.backbone(0.5 * esym.abs(x)))
 
     def exact(self, u):
         """Trial force [N] at the symbolic slip ``u`` by the full reversal-point law (no
-        shortcut; a caller with its own branch shortcut, the interface, wraps this)."""
+        shortcut)."""
         uc, n = self.uc, self.n
         du = u - uc
         moving = du != 0.0
@@ -129,18 +200,19 @@ class SymbolicIwanState:
             if j >= len(T):                  # deeper than held: only reached on overflow
                 return self._virgin(u)
             r, R = T[j]
-            single = esym.IfThenElse(passed(-r), self._virgin(u), self._branch(r, R, u))
+            single = esym.IfThenElse(passed(-r), self._virgin(u), self._branch_force(r, R, u))
             if j + 1 < len(T):
                 inner = esym.IfThenElse(passed(T[j + 1][0]), chain(T, m, j + 2),
-                                        self._branch(r, R, u))
+                                        self._branch_force(r, R, u))
             else:
-                inner = self._branch(r, R, u)
+                inner = self._branch_force(r, R, u)
             return esym.IfThenElse(m <= j + 0.5, self._virgin(u),
                                    esym.IfThenElse(m <= j + 1.5, single, inner))
 
         held = list(zip(self.r, self.R))
         d = esym.IfThenElse(n >= 0.5, uc - self.r[0], uc)        # direction of the branch
-        Fc = esym.IfThenElse(n >= 0.5, self._branch(self.r[0], self.R[0], uc), self._virgin(uc))
+        Fc = esym.IfThenElse(n >= 0.5, self._branch_force(self.r[0], self.R[0], uc),
+                             self._virgin(uc))
         f_cont = chain(held, n, 0)
         f_new = chain([(uc, Fc)] + held, n + 1.0, 0)
         f_small = esym.IfThenElse(n >= 0.5, chain(held[1:], n - 1.0, 0), self._virgin(u))
@@ -150,18 +222,11 @@ class SymbolicIwanState:
     def force(self, u):
         """Trial force [N] at the symbolic slip ``u`` (an expression of the solver's marker
         quantities): the branch shortcut in front of :meth:`exact`."""
-        uc = self.uc
-        # the usual trial continues the branch from r0 strictly between u_c and the point b
-        # where its loop closes (IwanJoint's own shortcut): the branch alone, with
-        # y = |u - r0| = (u - r0) s and 2 F_bb(y/2) = y (KT - a 2^-(chi+1) y^(chi+1))
-        s, b = self.s, self.b
-        fast = ((u - uc) * s > 0.0) * ((b - u) * s > 0.0)
-        y = (u - self.r[0]) * s
-        a2 = self.a * 0.5 ** self.e1
-        f_fast = self.R[0] + esym.IfThenElse(y < 2.0 * self.pm,
-                                             s * (y * (self.KT - a2 * esym.pow(y, self.e1))),
-                                             s * (2.0 * self.Fs))
-        return esym.IfThenElse(fast, f_fast, self.exact(u))
+        br = self._branch
+        ur, Fr, s1, s2, dr, bound = (br[k] for k in range(6))
+        cont = Fr + s2 * self.backbone(s1 * (u - ur))
+        fast = ((u - self.uc) * dr > 0.0) * ((bound - u) * dr > 0.0)
+        return esym.IfThenElse(fast, cont, self.exact(u))
 
 
 def make_probe(mbs, fn, kind, axis, off):
