@@ -112,8 +112,8 @@ class SymbolicIwanState:
         width = 2 * depth + 1                 # n, then (r_k, R_k) newest first
         self._stack = [esym.Vector(f"iwan{uid}_st{k}", [0.0] * min(CHUNK, width - k * CHUNK))
                        for k in range((width + CHUNK - 1) // CHUNK)]
-        self._stack_set = [v.SetVector for v in self._stack]
-        self._stack_len = [v.NumberOfItems() for v in self._stack]
+        self._chunks = [(v.SetVector, v.NumberOfItems(), k * CHUNK)
+                        for k, v in enumerate(self._stack)]
         entry = [v[k] for v in self._stack for k in range(v.NumberOfItems())]
         self.n = entry[0]
         self.r = entry[1::2]
@@ -135,13 +135,12 @@ class SymbolicIwanState:
         length (only the vectors holding live entries)."""
         n = len(us)
         m = min(n, self.depth)
-        vals = [float(n)]
-        for k in range(m):                   # r[0] is the newest point
-            vals.append(us[n - 1 - k])
-            vals.append(Fr[n - 1 - k])
+        vals = [0.0] * (2 * m + 1)
+        vals[0] = float(n)
+        vals[1::2] = us[:n - m - 1 if n > m else None:-1]      # newest first
+        vals[2::2] = Fr[:n - m - 1 if n > m else None:-1]
         end = len(vals)
-        for k, (f, w) in enumerate(zip(self._stack_set, self._stack_len)):
-            a = k * CHUNK
+        for f, w, a in self._chunks:
             if a >= end:
                 break
             chunk = vals[a:a + w]

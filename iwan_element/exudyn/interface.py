@@ -276,9 +276,9 @@ class IwanInterface:
         states = self._states
         us_all, Fr_all = bank.us, bank.Fr
         idx = events.tolist()
-        br = np.stack([bank.bur[events], bank.bFr[events], bank.bc1[events] * bank.bdir[events],
-                       bank.bc2[events] * bank.bdir[events], bank.bdir[events],
-                       bank.bound[events]], axis=1).tolist()
+        br = np.array((bank.bur, bank.bFr, bank.bc1, bank.bc2, bank.bdir, bank.bound))[:, events]
+        br[2:4] *= br[4]                           # s1 = c1 s, s2 = c2 s
+        br = br.T.tolist()
         for k, i in enumerate(idx):
             s = states[i]
             held = s.held
