@@ -19,23 +19,26 @@ variables and builds the law on them (one form for the connector and the interfa
   branch formula alone, ``F = F_r + s2 F_bb(s1 (u - u_r))`` with ``s1 = c1 s``,
   ``s2 = c2 s`` (``c1, c2 = 1/2, 2`` from a reversal point, ``1, 1`` virgin) and the branch
   direction ``s = +-1``; on that branch ``sign(u - u_r) = s``, so this is the formula of the
-  exact law. It is taken while the trial lies beyond ``u_c`` in the branch direction and
-  before the branch's bound (the older reversal point it would close on, ``-u_r`` for the
-  return to the virgin curve, infinity on the virgin curve):
-  ``((u - u_c) s > 0) ((bound - u) s > 0)``;
+  exact law. It is taken while the trial lies strictly between ``u_c`` and the branch's
+  bound ahead (the older reversal point it would close on, ``-u_r`` for the return to the
+  virgin curve, infinity on the virgin curve): ``(u - u_c) (bound - u) > 0`` (four
+  operations; a point at rest, ``s = 0``, holds ``bound = u_c``, so the test fails; a product
+  that underflows to zero only sends the trial to the exact law);
 * every other trial (a reversal, a loop closure, a point at rest with ``s = 0``) falls
   through to the full reversal-point law (:meth:`SymbolicIwanState.exact`, nested
   ``IfThenElse``: Exudyn evaluates only the branch taken, so a deep expression costs nothing
   until a step leaves its branch).
 
-State, in symbolic ``Vector``s of at most 6 entries (:data:`CHUNK`; Exudyn 1.13.6 crashed on
-longer ones indexed in an expression; one ``SetVector`` costs about as much as two
-``SetValue``): the branch ``(u_r, F_r, s1, s2, s, bound)`` in one vector, the stack depth
-``n`` and the newest ``depth`` reversal points ``(r_k, R_k)`` interleaved in
-``ceil((2 depth + 1) / 6)`` vectors (only those holding live entries are written), and the
-committed slip ``u_c`` (a named ``Real`` of the connector, or an entry of the interface's
-committed-slip vectors). The Python commit writes ``u_c`` at every accepted step and the
-rest only when the point leaves its branch.
+State (measured on Exudyn 1.13.6: a ``SetValue`` costs about 0.2 us, a ``SetVector`` of 6
+about 0.3 us; reading a ``Vector`` entry in an expression costs about 10 ns more than
+reading a named ``Real``; vectors of more than 6 entries (:data:`CHUNK`) indexed in an
+expression crashed): the branch ``(u_r, F_r, s1, s2, bound)``, read at every evaluation, in
+named ``Real``s; the stack depth ``n`` and the newest ``depth`` reversal points
+``(r_k, R_k)``, read only off the shortcut, interleaved in ``ceil((2 depth + 1) / 6)``
+vectors (only those holding live entries are written); the committed slip ``u_c`` in a named
+``Real`` of the connector, or an entry of the interface's committed-slip vectors. The
+Python commit writes ``u_c`` at every accepted step and the rest only when the point leaves
+its branch.
 
 Exactness: the expression is exact as long as a step reads no reversal point older than the
 ``depth`` it holds, i.e. always while the committed stack holds at most ``depth`` points.
@@ -56,6 +59,7 @@ esym = exu.symbolic
 _IDS = itertools.count()
 CHUNK = 6                     # entries per symbolic Vector (longer ones crash Exudyn 1.13.6)
 VIRGIN = (0.0, 0.0, 1.0, 1.0, 0.0, 0.0)     # the branch of an unloaded virgin point
+_VIRGIN_VARS = (0.0, 0.0, 0.0, 0.0, 0.0)     # its (u_r, F_r, s1, s2, bound)
 
 
 def _const(x: float):
@@ -86,7 +90,7 @@ def branch_of(us, Fr, uc: float) -> tuple:
         return head + (1.0, bound)
     if d < 0.0:
         return head + (-1.0, bound)
-    return head + (0.0, 0.0)
+    return head + (0.0, uc)             # at rest: an empty interval for the shortcut
 
 
 class SymbolicIwanState:
@@ -118,8 +122,9 @@ class SymbolicIwanState:
         self.n = entry[0]
         self.r = entry[1::2]
         self.R = entry[2::2]
-        self._branch = esym.Vector(f"iwan{uid}_br", list(VIRGIN))
-        self._branch_set = self._branch.SetVector
+        self._branch = [esym.Real(f"iwan{uid}_{k}", v)
+                        for k, v in zip(("ur", "Fr", "s1", "s2", "bound"), _VIRGIN_VARS)]
+        self._branch_set = [v.SetValue for v in self._branch]
         self.held = 0            # stack length the variables hold
         self.KT = float(params.KT)
         self.Fs = float(params.Fs)
@@ -150,8 +155,14 @@ class SymbolicIwanState:
         self.held = n
 
     def set_branch(self, ur, Fr, c1, c2, direction, bound) -> None:
-        """Write the branch through the committed state (``direction`` +1, -1 or 0)."""
-        self._branch_set([ur, Fr, c1 * direction, c2 * direction, direction, bound])
+        """Write the branch through the committed state (``direction`` +1, -1 or 0; with
+        0, ``bound`` must be the committed slip)."""
+        self.set_branch_values((ur, Fr, c1 * direction, c2 * direction, bound))
+
+    def set_branch_values(self, values) -> None:
+        """Write ``(u_r, F_r, s1, s2, bound)`` (see :meth:`set_branch`)."""
+        for f, v in zip(self._branch_set, values):
+            f(v)
 
     def set_uc(self, u: float) -> None:
         """Write the committed slip (own ``Real`` only)."""
@@ -221,10 +232,9 @@ class SymbolicIwanState:
     def force(self, u):
         """Trial force [N] at the symbolic slip ``u`` (an expression of the solver's marker
         quantities): the branch shortcut in front of :meth:`exact`."""
-        br = self._branch
-        ur, Fr, s1, s2, dr, bound = (br[k] for k in range(6))
+        ur, Fr, s1, s2, bound = self._branch
         cont = Fr + s2 * self.backbone(s1 * (u - ur))
-        fast = ((u - self.uc) * dr > 0.0) * ((bound - u) * dr > 0.0)
+        fast = (u - self.uc) * (bound - u) > 0.0
         return esym.IfThenElse(fast, cont, self.exact(u))
 
 

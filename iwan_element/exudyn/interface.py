@@ -12,8 +12,8 @@ lap joint). Two routes, chosen automatically:
   surface points by :mod:`._surface_slips`), commits all points at once in an
   :class:`~iwan_element.core.joint_bank.IwanJointBank`, writes the committed slips to
   symbolic vectors of 6 (one ``SetVector`` per 6 points), and only for the points that
-  left their branch the new branch (one ``SetVector``) and, if it changed, the reversal
-  stack. The records keep the slips; forces
+  left their branch the new branch (five ``SetValue``) and, if it changed, the reversal
+  stack (vectors of 6). The records keep the slips; forces
   and energies are recomputed from them when read (an exact replay of the same commits).
 * **python** (joints given as elements following the protocol, e.g. effects, or a rotating
   ``axisMarker``): one :func:`~iwan_element.exudyn.add_iwan_connector` per point, with the
@@ -276,8 +276,11 @@ class IwanInterface:
         states = self._states
         us_all, Fr_all = bank.us, bank.Fr
         idx = events.tolist()
-        br = np.array((bank.bur, bank.bFr, bank.bc1, bank.bc2, bank.bdir, bank.bound))[:, events]
-        br[2:4] *= br[4]                           # s1 = c1 s, s2 = c2 s
+        br = np.array((bank.bur, bank.bFr, bank.bc1, bank.bc2, bank.bound, bank.bdir))[:, events]
+        br[2:4] *= br[5]                           # s1 = c1 s, s2 = c2 s
+        rest = br[5] == 0.0
+        if rest.any():                             # at rest: bound = u_c (see the law)
+            br[4, rest] = u[events[rest]]
         br = br.T.tolist()
         for k, i in enumerate(idx):
             s = states[i]
@@ -291,7 +294,7 @@ class IwanInterface:
                                  "the %d reversal points the symbolic law holds; that step's "
                                  "force was not exact (raise depth)", i, t, s.depth)
                 s.set_stack(us, Fr_all[i])
-            s._branch_set(br[k])
+            s.set_branch_values(br[k])
 
 
 def add_iwan_interface(mbs, markerPairs, joints, *, axis=None, axisMarker=None, offsets=None,
