@@ -116,8 +116,9 @@ class SymbolicIwanState:
         width = 2 * depth + 1                 # n, then (r_k, R_k) newest first
         self._stack = [esym.Vector(f"iwan{uid}_st{k}", [0.0] * min(CHUNK, width - k * CHUNK))
                        for k in range((width + CHUNK - 1) // CHUNK)]
-        self._chunks = [(v.SetVector, v.NumberOfItems(), k * CHUNK)
+        self._chunks = [(v.SetVector, k * CHUNK, k * CHUNK + v.NumberOfItems())
                         for k, v in enumerate(self._stack)]
+        self._vals = [0.0] * width
         entry = [v[k] for v in self._stack for k in range(v.NumberOfItems())]
         self.n = entry[0]
         self.r = entry[1::2]
@@ -140,18 +141,17 @@ class SymbolicIwanState:
         length (only the vectors holding live entries)."""
         n = len(us)
         m = min(n, self.depth)
-        vals = [0.0] * (2 * m + 1)
-        vals[0] = float(n)
-        vals[1::2] = us[:n - m - 1 if n > m else None:-1]      # newest first
-        vals[2::2] = Fr[:n - m - 1 if n > m else None:-1]
-        end = len(vals)
-        for f, w, a in self._chunks:
+        v = self._vals
+        v[0] = float(n)
+        if m:
+            stop = n - m - 1 if n > m else None
+            v[1:2 * m + 1:2] = us[:stop:-1]        # newest first
+            v[2:2 * m + 2:2] = Fr[:stop:-1]
+        end = 2 * m + 1
+        for f, a, b in self._chunks:              # entries beyond 2 m are not read
             if a >= end:
                 break
-            chunk = vals[a:a + w]
-            if len(chunk) < w:
-                chunk += [0.0] * (w - len(chunk))
-            f(chunk)
+            f(v[a:b])
         self.held = n
 
     def set_branch(self, ur, Fr, c1, c2, direction, bound) -> None:
@@ -161,8 +161,12 @@ class SymbolicIwanState:
 
     def set_branch_values(self, values) -> None:
         """Write ``(u_r, F_r, s1, s2, bound)`` (see :meth:`set_branch`)."""
-        for f, v in zip(self._branch_set, values):
-            f(v)
+        a, b, c, d, e = self._branch_set
+        a(values[0])
+        b(values[1])
+        c(values[2])
+        d(values[3])
+        e(values[4])
 
     def set_uc(self, u: float) -> None:
         """Write the committed slip (own ``Real`` only)."""
