@@ -10,7 +10,7 @@ function of the end point alone (force, stored and dissipated energy are closed 
 the branch, REFERENCE.md section 2), so the ``IwanJoint`` is committed there only lazily —
 at the next reversal or loop closure (then it is brought to the last point of the branch,
 then walks the event exactly), at the end of the run and whenever the connector is read.
-Only such events rewrite the law's reversal stack.
+Only such events rewrite the law's branch and reversal stack.
 
 Records hold ``(t, u)`` per accepted step; force and energies are replayed from a copy of
 the joint taken when the records start (the same ``trial``/``commit`` sequence, so the

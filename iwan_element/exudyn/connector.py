@@ -25,8 +25,9 @@ Two force laws (``law=``), chosen automatically:
 * **symbolic** (an :class:`~iwan_element.IwanJoint` on two ``MarkerNodeCoordinate`` markers
   or on position markers with a global axis): the exact Iwan law as an Exudyn symbolic
   expression (:mod:`._symbolic_law`), evaluated in C++ without Python and without Exudyn
-  API calls (safe with several solver threads). Its state (the committed slip and the newest
-  ``depth`` reversal points) lives in named symbolic variables. Per accepted step the
+  API calls (safe with several solver threads). Its state (the committed slip, the branch
+  through it and the newest ``depth`` reversal points) lives in symbolic variables; the
+  interface uses the same law. Per accepted step the
   post-step reads the slip through a view of Exudyn's coordinates and writes it to one
   variable; while the slip continues the current branch (one interval test) nothing else
   happens: the ``IwanJoint`` (the reference, holding the energies) is committed lazily, at
