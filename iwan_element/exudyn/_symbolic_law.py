@@ -263,17 +263,26 @@ def coordinate_law(st: SymbolicIwanState, off: float):
     return law
 
 
-def cartesian_law(st: SymbolicIwanState, a, off: float):
+def cartesian_law(st: SymbolicIwanState, a, off: float, k=None):
     """Spring-force user function (ObjectConnectorCartesianSpringDamper) along the unit
     axis ``a``; components with ``a_k = 0`` are constant zeros (a shared sub-expression is
-    evaluated once per appearance, so the law appears only in the non-zero components)."""
+    evaluated once per appearance, so the law appears only in the non-zero components).
+    ``k`` (3 floats, optional): linear springs along the global axes added in the same
+    object, ``k_i d_i`` as Exudyn's built-in Cartesian spring (no offset, no damping)."""
+    k = (0.0, 0.0, 0.0) if k is None else tuple(float(x) for x in k)
+
     def law(mbs, t, itemNumber, displacement, velocity, stiffness, damping, offset):
         u = None
-        for k in range(3):
-            if a[k] != 0.0:
-                term = displacement[k] if a[k] == 1.0 else displacement[k] * a[k]
+        for i in range(3):
+            if a[i] != 0.0:
+                term = displacement[i] if a[i] == 1.0 else displacement[i] * a[i]
                 u = term if u is None else u + term
         F = st.force(u - off if off else u)
-        return [esym.Real(0.0) if a[k] == 0.0 else (F if a[k] == 1.0 else F * a[k])
-                for k in range(3)]
+        out = []
+        for i in range(3):
+            f = None if a[i] == 0.0 else (F if a[i] == 1.0 else F * a[i])
+            if k[i] != 0.0:
+                f = displacement[i] * k[i] if f is None else f + displacement[i] * k[i]
+            out.append(esym.Real(0.0) if f is None else f)
+        return out
     return law

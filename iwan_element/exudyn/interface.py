@@ -48,6 +48,7 @@ from ._surface_slips import SurfaceSlips
 from ._symbolic_law import (CHUNK, VIRGIN, SymbolicIwanState, cartesian_law,
                             committed_slip_vectors, coordinate_law, make_probe)
 from ._dispatch import _dispatcher_for, _installed_post_step
+from ._interface_springs import add_builtin_springs, check_stiffness, linear_energy
 from ._markers import _COORDINATE_MARKERS, _POSITION_MARKERS, _marker_type, _unit_axis
 from .connector import add_iwan_connector
 
@@ -84,6 +85,8 @@ class IwanInterface:
         self._read = None           # the slip map, once a run started
         self._map = None
         self._joints = ()
+        self._stiffness = None      # linear springs carried by the interface, (n, 3) or None
+        self._spring_objects = []   # python route: built-in springs carrying them
 
     # ------------------------------------------------------------------ read-only set-up
     @property
@@ -184,6 +187,11 @@ class IwanInterface:
         return {"time": tab["time"], "slip": tab["slip"], "force": tab["force"],
                 "stored_energy": tab["work"] - tab["diss"], "dissipated_energy": tab["diss"],
                 "work": tab["work"]}
+
+    def linear_energy(self) -> float:
+        """Potential energy [J] of the linear springs given as ``stiffness`` at the current
+        configuration (0 without them): Exudyn reports none for a user-function object."""
+        return linear_energy(self._mbs, self._pairs, self._stiffness)
 
     def reset(self) -> None:
         """Return every joint to its virgin state and clear the records (for a new run)."""
@@ -299,7 +307,8 @@ class IwanInterface:
 
 def add_iwan_interface(mbs, markerPairs, joints, *, axis=None, axisMarker=None, offsets=None,
                        record: bool = True, depth: int = 8, reversal_tol: float = 1e-12,
-                       name: str = "", allow_adaptive_explicit: bool = False) -> IwanInterface:
+                       name: str = "", allow_adaptive_explicit: bool = False,
+                       stiffness=None) -> IwanInterface:
     """Add a joint at each of many contact points, committed together once per step.
 
     Parameters
@@ -333,6 +342,12 @@ def add_iwan_interface(mbs, markerPairs, joints, *, axis=None, axisMarker=None, 
     allow_adaptive_explicit : bool, keyword-only
         Allow ODE23/DOPRI5 with automatic step size (refused by default, as for
         :func:`~iwan_element.exudyn.add_iwan_connector`).
+    stiffness : array_like, shape (n_points, 3), optional, keyword-only
+        Linear springs ``[kx, ky, kz]`` [N/m] along the global axes on each pair (position
+        markers), e.g. the normal contact stiffness: the same forces as a built-in
+        ``CartesianSpringDamper`` on the pair, but carried by the joint's own object on the
+        symbolic route (one object per point instead of two). Their potential energy is
+        :meth:`IwanInterface.linear_energy`.
 
     Returns
     -------
@@ -362,11 +377,17 @@ def add_iwan_interface(mbs, markerPairs, joints, *, axis=None, axisMarker=None, 
         raise ValueError(f"offsets must have {len(pairs)} entries, got {len(offs)}")
     offs = [check_scalar(f"offsets[{i}]", o) for i, o in enumerate(offs)]
     kind = _pair_kind(mbs, pairs, axis, axisMarker)
+    springs = check_stiffness(stiffness, len(pairs), kind)
     all_params = all(isinstance(j, IwanParameters) for j in joints)
     if not all_params or axisMarker is not None:
-        return _python_interface(mbs, pairs, joints, kind, axis, axisMarker, offs, record,
-                                 reversal_tol, name, allow_adaptive_explicit)
+        iface = _python_interface(mbs, pairs, joints, kind, axis, axisMarker, offs, record,
+                                  reversal_tol, name, allow_adaptive_explicit)
+        if springs is not None:
+            iface._stiffness = springs
+            iface._spring_objects = add_builtin_springs(mbs, pairs, springs, name)
+        return iface
     iface = IwanInterface(mbs, pairs, kind, "symbolic", record)
+    iface._stiffness = springs
     iface._allow_adaptive_explicit = bool(allow_adaptive_explicit)
     iface._offsets = offs
     iface._axis = _unit_axis(axis, "axis") if kind == "position" else None
@@ -439,7 +460,8 @@ def _symbolic_object(mbs, iface, i, st, name):
             name=name, markerNumbers=[m0, m1], stiffness=0.0, damping=0.0,
             springForceUserFunction=fn, visualization=_HIDDEN)
     else:
-        fn = CreateSymbolicUserFunction(mbs, cartesian_law(st, iface._axis, off),
+        k = None if iface._stiffness is None else iface._stiffness[i]
+        fn = CreateSymbolicUserFunction(mbs, cartesian_law(st, iface._axis, off, k),
                                         "springForceUserFunction",
                                         itemTypeName="ObjectConnectorCartesianSpringDamper")
         item = ObjectConnectorCartesianSpringDamper(
