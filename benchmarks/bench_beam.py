@@ -13,9 +13,11 @@ Run:  python benchmarks/bench_beam.py [--points 50] [--cycles 20] [--repeat 3] [
     iterations per step of each route (same solver settings for all). Two labelled floors:
     ``linear+zero-law`` (the linear model plus one symbolic Cartesian connector per point
     whose law is zero: the cost of the extra connector objects alone) and
-    ``symbolic-backbone`` (one symbolic connector per point with the stateless Iwan virgin
-    backbone as its law and no post-step function: the floor of any symbolic nonlinear
-    law, with its own Newton iterations per step; not a ring-down with hysteresis).
+    ``symbolic-backbone`` (one symbolic connector per point whose law is the stateless Iwan
+    virgin backbone along x plus the normal spring along y, the built-in springs switched
+    off, no post-step function: the floor of any symbolic nonlinear law in the compiled
+    route's one-object-per-point form, with its own Newton iterations per step; not a
+    ring-down with hysteresis).
     With ``--compare-with DIR`` the compiled route is also run with the interface of the
     package in ``DIR/iwan_element`` (e.g. ``git archive main iwan_element | tar -x -C DIR``),
     interleaved (row ``compiled@base``).
@@ -49,20 +51,26 @@ BASE = {}
 _KEEP = []
 
 
-def _base_interface(mbs, pairs, joints, **kw):
-    """``add_iwan_interface`` of the package loaded with ``--compare-with``."""
+def _base_interface(mbs, pairs, joints, stiffness=None, **kw):
+    """``add_iwan_interface`` of the package loaded with ``--compare-with``; springs it
+    cannot carry (``stiffness``, new) become built-in springs, as that package's model had."""
+    from exudyn.itemInterface import ObjectConnectorCartesianSpringDamper
     pkg = BASE["pkg"]
+    for (m0, m1), k in zip(pairs, stiffness if stiffness is not None else []):
+        mbs.AddObject(ObjectConnectorCartesianSpringDamper(
+            markerNumbers=[m0, m1], stiffness=list(k), damping=[0.0, 0.0, 0.0]))
     conv = [pkg.IwanParameters(Fs=p.Fs, KT=p.KT, chi=p.chi, beta=p.beta) for p in joints]
     return pkg.exudyn.add_iwan_interface(mbs, pairs, conv, **kw)
 
 
 def _add_floor_connectors(model, law: str) -> None:
-    """One symbolic Cartesian connector per contact point, without post-step: a zero law or
-    the stateless Iwan virgin backbone of the point along x (the floors in the docstring)."""
+    """One symbolic Cartesian connector per contact point, without post-step: a zero law, or
+    the stateless Iwan virgin backbone of the point along x plus its normal spring along y
+    in place of the built-in springs (the floors in the docstring)."""
     from exudyn.advancedUtilities import CreateSymbolicUserFunction
     from exudyn.itemInterface import ObjectConnectorCartesianSpringDamper
     esym = exu.symbolic
-    def make(p):
+    def make(p, kn):
         a, e1, pm = p.R / ((p.chi + 1.0) * (p.chi + 2.0)), p.chi + 1.0, p.phi_max
 
         def uf(mbs_, t, itemNumber, displacement, velocity, stiffness, damping, offset):
@@ -73,11 +81,16 @@ def _add_floor_connectors(model, law: str) -> None:
                 x = esym.abs(u)
                 fx = esym.sign(u) * esym.IfThenElse(x < pm, x * (p.KT - a * esym.pow(x, e1)),
                                                     esym.Real(p.Fs))
-            return [fx, esym.Real(0.0), esym.Real(0.0)]
+            fy = esym.Real(0.0) if law == "zero" else displacement[1] * kn
+            return [fx, fy, esym.Real(0.0)]
         return uf
 
-    for (ma, mb), p in zip(model.marker_pairs, model.points.params):
-        uf = make(p)
+    if law != "zero":
+        for s in model.springs:
+            model.mbs.SetObjectParameter(s, "activeConnector", False)
+    for (ma, mb), p, kn in zip(model.marker_pairs, model.points.params,
+                               model.points.normal_stiffness):
+        uf = make(p, float(kn))
         fn = CreateSymbolicUserFunction(model.mbs, uf, "springForceUserFunction",
                                         itemTypeName="ObjectConnectorCartesianSpringDamper")
         _KEEP.append(fn)                   # the expression must outlive the run
