@@ -242,17 +242,20 @@ class SymbolicIwanState:
         return esym.IfThenElse(fast, cont, self.exact(u))
 
 
-def make_probe(mbs, fn, kind, axis, off):
-    """``u -> F`` through the symbolic user function ``fn`` (no new expression)."""
+def make_probe(mbs, fn, kind, axis, off, k=None):
+    """``u -> F`` through the symbolic user function ``fn`` (no new expression); ``k``: the
+    linear springs the function also carries (see :func:`cartesian_law`), taken out again."""
     if kind == "coordinate":
         return lambda u: fn.Evaluate(mbs, 0.0, 0, u + off, 0.0, 0.0, 0.0, 0.0)
     a = axis
     zero = [0.0, 0.0, 0.0]
+    ka = 0.0 if k is None else float(sum(a[i] * a[i] * float(k[i]) for i in range(3)))
 
     def probe(u):
         d = u + off
         f = fn.Evaluate(mbs, 0.0, 0, [d * a[0], d * a[1], d * a[2]], zero, zero, zero, zero)
-        return a[0] * f[0] + a[1] * f[1] + a[2] * f[2]
+        F = a[0] * f[0] + a[1] * f[1] + a[2] * f[2]
+        return F - ka * d if ka else F
     return probe
 
 

@@ -468,7 +468,8 @@ def _symbolic_object(mbs, iface, i, st, name):
             name=name, markerNumbers=[m0, m1], springForceUserFunction=fn,
             visualization=_HIDDEN)
     iface._functions.append(fn)
-    st.probe = make_probe(mbs, fn, iface._kind, iface._axis, off)
+    st.probe = make_probe(mbs, fn, iface._kind, iface._axis, off,
+                          None if iface._stiffness is None else iface._stiffness[i])
     return mbs.AddObject(item)
 
 
