@@ -36,7 +36,7 @@ expression crashed): the branch ``(u_r, F_r, s1, s2, bound)``, read at every eva
 named ``Real``s; the stack depth ``n`` and the newest ``depth`` reversal points
 ``(r_k, R_k)``, read only off the shortcut, interleaved in ``ceil((2 depth + 1) / 6)``
 vectors (only those holding live entries are written); the committed slip ``u_c`` in a named
-``Real`` of the connector, or an entry of the interface's committed-slip vectors. The
+``Real`` of the connector, or an entry of the interface's committed-slip matrix. The
 Python commit writes ``u_c`` at every accepted step and the rest only when the point leaves
 its branch.
 
@@ -66,11 +66,12 @@ def _const(x: float):
     return esym.Real(float(x))
 
 
-def committed_slip_vectors(n: int) -> list:
-    """Symbolic vectors holding the committed slips of ``n`` points, ``CHUNK`` per vector."""
-    uid = next(_IDS)
-    return [esym.Vector(f"iwanuc{uid}_{k}", [0.0] * min(CHUNK, n - k * CHUNK))
-            for k in range((n + CHUNK - 1) // CHUNK)]
+def committed_slip_matrix(n: int):
+    """A symbolic 1 x ``n`` matrix holding the committed slips of ``n`` points: one
+    ``SetMatrix`` per accepted step (``Get(0, i)`` reads entry ``i`` live; unlike a
+    ``Vector``, a long ``Matrix`` row did not crash Exudyn 1.13.6 and costs 1 call instead
+    of ``n / 6``)."""
+    return esym.Matrix(f"iwanuc{next(_IDS)}", [[0.0] * n])
 
 
 def branch_of(us, Fr, uc: float) -> tuple:

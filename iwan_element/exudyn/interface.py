@@ -11,7 +11,7 @@ lap joint). Two routes, chosen automatically:
   slips of all points (one product of a view of the system coordinates; ANCF Cable2D
   surface points by :mod:`._surface_slips`), commits all points at once in an
   :class:`~iwan_element.core.joint_bank.IwanJointBank`, writes the committed slips to
-  symbolic vectors of 6 (one ``SetVector`` per 6 points), and only for the points that
+  one symbolic 1 x n matrix (one ``SetMatrix``), and only for the points that
   left their branch the new branch (five ``SetValue``) and, if it changed, the reversal
   stack (vectors of 6). The records keep the slips; forces
   and energies are recomputed from them when read (an exact replay of the same commits).
@@ -45,8 +45,8 @@ from ..core._validation import check_scalar
 from ._slip_map import SlipMap
 from ._slip_records import SlipRecords
 from ._surface_slips import SurfaceSlips
-from ._symbolic_law import (CHUNK, VIRGIN, SymbolicIwanState, cartesian_law,
-                            committed_slip_vectors, coordinate_law, make_probe)
+from ._symbolic_law import (VIRGIN, SymbolicIwanState, cartesian_law, committed_slip_matrix,
+                            coordinate_law, make_probe)
 from ._dispatch import _dispatcher_for, _installed_post_step
 from ._interface_springs import add_builtin_springs, check_stiffness, linear_energy
 from ._markers import _COORDINATE_MARKERS, _POSITION_MARKERS, _marker_type, _unit_axis
@@ -203,8 +203,7 @@ class IwanInterface:
         for s in self._states:
             s.set_stack([], [])
             s.set_branch(*VIRGIN)
-        for v in self._uc_vectors:
-            v.SetVector([0.0] * v.NumberOfItems())
+        self._set_uc([[0.0] * self.n_points])
         self._rec.clear()
         self._overflows.clear()
         self._t_acc = -math.inf
@@ -262,9 +261,7 @@ class IwanInterface:
         events = bank.commit(u)
         if events.size:
             self._events(t, u, events)
-        ul = u.tolist()
-        for f, a, b in self._set_uc:
-            f(ul[a:b])
+        self._set_uc([u.tolist()])
         self._t_acc = t
         if self._rec.on:
             self._rec.append(t, u)
@@ -395,14 +392,13 @@ def add_iwan_interface(mbs, markerPairs, joints, *, axis=None, axisMarker=None, 
     iface._bank = bank
     dispatcher = _dispatcher_for(mbs)
     iface._dispatcher = dispatcher
-    vecs = committed_slip_vectors(len(joints))
-    iface._uc_vectors = vecs
+    ucm = committed_slip_matrix(len(joints))
+    iface._uc_matrix = ucm
+    iface._set_uc = ucm.SetMatrix
     for i, p in enumerate(joints):
-        st = SymbolicIwanState(p, int(depth), float(bank.tol[i]), uc=vecs[i // CHUNK][i % CHUNK])
+        st = SymbolicIwanState(p, int(depth), float(bank.tol[i]), uc=ucm.Get(0, i))
         iface._states.append(st)
         iface._objects.append(_symbolic_object(mbs, iface, i, st, f"{name}{i}" if name else ""))
-    iface._set_uc = [(v.SetVector, k * CHUNK, k * CHUNK + v.NumberOfItems())
-                     for k, v in enumerate(vecs)]
     dispatcher.add(iface)
     _log.debug("added %r", iface)
     return iface
