@@ -153,7 +153,7 @@ def backbone_law():
 _KEEP = []
 
 
-def symbolic_backbone(mbs):
+def symbolic_backbone_with_variable(mbs):
     """The virgin backbone as an Exudyn symbolic law, and a variable set once per step."""
     esym = exu.symbolic
     KT, Fs, pm = P.KT, P.Fs, P.phi_max
@@ -182,7 +182,7 @@ def build(variant, counter=None):
     if variant == "builtin":
         mbs.AddObject(CoordinateSpringDamper(markerNumbers=[m0, m1], stiffness=P.KT))
     elif variant == "symbolic-nonlin+set":
-        fn, var = symbolic_backbone(mbs)
+        fn, var = symbolic_backbone_with_variable(mbs)
         mbs.AddObject(ObjectConnectorCoordinateSpringDamper(
             markerNumbers=[m0, m1], stiffness=0.0, damping=0.0, springForceUserFunction=fn))
         set_value = var.SetValue
@@ -315,8 +315,10 @@ def build_chain(variant, n):
             mbs.AddObject(CoordinateSpringDamper(markerNumbers=[m0, m1], stiffness=P.KT))
     elif variant == "symbolic-backbone":
         handle = [symbolic_backbone(mbs, m0, m1) for m0, m1 in pairs]   # keep them alive
-    elif variant == "interface":
-        handle = iwan_element.exudyn.add_iwan_interface(mbs, pairs, [P] * n)
+    elif variant.startswith("interface"):
+        pkg = PACKAGES[variant.partition("@")[2]]
+        params = pkg.IwanParameters(Fs=P.Fs, KT=P.KT, chi=P.chi, beta=P.beta)
+        handle = pkg.exudyn.add_iwan_interface(mbs, pairs, [params] * n)
     else:
         law = "python" if variant == "connectors-python" else "symbolic"
         handle = [iwan_element.exudyn.add_iwan_connector(mbs, list(pr), iwan_element.IwanJoint(P),
@@ -348,6 +350,8 @@ def contact_table(n, steps, repeat):
     per step, and the trajectory against the Python-law connectors."""
     variants = ["builtin", "symbolic-backbone", "interface", "connectors-symbolic",
                 "connectors-python"]
+    if "base" in PACKAGES:
+        variants.insert(2, "interface@base")
     best = {v: (math.inf, math.inf, math.nan) for v in variants}
     slips = {}
     for _ in range(repeat):
@@ -359,7 +363,7 @@ def contact_table(n, steps, repeat):
             newton = mbs.sys["dynamicSolver"].it.newtonStepsCount / steps
             w, c, _ = best[v]
             best[v] = (min(w, wall), min(c, cpu), newton)
-            if v == "interface":
+            if v.startswith("interface"):
                 slips[v] = handle.slip_history
             elif v.startswith("connectors"):
                 slips[v] = np.stack([c.slip_history for c in handle], axis=1)

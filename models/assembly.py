@@ -68,8 +68,12 @@ class SpecimenModel:
         return float(kin), float(pot)
 
     def spring_energy(self) -> float:
-        """Potential energy of the built-in springs [J]."""
-        return float(sum(self.mbs.GetObjectOutput(s, _OVT.PotentialEnergy) for s in self.springs))
+        """Potential energy of the linear springs [J]: the built-in ones and those the
+        interface's objects carry (the normal springs on the compiled route)."""
+        e = float(sum(self.mbs.GetObjectOutput(s, _OVT.PotentialEnergy) for s in self.springs))
+        if self.interface is not None:
+            e += self.interface.linear_energy()
+        return e
 
     def joint_energy(self) -> tuple[float, float]:
         """(stored, dissipated) energy of the interface's Iwan elements at the last accepted
@@ -170,20 +174,26 @@ def build_specimen_model(specimen: Specimen, *, tangential: str = "iwan",
         for c in coords:
             m = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=node, coordinate=c))
             mbs.AddObject(CoordinateConstraint(markerNumbers=[mg, m]))
+    # on the compiled route the interface's own objects carry the normal springs (one
+    # object per point instead of two: the extra objects cost about a third of the linear
+    # model, benchmarks/bench_beam.py); else built-in springs
+    merged = tangential == "iwan" and not joint_elements
     pairs, springs = [], []
     for x, p, kn in zip(pts.x, pts.params, pts.normal_stiffness):
         ma = _marker_at(mbs, ea, ae, 0.0, x, +0.5 * tl)
         mb = _marker_at(mbs, eb, be, s.lap_start, x, -0.5 * tl)
         pairs.append((ma, mb))
         kt = p.KT if tangential == "linear" else 0.0
-        springs.append(mbs.AddObject(ObjectConnectorCartesianSpringDamper(
-            markerNumbers=[ma, mb], stiffness=[kt, float(kn), 0.0], damping=[0.0, 0.0, 0.0])))
+        if not merged:
+            springs.append(mbs.AddObject(ObjectConnectorCartesianSpringDamper(
+                markerNumbers=[ma, mb], stiffness=[kt, float(kn), 0.0], damping=[0.0, 0.0, 0.0])))
     if post_step is not None:
         mbs.SetPostStepUserFunction(post_step)
     iface = None
     if tangential == "iwan":
         joints = [IwanJoint(p) for p in pts.params] if joint_elements else list(pts.params)
-        iface = add_iwan_interface(mbs, pairs, joints, axis=[1.0, 0.0, 0.0])
+        normal = [[0.0, float(kn), 0.0] for kn in pts.normal_stiffness] if merged else None
+        iface = add_iwan_interface(mbs, pairs, joints, axis=[1.0, 0.0, 0.0], stiffness=normal)
     xs = s.sensor_position
     if xs <= s.beam_length:
         sm = _marker_at(mbs, ea, ae, 0.0, xs, 0.0)

@@ -401,3 +401,71 @@ def test_records_read_during_the_run_equal_records_read_once():
         np.testing.assert_array_equal(a[key], b[key])
     idx = [k - 1 for k in range(1, iface.n_records + 1) if k % 97 == 5][:len(seen)]   # row k-1
     np.testing.assert_array_equal(np.array(seen), b["dissipated_energy"][idx])
+
+
+def test_springs_carried_by_the_interface_equal_built_in_springs():
+    """``stiffness`` puts linear springs along the global axes into the joints' own objects:
+    the trajectory equals the same model with built-in Cartesian springs (to round-off), and
+    linear_energy equals Exudyn's potential energy of those springs; the Python route adds
+    built-in springs instead, with the same result."""
+    a = np.array([0.6, 0.8, 0.0])
+    k = [[2e5, 0.0, 1e5], [0.0, 3e5, 1e5], [1e5, 1e5, 0.0]]
+    results, energies = [], []
+    for variant in ("builtin", "carried", "python"):
+        SC = exu.SystemContainer()
+        mbs = SC.AddSystem()
+        ground = mbs.AddObject(ObjectGround())
+        pairs, springs = [], []
+        for i in range(3):
+            v0 = list((2.0 + i) * a + np.array([0.0, 0.0, 0.5]))
+            nd = mbs.AddNode(NodePoint(initialVelocities=v0))
+            mbs.AddObject(MassPoint(nodeNumber=nd, mass=1.0))
+            m0 = mbs.AddMarker(MarkerBodyPosition(bodyNumber=ground, localPosition=[i, 0, 0]))
+            m1 = mbs.AddMarker(MarkerNodePosition(nodeNumber=nd))
+            if variant == "builtin":
+                springs.append(mbs.AddObject(ObjectConnectorCartesianSpringDamper(
+                    markerNumbers=[m0, m1], stiffness=k[i])))
+            pairs.append((m0, m1))
+        joints = [IwanJoint(P) for _ in range(3)] if variant == "python" else [P] * 3
+        h = add_iwan_interface(mbs, pairs, joints, axis=a,
+                               stiffness=None if variant == "builtin" else k)
+        assert h.route == ("python" if variant == "python" else "symbolic")
+        if variant == "carried":
+            assert mbs.systemData.NumberOfObjects() == 7     # ground, 3 masses, 3 joints
+        mbs.Assemble()
+        mbs.SolveDynamic(settings(1e-5, 2000))
+        if variant == "carried":          # the overflow probe sees the joint alone
+            u, F = h.slip_history[-1], h.force_history[-1]
+            for i, st in enumerate(h._states):
+                assert abs(st.probe(float(u[i])) - F[i]) <= 1e-9 * P.Fs
+        results.append(h.slip_history)
+        if variant == "builtin":
+            energies.append(sum(mbs.GetObjectOutput(s, exu.OutputVariableType.PotentialEnergy)
+                                for s in springs))
+        else:
+            energies.append(h.linear_energy())
+    amp = np.max(np.abs(results[0]))
+    assert amp > P.phi_max
+    for r in results[1:]:
+        assert np.max(np.abs(r - results[0])) <= 1e-9 * amp
+    assert energies[0] > 0.0
+    for e in energies[1:]:
+        assert e == pytest.approx(energies[0], rel=1e-9)
+
+
+def test_bad_stiffness_is_refused_with_the_argument_named():
+    SC = exu.SystemContainer()
+    mbs = SC.AddSystem()
+    ground = mbs.AddObject(ObjectGround())
+    nd = mbs.AddNode(NodePoint())
+    mbs.AddObject(MassPoint(nodeNumber=nd, mass=1.0))
+    m0 = mbs.AddMarker(MarkerBodyPosition(bodyNumber=ground))
+    m1 = mbs.AddMarker(MarkerNodePosition(nodeNumber=nd))
+    for bad, match in (([[1.0, 2.0]], "shape"), ([[1.0, -2.0, 0.0]], ">= 0"),
+                       ([[1.0, math.nan, 0.0]], "finite"), ("x", "stiffness")):
+        with pytest.raises(ValueError, match=match):
+            add_iwan_interface(mbs, [(m0, m1)], [P], axis=[1, 0, 0], stiffness=bad)
+    chain = Chain([1.0])
+    with pytest.raises(ValueError, match="stiffness applies to position markers"):
+        add_iwan_interface(chain.mbs, [(chain.marker(-1), chain.marker(0))], [P],
+                           stiffness=[[1.0, 0.0, 0.0]])

@@ -91,8 +91,7 @@ def test_symbolic_expression_equals_trial_when_within_depth_and_overflow_is_dete
         overflows = 0
         for du in _random_walk(rng, 3000):
             us, Fr = j.reversal_points()
-            st.set_stack(us.tolist(), Fr.tolist())
-            st.set_uc(j.displacement)
+            st.set_state(us.tolist(), Fr.tolist(), j.displacement)
             target = j.displacement + du
             uvar.SetValue(target)
             got = expr.Evaluate()
@@ -195,3 +194,28 @@ def test_fifty_symbolic_connectors_with_two_threads_finish():
                          timeout=240)
     assert out.returncode == 0, out.stderr[-2000:]
     assert "done 301" in out.stdout
+
+
+def test_branch_shortcut_interval_is_empty_at_rest_and_the_law_still_matches():
+    """The shortcut applies for trials strictly between u_c and the branch's bound; a point at
+    rest (direction 0) holds bound = u_c, so every trial goes to the exact law. Checked on
+    the virgin point at rest and on committed states with a stack, against IwanJoint."""
+    from iwan_element.exudyn._symbolic_law import branch_of
+    assert branch_of([], [], 0.0) == (0.0, 0.0, 1.0, 1.0, 0.0, 0.0)
+    assert branch_of([2e-4], [50.0], 2e-4)[4:] == (0.0, 2e-4)       # at its reversal point
+    ur, Fr, c1, c2, s, bound = branch_of([2e-4], [50.0], 1e-4)
+    assert (ur, Fr, c1, c2, s, bound) == (2e-4, 50.0, 0.5, 2.0, -1.0, -2e-4)
+    st, uvar, expr = _state_expression(8)
+    j = IwanJoint(P)
+    for path in ([], [3e-4, -1e-4], [3e-4, -1e-4, 2e-4]):
+        j.reset()
+        for x in path:
+            j.trial(x)
+            j.commit()
+        us, Fr = j.reversal_points()
+        st.set_state(us.tolist(), Fr.tolist(), j.displacement)
+        for du in (-5e-4, -1e-5, -1e-9, 1e-9, 1e-5, 5e-4):
+            uvar.SetValue(j.displacement + du)
+            want = j.trial(j.displacement + du)[0]
+            j.revert()
+            assert abs(expr.Evaluate() - want) <= 1e-12 * P.Fs

@@ -43,6 +43,7 @@ class _PostStepDispatcher:
         self.chained = chained
         self.connectors = []       # in creation order
         self.accepts = ()          # their accept functions, renewed with the views
+        self.solo = None           # the accept function if there is exactly one
         self.last_t = _NAN
         self.running = False
         self.stale = True          # a new solve was announced: check settings, renew views
@@ -57,8 +58,12 @@ class _PostStepDispatcher:
         def post_step_dispatcher(mbs, t):
             if t > disp.last_t and not disp.stale and not disp.running:
                 disp.last_t = t    # the usual case: the next accepted step of this run
-                for a in disp.accepts:
-                    a(t)
+                solo = disp.solo
+                if solo is not None:
+                    solo(t)
+                else:
+                    for a in disp.accepts:
+                        a(t)
                 f = disp.chained
                 if f is None:
                     return True
@@ -162,6 +167,7 @@ class _PostStepDispatcher:
             else:
                 c._refresh(mbs)
         self.accepts = tuple(c._accept for c in self.connectors)
+        self.solo = self.accepts[0] if len(self.accepts) == 1 else None
 
     def new_solve(self, mbs) -> None:
         """Start of a solve: refuse settings the connectors cannot serve, then refresh."""

@@ -10,7 +10,7 @@ function of the end point alone (force, stored and dissipated energy are closed 
 the branch, REFERENCE.md section 2), so the ``IwanJoint`` is committed there only lazily —
 at the next reversal or loop closure (then it is brought to the last point of the branch,
 then walks the event exactly), at the end of the run and whenever the connector is read.
-Only such events rewrite the law's reversal stack.
+Only such events rewrite the law's branch and reversal stack.
 
 Records hold ``(t, u)`` per accepted step; force and energies are replayed from a copy of
 the joint taken when the records start (the same ``trial``/``commit`` sequence, so the
@@ -36,7 +36,8 @@ from exudyn.itemInterface import (ObjectConnectorCartesianSpringDamper,
                                   ObjectConnectorCoordinateSpringDamper)
 
 from ._slip_map import SlipMap
-from ._symbolic_law import SymbolicIwanState, cartesian_law, coordinate_law, make_probe
+from ._symbolic_law import (SymbolicIwanState, branch_of, cartesian_law, coordinate_law,
+                            make_probe)
 
 __all__: list[str] = []
 
@@ -147,6 +148,10 @@ def law_window(joint, depth: int) -> tuple[float, float]:
     return ends[0], ends[1]
 
 
+#: Record values (t, u) kept in the list buffer at most until the next event (then moved to
+#: the array of the records).
+RECORD_BLOCK = 8192
+
 #: The post-Newton check is armed when the slip comes closer to the end of the law's exact
 #: window than this many times the largest slip increment of one step on the current branch
 #: segment (and the step that started it).
@@ -156,10 +161,13 @@ ARM_MARGIN = 10.0
 def _accept_function(conn, lazy_until):
     """The per-step work of one connector (see the module docstring)."""
     joint = conn._joint
-    depth = conn._state.depth
-    set_uc = conn._state.uc.SetValue
+    st = conn._state
+    depth = st.depth
+    set_uc = st.uc.SetValue
     read = conn._slip
-    rec = conn._rec.append if conn._record_on else None
+    buf = conn._buf             # (t, u) of the newest steps; list.append is ~3x faster than
+    rec = buf.append if conn._record_on else None      # array.append (moved at events)
+    keep = conn._rec.fromlist
     lo = hi = 0.0               # the open interval of plain continuations (empty: slow path)
     up = True
     dmax = 0.0                  # largest slip increment of one step on this branch segment
@@ -183,13 +191,19 @@ def _accept_function(conn, lazy_until):
         joint.commit()
         if joint.reversal_depth != n or conn._window:
             sync_stack(conn, t)
-        set_uc(u)
+        else:                        # same stack; the branch may start (from rest)
+            us, Fr = joint.reversal_points()
+            st.set_branch(*branch_of(us, Fr, u))
+            set_uc(u)
         conn._t_acc = t
         wa, wb = law_window(joint, depth)
         risky = not wa + margin < u < wb - margin
         if risky != conn._risky:
             conn._risky = risky
             conn._dispatcher.set_risky(conn, risky)
+        if len(buf) >= RECORD_BLOCK:
+            keep(buf)
+            buf.clear()
         if t < lazy_until and not risky:
             lo, hi, up = branch_interval(joint)
             lo, hi = max(lo, wa + margin), min(hi, wb - margin)
@@ -209,13 +223,13 @@ def _accept_function(conn, lazy_until):
         u = c0 + item(i)
         if lo < u < hi and t < lazy_until:
             if up:
-                if u - lo > dmax:
-                    dmax = u - lo
+                d = u - lo
                 lo = u
             else:
-                if hi - u > dmax:
-                    dmax = hi - u
+                d = hi - u
                 hi = u
+            if d > dmax:
+                dmax = d
             set_uc(u)
         else:
             event(t, u)
@@ -242,18 +256,20 @@ def flush_joint(conn) -> None:
 
 
 def sync_stack(conn, t=None) -> None:
-    """Write the joint's committed reversal stack to the law's variables (and check that
-    the step just committed read no point deeper than the expression holds)."""
+    """Write the joint's committed state (reversal stack, slip and the branch through it) to
+    the law's variables, and check that the step just committed read no point deeper than
+    the expression holds (possible only from a stack deeper than ``depth``)."""
     joint = conn._joint
     us, Fr = joint.reversal_points()
     us, Fr = us.tolist(), Fr.tolist()
     st = conn._state
-    if t is not None and st.disagrees(joint.displacement, joint.force):
+    if t is not None and (st.held > st.depth or conn._window) \
+            and st.disagrees(joint.displacement, joint.force):
         conn._overflows.append(t)
         _log.warning("Iwan connector %s at t=%g: the step closed loops beyond the %d reversal "
                      "points the symbolic law holds and could not be re-solved exactly; that "
                      "step's force was not exact (raise depth)", conn.objectNumber, t, st.depth)
-    st.set_stack(us, Fr)
+    st.set_state(us, Fr, joint.displacement)
     conn._window = False
 
 
@@ -326,8 +342,7 @@ def newton_check(conn, big: float) -> float:
         return 0.0                   # nothing to re-solve with (cannot happen in depth)
     k = max(0, len(states) - 1 - max(0, st.depth // 2 - 2))
     p, su, sF = states[k]
-    st.set_stack(su, sF)
-    st.set_uc(p)
+    st.set_state(su, sF, p)
     conn._window = True
     conn._n_resolved += 1
     _log.debug("Iwan connector %s: a step closes %d loops; re-solved from the state at u=%g",

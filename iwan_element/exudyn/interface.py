@@ -5,24 +5,26 @@ lap joint). Two routes, chosen automatically:
 
 * **symbolic** (every joint given as :class:`~iwan_element.IwanParameters`, a global axis or
   coordinate markers): each point's force is an Exudyn symbolic expression evaluated in C++
-  with no Python call and no Exudyn API call (:mod:`._interface_law`: the Masing branch
-  formula while the trial slip continues the point's branch, else the full exact law of
-  :mod:`._symbolic_law`). Once per accepted step one Python post-step reads the accepted
+  with no Python call and no Exudyn API call (:mod:`._symbolic_law`: the Masing branch
+  formula while the trial slip continues the point's branch, else the full exact law; the
+  same law as the connector's). Once per accepted step one Python post-step reads the accepted
   slips of all points (one product of a view of the system coordinates; ANCF Cable2D
   surface points by :mod:`._surface_slips`), commits all points at once in an
   :class:`~iwan_element.core.joint_bank.IwanJointBank`, writes the committed slips to
-  symbolic vectors of 6 (one ``SetVector`` per 6 points), and only for the points that
-  left their branch the new branch and reversal stack. The records keep the slips; forces
+  one symbolic 1 x n matrix (one ``SetMatrix``), and only for the points that
+  left their branch the new branch (five ``SetValue``) and, if it changed, the reversal
+  stack (vectors of 6). The records keep the slips; forces
   and energies are recomputed from them when read (an exact replay of the same commits).
 * **python** (joints given as elements following the protocol, e.g. effects, or a rotating
   ``axisMarker``): one :func:`~iwan_element.exudyn.add_iwan_connector` per point, with the
   same records in the handle.
 
 Exactness of the symbolic route: the expression holds the newest ``depth`` reversal points
-of each point; a step that closes so many loops that it needs an older point is detected
+of each point, so it is exact for any step from a stack of at most ``depth`` points; a step
+from a deeper stack that closes so many loops that it needs an older point is detected
 after the exact commit (the bank walks the full stack), by evaluating the law at the
-accepted slip with the previous state (only for points whose stack got shorter, i.e. that
-closed a loop). Such a step is logged as a warning and its time is listed in
+accepted slip with the previous state (only for points whose stack was deeper than
+``depth`` and got shorter, i.e. that closed a loop). Such a step is logged as a warning and its time is listed in
 :attr:`IwanInterface.overflow_times`; raise ``depth`` if that happens (it needs
 ``depth // 2`` loop closures inside one time step).
 """
@@ -43,9 +45,10 @@ from ..core._validation import check_scalar
 from ._slip_map import SlipMap
 from ._slip_records import SlipRecords
 from ._surface_slips import SurfaceSlips
-from ._symbolic_law import SymbolicIwanState, cartesian_law, coordinate_law, make_probe
+from ._symbolic_law import (VIRGIN, SymbolicIwanState, cartesian_law, committed_slip_matrix,
+                            coordinate_law, make_probe)
 from ._dispatch import _dispatcher_for, _installed_post_step
-from ._interface_law import CHUNK, VIRGIN, InterfacePointLaw, committed_slip_vectors
+from ._interface_springs import add_builtin_springs, check_stiffness, linear_energy
 from ._markers import _COORDINATE_MARKERS, _POSITION_MARKERS, _marker_type, _unit_axis
 from .connector import add_iwan_connector
 
@@ -71,8 +74,6 @@ class IwanInterface:
         self._route = route
         self._allow_adaptive_explicit = False
         self._rec = SlipRecords(len(pairs), record)
-        self._laws = []
-        self._held = [0] * len(pairs)   # stack length the symbolic variables hold, per point
         self._objects = []
         self._connectors = []       # python route
         self._bank = None           # symbolic route
@@ -84,6 +85,8 @@ class IwanInterface:
         self._read = None           # the slip map, once a run started
         self._map = None
         self._joints = ()
+        self._stiffness = None      # linear springs carried by the interface, (n, 3) or None
+        self._spring_objects = []   # python route: built-in springs carrying them
 
     # ------------------------------------------------------------------ read-only set-up
     @property
@@ -185,6 +188,11 @@ class IwanInterface:
                 "stored_energy": tab["work"] - tab["diss"], "dissipated_energy": tab["diss"],
                 "work": tab["work"]}
 
+    def linear_energy(self) -> float:
+        """Potential energy [J] of the linear springs given as ``stiffness`` at the current
+        configuration (0 without them): Exudyn reports none for a user-function object."""
+        return linear_energy(self._mbs, self._pairs, self._stiffness)
+
     def reset(self) -> None:
         """Return every joint to its virgin state and clear the records (for a new run)."""
         if self._route == "python":
@@ -192,12 +200,10 @@ class IwanInterface:
                 c.reset()
             return
         self._bank.reset()
-        for s, law in zip(self._states, self._laws):
+        for s in self._states:
             s.set_stack([], [])
-            law.set_branch(*VIRGIN)
-        self._held = [0] * self.n_points
-        for v in self._uc_vectors:
-            v.SetVector([0.0] * v.NumberOfItems())
+            s.set_branch(*VIRGIN)
+        self._set_uc([[0.0] * self.n_points])
         self._rec.clear()
         self._overflows.clear()
         self._t_acc = -math.inf
@@ -255,9 +261,7 @@ class IwanInterface:
         events = bank.commit(u)
         if events.size:
             self._events(t, u, events)
-        ul = u.tolist()
-        for f, a, b in self._set_uc:
-            f(ul[a:b])
+        self._set_uc([u.tolist()])
         self._t_acc = t
         if self._rec.on:
             self._rec.append(t, u)
@@ -269,31 +273,39 @@ class IwanInterface:
         A walk pushes at most one reversal point and pops two per closed loop (one when it
         returns to the virgin curve or meets a reversal point within the tolerance), so a
         stack that did not get shorter means no closed loop: a plain reversal (one more
-        point) or no change of the stack at all (same length). The law held every point such
-        a step reads, so only steps that shortened the stack are checked against the exact
-        force, and an unchanged stack is not written again."""
+        point) or no change of the stack at all (same length). Only a step that closed a loop
+        from a stack deeper than the law holds can have read a point the law does not hold,
+        so only those are checked against the exact force, and an unchanged stack is not
+        written again."""
         bank = self._bank
-        F = bank.F
-        held = self._held
-        for i in events.tolist():
-            s = self._states[i]
-            n1 = len(bank.us[i])
-            if n1 < held[i] and s.disagrees(float(u[i]), float(F[i])):
-                self._overflows.append(t)
-                _log.warning("Iwan interface point %d at t=%g: the step closed loops beyond "
-                             "the %d reversal points the symbolic law holds; that step's "
-                             "force was not exact (raise depth)", i, t, s.depth)
-            if n1 != held[i]:
-                s.set_stack(bank.us[i], bank.Fr[i])
-                held[i] = n1
-            self._laws[i].set_branch(float(bank.bur[i]), float(bank.bFr[i]), float(bank.bc1[i]),
-                                     float(bank.bc2[i]), float(bank.bdir[i]),
-                                     float(bank.bound[i]))
+        states = self._states
+        us_all, Fr_all = bank.us, bank.Fr
+        idx = events.tolist()
+        br = np.array((bank.bur, bank.bFr, bank.bc1, bank.bc2, bank.bound, bank.bdir))[:, events]
+        br[2:4] *= br[5]                           # s1 = c1 s, s2 = c2 s
+        rest = br[5] == 0.0
+        if rest.any():                             # at rest: bound = u_c (see the law)
+            br[4, rest] = u[events[rest]]
+        br = br.T.tolist()
+        for k, i in enumerate(idx):
+            s = states[i]
+            held = s.held
+            us = us_all[i]
+            n1 = len(us)
+            if n1 != held:
+                if n1 < held and held > s.depth and s.disagrees(float(u[i]), float(bank.F[i])):
+                    self._overflows.append(t)
+                    _log.warning("Iwan interface point %d at t=%g: the step closed loops beyond "
+                                 "the %d reversal points the symbolic law holds; that step's "
+                                 "force was not exact (raise depth)", i, t, s.depth)
+                s.set_stack(us, Fr_all[i])
+            s.set_branch_values(br[k])
 
 
 def add_iwan_interface(mbs, markerPairs, joints, *, axis=None, axisMarker=None, offsets=None,
                        record: bool = True, depth: int = 8, reversal_tol: float = 1e-12,
-                       name: str = "", allow_adaptive_explicit: bool = False) -> IwanInterface:
+                       name: str = "", allow_adaptive_explicit: bool = False,
+                       stiffness=None) -> IwanInterface:
     """Add a joint at each of many contact points, committed together once per step.
 
     Parameters
@@ -327,6 +339,12 @@ def add_iwan_interface(mbs, markerPairs, joints, *, axis=None, axisMarker=None, 
     allow_adaptive_explicit : bool, keyword-only
         Allow ODE23/DOPRI5 with automatic step size (refused by default, as for
         :func:`~iwan_element.exudyn.add_iwan_connector`).
+    stiffness : array_like, shape (n_points, 3), optional, keyword-only
+        Linear springs ``[kx, ky, kz]`` [N/m] along the global axes on each pair (position
+        markers), e.g. the normal contact stiffness: the same forces as a built-in
+        ``CartesianSpringDamper`` on the pair, but carried by the joint's own object on the
+        symbolic route (one object per point instead of two). Their potential energy is
+        :meth:`IwanInterface.linear_energy`.
 
     Returns
     -------
@@ -356,11 +374,17 @@ def add_iwan_interface(mbs, markerPairs, joints, *, axis=None, axisMarker=None, 
         raise ValueError(f"offsets must have {len(pairs)} entries, got {len(offs)}")
     offs = [check_scalar(f"offsets[{i}]", o) for i, o in enumerate(offs)]
     kind = _pair_kind(mbs, pairs, axis, axisMarker)
+    springs = check_stiffness(stiffness, len(pairs), kind)
     all_params = all(isinstance(j, IwanParameters) for j in joints)
     if not all_params or axisMarker is not None:
-        return _python_interface(mbs, pairs, joints, kind, axis, axisMarker, offs, record,
-                                 reversal_tol, name, allow_adaptive_explicit)
+        iface = _python_interface(mbs, pairs, joints, kind, axis, axisMarker, offs, record,
+                                  reversal_tol, name, allow_adaptive_explicit)
+        if springs is not None:
+            iface._stiffness = springs
+            iface._spring_objects = add_builtin_springs(mbs, pairs, springs, name)
+        return iface
     iface = IwanInterface(mbs, pairs, kind, "symbolic", record)
+    iface._stiffness = springs
     iface._allow_adaptive_explicit = bool(allow_adaptive_explicit)
     iface._offsets = offs
     iface._axis = _unit_axis(axis, "axis") if kind == "position" else None
@@ -368,16 +392,13 @@ def add_iwan_interface(mbs, markerPairs, joints, *, axis=None, axisMarker=None, 
     iface._bank = bank
     dispatcher = _dispatcher_for(mbs)
     iface._dispatcher = dispatcher
-    vecs = committed_slip_vectors(len(joints))
-    iface._uc_vectors = vecs
+    ucm = committed_slip_matrix(len(joints))
+    iface._uc_matrix = ucm
+    iface._set_uc = ucm.SetMatrix
     for i, p in enumerate(joints):
-        st = SymbolicIwanState(p, int(depth), float(bank.tol[i]))
-        law = InterfacePointLaw(st, vecs[i // CHUNK][i % CHUNK])
+        st = SymbolicIwanState(p, int(depth), float(bank.tol[i]), uc=ucm.Get(0, i))
         iface._states.append(st)
-        iface._laws.append(law)
-        iface._objects.append(_symbolic_object(mbs, iface, i, law, f"{name}{i}" if name else ""))
-    iface._set_uc = [(v.SetVector, k * CHUNK, k * CHUNK + v.NumberOfItems())
-                     for k, v in enumerate(vecs)]
+        iface._objects.append(_symbolic_object(mbs, iface, i, st, f"{name}{i}" if name else ""))
     dispatcher.add(iface)
     _log.debug("added %r", iface)
     return iface
@@ -425,8 +446,7 @@ def _pair_kind(mbs, pairs, axis, axisMarker) -> str:
     return kind
 
 
-def _symbolic_object(mbs, iface, i, law, name):
-    st = law
+def _symbolic_object(mbs, iface, i, st, name):
     m0, m1 = (int(m) for m in iface._pairs[i])
     off = iface._offsets[i]
     if iface._kind == "coordinate":
@@ -436,14 +456,16 @@ def _symbolic_object(mbs, iface, i, law, name):
             name=name, markerNumbers=[m0, m1], stiffness=0.0, damping=0.0,
             springForceUserFunction=fn, visualization=_HIDDEN)
     else:
-        fn = CreateSymbolicUserFunction(mbs, cartesian_law(st, iface._axis, off),
+        k = None if iface._stiffness is None else iface._stiffness[i]
+        fn = CreateSymbolicUserFunction(mbs, cartesian_law(st, iface._axis, off, k),
                                         "springForceUserFunction",
                                         itemTypeName="ObjectConnectorCartesianSpringDamper")
         item = ObjectConnectorCartesianSpringDamper(
             name=name, markerNumbers=[m0, m1], springForceUserFunction=fn,
             visualization=_HIDDEN)
     iface._functions.append(fn)
-    law.state.probe = make_probe(mbs, fn, iface._kind, iface._axis, off)
+    st.probe = make_probe(mbs, fn, iface._kind, iface._axis, off,
+                          None if iface._stiffness is None else iface._stiffness[i])
     return mbs.AddObject(item)
 
 
