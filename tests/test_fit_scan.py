@@ -1,5 +1,5 @@
-"""The 1-D scans that start the break-away and backlash fits (diagnose/_model.scan_starts,
-refine_scanned), checked on records made by routes independent of the effect classes: a
+"""The 1-D scans that start the break-away and backlash fits (diagnose/_model.scan_starts),
+checked on records made by routes independent of the effect classes: a
 Jenkins slider bank with static/kinetic thresholds and a gap-in-series stepper written here."""
 import numpy as np
 import pytest

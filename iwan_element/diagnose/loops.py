@@ -173,8 +173,6 @@ class _Fitter:
                 self.nfev += len(grid)
             res, nfev = M.fit(mdl, starts if fast else starts[:2],
                               max_nfev=200 if fast else 60)
-            if grid is not None and getattr(EFFECTS[scan], "fit_scan_refine", False):
-                res = M.refine_scanned(mdl, res, k, grid)
             self.nfev += nfev
             full = self.model(names)
             r = full.residual(res.x)
