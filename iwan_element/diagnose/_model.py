@@ -104,6 +104,35 @@ def fit(model: LoopModel, starts, *, max_nfev: int):
     return best, nfev
 
 
+def hop(model: LoopModel, res, *, max_nfev: int, rounds: int = 2):
+    """Restarts around a fit whose misfit has jumps (an effect with ``force_jumps``).
+
+    With break-away, the spike sliders (``S`` at ``phi_max``) break all at once: whether
+    they break in a given half cycle is a yes/no event of ``phi_max`` and the ratio, and it
+    changes the force of the rest of that half cycle, so the misfit has cliffs in these two
+    variables and a fit can stop on the wrong side of one (measured: 1.29 x the noise where
+    the truth gives 1.03). Each round restarts from the fit with ``ln phi_max`` moved by
+    +-0.01, +-0.03 and each jumping effect's first variable by the same steps, and keeps
+    the best; it stops when a round finds nothing better. Returns ``(result, nfev)``.
+    """
+    ks = [0] + [var_index(model.names, nm) for nm in model.names
+                if getattr(EFFECTS[nm], "force_jumps", False)]
+    nfev = 0
+    for _ in range(rounds):
+        starts = []
+        for k in ks:
+            for d in (-0.03, -0.01, 0.01, 0.03):
+                z = res.x.copy()
+                z[k] += d
+                starts.append(z)
+        best, n = fit(model, starts, max_nfev=max_nfev)
+        nfev += n
+        if not best.cost < res.cost * (1.0 - 1e-9):
+            break
+        res = best
+    return res, nfev
+
+
 def var_index(names, name: str) -> int:
     """Position of the first fitting variable of effect ``name`` in a model's ``z``."""
     k = 3

@@ -173,6 +173,9 @@ class _Fitter:
                 self.nfev += len(grid)
             res, nfev = M.fit(mdl, starts if fast else starts[:2],
                               max_nfev=200 if fast else 60)
+            if any(getattr(EFFECTS[nm], "force_jumps", False) for nm in names):
+                res, n_hop = M.hop(mdl, res, max_nfev=200 if fast else 60)
+                nfev += n_hop
             self.nfev += nfev
             full = self.model(names)
             r = full.residual(res.x)

@@ -193,6 +193,9 @@ class BreakAway(_Effect):
     #: fit started at 1 has no gradient to follow.
     fit_scan = tuple(1.0 + 0.1 * k for k in range(21))
     needs_energy = False
+    #: The spike's sliders break all at once: the force jumps, and whether they break in a
+    #: half cycle is a yes/no event of the parameters (fits restart around their result).
+    force_jumps = True
 
     def __init__(self, inner, *, ratio: float):
         super().__init__(inner)
