@@ -71,18 +71,31 @@ class _Pieces:
         z = np.zeros(a.size)
         self.state = {"a": a, "b": b, "w": w, "rat": rat, "sg": sg, "s": z, "c": z.copy(),
                       "slide": z.copy()}
+        self._tot = self._last = None
+
+    @property
+    def totals(self):
+        """``int rho phi^k`` over every row, ``k = 0, 1, 2`` (cached per state)."""
+        if self._tot is None:
+            st = self.state
+            self._tot = self._moments(st, st["b"], True, 3)
+        return self._tot
 
     # ---- moments of the density over [a, x] (x may be a 2-D array of limits)
-    def _cont(self, a, x, k):
-        q = self.p + k
-        return self.C * self.pm ** k * ((x / self.pm) ** q - (a / self.pm) ** q) / q
-
-    def _moments(self, st, x, k, broken):
-        """``int rho phi^k`` over the broken part ``[a, x]`` of every row (atoms: all of
-        their weight if ``broken``)."""
+    def _moments(self, st, x, broken, n):
+        """``int rho phi^k``, ``k < n``, over the broken part ``[a, x]`` of every row (point
+        masses: all of their weight where ``broken``)."""
         atom = st["w"] > 0.0
-        cont = self._cont(st["a"], np.where(atom, st["a"], x), k)
-        return np.where(atom, st["w"] * st["a"] ** k * broken, cont)
+        a = st["a"]
+        xr = np.where(atom, a, x) / self.pm
+        ar = a / self.pm
+        px, pa = xr ** self.p, ar ** self.p
+        out = []
+        for k in range(n):
+            cont = self.C * self.pm ** k * (px - pa) / (self.p + k)
+            out.append(np.where(atom, st["w"] * a ** k * broken, cont))
+            px, pa = px * xr, pa * ar
+        return out
 
     def _limit(self, st, d, delta):
         """Broken part of each row after a travel ``delta`` (>= 0, any shape ending in the
@@ -104,8 +117,13 @@ class _Pieces:
         st = self.state
         dl = np.asarray(delta, float)[..., None]
         x, brk, s_d, c_d, raw, den = self._limit(st, d, dl)
-        M0t, M1t = self._moments(st, st["b"], 0, True), self._moments(st, st["b"], 1, True)
-        M0b, M1b = self._moments(st, x, 0, brk), self._moments(st, x, 1, brk)
+        M0t, M1t = self.totals[:2]
+        if dl.ndim == 1:                 # one step (element route): kept for advance()
+            Mb = self._moments(st, x, brk, 3)
+            self._last = (d, float(delta), x, brk, s_d, c_d, Mb)
+        else:
+            Mb = self._moments(st, x, brk, 2)
+        M0b, M1b = Mb[:2]
         F = M1b + s_d * (M1t - M1b) + (c_d + dl) * (M0t - M0b)
         inside = (st["w"] == 0.0) & (raw > st["a"]) & (raw < st["b"]) & (den > 0.0)
         xs = np.where(inside, x, self.pm)
@@ -118,9 +136,13 @@ class _Pieces:
         """Move the state by a travel ``delta >= 0`` in direction ``d``; returns the signed
         work done on the banks [J] (exact: stick to ``r phi``, then slide at ``phi``)."""
         st = self.state
-        x, brk, s_d, c_d, _, _ = self._limit(st, d, delta)
-        M = [self._moments(st, st["b"], k, True) for k in range(3)]
-        Mb = [self._moments(st, x, k, brk) for k in range(3)]
+        last = self._last
+        if last is not None and last[0] == d and last[1] == delta:
+            x, brk, s_d, c_d, Mb = last[2:]
+        else:
+            x, brk, s_d, c_d, _, _ = self._limit(st, d, delta)
+            Mb = self._moments(st, x, brk, 3)
+        M = self.totals
         Mu = [t - b_ for t, b_ in zip(M, Mb)]
         r = st["rat"]
         work_b = ((0.5 * r * r - r - 0.5 * s_d * s_d + s_d) * Mb[2]
@@ -141,17 +163,15 @@ class _Pieces:
                                            np.flatnonzero(has_u) * 2 + 1]), kind="stable")
         new = {key: np.concatenate([lo[key], hi[key]])[order] for key in st}
         self.state = _merge(new)
+        self._tot = self._last = None
         return float(work @ st["sg"])
 
     def stored(self) -> float:
         """Signed elastic energy of the banks [J]: ``0.5 int rho e^2``."""
         st = self.state
-        M = [self._moments(st, st["b"], k, True) for k in range(3)]
+        M = self.totals
         s, c = st["s"], st["c"]
         return 0.5 * float((s * s * M[2] + 2.0 * s * c * M[1] + c * c * M[0]) @ st["sg"])
-
-    def copy_state(self) -> dict:
-        return dict(self.state)
 
 
 def _merge(st: dict) -> dict:
