@@ -10,7 +10,9 @@ force offset of 50-300 N and a displacement offset of 5-20 um, and starts after 
 samples. Clean records (offsets only) and pure-noise forces must name nothing.
 
 Pass criteria per hidden effect: the effect named first is the hidden one, and the RMS
-residual after is within 1.3 x the noise RMS.
+residual after is within 1.3 x the noise RMS. Clean records must succeed, pure noise must not.
+Every record also checks that ``success``, the report's status column and the warnings
+agree (:func:`agree`).
 
     python benchmarks/bench_diagnosis.py [--sizes 0.5 3] [--jobs 2] [--effects ...] [--seed 1000]
                                          [--cases N] [--timing REPEATS]
@@ -81,6 +83,31 @@ def _parameter(p, env, name, size):
     return 1.0 + x if key == "ratio" else x
 
 
+def agree(g) -> bool:
+    """``success``, the report's status column and the warnings say the same: a parameter
+    called identified in the status column has a finite stderr of at most half its value
+    (chi: of chi + 1) and is not at a bound of its search range; one that is not is named in
+    a warning; ``success`` holds only when Fs, KT and chi are identified."""
+    f = g.fit
+    rows = {line.split()[0]: line for line in f.report().splitlines()
+            if line.strip().split(" ")[0] in ("Fs", "KT", "chi", "beta") and "identified" in line}
+    warns = " | ".join(tuple(f.warnings) + tuple(g.warnings))
+    ok = True
+    for k in ("Fs", "KT", "chi", "beta"):
+        v, se = getattr(f.params, k), f.stderr.get(k, float("nan"))
+        scale = abs(v + 1.0) if k == "chi" else abs(v)
+        bound = (k == "chi" and not -0.98 + 1e-6 < v < 1.0 - 1e-6) or \
+                (k == "beta" and not 1e-6 < v < 100.0 - 1e-6)
+        says = "NOT identified" not in rows[k] and " identified" in rows[k]
+        if says and (not np.isfinite(se) or se > 0.5 * scale or bound):
+            ok = False
+        if says != bool(f.identified[k]):
+            ok = False
+        if not says and k not in warns and "noise" not in warns:
+            ok = False
+    return ok and (not g.success or all(f.identified[k] for k in ("Fs", "KT", "chi")))
+
+
 def one(case):
     kind, joint, env, name, size, seed = case
     p = JOINTS[joint]
@@ -92,7 +119,7 @@ def one(case):
     t0 = time.perf_counter()
     g = diagnose(t, u, F)
     ratio = float(np.sqrt(np.mean((g.F - g.force_after) ** 2)) / (NOISE * p.Fs))
-    return case, g.effect, g.effects, ratio, g.success, time.perf_counter() - t0
+    return case, g.effect, g.effects, ratio, (g.success, agree(g)), time.perf_counter() - t0
 
 
 def timing(repeats: int) -> None:
@@ -161,20 +188,24 @@ def main(argv=None):
     with ProcessPoolExecutor(args.jobs) as ex:
         rows = list(ex.map(one, cases))
     print(f"{'hidden':<18} {'joint':<6} {'envelope':<10} {'size':>5} {'named':<36} "
-          f"{'resid/noise':>11} {'pass':>5} {'time':>6}")
+          f"{'resid/noise':>11} {'pass':>5} {'success':>7} {'agree':>5} {'time':>6}")
     passed = {}
-    for (kind, joint, env, name, size, _), eff, effs, ratio, ok, dt in rows:
+    n_agree = 0
+    for (kind, joint, env, name, size, _), eff, effs, ratio, (ok, agr), dt in rows:
         if kind == "effect":
             good = eff == name and ratio <= 1.3
         else:
             good = effs == () and (ok if kind == "clean" else not ok)
         label = name if kind == "effect" else kind
         passed.setdefault(label, []).append(good)
+        n_agree += agr
         print(f"{label:<18} {joint:<6} {env:<10} {size:5.2g} {' + '.join(effs) or 'none':<36} "
-              f"{ratio:11.3f} {'yes' if good else 'NO':>5} {dt:6.1f}")
+              f"{ratio:11.3f} {'yes' if good else 'NO':>5} {str(ok):>7} {'yes' if agr else 'NO':>5} "
+              f"{dt:6.1f}")
     print("\nsummary (passed / cases):")
     for label, v in passed.items():
         print(f"  {label:<18} {sum(v)}/{len(v)}")
+    print(f"  success, status column and warnings agree: {n_agree}/{len(rows)}")
     return 0
 
 

@@ -276,8 +276,8 @@ REGISTRY.update({
         amplitudes=np.array([1e-5, 1e-4]), n_samples=2, executor="serial", seed=0)),
         {"source": "object", "system": "object", "amplitudes": "values", "n_samples": "count"}),
     "PredictionBands": Entry(skip=_RESULT.format("propagate_uncertainty")),
-    "BreakAway": Entry(lambda: (ie.BreakAway, dict(inner=IwanJoint(P), ratio=1.5, n_sliders=16)),
-                       {"inner": "object", "ratio": "scalar", "n_sliders": "count"}),
+    "BreakAway": Entry(lambda: (ie.BreakAway, dict(inner=IwanJoint(P), ratio=1.5)),
+                       {"inner": "object", "ratio": "scalar"}),
 })
 
 

@@ -154,7 +154,7 @@ def test_slider_effects_match_an_independent_slider_bank():
     np.testing.assert_allclose(F, _jenkins_bank(u, k, (1 + a) * phi, (1 - a) * phi),
                                rtol=0, atol=1e-9 * P.Fs)
     r = 1.6
-    F = BreakAway(DiscreteIwan(P, 12), ratio=r, n_sliders=12).force_history(u)
+    F = BreakAway(DiscreteIwan(P, 12), ratio=r).force_history(u)
     np.testing.assert_allclose(F, _jenkins_bank(u, k, r * phi, r * phi, kin_up=phi, kin_dn=phi),
                                rtol=0, atol=1e-9 * P.Fs)
 

@@ -173,8 +173,10 @@ class _Fitter:
                 self.nfev += len(grid)
             res, nfev = M.fit(mdl, starts if fast else starts[:2],
                               max_nfev=200 if fast else 60)
-            if grid is not None and getattr(EFFECTS[scan], "fit_scan_refine", False):
-                res = M.refine_scanned(mdl, res, k, grid)
+            if fast and any(getattr(EFFECTS[nm], "force_jumps", False) for nm in names):
+                # (not for stacks run element by element: 16 more fits cost minutes there)
+                res, n_hop = M.hop(mdl, res, max_nfev=200 if fast else 60)
+                nfev += n_hop
             self.nfev += nfev
             full = self.model(names)
             r = full.residual(res.x)
