@@ -319,3 +319,75 @@ def test_make_effect_missing_parameter_and_bare_element():
         Backlash(Bare(), gap=0.1)
     with pytest.raises(ValueError, match="plain Iwan joint"):
         AsymmetricSlip(Backlash(IwanJoint(P), gap=1e-6), asymmetry=0.1)
+
+
+def _series_loop_by_parametric_route(g, c, w_r):
+    """Independent route for a virgin loading to joint displacement ``w_r`` and the full
+    unloading to ``-w_r`` of a joint in series with a gap ``g`` and a Hertz contact
+    ``delta = c |F|^(2/3)``: on a fine grid of the joint displacement ``w`` the joint force is
+    the closed-form backbone / Masing branch (REFERENCE.md sec. 2, eq. 13) and the drive is
+    explicit, ``u = w + sign(F) (g + c |F|^(2/3))``; ``F(u)`` is read off by interpolation."""
+    w_up = np.linspace(0.0, w_r, 40001)
+    F_up = backbone(w_up, P)
+    u_up = w_up + g + c * F_up ** (2.0 / 3.0)
+    w_dn = np.linspace(w_r, -w_r, 80001)
+    F_r = backbone(w_r, P)
+    F_dn = F_r - 2.0 * backbone((w_r - w_dn) / 2.0, P)
+    s = np.where(F_dn >= 0.0, 1.0, -1.0)
+    u_dn = w_dn + s * (g + c * np.abs(F_dn) ** (2.0 / 3.0))
+    return (u_up, F_up), (u_dn[::-1], F_dn[::-1])
+
+
+@pytest.mark.parametrize("w_r", [0.4 * A, 1.6 * A])
+def test_compliant_backlash_against_explicit_series_route(w_r):
+    g = 0.2 * A
+    c = 0.3 * A / P.Fs ** (2.0 / 3.0)              # contact compression 0.3 phi_max at Fs
+    (u_up, F_up), (u_dn, F_dn) = _series_loop_by_parametric_route(g, c, w_r)
+    u_top = u_up[-1]
+    up = np.linspace(0.0, u_top, 301)[1:]
+    dn = np.linspace(u_top, u_dn[0], 601)[1:]
+    el = Backlash(IwanJoint(P), gap=g, contact=c)
+    F = el.force_history(np.concatenate([up, dn]))
+    np.testing.assert_allclose(F[:up.size], np.interp(up, u_up, F_up), rtol=0, atol=2e-4 * P.Fs)
+    np.testing.assert_allclose(F[up.size:], np.interp(dn, u_dn, F_dn), rtol=0, atol=2e-4 * P.Fs)
+    # the re-engagement after the plateau is convex (stiffening) at first, where the rigid stop
+    # rises concavely: the slope grows over the first 5 % of Fs after contact
+    rise = F[up.size:]
+    neg = -rise[rise < 0]                          # in order of travel, from contact on
+    assert neg.size > 10
+    slopes = np.diff(neg[:np.searchsorted(neg, 0.05 * P.Fs)])
+    assert slopes.size >= 3 and slopes[-1] > 1.5 * slopes[0]
+
+
+def test_compliant_backlash_tends_to_the_rigid_stop_and_energy_balances():
+    g = 0.15 * A
+    _, u = history()
+    rigid = Backlash(IwanJoint(P), gap=g).force_history(u)
+    for c, tol in ((1e-4 * A / P.Fs ** (2 / 3), 2e-3), (1e-7 * A / P.Fs ** (2 / 3), 1e-5)):
+        soft = Backlash(IwanJoint(P), gap=g, contact=c).force_history(u)
+        np.testing.assert_allclose(soft, rigid, rtol=0, atol=tol * P.Fs)
+    # work = joint work + the contact's stored energy; over a closed cycle the loop area is
+    # the joint's dissipation (the contact is elastic), checked by the trapezoid rule
+    c = 0.2 * A / P.Fs ** (2 / 3)
+    u0 = 2.5 * A
+    uc = u0 * np.cos(np.linspace(0, 4 * np.pi, 8001))
+    el = Backlash(IwanJoint(P), gap=g, contact=c)
+    F, W, D = run(el, uc)
+    half = 4000
+    assert np.trapezoid(F[half:], uc[half:]) == pytest.approx(D[-1] - D[half], rel=2e-4)
+    assert W[-1] - W[half] == pytest.approx(D[-1] - D[half], rel=1e-9)
+    np.testing.assert_allclose(W[1:] - W[0], np.cumsum(0.5 * (F[1:] + F[:-1]) * np.diff(uc)),
+                               rtol=0, atol=2e-4 * P.Fs * A)
+    assert np.all(W - D >= -1e-12 * P.Fs * A)
+
+
+def test_compliant_backlash_coarse_steps_and_bad_contact():
+    rng = np.random.default_rng(5)
+    pts = np.concatenate([[0.0], rng.uniform(-2.5, 2.5, 30) * A])
+    fine = np.concatenate([np.linspace(a, b, 51)[1:] for a, b in zip(pts[:-1], pts[1:])])
+    el = Backlash(IwanJoint(P), gap=0.1 * A, contact=0.2 * A / P.Fs ** (2 / 3))
+    np.testing.assert_allclose(el.force_history(fine)[49::50], el.force_history(pts[1:]),
+                               rtol=0, atol=1e-9 * P.Fs)
+    for bad in (-1e-9, math.nan, math.inf):
+        with pytest.raises(ValueError, match="contact"):
+            Backlash(IwanJoint(P), gap=0.1 * A, contact=bad)
