@@ -1,110 +1,114 @@
-"""Backlash: a gap in series with the joint, closed through a compliant contact.
+"""Backlash: a gap in series with the joint, crossed against a small drag friction.
 
 Physics: free play between the driven part and the joint (clearance in a clevis, a loose
-band or a bolt hole before bearing). While the gap is open the joint carries no load: the
-force is zero and the joint's history (its slider states) is frozen; the gap is crossed at
-zero force and contact is made on the other side, where the joint is loaded again from the
-state it was left in. After a reversal the joint first unloads along its own Masing branch
-until its force is zero, and only then does the gap open. This is the dead-zone-in-series
-form (a gap element in series with a hysteretic spring); its signature in a loop is a flat
-zero-force segment of width ``2 gap`` after each reversal.
+band or a bolt hole before bearing). While the gap is open the joint carries only what it
+takes to move the free part across the gap; the joint's history (its slider states) is
+frozen at that force; contact is made on the other side, where the joint is loaded again
+from the state it was left in. After a reversal the joint first unloads along its own
+Masing branch, and only then does the gap open. This is the dead-zone-in-series form (a gap
+element in series with a hysteretic spring, e.g. Nordin and Gutman, Automatica 38 (2002)
+1633-1649, sec. 2); its signature in a loop is a plateau of width ``2 gap`` after each
+reversal.
 
-The contact that closes the gap is not rigid. Two curved bodies (a pin in a clevis hole, a
-band wrapping onto its drum, the rounded faces of a loose linkage) touch at a point or a
-line and the contact area grows with the load, so the contact *stiffens* with penetration.
-Hertz's solution for curved elastic bodies gives the compression ``delta`` under a force
-``P`` as ``P = (4/3) E* R^(1/2) delta^(3/2)`` (Johnson, *Contact Mechanics*, Cambridge
-University Press 1985, eq. 4.23; a power law ``P ~ delta^n`` is the usual engineering form
-of such contacts, e.g. Hunt and Crossley, J. Appl. Mech. 42 (1975) 440-445, and the
-standard gap-contact element of multibody codes). Here the contact compresses by
+The part that crosses the gap is not free: a loose link slides on its pin, a slack band
+rubs its drum, a rod passes a seal. That rubbing is a Coulomb friction ``drag`` in series
+with the joint *inside* the gap: the gap opening ``e = u - w`` (``w``: the joint's own
+displacement) sticks while ``|F| < drag``, slides at ``F = +-drag`` against the motion, and
+stops at the hard contacts ``e = +-gap``. The plateau therefore sits at ``-drag`` when the
+drive moves back and at ``+drag`` when it moves forward (a rigid-plastic element with a
+stroke limit in series with the joint), and each crossing dissipates ``2 gap drag``. The
+ARTS friction-damper records show this: their plateaus lie a few per cent of the sliding
+force on the side of the motion. ``drag = 0`` is the free gap crossed at zero force, which
+this element reproduces exactly.
 
-    delta(F) = contact * |F|^(2/3)            (``contact``: compliance [m N^(-2/3)])
-
-so that the gap-plus-contact is a nonlinear elastic spring with a dead zone,
-``F = sign(e) ((|e| - gap)_+ / contact)^(3/2)`` for a stretch ``e = u - w`` across it, in
-series with the joint (joint displacement ``w``); the force is found from the series
-equilibrium ``F_joint(w) = F_contact(u - w)`` (one increasing function of ``w``). Where the
-records show it, this is the shape of a re-engagement after the plateau: convex (soft while
-the contact is light, stiffening with the load), where a rigid stop in series with the
-concave Iwan branch can only rise concavely. The exponent 3/2 is Hertz's for curved bodies;
-``contact = 0`` is the rigid stop (the dead zone alone) and reproduces it exactly.
+A compliant Hertz contact closing the gap (``F ~ delta^(3/2)``, a convex re-engagement) was
+tried as the engagement law and rejected by the same records: refitted with the joint's
+shape, its compliance goes to zero (see the project notes of the damper work).
 """
 from __future__ import annotations
-
-import math
 
 from ._base import ParamSpec, _Effect, _find_zero
 
 __all__ = ["Backlash"]
 
-#: Exponent of the contact law ``F ~ delta^EXPONENT`` (Hertz, curved elastic bodies).
-EXPONENT = 1.5
+
+def _shifted(FK, f):
+    return FK[0] - f, FK[1]
 
 
 class Backlash(_Effect):
-    """A dead zone of total width ``2 gap`` in series with the joint, closed through a Hertz
-    contact (module docstring).
+    """A dead zone of total width ``2 gap`` in series with the joint, crossed against a
+    friction ``drag`` (module docstring).
 
-    The joint displacement ``w`` follows ``u - gap - delta(F)`` (contact pushing forward) or
-    ``u + gap + delta(F)`` (pushing back), with the contact compression
-    ``delta(F) = contact |F|^(2/3)``. When the motion reverses, the joint first unloads along
-    its branch and the contact relaxes until the force is zero, then the gap opens and ``u``
-    crosses it at zero force until contact is made on the other side. In the virgin state the
-    joint sits in the middle of the gap.
+    The joint displacement ``w`` follows ``u - gap`` (contact pushing forward) or
+    ``u + gap`` (contact pushing back). When the motion reverses, the joint first unloads
+    along its branch until its force is ``-+drag``, then the gap opens and ``u`` crosses it
+    at that force until contact is made on the other side. In the virgin state the joint
+    sits in the middle of the gap.
 
     Parameters
     ----------
     inner : joint element
     gap : float, keyword-only
         Half the dead-zone width [m], ``>= 0``.
-    contact : float, keyword-only
-        Compliance of the contact that closes the gap [m N^(-2/3)], ``>= 0``: the contact
-        compresses by ``contact |F|^(2/3)`` under the force ``F``. Default 0 (a rigid stop).
+    drag : float, keyword-only
+        Friction force [N] resisting the motion across the open gap, ``>= 0`` (default 0:
+        the gap is crossed at zero force).
     """
 
     effect = "backlash"
     specs = (ParamSpec("gap", "m", "half width of the free play in series with the joint",
                        ref="u_max", ref_power=-1, fit_bounds=(0.0, 0.5), fit_starts=(0.0, 0.01, 0.08)),
-             ParamSpec("contact", "m N^(-2/3)",
-                       "compliance of the Hertz contact closing the gap: compression "
-                       "contact |F|^(2/3)", default=0.0, fs_power=-2.0 / 3.0, ref="u_max",
-                       ref_power=-1, fit_bounds=(0.0, 0.3), fit_starts=(0.0, 0.01, 0.03)))
+             ParamSpec("drag", "N", "friction force resisting the motion across the open gap",
+                       default=0.0, fs_power=1, fit_bounds=(0.0, 0.5), fit_starts=(0.0, 0.05, 0.1)))
     #: Gap values (fraction of the largest |u|) scanned for a start before the fit: the gap
     #: must land near the record's zero-force plateau before the joint's shape can follow.
     fit_scan = (0.0, 0.003, 0.006, 0.01, 0.015, 0.02, 0.03, 0.045, 0.06, 0.08, 0.1, 0.13, 0.17,
                 0.22, 0.3)
 
-    def __init__(self, inner, *, gap: float, contact: float = 0.0):
+    def __init__(self, inner, *, gap: float, drag: float = 0.0):
         super().__init__(inner)
-        self._set_parameters({"gap": gap, "contact": contact})
+        self._set_parameters({"gap": gap, "drag": drag})
         self._reset_own()
 
     def _reset_own(self):
+        self._e = 0.0            # opening of the gap (u - w) while drag acts, in [-gap, gap]
+        self._Dg = 0.0           # energy dissipated by the drag [J]
         self._w = 0.0
         self._side = 0           # +1 / -1: in contact pushing forward / back; 0: gap open
 
     @property
     def joint_displacement(self) -> float:
-        """Committed displacement across the joint itself (excluding gap and contact) [m]."""
+        """Committed displacement across the joint itself (excluding the gap) [m]."""
         return self._w
 
-    def compression(self, F: float) -> float:
-        """Contact compression [m] under the force ``F`` [N] (signed like ``F``)."""
-        return math.copysign(self.contact * abs(F) ** (1.0 / EXPONENT), F)
-
-    def contact_force(self, e: float) -> tuple[float, float]:
-        """Force [N] and stiffness [N/m] of gap plus contact at the stretch ``e`` [m] across
-        them (``contact > 0``)."""
-        pen = abs(e) - self.gap
-        if pen <= 0.0:
-            return 0.0, 0.0
-        F = (pen / self.contact) ** EXPONENT
-        return math.copysign(F, e), EXPONENT * F / pen
-
     def _solve(self, u: float, v: float):
-        if self.contact > 0.0:
-            return self._solve_compliant(u, v)
+        if self.drag > 0.0:
+            return self._solve_drag(u, v)
         return self._solve_rigid(u, v)
+
+    def _solve_drag(self, u: float, v: float):
+        """Rigid stops with a friction ``drag`` across the gap: the gap opening ``e = u - w``
+        sticks while ``|F| < drag`` (or while pressed against a stop), slides at
+        ``F = +-drag`` otherwise, up to the stop at ``+-gap``."""
+        inner, g, fd, wc, ec = self._inner, self.gap, self.drag, self._w, self._e
+        w = u - ec
+        F, K = inner.trial(w, v)                 # gap element stuck
+        for s in (1.0, -1.0):
+            if s * F <= fd or self._side == s:  # stuck, or pressed against that stop
+                continue
+            Fc = inner.force - s * fd            # committed joint force is inside +-drag
+            if s * Fc >= 0.0:                    # (up to rounding: at +-drag already)
+                w_s = wc
+            else:
+                w_s = _find_zero(lambda x: _shifted(inner.trial(x, v), s * fd), wc, Fc, w,
+                                 F - s * fd)
+            if s * (u - w_s) >= g:               # slid up to the stop: contact there
+                w = u - s * g
+                F, K = inner.trial(w, v)
+                return w, int(s), F, K
+            return w_s, 0, s * fd, 0.0
+        return w, self._side, F, K
 
     def _solve_rigid(self, u: float, v: float):
         """Joint displacement ``w``, contact side, force and tangent at ``u`` (rigid stop)."""
@@ -130,60 +134,11 @@ class Backlash(_Effect):
             return w_other, -side, F, K
         return w0, 0, inner.trial(w0, v)[0], 0.0
 
-    def _solve_compliant(self, u: float, v: float):
-        """Series equilibrium ``h(w) = F_joint(w) - F_contact(u - w) = 0``: ``h`` increases
-        with ``w`` (both parts have a non-negative tangent), so its root is bracketed by
-        stepping away from the committed ``w`` and found by Newton steps safeguarded by
-        bisection. Returns ``w``, side, force, series tangent."""
-        inner = self._inner
-        wc = self._w
-
-        def h(w):
-            Fj, Kj = inner.trial(w, v)
-            Fc, Kc = self.contact_force(u - w)
-            return Fj - Fc, Kj + Kc, Fj, Kj, Kc
-
-        hc = h(wc)
-        if hc[0] == 0.0:
-            return self._finish(wc, hc)
-        step = -math.copysign(max(abs(u - self._u), self.gap, 1e-12 * (abs(u) + abs(wc)),
-                                  1e-300), hc[0])
-        a, ha = wc, hc
-        for _ in range(200):                     # bracket: h changes sign between a and b
-            b = a + step
-            hb = h(b)
-            if hb[0] == 0.0 or (hb[0] > 0.0) != (ha[0] > 0.0):
-                break
-            a, ha, step = b, hb, 2.0 * step
-        else:
-            raise FloatingPointError("backlash: the series equilibrium was not bracketed")
-        lo, hi = (a, b) if ha[0] < 0.0 else (b, a)
-        w, hw = (b, hb) if abs(hb[0]) < abs(ha[0]) else (a, ha)
-        scale = max(abs(ha[2]), abs(hb[2]), 1e-300)
-        for _ in range(200):
-            if abs(hw[0]) <= 1e-13 * scale or abs(hi - lo) <= 1e-15 * (abs(lo) + abs(hi)):
-                break
-            w_new = w - hw[0] / hw[1] if hw[1] > 0.0 else 0.5 * (lo + hi)
-            if not min(lo, hi) < w_new < max(lo, hi):
-                w_new = 0.5 * (lo + hi)
-            w = w_new
-            hw = h(w)
-            if hw[0] < 0.0:
-                lo = w
-            else:
-                hi = w
-        return self._finish(w, hw)
-
-    @staticmethod
-    def _finish(w, hw):
-        _, _, Fj, Kj, Kc = hw
-        side = 0 if Fj == 0.0 else (1 if Fj > 0.0 else -1)
-        K = Kj * Kc / (Kj + Kc) if Kj + Kc > 0.0 else 0.0      # springs in series
-        return w, side, Fj, K
-
     def trial(self, u: float, v: float = 0.0) -> tuple[float, float]:
-        """Force [N] and tangent [N/m] (zero while the gap is open)."""
+        """Force [N] and tangent [N/m] (zero tangent while the gap slides open)."""
         w, side, F, K = self._solve(float(u), v)
+        self._te = (0.0 if self.drag == 0.0 else side * self.gap if side
+                    else min(max(float(u) - w, -self.gap), self.gap))
         self._tw = w
         self._tside = side
         self._set_trial(u, v, F)
@@ -194,8 +149,7 @@ class Backlash(_Effect):
         self._inner.commit()
         self._w = self._tw
         self._side = self._tside
-        # work = the joint's work plus the elastic energy stored in the contact,
-        # int F d(delta) = |F| delta(F) / (EXPONENT + 1) for F ~ delta^EXPONENT
-        F = self._inner.force
-        self._W = self._inner.work + abs(F * self.compression(F)) / (EXPONENT + 1.0)
-        self._D = self._inner.dissipated_energy
+        self._Dg += self.drag * abs(self._te - self._e)
+        self._e = self._te
+        self._W = self._inner.work + self._Dg          # the drag's work is all dissipated
+        self._D = self._inner.dissipated_energy + self._Dg
