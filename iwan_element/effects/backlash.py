@@ -7,7 +7,7 @@ frozen at that force; contact is made on the other side, where the joint is load
 from the state it was left in. After a reversal the joint first unloads along its own
 Masing branch, and only then does the gap open. This is the dead-zone-in-series form (a gap
 element in series with a hysteretic spring, e.g. Nordin and Gutman, Automatica 38 (2002)
-1633-1649, sec. 2); its signature in a loop is a plateau of width ``2 gap`` after each
+1633-1649); its signature in a loop is a plateau of width ``2 gap`` after each
 reversal.
 
 The part that crosses the gap is not free: a loose link slides on its pin, a slack band
