@@ -28,8 +28,9 @@ The rule, stated once:
   that lower it) are fitted together (each order, starting from each single fit) and named
   as a pair if the pair passes the same tests with both effects' parameters counted (lowers
   IC, removes ``explain_fraction`` of the excess) **and** each member earns its place on top of
-  the other (the pair's IC is below each single's by at least the partner's ``q ln n_eff``
-  penalty). Clean data and pure noise never reach a step, so this cannot name anything there.
+  the other (the pair's IC is below each single's IC: adding the partner to that single
+  lowers ``chi2 / tau`` by more than its own ``q ln n_eff``). Clean data and pure noise
+  never reach a step, so this cannot name anything there.
 """
 from __future__ import annotations
 
