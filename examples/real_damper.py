@@ -12,10 +12,14 @@ displacement with a tapered envelope. The workflow:
    the model misses;
 3. force vs displacement and the residual vs time, before and after, are saved as PNGs, and a
    third figure overlays the force after every reversal against the travel since that
-   reversal (measured and fitted): the measured curves collapse onto one shape, which shows
-   what the gap model gets right (plateau width) and what it does not (the measured
-   re-engagement after the gap is convex, stiffening with load, where the Iwan branch is
-   concave).
+   reversal (measured and fitted): the measured curves collapse onto one shape per
+   direction. Two pieces of the device's physics show there: the plateau of the backlash
+   (the free play of the linkage), which sits a little on the side of the motion (the
+   loose part drags as it crosses the gap: ``Backlash(..., drag=...)``), and a sliding
+   force that differs with the direction (a band brake is self-energising one way:
+   ``asymmetric_slip``). When neither alone explains a quarter of the misfit, the selection
+   rule tries the two best together (its pair step). A stiffening (Hertz) contact closing
+   the gap was tried and rejected: refitted with the joint, its compliance goes to zero.
 
     python examples/real_damper.py [--record PATH] [--out out/]
 """

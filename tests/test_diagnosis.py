@@ -364,3 +364,21 @@ def test_example_runs(tmp_path):
                           timeout=120, env={**os.environ, "MPLBACKEND": "Agg"})
     assert proc.returncode == 0, proc.stderr
     assert "named: backlash" in proc.stdout and out.stat().st_size > 10_000
+
+
+def test_backlash_crossed_against_drag_is_named_with_its_drag():
+    """A gap crossed against a friction drag (plateau at -+drag after each reversal): named
+    backlash, fitted to the noise, with gap and drag recovered; a free gap (drag 0) of the
+    same width leaves a misfit."""
+    g_true, fd_true = 0.15 * P.phi_max, 0.06 * P.Fs
+    el = make_effect("backlash", IwanJoint(P), gap=g_true, drag=fd_true)
+    d = simulate_element_test(el, np.array(PROTOCOLS["ladder"]) * P.phi_max, force_noise=SIGMA,
+                              seed=611, force_offset=-80.0, rest_samples=20)
+    g = diagnose(d.t, d.u, d.F, max_effects=1)
+    assert g.effects == ("backlash",), g.report()
+    assert g.error_after / g.noise_level <= 1.3, g.report()
+    fitted = g.fit.details["effects"][0]["parameters"]
+    assert fitted["gap"] == pytest.approx(g_true, rel=0.1), fitted
+    assert fitted["drag"] == pytest.approx(fd_true, rel=0.15), fitted
+    free = make_effect("backlash", IwanJoint(P), gap=g_true)
+    assert np.sqrt(np.mean((free.force_history(d.u) - (d.F + 80.0)) ** 2)) > 3 * SIGMA

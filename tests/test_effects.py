@@ -319,3 +319,71 @@ def test_make_effect_missing_parameter_and_bare_element():
         Backlash(Bare(), gap=0.1)
     with pytest.raises(ValueError, match="plain Iwan joint"):
         AsymmetricSlip(Backlash(IwanJoint(P), gap=1e-6), asymmetry=0.1)
+
+
+def _drag_loop_by_parametric_route(g, fd, w_r):
+    """Independent route for a virgin loading to joint displacement ``w_r`` and the full
+    unloading to ``-w_r`` of a joint in series with a gap ``g`` crossed against a friction
+    ``fd``: on a fine grid of the joint displacement ``w`` the joint force is the closed-form
+    backbone / Masing branch (REFERENCE.md sec. 2, eq. 13) and the drive is explicit,
+    ``u = w + g`` against the forward stop and ``u = w - g`` against the back stop, with a
+    plateau at ``F = -fd`` between (the joint stands still while the gap slides open)."""
+    w_up = np.linspace(0.0, w_r, 40001)
+    F_up = backbone(w_up, P)
+    u_up = np.where(F_up < fd, w_up, w_up + g)          # stuck in the middle, then slid open
+    w_dn = np.linspace(w_r, -w_r, 80001)
+    F_dn = backbone(w_r, P) - 2.0 * backbone((w_r - w_dn) / 2.0, P)
+    fwd = F_dn > -fd
+    u_dn = np.concatenate([w_dn[fwd] + g, w_dn[~fwd] - g])
+    return (u_up, F_up), (u_dn[::-1], F_dn[::-1])
+
+
+@pytest.mark.parametrize("w_r", [0.4 * A, 1.6 * A])
+def test_backlash_drag_against_explicit_series_route(w_r):
+    g, fd = 0.2 * A, 0.05 * P.Fs
+    (u_up, F_up), (u_dn, F_dn) = _drag_loop_by_parametric_route(g, fd, w_r)
+    up = np.linspace(0.0, u_up[-1], 301)[1:]
+    dn = np.linspace(u_up[-1], u_dn[0], 601)[1:]
+    el = Backlash(IwanJoint(P), gap=g, drag=fd)
+    F = el.force_history(np.concatenate([up, dn]))
+    np.testing.assert_allclose(F[:up.size], np.interp(up, u_up, F_up), rtol=0, atol=2e-4 * P.Fs)
+    np.testing.assert_allclose(F[up.size:], np.interp(dn, u_dn, F_dn), rtol=0, atol=2e-4 * P.Fs)
+    # the plateau sits at -drag, against the motion, over a travel of 2 gap
+    on = np.abs(F[up.size:] + fd) < 1e-9 * P.Fs
+    assert np.sum(on) * abs(dn[1] - dn[0]) == pytest.approx(2 * g, abs=2 * abs(dn[1] - dn[0]))
+
+
+def test_backlash_drag_tends_to_the_free_gap_and_energy_balances():
+    g = 0.15 * A
+    _, u = history()
+    free = Backlash(IwanJoint(P), gap=g).force_history(u)
+    for fd in (1e-3 * P.Fs, 1e-9 * P.Fs):
+        np.testing.assert_allclose(Backlash(IwanJoint(P), gap=g, drag=fd).force_history(u),
+                                   free, rtol=0, atol=1.01 * fd + 1e-12 * P.Fs)
+    # over a closed cycle the loop area is the joint's dissipation plus 2 crossings of the
+    # gap against the drag, 4 gap drag (the joint sees amplitude u0 - g)
+    fd = 0.08 * P.Fs
+    u0 = 2.5 * A
+    uc = u0 * np.cos(np.linspace(0, 4 * np.pi, 8001))
+    el = Backlash(IwanJoint(P), gap=g, drag=fd)
+    F, W, D = run(el, uc)
+    half = 4000
+    expected = dissipation(u0 - g, P) + 4 * g * fd
+    assert D[-1] - D[half] == pytest.approx(expected, rel=1e-9)
+    assert W[-1] - W[half] == pytest.approx(expected, rel=1e-9)
+    assert np.trapezoid(F[half:], uc[half:]) == pytest.approx(expected, rel=2e-4)
+    np.testing.assert_allclose(W[1:] - W[0], np.cumsum(0.5 * (F[1:] + F[:-1]) * np.diff(uc)),
+                               rtol=0, atol=2e-4 * P.Fs * A)
+    assert np.all(np.diff(D) >= -1e-12 * P.Fs * A)
+
+
+def test_backlash_drag_coarse_steps_and_bad_drag():
+    rng = np.random.default_rng(5)
+    pts = np.concatenate([[0.0], rng.uniform(-2.5, 2.5, 30) * A])
+    fine = np.concatenate([np.linspace(a, b, 51)[1:] for a, b in zip(pts[:-1], pts[1:])])
+    el = Backlash(IwanJoint(P), gap=0.1 * A, drag=0.05 * P.Fs)
+    np.testing.assert_allclose(el.force_history(fine)[49::50], el.force_history(pts[1:]),
+                               rtol=0, atol=1e-9 * P.Fs)
+    for bad in (-1e-9, math.nan, math.inf):
+        with pytest.raises(ValueError, match="drag"):
+            Backlash(IwanJoint(P), gap=0.1 * A, drag=bad)

@@ -21,6 +21,16 @@ The rule, stated once:
 * Among eligible candidates the lowest IC is named; others within ``ambiguity`` IC units are
   reported as nearly as good. The loop then continues on top of the named effect, until the
   rest is noise, nothing is eligible, or ``max_effects`` effects are named.
+* **Pair step.** Two effects can each hide the other: a joint with backlash *and*
+  direction-dependent slip leaves a misfit where either alone explains too little (a forward
+  greedy step cannot see it). When no single candidate is eligible, the misfit is not noise
+  and two more effects may be named, the two best single candidates (lowest IC among those
+  that lower it) are fitted together (each order, starting from each single fit) and named
+  as a pair if the pair passes the same tests with both effects' parameters counted (lowers
+  IC, removes ``explain_fraction`` of the excess) **and** each member earns its place on top of
+  the other (the pair's IC is below each single's IC: adding the partner to that single
+  lowers ``chi2 / tau`` by more than its own ``q ln n_eff``). Clean data and pure noise
+  never reach a step, so this cannot name anything there.
 """
 from __future__ import annotations
 
@@ -80,7 +90,7 @@ def _verdicts(rows, best, ambiguity):
 def stepwise_select(fit_candidate, candidates, base: dict, *, tau: float, n_eff: float,
                     alpha: float = 1e-3, max_effects: int = 2, ambiguity: float = 10.0,
                     explain_fraction: float = EXPLAIN_FRACTION, allowed=None,
-                    guard=None) -> SelectionResult:
+                    guard=None, pairs: bool = True) -> SelectionResult:
     """Run the selection rule (module docstring).
 
     Parameters
@@ -98,6 +108,8 @@ def stepwise_select(fit_candidate, candidates, base: dict, *, tau: float, n_eff:
         ``allowed(names, name) -> bool``: whether ``name`` may be stacked on ``names``.
     guard : callable, optional
         ``guard(current, row) -> bool``: an extra condition for naming (True: passes).
+    pairs : bool
+        Whether the pair step (module docstring) is tried when no single effect is eligible.
     """
     cur = dict(base)
     p0 = misfit_p(cur["chi2"], tau, n_eff, cur["q"])
@@ -127,6 +139,15 @@ def stepwise_select(fit_candidate, candidates, base: dict, *, tau: float, n_eff:
         best = min(ok, key=lambda r: r["ic"]) if ok else None
         _verdicts(rows, best, ambiguity)
         steps.append({"on": list(cur["names"]), "rows": rows})
+        if best is None and pairs and len(named) + 2 <= max_effects:
+            pair, tried = _pair_step(fit_candidate, cur, rows, excess, ic_cur, tau, pen,
+                                     explain_fraction, allowed, guard)
+            if tried:
+                steps.append({"on": list(cur["names"]), "rows": tried})
+            if pair is not None:
+                named.extend(pair[0])
+                cur = pair[2]
+                continue
         if best is None:
             break
         if not named:
@@ -136,3 +157,38 @@ def stepwise_select(fit_candidate, candidates, base: dict, *, tau: float, n_eff:
                "state": best["state"], "row": best}
     return SelectionResult(named=named, ambiguous=ambiguous, steps=steps, final=cur,
                            p_before=p0, p_after=misfit_p(cur["chi2"], tau, n_eff, cur["q"]))
+
+
+def _pair_step(fit_candidate, cur, rows, excess, ic_cur, tau, pen, explain_fraction, allowed,
+               guard):
+    """The pair step of the rule (module docstring): ``((names, row, new current) or None,
+    rows of the pairs tried)``."""
+    singles = sorted((r for r in rows if r["lowers_ic"]), key=lambda r: r["ic"])[:2]
+    if len(singles) < 2:
+        return None, []
+    best, tried = None, []
+    for first, second in (singles, singles[::-1]):
+        if allowed is not None and not allowed(first["names"], second["name"]):
+            continue
+        on = {"names": first["names"], "chi2": first["chi2"], "q": cur["q"] + first["q"],
+              "state": first["state"]}
+        r = dict(fit_candidate(on, second["name"]))
+        q_pair = first["q"] + r["q"]
+        r["name"] = f"{first['name']} + {second['name']}"
+        r["ic"] = r["chi2"] / tau + (cur["q"] + q_pair) * pen
+        gain = max(cur["chi2"] - r["chi2"], 0.0) / tau
+        r["lowers_ic"] = r["ic"] < ic_cur
+        r["explained"] = gain / excess if excess > 0 else 0.0
+        r["enough"] = gain >= explain_fraction * excess
+        r["guard_ok"] = True if guard is None else bool(guard(cur, r))
+        # each member earns its parameters on top of the other
+        earns = all(r["ic"] < s["ic"] for s in singles)
+        r["verdict"] = "NAMED (pair)" if (r["lowers_ic"] and r["enough"] and r["guard_ok"]
+                                          and earns) else "pair explains little"
+        r["dIC"] = r["ic"] - min(s["ic"] for s in singles)
+        tried.append(r)
+        if r["verdict"].startswith("NAMED") and (best is None or r["ic"] < best[1]["ic"]):
+            best = ((first["name"], second["name"]), r,
+                    {"names": r["names"], "chi2": r["chi2"], "q": cur["q"] + q_pair,
+                     "state": r["state"], "row": r})
+    return best, tried

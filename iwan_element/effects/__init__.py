@@ -14,8 +14,9 @@ name                      physics
 ``viscous_damping``       ``F = F_j(u) + c v`` (a dashpot in parallel); modal: ``+ zeta_v``
 ``pinning_stiffness``     ``F = F_j(u) + k_p sign(u) max(|u| - delta, 0)``; modal: describing-
                           function stiffness of the dead-zone spring
-``backlash``              a gap ``2 gap`` wide in series with the joint: force zero and the
-                          joint's history frozen while it is open, crossed at zero force
+``backlash``              a gap ``2 gap`` wide in series with the joint: the joint's history
+                          frozen while it is open, crossed against a friction ``drag``
+                          (default 0: at zero force)
 ``slip_degradation``      slider thresholds ``exp(-rate D) phi_i`` (wear with the dissipated
                           energy ``D``), stiffness unchanged
 ``asymmetric_slip``       slider thresholds ``(1 + a) phi_i`` forward, ``(1 - a) phi_i`` back

@@ -1,0 +1,65 @@
+"""The stepwise selection rule (diagnose/selection.py) on tables of chi2 values, so each
+clause of the rule is checked on its own: the misfit test, the IC and "explains little"
+tests, and the pair step for two effects that each hide the other."""
+import math
+
+from iwan_element.diagnose.selection import stepwise_select
+
+N_EFF = 400.0
+
+
+def _candidate(table):
+    """fit_candidate from a table {stack (frozenset of names): chi2}; one parameter each."""
+    def fit(cur, name):
+        names = tuple(cur["names"]) + (name,)
+        return {"names": names, "chi2": table[frozenset(names)], "q": 1, "state": names}
+    return fit
+
+
+def _run(table, base_chi2, **kw):
+    base = {"names": (), "chi2": base_chi2, "q": 5, "state": ()}
+    return stepwise_select(_candidate(table), ("a", "b", "c"), base, tau=1.0, n_eff=N_EFF, **kw)
+
+
+def _table(a, b, c, ab, ac=None, bc=None):
+    f = frozenset
+    return {f("a"): a, f("b"): b, f("c"): c, f("ab"): ab, f("ac"): ac or a, f("bc"): bc or b}
+
+
+def test_noise_level_misfit_names_nothing_even_with_a_large_pair_gain():
+    # chi2 at its expectation: the misfit test stops before any step (no pair is tried)
+    sel = _run(_table(380.0, 385.0, 390.0, 10.0), N_EFF - 5)
+    assert sel.named == [] and sel.steps == []
+
+
+def test_single_effect_named_greedily_and_pair_not_needed():
+    sel = _run(_table(1000.0, 4000.0, 4100.0, 950.0), 5000.0)
+    assert sel.named[0] == "a"
+    assert all(r.get("verdict") != "NAMED (pair)" for st in sel.steps for r in st["rows"])
+
+
+def test_pair_named_when_each_alone_explains_little():
+    excess = 10000.0 - (N_EFF - 5)
+    a, b = 10000.0 - 0.20 * excess, 10000.0 - 0.15 * excess        # 20 % and 15 %
+    sel = _run(_table(a, b, 9990.0, 10000.0 - 0.6 * excess), 10000.0)
+    assert set(sel.named) == {"a", "b"} and len(sel.named) == 2
+    assert sel.final["q"] == 7
+    assert sel.steps[-1]["rows"][0]["verdict"] == "NAMED (pair)"
+    # not without the pair step
+    assert _run(_table(a, b, 9990.0, 10000.0 - 0.6 * excess), 10000.0, pairs=False).named == []
+    # nor when max_effects leaves room for one effect only
+    assert _run(_table(a, b, 9990.0, 10000.0 - 0.6 * excess), 10000.0, max_effects=1).named == []
+
+
+def test_pair_whose_partner_does_not_earn_its_parameter_is_not_named():
+    # excess 150: "a" removes 22 %, the pair 25.3 % (enough, and it lowers the IC with both
+    # parameters counted), but "b" adds less than one parameter's penalty ln(n_eff) on top
+    # of "a": the pair is not named
+    base = (N_EFF - 5) + 150.0
+    a, b, ab = base - 33.0, base - 10.0, base - 38.0
+    assert 38.0 - 33.0 < math.log(N_EFF) < 38.0 / 2
+    sel = _run(_table(a, b, base - 1.0, ab), base)
+    assert sel.named == []
+    assert [r["verdict"] for r in sel.steps[-1]["rows"]] == ["pair explains little"] * 2
+    # with "b" earning its parameter, the same pair is named
+    assert set(_run(_table(a, b, base - 1.0, base - 45.0), base).named) == {"a", "b"}
