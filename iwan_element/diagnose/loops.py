@@ -177,10 +177,12 @@ class _Fitter:
                 # (not for stacks run element by element: 16 more fits cost minutes there)
                 res, n_hop = M.hop(mdl, res, max_nfev=200 if fast else 60)
                 nfev += n_hop
-            self.nfev += nfev
+            start, res, n_start = M.fit_start(mdl, res, max_nfev=200 if fast else 60)
+            self.nfev += nfev + n_start
             full = self.model(names)
+            full.start = start
             r = full.residual(res.x)
-            row = {"names": tuple(names), "ssr": float(r @ r), "z": res.x,
+            row = {"names": tuple(names), "ssr": float(r @ r), "z": res.x, "start": start,
                    "status": int(res.status), "message": str(res.message), "model": full}
             self._memo[key] = row
         return dict(row, chi2=row["ssr"] / self.s2)
@@ -266,8 +268,10 @@ def _record_force(row, uj, v):
     """Force [N] of a fitted stack on the whole record, offset included, and the element."""
     p, effs, F0 = row["model"].physical(row["z"])
     el = build_element(p, row["names"], effs)
-    F = el.force_history(uj, v) if row["names"] else el.force_history(uj)
-    return F + F0, el
+    s = row.get("start", 0.0)
+    ue, ve = np.concatenate([[s], uj]), np.concatenate([[0.0], v])
+    F = el.force_history(ue, ve) if row["names"] else el.force_history(ue)
+    return F[1:] + F0, el
 
 
 def diagnose(t, u, F, *, candidates=None, max_effects: int = 2, noise: float | None = None,
@@ -452,7 +456,12 @@ def _assemble(c) -> Diagnosis:
                "misfit_p_after": sel.p_after, "alpha": c["alpha"], "ambiguity": c["ambiguity"],
                "criterion": criterion_text(), "location": loc, "lowpass": c["lp"],
                "lowpass_reason": "rig dynamics removed before fitting" if c["lp"] else None,
+               "start_displacement": float(final.get("start", 0.0)),
                "wall_time": time.perf_counter() - c["t_start"]}
+    if final.get("start", 0.0) != 0.0:
+        warns.append(f"the record does not start from the joint's rest: a path to "
+                     f"{final['start']:.4g} m before the first sample (the joint's unknown "
+                     "starting state, fitted as a nuisance) fits better")
     return Diagnosis(
         effect=sel.named[0] if sel.named else "none", effects=tuple(sel.named),
         ambiguous_with=sel.ambiguous, where=where,

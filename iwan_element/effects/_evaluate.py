@@ -107,6 +107,37 @@ class Evaluator:
         self.uk = u[keep]
         self.vk = v[keep]
         self.n_eval = 0
+        self._hist0 = self.hist
+        self._starts = {}
+        self.start = 0.0
+        self._ext = (u, v, drive, self.drive_pos)
+
+    def set_start(self, start: float) -> None:
+        """Drive the joint from its virgin rest to ``start`` [m] before the first sample.
+
+        A test record begins in whatever state the previous test or the setting-up left the
+        joint: a residual load, a position in a gap. The path ``0 -> start -> u[0]`` before
+        the record is that unknown state's one-parameter form (``start = 0``, or any value
+        between 0 and ``u[0]``, is the virgin start). Histories are cached per value.
+        """
+        start = float(start)
+        if start == self.start:
+            return
+        self.start = start
+        self._segs = None
+        if start == 0.0:
+            self.hist = self._hist0
+            self._ext = (self.u, self.v, self.drive, self.drive_pos)
+            return
+        u = np.concatenate([[start], self.u])
+        v = np.concatenate([[0.0], self.v])
+        hist = self._starts.get(start)
+        if hist is None:
+            if len(self._starts) > 256:
+                self._starts.clear()
+            hist = self._starts[start] = History(u, keep=self.keep + 1, tol=self._tol)
+        self.hist = hist
+        self._ext = (u, v, np.concatenate([[0], self.drive + 1]), self.drive_pos + 1)
 
     @staticmethod
     def fast(names) -> bool:
@@ -118,22 +149,24 @@ class Evaluator:
 
     def unit_dissipation(self, p1: IwanParameters) -> np.ndarray:
         """Dissipated energy of the plain unit Iwan joint after each step of the record."""
+        u = self._ext[0]
         if self._segs is None:
-            self._segs = dissipation_segments(self.u, self._tol)
+            self._segs = dissipation_segments(u, self._tol)
         step, virgin, xa, xb = self._segs
         d = _slip_energy(xb, p1) - _slip_energy(xa, p1)
         d = np.where(virgin, np.maximum(d, 0.0), 2.0 * d)
-        return np.cumsum(np.bincount(step, weights=d, minlength=self.u.size))
+        return np.cumsum(np.bincount(step, weights=d, minlength=u.size))
 
     def unit_force(self, shape, names, values) -> np.ndarray:
         """Force with ``Fs = 1`` at the kept samples. ``shape = (phi_max, chi, beta)``;
         ``values``: unit-``Fs`` parameter dicts, one per effect (innermost first)."""
         self.n_eval += 1
         p1 = unit_params(*shape)
+        u, v, drive, pos = self._ext
         if not self.fast(names):
             el = build_element(p1, names, values)
-            F = el.force_history(self.u[self.drive], self.v[self.drive])
-            return F[self.drive_pos]
+            F = el.force_history(u[drive], v[drive])
+            return F[pos]
         F = self.hist.forces(p1)
         for name, vals in zip(names, values):
             cls = EFFECTS[name]
@@ -141,8 +174,8 @@ class Evaluator:
                 el = cls(IwanJoint(p1), **vals)
                 D = None
                 if cls.needs_energy:
-                    D = self.unit_dissipation(p1)[self.drive]
-                F = F + el.correction_history(self.u[self.drive], D)[self.drive_pos]
+                    D = self.unit_dissipation(p1)[drive]
+                F = F + el.correction_history(u[drive], D)[pos]
             else:
                 F = cls.vector_force(F, self.uk, self.vk, **vals)
         return F
