@@ -165,16 +165,21 @@ def fit_start(model: LoopModel, res, *, max_nfev: int):
         model.start = 0.0
         return 0.0, res, nfev
     h = x * (START_GRID[1] - START_GRID[0])
-    opt = minimize_scalar(cost, bounds=(s_best - h, s_best + h), method="bounded",
-                          options={"xatol": 1e-4 * h, "maxiter": 12})
-    nfev += int(opt.nfev)
-    if opt.fun < c_best:
-        c_best, s_best = float(opt.fun), float(opt.x)
-    model.start = s_best
-    again, n = fit(model, [res.x], max_nfev=max_nfev)
-    nfev += n
-    if again.cost <= res.cost:
+    for _ in range(3):                 # alternate: the start with the rest held, then the rest
+        opt = minimize_scalar(cost, bounds=(s_best - h, s_best + h), method="bounded",
+                              options={"xatol": 1e-5 * x, "maxiter": 16})
+        nfev += int(opt.nfev)
+        if opt.fun < c_best:
+            c_best, s_best = float(opt.fun), float(opt.x)
+        model.start = s_best
+        again, n = fit(model, [res.x], max_nfev=max_nfev)
+        nfev += n
+        if not again.cost < res.cost * (1.0 - 1e-6):
+            break
         res = again
+        c_best = 2.0 * res.cost
+        h *= 0.25
+    model.start = s_best
     return s_best, res, nfev
 
 
