@@ -7,7 +7,8 @@ displacement with a tapered envelope. The workflow:
 1. the rig's structural ringing after each break-away (40-50 Hz, a property of the test rig,
    not of the damper) is removed by a zero-phase 20 Hz low-pass (``lowpass=20``); the test
    frequency is 1 Hz, so the joint's own response is untouched;
-2. ``diagnose`` fits the Iwan model with the sensor offsets as nuisance parameters, estimates
+2. ``diagnose`` fits the Iwan model with the sensor offsets and the joint's starting state
+   (the record begins where the previous test left the joint) as nuisance parameters, estimates
    the noise from the record itself (the envelope never repeats an amplitude), and names what
    the model misses;
 3. force vs displacement and the residual vs time, before and after, are saved as PNGs, and a
