@@ -124,24 +124,18 @@ def stepwise_select(fit_candidate, candidates, base: dict, *, tau: float, n_eff:
             break
         excess = max(cur["chi2"] / tau - (n_eff - cur["q"]), 0.0)
         ic_cur = cur["chi2"] / tau + cur["q"] * pen
+        score = _scorer(cur, excess, ic_cur, tau, pen, explain_fraction, guard)
         rows = []
         for name in rest:
             r = dict(fit_candidate(cur, name))
             r["name"] = name
-            gain = max(cur["chi2"] - r["chi2"], 0.0) / tau
-            r["ic"] = r["chi2"] / tau + (cur["q"] + r["q"]) * pen
-            r["lowers_ic"] = r["ic"] < ic_cur
-            r["explained"] = gain / excess if excess > 0 else 0.0
-            r["enough"] = gain >= explain_fraction * excess
-            r["guard_ok"] = True if guard is None else bool(guard(cur, r))
-            rows.append(r)
+            rows.append(score(r, r["q"]))
         ok = [r for r in rows if r["lowers_ic"] and r["enough"] and r["guard_ok"]]
         best = min(ok, key=lambda r: r["ic"]) if ok else None
         _verdicts(rows, best, ambiguity)
         steps.append({"on": list(cur["names"]), "rows": rows})
         if best is None and pairs and len(named) + 2 <= max_effects:
-            pair, tried = _pair_step(fit_candidate, cur, rows, excess, ic_cur, tau, pen,
-                                     explain_fraction, allowed, guard)
+            pair, tried = _pair_step(fit_candidate, cur, rows, score, allowed)
             if tried:
                 steps.append({"on": list(cur["names"]), "rows": tried})
             if pair is not None:
@@ -159,10 +153,24 @@ def stepwise_select(fit_candidate, candidates, base: dict, *, tau: float, n_eff:
                            p_before=p0, p_after=misfit_p(cur["chi2"], tau, n_eff, cur["q"]))
 
 
-def _pair_step(fit_candidate, cur, rows, excess, ic_cur, tau, pen, explain_fraction, allowed,
-               guard):
+def _scorer(cur, excess, ic_cur, tau, pen, explain_fraction, guard):
+    """The rule's tests of a fitted model ``r`` on top of ``cur`` that adds ``q`` parameters:
+    its IC, whether it lowers the current IC, the fraction of the excess misfit it explains,
+    whether that is enough, and the caller's guard. Returns ``score(r, q) -> r``."""
+    def score(r, q):
+        gain = max(cur["chi2"] - r["chi2"], 0.0) / tau
+        r["ic"] = r["chi2"] / tau + (cur["q"] + q) * pen
+        r["lowers_ic"] = r["ic"] < ic_cur
+        r["explained"] = gain / excess if excess > 0 else 0.0
+        r["enough"] = gain >= explain_fraction * excess
+        r["guard_ok"] = True if guard is None else bool(guard(cur, r))
+        return r
+    return score
+
+
+def _pair_step(fit_candidate, cur, rows, score, allowed):
     """The pair step of the rule (module docstring): ``((names, row, new current) or None,
-    rows of the pairs tried)``."""
+    rows of the pairs tried)``; ``score`` is the step's :func:`_scorer`."""
     singles = sorted((r for r in rows if r["lowers_ic"]), key=lambda r: r["ic"])[:2]
     if len(singles) < 2:
         return None, []
@@ -175,12 +183,7 @@ def _pair_step(fit_candidate, cur, rows, excess, ic_cur, tau, pen, explain_fract
         r = dict(fit_candidate(on, second["name"]))
         q_pair = first["q"] + r["q"]
         r["name"] = f"{first['name']} + {second['name']}"
-        r["ic"] = r["chi2"] / tau + (cur["q"] + q_pair) * pen
-        gain = max(cur["chi2"] - r["chi2"], 0.0) / tau
-        r["lowers_ic"] = r["ic"] < ic_cur
-        r["explained"] = gain / excess if excess > 0 else 0.0
-        r["enough"] = gain >= explain_fraction * excess
-        r["guard_ok"] = True if guard is None else bool(guard(cur, r))
+        score(r, q_pair)
         # each member earns its parameters on top of the other
         earns = all(r["ic"] < s["ic"] for s in singles)
         r["verdict"] = "NAMED (pair)" if (r["lowers_ic"] and r["enough"] and r["guard_ok"]
