@@ -171,13 +171,13 @@ class _Fitter:
                 k = M.var_index(names, scan)
                 starts = M.scan_starts(mdl, starts[0], k, grid) + list(starts[:1])
                 self.nfev += len(grid)
-            res, nfev = M.fit(mdl, starts if fast else starts[:2],
-                              max_nfev=200 if fast else 60)
+            max_nfev = 200 if fast else 60
+            res, nfev = M.fit(mdl, starts if fast else starts[:2], max_nfev=max_nfev)
             if fast and any(getattr(EFFECTS[nm], "force_jumps", False) for nm in names):
                 # (not for stacks run element by element: 16 more fits cost minutes there)
-                res, n_hop = M.hop(mdl, res, max_nfev=200 if fast else 60)
+                res, n_hop = M.hop(mdl, res, max_nfev=max_nfev)
                 nfev += n_hop
-            start, res, n_start = M.fit_start(mdl, res, max_nfev=200 if fast else 60)
+            start, res, n_start = M.fit_start(mdl, res, max_nfev=max_nfev)
             self.nfev += nfev + n_start
             full = self.model(names)
             full.start = start
