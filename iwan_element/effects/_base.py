@@ -12,6 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..core._validation import check_scalar, finite_array, same_length
+from ..core.parameters import IwanParameters
 from ..core.protocol import check_element
 
 __all__ = ["ParamSpec", "_Effect", "_find_zero"]
@@ -86,6 +87,17 @@ def _find_zero(trial, a: float, Fa: float, b: float, Fb: float, *, rtol: float =
         else:
             hi = x
     return x
+
+
+def _require_plain_joint(inner, subject: str) -> None:
+    """Refuse an ``inner`` that is not a plain Iwan joint (``IwanJoint`` or ``DiscreteIwan``
+    with ``IwanParameters``): ``subject`` (e.g. ``"break-away"``) changes the joint's own
+    sliders, so it must wrap the joint directly."""
+    if isinstance(inner, _Effect) or not isinstance(getattr(inner, "params", None),
+                                                    IwanParameters):
+        raise ValueError("inner must be a plain Iwan joint (IwanJoint or DiscreteIwan with "
+                         f"IwanParameters): {subject} changes the joint's own sliders, so "
+                         "it wraps the joint directly (put other effects around it)")
 
 
 class _Effect:

@@ -25,8 +25,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..core.discrete import slider_distribution
-from ..core.parameters import IwanParameters
-from ._base import _Effect
+from ._base import _Effect, _require_plain_joint
 
 __all__ = ["_SliderEffect"]
 
@@ -42,11 +41,7 @@ class _SliderEffect(_Effect):
 
     def __init__(self, inner, *, n_sliders: int = N_SLIDERS):
         super().__init__(inner)
-        if isinstance(inner, _Effect) or not isinstance(getattr(inner, "params", None),
-                                                        IwanParameters):
-            raise ValueError("inner must be a plain Iwan joint (IwanJoint or DiscreteIwan with "
-                             "IwanParameters): a slider-level effect changes the joint's own "
-                             "sliders, so it wraps the joint directly (put other effects around it)")
+        _require_plain_joint(inner, "a slider-level effect")
         k, phi = slider_distribution(inner.params, n_sliders)
         self._k = np.concatenate([k, k])         # modified bank, then the plain reference bank
         self._phi = phi

@@ -41,7 +41,7 @@ import numpy as np
 
 from ..core.discrete import DiscreteIwan
 from ..core.parameters import IwanParameters
-from ._base import ParamSpec, _Effect
+from ._base import ParamSpec, _Effect, _require_plain_joint
 
 __all__ = ["BreakAway"]
 
@@ -219,11 +219,7 @@ class BreakAway(_Effect):
 
     def __init__(self, inner, *, ratio: float):
         super().__init__(inner)
-        if isinstance(inner, _Effect) or not isinstance(getattr(inner, "params", None),
-                                                        IwanParameters):
-            raise ValueError("inner must be a plain Iwan joint (IwanJoint or DiscreteIwan with "
-                             "IwanParameters): break-away changes the joint's own sliders, so "
-                             "it wraps the joint directly (put other effects around it)")
+        _require_plain_joint(inner, "break-away")
         self._set_parameters({"ratio": ratio})
         self._atoms = ((inner.slider_stiffness, inner.slider_slip)
                        if isinstance(inner, DiscreteIwan) else None)
