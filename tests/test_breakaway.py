@@ -1,37 +1,17 @@
 """Break-away on the continuous Iwan density (effects/breakaway.py), against independent
 routes: the closed-form virgin and first unloading branches written here from the density
 (REFERENCE.md sec. 2), and a bank of Jenkins sliders with static/kinetic thresholds stepped
-here, which converges to the element as the bank gets dense."""
+in tests/_jenkins_bank.py, which converges to the element as the bank gets dense."""
 import numpy as np
 import pytest
 
 from iwan_element import DiscreteIwan, IwanJoint, IwanParameters
 from iwan_element.effects import BreakAway
+from _jenkins_bank import jenkins_bank
 
 P = IwanParameters(1000.0, 1e6, -0.5, 0.2)
 P0 = IwanParameters(1000.0, 1e6, -0.3, 0.0)          # no spike: force continuous in time
 A = P.phi_max
-
-
-def _bank(u, k, s, ratio):
-    """Parallel Jenkins sliders (stiffness ``k``, sliding stretch ``s``), vectorised over the
-    sliders: a stuck slider breaks when its stretch exceeds ``ratio s``, slides at ``s``
-    while the motion keeps its direction, sticks again when it reverses."""
-    x = np.zeros_like(k)                  # slider positions
-    slide = np.zeros(k.size, bool)
-    direc = np.zeros(k.size)
-    out = np.empty(u.size)
-    for i, ui in enumerate(u):
-        e = ui - x
-        keep = slide & (e * direc >= s)
-        x[keep] = ui - direc[keep] * s[keep]
-        slide &= keep
-        brk = ~slide & (np.abs(e) > ratio * s)
-        direc[brk] = np.sign(e[brk])
-        x[brk] = ui - direc[brk] * s[brk]
-        slide |= brk
-        out[i] = float(np.sum(k * (ui - x)))
-    return out
 
 
 def _drive(per=150, amps=(0.4, 1.6, 0.7, 2.5, 0.3, 1.1)):
@@ -87,7 +67,7 @@ def test_dense_slider_banks_converge_to_the_element():
     errs = []
     for n in (100, 400, 1600):
         d = DiscreteIwan(P, n)
-        errs.append(float(np.sqrt(np.mean((_bank(u, d.slider_stiffness, d.slider_slip, r)
+        errs.append(float(np.sqrt(np.mean((jenkins_bank(u, d.slider_stiffness, d.slider_slip, r)
                                            - F) ** 2))) / P.Fs)
     # first order in 1/n (a slider breaks one sample early or late): 4x denser, about 4x closer
     assert errs[0] / errs[1] > 2.5 and errs[1] / errs[2] > 2.5, errs
@@ -98,7 +78,7 @@ def test_on_a_discrete_joint_it_is_that_bank():
     u = _drive(60)
     d = DiscreteIwan(P, 15)
     F = BreakAway(DiscreteIwan(P, 15), ratio=1.45).force_history(u)
-    np.testing.assert_allclose(F, _bank(u, d.slider_stiffness, d.slider_slip, 1.45),
+    np.testing.assert_allclose(F, jenkins_bank(u, d.slider_stiffness, d.slider_slip, 1.45),
                                rtol=0, atol=1e-9 * P.Fs)
 
 
@@ -165,7 +145,7 @@ def test_force_is_continuous_in_the_ratio():
     s_big, s_small = slope(1e-2, cont), slope(1e-5, cont)
     assert s_small == pytest.approx(s_big, rel=0.2)
     d = DiscreteIwan(P0, 128)
-    bank = lambda x: _bank(u, d.slider_stiffness, d.slider_slip, x)  # noqa: E731
+    bank = lambda x: jenkins_bank(u, d.slider_stiffness, d.slider_slip, x)  # noqa: E731
     # the bank's quotient is zero between breaks and jump/step across one: never the slope
     assert abs(slope(1e-5, bank) / slope(1e-2, bank) - 1.0) > 0.5
 

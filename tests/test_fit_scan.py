@@ -1,11 +1,13 @@
 """The 1-D scans that start the break-away and backlash fits (diagnose/_model.scan_starts),
 checked on records made by routes independent of the effect classes: a
-Jenkins slider bank with static/kinetic thresholds and a gap-in-series stepper written here."""
+Jenkins slider bank with static/kinetic thresholds (tests/_jenkins_bank.py) and a gap-in-series
+stepper written here."""
 import numpy as np
 import pytest
 
 from iwan_element import IwanJoint, IwanParameters, diagnose
 from iwan_element.core.discrete import DiscreteIwan
+from _jenkins_bank import jenkins_bank
 
 P = IwanParameters(1000.0, 1e6, -0.5, 0.2)
 SIGMA = 4.0
@@ -22,22 +24,7 @@ def _bank_breakaway(u, ratio, n=300):
     """Jenkins sliders of a dense discretisation: each holds to ``ratio`` times its sliding
     force once stuck, slides at its sliding force, sticks again when its motion reverses."""
     d = DiscreteIwan(P, n_sliders=n)
-    k, s = np.asarray(d.slider_stiffness, float), np.asarray(d.slider_slip, float)
-    x = np.zeros_like(k)
-    slide = np.zeros(k.size, bool)
-    direc = np.zeros(k.size)
-    out = np.empty(u.size)
-    for i, ui in enumerate(u):
-        e = ui - x
-        keep = slide & (e * direc >= s)
-        x[keep] = ui - direc[keep] * s[keep]
-        slide &= keep
-        brk = ~slide & (np.abs(e) > ratio * s)
-        direc[brk] = np.sign(e[brk])
-        x[brk] = ui - direc[brk] * s[brk]
-        slide |= brk
-        out[i] = float(np.sum(k * (ui - x)))
-    return out
+    return jenkins_bank(u, d.slider_stiffness, d.slider_slip, ratio)
 
 
 def test_bank_without_breakaway_is_the_discrete_joint():
