@@ -63,3 +63,28 @@ def test_pair_whose_partner_does_not_earn_its_parameter_is_not_named():
     assert [r["verdict"] for r in sel.steps[-1]["rows"]] == ["pair explains little"] * 2
     # with "b" earning its parameter, the same pair is named
     assert set(_run(_table(a, b, base - 1.0, base - 45.0), base).named) == {"a", "b"}
+
+
+def test_pair_partner_need_not_be_the_runner_up_alone():
+    # "a" leads (20 %); "b" alone explains more (15 %) than "c" (5 %), but "a" hides "c":
+    # a + c explains 60 % while a + b adds nothing to "a". The best single is tried with every
+    # partner that lowers the IC, so "a" + "c" is named; the old rule (the two best singles
+    # only) would try a + b and b + a and name nothing.
+    excess = 10000.0 - (N_EFF - 5)
+    a, b, c = (10000.0 - f * excess for f in (0.20, 0.15, 0.05))
+    sel = _run(_table(a, b, c, a, ac=10000.0 - 0.6 * excess, bc=b), 10000.0)
+    assert set(sel.named) == {"a", "c"}
+    tried = {r["name"]: r["verdict"] for r in sel.steps[-1]["rows"]}
+    assert tried == {"a + b": "pair explains little", "a + c": "NAMED (pair)",
+                     "b + a": "pair explains little"}
+
+
+def test_pair_partner_that_does_not_lower_the_ic_alone_is_not_tried():
+    # "c" alone gains less than one parameter's penalty: it is not a partner, however good
+    # the pair would be (the pair step costs a fit per partner; a partner must show itself)
+    excess = 10000.0 - (N_EFF - 5)
+    a, b = 10000.0 - 0.20 * excess, 10000.0 - 0.15 * excess
+    c = 10000.0 - 0.5 * math.log(N_EFF)
+    sel = _run(_table(a, b, c, a, ac=10000.0 - 0.6 * excess, bc=b), 10000.0)
+    assert sel.named == []
+    assert {r["name"] for r in sel.steps[-1]["rows"]} == {"a + b", "b + a"}

@@ -24,13 +24,17 @@ The rule, stated once:
 * **Pair step.** Two effects can each hide the other: a joint with backlash *and*
   direction-dependent slip leaves a misfit where either alone explains too little (a forward
   greedy step cannot see it). When no single candidate is eligible, the misfit is not noise
-  and two more effects may be named, the two best single candidates (lowest IC among those
-  that lower it) are fitted together (each order, starting from each single fit) and named
-  as a pair if the pair passes the same tests with both effects' parameters counted (lowers
-  IC, removes ``explain_fraction`` of the excess) **and** each member earns its place on top of
-  the other (the pair's IC is below each single's IC: adding the partner to that single
-  lowers ``chi2 / tau`` by more than its own ``q ln n_eff``). Clean data and pure noise
-  never reach a step, so this cannot name anything there.
+  and two more effects may be named, the best single candidate (lowest IC among those that
+  lower it) is fitted together with **each** other candidate that lowers the IC on its own
+  (starting from the best single's fit), and the runner-up with the best (starting from the
+  runner-up's fit). The partner a leading effect hides need not be the runner-up alone: on a
+  damper with backlash and direction-dependent slip, a dashpot alone explains more than the
+  asymmetry, whose misfit the open gap displaces. A pair is named if it passes the same
+  tests with both effects' parameters counted (lowers IC, removes ``explain_fraction`` of the
+  excess) **and** each member earns its place on top of the other (the pair's IC is below
+  each single's IC: adding the partner to that single lowers ``chi2 / tau`` by more than its
+  own ``q ln n_eff``); the lowest IC among such pairs wins. Clean data and pure noise never
+  reach a step, so this cannot name anything there.
 """
 from __future__ import annotations
 
@@ -171,11 +175,12 @@ def _scorer(cur, excess, ic_cur, tau, pen, explain_fraction, guard):
 def _pair_step(fit_candidate, cur, rows, score, allowed):
     """The pair step of the rule (module docstring): ``((names, row, new current) or None,
     rows of the pairs tried)``; ``score`` is the step's :func:`_scorer`."""
-    singles = sorted((r for r in rows if r["lowers_ic"]), key=lambda r: r["ic"])[:2]
+    singles = sorted((r for r in rows if r["lowers_ic"]), key=lambda r: r["ic"])
     if len(singles) < 2:
         return None, []
+    orders = [(singles[0], r) for r in singles[1:]] + [(singles[1], singles[0])]
     best, tried = None, []
-    for first, second in (singles, singles[::-1]):
+    for first, second in orders:
         if allowed is not None and not allowed(first["names"], second["name"]):
             continue
         on = {"names": first["names"], "chi2": first["chi2"], "q": cur["q"] + first["q"],
@@ -185,10 +190,10 @@ def _pair_step(fit_candidate, cur, rows, score, allowed):
         r["name"] = f"{first['name']} + {second['name']}"
         score(r, q_pair)
         # each member earns its parameters on top of the other
-        earns = all(r["ic"] < s["ic"] for s in singles)
+        earns = r["ic"] < min(first["ic"], second["ic"])
         r["verdict"] = "NAMED (pair)" if (r["lowers_ic"] and r["enough"] and r["guard_ok"]
                                           and earns) else "pair explains little"
-        r["dIC"] = r["ic"] - min(s["ic"] for s in singles)
+        r["dIC"] = r["ic"] - min(first["ic"], second["ic"])
         tried.append(r)
         if r["verdict"].startswith("NAMED") and (best is None or r["ic"] < best[1]["ic"]):
             best = ((first["name"], second["name"]), r,
