@@ -406,10 +406,15 @@ def test_a_record_that_starts_loaded_gets_a_starting_state_not_an_effect():
     g = diagnose(t, u, forces[s_true], noise=SIGMA)
     assert g.effects == ()
     assert g.details["start_displacement"] == pytest.approx(s_true, rel=0.05)
+    # the start is a nuisance variable of the stated uncertainty too: its own error covers it
+    se_s = g.details["start_displacement_stderr"]
+    assert 0.0 < se_s < 0.1 * s_true
+    assert abs(g.details["start_displacement"] - s_true) < 3.0 * se_s
     assert np.sqrt(np.mean((forces[s_true] - g.force_after) ** 2)) < 1.3 * SIGMA
     assert any("does not start from the joint's rest" in w for w in g.warnings)
     g0 = diagnose(t, u, forces[0.0], noise=SIGMA)
     assert g0.effects == () and g0.details["start_displacement"] == 0.0
+    assert g0.details["start_displacement_stderr"] == 0.0       # held at rest, not fitted
     assert not any("does not start from the joint's rest" in w for w in g0.warnings)
 
 

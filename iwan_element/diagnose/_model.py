@@ -180,7 +180,35 @@ def fit_start(model: LoopModel, res, *, max_nfev: int):
         c_best = 2.0 * res.cost
         h *= 0.25
     model.start = s_best
-    return s_best, res, nfev
+    s_best, res, n = _polish_start(model, s_best, res, max_nfev=max_nfev)
+    return s_best, res, nfev + n
+
+
+def _polish_start(model: LoopModel, s, res, *, max_nfev: int):
+    """One least-squares fit of the start together with the other variables, from the
+    alternation's result (fitting in turn stops where each variable is optimal with the
+    others held, which is not the joint optimum when the start and the joint's shape are
+    correlated). Kept only if it lowers the misfit. Returns ``(start, result, nfev)``."""
+    x = model.ev.x_max
+    lo, hi = -1.5 * x, 1.5 * x
+
+    def fun(zs):
+        model.start = float(zs[-1])
+        return model.residual(zs[:-1])
+
+    zs0 = np.clip(np.append(res.x, s), np.append(model.lower, lo), np.append(model.upper, hi))
+    try:
+        joint = least_squares(fun, zs0, bounds=(np.append(model.lower, lo),
+                                                np.append(model.upper, hi)),
+                              method="trf", x_scale="jac", max_nfev=max_nfev, diff_step=1e-6)
+    finally:
+        model.start = s
+    if not joint.cost < res.cost * (1.0 - 1e-9):
+        return s, res, int(joint.nfev)
+    s = float(joint.x[-1])
+    joint.x = joint.x[:-1]
+    model.start = s
+    return s, joint, int(joint.nfev)
 
 
 def var_index(names, name: str) -> int:
@@ -242,29 +270,47 @@ def residual_tau(r) -> float:
 
 def uncertainty(model: LoopModel, z, r):
     """Standard errors and correlation of (Fs, KT, chi, beta, effect params, F0): delta method
-    from the Jacobian in ``(z, Fs, F0)``, with the residual variance inflated by its
-    correlation time (a correlated, systematic misfit is not treated as independent noise)."""
+    from the Jacobian in ``(z, start, Fs, F0)``, with the residual variance inflated by its
+    correlation time (a correlated, systematic misfit is not treated as independent noise).
+
+    A fitted starting state (``model.start != 0``, :func:`fit_start`) is a nuisance variable
+    of the fit like the force offset: it has a column in the Jacobian, so its correlation
+    with the joint's variables widens their errors; ``start = 0`` (kept when no start fits
+    better) is held. Returns ``(se, corr, se_start)`` (``se_start`` [m], 0 when held)."""
     Fs, F0 = model.linear(model.unit(z))
-    theta = np.concatenate([z, [Fs, F0]])
+    s0 = model.start
+    free_start = s0 != 0.0
+    nz = z.size
+    theta = np.concatenate([z, [s0] if free_start else [], [Fs, F0]])
     fixed = model.F0 is not None
-    lo = np.concatenate([model.lower, [0.0, -np.inf]])
-    hi = np.concatenate([model.upper, [np.inf, np.inf]])
+    lo = np.concatenate([model.lower, [-np.inf] if free_start else [], [0.0, -np.inf]])
+    hi = np.concatenate([model.upper, [np.inf] if free_start else [], [np.inf, np.inf]])
 
     def resid(th):
-        return model.y - th[-2] * model.unit(th[:-2]) - th[-1]
+        if free_start:
+            model.start = float(th[nz])
+        try:
+            return model.y - th[-2] * model.unit(th[:nz]) - th[-1]
+        finally:
+            model.start = s0
 
     def phys(th):
-        p, effs, _ = model.physical(th[:-2])
+        p, effs, _ = model.physical(th[:nz])
         s = th[-2] / p.Fs
         p = IwanParameters(th[-2], p.KT * s, p.chi, p.beta)
         effs = [scale_effect(nm, d, s, to_unit=False) for nm, d in zip(model.names, effs)]
-        return flat(p, effs, model.names, th[-1])[0]
+        return np.append(flat(p, effs, model.names, th[-1])[0], th[nz] if free_start else 0.0)
 
     cols, pcols = [], []
     for j in range(theta.size - (1 if fixed else 0)):
-        h = 1e-5 * max(abs(theta[j]), 1.0) if j >= theta.size - 2 else 1e-5
         if j == theta.size - 2:                  # Fs: a relative step that stays positive
             h = 1e-5 * theta[j]
+        elif j == theta.size - 1:
+            h = 1e-5 * max(abs(theta[j]), 1.0)
+        elif j == nz:                            # the start (only when free): metres
+            h = 1e-5 * model.ev.x_max
+        else:
+            h = 1e-5
         (dr, dp), (dr4, _) = (_difference(resid, phys, theta, j, f * h, lo, hi) for f in (1, 4))
         cols.append(np.where(_jumps(dr, dr4), 0.0, dr))
         pcols.append(dp)
@@ -272,9 +318,11 @@ def uncertainty(model: LoopModel, z, r):
     s2 = float(r @ r) / max(r.size - theta.size, 1) * residual_tau(r)
     cov = Jp @ (s2 * np.linalg.pinv(J.T @ J, rcond=1e-12, hermitian=True)) @ Jp.T
     se = np.sqrt(np.clip(np.diag(cov), 0.0, None))
+    cov, se_start = cov[:-1, :-1], float(se[-1])
+    se = se[:-1]
     with np.errstate(invalid="ignore", divide="ignore"):
         corr = cov / np.outer(se, se)
-    return se, corr
+    return se, corr, se_start
 
 
 def _difference(resid, phys, theta, j, h, lo, hi):

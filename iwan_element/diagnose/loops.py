@@ -227,7 +227,7 @@ def _fit_result(row, fitter, FF, F_model, t_start, base_identified=None, extra_w
     mdl, z = row["model"], row["z"]
     p, effs, F0 = mdl.physical(z)
     r = mdl.residual(z)
-    se, corr = M.uncertainty(mdl, z, r)
+    se, corr, se_start = M.uncertainty(mdl, z, r)
     vals, labels = M.flat(p, effs, mdl.names, F0)
     stderr = dict(zip(M.PARAM_NAMES, se[:4].tolist()))
     at_bound = np.isclose(z, mdl.lower, atol=1e-6) | np.isclose(z, mdl.upper, atol=1e-6)
@@ -261,7 +261,9 @@ def _fit_result(row, fitter, FF, F_model, t_start, base_identified=None, extra_w
         nfev=int(fitter.nfev), method="loops+" + "+".join(mdl.names) if mdl.names else "loops",
         n_data=int(r.size), warnings=tuple(warns), wall_time=time.perf_counter() - t_start,
         details=_json({"effects": eff_out, "labels": labels, "force_offset": F0,
-                       "force_offset_stderr": float(se[-1]), "correlation_all": corr}))
+                       "force_offset_stderr": float(se[-1]), "correlation_all": corr,
+                       "start_displacement": float(mdl.start),
+                       "start_displacement_stderr": se_start}))
 
 
 def _record_force(row, uj, v):
@@ -457,10 +459,13 @@ def _assemble(c) -> Diagnosis:
                "criterion": criterion_text(), "location": loc, "lowpass": c["lp"],
                "lowpass_reason": "rig dynamics removed before fitting" if c["lp"] else None,
                "start_displacement": float(final.get("start", 0.0)),
+               "start_displacement_stderr": float(fit.details.get("start_displacement_stderr",
+                                                                  0.0)),
                "wall_time": time.perf_counter() - c["t_start"]}
     if final.get("start", 0.0) != 0.0:
         warns.append(f"the record does not start from the joint's rest: a path to "
-                     f"{final['start']:.4g} m before the first sample (the joint's unknown "
+                     f"{final['start']:.4g} +- {details['start_displacement_stderr']:.2g} m "
+                     "before the first sample (the joint's unknown "
                      "starting state, fitted as a nuisance) fits better")
     return Diagnosis(
         effect=sel.named[0] if sel.named else "none", effects=tuple(sel.named),
