@@ -19,7 +19,8 @@ displacement with a tapered envelope. The workflow:
    loose part drags as it crosses the gap: ``Backlash(..., drag=...)``), and a sliding
    force that differs with the direction (a band brake is self-energising one way:
    ``asymmetric_slip``). When neither alone explains a quarter of the misfit, the selection
-   rule tries the two best together (its pair step). A stiffening (Hertz) contact closing
+   rule tries the best one together with each other candidate (its pair step): the open gap
+   hides the asymmetry, which alone explains less than a dashpot does. A stiffening (Hertz) contact closing
    the gap was tried and rejected: refitted with the joint, its compliance goes to zero.
 
     python examples/real_damper.py [--record PATH] [--out out/]

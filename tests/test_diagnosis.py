@@ -14,12 +14,11 @@ import pytest
 from _diagnosis_cases import (MODAL, P, PROTOCOLS, SHAPES, SIGMA, ZETA0, calibrated,
                               effect_rms, element, modal_curves, record, vibration_case,
                               vibration_case_elements)
-from iwan_element import (AsymmetricSlip, IwanJoint, IwanParameters, PinningStiffness,
-                          ViscousDamping, make_effect)
+from iwan_element import (AsymmetricSlip, IwanJoint, PinningStiffness, ViscousDamping,
+                          make_effect)
 from iwan_element.core._history import REVERSAL_TOL, unit_params
 from iwan_element.effects._evaluate import Evaluator, build_element, dissipation_segments
-from iwan_element.diagnose import (CANDIDATES, diagnose, diagnose_vibration,
-                                    simulate_element_test)
+from iwan_element.diagnose import diagnose, diagnose_vibration, simulate_element_test
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -41,7 +41,7 @@ from ._locate import _check_candidates, _locate, _untestable
 from ._noise import noise_estimate
 from ..identify.result import _settle
 from .results import Diagnosis, _json
-from .selection import criterion_text, misfit_p, stepwise_select
+from .selection import criterion_text, stepwise_select
 
 __all__ = ["CANDIDATES", "diagnose"]
 

@@ -7,8 +7,6 @@ domain it is a constant added modal damping ratio ``zeta_v = c r^2 / (2 m omega)
 """
 from __future__ import annotations
 
-import numpy as np
-
 from ._base import ParamSpec, _Effect
 
 __all__ = ["ViscousDamping"]
