@@ -62,21 +62,40 @@ def _identify(prob: _Problem, *, n_starts: int, rng: np.random.Generator, alpha:
     Returns a dict with the chosen params, stderr, correlation, identified, ranges, residuals
     and diagnostics.
     """
-    xm = prob.x_max
-    lo_q, hi_q = math.log(_PHI_RANGE[0]), math.log(_PHI_RANGE[1])
-    # ---- microslip only: beta = 0, phi_max >= x_max (represents every microslip model)
-    lower_m = np.array([0.0, _CHI_BOUNDS[0]])
-    upper_m = np.array([hi_q, _CHI_BOUNDS[1]])
-    starts_m = [(math.log(2.0), -0.5), (math.log(1.2), -0.2), (math.log(5.0), -0.8),
-                (math.log(1.5), 0.3)]
-    res_m = _multistart(prob, starts_m, lower_m, upper_m, beta_fixed=0.0, max_nfev=max_nfev)
-    phi_m, chi_m, _ = _q_to_shape(res_m.x, xm, 0.0)
-    Fs_m, r_m = prob.projected(phi_m, chi_m, 0.0)
-    ssr_m = float(r_m @ r_m)
-    # ---- all four parameters
-    lower = np.array([lo_q, _CHI_BOUNDS[0], 0.0])
-    upper = np.array([hi_q, _CHI_BOUNDS[1], math.log1p(_BETA_MAX)])
-    starts = [(res_m.x[0], chi_m, 0.0), (math.log(0.7), chi_m, math.log(2.0)),
+    micro = _fit_microslip(prob, max_nfev=max_nfev)
+    full = _fit_full(prob, micro, n_starts=n_starts, rng=rng, max_nfev=max_nfev,
+                     initial=initial)
+    macro, details = _macroslip_test(prob, micro, full, alpha)
+    out = _macro_result(prob, full, details) if macro else _micro_result(prob, micro, full,
+                                                                         details)
+    out["warnings"] += _range_warnings(out["params"])
+    details["tau"] = out["tau"]
+    r = out["r"]
+    out.update(details=details, ssr=float(r @ r), n_free=4 if macro else 3)
+    return out
+
+
+def _fit_microslip(prob: _Problem, *, max_nfev: int) -> dict:
+    """The microslip-only fit: beta = 0, phi_max >= x_max (it represents every microslip
+    model, REFERENCE.md eq. 10)."""
+    lower = np.array([0.0, _CHI_BOUNDS[0]])
+    upper = np.array([math.log(_PHI_RANGE[1]), _CHI_BOUNDS[1]])
+    starts = [(math.log(2.0), -0.5), (math.log(1.2), -0.2), (math.log(5.0), -0.8),
+              (math.log(1.5), 0.3)]
+    res = _multistart(prob, starts, lower, upper, beta_fixed=0.0, max_nfev=max_nfev)
+    phi, chi, _ = _q_to_shape(res.x, prob.x_max, 0.0)
+    Fs, r = prob.projected(phi, chi, 0.0)
+    return {"res": res, "phi": phi, "chi": chi, "Fs": Fs, "r": r}
+
+
+def _fit_full(prob: _Problem, micro: dict, *, n_starts: int, rng: np.random.Generator,
+              max_nfev: int, initial: IwanParameters | None) -> dict:
+    """The four-parameter multi-start fit, started from the microslip fit, the user's
+    ``initial`` and random shapes."""
+    xm, chi_m = prob.x_max, micro["chi"]
+    lower = np.array([math.log(_PHI_RANGE[0]), _CHI_BOUNDS[0], 0.0])
+    upper = np.array([math.log(_PHI_RANGE[1]), _CHI_BOUNDS[1], math.log1p(_BETA_MAX)])
+    starts = [(micro["res"].x[0], chi_m, 0.0), (math.log(0.7), chi_m, math.log(2.0)),
               (math.log(0.4), chi_m, 0.0), (math.log(0.9), chi_m, math.log(4.0))]
     if initial is not None:
         starts.insert(0, (math.log(initial.phi_max / xm), initial.chi, math.log1p(initial.beta)))
@@ -84,12 +103,21 @@ def _identify(prob: _Problem, *, n_starts: int, rng: np.random.Generator, alpha:
         starts.append((rng.uniform(math.log(0.2), math.log(2.0)), rng.uniform(-0.9, -0.05),
                        rng.uniform(0.0, math.log(4.0))))
     starts = starts[:max(n_starts, 1 if initial is None else 2)]
-    res_f = _multistart(prob, starts, lower, upper, beta_fixed=None, max_nfev=max_nfev)
-    phi_f, chi_f, beta_f = _q_to_shape(res_f.x, xm, None)
-    Fs_f, r_f = prob.projected(phi_f, chi_f, beta_f)
-    ssr_f = float(r_f @ r_f)
+    res = _multistart(prob, starts, lower, upper, beta_fixed=None, max_nfev=max_nfev)
+    phi, chi, beta = _q_to_shape(res.x, xm, None)
+    Fs, r = prob.projected(phi, chi, beta)
+    return {"res": res, "phi": phi, "chi": chi, "beta": beta, "Fs": Fs, "r": r,
+            "starts": len(starts)}
+
+
+def _macroslip_test(prob: _Problem, micro: dict, full: dict, alpha: float):
+    """Whether the data reach macroslip: the four-parameter fit puts macroslip samples in the
+    data and lowers the residual significantly (F test on the effective samples).
+    Returns ``(macro, details)``."""
+    xm, r_f = prob.x_max, full["r"]
+    ssr_m, ssr_f = float(micro["r"] @ micro["r"]), float(r_f @ r_f)
     m = r_f.size
-    n_macro = prob.n_macro(phi_f)
+    n_macro = prob.n_macro(full["phi"])
     tau_f = integrated_time(r_f) if prob.timeseries else 1.0
     m_eff = m / tau_f                      # correlated residuals carry fewer independent data
     if ssr_f > 0 and m_eff > 5:
@@ -97,90 +125,98 @@ def _identify(prob: _Problem, *, n_starts: int, rng: np.random.Generator, alpha:
         p_value = float(fdtrc(1, m_eff - 4, F_stat))      # F-distribution survival
     else:
         F_stat, p_value = (math.inf, 0.0) if ssr_m > ssr_f else (0.0, 1.0)
-    macro = (phi_f < xm and n_macro >= prob.min_macro and p_value < alpha)
+    macro = (full["phi"] < xm and n_macro >= prob.min_macro and p_value < alpha)
     details = {"x_max": xm, "ssr_microslip": ssr_m, "ssr_full": ssr_f, "F_statistic": F_stat,
                "p_value": p_value, "alpha": alpha, "macroslip_residuals": n_macro,
-               "macroslip_reached": bool(macro), "starts": len(starts)}
-    warns: list[str] = []
-    tau_of = (lambda r_: integrated_time(r_)) if prob.timeseries else (lambda r_: 1.0)
-    off = prob.offset
-    if macro:
-        Fs, chi, beta = Fs_f, chi_f, beta_f
-        KT = Fs * unit_params(phi_f, chi, beta).KT
-        params = IwanParameters(Fs, KT, chi, beta)
-        res, r = res_f, r_f
-        dF0 = prob.dF0 if off else 0.0
-        tau = tau_of(r)
-        theta = np.array([math.log(Fs), math.log(KT), chi, math.log1p(beta)] + ([dF0] if off else []))
+               "macroslip_reached": bool(macro), "starts": full["starts"]}
+    return macro, details
 
-        def fun(th):
-            return prob.residual(IwanParameters(math.exp(th[0]), math.exp(th[1]), th[2],
-                                                math.expm1(th[3])), th[4] if off else 0.0)
 
-        se, corr = _uncertainty(fun, theta, r, [Fs, KT, 1.0, 1.0 + beta] + ([1.0] if off else []),
-                                at_lower_bound=3, tau=tau,
-                                timeseries=prob.timeseries, block=prob.block)
-        stderr = dict(zip(PARAM_NAMES, se[:4].tolist()))
-        se_off = float(se[4]) if off else math.nan
-        corr = corr[:4, :4]
-        identified = dict.fromkeys(PARAM_NAMES, True)
-        ranges = {}
-        at_bound = [k for k, v, (lo, hi) in (("chi", chi, _CHI_BOUNDS), ("beta", beta, (0, _BETA_MAX)))
-                    if min(abs(v - lo), abs(v - hi)) < 1e-6]
-        if phi_f <= xm * _PHI_RANGE[0] * (1 + 1e-6):
-            at_bound += ["Fs", "KT"]
-        details["macroslip_fraction"] = n_macro / m
+def _tau(prob: _Problem, r) -> float:
+    return integrated_time(r) if prob.timeseries else 1.0
+
+
+def _macro_result(prob: _Problem, full: dict, details: dict) -> dict:
+    """All four parameters identified: their covariance in (ln Fs, ln KT, chi, ln(1+beta))."""
+    xm, off = prob.x_max, prob.offset
+    Fs, chi, beta, phi_f = full["Fs"], full["chi"], full["beta"], full["phi"]
+    KT = Fs * unit_params(phi_f, chi, beta).KT
+    params = IwanParameters(Fs, KT, chi, beta)
+    r = full["r"]
+    dF0 = prob.dF0 if off else 0.0
+    tau = _tau(prob, r)
+    theta = np.array([math.log(Fs), math.log(KT), chi, math.log1p(beta)] + ([dF0] if off else []))
+
+    def fun(th):
+        return prob.residual(IwanParameters(math.exp(th[0]), math.exp(th[1]), th[2],
+                                            math.expm1(th[3])), th[4] if off else 0.0)
+
+    se, corr = _uncertainty(fun, theta, r, [Fs, KT, 1.0, 1.0 + beta] + ([1.0] if off else []),
+                            at_lower_bound=3, tau=tau,
+                            timeseries=prob.timeseries, block=prob.block)
+    at_bound = [k for k, v, (lo, hi) in (("chi", chi, _CHI_BOUNDS), ("beta", beta, (0, _BETA_MAX)))
+                if min(abs(v - lo), abs(v - hi)) < 1e-6]
+    if phi_f <= xm * _PHI_RANGE[0] * (1 + 1e-6):
+        at_bound += ["Fs", "KT"]
+    details["macroslip_fraction"] = details["macroslip_residuals"] / r.size
+    return {"params": params, "stderr": dict(zip(PARAM_NAMES, se[:4].tolist())),
+            "correlation": corr[:4, :4], "identified": dict.fromkeys(PARAM_NAMES, True),
+            "ranges": {}, "res": full["res"], "r": r, "warnings": [], "at_bound": at_bound,
+            "dF0": (dF0, float(se[4]) if off else math.nan), "tau": tau}
+
+
+def _micro_result(prob: _Problem, micro: dict, full: dict, details: dict) -> dict:
+    """Microslip only: KT, chi and R identified (REFERENCE.md eq. 10); Fs and beta given as
+    the range of the family that fits equally, with a warning that says why."""
+    xm, off = prob.x_max, prob.offset
+    Fs0, phi0, chi = micro["Fs"], micro["phi"], micro["chi"]
+    KT = Fs0 * unit_params(phi0, chi, 0.0).KT
+    params = IwanParameters(Fs0, KT, chi, 0.0)
+    R = params.R
+    r = micro["r"]
+    prob.projected(phi0, chi, 0.0)               # the offset of this member (prob.dF0)
+    dF0 = prob.dF0 if off else 0.0
+    tau = _tau(prob, r)
+    theta = np.array([math.log(KT), chi, math.log(R)] + ([dF0] if off else []))
+
+    def fun(th):
+        # the beta = 0 member for (KT, chi, R): R phi^(chi+1) = (chi+1) KT, eq. 10
+        KT_, chi_, R_ = math.exp(th[0]), th[1], math.exp(th[2])
+        phi_ = ((chi_ + 1.0) * KT_ / R_) ** (1.0 / (chi_ + 1.0))
+        return prob.residual(IwanParameters(KT_ * phi_ * (chi_ + 1.0) / (chi_ + 2.0), KT_,
+                                            chi_, 0.0), th[3] if off else 0.0)
+
+    se3, c3 = _uncertainty(fun, theta, r, [KT, 1.0, R] + ([1.0] if off else []), tau=tau,
+                           timeseries=prob.timeseries, block=prob.block)
+    corr = np.full((4, 4), np.nan)
+    corr[1:3, 1:3] = c3[:2, :2]
+    at_bound = [k for k, v, (lo, hi) in (("chi", chi, _CHI_BOUNDS),)
+                if min(abs(v - lo), abs(v - hi)) < 1e-6]
+    # family members that fit equally: phi_max in [x_max, phi0], beta = (phi0/phi)^(chi+1) - 1
+    beta_hi = (phi0 / xm) ** (chi + 1.0) - 1.0
+    Fs_lo = backbone(xm, params)             # phi_max = x_max: Fs is the force reached
+    details.update({"R": R, "stderr_R": se3[2], "corr_KT_chi_R": c3[:3, :3]})
+    p_value, alpha = details["p_value"], details["alpha"]
+    if details["macroslip_residuals"] >= prob.min_macro and full["phi"] < xm:
+        why = (f"the four-parameter fit puts macroslip in the data but does not improve "
+               f"the residual significantly (p = {p_value:.2g} >= {alpha:g})")
     else:
-        Fs0, phi0, chi = Fs_m, phi_m, chi_m
-        KT = Fs0 * unit_params(phi0, chi, 0.0).KT
-        params = IwanParameters(Fs0, KT, chi, 0.0)
-        R = params.R
-        res, r = res_m, r_m
-        prob.projected(phi_m, chi_m, 0.0)
-        dF0 = prob.dF0 if off else 0.0
-        tau = tau_of(r)
-        theta = np.array([math.log(KT), chi, math.log(R)] + ([dF0] if off else []))
-
-        def fun(th):
-            # the beta = 0 member for (KT, chi, R): R phi^(chi+1) = (chi+1) KT, eq. 10
-            KT_, chi_, R_ = math.exp(th[0]), th[1], math.exp(th[2])
-            phi_ = ((chi_ + 1.0) * KT_ / R_) ** (1.0 / (chi_ + 1.0))
-            return prob.residual(IwanParameters(KT_ * phi_ * (chi_ + 1.0) / (chi_ + 2.0), KT_,
-                                                chi_, 0.0), th[3] if off else 0.0)
-
-        se3, c3 = _uncertainty(fun, theta, r, [KT, 1.0, R] + ([1.0] if off else []), tau=tau,
-                               timeseries=prob.timeseries, block=prob.block)
-        se_off = float(se3[3]) if off else math.nan
-        stderr = {"Fs": math.nan, "KT": se3[0], "chi": se3[1], "beta": math.nan}
-        corr = np.full((4, 4), np.nan)
-        corr[1:3, 1:3] = c3[:2, :2]
-        at_bound = [k for k, v, (lo, hi) in (("chi", chi, _CHI_BOUNDS),)
-                    if min(abs(v - lo), abs(v - hi)) < 1e-6]
-        identified = {"Fs": False, "KT": True, "chi": True, "beta": False}
-        # family members that fit equally: phi_max in [x_max, phi0], beta = (phi0/phi)^(chi+1) - 1
-        beta_hi = (phi0 / xm) ** (chi + 1.0) - 1.0
-        Fs_lo = backbone(xm, params)             # phi_max = x_max: Fs is the force reached
-        ranges = {"Fs": (float(Fs_lo), float(Fs0)), "beta": (0.0, float(beta_hi))}
-        details.update({"R": R, "stderr_R": se3[2], "corr_KT_chi_R": c3[:3, :3]})
-        if n_macro >= prob.min_macro and phi_f < xm:
-            why = (f"the four-parameter fit puts macroslip in the data but does not improve "
-                   f"the residual significantly (p = {p_value:.2g} >= {alpha:g})")
-        else:
-            why = ("the data do not reach macroslip (largest backbone argument "
-                   f"{xm * 1e3:.4g} mm <= phi_max)")
-        warns.append(f"Fs and beta are NOT identified: {why}; the data determine only KT, chi "
-                     f"and R = {R:.5g}. Any Fs in [{Fs_lo:.5g}, {Fs0:.5g}] N with beta in "
-                     f"[0, {beta_hi:.4g}] fits equally; params reports the beta = 0 member. "
-                     "Test to larger amplitudes to identify them.")
-        if phi0 <= xm * (1 + 1e-9):
-            warns.append("the microslip fit sits at its bound phi_max = x_max: the backbone's "
-                         "tangent vanishes at the largest excursion; more data near macroslip "
-                         "would settle Fs")
-    warns += _range_warnings(params)
-    details["tau"] = tau
-    return {"params": params, "stderr": stderr, "correlation": corr, "identified": identified,
-            "ranges": ranges, "res": res, "r": r, "warnings": warns, "details": details,
-            "at_bound": at_bound, "dF0": (dF0, se_off), "tau": tau,
-            "ssr": float(r @ r), "n_free": 4 if macro else 3}
+        why = ("the data do not reach macroslip (largest backbone argument "
+               f"{xm * 1e3:.4g} mm <= phi_max)")
+    warns = [f"Fs and beta are NOT identified: {why}; the data determine only KT, chi "
+             f"and R = {R:.5g}. Any Fs in [{Fs_lo:.5g}, {Fs0:.5g}] N with beta in "
+             f"[0, {beta_hi:.4g}] fits equally; params reports the beta = 0 member. "
+             "Test to larger amplitudes to identify them."]
+    if phi0 <= xm * (1 + 1e-9):
+        warns.append("the microslip fit sits at its bound phi_max = x_max: the backbone's "
+                     "tangent vanishes at the largest excursion; more data near macroslip "
+                     "would settle Fs")
+    return {"params": params, "stderr": {"Fs": math.nan, "KT": se3[0], "chi": se3[1],
+                                         "beta": math.nan},
+            "correlation": corr, "identified": {"Fs": False, "KT": True, "chi": True,
+                                                "beta": False},
+            "ranges": {"Fs": (float(Fs_lo), float(Fs0)), "beta": (0.0, float(beta_hi))},
+            "res": micro["res"], "r": r, "warnings": warns, "at_bound": at_bound,
+            "dF0": (dF0, float(se3[3]) if off else math.nan), "tau": tau}
 
 
