@@ -14,8 +14,12 @@ residual after is within 1.3 x the noise RMS. Clean records must succeed, pure n
 Every record also checks that ``success``, the report's status column and the warnings
 agree (:func:`agree`).
 
+With ``--pairs`` two effects are hidden in each record instead (each calibrated alone to the
+size; default sizes 1 and 3): both must be named, in either order, and the residual after
+must be within 1.3 x the noise.
+
     python benchmarks/bench_diagnosis.py [--sizes 0.5 3] [--jobs 2] [--effects ...] [--seed 1000]
-                                         [--cases N] [--timing REPEATS]
+                                         [--cases N] [--timing REPEATS] [--pairs [A+B ...]]
 """
 from __future__ import annotations
 
@@ -42,6 +46,10 @@ ENVELOPES = {"constant": ("steps", (0.4, 0.9, 1.7), 2),
 SHAPES = {"viscous_damping": ("c", {}), "pinning_stiffness": ("k_p", {"delta": 0.6}),
           "backlash": ("gap", {}), "slip_degradation": ("rate", {}),
           "asymmetric_slip": ("asymmetry", {}), "breakaway": ("ratio", {})}
+#: Two hidden effects per record (``--pairs``): the damper's backlash with direction-dependent
+#: slip, and two combinations with a dashpot.
+PAIRS = ("backlash+asymmetric_slip", "viscous_damping+asymmetric_slip",
+         "backlash+viscous_damping")
 NOISE = 0.004                       # force noise / Fs
 NOTICEABLE = 2.0                    # added-force RMS / noise RMS
 
@@ -108,11 +116,25 @@ def agree(g) -> bool:
     return ok and (not g.success or all(f.identified[k] for k in ("Fs", "KT", "chi")))
 
 
+def _pair_element(p, env, names, size):
+    """Two effects stacked on the joint (slider-level innermost), each calibrated alone to
+    ``size`` x noticeable."""
+    from iwan_element.effects._evaluate import order_stack
+    el = IwanJoint(p)
+    for nm in order_stack(names):
+        key, extra = SHAPES[nm]
+        x = _parameter(p, env, nm, size)
+        el = make_effect(nm, el, **{key: x}, **{k: v * p.phi_max for k, v in extra.items()})
+    return el
+
+
 def one(case):
     kind, joint, env, name, size, seed = case
     p = JOINTS[joint]
     if kind == "effect":
         el = _element(p, name, _parameter(p, env, name, size))
+    elif kind == "pair":
+        el = _pair_element(p, env, name.split("+"), size)
     else:
         el = IwanJoint(p)
     t, u, F = _record(p, env, el, seed, pure_noise=(kind == "noise"))
@@ -164,6 +186,10 @@ def main(argv=None):
                     help="first seed of the effect cases (clean: seed + 1000, noise: + 2000)")
     ap.add_argument("--cases", type=int, default=None,
                     help="run only every k-th case so that about this many run (default all)")
+    ap.add_argument("--pairs", nargs="*", default=None, metavar="A+B",
+                    help="run two hidden effects per record instead (default pairs: "
+                         + " ".join(PAIRS) + "), at --sizes (default here 1 3) x noticeable "
+                         "each; pass: both named, residual within 1.3 x the noise")
     ap.add_argument("--timing", type=int, default=0, metavar="REPEATS",
                     help="only time diagnose with the slip-degradation run solver vs the "
                          "per-sample loop (interleaved, this many repeats) and exit")
@@ -173,6 +199,15 @@ def main(argv=None):
         return 0
     cases, seed = [], args.seed
     joints = list(JOINTS)
+    if args.pairs is not None:
+        pairs = args.pairs or list(PAIRS)
+        sizes = args.sizes if "--sizes" in (argv or sys.argv) else [1.0, 3.0]
+        for i, name in enumerate(pairs):
+            for j, env in enumerate(args.envelopes):
+                for size in sizes:
+                    seed += 1
+                    cases.append(("pair", joints[(i + j) % 2], env, name, size, seed + 3000))
+        args.effects, args.clean = [], 0
     for i, name in enumerate(args.effects):
         for j, env in enumerate(args.envelopes):
             for size in args.sizes:
@@ -194,9 +229,11 @@ def main(argv=None):
     for (kind, joint, env, name, size, _), eff, effs, ratio, (ok, agr), dt in rows:
         if kind == "effect":
             good = eff == name and ratio <= 1.3
+        elif kind == "pair":
+            good = set(effs) == set(name.split("+")) and ratio <= 1.3
         else:
             good = effs == () and (ok if kind == "clean" else not ok)
-        label = name if kind == "effect" else kind
+        label = name if kind in ("effect", "pair") else kind
         passed.setdefault(label, []).append(good)
         n_agree += agr
         print(f"{label:<18} {joint:<6} {env:<10} {size:5.2g} {' + '.join(effs) or 'none':<36} "
