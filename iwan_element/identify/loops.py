@@ -242,21 +242,9 @@ def fit_loops(t, u, F, *, sigma=None, smooth="auto", max_samples: int | None = 2
     prob.block = half
     out = _identify(prob, n_starts=n_starts, rng=rng, alpha=alpha, max_nfev=max_nfev,
                     initial=initial)
-    du0, se_du0 = 0.0, math.nan
-    for _ in range(4):                     # Gauss-Newton on du0, refitting the joint each time
-        step, se_du0 = _displacement_offset(hist, u_drive - du0, prob, out, amp)
-        if not math.isfinite(se_du0) or abs(step) <= max(0.1 * se_du0, 1e-5 * amp):
-            break
-        trial = _setup(u_drive - du0 - step, FF, w_full, keep, tol)
-        trial[1].block = half
-        out_t = _identify(trial[1], n_starts=1, rng=rng, alpha=alpha, max_nfev=max_nfev,
-                          initial=out["params"])
-        if out_t["ssr"] >= out["ssr"]:
-            break                          # the shift does not improve the fit: keep what we have
-        du0 += step
-        (hist, prob), out = trial, out_t
-    if not math.isfinite(se_du0):
-        du0 = 0.0 if du0 == 0.0 else du0   # reported as not determined (stderr NaN)
+    du0, se_du0, hist, prob, out = _fit_displacement_offset(
+        (hist, prob), out, u_drive, FF, w_full, keep, tol, amp,
+        dict(rng=rng, alpha=alpha, max_nfev=max_nfev))
     p_noise, r2 = _explains(out, prob)
     dF0, se_dF0 = out["dF0"]
     if p_noise >= alpha:
@@ -283,3 +271,26 @@ def fit_loops(t, u, F, *, sigma=None, smooth="auto", max_samples: int | None = 2
                    nfev=prob.nfev, nrmse=nrmse, t0=t0, extra_warnings=warns,
                    offsets={"force": (dF0, se_dF0), "displacement": (du0, se_du0)},
                    noise=noise, curves=curves)
+
+
+def _fit_displacement_offset(setup, out, u_drive, FF, w_full, keep, tol, amp, opts):
+    """Gauss-Newton on the displacement offset ``du0``, refitting the joint each time (up to
+    4 steps; a shift that does not lower the misfit is not taken). ``setup``: the current
+    ``(hist, prob)``; ``amp``: half the measured displacement range [m]; ``opts``: ``rng``,
+    ``alpha``, ``max_nfev`` of the joint's fit.
+    Returns ``(du0, se_du0, hist, prob, out)`` (``se_du0`` NaN: not determined)."""
+    hist, prob = setup
+    half = prob.block
+    du0, se_du0 = 0.0, math.nan
+    for _ in range(4):
+        step, se_du0 = _displacement_offset(hist, u_drive - du0, prob, out, amp)
+        if not math.isfinite(se_du0) or abs(step) <= max(0.1 * se_du0, 1e-5 * amp):
+            break
+        trial = _setup(u_drive - du0 - step, FF, w_full, keep, tol)
+        trial[1].block = half
+        out_t = _identify(trial[1], n_starts=1, initial=out["params"], **opts)
+        if out_t["ssr"] >= out["ssr"]:
+            break                          # the shift does not improve the fit: keep what we have
+        du0 += step
+        (hist, prob), out = trial, out_t
+    return du0, se_du0, hist, prob, out
