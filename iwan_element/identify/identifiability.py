@@ -110,6 +110,11 @@ def _fit_full(prob: _Problem, micro: dict, *, n_starts: int, rng: np.random.Gene
             "starts": len(starts)}
 
 
+def _tau(prob: _Problem, r) -> float:
+    """Correlation time of a residual [samples]: 1 for points that are not a time series."""
+    return integrated_time(r) if prob.timeseries else 1.0
+
+
 def _macroslip_test(prob: _Problem, micro: dict, full: dict, alpha: float):
     """Whether the data reach macroslip: the four-parameter fit puts macroslip samples in the
     data and lowers the residual significantly (F test on the effective samples).
@@ -118,7 +123,7 @@ def _macroslip_test(prob: _Problem, micro: dict, full: dict, alpha: float):
     ssr_m, ssr_f = float(micro["r"] @ micro["r"]), float(r_f @ r_f)
     m = r_f.size
     n_macro = prob.n_macro(full["phi"])
-    tau_f = integrated_time(r_f) if prob.timeseries else 1.0
+    tau_f = _tau(prob, r_f)
     m_eff = m / tau_f                      # correlated residuals carry fewer independent data
     if ssr_f > 0 and m_eff > 5:
         F_stat = max(ssr_m - ssr_f, 0.0) / (ssr_f / (m - 4)) / tau_f
@@ -130,10 +135,6 @@ def _macroslip_test(prob: _Problem, micro: dict, full: dict, alpha: float):
                "p_value": p_value, "alpha": alpha, "macroslip_residuals": n_macro,
                "macroslip_reached": bool(macro), "starts": full["starts"]}
     return macro, details
-
-
-def _tau(prob: _Problem, r) -> float:
-    return integrated_time(r) if prob.timeseries else 1.0
 
 
 def _macro_result(prob: _Problem, full: dict, details: dict) -> dict:
