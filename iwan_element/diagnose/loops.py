@@ -328,13 +328,13 @@ def diagnose(t, u, F, *, candidates=None, max_effects: int = 2, noise: float | N
     alpha = check_scalar("alpha", alpha, low=0.0, high=0.5, low_open=True, high_open=True)
     ambiguity = check_scalar("ambiguity", ambiguity, low=0.0)
     max_samples = _check_int("max_samples", max_samples, 100)
-    FF = FF_in if lp is None else _filter(tt, FF_in, lp)
+    FF = FF_in
     if lp is not None:
         # both channels, as the rig's dynamics and the sensor noise are in both: the joint is
         # driven by the displacement without them. Raw displacement noise makes turning
         # points by the hundred (154 on a 1 Hz damper record at the fitted samples, 26 after
         # a 20 Hz low-pass), and every one re-sticks the sliders of a break-away model
-        uu = _filter(tt, uu, lp)
+        FF, uu = _filter(tt, FF_in, lp), _filter(tt, uu, lp)
     i_rest = _rest_index(uu, noise_estimate(tt, uu)[0])
     u_off = float(np.mean(uu[:i_rest]))
     # the force offset is always fitted (linear, with Fs), the rest samples being part of the

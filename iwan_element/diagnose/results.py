@@ -87,9 +87,10 @@ class Diagnosis:
         Effects this record cannot reveal, with the reason.
     warnings : tuple of str
     force_before, force_after : ndarray, shape (n,)
-        Forces [N] of the base and the augmented model on the measured displacement.
+        Forces [N] of the base and the augmented model on the displacement as fitted.
     t, u, F : ndarray, shape (n,)
-        The data (read-only copies; ``t`` is the sample index if no time was given).
+        The data as fitted: after the ``lowpass`` of both channels if one was given
+        (read-only copies; ``t`` is the sample index if no time was given).
     details : dict
         Test statistics (JSON-safe).
     """
