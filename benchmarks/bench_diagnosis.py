@@ -66,10 +66,10 @@ def _record(p, env, el, seed, *, pure_noise=False):
     return d.t, d.u, F
 
 
-def _element(p, name, x):
+def _element(p, name, x, inner=None):
     key, extra = SHAPES[name]
     extra = {k: v * p.phi_max for k, v in extra.items()}
-    return make_effect(name, IwanJoint(p), **{key: x}, **extra)
+    return make_effect(name, IwanJoint(p) if inner is None else inner, **{key: x}, **extra)
 
 
 def _parameter(p, env, name, size):
@@ -122,9 +122,7 @@ def _pair_element(p, env, names, size):
     from iwan_element.effects._evaluate import order_stack
     el = IwanJoint(p)
     for nm in order_stack(names):
-        key, extra = SHAPES[nm]
-        x = _parameter(p, env, nm, size)
-        el = make_effect(nm, el, **{key: x}, **{k: v * p.phi_max for k, v in extra.items()})
+        el = _element(p, nm, _parameter(p, env, nm, size), inner=el)
     return el
 
 
@@ -176,8 +174,9 @@ def timing(repeats: int) -> None:
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--sizes", type=float, nargs="+", default=[0.5, 1.0, 3.0],
-                    help="effect size in units of noticeable (default 0.5 1 3)")
+    ap.add_argument("--sizes", type=float, nargs="+", default=None,
+                    help="effect size in units of noticeable (default 0.5 1 3; with --pairs "
+                         "1 3)")
     ap.add_argument("--effects", nargs="+", default=list(SHAPES))
     ap.add_argument("--envelopes", nargs="+", default=list(ENVELOPES))
     ap.add_argument("--clean", type=int, default=6, help="clean and pure-noise records each")
@@ -201,7 +200,7 @@ def main(argv=None):
     joints = list(JOINTS)
     if args.pairs is not None:
         pairs = args.pairs or list(PAIRS)
-        sizes = args.sizes if "--sizes" in (argv or sys.argv) else [1.0, 3.0]
+        sizes = args.sizes or [1.0, 3.0]
         for i, name in enumerate(pairs):
             for j, env in enumerate(args.envelopes):
                 for size in sizes:
@@ -210,7 +209,7 @@ def main(argv=None):
         args.effects, args.clean = [], 0
     for i, name in enumerate(args.effects):
         for j, env in enumerate(args.envelopes):
-            for size in args.sizes:
+            for size in args.sizes or [0.5, 1.0, 3.0]:
                 seed += 1
                 cases.append(("effect", joints[(i + j) % 2], env, name, size, seed))
     for k in range(args.clean):
