@@ -15,6 +15,7 @@ from .jointed_beam import JointedBeamConfig, JointedBeamModel, build_jointed_bea
 
 __all__ = ["ModalResult", "modal_analysis"]
 
+
 @dataclass
 class ModalResult:
     """Linearised modes of the assembly (joint at ``KT``) and the closed-form prediction.
