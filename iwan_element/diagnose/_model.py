@@ -158,8 +158,8 @@ def fit_start(model: LoopModel, res, *, max_nfev: int):
 
     x = model.ev.x_max
     c0 = cost(0.0)
-    grid = [(cost(g * x), g * x) for g in START_GRID]
-    nfev = len(grid) + 1
+    grid = [(c0, 0.0) if g == 0.0 else (cost(g * x), g * x) for g in START_GRID]
+    nfev = len(grid)
     c_best, s_best = min(grid)
     if not c_best < c0 * (1.0 - 1e-6):
         model.start = 0.0
