@@ -150,7 +150,7 @@ def test_slider_effects_match_an_independent_slider_bank():
     k, phi = base.slider_stiffness, base.slider_slip
     _, u = history(amps=(0.4, 1.6, 0.2, 0.9), per_cycle=60)
     a = 0.35
-    F = AsymmetricSlip(DiscreteIwan(P, 12), asymmetry=a, n_sliders=12).force_history(u)
+    F = AsymmetricSlip(DiscreteIwan(P, 12), asymmetry=a).force_history(u)
     np.testing.assert_allclose(F, _jenkins_bank(u, k, (1 + a) * phi, (1 - a) * phi),
                                rtol=0, atol=1e-9 * P.Fs)
     r = 1.6

@@ -205,8 +205,12 @@ def _z_start(names, prev_names, prev_z, which):
 
 
 def _allowed(names, cand):
-    """At most one slider-level effect per stack (each rebuilds the joint's sliders)."""
-    return not (EFFECTS[cand].slider_level and any(EFFECTS[n].slider_level for n in names))
+    """At most one slider-level effect per stack (each rebuilds the joint's sliders), unless
+    all of them are composable slider laws (their thresholds multiply)."""
+    if not EFFECTS[cand].slider_level:
+        return True
+    below = [n for n in names if EFFECTS[n].slider_level]
+    return not below or all(EFFECTS[n].composable for n in below + [cand])
 
 
 def _fit_base(fitter, ev, shape0):

@@ -25,6 +25,8 @@ name                      physics
 ========================  =====================================================================
 
 Slider-level effects (the last three) wrap a plain joint directly; the others wrap anything.
+Asymmetric slip and break-away are one slider law each and may wrap one another (their
+thresholds multiply: :mod:`iwan_element.effects._law`); slip degradation stands alone.
 Every effect reduces exactly to the wrapped element at its neutral parameter values.
 """
 from __future__ import annotations

@@ -108,6 +108,8 @@ class _Effect:
     specs: tuple = ()
     #: True for effects acting on the sliders of the joint (they must wrap a plain joint).
     slider_level = False
+    #: True for slider-level effects that may wrap one another (their laws multiply).
+    composable = False
     #: Parameters of the amplitude-domain (modal) form, or () if the effect has none.
     modal_specs: tuple = ()
 

@@ -142,10 +142,13 @@ class Evaluator:
     @staticmethod
     def fast(names) -> bool:
         """True if the stack can be evaluated without running the elements step by step
-        (vector forms, and at most one innermost slider-level effect, whose correction bank
-        runs on the drive samples)."""
-        return all(has_vector_form(n) or (EFFECTS[n].slider_level and i == 0)
-                   for i, n in enumerate(names))
+        (vector forms around innermost slider-level effects, whose corrections run on the
+        drive samples: one, or a chain of composable ones)."""
+        k = 0
+        while k < len(names) and EFFECTS[names[k]].slider_level:
+            k += 1
+        chain_ok = k <= 1 or all(EFFECTS[n].composable for n in names[:k])
+        return chain_ok and all(has_vector_form(n) for n in names[k:])
 
     def unit_dissipation(self, p1: IwanParameters) -> np.ndarray:
         """Dissipated energy of the plain unit Iwan joint after each step of the record."""
@@ -168,10 +171,11 @@ class Evaluator:
             F = el.force_history(u[drive], v[drive])
             return F[pos]
         F = self.hist.forces(p1)
+        el = IwanJoint(p1)
         for name, vals in zip(names, values):
             cls = EFFECTS[name]
-            if cls.slider_level:
-                el = cls(IwanJoint(p1), **vals)
+            if cls.slider_level:            # each adds its force over the chain below it
+                el = cls(el, **vals)
                 D = None
                 if cls.needs_energy:
                     D = self.unit_dissipation(p1)[drive]

@@ -4,8 +4,10 @@ An Iwan joint is a bank of parallel Jenkins sliders (a spring ``k_i`` in series 
 Coulomb slider that slips at stretch ``phi_i``, REFERENCE.md section 1, paper eq. 3). Effects
 that change *how the sliders slip* (different thresholds forward and back, thresholds
 falling with wear, a static threshold above the kinetic one) cannot be written as a function
-of the joint's force; they act on each slider. This module evaluates them without giving up
-the exact joint:
+of the joint's force; they act on each slider. Laws fixed per direction (asymmetric slip,
+break-away) are evaluated exactly on the continuous density (:mod:`._law`); thresholds that
+evolve with the state (slip degradation) use this module, without giving up the exact
+joint:
 
 ``F = F_inner(u) + [F_bank(u; modified thresholds) - F_bank(u; plain thresholds)]``
 

@@ -10,26 +10,30 @@ This is *not* a force offset: in steady cycling a full-slip loop is the symmetri
 shifted by ``a Fs``, but the shift only builds up as sliders slip (a microslip loop shifts
 by ``a`` times the slipped capacity only) and the virgin curves differ forward and back,
 whereas a load-cell offset shifts every force by the same constant from the first sample.
+
+Exact on the continuous density (:mod:`iwan_element.effects._law`, law
+``sigma_d = kappa_d = 1 +- a``). Wrapped by :class:`~iwan_element.effects.BreakAway`, the laws
+multiply: a contact that grips harder one way and whose static friction exceeds its kinetic
+friction (a band brake, whose self-energising wrap favours one direction).
 """
 from __future__ import annotations
 
 from ._base import ParamSpec
-from ._sliders import _SliderEffect
+from ._law import _LawEffect
 
 __all__ = ["AsymmetricSlip"]
 
 
-class AsymmetricSlip(_SliderEffect):
+class AsymmetricSlip(_LawEffect):
     """Slip thresholds ``(1 + a) phi_i`` forward and ``(1 - a) phi_i`` back on every slider.
 
     Parameters
     ----------
-    inner : IwanJoint or DiscreteIwan
-        The joint whose sliders are affected (a plain joint; put other effects around this).
+    inner : IwanJoint, DiscreteIwan or BreakAway
+        The joint whose sliders are affected (a plain joint, or one with break-away; put
+        other effects around this). On a DiscreteIwan it acts on that joint's own sliders.
     asymmetry : float, keyword-only
         ``a`` [-], in ``(-1, 1)``; macroslip forces ``Fs (1 + a)`` and ``-Fs (1 - a)``.
-    n_sliders : int, keyword-only
-        Sliders of the correction bank (see :mod:`iwan_element.effects._sliders`).
     """
 
     effect = "asymmetric_slip"
@@ -37,12 +41,11 @@ class AsymmetricSlip(_SliderEffect):
                        "slip thresholds", lower=-1.0, upper=1.0, fit_bounds=(-0.9, 0.9),
                        fit_starts=(0.0, 0.1, -0.1)),)
 
-    def __init__(self, inner, *, asymmetry: float, n_sliders: int = 128):
-        super().__init__(inner, n_sliders=n_sliders)
+    def __init__(self, inner, *, asymmetry: float):
+        super().__init__(inner)
         self._set_parameters({"asymmetry": asymmetry})
         self._reset_own()
 
-    def _caps(self):
-        up = (1.0 + self.asymmetry) * self._phi
-        dn = (1.0 - self.asymmetry) * self._phi
-        return up, dn, up, dn
+    def own_law(self) -> tuple:
+        a = self.asymmetry
+        return (1.0 + a, 1.0 - a, 1.0 + a, 1.0 - a)
