@@ -387,3 +387,29 @@ def test_backlash_drag_coarse_steps_and_bad_drag():
     for bad in (-1e-9, math.nan, math.inf):
         with pytest.raises(ValueError, match="drag"):
             Backlash(IwanJoint(P), gap=0.1 * A, drag=bad)
+
+
+@pytest.mark.parametrize("drag", [0.0, 30.0, 200.0])
+@pytest.mark.parametrize("gap_x", [0.0, 0.05, 0.5])
+def test_backlash_joint_path_is_the_per_sample_steps(drag, gap_x):
+    """The run-by-run joint path (one trial per monotone run) against the element stepped
+    sample by sample, on a plain joint and on a chain of slider laws; forces along the path
+    are the backlash element's."""
+    rng = np.random.default_rng(1)
+    t = np.linspace(0, 6, 6 * 80 + 1)
+    u = A * np.sin(2 * np.pi * t) * np.linspace(0.3, 3, t.size) + 0.02 * A * rng.normal(size=t.size)
+    u = np.concatenate([u, u[-1] + np.cumsum(rng.normal(size=150)) * 0.2 * A])
+    for inner in (IwanJoint(P), BreakAway(AsymmetricSlip(IwanJoint(P), asymmetry=0.2), ratio=1.6)):
+        el = Backlash(inner, gap=gap_x * A, drag=drag)
+        stepped = Backlash(inner, gap=gap_x * A, drag=drag)
+        stepped.reset()
+        w_ref = []
+        for x in u:
+            stepped.trial(x)
+            stepped.commit()
+            w_ref.append(stepped.joint_displacement)
+        w = el.joint_path(u)
+        np.testing.assert_allclose(w, w_ref, rtol=0, atol=1e-12 * A)
+        np.testing.assert_allclose(inner.force_history(w), el.force_history(u), rtol=0,
+                                   atol=1e-10 * P.Fs)
+    assert el.joint_displacement == 0.0                  # the element itself is untouched

@@ -39,6 +39,23 @@ def order_stack(names) -> tuple:
             + tuple(n for n in names if not EFFECTS[n].slider_level))
 
 
+def _layers(names) -> tuple:
+    """``(chain, series, rest)`` of a stack (innermost first): the innermost slider-level
+    effects; an effect in series with the joint (one with ``joint_path``, e.g. backlash)
+    right around them if there is one and nothing below it depends on the rate or the
+    dissipated energy; and everything else."""
+    names = tuple(names)
+    k = 0
+    while k < len(names) and EFFECTS[names[k]].slider_level:
+        k += 1
+    chain, rest = names[:k], names[k:]
+    series = ()
+    if (rest and callable(getattr(EFFECTS[rest[0]], "joint_path", None))
+            and not any(EFFECTS[n].needs_energy for n in chain)):
+        series = rest[:1]
+    return chain, series, rest[len(series):]
+
+
 def has_vector_form(name: str) -> bool:
     """True if the effect has a history-free vectorised force."""
     return EFFECTS[name].vector_force.__func__ is not _Effect.vector_force.__func__
@@ -141,14 +158,14 @@ class Evaluator:
 
     @staticmethod
     def fast(names) -> bool:
-        """True if the stack can be evaluated without running the elements step by step
-        (vector forms around innermost slider-level effects, whose corrections run on the
-        drive samples: one, or a chain of composable ones)."""
-        k = 0
-        while k < len(names) and EFFECTS[names[k]].slider_level:
-            k += 1
-        chain_ok = k <= 1 or all(EFFECTS[n].composable for n in names[:k])
-        return chain_ok and all(has_vector_form(n) for n in names[k:])
+        """True if the stack can be evaluated without running the elements step by step:
+        innermost slider-level effects (one, or a chain of composable ones), whose
+        corrections run on the drive samples; then optionally an effect in series with the
+        joint (``joint_path``: the joint's own displacement, found run by run) around
+        rate-independent ones; then vector forms."""
+        chain, series, rest = _layers(names)
+        chain_ok = len(chain) <= 1 or all(EFFECTS[n].composable for n in chain)
+        return chain_ok and all(has_vector_form(n) for n in rest)
 
     def unit_dissipation(self, p1: IwanParameters) -> np.ndarray:
         """Dissipated energy of the plain unit Iwan joint after each step of the record."""
@@ -170,16 +187,22 @@ class Evaluator:
             el = build_element(p1, names, values)
             F = el.force_history(u[drive], v[drive])
             return F[pos]
-        F = self.hist.forces(p1)
+        chain, series, rest = _layers(names)
+        vals = dict(zip(names, values))
+        x, hist = u[drive], self.hist
+        if series:                      # the joint sees its own path w, not the drive
+            el = IwanJoint(p1)
+            for name in chain:
+                el = EFFECTS[name](el, **vals[name])
+            x = EFFECTS[series[0]](el, **vals[series[0]]).joint_path(x)
+            hist = History(x, keep=pos, tol=self._tol)
+        F = hist.forces(p1)
         el = IwanJoint(p1)
-        for name, vals in zip(names, values):
+        for name in chain:              # each adds its force over the chain below it
             cls = EFFECTS[name]
-            if cls.slider_level:            # each adds its force over the chain below it
-                el = cls(el, **vals)
-                D = None
-                if cls.needs_energy:
-                    D = self.unit_dissipation(p1)[drive]
-                F = F + el.correction_history(u[drive], D)[pos]
-            else:
-                F = cls.vector_force(F, self.uk, self.vk, **vals)
+            el = cls(el, **vals[name])
+            D = self.unit_dissipation(p1)[drive] if cls.needs_energy else None
+            F = F + el.correction_history(x, D)[pos]
+        for name in rest:
+            F = EFFECTS[name].vector_force(F, self.uk, self.vk, **vals[name])
         return F

@@ -27,6 +27,10 @@ shape, its compliance goes to zero (see the project notes of the damper work).
 """
 from __future__ import annotations
 
+import copy
+
+import numpy as np
+
 from ._base import ParamSpec, _Effect, _find_zero
 
 __all__ = ["Backlash"]
@@ -76,11 +80,48 @@ class Backlash(_Effect):
         self._Dg = 0.0           # energy dissipated by the drag [J]
         self._w = 0.0
         self._side = 0           # +1 / -1: in contact pushing forward / back; 0: gap open
+        self._slide_at = None    # joint displacement where the last trial's gap began to slide
 
     @property
     def joint_displacement(self) -> float:
         """Committed displacement across the joint itself (excluding the gap) [m]."""
         return self._w
+
+    def joint_path(self, u) -> np.ndarray:
+        """Displacement across the joint itself [m] along a history ``u`` [m] from the virgin
+        state, on a private copy (this element is untouched), for a rate-independent inner
+        joint: one trial per monotone run of ``u``. Within a run of direction ``d`` the joint
+        follows the drive with the gap's opening held (``w = u - e0``) until its force
+        reaches ``d drag``, where the gap slides open (``w`` held at that point ``w_s``),
+        until contact on the far side (``w = u - d gap``); the run's trial gives ``w_s``.
+        So ``w = max(min(u - e0, w_s), u - gap)`` for ``d = +1`` (mirrored for ``-1``), the
+        element's own per-sample steps (checked in ``tests/test_effects.py``)."""
+        uu = np.asarray(u, float)
+        el = copy.deepcopy(self)
+        el.reset()
+        w = np.zeros(uu.size)
+        du = np.diff(uu, prepend=0.0)
+        nz = np.flatnonzero(du)
+        if nz.size == 0:
+            return w
+        sgn = np.sign(du[nz])
+        starts = nz[np.flatnonzero(np.diff(sgn, prepend=0.0))]
+        ends = np.append(starts[1:], uu.size)
+        g, u_prev, w_prev = self.gap, 0.0, 0.0
+        for a, b in zip(starts, ends):
+            d = float(np.sign(du[a]))
+            e0 = u_prev - w_prev
+            el.trial(uu[b - 1])
+            ws = el._slide_at
+            seg = uu[a:b]
+            if d > 0.0:
+                w[a:b] = np.maximum(np.minimum(seg - e0, np.inf if ws is None else ws), seg - g)
+            else:
+                w[a:b] = np.minimum(np.maximum(seg - e0, -np.inf if ws is None else ws), seg + g)
+            el.commit()
+            u_prev, w_prev = float(uu[b - 1]), el.joint_displacement
+            w[b - 1] = w_prev
+        return w
 
     def _solve(self, u: float, v: float):
         if self.drag > 0.0:
@@ -92,6 +133,7 @@ class Backlash(_Effect):
         sticks while ``|F| < drag`` (or while pressed against a stop), slides at
         ``F = +-drag`` otherwise, up to the stop at ``+-gap``."""
         inner, g, fd, wc, ec = self._inner, self.gap, self.drag, self._w, self._e
+        self._slide_at = None
         w = u - ec
         F, K = inner.trial(w, v)                 # gap element stuck
         for s in (1.0, -1.0):
@@ -103,6 +145,7 @@ class Backlash(_Effect):
             else:
                 w_s = _find_zero(lambda x: _shifted(inner.trial(x, v), s * fd), wc, Fc, w,
                                  F - s * fd)
+            self._slide_at = w_s
             if s * (u - w_s) >= g:               # slid up to the stop: contact there
                 w = u - s * g
                 F, K = inner.trial(w, v)
@@ -116,7 +159,9 @@ class Backlash(_Effect):
         g = self.gap
         wc = self._w
         side = self._side
+        self._slide_at = None
         if side == 0:                            # resting in the gap at zero joint force
+            self._slide_at = wc
             w = min(max(wc, u - g), u + g)
             if w == wc:
                 return wc, 0, inner.trial(wc, v)[0], 0.0
@@ -128,6 +173,7 @@ class Backlash(_Effect):
             return w_contact, side, F, K         # contact kept (loading or partial unloading)
         # the joint unloads to zero force, then the gap opens
         w0 = _find_zero(lambda x: inner.trial(x, v), wc, inner.force, w_contact, F)
+        self._slide_at = w0
         w_other = u + g * side
         if (w_other - w0) * side < 0.0:          # crossed the gap: contact on the other side
             F, K = inner.trial(w_other, v)
