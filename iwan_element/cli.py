@@ -14,7 +14,7 @@ diagnose
     asymmetric slip)::
 
         iwan-element diagnose data.csv --units mm,kN [--plot out.png] [--json out.json]
-                     [--max-effects 2] [--noise SIGMA]
+                     [--max-effects 3] [--noise SIGMA]
 
 Exit status: 0 on success, 1 on bad input (one line on stderr saying why), 2 on a usage error,
 3 when the optimiser did not converge (the report is still printed).
@@ -94,8 +94,8 @@ def build_parser() -> argparse.ArgumentParser:
                     "misfit is more than noise, locate it, refit with each candidate effect and "
                     "name the ones the data support (or none).")
     _add_record_args(dg)
-    dg.add_argument("--max-effects", type=int, default=2, metavar="N",
-                    help="most effects named one after the other (default 2)")
+    dg.add_argument("--max-effects", type=int, default=3, metavar="N",
+                    help="most effects named (default 3)")
     dg.add_argument("--noise", type=float, metavar="SIGMA",
                     help="force noise standard deviation in the force unit of --units "
                          "(default: estimated from the record)")

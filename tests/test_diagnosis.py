@@ -14,7 +14,7 @@ import pytest
 from _diagnosis_cases import (MODAL, P, PROTOCOLS, SHAPES, SIGMA, ZETA0, calibrated,
                               effect_rms, element, modal_curves, record, vibration_case,
                               vibration_case_elements)
-from iwan_element import (AsymmetricSlip, IwanJoint, PinningStiffness, ViscousDamping,
+from iwan_element import (AsymmetricSlip, BreakAway, IwanJoint, PinningStiffness, ViscousDamping,
                           make_effect)
 from iwan_element.core._history import REVERSAL_TOL, unit_params
 from iwan_element.effects._evaluate import Evaluator, build_element, dissipation_segments
@@ -40,14 +40,22 @@ def test_fast_evaluation_equals_the_elements():
              (("breakaway",), ({"ratio": 1.4},)),
              (("slip_degradation", "viscous_damping"), ({"rate": 30.0}, {"c": 0.01})),
              (("asymmetric_slip", "pinning_stiffness"), ({"asymmetry": 0.2},
-                                                         {"k_p": 300.0, "delta": 1e-3}))]
+                                                         {"k_p": 300.0, "delta": 1e-3})),
+             (("backlash",), ({"gap": 2e-4},)),
+             (("backlash", "viscous_damping"), ({"gap": 2e-4, "drag": 0.05}, {"c": 0.01})),
+             (("asymmetric_slip", "breakaway", "backlash"), ({"asymmetry": 0.2}, {"ratio": 1.4},
+                                                             {"gap": 1e-4, "drag": 0.1}))]
     for names, vals in cases:
         assert ev.fast(names)
         fast = ev.unit_force(shape, names, vals)
         el = build_element(unit_params(*shape), names, vals)
         ref = (el.force_history(u, v) if names else el.force_history(u))[keep]
         np.testing.assert_allclose(fast, ref, rtol=0, atol=1e-9)
-    assert not ev.fast(("backlash",)) and not ev.fast(("viscous_damping", "asymmetric_slip"))
+    # rate- or energy-dependent elements inside the gap, and a slider effect outside it,
+    # are run element by element
+    for names in (("viscous_damping", "backlash"), ("slip_degradation", "backlash"),
+                  ("viscous_damping", "asymmetric_slip")):
+        assert not ev.fast(names)
 
 
 def test_dissipation_segments_give_the_joint_dissipation():
@@ -154,6 +162,22 @@ def test_two_hidden_effects_are_named_in_two_steps():
     assert type(g.model).__name__ == "ViscousDamping"          # slider effect innermost
     g1 = diagnose(d.t, d.u, d.F, max_effects=1, candidates=("viscous_damping", "asymmetric_slip"))
     assert len(g1.effects) == 1 and any("remains" in w for w in g1.warnings)
+
+
+def test_two_slider_laws_on_one_joint_are_both_named():
+    """A contact that grips harder one way and breaks away above its sliding force: the two
+    slider laws multiply on the same sliders (effects/_law.py), and the diagnosis names both
+    and fits them down to the noise."""
+    a = calibrated("asymmetric_slip", 8.0, "ladder")
+    r = calibrated("breakaway", 8.0, "ladder")
+    el = BreakAway(AsymmetricSlip(IwanJoint(P), asymmetry=a), ratio=r)
+    d = record(None, 0, "ladder", 12, el=el)
+    g = diagnose(d.t, d.u, d.F, candidates=("viscous_damping", "asymmetric_slip", "breakaway"))
+    assert set(g.effects) == {"asymmetric_slip", "breakaway"}, g.report()
+    assert g.error_after / g.noise_level <= 1.3, g.report()
+    assert {type(g.model).__name__, type(g.model.inner).__name__} == {"BreakAway",
+                                                                     "AsymmetricSlip"}
+    assert g.model.law() == pytest.approx(el.law(), rel=0.05), (g.model.law(), el.law())
 
 
 def test_result_reports_serialises_and_plots(tmp_path):

@@ -280,7 +280,7 @@ def _record_force(row, uj, v):
     return F[1:] + F0, el
 
 
-def diagnose(t, u, F, *, candidates=None, max_effects: int = 2, noise: float | None = None,
+def diagnose(t, u, F, *, candidates=None, max_effects: int = 3, noise: float | None = None,
              alpha: float = 1e-3, ambiguity: float = 10.0, max_samples: int = 1500,
              lowpass: float | None = None, seed=0) -> Diagnosis:
     """Find what the four-parameter Iwan model misses in a displacement-driven test.
@@ -298,7 +298,9 @@ def diagnose(t, u, F, *, candidates=None, max_effects: int = 2, noise: float | N
     candidates : sequence of str, optional, keyword-only
         Effects to try (default :data:`CANDIDATES`).
     max_effects : int, keyword-only
-        Most effects named one after the other, ``>= 1`` (default 2).
+        Most effects named, ``>= 1`` (default 3: a real damper can show a gap, a
+        direction-dependent grip and break-away at once; each must pass the selection
+        rule on top of the others, so a record that needs fewer names fewer).
     noise : float, optional, keyword-only
         Force noise standard deviation [N], ``> 1e-9 max|F|`` and in ``[1e-100, 1e100]``,
         taken as white. Default: estimated from the record.
