@@ -89,6 +89,21 @@ def _find_zero(trial, a: float, Fa: float, b: float, Fb: float, *, rtol: float =
     return x
 
 
+def monotone_runs(u: np.ndarray):
+    """Monotone runs of a displacement history that starts from rest at 0: ``(a, b, d)`` for
+    each, samples ``a:b`` moving in direction ``d`` (+1/-1) from ``u[a - 1]`` (0 before the
+    first sample). Pauses belong to the run they interrupt; samples before the first move to
+    none."""
+    du = np.diff(u, prepend=0.0)
+    nz = np.flatnonzero(du)
+    if nz.size == 0:
+        return []
+    sgn = np.sign(du[nz])
+    starts = nz[np.flatnonzero(np.diff(sgn, prepend=0.0))]
+    ends = np.append(starts[1:], u.size)
+    return [(int(a), int(b), float(np.sign(du[a]))) for a, b in zip(starts, ends)]
+
+
 def _require_plain_joint(inner, subject: str) -> None:
     """Refuse an ``inner`` that is not a plain Iwan joint (``IwanJoint`` or ``DiscreteIwan``
     with ``IwanParameters``): ``subject`` (e.g. ``"break-away"``) changes the joint's own

@@ -38,7 +38,7 @@ import numpy as np
 
 from ..core.discrete import DiscreteIwan
 from ..core.parameters import IwanParameters
-from ._base import _Effect, _require_plain_joint
+from ._base import _Effect, _require_plain_joint, monotone_runs
 
 __all__: list[str] = []
 
@@ -214,15 +214,7 @@ def law_history(pieces: _Pieces, u) -> np.ndarray:
     monotone within a run, so this equals the step-by-step rule)."""
     uu = np.asarray(u, float)
     out = np.zeros(uu.size)
-    du = np.diff(uu, prepend=0.0)
-    nz = np.flatnonzero(du)
-    if nz.size == 0:
-        return out
-    sgn = np.sign(du[nz])
-    starts = nz[np.flatnonzero(np.diff(sgn, prepend=0.0))]
-    ends = np.append(starts[1:], uu.size)
-    for a, b in zip(starts, ends):
-        d = float(np.sign(du[a]))
+    for a, b, d in monotone_runs(uu):
         u_s = uu[a - 1] if a > 0 else 0.0
         delta = d * (uu[a:b] - u_s)
         out[a:b] = pieces.force(d, delta)[0]

@@ -31,7 +31,7 @@ import copy
 
 import numpy as np
 
-from ._base import ParamSpec, _Effect, _find_zero
+from ._base import ParamSpec, _Effect, _find_zero, monotone_runs
 
 __all__ = ["Backlash"]
 
@@ -100,16 +100,8 @@ class Backlash(_Effect):
         el = copy.deepcopy(self)
         el.reset()
         w = np.zeros(uu.size)
-        du = np.diff(uu, prepend=0.0)
-        nz = np.flatnonzero(du)
-        if nz.size == 0:
-            return w
-        sgn = np.sign(du[nz])
-        starts = nz[np.flatnonzero(np.diff(sgn, prepend=0.0))]
-        ends = np.append(starts[1:], uu.size)
         g, u_prev, w_prev = self.gap, 0.0, 0.0
-        for a, b in zip(starts, ends):
-            d = float(np.sign(du[a]))
+        for a, b, d in monotone_runs(uu):
             e0 = u_prev - w_prev
             el.trial(uu[b - 1])
             ws = el._slide_at
