@@ -20,8 +20,11 @@ displacement with a tapered envelope. The workflow:
    force that differs with the direction (a band brake is self-energising one way:
    ``asymmetric_slip``). When neither alone explains a quarter of the misfit, the selection
    rule tries the best one together with each other candidate (its pair step): the open gap
-   hides the asymmetry, which alone explains less than a dashpot does. A stiffening (Hertz) contact closing
-   the gap was tried and rejected: refitted with the joint, its compliance goes to zero.
+   hides the asymmetry, which alone explains less than a dashpot does. Break-away (static
+   friction above sliding friction) and the asymmetry are laws of the same sliders and
+   compose (``BreakAway(AsymmetricSlip(joint))``): on some records all three are named. A
+   stiffening (Hertz) contact closing the gap was tried and rejected: refitted with the
+   joint, its compliance goes to zero.
 
     python examples/real_damper.py [--record PATH] [--out out/]
 """
