@@ -35,9 +35,10 @@ N_SLIDERS = 128
 
 
 class _SliderEffect(_Effect):
-    """Base of slider-level effects. Subclasses define :meth:`_caps` (static and kinetic
-    thresholds of the modified bank, forward and back, as stretches [m]) and optionally
-    :meth:`_after_commit` (thresholds that evolve with the committed state)."""
+    """Base of slider-level effects whose thresholds evolve with the dissipated energy.
+    Subclasses define :meth:`_caps` (static and kinetic thresholds of the modified bank,
+    forward and back, as stretches [m]), :meth:`_after_commit` and
+    :meth:`_after_commit_energy` (the thresholds' update from the committed state)."""
 
     slider_level = True
 
@@ -125,63 +126,26 @@ class _SliderEffect(_Effect):
     def _after_commit(self) -> None:
         pass
 
-    #: True if the thresholds depend on the dissipated energy (the fast loop then tracks it).
-    needs_energy = False
+    #: The thresholds depend on the dissipated energy (the fast loop then tracks it); laws
+    #: fixed per direction are :class:`~iwan_element.effects._law._LawEffect`.
+    needs_energy = True
 
     def correction_history(self, u, D_inner=None) -> np.ndarray:
         """Force correction ``F_bank(modified) - F_bank(plain)`` [N] along a displacement
         history ``u`` [m] from the virgin state, on a private state (this element is
-        untouched). ``D_inner``: dissipated energy of the wrapped joint after each step [J],
-        needed when :attr:`needs_energy`. The same slider steps as :meth:`trial`/
+        untouched). ``D_inner``: dissipated energy of the wrapped joint after each step [J].
+        The same slider steps as :meth:`trial`/
         :meth:`commit`, with the bookkeeping the force does not need left out."""
         state = (self._e, self._slip, self._Wb, self._Db, self._ub, self._last)
         lam = getattr(self, "_lam", None)
         try:
             self._reset_own()
-            uu = np.asarray(u, float)
-            if self.needs_energy:
-                return self._correction_energy(uu, D_inner)
-            return self._correction_segments(uu)
+            return self._correction_energy(np.asarray(u, float), D_inner)
         finally:
             self._e, self._slip, self._Wb, self._Db, self._ub, self._last = state
             if lam is not None:
                 self._lam = lam
             self._refresh_caps()
-
-    def _correction_segments(self, u: np.ndarray) -> np.ndarray:
-        """Thresholds fixed per direction: one vectorised step per monotone run of ``u``.
-
-        Within a run of direction ``d`` starting at ``u_s`` every slider's stretch in the
-        direction of motion is ``ep0 + d (u - u_s)`` until it passes the static threshold,
-        then the kinetic one for the rest of the run (the motion is monotone, so a slider
-        that broke away keeps sliding): the per-step rule of :meth:`_step`, summed."""
-        sk = self._sign * self._k
-        out = np.zeros(u.size)
-        du = np.diff(u, prepend=0.0)
-        sgn = np.sign(du)
-        nz = np.flatnonzero(sgn)
-        if nz.size == 0:
-            return out
-        # direction of the last nonzero step at every sample (0 before the first move)
-        last = np.zeros(u.size, dtype=np.intp)
-        last[nz] = nz
-        last = np.maximum.accumulate(last)
-        d_at = np.where(np.arange(u.size) >= nz[0], sgn[last], 0.0)
-        starts = nz[np.flatnonzero(np.diff(sgn[nz], prepend=0.0))]
-        ends = np.append(starts[1:], u.size)
-        e, s = self._e, self._slip
-        for a, b in zip(starts, ends):
-            d = d_at[a]
-            cs, ck = self._cap_up if d > 0 else self._cap_dn
-            u_s = u[a - 1] if a > 0 else 0.0
-            delta = d * (u[a:b] - u_s)                       # >= 0, non-decreasing
-            ep = d * e
-            end = ep[None, :] + delta[:, None]
-            mv = (s == d)[None, :] | (end > cs[None, :])
-            e_run = d * np.where(mv, ck[None, :], end)
-            out[a:b] = e_run @ sk
-            e, s = e_run[-1], np.where(mv[-1], d, 0.0)
-        return out
 
     def _correction_energy(self, u: np.ndarray, D_inner, prev: float = 0.0) -> np.ndarray:
         """Thresholds that fall with the dissipated energy: step by step (the reference;

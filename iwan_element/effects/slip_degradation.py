@@ -110,8 +110,6 @@ class SlipDegradation(_SliderEffect):
         c = self._lam * self._phi
         return c, c, c, c
 
-    needs_energy = True
-
     def _after_commit(self) -> None:
         self._after_commit_energy(self._inner.dissipated_energy)
 
