@@ -34,7 +34,7 @@ from ..core._history import REVERSAL_TOL, unit_params
 from ..core._validation import (MAGNITUDE_RANGE, _check_int, _check_time, check_magnitude,
                                 check_scalar, finite_array, same_length)
 from ..effects import EFFECTS
-from ..effects._evaluate import Evaluator, build_element, order_stack
+from ..effects._evaluate import Evaluator, build_element, order_stack, stack_ok
 from ..identify.testdata import find_reversals, split_cycles
 from . import _model as M
 from ._locate import _check_candidates, _locate, _untestable
@@ -205,12 +205,8 @@ def _z_start(names, prev_names, prev_z, which):
 
 
 def _allowed(names, cand):
-    """At most one slider-level effect per stack (each rebuilds the joint's sliders), unless
-    all of them are composable slider laws (their thresholds multiply)."""
-    if not EFFECTS[cand].slider_level:
-        return True
-    below = [n for n in names if EFFECTS[n].slider_level]
-    return not below or all(EFFECTS[n].composable for n in below + [cand])
+    """Whether ``cand`` may join the stack ``names`` (:func:`stack_ok`)."""
+    return stack_ok(tuple(names) + (cand,))
 
 
 def _fit_base(fitter, ev, shape0):

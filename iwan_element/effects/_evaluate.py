@@ -39,6 +39,14 @@ def order_stack(names) -> tuple:
             + tuple(n for n in names if not EFFECTS[n].slider_level))
 
 
+def stack_ok(names) -> bool:
+    """Whether the slider-level effects among ``names`` may share one joint: at most one,
+    since each rebuilds the joint's sliders, unless all are composable slider laws (their
+    thresholds multiply)."""
+    sliders = [n for n in names if EFFECTS[n].slider_level]
+    return len(sliders) <= 1 or all(EFFECTS[n].composable for n in sliders)
+
+
 def _layers(names) -> tuple:
     """``(chain, series, rest)`` of a stack (innermost first): the innermost slider-level
     effects; an effect in series with the joint (one with ``joint_path``, e.g. backlash)
@@ -164,8 +172,7 @@ class Evaluator:
         joint (``joint_path``: the joint's own displacement, found run by run) around
         rate-independent ones; then vector forms."""
         chain, series, rest = _layers(names)
-        chain_ok = len(chain) <= 1 or all(EFFECTS[n].composable for n in chain)
-        return chain_ok and all(has_vector_form(n) for n in rest)
+        return stack_ok(chain) and all(has_vector_form(n) for n in rest)
 
     def unit_dissipation(self, p1: IwanParameters) -> np.ndarray:
         """Dissipated energy of the plain unit Iwan joint after each step of the record."""
@@ -189,19 +196,16 @@ class Evaluator:
             return F[pos]
         chain, series, rest = _layers(names)
         vals = dict(zip(names, values))
+        els = [IwanJoint(p1)]
+        for name in chain:
+            els.append(EFFECTS[name](els[-1], **vals[name]))
         x, hist = u[drive], self.hist
         if series:                      # the joint sees its own path w, not the drive
-            el = IwanJoint(p1)
-            for name in chain:
-                el = EFFECTS[name](el, **vals[name])
-            x = EFFECTS[series[0]](el, **vals[series[0]]).joint_path(x)
+            x = EFFECTS[series[0]](els[-1], **vals[series[0]]).joint_path(x)
             hist = History(x, keep=pos, tol=self._tol)
         F = hist.forces(p1)
-        el = IwanJoint(p1)
-        for name in chain:              # each adds its force over the chain below it
-            cls = EFFECTS[name]
-            el = cls(el, **vals[name])
-            D = self.unit_dissipation(p1)[drive] if cls.needs_energy else None
+        for el in els[1:]:              # each adds its force over the chain below it
+            D = self.unit_dissipation(p1)[drive] if el.needs_energy else None
             F = F + el.correction_history(x, D)[pos]
         for name in rest:
             F = EFFECTS[name].vector_force(F, self.uk, self.vk, **vals[name])

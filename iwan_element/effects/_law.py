@@ -222,6 +222,11 @@ def law_history(pieces: _Pieces, u) -> np.ndarray:
     return out
 
 
+def _product(law, below) -> tuple:
+    """Two laws on the same sliders: their threshold factors multiply."""
+    return tuple(a * b for a, b in zip(law, below))
+
+
 class _LawEffect(_Effect):
     """Element of a slider law (module docstring): wraps a plain joint or another law effect.
 
@@ -247,14 +252,18 @@ class _LawEffect(_Effect):
         """``(sigma_up, sigma_down, kappa_up, kappa_down)`` of this effect alone [-]."""
         raise NotImplementedError
 
+    def _below(self) -> tuple:
+        """The law of the element this one wraps (Masing for the plain joint)."""
+        return self._inner.law() if isinstance(self._inner, _LawEffect) else MASING
+
     def law(self) -> tuple:
         """The law of this effect times every law effect below it."""
-        below = self._inner.law() if isinstance(self._inner, _LawEffect) else MASING
-        return tuple(a * b for a, b in zip(self.own_law(), below))
+        return _product(self.own_law(), self._below())
 
     def _new_pieces(self) -> _Pieces:
-        below = self._inner.law() if isinstance(self._inner, _LawEffect) else MASING
-        return _Pieces(self._joint.params, self._atoms, (self.law(), below), (1.0, -1.0))
+        below = self._below()
+        return _Pieces(self._joint.params, self._atoms, (_product(self.own_law(), below), below),
+                       (1.0, -1.0))
 
     def _reset_own(self):
         self._pieces = self._new_pieces()
