@@ -7,6 +7,7 @@ import pytest
 
 from iwan_element import IwanJoint, IwanParameters, backbone, dissipation
 from iwan_element import DiscreteIwan
+from _jenkins_bank import directional_bank
 from iwan_element.effects import (EFFECTS, AsymmetricSlip, Backlash, BreakAway, PinningStiffness,
                                   SlipDegradation, ViscousDamping, base_joint, make_effect)
 
@@ -113,36 +114,6 @@ def test_backlash_virgin_gap_then_contact():
     assert el.trial(-g - 0.3 * A)[0] == pytest.approx(-backbone(0.3 * A, P), rel=1e-12)
 
 
-def _jenkins_bank(u, k, up, dn, ks=None, kin_up=None, kin_dn=None):
-    """Independent route: parallel Jenkins sliders stepped one by one in plain Python, with
-    static thresholds ``up``/``dn`` and kinetic ``kin_up``/``kin_dn`` (stretches [m])."""
-    kin_up = up if kin_up is None else kin_up
-    kin_dn = dn if kin_dn is None else kin_dn
-    out = []
-    for i in range(len(k)):
-        e, prev, slide, f_i = 0.0, 0.0, 0, []
-        for x in u:
-            du = x - prev
-            prev = x
-            d = 1 if du > 0 else -1 if du < 0 else 0
-            if d == 0:
-                f_i.append(k[i] * e)
-                continue
-            if slide != d:
-                slide = 0
-            e_new = e + du
-            if slide == 0 and (e_new > up[i] or e_new < -dn[i]):
-                slide = d
-            if slide == 1:
-                e_new = kin_up[i]
-            elif slide == -1:
-                e_new = -kin_dn[i]
-            e = e_new
-            f_i.append(k[i] * e)
-        out.append(f_i)
-    return np.sum(out, axis=0)
-
-
 def test_slider_effects_match_an_independent_slider_bank():
     """On a DiscreteIwan (the bank is then exact), each slider-level effect equals a
     plain-Python bank of Jenkins sliders with the effect's thresholds."""
@@ -151,11 +122,12 @@ def test_slider_effects_match_an_independent_slider_bank():
     _, u = history(amps=(0.4, 1.6, 0.2, 0.9), per_cycle=60)
     a = 0.35
     F = AsymmetricSlip(DiscreteIwan(P, 12), asymmetry=a).force_history(u)
-    np.testing.assert_allclose(F, _jenkins_bank(u, k, (1 + a) * phi, (1 - a) * phi),
+    np.testing.assert_allclose(F, directional_bank(u, k, (1 + a) * phi, (1 - a) * phi),
                                rtol=0, atol=1e-9 * P.Fs)
     r = 1.6
     F = BreakAway(DiscreteIwan(P, 12), ratio=r).force_history(u)
-    np.testing.assert_allclose(F, _jenkins_bank(u, k, r * phi, r * phi, kin_up=phi, kin_dn=phi),
+    np.testing.assert_allclose(F, directional_bank(u, k, r * phi, r * phi, kin_up=phi,
+                                                   kin_dn=phi),
                                rtol=0, atol=1e-9 * P.Fs)
 
 

@@ -1,7 +1,7 @@
 """Slider laws that compose (effects/_law.py): asymmetric slip and break-away on one joint.
 
 Independent routes: a plain-Python bank of Jenkins sliders with static and kinetic thresholds
-per direction (tests/test_effects.py), to which the element is equal on a DiscreteIwan and to
+per direction (tests/_jenkins_bank.py), to which the element is equal on a DiscreteIwan and to
 which dense banks converge on the continuous joint; the element's exact work against the
 trapezoidal rule over its forces; the diagnosis evaluator's run route against the element."""
 import numpy as np
@@ -10,7 +10,7 @@ import pytest
 from iwan_element import DiscreteIwan, IwanJoint, IwanParameters
 from iwan_element.effects import AsymmetricSlip, BreakAway, SlipDegradation
 from iwan_element.effects._evaluate import Evaluator
-from test_effects import _jenkins_bank
+from _jenkins_bank import directional_bank
 
 P = IwanParameters(1000.0, 1e6, -0.5, 0.2)
 A = P.phi_max
@@ -25,7 +25,7 @@ def _drive(per=80, amps=(0.4, 1.6, 0.7, 2.5, 0.3, 1.1)):
 
 def _bank(u, d, r=R, a=ASYM):
     k, phi = d.slider_stiffness, d.slider_slip
-    return _jenkins_bank(u, k, r * (1 + a) * phi, r * (1 - a) * phi,
+    return directional_bank(u, k, r * (1 + a) * phi, r * (1 - a) * phi,
                          kin_up=(1 + a) * phi, kin_dn=(1 - a) * phi)
 
 
