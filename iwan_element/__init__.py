@@ -16,8 +16,8 @@ from .core.closed_form import (
     secant_stiffness,
     tangent_stiffness,
 )
-from .diagnose import (CANDIDATES, Diagnosis, VibrationDiagnosis, diagnose, diagnose_vibration,
-                        simulate_element_test)
+from .diagnose import (CANDIDATES, BatchDiagnosis, Diagnosis, VibrationDiagnosis, diagnose,
+                       diagnose_many, diagnose_vibration, simulate_element_test)
 from .core.discrete import DiscreteIwan, slider_distribution
 from .effects import (EFFECTS, AsymmetricSlip, Backlash, BreakAway, PinningStiffness,
                       SlipDegradation, ViscousDamping, base_joint, make_effect)
@@ -90,6 +90,8 @@ __all__ = [
     "FitResult",
     "IdentifiabilityWarning",
     "diagnose",
+    "diagnose_many",
+    "BatchDiagnosis",
     "diagnose_vibration",
     "Diagnosis",
     "VibrationDiagnosis",

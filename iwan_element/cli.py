@@ -14,7 +14,13 @@ diagnose
     asymmetric slip)::
 
         iwan-element diagnose data.csv --units mm,kN [--plot out.png] [--json out.json]
-                     [--max-effects 3] [--noise SIGMA]
+                     [--max-effects 3] [--noise SIGMA] [--progress]
+
+    Several records (a test campaign) are diagnosed on local processes, with one table and
+    one JSON for the run::
+
+        iwan-element diagnose runs/*.csv --units in,lbf --lowpass 20 --jobs 2 --progress
+                     [--json campaign.json] [--table campaign.csv]
 
 Exit status: 0 on success, 1 on bad input (one line on stderr saying why), 2 on a usage error,
 3 when the optimiser did not converge (the report is still printed).
@@ -45,9 +51,13 @@ class _Parser(argparse.ArgumentParser):
         raise _UsageError(message)
 
 
-def _add_record_args(parser) -> None:
+def _add_record_args(parser, *, many: bool = False) -> None:
     """The arguments that locate and read a test record (shared by the subcommands)."""
-    parser.add_argument("csv", type=Path, help="test record: time, displacement, force columns")
+    if many:
+        parser.add_argument("csv", type=Path, nargs="+",
+                            help="test record(s): time, displacement, force columns")
+    else:
+        parser.add_argument("csv", type=Path, help="test record: time, displacement, force columns")
     parser.add_argument("--units", required=True, metavar="DISP,FORCE[,TIME]",
                         help="units of the displacement, force (and time) columns, e.g. mm,kN "
                              "(displacement: m, mm, um, in; force: N, kN, MN, lbf, kip; "
@@ -93,7 +103,7 @@ def build_parser() -> argparse.ArgumentParser:
                     "parameters, estimate the force noise from the record, decide whether the "
                     "misfit is more than noise, locate it, refit with each candidate effect and "
                     "name the ones the data support (or none).")
-    _add_record_args(dg)
+    _add_record_args(dg, many=True)
     dg.add_argument("--max-effects", type=int, default=3, metavar="N",
                     help="most effects named (default 3)")
     dg.add_argument("--noise", type=float, metavar="SIGMA",
@@ -105,6 +115,12 @@ def build_parser() -> argparse.ArgumentParser:
     dg.add_argument("--plot", type=Path, metavar="PNG",
                     help="write data, base and augmented fit and the residuals before/after")
     dg.add_argument("--json", type=Path, metavar="FILE", help="write the diagnosis as JSON")
+    dg.add_argument("--jobs", type=int, default=None, metavar="N",
+                    help="with several records: worker processes (default: one per core)")
+    dg.add_argument("--table", type=Path, metavar="CSV",
+                    help="with several records: write the table as CSV")
+    dg.add_argument("--progress", action="store_true",
+                    help="show a progress bar (needs tqdm)")
     return parser
 
 
@@ -112,12 +128,14 @@ def _run_diagnose(args) -> int:
     from .diagnose import diagnose
     from .identify.testdata import FORCE_UNITS, load_test
 
+    if len(args.csv) > 1 or args.jobs is not None or args.table is not None:
+        return _run_diagnose_many(args)
     du, fu, tu = _parse_units(args.units)
-    data = load_test(args.csv, displacement_unit=du, force_unit=fu, time_unit=tu,
+    data = load_test(args.csv[0], displacement_unit=du, force_unit=fu, time_unit=tu,
                      columns=_parse_columns(args.columns), delimiter=args.delimiter)
     noise = None if args.noise is None else args.noise * FORCE_UNITS[fu]
     result = diagnose(data.t, data.u, data.F, max_effects=args.max_effects, noise=noise,
-                      lowpass=args.lowpass, seed=args.seed)
+                      lowpass=args.lowpass, seed=args.seed, progress=args.progress)
     wrote = []                  # files first: a closed stdout must not cost the outputs
     if args.json is not None:
         args.json.write_text(json.dumps(result.to_dict(), indent=2, allow_nan=False) + "\n")
@@ -132,6 +150,45 @@ def _run_diagnose(args) -> int:
     status = EXIT_OK if result.fit.success or not result.effects else EXIT_NOT_CONVERGED
     return status, [f"{data.source}: {len(data.u)} samples, {len(data.cycles)} cycles, units "
                     f"{du}, {fu}, {tu} (converted to SI)", result.report()] + wrote
+
+
+def _run_diagnose_many(args) -> int:
+    """Several records: one table on stdout, one JSON (and CSV table) for the run."""
+    from concurrent.futures import ProcessPoolExecutor
+
+    from .diagnose import diagnose_many
+    from .identify.testdata import FORCE_UNITS, load_test
+
+    if args.plot is not None:
+        raise ValueError("--plot draws one record; with several records use --json/--table "
+                         "(or diagnose the record alone)")
+    if args.jobs is not None and args.jobs < 1:
+        raise ValueError(f"--jobs must be >= 1, got {args.jobs}")
+    du, fu, tu = _parse_units(args.units)
+    cols = _parse_columns(args.columns)
+    records = []
+    for path in args.csv:
+        data = load_test(path, displacement_unit=du, force_unit=fu, time_unit=tu, columns=cols,
+                         delimiter=args.delimiter)
+        records.append((data.t, data.u, data.F))
+    noise = None if args.noise is None else args.noise * FORCE_UNITS[fu]
+    opts = {"max_effects": args.max_effects, "noise": noise, "lowpass": args.lowpass,
+            "seed": args.seed}
+    names = [p.name for p in args.csv]
+    if args.jobs == 1:
+        batch = diagnose_many(records, names=names, executor="serial", progress=args.progress,
+                              **opts)
+    else:
+        with ProcessPoolExecutor(args.jobs) as pool:
+            batch = diagnose_many(records, names=names, executor=pool, progress=args.progress,
+                                  **opts)
+    wrote = []
+    if args.json is not None:
+        args.json.write_text(json.dumps(batch.to_dict(), indent=2, allow_nan=False) + "\n")
+        wrote.append(f"wrote {args.json}")
+    if args.table is not None:
+        wrote.append(f"wrote {batch.to_csv(args.table)}")
+    return EXIT_OK if batch.success else EXIT_NOT_CONVERGED, [batch.report()] + wrote
 
 
 def _parse_units(text: str) -> tuple[str, str, str]:

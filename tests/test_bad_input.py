@@ -166,6 +166,11 @@ REGISTRY: dict[str, Entry] = {
         predicted_frequency=_curve()["frequency"] + 0.01, predicted_damping=_curve()["damping"],
         frequency_noise=0.01, damping_noise=1e-4)),
         {"amplitude": "data", "frequency": "data", "damping": "data"}),
+    "diagnose_many": Entry(lambda: (ie.diagnose_many, dict(
+        records=[(_record().t.copy(), _record().u.copy(), _record().F.copy())], band=0.25,
+        executor="serial", max_samples=300, max_effects=1, noise=5.0)),
+        {"records": "object", "band": "scalar"}),
+    "BatchDiagnosis": Entry(skip="a result object built by diagnose_many"),
     "Diagnosis": Entry(skip="a result object built by diagnose"),
     "VibrationDiagnosis": Entry(skip="a result object built by diagnose_vibration"),
     "simulate_element_test": Entry(lambda: (ie.simulate_element_test, dict(

@@ -2,12 +2,14 @@
 
 Modules: :mod:`.loops` (force-displacement records), :mod:`.vibration` (amplitude-dependent
 frequency and damping), :mod:`.selection` (the one selection rule both use),
-:mod:`.results` (result objects), :mod:`.generator` (the synthetic test generator).
+:mod:`.results` (result objects), :mod:`.generator` (the synthetic test generator),
+:mod:`.batch` (many records on local processes or Dask).
 """
+from .batch import BatchDiagnosis, diagnose_many
 from .generator import simulate_element_test
 from .loops import CANDIDATES, diagnose
 from .results import Diagnosis, VibrationDiagnosis
 from .vibration import diagnose_vibration
 
-__all__ = ["CANDIDATES", "Diagnosis", "VibrationDiagnosis", "diagnose", "diagnose_vibration",
-           "simulate_element_test"]
+__all__ = ["BatchDiagnosis", "CANDIDATES", "Diagnosis", "VibrationDiagnosis", "diagnose",
+           "diagnose_many", "diagnose_vibration", "simulate_element_test"]

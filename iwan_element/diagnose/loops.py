@@ -35,6 +35,7 @@ from ..core._validation import (MAGNITUDE_RANGE, _check_int, _check_time, check_
                                 check_scalar, finite_array, same_length)
 from ..effects import EFFECTS
 from ..effects._evaluate import Evaluator, build_element, order_stack, stack_ok
+from ..ensemble.runner import progress_bar
 from ..identify.testdata import find_reversals, split_cycles
 from . import _model as M
 from ._locate import _check_candidates, _locate, _untestable
@@ -278,7 +279,7 @@ def _record_force(row, uj, v):
 
 def diagnose(t, u, F, *, candidates=None, max_effects: int = 3, noise: float | None = None,
              alpha: float = 1e-3, ambiguity: float = 10.0, max_samples: int = 1500,
-             lowpass: float | None = None, seed=0) -> Diagnosis:
+             lowpass: float | None = None, seed=0, progress: bool = False) -> Diagnosis:
     """Find what the four-parameter Iwan model misses in a displacement-driven test.
 
     See the module docstring for the procedure.
@@ -312,6 +313,9 @@ def diagnose(t, u, F, *, candidates=None, max_effects: int = 3, noise: float | N
         ``(0, sample rate / 2)``. Needs ``t``. Default: none.
     seed : int or numpy.random.Generator, keyword-only
         Seed of the starting loop fit's random starts.
+    progress : bool, keyword-only
+        Show a tqdm progress bar counting the model fits (the base fit, then each
+        candidate stack), with the stack being fitted (needs tqdm).
 
     Returns
     -------
@@ -330,6 +334,18 @@ def diagnose(t, u, F, *, candidates=None, max_effects: int = 3, noise: float | N
     alpha = check_scalar("alpha", alpha, low=0.0, high=0.5, low_open=True, high_open=True)
     ambiguity = check_scalar("ambiguity", ambiguity, low=0.0)
     max_samples = _check_int("max_samples", max_samples, 100)
+    bar = progress_bar(progress, desc="diagnose", unit="fit")
+    try:
+        return _diagnose(tt, uu, FF_in, n, noise, lp, cand, max_effects, alpha, ambiguity,
+                         max_samples, seed, bar, t_start)
+    finally:
+        if bar is not None:
+            bar.close()
+
+
+def _diagnose(tt, uu, FF_in, n, noise, lp, cand, max_effects, alpha, ambiguity, max_samples,
+              seed, bar, t_start):
+    """The procedure of :func:`diagnose` on checked input (see the module docstring)."""
     FF = FF_in
     if lp is not None:
         # both channels, as the rig's dynamics and the sensor noise are in both: the joint is
@@ -350,6 +366,9 @@ def diagnose(t, u, F, *, candidates=None, max_effects: int = 3, noise: float | N
                                                   "v_rms": float(np.sqrt(np.mean(v ** 2))) or 1.0,
                                                   "D_ref": 1.0}, 1.0, F_rest)
     base = _fit_base(fitter, ev, _base_start(tt, uj, FF, seed))
+    if bar is not None:
+        bar.set_postfix_str("Iwan")
+        bar.update(1)
     r_raw = FF_in - _record_force(base, uj, v)[0]
     sigma, tau, noise_text, nwarn = _noise_level(tt, r_raw, noise, lp, FF_in)
     fitter.s2 = sigma * sigma
@@ -358,7 +377,8 @@ def diagnose(t, u, F, *, candidates=None, max_effects: int = 3, noise: float | N
     fitter.scales["D_ref"] = float(ev.unit_dissipation(unit_params(*shape_b))[-1]) or 1.0
     tau_k = max(1.0, tau * keep.size / n)
     n_eff = keep.size / tau_k
-    sel = _select(fitter, base, cand, tt, v, uj, FF, tau_k, n_eff, alpha, max_effects, ambiguity)
+    sel = _select(fitter, base, cand, tt, v, uj, FF, tau_k, n_eff, alpha, max_effects, ambiguity,
+                  bar=bar)
     for _ in range(2 if noise is None else 0):
         # a large misfit leaks into the plain fit's residual and inflates the noise estimate,
         # which can hide a further effect: the noise is re-read from the residual of the
@@ -376,7 +396,7 @@ def diagnose(t, u, F, *, candidates=None, max_effects: int = 3, noise: float | N
         tau_k = max(1.0, tau * keep.size / n)
         n_eff = keep.size / tau_k
         sel = _select(fitter, base, cand, tt, v, uj, FF, tau_k, n_eff, alpha, max_effects,
-                      ambiguity)
+                      ambiguity, bar=bar)
     ctx = dict(t_start=t_start, uu=uu, FF_in=FF_in, FF=FF, tt=tt, n=n, noise=noise, lp=lp,
                sigma=sigma, tau=tau, noise_text=noise_text, nwarn=nwarn, u_off=u_off, uj=uj,
                v=v, keep=keep, fitter=fitter, base=base, tau_k=tau_k, n_eff=n_eff, sel=sel,
@@ -384,8 +404,10 @@ def diagnose(t, u, F, *, candidates=None, max_effects: int = 3, noise: float | N
     return _assemble(ctx)
 
 
-def _select(fitter, base, cand, tt, v, uj, FF, tau_k, n_eff, alpha, max_effects, ambiguity):
-    """Run the shared selection rule over the testable candidates."""
+def _select(fitter, base, cand, tt, v, uj, FF, tau_k, n_eff, alpha, max_effects, ambiguity, *,
+            bar=None):
+    """Run the shared selection rule over the testable candidates (``bar``: a progress bar
+    counting the fits)."""
     try:
         import inspect
         if next(iter(inspect.signature(split_cycles).parameters)) == "t":   # time first
@@ -403,7 +425,11 @@ def _select(fitter, base, cand, tt, v, uj, FF, tau_k, n_eff, alpha, max_effects,
         names = order_stack(cur["names"] + (name,))
         k = max(len(s.fit_starts) for s in EFFECTS[name].specs)
         starts = [_z_start(names, cur["names"], cur["state"]["z"], j) for j in range(k)]
+        if bar is not None:
+            bar.set_postfix_str(" + ".join(names))
         row = fitter.run(names, starts, scan=name)
+        if bar is not None:
+            bar.update(1)
         q = len(EFFECTS[name].specs)
         ssr = row["chi2"] * fitter.s2
         return {"names": names, "chi2": row["chi2"], "q": q, "state": row,

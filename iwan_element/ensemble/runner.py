@@ -317,7 +317,7 @@ def run_ensemble(func, parameter_sets, *, executor=None, seed=None,
     sets = _check_sets(parameter_sets)
     root = np.random.SeedSequence(_check_seed(seed))
     children = root.spawn(len(sets))
-    bar = _progress_bar(progress, len(sets))
+    bar = progress_bar(progress, total=len(sets), desc="ensemble", unit="task")
     try:
         raw, where, warns = _dispatch(func, sets, children, executor, bar)
     finally:
@@ -326,7 +326,9 @@ def run_ensemble(func, parameter_sets, *, executor=None, seed=None,
     return _assemble(sets, raw, root, where, time.perf_counter() - t0, warns)
 
 
-def _progress_bar(progress, n):
+def progress_bar(progress, *, total=None, desc: str, unit: str):
+    """A tqdm progress bar when ``progress`` is True, else None (the package's one way to
+    show progress; tqdm is optional: ``pip install 'iwan-element[progress]'``)."""
     if not isinstance(progress, (bool, np.bool_)):
         raise ValueError(f"progress must be True or False, got {progress!r}")
     if not progress:
@@ -336,7 +338,7 @@ def _progress_bar(progress, n):
     except ImportError:
         raise ImportError("progress=True needs tqdm: "
                           "pip install 'iwan-element[progress]'") from None
-    return tqdm(total=n, desc="ensemble", unit="task")
+    return tqdm(total=total, desc=desc, unit=unit)
 
 
 def _dispatch(func, sets, children, executor, bar):
