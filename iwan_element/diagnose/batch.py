@@ -242,8 +242,9 @@ class BatchDiagnosis:
             _, ax = plt.subplots(figsize=(max(5.0, 0.5 * len(self.rows) + 2), 4))
         ok = [r for r in self.rows if r["status"] == "ok"]
         x = np.arange(len(ok))
-        artists = [ax.bar(x - 0.2, [r["band_before"] for r in ok], 0.4, label="Iwan"),
-                   ax.bar(x + 0.2, [r["band_after"] for r in ok], 0.4, label="with named effects")]
+        artists = list(ax.bar(x - 0.2, [r["band_before"] for r in ok], 0.4, label="Iwan"))
+        artists += list(ax.bar(x + 0.2, [r["band_after"] for r in ok], 0.4,
+                               label="with named effects"))
         ax.set_xticks(x, [r["record"] for r in ok], rotation=60, ha="right", fontsize=7)
         ax.set_ylabel("band misfit [N]")
         ax.set_yscale("log")
