@@ -56,10 +56,7 @@ def test_plotting_functions_take_ax_and_return_its_artists(name):
 # result objects: how to build one cheaply
 def _fit():
     d = _record()
-    names = list(inspect.signature(ie.fit_loops).parameters)
-    if names[0] == "t":
-        return ie.fit_loops(d.t, d.u, d.F, n_starts=1, max_nfev=30)
-    return ie.fit_loops(d.u, d.F, t=d.t, n_starts=1, max_nfev=30)
+    return ie.fit_loops(d.t, d.u, d.F, n_starts=1, max_nfev=30)
 
 
 def _curve():
@@ -117,10 +114,6 @@ def test_result_objects_have_one_shape(name, part, request):
 
 
 @pytest.mark.parametrize("fn", [ie.diagnose, ie.fit_loops, ie.split_cycles, ie.TestData])
-def test_time_series_functions_take_time_first(fn, request):
+def test_time_series_functions_take_time_first(fn):
     names = list(inspect.signature(fn).parameters)
-    if "t" not in names[:1] and fn in (ie.fit_loops, ie.split_cycles):
-        request.applymarker(pytest.mark.xfail(
-            strict=True, reason="identify/ owner: fit_loops(u, F, t=...) and split_cycles(u, F, "
-                                "t=...) are not time first yet (issue 14)"))
     assert names[:3] == ["t", "u", "F"]

@@ -128,15 +128,9 @@ def _evaluators(uj, v, max_samples):
 def _base_start(tt, uj, FF, seed):
     """Shape start ``(phi_max, chi, beta)`` from the plain loop fit, or None."""
     from ..identify.fit import fit_loops, _quiet
-    import inspect
-    sig = inspect.signature(fit_loops).parameters
-    opts = {k: v for k, v in (("max_samples", 3000), ("n_starts", 3)) if k in sig}
     try:
         with _quiet():
-            if next(iter(sig)) == "t":
-                res = fit_loops(tt, uj, FF, seed=seed, **opts)
-            else:
-                res = fit_loops(uj, FF, t=tt, seed=seed, **opts)
+            res = fit_loops(tt, uj, FF, seed=seed, max_samples=3000, n_starts=3)
         p = res.params
         return (p.phi_max, p.chi, p.beta)
     except (ValueError, FloatingPointError, ZeroDivisionError):
@@ -409,11 +403,7 @@ def _select(fitter, base, cand, tt, v, uj, FF, tau_k, n_eff, alpha, max_effects,
     """Run the shared selection rule over the testable candidates (``bar``: a progress bar
     counting the fits)."""
     try:
-        import inspect
-        if next(iter(inspect.signature(split_cycles).parameters)) == "t":   # time first
-            cycles = split_cycles(np.arange(uj.size, dtype=float) if tt is None else tt, uj, FF)
-        else:
-            cycles = split_cycles(uj, FF, t=tt)
+        cycles = split_cycles(np.arange(uj.size, dtype=float) if tt is None else tt, uj, FF)
     except ValueError:
         cycles = []
     untestable = {k: why for k, why in _untestable(tt, v, cycles).items() if k in cand}
