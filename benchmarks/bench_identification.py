@@ -30,7 +30,8 @@ import numpy as np
 
 from iwan_element import IwanParameters, force_amplitude
 from iwan_element.identify.fit import IdentifiabilityWarning, fit_dissipation, fit_loops
-from iwan_element.identify.testdata import load_test, simulate_test
+from iwan_element.identify.csv_input import load_test
+from iwan_element.identify.testdata import simulate_test
 
 SETS = [IwanParameters(9e3, 5e7, -0.8, 0.0), IwanParameters(9e3, 5e7, -0.5, 1.0),
         IwanParameters(9e3, 5e7, -0.1, 2.0), IwanParameters(9e3, 5e7, -0.8, 2.0)]

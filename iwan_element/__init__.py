@@ -35,7 +35,8 @@ from .core.modal import harmonic_stiffness, modal_iwan_curve, modal_ringdown
 from .identify.vibration import amplitude_curve
 from .identify.modal_fit import ModalIwanFit, fit_modal_iwan
 from .identify.stepped_sine import stepped_sine_curve
-from .identify.testdata import Cycle, TestData, find_reversals, load_test, simulate_test, split_cycles
+from .identify.csv_input import load_test
+from .identify.testdata import Cycle, TestData, find_reversals, simulate_test, split_cycles
 
 __version__ = "0.1.0"
 

@@ -126,7 +126,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 def _run_diagnose(args) -> int:
     from .diagnose import diagnose
-    from .identify.testdata import FORCE_UNITS, load_test
+    from .identify.csv_input import FORCE_UNITS, load_test
 
     if len(args.csv) > 1 or args.jobs is not None or args.table is not None:
         return _run_diagnose_many(args)
@@ -157,7 +157,7 @@ def _run_diagnose_many(args) -> int:
     from concurrent.futures import ProcessPoolExecutor
 
     from .diagnose import diagnose_many
-    from .identify.testdata import FORCE_UNITS, load_test
+    from .identify.csv_input import FORCE_UNITS, load_test
 
     if args.plot is not None:
         raise ValueError("--plot draws one record; with several records use --json/--table "
@@ -230,7 +230,7 @@ def _write_plot(path: Path, data, result) -> None:
 
 def _run_fit(args) -> int:
     from .identify.fit import fit_dissipation, fit_loops
-    from .identify.testdata import FORCE_UNITS, load_test
+    from .identify.csv_input import FORCE_UNITS, load_test
 
     du, fu, tu = _parse_units(args.units)
     data = load_test(args.csv, displacement_unit=du, force_unit=fu, time_unit=tu,

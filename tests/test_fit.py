@@ -26,7 +26,8 @@ from iwan_element.identify.dissipation import _seed_model
 from iwan_element.identify.result import _quiet as _quiet_ctx
 from iwan_element.core._history import History
 from iwan_element.identify.fit import FitResult, IdentifiabilityWarning, fit_dissipation, fit_loops
-from iwan_element.identify.testdata import load_test, simulate_test
+from iwan_element.identify.csv_input import load_test
+from iwan_element.identify.testdata import simulate_test
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "models" / "example_test_30kN.csv"
 

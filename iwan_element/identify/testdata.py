@@ -30,14 +30,10 @@ from ..core.parameters import IwanParameters
 from .noise import estimate_noise
 
 __all__ = [
-    "DISPLACEMENT_UNITS",
-    "FORCE_UNITS",
-    "TIME_UNITS",
     "Cycle",
     "TestData",
     "find_reversals",
     "split_cycles",
-    "load_test",
     "simulate_test",
 ]
 
@@ -489,6 +485,3 @@ def simulate_test(params: IwanParameters, amplitudes, *, cycles: int = 3, freque
            f"displacement_noise={su:g} m)")
     return TestData.from_arrays(t, u_meas, F_meas, source=src)
 
-
-# CSV input lives in its own module; its names stay importable from here
-from .csv_input import DISPLACEMENT_UNITS, FORCE_UNITS, TIME_UNITS, load_test  # noqa: E402
