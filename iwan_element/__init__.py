@@ -35,6 +35,7 @@ from .core.modal import harmonic_stiffness, modal_iwan_curve, modal_ringdown
 from .identify.vibration import amplitude_curve
 from .identify.modal_fit import ModalIwanFit, fit_modal_iwan
 from .identify.stepped_sine import stepped_sine_curve
+from .identify.sweeps import sweep_curve
 from .identify.testdata import Cycle, TestData, find_reversals, load_test, simulate_test, split_cycles
 
 __version__ = "0.1.0"
@@ -84,6 +85,7 @@ __all__ = [
     "amplitude_curve",
     "fit_modal_iwan",
     "stepped_sine_curve",
+    "sweep_curve",
     "ModalIwanFit",
     "fit_loops",
     "fit_dissipation",
