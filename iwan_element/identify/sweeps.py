@@ -318,7 +318,7 @@ def sweep_curve(f, F, response, phase, *, level=None, quantity: str = "accelerat
     degree : int, keyword-only
         Polynomial degree in ``ln X`` of the smooth curves fitted with ``c`` and ``B``
         (1 to 5, default 3; reduced to the number of sweeps minus one when every sweep
-        holds one amplitude).
+        holds its response within 10 %, as response control does).
     residual : bool, keyword-only
         Fit the real residual ``B`` of the other modes (default True).
     bins : int, optional, keyword-only
@@ -351,8 +351,8 @@ def sweep_curve(f, F, response, phase, *, level=None, quantity: str = "accelerat
     X = arrs["response"] / W ** _POWER[quantity]
     phd, conv_note = _convention(W, X, arrs["F"], arrs["phase"], sweeps, quantity)
     H = X * np.exp(1j * phd) / arrs["F"]
-    n_clusters = 1 + int(np.sum(np.diff(np.sort(np.log(X))) > 0.1))
-    deg = min(deg, n_clusters - 1)          # response control: one amplitude per sweep
+    if max(float(np.ptp(np.log(X[i]))) for i in sweeps) < 0.1:
+        deg = min(deg, len(sweeps) - 1)     # response held within 10 %: one amplitude a sweep
     warns = []
     if deg < 1:
         deg = 1
