@@ -32,7 +32,7 @@ import math
 import numpy as np
 from scipy import optimize
 
-from ..core._validation import check_scalar, finite_array, same_length
+from ..core._validation import check_magnitude, check_scalar, finite_array, same_length
 from .curves import AmplitudeCurve
 from .stepped_sine import _fit_sdof
 
@@ -51,7 +51,7 @@ _PHASE_TOL = math.pi / 6          # largest distance of the resonance phase from
 def _inputs(f, F, response, phase, level):
     arrs = {}
     for name, v in (("f", f), ("F", F), ("response", response), ("phase", phase)):
-        arrs[name] = finite_array(name, v, min_size=8)
+        arrs[name] = check_magnitude(name, finite_array(name, v, min_size=8))
     same_length(**arrs)
     for name, unit in (("f", "Hz"), ("F", "N"), ("response", "SI units of quantity")):
         if np.any(arrs[name] <= 0):
@@ -351,6 +351,8 @@ def sweep_curve(f, F, response, phase, *, level=None, quantity: str = "accelerat
     X = arrs["response"] / W ** _POWER[quantity]
     phd, conv_note = _convention(W, X, arrs["F"], arrs["phase"], sweeps, quantity)
     H = X * np.exp(1j * phd) / arrs["F"]
+    scale = float(np.max(np.abs(H)))        # fit in units of the largest receptance
+    H = H / scale
     if max(float(np.ptp(np.log(X[i]))) for i in sweeps) < 0.1:
         deg = min(deg, len(sweeps) - 1)     # response held within 10 %: one amplitude a sweep
     warns = []
@@ -365,7 +367,9 @@ def sweep_curve(f, F, response, phase, *, level=None, quantity: str = "accelerat
         keep[i] = np.abs(H[i]) >= frac * np.max(np.abs(H[i]))
     n_bins = int(np.clip(round(keep.sum() / 8), 3, 12)) if bins is None else \
         int(check_scalar("bins", bins, low=1, high=keep.sum() / 2))
-    amp, wr, z, sw, sz, excess = _binned(W, arrs["F"], H, keep, c, B, cov_cB, rms, n_bins)
+    amp, wr, z, sw, sz, excess = _binned(W, arrs["F"] * scale, H, keep, c, B, cov_cB, rms,
+                                         n_bins)
+    c, B = c * scale, B * scale
     log.debug("bin scatter / propagated error: median %.3g", excess)
     warns += _warnings(ok, rms, z, amp)
     if np.any(z >= 0.1):
