@@ -36,6 +36,7 @@ from .identify.vibration import amplitude_curve
 from .identify.modal_fit import ModalIwanFit, fit_modal_iwan
 from .identify.stepped_sine import stepped_sine_curve
 from .identify.sweeps import sweep_curve
+from .identify.formats import UffRecord, read_sweep_csv, read_uff
 from .identify.testdata import Cycle, TestData, find_reversals, load_test, simulate_test, split_cycles
 
 __version__ = "0.1.0"
@@ -86,6 +87,9 @@ __all__ = [
     "fit_modal_iwan",
     "stepped_sine_curve",
     "sweep_curve",
+    "read_uff",
+    "UffRecord",
+    "read_sweep_csv",
     "ModalIwanFit",
     "fit_loops",
     "fit_dissipation",

@@ -136,6 +136,11 @@ REGISTRY: dict[str, Entry] = {
                                        dict(s=np.linspace(-1, 1, 9), s0=1.0, chi=-0.5, beta=0.5)),
                               {"s": "shape_free", "s0": "scalar", "chi": "scalar", "beta": "scalar"}),
     "load_test": Entry(skip="reads a file: fuzzed through the CLI and test_load_test_bad_files"),
+    "read_uff": Entry(skip="reads a file: unknown or contradicting units and function types "
+                           "are tested in tests/test_uff.py"),
+    "read_sweep_csv": Entry(skip="reads a file: unknown units, missing or repeated columns are "
+                                 "tested in tests/test_uff.py"),
+    "UffRecord": Entry(skip="a plain record built by read_uff"),
     "split_cycles": Entry(lambda: (ie.split_cycles, dict(u=_record().u.copy(), F=_record().F.copy(),
                                                          t=_record().t.copy())),
                           {"u": "data", "F": "data", "t": "time"}),
