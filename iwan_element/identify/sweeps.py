@@ -2,10 +2,11 @@
 
 Every point of a sweep (drive frequency ``W``, fundamental force amplitude ``F``, response
 amplitude and phase relative to the force) is read as the mode at its own amplitude
-(single-nonlinear-mode theory: Szemplinska-Stupnicka, *The Behavior of Nonlinear Vibrating
-Systems*, Kluwer 1990; applied to jointed structures e.g. by Scheel, Peter, Leine, Krack,
-J. Sound Vib. 423:320-331, 2018). With drive and response at the same point, one dominant
-mode and a real modal constant ``c`` shared by all points (``docs/sweeps.md``)::
+(the single-nonlinear-mode idea of Szemplinska-Stupnicka, exact reference not checked here;
+amplitude-dependent modal properties of friction-damped structures from steady forced
+response: Scheel, Peter, Leine, Krack, J. Sound Vib. 435:56-73, 2018). With drive and
+response at the same point, one dominant mode and a real modal constant ``c`` shared by all
+points (``docs/sweeps.md``)::
 
     H = X exp(i phi) / F = c / (w_r(X)**2 - W**2 + 2 i zeta_r(X) w_r(X) W) + B
 
@@ -351,10 +352,30 @@ def sweep_curve(f, F, response, phase, *, level=None, quantity: str = "accelerat
     X = arrs["response"] / W ** _POWER[quantity]
     phd, conv_note = _convention(W, X, arrs["F"], arrs["phase"], sweeps, quantity)
     H = X * np.exp(1j * phd) / arrs["F"]
-    scale = float(np.max(np.abs(H)))        # fit in units of the largest receptance
-    H = H / scale
     if max(float(np.ptp(np.log(X[i]))) for i in sweeps) < 0.1:
         deg = min(deg, len(sweeps) - 1)     # response held within 10 %: one amplitude a sweep
+    r = _identify(W, H, arrs["F"], sweeps, deg, residual, frac, bins)
+    amp, wr, z, sw, sz = r["curve"]
+    c, B, keep, n_bins, rms = r["c"], r["B"], r["keep"], r["n_bins"], r["rms"]
+    if np.any(z >= 0.1):
+        raise ValueError(f"the single-mode inversion gives damping ratios up to {z.max():.3g}: "
+                         "not a lightly damped single mode (check the phase and that the "
+                         "response is co-located with the force)")
+    deg = r["deg"]
+    notes = (f"{len(sweeps)} sweeps, {W.size} points ({keep.sum()} inverted, |X/F| >= {frac:g} "
+             f"x sweep peak); {conv_note}; modal constant c = {c:.5g} 1/kg, residual B = "
+             f"{B:.4g} m/N; smooth curves of degree {deg} in ln X; fit rms relative error "
+             f"{rms:.2g}; bins: {len(amp)} of {n_bins} in ln X")
+    return AmplitudeCurve(amp, wr / (2 * math.pi), z, frequency_std=sw / (2 * math.pi),
+                          damping_std=sz, method="stepped-sine-sweep", notes=notes,
+                          warnings=r["warnings"])
+
+
+def _identify(W, H, F, sweeps, deg, residual, frac, bins):
+    """Fit ``c`` and ``B``, invert the kept points and bin them (see the module docstring)."""
+    scale = float(np.max(np.abs(H)))        # fit in units of the largest receptance
+    H = H / scale
+    X = np.abs(H) * F * scale
     warns = []
     if deg < 1:
         deg = 1
@@ -367,22 +388,11 @@ def sweep_curve(f, F, response, phase, *, level=None, quantity: str = "accelerat
         keep[i] = np.abs(H[i]) >= frac * np.max(np.abs(H[i]))
     n_bins = int(np.clip(round(keep.sum() / 8), 3, 12)) if bins is None else \
         int(check_scalar("bins", bins, low=1, high=keep.sum() / 2))
-    amp, wr, z, sw, sz, excess = _binned(W, arrs["F"] * scale, H, keep, c, B, cov_cB, rms,
-                                         n_bins)
-    c, B = c * scale, B * scale
+    amp, wr, z, sw, sz, excess = _binned(W, F * scale, H, keep, c, B, cov_cB, rms, n_bins)
     log.debug("bin scatter / propagated error: median %.3g", excess)
     warns += _warnings(ok, rms, z, amp)
-    if np.any(z >= 0.1):
-        raise ValueError(f"the single-mode inversion gives damping ratios up to {z.max():.3g}: "
-                         "not a lightly damped single mode (check the phase and that the "
-                         "response is co-located with the force)")
-    notes = (f"{len(sweeps)} sweeps, {W.size} points ({keep.sum()} inverted, |X/F| >= {frac:g} "
-             f"x sweep peak); {conv_note}; modal constant c = {c:.5g} 1/kg, residual B = "
-             f"{B:.4g} m/N; smooth curves of degree {deg} in ln X; fit rms relative error "
-             f"{rms:.2g}; bins: {len(amp)} of {n_bins} in ln X")
-    return AmplitudeCurve(amp, wr / (2 * math.pi), z, frequency_std=sw / (2 * math.pi),
-                          damping_std=sz, method="stepped-sine-sweep", notes=notes,
-                          warnings=tuple(warns))
+    return {"curve": (amp, wr, z, sw, sz), "c": c * scale, "B": B * scale, "keep": keep,
+            "n_bins": n_bins, "rms": rms, "deg": deg, "warnings": tuple(warns)}
 
 
 def _cov_cB(x, cov, w0, residual):
