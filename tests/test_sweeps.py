@@ -10,6 +10,7 @@ Iwan closed form (``modal_iwan_curve``, first-harmonic stiffness, dashpot floor)
 modal amplitude ``X / PHI``: it is not made by the code under test.
 """
 import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -122,6 +123,8 @@ def test_force_controlled_sweeps_give_the_modal_iwan_curve(force_controlled):
     # damping (measured 1.6-2.6 %), 5e-4 in frequency
     _check_truth(curve, 5e-4, 0.04)
     assert "accelerance-like" in curve.notes and not curve.warnings
+    c = float(re.search(r"modal constant c = ([0-9.eE+-]+)", curve.notes).group(1))
+    assert c == pytest.approx(PHI ** 2, rel=0.03)                # fitted, not given
 
 
 def test_response_controlled_sweeps(response_controlled):
@@ -184,6 +187,10 @@ def test_bad_input_and_no_mutation(force_controlled):
         sweep_curve(f, F, A, ph, level=lab[:-1])
     with pytest.raises(ValueError, match="peak_fraction"):
         sweep_curve(f, F, A, ph, level=lab, peak_fraction=0.0)
+    with pytest.raises(ValueError, match="bins must be an integer"):
+        sweep_curve(f, F, A, ph, level=lab, bins=2.5)
+    with pytest.raises(ValueError, match="degree must be"):
+        sweep_curve(f, F, A, ph, level=lab, degree=9)
 
 
 def test_sweeps_without_labels_split_where_frequency_turns(force_controlled):
@@ -242,3 +249,18 @@ def test_real_brb_sweeps_against_the_hammer_curve():
     # and the curve goes into the modal Iwan fit as it is
     fit = fit_modal_iwan(sweep)
     assert 80.0 < fit.parameters["f0"] < 81.0
+
+
+def test_noisy_sweeps_stay_within_their_stated_errors(force_controlled):
+    """1 % amplitude and 0.01 rad phase noise (seeded): the curve stays near the truth and the
+    stated standard errors cover the error (within 3 sigma plus the 2 % form bias)."""
+    lab, f, F, A, ph = force_controlled
+    rng = np.random.default_rng(7)
+    A_n = A * (1 + 0.01 * rng.standard_normal(A.size))
+    F_n = F * (1 + 0.01 * rng.standard_normal(F.size))
+    ph_n = ph + 0.01 * rng.standard_normal(ph.size)
+    curve = sweep_curve(f, F_n, A_n, ph_n, level=lab)
+    ft, zt = truth(curve.amplitude)
+    assert np.all(np.abs(curve.frequency - ft) < 3 * curve.frequency_std + 2e-4 * ft)
+    assert np.all(np.abs(curve.damping_ratio - zt) < 3 * curve.damping_std + 0.03 * zt)
+    assert np.all(curve.damping_std < 0.1 * zt)

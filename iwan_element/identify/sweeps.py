@@ -323,7 +323,8 @@ def sweep_curve(f, F, response, phase, *, level=None, quantity: str = "accelerat
     residual : bool, keyword-only
         Fit the real residual ``B`` of the other modes (default True).
     bins : int, optional, keyword-only
-        Number of equal bins in ``ln X`` (default: kept points / 8, between 3 and 12).
+        Number of equal bins in ``ln X``, 1 to 50 (default: kept points / 8, between 3 and
+        12); clusters of amplitude separated by more than 0.1 in ``ln X`` are never merged.
 
     Returns
     -------
@@ -347,6 +348,9 @@ def sweep_curve(f, F, response, phase, *, level=None, quantity: str = "accelerat
     deg = int(check_scalar("degree", degree, low=1, high=5))
     if deg != degree:
         raise ValueError(f"degree must be an integer in [1, 5], got {degree!r}")
+    if bins is not None and (isinstance(bins, bool) or not isinstance(bins, (int, np.integer))
+                             or not 1 <= bins <= 50):
+        raise ValueError(f"bins must be an integer in [1, 50] or None, got {bins!r}")
     arrs, sweeps = _inputs(f, F, response, phase, level)
     W = 2.0 * math.pi * arrs["f"]
     X = arrs["response"] / W ** _POWER[quantity]
@@ -386,8 +390,7 @@ def _identify(W, H, F, sweeps, deg, residual, frac, bins):
     keep = np.zeros(W.size, bool)
     for i in sweeps:
         keep[i] = np.abs(H[i]) >= frac * np.max(np.abs(H[i]))
-    n_bins = int(np.clip(round(keep.sum() / 8), 3, 12)) if bins is None else \
-        int(check_scalar("bins", bins, low=1, high=keep.sum() / 2))
+    n_bins = int(np.clip(round(keep.sum() / 8), 3, 12)) if bins is None else bins
     amp, wr, z, sw, sz, excess = _binned(W, F * scale, H, keep, c, B, cov_cB, rms, n_bins)
     log.debug("bin scatter / propagated error: median %.3g", excess)
     warns += _warnings(ok, rms, z, amp)
