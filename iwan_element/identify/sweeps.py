@@ -367,7 +367,7 @@ def sweep_curve(f, F, response, phase, *, level=None, quantity: str = "accelerat
                          "response is co-located with the force)")
     deg = r["deg"]
     notes = (f"{len(sweeps)} sweeps, {W.size} points ({keep.sum()} inverted, |X/F| >= {frac:g} "
-             f"x sweep peak); {conv_note}; modal constant c = {c:.5g} 1/kg, residual B = "
+             f"x sweep peak, X {r['span'][0]:.3g}-{r['span'][1]:.3g} m); {conv_note}; modal constant c = {c:.5g} 1/kg, residual B = "
              f"{B:.4g} m/N; smooth curves of degree {deg} in ln X; fit rms relative error "
              f"{rms:.2g}; bins: {len(amp)} of {n_bins} in ln X")
     return AmplitudeCurve(amp, wr / (2 * math.pi), z, frequency_std=sw / (2 * math.pi),
@@ -394,7 +394,9 @@ def _identify(W, H, F, sweeps, deg, residual, frac, bins):
     amp, wr, z, sw, sz, excess = _binned(W, F * scale, H, keep, c, B, cov_cB, rms, n_bins)
     log.debug("bin scatter / propagated error: median %.3g", excess)
     warns += _warnings(ok, rms, z, amp)
+    Xk = np.abs(H[keep] - B) * F[keep] * scale
     return {"curve": (amp, wr, z, sw, sz), "c": c * scale, "B": B * scale, "keep": keep,
+            "span": (float(Xk.min()), float(Xk.max())),
             "n_bins": n_bins, "rms": rms, "deg": deg, "warnings": tuple(warns)}
 
 
