@@ -6,7 +6,7 @@ amplitude and phase relative to the force) is read as the mode at its own amplit
 amplitude-dependent modal properties of friction-damped structures from steady forced
 response: Scheel, Peter, Leine, Krack, J. Sound Vib. 435:56-73, 2018). With drive and
 response at the same point, one dominant mode and a real modal constant ``c`` shared by all
-points (``docs/sweeps.md``)::
+points (``docs/equations.md`` §8.2; the algorithm in ``docs/sweeps.md``)::
 
     H = X exp(i phi) / F = c / (w_r(X)**2 - W**2 + 2 i zeta_r(X) w_r(X) W) + B
 
