@@ -35,6 +35,8 @@ from .core.modal import harmonic_stiffness, modal_iwan_curve, modal_ringdown
 from .identify.vibration import amplitude_curve
 from .identify.modal_fit import ModalIwanFit, fit_modal_iwan
 from .identify.stepped_sine import stepped_sine_curve
+from .identify.sweeps import sweep_curve
+from .identify.formats import UffRecord, read_sweep_csv, read_uff
 from .identify.csv_input import load_test
 from .identify.testdata import Cycle, TestData, find_reversals, simulate_test, split_cycles
 
@@ -85,6 +87,10 @@ __all__ = [
     "amplitude_curve",
     "fit_modal_iwan",
     "stepped_sine_curve",
+    "sweep_curve",
+    "read_uff",
+    "UffRecord",
+    "read_sweep_csv",
     "ModalIwanFit",
     "fit_loops",
     "fit_dissipation",

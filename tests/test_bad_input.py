@@ -136,6 +136,11 @@ REGISTRY: dict[str, Entry] = {
                                        dict(s=np.linspace(-1, 1, 9), s0=1.0, chi=-0.5, beta=0.5)),
                               {"s": "shape_free", "s0": "scalar", "chi": "scalar", "beta": "scalar"}),
     "load_test": Entry(skip="reads a file: fuzzed through the CLI and test_load_test_bad_files"),
+    "read_uff": Entry(skip="reads a file: unknown or contradicting units and function types "
+                           "are tested in tests/test_uff.py"),
+    "read_sweep_csv": Entry(skip="reads a file: unknown units, missing or repeated columns are "
+                                 "tested in tests/test_uff.py"),
+    "UffRecord": Entry(skip="a plain record built by read_uff"),
     "split_cycles": Entry(lambda: (ie.split_cycles, dict(u=_record().u.copy(), F=_record().F.copy(),
                                                          t=_record().t.copy())),
                           {"u": "data", "F": "data", "t": "time"}),
@@ -213,6 +218,20 @@ def _levels():
     return out
 
 
+def _sweeps():
+    """Two force-controlled sweeps of a softening linear-per-level mode (accelerance)."""
+    f = np.linspace(48.0, 52.0, 17)
+    w = 2 * np.pi * f
+    out = {k: [] for k in ("f", "F", "response", "phase", "level")}
+    for k in range(2):
+        wk, F = 2 * np.pi * 50.0 * (1 - 0.005 * k), (1.0 + k) * (1 - 0.3 * np.exp(-(f - 50) ** 2))
+        H = -w ** 2 * 0.5 / (wk ** 2 - w ** 2 + 2j * 0.01 * (1 + 0.2 * k) * wk * w)
+        for key, v in (("f", f), ("F", F), ("response", np.abs(H) * F), ("phase", np.angle(H)),
+                       ("level", np.full(f.size, k))):
+            out[key].append(v)
+    return {k: np.concatenate(v) for k, v in out.items()}
+
+
 def _spring_model(u, theta):
     """A linear spring F = k u (module level: the fit may pickle it)."""
     return theta[0] * np.asarray(u)
@@ -262,6 +281,9 @@ REGISTRY.update({
     "stepped_sine_curve": Entry(lambda: (ie.stepped_sine_curve, dict(levels=_levels(),
                                                                      peak_fraction=0.5)),
                                 {"levels": "object", "peak_fraction": "scalar"}),
+    "sweep_curve": Entry(lambda: (ie.sweep_curve, dict(_sweeps(), peak_fraction=0.3)),
+                         {"f": "data", "F": "data", "response": "data", "phase": "data",
+                          "peak_fraction": "scalar"}),
     "run_ensemble": Entry(lambda: (ie.run_ensemble, dict(
         func=_ensemble_task, parameter_sets=[{"Fs": 9e3}, {"Fs": 1e4}], executor="serial", seed=0)),
         {"func": "object", "parameter_sets": "object"}),

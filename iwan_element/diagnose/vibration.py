@@ -18,6 +18,8 @@ from scipy.optimize import least_squares
 
 from ..core._validation import _check_int, check_scalar, finite_array, same_length
 from ..effects import EFFECTS
+from ..identify.curves import AmplitudeCurve
+from ..identify.units import check_damping_ratio, check_frequency_ratio
 from .results import VibrationDiagnosis, _json
 from .selection import criterion_text, stepwise_select
 
@@ -35,17 +37,11 @@ def _curve_noise(r):
     return float(1.4826 * np.median(np.abs(d2 - np.median(d2))) / math.sqrt(6.0))
 
 
-def _check_units(fm, fp, zm):
+def _check_units(fm, fp, zm, zp):
     """Clear errors for rad/s given as Hz and percent given as a ratio."""
-    ratio = float(np.median(fm / fp))
-    for k, name, other in ((2 * np.pi, "frequency", "predicted_frequency"),
-                           (1 / (2 * np.pi), "predicted_frequency", "frequency")):
-        if abs(ratio / k - 1.0) < 0.15:
-            raise ValueError(f"{name} is {ratio if k > 1 else 1 / ratio:.3g} x {other}, close to "
-                             f"2 pi: {name} looks like rad/s; give both in Hz")
-    if np.any(zm > 1.0):
-        raise ValueError(f"damping has values above 1 (max {zm.max():.3g}): a damping ratio is "
-                         "dimensionless and below 1; it looks like percent (divide by 100)")
+    check_frequency_ratio("frequency", fm, "predicted_frequency", fp)
+    check_damping_ratio("damping", zm)
+    check_damping_ratio("predicted_damping", zp)
 
 
 def _noise(r, stated, n, name):
@@ -148,14 +144,30 @@ def _inputs(amplitude, frequency, damping, predicted_frequency, predicted_dampin
     for nm, a in arrs.items():
         if np.any(a <= 0):
             raise ValueError(f"{nm} must be > 0 everywhere")
-    _check_units(arrs["frequency"], arrs["predicted_frequency"], arrs["damping"])
-    if np.any(arrs["predicted_damping"] > 1.0):
-        raise ValueError("predicted_damping has values above 1: it looks like percent "
-                         "(divide by 100)")
+    _check_units(arrs["frequency"], arrs["predicted_frequency"], arrs["damping"],
+                 arrs["predicted_damping"])
     return n, arrs
 
 
-def diagnose_vibration(amplitude, frequency, damping, *, predicted_frequency, predicted_damping,
+def _from_curve(amplitude, frequency, damping, f_unc, z_unc):
+    """Arrays and relative uncertainties from an AmplitudeCurve given as ``amplitude``."""
+    if not isinstance(amplitude, AmplitudeCurve):
+        if frequency is None or damping is None:
+            raise ValueError("frequency and damping are required with an amplitude array")
+        return amplitude, frequency, damping, f_unc, z_unc
+    if frequency is not None or damping is not None:
+        raise ValueError("give either an AmplitudeCurve or three arrays, not both")
+    c = amplitude
+    rel_f, rel_z = c.frequency_std / c.frequency, c.damping_std / np.abs(c.damping_ratio)
+    if f_unc is None and np.all(np.isfinite(rel_f)) and np.all(rel_f > 0):
+        f_unc = rel_f
+    if z_unc is None and np.all(np.isfinite(rel_z)) and np.all(rel_z > 0):
+        z_unc = rel_z
+    return c.amplitude, c.frequency, c.damping_ratio, f_unc, z_unc
+
+
+def diagnose_vibration(amplitude, frequency=None, damping=None, *, predicted_frequency,
+                       predicted_damping,
                        frequency_noise: float | None = None, damping_noise: float | None = None,
                        frequency_uncertainty=None, damping_uncertainty=None,
                        predicted_zeta0: float = 0.0, alpha: float = 1e-3,
@@ -165,10 +177,14 @@ def diagnose_vibration(amplitude, frequency, damping, *, predicted_frequency, pr
 
     Parameters
     ----------
-    amplitude : array_like, shape (n,)
-        Response amplitude [m], ``> 0``.
+    amplitude : array_like, shape (n,), or AmplitudeCurve
+        Response amplitude [m], ``> 0``; or a measured :class:`~iwan_element.AmplitudeCurve`
+        (from :func:`~iwan_element.amplitude_curve`, :func:`~iwan_element.sweep_curve`, ...):
+        then ``frequency`` and ``damping`` are omitted and its standard errors, relative to
+        its values, are the stated uncertainties unless those are given.
     frequency, damping : array_like, shape (n,)
-        Measured frequency [Hz] and damping ratio [-] (``< 1``), ``> 0``.
+        Measured frequency [Hz] and damping ratio [-], ``> 0`` (a value of 1 or more, or a
+        curve never below 0.05, is refused as percent).
     predicted_frequency, predicted_damping : array_like, shape (n,), keyword-only
         The model's prediction at the same amplitudes [Hz], [-].
     frequency_noise, damping_noise : float, optional, keyword-only
@@ -189,9 +205,11 @@ def diagnose_vibration(amplitude, frequency, damping, *, predicted_frequency, pr
     ------
     ValueError
         Non-positive or non-finite values, unequal lengths, a frequency that is about
-        ``2 pi`` times the prediction (rad/s for Hz) or the other way round, a damping ratio
-        above 1 (percent), or an option out of range.
+        ``2 pi`` times the prediction (rad/s for Hz) or the other way round, damping ratios
+        that look like percent (one >= 1, or none below 0.05), or an option out of range.
     """
+    amplitude, frequency, damping, frequency_uncertainty, damping_uncertainty = _from_curve(
+        amplitude, frequency, damping, frequency_uncertainty, damping_uncertainty)
     n, a = _inputs(amplitude, frequency, damping, predicted_frequency, predicted_damping)
     X, fm, zm, fp, zp = (a[k] for k in ("amplitude", "frequency", "damping",
                                          "predicted_frequency", "predicted_damping"))

@@ -33,6 +33,7 @@ from scipy import optimize, stats
 from ..core._validation import check_scalar
 from .curves import AmplitudeCurve
 from ._modal_result import ModalIwanFit, model_curve
+from .units import check_damping_ratio
 
 __all__ = ["fit_modal_iwan", "ModalIwanFit"]
 
@@ -136,7 +137,8 @@ def fit_modal_iwan(amplitude, frequency=None, damping_ratio=None, *, stiffness: 
     frequency : array_like
         Natural frequency [Hz].
     damping_ratio : array_like
-        Damping ratio [-] (a ratio, not percent).
+        Damping ratio [-] (a ratio, not percent): a value of 1 or more, or a curve never
+        below 0.05, is refused as percent.
     stiffness : {"harmonic", "secant"}, keyword-only
         Stiffness the measurement sees: ``"harmonic"`` (default; ring-down and stepped-sine
         tests measure the first-harmonic stiffness) or ``"secant"`` (quasi-static modal
@@ -154,6 +156,7 @@ def fit_modal_iwan(amplitude, frequency=None, damping_ratio=None, *, stiffness: 
     ModalIwanFit
     """
     X, f, z, fstd, zstd, in_warn = _as_data(amplitude, frequency, damping_ratio)
+    check_damping_ratio("damping_ratio", z)
     if stiffness not in ("harmonic", "secant"):
         raise ValueError(f"stiffness must be 'harmonic' or 'secant', got {stiffness!r}")
     if floor not in ("dashpot", "constant"):
