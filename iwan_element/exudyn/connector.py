@@ -201,6 +201,28 @@ def add_iwan_connector(mbs, markerNumbers, joint, *, axis=None, axisMarker=None,
     >>> mbs.Assemble(); mbs.SolveDynamic(simulationSettings)                  # doctest: +SKIP
     >>> conn.dissipated_energy_history[-1]                                    # doctest: +SKIP
     """
+    _check_options(mbs, markerNumbers, joint, name=name, record=record, law=law, depth=depth,
+                   allow_adaptive_explicit=allow_adaptive_explicit)
+    offset = check_scalar("offset", offset)
+    vis = _visualization(visualization)
+    kind, unit, axis_marker = _classify_markers(mbs, markerNumbers, axis, axisMarker)
+    dispatcher = _dispatcher_for(mbs)
+    conn = IwanConnector(mbs, markerNumbers, joint, kind, unit, axis_marker, offset, record)
+    _claim(joint, conn)
+    conn._dispatcher = dispatcher
+    conn._allow_adaptive_explicit = allow_adaptive_explicit
+    if kind == "coordinate":
+        conn._fast_nodes = _node_coordinate_nodes(mbs, markerNumbers)
+    route = _choose_route(law, joint, kind, conn._fast_nodes, axis_marker)
+    conn._object = mbs.AddObject(_connector_item(conn, joint, route, int(depth), name, vis))
+    dispatcher.add(conn)
+    _log.debug("added %r", conn)
+    return conn
+
+
+def _check_options(mbs, markerNumbers, joint, *, name, record, law, depth,
+                   allow_adaptive_explicit) -> None:
+    """The checks of :func:`add_iwan_connector`'s arguments that need no marker types."""
     if not isinstance(mbs, exu.MainSystem):
         raise ValueError(f"mbs must be an exudyn.MainSystem, got {type(mbs).__name__}")
     if isinstance(markerNumbers, (str, bytes)) or not hasattr(markerNumbers, "__len__") \
@@ -211,7 +233,6 @@ def add_iwan_connector(mbs, markerNumbers, joint, *, axis=None, axisMarker=None,
     if missing:
         raise ValueError(f"joint must expose the committed {missing} (element protocol); "
                          f"{type(joint).__name__} does not")
-    offset = check_scalar("offset", offset)
     if not isinstance(name, str):
         raise ValueError(f"name must be a str, got {type(name).__name__}")
     if not isinstance(record, bool):
@@ -223,70 +244,59 @@ def add_iwan_connector(mbs, markerNumbers, joint, *, axis=None, axisMarker=None,
         raise ValueError(f"law must be 'auto', 'symbolic' or 'python', got {law!r}")
     if isinstance(depth, bool) or not isinstance(depth, (int, np.integer)) or not 2 <= depth <= 64:
         raise ValueError(f"depth must be an int in [2, 64], got {depth!r}")
-    vis = _visualization(visualization)
 
+
+def _classify_markers(mbs, markerNumbers, axis, axisMarker):
+    """``(kind, unit axis or None, axis marker or None)`` of two coordinate or position
+    markers."""
     t0 = _marker_type(mbs, markerNumbers[0], "markerNumbers[0]")
     t1 = _marker_type(mbs, markerNumbers[1], "markerNumbers[1]")
     if int(markerNumbers[0]) == int(markerNumbers[1]):
         raise ValueError(f"markerNumbers must be two different markers, got {list(markerNumbers)}")
     if t0 in _COORDINATE_MARKERS and t1 in _COORDINATE_MARKERS:
-        kind = "coordinate"
         if axis is not None or axisMarker is not None:
             raise ValueError("axis and axisMarker apply to position markers only; markerNumbers "
                              f"are coordinate markers ({t0}, {t1})")
-    elif t0 in _POSITION_MARKERS and t1 in _POSITION_MARKERS:
-        kind = "position"
-        if axis is None:
-            raise ValueError(f"axis is required for position markers ({t0}, {t1}): give the "
-                             "direction of the joint force, e.g. axis=[1, 0, 0]")
-    else:
+        return "coordinate", None, None
+    if not (t0 in _POSITION_MARKERS and t1 in _POSITION_MARKERS):
         raise ValueError(
             f"markerNumbers must be two coordinate markers ({sorted(_COORDINATE_MARKERS)}) or two "
             f"position markers ({sorted(_POSITION_MARKERS)}); got {t0} and {t1}")
+    if axis is None:
+        raise ValueError(f"axis is required for position markers ({t0}, {t1}): give the "
+                         "direction of the joint force, e.g. axis=[1, 0, 0]")
+    unit = _unit_axis(axis, "axis")
+    if axisMarker is None:
+        return "position", unit, None
+    ta = _marker_type(mbs, axisMarker, "axisMarker")
+    if ta not in _ORIENTATION_MARKERS:
+        raise ValueError(f"axisMarker must be a marker with an orientation "
+                         f"({sorted(_ORIENTATION_MARKERS)}), got {ta}")
+    return "position", unit, int(axisMarker)
 
-    unit = None
-    axis_marker = None
-    if kind == "position":
-        unit = _unit_axis(axis, "axis")
-        if axisMarker is not None:
-            ta = _marker_type(mbs, axisMarker, "axisMarker")
-            if ta not in _ORIENTATION_MARKERS:
-                raise ValueError(f"axisMarker must be a marker with an orientation "
-                                 f"({sorted(_ORIENTATION_MARKERS)}), got {ta}")
-            axis_marker = int(axisMarker)
 
-    dispatcher = _dispatcher_for(mbs)
-    conn = IwanConnector(mbs, markerNumbers, joint, kind, unit, axis_marker, offset, record)
-    _claim(joint, conn)
-    conn._dispatcher = dispatcher
-    conn._allow_adaptive_explicit = allow_adaptive_explicit
-    if kind == "coordinate":
-        conn._fast_nodes = _node_coordinate_nodes(mbs, markerNumbers)
-    route = _choose_route(law, joint, kind, conn._fast_nodes, axis_marker)
+def _connector_item(conn, joint, route, depth, name, vis):
+    """The Exudyn object of the connector: the symbolic law, or a Python user function on a
+    coordinate or Cartesian spring-damper."""
     if route == "symbolic":
         conn._route = "symbolic"
         conn._lazy = True
-        item = _symbolic.symbolic_item(conn, int(depth), name, vis)
+        dispatcher = conn._dispatcher
+        item = _symbolic.symbolic_item(conn, depth, name, vis)
         conn._dispatcher = dispatcher
         _symbolic.sync_stack(conn)
         conn._state.set_uc(joint.displacement)
-    elif kind == "coordinate":
-        uf = _coordinate_force_function(conn)
-        item = ObjectConnectorCoordinateSpringDamper(
-            name=name, markerNumbers=list(markerNumbers), stiffness=0.0, damping=0.0,
-            offset=offset, springForceUserFunction=uf, visualization=vis)
-    else:
-        if axis_marker is None:
-            uf = _position_force_function(conn)
-        else:
-            uf = _rotating_axis_force_function(conn)
-        item = ObjectConnectorCartesianSpringDamper(
-            name=name, markerNumbers=list(markerNumbers), springForceUserFunction=uf,
+        return item
+    if conn.kind == "coordinate":
+        return ObjectConnectorCoordinateSpringDamper(
+            name=name, markerNumbers=list(conn.markerNumbers), stiffness=0.0, damping=0.0,
+            offset=conn.offset, springForceUserFunction=_coordinate_force_function(conn),
             visualization=vis)
-    conn._object = mbs.AddObject(item)
-    dispatcher.add(conn)
-    _log.debug("added %r", conn)
-    return conn
+    uf = (_position_force_function(conn) if conn.axisMarker is None
+          else _rotating_axis_force_function(conn))
+    return ObjectConnectorCartesianSpringDamper(
+        name=name, markerNumbers=list(conn.markerNumbers), springForceUserFunction=uf,
+        visualization=vis)
 
 
 def _choose_route(law, joint, kind, fast_nodes, axis_marker) -> str:
