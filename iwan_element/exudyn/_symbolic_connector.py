@@ -158,12 +158,36 @@ RECORD_BLOCK = 8192
 ARM_MARGIN = 10.0
 
 
+def _commit_event(conn, t, u) -> None:
+    """Commit the joint at an event step and bring the law's stack or branch up to date."""
+    joint = conn._joint
+    conn._flush_joint()
+    n = joint.reversal_depth
+    joint.trial(u)
+    joint.commit()
+    if joint.reversal_depth != n or conn._window:
+        sync_stack(conn, t)
+    else:                        # same stack; the branch may start (from rest)
+        us, Fr = joint.reversal_points()
+        conn._state.set_branch(*branch_of(us, Fr, u))
+        conn._state.uc.SetValue(u)
+
+
+def _risk(conn, u, margin):
+    """The law's exact window ``(wa, wb)`` and whether ``u`` is within ``margin`` of its
+    ends (then every step is committed); tells the dispatcher when that changes."""
+    wa, wb = law_window(conn._joint, conn._state.depth)
+    risky = not wa + margin < u < wb - margin
+    if risky != conn._risky:
+        conn._risky = risky
+        conn._dispatcher.set_risky(conn, risky)
+    return wa, wb, risky
+
+
 def _accept_function(conn, lazy_until):
     """The per-step work of one connector (see the module docstring)."""
     joint = conn._joint
-    st = conn._state
-    depth = st.depth
-    set_uc = st.uc.SetValue
+    set_uc = conn._state.uc.SetValue
     read = conn._slip
     buf = conn._buf             # (t, u) of the newest steps; list.append is ~3x faster than
     rec = buf.append if conn._record_on else None      # array.append (moved at events)
@@ -185,22 +209,9 @@ def _accept_function(conn, lazy_until):
         at_event = u
         margin = ARM_MARGIN * dmax
         dmax = 0.0                   # the next branch segment starts its own count
-        conn._flush_joint()
-        n = joint.reversal_depth
-        joint.trial(u)
-        joint.commit()
-        if joint.reversal_depth != n or conn._window:
-            sync_stack(conn, t)
-        else:                        # same stack; the branch may start (from rest)
-            us, Fr = joint.reversal_points()
-            st.set_branch(*branch_of(us, Fr, u))
-            set_uc(u)
+        _commit_event(conn, t, u)
         conn._t_acc = t
-        wa, wb = law_window(joint, depth)
-        risky = not wa + margin < u < wb - margin
-        if risky != conn._risky:
-            conn._risky = risky
-            conn._dispatcher.set_risky(conn, risky)
+        wa, wb, risky = _risk(conn, u, margin)
         if len(buf) >= RECORD_BLOCK:
             keep(buf)
             buf.clear()
