@@ -18,6 +18,7 @@ from scipy.optimize import least_squares
 
 from ..core._validation import _check_int, check_scalar, finite_array, same_length
 from ..effects import EFFECTS
+from ..identify.curves import AmplitudeCurve
 from .results import VibrationDiagnosis, _json
 from .selection import criterion_text, stepwise_select
 
@@ -78,8 +79,9 @@ class _Vib:
     def __init__(self, X, fm, zm, fp, zp, zeta0, sf, sz):
         self.X, self.fm, self.zm, self.fp, self.zp, self.zeta0 = X, fm, zm, fp, zp, zeta0
         self.sf, self.sz = sf, sz
+        w2 = 4 * np.pi ** 2 * float(np.min(fp)) ** 2
         self.refs = {"zeta_ref": float(np.median(zp)), "X_max": float(X.max()),
-                     "omega2_ref": 4 * np.pi ** 2 * float(np.min(fp)) ** 2, "1": 1.0}
+                     "omega2_ref": w2, "omega2_per_X2": w2 / float(X.max()) ** 2, "1": 1.0}
 
     def decode(self, names, z):
         vals, k = {}, 0
@@ -138,6 +140,17 @@ def _where(X, rf0, rz0, sf, sz, misfit):
     return where[0].upper() + where[1:]
 
 
+def _left(X, rf, rz, sf, sz):
+    """Where residuals left after the fit exceed 3 x noise: amplitude ranges per curve."""
+    parts = []
+    for label, r, s in (("frequency", rf, sf), ("damping", rz, sz)):
+        big = np.abs(r) > 3 * s
+        if big.any():
+            parts.append(f"{label} off by up to {100 * np.max(np.abs(r[big])):.3g} % at "
+                         f"{X[big].min():.3g} .. {X[big].max():.3g} m")
+    return (": " + "; ".join(parts)) if parts else ""
+
+
 def _inputs(amplitude, frequency, damping, predicted_frequency, predicted_damping):
     arrs = {}
     for nm, a in (("amplitude", amplitude), ("frequency", frequency), ("damping", damping),
@@ -155,8 +168,29 @@ def _inputs(amplitude, frequency, damping, predicted_frequency, predicted_dampin
     return n, arrs
 
 
-def diagnose_vibration(amplitude, frequency, damping, *, predicted_frequency, predicted_damping,
-                       frequency_noise: float | None = None, damping_noise: float | None = None,
+def _measurement(amplitude, frequency, damping, f_unc, z_unc):
+    """Arrays and stated relative uncertainties from an AmplitudeCurve or three arrays."""
+    if not isinstance(amplitude, AmplitudeCurve):
+        if frequency is None or damping is None:
+            raise ValueError("frequency and damping are required unless amplitude is an "
+                             "AmplitudeCurve")
+        return amplitude, frequency, damping, f_unc, z_unc
+    c = amplitude
+    if frequency is not None or damping is not None:
+        raise ValueError("frequency and damping must be None when amplitude is an "
+                         "AmplitudeCurve (the curve carries them)")
+
+    def rel(std, val):
+        r = np.asarray(std, float) / val
+        return r if np.all(np.isfinite(r)) and np.all(r > 0) else None
+
+    f_unc = rel(c.frequency_std, c.frequency) if f_unc is None else f_unc
+    z_unc = rel(c.damping_std, c.damping_ratio) if z_unc is None else z_unc
+    return c.amplitude, c.frequency, c.damping_ratio, f_unc, z_unc
+
+
+def diagnose_vibration(amplitude, frequency=None, damping=None, *, predicted_frequency,
+                       predicted_damping, frequency_noise: float | None = None, damping_noise: float | None = None,
                        frequency_uncertainty=None, damping_uncertainty=None,
                        predicted_zeta0: float = 0.0, alpha: float = 1e-3,
                        ambiguity: float = 10.0, max_effects: int = 2) -> VibrationDiagnosis:
@@ -165,10 +199,13 @@ def diagnose_vibration(amplitude, frequency, damping, *, predicted_frequency, pr
 
     Parameters
     ----------
-    amplitude : array_like, shape (n,)
-        Response amplitude [m], ``> 0``.
-    frequency, damping : array_like, shape (n,)
-        Measured frequency [Hz] and damping ratio [-] (``< 1``), ``> 0``.
+    amplitude : array_like, shape (n,), or AmplitudeCurve
+        Response amplitude [m], ``> 0``; or the measured curve (from a decay or from
+        sweeps), whose ``frequency_std`` and ``damping_std`` (when finite) are the stated
+        uncertainties unless given below.
+    frequency, damping : array_like, shape (n,), optional
+        Measured frequency [Hz] and damping ratio [-] (``< 1``), ``> 0``; ``None`` when
+        ``amplitude`` is an AmplitudeCurve.
     predicted_frequency, predicted_damping : array_like, shape (n,), keyword-only
         The model's prediction at the same amplitudes [Hz], [-].
     frequency_noise, damping_noise : float, optional, keyword-only
@@ -192,6 +229,8 @@ def diagnose_vibration(amplitude, frequency, damping, *, predicted_frequency, pr
         ``2 pi`` times the prediction (rad/s for Hz) or the other way round, a damping ratio
         above 1 (percent), or an option out of range.
     """
+    amplitude, frequency, damping, frequency_uncertainty, damping_uncertainty = _measurement(
+        amplitude, frequency, damping, frequency_uncertainty, damping_uncertainty)
     n, a = _inputs(amplitude, frequency, damping, predicted_frequency, predicted_damping)
     X, fm, zm, fp, zp = (a[k] for k in ("amplitude", "frequency", "damping",
                                          "predicted_frequency", "predicted_damping"))
@@ -238,7 +277,8 @@ def _vib_result(vib, sel, chi_b, err_b, rf0, rz0, warns, alpha, noise_from):
     if misfit and sel.p_after < alpha:
         warns.append("mismatch beyond the noise remains" + (
             f" after {' + '.join(sel.named)}" if sel.named else
-            "; no effect with a modal form explains it"))
+            f"; no candidate ({', '.join(vibration_candidates())}) explains it")
+            + _left(vib.X, np.log(vib.fm / f_new), np.log(vib.zm / z_new), vib.sf, vib.sz))
     steps = [{"on": st["on"], "candidates": [
         {k: r.get(k) for k in ("name", "error", "dIC", "explained", "verdict")}
         for r in st["rows"]]} for st in sel.steps]
