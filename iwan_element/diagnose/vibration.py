@@ -259,8 +259,11 @@ def diagnose_vibration(amplitude, frequency=None, damping=None, *, predicted_fre
     base = {"names": (), "chi2": chi_b, "q": 0, "state": np.zeros(0)}
     sel = stepwise_select(fit_candidate, vibration_candidates(), base, tau=1.0, n_eff=2.0 * n,
                           alpha=alpha, max_effects=max_effects, ambiguity=ambiguity)
-    # never name a set of effects that leaves the unweighted mismatch higher than before
-    while sel.named and vib.error(sel.final["names"], sel.final["state"]) >= err_b:
+    # never name a set of effects that leaves the unweighted mismatch higher than before (by
+    # more than a tenth of the noise: a hidden frequency effect changes the damping-dominated
+    # unweighted mismatch by less than the damping noise's own scatter)
+    tol = 0.1 * math.sqrt(0.5 * (sf ** 2 + sz ** 2))
+    while sel.named and vib.error(sel.final["names"], sel.final["state"]) > err_b + tol:
         warns.append(f"{' + '.join(sel.named)} lowers the noise-weighted misfit but raises the "
                      "mismatch; not named")
         sel.named, sel.ambiguous = [], ()
