@@ -116,3 +116,57 @@ def test_unexplained_mismatch_is_stated_with_its_amplitudes(base):
     assert "frequency off by up to" in w[0] and " m" in w[0]
     lo, hi = (float(v) for v in w[0].split(" at ")[-1].split(" m")[0].split(" .. "))
     assert lo <= mid <= hi
+
+
+def test_predict_bands_cover_the_hidden_truth_and_extrapolation_is_stated(base):
+    for seed, name in ((7, "hardening"), (8, "macroslip_onset")):
+        Xc, fm, zm, fp, zp, vals = vc.seeded_case(seed, name, 2.0, P=vc.BASE, X=X, base=base)
+        g = _diag((Xc, fm, zm, fp, zp, vals))
+        assert g.effect == name
+        ft, zt = vc.element_curve(X, vc.BASE, name, **vc.to_joint(name, vals))
+        p = g.predict(X)
+        assert not p.warnings
+        np.testing.assert_allclose(p.frequency, g.model_frequency, rtol=1e-12)
+        assert np.all(np.abs(p.frequency - ft) <= 4 * p.frequency_std + 2e-6 * ft)
+        assert np.all(np.abs(p.damping_ratio - zt) <= 4 * p.damping_std + 1e-3 * zt)
+        assert p.frequency_std.max() > 0
+        beyond = g.predict(X * 2.0)
+        assert any("extrapolated beyond the diagnosed amplitudes" in w for w in beyond.warnings)
+        with pytest.raises(ValueError, match="base must be"):
+            g.predict(X, base=AmplitudeCurve(X * 1.1, fp, zp))
+
+
+def test_augmented_specimen_carries_the_effect_and_its_qsma_is_the_fit():
+    """Diagnosis against the beam model: the prediction is the Brake-Reuss specimen's QSMA,
+    the 'measurement' the same specimen carrying a hidden hardening (plus noise). The
+    augmented specimen's own QSMA reproduces the diagnosis's curve, and the specimen warns
+    beyond the amplitudes it was calibrated on."""
+    from iwan_element import models
+    spec = models.preset("brake-reuss")
+    Xm = np.geomspace(5e-6, 2.75e-4, 30)
+    k3 = 4e-3 * (2 * np.pi * 80.5) ** 2 / Xm.max() ** 2        # ~0.15 % rise at the top
+    truth = spec.with_effects({"hardening": {"k3_per_mass": k3}})
+    pred = models.modal_amplitude_curve(spec.replace(calibrated_range=None), amplitudes=Xm)
+    meas = models.modal_amplitude_curve(truth.replace(calibrated_range=None), amplitudes=Xm)
+    rng = np.random.default_rng(3)
+    fm = meas.frequency * np.exp(1e-4 * rng.normal(size=Xm.size))
+    zm = meas.damping_ratio * np.exp(0.03 * rng.normal(size=Xm.size))
+    g = diagnose_vibration(AmplitudeCurve(Xm, fm, zm, frequency_std=1e-4 * fm,
+                                          damping_std=0.03 * zm),
+                           predicted_frequency=pred.frequency,
+                           predicted_damping=pred.damping_ratio,
+                           predicted_zeta0=spec.interface.damping_floor)
+    assert g.effect == "hardening", g.report()
+    assert g.parameters["hardening"]["k3_per_mass"] == pytest.approx(k3, rel=0.2)
+    aug = g.augment(spec)
+    assert [e.name for e in aug.effects] == ["hardening"]
+    assert aug.calibrated_range == pytest.approx((2e-6, Xm.max()))
+    q = models.modal_amplitude_curve(aug, amplitudes=Xm)
+    np.testing.assert_allclose(q.frequency, g.model_frequency, rtol=1e-10)
+    np.testing.assert_allclose(q.damping_ratio, g.model_damping, rtol=1e-10)
+    assert q.warnings == ()
+    far = models.modal_amplitude_curve(aug, amplitudes=[1e-5, 5e-4])
+    assert any("calibrated on" in w and "extrapolated" in w for w in far.warnings)
+    plain = models.modal_amplitude_curve(spec, amplitudes=[1e-5, 3.15e-4])
+    assert any("5.25 x beyond" in w for w in plain.warnings), plain.warnings
+    assert models.modal_amplitude_curve(spec).warnings == ()

@@ -16,7 +16,8 @@ import math
 import numpy as np
 from scipy.optimize import least_squares
 
-from ..core._validation import _check_int, check_scalar, finite_array, same_length
+from ..core._validation import (_check_int, check_magnitude, check_scalar, finite_array,
+                                same_length)
 from ..effects import EFFECTS
 from ..identify.curves import AmplitudeCurve
 from .results import VibrationDiagnosis, _json
@@ -156,7 +157,7 @@ def _inputs(amplitude, frequency, damping, predicted_frequency, predicted_dampin
     for nm, a in (("amplitude", amplitude), ("frequency", frequency), ("damping", damping),
                   ("predicted_frequency", predicted_frequency),
                   ("predicted_damping", predicted_damping)):
-        arrs[nm] = finite_array(nm, a, ndim=1, min_size=3)
+        arrs[nm] = check_magnitude(nm, finite_array(nm, a, ndim=1, min_size=3))
     n = same_length(**arrs)
     for nm, a in arrs.items():
         if np.any(a <= 0):
@@ -285,10 +286,11 @@ def _vib_result(vib, sel, chi_b, err_b, rf0, rz0, warns, alpha, noise_from):
     steps = [{"on": st["on"], "candidates": [
         {k: r.get(k) for k in ("name", "error", "dIC", "explained", "verdict")}
         for r in st["rows"]]} for st in sel.steps]
+    cov = _covariance(vib, names, z, sel.final["chi2"])
     ro = lambda a: (a.setflags(write=False), a)[1]  # noqa: E731
     details = {"noise_from": noise_from, "misfit_p": sel.p_before, "misfit_p_after": sel.p_after,
                "alpha": alpha, "chi2_before": chi_b, "chi2_after": sel.final["chi2"],
-               "criterion": criterion_text(),
+               "criterion": criterion_text(), "predicted_zeta0": vib.zeta0,
                "frequency_error_before": float(np.sqrt(np.mean(rf0 ** 2))),
                "damping_error_before": float(np.sqrt(np.mean(rz0 ** 2))),
                "frequency_error_after": float(np.sqrt(np.mean(np.log(vib.fm / f_new) ** 2))),
@@ -302,4 +304,24 @@ def _vib_result(vib, sel, chi_b, err_b, rf0, rz0, warns, alpha, noise_from):
         damping_noise=vib.sz, amplitude=ro(vib.X), frequency=ro(vib.fm), damping=ro(vib.zm),
         predicted_frequency=ro(vib.fp), predicted_damping=ro(vib.zp), model_frequency=ro(f_new),
         model_damping=ro(z_new), steps=tuple(_json(s) for s in steps), warnings=tuple(warns),
-        details=_json(details))
+        details=_json(details), covariance=None if cov is None else ro(cov))
+
+
+def _covariance(vib, names, z, chi2):
+    """Covariance of the fitted modal values: ``(J^T J)^+`` of the noise-normalised residual
+    in the fitting variables, scaled by the reduced chi-square when above 1, mapped to the
+    values (each value is its variable over a fixed reference scale)."""
+    if not names:
+        return None
+    h = 1e-6 * np.maximum(np.abs(z), 1e-3)
+    r0 = vib.resid(names, z)
+    J = np.empty((r0.size, z.size))
+    for j in range(z.size):
+        zz = z.copy()
+        zz[j] += h[j]
+        J[:, j] = (vib.resid(names, zz) - r0) / h[j]
+    dof = max(r0.size - z.size, 1)
+    Cz = np.linalg.pinv(J.T @ J) * max(1.0, chi2 / dof)
+    scale = np.array([1.0 / vib.refs[sp.ref] ** sp.ref_power
+                      for nm in names for sp in EFFECTS[nm].modal_specs])
+    return Cz * np.outer(scale, scale)
