@@ -240,18 +240,24 @@ def modal_amplitude_curve(specimen: Specimen, *, mode: int = 1, amplitudes=None)
 
 
 def extrapolation_warnings(specimen: Specimen, amplitudes) -> list:
-    """Warnings for sensor amplitudes [m] outside the range the specimen (and each effect it
-    carries) was calibrated on; empty when inside, or when no calibrated range is known."""
+    """Warnings for sensor amplitudes [m] outside the range the specimen was calibrated on,
+    or above the range an effect it carries was fitted on (below it the effects' modal forms
+    fade or stay constant, and the specimen's own range governs); empty when inside, or when
+    no calibrated range is known."""
     X = np.asarray(amplitudes, float)
     out = []
     for label, cr in [("the specimen", specimen.calibrated_range)] + [
             (f"its {e.name}", e.calibrated_range) for e in specimen.effects]:
-        if cr is None or (out and label != "the specimen" and cr == specimen.calibrated_range):
+        own = label == "the specimen"
+        if cr is None or (not own and specimen.calibrated_range is not None
+                          and cr[1] == specimen.calibrated_range[1]):
             continue
         lo, hi = cr
-        bad = (X < lo * (1 - 1e-6)) | (X > hi * (1 + 1e-6))
+        bad = X > hi * (1 + 1e-6)
+        if own:                             # an effect's modal form fades towards X -> 0
+            bad |= X < lo * (1 - 1e-6)
         if bad.any():
-            k = max(float(X.max() / hi), float(lo / X.min()))
+            k = max(float(X.max() / hi), float(lo / X.min()) if own else 0.0)
             out.append(f"{int(bad.sum())} of {X.size} amplitudes ({X[bad].min():.3g} .. "
                        f"{X[bad].max():.3g} m) lie outside the range {lo:.3g} .. {hi:.3g} m "
                        f"that {label} ({specimen.name}) was calibrated on (up to {k:.3g} x "
