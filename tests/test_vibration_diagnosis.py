@@ -3,6 +3,8 @@ time-domain elements, tests/_vibration_cases.py), clean curves, AmplitudeCurve i
 candidates from the effects' declarations, and an unexplained mismatch located."""
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -170,3 +172,37 @@ def test_augmented_specimen_carries_the_effect_and_its_qsma_is_the_fit():
     plain = models.modal_amplitude_curve(spec, amplitudes=[1e-5, 3.15e-4])
     assert any("5.25 x beyond" in w for w in plain.warnings), plain.warnings
     assert models.modal_amplitude_curve(spec).warnings == ()
+
+
+# the repository's sibling ../shared (main checkout), or the worktrees' /work/shared
+_SHARED = [Path(__file__).resolve().parents[2] / "shared" / "data",
+           Path(__file__).resolve().parents[3] / "shared" / "data"]
+_SWEEPS = next((d / "brb-steppedsine-fc" / "fc_sweeps.csv" for d in _SHARED
+                if (d / "brb-steppedsine-fc" / "fc_sweeps.csv").exists()), None)
+
+
+@pytest.mark.skipif(_SWEEPS is None, reason="../shared/data/brb-steppedsine-fc (GPL data, read "
+                    "from ../shared only) is absent")
+def test_brake_reuss_sweeps_name_an_effect_that_halves_the_mismatch_beyond_the_noise():
+    """The hammer-calibrated beam against the force-controlled sweeps (94-275 um): the
+    diagnosis names what the sweeps support, and the augmented beam model's mismatch beyond
+    the noise is at most half the plain model's. Needs ``iwan_element.sweep_curve`` (merged
+    from the vibration-data branch)."""
+    import iwan_element as ie
+    from iwan_element import models
+    if not hasattr(ie, "sweep_curve"):
+        pytest.skip("iwan_element.sweep_curve is not merged yet")
+    level, f, F, A, phase = np.loadtxt(_SWEEPS, delimiter=",", skiprows=1).T
+    curve = ie.sweep_curve(f, F, A, phase, level=level.astype(int), quantity="acceleration")
+    spec = models.preset("brake-reuss")
+    pred = models.modal_amplitude_curve(spec, amplitudes=curve.amplitude)
+    assert any("extrapolated" in w for w in pred.warnings)
+    g = diagnose_vibration(curve, predicted_frequency=pred.frequency,
+                           predicted_damping=pred.damping_ratio,
+                           predicted_zeta0=spec.interface.damping_floor)
+    assert g.effects, g.report()
+    assert g.error_after - g.noise_level <= 0.5 * (g.error_before - g.noise_level), g.report()
+    aug = g.augment(spec)
+    q = models.modal_amplitude_curve(aug, amplitudes=[1e-4, 3e-4])
+    q0 = models.modal_amplitude_curve(spec, amplitudes=[1e-4, 3e-4])
+    assert q.frequency[1] > q0.frequency[1] and q.damping_ratio[1] > q0.damping_ratio[1]
