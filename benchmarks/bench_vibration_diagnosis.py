@@ -3,7 +3,7 @@
 Held out from the tests (``tests/test_vibration_diagnosis.py`` uses the modal joint
 ``(400 N, 2.5266e5 N/m, -0.5, 1.0)``, 30 amplitudes over 0.02-1.5 phi_max, seeds < 100): here
 another modal joint ``(250, 1.8e5, -0.35, 0.5)`` on ``K_inf = 1.2e5`` [1/s^2], 36 amplitudes
-over 0.01-1.2 phi_max, seeds from 1000. The measured curves come from the time-domain
+over 0.01-1.2 phi_max, seeds from 1000 (a separate block per effect and size). The measured curves come from the time-domain
 elements (steady driven cycles, harmonic balance by quadrature: ``tests/_vibration_cases.py``),
 not from the modal forms the diagnosis fits; each hidden effect's size is ``size`` x
 "noticeable", noticeable meaning an RMS change over the points of 4 noise standard
@@ -56,12 +56,13 @@ def main(argv=None):
     print(f"{'hidden':<18}{'size':>5}{'df max %':>10}{'dz max %':>10}{'named':>8}"
           f"{'or amb.':>8}{'after/noise':>13}  misnamed as")
     rows, hidden_ok, hidden_n, clean_ok, clean_n = [], 0, 0, 0, 0
-    for name in vibration_candidates() + (None,):
+    for ke, name in enumerate(vibration_candidates() + (None,)):
         sizes = a.sizes if name else [0.0]
-        for size in sizes:
+        for ks, size in enumerate(sizes):
             ok = amb = 0
             after, dfs, dzs, wrong = [], [], [], []
-            seeds = range(1000, 1000 + (a.seeds if name else 4 * a.seeds))
+            s0 = 1000 + 1000 * ke + 100 * ks          # independent noise for every row
+            seeds = range(s0, s0 + (a.seeds if name else 4 * a.seeds))
             for seed in seeds:
                 Xc, fm, zm, fp, zp, vals = vc.seeded_case(seed, name, size, P=P, X=X, base=base)
                 curve = AmplitudeCurve(X, fm, zm, frequency_std=vc.F_NOISE * fm,

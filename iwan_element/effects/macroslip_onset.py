@@ -67,10 +67,10 @@ class MacroslipOnset(_Effect):
                        fit_starts=(0.5, 0.3, 0.7)))
     modal_specs = (ParamSpec("kappa_s", "1/s^2", "patch stiffness over modal mass",
                              ref="omega2_ref", ref_power=-1, fit_bounds=(0.0, 0.3),
-                             fit_starts=(0.0, 0.01, 0.05)),
+                             fit_starts=(0.0, 0.01, 0.05, 0.003, 0.02, 0.05)),
                    ParamSpec("X_s", "m", "amplitude at which the patch starts to slide",
                              ref="X_max", ref_power=-1, fit_bounds=(0.02, 1.0),
-                             fit_starts=(0.5, 0.3, 0.6)))
+                             fit_starts=(0.5, 0.3, 0.6, 0.8, 0.8, 0.9)))
     kind = "dissipation"
 
     def __init__(self, inner, *, k_s: float, u_s: float):
