@@ -439,7 +439,9 @@ class VibrationDiagnosis:
                              f"{c['dIC']:8.1f}  explains {100 * c['explained']:5.3g} %  "
                              f"{c['verdict']}")
         if self.effects:
-            lines.append(f"  named: {', '.join(self.effects)}" + (
+            lines.append("  named: " + ", ".join(
+                f"{n} ({EFFECTS[n].kind})" if getattr(EFFECTS[n], "kind", "") else n
+                for n in self.effects) + (
                 f" (nearly as good: {', '.join(self.ambiguous_with)})" if self.ambiguous_with else ""))
             for name, d in self.parameters.items():
                 lines.append("    " + name + ": " + ", ".join(

@@ -1,10 +1,17 @@
 """Vibration diagnosis: measured against predicted amplitude-dependent frequency and damping.
 
-The candidates are the effects of :data:`~iwan_element.EFFECTS` that have an
-amplitude-domain (modal) form (``modal_form``: today viscous damping, a damping floor, and
-pinning stiffness, a frequency floor/stiffening); the selection rule is the one shared with
-the loop diagnosis (:mod:`iwan_element.diagnose.selection`), on the log residuals of
-frequency and damping divided by their noise. The noise is the larger of the scatter the
+The candidates are the effects of :data:`~iwan_element.EFFECTS` that declare an
+amplitude-domain (modal) form (``modal_specs`` and ``modal_form``; e.g. viscous damping, a
+damping floor; pinning stiffness, a stiffening after a clearance; hardening, a cubic
+stiffening; macroslip onset, a patch that slides above an amplitude), so a new effect module
+with a modal form is a candidate without touching this module. Equations:
+``docs/vibration_effects.md``. The measurement may be an
+:class:`~iwan_element.AmplitudeCurve` (from a decay or from sweeps). The selection rule is
+the one shared with the loop diagnosis (:mod:`iwan_element.diagnose.selection`), on the log
+residuals of frequency and damping divided by their noise. When the prediction is a beam
+specimen's QSMA curve, the fitted modal forms are exactly the augmented specimen's
+(``VibrationDiagnosis.augment``). A mismatch no candidate explains is stated with the
+amplitudes where it lies. The noise is the larger of the scatter the
 data show about a smooth curve (robust, from second differences along amplitude) and the
 per-point uncertainty the caller states; with too few amplitudes to trust a scatter
 estimate a warning says so.
