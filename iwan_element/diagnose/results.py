@@ -442,7 +442,8 @@ class VibrationDiagnosis:
             lines.append("  named: " + ", ".join(
                 f"{n} ({EFFECTS[n].kind})" if getattr(EFFECTS[n], "kind", "") else n
                 for n in self.effects) + (
-                f" (nearly as good: {', '.join(self.ambiguous_with)})" if self.ambiguous_with else ""))
+                f" (nearly as good: {', '.join(self.ambiguous_with)})"
+                if self.ambiguous_with else ""))
             for name, d in self.parameters.items():
                 lines.append("    " + name + ": " + ", ".join(
                     f"{k} = {v:.4g} {_unit(name, k, modal=True)}" for k, v in d.items()))

@@ -198,7 +198,8 @@ def _measurement(amplitude, frequency, damping, f_unc, z_unc):
 
 
 def diagnose_vibration(amplitude, frequency=None, damping=None, *, predicted_frequency,
-                       predicted_damping, frequency_noise: float | None = None, damping_noise: float | None = None,
+                       predicted_damping, frequency_noise: float | None = None,
+                       damping_noise: float | None = None,
                        frequency_uncertainty=None, damping_uncertainty=None,
                        predicted_zeta0: float = 0.0, alpha: float = 1e-3,
                        ambiguity: float = 10.0, max_effects: int = 2) -> VibrationDiagnosis:
