@@ -12,9 +12,8 @@ frequency 1e-4 relative, damping 3 % relative, stated on the ``AmplitudeCurve`` 
 extraction states it). Clean curves (no effect) must name nothing.
 
 Pass per hidden case: the effect named first is the hidden one and the RMS mismatch after is
-within 1.3 x the nominal noise RMS. Also reported: named or reported "nearly as good". A
-clean case passes when nothing is named and the mismatch is within 1.3 x the nominal noise
-(a noise draw well above nominal fails it although nothing is named).
+within 1.3 x the nominal noise RMS. Also reported: named or reported "nearly as good". Clean cases
+pass when nothing is named (their mismatch is the noise draw itself; the last column shows it).
 
     python benchmarks/bench_vibration_diagnosis.py [--seeds 6] [--sizes 0.5 1 2 3]
 """
@@ -72,10 +71,10 @@ def main(argv=None):
                 g = diagnose_vibration(curve, predicted_frequency=fp, predicted_damping=zp,
                                        predicted_zeta0=vc.ZETA0)
                 want = name or "none"
-                good = g.effect == want and g.error_after <= 1.3 * noise
+                good = g.effect == want and (g.error_after <= 1.3 * noise or name is None)
                 ok += good
                 amb += (g.effect == want or want in g.ambiguous_with) and \
-                    g.error_after <= 1.3 * noise
+                    (g.error_after <= 1.3 * noise or name is None)
                 after.append(g.error_after / noise)
                 d = top_change(name, vals, X, fp, zp)
                 dfs.append(d[0])
