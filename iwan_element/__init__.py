@@ -19,8 +19,8 @@ from .core.closed_form import (
 from .diagnose import (CANDIDATES, BatchDiagnosis, Diagnosis, VibrationDiagnosis, diagnose,
                        diagnose_many, diagnose_vibration, simulate_element_test)
 from .core.discrete import DiscreteIwan, slider_distribution
-from .effects import (EFFECTS, AsymmetricSlip, Backlash, BreakAway, PinningStiffness,
-                      SlipDegradation, ViscousDamping, base_joint, make_effect)
+from .effects import (EFFECTS, AsymmetricSlip, Backlash, BreakAway, Hardening, MacroslipOnset,
+                      PinningStiffness, SlipDegradation, ViscousDamping, base_joint, make_effect)
 from .identify.fit import FitResult, IdentifiabilityWarning, fit_dissipation, fit_loops
 from .core.joint import IwanJoint
 from .core.joint_bank import IwanJointBank
@@ -59,6 +59,8 @@ __all__ = [
     "SlipDegradation",
     "AsymmetricSlip",
     "BreakAway",
+    "Hardening",
+    "MacroslipOnset",
     "backbone",
     "backbone_work",
     "tangent_stiffness",

@@ -153,7 +153,7 @@ def calibrate(specimen: Specimen, measured: AmplitudeCurve, *, fit=("stiffness_p
     sol = optimize.least_squares(resid, x0, bounds=(lb, ub), x_scale=1.0, diff_step=1e-4,
                                  max_nfev=200)
     vals = [transform(n, v, True) for n, v in zip(fit, sol.x)]
-    fitted = _with(specimen, fit, vals)
+    fitted = _with(specimen, fit, vals).replace(calibrated_range=(float(X.min()), float(X.max())))
     curve = modal_amplitude_curve(fitted, mode=mode, amplitudes=X)
     warns = []
     try:

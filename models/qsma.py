@@ -32,13 +32,15 @@ import numpy as np
 import scipy.linalg as sla
 
 from iwan_element import AmplitudeCurve, dissipation, normalized_backbone
+from iwan_element.effects import EFFECTS
 from iwan_element.core._validation import check_magnitude, finite_array
 
 from .assembly import linear_system
 from .interface import contact_points
 from .specimens import Specimen
 
-__all__ = ["modal_amplitude_curve", "linear_modes", "static_modal_load"]
+__all__ = ["modal_amplitude_curve", "linear_modes", "static_modal_load",
+           "extrapolation_warnings"]
 
 log = logging.getLogger(__name__)
 
@@ -99,7 +101,7 @@ def _interface_law(u, Fs, KT, phimax, chi, beta):
 
 def _prepare_key(specimen: Specimen, mode: int):
     return (specimen.replace(friction=1.0, chi=0.0, beta=0.0, damping_floor=0.0,
-                             amplitude_range=(1.0, 2.0)), mode)
+                             amplitude_range=(1.0, 2.0), calibrated_range=None, effects=()), mode)
 
 
 @lru_cache(maxsize=32)
@@ -203,7 +205,9 @@ def modal_amplitude_curve(specimen: Specimen, *, mode: int = 1, amplitudes=None)
     AmplitudeCurve
         ``method="qsma"``; ``frequency`` is the secant natural frequency [Hz],
         ``damping_ratio`` the Masing damping of the contact points plus the specimen's
-        damping floor.
+        damping floor, with the modal forms of the specimen's ``effects`` on this mode
+        applied on top (``docs/vibration_effects.md``). ``warnings`` states amplitudes
+        outside the specimen's (or an effect's) calibrated range (also logged).
     """
     if not isinstance(specimen, Specimen):
         raise ValueError(f"specimen must be a Specimen, got {type(specimen).__name__}")
@@ -214,10 +218,48 @@ def modal_amplitude_curve(specimen: Specimen, *, mode: int = 1, amplitudes=None)
         D += dissipation(slip[:, i], p)
     alpha, q = r["alpha"], r["q"]
     w = np.sqrt(alpha / q)
-    zeta = specimen.interface.damping_floor + D / (2 * math.pi * alpha * q)
+    floor = specimen.interface.damping_floor
+    zeta = floor + D / (2 * math.pi * alpha * q)
+    f = w / (2 * math.pi)
+    X = r["amplitude"]
+    names = []
+    for e in specimen.effects:
+        if e.mode == mode:
+            f, zeta = EFFECTS[e.name].modal_form(X, f, zeta, floor, **e.parameters)
+            names.append(e.name)
+    warns = list(r["warnings"]) + extrapolation_warnings(specimen, X)
+    for w_ in warns[len(r["warnings"]):]:
+        log.warning("%s", w_)
     return AmplitudeCurve(
-        r["amplitude"], w / (2 * math.pi), zeta, method="qsma",
+        X, f, zeta, method="qsma",
         notes=(f"{specimen.name}: mode {mode}, {len(r['points'])} contact points, amplitude = "
                f"transverse displacement at x = {specimen.sensor_position:.4g} m; linear "
-               f"(stuck) frequency {r['omega0'] / (2 * math.pi):.4f} Hz"),
-        warnings=tuple(r["warnings"]))
+               f"(stuck) frequency {r['omega0'] / (2 * math.pi):.4f} Hz"
+               + (f"; with {' + '.join(names)} (modal form)" if names else "")),
+        warnings=tuple(warns))
+
+
+def extrapolation_warnings(specimen: Specimen, amplitudes) -> list:
+    """Warnings for sensor amplitudes [m] outside the range the specimen was calibrated on,
+    or above the range an effect it carries was fitted on (below it the effects' modal forms
+    fade or stay constant, and the specimen's own range governs); empty when inside, or when
+    no calibrated range is known."""
+    X = np.asarray(amplitudes, float)
+    out = []
+    for label, cr in [("the specimen", specimen.calibrated_range)] + [
+            (f"its {e.name}", e.calibrated_range) for e in specimen.effects]:
+        own = label == "the specimen"
+        if cr is None or (not own and specimen.calibrated_range is not None
+                          and cr[1] == specimen.calibrated_range[1]):
+            continue
+        lo, hi = cr
+        bad = X > hi * (1 + 1e-6)
+        if own:                             # an effect's modal form fades towards X -> 0
+            bad |= X < lo * (1 - 1e-6)
+        if bad.any():
+            k = max(float(X.max() / hi), float(lo / X.min()) if own else 0.0)
+            out.append(f"{int(bad.sum())} of {X.size} amplitudes ({X[bad].min():.3g} .. "
+                       f"{X[bad].max():.3g} m) lie outside the range {lo:.3g} .. {hi:.3g} m "
+                       f"that {label} ({specimen.name}) was calibrated on (up to {k:.3g} x "
+                       "beyond): extrapolated")
+    return out

@@ -34,7 +34,9 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field, fields, replace
 
-__all__ = ["InterfaceModel", "Excitation", "Specimen", "preset", "PRESETS"]
+from iwan_element.effects import EFFECTS
+
+__all__ = ["InterfaceModel", "Excitation", "Specimen", "SpecimenEffect", "preset", "PRESETS"]
 
 _BOUNDARIES = ("free-free", "clamped-free", "clamped-driven")
 _EXCITATIONS = ("hammer", "shaker", "base")
@@ -130,6 +132,68 @@ class Excitation:
 
 
 @dataclass(frozen=True)
+class SpecimenEffect:
+    """A named vibration effect carried by a specimen, in its modal (amplitude-domain) form.
+
+    Parameters
+    ----------
+    name : str
+        A name of :data:`iwan_element.EFFECTS` with a modal form (``modal_specs``).
+    values : mapping or tuple of (str, float) pairs
+        The effect's modal parameters (``EFFECTS[name].modal_specs``; amplitudes in metres
+        at the specimen's sensor point), each inside its declared bounds; stored as a sorted
+        tuple of pairs (hashable).
+    mode : int
+        Elastic mode the effect acts on (1: lowest).
+    calibrated_range : tuple of 2 floats or None
+        Sensor amplitudes [m] the values were fitted on.
+
+    The effect's modal form (``modal_form(X, f, zeta, zeta_floor, **values)``) is applied on
+    top of the QSMA curve of that mode (:func:`~iwan_element.models.qsma.modal_amplitude_curve`).
+    """
+
+    name: str
+    values: tuple
+    mode: int = 1
+    calibrated_range: tuple | None = None
+
+    def __post_init__(self):
+        cls = EFFECTS.get(self.name)
+        if cls is None or not cls.modal_specs:
+            known = sorted(n for n, c in EFFECTS.items() if c.modal_specs)
+            raise ValueError(f"name must be an effect with a modal form, one of {known}, "
+                             f"got {self.name!r}")
+        vals = dict(self.values)
+        want = {sp.name: sp for sp in cls.modal_specs}
+        if set(vals) != set(want):
+            raise ValueError(f"values of {self.name!r} must be {sorted(want)}, got {sorted(vals)}")
+        for k, v in vals.items():
+            sp = want[k]
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) \
+                    or not sp.lower <= v <= sp.upper:
+                raise ValueError(f"{self.name} {k} must be a finite number in [{sp.lower}, "
+                                 f"{sp.upper}] {sp.unit}, got {v!r}")
+        object.__setattr__(self, "values", tuple(sorted((k, float(v)) for k, v in vals.items())))
+        if isinstance(self.mode, bool) or not isinstance(self.mode, int) or self.mode < 1:
+            raise ValueError(f"mode must be an integer >= 1, got {self.mode!r}")
+        if self.calibrated_range is not None:
+            object.__setattr__(self, "calibrated_range",
+                               _range("calibrated_range", self.calibrated_range))
+
+    @property
+    def parameters(self) -> dict:
+        """The modal parameters as a dict (SI units)."""
+        return dict(self.values)
+
+
+def _range(name, r):
+    rr = tuple(float(a) for a in r)
+    if len(rr) != 2 or not (0 < rr[0] < rr[1]) or not all(map(math.isfinite, rr)):
+        raise ValueError(f"{name} must be (low, high) with 0 < low < high [m], got {r!r}")
+    return rr
+
+
+@dataclass(frozen=True)
 class Specimen:
     """A two-beam bolted lap-joint specimen (SI units). See the module docstring.
 
@@ -166,6 +230,13 @@ class Specimen:
     amplitude_range : tuple of 2 floats
         Documented (measured, for published specimens) displacement amplitude range at the
         sensor [m].
+    calibrated_range : tuple of 2 floats or None
+        Sensor amplitudes [m] the interface was calibrated on (``None``: not calibrated, or
+        unknown). :func:`~iwan_element.models.qsma.modal_amplitude_curve` warns for
+        amplitudes outside it.
+    effects : tuple of SpecimenEffect
+        Vibration effects beyond the Iwan interface (hardening, macroslip onset, ...) in their
+        modal form, e.g. from ``VibrationDiagnosis.augment``; QSMA applies them.
     interface : InterfaceModel
     n_elements : int
         Beam elements per beam (split between the lap and the rest by length), ``>= 4``.
@@ -191,6 +262,8 @@ class Specimen:
     sensor_position: float = 0.35
     amplitude_range: tuple = (1e-6, 1e-4)
     interface: InterfaceModel = field(default_factory=InterfaceModel)
+    calibrated_range: tuple | None = None
+    effects: tuple = ()
     n_elements: int = 16
     reference: str = ""
 
@@ -220,11 +293,14 @@ class Specimen:
                              f"got {self.sensor_position!r}")
         if self.excitation.position > self.total_length:
             raise ValueError("excitation position must lie on the assembly")
-        ar = tuple(float(a) for a in self.amplitude_range)
-        if len(ar) != 2 or not (0 < ar[0] < ar[1]) or not all(map(math.isfinite, ar)):
-            raise ValueError(f"amplitude_range must be (low, high) with 0 < low < high [m], "
-                             f"got {self.amplitude_range!r}")
-        object.__setattr__(self, "amplitude_range", ar)
+        object.__setattr__(self, "amplitude_range", _range("amplitude_range", self.amplitude_range))
+        if self.calibrated_range is not None:
+            object.__setattr__(self, "calibrated_range",
+                               _range("calibrated_range", self.calibrated_range))
+        eff = tuple(self.effects)
+        if not all(isinstance(e, SpecimenEffect) for e in eff):
+            raise ValueError("effects must be a sequence of SpecimenEffect")
+        object.__setattr__(self, "effects", eff)
         if isinstance(self.n_elements, bool) or not isinstance(self.n_elements, int) \
                 or self.n_elements < 4:
             raise ValueError(f"n_elements must be an integer >= 4, got {self.n_elements!r}")
@@ -245,6 +321,20 @@ class Specimen:
         (REFERENCE sec. 7; ``t`` the lap thickness of one beam)."""
         a = math.radians(self.interface.cone_angle_deg)
         return 0.5 * self.washer_diameter + self.lap_thickness * math.tan(a)
+
+    def with_effects(self, effects: dict, *, mode: int = 1, calibrated_range=None) -> "Specimen":
+        """A copy carrying ``effects`` ({name: modal values}) on ``mode`` in addition to its
+        own (an effect already carried on that mode is replaced). ``calibrated_range`` [m]:
+        the amplitudes the values were fitted on; the copy's calibrated range then spans
+        its own and that one."""
+        new = tuple(SpecimenEffect(n, tuple(v.items()), mode, calibrated_range)
+                    for n, v in effects.items())
+        keep = tuple(e for e in self.effects if not (e.mode == mode and e.name in effects))
+        cr = self.calibrated_range
+        if calibrated_range is not None:
+            lo, hi = _range("calibrated_range", calibrated_range)
+            cr = (lo, hi) if cr is None else (min(cr[0], lo), max(cr[1], hi))
+        return replace(self, effects=keep + new, calibrated_range=cr)
 
     def replace(self, **changes) -> "Specimen":
         """A validated copy with fields changed; interface fields may be given by name too."""
@@ -281,7 +371,7 @@ def _brake_reuss() -> Specimen:
         bolt_positions=(0.03, 0.06, 0.09), preload=12.0e3, bolt_diameter=0.0079375,
         washer_diameter=0.01746, friction=0.3823, boundary="free-free",
         excitation=Excitation("hammer", 0.72 - 0.0762), sensor_position=0.72 - 0.0762,
-        amplitude_range=(2e-6, 60e-6),
+        amplitude_range=(2e-6, 60e-6), calibrated_range=(2e-6, 60e-6),
         interface=InterfaceModel(n_points=40, stiffness_per_area=6.905e11, chi=-0.4687,
                                  beta=0.1, damping_floor=1.2941e-3),
         n_elements=20,

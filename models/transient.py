@@ -14,6 +14,14 @@ arctan(w h / 2)``); the frequencies are corrected for it.
 The damping floor of the specimen is applied as stiffness-proportional beam damping
 ``beta`` chosen so that the stuck linear mode has ``zeta = damping_floor``
 (``zeta = beta phi^T K_beams phi / (2 w)``).
+
+The specimen's vibration effects on this mode (``specimen.effects``, modal form, amplitudes
+at the sensor; ``docs/vibration_effects.md``) act as a modal force: their elements
+(``EFFECTS[name]`` around a zero-force element, joint values from ``modal_to_joint`` with
+unit modal mass in sensor units) are driven by the sensor-scaled modal coordinate
+``Y = s q``, ``q = phi^T M x``, ``s = S phi``, and apply ``-M phi F(Y) / s`` to the beams
+(an Exudyn ``ObjectGenericODE2`` with its exact Jacobian ``M phi phi^T M F'(Y)``), which the
+mass-orthogonality of the modes keeps on this mode. Their work is ``(1/s^2) int F dY``.
 """
 from __future__ import annotations
 
@@ -24,8 +32,11 @@ from dataclasses import dataclass, field
 import exudyn as exu
 import numpy as np
 
+from exudyn.itemInterface import ObjectGenericODE2
+
 from iwan_element import AmplitudeCurve
 from iwan_element.core._validation import check_scalar
+from iwan_element.effects import EFFECTS
 
 from .assembly import build_specimen_model
 from .qsma import static_modal_load
@@ -50,8 +61,9 @@ class RingdownResult:
     curve : AmplitudeCurve
         Frequency and damping against amplitude from the decay (``method="ringdown"``).
     energy : dict of ndarray
-        ``t``, ``kinetic``, ``strain``, ``springs``, ``joint_stored``, ``joint_dissipated`` [J]
-        (filled when ``record_energy``).
+        ``t``, ``kinetic``, ``strain``, ``springs``, ``joint_stored``, ``joint_dissipated``,
+        ``effect_stored``, ``effect_dissipated`` [J] (filled when ``record_energy``; the
+        effect terms stay empty without effects).
     initial_energy : float
         Elastic energy at the release [J] (beams, springs, joints).
     wall_time : float
@@ -73,7 +85,92 @@ class RingdownResult:
         ``(kinetic + strain + springs + stored + dissipated) / E0 - 1``."""
         e = self.energy
         total = e["kinetic"] + e["strain"] + e["springs"] + e["joint_stored"] + e["joint_dissipated"]
+        if e.get("effect_stored") is not None and len(e["effect_stored"]):
+            total = total + e["effect_stored"] + e["effect_dissipated"]
         return total / self.initial_energy - 1.0
+
+
+class _Zero:
+    """A zero-force element following the joint element protocol (the base the modal
+    effects wrap)."""
+
+    force = displacement = work = stored_energy = dissipated_energy = 0.0
+
+    def trial(self, u, v=0.0):
+        return 0.0, 0.0
+
+    def commit(self):
+        pass
+
+    def revert(self):
+        pass
+
+    def reset(self):
+        pass
+
+
+class _ModalEffects:
+    """The specimen's effects on one mode as a modal force on the beams (module docstring)."""
+
+    def __init__(self, specimen: Specimen, mode: int, L, phi, omega0: float):
+        el = _Zero()
+        self.names = []
+        for e in specimen.effects:
+            if e.mode == mode:
+                cls = EFFECTS[e.name]
+                el = cls(el, **cls.modal_to_joint(e.parameters, modal_mass=1.0,
+                                                  slip_per_amplitude=1.0, omega0=omega0))
+                self.names.append(e.name)
+        self.el = el
+        self.s = float(L.S @ phi)
+        self.a_free = L.M @ phi
+        self.free = L.free
+
+    def attach(self, mbs, nodes, n_coordinates: int):
+        """Add the ObjectGenericODE2 on ``nodes`` (4 ODE2 coordinates each)."""
+        idx = np.concatenate([np.arange(mbs.GetNodeODE2Index(n), mbs.GetNodeODE2Index(n) + 4)
+                              for n in nodes])
+        a = np.zeros(n_coordinates)
+        a[self.free] = self.a_free
+        self.a = a[idx]
+        self.aa = np.outer(self.a, self.a)
+        el, s, av = self.el, self.s, self.a
+
+        def force(mbs_, t, item, q, q_t):
+            F, _ = el.trial(s * float(av @ np.asarray(q)), s * float(av @ np.asarray(q_t)))
+            return (-av * (F / s)).tolist()
+
+        def jacobian(mbs_, t, item, q, q_t, f_q, f_v):
+            F, K = el.trial(s * float(av @ np.asarray(q)), s * float(av @ np.asarray(q_t)))
+            c = sum(getattr(x, "c", 0.0) for x in self._stack())
+            return self.aa * (K * f_q + c * f_v)
+
+        n = idx.size
+        mbs.AddObject(ObjectGenericODE2(nodeNumbers=list(nodes), massMatrix=np.zeros((n, n)),
+                                        forceUserFunction=force, jacobianUserFunction=jacobian))
+
+    def _stack(self):
+        el = self.el
+        while not isinstance(el, _Zero):
+            yield el
+            el = el.inner
+
+    def start(self, Y0: float, n: int = 400) -> float:
+        """Drive the elements from rest to ``Y0`` (virgin loading, as the static release
+        state); returns their work on the beams' modal coordinate [J]."""
+        for y in np.linspace(0.0, Y0, n + 1)[1:]:
+            self.el.trial(float(y), 0.0)
+            self.el.commit()
+        return self.el.work / self.s ** 2
+
+    def commit(self, x_free, v_free):
+        self.el.trial(self.s * float(self.a_free @ x_free), self.s * float(self.a_free @ v_free))
+        self.el.commit()
+
+    def energy(self) -> tuple[float, float]:
+        """(stored, dissipated) [J] on the beams' modal coordinate."""
+        s2 = self.s ** 2
+        return self.el.stored_energy / s2, self.el.dissipated_energy / s2
 
 
 def _roundoff_force(L, specimen: Specimen) -> float:
@@ -147,13 +244,23 @@ def ringdown(specimen: Specimen, *, mode: int = 1, amplitude: float, cycles: flo
     L, phi, w0 = st["system"], st["phi"], st["omega0"]
     floor = specimen.interface.damping_floor
     beta = 2.0 * floor * w0 / float(phi @ L.Kb @ phi) if floor > 0 else 0.0
-    e_keys = ("t", "kinetic", "strain", "springs", "joint_stored", "joint_dissipated")
+    e_keys = ("t", "kinetic", "strain", "springs", "joint_stored", "joint_dissipated",
+              "effect_stored", "effect_dissipated")
     energy = {k: [] for k in e_keys}
     coords = []
     handle = {}
+    eff = _ModalEffects(specimen, mode, L, phi, w0) if any(
+        e.mode == mode for e in specimen.effects) else None
 
     def post_step(mbs_, t):
         coords.append(mbs_.systemData.GetODE2Coordinates())
+        if eff is not None:
+            eff.commit(coords[-1][L.free], np.asarray(
+                mbs_.systemData.GetODE2Coordinates_t())[L.free])
+            if record_energy:
+                es, ed = eff.energy()
+                energy["effect_stored"].append(es)
+                energy["effect_dissipated"].append(ed)
         if record_energy:
             model = handle["model"]
             kin, pot = model.beam_energy()
@@ -167,6 +274,9 @@ def ringdown(specimen: Specimen, *, mode: int = 1, amplitude: float, cycles: flo
                                  post_step=post_step, joint_elements=joint_elements)
     handle["model"] = model
     mbs = model.mbs
+    if eff is not None:
+        eff.attach(mbs, model.nodes, L.n_coordinates)
+        mbs.Assemble()
     x0 = np.zeros(L.n_coordinates)
     x0[L.free] = st["x"][0]
     mbs.systemData.SetODE2Coordinates(x0, configuration=exu.ConfigurationType.Initial)
@@ -177,6 +287,8 @@ def ringdown(specimen: Specimen, *, mode: int = 1, amplitude: float, cycles: flo
     u0 = np.abs(st["slip"][0])
     e_joint0 = float(sum(backbone_work(u, p) for u, p in zip(u0, model.points.params)))
     e0 = pot0 + model.spring_energy() + e_joint0
+    if eff is not None:
+        e0 += eff.start(eff.s * float(eff.a_free @ st["x"][0]))
     h = 2 * math.pi / (w0 * steps_per_period)
     n = int(round(cycles * steps_per_period))
     sim = _settings(force_scale=float(np.max(np.abs(L.K0 @ st["x"][0]))))
@@ -203,10 +315,12 @@ def ringdown(specimen: Specimen, *, mode: int = 1, amplitude: float, cycles: flo
     curve = AmplitudeCurve(amp, f_true, np.clip(zeta, 0, None), method="ringdown",
                            notes=(f"{specimen.name}: Exudyn transient, mode {mode}, "
                                   f"{steps_per_period} steps/period, released from "
-                                  f"{amplitude:.3g} m at the sensor; modal filtering"))
+                                  f"{amplitude:.3g} m at the sensor; modal filtering"
+                                  + (f"; with {' + '.join(eff.names)}" if eff else "")))
     return RingdownResult(t=t, sensor=X @ L.S, modal=modal, curve=curve,
                           energy={k: np.array(v) for k, v in energy.items()},
                           initial_energy=e0, wall_time=wall,
                           metadata={"h": h, "steps": n, "beam_damping": beta,
                                     "n_points": len(model.points),
+                                    "effects": tuple(eff.names) if eff else (),
                                     "kinetic_at_release": kin0})

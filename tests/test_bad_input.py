@@ -305,6 +305,11 @@ REGISTRY.update({
     "PredictionBands": Entry(skip=_RESULT.format("propagate_uncertainty")),
     "BreakAway": Entry(lambda: (ie.BreakAway, dict(inner=IwanJoint(P), ratio=1.5)),
                        {"inner": "object", "ratio": "scalar"}),
+    "Hardening": Entry(lambda: (ie.Hardening, dict(inner=IwanJoint(P), k3=1e12)),
+                       {"inner": "object", "k3": "scalar"}),
+    "MacroslipOnset": Entry(lambda: (ie.MacroslipOnset, dict(inner=IwanJoint(P), k_s=1e5,
+                                                             u_s=1e-5)),
+                            {"inner": "object", "k_s": "scalar", "u_s": "scalar"}),
 })
 
 

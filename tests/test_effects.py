@@ -38,7 +38,8 @@ def run(el, u, v=None):
 
 def test_names_are_the_fixed_ones():
     assert set(EFFECTS) == {"viscous_damping", "pinning_stiffness", "backlash",
-                            "slip_degradation", "asymmetric_slip", "breakaway"}
+                            "slip_degradation", "asymmetric_slip", "breakaway", "hardening",
+                            "macroslip_onset"}
     for cls in EFFECTS.values():             # every parameter declares its physics
         assert cls.specs and all(sp.unit and sp.meaning for sp in cls.specs)
         assert cls.__doc__ and cls.__module__.endswith(cls.effect)

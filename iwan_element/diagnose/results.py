@@ -228,6 +228,13 @@ def _describe(model) -> str:
     return model.describe() if hasattr(model, "describe") else repr(model.params)
 
 
+def _apply(names, parameters, X, f, z, zeta0):
+    """The named effects' modal forms on a base curve, in order."""
+    for n in names:
+        f, z = EFFECTS[n].modal_form(X, f, z, zeta0, **parameters[n])
+    return f, z
+
+
 @dataclass(frozen=True, eq=False)
 class VibrationDiagnosis:
     """Measured against predicted amplitude-dependent frequency and damping: what is missing.
@@ -235,7 +242,9 @@ class VibrationDiagnosis:
     Attributes
     ----------
     effect : str
-        ``"viscous_damping"``, ``"pinning_stiffness"`` or ``"none"`` (the first one named).
+        The first effect named (a name of :data:`~iwan_element.EFFECTS` with a modal form:
+        ``"hardening"``, ``"macroslip_onset"``, ``"pinning_stiffness"``,
+        ``"viscous_damping"``, ...) or ``"none"``.
     effects : tuple of str
         All effects named, in order.
     ambiguous_with : tuple of str
@@ -243,9 +252,11 @@ class VibrationDiagnosis:
     where : str
         Where measured and predicted curves disagree beyond the noise.
     parameters : dict
-        Fitted magnitudes: ``viscous_damping: {"zeta_v"}`` (added modal viscous damping
-        ratio [-]); ``pinning_stiffness: {"k_p_per_mass" [1/s^2], "delta" [m]}`` (added modal
-        stiffness over modal mass, and the clearance in amplitude units).
+        Fitted modal values of each named effect (its ``modal_specs``: names, units,
+        meaning), e.g. ``viscous_damping: {"zeta_v"}`` (added modal viscous damping
+        ratio [-]); ``pinning_stiffness: {"k_p_per_mass" [1/s^2], "delta" [m]}``;
+        ``hardening: {"k3_per_mass" [1/(m^2 s^2)]}``; ``macroslip_onset: {"kappa_s"
+        [1/s^2], "X_s" [m]}`` (amplitudes in the curve's units).
     error_before, error_after : float
         RMS relative mismatch of frequency and damping together [-] (log residuals).
     noise_level : float
@@ -259,8 +270,11 @@ class VibrationDiagnosis:
     steps : tuple of dict
     warnings : tuple of str
         What the data cannot support (few amplitudes for a noise estimate, a mismatch left
-        beyond the noise).
+        beyond the noise, and where).
     details : dict
+    covariance : ndarray or None
+        Covariance of the fitted modal values (in the order of ``parameters``), from the
+        noise-normalised Jacobian, scaled by the reduced chi-square when above 1.
     """
 
     effect: str
@@ -283,26 +297,46 @@ class VibrationDiagnosis:
     steps: tuple
     warnings: tuple = ()
     details: dict = field(default_factory=dict)
+    covariance: np.ndarray | None = None
 
-    def augment(self, joint, *, modal_mass: float, slip_per_amplitude: float = 1.0):
-        """Wrap a joint element with the named effects, converted from modal to joint terms.
+    def augment(self, target, *, modal_mass: float | None = None,
+                slip_per_amplitude: float = 1.0, mode: int = 1):
+        """The model with the named effects added: a beam specimen or a joint element.
 
         Parameters
         ----------
-        joint : joint element
+        target : Specimen or joint element
+            A :class:`~iwan_element.models.specimens.Specimen` (anything with
+            ``with_effects``): returned carrying the named effects in their modal form with
+            the fitted values, on ``mode``, calibrated over the diagnosed amplitudes (its QSMA
+            curve is then the diagnosis's ``model_frequency``/``model_damping`` when the
+            prediction was that specimen's QSMA). Or a joint element, wrapped in the effects
+            converted to joint terms.
         modal_mass : float, keyword-only
-            Modal mass [kg] of the mode the curves describe, ``> 0``.
+            For a joint: modal mass [kg] of the mode the curves describe, ``> 0``.
         slip_per_amplitude : float, keyword-only
-            Joint slip per unit modal amplitude ``r`` [-], ``> 0``: a joint spring ``k`` adds
-            ``k r^2`` to the modal stiffness, a dashpot ``c`` adds ``c r^2``.
+            For a joint: joint slip per unit modal amplitude ``r`` [-], ``> 0``: a joint
+            spring ``k`` adds ``k r^2`` to the modal stiffness, a dashpot ``c`` adds ``c r^2``.
+        mode : int, keyword-only
+            For a specimen: the elastic mode the curves describe (1: lowest).
 
         Returns
         -------
-        joint element
-            ``PinningStiffness(k_p = kappa m / r^2, delta = delta r)`` and/or
-            ``ViscousDamping(c = 2 zeta_v omega_0 m / r^2)`` around ``joint``, with
-            ``omega_0`` the measured angular frequency at the smallest amplitude.
+        Specimen or joint element
+            For a joint: e.g. ``PinningStiffness(k_p = kappa m / r^2, delta = delta r)``
+            and/or ``ViscousDamping(c = 2 zeta_v omega_0 m / r^2)`` around ``joint``, with
+            ``omega_0`` the measured angular frequency at the smallest amplitude (each effect's
+            ``modal_to_joint``).
         """
+        if hasattr(target, "with_effects"):
+            if not self.effects:
+                return target
+            return target.with_effects(
+                {n: dict(self.parameters[n]) for n in self.effects}, mode=mode,
+                calibrated_range=(float(self.amplitude.min()), float(self.amplitude.max())))
+        if modal_mass is None:
+            raise ValueError("modal_mass is required to augment a joint element")
+        joint = target
         m = check_scalar("modal_mass", modal_mass, low=0.0, low_open=True)
         r = check_scalar("slip_per_amplitude", slip_per_amplitude, low=0.0, low_open=True)
         el = joint
@@ -313,13 +347,83 @@ class VibrationDiagnosis:
                                               slip_per_amplitude=r, omega0=w0))
         return el
 
+    def predict(self, amplitude, *, base=None):
+        """The augmented model's frequency and damping at new amplitudes, with 1-sigma bands.
+
+        Parameters
+        ----------
+        amplitude : array_like, shape (m,)
+            Amplitudes [m], ``> 0``.
+        base : AmplitudeCurve, optional, keyword-only
+            The model without the named effects at exactly these amplitudes (e.g. the
+            specimen's QSMA curve). Default: the prediction the diagnosis was given,
+            interpolated in log amplitude; outside the diagnosed amplitudes it is held at
+            its end values and a warning says so (pass ``base`` there).
+
+        Returns
+        -------
+        AmplitudeCurve
+            ``method="diagnosis"``; ``frequency_std`` and ``damping_std`` are the bands
+            (1 sigma) from the fitted parameters' covariance (linearised), ``warnings`` states
+            extrapolation beyond the diagnosed amplitudes.
+        """
+        from ..core._validation import finite_array
+        from ..identify.curves import AmplitudeCurve
+        X = finite_array("amplitude", amplitude, ndim=1, min_size=1)
+        if np.any(X <= 0):
+            raise ValueError("amplitude must be > 0 [m]")
+        warns = []
+        lo, hi = float(self.amplitude.min()), float(self.amplitude.max())
+        out = (X < lo * (1 - 1e-9)) | (X > hi * (1 + 1e-9))
+        if base is None:
+            o = np.argsort(self.amplitude)
+            lx = np.log(self.amplitude[o])
+            fb = np.exp(np.interp(np.log(X), lx, np.log(self.predicted_frequency[o])))
+            zb = np.exp(np.interp(np.log(X), lx, np.log(self.predicted_damping[o])))
+            if out.any():
+                warns.append(f"{int(out.sum())} amplitudes outside the diagnosed range {lo:.3g} .. "
+                             f"{hi:.3g} m: the base prediction is held at its end values there; "
+                             "pass base= (the model's curve at these amplitudes)")
+        else:
+            if not np.allclose(np.asarray(base.amplitude), X, rtol=1e-9, atol=0.0):
+                raise ValueError("base must be the model's curve at exactly these amplitudes")
+            fb, zb = np.asarray(base.frequency, float), np.asarray(base.damping_ratio, float)
+        if out.any():
+            warns.append(f"the fitted effects ({', '.join(self.effects) or 'none'}) are "
+                         f"extrapolated beyond the diagnosed amplitudes {lo:.3g} .. {hi:.3g} m "
+                         f"(up to {max(X.max() / hi, lo / X.min()):.3g} x beyond)")
+        z0 = float(self.details.get("predicted_zeta0", 0.0))
+        f, z = _apply(self.effects, self.parameters, X, fb, zb, z0)
+        sf, sz = self._bands(X, fb, zb, z0, f, z)
+        return AmplitudeCurve(X, f, z, frequency_std=sf, damping_std=sz, method="diagnosis",
+                              notes="prediction + " + (" + ".join(self.effects) or "nothing"),
+                              warnings=tuple(warns))
+
+    def _bands(self, X, fb, zb, z0, f, z):
+        """Linearised 1-sigma bands [Hz], [-] from the covariance of the fitted values."""
+        keys = [(n, k) for n in self.effects for k in self.parameters[n]]
+        C = self.covariance
+        if not keys or C is None or C.shape != (len(keys), len(keys)):
+            return np.zeros_like(f), np.zeros_like(z)
+        G = np.empty((2 * X.size, len(keys)))
+        for j, (n, k) in enumerate(keys):
+            v = self.parameters[n][k]
+            h = max(1e-6 * abs(v), 1e-6 * math.sqrt(max(C[j, j], 0.0)), 1e-300)
+            p = {a: dict(b) for a, b in self.parameters.items()}
+            p[n][k] = v + h
+            f1, z1 = _apply(self.effects, p, X, fb, zb, z0)
+            G[:, j] = np.concatenate([np.log(f1 / f), np.log(z1 / z)]) / h
+        var = np.einsum("ij,jk,ik->i", G, C, G)
+        s = np.sqrt(np.maximum(var, 0.0))
+        return f * s[:X.size], z * s[X.size:]
+
     def to_dict(self) -> dict:
         """JSON-safe dict."""
         return _json({k: getattr(self, k) for k in (
             "effect", "effects", "ambiguous_with", "where", "parameters", "error_before",
             "error_after", "noise_level", "frequency_noise", "damping_noise", "amplitude",
             "frequency", "damping", "predicted_frequency", "predicted_damping",
-            "model_frequency", "model_damping", "steps", "warnings", "details")})
+            "model_frequency", "model_damping", "steps", "warnings", "details", "covariance")})
 
     def report(self) -> str:
         """Human-readable account."""
@@ -335,8 +439,11 @@ class VibrationDiagnosis:
                              f"{c['dIC']:8.1f}  explains {100 * c['explained']:5.3g} %  "
                              f"{c['verdict']}")
         if self.effects:
-            lines.append(f"  named: {', '.join(self.effects)}" + (
-                f" (nearly as good: {', '.join(self.ambiguous_with)})" if self.ambiguous_with else ""))
+            lines.append("  named: " + ", ".join(
+                f"{n} ({EFFECTS[n].kind})" if getattr(EFFECTS[n], "kind", "") else n
+                for n in self.effects) + (
+                f" (nearly as good: {', '.join(self.ambiguous_with)})"
+                if self.ambiguous_with else ""))
             for name, d in self.parameters.items():
                 lines.append("    " + name + ": " + ", ".join(
                     f"{k} = {v:.4g} {_unit(name, k, modal=True)}" for k, v in d.items()))

@@ -1,10 +1,17 @@
 """Vibration diagnosis: measured against predicted amplitude-dependent frequency and damping.
 
-The candidates are the effects of :data:`~iwan_element.EFFECTS` that have an
-amplitude-domain (modal) form (``modal_form``: today viscous damping, a damping floor, and
-pinning stiffness, a frequency floor/stiffening); the selection rule is the one shared with
-the loop diagnosis (:mod:`iwan_element.diagnose.selection`), on the log residuals of
-frequency and damping divided by their noise. The noise is the larger of the scatter the
+The candidates are the effects of :data:`~iwan_element.EFFECTS` that declare an
+amplitude-domain (modal) form (``modal_specs`` and ``modal_form``; e.g. viscous damping, a
+damping floor; pinning stiffness, a stiffening after a clearance; hardening, a cubic
+stiffening; macroslip onset, a patch that slides above an amplitude), so a new effect module
+with a modal form is a candidate without touching this module. Equations:
+``docs/vibration_effects.md``. The measurement may be an
+:class:`~iwan_element.AmplitudeCurve` (from a decay or from sweeps). The selection rule is
+the one shared with the loop diagnosis (:mod:`iwan_element.diagnose.selection`), on the log
+residuals of frequency and damping divided by their noise. When the prediction is a beam
+specimen's QSMA curve, the fitted modal forms are exactly the augmented specimen's
+(``VibrationDiagnosis.augment``). A mismatch no candidate explains is stated with the
+amplitudes where it lies. The noise is the larger of the scatter the
 data show about a smooth curve (robust, from second differences along amplitude) and the
 per-point uncertainty the caller states; with too few amplitudes to trust a scatter
 estimate a warning says so.
@@ -16,7 +23,8 @@ import math
 import numpy as np
 from scipy.optimize import least_squares
 
-from ..core._validation import _check_int, check_scalar, finite_array, same_length
+from ..core._validation import (_check_int, check_magnitude, check_scalar, finite_array,
+                                same_length)
 from ..effects import EFFECTS
 from ..identify.curves import AmplitudeCurve
 from ..identify.units import check_damping_ratio, check_frequency_ratio
@@ -74,8 +82,9 @@ class _Vib:
     def __init__(self, X, fm, zm, fp, zp, zeta0, sf, sz):
         self.X, self.fm, self.zm, self.fp, self.zp, self.zeta0 = X, fm, zm, fp, zp, zeta0
         self.sf, self.sz = sf, sz
+        w2 = 4 * np.pi ** 2 * float(np.min(fp)) ** 2
         self.refs = {"zeta_ref": float(np.median(zp)), "X_max": float(X.max()),
-                     "omega2_ref": 4 * np.pi ** 2 * float(np.min(fp)) ** 2, "1": 1.0}
+                     "omega2_ref": w2, "omega2_per_X2": w2 / float(X.max()) ** 2, "1": 1.0}
 
     def decode(self, names, z):
         vals, k = {}, 0
@@ -118,20 +127,43 @@ class _Vib:
 
 
 def _where(X, rf0, rz0, sf, sz, misfit):
+    """Where the measured curves leave the prediction by more than 3 x noise: per curve, the
+    amplitude ranges (in increasing amplitude) where the measurement is above or below, with
+    the largest relative difference in each (a turn, e.g. a frequency that falls and then
+    rises again, shows as two ranges of opposite sign)."""
+    order = np.argsort(X)
     parts = []
-    for label, r, s in (("frequency", rf0, sf), ("damping", rz0, sz)):
-        big = np.abs(r) > 3 * s
-        if big.sum() >= 2:
-            xs = X[big]
-            sign = "above" if np.median(r[big]) > 0 else "below"
-            top = float(X[np.argmax(np.abs(r))])
-            lo_hi = "low" if top <= np.median(X) else "high"
-            parts.append(f"measured {label} is {sign} the prediction, most at {lo_hi} amplitudes "
-                         f"(beyond 3 x noise from {xs.min():.3g} to {xs.max():.3g} m, up to "
-                         f"{100 * np.max(np.abs(r[big])):.3g} % at {top:.3g} m)")
+    for label, r, s in (("frequency", rf0[order], sf), ("damping", rz0[order], sz)):
+        xs = X[order]
+        sign = np.where(r > 3 * s, 1, np.where(r < -3 * s, -1, 0))
+        runs, k = [], 0
+        while k < sign.size:
+            j = k
+            while j + 1 < sign.size and sign[j + 1] == sign[k]:
+                j += 1
+            if sign[k] != 0 and j > k:            # two or more points in a row
+                i = k + int(np.argmax(np.abs(r[k:j + 1])))
+                runs.append(f"{'above' if sign[k] > 0 else 'below'} it from {xs[k]:.3g} to "
+                            f"{xs[j]:.3g} m (up to {100 * abs(math.expm1(r[i])):.3g} % at "
+                            f"{xs[i]:.3g} m)")
+            k = j + 1
+        if runs:
+            parts.append(f"measured {label} beyond 3 x noise of the prediction: "
+                         + ", then ".join(runs))
     where = ("; ".join(parts) if (misfit and parts) else
              "measured and predicted curves agree within the noise") + "."
     return where[0].upper() + where[1:]
+
+
+def _left(X, rf, rz, sf, sz):
+    """Where residuals left after the fit exceed 3 x noise: amplitude ranges per curve."""
+    parts = []
+    for label, r, s in (("frequency", rf, sf), ("damping", rz, sz)):
+        big = np.abs(r) > 3 * s
+        if big.any():
+            parts.append(f"{label} off by up to {100 * np.max(np.abs(r[big])):.3g} % at "
+                         f"{X[big].min():.3g} .. {X[big].max():.3g} m")
+    return (": " + "; ".join(parts)) if parts else ""
 
 
 def _inputs(amplitude, frequency, damping, predicted_frequency, predicted_damping):
@@ -139,7 +171,7 @@ def _inputs(amplitude, frequency, damping, predicted_frequency, predicted_dampin
     for nm, a in (("amplitude", amplitude), ("frequency", frequency), ("damping", damping),
                   ("predicted_frequency", predicted_frequency),
                   ("predicted_damping", predicted_damping)):
-        arrs[nm] = finite_array(nm, a, ndim=1, min_size=3)
+        arrs[nm] = check_magnitude(nm, finite_array(nm, a, ndim=1, min_size=3))
     n = same_length(**arrs)
     for nm, a in arrs.items():
         if np.any(a <= 0):
@@ -149,26 +181,30 @@ def _inputs(amplitude, frequency, damping, predicted_frequency, predicted_dampin
     return n, arrs
 
 
-def _from_curve(amplitude, frequency, damping, f_unc, z_unc):
-    """Arrays and relative uncertainties from an AmplitudeCurve given as ``amplitude``."""
+def _measurement(amplitude, frequency, damping, f_unc, z_unc):
+    """Arrays and stated relative uncertainties from an AmplitudeCurve or three arrays."""
     if not isinstance(amplitude, AmplitudeCurve):
         if frequency is None or damping is None:
-            raise ValueError("frequency and damping are required with an amplitude array")
+            raise ValueError("frequency and damping are required unless amplitude is an "
+                             "AmplitudeCurve")
         return amplitude, frequency, damping, f_unc, z_unc
-    if frequency is not None or damping is not None:
-        raise ValueError("give either an AmplitudeCurve or three arrays, not both")
     c = amplitude
-    rel_f, rel_z = c.frequency_std / c.frequency, c.damping_std / np.abs(c.damping_ratio)
-    if f_unc is None and np.all(np.isfinite(rel_f)) and np.all(rel_f > 0):
-        f_unc = rel_f
-    if z_unc is None and np.all(np.isfinite(rel_z)) and np.all(rel_z > 0):
-        z_unc = rel_z
+    if frequency is not None or damping is not None:
+        raise ValueError("give either an AmplitudeCurve or three arrays, not both: frequency and "
+                         "damping must be None when amplitude is an AmplitudeCurve")
+
+    def rel(std, val):
+        r = np.asarray(std, float) / val
+        return r if np.all(np.isfinite(r)) and np.all(r > 0) else None
+
+    f_unc = rel(c.frequency_std, c.frequency) if f_unc is None else f_unc
+    z_unc = rel(c.damping_std, c.damping_ratio) if z_unc is None else z_unc
     return c.amplitude, c.frequency, c.damping_ratio, f_unc, z_unc
 
 
 def diagnose_vibration(amplitude, frequency=None, damping=None, *, predicted_frequency,
-                       predicted_damping,
-                       frequency_noise: float | None = None, damping_noise: float | None = None,
+                       predicted_damping, frequency_noise: float | None = None,
+                       damping_noise: float | None = None,
                        frequency_uncertainty=None, damping_uncertainty=None,
                        predicted_zeta0: float = 0.0, alpha: float = 1e-3,
                        ambiguity: float = 10.0, max_effects: int = 2) -> VibrationDiagnosis:
@@ -208,7 +244,7 @@ def diagnose_vibration(amplitude, frequency=None, damping=None, *, predicted_fre
         ``2 pi`` times the prediction (rad/s for Hz) or the other way round, damping ratios
         that look like percent (one >= 1, or none below 0.05), or an option out of range.
     """
-    amplitude, frequency, damping, frequency_uncertainty, damping_uncertainty = _from_curve(
+    amplitude, frequency, damping, frequency_uncertainty, damping_uncertainty = _measurement(
         amplitude, frequency, damping, frequency_uncertainty, damping_uncertainty)
     n, a = _inputs(amplitude, frequency, damping, predicted_frequency, predicted_damping)
     X, fm, zm, fp, zp = (a[k] for k in ("amplitude", "frequency", "damping",
@@ -238,8 +274,11 @@ def diagnose_vibration(amplitude, frequency=None, damping=None, *, predicted_fre
     base = {"names": (), "chi2": chi_b, "q": 0, "state": np.zeros(0)}
     sel = stepwise_select(fit_candidate, vibration_candidates(), base, tau=1.0, n_eff=2.0 * n,
                           alpha=alpha, max_effects=max_effects, ambiguity=ambiguity)
-    # never name a set of effects that leaves the unweighted mismatch higher than before
-    while sel.named and vib.error(sel.final["names"], sel.final["state"]) >= err_b:
+    # never name a set of effects that leaves the unweighted mismatch higher than before (by
+    # more than a tenth of the noise: a hidden frequency effect changes the damping-dominated
+    # unweighted mismatch by less than the damping noise's own scatter)
+    tol = 0.1 * math.sqrt(0.5 * (sf ** 2 + sz ** 2))
+    while sel.named and vib.error(sel.final["names"], sel.final["state"]) > err_b + tol:
         warns.append(f"{' + '.join(sel.named)} lowers the noise-weighted misfit but raises the "
                      "mismatch; not named")
         sel.named, sel.ambiguous = [], ()
@@ -256,14 +295,16 @@ def _vib_result(vib, sel, chi_b, err_b, rf0, rz0, warns, alpha, noise_from):
     if misfit and sel.p_after < alpha:
         warns.append("mismatch beyond the noise remains" + (
             f" after {' + '.join(sel.named)}" if sel.named else
-            "; no effect with a modal form explains it"))
+            f"; no candidate ({', '.join(vibration_candidates())}) explains it")
+            + _left(vib.X, np.log(vib.fm / f_new), np.log(vib.zm / z_new), vib.sf, vib.sz))
     steps = [{"on": st["on"], "candidates": [
         {k: r.get(k) for k in ("name", "error", "dIC", "explained", "verdict")}
         for r in st["rows"]]} for st in sel.steps]
+    cov = _covariance(vib, names, z, sel.final["chi2"])
     ro = lambda a: (a.setflags(write=False), a)[1]  # noqa: E731
     details = {"noise_from": noise_from, "misfit_p": sel.p_before, "misfit_p_after": sel.p_after,
                "alpha": alpha, "chi2_before": chi_b, "chi2_after": sel.final["chi2"],
-               "criterion": criterion_text(),
+               "criterion": criterion_text(), "predicted_zeta0": vib.zeta0,
                "frequency_error_before": float(np.sqrt(np.mean(rf0 ** 2))),
                "damping_error_before": float(np.sqrt(np.mean(rz0 ** 2))),
                "frequency_error_after": float(np.sqrt(np.mean(np.log(vib.fm / f_new) ** 2))),
@@ -277,4 +318,24 @@ def _vib_result(vib, sel, chi_b, err_b, rf0, rz0, warns, alpha, noise_from):
         damping_noise=vib.sz, amplitude=ro(vib.X), frequency=ro(vib.fm), damping=ro(vib.zm),
         predicted_frequency=ro(vib.fp), predicted_damping=ro(vib.zp), model_frequency=ro(f_new),
         model_damping=ro(z_new), steps=tuple(_json(s) for s in steps), warnings=tuple(warns),
-        details=_json(details))
+        details=_json(details), covariance=None if cov is None else ro(cov))
+
+
+def _covariance(vib, names, z, chi2):
+    """Covariance of the fitted modal values: ``(J^T J)^+`` of the noise-normalised residual
+    in the fitting variables, scaled by the reduced chi-square when above 1, mapped to the
+    values (each value is its variable over a fixed reference scale)."""
+    if not names:
+        return None
+    h = 1e-6 * np.maximum(np.abs(z), 1e-3)
+    r0 = vib.resid(names, z)
+    J = np.empty((r0.size, z.size))
+    for j in range(z.size):
+        zz = z.copy()
+        zz[j] += h[j]
+        J[:, j] = (vib.resid(names, zz) - r0) / h[j]
+    dof = max(r0.size - z.size, 1)
+    Cz = np.linalg.pinv(J.T @ J) * max(1.0, chi2 / dof)
+    scale = np.array([1.0 / vib.refs[sp.ref] ** sp.ref_power
+                      for nm in names for sp in EFFECTS[nm].modal_specs])
+    return Cz * np.outer(scale, scale)

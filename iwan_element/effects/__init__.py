@@ -40,12 +40,15 @@ from ._base import ParamSpec, _Effect
 from .asymmetric_slip import AsymmetricSlip
 from .backlash import Backlash
 from .breakaway import BreakAway
+from .hardening import Hardening
+from .macroslip_onset import MacroslipOnset
 from .pinning_stiffness import PinningStiffness
 from .slip_degradation import SlipDegradation
 from .viscous_damping import ViscousDamping
 
 __all__ = ["EFFECTS", "ParamSpec", "ViscousDamping", "PinningStiffness", "Backlash",
-           "SlipDegradation", "AsymmetricSlip", "BreakAway", "make_effect", "base_joint",
+           "SlipDegradation", "AsymmetricSlip", "BreakAway", "Hardening", "MacroslipOnset",
+           "make_effect", "base_joint",
            "register_effect"]
 
 EFFECTS: dict = {}

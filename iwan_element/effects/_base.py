@@ -41,8 +41,8 @@ class ParamSpec:
     ref : str
         Reference scale of the dimensionless fitting variable: ``"u_max"`` (largest |u|),
         ``"v_rms"``, ``"D_ref"`` (energy dissipated by the plain unit-``Fs`` fit over the
-        record) or ``"1"`` for loops; ``"zeta_ref"``, ``"omega2_ref"``, ``"X_max"`` for
-        modal forms. The fit works on ``z = (value / Fs**fs_power) * ref**ref_power``.
+        record) or ``"1"`` for loops; ``"zeta_ref"``, ``"omega2_ref"``, ``"X_max"``,
+        ``"omega2_per_X2"`` (``omega2_ref / X_max**2``) for modal forms. The fit works on ``z = (value / Fs**fs_power) * ref**ref_power``.
     ref_power : int
         Exponent of ``ref`` in the fitting variable.
     fit_bounds : tuple of float
@@ -127,6 +127,12 @@ class _Effect:
     composable = False
     #: Parameters of the amplitude-domain (modal) form, or () if the effect has none.
     modal_specs: tuple = ()
+    #: What the modal form changes in a vibration curve: "stiffness" (frequency only, same
+    #: dissipation), "dissipation" (adds dissipation per cycle), "" (no modal form). Effects
+    #: with a modal form define ``modal_form(X, frequency, damping, zeta0, **modal_values)``
+    #: -> (frequency [Hz], damping ratio [-]) on top of a base curve, and
+    #: ``modal_to_joint(values, *, modal_mass, slip_per_amplitude, omega0)``.
+    kind: str = ""
 
     def __init_subclass__(cls, **kw):
         super().__init_subclass__(**kw)

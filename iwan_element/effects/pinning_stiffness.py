@@ -40,6 +40,7 @@ class PinningStiffness(_Effect):
     """
 
     effect = "pinning_stiffness"
+    kind = "stiffness"
     specs = (ParamSpec("k_p", "N/m", "stiffness in parallel after the clearance", fs_power=1,
                        ref="u_max", fit_bounds=(0.0, 20.0), fit_starts=(0.0, 0.2, 0.3)),
              ParamSpec("delta", "m", "clearance before the pin bears", default=0.0, ref="u_max", ref_power=-1,

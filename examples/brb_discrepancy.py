@@ -1,0 +1,136 @@
+"""The discrepancy workflow on the bolted Brake-Reuss beam's vibration.
+
+1. The beam model (``models.preset("brake-reuss")``) is calibrated on the hammer ring-down
+   (2-60 um at accelerometer 3); its QSMA curve is compared with that curve.
+2. The force-controlled stepped-sine sweeps (94-275 um, same beam, same point) become an
+   amplitude curve with :func:`iwan_element.sweep_curve` (single nonlinear mode per point)
+   and expose the high-amplitude disagreement; the model warns that it extrapolates there.
+3. :func:`iwan_element.diagnose_vibration` compares the sweeps with the model's QSMA at the
+   same amplitudes, locates the disagreement and names what the data support; the named
+   effects are added to the beam model (``d.augment(specimen)``).
+4. The augmented beam model runs QSMA (with bands from ``d.predict``) and an Exudyn
+   ring-down; one figure shows measured points, the model before and after, and the band.
+
+Data (GPL-3.0, read from ``../shared`` only, never copied): ``brb-hammer/hammer_acc3.csv``
+and ``brb-steppedsine-fc/fc_sweeps.csv`` (Chen et al., MSSP 166:108401, 2022; Jin et al.,
+MSSP 166:108402, 2022; github.com/mattiacenedese/BRBtesting).
+
+NOTE: ``iwan_element.sweep_curve`` is written on another branch; this example calls it
+and stops with a message until it is merged.
+
+    python examples/brb_discrepancy.py [--out DIR] [--quick]
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+import iwan_element as ie  # noqa: E402
+from iwan_element import models  # noqa: E402
+from iwan_element.models.calibration import measured_amplitude_curve  # noqa: E402
+
+SHARED = [ROOT.parent / "shared" / "data", ROOT.parents[1] / "shared" / "data"]
+
+
+def data_dir():
+    for d in SHARED:
+        if (d / "brb-steppedsine-fc" / "fc_sweeps.csv").exists():
+            return d
+    return None
+
+
+def sweeps_curve(path):
+    """The sweeps as one amplitude curve (``iwan_element.sweep_curve``)."""
+    if not hasattr(ie, "sweep_curve"):
+        raise SystemExit("iwan_element.sweep_curve is not available yet (it is merged from "
+                         "the vibration-data branch); nothing else to do")
+    d = np.loadtxt(path, delimiter=",", skiprows=1)
+    level, f, F, A, phase = d.T
+    return ie.sweep_curve(f, F, A, phase, level=level.astype(int), quantity="acceleration")
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--out", type=Path, default=Path("brb_discrepancy"))
+    ap.add_argument("--quick", action="store_true", help="shorter ring-down")
+    a = ap.parse_args(argv)
+    d = data_dir()
+    if d is None:
+        print("../shared/data (brb-hammer, brb-steppedsine-fc) not found: nothing to do")
+        return 0
+    a.out.mkdir(parents=True, exist_ok=True)
+    spec = models.preset("brake-reuss")
+    hammer = measured_amplitude_curve(d / "brb-hammer" / "hammer_acc3.csv")
+    sweeps = sweeps_curve(d / "brb-steppedsine-fc" / "fc_sweeps.csv")
+    print(f"hammer: {len(hammer)} points {1e6 * hammer.amplitude.min():.3g}-"
+          f"{1e6 * hammer.amplitude.max():.3g} um; sweeps: {len(sweeps)} points "
+          f"{1e6 * sweeps.amplitude.min():.3g}-{1e6 * sweeps.amplitude.max():.3g} um")
+    before = models.modal_amplitude_curve(spec, amplitudes=sweeps.amplitude)
+    for w in before.warnings:
+        print("model:", w)
+    diag = ie.diagnose_vibration(sweeps, predicted_frequency=before.frequency,
+                                 predicted_damping=before.damping_ratio,
+                                 predicted_zeta0=spec.interface.damping_floor)
+    print(diag.report())
+    aug = diag.augment(spec)
+    Xp = np.array([20e-6, 100e-6, 200e-6, 300e-6])
+    qb = models.modal_amplitude_curve(spec, amplitudes=Xp)
+    qa = models.modal_amplitude_curve(aug, amplitudes=Xp)
+    band = diag.predict(Xp, base=qb)
+    print("\n  X [um]  f before [Hz]  f after [Hz]   zeta before [%]  zeta after [%]")
+    for i, x in enumerate(Xp):
+        print(f"  {1e6 * x:6.0f}  {qb.frequency[i]:13.3f}  {qa.frequency[i]:8.3f} +- "
+              f"{band.frequency_std[i]:.3f}  {100 * qb.damping_ratio[i]:15.3f}  "
+              f"{100 * qa.damping_ratio[i]:8.3f} +- {100 * band.damping_std[i]:.3f}")
+    X0 = float(sweeps.amplitude.max())
+    rd = models.ringdown(aug, amplitude=X0, cycles=20 if a.quick else 60)
+    print(f"\nExudyn ring-down of the augmented beam from {1e6 * X0:.3g} um "
+          f"({rd.wall_time:.1f} s): effects {rd.metadata['effects']}, {len(rd.curve)} points "
+          f"{1e6 * rd.curve.amplitude.min():.3g}-{1e6 * rd.curve.amplitude.max():.3g} um")
+    figure(a.out / "brb_discrepancy.png", spec, aug, diag, hammer, sweeps, rd)
+    print(f"wrote {a.out / 'brb_discrepancy.png'}")
+    return 0
+
+
+def figure(path, spec, aug, diag, hammer, sweeps, rd):
+    import matplotlib.pyplot as plt
+    X = np.geomspace(2e-6, 3.15e-4, 60)
+    qb = models.modal_amplitude_curve(spec, amplitudes=X)
+    qa = models.modal_amplitude_curve(aug, amplitudes=X)
+    band = diag.predict(X, base=qb)
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(11, 4.2))
+    for ax, yb, ya, sd, ym, ys, yr, scale in (
+            (a1, qb.frequency, qa.frequency, band.frequency_std, hammer.frequency,
+             sweeps.frequency, rd.curve.frequency, 1.0),
+            (a2, qb.damping_ratio, qa.damping_ratio, band.damping_std, hammer.damping_ratio,
+             sweeps.damping_ratio, rd.curve.damping_ratio, 100.0)):
+        ax.semilogx(hammer.amplitude, scale * ym, "o", mfc="none", color="k", ms=4,
+                    label="hammer ring-down (calibration)")
+        ax.semilogx(sweeps.amplitude, scale * ys, "s", mfc="none", color="C2", ms=4,
+                    label="stepped-sine sweeps")
+        ax.semilogx(X, scale * yb, "-", color="C0", label="beam model (QSMA)")
+        ax.semilogx(X, scale * ya, "--", color="C3",
+                    label="+ " + (" + ".join(diag.effects) or "nothing"))
+        ax.fill_between(X, scale * (ya - 2 * sd), scale * (ya + 2 * sd), color="C3", alpha=0.2,
+                        label="2-sigma band")
+        ax.semilogx(rd.curve.amplitude, scale * yr, "-", color="C1", lw=3, alpha=0.6,
+                    label="augmented, Exudyn ring-down")
+        ax.axvspan(*spec.calibrated_range, color="0.9", zorder=0)
+        ax.set_xlabel("amplitude at accelerometer 3 [m]")
+        ax.grid(True, which="both", alpha=0.3)
+    a1.set_ylabel("frequency [Hz]")
+    a2.set_ylabel("damping ratio [%]")
+    a2.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

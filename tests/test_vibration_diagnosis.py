@@ -1,0 +1,233 @@
+"""diagnose_vibration on seeded curves with a hidden vibration effect (truth from the
+time-domain elements, tests/_vibration_cases.py), clean curves, AmplitudeCurve input,
+candidates from the effects' declarations, and an unexplained mismatch located."""
+from __future__ import annotations
+
+import math
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import _vibration_cases as vc
+from iwan_element import AmplitudeCurve, diagnose_vibration
+from iwan_element.effects import EFFECTS, ParamSpec, register_effect
+from iwan_element.effects._base import _Effect
+from iwan_element.diagnose.vibration import vibration_candidates
+
+X = np.geomspace(0.02, 1.5, 30) * vc.BASE.phi_max
+NOISE = float(np.sqrt(0.5 * (vc.F_NOISE ** 2 + vc.Z_NOISE ** 2)))
+
+
+@pytest.fixture(scope="module")
+def base():
+    return vc.element_curve(X, vc.BASE)
+
+
+def _diag(case, stated=True):
+    Xc, fm, zm, fp, zp, _ = case
+    std = dict(frequency_std=vc.F_NOISE * fm, damping_std=vc.Z_NOISE * zm) if stated else {}
+    return diagnose_vibration(AmplitudeCurve(Xc, fm, zm, **std), predicted_frequency=fp,
+                              predicted_damping=zp, predicted_zeta0=vc.ZETA0)
+
+
+@pytest.mark.parametrize("name", ["hardening", "macroslip_onset", "pinning_stiffness",
+                                  "viscous_damping"])
+@pytest.mark.parametrize("size", [0.5, 3.0])
+def test_hidden_effect_is_named_and_the_gap_closes_to_the_noise(base, name, size):
+    for seed in (1, 2):
+        case = vc.seeded_case(seed, name, size, P=vc.BASE, X=X, base=base)
+        g = _diag(case)
+        # at half the noticeable size a dead-zone spring and a cubic one can look alike: the
+        # other stiffness effect may lead if the hidden one is reported as nearly as good
+        assert g.effect == name or (name in g.ambiguous_with and g.effect != "none" and
+                                    EFFECTS[g.effect].kind == EFFECTS[name].kind), g.report()
+        assert g.error_after <= 1.3 * NOISE, g.report()
+        assert g.details["misfit_p_after"] >= g.details["alpha"]
+
+
+def test_hidden_hardening_sized_like_the_issue_is_named_and_sized(base):
+    """A 0.06-0.15 % frequency rise at the top amplitude with 1e-4 frequency noise (the
+    issue's case that named nothing), noise estimated from the curves' own scatter."""
+    for seed, size in ((3, 0.4), (4, 0.9)):
+        case = vc.seeded_case(seed, "hardening", size, P=vc.BASE, X=X, base=base)
+        rise = np.sqrt(1 + 0.75 * case[5]["k3_per_mass"] * X.max() ** 2
+                       / (2 * np.pi * case[3][-1]) ** 2) - 1
+        assert 6e-4 <= rise <= 1.5e-3
+        g = _diag(case, stated=False)
+        assert g.effect == "hardening", g.report()
+        assert g.parameters["hardening"]["k3_per_mass"] == pytest.approx(
+            case[5]["k3_per_mass"], rel=0.35)
+        assert "measured frequency beyond 3 x noise of the prediction: above it from" in g.where.lower()
+        assert "below it" not in g.where.split(";")[0]
+
+
+def test_clean_curves_name_nothing(base):
+    for seed in range(20, 32):
+        g = _diag(vc.seeded_case(seed, None, 0.0, P=vc.BASE, X=X, base=base))
+        assert g.effect == "none", g.report()
+        assert not any("remains" in w for w in g.warnings)
+
+
+def test_curve_input_equals_arrays_and_is_not_mutated(base):
+    Xc, fm, zm, fp, zp, _ = vc.seeded_case(5, "hardening", 1.0, P=vc.BASE, X=X, base=base)
+    curve = AmplitudeCurve(Xc, fm, zm)
+    fp0 = fp.copy()
+    g1 = diagnose_vibration(curve, predicted_frequency=fp, predicted_damping=zp)
+    g2 = diagnose_vibration(Xc, fm, zm, predicted_frequency=fp, predicted_damping=zp)
+    assert g1.effects == g2.effects and g1.error_after == pytest.approx(g2.error_after)
+    np.testing.assert_array_equal(fp, fp0)
+    with pytest.raises(ValueError, match="frequency and damping must be None"):
+        diagnose_vibration(curve, fm, zm, predicted_frequency=fp, predicted_damping=zp)
+    with pytest.raises(ValueError, match="frequency and damping are required"):
+        diagnose_vibration(Xc, predicted_frequency=fp, predicted_damping=zp)
+
+
+def test_candidates_come_from_the_effects_declarations():
+    assert set(vibration_candidates()) == {n for n, c in EFFECTS.items() if c.modal_specs}
+    assert {"hardening", "macroslip_onset"} <= set(vibration_candidates())
+
+    class _Probe(_Effect):
+        effect = "probe_floor"
+        kind = "dissipation"
+        specs = (ParamSpec("c", "N s/m", "probe"),)
+        modal_specs = (ParamSpec("zeta_x", "1", "probe", ref="zeta_ref", ref_power=-1,
+                                 fit_bounds=(0.0, 10.0), fit_starts=(0.0, 1.0)),)
+
+        @classmethod
+        def modal_form(cls, X, frequency, damping, zeta0, *, zeta_x):
+            return frequency, damping + zeta_x
+
+    register_effect(_Probe)
+    try:
+        assert "probe_floor" in vibration_candidates()
+    finally:
+        del EFFECTS["probe_floor"]
+
+
+def test_unexplained_mismatch_is_stated_with_its_amplitudes(base):
+    """A frequency dip in mid-range (no candidate's shape): nothing explains it, the
+    warning says so and names the amplitudes."""
+    Xc, fm, zm, fp, zp, _ = vc.seeded_case(6, None, 0.0, P=vc.BASE, X=X, base=base)
+    mid = np.exp(np.mean(np.log(X)))
+    dip = 1.0 - 2e-3 * np.exp(-(np.log(X / mid) / 0.3) ** 2)
+    g = diagnose_vibration(AmplitudeCurve(Xc, fm * dip, zm, frequency_std=vc.F_NOISE * fm,
+                                          damping_std=vc.Z_NOISE * zm),
+                           predicted_frequency=fp, predicted_damping=zp,
+                           predicted_zeta0=vc.ZETA0)
+    w = [x for x in g.warnings if "remains" in x]
+    assert w, g.report()
+    assert "frequency off by up to" in w[0] and " m" in w[0]
+    lo, hi = (float(v) for v in w[0].split(" at ")[-1].split(" m")[0].split(" .. "))
+    assert lo <= mid <= hi
+
+
+def test_predict_bands_cover_the_hidden_truth_and_extrapolation_is_stated(base):
+    for seed, name in ((7, "hardening"), (8, "macroslip_onset")):
+        Xc, fm, zm, fp, zp, vals = vc.seeded_case(seed, name, 2.0, P=vc.BASE, X=X, base=base)
+        g = _diag((Xc, fm, zm, fp, zp, vals))
+        assert g.effect == name
+        ft, zt = vc.element_curve(X, vc.BASE, name, **vc.to_joint(name, vals))
+        p = g.predict(X)
+        assert not p.warnings
+        np.testing.assert_allclose(p.frequency, g.model_frequency, rtol=1e-12)
+        assert np.all(np.abs(p.frequency - ft) <= 4 * p.frequency_std + 2e-6 * ft)
+        assert np.all(np.abs(p.damping_ratio - zt) <= 4 * p.damping_std + 1e-3 * zt)
+        assert p.frequency_std.max() > 0
+        beyond = g.predict(X * 2.0)
+        assert any("extrapolated beyond the diagnosed amplitudes" in w for w in beyond.warnings)
+        with pytest.raises(ValueError, match="base must be"):
+            g.predict(X, base=AmplitudeCurve(X * 1.1, fp, zp))
+
+
+def test_augmented_specimen_carries_the_effect_and_its_qsma_is_the_fit():
+    """Diagnosis against the beam model: the prediction is the Brake-Reuss specimen's QSMA,
+    the 'measurement' the same specimen carrying a hidden hardening (plus noise). The
+    augmented specimen's own QSMA reproduces the diagnosis's curve, and the specimen warns
+    beyond the amplitudes it was calibrated on."""
+    from iwan_element import models
+    spec = models.preset("brake-reuss")
+    Xm = np.geomspace(5e-6, 2.75e-4, 30)
+    k3 = 4e-3 * (2 * np.pi * 80.5) ** 2 / Xm.max() ** 2        # ~0.15 % rise at the top
+    truth = spec.with_effects({"hardening": {"k3_per_mass": k3}})
+    pred = models.modal_amplitude_curve(spec.replace(calibrated_range=None), amplitudes=Xm)
+    meas = models.modal_amplitude_curve(truth.replace(calibrated_range=None), amplitudes=Xm)
+    rng = np.random.default_rng(3)
+    fm = meas.frequency * np.exp(1e-4 * rng.normal(size=Xm.size))
+    zm = meas.damping_ratio * np.exp(0.03 * rng.normal(size=Xm.size))
+    g = diagnose_vibration(AmplitudeCurve(Xm, fm, zm, frequency_std=1e-4 * fm,
+                                          damping_std=0.03 * zm),
+                           predicted_frequency=pred.frequency,
+                           predicted_damping=pred.damping_ratio,
+                           predicted_zeta0=spec.interface.damping_floor)
+    assert g.effect == "hardening", g.report()
+    assert g.parameters["hardening"]["k3_per_mass"] == pytest.approx(k3, rel=0.2)
+    aug = g.augment(spec)
+    assert [e.name for e in aug.effects] == ["hardening"]
+    assert aug.calibrated_range == pytest.approx((2e-6, Xm.max()))
+    q = models.modal_amplitude_curve(aug, amplitudes=Xm)
+    np.testing.assert_allclose(q.frequency, g.model_frequency, rtol=1e-10)
+    np.testing.assert_allclose(q.damping_ratio, g.model_damping, rtol=1e-10)
+    assert q.warnings == ()
+    far = models.modal_amplitude_curve(aug, amplitudes=[1e-5, 5e-4])
+    assert any("calibrated on" in w and "extrapolated" in w for w in far.warnings)
+    plain = models.modal_amplitude_curve(spec, amplitudes=[1e-5, 3.15e-4])
+    assert any("5.25 x beyond" in w for w in plain.warnings), plain.warnings
+    assert models.modal_amplitude_curve(spec).warnings == ()
+
+
+# the repository's sibling ../shared (main checkout), or the worktrees' /work/shared
+_SHARED = [Path(__file__).resolve().parents[2] / "shared" / "data",
+           Path(__file__).resolve().parents[3] / "shared" / "data"]
+_SWEEPS = next((d / "brb-steppedsine-fc" / "fc_sweeps.csv" for d in _SHARED
+                if (d / "brb-steppedsine-fc" / "fc_sweeps.csv").exists()), None)
+
+
+@pytest.mark.skipif(_SWEEPS is None, reason="../shared/data/brb-steppedsine-fc (GPL data, read "
+                    "from ../shared only) is absent")
+@pytest.mark.xfail(strict=True, reason="with the merged sweep_curve the sweeps sit 0.05-0.15 % "
+                   "(frequency) and about 20 % (damping) below the hammer-calibrated model at "
+                   "low amplitude (a between-test difference), which no joint effect explains")
+def test_brake_reuss_sweeps_name_an_effect_that_halves_the_mismatch_beyond_the_noise():
+    """The hammer-calibrated beam against the force-controlled sweeps (94-275 um): the
+    diagnosis names what the sweeps support, and the augmented beam model's mismatch beyond
+    the noise is at most half the plain model's. Needs ``iwan_element.sweep_curve`` (merged
+    from the vibration-data branch)."""
+    import iwan_element as ie
+    from iwan_element import models
+    if not hasattr(ie, "sweep_curve"):
+        pytest.skip("iwan_element.sweep_curve is not merged yet")
+    level, f, F, A, phase = np.loadtxt(_SWEEPS, delimiter=",", skiprows=1).T
+    curve = ie.sweep_curve(f, F, A, phase, level=level.astype(int), quantity="acceleration")
+    spec = models.preset("brake-reuss")
+    pred = models.modal_amplitude_curve(spec, amplitudes=curve.amplitude)
+    assert any("extrapolated" in w for w in pred.warnings)
+    g = diagnose_vibration(curve, predicted_frequency=pred.frequency,
+                           predicted_damping=pred.damping_ratio,
+                           predicted_zeta0=spec.interface.damping_floor)
+    assert g.effects, g.report()
+    assert g.error_after - g.noise_level <= 0.5 * (g.error_before - g.noise_level), g.report()
+    aug = g.augment(spec)
+    q = models.modal_amplitude_curve(aug, amplitudes=[1e-4, 3e-4])
+    q0 = models.modal_amplitude_curve(spec, amplitudes=[1e-4, 3e-4])
+    assert q.frequency[1] > q0.frequency[1] and q.damping_ratio[1] > q0.damping_ratio[1]
+
+
+def test_where_names_a_turn_as_two_ranges_of_opposite_sign():
+    """A measured frequency that falls below the prediction and then rises above it (the
+    turn of a bolted beam at high amplitude) is described as two ranges, in amplitude order;
+    the largest difference of each range is quoted."""
+    X = np.geomspace(1e-5, 3e-4, 16)
+    fp = 80.0 - 2.0 * X / X.max()
+    dev = np.where(X < 1e-4, -2e-3, 3e-3)          # -0.2 % then +0.3 %
+    fm = fp * np.exp(dev)
+    zp = 2e-3 * (1 + X / X.max())
+    g = diagnose_vibration(X, fm, zp.copy(), predicted_frequency=fp, predicted_damping=zp,
+                           frequency_noise=1e-4, damping_noise=0.02)
+    w = g.where
+    assert "measured frequency beyond 3 x noise of the prediction: below it from" in w.lower(), w
+    below, above = w.split(", then ")[:2]
+    assert "below it" in below and "above it" in above
+    assert f"{100 * math.expm1(-2e-3):.3g}".lstrip("-") in below
+    assert f"{100 * math.expm1(3e-3):.3g}" in above

@@ -1,0 +1,171 @@
+"""Vibration effects (hardening, macroslip onset): their modal forms against independent
+routes (the time-domain elements driven through steady cycles, first harmonic and loop area
+by quadrature; the Duffing oscillator integrated in time), energy bookkeeping, neutral
+values and bad input."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+from iwan_element import IwanJoint, IwanParameters, dissipation
+from iwan_element.effects import EFFECTS, Hardening, MacroslipOnset
+
+P = IwanParameters(400.0, 2.5266e5, -0.5, 1.0)
+K_INF = 1.4212e5
+W0 = math.sqrt(K_INF + P.KT)
+
+
+def cycle(el, x, n=1440):
+    """Steady driven cycle of amplitude x through element el: first-harmonic stiffness
+    [N/m] and loop area [J] by quadrature of the simulated force."""
+    th = np.linspace(0.0, 0.5 * np.pi + 2 * np.pi, n // 4 + n + 1)
+    u = x * np.sin(th)
+    F = el.force_history(u)
+    Fc, uc, thc = F[-(n + 1):], u[-(n + 1):], th[-(n + 1):]
+    return np.trapezoid(Fc * np.sin(thc), thc) / (np.pi * x), abs(np.trapezoid(Fc, uc))
+
+
+def curve(make, X):
+    """(f [Hz], zeta) of the unit-mass mode K_INF + element, by harmonic balance."""
+    f, z = [], []
+    for x in X:
+        k1, D = cycle(make(), x)
+        w2 = K_INF + k1
+        f.append(math.sqrt(w2) / (2 * math.pi))
+        z.append(D / (2 * math.pi * w2 * x * x))
+    return np.array(f), np.array(z)
+
+
+X = np.geomspace(0.02, 2.0, 9) * P.phi_max
+
+
+@pytest.mark.parametrize("eps", [0.01, 0.05])
+def test_hardening_modal_form_is_the_elements_first_harmonic(eps):
+    k3 = eps * W0 ** 2 / X.max() ** 2
+    fb, zb = curve(lambda: IwanJoint(P), X)
+    fe, ze = curve(lambda: Hardening(IwanJoint(P), k3=k3), X)
+    fm, zm = Hardening.modal_form(X, fb, zb, 0.0, k3_per_mass=k3)
+    np.testing.assert_allclose(fm, fe, rtol=1e-9)
+    np.testing.assert_allclose(zm, ze, rtol=1e-7)
+    assert fe[-1] > fb[-1] * (1 + 0.3 * eps)          # it hardens
+
+
+def test_hardening_first_harmonic_against_duffing_time_integration():
+    """Free Duffing oscillator q'' + w0^2 q + k3 q^3 = 0 integrated in time: its period at
+    amplitude A against the modal form; they differ only at second order in
+    eps = k3 A^2 / w0^2 (Lindstedt: (3/256) eps^2 relative in frequency)."""
+    w0 = 2 * math.pi * 100.0
+    A = 1e-3
+    for eps in (0.005, 0.02):
+        k3 = eps * w0 ** 2 / A ** 2
+        sol = solve_ivp(lambda t, y: [y[1], -w0 ** 2 * y[0] - k3 * y[0] ** 3], (0, 0.2),
+                        [A, 0.0], rtol=1e-11, atol=1e-16, dense_output=True,
+                        events=lambda t, y: y[1])
+        t_max = sol.t_events[0]
+        t_max = t_max[np.abs(sol.sol(t_max)[0] - A) < 1e-3 * A]   # maxima only
+        T = np.mean(np.diff(t_max))
+        f_sim = 1.0 / T
+        f_mod, _ = Hardening.modal_form(np.array([A]), np.array([100.0]), np.array([1e-3]),
+                                        0.0, k3_per_mass=k3)
+        assert f_mod[0] == pytest.approx(f_sim, rel=2 * 3 / 256 * eps ** 2 + 1e-9)
+        assert f_sim > 100.0 * (1 + 0.3 * eps)
+
+
+def test_hardening_is_conservative_and_neutral_at_zero():
+    u = 0.8 * P.phi_max * np.sin(np.linspace(0, 6 * np.pi, 600))
+    el = Hardening(IwanJoint(P), k3=1e12)
+    ref = IwanJoint(P)
+    for x in u:
+        el.trial(x)
+        el.commit()
+        ref.trial(x)
+        ref.commit()
+    assert el.dissipated_energy == pytest.approx(ref.dissipated_energy, rel=1e-12)
+    assert el.stored_energy == pytest.approx(ref.stored_energy + 0.25e12 * u[-1] ** 4, rel=1e-9)
+    np.testing.assert_array_equal(Hardening(IwanJoint(P), k3=0.0).force_history(u),
+                                  IwanJoint(P).force_history(u))
+
+
+@pytest.mark.parametrize("xs_frac", [0.2, 0.6])
+def test_macroslip_modal_form_is_the_elements_first_harmonic_and_loop_area(xs_frac):
+    ks = 0.04 * W0 ** 2
+    us = xs_frac * X.max()
+    fb, zb = curve(lambda: IwanJoint(P), X)
+    fe, ze = curve(lambda: MacroslipOnset(IwanJoint(P), k_s=ks, u_s=us), X)
+    fm, zm = MacroslipOnset.modal_form(X, fb, zb, 0.0, kappa_s=ks, X_s=us)
+    np.testing.assert_allclose(fm, fe, rtol=1e-6)
+    np.testing.assert_allclose(zm, ze, rtol=1e-5)
+    above = X > us
+    assert np.all(fe[above] < fb[above]) and np.all(ze[above] > zb[above])
+    np.testing.assert_allclose(fe[~above], fb[~above], rtol=1e-12)
+
+
+def test_macroslip_dissipation_and_energy_balance():
+    """Loop area = Iwan dissipation (closed form) + 4 k_s u_s (X - u_s); work = stored +
+    dissipated along the history; identical to the joint below u_s."""
+    ks, us, x = 2e4, 0.3 * P.phi_max, 0.9 * P.phi_max
+    k1, D = cycle(MacroslipOnset(IwanJoint(P), k_s=ks, u_s=us), x, n=2880)
+    assert D == pytest.approx(float(dissipation(x, P)) + 4 * ks * us * (x - us), rel=1e-4)
+    th = np.linspace(0, 0.5 * np.pi + 4 * np.pi, 3000)
+    el = MacroslipOnset(IwanJoint(P), k_s=ks, u_s=us)
+    F = el.force_history(x * np.sin(th))
+    W = np.sum(0.5 * (F[1:] + F[:-1]) * np.diff(x * np.sin(th)))
+    el2 = MacroslipOnset(IwanJoint(P), k_s=ks, u_s=us)
+    for ui in x * np.sin(th):
+        el2.trial(ui)
+        el2.commit()
+    assert el2.work == pytest.approx(W, rel=1e-3)
+    assert el2.dissipated_energy > 0 and el2.stored_energy == pytest.approx(
+        el2.work - el2.dissipated_energy)
+    small = 0.9 * us * np.sin(th)
+    np.testing.assert_allclose(MacroslipOnset(IwanJoint(P), k_s=ks, u_s=us).force_history(small),
+                               IwanJoint(P).force_history(small), rtol=1e-12, atol=1e-12)
+
+
+def test_effects_declare_kind_units_and_bounds():
+    for name in ("hardening", "macroslip_onset", "pinning_stiffness", "viscous_damping"):
+        cls = EFFECTS[name]
+        assert cls.kind in ("stiffness", "dissipation")
+        for sp in cls.specs + cls.modal_specs:
+            assert sp.unit and sp.meaning and sp.fit_bounds[0] < sp.fit_bounds[1]
+    # a stiffness effect leaves the dissipation per cycle unchanged: zeta_hyst * f^2 is kept
+    f, z = EFFECTS["hardening"].modal_form(X, np.full(X.size, 90.0), np.full(X.size, 0.01),
+                                           1e-3, k3_per_mass=1e9)
+    np.testing.assert_allclose((z - 1e-3) * f ** 2, 0.009 * 90.0 ** 2, rtol=1e-12)
+
+
+def test_bad_parameters_raise_naming_them():
+    with pytest.raises(ValueError, match="k3"):
+        Hardening(IwanJoint(P), k3=-1.0)
+    with pytest.raises(ValueError, match="k3"):
+        Hardening(IwanJoint(P), k3=float("nan"))
+    with pytest.raises(ValueError, match="u_s"):
+        MacroslipOnset(IwanJoint(P), k_s=1e4, u_s=0.0)
+    with pytest.raises(ValueError, match="k_s"):
+        MacroslipOnset(IwanJoint(P), k_s=-1e4, u_s=1e-5)
+
+
+def test_augmented_specimen_rings_down_in_exudyn_with_its_energy_balanced():
+    """The Brake-Reuss specimen carrying hardening + macroslip onset (modal form) in the
+    Exudyn transient: the energy balance (beams, springs, joints, effects) closes to 1e-3,
+    the patch dissipates, and the decay's frequency and damping follow the augmented QSMA
+    curve (an independent route: time integration of the beam vs quasi-static analysis)."""
+    from iwan_element import models
+    s = models.preset("brake-reuss").replace(damping_floor=0.0, n_points=24,
+                                              calibrated_range=None)
+    X0 = 60e-6
+    w2 = (2 * np.pi * 80.5) ** 2
+    aug = s.with_effects({"hardening": {"k3_per_mass": 0.01 * w2 / X0 ** 2},
+                          "macroslip_onset": {"kappa_s": 0.02 * w2, "X_s": 25e-6}})
+    r = models.ringdown(aug, amplitude=X0, cycles=8, steps_per_period=96, record_energy=True)
+    assert r.metadata["effects"] == ("hardening", "macroslip_onset")
+    assert np.max(np.abs(r.energy_error())) < 1e-3
+    assert r.energy["effect_dissipated"][-1] > 0.05 * r.initial_energy
+    q = models.modal_amplitude_curve(aug, amplitudes=r.curve.amplitude)
+    np.testing.assert_allclose(r.curve.frequency, q.frequency, rtol=3e-4)
+    np.testing.assert_allclose(r.curve.damping_ratio, q.damping_ratio, rtol=0.1)
+    plain = models.ringdown(s, amplitude=X0, cycles=8, steps_per_period=96)
+    assert r.curve.damping_ratio[0] > 2 * plain.curve.damping_ratio[0]
