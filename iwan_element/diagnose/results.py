@@ -430,8 +430,16 @@ class VibrationDiagnosis:
         lines = ["Vibration diagnosis (amplitude-dependent frequency and damping)",
                  f"  {self.amplitude.size} amplitudes, {self.amplitude.min():.3g} .. "
                  f"{self.amplitude.max():.3g} m; noise: frequency {100 * self.frequency_noise:.2g} %, "
-                 f"damping {100 * self.damping_noise:.2g} % ({self.details['noise_from']})",
-                 f"  where: {self.where}"]
+                 f"damping {100 * self.damping_noise:.2g} % ({self.details['noise_from']})"]
+        bt = self.details.get("between_tests")
+        if bt:
+            lines.append(
+                f"  between-test nuisances (not named): frequency offset "
+                f"{100 * bt['frequency_offset']:+.3g} % (+- {100 * bt['frequency_offset_stderr']:.2g}),"
+                f" damping-floor offset {bt['damping_offset']:+.3g} "
+                f"(+- {bt['damping_offset_stderr']:.2g}); not testable against them: "
+                f"{', '.join(bt['untested']) or 'none'}")
+        lines.append(f"  where: {self.where}")
         for k, st in enumerate(self.steps):
             lines.append(f"  step {k + 1}: candidates on {' + '.join(st['on']) or 'prediction'}")
             for c in st["candidates"]:

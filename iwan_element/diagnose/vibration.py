@@ -79,15 +79,36 @@ def _stated(name, value, n):
 class _Vib:
     """Modal forms of a stack on the prediction, and its noise-normalised residual."""
 
-    def __init__(self, X, fm, zm, fp, zp, zeta0, sf, sz):
+    def __init__(self, X, fm, zm, fp, zp, zeta0, sf, sz, between_tests=False):
         self.X, self.fm, self.zm, self.fp, self.zp, self.zeta0 = X, fm, zm, fp, zp, zeta0
         self.sf, self.sz = sf, sz
         w2 = 4 * np.pi ** 2 * float(np.min(fp)) ** 2
         self.refs = {"zeta_ref": float(np.median(zp)), "X_max": float(X.max()),
                      "omega2_ref": w2, "omega2_per_X2": w2 / float(X.max()) ** 2, "1": 1.0}
+        # between-test nuisances (first in every state vector): the log frequency ratio and
+        # the damping-floor difference over zeta_ref, the floor kept above 1 % of the least
+        # predicted damping
+        self.nn = 2 if between_tests else 0
+        z_lo = -0.99 * float(np.min(zp)) / self.refs["zeta_ref"]
+        self.nuisance_bounds = (np.array([-0.05, z_lo]), np.array([0.05, 10.0]))
+
+    def nuisance(self, z):
+        """``(relative frequency offset [-], damping-floor offset [-])`` of a state."""
+        if not self.nn:
+            return 0.0, 0.0
+        return math.expm1(float(z[0])), float(z[1]) * self.refs["zeta_ref"]
+
+    def fit_nuisance(self):
+        """The base state: the between-test nuisances alone (empty without them)."""
+        if not self.nn:
+            return np.zeros(0), float(np.sum(self.resid((), np.zeros(0)) ** 2))
+        lo, hi = self.nuisance_bounds
+        res = least_squares(lambda z: self.resid((), z), np.zeros(2), bounds=(lo, hi),
+                            method="trf", x_scale="jac")
+        return res.x, 2 * float(res.cost)
 
     def decode(self, names, z):
-        vals, k = {}, 0
+        vals, k = {}, self.nn
         for nm in names:
             vals[nm] = {}
             for sp in EFFECTS[nm].modal_specs:
@@ -97,6 +118,9 @@ class _Vib:
 
     def curves(self, names, z):
         f, zz = self.fp, self.zp
+        if self.nn:
+            df, dz = self.nuisance(z)
+            f, zz = f * (1.0 + df), zz + dz
         vals = self.decode(names, z)
         for nm in names:
             f, zz = EFFECTS[nm].modal_form(self.X, f, zz, self.zeta0, **vals[nm])
@@ -114,6 +138,9 @@ class _Vib:
         specs = [s for nm in names for s in EFFECTS[nm].modal_specs]
         lo = np.array([s.fit_bounds[0] for s in specs])
         hi = np.array([s.fit_bounds[1] for s in specs])
+        if self.nn:
+            lo = np.concatenate([self.nuisance_bounds[0], lo])
+            hi = np.concatenate([self.nuisance_bounds[1], hi])
         new = EFFECTS[names[-1]].modal_specs
         best = None
         for j in range(max(len(s.fit_starts) for s in new)):
@@ -207,7 +234,8 @@ def diagnose_vibration(amplitude, frequency=None, damping=None, *, predicted_fre
                        damping_noise: float | None = None,
                        frequency_uncertainty=None, damping_uncertainty=None,
                        predicted_zeta0: float = 0.0, alpha: float = 1e-3,
-                       ambiguity: float = 10.0, max_effects: int = 2) -> VibrationDiagnosis:
+                       ambiguity: float = 10.0, max_effects: int = 2,
+                       between_tests: bool = False) -> VibrationDiagnosis:
     """Compare measured and predicted amplitude-dependent frequency and damping; name what the
     jointed model misses (see the module docstring).
 
@@ -232,6 +260,15 @@ def diagnose_vibration(amplitude, frequency=None, damping=None, *, predicted_fre
         Viscous damping ratio already in the prediction [-], ``>= 0``.
     alpha, ambiguity, max_effects : keyword-only
         As in :func:`~iwan_element.diagnose`.
+    between_tests : bool, keyword-only
+        True when the measurement comes from another test than the one the model was
+        calibrated on (a shaker sweep against a hammer-calibrated model, another day): the
+        linear properties then differ between the tests (shaker or stinger attachment,
+        suspension, temperature, re-tightening), so a relative frequency offset and a
+        damping-floor offset are fitted as nuisances with every model (reported in
+        ``details["between_tests"]``, never named, not carried by :meth:`augment`); an
+        effect whose modal form is a constant floor (viscous damping) cannot be told from the
+        floor offset and is not tested. Default False (same test, or a synthetic curve).
 
     Returns
     -------
@@ -261,9 +298,13 @@ def diagnose_vibration(amplitude, frequency=None, damping=None, *, predicted_fre
     if (frequency_noise is None or damping_noise is None) and n < 12:
         warns.append(f"only {n} amplitudes: the noise taken from their scatter is uncertain "
                      "(state the per-point uncertainty or the noise levels)")
-    vib = _Vib(X, fm, zm, fp, zp, zeta0, sf, sz)
-    chi_b = float(np.sum(vib.resid((), np.zeros(0)) ** 2))
-    err_b = vib.error((), np.zeros(0))
+    if not isinstance(between_tests, (bool, np.bool_)):
+        raise ValueError(f"between_tests must be True or False, got {between_tests!r}")
+    vib = _Vib(X, fm, zm, fp, zp, zeta0, sf, sz, bool(between_tests))
+    z_b, chi_b = vib.fit_nuisance()
+    err_b = vib.error((), z_b)
+    cands = tuple(c for c in vibration_candidates()
+                  if not (between_tests and EFFECTS[c].modal_floor))
 
     def fit_candidate(cur, name):
         names = cur["names"] + (name,)
@@ -271,8 +312,8 @@ def diagnose_vibration(amplitude, frequency=None, damping=None, *, predicted_fre
         return {"names": names, "chi2": 2 * float(res.cost), "state": res.x,
                 "q": len(EFFECTS[name].modal_specs), "error": vib.error(names, res.x)}
 
-    base = {"names": (), "chi2": chi_b, "q": 0, "state": np.zeros(0)}
-    sel = stepwise_select(fit_candidate, vibration_candidates(), base, tau=1.0, n_eff=2.0 * n,
+    base = {"names": (), "chi2": chi_b, "q": 0, "state": z_b}
+    sel = stepwise_select(fit_candidate, cands, base, tau=1.0, n_eff=2.0 * n,
                           alpha=alpha, max_effects=max_effects, ambiguity=ambiguity)
     # never name a set of effects that leaves the unweighted mismatch higher than before (by
     # more than a tenth of the noise: a hidden frequency effect changes the damping-dominated
@@ -284,10 +325,14 @@ def diagnose_vibration(amplitude, frequency=None, damping=None, *, predicted_fre
         sel.named, sel.ambiguous = [], ()
         sel.final = base
         sel.p_after = sel.p_before
-    return _vib_result(vib, sel, chi_b, err_b, rf0, rz0, warns, alpha, f"{src_f}; {src_z}")
+    if vib.nn:                          # where: what is left after the between-test offsets
+        f_b, z_b_curve = vib.curves((), z_b)
+        rf0, rz0 = np.log(fm / f_b), np.log(zm / z_b_curve)
+    return _vib_result(vib, sel, chi_b, err_b, rf0, rz0, warns, alpha, f"{src_f}; {src_z}",
+                       cands)
 
 
-def _vib_result(vib, sel, chi_b, err_b, rf0, rz0, warns, alpha, noise_from):
+def _vib_result(vib, sel, chi_b, err_b, rf0, rz0, warns, alpha, noise_from, cands):
     names, z = sel.final["names"], sel.final["state"]
     params = vib.decode(names, z)
     f_new, z_new = vib.curves(names, z)
@@ -295,12 +340,12 @@ def _vib_result(vib, sel, chi_b, err_b, rf0, rz0, warns, alpha, noise_from):
     if misfit and sel.p_after < alpha:
         warns.append("mismatch beyond the noise remains" + (
             f" after {' + '.join(sel.named)}" if sel.named else
-            f"; no candidate ({', '.join(vibration_candidates())}) explains it")
+            f"; no candidate ({', '.join(cands)}) explains it")
             + _left(vib.X, np.log(vib.fm / f_new), np.log(vib.zm / z_new), vib.sf, vib.sz))
     steps = [{"on": st["on"], "candidates": [
         {k: r.get(k) for k in ("name", "error", "dIC", "explained", "verdict")}
         for r in st["rows"]]} for st in sel.steps]
-    cov = _covariance(vib, names, z, sel.final["chi2"])
+    cov, nuis_std = _covariance(vib, names, z, sel.final["chi2"])
     ro = lambda a: (a.setflags(write=False), a)[1]  # noqa: E731
     details = {"noise_from": noise_from, "misfit_p": sel.p_before, "misfit_p_after": sel.p_after,
                "alpha": alpha, "chi2_before": chi_b, "chi2_after": sel.final["chi2"],
@@ -309,6 +354,12 @@ def _vib_result(vib, sel, chi_b, err_b, rf0, rz0, warns, alpha, noise_from):
                "damping_error_before": float(np.sqrt(np.mean(rz0 ** 2))),
                "frequency_error_after": float(np.sqrt(np.mean(np.log(vib.fm / f_new) ** 2))),
                "damping_error_after": float(np.sqrt(np.mean(np.log(vib.zm / z_new) ** 2)))}
+    if vib.nn:
+        df, dz = vib.nuisance(z)
+        details["between_tests"] = {
+            "frequency_offset": df, "frequency_offset_stderr": nuis_std[0],
+            "damping_offset": dz, "damping_offset_stderr": nuis_std[1],
+            "untested": [c for c in vibration_candidates() if c not in cands]}
     return VibrationDiagnosis(
         effect=sel.named[0] if sel.named else "none", effects=tuple(sel.named),
         ambiguous_with=sel.ambiguous,
@@ -324,9 +375,11 @@ def _vib_result(vib, sel, chi_b, err_b, rf0, rz0, warns, alpha, noise_from):
 def _covariance(vib, names, z, chi2):
     """Covariance of the fitted modal values: ``(J^T J)^+`` of the noise-normalised residual
     in the fitting variables, scaled by the reduced chi-square when above 1, mapped to the
-    values (each value is its variable over a fixed reference scale)."""
-    if not names:
-        return None
+    values (each value is its variable over a fixed reference scale). Returns that matrix
+    (None without effects) and the standard errors of the between-test nuisances (relative
+    frequency offset, damping-floor offset; empty without them)."""
+    if z.size == 0:
+        return None, ()
     h = 1e-6 * np.maximum(np.abs(z), 1e-3)
     r0 = vib.resid(names, z)
     J = np.empty((r0.size, z.size))
@@ -336,6 +389,11 @@ def _covariance(vib, names, z, chi2):
         J[:, j] = (vib.resid(names, zz) - r0) / h[j]
     dof = max(r0.size - z.size, 1)
     Cz = np.linalg.pinv(J.T @ J) * max(1.0, chi2 / dof)
+    sd = np.sqrt(np.diag(Cz))
+    nuis = () if not vib.nn else (float(sd[0] * math.exp(float(z[0]))),
+                                  float(sd[1] * vib.refs["zeta_ref"]))
+    if not names:
+        return None, nuis
     scale = np.array([1.0 / vib.refs[sp.ref] ** sp.ref_power
                       for nm in names for sp in EFFECTS[nm].modal_specs])
-    return Cz * np.outer(scale, scale)
+    return Cz[vib.nn:, vib.nn:] * np.outer(scale, scale), nuis

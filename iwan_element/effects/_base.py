@@ -133,6 +133,10 @@ class _Effect:
     #: -> (frequency [Hz], damping ratio [-]) on top of a base curve, and
     #: ``modal_to_joint(values, *, modal_mass, slip_per_amplitude, omega0)``.
     kind: str = ""
+    #: True when the modal form is a constant damping floor: a vibration test cannot tell it
+    #: from a between-test difference of the linear damping (shaker, suspension), so a
+    #: vibration diagnosis that fits that difference cannot test it.
+    modal_floor: bool = False
 
     def __init_subclass__(cls, **kw):
         super().__init_subclass__(**kw)

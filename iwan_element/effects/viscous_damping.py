@@ -30,6 +30,7 @@ class ViscousDamping(_Effect):
 
     effect = "viscous_damping"
     kind = "dissipation"
+    modal_floor = True
     specs = (ParamSpec("c", "N s/m", "dashpot coefficient in parallel with the joint",
                        fs_power=1, ref="v_rms", fit_bounds=(0.0, 2.0), fit_starts=(0.0, 0.03)),)
     modal_specs = (ParamSpec("zeta_v", "1", "added modal viscous damping ratio",
