@@ -1,0 +1,126 @@
+"""Windows that follow a free decay, and the Hilbert (envelope and phase) estimate in each.
+
+Each window spans a bounded decay (``span`` nepers, default 0.15: the amplitude changes by at
+most ``exp(span)`` across it, so the amplitude at its centre stands for it) and at least
+``n_min`` periods (three); at light damping it is at most ``n_max`` periods long. Windows
+follow each other at the same decay step; where three periods decay by more than ``span``
+(heavy damping), they overlap, with the step still ``span`` nepers (at least half a
+period), so that the curve keeps about ``1 / span`` points per neper of decay. Overlapping
+points share data: their errors are correlated over ``overlap`` neighbours (stated in the
+curve's notes).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ._decay_filter import _reverse_gain
+
+
+@dataclass(frozen=True)
+class WindowPlan:
+    """How windows are laid: lengths in samples and the decay per window [neper]."""
+
+    n_min: int
+    n_max: int
+    n_half: int
+    span: float
+    fixed: bool          # a window length given by the user: fixed, disjoint windows
+
+
+def _line_fit(tw, yv, n_block):
+    """Straight line through ``yv(tw)``: coefficients and their standard errors, the errors
+    from the residuals averaged over blocks of ``n_block`` samples (the block means drop the
+    deterministic ripple of harmonics and are nearly independent samples of the noise)."""
+    X = np.column_stack([np.ones_like(tw), tw])
+    coef, *_ = np.linalg.lstsq(X, yv, rcond=None)
+    nb = max(tw.size // n_block, 3)
+    edges = np.linspace(0, tw.size, nb + 1).astype(int)
+    tb = np.add.reduceat(tw, edges[:-1]) / np.diff(edges)
+    Xb = np.column_stack([np.ones_like(tb), tb])
+    res = np.add.reduceat(yv - X @ coef, edges[:-1]) / np.diff(edges)
+    s2 = float(res @ res) / (nb - 2)
+    return coef, np.sqrt(np.diag(np.linalg.inv(Xb.T @ Xb) * s2))
+
+
+def _noise_std(noise, amp, T, bw):
+    """Standard errors of intercept and slope of a line through ``ln A`` (or the phase) over
+    a window of ``T`` seconds, from in-band noise of RMS ``noise`` on an envelope ``amp``:
+    ``noise / amp`` per sample, ``max(B T, 2)`` independent samples."""
+    n_ind = max(bw * T, 2.0)
+    r = noise / amp
+    return r / math.sqrt(n_ind), math.sqrt(12.0) * r / (T * math.sqrt(n_ind))
+
+
+def _fit_window(tt, env, phase, sl, n_block, noise, bw):
+    """Line fits of ``ln A`` and phase over ``sl``: (centre, lnA0, sigma, wd, stds)."""
+    dt = tt[1] - tt[0]
+    n_w = sl.stop - sl.start
+    tc = tt[sl.start] + 0.5 * (n_w - 1) * dt
+    tw = tt[sl] - tc
+    (ca, sa) = _line_fit(tw, np.log(env[sl]), n_block)
+    (cp, sp) = _line_fit(tw, phase[sl], n_block)
+    n0, n1 = _noise_std(noise, math.exp(ca[0]), n_w * dt, bw)
+    sa = np.maximum(sa, [n0, n1])
+    sp = np.maximum(sp, [n0, n1])
+    return tc, ca[0], -ca[1], cp[1], (sa, sp)
+
+
+def _window_length(plan, sigma, dt):
+    """Window length [samples] for a decay rate ``sigma`` [1/s]."""
+    if plan.fixed:
+        n = plan.n_max
+        if sigma > 0:      # a given window is still shortened where it decays by > e**0.5
+            n = min(n, max(int(0.5 / (sigma * dt)), plan.n_min))
+        return n
+    n = int(plan.span / (sigma * dt)) if sigma > 0 else plan.n_max
+    return int(min(max(n, plan.n_min), plan.n_max))
+
+
+def _hop(plan, sigma, n_w, dt):
+    if plan.fixed or sigma <= 0:
+        return n_w
+    return int(min(n_w, max(plan.span / (sigma * dt), plan.n_half)))
+
+
+def hilbert_windows(tt, env, phase, span, plan, noise_spec, mode):
+    """Window estimates in time order until the signal meets the noise or stops being a mode.
+
+    ``span = (i0, i1)`` the usable samples; ``noise_spec = (noise, snr_min, bw, n_block)``;
+    ``mode = (k_pow, band, sos, fs, shift)``. Returns the rows ``(X, f, zeta, X_std, f_std,
+    zeta_std)``, the windows ``(start, stop)``, why the walk stopped and, if a stop was not
+    the noise's or the record's end, True.
+    """
+    i0, i1 = span
+    noise, snr_min, bw, n_block = noise_spec
+    k_pow, band, sos, fs, shift = mode
+    dt = tt[1] - tt[0]
+    rows, wins = [], []
+    s = i0
+    sigma = 0.0
+    while s + plan.n_min <= i1:
+        n_w = min(_window_length(plan, sigma, dt), i1 - s)
+        if np.mean(env[s:s + n_w]) < snr_min * noise:
+            return rows, wins, f"envelope below the noise threshold at t = {tt[s]:.4g} s", False
+        for _ in range(3):            # the length follows the decay rate found in the window
+            tc, ln_a, sigma, wd, (sa, sp) = _fit_window(tt, env, phase, slice(s, s + n_w),
+                                                        n_block, noise, bw)
+            n_new = min(_window_length(plan, sigma, dt), i1 - s)
+            if abs(n_new - n_w) <= 0.1 * n_w:
+                break
+            n_w = n_new
+        wn = math.hypot(sigma, wd)
+        f, zeta = wn / (2 * math.pi), sigma / wn
+        if not (band[0] < f < band[1]) or not (0.0 < zeta < 0.5):
+            return rows, wins, (f"window at t = {tc:.4g} s gives f = {f:.4g} Hz, zeta = "
+                                f"{zeta:.3g} (outside the band or not a decaying mode: beating, "
+                                "forcing or noise)"), True
+        gain = _reverse_gain(sos, fs, sigma, wd, shift)
+        amp = math.exp(ln_a) / gain / wn ** k_pow
+        f_std = math.hypot(sigma * sa[1], wd * sp[1]) / wn / (2 * math.pi)
+        rows.append((amp, f, zeta, amp * sa[0], f_std, sa[1] / wn))
+        wins.append((s, s + n_w))
+        s += max(_hop(plan, sigma, n_w, dt), 1)
+    return rows, wins, "end of the record (after trimming)", False
