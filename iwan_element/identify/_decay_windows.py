@@ -1,13 +1,12 @@
 """Windows that follow a free decay, and the Hilbert (envelope and phase) estimate in each.
 
-Each window spans a bounded decay (``span`` nepers, default 0.15: the amplitude changes by at
-most ``exp(span)`` across it, so the amplitude at its centre stands for it) and at least
-``n_min`` periods (three); at light damping it is at most ``n_max`` periods long. Windows
-follow each other at the same decay step; where three periods decay by more than ``span``
-(heavy damping), they overlap, with the step still ``span`` nepers (at least half a
-period), so that the curve keeps about ``1 / span`` points per neper of decay. Overlapping
-points share data: their errors are correlated over ``overlap`` neighbours (stated in the
-curve's notes).
+Each window spans a bounded decay (``span`` nepers, 0.5: the amplitude changes by at most
+``e**0.5`` across it, so that a straight line through ``ln A`` holds and the amplitude at its
+centre stands for it), at least ``n_min`` samples (three periods) and at most ``n_max``. The
+windows start every ``hop`` nepers of decay (0.15, at least half a period): about seven
+points per neper whatever the damping. They overlap (by ``span / hop``, about 3, where the
+span rule sets the length): neighbouring points share data and their errors are correlated;
+the overlap is stated in the curve's notes.
 """
 from __future__ import annotations
 
@@ -26,7 +25,8 @@ class WindowPlan:
     n_min: int
     n_max: int
     n_half: int
-    span: float
+    span: float          # decay across a window [neper]
+    hop: float           # decay between window starts [neper]
     fixed: bool          # a window length given by the user: fixed, disjoint windows
 
 
@@ -82,7 +82,7 @@ def _window_length(plan, sigma, dt):
 def _hop(plan, sigma, n_w, dt):
     if plan.fixed or sigma <= 0:
         return n_w
-    return int(min(n_w, max(plan.span / (sigma * dt), plan.n_half)))
+    return int(min(n_w, max(plan.hop / (sigma * dt), plan.n_half)))
 
 
 def hilbert_windows(tt, env, phase, span, plan, noise_spec, mode):
@@ -114,9 +114,14 @@ def hilbert_windows(tt, env, phase, span, plan, noise_spec, mode):
         wn = math.hypot(sigma, wd)
         f, zeta = wn / (2 * math.pi), sigma / wn
         if not (band[0] < f < band[1]) or not (0.0 < zeta < 0.5):
+            # within three standard errors of a decaying mode in the band: the noise's doing
+            z_sd, f_sd = sa[1] / wn, sp[1] / (2 * math.pi)
+            noisy = (zeta + 3 * z_sd > 0) and (band[0] - 3 * f_sd < f < band[1] + 3 * f_sd)
             return rows, wins, (f"window at t = {tc:.4g} s gives f = {f:.4g} Hz, zeta = "
-                                f"{zeta:.3g} (outside the band or not a decaying mode: beating, "
-                                "forcing or noise)"), True
+                                f"{zeta:.3g} (" + ("within 3 standard errors of the noise"
+                                                   if noisy else "outside the band or not a "
+                                                   "decaying mode: beating, forcing or noise")
+                                + ")"), not noisy
         gain = _reverse_gain(sos, fs, sigma, wd, shift)
         amp = math.exp(ln_a) / gain / wn ** k_pow
         f_std = math.hypot(sigma * sa[1], wd * sp[1]) / wn / (2 * math.pi)

@@ -192,9 +192,11 @@ def _noise_rms(yf, z, fs, span, f_peak):
 
 
 
-_SPAN = 0.15           # decay per window [neper]
+_SPAN = 0.5            # decay across a window [neper]
+_HOP = 0.15            # decay between window starts [neper]
 _MIN_POINTS = 10       # fewer points than this draw a warning
 _METHODS = ("hilbert", "pff")
+_F_TARGET, _Z_TARGET = 1e-4, 0.03     # precision below which the curve draws a warning
 
 
 def _plan(fs, f_peak, n_periods, window):
@@ -208,7 +210,7 @@ def _plan(fs, f_peak, n_periods, window):
     else:
         n_max, fixed = max(int(round(200 * per)), n_min), False
     return WindowPlan(n_min=min(n_min, n_max), n_max=n_max, n_half=max(int(round(per / 2)), 1),
-                      span=_SPAN, fixed=fixed)
+                      span=_SPAN, hop=_HOP, fixed=fixed)
 
 
 def _cut_uncertain(rows, max_zstd):
@@ -225,7 +227,7 @@ def _few_points_warning(n_pts, stop, usable, trim_np, noise_stop):
     x0, x1 = usable
     nep = math.log(x0 / x1) if x1 > 0 else 0.0
     msg = (f"only {n_pts} curve point(s) (fewer than {_MIN_POINTS}): the usable decay runs "
-           f"from {x0:.3g} m to {x1:.3g} m ({nep:.2g} nepers, about {1 / _SPAN:.2g} points per "
+           f"from {x0:.3g} m to {x1:.3g} m ({nep:.2g} nepers, about {1 / _HOP:.2g} points per "
            "neper)")
     if noise_stop:
         msg += ("; it reaches the noise floor there: less noise or a larger initial amplitude "
@@ -236,6 +238,24 @@ def _few_points_warning(n_pts, stop, usable, trim_np, noise_stop):
         msg += (f"; the filter's end effects cost {trim_np:.2g} nepers at the start: a wider "
                 "band or a lower order needs less")
     return msg
+
+
+def _precision_warning(a):
+    """A warning when the curve's stated uncertainty (RMS over the points) is above 1e-4 in
+    frequency or 3 % in damping, the precision a joint identification needs."""
+    rf = float(np.sqrt(np.mean((a[:, 4] / a[:, 1]) ** 2)))
+    rz = float(np.sqrt(np.mean((a[:, 5] / a[:, 2]) ** 2)))
+    parts = []
+    if rf > _F_TARGET:
+        parts.append(f"frequency to {rf:.2g} (relative)")
+    if rz > _Z_TARGET:
+        parts.append(f"damping to {100 * rz:.2g} %")
+    if not parts:
+        return None
+    return (f"the noise allows only {' and '.join(parts)} (RMS of the stated uncertainties "
+            f"over the curve; targets {_F_TARGET:g} and {100 * _Z_TARGET:g} %): less noise, a "
+            "larger initial amplitude, or longer windows (n_periods) at the cost of amplitude "
+            "resolution would help")
 
 
 def _compare(rows_a, rows_b, names):
@@ -363,10 +383,12 @@ def amplitude_curve(t, y, *, quantity: str = "acceleration", band,
                          f"({plan.n_min / fs:.3g} s); give a longer record or a wider band")
     env = np.abs(z)
     phase = np.unwrap(np.angle(z))
-    nw_noise = int(min(plan.n_max, max(plan.n_min, round(5 * fs / f_peak)), i1 - i0))
+    # noise windows of 20 periods (at least 10 / B): each bound rests on enough independent
+    # samples for the median of the lower half not to undershoot; at least three windows
+    bw = _noise_bandwidth(sos, fs)
+    nw_noise = int(max(min(max(20 * fs / f_peak, 10 * fs / bw), (i1 - i0) / 3), plan.n_min))
     noise, how = _noise_rms(yf, z, fs, (i_pk, i0, i1, n_start, nw_noise), f_peak)
     noise = max(noise, 1e-7 * float(env[i0:i1].max()))
-    bw = _noise_bandwidth(sos, fs)
     n_block = max(1, int(round(fs / f_peak)), int(round(fs / bw)))
     rows, wins, stop, odd_stop = hilbert_windows(
         tt, env, phase, (i0, i1), plan, (noise, snr_min, bw, n_block),
@@ -410,10 +432,13 @@ def _finish(tt, fits, stops, info, opts):
     a = np.array(rows)
     w_ref = 2 * math.pi * float(a[-1, 1])
     floor = snr_min * noise / w_ref ** k_pow
-    noise_stop = stop.startswith("envelope")
+    noise_stop = stop.startswith("envelope") or "of the noise" in stop
     if odd_stop:
         warns.append(f"the curve stopped early at {a[-1, 0]:.3g} m ({a[-1, 0] / floor:.3g} x the "
                      f"noise floor), not because of noise: {stop}")
+    prec = _precision_warning(a)
+    if prec:
+        warns.append(prec)
     if a.shape[0] < _MIN_POINTS:
         trim_np = float(n_start / fs * 2 * math.pi * a[0, 1] * a[0, 2])
         warns.append(_few_points_warning(a.shape[0], stop, (a[0, 0], a[-1, 0]), trim_np,
@@ -431,7 +456,8 @@ def _finish(tt, fits, stops, info, opts):
              f"{f_peak:.4g} Hz; decay from t = {tt[i_pk]:.4g} s, trimmed {n_start / fs:.4g} s "
              f"at its start and {n_end / fs:.4g} s before the end (measured end effects); "
              f"{a.shape[0]} windows ({'fixed' if plan.fixed else 'following the decay'}, "
-             f"{plan.span:g} nepers each, {plan.n_min / fs:.4g}-{plan.n_max / fs:.4g} s), "
+             f"{plan.span:g} nepers each, starting every {plan.hop:g} nepers, "
+             f"{plan.n_min / fs:.4g}-{plan.n_max / fs:.4g} s), "
              f"overlap {overlap:.2g} (neighbouring points share data when > 1); method "
              f"{names[0]}; in-band noise RMS {noise:.3g} from {how}; noise floor {floor:.3g} m "
              f"({snr_min:g} x noise); last point at {a[-1, 0]:.3g} m; stopped: {stop}"
