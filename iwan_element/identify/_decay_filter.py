@@ -227,3 +227,15 @@ def _analytic_signal(yy, fs, lo, hi, order):
     yt = _ramp_ends(yf, m, m)
     z = _hilbert(yt)
     return sos, yf, z, n_trim, i_pk
+
+
+def _drift_terms(sos, fs, w):
+    """``(g', tau')`` of ``sos`` applied twice at ``w`` [rad/s]: the slopes of the log-gain
+    ``ln|H|**2`` [s] and of the group delay [s**2] against angular frequency."""
+    f = w / (2 * math.pi)
+    h = 1e-3 * f
+    _, H = signal.sosfreqz(sos, worN=np.array([f - h, f, f + h]), fs=fs)
+    ph = np.unwrap(2.0 * np.angle(H))
+    lg = 2.0 * np.log(np.abs(H))
+    dw = 2 * math.pi * h
+    return float((lg[2] - lg[0]) / (2 * dw)), float(-(ph[2] - 2 * ph[1] + ph[0]) / dw ** 2)

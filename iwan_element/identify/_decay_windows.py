@@ -129,3 +129,51 @@ def hilbert_windows(tt, env, phase, span, plan, noise_spec, mode):
         wins.append((s, s + n_w))
         s += max(_hop(plan, sigma, n_w, dt), 1)
     return rows, wins, "end of the record (after trimming)", False
+
+
+def _log_slope(ln_x, ln_w, j, half=1.0):
+    """``d ln w / d ln X`` at point ``j``: derivative of the least-squares parabola through the
+    points within ``half`` nepers of amplitude of it (a line if fewer than five)."""
+    near = np.flatnonzero(np.abs(ln_x - ln_x[j]) <= half)
+    if near.size < 3:
+        near = np.arange(max(j - 1, 0), min(j + 2, ln_x.size))
+    if near.size < 2 or np.ptp(ln_x[near]) == 0:
+        return 0.0
+    deg = 2 if near.size >= 5 else 1
+    c = np.polyfit(ln_x[near] - ln_x[j], ln_w[near], deg)
+    return float(c[-2])
+
+
+def drift_correct(rows, k_pow, drift_terms):
+    """Decay rates corrected for a frequency that drifts with the amplitude.
+
+    Two first-order effects of ``dw/dt = -sigma w (d ln w / d ln X)`` (the curve's own slope,
+    from a parabola through the points within a neper): a filter's output for a slowly chirping input
+    ``a exp(i theta)`` is ``exp(i theta) [a H - i a' H' - (i/2) w' a H'']`` to first order, so
+    the envelope of the reversed pass decays at ``sigma (1 + tau_g' w') - g' w'`` with
+    ``g' = d ln|H|**2 / dw`` and ``tau_g' = d tau_g / dw`` (``drift_terms(w)`` gives both);
+    and velocity or acceleration amplitudes are ``w**k X``, whose logarithm decays at
+    ``sigma_X - k w' / w`` and whose phase runs ahead by ``k zeta' = -k sigma d zeta / d ln X``. Rows are ``(X, f, zeta,
+    X_std, f_std, zeta_std)``; ``None`` rows stay ``None``.
+    """
+    idx = [i for i, r in enumerate(rows) if r is not None]
+    if len(idx) < 2:
+        return rows
+    r = np.array([rows[i] for i in idx])
+    wn = 2 * math.pi * r[:, 1]
+    sig = r[:, 2] * wn
+    ln_x, ln_w = np.log(r[:, 0]), np.log(wn)
+    out = list(rows)
+    for j, i in enumerate(idx):
+        wd = math.sqrt(max(wn[j] ** 2 - sig[j] ** 2, 0.0))
+        w_dot = -sig[j] * wn[j] * _log_slope(ln_x, ln_w, j)
+        # the phase of w**k X carries k arg(i w - sigma) = k (pi/2 + zeta): it drifts by k zeta'
+        wd += k_pow * sig[j] * _log_slope(ln_x, r[:, 2], j)
+        g1, tau1 = drift_terms(wd)
+        s_env = (sig[j] + g1 * w_dot) / (1.0 + tau1 * w_dot)
+        s_x = s_env + k_pow * w_dot / wn[j]
+        w_new = math.hypot(s_x, wd)
+        zeta = s_x / w_new
+        z_std = rows[i][5] * zeta / max(r[j, 2], 1e-300)
+        out[i] = (rows[i][0], w_new / (2 * math.pi), zeta, rows[i][3], rows[i][4], z_std)
+    return out

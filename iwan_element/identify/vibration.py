@@ -74,8 +74,8 @@ from scipy import signal
 
 from ..core._validation import check_magnitude, check_scalar, finite_array
 from ._decay_filter import _analytic_signal  # noqa: F401  (the zero-phase route, used elsewhere)
-from ._decay_filter import _decay_signal, _noise_bandwidth
-from ._decay_windows import WindowPlan, _noise_std, hilbert_windows
+from ._decay_filter import _decay_signal, _drift_terms, _noise_bandwidth
+from ._decay_windows import WindowPlan, _noise_std, drift_correct, hilbert_windows
 from .curves import AmplitudeCurve
 from .peaks import pff_windows
 
@@ -400,6 +400,11 @@ def amplitude_curve(t, y, *, quantity: str = "acceleration", band,
     pff = pff_windows(tt, yf, wins, (k_pow, sos, fs, shift),
                       lambda amp, T: _noise_std(noise, amp, T, bw)) \
         if (method == "pff" or compare) else None
+    def terms(w):
+        return _drift_terms(sos, fs, w)
+    rows = drift_correct(rows, k_pow, terms)
+    if pff is not None:
+        pff = drift_correct(pff, k_pow, terms)
     names = (method, "pff" if method == "hilbert" else "hilbert")
     main, other = (rows, pff) if method == "hilbert" else (pff, rows)
     return _finish(tt, (main, other, wins, names), (stop, odd_stop),
