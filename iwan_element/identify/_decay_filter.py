@@ -18,6 +18,7 @@ import numpy as np
 from scipy import signal
 
 _TRIM_LEVEL = 1e-3        # end-effect error allowed, relative to the mode's local envelope
+_ZERO_PHASE_RATIO = 0.3   # zero-phase if the mode decays at < 0.3 x the filter's ringing rate
 
 
 def _filter_extent(sos, fs, lo, hi):
@@ -94,11 +95,11 @@ def _ramp_ends(x, n0, n1):
     return out
 
 
-def _reversed_pass(sos, decay, p, m, pads):
+def _continued_pass(sos, decay, p, m, pads, zero_phase):
     """Continue ``decay`` at both ends (predictor of order ``p`` on ``m`` samples; forwards it
-    may not grow, backwards by at most 1e3), filter it backwards in time; returns the output,
-    the index of the decay's first sample in it and the predictor's one-step residual RMS
-    relative to the RMS of the first ``m`` samples."""
+    may not grow, backwards by at most 1e3) and filter it: zero-phase (``sosfiltfilt``) or
+    backwards in time. Returns the output, the index of the decay's first sample in it and
+    the predictor's one-step residual RMS relative to the RMS of the first ``m`` samples."""
     n_head, n_tail = pads
     first = decay[:m][::-1]
     c = _lp_fit(first, p)
@@ -106,7 +107,24 @@ def _reversed_pass(sos, decay, p, m, pads):
     eps = float(np.sqrt(np.mean((first[p:] - A @ c) ** 2) / max(np.mean(first ** 2), 1e-300)))
     head = _taper_far_end(_lp_extend(first, c, n_head))
     tail = _taper_far_end(_lp_extend(decay[-m:], _lp_fit(decay[-m:], p), n_tail, growth=1.0))
-    return _reversed_filter(sos, np.concatenate([head[::-1], decay, tail])), head.size, eps
+    x = np.concatenate([head[::-1], decay, tail])
+    out = signal.sosfiltfilt(sos, x) if zero_phase else _reversed_filter(sos, x)
+    return out, head.size, eps
+
+
+def _filter_decay_rate(sos, fs):
+    """Decay rate [1/s] of the filter's least damped pole (how long it rings)."""
+    _, poles, _ = signal.sos2zpk(sos)
+    return float(-math.log(np.max(np.abs(poles))) * fs)
+
+
+def _envelope_decay_rate(yz, fs):
+    """Rough decay rate [1/s] of a band-passed decay: one over the time its envelope takes
+    to fall by e from its peak (0 if it never does)."""
+    env = np.abs(_hilbert(yz))
+    j = int(np.argmax(env))
+    below = np.flatnonzero(env[j:] < env[j] / math.e)
+    return fs / below[0] if below.size else 0.0
 
 
 def _head_weight(sos, n):
@@ -119,28 +137,34 @@ def _head_weight(sos, n):
 
 
 def _decay_signal(yy, fs, lo, hi, order):
-    """Band-passed decay and its analytic signal, filtered backwards in time.
+    """Band-passed decay and its analytic signal, on the record continued past its ends.
 
-    Run causally over the reversed record (twice: ``|H|**2``, as the zero-phase filter),
-    the filter meets the decay as a growing signal that starts in the noise of the record's
-    end: its start-up transient is at the noise level and dies, against the growing mode, at
-    the sum of the two decay rates, however heavily the mode is damped. A mode
-    ``Re(c exp(s t))`` comes out as ``Re(c G exp(s t))`` with a constant complex gain: decay
-    rate and frequency are kept, and ``|G| = exp(-sigma tau_g)`` to first order, the envelope
-    a group delay ``tau_g`` later. The output is therefore moved back by ``tau_g`` (at the
-    band's centre): envelope and phase at ``t`` are those of the mode at ``t``. The record is
-    continued past both ends by linear prediction before filtering (the output near the
-    decay's start draws on ``tau_g`` of input before it), and the output is tapered at its
-    far ends before the Hilbert transform.
+    The decay (from ``i_pk``) is continued past both ends by least-squares linear
+    prediction, the continuations tapered at their far ends, so that the filter meets no step
+    at the decay's start or at the record's end. Two routes:
 
-    Returns ``(sos, yf, z, (n_start, n_end), i_pk, shift)``: as :func:`_analytic_signal`,
-    with the trims at the decay's start and at the record's end apart (at least one period
-    each), and the shift [samples] by which the output was moved back. At the start the
-    output at sample ``j`` draws the share ``W[shift - j]`` of its input from the backward
-    continuation (:func:`_head_weight`), which is good to the predictor's relative one-step
-    residual ``eps``: the start trim keeps ``eps W`` below 1e-3. At the end, if the mode still
-    rings there, the trim is where two continuations (predictors fitted on ten and on six
-    periods) give outputs that differ by more than 1e-3 of the envelope.
+    * zero-phase (``scipy.signal.sosfiltfilt``), allowed where the filter's ringing dies well
+      within the mode's decay (its least damped pole decays more than ``1 / 0.3`` times faster
+      than the mode's envelope), and taken if it spoils the start no more than the other
+      route: then what remains of the end effects is the continuation's error;
+    * otherwise backwards in time: run causally over the reversed record (twice: ``|H|**2``,
+      as the zero-phase filter), the filter meets the decay as a growing signal that starts
+      in the quiet end of the record: its start-up transient is at the noise level and dies
+      against the growing mode at the sum of the two decay rates, however heavily the mode
+      is damped. A mode ``Re(c exp(s t))`` comes out as ``Re(c G exp(s t))`` with a constant
+      complex gain: decay rate and frequency are kept, ``|G| = exp(-sigma tau_g)`` to first
+      order, the envelope a group delay ``tau_g`` later; the output is moved back by
+      ``tau_g`` (at the band's centre).
+
+    Returns ``(sos, yf, z, (n_start, n_end), i_pk, (zero_phase, shift))``: as
+    :func:`_analytic_signal`, with the trims at the decay's start and at the record's end
+    apart (at least one period each), the route and the shift [samples]. Zero-phase, a trim
+    is where two continuations (predictors fitted on ten and on six periods) give outputs
+    differing by more than 1e-3 of the envelope. Backwards, at the start the output at
+    sample ``j`` draws the share ``W[shift - j]`` of its input from the backward
+    continuation (:func:`_head_weight`), good to the predictor's relative one-step residual
+    ``eps``: the start trim keeps ``eps W`` below 1e-3; the end trim is the two-continuation
+    one. The end is trimmed only if the mode still rings there.
     """
     n = yy.size
     sos = signal.butter(order, [lo, hi], btype="bandpass", fs=fs, output="sos")
@@ -149,8 +173,23 @@ def _decay_signal(yy, fs, lo, hi, order):
     i_pk = int(min(np.argmax(np.abs(yz)), np.argmax(ay >= 0.5 * ay.max())))
     n_ext = _filter_extent(sos, fs, lo, hi)
     f_c = math.sqrt(lo * hi)
+    # zero-phase allowed where the filter's ringing dies well within the mode's decay; then
+    # the route whose start is spoiled less (zero-phase on a tie: it has no delay to undo)
+    back = _route(yy, yz, sos, (fs, f_c, n_ext, i_pk), False)
+    if _envelope_decay_rate(yz[i_pk:], fs) < _ZERO_PHASE_RATIO * _filter_decay_rate(sos, fs):
+        zero = _route(yy, yz, sos, (fs, f_c, n_ext, i_pk), True)
+        if zero[2][0] <= back[2][0]:
+            return (sos,) + zero[:3] + (i_pk,) + zero[3:]
+    return (sos,) + back[:3] + (i_pk,) + back[3:]
+
+
+def _route(yy, yz, sos, spec, zero_phase):
+    """One filtering route of :func:`_decay_signal`: ``(yf, z, (n_start, n_end), (zero_phase,
+    shift))``."""
+    fs, f_c, n_ext, i_pk = spec
+    n = yy.size
     per = fs / f_c
-    sh = int(round(_group_delay(sos, fs, f_c) * fs))
+    sh = 0 if zero_phase else int(round(_group_delay(sos, fs, f_c) * fs))
     decay = yy[i_pk:]
     nd = decay.size
     yf = yz.copy()
@@ -163,7 +202,7 @@ def _decay_signal(yy, fs, lo, hi, order):
     outs = []
     n_l = int(round(5 * per))            # output kept (and tapered) beyond the decay's ends
     for mm in (m, max(int(0.6 * m), 4 * p)):
-        out, h, eps = _reversed_pass(sos, decay, p, mm, pads)
+        out, h, eps = _continued_pass(sos, decay, p, mm, pads, zero_phase)
         j0 = h - sh                       # output index of the decay's first sample
         a, b = max(j0 - n_l, 0), min(j0 + nd + n_l, out.size)
         zz = _hilbert(_ramp_ends(out[a:b], n_l, b - (j0 + nd)))
@@ -177,34 +216,48 @@ def _decay_signal(yy, fs, lo, hi, order):
     # start: the output at sample j draws the share W[sh - j] of its input from before the
     # decay (the backward continuation); with the continuation good to the predictor's
     # residual, the error is about eps W[sh - j]
-    W = _head_weight(sos, sh + 1)
-    j = np.arange(min(sh + 1, nd))
-    bad = np.flatnonzero(max(eps_a, 1e-4) * W[sh - j] > _TRIM_LEVEL)
+    env = np.abs(za)
+    rel = np.abs(za - zb) / np.maximum(env, 1e-300)
+    k = min(n_ext + sh, nd // 2)
+    if zero_phase:     # both ends draw on the continuations: where two of them differ
+        bad = np.flatnonzero(~(rel[:k] <= _TRIM_LEVEL))
+    else:
+        W = _head_weight(sos, sh + 1)
+        j = np.arange(min(sh + 1, nd))
+        bad = np.flatnonzero(max(eps_a, 1e-4) * W[sh - j] > _TRIM_LEVEL)
     n_trim = int(bad[-1]) + 1 if bad.size else 0
     if short:          # the continuation was cut (it grew by 1e3): no output before it
         n_trim = max(n_trim, n_l - j0)
     # end: where two continuations (ten and six periods of fit) differ, if it still rings
-    env = np.abs(za)
-    rel = np.abs(za - zb) / np.maximum(env, 1e-300)
-    k = min(n_ext + sh, nd // 2)
     n_end = 0
     if np.nanmean(env[-min(n_ext, k):]) > 0.01 * np.nanmax(env):
         above = np.flatnonzero(~(rel[nd - k:][::-1] <= _TRIM_LEVEL))
         n_end = int(above[-1]) + 1 if above.size else 0
     one = int(round(per))
-    return sos, yf, z, (max(n_trim, one), max(n_end, one)), i_pk, sh
+    return yf, z, (max(n_trim, one), max(n_end, one)), (zero_phase, sh)
 
 
-def _reverse_gain(sos, fs, sigma, wd, shift):
-    """Envelope gain of the reversed pass after the shift, for a mode decaying at ``sigma``
-    [1/s] with damped angular frequency ``wd`` [rad/s]: ``|H(z)|**2 exp(sigma shift dt)`` at
-    ``z = exp((sigma + i wd) dt)`` (the reversed record grows at ``sigma``); 1 to first
-    order in ``sigma``, it is divided out of the amplitude."""
-    zz = complex(math.exp(sigma / fs) * math.cos(wd / fs), math.exp(sigma / fs) * math.sin(wd / fs))
+def _sos_response(sos, zz):
+    """``H(z)`` of second-order sections at a complex ``z``."""
     g = 1.0 + 0j
     for b0, b1, b2, a0, a1, a2 in sos:
         g *= (b0 + b1 / zz + b2 / zz ** 2) / (a0 + a1 / zz + a2 / zz ** 2)
-    return abs(g) ** 2 * math.exp(sigma * shift / fs)
+    return g
+
+
+def _reverse_gain(sos, fs, sigma, wd, route):
+    """Envelope gain of the filtering for a mode decaying at ``sigma`` [1/s] with damped
+    angular frequency ``wd`` [rad/s], divided out of the amplitude (1 to first order in
+    ``sigma``). ``route = (zero_phase, shift)``. Backwards: ``|H(z)|**2 exp(sigma shift dt)``
+    at ``z = exp((sigma + i wd) dt)`` (the reversed record grows at ``sigma``); zero-phase:
+    ``|H(z) H(1/z)|`` at ``z = exp((-sigma + i wd) dt)``."""
+    zero_phase, shift = route
+    if zero_phase:
+        zz = complex(math.exp(-sigma / fs) * math.cos(wd / fs),
+                     math.exp(-sigma / fs) * math.sin(wd / fs))
+        return abs(_sos_response(sos, zz) * _sos_response(sos, 1.0 / zz))
+    zz = complex(math.exp(sigma / fs) * math.cos(wd / fs), math.exp(sigma / fs) * math.sin(wd / fs))
+    return abs(_sos_response(sos, zz)) ** 2 * math.exp(sigma * shift / fs)
 
 
 def _analytic_signal(yy, fs, lo, hi, order):
@@ -229,13 +282,15 @@ def _analytic_signal(yy, fs, lo, hi, order):
     return sos, yf, z, n_trim, i_pk
 
 
-def _drift_terms(sos, fs, w):
+def _drift_terms(sos, fs, w, zero_phase=False):
     """``(g', tau')`` of ``sos`` applied twice at ``w`` [rad/s]: the slopes of the log-gain
-    ``ln|H|**2`` [s] and of the group delay [s**2] against angular frequency."""
+    ``ln|H|**2`` [s] and of the group delay [s**2] against angular frequency (0 for the
+    zero-phase route, which has no delay)."""
     f = w / (2 * math.pi)
     h = 1e-3 * f
     _, H = signal.sosfreqz(sos, worN=np.array([f - h, f, f + h]), fs=fs)
     ph = np.unwrap(2.0 * np.angle(H))
     lg = 2.0 * np.log(np.abs(H))
     dw = 2 * math.pi * h
-    return float((lg[2] - lg[0]) / (2 * dw)), float(-(ph[2] - 2 * ph[1] + ph[0]) / dw ** 2)
+    tau1 = 0.0 if zero_phase else float(-(ph[2] - 2 * ph[1] + ph[0]) / dw ** 2)
+    return float((lg[2] - lg[0]) / (2 * dw)), tau1

@@ -88,29 +88,36 @@ def _hop(plan, sigma, n_w, dt):
 def hilbert_windows(tt, env, phase, span, plan, noise_spec, mode):
     """Window estimates in time order until the signal meets the noise or stops being a mode.
 
-    ``span = (i0, i1)`` the usable samples; ``noise_spec = (noise, snr_min, bw, n_block)``;
-    ``mode = (k_pow, band, sos, fs, shift)``. Returns the rows ``(X, f, zeta, X_std, f_std,
-    zeta_std)``, the windows ``(start, stop)``, why the walk stopped and, if a stop was not
-    the noise's or the record's end, True.
+    The windows are laid by their centres, every ``plan.hop`` nepers; near the two ends of
+    the usable samples a window is shortened symmetrically about its centre (to no less than
+    ``plan.n_min``), so that the curve starts as close to the decay's start as the trim
+    allows, with the larger uncertainty of the shorter window. ``span = (i0, i1)`` the
+    usable samples; ``noise_spec = (noise, snr_min, bw, n_block)``; ``mode = (k_pow, band,
+    sos, fs, route)``. Returns the rows ``(X, f, zeta, X_std, f_std, zeta_std)``, the windows
+    ``(start, stop)``, why the walk stopped and, if the stop was not the noise's or the
+    record's end, True.
     """
     i0, i1 = span
     noise, snr_min, bw, n_block = noise_spec
-    k_pow, band, sos, fs, shift = mode
+    k_pow, band, sos, fs, route = mode
     dt = tt[1] - tt[0]
     rows, wins = [], []
-    s = i0
+    half = plan.n_min // 2
+    c = i0 + half
     sigma = 0.0
-    while s + plan.n_min <= i1:
-        n_w = min(_window_length(plan, sigma, dt), i1 - s)
-        if np.mean(env[s:s + n_w]) < snr_min * noise:
-            return rows, wins, f"envelope below the noise threshold at t = {tt[s]:.4g} s", False
+    while c + half <= i1:
+        def window(sig):
+            h = min(_window_length(plan, sig, dt) // 2, c - i0, i1 - c)
+            return slice(c - h, c + h)
+        sl = window(sigma)
+        if np.mean(env[sl]) < snr_min * noise:
+            return rows, wins, f"envelope below the noise threshold at t = {tt[c]:.4g} s", False
         for _ in range(3):            # the length follows the decay rate found in the window
-            tc, ln_a, sigma, wd, (sa, sp) = _fit_window(tt, env, phase, slice(s, s + n_w),
-                                                        n_block, noise, bw)
-            n_new = min(_window_length(plan, sigma, dt), i1 - s)
-            if abs(n_new - n_w) <= 0.1 * n_w:
+            tc, ln_a, sigma, wd, (sa, sp) = _fit_window(tt, env, phase, sl, n_block, noise, bw)
+            new = window(sigma)
+            if abs((new.stop - new.start) - (sl.stop - sl.start)) <= 0.1 * (sl.stop - sl.start):
                 break
-            n_w = n_new
+            sl = new
         wn = math.hypot(sigma, wd)
         f, zeta = wn / (2 * math.pi), sigma / wn
         if not (band[0] < f < band[1]) or not (0.0 < zeta < 0.5):
@@ -122,12 +129,13 @@ def hilbert_windows(tt, env, phase, span, plan, noise_spec, mode):
                                                    if noisy else "outside the band or not a "
                                                    "decaying mode: beating, forcing or noise")
                                 + ")"), not noisy
-        gain = _reverse_gain(sos, fs, sigma, wd, shift)
+        gain = _reverse_gain(sos, fs, sigma, wd, route)
         amp = math.exp(ln_a) / gain / wn ** k_pow
         f_std = math.hypot(sigma * sa[1], wd * sp[1]) / wn / (2 * math.pi)
         rows.append((amp, f, zeta, amp * sa[0], f_std, sa[1] / wn))
-        wins.append((s, s + n_w))
-        s += max(_hop(plan, sigma, n_w, dt), 1)
+        wins.append((sl.start, sl.stop))
+        n_full = _window_length(plan, sigma, dt)
+        c += max(_hop(plan, sigma, n_full, dt), 1)
     return rows, wins, "end of the record (after trimming)", False
 
 

@@ -73,14 +73,14 @@ def _ols(x, y):
 def pff_windows(tt, yf, wins, mode, noise_std):
     """Peak-finding-and-fitting estimates in the given windows.
 
-    ``wins`` are ``(start, stop)`` sample ranges, ``mode = (k_pow, sos, fs, shift)`` (the
+    ``wins`` are ``(start, stop)`` sample ranges, ``mode = (k_pow, sos, fs, route)`` (the
     amplitude is divided by the reversed pass's gain, as the Hilbert estimate's), and
     ``noise_std(amp, T)`` gives the noise-limited standard errors ``(ln A, slope)`` of a
     window, a floor for the residual-based ones. Returns one row ``(X, f, zeta, X_std,
     f_std, zeta_std)`` per window, ``None`` where it holds fewer than five extrema or no
     decaying mode.
     """
-    k_pow, sos, fs, shift = mode
+    k_pow, sos, fs, route = mode
     dt = tt[1] - tt[0]
     pos, val = extrema(yf, wins[0][0], wins[-1][1]) if wins else (np.empty(0), np.empty(0))
     times = tt[0] + pos * dt
@@ -105,7 +105,7 @@ def pff_windows(tt, yf, wins, mode, noise_std):
         n0, n1 = noise_std(amp_f, (e - s) * dt)
         sa0, sa1 = max(s_a[0], n0), max(s_a[1], n1)
         swd = max(wd * s_t[1] / c_t[1], n1)
-        amp = amp_f / _reverse_gain(sos, fs, sigma, wd, shift) / wn ** k_pow
+        amp = amp_f / _reverse_gain(sos, fs, sigma, wd, route) / wn ** k_pow
         f_std = math.hypot(sigma * sa1, wd * swd) / wn / (2 * math.pi)
         rows.append((amp, wn / (2 * math.pi), sigma / wn, amp * sa0, f_std, sa1 / wn))
     return rows

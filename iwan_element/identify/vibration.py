@@ -373,7 +373,7 @@ def amplitude_curve(t, y, *, quantity: str = "acceleration", band,
     lo, hi = _check_band(band, fs)
     yy = yy - yy.mean()
     f_peak = _check_mode(yy, fs, lo, hi)
-    sos, yf, z, (n_start, n_end), i_pk, shift = _decay_signal(yy, fs, lo, hi, int(order))
+    sos, yf, z, (n_start, n_end), i_pk, route = _decay_signal(yy, fs, lo, hi, int(order))
     plan = _plan(fs, f_peak, n_periods, window)
     i0, i1 = i_pk + n_start, n - n_end
     if i1 - i0 < plan.n_min:
@@ -392,23 +392,24 @@ def amplitude_curve(t, y, *, quantity: str = "acceleration", band,
     n_block = max(1, int(round(fs / f_peak)), int(round(fs / bw)))
     rows, wins, stop, odd_stop = hilbert_windows(
         tt, env, phase, (i0, i1), plan, (noise, snr_min, bw, n_block),
-        (k_pow, (lo, hi), sos, fs, shift))
+        (k_pow, (lo, hi), sos, fs, route))
     if not rows:
         raise ValueError(f"no usable window in band ({lo:g}, {hi:g}) Hz after the trimmed start: "
                          f"{stop}; the signal does not rise above {snr_min:g} x the in-band noise "
                          f"({noise:.3g} in units of y) or holds no decaying mode there")
-    pff = pff_windows(tt, yf, wins, (k_pow, sos, fs, shift),
+    pff = pff_windows(tt, yf, wins, (k_pow, sos, fs, route),
                       lambda amp, T: _noise_std(noise, amp, T, bw)) \
         if (method == "pff" or compare) else None
     def terms(w):
-        return _drift_terms(sos, fs, w)
+        return _drift_terms(sos, fs, w, route[0])
     rows = drift_correct(rows, k_pow, terms)
     if pff is not None:
         pff = drift_correct(pff, k_pow, terms)
     names = (method, "pff" if method == "hilbert" else "hilbert")
     main, other = (rows, pff) if method == "hilbert" else (pff, rows)
     return _finish(tt, (main, other, wins, names), (stop, odd_stop),
-                   (lo, hi, order, f_peak, fs, n_start, n_end, i_pk, noise, how, snr_min, k_pow),
+                   (lo, hi, order, f_peak, fs, n_start, n_end, i_pk, noise, how, snr_min, k_pow,
+                    route),
                    (max_damping_std, compare, plan))
 
 
@@ -416,7 +417,7 @@ def _finish(tt, fits, stops, info, opts):
     """The curve, its notes and its warnings from the window estimates."""
     main, other, wins, names = fits
     stop, odd_stop = stops
-    lo, hi, order, f_peak, fs, n_start, n_end, i_pk, noise, how, snr_min, k_pow = info
+    lo, hi, order, f_peak, fs, n_start, n_end, i_pk, noise, how, snr_min, k_pow, route = info
     max_zstd, compare, plan = opts
     keep = [i for i, r in enumerate(main) if r is not None]
     warns = []
@@ -456,8 +457,10 @@ def _finish(tt, fits, stops, info, opts):
                                       [other[i] for i in keep][:len(rows)], names)
         if cmp_warn:
             warns.append(cmp_warn)
-    notes = (f"band {lo:g}-{hi:g} Hz, Butterworth order {order} run twice backwards in time "
-             f"(sosfilt on the reversed record, moved back by the group delay); mode at "
+    how_f = ("zero-phase (sosfiltfilt)" if route[0] else "run twice backwards in time (sosfilt "
+             f"on the reversed record, moved back by the group delay, {route[1] / fs:.4g} s)")
+    notes = (f"band {lo:g}-{hi:g} Hz, Butterworth order {order} {how_f}, on the record "
+             f"continued past its ends by linear prediction; mode at "
              f"{f_peak:.4g} Hz; decay from t = {tt[i_pk]:.4g} s, trimmed {n_start / fs:.4g} s "
              f"at its start and {n_end / fs:.4g} s before the end (measured end effects); "
              f"{a.shape[0]} windows ({'fixed' if plan.fixed else 'following the decay'}, "
