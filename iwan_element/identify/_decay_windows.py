@@ -91,7 +91,9 @@ def hilbert_windows(tt, env, phase, span, plan, noise_spec, mode):
     The windows are laid by their centres, every ``plan.hop`` nepers; near the two ends of
     the usable samples a window is shortened symmetrically about its centre (to no less than
     ``plan.n_min``), so that the curve starts as close to the decay's start as the trim
-    allows, with the larger uncertainty of the shorter window. ``span = (i0, i1)`` the
+    allows, with the larger uncertainty of the shorter window (a shortened window keeps at
+    least half the full length). A window whose estimate is no decaying mode but within three
+    standard errors of one (noise) is skipped. ``span = (i0, i1)`` the
     usable samples; ``noise_spec = (noise, snr_min, bw, n_block)``; ``mode = (k_pow, band,
     sos, fs, route)``. Returns the rows ``(X, f, zeta, X_std, f_std, zeta_std)``, the windows
     ``(start, stop)``, why the walk stopped and, if the stop was not the noise's or the
@@ -102,20 +104,30 @@ def hilbert_windows(tt, env, phase, span, plan, noise_spec, mode):
     k_pow, band, sos, fs, route = mode
     dt = tt[1] - tt[0]
     rows, wins = [], []
-    half = plan.n_min // 2
-    c = i0 + half
-    sigma = 0.0
-    while c + half <= i1:
+    # a first decay rate: the time the envelope takes to fall by e from the usable start
+    below = np.flatnonzero(env[i0:i1] < env[i0] / math.e)
+    sigma = 1.0 / (below[0] * dt) if below.size and below[0] > 0 else 0.0
+    c = i0 + _window_length(plan, sigma, dt) // 4
+    skipped = 0
+    while True:
         def window(sig):
-            h = min(_window_length(plan, sig, dt) // 2, c - i0, i1 - c)
-            return slice(c - h, c + h)
+            n_full = _window_length(plan, sig, dt)
+            h = min(n_full // 2, c - i0, i1 - c)
+            return slice(c - h, c + h) if 2 * h >= max(plan.n_min, n_full // 2) else None
         sl = window(sigma)
+        if sl is None:
+            if c < i0 + plan.n_max:          # at the start, walk on to a full-enough window
+                c += plan.n_half
+                if c < i1:
+                    continue
+            break
         if np.mean(env[sl]) < snr_min * noise:
             return rows, wins, f"envelope below the noise threshold at t = {tt[c]:.4g} s", False
         for _ in range(3):            # the length follows the decay rate found in the window
             tc, ln_a, sigma, wd, (sa, sp) = _fit_window(tt, env, phase, sl, n_block, noise, bw)
             new = window(sigma)
-            if abs((new.stop - new.start) - (sl.stop - sl.start)) <= 0.1 * (sl.stop - sl.start):
+            if new is None or abs((new.stop - new.start) - (sl.stop - sl.start)) <= 0.1 * (
+                    sl.stop - sl.start):
                 break
             sl = new
         wn = math.hypot(sigma, wd)
@@ -124,11 +136,15 @@ def hilbert_windows(tt, env, phase, span, plan, noise_spec, mode):
             # within three standard errors of a decaying mode in the band: the noise's doing
             z_sd, f_sd = sa[1] / wn, sp[1] / (2 * math.pi)
             noisy = (zeta + 3 * z_sd > 0) and (band[0] - 3 * f_sd < f < band[1] + 3 * f_sd)
+            if noisy:                 # no estimate from this one: skip it, counted
+                skipped += 1
+                sigma = 0.0 if not rows else sigma
+                c += plan.n_half if not rows else max(_hop(plan, sigma, sl.stop - sl.start,
+                                                           dt), 1)
+                continue
             return rows, wins, (f"window at t = {tc:.4g} s gives f = {f:.4g} Hz, zeta = "
-                                f"{zeta:.3g} (" + ("within 3 standard errors of the noise"
-                                                   if noisy else "outside the band or not a "
-                                                   "decaying mode: beating, forcing or noise")
-                                + ")"), not noisy
+                                f"{zeta:.3g} (outside the band or not a decaying mode: beating, "
+                                "forcing or noise)"), True
         gain = _reverse_gain(sos, fs, sigma, wd, route)
         amp = math.exp(ln_a) / gain / wn ** k_pow
         f_std = math.hypot(sigma * sa[1], wd * sp[1]) / wn / (2 * math.pi)
@@ -136,7 +152,8 @@ def hilbert_windows(tt, env, phase, span, plan, noise_spec, mode):
         wins.append((sl.start, sl.stop))
         n_full = _window_length(plan, sigma, dt)
         c += max(_hop(plan, sigma, n_full, dt), 1)
-    return rows, wins, "end of the record (after trimming)", False
+    return rows, wins, "end of the record (after trimming)" + (
+        f"; {skipped} window(s) within the noise of no decay skipped" if skipped else ""), False
 
 
 def _log_slope(ln_x, ln_w, j, half=1.0):

@@ -241,21 +241,24 @@ def _few_points_warning(n_pts, stop, usable, trim_np, noise_stop):
 
 
 def _precision_warning(a):
-    """A warning when the curve's stated uncertainty (RMS over the points) is above 1e-4 in
-    frequency or 3 % in damping, the precision a joint identification needs."""
-    rf = float(np.sqrt(np.mean((a[:, 4] / a[:, 1]) ** 2)))
-    rz = float(np.sqrt(np.mean((a[:, 5] / a[:, 2]) ** 2)))
+    """A warning when the stated uncertainty reaches 1e-4 in frequency or 3 % in damping (the
+    precision a joint identification needs) over less than a decade of amplitude from the
+    curve's first point."""
+    x = a[:, 0]
     parts = []
-    if rf > _F_TARGET:
-        parts.append(f"frequency to {rf:.2g} (relative)")
-    if rz > _Z_TARGET:
-        parts.append(f"damping to {100 * rz:.2g} %")
+    for col, target, name in ((4, _F_TARGET, "frequency"), (5, _Z_TARGET, "damping")):
+        rel = a[:, col] / np.abs(a[:, col - 3])
+        bad = np.flatnonzero(rel > target)
+        x_ok = x[bad[0] - 1] if bad.size and bad[0] > 0 else (None if bad.size else x[-1])
+        if x_ok is None or x_ok > 0.1 * x[0]:
+            where = ("at no point" if x_ok is None else
+                     f"only down to {x_ok:.3g} m ({x_ok / x[0]:.2g} of the first point)")
+            parts.append(f"{name} to {target:g} (relative) {where}")
     if not parts:
         return None
-    return (f"the noise allows only {' and '.join(parts)} (RMS of the stated uncertainties "
-            f"over the curve; targets {_F_TARGET:g} and {100 * _Z_TARGET:g} %): less noise, a "
-            "larger initial amplitude, or longer windows (n_periods) at the cost of amplitude "
-            "resolution would help")
+    return (f"the data (noise, other content in the band) allow {' and '.join(parts)}, less than a decade of amplitude: less "
+            "noise, a larger initial amplitude, or longer windows (n_periods) at the cost of "
+            "amplitude resolution would help")
 
 
 def _compare(rows_a, rows_b, names):
