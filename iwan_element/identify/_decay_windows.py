@@ -31,18 +31,20 @@ class WindowPlan:
 
 
 def _line_fit(tw, yv, n_block):
-    """Straight line through ``yv(tw)``: coefficients and their standard errors, the errors
-    from the residuals averaged over blocks of ``n_block`` samples (the block means drop the
-    deterministic ripple of harmonics and are nearly independent samples of the noise)."""
-    X = np.column_stack([np.ones_like(tw), tw])
+    """Value and slope at the window centre (``tw`` centred) of ``yv(tw)``, with their standard
+    errors: a least-squares parabola, whose curvature takes up a decay rate or frequency that
+    changes across the window (on a centred window the linear coefficient is orthogonal to
+    it). The errors come from the residuals averaged over blocks of ``n_block`` samples (the
+    block means drop the deterministic ripple of harmonics and are nearly independent
+    samples of the noise), at least four blocks."""
+    X = np.column_stack([np.ones_like(tw), tw, tw ** 2])
     coef, *_ = np.linalg.lstsq(X, yv, rcond=None)
-    nb = max(tw.size // n_block, 3)
+    nb = max(tw.size // n_block, 4)
     edges = np.linspace(0, tw.size, nb + 1).astype(int)
-    tb = np.add.reduceat(tw, edges[:-1]) / np.diff(edges)
-    Xb = np.column_stack([np.ones_like(tb), tb])
+    Xb = np.add.reduceat(X, edges[:-1], axis=0) / np.diff(edges)[:, None]
     res = np.add.reduceat(yv - X @ coef, edges[:-1]) / np.diff(edges)
-    s2 = float(res @ res) / (nb - 2)
-    return coef, np.sqrt(np.diag(np.linalg.inv(Xb.T @ Xb) * s2))
+    s2 = float(res @ res) / (nb - 3)
+    return coef[:2], np.sqrt(np.diag(np.linalg.inv(Xb.T @ Xb) * s2))[:2]
 
 
 def _noise_std(noise, amp, T, bw):
