@@ -58,13 +58,11 @@ def _noise_std(noise, amp, T, bw):
 
 def _fit_window(tt, env, phase, sl, n_block, noise, bw):
     """Line fits of ``ln A`` and phase over ``sl``: (centre, lnA0, sigma, wd, stds)."""
-    dt = tt[1] - tt[0]
-    n_w = sl.stop - sl.start
-    tc = tt[sl.start] + 0.5 * (n_w - 1) * dt
+    tc = float(np.mean(tt[sl]))
     tw = tt[sl] - tc
     (ca, sa) = _line_fit(tw, np.log(env[sl]), n_block)
     (cp, sp) = _line_fit(tw, phase[sl], n_block)
-    n0, n1 = _noise_std(noise, math.exp(ca[0]), n_w * dt, bw)
+    n0, n1 = _noise_std(noise, math.exp(ca[0]), float(tt[sl.stop - 1] - tt[sl.start]), bw)
     sa = np.maximum(sa, [n0, n1])
     sp = np.maximum(sp, [n0, n1])
     return tc, ca[0], -ca[1], cp[1], (sa, sp)
@@ -104,7 +102,7 @@ def hilbert_windows(tt, env, phase, span, plan, noise_spec, mode):
     i0, i1 = span
     noise, snr_min, bw, n_block = noise_spec
     k_pow, band, sos, fs, route = mode
-    dt = tt[1] - tt[0]
+    dt = 1.0 / fs                 # the mean step (time stamps may be rounded)
     rows, wins = [], []
     # a first decay rate: the time the envelope takes to fall by e from the usable start
     below = np.flatnonzero(env[i0:i1] < env[i0] / math.e)

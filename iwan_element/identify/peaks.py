@@ -81,7 +81,7 @@ def pff_windows(tt, yf, wins, mode, noise_std):
     decaying mode.
     """
     k_pow, sos, fs, route = mode
-    dt = tt[1] - tt[0]
+    dt = 1.0 / fs                 # the mean step (time stamps may be rounded)
     pos, val = extrema(yf, wins[0][0], wins[-1][1]) if wins else (np.empty(0), np.empty(0))
     times = tt[0] + pos * dt
     rows = []
