@@ -379,11 +379,12 @@ def amplitude_curve(t, y, *, quantity: str = "acceleration", band,
     sos, yf, z, (n_start, n_end), i_pk, route = _decay_signal(yy, fs, lo, hi, int(order))
     plan = _plan(fs, f_peak, n_periods, window)
     i0, i1 = i_pk + n_start, n - n_end
-    if i1 - i0 < plan.n_min:
+    if i1 - i0 < (plan.n_max if plan.fixed else plan.n_min):
         raise ValueError(f"record too short: after trimming {n_start / fs:.3g} s of filter end "
                          f"effects at the start and {n_end / fs:.3g} s at the end, "
                          f"{max(i1 - i0, 0) / fs:.3g} s remain, less than one window "
-                         f"({plan.n_min / fs:.3g} s); give a longer record or a wider band")
+                         f"({(plan.n_max if plan.fixed else plan.n_min) / fs:.3g} s); give a "
+                         "longer record, a wider band or a shorter window")
     env = np.abs(z)
     phase = np.unwrap(np.angle(z))
     # noise windows of 20 periods (at least 10 / B): each bound rests on enough independent
