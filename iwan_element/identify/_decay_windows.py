@@ -107,13 +107,16 @@ def hilbert_windows(tt, env, phase, span, plan, noise_spec, mode):
     # a first decay rate: the time the envelope takes to fall by e from the usable start
     below = np.flatnonzero(env[i0:i1] < env[i0] / math.e)
     sigma = 1.0 / (below[0] * dt) if below.size and below[0] > 0 else 0.0
-    c = i0 + _window_length(plan, sigma, dt) // 4
+    # a fixed window (given by the user) is never shortened at the ends: disjoint windows
+    # from the trimmed start, as asked
+    c = i0 + _window_length(plan, sigma, dt) // (2 if plan.fixed else 4)
     skipped = 0
     while True:
         def window(sig):
             n_full = _window_length(plan, sig, dt)
             h = min(n_full // 2, c - i0, i1 - c)
-            return slice(c - h, c + h) if 2 * h >= max(plan.n_min, n_full // 2) else None
+            keep = n_full if plan.fixed else max(plan.n_min, n_full // 2)
+            return slice(c - h, c + h) if 2 * h >= keep - 1 else None
         sl = window(sigma)
         if sl is None:
             if c < i0 + plan.n_max:          # at the start, walk on to a full-enough window
@@ -151,7 +154,10 @@ def hilbert_windows(tt, env, phase, span, plan, noise_spec, mode):
         rows.append((amp, f, zeta, amp * sa[0], f_std, sa[1] / wn))
         wins.append((sl.start, sl.stop))
         n_full = _window_length(plan, sigma, dt)
-        c += max(_hop(plan, sigma, n_full, dt), 1)
+        if plan.fixed:                # disjoint: the next window starts where this one ends
+            c = sl.stop + n_full // 2
+        else:
+            c += max(_hop(plan, sigma, n_full, dt), 1)
     return rows, wins, "end of the record (after trimming)" + (
         f"; {skipped} window(s) within the noise of no decay skipped" if skipped else ""), False
 

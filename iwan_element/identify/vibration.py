@@ -213,6 +213,18 @@ def _plan(fs, f_peak, n_periods, window):
                       span=_SPAN, hop=_HOP, fixed=fixed)
 
 
+def _overlap(wins):
+    """Per point: its window's length over the spacing of the window centres (>= 1), the
+    number of points that share each sample of data."""
+    if len(wins) < 2:
+        return np.ones(len(wins))
+    c = np.array([0.5 * (s + e) for s, e in wins])
+    step = np.diff(c)
+    step = np.concatenate([step, step[-1:]])
+    n = np.array([e - s for s, e in wins], dtype=float)
+    return np.maximum(n / np.maximum(step, 1.0), 1.0)
+
+
 def _cut_uncertain(rows, max_zstd):
     """Rows up to the first (from the fourth on) whose damping is known to worse than
     ``max_zstd`` (relative); and how many were dropped."""
@@ -453,8 +465,8 @@ def _finish(tt, fits, stops, info, opts):
         trim_np = float(n_start / fs * 2 * math.pi * a[0, 1] * a[0, 2])
         warns.append(_few_points_warning(a.shape[0], stop, (a[0, 0], a[-1, 0]), trim_np,
                                          noise_stop))
-    overlap = float(np.mean([(e - s) for s, e in wins]) / np.mean(np.diff([s for s, _ in wins]))) \
-        if len(wins) > 1 else 1.0
+    share = _overlap([wins[i] for i in keep][:len(rows)])
+    overlap = float(np.mean(share))
     cmp_note = ""
     if compare and other is not None:
         cmp_note, cmp_warn = _compare([main[i] for i in keep][:len(rows)],
@@ -474,6 +486,11 @@ def _finish(tt, fits, stops, info, opts):
              f"{names[0]}; in-band noise RMS {noise:.3g} from {how}; noise floor {floor:.3g} m "
              f"({snr_min:g} x noise); last point at {a[-1, 0]:.3g} m; stopped: {stop}"
              + (f"; {cmp_note}" if cmp_note else ""))
+    if overlap > 1.05:
+        notes += (f"; the uncertainties include the factor sqrt(overlap) (mean {overlap:.2g}), so "
+                  "that a fit treating the points as independent states its own uncertainty "
+                  "right: one point alone is known better by that factor")
+    a[:, 3:6] *= np.sqrt(share)[:, None]
     log.debug("amplitude_curve: %s", notes)
     return AmplitudeCurve(a[:, 0], a[:, 1], a[:, 2], amplitude_std=a[:, 3],
                           frequency_std=a[:, 4], damping_std=a[:, 5], noise_floor=floor,
