@@ -62,7 +62,8 @@ to 5 % of damping with its defaults. The equations and their sources are in
    standard uncertainties (in frequency or damping) are listed in a warning.
 
 The band must hold one clear mode: a Welch spectrum peak inside it, not at its edges, at
-least 10 times the band's median level, with no second peak above a tenth of it.
+least 10 times the band's median level (or 3 times, if the band-passed envelope decays
+tenfold: a heavily damped mode fills a narrow band), with no second peak above a tenth of it.
 """
 from __future__ import annotations
 
@@ -116,14 +117,25 @@ def _check_band(band, fs):
     return lo, hi
 
 
+def _decays_in_band(y, fs, lo, hi):
+    """Whether the band-passed record's envelope falls tenfold from its peak to the mean of
+    its last fifth: a heavily damped mode fills a narrow band, so that its spectral peak is
+    only a few times the band's median, but it decays; noise does not."""
+    sos = signal.butter(2, [lo, hi], btype="bandpass", fs=fs, output="sos")
+    env = np.abs(signal.hilbert(signal.sosfiltfilt(sos, y)))
+    return bool(env.max() > 10.0 * np.mean(env[-max(env.size // 5, 1):]))
+
+
 def _check_mode(y, fs, lo, hi):
     """Welch spectrum of the record: the frequency of the one clear mode in the band."""
-    nper = int(min(y.size, 2 ** math.ceil(math.log2(fs / ((hi - lo) / 64.0)))))
-    f, P = signal.welch(y, fs=fs, nperseg=nper)
+    nfft = int(2 ** math.ceil(math.log2(fs / ((hi - lo) / 64.0))))
+    nper = int(min(y.size, nfft))
+    # a short record (a heavily damped decay) is zero-padded to the same line spacing
+    f, P = signal.welch(y, fs=fs, nperseg=nper, nfft=nfft)
     inb = np.flatnonzero((f >= lo) & (f <= hi))
-    if inb.size < 8:
+    if inb.size < 8 or (hi - lo) * y.size / fs < 4.0:
         raise ValueError(f"band ({lo:g}, {hi:g}) Hz is too narrow for the record length "
-                         f"({y.size / fs:.3g} s): it holds {inb.size} spectral lines; widen it")
+                         f"({y.size / fs:.3g} s): it is less than 4 / T wide; widen it")
     Pb = P[inb]
     k = int(np.argmax(Pb))
     med = float(np.median(Pb))
@@ -131,10 +143,10 @@ def _check_mode(y, fs, lo, hi):
     if k < 2 or k > inb.size - 3:
         raise ValueError(f"no clear mode {where}: the strongest content is at its edge "
                          f"({f[inb[k]]:.4g} Hz); move or widen the band around one mode")
-    if Pb[k] < 10.0 * med:
+    if Pb[k] < 10.0 * med and not (Pb[k] > 3.0 * med and _decays_in_band(y, fs, lo, hi)):
         raise ValueError(f"no clear mode {where}: the spectral peak at {f[inb[k]]:.4g} Hz is "
                          f"only {Pb[k] / max(med, 1e-300):.3g} times the band's median level "
-                         "(needs 10)")
+                         "(needs 10, or 3 with an envelope that decays tenfold)")
     peaks, _ = signal.find_peaks(Pb, prominence=0.05 * Pb[k])
     others = [int(j) for j in peaks if abs(int(j) - k) > 3 and Pb[j] > 0.1 * Pb[k]]
     if others:
@@ -234,13 +246,14 @@ def _cut_uncertain(rows, max_zstd):
     return rows, 0
 
 
-def _few_points_warning(n_pts, stop, usable, trim_np, noise_stop):
-    """Why the curve has fewer than ``_MIN_POINTS`` points, and what to change."""
+def _few_points_warning(n_pts, stop, usable, trim_np, noise_stop, x_start):
+    """Why the curve has fewer than ``_MIN_POINTS`` points in the first decade of the decay,
+    and what to change."""
     x0, x1 = usable
     nep = math.log(x0 / x1) if x1 > 0 else 0.0
-    msg = (f"only {n_pts} curve point(s) (fewer than {_MIN_POINTS}): the usable decay runs "
-           f"from {x0:.3g} m to {x1:.3g} m ({nep:.2g} nepers, about {1 / _HOP:.2g} points per "
-           "neper)")
+    msg = (f"only {n_pts} curve point(s) (fewer than {_MIN_POINTS}) in the first decade of the "
+           f"decay (from about {x_start:.3g} m): they run from {x0:.3g} m to {x1:.3g} m "
+           f"({nep:.2g} nepers, about {1 / _HOP:.2g} points per neper)")
     if noise_stop:
         msg += ("; it reaches the noise floor there: less noise or a larger initial amplitude "
                 "gives more points")
@@ -409,6 +422,13 @@ def amplitude_curve(t, y, *, quantity: str = "acceleration", band,
     rows, wins, stop, odd_stop = hilbert_windows(
         tt, env, phase, (i0, i1), plan, (noise, snr_min, bw, n_block),
         (k_pow, (lo, hi), sos, fs, route))
+    if not rows and stop.startswith("end"):
+        raise ValueError(f"record too short: after trimming {n_start / fs:.3g} s of filter end "
+                         f"effects at the start and {n_end / fs:.3g} s at the end, "
+                         f"{(i1 - i0) / fs:.3g} s remain, not enough for one window that follows "
+                         f"the decay (0.5 nepers of it, at least 3 periods, at least half of it "
+                         "inside the record); give a longer record or a fixed, shorter window "
+                         "(n_periods)")
     if not rows:
         raise ValueError(f"no usable window in band ({lo:g}, {hi:g}) Hz after the trimmed start: "
                          f"{stop}; the signal does not rise above {snr_min:g} x the in-band noise "
@@ -425,7 +445,7 @@ def amplitude_curve(t, y, *, quantity: str = "acceleration", band,
     main, other = (rows, pff) if method == "hilbert" else (pff, rows)
     return _finish(tt, (main, other, wins, names), (stop, odd_stop),
                    (lo, hi, order, f_peak, fs, n_start, n_end, i_pk, noise, how, snr_min, k_pow,
-                    route),
+                    route, env[i_pk:i_pk + n_start + 1]),
                    (max_damping_std, compare, plan))
 
 
@@ -433,7 +453,8 @@ def _finish(tt, fits, stops, info, opts):
     """The curve, its notes and its warnings from the window estimates."""
     main, other, wins, names = fits
     stop, odd_stop = stops
-    lo, hi, order, f_peak, fs, n_start, n_end, i_pk, noise, how, snr_min, k_pow, route = info
+    lo, hi, order, f_peak, fs, n_start, n_end, i_pk, noise, how, snr_min, k_pow, route = info[:13]
+    env_start = info[13]
     max_zstd, compare, plan = opts
     keep = [i for i, r in enumerate(main) if r is not None]
     warns = []
@@ -461,10 +482,17 @@ def _finish(tt, fits, stops, info, opts):
     prec = _precision_warning(a)
     if prec:
         warns.append(prec)
-    if a.shape[0] < _MIN_POINTS:
+    # the amplitude at the decay's start, from the first point and its decay rate
+    s0, e0 = wins[keep[0]]
+    t_c0 = 0.5 * (tt[s0] + tt[e0 - 1])
+    x_start = float(a[0, 0] * math.exp(2 * math.pi * a[0, 1] * a[0, 2] * (t_c0 - tt[i_pk])))
+    per = int(round(fs / f_peak))         # or the (spoiled) envelope in the first period
+    x_start = max(x_start, float(np.max(env_start[:per])) / (2 * math.pi * a[0, 1]) ** k_pow)
+    n_dec = int(np.count_nonzero(a[:, 0] >= 0.1 * x_start))
+    if n_dec < _MIN_POINTS:
         trim_np = float(n_start / fs * 2 * math.pi * a[0, 1] * a[0, 2])
-        warns.append(_few_points_warning(a.shape[0], stop, (a[0, 0], a[-1, 0]), trim_np,
-                                         noise_stop))
+        warns.append(_few_points_warning(n_dec, stop, (a[0, 0], a[n_dec - 1, 0]), trim_np,
+                                         noise_stop and n_dec == a.shape[0], x_start))
     share = _overlap([wins[i] for i in keep][:len(rows)])
     overlap = float(np.mean(share))
     cmp_note = ""
