@@ -166,7 +166,6 @@ def _decay_signal(yy, fs, lo, hi, order):
     ``eps``: the start trim keeps ``eps W`` below 1e-3; the end trim is the two-continuation
     one. The end is trimmed only if the mode still rings there.
     """
-    n = yy.size
     sos = signal.butter(order, [lo, hi], btype="bandpass", fs=fs, output="sos")
     ay = np.abs(yy)
     yz = signal.sosfiltfilt(sos, yy)

@@ -179,12 +179,14 @@ def drift_correct(rows, k_pow, drift_terms):
     """Decay rates corrected for a frequency that drifts with the amplitude.
 
     Two first-order effects of ``dw/dt = -sigma w (d ln w / d ln X)`` (the curve's own slope,
-    from a parabola through the points within a neper): a filter's output for a slowly chirping input
+    from a parabola through the points within a neper): a filter's output for a slowly
+    chirping input
     ``a exp(i theta)`` is ``exp(i theta) [a H - i a' H' - (i/2) w' a H'']`` to first order, so
     the envelope of the reversed pass decays at ``sigma (1 + tau_g' w') - g' w'`` with
     ``g' = d ln|H|**2 / dw`` and ``tau_g' = d tau_g / dw`` (``drift_terms(w)`` gives both);
     and velocity or acceleration amplitudes are ``w**k X``, whose logarithm decays at
-    ``sigma_X - k w' / w`` and whose phase runs ahead by ``k zeta' = -k sigma d zeta / d ln X``. Rows are ``(X, f, zeta,
+    ``sigma_X - k w' / w`` and whose phase runs ahead by ``k zeta' = -k sigma d zeta / d ln X``.
+    Rows are ``(X, f, zeta,
     X_std, f_std, zeta_std)``; ``None`` rows stay ``None``.
     """
     idx = [i for i, r in enumerate(rows) if r is not None]
