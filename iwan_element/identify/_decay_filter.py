@@ -39,7 +39,8 @@ def _noise_bandwidth(sos, fs):
 
 def _lp_fit(seg, p):
     """Least-squares forward predictor ``x[n] = sum_k c_k x[n - k]`` of order ``p`` over
-    ``seg`` (the covariance method; singular values below 1e-7 of the largest dropped)."""
+    ``seg`` (the covariance method of linear prediction, S. M. Kay, *Modern Spectral
+    Estimation*, 1988; singular values below 1e-7 of the largest dropped)."""
     m = seg.size
     A = np.column_stack([seg[p - k:m - k] for k in range(1, p + 1)])
     c, *_ = np.linalg.lstsq(A, seg[p:], rcond=1e-7)
