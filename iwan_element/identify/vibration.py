@@ -128,7 +128,9 @@ def _decays_in_band(y, fs, lo, hi):
 
 def _check_mode(y, fs, lo, hi):
     """Welch spectrum of the record: the frequency of the one clear mode in the band."""
-    nfft = int(2 ** math.ceil(math.log2(fs / ((hi - lo) / 64.0))))
+    # (zero padding at most 16 times the record: a nonsensical time axis cannot blow it up)
+    nfft = int(2 ** min(math.ceil(math.log2(fs / ((hi - lo) / 64.0))),
+                        math.ceil(math.log2(16 * y.size))))
     nper = int(min(y.size, nfft))
     # a short record (a heavily damped decay) is zero-padded to the same line spacing
     f, P = signal.welch(y, fs=fs, nperseg=nper, nfft=nfft)
