@@ -166,3 +166,51 @@ def joint_decay(params: IwanParameters, *, K_inf: float, zeta0: float, q0: float
              "K_inf": K_inf, "zeta0": zeta0}
     return Decay(t, y, quantity, abs(float(q0)), f0, _band(f0, ratio),
                  lambda a: curve(a)[0], lambda a: curve(a)[1], truth)
+
+
+def svam_case(zeta: float, *, quantity: str = "acceleration", ratio: float = 1.3,
+              second: float = 0.3, noise: float = 0.01, rng: np.random.Generator,
+              f0: float = 20.0, fs: float = 800.0, a0: float = 1e-4,
+              end: float = 0.02) -> Decay:
+    """A :func:`svam_decay` whose damping is about ``zeta`` at the start.
+
+    Microslip-like truth (:func:`modal_curves`, chi = -0.5): ``zeta(a) = zeta (0.5 + 0.5
+    sqrt(a / a0))`` and a frequency 0.5 % lower at ``a0`` than at small amplitude. The record
+    lasts until the slowest decay (damping ``zeta / 2``) has reached ``end * a0``.
+    """
+    frequency, damping = modal_curves(f0, 0.5 * zeta, 0.5 * zeta, 0.005, a0)
+    duration = math.log(1.0 / end) / (0.5 * zeta * 2 * math.pi * f0)
+    return svam_decay(frequency, damping, a0=a0, duration=duration, fs=fs, quantity=quantity,
+                      ratio=ratio, second=second, noise=noise, rng=rng,
+                      truth={"zeta": zeta, "source": "svam"})
+
+
+def joint_case(zeta: float, *, quantity: str = "acceleration", ratio: float = 1.3,
+               second: float = 0.3, noise: float = 0.01, rng: np.random.Generator,
+               f0: float = 20.0, fs: float = 800.0, end: float = 0.02) -> Decay:
+    """A :func:`joint_decay` whose damping is about ``zeta`` at the release.
+
+    Unit-mass modal Iwan joint (chi = -0.5, beta = 0.5, KT = 0.5 w0**2, phi_max = 1 mm): the
+    joint supplies two thirds of ``zeta`` at the release (at most what it gives at 0.9
+    phi_max, about 3 %) and a dashpot floor ``zeta0`` the rest; the release amplitude is where
+    the closed-form damping is ``zeta``. The record lasts until the dashpot alone would have
+    brought the release amplitude down to ``end`` times it.
+    """
+    from scipy.optimize import brentq
+    chi, beta, phimax = -0.5, 0.5, 1e-3
+    w02 = (2 * math.pi * f0) ** 2
+    KT = 0.5 * w02
+    c = beta + (chi + 1) / (chi + 2)
+    p = IwanParameters(KT * c * phimax / (1 + beta), KT, chi, beta)
+    k_inf = w02 - KT
+
+    def joint_zeta(q, z0):
+        return float(modal_iwan_curve(np.array([q]), p, K_inf=k_inf, zeta0=z0,
+                                      stiffness="harmonic", floor="dashpot")[1][0])
+
+    zeta0 = max(zeta / 3.0, zeta - joint_zeta(0.9 * phimax, 0.0))
+    q0 = math.exp(brentq(lambda lq: joint_zeta(math.exp(lq), zeta0) - zeta,
+                         math.log(1e-9 * phimax), math.log(0.9 * phimax), xtol=1e-10))
+    duration = math.log(1.0 / end) / (zeta0 * 2 * math.pi * f0)
+    return joint_decay(p, K_inf=k_inf, zeta0=zeta0, q0=q0, duration=duration, fs=fs,
+                       quantity=quantity, ratio=ratio, second=second, noise=noise, rng=rng)

@@ -120,7 +120,35 @@ def test_ringdown_energy_balance():
     assert a[0] == pytest.approx(-(k_inf * q[0] + F[0]), rel=1e-12)
 
 
+def _peak_decrement(p, k_inf, q0, zeta0, fs=40000.0, duration=16.0):
+    """Damping and frequency of the exact ring-down from its raw displacement extrema, an
+    extraction independent of amplitude_curve: sampled at 40 kHz, no filter, no Hilbert
+    transform; the amplitude of each cycle is half its peak-to-peak (which ignores the slow
+    offset that slip leaves), sigma = -d ln X / dt and w_d = 2 pi / (time between maxima)."""
+    from scipy import signal as sps
+    t = np.arange(0.0, duration, 1 / fs)
+    q, _, _ = modal_ringdown(t, p, K_inf=k_inf, q0=q0, zeta0=zeta0)
+    imax, imin = sps.find_peaks(q)[0], sps.find_peaks(-q)[0]
+    X, T = [], []
+    for i in imax[:-1]:
+        j = imin[imin > i][0]
+        X.append(0.5 * (q[i] - q[j]))
+        T.append(0.5 * (t[i] + t[j]))
+    X, T = np.array(X), np.array(T)
+    sigma = -np.gradient(np.log(X), T)
+    wn = np.hypot(sigma, 2 * math.pi / np.gradient(T))
+    return X, wn / (2 * math.pi), sigma / wn
+
+
 def test_ringdown_curve_matches_harmonic_closed_form(ringdown):
+    """The exact-joint ring-down: frequency against the harmonic closed form, damping against
+    the raw-peak decrement of the same motion, and the three quantities give one curve.
+
+    (Behaviour changed with the free-decay work: the curve now starts within a period of the
+    release, at up to 0.4 phi_max, where the first-order closed form's damping is 4-5 % below
+    the exact motion's, as the independent raw-peak decrement shows; the old test compared
+    only smaller amplitudes, and there an acceleration-only bias of the old extraction
+    (w**2 X decays slower than X while the frequency rises) happened to offset that gap.)"""
     p, k_inf, t, q, v, a = ringdown
     cur = amplitude_curve(t, a, quantity="acceleration", band=(12.0, 30.0))
     assert cur.method == "hilbert" and len(cur) >= 8
@@ -131,9 +159,17 @@ def test_ringdown_curve_matches_harmonic_closed_form(ringdown):
     big = cur.amplitude > 2e-6
     err_h = np.abs(cur.frequency / f_h - 1)[big]
     assert np.max(err_h) < 1e-4
-    assert np.max(np.abs(cur.damping_ratio / z_h - 1)[big]) < 0.03
     # the secant stiffness is measurably wrong at the largest amplitudes
     assert np.max(np.abs(cur.frequency / f_s - 1)) > 5 * np.max(err_h)
+    # damping: the exact motion's raw-peak decrement where it is defined (X > 50 um), the
+    # first-order closed form below 0.05 phi_max
+    Xp, fp, zp = _peak_decrement(p, k_inf, 0.6e-3, 2e-3)
+    inside = big & (cur.amplitude < Xp[1]) & (cur.amplitude > 50e-6)
+    assert np.count_nonzero(inside) >= 5
+    zi = np.interp(np.log(cur.amplitude[inside]), np.log(Xp[::-1]), zp[::-1])
+    assert np.max(np.abs(cur.damping_ratio[inside] / zi - 1)) < 0.02
+    small = big & (cur.amplitude < 0.05 * p.phi_max)
+    assert np.max(np.abs(cur.damping_ratio / z_h - 1)[small]) < 0.03
     # the three quantities give one curve (compared at equal amplitude)
     s = cur.sorted()
     for y, quantity in ((q, "displacement"), (v, "velocity")):
@@ -143,7 +179,7 @@ def test_ringdown_curve_matches_harmonic_closed_form(ringdown):
         assert X.size >= 4
         zi = np.exp(np.interp(np.log(X), np.log(s.amplitude), np.log(s.damping_ratio)))
         fi = np.interp(np.log(X), np.log(s.amplitude), s.frequency)
-        tol = 0.03 * zi + 3 * np.hypot(c2.damping_std[inside], np.median(s.damping_std))
+        tol = 0.01 * zi + 3 * np.hypot(c2.damping_std[inside], np.median(s.damping_std))
         assert np.all(np.abs(c2.damping_ratio[inside] - zi) < tol)
         ftol = 1.5e-4 * fi + 3 * np.hypot(c2.frequency_std[inside], np.median(s.frequency_std))
         assert np.all(np.abs(c2.frequency[inside] - fi) < ftol)
@@ -174,14 +210,18 @@ def test_linear_decay_with_noise_and_second_mode():
     assert cur.amplitude.min() >= cur.noise_floor * 0.9
     # in-band noise RMS of white noise with std s through a band B: s sqrt(2 B_eff / fs)
     assert 1e-6 < cur.noise_floor < 1e-4
-    # the default (1 % damping precision) stops where the noise makes the damping uncertain
-    strict = amplitude_curve(t, y, quantity="displacement", band=(38.0, 64.0))
-    # (the noise floor is the noise's, whatever stopped the curve; the stop goes to notes)
-    assert len(strict) < len(cur) and strict.noise_floor == cur.noise_floor
-    # the rule never leaves fewer than three points: those keep their honest uncertainty
-    assert len(strict) == 3 and np.any(strict.damping_std > 0.01 * strict.damping_ratio)
+    # by default every point above the noise floor is kept with its stated uncertainty;
+    # max_damping_std drops the later ones, and says how many in a warning (behaviour
+    # changed with the free-decay work: it used to be the default and said so only in notes)
+    full = amplitude_curve(t, y, quantity="displacement", band=(38.0, 64.0))
+    strict = amplitude_curve(t, y, quantity="displacement", band=(38.0, 64.0),
+                             max_damping_std=0.01)
+    assert len(strict) < len(full) and strict.noise_floor == full.noise_floor
+    assert len(strict) >= 3
+    dropped = [w for w in strict.warnings if "max_damping_std=0.01" in w]
+    assert dropped and f"{len(full) - len(strict)} point(s)" in dropped[0]
     assert np.all(np.abs(strict.damping_ratio - 0.004) < 4 * strict.damping_std + 1e-4)
-    assert "known to worse than 1 %" in strict.notes and "last point at" in strict.notes
+    assert "noise threshold" in full.notes and "last point at" in full.notes
     # stated uncertainties are of the size of the scatter
     z = (cur.frequency - 50.0) / cur.frequency_std
     assert 0.2 < np.sqrt(np.mean(z ** 2)) < 3.0
@@ -417,5 +457,7 @@ def test_noise_floor_needs_no_pretrigger_and_ignores_other_modes(ringdown):
     for f in (np.max, np.min):
         assert abs(math.log(f(a.amplitude) / f(b.amplitude))) <= math.log(step) * 1.01
     assert abs(len(a) - len(b)) <= 1
-    # it stopped because of the noise (the damping precision it allows), with no warning
-    assert "(noise)" in a.notes and not a.warnings and not b.warnings
+    # it stopped because of the noise, with no warning but the precision one (the two
+    # larger out-of-band modes leak a ripple of a few 1e-3 into the band)
+    assert "noise threshold" in a.notes and "noise threshold" in b.notes
+    assert all(w.startswith("the data") for w in a.warnings + b.warnings)

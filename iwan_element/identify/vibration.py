@@ -1,63 +1,69 @@
 """From a measured free decay to frequency and damping against amplitude.
 
 :func:`amplitude_curve` turns a ring-down record (hammer impact, release test, a simulated
-free decay) into an :class:`~iwan_element.identify.curves.AmplitudeCurve`:
+free decay) into an :class:`~iwan_element.identify.curves.AmplitudeCurve`, from about 0.02 %
+to 5 % of damping with its defaults. The equations and their sources are in
+``docs/free_decay.md``.
 
-1. The record is band-pass filtered around one mode with a zero-phase Butterworth filter
-   (``scipy.signal.butter`` as second-order sections, ``scipy.signal.sosfiltfilt``).
-2. Its analytic signal ``z(t)`` comes from the Hilbert transform (``scipy.signal.hilbert``,
-   zero-padded to at least twice the length so that the FFT's wrap-around does not carry the
-   large start of the record into its quiet end).
-   For a slowly decaying mode ``z = A(t) exp(i theta(t))``: the envelope ``A`` and the
-   unwrapped phase ``theta``.
-3. In consecutive, non-overlapping windows (default 20 periods, shortened to at least three
-   periods where the envelope would fall by more than ``e**0.5`` within one, so that the
-   amplitude at the window centre stands for the window) straight lines are fitted to
-   ``ln A`` and ``theta``: their slopes are ``-sigma`` (decay rate) and ``w_d`` (damped
-   angular frequency). Then ``w_n = sqrt(sigma**2 + w_d**2)`` (the undamped natural
-   frequency, reported as ``frequency``), ``zeta = sigma / w_n`` and the amplitude at the
-   window centre is ``A / w_n**k`` (k = 2 for acceleration, 1 for velocity, 0 for
-   displacement): the displacement amplitude at the sensor.
-4. Per-point uncertainty: the regression standard errors, computed from the residuals
-   averaged over blocks of one period (the block means drop the deterministic ripple that
-   harmonics of a nonlinear response leave in envelope and phase, and are nearly
-   independent samples of the noise); when the filter's noise bandwidth ``B`` is below the
-   mode frequency the blocks are ``1 / B`` long, the noise's correlation time.
-5. End effects: the filter's impulse response (``sosfilt`` of a unit impulse) is taken to
-   last until it stays below 1e-3 of its peak; that time is cut after the largest sample of
-   the band-passed record (the impact, or the release at the start of the record) and before
-   the end of the record. Those cut stretches are tapered (half-Hann) before the Hilbert
-   transform: a record cropped at the impact starts abruptly, and the transform's slowly
-   decaying ``1/t`` kernel would otherwise spread that step over the whole record.
+1. Band-pass, backwards in time. A Butterworth band-pass (``scipy.signal.butter``, second-order
+   sections) is run causally, twice, over the time-reversed decay (``scipy.signal.sosfilt``):
+   there the decay is a growing signal that starts in the noise of the record's end, so the
+   filter's start-up transient is at the noise level and dies against the mode at the sum of
+   the two decay rates, however heavily the mode is damped; a zero-phase filter would ring
+   at the decay's abrupt start for as long as a mode damped at a few per cent lasts. The
+   output is moved back by the filter's group delay; the record is continued past both ends
+   by a least-squares linear predictor before filtering. A linear mode keeps its decay rate
+   and frequency through any linear filter; its amplitude is divided by the pass's gain
+   ``|H(exp((sigma + i w_d) dt))|**2 exp(sigma tau)`` (1 to first order in the damping).
+2. Analytic signal ``z = A exp(i theta)`` (``scipy.signal.hilbert``, zero-padded, of the
+   filtered decay continued at both ends by a short predictor: a decay that starts at full
+   amplitude is a step, which the transform's ``1/t`` kernel would spread).
+3. Trims, measured: at the start, the samples whose output draws on the backward
+   continuation (the share of the pass's impulse response that reaches before the decay,
+   times the predictor's relative residual) by more than 1e-3; at the end, if the mode still
+   rings there, where two continuations (predictors fitted on ten and on six periods) give
+   outputs differing by more than 1e-3 of the envelope; at least one period each.
+4. Windows that follow the decay (:mod:`._decay_windows`): each spans at most ``span``
+   (0.15) nepers of decay and at least three periods (at most ``n_max``, 200 periods); they
+   step by the same decay, overlapping where three periods decay by more (heavy damping), so
+   the curve has about seven points per neper of decay whatever the damping. ``n_periods``
+   or ``window`` fix the length instead (disjoint windows, shortened where they would decay
+   by more than ``e**0.5``). In each, straight lines through ``ln A`` and ``theta``: slopes
+   ``-sigma`` and ``w_d``; ``w_n = sqrt(sigma**2 + w_d**2)`` (``frequency``), ``zeta = sigma /
+   w_n`` and the displacement amplitude at the window centre ``A / w_n**k`` (k = 2, 1, 0 for
+   acceleration, velocity, displacement).
+5. Per-point uncertainty: the regression standard errors, from the residuals averaged over
+   blocks of one period (or of the noise correlation time ``1 / B`` if longer), and never
+   below what the in-band noise alone causes: ``(s_n / A) / sqrt(B T)`` for ``ln A`` and
+   ``sqrt(12) (s_n / A) / (T sqrt(B T))`` for the slopes (``B T`` independent samples).
 6. Noise, from the in-band signal itself (no pre-trigger needed, not fooled by other modes
-   outside the band). In consecutive windows after the impact the analytic signal ``z`` is
-   compared with its local free-decay model ``exp(a + b t + i (c + d t))`` (straight lines
-   through ``ln |z|`` and the phase). In-band real noise of RMS ``s`` adds ``sqrt(2) s`` RMS
-   to ``z``, so ``rms|z - model| / sqrt(2)`` is an upper bound on ``s`` (model error, such as
-   a frequency drifting within the window, only adds); where the mode has decayed into the
-   noise (the residual is above 0.3 of ``rms|z|``) the whole in-band content
-   ``rms|z| / sqrt(2)`` is the bound (the record's late tail). Each window's bound rests on
-   only ``B T`` independent samples, so the estimate is the median of the lower half of the
-   windows' bounds. When the record has a pre-trigger of at least three periods clear of the
-   filter's end effects, the RMS of the band-passed pre-trigger is a direct estimate, and the
-   smaller of the two is used: no estimate can exceed what a clean stretch of the signal
-   allows (an envelope that fits an exponential to 1e-3 bounds the noise at 1e-3 of it).
-   The out-of-band spectral level is not used: on an impact test it holds the tails of the
-   other modes and overstates the in-band noise by orders of magnitude.
-7. Stop and noise floor: ``noise_floor`` is the noise-based amplitude floor, the
-   displacement amplitude at which the envelope would be ``snr_min`` times the in-band noise
-   RMS ``s_n``. The curve stops where the envelope falls below that, or at the end of the
-   record, or (after at least three points) at the first window whose damping ratio has a
-   relative standard uncertainty (step 4) above ``max_damping_std`` while the noise alone
-   would cause that much (the decay-rate error that noise ``s_n / A`` on ``B T`` independent
-   samples gives, ``sqrt(12) (s_n / A) / (T sqrt(B T))``, is above the limit; a scatter that
-   the noise cannot explain, such as the change of damping within a window at large
-   amplitude, does not stop the curve). Why and at which amplitude the curve stopped is in
-   ``notes``; a stop for a reason other than noise (a window that is not a decaying mode in
-   the band) is also a warning.
+   outside the band). In consecutive windows after the trimmed start the analytic signal is
+   compared with its local free-decay model ``exp(a + b t + i (c + d t))``; ``rms|z -
+   model| / sqrt(2)`` bounds the in-band noise RMS ``s`` from above, and where the mode has
+   decayed into the noise (residual above 0.3 of ``rms|z|``) the whole in-band content
+   ``rms|z| / sqrt(2)`` is the bound. The estimate is the median of the lower half of the
+   windows' bounds. When the record has a pre-trigger of at least three periods clear of
+   the filter's end effects, the RMS of the band-passed pre-trigger is a direct estimate, and
+   the smaller of the two is used. The out-of-band spectral level is not used: on an impact
+   test it holds the tails of the other modes.
+7. Stop and noise floor: ``noise_floor`` is the displacement amplitude at which the envelope
+   would be ``snr_min`` times the in-band noise RMS. The curve runs to the first window
+   whose envelope is below that, or to the end of the record; a window that is not a
+   decaying mode in the band (beating, forcing) also stops it, with a warning. No point
+   above the noise floor is dropped for its uncertainty unless ``max_damping_std`` is given;
+   then the points after the first one (from the fourth on) whose damping is known to worse
+   than that are dropped, with a warning that counts them.
+8. Warnings when the curve has fewer than 10 points, saying why (record too short, noise,
+   the trim) and what to change.
+9. A second, independent extraction, ``method="pff"`` (:mod:`.peaks`, peak finding and
+   fitting after Jin et al., J. Vib. Acoust. 142(5):051111, 2020) uses only the extrema of
+   the filtered decay in the same windows. With ``compare=True`` (the default) the other
+   method is run too and the points where the two differ by more than three combined
+   standard uncertainties (in frequency or damping) are listed in a warning.
 
 The band must hold one clear mode: a Welch spectrum peak inside it, not at its edges, at
-least 10 times the band's median level, with no second peak above a tenth of it.
+least 10 times the band's median level (or 3 times, if the band-passed envelope decays
+tenfold: a heavily damped mode fills a narrow band), with no second peak above a tenth of it.
 """
 from __future__ import annotations
 
@@ -68,7 +74,11 @@ import numpy as np
 from scipy import signal
 
 from ..core._validation import check_magnitude, check_scalar, finite_array
-from .curves import AmplitudeCurve
+from ._decay_filter import _analytic_signal  # noqa: F401  (the zero-phase route, used elsewhere)
+from ._decay_filter import _decay_signal, _drift_terms, _noise_bandwidth
+from ._decay_windows import WindowPlan, _noise_std, drift_correct, hilbert_windows
+from ._decay_report import _finish
+from .peaks import pff_windows
 
 __all__ = ["amplitude_curve"]
 
@@ -107,14 +117,27 @@ def _check_band(band, fs):
     return lo, hi
 
 
+def _decays_in_band(y, fs, lo, hi):
+    """Whether the band-passed record's envelope falls tenfold from its peak to the mean of
+    its last fifth: a heavily damped mode fills a narrow band, so that its spectral peak is
+    only a few times the band's median, but it decays; noise does not."""
+    sos = signal.butter(2, [lo, hi], btype="bandpass", fs=fs, output="sos")
+    env = np.abs(signal.hilbert(signal.sosfiltfilt(sos, y)))
+    return bool(env.max() > 10.0 * np.mean(env[-max(env.size // 5, 1):]))
+
+
 def _check_mode(y, fs, lo, hi):
     """Welch spectrum of the record: the frequency of the one clear mode in the band."""
-    nper = int(min(y.size, 2 ** math.ceil(math.log2(fs / ((hi - lo) / 64.0)))))
-    f, P = signal.welch(y, fs=fs, nperseg=nper)
+    # (zero padding at most 16 times the record: a nonsensical time axis cannot blow it up)
+    nfft = int(2 ** min(math.ceil(math.log2(fs / ((hi - lo) / 64.0))),
+                        math.ceil(math.log2(16 * y.size))))
+    nper = int(min(y.size, nfft))
+    # a short record (a heavily damped decay) is zero-padded to the same line spacing
+    f, P = signal.welch(y, fs=fs, nperseg=nper, nfft=nfft)
     inb = np.flatnonzero((f >= lo) & (f <= hi))
-    if inb.size < 8:
+    if inb.size < 8 or (hi - lo) * y.size / fs < 4.0:
         raise ValueError(f"band ({lo:g}, {hi:g}) Hz is too narrow for the record length "
-                         f"({y.size / fs:.3g} s): it holds {inb.size} spectral lines; widen it")
+                         f"({y.size / fs:.3g} s): it is less than 4 / T wide; widen it")
     Pb = P[inb]
     k = int(np.argmax(Pb))
     med = float(np.median(Pb))
@@ -122,32 +145,16 @@ def _check_mode(y, fs, lo, hi):
     if k < 2 or k > inb.size - 3:
         raise ValueError(f"no clear mode {where}: the strongest content is at its edge "
                          f"({f[inb[k]]:.4g} Hz); move or widen the band around one mode")
-    if Pb[k] < 10.0 * med:
+    if Pb[k] < 10.0 * med and not (Pb[k] > 3.0 * med and _decays_in_band(y, fs, lo, hi)):
         raise ValueError(f"no clear mode {where}: the spectral peak at {f[inb[k]]:.4g} Hz is "
                          f"only {Pb[k] / max(med, 1e-300):.3g} times the band's median level "
-                         "(needs 10)")
+                         "(needs 10, or 3 with an envelope that decays tenfold)")
     peaks, _ = signal.find_peaks(Pb, prominence=0.05 * Pb[k])
     others = [int(j) for j in peaks if abs(int(j) - k) > 3 and Pb[j] > 0.1 * Pb[k]]
     if others:
         raise ValueError(f"band ({lo:g}, {hi:g}) Hz holds more than one mode (peaks at "
                          f"{f[inb[k]]:.4g} Hz and {f[inb[others[0]]]:.4g} Hz); narrow it to one")
     return float(f[inb[k]])
-
-
-def _filter_extent(sos, fs, lo, hi):
-    """Samples until the filter's impulse response stays below 1e-3 of its peak."""
-    n = int(max(64, 40.0 * fs / (hi - lo)))
-    imp = np.zeros(n)
-    imp[0] = 1.0
-    h = np.abs(signal.sosfilt(sos, imp))
-    above = np.flatnonzero(h > 1e-3 * h.max())
-    return int(above[-1]) + 1
-
-
-def _noise_bandwidth(sos, fs):
-    """Noise bandwidth [Hz] of the zero-phase filter (``sosfiltfilt`` applies ``|H|**2``)."""
-    w, H = signal.sosfreqz(sos, worN=8192, fs=fs)
-    return float(np.trapezoid(np.abs(H) ** 4, w))
 
 
 def _residual_noise(z, i0, i1, nw):
@@ -197,77 +204,56 @@ def _noise_rms(yf, z, fs, span, f_peak):
     return noise, "; ".join(how)
 
 
-def _window_fit(tw, lnA, ph, n_block):
-    """Straight lines through ln A and phase: coefficients and their standard errors.
-
-    The lines are fitted to every sample; the standard errors come from the residuals
-    averaged over blocks of ``n_block`` samples (about one period): the average removes the
-    deterministic ripple of a non-sinusoidal response (harmonics leave a ripple at twice the
-    frequency that does not bias the slope) and leaves the noise, whose block means are
-    nearly independent.
-    """
-    X = np.column_stack([np.ones_like(tw), tw])
-    nb = max(tw.size // n_block, 3)
-    edges = np.linspace(0, tw.size, nb + 1).astype(int)
-    tb = np.add.reduceat(tw, edges[:-1]) / np.diff(edges)
-    Xb = np.column_stack([np.ones_like(tb), tb])
-    Xb_inv = np.linalg.inv(Xb.T @ Xb)
-    out = []
-    for yv in (lnA, ph):
-        coef, *_ = np.linalg.lstsq(X, yv, rcond=None)
-        res = np.add.reduceat(yv - X @ coef, edges[:-1]) / np.diff(edges)
-        s2 = float(res @ res) / (nb - 2)
-        out.append((coef, np.sqrt(np.diag(Xb_inv * s2))))
-    return out
 
 
-def _analytic_signal(yy, fs, lo, hi, order):
-    """Zero-phase band-passed signal and its analytic signal.
-
-    Returns ``(sos, yf, z, n_trim, i_pk)``: the filter, the filtered signal, its Hilbert
-    transform, the number of samples spoiled by the filter's end effects at each end and the
-    index of the largest filtered sample.
-    """
-    n = yy.size
-    sos = signal.butter(order, [lo, hi], btype="bandpass", fs=fs, output="sos")
-    yf = signal.sosfiltfilt(sos, yy)
-    # zero padding to >= 2n: the FFT-based transform is circular, and without padding the
-    # large start of a ring-down would leak into its quiet end. The first and last n_trim
-    # samples (cut anyway) are tapered: a record cropped at the impact starts abruptly, and
-    # the Hilbert kernel's slow 1/t decay would spread that step over the whole record.
-    n_trim = _filter_extent(sos, fs, lo, hi)
-    i_pk = int(np.argmax(np.abs(yf)))
-    m = min(n_trim, n // 4)
-    ramp = 0.5 - 0.5 * np.cos(np.pi * (np.arange(m) + 0.5) / m)
-    yt = yf.copy()
-    yt[:m] *= ramp
-    yt[n - m:] *= ramp[::-1]
-    z = signal.hilbert(yt, N=int(2 ** math.ceil(math.log2(2 * n))))[:n]
-    return sos, yf, z, n_trim, i_pk
+_SPAN = 0.5            # decay across a window [neper]
+_HOP = 0.15            # decay between window starts [neper]
+_METHODS = ("hilbert", "pff")
 
 
-def _curve_warnings(a, stop, floor):
-    """Warnings on a finished curve: too few points, or stopped early for a reason other
-    than noise."""
-    warns = []
-    if a.shape[0] < 3:
-        warns.append(f"only {a.shape[0]} window(s) above the noise floor; the curve is too "
-                     "short to show an amplitude dependence")
-    x_last = float(a[-1, 0])
-    if stop.startswith("window"):
-        warns.append(f"the curve stopped early at {x_last:.3g} m ({x_last / floor:.3g} x the "
-                     f"noise floor), not because of noise: {stop}")
-    return warns
+def _plan(fs, f_peak, n_periods, window):
+    """Window plan: adaptive (default) or a fixed length from ``n_periods`` or ``window``."""
+    per = fs / f_peak
+    n_min = max(int(round(3 * per)), 16)
+    if window is not None:
+        n_max, fixed = max(int(round(window * fs)), 16), True
+    elif n_periods is not None:
+        n_max, fixed = max(int(round(n_periods * per)), 16), True
+    else:
+        n_max, fixed = max(int(round(200 * per)), n_min), False
+    return WindowPlan(n_min=min(n_min, n_max), n_max=n_max, n_half=max(int(round(per / 2)), 1),
+                      span=_SPAN, hop=_HOP, fixed=fixed)
 
 
-def amplitude_curve(t, y, *, quantity: str = "acceleration", band, n_periods: float = 20.0,
-                    window: float | None = None, order: int = 4, snr_min: float = 10.0,
-                    max_damping_std: float = 0.01):
+def _check_options(quantity, order, n_periods, window, snr_min, max_damping_std, method):
+    if quantity not in _QUANTITY_POWER:
+        raise ValueError(f"quantity must be one of {sorted(_QUANTITY_POWER)}, got {quantity!r}")
+    if isinstance(order, bool) or not isinstance(order, (int, np.integer)) or not 1 <= order <= 10:
+        raise ValueError(f"order must be an integer in [1, 10], got {order!r}")
+    if method not in _METHODS:
+        raise ValueError(f"method must be one of {_METHODS}, got {method!r}")
+    if n_periods is not None:
+        n_periods = check_scalar("n_periods", n_periods, low=3.0, high=1000.0)
+    if window is not None:
+        window = check_scalar("window", window, low=0.0, low_open=True)
+    snr_min = check_scalar("snr_min", snr_min, low=2.0, high=1e6)
+    if max_damping_std is not None:
+        max_damping_std = check_scalar("max_damping_std", max_damping_std, low=0.0, high=1.0,
+                                       low_open=True)
+    return n_periods, window, snr_min, max_damping_std
+
+
+def amplitude_curve(t, y, *, quantity: str = "acceleration", band,
+                    n_periods: float | None = None, window: float | None = None,
+                    order: int = 4, snr_min: float = 10.0,
+                    max_damping_std: float | None = None, method: str = "hilbert",
+                    compare: bool = True):
     """Frequency and damping ratio against amplitude from a free-decay record of one mode.
 
-    Band-pass (zero-phase Butterworth, ``scipy.signal.sosfiltfilt``) and Hilbert transform
-    (``scipy.signal.hilbert``), straight-line fits of log-envelope and phase in windows; see
-    the module docstring for every step.
+    Band-pass run backwards in time, Hilbert transform, straight-line fits of log-envelope
+    and phase in windows that follow the decay (or peak finding and fitting in the same
+    windows); see the module docstring for every step and ``docs/free_decay.md`` for the
+    equations.
 
     Parameters
     ----------
@@ -280,37 +266,46 @@ def amplitude_curve(t, y, *, quantity: str = "acceleration", band, n_periods: fl
         What ``y`` is: [m/s^2], [m/s] or [m].
     band : (float, float), keyword-only
         Pass band ``(f_lo, f_hi)`` [Hz] around one mode, inside ``(0, fs/2)``.
-    n_periods : float, keyword-only
-        Window length in periods of the mode (default 20, range [3, 1000]).
+    n_periods : float, optional
+        Fixed window length in periods of the mode (range [3, 1000]); by default (None) the
+        windows follow the decay: 0.15 nepers of decay each, 3 to 200 periods.
     window : float, optional
-        Window length [s]; overrides ``n_periods``.
+        Fixed window length [s]; overrides ``n_periods``.
     order : int, keyword-only
-        Butterworth order (default 4, range 1..10); zero-phase doubles it.
+        Butterworth order (default 4, range 1..10); applied twice.
     snr_min : float, keyword-only
         The curve stops where the envelope is below ``snr_min`` times the in-band noise RMS
         (default 10, range [2, 1e6]).
-    max_damping_std : float, keyword-only
-        After at least three points, the curve also stops at the first window whose damping
-        ratio has a relative standard uncertainty above this while the noise alone would
-        cause that much (default 0.01, range (0, 1]); points before it keep their stated
-        uncertainty.
+    max_damping_std : float, optional
+        If given (range (0, 1]), the curve also stops at the first point from the fourth on
+        whose damping ratio has a relative standard uncertainty above this; the points dropped
+        are counted in a warning. By default every point above the noise floor is kept with
+        its stated uncertainty.
+    method : {"hilbert", "pff"}, keyword-only
+        Envelope and phase of the analytic signal (default), or peak finding and fitting on
+        the extrema of the filtered decay (:mod:`iwan_element.identify.peaks`).
+    compare : bool, keyword-only
+        Also run the other method in the same windows and warn where the two differ by more
+        than three combined standard uncertainties (default True).
 
     Returns
     -------
     AmplitudeCurve
         ``amplitude`` [m] (displacement at the sensor), ``frequency`` [Hz] (undamped natural
         frequency ``sqrt(sigma**2 + w_d**2) / 2 pi``), ``damping_ratio`` [-], their standard
-        uncertainties, ``noise_floor`` [m] (the displacement amplitude at which the signal would
-        be ``snr_min`` times the in-band noise), ``method="hilbert"``; ``notes`` state the
-        filter, the trimming, the windows, the noise estimate and where and why the curve
-        stopped. Points are in time order (decreasing amplitude).
+        uncertainties, ``noise_floor`` [m] (the displacement amplitude at which the signal
+        would be ``snr_min`` times the in-band noise), ``method``; ``notes`` state the
+        filter, the trims, the windows and their overlap, the noise estimate, the comparison
+        and where and why the curve stopped; ``warnings`` what the data could not support.
+        Points are in time order (decreasing amplitude). Where windows overlap, neighbouring
+        points share data and their errors are correlated.
 
     Raises
     ------
     ValueError
         Bad input (NaN, non-uniform or non-increasing ``t``, too short a record, a band
-        outside the Nyquist range), a band holding no clear mode or more than one, or a
-        signal that never rises above ``snr_min`` times the noise.
+        outside the Nyquist range, an unknown option), a band holding no clear mode or more
+        than one, or a signal that never rises above ``snr_min`` times the noise.
     """
     yy = check_magnitude("y", finite_array("y", y))
     n = yy.size
@@ -318,100 +313,57 @@ def amplitude_curve(t, y, *, quantity: str = "acceleration", band, n_periods: fl
         raise ValueError(f"y must have at least 64 samples, got {n}")
     tt, dt = _check_uniform_time(t, n)
     fs = 1.0 / dt
-    if quantity not in _QUANTITY_POWER:
-        raise ValueError(f"quantity must be one of {sorted(_QUANTITY_POWER)}, got {quantity!r}")
+    n_periods, window, snr_min, max_damping_std = _check_options(
+        quantity, order, n_periods, window, snr_min, max_damping_std, method)
     k_pow = _QUANTITY_POWER[quantity]
     lo, hi = _check_band(band, fs)
-    if isinstance(order, bool) or not isinstance(order, (int, np.integer)) or not 1 <= order <= 10:
-        raise ValueError(f"order must be an integer in [1, 10], got {order!r}")
-    n_periods = check_scalar("n_periods", n_periods, low=3.0, high=1000.0)
-    snr_min = check_scalar("snr_min", snr_min, low=2.0, high=1e6)
-    max_damping_std = check_scalar("max_damping_std", max_damping_std, low=0.0, high=1.0,
-                                   low_open=True)
     yy = yy - yy.mean()
     f_peak = _check_mode(yy, fs, lo, hi)
-    sos, yf, z, n_trim, i_pk = _analytic_signal(yy, fs, lo, hi, int(order))
+    sos, yf, z, (n_start, n_end), i_pk, route = _decay_signal(yy, fs, lo, hi, int(order))
+    plan = _plan(fs, f_peak, n_periods, window)
+    i0, i1 = i_pk + n_start, n - n_end
+    if i1 - i0 < (plan.n_max if plan.fixed else plan.n_min):
+        raise ValueError(f"record too short: after trimming {n_start / fs:.3g} s of filter end "
+                         f"effects at the start and {n_end / fs:.3g} s at the end, "
+                         f"{max(i1 - i0, 0) / fs:.3g} s remain, less than one window "
+                         f"({(plan.n_max if plan.fixed else plan.n_min) / fs:.3g} s); give a "
+                         "longer record, a wider band or a shorter window")
     env = np.abs(z)
     phase = np.unwrap(np.angle(z))
-    i0 = i_pk + n_trim
-    i1 = n - n_trim
-    if window is not None:
-        window = check_scalar("window", window, low=0.0, low_open=True)
-        nw = int(round(window * fs))
-    else:
-        nw = int(round(n_periods * fs / f_peak))
-    nw = max(nw, 16)
-    if i1 - i0 < nw:
-        raise ValueError(f"record too short: after trimming {n_trim / fs:.3g} s of filter end "
-                         f"effects at each end, {max(i1 - i0, 0) / fs:.3g} s remain, less than "
-                         f"one window ({nw / fs:.3g} s); give a longer record or a wider band")
-    noise, how = _noise_rms(yf, z, fs, (i0 - n_trim, i0, i1, n_trim, nw), f_peak)
-    noise = max(noise, 1e-7 * float(env.max()))
+    # noise windows of 20 periods (at least 10 / B): each bound rests on enough independent
+    # samples for the median of the lower half not to undershoot; at least three windows
     bw = _noise_bandwidth(sos, fs)
-    rows, stop, x_stop = _windows(tt, env, phase, (i0, i1, nw), (noise, snr_min, bw), k_pow,
-                                  f_peak, (lo, hi), max_damping_std)
+    nw_noise = int(max(min(max(20 * fs / f_peak, 10 * fs / bw), (i1 - i0) / 3), plan.n_min))
+    noise, how = _noise_rms(yf, z, fs, (i_pk, i0, i1, n_start, nw_noise), f_peak)
+    noise = max(noise, 1e-7 * float(env[i0:i1].max()))
+    n_block = max(1, int(round(fs / f_peak)), int(round(fs / bw)))
+    rows, wins, stop, odd_stop = hilbert_windows(
+        tt, env, phase, (i0, i1), plan, (noise, snr_min, bw, n_block),
+        (k_pow, (lo, hi), sos, fs, route))
+    if not rows and stop.startswith("end"):
+        raise ValueError(f"record too short: after trimming {n_start / fs:.3g} s of filter end "
+                         f"effects at the start and {n_end / fs:.3g} s at the end, "
+                         f"{(i1 - i0) / fs:.3g} s remain, not enough for one window that follows "
+                         f"the decay (0.5 nepers of it, at least 3 periods, at least half of it "
+                         "inside the record); give a longer record or a fixed, shorter window "
+                         "(n_periods)")
     if not rows:
         raise ValueError(f"no usable window in band ({lo:g}, {hi:g}) Hz after the trimmed start: "
                          f"{stop}; the signal does not rise above {snr_min:g} x the in-band noise "
                          f"({noise:.3g} in units of y) or holds no decaying mode there")
-    a = np.array(rows)
-    w_ref = 2 * math.pi * float(a[-1, 1])
-    floor = snr_min * noise / w_ref ** k_pow
-    x_last = float(a[-1, 0])
-    warns = _curve_warnings(a, stop, floor)
-    notes = (f"band {lo:g}-{hi:g} Hz, Butterworth order {order} zero-phase (sosfiltfilt); "
-             f"mode at {f_peak:.4g} Hz; trimmed {n_trim / fs:.4g} s after the envelope peak "
-             f"(t = {tt[i0 - n_trim]:.4g} s) and {n_trim / fs:.4g} s before the end; "
-             f"{a.shape[0]} windows of up to {nw / fs:.4g} s; in-band noise RMS {noise:.3g} "
-             f"({quantity}) from {how}; noise floor {floor:.3g} m ({snr_min:g} x noise); "
-             f"last point at {x_last:.3g} m; stopped: {stop}"
-             + (f" (at {x_stop:.3g} m)" if x_stop > 0 else ""))
-    log.debug("amplitude_curve: %s", notes)
-    return AmplitudeCurve(a[:, 0], a[:, 1], a[:, 2], amplitude_std=a[:, 3],
-                          frequency_std=a[:, 4], damping_std=a[:, 5], noise_floor=floor,
-                          method="hilbert", notes=notes, warnings=tuple(warns))
+    pff = pff_windows(tt, yf, wins, (k_pow, sos, fs, route),
+                      lambda amp, T: _noise_std(noise, amp, T, bw)) \
+        if (method == "pff" or compare) else None
+    def terms(w):
+        return _drift_terms(sos, fs, w, route[0])
+    rows = drift_correct(rows, k_pow, terms)
+    if pff is not None:
+        pff = drift_correct(pff, k_pow, terms)
+    names = (method, "pff" if method == "hilbert" else "hilbert")
+    main, other = (rows, pff) if method == "hilbert" else (pff, rows)
+    return _finish(tt, (main, other, wins, names), (stop, odd_stop),
+                   (lo, hi, order, f_peak, fs, n_start, n_end, i_pk, noise, how, snr_min, k_pow,
+                    route, env[i_pk:i_pk + n_start + 1]),
+                   (max_damping_std, compare, plan))
 
 
-def _windows(tt, env, phase, span, noise_spec, k_pow, f_peak, band, max_zstd):
-    """Window estimates in time order until the signal meets the noise or stops being a mode.
-
-    Returns the rows ``(X, f, zeta, X_std, f_std, zeta_std)``, why the walk stopped and the
-    amplitude of the window that stopped it (0 if none).
-    """
-    i0, i1, nw = span
-    noise, snr_min, bw = noise_spec
-    thresh = snr_min * noise
-    dt = tt[1] - tt[0]
-    # blocks of one period, or of the noise correlation time 1/B if longer
-    n_block = max(1, int(round(1.0 / (f_peak * dt))), int(round(1.0 / (bw * dt))))
-    rows = []
-    s = i0
-    while s + nw <= i1:
-        n_w = nw
-        if np.mean(env[s:s + n_w]) < thresh:
-            return rows, f"envelope below the noise threshold at t = {tt[s]:.4g} s", 0.0
-        for _ in range(2):       # shorten the window where the envelope falls by > e**0.5
-            sl = slice(s, s + n_w)
-            tc = tt[s] + 0.5 * (n_w - 1) * dt
-            (ca, sa), (cp, sp) = _window_fit(tt[sl] - tc, np.log(env[sl]), phase[sl], n_block)
-            sigma, wd = -ca[1], cp[1]
-            n_short = max(int(0.5 / (abs(sigma) * dt)), 3 * n_block, 16)
-            if n_short >= n_w:
-                break
-            n_w = n_short
-        wn = math.hypot(sigma, wd)
-        f, zeta = wn / (2 * math.pi), sigma / wn
-        if not (band[0] < f < band[1]) or not (0.0 < zeta < 0.5):
-            return rows, (f"window at t = {tc:.4g} s gives f = {f:.4g} Hz, zeta = {zeta:.3g} "
-                          "(outside the band or not a decaying mode: beating, forcing or "
-                          "noise)"), 0.0
-        amp = math.exp(ca[0]) / wn ** k_pow
-        f_std = math.hypot(sigma * sa[1], wd * sp[1]) / wn / (2 * math.pi)
-        T = n_w * dt           # decay-rate error that the noise alone would cause
-        sd_noise = math.sqrt(12.0) * noise / math.exp(ca[0]) / (T * math.sqrt(max(bw * T, 3.0)))
-        if len(rows) >= 3 and sa[1] > max_zstd * sigma and sd_noise > max_zstd * sigma:
-            return rows, (f"damping ratio known to worse than {100 * max_zstd:g} % at "
-                          f"t = {tc:.4g} s (noise)"), amp
-        rows.append((amp, f, zeta, amp * sa[0], f_std, sa[1] / wn))
-        s += n_w
-    return rows, "end of the record (after trimming)", 0.0
