@@ -47,10 +47,13 @@ def test_brake_reuss_calibrated_from_neutral_start_reproduces_the_measured_curve
     c = modal_amplitude_curve(preset("brake-reuss"), amplitudes=measured.amplitude[m])
     assert np.max(np.abs(c.frequency / measured.frequency[m] - 1)) < 5e-4
     assert np.max(np.abs(c.damping_ratio / measured.damping_ratio[m] - 1)) < 0.20
+    # the preset carries a calibration of this record: every parameter within 2 % or two of
+    # its stated standard errors (friction is weakly identified from a microslip ring-down,
+    # +- 35 %: the curve fixes the slip combination, not the friction coefficient alone)
     for k, v in res.params.items():
         ref = getattr(preset("brake-reuss"), k) if k == "friction" else \
             getattr(preset("brake-reuss").interface, k)
-        assert v == pytest.approx(ref, rel=0.02), k
+        assert abs(v - ref) <= max(0.02 * abs(ref), 2.0 * res.stderr[k]), (k, res.report())
 
 
 def test_a_lumped_joint_maps_onto_the_interface_with_its_totals():

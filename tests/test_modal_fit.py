@@ -133,12 +133,22 @@ def test_result_api_and_no_mutation():
 
 
 def test_ringdown_end_to_end():
-    """Exact-joint ring-down -> Hilbert curve -> fit: the microslip combination is found."""
+    """Exact-joint ring-down -> Hilbert curve -> fit: the microslip combination is found.
+
+    The truth is the first-order (averaging) closed form. The curve now starts within a
+    period of the release, up to 0.16 phi_max, where the exact motion decays 2-3 % faster
+    than that form (second order in the damping; the raw peaks' log decrement shows the same)
+    while the curve states its damping to 0.3 %: the fit is checked where the first-order
+    form holds to its stated precision (below 0.05 phi_max)."""
     p, k_inf = _joint(beta=0.5)
     t = np.arange(0.0, 20.0, 1 / 400.0)
     _, _, a = modal_ringdown(t, p, K_inf=k_inf, q0=0.2e-3, zeta0=2e-3)
     noise = 0.01 * np.std(a) * np.random.default_rng(7).standard_normal(t.size)
-    cur = amplitude_curve(t, a + noise, band=(12.0, 30.0))
+    full = amplitude_curve(t, a + noise, band=(12.0, 30.0))
+    m = full.amplitude < 0.05 * p.phi_max
+    assert full.amplitude.max() > 0.1 * p.phi_max and m.sum() >= 20
+    cur = AmplitudeCurve(full.amplitude[m], full.frequency[m], full.damping_ratio[m],
+                         frequency_std=full.frequency_std[m], damping_std=full.damping_std[m])
     r = fit_modal_iwan(cur)
     assert r.regime == "microslip"
     x_ref = r.conventions["x_ref"]
