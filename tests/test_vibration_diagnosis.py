@@ -211,6 +211,13 @@ def test_brake_reuss_sweeps_name_an_effect_that_halves_the_mismatch_beyond_the_n
     q = models.modal_amplitude_curve(aug, amplitudes=[1e-4, 3e-4])
     q0 = models.modal_amplitude_curve(spec, amplitudes=[1e-4, 3e-4])
     assert q.frequency[1] > q0.frequency[1] and q.damping_ratio[1] > q0.damping_ratio[1]
+    # the damping the sweeps show keeps growing to their top amplitude: the patch named is a
+    # spread one (a whole patch's added damping would already fall beyond 2 X_s), and the
+    # augmented beam damps clearly more than the plain one beyond the sweeps
+    assert "macroslip_onset" in g.effects, g.report()
+    ms = g.parameters["macroslip_onset"]
+    assert ms["spread"] > 0.5 and 2 * ms["X_s"] < curve.amplitude.max(), g.report()
+    assert q.damping_ratio[1] > 1.3 * q0.damping_ratio[1]
 
 
 def test_where_names_a_turn_as_two_ranges_of_opposite_sign():
