@@ -1,5 +1,5 @@
 """Onset of macroslip over part of the interface: a stuck patch that starts to slide, all at
-once or spread over an amplitude range.
+once or with its slip front moving in as the amplitude grows.
 
 Physics: the calibrated joint carries part of its stuck stiffness in a region that, over
 the calibrated amplitudes, never slips (a high-pressure patch under a bolt, or the region
@@ -8,36 +8,42 @@ amplitude its tangential load reaches its friction limit and it starts to slide.
 as Iwan's distributed-element model (Iwan, J. Appl. Mech. 33:893-900, 1966): parallel
 Jenkins elements (a spring in series with a Coulomb slider; Caughey, J. Appl. Mech.
 27:640-643, 1960, for its harmonic response) of total stiffness ``k_s`` whose slip
-displacements ``phi`` are spread uniformly over ``[u_s, u_e]``, ``u_e = u_s (1 + spread)``.
-A uniform density of slip displacements is what a strip of uniform tangential stiffness per
-area sees when its contact pressure falls linearly across it (``phi = mu p / k_t``), e.g. the
-flank of a pressure cone. ``spread = 0`` is a patch that slides as a whole (one Jenkins
-element). The patch replaces the part ``k_s`` of the joint's stuck stiffness:
+displacements start at ``u_s``: the stiffness fraction ``s`` in ``[0, 1)`` has slip
+displacements below
+
+    phi(s) = u_s (1 - s)^(-spread)          (:func:`patch_thresholds`)
+
+(density ``~ phi^-(1 + 1/spread)`` above ``u_s``, finite total stiffness). ``spread = 0``
+is a patch that slides as a whole (one Jenkins element). Reading: uniform tangential
+stiffness per area and a contact pressure rising towards a peak as ``r^-m`` inside the
+radius where it equals the onset pressure; the threshold is ``phi = mu p / k_t``, so
+``spread = m / 2`` and the slip front moves inward with amplitude, as in Cattaneo-Mindlin
+partial slip (Mindlin, J. Appl. Mech. 16:259-268, 1949). The patch replaces the part ``k_s``
+of the joint's stuck stiffness:
 
     F = F_j(u) + P(u) - k_s u,
 
 identical to the joint below ``u_s``. Above it each sliding element dissipates
-``4 k phi (X - phi)`` per cycle and loses stiffness. A sliding patch (``spread = 0``) adds a
+``4 k phi (X - phi)`` per cycle and loses stiffness. A whole patch (``spread = 0``) adds a
 damping ratio ``~ (X - X_s) / X^2``, which peaks at ``2 X_s`` and falls after; a spread patch
-keeps adding sliding elements up to ``X_e``, so its damping keeps growing until about ``X_e``.
+keeps adding sliding elements, so the damping it adds keeps growing well beyond ``2 X_s``.
 
-Modal form (first harmonic, elastic-perfectly-plastic elements, density
-``rho = kappa_s / (X_e - X_s)`` over ``[X_s, X_e]``; ``a = X_s``, ``b = min(X, X_e)``, for
-``X > X_s``):
+Modal form (first harmonic, elastic-perfectly-plastic elements; ``s(X) = 1 - (X_s /
+X)^(1/spread)`` the sliding fraction at ``X > X_s``):
 
-    w(X)^2 = w_base(X)^2 - rho int_a^b (1 - g(X, phi)) dphi,
-    D(X)   = 4 rho int_a^b phi (X - phi) dphi
-           = 4 kappa_s (b - a) / (X_e - X_s) [X (a + b) / 2 - (a^2 + a b + b^2) / 3],
+    w(X)^2 = w_base(X)^2 - kappa_s int_0^s(X) (1 - g(X, phi(s))) ds,
+    D(X)   = 4 kappa_s int_0^s(X) phi(s) (X - phi(s)) ds,
     zeta = zeta0 + (zeta_base - zeta0) w_base^2 / w^2 + D / (2 pi w^2 X^2),
 
 with ``g`` the Jenkins element's first-harmonic gain (:func:`jenkins_gain`); the stiffness
-integral is in closed form (:func:`patch_stiffness_loss`). Equations and derivation:
+integral by 48-point Gauss-Legendre quadrature (:func:`patch_stiffness_loss`), the
+dissipation in closed form (:func:`patch_dissipation`). Equations and derivation:
 ``docs/vibration_effects.md``.
 
-Joint (time-domain) form: a bank of ``bins`` Jenkins elements, one at the midpoint of each
-of ``bins`` equal-width threshold bins, each with stiffness ``k_s / bins``: the stiffness and
-the mean threshold of every bin are exact; the dissipation of a cycle past a bin is high by
-``4 (k_s / bins) h^2 / 12`` (``h`` the bin width), ``O(bins^-2)`` relative.
+Joint (time-domain) form: a bank of ``bins`` Jenkins elements of stiffness ``k_s / bins``,
+one per bin of equal stiffness, at the bin's median slip displacement ``phi((i + 1/2) /
+bins)``: the stiffness is exact, the dissipation of the bins already sliding is off by their
+spread within the bin, ``O(bins^-2)`` (measured in ``tests/test_vibration_effects.py``).
 """
 from __future__ import annotations
 
@@ -116,8 +122,9 @@ def patch_dissipation(X, X_s, spread):
 
 
 class MacroslipOnset(_Effect):
-    """A stuck patch of the interface that slides above ``u_s`` (all at once, or its
-    elements one after another up to ``u_s (1 + spread)``).
+    """A stuck patch of the interface that slides above ``u_s``: all at once
+    (``spread = 0``), or its elements one after another, the stiffness fraction ``s`` once
+    the slip exceeds ``u_s (1 - s)^-spread``.
 
     Parameters
     ----------
@@ -128,8 +135,9 @@ class MacroslipOnset(_Effect):
     u_s : float, keyword-only
         Slip displacement at which the patch starts to slide [m], ``> 0``.
     spread : float, keyword-only
-        Relative spread of the patch's slip displacements [-], ``>= 0``: uniform over
-        ``[u_s, u_s (1 + spread)]``; 0 (default): the patch slides as a whole.
+        Spread exponent of the patch's slip displacements [-], ``>= 0``: the stiffness
+        fraction ``s`` has them below ``u_s (1 - s)^-spread`` (median ``u_s 2^spread``);
+        0 (default): the patch slides as a whole.
     bins : int, keyword-only
         Jenkins elements of the time-domain bank when ``spread > 0`` (module docstring),
         ``>= 1``; default 32.
@@ -141,8 +149,8 @@ class MacroslipOnset(_Effect):
              ParamSpec("u_s", "m", "slip displacement at which the patch starts to slide",
                        lower=0.0, default=None, ref="u_max", ref_power=-1,
                        fit_bounds=(0.02, 1.0), fit_starts=(0.5, 0.3, 0.7)),
-             ParamSpec("spread", "1", "relative spread of the patch's slip displacements "
-                       "(0: slides as a whole)", default=0.0, fit_bounds=(0.0, 10.0),
+             ParamSpec("spread", "1", "spread exponent of the patch's slip displacements, "
+                       "u_s (1 - s)^-spread (0: slides as a whole)", default=0.0, fit_bounds=(0.0, 10.0),
                        fit_starts=(0.0, 0.0, 1.0)))
     modal_specs = (ParamSpec("kappa_s", "1/s^2", "patch stiffness over modal mass",
                              ref="omega2_ref", ref_power=-1, fit_bounds=(0.0, 0.3),
@@ -150,8 +158,8 @@ class MacroslipOnset(_Effect):
                    ParamSpec("X_s", "m", "amplitude at which the patch starts to slide",
                              ref="X_max", ref_power=-1, fit_bounds=(0.02, 1.0),
                              fit_starts=(0.5, 0.3, 0.6, 0.8, 0.8, 0.9, 0.4, 0.3)),
-                   ParamSpec("spread", "1", "relative spread of the slip amplitudes: uniform "
-                             "over [X_s, X_s (1 + spread)] (0: slides as a whole)",
+                   ParamSpec("spread", "1", "spread exponent of the slip amplitudes, "
+                             "X_s (1 - s)^-spread (0: slides as a whole)",
                              default=0.0, fit_bounds=(0.0, 10.0),
                              fit_starts=(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 3.0)))
     kind = "dissipation"
@@ -190,7 +198,7 @@ class MacroslipOnset(_Effect):
     @classmethod
     def modal_to_joint(cls, values, *, modal_mass, slip_per_amplitude, omega0):
         """Patch stiffness ``k_s = kappa_s m / r^2`` [N/m], onset ``u_s = X_s r`` [m], the
-        relative spread unchanged."""
+        spread exponent unchanged."""
         r = slip_per_amplitude
         return {"k_s": values["kappa_s"] * modal_mass / r ** 2, "u_s": values["X_s"] * r,
                 "spread": values.get("spread", 0.0)}
