@@ -141,8 +141,9 @@ class SpecimenEffect:
         A name of :data:`iwan_element.EFFECTS` with a modal form (``modal_specs``).
     values : mapping or tuple of (str, float) pairs
         The effect's modal parameters (``EFFECTS[name].modal_specs``; amplitudes in metres
-        at the specimen's sensor point), each inside its declared bounds; stored as a sorted
-        tuple of pairs (hashable).
+        at the specimen's sensor point), each inside its declared bounds; those with a
+        declared default (e.g. the ``spread`` of ``macroslip_onset``) may be left out;
+        stored as a sorted tuple of pairs (hashable).
     mode : int
         Elastic mode the effect acts on (1: lowest).
     calibrated_range : tuple of 2 floats or None
@@ -163,8 +164,9 @@ class SpecimenEffect:
             known = sorted(n for n, c in EFFECTS.items() if c.modal_specs)
             raise ValueError(f"name must be an effect with a modal form, one of {known}, "
                              f"got {self.name!r}")
-        vals = dict(self.values)
         want = {sp.name: sp for sp in cls.modal_specs}
+        vals = {**{k: sp.default for k, sp in want.items() if sp.default is not None},
+                **dict(self.values)}          # a modal value with a default may be left out
         if set(vals) != set(want):
             raise ValueError(f"values of {self.name!r} must be {sorted(want)}, got {sorted(vals)}")
         for k, v in vals.items():

@@ -47,8 +47,10 @@ def _shape(name, X, rng):
     Xm = float(X.max())
     if name == "hardening":
         return {"k3_per_mass": 1.0}, "k3_per_mass"
-    if name == "macroslip_onset":
-        return {"kappa_s": 1.0, "X_s": float(rng.uniform(0.3, 0.7)) * Xm}, "kappa_s"
+    if name == "macroslip_onset":       # half the cases a whole patch, half a spread one
+        xs = float(rng.uniform(0.3, 0.7)) * Xm
+        spread = float(rng.uniform(0.3, 2.0)) if rng.uniform() < 0.5 else 0.0
+        return {"kappa_s": 1.0, "X_s": xs, "spread": spread}, "kappa_s"
     if name == "pinning_stiffness":
         return {"k_p_per_mass": 1.0, "delta": float(rng.uniform(0.0, 0.5)) * Xm}, "k_p_per_mass"
     if name == "viscous_damping":

@@ -1,6 +1,6 @@
-"""Vibration effects (hardening, macroslip onset): their modal forms against independent
-routes (the time-domain elements driven through steady cycles, first harmonic and loop area
-by quadrature; the Duffing oscillator integrated in time), energy bookkeeping, neutral
+"""Vibration effects (hardening, macroslip onset, whole or spread): their modal forms against
+independent routes (the time-domain elements driven through steady cycles, first harmonic and
+loop area by quadrature; adaptive quadrature over the patch's thresholds; the Duffing oscillator integrated in time), energy bookkeeping, neutral
 values and bad input."""
 from __future__ import annotations
 
@@ -103,6 +103,68 @@ def test_macroslip_modal_form_is_the_elements_first_harmonic_and_loop_area(xs_fr
     np.testing.assert_allclose(fe[~above], fb[~above], rtol=1e-12)
 
 
+@pytest.mark.parametrize("spread", [0.5, 2.0])
+def test_spread_patch_modal_form_converges_to_the_driven_jenkins_bank(spread):
+    """The spread patch's modal form (stiffness by quadrature over its thresholds,
+    dissipation in closed form) against a bank of Jenkins elements driven through steady
+    cycles (first harmonic and loop area by quadrature of the simulated force): the gap is
+    the bank's binning error, and it shrinks at least 5x from 32 to 128 bins."""
+    ks, us = 0.04 * W0 ** 2, 0.2 * X.max()
+    fb, zb = curve(lambda: IwanJoint(P), X)
+    fm, zm = MacroslipOnset.modal_form(X, fb, zb, 0.0, kappa_s=ks, X_s=us, spread=spread)
+    gaps = []
+    for bins in (32, 128):
+        fe, ze = curve(lambda: MacroslipOnset(IwanJoint(P), k_s=ks, u_s=us, spread=spread,
+                                              bins=bins), X)
+        gaps.append((np.max(np.abs(fm / fe - 1)), np.max(np.abs(zm / ze - 1))))
+    assert gaps[1][0] < 2e-7 and gaps[1][1] < 2e-5, gaps
+    assert gaps[1][0] < 0.2 * gaps[0][0] and gaps[1][1] < 0.2 * gaps[0][1], gaps
+    above = X > us
+    assert np.all(fm[above] < fb[above]) and np.all(zm[above] > zb[above])
+    np.testing.assert_allclose(fm[~above], fb[~above], rtol=1e-12)
+
+
+@pytest.mark.parametrize("spread", [0.02, 0.3, 1.0, 0.5, 3.0])
+def test_spread_patch_integrals_against_adaptive_quadrature(spread):
+    """Lost stiffness and dissipation per cycle of the spread patch against scipy's adaptive
+    quadrature of the Jenkins element's first harmonic and of ``4 phi (X - phi)`` over the
+    stiffness fraction that slides (``phi(s) = X_s (1 - s)^-spread``); the exact log cases
+    ``spread = 1`` and ``1/2`` included."""
+    from scipy.integrate import quad
+
+    from iwan_element.effects.macroslip_onset import (jenkins_gain, patch_dissipation,
+                                                      patch_stiffness_loss)
+    Xs = 1e-5
+    Xa = Xs * np.array([0.5, 1.01, 1.5, 3.0, 10.0])
+    L = patch_stiffness_loss(Xa, Xs, spread)
+    D = patch_dissipation(Xa, Xs, spread)
+    for x, l, d in zip(Xa, L, D):
+        # s = 1 - exp(-t): ds = exp(-t) dt, phi = X_s exp(spread t), t up to ln(x/X_s)/spread
+        tx = max(math.log(x / Xs) / spread, 0.0)
+        phi = lambda t: Xs * math.exp(spread * t)  # noqa: E731
+        lq = quad(lambda t: (1.0 - jenkins_gain(x, phi(t))) * math.exp(-t), 0.0, tx,
+                  limit=200, epsabs=1e-14)[0]
+        dq = quad(lambda t: 4.0 * phi(t) * (x - phi(t)) * math.exp(-t), 0.0, tx, limit=200,
+                  epsabs=1e-24)[0]
+        assert l == pytest.approx(lq, abs=2e-5)
+        assert d == pytest.approx(dq, rel=1e-9, abs=1e-24)
+
+
+def test_spread_patch_tends_to_the_jenkins_patch_and_keeps_damping_growing():
+    """``spread -> 0`` is the patch sliding as a whole; a spread patch's added damping
+    keeps growing beyond ``2 X_s``, where the whole patch's has its peak."""
+    Xa = np.geomspace(0.05, 10.0, 60) * 1e-4
+    f0, z0 = np.full(Xa.size, 80.0), np.full(Xa.size, 1e-3)
+    kw = dict(kappa_s=0.02 * (2 * np.pi * 80.0) ** 2, X_s=1e-4)
+    fj, zj = MacroslipOnset.modal_form(Xa, f0, z0, 0.0, **kw)
+    fs, zs = MacroslipOnset.modal_form(Xa, f0, z0, 0.0, spread=1e-7, **kw)
+    np.testing.assert_allclose(fs, fj, rtol=1e-6)
+    np.testing.assert_allclose(zs, zj, rtol=1e-5)
+    assert Xa[np.argmax(zj)] == pytest.approx(2e-4, rel=0.1)
+    _, z2 = MacroslipOnset.modal_form(Xa, f0, z0, 0.0, spread=2.0, **kw)
+    assert np.argmax(z2) > np.argmax(zj) and np.max(z2[Xa > 2e-4] - z2[np.argmax(zj)]) > 0
+
+
 def test_macroslip_dissipation_and_energy_balance():
     """Loop area = Iwan dissipation (closed form) + 4 k_s u_s (X - u_s); work = stored +
     dissipated along the history; identical to the joint below u_s."""
@@ -123,6 +185,36 @@ def test_macroslip_dissipation_and_energy_balance():
     small = 0.9 * us * np.sin(th)
     np.testing.assert_allclose(MacroslipOnset(IwanJoint(P), k_s=ks, u_s=us).force_history(small),
                                IwanJoint(P).force_history(small), rtol=1e-12, atol=1e-12)
+
+
+def test_spread_patch_bank_dissipation_and_energy_balance():
+    """The bank of a spread patch: loop area of a driven cycle = Iwan dissipation (closed
+    form) + sum over its sliding elements of 4 k_i phi_i (X - phi_i); work = stored +
+    dissipated; identical to the joint below u_s; the bins hold k_s in total."""
+    ks, us, x, q = 2e4, 0.2 * P.phi_max, 0.9 * P.phi_max, 1.5
+    el = MacroslipOnset(IwanJoint(P), k_s=ks, u_s=us, spread=q, bins=16)
+    s = (np.arange(16) + 0.5) / 16
+    phi = us * (1 - s) ** -q
+    slid = phi < x
+    k1, D = cycle(el, x, n=2880)
+    want = float(dissipation(x, P)) + np.sum(4 * ks / 16 * phi[slid] * (x - phi[slid]))
+    assert D == pytest.approx(want, rel=1e-4)
+    th = np.linspace(0, 0.5 * np.pi + 4 * np.pi, 3000)
+    u = x * np.sin(th)
+    F = el.force_history(u)
+    W = np.sum(0.5 * (F[1:] + F[:-1]) * np.diff(u))
+    for ui in u:
+        el.trial(ui)
+        el.commit()
+    assert el.work == pytest.approx(W, rel=1e-3)
+    assert el.stored_energy == pytest.approx(el.work - el.dissipated_energy)
+    small = 0.9 * us * np.sin(th)
+    np.testing.assert_allclose(MacroslipOnset(IwanJoint(P), k_s=ks, u_s=us, spread=q)
+                               .force_history(small), IwanJoint(P).force_history(small),
+                               rtol=1e-12, atol=1e-12)
+    fresh = MacroslipOnset(IwanJoint(P), k_s=ks, u_s=us, spread=q)
+    assert fresh.trial(1e-3 * us)[1] == pytest.approx(IwanJoint(P).trial(1e-3 * us)[1],
+                                                      rel=1e-12)
 
 
 def test_effects_declare_kind_units_and_bounds():
@@ -146,10 +238,16 @@ def test_bad_parameters_raise_naming_them():
         MacroslipOnset(IwanJoint(P), k_s=1e4, u_s=0.0)
     with pytest.raises(ValueError, match="k_s"):
         MacroslipOnset(IwanJoint(P), k_s=-1e4, u_s=1e-5)
+    with pytest.raises(ValueError, match="spread"):
+        MacroslipOnset(IwanJoint(P), k_s=1e4, u_s=1e-5, spread=-0.1)
+    with pytest.raises(ValueError, match="spread"):
+        MacroslipOnset(IwanJoint(P), k_s=1e4, u_s=1e-5, spread=float("nan"))
+    with pytest.raises(ValueError, match="bins"):
+        MacroslipOnset(IwanJoint(P), k_s=1e4, u_s=1e-5, spread=1.0, bins=0)
 
 
 def test_augmented_specimen_rings_down_in_exudyn_with_its_energy_balanced():
-    """The Brake-Reuss specimen carrying hardening + macroslip onset (modal form) in the
+    """The Brake-Reuss specimen carrying hardening + a spread macroslip patch (modal form) in the
     Exudyn transient: the energy balance (beams, springs, joints, effects) closes to 1e-3,
     the patch dissipates, and the decay's frequency and damping follow the augmented QSMA
     curve (an independent route: time integration of the beam vs quasi-static analysis)."""
@@ -159,7 +257,7 @@ def test_augmented_specimen_rings_down_in_exudyn_with_its_energy_balanced():
     X0 = 60e-6
     w2 = (2 * np.pi * 80.5) ** 2
     aug = s.with_effects({"hardening": {"k3_per_mass": 0.01 * w2 / X0 ** 2},
-                          "macroslip_onset": {"kappa_s": 0.02 * w2, "X_s": 25e-6}})
+                          "macroslip_onset": {"kappa_s": 0.02 * w2, "X_s": 20e-6, "spread": 1.0}})
     r = models.ringdown(aug, amplitude=X0, cycles=8, steps_per_period=96, record_energy=True)
     assert r.metadata["effects"] == ("hardening", "macroslip_onset")
     assert np.max(np.abs(r.energy_error())) < 1e-3

@@ -342,6 +342,7 @@ def _vib_result(vib, sel, chi_b, err_b, rf0, rz0, warns, alpha, noise_from, cand
             f" after {' + '.join(sel.named)}" if sel.named else
             f"; no candidate ({', '.join(cands)}) explains it")
             + _left(vib.X, np.log(vib.fm / f_new), np.log(vib.zm / z_new), vib.sf, vib.sz))
+    warns.extend(_at_upper_bound(vib, names, z))
     steps = [{"on": st["on"], "candidates": [
         {k: r.get(k) for k in ("name", "error", "dIC", "explained", "verdict")}
         for r in st["rows"]]} for st in sel.steps]
@@ -370,6 +371,21 @@ def _vib_result(vib, sel, chi_b, err_b, rf0, rz0, warns, alpha, noise_from, cand
         predicted_frequency=ro(vib.fp), predicted_damping=ro(vib.zp), model_frequency=ro(f_new),
         model_damping=ro(z_new), steps=tuple(_json(s) for s in steps), warnings=tuple(warns),
         details=_json(details), covariance=None if cov is None else ro(cov))
+
+
+def _at_upper_bound(vib, names, z):
+    """Warnings for fitted values at the upper end of their fit range: the data do not
+    bound them, and predictions beyond the measured amplitudes depend on that end."""
+    out, k = [], vib.nn
+    for nm in names:
+        for sp in EFFECTS[nm].modal_specs:
+            lo, hi = sp.fit_bounds
+            if z[k] >= hi - 1e-6 * (hi - lo):
+                out.append(f"{nm} {sp.name} sits at the upper end of its fit range "
+                           f"({hi:g} in fit units): the data do not bound it, and predictions "
+                           "beyond the measured amplitudes depend on that end")
+            k += 1
+    return out
 
 
 def _covariance(vib, names, z, chi2):
