@@ -25,17 +25,15 @@ from the plain model.
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
+import iwan_element as ie
+from iwan_element import models
+from iwan_element.models.calibration import measured_amplitude_curve
 
-import iwan_element as ie  # noqa: E402
-from iwan_element import models  # noqa: E402
-from iwan_element.models.calibration import measured_amplitude_curve  # noqa: E402
+ROOT = Path(__file__).resolve().parents[1]
 
 SHARED = [ROOT.parent / "shared" / "data", ROOT.parents[1] / "shared" / "data"]
 

@@ -230,7 +230,7 @@ def test_real_brb_sweeps_against_the_hammer_curve():
     two tests were made on different set-ups; the data README expects about 0.1 Hz) and
     within 35 % in damping (README: 10-20 % between test types; measured here 20-29 %)."""
     from iwan_element import read_sweep_csv
-    from models.calibration import measured_amplitude_curve
+    from iwan_element.models.calibration import measured_amplitude_curve
     sweep = sweep_curve(**read_sweep_csv(SWEEPS))
     hammer = measured_amplitude_curve(HAMMER)
     assert "receptance-like" in sweep.notes and not sweep.warnings
