@@ -57,7 +57,7 @@ def sweeps_curve(path):
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--out", type=Path, default=Path("brb_discrepancy"))
+    ap.add_argument("--out", type=Path, default=Path("out") / "brb_discrepancy")
     ap.add_argument("--quick", action="store_true", help="shorter ring-down")
     a = ap.parse_args(argv)
     d = data_dir()
