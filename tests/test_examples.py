@@ -91,3 +91,21 @@ def test_preload_sweep_quick(tmp_path):
     zmax = [float(r["damping_max"]) for r in rows]
     assert [float(r["preload"]) for r in rows] == [5e3, 15e3, 30e3]
     assert drop[0] > drop[1] > drop[2] > 0 and zmax[0] > zmax[1] > zmax[2]
+
+
+_SHARED_DATA = next((d for d in (ROOT.parent / "shared" / "data", ROOT.parents[1] / "shared" / "data")
+                     if (d / "brb-steppedsine-fc" / "fc_sweeps.csv").exists()), None)
+
+
+@pytest.mark.skipif(_SHARED_DATA is None, reason="../shared/data/brb-* (GPL data, read from "
+                    "../shared only, never copied into the project) is absent")
+def test_brb_discrepancy_example_names_adds_and_predicts(tmp_path):
+    """The beam workflow end to end: the sweeps' disagreement is named, the augmented beam
+    predicts more frequency and damping than the plain one at 300 um, the figure is written."""
+    proc = run_example("brb_discrepancy.py", "--quick", "--out", str(tmp_path))
+    out = proc.stdout
+    assert "named: " in out and "named: none" not in out, out
+    assert (tmp_path / "brb_discrepancy.png").stat().st_size > 10_000
+    row = next(line.split() for line in out.splitlines() if line.strip().startswith("300 "))
+    f_before, f_after, z_before, z_after = float(row[1]), float(row[2]), float(row[7]), float(row[8])
+    assert f_after > f_before and z_after > 1.2 * z_before, out
