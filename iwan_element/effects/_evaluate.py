@@ -22,9 +22,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..core._history import History, unit_params, walk
+from ..core._history import History, unit_params
 from ..core.closed_form import _slip_energy
 from ..core.joint import IwanJoint
+from ..core.masing import reversal_structure
 from ..core.parameters import IwanParameters
 from . import EFFECTS
 from ._base import _Effect
@@ -70,14 +71,14 @@ def has_vector_form(name: str) -> bool:
 
 
 def dissipation_segments(u: np.ndarray, tol: float):
-    """Branch segments walked by the Iwan joint along ``u`` (the walk of
-    :func:`iwan_element.core._history.walk`, which mirrors ``IwanJoint._walk``).
+    """Branch segments walked by the Iwan joint along ``u`` (the kernel's walk,
+    :func:`iwan_element.core.masing.reversal_structure`).
 
     Returns ``(step, virgin, xa, xb)``: step index of each segment, True for a segment on the
     virgin curve (dissipation ``I_H(xb) - I_H(xa)``, clipped at 0) and False on a branch
     (``2 (I_H(xb) - I_H(xa))``), and the backbone arguments at its ends [m].
     """
-    _, (step, anchor, ua, ub) = walk(u, tol, segments=True)
+    _, (step, anchor, ua, ub) = reversal_structure(u, tol, segments=True)
     virgin = anchor < 0
     ur = np.where(virgin, 0.0, u[np.maximum(anchor, 0)])
     scale = np.where(virgin, 1.0, 0.5)
