@@ -31,7 +31,8 @@ from numba import njit
 from ._validation import check_scalar, finite_array
 from .parameters import IwanParameters
 
-__all__ = ["masing_constants", "masing_history", "reversal_structure"]
+__all__ = ["masing_constants", "constants_from_arrays", "masing_history", "masing_rows",
+           "reversal_structure"]
 
 # Positions in the constants vector of one parameter set (see masing_constants).
 KT, FS, PM, IPM, E1, E3, KTPM, A, B, G2, G3, GPM, IHC, FSPM, TOL = range(15)
@@ -60,6 +61,21 @@ def masing_constants(params: IwanParameters, tol: float) -> np.ndarray:
     return np.array([p.KT, p.Fs, pm, 1.0 / pm, p.chi + 1.0, p.chi + 3.0, p.KT * pm,
                      Ks * pm / (p.chi + 2.0), Ks, g2, g3, g2 - g3, (p.chi + 1.0) * g3,
                      p.Fs * pm, float(tol)])
+
+
+def constants_from_arrays(Fs, KT, chi, beta, tol=0.0) -> np.ndarray:
+    """:func:`masing_constants` for arrays of parameters (broadcast together), shape
+    ``(m, 15)``; ``phi_max`` from paper eq. 11 as :class:`IwanParameters` computes it. The
+    values are not validated here (the callers hold validated parameters)."""
+    Fs, KT, chi, beta, tol = np.broadcast_arrays(*(np.asarray(x, float).ravel()
+                                                   for x in (Fs, KT, chi, beta, tol)))
+    pm = Fs / KT * ((1.0 + beta) / (beta + (chi + 1.0) / (chi + 2.0)))
+    Ks = KT / (1.0 + beta)
+    g2 = 0.5 * KT * pm * pm
+    g3 = Ks * pm * pm / ((chi + 2.0) * (chi + 3.0))
+    return np.ascontiguousarray(np.column_stack(
+        [KT, Fs, pm, 1.0 / pm, chi + 1.0, chi + 3.0, KT * pm, Ks * pm / (chi + 2.0), Ks, g2, g3,
+         g2 - g3, (chi + 1.0) * g3, Fs * pm, tol * pm]))
 
 
 @njit(cache=True)
@@ -222,6 +238,17 @@ def _rows(C, U, F, K, W, D):
         _row(C[k], U[k], F[k], K[k], W[k], D[k], ids, seg)
 
 
+def masing_rows(C: np.ndarray, U: np.ndarray):
+    """The kernel on raw arrays (no validation): constants ``C`` of shape ``(m, 15)``
+    (:func:`constants_from_arrays`) and histories ``U`` of shape ``(m, n)`` [m], each from
+    the virgin state. Returns ``F, K, W, D``, each ``(m, n)`` (see :func:`masing_history`)."""
+    C = np.ascontiguousarray(C, dtype=float)
+    U = np.ascontiguousarray(U, dtype=float)
+    F, K, W, D = (np.empty(U.shape) for _ in range(4))
+    _rows(C, U, F, K, W, D)
+    return F, K, W, D
+
+
 def _as_params(params) -> list:
     if isinstance(params, IwanParameters):
         return [params]
@@ -265,8 +292,7 @@ def masing_history(u, params, *, reversal_tol: float = 1e-12):
     if U.shape[0] != len(plist):
         raise ValueError(f"u has {U.shape[0]} rows but params has {len(plist)} sets")
     C = np.array([masing_constants(p, tol * p.phi_max) for p in plist])
-    F, K, W, D = (np.empty(U.shape) for _ in range(4))
-    _rows(C, U, F, K, W, D)
+    F, K, W, D = masing_rows(C, U)
     if single:
         return F[0], K[0], W[0], D[0]
     return F, K, W, D
