@@ -160,5 +160,7 @@ class SlipDegradation(_SliderEffect):
         self._lam = math.exp(-self.rate * max(D, 0.0))
         n = self._n
         cap = self._lam * self._phi
-        self._e[:n] = np.clip(self._e[:n], -cap, cap)
+        e = self._e[:n]
+        np.minimum(e, cap, out=e)
+        np.maximum(e, -cap, out=e)
         self._refresh_caps()
