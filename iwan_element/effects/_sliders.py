@@ -99,6 +99,7 @@ class _SliderEffect(_Effect):
         self._n = k.size
         self._sign = np.concatenate([np.ones(k.size), -np.ones(k.size)])
         self._cap_up = self._cap_dn = None
+        self._sk = self._sign * self._k
 
     # ---- thresholds
     def _caps(self):
@@ -134,7 +135,7 @@ class _SliderEffect(_Effect):
         return _bank_step(self._e, self._slip, self._k, self._sign, cs, ck, du)
 
     def _stored(self, e):
-        return 0.5 * float(np.dot(self._sign * self._k, e * e))
+        return 0.5 * float(self._sk @ (e * e))
 
     def trial(self, u: float, v: float = 0.0) -> tuple[float, float]:
         """Force [N] and tangent [N/m]."""
@@ -190,7 +191,7 @@ class _SliderEffect(_Effect):
         """Thresholds that fall with the dissipated energy: step by step (the reference;
         :class:`~iwan_element.effects.SlipDegradation` solves it per monotone run).
         ``prev``: the displacement the state was committed at [m]."""
-        sk = self._sign * self._k
+        sk = self._sk
         out = np.empty(u.size)
         for i, x in enumerate(u.tolist()):
             du = x - prev
