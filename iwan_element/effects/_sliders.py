@@ -189,7 +189,7 @@ class _SliderEffect(_Effect):
 
     def _correction_energy(self, u: np.ndarray, D_inner, prev: float = 0.0) -> np.ndarray:
         """Thresholds that fall with the dissipated energy: step by step (the reference;
-        :class:`~iwan_element.effects.SlipDegradation` solves it per monotone run).
+        :class:`~iwan_element.effects.SlipDegradation` runs the same rule compiled).
         ``prev``: the displacement the state was committed at [m]."""
         sk = self._sk
         out = np.empty(u.size)
