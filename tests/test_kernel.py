@@ -179,3 +179,31 @@ def test_input_is_not_mutated():
     masing_history(u, IwanParameters(1.0, 1e3, 0.0, 0.0))
     reversal_structure(u, 0.0, segments=True)
     assert np.array_equal(u, keep)
+
+
+def test_compiled_routes_work_in_either_order_in_a_fresh_process():
+    """Every compiled entry point is called from Python after the whole-history routes have
+    loaded the functions they share (numba once failed to return arrays to Python from a
+    cached function first compiled inside another one: 'descr is NULL')."""
+    import subprocess
+    import sys
+    from pathlib import Path
+    code = """
+import numpy as np
+from iwan_element import IwanJoint, IwanParameters, SlipDegradation, BreakAway, Backlash
+p = IwanParameters(1.0, 100.0, -0.5, 0.2)
+u = 0.02 * np.sin(np.linspace(0, 12, 400))
+d = SlipDegradation(IwanJoint(p), rate=0.5)
+d.correction_history(u, np.linspace(0, 1e-3, 400))
+b = BreakAway(IwanJoint(p), ratio=1.5)
+b.correction_history(u)
+Backlash(d, gap=1e-3, drag=0.05).force_history(u[:50])
+Backlash(b, gap=1e-3, drag=0.05).force_history(u[:50])
+print("ok")
+"""
+    root = Path(__file__).resolve().parents[1]
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         cwd=root, env={**os.environ, "PYTHONPATH": str(root)},
+                         timeout=600)
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert out.stdout.strip() == "ok"

@@ -40,7 +40,7 @@ import numpy as np
 from ..core.discrete import DiscreteIwan
 from ..core.parameters import IwanParameters
 from . import _law_kernel as K
-from ._base import _Effect, _require_plain_joint, monotone_runs
+from ._base import _Effect, _require_plain_joint
 
 __all__: list[str] = []
 
@@ -107,15 +107,12 @@ class _Pieces:
 
 def law_history(pieces: _Pieces, u) -> np.ndarray:
     """Signed bank force along a displacement history ``u`` [m] from the state of ``pieces``
-    (which is advanced): one vectorised evaluation per monotone run of ``u`` (breaking is
-    monotone within a run, so this equals the step-by-step rule)."""
-    uu = np.asarray(u, float)
-    out = np.zeros(uu.size)
-    for a, b, d in monotone_runs(uu):
-        u_s = uu[a - 1] if a > 0 else 0.0
-        delta = d * (uu[a:b] - u_s)
-        out[a:b] = pieces.force(d, delta)[0]
-        pieces.advance(d, float(delta[-1]))
+    (which is advanced): one evaluation per monotone run of ``u`` (breaking is monotone
+    within a run, so this equals the step-by-step rule), compiled
+    (:func:`._law_kernel.law_history`)."""
+    out, pieces.state = K.law_history(pieces.state, np.ascontiguousarray(u, dtype=float),
+                                      pieces.pm, pieces.p, pieces.C)
+    pieces._last = None
     return out
 
 

@@ -64,7 +64,7 @@ def _limit(st, r, d, delta):
 
 
 @njit(cache=True)
-def law_force(st, d, deltas, pm, p, Cc):
+def _force(st, d, deltas, pm, p, Cc):
     """Signed force [N] and tangent [N/m] of the banks after each travel ``deltas[j] >= 0``
     [m] from the current state in direction ``d``: ``kappa_d`` times the broken sliders'
     moment plus the stuck sliders' stretch."""
@@ -92,7 +92,7 @@ def law_force(st, d, deltas, pm, p, Cc):
 
 
 @njit(cache=True)
-def law_advance(st, d, delta, pm, p, Cc):
+def _advance(st, d, delta, pm, p, Cc):
     """Move the state by a travel ``delta >= 0`` in direction ``d`` (stick to
     ``sigma_d phi``, slide at ``kappa_d phi``): the new table and the signed work [J]."""
     nr = st.shape[1]
@@ -152,6 +152,20 @@ def _merge(st):
     return out[:, :m].copy()
 
 
+# Entry points from Python. (A cached function that returns arrays must not also be called
+# from another compiled function: numba then fails to box its arrays for Python.)
+@njit(cache=True)
+def law_force(st, d, deltas, pm, p, Cc):
+    """:func:`_force`, called from Python."""
+    return _force(st, d, deltas, pm, p, Cc)
+
+
+@njit(cache=True)
+def law_advance(st, d, delta, pm, p, Cc):
+    """:func:`_advance`, called from Python."""
+    return _advance(st, d, delta, pm, p, Cc)
+
+
 @njit(cache=True)
 def law_stored(st, pm, p, Cc):
     """Signed elastic energy of the banks [J]: ``0.5 int rho e^2``."""
@@ -162,3 +176,40 @@ def law_stored(st, pm, p, Cc):
         c = st[C, r]
         E += (s * s * M2 + 2.0 * s * c * M1 + c * c * M0) * st[SG, r]
     return 0.5 * E
+
+
+@njit(cache=True)
+def law_history(st, u, pm, p, Cc):
+    """Signed bank force [N] along the displacement history ``u`` [m] from the state ``st``:
+    one :func:`law_force` per monotone run of ``u`` (breaking is monotone within a run), then
+    :func:`law_advance` to its end. Runs as in ``_base.monotone_runs``: a run starts where the
+    sign of the (nonzero) increment changes, pauses belong to the run they interrupt, samples
+    before the first move carry no force. Returns ``(force, final state)``."""
+    n = u.size
+    out = np.zeros(n)
+    starts = np.empty(n + 1, np.int64)
+    dirs = np.empty(n)
+    m = 0
+    d_prev = 0.0
+    prev = 0.0
+    for i in range(n):
+        du = u[i] - prev
+        prev = u[i]
+        if du != 0.0:
+            d = 1.0 if du > 0.0 else -1.0
+            if d != d_prev:
+                starts[m] = i
+                dirs[m] = d
+                m += 1
+                d_prev = d
+    starts[m] = n
+    for r in range(m):
+        a = starts[r]
+        b = starts[r + 1]
+        d = dirs[r]
+        u_s = u[a - 1] if a > 0 else 0.0
+        deltas = d * (u[a:b] - u_s)
+        F, _ = _force(st, d, deltas, pm, p, Cc)
+        out[a:b] = F
+        st, _ = _advance(st, d, deltas[-1], pm, p, Cc)
+    return out, st

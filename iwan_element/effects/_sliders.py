@@ -36,17 +36,17 @@ N_SLIDERS = 128
 
 
 @njit(cache=True)
-def _bank_step(e, s, k, sgn, cs, ck, du):
+def _bank_step(e, s, k, sgn, cs, ck, du, e_new, s_new):
     """Every slider's exact linear move ``du`` [m] (compiled): stick until the stretch in the
     direction of motion reaches the static cap ``cs``, then slide at the kinetic cap ``ck``.
 
-    Returns ``(e_new, s_new, W, F, K)``: stretches [m], slip states (+1/-1 sliding that way, 0
-    stuck), and the sums weighted by ``sgn`` (modified bank +1, plain bank -1) of the work
-    [J], the force ``k e`` [N] and the stiffness of the stuck sliders [N/m].
+    Writes the new stretches [m] to ``e_new`` and slip states (+1/-1 sliding that way, 0
+    stuck) to ``s_new``; returns ``(W, F, K)``, the sums weighted by ``sgn`` (modified bank
+    +1, plain bank -1) of the work [J], the force ``k e`` [N] and the stiffness of the stuck
+    sliders [N/m]. (Arrays are passed in, not returned: a cached function that also runs
+    inside another compiled one must not box arrays for Python.)
     """
     n = e.size
-    e_new = np.empty(n)
-    s_new = np.empty(n)
     W = 0.0
     F = 0.0
     K = 0.0
@@ -57,7 +57,7 @@ def _bank_step(e, s, k, sgn, cs, ck, du):
             F += sgn[i] * k[i] * e[i]
             if s[i] == 0.0:
                 K += sgn[i] * k[i]
-        return e_new, s_new, W, F, K
+        return W, F, K
     d = 1.0 if du > 0.0 else -1.0
     adu = abs(du)
     for i in range(n):
@@ -79,7 +79,7 @@ def _bank_step(e, s, k, sgn, cs, ck, du):
         e_new[i] = d * ep_new
         W += sgn[i] * work
         F += sgn[i] * k[i] * e_new[i]
-    return e_new, s_new, W, F, K
+    return W, F, K
 
 
 class _SliderEffect(_Effect):
@@ -132,7 +132,9 @@ class _SliderEffect(_Effect):
         """Stretches, slip states and the signed work, force and stiffness of both banks for a
         linear move ``du`` [m] (:func:`_bank_step`)."""
         cs, ck = self._cap_up if du > 0.0 else self._cap_dn
-        return _bank_step(self._e, self._slip, self._k, self._sign, cs, ck, du)
+        e, s = np.empty(self._e.size), np.empty(self._e.size)
+        W, F, K = _bank_step(self._e, self._slip, self._k, self._sign, cs, ck, du, e, s)
+        return e, s, W, F, K
 
     def _stored(self, e):
         return 0.5 * float(self._sk @ (e * e))

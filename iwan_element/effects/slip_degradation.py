@@ -37,6 +37,8 @@ def _degrade_history(e, slip, k, sgn, phi, lam, Wb, rate, u, prev, D_inner):
     caps = np.empty(2 * n)
     caps[n:] = phi
     out = np.empty(u.size)
+    e_new = np.empty(2 * n)
+    s_new = np.empty(2 * n)
     for i in range(u.size):
         du = u[i] - prev
         if du == 0.0:
@@ -47,7 +49,7 @@ def _degrade_history(e, slip, k, sgn, phi, lam, Wb, rate, u, prev, D_inner):
             continue
         for j in range(n):
             caps[j] = lam * phi[j]
-        e_new, s_new, W, F, _ = _bank_step(e, slip, k, sgn, caps, caps, du)
+        W, F, _ = _bank_step(e, slip, k, sgn, caps, caps, du, e_new, s_new)
         e[:] = e_new
         slip[:] = s_new
         Wb += W
