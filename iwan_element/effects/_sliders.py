@@ -161,12 +161,14 @@ class _SliderEffect(_Effect):
         self._e, self._slip = e, s
         self._Wb += work
         self._ub = float(self._tu)
-        self._after_commit()
+        stored = self._after_commit()
         self._W = inner.work + self._Wb
-        self._D = inner.dissipated_energy + self._Wb - self._stored(self._e)
+        self._D = inner.dissipated_energy + self._Wb - (
+            self._stored(self._e) if stored is None else stored)
 
-    def _after_commit(self) -> None:
-        pass
+    def _after_commit(self):
+        """Update the thresholds after a commit; may return the banks' stored energy [J]."""
+        return None
 
     #: The thresholds depend on the dissipated energy (the fast loop then tracks it); laws
     #: fixed per direction are :class:`~iwan_element.effects._law._LawEffect`.

@@ -21,6 +21,30 @@ from ._sliders import _SliderEffect, _bank_step
 
 __all__ = ["SlipDegradation"]
 
+
+@njit(cache=True)
+def _degrade(e, sgn, k, phi, D_inner, Wb, rate, cap_s, cap_k):
+    """The commit of the correction bank (compiled): ``lambda = exp(-rate D)`` from the energy
+    dissipated so far (``D = D_inner + Wb - stored``), the modified sliders clipped to their
+    shrunken caps ``lambda phi`` (``e`` changed in place) and the caps of the modified bank
+    written to the first entries of ``cap_s``, ``cap_k``. Returns ``(lambda, stored energy
+    after the clip [J])``."""
+    n = phi.size
+    stored = 0.0
+    for j in range(2 * n):
+        stored += sgn[j] * k[j] * (e[j] * e[j])
+    lam = math.exp(-rate * max(D_inner + Wb - 0.5 * stored, 0.0))
+    after = 0.0
+    for j in range(2 * n):
+        if j < n:
+            c = lam * phi[j]
+            e[j] = max(min(e[j], c), -c)
+            cap_s[j] = c
+            cap_k[j] = c
+        after += sgn[j] * k[j] * (e[j] * e[j])
+    return lam, 0.5 * after
+
+
 @njit(cache=True)
 def _degrade_history(e, slip, k, sgn, phi, lam, Wb, rate, u, prev, D_inner):
     """The per-sample rule of the correction bank along ``u`` [m] (compiled): each step moves
@@ -36,6 +60,8 @@ def _degrade_history(e, slip, k, sgn, phi, lam, Wb, rate, u, prev, D_inner):
     n = phi.size
     caps = np.empty(2 * n)
     caps[n:] = phi
+    for j in range(n):
+        caps[j] = lam * phi[j]
     out = np.empty(u.size)
     e_new = np.empty(2 * n)
     s_new = np.empty(2 * n)
@@ -47,20 +73,12 @@ def _degrade_history(e, slip, k, sgn, phi, lam, Wb, rate, u, prev, D_inner):
                 F += sgn[j] * k[j] * e[j]
             out[i] = F
             continue
-        for j in range(n):
-            caps[j] = lam * phi[j]
         W, F, _ = _bank_step(e, slip, k, sgn, caps, caps, du, e_new, s_new)
         e[:] = e_new
         slip[:] = s_new
         Wb += W
         out[i] = F                                   # the step's force, before the commit
-        stored = 0.0
-        for j in range(2 * n):
-            stored += sgn[j] * k[j] * (e[j] * e[j])
-        lam = math.exp(-rate * max(D_inner[i] + Wb - 0.5 * stored, 0.0))
-        for j in range(n):                           # clip to the shrunken capacity
-            c = lam * phi[j]
-            e[j] = max(min(e[j], c), -c)
+        lam, _ = _degrade(e, sgn, k, phi, D_inner[i], Wb, rate, caps, caps)
         prev = u[i]
     return out, lam, Wb
 
@@ -100,8 +118,8 @@ class SlipDegradation(_SliderEffect):
         c = self._lam * self._phi
         return c, c, c, c
 
-    def _after_commit(self) -> None:
-        self._after_commit_energy(self._inner.dissipated_energy)
+    def _after_commit(self) -> float:
+        return self._after_commit_energy(self._inner.dissipated_energy)
 
     def _correction_energy(self, u: np.ndarray, D_inner) -> np.ndarray:
         """The per-sample rule of :meth:`_SliderEffect._correction_energy`, compiled
@@ -115,13 +133,13 @@ class SlipDegradation(_SliderEffect):
         self._refresh_caps()
         return out
 
-    def _after_commit_energy(self, D_inner: float) -> None:
-        """Update ``lambda`` from the joint's dissipated energy and clip the stretches."""
-        D = D_inner + self._Wb - self._stored(self._e)
-        self._lam = math.exp(-self.rate * max(D, 0.0))
-        n = self._n
-        cap = self._lam * self._phi
-        e = self._e[:n]
-        np.minimum(e, cap, out=e)
-        np.maximum(e, -cap, out=e)
-        self._refresh_caps()
+    def _after_commit_energy(self, D_inner: float) -> float:
+        """Update ``lambda`` from the joint's dissipated energy, clip the stretches and the
+        caps (:func:`_degrade`); returns the stored energy of the banks after the clip [J]."""
+        if self._cap_up is None:
+            self._refresh_caps()
+        self._lam, stored = _degrade(self._e, self._sign, self._k, self._phi, D_inner,
+                                     self._Wb, self.rate, *self._cap_up)
+        np.copyto(self._cap_dn[0], self._cap_up[0])
+        np.copyto(self._cap_dn[1], self._cap_up[1])
+        return stored
