@@ -80,16 +80,17 @@ class _Pieces:
         """Signed force of the banks (sum of ``sg`` x bank force) after a travel ``delta``
         [m] (scalar or 1-D array) from the current state in direction ``d``, and the
         tangent [N/m] (continuous part; a point mass breaking is a jump)."""
-        last = self._last
-        if last is not None and np.ndim(delta) == 0 and last[0] == d and last[1] == delta:
-            return last[2]               # the same step again (a wrapper re-trials to commit)
-        dl = np.atleast_1d(np.asarray(delta, float))
-        F, Kt = K.law_force(self.state, float(d), dl, self.pm, self.p, self.C)
         if np.ndim(delta) == 0:
-            out = F[0], Kt[0]
-            self._last = (d, float(delta), out)
+            delta = float(delta)
+            last = self._last
+            if last is not None and last[0] == d and last[1] == delta:
+                return last[2]           # the same step again (a wrapper re-trials to commit)
+            F, Kt = K.law_force(self.state, float(d), np.array([delta]), self.pm, self.p, self.C)
+            out = float(F[0]), float(Kt[0])
+            self._last = (d, delta, out)
             return out
-        return F, Kt
+        return K.law_force(self.state, float(d), np.asarray(delta, float), self.pm, self.p,
+                           self.C)
 
     def advance(self, d: float, delta: float) -> float:
         """Move the state by a travel ``delta >= 0`` in direction ``d``; returns the signed
