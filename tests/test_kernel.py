@@ -191,8 +191,12 @@ def test_compiled_routes_work_in_either_order_in_a_fresh_process():
     code = """
 import numpy as np
 from iwan_element import IwanJoint, IwanParameters, SlipDegradation, BreakAway, Backlash
+from iwan_element.effects._evaluate import Evaluator
 p = IwanParameters(1.0, 100.0, -0.5, 0.2)
 u = 0.02 * np.sin(np.linspace(0, 12, 400))
+ev = Evaluator(u, np.zeros(400), np.arange(400), np.arange(400), tol=0.0)
+ev.unit_force((0.01, -0.5, 0.2), ("slip_degradation", "backlash"),
+              [{"rate": 0.5}, {"gap": 1e-3, "drag": 0.05}])
 d = SlipDegradation(IwanJoint(p), rate=0.5)
 d.correction_history(u, np.linspace(0, 1e-3, 400))
 b = BreakAway(IwanJoint(p), ratio=1.5)
@@ -207,3 +211,26 @@ print("ok")
                          timeout=600)
     assert out.returncode == 0, out.stderr[-2000:]
     assert out.stdout.strip() == "ok"
+
+
+@pytest.mark.parametrize("drag", [0.0, 0.05, 0.3])
+def test_compiled_wear_behind_a_gap_equals_the_elements(drag):
+    """The diagnosis evaluates slip degradation inside backlash (then a spring and a dashpot)
+    with the elements' per-sample rule compiled; it must give their forces."""
+    from iwan_element.core._history import unit_params
+    from iwan_element.effects._evaluate import Evaluator, build_element
+    rng = np.random.default_rng(int(drag * 100) + 4)
+    t = np.linspace(0.0, 6.0, 600)
+    u = 0.02 * np.sin(2 * np.pi * t) + 2e-4 * rng.normal(size=t.size)
+    v = np.gradient(u, t)
+    shape = (0.01, -0.5, 0.2)
+    names = ("slip_degradation", "backlash", "pinning_stiffness", "viscous_damping")
+    keep = np.arange(0, u.size, 3)
+    ev = Evaluator(u, v, keep, np.arange(u.size), tol=1e-12 * 0.02)
+    assert not ev.fast(names)                   # the route below, not the run-by-run one
+    for rate, gap in [(0.0, 0.0), (0.8, 0.002), (3.0, 0.006)]:
+        vals = [{"rate": rate}, {"gap": gap, "drag": drag}, {"k_p": 2.0, "delta": 0.01},
+                {"c": 0.01}]
+        F = ev.unit_force(shape, names, vals)
+        ref = build_element(unit_params(*shape), names, vals).force_history(u, v)[keep]
+        assert np.max(np.abs(F - ref)) <= 1e-12

@@ -30,7 +30,7 @@ import numpy as np
 
 from ._validation import check_scalar, finite_array
 from ._history import REVERSAL_TOL
-from .masing import _NOSEG, _step, masing_constants, masing_history
+from .masing import _NOSEG, masing_step, masing_constants, masing_history
 from .parameters import IwanParameters
 
 __all__ = ["IwanJoint"]
@@ -326,7 +326,7 @@ class IwanJoint:
 
     # ------------------------------------------------------------------ kernel
     def _kernel(self, u: float):
-        """The compiled walk (:func:`iwan_element.core.masing._step`) from the committed
+        """The compiled walk (:func:`iwan_element.core.masing.masing_step`) from the committed
         state to ``u``: ``(n, F, K, dW, dD, G, I_H)``; the new stack is the first ``n``
         entries of the arrays (a reversal is written above the committed ones)."""
         if self._n + 1 >= self._us.size:        # room for one more reversal
@@ -334,7 +334,7 @@ class IwanJoint:
             self._us = np.concatenate([self._us, np.empty(grow)])
             self._Fr = np.concatenate([self._Fr, np.empty(grow)])
             self._at = np.concatenate([self._at, np.empty(grow, np.int64)])
-        return _step(self._c, self._us, self._Fr, self._at, self._n, self._u, self._F,
+        return masing_step(self._c, self._us, self._Fr, self._at, self._n, self._u, self._F,
                      self._Gc, self._IHc, u, _NOSEG)
 
     def _walk(self, u: float, acc):

@@ -29,7 +29,7 @@ import numpy as np
 from ._history import REVERSAL_TOL
 from ._validation import check_scalar, finite_array
 from .joint import REVERSAL_TOL_MAX
-from .masing import _NOSEG, _step, masing_constants
+from .masing import _NOSEG, masing_step, masing_constants
 from .parameters import IwanParameters
 
 __all__ = ["IwanJointBank"]
@@ -303,11 +303,12 @@ class IwanJointBank:
 
     def _walk_commit(self, i: int, u: float) -> None:
         """Exact Masing walk of point ``i`` from its committed state to ``u`` (the compiled
-        kernel, :func:`iwan_element.core.masing._step`), committed."""
+        kernel, :func:`iwan_element.core.masing.masing_step`), committed."""
         self._room(i)
-        n, F, _, dW, dD, G, I = _step(self._consts[i], self._us[i], self._Fr[i], self._at[i],
-                                      int(self._nst[i]), float(self.u[i]), float(self._F[i]),
-                                      float(self._Gc[i]), float(self._IHc[i]), u, _NOSEG)
+        n, F, _, dW, dD, G, I = masing_step(
+            self._consts[i], self._us[i], self._Fr[i], self._at[i], int(self._nst[i]),
+            float(self.u[i]), float(self._F[i]), float(self._Gc[i]), float(self._IHc[i]), u,
+            _NOSEG)
         self.u[i] = u
         self._F[i] = F
         self._W[i] += dW

@@ -15,8 +15,8 @@ Every exact element of the package moves the same reversal stack (Masing 1926; I
   ``dG`` and ``dI_H``), with ``G`` the backbone's integral and ``I_H`` the double integral of
   the slider density; both in closed form.
 
-:func:`_advance` is the one walk; :func:`_step` applies it to one element's stack (the slow
-path of :class:`~iwan_element.IwanJoint` and :class:`~iwan_element.IwanJointBank`) and
+:func:`_advance` is the one walk; :func:`masing_step` applies it to one element's stack (the
+slow path of :class:`~iwan_element.IwanJoint` and :class:`~iwan_element.IwanJointBank`) and
 :func:`masing_history` to whole histories, one parameter set per row (a batch of parameter
 sets, e.g. all the perturbations of a finite-difference Jacobian, is one call).
 :func:`reversal_structure` gives the parameter-free part (which reversal each sample's branch
@@ -32,7 +32,7 @@ from ._validation import check_scalar, finite_array
 from .parameters import IwanParameters
 
 __all__ = ["masing_constants", "constants_from_arrays", "masing_history", "masing_rows",
-           "reversal_structure"]
+           "masing_step", "reversal_structure"]
 
 # Positions in the constants vector of one parameter set (see masing_constants).
 KT, FS, PM, IPM, E1, E3, KTPM, A, B, G2, G3, GPM, IHC, FSPM, TOL = range(15)
@@ -187,9 +187,16 @@ _NOSEG = np.empty((4, 0))
 
 
 @njit(cache=True)
-def _step(c, us, Fr, at, n, uc, Fc, Gc, IHc, u, seg):
-    """:func:`_advance` for one element (its compiled entry point from Python); returns
-    ``(m, F, K, dW, dD, G, I_H)``. ``seg``: an empty ``(4, 0)`` array."""
+def masing_step(c, us, Fr, at, n, uc, Fc, Gc, IHc, u, seg):
+    """One element's move from its committed state to ``u`` (:func:`_advance`; the compiled
+    entry point from Python and from other compiled elements).
+
+    ``c``: constants (:func:`masing_constants`); ``us, Fr, at``: the stack arrays with room for
+    one more entry; ``n``: committed depth; ``uc, Fc``: committed displacement [m] and force
+    [N]; ``Gc, IHc``: ``G`` and ``I_H`` there [J]; ``seg``: an empty ``(4, 0)`` array.
+    Returns ``(m, F, K, dW, dD, G, I_H)``: the new depth (the first ``m`` stack entries),
+    force [N], tangent [N/m], work and dissipation of the move [J], ``G`` and ``I_H`` at ``u``.
+    """
     m, F, K, W, D, G, I, _ = _advance(c, us, Fr, at, n, uc, Fc, Gc, IHc, u, 0, seg, 0)
     return m, F, K, W, D, G, I
 

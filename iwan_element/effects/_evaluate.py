@@ -22,13 +22,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..core._history import History, unit_params
+from ..core._history import REVERSAL_TOL, History, unit_params
 from ..core.closed_form import _slip_energy
 from ..core.joint import IwanJoint
-from ..core.masing import reversal_structure
+from ..core.masing import masing_constants, reversal_structure
 from ..core.parameters import IwanParameters
 from . import EFFECTS
 from ._base import _Effect
+from ._series_kernel import backlash_wear_history
 
 __all__: list[str] = []
 
@@ -63,6 +64,14 @@ def _layers(names) -> tuple:
             and not any(EFFECTS[n].needs_energy for n in chain)):
         series = rest[:1]
     return chain, series, rest[len(series):]
+
+
+def wear_behind_gap(names) -> bool:
+    """True for slip degradation with backlash around it (then vector forms only): the
+    stack :func:`backlash_wear_history` evaluates compiled, sample by sample."""
+    names = tuple(names)
+    return (names[:2] == ("slip_degradation", "backlash")
+            and all(has_vector_form(n) for n in names[2:]))
 
 
 def has_vector_form(name: str) -> bool:
@@ -192,6 +201,8 @@ class Evaluator:
         p1 = unit_params(*shape)
         u, v, drive, pos = self._ext
         if not self.fast(names):
+            if wear_behind_gap(names):
+                return self._wear_behind_gap(p1, names, values)
             el = build_element(p1, names, values)
             F = el.force_history(u[drive], v[drive])
             return F[pos]
@@ -210,4 +221,18 @@ class Evaluator:
             F = F + el.correction_history(x, D)[pos]
         for name in rest:
             F = EFFECTS[name].vector_force(F, self.uk, self.vk, **vals[name])
+        return F
+
+    def _wear_behind_gap(self, p1: IwanParameters, names, values) -> np.ndarray:
+        """Unit force of ``slip_degradation, backlash[, vector forms]`` (:func:`wear_behind_gap`)
+        at the kept samples: the elements' per-sample rule on the drive samples, compiled."""
+        u, _, drive, pos = self._ext
+        wear = EFFECTS["slip_degradation"](IwanJoint(p1), **values[0])
+        gap = values[1]
+        F = backlash_wear_history(np.ascontiguousarray(u[drive]),
+                                  masing_constants(p1, REVERSAL_TOL * p1.phi_max), wear._k,
+                                  wear._sign, wear._phi, wear.rate, float(gap["gap"]),
+                                  float(gap.get("drag", 0.0)))[pos]
+        for name, vals in zip(names[2:], values[2:]):
+            F = EFFECTS[name].vector_force(F, self.uk, self.vk, **vals)
         return F

@@ -110,7 +110,8 @@ def _advance(st, d, delta, pm, p, Cc):
         else:      # stick from s phi + c to sigma phi, drop to kappa phi, slide at kappa phi
             wb = ((0.5 * sig * sig - kap * sig - 0.5 * s_d * s_d + kap * s_d) * Mb2
                   + (kap * delta + c_d * (kap - s_d)) * Mb1 - 0.5 * c_d * c_d * Mb0)
-            wk = wb + delta * (s_d * (M1 - Mb1) + c_d * (M0 - Mb0)) + 0.5 * delta * delta * (M0 - Mb0)
+            wk = (wb + delta * (s_d * (M1 - Mb1) + c_d * (M0 - Mb0))
+                  + 0.5 * delta * delta * (M0 - Mb0))
         work += wk * st[SG, r]
         atom = st[W, r] > 0.0
         if brk if atom else x > st[A, r]:          # the broken part, now sliding
