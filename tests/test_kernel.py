@@ -213,30 +213,24 @@ print("ok")
     assert out.stdout.strip() == "ok"
 
 
-INNER = [((), []), (("slip_degradation",), [{"rate": 0.8}]), (("slip_degradation",), [{"rate": 4.0}]),
-         (("breakaway",), [{"ratio": 1.7}]),
-         (("asymmetric_slip", "breakaway"), [{"asymmetry": 0.2}, {"ratio": 1.4}])]
-
-
 @pytest.mark.parametrize("drag", [0.0, 0.05, 0.3])
-@pytest.mark.parametrize("inner", INNER, ids=["joint", "wear", "fast wear", "breakaway", "laws"])
-def test_compiled_backlash_route_equals_the_elements(drag, inner):
-    """The diagnosis evaluates backlash around the joint and its slider effects (wear or
-    laws), then a spring and a dashpot, with the elements' per-sample rule compiled
-    (``effects/_series_kernel.py``); it must give their forces."""
+def test_compiled_wear_behind_a_gap_equals_the_elements(drag):
+    """The diagnosis evaluates slip degradation inside backlash (then a spring and a dashpot)
+    with the elements' per-sample rule compiled; it must give their forces."""
     from iwan_element.core._history import unit_params
-    from iwan_element.effects._evaluate import Evaluator, behind_gap, build_element
+    from iwan_element.effects._evaluate import Evaluator, build_element
     rng = np.random.default_rng(int(drag * 100) + 4)
     t = np.linspace(0.0, 6.0, 600)
     u = 0.02 * np.sin(2 * np.pi * t) + 2e-4 * rng.normal(size=t.size)
     v = np.gradient(u, t)
     shape = (0.01, -0.5, 0.2)
-    names = inner[0] + ("backlash", "pinning_stiffness", "viscous_damping")
-    assert behind_gap(names) == len(inner[0])
+    names = ("slip_degradation", "backlash", "pinning_stiffness", "viscous_damping")
     keep = np.arange(0, u.size, 3)
     ev = Evaluator(u, v, keep, np.arange(u.size), tol=1e-12 * 0.02)
-    for gap in (0.0, 0.002, 0.006):
-        vals = inner[1] + [{"gap": gap, "drag": drag}, {"k_p": 2.0, "delta": 0.01}, {"c": 0.01}]
+    assert not ev.fast(names)                   # the route below, not the run-by-run one
+    for rate, gap in [(0.0, 0.0), (0.8, 0.002), (3.0, 0.006)]:
+        vals = [{"rate": rate}, {"gap": gap, "drag": drag}, {"k_p": 2.0, "delta": 0.01},
+                {"c": 0.01}]
         F = ev.unit_force(shape, names, vals)
         ref = build_element(unit_params(*shape), names, vals).force_history(u, v)[keep]
         assert np.max(np.abs(F - ref)) <= 1e-12

@@ -11,16 +11,12 @@ force is evaluated
 * vectorised and exact (the Iwan joint through :class:`~iwan_element.core._history.History`,
   then each effect's ``vector_force``) when every effect of the stack has a history-free
   vectorised form (viscous damping, pinning stiffness);
-* a backlash around the joint, optionally with slip degradation or slider laws below it and
-  vector forms around it, by the elements' per-sample rule compiled
-  (:mod:`._series_kernel`) on the drive samples (the fitted samples plus every turning
-  point of the record);
-* otherwise by the effect elements' own ``force_history`` on the drive samples (exact for
-  these rate-independent elements, whose state depends only on the turning points; a
-  dashpot in such a stack sees the velocity at the drive samples).
+* otherwise by the effect elements' own ``force_history`` on the displacement decimated to
+  the fitted samples plus every turning point of the record (exact for these
+  rate-independent elements, whose state depends only on the turning points; a dashpot in
+  such a stack sees the velocity at the drive samples).
 
-The routes are checked against the elements in ``tests/test_diagnosis.py`` and
-``tests/test_kernel.py``.
+Both routes are checked against the elements in ``tests/test_diagnosis.py``.
 """
 from __future__ import annotations
 
@@ -33,8 +29,7 @@ from ..core.masing import masing_constants, reversal_structure
 from ..core.parameters import IwanParameters
 from . import EFFECTS
 from ._base import _Effect
-from ._law import _LawEffect
-from ._series_kernel import backlash_history
+from ._series_kernel import backlash_wear_history
 
 __all__: list[str] = []
 
@@ -71,17 +66,12 @@ def _layers(names) -> tuple:
     return chain, series, rest[len(series):]
 
 
-def behind_gap(names) -> int:
-    """Number of slider-level effects below a backlash that the compiled per-sample route
-    (:func:`backlash_history`) evaluates, or -1: slip degradation or composable slider laws
-    (or none) innermost, then backlash, then effects with vector forms only."""
+def wear_behind_gap(names) -> bool:
+    """True for slip degradation with backlash around it (then vector forms only): the
+    stack :func:`backlash_wear_history` evaluates compiled, sample by sample."""
     names = tuple(names)
-    k = 0
-    while k < len(names) and EFFECTS[names[k]].slider_level:
-        k += 1
-    ok = (names[k:k + 1] == ("backlash",) and stack_ok(names[:k])
-          and all(has_vector_form(n) for n in names[k + 1:]))
-    return k if ok else -1
+    return (names[:2] == ("slip_degradation", "backlash")
+            and all(has_vector_form(n) for n in names[2:]))
 
 
 def has_vector_form(name: str) -> bool:
@@ -210,20 +200,22 @@ class Evaluator:
         self.n_eval += 1
         p1 = unit_params(*shape)
         u, v, drive, pos = self._ext
-        k = behind_gap(names)
-        if k >= 0:
-            return self._behind_gap(p1, names, values, k)
         if not self.fast(names):
+            if wear_behind_gap(names):
+                return self._wear_behind_gap(p1, names, values)
             el = build_element(p1, names, values)
             F = el.force_history(u[drive], v[drive])
             return F[pos]
-        chain, _, rest = _layers(names)         # (a backlash was taken by behind_gap)
+        chain, series, rest = _layers(names)
         vals = dict(zip(names, values))
         els = [IwanJoint(p1)]
         for name in chain:
             els.append(EFFECTS[name](els[-1], **vals[name]))
-        x = u[drive]
-        F = self.hist.forces(p1)
+        x, hist = u[drive], self.hist
+        if series:                      # the joint sees its own path w, not the drive
+            x = EFFECTS[series[0]](els[-1], **vals[series[0]]).joint_path(x)
+            hist = History(x, keep=pos, tol=self._tol)
+        F = hist.forces(p1)
         for el in els[1:]:              # each adds its force over the chain below it
             D = self.unit_dissipation(p1)[drive] if el.needs_energy else None
             F = F + el.correction_history(x, D)[pos]
@@ -231,29 +223,16 @@ class Evaluator:
             F = EFFECTS[name].vector_force(F, self.uk, self.vk, **vals[name])
         return F
 
-    def _behind_gap(self, p1: IwanParameters, names, values, k: int) -> np.ndarray:
-        """Unit force of ``k`` slider-level effects, backlash and vector forms
-        (:func:`behind_gap`) at the kept samples: the elements' per-sample rule on the drive
-        samples, compiled (:func:`backlash_history`)."""
+    def _wear_behind_gap(self, p1: IwanParameters, names, values) -> np.ndarray:
+        """Unit force of ``slip_degradation, backlash[, vector forms]`` (:func:`wear_behind_gap`)
+        at the kept samples: the elements' per-sample rule on the drive samples, compiled."""
         u, _, drive, pos = self._ext
-        el = IwanJoint(p1)
-        wear, tables = None, []
-        for name, vals in zip(names[:k], values[:k]):
-            el = EFFECTS[name](el, **vals)
-            if isinstance(el, _LawEffect):
-                tables.append(el._new_pieces())
-            else:
-                wear = el
-        z = np.zeros(0)
-        table = (np.concatenate([t.state for t in tables], axis=1) if tables
-                 else np.zeros((11, 0)))
-        dens = (tables[0].pm, tables[0].p, tables[0].C) if tables else (1.0, 1.0, 0.0)
-        gap = values[k]
-        F = backlash_history(
-            np.ascontiguousarray(u[drive]), masing_constants(p1, REVERSAL_TOL * p1.phi_max),
-            z if wear is None else wear._k, z if wear is None else wear._sign,
-            z if wear is None else wear._phi, 0.0 if wear is None else wear.rate, table, *dens,
-            float(gap["gap"]), float(gap.get("drag", 0.0)))[pos]
-        for name, vals in zip(names[k + 1:], values[k + 1:]):
+        wear = EFFECTS["slip_degradation"](IwanJoint(p1), **values[0])
+        gap = values[1]
+        F = backlash_wear_history(np.ascontiguousarray(u[drive]),
+                                  masing_constants(p1, REVERSAL_TOL * p1.phi_max), wear._k,
+                                  wear._sign, wear._phi, wear.rate, float(gap["gap"]),
+                                  float(gap.get("drag", 0.0)))[pos]
+        for name, vals in zip(names[2:], values[2:]):
             F = EFFECTS[name].vector_force(F, self.uk, self.vk, **vals)
         return F

@@ -64,49 +64,30 @@ def _limit(st, r, d, delta):
 
 
 @njit(cache=True)
-def _row_force(st, r, d, dl, M0t, M1t, pm, p, Cc):
-    """Force [N] and tangent [N/m] of row ``r`` (unsigned, in direction ``d``) after a travel
-    ``dl >= 0``: ``kappa_d`` times the broken sliders' moment plus the stuck sliders'
-    stretch; ``M0t, M1t``: the row's total moments."""
-    sig = st[SU, r] if d > 0 else st[SD, r]
-    kap = st[KU, r] if d > 0 else st[KD, r]
-    x, brk, s_d, c_d, raw, den = _limit(st, r, d, dl)
-    M0b, M1b, _ = _moments(st, r, x, brk, pm, p, Cc)
-    f = kap * M1b + s_d * (M1t - M1b) + (c_d + dl) * (M0t - M0b)
-    k = M0t - M0b
-    if st[W, r] == 0.0 and raw > st[A, r] and raw < st[B, r] and den > 0.0:
-        rho = Cc / pm * (x / pm) ** (p - 1.0)
-        k -= rho * (sig - kap) * x / den
-    return f, k
-
-
-@njit(cache=True)
 def _force(st, d, deltas, pm, p, Cc):
     """Signed force [N] and tangent [N/m] of the banks after each travel ``deltas[j] >= 0``
-    [m] from the current state in direction ``d``."""
+    [m] from the current state in direction ``d``: ``kappa_d`` times the broken sliders'
+    moment plus the stuck sliders' stretch."""
     m = deltas.size
     F = np.zeros(m)
     K = np.zeros(m)
     for r in range(st.shape[1]):
         M0t, M1t, _ = _moments(st, r, st[B, r], True, pm, p, Cc)
+        sig = st[SU, r] if d > 0 else st[SD, r]
+        kap = st[KU, r] if d > 0 else st[KD, r]
         sg = st[SG, r]
+        cont = st[W, r] == 0.0
         for j in range(m):
-            f, k = _row_force(st, r, d, deltas[j], M0t, M1t, pm, p, Cc)
+            dl = deltas[j]
+            x, brk, s_d, c_d, raw, den = _limit(st, r, d, dl)
+            M0b, M1b, _ = _moments(st, r, x, brk, pm, p, Cc)
+            f = kap * M1b + s_d * (M1t - M1b) + (c_d + dl) * (M0t - M0b)
+            k = M0t - M0b
+            if cont and raw > st[A, r] and raw < st[B, r] and den > 0.0:
+                rho = Cc / pm * (x / pm) ** (p - 1.0)
+                k -= rho * (sig - kap) * x / den
             F[j] += sg * f
             K[j] += sg * k
-    return d * F, K
-
-
-@njit(cache=True)
-def force_at(st, d, delta, pm, p, Cc):
-    """:func:`_force` for one travel ``delta`` (scalars in and out, no arrays)."""
-    F = 0.0
-    K = 0.0
-    for r in range(st.shape[1]):
-        M0t, M1t, _ = _moments(st, r, st[B, r], True, pm, p, Cc)
-        f, k = _row_force(st, r, d, delta, M0t, M1t, pm, p, Cc)
-        F += st[SG, r] * f
-        K += st[SG, r] * k
     return d * F, K
 
 
