@@ -11,12 +11,18 @@ force is evaluated
 * vectorised and exact (the Iwan joint through :class:`~iwan_element.core._history.History`,
   then each effect's ``vector_force``) when every effect of the stack has a history-free
   vectorised form (viscous damping, pinning stiffness);
-* otherwise by the effect elements' own ``force_history`` on the displacement decimated to
-  the fitted samples plus every turning point of the record (exact for these
-  rate-independent elements, whose state depends only on the turning points; a dashpot in
-  such a stack sees the velocity at the drive samples).
+* slip degradation behind a backlash (then vector forms), whose wear makes the joint's path
+  depend on every commit, by the elements' per-sample rule compiled
+  (:mod:`._series_kernel`) on the drive samples (the fitted samples plus every turning
+  point of the record); a backlash around a joint whose state depends only on its turning
+  points is found run by run instead (``Backlash.joint_path``: measured twice as fast on
+  the damper records);
+* otherwise by the effect elements' own ``force_history`` on the drive samples (exact for
+  these rate-independent elements, whose state depends only on the turning points; a
+  dashpot in such a stack sees the velocity at the drive samples).
 
-Both routes are checked against the elements in ``tests/test_diagnosis.py``.
+The routes are checked against the elements in ``tests/test_diagnosis.py`` and
+``tests/test_kernel.py``.
 """
 from __future__ import annotations
 

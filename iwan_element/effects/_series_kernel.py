@@ -32,9 +32,8 @@ __all__: list[str] = []
 @njit(cache=True)
 def _trial(c, st, J, e, sl, k, sg, caps, S, w, e_new, s_new):
     """Force [N] and tangent [N/m] of the wearing joint at ``w`` from its committed state."""
-    seg = np.empty((4, 0))
     _, F, K, _, _, _, _ = masing_step(c, st[0], st[1], st[2], int(J[0]), J[1], J[2], J[3], J[4],
-                                      w, seg)
+                                      w, st[3])
     _, dF, dK = _bank_step(e, sl, k, sg, caps, caps, w - S[2], e_new, s_new)
     return F + dF, K + dK
 
@@ -42,9 +41,8 @@ def _trial(c, st, J, e, sl, k, sg, caps, S, w, e_new, s_new):
 @njit(cache=True)
 def _commit(c, st, J, e, sl, k, sg, phi, caps, S, rate, w, e_new, s_new):
     """Commit the wearing joint at ``w``; returns its force there [N] (before the clip)."""
-    seg = np.empty((4, 0))
     n, F, _, _, dD, G, I = masing_step(c, st[0], st[1], st[2], int(J[0]), J[1], J[2], J[3],
-                                       J[4], w, seg)
+                                       J[4], w, st[3])
     J[0], J[1], J[2], J[3], J[4], J[5] = n, w, F, G, I, J[5] + dD
     W, dF, _ = _bank_step(e, sl, k, sg, caps, caps, w - S[2], e_new, s_new)
     e[:] = e_new
@@ -126,7 +124,7 @@ def backlash_wear_history(u, c, k, sg, phi, rate, gap, drag):
     bank's slider stiffnesses and signs (modified bank, then the plain one) and the slip
     displacements of one bank [m]; ``rate`` [1/J], ``gap`` [m], ``drag`` [N]."""
     m = u.size
-    st = np.empty((3, m + 2))                       # joint stack: u_r, F_r, sample index
+    st = np.empty((2, m + 2))                       # joint stack: u_r, F_r
     J = np.zeros(6)
     S = np.array([1.0, 0.0, 0.0])
     B = np.zeros(4)
@@ -138,11 +136,12 @@ def backlash_wear_history(u, c, k, sg, phi, rate, gap, drag):
     caps = np.concatenate((phi, phi))
     at = np.empty(m + 2, np.int64)
     out = np.empty(m)
+    stack = (st[0], st[1], at, np.empty((4, 0)))     # stack arrays, no segments recorded
     for i in range(m):
-        w, side, F = _solve(c, (st[0], st[1], at), J, e, sl, k, sg, caps, S, B, u[i], gap,
+        w, side, F = _solve(c, stack, J, e, sl, k, sg, caps, S, B, u[i], gap,
                             drag, e_new, s_new)
         out[i] = F
-        B[3] = _commit(c, (st[0], st[1], at), J, e, sl, k, sg, phi, caps, S, rate, w, e_new,
+        B[3] = _commit(c, stack, J, e, sl, k, sg, phi, caps, S, rate, w, e_new,
                        s_new)
         if drag > 0.0:
             B[1] = side * gap if side != 0.0 else min(max(u[i] - w, -gap), gap)
