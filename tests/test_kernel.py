@@ -234,3 +234,30 @@ def test_compiled_wear_behind_a_gap_equals_the_elements(drag):
         F = ev.unit_force(shape, names, vals)
         ref = build_element(unit_params(*shape), names, vals).force_history(u, v)[keep]
         assert np.max(np.abs(F - ref)) <= 1e-12
+
+
+@pytest.mark.parametrize("drag", [0.0, 0.05, 0.3])
+def test_compiled_joint_path_behind_a_gap_equals_the_element(drag):
+    """The diagnosis finds the joint's own path behind a backlash run by run, compiled
+    (``_series_kernel.backlash_path``): it must be ``Backlash.joint_path`` (itself checked
+    against the per-sample elements in ``tests/test_effects.py``), with and without slider
+    laws, through a pause and a rest at the start."""
+    from iwan_element import AsymmetricSlip, Backlash, BreakAway
+    from iwan_element.core._history import unit_params
+    from iwan_element.effects._evaluate import _constants, _laws
+    from iwan_element.effects._series_kernel import backlash_path
+    rng = np.random.default_rng(int(drag * 100) + 9)
+    p1 = unit_params(0.01, -0.5, 0.2)
+    t = np.linspace(0.0, 6.0, 700)
+    u = 0.02 * np.sin(2 * np.pi * t) + 3e-4 * rng.normal(size=t.size)
+    u[:5] = 0.0
+    u[300:310] = u[300]
+    for make in (lambda j: [j], lambda j: [j, BreakAway(j, ratio=1.6)],
+                 lambda j: [j, AsymmetricSlip(j, asymmetry=0.2)]):
+        els = make(IwanJoint(p1))
+        if len(els) == 2 and isinstance(els[1], AsymmetricSlip):
+            els.append(BreakAway(els[1], ratio=1.3))
+        for gap in (0.0, 0.002, 0.006):
+            ref = Backlash(els[-1], gap=gap, drag=drag).joint_path(u)
+            new = backlash_path(u, _constants(p1), *_laws(els[1:]), gap, drag)
+            assert np.max(np.abs(new - ref)) <= 1e-12 * 0.02

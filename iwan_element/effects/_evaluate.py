@@ -35,7 +35,7 @@ from ..core.masing import masing_constants, reversal_structure
 from ..core.parameters import IwanParameters
 from . import EFFECTS
 from ._base import _Effect
-from ._series_kernel import backlash_wear_history
+from ._series_kernel import backlash_history, backlash_path
 
 __all__: list[str] = []
 
@@ -74,7 +74,7 @@ def _layers(names) -> tuple:
 
 def wear_behind_gap(names) -> bool:
     """True for slip degradation with backlash around it (then vector forms only): the
-    stack :func:`backlash_wear_history` evaluates compiled, sample by sample."""
+    stack :func:`backlash_history` evaluates compiled, sample by sample."""
     names = tuple(names)
     return (names[:2] == ("slip_degradation", "backlash")
             and all(has_vector_form(n) for n in names[2:]))
@@ -219,7 +219,9 @@ class Evaluator:
             els.append(EFFECTS[name](els[-1], **vals[name]))
         x, hist = u[drive], self.hist
         if series:                      # the joint sees its own path w, not the drive
-            x = EFFECTS[series[0]](els[-1], **vals[series[0]]).joint_path(x)
+            gap = vals[series[0]]       # (Backlash.joint_path, compiled)
+            x = backlash_path(np.ascontiguousarray(x), _constants(p1), *_laws(els[1:]),
+                              float(gap["gap"]), float(gap.get("drag", 0.0)))
             hist = History(x, keep=pos, tol=self._tol)
         F = hist.forces(p1)
         for el in els[1:]:              # each adds its force over the chain below it
@@ -235,10 +237,24 @@ class Evaluator:
         u, _, drive, pos = self._ext
         wear = EFFECTS["slip_degradation"](IwanJoint(p1), **values[0])
         gap = values[1]
-        F = backlash_wear_history(np.ascontiguousarray(u[drive]),
-                                  masing_constants(p1, REVERSAL_TOL * p1.phi_max), wear._k,
-                                  wear._sign, wear._phi, wear.rate, float(gap["gap"]),
-                                  float(gap.get("drag", 0.0)))[pos]
+        F = backlash_history(np.ascontiguousarray(u[drive]), _constants(p1), wear._k,
+                             wear._sign, wear._phi, wear.rate, *_laws([]),
+                             float(gap["gap"]), float(gap.get("drag", 0.0)))[pos]
         for name, vals in zip(names[2:], values[2:]):
             F = EFFECTS[name].vector_force(F, self.uk, self.vk, **vals)
         return F
+
+
+def _constants(p1: IwanParameters) -> np.ndarray:
+    """Kernel constants of ``IwanJoint(p1)`` (the package's reversal tolerance)."""
+    return masing_constants(p1, REVERSAL_TOL * p1.phi_max)
+
+
+def _laws(els) -> tuple:
+    """``(table, pm, p, C)``: the joint's slider-law state (the law effects ``els``, each
+    wrapping the one before, their tables side by side; no columns for none)."""
+    if not els:
+        return np.zeros((11, 0)), 1.0, 1.0, 0.0
+    tables = [el._new_pieces() for el in els]
+    t0 = tables[0]
+    return np.concatenate([t.state for t in tables], axis=1), t0.pm, t0.p, t0.C

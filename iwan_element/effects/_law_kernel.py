@@ -64,30 +64,49 @@ def _limit(st, r, d, delta):
 
 
 @njit(cache=True)
+def _row_force(st, r, d, dl, M0t, M1t, pm, p, Cc):
+    """Force [N] and tangent [N/m] of row ``r`` (unsigned, in direction ``d``) after a travel
+    ``dl >= 0``: ``kappa_d`` times the broken sliders' moment plus the stuck sliders'
+    stretch; ``M0t, M1t``: the row's total moments."""
+    sig = st[SU, r] if d > 0 else st[SD, r]
+    kap = st[KU, r] if d > 0 else st[KD, r]
+    x, brk, s_d, c_d, raw, den = _limit(st, r, d, dl)
+    M0b, M1b, _ = _moments(st, r, x, brk, pm, p, Cc)
+    f = kap * M1b + s_d * (M1t - M1b) + (c_d + dl) * (M0t - M0b)
+    k = M0t - M0b
+    if st[W, r] == 0.0 and raw > st[A, r] and raw < st[B, r] and den > 0.0:
+        rho = Cc / pm * (x / pm) ** (p - 1.0)
+        k -= rho * (sig - kap) * x / den
+    return f, k
+
+
+@njit(cache=True)
 def _force(st, d, deltas, pm, p, Cc):
     """Signed force [N] and tangent [N/m] of the banks after each travel ``deltas[j] >= 0``
-    [m] from the current state in direction ``d``: ``kappa_d`` times the broken sliders'
-    moment plus the stuck sliders' stretch."""
+    [m] from the current state in direction ``d``."""
     m = deltas.size
     F = np.zeros(m)
     K = np.zeros(m)
     for r in range(st.shape[1]):
         M0t, M1t, _ = _moments(st, r, st[B, r], True, pm, p, Cc)
-        sig = st[SU, r] if d > 0 else st[SD, r]
-        kap = st[KU, r] if d > 0 else st[KD, r]
         sg = st[SG, r]
-        cont = st[W, r] == 0.0
         for j in range(m):
-            dl = deltas[j]
-            x, brk, s_d, c_d, raw, den = _limit(st, r, d, dl)
-            M0b, M1b, _ = _moments(st, r, x, brk, pm, p, Cc)
-            f = kap * M1b + s_d * (M1t - M1b) + (c_d + dl) * (M0t - M0b)
-            k = M0t - M0b
-            if cont and raw > st[A, r] and raw < st[B, r] and den > 0.0:
-                rho = Cc / pm * (x / pm) ** (p - 1.0)
-                k -= rho * (sig - kap) * x / den
+            f, k = _row_force(st, r, d, deltas[j], M0t, M1t, pm, p, Cc)
             F[j] += sg * f
             K[j] += sg * k
+    return d * F, K
+
+
+@njit(cache=True)
+def force_at(st, d, delta, pm, p, Cc):
+    """:func:`_force` for one travel ``delta`` (scalars in and out, no arrays)."""
+    F = 0.0
+    K = 0.0
+    for r in range(st.shape[1]):
+        M0t, M1t, _ = _moments(st, r, st[B, r], True, pm, p, Cc)
+        f, k = _row_force(st, r, d, delta, M0t, M1t, pm, p, Cc)
+        F += st[SG, r] * f
+        K += st[SG, r] * k
     return d * F, K
 
 
@@ -180,14 +199,12 @@ def law_stored(st, pm, p, Cc):
 
 
 @njit(cache=True)
-def law_history(st, u, pm, p, Cc):
-    """Signed bank force [N] along the displacement history ``u`` [m] from the state ``st``:
-    one :func:`law_force` per monotone run of ``u`` (breaking is monotone within a run), then
-    :func:`law_advance` to its end. Runs as in ``_base.monotone_runs``: a run starts where the
-    sign of the (nonzero) increment changes, pauses belong to the run they interrupt, samples
-    before the first move carry no force. Returns ``(force, final state)``."""
+def monotone_runs(u):
+    """Monotone runs of ``u`` (as ``_base.monotone_runs``): a run starts where the sign of the
+    (nonzero) increment from the previous sample (0 before the first) changes; pauses belong
+    to the run they interrupt. Returns ``(starts, dirs, m)``: ``starts[:m]`` the first samples,
+    ``starts[m] = len(u)``, ``dirs[:m]`` the directions (+1/-1)."""
     n = u.size
-    out = np.zeros(n)
     starts = np.empty(n + 1, np.int64)
     dirs = np.empty(n)
     m = 0
@@ -204,6 +221,17 @@ def law_history(st, u, pm, p, Cc):
                 m += 1
                 d_prev = d
     starts[m] = n
+    return starts, dirs, m
+
+
+@njit(cache=True)
+def law_history(st, u, pm, p, Cc):
+    """Signed bank force [N] along the displacement history ``u`` [m] from the state ``st``:
+    one :func:`_force` per monotone run of ``u`` (:func:`monotone_runs`; breaking is monotone
+    within a run), then :func:`_advance` to its end; samples before the first move carry no
+    force. Returns ``(force, final state)``."""
+    out = np.zeros(u.size)
+    starts, dirs, m = monotone_runs(u)
     for r in range(m):
         a = starts[r]
         b = starts[r + 1]
