@@ -31,7 +31,7 @@ import numpy as np
 from ..core._history import REVERSAL_TOL, History, unit_params
 from ..core.closed_form import _slip_energy
 from ..core.joint import IwanJoint
-from ..core.masing import masing_constants, reversal_structure
+from ..core.masing import masing_constants, masing_rows, reversal_structure
 from ..core.parameters import IwanParameters
 from . import EFFECTS
 from ._base import _Effect
@@ -219,11 +219,13 @@ class Evaluator:
             els.append(EFFECTS[name](els[-1], **vals[name]))
         x, hist = u[drive], self.hist
         if series:                      # the joint sees its own path w, not the drive
-            gap = vals[series[0]]       # (Backlash.joint_path, compiled)
+            gap = vals[series[0]]       # (Backlash.joint_path, compiled), new every call:
             x = backlash_path(np.ascontiguousarray(x), _constants(p1), *_laws(els[1:]),
                               float(gap["gap"]), float(gap.get("drag", 0.0)))
-            hist = History(x, keep=pos, tol=self._tol)
-        F = hist.forces(p1)
+            C = masing_constants(p1, self._tol)[None, :]     # the kernel along it directly
+            F = masing_rows(C, x[None, :])[0][0, pos]
+        else:
+            F = hist.forces(p1)
         for el in els[1:]:              # each adds its force over the chain below it
             D = self.unit_dissipation(p1)[drive] if el.needs_energy else None
             F = F + el.correction_history(x, D)[pos]
