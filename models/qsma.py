@@ -89,13 +89,14 @@ def linear_modes(specimen: Specimen, *, mode: int = 1):
     return math.sqrt(abs(w2[k])), phi, V[:, :n_rigid], L, pts
 
 
-def _interface_law(u, Fs, KT, chi, beta):
+def _interface_law(u, Fs, KT, phimax, chi, beta):
     """Virgin-curve force [N] and tangent [N/m] of every point: one step from rest of the
     package's exact Masing kernel (:func:`iwan_element.core.masing.masing_rows`), one
     parameter set per point."""
     u = np.asarray(u, float)
-    Fs, KT = (np.broadcast_to(x, u.shape) for x in (Fs, KT))
-    F, K, _, _ = masing_rows(constants_from_arrays(Fs, KT, chi, beta), u.reshape(-1, 1))
+    Fs, KT, phimax = (np.broadcast_to(x, u.shape) for x in (Fs, KT, phimax))
+    C = constants_from_arrays(Fs, KT, chi, beta, phi_max=phimax)
+    F, K, _, _ = masing_rows(C, u.reshape(-1, 1))
     return F.reshape(u.shape), K.reshape(u.shape)
 
 
@@ -144,7 +145,7 @@ def static_modal_load(specimen: Specimen, amplitudes, *, mode: int = 1,
     c = _condensed(_prepare_key(specimen, mode))
     pts = contact_points(specimen)
     itf = specimen.interface
-    Fs, KT = pts.Fs, pts.KT
+    Fs, KT, pm = pts.Fs, pts.KT, pts.phi_max
     C, ub, sb, sG = c["C"], c["ub"], c["sb"], c["sG"]
     n = len(KT)
     eye = np.eye(n)
@@ -161,7 +162,7 @@ def static_modal_load(specimen: Specimen, amplitudes, *, mode: int = 1,
             r = Xt / X_prev
             u, alpha = u * r, alpha * r
         for _ in range(max_iter):
-            F, kt = _interface_law(u, Fs, KT, itf.chi, itf.beta)
+            F, kt = _interface_law(u, Fs, KT, pm, itf.chi, itf.beta)
             d = F - KT * u
             res = np.concatenate([u - alpha * ub + C @ d, [alpha * sb - sG @ d - Xt]])
             J = np.empty((n + 1, n + 1))
@@ -179,7 +180,7 @@ def static_modal_load(specimen: Specimen, amplitudes, *, mode: int = 1,
             warns.append(f"static solve at X = {Xt:.3e} m did not converge in {max_iter} "
                          "Newton iterations")
         out_u[j], out_a[j], X_prev = u, alpha, Xt
-    F, _ = _interface_law(out_u, Fs, KT, itf.chi, itf.beta)
+    F, _ = _interface_law(out_u, Fs, KT, pm, itf.chi, itf.beta)
     d = F - KT * out_u
     x = out_a[:, None] * c["Yb"][None, :] - d @ c["YG"].T
     q = out_a * c["qb"] - d @ c["qG"]

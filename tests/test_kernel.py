@@ -138,7 +138,8 @@ def test_a_batch_of_parameter_sets_is_each_row_alone():
 def test_the_qsma_interface_law_is_the_virgin_curve():
     p = IwanParameters(300.0, 2e7, -0.4, 0.3)
     u = np.linspace(-2, 2, 41)[None, :] * p.phi_max * np.array([[1.0], [0.5]])
-    F, K = _interface_law(u, np.full(41, p.Fs), np.full(41, p.KT), p.chi, p.beta)
+    F, K = _interface_law(u, np.full(41, p.Fs), np.full(41, p.KT), np.full(41, p.phi_max),
+                          p.chi, p.beta)
     Fr = np.array([reference_history([x], p)[0][0] for x in u.ravel()]).reshape(u.shape)
     Kr = np.array([reference_history([x], p)[1][0] for x in u.ravel()]).reshape(u.shape)
     assert np.max(np.abs(F - Fr)) <= 1e-12 * p.Fs

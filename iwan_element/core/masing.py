@@ -63,13 +63,17 @@ def masing_constants(params: IwanParameters, tol: float) -> np.ndarray:
                      p.Fs * pm, float(tol)])
 
 
-def constants_from_arrays(Fs, KT, chi, beta, tol=0.0) -> np.ndarray:
+def constants_from_arrays(Fs, KT, chi, beta, tol=0.0, phi_max=None) -> np.ndarray:
     """:func:`masing_constants` for arrays of parameters (broadcast together), shape
-    ``(m, 15)``; ``phi_max`` from paper eq. 11 as :class:`IwanParameters` computes it. The
-    values are not validated here (the callers hold validated parameters)."""
+    ``(m, 15)``; ``phi_max`` [m] from paper eq. 11 as :class:`IwanParameters` computes it
+    unless given. The values are not validated here (the callers hold validated parameters).
+    ``tol``: relative reversal tolerance (times ``phi_max``)."""
     Fs, KT, chi, beta, tol = np.broadcast_arrays(*(np.asarray(x, float).ravel()
                                                    for x in (Fs, KT, chi, beta, tol)))
-    pm = Fs / KT * ((1.0 + beta) / (beta + (chi + 1.0) / (chi + 2.0)))
+    if phi_max is None:
+        pm = Fs / KT * ((1.0 + beta) / (beta + (chi + 1.0) / (chi + 2.0)))
+    else:
+        pm = np.broadcast_to(np.asarray(phi_max, float).ravel(), Fs.shape)
     Ks = KT / (1.0 + beta)
     g2 = 0.5 * KT * pm * pm
     g3 = Ks * pm * pm / ((chi + 2.0) * (chi + 3.0))
