@@ -31,9 +31,10 @@ from functools import lru_cache
 import numpy as np
 import scipy.linalg as sla
 
-from iwan_element import AmplitudeCurve, dissipation, normalized_backbone
+from iwan_element import AmplitudeCurve, dissipation
 from iwan_element.effects import EFFECTS
 from iwan_element.core._validation import check_magnitude, finite_array
+from iwan_element.core.masing import constants_from_arrays, masing_rows
 
 from .assembly import linear_system
 from .interface import contact_points
@@ -91,12 +92,14 @@ def linear_modes(specimen: Specimen, *, mode: int = 1):
 
 
 def _interface_law(u, Fs, KT, phimax, chi, beta):
-    """Virgin backbone force and tangent of every point (REFERENCE sec. 2)."""
-    s = u / phimax
-    F = Fs * normalized_backbone(s, chi, beta)
-    a = np.minimum(np.abs(s), 1.0)
-    kt = np.where(np.abs(s) < 1.0, KT * (1.0 - a ** (chi + 1.0) / (1.0 + beta)), 0.0)
-    return F, kt
+    """Virgin-curve force [N] and tangent [N/m] of every point: one step from rest of the
+    package's exact Masing kernel (:func:`iwan_element.core.masing.masing_rows`), one
+    parameter set per point."""
+    u = np.asarray(u, float)
+    Fs, KT, phimax = (np.broadcast_to(x, u.shape) for x in (Fs, KT, phimax))
+    C = constants_from_arrays(Fs, KT, chi, beta, phi_max=phimax)
+    F, K, _, _ = masing_rows(C, u.reshape(-1, 1))
+    return F.reshape(u.shape), K.reshape(u.shape)
 
 
 def _prepare_key(specimen: Specimen, mode: int):

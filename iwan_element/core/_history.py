@@ -2,8 +2,9 @@
 
 For a displacement-driven history the reversal points, and hence which Masing branch each
 sample lies on, depend only on the displacements, not on the joint parameters. This module
-finds that structure once (a pure-Python pass that mirrors :meth:`IwanJoint._walk` step for
-step) and then evaluates the forces for any parameter set with a few numpy operations:
+finds that structure once (the compiled walk every exact element uses,
+:func:`iwan_element.core.masing.reversal_structure`) and then evaluates the forces for any
+parameter set with a few numpy operations:
 
 * sample ``i`` lies on the branch that leaves the reversal sample ``a = anchor[i]``
   (``-1``: the virgin curve), so ``F[i] = F[a] + sign(u_i - u_a) 2 F_bb(|u_i - u_a|/2)``
@@ -21,8 +22,10 @@ Private module: used by :mod:`iwan_element.identify.fit`; verified against ``Iwa
 from __future__ import annotations
 
 import numpy as np
+from numba import njit
 
 from .closed_form import backbone
+from .masing import reversal_structure
 from .parameters import IwanParameters
 
 __all__: list[str] = []
@@ -39,97 +42,20 @@ def unit_params(phi_max: float, chi: float, beta: float) -> IwanParameters:
     return IwanParameters(1.0, (1.0 + beta) / (phi_max * c), chi, beta)
 
 
-def walk(u: np.ndarray, tol: float, *, segments: bool = False):
-    """Reversal structure of the history ``u`` [m] from the virgin state.
-
-    Mirrors ``IwanJoint._walk``/``commit`` step for step with the absolute reversal tolerance
-    ``tol`` [m] (``IwanJoint`` uses ``reversal_tol * phi_max``); the element keeps its own
-    inline copy because it is the hot path of every simulation.
-
-    Returns
-    -------
-    anchor : ndarray of int, shape (n,)
-        Sample index of the reversal each sample's branch leaves (``-1``: virgin curve).
-    segs : tuple of ndarray or None
-        With ``segments=True``, the monotone branch segments walked by each step, as
-        ``(step, anchor, ua, ub)``: the step index, the reversal sample the segment's branch
-        leaves (``-1``: virgin curve) and its end displacements [m].
-    """
-    vals = u.tolist()
-    n_s = len(vals)
-    anchor = [0] * n_s
-    st: list[int] = []          # stack of reversal sample indices
-    c = -1                      # committed sample (-1: virgin origin, u = 0)
-    uc = 0.0
-    s_step: list[int] = []
-    s_anchor: list[int] = []
-    s_a: list[float] = []
-    s_b: list[float] = []
-    for i in range(n_s):
-        ui = vals[i]
-        n = len(st)
-        du = ui - uc
-        e = -1
-        if du != 0.0:
-            d = uc - vals[st[n - 1]] if n else uc
-            up = du > 0.0                # signs, not products (d * du underflows)
-            if (d < 0.0) if up else (d > 0.0):
-                if abs(d) <= tol:
-                    if n:
-                        n -= 1
-                else:
-                    e = c
-            pos = uc
-            while True:
-                if e >= 0:
-                    top = e
-                    bound = vals[st[n - 1]] if n else -vals[e]
-                elif n:
-                    top = st[n - 1]
-                    bound = vals[st[n - 2]] if n >= 2 else -vals[st[n - 1]]
-                else:
-                    break
-                if (ui < bound) if up else (ui > bound):
-                    break
-                if segments:
-                    s_step.append(i)
-                    s_anchor.append(top)
-                    s_a.append(pos)
-                    s_b.append(bound)
-                    pos = bound
-                if e >= 0:
-                    e = -1
-                    if n:
-                        n -= 1
-                else:
-                    n -= 2 if n >= 2 else 1
-            if segments:
-                s_step.append(i)
-                s_anchor.append(e if e >= 0 else (st[n - 1] if n else -1))
-                s_a.append(pos)
-                s_b.append(ui)
-        if n < len(st):
-            del st[n:]
-        if e >= 0:
-            st.append(e)
-        anchor[i] = st[-1] if st else -1
-        c = i
-        uc = ui
-    segs = None
-    if segments:
-        segs = (np.array(s_step, dtype=np.intp), np.array(s_anchor, dtype=np.intp),
-                np.array(s_a), np.array(s_b))
-    return np.array(anchor, dtype=np.intp), segs
+@njit(cache=True)
+def _levels(anchor):
+    """Nesting level of every sample: one more than its anchor's (anchors precede samples)."""
+    level = np.zeros(anchor.size, np.int64)
+    for i in range(anchor.size):
+        if anchor[i] >= 0:
+            level[i] = level[anchor[i]] + 1
+    return level
 
 
 def _structure(u: np.ndarray, tol: float) -> tuple[np.ndarray, np.ndarray]:
     """Anchor index (``-1`` = virgin curve) and nesting level of every sample of ``u``."""
-    anchor, _ = walk(u, tol)
-    level = np.zeros(len(anchor), dtype=np.intp)
-    for i, a in enumerate(anchor.tolist()):        # anchors precede their samples
-        if a >= 0:
-            level[i] = level[a] + 1
-    return anchor, level
+    anchor, _ = reversal_structure(u, tol)
+    return anchor, _levels(anchor).astype(np.intp)
 
 
 class History:

@@ -14,11 +14,13 @@ displacement history (Segalman 2005, sec. 3; paper eqs. 13-15).
   and the dissipation is ``2 dI_H`` with ``I_H(y) = int_0^y int_0^q phi rho(phi)``; the stored
   (slider spring) energy is their difference. All three are exact closed forms.
 
-The cost per call is O(1) amortised: only the top of the reversal stack is touched. A
-trial that continues the current branch without closing a loop (most trials and commits of
-a time integration) takes a shortcut (an interval test against the cached branch) that gives
-bit-for-bit the numbers of the general walk; its commit reuses ``G`` and ``I_H`` at the
-committed point, kept from the previous commit.
+The cost per call is O(1) amortised: only the top of the reversal stack is touched. The
+reversal walk is the compiled kernel of :mod:`iwan_element.core.masing`, shared by every
+exact element. A trial that continues the current branch without closing a loop (most
+trials and commits of a time integration) takes a shortcut in Python (an interval test
+against the cached branch, cheaper than any call into compiled code) that gives bit-for-bit
+the numbers of the kernel; its commit reuses ``G`` and ``I_H`` at the committed point, kept
+from the previous commit.
 """
 from __future__ import annotations
 
@@ -28,6 +30,7 @@ import numpy as np
 
 from ._validation import check_scalar, finite_array
 from ._history import REVERSAL_TOL
+from .masing import _NOSEG, masing_step, masing_constants, masing_history
 from .parameters import IwanParameters
 
 __all__ = ["IwanJoint"]
@@ -76,9 +79,9 @@ class IwanJoint:
     """
 
     __slots__ = ("_p", "_tol", "_KT", "_Fs", "_pm", "_e1", "_e3", "_a", "_b", "_g_pm", "_ih_c",
-                 "_ipm", "_KTpm", "_g2", "_g3", "_Fspm", "_rtol",
+                 "_ipm", "_KTpm", "_g2", "_g3", "_Fspm", "_rtol", "_c", "_n", "_at",
                  "_ih_pm", "_u", "_F", "_K", "_us", "_Fr", "_W", "_D",
-                 "_tu", "_tF", "_tK", "_tn", "_te", "_teF", "_has_trial", "_tfast", "_Gc", "_IHc",
+                 "_tu", "_tF", "_tK", "_tn", "_tacc", "_has_trial", "_tfast", "_Gc", "_IHc",
                  "_blo", "_bhi", "_bur", "_bFr", "_bc1", "_bc2", "_bdir")
 
     def __init__(self, params: IwanParameters, *, reversal_tol: float = REVERSAL_TOL):
@@ -108,6 +111,7 @@ class IwanJoint:
         self._ih_c = (p.chi + 1.0) * self._g3                 # I_H = ih_c r^(chi+3)
         self._ih_pm = self._ih_c
         self._Fspm = p.Fs * pm
+        self._c = masing_constants(p, self._tol)     # the same numbers, for the kernel
         self.reset()
 
     # ------------------------------------------------------------------ public protocol
@@ -121,8 +125,10 @@ class IwanJoint:
         self._u = 0.0
         self._F = 0.0
         self._K = self._KT
-        self._us = []
-        self._Fr = []
+        self._us = np.empty(16)     # reversal stack (oldest first), the first _n entries
+        self._Fr = np.empty(16)
+        self._at = np.empty(16, np.int64)
+        self._n = 0
         self._W = 0.0
         self._D = 0.0
         self._Gc = 0.0          # G and I_H at the committed point, in the coordinate of the
@@ -181,13 +187,12 @@ class IwanJoint:
             raise ValueError(f"u must be a real number (displacement [m]), got {u!r:.40}") from None
         if not _NINF < u < _INF:
             raise ValueError(f"u must be finite, got {u}")
-        n, e, eF, F, K = self._walk(u, None)
+        n, F, K, dW, dD, G, I = self._kernel(u)
         self._tu = u
         self._tF = F
         self._tK = K
         self._tn = n
-        self._te = e
-        self._teF = eF
+        self._tacc = (dW, dD, G, I)
         self._tfast = False
         self._has_trial = True
         return F, K
@@ -223,21 +228,13 @@ class IwanJoint:
             else:
                 self._bhi = u
             return
-        acc = [0.0, 0.0, self._Gc, self._IHc]
-        self._walk(self._tu, acc)
-        n = self._tn
-        del self._us[n:]
-        del self._Fr[n:]
-        if self._te is not None:
-            self._us.append(self._te)
-            self._Fr.append(self._teF)
+        dW, dD, self._Gc, self._IHc = self._tacc
+        self._n = self._tn          # the trial wrote its reversal above the committed stack
         self._u = self._tu
         self._F = self._tF
         self._K = self._tK
-        self._W += acc[0]
-        self._D += acc[1]
-        self._Gc = acc[2]
-        self._IHc = acc[3]
+        self._W += dW
+        self._D += dD
         self._has_trial = False
         self._set_branch()
 
@@ -253,14 +250,14 @@ class IwanJoint:
         ``F_r + c2 F_bb(c1 |u - u_r|)`` with the sign of ``u - u_r``: ``c1, c2 = 1/2, 2``
         from a reversal point, ``1, 1`` with ``u_r = F_r = 0`` on the virgin curve.
         """
-        us = self._us
+        n = self._n
         uc = self._u
-        if us:
-            ur = us[-1]
+        if n:
+            ur = float(self._us[n - 1])
             d = uc - ur
-            bound = us[-2] if len(us) >= 2 else -ur
+            bound = float(self._us[n - 2]) if n >= 2 else -ur
             self._bur = ur
-            self._bFr = self._Fr[-1]
+            self._bFr = float(self._Fr[n - 1])
             self._bc1 = 0.5 * self._ipm
             self._bc2 = 2.0
         else:
@@ -311,127 +308,47 @@ class IwanJoint:
     @property
     def reversal_depth(self) -> int:
         """Number of reversal points remembered (committed)."""
-        return len(self._us)
+        return self._n
 
     def reversal_points(self) -> tuple[np.ndarray, np.ndarray]:
         """Copies of the remembered reversal points ``(u_r [m], F_r [N])``, oldest first."""
-        return np.array(self._us), np.array(self._Fr)
+        return self._us[:self._n].copy(), self._Fr[:self._n].copy()
 
     def force_history(self, u) -> np.ndarray:
         """Forces [N] for a whole displacement history ``u`` [m], shape (n,), from the virgin
         state. Each sample is committed in turn on a private copy; this element is untouched.
         """
         arr = finite_array("u", u, ndim=1)
-        j = IwanJoint(self._p, reversal_tol=self._rtol)
-        out = np.empty_like(arr)
-        trial, commit = j.trial, j.commit
-        for i, ui in enumerate(arr.tolist()):
-            out[i] = trial(ui)[0]
-            commit()
-        return out
+        return masing_history(arr, self._p, reversal_tol=self._rtol)[0]
 
     def __repr__(self) -> str:
-        return f"IwanJoint({self._p!r}, depth={len(self._us)}, u={self._u:.6g})"
+        return f"IwanJoint({self._p!r}, depth={self._n}, u={self._u:.6g})"
 
     # ------------------------------------------------------------------ kernel
-    def _bb(self, r: float) -> tuple[float, float]:
-        """Backbone force and tangent at ``x = r phi_max >= 0``."""
-        if r < 1.0:
-            q = r ** self._e1
-            return r * (self._KTpm - self._a * q), self._KT - self._b * q
-        return self._Fs, 0.0
-
-    def _G(self, r: float) -> float:
-        """``int_0^x F_bb`` for ``x = r phi_max >= 0``."""
-        if r < 1.0:
-            return self._g2 * r * r - self._g3 * r ** self._e3
-        return self._g_pm + self._Fspm * (r - 1.0)
-
-    def _IH(self, r: float) -> float:
-        """``int_0^y int_0^q phi rho(phi) dphi dq`` for ``y = r phi_max >= 0``."""
-        if r < 1.0:
-            return self._ih_c * r ** self._e3
-        return self._ih_pm + self._Fspm * (r - 1.0)
-
-    def _segment(self, ur, Fr, ua, ub, acc) -> None:
-        """Add work and dissipation of a monotone move ``ua -> ub`` on the branch from ``ur``
-        (``ur is None`` for the virgin curve) to ``acc = [W, D, G, I_H]`` and put ``G`` and
-        ``I_H`` at ``ub`` (in the branch's coordinate) in its last two entries."""
-        s = self._ipm
-        if ur is None:
-            Gb = self._G(s * abs(ub))
-            Ib = self._IH(s * abs(ub))
-            acc[0] += Gb - self._G(s * abs(ua))
-            acc[1] += max(Ib - self._IH(s * abs(ua)), 0.0)
-        else:
-            xa = 0.5 * s * abs(ua - ur)
-            xb = 0.5 * s * abs(ub - ur)
-            Gb = self._G(xb)
-            Ib = self._IH(xb)
-            acc[0] += Fr * (ub - ua) + 4.0 * (Gb - self._G(xa))
-            acc[1] += 2.0 * (Ib - self._IH(xa))
-        acc[2] = Gb                 # the last segment of a walk ends at its target
-        acc[3] = Ib
+    def _kernel(self, u: float):
+        """The compiled walk (:func:`iwan_element.core.masing.masing_step`) from the committed
+        state to ``u``: ``(n, F, K, dW, dD, G, I_H)``; the new stack is the first ``n``
+        entries of the arrays (a reversal is written above the committed ones)."""
+        if self._n + 1 >= self._us.size:        # room for one more reversal
+            grow = self._us.size
+            self._us = np.concatenate([self._us, np.empty(grow)])
+            self._Fr = np.concatenate([self._Fr, np.empty(grow)])
+            self._at = np.concatenate([self._at, np.empty(grow, np.int64)])
+        return masing_step(self._c, self._us, self._Fr, self._at, self._n, self._u, self._F,
+                     self._Gc, self._IHc, u, _NOSEG)
 
     def _walk(self, u: float, acc):
-        """Move from the committed state to ``u``.
+        """The general walk to ``u`` (the fast path's reference in the tests).
 
-        Returns ``(n, e, eF, F, K)``: the new stack is the first ``n`` committed entries plus
-        the new reversal ``(e, eF)`` if ``e is not None``. With ``acc = [W, D, G, I_H]`` the
-        work and dissipation of the move are added to it (see :meth:`_segment`).
+        Returns ``(n, None, 0.0, F, K)``: the new stack is the first ``n`` entries of the
+        stack arrays (the kernel writes a new reversal in place, above the committed entries).
+        With ``acc = [W, D, G, I_H]`` the work and dissipation of the move are added to it and
+        ``G``, ``I_H`` at ``u`` put in its last two entries.
         """
-        us = self._us
-        Fr = self._Fr
-        n = len(us)
-        uc = self._u
-        du = u - uc
-        e = None
-        eF = 0.0
-        if du != 0.0:
-            d = uc - us[n - 1] if n else uc          # direction of the current branch
-            up = du > 0.0                            # signs, not products: d * du underflows
-            if (d < 0.0) if up else (d > 0.0):       # the motion reverses at uc
-                if abs(d) <= self._tol:
-                    if n:
-                        n -= 1                       # ignore a negligible excursion
-                else:
-                    e = uc
-                    eF = self._F
-            pos = uc
-            while True:                              # close the loops that u passes
-                if e is not None:
-                    top, topF = e, eF
-                    bound = us[n - 1] if n else -e
-                elif n:
-                    top, topF = us[n - 1], Fr[n - 1]
-                    bound = us[n - 2] if n >= 2 else -top
-                else:
-                    break
-                if (u < bound) if up else (u > bound):   # bound not reached
-                    break
-                if acc is not None:
-                    self._segment(top, topF, pos, bound, acc)
-                    pos = bound
-                if e is not None:
-                    e = None
-                    if n:
-                        n -= 1
-                else:
-                    n -= 2 if n >= 2 else 1
-            if acc is not None:
-                if e is not None:
-                    self._segment(e, eF, pos, u, acc)
-                elif n:
-                    self._segment(us[n - 1], Fr[n - 1], pos, u, acc)
-                else:
-                    self._segment(None, 0.0, pos, u, acc)
-        if e is not None:
-            ur, Fr_r = e, eF
-        elif n:
-            ur, Fr_r = us[n - 1], Fr[n - 1]
-        else:
-            f, k = self._bb(self._ipm * abs(u))
-            return n, e, eF, (f if u >= 0.0 else -f), k
-        x = u - ur
-        f, k = self._bb(0.5 * self._ipm * abs(x))
-        return n, e, eF, (Fr_r + 2.0 * f if x >= 0.0 else Fr_r - 2.0 * f), k
+        n, F, K, dW, dD, G, I = self._kernel(float(u))
+        if acc is not None:
+            acc[0] += dW
+            acc[1] += dD
+            acc[2] = G
+            acc[3] = I
+        return n, None, 0.0, F, K

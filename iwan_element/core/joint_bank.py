@@ -14,7 +14,7 @@ new displacement at once:
 * plain reversals (a new branch that reaches no older reversal point in the step) are
   committed for all such points at once with numpy;
 * the few points that close a loop (or start from rest) walk their reversal stack one by
-  one, exactly as ``IwanJoint`` does.
+  one with the compiled kernel every exact element shares (:mod:`iwan_element.core.masing`).
 
 The bank is the committed state of a multi-contact interface; it never evaluates trials for
 a solver (the solver's trial forces come from the symbolic law of
@@ -29,6 +29,7 @@ import numpy as np
 from ._history import REVERSAL_TOL
 from ._validation import check_scalar, finite_array
 from .joint import REVERSAL_TOL_MAX
+from .masing import _NOSEG, masing_step, masing_constants
 from .parameters import IwanParameters
 
 __all__ = ["IwanJointBank"]
@@ -86,10 +87,7 @@ class IwanJointBank:
         self._halfKT = 0.5 * self.KT
         self._a_e3 = self.a / self.e3
         self._e1s = float(self.e1[0]) if np.all(self.e1 == self.e1[0]) else None
-        self._scal = [(float(self.KT[i]), float(self.Fs[i]), float(self.pm[i]), float(self.e1[i]),
-                       float(self.e3[i]), float(self.a[i]), float(self.g_pm[i]),
-                       float(self.ih_c[i]), float(self.ih_pm[i]), float(self.tol[i]))
-                      for i in range(len(params))]
+        self._consts = [masing_constants(p, tol * p.phi_max) for p in params]
         self.reset()
 
     # ------------------------------------------------------------------ state
@@ -112,8 +110,9 @@ class IwanJointBank:
         self._Gc, self._IHc = z.copy(), z.copy()
         # the branch through the committed state and the values where it started
         self.u0, self.W0, self.D0, self.G0, self.I0 = z.copy(), z.copy(), z.copy(), z.copy(), z.copy()
-        self.us = [[] for _ in range(n)]      # reversal stacks, oldest first
-        self.Fr = [[] for _ in range(n)]
+        self._us = [np.empty(8) for _ in range(n)]     # reversal stacks, oldest first: the
+        self._Fr = [np.empty(8) for _ in range(n)]     # first _nst[i] entries of point i
+        self._at = [np.empty(8, np.int64) for _ in range(n)]
         self.bur, self.bFr = z.copy(), z.copy()
         self.bc1, self.bc2 = np.ones(n), np.ones(n)
         self.blo, self.bhi = z.copy(), z.copy()
@@ -123,6 +122,8 @@ class IwanJointBank:
         self._down = np.zeros(n, dtype=bool)   # ... towards smaller u
         self._stale = False                    # F, W, D lag behind u (see _sync)
         self._nst = np.zeros(n, dtype=np.intp)  # stack lengths
+        self.us = _Stacks(self._us, self._nst)  # read-only views of the live entries
+        self.Fr = _Stacks(self._Fr, self._nst)
         self._fast_buf = np.zeros(n, dtype=bool)
         self._above_buf = np.zeros(n, dtype=bool)
         for i in range(n):
@@ -157,7 +158,7 @@ class IwanJointBank:
 
     def depth(self, i: int) -> int:
         """Number of reversal points remembered by point ``i``."""
-        return len(self.us[i])
+        return int(self._nst[i])
 
     # ------------------------------------------------------------------ commit
     def commit(self, u) -> np.ndarray:
@@ -239,11 +240,12 @@ class IwanJointBank:
         self._up[idx], self._down[idx] = upi, ~upi
         self.blo[idx] = np.where(upi, ub, bnd)
         self.bhi[idx] = np.where(upi, bnd, ub)
-        self._nst[idx] += 1
-        us, Fr = self.us, self.Fr
         for i, ei, Fi in zip(idx.tolist(), e.tolist(), eF.tolist()):
-            us[i].append(ei)
-            Fr[i].append(Fi)
+            self._room(i)
+            k = self._nst[i]
+            self._us[i][k] = ei
+            self._Fr[i][k] = Fi
+            self._nst[i] = k + 1
         return slow[~plain]
 
     def _curves(self, h, s):
@@ -291,118 +293,45 @@ class IwanJointBank:
         self._stale = False
 
     # ------------------------------------------------------------------ one point
-    def _bb(self, i, x):
-        KT, Fs, pm, e1 = self._scal[i][:4]
-        a = self._scal[i][5]
-        if x < pm:
-            return x * (KT - a * x ** e1)
-        return Fs
-
-    def _G(self, i, x):
-        KT, Fs, pm, _, e3, a, g_pm = self._scal[i][:7]
-        if x < pm:
-            return 0.5 * KT * x * x - a * x ** e3 / e3
-        return g_pm + Fs * (x - pm)
-
-    def _IH(self, i, y):
-        s = self._scal[i]
-        if y < s[2]:
-            return s[7] * y ** s[4]
-        return s[8] + s[1] * (y - s[2])
-
-    def _segment(self, i, ur, Fr, ua, ub, acc) -> None:
-        """Work and dissipation of a monotone move ``ua -> ub`` on the branch from ``ur``
-        (``None``: the virgin curve), REFERENCE.md section 2 energy forms."""
-        if ur is None:
-            Gb, Ib = self._G(i, abs(ub)), self._IH(i, abs(ub))
-            acc[0] += Gb - self._G(i, abs(ua))
-            acc[1] += max(Ib - self._IH(i, abs(ua)), 0.0)
-        else:
-            xa, xb = 0.5 * abs(ua - ur), 0.5 * abs(ub - ur)
-            Gb, Ib = self._G(i, xb), self._IH(i, xb)
-            acc[0] += Fr * (ub - ua) + 4.0 * (Gb - self._G(i, xa))
-            acc[1] += 2.0 * (Ib - self._IH(i, xa))
-        acc[2] = Gb
-        acc[3] = Ib
+    def _room(self, i: int) -> None:
+        """Make room for one more reversal point on the stack of point ``i``."""
+        if self._nst[i] + 1 >= self._us[i].size:
+            grow = self._us[i].size
+            self._us[i] = np.concatenate([self._us[i], np.empty(grow)])
+            self._Fr[i] = np.concatenate([self._Fr[i], np.empty(grow)])
+            self._at[i] = np.concatenate([self._at[i], np.empty(grow, np.int64)])
 
     def _walk_commit(self, i: int, u: float) -> None:
-        """Exact Masing walk of point ``i`` from its committed state to ``u``, committed."""
-        us, Fr = self.us[i], self.Fr[i]
-        n = len(us)
-        uc = float(self.u[i])
-        du = u - uc
-        e = None
-        eF = 0.0
-        acc = [0.0, 0.0, float(self._Gc[i]), float(self._IHc[i])]
-        if du != 0.0:
-            d = uc - us[n - 1] if n else uc
-            up = du > 0.0                    # signs, not products: d * du underflows
-            if (d < 0.0) if up else (d > 0.0):
-                if abs(d) <= self._scal[i][9]:
-                    if n:
-                        n -= 1
-                else:
-                    e, eF = uc, float(self._F[i])
-            pos = uc
-            while True:
-                if e is not None:
-                    top, topF = e, eF
-                    bound = us[n - 1] if n else -e
-                elif n:
-                    top, topF = us[n - 1], Fr[n - 1]
-                    bound = us[n - 2] if n >= 2 else -top
-                else:
-                    break
-                if (u < bound) if up else (u > bound):   # bound not reached
-                    break
-                self._segment(i, top, topF, pos, bound, acc)
-                pos = bound
-                if e is not None:
-                    e = None
-                    if n:
-                        n -= 1
-                else:
-                    n -= 2 if n >= 2 else 1
-            if e is not None:
-                self._segment(i, e, eF, pos, u, acc)
-            elif n:
-                self._segment(i, us[n - 1], Fr[n - 1], pos, u, acc)
-            else:
-                self._segment(i, None, 0.0, pos, u, acc)
-        del us[n:]
-        del Fr[n:]
-        if e is not None:
-            us.append(e)
-            Fr.append(eF)
-        if us:
-            x = u - us[-1]
-            f = 2.0 * self._bb(i, 0.5 * abs(x))
-            F = Fr[-1] + f if x >= 0.0 else Fr[-1] - f
-        else:
-            f = self._bb(i, abs(u))
-            F = f if u >= 0.0 else -f
+        """Exact Masing walk of point ``i`` from its committed state to ``u`` (the compiled
+        kernel, :func:`iwan_element.core.masing.masing_step`), committed."""
+        self._room(i)
+        n, F, _, dW, dD, G, I = masing_step(
+            self._consts[i], self._us[i], self._Fr[i], self._at[i], int(self._nst[i]),
+            float(self.u[i]), float(self._F[i]), float(self._Gc[i]), float(self._IHc[i]), u,
+            _NOSEG)
         self.u[i] = u
         self._F[i] = F
-        self._W[i] += acc[0]
-        self._D[i] += acc[1]
-        self._Gc[i] = acc[2]
-        self._IHc[i] = acc[3]
-        self._nst[i] = len(us)
+        self._W[i] += dW
+        self._D[i] += dD
+        self._Gc[i] = G
+        self._IHc[i] = I
+        self._nst[i] = n
         self._set_branch(i)
 
     def _set_branch(self, i: int) -> None:
         """Cache the branch through the committed state of point ``i`` (see
         ``IwanJoint._set_branch``): the open interval ``(blo, bhi)`` of displacements that
         continue it without a reversal or a closed loop."""
-        us = self.us[i]
+        n = int(self._nst[i])
+        us = self._us[i]
         uc = float(self.u[i])
         self.u0[i], self.W0[i], self.D0[i] = uc, self._W[i], self._D[i]
         self.G0[i], self.I0[i] = self._Gc[i], self._IHc[i]
-        if us:
-            ur = us[-1]
+        if n:
+            ur = float(us[n - 1])
             d = uc - ur
-            bound = us[-2] if len(us) >= 2 else -ur
-            self.bur[i], self.bFr[i], self.bc1[i], self.bc2[i] = ur, self.Fr[i][-1], 0.5, 2.0
+            bound = float(us[n - 2]) if n >= 2 else -ur
+            self.bur[i], self.bFr[i], self.bc1[i], self.bc2[i] = ur, self._Fr[i][n - 1], 0.5, 2.0
             self._c4[i] = 4.0
         else:
             d = uc
@@ -433,3 +362,19 @@ class IwanJointBank:
 
     def __repr__(self) -> str:
         return f"IwanJointBank(n_points={self.n_points})"
+
+
+class _Stacks:
+    """Read-only access to the live reversal stacks of a bank: ``stacks[i]`` is a view of the
+    committed entries of point ``i`` (oldest first)."""
+
+    __slots__ = ("_arrs", "_n")
+
+    def __init__(self, arrs, n):
+        self._arrs, self._n = arrs, n
+
+    def __len__(self) -> int:
+        return len(self._arrs)
+
+    def __getitem__(self, i):
+        return self._arrs[i][:self._n[i]]

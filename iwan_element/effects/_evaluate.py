@@ -11,23 +11,31 @@ force is evaluated
 * vectorised and exact (the Iwan joint through :class:`~iwan_element.core._history.History`,
   then each effect's ``vector_force``) when every effect of the stack has a history-free
   vectorised form (viscous damping, pinning stiffness);
-* otherwise by the effect elements' own ``force_history`` on the displacement decimated to
-  the fitted samples plus every turning point of the record (exact for these
-  rate-independent elements, whose state depends only on the turning points; a dashpot in
-  such a stack sees the velocity at the drive samples).
+* slip degradation behind a backlash (then vector forms), whose wear makes the joint's path
+  depend on every commit, by the elements' per-sample rule compiled
+  (:mod:`._series_kernel`) on the drive samples (the fitted samples plus every turning
+  point of the record); a backlash around a joint whose state depends only on its turning
+  points is found run by run instead (``Backlash.joint_path``: measured twice as fast on
+  the damper records);
+* otherwise by the effect elements' own ``force_history`` on the drive samples (exact for
+  these rate-independent elements, whose state depends only on the turning points; a
+  dashpot in such a stack sees the velocity at the drive samples).
 
-Both routes are checked against the elements in ``tests/test_diagnosis.py``.
+The routes are checked against the elements in ``tests/test_diagnosis.py`` and
+``tests/test_kernel.py``.
 """
 from __future__ import annotations
 
 import numpy as np
 
-from ..core._history import History, unit_params, walk
+from ..core._history import REVERSAL_TOL, History, unit_params
 from ..core.closed_form import _slip_energy
 from ..core.joint import IwanJoint
+from ..core.masing import masing_constants, masing_rows, reversal_structure
 from ..core.parameters import IwanParameters
 from . import EFFECTS
 from ._base import _Effect
+from ._series_kernel import backlash_history, backlash_path
 
 __all__: list[str] = []
 
@@ -64,20 +72,28 @@ def _layers(names) -> tuple:
     return chain, series, rest[len(series):]
 
 
+def wear_behind_gap(names) -> bool:
+    """True for slip degradation with backlash around it (then vector forms only): the
+    stack :func:`backlash_history` evaluates compiled, sample by sample."""
+    names = tuple(names)
+    return (names[:2] == ("slip_degradation", "backlash")
+            and all(has_vector_form(n) for n in names[2:]))
+
+
 def has_vector_form(name: str) -> bool:
     """True if the effect has a history-free vectorised force."""
     return EFFECTS[name].vector_force.__func__ is not _Effect.vector_force.__func__
 
 
 def dissipation_segments(u: np.ndarray, tol: float):
-    """Branch segments walked by the Iwan joint along ``u`` (the walk of
-    :func:`iwan_element.core._history.walk`, which mirrors ``IwanJoint._walk``).
+    """Branch segments walked by the Iwan joint along ``u`` (the kernel's walk,
+    :func:`iwan_element.core.masing.reversal_structure`).
 
     Returns ``(step, virgin, xa, xb)``: step index of each segment, True for a segment on the
     virgin curve (dissipation ``I_H(xb) - I_H(xa)``, clipped at 0) and False on a branch
     (``2 (I_H(xb) - I_H(xa))``), and the backbone arguments at its ends [m].
     """
-    _, (step, anchor, ua, ub) = walk(u, tol, segments=True)
+    _, (step, anchor, ua, ub) = reversal_structure(u, tol, segments=True)
     virgin = anchor < 0
     ur = np.where(virgin, 0.0, u[np.maximum(anchor, 0)])
     scale = np.where(virgin, 1.0, 0.5)
@@ -191,6 +207,8 @@ class Evaluator:
         p1 = unit_params(*shape)
         u, v, drive, pos = self._ext
         if not self.fast(names):
+            if wear_behind_gap(names):
+                return self._wear_behind_gap(p1, names, values)
             el = build_element(p1, names, values)
             F = el.force_history(u[drive], v[drive])
             return F[pos]
@@ -201,12 +219,44 @@ class Evaluator:
             els.append(EFFECTS[name](els[-1], **vals[name]))
         x, hist = u[drive], self.hist
         if series:                      # the joint sees its own path w, not the drive
-            x = EFFECTS[series[0]](els[-1], **vals[series[0]]).joint_path(x)
-            hist = History(x, keep=pos, tol=self._tol)
-        F = hist.forces(p1)
+            gap = vals[series[0]]       # (Backlash.joint_path, compiled), new every call:
+            x = backlash_path(np.ascontiguousarray(x), _constants(p1), *_laws(els[1:]),
+                              float(gap["gap"]), float(gap.get("drag", 0.0)))
+            C = masing_constants(p1, self._tol)[None, :]     # the kernel along it directly
+            F = masing_rows(C, x[None, :])[0][0, pos]
+        else:
+            F = hist.forces(p1)
         for el in els[1:]:              # each adds its force over the chain below it
             D = self.unit_dissipation(p1)[drive] if el.needs_energy else None
             F = F + el.correction_history(x, D)[pos]
         for name in rest:
             F = EFFECTS[name].vector_force(F, self.uk, self.vk, **vals[name])
         return F
+
+    def _wear_behind_gap(self, p1: IwanParameters, names, values) -> np.ndarray:
+        """Unit force of ``slip_degradation, backlash[, vector forms]`` (:func:`wear_behind_gap`)
+        at the kept samples: the elements' per-sample rule on the drive samples, compiled."""
+        u, _, drive, pos = self._ext
+        wear = EFFECTS["slip_degradation"](IwanJoint(p1), **values[0])
+        gap = values[1]
+        F = backlash_history(np.ascontiguousarray(u[drive]), _constants(p1), wear._k,
+                             wear._sign, wear._phi, wear.rate, *_laws([]),
+                             float(gap["gap"]), float(gap.get("drag", 0.0)))[pos]
+        for name, vals in zip(names[2:], values[2:]):
+            F = EFFECTS[name].vector_force(F, self.uk, self.vk, **vals)
+        return F
+
+
+def _constants(p1: IwanParameters) -> np.ndarray:
+    """Kernel constants of ``IwanJoint(p1)`` (the package's reversal tolerance)."""
+    return masing_constants(p1, REVERSAL_TOL * p1.phi_max)
+
+
+def _laws(els) -> tuple:
+    """``(table, pm, p, C)``: the joint's slider-law state (the law effects ``els``, each
+    wrapping the one before, their tables side by side; no columns for none)."""
+    if not els:
+        return np.zeros((11, 0)), 1.0, 1.0, 0.0
+    tables = [el._new_pieces() for el in els]
+    t0 = tables[0]
+    return np.concatenate([t.state for t in tables], axis=1), t0.pm, t0.p, t0.C

@@ -20,7 +20,8 @@ spike ``S`` at ``phi_max``),
 ``F = kappa_d int_broken rho phi dphi + int_stuck rho (s_d phi + c_d + delta) dphi``,
 
 in closed form, so the force, and the misfit of a fit, are continuous in the law's
-parameters (a bank of discrete sliders makes them a staircase). A
+parameters (a bank of discrete sliders makes them a staircase). The state table is moved and
+evaluated by compiled functions (:mod:`._law_kernel`). A
 :class:`~iwan_element.core.discrete.DiscreteIwan` is handled the same way with its sliders as
 point masses. Checked against independent plain-Python slider banks
 (``tests/test_breakaway.py``, ``tests/test_effects.py``).
@@ -38,23 +39,24 @@ import numpy as np
 
 from ..core.discrete import DiscreteIwan
 from ..core.parameters import IwanParameters
-from ._base import _Effect, _require_plain_joint, monotone_runs
+from . import _law_kernel as K
+from ._base import _Effect, _require_plain_joint
 
 __all__: list[str] = []
 
 #: The law of the plain joint: ``(sigma_up, sigma_down, kappa_up, kappa_down)``.
 MASING = (1.0, 1.0, 1.0, 1.0)
-_LAW = ("su", "sd", "ku", "kd")
 
 
 class _Pieces:
     """Slider states on intervals of ``phi`` for a set of banks (each with its own law), each
-    bank weighted by a sign; all arrays have one row per piece.
+    bank weighted by a sign: the state table of :mod:`._law_kernel` (one column per piece),
+    moved and evaluated by its compiled functions.
 
     Rows: ``a, b`` interval [m] (``a == b`` for a point mass of stiffness ``w`` [N/m]),
-    ``s, c`` the state ``e = s phi + c`` [m], ``slide`` (+1/-1 sliding that way, 0 stuck),
     ``su, sd, ku, kd`` the bank's law (static and kinetic thresholds up and down, as multiples
-    of ``phi``), ``sg`` its sign. Continuous rows carry the density
+    of ``phi``), ``sg`` its sign, ``s, c`` the state ``e = s phi + c`` [m], ``slide`` (+1/-1
+    sliding that way, 0 stuck). Continuous rows carry the density
     ``rho = C / pm (phi / pm)^(p - 1)`` (``C = (chi + 1) KT / (1 + beta)``, ``p = chi + 1``).
     """
 
@@ -69,156 +71,49 @@ class _Pieces:
                     rows.append((self.pm, self.pm, params.KT - params.K_slider, *law, sg))
             else:
                 rows.extend((ph, ph, k, *law, sg) for k, ph in zip(*atoms))
-        cols = [np.array(x, float) for x in zip(*rows)]
-        self.state = dict(zip(("a", "b", "w") + _LAW + ("sg",), cols))
-        z = np.zeros(cols[0].size)
-        self.state.update(s=z, c=z.copy(), slide=z.copy())
-        self._tot = self._last = None
-
-    @property
-    def totals(self):
-        """``int rho phi^k`` over every row, ``k = 0, 1, 2`` (cached per state)."""
-        if self._tot is None:
-            st = self.state
-            self._tot = self._moments(st, st["b"], True, 3)
-        return self._tot
-
-    # ---- moments of the density over [a, x] (x may be a 2-D array of limits)
-    def _moments(self, st, x, broken, n):
-        """``int rho phi^k``, ``k < n``, over the broken part ``[a, x]`` of every row (point
-        masses: all of their weight where ``broken``)."""
-        atom = st["w"] > 0.0
-        a = st["a"]
-        xr = np.where(atom, a, x) / self.pm
-        ar = a / self.pm
-        px, pa = xr ** self.p, ar ** self.p
-        out = []
-        for k in range(n):
-            cont = self.C * self.pm ** k * (px - pa) / (self.p + k)
-            out.append(np.where(atom, st["w"] * a ** k * broken, cont))
-            px, pa = px * xr, pa * ar
-        return out
-
-    @staticmethod
-    def _law(st, d):
-        """Static and kinetic threshold factors of every row in direction ``d``."""
-        return (st["su"], st["ku"]) if d > 0 else (st["sd"], st["kd"])
-
-    def _limit(self, st, d, delta):
-        """Broken part of each row after a travel ``delta`` (>= 0, any shape ending in the
-        rows) in direction ``d``: ``(x, broken, s_d, c_d, raw, den)`` with ``x`` the clipped
-        limit and ``broken`` for point masses."""
-        s_d, c_d = d * st["s"], d * st["c"]
-        num = c_d + delta
-        den = self._law(st, d)[0] - s_d
-        with np.errstate(divide="ignore", invalid="ignore"):
-            raw = np.where(den > 0.0, num / np.where(den > 0.0, den, 1.0),
-                           np.where(num > 0.0, np.inf, -np.inf))
-        raw = np.where(st["slide"] == d, np.inf, raw)
-        return np.clip(raw, st["a"], st["b"]), raw > st["a"], s_d, c_d, raw, den
+        st = np.zeros((K.N_ROWS, len(rows)))
+        st[:K.S] = np.array(rows, float).T          # s, c, slide: 0 (stuck, unstretched)
+        self.state = st
+        self._last = None
 
     def force(self, d: float, delta):
         """Signed force of the banks (sum of ``sg`` x bank force) after a travel ``delta``
         [m] (scalar or 1-D array) from the current state in direction ``d``, and the
         tangent [N/m] (continuous part; a point mass breaking is a jump)."""
-        st = self.state
-        last = self._last
-        if last is not None and np.ndim(delta) == 0 and last[0] == d and last[1] == delta:
-            return last[7]               # the same step again (a wrapper re-trials to commit)
-        dl = np.asarray(delta, float)[..., None]
-        x, brk, s_d, c_d, raw, den = self._limit(st, d, dl)
-        sig, kap = self._law(st, d)
-        M0t, M1t = self.totals[:2]
-        scalar = dl.ndim == 1
-        if scalar:                       # one step (element route): kept for advance()
-            Mb = self._moments(st, x, brk, 3)
-        else:
-            Mb = self._moments(st, x, brk, 2)
-        M0b, M1b = Mb[:2]
-        F = kap * M1b + s_d * (M1t - M1b) + (c_d + dl) * (M0t - M0b)
-        inside = (st["w"] == 0.0) & (raw > st["a"]) & (raw < st["b"]) & (den > 0.0)
-        xs = np.where(inside, x, self.pm)
-        rho = self.C / self.pm * (xs / self.pm) ** (self.p - 1.0)
-        K = (M0t - M0b) - np.where(inside, rho * (sig - kap) * xs / np.where(
-            den > 0.0, den, 1.0), 0.0)
-        out = d * (F @ st["sg"]), K @ st["sg"]
-        if scalar:
-            self._last = (d, float(delta), x, brk, s_d, c_d, Mb, out)
-        return out
+        if np.ndim(delta) == 0:
+            delta = float(delta)
+            last = self._last
+            if last is not None and last[0] == d and last[1] == delta:
+                return last[2]           # the same step again (a wrapper re-trials to commit)
+            F, Kt = K.law_force(self.state, float(d), np.array([delta]), self.pm, self.p, self.C)
+            out = float(F[0]), float(Kt[0])
+            self._last = (d, delta, out)
+            return out
+        return K.law_force(self.state, float(d), np.asarray(delta, float), self.pm, self.p,
+                           self.C)
 
     def advance(self, d: float, delta: float) -> float:
         """Move the state by a travel ``delta >= 0`` in direction ``d``; returns the signed
         work done on the banks [J] (exact: stick to ``sigma_d phi``, slide at
         ``kappa_d phi``)."""
-        st = self.state
-        last = self._last
-        if last is not None and last[0] == d and last[1] == delta:
-            x, brk, s_d, c_d, Mb = last[2:7]
-        else:
-            x, brk, s_d, c_d, _, _ = self._limit(st, d, delta)
-            Mb = self._moments(st, x, brk, 3)
-        M = self.totals
-        Mu = [t - b_ for t, b_ in zip(M, Mb)]
-        sig, kap = self._law(st, d)
-        # stick from s phi + c to sigma phi, drop to kappa phi, slide the rest at kappa phi
-        work_b = ((0.5 * sig * sig - kap * sig - 0.5 * s_d * s_d + kap * s_d) * Mb[2]
-                  + (kap * delta + c_d * (kap - s_d)) * Mb[1] - 0.5 * c_d * c_d * Mb[0])
-        work = np.where(st["slide"] == d, kap * delta * M[1],
-                        work_b + delta * (s_d * Mu[1] + c_d * Mu[0]) + 0.5 * delta ** 2 * Mu[0])
-        atom = st["w"] > 0.0
-        has_b = np.where(atom, brk, x > st["a"])
-        has_u = np.where(atom, ~brk, x < st["b"])
-        lo = {key: v[has_b] for key, v in st.items()}
-        lo.update(b=np.where(atom, st["b"], x)[has_b], s=(d * kap)[has_b],
-                  c=np.zeros(lo["a"].size), slide=np.full(lo["a"].size, d))
-        hi = {key: v[has_u] for key, v in st.items()}
-        hi.update(a=np.where(atom, st["a"], x)[has_u], c=(st["c"] + d * delta)[has_u],
-                  slide=np.zeros(hi["a"].size))
-        # interleave (broken part first, then the stuck part of the same row): keeps order
-        order = np.argsort(np.concatenate([np.flatnonzero(has_b) * 2,
-                                           np.flatnonzero(has_u) * 2 + 1]), kind="stable")
-        new = {key: np.concatenate([lo[key], hi[key]])[order] for key in st}
-        self.state = _merge(new)
-        self._tot = self._last = None
-        return float(work @ st["sg"])
+        self.state, work = K.law_advance(self.state, float(d), float(delta), self.pm, self.p,
+                                         self.C)
+        self._last = None
+        return float(work)
 
     def stored(self) -> float:
         """Signed elastic energy of the banks [J]: ``0.5 int rho e^2``."""
-        st = self.state
-        M = self.totals
-        s, c = st["s"], st["c"]
-        return 0.5 * float((s * s * M[2] + 2.0 * s * c * M[1] + c * c * M[0]) @ st["sg"])
-
-
-def _merge(st: dict) -> dict:
-    """Join neighbouring continuous rows with the same state and bank (keeps rows few)."""
-    n = st["a"].size
-    if n < 2:
-        return st
-    same = np.ones(n - 1, bool)
-    for key in ("s", "c", "slide", "sg") + _LAW:
-        same &= st[key][1:] == st[key][:-1]
-    same &= (st["w"][1:] == 0.0) & (st["w"][:-1] == 0.0) & (st["b"][:-1] == st["a"][1:])
-    if not same.any():
-        return st
-    first = np.concatenate([[True], ~same])
-    last = np.concatenate([~same, [True]])
-    out = {key: v[first] for key, v in st.items()}
-    out["b"] = st["b"][last]
-    return out
+        return float(K.law_stored(self.state, self.pm, self.p, self.C))
 
 
 def law_history(pieces: _Pieces, u) -> np.ndarray:
     """Signed bank force along a displacement history ``u`` [m] from the state of ``pieces``
-    (which is advanced): one vectorised evaluation per monotone run of ``u`` (breaking is
-    monotone within a run, so this equals the step-by-step rule)."""
-    uu = np.asarray(u, float)
-    out = np.zeros(uu.size)
-    for a, b, d in monotone_runs(uu):
-        u_s = uu[a - 1] if a > 0 else 0.0
-        delta = d * (uu[a:b] - u_s)
-        out[a:b] = pieces.force(d, delta)[0]
-        pieces.advance(d, float(delta[-1]))
+    (which is advanced): one evaluation per monotone run of ``u`` (breaking is monotone
+    within a run, so this equals the step-by-step rule), compiled
+    (:func:`._law_kernel.law_history`)."""
+    out, pieces.state = K.law_history(pieces.state, np.ascontiguousarray(u, dtype=float),
+                                      pieces.pm, pieces.p, pieces.C)
+    pieces._last = None
     return out
 
 
@@ -295,7 +190,7 @@ class _LawEffect(_Effect):
     @property
     def n_pieces(self) -> int:
         """Number of ``phi`` intervals the committed state is kept on (both banks)."""
-        return int(self._pieces.state["a"].size)
+        return int(self._pieces.state.shape[1])
 
     def correction_history(self, u, D_inner=None) -> np.ndarray:
         """This element's force minus its inner element's [N] along a displacement history

@@ -25,6 +25,7 @@ is integrated per slider, and the dissipation is the work minus the stored elast
 from __future__ import annotations
 
 import numpy as np
+from numba import njit
 
 from ..core.discrete import slider_distribution
 from ._base import _Effect, _require_plain_joint
@@ -32,6 +33,53 @@ from ._base import _Effect, _require_plain_joint
 __all__ = ["_SliderEffect"]
 
 N_SLIDERS = 128
+
+
+@njit(cache=True)
+def _bank_step(e, s, k, sgn, cs, ck, du, e_new, s_new):
+    """Every slider's exact linear move ``du`` [m] (compiled): stick until the stretch in the
+    direction of motion reaches the static cap ``cs``, then slide at the kinetic cap ``ck``.
+
+    Writes the new stretches [m] to ``e_new`` and slip states (+1/-1 sliding that way, 0
+    stuck) to ``s_new``; returns ``(W, F, K)``, the sums weighted by ``sgn`` (modified bank
+    +1, plain bank -1) of the work [J], the force ``k e`` [N] and the stiffness of the stuck
+    sliders [N/m]. (Arrays are passed in, not returned: a cached function that also runs
+    inside another compiled one must not box arrays for Python.)
+    """
+    n = e.size
+    W = 0.0
+    F = 0.0
+    K = 0.0
+    if du == 0.0:
+        for i in range(n):
+            e_new[i] = e[i]
+            s_new[i] = s[i]
+            F += sgn[i] * k[i] * e[i]
+            if s[i] == 0.0:
+                K += sgn[i] * k[i]
+        return W, F, K
+    d = 1.0 if du > 0.0 else -1.0
+    adu = abs(du)
+    for i in range(n):
+        ep = d * e[i]                            # stretch in the direction of motion
+        end = ep + adu
+        if s[i] == d:                            # sliding: stays at the kinetic cap
+            ep_new = ck[i]
+            work = k[i] * ck[i] * adu
+            s_new[i] = d
+        elif end > cs[i]:                        # breaks: stick up to the static cap, slide
+            ep_new = ck[i]
+            work = 0.5 * k[i] * (cs[i] ** 2 - ep ** 2) + k[i] * ck[i] * (end - cs[i])
+            s_new[i] = d
+        else:                                    # stuck
+            ep_new = end
+            work = 0.5 * k[i] * (end ** 2 - ep ** 2)
+            s_new[i] = 0.0
+            K += sgn[i] * k[i]
+        e_new[i] = d * ep_new
+        W += sgn[i] * work
+        F += sgn[i] * k[i] * e_new[i]
+    return W, F, K
 
 
 class _SliderEffect(_Effect):
@@ -50,6 +98,8 @@ class _SliderEffect(_Effect):
         self._phi = phi
         self._n = k.size
         self._sign = np.concatenate([np.ones(k.size), -np.ones(k.size)])
+        self._cap_up = self._cap_dn = None
+        self._sk = self._sign * self._k
 
     # ---- thresholds
     def _caps(self):
@@ -59,10 +109,15 @@ class _SliderEffect(_Effect):
 
     def _refresh_caps(self) -> None:
         """Cache the thresholds of both banks (call after they change)."""
+        n = self._n
+        if getattr(self, "_cap_up", None) is None:      # both banks' caps, filled in place
+            self._cap_up = (np.tile(self._phi, 2), np.tile(self._phi, 2))
+            self._cap_dn = (np.tile(self._phi, 2), np.tile(self._phi, 2))
         su, sd, ku, kd = self._caps()
-        p = self._phi
-        self._cap_up = (np.concatenate([su, p]), np.concatenate([ku, p]))
-        self._cap_dn = (np.concatenate([sd, p]), np.concatenate([kd, p]))
+        self._cap_up[0][:n] = su
+        self._cap_up[1][:n] = ku
+        self._cap_dn[0][:n] = sd
+        self._cap_dn[1][:n] = kd
 
     def _reset_own(self):
         self._e = np.zeros(2 * self._n)          # slider stretches [m]
@@ -74,36 +129,23 @@ class _SliderEffect(_Effect):
         self._refresh_caps()
 
     def _step(self, du: float):
-        """Stretches, slip states and work per slider for a linear move ``du`` [m]."""
-        e, s, k = self._e, self._slip, self._k
-        if du == 0.0:
-            return e.copy(), s.copy(), np.zeros_like(e)
-        d = 1.0 if du > 0.0 else -1.0
-        cs, ck = self._cap_up if d > 0 else self._cap_dn
-        ep = d * e                               # stretch in the direction of motion
-        sliding = s == d
-        end = ep + abs(du)
-        breaks = ~sliding & (end > cs)
-        ep_new = np.where(sliding | breaks, ck, end)
-        start_el = np.where(sliding, ck, ep)     # a sliding slider stays at the kinetic cap
-        peak = np.where(sliding, ck, np.where(breaks, cs, end))
-        work = np.where(sliding, k * ck * abs(du),
-                        0.5 * k * (peak ** 2 - start_el ** 2)
-                        + np.where(breaks, k * ck * (end - cs), 0.0))
-        s_new = np.where(sliding | breaks, d, 0.0)
-        return d * ep_new, s_new, work
+        """Stretches, slip states and the signed work, force and stiffness of both banks for a
+        linear move ``du`` [m] (:func:`_bank_step`)."""
+        cs, ck = self._cap_up if du > 0.0 else self._cap_dn
+        e, s = np.empty(self._e.size), np.empty(self._e.size)
+        W, F, K = _bank_step(self._e, self._slip, self._k, self._sign, cs, ck, du, e, s)
+        return e, s, W, F, K
 
     def _stored(self, e):
-        return 0.5 * float(np.dot(self._sign * self._k, e * e))
+        return 0.5 * float(self._sk @ (e * e))
 
     def trial(self, u: float, v: float = 0.0) -> tuple[float, float]:
         """Force [N] and tangent [N/m]."""
         F, K = self._inner.trial(u, v)
-        e, s, work = self._step(float(u) - self._ub)
+        e, s, work, dF, dK = self._step(float(u) - self._ub)
         self._last = (float(u), e, s, work)
-        sk = self._sign * self._k
-        F += float(sk @ e)
-        K += float(sk @ (s == 0.0))
+        F += dF
+        K += dK
         self._set_trial(u, v, F)
         return F, K
 
@@ -114,17 +156,19 @@ class _SliderEffect(_Effect):
         if last is not None and last[0] == float(self._tu):
             _, e, s, work = last
         else:
-            e, s, work = self._step(float(self._tu) - self._ub)
+            e, s, work, _, _ = self._step(float(self._tu) - self._ub)
         self._last = None
         self._e, self._slip = e, s
-        self._Wb += float(self._sign @ work)
+        self._Wb += work
         self._ub = float(self._tu)
-        self._after_commit()
+        stored = self._after_commit()
         self._W = inner.work + self._Wb
-        self._D = inner.dissipated_energy + self._Wb - self._stored(self._e)
+        self._D = inner.dissipated_energy + self._Wb - (
+            self._stored(self._e) if stored is None else stored)
 
-    def _after_commit(self) -> None:
-        pass
+    def _after_commit(self):
+        """Update the thresholds after a commit; may return the banks' stored energy [J]."""
+        return None
 
     #: The thresholds depend on the dissipated energy (the fast loop then tracks it); laws
     #: fixed per direction are :class:`~iwan_element.effects._law._LawEffect`.
@@ -149,17 +193,17 @@ class _SliderEffect(_Effect):
 
     def _correction_energy(self, u: np.ndarray, D_inner, prev: float = 0.0) -> np.ndarray:
         """Thresholds that fall with the dissipated energy: step by step (the reference;
-        :class:`~iwan_element.effects.SlipDegradation` solves it per monotone run).
+        :class:`~iwan_element.effects.SlipDegradation` runs the same rule compiled).
         ``prev``: the displacement the state was committed at [m]."""
-        sk = self._sign * self._k
+        sk = self._sk
         out = np.empty(u.size)
         for i, x in enumerate(u.tolist()):
             du = x - prev
             if du != 0.0:
-                e, s, work = self._step(du)
+                e, s, work, F, _ = self._step(du)
                 self._e, self._slip = e, s
-                self._Wb += float(self._sign @ work)
-                out[i] = float(sk @ e)          # the step's force, before the commit
+                self._Wb += work
+                out[i] = F                      # the step's force, before the commit
                 self._after_commit_energy(D_inner[i])   # lowers the thresholds
                 prev = x
             else:

@@ -14,65 +14,73 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from numba import njit
 
 from ._base import ParamSpec
-from ._sliders import _SliderEffect
+from ._sliders import _SliderEffect, _bank_step
 
 __all__ = ["SlipDegradation"]
 
-_MAX_ITER = 80
-_LAM_TOL = 1e-14          # capacity change [-] at which the run's fixed point is accepted
-_SHORT_RUN = 8            # runs of fewer steps go through the per-sample loop (cheaper there)
+
+@njit(cache=True)
+def _degrade(e, sgn, k, phi, D_inner, Wb, rate, cap_s, cap_k):
+    """The commit of the correction bank (compiled): ``lambda = exp(-rate D)`` from the energy
+    dissipated so far (``D = D_inner + Wb - stored``), the modified sliders clipped to their
+    shrunken caps ``lambda phi`` (``e`` changed in place) and the caps of the modified bank
+    written to the first entries of ``cap_s``, ``cap_k``. Returns ``(lambda, stored energy
+    after the clip [J])``."""
+    n = phi.size
+    stored = 0.0
+    for j in range(2 * n):
+        stored += sgn[j] * k[j] * (e[j] * e[j])
+    lam = math.exp(-rate * max(D_inner + Wb - 0.5 * stored, 0.0))
+    after = 0.0
+    for j in range(2 * n):
+        if j < n:
+            c = lam * phi[j]
+            e[j] = max(min(e[j], c), -c)
+            cap_s[j] = c
+            cap_k[j] = c
+        after += sgn[j] * k[j] * (e[j] * e[j])
+    return lam, 0.5 * after
 
 
-def _run_fixed_point(x0, xp0, lam0, rate, phi, k, step, D_in, Wb0, D_in0=None):
-    """One monotone run of the correction bank, all samples at once.
+@njit(cache=True)
+def _degrade_history(e, slip, k, sgn, phi, lam, Wb, rate, u, prev, D_inner):
+    """The per-sample rule of the correction bank along ``u`` [m] (compiled): each step moves
+    every slider exactly (:func:`._sliders._bank_step`, caps ``lambda phi`` in the modified
+    bank, ``phi`` in the plain one), then ``lambda = exp(-rate D)`` from the energy
+    dissipated so far and the modified sliders are clipped to their shrunken caps.
 
-    In the coordinate of the motion (``x``: modified sliders, ``xp``: plain sliders) a step
-    ``s_j > 0`` maps every modified slider by ``x_j = clip(x_{j-1} + s_j, -c_j, min(c_{j-1},
-    c_j))`` with ``c_j = lambda_j phi`` (stick or slide at the capacity before the step, then
-    clip to the shrunken capacity), which for a non-increasing ``lambda`` composes to
-    ``x_j = min(delta_j + max(x_0, max_{i<=j}(-c_i - delta_i)), c_j)`` (``delta``: travel since
-    the run started). The capacities depend on the energy dissipated up to each step, which
-    depends on the capacities before it: the run's ``lambda_j`` are found by fixed-point
-    iteration (causal, so it converges; geometrically at the small capacity changes of one
-    run). Returns ``None`` when ``lambda`` is not non-increasing or does not converge, else
-    ``(force (modified - plain) per sample in the motion's coordinate, x_end, xp_end,
-    lambda_end, Wb_end, force after the clip)``.
+    ``e, slip``: both banks' stretches [m] and slip flags (modified first), changed in place;
+    ``prev``: the displacement they were committed at [m]; ``D_inner``: dissipated energy of
+    the wrapped joint after each step [J]. Returns ``(correction force per sample [N],
+    lambda, Wb)``.
     """
-    delta = np.cumsum(step)
-    D_in0 = D_in[0] if D_in0 is None else D_in0
-    # plain bank: fixed thresholds phi
-    Xp = np.minimum(xp0[None, :] + delta[:, None], phi[None, :])
-    Xp_prev = np.vstack([xp0[None, :], Xp[:-1]])
-    wp = (0.5 * (Xp ** 2 - Xp_prev ** 2)
-          + phi[None, :] * np.maximum(Xp_prev + step[:, None] - phi[None, :], 0.0)) @ k
-    Fp = Xp @ k
-    G = D_in - (np.cumsum(wp) - 0.5 * (Xp ** 2) @ k) + Wb0
-    # start from the capacities the wrapped joint's own dissipation would give (the bank's
-    # correction changes them by its discretisation error and the effect's feedback only)
-    lam = lam0 * np.exp(-rate * np.maximum(D_in - D_in0, 0.0))
-    for _ in range(_MAX_ITER):
-        c = lam[:, None] * phi[None, :]
-        c_prev = np.vstack([lam0 * phi[None, :], c[:-1]])
-        M = np.maximum.accumulate(-c - delta[:, None], axis=0)
-        X = np.minimum(delta[:, None] + np.maximum(x0[None, :], M), c)
-        X_prev = np.vstack([x0[None, :], X[:-1]])
-        y = np.minimum(X_prev + step[:, None], c_prev)
-        w = (0.5 * (y ** 2 - X_prev ** 2)
-             + c_prev * np.maximum(X_prev + step[:, None] - c_prev, 0.0)) @ k
-        D = G + np.cumsum(w) - 0.5 * (y ** 2) @ k
-        lam_new = np.exp(-rate * np.maximum(D, 0.0))
-        done = float(np.max(np.abs(lam_new - lam))) <= _LAM_TOL
-        lam = lam_new
-        if done:
-            break
-    else:
-        return None
-    if lam[0] > lam0 or np.any(np.diff(lam) > 0.0):
-        return None
-    Wb_end = Wb0 + float(np.sum(w)) - float(np.sum(wp))
-    return y @ k - Fp, X[-1], Xp[-1], float(lam[-1]), Wb_end, X @ k - Fp
+    n = phi.size
+    caps = np.empty(2 * n)
+    caps[n:] = phi
+    for j in range(n):
+        caps[j] = lam * phi[j]
+    out = np.empty(u.size)
+    e_new = np.empty(2 * n)
+    s_new = np.empty(2 * n)
+    for i in range(u.size):
+        du = u[i] - prev
+        if du == 0.0:
+            F = 0.0
+            for j in range(2 * n):
+                F += sgn[j] * k[j] * e[j]
+            out[i] = F
+            continue
+        W, F, _ = _bank_step(e, slip, k, sgn, caps, caps, du, e_new, s_new)
+        e[:] = e_new
+        slip[:] = s_new
+        Wb += W
+        out[i] = F                                   # the step's force, before the commit
+        lam, _ = _degrade(e, sgn, k, phi, D_inner[i], Wb, rate, caps, caps)
+        prev = u[i]
+    return out, lam, Wb
 
 
 class SlipDegradation(_SliderEffect):
@@ -110,55 +118,28 @@ class SlipDegradation(_SliderEffect):
         c = self._lam * self._phi
         return c, c, c, c
 
-    def _after_commit(self) -> None:
-        self._after_commit_energy(self._inner.dissipated_energy)
+    def _after_commit(self) -> float:
+        return self._after_commit_energy(self._inner.dissipated_energy)
 
     def _correction_energy(self, u: np.ndarray, D_inner) -> np.ndarray:
-        """The per-sample rule of :meth:`_SliderEffect._correction_energy`, solved one
-        monotone run at a time (see :func:`_run_fixed_point`); a run whose capacity does not
-        fall monotonically (possible only through the bank's discretisation error in the
-        energy) is stepped sample by sample with the reference loop."""
-        D_inner = np.asarray(D_inner, float)
-        out = np.empty(u.size)
-        du = np.diff(u, prepend=0.0)
-        nz = np.flatnonzero(du)
-        if nz.size == 0:
-            out[:] = 0.0
-            return out
-        out[:nz[0]] = 0.0
-        sgn = np.sign(du[nz])
-        cut = np.flatnonzero(np.diff(sgn)) + 1
-        n, k = self._n, self._k[:self._n]
-        for seg in np.split(np.arange(nz.size), cut):
-            idx = nz[seg]
-            a = idx[0]
-            b = nz[seg[-1] + 1] if seg[-1] + 1 < nz.size else u.size
-            d = float(sgn[seg[0]])
-            res = None
-            if idx.size >= _SHORT_RUN:
-                res = _run_fixed_point(d * self._e[:n], d * self._e[n:], self._lam, self.rate,
-                                       self._phi, k, np.abs(du[idx]), D_inner[idx], self._Wb,
-                                       D_inner[a - 1] if a > 0 else 0.0)
-            if res is None:                      # short run or no monotone fixed point:
-                # the reference, sample by sample (flags of the other direction: irrelevant)
-                self._slip = np.zeros(2 * n)
-                out[a:b] = super()._correction_energy(u[a:b], D_inner[a:b], prev=u[a] - du[a])
-                continue
-            F_run, x_end, xp_end, lam_end, Wb_end, F_post = res
-            # samples without motion hold the committed (clipped) state's force
-            last = np.searchsorted(idx, np.arange(a, b), side="right") - 1
-            out[a:b] = d * F_post[last]
-            out[idx] = d * F_run
-            self._e = d * np.concatenate([x_end, xp_end])
-            self._lam, self._Wb = lam_end, Wb_end
-            self._refresh_caps()
+        """The per-sample rule of :meth:`_SliderEffect._correction_energy`, compiled
+        (:func:`_degrade_history`), from the virgin state."""
+        D_inner = np.ascontiguousarray(D_inner, dtype=float)
+        e, slip = self._e.copy(), self._slip.copy()
+        out, self._lam, self._Wb = _degrade_history(
+            e, slip, self._k, self._sign, self._phi, self._lam, self._Wb, self.rate,
+            np.ascontiguousarray(u, dtype=float), 0.0, D_inner)
+        self._e, self._slip = e, slip
+        self._refresh_caps()
         return out
 
-    def _after_commit_energy(self, D_inner: float) -> None:
-        """Update ``lambda`` from the joint's dissipated energy and clip the stretches."""
-        D = D_inner + self._Wb - self._stored(self._e)
-        self._lam = math.exp(-self.rate * max(D, 0.0))
-        n = self._n
-        cap = self._lam * self._phi
-        self._e[:n] = np.clip(self._e[:n], -cap, cap)
-        self._refresh_caps()
+    def _after_commit_energy(self, D_inner: float) -> float:
+        """Update ``lambda`` from the joint's dissipated energy, clip the stretches and the
+        caps (:func:`_degrade`); returns the stored energy of the banks after the clip [J]."""
+        if self._cap_up is None:
+            self._refresh_caps()
+        self._lam, stored = _degrade(self._e, self._sign, self._k, self._phi, D_inner,
+                                     self._Wb, self.rate, *self._cap_up)
+        np.copyto(self._cap_dn[0], self._cap_up[0])
+        np.copyto(self._cap_dn[1], self._cap_up[1])
+        return stored
