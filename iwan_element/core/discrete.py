@@ -22,6 +22,7 @@ import numpy as np
 
 from ._validation import check_scalar, finite_array
 from .parameters import IwanParameters
+from .protocol import CommittedState
 
 __all__ = ["DiscreteIwan", "slider_distribution"]
 
@@ -85,7 +86,7 @@ def slider_distribution(params: IwanParameters, n_sliders: int = 100, *, spacing
     return k, phi
 
 
-class DiscreteIwan:
+class DiscreteIwan(CommittedState):
     """Iwan joint discretised into parallel Jenkins sliders (element protocol).
 
     Same protocol as :class:`~iwan_element.IwanJoint`: ``trial(u, v=0.0) -> (force,
@@ -178,16 +179,6 @@ class DiscreteIwan:
         self._tz = None
 
     @property
-    def displacement(self) -> float:
-        """Committed displacement [m]."""
-        return self._u
-
-    @property
-    def force(self) -> float:
-        """Committed force [N]."""
-        return self._F
-
-    @property
     def stiffness(self) -> float:
         """Committed tangent [N/m]."""
         return self._K
@@ -196,16 +187,6 @@ class DiscreteIwan:
     def stored_energy(self) -> float:
         """Elastic energy in the slider springs, ``sum k z**2 / 2`` [J] (committed)."""
         return 0.5 * float(self._k @ (self._z * self._z))
-
-    @property
-    def dissipated_energy(self) -> float:
-        """Energy dissipated by slip since the last reset [J] (committed)."""
-        return self._D
-
-    @property
-    def work(self) -> float:
-        """Work done on the joint since the last reset [J]: stored plus dissipated."""
-        return self._W
 
     def force_history(self, u) -> np.ndarray:
         """Forces [N] for a whole history ``u`` [m], shape (n,), from the virgin state (on a

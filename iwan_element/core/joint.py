@@ -32,6 +32,7 @@ from ._validation import check_scalar, finite_array
 from ._history import REVERSAL_TOL
 from .masing import _NOSEG, masing_step, masing_constants, masing_history
 from .parameters import IwanParameters
+from .protocol import CommittedState
 
 __all__ = ["IwanJoint"]
 
@@ -43,7 +44,7 @@ _INF = math.inf
 _NINF = -math.inf
 
 
-class IwanJoint:
+class IwanJoint(CommittedState):
     """Exact time-domain Iwan joint with reversal-point memory (element protocol).
 
     The element follows the protocol of a history-dependent material (as in OpenSees):
@@ -275,35 +276,11 @@ class IwanJoint:
             self._blo, self._bhi, self._bdir = 0.0, 0.0, 0
 
     # ------------------------------------------------------------------ state read-out
-    @property
-    def displacement(self) -> float:
-        """Committed displacement [m]."""
-        return self._u
-
-    @property
-    def force(self) -> float:
-        """Committed force [N]."""
-        return self._F
-
+    # (displacement, force, work, dissipated and stored energy: CommittedState)
     @property
     def stiffness(self) -> float:
         """Committed consistent tangent [N/m]."""
         return self._K
-
-    @property
-    def work(self) -> float:
-        """Work done on the joint since the last reset, ``int F du`` [J] (committed)."""
-        return self._W
-
-    @property
-    def dissipated_energy(self) -> float:
-        """Energy dissipated by slip since the last reset [J] (committed, never decreases)."""
-        return self._D
-
-    @property
-    def stored_energy(self) -> float:
-        """Elastic energy stored in the slider springs [J] (committed): work minus dissipation."""
-        return self._W - self._D
 
     @property
     def reversal_depth(self) -> int:

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from typing import Protocol, runtime_checkable
 
-__all__ = ["JointElement", "check_element"]
+__all__ = ["JointElement", "CommittedState", "check_element"]
 
 
 @runtime_checkable
@@ -70,3 +70,37 @@ def check_element(obj, *, name: str = "obj") -> None:
         raise ValueError(f"{name} must follow the joint element protocol (trial, commit, revert, "
                          f"reset, force, displacement and energy read-outs); "
                          f"{type(obj).__name__} lacks {missing}")
+
+
+class CommittedState:
+    """Read-outs of an element's committed state, from its attributes ``_u`` [m], ``_F``
+    [N], ``_W`` (work) and ``_D`` (dissipated energy) [J]: the one implementation of the
+    protocol's properties for the package's elements (an element with another stored energy
+    overrides :attr:`stored_energy`)."""
+
+    __slots__ = ()
+
+    @property
+    def displacement(self) -> float:
+        """Committed displacement [m]."""
+        return self._u
+
+    @property
+    def force(self) -> float:
+        """Committed force [N]."""
+        return self._F
+
+    @property
+    def work(self) -> float:
+        """Work done on the element since the last reset, ``int F du`` [J] (committed)."""
+        return self._W
+
+    @property
+    def dissipated_energy(self) -> float:
+        """Energy dissipated since the last reset [J] (committed, never decreases)."""
+        return self._D
+
+    @property
+    def stored_energy(self) -> float:
+        """Recoverable energy [J] (committed): work minus dissipation."""
+        return self._W - self._D

@@ -13,7 +13,7 @@ import numpy as np
 
 from ..core._validation import check_scalar, finite_array, same_length
 from ..core.parameters import IwanParameters
-from ..core.protocol import check_element
+from ..core.protocol import CommittedState, check_element
 
 __all__ = ["ParamSpec", "_Effect", "_find_zero"]
 
@@ -115,7 +115,7 @@ def _require_plain_joint(inner, subject: str) -> None:
                          "it wraps the joint directly (put other effects around it)")
 
 
-class _Effect:
+class _Effect(CommittedState):
     """Shared plumbing: the wrapped element, energy counters and a generic force history."""
 
     effect = ""
@@ -222,31 +222,6 @@ class _Effect:
 
     def _commit(self) -> None:
         raise NotImplementedError
-
-    @property
-    def force(self) -> float:
-        """Committed force [N]."""
-        return self._F
-
-    @property
-    def displacement(self) -> float:
-        """Committed displacement [m]."""
-        return self._u
-
-    @property
-    def work(self) -> float:
-        """Work done on the element since the last reset [J]."""
-        return self._W
-
-    @property
-    def dissipated_energy(self) -> float:
-        """Energy dissipated since the last reset [J]."""
-        return self._D
-
-    @property
-    def stored_energy(self) -> float:
-        """Recoverable energy [J]: work minus dissipation."""
-        return self._W - self._D
 
     def force_history(self, u, v=None) -> np.ndarray:
         """Forces [N] for a history ``u`` [m] (and velocities ``v`` [m/s], default zero), shape

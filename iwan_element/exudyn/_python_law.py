@@ -32,24 +32,30 @@ def _coordinate_force_function(conn):
     return iwan_coordinate_force
 
 
+def _axial_force(conn, trial, mbs, t, displacement, velocity, a0, a1, a2, off):
+    """Force vector of the joint along the unit axis ``(a0, a1, a2)`` (the position routes;
+    their elements' trials cost far more than this call)."""
+    u = displacement[0] * a0 + displacement[1] * a1 + displacement[2] * a2 - off
+    if t <= conn._guard:
+        conn._check(mbs, t, u)
+    v = velocity[0] * a0 + velocity[1] * a1 + velocity[2] * a2
+    if u == conn._lu and v == conn._lv:
+        F = conn._lF
+    else:
+        F = trial(u, v)[0]
+        conn._lu = u
+        conn._lv = v
+        conn._lF = F
+    return [F * a0, F * a1, F * a2]
+
+
 def _position_force_function(conn):
     trial = conn._joint.trial
     a0, a1, a2 = conn._axis
     off = conn._offset
 
     def iwan_position_force(mbs, t, itemNumber, displacement, velocity, stiffness, damping, offset):
-        u = displacement[0] * a0 + displacement[1] * a1 + displacement[2] * a2 - off
-        if t <= conn._guard:
-            conn._check(mbs, t, u)
-        v = velocity[0] * a0 + velocity[1] * a1 + velocity[2] * a2
-        if u == conn._lu and v == conn._lv:
-            F = conn._lF
-        else:
-            F = trial(u, v)[0]
-            conn._lu = u
-            conn._lv = v
-            conn._lF = F
-        return [F * a0, F * a1, F * a2]
+        return _axial_force(conn, trial, mbs, t, displacement, velocity, a0, a1, a2, off)
 
     return iwan_position_force
 
@@ -64,20 +70,8 @@ def _rotating_axis_force_function(conn):
     def iwan_rotating_axis_force(mbs, t, itemNumber, displacement, velocity, stiffness, damping,
                                  offset):
         A = get(marker, _ROTATION_MATRIX).tolist()      # row-major 3x3, current configuration
-        a0 = A[0] * l0 + A[1] * l1 + A[2] * l2
-        a1 = A[3] * l0 + A[4] * l1 + A[5] * l2
-        a2 = A[6] * l0 + A[7] * l1 + A[8] * l2
-        u = displacement[0] * a0 + displacement[1] * a1 + displacement[2] * a2 - off
-        if t <= conn._guard:
-            conn._check(mbs, t, u)
-        v = velocity[0] * a0 + velocity[1] * a1 + velocity[2] * a2
-        if u == conn._lu and v == conn._lv:
-            F = conn._lF
-        else:
-            F = trial(u, v)[0]
-            conn._lu = u
-            conn._lv = v
-            conn._lF = F
-        return [F * a0, F * a1, F * a2]
+        return _axial_force(conn, trial, mbs, t, displacement, velocity,
+                            A[0] * l0 + A[1] * l1 + A[2] * l2, A[3] * l0 + A[4] * l1 + A[5] * l2,
+                            A[6] * l0 + A[7] * l1 + A[8] * l2, off)
 
     return iwan_rotating_axis_force
