@@ -1,6 +1,6 @@
 """Diagnose every real friction-damper record in ../shared/data/arts-damper.
 
-Per record: the effect(s) named, the RMS misfit in the band |F| < 0.25 max|F| (where backlash
+Per record: the effect(s) named, the wall and the process CPU time of its diagnosis, the RMS misfit in the band |F| < 0.25 max|F| (where backlash
 acts) before and after, and their ratio. The rig's 40-50 Hz ringing is removed first by a
 zero-phase low-pass (``--lowpass``, default 20 Hz; the joint is driven at 0.5-1 Hz), and the
 band misfit is measured on that low-passed force. The last column is the force-channel lag
@@ -24,11 +24,13 @@ ROOT = Path(__file__).resolve().parents[1]
 def run(path, lowpass):
     from iwan_element import diagnose
     t, u, F = np.loadtxt(path, delimiter=",", skiprows=1).T
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     try:
         g = diagnose(t, u, F, lowpass=lowpass)
     except ValueError as exc:                     # a refusal is a result, reported as such
-        return path.name, f"REFUSED: {exc}", np.nan, np.nan, time.perf_counter() - t0, (0, np.nan)
+        return (path.name, f"REFUSED: {exc}", np.nan, np.nan, time.perf_counter() - t0,
+                (0, np.nan), time.process_time() - c0)
+    cpu = time.process_time() - c0
     band = np.abs(g.F) < 0.25 * np.abs(g.F).max()
     rb = float(np.sqrt(np.mean((g.F - g.force_before)[band] ** 2)))
     ra = float(np.sqrt(np.mean((g.F - g.force_after)[band] ** 2)))
@@ -36,7 +38,7 @@ def run(path, lowpass):
     shifted = [np.sqrt(np.mean((g.F - np.interp(g.t - k / fs, g.t, g.force_after))[band] ** 2))
                for fs in [1.0 / float(np.median(np.diff(g.t)))] for k in lags]
     lag = (int(lags[int(np.argmin(shifted))]), float(np.min(shifted)))
-    return path.name, " + ".join(g.effects) or "none", rb, ra, time.perf_counter() - t0, lag
+    return path.name, " + ".join(g.effects) or "none", rb, ra, time.perf_counter() - t0, lag, cpu
 
 
 def main(argv=None):
@@ -57,11 +59,12 @@ def main(argv=None):
         return 0
     with ProcessPoolExecutor(args.jobs) as ex:
         rows = list(ex.map(run, files, [args.lowpass] * len(files)))
-    print(f"{'record':<22} {'named':<34} {'band before [N]':>15} {'after [N]':>10} "
-          f"{'ratio':>6} {'time [s]':>8} {'lag':>4} {'at lag [N]':>10}")
+    print(f"{'record':<26} {'named':<34} {'band before [N]':>15} {'after [N]':>10} "
+          f"{'ratio':>6} {'time [s]':>8} {'CPU [s]':>7} {'lag':>4} {'at lag [N]':>10}")
     ok = 0
-    for name, eff, rb, ra, dt, lag in rows:
-        print(f"{name:<22} {eff:<34} {rb:15.0f} {ra:10.0f} {ra / rb:6.2f} {dt:8.0f} {lag[0]:4d} {lag[1]:10.0f}")
+    for name, eff, rb, ra, dt, lag, cpu in rows:
+        print(f"{name:<26} {eff:<34} {rb:15.0f} {ra:10.0f} {ra / rb:6.2f} {dt:8.1f} {cpu:7.1f} "
+              f"{lag[0]:4d} {lag[1]:10.0f}")
         ok += ("backlash" in eff) and ra <= 0.5 * rb
     print(f"{ok}/{len(rows)} records: backlash named and band misfit at least halved")
     return 0

@@ -1,7 +1,7 @@
 """Exudyn model of a :class:`~iwan_element.models.specimens.Specimen` and its linear matrices.
 
 Beams: ``ObjectANCFCable2D`` (Bernoulli-Euler, geometrically exact) as in
-:mod:`~iwan_element.models.jointed_beam` (REFERENCE sec. 6: Cable2D accepts markers offset to
+:mod:`~iwan_element.models.jointed_beam` (docs/equations.md section 6: Cable2D accepts markers offset to
 the beam surfaces). Each beam has lap elements of height ``lap_thickness`` and outer elements
 of height ``thickness``; beam A's axis is at ``y = 0``, beam B's at ``y = lap_thickness``, and
 the interface at the surfaces ``+-lap_thickness/2``. Simplification: for stepped halves

@@ -12,7 +12,7 @@
   interface: ``mu = Fs / sum(preloads)`` (in a shear test every point slips at
   ``mu N_i``, and ``sum N_i = sum P``) and ``k_t = KT / A_contact``; chi and beta carry over.
   :func:`interface_from_modal_iwan` maps a modal Iwan model (modal units, Segalman 2005,
-  REFERENCE sec. 7, ``w0^2 = K_inf + KT``): ``k_t`` such that the stuck mode's
+  docs/equations.md section 7, ``w0^2 = K_inf + KT``): ``k_t`` such that the stuck mode's
   ``w^2`` exceeds that of the tangentially free lap (``K_inf``, macroslip) by ``KT_modal``,
   and ``mu`` such that the points' slip forces weighted by the mode's slip shape
   ``g_i = du_i/dq`` sum to the modal macroslip force, ``sum |g_i| mu N_i = Fs_modal``

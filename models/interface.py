@@ -1,6 +1,6 @@
 """Contact pressure in the lap and the Iwan element of each contact point.
 
-Pressure model (REFERENCE.md sec. 7, "Contact pressure"): each bolt clamps the two lap
+Pressure model (docs/equations.md section 7, "Contact pressure"): each bolt clamps the two lap
 halves through a frustum of half-apex angle ``a`` (Shigley/Budynas & Nisbett ch. 8; Osgood
 25-33 deg) starting at the washer, so at the interface the pressure is confined to a disc of
 radius ``r_c = D_w/2 + t tan(a)`` (``t`` the thickness of one lap half), zero in the bolt hole

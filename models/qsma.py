@@ -1,6 +1,6 @@
 """Quasi-static modal analysis (QSMA) of a lap-jointed specimen.
 
-Lacayo & Allen (MSSP 118:133-157, 2019; REFERENCE.md sec. 7 steps 1-6), on the linear beam
+Lacayo & Allen (MSSP 118:133-157, 2019; docs/equations.md section 7 steps 1-6), on the linear beam
 matrices extracted once from the Exudyn model (:func:`~iwan_element.models.assembly.linear_system`)
 and the closed-form Iwan backbones of the contact points:
 
@@ -8,12 +8,12 @@ and the closed-form Iwan backbones of the contact points:
    coupling), so ``x0 = 0`` and the stuck tangent is ``K = K0 + G^T diag(KT_i) G``;
 2. mass-normalised eigenpair ``(w_k, phi)`` of ``(K, M)`` for the requested elastic mode;
 3. static load ``alpha M phi``: ``K0 x + G^T F(G x) = alpha M phi`` with ``F_i`` the virgin
-   backbone of point ``i`` (REFERENCE sec. 2), condensed statically onto the contact slips
+   backbone of point ``i`` (docs/equations.md section 2), condensed statically onto the contact slips
    ``u = G x`` and solved by Newton with the backbones' tangents, bordered with ``S x = X`` so
    that each requested sensor amplitude ``X`` is hit exactly;
 4. ``q = phi^T M x`` and secant ``w^2 = alpha / q``;
 5. Masing damping from the sum of the contact points' dissipations at their slip
-   amplitudes ``u_i = |G_i x|`` (closed form, REFERENCE sec. 2) rather than the modal
+   amplitudes ``u_i = |G_i x|`` (closed form, docs/equations.md section 2) rather than the modal
    integral the reference code marks as inaccurate;
 6. ``zeta = zeta_floor + D / (2 pi alpha q)``.
 

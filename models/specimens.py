@@ -7,7 +7,7 @@ points, the amplitude range a test covers, and the contact-interface model
 (:class:`InterfaceModel`). Coordinates run along the assembly from the free or clamped end of
 beam A (``x = 0``); beam A occupies ``[0, L]``, beam B ``[L - overlap, 2L - overlap]``.
 
-Presets (:func:`preset`; REFERENCE.md sec. 7 for every published number):
+Presets (:func:`preset`; docs/equations.md section 7 for every published number):
 
 ``"example"``
     Today's example: two 200 x 40 x 10 mm steel beams, 50 mm lap, one M16 bolt at 30 kN in the
@@ -75,10 +75,10 @@ class InterfaceModel:
     normal_stiffness_per_area : float
         Normal contact stiffness per unit area [N/m^3].
     chi, beta : float
-        Iwan exponent and spike ratio of every point (REFERENCE sec. 2 ranges).
+        Iwan exponent and spike ratio of every point (docs/equations.md section 2 ranges).
     damping_floor : float
         Modal damping ratio of the linear mode from material and boundaries [-], ``>= 0``
-        (a viscous floor, REFERENCE sec. 7: it adds to the joint's).
+        (a viscous floor, docs/equations.md section 7: it adds to the joint's).
     pressure : {"linear-cone", "uniform-cone"}
         Pressure shape inside each bolt's cone (zero in the hole and beyond ``r_c``):
         decreasing linearly from the hole edge to zero at ``r_c``, or uniform.
@@ -320,7 +320,7 @@ class Specimen:
     @property
     def cone_radius(self) -> float:
         """Radius of the pressure cone at the interface, ``D_w/2 + t tan(a)`` [m]
-        (REFERENCE sec. 7; ``t`` the lap thickness of one beam)."""
+        (docs/equations.md section 7; ``t`` the lap thickness of one beam)."""
         a = math.radians(self.interface.cone_angle_deg)
         return 0.5 * self.washer_diameter + self.lap_thickness * math.tan(a)
 

@@ -1,7 +1,7 @@
 """Synthetic test records with a hidden effect, shared by tests/test_diagnosis.py and
 benchmarks/bench_diagnosis.py. The diagnosis is never told which effect is hidden.
 
-Joint: the REFERENCE.md sec. 5 test vector (Fs, KT, chi, beta) = (1000 N, 1e6 N/m, -0.5, 0.2),
+Joint: the docs/equations.md section 5 test vector (Fs, KT, chi, beta) = (1000 N, 1e6 N/m, -0.5, 0.2),
 phi_max = 2.25 mm. Each amplitude is applied for three cycles of 96 samples at 1 Hz; the force
 noise is 5 N (0.5 % of Fs), white or AR(1)-coloured.
 
@@ -98,12 +98,12 @@ def record(name, magnitude, protocol, seed, *, colour=0.0, waveform="sine", el=N
 
 
 # ----------------------------------------------------------------------------- vibration
-MODAL = IwanParameters(400.0, 2.5266e5, -0.5, 1.0)     # REFERENCE.md sec. 5, modal Iwan
+MODAL = IwanParameters(400.0, 2.5266e5, -0.5, 1.0)     # docs/equations.md section 5, modal Iwan
 K_INF, M_MODAL, ZETA0 = 1.4212e5, 1.0, 1e-4
 
 
 def modal_curves(X, *, zeta_v=0.0, k_p=0.0, delta=0.0):
-    """Single-mode modal Iwan (REFERENCE.md sec. 5): frequency [Hz] and damping ratio at
+    """Single-mode modal Iwan (docs/equations.md section 5): frequency [Hz] and damping ratio at
     amplitudes X [m], with a hidden viscous ratio ``zeta_v`` and/or a pinning spring
     ``k_p`` [N/m] beyond ``delta`` [m] (harmonic-balance stiffness of the dead-zone spring)."""
     from iwan_element import dissipation, secant_stiffness

@@ -1,6 +1,6 @@
 """Break-away on the continuous Iwan density (effects/breakaway.py), against independent
 routes: the closed-form virgin and first unloading branches written here from the density
-(REFERENCE.md sec. 2), and a bank of Jenkins sliders with static/kinetic thresholds stepped
+(docs/equations.md section 2), and a bank of Jenkins sliders with static/kinetic thresholds stepped
 in tests/_jenkins_bank.py, which converges to the element as the bank gets dense."""
 import numpy as np
 import pytest
@@ -21,7 +21,7 @@ def _drive(per=150, amps=(0.4, 1.6, 0.7, 2.5, 0.3, 1.1)):
 
 
 def _moments(p, x):
-    """Continuous density of ``p`` (REFERENCE.md sec. 2): ``int_0^x rho`` and
+    """Continuous density of ``p`` (docs/equations.md section 2): ``int_0^x rho`` and
     ``int_0^x rho phi``, ``rho = R phi^chi``."""
     q = p.chi + 1.0
     C = q * p.KT / (1.0 + p.beta)                     # R phi_max^(chi+1)

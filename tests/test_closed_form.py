@@ -1,4 +1,4 @@
-"""Closed forms against REFERENCE.md vectors and against independent routes (quadrature)."""
+"""Closed forms against the test vectors of docs/equations.md section 5 and against independent routes (quadrature)."""
 import numpy as np
 import pytest
 from scipy import integrate
@@ -14,7 +14,7 @@ PARAMS = [P_REF, IwanParameters(400.0, 2.5266e5, -0.5, 1.0), IwanParameters(1000
 
 
 def test_dissipation_reference_vector():
-    """REFERENCE.md section 5: D for (3, 2, -0.1, 0.1) at seven amplitudes."""
+    """docs/equations.md section 5: D for (3, 2, -0.1, 0.1) at seven amplitudes."""
     r = np.array([1e-3, 1e-2, 0.1, 0.5, 1.0, 1.5, 3.0])
     expected = [1.96069620e-8, 1.55743635e-5, 1.23711567e-2, 1.31650745,
                 9.82675904, 2.70836398e1, 7.88542820e1]
@@ -49,7 +49,7 @@ def test_backbone_limits_and_tangent(p):
     np.testing.assert_allclose(backbone(-u, p), -F, rtol=0, atol=0)
     assert backbone(p.phi_max, p) == pytest.approx(p.Fs, rel=1e-12)
     assert tangent_stiffness(0.0, p) == pytest.approx(p.KT)
-    # tangent just below phi_max equals the spike stiffness S (REFERENCE section 2)
+    # tangent just below phi_max equals the spike stiffness S (docs/equations.md section 2)
     assert tangent_stiffness(p.phi_max * (1 - 1e-12), p) == pytest.approx(p.S, rel=1e-6, abs=1e-6 * p.KT)
     assert tangent_stiffness(2 * p.phi_max, p) == 0.0
     # finite difference of the backbone
@@ -73,7 +73,7 @@ def test_secant_eq24(p):
 
 @pytest.mark.parametrize("p", PARAMS)
 def test_dissipation_equals_masing_integral(p):
-    """Any Masing model: D = 8 int_0^u0 F dx - 4 u0 F(u0) (REFERENCE section 2), by quadrature."""
+    """Any Masing model: D = 8 int_0^u0 F dx - 4 u0 F(u0) (docs/equations.md section 2), by quadrature."""
     for r in [1e-3, 0.2, 0.9, 1.0, 1.7, 4.0]:
         u0 = r * p.phi_max
         pts = [p.phi_max] if u0 > p.phi_max else None
@@ -94,7 +94,7 @@ def test_masing_loop_area_equals_dissipation(p):
 
 
 def test_dissipation_slope_eq21_and_reference_values():
-    """Local slope d ln D / d ln F0 (REFERENCE section 2 values at chi = -0.5, beta = 0)."""
+    """Local slope d ln D / d ln F0 (docs/equations.md section 2 values at chi = -0.5, beta = 0)."""
     p = IwanParameters(1.0, 1.0, -0.5, 0.0)
     F0_over_Fs = np.array([0.001, 0.1, 0.3, 0.5])
     # invert the backbone for u0

@@ -1,10 +1,10 @@
-"""DiscreteIwan: slider layout, REFERENCE.md section 4 figures, protocol and energy."""
+"""DiscreteIwan: slider layout, docs/equations.md section 4 figures, protocol and energy."""
 import numpy as np
 import pytest
 
 from iwan_element import DiscreteIwan, IwanJoint, IwanParameters, dissipation, slider_distribution
 
-P = IwanParameters(1.0, 1.0, -0.5, 0.1)      # the case of REFERENCE.md section 4
+P = IwanParameters(1.0, 1.0, -0.5, 0.1)      # the case of docs/equations.md section 4
 
 
 def steady_cycle_dissipation(el, u0, n=40):
@@ -29,7 +29,7 @@ def test_moment_matched_bins_keep_KT_and_Fs():
 
 def test_uniform_midpoint_underestimates_KT_as_in_reference():
     k, _ = slider_distribution(P, 100, spacing="uniform")
-    assert k.sum() / P.KT - 1 == pytest.approx(-0.0275, abs=5e-4)     # REFERENCE section 4
+    assert k.sum() / P.KT - 1 == pytest.approx(-0.0275, abs=5e-4)     # docs/equations.md section 4
 
 
 @pytest.mark.parametrize("spacing,lowest,expected", [

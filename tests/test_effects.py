@@ -298,7 +298,7 @@ def _drag_loop_by_parametric_route(g, fd, w_r):
     """Independent route for a virgin loading to joint displacement ``w_r`` and the full
     unloading to ``-w_r`` of a joint in series with a gap ``g`` crossed against a friction
     ``fd``: on a fine grid of the joint displacement ``w`` the joint force is the closed-form
-    backbone / Masing branch (REFERENCE.md sec. 2, eq. 13) and the drive is explicit,
+    backbone / Masing branch (docs/equations.md section 2, eq. 13) and the drive is explicit,
     ``u = w + g`` against the forward stop and ``u = w - g`` against the back stop, with a
     plateau at ``F = -fd`` between (the joint stands still while the gap slides open)."""
     w_up = np.linspace(0.0, w_r, 40001)

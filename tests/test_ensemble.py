@@ -201,7 +201,7 @@ def test_closed_form_curve_matches_a_transient_ring_down():
     """Independent route: frequency and decay per cycle of the exact time simulation.
 
     The closed form is the single-mode equivalent linearisation (zeta = D / (4 pi E) with
-    E the peak secant energy, REFERENCE.md sec. 7). The exact ring-down decays a little
+    E the peak secant energy, docs/equations.md section 7). The exact ring-down decays a little
     faster because a slipped Iwan joint stores less than the secant energy at a turning
     point; that bias (here 2-9 %) shrinks with the amplitude, which is checked too.
     """

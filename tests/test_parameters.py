@@ -1,4 +1,4 @@
-"""IwanParameters: derived quantities (REFERENCE.md section 5), validation, JSON round trip."""
+"""IwanParameters: derived quantities (docs/equations.md section 5), validation, JSON round trip."""
 import dataclasses
 import json
 import math
@@ -7,7 +7,7 @@ import pytest
 
 from iwan_element import IwanParameters
 
-# REFERENCE.md section 5: (Fs, KT, chi, beta) -> R, S, phi_max
+# docs/equations.md section 5: (Fs, KT, chi, beta) -> R, S, phi_max
 VECTORS = [
     ((3.0, 2.0, -0.1, 0.1), 0.632339, 0.181818, 2.87615),
     ((400.0, 2.5266e5, -0.5, 1.0), 1.29619e6, 1.26330e5, 2.374733e-3),

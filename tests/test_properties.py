@@ -72,8 +72,8 @@ def _state(j):
 # ---------------------------------------------------------------- the element
 def _slider_bank(p, n=20000):
     """An independent dense bank: ``n`` equal bins in ``s = phi/phi_max`` with weight = the
-    integral of rho over the bin and slip at the bin's centroid (moment matching, REFERENCE
-    sec. 4), plus the spike. Returns (k, phi, bound): ``bound = sum k_i (hi_i - lo_i)
+    integral of rho over the bin and slip at the bin's centroid (moment matching, docs/equations.md
+    section 4), plus the spike. Returns (k, phi, bound): ``bound = sum k_i (hi_i - lo_i)
     = K_slider phi_max / n`` is the largest force error of the bank, since a slider's force is
     1-Lipschitz in its slip threshold (moving each threshold inside its bin changes the force
     by at most k_i (hi_i - lo_i))."""
@@ -219,7 +219,7 @@ def test_closed_forms_are_finite_and_monotone(p):
     assert np.all((Kt >= 0.0) & (Kt <= p.KT))
     assert np.all(np.diff(Ks) <= 1e-12 * p.KT)
     assert np.all(np.diff(D) >= 0.0) and D[0] == 0.0
-    # any Masing model: D = 8 int_0^u0 F - 4 u0 F(u0) (REFERENCE sec. 2), an independent route
+    # any Masing model: D = 8 int_0^u0 F - 4 u0 F(u0) (docs/equations.md section 2), an independent route
     assert np.allclose(D, 8.0 * G - 4.0 * u * F, rtol=1e-7, atol=1e-12 * p.Fs * p.phi_max)
     slope = dissipation_slope(u[1:], p)
     assert np.all(slope[_r[1:] < 1.0] >= (p.chi + 3.0) * (1.0 - 1e-9))

@@ -61,7 +61,7 @@ def test_energy_closes_with_the_distributed_interface():
 def test_small_amplitudes_tend_to_the_stuck_linear_mode_and_the_floor():
     s = preset("brake-reuss")
     w0, *_ = linear_modes(s)
-    # the joint's share falls as X**(chi+1) (REFERENCE sec. 7): slowly, so go far down
+    # the joint's share falls as X**(chi+1) (docs/equations.md section 7): slowly, so go far down
     c = modal_amplitude_curve(s, amplitudes=[1e-15, 1e-13])
     f0 = w0 / (2 * math.pi)
     assert c.frequency[0] == pytest.approx(f0, rel=1e-7)

@@ -114,7 +114,7 @@ def test_large_chi_computes_correctly(chi, Fs, KT):
     """chi >= 120 used to raise ZeroDivisionError/OverflowError (R = ... phi_max**-(chi+2)).
     Now every closed form is finite and agrees with an independent route: the backbone's
     numerical integral is backbone_work, and 8 int F - 4 u0 F(u0) is the dissipation
-    (REFERENCE sec. 2, any Masing model)."""
+    (docs/equations.md section 2, any Masing model)."""
     p = IwanParameters(Fs, KT, chi, 0.1)
     pm = p.phi_max
     for r in (0.3, 0.999, 0.99999, 1.0, 2.0):
@@ -142,7 +142,7 @@ def test_R_out_of_float_range_is_a_clear_error():
     with pytest.raises(ValueError, match="R = 10\\*\\*370.*outside the float range"):
         p.R
     q = IwanParameters(1e3, 1e6, -0.5, 0.2)
-    assert q.R == pytest.approx(8.784105e6, rel=1e-6)     # REFERENCE sec. 5
+    assert q.R == pytest.approx(8.784105e6, rel=1e-6)     # docs/equations.md section 5
 
 
 @pytest.mark.parametrize("kw, match", [

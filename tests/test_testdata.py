@@ -1,7 +1,7 @@
 """Test data in, clean cycles out: CSV reading, units, reversal finding, cycle splitting.
 
 Independent routes: the loop area of a simulated cycle (trapezoids over the IwanJoint force
-history) is checked against the closed-form dissipation (REFERENCE.md sec. 2), its force
+history) is checked against the closed-form dissipation (docs/equations.md section 2), its force
 amplitude against the backbone and its secant stiffness against paper eq. 24.
 """
 from __future__ import annotations
@@ -32,7 +32,7 @@ def test_cycle_quantities_match_closed_forms(clean):
     usable = clean.usable_cycles()
     assert len(usable) == 8                         # 3 per amplitude, the transition one flagged
     for c in usable:
-        # loop area (trapezoids) against the closed form of D (REFERENCE.md sec. 2)
+        # loop area (trapezoids) against the closed form of D (docs/equations.md section 2)
         assert c.D == pytest.approx(dissipation(c.u0, P), rel=2e-4)
         assert c.F0 == pytest.approx(force_amplitude(c.u0, P), rel=2e-3)
         assert c.k_sec == pytest.approx(secant_stiffness(c.u0, P), rel=2e-3)

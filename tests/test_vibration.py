@@ -1,6 +1,6 @@
 """Vibration route: modal Iwan closed forms, ring-down to amplitude curve, stepped-sine levels.
 
-Independent routes: the REFERENCE.md section 5 modal vector; the first-harmonic stiffness by
+Independent routes: the docs/equations.md section 5 modal vector; the first-harmonic stiffness by
 scipy quadrature of the Masing loop and by its microslip Gamma-function form; a time
 integration of the oscillator with the exact IwanJoint against the closed forms; analytic
 decaying sinusoids; harmonic-balance FRFs.
@@ -38,7 +38,7 @@ def brb_file(name="hammer_acc3.csv"):
 
 # ---------------------------------------------------------------- closed forms
 def test_modal_iwan_reference_vector():
-    """REFERENCE.md section 5: modal Iwan, m = 1, K_inf = 1.4212e5, zeta0 = 1e-4 (secant)."""
+    """docs/equations.md section 5: modal Iwan, m = 1, K_inf = 1.4212e5, zeta0 = 1e-4 (secant)."""
     r = np.array([1e-3, 0.1, 1.0])
     f, z = modal_iwan_curve(r * P_MODAL.phi_max, P_MODAL, K_inf=1.4212e5, zeta0=1e-4)
     np.testing.assert_allclose(f, [99.6616, 96.5675, 88.6937], rtol=2e-6)

@@ -28,7 +28,7 @@ __all__ = ["DiscreteIwan", "slider_distribution"]
 
 
 #: Largest accepted ``n_sliders`` (a bank of 1e6 sliders is already 1e4 times the 100 that
-#: REFERENCE sec. 4 shows accurate to ~2e-3).
+#: docs/equations.md section 4 shows accurate to ~2e-3).
 MAX_SLIDERS = 1_000_000
 
 def slider_distribution(params: IwanParameters, n_sliders: int = 100, *, spacing: str = "log",

@@ -2,7 +2,7 @@
 
 Each point ``i`` is an exact four-parameter Iwan joint with its own parameters and its own
 reversal-point memory (the extended Masing rules of :mod:`iwan_element.core.joint`,
-REFERENCE.md section 2, paper eqs. 13-15). :meth:`IwanJointBank.commit` moves every point to a
+docs/equations.md section 2, paper eqs. 13-15). :meth:`IwanJointBank.commit` moves every point to a
 new displacement at once:
 
 * points that continue their current branch without a reversal and without closing a loop
@@ -174,7 +174,7 @@ class IwanJointBank:
         -----
         A point that continues its branch only records ``u``; its force and energies follow
         in closed form from the branch and the values where the branch started (the Masing
-        branch formula, and the telescoped sums of ``G`` and ``I_H``, REFERENCE.md section 2),
+        branch formula, and the telescoped sums of ``G`` and ``I_H``, docs/equations.md section 2),
         evaluated for all points at once when :attr:`F`, :attr:`W` or :attr:`D` is read.
         """
         u = np.asarray(u, dtype=float)
@@ -210,7 +210,7 @@ class IwanJointBank:
         not reach the bound of the new branch from ``(u_c, F_c)`` (the newest older reversal
         point, or ``-u_c`` on the virgin curve): ``IwanJoint``'s walk then pushes ``(u_c, F_c)``
         and moves on the new branch, ``F = F_c + 2 F_bb(x/2)``, work ``F_c x + 4 G(|x|/2)``,
-        dissipation ``2 I_H(|x|/2)`` with ``x = u - u_c`` (REFERENCE.md section 2)."""
+        dissipation ``2 I_H(|x|/2)`` with ``x = u - u_c`` (docs/equations.md section 2)."""
         uu = u[slow]
         uc = self.u[slow]
         du = uu - uc

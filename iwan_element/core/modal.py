@@ -1,27 +1,27 @@
 """Single-mode modal Iwan model: amplitude-dependent frequency and damping, and its ring-down.
 
 One mass-normalised mode with an Iwan joint and a linear viscous floor (Segalman 2005,
-J. Appl. Mech. 72:752-760; REFERENCE.md section 7)::
+J. Appl. Mech. 72:752-760; docs/equations.md section 7)::
 
     m q'' + c q' + K_inf q + F_J(q) = 0,     c = 2 zeta0 m w0,   w0**2 = (K_inf + KT) / m
 
 with ``F_J`` the four-parameter Iwan force (Fs, KT, chi, beta) in modal units. At modal
-displacement amplitude ``Q`` (REFERENCE section 7)::
+displacement amplitude ``Q`` (docs/equations.md section 7)::
 
     w(Q)**2 = (K_inf + K(Q)) / m
     zeta(Q) = zeta_v(Q) + D(Q) / (2 pi m w(Q)**2 Q**2)
 
-``D`` is the exact dissipation per cycle (REFERENCE section 2). Two choices are offered:
+``D`` is the exact dissipation per cycle (docs/equations.md section 2). Two choices are offered:
 
-* ``stiffness="secant"`` (REFERENCE section 7, QSMA): ``K(Q) = F(Q)/Q``, the secant of the
+* ``stiffness="secant"`` (docs/equations.md section 7, QSMA): ``K(Q) = F(Q)/Q``, the secant of the
   backbone (paper eq. 24).
 * ``stiffness="harmonic"``: ``K(Q)`` is the in-phase first-harmonic coefficient of the
   Masing loop of amplitude ``Q`` divided by ``Q`` (the describing function). This is the
   stiffness that a ring-down or a stepped-sine test measures to first order in the damping
   (averaging method); it lies below the secant (by 1.9 % of the secant's stiffness drop in
-  microslip at chi = -0.5, about 0.07 % in frequency at Q = 0.1 phi_max for the REFERENCE
-  modal vector).
-* ``floor="constant"`` (REFERENCE section 7): ``zeta_v = zeta0`` at every amplitude;
+  microslip at chi = -0.5, about 0.07 % in frequency at Q = 0.1 phi_max for the modal test
+  vector of docs/equations.md section 5).
+* ``floor="constant"`` (docs/equations.md section 7): ``zeta_v = zeta0`` at every amplitude;
   ``floor="dashpot"``: a fixed dashpot ``c = 2 zeta0 m w0`` gives ``zeta_v = zeta0 w0 / w(Q)``.
 
 :func:`modal_ringdown` integrates the oscillator in time with the exact :class:`IwanJoint`
@@ -53,7 +53,7 @@ def harmonic_stiffness(Q, params: IwanParameters):
     """First-harmonic (describing-function) stiffness of the Iwan joint [N/m].
 
     For ``u = Q cos(theta)`` the steady Masing loop has the descending branch
-    ``F = F_bb(Q) - 2 F_bb((Q - u)/2)`` (REFERENCE section 2); the in-phase coefficient is
+    ``F = F_bb(Q) - 2 F_bb((Q - u)/2)`` (docs/equations.md section 2); the in-phase coefficient is
     ``a1 = (2/pi) int_0^pi F cos(theta) dtheta`` and the stiffness is ``a1 / Q``. The integral
     has a closed form in microslip (``Q <= phi_max``),
     ``KT - R Q**(chi+1) 4 n Gamma(n + 1/2) / (sqrt(pi) Gamma(n + 2) (chi+1)(chi+2))`` with
@@ -108,7 +108,7 @@ def modal_iwan_curve(Q, params: IwanParameters, *, K_inf: float, zeta0: float = 
     """Natural frequency and damping ratio of a single-mode modal Iwan model.
 
     ``w(Q)**2 = (K_inf + K(Q)) / mass`` and
-    ``zeta(Q) = zeta_v + D(Q) / (2 pi mass w(Q)**2 Q**2)`` (Segalman 2005; REFERENCE.md
+    ``zeta(Q) = zeta_v + D(Q) / (2 pi mass w(Q)**2 Q**2)`` (Segalman 2005; docs/equations.md
     section 7, test vector in section 5).
 
     Parameters
@@ -124,10 +124,10 @@ def modal_iwan_curve(Q, params: IwanParameters, *, K_inf: float, zeta0: float = 
     mass : float, keyword-only
         Modal mass [kg], ``> 0`` (1 for a mass-normalised mode).
     stiffness : {"secant", "harmonic"}, keyword-only
-        ``"secant"`` (REFERENCE section 7, QSMA) or ``"harmonic"`` (first-harmonic stiffness,
+        ``"secant"`` (docs/equations.md section 7, QSMA) or ``"harmonic"`` (first-harmonic stiffness,
         what a ring-down or stepped-sine test measures; see :func:`harmonic_stiffness`).
     floor : {"constant", "dashpot"}, keyword-only
-        ``"constant"``: the floor adds ``zeta0`` at every amplitude (REFERENCE section 7);
+        ``"constant"``: the floor adds ``zeta0`` at every amplitude (docs/equations.md section 7);
         ``"dashpot"``: a fixed dashpot ``c = 2 zeta0 mass w0`` adds ``zeta0 w0 / w(Q)``.
 
     Returns

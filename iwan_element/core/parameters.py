@@ -125,7 +125,7 @@ class IwanParameters:
     def R(self) -> float:
         """Coefficient of the power-law density [N m**(-chi-2)] (paper eq. 7).
 
-        ``R = (chi+1) KT / ((1+beta) phi_max**(chi+1))`` (REFERENCE sec. 2,
+        ``R = (chi+1) KT / ((1+beta) phi_max**(chi+1))`` (docs/equations.md section 2,
         ``KT = R phi_max**(chi+1)/(chi+1) + S``). Its unit depends on ``chi``, so for large
         ``chi`` or ``phi_max`` far from 1 m it may not be representable as a float; the
         closed forms never use it (they use ``r = u/phi_max``). Raises ``ValueError`` then.

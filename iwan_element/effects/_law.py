@@ -1,6 +1,6 @@
 """Exact slider laws on the continuous Iwan density: the engine of the law effects.
 
-Every slider of the joint (slip displacement ``phi``, REFERENCE.md sec. 2) follows a
+Every slider of the joint (slip displacement ``phi``, docs/equations.md section 2) follows a
 direction-dependent Coulomb-Morin law: once stuck (at the start and after every reversal of
 its motion) it holds until its stretch reaches ``sigma_d phi`` (static threshold in the
 direction ``d`` of motion), then slides at stretch ``kappa_d phi`` (kinetic) until its motion

@@ -1,7 +1,7 @@
 """Slider-level effects: physics that changes the slip thresholds of the joint's sliders.
 
 An Iwan joint is a bank of parallel Jenkins sliders (a spring ``k_i`` in series with a
-Coulomb slider that slips at stretch ``phi_i``, REFERENCE.md section 1, paper eq. 3). Effects
+Coulomb slider that slips at stretch ``phi_i``, docs/equations.md section 1, paper eq. 3). Effects
 that change *how the sliders slip* (different thresholds forward and back, thresholds
 falling with wear, a static threshold above the kinetic one) cannot be written as a function
 of the joint's force; they act on each slider. Laws fixed per direction (asymmetric slip,

@@ -3,8 +3,8 @@ start sliding than it carries while sliding.
 
 Physics: the classical static/kinetic friction law (Coulomb-Morin; the stick-slip
 literature, e.g. Armstrong-Helouvry, Dupont and Canudas de Wit, Automatica 30, 1994, the
-"break-away force"). Every slider of the joint (slip displacement ``phi``, REFERENCE.md
-sec. 2), once stuck (at the start and after every reversal of its motion), holds until its
+"break-away force"). Every slider of the joint (slip displacement ``phi``, docs/equations.md
+section 2), once stuck (at the start and after every reversal of its motion), holds until its
 stretch reaches ``r phi`` (static), then slides at stretch ``phi`` (kinetic) until its
 motion reverses. In a loop this is a force peak of up to ``r`` times the sliding force just
 after the joint starts to slide in a new direction, the signature the ARTS friction-damper

@@ -3,7 +3,7 @@
 Physics: after macroslip a bolted joint keeps a residual stiffness (the bolt shank bearing on
 the hole once the clearance ``delta`` is taken up, or the elastic stiffness of the clamped
 region that never slips, ``delta = 0``): ``F = F_j(u) + k_p sign(u) max(|u| - delta, 0)``
-(REFERENCE.md section 7: the frequency floor / stiffening of a jointed beam at high
+(docs/equations.md section 7: the frequency floor / stiffening of a jointed beam at high
 amplitude). In the amplitude domain the dead-zone spring adds the describing-function
 stiffness ``k_p g(delta/X)``, ``g(r) = 1 - (2/pi)(asin r + r sqrt(1 - r^2))`` (first
 harmonic of a dead-zone nonlinearity), and leaves the dissipation per cycle unchanged.

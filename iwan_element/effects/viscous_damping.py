@@ -1,7 +1,7 @@
 """Viscous damping: a dashpot in parallel with the joint.
 
 Physics: material and air damping of the jointed structure act in parallel with the joint's
-friction, ``F = F_j(u) + c v`` (REFERENCE.md section 7, the damping floor of a jointed
+friction, ``F = F_j(u) + c v`` (docs/equations.md section 7, the damping floor of a jointed
 beam's modal damping at low amplitude, where the joint's hysteresis fades). In the amplitude
 domain it is a constant added modal damping ratio ``zeta_v = c r^2 / (2 m omega)``.
 """

@@ -1,19 +1,19 @@
 """A single-mode structure with an Iwan joint: the closed-form f(X), zeta(X) and a transient run.
 
 The structure is one mass ``m`` [kg] on a linear spring ``K_inf`` [N/m] in parallel with the
-joint and a viscous dashpot (REFERENCE.md sec. 7, modal Iwan, in physical units)::
+joint and a viscous dashpot (docs/equations.md section 7, modal Iwan, in physical units)::
 
     m x'' + c x' + K_inf x + F_J(x) = F0 sin(2 pi f t),   c = 2 zeta0 w0 m,
     w0^2 = (K_inf + KT) / m.
 
-At displacement amplitude ``X`` (single-mode equivalent linearisation, REFERENCE.md sec. 7,
+At displacement amplitude ``X`` (single-mode equivalent linearisation, docs/equations.md section 7,
 secant stiffness paper eq. 24, joint dissipation paper eq. 17; evaluated by
 :func:`iwan_element.modal_iwan_curve` with ``floor="dashpot"``)::
 
     w(X)^2  = (K_inf + K_sec(X)) / m
     zeta(X) = zeta0 w0 / w(X) + D(X) / (2 pi m w(X)^2 X^2)
 
-(the dashpot dissipates ``pi c w X^2`` per cycle, hence ``zeta0 w0 / w``; REFERENCE.md writes
+(the dashpot dissipates ``pi c w X^2`` per cycle, hence ``zeta0 w0 / w``; docs/equations.md section 7 writes
 ``zeta0`` for the same floor at ``w ~ w0``). :func:`peak_response` integrates the equation of
 motion with the exact :class:`~iwan_element.IwanJoint` (average-acceleration Newmark, Newton
 iterations with the joint's consistent tangent, one commit per accepted step).
@@ -77,7 +77,7 @@ def modal_curve(joint: IwanParameters, system: SingleModeSystem, amplitudes, *,
     amplitudes : array_like, shape (n,)
         Displacement amplitudes ``X`` [m], ``> 0``.
     stiffness : {"secant", "harmonic"}, keyword-only
-        Secant (QSMA, REFERENCE.md sec. 7) or first-harmonic stiffness (what a ring-down
+        Secant (QSMA, docs/equations.md section 7) or first-harmonic stiffness (what a ring-down
         measures).
 
     Returns

@@ -1,7 +1,7 @@
 """Ready-made ensemble tasks for parameter studies of the lap-jointed beam specimens.
 
 :func:`specimen_curve_task` runs the quasi-static modal analysis
-(:func:`iwan_element.models.qsma.modal_amplitude_curve`, REFERENCE.md sec. 7) of a
+(:func:`iwan_element.models.qsma.modal_amplitude_curve`, docs/equations.md section 7) of a
 :class:`~iwan_element.models.specimens.Specimen` with some of its inputs changed, so that
 preload, friction coefficient, bolt count or an interface parameter can be swept with
 :func:`~iwan_element.ensemble.run_ensemble`::

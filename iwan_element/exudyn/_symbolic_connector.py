@@ -7,7 +7,7 @@ accepted slip (a view of the system coordinates) and writes it to the law's vari
 ``u_c``. That is all it does while the slip moves on along the current branch without
 closing a loop (one interval test, the usual step): the joint's state on one branch is a
 function of the end point alone (force, stored and dissipated energy are closed forms of
-the branch, REFERENCE.md section 2), so the ``IwanJoint`` is committed there only lazily —
+the branch, docs/equations.md section 2), so the ``IwanJoint`` is committed there only lazily —
 at the next reversal or loop closure (then it is brought to the last point of the branch,
 then walks the event exactly), at the end of the run and whenever the connector is read.
 Only such events rewrite the law's branch and reversal stack.
@@ -133,7 +133,7 @@ def branch_interval(joint) -> tuple[float, float, bool]:
 def law_window(joint, depth: int) -> tuple[float, float]:
     """Open interval of slips at which the law, holding the newest ``depth`` reversal points
     of the joint's committed stack, is exact for the next step: ends at the ``depth // 2``-th
-    loop-closing point the walk passes either way (REFERENCE.md section 2); the whole line
+    loop-closing point the walk passes either way (docs/equations.md section 2); the whole line
     when the stack fits."""
     us, Fr = joint.reversal_points()
     if len(us) <= depth:
@@ -288,7 +288,7 @@ def sync_stack(conn, t=None) -> None:
 def walk_states(us, Fr, uc, Fc, u, tol, limit=None):
     """The committed states the joint passes through on the monotone move ``uc -> u``.
 
-    Mirrors :meth:`IwanJoint._walk` (extended Masing rules, REFERENCE.md section 2): a
+    Mirrors :meth:`IwanJoint._walk` (extended Masing rules, docs/equations.md section 2): a
     reversal at ``uc`` if the move turns back, then one state per loop the move closes.
     Returns a list of ``(p, stack_u, stack_F)``: the slip ``p`` at which a loop closes
     and the reversal stack (oldest first) right after it; at most ``limit`` states.

@@ -1,7 +1,7 @@
 """The exact Iwan force law as an Exudyn symbolic expression (no Python call per evaluation).
 
 The trial force of an Iwan joint at slip ``u``, given its committed state, follows the
-extended Masing rules (REFERENCE.md section 2; paper eqs. 13-15):
+extended Masing rules (docs/equations.md section 2; paper eqs. 13-15):
 
 * from the committed slip ``u_c`` the motion either continues the current branch or reverses
   (a new reversal point at ``(u_c, F_c)``);
@@ -190,7 +190,7 @@ class SymbolicIwanState:
 
     # ------------------------------------------------------------------ the law
     def backbone(self, x):
-        """``F_bb(x)`` for ``x >= 0`` (REFERENCE.md section 2, paper eq. 12)."""
+        """``F_bb(x)`` for ``x >= 0`` (docs/equations.md section 2, paper eq. 12)."""
         return esym.IfThenElse(x < self.pm, x * (self.KT - self.a * esym.pow(x, self.e1)),
                                _const(self.Fs))
 

@@ -3,7 +3,7 @@
 Identifiability
     If the data never reach macroslip, the loops (and ``F0``, ``D``) depend on ``KT``, ``chi``
     and ``R`` only; ``Fs`` and ``beta`` enter only through ``R`` and cannot be separated
-    (REFERENCE.md sec. 2). Every fit therefore also fits the microslip-only model (``beta = 0``
+    (docs/equations.md section 2). Every fit therefore also fits the microslip-only model (``beta = 0``
     with ``phi_max`` above the largest backbone argument reached by the data, which represents
     the whole family) and keeps the four-parameter fit only if it reaches macroslip on enough
     data and improves the residual significantly (F-test at level ``alpha``). Otherwise the
@@ -77,7 +77,7 @@ def _identify(prob: _Problem, *, n_starts: int, rng: np.random.Generator, alpha:
 
 def _fit_microslip(prob: _Problem, *, max_nfev: int) -> dict:
     """The microslip-only fit: beta = 0, phi_max >= x_max (it represents every microslip
-    model, REFERENCE.md eq. 10)."""
+    model, docs/equations.md section 2 (seed paper eq. 10))."""
     lower = np.array([0.0, _CHI_BOUNDS[0]])
     upper = np.array([math.log(_PHI_RANGE[1]), _CHI_BOUNDS[1]])
     starts = [(math.log(2.0), -0.5), (math.log(1.2), -0.2), (math.log(5.0), -0.8),
@@ -167,7 +167,7 @@ def _macro_result(prob: _Problem, full: dict, details: dict) -> dict:
 
 
 def _micro_result(prob: _Problem, micro: dict, full: dict, details: dict) -> dict:
-    """Microslip only: KT, chi and R identified (REFERENCE.md eq. 10); Fs and beta given as
+    """Microslip only: KT, chi and R identified (docs/equations.md section 2 (seed paper eq. 10)); Fs and beta given as
     the range of the family that fits equally, with a warning that says why."""
     xm, off = prob.x_max, prob.offset
     Fs0, phi0, chi = micro["Fs"], micro["phi"], micro["chi"]

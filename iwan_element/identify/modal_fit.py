@@ -1,7 +1,7 @@
 """Modal Iwan identification from frequency and damping against amplitude.
 
 The model is one mass-normalised mode with an Iwan joint and a viscous floor (Segalman 2005,
-J. Appl. Mech. 72:752-760; REFERENCE.md section 7; :mod:`iwan_element.core.modal`). The
+J. Appl. Mech. 72:752-760; docs/equations.md section 7; :mod:`iwan_element.core.modal`). The
 sensor sees ``X = Phi q``, with the mode-shape value ``Phi`` at the sensor unknown. The
 model is therefore written in the sensor coordinate with unit modal mass: the joint's
 ``phi_max`` is in metres at the sensor, ``KT`` and ``K_inf`` in 1/s^2 and ``Fs`` in m/s^2.
@@ -121,7 +121,7 @@ def fit_modal_iwan(amplitude, frequency=None, damping_ratio=None, *, stiffness: 
                    significance: float = 0.01) -> ModalIwanFit:
     """Identify a single-mode modal Iwan model with a viscous floor from f(X) and zeta(X).
 
-    Model (Segalman 2005, J. Appl. Mech. 72:752-760; REFERENCE.md section 7):
+    Model (Segalman 2005, J. Appl. Mech. 72:752-760; docs/equations.md section 7):
     ``w(X)**2 = K_inf + K(X)`` and ``zeta(X) = zeta_v + D(X) / (2 pi w(X)**2 X**2)`` with the
     Iwan joint's dissipation ``D`` and stiffness ``K`` (secant or first harmonic), in the
     sensor coordinate with unit modal mass (see the module docstring for units and for what
@@ -144,7 +144,7 @@ def fit_modal_iwan(amplitude, frequency=None, damping_ratio=None, *, stiffness: 
         tests measure the first-harmonic stiffness) or ``"secant"`` (quasi-static modal
         analysis, QSMA).
     floor : {"dashpot", "constant"}, keyword-only
-        Viscous floor: a fixed dashpot (default) or a constant ratio (REFERENCE section 7).
+        Viscous floor: a fixed dashpot (default) or a constant ratio (docs/equations.md section 7).
     x_ref : float, optional
         Reference amplitude [m] of ``delta``; default the geometric mean of the amplitudes.
     significance : float, keyword-only

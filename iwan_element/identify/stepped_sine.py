@@ -22,7 +22,7 @@ the solution and the residual scatter. The damping term is the structural (hyste
 ``2 zeta w_r**2`` with ``zeta = eta / 2``: the first harmonic of a joint's friction force is
 frequency independent, so at a held amplitude this form is exact for the joint and equals
 the viscous ``2 zeta w_r w`` at the resonance; ``zeta`` is then the equivalent viscous damping
-ratio of the modal Iwan closed forms (REFERENCE.md section 7).
+ratio of the modal Iwan closed forms (docs/equations.md section 7).
 
 Force control distorts each level's peak (the amplitude, hence stiffness and damping, vary
 along the sweep), so a fit of one level is biased. With one mode of fixed shape the modal
