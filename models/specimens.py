@@ -20,8 +20,8 @@ Presets (:func:`preset`; docs/equations.md section 7 for every published number)
     bending mode about 80.4 Hz; measured range 2-60 um at acc3. Material 304 stainless
     (E = 192.31 GPa as in tmdsimpy's BRB model; density 8000 kg/m^3 assumed). Bolt preload
     12 kN (the classic BRB's measured mean is 12.25 kN; the thin BRB's torque is not
-    verified). The interface parameters are the calibration of ``calibration.py`` (see
-    ``/work/notes/beam.md``).
+    verified). The interface parameters are the calibration of ``calibration.py`` on the
+    measured ring-down (``docs/equations.md`` section 7).
 ``"two-bolt-aluminium"``
     Two aluminium beams 270 x 25.4 x 6.35 mm (UNESP-BERT data set, shm-unesp/DATASET_BOLTEDBEAM),
     clamped-free, shaker 85 mm from the clamp, laser vibrometer at the free end. The data set
@@ -365,8 +365,8 @@ def _example() -> Specimen:
 
 
 def _brake_reuss() -> Specimen:
-    # Calibrated interface: see calibration.py and /work/notes/beam.md (fitted on the thin
-    # BRB hammer ring-down, shared/data/brb-hammer/hammer_acc3.csv).
+    # Calibrated interface: see calibration.py (fitted on the thin BRB hammer ring-down,
+    # brb-hammer/hammer_acc3.csv of the shared data, read in place).
     return Specimen(
         name="brake-reuss", beam_length=0.42, width=0.0254, thickness=0.0127,
         lap_thickness=0.00635, youngs_modulus=192.31e9, density=8000.0, overlap=0.12,
