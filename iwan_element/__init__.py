@@ -1,6 +1,6 @@
 """iwan-element: Segalman's four-parameter Iwan bolted-joint model.
 
-The physics core (this package's top level) depends only on numpy and scipy. The Exudyn
+The physics core (this package's top level) depends only on numpy, scipy and numba. The Exudyn
 connector lives in :mod:`iwan_element.exudyn`, which is the only module importing exudyn.
 """
 from .core.closed_form import (
