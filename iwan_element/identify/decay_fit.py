@@ -1,0 +1,537 @@
+"""Direct fit of the modal Iwan model to a free-decay record (no amplitude curve in between).
+
+:func:`fit_decay` fits one nonlinear mode with an Iwan joint and a viscous floor (the model
+of :func:`iwan_element.fit_modal_iwan`; Segalman 2005, J. Appl. Mech. 72:752-760) to the
+band-passed analytic signal of the record itself, sample by sample. The equations are in the
+project's ``docs/decay_fit.md``; in short:
+
+1. Slowly varying amplitude and phase (first-order averaging, Krylov-Bogoliubov; Nayfeh &
+   Mook 1979, *Nonlinear Oscillations*, ch. 4) of the displacement at the sensor,
+   ``x = a cos(theta)``::
+
+       da/dt = -zeta(a) w(a) a,      dtheta/dt = w(a) sqrt(1 - zeta(a)**2)
+
+   with ``w(a)``, ``zeta(a)`` the modal Iwan curves (:func:`model_curve`, same
+   parametrisation and regimes as :func:`fit_modal_iwan`). They are integrated once per
+   parameter set by quadrature in ``u = ln a`` (``dt/du = -1 / (zeta w)``,
+   ``dtheta/du = -sqrt(1 - zeta**2) / zeta``; cumulative Simpson on a fixed grid of 2000
+   log-amplitudes) and interpolated to the sample times (cubic spline).
+2. The measured quantity is, to first order in the slow variation,
+   ``y = a w**k cos(theta + k asin(zeta) + phi_s)`` (k = 0, 1, 2 for displacement,
+   velocity, acceleration; the constant ``phi_s`` absorbs the initial phase and the
+   ``k pi / 2`` of the derivatives). This model record, zero before the start of the decay,
+   goes through the *same* zero-phase band-pass and Hilbert transform as the data, so the
+   filter's end effects are modelled rather than cut away: the fit uses the record from the
+   start of the decay (release or impact), which matters for short, heavily damped decays.
+3. Least squares (``scipy.optimize.least_squares``) on the analytic signal, in log-polar
+   form: the residuals are ``|z| (ln|z| - ln|z_m|)`` and ``|z| (arg z - arg z_m)`` (unwrapped
+   phases). To first order in noise / signal this is the complex residual ``z - z_m``
+   rotated by the signal's phase, but its cost has a single basin in the frequency (no
+   2 pi wrap of the phase). Samples are used while the envelope is above ``snr_min`` times
+   the in-band noise, decimated to ``samples_per_correlation`` samples per noise
+   correlation time ``1 / B`` (``B`` the filter's noise bandwidth; the band-limited signal
+   holds no more information than that).
+4. Uncertainty: the residuals of a band-passed record are correlated over ``1 / B``, and
+   leakage of other modes or model error add structure. The covariance is the
+   heteroscedasticity-and-autocorrelation-consistent sandwich (Newey & West 1987,
+   Econometrica 55:703-708; Bartlett weights over ``4 / B``) built from the residuals
+   themselves, not from an assumed noise model.
+5. Regimes as in :func:`fit_modal_iwan`: in microslip only ``f0, zeta0, chi, delta`` are
+   identified; the full set (``kappa, phi_max, beta``) is reported only when a likelihood
+   ratio test (chi-square with 2 degrees of freedom, corrected for the residual correlation)
+   rejects microslip at ``significance`` and ``phi_max`` is known within a factor e.
+"""
+from __future__ import annotations
+
+import logging
+import math
+
+import numpy as np
+from scipy import optimize, signal, stats
+from scipy.integrate import cumulative_simpson
+from scipy.interpolate import CubicSpline
+
+from ..core._validation import check_magnitude, check_scalar, finite_array
+from ._modal_result import ModalIwanFit, model_curve
+from .modal_fit import fit_modal_iwan
+from .vibration import _analytic_signal, _check_band, _check_uniform_time
+
+__all__ = ["fit_decay"]
+
+log = logging.getLogger(__name__)
+
+_QUANTITY_POWER = {"displacement": 0, "velocity": 1, "acceleration": 2}
+_GRID = 2000            # log-amplitude grid of the quadrature
+
+
+class _Problem:
+    """Record at the working rate, the linear operator ``L`` (band-pass, taper, Hilbert) and
+    the model's analytic signal ``L(y_model)`` with its Jacobian."""
+
+    def __init__(self, yy, fs, band, order, k, conv):
+        # working rate: at least 8 samples per period of the band's upper edge (the band-passed
+        # content is unchanged; resample_poly's anti-alias FIR is flat far above the band)
+        self.q = max(1, int(fs // (8.0 * band[1])))
+        yw = signal.resample_poly(yy, 1, self.q) if self.q > 1 else yy
+        self.fs, self.band, self.order, self.k, self.conv = fs / self.q, band, order, k, conv
+        self.y, self.n = yw, yw.size
+        self.sos, _, _, self.n_trim, self.i_pk = _analytic_signal(yw, self.fs, *band, order)
+        m = min(self.n_trim, self.n // 4)
+        self.ramp = 0.5 - 0.5 * np.cos(np.pi * (np.arange(m) + 0.5) / m)
+        self.nfft = int(2 ** math.ceil(math.log2(2 * self.n)))
+        self.z = self.apply(yw)
+        w, H = signal.sosfreqz(self.sos, worN=8192, fs=self.fs)
+        self.bw = float(np.trapezoid(np.abs(H) ** 4, w))      # noise bandwidth [Hz]
+        self.span = self.i_s = None
+
+    def apply(self, Y):
+        """``L``: zero-phase band-pass, half-Hann taper over the filter's end effects and
+        Hilbert transform (zero-padded to >= 2n), column by column."""
+        yf = signal.sosfiltfilt(self.sos, Y, axis=0)
+        m = self.ramp.size
+        shape = (m,) + (1,) * (yf.ndim - 1)
+        yf[:m] *= self.ramp.reshape(shape)
+        yf[self.n - m:] *= self.ramp[::-1].reshape(shape)
+        return signal.hilbert(yf, N=self.nfft, axis=0)[:self.n]
+
+    def trajectory(self, theta, regime, ln_a0, t_rel):
+        """ln a, theta, ln w and asin(zeta) at ``t_rel`` [s] after the start of the decay.
+
+        Quadrature in ``u = ln a`` on a fixed grid (cumulative Simpson), cubic spline in time.
+        """
+        u = ln_a0 - np.linspace(0.0, self.span, _GRID)
+        f, zeta = model_curve(theta, np.exp(u), regime, self.conv["x_ref"],
+                              self.conv["stiffness"], self.conv["floor"])
+        f, zeta = np.asarray(f, float), np.asarray(zeta, float)
+        if not (np.all(np.isfinite(f)) and np.all(f > 0) and np.all(np.isfinite(zeta))
+                and np.all(zeta > 0) and np.all(zeta < 0.5)):
+            raise ValueError("model outside its range")
+        w = 2.0 * math.pi * f
+        h = self.span / (_GRID - 1)
+        tu = cumulative_simpson(1.0 / (zeta * w), dx=h, initial=0.0)
+        th = cumulative_simpson(np.sqrt(1.0 - zeta ** 2) / zeta, dx=h, initial=0.0)
+        if not np.all(np.diff(tu) > 0):
+            raise ValueError("time grid not increasing")
+        spl = CubicSpline(tu, np.column_stack([u, th, np.log(w), np.arcsin(zeta)]))
+        out = spl(np.minimum(t_rel, tu[-1]))
+        beyond = t_rel > tu[-1]
+        if np.any(beyond):      # past the grid: continue at the last decay rate and frequency
+            dt = t_rel[beyond] - tu[-1]
+            out[beyond, 0] = u[-1] - zeta[-1] * w[-1] * dt
+            out[beyond, 1] = th[-1] + w[-1] * math.sqrt(1 - zeta[-1] ** 2) * dt
+        return out
+
+    def record(self, x, regime):
+        """Model record ``a w**k cos(theta + k asin(zeta) + phi_s)``, zero before the start."""
+        t_rel = np.arange(self.n - self.i_s) / self.fs
+        u, th, lw, asz = self.trajectory(x[:-2], regime, x[-2], t_rel).T
+        y = np.zeros(self.n)
+        y[self.i_s:] = np.exp(u + self.k * lw) * np.cos(th + self.k * asz + x[-1])
+        return y
+
+
+def _polar(z):
+    return np.log(np.maximum(np.abs(z), 1e-300)), np.unwrap(np.angle(z))
+
+
+class _Objective:
+    """Log-polar residuals on the samples ``idx`` and their Jacobian (``L`` is linear, so
+    ``dz/dx = L(dy/dx)``; ``dy/dx`` by forward differences of the model record)."""
+
+    def __init__(self, prob, regime, idx, ref, bounds):
+        self.prob, self.regime, self.idx, self.ub = prob, regime, idx, bounds[1]
+        self.sl = slice(idx[0], idx[-1] + 1)
+        self.sel = idx - idx[0]
+        zd = prob.z[self.sl]
+        lnd, phd = _polar(zd)
+        self.wgt = np.abs(zd[self.sel]) / ref
+        self.lnd, self.phd = lnd[self.sel], phd[self.sel]
+        self._cache = (None, None, None)
+
+    def _model(self, x):
+        if self._cache[0] is not None and np.array_equal(self._cache[0], x):
+            return self._cache[1], self._cache[2]
+        y = self.prob.record(x, self.regime)
+        zm = self.prob.apply(y)[self.sl]
+        self._cache = (np.array(x), y, zm)
+        return y, zm
+
+    def resid(self, x):
+        try:
+            _, zm = self._model(x)
+        except ValueError:
+            return np.full(2 * self.idx.size, 1e3)
+        lnm, phm = _polar(zm)
+        dph = self.phd - phm[self.sel]
+        dph -= 2.0 * math.pi * np.round(dph[0] / (2.0 * math.pi))
+        return np.concatenate([self.wgt * (self.lnd - lnm[self.sel]), self.wgt * dph])
+
+    def jac(self, x):
+        try:
+            y0, zm = self._model(x)
+            cols = []
+            for j in range(x.size):
+                h = 1e-7 * max(abs(x[j]), 1e-2 if j < x.size - 2 else 1.0)
+                if x[j] + h > self.ub[j]:
+                    h = -h
+                xp = np.array(x, dtype=float)
+                xp[j] += h
+                cols.append((self.prob.record(xp, self.regime) - y0) / h)
+        except ValueError:
+            return np.zeros((2 * self.idx.size, x.size))
+        dz = self.prob.apply(np.column_stack(cols))[self.sl][self.sel] / zm[self.sel, None]
+        return -np.vstack([self.wgt[:, None] * dz.real, self.wgt[:, None] * dz.imag])
+
+
+def _solve(obj, x0, lb, ub):
+    width = np.where(np.isfinite(ub - lb), ub - lb, 0.0)
+    x0 = np.clip(x0, lb + 1e-9 * width, ub - 1e-9 * width)
+    return optimize.least_squares(obj.resid, x0, jac=obj.jac, bounds=(lb, ub), x_scale="jac",
+                                  method="trf", xtol=1e-10, ftol=1e-10, gtol=1e-10,
+                                  max_nfev=200)
+
+
+def _noise_correlation(prob, lags):
+    """Correlation ``rho(k dt)`` of the analytic signal of white noise after the band-pass
+    (``sum_f |H(f)|**4 exp(2 pi i f tau)`` over ``f >= 0``, normalised to 1 at 0)."""
+    f, H = signal.sosfreqz(prob.sos, worN=16384, fs=prob.fs)
+    P = np.abs(H) ** 4
+    tau = np.arange(lags + 1) / prob.fs
+    return (np.exp(2j * np.pi * np.outer(tau, f)) @ P) / P.sum()
+
+
+def _covariance(obj, r, J):
+    """Covariance of the least-squares estimate for band-passed white noise.
+
+    The rotated residual ``rr = r_ln + i r_phase`` is the in-band noise ``n`` turned by the
+    signal's phase; ``E[rr_i conj(rr_j)] = s2 conj(rho(t_j - t_i)) exp(i (phi_j - phi_i))``
+    with ``s2`` the mean of ``|rr|**2``. Sandwich ``B Omega B``, ``B = (J^T J)^-1``,
+    ``Omega = Re(Jc^H C Jc) / 2`` with ``Jc = J_ln + i J_phase`` (the estimator's exact
+    covariance under that noise model). Also returns the variance inflation of a sum of
+    residuals relative to independent samples (the correlation factor).
+    """
+    m = r.size // 2
+    rr = r[:m] + 1j * r[m:]
+    s2 = float(np.mean(np.abs(rr) ** 2))
+    Jc = J[:m] + 1j * J[m:]
+    step = int(obj.idx[1] - obj.idx[0]) if obj.idx.size > 1 else 1
+    lags = min(m - 1, int(math.ceil(20.0 * obj.prob.fs / (obj.prob.bw * step))))
+    rho = _noise_correlation(obj.prob, lags * step)[::step]
+    omega = (Jc.conj().T @ Jc).real
+    kappa = 1.0
+    for k in range(1, lags + 1):
+        c = np.conj(rho[k]) * np.exp(1j * (obj.phd[k:] - obj.phd[:-k]))     # C_{i,i+k} / s2
+        g = (Jc[:-k].conj() * c[:, None]).T @ Jc[k:]
+        omega += 2.0 * g.real                 # the lag and its Hermitian transpose
+        kappa += 2.0 * (1.0 - k / m) * float(np.mean(c.real))
+    omega *= 0.5 * s2
+    try:
+        bread = np.linalg.inv(J.T @ J)
+    except np.linalg.LinAlgError:
+        bread = np.linalg.pinv(J.T @ J)
+    return bread @ omega @ bread, max(kappa, 1.0)
+
+
+def _windows(prob, i_a, i_b, nw):
+    """Local decaying-sinusoid fits in consecutive windows of ``nw`` samples.
+
+    Returns rows ``(i_centre, envelope, sigma, w_d, phase, rms|z - local model|, rms|z|)``
+    at the window centres (start values, noise and the data summary of the result; the fit
+    itself does not use them).
+    """
+    rows = []
+    tw = (np.arange(nw) - 0.5 * (nw - 1)) / prob.fs
+    for s in range(i_a, i_b - nw + 1, nw):
+        zw = prob.z[s:s + nw]
+        lnA, ph = _polar(zw)
+        ca = np.polyfit(tw, lnA, 1)
+        cp = np.polyfit(tw, ph, 1)
+        res = np.abs(zw - np.exp(np.polyval(ca, tw) + 1j * np.polyval(cp, tw)))
+        rows.append((s + 0.5 * (nw - 1), math.exp(ca[1]), -ca[0], cp[0], cp[1],
+                     float(np.sqrt(np.mean(res ** 2))), float(np.sqrt(np.mean(np.abs(zw) ** 2)))))
+    return np.array(rows).reshape(-1, 7)
+
+
+def _noise_and_end(prob, i_s, nw, snr_min):
+    """RMS in-band noise of ``z`` (upper bound, from the windows' residuals about a local
+    decaying sinusoid; the whole content where the mode has decayed into the noise) and the
+    first sample after the envelope's peak whose smoothed envelope is below ``snr_min`` times it."""
+    # windows several correlation times long (a shorter local model follows the band-limited
+    # noise and understates it), but not longer than the decay time (at most e**-1 within)
+    env = np.convolve(np.abs(prob.z), np.ones(nw) / nw, mode="same")
+    i_top = i_s + int(np.argmax(env[i_s:]))          # the start is tapered by the filter
+    short = _windows(prob, i_top, min(prob.n, i_top + 3 * nw), nw)
+    sigma = float(np.median(short[:, 2])) if short.shape[0] else 0.0
+    nwn = max(nw, int(prob.fs * min(5.0 / prob.bw, 1.0 / max(sigma, 1e-300))))
+    bounds = _windows(prob, i_s, prob.n, nwn)
+    if bounds.shape[0] == 0:
+        raise ValueError(f"record too short: {prob.n - i_s} samples after the start of the "
+                         f"decay, less than one window of {nw} (two periods)")
+    bound = np.where(bounds[:, 5] < 0.3 * bounds[:, 6], bounds[:, 5], bounds[:, 6])
+    inner = (bounds[:, 0] > prob.n_trim) & (bounds[:, 0] < prob.n - prob.n_trim)
+    if np.count_nonzero(inner) >= 3:      # the tapered ends understate the noise
+        bound = bound[inner]
+    noise = float(np.median(np.sort(bound)[:(bound.size + 1) // 2]))
+    noise = max(noise, 1e-9 * float(bounds[:, 6].max()))
+    low = np.flatnonzero(env[i_top:] < snr_min * noise)
+    i_b = prob.n if low.size == 0 else i_top + int(low[0])
+    return noise, i_b
+
+
+def _summary(prob, rows):
+    """Window estimates as a curve: displacement amplitude [m], frequency [Hz], zeta."""
+    wn = np.hypot(rows[:, 2], rows[:, 3])
+    ok = (rows[:, 2] > 0) & (wn > 2 * math.pi * prob.band[0]) & (wn < 2 * math.pi * prob.band[1])
+    return rows[ok, 1] / wn[ok] ** prob.k, wn[ok] / (2 * math.pi), rows[ok, 2] / wn[ok]
+
+
+def _starts(X, f, zeta, conv):
+    """Curve start values: the modal Iwan fit of the window estimates, and a near-linear mode."""
+    starts = []
+    if X.size >= 4 and np.unique(np.round(np.log(X), 6)).size >= 3:
+        try:
+            fit = fit_modal_iwan(X, f, np.maximum(zeta, 1e-7), stiffness=conv["stiffness"],
+                                 floor=conv["floor"], x_ref=conv["x_ref"])
+            p = fit.parameters
+            if fit.regime == "microslip":
+                starts.append(np.array(fit.values, dtype=float))
+            elif fit.regime == "macroslip":
+                delta = p["kappa"] * (conv["x_ref"] / p["phi_max"]) ** (p["chi"] + 1) \
+                    / ((p["chi"] + 2) * (1 + p["beta"]))
+                starts.append(np.array([p["f0"], p["zeta0"], p["chi"], min(delta, 0.5)]))
+        except ValueError:
+            pass
+    zmin = float(np.min(zeta)) if zeta.size else 1e-3
+    starts.append(np.array([float(np.max(f)) * 1.00001, 0.8 * max(zmin, 1e-6), -0.5,
+                            max(1.0 - (np.median(f) / np.max(f)) ** 2, 1e-6)]))
+    return starts
+
+
+def _decay_start(prob, t_start, t0):
+    """Working-rate index of the start of the free decay: given, the record's start (release,
+    or a record cropped in the decay) or the largest sample near the band-passed peak."""
+    if t_start is not None:
+        t_end = t0 + (prob.n - 1) / prob.fs
+        t_start = check_scalar("t_start", t_start, low=t0, high=t_end)
+        return int(round((t_start - t0) * prob.fs))
+    if prob.i_pk <= prob.n_trim:
+        return 0
+    lo = prob.i_pk - prob.n_trim
+    return lo + int(np.argmax(np.abs(prob.y[lo:prob.i_pk + 1])))
+
+
+def _fit_regime(obj, starts, bounds):
+    best = None
+    for x0 in starts:
+        r = _solve(obj, x0, *bounds)
+        if best is None or r.cost < best.cost:
+            best = r
+    return best
+
+
+def _full_starts(micro_x, X_max, x_ref):
+    f0, z0, chi, delta = micro_x[:4]
+    out = []
+    for ratio in (1.0, 3.0):
+        phimax, beta = ratio * X_max, 0.5
+        kappa = delta * (chi + 2.0) * (1.0 + beta) * (phimax / x_ref) ** (chi + 1.0)
+        if 0.0 < kappa < 1.0:
+            out.append(np.concatenate([[f0, z0, chi, kappa, math.log(phimax), beta],
+                                       micro_x[4:]]))
+    return out
+
+
+def _check_options(quantity, order, stiffness, floor):
+    if quantity not in _QUANTITY_POWER:
+        raise ValueError(f"quantity must be one of {sorted(_QUANTITY_POWER)}, got {quantity!r}")
+    if isinstance(order, bool) or not isinstance(order, (int, np.integer)) or not 1 <= order <= 10:
+        raise ValueError(f"order must be an integer in [1, 10], got {order!r}")
+    if stiffness not in ("harmonic", "secant"):
+        raise ValueError(f"stiffness must be 'harmonic' or 'secant', got {stiffness!r}")
+    if floor not in ("dashpot", "constant"):
+        raise ValueError(f"floor must be 'dashpot' or 'constant', got {floor!r}")
+
+
+def _prepare(t, y, quantity, band, order, stiffness, floor, x_ref, t_start, snr_min, spc):
+    """Checks, analytic signal, fit span, decimation and start values."""
+    yy = check_magnitude("y", finite_array("y", y))
+    if yy.size < 64:
+        raise ValueError(f"y must have at least 64 samples, got {yy.size}")
+    tt, dt = _check_uniform_time(t, yy.size)
+    _check_options(quantity, order, stiffness, floor)
+    lo, hi = _check_band(band, 1.0 / dt)
+    conv = dict(stiffness=stiffness, floor=floor, x_ref=None, method="direct signal fit",
+                quantity=quantity, band=[lo, hi], order=int(order))
+    prob = _Problem(yy - yy.mean(), 1.0 / dt, (lo, hi), int(order), _QUANTITY_POWER[quantity],
+                    conv)
+    fs = prob.fs
+    i_s = prob.i_s = _decay_start(prob, t_start, float(tt[0]))
+    nw = max(16, int(round(2.0 * fs / math.sqrt(lo * hi))))          # two periods
+    noise, i_b = _noise_and_end(prob, i_s, nw, snr_min)
+    # window estimates for start values and the plot, clear of the taper before the Hilbert
+    # transform where possible (the fit itself models it)
+    m = prob.ramp.size
+    a, b = (max(i_s, m), min(i_b, prob.n - m)) if min(i_b, prob.n - m) - max(i_s, m) >= 2 * nw \
+        else (i_s, i_b)
+    rows = _windows(prob, a, b, max(nw, (b - a) // 16))                 # at most 16 windows
+    X, f, zeta = _summary(prob, rows)
+    if X.size == 0 or i_b - i_s < nw:
+        raise ValueError(f"no decaying mode in band ({lo:g}, {hi:g}) Hz above {snr_min:g} x the "
+                         f"in-band noise ({noise:.3g}) after t = {tt[0] + i_s / fs:.4g} s")
+    conv["x_ref"] = float(np.exp(np.mean(np.log(X)))) if x_ref is None else \
+        check_scalar("x_ref", x_ref, low=0.0, low_open=True)
+    step = max(1, min(int(fs / (spc * prob.bw)), (i_b - i_s) // 400), math.ceil((i_b - i_s) / 4000))
+    first = rows[0] if a > i_s or i_s >= m else rows[int(np.argmax(rows[:, 1]))]
+    wn = math.hypot(first[2], first[3])
+    tc = (first[0] - i_s) / fs
+    decay = max(math.log(rows[0, 1] / rows[-1, 1]), 0.0) + max(first[2], 0.0) * tc
+    prob.span = max(3.0 * decay, decay + 5.0)
+    nuis = [math.log(first[1] / wn ** prob.k) + max(first[2], 0.0) * tc,
+            first[4] - first[3] * tc - prob.k * math.asin(min(max(first[2] / wn, 0.0), 0.5))]
+    info = dict(t0=float(tt[0]), i_s=i_s, i_b=i_b, idx=np.arange(i_s, i_b, step), step=step,
+                noise=noise, nuis=nuis, data=(X, f, zeta))
+    return prob, conv, info
+
+
+def _bounds(prob, regime, X, x_max, ln_a0):
+    lo, hi = prob.band
+    if regime == "microslip":
+        lb, ub = [0.5 * lo, 0.0, -0.999, 1e-12], [2.0 * hi, 0.999, 1.0, 0.999]
+    else:
+        lb = [0.5 * lo, 0.0, -0.999, 1e-9, math.log(1e-3 * X.min()), 0.0]
+        ub = [2.0 * hi, 0.999, 1.0, 1.0 - 1e-9, math.log(1e3 * x_max), 100.0]
+    return np.array(lb + [ln_a0 - 10.0, -np.inf]), np.array(ub + [ln_a0 + 10.0, np.inf])
+
+
+def _misfit_ratio(r, lag):
+    """Mean square residual over its noise part: half the mean square of differences ``lag``
+    samples apart (beyond the noise correlation time, so a slowly varying misfit cancels in
+    them); about 1 when the residual is noise only."""
+    m = r.size // 2
+    rr = r[:m] + 1j * r[m:]
+    if m <= lag + 2:
+        return float("nan")
+    d = rr[lag:] - rr[:-lag]
+    return float(np.mean(np.abs(rr) ** 2) / max(0.5 * np.mean(np.abs(d) ** 2), 1e-300))
+
+
+def _fit_models(prob, info, alpha):
+    """Microslip fit, then the full model and the likelihood-ratio test between them."""
+    X, f, zeta = info["data"]
+    idx, nuis = info["idx"], info["nuis"]
+    ref = float(np.abs(prob.z[idx]).max())
+    lags = math.ceil(2.0 * prob.fs / (prob.bw * info["step"]))
+    bnd = _bounds(prob, "microslip", X, None, nuis[0])
+    starts = [np.concatenate([s, nuis]) for s in _starts(X, f, zeta, prob.conv)]
+    obj = _Objective(prob, "microslip", idx, ref, bnd)
+    chosen = micro = _fit_regime(obj, starts, bnd)
+    regime, warns = "microslip", []
+    cov, kappa = _covariance(obj, micro.fun, micro.jac)
+    x_max = math.exp(micro.x[-2])
+    full_starts = _full_starts(micro.x, x_max, prob.conv["x_ref"])
+    if 2 * idx.size > 12 and full_starts:
+        bnd = _bounds(prob, "macroslip", X, x_max, nuis[0])
+        obj_f = _Objective(prob, "macroslip", idx, ref, bnd)
+        full = _fit_regime(obj_f, full_starts, bnd)
+        cov_f, kappa_f = _covariance(obj_f, full.fun, full.jac)
+        s2 = float(np.mean(full.fun ** 2))
+        stat = 2.0 * (micro.cost - full.cost) / max(s2 * kappa_f, 1e-300)
+        p_val = float(stats.chi2.sf(max(stat, 0.0), 2))
+        phi_known = math.sqrt(max(cov_f[4, 4], 0.0)) < 1.0
+        if p_val < alpha and phi_known:
+            chosen, regime, cov, kappa = full, "macroslip", cov_f, kappa_f
+        else:
+            warns.append(
+                f"the decay never leaves microslip (likelihood-ratio p = {p_val:.2g}, "
+                f"phi_max {'not ' if not phi_known else ''}bounded): KT, phi_max, beta "
+                "and Fs are not identified; reported f0, zeta0, chi and delta")
+    chi2_red = _misfit_ratio(chosen.fun, lags)
+    if chi2_red > 1.0:          # structure beyond the noise model: widen (as fit_modal_iwan)
+        cov = cov * chi2_red
+    return chosen, regime, cov, kappa, chi2_red, warns
+
+
+def fit_decay(t, y, *, quantity: str = "acceleration", band, order: int = 4,
+              stiffness: str = "harmonic", floor: str = "dashpot", x_ref: float | None = None,
+              t_start: float | None = None, snr_min: float = 10.0,
+              samples_per_correlation: float = 4.0, significance: float = 0.01) -> ModalIwanFit:
+    """Fit the modal Iwan model directly to a free-decay record of one mode.
+
+    The slowly varying amplitude and phase of the mode (averaging) with the modal Iwan
+    frequency and damping curves (Segalman 2005, J. Appl. Mech. 72:752-760) are passed through
+    the same zero-phase band-pass and Hilbert transform as the record and fitted to its
+    analytic signal sample by sample (least squares in log-polar form, covariance from the
+    residuals' autocorrelation, Newey & West 1987). The module docstring and the project's
+    ``docs/decay_fit.md`` give the equations. Unlike ``fit_modal_iwan(amplitude_curve(...))``
+    no windows are needed, so short and heavily damped decays are used to their start.
+
+    Parameters
+    ----------
+    t : array_like, shape (n,)
+        Sample times [s], strictly increasing and uniform (jitter up to 5 % of the step).
+    y : array_like, shape (n,)
+        Response at the sensor in SI units of ``quantity``; at least 64 samples.
+    quantity : {"acceleration", "velocity", "displacement"}, keyword-only
+        What ``y`` is: [m/s^2], [m/s] or [m].
+    band : (float, float), keyword-only
+        Pass band ``(f_lo, f_hi)`` [Hz] around one mode, inside ``(0, fs/2)``; other modes
+        should be outside it.
+    order : int, keyword-only
+        Butterworth order (default 4, range 1..10).
+    stiffness, floor : str, keyword-only
+        As in :func:`fit_modal_iwan` (default first-harmonic stiffness, dashpot floor).
+    x_ref : float, optional
+        Reference displacement amplitude [m] of ``delta``; default the geometric mean of the
+        amplitudes in the fitted span.
+    t_start : float, optional
+        Time [s] at which the free decay starts (release, end of the impact); default the
+        record's start when the band-passed peak is there, else the largest raw sample near
+        the band-passed peak. The model is zero before it.
+    snr_min : float, keyword-only
+        Samples are used while the envelope is above ``snr_min`` times the in-band noise
+        RMS (default 10, range [2, 1e6]).
+    samples_per_correlation : float, keyword-only
+        Decimation: samples per noise correlation time ``1/B`` (default 4, range [1, 100]).
+    significance : float, keyword-only
+        Level of the test that must reject microslip before ``phi_max`` and ``beta`` are
+        reported (default 0.01, range (0, 0.5)).
+
+    Returns
+    -------
+    ModalIwanFit
+        As from :func:`fit_modal_iwan` (parameters in the sensor coordinate with unit modal
+        mass, ``stderr``, ``predict``, ``warnings``, ``success``); ``data`` holds local
+        window estimates of the record (for plots only), ``conventions["method"]`` is
+        ``"direct signal fit"`` with the band, the fitted span and the noise.
+
+    Raises
+    ------
+    ValueError
+        Bad input (NaN, non-uniform ``t``, band outside ``(0, fs/2)``, unknown quantity), or
+        no decaying mode above ``snr_min`` times the noise in the band.
+    """
+    snr_min = check_scalar("snr_min", snr_min, low=2.0, high=1e6)
+    spc = check_scalar("samples_per_correlation", samples_per_correlation, low=1.0, high=100.0)
+    alpha = check_scalar("significance", significance, low=0.0, high=0.5, low_open=True,
+                         high_open=True)
+    prob, conv, info = _prepare(t, y, quantity, band, order, stiffness, floor, x_ref, t_start,
+                                snr_min, spc)
+    best, regime, cov, kappa, chi2_red, warns = _fit_models(prob, info, alpha)
+    i_s, i_b, t0 = info["i_s"], info["i_b"], info["t0"]
+    a_end = float(np.exp(prob.trajectory(best.x[:-2], regime, best.x[-2],
+                                         np.array([(i_b - 1 - i_s) / prob.fs]))[0, 0]))
+    conv.update(t_fit=[t0 + i_s / prob.fs, t0 + (i_b - 1) / prob.fs],
+                samples=int(info["idx"].size), sample_step=float(info["step"] / prob.fs),
+                noise_rms=info["noise"] / math.sqrt(2.0), correlation_factor=float(kappa),
+                amplitude_range=[math.exp(best.x[-2]), a_end])
+    if best.x[-2] - math.log(a_end) < 0.1:
+        warns.append(f"the amplitude changes by only {100 * (math.exp(best.x[-2]) / a_end - 1):.2g}"
+                     " % over the fitted span: the amplitude dependence rests on very little")
+    X, f, zeta = info["data"]
+    data = dict(amplitude=X, frequency=f, damping_ratio=zeta,
+                frequency_std=np.full(X.size, np.nan), damping_std=np.full(X.size, np.nan))
+    fit = ModalIwanFit.from_solution(best.x[:-2], cov[:-2, :-2], regime, data, conv,
+                                     chi2_red=chi2_red, weights=(), warnings=tuple(warns),
+                                     optimizer_ok=bool(best.success))
+    log.debug("fit_decay: %s", conv)
+    return fit
