@@ -146,13 +146,13 @@ class _Objective:
     """Log-polar residuals on the samples ``idx`` and their Jacobian (``L`` is linear, so
     ``dz/dx = L(dy/dx)``; ``dy/dx`` by forward differences of the model record)."""
 
-    def __init__(self, prob, regime, idx, ref, bounds):
+    def __init__(self, prob, regime, idx, ref, bounds, weights=None):
         self.prob, self.regime, self.idx, self.ub = prob, regime, idx, bounds[1]
         self.sl = slice(idx[0], idx[-1] + 1)
         self.sel = idx - idx[0]
         zd = prob.z[self.sl]
         lnd, phd = _polar(zd)
-        self.wgt = np.abs(zd[self.sel]) / ref
+        self.wgt = np.abs(zd[self.sel]) / ref * (1.0 if weights is None else weights)
         self.lnd, self.phd = lnd[self.sel], phd[self.sel]
         self._cache = (None, None, None)
 
@@ -316,14 +316,19 @@ def _fit_regime(obj, starts, bounds):
 
 
 def _full_starts(micro_x, X_max, x_ref, curve_full):
-    f0, z0, chi, delta = micro_x[:4]
+    """Starts of the full model: the window-curve fit's macroslip solution if any, and
+    ``phi_max`` at 0.3, 1 and 3 times the initial amplitude with the microslip ``chi`` (and
+    ``chi = -0.5``, since microslip estimates are biased when the data leave microslip), the
+    stiffness ratio matching the microslip ``delta``."""
+    f0, z0, chi_m, delta = micro_x[:4]
     out = [] if curve_full is None else [np.concatenate([curve_full, micro_x[4:]])]
     for ratio in (0.3, 1.0, 3.0):
-        phimax, beta = ratio * X_max, 0.5
-        kappa = delta * (chi + 2.0) * (1.0 + beta) * (phimax / x_ref) ** (chi + 1.0)
-        if 0.0 < kappa < 1.0:
-            out.append(np.concatenate([[f0, z0, chi, kappa, math.log(phimax), beta],
-                                       micro_x[4:]]))
+        for chi in (chi_m, -0.5) if ratio < 3.0 else (chi_m,):
+            phimax, beta = ratio * X_max, 0.5
+            kappa = delta * (chi + 2.0) * (1.0 + beta) * (phimax / x_ref) ** (chi + 1.0)
+            if 0.0 < kappa < 1.0:
+                out.append(np.concatenate([[f0, z0, chi, kappa, math.log(phimax), beta],
+                                           micro_x[4:]]))
     return out
 
 
@@ -416,33 +421,58 @@ def _misfit_ratio(r, lag):
     return float(np.mean(np.abs(rr) ** 2) / max(0.5 * np.mean(np.abs(d) ** 2), 1e-300))
 
 
+def _local_weights(r, lag):
+    """Weights ``<= 1`` that level the local noise of the residual ``r``, and the noise RMS.
+
+    The noise RMS is that of the turned residual ``rr``'s differences ``lag`` samples (two
+    correlation times) apart (median of local mean squares over eight lags, halved), where a
+    slowly varying misfit cancels. The local noise level is the mean square over two
+    correlation times of second differences at half a correlation time: they cancel a misfit that varies over the decay
+    time, but keep noise and the leakage of other modes (an out-of-band mode's transient after
+    an abrupt start oscillates at the difference frequency). Samples whose level is above the
+    median are weighted down by the ratio of RMS values (feasible weighted least squares);
+    none is weighted up.
+    """
+    m = r.size // 2
+    rr = r[:m] + 1j * r[m:]
+    lag = max(1, min(lag, m // 8))
+
+    def local(d2, win):
+        d2 = np.concatenate([d2, np.full(m - d2.size, d2[-1])])
+        return np.convolve(d2, np.ones(win), mode="same") / np.convolve(np.ones(m), np.ones(win),
+                                                                       mode="same")
+    first = local(np.abs(rr[lag:] - rr[:-lag]) ** 2, 8 * lag)
+    h = max(1, lag // 4)
+    second = local(np.abs(rr[2 * h:] - 2.0 * rr[h:-h] + rr[:-2 * h]) ** 2, max(lag, 4))
+    med = float(np.median(second))
+    return np.sqrt(med / np.maximum(second, med)), math.sqrt(0.5 * float(np.median(first)))
+
+
 def _fit_micro(prob, info, snr_min, spc):
-    """Microslip fit in two stages: over the decay to 5 % of the peak envelope, then (after
-    the noise is known from that fit's residual) over every sample above ``snr_min`` x noise,
-    starting from the first stage."""
+    """Microslip fit in two stages: over the decay to 5 % of the peak envelope, then over
+    every sample above ``snr_min`` x the noise (from the first stage's residual), with the
+    local-noise weights of the first stage's residual, starting from its solution."""
     X, f, zeta = info["data"]
     nuis, env, i_top = info["nuis"], info["env"], info["i_top"]
     bnd = _bounds(prob, "microslip", X, None, nuis[0])
     curve_starts, curve_full = _starts(X, f, zeta, prob.conv)
     starts = [np.concatenate([s, nuis]) for s in curve_starts]
-    i_b = info["i_a"]
-    for stage in range(2):
-        idx, step = _span(prob, info, i_b, spc)
-        ref = float(np.abs(prob.z[idx]).max())
-        obj = _Objective(prob, "microslip", idx, ref, bnd)
-        micro = _fit_regime(obj, starts, bnd)
-        m = micro.fun.size // 2
-        noise = ref * math.sqrt(float(np.mean(micro.fun[:m] ** 2 + micro.fun[m:] ** 2)))
-        if stage == 1:
-            break
-        low = np.flatnonzero(env[i_top:] < snr_min * noise)
-        i_new = prob.n if low.size == 0 else i_top + int(low[0])
-        if abs(i_new - i_b) <= max(info["nw"], 0.02 * (i_b - info["i_s"])) \
-                or i_new - info["i_s"] < 2 * info["nw"]:
-            break
-        i_b, starts = i_new, [micro.x]
+    idx, step = _span(prob, info, info["i_a"], spc)
+    ref = float(np.abs(prob.z[idx]).max())
+    first = _fit_regime(_Objective(prob, "microslip", idx, ref, bnd), starts, bnd)
+    lag = math.ceil(2.0 * prob.fs / (prob.bw * step))
+    noise = ref * _local_weights(first.fun, lag)[1] * math.sqrt(2.0)
+    low = np.flatnonzero(env[i_top:] < snr_min * noise)
+    i_b = max(prob.n if low.size == 0 else i_top + int(low[0]), info["i_s"] + 2 * info["nw"])
+    idx, step = _span(prob, info, i_b, spc)
+    ref = float(np.abs(prob.z[idx]).max())
+    obj = _Objective(prob, "microslip", idx, ref, bnd)
+    lag = math.ceil(2.0 * prob.fs / (prob.bw * step))
+    weights, _ = _local_weights(obj.resid(first.x), lag)
+    obj = _Objective(prob, "microslip", idx, ref, bnd, weights)
+    micro = _fit_regime(obj, [first.x], bnd)
     return micro, obj, dict(idx=idx, step=step, i_b=i_b, noise=noise, ref=ref,
-                            curve_full=curve_full)
+                            curve_full=curve_full, weights=weights)
 
 
 def _fit_models(prob, info, alpha, snr_min, spc):
@@ -456,21 +486,25 @@ def _fit_models(prob, info, alpha, snr_min, spc):
     full_starts = _full_starts(micro.x, x_max, prob.conv["x_ref"], span["curve_full"])
     if 2 * idx.size > 12 and full_starts:
         bnd = _bounds(prob, "macroslip", X, x_max, info["nuis"][0])
-        obj_f = _Objective(prob, "macroslip", idx, ref, bnd)
+        obj_f = _Objective(prob, "macroslip", idx, ref, bnd, span["weights"])
         full = _fit_regime(obj_f, full_starts, bnd)
         cov_f, kappa_f = _covariance(obj_f, full.fun, full.jac)
         s2 = float(np.mean(full.fun ** 2))
         stat = 2.0 * (micro.cost - full.cost) / max(s2 * kappa_f, 1e-300)
         p_val = float(stats.chi2.sf(max(stat, 0.0), 2))
+        log.debug("fit_decay: likelihood-ratio statistic %.3g, p %.3g", stat, p_val)
         phi_known = math.sqrt(max(cov_f[4, 4], 0.0)) < 1.0
-        if p_val < alpha and phi_known:
+        t_end = np.array([(span["i_b"] - 1 - info["i_s"]) / prob.fs])
+        a_end = math.exp(prob.trajectory(full.x[:-2], "macroslip", full.x[-2], t_end)[0, 0])
+        inside = a_end < math.exp(full.x[4]) < math.e * math.exp(full.x[-2])
+        if p_val < alpha and phi_known and inside:
             chosen, regime, cov, kappa = full, "macroslip", cov_f, kappa_f
         else:
             warns.append(
                 f"the decay never leaves microslip (likelihood-ratio p = {p_val:.2g}, "
-                f"phi_max {'not ' if not phi_known else ''}bounded): KT, phi_max, beta "
+                f"phi_max {'not ' if not phi_known else ''}bounded"
+                f"{'' if inside else ', outside the decay amplitudes'}): KT, phi_max, beta "
                 "and Fs are not identified; reported f0, zeta0, chi and delta")
-    log.debug("fit_decay: LR stat %.3g p %.3g kappa %.3g", stat, p_val, kappa_f) if full_starts and 2 * idx.size > 12 else None
     chi2_red = _misfit_ratio(chosen.fun, lags)
     if chi2_red > 1.0:          # structure beyond the noise model: widen (as fit_modal_iwan)
         cov = cov * chi2_red
