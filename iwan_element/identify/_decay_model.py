@@ -214,13 +214,14 @@ def _local_weights(r, lag):
     """Weights ``<= 1`` that level the local noise of the residual ``r``, and the noise RMS.
 
     The noise RMS is that of the turned residual ``rr``'s differences ``lag`` samples (two
-    correlation times) apart (median of local mean squares over eight lags, halved), where a
-    slowly varying misfit cancels. The local noise level is the mean square over two
-    correlation times of second differences at half a correlation time: they cancel a misfit that varies over the decay
-    time, but keep noise and the leakage of other modes (an out-of-band mode's transient after
-    an abrupt start oscillates at the difference frequency). Samples whose level is above the
-    median are weighted down by the ratio of RMS values (feasible weighted least squares);
-    none is weighted up.
+    correlation times) apart, where a slowly varying misfit cancels (lower quartile of local
+    mean squares over eight lags, halved: the transients of other modes at the ends of the
+    record are left out). The local noise level is the mean square over two correlation times
+    of second differences at half a correlation time: they cancel a misfit that varies over
+    the decay time, but keep noise and the leakage of other modes (an out-of-band mode's
+    transient after an abrupt start oscillates at the difference frequency). Samples whose
+    level is above the median are weighted down by the ratio of RMS values (feasible weighted
+    least squares); none is weighted up.
     """
     m = r.size // 2
     rr = r[:m] + 1j * r[m:]
@@ -234,7 +235,7 @@ def _local_weights(r, lag):
     h = max(1, lag // 4)
     second = local(np.abs(rr[2 * h:] - 2.0 * rr[h:-h] + rr[:-2 * h]) ** 2, max(lag, 4))
     med = float(np.median(second))
-    return np.sqrt(med / np.maximum(second, med)), math.sqrt(0.5 * float(np.median(first)))
+    return np.sqrt(med / np.maximum(second, med)), math.sqrt(0.5 * float(np.percentile(first, 25)))
 
 
 def _fit_regime(obj, starts, bounds):

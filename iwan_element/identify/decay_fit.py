@@ -112,16 +112,18 @@ def _starts(X, f, zeta, conv):
 
 
 def _decay_start(prob, t_start, t0):
-    """Working-rate index of the start of the free decay: given, the record's start (release,
-    or a record cropped in the decay) or the largest sample near the band-passed peak."""
+    """Working-rate index of the start of the free decay: given, else the first sample above
+    0.3 of the record's largest magnitude (an impact or a release), taken as the record's
+    start when it is within the first period (a release, or a record cropped in the decay,
+    whose first samples may be near a zero crossing)."""
     if t_start is not None:
         t_end = t0 + (prob.n - 1) / prob.fs
         t_start = check_scalar("t_start", t_start, low=t0, high=t_end)
         return int(round((t_start - t0) * prob.fs))
-    if prob.i_pk <= prob.n_trim:
-        return 0
-    lo = prob.i_pk - prob.n_trim
-    return lo + int(np.argmax(np.abs(prob.y[lo:prob.i_pk + 1])))
+    mag = np.abs(prob.y)
+    i_on = int(np.argmax(mag > 0.3 * mag.max()))
+    period = prob.fs / math.sqrt(prob.band[0] * prob.band[1])
+    return 0 if i_on <= period else i_on
 
 
 def _full_starts(micro_x, X_max, x_ref, curve_full):
@@ -280,7 +282,7 @@ def _fit_models(prob, info, alpha, snr_min, spc):
                 f"the decay never leaves microslip (likelihood-ratio p = {p_val:.2g}, "
                 f"phi_max {'not ' if not phi_known else ''}bounded"
                 f"{'' if inside else ', outside the decay amplitudes'}"
-                f"{'' if complete or not (phi_known and inside) else ', not all joint parameters fixed'}"
+                f"{'' if complete or not (phi_known and inside) else ', joint not fixed'}"
                 "): KT, phi_max, beta "
                 "and Fs are not identified; reported f0, zeta0, chi and delta")
     chi2_red = _misfit_ratio(chosen.fun, lags)
@@ -367,8 +369,9 @@ def fit_decay(t, y, *, quantity: str = "acceleration", band, order: int = 4,
                 correlation_factor=float(span["kappa"]),
                 amplitude_range=[math.exp(best.x[-2]), a_end])
     if best.x[-2] - math.log(a_end) < 0.1:
-        warns.append(f"the amplitude changes by only {100 * (math.exp(best.x[-2]) / a_end - 1):.2g}"
-                     " % over the fitted span: the amplitude dependence rests on very little")
+        change = 100 * (math.exp(best.x[-2]) / a_end - 1)
+        warns.append(f"the amplitude changes by only {change:.2g} % over the fitted span: the "
+                     "amplitude dependence rests on very little")
     X, f, zeta, _ = _window_curve(prob, i_s, i_b, info["nw"])
     data = dict(amplitude=X, frequency=f, damping_ratio=zeta,
                 frequency_std=np.full(X.size, np.nan), damping_std=np.full(X.size, np.nan))
