@@ -160,8 +160,12 @@ def _prepare(t, y, quantity, band, order, stiffness, floor, x_ref, t_start):
     if yy.size < 64:
         raise ValueError(f"y must have at least 64 samples, got {yy.size}")
     tt, dt = _check_uniform_time(t, yy.size)
+    check_magnitude("t", tt, unit="s")
     _check_options(quantity, order, stiffness, floor)
     lo, hi = _check_band(band, 1.0 / dt)
+    if hi * dt < 1e-5:
+        raise ValueError(f"band ({lo:g}, {hi:g}) Hz is below 1e-5 of the sampling rate "
+                         f"{1.0 / dt:.3g} Hz (from t): check the unit of t")
     conv = dict(stiffness=stiffness, floor=floor, x_ref=None, method="direct signal fit",
                 quantity=quantity, band=[lo, hi], order=int(order))
     prob = _Problem(yy - yy.mean(), 1.0 / dt, (lo, hi), int(order), _QUANTITY_POWER[quantity],
