@@ -364,7 +364,8 @@ def fit_decay(t, y, *, quantity: str = "acceleration", band, order: int = 4,
                          high_open=True)
     prob, conv, info = _prepare(t, y, quantity, band, order, stiffness, floor, x_ref, t_start)
     best, span = _fit_models(prob, info, alpha, snr_min, spc)
-    regime, warns, i_s, i_b, t0 = span["regime"], span["warns"], info["i_s"], span["i_b"], info["t0"]
+    regime, warns, i_s, i_b = span["regime"], span["warns"], info["i_s"], span["i_b"]
+    t0 = info["t0"]
     a_end = float(np.exp(prob.trajectory(best.x[:-2], regime, best.x[-2],
                                          np.array([(i_b - 1 - i_s) / prob.fs]))[0, 0]))
     conv.update(t_fit=[t0 + i_s / prob.fs, t0 + (i_b - 1) / prob.fs],
