@@ -22,8 +22,8 @@ _PER_PERIOD = 8.0       # working rate: samples per period of the band's upper e
 
 
 class _Problem:
-    """Record at the working rate, the linear operator ``L`` (band-pass, taper, Hilbert) and
-    the model's analytic signal ``L(y_model)`` with its Jacobian."""
+    """Record at the working rate, the linear operator ``L`` (decimation, zero padding,
+    band-pass, Hilbert) and the model record that goes through it."""
 
     def __init__(self, yy, fs, band, order, k, conv):
         # working rate: at least 8 samples per period of the band's upper edge. The model is

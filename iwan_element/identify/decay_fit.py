@@ -174,7 +174,7 @@ def _prepare(t, y, quantity, band, order, stiffness, floor, x_ref, t_start):
     i_s = prob.i_s = _decay_start(prob, t_start, float(tt[0]))
     nw = max(16, int(round(2.0 * fs / math.sqrt(lo * hi))))          # two periods
     env = np.convolve(np.abs(prob.z), np.ones(nw) / nw, mode="same")
-    i_top = i_s + int(np.argmax(env[i_s:]))          # the start is tapered by the filter
+    i_top = i_s + int(np.argmax(env[i_s:]))          # the filter spreads the start
     low = np.flatnonzero(env[i_top:] < 0.05 * env[i_top])
     i_a = prob.n if low.size == 0 else i_top + int(low[0])
     X, f, zeta, rows = _window_curve(prob, i_s, i_a, nw)
@@ -194,7 +194,7 @@ def _prepare(t, y, quantity, band, order, stiffness, floor, x_ref, t_start):
 
 
 def _window_curve(prob, i_s, i_b, nw):
-    """Window estimates over ``[i_s, i_b)``, clear of the taper before the Hilbert transform
+    """Window estimates over ``[i_s, i_b)``, clear of the filter's end effects
     where possible (the fit itself models it): start values and the plot's data."""
     m = prob.n_trim
     a, b = (max(i_s, m), min(i_b, prob.n - m)) if min(i_b, prob.n - m) - max(i_s, m) >= 2 * nw \
@@ -305,8 +305,9 @@ def fit_decay(t, y, *, quantity: str = "acceleration", band, order: int = 4,
     The slowly varying amplitude and phase of the mode (averaging) with the modal Iwan
     frequency and damping curves (Segalman 2005, J. Appl. Mech. 72:752-760) are passed through
     the same zero-phase band-pass and Hilbert transform as the record and fitted to its
-    analytic signal sample by sample (least squares in log-polar form, covariance from the
-    residuals' autocorrelation, Newey & West 1987). The module docstring and the project's
+    analytic signal sample by sample (least squares in log-polar form, samples weighted by
+    their local noise, covariance for band-passed noise from the filter's correlation, widened
+    by unexplained structure). The module docstring and the project's
     ``docs/decay_fit.md`` give the equations. Unlike ``fit_modal_iwan(amplitude_curve(...))``
     no windows are needed, so short and heavily damped decays are used to their start.
 
