@@ -34,6 +34,7 @@ from .identify.model_fit import ModelFit, fit_force_model
 from .core.modal import harmonic_stiffness, modal_iwan_curve, modal_ringdown
 from .identify.vibration import amplitude_curve
 from .identify.modal_fit import ModalIwanFit, fit_modal_iwan
+from .identify.decay_fit import fit_decay
 from .identify.stepped_sine import stepped_sine_curve
 from .identify.sweeps import sweep_curve
 from .identify.formats import UffRecord, read_sweep_csv, read_uff
@@ -88,6 +89,7 @@ __all__ = [
     "modal_ringdown",
     "amplitude_curve",
     "fit_modal_iwan",
+    "fit_decay",
     "stepped_sine_curve",
     "sweep_curve",
     "read_uff",

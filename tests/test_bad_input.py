@@ -275,6 +275,10 @@ REGISTRY.update({
         t=_ringdown_signal()[0].copy(), y=_ringdown_signal()[1].copy(), quantity="displacement",
         band=(10.0, 40.0), n_periods=10.0)),
         {"t": "time", "y": "data", "n_periods": "scalar"}),
+    "fit_decay": Entry(lambda: (ie.fit_decay, dict(
+        t=_ringdown_signal()[0].copy(), y=_ringdown_signal()[1].copy(), quantity="displacement",
+        band=(10.0, 40.0), snr_min=10.0)),
+        {"t": "time", "y": "data", "snr_min": "scalar"}),
     "fit_modal_iwan": Entry(lambda: (ie.fit_modal_iwan, _modal_curve()),
                             {"amplitude": "data", "frequency": "data", "damping_ratio": "data"}),
     "ModalIwanFit": Entry(skip=_RESULT.format("fit_modal_iwan")),

@@ -146,6 +146,13 @@ class ModalIwanFit:
 
     # ------------------------------------------------------------------ model access
     @property
+    def identified(self) -> tuple:
+        """Names of the reported parameters the data pin down (not named in an
+        "is not identified" warning)."""
+        bad = _unidentified(self.parameters, self.stderr, self.values, self.names)
+        return tuple(k for k in self.parameters if k not in bad)
+
+    @property
     def params(self) -> IwanParameters | None:
         """The joint (unit modal mass, sensor coordinate) when the data fix it, else None."""
         return full_parameters(self.values)[0] if self.regime == "macroslip" else None

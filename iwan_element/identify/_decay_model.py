@@ -1,0 +1,247 @@
+"""Model and statistics of :func:`iwan_element.identify.decay_fit.fit_decay`.
+
+The record's linear processing ``L`` (decimation, zero padding, zero-phase band-pass,
+Hilbert transform), the averaged modal Iwan decay passed through it, the log-polar residuals
+and their Jacobian, and the covariance for band-passed noise. Equations: the project's
+``docs/decay_fit.md``.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy import optimize, signal
+from scipy.integrate import cumulative_simpson
+from scipy.interpolate import CubicSpline
+
+from ._modal_result import model_curve
+from .vibration import _analytic_signal
+
+_GRID = 2000            # log-amplitude grid of the quadrature
+_PER_PERIOD = 8.0       # working rate: samples per period of the band's upper edge
+
+
+class _Problem:
+    """Record at the working rate, the linear operator ``L`` (decimation, zero padding,
+    band-pass, Hilbert) and the model record that goes through it."""
+
+    def __init__(self, yy, fs, band, order, k, conv):
+        # working rate: at least 8 samples per period of the band's upper edge. The model is
+        # made at the record's rate and decimated by the same resample_poly: its anti-alias
+        # filter smears an abrupt release, which leaks into the band (1 % near the start)
+        self.q = max(1, int(fs // (_PER_PERIOD * band[1])))
+        self.n_full, self.fs_full = yy.size, fs
+        yw = self.decimate(yy)
+        self.fs, self.band, self.order, self.k, self.conv = fs / self.q, band, order, k, conv
+        self.y, self.n = yw, yw.size
+        self.sos, _, _, self.n_trim, self.i_pk = _analytic_signal(yw, self.fs, *band, order)
+        self.nfft = int(2 ** math.ceil(math.log2(2 * (self.n + 2 * self.n_trim))))
+        self.z = self.apply(yw)
+        w, H = signal.sosfreqz(self.sos, worN=8192, fs=self.fs)
+        self.bw = float(np.trapezoid(np.abs(H) ** 4, w))      # noise bandwidth [Hz]
+        self.span = self.i_s = None
+
+    def decimate(self, Y):
+        return signal.resample_poly(Y, 1, self.q, axis=0) if self.q > 1 else Y
+
+    def apply(self, Y):
+        """``L``: the record (column by column) as zero outside its span, padded with zeros
+        for the filter's extent at both ends, zero-phase band-pass and Hilbert transform.
+
+        Data and model go through exactly this, so the end effects (an abrupt release or
+        end of record) are the same in both; no taper is needed since the padded band-passed
+        signal fades out smoothly inside the padding.
+        """
+        pad = [(self.n_trim, self.n_trim)] + [(0, 0)] * (np.ndim(Y) - 1)
+        yf = signal.sosfiltfilt(self.sos, np.pad(Y, pad), axis=0)
+        return signal.hilbert(yf, N=self.nfft, axis=0)[self.n_trim:self.n_trim + self.n]
+
+    def trajectory(self, theta, regime, ln_a0, t_rel):
+        """ln a, theta, ln w and asin(zeta) at ``t_rel`` [s] after the start of the decay.
+
+        Quadrature in ``u = ln a`` on a fixed grid (cumulative Simpson), cubic spline in time.
+        """
+        u = ln_a0 - np.linspace(0.0, self.span, _GRID)
+        f, zeta = model_curve(theta, np.exp(u), regime, self.conv["x_ref"],
+                              self.conv["stiffness"], self.conv["floor"])
+        f, zeta = np.asarray(f, float), np.asarray(zeta, float)
+        if not (np.all(np.isfinite(f)) and np.all(f > 0) and np.all(np.isfinite(zeta))
+                and np.all(zeta > 0) and np.all(zeta < 0.5)):
+            raise ValueError("model outside its range")
+        w = 2.0 * math.pi * f
+        h = self.span / (_GRID - 1)
+        tu = cumulative_simpson(1.0 / (zeta * w), dx=h, initial=0.0)
+        th = cumulative_simpson(np.sqrt(1.0 - zeta ** 2) / zeta, dx=h, initial=0.0)
+        if not np.all(np.diff(tu) > 0):
+            raise ValueError("time grid not increasing")
+        spl = CubicSpline(tu, np.column_stack([u, th, np.log(w), np.arcsin(zeta)]))
+        out = spl(np.minimum(t_rel, tu[-1]))
+        beyond = t_rel > tu[-1]
+        if np.any(beyond):      # past the grid: continue at the last decay rate and frequency
+            dt = t_rel[beyond] - tu[-1]
+            out[beyond, 0] = u[-1] - zeta[-1] * w[-1] * dt
+            out[beyond, 1] = th[-1] + w[-1] * math.sqrt(1 - zeta[-1] ** 2) * dt
+        return out
+
+    def record(self, x, regime):
+        """Model record ``a w**k cos(theta + k asin(zeta) + phi_s)`` at the record's rate,
+        zero before the start."""
+        i0 = self.i_s * self.q
+        t_rel = np.arange(self.n_full - i0) / self.fs_full
+        u, th, lw, asz = self.trajectory(x[:-2], regime, x[-2], t_rel).T
+        y = np.zeros(self.n_full)
+        y[i0:] = np.exp(u + self.k * lw) * np.cos(th + self.k * asz + x[-1])
+        return y
+
+
+def _polar(z):
+    return np.log(np.maximum(np.abs(z), 1e-300)), np.unwrap(np.angle(z))
+
+
+class _Objective:
+    """Log-polar residuals on the samples ``idx`` and their Jacobian (``L`` is linear, so
+    ``dz/dx = L(dy/dx)``; ``dy/dx`` by forward differences of the model record)."""
+
+    def __init__(self, prob, regime, idx, ref, bounds, weights=None):
+        self.prob, self.regime, self.idx, self.ub = prob, regime, idx, bounds[1]
+        self.sl = slice(idx[0], idx[-1] + 1)
+        self.sel = idx - idx[0]
+        zd = prob.z[self.sl]
+        lnd, phd = _polar(zd)
+        self.wgt = np.abs(zd[self.sel]) / ref * (1.0 if weights is None else weights)
+        self.lnd, self.phd = lnd[self.sel], phd[self.sel]
+        self._cache = (None, None, None)
+
+    def _model(self, x):
+        if self._cache[0] is not None and np.array_equal(self._cache[0], x):
+            return self._cache[1], self._cache[2]
+        y = self.prob.record(x, self.regime)
+        zm = self.prob.apply(self.prob.decimate(y))[self.sl]
+        self._cache = (np.array(x), y, zm)
+        return y, zm
+
+    def resid(self, x):
+        try:
+            _, zm = self._model(x)
+        except ValueError:
+            return np.full(2 * self.idx.size, 1e3)
+        lnm, phm = _polar(zm)
+        dph = self.phd - phm[self.sel]
+        dph -= 2.0 * math.pi * np.round(dph[0] / (2.0 * math.pi))
+        return np.concatenate([self.wgt * (self.lnd - lnm[self.sel]), self.wgt * dph])
+
+    def jac(self, x):
+        try:
+            y0, zm = self._model(x)
+            cols = []
+            for j in range(x.size):
+                h = 1e-7 * max(abs(x[j]), 1e-2 if j < x.size - 2 else 1.0)
+                if x[j] + h > self.ub[j]:
+                    h = -h
+                xp = np.array(x, dtype=float)
+                xp[j] += h
+                cols.append((self.prob.record(xp, self.regime) - y0) / h)
+        except ValueError:
+            return np.zeros((2 * self.idx.size, x.size))
+        dz = self.prob.apply(self.prob.decimate(np.column_stack(cols)))[self.sl][self.sel] \
+            / zm[self.sel, None]
+        return -np.vstack([self.wgt[:, None] * dz.real, self.wgt[:, None] * dz.imag])
+
+
+def _solve(obj, x0, lb, ub):
+    width = np.where(np.isfinite(ub - lb), ub - lb, 0.0)
+    x0 = np.clip(x0, lb + 1e-9 * width, ub - 1e-9 * width)
+    return optimize.least_squares(obj.resid, x0, jac=obj.jac, bounds=(lb, ub), x_scale="jac",
+                                  method="trf", xtol=1e-10, ftol=1e-10, gtol=1e-10,
+                                  max_nfev=100)
+
+
+def _noise_correlation(prob, lags):
+    """Correlation ``rho(k dt)`` of the analytic signal of white noise after the band-pass
+    (``sum_f |H(f)|**4 exp(2 pi i f tau)`` over ``f >= 0``, normalised to 1 at 0)."""
+    nf = max(16384, int(2 ** math.ceil(math.log2(lags + 1))))
+    _, H = signal.sosfreqz(prob.sos, worN=nf, fs=prob.fs)     # f_j = j fs / (2 nf)
+    P = np.zeros(2 * nf)
+    P[:nf] = np.abs(H) ** 4
+    return np.fft.ifft(P)[:lags + 1] * (2 * nf) / P.sum()
+
+
+def _covariance(obj, r, J):
+    """Covariance of the least-squares estimate for band-passed white noise.
+
+    The rotated residual ``rr = r_ln + i r_phase`` is the in-band noise ``n`` turned by the
+    signal's phase; ``E[rr_i conj(rr_j)] = s2 conj(rho(t_j - t_i)) exp(i (phi_j - phi_i))``
+    with ``s2`` the mean of ``|rr|**2``. Sandwich ``B Omega B``, ``B = (J^T J)^-1``,
+    ``Omega = Re(Jc^H C Jc) / 2`` with ``Jc = J_ln + i J_phase`` (the estimator's exact
+    covariance under that noise model). Also returns the variance inflation of a sum of
+    residuals relative to independent samples (the correlation factor).
+    """
+    m = r.size // 2
+    rr = r[:m] + 1j * r[m:]
+    s2 = float(np.mean(np.abs(rr) ** 2))
+    Jc = J[:m] + 1j * J[m:]
+    step = int(obj.idx[1] - obj.idx[0]) if obj.idx.size > 1 else 1
+    lags = min(m - 1, int(math.ceil(20.0 * obj.prob.fs / (obj.prob.bw * step))))
+    rho = _noise_correlation(obj.prob, lags * step)[::step]
+    omega = (Jc.conj().T @ Jc).real
+    kappa = 1.0
+    for k in range(1, lags + 1):
+        c = np.conj(rho[k]) * np.exp(1j * (obj.phd[k:] - obj.phd[:-k]))     # C_{i,i+k} / s2
+        g = (Jc[:-k].conj() * c[:, None]).T @ Jc[k:]
+        omega += g.real + g.real.T            # the lag and its Hermitian transpose
+        kappa += 2.0 * (1.0 - k / m) * float(np.mean(c.real))
+    omega *= 0.5 * s2
+    try:
+        bread = np.linalg.inv(J.T @ J)
+    except np.linalg.LinAlgError:
+        bread = np.linalg.pinv(J.T @ J)
+    return bread @ omega @ bread, max(kappa, 1.0)
+
+
+def _misfit_ratio(r, lag):
+    """Mean square residual over its noise part: half the mean square of differences ``lag``
+    samples apart (beyond the noise correlation time, so a slowly varying misfit cancels in
+    them); about 1 when the residual is noise only."""
+    m = r.size // 2
+    rr = r[:m] + 1j * r[m:]
+    if m <= lag + 2:
+        return float("nan")
+    d = rr[lag:] - rr[:-lag]
+    return float(np.mean(np.abs(rr) ** 2) / max(0.5 * np.mean(np.abs(d) ** 2), 1e-300))
+
+
+def _local_weights(r, lag):
+    """Weights ``<= 1`` that level the local noise of the residual ``r``, and the noise RMS.
+
+    The noise RMS is that of the turned residual ``rr``'s differences ``lag`` samples (two
+    correlation times) apart, where a slowly varying misfit cancels (lower quartile of local
+    mean squares over eight lags, halved: the transients of other modes at the ends of the
+    record are left out). The local noise level is the mean square over two correlation times
+    of second differences at half a correlation time: they cancel a misfit that varies over
+    the decay time, but keep noise and the leakage of other modes (an out-of-band mode's
+    transient after an abrupt start oscillates at the difference frequency). Samples whose
+    level is above the median are weighted down by the ratio of RMS values (feasible weighted
+    least squares); none is weighted up.
+    """
+    m = r.size // 2
+    rr = r[:m] + 1j * r[m:]
+    lag = max(1, min(lag, m // 8))
+
+    def local(d2, win):
+        d2 = np.concatenate([d2, np.full(m - d2.size, d2[-1])])
+        return np.convolve(d2, np.ones(win), mode="same") / np.convolve(np.ones(m), np.ones(win),
+                                                                       mode="same")
+    first = local(np.abs(rr[lag:] - rr[:-lag]) ** 2, 8 * lag)
+    h = max(1, lag // 4)
+    second = local(np.abs(rr[2 * h:] - 2.0 * rr[h:-h] + rr[:-2 * h]) ** 2, max(lag, 4))
+    med = float(np.median(second))
+    return np.sqrt(med / np.maximum(second, med)), math.sqrt(0.5 * float(np.percentile(first, 25)))
+
+
+def _fit_regime(obj, starts, bounds):
+    best = None
+    for x0 in starts:
+        r = _solve(obj, x0, *bounds)
+        if best is None or r.cost < best.cost:
+            best = r
+    return best

@@ -1,0 +1,266 @@
+"""fit_decay: the modal Iwan model fitted directly to the analytic signal of a free decay.
+
+Truths come from routes that share no code with the fit (``tests/_decays.py``): the
+slowly-varying-amplitude equations integrated by ``solve_ivp`` with the closed-form curves, and
+the exact Iwan oscillator in time. The covariance is checked against the scatter of repeated
+seeded fits, the noise correlation against simulated noise, the quadrature against
+``solve_ivp``.
+"""
+from __future__ import annotations
+
+import json
+import math
+
+import matplotlib
+
+matplotlib.use("Agg")
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+from scipy import signal  # noqa: E402
+from scipy.integrate import solve_ivp  # noqa: E402
+
+from _decays import joint_decay, svam_decay  # noqa: E402
+from iwan_element import IwanParameters, ModalIwanFit, fit_decay, modal_iwan_curve  # noqa: E402
+from iwan_element.identify import _decay_model as D  # noqa: E402
+
+F0 = 80.0
+PHI_MAX = 1e-3
+
+
+def _joint(kappa=0.05, chi=-0.5, beta=0.5):
+    w02 = (2 * math.pi * F0) ** 2
+    KT = kappa * w02
+    c = beta + (chi + 1) / (chi + 2)
+    return IwanParameters(KT * c * PHI_MAX / (1 + beta), KT, chi, beta), w02 - KT
+
+
+P, K_INF = _joint()
+
+
+def _curves(zeta0, p=P, k_inf=K_INF):
+    def both(a):
+        a = np.asarray(a, dtype=float)
+        f, z = modal_iwan_curve(np.atleast_1d(a), p, K_inf=k_inf, zeta0=zeta0,
+                                stiffness="harmonic", floor="dashpot")
+        return np.asarray(f).reshape(a.shape), np.asarray(z).reshape(a.shape)
+    return (lambda a: both(a)[0]), (lambda a: both(a)[1])
+
+
+def _truth(fit, zeta0, p=P, k_inf=K_INF):
+    x_ref = fit.conventions["x_ref"]
+    w02 = k_inf + p.KT
+    return {"f0": math.sqrt(w02) / (2 * math.pi), "zeta0": zeta0, "chi": p.chi,
+            "delta": p.KT * (x_ref / p.phi_max) ** (p.chi + 1) / (w02 * (p.chi + 2) * (1 + p.beta)),
+            "beta": p.beta, "kappa": p.KT / w02, "phi_max": p.phi_max, "KT": p.KT,
+            "K_inf": k_inf, "Fs": p.Fs}
+
+
+def _svam(zeta0=2e-3, a0=1e-4, duration=2.0, fs=2000.0, quantity="acceleration", noise=0.01,
+          second=0.3, seed=0, ratio=1.3):
+    f, z = _curves(zeta0)
+    return svam_decay(f, z, a0=a0, duration=duration, fs=fs, quantity=quantity, ratio=ratio,
+                      second=second, noise=noise, rng=np.random.default_rng(seed))
+
+
+# ------------------------------------------------------------------ building blocks
+def test_quadrature_trajectory_matches_solve_ivp():
+    """Amplitude and phase by quadrature in ln a equal solve_ivp of the averaging equations."""
+    zeta0 = 5e-3
+    fr, dm = _curves(zeta0)
+    a0, T = 3e-4, 1.5
+
+    def rhs(_, s):
+        a = math.exp(s[0])
+        zz, w = float(dm(a)), 2 * math.pi * float(fr(a))
+        return [-zz * w, w * math.sqrt(1 - zz * zz)]
+    t = np.linspace(0.0, T, 301)
+    ref = solve_ivp(rhs, (0, T), [math.log(a0), 0.0], t_eval=t, rtol=1e-12, atol=1e-12,
+                    method="DOP853").y
+    prob = D._Problem(np.zeros(4096), 2000.0, (70.0, 90.0), 4, 2,
+                      dict(stiffness="harmonic", floor="dashpot", x_ref=3e-5))
+    prob.span = 12.0
+    w02 = K_INF + P.KT
+    theta = [math.sqrt(w02) / (2 * math.pi), zeta0, P.chi,
+             P.KT * (3e-5 / P.phi_max) ** (P.chi + 1) / (w02 * (P.chi + 2) * (1 + P.beta))]
+    out = prob.trajectory(np.array(theta), "microslip", math.log(a0), t)
+    assert np.max(np.abs(out[:, 0] - ref[0])) < 1e-6          # ln a
+    assert np.max(np.abs(out[:, 1] - ref[1])) < 1e-5          # phase [rad], ~750 rad total
+
+
+def test_noise_correlation_matches_simulated_noise():
+    """rho(tau) from |H|^4 equals the correlation of band-passed white noise's analytic signal."""
+    prob = D._Problem(np.zeros(4096), 1000.0, (70.0, 90.0), 4, 0,
+                      dict(stiffness="harmonic", floor="dashpot", x_ref=1.0))
+    rho = D._noise_correlation(prob, 60)
+    x = np.random.default_rng(3).standard_normal(2 ** 21)     # ~4e4 correlation times
+    z = signal.hilbert(signal.sosfiltfilt(prob.sos, x))
+    emp = np.array([np.mean(z[:z.size - k] * np.conj(z[k:])) for k in range(0, 61, 6)])
+    emp /= emp[0]
+    assert np.max(np.abs(emp - np.conj(rho[::6]))) < 0.025       # sampling error ~0.005
+
+
+# ------------------------------------------------------------------ recovery
+@pytest.mark.parametrize("quantity", ["displacement", "velocity", "acceleration"])
+def test_noise_free_decay_recovers_the_curves(quantity):
+    """Without noise or a second mode the fit returns the closed-form truth (the processing of
+    data and model is the same, release included)."""
+    d = _svam(zeta0=2e-3, a0=2e-4, duration=1.0, quantity=quantity, noise=0.0, second=0.0)
+    fit = fit_decay(d.t, d.y, quantity=quantity, band=d.band)
+    tr = _truth(fit, 2e-3)
+    assert fit.regime == "microslip"
+    assert fit.parameters["f0"] == pytest.approx(tr["f0"], rel=1e-6)
+    assert fit.parameters["zeta0"] == pytest.approx(tr["zeta0"], rel=1e-3)
+    assert fit.parameters["chi"] == pytest.approx(tr["chi"], abs=2e-3)
+    assert fit.parameters["delta"] == pytest.approx(tr["delta"], rel=3e-3)
+    f, z = fit.predict(np.array([1e-5, 1e-4]))
+    ft, zt = _curves(2e-3)
+    assert np.allclose(f, ft(np.array([1e-5, 1e-4])), rtol=1e-6)
+    assert np.allclose(z, zt(np.array([1e-5, 1e-4])), rtol=2e-3)
+
+
+def test_stderr_is_not_smaller_than_the_scatter_of_repeated_fits():
+    """Over seeded noise (and a second mode of random phase) the spread of the estimates is
+    not larger than the stated stderr, nor their mean further from the truth than the
+    stderr of a mean allows.
+
+    Found here: the stated stderr is conservative for f0 (the scatter is about 0.1-0.2 of it
+    in this configuration), close for chi; reported, not hidden by a two-sided bound.
+    """
+    est, sds = [], []
+    for seed in range(10):
+        d = _svam(zeta0=3e-3, a0=1e-4, duration=0.6, quantity="velocity", seed=seed)
+        fit = fit_decay(d.t, d.y, quantity="velocity", band=d.band)
+        est.append([fit.parameters[k] for k in ("f0", "zeta0", "chi")])
+        sds.append([fit.stderr[k] for k in ("f0", "zeta0", "chi")])
+        tr = _truth(fit, 3e-3)
+    est, rms_sd = np.array(est), np.sqrt(np.mean(np.square(sds), axis=0))
+    ratio = np.std(est, axis=0, ddof=1) / rms_sd
+    assert np.all(ratio < 1.6), ratio
+    truth = np.array([tr["f0"], tr["zeta0"], tr["chi"]])
+    assert np.all(np.abs(est.mean(axis=0) - truth) < 3 * rms_sd / math.sqrt(len(est)) + 1e-12)
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_exact_iwan_oscillator_within_three_stderr(seed):
+    """The exact Iwan oscillator (virgin start, harmonics) against the first-order truth."""
+    rng = np.random.default_rng(seed)
+    zeta0 = float(rng.uniform(1e-3, 5e-3))
+    q0 = float(rng.uniform(0.05, 0.3)) * PHI_MAX
+    d = joint_decay(P, K_inf=K_INF, zeta0=zeta0, q0=q0, duration=1.5, fs=2000.0,
+                    quantity=("displacement", "velocity", "acceleration")[seed % 3],
+                    ratio=1.25, rng=rng)
+    fit = fit_decay(d.t, d.y, quantity=d.quantity, band=d.band)
+    tr = _truth(fit, zeta0)
+    assert fit.identified
+    for k in fit.identified:
+        assert abs(fit.parameters[k] - tr[k]) < 3 * fit.stderr[k], (k, fit.report())
+
+
+def test_short_heavily_damped_decay_uses_the_release():
+    """2.3 % damping, 30 periods to the noise, 1 % noise, no second mode: the fit starts at
+    the release (nothing is trimmed), fixes f0 and zeta0 and follows the truth's curves over
+    the decay. (With a strong nearby mode the transient its abrupt start leaks through the
+    band-pass dominates so short a record; see docs/decay_fit.md, limits.)"""
+    d = _svam(zeta0=0.02, a0=0.8 * PHI_MAX, duration=0.4, quantity="acceleration", seed=5,
+              second=0.0)
+    fit = fit_decay(d.t, d.y, quantity="acceleration", band=d.band)
+    assert fit.conventions["t_fit"][0] == 0.0
+    tr = _truth(fit, 0.02)
+    for k in ("f0", "zeta0"):
+        assert k in fit.identified
+        assert abs(fit.parameters[k] - tr[k]) < 3 * fit.stderr[k]
+    assert fit.stderr["zeta0"] < 0.05 * 0.02
+    a_hi, a_lo = fit.conventions["amplitude_range"]
+    X = np.geomspace(a_lo, a_hi, 5)
+    f, z, fb, zb = fit.predict(X, band=0.997)
+    ft, zt = _curves(0.02)
+    assert np.all((fb[0] <= ft(X)) & (ft(X) <= fb[1]))
+    assert np.all((zb[0] <= zt(X)) & (zt(X) <= zb[1]))
+    assert np.all(zb[1] - zb[0] < 0.1 * zt(X))          # and the band is informative
+    if set(fit.parameters) - set(fit.identified):
+        assert not fit.success
+        assert any("not identified" in w for w in fit.warnings)
+
+
+def test_macroslip_release_identifies_the_joint():
+    d = _svam(zeta0=2e-3, a0=3 * PHI_MAX, duration=1.5, quantity="displacement", seed=7)
+    fit = fit_decay(d.t, d.y, quantity="displacement", band=d.band)
+    assert fit.regime == "macroslip"
+    tr = _truth(fit, 2e-3)
+    for k in fit.identified:
+        assert abs(fit.parameters[k] - tr[k]) < 3 * fit.stderr[k], (k, fit.report())
+    assert {"phi_max", "KT", "Fs"} <= set(fit.identified)
+
+
+def test_pretrigger_and_impact_start_are_found():
+    """A record with 0.2 s of noise before the decay: the start is found and the model is
+    zero before it."""
+    d = _svam(zeta0=4e-3, a0=1e-4, duration=1.0, quantity="acceleration", seed=11)
+    n_pre = 400
+    rng = np.random.default_rng(12)
+    y = np.concatenate([0.01 * np.abs(d.y).max() * rng.standard_normal(n_pre), d.y])
+    t = np.arange(y.size) / 2000.0
+    fit = fit_decay(t, y, quantity="acceleration", band=d.band)
+    assert fit.conventions["t_fit"][0] == pytest.approx(n_pre / 2000.0, abs=3e-3)
+    tr = _truth(fit, 4e-3)
+    for k in ("f0", "zeta0"):
+        assert abs(fit.parameters[k] - tr[k]) < 3 * fit.stderr[k]
+
+
+# ------------------------------------------------------------------ API and bad input
+def test_result_api_and_no_mutation():
+    d = _svam(zeta0=2e-3, duration=1.0, seed=2)
+    t0, y0 = d.t.copy(), d.y.copy()
+    fit = fit_decay(d.t, d.y, quantity="acceleration", band=d.band)
+    assert np.array_equal(d.t, t0) and np.array_equal(d.y, y0)
+    assert isinstance(fit, ModalIwanFit)
+    assert fit.conventions["method"] == "direct signal fit"
+    assert isinstance(fit.warnings, tuple)
+    json.dumps(fit.to_dict(), allow_nan=False)
+    assert "Modal Iwan fit" in fit.report()
+    f, z, fb, zb = fit.predict(np.array([1e-5, 5e-5]), band=0.95)
+    assert np.all(fb[0] <= f) and np.all(f <= fb[1])
+    from matplotlib.figure import Figure
+    fig = Figure()
+    axes = (fig.add_subplot(2, 1, 1), fig.add_subplot(2, 1, 2))
+    artists = fit.plot(ax=axes)
+    assert artists and all(getattr(a, "axes", axes[0]) in axes for a in artists)
+
+
+def _ok():
+    d = _svam(zeta0=2e-3, duration=0.5, seed=4)
+    return d.t, d.y, d.band
+
+
+@pytest.mark.parametrize("change, match", [
+    (lambda t, y, b: (t, np.where(np.arange(y.size) == 50, np.nan, y), b, {}), "y"),
+    (lambda t, y, b: (t[:-1], y, b, {}), "t"),
+    (lambda t, y, b: (t * np.r_[1.0, np.ones(t.size - 2) * 1.0, 1.3], y, b, {}), "t"),
+    (lambda t, y, b: (t, y, (b[0], 5000.0), {}), "band"),
+    (lambda t, y, b: (t, y, (b[1], b[0]), {}), "band"),
+    (lambda t, y, b: (t, y, b, {"quantity": "jerk"}), "quantity"),
+    (lambda t, y, b: (t, y, b, {"order": 0}), "order"),
+    (lambda t, y, b: (t, y, b, {"snr_min": 1.0}), "snr_min"),
+    (lambda t, y, b: (t, y, b, {"significance": 0.0}), "significance"),
+    (lambda t, y, b: (t, y, b, {"t_start": -1.0}), "t_start"),
+    (lambda t, y, b: (t, y, b, {"floor": "none"}), "floor"),
+    (lambda t, y, b: (t[:30], y[:30], b, {}), "y"),
+])
+def test_bad_input_raises_naming_the_argument(change, match):
+    t, y, band = _ok()
+    tt, yy, bb, kw = change(t, y, band)
+    with pytest.raises(ValueError, match=match):
+        fit_decay(tt, yy, band=bb, **kw)
+
+
+def test_noise_only_record_is_refused_or_unsupported():
+    """Pure noise holds no decaying mode: an error or a fit that says it is not supported."""
+    rng = np.random.default_rng(0)
+    t = np.arange(4000) / 2000.0
+    y = rng.standard_normal(t.size)
+    try:
+        fit = fit_decay(t, y, quantity="acceleration", band=(70.0, 90.0))
+    except ValueError as exc:
+        assert "band" in str(exc) or "mode" in str(exc)
+    else:
+        assert not fit.success
