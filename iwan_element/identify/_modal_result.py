@@ -257,8 +257,9 @@ class ModalIwanFit:
         artists = []
         for a, y, s, m, b in ((ax[0], d["frequency"], d["frequency_std"], f, fb),
                               (ax[1], d["damping_ratio"], d["damping_std"], z, zb)):
-            artists.append(a.errorbar(d["amplitude"], y, yerr=np.nan_to_num(s), fmt="o", ms=3,
-                                      color="k", label="data"))
+            eb = a.errorbar(d["amplitude"], y, yerr=np.nan_to_num(s), fmt="o", ms=3, color="k",
+                            label="data")
+            artists += [eb.lines[0], *eb.lines[2]]
             artists += a.plot(X, m, "r-", label=label)
             artists.append(a.fill_between(X, b[0], b[1], color="r", alpha=0.25,
                                           label=f"{100 * band:.0f} % band"))

@@ -173,8 +173,8 @@ class AmplitudeCurve:
             if np.all(np.isnan(s)):
                 artists += a.plot(self.amplitude, y, label=label, **kw)
             else:
-                artists.append(a.errorbar(self.amplitude, y, yerr=np.nan_to_num(s), label=label,
-                                          **kw))
+                eb = a.errorbar(self.amplitude, y, yerr=np.nan_to_num(s), label=label, **kw)
+                artists += [eb.lines[0], *eb.lines[2]]
             a.set_xscale("log")
         ax_f.set_ylabel("frequency [Hz]")
         ax_z.set_ylabel("damping ratio [-]")
