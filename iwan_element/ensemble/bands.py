@@ -39,7 +39,8 @@ def modal_fit_task(params: dict, rng, *, names, regime: str, conventions: dict, 
     from ..identify._modal_result import full_parameters, model_curve
     theta = np.array([params[n] for n in names], dtype=float)
     f, z = model_curve(theta, np.asarray(amplitudes, float), regime, conventions["x_ref"],
-                       conventions["stiffness"], conventions["floor"])
+                       conventions["stiffness"], conventions["floor"],
+                       conventions.get("damping", "energy"))
     out = {"frequency": np.asarray(f, float), "damping": np.asarray(z, float)}
     if force is not None:
         p, k_inf = full_parameters(theta)

@@ -63,7 +63,7 @@ class _Problem:
         """
         u = ln_a0 - np.linspace(0.0, self.span, _GRID)
         f, zeta = model_curve(theta, np.exp(u), regime, self.conv["x_ref"],
-                              self.conv["stiffness"], self.conv["floor"])
+                              self.conv["stiffness"], self.conv["floor"], "decay")
         f, zeta = np.asarray(f, float), np.asarray(zeta, float)
         if not (np.all(np.isfinite(f)) and np.all(f > 0) and np.all(np.isfinite(zeta))
                 and np.all(zeta > 0) and np.all(zeta < 0.5)):
