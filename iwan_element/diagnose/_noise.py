@@ -12,6 +12,8 @@ residual of the model it selected.
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from ..identify.noise import _MIN_WINDOW, _signal_window, estimate_noise
@@ -34,3 +36,11 @@ def noise_estimate(t, y, channel=None) -> tuple[float, float, str, tuple]:
             window = w * float(np.median(np.diff(tt)))
     est = estimate_noise(tt, y, window=window)
     return float(est.sigma), est.tau, est.method, tuple(est.warnings)
+
+
+def pure_noise(y, chi2_model, sigma, tau, n_eff) -> bool:
+    """True when a model with misfit ``chi2_model`` explains the record ``y`` no better than
+    a constant would (BIC with ``n_eff`` independent samples, residuals correlated over
+    ``tau`` samples): a record that is noise identifies nothing."""
+    chi0 = float(np.sum((y - y.mean()) ** 2)) / sigma ** 2
+    return (chi0 - chi2_model) / tau < 4.0 * math.log(max(n_eff, 2.0))

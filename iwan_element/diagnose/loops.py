@@ -39,7 +39,7 @@ from ..ensemble.runner import progress_bar
 from ..identify.testdata import find_reversals, split_cycles
 from . import _model as M
 from ._locate import _check_candidates, _locate, _untestable
-from ._noise import noise_estimate
+from ._noise import noise_estimate, pure_noise
 from ..identify.result import _settle
 from .results import Diagnosis, _json
 from .selection import criterion_text, stepwise_select
@@ -436,20 +436,13 @@ def _select(fitter, base, cand, tt, v, uj, FF, tau_k, n_eff, alpha, max_effects,
     return sel
 
 
-def _pure_noise(FF, keep, base, sigma, tau_k, n_eff) -> bool:
-    """True when the Iwan model explains no more than a constant force would (BIC)."""
-    y = FF[keep]
-    chi0 = float(np.sum((y - y.mean()) ** 2)) / sigma ** 2
-    return (chi0 - base["chi2"]) / tau_k < 4.0 * math.log(max(n_eff, 2.0))
-
-
 def _assemble(c) -> Diagnosis:
     """Refit, forces, location, warnings and the result object."""
     sel, fitter, FF, uj, v = c["sel"], c["fitter"], c["FF"], c["uj"], c["v"]
     warns = [f"noise estimate: {w}" for w in c["nwarn"]]
     base = c["base"]
     F_base, _ = _record_force(base, uj, v)
-    noise_only = _pure_noise(FF, c["keep"], base, c["sigma"], c["tau_k"], c["n_eff"])
+    noise_only = pure_noise(FF[c["keep"]], base["chi2"], c["sigma"], c["tau_k"], c["n_eff"])
     if noise_only:                       # nothing is identified from noise
         sel.named, sel.ambiguous = [], ()
     final = sel.final["state"] if sel.named else base
