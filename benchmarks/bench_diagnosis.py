@@ -119,7 +119,7 @@ def agree(g) -> bool:
 def _pair_element(p, env, names, size):
     """Two effects stacked on the joint (slider-level innermost), each calibrated alone to
     ``size`` x noticeable."""
-    from iwan_element.effects._evaluate import order_stack
+    from iwan_element.effects.evaluate import order_stack
     el = IwanJoint(p)
     for nm in order_stack(names):
         el = _element(p, nm, _parameter(p, env, nm, size), inner=el)

@@ -29,7 +29,9 @@ from pathlib import Path
 import numpy as np
 
 from iwan_element import IwanParameters, force_amplitude
-from iwan_element.identify.fit import IdentifiabilityWarning, fit_dissipation, fit_loops
+from iwan_element.identify.dissipation import fit_dissipation
+from iwan_element.identify.loops import fit_loops
+from iwan_element.identify.result import IdentifiabilityWarning
 from iwan_element.identify.csv_input import load_test
 from iwan_element.identify.testdata import simulate_test
 

@@ -8,7 +8,7 @@ best of several repeats, one core:
 
 * ``kernel``: :func:`iwan_element.core.masing.masing_history` (force, tangent, work and
   dissipation of every sample), and the same for a batch of 16 parameter sets (per set);
-* ``numpy``: the vectorised route of :class:`iwan_element.core._history.History`: the
+* ``numpy``: the vectorised route of :class:`iwan_element.core.history.History`: the
   reversal structure once (compiled walk), then the forces of a parameter set with numpy;
 * ``element``: :class:`~iwan_element.IwanJoint` ``trial``/``commit`` per sample (the Python fast
   path on a branch, the kernel at reversals);
@@ -61,7 +61,10 @@ def history(n, p, rng):
 def routes(pkg, label, u, ps):
     """(label, seconds per history and parameter set) for the routes ``pkg`` has."""
     from importlib import import_module
-    hist_mod = import_module(pkg.__name__ + ".core._history")
+    try:                                # the module's name before and after it went public
+        hist_mod = import_module(pkg.__name__ + ".core.history")
+    except ImportError:
+        hist_mod = import_module(pkg.__name__ + ".core._history")
     p = ps[0]
     tol = 1e-12 * p.phi_max
     rows = []

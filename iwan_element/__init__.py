@@ -21,7 +21,9 @@ from .diagnose import (CANDIDATES, BatchDiagnosis, Diagnosis, VibrationDiagnosis
 from .core.discrete import DiscreteIwan, slider_distribution
 from .effects import (EFFECTS, AsymmetricSlip, Backlash, BreakAway, Hardening, MacroslipOnset,
                       PinningStiffness, SlipDegradation, ViscousDamping, base_joint, make_effect)
-from .identify.fit import FitResult, IdentifiabilityWarning, fit_dissipation, fit_loops
+from .identify.dissipation import fit_dissipation
+from .identify.loops import fit_loops
+from .identify.result import FitResult, IdentifiabilityWarning
 from .core.joint import IwanJoint
 from .core.joint_bank import IwanJointBank
 from .core.parameters import IwanParameters

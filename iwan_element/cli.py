@@ -229,7 +229,8 @@ def _write_plot(path: Path, data, result) -> None:
 
 
 def _run_fit(args) -> int:
-    from .identify.fit import fit_dissipation, fit_loops
+    from .identify.dissipation import fit_dissipation
+    from .identify.loops import fit_loops
     from .identify.csv_input import FORCE_UNITS, load_test
 
     du, fu, tu = _parse_units(args.units)
@@ -238,7 +239,7 @@ def _run_fit(args) -> int:
     if args.method != "seed" and args.slip_force is not None:
         raise ValueError("--slip-force is only used by --method seed")
     if args.slip_force is not None:
-        from .core._validation import check_scalar
+        from .core.validation import check_scalar
         check_scalar("--slip-force", args.slip_force, low=0.0, low_open=True)
     with warnings.catch_warnings(record=True):       # the report lists every warning
         warnings.simplefilter("always")

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .core._validation import _check_int, finite_array, same_length
+from .core.validation import check_int, finite_array, same_length
 from .core.closed_form import (dissipation, dissipation_slope, force_amplitude, masing_ascending,
                           masing_descending, masing_loop, normalized_backbone)
 from .core.parameters import IwanParameters
@@ -24,7 +24,7 @@ def _pyplot():
     return plt
 
 
-def _axes(ax):
+def axes_or_new(ax):
     """One matplotlib Axes: ``ax`` itself, or a new figure's if ``None``."""
     if ax is None:
         plt = _pyplot()
@@ -52,7 +52,7 @@ def plot_normalized_loops(cases, *, s0: float = 1.0, step: float = 0.002, ax=Non
     list of matplotlib.lines.Line2D
         Three lines per case: virgin curve, descending and ascending branch.
     """
-    ax = _axes(ax)
+    ax = axes_or_new(ax)
     s = np.arange(-s0, s0 + 0.5 * step, step)
     lines = []
     for beta, chi in cases:
@@ -80,7 +80,7 @@ def plot_loop(u0: float, params: IwanParameters, *, n: int = 401, ax=None,
     -------
     list of matplotlib.lines.Line2D
     """
-    ax = _axes(ax)
+    ax = axes_or_new(ax)
     u, F = masing_loop(u0, params, n=n)
     lines = ax.plot(u * 1e3, F * 1e-3, label=label)
     ax.set_xlabel("displacement [mm]")
@@ -126,10 +126,10 @@ def plot_fitted_loops(u, F, params, *, ax=None, max_points: int = 20000):
     uu = finite_array("u", u, ndim=1, min_size=2)
     FF = finite_array("F", F, ndim=1, min_size=2)
     same_length(u=uu, F=FF)
-    max_points = _check_int("max_points", max_points, 10)
+    max_points = check_int("max_points", max_points, 10)
     F_fit = IwanJoint(p).force_history(uu)
     step = max(1, -(-uu.size // max_points))
-    ax = _axes(ax)
+    ax = axes_or_new(ax)
     (meas,) = ax.plot(uu[::step] * 1e3, FF[::step] * 1e-3, ".", ms=1.5, color="0.55",
                       label="measured")
     (fit,) = ax.plot(uu[::step] * 1e3, F_fit[::step] * 1e-3, "-", lw=1.0, color="C3",
@@ -171,10 +171,10 @@ def plot_dissipation_fit(F0, D, params, *, ax=None, slope: bool = True, n: int =
     same_length(F0=F0a, D=Da)
     if np.any(F0a <= 0) or np.any(Da <= 0):
         raise ValueError("F0 and D must be > 0 for a log-log plot")
-    n = _check_int("n", n, 10)
+    n = check_int("n", n, 10)
     lo = 0.5 * min(F0a.min() / p.KT, p.phi_max)
     u_grid = np.geomspace(lo, p.phi_max * (1 - 1e-9), n)
-    ax = _axes(ax)
+    ax = axes_or_new(ax)
     (data,) = ax.loglog(F0a * 1e-3, Da * 1e3, "o", ms=4, mfc="none", color="k",
                         label="measured cycles")
     F_curve = force_amplitude(u_grid, p)

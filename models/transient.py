@@ -35,7 +35,7 @@ import numpy as np
 from exudyn.itemInterface import ObjectGenericODE2
 
 from iwan_element import AmplitudeCurve
-from iwan_element.core._validation import check_scalar
+from iwan_element.core.validation import check_scalar
 from iwan_element.effects import EFFECTS
 
 from .assembly import build_specimen_model

@@ -16,8 +16,8 @@ from _diagnosis_cases import (MODAL, P, PROTOCOLS, SHAPES, SIGMA, ZETA0, calibra
                               vibration_case_elements)
 from iwan_element import (AsymmetricSlip, BreakAway, IwanJoint, PinningStiffness, ViscousDamping,
                           make_effect)
-from iwan_element.core._history import REVERSAL_TOL, unit_params
-from iwan_element.effects._evaluate import Evaluator, build_element, dissipation_segments
+from iwan_element.core.history import REVERSAL_TOL, unit_params
+from iwan_element.effects.evaluate import Evaluator, build_element, dissipation_segments
 from iwan_element.diagnose import diagnose, diagnose_vibration, simulate_element_test
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -23,9 +23,11 @@ from iwan_element import (IwanJoint, IwanParameters, dissipation, force_amplitud
                           secant_stiffness)
 from iwan_element.identify._solver import _Problem, _lsq_box, _q_to_shape
 from iwan_element.identify.dissipation import _seed_model
-from iwan_element.identify.result import _quiet as _quiet_ctx
-from iwan_element.core._history import History
-from iwan_element.identify.fit import FitResult, IdentifiabilityWarning, fit_dissipation, fit_loops
+from iwan_element.identify.result import quiet_fits as _quiet_ctx
+from iwan_element.core.history import History
+from iwan_element.identify.dissipation import fit_dissipation
+from iwan_element.identify.loops import fit_loops
+from iwan_element.identify.result import FitResult, IdentifiabilityWarning
 from iwan_element.identify.csv_input import load_test
 from iwan_element.identify.testdata import simulate_test
 
@@ -38,7 +40,7 @@ MICRO = [0.1, 0.2, 0.35, 0.5, 0.7, 0.9]          # amplitudes / phi_max: microsl
 MACRO = [0.2, 0.4, 0.7, 1.0, 1.5, 2.5]           # reaching macroslip
 
 
-def _quiet(func, *args, **kwargs):
+def quiet_fits(func, *args, **kwargs):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", IdentifiabilityWarning)
         return func(*args, **kwargs)
@@ -105,7 +107,7 @@ def test_box_lm_reaches_the_scipy_least_squares_minimum():
 def test_loop_fit_exact_data_is_recovered(p):
     for amps, macro in ((MICRO, False), (MACRO, True)):
         d = simulate_test(p, np.array(amps) * p.phi_max, cycles=2, sample_rate=5)
-        r = _quiet(fit_loops, d.t, d.u, d.F)
+        r = quiet_fits(fit_loops, d.t, d.u, d.F)
         q = r.params
         assert r.success and r.identified["Fs"] is macro
         # a parameter at the bound of its range (beta = 0) is never called identified
@@ -167,8 +169,8 @@ def test_loop_fit_is_reproducible_and_json_safe():
     p = SETS[1]
     d = simulate_test(p, np.array(MACRO) * p.phi_max, cycles=2, sample_rate=5,
                       force_noise=50.0, seed=3)
-    a = _quiet(fit_loops, d.t, d.u, d.F, seed=42, n_starts=8)
-    b = _quiet(fit_loops, d.t, d.u, d.F, seed=np.random.default_rng(42), n_starts=8)
+    a = quiet_fits(fit_loops, d.t, d.u, d.F, seed=42, n_starts=8)
+    b = quiet_fits(fit_loops, d.t, d.u, d.F, seed=np.random.default_rng(42), n_starts=8)
     da, db = a.to_dict(), b.to_dict()
     for k in ("wall_time",):
         da.pop(k), db.pop(k)
@@ -184,7 +186,7 @@ def test_loop_fit_is_reproducible_and_json_safe():
     assert isinstance(a, FitResult) and a.nfev > 0 and a.n_data == a.details["fitted_samples"]
     assert a.details["burn_in"] > 0 and a.n_data == d.u.size - a.details["burn_in"]
     # a constant sigma only rescales the residuals: same parameters and standard errors
-    w = _quiet(fit_loops, d.t, d.u, d.F, seed=42, n_starts=8, sigma=np.full(d.u.size, 50.0))
+    w = quiet_fits(fit_loops, d.t, d.u, d.F, seed=42, n_starts=8, sigma=np.full(d.u.size, 50.0))
     assert w.params.KT == pytest.approx(a.params.KT, rel=1e-8)
     assert w.stderr["KT"] == pytest.approx(a.stderr["KT"], rel=1e-6)
     assert w.residual_norm == pytest.approx(a.residual_norm / 50.0, rel=1e-8)
@@ -193,7 +195,7 @@ def test_loop_fit_is_reproducible_and_json_safe():
 def test_decimation_keeps_reversals_and_accuracy():
     p = SETS[1]
     d = simulate_test(p, np.array(MACRO) * p.phi_max, cycles=2, sample_rate=10)
-    r = _quiet(fit_loops, d.t, d.u, d.F, max_samples=500)
+    r = quiet_fits(fit_loops, d.t, d.u, d.F, max_samples=500)
     assert r.details["fitted_samples"] == 500 and r.details["model_samples"] > 500
     assert r.params.KT == pytest.approx(p.KT, rel=1e-7)
 
@@ -204,7 +206,7 @@ def test_smoothing_reduces_the_displacement_noise_bias():
                       sample_rate=10, force_noise=15.0, displacement_noise=1e-6, seed=0)
     with pytest.warns(IdentifiabilityWarning, match="displacement noise"):
         raw = fit_loops(d.t, d.u, d.F, smooth=0)
-    smooth = _quiet(fit_loops, d.t, d.u, d.F)                # smooth="auto" is the default
+    smooth = quiet_fits(fit_loops, d.t, d.u, d.F)                # smooth="auto" is the default
     assert smooth.details["smooth"] >= 7
     # the de-noised drive and the dead band of 3 sigma against noise reversals remove the
     # errors-in-variables bias (KT low, chi high) that unfiltered noise used to cause
@@ -241,7 +243,7 @@ def test_loop_fit_bad_inputs_and_no_mutation():
         with pytest.raises(ValueError, match=match):
             fit_loops(t, u, F, **kwargs)
     u.setflags(write=False)                             # read-only input is fine
-    _quiet(fit_loops, t, u, F, n_starts=2)
+    quiet_fits(fit_loops, t, u, F, n_starts=2)
     assert np.array_equal(u, d.u) and np.array_equal(F, d.F) and np.array_equal(t, d.t)
 
 
@@ -276,8 +278,8 @@ def test_seed_beta_is_conditional_on_the_given_fs():
     p = SETS[1]
     u0 = np.array(MICRO) * p.phi_max
     F0, D = force_amplitude(u0, p), dissipation(u0, p)
-    right = _quiet(fit_dissipation, F0, D, u0=u0, method="seed", Fs=p.Fs)
-    wrong = _quiet(fit_dissipation, F0, D, u0=u0, method="seed", Fs=1.3 * p.Fs)
+    right = quiet_fits(fit_dissipation, F0, D, u0=u0, method="seed", Fs=p.Fs)
+    wrong = quiet_fits(fit_dissipation, F0, D, u0=u0, method="seed", Fs=1.3 * p.Fs)
     # same KT, chi and R (what microslip data determine), different beta, both fit exactly
     assert wrong.params.KT == pytest.approx(right.params.KT, rel=1e-5)
     assert wrong.params.chi == pytest.approx(right.params.chi, abs=1e-5)
@@ -289,7 +291,7 @@ def test_seed_beta_is_conditional_on_the_given_fs():
 def test_seed_method_leaves_out_macroslip_cycles():
     p = SETS[1]
     u0 = np.array(MACRO) * p.phi_max
-    r = _quiet(fit_dissipation, force_amplitude(u0, p), dissipation(u0, p), u0=u0,
+    r = quiet_fits(fit_dissipation, force_amplitude(u0, p), dissipation(u0, p), u0=u0,
                method="seed", Fs=p.Fs)
     assert any("3 cycle(s) with F0 >= 0.99 Fs were left out" in w for w in r.warnings)
     assert r.params.KT == pytest.approx(p.KT, rel=1e-6) and r.details["cycles_used"] == 3
@@ -299,7 +301,7 @@ def test_seed_method_leaves_out_macroslip_cycles():
 def test_least_squares_dissipation_fit_on_exact_tables(p):
     for amps, macro in ((MICRO, False), (MACRO, True)):
         u0 = np.array(amps) * p.phi_max
-        r = _quiet(fit_dissipation, force_amplitude(u0, p), dissipation(u0, p), u0=u0)
+        r = quiet_fits(fit_dissipation, force_amplitude(u0, p), dissipation(u0, p), u0=u0)
         q = r.params
         assert r.method == "least_squares" and r.identified["Fs"] is macro
         assert q.KT == pytest.approx(p.KT, rel=1e-6) and q.chi == pytest.approx(p.chi, abs=1e-6)
@@ -313,8 +315,8 @@ def test_dissipation_fit_from_noisy_loops():
     d = simulate_test(p, np.array([0.025, 0.05, 0.075, 0.1, 0.15, 0.2, 0.3, 0.45]) * 1e-3,
                       cycles=3, sample_rate=10, force_noise=15.0, seed=3)
     tab = d.amplitude_table()
-    ls = _quiet(fit_dissipation, tab["F0"], tab["D"], u0=tab["u0"])
-    sd = _quiet(fit_dissipation, tab["F0"], tab["D"], u0=tab["u0"], method="seed", Fs=p.Fs)
+    ls = quiet_fits(fit_dissipation, tab["F0"], tab["D"], u0=tab["u0"])
+    sd = quiet_fits(fit_dissipation, tab["F0"], tab["D"], u0=tab["u0"], method="seed", Fs=p.Fs)
     for r in (ls, sd):
         assert abs(r.params.KT / p.KT - 1) < 0.02 and abs(r.params.chi - p.chi) < 0.03
     assert ls.identified["Fs"] and abs(ls.params.Fs / p.Fs - 1) < 0.01
@@ -349,7 +351,7 @@ def test_dissipation_fit_bad_inputs():
 def test_fit_on_the_shipped_example_is_fast_and_close():
     data = load_test(EXAMPLE)
     c0 = time.process_time()
-    r = _quiet(fit_loops, data.t, data.u, data.F, smooth=15)
+    r = quiet_fits(fit_loops, data.t, data.u, data.F, smooth=15)
     cpu = time.process_time() - c0
     assert cpu < 2.0
     truth = IwanParameters.load(EXAMPLE.with_name("example_test_30kN_params.json"))
@@ -368,7 +370,7 @@ def test_fit_plots_return_artists():
 
     p = SETS[1]
     d = simulate_test(p, np.array(MACRO) * p.phi_max, cycles=2, sample_rate=5)
-    r = _quiet(fit_loops, d.t, d.u, d.F)
+    r = quiet_fits(fit_loops, d.t, d.u, d.F)
     tab = d.amplitude_table()
     u_in = d.u.copy()
     fig = Figure()
@@ -433,7 +435,7 @@ def test_sensor_offsets_are_absorbed_and_reported(dF0, du0):
     Fm = F + dF0 + rng.normal(0, 2.0, F.size)
     um = u + du0 + rng.normal(0, 0.1e-6, u.size)
     Fm0, um0 = Fm.copy(), um.copy()
-    r = _quiet(fit_loops, t, um, Fm)
+    r = quiet_fits(fit_loops, t, um, Fm)
     assert np.array_equal(Fm, Fm0) and np.array_equal(um, um0)
     (f, sf), (d, sd) = r.offsets["force"], r.offsets["displacement"]
     assert abs(f - dF0) < max(4 * sf, 3.0) and abs(d - du0) < max(4 * sd, 0.5e-6)
@@ -452,7 +454,7 @@ def test_offset_of_a_record_that_does_not_start_at_rest():
     p = SETS[1]
     d = simulate_test(p, np.full(4, 1.5 * p.phi_max), cycles=2, sample_rate=5)
     i0 = d.u.size // 5 + 37                                   # somewhere inside a cycle
-    r = _quiet(fit_loops, d.t[i0:], d.u[i0:], d.F[i0:] + 120.0)
+    r = quiet_fits(fit_loops, d.t[i0:], d.u[i0:], d.F[i0:] + 120.0)
     assert r.params.KT == pytest.approx(p.KT, rel=1e-6) and r.params.Fs == pytest.approx(p.Fs, rel=1e-6)
     assert not any("rest" in w for w in r.warnings)
 
@@ -462,7 +464,7 @@ def test_pure_noise_force_identifies_nothing():
     d = simulate_test(p, np.array(MACRO) * p.phi_max, cycles=2, sample_rate=5)
     for seed in range(3):
         F = np.random.default_rng(seed).normal(0.0, 100.0, d.u.size)
-        r = _quiet(fit_loops, d.t, d.u, F)
+        r = quiet_fits(fit_loops, d.t, d.u, F)
         assert not r.success and not any(r.identified.values())
         assert any("indistinguishable from noise" in w for w in r.warnings)
         rows = [ln for ln in r.report().splitlines() if ln.strip()[:5] in ("Fs   ", "KT   ", "chi  ", "beta ") and "[" in ln]
@@ -475,7 +477,7 @@ def test_status_column_success_and_warnings_agree():
     p = IwanParameters(9e3, 5e7, -0.97, 0.2)
     d = simulate_test(p, np.array(MICRO[:3]) * p.phi_max, cycles=2, sample_rate=5,
                       force_noise=0.05 * p.Fs * 0.1, seed=4)
-    r = _quiet(fit_loops, d.t, d.u, d.F)
+    r = quiet_fits(fit_loops, d.t, d.u, d.F)
     for k in ("Fs", "KT", "chi", "beta"):
         se, v = r.stderr[k], getattr(r.params, k)
         scale = abs(v + 1) if k == "chi" else abs(v)
@@ -494,10 +496,10 @@ def test_systematic_misfit_widens_the_stated_uncertainty():
     gap = 0.1 * p.phi_max
     ub = np.sign(d.u) * np.maximum(np.abs(d.u) - gap, 0.0)    # a crude dead zone
     F = IwanJoint(p).force_history(ub) + np.random.default_rng(0).normal(0, 20.0, d.u.size)
-    r = _quiet(fit_loops, d.t, d.u, F)
+    r = quiet_fits(fit_loops, d.t, d.u, F)
     assert r.noise["tau"] > 5.0
     assert any("correlated over" in w for w in r.warnings)
-    clean = _quiet(fit_loops, d.t, d.u, d.F)
+    clean = quiet_fits(fit_loops, d.t, d.u, d.F)
     assert clean.noise["tau"] < 2.0
 
 
@@ -506,7 +508,7 @@ def test_fit_result_api_shape():
     from matplotlib.figure import Figure
     p = SETS[1]
     d = simulate_test(p, np.array(MACRO) * p.phi_max, cycles=2, sample_rate=5, force_noise=10.0)
-    r = _quiet(fit_loops, d.t, d.u, d.F)
+    r = quiet_fits(fit_loops, d.t, d.u, d.F)
     ax = Figure().add_subplot()
     arts = r.plot(ax=ax)
     assert len(arts) == 2 and all(a.axes is ax for a in arts)
@@ -515,7 +517,7 @@ def test_fit_result_api_shape():
     assert set(dd["offsets"]) == {"force", "displacement"} and dd["noise"]["force"] > 0
     assert isinstance(r.warnings, tuple)
     tab = d.amplitude_table()
-    rd = _quiet(fit_dissipation, tab["F0"], tab["D"], u0=tab["u0"])
+    rd = quiet_fits(fit_dissipation, tab["F0"], tab["D"], u0=tab["u0"])
     assert len(rd.plot(ax=Figure().add_subplot())) == 2 and "Fs   [N]" in rd.report()
 
 
@@ -530,7 +532,7 @@ def test_dissipation_fit_refuses_one_amplitude_and_fails_a_gross_misfit():
     # a table no Iwan joint makes: dissipation falling with amplitude
     u0 = np.array(MACRO) * p.phi_max
     D_bad = dissipation(u0, p)[::-1]
-    r = _quiet(fit_dissipation, force_amplitude(u0, p), D_bad, u0=u0)
+    r = quiet_fits(fit_dissipation, force_amplitude(u0, p), D_bad, u0=u0)
     assert r.nrmse > 0.25 and not r.success and not any(r.identified.values())
     assert any("does not describe the data" in w for w in r.warnings)
 

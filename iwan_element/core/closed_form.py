@@ -11,7 +11,7 @@ import warnings
 
 import numpy as np
 
-from ._validation import check_scalar, finite_array
+from .validation import check_scalar, finite_array
 from .parameters import CHI_MAX, IwanParameters
 
 __all__ = [
@@ -128,7 +128,7 @@ def secant_stiffness(u0, params: IwanParameters):
     return _out(k, u0)
 
 
-def _slip_energy(y, p: IwanParameters):
+def slip_energy(y, p: IwanParameters):
     """``I_H(y) = int_0^y int_0^q phi rho(phi) dphi dq`` [J]; dissipation per cycle is ``4 I_H(u0)``.
 
     ``R y**(chi+3)/((chi+2)(chi+3))`` below ``phi_max``, growing by ``Fs`` per metre beyond.
@@ -159,7 +159,7 @@ def dissipation(u0, params: IwanParameters):
     x = _as_array("u0", u0)
     if np.any(x < 0):
         raise ValueError("u0 (displacement amplitude) must be >= 0")
-    return _finite("u0", _out(4.0 * _slip_energy(x, p), u0), "dissipation")
+    return _finite("u0", _out(4.0 * slip_energy(x, p), u0), "dissipation")
 
 
 def dissipation_slope(u0, params: IwanParameters):

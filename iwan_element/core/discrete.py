@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._validation import check_scalar, finite_array
+from .validation import check_scalar, finite_array
 from .parameters import IwanParameters
 from .protocol import CommittedState
 

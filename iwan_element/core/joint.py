@@ -28,8 +28,8 @@ import math
 
 import numpy as np
 
-from ._validation import check_scalar, finite_array
-from ._history import REVERSAL_TOL
+from .validation import check_scalar, finite_array
+from .history import REVERSAL_TOL
 from .masing import _NOSEG, masing_step, masing_constants, masing_history
 from .parameters import IwanParameters
 from .protocol import CommittedState

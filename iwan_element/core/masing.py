@@ -21,14 +21,14 @@ slow path of :class:`~iwan_element.IwanJoint` and :class:`~iwan_element.IwanJoin
 sets, e.g. all the perturbations of a finite-difference Jacobian, is one call).
 :func:`reversal_structure` gives the parameter-free part (which reversal each sample's branch
 leaves, and the branch segments walked) for the vectorised evaluation of
-:mod:`iwan_element.core._history`.
+:mod:`iwan_element.core.history`.
 """
 from __future__ import annotations
 
 import numpy as np
 from numba import njit
 
-from ._validation import check_scalar, finite_array
+from .validation import check_scalar, finite_array
 from .parameters import IwanParameters
 
 __all__ = ["masing_constants", "constants_from_arrays", "masing_history", "masing_rows",

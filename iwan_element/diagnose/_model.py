@@ -8,11 +8,11 @@ import math
 import numpy as np
 from scipy.optimize import least_squares, minimize_scalar
 
-from ..core._history import unit_params
+from ..core.history import unit_params
 from ..core.parameters import IwanParameters
 from ..effects import EFFECTS
-from ..effects._evaluate import Evaluator, scale_effect
-from ..identify.fit import FitResult
+from ..effects.evaluate import Evaluator, scale_effect
+from ..identify.result import FitResult
 
 __all__: list[str] = []
 

@@ -16,7 +16,7 @@ import math
 
 import numpy as np
 
-from ..identify.noise import _MIN_WINDOW, _signal_window, estimate_noise
+from ..identify.noise import MIN_WINDOW, signal_window, estimate_noise
 
 __all__ = ["noise_estimate"]
 
@@ -30,9 +30,9 @@ def noise_estimate(t, y, channel=None) -> tuple[float, float, str, tuple]:
     tt = np.arange(y.size, dtype=float) if t is None else np.asarray(t, float)
     window = None
     if channel is not None:
-        w = min(max(_signal_window(np.asarray(channel, float)), _RESIDUAL_MIN), y.size // 4)
+        w = min(max(signal_window(np.asarray(channel, float)), _RESIDUAL_MIN), y.size // 4)
         w = w if w % 2 else w - 1
-        if w >= _MIN_WINDOW:
+        if w >= MIN_WINDOW:
             window = w * float(np.median(np.diff(tt)))
     est = estimate_noise(tt, y, window=window)
     return float(est.sigma), est.tau, est.method, tuple(est.warnings)

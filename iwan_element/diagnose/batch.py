@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..core._validation import check_scalar, finite_array
+from ..core.validation import check_scalar, finite_array
 from ..ensemble import run_ensemble
 from .loops import diagnose
 

@@ -7,7 +7,7 @@ import math
 import numpy as np
 from scipy.signal import lfilter
 
-from ..core._validation import _check_int, check_magnitude, check_scalar, finite_array
+from ..core.validation import check_int, check_magnitude, check_scalar, finite_array
 from ..core.protocol import check_element
 from ..identify.testdata import TestData
 
@@ -94,9 +94,9 @@ def simulate_element_test(element, amplitudes, *, cycles: int = 3, frequency: fl
     amps = check_magnitude("amplitudes", finite_array("amplitudes", amplitudes, ndim=1), unit="m")
     if np.any(amps <= 0.0):
         raise ValueError("amplitudes must all be > 0 [m]")
-    cycles = _check_int("cycles", cycles, 1)
+    cycles = check_int("cycles", cycles, 1)
     f = check_scalar("frequency", frequency, low=0.0, low_open=True)
-    n_per = _check_int("samples_per_cycle", samples_per_cycle, 16)
+    n_per = check_int("samples_per_cycle", samples_per_cycle, 16)
     if waveform not in ("sine", "triangle"):
         raise ValueError(f"waveform must be 'sine' or 'triangle', got {waveform!r}")
     if envelope not in ("steps", "linear"):
@@ -106,7 +106,7 @@ def simulate_element_test(element, amplitudes, *, cycles: int = 3, frequency: fl
     phi = check_scalar("noise_correlation", noise_correlation, low=0.0, high=1.0, high_open=True)
     f0 = check_scalar("force_offset", force_offset)
     u0 = check_scalar("displacement_offset", displacement_offset)
-    n_rest = _check_int("rest_samples", rest_samples, 0)
+    n_rest = check_int("rest_samples", rest_samples, 0)
     rng = np.random.default_rng(seed)
     u = np.concatenate([np.zeros(n_rest), _drive(amps, cycles, n_per, waveform, envelope)])
     t = np.arange(u.size) / (n_per * f)

@@ -30,18 +30,19 @@ import time
 import numpy as np
 from scipy.signal import butter, sosfiltfilt
 
-from ..core._history import REVERSAL_TOL, unit_params
-from ..core._validation import (MAGNITUDE_RANGE, _check_int, _check_time, check_magnitude,
+from ..core.history import REVERSAL_TOL, unit_params
+from ..core.validation import (MAGNITUDE_RANGE, check_int, check_time, check_magnitude,
                                 check_scalar, finite_array, same_length)
 from ..effects import EFFECTS
-from ..effects._evaluate import Evaluator, build_element, order_stack, stack_ok
+from ..effects.evaluate import Evaluator, build_element, order_stack, stack_ok
 from ..ensemble.runner import progress_bar
 from ..identify.testdata import find_reversals, split_cycles
 from . import _model as M
 from ._locate import _check_candidates, _locate, _untestable
 from ._noise import noise_estimate, pure_noise
-from ..identify.result import _settle
-from .results import Diagnosis, _json
+from ..identify.result import settle_verdict
+from ..core.serialize import json_safe
+from .results import Diagnosis
 from .selection import criterion_text, stepwise_select
 
 __all__ = ["CANDIDATES", "diagnose"]
@@ -65,7 +66,7 @@ def _prepare(t, u, F, noise, lowpass):
     uu = check_magnitude("u", finite_array("u", u, ndim=1, min_size=40), unit="m")
     FF = check_magnitude("F", finite_array("F", F, ndim=1, min_size=40), unit="N")
     n = same_length(u=uu, F=FF)
-    tt = None if t is None else _check_time(t, n)
+    tt = None if t is None else check_time(t, n)
     if not np.ptp(uu) > 0:
         raise ValueError("u never moves: a displacement-driven test is needed")
     scale_F = max(float(np.max(np.abs(FF))), 1e-300)
@@ -127,9 +128,10 @@ def _evaluators(uj, v, max_samples):
 
 def _base_start(tt, uj, FF, seed):
     """Shape start ``(phi_max, chi, beta)`` from the plain loop fit, or None."""
-    from ..identify.fit import fit_loops, _quiet
+    from ..identify.loops import fit_loops
+    from ..identify.result import quiet_fits
     try:
-        with _quiet():
+        with quiet_fits():
             res = fit_loops(tt, uj, FF, seed=seed, max_samples=3000, n_starts=3)
         p = res.params
         return (p.phi_max, p.chi, p.beta)
@@ -226,10 +228,10 @@ def _fit_result(row, fitter, FF, F_model, t_start, base_identified=None, extra_w
     vals, labels = M.flat(p, effs, mdl.names, F0)
     stderr = dict(zip(M.PARAM_NAMES, se[:4].tolist()))
     at_bound = np.isclose(z, mdl.lower, atol=1e-6) | np.isclose(z, mdl.upper, atol=1e-6)
-    # the package's one identification rule (identify.result._settle): finite stderr of at
+    # the package's one identification rule (identify.result.settle_verdict): finite stderr of at
     # most half the value (chi: of chi + 1), not at a bound (phi_max's bound is KT's)
     ranges = {}
-    ident, settle_warns = _settle({"identified": dict.fromkeys(M.PARAM_NAMES, True),
+    ident, settle_warns = settle_verdict({"identified": dict.fromkeys(M.PARAM_NAMES, True),
                                    "params": p, "stderr": stderr, "ranges": ranges,
                                    "at_bound": {k for k, b in zip(("KT", "chi", "beta"),
                                                                   at_bound[:3]) if b}}, ())
@@ -255,7 +257,7 @@ def _fit_result(row, fitter, FF, F_model, t_start, base_identified=None, extra_w
         message=row["message"],
         nfev=int(fitter.nfev), method="loops+" + "+".join(mdl.names) if mdl.names else "loops",
         n_data=int(r.size), warnings=tuple(warns), wall_time=time.perf_counter() - t_start,
-        details=_json({"effects": eff_out, "labels": labels, "force_offset": F0,
+        details=json_safe({"effects": eff_out, "labels": labels, "force_offset": F0,
                        "force_offset_stderr": float(se[-1]), "correlation_all": corr,
                        "start_displacement": float(mdl.start),
                        "start_displacement_stderr": se_start}))
@@ -324,10 +326,10 @@ def diagnose(t, u, F, *, candidates=None, max_effects: int = 3, noise: float | N
     t_start = time.perf_counter()
     uu, FF_in, tt, n, noise, lp = _prepare(t, u, F, noise, lowpass)
     cand = _check_candidates(candidates, CANDIDATES)
-    max_effects = _check_int("max_effects", max_effects, 1)
+    max_effects = check_int("max_effects", max_effects, 1)
     alpha = check_scalar("alpha", alpha, low=0.0, high=0.5, low_open=True, high_open=True)
     ambiguity = check_scalar("ambiguity", ambiguity, low=0.0)
-    max_samples = _check_int("max_samples", max_samples, 100)
+    max_samples = check_int("max_samples", max_samples, 100)
     bar = progress_bar(progress, desc="diagnose", unit="fit")
     try:
         return _diagnose(tt, uu, FF_in, n, noise, lp, cand, max_effects, alpha, ambiguity,
@@ -491,8 +493,8 @@ def _assemble(c) -> Diagnosis:
         error_before=float(np.sqrt(np.mean(r0 ** 2)) / span),
         error_after=float(np.sqrt(np.mean((FF - F_after) ** 2)) / span),
         noise_level=c["sigma"] / span, noise_sigma=float(c["sigma"]), misfit=bool(misfit),
-        base_fit=base_fit, fit=fit, model=model, steps=tuple(_json(s) for s in steps),
+        base_fit=base_fit, fit=fit, model=model, steps=tuple(json_safe(s) for s in steps),
         untestable=sel.untestable, warnings=tuple(warns), force_before=ro(F_base),
         force_after=ro(np.array(F_after)),
         t=ro(np.arange(c["n"], dtype=float) if c["tt"] is None else c["tt"]),
-        u=ro(c["uu"]), F=ro(FF), details=_json(details))
+        u=ro(c["uu"]), F=ro(FF), details=json_safe(details))

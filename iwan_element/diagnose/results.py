@@ -7,27 +7,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..core._validation import check_scalar
+from ..core.serialize import json_safe
+
+from ..core.validation import check_scalar
 from ..effects import EFFECTS
 
 __all__ = ["Diagnosis", "VibrationDiagnosis"]
-
-
-def _json(x):
-    """Recursively convert to JSON-safe Python types (NaN and inf become None)."""
-    if isinstance(x, dict):
-        return {str(k): _json(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple, np.ndarray)):
-        return [_json(v) for v in (x.tolist() if isinstance(x, np.ndarray) else x)]
-    if hasattr(x, "to_dict"):
-        return x.to_dict()
-    if isinstance(x, (np.floating, float)):
-        return float(x) if math.isfinite(float(x)) else None
-    if isinstance(x, (np.integer,)):
-        return int(x)
-    if isinstance(x, np.bool_):
-        return bool(x)
-    return x
 
 
 def _unit(name: str, key: str, modal: bool = False) -> str:
@@ -121,7 +106,7 @@ class Diagnosis:
 
     def to_dict(self) -> dict:
         """JSON-safe dict (NaN/inf become None); the fits as :meth:`FitResult.to_dict`."""
-        return _json({
+        return json_safe({
             "effect": self.effect, "effects": list(self.effects),
             "ambiguous_with": list(self.ambiguous_with), "where": self.where,
             "success": self.success, "offsets": dict(self.offsets),
@@ -367,7 +352,7 @@ class VibrationDiagnosis:
             (1 sigma) from the fitted parameters' covariance (linearised), ``warnings`` states
             extrapolation beyond the diagnosed amplitudes.
         """
-        from ..core._validation import finite_array
+        from ..core.validation import finite_array
         from ..identify.curves import AmplitudeCurve
         X = finite_array("amplitude", amplitude, ndim=1, min_size=1)
         if np.any(X <= 0):
@@ -419,7 +404,7 @@ class VibrationDiagnosis:
 
     def to_dict(self) -> dict:
         """JSON-safe dict."""
-        return _json({k: getattr(self, k) for k in (
+        return json_safe({k: getattr(self, k) for k in (
             "effect", "effects", "ambiguous_with", "where", "parameters", "error_before",
             "error_after", "noise_level", "frequency_noise", "damping_noise", "amplitude",
             "frequency", "damping", "predicted_frequency", "predicted_damping",

@@ -23,12 +23,13 @@ import math
 import numpy as np
 from scipy.optimize import least_squares
 
-from ..core._validation import (_check_int, check_magnitude, check_scalar, finite_array,
+from ..core.validation import (check_int, check_magnitude, check_scalar, finite_array,
                                 same_length)
 from ..effects import EFFECTS
 from ..identify.curves import AmplitudeCurve
 from ..identify.units import check_damping_ratio, check_frequency_ratio
-from .results import VibrationDiagnosis, _json
+from ..core.serialize import json_safe
+from .results import VibrationDiagnosis
 from .selection import criterion_text, stepwise_select
 
 __all__ = ["diagnose_vibration", "vibration_candidates"]
@@ -289,7 +290,7 @@ def diagnose_vibration(amplitude, frequency=None, damping=None, *, predicted_fre
     zeta0 = check_scalar("predicted_zeta0", predicted_zeta0, low=0.0)
     alpha = check_scalar("alpha", alpha, low=0.0, high=0.5, low_open=True, high_open=True)
     ambiguity = check_scalar("ambiguity", ambiguity, low=0.0)
-    max_effects = _check_int("max_effects", max_effects, 1)
+    max_effects = check_int("max_effects", max_effects, 1)
     o = np.argsort(X)
     rf0, rz0 = np.log(fm / fp), np.log(zm / zp)
     warns = []
@@ -369,8 +370,8 @@ def _vib_result(vib, sel, chi_b, err_b, rf0, rz0, warns, alpha, noise_from, cand
         noise_level=math.sqrt(0.5 * (vib.sf ** 2 + vib.sz ** 2)), frequency_noise=vib.sf,
         damping_noise=vib.sz, amplitude=ro(vib.X), frequency=ro(vib.fm), damping=ro(vib.zm),
         predicted_frequency=ro(vib.fp), predicted_damping=ro(vib.zp), model_frequency=ro(f_new),
-        model_damping=ro(z_new), steps=tuple(_json(s) for s in steps), warnings=tuple(warns),
-        details=_json(details), covariance=None if cov is None else ro(cov))
+        model_damping=ro(z_new), steps=tuple(json_safe(s) for s in steps), warnings=tuple(warns),
+        details=json_safe(details), covariance=None if cov is None else ro(cov))
 
 
 def _at_upper_bound(vib, names, z):

@@ -6,9 +6,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..core._validation import _check_int, check_magnitude, check_scalar, finite_array
+from ..core.validation import check_int, check_magnitude, check_scalar, finite_array
 from ..core.parameters import IwanParameters
-from ..identify.fit import _json
+from ..core.serialize import json_safe
 from .oscillator import SingleModeSystem, modal_curve, peak_response
 from .runner import EnsembleResult, run_ensemble
 from .uncertainty import ParameterUncertainty
@@ -36,7 +36,7 @@ def modal_fit_task(params: dict, rng, *, names, regime: str, conventions: dict, 
     curve at ``amplitudes`` for one sampled fit vector and, in the macroslip regime with
     ``force`` [N per unit modal mass], the peak transient displacement [m] of the fitted
     single-mode oscillator (fixed dashpot ``2 zeta0 w0``)."""
-    from ..identify._modal_result import full_parameters, model_curve
+    from ..identify.modal_result import full_parameters, model_curve
     theta = np.array([params[n] for n in names], dtype=float)
     f, z = model_curve(theta, np.asarray(amplitudes, float), regime, conventions["x_ref"],
                        conventions["stiffness"], conventions["floor"],
@@ -127,7 +127,7 @@ class PredictionBands:
         for name in ("frequency", "damping") + (("peak",) if self.peak is not None else ()):
             lo, med, hi = self.band(name)
             q[name] = {"low": lo, "median": med, "high": hi, "nominal": self.nominal[name]}
-        return _json({"amplitudes": self.amplitudes, "level": self.level, "force": self.force,
+        return json_safe({"amplitudes": self.amplitudes, "level": self.level, "force": self.force,
                       "samples": int(self.frequency.shape[0]),
                       "failed": len(self.ensemble.errors), "bands": q,
                       "system": None if self.system is None else
@@ -235,7 +235,7 @@ def propagate_uncertainty(source, *, system: SingleModeSystem | None = None, amp
     X = check_magnitude("amplitudes", finite_array("amplitudes", amplitudes), unit="m")
     if np.any(X <= 0):
         raise ValueError("amplitudes must be > 0 [m]")
-    n_samples = _check_int("n_samples", n_samples, 2)
+    n_samples = check_int("n_samples", n_samples, 2)
     if n_samples > _MAX_SAMPLES:
         raise ValueError(f"n_samples must be in [2, {_MAX_SAMPLES:.0e}], got {n_samples}")
     level = check_scalar("level", level, low=0.0, high=1.0, low_open=True, high_open=True)

@@ -25,7 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..core._validation import _check_int, check_scalar, finite_array
+from ..core.validation import check_int, check_scalar, finite_array
 from ..core.joint import IwanJoint
 from ..core.modal import modal_iwan_curve
 from ..core.parameters import IwanParameters
@@ -123,8 +123,8 @@ def peak_response(joint: IwanParameters, system: SingleModeSystem, *, force: flo
     F0 = check_scalar("force", force, low=0.0, low_open=True)
     f = system.linear_frequency(joint) if frequency is None else \
         check_scalar("frequency", frequency, low=0.0, low_open=True)
-    cycles = _check_int("cycles", cycles, 1)
-    steps_per_period = _check_int("steps_per_period", steps_per_period, 16)
+    cycles = check_int("cycles", cycles, 1)
+    steps_per_period = check_int("steps_per_period", steps_per_period, 16)
     w = 2.0 * math.pi * f
     t, xs = _integrate(joint, system, h=1.0 / (f * steps_per_period),
                        n=cycles * steps_per_period, load=lambda t_: F0 * math.sin(w * t_))

@@ -38,7 +38,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..identify.fit import _json
+from ..core.serialize import json_safe
 
 __all__ = ["run_ensemble", "EnsembleResult", "TaskError"]
 
@@ -57,7 +57,7 @@ class TaskError:
     traceback: str = ""
 
     def to_dict(self) -> dict:
-        return _json({"index": self.index, "params": self.params, "message": self.message,
+        return json_safe({"index": self.index, "params": self.params, "message": self.message,
                       "traceback": self.traceback})
 
 
@@ -149,7 +149,7 @@ class EnsembleResult:
 
     def to_dict(self) -> dict:
         """JSON-safe dict (NaN becomes ``None``)."""
-        return _json({"rows": list(self.rows), "errors": [e.to_dict() for e in self.errors],
+        return json_safe({"rows": list(self.rows), "errors": [e.to_dict() for e in self.errors],
                       "outputs": list(self.outputs), "parameters": list(self.parameters),
                       "seed": self.seed, "executor": self.executor, "wall_time": self.wall_time,
                       "warnings": list(self.warnings)})

@@ -7,7 +7,7 @@ import math
 import numpy as np
 from scipy.stats import qmc
 
-from ..core._validation import _check_int, check_scalar
+from ..core.validation import check_int, check_scalar
 
 __all__ = ["parameter_grid", "parameter_samples"]
 
@@ -57,7 +57,7 @@ def parameter_samples(n: int, *, seed=None, method: str = "lhs", log=(), **range
     -------
     list of dict
     """
-    n = _check_int("n", n, 1)
+    n = check_int("n", n, 1)
     if not ranges:
         raise ValueError("give at least one range, e.g. parameter_samples(8, preload=(1e4, 4e4))")
     if method not in ("lhs", "sobol", "random"):

@@ -1,7 +1,7 @@
 """From a fit's parameters and covariance to prediction bands of the structure's response.
 
 :class:`ParameterUncertainty` holds a Gaussian in the coordinates the fits use for their
-covariance (``ln Fs, ln KT, chi, ln(1 + beta)``, see :mod:`iwan_element.identify.fit`), so that
+covariance (``ln Fs, ln KT, chi, ln(1 + beta)``, see :mod:`iwan_element.identify.loops`), so that
 samples keep ``Fs, KT > 0`` and ``1 + beta > 0`` by construction; the remaining bounds
 (``beta >= 0``, ``chi > -1``) are kept by rejection, which makes the distribution the
 truncated normal (the rejected fraction is reported). A fit that did not reach macroslip
@@ -21,11 +21,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..core._validation import _check_int, finite_array
+from ..core.validation import check_int, finite_array
 from ..core.parameters import IwanParameters
-from ..identify.fit import PARAM_NAMES, _json
+from ..core.serialize import json_safe
+from ..identify.result import PARAM_NAMES
 
-__all__ = ["ParameterUncertainty", "PredictionBands", "propagate_uncertainty"]
+__all__ = ["ParameterUncertainty"]
 
 _COORD = {"Fs": "ln Fs", "KT": "ln KT", "chi": "chi", "beta": "ln(1+beta)", "R": "ln R"}
 
@@ -180,7 +181,7 @@ class ParameterUncertainty:
         model's range (``chi <= -1``, ``beta < 0``); raises ``RuntimeError`` if fewer than 1 %
         of the draws are accepted.
         """
-        n = _check_int("n", n, 1)
+        n = check_int("n", n, 1)
         if not isinstance(rng, np.random.Generator):
             raise ValueError(f"rng must be a numpy Generator, got {type(rng).__name__}")
         out, drawn = [], 0
@@ -212,7 +213,7 @@ class ParameterUncertainty:
         return "\n".join(lines + [f"  warning: {w}" for w in self.warnings])
 
     def to_dict(self) -> dict:
-        return _json({"nominal": self.nominal.to_dict(), "names": list(self.names),
+        return json_safe({"nominal": self.nominal.to_dict(), "names": list(self.names),
                       "coordinates": [_COORD[n] for n in self.names], "mean": self.mean,
                       "cov": self.cov, "source": self.source,
                       "valid_amplitude": self.valid_amplitude, "warnings": list(self.warnings)})

@@ -102,7 +102,7 @@ import numpy as np
 from exudyn.itemInterface import (ObjectConnectorCartesianSpringDamper,
                                   ObjectConnectorCoordinateSpringDamper)
 
-from ..core._validation import check_scalar
+from ..core.validation import check_scalar
 from ..core.joint import IwanJoint
 from ..core.protocol import check_element
 from . import _symbolic_connector as _symbolic

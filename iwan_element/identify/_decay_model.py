@@ -14,7 +14,7 @@ from scipy import optimize, signal
 from scipy.integrate import cumulative_simpson
 from scipy.interpolate import CubicSpline
 
-from ._modal_result import model_curve
+from .modal_result import model_curve
 from .vibration import _analytic_signal
 
 _GRID = 2000            # log-amplitude grid of the quadrature

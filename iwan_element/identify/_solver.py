@@ -14,7 +14,7 @@ from typing import Callable
 
 import numpy as np
 
-from ..core._history import unit_params
+from ..core.history import unit_params
 from ..core.parameters import IwanParameters
 
 log = logging.getLogger(__name__)

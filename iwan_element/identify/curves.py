@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..core._validation import check_magnitude, finite_array
+from ..core.validation import check_magnitude, finite_array
 
 __all__ = ["AmplitudeCurve"]
 

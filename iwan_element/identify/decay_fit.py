@@ -46,10 +46,10 @@ import math
 import numpy as np
 from scipy import stats
 
-from ..core._validation import check_magnitude, check_scalar, finite_array
+from ..core.validation import check_magnitude, check_scalar, finite_array
 from ._decay_model import (_Objective, _Problem, _covariance, _fit_regime, _local_weights,
                            _misfit_ratio, _polar)
-from ._modal_result import ModalIwanFit
+from .modal_result import ModalIwanFit
 from .modal_fit import fit_modal_iwan
 from .vibration import _check_band, _check_uniform_time
 

@@ -21,7 +21,7 @@ import time
 import numpy as np
 from scipy import optimize
 
-from ..core._validation import _check_int, check_magnitude, check_scalar, finite_array, same_length
+from ..core.validation import check_int, check_magnitude, check_scalar, finite_array, same_length
 from ..core.closed_form import dissipation, force_amplitude
 from ..core.parameters import IwanParameters
 from ._solver import _Problem, _uncertainty
@@ -262,8 +262,8 @@ def fit_dissipation(F0, D, *, u0, method: str = "least_squares", Fs: float | Non
         return _fit_seed(F0a, Da, ua, Fs, t0=t0)
     if Fs is not None:
         raise ValueError("Fs is only used by method='seed'; least_squares fits it")
-    n_starts = _check_int("n_starts", n_starts, 1)
-    max_nfev = _check_int("max_nfev", max_nfev, 10)
+    n_starts = check_int("n_starts", n_starts, 1)
+    max_nfev = check_int("max_nfev", max_nfev, 10)
     alpha = check_scalar("alpha", alpha, low=0.0, high=0.5, low_open=True, high_open=True)
     rng = np.random.default_rng(seed)
 

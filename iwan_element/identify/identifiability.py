@@ -25,7 +25,7 @@ Uncertainties
     95 % intervals' coverage.
 
 Verdict
-    :func:`~iwan_element.identify.result._settle` applies one rule to every fit: identified
+    :func:`~iwan_element.identify.result.settle_verdict` applies one rule to every fit: identified
     means a finite standard error of at most half the value (``chi + 1`` for ``chi``) and not
     at a bound of the search range.
 """
@@ -36,7 +36,7 @@ import math
 import numpy as np
 from scipy.special import fdtrc
 
-from ..core._history import unit_params
+from ..core.history import unit_params
 from ..core.closed_form import backbone
 from ..core.parameters import IwanParameters
 from ._solver import _multistart, _Problem, _q_to_shape, _uncertainty

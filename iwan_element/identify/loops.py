@@ -7,7 +7,7 @@ nuisance parameters: ``F = F_iwan(u - du0) + dF0``.
 How it is made fast
     For a displacement-driven record the reversal points, and so the Masing branch each
     sample lies on, do not depend on the parameters; they are found once and each evaluation
-    is a few numpy operations (:mod:`iwan_element.core._history`, verified against
+    is a few numpy operations (:mod:`iwan_element.core.history`, verified against
     ``IwanJoint.force_history`` to round-off). The fitted samples are decimated to
     ``max_samples`` but the reversal points of the full record are kept. At fixed
     ``(phi_max, chi, beta)`` the force is linear in ``Fs`` and in ``dF0`` (the backbone is
@@ -34,8 +34,8 @@ import time
 import numpy as np
 from scipy.special import fdtrc
 
-from ..core._history import REVERSAL_TOL, History
-from ..core._validation import (_check_int, _check_time, check_magnitude, check_scalar, finite_array,
+from ..core.history import REVERSAL_TOL, History
+from ..core.validation import (check_int, check_time, check_magnitude, check_scalar, finite_array,
                                 same_length)
 from ..core.parameters import IwanParameters
 from ._solver import _Problem
@@ -52,7 +52,7 @@ def _check_record(t, u, F):
     uu = check_magnitude("u", finite_array("u", u, ndim=1, min_size=32), unit="m")
     FF = check_magnitude("F", finite_array("F", F, ndim=1, min_size=32), unit="N")
     n = same_length(u=uu, F=FF)
-    tt = _check_time(t, n)
+    tt = check_time(t, n)
     if not np.any(FF != 0.0):
         raise ValueError("F is all zero: there is no force to fit")
     if np.ptp(uu) == 0.0:
@@ -206,9 +206,9 @@ def fit_loops(t, u, F, *, sigma=None, smooth="auto", max_samples: int | None = 2
     tt, uu, FF = _check_record(t, u, F)
     n = uu.size
     w_full = _weights(sigma, n)
-    max_samples = n if max_samples is None else _check_int("max_samples", max_samples, 100)
-    n_starts = _check_int("n_starts", n_starts, 1)
-    max_nfev = _check_int("max_nfev", max_nfev, 10)
+    max_samples = n if max_samples is None else check_int("max_samples", max_samples, 100)
+    n_starts = check_int("n_starts", n_starts, 1)
+    max_nfev = check_int("max_nfev", max_nfev, 10)
     alpha = check_scalar("alpha", alpha, low=0.0, high=0.5, low_open=True, high_open=True)
     if initial is not None and not isinstance(initial, IwanParameters):
         raise ValueError(f"initial must be an IwanParameters or None, got {type(initial).__name__}")

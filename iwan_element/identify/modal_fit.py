@@ -30,9 +30,9 @@ import math
 import numpy as np
 from scipy import optimize, stats
 
-from ..core._validation import check_scalar
+from ..core.validation import check_scalar
 from .curves import AmplitudeCurve
-from ._modal_result import ModalIwanFit, model_curve
+from .modal_result import ModalIwanFit, model_curve
 from .units import check_damping_ratio
 
 __all__ = ["fit_modal_iwan", "ModalIwanFit"]

@@ -43,7 +43,7 @@ import numpy as np
 from scipy import optimize
 from scipy.signal import savgol_coeffs, savgol_filter
 
-from ..core._validation import _check_int, _check_time, check_magnitude, finite_array, same_length
+from ..core.validation import check_int, check_time, check_magnitude, finite_array, same_length
 from .noise import _correlation_time, estimate_noise
 
 __all__ = ["ModelFit", "fit_force_model", "drive_displacement", "burn_in_index",
@@ -102,7 +102,7 @@ def drive_displacement(t, u, smooth="auto"):
             w = int(round(ne.window / dt)) | 1
             w = w if 7 <= w < n else 0
     else:
-        w = _check_int("smooth", smooth, 0)
+        w = check_int("smooth", smooth, 0)
         if w and (w < 7 or w % 2 == 0 or w >= n):
             raise ValueError(f"smooth must be 'auto', 0 or an odd window of at least 7 samples "
                              f"below the record length {n}, got {smooth}")
@@ -167,8 +167,8 @@ class ModelFit:
 
     def to_dict(self) -> dict:
         """JSON-safe dict (NaN becomes None)."""
-        from .result import _json
-        return _json({"names": list(self.names), "values": self.values, "stderr": self.stderr,
+        from ..core.serialize import json_safe
+        return json_safe({"names": list(self.names), "values": self.values, "stderr": self.stderr,
                       "identified": self.identified,
                       "offsets": {k: list(v) for k, v in self.offsets.items()},
                       "rms": self.rms, "tau": self.tau, "n_eff": self.n_eff,
@@ -192,8 +192,8 @@ class ModelFit:
 
     def plot(self, ax=None):
         """Residual [N] vs time [s]; returns the list of artists."""
-        from ..plotting import _axes
-        ax = _axes(ax)
+        from ..plotting import axes_or_new
+        ax = axes_or_new(ax)
         lines = ax.plot(self.t, self.residual, "-", lw=0.6, label="measured - model")
         ax.set_xlabel("t [s]")
         ax.set_ylabel("residual [N]")
@@ -260,7 +260,7 @@ def fit_force_model(t, u, F, model: Callable, theta0, *, lower=None, upper=None,
     uu = check_magnitude("u", finite_array("u", u, ndim=1, min_size=32), unit="m")
     FF = check_magnitude("F", finite_array("F", F, ndim=1, min_size=32), unit="N")
     n = same_length(u=uu, F=FF)
-    tt = _check_time(t, n)
+    tt = check_time(t, n)
     if not callable(model):
         raise ValueError(f"model must be callable model(u, theta), got {type(model).__name__}")
     th0 = finite_array("theta0", theta0, ndim=1)
@@ -273,11 +273,11 @@ def fit_force_model(t, u, F, model: Callable, theta0, *, lower=None, upper=None,
     if len(names) != p:
         raise ValueError(f"names must have {p} entries, got {len(names)}")
     u_drive, dinfo = drive_displacement(tt, uu, smooth)
-    b = burn_in_index(u_drive) if burn_in == "auto" else _check_int("burn_in", burn_in, 0)
+    b = burn_in_index(u_drive) if burn_in == "auto" else check_int("burn_in", burn_in, 0)
     if b >= n - 20:
         raise ValueError(f"burn_in leaves {n - b} samples; at least 20 are needed")
     m_all = n - b
-    ms = m_all if max_samples is None else min(m_all, _check_int("max_samples", max_samples, 100))
+    ms = m_all if max_samples is None else min(m_all, check_int("max_samples", max_samples, 100))
     keep = b + np.unique(np.round(np.linspace(0, m_all - 1, ms)).astype(np.intp))
     y = FF[keep]
     nfev = [0]

@@ -46,14 +46,14 @@ import numpy as np
 from scipy.optimize import minimize_scalar
 from scipy.signal import savgol_coeffs, savgol_filter
 
-from ..core._validation import (_check_time, check_magnitude, check_scalar, finite_array,
+from ..core.validation import (check_time, check_magnitude, check_scalar, finite_array,
                                 same_length)
 
 __all__ = ["NoiseEstimate", "estimate_noise"]
 
 _MAD = 1.482602218505602          # 1 / Phi^-1(3/4): MAD -> standard deviation of a Gaussian
 _POLY = 5
-_MIN_WINDOW = 9
+MIN_WINDOW = 9
 
 
 _RHO_MAX = 0.98
@@ -114,7 +114,7 @@ class NoiseEstimate:
         return "\n".join(lines)
 
 
-def _signal_window(y: np.ndarray) -> int:
+def signal_window(y: np.ndarray) -> int:
     """Odd window [samples]: 1/16 of the period at the 95 % power frequency of ``y``."""
     n = y.size
     x = np.arange(n, dtype=float)
@@ -123,11 +123,11 @@ def _signal_window(y: np.ndarray) -> int:
     p[0] = 0.0
     tot = p.sum()
     if tot <= 0.0:
-        return _MIN_WINDOW
+        return MIN_WINDOW
     k95 = int(np.searchsorted(np.cumsum(p), 0.95 * tot)) + 1       # cycles per record
     w = int(n / (8.0 * k95))
-    w = max(_MIN_WINDOW, min(w, n // 4))
-    return w if w % 2 else w - 1 if w > _MIN_WINDOW else _MIN_WINDOW
+    w = max(MIN_WINDOW, min(w, n // 4))
+    return w if w % 2 else w - 1 if w > MIN_WINDOW else MIN_WINDOW
 
 
 def _clean_blocks(r: np.ndarray, L: int) -> np.ndarray:
@@ -253,7 +253,7 @@ def estimate_noise(t, y, *, method: str = "auto", window: float | None = None) -
     yy = check_magnitude("y", finite_array("y", y, ndim=1, min_size=32))
     tt = finite_array("t", t, ndim=1, min_size=32)
     n = same_length(t=tt, y=yy)
-    tt = _check_time(tt, n)
+    tt = check_time(tt, n)
     dt_all = np.diff(tt)
     dt = float(np.median(dt_all))
     warns = []
@@ -270,15 +270,15 @@ def estimate_noise(t, y, *, method: str = "auto", window: float | None = None) -
         tau = _correlation_time(_clean_blocks(d2, min(64, d2.size // 4)), s * math.sqrt(6.0))
         return NoiseEstimate(s, "difference", tau * dt, n, n / tau, dt, tuple(warns))
     if window is None:
-        w = _signal_window(yy)
+        w = signal_window(yy)
     else:
         win = check_scalar("window", window, low=0.0, low_open=True)
         w = int(round(win / dt)) | 1
-        if not _MIN_WINDOW <= w <= n // 4:
+        if not MIN_WINDOW <= w <= n // 4:
             raise ValueError(f"window = {win:g} s is {w} samples; it must span "
-                             f"{_MIN_WINDOW} to {n // 4} samples (a quarter of the record)")
+                             f"{MIN_WINDOW} to {n // 4} samples (a quarter of the record)")
     s, rho, capped = _savgol_sigma(yy, w)
-    w2 = max(_MIN_WINDOW, (w // 2) | 1)
+    w2 = max(MIN_WINDOW, (w // 2) | 1)
     if w2 < w and s > 0:
         s2, rho2, capped2 = _savgol_sigma(yy, w2)
         if abs(s2 - s) > 0.25 * s:

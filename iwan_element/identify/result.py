@@ -10,6 +10,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..core.serialize import json_safe
+
 from ..core.parameters import IwanParameters
 
 __all__ = ["FitResult", "IdentifiabilityWarning", "PARAM_NAMES"]
@@ -28,23 +30,6 @@ def status_text(identified: bool, nuisance: bool = False) -> str:
 
 class IdentifiabilityWarning(UserWarning):
     """A parameter is not, or only poorly, determined by the data (see ``FitResult.warnings``)."""
-
-
-def _json(x):
-    """Recursively convert to JSON-safe Python types (NaN and inf become None)."""
-    if isinstance(x, dict):
-        return {str(k): _json(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple, np.ndarray)):
-        return [_json(v) for v in (x.tolist() if isinstance(x, np.ndarray) else x)]
-    if isinstance(x, (bool, np.bool_)):
-        return bool(x)
-    if isinstance(x, (int, np.integer)):
-        return int(x)
-    if isinstance(x, (float, np.floating)):
-        return float(x) if math.isfinite(x) else None
-    if x is None or isinstance(x, str):
-        return x
-    return str(x)
 
 
 @dataclass(frozen=True, eq=False)
@@ -125,7 +110,7 @@ class FitResult:
     def to_dict(self) -> dict:
         """JSON-safe dict (NaN and inf become ``None``). ``IwanParameters.from_dict(d["params"])``
         rebuilds the parameters."""
-        return _json({
+        return json_safe({
             "method": self.method,
             "params": self.params.to_dict(),
             "stderr": dict(self.stderr),
@@ -149,8 +134,8 @@ class FitResult:
     def plot(self, ax=None):
         """Loop fits: measured and fitted force [kN] vs displacement [mm]; dissipation fits:
         measured and fitted ``D`` [J] vs ``F0`` [N] (log-log). Returns the list of artists."""
-        from ..plotting import _axes
-        ax = _axes(ax)
+        from ..plotting import axes_or_new
+        ax = axes_or_new(ax)
         c = self._curves
         if not c:
             raise ValueError("this result carries no data to plot (rebuilt from a dict?)")
@@ -227,7 +212,7 @@ class FitResult:
         return "\n".join(lines)
 
 
-def _settle(out: dict, fixed) -> tuple[dict, list[str]]:
+def settle_verdict(out: dict, fixed) -> tuple[dict, list[str]]:
     """The identification verdict, one rule for every fit: a fitted parameter is identified
     only with a finite standard error of at most half its magnitude (for ``chi``: of
     ``chi + 1``, the exponent of the slider density, since ``chi = 0`` is a valid value) and
@@ -270,10 +255,10 @@ def _finish(method, out, *, converged, message, nfev, nrmse, t0, extra_warnings=
 
     ``success`` means: the optimiser converged, the data are more than noise
     (``out["explains"]``, default True) and every parameter in ``required`` (not given) is
-    identified by the rule of :func:`_settle`; so ``success``, the report's status column and
+    identified by the rule of :func:`settle_verdict`; so ``success``, the report's status column and
     the warnings say the same.
     """
-    ident, settle_warns = _settle(out, fixed)
+    ident, settle_warns = settle_verdict(out, fixed)
     warns = list(extra_warnings) + out["warnings"] + settle_warns
     if not converged:
         warns.append(f"the optimiser did not converge: {message}")
@@ -287,7 +272,7 @@ def _finish(method, out, *, converged, message, nfev, nrmse, t0, extra_warnings=
                        residual_norm=float(np.sqrt(out["r"] @ out["r"])), nrmse=float(nrmse),
                        success=success, message=str(message), nfev=int(nfev),
                        method=method, n_data=int(out["r"].size), warnings=tuple(warns),
-                       wall_time=time.perf_counter() - t0, details=_json(out["details"]),
+                       wall_time=time.perf_counter() - t0, details=json_safe(out["details"]),
                        offsets=dict(offsets or {}), noise=dict(noise or {}),
                        _curves=dict(curves or {}))
     if warns and _EMIT.get():
@@ -303,7 +288,7 @@ _EMIT: ContextVar[bool] = ContextVar("iwan_fit_emit_warnings", default=True)
 
 
 @contextmanager
-def _quiet():
+def quiet_fits():
     """Within this context (thread / task), fits do not call ``warnings.warn``."""
     token = _EMIT.set(False)
     try:

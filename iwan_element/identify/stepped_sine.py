@@ -39,7 +39,7 @@ import math
 import numpy as np
 from scipy import optimize
 
-from ..core._validation import check_scalar
+from ..core.validation import check_scalar
 from .curves import AmplitudeCurve
 
 __all__ = ["stepped_sine_curve"]

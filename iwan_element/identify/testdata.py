@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..core._validation import (_check_int, _check_time, check_magnitude, check_scalar, finite_array,
+from ..core.validation import (check_int, check_time, check_magnitude, check_scalar, finite_array,
                                 same_length)
 from ..core.joint import IwanJoint
 from ..core.parameters import IwanParameters
@@ -251,7 +251,7 @@ def split_cycles(t, u, F, *, hysteresis: float | None = None, close_tol: float =
     FF = check_magnitude("F", finite_array("F", F, ndim=1, min_size=2), unit="N")
     same_length(u=uu, F=FF)
     _check_varies(uu)
-    tt = np.arange(uu.size, dtype=float) if t is None else _check_time(t, uu.size)
+    tt = np.arange(uu.size, dtype=float) if t is None else check_time(t, uu.size)
     close_tol = check_scalar("close_tol", close_tol, low=0.0, high=1.0, low_open=True, high_open=True)
     drift_tol = check_scalar("drift_tol", drift_tol, low=0.0, high=1.0, low_open=True, high_open=True)
     h = _default_hysteresis(uu) if hysteresis is None else check_scalar(
@@ -342,7 +342,7 @@ class TestData:
         uu = finite_array("u (displacement)", self.u, ndim=1, min_size=4).copy()
         FF = finite_array("F (force)", self.F, ndim=1, min_size=4).copy()
         same_length(t=np.asarray(self.t).ravel(), u=uu, F=FF)
-        tt = np.array(_check_time(self.t, uu.size), dtype=float)
+        tt = np.array(check_time(self.t, uu.size), dtype=float)
         _check_varies(uu)
         for name, arr in (("t", tt), ("u", uu), ("F", FF)):
             object.__setattr__(self, name, _readonly(arr))
@@ -373,7 +373,7 @@ class TestData:
         uu = finite_array("u (displacement)", u, ndim=1, min_size=4)
         FF = finite_array("F (force)", F, ndim=1, min_size=4)
         same_length(t=np.asarray(t).ravel(), u=uu, F=FF)
-        tt = _check_time(t, uu.size)
+        tt = check_time(t, uu.size)
         if not np.any(FF != 0.0):
             raise ValueError("F (force) is all zero: check the force column and its unit")
         _check_varies(uu)
@@ -410,7 +410,7 @@ class TestData:
             If fewer than ``min_cycles`` cycles close without drifting; the message lists why
             the others were rejected.
         """
-        _check_int("min_cycles", min_cycles, 1)
+        check_int("min_cycles", min_cycles, 1)
         good = self.usable_cycles()
         if len(good) < min_cycles:
             bad = [f"cycle {c.index}: {', '.join(c.flags)}" for c in self.cycles if not c.usable]
@@ -467,7 +467,7 @@ def simulate_test(params: IwanParameters, amplitudes, *, cycles: int = 3, freque
     amps = check_magnitude("amplitudes", finite_array("amplitudes", amplitudes, ndim=1), unit="m")
     if np.any(amps <= 0.0):
         raise ValueError("amplitudes must all be > 0 [m]")
-    cycles = _check_int("cycles", cycles, 1)
+    cycles = check_int("cycles", cycles, 1)
     f = check_scalar("frequency", frequency, low=0.0, low_open=True)
     fs = check_scalar("sample_rate", sample_rate, low=16.0 * f)
     sf = check_scalar("force_noise", force_noise, low=0.0, high=1e100)

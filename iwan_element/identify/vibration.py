@@ -73,7 +73,7 @@ import math
 import numpy as np
 from scipy import signal
 
-from ..core._validation import check_magnitude, check_scalar, finite_array
+from ..core.validation import check_magnitude, check_scalar, finite_array
 from ._decay_filter import _analytic_signal  # noqa: F401  (the zero-phase route, used elsewhere)
 from ._decay_filter import _decay_signal, _drift_terms, _noise_bandwidth
 from ._decay_windows import WindowPlan, _noise_std, drift_correct, hilbert_windows

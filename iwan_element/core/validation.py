@@ -77,14 +77,14 @@ def same_length(**arrays: np.ndarray) -> int:
     return next(iter(sizes.values()))
 
 
-def _check_int(name: str, value, low: int) -> int:
+def check_int(name: str, value, low: int) -> int:
     """Return ``value`` as an int ``>= low``, else raise ``ValueError`` naming ``name``."""
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < low:
         raise ValueError(f"{name} must be an integer >= {low}, got {value!r}")
     return int(value)
 
 
-def _check_time(t, n: int, name: str = "t") -> np.ndarray:
+def check_time(t, n: int, name: str = "t") -> np.ndarray:
     """Return ``t`` as a new finite, strictly increasing array of length ``n``."""
     tt = check_magnitude(name, finite_array(name, t, ndim=1), unit="s")
     if tt.size != n:

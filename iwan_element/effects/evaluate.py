@@ -8,7 +8,7 @@ effects innermost. Every effect is homogeneous of degree one in the force scale:
 :class:`~iwan_element.effects.ParamSpec`) the force is ``Fs`` times the unit force. The unit
 force is evaluated
 
-* vectorised and exact (the Iwan joint through :class:`~iwan_element.core._history.History`,
+* vectorised and exact (the Iwan joint through :class:`~iwan_element.core.history.History`,
   then each effect's ``vector_force``) when every effect of the stack has a history-free
   vectorised form (viscous damping, pinning stiffness);
 * slip degradation behind a backlash (then vector forms), whose wear makes the joint's path
@@ -28,8 +28,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..core._history import REVERSAL_TOL, History, unit_params
-from ..core.closed_form import _slip_energy
+from ..core.history import REVERSAL_TOL, History, unit_params
+from ..core.closed_form import slip_energy
 from ..core.joint import IwanJoint
 from ..core.masing import masing_constants, masing_rows, reversal_structure
 from ..core.parameters import IwanParameters
@@ -196,7 +196,7 @@ class Evaluator:
         if self._segs is None:
             self._segs = dissipation_segments(u, self._tol)
         step, virgin, xa, xb = self._segs
-        d = _slip_energy(xb, p1) - _slip_energy(xa, p1)
+        d = slip_energy(xb, p1) - slip_energy(xa, p1)
         d = np.where(virgin, np.maximum(d, 0.0), 2.0 * d)
         return np.cumsum(np.bincount(step, weights=d, minlength=u.size))
 
