@@ -189,6 +189,40 @@ def _roundoff_force(L, specimen: Specimen) -> float:
     return float(np.finfo(float).eps * np.max(np.abs(np.diag(K))) * span * math.sqrt(K.shape[0]))
 
 
+def _check_args(specimen, amplitude, cycles, steps_per_period) -> float:
+    """Checks of :func:`ringdown`'s arguments; returns ``cycles`` as a float."""
+    if not isinstance(specimen, Specimen):
+        raise ValueError(f"specimen must be a Specimen, got {type(specimen).__name__}")
+    if not (isinstance(amplitude, (int, float)) and math.isfinite(amplitude) and amplitude > 0):
+        raise ValueError(f"amplitude must be a finite displacement > 0 [m], got {amplitude!r}")
+    if isinstance(steps_per_period, bool) or not isinstance(steps_per_period, int) \
+            or steps_per_period < 16:
+        raise ValueError(f"steps_per_period must be an integer >= 16, got {steps_per_period!r}")
+    return check_scalar("cycles", cycles, low=2.0, low_open=True)
+
+
+def _initial_energy(model, st, eff) -> tuple:
+    """``(kinetic, total)`` energy [J] at the release: the beams' strain energy, the springs',
+    the joint's (the virgin backbone work at the initial slips) and the effects'."""
+    from iwan_element import backbone_work
+    kin0, pot0 = model.beam_energy()
+    u0 = np.abs(st["slip"][0])
+    e_joint0 = float(sum(backbone_work(u, p) for u, p in zip(u0, model.points.params)))
+    e0 = pot0 + model.spring_energy() + e_joint0
+    if eff is not None:
+        e0 += eff.start(eff.s * float(eff.a_free @ st["x"][0]))
+    return kin0, e0
+
+
+def _decay_curve(t, modal, h, window, *, notes) -> AmplitudeCurve:
+    """Frequency and damping of the modal decay, the trapezoidal rule's period error
+    removed (``w_true = tan(w h / 2) 2 / h``)."""
+    amp, fnum, zeta = decay_analysis(t, modal, window=window)
+    w_num = 2 * math.pi * fnum
+    f_true = np.tan(w_num * h / 2) * 2 / h / (2 * math.pi)
+    return AmplitudeCurve(amp, f_true, np.clip(zeta, 0, None), method="ringdown", notes=notes)
+
+
 def ringdown(specimen: Specimen, *, mode: int = 1, amplitude: float, cycles: float = 30,
              steps_per_period: int = 64, window: int = 12, record_energy: bool = False,
              joint_elements: bool = False) -> RingdownResult:
@@ -232,14 +266,7 @@ def ringdown(specimen: Specimen, *, mode: int = 1, amplitude: float, cycles: flo
     it stays with the time step (24 to 96 steps/period), the normal stiffness (/10) and with
     stuck joints (friction 1e3).
     """
-    if not isinstance(specimen, Specimen):
-        raise ValueError(f"specimen must be a Specimen, got {type(specimen).__name__}")
-    if not (isinstance(amplitude, (int, float)) and math.isfinite(amplitude) and amplitude > 0):
-        raise ValueError(f"amplitude must be a finite displacement > 0 [m], got {amplitude!r}")
-    cycles = check_scalar("cycles", cycles, low=2.0, low_open=True)
-    if isinstance(steps_per_period, bool) or not isinstance(steps_per_period, int) \
-            or steps_per_period < 16:
-        raise ValueError(f"steps_per_period must be an integer >= 16, got {steps_per_period!r}")
+    cycles = _check_args(specimen, amplitude, cycles, steps_per_period)
     st = static_modal_load(specimen, [amplitude], mode=mode)
     L, phi, w0 = st["system"], st["phi"], st["omega0"]
     floor = specimen.interface.damping_floor
@@ -281,14 +308,7 @@ def ringdown(specimen: Specimen, *, mode: int = 1, amplitude: float, cycles: flo
     x0[L.free] = st["x"][0]
     mbs.systemData.SetODE2Coordinates(x0, configuration=exu.ConfigurationType.Initial)
     mbs.systemData.SetODE2Coordinates(x0, configuration=exu.ConfigurationType.Current)
-    kin0, pot0 = model.beam_energy()
-    # initial joint energy: the virgin backbone work at the initial slips
-    from iwan_element import backbone_work
-    u0 = np.abs(st["slip"][0])
-    e_joint0 = float(sum(backbone_work(u, p) for u, p in zip(u0, model.points.params)))
-    e0 = pot0 + model.spring_energy() + e_joint0
-    if eff is not None:
-        e0 += eff.start(eff.s * float(eff.a_free @ st["x"][0]))
+    kin0, e0 = _initial_energy(model, st, eff)
     h = 2 * math.pi / (w0 * steps_per_period)
     n = int(round(cycles * steps_per_period))
     sim = _settings(force_scale=float(np.max(np.abs(L.K0 @ st["x"][0]))))
@@ -307,16 +327,11 @@ def ringdown(specimen: Specimen, *, mode: int = 1, amplitude: float, cycles: flo
         energy["joint_dissipated"] = list(itf.dissipated_energy_history[-len(energy["t"]):])
     X = np.array(coords)[-(n + 1):, L.free]
     t = np.arange(X.shape[0]) * h
-    sphi = float(L.S @ phi)
-    modal = (X @ (L.M @ phi)) * sphi
-    amp, fnum, zeta = decay_analysis(t, modal, window=window)
-    w_num = 2 * math.pi * fnum
-    f_true = np.tan(w_num * h / 2) * 2 / h / (2 * math.pi)      # trapezoidal period error removed
-    curve = AmplitudeCurve(amp, f_true, np.clip(zeta, 0, None), method="ringdown",
-                           notes=(f"{specimen.name}: Exudyn transient, mode {mode}, "
-                                  f"{steps_per_period} steps/period, released from "
-                                  f"{amplitude:.3g} m at the sensor; modal filtering"
-                                  + (f"; with {' + '.join(eff.names)}" if eff else "")))
+    modal = (X @ (L.M @ phi)) * float(L.S @ phi)
+    curve = _decay_curve(t, modal, h, window, notes=(
+        f"{specimen.name}: Exudyn transient, mode {mode}, {steps_per_period} steps/period, "
+        f"released from {amplitude:.3g} m at the sensor; modal filtering"
+        + (f"; with {' + '.join(eff.names)}" if eff else "")))
     return RingdownResult(t=t, sensor=X @ L.S, modal=modal, curve=curve,
                           energy={k: np.array(v) for k, v in energy.items()},
                           initial_energy=e0, wall_time=wall,
