@@ -23,6 +23,7 @@ ROOT = Path(__file__).resolve().parents[1]
 
 def run(path, lowpass):
     from iwan_element import diagnose
+    from iwan_element.diagnose.batch import band_misfit
     t, u, F = np.loadtxt(path, delimiter=",", skiprows=1).T
     t0, c0 = time.perf_counter(), time.process_time()
     try:
@@ -31,9 +32,8 @@ def run(path, lowpass):
         return (path.name, f"REFUSED: {exc}", np.nan, np.nan, time.perf_counter() - t0,
                 (0, np.nan), time.process_time() - c0)
     cpu = time.process_time() - c0
+    rb, ra = band_misfit(g.F, g.force_before, 0.25), band_misfit(g.F, g.force_after, 0.25)
     band = np.abs(g.F) < 0.25 * np.abs(g.F).max()
-    rb = float(np.sqrt(np.mean((g.F - g.force_before)[band] ** 2)))
-    ra = float(np.sqrt(np.mean((g.F - g.force_after)[band] ** 2)))
     lags = np.arange(-10, 11)
     shifted = [np.sqrt(np.mean((g.F - np.interp(g.t - k / fs, g.t, g.force_after))[band] ** 2))
                for fs in [1.0 / float(np.median(np.diff(g.t)))] for k in lags]

@@ -15,7 +15,7 @@ from scipy.integrate import cumulative_simpson
 from scipy.interpolate import CubicSpline
 
 from .modal_result import model_curve
-from .vibration import _analytic_signal
+from ._decay_filter import _analytic_signal
 
 _GRID = 2000            # log-amplitude grid of the quadrature
 _PER_PERIOD = 8.0       # working rate: samples per period of the band's upper edge

@@ -32,6 +32,7 @@ from scipy import optimize, stats
 
 from ..core.validation import check_scalar
 from .curves import AmplitudeCurve
+from .vibration import DECAY_METHODS
 from .modal_result import ModalIwanFit, model_curve
 from .units import check_damping_ratio
 
@@ -165,7 +166,7 @@ def fit_modal_iwan(amplitude, frequency=None, damping_ratio=None, *, stiffness: 
     if damping not in ("auto", "decay", "energy"):
         raise ValueError(f"damping must be 'auto', 'decay' or 'energy', got {damping!r}")
     if damping == "auto":
-        decay = isinstance(amplitude, AmplitudeCurve) and amplitude.method in ("hilbert", "pff")
+        decay = isinstance(amplitude, AmplitudeCurve) and amplitude.method in DECAY_METHODS
         damping = "decay" if decay else "energy"
     X, f, z, fstd, zstd, in_warn = _as_data(amplitude, frequency, damping_ratio)
     check_damping_ratio("damping_ratio", z)

@@ -74,7 +74,6 @@ import numpy as np
 from scipy import signal
 
 from ..core.validation import check_magnitude, check_scalar, finite_array
-from ._decay_filter import _analytic_signal  # noqa: F401  (the zero-phase route, used elsewhere)
 from ._decay_filter import _decay_signal, _drift_terms, _noise_bandwidth
 from ._decay_windows import WindowPlan, _noise_std, drift_correct, hilbert_windows
 from ._decay_report import _finish
@@ -208,7 +207,8 @@ def _noise_rms(yf, z, fs, span, f_peak):
 
 _SPAN = 0.5            # decay across a window [neper]
 _HOP = 0.15            # decay between window starts [neper]
-_METHODS = ("hilbert", "pff")
+#: The extractions of a free decay (their curves carry the damping a decay shows).
+DECAY_METHODS = ("hilbert", "pff")
 
 
 def _plan(fs, f_peak, n_periods, window):
@@ -230,8 +230,8 @@ def _check_options(quantity, order, n_periods, window, snr_min, max_damping_std,
         raise ValueError(f"quantity must be one of {sorted(_QUANTITY_POWER)}, got {quantity!r}")
     if isinstance(order, bool) or not isinstance(order, (int, np.integer)) or not 1 <= order <= 10:
         raise ValueError(f"order must be an integer in [1, 10], got {order!r}")
-    if method not in _METHODS:
-        raise ValueError(f"method must be one of {_METHODS}, got {method!r}")
+    if method not in DECAY_METHODS:
+        raise ValueError(f"method must be one of {DECAY_METHODS}, got {method!r}")
     if n_periods is not None:
         n_periods = check_scalar("n_periods", n_periods, low=3.0, high=1000.0)
     if window is not None:
