@@ -262,3 +262,21 @@ def test_compiled_joint_path_behind_a_gap_equals_the_element(drag):
             ref = Backlash(els[-1], gap=gap, drag=drag).joint_path(u)
             new = backlash_path(u, _constants(p1), *_laws(els[1:]), gap, drag)
             assert np.max(np.abs(new - ref)) <= 1e-12 * 0.02
+
+
+def test_one_blas_thread_limits_and_restores():
+    """The fits' BLAS limit (core.threads): one thread inside, the previous limits after."""
+    from threadpoolctl import threadpool_info
+
+    from iwan_element.core.threads import one_blas_thread
+
+    np.linalg.svd(np.ones((4, 2)))                  # a BLAS is loaded by now
+    before = [(p["filepath"], p["num_threads"]) for p in threadpool_info()
+              if p["user_api"] == "blas"]
+    assert before, "numpy's BLAS is not visible to threadpoolctl"
+    with one_blas_thread():
+        inside = [p["num_threads"] for p in threadpool_info() if p["user_api"] == "blas"]
+    after = [(p["filepath"], p["num_threads"]) for p in threadpool_info()
+             if p["user_api"] == "blas"]
+    assert inside == [1] * len(before)
+    assert after == before

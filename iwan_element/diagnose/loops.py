@@ -42,6 +42,7 @@ from ._locate import _check_candidates, _locate, _untestable
 from ._noise import noise_estimate, pure_noise
 from ..identify.result import settle_verdict
 from ..core.serialize import json_safe
+from ..core.threads import one_blas_thread
 from .results import Diagnosis
 from .selection import criterion_text, stepwise_select
 
@@ -332,8 +333,9 @@ def diagnose(t, u, F, *, candidates=None, max_effects: int = 3, noise: float | N
     max_samples = check_int("max_samples", max_samples, 100)
     bar = progress_bar(progress, desc="diagnose", unit="fit")
     try:
-        return _diagnose(tt, uu, FF_in, n, noise, lp, cand, max_effects, alpha, ambiguity,
-                         max_samples, seed, bar, t_start)
+        with one_blas_thread():          # tall, narrow least squares: threads only spin
+            return _diagnose(tt, uu, FF_in, n, noise, lp, cand, max_effects, alpha, ambiguity,
+                             max_samples, seed, bar, t_start)
     finally:
         if bar is not None:
             bar.close()
