@@ -25,6 +25,7 @@ import numpy as np
 import pytest
 
 import iwan_element as ie
+from _helpers import write_record_csv
 from iwan_element import IwanJoint, IwanParameters
 
 P = IwanParameters(9e3, 5e7, -0.5, 0.5)
@@ -69,10 +70,7 @@ def _fit_loops_fuzz():
 def _csv(tmp_dir):
     from pathlib import Path
     d = _record()
-    path = Path(tmp_dir) / "rec.csv"
-    rows = "\n".join(f"{a:.3f},{b:.7f},{c:.6f}" for a, b, c in zip(d.t, d.u * 1e3, d.F * 1e-3))
-    path.write_text("time [s],displacement [mm],force [kN]\n" + rows + "\n")
-    return path
+    return write_record_csv(Path(tmp_dir) / "rec.csv", d.t, d.u, d.F, digits=(3, 7, 6))
 
 
 def _curve():

@@ -5,6 +5,7 @@ in tests/_jenkins_bank.py, which converges to the element as the bank gets dense
 import numpy as np
 import pytest
 
+from _helpers import stepped_sine
 from iwan_element import DiscreteIwan, IwanJoint, IwanParameters
 from iwan_element.effects import BreakAway
 from _jenkins_bank import jenkins_bank
@@ -14,10 +15,11 @@ P0 = IwanParameters(1000.0, 1e6, -0.3, 0.0)          # no spike: force continuou
 A = P.phi_max
 
 
-def _drive(per=150, amps=(0.4, 1.6, 0.7, 2.5, 0.3, 1.1)):
-    t = np.linspace(0, len(amps), len(amps) * per + 1)
-    env = np.append(np.repeat(np.array(amps) * A, per), amps[-1] * A)
-    return env * np.sin(2 * np.pi * t)
+AMPS = (0.4, 1.6, 0.7, 2.5, 0.3, 1.1)        # fractions of phi_max
+
+
+def _drive(per=150):
+    return stepped_sine(A, per, AMPS)[1]
 
 
 def _moments(p, x):

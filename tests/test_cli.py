@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from _helpers import write_record_csv
 from iwan_element import IwanParameters
 from iwan_element.cli import main
 from iwan_element.identify.testdata import simulate_test
@@ -21,10 +22,8 @@ P = IwanParameters(9e3, 5e7, -0.5, 0.5)
 def csv_path(tmp_path_factory):
     d = simulate_test(P, np.array([0.025, 0.05, 0.1, 0.2, 0.3, 0.45]) * 1e-3, cycles=3,
                       sample_rate=5, force_noise=15.0, seed=0)
-    path = tmp_path_factory.mktemp("cli") / "test.csv"
-    rows = "\n".join(f"{a:.2f},{b:.7f},{c:.6f}" for a, b, c in zip(d.t, d.u * 1e3, d.F * 1e-3))
-    path.write_text("# SYNTHETIC\ntime [s],displacement [mm],force [kN]\n" + rows + "\n")
-    return path
+    return write_record_csv(tmp_path_factory.mktemp("cli") / "test.csv", d.t, d.u, d.F,
+                            digits=(2, 7, 6), comment="# SYNTHETIC")
 
 
 def _one_line_error(err: str, match: str) -> None:

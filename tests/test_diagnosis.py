@@ -14,6 +14,7 @@ import pytest
 from _diagnosis_cases import (MODAL, P, PROTOCOLS, SHAPES, SIGMA, ZETA0, calibrated,
                               effect_rms, element, modal_curves, record, vibration_case,
                               vibration_case_elements)
+from _helpers import write_record_csv
 from iwan_element import (AsymmetricSlip, BreakAway, IwanJoint, PinningStiffness, ViscousDamping,
                           make_effect)
 from iwan_element.core.history import REVERSAL_TOL, unit_params
@@ -357,17 +358,10 @@ def test_vibration_never_names_what_raises_the_mismatch():
 
 
 # ----------------------------------------------------------------------------- CLI, example
-def _csv(tmp_path, d):
-    path = tmp_path / "t.csv"
-    rows = "\n".join(f"{a:.6f},{b:.8f},{c:.7f}" for a, b, c in zip(d.t, d.u * 1e3, d.F * 1e-3))
-    path.write_text("time [s],displacement [mm],force [kN]\n" + rows + "\n")
-    return path
-
-
 def test_cli_diagnose(tmp_path, capsys):
     from iwan_element.cli import main
     d = record("asymmetric_slip", 8.0, "ladder", 5)
-    path = _csv(tmp_path, d)
+    path = write_record_csv(tmp_path / "t.csv", d.t, d.u, d.F)
     js, png = tmp_path / "d.json", tmp_path / "d.png"
     assert main(["diagnose", str(path), "--units", "mm,kN", "--json", str(js), "--plot", str(png)]) == 0
     out = capsys.readouterr()

@@ -5,6 +5,7 @@ stepper written here."""
 import numpy as np
 import pytest
 
+from _helpers import stepped_sine
 from iwan_element import IwanJoint, IwanParameters, diagnose
 from iwan_element.core.discrete import DiscreteIwan
 from _jenkins_bank import jenkins_bank
@@ -14,10 +15,7 @@ SIGMA = 4.0
 
 
 def _drive(n_per=400):
-    amps = np.repeat([0.5, 1.5, 3.0, 1.0], 2) * P.phi_max
-    t = np.linspace(0.0, amps.size, amps.size * n_per + 1)
-    env = np.append(np.repeat(amps, n_per), amps[-1])
-    return t, env * np.sin(2 * np.pi * t)
+    return stepped_sine(P.phi_max, n_per, np.repeat([0.5, 1.5, 3.0, 1.0], 2))
 
 
 def _bank_breakaway(u, ratio, n=300):

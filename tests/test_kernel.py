@@ -2,14 +2,14 @@
 plain-Python reference, the package's elements, the closed forms and energy balance."""
 from __future__ import annotations
 
-import math
 import os
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import given
 from hypothesis import strategies as st
 
+from _helpers import params_strategy
 from _masing_reference import reference_history
 from iwan_element import IwanJoint, IwanJointBank, IwanParameters, dissipation
 from iwan_element.core.history import History
@@ -17,24 +17,13 @@ from iwan_element.core.masing import (constants_from_arrays, masing_constants, m
                                       masing_rows, reversal_structure)
 from iwan_element.models.qsma import _interface_law
 
-N_EXAMPLES = int(os.environ.get("IWAN_HYPOTHESIS_EXAMPLES", 40))
-SETTINGS = settings(max_examples=N_EXAMPLES, deadline=None, derandomize=True,
-                    suppress_health_check=[HealthCheck.too_slow])
-
-
-def _log_uniform(lo, hi):
-    return st.floats(math.log10(lo), math.log10(hi)).map(lambda e: 10.0 ** e)
-
-
-params_st = st.builds(IwanParameters, Fs=_log_uniform(1e-2, 1e6), KT=_log_uniform(1e2, 1e10),
-                      chi=st.floats(-0.95, 2.0), beta=st.one_of(st.just(0.0), st.floats(0.0, 5.0)))
 
 
 @st.composite
 def histories(draw):
     """(params, u): random reversal points (fractions of phi_max, large and tiny excursions,
     nested loops), each leg sampled at a few points, some samples repeated (no motion)."""
-    p = draw(params_st)
+    p = draw(params_strategy)
     pts = [0.0]
     for _ in range(draw(st.integers(1, 14))):
         if draw(st.booleans()):
@@ -58,7 +47,6 @@ def _element(p, u, tol):
     return out
 
 
-@SETTINGS
 @given(histories(), st.sampled_from([0.0, 1e-12, 1e-9]))
 def test_kernel_equals_the_reference_and_the_elements(case, rtol):
     p, u = case
@@ -76,7 +64,6 @@ def test_kernel_equals_the_reference_and_the_elements(case, rtol):
     assert np.max(np.abs(hist - F)) <= 1e-12 * p.Fs
 
 
-@SETTINGS
 @given(histories())
 def test_work_is_the_integral_of_the_force_and_dissipation_never_decreases(case):
     """Energy balance on an independent route: the kernel's closed-form work equals the

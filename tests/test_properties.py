@@ -1,41 +1,20 @@
 """Property tests (hypothesis) of the exact Iwan joint and the closed forms.
 
-The number of examples is bounded by a settings profile so that the suite stays fast:
-``ci`` (default, 40 examples, no deadline) or ``long`` (1000 examples), selected with the
-environment variable ``IWAN_HYPOTHESIS_PROFILE`` (or any count with ``IWAN_HYPOTHESIS_EXAMPLES``);
-``benchmarks/bench_properties.py`` runs them with many more examples.
+The number of examples is bounded by the settings profiles of ``tests/conftest.py`` (``ci``
+by default); ``benchmarks/bench_properties.py`` runs them with many more examples.
 """
 from __future__ import annotations
 
 import math
-import os
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, assume, given, settings
+from hypothesis import assume, given
 from hypothesis import strategies as st
 
+from _helpers import log_uniform, params_strategy, step_element
 from iwan_element import (IwanJoint, IwanParameters, backbone, backbone_work, dissipation,
                           dissipation_slope, secant_stiffness, tangent_stiffness)
-
-settings.register_profile("ci", max_examples=40, deadline=None, derandomize=True,
-                          suppress_health_check=[HealthCheck.too_slow])
-settings.register_profile("long", max_examples=1000, deadline=None,
-                          suppress_health_check=[HealthCheck.too_slow])
-if os.environ.get("IWAN_HYPOTHESIS_EXAMPLES"):              # benchmarks/bench_properties.py
-    settings.register_profile("custom", max_examples=int(os.environ["IWAN_HYPOTHESIS_EXAMPLES"]),
-                              deadline=None, suppress_health_check=[HealthCheck.too_slow])
-    settings.load_profile("custom")
-else:
-    settings.load_profile(os.environ.get("IWAN_HYPOTHESIS_PROFILE", "ci"))
-
-
-def _log_uniform(lo, hi):
-    return st.floats(math.log10(lo), math.log10(hi)).map(lambda e: 10.0 ** e)
-
-
-params_st = st.builds(IwanParameters, Fs=_log_uniform(1e-2, 1e6), KT=_log_uniform(1e2, 1e10),
-                      chi=st.floats(-0.95, 2.0), beta=st.one_of(st.just(0.0), st.floats(0.0, 5.0)))
 
 # reversal targets as fractions of phi_max: large, small and tiny excursions mixed
 _targets = st.lists(st.one_of(st.floats(-3.0, 3.0), st.floats(-1e-3, 1e-3)), min_size=1, max_size=12)
@@ -45,7 +24,7 @@ _targets = st.lists(st.one_of(st.floats(-3.0, 3.0), st.floats(-1e-3, 1e-3)), min
 def histories(draw):
     """(params, u): a displacement history [m] through random reversal points, each leg
     sampled at a few points; some legs are tiny excursions around the previous point."""
-    p = draw(params_st)
+    p = draw(params_strategy)
     pts = [0.0]
     for a in draw(_targets):
         if draw(st.booleans()):
@@ -53,14 +32,6 @@ def histories(draw):
         pts.append(a)
     legs = [np.linspace(a, b, draw(st.integers(2, 6)))[1:] for a, b in zip(pts[:-1], pts[1:])]
     return p, p.phi_max * np.concatenate(legs)
-
-
-def _drive(j, u):
-    F = np.empty(len(u))
-    for i, x in enumerate(u.tolist()):
-        F[i] = j.trial(x)[0]
-        j.commit()
-    return F
 
 
 def _state(j):
@@ -93,7 +64,7 @@ def _slider_bank(p, n=20000):
 @given(histories())
 def test_exact_joint_agrees_with_a_dense_slider_bank(case):
     p, u = case
-    F = _drive(IwanJoint(p, reversal_tol=0.0), u)
+    F = step_element(IwanJoint(p, reversal_tol=0.0), u)
     k, phi, bound = _slider_bank(p)
     x = np.zeros_like(k)
     Fb = np.empty(len(u))
@@ -204,7 +175,7 @@ def test_force_is_continuous_and_tangent_bounded(case, log_h, up):
 _r = np.concatenate([[0.0], np.geomspace(1e-9, 20.0, 300)])
 
 
-@given(params_st)
+@given(params_strategy)
 def test_closed_forms_are_finite_and_monotone(p):
     u = _r * p.phi_max
     F = backbone(u, p)
@@ -241,9 +212,9 @@ def test_invalid_parameters_give_a_clear_error(name, bad):
         IwanParameters(**kw)
 
 
-_wide_params = st.tuples(_log_uniform(1e-120, 1e120), _log_uniform(1e-120, 1e120),
-                         st.one_of(st.floats(-0.999999, 2.0), _log_uniform(1.0, 1e6)),
-                         st.one_of(st.just(0.0), _log_uniform(1e-12, 1e12)))
+_wide_params = st.tuples(log_uniform(1e-120, 1e120), log_uniform(1e-120, 1e120),
+                         st.one_of(st.floats(-0.999999, 2.0), log_uniform(1.0, 1e6)),
+                         st.one_of(st.just(0.0), log_uniform(1e-12, 1e12)))
 
 
 @given(_wide_params)

@@ -7,6 +7,7 @@ trapezoidal rule over its forces; the diagnosis evaluator's run route against th
 import numpy as np
 import pytest
 
+from _helpers import stepped_sine
 from iwan_element import DiscreteIwan, IwanJoint, IwanParameters
 from iwan_element.effects import AsymmetricSlip, BreakAway, SlipDegradation
 from iwan_element.effects.evaluate import Evaluator
@@ -17,10 +18,11 @@ A = P.phi_max
 R, ASYM = 1.7, 0.3
 
 
-def _drive(per=80, amps=(0.4, 1.6, 0.7, 2.5, 0.3, 1.1)):
-    t = np.linspace(0, len(amps), len(amps) * per + 1)
-    env = np.append(np.repeat(np.array(amps) * A, per), amps[-1] * A)
-    return env * np.sin(2 * np.pi * t)
+AMPS = (0.4, 1.6, 0.7, 2.5, 0.3, 1.1)        # fractions of phi_max
+
+
+def _drive(per=80):
+    return stepped_sine(A, per, AMPS)[1]
 
 
 def _bank(u, d, r=R, a=ASYM):
