@@ -79,7 +79,8 @@ def main(argv=None) -> dict:
     print(bands.report())
     fig, axes = plt.subplots(2, 3, figsize=(13, 7.5), layout="constrained")
     bands.plot(ax=axes[0])
-    bands.plot(ax=axes[1, :2], relative=True)      # the same bands as % of the nominal curve
+    bands.plot(ax=axes[1], relative=True)          # the same bands as % of the nominal curve
+    axes[1, 2].clear()                             # (its peak panel repeats the one above)
     axes[1, 2].axis("off")
     axes[1, 2].text(0, 0.5, "\n".join([f"fit: {bands.uncertainty.source}",
                                        f"nominal {fit.params}".replace(", ", ",\n  "),

@@ -12,6 +12,7 @@ from .core.validation import check_int, finite_array, same_length
 from .core.closed_form import (dissipation, dissipation_slope, force_amplitude, masing_ascending,
                           masing_descending, masing_loop, normalized_backbone)
 from .core.parameters import IwanParameters
+from .core.result_shape import panels
 
 __all__ = ["plot_normalized_loops", "plot_loop", "plot_fitted_loops", "plot_dissipation_fit"]
 
@@ -25,13 +26,11 @@ def _pyplot():
 
 
 def axes_or_new(ax):
-    """One matplotlib Axes: ``ax`` itself, or a new figure's if ``None``."""
+    """One matplotlib Axes: ``ax`` itself, or a new figure's if ``None`` (the one-panel case
+    of the package's axes contract, :func:`iwan_element.core.result_shape.panels`)."""
     if ax is None:
-        plt = _pyplot()
-        _, ax = plt.subplots()
-    elif not hasattr(ax, "plot"):
-        raise TypeError(f"ax must be one matplotlib Axes, got {type(ax).__name__}")
-    return ax
+        _pyplot()
+    return panels(ax, 1, figsize=(6.4, 4.8))[0]
 
 
 def plot_normalized_loops(cases, *, s0: float = 1.0, step: float = 0.002, ax=None):

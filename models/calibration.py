@@ -28,6 +28,7 @@ import numpy as np
 from scipy import optimize
 
 from iwan_element import AmplitudeCurve, IwanParameters, amplitude_curve
+from iwan_element.core.result_shape import ResultShape, panels
 
 from .interface import contact_points
 from .qsma import linear_modes, modal_amplitude_curve
@@ -58,8 +59,10 @@ def measured_amplitude_curve(path, *, band=(60.0, 120.0), window: float = 0.25,
 
 
 @dataclass
-class CalibrationResult:
+class CalibrationResult(ResultShape):
     """Result of :func:`calibrate`."""
+
+    plot_panels = 2
 
     specimen: Specimen
     params: dict
@@ -88,10 +91,10 @@ class CalibrationResult:
                 "model": self.model.to_dict(), "measured": self.measured.to_dict()}
 
     def plot(self, ax=None):
-        """Measured and model f(X), zeta(X) on ``ax = (ax_f, ax_z)``; returns the artists."""
+        """Measured and model f(X), zeta(X) on ``ax = (ax_f, ax_z)`` (a new figure if
+        ``None``; :mod:`iwan_element.core.result_shape`); returns the artists."""
+        ax = panels(ax, 2, sharex=True, figsize=(6, 6))
         arts = self.measured.plot(ax, label="measured", ls="none")
-        if ax is None:
-            ax = (arts[0].axes, arts[1].axes)
         arts += self.model.plot(ax, label="model (QSMA)", marker="", ls="-")
         return arts
 

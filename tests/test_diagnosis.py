@@ -204,7 +204,7 @@ def test_result_reports_serialises_and_plots(tmp_path):
     assert len(arts) >= 6
     plt.gcf().savefig(tmp_path / "d.png")
     plt.close("all")
-    with pytest.raises(ValueError, match="ax"):
+    with pytest.raises(TypeError, match="ax"):
         g.plot(ax=[1, 2, 3])
 
 

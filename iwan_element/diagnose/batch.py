@@ -24,6 +24,7 @@ import numpy as np
 from ..core.validation import check_scalar, finite_array
 from ..ensemble import run_ensemble
 from .loops import diagnose
+from ..core.result_shape import ResultShape, panels
 
 __all__ = ["diagnose_many", "BatchDiagnosis"]
 
@@ -151,7 +152,7 @@ def _errors_by_index(res):
 
 
 @dataclass(frozen=True, eq=False)
-class BatchDiagnosis:
+class BatchDiagnosis(ResultShape):
     """What :func:`diagnose_many` returns: one table row and one diagnosis per record.
 
     Attributes
@@ -235,11 +236,7 @@ class BatchDiagnosis:
         list
             The matplotlib artists drawn.
         """
-        if isinstance(ax, (list, tuple, np.ndarray)):
-            raise TypeError("ax must be one matplotlib Axes (the table has one panel)")
-        if ax is None:
-            import matplotlib.pyplot as plt
-            _, ax = plt.subplots(figsize=(max(5.0, 0.5 * len(self.rows) + 2), 4))
+        ax, = panels(ax, 1, figsize=(max(5.0, 0.5 * len(self.rows) + 2), 4))
         ok = [r for r in self.rows if r["status"] == "ok"]
         x = np.arange(len(ok))
         artists = list(ax.bar(x - 0.2, [r["band_before"] for r in ok], 0.4, label="Iwan"))

@@ -11,6 +11,7 @@ from ..core.serialize import json_safe
 
 from ..core.validation import check_scalar
 from ..effects import EFFECTS
+from ..core.result_shape import ResultShape, panels
 
 __all__ = ["Diagnosis", "VibrationDiagnosis"]
 
@@ -30,7 +31,7 @@ def _verdict_lines(word: str, result) -> list:
     return lines
 
 @dataclass(frozen=True, eq=False)
-class Diagnosis:
+class Diagnosis(ResultShape):
     """What the four-parameter Iwan fit misses in a test record, and the augmented model.
 
     Attributes
@@ -79,6 +80,8 @@ class Diagnosis:
     details : dict
         Test statistics (JSON-safe).
     """
+
+    plot_panels = 2
 
     effect: str
     effects: tuple
@@ -164,24 +167,15 @@ class Diagnosis:
 
         Parameters
         ----------
-        ax : None, a pair of Axes, or one Axes
-            ``None``: a new figure with two panels; one Axes: the loops there and the
-            residuals in an inset.
+        ax : None or a sequence of two Axes
+            ``(ax_loops, ax_residual)``; ``None``: a new figure with two panels
+            (:mod:`iwan_element.core.result_shape`).
 
         Returns
         -------
         list of matplotlib artists
         """
-        if ax is None:
-            import matplotlib.pyplot as plt
-            _, (a1, a2) = plt.subplots(1, 2, figsize=(11, 4.5))
-        elif isinstance(ax, (list, tuple, np.ndarray)):
-            if len(ax) != 2:
-                raise ValueError(f"ax must be None, one Axes or two Axes, got {len(ax)}")
-            a1, a2 = ax
-        else:
-            a1 = ax
-            a2 = ax.inset_axes([0.6, 0.07, 0.38, 0.3])
+        a1, a2 = panels(ax, 2, figsize=(6, 8))
         step = max(1, self.u.size // 20000)
         u, F = self.u[::step] * 1e3, self.F[::step] * 1e-3
         arts = a1.plot(u, F, ".", ms=1.5, color="0.6", label="measured")
@@ -221,7 +215,7 @@ def _apply(names, parameters, X, f, z, zeta0):
 
 
 @dataclass(frozen=True, eq=False)
-class VibrationDiagnosis:
+class VibrationDiagnosis(ResultShape):
     """Measured against predicted amplitude-dependent frequency and damping: what is missing.
 
     Attributes
@@ -262,6 +256,8 @@ class VibrationDiagnosis:
         noise-normalised Jacobian, scaled by the reduced chi-square when above 1.
     """
 
+    plot_panels = 2
+
     effect: str
     effects: tuple
     ambiguous_with: tuple
@@ -283,6 +279,13 @@ class VibrationDiagnosis:
     warnings: tuple = ()
     details: dict = field(default_factory=dict)
     covariance: np.ndarray | None = None
+
+    @property
+    def success(self) -> bool:
+        """True unless a mismatch beyond the noise remains after the effects named (the same
+        test as the warning saying so: the misfit's p-value below ``alpha`` before and after)."""
+        d = self.details
+        return not (d["misfit_p"] < d["alpha"] and d["misfit_p_after"] < d["alpha"])
 
     def augment(self, target, *, modal_mass: float | None = None,
                 slip_per_amplitude: float = 1.0, mode: int = 1):
@@ -447,13 +450,9 @@ class VibrationDiagnosis:
     def plot(self, ax=None):
         """Frequency and damping against amplitude: measured, predicted, augmented.
 
-        ``ax``: ``None`` (new figure, two panels) or a pair of Axes. Returns the artists."""
-        if ax is None:
-            import matplotlib.pyplot as plt
-            _, ax = plt.subplots(1, 2, figsize=(11, 4.2))
-        if not isinstance(ax, (list, tuple, np.ndarray)) or len(ax) != 2:
-            raise ValueError("ax must be None or a pair of Axes (frequency, damping)")
-        a1, a2 = ax
+        ``ax``: ``None`` (new figure, two panels) or a sequence of two Axes (frequency,
+        damping; :mod:`iwan_element.core.result_shape`). Returns the artists."""
+        a1, a2 = panels(ax, 2, figsize=(6, 7))
         X = self.amplitude
         o = np.argsort(X)
         arts = a1.semilogx(X[o], self.frequency[o], "o", ms=3, mfc="none", color="k", label="measured")

@@ -12,6 +12,7 @@ from ..core.serialize import json_safe
 from .oscillator import SingleModeSystem, modal_curve, peak_response
 from .runner import EnsembleResult, run_ensemble
 from .uncertainty import ParameterUncertainty
+from ..core.result_shape import ResultShape, panels
 
 __all__ = ["PredictionBands", "propagate_uncertainty", "response_task", "modal_fit_task"]
 
@@ -51,7 +52,7 @@ def modal_fit_task(params: dict, rng, *, names, regime: str, conventions: dict, 
 
 
 @dataclass(frozen=True, eq=False)
-class PredictionBands:
+class PredictionBands(ResultShape):
     """Quantile bands of the predicted response over the sampled parameter sets.
 
     Attributes
@@ -104,6 +105,18 @@ class PredictionBands:
         q = [(1 - self.level) / 2, 0.5, (1 + self.level) / 2]
         return tuple(np.quantile(data, q, axis=0))
 
+    @property
+    def plot_panels(self) -> int:
+        """Frequency and damping, and the peak response when there is one."""
+        return 3 if self.peak is not None else 2
+
+    @property
+    def success(self) -> bool:
+        """True when at least two thirds of the sampled parameter sets ran (the bands are
+        quantiles of the successful ones; failures are listed in the ensemble)."""
+        n = len(self.ensemble)
+        return bool(n > 0 and len(self.ensemble.errors) <= n / 3)
+
     def report(self) -> str:
         lines = [f"Prediction bands ({100 * self.level:.0f} % central) from {self._source}: "
                  f"{self.frequency.shape[0]} samples on {self.ensemble.executor}, "
@@ -142,8 +155,9 @@ class PredictionBands:
         Parameters
         ----------
         ax : sequence of matplotlib Axes, optional
-            ``(ax_frequency, ax_damping)`` or, with a peak response,
-            ``(ax_frequency, ax_damping, ax_peak)``; new axes if omitted.
+            ``plot_panels`` Axes: ``(ax_frequency, ax_damping)`` or, with a peak response,
+            ``(ax_frequency, ax_damping, ax_peak)``; new axes if omitted
+            (:mod:`iwan_element.core.result_shape`).
         color, label : keyword-only
             Colour and legend label of the bands.
         relative : bool, keyword-only
@@ -155,13 +169,7 @@ class PredictionBands:
         list
             The artists drawn.
         """
-        n_ax = 3 if self.peak is not None else 2
-        if ax is None:
-            import matplotlib.pyplot as plt
-            _, ax = plt.subplots(1, n_ax, figsize=(4.2 * n_ax, 3.8), layout="constrained")
-        ax = list(np.atleast_1d(ax))
-        if len(ax) < 2:
-            raise ValueError("ax must hold at least two Axes (frequency, damping)")
+        ax = panels(ax, self.plot_panels, figsize=(6, 3.2 * self.plot_panels))
         X = self.amplitudes
         pct = f"{100 * self.level:.0f} % band"
         artists = []
@@ -181,7 +189,7 @@ class PredictionBands:
             a.set_ylabel(f"{ylabel}: deviation from nominal [%]" if relative
                          else f"{ylabel} {unit}")
         ax[0].legend(fontsize=8)
-        if self.peak is not None and len(ax) > 2:
+        if self.peak is not None:
             lo, _, hi = self.band("peak")
             artists.append(ax[2].hist(self.peak, bins=min(30, max(5, self.peak.size // 5)),
                                       color=color, alpha=0.6)[2])

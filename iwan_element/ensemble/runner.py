@@ -39,6 +39,7 @@ from pathlib import Path
 import numpy as np
 
 from ..core.serialize import json_safe
+from ..core.result_shape import ResultShape, panels
 
 __all__ = ["run_ensemble", "EnsembleResult", "TaskError"]
 
@@ -62,7 +63,7 @@ class TaskError:
 
 
 @dataclass(frozen=True, eq=False)
-class EnsembleResult:
+class EnsembleResult(ResultShape):
     """What :func:`run_ensemble` returns.
 
     Attributes
@@ -153,6 +154,30 @@ class EnsembleResult:
                       "outputs": list(self.outputs), "parameters": list(self.parameters),
                       "seed": self.seed, "executor": self.executor, "wall_time": self.wall_time,
                       "warnings": list(self.warnings)})
+
+    @property
+    def success(self) -> bool:
+        """True when every task ran (failed tasks are in ``errors``)."""
+        return bool(len(self.rows) > 0 and not self.errors)
+
+    def plot(self, ax=None, *, output: str | None = None, bins: int = 30):
+        """Histogram of one scalar output over the successful tasks (default: the first
+        scalar output). Returns the artists (one Axes, :mod:`iwan_element.core.result_shape`).
+        Raises ``ValueError`` when there is no scalar output to draw."""
+        names = [output] if output is not None else list(self.outputs)
+        for name in names:
+            col = self.column(name)
+            if col.dtype != object and col.ndim == 1 and np.isfinite(col).any():
+                break
+        else:
+            raise ValueError(f"no scalar output with finite values among {names}")
+        ax, = panels(ax, 1, figsize=(5, 3.5))
+        vals = col[np.isfinite(col)]
+        arts = list(ax.hist(vals, bins=max(1, min(bins, vals.size)), color="C0", alpha=0.7)[2])
+        ax.set_xlabel(name)
+        ax.set_ylabel("tasks")
+        ax.set_title(f"{vals.size} of {len(self.rows)} tasks ({self.executor})", fontsize=9)
+        return arts
 
     def report(self) -> str:
         """Summary: tasks, failures (with their messages), outputs and their ranges."""

@@ -25,6 +25,7 @@ from ..core.validation import check_int, finite_array
 from ..core.parameters import IwanParameters
 from ..core.serialize import json_safe
 from ..identify.result import PARAM_NAMES
+from ..core.result_shape import ResultShape, panels
 
 __all__ = ["ParameterUncertainty"]
 
@@ -49,7 +50,7 @@ def _scale(name, value):
 
 
 @dataclass(frozen=True, eq=False)
-class ParameterUncertainty:
+class ParameterUncertainty(ResultShape):
     """A Gaussian over Iwan parameters in transformed coordinates.
 
     Attributes
@@ -67,6 +68,8 @@ class ParameterUncertainty:
         Largest displacement amplitude [m] the samples are valid for (``inf`` unless the fit
         left ``Fs, beta`` undetermined).
     warnings : tuple of str
+    success : bool
+        False when the source fit did not succeed (its covariance may then be meaningless).
     """
 
     nominal: IwanParameters
@@ -76,6 +79,7 @@ class ParameterUncertainty:
     source: str = "generic"
     valid_amplitude: float = math.inf
     warnings: tuple = field(default_factory=tuple)
+    success: bool = True
 
     @classmethod
     def from_mean_cov(cls, mean: IwanParameters, cov, names=PARAM_NAMES, *,
@@ -107,7 +111,7 @@ class ParameterUncertainty:
 
     @classmethod
     def _build(cls, nominal, names, cov_theta, *, source, valid=math.inf, warnings=(),
-               values=None):
+               values=None, success=True):
         C = 0.5 * (cov_theta + cov_theta.T)
         if not np.allclose(C, cov_theta, rtol=1e-8, atol=1e-300):
             raise ValueError("cov must be symmetric")
@@ -118,7 +122,8 @@ class ParameterUncertainty:
         values = values or {n: getattr(nominal, n) for n in names}
         mean = np.array([_to_theta(n, values[n]) for n in names])
         return cls(nominal=nominal, names=tuple(names), mean=mean, cov=C, source=source,
-                   valid_amplitude=float(valid), warnings=tuple(warnings))
+                   valid_amplitude=float(valid), warnings=tuple(warnings),
+                   success=bool(success))
 
     @classmethod
     def from_fit(cls, fit) -> "ParameterUncertainty":
@@ -149,7 +154,8 @@ class ParameterUncertainty:
                          f"its (KT, chi, R) family, valid for amplitudes up to {xm:.4g} m")
             return cls._build(p, ("KT", "chi", "R"), corr * np.outer(se, se), source=src,
                               valid=xm, warnings=warns,
-                              values={"KT": p.KT, "chi": p.chi, "R": p.R})
+                              values={"KT": p.KT, "chi": p.chi, "R": p.R},
+                              success=getattr(fit, "success", True))
         fixed = set(getattr(fit, "fixed", ()))
         names = [n for n in PARAM_NAMES if n not in fixed and ident.get(n, True)
                  and math.isfinite(fit.stderr.get(n, math.nan))]
@@ -162,7 +168,8 @@ class ParameterUncertainty:
         idx = [PARAM_NAMES.index(n) for n in names]
         corr = np.asarray(fit.correlation, float)[np.ix_(idx, idx)]
         se = np.array([fit.stderr[n] * _scale(n, getattr(p, n)) for n in names])
-        return cls._build(p, names, corr * np.outer(se, se), source=src, warnings=warns)
+        return cls._build(p, names, corr * np.outer(se, se), source=src, warnings=warns,
+                          success=getattr(fit, "success", True))
 
     def _params(self, theta) -> IwanParameters:
         v = {n: float(_from_theta(n, t)) for n, t in zip(self.names, theta)}
@@ -216,4 +223,24 @@ class ParameterUncertainty:
         return json_safe({"nominal": self.nominal.to_dict(), "names": list(self.names),
                       "coordinates": [_COORD[n] for n in self.names], "mean": self.mean,
                       "cov": self.cov, "source": self.source,
-                      "valid_amplitude": self.valid_amplitude, "warnings": list(self.warnings)})
+                      "valid_amplitude": self.valid_amplitude, "warnings": list(self.warnings),
+                      "success": self.success})
+
+    def plot(self, ax=None):
+        """One standard deviation of each sampled coordinate (``ln Fs``, ``ln KT``, ``chi``,
+        ``ln(1 + beta)``, ``ln R``; a logarithm's is a relative error) as bars, with the
+        correlation matrix written on them. Returns the artists (one Axes,
+        :mod:`iwan_element.core.result_shape`)."""
+        ax, = panels(ax, 1, figsize=(5, 3.5))
+        se = np.sqrt(np.diag(self.cov))
+        x = np.arange(len(self.names))
+        arts = list(ax.bar(x, se, color="C0", alpha=0.7))
+        ax.set_xticks(x, [_COORD[n] for n in self.names])
+        ax.set_ylabel("standard deviation (relative for a logarithm)")
+        with np.errstate(invalid="ignore", divide="ignore"):
+            corr = self.cov / np.outer(se, se)
+        for i, s in enumerate(se):
+            arts.append(ax.annotate(" ".join(f"{c:+.2f}" for c in corr[i]), (i, s),
+                                    ha="center", va="bottom", fontsize=6))
+        ax.set_title(f"uncertainty from {self.source}", fontsize=9)
+        return arts

@@ -14,8 +14,13 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..core.validation import check_magnitude, finite_array
+from ..core.result_shape import ResultShape, panels
 
-__all__ = ["AmplitudeCurve"]
+__all__ = ["AmplitudeCurve", "MIN_POINTS"]
+
+#: Fewest curve points a modal fit can use (:func:`~iwan_element.fit_modal_iwan` needs three
+#: amplitudes: frequency and damping each carry up to three parameters of the microslip form).
+MIN_POINTS = 3
 
 
 def _optional_std(value, n: int, name: str) -> np.ndarray:
@@ -35,7 +40,7 @@ def _optional_std(value, n: int, name: str) -> np.ndarray:
 
 
 @dataclass(frozen=True)
-class AmplitudeCurve:
+class AmplitudeCurve(ResultShape):
     """Natural frequency and damping ratio against response amplitude.
 
     Parameters
@@ -63,6 +68,8 @@ class AmplitudeCurve:
 
     The arrays are copied and made read-only; nothing the caller passed is changed.
     """
+
+    plot_panels = 2
 
     amplitude: np.ndarray
     frequency: np.ndarray
@@ -115,6 +122,13 @@ class AmplitudeCurve:
             damping_std=self.damping_std[order], noise_floor=self.noise_floor,
             method=self.method, notes=self.notes, warnings=self.warnings)
 
+    @property
+    def success(self) -> bool:
+        """True when the curve has at least :data:`MIN_POINTS` points with finite frequency
+        and damping (a modal fit needs them; fewer points are reported in ``warnings``)."""
+        ok = np.isfinite(self.frequency) & np.isfinite(self.damping_ratio)
+        return bool(np.count_nonzero(ok) >= MIN_POINTS)
+
     def to_dict(self) -> dict:
         """Plain JSON-ready dictionary (NaN written as ``None``)."""
         def clean(a):
@@ -151,8 +165,9 @@ class AmplitudeCurve:
 
         Parameters
         ----------
-        ax : pair of matplotlib Axes, optional
-            ``(ax_frequency, ax_damping)``; a new figure with two panels if omitted.
+        ax : sequence of two matplotlib Axes, optional
+            ``(ax_frequency, ax_damping)``; a new figure with two panels if omitted (the
+            package's axes contract, :mod:`iwan_element.core.result_shape`).
         label : str, optional
             Legend label.
 
@@ -161,10 +176,7 @@ class AmplitudeCurve:
         list
             The matplotlib artists drawn.
         """
-        if ax is None:
-            import matplotlib.pyplot as plt
-            _, ax = plt.subplots(2, 1, sharex=True, figsize=(6, 6))
-        ax_f, ax_z = ax
+        ax_f, ax_z = panels(ax, 2, sharex=True, figsize=(6, 6))
         kw = {"marker": "o", "ms": 3, "ls": "-"}
         kw.update(kwargs)
         artists = []

@@ -10,6 +10,7 @@ from scipy import special, stats
 
 from ..core.modal import modal_iwan_curve
 from ..core.parameters import IwanParameters
+from ..core.result_shape import ResultShape, panels
 
 __all__ = ["ModalIwanFit", "model_curve", "full_parameters", "harmonic_factor"]
 
@@ -72,7 +73,7 @@ def _derived(theta, regime):
 
 
 @dataclass(frozen=True)
-class ModalIwanFit:
+class ModalIwanFit(ResultShape):
     """Result of :func:`fit_modal_iwan`.
 
     Attributes
@@ -95,6 +96,8 @@ class ModalIwanFit:
         Optimiser converged and every reported parameter is identified.
     warnings : tuple of str
     """
+
+    plot_panels = 2
 
     regime: str
     names: tuple
@@ -247,12 +250,10 @@ class ModalIwanFit:
     def plot(self, ax=None, *, band: float = 0.95, label: str = "fit"):
         """Data (with error bars), fitted curves and their band against amplitude.
 
-        ``ax`` is a pair ``(ax_frequency, ax_damping)``; a new figure if omitted. Returns
-        the list of artists drawn.
+        ``ax`` is a sequence of two Axes ``(ax_frequency, ax_damping)``; a new figure if
+        omitted (:mod:`iwan_element.core.result_shape`). Returns the list of artists drawn.
         """
-        if ax is None:
-            import matplotlib.pyplot as plt
-            _, ax = plt.subplots(2, 1, sharex=True, figsize=(6, 6))
+        ax = panels(ax, 2, sharex=True, figsize=(6, 6))
         from matplotlib.ticker import NullFormatter
         d = self.data
         X = np.geomspace(d["amplitude"].min(), d["amplitude"].max(), 200)

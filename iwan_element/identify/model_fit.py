@@ -45,6 +45,7 @@ from scipy.signal import savgol_coeffs, savgol_filter
 
 from ..core.validation import check_int, check_time, check_magnitude, finite_array, same_length
 from .noise import _correlation_time, estimate_noise
+from ..core.result_shape import ResultShape
 
 __all__ = ["ModelFit", "fit_force_model", "drive_displacement", "burn_in_index",
            "integrated_time"]
@@ -113,7 +114,7 @@ def drive_displacement(t, u, smooth="auto"):
 
 
 @dataclass(frozen=True, eq=False)
-class ModelFit:
+class ModelFit(ResultShape):
     """Result of :func:`fit_force_model`.
 
     Attributes

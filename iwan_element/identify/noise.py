@@ -48,6 +48,7 @@ from scipy.signal import savgol_coeffs, savgol_filter
 
 from ..core.validation import (check_time, check_magnitude, check_scalar, finite_array,
                                 same_length)
+from ..core.result_shape import ResultShape, panels
 
 __all__ = ["NoiseEstimate", "estimate_noise"]
 
@@ -57,10 +58,12 @@ MIN_WINDOW = 9
 
 
 _RHO_MAX = 0.98
+#: Fewest effective samples for a noise level to count as estimated (``NoiseEstimate.success``).
+MIN_EFFECTIVE = 10
 
 
 @dataclass(frozen=True)
-class NoiseEstimate:
+class NoiseEstimate(ResultShape):
     """Noise level of one channel (see :func:`estimate_noise`).
 
     Attributes
@@ -97,9 +100,34 @@ class NoiseEstimate:
         """Integrated correlation time in samples (``n / n_eff``, at least 1)."""
         return max(float(self.n) / float(self.n_eff), 1.0) if self.n_eff > 0 else 1.0
 
+    @property
+    def success(self) -> bool:
+        """True for a finite, positive level from at least :data:`MIN_EFFECTIVE` independent
+        samples (then its relative standard error, about ``1 / sqrt(2 n_eff)``, is below
+        about 22 %)."""
+        return bool(math.isfinite(self.sigma) and self.sigma > 0
+                    and self.n_eff >= MIN_EFFECTIVE)
+
+    def plot(self, ax=None, *, lags: int | None = None):
+        """The noise model's autocorrelation ``rho**|k|`` (AR(1)) against the lag [s], with the
+        integrated correlation time marked. Returns the artists (one Axes,
+        :mod:`iwan_element.core.result_shape`)."""
+        ax, = panels(ax, 1, figsize=(5, 3.5))
+        dt = self.correlation_time / self.tau if self.tau > 0 else 1.0
+        k = np.arange(lags if lags is not None else max(10, int(6 * self.tau)) + 1)
+        rho = self.lag_one ** k if self.lag_one > 0 else (k == 0).astype(float)
+        arts = ax.plot(k * dt, rho, "o-", ms=3, label=f"AR(1), rho = {self.lag_one:.2f}")
+        arts.append(ax.axvline(self.correlation_time, color="k", ls=":",
+                               label=f"correlation time {self.correlation_time:.3g} s"))
+        ax.set_xlabel("lag [s]")
+        ax.set_ylabel("noise autocorrelation [-]")
+        ax.set_title(f"sigma = {self.sigma:.4g} ({self.method})", fontsize=9)
+        ax.legend(fontsize=8)
+        return arts
+
     def to_dict(self) -> dict:
         """JSON-safe dict."""
-        return {"sigma": float(self.sigma), "method": self.method,
+        return {"sigma": float(self.sigma), "method": self.method, "success": self.success,
                 "correlation_time": float(self.correlation_time), "n": int(self.n),
                 "n_eff": float(self.n_eff), "window": float(self.window),
                 "lag_one": float(self.lag_one), "warnings": list(self.warnings)}

@@ -13,6 +13,7 @@ import numpy as np
 from ..core.serialize import json_safe
 
 from ..core.parameters import IwanParameters
+from ..core.result_shape import ResultShape
 
 __all__ = ["FitResult", "IdentifiabilityWarning", "PARAM_NAMES"]
 
@@ -33,7 +34,7 @@ class IdentifiabilityWarning(UserWarning):
 
 
 @dataclass(frozen=True, eq=False)
-class FitResult:
+class FitResult(ResultShape):
     """Identified Iwan parameters with uncertainties and diagnostics.
 
     Attributes
