@@ -13,12 +13,13 @@ residual of the model it selected.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from ..identify.noise import MIN_WINDOW, signal_window, estimate_noise
 
-__all__ = ["noise_estimate"]
+__all__ = ["noise_estimate", "NoiseLevel", "noise_level"]
 
 _RESIDUAL_MIN = 25               # samples: the AR(1) match is poorly conditioned below
 
@@ -44,3 +45,58 @@ def pure_noise(y, chi2_model, sigma, tau, n_eff) -> bool:
     ``tau`` samples): a record that is noise identifies nothing."""
     chi0 = float(np.sum((y - y.mean()) ** 2)) / sigma ** 2
     return (chi0 - chi2_model) / tau < 4.0 * math.log(max(n_eff, 2.0))
+
+
+@dataclass(frozen=True)
+class NoiseLevel:
+    """The force noise a diagnosis scores its fits against.
+
+    Attributes
+    ----------
+    sigma : float
+        Standard deviation [N] of the force as fitted.
+    tau : float
+        Correlation time [samples of the record].
+    text : str
+        Where it came from (given, estimated, reduced to the low-pass band, re-read).
+    warnings : tuple of str
+        What limits the estimate.
+    tau_k, n_eff : float
+        Correlation time in fitted samples (at least 1) and the effective number of
+        independent fitted samples.
+    """
+
+    sigma: float
+    tau: float
+    text: str
+    warnings: tuple
+    tau_k: float
+    n_eff: float
+
+    def reread(self, other: "NoiseLevel") -> "NoiseLevel":
+        """``other`` marked as re-read from the residual of the model selected."""
+        return replace(other, text=other.text + ", from the residual of the model selected")
+
+
+def noise_level(rec, r, noise) -> NoiseLevel:
+    """The noise of a prepared record ``rec`` (:class:`~.prepare.PreparedRecord`) from the
+    residual ``r`` [N] of a fit to the raw force (the model removes the loops' corners, the
+    estimator the smooth rest of any model error), or ``noise`` [N] when given (white)."""
+    if noise is not None:
+        sigma, tau, text, warns = noise, 1.0, "given", ()
+    else:
+        sigma, tau, method, warns = noise_estimate(rec.t, r, rec.F_raw)
+        text = f"estimated from the record ({method})"
+        if rec.lowpass is not None:                  # white noise through the low-pass
+            fs = 1.0 / float(np.median(np.diff(rec.t)))
+            frac = min(2.0 * rec.lowpass / fs, 1.0)
+            sigma *= math.sqrt(frac)
+            tau = max(tau, 1.0 / frac)
+            text += f", reduced to the {rec.lowpass:g} Hz band"
+        if not sigma > 0:
+            sigma = 1e-9 * float(np.max(np.abs(r))) or 1e-300
+            warns = tuple(warns) + ("no noise found in the force: a floor of 1e-9 x max|F| "
+                                    "is used",)
+    tau_k = max(1.0, tau * rec.keep.size / rec.n)
+    return NoiseLevel(sigma=float(sigma), tau=float(tau), text=text, warnings=tuple(warns),
+                      tau_k=tau_k, n_eff=rec.keep.size / tau_k)

@@ -28,21 +28,20 @@ import math
 import time
 
 import numpy as np
-from scipy.signal import butter, sosfiltfilt
 
-from ..core.history import REVERSAL_TOL, unit_params
-from ..core.validation import (MAGNITUDE_RANGE, check_int, check_time, check_magnitude,
-                                check_scalar, finite_array, same_length)
+from ..core.history import unit_params
+from ..core.serialize import json_safe
+from ..core.threads import one_blas_thread
+from ..core.validation import check_int, check_scalar
 from ..effects import EFFECTS
 from ..effects.evaluate import Evaluator, build_element, order_stack, stack_ok
 from ..ensemble.runner import progress_bar
-from ..identify.testdata import find_reversals, split_cycles
+from ..identify.result import settle_verdict
+from ..identify.testdata import split_cycles
 from . import _model as M
 from ._locate import _check_candidates, _locate, _untestable
-from ._noise import noise_estimate, pure_noise
-from ..identify.result import settle_verdict
-from ..core.serialize import json_safe
-from ..core.threads import one_blas_thread
+from ._noise import noise_level, pure_noise
+from .prepare import check_record, prepare_record
 from .results import Diagnosis
 from .selection import criterion_text, stepwise_select
 
@@ -53,78 +52,6 @@ log = logging.getLogger(__name__)
 #: Candidate effects tried by :func:`diagnose`, in the order they are reported.
 CANDIDATES = ("viscous_damping", "pinning_stiffness", "backlash", "slip_degradation",
               "asymmetric_slip", "breakaway")
-_SLOW_FIT_SAMPLES = 300          # samples fitted for stacks without a vectorised form
-
-
-def _rest_index(u, noise_u):
-    """Samples before the motion starts (at least 1)."""
-    thr = max(1e-6 * float(np.ptp(u)), 5.0 * noise_u)
-    moved = np.flatnonzero(np.abs(u - u[0]) > thr)
-    return max(int(moved[0]) if moved.size else 1, 1)
-
-
-def _prepare(t, u, F, noise, lowpass):
-    uu = check_magnitude("u", finite_array("u", u, ndim=1, min_size=40), unit="m")
-    FF = check_magnitude("F", finite_array("F", F, ndim=1, min_size=40), unit="N")
-    n = same_length(u=uu, F=FF)
-    tt = None if t is None else check_time(t, n)
-    if not np.ptp(uu) > 0:
-        raise ValueError("u never moves: a displacement-driven test is needed")
-    scale_F = max(float(np.max(np.abs(FF))), 1e-300)
-    if noise is not None:
-        noise = check_scalar("noise", noise, low=MAGNITUDE_RANGE[0], high=MAGNITUDE_RANGE[1])
-        if noise < 1e-9 * scale_F:
-            raise ValueError(f"noise = {noise:g} N is below the floating-point resolution of the "
-                             f"force record (1e-9 x max|F| = {1e-9 * scale_F:.3g} N); give a "
-                             "realistic noise level or leave noise=None to estimate it")
-    lp = None
-    if lowpass is not None:
-        if tt is None:
-            raise ValueError("lowpass needs the time vector t")
-        fs = 1.0 / float(np.median(np.diff(tt)))
-        lp = check_scalar("lowpass", lowpass, low=0.0, high=0.5 * fs, low_open=True,
-                          high_open=True)
-    return uu, FF, tt, n, noise, lp
-
-
-def _filter(tt, x, lp):
-    fs = 1.0 / float(np.median(np.diff(tt)))
-    sos = butter(4, lp, fs=fs, output="sos")
-    return sosfiltfilt(sos, x)
-
-
-def _noise_level(tt, r, noise, lp, channel=None):
-    """``(sigma [N], tau [samples], text, warnings)`` of the force as fitted, from the
-    residual ``r`` of a fit to the raw force (the model removes the loops' corners, the
-    estimator the smooth rest of any model error); ``channel``: the measured force, whose
-    loading time scale sets the estimator's window."""
-    if noise is not None:
-        return noise, 1.0, "given", ()
-    sigma, tau, method, warns = noise_estimate(tt, r, channel)
-    text = f"estimated from the record ({method})"
-    if lp is not None:                       # white noise through the low-pass
-        fs = 1.0 / float(np.median(np.diff(tt)))
-        frac = min(2.0 * lp / fs, 1.0)
-        sigma *= math.sqrt(frac)
-        tau = max(tau, 1.0 / frac)
-        text += f", reduced to the {lp:g} Hz band"
-    if not sigma > 0:
-        sigma = 1e-9 * float(np.max(np.abs(r))) or 1e-300
-        warns = tuple(warns) + ("no noise found in the force: a floor of 1e-9 x max|F| is "
-                                "used",)
-    return sigma, tau, text, tuple(warns)
-
-
-def _evaluators(uj, v, max_samples):
-    n = uj.size
-    rev = find_reversals(uj) if n > 2 else np.zeros(0, np.intp)
-    tol = REVERSAL_TOL * float(np.abs(uj).max())
-    keep = np.unique(np.round(np.linspace(0, n - 1, min(n, max_samples))).astype(np.intp))
-    ev = Evaluator(uj, v, keep, rev, tol=tol)
-    sub = keep[np.unique(np.round(np.linspace(0, keep.size - 1,
-                                              min(keep.size, _SLOW_FIT_SAMPLES))).astype(np.intp))]
-    ev_slow = Evaluator(uj, v, sub, rev, tol=tol)
-    return ev, ev_slow, keep, sub
 
 
 def _base_start(tt, uj, FF, seed):
@@ -143,10 +70,11 @@ def _base_start(tt, uj, FF, seed):
 class _Fitter:
     """Fits stacks on one record; scores them as noise-normalised chi2 on the full keep set."""
 
-    def __init__(self, ev, ev_slow, FF, keep, sub, scales, sigma, F0=None):
-        self.ev, self.ev_slow, self.scales, self.s2 = ev, ev_slow, scales, sigma * sigma
+    def __init__(self, rec, sigma=1.0, F0=None):
+        self.ev, self.ev_slow, self.scales = rec.ev, rec.ev_slow, rec.scales
+        self.s2 = sigma * sigma
         self.F0 = F0
-        self.y, self.y_sub = FF[keep], FF[sub]
+        self.y, self.y_sub = rec.F[rec.keep], rec.F[rec.sub]
         self.nfev = 0
 
     def model(self, names, *, full=True):
@@ -325,87 +253,64 @@ def diagnose(t, u, F, *, candidates=None, max_effects: int = 3, noise: float | N
         below the record's resolution, or an option out of range.
     """
     t_start = time.perf_counter()
-    uu, FF_in, tt, n, noise, lp = _prepare(t, u, F, noise, lowpass)
+    tt, uu, FF, n, noise, lp = check_record(t, u, F, noise, lowpass)
     cand = _check_candidates(candidates, CANDIDATES)
     max_effects = check_int("max_effects", max_effects, 1)
-    alpha = check_scalar("alpha", alpha, low=0.0, high=0.5, low_open=True, high_open=True)
-    ambiguity = check_scalar("ambiguity", ambiguity, low=0.0)
+    opts = dict(alpha=check_scalar("alpha", alpha, low=0.0, high=0.5, low_open=True,
+                                   high_open=True),
+                ambiguity=check_scalar("ambiguity", ambiguity, low=0.0),
+                max_effects=max_effects)
     max_samples = check_int("max_samples", max_samples, 100)
     bar = progress_bar(progress, desc="diagnose", unit="fit")
     try:
         with one_blas_thread():          # tall, narrow least squares: threads only spin
-            return _diagnose(tt, uu, FF_in, n, noise, lp, cand, max_effects, alpha, ambiguity,
-                             max_samples, seed, bar, t_start)
+            rec = prepare_record(tt, uu, FF, n, lp, max_samples)
+            fitter = _Fitter(rec)
+            base = _fit_base(fitter, rec.ev, _base_start(rec.t, rec.uj, rec.F, seed))
+            _tick(bar, "Iwan")
+            nl = noise_level(rec, rec.F_raw - _record_force(base, rec.uj, rec.v)[0], noise)
+            fitter.scales["D_ref"] = _dissipation_scale(rec, base)
+            sel, nl = _select_with_noise(fitter, base, rec, nl, noise, cand, opts, bar)
+            return _assemble(rec, fitter, base, nl, sel, opts, t_start)
     finally:
         if bar is not None:
             bar.close()
 
 
-def _diagnose(tt, uu, FF_in, n, noise, lp, cand, max_effects, alpha, ambiguity, max_samples,
-              seed, bar, t_start):
-    """The procedure of :func:`diagnose` on checked input (see the module docstring)."""
-    FF = FF_in
-    if lp is not None:
-        # both channels, as the rig's dynamics and the sensor noise are in both: the joint is
-        # driven by the displacement without them. Raw displacement noise makes turning
-        # points by the hundred (154 on a 1 Hz damper record at the fitted samples, 26 after
-        # a 20 Hz low-pass), and every one re-sticks the sliders of a break-away model
-        FF, uu = _filter(tt, FF_in, lp), _filter(tt, uu, lp)
-    i_rest = _rest_index(uu, noise_estimate(tt, uu)[0])
-    u_off = float(np.mean(uu[:i_rest]))
-    # the force offset is always fitted (linear, with Fs), the rest samples being part of the
-    # fitted data: a mean over a few rest samples has an error of sigma/sqrt(n_rest) that a
-    # fixed offset would leave in the residual as a constant misfit (a false "effect")
-    F_rest = None
-    uj = uu - u_off
-    v = np.zeros(n) if tt is None else np.gradient(uj, tt)
-    ev, ev_slow, keep, sub = _evaluators(uj, v, max_samples)
-    fitter = _Fitter(ev, ev_slow, FF, keep, sub, {"u_max": float(np.abs(uj).max()), "1": 1.0,
-                                                  "v_rms": float(np.sqrt(np.mean(v ** 2))) or 1.0,
-                                                  "D_ref": 1.0}, 1.0, F_rest)
-    base = _fit_base(fitter, ev, _base_start(tt, uj, FF, seed))
+def _tick(bar, text):
     if bar is not None:
-        bar.set_postfix_str("Iwan")
+        bar.set_postfix_str(text)
         bar.update(1)
-    r_raw = FF_in - _record_force(base, uj, v)[0]
-    sigma, tau, noise_text, nwarn = _noise_level(tt, r_raw, noise, lp, FF_in)
-    fitter.s2 = sigma * sigma
-    base["chi2"] = base["ssr"] / fitter.s2
+
+
+def _dissipation_scale(rec, base) -> float:
+    """The plain fit's unit dissipation over the record (the energy effects' scale)."""
     shape_b, _ = base["model"].decode(base["z"])
-    fitter.scales["D_ref"] = float(ev.unit_dissipation(unit_params(*shape_b))[-1]) or 1.0
-    tau_k = max(1.0, tau * keep.size / n)
-    n_eff = keep.size / tau_k
-    sel = _select(fitter, base, cand, tt, v, uj, FF, tau_k, n_eff, alpha, max_effects, ambiguity,
-                  bar=bar)
-    for _ in range(2 if noise is None else 0):
-        # a large misfit leaks into the plain fit's residual and inflates the noise estimate,
-        # which can hide a further effect: the noise is re-read from the residual of the
-        # model selected, and the selection is repeated with it (the fits are reused)
-        if not sel.named:
-            break
-        r_fin = FF_in - _record_force(sel.final["state"], uj, v)[0]
-        s_new, t_new, noise_text, nwarn = _noise_level(tt, r_fin, noise, lp, FF_in)
-        if abs(s_new - sigma) <= 0.05 * sigma and abs(t_new - tau) <= 0.1 * tau:
-            break
-        sigma, tau = s_new, t_new
-        noise_text += ", from the residual of the model selected"
-        fitter.s2 = sigma * sigma
+    return float(rec.ev.unit_dissipation(unit_params(*shape_b))[-1]) or 1.0
+
+
+def _select_with_noise(fitter, base, rec, nl, noise, cand, opts, bar):
+    """The selection, repeated with the noise re-read from the residual of the model it
+    selected (a large misfit leaks into the plain fit's residual and inflates the noise
+    estimate, which can hide a further effect; the fits are reused). ``(selection, noise)``."""
+    for k in range(3 if noise is None else 1):
+        fitter.s2 = nl.sigma ** 2
         base["chi2"] = base["ssr"] / fitter.s2
-        tau_k = max(1.0, tau * keep.size / n)
-        n_eff = keep.size / tau_k
-        sel = _select(fitter, base, cand, tt, v, uj, FF, tau_k, n_eff, alpha, max_effects,
-                      ambiguity, bar=bar)
-    ctx = dict(t_start=t_start, uu=uu, FF_in=FF_in, FF=FF, tt=tt, n=n, noise=noise, lp=lp,
-               sigma=sigma, tau=tau, noise_text=noise_text, nwarn=nwarn, u_off=u_off, uj=uj,
-               v=v, keep=keep, fitter=fitter, base=base, tau_k=tau_k, n_eff=n_eff, sel=sel,
-               alpha=alpha, ambiguity=ambiguity, cand=cand)
-    return _assemble(ctx)
+        sel = _select(fitter, base, cand, rec, nl, opts, bar=bar)
+        if k == 2 or not sel.named or noise is not None:
+            break
+        new = noise_level(rec, rec.F_raw - _record_force(sel.final["state"], rec.uj,
+                                                         rec.v)[0], noise)
+        if abs(new.sigma - nl.sigma) <= 0.05 * nl.sigma and abs(new.tau - nl.tau) <= 0.1 * nl.tau:
+            break
+        nl = nl.reread(new)
+    return sel, nl
 
 
-def _select(fitter, base, cand, tt, v, uj, FF, tau_k, n_eff, alpha, max_effects, ambiguity, *,
-            bar=None):
+def _select(fitter, base, cand, rec, nl, opts, *, bar=None):
     """Run the shared selection rule over the testable candidates (``bar``: a progress bar
     counting the fits)."""
+    tt, uj, v, FF = rec.t, rec.uj, rec.v, rec.F
     try:
         cycles = split_cycles(np.arange(uj.size, dtype=float) if tt is None else tt, uj, FF)
     except ValueError:
@@ -432,71 +337,81 @@ def _select(fitter, base, cand, tt, v, uj, FF, tau_k, n_eff, alpha, max_effects,
                 "message": row["message"]}
 
     base_state = {"names": (), "chi2": base["chi2"], "q": 5, "state": base}
-    sel = stepwise_select(fit_candidate, testable, base_state, tau=tau_k, n_eff=n_eff,
-                          alpha=alpha, max_effects=max_effects, ambiguity=ambiguity,
-                          allowed=_allowed)
+    sel = stepwise_select(fit_candidate, testable, base_state, tau=nl.tau_k, n_eff=nl.n_eff,
+                          allowed=_allowed, **opts)
     sel.untestable = untestable
     sel.cycles = cycles
     return sel
 
 
-def _assemble(c) -> Diagnosis:
+def _assemble(rec, fitter, base, nl, sel, opts, t_start) -> Diagnosis:
     """Refit, forces, location, warnings and the result object."""
-    sel, fitter, FF, uj, v = c["sel"], c["fitter"], c["FF"], c["uj"], c["v"]
-    warns = [f"noise estimate: {w}" for w in c["nwarn"]]
-    base = c["base"]
+    FF, uj, v, alpha = rec.F, rec.uj, rec.v, opts["alpha"]
+    warns = [f"noise estimate: {w}" for w in nl.warnings]
     F_base, _ = _record_force(base, uj, v)
-    noise_only = pure_noise(FF[c["keep"]], base["chi2"], c["sigma"], c["tau_k"], c["n_eff"])
+    noise_only = pure_noise(FF[rec.keep], base["chi2"], nl.sigma, nl.tau_k, nl.n_eff)
     if noise_only:                       # nothing is identified from noise
         sel.named, sel.ambiguous = [], ()
-    final = sel.final["state"] if sel.named else base
-    F_after, model = _record_force(final, uj, v)
-    if noise_only:
         warns.append("the force is indistinguishable from noise (the Iwan model explains no "
                      "more than a constant): nothing is identified")
-    base_fit = _fit_result(base, fitter, FF, F_base, c["t_start"], noise_only=noise_only)
-    fit = base_fit if not sel.named else _fit_result(final, fitter, FF, F_after, c["t_start"])
-    misfit = sel.p_before < c["alpha"] and not noise_only
+    final = sel.final["state"] if sel.named else base
+    F_after, model = _record_force(final, uj, v)
+    base_fit = _fit_result(base, fitter, FF, F_base, t_start, noise_only=noise_only)
+    fit = base_fit if not sel.named else _fit_result(final, fitter, FF, F_after, t_start)
+    misfit = sel.p_before < alpha and not noise_only
     r0 = FF - F_base
-    where, loc = _locate(c["tt"], uj, FF, F_base, r0, sel.cycles, c["sigma"], c["tau"]) \
+    where, loc = _locate(rec.t, uj, FF, F_base, r0, sel.cycles, nl.sigma, nl.tau) \
         if sel.cycles else ("", {})
     if not misfit:
         where = (f"The residual is consistent with the noise (RMS {np.sqrt(np.mean(r0 ** 2)):.3g} "
-                 f"N vs {c['sigma']:.3g} N); there is no misfit to explain.")
-    if misfit and sel.named and sel.p_after < c["alpha"]:
-        warns.append(f"misfit beyond the noise remains after {' + '.join(sel.named)}")
-    if misfit and not sel.named:
-        warns.append("the misfit is more than noise but no tested effect explains it" + (
-            f"; this record cannot reveal {', '.join(sel.untestable)}" if sel.untestable else ""))
-    span = float(np.ptp(FF)) or 1.0
-    steps = [{"on": st["on"], "candidates": [
-        {k: r.get(k) for k in ("name", "nrmse", "ratio", "dIC", "explained", "verdict", "message")}
-        for r in st["rows"]]} for st in sel.steps]
-    F0 = fit.details["force_offset"]
-    ro = lambda a: (a.setflags(write=False), a)[1]  # noqa: E731
-    details = {"samples": c["n"], "fitted_samples": int(c["keep"].size), "tau": c["tau"],
-               "n_eff": c["n_eff"], "noise_from": c["noise_text"], "misfit_p": sel.p_before,
-               "misfit_p_after": sel.p_after, "alpha": c["alpha"], "ambiguity": c["ambiguity"],
-               "criterion": criterion_text(), "location": loc, "lowpass": c["lp"],
-               "lowpass_reason": "rig dynamics removed before fitting" if c["lp"] else None,
-               "start_displacement": float(final.get("start", 0.0)),
-               "start_displacement_stderr": float(fit.details.get("start_displacement_stderr",
-                                                                  0.0)),
-               "wall_time": time.perf_counter() - c["t_start"]}
+                 f"N vs {nl.sigma:.3g} N); there is no misfit to explain.")
+    warns += _verdict_warnings(sel, misfit, alpha)
+    details = _details(rec, nl, sel, opts, loc, final, fit, t_start)
     if final.get("start", 0.0) != 0.0:
         warns.append(f"the record does not start from the joint's rest: a path to "
                      f"{final['start']:.4g} +- {details['start_displacement_stderr']:.2g} m "
                      "before the first sample (the joint's unknown "
                      "starting state, fitted as a nuisance) fits better")
+    span = float(np.ptp(FF)) or 1.0
+    steps = [{"on": st["on"], "candidates": [
+        {k: r.get(k) for k in ("name", "nrmse", "ratio", "dIC", "explained", "verdict", "message")}
+        for r in st["rows"]]} for st in sel.steps]
+    ro = lambda a: (a.setflags(write=False), a)[1]  # noqa: E731
     return Diagnosis(
         effect=sel.named[0] if sel.named else "none", effects=tuple(sel.named),
         ambiguous_with=sel.ambiguous, where=where,
-        success=bool(not noise_only and fit.success), offsets={"force": F0, "displacement": c["u_off"]},
+        success=bool(not noise_only and fit.success),
+        offsets={"force": fit.details["force_offset"], "displacement": rec.u_offset},
         error_before=float(np.sqrt(np.mean(r0 ** 2)) / span),
         error_after=float(np.sqrt(np.mean((FF - F_after) ** 2)) / span),
-        noise_level=c["sigma"] / span, noise_sigma=float(c["sigma"]), misfit=bool(misfit),
+        noise_level=nl.sigma / span, noise_sigma=float(nl.sigma), misfit=bool(misfit),
         base_fit=base_fit, fit=fit, model=model, steps=tuple(json_safe(s) for s in steps),
         untestable=sel.untestable, warnings=tuple(warns), force_before=ro(F_base),
         force_after=ro(np.array(F_after)),
-        t=ro(np.arange(c["n"], dtype=float) if c["tt"] is None else c["tt"]),
-        u=ro(c["uu"]), F=ro(FF), details=json_safe(details))
+        t=ro(np.arange(rec.n, dtype=float) if rec.t is None else rec.t),
+        u=ro(rec.u), F=ro(FF), details=json_safe(details))
+
+
+def _verdict_warnings(sel, misfit, alpha) -> list:
+    """What the selection leaves unexplained."""
+    if misfit and sel.named and sel.p_after < alpha:
+        return [f"misfit beyond the noise remains after {' + '.join(sel.named)}"]
+    if misfit and not sel.named:
+        return ["the misfit is more than noise but no tested effect explains it" + (
+            f"; this record cannot reveal {', '.join(sel.untestable)}" if sel.untestable
+            else "")]
+    return []
+
+
+def _details(rec, nl, sel, opts, loc, final, fit, t_start) -> dict:
+    """The diagnosis' ``details``: sizes, noise, tests, location and the starting state."""
+    return {"samples": rec.n, "fitted_samples": int(rec.keep.size), "tau": nl.tau,
+            "n_eff": nl.n_eff, "noise_from": nl.text, "misfit_p": sel.p_before,
+            "misfit_p_after": sel.p_after, "alpha": opts["alpha"],
+            "ambiguity": opts["ambiguity"], "criterion": criterion_text(), "location": loc,
+            "lowpass": rec.lowpass,
+            "lowpass_reason": "rig dynamics removed before fitting" if rec.lowpass else None,
+            "start_displacement": float(final.get("start", 0.0)),
+            "start_displacement_stderr": float(fit.details.get("start_displacement_stderr",
+                                                               0.0)),
+            "wall_time": time.perf_counter() - t_start}
