@@ -12,6 +12,7 @@ from ..core.history import unit_params
 from ..core.parameters import IwanParameters
 from ..effects import EFFECTS
 from ..effects.evaluate import Evaluator, scale_effect
+from ..identify.noise import integrated_time
 from ..identify.result import FitResult
 
 __all__: list[str] = []
@@ -263,22 +264,6 @@ def flat(p: IwanParameters, effs, names, F0):
     return np.array(out + [F0]), labels + ["force_offset"]
 
 
-def residual_tau(r) -> float:
-    """Integrated autocorrelation time of a residual [samples] (initial positive sequence):
-    a systematic misfit is correlated and widens the stated uncertainty by this factor."""
-    r = r - r.mean()
-    v = float(r @ r)
-    if v <= 0:
-        return 1.0
-    tau = 1.0
-    for k in range(1, min(200, r.size // 4)):
-        rho = float(r[:-k] @ r[k:]) / v
-        if rho <= 0.02:
-            break
-        tau += 2.0 * rho
-    return tau
-
-
 def uncertainty(model: LoopModel, z, r):
     """Standard errors and correlation of (Fs, KT, chi, beta, effect params, F0): delta method
     from the Jacobian in ``(z, start, Fs, F0)``, with the residual variance inflated by its
@@ -326,7 +311,7 @@ def uncertainty(model: LoopModel, z, r):
         cols.append(np.where(_jumps(dr, dr4), 0.0, dr))
         pcols.append(dp)
     J, Jp = np.column_stack(cols), np.column_stack(pcols)
-    s2 = float(r @ r) / max(r.size - theta.size, 1) * residual_tau(r)
+    s2 = float(r @ r) / max(r.size - theta.size, 1) * integrated_time(r)
     cov = Jp @ (s2 * np.linalg.pinv(J.T @ J, rcond=1e-12, hermitian=True)) @ Jp.T
     se = np.sqrt(np.clip(np.diag(cov), 0.0, None))
     cov, se_start = cov[:-1, :-1], float(se[-1])

@@ -16,7 +16,7 @@ Uncertainties
     ``dF0`` of a loop fit), central differences at the optimum:
     ``cov = tau s^2 (J^T J)^-1`` with ``s^2 = SSR/(m - p)``, mapped back to
     ``(Fs, KT, chi, beta)`` with the delta method. ``tau`` is the integrated autocorrelation
-    time of the residuals (:func:`~iwan_element.identify.model_fit.integrated_time`): 1 for
+    time of the residuals (:func:`~iwan_element.identify.noise.integrated_time`): 1 for
     white residuals, large for coloured noise or a systematic misfit, so a model that does not
     follow the data gets wider, not narrower, intervals. ``s^2`` holds the noise of both
     channels (force noise plus tangent stiffness times the displacement error); the
@@ -40,7 +40,7 @@ from ..core.history import unit_params
 from ..core.closed_form import backbone
 from ..core.parameters import IwanParameters
 from ._solver import _multistart, _Problem, _q_to_shape, _uncertainty
-from .model_fit import integrated_time
+from .noise import integrated_time
 from .result import PARAM_NAMES
 
 _CHI_BOUNDS = (-0.98, 1.0)            # search range of chi (physical joints: -1 < chi <= 0)

@@ -44,24 +44,13 @@ from scipy import optimize
 from scipy.signal import savgol_coeffs, savgol_filter
 
 from ..core.validation import check_int, check_time, check_magnitude, finite_array, same_length
-from .noise import _correlation_time, estimate_noise
+from .noise import estimate_noise, integrated_time
 from ..core.result_shape import ResultShape
 
-__all__ = ["ModelFit", "fit_force_model", "drive_displacement", "burn_in_index",
-           "integrated_time"]
+__all__ = ["ModelFit", "fit_force_model", "drive_displacement", "burn_in_index"]
 
 log = logging.getLogger(__name__)
 OFFSET_NAMES = ("dF0", "du0")
-
-
-def integrated_time(r: np.ndarray) -> float:
-    """Integrated autocorrelation time of the residual sequence ``r`` [samples], ``>= 1``."""
-    r = np.asarray(r, float)
-    if r.size < 8:
-        return 1.0
-    sc = 1.4826 * float(np.median(np.abs(r - np.median(r))))
-    sc = sc if sc > 0 else float(np.std(r))
-    return _correlation_time(r[None, :] - np.median(r), sc)
 
 
 def burn_in_index(u: np.ndarray, *, hysteresis: float | None = None) -> int:

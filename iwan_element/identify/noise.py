@@ -50,7 +50,7 @@ from ..core.validation import (check_time, check_magnitude, check_scalar, finite
                                 same_length)
 from ..core.result_shape import ResultShape, panels
 
-__all__ = ["NoiseEstimate", "estimate_noise"]
+__all__ = ["NoiseEstimate", "estimate_noise", "integrated_time"]
 
 _MAD = 1.482602218505602          # 1 / Phi^-1(3/4): MAD -> standard deviation of a Gaussian
 _POLY = 5
@@ -247,6 +247,18 @@ def _correlation_time(B: np.ndarray, sigma: float) -> float:
             break
         tau += 2.0 * pair
     return max(tau, 1.0)
+
+
+def integrated_time(r: np.ndarray) -> float:
+    """Integrated autocorrelation time of the residual sequence ``r`` [samples], ``>= 1``: the
+    package's one estimate (Geyer's initial positive sequence on a robustly scaled residual),
+    used by every fit and diagnosis to widen its stated uncertainty for correlated misfit."""
+    r = np.asarray(r, float)
+    if r.size < 8:
+        return 1.0
+    sc = 1.4826 * float(np.median(np.abs(r - np.median(r))))
+    sc = sc if sc > 0 else float(np.std(r))
+    return _correlation_time(r[None, :] - np.median(r), sc)
 
 
 def estimate_noise(t, y, *, method: str = "auto", window: float | None = None) -> NoiseEstimate:
