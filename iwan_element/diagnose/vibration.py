@@ -27,6 +27,7 @@ from ..core.validation import (check_int, check_magnitude, check_scalar, finite_
                                 same_length)
 from ..effects import EFFECTS
 from ..identify.curves import AmplitudeCurve
+from ..identify.noise import difference_sigma
 from ..identify.units import check_damping_ratio, check_frequency_ratio
 from ..core.serialize import json_safe
 from .results import VibrationDiagnosis
@@ -42,8 +43,7 @@ def vibration_candidates() -> tuple:
 
 def _curve_noise(r):
     """Relative noise of a curve from its second differences along amplitude (MAD)."""
-    d2 = r[:-2] - 2 * r[1:-1] + r[2:]
-    return float(1.4826 * np.median(np.abs(d2 - np.median(d2))) / math.sqrt(6.0))
+    return difference_sigma(r)
 
 
 def _check_units(fm, fp, zm, zp):

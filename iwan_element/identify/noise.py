@@ -50,7 +50,7 @@ from ..core.validation import (check_time, check_magnitude, check_scalar, finite
                                 same_length)
 from ..core.result_shape import ResultShape, panels
 
-__all__ = ["NoiseEstimate", "estimate_noise", "integrated_time"]
+__all__ = ["NoiseEstimate", "estimate_noise", "integrated_time", "difference_sigma"]
 
 _MAD = 1.482602218505602          # 1 / Phi^-1(3/4): MAD -> standard deviation of a Gaussian
 _POLY = 5
@@ -261,6 +261,15 @@ def integrated_time(r: np.ndarray) -> float:
     return _correlation_time(r[None, :] - np.median(r), sc)
 
 
+def difference_sigma(y) -> float:
+    """Noise standard deviation of a sequence from its second differences: ``1.4826 MAD``
+    of ``y[i-1] - 2 y[i] + y[i+1]`` divided by ``sqrt(6)`` (white noise of variance
+    ``s**2`` gives second differences of variance ``6 s**2``; the MAD ignores a smooth signal's
+    slowly varying curvature and isolated outliers). The package's one copy of this rule."""
+    d2 = np.diff(np.asarray(y, float), 2)
+    return _MAD * float(np.median(np.abs(d2 - np.median(d2)))) / math.sqrt(6.0)
+
+
 def estimate_noise(t, y, *, method: str = "auto", window: float | None = None) -> NoiseEstimate:
     """Estimate the noise standard deviation of one measured channel (see the module docstring).
 
@@ -306,7 +315,7 @@ def estimate_noise(t, y, *, method: str = "auto", window: float | None = None) -
                                                           "(a quantised or switched-off channel?)"]))
     if method == "difference":
         d2 = np.diff(yy, 2)
-        s = _MAD * float(np.median(np.abs(d2 - np.median(d2)))) / math.sqrt(6.0)
+        s = difference_sigma(yy)
         tau = _correlation_time(_clean_blocks(d2, min(64, d2.size // 4)), s * math.sqrt(6.0))
         return NoiseEstimate(s, "difference", tau * dt, n, n / tau, dt, tuple(warns))
     if window is None:

@@ -27,7 +27,7 @@ from ..core.validation import (check_int, check_time, check_magnitude, check_sca
                                 same_length)
 from ..core.joint import IwanJoint
 from ..core.parameters import IwanParameters
-from .noise import estimate_noise
+from .noise import difference_sigma, estimate_noise
 
 __all__ = [
     "Cycle",
@@ -110,8 +110,7 @@ def _noise_sigma(u: np.ndarray) -> float:
         return 0.0
     if u.size >= 32:
         return estimate_noise(np.arange(u.size, dtype=float), u).sigma
-    d2 = np.diff(u, 2)
-    return float(1.4826 * np.median(np.abs(d2 - np.median(d2))) / math.sqrt(6.0))
+    return difference_sigma(u)
 
 
 def _check_varies(u: np.ndarray) -> None:
