@@ -38,7 +38,7 @@ from .closed_form import backbone, dissipation, secant_stiffness, tangent_stiffn
 from .joint import IwanJoint
 from .parameters import IwanParameters
 
-__all__ = ["harmonic_stiffness", "modal_iwan_curve", "modal_ringdown"]
+__all__ = ["harmonic_stiffness", "modal_iwan_curve", "modal_ringdown", "viscous_floor"]
 
 _GL_X, _GL_W = np.polynomial.legendre.leggauss(48)
 
@@ -101,6 +101,29 @@ def _harmonic_quadrature(q, p):
         F = backbone(qq, p) - 2.0 * backbone(0.5 * (qq - u), p)
         total += half * np.sum(_GL_W[None, :] * F * np.cos(th), axis=1, keepdims=True)
     return (2.0 / math.pi) * total[:, 0] / q
+
+
+def viscous_floor(zeta0, w0_sq, w_sq, k_e, floor: str):
+    """The viscous part of a mode's damping ratio (the package's one copy of the rule;
+    ``docs/equations.md`` section 7).
+
+    ``floor="constant"``: ``zeta0`` itself. ``floor="dashpot"``: a fixed dashpot
+    ``c = 2 zeta0 w0`` (per unit modal mass) dissipates ``pi c w X**2`` per cycle, which as a
+    ratio of the energy measure ``k_e X**2`` (``k_e = w**2`` for the energy form, the
+    tangent for a free decay's form; per unit mass) is ``zeta0 w0 w / k_e``.
+
+    Parameters
+    ----------
+    zeta0 : float
+        Viscous damping ratio at the linear frequency.
+    w0_sq, w_sq, k_e : float or ndarray
+        Squared linear and amplitude-dependent angular frequency [rad^2/s^2] and the energy
+        measure [rad^2/s^2] (stiffnesses per unit modal mass).
+    floor : {"constant", "dashpot"}
+    """
+    if floor == "constant":
+        return zeta0 + 0.0 * np.asarray(w_sq)
+    return zeta0 * np.sqrt(w0_sq * np.asarray(w_sq)) / k_e
 
 
 def modal_iwan_curve(Q, params: IwanParameters, *, K_inf: float, zeta0: float = 0.0,
@@ -169,7 +192,7 @@ def modal_iwan_curve(Q, params: IwanParameters, *, K_inf: float, zeta0: float = 
     w0 = math.sqrt((K_inf + p.KT) / mass)
     # the stiffness that relates the energy to the amplitude: m w^2, or dE/dQ / Q for a decay
     k_e = mass * w2 if damping == "energy" else K_inf + np.asarray(tangent_stiffness(x, p))
-    zv = zeta0 if floor == "constant" else zeta0 * mass * w0 * np.sqrt(w2) / k_e
+    zv = viscous_floor(zeta0, w0 * w0, w2, k_e / mass, floor)
     zeta = zv + np.asarray(dissipation(x, p)) / (2.0 * math.pi * k_e * x * x)
     f = np.sqrt(w2) / (2.0 * math.pi)
     if np.ndim(Q) == 0:

@@ -8,7 +8,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import special, stats
 
-from ..core.modal import modal_iwan_curve
+from ..core.modal import modal_iwan_curve, viscous_floor
 from ..core.parameters import IwanParameters
 from ..core.result_shape import ResultShape, panels
 
@@ -51,7 +51,7 @@ def model_curve(theta, X, regime, x_ref, stiffness, floor, damping="energy"):
         w2 = w02 * np.maximum(1.0 - s * g, 1e-12)
         # energy per amplitude: w^2, or the tangent (secant drop times chi + 2) for a decay
         k_e = w2 if damping == "energy" else w02 * np.maximum(1.0 - (chi + 2.0) * g, 1e-12)
-        zv = z0 if floor == "constant" else z0 * np.sqrt(w02 * w2) / k_e
+        zv = viscous_floor(z0, w02, w2, k_e, floor)
         zeta = zv + w02 * g * 2.0 * (chi + 1.0) / (math.pi * (chi + 3.0)) / k_e
         return np.sqrt(w2) / (2.0 * math.pi), zeta
     p, k_inf = full_parameters(theta)
