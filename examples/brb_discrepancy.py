@@ -47,9 +47,6 @@ def data_dir():
 
 def sweeps_curve(path):
     """The sweeps as one amplitude curve (``iwan_element.sweep_curve``)."""
-    if not hasattr(ie, "sweep_curve"):
-        raise SystemExit("iwan_element.sweep_curve is not available yet (it is merged from "
-                         "the vibration-data branch); nothing else to do")
     d = np.loadtxt(path, delimiter=",", skiprows=1)
     level, f, F, A, phase = d.T
     return ie.sweep_curve(f, F, A, phase, level=level.astype(int), quantity="acceleration")

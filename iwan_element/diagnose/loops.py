@@ -49,9 +49,11 @@ __all__ = ["CANDIDATES", "diagnose"]
 
 log = logging.getLogger(__name__)
 
-#: Candidate effects tried by :func:`diagnose`, in the order they are reported.
-CANDIDATES = ("viscous_damping", "pinning_stiffness", "backlash", "slip_degradation",
-              "asymmetric_slip", "breakaway")
+#: Candidate effects tried by :func:`diagnose`, in the order they are reported: every effect
+#: that declares a ``loop_rank`` (the effects' own declaration, so a new effect module joins
+#: by itself), in that order.
+CANDIDATES = tuple(sorted((n for n, c in EFFECTS.items() if c.loop_rank is not None),
+                          key=lambda n: EFFECTS[n].loop_rank))
 
 
 def _base_start(tt, uj, FF, seed):

@@ -49,6 +49,9 @@ class ParamSpec:
         Bounds of that dimensionless fitting variable.
     fit_starts : tuple of float
         Starting values of that fitting variable (the first is the "no effect" value).
+    open_range : bool
+        True when the ends of ``[lower, upper]`` are excluded (e.g. an asymmetry of +-1
+        would leave one direction without friction).
     """
 
     name: str
@@ -62,6 +65,7 @@ class ParamSpec:
     ref_power: int = 1
     fit_bounds: tuple = (0.0, 1.0)
     fit_starts: tuple = (0.0,)
+    open_range: bool = False
 
 
 def _find_zero(trial, a: float, Fa: float, b: float, Fb: float, *, rtol: float = 1e-13,
@@ -137,6 +141,10 @@ class _Effect(CommittedState):
     #: from a between-test difference of the linear damping (shaker, suspension), so a
     #: vibration diagnosis that fits that difference cannot test it.
     modal_floor: bool = False
+    #: Place among the candidates a loop diagnosis tries (:data:`iwan_element.CANDIDATES`,
+    #: in this order), or ``None`` for an effect a force-displacement record does not test
+    #: (one whose form is for the beam model's vibration only).
+    loop_rank: int | None = None
 
     def __init_subclass__(cls, **kw):
         super().__init_subclass__(**kw)
@@ -188,10 +196,9 @@ class _Effect(CommittedState):
             val = values[sp.name]
             if val is None:
                 raise ValueError(f"effect {self.effect!r} needs parameter {sp.name!r}")
-            lo_open = sp.name == "asymmetry"
             setattr(self, sp.name, check_scalar(
                 sp.name, val, low=sp.lower, high=None if math.isinf(sp.upper) else sp.upper,
-                low_open=lo_open, high_open=lo_open))
+                low_open=sp.open_range, high_open=sp.open_range))
 
     @classmethod
     def vector_force(cls, F, u, v, **values):

@@ -40,6 +40,7 @@ class PinningStiffness(_Effect):
     """
 
     effect = "pinning_stiffness"
+    loop_rank = 20
     kind = "stiffness"
     specs = (ParamSpec("k_p", "N/m", "stiffness in parallel after the clearance", fs_power=1,
                        ref="u_max", fit_bounds=(0.0, 20.0), fit_starts=(0.0, 0.2, 0.3)),

@@ -97,6 +97,7 @@ class SlipDegradation(_SliderEffect):
     """
 
     effect = "slip_degradation"
+    loop_rank = 40
     specs = (ParamSpec("rate", "1/J", "relative loss of slip capacity per joule dissipated",
                        fs_power=-1, ref="D_ref", fit_bounds=(0.0, 5.0), fit_starts=(0.0, 0.2)),)
 

@@ -29,6 +29,7 @@ class ViscousDamping(_Effect):
     """
 
     effect = "viscous_damping"
+    loop_rank = 10
     kind = "dissipation"
     modal_floor = True
     specs = (ParamSpec("c", "N s/m", "dashpot coefficient in parallel with the joint",
