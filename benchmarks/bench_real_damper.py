@@ -7,10 +7,12 @@ band misfit is measured on that low-passed force. The last column is the force-c
 [samples] that would minimise the band misfit after (the fitted force shifted by -10..10
 samples) and the band misfit after at that lag: a channel time lag is a nuisance worth fitting
 only if that misfit is much smaller than the unshifted one. ``at speed`` is the share [%] of
-the band's squared misfit after that lies where the drive moves at over 90 % of its top speed:
-a rate-independent joint slides there, at its friction level, so a measured force inside the
-band at full speed is not quasi-static joint behaviour (in the 1-2 Hz ds2 records: the loose
-part chattering in the gap after it closes, see docs/damper_range.md).
+the band's squared misfit after that lies where the drive moves at over 90 % of its top speed,
+away from the reversals and gap crossings: a rate-independent joint slides there at its
+friction level, so a large share puts the misfit in the sliding phase, not in the transitions
+(a sliding level inside the band, as on the decreasing branch of the 0 lb records, or the
+chatter after the gap closes at full speed in the velocity-limited 1-2 Hz ds2 records: see
+docs/damper_range.md).
 
     python benchmarks/bench_real_damper.py [--data DIR] [--lowpass 20] [--jobs 1]
 """
