@@ -33,9 +33,10 @@ def truth(cond):
     return {q: a + b * cond["tension"] + c * cond["frequency"] for q, (a, b, c) in LAWS.items()}
 
 
-def element(cond):
-    """The true device at one condition."""
+def element(cond, *, fs_factor=1.0):
+    """The true device at one condition (``fs_factor``: a device off the Fs law)."""
     q = truth(cond)
+    q["Fs"] *= fs_factor
     phi, chi, beta = math.exp(q["log_phi_max"]), q["chi"], math.expm1(q["log1p_beta"])
     KT = q["Fs"] * (1 + beta) / (phi * (beta + (chi + 1) / (chi + 2)))
     p = IwanParameters(q["Fs"], KT, chi, beta)
@@ -43,13 +44,14 @@ def element(cond):
                                      "drag": q["backlash.drag/Fs"] * q["Fs"]}])
 
 
-def campaign(seed, conditions=CONDITIONS, noise=0.005):
+def campaign(seed, conditions=CONDITIONS, noise=0.005, odd=None):
     """``(records, conditions)`` of one seeded campaign: per condition a test of three
-    amplitude blocks (0.6, 1.5, 3 phi_max) of two cycles, 96 samples per cycle."""
+    amplitude blocks (0.6, 1.5, 3 phi_max) of two cycles, 96 samples per cycle; record
+    ``odd`` (an index), if given, is a device with 1.3 times the law's Fs."""
     rng = np.random.default_rng(seed)
     recs = []
-    for c in conditions:
-        el = element(c)
+    for i, c in enumerate(conditions):
+        el = element(c, fs_factor=1.3 if i == odd else 1.0)
         amps = np.array([0.6, 1.5, 3.0]) * math.exp(truth(c)["log_phi_max"])
         d = simulate_element_test(el, amps, cycles=2, frequency=c["frequency"],
                                   samples_per_cycle=96, rest_samples=10,

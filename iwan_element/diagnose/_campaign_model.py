@@ -74,16 +74,32 @@ def check_conditions(conditions, n: int):
     return names, X
 
 
+def precheck_laws(laws, cnames, X):
+    """The checks of :func:`resolve_laws` that need no effect stack (made before the records
+    are diagnosed): quantities of known form, conditions that exist and vary, enough
+    records for the joint's default laws."""
+    if laws is not None and not isinstance(laws, dict):
+        raise ValueError(f"laws must be a dict {{quantity: conditions}}, got {type(laws).__name__}")
+    known = set(BASE_QUANTITIES) | {effect_quantity(nm, sp) for nm, cls in EFFECTS.items()
+                                    for sp in cls.specs}
+    unknown = sorted(set(laws or {}) - known)
+    if unknown:
+        raise ValueError(f"laws names {unknown}, which are not quantities of any model; "
+                         f"they are {sorted(known)}")
+    laws = dict(laws or {})
+    resolve_laws(laws, tuple(dict.fromkeys(BASE_QUANTITIES + tuple(laws))), cnames, X)
+
+
 def resolve_laws(laws, qnames, cnames, X):
     """Conditions of each quantity's law: ``laws[q]`` if given (each must vary over the
     records), else every condition that varies. Returns ``(dict q -> tuple, warnings)``."""
     varies = {c: bool(np.ptp(X[:, j]) > 0) for j, c in enumerate(cnames)}
     laws = {} if laws is None else dict(laws)
-    unknown = sorted(set(laws) - set(qnames))
-    if unknown:
-        raise ValueError(f"laws names {unknown}, which are not quantities of this model; "
-                         f"they are {list(qnames)}")
     out, warns = {}, []
+    unknown = sorted(set(laws) - set(qnames))
+    if unknown:              # an effect the campaign's stack does not have (checked before)
+        warns.append(f"laws for {unknown} are not used: the campaign's stack has no such "
+                     "effect")
     for q in qnames:
         if q in laws:
             conds = laws[q]

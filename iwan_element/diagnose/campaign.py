@@ -255,6 +255,9 @@ def fit_campaign(records, conditions, *, effects=None, laws=None, names=None, di
         raise ValueError(f"jobs must be an integer >= 1, got {jobs!r}")
     if isinstance(max_nfev, bool) or not isinstance(max_nfev, (int, np.integer)) or max_nfev < 1:
         raise ValueError(f"max_nfev must be an integer >= 1, got {max_nfev!r}")
+    CM.precheck_laws(laws, cnames, X)
+    if effects is not None:
+        _common_stack([], effects)               # checked before the records are diagnosed
     preps, warns = _diagnose_records(recs, labels, opts, diagnoses, jobs, client, progress)
     ok = [i for i, p in enumerate(preps) if p is not None]
     preps, labels, X = [preps[i] for i in ok], [labels[i] for i in ok], X[ok]
