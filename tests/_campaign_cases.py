@@ -6,7 +6,8 @@ values.
 
 Device: a joint with backlash whose slip force grows linearly with a "tension" condition and
 whose shape (chi) changes linearly with a "frequency" condition; phi_max, beta, the gap and
-the drag per Fs are constants. Noise: 0.5 % of the record's Fs.
+the drag per Fs are constants (the laws' forms: ln phi_max, ln(1 + beta), ln gap,
+ln(drag / Fs)). Noise: 0.5 % of the record's Fs.
 """
 from __future__ import annotations
 
@@ -21,7 +22,8 @@ from iwan_element.effects.evaluate import build_element
 #: True laws: quantity -> (intercept, per tension [N/lb or 1/lb], per frequency [1/Hz]).
 LAWS = {"Fs": (400.0, 20.0, 0.0), "log_phi_max": (math.log(2.0e-3), 0.0, 0.0),
         "chi": (-0.6, 0.0, 0.2), "log1p_beta": (math.log1p(0.3), 0.0, 0.0),
-        "backlash.gap": (0.4e-3, 0.0, 0.0), "backlash.drag/Fs": (0.05, 0.0, 0.0)}
+        "ln(backlash.gap)": (math.log(0.4e-3), 0.0, 0.0),
+        "ln(backlash.drag/Fs)": (math.log(0.05), 0.0, 0.0)}
 #: Test conditions of the campaign (tension [lb], frequency [Hz]).
 CONDITIONS = tuple({"tension": T, "frequency": f} for T in (10.0, 20.0, 30.0, 40.0)
                    for f in (0.5, 1.0))
@@ -40,8 +42,8 @@ def element(cond, *, fs_factor=1.0):
     phi, chi, beta = math.exp(q["log_phi_max"]), q["chi"], math.expm1(q["log1p_beta"])
     KT = q["Fs"] * (1 + beta) / (phi * (beta + (chi + 1) / (chi + 2)))
     p = IwanParameters(q["Fs"], KT, chi, beta)
-    return build_element(p, NAMES, [{"gap": q["backlash.gap"],
-                                     "drag": q["backlash.drag/Fs"] * q["Fs"]}])
+    return build_element(p, NAMES, [{"gap": math.exp(q["ln(backlash.gap)"]),
+                                     "drag": math.exp(q["ln(backlash.drag/Fs)"]) * q["Fs"]}])
 
 
 def campaign(seed, conditions=CONDITIONS, noise=0.005, odd=None):

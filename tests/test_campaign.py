@@ -104,7 +104,8 @@ def test_result_api(fitted):
     before = [tuple(np.array(a, copy=True) for a in r) for r in recs]
     fit_campaign(recs[:4], conds[:4], laws={"Fs": ("tension",), "chi": (),
                                             "log_phi_max": (), "log1p_beta": (),
-                                            "backlash.gap": (), "backlash.drag/Fs": ()},
+                                            "ln(backlash.gap)": (),
+                                            "ln(backlash.drag/Fs)": ()},
                  **OPTS)
     for r, r0 in zip(recs, before):                              # nothing mutated
         assert all(np.array_equal(x, y) for x, y in zip(r, r0))

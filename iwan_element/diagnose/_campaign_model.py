@@ -26,23 +26,49 @@ BASE_UNITS = {"Fs": "N", "log_phi_max": "ln m", "chi": "1", "log1p_beta": "1"}
 BAND = 0.25                          # the band misfit's |F| < BAND max|F|
 
 
+def log_form(spec) -> bool:
+    """True for a parameter bounded on one side only (a gap, a drag, a ratio >= 1): its law
+    is on ``ln(value - lower)``, which keeps every law value in range without clipping."""
+    return math.isfinite(spec.lower) and math.isinf(spec.upper)
+
+
 def effect_quantity(name: str, spec) -> str:
     """Law name of an effect parameter: its value per ``Fs**fs_power`` (the unit-force form,
-    homogeneous of degree zero in the force scale)."""
+    homogeneous of degree zero in the force scale), as ``ln(value - lower)`` for a parameter
+    bounded on one side (:func:`log_form`)."""
     suffix = {0: "", 1: "/Fs", -1: "*Fs"}.get(spec.fs_power, f"/Fs^{spec.fs_power}")
-    return f"{name}.{spec.name}{suffix}"
+    q = f"{name}.{spec.name}{suffix}"
+    if log_form(spec):
+        return f"ln({q})" if spec.lower == 0 else f"ln({q} - {spec.lower:g})"
+    return q
+
+
+def to_law(spec, value: float) -> float:
+    """A unit-force parameter value in its law's form (NaN at the lower bound of a log form:
+    no information on the logarithm's scale)."""
+    if not log_form(spec):
+        return value
+    d = value - spec.lower
+    return math.log(d) if d > 0 else math.nan
+
+
+def from_law(spec, v: float) -> float:
+    """Inverse of :func:`to_law`."""
+    return spec.lower + math.exp(min(v, 700.0)) if log_form(spec) else v
 
 
 def quantities(names) -> tuple:
-    """``(law names, units)`` of the stack ``names``: the joint's four, then every effect
-    parameter in the unit-force form."""
-    q, units = list(BASE_QUANTITIES), dict(BASE_UNITS)
+    """``(law names, units, specs)`` of the stack ``names``: the joint's four, then every
+    effect parameter in its law form (``specs``: quantity -> (effect, ParamSpec))."""
+    q, units, specs = list(BASE_QUANTITIES), dict(BASE_UNITS), {}
     for nm in names:
         for sp in EFFECTS[nm].specs:
             k = effect_quantity(nm, sp)
             q.append(k)
-            units[k] = sp.unit if sp.fs_power == 0 else f"{sp.unit} per N^{sp.fs_power}"
-    return tuple(q), units
+            u = sp.unit if sp.fs_power == 0 else f"{sp.unit} per N^{sp.fs_power}"
+            units[k] = f"ln {u}" if log_form(sp) else u
+            specs[k] = (nm, sp)
+    return tuple(q), units, specs
 
 
 def check_conditions(conditions, n: int):
@@ -162,8 +188,10 @@ def prepare_record(d, max_samples: int) -> dict:
     for e in d.fit.details.get("effects", []):
         for sp in EFFECTS[e["name"]].specs:
             k = effect_quantity(e["name"], sp)
-            est[k] = float(e["parameters"][sp.name]) / p.Fs ** sp.fs_power
-            se[k] = float(e["stderr"].get(sp.name) or math.nan) / p.Fs ** sp.fs_power
+            val = float(e["parameters"][sp.name]) / p.Fs ** sp.fs_power
+            s_val = float(e["stderr"].get(sp.name) or math.nan) / p.Fs ** sp.fs_power
+            est[k] = to_law(sp, val)
+            se[k] = s_val / (val - sp.lower) if log_form(sp) else s_val
     base = d.base_fit.params
     return {"t": t, "u": uj, "F": F, "keep": keep, "effects": tuple(d.effects),
             "estimates": est, "stderr": se, "start": float(d.details["start_displacement"]),
@@ -238,8 +266,8 @@ class CampaignModel:
             d = {}
             for sp in EFFECTS[nm].specs:
                 ref = rm.scales[sp.ref] ** sp.ref_power
-                z = min(max(vals[effect_quantity(nm, sp)] * ref, sp.fit_bounds[0]),
-                        sp.fit_bounds[1])
+                z = min(max(from_law(sp, vals[effect_quantity(nm, sp)]) * ref,
+                            sp.fit_bounds[0]), sp.fit_bounds[1])
                 d[sp.name] = z / ref
             effs.append(d)
         return vals["Fs"], (phi, chi, beta), effs

@@ -11,7 +11,8 @@ condition that was not tested (:meth:`CampaignFit.predict`). The procedure
    yardstick of the campaign model), its noise and the record as fitted (offsets, low-pass);
 2. the campaign's effect stack is the effects named on at least half of the records (or
    ``effects=``); each quantity ``q`` of the stack (``Fs``, ``ln phi_max``, ``chi``,
-   ``ln(1 + beta)``, every effect parameter per ``Fs**fs_power``) follows a law linear in
+   ``ln(1 + beta)``, every effect parameter per ``Fs**fs_power``, as ``ln(value - lower)``
+   when it is bounded on one side only, e.g. a gap or a drag) follows a law linear in
    the conditions, ``q = a + sum_c b_c x_c`` (by default in every condition that varies;
    ``laws=`` states others, e.g. ``{"chi": ()}`` for a constant);
 3. one weighted least-squares fit over all records (scipy ``least_squares``, sparse Jacobian
@@ -166,9 +167,12 @@ def _start_values(model, preps):
 def _no_effect(model, q) -> float:
     """An effect parameter's first non-zero fitting start, in internal units (the law's
     internal scale is the physical value of fitting variable 1, :func:`build_model`)."""
-    nm, rest = q.split(".", 1)
-    sp = next(s for s in EFFECTS[nm].specs if rest.startswith(s.name))
-    return float(sp.fit_starts[min(1, len(sp.fit_starts) - 1)])
+    nm, sp = CM.quantities(model.names)[2][q]
+    z = float(sp.fit_starts[min(1, len(sp.fit_starts) - 1)])
+    if not CM.log_form(sp):
+        return z
+    unit = float(np.median([rm.scales[sp.ref] ** -sp.ref_power for rm in model.records]))
+    return CM.to_law(sp, max(sp.lower + z * unit, sp.lower + 1e-3 * unit))
 
 
 def build_model(preps, names, laws, cnames, X):
@@ -180,7 +184,7 @@ def build_model(preps, names, laws, cnames, X):
               "log_phi_max": 1.0, "chi": 1.0, "log1p_beta": 1.0}
     for nm in names:
         for sp in EFFECTS[nm].specs:
-            qscale[CM.effect_quantity(nm, sp)] = float(np.median(
+            qscale[CM.effect_quantity(nm, sp)] = 1.0 if CM.log_form(sp) else float(np.median(
                 [rm.scales[sp.ref] ** -sp.ref_power for rm in records]))
     free = [p["start"] != 0.0 for p in preps]
     return CM.CampaignModel(records, names, laws, cnames, X, centre, cscale, qscale, free)
@@ -218,8 +222,9 @@ def fit_campaign(records, conditions, *, effects=None, laws=None, names=None, di
         ``{quantity: conditions}`` for quantities whose law is not linear in every condition
         that varies (the default), e.g. ``{"Fs": ("tension",), "chi": ()}``. Quantities:
         ``Fs`` [N], ``log_phi_max`` [ln m], ``chi``, ``log1p_beta`` and per effect parameter
-        ``"<effect>.<param>"`` (``"/Fs"`` appended for a force-scaled one, e.g.
-        ``"backlash.drag/Fs"``).
+        ``"<effect>.<param>"`` (``"/Fs"`` appended for a force-scaled one; in ``ln(...)`` for
+        one bounded on one side, e.g. ``"ln(backlash.gap)"``, ``"ln(backlash.drag/Fs)"``,
+        ``"ln(breakaway.ratio - 1)"``, ``"asymmetric_slip.asymmetry"``).
     names : sequence of str, optional, keyword-only
         A label per record (default ``"record i"``).
     diagnoses : sequence of Diagnosis, optional, keyword-only
@@ -265,7 +270,7 @@ def fit_campaign(records, conditions, *, effects=None, laws=None, names=None, di
         raise ValueError("no record could be diagnosed: nothing to fit")
     t_diag = time.perf_counter() - t0
     names_, stack_from = _common_stack(preps, effects)
-    qnames, units = CM.quantities(names_)
+    qnames, units, _ = CM.quantities(names_)
     laws_, lwarn = CM.resolve_laws(laws, qnames, cnames, X)
     model = build_model(preps, names_, laws_, cnames, X)
     theta0 = _start_values(model, preps)
