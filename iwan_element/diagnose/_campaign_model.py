@@ -196,7 +196,8 @@ def prepare_record(d, max_samples: int) -> dict:
     return {"t": t, "u": uj, "F": F, "keep": keep, "effects": tuple(d.effects),
             "estimates": est, "stderr": se, "start": float(d.details["start_displacement"]),
             "sigma": float(d.noise_sigma), "rms_own": float(np.sqrt(np.mean(own[keep] ** 2))),
-            "tau_own": max(1.0, M.residual_tau(own[keep])), "band_own": band_misfit(F, F - own, BAND),
+            "tau_own": max(1.0, M.residual_tau(own[keep])),
+            "band_own": band_misfit(F, F - own, BAND),
             "base_shape": (base.phi_max, base.chi, base.beta), "success": bool(d.success)}
 
 

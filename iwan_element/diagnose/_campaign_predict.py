@@ -99,18 +99,27 @@ def predict(fit, conditions, t, u, *, F0=0.0, start=0.0, level=0.95, draws=64, r
     level = check_scalar("level", level, low=0.0, high=1.0, low_open=True, high_open=True)
     draws = check_int("draws", draws, 8)
     rng = np.random.default_rng(0 if rng is None else rng)
+    Fs = model.law_values(theta, x)["Fs"]
+    if not Fs > 0:
+        raise ValueError(f"the Fs law gives Fs = {Fs:.4g} N <= 0 at conditions {conditions}: "
+                         "the campaign model does not reach there")
     rm = CM.RecordModel(_drive_record(model, theta, x, tt, uu), full=True)
     force = _force(model, rm, theta, x, start) + F0
     ng = model.n_glob
     L = _chol(cov)
-    samples = []
+    samples, warns = [], []
     for _ in range(draws):
         th = theta.copy()
         th[:ng] = theta[:ng] + L @ rng.standard_normal(ng)
-        samples.append(_force(model, rm, th, x, start) + F0)
+        if model.law_values(th, x)["Fs"] > 0:
+            samples.append(_force(model, rm, th, x, start) + F0)
+    if len(samples) < draws:
+        warns.append(f"{draws - len(samples)} of {draws} coefficient draws give Fs <= 0 here "
+                     "and are left out of the band")
+    if not samples:
+        samples = [force]
     q = 0.5 * (1.0 - level)
     lo, hi = np.quantile(np.array(samples), [q, 1.0 - q], axis=0)
-    warns = []
     for j, c in enumerate(fit.condition_names):
         a, b = float(model.X[:, j].min()), float(model.X[:, j].max())
         if not a <= x[j] <= b:
@@ -256,6 +265,9 @@ def leave_one_out(fit, *, refit="step", jobs=1, client=None, progress=False, max
                   "band_own": preps[i]["band_own"], "band_pred": b,
                   "ratio": b / preps[i]["band_own"] if preps[i]["band_own"] > 0 else math.nan}
                  for i, b in enumerate(bands))
+    warns += [f"{r['record']}: the laws from the other records give no model there (Fs <= 0 "
+              "or an evaluation failure): not predicted, counted as a miss"
+              for r in rows if not math.isfinite(r["band_pred"])]
     within = float(np.mean([r["ratio"] <= LOO_TARGET for r in rows]))
     return LeaveOneOut(rows=rows, refit=refit, share_within=within,
                        wall_time=time.perf_counter() - t0, warnings=tuple(warns))

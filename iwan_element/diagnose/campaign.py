@@ -39,6 +39,7 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from ..core.serialize import json_safe
+from ..core.validation import check_int
 from ..effects import EFFECTS
 from ..effects.evaluate import order_stack, stack_ok
 from ..ensemble import run_ensemble
@@ -201,6 +202,19 @@ def solve(model, theta0, *, max_nfev, bar=None):
                          x_scale="jac", diff_step=1e-6, max_nfev=max_nfev)
 
 
+def _check_input(records, conditions, names, laws, effects, jobs, max_nfev, options):
+    """Everything that can be checked before the records are diagnosed."""
+    recs, labels = _check_records(records, names)
+    cnames, X = CM.check_conditions(conditions, len(recs))
+    opts = _check_options(options)
+    check_int("jobs", jobs, 1)
+    check_int("max_nfev", max_nfev, 1)
+    CM.precheck_laws(laws, cnames, X)
+    if effects is not None:
+        _common_stack([], effects)
+    return recs, labels, cnames, X, opts
+
+
 def fit_campaign(records, conditions, *, effects=None, laws=None, names=None, diagnoses=None,
                  jobs: int = 1, client=None, progress: bool = False, max_nfev: int = 60,
                  **options) -> CampaignFit:
@@ -253,16 +267,8 @@ def fit_campaign(records, conditions, *, effects=None, laws=None, names=None, di
         that does not vary, or with more coefficients than records, an unknown option.
     """
     t0 = time.perf_counter()
-    recs, labels = _check_records(records, names)
-    cnames, X = CM.check_conditions(conditions, len(recs))
-    opts = _check_options(options)
-    if isinstance(jobs, bool) or not isinstance(jobs, (int, np.integer)) or jobs < 1:
-        raise ValueError(f"jobs must be an integer >= 1, got {jobs!r}")
-    if isinstance(max_nfev, bool) or not isinstance(max_nfev, (int, np.integer)) or max_nfev < 1:
-        raise ValueError(f"max_nfev must be an integer >= 1, got {max_nfev!r}")
-    CM.precheck_laws(laws, cnames, X)
-    if effects is not None:
-        _common_stack([], effects)               # checked before the records are diagnosed
+    recs, labels, cnames, X, opts = _check_input(records, conditions, names, laws, effects,
+                                                 jobs, max_nfev, options)
     preps, warns = _diagnose_records(recs, labels, opts, diagnoses, jobs, client, progress)
     ok = [i for i, p in enumerate(preps) if p is not None]
     preps, labels, X = [preps[i] for i in ok], [labels[i] for i in ok], X[ok]
