@@ -97,7 +97,13 @@ def test_result_api(fitted):
     import matplotlib.pyplot as plt
     fig, ax = plt.subplots()
     arts = fit.plot(ax, quantity="Fs", condition="tension")
-    assert arts and arts[0] is not None
+    assert arts and all(a.axes is ax for a in arts)
+    loo = fit.leave_one_out()
+    assert all(a.axes is ax for a in loo.plot(ax))
+    pred = fit.predict(conds[0], recs[0][0], recs[0][1], draws=8)
+    assert all(a.axes is ax for a in pred.plot(ax, measured=recs[0][2]))
+    assert "band" in pred.report()
+    json.dumps(pred.to_dict(), allow_nan=False)
     with pytest.raises(ValueError, match="quantity"):
         fit.plot(ax, quantity="nope")
     plt.close(fig)

@@ -52,6 +52,15 @@ class CampaignPrediction:
         return json_safe({k: getattr(self, k) for k in (
             "t", "u", "force", "lower", "upper", "conditions", "values", "level", "warnings")})
 
+    def report(self) -> str:
+        """Conditions, the law values used, the band's mean width, warnings."""
+        vals = ", ".join(f"{k} = {v:.4g}" for k, v in self.values.items())
+        lines = [f"Prediction at {self.conditions} over {self.force.size} samples: {vals}",
+                 f"  {100 * self.level:g} % band: mean width "
+                 f"{float(np.mean(self.upper - self.lower)):.4g} N, largest "
+                 f"{float(np.max(self.upper - self.lower)):.4g} N"]
+        return "\n".join(lines + [f"  warning: {w}" for w in self.warnings])
+
     def plot(self, ax=None, *, measured=None):
         """Force against displacement: the prediction, its band (as a shaded envelope in
         time order) and ``measured`` (a force array of the same length) if given. Returns
@@ -215,6 +224,17 @@ class LeaveOneOut:
                          f"{r['ratio']:6.2f}")
         lines += [f"  warning: {w}" for w in self.warnings]
         return "\n".join(lines)
+
+    def plot(self, ax=None):
+        """Ratio of the prediction's band misfit to the own fit's per record (bars), with the
+        1.5 target. Returns the artists."""
+        ax = axes_or_new(ax)
+        x = np.arange(len(self.rows))
+        arts = list(ax.bar(x, [r["ratio"] for r in self.rows], 0.6))
+        arts.append(ax.axhline(LOO_TARGET, color="k", ls="--", lw=0.8))
+        ax.set_xticks(x, [r["record"] for r in self.rows], rotation=60, ha="right", fontsize=7)
+        ax.set_ylabel("band misfit: leave-one-out prediction / own fit")
+        return arts
 
     def to_dict(self) -> dict:
         return json_safe({"rows": list(self.rows), "refit": self.refit,

@@ -321,8 +321,9 @@ class CampaignFit:
         x_rec = model.X[:, j]
         est = np.array([p["estimates"].get(quantity, np.nan) for p in st["preps"]])
         err = np.array([p["stderr"].get(quantity, np.nan) for p in st["preps"]])
-        arts = [ax.errorbar(x_rec, est, yerr=np.where(np.isfinite(err), err, 0.0), fmt="o",
-                            ms=4, label="records (own fit)")]
+        eb = ax.errorbar(x_rec, est, yerr=np.where(np.isfinite(err), err, 0.0), fmt="o", ms=4,
+                         label="records (own fit)")
+        arts = [eb[0], *eb[2]]
         grid = np.linspace(x_rec.min(), x_rec.max(), 50)
         mid, lo, hi = [], [], []
         for g in grid:
