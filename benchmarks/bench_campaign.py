@@ -116,7 +116,7 @@ def main(argv=None):
     ap.add_argument("--jobs", type=int, default=1)
     ap.add_argument("--cache", default=None, help="folder of cached per-record diagnoses")
     ap.add_argument("--loo", default="step", choices=("step", "full"))
-    ap.add_argument("--max-nfev", type=int, default=60, dest="max_nfev")
+    ap.add_argument("--max-nfev", type=int, default=100, dest="max_nfev")
     args = ap.parse_args(argv)
     if args.coverage:
         coverage(args.coverage)

@@ -191,7 +191,7 @@ def _loo_task(params, rng):
     theta = params["theta"]
     th0 = np.concatenate([theta[:full.n_glob],
                           [theta[full.start_pos[k]] for k in others if k in full.start_pos]])
-    res = solve(sub, th0, max_nfev=params["max_nfev"] * (sub.n_theta + 1))
+    res = solve(sub, th0, max_nfev=params["max_nfev"])
     th = theta.copy()
     th[:full.n_glob] = res.x[:full.n_glob]
     return {"band_pred": _predict_record(full, th, i, preps[i]), "nfev": int(res.nfev),

@@ -256,9 +256,34 @@ class CampaignFit:
 
     def leave_one_out(self, *, refit: str = "step", jobs: int = 1, client=None,
                       progress: bool = False, max_nfev: int = 20):
-        """Predict each record from the others: per record the band misfit of that prediction
-        over the band misfit of the record's own fit (see
-        :func:`~iwan_element.diagnose._campaign_predict.leave_one_out`)."""
+        """Predict each record from the campaign fitted without it.
+
+        The device comes from the laws fitted to the other records; the record's nuisances
+        (force offset, starting state) are fitted to it with the device held. Per record:
+        the band misfit [N] (``|F| < 0.25 max|F|``) of that prediction over the record's own
+        fit's (its diagnosis), target at most 1.5 on at least 80 % of the records.
+
+        Parameters
+        ----------
+        refit : {"step", "full"}, keyword-only
+            ``"step"`` (default): one Gauss-Newton step from the full fit on the weighted
+            normal equations without the record (no new fit); ``"full"``: a warm-started
+            least-squares refit per record.
+        jobs : int, keyword-only
+            Local processes for ``"full"`` (1: in this process).
+        client : dask.distributed.Client, optional, keyword-only
+            Run the ``"full"`` refits on this Dask cluster instead.
+        progress : bool, keyword-only
+            tqdm progress bar over the refits (``"full"``).
+        max_nfev : int, keyword-only
+            Most objective evaluations per refit (``"full"``), ``>= 1``.
+
+        Returns
+        -------
+        LeaveOneOut
+            ``rows`` (record, own and predicted band misfit [N], ratio), ``share_within``,
+            ``success``, ``report()``, ``to_dict()``, ``plot()``, ``warnings``.
+        """
         from ._campaign_predict import leave_one_out
         return leave_one_out(self, refit=refit, jobs=jobs, client=client, progress=progress,
                              max_nfev=max_nfev)

@@ -216,7 +216,7 @@ def _check_input(records, conditions, names, laws, effects, jobs, max_nfev, opti
 
 
 def fit_campaign(records, conditions, *, effects=None, laws=None, names=None, diagnoses=None,
-                 jobs: int = 1, client=None, progress: bool = False, max_nfev: int = 60,
+                 jobs: int = 1, client=None, progress: bool = False, max_nfev: int = 100,
                  **options) -> CampaignFit:
     """Fit one device model over a test campaign, its parameters laws of the conditions.
 
@@ -250,8 +250,9 @@ def fit_campaign(records, conditions, *, effects=None, laws=None, names=None, di
     progress : bool, keyword-only
         tqdm progress bars: records diagnosed, then model evaluations of the joint fit.
     max_nfev : int, keyword-only
-        Most trust-region iterations' worth of evaluations of the joint fit (``>= 1``; each
-        iteration costs one evaluation per law coefficient plus one).
+        Most evaluations of the joint fit's objective (``>= 1``, scipy's count: those of its
+        finite-difference Jacobians, one per law coefficient plus one per iteration, are not
+        counted; default 100).
     **options
         Options of :func:`~iwan_element.diagnose` for every record (e.g. ``lowpass=20``).
 
@@ -283,7 +284,7 @@ def fit_campaign(records, conditions, *, effects=None, laws=None, names=None, di
     bar = progress_bar(progress, desc="campaign fit", unit="eval")
     try:
         t1 = time.perf_counter()
-        res = solve(model, theta0, max_nfev=max_nfev * (model.n_theta + 1), bar=bar)
+        res = solve(model, theta0, max_nfev=max_nfev, bar=bar)
         t_fit = time.perf_counter() - t1
     finally:
         if bar is not None:
