@@ -19,6 +19,7 @@ run fits the campaign only.
 
     python benchmarks/bench_campaign.py --coverage 40
     python benchmarks/bench_campaign.py --real [--jobs 2] [--cache DIR] [--loo full]
+        [--effects backlash,asymmetric_slip] [--stroke]
 """
 import argparse
 import pickle
@@ -98,7 +99,8 @@ def real(args):
     print(f"per-record diagnoses: {time.perf_counter() - t0:.0f} s wall "
           f"({sum(s for _, s in out):.0f} s computed now, the rest from --cache)")
     fit = fit_campaign(recs, conds, names=[p.stem for p in files], diagnoses=diags,
-                       lowpass=args.lowpass, max_nfev=args.max_nfev)
+                       lowpass=args.lowpass, max_nfev=args.max_nfev,
+                       effects=args.effects.split(",") if args.effects else None)
     print(fit.report())
     t1 = time.perf_counter()
     loo = fit.leave_one_out(refit=args.loo, jobs=args.jobs)
@@ -112,6 +114,8 @@ def main(argv=None):
     ap.add_argument("--coverage", type=int, default=0, help="synthetic campaigns")
     ap.add_argument("--real", action="store_true", help="the 29 real damper records")
     ap.add_argument("--stroke", action="store_true", help="nominal stroke as a condition")
+    ap.add_argument("--effects", default=None,
+                    help="the campaign's stack, comma-separated (default: named on >= half)")
     ap.add_argument("--lowpass", type=float, default=20.0)
     ap.add_argument("--jobs", type=int, default=1)
     ap.add_argument("--cache", default=None, help="folder of cached per-record diagnoses")
