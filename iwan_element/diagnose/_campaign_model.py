@@ -65,8 +65,9 @@ def quantities(names) -> tuple:
         for sp in EFFECTS[nm].specs:
             k = effect_quantity(nm, sp)
             q.append(k)
-            u = sp.unit if sp.fs_power == 0 else f"{sp.unit} per N^{sp.fs_power}"
-            units[k] = f"ln {u}" if log_form(sp) else u
+            u = {0: sp.unit, 1: f"({sp.unit})/N", -1: f"({sp.unit}) N"}.get(
+                sp.fs_power, f"({sp.unit}) N^{-sp.fs_power}")
+            units[k] = f"ln({u})" if log_form(sp) else u
             specs[k] = (nm, sp)
     return tuple(q), units, specs
 
