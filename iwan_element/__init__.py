@@ -18,6 +18,7 @@ from .core.closed_form import (
 )
 from .diagnose import (CANDIDATES, BatchDiagnosis, Diagnosis, VibrationDiagnosis, diagnose,
                        diagnose_many, diagnose_vibration, simulate_element_test)
+from .diagnose import CampaignFit, fit_campaign
 from .core.discrete import DiscreteIwan, slider_distribution
 from .effects import (EFFECTS, AsymmetricSlip, Backlash, BreakAway, Hardening, MacroslipOnset,
                       PinningStiffness, SlipDegradation, ViscousDamping, base_joint, make_effect)
@@ -104,6 +105,8 @@ __all__ = [
     "IdentifiabilityWarning",
     "diagnose",
     "diagnose_many",
+    "fit_campaign",
+    "CampaignFit",
     "BatchDiagnosis",
     "diagnose_vibration",
     "Diagnosis",

@@ -174,6 +174,12 @@ REGISTRY: dict[str, Entry] = {
         executor="serial", max_samples=300, max_effects=1, noise=5.0)),
         {"records": "object", "band": "scalar"}),
     "BatchDiagnosis": Entry(skip="a result object built by diagnose_many"),
+    "fit_campaign": Entry(lambda: (ie.fit_campaign, dict(
+        records=[(_record().t.copy(), _record().u.copy(), _record().F.copy())] * 2,
+        conditions=[{"tension": 1.0}, {"tension": 2.0}], laws={"Fs": ("tension",)},
+        max_samples=300, max_effects=1, noise=5.0, candidates=("viscous_damping",))),
+        {"records": "object", "conditions": "object"}),
+    "CampaignFit": Entry(skip="a result object built by fit_campaign"),
     "Diagnosis": Entry(skip="a result object built by diagnose"),
     "VibrationDiagnosis": Entry(skip="a result object built by diagnose_vibration"),
     "simulate_element_test": Entry(lambda: (ie.simulate_element_test, dict(

@@ -3,13 +3,15 @@
 Modules: :mod:`.loops` (force-displacement records), :mod:`.vibration` (amplitude-dependent
 frequency and damping), :mod:`.selection` (the one selection rule both use),
 :mod:`.results` (result objects), :mod:`.generator` (the synthetic test generator),
-:mod:`.batch` (many records on local processes or Dask).
+:mod:`.batch` (many records on local processes or Dask), :mod:`.campaign` (one device
+model over a campaign, its parameters laws of the test conditions).
 """
 from .batch import BatchDiagnosis, diagnose_many
+from .campaign import CampaignFit, fit_campaign
 from .generator import simulate_element_test
 from .loops import CANDIDATES, diagnose
 from .results import Diagnosis, VibrationDiagnosis
 from .vibration import diagnose_vibration
 
-__all__ = ["BatchDiagnosis", "CANDIDATES", "Diagnosis", "VibrationDiagnosis", "diagnose",
+__all__ = ["BatchDiagnosis", "CANDIDATES", "CampaignFit", "fit_campaign", "Diagnosis", "VibrationDiagnosis", "diagnose",
            "diagnose_many", "diagnose_vibration", "simulate_element_test"]

@@ -1,0 +1,340 @@
+"""The device model of a campaign fit: parameter laws over the test conditions, the records
+as the diagnosis prepared them, and the joint residual over all records.
+
+Private module of :mod:`iwan_element.diagnose.campaign` (equations: ``docs/campaign.md``).
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy.sparse import lil_matrix
+
+from ..core.history import REVERSAL_TOL, unit_params
+from ..core.validation import finite_array
+from ..effects import EFFECTS
+from ..effects.evaluate import Evaluator
+from ..identify.testdata import find_reversals
+from . import _model as M
+from .batch import band_misfit
+
+__all__: list[str] = []
+
+#: The joint's quantities every campaign model has a law for (the law's form of each).
+BASE_QUANTITIES = ("Fs", "log_phi_max", "chi", "log1p_beta")
+BASE_UNITS = {"Fs": "N", "log_phi_max": "ln m", "chi": "1", "log1p_beta": "1"}
+BAND = 0.25                          # the band misfit's |F| < BAND max|F|
+
+
+def log_form(spec) -> bool:
+    """True for a parameter bounded on one side only (a gap, a drag, a ratio >= 1): its law
+    is on ``ln(value - lower)``, which keeps every law value in range without clipping."""
+    return math.isfinite(spec.lower) and math.isinf(spec.upper)
+
+
+def effect_quantity(name: str, spec) -> str:
+    """Law name of an effect parameter: its value per ``Fs**fs_power`` (the unit-force form,
+    homogeneous of degree zero in the force scale), as ``ln(value - lower)`` for a parameter
+    bounded on one side (:func:`log_form`)."""
+    suffix = {0: "", 1: "/Fs", -1: "*Fs"}.get(spec.fs_power, f"/Fs^{spec.fs_power}")
+    q = f"{name}.{spec.name}{suffix}"
+    if log_form(spec):
+        return f"ln({q})" if spec.lower == 0 else f"ln({q} - {spec.lower:g})"
+    return q
+
+
+def to_law(spec, value: float) -> float:
+    """A unit-force parameter value in its law's form (NaN at the lower bound of a log form:
+    no information on the logarithm's scale)."""
+    if not log_form(spec):
+        return value
+    d = value - spec.lower
+    return math.log(d) if d > 0 else math.nan
+
+
+def from_law(spec, v: float) -> float:
+    """Inverse of :func:`to_law`."""
+    return spec.lower + math.exp(min(v, 700.0)) if log_form(spec) else v
+
+
+def quantities(names) -> tuple:
+    """``(law names, units, specs)`` of the stack ``names``: the joint's four, then every
+    effect parameter in its law form (``specs``: quantity -> (effect, ParamSpec))."""
+    q, units, specs = list(BASE_QUANTITIES), dict(BASE_UNITS), {}
+    for nm in names:
+        for sp in EFFECTS[nm].specs:
+            k = effect_quantity(nm, sp)
+            q.append(k)
+            u = {0: sp.unit, 1: f"({sp.unit})/N", -1: f"({sp.unit}) N"}.get(
+                sp.fs_power, f"({sp.unit}) N^{-sp.fs_power}")
+            units[k] = f"ln({u})" if log_form(sp) else u
+            specs[k] = (nm, sp)
+    return tuple(q), units, specs
+
+
+def check_conditions(conditions, n: int):
+    """``(names, X)``: condition names (first record's order) and an ``(n, c)`` array."""
+    try:
+        conds = list(conditions)
+    except TypeError:
+        raise ValueError("conditions must be a sequence of dicts, one per record") from None
+    if len(conds) != n:
+        raise ValueError(f"conditions must hold one dict per record ({n}), got {len(conds)}")
+    if not all(isinstance(c, dict) for c in conds):
+        raise ValueError("conditions must be dicts of named numbers, e.g. "
+                         "{'tension': 30.0, 'frequency': 0.5}")
+    names = tuple(str(k) for k in conds[0])
+    if not names:
+        raise ValueError("conditions must name at least one condition per record")
+    X = np.empty((n, len(names)))
+    for i, c in enumerate(conds):
+        if set(map(str, c)) != set(names):
+            raise ValueError(f"conditions[{i}] names {sorted(map(str, c))}; every record must "
+                             f"name the same conditions {sorted(names)}")
+        for j, k in enumerate(names):
+            try:
+                X[i, j] = float(c[k])
+            except (TypeError, ValueError):
+                raise ValueError(f"conditions[{i}][{k!r}] must be a number, got "
+                                 f"{c[k]!r}") from None
+    finite_array("conditions", X, ndim=2)
+    return names, X
+
+
+def precheck_laws(laws, cnames, X):
+    """The checks of :func:`resolve_laws` that need no effect stack (made before the records
+    are diagnosed): quantities of known form, conditions that exist and vary, enough
+    records for the joint's default laws."""
+    if laws is not None and not isinstance(laws, dict):
+        raise ValueError(f"laws must be a dict {{quantity: conditions}}, got {type(laws).__name__}")
+    known = set(BASE_QUANTITIES) | {effect_quantity(nm, sp) for nm, cls in EFFECTS.items()
+                                    for sp in cls.specs}
+    unknown = sorted(set(laws or {}) - known)
+    if unknown:
+        raise ValueError(f"laws names {unknown}, which are not quantities of any model; "
+                         f"they are {sorted(known)}")
+    laws = dict(laws or {})
+    resolve_laws(laws, tuple(dict.fromkeys(BASE_QUANTITIES + tuple(laws))), cnames, X)
+
+
+def resolve_laws(laws, qnames, cnames, X):
+    """Conditions of each quantity's law: ``laws[q]`` if given (each must vary over the
+    records), else every condition that varies. Returns ``(dict q -> tuple, warnings)``."""
+    varies = {c: bool(np.ptp(X[:, j]) > 0) for j, c in enumerate(cnames)}
+    laws = {} if laws is None else dict(laws)
+    out, warns = {}, []
+    unknown = sorted(set(laws) - set(qnames))
+    if unknown:              # an effect the campaign's stack does not have (checked before)
+        warns.append(f"laws for {unknown} are not used: the campaign's stack has no such "
+                     "effect")
+    for q in qnames:
+        if q in laws:
+            conds = laws[q]
+            conds = (conds,) if isinstance(conds, str) else tuple(conds)
+            for c in conds:
+                if c not in cnames:
+                    raise ValueError(f"laws[{q!r}] names the condition {c!r}; the conditions "
+                                     f"are {list(cnames)}")
+                if not varies[c]:
+                    raise ValueError(f"laws[{q!r}]: the condition {c!r} has one value over "
+                                     "all records; a law in it cannot be identified")
+            out[q] = tuple(dict.fromkeys(conds))
+        else:
+            out[q] = tuple(c for c in cnames if varies[c])
+    for c in cnames:
+        if not varies[c]:
+            warns.append(f"the condition {c!r} has one value over all records: every law is "
+                         "constant in it")
+    n = X.shape[0]
+    for q, conds in out.items():
+        A = design(X, cnames, conds)
+        if A.shape[1] > n:
+            raise ValueError(f"the law of {q} has {A.shape[1]} coefficients but there are "
+                             f"only {n} records; give more records or fewer conditions")
+        if np.linalg.matrix_rank(A) < A.shape[1]:
+            raise ValueError(f"the law of {q} in {list(conds)} cannot be identified: these "
+                             f"conditions are collinear over the {n} records")
+    return out, warns
+
+
+def design(X, cnames, conds, centre=None, scale=None):
+    """Design matrix ``[1, (x_c - centre_c) / scale_c ...]`` of a law in ``conds``."""
+    cols = [np.ones(X.shape[0])]
+    for c in conds:
+        j = cnames.index(c)
+        m = 0.0 if centre is None else centre[j]
+        s = 1.0 if scale is None else scale[j]
+        cols.append((X[:, j] - m) / s)
+    return np.column_stack(cols)
+
+
+def prepare_record(d, max_samples: int) -> dict:
+    """What the campaign fit needs of one record's :class:`Diagnosis`: the record as fitted
+    (low-passed, displacement from the rest position), the fitted samples, the per-record
+    estimates, the noise and the own fit's misfit (plain arrays, picklable)."""
+    from .loops import _evaluators
+    t = np.asarray(d.t, float)
+    uj = np.asarray(d.u, float) - float(d.offsets["displacement"])
+    F = np.asarray(d.F, float)
+    v = np.gradient(uj, t)
+    _, _, keep, _ = _evaluators(uj, v, max_samples)
+    p = d.fit.params
+    own = F - np.asarray(d.force_after, float)
+    est, se = {"Fs": p.Fs, "log_phi_max": math.log(p.phi_max), "chi": p.chi,
+               "log1p_beta": math.log1p(p.beta)}, {}
+    fse = d.fit.stderr or {}
+    se["Fs"] = fse.get("Fs", math.nan)
+    se["chi"] = fse.get("chi", math.nan)
+    se["log1p_beta"] = fse.get("beta", math.nan) / (1.0 + p.beta)
+    for e in d.fit.details.get("effects", []):
+        for sp in EFFECTS[e["name"]].specs:
+            k = effect_quantity(e["name"], sp)
+            val = float(e["parameters"][sp.name]) / p.Fs ** sp.fs_power
+            s_val = float(e["stderr"].get(sp.name) or math.nan) / p.Fs ** sp.fs_power
+            est[k] = to_law(sp, val)
+            se[k] = s_val / (val - sp.lower) if log_form(sp) else s_val
+    base = d.base_fit.params
+    return {"t": t, "u": uj, "F": F, "keep": keep, "effects": tuple(d.effects),
+            "estimates": est, "stderr": se, "start": float(d.details["start_displacement"]),
+            "sigma": float(d.noise_sigma), "rms_own": float(np.sqrt(np.mean(own[keep] ** 2))),
+            "tau_own": max(1.0, M.residual_tau(own[keep])),
+            "band_own": band_misfit(F, F - own, BAND),
+            "base_shape": (base.phi_max, base.chi, base.beta), "success": bool(d.success)}
+
+
+class RecordModel:
+    """One record in a campaign: its evaluator on the fitted samples, its scales and weight."""
+
+    def __init__(self, rec: dict, *, full: bool = False):
+        u, t = rec["u"], rec["t"]
+        v = np.gradient(u, t)
+        keep = np.arange(u.size) if full else rec["keep"]
+        tol = REVERSAL_TOL * float(np.abs(u).max())
+        rev = find_reversals(u) if u.size > 2 else np.zeros(0, np.intp)
+        self.ev = Evaluator(u, v, keep, rev, tol=tol)
+        self.y = rec["F"][keep]
+        self.x_max = self.ev.x_max
+        phi, chi, beta = rec["base_shape"]
+        d_ref = float(self.ev.unit_dissipation(unit_params(phi, chi, beta))[-1]) or 1.0
+        self.scales = {"u_max": float(np.abs(u).max()), "1": 1.0, "D_ref": d_ref,
+                       "v_rms": float(np.sqrt(np.mean(v ** 2))) or 1.0}
+        self.weight = 1.0 / (max(rec["sigma"], rec["rms_own"]) * math.sqrt(rec["tau_own"]))
+
+
+class CampaignModel:
+    """Law coefficients ``c`` (internal: divided by a scale per quantity, conditions centred
+    and scaled) and the starting states of the records whose diagnosis fitted one.
+
+    ``theta = [c of every quantity..., start_r / x_max_r for each free start]``.
+    """
+
+    def __init__(self, records, names, laws, cnames, X, centre, cscale, qscale, free_start):
+        self.records, self.names, self.laws = records, tuple(names), laws
+        self.cnames, self.X, self.centre, self.cscale = cnames, X, centre, cscale
+        self.qnames = tuple(laws)
+        self.qscale = qscale
+        self.slices, k = {}, 0
+        for q in self.qnames:
+            n = 1 + len(laws[q])
+            self.slices[q] = slice(k, k + n)
+            k += n
+        self.n_glob = k
+        self.start_pos = {}
+        for r, free in enumerate(free_start):
+            if free:
+                self.start_pos[r] = k
+                k += 1
+        self.n_theta = k
+        self.rows = np.cumsum([0] + [rm.y.size for rm in records])
+
+    def law_values(self, theta, x) -> dict:
+        """Each quantity's law value at the conditions ``x`` (a vector in ``cnames`` order)."""
+        out = {}
+        for q in self.qnames:
+            a = design(np.atleast_2d(x), self.cnames, self.laws[q], self.centre, self.cscale)[0]
+            out[q] = float(a @ theta[self.slices[q]]) * self.qscale[q]
+        return out
+
+    def physical(self, vals, rm):
+        """``(Fs, shape, effect dicts)`` of law values on record model ``rm`` (clipped into
+        the range a fit may take there)."""
+        x = rm.x_max
+        phi = x * min(max(math.exp(min(vals["log_phi_max"], 700.0)) / x, M.PHI_RANGE[0]),
+                      M.PHI_RANGE[1])
+        chi = min(max(vals["chi"], M.CHI_BOUNDS[0]), M.CHI_BOUNDS[1])
+        beta = math.expm1(min(max(vals["log1p_beta"], 0.0), math.log1p(M.BETA_MAX)))
+        effs = []
+        for nm in self.names:
+            d = {}
+            for sp in EFFECTS[nm].specs:
+                ref = rm.scales[sp.ref] ** sp.ref_power
+                z = min(max(from_law(sp, vals[effect_quantity(nm, sp)]) * ref,
+                            sp.fit_bounds[0]), sp.fit_bounds[1])
+                d[sp.name] = z / ref
+            effs.append(d)
+        return vals["Fs"], (phi, chi, beta), effs
+
+    def start(self, theta, r) -> float:
+        k = self.start_pos.get(r)
+        return 0.0 if k is None else float(theta[k]) * self.records[r].x_max
+
+    def record_force(self, theta, r, vals=None, start=None):
+        """``Fs g`` [N] of record ``r`` at its fitted samples (no offset), or None if the
+        model cannot be evaluated there."""
+        rm = self.records[r]
+        vals = self.law_values(theta, self.X[r]) if vals is None else vals
+        Fs, shape, effs = self.physical(vals, rm)
+        if not Fs > 0:
+            return None
+        rm.ev.set_start(self.start(theta, r) if start is None else start)
+        try:
+            g = rm.ev.unit_force(shape, self.names, effs)
+        except (ValueError, ZeroDivisionError, OverflowError, FloatingPointError):
+            return None
+        return Fs * g if np.all(np.isfinite(g)) else None
+
+    def record_residual(self, theta, r):
+        """Unweighted residual of record ``r``, the offset eliminated (its mean)."""
+        rm = self.records[r]
+        m = self.record_force(theta, r)
+        if m is None:
+            return np.full(rm.y.size, 1e3 * float(np.std(rm.y)) + 1.0)
+        e = rm.y - m
+        return e - e.mean()
+
+    def residual(self, theta):
+        """Weighted residual of all records, stacked (the least-squares objective)."""
+        return np.concatenate([rm.weight * self.record_residual(theta, r)
+                               for r, rm in enumerate(self.records)])
+
+    def sparsity(self):
+        """Jacobian structure: every row depends on the law coefficients, a start only on
+        its own record's rows."""
+        S = lil_matrix((int(self.rows[-1]), self.n_theta), dtype=np.int8)
+        S[:, :self.n_glob] = 1
+        for r, k in self.start_pos.items():
+            S[self.rows[r]:self.rows[r + 1], k] = 1
+        return S.tocsr()
+
+    def jacobian(self, theta):
+        """Unweighted Jacobian ``d residual / d theta`` by central differences (two steps;
+        samples whose force jumps between them are left out, :func:`_model._jumps`)."""
+        J = np.zeros((int(self.rows[-1]), self.n_theta))
+
+        def diff(j, h, rs):
+            out = []
+            for f in (1.0, 4.0):
+                tp, tm = theta.copy(), theta.copy()
+                tp[j] += f * h
+                tm[j] -= f * h
+                out.append([(self.record_residual(tp, r) - self.record_residual(tm, r))
+                            / (2 * f * h) for r in rs])
+            for r, d1, d4 in zip(rs, *out):
+                J[self.rows[r]:self.rows[r + 1], j] = np.where(M._jumps(d1, d4), 0.0, d1)
+
+        every = range(len(self.records))
+        for j in range(self.n_glob):
+            diff(j, 1e-5, every)
+        for r, k in self.start_pos.items():
+            diff(k, 1e-4, [r])
+        return J

@@ -1,0 +1,366 @@
+"""The result of a campaign fit: law coefficients with their uncertainty, the per-record
+agreement table, and the methods that predict and cross-check (private module of
+:mod:`iwan_element.diagnose.campaign`)."""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..core.serialize import json_safe
+from ..plotting import axes_or_new
+from . import _campaign_model as CM
+from . import _model as M
+from .batch import band_misfit
+
+__all__ = ["CampaignFit", "assemble"]
+
+Z_AGREE = 3.0                         # |z| above which a record disagrees with a law
+
+
+def _covariance(model, theta):
+    """Covariance of ``theta`` (delta method): rows of record ``r`` weighted by
+    ``1 / (s_r sqrt(tau_r))`` with ``s_r``, ``tau_r`` the RMS and correlation time of the
+    campaign residual on that record. Returns ``(cov, J, s, tau)``."""
+    J = model.jacobian(theta)
+    s, tau = [], []
+    Jw = np.empty_like(J)
+    for r in range(len(model.records)):
+        e = model.record_residual(theta, r)
+        s.append(float(np.sqrt(np.mean(e * e))) or 1e-300)
+        tau.append(M.residual_tau(e))
+        sl = slice(model.rows[r], model.rows[r + 1])
+        Jw[sl] = J[sl] / (s[-1] * math.sqrt(tau[-1]))
+    n, p = J.shape
+    cov = np.linalg.pinv(Jw.T @ Jw, rcond=1e-12, hermitian=True) * n / max(n - p, 1)
+    return cov, J, np.array(s), np.array(tau)
+
+
+def to_physical(model):
+    """Matrix ``T`` with ``coefficients = T theta[:n_glob]`` (laws in the conditions' own
+    units: ``q = a + sum_c b_c x_c``) and the coefficient labels ``(quantity, term)``."""
+    T = np.zeros((model.n_glob, model.n_glob))
+    labels = []
+    for q in model.qnames:
+        sl, qs = model.slices[q], model.qscale[q]
+        k0 = sl.start
+        T[k0, k0] = qs
+        labels.append((q, "1"))
+        for i, c in enumerate(model.laws[q], start=1):
+            j = model.cnames.index(c)
+            T[k0 + i, k0 + i] = qs / model.cscale[j]
+            T[k0, k0 + i] = -qs * model.centre[j] / model.cscale[j]
+            labels.append((q, c))
+    return T, labels
+
+
+def law_at(model, theta, cov_int, x):
+    """Law values and their standard errors at conditions ``x``."""
+    vals = model.law_values(theta, x)
+    se = {}
+    for q in model.qnames:
+        a = CM.design(np.atleast_2d(x), model.cnames, model.laws[q], model.centre,
+                      model.cscale)[0]
+        sl = model.slices[q]
+        se[q] = math.sqrt(max(float(a @ cov_int[sl, sl] @ a), 0.0)) * model.qscale[q]
+    return vals, se
+
+
+def full_force(model, theta, r, prep, vals=None, start=None):
+    """Campaign force [N] of record ``r`` at every sample, offset included (fitted on the
+    record's fitted samples), and the offset."""
+    rm_full = CM.RecordModel(prep, full=True)
+    vals = model.law_values(theta, model.X[r]) if vals is None else vals
+    start = model.start(theta, r) if start is None else start
+    m_keep = model.record_force(theta, r, vals=vals, start=start)
+    if m_keep is None:
+        return None, math.nan
+    F0 = float(np.mean(model.records[r].y - m_keep))
+    Fs, shape, effs = model.physical(vals, rm_full)
+    rm_full.ev.set_start(start)
+    return Fs * rm_full.ev.unit_force(shape, model.names, effs) + F0, F0
+
+
+def _rows(model, theta, cov_int, preps, labels):
+    rows, warns = [], []
+    stack = set(model.names)
+    for r, p in enumerate(preps):
+        vals, se = law_at(model, theta, cov_int, model.X[r])
+        F, F0 = full_force(model, theta, r, p)
+        band = band_misfit(p["F"], F, CM.BAND) if F is not None else math.nan
+        z = {}
+        for q in model.qnames:
+            est, s_est = p["estimates"].get(q, math.nan), p["stderr"].get(q, math.nan)
+            if math.isfinite(est) and math.isfinite(s_est):
+                z[q] = (est - vals[q]) / math.hypot(s_est, se[q]) if (s_est or se[q]) else 0.0
+        named = set(p["effects"])
+        row = {"record": labels[r], "conditions": dict(zip(model.cnames, model.X[r].tolist())),
+               "named": " + ".join(p["effects"]) or "none",
+               "missing": sorted(stack - named), "extra": sorted(named - stack),
+               "band_own": p["band_own"], "band_campaign": band,
+               "band_ratio": band / p["band_own"] if p["band_own"] > 0 else math.nan,
+               "force_offset": F0, "start": model.start(theta, r), "z": z,
+               "law": vals, "law_stderr": se}
+        rows.append(row)
+        far = sorted((q for q, v in z.items() if abs(v) > Z_AGREE), key=lambda q: -abs(z[q]))
+        if row["missing"] or row["extra"]:
+            warns.append(f"{labels[r]}: named {row['named']}; the campaign stack "
+                         f"{' + '.join(model.names) or 'Iwan'} "
+                         + (f"adds {', '.join(row['missing'])}" if row["missing"] else "")
+                         + (" and " if row["missing"] and row["extra"] else "")
+                         + (f"lacks {', '.join(row['extra'])}" if row["extra"] else ""))
+        if far:
+            warns.append(f"{labels[r]}: own estimates off the law by more than {Z_AGREE:g} "
+                         "standard errors: " + ", ".join(f"{q} (z = {z[q]:.1f})" for q in far))
+    return rows, warns
+
+
+def assemble(*, model, preps, labels, res, units, stack_from, warnings, options, times, t0):
+    """Uncertainty, coefficients, the per-record table, the verdict: a :class:`CampaignFit`."""
+    theta = res.x
+    t1 = time.perf_counter()
+    cov, J, s, tau = _covariance(model, theta)
+    times = dict(times, uncertainty=time.perf_counter() - t1)
+    ng = model.n_glob
+    cov_int = cov[:ng, :ng]
+    T, labels_c = to_physical(model)
+    coef = T @ theta[:ng]
+    cov_phys = T @ cov_int @ T.T
+    se = np.sqrt(np.clip(np.diag(cov_phys), 0.0, None))
+    coefficients, stderr = {}, {}
+    for (q, term), c, e in zip(labels_c, coef, se):
+        coefficients.setdefault(q, {})[term] = float(c)
+        stderr.setdefault(q, {})[term] = float(e)
+    rows, awarn = _rows(model, theta, cov_int, preps, labels)
+    warns = list(warnings)
+    converged = bool(res.status > 0)
+    if not converged:
+        warns.append(f"the campaign fit did not converge: {res.message}")
+    ident = bool(np.all(np.isfinite(se)) and np.all(se > 0))
+    if not ident:
+        bad = [f"{q}:{t}" for (q, t), e in zip(labels_c, se) if not (math.isfinite(e) and e > 0)]
+        warns.append(f"coefficients not identified by the records: {', '.join(bad)}")
+    warns += awarn
+    details = {"weights": [rm.weight for rm in model.records], "record_rms": s.tolist(),
+               "record_tau": tau.tolist(), "cost": float(res.cost),
+               "fitted_samples": int(model.rows[-1]), "n_coefficients": ng,
+               "n_starts": len(model.start_pos), "options": options, "times": times}
+    times["total"] = time.perf_counter() - t0
+    return CampaignFit(
+        records=tuple(labels), condition_names=model.cnames, effects=model.names,
+        effects_from=stack_from, laws={q: tuple(v) for q, v in model.laws.items()},
+        units=units, coefficients=coefficients, stderr=stderr, covariance=cov_phys,
+        coefficient_labels=tuple(f"{q}:{t}" for q, t in labels_c), rows=tuple(rows),
+        converged=converged, success=converged and ident, message=str(res.message),
+        nfev=int(res.nfev), wall_time=times["total"], warnings=tuple(warns),
+        details=details, _state={"model": model, "theta": theta, "cov_int": cov_int, "J": J,
+                                 "preps": preps, "cov": cov})
+
+
+@dataclass(frozen=True, eq=False)
+class CampaignFit:
+    """What :func:`~iwan_element.diagnose.campaign.fit_campaign` returns.
+
+    Attributes
+    ----------
+    records : tuple of str
+        The records fitted (those diagnosed), in order.
+    condition_names : tuple of str
+    effects : tuple of str
+        The campaign's effect stack (innermost first); ``effects_from`` says how it was chosen.
+    laws : dict
+        ``{quantity: conditions}``: each quantity is ``a + sum_c b_c x_c`` over these.
+    units : dict
+        Unit of each quantity.
+    coefficients, stderr : dict
+        ``{quantity: {"1": a, condition: b_c}}`` and their standard errors (delta method).
+    covariance : ndarray
+        Of all coefficients, in the order of ``coefficient_labels`` (``"quantity:term"``).
+    rows : tuple of dict
+        Per record: conditions, effects named on its own, those the stack adds (``missing``)
+        or lacks (``extra``), band misfit [N] of its own fit and of the campaign model and
+        their ratio, force offset [N], start [m], law values and the z-scores of its own
+        estimates against the laws.
+    converged, success : bool
+        The fit converged; and every coefficient has a finite, non-zero standard error.
+    message : str
+    nfev : int
+    wall_time : float
+        [s], with ``details["times"]`` split into diagnoses, joint fit and uncertainty.
+    warnings : tuple of str
+    details : dict
+    """
+
+    records: tuple
+    condition_names: tuple
+    effects: tuple
+    effects_from: str
+    laws: dict
+    units: dict
+    coefficients: dict
+    stderr: dict
+    covariance: np.ndarray
+    coefficient_labels: tuple
+    rows: tuple
+    converged: bool
+    success: bool
+    message: str
+    nfev: int
+    wall_time: float
+    warnings: tuple = field(default_factory=tuple)
+    details: dict = field(default_factory=dict)
+    _state: dict = field(default_factory=dict, repr=False)
+
+    def law(self, quantity: str, conditions: dict):
+        """``(value, stderr)`` of one quantity's law at ``conditions``."""
+        from ._campaign_predict import condition_vector
+        st = self._state
+        x = condition_vector(self.condition_names, conditions)
+        if quantity not in self.laws:
+            raise ValueError(f"quantity must be one of {list(self.laws)}, got {quantity!r}")
+        vals, se = law_at(st["model"], st["theta"], st["cov_int"], x)
+        return vals[quantity], se[quantity]
+
+    def predict(self, conditions, t, u, *, F0: float = 0.0, start: float = 0.0,
+                level: float = 0.95, draws: int = 64, rng=None):
+        """Force history of the device at ``conditions`` (tested or not) under the drive
+        ``(t, u)``, with a band from the law coefficients' uncertainty.
+
+        Parameters
+        ----------
+        conditions : dict
+            The campaign's condition names, finite numbers.
+        t, u : array_like, shape (n,)
+            Time [s] and displacement [m] from the joint's rest position, ``n >= 3``.
+        F0 : float, keyword-only
+            Force offset [N] added (a sensor zero, not a device property).
+        start : float, keyword-only
+            Joint's starting state [m] (path ``0 -> start -> u[0]``; 0: virgin rest).
+        level : float, keyword-only
+            Probability of the band, in (0, 1).
+        draws : int, keyword-only
+            Coefficient draws from their normal distribution for the band, ``>= 8``.
+        rng : numpy.random.Generator or int, optional, keyword-only
+            Source of the draws (default seed 0: reproducible).
+
+        Returns
+        -------
+        CampaignPrediction
+            ``.force``, ``.lower``, ``.upper`` [N] and ``warnings`` (e.g. extrapolation).
+        """
+        from ._campaign_predict import predict
+        return predict(self, conditions, t, u, F0=F0, start=start, level=level, draws=draws,
+                       rng=rng)
+
+    def leave_one_out(self, *, refit: str = "step", jobs: int = 1, client=None,
+                      progress: bool = False, max_nfev: int = 20):
+        """Predict each record from the campaign fitted without it.
+
+        The device comes from the laws fitted to the other records; the record's nuisances
+        (force offset, starting state) are fitted to it with the device held. Per record:
+        the band misfit [N] (``|F| < 0.25 max|F|``) of that prediction over the record's own
+        fit's (its diagnosis), target at most 1.5 on at least 80 % of the records.
+
+        Parameters
+        ----------
+        refit : {"step", "full"}, keyword-only
+            ``"step"`` (default): one Gauss-Newton step from the full fit on the weighted
+            normal equations without the record (no new fit); ``"full"``: a warm-started
+            least-squares refit per record.
+        jobs : int, keyword-only
+            Local processes for ``"full"`` (1: in this process).
+        client : dask.distributed.Client, optional, keyword-only
+            Run the ``"full"`` refits on this Dask cluster instead.
+        progress : bool, keyword-only
+            tqdm progress bar over the refits (``"full"``).
+        max_nfev : int, keyword-only
+            Most objective evaluations per refit (``"full"``), ``>= 1``.
+
+        Returns
+        -------
+        LeaveOneOut
+            ``rows`` (record, own and predicted band misfit [N], ratio), ``share_within``,
+            ``success``, ``report()``, ``to_dict()``, ``plot()``, ``warnings``.
+        """
+        from ._campaign_predict import leave_one_out
+        return leave_one_out(self, refit=refit, jobs=jobs, client=client, progress=progress,
+                             max_nfev=max_nfev)
+
+    def report(self) -> str:
+        """Laws with their coefficients, the per-record table, warnings and times."""
+        tm = self.details["times"]
+        lines = [f"Campaign fit of {len(self.records)} records: stack "
+                 f"{' + '.join(self.effects) or 'Iwan'} ({self.effects_from}); "
+                 f"{'converged' if self.converged else 'NOT converged'}, {self.nfev} "
+                 f"evaluations; {self.wall_time:.1f} s (diagnoses {tm['diagnoses']:.1f} s, "
+                 f"joint fit {tm['joint_fit']:.1f} s, uncertainty {tm['uncertainty']:.1f} s)",
+                 "  laws (coefficient +- standard error):"]
+        for q, terms in self.coefficients.items():
+            parts = [f"{c:.5g} +- {self.stderr[q][k]:.2g}" + ("" if k == "1" else f" x {k}")
+                     for k, c in terms.items()]
+            lines.append(f"    {q} [{self.units[q]}] = " + " + ".join(parts))
+        lines.append(f"  {'record':<26} {'named':<40} {'own band':>9} {'campaign':>9} "
+                     f"{'ratio':>6}")
+        for r in self.rows:
+            lines.append(f"  {r['record']:<26} {r['named']:<40} {r['band_own']:9.4g} "
+                         f"{r['band_campaign']:9.4g} {r['band_ratio']:6.2f}")
+        lines += [f"  warning: {w}" for w in self.warnings]
+        return "\n".join(lines)
+
+    def to_dict(self) -> dict:
+        """JSON-safe dict (NaN becomes None)."""
+        return json_safe({k: getattr(self, k) for k in (
+            "records", "condition_names", "effects", "effects_from", "laws", "units",
+            "coefficients", "stderr", "covariance", "coefficient_labels", "rows", "converged",
+            "success", "message", "nfev", "wall_time", "warnings", "details")})
+
+    def plot(self, ax=None, *, quantity: str = "Fs", condition: str | None = None):
+        """One quantity against one condition: the records' own estimates (with their
+        standard errors) and the law with its 95 % band, the other conditions held at their
+        mean over the records.
+
+        Parameters
+        ----------
+        ax : matplotlib Axes, optional
+        quantity : str, keyword-only
+            A key of :attr:`laws` (default ``"Fs"``).
+        condition : str, optional, keyword-only
+            A condition name (default: the first one).
+
+        Returns
+        -------
+        list
+            The matplotlib artists drawn.
+        """
+        if quantity not in self.laws:
+            raise ValueError(f"quantity must be one of {list(self.laws)}, got {quantity!r}")
+        condition = self.condition_names[0] if condition is None else condition
+        if condition not in self.condition_names:
+            raise ValueError(f"condition must be one of {list(self.condition_names)}, got "
+                             f"{condition!r}")
+        ax = axes_or_new(ax)
+        st = self._state
+        model, j = st["model"], self.condition_names.index(condition)
+        x_rec = model.X[:, j]
+        est = np.array([p["estimates"].get(quantity, np.nan) for p in st["preps"]])
+        err = np.array([p["stderr"].get(quantity, np.nan) for p in st["preps"]])
+        eb = ax.errorbar(x_rec, est, yerr=np.where(np.isfinite(err), err, 0.0), fmt="o", ms=4,
+                         label="records (own fit)")
+        arts = [eb[0], *eb[2]]
+        grid = np.linspace(x_rec.min(), x_rec.max(), 50)
+        mid, lo, hi = [], [], []
+        for g in grid:
+            x = model.centre.copy()
+            x[j] = g
+            v, s = law_at(model, st["theta"], st["cov_int"], x)
+            mid.append(v[quantity])
+            lo.append(v[quantity] - 1.96 * s[quantity])
+            hi.append(v[quantity] + 1.96 * s[quantity])
+        arts += ax.plot(grid, mid, "-", label="campaign law")
+        arts.append(ax.fill_between(grid, lo, hi, alpha=0.3, label="95 % band"))
+        ax.set_xlabel(condition)
+        ax.set_ylabel(f"{quantity} [{self.units[quantity]}]")
+        ax.legend(fontsize=7)
+        return arts
