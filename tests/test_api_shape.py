@@ -121,10 +121,19 @@ def _bands():
                                     executor="serial")
 
 
+def _campaign():
+    from _campaign_cases import campaign
+    recs, conds = campaign(3, conditions=tuple({"tension": T, "frequency": 1.0}
+                                               for T in (10.0, 20.0, 30.0, 40.0)))
+    return ie.fit_campaign(recs, conds, effects=("backlash",), candidates=("backlash",),
+                           laws={"Fs": ("tension",)})
+
+
 RESULTS = {"FitResult": _fit, "AmplitudeCurve": _curve, "VibrationDiagnosis": _vib,
            "Diagnosis": _diag, "BatchDiagnosis": _batch, "ModalIwanFit": _modal,
            "ModelFit": _model_fit, "NoiseEstimate": _noise, "EnsembleResult": _ensemble,
-           "ParameterUncertainty": _uncertainty, "PredictionBands": _bands}
+           "ParameterUncertainty": _uncertainty, "PredictionBands": _bands,
+           "CampaignFit": _campaign}
 
 
 def test_every_public_result_class_is_covered():

@@ -16,7 +16,9 @@ from ..effects import EFFECTS
 from ..effects.evaluate import Evaluator
 from ..identify.testdata import find_reversals
 from . import _model as M
+from ..identify.noise import integrated_time
 from .batch import band_misfit
+from .prepare import fitted_samples
 
 __all__: list[str] = []
 
@@ -172,12 +174,10 @@ def prepare_record(d, max_samples: int) -> dict:
     """What the campaign fit needs of one record's :class:`Diagnosis`: the record as fitted
     (low-passed, displacement from the rest position), the fitted samples, the per-record
     estimates, the noise and the own fit's misfit (plain arrays, picklable)."""
-    from .loops import _evaluators
     t = np.asarray(d.t, float)
     uj = np.asarray(d.u, float) - float(d.offsets["displacement"])
     F = np.asarray(d.F, float)
-    v = np.gradient(uj, t)
-    _, _, keep, _ = _evaluators(uj, v, max_samples)
+    keep = fitted_samples(uj.size, max_samples)
     p = d.fit.params
     own = F - np.asarray(d.force_after, float)
     est, se = {"Fs": p.Fs, "log_phi_max": math.log(p.phi_max), "chi": p.chi,
@@ -197,7 +197,7 @@ def prepare_record(d, max_samples: int) -> dict:
     return {"t": t, "u": uj, "F": F, "keep": keep, "effects": tuple(d.effects),
             "estimates": est, "stderr": se, "start": float(d.details["start_displacement"]),
             "sigma": float(d.noise_sigma), "rms_own": float(np.sqrt(np.mean(own[keep] ** 2))),
-            "tau_own": max(1.0, M.residual_tau(own[keep])),
+            "tau_own": max(1.0, integrated_time(own[keep])),
             "band_own": band_misfit(F, F - own, BAND),
             "base_shape": (base.phi_max, base.chi, base.beta), "success": bool(d.success)}
 

@@ -8,6 +8,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..core.result_shape import ResultShape
 from ..core.serialize import json_safe
 from ..core.validation import check_int, check_scalar, check_time, finite_array
 from ..ensemble import run_ensemble
@@ -33,7 +34,7 @@ def condition_vector(cnames, conditions) -> np.ndarray:
 
 
 @dataclass(frozen=True, eq=False)
-class CampaignPrediction:
+class CampaignPrediction(ResultShape):
     """Predicted force history at a condition: ``force`` [N] and its band ``lower``,
     ``upper`` [N] (probability ``level``, from the law coefficients' uncertainty), with the
     law values used and ``warnings`` (extrapolation)."""
@@ -48,9 +49,16 @@ class CampaignPrediction:
     level: float
     warnings: tuple = field(default_factory=tuple)
 
+    @property
+    def success(self) -> bool:
+        """True when the force and its band are finite at every sample."""
+        return bool(np.all(np.isfinite(self.force)) and np.all(np.isfinite(self.lower))
+                    and np.all(np.isfinite(self.upper)))
+
     def to_dict(self) -> dict:
         return json_safe({k: getattr(self, k) for k in (
-            "t", "u", "force", "lower", "upper", "conditions", "values", "level", "warnings")})
+            "t", "u", "force", "lower", "upper", "conditions", "values", "level", "warnings")}
+            | {"success": self.success})
 
     def report(self) -> str:
         """Conditions, the law values used, the band's mean width, warnings."""
@@ -199,7 +207,7 @@ def _loo_task(params, rng):
 
 
 @dataclass(frozen=True, eq=False)
-class LeaveOneOut:
+class LeaveOneOut(ResultShape):
     """Per record: the band misfit [N] of its prediction from the other records, of its own
     fit, their ratio, and the share of records within :data:`LOO_TARGET` (1.5)."""
 

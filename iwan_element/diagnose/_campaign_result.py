@@ -9,10 +9,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..core.result_shape import ResultShape
 from ..core.serialize import json_safe
+from ..identify.noise import integrated_time
 from ..plotting import axes_or_new
 from . import _campaign_model as CM
-from . import _model as M
 from .batch import band_misfit
 
 __all__ = ["CampaignFit", "assemble"]
@@ -30,7 +31,7 @@ def _covariance(model, theta):
     for r in range(len(model.records)):
         e = model.record_residual(theta, r)
         s.append(float(np.sqrt(np.mean(e * e))) or 1e-300)
-        tau.append(M.residual_tau(e))
+        tau.append(integrated_time(e))
         sl = slice(model.rows[r], model.rows[r + 1])
         Jw[sl] = J[sl] / (s[-1] * math.sqrt(tau[-1]))
     n, p = J.shape
@@ -160,7 +161,7 @@ def assemble(*, model, preps, labels, res, units, stack_from, warnings, options,
 
 
 @dataclass(frozen=True, eq=False)
-class CampaignFit:
+class CampaignFit(ResultShape):
     """What :func:`~iwan_element.diagnose.campaign.fit_campaign` returns.
 
     Attributes

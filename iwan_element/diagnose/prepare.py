@@ -20,7 +20,8 @@ from ..effects.evaluate import Evaluator
 from ..identify.testdata import find_reversals
 from ._noise import noise_estimate
 
-__all__ = ["PreparedRecord", "check_record", "prepare_record", "SLOW_FIT_SAMPLES"]
+__all__ = ["PreparedRecord", "check_record", "prepare_record", "fitted_samples",
+           "SLOW_FIT_SAMPLES"]
 
 #: Samples fitted for stacks without a vectorised form (run element by element).
 SLOW_FIT_SAMPLES = 300
@@ -111,11 +112,17 @@ def _rest_index(u, noise_u):
     return max(int(moved[0]) if moved.size else 1, 1)
 
 
+def fitted_samples(n: int, max_samples: int) -> np.ndarray:
+    """Indices of the samples a diagnosis fits: at most ``max_samples``, evenly spaced over
+    the ``n`` samples of the record (the first and last included)."""
+    return np.unique(np.round(np.linspace(0, n - 1, min(n, max_samples))).astype(np.intp))
+
+
 def _evaluators(uj, v, max_samples):
     n = uj.size
     rev = find_reversals(uj) if n > 2 else np.zeros(0, np.intp)
     tol = REVERSAL_TOL * float(np.abs(uj).max())
-    keep = np.unique(np.round(np.linspace(0, n - 1, min(n, max_samples))).astype(np.intp))
+    keep = fitted_samples(n, max_samples)
     ev = Evaluator(uj, v, keep, rev, tol=tol)
     sub = keep[np.unique(np.round(np.linspace(0, keep.size - 1,
                                               min(keep.size, SLOW_FIT_SAMPLES))).astype(np.intp))]
