@@ -19,7 +19,7 @@ run fits the campaign only.
 
     python benchmarks/bench_campaign.py --coverage 40
     python benchmarks/bench_campaign.py --real [--jobs 2] [--cache DIR] [--loo full]
-        [--effects backlash,asymmetric_slip] [--stroke]
+        [--effects backlash,asymmetric_slip] [--stroke] [--interaction] [--quadratic]
 """
 import argparse
 import pickle
@@ -56,13 +56,17 @@ def coverage(n):
           "(target 90-98 %)")
 
 
-def _conditions(path, stroke):
+def _conditions(path, stroke, interaction=False, quadratic=False):
     m = re.match(r"ds(\d)_(\d+(?:p\d+)?)Hz_(\d+)lb(?:_(\d+(?:p\d+)?)in)?", path.stem)
     ds, f, T, a = m.groups()
     c = {"tension": float(T), "frequency": float(f.replace("p", ".")),
          "campaign": float(int(ds) - 1)}
     if stroke:
         c["stroke"] = float(a.replace("p", ".")) if a else 1.0
+    if interaction:                 # a slope in tension of its own for each campaign
+        c["campaign_x_tension"] = c["campaign"] * c["tension"]
+    if quadratic:                   # a curvature in tension (saturation at 70-80 lb)
+        c["tension_squared"] = c["tension"] ** 2
     return c
 
 
@@ -90,7 +94,7 @@ def real(args):
     files = sorted(shared.glob("arts-damper/ds1_*.csv")) + sorted(
         shared.glob("arts-damper-ds2/ds2_*.csv"))
     recs = [tuple(np.loadtxt(p, delimiter=",", skiprows=1).T) for p in files]
-    conds = [_conditions(p, args.stroke) for p in files]
+    conds = [_conditions(p, args.stroke, args.interaction, args.quadratic) for p in files]
     t0 = time.perf_counter()
     with ProcessPoolExecutor(args.jobs) as ex:
         out = list(ex.map(_diagnose, files, [args.lowpass] * len(files),
@@ -114,6 +118,9 @@ def main(argv=None):
     ap.add_argument("--coverage", type=int, default=0, help="synthetic campaigns")
     ap.add_argument("--real", action="store_true", help="the 29 real damper records")
     ap.add_argument("--stroke", action="store_true", help="nominal stroke as a condition")
+    ap.add_argument("--interaction", action="store_true",
+                    help="campaign x tension as a condition (a tension slope per campaign)")
+    ap.add_argument("--quadratic", action="store_true", help="tension squared as a condition")
     ap.add_argument("--effects", default=None,
                     help="the campaign's stack, comma-separated (default: named on >= half)")
     ap.add_argument("--lowpass", type=float, default=20.0)

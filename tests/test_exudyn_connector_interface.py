@@ -285,11 +285,11 @@ def test_bank_equals_separate_joints_on_random_histories():
         for j, x in zip(joints, row):
             j.trial(x)
             j.commit()
-        assert np.max(np.abs(bank.F - [j.force for j in joints])) <= 1e-12 * 1e3
-    np.testing.assert_allclose(bank.W, [j.work for j in joints], rtol=1e-11)
-    np.testing.assert_allclose(bank.D, [j.dissipated_energy for j in joints], rtol=1e-11)
+        assert np.max(np.abs(bank.force - [j.force for j in joints])) <= 1e-12 * 1e3
+    np.testing.assert_allclose(bank.work, [j.work for j in joints], rtol=1e-11)
+    np.testing.assert_allclose(bank.dissipated_energy, [j.dissipated_energy for j in joints], rtol=1e-11)
     assert [bank.depth(i) for i in range(4)] == [j.reversal_depth for j in joints]
-    np.testing.assert_allclose(bank.force_history(u)[-1], bank.F, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(bank.force_history(u)[-1], bank.force, rtol=0, atol=1e-12)
 
 
 def test_bank_keeps_tiny_reversals_and_the_joint_tolerance_bound():
@@ -302,7 +302,7 @@ def test_bank_keeps_tiny_reversals_and_the_joint_tolerance_bound():
         j.trial(r * p.phi_max)
         j.commit()
         bank.commit(np.array([r * p.phi_max]))
-        assert bank.F[0] == pytest.approx(j.force, rel=1e-12, abs=0.0)
+        assert bank.force[0] == pytest.approx(j.force, rel=1e-12, abs=0.0)
     with pytest.raises(ValueError, match="reversal_tol"):
         IwanJointBank([P], reversal_tol=1e-3)
 

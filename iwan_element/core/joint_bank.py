@@ -10,7 +10,8 @@ new displacement at once:
   displacement (three numpy operations for the whole bank); their force, work and
   dissipation follow in closed form from the branch and the values where it started
   (branch formula, ``G`` and ``I_H``: the same formulas as ``IwanJoint``'s fast path) and are
-  evaluated for all points at once when :attr:`IwanJointBank.F`, ``W`` or ``D`` is read;
+  evaluated for all points at once when :attr:`IwanJointBank.force`, ``work`` or
+  ``dissipated_energy`` is read (the names :class:`IwanJoint` uses);
 * plain reversals (a new branch that reaches no older reversal point in the step) are
   committed for all such points at once with numpy;
 * the few points that close a loop (or start from rest) walk their reversal stack one by
@@ -131,21 +132,21 @@ class IwanJointBank:
 
     # ------------------------------------------------------------------ committed values
     @property
-    def F(self) -> np.ndarray:
+    def force(self) -> np.ndarray:
         """Committed force of every point [N], shape (n_points,) (resists positive slip)."""
         if self._stale:
             self._sync()
         return self._F
 
     @property
-    def W(self) -> np.ndarray:
+    def work(self) -> np.ndarray:
         """Work done on every point since the reset [J], shape (n_points,)."""
         if self._stale:
             self._sync()
         return self._W
 
     @property
-    def D(self) -> np.ndarray:
+    def dissipated_energy(self) -> np.ndarray:
         """Energy dissipated by every point since the reset [J], shape (n_points,)."""
         if self._stale:
             self._sync()
@@ -154,7 +155,7 @@ class IwanJointBank:
     @property
     def stored_energy(self) -> np.ndarray:
         """Stored (slider spring) energy of every point [J], shape (n_points,)."""
-        return self.W - self.D
+        return self.work - self.dissipated_energy
 
     def depth(self, i: int) -> int:
         """Number of reversal points remembered by point ``i``."""
@@ -357,7 +358,7 @@ class IwanJointBank:
         out = np.empty_like(arr)
         for k in range(arr.shape[0]):
             bank.commit(arr[k])
-            out[k] = bank.F
+            out[k] = bank.force
         return out
 
     def __repr__(self) -> str:

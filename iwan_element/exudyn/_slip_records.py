@@ -61,9 +61,9 @@ class SlipRecords:
         replay = self._replay
         for k in range(self._done, n):
             replay.commit(self.slip[k])
-            self._force[k] = replay.F
-            self._work[k] = replay.W.sum()
-            self._diss[k] = replay.D.sum()
+            self._force[k] = replay.force
+            self._work[k] = replay.work.sum()
+            self._diss[k] = replay.dissipated_energy.sum()
         self._done = n
 
     def table(self, bank) -> dict:

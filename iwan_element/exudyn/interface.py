@@ -293,7 +293,7 @@ class IwanInterface:
             us = us_all[i]
             n1 = len(us)
             if n1 != held:
-                if n1 < held and held > s.depth and s.disagrees(float(u[i]), float(bank.F[i])):
+                if n1 < held and held > s.depth and s.disagrees(float(u[i]), float(bank.force[i])):
                     self._overflows.append(t)
                     _log.warning("Iwan interface point %d at t=%g: the step closed loops beyond "
                                  "the %d reversal points the symbolic law holds; that step's "
