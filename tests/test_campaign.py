@@ -186,3 +186,16 @@ def test_real_damper_records_give_a_tension_law():
     for T in (25.0, 70.0):
         assert 5e3 < fit.law("Fs", {"tension": T})[0] < 1.5e4
     assert all(r["band_ratio"] < 2.0 for r in fit.rows)
+
+
+def test_a_law_that_leaves_the_model_range_is_found(fitted):
+    """A law value outside the range a record's fit can take is clipped there (the misfit no
+    longer depends on the law): clipped() names the quantity and the records, so the result
+    can say so instead of stating a spurious tiny standard error."""
+    fit, recs, conds = fitted
+    model, theta = fit._state["model"], np.array(fit._state["theta"], copy=True)
+    assert model.clipped(theta) == {}
+    sl = model.slices["chi"]
+    theta[sl.start] = -5.0 / model.qscale["chi"]     # chi law far below -1 everywhere
+    assert model.clipped(theta) == {"chi": list(range(len(recs)))}
+    assert not any("leaves the range" in w for w in fit.warnings)

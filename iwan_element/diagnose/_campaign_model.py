@@ -274,6 +274,29 @@ class CampaignModel:
             effs.append(d)
         return vals["Fs"], (phi, chi, beta), effs
 
+    def clipped(self, theta) -> dict:
+        """Quantities whose law leaves the range a record's fit may take, with the records
+        where it does: ``{quantity: [record index, ...]}``. There :meth:`physical` clips the
+        value, the misfit no longer depends on the law's coefficients, and their standard
+        errors claim a precision the records do not give."""
+        out = {}
+        for r, rm in enumerate(self.records):
+            vals = self.law_values(theta, self.X[r])
+            x = rm.x_max
+            checks = {"log_phi_max": (math.log(x * M.PHI_RANGE[0]), math.log(x * M.PHI_RANGE[1])),
+                      "chi": M.CHI_BOUNDS, "log1p_beta": (0.0, math.log1p(M.BETA_MAX))}
+            for nm in self.names:
+                for sp in EFFECTS[nm].specs:
+                    ref = rm.scales[sp.ref] ** sp.ref_power
+                    lo, hi = (b / ref for b in sp.fit_bounds)
+                    checks[effect_quantity(nm, sp)] = (to_law(sp, lo) if lo > sp.lower or
+                                                       not log_form(sp) else -math.inf,
+                                                       to_law(sp, hi))
+            for q, (lo, hi) in checks.items():
+                if not lo <= vals[q] <= hi:
+                    out.setdefault(q, []).append(r)
+        return out
+
     def start(self, theta, r) -> float:
         k = self.start_pos.get(r)
         return 0.0 if k is None else float(theta[k]) * self.records[r].x_max

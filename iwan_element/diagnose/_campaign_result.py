@@ -140,6 +140,15 @@ def assemble(*, model, preps, labels, res, units, stack_from, warnings, options,
     if not converged:
         warns.append(f"the campaign fit did not converge: {res.message}")
     ident = bool(np.all(np.isfinite(se)) and np.all(se > 0))
+    for q, recs in model.clipped(theta).items():
+        ident = False
+        names = [labels[r] for r in recs]
+        warns.append(f"the {q} law leaves the range the model can take on {len(recs)} of "
+                     f"{len(labels)} records ({', '.join(names[:6])}"
+                     f"{', ...' if len(names) > 6 else ''}): it is clipped there, so those "
+                     "records do not determine its coefficients and their standard errors are "
+                     "not to be trusted; state a law that stays in range (laws=) or drop the "
+                     "condition")
     if not ident:
         bad = [f"{q}:{t}" for (q, t), e in zip(labels_c, se) if not (math.isfinite(e) and e > 0)]
         warns.append(f"coefficients not identified by the records: {', '.join(bad)}")
