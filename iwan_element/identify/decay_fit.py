@@ -48,7 +48,7 @@ from scipy import stats
 
 from ..core.validation import check_magnitude, check_scalar, finite_array
 from ._decay_model import (_Objective, _Problem, _covariance, _fit_regime, _local_weights,
-                           _misfit_ratio, _polar)
+                           _misfit_ratio, _neighbours, _polar)
 from .modal_result import ModalIwanFit
 from .modal_fit import fit_modal_iwan
 from .vibration import _check_band, _check_uniform_time
@@ -190,6 +190,9 @@ def _prepare(t, y, quantity, band, order, stiffness, floor, x_ref, t_start):
     tc = (first[0] - i_s) / fs
     nuis = [math.log(first[1] / wn ** prob.k) + max(first[2], 0.0) * tc,
             first[4] - first[3] * tc - prob.k * math.asin(min(max(first[2] / wn, 0.0), 0.5))]
+    prob.nb_starts = _neighbours(prob, i_s)
+    prob.nb = len(prob.nb_starts)
+    nuis = [v for nb in prob.nb_starts for v in nb] + nuis
     return prob, conv, dict(t0=float(tt[0]), i_s=i_s, i_top=i_top, i_a=i_a, env=env, nw=nw,
                             nuis=nuis, data=(X, f, zeta))
 
@@ -222,6 +225,10 @@ def _bounds(prob, regime, X, x_max, ln_a0):
     else:
         lb = [0.5 * lo, 0.0, -0.999, 1e-9, math.log(1e-3 * X.min()), 0.0]
         ub = [2.0 * hi, 0.999, 1.0, 1.0 - 1e-9, math.log(1e3 * x_max), 100.0]
+    for f2, s2, _, _ in prob.nb_starts:     # a neighbour stays near its spectral estimate
+        df = 0.02 * f2
+        lb += [f2 - df, 0.0, -np.inf, -np.inf]
+        ub += [f2 + df, 2.0 * s2 + 2.0 * math.pi * df, np.inf, np.inf]
     return np.array(lb + [ln_a0 - 10.0, -np.inf]), np.array(ub + [ln_a0 + 10.0, np.inf])
 
 
@@ -231,7 +238,7 @@ def _fit_micro(prob, info, snr_min, spc):
     local-noise weights of the first stage's residual, starting from its solution."""
     X, f, zeta = info["data"]
     nuis, env, i_top = info["nuis"], info["env"], info["i_top"]
-    bnd = _bounds(prob, "microslip", X, None, nuis[0])
+    bnd = _bounds(prob, "microslip", X, None, nuis[-2])
     curve_starts, curve_full = _starts(X, f, zeta, prob.conv)
     starts = [np.concatenate([s, nuis]) for s in curve_starts]
     idx, step = _span(prob, info, info["i_a"], spc)
@@ -262,7 +269,7 @@ def _fit_models(prob, info, alpha, snr_min, spc):
     x_max = math.exp(micro.x[-2])
     full_starts = _full_starts(micro.x, x_max, prob.conv["x_ref"], span["curve_full"])
     if 2 * idx.size > 12 and full_starts:
-        bnd = _bounds(prob, "macroslip", X, x_max, info["nuis"][0])
+        bnd = _bounds(prob, "macroslip", X, x_max, info["nuis"][-2])
         obj_f = _Objective(prob, "macroslip", idx, ref, bnd, span["weights"])
         full = _fit_regime(obj_f, full_starts, bnd)
         cov_f, kappa_f = _covariance(obj_f, full.fun, full.jac)
@@ -272,11 +279,11 @@ def _fit_models(prob, info, alpha, snr_min, spc):
         log.debug("fit_decay: likelihood-ratio statistic %.3g, p %.3g", stat, p_val)
         phi_known = math.sqrt(max(cov_f[4, 4], 0.0)) < 1.0
         t_end = np.array([(span["i_b"] - 1 - info["i_s"]) / prob.fs])
-        a_end = math.exp(prob.trajectory(full.x[:-2], "macroslip", full.x[-2], t_end)[0, 0])
+        a_end = math.exp(prob.trajectory(prob.theta(full.x), "macroslip", full.x[-2], t_end)[0, 0])
         inside = a_end < math.exp(full.x[4]) < math.e * math.exp(full.x[-2])
         complete = False
         if p_val < alpha and phi_known and inside:     # every joint parameter must be fixed
-            trial = ModalIwanFit.from_solution(full.x[:-2], cov_f[:-2, :-2], "macroslip", {},
+            trial = ModalIwanFit.from_solution(full.x[:6], cov_f[:6, :6], "macroslip", {},
                                                prob.conv, chi2_red=1.0, weights=(), warnings=(),
                                                optimizer_ok=True)
             complete = len(trial.identified) == len(trial.parameters)
@@ -368,7 +375,8 @@ def fit_decay(t, y, *, quantity: str = "acceleration", band, order: int = 4,
     best, span = _fit_models(prob, info, alpha, snr_min, spc)
     regime, warns, i_s, i_b = span["regime"], span["warns"], info["i_s"], span["i_b"]
     t0 = info["t0"]
-    a_end = float(np.exp(prob.trajectory(best.x[:-2], regime, best.x[-2],
+    n_th = best.x.size - prob.n_nuis
+    a_end = float(np.exp(prob.trajectory(best.x[:n_th], regime, best.x[-2],
                                          np.array([(i_b - 1 - i_s) / prob.fs]))[0, 0]))
     conv.update(t_fit=[t0 + i_s / prob.fs, t0 + (i_b - 1) / prob.fs],
                 samples=int(span["idx"].size), sample_step=float(span["step"] / prob.fs),
@@ -382,7 +390,7 @@ def fit_decay(t, y, *, quantity: str = "acceleration", band, order: int = 4,
     X, f, zeta, _ = _window_curve(prob, i_s, i_b, info["nw"])
     data = dict(amplitude=X, frequency=f, damping_ratio=zeta,
                 frequency_std=np.full(X.size, np.nan), damping_std=np.full(X.size, np.nan))
-    fit = ModalIwanFit.from_solution(best.x[:-2], span["cov"][:-2, :-2], regime, data, conv,
+    fit = ModalIwanFit.from_solution(best.x[:n_th], span["cov"][:n_th, :n_th], regime, data, conv,
                                      chi2_red=span["chi2_red"], weights=(),
                                      warnings=tuple(warns), optimizer_ok=bool(best.success))
     log.debug("fit_decay: %s", conv)
