@@ -40,6 +40,7 @@ sources are in the project's ``docs/decay_fit.md``; in short:
 """
 from __future__ import annotations
 
+import dataclasses
 import logging
 import math
 
@@ -264,7 +265,7 @@ def _fit_models(prob, info, alpha, snr_min, spc):
     micro, obj, span = _fit_micro(prob, info, snr_min, spc)
     idx, ref, X = span["idx"], span["ref"], info["data"][0]
     lags = math.ceil(2.0 * prob.fs / (prob.bw * span["step"]))
-    chosen, regime, warns = micro, "microslip", []
+    chosen, regime, warns, guard = micro, "microslip", [], False
     cov, kappa = _covariance(obj, micro.fun, micro.jac)
     x_max = math.exp(micro.x[-2])
     full_starts = _full_starts(micro.x, x_max, prob.conv["x_ref"], span["curve_full"])
@@ -289,6 +290,15 @@ def _fit_models(prob, info, alpha, snr_min, spc):
             complete = len(trial.identified) == len(trial.parameters)
         if complete:
             chosen, regime, cov, kappa = full, "macroslip", cov_f, kappa_f
+        elif phi_known and math.exp(full.x[4]) < math.exp(full.x[-2]):
+            guard = True        # microslip closed forms hold for X << phi_max only
+            warns.append(
+                f"the full model puts phi_max = {math.exp(full.x[4]):.3g} m (within a factor "
+                f"{math.exp(math.sqrt(cov_f[4, 4])):.2g}) below the release amplitude "
+                f"{math.exp(full.x[-2]):.3g} m, but the record does not fix the full model "
+                f"(likelihood-ratio p = {p_val:.2g}): the microslip parameters f0, zeta0, chi "
+                "and delta describe amplitudes beyond the validity of the microslip model and "
+                "may be biased; not a success")
         else:
             warns.append(
                 f"the decay never leaves microslip (likelihood-ratio p = {p_val:.2g}, "
@@ -300,7 +310,8 @@ def _fit_models(prob, info, alpha, snr_min, spc):
     chi2_red = _misfit_ratio(chosen.fun, lags)
     if chi2_red > 1.0:          # structure beyond the noise model: widen (as fit_modal_iwan)
         cov = cov * chi2_red
-    span.update(kappa=kappa, chi2_red=chi2_red, regime=regime, warns=warns, cov=cov)
+    span.update(kappa=kappa, chi2_red=chi2_red, regime=regime, warns=warns, cov=cov,
+                beyond_microslip=guard)
     return chosen, span
 
 
@@ -393,5 +404,7 @@ def fit_decay(t, y, *, quantity: str = "acceleration", band, order: int = 4,
     fit = ModalIwanFit.from_solution(best.x[:n_th], span["cov"][:n_th, :n_th], regime, data, conv,
                                      chi2_red=span["chi2_red"], weights=(),
                                      warnings=tuple(warns), optimizer_ok=bool(best.success))
+    if span["beyond_microslip"]:
+        fit = dataclasses.replace(fit, success=False)
     log.debug("fit_decay: %s", conv)
     return fit
