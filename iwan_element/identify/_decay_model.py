@@ -99,8 +99,8 @@ class _Problem:
         lp = theta[4] if regime != "microslip" else np.inf
         if u_end < lp < ln_a0 - 1e-9:
             n_a = min(max(int(round(_GRID * (ln_a0 - lp) / self.span)), 5), _GRID - 5)
-            cuts = [(ln_a0, lp, n_a, 1.0 + 1e-12, 1.0), (lp, u_end, _GRID - n_a + 1, 1.0,
-                                                        1.0 - 1e-12)]
+            cuts = [(ln_a0, lp, n_a, 1.0, 1.0 + 1e-12),             # phi_max from above
+                    (lp, u_end, _GRID - n_a + 1, 1.0 - 1e-12, 1.0)]    # and from below
         else:
             cuts = [(ln_a0, u_end, _GRID, 1.0, 1.0)]
         pieces, t0, th0 = [], 0.0, 0.0
