@@ -393,7 +393,9 @@ def fit_decay(t, y, *, quantity: str = "acceleration", band, order: int = 4,
                 samples=int(span["idx"].size), sample_step=float(span["step"] / prob.fs),
                 noise_rms=span["noise"] / math.sqrt(2.0),
                 correlation_factor=float(span["kappa"]),
-                amplitude_range=[math.exp(best.x[-2]), a_end])
+                amplitude_range=[math.exp(best.x[-2]), a_end],
+                neighbour_modes=[dict(frequency=float(v[0]), decay_rate=float(v[1]))
+                                 for v in best.x[n_th:n_th + 4 * prob.nb].reshape(-1, 4)])
     if best.x[-2] - math.log(a_end) < 0.1:
         change = 100 * (math.exp(best.x[-2]) / a_end - 1)
         warns.append(f"the amplitude changes by only {change:.2g} % over the fitted span: the "
