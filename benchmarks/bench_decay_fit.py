@@ -97,7 +97,7 @@ def run_case(seed):
                                      stiffness="harmonic", floor="dashpot")[1])
     return dict(seed=seed, c=_describe(c), zeta_q0=zeta_q0, regime=fit.regime,
                 success=fit.success, z=z, reported=list(fit.parameters),
-                seconds=time.perf_counter() - t0)
+                beyond=c["q0"] > c["p"].phi_max, seconds=time.perf_counter() - t0)
 
 
 def _describe(c):
@@ -139,6 +139,20 @@ def main(argv=None):
     if tot_n:
         print(f"  overall  {tot_h:3d}/{tot_n:3d} = {100 * tot_h / tot_n:5.1f} %  "
               f"(largest |z| {max(worst):.3g})")
+    _regime_counts([r for r in rows if "error" not in r])
+
+
+def _regime_counts(rows):
+    """Reported regime and success against where the release was (the truth's phi_max)."""
+    print("regimes (release above / below phi_max):")
+    for beyond in (True, False):
+        sub = [r for r in rows if r["beyond"] == beyond]
+        tally = {}
+        for r in sub:
+            key = f"{r['regime']}, success={r['success']}"
+            tally[key] = tally.get(key, 0) + 1
+        print(f"  {'above' if beyond else 'below'} ({len(sub)}): "
+              + "; ".join(f"{k}: {v}" for k, v in sorted(tally.items())))
 
 
 if __name__ == "__main__":

@@ -40,6 +40,18 @@ class _Problem:
         w, H = signal.sosfreqz(self.sos, worN=8192, fs=self.fs)
         self.bw = float(np.trapezoid(np.abs(H) ** 4, w))      # noise bandwidth [Hz]
         self.span = self.i_s = None
+        self.nb = 0                 # neighbouring out-of-band modes modelled (set by the fit)
+        self.scale = float(np.max(np.abs(yw))) or 1.0
+
+    @property
+    def n_nuis(self):
+        """Nuisance entries at the end of a parameter vector: four per neighbouring mode
+        (frequency [Hz], decay rate [1/s], two amplitudes / ``scale``), then ``ln a0, phi_s``."""
+        return 4 * self.nb + 2
+
+    def theta(self, x):
+        """The curve parameters of the vector ``x`` (without the nuisances)."""
+        return x[:x.size - self.n_nuis]
 
     def decimate(self, Y):
         return signal.resample_poly(Y, 1, self.q, axis=0) if self.q > 1 else Y
@@ -56,31 +68,63 @@ class _Problem:
         yf = signal.sosfiltfilt(self.sos, np.pad(Y, pad), axis=0)
         return signal.hilbert(yf, N=self.nfft, axis=0)[self.n_trim:self.n_trim + self.n]
 
-    def trajectory(self, theta, regime, ln_a0, t_rel):
-        """ln a, theta, ln w and asin(zeta) at ``t_rel`` [s] after the start of the decay.
-
-        Quadrature in ``u = ln a`` on a fixed grid (cumulative Simpson), cubic spline in time.
-        """
-        u = ln_a0 - np.linspace(0.0, self.span, _GRID)
-        f, zeta = model_curve(theta, np.exp(u), regime, self.conv["x_ref"],
+    def _segment(self, theta, regime, u, X):
+        """Quadrature of one smooth piece of the curves: amplitudes ``X`` at ``u`` (a uniform
+        grid, decreasing); returns the time, phase, ln w, asin(zeta), zeta and w on it."""
+        f, zeta = model_curve(theta, X, regime, self.conv["x_ref"],
                               self.conv["stiffness"], self.conv["floor"], "decay")
         f, zeta = np.asarray(f, float), np.asarray(zeta, float)
         if not (np.all(np.isfinite(f)) and np.all(f > 0) and np.all(np.isfinite(zeta))
                 and np.all(zeta > 0) and np.all(zeta < 0.5)):
             raise ValueError("model outside its range")
         w = 2.0 * math.pi * f
-        h = self.span / (_GRID - 1)
+        h = u[0] - u[1]
         tu = cumulative_simpson(1.0 / (zeta * w), dx=h, initial=0.0)
         th = cumulative_simpson(np.sqrt(1.0 - zeta ** 2) / zeta, dx=h, initial=0.0)
         if not np.all(np.diff(tu) > 0):
             raise ValueError("time grid not increasing")
-        spl = CubicSpline(tu, np.column_stack([u, th, np.log(w), np.arcsin(zeta)]))
-        out = spl(np.minimum(t_rel, tu[-1]))
-        beyond = t_rel > tu[-1]
+        return tu, th, np.log(w), np.arcsin(zeta), zeta, w
+
+    def trajectory(self, theta, regime, ln_a0, t_rel):
+        """ln a, theta, ln w and asin(zeta) at ``t_rel`` [s] after the start of the decay.
+
+        Quadrature in ``u = ln a`` on a fixed grid (cumulative Simpson), cubic spline in time.
+        The decay-form damping of the full model jumps at ``X = phi_max`` (the joint's tangent
+        loses the sliders at ``phi_max`` at once): a grid node sits there and each side is
+        integrated with its own one-sided values, so the trajectory is smooth in ``phi_max``
+        (a fixed grid made the residual step whenever ``phi_max`` crossed a node, and finite
+        differences then overstated its sensitivity some 50-fold).
+        """
+        u_end = ln_a0 - self.span
+        lp = theta[4] if regime != "microslip" else np.inf
+        if u_end < lp < ln_a0 - 1e-9:
+            n_a = min(max(int(round(_GRID * (ln_a0 - lp) / self.span)), 5), _GRID - 5)
+            cuts = [(ln_a0, lp, n_a, 1.0, 1.0 + 1e-12),             # phi_max from above
+                    (lp, u_end, _GRID - n_a + 1, 1.0 - 1e-12, 1.0)]    # and from below
+        else:
+            cuts = [(ln_a0, u_end, _GRID, 1.0, 1.0)]
+        pieces, t0, th0 = [], 0.0, 0.0
+        for ua, ub, m, first, last in cuts:
+            u = np.linspace(ua, ub, m)
+            X = np.exp(u)
+            X[0] *= first
+            X[-1] *= last
+            tu, th, lw, asz, zeta, w = self._segment(theta, regime, u, X)
+            tu, th = tu + t0, th + th0
+            pieces.append((tu, CubicSpline(tu, np.column_stack([u, th, lw, asz]))))
+            t0, th0 = tu[-1], th[-1]
+        out = np.empty((t_rel.size, 4))
+        lo = -np.inf
+        for tu, spl in pieces:
+            sel = (t_rel > lo) & (t_rel <= tu[-1]) if lo > -np.inf else t_rel <= tu[-1]
+            out[sel] = spl(t_rel[sel])
+            lo = tu[-1]
+        beyond = t_rel > t0
         if np.any(beyond):      # past the grid: continue at the last decay rate and frequency
-            dt = t_rel[beyond] - tu[-1]
+            out[beyond] = pieces[-1][1](np.full(int(beyond.sum()), t0))
+            dt = t_rel[beyond] - t0
             out[beyond, 0] = u[-1] - zeta[-1] * w[-1] * dt
-            out[beyond, 1] = th[-1] + w[-1] * math.sqrt(1 - zeta[-1] ** 2) * dt
+            out[beyond, 1] = th0 + w[-1] * math.sqrt(1 - zeta[-1] ** 2) * dt
         return out
 
     def record(self, x, regime):
@@ -88,10 +132,30 @@ class _Problem:
         zero before the start."""
         i0 = self.i_s * self.q
         t_rel = np.arange(self.n_full - i0) / self.fs_full
-        u, th, lw, asz = self.trajectory(x[:-2], regime, x[-2], t_rel).T
+        u, th, lw, asz = self.trajectory(self.theta(x), regime, x[-2], t_rel).T
         y = np.zeros(self.n_full)
         y[i0:] = np.exp(u + self.k * lw) * np.cos(th + self.k * asz + x[-1])
+        for j in range(self.nb):            # linear out-of-band modes that leak into the band
+            f2, s2, c, s = x[x.size - self.n_nuis + 4 * j:][:4]
+            wt = 2.0 * math.pi * f2 * t_rel
+            y[i0:] += self.scale * np.exp(-s2 * t_rel) * (c * np.cos(wt) + s * np.sin(wt))
         return y
+
+    def neighbour_columns(self, x):
+        """Exact derivatives of :meth:`record` by the neighbours' four entries each
+        (frequency, decay rate, amplitudes), in the order of ``x``."""
+        i0 = self.i_s * self.q
+        t_rel = np.arange(self.n_full - i0) / self.fs_full
+        cols = np.zeros((self.n_full, 4 * self.nb))
+        for j in range(self.nb):
+            f2, s2, c, s = x[x.size - self.n_nuis + 4 * j:][:4]
+            wt = 2.0 * math.pi * f2 * t_rel
+            ec, es = self.scale * np.exp(-s2 * t_rel) * np.cos(wt), \
+                self.scale * np.exp(-s2 * t_rel) * np.sin(wt)
+            cols[i0:, 4 * j] = 2.0 * math.pi * t_rel * (s * ec - c * es)
+            cols[i0:, 4 * j + 1] = -t_rel * (c * ec + s * es)
+            cols[i0:, 4 * j + 2], cols[i0:, 4 * j + 3] = ec, es
+        return cols
 
 
 def _polar(z):
@@ -134,7 +198,8 @@ class _Objective:
         try:
             y0, zm = self._model(x)
             cols = []
-            for j in range(x.size):
+            nb0, nb1 = x.size - self.prob.n_nuis, x.size - 2       # neighbours: exact columns
+            for j in [*range(nb0), nb1, nb1 + 1]:
                 h = 1e-7 * max(abs(x[j]), 1e-2 if j < x.size - 2 else 1.0)
                 if x[j] + h > self.ub[j]:
                     h = -h
@@ -143,7 +208,8 @@ class _Objective:
                 cols.append((self.prob.record(xp, self.regime) - y0) / h)
         except ValueError:
             return np.zeros((2 * self.idx.size, x.size))
-        dz = self.prob.apply(self.prob.decimate(np.column_stack(cols)))[self.sl][self.sel] \
+        cols = np.column_stack(cols[:nb0] + [self.prob.neighbour_columns(x)] + cols[nb0:])
+        dz = self.prob.apply(self.prob.decimate(cols))[self.sl][self.sel] \
             / zm[self.sel, None]
         return -np.vstack([self.wgt[:, None] * dz.real, self.wgt[:, None] * dz.imag])
 
@@ -245,3 +311,70 @@ def _fit_regime(obj, starts, bounds):
         if best is None or r.cost < best.cost:
             best = r
     return best
+
+
+def _neighbours(prob, i_s, max_modes=2):
+    """Out-of-band modes that leak into the band: start values ``[f, sigma, c, s]`` of each.
+
+    Peaks of the record's amplitude spectrum (from the start of the decay) outside the band,
+    at least 10 times the median out-of-band level (the noise), the one with the strongest
+    steady leak (spectrum times ``|H|**2``) on each side, if that leak is above 1e-3 of the
+    noise level: a mode that starts abruptly with the decay leaks far more through the
+    band-pass at the start than its steady ``|H|**2`` says (a 16 % neighbour with a steady
+    leak below the noise biased the joint parameters by 30 standard errors). Each is a linear decaying sinusoid: frequency and decay rate from straight lines
+    through the phase and log-envelope of its own narrow band's analytic signal (clear of
+    that filter's end effects), amplitudes by linear least squares on the record.
+    """
+    lo, hi = prob.band
+    seg = prob.y[i_s:]
+    n = seg.size
+    if n < 64:
+        return []
+    nfft = int(2 ** math.ceil(math.log2(4 * n)))
+    f = np.fft.rfftfreq(nfft, 1.0 / prob.fs)
+    Y = np.abs(np.fft.rfft(seg * signal.windows.hann(n), nfft))
+    _, H = signal.sosfreqz(prob.sos, worN=f, fs=prob.fs)
+    H2 = np.abs(H) ** 2
+    out_band = ((f < lo) | (f > hi)) & (f > 0.25 * lo) & (f < 0.45 * prob.fs)
+    if not np.any(out_band):
+        return []
+    floor = float(np.median(Y[out_band]))
+    pk, _ = signal.find_peaks(Y)
+    pk = pk[out_band[pk] & (Y[pk] > 10.0 * floor) & (Y[pk] * H2[pk] > 1e-3 * floor)]
+    starts = []
+    t = np.arange(n) / prob.fs
+    for side in (pk[f[pk] < lo], pk[f[pk] > hi]):
+        if side.size == 0:
+            continue
+        j = side[np.argmax(Y[side] * H2[side])]
+        est = _neighbour_start(prob, seg, t, float(f[j]))
+        if est is not None:
+            starts.append(est)
+    return starts[:max_modes]
+
+
+def _neighbour_start(prob, seg, t, f2):
+    """Frequency, decay rate and amplitudes of a linear mode near ``f2`` [Hz] in ``seg``."""
+    lo, hi = prob.band
+    gap = (lo - f2) if f2 < lo else (f2 - hi)
+    d = min(0.5 * gap, 0.1 * f2)
+    if d <= 0.0 or f2 + d >= 0.5 * prob.fs:
+        return None
+    sos = signal.butter(2, [f2 - d, f2 + d], btype="bandpass", fs=prob.fs, output="sos")
+    z = signal.hilbert(signal.sosfiltfilt(sos, seg), N=int(2 ** math.ceil(math.log2(2 * seg.size))))
+    z = z[:seg.size]
+    m = int(math.ceil(3.0 * prob.fs / d))                 # a few of its filter's time constants
+    if seg.size - 2 * m < 16:
+        m = seg.size // 4
+    sl = slice(m, seg.size - m)
+    lnA, ph = _polar(z[sl])
+    w = np.abs(z[sl]) ** 2
+    cs = np.polyfit(t[sl], lnA, 1, w=np.sqrt(w))
+    cp = np.polyfit(t[sl], ph, 1, w=np.sqrt(w))
+    fr, sig = cp[0] / (2.0 * math.pi), max(-cs[0], 0.0)
+    if not (f2 - d < fr < f2 + d):
+        return None
+    env = np.exp(-sig * t)
+    A = np.column_stack([env * np.cos(2 * math.pi * fr * t), env * np.sin(2 * math.pi * fr * t)])
+    coef, *_ = np.linalg.lstsq(A, seg, rcond=None)
+    return np.array([fr, sig, coef[0] / prob.scale, coef[1] / prob.scale])
