@@ -3,6 +3,7 @@
 The physics core (this package's top level) depends only on numpy, scipy and numba. The Exudyn
 connector lives in :mod:`iwan_element.exudyn`, which is the only module importing exudyn.
 """
+from .core import closed_form
 from .core.closed_form import (
     backbone,
     backbone_work,
@@ -47,6 +48,7 @@ from .identify.testdata import Cycle, TestData, find_reversals, simulate_test, s
 __version__ = "0.1.0"
 
 __all__ = [
+    *closed_form.__all__,              # the paper's closed forms, as that module lists them
     "IwanParameters",
     "IwanJoint",
     "IwanJointBank",
@@ -65,17 +67,6 @@ __all__ = [
     "BreakAway",
     "Hardening",
     "MacroslipOnset",
-    "backbone",
-    "backbone_work",
-    "tangent_stiffness",
-    "secant_stiffness",
-    "force_amplitude",
-    "dissipation",
-    "dissipation_slope",
-    "masing_loop",
-    "normalized_backbone",
-    "masing_descending",
-    "masing_ascending",
     "load_test",
     "split_cycles",
     "find_reversals",
