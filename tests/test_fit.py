@@ -186,7 +186,7 @@ def test_loop_fit_is_reproducible_and_json_safe():
     assert isinstance(a, FitResult) and a.nfev > 0 and a.n_data == a.details["fitted_samples"]
     assert a.details["burn_in"] > 0 and a.n_data == d.u.size - a.details["burn_in"]
     # a constant sigma only rescales the residuals: same parameters and standard errors
-    w = quiet_fits(fit_loops, d.t, d.u, d.F, seed=42, n_starts=8, sigma=np.full(d.u.size, 50.0))
+    w = quiet_fits(fit_loops, d.t, d.u, d.F, seed=42, n_starts=8, noise=np.full(d.u.size, 50.0))
     assert w.params.KT == pytest.approx(a.params.KT, rel=1e-8)
     assert w.stderr["KT"] == pytest.approx(a.stderr["KT"], rel=1e-6)
     assert w.residual_norm == pytest.approx(a.residual_norm / 50.0, rel=1e-8)
@@ -237,7 +237,7 @@ def test_loop_fit_bad_inputs_and_no_mutation():
         fit_loops(t, u, -F)
     with pytest.raises(ValueError, match="at least 2 are needed"):
         fit_loops(t[:150], u[:150], F[:150])                    # one and a half periods
-    for kwargs, match in [({"sigma": -1.0}, "sigma"), ({"max_samples": 5}, "max_samples"),
+    for kwargs, match in [({"noise": -1.0}, "noise"), ({"max_samples": 5}, "max_samples"),
                           ({"n_starts": 0}, "n_starts"), ({"alpha": 0.7}, "alpha"),
                           ({"smooth": 4}, "smooth"), ({"initial": "x"}, "initial")]:
         with pytest.raises(ValueError, match=match):

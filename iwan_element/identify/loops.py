@@ -65,14 +65,14 @@ def _check_record(t, u, F):
     return tt, uu, FF
 
 
-def _weights(sigma, n):
-    if sigma is None:
+def _weights(noise, n):
+    if noise is None:
         return np.ones(n)
-    if np.ndim(sigma) == 0:
-        return np.full(n, 1.0 / check_scalar("sigma", sigma, low=0.0, low_open=True))
-    s = finite_array("sigma", sigma, ndim=1)
+    if np.ndim(noise) == 0:
+        return np.full(n, 1.0 / check_scalar("noise", noise, low=0.0, low_open=True))
+    s = finite_array("noise", noise, ndim=1)
     if s.size != n or np.any(s <= 0):
-        raise ValueError(f"sigma must be a positive scalar or have {n} positive entries")
+        raise ValueError(f"noise must be a positive scalar or have {n} positive entries")
     return 1.0 / s
 
 
@@ -143,7 +143,7 @@ def _explains(out, prob):
     return float(fdtrc(k, m_eff - k - 1, F_stat)), 1.0 - ssr / ssr0
 
 
-def fit_loops(t, u, F, *, sigma=None, smooth="auto", max_samples: int | None = 20000,
+def fit_loops(t, u, F, *, noise=None, smooth="auto", max_samples: int | None = 20000,
               n_starts: int = 6, seed=0, alpha: float = 1e-3, hysteresis: float | None = None,
               initial: IwanParameters | None = None, max_nfev: int = 300) -> FitResult:
     """Fit all four Iwan parameters and the sensor offsets to a measured force history.
@@ -156,8 +156,9 @@ def fit_loops(t, u, F, *, sigma=None, smooth="auto", max_samples: int | None = 2
         Measured joint displacement [m]. Not modified.
     F : array_like, shape (n,)
         Measured joint force [N]. Not modified.
-    sigma : float or array_like of shape (n,), optional, keyword-only
-        Force noise standard deviation [N] (weights ``1/sigma``); default uniform weights.
+    noise : float or array_like of shape (n,), optional, keyword-only
+        Force noise standard deviation [N] (weights ``1/noise``; the package's one name for a
+        given noise level, as in :func:`~iwan_element.diagnose`); default uniform weights.
         It overrides the estimated noise in the report.
     smooth : "auto", 0 or odd int, keyword-only
         De-noising of the displacement that drives the model (quintic Savitzky-Golay window,
@@ -205,7 +206,7 @@ def fit_loops(t, u, F, *, sigma=None, smooth="auto", max_samples: int | None = 2
     t0 = time.perf_counter()
     tt, uu, FF = _check_record(t, u, F)
     n = uu.size
-    w_full = _weights(sigma, n)
+    w_full = _weights(noise, n)
     max_samples = n if max_samples is None else check_int("max_samples", max_samples, 100)
     n_starts = check_int("n_starts", n_starts, 1)
     max_nfev = check_int("max_nfev", max_nfev, 10)
@@ -261,16 +262,16 @@ def fit_loops(t, u, F, *, sigma=None, smooth="auto", max_samples: int | None = 2
                      f"sqrt(tau) = {math.sqrt(out['tau']):.3g}")
     out["details"].update({"samples": n, "fitted_samples": int(keep.size), "burn_in": int(b),
                            "model_samples": int(hist.index.size), "reversal_depth": hist.depth,
-                           "cycles": len(cycles), "weighted": sigma is not None,
+                           "cycles": len(cycles), "weighted": noise is not None,
                            "p_explains": p_noise, "r_squared": r2, **dinfo})
-    noise = {"force": noise_F.sigma if sigma is None else float(np.median(1.0 / w_full)),
+    noise_out = {"force": noise_F.sigma if noise is None else float(np.median(1.0 / w_full)),
              "displacement": sigma_u, "tau": out["tau"],
-             "force_method": noise_F.method if sigma is None else "given"}
+             "force_method": noise_F.method if noise is None else "given"}
     curves = {"u": u_drive[keep] - du0, "F": y - dF0, "F_fit": F_fit}
     return _finish("loops", out, converged=out["res"].status > 0, message=out["res"].message,
                    nfev=prob.nfev, nrmse=nrmse, t0=t0, extra_warnings=warns,
                    offsets={"force": (dF0, se_dF0), "displacement": (du0, se_du0)},
-                   noise=noise, curves=curves)
+                   noise=noise_out, curves=curves)
 
 
 def _fit_displacement_offset(setup, out, u_drive, FF, w_full, keep, tol, amp, opts):
