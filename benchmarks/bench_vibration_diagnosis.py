@@ -69,7 +69,7 @@ def main(argv=None):
                 Xc, fm, zm, fp, zp, vals = vc.seeded_case(seed, name, size, P=P, X=X, base=base)
                 curve = AmplitudeCurve(X, fm, zm, frequency_std=vc.F_NOISE * fm,
                                        damping_std=vc.Z_NOISE * zm, method="seeded")
-                g = diagnose_vibration(curve, predicted_frequency=fp, predicted_damping=zp,
+                g = diagnose_vibration(curve, predicted_frequency=fp, predicted_damping_ratio=zp,
                                        predicted_zeta0=vc.ZETA0)
                 want = name or "none"
                 good = g.effect == want and (g.error_after <= 1.3 * noise or name is None)

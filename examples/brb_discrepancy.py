@@ -74,7 +74,7 @@ def main(argv=None):
     # the sweeps are another test than the hammer calibration (shaker attached): the
     # between-test frequency and damping-floor offsets are fitted as nuisances, not named
     diag = ie.diagnose_vibration(sweeps, predicted_frequency=before.frequency,
-                                 predicted_damping=before.damping_ratio,
+                                 predicted_damping_ratio=before.damping_ratio,
                                  predicted_zeta0=spec.interface.damping_floor,
                                  between_tests=True)
     print(diag.report())

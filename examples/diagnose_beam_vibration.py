@@ -70,7 +70,7 @@ def run(effect: str, *, quick: bool):
     # the simulation at the measured amplitudes (log-log interpolation between runs)
     fp = np.exp(np.interp(np.log(a_m), np.log(a_p), np.log(f_p)))
     zp = np.exp(np.interp(np.log(a_m), np.log(a_p), np.log(z_p)))
-    diag = diagnose_vibration(a_m, f_m, z_m, predicted_frequency=fp, predicted_damping=zp,
+    diag = diagnose_vibration(a_m, f_m, z_m, predicted_frequency=fp, predicted_damping_ratio=zp,
                               frequency_noise=2e-7, damping_noise=0.01)
     result = {"effect_hidden": effect, "diagnosis": diag}
     if diag.effect != "none":

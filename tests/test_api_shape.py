@@ -70,7 +70,7 @@ def _vib():
     c = _curve()
     return ie.diagnose_vibration(c.amplitude, c.frequency, c.damping_ratio,
                                  predicted_frequency=c.frequency + 0.01,
-                                 predicted_damping=c.damping_ratio,
+                                 predicted_damping_ratio=c.damping_ratio,
                                  frequency_noise=0.01, damping_noise=1e-4)
 
 

@@ -165,10 +165,10 @@ REGISTRY: dict[str, Entry] = {
                                                  max_effects=1, noise=5.0)),
                       {"t": "time", "u": "data", "F": "data", "noise": "scalar"}),
     "diagnose_vibration": Entry(lambda: (ie.diagnose_vibration, dict(
-        amplitude=_curve()["amplitude"], frequency=_curve()["frequency"], damping=_curve()["damping"],
-        predicted_frequency=_curve()["frequency"] + 0.01, predicted_damping=_curve()["damping"],
-        frequency_noise=0.01, damping_noise=1e-4)),
-        {"amplitude": "data", "frequency": "data", "damping": "data"}),
+        amplitude=_curve()["amplitude"], frequency=_curve()["frequency"],
+        damping_ratio=_curve()["damping"], predicted_frequency=_curve()["frequency"] + 0.01,
+        predicted_damping_ratio=_curve()["damping"], frequency_noise=0.01, damping_noise=1e-4)),
+        {"amplitude": "data", "frequency": "data", "damping_ratio": "data"}),
     "diagnose_many": Entry(lambda: (ie.diagnose_many, dict(
         records=[(_record().t.copy(), _record().u.copy(), _record().F.copy())], band=0.25,
         executor="serial", max_samples=300, max_effects=1, noise=5.0)),

@@ -297,7 +297,7 @@ def test_vibration_floor_is_named_and_sized(hidden, name):
     describing function the diagnosis uses."""
     for seed in (1, 2):
         X, fm, zm, fp, zp = vibration_case_elements(seed, **hidden)
-        g = diagnose_vibration(X, fm, zm, predicted_frequency=fp, predicted_damping=zp,
+        g = diagnose_vibration(X, fm, zm, predicted_frequency=fp, predicted_damping_ratio=zp,
                                predicted_zeta0=ZETA0)
         assert g.effects == (name,), g.report()
         par = g.parameters[name]
@@ -314,7 +314,7 @@ def test_vibration_floor_is_named_and_sized(hidden, name):
 
 def test_vibration_two_effects_clean_curves_and_augment():
     X, fm, zm, fp, zp = vibration_case(5, zeta_v=1e-3, k_p=3e4)
-    g = diagnose_vibration(X, fm, zm, predicted_frequency=fp, predicted_damping=zp,
+    g = diagnose_vibration(X, fm, zm, predicted_frequency=fp, predicted_damping_ratio=zp,
                            predicted_zeta0=ZETA0)
     assert set(g.effects) == {"viscous_damping", "pinning_stiffness"}
     el = g.augment(IwanJoint(MODAL), modal_mass=1.0)
@@ -326,23 +326,23 @@ def test_vibration_two_effects_clean_curves_and_augment():
     assert "named: " in g.report()
     for seed in range(20):
         X, fm, zm, fp, zp = vibration_case(100 + seed)
-        g = diagnose_vibration(X, fm, zm, predicted_frequency=fp, predicted_damping=zp)
+        g = diagnose_vibration(X, fm, zm, predicted_frequency=fp, predicted_damping_ratio=zp)
         assert g.effect == "none", (seed, g.report())
     g5 = diagnose_vibration(X[:5], fm[:5], zm[:5], predicted_frequency=fp[:5],
-                            predicted_damping=zp[:5])
+                            predicted_damping_ratio=zp[:5])
     assert any("only 5 amplitudes" in w for w in g5.warnings)
-    with pytest.raises(ValueError, match="damping must be > 0"):
-        diagnose_vibration(X, fm, -zm, predicted_frequency=fp, predicted_damping=zp)
+    with pytest.raises(ValueError, match="damping_ratio must be > 0"):
+        diagnose_vibration(X, fm, -zm, predicted_frequency=fp, predicted_damping_ratio=zp)
 
 
 def test_vibration_unit_mistakes_are_flagged():
     X, fm, zm, fp, zp = vibration_case(3)
     with pytest.raises(ValueError, match="frequency .*rad/s"):
-        diagnose_vibration(X, 2 * np.pi * fm, zm, predicted_frequency=fp, predicted_damping=zp)
+        diagnose_vibration(X, 2 * np.pi * fm, zm, predicted_frequency=fp, predicted_damping_ratio=zp)
     with pytest.raises(ValueError, match="predicted_frequency .*rad/s"):
-        diagnose_vibration(X, fm, zm, predicted_frequency=2 * np.pi * fp, predicted_damping=zp)
+        diagnose_vibration(X, fm, zm, predicted_frequency=2 * np.pi * fp, predicted_damping_ratio=zp)
     with pytest.raises(ValueError, match="damping .*percent"):
-        diagnose_vibration(X, fm, 100 * zm + 1.0, predicted_frequency=fp, predicted_damping=zp)
+        diagnose_vibration(X, fm, 100 * zm + 1.0, predicted_frequency=fp, predicted_damping_ratio=zp)
 
 
 def test_vibration_never_names_what_raises_the_mismatch():
@@ -350,7 +350,7 @@ def test_vibration_never_names_what_raises_the_mismatch():
     unnamed, with a warning, and the mismatch after is never above the mismatch before."""
     X, fm, zm, fp, zp = vibration_case(4)
     bump = 1.0 - 0.004 * np.exp(-np.log(X / np.median(X)) ** 2)
-    g = diagnose_vibration(X, fm * bump, zm, predicted_frequency=fp, predicted_damping=zp)
+    g = diagnose_vibration(X, fm * bump, zm, predicted_frequency=fp, predicted_damping_ratio=zp)
     assert g.error_after <= g.error_before
     assert g.effect == "none" or g.error_after < 0.8 * g.error_before, g.report()
     if g.effect == "none":

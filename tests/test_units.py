@@ -31,12 +31,12 @@ def test_fit_modal_iwan_refuses_percent():
 
 
 def test_diagnose_vibration_refuses_percent_and_rad_s():
-    kw = dict(predicted_frequency=F * 1.0001, predicted_damping=Z * 0.9)
+    kw = dict(predicted_frequency=F * 1.0001, predicted_damping_ratio=Z * 0.9)
     diagnose_vibration(X, F, Z, **kw)
     with pytest.raises(ValueError, match="damping .*percent"):
         diagnose_vibration(X, F, 100 * Z, **kw)
-    with pytest.raises(ValueError, match="predicted_damping .*percent"):
-        diagnose_vibration(X, F, Z, predicted_frequency=F, predicted_damping=100 * Z)
+    with pytest.raises(ValueError, match="predicted_damping_ratio .*percent"):
+        diagnose_vibration(X, F, Z, predicted_frequency=F, predicted_damping_ratio=100 * Z)
     with pytest.raises(ValueError, match="frequency .*rad/s"):
         diagnose_vibration(X, 2 * math.pi * F, Z, **kw)
 
@@ -46,19 +46,19 @@ def test_curves_in_percent_cannot_be_made_for_the_vibration_functions():
     with pytest.raises(ValueError, match="percent"):
         fit_modal_iwan(curve)
     with pytest.raises(ValueError, match="percent"):
-        diagnose_vibration(curve, predicted_frequency=F, predicted_damping=Z)
+        diagnose_vibration(curve, predicted_frequency=F, predicted_damping_ratio=Z)
 
 
 def test_diagnose_vibration_takes_an_amplitude_curve():
     std = AmplitudeCurve(X, F, Z, frequency_std=1e-5 * F, damping_std=0.02 * Z)
-    kw = dict(predicted_frequency=F, predicted_damping=Z)
+    kw = dict(predicted_frequency=F, predicted_damping_ratio=Z)
     a = diagnose_vibration(std, **kw)
     b = diagnose_vibration(X, F, Z, frequency_uncertainty=1e-5, damping_uncertainty=0.02, **kw)
     assert a.effect == b.effect and a.details["noise_from"] == b.details["noise_from"]
     assert a.frequency_noise == pytest.approx(b.frequency_noise)
     with pytest.raises(ValueError, match="not both"):
         diagnose_vibration(std, F, Z, **kw)
-    with pytest.raises(ValueError, match="frequency and damping are required"):
+    with pytest.raises(ValueError, match="frequency and damping_ratio are required"):
         diagnose_vibration(X, **kw)
 
 

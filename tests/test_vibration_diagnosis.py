@@ -30,7 +30,7 @@ def _diag(case, stated=True):
     Xc, fm, zm, fp, zp, _ = case
     std = dict(frequency_std=vc.F_NOISE * fm, damping_std=vc.Z_NOISE * zm) if stated else {}
     return diagnose_vibration(AmplitudeCurve(Xc, fm, zm, **std), predicted_frequency=fp,
-                              predicted_damping=zp, predicted_zeta0=vc.ZETA0)
+                              predicted_damping_ratio=zp, predicted_zeta0=vc.ZETA0)
 
 
 @pytest.mark.parametrize("name", ["hardening", "macroslip_onset", "pinning_stiffness",
@@ -75,14 +75,14 @@ def test_curve_input_equals_arrays_and_is_not_mutated(base):
     Xc, fm, zm, fp, zp, _ = vc.seeded_case(5, "hardening", 1.0, P=vc.BASE, X=X, base=base)
     curve = AmplitudeCurve(Xc, fm, zm)
     fp0 = fp.copy()
-    g1 = diagnose_vibration(curve, predicted_frequency=fp, predicted_damping=zp)
-    g2 = diagnose_vibration(Xc, fm, zm, predicted_frequency=fp, predicted_damping=zp)
+    g1 = diagnose_vibration(curve, predicted_frequency=fp, predicted_damping_ratio=zp)
+    g2 = diagnose_vibration(Xc, fm, zm, predicted_frequency=fp, predicted_damping_ratio=zp)
     assert g1.effects == g2.effects and g1.error_after == pytest.approx(g2.error_after)
     np.testing.assert_array_equal(fp, fp0)
-    with pytest.raises(ValueError, match="frequency and damping must be None"):
-        diagnose_vibration(curve, fm, zm, predicted_frequency=fp, predicted_damping=zp)
-    with pytest.raises(ValueError, match="frequency and damping are required"):
-        diagnose_vibration(Xc, predicted_frequency=fp, predicted_damping=zp)
+    with pytest.raises(ValueError, match="frequency and damping_ratio must be None"):
+        diagnose_vibration(curve, fm, zm, predicted_frequency=fp, predicted_damping_ratio=zp)
+    with pytest.raises(ValueError, match="frequency and damping_ratio are required"):
+        diagnose_vibration(Xc, predicted_frequency=fp, predicted_damping_ratio=zp)
 
 
 def test_candidates_come_from_the_effects_declarations():
@@ -115,7 +115,7 @@ def test_unexplained_mismatch_is_stated_with_its_amplitudes(base):
     dip = 1.0 - 2e-3 * np.exp(-(np.log(X / mid) / 0.3) ** 2)
     g = diagnose_vibration(AmplitudeCurve(Xc, fm * dip, zm, frequency_std=vc.F_NOISE * fm,
                                           damping_std=vc.Z_NOISE * zm),
-                           predicted_frequency=fp, predicted_damping=zp,
+                           predicted_frequency=fp, predicted_damping_ratio=zp,
                            predicted_zeta0=vc.ZETA0)
     w = [x for x in g.warnings if "remains" in x]
     assert w, g.report()
@@ -160,7 +160,7 @@ def test_augmented_specimen_carries_the_effect_and_its_qsma_is_the_fit():
     g = diagnose_vibration(AmplitudeCurve(Xm, fm, zm, frequency_std=1e-4 * fm,
                                           damping_std=0.03 * zm),
                            predicted_frequency=pred.frequency,
-                           predicted_damping=pred.damping_ratio,
+                           predicted_damping_ratio=pred.damping_ratio,
                            predicted_zeta0=spec.interface.damping_floor)
     assert g.effect == "hardening", g.report()
     assert g.parameters["hardening"]["k3_per_mass"] == pytest.approx(k3, rel=0.2)
@@ -169,7 +169,7 @@ def test_augmented_specimen_carries_the_effect_and_its_qsma_is_the_fit():
     assert aug.calibrated_range == pytest.approx((2e-6, Xm.max()))
     q = models.modal_amplitude_curve(aug, amplitudes=Xm)
     np.testing.assert_allclose(q.frequency, g.model_frequency, rtol=1e-10)
-    np.testing.assert_allclose(q.damping_ratio, g.model_damping, rtol=1e-10)
+    np.testing.assert_allclose(q.damping_ratio, g.model_damping_ratio, rtol=1e-10)
     assert q.warnings == ()
     far = models.modal_amplitude_curve(aug, amplitudes=[1e-5, 5e-4])
     assert any("calibrated on" in w and "extrapolated" in w for w in far.warnings)
@@ -202,7 +202,7 @@ def test_brake_reuss_sweeps_name_an_effect_that_halves_the_mismatch_beyond_the_n
     pred = models.modal_amplitude_curve(spec, amplitudes=curve.amplitude)
     assert any("extrapolated" in w for w in pred.warnings)
     g = diagnose_vibration(curve, predicted_frequency=pred.frequency,
-                           predicted_damping=pred.damping_ratio,
+                           predicted_damping_ratio=pred.damping_ratio,
                            predicted_zeta0=spec.interface.damping_floor, between_tests=True)
     assert g.effects, g.report()
     bt = g.details["between_tests"]          # the sweeps sit below the hammer-calibrated model
@@ -230,7 +230,7 @@ def test_where_names_a_turn_as_two_ranges_of_opposite_sign():
     dev = np.where(X < 1e-4, -2e-3, 3e-3)          # -0.2 % then +0.3 %
     fm = fp * np.exp(dev)
     zp = 2e-3 * (1 + X / X.max())
-    g = diagnose_vibration(X, fm, zp.copy(), predicted_frequency=fp, predicted_damping=zp,
+    g = diagnose_vibration(X, fm, zp.copy(), predicted_frequency=fp, predicted_damping_ratio=zp,
                            frequency_noise=1e-4, damping_noise=0.02)
     w = g.where
     assert "measured frequency beyond 3 x noise of the prediction: below it from" in w.lower(), w
@@ -251,7 +251,7 @@ def test_between_test_offsets_are_nuisances_not_effects(base):
         fm2, zm2 = fm * (1 + df), zm + dz
         g = diagnose_vibration(AmplitudeCurve(Xc, fm2, zm2, frequency_std=vc.F_NOISE * fm2,
                                               damping_std=vc.Z_NOISE * zm2),
-                               predicted_frequency=fp, predicted_damping=zp,
+                               predicted_frequency=fp, predicted_damping_ratio=zp,
                                predicted_zeta0=vc.ZETA0, between_tests=True)
         assert g.effect == "none", g.report()
         bt = g.details["between_tests"]
@@ -260,19 +260,19 @@ def test_between_test_offsets_are_nuisances_not_effects(base):
         assert bt["untested"] == ["viscous_damping"] and "between-test" in g.report()
         plain = diagnose_vibration(AmplitudeCurve(Xc, fm2, zm2, frequency_std=vc.F_NOISE * fm2,
                                                   damping_std=vc.Z_NOISE * zm2),
-                                   predicted_frequency=fp, predicted_damping=zp,
+                                   predicted_frequency=fp, predicted_damping_ratio=zp,
                                    predicted_zeta0=vc.ZETA0)
         assert plain.details["misfit_p"] < 1e-3
     Xc, fm, zm, fp, zp, _ = vc.seeded_case(42, "hardening", 2.0, P=vc.BASE, X=X, base=base)
     g = diagnose_vibration(AmplitudeCurve(Xc, fm * (1 + df), zm + dz,
                                           frequency_std=vc.F_NOISE * fm,
                                           damping_std=vc.Z_NOISE * zm),
-                           predicted_frequency=fp, predicted_damping=zp,
+                           predicted_frequency=fp, predicted_damping_ratio=zp,
                            predicted_zeta0=vc.ZETA0, between_tests=True)
     assert g.effects == ("hardening",), g.report()
     with pytest.raises(ValueError, match="between_tests"):
         diagnose_vibration(AmplitudeCurve(Xc, fm, zm), predicted_frequency=fp,
-                           predicted_damping=zp, between_tests="yes")
+                           predicted_damping_ratio=zp, between_tests="yes")
 
 
 @pytest.mark.parametrize("spread", [0.0, 1.5])

@@ -242,9 +242,11 @@ class VibrationDiagnosis(ResultShape):
         RMS relative noise of the two curves [-].
     frequency_noise, damping_noise : float
         Relative noise of each curve [-] (estimated or given).
-    amplitude, frequency, damping, predicted_frequency, predicted_damping : ndarray, shape (n,)
-        The inputs (read-only copies).
-    model_frequency, model_damping : ndarray, shape (n,)
+    amplitude, frequency, damping_ratio : ndarray, shape (n,)
+        The measured curve (read-only copies).
+    predicted_frequency, predicted_damping_ratio : ndarray, shape (n,)
+        The prediction it was compared with (read-only copies).
+    model_frequency, model_damping_ratio : ndarray, shape (n,)
         The prediction with the named effects added.
     steps : tuple of dict
     warnings : tuple of str
@@ -270,11 +272,11 @@ class VibrationDiagnosis(ResultShape):
     damping_noise: float
     amplitude: np.ndarray
     frequency: np.ndarray
-    damping: np.ndarray
+    damping_ratio: np.ndarray
     predicted_frequency: np.ndarray
-    predicted_damping: np.ndarray
+    predicted_damping_ratio: np.ndarray
     model_frequency: np.ndarray
-    model_damping: np.ndarray
+    model_damping_ratio: np.ndarray
     steps: tuple
     warnings: tuple = ()
     details: dict = field(default_factory=dict)
@@ -297,7 +299,7 @@ class VibrationDiagnosis(ResultShape):
             A :class:`~iwan_element.models.specimens.Specimen` (anything with
             ``with_effects``): returned carrying the named effects in their modal form with
             the fitted values, on ``mode``, calibrated over the diagnosed amplitudes (its QSMA
-            curve is then the diagnosis's ``model_frequency``/``model_damping`` when the
+            curve is then the diagnosis's ``model_frequency``/``model_damping_ratio`` when the
             prediction was that specimen's QSMA). Or a joint element, wrapped in the effects
             converted to joint terms.
         modal_mass : float, keyword-only
@@ -367,7 +369,7 @@ class VibrationDiagnosis(ResultShape):
             o = np.argsort(self.amplitude)
             lx = np.log(self.amplitude[o])
             fb = np.exp(np.interp(np.log(X), lx, np.log(self.predicted_frequency[o])))
-            zb = np.exp(np.interp(np.log(X), lx, np.log(self.predicted_damping[o])))
+            zb = np.exp(np.interp(np.log(X), lx, np.log(self.predicted_damping_ratio[o])))
             if out.any():
                 warns.append(f"{int(out.sum())} amplitudes outside the diagnosed range {lo:.3g} .. "
                              f"{hi:.3g} m: the base prediction is held at its end values there; "
@@ -410,8 +412,8 @@ class VibrationDiagnosis(ResultShape):
         return json_safe({k: getattr(self, k) for k in (
             "effect", "effects", "ambiguous_with", "where", "parameters", "error_before",
             "error_after", "noise_level", "frequency_noise", "damping_noise", "amplitude",
-            "frequency", "damping", "predicted_frequency", "predicted_damping",
-            "model_frequency", "model_damping", "steps", "warnings", "details", "covariance")})
+            "frequency", "damping_ratio", "predicted_frequency", "predicted_damping_ratio",
+            "model_frequency", "model_damping_ratio", "steps", "warnings", "details", "covariance")})
 
     def report(self) -> str:
         """Human-readable account."""
@@ -461,9 +463,9 @@ class VibrationDiagnosis(ResultShape):
                             label="+ " + (" + ".join(self.effects) or "nothing"))
         a1.set_xlabel("amplitude [m]")
         a1.set_ylabel("frequency [Hz]")
-        arts += a2.loglog(X[o], self.damping[o], "o", ms=3, mfc="none", color="k", label="measured")
-        arts += a2.loglog(X[o], self.predicted_damping[o], "-", color="C0", label="predicted")
-        arts += a2.loglog(X[o], self.model_damping[o], "--", color="C3",
+        arts += a2.loglog(X[o], self.damping_ratio[o], "o", ms=3, mfc="none", color="k", label="measured")
+        arts += a2.loglog(X[o], self.predicted_damping_ratio[o], "-", color="C0", label="predicted")
+        arts += a2.loglog(X[o], self.model_damping_ratio[o], "--", color="C3",
                           label="+ " + (" + ".join(self.effects) or "nothing"))
         a2.set_xlabel("amplitude [m]")
         a2.set_ylabel("damping ratio [-]")

@@ -49,8 +49,8 @@ def _curve_noise(r):
 def _check_units(fm, fp, zm, zp):
     """Clear errors for rad/s given as Hz and percent given as a ratio."""
     check_frequency_ratio("frequency", fm, "predicted_frequency", fp)
-    check_damping_ratio("damping", zm)
-    check_damping_ratio("predicted_damping", zp)
+    check_damping_ratio("damping_ratio", zm)
+    check_damping_ratio("predicted_damping_ratio", zp)
 
 
 def _noise(r, stated, n, name):
@@ -194,32 +194,32 @@ def _left(X, rf, rz, sf, sz):
     return (": " + "; ".join(parts)) if parts else ""
 
 
-def _inputs(amplitude, frequency, damping, predicted_frequency, predicted_damping):
+def _inputs(amplitude, frequency, damping_ratio, predicted_frequency, predicted_damping_ratio):
     arrs = {}
-    for nm, a in (("amplitude", amplitude), ("frequency", frequency), ("damping", damping),
+    for nm, a in (("amplitude", amplitude), ("frequency", frequency), ("damping_ratio", damping_ratio),
                   ("predicted_frequency", predicted_frequency),
-                  ("predicted_damping", predicted_damping)):
+                  ("predicted_damping_ratio", predicted_damping_ratio)):
         arrs[nm] = check_magnitude(nm, finite_array(nm, a, ndim=1, min_size=3))
     n = same_length(**arrs)
     for nm, a in arrs.items():
         if np.any(a <= 0):
             raise ValueError(f"{nm} must be > 0 everywhere")
-    _check_units(arrs["frequency"], arrs["predicted_frequency"], arrs["damping"],
-                 arrs["predicted_damping"])
+    _check_units(arrs["frequency"], arrs["predicted_frequency"], arrs["damping_ratio"],
+                 arrs["predicted_damping_ratio"])
     return n, arrs
 
 
-def _measurement(amplitude, frequency, damping, f_unc, z_unc):
+def _measurement(amplitude, frequency, damping_ratio, f_unc, z_unc):
     """Arrays and stated relative uncertainties from an AmplitudeCurve or three arrays."""
     if not isinstance(amplitude, AmplitudeCurve):
-        if frequency is None or damping is None:
-            raise ValueError("frequency and damping are required unless amplitude is an "
+        if frequency is None or damping_ratio is None:
+            raise ValueError("frequency and damping_ratio are required unless amplitude is an "
                              "AmplitudeCurve")
-        return amplitude, frequency, damping, f_unc, z_unc
+        return amplitude, frequency, damping_ratio, f_unc, z_unc
     c = amplitude
-    if frequency is not None or damping is not None:
+    if frequency is not None or damping_ratio is not None:
         raise ValueError("give either an AmplitudeCurve or three arrays, not both: frequency and "
-                         "damping must be None when amplitude is an AmplitudeCurve")
+                         "damping_ratio must be None when amplitude is an AmplitudeCurve")
 
     def rel(std, val):
         r = np.asarray(std, float) / val
@@ -230,8 +230,8 @@ def _measurement(amplitude, frequency, damping, f_unc, z_unc):
     return c.amplitude, c.frequency, c.damping_ratio, f_unc, z_unc
 
 
-def diagnose_vibration(amplitude, frequency=None, damping=None, *, predicted_frequency,
-                       predicted_damping, frequency_noise: float | None = None,
+def diagnose_vibration(amplitude, frequency=None, damping_ratio=None, *, predicted_frequency,
+                       predicted_damping_ratio, frequency_noise: float | None = None,
                        damping_noise: float | None = None,
                        frequency_uncertainty=None, damping_uncertainty=None,
                        predicted_zeta0: float = 0.0, alpha: float = 1e-3,
@@ -245,12 +245,12 @@ def diagnose_vibration(amplitude, frequency=None, damping=None, *, predicted_fre
     amplitude : array_like, shape (n,), or AmplitudeCurve
         Response amplitude [m], ``> 0``; or a measured :class:`~iwan_element.AmplitudeCurve`
         (from :func:`~iwan_element.amplitude_curve`, :func:`~iwan_element.sweep_curve`, ...):
-        then ``frequency`` and ``damping`` are omitted and its standard errors, relative to
+        then ``frequency`` and ``damping_ratio`` are omitted and its standard errors, relative to
         its values, are the stated uncertainties unless those are given.
-    frequency, damping : array_like, shape (n,)
+    frequency, damping_ratio : array_like, shape (n,)
         Measured frequency [Hz] and damping ratio [-], ``> 0`` (a value of 1 or more, or a
         curve never below 0.05, is refused as percent).
-    predicted_frequency, predicted_damping : array_like, shape (n,), keyword-only
+    predicted_frequency, predicted_damping_ratio : array_like, shape (n,), keyword-only
         The model's prediction at the same amplitudes [Hz], [-].
     frequency_noise, damping_noise : float, optional, keyword-only
         Relative noise standard deviations [-], ``> 0``; when given they are used as they are.
@@ -282,11 +282,12 @@ def diagnose_vibration(amplitude, frequency=None, damping=None, *, predicted_fre
         ``2 pi`` times the prediction (rad/s for Hz) or the other way round, damping ratios
         that look like percent (one >= 1, or none below 0.05), or an option out of range.
     """
-    amplitude, frequency, damping, frequency_uncertainty, damping_uncertainty = _measurement(
-        amplitude, frequency, damping, frequency_uncertainty, damping_uncertainty)
-    n, a = _inputs(amplitude, frequency, damping, predicted_frequency, predicted_damping)
-    X, fm, zm, fp, zp = (a[k] for k in ("amplitude", "frequency", "damping",
-                                         "predicted_frequency", "predicted_damping"))
+    amplitude, frequency, damping_ratio, frequency_uncertainty, damping_uncertainty = _measurement(
+        amplitude, frequency, damping_ratio, frequency_uncertainty, damping_uncertainty)
+    n, a = _inputs(amplitude, frequency, damping_ratio, predicted_frequency,
+                   predicted_damping_ratio)
+    X, fm, zm, fp, zp = (a[k] for k in ("amplitude", "frequency", "damping_ratio",
+                                         "predicted_frequency", "predicted_damping_ratio"))
     zeta0 = check_scalar("predicted_zeta0", predicted_zeta0, low=0.0)
     alpha = check_scalar("alpha", alpha, low=0.0, high=0.5, low_open=True, high_open=True)
     ambiguity = check_scalar("ambiguity", ambiguity, low=0.0)
@@ -368,9 +369,9 @@ def _vib_result(vib, sel, chi_b, err_b, rf0, rz0, warns, alpha, noise_from, cand
         where=_where(vib.X, rf0, rz0, vib.sf, vib.sz, misfit), parameters=params,
         error_before=err_b, error_after=vib.error(names, z),
         noise_level=math.sqrt(0.5 * (vib.sf ** 2 + vib.sz ** 2)), frequency_noise=vib.sf,
-        damping_noise=vib.sz, amplitude=ro(vib.X), frequency=ro(vib.fm), damping=ro(vib.zm),
-        predicted_frequency=ro(vib.fp), predicted_damping=ro(vib.zp), model_frequency=ro(f_new),
-        model_damping=ro(z_new), steps=tuple(json_safe(s) for s in steps), warnings=tuple(warns),
+        damping_noise=vib.sz, amplitude=ro(vib.X), frequency=ro(vib.fm), damping_ratio=ro(vib.zm),
+        predicted_frequency=ro(vib.fp), predicted_damping_ratio=ro(vib.zp), model_frequency=ro(f_new),
+        model_damping_ratio=ro(z_new), steps=tuple(json_safe(s) for s in steps), warnings=tuple(warns),
         details=json_safe(details), covariance=None if cov is None else ro(cov))
 
 
