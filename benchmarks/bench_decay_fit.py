@@ -67,7 +67,7 @@ def make_record(c):
     def curves(a):
         a = np.asarray(a, dtype=float)
         f, z = modal_iwan_curve(np.atleast_1d(a), p, K_inf=k_inf, zeta0=zeta0,
-                                stiffness="harmonic", floor="dashpot", damping="decay")
+                                stiffness="harmonic", floor="dashpot", damping_form="decay")
         return np.asarray(f).reshape(a.shape), np.asarray(z).reshape(a.shape)
     return svam_decay(lambda a: curves(a)[0], lambda a: curves(a)[1], a0=c["q0"], **kw)
 

@@ -14,7 +14,7 @@ Two independent routes, neither of which is the extraction code under test:
 * :func:`joint_decay`: the single-mode oscillator with the exact Iwan joint, integrated in
   time (:func:`iwan_element.modal_ringdown`); its truth is the modal Iwan closed form
   (:func:`iwan_element.modal_iwan_curve`, first-harmonic stiffness, dashpot floor, the
-  damping a decay shows: ``damping="decay"``).
+  damping a decay shows: ``damping_form="decay"``).
 
 Both add a second, linear mode at ``ratio * f0`` and white noise of ``noise`` times the
 record's largest absolute value, from an explicit ``numpy.random.Generator``.
@@ -148,7 +148,7 @@ def joint_decay(params: IwanParameters, *, K_inf: float, zeta0: float, q0: float
     """A free decay of the unit-mass modal oscillator with the exact Iwan joint.
 
     Released from rest at ``q0`` [m]; the truth is :func:`modal_iwan_curve` with the
-    first-harmonic stiffness, the dashpot floor and ``damping="decay"`` (what a ring-down
+    first-harmonic stiffness, the dashpot floor and ``damping_form="decay"`` (what a ring-down
     measures to first order in the damping).
     """
     t = np.arange(int(round(duration * fs))) / fs
@@ -158,7 +158,7 @@ def joint_decay(params: IwanParameters, *, K_inf: float, zeta0: float, q0: float
     def curve(a):
         f, z = modal_iwan_curve(np.atleast_1d(np.asarray(a, dtype=float)), params,
                                 K_inf=K_inf, zeta0=zeta0, stiffness="harmonic",
-                                floor="dashpot", damping="decay")
+                                floor="dashpot", damping_form="decay")
         return np.asarray(f), np.asarray(z)
 
     f0 = math.sqrt(K_inf + params.KT) / (2 * math.pi)

@@ -41,7 +41,7 @@ def _curves(zeta0, p=P, k_inf=K_INF):
     def both(a):
         a = np.asarray(a, dtype=float)
         f, z = modal_iwan_curve(np.atleast_1d(a), p, K_inf=k_inf, zeta0=zeta0,
-                                stiffness="harmonic", floor="dashpot", damping="decay")
+                                stiffness="harmonic", floor="dashpot", damping_form="decay")
         return np.asarray(f).reshape(a.shape), np.asarray(z).reshape(a.shape)
     return (lambda a: both(a)[0]), (lambda a: both(a)[1])
 

@@ -145,7 +145,7 @@ def test_ringdown_end_to_end():
     cur = amplitude_curve(t, a + noise, band=(12.0, 30.0))
     assert cur.amplitude.max() > 0.1 * p.phi_max
     r = fit_modal_iwan(cur)
-    assert r.regime == "microslip" and r.conventions["damping"] == "decay"
+    assert r.regime == "microslip" and r.conventions["damping_form"] == "decay"
     x_ref = r.conventions["x_ref"]
     truth = {"f0": math.sqrt(k_inf + p.KT) / (2 * math.pi), "zeta0": 2e-3, "chi": p.chi,
              "delta": p.KT * (x_ref / p.phi_max) ** (p.chi + 1)
@@ -169,9 +169,9 @@ def test_a_free_decay_shows_the_decay_form_of_the_damping():
     m = (c.amplitude > 0.05 * p.phi_max) & (c.amplitude < 0.2 * p.phi_max)
     assert m.sum() >= 5
     _, z_decay = modal_iwan_curve(c.amplitude[m], p, K_inf=k_inf, stiffness="harmonic",
-                                  damping="decay")
+                                  damping_form="decay")
     _, z_energy = modal_iwan_curve(c.amplitude[m], p, K_inf=k_inf, stiffness="harmonic")
     assert np.max(np.abs(c.damping_ratio[m] / z_decay - 1)) < 0.01
     assert np.min(c.damping_ratio[m] / z_energy - 1) > 0.03
     with pytest.raises(ValueError, match="damping"):
-        modal_iwan_curve(1e-4, p, K_inf=k_inf, damping="viscous")
+        modal_iwan_curve(1e-4, p, K_inf=k_inf, damping_form="viscous")

@@ -128,7 +128,7 @@ def viscous_floor(zeta0, w0_sq, w_sq, k_e, floor: str):
 
 def modal_iwan_curve(Q, params: IwanParameters, *, K_inf: float, zeta0: float = 0.0,
                      mass: float = 1.0, stiffness: str = "secant", floor: str = "constant",
-                     damping: str = "energy"):
+                     damping_form: str = "energy"):
     """Natural frequency and damping ratio of a single-mode modal Iwan model.
 
     ``w(Q)**2 = (K_inf + K(Q)) / mass`` and
@@ -153,7 +153,7 @@ def modal_iwan_curve(Q, params: IwanParameters, *, K_inf: float, zeta0: float = 
     floor : {"constant", "dashpot"}, keyword-only
         ``"constant"``: the floor adds ``zeta0`` at every amplitude (docs/equations.md section 7);
         ``"dashpot"``: a fixed dashpot ``c = 2 zeta0 mass w0`` adds ``zeta0 w0 / w(Q)``.
-    damping : {"energy", "decay"}, keyword-only
+    damping_form : {"energy", "decay"}, keyword-only
         ``"energy"`` (default; QSMA, steady forced response): ``zeta = D / (2 pi m w**2
         Q**2)``. ``"decay"``: the damping ratio a free decay shows, its amplitude's decay rate
         over ``w``. The energy at a turning point is what the dissipation ``D`` drains once per
@@ -186,12 +186,12 @@ def modal_iwan_curve(Q, params: IwanParameters, *, K_inf: float, zeta0: float = 
         raise ValueError(f"stiffness must be 'secant' or 'harmonic', got {stiffness!r}")
     if floor not in ("constant", "dashpot"):
         raise ValueError(f"floor must be 'constant' or 'dashpot', got {floor!r}")
-    if damping not in ("energy", "decay"):
-        raise ValueError(f"damping must be 'energy' or 'decay', got {damping!r}")
+    if damping_form not in ("energy", "decay"):
+        raise ValueError(f"damping_form must be 'energy' or 'decay', got {damping_form!r}")
     w2 = (K_inf + np.asarray(k)) / mass
     w0 = math.sqrt((K_inf + p.KT) / mass)
     # the stiffness that relates the energy to the amplitude: m w^2, or dE/dQ / Q for a decay
-    k_e = mass * w2 if damping == "energy" else K_inf + np.asarray(tangent_stiffness(x, p))
+    k_e = mass * w2 if damping_form == "energy" else K_inf + np.asarray(tangent_stiffness(x, p))
     zv = viscous_floor(zeta0, w0 * w0, w2, k_e / mass, floor)
     zeta = zv + np.asarray(dissipation(x, p)) / (2.0 * math.pi * k_e * x * x)
     f = np.sqrt(w2) / (2.0 * math.pi)

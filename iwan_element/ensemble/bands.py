@@ -41,7 +41,7 @@ def modal_fit_task(params: dict, rng, *, names, regime: str, conventions: dict, 
     theta = np.array([params[n] for n in names], dtype=float)
     f, z = model_curve(theta, np.asarray(amplitudes, float), regime, conventions["x_ref"],
                        conventions["stiffness"], conventions["floor"],
-                       conventions.get("damping", "energy"))
+                       conventions.get("damping_form", "energy"))
     out = {"frequency": np.asarray(f, float), "damping": np.asarray(z, float)}
     if force is not None:
         p, k_inf = full_parameters(theta)

@@ -99,7 +99,7 @@ def _starts(X, f, zeta, conv):
     if X.size >= 4 and np.unique(np.round(np.log(X), 6)).size >= 3:
         try:
             fit = fit_modal_iwan(X, f, np.maximum(zeta, 1e-7), stiffness=conv["stiffness"],
-                                 floor=conv["floor"], x_ref=conv["x_ref"], damping="decay")
+                                 floor=conv["floor"], x_ref=conv["x_ref"], damping_form="decay")
             p = fit.parameters
             if fit.regime == "microslip":
                 starts.append(np.array(fit.values, dtype=float))
@@ -182,7 +182,7 @@ def _prepare(t, y, quantity, band, order, stiffness, floor, x_ref, t_start):
     if hi * dt < 1e-5:
         raise ValueError(f"band ({lo:g}, {hi:g}) Hz is below 1e-5 of the sampling rate "
                          f"{1.0 / dt:.3g} Hz (from t): check the unit of t")
-    conv = dict(stiffness=stiffness, floor=floor, x_ref=None, damping="decay",
+    conv = dict(stiffness=stiffness, floor=floor, x_ref=None, damping_form="decay",
                 method="direct signal fit",
                 quantity=quantity, band=[lo, hi], order=int(order))
     prob = _Problem(yy - yy.mean(), 1.0 / dt, (lo, hi), int(order), _QUANTITY_POWER[quantity],

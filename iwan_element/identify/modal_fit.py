@@ -60,10 +60,10 @@ def _weights(f, z, fstd, zstd):
     return np.full(f.size, 1e-4 * np.median(f)), np.full(z.size, 0.02 * np.median(np.abs(z))), False
 
 
-def _solve(regime, x0, lb, ub, X, f, z, sf, sz, x_ref, stiffness, floor, damping):
+def _solve(regime, x0, lb, ub, X, f, z, sf, sz, x_ref, stiffness, floor, damping_form):
     def resid(theta):
         try:
-            fm, zm = model_curve(theta, X, regime, x_ref, stiffness, floor, damping)
+            fm, zm = model_curve(theta, X, regime, x_ref, stiffness, floor, damping_form)
         except ValueError:
             return np.full(2 * X.size, 1e6)
         return np.concatenate([(fm - f) / sf, (zm - z) / sz])
@@ -72,7 +72,7 @@ def _solve(regime, x0, lb, ub, X, f, z, sf, sz, x_ref, stiffness, floor, damping
                                   xtol=1e-10, ftol=1e-12, gtol=1e-12, max_nfev=200)
 
 
-def _fit_micro(X, f, z, sf, sz, x_ref, stiffness, floor, damping):
+def _fit_micro(X, f, z, sf, sz, x_ref, stiffness, floor, damping_form):
     f0 = float(f[np.argmin(X)]) * (1.0 + 1e-5)
     lb = np.array([0.5 * f.min(), 0.0, -0.999, 1e-12])
     ub = np.array([2.0 * f.max(), 0.999, 1.0, 0.999])
@@ -80,13 +80,13 @@ def _fit_micro(X, f, z, sf, sz, x_ref, stiffness, floor, damping):
     for chi in (-0.7, -0.4, 0.0, 0.5):
         drop = max(1.0 - (np.median(f) / f0) ** 2, 1e-6)
         x0 = np.array([f0, 0.8 * max(float(z.min()), 1e-6), chi, drop])
-        r = _solve("microslip", x0, lb, ub, X, f, z, sf, sz, x_ref, stiffness, floor, damping)
+        r = _solve("microslip", x0, lb, ub, X, f, z, sf, sz, x_ref, stiffness, floor, damping_form)
         if best is None or r.cost < best.cost:
             best = r
     return best
 
 
-def _fit_full(micro, X, f, z, sf, sz, x_ref, stiffness, floor, damping):
+def _fit_full(micro, X, f, z, sf, sz, x_ref, stiffness, floor, damping_form):
     f0, z0, chi, delta = micro.x
     xmax = float(X.max())
     lb = np.array([0.5 * f.min(), 0.0, -0.999, 1e-9, math.log(1e-3 * X.min()), 0.0])
@@ -99,7 +99,7 @@ def _fit_full(micro, X, f, z, sf, sz, x_ref, stiffness, floor, damping):
             if not 0.0 < kappa < 1.0:
                 continue
             x0 = np.array([f0, z0, chi, kappa, math.log(phimax), beta])
-            r = _solve("full", x0, lb, ub, X, f, z, sf, sz, x_ref, stiffness, floor, damping)
+            r = _solve("full", x0, lb, ub, X, f, z, sf, sz, x_ref, stiffness, floor, damping_form)
             if best is None or r.cost < best.cost:
                 best = r
     return best
@@ -119,7 +119,7 @@ def _covariance(r, n_data):
 
 def fit_modal_iwan(amplitude, frequency=None, damping_ratio=None, *, stiffness: str = "harmonic",
                    floor: str = "dashpot", x_ref: float | None = None,
-                   significance: float = 0.01, damping: str = "auto") -> ModalIwanFit:
+                   significance: float = 0.01, damping_form: str = "auto") -> ModalIwanFit:
     """Identify a single-mode modal Iwan model with a viscous floor from f(X) and zeta(X).
 
     Model (Segalman 2005, J. Appl. Mech. 72:752-760; docs/equations.md section 7):
@@ -151,7 +151,7 @@ def fit_modal_iwan(amplitude, frequency=None, damping_ratio=None, *, stiffness: 
     significance : float, keyword-only
         Level of the F-test that must reject the microslip model before ``phi_max`` and
         ``beta`` are reported (default 0.01, range (0, 0.5)).
-    damping : {"auto", "decay", "energy"}, keyword-only
+    damping_form : {"auto", "decay", "energy"}, keyword-only
         What the measured damping ratio is: ``"decay"``, the decay rate of a free decay over
         ``w`` (``zeta = D / (2 pi (K_inf + K_t) X**2)``, the energy drained from a turning
         point, :func:`~iwan_element.modal_iwan_curve`); ``"energy"``,
@@ -163,11 +163,12 @@ def fit_modal_iwan(amplitude, frequency=None, damping_ratio=None, *, stiffness: 
     -------
     ModalIwanFit
     """
-    if damping not in ("auto", "decay", "energy"):
-        raise ValueError(f"damping must be 'auto', 'decay' or 'energy', got {damping!r}")
-    if damping == "auto":
+    if damping_form not in ("auto", "decay", "energy"):
+        raise ValueError(f"damping_form must be 'auto', 'decay' or 'energy', got "
+                         f"{damping_form!r}")
+    if damping_form == "auto":
         decay = isinstance(amplitude, AmplitudeCurve) and amplitude.method in DECAY_METHODS
-        damping = "decay" if decay else "energy"
+        damping_form = "decay" if decay else "energy"
     X, f, z, fstd, zstd, in_warn = _as_data(amplitude, frequency, damping_ratio)
     check_damping_ratio("damping_ratio", z)
     if stiffness not in ("harmonic", "secant"):
@@ -180,7 +181,7 @@ def fit_modal_iwan(amplitude, frequency=None, damping_ratio=None, *, stiffness: 
         raise ValueError("damping_ratio must be >= 0 for a modal Iwan fit")
     x_ref = float(np.exp(np.mean(np.log(X)))) if x_ref is None else \
         check_scalar("x_ref", x_ref, low=0.0, low_open=True)
-    conv = dict(stiffness=stiffness, floor=floor, x_ref=x_ref, damping=damping)
+    conv = dict(stiffness=stiffness, floor=floor, x_ref=x_ref, damping_form=damping_form)
     data = dict(amplitude=X, frequency=f, damping_ratio=z, frequency_std=fstd, damping_std=zstd)
     n_amp = np.unique(np.round(np.log(X), 9)).size
     if n_amp < 3:
@@ -188,17 +189,17 @@ def fit_modal_iwan(amplitude, frequency=None, damping_ratio=None, *, stiffness: 
             f"only {n_amp} distinct amplitude(s): the amplitude dependence cannot be "
             "identified; reported the mean frequency and damping ratio only",))
     sf, sz, known = _weights(f, z, fstd, zstd)
-    micro = _fit_micro(X, f, z, sf, sz, x_ref, stiffness, floor, damping)
+    micro = _fit_micro(X, f, z, sf, sz, x_ref, stiffness, floor, damping_form)
     if not known:                      # weights from each curve's own residual scatter
-        fm, zm = model_curve(micro.x, X, "microslip", x_ref, stiffness, floor, damping)
+        fm, zm = model_curve(micro.x, X, "microslip", x_ref, stiffness, floor, damping_form)
         dof = max(X.size - 2, 1)
         sf = np.full(X.size, max(math.sqrt(np.sum((fm - f) ** 2) / dof), 1e-9 * np.median(f)))
         sz = np.full(X.size, max(math.sqrt(np.sum((zm - z) ** 2) / dof), 1e-9 * np.median(z)))
-        micro = _fit_micro(X, f, z, sf, sz, x_ref, stiffness, floor, damping)
+        micro = _fit_micro(X, f, z, sf, sz, x_ref, stiffness, floor, damping_form)
     warns = list(in_warn)
     chosen, regime = micro, "microslip"
     n_data = 2 * X.size
-    full = _fit_full(micro, X, f, z, sf, sz, x_ref, stiffness, floor, damping) if n_data > 7 \
+    full = _fit_full(micro, X, f, z, sf, sz, x_ref, stiffness, floor, damping_form) if n_data > 7 \
         else None
     if full is not None:
         cov_f, chi2_f = _covariance(full, n_data)

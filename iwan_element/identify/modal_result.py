@@ -39,8 +39,8 @@ def full_parameters(theta):
     return IwanParameters(KT * c * phimax / (1.0 + beta), KT, chi, beta), w02 - KT
 
 
-def model_curve(theta, X, regime, x_ref, stiffness, floor, damping="energy"):
-    """Frequency [Hz] and damping ratio of the model at amplitudes ``X`` (``damping``: the
+def model_curve(theta, X, regime, x_ref, stiffness, floor, damping_form="energy"):
+    """Frequency [Hz] and damping ratio of the model at amplitudes ``X`` (``damping_form``: the
     energy form or the form a free decay shows, :func:`~iwan_element.modal_iwan_curve`)."""
     f0, z0, chi = theta[0], theta[1], theta[2]
     if regime == "microslip":
@@ -50,13 +50,13 @@ def model_curve(theta, X, regime, x_ref, stiffness, floor, damping="energy"):
         s = 1.0 if stiffness == "secant" else harmonic_factor(chi)
         w2 = w02 * np.maximum(1.0 - s * g, 1e-12)
         # energy per amplitude: w^2, or the tangent (secant drop times chi + 2) for a decay
-        k_e = w2 if damping == "energy" else w02 * np.maximum(1.0 - (chi + 2.0) * g, 1e-12)
+        k_e = w2 if damping_form == "energy" else w02 * np.maximum(1.0 - (chi + 2.0) * g, 1e-12)
         zv = viscous_floor(z0, w02, w2, k_e, floor)
         zeta = zv + w02 * g * 2.0 * (chi + 1.0) / (math.pi * (chi + 3.0)) / k_e
         return np.sqrt(w2) / (2.0 * math.pi), zeta
     p, k_inf = full_parameters(theta)
     return modal_iwan_curve(X, p, K_inf=k_inf, zeta0=z0, stiffness=stiffness,
-                            floor=floor, damping=damping)
+                            floor=floor, damping_form=damping_form)
 
 
 def _derived(theta, regime):
@@ -167,7 +167,7 @@ class ModalIwanFit(ResultShape):
             return np.full(X.shape, theta[0]), np.full(X.shape, theta[1])
         c = self.conventions
         return model_curve(theta, X, self.regime, c["x_ref"], c["stiffness"], c["floor"],
-                           c.get("damping", "energy"))
+                           c.get("damping_form", "energy"))
 
     def predict(self, amplitude, band: float | None = None):
         """Frequency [Hz] and damping ratio [-] of the fitted model at ``amplitude`` [m].
