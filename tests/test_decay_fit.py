@@ -37,6 +37,18 @@ def _joint(kappa=0.05, chi=-0.5, beta=0.5):
 P, K_INF = _joint()
 
 
+def _reference_decay(fr, dm, a0, T):
+    """``(t, [ln a, theta])`` of the averaging equations by an independent ODE solver (DOP853
+    to 1e-12) from ``a0`` over ``T`` [s], 301 samples."""
+    def rhs(_, s):
+        a = math.exp(s[0])
+        zz, w = float(dm(a)), 2 * math.pi * float(fr(a))
+        return [-zz * w, w * math.sqrt(1 - zz * zz)]
+    t = np.linspace(0.0, T, 301)
+    return t, solve_ivp(rhs, (0, T), [math.log(a0), 0.0], t_eval=t, rtol=1e-12, atol=1e-12,
+                        method="DOP853").y
+
+
 def _curves(zeta0, p=P, k_inf=K_INF):
     def both(a):
         a = np.asarray(a, dtype=float)
@@ -69,13 +81,7 @@ def test_quadrature_trajectory_matches_solve_ivp():
     fr, dm = _curves(zeta0)
     a0, T = 3e-4, 1.5
 
-    def rhs(_, s):
-        a = math.exp(s[0])
-        zz, w = float(dm(a)), 2 * math.pi * float(fr(a))
-        return [-zz * w, w * math.sqrt(1 - zz * zz)]
-    t = np.linspace(0.0, T, 301)
-    ref = solve_ivp(rhs, (0, T), [math.log(a0), 0.0], t_eval=t, rtol=1e-12, atol=1e-12,
-                    method="DOP853").y
+    t, ref = _reference_decay(fr, dm, a0, T)
     prob = D._Problem(np.zeros(4096), 2000.0, (70.0, 90.0), 4, 2,
                       dict(stiffness="harmonic", floor="dashpot", x_ref=3e-5))
     prob.span = 12.0
@@ -96,13 +102,7 @@ def test_quadrature_through_phi_max_matches_solve_ivp():
     a0, T = 3 * PHI_MAX, 1.5
     assert float(dm(PHI_MAX * (1 + 1e-9))) > float(dm(PHI_MAX * (1 - 1e-9))) * 1.001
 
-    def rhs(_, s):
-        a = math.exp(s[0])
-        zz, w = float(dm(a)), 2 * math.pi * float(fr(a))
-        return [-zz * w, w * math.sqrt(1 - zz * zz)]
-    t = np.linspace(0.0, T, 301)
-    ref = solve_ivp(rhs, (0, T), [math.log(a0), 0.0], t_eval=t, rtol=1e-12, atol=1e-12,
-                    method="DOP853").y
+    t, ref = _reference_decay(fr, dm, a0, T)
     assert ref[0, -1] < math.log(0.3 * PHI_MAX)              # the decay passes phi_max
     prob = D._Problem(np.zeros(4096), 2000.0, (70.0, 90.0), 4, 2,
                       dict(stiffness="harmonic", floor="dashpot", x_ref=3e-4))
