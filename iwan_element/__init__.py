@@ -17,7 +17,7 @@ from .core.closed_form import (
     secant_stiffness,
     tangent_stiffness,
 )
-from .diagnose import (CANDIDATES, BatchDiagnosis, Diagnosis, VibrationDiagnosis, diagnose,
+from .diagnose import (BatchDiagnosis, Diagnosis, VibrationDiagnosis, diagnose, loop_candidates,
                        diagnose_many, diagnose_vibration, simulate_element_test)
 from .diagnose import CampaignFit, fit_campaign
 from .core.discrete import DiscreteIwan, slider_distribution
@@ -103,7 +103,7 @@ __all__ = [
     "Diagnosis",
     "VibrationDiagnosis",
     "simulate_element_test",
-    "CANDIDATES",
+    "loop_candidates",
     "run_ensemble",
     "EnsembleResult",
     "ParameterUncertainty",

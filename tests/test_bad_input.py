@@ -186,7 +186,7 @@ REGISTRY: dict[str, Entry] = {
         element=IwanJoint(P), amplitudes=np.array([1e-4, 2e-4]), cycles=2, samples_per_cycle=16,
         force_noise=1.0)),
         {"element": "object", "amplitudes": "values", "force_noise": "scalar"}),
-    "CANDIDATES": Entry(skip="a constant tuple of effect names"),
+    "loop_candidates": Entry(skip="takes no argument: the effects that declare a loop_rank"),
 }
 
 # ---------------------------------------------------------------- vibration, modal, ensemble

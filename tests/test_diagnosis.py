@@ -456,3 +456,26 @@ def test_evaluator_start_equals_the_elements_driven_from_the_start():
     el = build_element(unit_params(*shape), (), ())
     np.testing.assert_allclose(ev.unit_force(shape, (), ()), el.force_history(u)[keep],
                                rtol=0, atol=1e-9)
+
+
+def test_loop_candidates_come_from_the_effects_declarations():
+    """The default candidates are read from the effects' loop_rank when diagnose is called, so
+    an effect registered later joins (as vibration_candidates does for modal forms)."""
+    from iwan_element import loop_candidates
+    from iwan_element.effects import EFFECTS, ParamSpec, register_effect
+    from iwan_element.effects._base import _Effect
+    assert loop_candidates() == ("viscous_damping", "pinning_stiffness", "backlash",
+                                 "slip_degradation", "asymmetric_slip", "breakaway")
+    assert "hardening" not in loop_candidates()          # a beam-vibration effect only
+
+    class _Probe(_Effect):
+        effect = "probe_loop"
+        loop_rank = 5
+        specs = (ParamSpec("c", "N s/m", "probe"),)
+
+    register_effect(_Probe)
+    try:
+        assert loop_candidates()[0] == "probe_loop"
+    finally:
+        del EFFECTS["probe_loop"]
+    assert "probe_loop" not in loop_candidates()

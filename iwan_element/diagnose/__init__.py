@@ -9,9 +9,10 @@ model over a campaign, its parameters laws of the test conditions).
 from .batch import BatchDiagnosis, diagnose_many
 from .campaign import CampaignFit, fit_campaign
 from .generator import simulate_element_test
-from .loops import CANDIDATES, diagnose
+from .loops import diagnose, loop_candidates
 from .results import Diagnosis, VibrationDiagnosis
 from .vibration import diagnose_vibration
 
-__all__ = ["BatchDiagnosis", "CANDIDATES", "CampaignFit", "fit_campaign", "Diagnosis", "VibrationDiagnosis", "diagnose",
-           "diagnose_many", "diagnose_vibration", "simulate_element_test"]
+__all__ = ["BatchDiagnosis", "CampaignFit", "fit_campaign", "Diagnosis", "VibrationDiagnosis",
+           "diagnose", "diagnose_many", "diagnose_vibration", "loop_candidates",
+           "simulate_element_test"]

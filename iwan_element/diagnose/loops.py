@@ -45,15 +45,17 @@ from .prepare import check_record, prepare_record
 from .results import Diagnosis
 from .selection import criterion_text, stepwise_select
 
-__all__ = ["CANDIDATES", "diagnose"]
+__all__ = ["diagnose", "loop_candidates"]
 
 log = logging.getLogger(__name__)
 
-#: Candidate effects tried by :func:`diagnose`, in the order they are reported: every effect
-#: that declares a ``loop_rank`` (the effects' own declaration, so a new effect module joins
-#: by itself), in that order.
-CANDIDATES = tuple(sorted((n for n, c in EFFECTS.items() if c.loop_rank is not None),
-                          key=lambda n: EFFECTS[n].loop_rank))
+def loop_candidates() -> tuple:
+    """Names of the effects :func:`diagnose` tries by default, in the order they are reported:
+    every effect in :data:`~iwan_element.EFFECTS` that declares a ``loop_rank``, by that rank
+    (read when called, as :func:`~iwan_element.diagnose.vibration.vibration_candidates` is, so
+    an effect registered later joins too)."""
+    return tuple(sorted((n for n, c in EFFECTS.items() if c.loop_rank is not None),
+                        key=lambda n: EFFECTS[n].loop_rank))
 
 
 def _base_start(tt, uj, FF, seed):
@@ -220,7 +222,7 @@ def diagnose(t, u, F, *, candidates=None, max_effects: int = 3, noise: float | N
         Measured displacement [m] and force [N], ``n >= 40``, starting at rest (any sensor
         zero offsets are absorbed as nuisance parameters). Not modified.
     candidates : sequence of str, optional, keyword-only
-        Effects to try (default :data:`CANDIDATES`).
+        Effects to try (default :func:`loop_candidates`).
     max_effects : int, keyword-only
         Most effects named, ``>= 1`` (default 3: a real damper can show a gap, a
         direction-dependent grip and break-away at once; each must pass the selection
@@ -256,7 +258,7 @@ def diagnose(t, u, F, *, candidates=None, max_effects: int = 3, noise: float | N
     """
     t_start = time.perf_counter()
     tt, uu, FF, n, noise, lp = check_record(t, u, F, noise, lowpass)
-    cand = _check_candidates(candidates, CANDIDATES)
+    cand = _check_candidates(candidates, loop_candidates())
     max_effects = check_int("max_effects", max_effects, 1)
     opts = dict(alpha=check_scalar("alpha", alpha, low=0.0, high=0.5, low_open=True,
                                    high_open=True),

@@ -141,7 +141,7 @@ class _Effect(CommittedState):
     #: from a between-test difference of the linear damping (shaker, suspension), so a
     #: vibration diagnosis that fits that difference cannot test it.
     modal_floor: bool = False
-    #: Place among the candidates a loop diagnosis tries (:data:`iwan_element.CANDIDATES`,
+    #: Place among the candidates a loop diagnosis tries (:func:`iwan_element.loop_candidates`,
     #: in this order), or ``None`` for an effect a force-displacement record does not test
     #: (one whose form is for the beam model's vibration only).
     loop_rank: int | None = None
