@@ -170,7 +170,7 @@ def design(X, cnames, conds, centre=None, scale=None):
     return np.column_stack(cols)
 
 
-def prepare_record(d, max_samples: int) -> dict:
+def record_from_diagnosis(d, max_samples: int) -> dict:
     """What the campaign fit needs of one record's :class:`Diagnosis`: the record as fitted
     (low-passed, displacement from the rest position), the fitted samples, the per-record
     estimates, the noise and the own fit's misfit (plain arrays, picklable)."""
@@ -282,18 +282,16 @@ class CampaignModel:
         out = {}
         for r, rm in enumerate(self.records):
             vals = self.law_values(theta, self.X[r])
-            x = rm.x_max
-            checks = {"log_phi_max": (math.log(x * M.PHI_RANGE[0]), math.log(x * M.PHI_RANGE[1])),
-                      "chi": M.CHI_BOUNDS, "log1p_beta": (0.0, math.log1p(M.BETA_MAX))}
-            for nm in self.names:
+            _, (phi, chi, beta), effs = self.physical(vals, rm)    # the one place that clips
+            pairs = {"log_phi_max": (phi, math.exp(min(vals["log_phi_max"], 700.0))),
+                     "chi": (chi, vals["chi"]),
+                     "log1p_beta": (beta, math.expm1(min(vals["log1p_beta"], 700.0)))}
+            for nm, d in zip(self.names, effs):
                 for sp in EFFECTS[nm].specs:
-                    ref = rm.scales[sp.ref] ** sp.ref_power
-                    lo, hi = (b / ref for b in sp.fit_bounds)
-                    checks[effect_quantity(nm, sp)] = (to_law(sp, lo) if lo > sp.lower or
-                                                       not log_form(sp) else -math.inf,
-                                                       to_law(sp, hi))
-            for q, (lo, hi) in checks.items():
-                if not lo <= vals[q] <= hi:
+                    q = effect_quantity(nm, sp)
+                    pairs[q] = (d[sp.name], from_law(sp, vals[q]))
+            for q, (used, law) in pairs.items():
+                if not math.isclose(used, law, rel_tol=1e-9):
                     out.setdefault(q, []).append(r)
         return out
 

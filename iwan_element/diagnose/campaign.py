@@ -59,7 +59,7 @@ def _record_task(params, rng):
     """Diagnose one record and keep what the campaign fit needs (module level: picklable)."""
     del rng
     d = diagnose(params["t"], params["u"], params["F"], **params["options"])
-    return _pack(CM.prepare_record(d, params["max_samples"]))
+    return _pack(CM.record_from_diagnosis(d, params["max_samples"]))
 
 
 def _pack(prep: dict) -> dict:
@@ -101,7 +101,7 @@ def _diagnose_records(recs, labels, opts, diagnoses, jobs, client, progress):
             if getattr(d, "F", None) is None or np.asarray(d.F).size != r[2].size:
                 raise ValueError(f"diagnoses[{i}] is not a Diagnosis of records[{i}] (its "
                                  "force has another length)")
-        return [CM.prepare_record(d, max_samples) for d in diags], []
+        return [CM.record_from_diagnosis(d, max_samples) for d in diags], []
     sets = [{"t": t, "u": u, "F": F, "options": opts, "max_samples": max_samples}
             for t, u, F in recs]
     ex = _executor(jobs, client)
