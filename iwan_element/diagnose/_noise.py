@@ -13,7 +13,7 @@ residual of the model it selected.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -72,10 +72,6 @@ class NoiseLevel:
     warnings: tuple
     tau_k: float
     n_eff: float
-
-    def reread(self, other: "NoiseLevel") -> "NoiseLevel":
-        """``other`` marked as re-read from the residual of the model selected."""
-        return replace(other, text=other.text + ", from the residual of the model selected")
 
 
 def noise_level(rec, r, noise) -> NoiseLevel:

@@ -26,6 +26,7 @@ from __future__ import annotations
 import logging
 import math
 import time
+from dataclasses import replace
 
 import numpy as np
 
@@ -297,17 +298,17 @@ def _select_with_noise(fitter, base, rec, nl, noise, cand, opts, bar):
     """The selection, repeated with the noise re-read from the residual of the model it
     selected (a large misfit leaks into the plain fit's residual and inflates the noise
     estimate, which can hide a further effect; the fits are reused). ``(selection, noise)``."""
-    for k in range(3 if noise is None else 1):
+    for k in range(3):
         fitter.s2 = nl.sigma ** 2
         base["chi2"] = base["ssr"] / fitter.s2
         sel = _select(fitter, base, cand, rec, nl, opts, bar=bar)
-        if k == 2 or not sel.named or noise is not None:
+        if noise is not None or not sel.named or k == 2:
             break
         new = noise_level(rec, rec.F_raw - _record_force(sel.final["state"], rec.uj,
                                                          rec.v)[0], noise)
         if abs(new.sigma - nl.sigma) <= 0.05 * nl.sigma and abs(new.tau - nl.tau) <= 0.1 * nl.tau:
             break
-        nl = nl.reread(new)
+        nl = replace(new, text=new.text + ", from the residual of the model selected")
     return sel, nl
 
 
