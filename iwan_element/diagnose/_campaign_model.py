@@ -10,15 +10,13 @@ import math
 import numpy as np
 from scipy.sparse import lil_matrix
 
-from ..core.history import REVERSAL_TOL, unit_params
 from ..core.validation import finite_array
 from ..effects import EFFECTS
 from ..effects.evaluate import Evaluator
-from ..identify.testdata import find_reversals
 from . import _model as M
 from ..identify.noise import integrated_time
 from .batch import band_misfit
-from .prepare import fitted_samples
+from .prepare import dissipation_scale, drive_structure, effect_scales, fitted_samples
 
 __all__: list[str] = []
 
@@ -209,15 +207,11 @@ class RecordModel:
         u, t = rec["u"], rec["t"]
         v = np.gradient(u, t)
         keep = np.arange(u.size) if full else rec["keep"]
-        tol = REVERSAL_TOL * float(np.abs(u).max())
-        rev = find_reversals(u) if u.size > 2 else np.zeros(0, np.intp)
+        rev, tol = drive_structure(u)
         self.ev = Evaluator(u, v, keep, rev, tol=tol)
         self.y = rec["F"][keep]
         self.x_max = self.ev.x_max
-        phi, chi, beta = rec["base_shape"]
-        d_ref = float(self.ev.unit_dissipation(unit_params(phi, chi, beta))[-1]) or 1.0
-        self.scales = {"u_max": float(np.abs(u).max()), "1": 1.0, "D_ref": d_ref,
-                       "v_rms": float(np.sqrt(np.mean(v ** 2))) or 1.0}
+        self.scales = effect_scales(u, v, dissipation_scale(self.ev, rec["base_shape"]))
         self.weight = 1.0 / (max(rec["sigma"], rec["rms_own"]) * math.sqrt(rec["tau_own"]))
 
 

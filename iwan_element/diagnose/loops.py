@@ -30,7 +30,6 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..core.history import unit_params
 from ..core.serialize import json_safe
 from ..core.threads import one_blas_thread
 from ..core.validation import check_int, check_scalar
@@ -42,7 +41,7 @@ from ..identify.testdata import split_cycles
 from . import _model as M
 from ._locate import _check_candidates, _locate, _untestable
 from ._noise import noise_level, pure_noise
-from .prepare import check_record, prepare_record
+from .prepare import check_record, dissipation_scale, prepare_record
 from .results import Diagnosis
 from .selection import criterion_text, stepwise_select
 
@@ -274,7 +273,8 @@ def diagnose(t, u, F, *, candidates=None, max_effects: int = 3, noise: float | N
             base = _fit_base(fitter, rec.ev, _base_start(rec.t, rec.uj, rec.F, seed))
             _tick(bar, "Iwan")
             nl = noise_level(rec, rec.F_raw - _record_force(base, rec.uj, rec.v)[0], noise)
-            fitter.scales["D_ref"] = _dissipation_scale(rec, base)
+            shape_b, _ = base["model"].decode(base["z"])
+            fitter.scales["D_ref"] = dissipation_scale(rec.ev, shape_b)
             sel, nl = _select_with_noise(fitter, base, rec, nl, noise, cand, opts, bar)
             return _assemble(rec, fitter, base, nl, sel, opts, t_start)
     finally:
@@ -286,12 +286,6 @@ def _tick(bar, text):
     if bar is not None:
         bar.set_postfix_str(text)
         bar.update(1)
-
-
-def _dissipation_scale(rec, base) -> float:
-    """The plain fit's unit dissipation over the record (the energy effects' scale)."""
-    shape_b, _ = base["model"].decode(base["z"])
-    return float(rec.ev.unit_dissipation(unit_params(*shape_b))[-1]) or 1.0
 
 
 def _select_with_noise(fitter, base, rec, nl, noise, cand, opts, bar):

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.signal import butter, sosfiltfilt
 
-from ..core.history import REVERSAL_TOL
+from ..core.history import REVERSAL_TOL, unit_params
 from ..core.validation import (MAGNITUDE_RANGE, check_magnitude, check_scalar, check_time,
                                 finite_array, same_length)
 from ..effects.evaluate import Evaluator
@@ -21,7 +21,7 @@ from ..identify.testdata import find_reversals
 from ._noise import noise_estimate
 
 __all__ = ["PreparedRecord", "check_record", "prepare_record", "fitted_samples",
-           "SLOW_FIT_SAMPLES"]
+           "effect_scales", "dissipation_scale", "drive_structure", "SLOW_FIT_SAMPLES"]
 
 #: Samples fitted for stacks without a vectorised form (run element by element).
 SLOW_FIT_SAMPLES = 300
@@ -69,9 +69,30 @@ class PreparedRecord:
 
     @property
     def scales(self) -> dict:
-        """Reference sizes of the effect variables (``ParamSpec.ref``)."""
-        return {"u_max": float(np.abs(self.uj).max()), "1": 1.0,
-                "v_rms": float(np.sqrt(np.mean(self.v ** 2))) or 1.0, "D_ref": 1.0}
+        """Reference sizes of the effect variables (:func:`effect_scales`; ``D_ref`` 1 until
+        a plain fit gives it, :func:`dissipation_scale`)."""
+        return effect_scales(self.uj, self.v)
+
+
+def effect_scales(uj, v, d_ref: float = 1.0) -> dict:
+    """Reference sizes of the effect variables (``ParamSpec.ref``) of a record: largest |u|
+    [m], RMS velocity [m/s], the plain unit-``Fs`` fit's dissipation over the record ``d_ref``
+    [J per N of Fs] and 1."""
+    return {"u_max": float(np.abs(uj).max()), "1": 1.0,
+            "v_rms": float(np.sqrt(np.mean(v ** 2))) or 1.0, "D_ref": d_ref}
+
+
+def dissipation_scale(ev: Evaluator, shape) -> float:
+    """Energy the plain unit-``Fs`` joint of ``shape = (phi_max, chi, beta)`` dissipates over
+    the record of ``ev`` (the energy-dependent effects' scale, ``D_ref``), 1 if none."""
+    return float(ev.unit_dissipation(unit_params(*shape))[-1]) or 1.0
+
+
+def drive_structure(uj):
+    """``(reversal indices, absolute reversal tolerance [m])`` of a record's displacement from
+    its rest position, as every evaluator of it uses them."""
+    rev = find_reversals(uj) if uj.size > 2 else np.zeros(0, np.intp)
+    return rev, REVERSAL_TOL * float(np.abs(uj).max())
 
 
 def check_record(t, u, F, noise, lowpass):
@@ -120,8 +141,7 @@ def fitted_samples(n: int, max_samples: int) -> np.ndarray:
 
 def _evaluators(uj, v, max_samples):
     n = uj.size
-    rev = find_reversals(uj) if n > 2 else np.zeros(0, np.intp)
-    tol = REVERSAL_TOL * float(np.abs(uj).max())
+    rev, tol = drive_structure(uj)
     keep = fitted_samples(n, max_samples)
     ev = Evaluator(uj, v, keep, rev, tol=tol)
     sub = keep[np.unique(np.round(np.linspace(0, keep.size - 1,
