@@ -132,7 +132,8 @@ def test_spread_patch_integrals_against_adaptive_quadrature(spread):
     ``spread = 1`` and ``1/2`` included."""
     from scipy.integrate import quad
 
-    from iwan_element.effects.macroslip_onset import (jenkins_gain, patch_dissipation,
+    from iwan_element.effects._jenkins import jenkins_gain
+    from iwan_element.effects.macroslip_onset import (patch_dissipation,
                                                       patch_stiffness_loss)
     Xs = 1e-5
     Xa = Xs * np.array([0.5, 1.01, 1.5, 3.0, 10.0])

@@ -49,20 +49,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._base import ParamSpec, _Effect
+from ._base import ParamSpec
+from ._jenkins import JenkinsBank, jenkins_gain
 
-__all__ = ["MacroslipOnset", "jenkins_gain", "patch_thresholds", "patch_stiffness_loss",
+__all__ = ["MacroslipOnset", "patch_thresholds", "patch_stiffness_loss",
            "patch_dissipation"]
-
-
-def jenkins_gain(X, X_s):
-    """First-harmonic (in-phase) stiffness of a Jenkins element at amplitude ``X`` per unit
-    spring stiffness [-]: 1 while stuck (``X <= X_s``), ``(theta - sin theta cos theta)/pi``
-    with ``cos theta = 1 - 2 X_s / X`` above."""
-    X = np.asarray(X, float)
-    c = np.clip(1.0 - 2.0 * X_s / X, -1.0, 1.0)
-    th = np.arccos(c)
-    return (th - np.sin(th) * c) / np.pi
 
 
 _GL = np.polynomial.legendre.leggauss(48)
@@ -121,7 +112,7 @@ def patch_dissipation(X, X_s, spread):
     return 4.0 * (X * m1 - m2)
 
 
-class MacroslipOnset(_Effect):
+class MacroslipOnset(JenkinsBank):
     """A stuck patch of the interface that slides above ``u_s``: all at once
     (``spread = 0``), or its elements one after another, the stiffness fraction ``s`` once
     the slip exceeds ``u_s (1 - s)^-spread``.
@@ -174,14 +165,8 @@ class MacroslipOnset(_Effect):
             raise ValueError(f"bins must be an integer >= 1, got {bins!r}")
         n = 1 if self.spread == 0.0 else int(bins)
         # n bins of equal stiffness, each element at its bin's median slip displacement
-        self._phi = patch_thresholds((np.arange(n) + 0.5) / n, self.u_s, self.spread)
-        self._k = np.full(n, self.k_s / n)                  # stiffness of each element [N/m]
-        self._lim = self._k * self._phi                     # friction limits [N]
-        self._reset_own()
-
-    def _reset_own(self):
-        self._z = np.zeros(self._k.size)    # committed element forces [N]
-        self._Dp = 0.0                      # energy dissipated by the patch's sliders [J]
+        self._set_bank(patch_thresholds((np.arange(n) + 0.5) / n, self.u_s, self.spread),
+                       np.full(n, self.k_s / n))
 
     @classmethod
     def modal_form(cls, X, frequency, damping, zeta0, *, kappa_s, X_s, spread=0.0):
@@ -202,31 +187,3 @@ class MacroslipOnset(_Effect):
         r = slip_per_amplitude
         return {"k_s": values["kappa_s"] * modal_mass / r ** 2, "u_s": values["X_s"] * r,
                 "spread": values.get("spread", 0.0)}
-
-    def _patch(self, u: float):
-        """Trial element forces, the patch's tangent and the slip increment's dissipation."""
-        z = self._z + self._k * (u - self._u)
-        zc = np.clip(z, -self._lim, self._lim)
-        stuck = zc == z
-        k = self._k
-        dD = float(np.sum(self._lim[~stuck] * np.abs(z - zc)[~stuck] / k[~stuck])) \
-            if self.k_s > 0 else 0.0
-        return zc, float(np.sum(k[stuck])), dD
-
-    def trial(self, u: float, v: float = 0.0) -> tuple[float, float]:
-        """Force [N] and tangent [N/m]."""
-        F, K = self._inner.trial(u, v)
-        z, kz, self._tdD = self._patch(u)
-        self._tz = z
-        F += float(np.sum(z)) - self.k_s * u
-        self._set_trial(u, v, F)
-        return F, K + kz - self.k_s
-
-    def _commit(self) -> None:
-        self._inner.commit()
-        self._z = self._tz
-        self._Dp += self._tdD
-        stored = (0.5 * float(np.sum(self._z ** 2 / self._k)) if self.k_s > 0 else 0.0) \
-            - 0.5 * self.k_s * self._tu ** 2
-        self._W = self._inner.work + self._Dp + stored
-        self._D = self._inner.dissipated_energy + self._Dp
