@@ -16,7 +16,7 @@ and ``brb-steppedsine-fc/fc_sweeps.csv`` (Chen et al., MSSP 166:108401, 2022; Ji
 MSSP 166:108402, 2022; github.com/mattiacenedese/BRBtesting).
 
 The sweeps come from another test than the hammer calibration, so the diagnosis runs with
-``between_tests=True`` (a relative frequency offset and a damping-floor offset fitted as
+``between_tests=True`` (constant relative offsets of frequency and damping fitted as
 nuisances); the augmented model's predictions at 20-315 um are printed with their change
 from the plain model.
 
@@ -72,7 +72,7 @@ def main(argv=None):
     for w in before.warnings:
         print("model:", w)
     # the sweeps are another test than the hammer calibration (shaker attached): the
-    # between-test frequency and damping-floor offsets are fitted as nuisances, not named
+    # between-test relative frequency and damping offsets are fitted as nuisances, not named
     diag = ie.diagnose_vibration(sweeps, predicted_frequency=before.frequency,
                                  predicted_damping_ratio=before.damping_ratio,
                                  predicted_zeta0=spec.interface.damping_floor,

@@ -49,8 +49,8 @@ def _shape(name, X, rng):
         return {"k3_per_mass": 1.0}, "k3_per_mass"
     if name == "macroslip_onset":       # half the cases a whole patch, half a spread one
         xs = float(rng.uniform(0.3, 0.7)) * Xm
-        spread = float(rng.uniform(0.3, 2.0)) if rng.uniform() < 0.5 else 0.0
-        return {"kappa_s": 1.0, "X_s": xs, "spread": spread}, "kappa_s"
+        shape = float(rng.uniform(0.15, 0.5)) if rng.uniform() < 0.5 else 0.0
+        return {"kappa_2": 1.0, "X_s": xs, "shape": shape}, "kappa_2"
     if name == "pinning_stiffness":
         return {"k_p_per_mass": 1.0, "delta": float(rng.uniform(0.0, 0.5)) * Xm}, "k_p_per_mass"
     if name == "viscous_damping":

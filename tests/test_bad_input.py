@@ -315,9 +315,9 @@ REGISTRY.update({
                        {"inner": "object", "ratio": "scalar"}),
     "Hardening": Entry(lambda: (ie.Hardening, dict(inner=IwanJoint(P), k3=1e12)),
                        {"inner": "object", "k3": "scalar"}),
-    "MacroslipOnset": Entry(lambda: (ie.MacroslipOnset, dict(inner=IwanJoint(P), k_s=1e5,
+    "MacroslipOnset": Entry(lambda: (ie.MacroslipOnset, dict(inner=IwanJoint(P), k_2=1e5,
                                                              u_s=1e-5)),
-                            {"inner": "object", "k_s": "scalar", "u_s": "scalar"}),
+                            {"inner": "object", "k_2": "scalar", "u_s": "scalar"}),
 })
 
 

@@ -213,11 +213,11 @@ def test_brake_reuss_sweeps_name_an_effect_that_halves_the_mismatch_beyond_the_n
     q0 = models.modal_amplitude_curve(spec, amplitudes=[1e-4, 3e-4])
     assert q.frequency[1] > q0.frequency[1] and q.damping_ratio[1] > q0.damping_ratio[1]
     # the damping the sweeps show keeps growing to their top amplitude: the patch named is a
-    # spread one (a whole patch's added damping would already fall beyond 2 X_s), and the
-    # augmented beam damps clearly more than the plain one beyond the sweeps
+    # spread one (a whole patch's added damping would already fall beyond 2 X_s), starting
+    # inside the sweeps, and the augmented beam damps clearly more than the plain one beyond
     assert "macroslip_onset" in g.effects, g.report()
     ms = g.parameters["macroslip_onset"]
-    assert ms["spread"] > 0.5 and 2 * ms["X_s"] < curve.amplitude.max(), g.report()
+    assert ms.get("shape", 1.0) > 0.15 and 2 * ms["X_s"] < curve.amplitude.max(), g.report()
     assert q.damping_ratio[1] > 1.3 * q0.damping_ratio[1]
 
 
@@ -241,14 +241,14 @@ def test_where_names_a_turn_as_two_ranges_of_opposite_sign():
 
 
 def test_between_test_offsets_are_nuisances_not_effects(base):
-    """A curve from another test (its linear frequency 0.08 % lower and its damping floor
-    0.02 % lower than the model's calibration test): with between_tests=True the offsets are
+    """A curve from another test (its frequency 0.08 % lower and its damping 15 % lower than
+    the model's calibration test at every amplitude): with between_tests=True the offsets are
     fitted, reported with their stderr and nothing is named on a clean curve; a hidden
     hardening on top is still named. Without it, the offsets alone show as a misfit."""
-    df, dz = -8e-4, -2e-4
+    df, dz = -8e-4, -0.15
     for seed in (40, 41):
         Xc, fm, zm, fp, zp, _ = vc.seeded_case(seed, None, 0.0, P=vc.BASE, X=X, base=base)
-        fm2, zm2 = fm * (1 + df), zm + dz
+        fm2, zm2 = fm * (1 + df), zm * (1 + dz)
         g = diagnose_vibration(AmplitudeCurve(Xc, fm2, zm2, frequency_std=vc.F_NOISE * fm2,
                                               damping_std=vc.Z_NOISE * zm2),
                                predicted_frequency=fp, predicted_damping_ratio=zp,
@@ -264,7 +264,7 @@ def test_between_test_offsets_are_nuisances_not_effects(base):
                                    predicted_zeta0=vc.ZETA0)
         assert plain.details["misfit_p"] < 1e-3
     Xc, fm, zm, fp, zp, _ = vc.seeded_case(42, "hardening", 2.0, P=vc.BASE, X=X, base=base)
-    g = diagnose_vibration(AmplitudeCurve(Xc, fm * (1 + df), zm + dz,
+    g = diagnose_vibration(AmplitudeCurve(Xc, fm * (1 + df), zm * (1 + dz),
                                           frequency_std=vc.F_NOISE * fm,
                                           damping_std=vc.Z_NOISE * zm),
                            predicted_frequency=fp, predicted_damping_ratio=zp,
@@ -275,27 +275,25 @@ def test_between_test_offsets_are_nuisances_not_effects(base):
                            predicted_damping_ratio=zp, between_tests="yes")
 
 
-@pytest.mark.parametrize("spread", [0.0, 1.5])
-def test_hidden_whole_or_spread_patch_is_named_and_told_apart(base, spread):
+@pytest.mark.parametrize("shape", [0.0, 0.28, 0.45])
+def test_hidden_whole_or_spread_patch_is_named_and_told_apart(base, shape):
     """A hidden macroslip patch (truth: the Jenkins bank driven through steady cycles) that
-    slides as a whole is fitted with (nearly) no spread and its stiffness recovered; a
-    spread one (thresholds X_s (1 - s)^-1.5) is fitted with a clear spread. Within the data
-    only the threshold density over [X_s, X_max] is seen, so the spread's size is not
-    pinned down (its fits range over 0.4-10; at the end of its fit range a warning says
-    so): the test asks only which kind it is."""
+    slides as a whole is fitted with (nearly) no shape and its stiffness recovered; a spread
+    one (thresholds thinning out, shape 0.28, or nearly evenly spread, 0.45) is fitted with a
+    clear shape. Within the data only the threshold density over [X_s, X_max] is seen, so
+    the shape's size is not pinned down: the test asks only which kind it is."""
     fp, zp = base
-    seen = []
     for seed in (50, 51, 52, 53):
         rng = np.random.default_rng(seed)
-        vals = {"kappa_s": 1.0, "X_s": 0.25 * X.max(), "spread": spread}
+        vals = {"kappa_2": 1.0, "X_s": 0.25 * X.max(), "shape": shape}
 
         def rms(k):
             f, z = EFFECTS["macroslip_onset"].modal_form(X, fp, zp, vc.ZETA0,
-                                                         **dict(vals, kappa_s=k))
+                                                         **dict(vals, kappa_2=k))
             return np.sqrt(np.mean((np.log(f / fp) / vc.F_NOISE) ** 2
                                    + (np.log(z / zp) / vc.Z_NOISE) ** 2))
 
-        vals["kappa_s"] = brentq(lambda k: rms(k) - 2 * vc.NOTICEABLE, 1e-6, 1e6)
+        vals["kappa_2"] = brentq(lambda k: rms(k) - 2 * vc.NOTICEABLE, 1e-6, 1e6)
         fm, zm = vc.element_curve(X, vc.BASE, "macroslip_onset",
                                   **vc.to_joint("macroslip_onset", vals))
         fm = fm * np.exp(vc.F_NOISE * rng.normal(size=X.size))
@@ -305,12 +303,8 @@ def test_hidden_whole_or_spread_patch_is_named_and_told_apart(base, spread):
         assert g.error_after <= 1.3 * NOISE, g.report()
         fit = g.parameters["macroslip_onset"]
         assert fit["X_s"] == pytest.approx(vals["X_s"], rel=0.25), g.report()
-        if spread == 0.0:
-            assert fit["spread"] < 0.2, g.report()
-            assert fit["kappa_s"] == pytest.approx(vals["kappa_s"], rel=0.1), g.report()
+        if shape == 0.0:
+            assert fit["shape"] < 0.1, g.report()
+            assert fit["kappa_2"] == pytest.approx(vals["kappa_2"], rel=0.1), g.report()
         else:
-            assert fit["spread"] > 0.3, g.report()
-        at_end = fit["spread"] >= 10.0 * (1 - 1e-6)         # its fit range ends at 10
-        assert at_end == any("spread sits at the upper end" in w for w in g.warnings)
-        seen.append(at_end)
-    assert spread == 0.0 or any(seen)        # seed 50 runs to the end (stated in warnings)
+            assert fit["shape"] > 0.15, g.report()

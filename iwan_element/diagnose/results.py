@@ -234,8 +234,8 @@ class VibrationDiagnosis(ResultShape):
         Fitted modal values of each named effect (its ``modal_specs``: names, units,
         meaning), e.g. ``viscous_damping: {"zeta_v"}`` (added modal viscous damping
         ratio [-]); ``pinning_stiffness: {"k_p_per_mass" [1/s^2], "delta" [m]}``;
-        ``hardening: {"k3_per_mass" [1/(m^2 s^2)]}``; ``macroslip_onset: {"kappa_s"
-        [1/s^2], "X_s" [m]}`` (amplitudes in the curve's units).
+        ``hardening: {"k3_per_mass" [1/(m^2 s^2)]}``; ``macroslip_onset: {"kappa_2"
+        [1/s^2], "X_s" [m], "shape" [-]}`` (amplitudes in the curve's units).
     error_before, error_after : float
         RMS relative mismatch of frequency and damping together [-] (log residuals).
     noise_level : float
@@ -426,8 +426,8 @@ class VibrationDiagnosis(ResultShape):
             lines.append(
                 f"  between-test nuisances (not named): frequency offset "
                 f"{100 * bt['frequency_offset']:+.3g} % (+- {100 * bt['frequency_offset_stderr']:.2g}),"
-                f" damping-floor offset {bt['damping_offset']:+.3g} "
-                f"(+- {bt['damping_offset_stderr']:.2g}); not testable against them: "
+                f" damping offset {100 * bt['damping_offset']:+.3g} % "
+                f"(+- {100 * bt['damping_offset_stderr']:.2g}); not testable against them: "
                 f"{', '.join(bt['untested']) or 'none'}")
         lines.append(f"  where: {self.where}")
         for k, st in enumerate(self.steps):

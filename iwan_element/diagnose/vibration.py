@@ -86,18 +86,16 @@ class _Vib:
         w2 = 4 * np.pi ** 2 * float(np.min(fp)) ** 2
         self.refs = {"zeta_ref": float(np.median(zp)), "X_max": float(X.max()),
                      "omega2_ref": w2, "omega2_per_X2": w2 / float(X.max()) ** 2, "1": 1.0}
-        # between-test nuisances (first in every state vector): the log frequency ratio and
-        # the damping-floor difference over zeta_ref, the floor kept above 1 % of the least
-        # predicted damping
+        # between-test nuisances (first in every state vector): the log ratios of the other
+        # test's frequency and damping to the model's, constant over the amplitudes
         self.nn = 2 if between_tests else 0
-        z_lo = -0.99 * float(np.min(zp)) / self.refs["zeta_ref"]
-        self.nuisance_bounds = (np.array([-0.05, z_lo]), np.array([0.05, 10.0]))
+        self.nuisance_bounds = (np.array([-0.05, -1.0]), np.array([0.05, 1.0]))
 
     def nuisance(self, z):
-        """``(relative frequency offset [-], damping-floor offset [-])`` of a state."""
+        """``(relative frequency offset [-], relative damping offset [-])`` of a state."""
         if not self.nn:
             return 0.0, 0.0
-        return math.expm1(float(z[0])), float(z[1]) * self.refs["zeta_ref"]
+        return math.expm1(float(z[0])), math.expm1(float(z[1]))
 
     def fit_nuisance(self):
         """The base state: the between-test nuisances alone (empty without them)."""
@@ -119,12 +117,11 @@ class _Vib:
 
     def curves(self, names, z):
         f, zz = self.fp, self.zp
-        if self.nn:
-            df, dz = self.nuisance(z)
-            f, zz = f * (1.0 + df), zz + dz
         vals = self.decode(names, z)
         for nm in names:
             f, zz = EFFECTS[nm].modal_form(self.X, f, zz, self.zeta0, **vals[nm])
+        if self.nn:                     # the other test: the whole curve by constant factors
+            f, zz = f * math.exp(float(z[0])), zz * math.exp(float(z[1]))
         return f, zz
 
     def resid(self, names, z):
@@ -265,11 +262,13 @@ def diagnose_vibration(amplitude, frequency=None, damping_ratio=None, *, predict
         True when the measurement comes from another test than the one the model was
         calibrated on (a shaker sweep against a hammer-calibrated model, another day): the
         linear properties then differ between the tests (shaker or stinger attachment,
-        suspension, temperature, re-tightening), so a relative frequency offset and a
-        damping-floor offset are fitted as nuisances with every model (reported in
+        suspension, temperature, re-tightening), so constant relative offsets of the
+        frequency and of the damping ratio (the other test's curves are the model's times
+        ``1 + offset``) are fitted as nuisances with every model (reported in
         ``details["between_tests"]``, never named, not carried by :meth:`augment`); an
-        effect whose modal form is a constant floor (viscous damping) cannot be told from the
-        floor offset and is not tested. Default False (same test, or a synthetic curve).
+        effect whose modal form is a constant floor (viscous damping) cannot be told from a
+        between-test difference of the linear damping and is not tested. Default False (same
+        test, or a synthetic curve).
 
     Returns
     -------
@@ -395,7 +394,7 @@ def _covariance(vib, names, z, chi2):
     in the fitting variables, scaled by the reduced chi-square when above 1, mapped to the
     values (each value is its variable over a fixed reference scale). Returns that matrix
     (None without effects) and the standard errors of the between-test nuisances (relative
-    frequency offset, damping-floor offset; empty without them)."""
+    frequency and damping offsets; empty without them)."""
     if z.size == 0:
         return None, ()
     h = 1e-6 * np.maximum(np.abs(z), 1e-3)
@@ -409,7 +408,7 @@ def _covariance(vib, names, z, chi2):
     Cz = np.linalg.pinv(J.T @ J) * max(1.0, chi2 / dof)
     sd = np.sqrt(np.diag(Cz))
     nuis = () if not vib.nn else (float(sd[0] * math.exp(float(z[0]))),
-                                  float(sd[1] * vib.refs["zeta_ref"]))
+                                  float(sd[1] * math.exp(float(z[1]))))
     if not names:
         return None, nuis
     scale = np.array([1.0 / vib.refs[sp.ref] ** sp.ref_power

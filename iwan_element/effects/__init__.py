@@ -84,15 +84,17 @@ def make_effect(name: str, inner, **parameters: float):
     """Wrap ``inner`` in the effect called ``name`` with the given parameters.
 
     ``parameters`` must be the effect's parameter names (``EFFECTS[name].parameter_names``;
-    those with a default may be left out); unknown names raise ``ValueError``.
+    those with a default may be left out) or its options (``EFFECTS[name].options``); unknown
+    names raise ``ValueError``.
     """
     if name not in EFFECTS:
         raise ValueError(f"unknown effect {name!r}; known effects are {sorted(EFFECTS)}")
     cls = EFFECTS[name]
-    unknown = set(parameters) - set(cls.parameter_names)
+    unknown = set(parameters) - set(cls.parameter_names) - set(cls.options)
     if unknown:
-        raise ValueError(f"effect {name!r} takes parameters {list(cls.parameter_names)}, "
-                         f"not {sorted(unknown)}")
+        raise ValueError(f"effect {name!r} takes parameters {list(cls.parameter_names)}"
+                         + (f" and options {list(cls.options)}" if cls.options else "")
+                         + f", not {sorted(unknown)}")
     missing = [s.name for s in cls.specs if s.default is None and s.name not in parameters]
     if missing:
         raise ValueError(f"effect {name!r} needs parameter(s) {missing}")

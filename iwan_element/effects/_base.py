@@ -125,6 +125,9 @@ class _Effect(CommittedState):
     effect = ""
     #: ParamSpec of each parameter, in the constructor's order.
     specs: tuple = ()
+    #: Keyword options of the constructor that are not physical parameters (discretisation,
+    #: extent of a time-domain bank); :func:`make_effect` passes them through.
+    options: tuple = ()
     #: True for effects acting on the sliders of the joint (they must wrap a plain joint).
     slider_level = False
     #: True for slider-level effects that may wrap one another (their laws multiply).
