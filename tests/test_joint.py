@@ -307,3 +307,18 @@ def test_fast_paths_equal_the_general_walk_bit_for_bit(p):
         j.commit()
         assert (j.work, j.dissipated_energy) == (W, D), i
     assert 0.3 * len(u) < fast < len(u)        # both routes were exercised
+
+
+def test_force_history_takes_velocities_like_every_element_and_checks_them():
+    """The plain joints are rate independent: velocities change nothing, but a velocity
+    history of the wrong length or with NaN is refused naming ``v``."""
+    from iwan_element import DiscreteIwan
+    p = IwanParameters(400.0, 2.5e5, -0.5, 1.0)
+    u = 1.5 * p.phi_max * np.sin(np.linspace(0, 4 * np.pi, 200))
+    v = np.gradient(u)
+    for el in (IwanJoint(p), DiscreteIwan(p, n_sliders=50)):
+        np.testing.assert_array_equal(el.force_history(u, v), el.force_history(u))
+        with pytest.raises(ValueError, match="v"):
+            el.force_history(u, v[:-1])
+        with pytest.raises(ValueError, match="v"):
+            el.force_history(u, np.full_like(u, np.nan))

@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .validation import check_scalar, finite_array
+from .validation import check_scalar, finite_array, same_length
 from .parameters import IwanParameters
 from .protocol import CommittedState
 
@@ -188,10 +188,14 @@ class DiscreteIwan(CommittedState):
         """Elastic energy in the slider springs, ``sum k z**2 / 2`` [J] (committed)."""
         return 0.5 * float(self._k @ (self._z * self._z))
 
-    def force_history(self, u) -> np.ndarray:
+    def force_history(self, u, v=None) -> np.ndarray:
         """Forces [N] for a whole history ``u`` [m], shape (n,), from the virgin state (on a
-        private copy; this element is untouched)."""
+        private copy; this element is untouched). Rate independent: velocities ``v`` [m/s]
+        (shape (n,)), accepted like every element's, are checked and do not change the
+        forces."""
         arr = finite_array("u", u, ndim=1)
+        if v is not None:
+            same_length(u=arr, v=finite_array("v", v, ndim=1))
         k, phi = self._k, self._phi
         z = np.zeros_like(k)
         out = np.empty_like(arr)

@@ -28,7 +28,7 @@ import math
 
 import numpy as np
 
-from .validation import check_scalar, finite_array
+from .validation import check_scalar, finite_array, same_length
 from .history import REVERSAL_TOL
 from .masing import _NOSEG, masing_step, masing_constants, masing_history
 from .parameters import IwanParameters
@@ -291,11 +291,14 @@ class IwanJoint(CommittedState):
         """Copies of the remembered reversal points ``(u_r [m], F_r [N])``, oldest first."""
         return self._us[:self._n].copy(), self._Fr[:self._n].copy()
 
-    def force_history(self, u) -> np.ndarray:
+    def force_history(self, u, v=None) -> np.ndarray:
         """Forces [N] for a whole displacement history ``u`` [m], shape (n,), from the virgin
         state. Each sample is committed in turn on a private copy; this element is untouched.
-        """
+        The joint is rate independent: velocities ``v`` [m/s] (shape (n,)), accepted like
+        every element's, are checked and do not change the forces."""
         arr = finite_array("u", u, ndim=1)
+        if v is not None:
+            same_length(u=arr, v=finite_array("v", v, ndim=1))
         return masing_history(arr, self._p, reversal_tol=self._rtol)[0]
 
     def __repr__(self) -> str:

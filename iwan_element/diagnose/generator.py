@@ -1,7 +1,6 @@
 """The test generator of the package: a displacement-driven test of any joint element."""
 from __future__ import annotations
 
-import inspect
 import math
 
 import numpy as np
@@ -111,10 +110,6 @@ def simulate_element_test(element, amplitudes, *, cycles: int = 3, frequency: fl
     u = np.concatenate([np.zeros(n_rest), _drive(amps, cycles, n_per, waveform, envelope)])
     t = np.arange(u.size) / (n_per * f)
     v = np.gradient(u, t)
-    if "v" in inspect.signature(element.force_history).parameters:
-        F = element.force_history(u, v)
-    else:                        # IwanJoint/DiscreteIwan: rate independent, no velocity
-        F = element.force_history(u)
-    F = F + f0 + (_noise(rng, u.size, sf, phi) if sf > 0 else 0.0)
+    F = element.force_history(u, v) + f0 + (_noise(rng, u.size, sf, phi) if sf > 0 else 0.0)
     u_meas = u + u0 + (_noise(rng, u.size, su, phi) if su > 0 else 0.0)
     return TestData.from_arrays(t, u_meas, F, source=f"simulate_element_test({element!r})")
