@@ -210,6 +210,26 @@ def _covariance(J: np.ndarray, r: np.ndarray, tau: float):
     return se, cov, bad
 
 
+def _identified(names, x, se, at_bound, degenerate, warns) -> dict:
+    """Which fitted values the data identify (finite stderr, off the bounds, a model
+    parameter known to better than half its value), appending to ``warns`` why not."""
+    ident = {}
+    for k, name in enumerate(names):
+        ok = math.isfinite(se[k]) and not at_bound[k]
+        if name not in OFFSET_NAMES:
+            ok = ok and se[k] <= 0.5 * abs(x[k])
+        ident[name] = bool(ok)
+        if at_bound[k]:
+            warns.append(f"{name} = {x[k]:.4g} is at a bound of its range: not identified")
+        elif degenerate[k]:
+            why = (" (a joint with no absolute position reference depends on displacement "
+                   "differences only)" if name == "du0" else "")
+            warns.append(f"{name} is not determined by the data{why}")
+        elif not ident[name]:
+            warns.append(f"{name}: std. error {se[k]:.3g} exceeds half its value: not identified")
+    return ident
+
+
 def fit_force_model(t, u, F, model: Callable, theta0, *, lower=None, upper=None,
                     names: Sequence[str] | None = None, units: dict | None = None,
                     fit_offsets: bool = True, smooth="auto", burn_in: int | str = "auto",
@@ -297,20 +317,7 @@ def fit_force_model(t, u, F, model: Callable, theta0, *, lower=None, upper=None,
                 | np.isclose(res.x, hi_x, rtol=1e-6, atol=1e-12))
     values = dict(zip(all_names, map(float, res.x)))
     stderr = dict(zip(all_names, map(float, se)))
-    ident = {}
-    for k, name in enumerate(all_names):
-        ok = math.isfinite(se[k]) and not at_bound[k]
-        if name not in OFFSET_NAMES:
-            ok = ok and se[k] <= 0.5 * abs(res.x[k])
-        ident[name] = bool(ok)
-        if at_bound[k]:
-            warns.append(f"{name} = {res.x[k]:.4g} is at a bound of its range: not identified")
-        elif degenerate[k]:
-            why = (" (a joint with no absolute position reference depends on displacement "
-                   "differences only)" if name == "du0" else "")
-            warns.append(f"{name} is not determined by the data{why}")
-        elif not ident[name]:
-            warns.append(f"{name}: std. error {se[k]:.3g} exceeds half its value: not identified")
+    ident = _identified(all_names, res.x, se, at_bound, degenerate, warns)
     if tau > 3.0:
         warns.append(f"the residuals are correlated over {tau:.3g} samples (a systematic misfit "
                      f"or coloured noise): the std. errors are widened by sqrt(tau) = "
