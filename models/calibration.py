@@ -72,7 +72,7 @@ class CalibrationResult(ResultShape):
     max_frequency_error: float
     max_damping_error: float
     success: bool
-    warnings: list = field(default_factory=list)
+    warnings: tuple = field(default_factory=tuple)
 
     def report(self) -> str:
         lines = [f"Interface calibration of {self.specimen.name!r} "
@@ -175,7 +175,7 @@ def calibrate(specimen: Specimen, measured: AmplitudeCurve, *, fit=("stiffness_p
     return CalibrationResult(specimen=fitted, params=dict(zip(fit, map(float, vals))),
                              stderr=stderr, measured=measured, model=curve,
                              max_frequency_error=ferr, max_damping_error=zerr,
-                             success=bool(sol.success) and not warns, warnings=warns)
+                             success=bool(sol.success) and not warns, warnings=tuple(warns))
 
 
 def interface_from_joint(specimen: Specimen, joint: IwanParameters) -> Specimen:

@@ -35,6 +35,8 @@ import numpy as np
 from exudyn.itemInterface import ObjectGenericODE2
 
 from iwan_element import AmplitudeCurve
+from iwan_element.core.result_shape import ResultShape, panels
+from iwan_element.core.serialize import json_safe
 from iwan_element.core.validation import check_scalar
 from iwan_element.effects import EFFECTS
 
@@ -46,9 +48,15 @@ from .specimens import Specimen
 __all__ = ["RingdownResult", "ringdown"]
 
 
+#: Largest relative energy-balance error a ring-down may show and still be a success.
+ENERGY_TOL = 1e-3
+
+
 @dataclass
-class RingdownResult:
-    """Result of :func:`ringdown`.
+class RingdownResult(ResultShape):
+    """Result of :func:`ringdown`, with the package's result shape (``report``, ``to_dict``,
+    ``warnings``, ``success``, ``plot(ax=None)`` on three panels: the mode's response against
+    time, then the decay's frequency and damping against amplitude).
 
     Attributes
     ----------
@@ -72,7 +80,12 @@ class RingdownResult:
     wall_time : float
         Seconds spent in ``SolveDynamic``.
     metadata : dict
+    warnings : tuple of str
+        The decay curve's warnings, and an energy balance off by more than
+        :data:`ENERGY_TOL` (when recorded).
     """
+
+    plot_panels = 3
 
     t: np.ndarray
     sensor: np.ndarray
@@ -82,6 +95,54 @@ class RingdownResult:
     initial_energy: float
     wall_time: float
     metadata: dict = field(default_factory=dict)
+    warnings: tuple = field(default_factory=tuple)
+
+    @property
+    def max_energy_error(self) -> float | None:
+        """Largest relative energy-balance error [-], or None when energy was not recorded."""
+        return float(np.max(np.abs(self.energy_error()))) if len(self.energy["t"]) else None
+
+    @property
+    def success(self) -> bool:
+        """True when the decay gave at least three curve points and the energy balance (when
+        recorded) closes to :data:`ENERGY_TOL`."""
+        err = self.max_energy_error
+        return bool(len(self.curve) >= 3 and (err is None or err <= ENERGY_TOL))
+
+    def report(self) -> str:
+        """Human-readable account."""
+        m, c = self.metadata, self.curve
+        lines = [f"Exudyn ring-down: {m['steps']} steps of {m['h']:.4g} s "
+                 f"({self.t[-1]:.4g} s, {self.wall_time:.3g} s wall), {m['n_points']} contact "
+                 f"points" + (f", effects {' + '.join(m['effects'])}" if m["effects"] else "")]
+        if len(c):
+            lines.append(f"  curve: {len(c)} points, {c.amplitude.min():.3g}-"
+                         f"{c.amplitude.max():.3g} m, f {c.frequency.min():.6g}-"
+                         f"{c.frequency.max():.6g} Hz, zeta {100 * c.damping_ratio.min():.3g}-"
+                         f"{100 * c.damping_ratio.max():.3g} %")
+        err = self.max_energy_error
+        lines.append("  energy balance: " + ("not recorded" if err is None else
+                                             f"max relative error {err:.2e}"))
+        lines += [f"  warning: {w}" for w in self.warnings]
+        return "\n".join(lines)
+
+    def to_dict(self) -> dict:
+        """JSON-safe summary: the curve, the energy balance and the run's metadata."""
+        return json_safe({"curve": self.curve.to_dict(), "duration": float(self.t[-1]),
+                          "initial_energy": self.initial_energy,
+                          "max_energy_error": self.max_energy_error,
+                          "wall_time": self.wall_time, "metadata": self.metadata,
+                          "success": self.success, "warnings": list(self.warnings)})
+
+    def plot(self, ax=None):
+        """The mode's response at the sensor against time, then the decay's frequency and
+        damping against amplitude, on ``ax = (ax_t, ax_f, ax_z)`` (a new figure if
+        ``None``; :mod:`iwan_element.core.result_shape`); returns the artists."""
+        ax_t, ax_f, ax_z = panels(ax, 3, figsize=(6, 8))
+        arts = ax_t.plot(self.t, self.modal, lw=0.6, label="mode at the sensor")
+        ax_t.set_xlabel("time [s]")
+        ax_t.set_ylabel("displacement [m]")
+        return arts + self.curve.plot((ax_f, ax_z), label="ring-down")
 
     def energy_error(self) -> np.ndarray:
         """Relative energy balance error over time (needs ``record_energy``):
@@ -361,10 +422,19 @@ def ringdown(specimen: Specimen, *, mode: int = 1, amplitude: float, cycles: flo
         f"{specimen.name}: Exudyn transient, mode {mode}, {steps_per_period} steps/period, "
         f"released from {amplitude:.3g} m at the sensor; modal filtering"
         + (f"; with {' + '.join(eff.names)}" if eff else "")))
-    return RingdownResult(t=t, sensor=X @ L.S, modal=modal, curve=curve,
-                          energy={k: np.array(v) for k, v in energy.items()},
-                          initial_energy=e0, wall_time=wall,
-                          metadata={"h": h, "steps": n, "beam_damping": beta,
-                                    "n_points": len(model.points),
-                                    "effects": tuple(eff.names) if eff else (),
-                                    "kinetic_at_release": kin0})
+    return _checked(RingdownResult(
+        t=t, sensor=X @ L.S, modal=modal, curve=curve,
+        energy={k: np.array(v) for k, v in energy.items()}, initial_energy=e0, wall_time=wall,
+        metadata={"h": h, "steps": n, "beam_damping": beta, "n_points": len(model.points),
+                  "effects": tuple(eff.names) if eff else (), "kinetic_at_release": kin0},
+        warnings=tuple(curve.warnings)))
+
+
+def _checked(out: RingdownResult) -> RingdownResult:
+    """The result with a warning when its recorded energy balance is off by more than
+    :data:`ENERGY_TOL`."""
+    err = out.max_energy_error
+    if err is not None and err > ENERGY_TOL:
+        out.warnings += (f"the energy balance is off by {err:.2g} of the release energy "
+                         f"(more than {ENERGY_TOL:g}): refine steps_per_period",)
+    return out

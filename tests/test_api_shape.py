@@ -173,3 +173,41 @@ def test_result_objects_have_one_shape(name, part):
 def test_time_series_functions_take_time_first(fn):
     names = list(inspect.signature(fn).parameters)
     assert names[:3] == ["t", "u", "F"]
+
+
+def _calibration():
+    from iwan_element import models
+    from iwan_element.models.calibration import calibrate
+    s = models.preset("brake-reuss").replace(n_points=8, calibrated_range=None)
+    X = np.geomspace(5e-6, 4e-5, 5)
+    q = models.modal_amplitude_curve(s, amplitudes=X)
+    meas = ie.AmplitudeCurve(X, q.frequency * (1 + 1e-4), q.damping_ratio * 1.1,
+                             frequency_std=1e-3, damping_std=1e-5)
+    return calibrate(s, meas, fit=("chi",))
+
+
+def _ringdown():
+    from iwan_element import models
+    s = models.preset("brake-reuss").replace(n_points=8)
+    return models.ringdown(s, amplitude=30e-6, cycles=8, steps_per_period=32,
+                           record_energy=True)
+
+
+#: Results of the beam model (``iwan_element.models``), with the same shape.
+MODEL_RESULTS = {"CalibrationResult": _calibration, "RingdownResult": _ringdown}
+
+
+def test_every_model_result_class_is_covered():
+    """Every result class the beam model's public functions return is in MODEL_RESULTS."""
+    from iwan_element import models
+    from iwan_element.models import calibration, transient
+    public = {n for mod in (models, calibration, transient) for n in getattr(mod, "__all__", ())
+              if n.endswith("Result") and inspect.isclass(getattr(mod, n))}
+    assert public == set(MODEL_RESULTS)
+
+
+@pytest.mark.parametrize("name", sorted(MODEL_RESULTS))
+@pytest.mark.parametrize("part", ["report", "to_dict", "warnings", "success", "plot"])
+def test_model_result_objects_have_the_same_shape(name, part, monkeypatch):
+    monkeypatch.setitem(RESULTS, name, MODEL_RESULTS[name])
+    test_result_objects_have_one_shape(name, part)
