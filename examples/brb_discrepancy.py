@@ -107,16 +107,20 @@ def figure(path, spec, aug, diag, hammer, sweeps, rd):
     qb = models.modal_amplitude_curve(spec, amplitudes=X)
     qa = models.modal_amplitude_curve(aug, amplitudes=X)
     band = diag.predict(X, base=qb)
+    # the sweeps in the calibration test's frame: divided by the fitted between-test ratios
+    bt = diag.details["between_tests"]
     fig, (a1, a2) = plt.subplots(1, 2, figsize=(11, 4.2))
-    for ax, yb, ya, sd, ym, ys, yr, scale in (
+    for ax, yb, ya, sd, ym, ys, yr, scale, off in (
             (a1, qb.frequency, qa.frequency, band.frequency_std, hammer.frequency,
-             sweeps.frequency, rd.curve.frequency, 1.0),
+             sweeps.frequency, rd.curve.frequency, 1.0, bt["frequency_offset"]),
             (a2, qb.damping_ratio, qa.damping_ratio, band.damping_std, hammer.damping_ratio,
-             sweeps.damping_ratio, rd.curve.damping_ratio, 100.0)):
+             sweeps.damping_ratio, rd.curve.damping_ratio, 100.0, bt["damping_offset"])):
         ax.semilogx(hammer.amplitude, scale * ym, "o", mfc="none", color="k", ms=4,
                     label="hammer ring-down (calibration)")
         ax.semilogx(sweeps.amplitude, scale * ys, "s", mfc="none", color="C2", ms=4,
-                    label="stepped-sine sweeps")
+                    label="stepped-sine sweeps, as measured")
+        ax.semilogx(sweeps.amplitude, scale * ys / (1 + off), "s", color="C2", ms=4,
+                    label="sweeps / between-test ratio")
         ax.semilogx(X, scale * yb, "-", color="C0", label="beam model (QSMA)")
         ax.semilogx(X, scale * ya, "--", color="C3",
                     label="+ " + (" + ".join(diag.effects) or "nothing"))
