@@ -70,6 +70,39 @@ def _conditions(path, stroke, interaction=False, quadratic=False):
     return c
 
 
+#: Law sets of ``--laws`` (the conditions each quantity's law is linear in; derived
+#: conditions made by :func:`_conditions`), chosen with the device's physics:
+#: docs/campaign.md section 8.
+LAW_SETS = {
+    "linear": None,                 # every quantity linear in every condition (the default)
+    "campaign": {
+        # a slip-force law in tension of its own per campaign, with curvature (dataset-1
+        # saturates, dataset-2 rises steeply from 30 to 36 lb), plus rate and stroke
+        "Fs": ("campaign", "tension", "campaign_x_tension", "tension_squared",
+               "campaign_x_tension_squared", "frequency", "stroke"),
+        # the asymmetry changes sign with tension in dataset-2 and grows with rate and
+        # stroke at 0 lb (ds2 README)
+        "asymmetric_slip.asymmetry": ("campaign", "tension", "campaign_x_tension",
+                                      "frequency", "stroke"),
+        "ln(backlash.gap)": ("campaign", "tension", "stroke"),
+        "ln(backlash.drag/Fs)": ("campaign", "tension"),
+        # the shape: what the records determine (chi sits at its bound on most records)
+        "log_phi_max": ("campaign", "tension", "campaign_x_tension"),
+        "log1p_beta": ("campaign",),
+        "chi": (),
+    },
+}
+
+
+def _derived(c):
+    """The derived conditions the law sets use (products and squares of the nominal ones)."""
+    c = dict(c)
+    c["campaign_x_tension"] = c["campaign"] * c["tension"]
+    c["tension_squared"] = c["tension"] ** 2
+    c["campaign_x_tension_squared"] = c["campaign"] * c["tension"] ** 2
+    return c
+
+
 def _diagnose(path, lowpass, cache):
     from iwan_element import diagnose
     pkl = None if cache is None else Path(cache) / (path.stem + ".pkl")
@@ -94,7 +127,11 @@ def real(args):
     files = sorted(shared.glob("arts-damper/ds1_*.csv")) + sorted(
         shared.glob("arts-damper-ds2/ds2_*.csv"))
     recs = [tuple(np.loadtxt(p, delimiter=",", skiprows=1).T) for p in files]
-    conds = [_conditions(p, args.stroke, args.interaction, args.quadratic) for p in files]
+    laws = LAW_SETS[args.laws]
+    conds = [_conditions(p, args.stroke or laws is not None, args.interaction, args.quadratic)
+             for p in files]
+    if laws is not None:
+        conds = [_derived(c) for c in conds]
     t0 = time.perf_counter()
     with ProcessPoolExecutor(args.jobs) as ex:
         out = list(ex.map(_diagnose, files, [args.lowpass] * len(files),
@@ -103,7 +140,7 @@ def real(args):
     print(f"per-record diagnoses: {time.perf_counter() - t0:.0f} s wall "
           f"({sum(s for _, s in out):.0f} s computed now, the rest from --cache)")
     fit = fit_campaign(recs, conds, names=[p.stem for p in files], diagnoses=diags,
-                       lowpass=args.lowpass, max_nfev=args.max_nfev,
+                       lowpass=args.lowpass, max_nfev=args.max_nfev, laws=laws,
                        effects=args.effects.split(",") if args.effects else None)
     print(fit.report())
     t1 = time.perf_counter()
@@ -123,6 +160,9 @@ def main(argv=None):
     ap.add_argument("--quadratic", action="store_true", help="tension squared as a condition")
     ap.add_argument("--effects", default=None,
                     help="the campaign's stack, comma-separated (default: named on >= half)")
+    ap.add_argument("--laws", default="linear", choices=sorted(LAW_SETS),
+                    help="law set: 'linear' (every quantity in every condition) or "
+                         "'campaign' (per-campaign laws chosen with the physics)")
     ap.add_argument("--lowpass", type=float, default=20.0)
     ap.add_argument("--jobs", type=int, default=1)
     ap.add_argument("--cache", default=None, help="folder of cached per-record diagnoses")
