@@ -20,6 +20,7 @@ run fits the campaign only.
     python benchmarks/bench_campaign.py --coverage 40
     python benchmarks/bench_campaign.py --real [--jobs 2] [--cache DIR] [--loo full]
         [--effects backlash,asymmetric_slip] [--stroke] [--interaction] [--quadratic]
+        [--laws campaign] [--band] [--attribute]
 """
 import argparse
 import pickle
@@ -144,7 +145,7 @@ def real(args):
                        effects=args.effects.split(",") if args.effects else None)
     print(fit.report())
     t1 = time.perf_counter()
-    loo = fit.leave_one_out(refit=args.loo, jobs=args.jobs)
+    loo = fit.leave_one_out(refit=args.loo, jobs=args.jobs, coverage=args.band)
     print(loo.report())
     print(f"leave-one-out: {time.perf_counter() - t1:.0f} s; "
           f"{sum(r['ratio'] <= 1.5 for r in loo.rows)}/{len(loo.rows)} records within 1.5x")
@@ -167,6 +168,9 @@ def main(argv=None):
     ap.add_argument("--jobs", type=int, default=1)
     ap.add_argument("--cache", default=None, help="folder of cached per-record diagnoses")
     ap.add_argument("--loo", default="step", choices=("step", "full"))
+    ap.add_argument("--band", action="store_true",
+                    help="leave-one-out: coverage of each left-out record's band samples by "
+                         "the 95 %% prediction band, with and without the record scatter")
     ap.add_argument("--max-nfev", type=int, default=100, dest="max_nfev")
     args = ap.parse_args(argv)
     if args.coverage:
