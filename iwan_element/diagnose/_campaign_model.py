@@ -402,3 +402,23 @@ def perturb(model, vals: dict, e) -> dict:
     for q, v in zip(model.qnames[1:], e[1:]):
         out[q] = vals[q] + float(v)
     return out
+
+
+def scatter_coef_cov(model, theta, S, skip=None) -> np.ndarray:
+    """Covariance of the law coefficients (internal form, ``n_glob`` square, a block per
+    quantity) that the record-to-record scatter ``S`` gives: each record's value of a
+    quantity off its law by a random effect of variance ``S_kk`` (``Fs``: relative, so
+    ``(S_00 Fs_law(x_r)^2``), the generalised least-squares covariance
+    ``(A^T V^-1 A)^-1`` of the law over the records (``skip`` left out)."""
+    C = np.zeros((model.n_glob, model.n_glob))
+    rs = [r for r in range(model.X.shape[0]) if r != skip]
+    for k, q in enumerate(model.qnames):
+        A = design(model.X[rs], model.cnames, model.laws[q], model.centre, model.cscale)
+        var = np.full(len(rs), S[k, k]) / model.qscale[q] ** 2
+        if q == "Fs":
+            var = var * np.array([model.law_values(theta, model.X[r])["Fs"] ** 2 for r in rs])
+        if not np.all(var > 0):
+            continue
+        sl = model.slices[q]
+        C[sl, sl] = np.linalg.pinv((A / var[:, None]).T @ A, hermitian=True)
+    return C

@@ -145,6 +145,8 @@ def predict(fit, conditions, t, u, *, F0=0.0, start=0.0, level=0.95, draws=64, r
     rm = CM.RecordModel(_drive_record(model, theta, x, tt, uu), full=True)
     force = _force(model, rm, model.law_values(theta, x), start) + F0
     S = st.get("scatter_cov") if scatter else None
+    if S is not None:
+        cov = cov + st["cov_re"]
     samples = [_force(model, rm, v, start) + F0
                for v in draw_values(model, theta, cov, S, x, rng, draws)]
     warns = []
@@ -234,12 +236,14 @@ def _loo_predict(model, th, i, prep, free, cov, cover) -> dict:
         return {"band_pred": _predict_record(model, th, i, prep)[0], "coverage": math.nan,
                 "coverage_coef": math.nan}
     draws, level, seed = cover
-    S = None
+    S, cov_s = None, cov
     if free is not None:
         D, dof = CM.deviations(model, th, free, skip=i)
-        S = CM.scatter_cov(D, dof) if D.shape[0] >= 2 else None
+        if D.shape[0] >= 2:
+            S = CM.scatter_cov(D, dof)
+            cov_s = cov + CM.scatter_coef_cov(model, th, S, skip=i)
     rng = np.random.default_rng([seed, i])
-    band, cov_re = _predict_record(model, th, i, prep, (cov, S, draws, level, rng))
+    band, cov_re = _predict_record(model, th, i, prep, (cov_s, S, draws, level, rng))
     _, cov_coef = _predict_record(model, th, i, prep, (cov, None, draws, level, rng))
     return {"band_pred": band, "coverage": cov_re if S is not None else math.nan,
             "coverage_coef": cov_coef}

@@ -129,6 +129,13 @@ def _scatter(model, theta, free):
     return {q: float(math.sqrt(S[k, k])) for k, q in enumerate(names)}, S
 
 
+def _stderr_dict(labels_c, cov_phys):
+    out = {}
+    for (q, term), e in zip(labels_c, np.sqrt(np.clip(np.diag(cov_phys), 0.0, None))):
+        out.setdefault(q, {})[term] = float(e)
+    return out
+
+
 def assemble(*, model, preps, labels, res, units, stack_from, warnings, options, times, t0,
              free=None):
     """Uncertainty, coefficients, the per-record table, the verdict: a :class:`CampaignFit`."""
@@ -148,6 +155,9 @@ def assemble(*, model, preps, labels, res, units, stack_from, warnings, options,
         stderr.setdefault(q, {})[term] = float(e)
     rows, awarn = _rows(model, theta, cov_int, preps, labels)
     scatter, S = _scatter(model, theta, free)
+    cov_re = None if S is None else CM.scatter_coef_cov(model, theta, S)
+    stderr_scatter = {} if cov_re is None else _stderr_dict(labels_c, T @ (cov_int + cov_re)
+                                                             @ T.T)
     warns = list(warnings)
     converged = bool(res.status > 0)
     if not converged:
@@ -176,12 +186,13 @@ def assemble(*, model, preps, labels, res, units, stack_from, warnings, options,
         effects_from=stack_from, laws={q: tuple(v) for q, v in model.laws.items()},
         units=units, coefficients=coefficients, stderr=stderr, covariance=cov_phys,
         coefficient_labels=tuple(f"{q}:{t}" for q, t in labels_c), rows=tuple(rows),
-        scatter=scatter,
+        scatter=scatter, stderr_scatter=stderr_scatter,
         converged=converged, success=converged and ident, message=str(res.message),
         nfev=int(res.nfev), wall_time=times["total"], warnings=tuple(warns),
         details=details, _state={"model": model, "theta": theta, "cov_int": cov_int, "J": J,
                                  "preps": preps, "cov": cov,
-                                 "free": free, "scatter_cov": S})
+                                 "free": free, "scatter_cov": S,
+                                 "cov_re": cov_re})
 
 
 @dataclass(frozen=True, eq=False)
@@ -208,6 +219,11 @@ class CampaignFit(ResultShape):
         force as ``"ln Fs"``: a relative scatter), from each record refitted alone with the
         campaign's stack; empty when ``scatter=False``. It is the part of the device the
         conditions do not predict; :meth:`predict` carries it in its band.
+    stderr_scatter : dict
+        The coefficients' standard errors with that scatter: the delta method's (``stderr``,
+        which sees each record's noise only) plus the generalised least-squares covariance
+        of the laws over records that scatter by ``scatter`` (docs/campaign.md section 6);
+        empty when ``scatter=False``.
     rows : tuple of dict
         Per record: conditions, effects named on its own, those the stack adds (``missing``)
         or lacks (``extra``), band misfit [N] of its own fit and of the campaign model and
@@ -235,6 +251,7 @@ class CampaignFit(ResultShape):
     coefficient_labels: tuple
     rows: tuple
     scatter: dict
+    stderr_scatter: dict
     converged: bool
     success: bool
     message: str
@@ -344,10 +361,11 @@ class CampaignFit(ResultShape):
                  f"{'converged' if self.converged else 'NOT converged'}, {self.nfev} "
                  f"evaluations; {self.wall_time:.1f} s (diagnoses {tm['diagnoses']:.1f} s, "
                  f"joint fit {tm['joint_fit']:.1f} s, uncertainty {tm['uncertainty']:.1f} s)",
-                 "  laws (coefficient +- standard error):"]
+                 "  laws (coefficient +- standard error (with the record scatter)):"]
         for q, terms in self.coefficients.items():
-            parts = [f"{c:.5g} +- {self.stderr[q][k]:.2g}" + ("" if k == "1" else f" x {k}")
-                     for k, c in terms.items()]
+            parts = [f"{c:.5g} +- {self.stderr[q][k]:.2g}"
+                     + (f" ({self.stderr_scatter[q][k]:.2g})" if self.stderr_scatter else "")
+                     + ("" if k == "1" else f" x {k}") for k, c in terms.items()]
             lines.append(f"    {q} [{self.units[q]}] = " + " + ".join(parts))
         if self.scatter:
             lines.append("  record-to-record scatter about the laws (standard deviation): "
@@ -365,6 +383,7 @@ class CampaignFit(ResultShape):
         return json_safe({k: getattr(self, k) for k in (
             "records", "condition_names", "effects", "effects_from", "laws", "units",
             "coefficients", "stderr", "covariance", "coefficient_labels", "rows", "scatter",
+            "stderr_scatter",
             "converged",
             "success", "message", "nfev", "wall_time", "warnings", "details")})
 
