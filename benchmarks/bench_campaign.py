@@ -20,7 +20,7 @@ run fits the campaign only.
     python benchmarks/bench_campaign.py --coverage 40
     python benchmarks/bench_campaign.py --real [--jobs 2] [--cache DIR] [--loo full]
         [--effects backlash,asymmetric_slip] [--stroke] [--interaction] [--quadratic]
-        [--laws campaign] [--band] [--attribute]
+        [--laws campaign] [--band] [--attribute] [--neighbours]
 """
 import argparse
 import pickle
@@ -144,11 +144,94 @@ def real(args):
                        lowpass=args.lowpass, max_nfev=args.max_nfev, laws=laws,
                        effects=args.effects.split(",") if args.effects else None)
     print(fit.report())
+    if args.attribute:
+        attribute(fit)
+    if args.neighbours:
+        neighbours(fit)
     t1 = time.perf_counter()
     loo = fit.leave_one_out(refit=args.loo, jobs=args.jobs, coverage=args.band)
     print(loo.report())
     print(f"leave-one-out: {time.perf_counter() - t1:.0f} s; "
           f"{sum(r['ratio'] <= 1.5 for r in loo.rows)}/{len(loo.rows)} records within 1.5x")
+
+
+#: Quantity groups of ``--attribute``: the slip force, the joint's shape, the asymmetry,
+#: the backlash (each group swapped as a whole: its members compensate one another).
+GROUPS = {"Fs": ("Fs",), "shape": ("log_phi_max", "chi", "log1p_beta"),
+          "asymmetry": ("asymmetric_slip.asymmetry",),
+          "backlash": ("ln(backlash.gap)", "ln(backlash.drag/Fs)")}
+
+
+def attribute(fit):
+    """Per record, what part of the campaign model's band misfit comes from which quantity:
+    the band misfit (over the record's own fit's) of the device at the laws, at the record's
+    own values with the campaign stack (``free``), and with one group swapped: the laws with
+    the record's own values of that group (``law+own``) and the record's own values with the
+    laws' values of that group (``own+law``). Nuisances (offset, start) fitted as in the
+    leave-one-out."""
+    from iwan_element.diagnose._campaign_predict import _predict_record
+    st = fit._state
+    model, theta, preps, free = st["model"], st["theta"], st["preps"], st["free"]
+    groups = {g: [q for q in qs if q in model.qnames] for g, qs in GROUPS.items()}
+    groups = {g: qs for g, qs in groups.items() if qs}
+    head = "  ".join(f"{g[:9]:>9}" for g in groups)
+    print(f"attribution (band misfit / own fit's): {'record':<24} {'laws':>5} {'free':>5}  "
+          f"law+own: {head}  own+law: {head}")
+    counts = {}
+    for r, p in enumerate(preps):
+        own, law = p["band_own"], model.law_values(theta, model.X[r])
+        f = free[r] if free[r] is not None else law
+
+        def ratio(vals):
+            return _predict_record(model, theta, r, p, vals=vals)[0] / own
+        out = {"laws": ratio(law), "free": ratio(dict(f))}
+        for g, qs in groups.items():
+            out[f"law+own {g}"] = ratio(dict(law, **{q: f[q] for q in qs}))
+            out[f"own+law {g}"] = ratio(dict(f, **{q: law[q] for q in qs}))
+        for k, v in out.items():
+            counts[k] = counts.get(k, 0) + (v <= 1.5)
+        vals = list(out.values())
+        print(f"  {fit.records[r]:<24} {vals[0]:5.2f} {vals[1]:5.2f}  law+own: "
+              + "  ".join(f"{v:9.2f}" for v in vals[2::2]) + "  own+law: "
+              + "  ".join(f"{v:9.2f}" for v in vals[3::2]))
+    print("records within 1.5x: " + ", ".join(f"{k} {v}" for k, v in counts.items()))
+
+
+def neighbours(fit):
+    """What the nominal conditions can predict at best, with no law at all: each record
+    predicted from the median of the own values (campaign stack) of the other records of
+    the same campaign and band tension (``same T``), and of those among them nearest in
+    frequency, then in stroke (``nearest``). Band misfit over the record's own fit's."""
+    import math
+    from iwan_element.diagnose._campaign_predict import _predict_record
+    st = fit._state
+    model, theta, preps, free = st["model"], st["theta"], st["preps"], st["free"]
+    col = {c: j for j, c in enumerate(model.cnames)}
+    X = model.X
+
+    def key(r):
+        return X[r, col["campaign"]], X[r, col["tension"]]
+
+    def dist(r, k):
+        return tuple(abs(X[r, col[c]] - X[k, col[c]]) for c in ("frequency", "stroke")
+                     if c in col)
+    counts, n = {"same T": 0, "nearest": 0}, len(preps)
+    for r in range(n):
+        grp = [k for k in range(n) if k != r and key(k) == key(r) and free[k] is not None]
+        near = [k for k in grp if dist(r, k) == min(dist(r, j) for j in grp)] if grp else []
+        out = []
+        for name, g in (("same T", grp), ("nearest", near)):
+            if not g:
+                out.append(math.nan)
+                continue
+            vals = {q: float(np.median([free[k][q] for k in g])) for q in model.qnames}
+            out.append(_predict_record(model, theta, r, preps[r], vals=vals)[0]
+                       / preps[r]["band_own"])
+            counts[name] += out[-1] <= 1.5
+        print(f"  neighbours {fit.records[r]:<24} same T ({len(grp)}) {out[0]:5.2f}   "
+              f"nearest ({len(near)}) {out[1]:5.2f}")
+    print(f"neighbours: within 1.5x: same campaign and tension {counts['same T']}/{n}, "
+          f"nearest of those {counts['nearest']}/{n}")
 
 
 def main(argv=None):
@@ -164,6 +247,11 @@ def main(argv=None):
     ap.add_argument("--laws", default="linear", choices=sorted(LAW_SETS),
                     help="law set: 'linear' (every quantity in every condition) or "
                          "'campaign' (per-campaign laws chosen with the physics)")
+    ap.add_argument("--attribute", action="store_true",
+                    help="per record, the part of the campaign misfit each quantity makes")
+    ap.add_argument("--neighbours", action="store_true",
+                    help="predict each record from the records of the same campaign and "
+                         "tension (no law): what the nominal conditions can give at best")
     ap.add_argument("--lowpass", type=float, default=20.0)
     ap.add_argument("--jobs", type=int, default=1)
     ap.add_argument("--cache", default=None, help="folder of cached per-record diagnoses")

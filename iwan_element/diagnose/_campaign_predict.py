@@ -178,15 +178,16 @@ def _chol(cov):
     return V * np.sqrt(np.clip(w, 0.0, None))
 
 
-def _predict_record(model, theta, r, prep, band=None):
+def _predict_record(model, theta, r, prep, band=None, vals=None):
     """``(band misfit [N], coverage)`` of the device predicted from ``theta`` on record
     ``r``; the record's nuisances (force offset, starting state) are fitted to it with the
     device held. ``band = (cov, S, draws, level, rng)``: the share of the record's fitted
     samples in the misfit band (``|F| < 0.25 max|F|``) whose measured force lies in the
     prediction's band (coefficients from ``cov``, scatter from ``S``; nuisances held at the
-    central prediction's); NaN without ``band``."""
+    central prediction's); NaN without ``band``. ``vals``: law values to use instead of
+    ``theta``'s (e.g. some of the record's own, to attribute the misfit)."""
     best = (math.inf, 0.0)
-    vals = model.law_values(theta, model.X[r])
+    vals = model.law_values(theta, model.X[r]) if vals is None else vals
     for g in M.START_GRID:
         s = g * model.records[r].x_max
         m = model.record_force(theta, r, vals=vals, start=s)
