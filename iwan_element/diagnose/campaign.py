@@ -26,7 +26,11 @@ condition that was not tested (:meth:`CampaignFit.predict`). The procedure
    residual variance estimated from the campaign residual on that record and inflated by
    its correlation time;
 5. agreement: per record, the effects it named against the campaign stack and its own
-   estimates against the law (z-scores); disagreements are stated in ``warnings``.
+   estimates against the law (z-scores); disagreements are stated in ``warnings``;
+6. the record-to-record scatter about the laws (``scatter=True``): every record refitted
+   alone with the campaign's stack, the covariance of its deviations from the laws (a
+   random effect the conditions do not predict), carried in the prediction band and in
+   the coefficients' ``stderr_scatter``.
 """
 from __future__ import annotations
 
