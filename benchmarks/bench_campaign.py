@@ -17,7 +17,7 @@ from the other records over the record's own fit's; target <= 1.5 on >= 80 % of 
 and the times. Per-record diagnoses are cached in ``--cache`` (pickles) so that a second
 run fits the campaign only.
 
-    python benchmarks/bench_campaign.py --coverage 40
+    python benchmarks/bench_campaign.py --coverage 40 [--fs-scatter 0.1]
     python benchmarks/bench_campaign.py --real [--jobs 2] [--cache DIR] [--loo full]
         [--effects backlash,asymmetric_slip] [--stroke] [--interaction] [--quadratic]
         [--laws campaign] [--band] [--attribute] [--neighbours]
@@ -36,25 +36,34 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
 
 
-def coverage(n):
+def coverage(n, fs_scatter=0.0):
+    """Share of true law coefficients within 2 stated standard errors (``stderr``, and
+    ``stderr_scatter``: with the record-to-record scatter) over ``n`` seeded campaigns whose
+    records' Fs scatter by ``fs_scatter`` (ln Fs standard deviation) about the law."""
     from _campaign_cases import LAWS, campaign
     from iwan_element import fit_campaign
     hits, per_q, t0, bad = [], {q: [] for q in LAWS}, time.perf_counter(), 0
+    hits_s, per_q_s = [], {q: [] for q in LAWS}
     for seed in range(n):
-        recs, conds = campaign(1000 + seed)
+        recs, conds = campaign(1000 + seed, fs_scatter=fs_scatter)
         fit = fit_campaign(recs, conds, effects=("backlash",), candidates=("backlash",))
         bad += not fit.success
         for q, true in LAWS.items():
             for term, v in zip(("1", "tension", "frequency"), true):
-                ok = abs(fit.coefficients[q][term] - v) <= 2.0 * fit.stderr[q][term]
+                err = abs(fit.coefficients[q][term] - v)
+                ok = err <= 2.0 * fit.stderr[q][term]
                 hits.append(ok)
                 per_q[q].append(ok)
+                ok = err <= 2.0 * fit.stderr_scatter[q][term]
+                hits_s.append(ok)
+                per_q_s[q].append(ok)
     print(f"{n} campaigns x {len(hits) // n} coefficients in {time.perf_counter() - t0:.0f} s; "
-          f"{bad} fits not successful")
-    for q, h in per_q.items():
-        print(f"  {q:<20} {100 * np.mean(h):5.1f} % within 2 stderr")
+          f"{bad} fits not successful; Fs scatter {fs_scatter:g} (ln Fs)")
+    for q in per_q:
+        print(f"  {q:<20} {100 * np.mean(per_q[q]):5.1f} % within 2 stderr, "
+              f"{100 * np.mean(per_q_s[q]):5.1f} % within 2 stderr_scatter")
     print(f"coverage of the law coefficients by 2 stderr: {100 * np.mean(hits):.1f} % "
-          "(target 90-98 %)")
+          f"(target 90-98 %); by 2 stderr_scatter: {100 * np.mean(hits_s):.1f} %")
 
 
 def _conditions(path, stroke, interaction=False, quadratic=False):
@@ -237,6 +246,8 @@ def neighbours(fit):
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--coverage", type=int, default=0, help="synthetic campaigns")
+    ap.add_argument("--fs-scatter", type=float, default=0.0, dest="fs_scatter",
+                    help="--coverage: campaigns whose records' Fs scatter by this (ln Fs sd)")
     ap.add_argument("--real", action="store_true", help="the 29 real damper records")
     ap.add_argument("--stroke", action="store_true", help="nominal stroke as a condition")
     ap.add_argument("--interaction", action="store_true",
@@ -262,7 +273,7 @@ def main(argv=None):
     ap.add_argument("--max-nfev", type=int, default=100, dest="max_nfev")
     args = ap.parse_args(argv)
     if args.coverage:
-        coverage(args.coverage)
+        coverage(args.coverage, args.fs_scatter)
     if args.real:
         real(args)
     if not (args.coverage or args.real):
