@@ -102,6 +102,11 @@ LAW_SETS = {
         "chi": (),
     },
 }
+#: the same, with the slip force's curvature in tension as ln(1 + tension/lb) per campaign
+#: instead of a square (a saturating form, as the capstan-like grip of a band might give)
+LAW_SETS["campaign_log"] = dict(LAW_SETS["campaign"], Fs=(
+    "campaign", "tension", "campaign_x_tension", "ln1p_tension", "campaign_x_ln1p_tension",
+    "frequency", "stroke"))
 
 
 def _derived(c):
@@ -110,6 +115,8 @@ def _derived(c):
     c["campaign_x_tension"] = c["campaign"] * c["tension"]
     c["tension_squared"] = c["tension"] ** 2
     c["campaign_x_tension_squared"] = c["campaign"] * c["tension"] ** 2
+    c["ln1p_tension"] = float(np.log1p(c["tension"]))
+    c["campaign_x_ln1p_tension"] = c["campaign"] * c["ln1p_tension"]
     return c
 
 
@@ -256,8 +263,9 @@ def main(argv=None):
     ap.add_argument("--effects", default=None,
                     help="the campaign's stack, comma-separated (default: named on >= half)")
     ap.add_argument("--laws", default="linear", choices=sorted(LAW_SETS),
-                    help="law set: 'linear' (every quantity in every condition) or "
-                         "'campaign' (per-campaign laws chosen with the physics)")
+                    help="law set: 'linear' (every quantity in every condition), 'campaign' "
+                         "(per-campaign laws chosen with the physics) or 'campaign_log' "
+                         "(the same, Fs curved in ln(1 + tension))")
     ap.add_argument("--attribute", action="store_true",
                     help="per record, the part of the campaign misfit each quantity makes")
     ap.add_argument("--neighbours", action="store_true",
