@@ -243,6 +243,15 @@ def test_record_scatter_is_estimated_and_carried_in_the_band():
     new = truth(cond)["Fs"] * fs_factors(99, 200, s_true)
     inside = lambda p: np.mean((new >= p.lower[k]) & (new <= p.upper[k]))  # noqa: E731
     assert inside(wide) > 0.5 > 0.2 > inside(narrow)
+    for q, terms in fit.stderr.items():
+        for term, e in terms.items():
+            assert fit.stderr_scatter[q][term] >= e
+    d = json.loads(json.dumps(fit.to_dict(), allow_nan=False))
+    assert d["scatter"]["ln Fs"] == pytest.approx(fit.scatter["ln Fs"])
+    assert "scatter" in fit.report()
+    plain = fit_campaign(recs, conds, scatter=False, **OPTS)
+    assert plain.scatter == {} and plain.stderr_scatter == {}
+    assert any("scatter" in w for w in plain.predict(cond, t, u, draws=8).warnings)
     loo = fit.leave_one_out(coverage=True, draws=16)
     assert loo.coverage > loo.coverage_coef and math.isfinite(loo.coverage)
     assert "prediction band" in loo.report()
