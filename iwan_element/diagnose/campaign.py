@@ -233,8 +233,11 @@ def record_values(model, theta, preps, *, max_nfev: int = 60):
     return out
 
 
-def _check_input(records, conditions, names, laws, effects, jobs, max_nfev, options):
+def _check_input(records, conditions, names, laws, effects, jobs, max_nfev, options,
+                 scatter):
     """Everything that can be checked before the records are diagnosed."""
+    if not isinstance(scatter, bool):
+        raise ValueError(f"scatter must be True or False, got {scatter!r}")
     recs, labels = _check_records(records, names)
     cnames, X = CM.check_conditions(conditions, len(recs))
     opts = _check_options(options)
@@ -304,10 +307,8 @@ def fit_campaign(records, conditions, *, effects=None, laws=None, names=None, di
         that does not vary, or with more coefficients than records, an unknown option.
     """
     t0 = time.perf_counter()
-    if not isinstance(scatter, bool):
-        raise ValueError(f"scatter must be True or False, got {scatter!r}")
     recs, labels, cnames, X, opts = _check_input(records, conditions, names, laws, effects,
-                                                 jobs, max_nfev, options)
+                                                 jobs, max_nfev, options, scatter)
     preps, warns = _diagnose_records(recs, labels, opts, diagnoses, jobs, client, progress)
     ok = [i for i, p in enumerate(preps) if p is not None]
     preps, labels, X = [preps[i] for i in ok], [labels[i] for i in ok], X[ok]
