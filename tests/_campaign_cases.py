@@ -46,14 +46,23 @@ def element(cond, *, fs_factor=1.0):
                                      "drag": math.exp(q["ln(backlash.drag/Fs)"]) * q["Fs"]}])
 
 
-def campaign(seed, conditions=CONDITIONS, noise=0.005, odd=None):
+def fs_factors(seed, n, fs_scatter):
+    """The per-record slip-force factors ``exp(fs_scatter z)``, ``z`` standard normal (a
+    stream of its own, so the records' noise does not depend on ``fs_scatter``)."""
+    return np.exp(fs_scatter * np.random.default_rng([seed, 7]).standard_normal(n))
+
+
+def campaign(seed, conditions=CONDITIONS, noise=0.005, odd=None, fs_scatter=0.0):
     """``(records, conditions)`` of one seeded campaign: per condition a test of three
     amplitude blocks (0.6, 1.5, 3 phi_max) of two cycles, 96 samples per cycle; record
-    ``odd`` (an index), if given, is a device with 1.3 times the law's Fs."""
+    ``odd`` (an index), if given, is a device with 1.3 times the law's Fs; every record's Fs
+    is off the law by the factor :func:`fs_factors` (a device that scatters from test to
+    test by ``fs_scatter`` in ln Fs, which no condition predicts)."""
     rng = np.random.default_rng(seed)
     recs = []
+    factors = fs_factors(seed, len(conditions), fs_scatter)
     for i, c in enumerate(conditions):
-        el = element(c, fs_factor=1.3 if i == odd else 1.0)
+        el = element(c, fs_factor=(1.3 if i == odd else 1.0) * factors[i])
         amps = np.array([0.6, 1.5, 3.0]) * math.exp(truth(c)["log_phi_max"])
         d = simulate_element_test(el, amps, cycles=2, frequency=c["frequency"],
                                   samples_per_cycle=96, rest_samples=10,

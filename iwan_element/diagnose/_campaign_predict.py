@@ -98,13 +98,33 @@ def _drive_record(model, theta, x, t, u):
             "sigma": 1.0, "rms_own": 1.0, "tau_own": 1.0, "base_shape": shape}
 
 
-def _force(model, rm, theta, x, start):
-    Fs, shape, effs = model.physical(model.law_values(theta, x), rm)
+def _force(model, rm, vals, start):
+    Fs, shape, effs = model.physical(vals, rm)
     rm.ev.set_start(start)
     return Fs * rm.ev.unit_force(shape, model.names, effs)
 
 
-def predict(fit, conditions, t, u, *, F0=0.0, start=0.0, level=0.95, draws=64, rng=None):
+def draw_values(model, theta, cov, S, x, rng, draws):
+    """``draws`` law-value dicts at conditions ``x``: coefficients from ``N(theta, cov)`` and,
+    when ``S`` (the scatter covariance) is given, a record-to-record deviation from
+    ``N(0, S)`` (:func:`_campaign_model.perturb`). Draws with ``Fs <= 0`` are left out."""
+    ng = model.n_glob
+    L = _chol(cov)
+    Ls = None if S is None else _chol(S)
+    out = []
+    for _ in range(draws):
+        th = theta.copy()
+        th[:ng] = theta[:ng] + L @ rng.standard_normal(ng)
+        vals = model.law_values(th, x)
+        if Ls is not None:
+            vals = CM.perturb(model, vals, Ls @ rng.standard_normal(Ls.shape[0]))
+        if vals["Fs"] > 0:
+            out.append(vals)
+    return out
+
+
+def predict(fit, conditions, t, u, *, F0=0.0, start=0.0, level=0.95, draws=64, rng=None,
+            scatter=True):
     """See :meth:`CampaignFit.predict`."""
     st = fit._state
     model, theta, cov = st["model"], st["theta"], st["cov_int"]
@@ -115,23 +135,26 @@ def predict(fit, conditions, t, u, *, F0=0.0, start=0.0, level=0.95, draws=64, r
     start = check_scalar("start", start)
     level = check_scalar("level", level, low=0.0, high=1.0, low_open=True, high_open=True)
     draws = check_int("draws", draws, 8)
+    if not isinstance(scatter, bool):
+        raise ValueError(f"scatter must be True or False, got {scatter!r}")
     rng = np.random.default_rng(0 if rng is None else rng)
     Fs = model.law_values(theta, x)["Fs"]
     if not Fs > 0:
         raise ValueError(f"the Fs law gives Fs = {Fs:.4g} N <= 0 at conditions {conditions}: "
                          "the campaign model does not reach there")
     rm = CM.RecordModel(_drive_record(model, theta, x, tt, uu), full=True)
-    force = _force(model, rm, theta, x, start) + F0
-    ng = model.n_glob
-    L = _chol(cov)
-    samples, warns = [], []
-    for _ in range(draws):
-        th = theta.copy()
-        th[:ng] = theta[:ng] + L @ rng.standard_normal(ng)
-        if model.law_values(th, x)["Fs"] > 0:
-            samples.append(_force(model, rm, th, x, start) + F0)
+    force = _force(model, rm, model.law_values(theta, x), start) + F0
+    S = st.get("scatter_cov") if scatter else None
+    if S is not None:
+        cov = cov + st["cov_re"]
+    samples = [_force(model, rm, v, start) + F0
+               for v in draw_values(model, theta, cov, S, x, rng, draws)]
+    warns = []
+    if scatter and S is None:
+        warns.append("the fit holds no record-to-record scatter (fit_campaign(scatter=False)):"
+                     " the band is the coefficients' uncertainty only")
     if len(samples) < draws:
-        warns.append(f"{draws - len(samples)} of {draws} coefficient draws give Fs <= 0 here "
+        warns.append(f"{draws - len(samples)} of {draws} draws give Fs <= 0 here "
                      "and are left out of the band")
     if not samples:
         samples = [force]
@@ -155,19 +178,40 @@ def _chol(cov):
     return V * np.sqrt(np.clip(w, 0.0, None))
 
 
-def _predict_record(model, theta, r, prep):
-    """Band misfit [N] of the device predicted from ``theta`` on record ``r``; the record's
-    nuisances (force offset, starting state) are fitted to it with the device held."""
+def _predict_record(model, theta, r, prep, band=None, vals=None):
+    """``(band misfit [N], coverage)`` of the device predicted from ``theta`` on record
+    ``r``; the record's nuisances (force offset, starting state) are fitted to it with the
+    device held. ``band = (cov, S, draws, level, rng)``: the share of the record's fitted
+    samples in the misfit band (``|F| < 0.25 max|F|``) whose measured force lies in the
+    prediction's band (coefficients from ``cov``, scatter from ``S``; nuisances held at the
+    central prediction's); NaN without ``band``. ``vals``: law values to use instead of
+    ``theta``'s (e.g. some of the record's own, to attribute the misfit)."""
     best = (math.inf, 0.0)
-    vals = model.law_values(theta, model.X[r])
+    vals = model.law_values(theta, model.X[r]) if vals is None else vals
     for g in M.START_GRID:
         s = g * model.records[r].x_max
         m = model.record_force(theta, r, vals=vals, start=s)
         if m is not None:
             e = model.records[r].y - m
             best = min(best, (float(np.var(e)), s))
-    F, _ = full_force(model, theta, r, prep, vals=vals, start=best[1])
-    return band_misfit(prep["F"], F, CM.BAND) if F is not None else math.nan
+    F, F0 = full_force(model, theta, r, prep, vals=vals, start=best[1])
+    if F is None:
+        return math.nan, math.nan
+    misfit = band_misfit(prep["F"], F, CM.BAND)
+    if band is None:
+        return misfit, math.nan
+    cov, S, draws, level, rng = band
+    forces = [model.record_force(theta, r, vals=v, start=best[1])
+              for v in draw_values(model, theta, cov, S, model.X[r], rng, draws)]
+    forces = [f + F0 for f in forces if f is not None]
+    if not forces:
+        return misfit, math.nan
+    q = 0.5 * (1.0 - level)
+    lo, hi = np.quantile(np.array(forces), [q, 1.0 - q], axis=0)
+    y = model.records[r].y
+    mask = np.abs(y) < CM.BAND * np.abs(prep["F"]).max()
+    inside = (y >= lo) & (y <= hi)
+    return misfit, float(inside[mask].mean()) if mask.any() else math.nan
 
 
 def _loo_step(model, theta, J, i):
@@ -182,6 +226,28 @@ def _loo_step(model, theta, J, i):
     th = theta.copy()
     th[cols] += delta
     return th
+
+
+def _loo_predict(model, th, i, prep, free, cov, cover) -> dict:
+    """Band misfit of record ``i`` predicted from ``th`` and, when ``cover = (draws, level,
+    seed)``, the coverage of its band samples by the prediction band with the scatter read
+    from the other records (``coverage``) and by the coefficients' band alone
+    (``coverage_coef``)."""
+    if cover is None:
+        return {"band_pred": _predict_record(model, th, i, prep)[0], "coverage": math.nan,
+                "coverage_coef": math.nan}
+    draws, level, seed = cover
+    S, cov_s = None, cov
+    if free is not None:
+        D, dof = CM.deviations(model, th, free, skip=i)
+        if D.shape[0] >= 2:
+            S = CM.scatter_cov(D, dof)
+            cov_s = cov + CM.scatter_coef_cov(model, th, S, skip=i)
+    rng = np.random.default_rng([seed, i])
+    band, cov_re = _predict_record(model, th, i, prep, (cov_s, S, draws, level, rng))
+    _, cov_coef = _predict_record(model, th, i, prep, (cov, None, draws, level, rng))
+    return {"band_pred": band, "coverage": cov_re if S is not None else math.nan,
+            "coverage_coef": cov_coef}
 
 
 def _loo_task(params, rng):
@@ -202,19 +268,25 @@ def _loo_task(params, rng):
     res = solve(sub, th0, max_nfev=params["max_nfev"])
     th = theta.copy()
     th[:full.n_glob] = res.x[:full.n_glob]
-    return {"band_pred": _predict_record(full, th, i, preps[i]), "nfev": int(res.nfev),
-            "status": int(res.status)}
+    out = _loo_predict(full, th, i, preps[i], params["free"], params["cov"], params["cover"])
+    return dict(out, nfev=int(res.nfev), status=int(res.status))
 
 
 @dataclass(frozen=True, eq=False)
 class LeaveOneOut(ResultShape):
     """Per record: the band misfit [N] of its prediction from the other records, of its own
-    fit, their ratio, and the share of records within :data:`LOO_TARGET` (1.5)."""
+    fit, their ratio, and the share of records within :data:`LOO_TARGET` (1.5); with
+    ``coverage=True`` also the share of its band samples inside the prediction band, with
+    the record-to-record scatter (``coverage``) and without it (``coverage_coef``), and
+    their medians over the records (``coverage``, ``coverage_coef``, NaN if not asked)."""
 
     rows: tuple
     refit: str
     share_within: float
     wall_time: float
+    coverage: float = math.nan
+    coverage_coef: float = math.nan
+    level: float = 0.95
     warnings: tuple = field(default_factory=tuple)
 
     @property
@@ -226,10 +298,16 @@ class LeaveOneOut(ResultShape):
         lines = [f"Leave-one-out ({self.refit}): {100 * self.share_within:.0f} % of "
                  f"{len(self.rows)} records predicted within {LOO_TARGET:g}x their own fit's "
                  f"band misfit ({self.wall_time:.1f} s)",
-                 f"  {'record':<26} {'own [N]':>9} {'predicted [N]':>13} {'ratio':>6}"]
+                 f"  {'record':<26} {'own [N]':>9} {'predicted [N]':>13} {'ratio':>6} "
+                 f"{'in band':>8} {'coef only':>9}"]
         for r in self.rows:
             lines.append(f"  {r['record']:<26} {r['band_own']:9.4g} {r['band_pred']:13.4g} "
-                         f"{r['ratio']:6.2f}")
+                         f"{r['ratio']:6.2f} {r['coverage']:8.2f} {r['coverage_coef']:9.2f}")
+        if math.isfinite(self.coverage_coef):
+            lines.append(f"  band samples inside the {100 * self.level:g} % prediction band "
+                         f"(median over records): {100 * self.coverage:.0f} % with the "
+                         f"record-to-record scatter, {100 * self.coverage_coef:.0f} % with the "
+                         "coefficients' uncertainty only")
         lines += [f"  warning: {w}" for w in self.warnings]
         return "\n".join(lines)
 
@@ -247,23 +325,35 @@ class LeaveOneOut(ResultShape):
     def to_dict(self) -> dict:
         return json_safe({"rows": list(self.rows), "refit": self.refit,
                           "share_within": self.share_within, "success": self.success,
+                          "coverage": self.coverage, "coverage_coef": self.coverage_coef,
+                          "level": self.level,
                           "wall_time": self.wall_time, "warnings": list(self.warnings)})
 
 
-def leave_one_out(fit, *, refit="step", jobs=1, client=None, progress=False, max_nfev=20):
+def leave_one_out(fit, *, refit="step", jobs=1, client=None, progress=False, max_nfev=20,
+                  coverage=False, draws=32, level=0.95, seed=0):
     """Predict each record from the campaign fitted without it.
 
     ``refit="step"``: one Gauss-Newton step from the full fit on the normal equations without
     the record (no new model evaluations but the prediction's); ``"full"``: a warm-started
     least-squares refit per record, on ``jobs`` local processes or a Dask ``client``. The
     prediction holds the device at the laws; the record's nuisances (force offset, starting
-    state on :data:`_model.START_GRID`) are fitted to it. Returns :class:`LeaveOneOut`.
+    state on :data:`_model.START_GRID`) are fitted to it. ``coverage=True`` also draws
+    ``draws`` devices per record (coefficients from the full fit's covariance, scatter read
+    from the other records) and states how much of the record's band the ``level`` band
+    holds. Returns :class:`LeaveOneOut`.
     """
     from .campaign import _executor
     if refit not in ("step", "full"):
         raise ValueError(f"refit must be 'step' or 'full', got {refit!r}")
     jobs = check_int("jobs", jobs, 1)
     max_nfev = check_int("max_nfev", max_nfev, 1)
+    if not isinstance(coverage, bool):
+        raise ValueError(f"coverage must be True or False, got {coverage!r}")
+    draws = check_int("draws", draws, 8)
+    level = check_scalar("level", level, low=0.0, high=1.0, low_open=True, high_open=True)
+    seed = check_int("seed", seed, 0)
+    cover = (draws, level, seed) if coverage else None
     t0 = time.perf_counter()
     st = fit._state
     model, theta, preps = st["model"], st["theta"], st["preps"]
@@ -272,12 +362,13 @@ def leave_one_out(fit, *, refit="step", jobs=1, client=None, progress=False, max
         raise ValueError(f"leave_one_out needs at least 3 records, the campaign has {n}")
     warns = []
     if refit == "step":
-        bands = [_predict_record(model, _loo_step(model, theta, st["J"], i), i, preps[i])
-                 for i in range(n)]
+        outs = [_loo_predict(model, _loo_step(model, theta, st["J"], i), i, preps[i],
+                             st.get("free"), st["cov_int"], cover) for i in range(n)]
     else:
         common = {"preps": preps, "X": model.X, "names": model.names, "laws": model.laws,
                   "cnames": model.cnames, "centre": model.centre, "cscale": model.cscale,
-                  "qscale": model.qscale, "theta": theta, "max_nfev": max_nfev}
+                  "qscale": model.qscale, "theta": theta, "max_nfev": max_nfev,
+                  "free": st.get("free"), "cov": st["cov_int"], "cover": cover}
         ex = _executor(jobs, client)
         try:
             res = run_ensemble(_loo_task, [dict(common, i=i) for i in range(n)], executor=ex,
@@ -285,17 +376,23 @@ def leave_one_out(fit, *, refit="step", jobs=1, client=None, progress=False, max
         finally:
             if ex is not client and not isinstance(ex, str):
                 ex.shutdown()
-        bands = [float(r.get("band_pred", math.nan)) for r in res.rows]
+        nan = {"band_pred": math.nan, "coverage": math.nan, "coverage_coef": math.nan}
+        outs = [{k: float(r.get(k, math.nan)) for k in nan} if r else nan for r in res.rows]
         warns += [f"{fit.records[e.index]}: {e.message}" for e in res.errors]
         warns += [f"{fit.records[i]}: the refit without it did not converge"
                   for i, r in enumerate(res.rows) if r.get("status", 1) == 0]
     rows = tuple({"record": fit.records[i], "conditions": fit.rows[i]["conditions"],
-                  "band_own": preps[i]["band_own"], "band_pred": b,
-                  "ratio": b / preps[i]["band_own"] if preps[i]["band_own"] > 0 else math.nan}
-                 for i, b in enumerate(bands))
+                  "band_own": preps[i]["band_own"], "band_pred": o["band_pred"],
+                  "ratio": (o["band_pred"] / preps[i]["band_own"] if preps[i]["band_own"] > 0
+                            else math.nan),
+                  "coverage": o["coverage"], "coverage_coef": o["coverage_coef"]}
+                 for i, o in enumerate(outs))
     warns += [f"{r['record']}: the laws from the other records give no model there (Fs <= 0 "
               "or an evaluation failure): not predicted, counted as a miss"
               for r in rows if not math.isfinite(r["band_pred"])]
     within = float(np.mean([r["ratio"] <= LOO_TARGET for r in rows]))
+    med = {k: float(np.nanmedian([r[k] for r in rows])) if coverage else math.nan
+           for k in ("coverage", "coverage_coef")}
     return LeaveOneOut(rows=rows, refit=refit, share_within=within,
-                       wall_time=time.perf_counter() - t0, warnings=tuple(warns))
+                       wall_time=time.perf_counter() - t0, warnings=tuple(warns),
+                       level=level, **med)

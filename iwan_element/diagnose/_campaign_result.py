@@ -118,7 +118,26 @@ def _rows(model, theta, cov_int, preps, labels):
     return rows, warns
 
 
-def assemble(*, model, preps, labels, res, units, stack_from, warnings, options, times, t0):
+def _scatter(model, theta, free):
+    """``(sd per quantity, covariance)`` of the record-to-record scatter about the laws
+    (empty dict and None without ``free``)."""
+    if free is None or sum(f is not None for f in free) < 2:
+        return {}, None
+    D, dof = CM.deviations(model, theta, free)
+    S = CM.scatter_cov(D, dof)
+    names = ["ln Fs"] + list(model.qnames[1:])
+    return {q: float(math.sqrt(S[k, k])) for k, q in enumerate(names)}, S
+
+
+def _stderr_dict(labels_c, cov_phys):
+    out = {}
+    for (q, term), e in zip(labels_c, np.sqrt(np.clip(np.diag(cov_phys), 0.0, None))):
+        out.setdefault(q, {})[term] = float(e)
+    return out
+
+
+def assemble(*, model, preps, labels, res, units, stack_from, warnings, options, times, t0,
+             free=None):
     """Uncertainty, coefficients, the per-record table, the verdict: a :class:`CampaignFit`."""
     theta = res.x
     t1 = time.perf_counter()
@@ -135,6 +154,10 @@ def assemble(*, model, preps, labels, res, units, stack_from, warnings, options,
         coefficients.setdefault(q, {})[term] = float(c)
         stderr.setdefault(q, {})[term] = float(e)
     rows, awarn = _rows(model, theta, cov_int, preps, labels)
+    scatter, S = _scatter(model, theta, free)
+    cov_re = None if S is None else CM.scatter_coef_cov(model, theta, S)
+    stderr_scatter = {} if cov_re is None else _stderr_dict(labels_c, T @ (cov_int + cov_re)
+                                                             @ T.T)
     warns = list(warnings)
     converged = bool(res.status > 0)
     if not converged:
@@ -163,10 +186,13 @@ def assemble(*, model, preps, labels, res, units, stack_from, warnings, options,
         effects_from=stack_from, laws={q: tuple(v) for q, v in model.laws.items()},
         units=units, coefficients=coefficients, stderr=stderr, covariance=cov_phys,
         coefficient_labels=tuple(f"{q}:{t}" for q, t in labels_c), rows=tuple(rows),
+        scatter=scatter, stderr_scatter=stderr_scatter,
         converged=converged, success=converged and ident, message=str(res.message),
         nfev=int(res.nfev), wall_time=times["total"], warnings=tuple(warns),
         details=details, _state={"model": model, "theta": theta, "cov_int": cov_int, "J": J,
-                                 "preps": preps, "cov": cov})
+                                 "preps": preps, "cov": cov,
+                                 "free": free, "scatter_cov": S,
+                                 "cov_re": cov_re})
 
 
 @dataclass(frozen=True, eq=False)
@@ -188,6 +214,16 @@ class CampaignFit(ResultShape):
         ``{quantity: {"1": a, condition: b_c}}`` and their standard errors (delta method).
     covariance : ndarray
         Of all coefficients, in the order of ``coefficient_labels`` (``"quantity:term"``).
+    scatter : dict
+        Record-to-record scatter about the laws (standard deviation per quantity, the slip
+        force as ``"ln Fs"``: a relative scatter), from each record refitted alone with the
+        campaign's stack; empty when ``scatter=False``. It is the part of the device the
+        conditions do not predict; :meth:`predict` carries it in its band.
+    stderr_scatter : dict
+        The coefficients' standard errors with that scatter: the delta method's (``stderr``,
+        which sees each record's noise only) plus the generalised least-squares covariance
+        of the laws over records that scatter by ``scatter`` (docs/campaign.md section 6);
+        empty when ``scatter=False``.
     rows : tuple of dict
         Per record: conditions, effects named on its own, those the stack adds (``missing``)
         or lacks (``extra``), band misfit [N] of its own fit and of the campaign model and
@@ -214,6 +250,8 @@ class CampaignFit(ResultShape):
     covariance: np.ndarray
     coefficient_labels: tuple
     rows: tuple
+    scatter: dict
+    stderr_scatter: dict
     converged: bool
     success: bool
     message: str
@@ -234,7 +272,7 @@ class CampaignFit(ResultShape):
         return vals[quantity], se[quantity]
 
     def predict(self, conditions, t, u, *, F0: float = 0.0, start: float = 0.0,
-                level: float = 0.95, draws: int = 64, rng=None):
+                level: float = 0.95, draws: int = 64, rng=None, scatter: bool = True):
         """Force history of the device at ``conditions`` (tested or not) under the drive
         ``(t, u)``, with a band from the law coefficients' uncertainty.
 
@@ -254,6 +292,11 @@ class CampaignFit(ResultShape):
             Coefficient draws from their normal distribution for the band, ``>= 8``.
         rng : numpy.random.Generator or int, optional, keyword-only
             Source of the draws (default seed 0: reproducible).
+        scatter : bool, keyword-only
+            Add to each draw a record-to-record deviation from the scatter the records show
+            about the laws (:attr:`scatter`; default True): the band then says how far a new
+            test at these conditions may fall from the law, not only how well the law is
+            known.
 
         Returns
         -------
@@ -262,10 +305,11 @@ class CampaignFit(ResultShape):
         """
         from ._campaign_predict import predict
         return predict(self, conditions, t, u, F0=F0, start=start, level=level, draws=draws,
-                       rng=rng)
+                       rng=rng, scatter=scatter)
 
     def leave_one_out(self, *, refit: str = "step", jobs: int = 1, client=None,
-                      progress: bool = False, max_nfev: int = 20):
+                      progress: bool = False, max_nfev: int = 20, coverage: bool = False,
+                      draws: int = 32, level: float = 0.95, seed: int = 0):
         """Predict each record from the campaign fitted without it.
 
         The device comes from the laws fitted to the other records; the record's nuisances
@@ -287,6 +331,16 @@ class CampaignFit(ResultShape):
             tqdm progress bar over the refits (``"full"``).
         max_nfev : int, keyword-only
             Most objective evaluations per refit (``"full"``), ``>= 1``.
+        coverage : bool, keyword-only
+            Also state, per record, the share of its band samples (``|F| < 0.25 max|F|``, at
+            its fitted samples) inside the ``level`` prediction band, with the scatter read
+            from the other records and with the coefficients' uncertainty only.
+        draws : int, keyword-only
+            Devices drawn per record and per band for ``coverage``, ``>= 8``.
+        level : float, keyword-only
+            Probability of the band, in (0, 1).
+        seed : int, keyword-only
+            Seed of the draws (one stream per record), ``>= 0``.
 
         Returns
         -------
@@ -296,7 +350,8 @@ class CampaignFit(ResultShape):
         """
         from ._campaign_predict import leave_one_out
         return leave_one_out(self, refit=refit, jobs=jobs, client=client, progress=progress,
-                             max_nfev=max_nfev)
+                             max_nfev=max_nfev, coverage=coverage, draws=draws, level=level,
+                             seed=seed)
 
     def report(self) -> str:
         """Laws with their coefficients, the per-record table, warnings and times."""
@@ -306,11 +361,15 @@ class CampaignFit(ResultShape):
                  f"{'converged' if self.converged else 'NOT converged'}, {self.nfev} "
                  f"evaluations; {self.wall_time:.1f} s (diagnoses {tm['diagnoses']:.1f} s, "
                  f"joint fit {tm['joint_fit']:.1f} s, uncertainty {tm['uncertainty']:.1f} s)",
-                 "  laws (coefficient +- standard error):"]
+                 "  laws (coefficient +- standard error (with the record scatter)):"]
         for q, terms in self.coefficients.items():
-            parts = [f"{c:.5g} +- {self.stderr[q][k]:.2g}" + ("" if k == "1" else f" x {k}")
-                     for k, c in terms.items()]
+            parts = [f"{c:.5g} +- {self.stderr[q][k]:.2g}"
+                     + (f" ({self.stderr_scatter[q][k]:.2g})" if self.stderr_scatter else "")
+                     + ("" if k == "1" else f" x {k}") for k, c in terms.items()]
             lines.append(f"    {q} [{self.units[q]}] = " + " + ".join(parts))
+        if self.scatter:
+            lines.append("  record-to-record scatter about the laws (standard deviation): "
+                         + ", ".join(f"{q} {v:.3g}" for q, v in self.scatter.items()))
         lines.append(f"  {'record':<26} {'named':<40} {'own band':>9} {'campaign':>9} "
                      f"{'ratio':>6}")
         for r in self.rows:
@@ -323,7 +382,9 @@ class CampaignFit(ResultShape):
         """JSON-safe dict (NaN becomes None)."""
         return json_safe({k: getattr(self, k) for k in (
             "records", "condition_names", "effects", "effects_from", "laws", "units",
-            "coefficients", "stderr", "covariance", "coefficient_labels", "rows", "converged",
+            "coefficients", "stderr", "covariance", "coefficient_labels", "rows", "scatter",
+            "stderr_scatter",
+            "converged",
             "success", "message", "nfev", "wall_time", "warnings", "details")})
 
     def plot(self, ax=None, *, quantity: str = "Fs", condition: str | None = None):

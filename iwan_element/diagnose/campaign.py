@@ -26,7 +26,11 @@ condition that was not tested (:meth:`CampaignFit.predict`). The procedure
    residual variance estimated from the campaign residual on that record and inflated by
    its correlation time;
 5. agreement: per record, the effects it named against the campaign stack and its own
-   estimates against the law (z-scores); disagreements are stated in ``warnings``.
+   estimates against the law (z-scores); disagreements are stated in ``warnings``;
+6. the record-to-record scatter about the laws (``scatter=True``): every record refitted
+   alone with the campaign's stack, the covariance of its deviations from the laws (a
+   random effect the conditions do not predict), carried in the prediction band and in
+   the coefficients' ``stderr_scatter``.
 """
 from __future__ import annotations
 
@@ -202,8 +206,38 @@ def solve(model, theta0, *, max_nfev, bar=None):
                          x_scale="jac", diff_step=1e-6, max_nfev=max_nfev)
 
 
-def _check_input(records, conditions, names, laws, effects, jobs, max_nfev, options):
+def record_values(model, theta, preps, *, max_nfev: int = 60):
+    """Each record's own values with the campaign's stack (its quantities fitted to it alone,
+    every law a constant; warm-started at its own estimates, else at the laws), in the form
+    :func:`_campaign_model.in_range` gives; None where that fit fails. The record-to-record
+    scatter about the laws is read from them (:func:`_campaign_model.deviations`)."""
+    out = []
+    for r, p in enumerate(preps):
+        sub = build_model([p], model.names, {q: () for q in model.qnames}, model.cnames,
+                          model.X[[r]])
+        law = model.law_values(theta, model.X[r])
+        th0 = np.zeros(sub.n_theta)
+        for q in sub.qnames:
+            e = p["estimates"].get(q, math.nan)
+            th0[sub.slices[q]] = (e if math.isfinite(e) else law[q]) / sub.qscale[q]
+        if sub.start_pos:
+            th0[-1] = p["start"] / sub.records[0].x_max
+        try:
+            res = solve(sub, th0, max_nfev=max_nfev)
+        except (ValueError, FloatingPointError) as exc:
+            log.info("record %d: its own fit with the campaign stack failed (%s)", r, exc)
+            out.append(None)
+            continue
+        vals = sub.law_values(res.x, sub.X[0])
+        out.append(CM.in_range(model, vals, model.records[r]) if vals["Fs"] > 0 else None)
+    return out
+
+
+def _check_input(records, conditions, names, laws, effects, jobs, max_nfev, options,
+                 scatter):
     """Everything that can be checked before the records are diagnosed."""
+    if not isinstance(scatter, bool):
+        raise ValueError(f"scatter must be True or False, got {scatter!r}")
     recs, labels = _check_records(records, names)
     cnames, X = CM.check_conditions(conditions, len(recs))
     opts = _check_options(options)
@@ -217,7 +251,7 @@ def _check_input(records, conditions, names, laws, effects, jobs, max_nfev, opti
 
 def fit_campaign(records, conditions, *, effects=None, laws=None, names=None, diagnoses=None,
                  jobs: int = 1, client=None, progress: bool = False, max_nfev: int = 100,
-                 **options) -> CampaignFit:
+                 scatter: bool = True, **options) -> CampaignFit:
     """Fit one device model over a test campaign, its parameters laws of the conditions.
 
     See the module docstring for the procedure and ``docs/campaign.md`` for the equations.
@@ -253,6 +287,11 @@ def fit_campaign(records, conditions, *, effects=None, laws=None, names=None, di
         Most evaluations of the joint fit's objective (``>= 1``, scipy's count: those of its
         finite-difference Jacobians, one per law coefficient plus one per iteration, are not
         counted; default 100).
+    scatter : bool, keyword-only
+        Estimate the record-to-record scatter about the laws (each record refitted alone
+        with the campaign's stack, a few seconds per record) and carry it in the prediction
+        band (default True). Without it the band holds the coefficients' uncertainty only,
+        which is honest only when the conditions determine the device.
     **options
         Options of :func:`~iwan_element.diagnose` for every record (e.g. ``lowpass=20``).
 
@@ -269,7 +308,7 @@ def fit_campaign(records, conditions, *, effects=None, laws=None, names=None, di
     """
     t0 = time.perf_counter()
     recs, labels, cnames, X, opts = _check_input(records, conditions, names, laws, effects,
-                                                 jobs, max_nfev, options)
+                                                 jobs, max_nfev, options, scatter)
     preps, warns = _diagnose_records(recs, labels, opts, diagnoses, jobs, client, progress)
     ok = [i for i, p in enumerate(preps) if p is not None]
     preps, labels, X = [preps[i] for i in ok], [labels[i] for i in ok], X[ok]
@@ -289,7 +328,10 @@ def fit_campaign(records, conditions, *, effects=None, laws=None, names=None, di
     finally:
         if bar is not None:
             bar.close()
+    t2 = time.perf_counter()
+    free = record_values(model, res.x, preps) if scatter else None
+    times = {"diagnoses": t_diag, "joint_fit": t_fit, "scatter": time.perf_counter() - t2}
     from ._campaign_result import assemble
     return assemble(model=model, preps=preps, labels=labels, res=res, units=units,
                     stack_from=stack_from, warnings=warns + lwarn, options=opts,
-                    times={"diagnoses": t_diag, "joint_fit": t_fit}, t0=t0)
+                    times=times, t0=t0, free=free)
