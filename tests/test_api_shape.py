@@ -4,6 +4,7 @@ every public result class has ``report()``, a JSON-safe ``to_dict()``, ``warning
 contract of ``iwan_element.core.result_shape``; time-series functions take time first."""
 from __future__ import annotations
 
+import functools
 import inspect
 import json
 import warnings
@@ -121,7 +122,9 @@ def _bands():
                                     executor="serial")
 
 
+@functools.lru_cache(maxsize=1)
 def _campaign():
+    """One small campaign fit, shared by its own shape test and its results' (read only)."""
     from _campaign_cases import campaign
     recs, conds = campaign(3, conditions=tuple({"tension": T, "frequency": 1.0}
                                                for T in (10.0, 20.0, 30.0, 40.0)))
@@ -210,4 +213,26 @@ def test_every_model_result_class_is_covered():
 @pytest.mark.parametrize("part", ["report", "to_dict", "warnings", "success", "plot"])
 def test_model_result_objects_have_the_same_shape(name, part, monkeypatch):
     monkeypatch.setitem(RESULTS, name, MODEL_RESULTS[name])
+    test_result_objects_have_one_shape(name, part)
+
+
+def _prediction():
+    fit = _campaign()
+    t = np.linspace(0.0, 2.0, 400)
+    return fit.predict({"tension": 25.0, "frequency": 1.0}, t, 2e-4 * np.sin(2 * np.pi * t))
+
+
+def _loo():
+    return _campaign().leave_one_out()
+
+
+#: Results that public methods of other results return (the campaign's prediction and
+#: leave-one-out), with the same shape.
+METHOD_RESULTS = {"CampaignPrediction": _prediction, "LeaveOneOut": _loo}
+
+
+@pytest.mark.parametrize("name", sorted(METHOD_RESULTS))
+@pytest.mark.parametrize("part", ["report", "to_dict", "warnings", "success", "plot"])
+def test_method_result_objects_have_the_same_shape(name, part, monkeypatch):
+    monkeypatch.setitem(RESULTS, name, METHOD_RESULTS[name])
     test_result_objects_have_one_shape(name, part)
