@@ -236,32 +236,41 @@ def _covariance(obj, r, J):
     """Covariance of the least-squares estimate for band-passed white noise.
 
     The rotated residual ``rr = r_ln + i r_phase`` is the in-band noise ``n`` turned by the
-    signal's phase; ``E[rr_i conj(rr_j)] = s2 conj(rho(t_j - t_i)) exp(i (phi_j - phi_i))``
-    with ``s2`` the mean of ``|rr|**2``. Sandwich ``B Omega B``, ``B = (J^T J)^-1``,
-    ``Omega = Re(Jc^H C Jc) / 2`` with ``Jc = J_ln + i J_phase`` (the estimator's exact
-    covariance under that noise model). Also returns the variance inflation of a sum of
-    residuals relative to independent samples (the correlation factor).
+    signal's phase; ``E[rr_i conj(rr_j)] = s2 conj(rho(t_j - t_i)) exp(i (phi_j - phi_i))``.
+    Sandwich ``B Omega B``, ``B = (J^T J)^-1``, ``Omega = s2 Re(Jc^H R Jc) / 2`` with
+    ``Jc = J_ln + i J_phase`` and ``R`` the correlation above (the estimator's exact
+    covariance under that noise model). ``s2`` is the residual's sum of squares over its
+    degrees of freedom under the same model, ``m - tr(B Omega / s2)`` (the fit absorbs that
+    much of correlated noise; a short record has few independent noise samples, and the
+    plain mean square understated the noise by up to half). Also returns the variance
+    inflation of a sum of residuals relative to independent samples (the correlation factor)
+    and the residual degrees of freedom: ``m - tr(B Omega / s2)`` in samples, and the
+    chi-square degrees of freedom of ``s2`` (Satterthwaite: ``2 dof / tau2``, ``tau2 =
+    sum_k |rho_k|**2`` the correlation time of the squared noise), on which the standard
+    errors' own precision rests.
     """
     m = r.size // 2
     rr = r[:m] + 1j * r[m:]
-    s2 = float(np.mean(np.abs(rr) ** 2))
     Jc = J[:m] + 1j * J[m:]
     step = int(obj.idx[1] - obj.idx[0]) if obj.idx.size > 1 else 1
     lags = min(m - 1, int(math.ceil(20.0 * obj.prob.fs / (obj.prob.bw * step))))
     rho = _noise_correlation(obj.prob, lags * step)[::step]
     omega = (Jc.conj().T @ Jc).real
-    kappa = 1.0
+    kappa, tau2 = 1.0, 1.0
     for k in range(1, lags + 1):
         c = np.conj(rho[k]) * np.exp(1j * (obj.phd[k:] - obj.phd[:-k]))     # C_{i,i+k} / s2
         g = (Jc[:-k].conj() * c[:, None]).T @ Jc[k:]
         omega += g.real + g.real.T            # the lag and its Hermitian transpose
         kappa += 2.0 * (1.0 - k / m) * float(np.mean(c.real))
-    omega *= 0.5 * s2
+        tau2 += 2.0 * (1.0 - k / m) * abs(rho[k]) ** 2
+    omega *= 0.5
     try:
         bread = np.linalg.inv(J.T @ J)
     except np.linalg.LinAlgError:
         bread = np.linalg.pinv(J.T @ J)
-    return bread @ omega @ bread, max(kappa, 1.0)
+    dof = m - float(np.trace(bread @ omega))
+    s2 = float(np.sum(np.abs(rr) ** 2)) / max(dof, 1.0)
+    return bread @ (s2 * omega) @ bread, max(kappa, 1.0), (dof, 2.0 * max(dof, 0.0) / tau2)
 
 
 def _misfit_ratio(r, lag):

@@ -281,14 +281,14 @@ def _fit_models(prob, info, alpha, snr_min, spc):
     idx, ref, X = span["idx"], span["ref"], info["data"][0]
     lags = math.ceil(2.0 * prob.fs / (prob.bw * span["step"]))
     chosen, regime, warns, guard = micro, "microslip", [], False
-    cov, kappa = _covariance(obj, micro.fun, micro.jac)
+    cov, kappa, dof = _covariance(obj, micro.fun, micro.jac)
     x_max = math.exp(micro.x[-2])
     full_starts = _full_starts(micro.x, x_max, prob.conv["x_ref"], span["curve_full"])
     if 2 * idx.size > 12 and full_starts:
         bnd = _bounds(prob, "macroslip", X, x_max, info["nuis"][-2])
         obj_f = _Objective(prob, "macroslip", idx, ref, bnd, span["weights"])
         full = _fit_regime(obj_f, full_starts, bnd)
-        cov_f, kappa_f = _covariance(obj_f, full.fun, full.jac)
+        cov_f, kappa_f, dof_f = _covariance(obj_f, full.fun, full.jac)
         s2 = float(np.mean(full.fun ** 2))
         stat = 2.0 * (micro.cost - full.cost) / max(s2 * kappa_f, 1e-300)
         p_val = float(stats.chi2.sf(max(stat, 0.0), 2))
@@ -304,7 +304,7 @@ def _fit_models(prob, info, alpha, snr_min, spc):
                                                optimizer_ok=True)
             complete = len(trial.identified) == len(trial.parameters)
         if complete:
-            chosen, regime, cov, kappa = full, "macroslip", cov_f, kappa_f
+            chosen, regime, cov, kappa, dof = full, "macroslip", cov_f, kappa_f, dof_f
         elif p_val < alpha or (p_val < 0.05 and phi_known and inside
                                and math.exp(full.x[4]) < math.exp(full.x[-2])):
             guard = True        # microslip closed forms hold for X << phi_max only
@@ -330,7 +330,7 @@ def _fit_models(prob, info, alpha, snr_min, spc):
     chi2_red = _misfit_ratio(chosen.fun, lags)
     if chi2_red > 1.0:          # structure beyond the noise model: widen (as fit_modal_iwan)
         cov = cov * chi2_red
-    span.update(kappa=kappa, chi2_red=chi2_red, regime=regime, warns=warns, cov=cov,
+    span.update(kappa=kappa, dof=dof, chi2_red=chi2_red, regime=regime, warns=warns, cov=cov,
                 beyond_microslip=guard)
     return chosen, span
 
@@ -416,6 +416,7 @@ def fit_decay(t, y, *, quantity: str = "acceleration", band, order: int = 4,
                 samples=int(span["idx"].size), sample_step=float(span["step"] / prob.fs),
                 noise_rms=span["noise"] / math.sqrt(2.0),
                 correlation_factor=float(span["kappa"]),
+                residual_dof=float(span["dof"][0]), noise_dof=float(span["dof"][1]),
                 amplitude_range=[math.exp(best.x[-2]), a_end],
                 neighbour_modes=[dict(frequency=float(v[0]), decay_rate=float(v[1]))
                                  for v in best.x[n_th:n_th + 4 * prob.nb].reshape(-1, 4)])
