@@ -166,13 +166,20 @@ class _Objective:
     """Log-polar residuals on the samples ``idx`` and their Jacobian (``L`` is linear, so
     ``dz/dx = L(dy/dx)``; ``dy/dx`` by forward differences of the model record)."""
 
-    def __init__(self, prob, regime, idx, ref, bounds, weights=None):
+    def __init__(self, prob, regime, idx, ref, bounds, weights=None, envelope=None):
         self.prob, self.regime, self.idx, self.ub = prob, regime, idx, bounds[1]
         self.sl = slice(idx[0], idx[-1] + 1)
         self.sel = idx - idx[0]
         zd = prob.z[self.sl]
         lnd, phd = _polar(zd)
-        self.wgt = np.abs(zd[self.sel]) / ref * (1.0 if weights is None else weights)
+        # |z| (ln|z| - ln|z_m|) with the data's own |z| as the weight has the mean
+        # E|n|**2 / (2 |z|) per sample (the weight and the log error share the noise's
+        # in-phase part): a bias that grows as the decay meets the noise and reads as a
+        # lower damping there. A given envelope (a previous fit's model, free of this
+        # sample's noise) has none: to second order the mean is then (s_i**2 - s_r**2) / 2|z|
+        # = 0 for in-band noise, which is circular.
+        env = np.abs(zd[self.sel]) if envelope is None else envelope
+        self.wgt = env / ref * (1.0 if weights is None else weights)
         self.lnd, self.phd = lnd[self.sel], phd[self.sel]
         self._cache = (None, None, None)
 
@@ -183,6 +190,10 @@ class _Objective:
         zm = self.prob.apply(self.prob.decimate(y))[self.sl]
         self._cache = (np.array(x), y, zm)
         return y, zm
+
+    def envelope(self, x):
+        """``|z_m|`` of the model ``x`` at the samples."""
+        return np.abs(self._model(x)[1][self.sel])
 
     def resid(self, x):
         try:

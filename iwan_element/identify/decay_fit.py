@@ -65,6 +65,11 @@ __all__ = ["fit_decay"]
 log = logging.getLogger(__name__)
 
 _QUANTITY_POWER = {"displacement": 0, "velocity": 1, "acceleration": 2}
+#: Fewest chi-square degrees of freedom of the noise level for a success: below 5, +-2 stated
+#: standard errors cover less than 90 % even with a perfect model (Student t).
+_MIN_NOISE_DOF = 5.0
+
+
 def _windows(prob, i_a, i_b, nw):
     """Local decaying-sinusoid fits in consecutive windows of ``nw`` samples.
 
@@ -269,10 +274,11 @@ def _fit_micro(prob, info, snr_min, spc):
     obj = _Objective(prob, "microslip", idx, ref, bnd)
     lag = math.ceil(2.0 * prob.fs / (prob.bw * step))
     weights, _ = _local_weights(obj.resid(first.x), lag)
-    obj = _Objective(prob, "microslip", idx, ref, bnd, weights)
+    envelope = obj.envelope(first.x)      # weights free of each sample's own noise
+    obj = _Objective(prob, "microslip", idx, ref, bnd, weights, envelope)
     micro = _fit_regime(obj, [first.x], bnd)
     return micro, obj, dict(idx=idx, step=step, i_b=i_b, noise=noise, ref=ref,
-                            curve_full=curve_full, weights=weights)
+                            curve_full=curve_full, weights=weights, envelope=envelope)
 
 
 def _fit_models(prob, info, alpha, snr_min, spc):
@@ -286,7 +292,8 @@ def _fit_models(prob, info, alpha, snr_min, spc):
     full_starts = _full_starts(micro.x, x_max, prob.conv["x_ref"], span["curve_full"])
     if 2 * idx.size > 12 and full_starts:
         bnd = _bounds(prob, "macroslip", X, x_max, info["nuis"][-2])
-        obj_f = _Objective(prob, "macroslip", idx, ref, bnd, span["weights"])
+        obj_f = _Objective(prob, "macroslip", idx, ref, bnd, span["weights"],
+                           span["envelope"])
         full = _fit_regime(obj_f, full_starts, bnd)
         cov_f, kappa_f, dof_f = _covariance(obj_f, full.fun, full.jac)
         s2 = float(np.mean(full.fun ** 2))
@@ -330,8 +337,17 @@ def _fit_models(prob, info, alpha, snr_min, spc):
     chi2_red = _misfit_ratio(chosen.fun, lags)
     if chi2_red > 1.0:          # structure beyond the noise model: widen (as fit_modal_iwan)
         cov = cov * chi2_red
+    if dof[1] < _MIN_NOISE_DOF:
+        guard = True
+        cover = 100.0 * (1.0 - 2.0 * stats.t.sf(2.0, max(dof[1], 0.1)))
+        warns.append(
+            f"the noise level rests on {dof[1]:.2g} degrees of freedom (the record holds few "
+            "independent noise samples beyond what the fit absorbs): the standard errors are "
+            f"themselves uncertain by about {100 * math.sqrt(0.5 / max(dof[1], 0.1)):.0f} % "
+            f"and +-2 stderr covers only about {cover:.0f} % (Student t); a longer record, "
+            "a wider band or less noise would help; not a success")
     span.update(kappa=kappa, dof=dof, chi2_red=chi2_red, regime=regime, warns=warns, cov=cov,
-                beyond_microslip=guard)
+                guard=guard)
     return chosen, span
 
 
@@ -430,7 +446,7 @@ def fit_decay(t, y, *, quantity: str = "acceleration", band, order: int = 4,
     fit = ModalIwanFit.from_solution(best.x[:n_th], span["cov"][:n_th, :n_th], regime, data, conv,
                                      chi2_red=span["chi2_red"], weights=(),
                                      warnings=tuple(warns), optimizer_ok=bool(best.success))
-    if span["beyond_microslip"]:
+    if span["guard"]:
         fit = dataclasses.replace(fit, success=False)
     log.debug("fit_decay: %s", conv)
     return fit
