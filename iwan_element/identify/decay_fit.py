@@ -35,8 +35,12 @@ sources are in the project's ``docs/decay_fit.md``; in short:
    (the transient an abruptly starting out-of-band mode leaks through the band-pass is
    weighted down).
 4. Uncertainty: the exact covariance of the least-squares estimate for band-passed white
-   noise, whose correlation follows from the filter (``|H|**4``), scaled up by the residual's
-   unexplained structure when there is any.
+   noise, whose correlation follows from the filter (``|H|**4``), with the noise level the
+   residual's sum of squares over its degrees of freedom under that correlation (a short
+   record holds few independent noise samples and the fit absorbs many of them), scaled up
+   by the residual's unexplained structure when there is any. The noise level's own
+   chi-square degrees of freedom (Satterthwaite 1946, Biometrics Bulletin 2:110-114) are
+   reported; below 5 the result is not a success.
 5. Regimes as in :func:`fit_modal_iwan`: in microslip only ``f0, zeta0, chi, delta`` are
    identified; the full set (``kappa, phi_max, beta``) is reported only when a likelihood
    ratio test rejects microslip at ``significance``, ``phi_max`` is known within a factor e
@@ -408,8 +412,10 @@ def fit_decay(t, y, *, quantity: str = "acceleration", band, order: int = 4,
         window estimates of the record (for plots only), ``conventions["method"]`` is
         ``"direct signal fit"`` with the band, the fitted span, the noise and
         ``neighbour_modes`` (frequency [Hz] and decay rate [1/s] of each out-of-band mode
-        modelled). ``success`` is False when microslip is reported although the full model
-        places ``phi_max`` below the release amplitude.
+        modelled), ``residual_dof`` (samples) and ``noise_dof`` (chi-square degrees of
+        freedom of the noise level, on which every stderr rests). ``success`` is False when
+        microslip is reported although the full model places ``phi_max`` below the release
+        amplitude, or when ``noise_dof < 5`` (+-2 stderr would cover less than 90 %).
 
     Raises
     ------
