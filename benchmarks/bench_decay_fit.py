@@ -8,7 +8,8 @@ time (``joint_decay``; even cases) and the slowly-varying-amplitude equations in
 ``solve_ivp`` with the closed-form curves (``svam_decay``; odd cases). The truth is the modal
 Iwan closed form (first-harmonic stiffness, dashpot floor). Each case is fitted with
 :func:`iwan_element.fit_decay`; a parameter counts when the result marks it identified
-(``fit.identified``), and it is covered when ``|value - truth| <= 2 stderr``.
+(``fit.identified``), and it is covered when ``|value - truth| <= 2 stderr``; the coverage is
+printed over all fits and over those with ``success=True``, with each fit's ``noise_dof``.
 
     PYTHONPATH=. python benchmarks/bench_decay_fit.py --cases 50 [--workers 2]
 """
@@ -97,6 +98,7 @@ def run_case(seed):
                                      stiffness="harmonic", floor="dashpot")[1])
     return dict(seed=seed, c=_describe(c), zeta_q0=zeta_q0, regime=fit.regime,
                 success=fit.success, z=z, reported=list(fit.parameters),
+                nu=fit.conventions["noise_dof"],
                 beyond=c["q0"] > c["p"].phi_max, seconds=time.perf_counter() - t0)
 
 
@@ -118,28 +120,37 @@ def main(argv=None):
             rows = list(ex.map(run_case, seeds))
     else:
         rows = [run_case(s) for s in seeds]
-    hits, counts, worst = {}, {}, []
     for r in rows:
         if "error" in r:
             print(f"seed {r['seed']:3d} {r['c']}  ERROR {r['error']}")
-            continue
+    n_err = sum("error" in r for r in rows)
+    print(f"{len(rows)} cases, {n_err} raised, {time.perf_counter() - t0:.0f} s")
+    ok = [r for r in rows if "error" not in r]
+    for r in ok:
         zs = " ".join(f"{k}={v:+.2f}" for k, v in r["z"].items())
         print(f"seed {r['seed']:3d} {r['c']} zeta(q0)={100 * r['zeta_q0']:.3f}% "
-              f"{r['regime']:9s} success={str(r['success']):5s} {r['seconds']:5.1f}s  {zs}")
+              f"{r['regime']:9s} success={str(r['success']):5s} nu={r['nu']:5.1f} "
+              f"{r['seconds']:5.1f}s  {zs}")
+    _coverage(ok, "all fits")
+    _coverage([r for r in ok if r["success"]], "fits with success=True")
+    _regime_counts(ok)
+
+
+def _coverage(rows, label):
+    """Coverage of 2 stderr per parameter and overall over ``rows``."""
+    hits, counts, worst = {}, {}, []
+    for r in rows:
         for k, v in r["z"].items():
             counts[k] = counts.get(k, 0) + 1
             hits[k] = hits.get(k, 0) + (abs(v) <= 2.0)
         worst += [abs(v) for v in r["z"].values()]
-    n_err = sum("error" in r for r in rows)
-    print(f"\n{len(rows)} cases, {n_err} raised, {time.perf_counter() - t0:.0f} s")
-    print("coverage of identified parameters within 2 stderr:")
+    print(f"coverage of identified parameters within 2 stderr, {label} ({len(rows)}):")
     for k in counts:
         print(f"  {k:8s} {hits[k]:3d}/{counts[k]:3d} = {100 * hits[k] / counts[k]:5.1f} %")
     tot_h, tot_n = sum(hits.values()), sum(counts.values())
     if tot_n:
         print(f"  overall  {tot_h:3d}/{tot_n:3d} = {100 * tot_h / tot_n:5.1f} %  "
               f"(largest |z| {max(worst):.3g})")
-    _regime_counts([r for r in rows if "error" not in r])
 
 
 def _regime_counts(rows):

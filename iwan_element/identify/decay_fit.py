@@ -35,8 +35,12 @@ sources are in the project's ``docs/decay_fit.md``; in short:
    (the transient an abruptly starting out-of-band mode leaks through the band-pass is
    weighted down).
 4. Uncertainty: the exact covariance of the least-squares estimate for band-passed white
-   noise, whose correlation follows from the filter (``|H|**4``), scaled up by the residual's
-   unexplained structure when there is any.
+   noise, whose correlation follows from the filter (``|H|**4``), with the noise level the
+   residual's sum of squares over its degrees of freedom under that correlation (a short
+   record holds few independent noise samples and the fit absorbs many of them), scaled up
+   by the residual's unexplained structure when there is any. The noise level's own
+   chi-square degrees of freedom (Satterthwaite 1946, Biometrics Bulletin 2:110-114) are
+   reported; below 5 the result is not a success.
 5. Regimes as in :func:`fit_modal_iwan`: in microslip only ``f0, zeta0, chi, delta`` are
    identified; the full set (``kappa, phi_max, beta``) is reported only when a likelihood
    ratio test rejects microslip at ``significance``, ``phi_max`` is known within a factor e
@@ -65,6 +69,11 @@ __all__ = ["fit_decay"]
 log = logging.getLogger(__name__)
 
 _QUANTITY_POWER = {"displacement": 0, "velocity": 1, "acceleration": 2}
+#: Fewest chi-square degrees of freedom of the noise level for a success: below 5, +-2 stated
+#: standard errors cover less than 90 % even with a perfect model (Student t).
+_MIN_NOISE_DOF = 5.0
+
+
 def _windows(prob, i_a, i_b, nw):
     """Local decaying-sinusoid fits in consecutive windows of ``nw`` samples.
 
@@ -269,10 +278,11 @@ def _fit_micro(prob, info, snr_min, spc):
     obj = _Objective(prob, "microslip", idx, ref, bnd)
     lag = math.ceil(2.0 * prob.fs / (prob.bw * step))
     weights, _ = _local_weights(obj.resid(first.x), lag)
-    obj = _Objective(prob, "microslip", idx, ref, bnd, weights)
+    envelope = obj.envelope(first.x)      # weights free of each sample's own noise
+    obj = _Objective(prob, "microslip", idx, ref, bnd, weights, envelope)
     micro = _fit_regime(obj, [first.x], bnd)
     return micro, obj, dict(idx=idx, step=step, i_b=i_b, noise=noise, ref=ref,
-                            curve_full=curve_full, weights=weights)
+                            curve_full=curve_full, weights=weights, envelope=envelope)
 
 
 def _fit_models(prob, info, alpha, snr_min, spc):
@@ -281,14 +291,15 @@ def _fit_models(prob, info, alpha, snr_min, spc):
     idx, ref, X = span["idx"], span["ref"], info["data"][0]
     lags = math.ceil(2.0 * prob.fs / (prob.bw * span["step"]))
     chosen, regime, warns, guard = micro, "microslip", [], False
-    cov, kappa = _covariance(obj, micro.fun, micro.jac)
+    cov, kappa, dof = _covariance(obj, micro.fun, micro.jac)
     x_max = math.exp(micro.x[-2])
     full_starts = _full_starts(micro.x, x_max, prob.conv["x_ref"], span["curve_full"])
     if 2 * idx.size > 12 and full_starts:
         bnd = _bounds(prob, "macroslip", X, x_max, info["nuis"][-2])
-        obj_f = _Objective(prob, "macroslip", idx, ref, bnd, span["weights"])
+        obj_f = _Objective(prob, "macroslip", idx, ref, bnd, span["weights"],
+                           span["envelope"])
         full = _fit_regime(obj_f, full_starts, bnd)
-        cov_f, kappa_f = _covariance(obj_f, full.fun, full.jac)
+        cov_f, kappa_f, dof_f = _covariance(obj_f, full.fun, full.jac)
         s2 = float(np.mean(full.fun ** 2))
         stat = 2.0 * (micro.cost - full.cost) / max(s2 * kappa_f, 1e-300)
         p_val = float(stats.chi2.sf(max(stat, 0.0), 2))
@@ -304,7 +315,7 @@ def _fit_models(prob, info, alpha, snr_min, spc):
                                                optimizer_ok=True)
             complete = len(trial.identified) == len(trial.parameters)
         if complete:
-            chosen, regime, cov, kappa = full, "macroslip", cov_f, kappa_f
+            chosen, regime, cov, kappa, dof = full, "macroslip", cov_f, kappa_f, dof_f
         elif p_val < alpha or (p_val < 0.05 and phi_known and inside
                                and math.exp(full.x[4]) < math.exp(full.x[-2])):
             guard = True        # microslip closed forms hold for X << phi_max only
@@ -330,8 +341,17 @@ def _fit_models(prob, info, alpha, snr_min, spc):
     chi2_red = _misfit_ratio(chosen.fun, lags)
     if chi2_red > 1.0:          # structure beyond the noise model: widen (as fit_modal_iwan)
         cov = cov * chi2_red
-    span.update(kappa=kappa, chi2_red=chi2_red, regime=regime, warns=warns, cov=cov,
-                beyond_microslip=guard)
+    if dof[1] < _MIN_NOISE_DOF:
+        guard = True
+        cover = 100.0 * (1.0 - 2.0 * stats.t.sf(2.0, max(dof[1], 0.1)))
+        warns.append(
+            f"the noise level rests on {dof[1]:.2g} degrees of freedom (the record holds few "
+            "independent noise samples beyond what the fit absorbs): the standard errors are "
+            f"themselves uncertain by about {100 * math.sqrt(0.5 / max(dof[1], 0.1)):.0f} % "
+            f"and +-2 stderr covers only about {cover:.0f} % (Student t); a longer record, "
+            "a wider band or less noise would help; not a success")
+    span.update(kappa=kappa, dof=dof, chi2_red=chi2_red, regime=regime, warns=warns, cov=cov,
+                guard=guard)
     return chosen, span
 
 
@@ -392,8 +412,10 @@ def fit_decay(t, y, *, quantity: str = "acceleration", band, order: int = 4,
         window estimates of the record (for plots only), ``conventions["method"]`` is
         ``"direct signal fit"`` with the band, the fitted span, the noise and
         ``neighbour_modes`` (frequency [Hz] and decay rate [1/s] of each out-of-band mode
-        modelled). ``success`` is False when microslip is reported although the full model
-        places ``phi_max`` below the release amplitude.
+        modelled), ``residual_dof`` (samples) and ``noise_dof`` (chi-square degrees of
+        freedom of the noise level, on which every stderr rests). ``success`` is False when
+        microslip is reported although the full model places ``phi_max`` below the release
+        amplitude, or when ``noise_dof < 5`` (+-2 stderr would cover less than 90 %).
 
     Raises
     ------
@@ -416,6 +438,7 @@ def fit_decay(t, y, *, quantity: str = "acceleration", band, order: int = 4,
                 samples=int(span["idx"].size), sample_step=float(span["step"] / prob.fs),
                 noise_rms=span["noise"] / math.sqrt(2.0),
                 correlation_factor=float(span["kappa"]),
+                residual_dof=float(span["dof"][0]), noise_dof=float(span["dof"][1]),
                 amplitude_range=[math.exp(best.x[-2]), a_end],
                 neighbour_modes=[dict(frequency=float(v[0]), decay_rate=float(v[1]))
                                  for v in best.x[n_th:n_th + 4 * prob.nb].reshape(-1, 4)])
@@ -429,7 +452,7 @@ def fit_decay(t, y, *, quantity: str = "acceleration", band, order: int = 4,
     fit = ModalIwanFit.from_solution(best.x[:n_th], span["cov"][:n_th, :n_th], regime, data, conv,
                                      chi2_red=span["chi2_red"], weights=(),
                                      warnings=tuple(warns), optimizer_ok=bool(best.success))
-    if span["beyond_microslip"]:
+    if span["guard"]:
         fit = dataclasses.replace(fit, success=False)
     log.debug("fit_decay: %s", conv)
     return fit
