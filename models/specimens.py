@@ -142,7 +142,7 @@ class SpecimenEffect:
     values : mapping or tuple of (str, float) pairs
         The effect's modal parameters (``EFFECTS[name].modal_specs``; amplitudes in metres
         at the specimen's sensor point), each inside its declared bounds; those with a
-        declared default (e.g. the ``spread`` of ``macroslip_onset``) may be left out;
+        declared default (e.g. the ``shape`` of ``macroslip_onset``) may be left out;
         stored as a sorted tuple of pairs (hashable).
     mode : int
         Elastic mode the effect acts on (1: lowest).
