@@ -8,7 +8,7 @@ curves come from the time-domain elements (steady driven cycles, harmonic balanc
 quadrature: ``tests/_vibration_cases.py``), not from the modal forms the diagnosis fits; each hidden effect's size is ``size`` x
 "noticeable", noticeable meaning an RMS change over the points of 4 noise standard
 deviations (frequency and damping curves together), sizes 0.5-3; half the hidden macroslip
-patches slide as a whole, half are spread (``spread`` drawn in 0.3-2). Noise like a real curve:
+patches slide as a whole, half are spread (``shape`` drawn in 0.15-0.5). Noise like a real curve:
 frequency 1e-4 relative, damping 3 % relative, stated on the ``AmplitudeCurve`` (as an
 extraction states it). Clean curves (no effect) must name nothing.
 
