@@ -178,14 +178,15 @@ def _chol(cov):
     return V * np.sqrt(np.clip(w, 0.0, None))
 
 
-def _predict_record(model, theta, r, prep, band=None, vals=None):
-    """``(band misfit [N], coverage)`` of the device predicted from ``theta`` on record
-    ``r``; the record's nuisances (force offset, starting state) are fitted to it with the
-    device held. ``band = (cov, S, draws, level, rng)``: the share of the record's fitted
-    samples in the misfit band (``|F| < 0.25 max|F|``) whose measured force lies in the
-    prediction's band (coefficients from ``cov``, scatter from ``S``; nuisances held at the
-    central prediction's); NaN without ``band``. ``vals``: law values to use instead of
-    ``theta``'s (e.g. some of the record's own, to attribute the misfit)."""
+def _predict_record(model, theta, r, prep, bands=(), vals=None):
+    """``(band misfit [N], coverages)`` of the device predicted from ``theta`` on record
+    ``r``; the record's nuisances (force offset, starting state) are fitted to it once, with
+    the device held. Each of ``bands``, ``(cov, S, draws, level, rng)``, gives one coverage:
+    the share of the record's fitted samples in the misfit band (``|F| < 0.25 max|F|``)
+    whose measured force lies in the prediction's band (coefficients from ``cov``, scatter
+    from ``S``; nuisances held at the central prediction's), NaN where none can be drawn.
+    ``vals``: law values to use instead of ``theta``'s (e.g. some of the record's own, to
+    attribute the misfit)."""
     best = (math.inf, 0.0)
     vals = model.law_values(theta, model.X[r]) if vals is None else vals
     for g in M.START_GRID:
@@ -196,22 +197,21 @@ def _predict_record(model, theta, r, prep, band=None, vals=None):
             best = min(best, (float(np.var(e)), s))
     F, F0 = full_force(model, theta, r, prep, vals=vals, start=best[1])
     if F is None:
-        return math.nan, math.nan
-    misfit = band_misfit(prep["F"], F, CM.BAND)
-    if band is None:
-        return misfit, math.nan
-    cov, S, draws, level, rng = band
-    forces = [model.record_force(theta, r, vals=v, start=best[1])
-              for v in draw_values(model, theta, cov, S, model.X[r], rng, draws)]
-    forces = [f + F0 for f in forces if f is not None]
-    if not forces:
-        return misfit, math.nan
-    q = 0.5 * (1.0 - level)
-    lo, hi = np.quantile(np.array(forces), [q, 1.0 - q], axis=0)
+        return math.nan, [math.nan] * len(bands)
     y = model.records[r].y
     mask = np.abs(y) < CM.BAND * np.abs(prep["F"]).max()
-    inside = (y >= lo) & (y <= hi)
-    return misfit, float(inside[mask].mean()) if mask.any() else math.nan
+    coverages = []
+    for cov, S, draws, level, rng in bands:
+        forces = [model.record_force(theta, r, vals=v, start=best[1])
+                  for v in draw_values(model, theta, cov, S, model.X[r], rng, draws)]
+        forces = [f + F0 for f in forces if f is not None]
+        if not forces or not mask.any():
+            coverages.append(math.nan)
+            continue
+        q = 0.5 * (1.0 - level)
+        lo, hi = np.quantile(np.array(forces), [q, 1.0 - q], axis=0)
+        coverages.append(float(((y >= lo) & (y <= hi))[mask].mean()))
+    return band_misfit(prep["F"], F, CM.BAND), coverages
 
 
 def _loo_step(model, theta, J, i):
@@ -244,8 +244,8 @@ def _loo_predict(model, th, i, prep, free, cov, cover) -> dict:
             S = CM.scatter_cov(D, dof)
             cov_s = cov + CM.scatter_coef_cov(model, th, S, skip=i)
     rng = np.random.default_rng([seed, i])
-    band, cov_re = _predict_record(model, th, i, prep, (cov_s, S, draws, level, rng))
-    _, cov_coef = _predict_record(model, th, i, prep, (cov, None, draws, level, rng))
+    band, (cov_re, cov_coef) = _predict_record(
+        model, th, i, prep, ((cov_s, S, draws, level, rng), (cov, None, draws, level, rng)))
     return {"band_pred": band, "coverage": cov_re if S is not None else math.nan,
             "coverage_coef": cov_coef}
 
