@@ -49,11 +49,9 @@ class JenkinsBank(_Effect):
         """Trial element forces, the bank's tangent and the slip increment's dissipation."""
         z = self._z + self._k * (u - self._u)
         zc = np.clip(z, -self._lim, self._lim)
-        stuck = zc == z
-        k = self._k
-        dD = float(np.sum(self._lim[~stuck] * np.abs(z - zc)[~stuck] / k[~stuck])) \
-            if self._k_total > 0 else 0.0
-        return zc, float(np.sum(k[stuck])), dD
+        # a sliding element's slip is |z - zc| / k, at the friction limit k phi
+        dD = float(np.sum(self._phi * np.abs(z - zc)))
+        return zc, float(np.sum(self._k[zc == z])), dD
 
     def trial(self, u: float, v: float = 0.0) -> tuple[float, float]:
         """Force [N] and tangent [N/m]."""

@@ -87,6 +87,12 @@ def _E(a, L):
     return np.where(small, L * (1.0 + 0.5 * a * L), np.expm1(a * L) / np.where(small, 1.0, a))
 
 
+def _b2(q):
+    """``B(2) = (1 - 2^-q) / q`` (``ln 2`` at ``q = 0``): the law's stiffness between the
+    onset and twice it, per unit of its density scale."""
+    return _E(-q, np.log(2.0))
+
+
 def patch_cumulative(phi, X_s, shape):
     """Stiffness fraction ``K(phi) / k_2`` [-] of the patch with slip displacement in
     ``[X_s, phi]``: ``B(phi / X_s) / B(2)``, ``B(r) = (1 - r^-q) / q`` (module docstring;
@@ -95,14 +101,14 @@ def patch_cumulative(phi, X_s, shape):
     if shape <= 0.0:
         return np.where(L > 0.0, 1.0, 0.0)
     q = _q(shape)
-    return _E(-q, L) / _E(-q, np.log(2.0))
+    return _E(-q, L) / _b2(q)
 
 
 def _thresholds(kappa, X_s, shape):
     """Slip displacement [m] below which the stiffness fraction ``kappa`` (of ``k_2``) lies:
     the inverse of :func:`patch_cumulative`."""
     q = _q(shape)
-    k = np.asarray(kappa, float) * _E(-q, np.log(2.0))
+    k = np.asarray(kappa, float) * _b2(q)
     t = k if q == 0.0 else -np.log1p(-q * k) / q
     return X_s * np.exp(t)
 
@@ -130,7 +136,7 @@ def patch_dissipation(X, X_s, shape):
     if shape <= 0.0:
         return np.where(L > 0.0, 4.0 * X_s * (X - X_s), 0.0)
     q = _q(shape)
-    c = 1.0 / _E(-q, np.log(2.0))
+    c = 1.0 / _b2(q)
     return 4.0 * c * (X * X_s * _E(1.0 - q, L) - X_s * X_s * _E(2.0 - q, L))
 
 
@@ -203,8 +209,7 @@ class MacroslipOnset(JenkinsBank):
             self._set_bank([self.u_s], [self.k_2])
             return
         # bins of equal stiffness over [u_s, u_e], each element at its bin's median threshold
-        top = 1.0 / -math.expm1(-_q(self.shape) * math.log(2.0)) if math.isinf(self.u_e) else \
-            float(patch_cumulative(self.u_e, self.u_s, self.shape))
+        top = float(patch_cumulative(self.u_e, self.u_s, self.shape))    # 1 / (q B(2)) at inf
         kap = (np.arange(bins) + 0.5) / bins * top
         self._set_bank(_thresholds(kap, self.u_s, self.shape), np.full(bins, self.k_2 * top / bins))
 
