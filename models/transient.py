@@ -157,8 +157,7 @@ class RingdownResult(ResultShape):
         energy of the joints, the damping floor and the effects."""
         e = self.energy
         total = e["kinetic"] + e["strain"] + e["springs"] + e["joint_stored"] + e["joint_dissipated"]
-        if len(e.get("floor_dissipated", ())):
-            total = total + e["floor_dissipated"]
+        total = total + e["floor_dissipated"]
         if e.get("effect_stored") is not None and len(e["effect_stored"]):
             total = total + e["effect_stored"] + e["effect_dissipated"]
         return total / self.initial_energy - 1.0

@@ -41,11 +41,6 @@ def vibration_candidates() -> tuple:
     return tuple(n for n, c in EFFECTS.items() if c.modal_specs)
 
 
-def _curve_noise(r):
-    """Relative noise of a curve from its second differences along amplitude (MAD)."""
-    return difference_sigma(r)
-
-
 def _check_units(fm, fp, zm, zp):
     """Clear errors for rad/s given as Hz and percent given as a ratio."""
     check_frequency_ratio("frequency", fm, "predicted_frequency", fp)
@@ -55,7 +50,7 @@ def _check_units(fm, fp, zm, zp):
 
 def _noise(r, stated, n, name):
     """Noise of one log-residual curve [-]: max(scatter, stated); and its source text."""
-    scatter = _curve_noise(r) if n >= 5 else 0.0
+    scatter = difference_sigma(r) if n >= 5 else 0.0    # second differences along amplitude
     s = max(scatter, float(np.median(stated)) if stated is not None else 0.0, 1e-12)
     src = "scatter" if stated is None or scatter >= float(np.median(stated)) else "stated"
     return s, f"{name}: {src}"
@@ -121,7 +116,8 @@ class _Vib:
         for nm in names:
             f, zz = EFFECTS[nm].modal_form(self.X, f, zz, self.zeta0, **vals[nm])
         if self.nn:                     # the other test: the whole curve by constant factors
-            f, zz = f * math.exp(float(z[0])), zz * math.exp(float(z[1]))
+            df, dz = self.nuisance(z)
+            f, zz = f * (1.0 + df), zz * (1.0 + dz)
         return f, zz
 
     def resid(self, names, z):
