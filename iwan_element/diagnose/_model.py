@@ -129,7 +129,7 @@ def hop(model: LoopModel, res, *, max_nfev: int, rounds: int = 2):
     the best; it stops when a round finds nothing better. Returns ``(result, nfev)``.
     """
     ks = [0] + [var_index(model.names, nm) for nm in model.names
-                if getattr(EFFECTS[nm], "force_jumps", False)]
+                if EFFECTS[nm].force_jumps]
     nfev = 0
     for _ in range(rounds):
         starts = []

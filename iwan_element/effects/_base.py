@@ -119,6 +119,12 @@ def _require_plain_joint(inner, subject: str) -> None:
                          "it wraps the joint directly (put other effects around it)")
 
 
+#: The ways an effect can sit on the joint (``_Effect.structure``).
+STRUCTURES = ("parallel", "series", "slider", "energy")
+#: The data requirements an effect can declare (``_Effect.needs``).
+NEEDS = ("rate",)
+
+
 class _Effect(CommittedState):
     """Shared plumbing: the wrapped element, energy counters and a generic force history."""
 
@@ -128,10 +134,24 @@ class _Effect(CommittedState):
     #: Keyword options of the constructor that are not physical parameters (discretisation,
     #: extent of a time-domain bank); :func:`make_effect` passes them through.
     options: tuple = ()
-    #: True for effects acting on the sliders of the joint (they must wrap a plain joint).
+    #: How the effect sits on the joint (:data:`STRUCTURES`): ``"parallel"``, a force beside
+    #: the joint; ``"series"``, an element between the drive and the joint (a gap), which
+    #: defines ``joint_path(u)``; ``"slider"``, a law of the joint's own slider thresholds;
+    #: ``"energy"``, a slider law that evolves with the dissipated energy. It sets
+    #: ``slider_level`` (must wrap a plain joint) and ``needs_energy``.
+    structure: str = "parallel"
     slider_level = False
+    needs_energy = False
     #: True for slider-level effects that may wrap one another (their laws multiply).
     composable = False
+    #: What a record must hold to test the effect (:data:`NEEDS`): ``"rate"``, the time and
+    #: more than one loading rate. A diagnosis reports the effect as untestable otherwise.
+    needs: tuple = ()
+    #: Values of the first fitting variable a diagnosis scans for starts, or None.
+    fit_scan: tuple | None = None
+    #: True when the force jumps with a parameter (sliders breaking at once): the fit then
+    #: restarts around its result.
+    force_jumps: bool = False
     #: Parameters of the amplitude-domain (modal) form, or () if the effect has none.
     modal_specs: tuple = ()
     #: What the modal form changes in a vibration curve: "stiffness" (frequency only, same
@@ -151,7 +171,16 @@ class _Effect(CommittedState):
 
     def __init_subclass__(cls, **kw):
         super().__init_subclass__(**kw)
+        if cls.structure not in STRUCTURES:
+            raise TypeError(f"{cls.__name__}.structure must be one of {STRUCTURES}, got "
+                            f"{cls.structure!r}")
+        unknown = set(cls.needs) - set(NEEDS)
+        if unknown:
+            raise TypeError(f"{cls.__name__}.needs has unknown entries {sorted(unknown)}; "
+                            f"known: {NEEDS}")
         cls.parameter_names = tuple(s.name for s in cls.specs)
+        cls.slider_level = cls.structure in ("slider", "energy")
+        cls.needs_energy = cls.structure == "energy"
 
     def __init__(self, inner):
         check_element(inner, name="inner")

@@ -129,9 +129,8 @@ class _LawEffect(_Effect):
     parameters (``_set_parameters``) and then calls ``_reset_own``.
     """
 
-    slider_level = True
+    structure = "slider"
     composable = True
-    needs_energy = False
 
     def __init__(self, inner):
         super().__init__(inner)

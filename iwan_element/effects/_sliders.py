@@ -88,7 +88,7 @@ class _SliderEffect(_Effect):
     forward and back, as stretches [m]), :meth:`_after_commit` and
     :meth:`_after_commit_energy` (the thresholds' update from the committed state)."""
 
-    slider_level = True
+    structure = "energy"
 
     def __init__(self, inner, *, n_sliders: int = N_SLIDERS):
         super().__init__(inner)
@@ -169,10 +169,6 @@ class _SliderEffect(_Effect):
     def _after_commit(self):
         """Update the thresholds after a commit; may return the banks' stored energy [J]."""
         return None
-
-    #: The thresholds depend on the dissipated energy (the fast loop then tracks it); laws
-    #: fixed per direction are :class:`~iwan_element.effects._law._LawEffect`.
-    needs_energy = True
 
     def correction_history(self, u, D_inner=None) -> np.ndarray:
         """Force correction ``F_bank(modified) - F_bank(plain)`` [N] along a displacement

@@ -61,6 +61,7 @@ class Backlash(_Effect):
     """
 
     effect = "backlash"
+    structure = "series"
     loop_rank = 30
     specs = (ParamSpec("gap", "m", "half width of the free play in series with the joint",
                        ref="u_max", ref_power=-1, fit_bounds=(0.0, 0.5), fit_starts=(0.0, 0.01, 0.08)),

@@ -57,7 +57,7 @@ def stack_ok(names) -> bool:
 
 def _layers(names) -> tuple:
     """``(chain, series, rest)`` of a stack (innermost first): the innermost slider-level
-    effects; an effect in series with the joint (one with ``joint_path``, e.g. backlash)
+    effects; an effect in series with the joint (``structure == "series"``, e.g. backlash)
     right around them if there is one and nothing below it depends on the rate or the
     dissipated energy; and everything else."""
     names = tuple(names)
@@ -66,7 +66,7 @@ def _layers(names) -> tuple:
         k += 1
     chain, rest = names[:k], names[k:]
     series = ()
-    if (rest and callable(getattr(EFFECTS[rest[0]], "joint_path", None))
+    if (rest and EFFECTS[rest[0]].structure == "series"
             and not any(EFFECTS[n].needs_energy for n in chain)):
         series = rest[:1]
     return chain, series, rest[len(series):]

@@ -29,6 +29,7 @@ class ViscousDamping(_Effect):
     """
 
     effect = "viscous_damping"
+    needs = ("rate",)
     loop_rank = 10
     kind = "dissipation"
     modal_floor = True
