@@ -1,5 +1,4 @@
-"""Where a loop misfit lies (part of the cycle, amplitudes, direction), and which effects a
-record cannot reveal."""
+"""Where a loop misfit lies (part of the cycle, amplitudes, direction)."""
 from __future__ import annotations
 
 import math
@@ -99,21 +98,5 @@ def _check_candidates(candidates, default):
         raise ValueError(f"candidates must be distinct names of {sorted(EFFECTS)}, got {cand!r}")
     return cand
 
-
-def _untestable(t, v, cycles) -> dict:
-    out = {}
-    if t is None:
-        out["viscous_damping"] = ("no time vector was given, so the velocity is unknown; "
-                                  "a rate effect cannot be tested")
-    else:
-        s = np.abs(v)
-        moving = s > 0.05 * s.max()
-        med = float(np.median(s[moving])) if moving.any() else 0.0
-        if moving.sum() > 10 and np.mean(np.abs(s[moving] - med) <= 0.05 * med) >= 0.9:
-            out["viscous_damping"] = ("the record is loaded at a single constant rate (|v| "
-                                      "within 5 % of one value on 90 % of the samples), so a dashpot force c v cannot be told from a "
-                                      "rate-independent friction offset; test at several rates "
-                                      "or with sinusoidal loading")
-    return out
 
 

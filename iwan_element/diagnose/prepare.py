@@ -16,12 +16,14 @@ from scipy.signal import butter, sosfiltfilt
 from ..core.history import REVERSAL_TOL, unit_params
 from ..core.validation import (MAGNITUDE_RANGE, check_magnitude, check_scalar, check_time,
                                 finite_array, same_length)
+from ..effects import EFFECTS
 from ..effects.evaluate import Evaluator
-from ..identify.testdata import find_reversals
+from ..identify.testdata import find_reversals, split_cycles
 from ._noise import noise_estimate
 
 __all__ = ["PreparedRecord", "check_record", "prepare_record", "fitted_samples",
-           "effect_scales", "dissipation_scale", "drive_structure", "SLOW_FIT_SAMPLES"]
+           "effect_scales", "dissipation_scale", "drive_structure", "untestable",
+           "record_cycles", "SLOW_FIT_SAMPLES"]
 
 #: Samples fitted for stacks without a vectorised form (run element by element).
 SLOW_FIT_SAMPLES = 300
@@ -118,6 +120,44 @@ def check_record(t, u, F, noise, lowpass):
         lp = check_scalar("lowpass", lowpass, low=0.0, high=0.5 * fs, low_open=True,
                           high_open=True)
     return tt, uu, FF, n, noise, lp
+
+
+def _rate_missing(t, v) -> str:
+    """Why a record cannot test a rate-dependent force, or "" (the ``"rate"`` need)."""
+    if t is None:
+        return ("no time vector was given, so the velocity is unknown; a rate effect cannot "
+                "be tested")
+    s = np.abs(v)
+    moving = s > 0.05 * s.max()
+    med = float(np.median(s[moving])) if moving.any() else 0.0
+    if moving.sum() > 10 and np.mean(np.abs(s[moving] - med) <= 0.05 * med) >= 0.9:
+        return ("the record is loaded at a single constant rate (|v| within 5 % of one value "
+                "on 90 % of the samples), so a rate-dependent force cannot be told from a "
+                "rate-independent friction offset; test at several rates or with sinusoidal "
+                "loading")
+    return ""
+
+
+def untestable(rec: PreparedRecord, candidates) -> dict:
+    """``{effect: why}`` for each of ``candidates`` whose declared data needs
+    (``needs`` of its class in :data:`~iwan_element.EFFECTS`) the record ``rec`` lacks."""
+    missing = {"rate": _rate_missing(rec.t, rec.v)}
+    out = {}
+    for c in candidates:
+        why = [missing[n] for n in EFFECTS[c].needs if missing[n]]
+        if why:
+            out[c] = "; ".join(why)
+    return out
+
+
+def record_cycles(rec: PreparedRecord) -> list:
+    """The record's load cycles (:func:`~iwan_element.identify.testdata.split_cycles`; the
+    sample index stands for the time when there is none), or [] when it has none."""
+    t = np.arange(rec.uj.size, dtype=float) if rec.t is None else rec.t
+    try:
+        return split_cycles(t, rec.uj, rec.F)
+    except ValueError:
+        return []
 
 
 def lowpass_filter(t, x, cutoff):
