@@ -367,6 +367,7 @@ def ringdown(specimen: Specimen, *, mode: int = 1, amplitude: float, cycles: flo
     stuck joints (friction 1e3).
     """
     cycles = _check_args(specimen, amplitude, cycles, steps_per_period)
+    n_periods = check_scalar("n_periods", n_periods, low=3.0, high=1000.0)
     st = static_modal_load(specimen, [amplitude], mode=mode)
     L, phi, w0 = st["system"], st["phi"], st["omega0"]
     beta = floor_damping(specimen, mode=mode)
