@@ -121,7 +121,8 @@ def test_bad_qsma_input_is_refused(kw, match):
 
 @pytest.mark.parametrize("kw,match", [({"amplitude": -1.0}, "amplitude"),
                                       ({"amplitude": 1e-5, "cycles": 1}, "cycles"),
-                                      ({"amplitude": 1e-5, "steps_per_period": 4}, "steps_per_period")])
+                                      ({"amplitude": 1e-5, "steps_per_period": 4}, "steps_per_period"),
+                                      ({"amplitude": 1e-5, "n_periods": 2}, "n_periods")])
 def test_bad_ringdown_input_is_refused(kw, match):
     with pytest.raises(ValueError, match=match):
         ringdown(preset("example"), **kw)
