@@ -1,4 +1,4 @@
-"""Cost of the jointed-beam routes: distributed Iwan interface vs linear springs, and QSMA.
+"""Cost of the lap-jointed beam routes: distributed Iwan interface vs linear springs, and QSMA.
 
 Run:  python benchmarks/bench_beam.py [--points 50] [--cycles 20] [--repeat 3] [--profile]
       [--compare-with DIR]
@@ -44,7 +44,7 @@ import numpy as np
 from iwan_element.models import modal_amplitude_curve, preset
 from iwan_element.models.assembly import build_specimen_model
 from iwan_element.models.qsma import static_modal_load
-from iwan_element.models.scenarios import _settings
+from iwan_element.models.solver import solver_settings
 
 
 BASE = {}
@@ -127,7 +127,7 @@ def transient(spec, route: str, cycles: float, spp: int = 48) -> tuple:
         model.mbs.systemData.SetODE2Coordinates(x0, configuration=cfg)
     h = 2 * math.pi / (w0 * spp)
     n = int(round(cycles * spp))
-    sim = _settings(force_scale=float(np.max(np.abs(L.K0 @ st["x"][0]))))
+    sim = solver_settings(force_scale=float(np.max(np.abs(L.K0 @ st["x"][0]))))
     sim.timeIntegration.numberOfSteps = n
     sim.timeIntegration.endTime = n * h
     t0, c0 = time.perf_counter(), time.process_time()

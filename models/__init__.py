@@ -6,22 +6,32 @@
   interface's Iwan elements;
 * :mod:`~iwan_element.models.assembly` - the Exudyn model of a specimen and its linear matrices;
 * :mod:`~iwan_element.models.qsma` - quasi-static modal analysis (:func:`modal_amplitude_curve`);
-* :mod:`~iwan_element.models.transient` - the transient route (:func:`ringdown`);
+  :func:`~iwan_element.models.qsma.linear_modes`, :func:`natural_frequencies` (with the joint
+  stuck or without it);
+* :mod:`~iwan_element.models.transient` - the transient route (:func:`ringdown`, one release
+  level per call; frequency and damping by :func:`iwan_element.amplitude_curve`);
+* :mod:`~iwan_element.models.machine` - the joint's quasi-static test in a machine grip
+  (:func:`quasi_static_test`);
+* :mod:`~iwan_element.models.forced` - stepped-sine forced response at several force levels
+  (:func:`forced_response`);
+* :mod:`~iwan_element.models.solver` - Exudyn solver settings shared by the runs;
 * :mod:`~iwan_element.models.calibration` - interface calibration from vibration data and
   from joint / modal Iwan fits;
-* :mod:`~iwan_element.models.jointed_beam` - the original lumped two-beam lap-joint model;
 * ``example_test_30kN.csv`` - a SYNTHETIC quasi-static test of the seed paper's specimen
   (see ``README.md`` here and ``make_example_test.py``); :func:`example_test_path` finds it.
 """
 from importlib import resources
 from pathlib import Path
 
-from .qsma import modal_amplitude_curve
+from .forced import ForcedResponseResult, forced_response
+from .machine import QuasiStaticResult, quasi_static_test
+from .qsma import modal_amplitude_curve, natural_frequencies
 from .transient import RingdownResult, ringdown
 from .specimens import Excitation, InterfaceModel, Specimen, preset
 
-__all__ = ["example_test_path", "preset", "modal_amplitude_curve", "ringdown", "Specimen",
-           "InterfaceModel", "Excitation", "RingdownResult"]
+__all__ = ["example_test_path", "preset", "modal_amplitude_curve", "natural_frequencies",
+           "ringdown", "quasi_static_test", "forced_response", "Specimen", "InterfaceModel",
+           "Excitation", "RingdownResult", "QuasiStaticResult", "ForcedResponseResult"]
 
 
 def example_test_path() -> Path:

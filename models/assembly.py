@@ -1,10 +1,14 @@
 """Exudyn model of a :class:`~iwan_element.models.specimens.Specimen` and its linear matrices.
 
-Beams: ``ObjectANCFCable2D`` (Bernoulli-Euler, geometrically exact) as in
-:mod:`~iwan_element.models.jointed_beam` (docs/equations.md section 6: Cable2D accepts markers offset to
-the beam surfaces). Each beam has lap elements of height ``lap_thickness`` and outer elements
+Beams: ``ObjectANCFCable2D`` (Bernoulli-Euler, geometrically exact; docs/equations.md
+section 6: Cable2D accepts markers offset to the beam surfaces, where a lap joint acts,
+whereas the geometrically exact 2-D beam acts only at its axis). Each beam has lap elements of height ``lap_thickness`` and outer elements
 of height ``thickness``; beam A's axis is at ``y = 0``, beam B's at ``y = lap_thickness``, and
-the interface at the surfaces ``+-lap_thickness/2``. Simplification: for stepped halves
+the interface at the surfaces ``+-lap_thickness/2``. Boundaries: ``"clamped-free"`` and
+``"clamped-driven"`` clamp beam A's first node (x, y and slope); ``"clamped-driven"`` also
+holds beam B's last node in the machine grip (y and slope fixed, axial displacement
+prescribed by ``drive``, the quasi-static test of :mod:`~iwan_element.models.machine`).
+Simplification: for stepped halves
 (Brake-Reuss) the axis is kept straight through the step, so the outer part's bending
 stiffness is that of the full section but the eccentricity of its axis (``thickness/4``
 for the BRB) is neglected; this changes axial-bending coupling only.
@@ -132,7 +136,7 @@ def _marker_at(mbs, elems, edges, x0, x, y_local):
 
 def build_specimen_model(specimen: Specimen, *, tangential: str = "iwan",
                          beam_damping: float = 0.0, post_step=None,
-                         joint_elements: bool = False) -> SpecimenModel:
+                         joint_elements: bool = False, drive=None) -> SpecimenModel:
     """Build and assemble the Exudyn system of a specimen.
 
     Parameters
@@ -148,6 +152,10 @@ def build_specimen_model(specimen: Specimen, *, tangential: str = "iwan",
     joint_elements : bool, keyword-only
         Attach :class:`~iwan_element.IwanJoint` elements (Python route) instead of the
         compiled per-point law.
+    drive : callable, optional, keyword-only
+        ``drive(t) -> u`` [m], the axial displacement of beam B's end in the machine grip
+        (``boundary="clamped-driven"`` only; default: held at zero). The grip's axial
+        constraint is ``model.extra["grip"]`` (its force is the machine force).
     """
     if not isinstance(specimen, Specimen):
         raise ValueError(f"specimen must be a Specimen, got {type(specimen).__name__}")
@@ -155,6 +163,8 @@ def build_specimen_model(specimen: Specimen, *, tangential: str = "iwan",
         raise ValueError(f"tangential must be 'iwan', 'linear' or 'none', got {tangential!r}")
     if not (math.isfinite(beam_damping) and beam_damping >= 0):
         raise ValueError(f"beam_damping must be >= 0 [s], got {beam_damping!r}")
+    if drive is not None and (specimen.boundary != "clamped-driven" or not callable(drive)):
+        raise ValueError("drive must be a callable u(t) [m], given with boundary='clamped-driven'")
     s = specimen
     pts = contact_points(s)
     SC = exu.SystemContainer()
@@ -170,10 +180,16 @@ def build_specimen_model(specimen: Specimen, *, tangential: str = "iwan",
         fixed_nodes.append((na[0], (0, 1, 3)))
     if s.boundary == "clamped-driven":
         fixed_nodes.append((nb[-1], (0, 1, 3)))
+    extra = {}
     for node, coords in fixed_nodes:
         for c in coords:
             m = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=node, coordinate=c))
-            mbs.AddObject(CoordinateConstraint(markerNumbers=[mg, m]))
+            kw = {}
+            if node == nb[-1] and c == 0 and drive is not None:
+                kw["offsetUserFunction"] = lambda mbs_, t, item, off: float(drive(t))
+            obj = mbs.AddObject(CoordinateConstraint(markerNumbers=[mg, m], **kw))
+            if node == nb[-1] and c == 0:
+                extra["grip"] = obj
     # on the compiled route the interface's own objects carry the normal springs (one
     # object per point instead of two: the extra objects cost about a third of the linear
     # model, benchmarks/bench_beam.py); else built-in springs
@@ -208,7 +224,7 @@ def build_specimen_model(specimen: Specimen, *, tangential: str = "iwan",
     model = SpecimenModel(specimen=s, SC=SC, mbs=mbs, points=pts, elements=ea + eb,
                           nodes=na + nb, marker_pairs=pairs, springs=springs, interface=iface,
                           sensor_marker=sm, fixed_coordinates=fixed,
-                          beam_damping=beam_damping)
+                          beam_damping=beam_damping, extra=extra)
     model.extra["sensor_y0"] = float(mbs.GetMarkerOutput(sm, _OVT.Position,
                                                          configuration=exu.ConfigurationType.Reference)[1])
     return model

@@ -40,8 +40,8 @@ from .assembly import linear_system
 from .interface import contact_points
 from .specimens import Specimen
 
-__all__ = ["modal_amplitude_curve", "linear_modes", "static_modal_load",
-           "extrapolation_warnings"]
+__all__ = ["modal_amplitude_curve", "linear_modes", "natural_frequencies",
+           "static_modal_load", "extrapolation_warnings"]
 
 log = logging.getLogger(__name__)
 
@@ -89,6 +89,39 @@ def linear_modes(specimen: Specimen, *, mode: int = 1):
     if abs(L.S @ phi) < 1e-9 * np.max(np.abs(phi)):
         log.warning("the sensor sits at a node of mode %d", mode)
     return math.sqrt(abs(w2[k])), phi, V[:, :n_rigid], L, pts
+
+
+def natural_frequencies(specimen: Specimen, *, n_modes: int = 3,
+                        interface: str = "stuck") -> np.ndarray:
+    """Lowest natural frequencies [Hz] of the linearised specimen, with or without the joint.
+
+    Parameters
+    ----------
+    specimen : Specimen
+    n_modes : int, keyword-only
+        How many (>= 1), rigid-body modes of a free-free specimen included (about 0 Hz).
+    interface : {"stuck", "none"}, keyword-only
+        ``"stuck"``: every contact point at its tangential stiffness ``KT_i`` (the small-
+        amplitude limit, ``K0 + G^T diag(KT) G``; :func:`linear_modes` gives the shapes);
+        ``"none"``: no tangential stiffness, the beams held together by the normal contact
+        springs only (the limit of a fully slipped lap; beam B's axial sliding is then a
+        mode at about 0 Hz).
+
+    Returns
+    -------
+    ndarray, shape (n_modes,)
+    """
+    if interface not in ("stuck", "none"):
+        raise ValueError(f"interface must be 'stuck' or 'none', got {interface!r}")
+    if isinstance(n_modes, bool) or not isinstance(n_modes, (int, np.integer)) or n_modes < 1:
+        raise ValueError(f"n_modes must be an integer >= 1, got {n_modes!r}")
+    L = linear_system(specimen)
+    K = L.K0
+    if interface == "stuck":
+        K = K + L.G.T @ (contact_points(specimen).KT[:, None] * L.G)
+    top = min(int(n_modes), K.shape[0]) - 1
+    w2 = sla.eigh(K, L.M, subset_by_index=[0, top], eigvals_only=True)
+    return np.sqrt(np.abs(w2)) / (2 * math.pi)
 
 
 def _interface_law(u, Fs, KT, phimax, chi, beta):

@@ -6,10 +6,12 @@ slips) and released from rest at ``t = 0``. Exudyn integrates the geometrically 
 Cable2D beams with the history-dependent Iwan element of every contact point
 (generalized-alpha with spectral radius 1, i.e. the trapezoidal rule: no numerical
 damping). The mode's response is separated by modal filtering, ``q(t) = phi^T M x(t)``,
-and expressed at the sensor (``X = (S phi) q``); frequency and damping follow cycle by
-cycle from the decay of the extremes (:func:`iwan_element.models.scenarios.decay_analysis`).
+and expressed at the sensor (``X = (S phi) q``); frequency and damping against amplitude
+follow from the package's free-decay route, :func:`iwan_element.amplitude_curve` (band-pass
+``(0.5, 1.5)`` times the stuck frequency, Hilbert envelope and phase, straight-line fits in
+windows of ``n_periods``; ``docs/free_decay.md``), the same route a measured ring-down takes.
 The trapezoidal rule lengthens the period by a known amount (``w_num h / 2 =
-arctan(w h / 2)``); the frequencies are corrected for it.
+arctan(w h / 2)``); the frequencies are corrected for it (``docs/beam_tests.md``).
 
 The damping floor of the specimen is applied as stiffness-proportional beam damping
 ``beta`` chosen so that the stuck linear mode has ``zeta = damping_floor``
@@ -25,6 +27,7 @@ mass-orthogonality of the modes keeps on this mode. Their work is ``(1/s^2) int 
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from dataclasses import dataclass, field
@@ -34,7 +37,7 @@ import numpy as np
 
 from exudyn.itemInterface import ObjectGenericODE2
 
-from iwan_element import AmplitudeCurve
+from iwan_element import AmplitudeCurve, amplitude_curve
 from iwan_element.core.result_shape import ResultShape, panels
 from iwan_element.core.serialize import json_safe
 from iwan_element.core.validation import check_scalar
@@ -42,7 +45,7 @@ from iwan_element.effects import EFFECTS
 
 from .assembly import build_specimen_model
 from .qsma import static_modal_load
-from .scenarios import _settings, decay_analysis
+from .solver import floor_damping, solver_settings
 from .specimens import Specimen
 
 __all__ = ["RingdownResult", "ringdown"]
@@ -307,17 +310,20 @@ def _initial_energy(model, st, eff) -> tuple:
     return kin0, e0
 
 
-def _decay_curve(t, modal, h, window, *, notes) -> AmplitudeCurve:
-    """Frequency and damping of the modal decay, the trapezoidal rule's period error
-    removed (``w_true = tan(w h / 2) 2 / h``)."""
-    amp, fnum, zeta = decay_analysis(t, modal, window=window)
-    w_num = 2 * math.pi * fnum
-    f_true = np.tan(w_num * h / 2) * 2 / h / (2 * math.pi)
-    return AmplitudeCurve(amp, f_true, np.clip(zeta, 0, None), method="ringdown", notes=notes)
+def _decay_curve(t, modal, h, f0, n_periods, *, notes) -> AmplitudeCurve:
+    """Frequency and damping of the modal decay by :func:`iwan_element.amplitude_curve`
+    (displacement, band ``(0.5, 1.5) f0`` around the stuck frequency ``f0`` [Hz], windows
+    of ``n_periods``, no second extraction: the record is noise-free), the trapezoidal
+    rule's period error removed (``w_true = tan(w h / 2) 2 / h``)."""
+    c = amplitude_curve(t, modal, quantity="displacement", band=(0.5 * f0, 1.5 * f0),
+                        n_periods=n_periods, compare=False)
+    f_true = np.tan(np.pi * c.frequency * h) / (np.pi * h)
+    return dataclasses.replace(c, frequency=f_true, method="ringdown",
+                               notes=f"{notes}; {c.notes}" if c.notes else notes)
 
 
 def ringdown(specimen: Specimen, *, mode: int = 1, amplitude: float, cycles: float = 30,
-             steps_per_period: int = 64, window: int = 12, record_energy: bool = False,
+             steps_per_period: int = 64, n_periods: float = 3.0, record_energy: bool = False,
              joint_elements: bool = False) -> RingdownResult:
     """Release the specimen from a static deflection in a mode's load shape; let it ring down.
 
@@ -332,8 +338,9 @@ def ringdown(specimen: Specimen, *, mode: int = 1, amplitude: float, cycles: flo
         Duration in periods of the stuck linear mode (> 2).
     steps_per_period : int, keyword-only
         Time steps per period (>= 16).
-    window : int, keyword-only
-        Half-cycles per frequency/damping estimate (>= 2).
+    n_periods : float, keyword-only
+        Periods per frequency/damping window of :func:`iwan_element.amplitude_curve`
+        (range [3, 1000]; default 3, the most points a short record gives).
     record_energy : bool, keyword-only
         Record the energy terms every step (slower).
     joint_elements : bool, keyword-only
@@ -360,10 +367,10 @@ def ringdown(specimen: Specimen, *, mode: int = 1, amplitude: float, cycles: flo
     stuck joints (friction 1e3).
     """
     cycles = _check_args(specimen, amplitude, cycles, steps_per_period)
+    n_periods = check_scalar("n_periods", n_periods, low=3.0, high=1000.0)
     st = static_modal_load(specimen, [amplitude], mode=mode)
     L, phi, w0 = st["system"], st["phi"], st["omega0"]
-    floor = specimen.interface.damping_floor
-    beta = 2.0 * floor * w0 / float(phi @ L.Kb @ phi) if floor > 0 else 0.0
+    beta = floor_damping(specimen, mode=mode)
     e_keys = ("t", "kinetic", "strain", "springs", "joint_stored", "joint_dissipated",
               "floor_dissipated", "effect_stored", "effect_dissipated")
     floor_work = _FloorWork(beta, L)
@@ -407,7 +414,7 @@ def ringdown(specimen: Specimen, *, mode: int = 1, amplitude: float, cycles: flo
     kin0, e0 = _initial_energy(model, st, eff)
     h = 2 * math.pi / (w0 * steps_per_period)
     n = int(round(cycles * steps_per_period))
-    sim = _settings(force_scale=float(np.max(np.abs(L.K0 @ st["x"][0]))))
+    sim = solver_settings(force_scale=float(np.max(np.abs(L.K0 @ st["x"][0]))))
     newton = sim.timeIntegration.newton
     newton.absoluteTolerance = max(newton.absoluteTolerance, _roundoff_force(L, specimen))
     sim.timeIntegration.numberOfSteps = n
@@ -419,7 +426,7 @@ def ringdown(specimen: Specimen, *, mode: int = 1, amplitude: float, cycles: flo
     X = np.array(coords)[-(n + 1):, L.free]
     t = np.arange(X.shape[0]) * h
     modal = (X @ (L.M @ phi)) * float(L.S @ phi)
-    curve = _decay_curve(t, modal, h, window, notes=(
+    curve = _decay_curve(t, modal, h, w0 / (2 * math.pi), n_periods, notes=(
         f"{specimen.name}: Exudyn transient, mode {mode}, {steps_per_period} steps/period, "
         f"released from {amplitude:.3g} m at the sensor; modal filtering"
         + (f"; with {' + '.join(eff.names)}" if eff else "")))

@@ -196,15 +196,30 @@ def _ringdown():
                            record_energy=True)
 
 
+def _quasi_static():
+    from iwan_element import models
+    return models.quasi_static_test(models.preset("example").replace(n_points=8), cycles=1,
+                                    steps_per_cycle=40)
+
+
+def _forced():
+    from iwan_element import models
+    s = models.preset("example").replace(n_points=8, damping_floor=0.05)
+    return models.forced_response(s, force_levels=(1.0,), frequencies=[60.0, 66.6, 73.0],
+                                  settle_cycles=5, measure_cycles=2, steps_per_period=16)
+
+
 #: Results of the beam model (``iwan_element.models``), with the same shape.
-MODEL_RESULTS = {"CalibrationResult": _calibration, "RingdownResult": _ringdown}
+MODEL_RESULTS = {"CalibrationResult": _calibration, "RingdownResult": _ringdown,
+                 "QuasiStaticResult": _quasi_static, "ForcedResponseResult": _forced}
 
 
 def test_every_model_result_class_is_covered():
     """Every result class the beam model's public functions return is in MODEL_RESULTS."""
     from iwan_element import models
-    from iwan_element.models import calibration, transient
-    public = {n for mod in (models, calibration, transient) for n in getattr(mod, "__all__", ())
+    from iwan_element.models import calibration, forced, machine, transient
+    public = {n for mod in (models, calibration, transient, machine, forced)
+              for n in getattr(mod, "__all__", ())
               if n.endswith("Result") and inspect.isclass(getattr(mod, n))}
     assert public == set(MODEL_RESULTS)
 

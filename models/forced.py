@@ -1,0 +1,212 @@
+"""Stepped-sine forced response of a specimen through a resonance, at several force levels.
+
+A transverse force ``F sin(2 pi f t)`` acts at the specimen's excitation point (a shaker);
+at each frequency of the step the run continues from the state the previous frequency left
+(the force's phase kept continuous) for ``settle_cycles`` periods, and the steady amplitude
+at the sensor is half the peak-to-peak displacement over the next ``measure_cycles``. The
+beams carry the specimen's damping floor as stiffness-proportional damping (the ring-down's,
+:func:`~iwan_element.models.solver.floor_damping`); the joint damps through the contact
+points' Iwan elements. Time integration: generalized-alpha at spectral radius 0.98 (a little
+numerical damping of the kHz axial and contact modes the force's switch-on excites).
+
+Check (``docs/beam_tests.md``): with the contact points stuck (a friction so high that
+nothing slips) the response is the linear one, whose peak amplitude per force is
+``|S phi| |E phi| / (2 zeta w^2)`` at ``w`` for the mode's stiffness-proportional damping.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import exudyn as exu
+import numpy as np
+from exudyn.itemInterface import LoadForceVector, SensorMarker
+
+from iwan_element.core.result_shape import ResultShape, panels
+from iwan_element.core.serialize import json_safe
+from iwan_element.core.validation import check_int, finite_array
+
+from .assembly import _marker_at, _mesh, build_specimen_model, linear_system
+from .qsma import linear_modes
+from .solver import floor_damping, solver_settings
+from .specimens import Specimen
+from .transient import _roundoff_force
+
+__all__ = ["ForcedResponseResult", "forced_response"]
+
+
+@dataclass
+class ForcedResponseResult(ResultShape):
+    """Stepped-sine response, with the package's result shape.
+
+    Attributes
+    ----------
+    force_levels : ndarray, shape (n_levels,)
+        Force amplitudes [N].
+    frequencies : ndarray, shape (n_freq,)
+        Excitation frequencies [Hz] in the order stepped.
+    amplitude : ndarray, shape (n_levels, n_freq)
+        Steady displacement amplitude at the sensor [m].
+    specimen : Specimen
+    metadata : dict
+        ``mode``, ``linear_frequency_Hz``, ``beam_damping`` [s], ``settle_cycles``,
+        ``measure_cycles``, ``steps_per_period``.
+    warnings : tuple of str
+        A peak at the first or last frequency (the resonance is not inside the sweep).
+    """
+
+    force_levels: np.ndarray
+    frequencies: np.ndarray
+    amplitude: np.ndarray
+    specimen: Specimen
+    metadata: dict = field(default_factory=dict)
+    warnings: tuple = field(default_factory=tuple)
+
+    def peaks(self) -> tuple[np.ndarray, np.ndarray]:
+        """(peak frequency [Hz], peak amplitude [m]) per force level."""
+        j = np.argmax(self.amplitude, axis=1)
+        return self.frequencies[j], self.amplitude[np.arange(len(j)), j]
+
+    @property
+    def success(self) -> bool:
+        """True when every level's peak lies inside the swept frequencies."""
+        j = np.argmax(self.amplitude, axis=1)
+        return bool(np.all((j > 0) & (j < self.frequencies.size - 1)))
+
+    def summary(self) -> dict:
+        """Peaks per level (JSON-safe)."""
+        fp, ap = self.peaks()
+        return json_safe({"force_levels_N": self.force_levels, "peak_frequency_Hz": fp,
+                          "peak_amplitude_m": ap, "frequencies_Hz": self.frequencies})
+
+    def report(self) -> str:
+        """Human-readable account: the peak of each force level."""
+        fp, ap = self.peaks()
+        m = self.metadata
+        lines = [f"stepped sine of {self.specimen.name}, mode {m['mode']} (stuck "
+                 f"{m['linear_frequency_Hz']:.4f} Hz), {self.frequencies.size} frequencies "
+                 f"{self.frequencies.min():.4f}-{self.frequencies.max():.4f} Hz"]
+        lines += [f"  F = {F:g} N: peak {a:.4g} m at {f:.4f} Hz ({a / F:.4g} m/N)"
+                  for F, f, a in zip(self.force_levels, fp, ap)]
+        return "\n".join(lines + [f"  warning: {w}" for w in self.warnings])
+
+    def to_dict(self) -> dict:
+        """JSON-safe: the amplitudes, peaks, metadata, success and warnings."""
+        return json_safe({**self.summary(), "amplitude_m": self.amplitude,
+                          "metadata": self.metadata, "success": self.success,
+                          "warnings": list(self.warnings)})
+
+    def plot(self, ax=None):
+        """Amplitude per force [m/N] against frequency, one line per level; returns the
+        artists."""
+        (a,) = panels(ax, 1)
+        arts = []
+        for F, amp in zip(self.force_levels, self.amplitude):
+            arts += a.plot(self.frequencies, amp / F, "o-", ms=3, label=f"F = {F:g} N")
+        a.set(xlabel="frequency [Hz]", ylabel="amplitude / force [m/N]")
+        a.legend(fontsize=8)
+        return arts
+
+
+def _force_marker(model, s: Specimen) -> int:
+    """A marker on the beams' axis at the excitation point."""
+    (ae, ah), (be, _) = _mesh(s)
+    ea, eb = model.elements[:len(ah)], model.elements[len(ah):]
+    x = s.excitation.position
+    if x <= s.beam_length:
+        return _marker_at(model.mbs, ea, ae, 0.0, x, 0.0)
+    return _marker_at(model.mbs, eb, be, s.lap_start, x, 0.0)
+
+
+def _sweep_level(s, F0, freqs, beta, cycles, steps_per_period) -> np.ndarray:
+    """Steady sensor amplitude [m] at each frequency of ``freqs`` for one force level ``F0``
+    [N], each frequency continuing from the state the previous one left."""
+    settle, measure = cycles
+    model = build_specimen_model(s, beam_damping=beta)
+    mbs = model.mbs
+    state = {"w": 2 * math.pi * freqs[0], "t0": 0.0, "phase": 0.0}
+
+    def load(mbs_, t, load_vector):
+        return [0.0, F0 * math.sin(state["phase"] + state["w"] * (t - state["t0"])), 0.0]
+
+    mbs.AddLoad(LoadForceVector(markerNumber=_force_marker(model, s), loadVector=[0, 0, 0],
+                                loadVectorUserFunction=load))
+    sensor = mbs.AddSensor(SensorMarker(markerNumber=model.sensor_marker, storeInternal=True,
+                                        outputVariableType=exu.OutputVariableType.Position))
+    mbs.Assemble()
+    sim = solver_settings(force_scale=F0)
+    newton = sim.timeIntegration.newton          # not below the model's round-off
+    newton.absoluteTolerance = max(newton.absoluteTolerance, _roundoff_force(linear_system(s), s))
+    sim.timeIntegration.generalizedAlpha.spectralRadius = 0.98
+    ti = sim.timeIntegration
+    amp = np.zeros(len(freqs))
+    t_now = 0.0
+    for j, f in enumerate(freqs):
+        state["phase"] += state["w"] * (t_now - state["t0"])
+        state["w"], state["t0"] = 2 * math.pi * f, t_now
+        n, h = (settle + measure) * steps_per_period, 1.0 / (f * steps_per_period)
+        ti.startTime, ti.endTime, ti.numberOfSteps = t_now, t_now + n * h, n
+        sim.solution.sensors.writePeriod = h
+        if j > 0:
+            ti.initialStepSize = h
+        mbs.SolveDynamic(sim, updateInitialValues=True)
+        d = mbs.GetSensorStoredData(sensor)
+        keep = d[:, 0] >= t_now + settle * steps_per_period * h * (1 - 1e-12)
+        amp[j] = 0.5 * np.ptp(d[keep, 2])
+        t_now = ti.endTime
+    return amp
+
+
+def forced_response(specimen: Specimen, *, force_levels=(0.5, 2.0), frequencies=None,
+                    mode: int = 1, settle_cycles: int = 60, measure_cycles: int = 10,
+                    steps_per_period: int = 60) -> ForcedResponseResult:
+    """Transverse force ``F sin(2 pi f t)`` at the excitation point, stepped through a
+    resonance at each force level (module docstring).
+
+    Parameters
+    ----------
+    specimen : Specimen
+        Its ``excitation.position`` is where the force acts, its ``sensor_position`` where
+        the amplitude is read; its damping floor damps the beams.
+    force_levels : sequence of float, keyword-only
+        Force amplitudes [N], finite and > 0.
+    frequencies : array_like, optional, keyword-only
+        Frequencies to step through [Hz], finite and > 0, in order; default 15 from 0.97 to
+        1.01 times the stuck frequency of ``mode``.
+    mode : int, keyword-only
+        Elastic mode whose resonance the default frequencies cover (1: lowest).
+    settle_cycles, measure_cycles : int, keyword-only
+        Periods run before measuring, and measured, at each frequency (>= 1). Light damping
+        settles slowly: raise ``settle_cycles`` for a sharper peak.
+    steps_per_period : int, keyword-only
+        Time steps per excitation period (>= 8).
+
+    Returns
+    -------
+    ForcedResponseResult
+    """
+    if not isinstance(specimen, Specimen):
+        raise ValueError(f"specimen must be a Specimen, got {type(specimen).__name__}")
+    levels = finite_array("force_levels", force_levels, ndim=1)
+    if np.any(levels <= 0):
+        raise ValueError(f"force_levels must be > 0 [N], got {force_levels!r}")
+    cycles = (check_int("settle_cycles", settle_cycles, 1),
+              check_int("measure_cycles", measure_cycles, 1))
+    spp = check_int("steps_per_period", steps_per_period, 8)
+    f_lin = linear_modes(specimen, mode=mode)[0] / (2 * math.pi)
+    freqs = np.linspace(0.97, 1.01, 15) * f_lin if frequencies is None else \
+        finite_array("frequencies", frequencies, ndim=1)
+    if np.any(freqs <= 0):
+        raise ValueError(f"frequencies must be > 0 [Hz], got {frequencies!r}")
+    beta = floor_damping(specimen, mode=mode)
+    amp = np.array([_sweep_level(specimen, float(F0), freqs, beta, cycles, spp)
+                    for F0 in levels])
+    out = ForcedResponseResult(
+        force_levels=levels, frequencies=freqs, amplitude=amp, specimen=specimen,
+        metadata={"mode": mode, "linear_frequency_Hz": f_lin, "beam_damping": beta,
+                  "settle_cycles": cycles[0], "measure_cycles": cycles[1],
+                  "steps_per_period": spp})
+    if not out.success:
+        out.warnings += ("a force level's largest amplitude is at the first or last frequency: "
+                         "the resonance peak is not inside the sweep; widen frequencies",)
+    return out
