@@ -29,6 +29,7 @@ from scipy import optimize
 
 from iwan_element import AmplitudeCurve, IwanParameters, amplitude_curve
 from iwan_element.core.result_shape import ResultShape, panels
+from iwan_element.fitting import covariance
 
 from .interface import contact_points
 from .qsma import linear_modes, modal_amplitude_curve
@@ -159,12 +160,10 @@ def calibrate(specimen: Specimen, measured: AmplitudeCurve, *, fit=("stiffness_p
     fitted = _with(specimen, fit, vals).replace(calibrated_range=(float(X.min()), float(X.max())))
     curve = modal_amplitude_curve(fitted, mode=mode, amplitudes=X)
     warns = []
-    try:
-        dof = max(1, sol.fun.size - len(fit))
-        cov = np.linalg.inv(sol.jac.T @ sol.jac) * (2 * sol.cost / dof)
-        se_t = np.sqrt(np.diag(cov))
-    except np.linalg.LinAlgError:
-        se_t = np.full(len(fit), np.nan)
+    # the package's one covariance routine (docs/fitting.md): s^2 (J^T J)^-1, s^2 = SSR/dof
+    se_t = (covariance(sol.jac, sol.fun).stderr if np.all(np.isfinite(sol.jac))
+            else np.full(len(fit), np.nan))
+    if not np.all(np.isfinite(se_t)):
         warns.append("the Jacobian is singular: some parameters are not identifiable")
     stderr = {n: (float(s) if n == "chi" else float(v * s)) for n, v, s in zip(fit, vals, se_t)}
     ferr = float(np.max(np.abs(curve.frequency / fm - 1)))

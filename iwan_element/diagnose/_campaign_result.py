@@ -11,6 +11,7 @@ import numpy as np
 
 from ..core.result_shape import ResultShape
 from ..core.serialize import json_safe
+from ..fitting import covariance
 from ..identify.noise import integrated_time
 from ..plotting import axes_or_new
 from . import _campaign_model as CM
@@ -21,10 +22,13 @@ __all__ = ["CampaignFit", "assemble"]
 Z_AGREE = 3.0                         # |z| above which a record disagrees with a law
 
 
-def _covariance(model, theta):
-    """Covariance of ``theta`` (delta method): rows of record ``r`` weighted by
-    ``1 / (s_r sqrt(tau_r))`` with ``s_r``, ``tau_r`` the RMS and correlation time of the
-    campaign residual on that record. Returns ``(cov, J, s, tau)``."""
+def _covariance(model, theta, T):
+    """Covariance of ``theta`` by the package's one routine
+    (:func:`iwan_element.fitting.covariance`, docs/fitting.md): rows of record ``r`` weighted
+    by ``1 / (s_r sqrt(tau_r))`` with ``s_r``, ``tau_r`` the RMS and correlation time of the
+    campaign residual on that record, ``s^2 = n / (n - p)``; the law coefficients
+    ``T theta[:n_glob]`` by the delta method (NaN along a degenerate direction). Returns
+    ``(cov, J, s, tau, stderr of the coefficients)``."""
     J = model.jacobian(theta)
     s, tau = [], []
     Jw = np.empty_like(J)
@@ -35,8 +39,14 @@ def _covariance(model, theta):
         sl = slice(model.rows[r], model.rows[r + 1])
         Jw[sl] = J[sl] / (s[-1] * math.sqrt(tau[-1]))
     n, p = J.shape
-    cov = np.linalg.pinv(Jw.T @ Jw, rcond=1e-12, hermitian=True) * n / max(n - p, 1)
-    return cov, J, np.array(s), np.array(tau)
+    s2 = n / max(n - p, 1)
+    if not np.all(np.isfinite(Jw)):
+        return (np.full((p, p), np.nan), J, np.array(s), np.array(tau),
+                np.full(T.shape[0], np.nan))
+    Jp = np.zeros((T.shape[0], p))
+    Jp[:, :T.shape[1]] = T
+    cov = covariance(Jw, s2=s2).covariance
+    return cov, J, np.array(s), np.array(tau), covariance(Jw, s2=s2, Jp=Jp).stderr
 
 
 def to_physical(model):
@@ -141,14 +151,13 @@ def assemble(*, model, preps, labels, res, units, stack_from, warnings, options,
     """Uncertainty, coefficients, the per-record table, the verdict: a :class:`CampaignFit`."""
     theta = res.x
     t1 = time.perf_counter()
-    cov, J, s, tau = _covariance(model, theta)
+    T, labels_c = to_physical(model)
+    cov, J, s, tau, se = _covariance(model, theta, T)
     times = dict(times, uncertainty=time.perf_counter() - t1)
     ng = model.n_glob
     cov_int = cov[:ng, :ng]
-    T, labels_c = to_physical(model)
     coef = T @ theta[:ng]
     cov_phys = T @ cov_int @ T.T
-    se = np.sqrt(np.clip(np.diag(cov_phys), 0.0, None))
     coefficients, stderr = {}, {}
     for (q, term), c, e in zip(labels_c, coef, se):
         coefficients.setdefault(q, {})[term] = float(c)

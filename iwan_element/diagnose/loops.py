@@ -65,7 +65,7 @@ def _base_start(tt, uj, FF, seed):
     try:
         with quiet_fits():
             res = fit_loops(tt, uj, FF, seed=seed, max_samples=3000, n_starts=3)
-        p = res.params
+        p = res.joint
         return (p.phi_max, p.chi, p.beta)
     except (ValueError, FloatingPointError, ZeroDivisionError):
         return None
@@ -411,6 +411,6 @@ def _details(rec, nl, sel, opts, loc, final, fit, t_start) -> dict:
             "lowpass": rec.lowpass,
             "lowpass_reason": "rig dynamics removed before fitting" if rec.lowpass else None,
             "start_displacement": float(final.get("start", 0.0)),
-            "start_displacement_stderr": float(fit.details.get("start_displacement_stderr",
-                                                               0.0)),
+            "start_displacement_stderr": float(math.nan if (se_s := fit.details.get(
+                "start_displacement_stderr")) is None else se_s),     # None: not determined
             "wall_time": time.perf_counter() - t_start}

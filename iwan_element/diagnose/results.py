@@ -123,7 +123,7 @@ class Diagnosis(ResultShape):
     def report(self) -> str:
         """Human-readable account: noise, misfit, where, candidates, verdict, before/after."""
         d = self.details
-        p = self.base_fit.params
+        p = self.base_fit.joint
         lines = ["Iwan model diagnosis",
                  f"  {d['samples']} samples; noise {d['noise_from']}, correlation time "
                  f"{d['tau']:.3g} samples ({d['n_eff']:.0f} independent samples fitted)",
@@ -154,7 +154,7 @@ class Diagnosis(ResultShape):
                 ps = ", ".join(f"{k} = {v:.4g} {_unit(e['name'], k)} (+- {e['stderr'][k]:.2g})"
                                for k, v in e["parameters"].items())
                 lines.append(f"    {e['name']}: {ps}")
-            q = self.fit.params
+            q = self.fit.joint
             lines.append(f"    Iwan part: Fs={q.Fs:.5g} N, KT={q.KT:.5g} N/m, chi={q.chi:.4f}, "
                          f"beta={q.beta:.4f}")
         else:

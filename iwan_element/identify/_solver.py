@@ -2,8 +2,8 @@
 
 :class:`_Problem` holds data modelled as ``Fs g(phi_max, chi, beta)`` (plus a force offset
 for loop fits) with ``Fs`` and the offset eliminated in closed form (variable projection);
-:func:`_lsq_box` is a small box-bounded Levenberg-Marquardt; :func:`_uncertainty` turns the
-Jacobian at the optimum into standard errors and correlations.
+:func:`_lsq_box` is a small box-bounded Levenberg-Marquardt; :func:`_uncertainty` takes the
+Jacobian at the optimum to :func:`iwan_element.fitting.covariance`.
 """
 from __future__ import annotations
 
@@ -16,6 +16,7 @@ import numpy as np
 
 from ..core.history import unit_params
 from ..core.parameters import IwanParameters
+from ..fitting import covariance
 
 log = logging.getLogger(__name__)
 
@@ -201,47 +202,22 @@ def _uncertainty(fun, theta, r, scale, *, at_lower_bound=None, tau: float = 1.0,
                  timeseries: bool = False, block: int = 0):
     """Standard errors and correlations from the Jacobian (see :mod:`.identifiability`).
 
-    ``cov = tau s^2 (J^T J)^-1``: ``tau`` (the residuals' integrated autocorrelation time)
-    widens it when the residuals are correlated (systematic misfit, coloured noise). For a
-    time series (``timeseries=True``) the block sandwich
-    ``(J^T J)^-1 [sum_b (J_b^T r_b)(J_b^T r_b)^T] (J^T J)^-1`` over consecutive blocks of
-    ``max(20, 4 tau, block)`` residuals is also formed (``block``: a half cycle); it follows
-    residuals whose size changes along the record (displacement noise times a tangent
-    stiffness that jumps at every reversal) and errors shared by a whole branch (a turning
-    point displaced by the displacement noise moves every force of the branch that leaves
-    it), with the small-sample factor ``nb / (nb - p)`` for ``nb`` blocks and ``p``
-    parameters. Each variance is the larger of the two.
-
-    ``fun`` maps the transformed parameters ``theta`` to residuals, ``r`` are the residuals at
-    the optimum and ``scale = |d p / d theta|`` is the (diagonal) delta-method factor. A
-    parameter whose index is ``at_lower_bound`` is evaluated one step inside its bound 0.
-    Returns ``(stderr of p, correlation)``.
+    The central-difference Jacobian of ``fun`` (transformed parameters ``theta`` ->
+    residuals) at the optimum goes to the package's one covariance routine,
+    :func:`iwan_element.fitting.covariance` (docs/fitting.md): ``tau s^2 (J^T J)^-1``, for a
+    time series (``timeseries=True``) also the block sandwich over blocks of at least
+    ``block`` residuals (a half cycle), and the delta method with the diagonal factor
+    ``scale = |d p / d theta|``. A parameter whose index is ``at_lower_bound`` is evaluated
+    one step inside its bound 0. Returns ``(stderr of p, correlation)``; NaN for a parameter
+    the data do not determine.
     """
     h = 1e-5
     th = np.array(theta, float)
     if at_lower_bound is not None:
         th[at_lower_bound] = max(th[at_lower_bound], h)
     J = _fd_jacobian(fun, th, np.full(th.size, h))
-    m, p = J.shape
-    s2 = float(np.einsum("i,i->", r, r)) / max(m - p, 1)
-    try:
-        A_inv = np.linalg.pinv(np.einsum("ij,ik->jk", J, J), rcond=1e-12, hermitian=True)
-    except np.linalg.LinAlgError:
-        A_inv = np.full((p, p), np.nan)
-    cov = tau * s2 * A_inv
-    if timeseries and m > 4 * p:
-        L = int(max(20, math.ceil(4.0 * tau), block))
-        nb = m // L
-        if nb >= 2 * p:
-            sc = np.einsum("bij,bi->bj", J[:nb * L].reshape(nb, L, p), r[:nb * L].reshape(nb, L))
-            # small-sample factor nb / (nb - p): p parameters were fitted from nb block scores
-            S = np.einsum("bj,bk->jk", sc, sc) * (m / (nb * L)) * nb / (nb - p)
-            cov_s = A_inv @ S @ A_inv
-            ds, dt = np.diag(cov_s), np.diag(cov)
-            if np.all(ds > 0) and np.all(np.isfinite(ds)):
-                big = np.sqrt(np.maximum(ds, dt) / ds)
-                cov = cov_s * np.outer(big, big)
-    se_t = np.sqrt(np.clip(np.diag(cov), 0, None))
-    with np.errstate(invalid="ignore", divide="ignore"):
-        corr = cov / np.outer(se_t, se_t)
-    return se_t * np.asarray(scale, float), corr
+    if not np.all(np.isfinite(J)):            # the model failed next to the optimum
+        return np.full(th.size, math.nan), np.full((th.size, th.size), math.nan)
+    c = covariance(J, r, tau=tau, block=block if timeseries else None,
+                   Jp=np.diag(np.asarray(scale, float)))
+    return c.stderr, c.correlation
