@@ -11,7 +11,7 @@ import numpy as np
 
 from ..core.result_shape import ResultShape
 from ..core.serialize import json_safe
-from ..fitting import covariance
+from ..fitting import Parameter, ParameterTable, covariance, verdict
 from ..identify.noise import integrated_time
 from ..plotting import axes_or_new
 from . import _campaign_model as CM
@@ -139,6 +139,12 @@ def _scatter(model, theta, free):
     return {q: float(math.sqrt(S[k, k])) for k, q in enumerate(names)}, S
 
 
+def _coef_unit(unit: str, term: str) -> str:
+    """Unit of a law coefficient: the quantity's, per unit of the condition for a slope
+    (conditions in their own units, ``"[cond]"``)."""
+    return unit if term == "1" else f"{unit}/[{term}]"
+
+
 def _stderr_dict(labels_c, cov_phys):
     out = {}
     for (q, term), e in zip(labels_c, np.sqrt(np.clip(np.diag(cov_phys), 0.0, None))):
@@ -158,10 +164,6 @@ def assemble(*, model, preps, labels, res, units, stack_from, warnings, options,
     cov_int = cov[:ng, :ng]
     coef = T @ theta[:ng]
     cov_phys = T @ cov_int @ T.T
-    coefficients, stderr = {}, {}
-    for (q, term), c, e in zip(labels_c, coef, se):
-        coefficients.setdefault(q, {})[term] = float(c)
-        stderr.setdefault(q, {})[term] = float(e)
     rows, awarn = _rows(model, theta, cov_int, preps, labels)
     scatter, S = _scatter(model, theta, free)
     cov_re = None if S is None else CM.scatter_coef_cov(model, theta, S)
@@ -171,8 +173,15 @@ def assemble(*, model, preps, labels, res, units, stack_from, warnings, options,
     converged = bool(res.status > 0)
     if not converged:
         warns.append(f"the campaign fit did not converge: {res.message}")
-    ident = bool(np.all(np.isfinite(se)) and np.all(se > 0))
-    for q, recs in model.clipped(theta).items():
+    verdicts = [verdict(f"{q}:{t}", float(c), float(e), relative=False)[0] and e > 0
+                for (q, t), c, e in zip(labels_c, coef, se)]
+    ident = all(verdicts)
+    clipped = model.clipped(theta)
+    table = ParameterTable([Parameter(f"{q}:{t}", float(c), float(e),
+                                      unit=_coef_unit(units.get(q, ""), t),
+                                      identified=ok and q not in clipped)
+                            for (q, t), c, e, ok in zip(labels_c, coef, se, verdicts)])
+    for q, recs in clipped.items():
         ident = False
         names = [labels[r] for r in recs]
         warns.append(f"the {q} law leaves the range the model can take on {len(recs)} of "
@@ -193,7 +202,7 @@ def assemble(*, model, preps, labels, res, units, stack_from, warnings, options,
     return CampaignFit(
         records=tuple(labels), condition_names=model.cnames, effects=model.names,
         effects_from=stack_from, laws={q: tuple(v) for q, v in model.laws.items()},
-        units=units, coefficients=coefficients, stderr=stderr, covariance=cov_phys,
+        units=units, params=table, covariance=cov_phys,
         coefficient_labels=tuple(f"{q}:{t}" for q, t in labels_c), rows=tuple(rows),
         scatter=scatter, stderr_scatter=stderr_scatter,
         converged=converged, success=converged and ident, message=str(res.message),
@@ -219,8 +228,14 @@ class CampaignFit(ResultShape):
         ``{quantity: conditions}``: each quantity is ``a + sum_c b_c x_c`` over these.
     units : dict
         Unit of each quantity.
+    params : ParameterTable
+        The law coefficients ``"quantity:term"`` (term ``"1"`` for ``a``, a condition name
+        for its ``b_c``) with their standard errors (delta method), units and verdicts
+        (:func:`iwan_element.fitting.verdict`; a slope of zero is a valid finding, so only a
+        finite standard error, no relative precision, is asked).
     coefficients, stderr : dict
-        ``{quantity: {"1": a, condition: b_c}}`` and their standard errors (delta method).
+        (properties) ``{quantity: {"1": a, condition: b_c}}`` and their standard errors,
+        from ``params``.
     covariance : ndarray
         Of all coefficients, in the order of ``coefficient_labels`` (``"quantity:term"``).
     scatter : dict
@@ -254,8 +269,7 @@ class CampaignFit(ResultShape):
     effects_from: str
     laws: dict
     units: dict
-    coefficients: dict
-    stderr: dict
+    params: ParameterTable
     covariance: np.ndarray
     coefficient_labels: tuple
     rows: tuple
@@ -269,6 +283,23 @@ class CampaignFit(ResultShape):
     warnings: tuple = field(default_factory=tuple)
     details: dict = field(default_factory=dict)
     _state: dict = field(default_factory=dict, repr=False)
+
+    def _nested(self, what: str) -> dict:
+        out = {}
+        for p in self.params.parameters:
+            q, term = p.name.split(":", 1)
+            out.setdefault(q, {})[term] = getattr(p, what)
+        return out
+
+    @property
+    def coefficients(self) -> dict:
+        """``{quantity: {"1": a, condition: b_c}}`` (from ``params``)."""
+        return self._nested("value")
+
+    @property
+    def stderr(self) -> dict:
+        """The coefficients' standard errors, nested as :attr:`coefficients`."""
+        return self._nested("stderr")
 
     def law(self, quantity: str, conditions: dict):
         """``(value, stderr)`` of one quantity's law at ``conditions``."""
@@ -389,7 +420,7 @@ class CampaignFit(ResultShape):
 
     def to_dict(self) -> dict:
         """JSON-safe dict (NaN becomes None)."""
-        return json_safe({k: getattr(self, k) for k in (
+        return json_safe({"params": self.params.to_dict()} | {k: getattr(self, k) for k in (
             "records", "condition_names", "effects", "effects_from", "laws", "units",
             "coefficients", "stderr", "covariance", "coefficient_labels", "rows", "scatter",
             "stderr_scatter",

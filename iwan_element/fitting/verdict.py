@@ -10,7 +10,8 @@ A fitted parameter is identified when the data determine it:
    right, of no interest in itself), its standard error is at most half its reference
    magnitude: ``|value|`` by default, ``|chi + 1|`` for the Iwan exponent ``chi`` (the
    exponent of the slider density; ``chi = 0`` is a valid value), so a 95 % interval
-   ``value +- 1.96 stderr`` excludes zero.
+   ``value +- 1.96 stderr`` excludes zero. A quantity whose value zero is itself a
+   finding (a campaign law's slope) is asked only 1 and 2 (``relative=False``).
 
 A fit succeeds when its optimiser converged and every required parameter is identified.
 """
@@ -25,7 +26,7 @@ RELATIVE = 0.5
 
 
 def verdict(name: str, value: float, stderr: float, *, at_bound: bool = False,
-            degenerate: bool | None = None, nuisance: bool = False,
+            degenerate: bool | None = None, nuisance: bool = False, relative: bool = True,
             reference: float | None = None, reference_text: str = "its value",
             why_degenerate: str = "") -> tuple[bool, str | None]:
     """Whether the fitted parameter ``name`` is identified, and the warning when not.
@@ -43,6 +44,9 @@ def verdict(name: str, value: float, stderr: float, *, at_bound: bool = False,
         non-finite ``stderr``). Changes only the warning's wording.
     nuisance : bool, keyword-only
         Nuisance parameters skip the relative-precision test.
+    relative : bool, keyword-only
+        Apply the relative-precision test (default). False for a quantity whose value zero
+        is itself a finding (a law's slope: "no dependence"), which asks only rules 1-2.
     reference : float, optional, keyword-only
         Magnitude the standard error is compared with (default ``|value|``).
     reference_text : str, keyword-only
@@ -64,7 +68,7 @@ def verdict(name: str, value: float, stderr: float, *, at_bound: bool = False,
             return False, f"{name} has no standard error: NOT identified"
         return False, (f"{name} is not determined by the data (its Jacobian direction is "
                        f"degenerate){why_degenerate}: NOT identified")
-    if not nuisance and stderr > RELATIVE * ref:
+    if relative and not nuisance and stderr > RELATIVE * ref:
         return False, (f"{name}: std. error {stderr:.3g} exceeds half of {reference_text} "
                        f"({ref:.3g}): NOT identified")
     return True, None
