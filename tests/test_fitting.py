@@ -243,3 +243,25 @@ def test_table_validation():
         ParameterTable([("a", 1.0)])
     with pytest.raises(ValueError, match="correlation"):
         ParameterTable([Parameter("a", 1.0)], correlation=np.eye(2))
+
+
+# ------------------------------------------------------------- the fits carry the table
+
+def test_fit_result_params_table_and_joint():
+    """fit_loops: params is a ParameterTable, .joint the IwanParameters built from it, and
+    stderr/identified/correlation/fixed are views of the same table."""
+    from iwan_element import IwanParameters, fit_loops
+    from iwan_element.identify.testdata import simulate_test
+    p = IwanParameters(1000.0, 2e6, -0.5, 0.3)
+    d = simulate_test(p, np.array([0.3, 1.0, 2.0]) * p.phi_max, cycles=2, force_noise=2.0,
+                      seed=1)
+    r = fit_loops(d.t, d.u, d.F, seed=0)
+    assert isinstance(r.params, ParameterTable) and r.params.names == ("Fs", "KT", "chi", "beta")
+    assert r.joint == IwanParameters(*(r.params[k].value for k in r.params.names))
+    assert r.stderr == r.params.stderr and r.identified == r.params.identified
+    assert r.correlation is r.params.correlation and r.fixed == ()
+    assert [r.params[k].unit for k in r.params] == ["N", "N/m", "1", "1"]
+    assert abs(r.joint.KT / p.KT - 1) < 0.05
+    d2 = r.to_dict()
+    assert IwanParameters.from_dict(d2["joint"]) == r.joint
+    assert [q["name"] for q in d2["params"]["parameters"]] == list(r.params.names)
