@@ -11,7 +11,7 @@ from scipy import special, stats
 from ..core.modal import modal_iwan_curve, viscous_floor
 from ..core.parameters import IwanParameters
 from ..core.result_shape import ResultShape, panels
-from ..fitting import Parameter, ParameterTable, covariance, verdict
+from ..fitting import Parameter, ParameterTable, covariance, fit_success, verdict
 
 __all__ = ["ModalIwanFit", "model_curve", "full_parameters", "harmonic_factor"]
 
@@ -146,9 +146,9 @@ class ModalIwanFit(ResultShape):
                   f"{stderr[n]:.3g})" for n in bad]
         if params["zeta0"] < 1e-9:
             warns.append("zeta0 is at its bound 0: no viscous floor is visible in the data")
+        table = _table(params, stderr, bad)
         return cls(regime, names, theta, np.asarray(cov, dtype=float), data, conv, chi2_red,
-                   weights, tuple(warns), bool(optimizer_ok and not bad),
-                   _table(params, stderr, bad))
+                   weights, tuple(warns), fit_success(optimizer_ok, table.identified), table)
 
     @classmethod
     def linear(cls, data, conv, *, warnings):

@@ -29,7 +29,10 @@ Uncertainty (documented choice: residual-based, widened by the residual's correl
     residual is coloured noise or a systematic misfit, which widens the standard errors by
     ``sqrt(tau)`` instead of hiding behind many correlated samples. The displacement that
     drives the model is de-noised first (``smooth="auto"``, a Savitzky-Golay filter), so
-    noise in ``u`` does not create spurious reversals (the errors-in-variables bias).
+    noise in ``u`` does not create spurious reversals (the errors-in-variables bias). The
+    covariance and the verdict are the package's one routine and rule
+    (:func:`iwan_element.fitting.covariance`, :func:`iwan_element.fitting.verdict`,
+    docs/fitting.md).
 """
 from __future__ import annotations
 
