@@ -4,7 +4,8 @@
   tangential stiffness per area, the friction coefficient, chi and the modal damping floor)
   so that the QSMA curve (:func:`~iwan_element.models.qsma.modal_amplitude_curve`) matches a
   measured :class:`~iwan_element.AmplitudeCurve` (frequency and damping against amplitude at
-  the specimen's sensor point). Nonlinear least squares (``scipy.optimize.least_squares``,
+  the specimen's sensor point). Nonlinear least squares (``scipy.optimize.least_squares`` through
+  :func:`iwan_element.fitting.minimize`,
   log-parameters, bounded), residuals ``(f/f_meas - 1)/f_tol`` and ``(zeta/zeta_meas - 1)/z_tol``;
   standard errors from the Jacobian at the optimum.
 * From a joint or modal Iwan fit: :func:`interface_from_joint` maps a lumped joint
@@ -30,7 +31,7 @@ from scipy import optimize
 from iwan_element import AmplitudeCurve, IwanParameters, amplitude_curve
 from iwan_element.core.result_shape import ResultShape, panels
 from iwan_element.fitting import (Parameter, ParameterTable, covariance, fit_success,
-                                  verdict)
+                                  minimize, verdict)
 
 from .interface import contact_points
 from .qsma import linear_modes, modal_amplitude_curve
@@ -171,8 +172,7 @@ def calibrate(specimen: Specimen, measured: AmplitudeCurve, *, fit=("stiffness_p
         c = model(x)
         return np.concatenate([(c.frequency / fm - 1) / f_tol, (c.damping_ratio / zm - 1) / z_tol])
 
-    sol = optimize.least_squares(resid, x0, bounds=(lb, ub), x_scale=1.0, diff_step=1e-4,
-                                 max_nfev=200)
+    sol = minimize(resid, x0, lb, ub, method="trf", max_nfev=200, x_scale=1.0, diff_step=1e-4)
     vals = [transform(n, v, True) for n, v in zip(fit, sol.x)]
     fitted = _with(specimen, fit, vals).replace(calibrated_range=(float(X.min()), float(X.max())))
     curve = modal_amplitude_curve(fitted, mode=mode, amplitudes=X)

@@ -21,7 +21,8 @@ from scipy import optimize
 
 from iwan_element import (IwanJoint, IwanParameters, dissipation, force_amplitude,
                           secant_stiffness)
-from iwan_element.identify._solver import _Problem, _lsq_box, _q_to_shape
+from iwan_element.fitting import minimize
+from iwan_element.identify._solver import _Problem, _q_to_shape
 from iwan_element.identify.dissipation import _seed_model
 from iwan_element.identify.result import quiet_fits as _quiet_ctx
 from iwan_element.core.history import History
@@ -91,7 +92,7 @@ def test_box_lm_reaches_the_scipy_least_squares_minimum():
             return prob.projected(*_q_to_shape(q, prob.x_max, None))[1]
 
         q0 = np.array([math.log(1.5), -0.7, 1.0])
-        ours = _lsq_box(fun, q0, lower, upper, max_nfev=400)
+        ours = minimize(fun, q0, lower, upper, method="box-lm", max_nfev=400)
         ref = optimize.least_squares(fun, q0, bounds=(lower, upper), method="trf",
                                      ftol=1e-12, xtol=1e-12, gtol=1e-12, max_nfev=400)
         assert ours.status > 0

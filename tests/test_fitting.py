@@ -265,3 +265,40 @@ def test_fit_result_params_table_and_joint():
     d2 = r.to_dict()
     assert IwanParameters.from_dict(d2["joint"]) == r.joint
     assert [q["name"] for q in d2["params"]["parameters"]] == list(r.params.names)
+
+
+# ------------------------------------------------------------------- the minimiser entry
+
+def test_minimize_box_lm_and_trf_reach_the_same_bounded_minimum():
+    """y = a exp(-b t) with b bounded below its unconstrained optimum: both solvers stop on
+    the bound at the same a (the 1-D least squares in a with b held, closed form)."""
+    from iwan_element.fitting import minimize
+    rng = np.random.default_rng(8)
+    t = np.linspace(0, 3, 80)
+    y = 2.0 * np.exp(-1.3 * t) + 0.01 * rng.normal(size=t.size)
+
+    def fun(x):
+        return x[0] * np.exp(-x[1] * t) - y
+
+    for method in ("box-lm", "trf"):
+        r = minimize(fun, [1.0, 2.0], [0.0, 1.5], [10.0, 5.0], method=method, max_nfev=500)
+        g = np.exp(-1.5 * t)
+        assert r.success and r.x[1] == pytest.approx(1.5, abs=1e-9)
+        assert r.x[0] == pytest.approx(g @ y / (g @ g), rel=1e-6), method
+        assert r.cost == pytest.approx(0.5 * float(fun(r.x) @ fun(r.x)), rel=1e-12)
+
+
+@pytest.mark.parametrize("kw, match", [
+    ({"method": "nelder"}, "method"),
+    ({"lower": [1.0, 0.0], "upper": [0.0, 1.0]}, "lower < upper"),
+    ({"x0": [np.nan, 1.0]}, "x0"),
+    ({"max_nfev": 0}, "max_nfev"),
+    ({"method": "box-lm", "x_scale": "jac"}, "no options"),
+])
+def test_minimize_rejects_bad_input(kw, match):
+    from iwan_element.fitting import minimize
+    args = {"x0": [0.5, 0.5], "lower": [0.0, 0.0], "upper": [1.0, 1.0], "max_nfev": 10}
+    args.update(kw)
+    with pytest.raises(ValueError, match=match):
+        minimize(lambda x: x - 0.3, args.pop("x0"), args.pop("lower"), args.pop("upper"),
+                 **args)

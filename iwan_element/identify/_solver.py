@@ -2,21 +2,21 @@
 
 :class:`_Problem` holds data modelled as ``Fs g(phi_max, chi, beta)`` (plus a force offset
 for loop fits) with ``Fs`` and the offset eliminated in closed form (variable projection);
-:func:`_lsq_box` is a small box-bounded Levenberg-Marquardt; :func:`_uncertainty` takes the
+:func:`_multistart` runs the box-bounded Levenberg-Marquardt of
+:func:`iwan_element.fitting.minimize` (``method="box-lm"``) from several starts; :func:`_uncertainty` takes the
 Jacobian at the optimum to :func:`iwan_element.fitting.covariance`.
 """
 from __future__ import annotations
 
 import logging
 import math
-from dataclasses import dataclass
 from typing import Callable
 
 import numpy as np
 
 from ..core.history import unit_params
 from ..core.parameters import IwanParameters
-from ..fitting import covariance
+from ..fitting import covariance, minimize
 
 log = logging.getLogger(__name__)
 
@@ -96,81 +96,6 @@ def _q_to_shape(q, x_max, beta_fixed):
     return phi, float(q[1]), beta
 
 
-@dataclass
-class _LsqResult:
-    x: np.ndarray
-    cost: float
-    status: int              # > 0 converged, 0 evaluation budget used up
-    message: str
-    nfev: int
-
-
-def _lsq_box(fun, x0, lower, upper, *, max_nfev: int, ftol: float = 1e-12,
-             xtol: float = 1e-10) -> _LsqResult:
-    """Levenberg-Marquardt with box bounds (projected steps) for a few parameters.
-
-    Minimises ``0.5 |fun(x)|^2`` for ``lower <= x <= upper``. The Jacobian is taken by
-    forward differences; the normal equations are formed with ``einsum``. Why not
-    ``scipy.optimize.least_squares``: for a tall Jacobian (thousands of residuals, three
-    parameters) its trust-region steps spend their time in multithreaded OpenBLAS
-    matrix-vector products, which ran 7-10 times slower than single-threaded on a busy
-    2-core machine; this loop needs no BLAS. ``tests/test_fit.py`` checks that it reaches the
-    same minimum as ``least_squares(method="trf")``.
-    """
-    x = np.clip(np.asarray(x0, float), lower, upper)
-    r = fun(x)
-    nfev = 1
-    cost = 0.5 * float(np.einsum("i,i->", r, r))
-    lam = 1e-3
-    p = x.size
-    while nfev + p < max_nfev:
-        J = np.empty((r.size, p))
-        for j in range(p):
-            h = 1e-7 * max(1.0, abs(x[j]))
-            if x[j] + h > upper[j]:
-                h = -h                                   # step inwards at an upper bound
-            xh = x.copy()
-            xh[j] += h
-            J[:, j] = (fun(xh) - r) / h
-        nfev += p
-        g = np.einsum("ij,i->j", J, r)
-        A = np.einsum("ij,ik->jk", J, J)
-        free = ~(((x <= lower) & (g > 0)) | ((x >= upper) & (g < 0)))
-        if not free.any() or np.max(np.abs(g[free])) <= 1e-14 * max(cost, 1e-300):
-            return _LsqResult(x, cost, 1, "projected gradient is zero", nfev)
-        Af = A[np.ix_(free, free)]
-        while nfev < max_nfev:
-            M = Af + lam * np.diag(np.diag(Af) + 1e-30)
-            try:
-                d = np.zeros(p)
-                d[free] = np.linalg.solve(M, -g[free])
-            except np.linalg.LinAlgError:
-                lam *= 10.0
-                continue
-            x_new = np.clip(x + d, lower, upper)
-            r_new = fun(x_new)
-            nfev += 1
-            cost_new = 0.5 * float(np.einsum("i,i->", r_new, r_new))
-            if cost_new < cost:
-                step = x_new - x
-                predicted = -(g @ step + 0.5 * step @ A @ step)
-                small_f = cost - cost_new <= ftol * cost and predicted <= ftol * cost
-                # a short step means convergence only when damping did not shorten it
-                small_x = lam < 1e-2 and np.all(np.abs(step) <= xtol * (xtol + np.abs(x)))
-                x, r, cost = x_new, r_new, cost_new
-                lam = max(lam / 3.0, 1e-12)
-                if small_f or small_x:
-                    return _LsqResult(x, cost, 2, "relative reduction of the cost below "
-                                      f"{ftol:g}" if small_f else f"step below xtol = {xtol:g}",
-                                      nfev)
-                break
-            lam *= 4.0
-            if lam > 1e16:
-                return _LsqResult(x, cost, 3, "no step reduces the cost further (at a minimum "
-                                  "to round-off)", nfev)
-    return _LsqResult(x, cost, 0, f"evaluation budget max_nfev = {max_nfev} used up", nfev)
-
-
 def _multistart(prob: _Problem, starts, lower, upper, *, beta_fixed, max_nfev):
     """Least squares on ``q = (ln(phi_max/x_max), chi[, ln(1+beta)])`` from each start; best wins."""
     best = None
@@ -179,7 +104,8 @@ def _multistart(prob: _Problem, starts, lower, upper, *, beta_fixed, max_nfev):
         return prob.projected(*_q_to_shape(q, prob.x_max, beta_fixed))[1]
 
     for q0 in starts:
-        res = _lsq_box(fun, np.asarray(q0, float), lower, upper, max_nfev=max_nfev)
+        res = minimize(fun, np.asarray(q0, float), lower, upper, method="box-lm",
+                       max_nfev=max_nfev)
         log.debug("start %s -> cost %.6g (%s)", np.round(q0, 3), res.cost, res.message)
         if best is None or res.cost < best.cost:
             best = res

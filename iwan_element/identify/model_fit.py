@@ -43,13 +43,13 @@ from dataclasses import dataclass, field
 from typing import Callable, Sequence
 
 import numpy as np
-from scipy import optimize
 from scipy.signal import savgol_coeffs, savgol_filter
 
 from ..core.validation import check_int, check_time, check_magnitude, finite_array, same_length
 from .noise import estimate_noise, integrated_time
 from ..core.result_shape import ResultShape
-from ..fitting import Parameter, ParameterTable, covariance, fit_success, verdict
+from ..fitting import (Parameter, ParameterTable, covariance, fit_success, minimize,
+                       verdict)
 
 __all__ = ["ModelFit", "fit_force_model", "drive_displacement", "burn_in_index"]
 
@@ -281,8 +281,7 @@ def fit_force_model(t, u, F, model: Callable, theta0, *, lower=None, upper=None,
         all_names = names + OFFSET_NAMES
     else:
         x0, lo_x, hi_x, all_names = np.clip(th0, lo, hi), lo, hi, names
-    res = optimize.least_squares(resid, x0, bounds=(lo_x, hi_x), x_scale="jac",
-                                 max_nfev=max_nfev, method="trf")
+    res = minimize(resid, x0, lo_x, hi_x, method="trf", max_nfev=max_nfev, x_scale="jac")
     r = res.fun
     tau = integrated_time(r)
     c = covariance(res.jac, r, tau=tau)
