@@ -1,7 +1,7 @@
 """The one covariance routine of the package's fits (docs/fitting.md, sections 1-4).
 
 ``cov = tau s^2 (J^T J)^-1`` for residuals ``r`` with Jacobian ``J`` in the fitting
-variables ``theta`` (Seber and Wild 1989, *Nonlinear Regression*, Wiley, section 2.1.2),
+variables ``theta`` (Seber and Wild 1989, *Nonlinear Regression*, Wiley, chapter 2),
 computed through the SVD of the column-scaled Jacobian so that variables of different units
 do not decide the rank; a direction whose scaled singular value is below ``cutoff`` times
 the largest is degenerate (the data do not determine it) and every variable with a component
