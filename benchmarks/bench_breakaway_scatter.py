@@ -36,7 +36,7 @@ def one(args):
     if g.effects != ("breakaway",):
         return None
     e = g.fit.details["effects"][0]
-    est = [e["parameters"]["ratio"]] + [getattr(g.fit.params, k) for k in NAMES[1:]]
+    est = [e["parameters"]["ratio"]] + [getattr(g.fit.joint, k) for k in NAMES[1:]]
     se = [e["stderr"]["ratio"]] + [g.fit.stderr[k] for k in NAMES[1:]]
     return est, se
 

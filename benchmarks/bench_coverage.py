@@ -50,7 +50,7 @@ def one_case(k: int, force_noise: float, disp_noise: float) -> dict:
            "tau": r.noise.get("tau", math.nan), "dF0": dF0,
            "dF0_fit": r.offsets["force"][0], "dF0_se": r.offsets["force"][1]}
     for n in NAMES:
-        v, se, true = getattr(r.params, n), r.stderr[n], getattr(p, n)
+        v, se, true = getattr(r.joint, n), r.stderr[n], getattr(p, n)
         out[n] = {"identified": bool(r.identified[n]), "z": (v - true) / se if se > 0 else math.nan,
                   "covered": bool(math.isfinite(se) and abs(v - true) <= 1.96 * se)}
     return out

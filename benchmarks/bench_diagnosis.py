@@ -102,7 +102,7 @@ def agree(g) -> bool:
     warns = " | ".join(tuple(f.warnings) + tuple(g.warnings))
     ok = True
     for k in ("Fs", "KT", "chi", "beta"):
-        v, se = getattr(f.params, k), f.stderr.get(k, float("nan"))
+        v, se = getattr(f.joint, k), f.stderr.get(k, float("nan"))
         scale = abs(v + 1.0) if k == "chi" else abs(v)
         bound = (k == "chi" and not -0.98 + 1e-6 < v < 1.0 - 1e-6) or \
                 (k == "beta" and not 1e-6 < v < 100.0 - 1e-6)

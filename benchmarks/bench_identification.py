@@ -78,7 +78,7 @@ def bench_methods(n_seeds: int) -> list[str]:
                 for m in METHODS:
                     r, dt = _run(m, data, table, p)
                     a = acc[m]
-                    q = r.params
+                    q = r.joint
                     a["KT"].append(q.KT / p.KT - 1)
                     a["chi"].append(q.chi - p.chi)
                     a["Fs"].append(q.Fs / p.Fs - 1)
@@ -114,7 +114,7 @@ def bench_example(repeats: int = 5) -> list[str]:
             r = fit_loops(data.t, data.u, data.F, **kwargs)
             walls.append(time.perf_counter() - t0)
             cpus.append(time.process_time() - c0)
-        q = r.params
+        q = r.joint
         lines.append(f"| {label} | {statistics.median(walls):.2f} s | {statistics.median(cpus):.2f} s "
                      f"| {q.Fs / truth.Fs - 1:+.2%} | {q.KT / truth.KT - 1:+.2%} | "
                      f"{q.chi - truth.chi:+.4f} | {q.beta - truth.beta:+.4f} |")

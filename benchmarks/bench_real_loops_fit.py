@@ -56,7 +56,7 @@ def main(argv=None):
             warnings.simplefilter("ignore", IdentifiabilityWarning)
             r = fit_loops(d[:, 0], d[:, 1], d[:, 2])
         dt = time.perf_counter() - t0
-        p, se, idf = r.params, r.stderr, r.identified
+        p, se, idf = r.joint, r.stderr, r.identified
         (f0, sf0), (u0, su0) = r.offsets["force"], r.offsets["displacement"]
         rows.append([f.stem, _pm(f0, sf0), _pm(u0 * 1e6, su0 * 1e6),
                      _pm(p.Fs, se["Fs"], idf["Fs"]), _pm(p.KT * 1e-6, se["KT"] * 1e-6, idf["KT"]),

@@ -194,7 +194,7 @@ def main(argv=None) -> dict:
 
     progress("identifying the joint from the example test record (SYNTHETIC data)")
     data, fit = identify(example_test_path())
-    p = fit.params
+    p = fit.joint
     progress(f"identified Fs = {p.Fs:.1f} N, KT = {p.KT:.4g} N/m, chi = {p.chi:.4f}, "
              f"beta = {p.beta:.4f} (NRMSE {fit.nrmse:.2e})")
 

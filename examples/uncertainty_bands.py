@@ -59,8 +59,8 @@ def main(argv=None) -> dict:
                                       unc.cov * args.inflate ** 2,
                                       source=f"{unc.source}, std. errors x {args.inflate:g}",
                                       warnings=unc.warnings)
-    system = ie.SingleModeSystem(mass=10.0, stiffness=0.5 * fit.params.KT, zeta0=1e-3)
-    amplitudes = np.geomspace(1e-6, 1.5 * fit.params.phi_max, 12 if args.quick else 30)
+    system = ie.SingleModeSystem(mass=10.0, stiffness=0.5 * fit.joint.KT, zeta0=1e-3)
+    amplitudes = np.geomspace(1e-6, 1.5 * fit.joint.phi_max, 12 if args.quick else 30)
     client = None
     executor = "serial" if args.quick else None
     if args.scheduler:
@@ -83,7 +83,7 @@ def main(argv=None) -> dict:
     axes[1, 2].clear()                             # (its peak panel repeats the one above)
     axes[1, 2].axis("off")
     axes[1, 2].text(0, 0.5, "\n".join([f"fit: {bands.uncertainty.source}",
-                                       f"nominal {fit.params}".replace(", ", ",\n  "),
+                                       f"nominal {fit.joint}".replace(", ", ",\n  "),
                                        f"system: m = {system.mass:g} kg, K_inf = "
                                        f"{system.stiffness:.3g} N/m, zeta0 = {system.zeta0:g}"]),
                     fontsize=8, va="center")

@@ -96,7 +96,7 @@ def build_parser() -> argparse.ArgumentParser:
                      help="write measured vs fitted loops and the dissipation plot")
     fit.add_argument("--json", type=Path, metavar="FILE",
                      help="write the result as JSON (params loadable with "
-                          "IwanParameters.from_dict(d['params']))")
+                          "IwanParameters.from_dict(d['joint']))")
     dg = sub.add_parser(
         "diagnose", help="find which physical effect the Iwan fit misses (CSV test record)",
         description="Fit the four-parameter Iwan model with the sensor offsets as nuisance "

@@ -92,7 +92,7 @@ def plot_loop(u0: float, params: IwanParameters, *, n: int = 401, ax=None,
 
 
 def _fit_params(params) -> IwanParameters:
-    p = getattr(params, "params", params)             # a FitResult or IwanParameters
+    p = getattr(params, "joint", params)             # a FitResult or IwanParameters
     if not isinstance(p, IwanParameters):
         raise ValueError(f"params must be IwanParameters or a FitResult, got {type(params).__name__}")
     return p

@@ -4,7 +4,8 @@
   tangential stiffness per area, the friction coefficient, chi and the modal damping floor)
   so that the QSMA curve (:func:`~iwan_element.models.qsma.modal_amplitude_curve`) matches a
   measured :class:`~iwan_element.AmplitudeCurve` (frequency and damping against amplitude at
-  the specimen's sensor point). Nonlinear least squares (``scipy.optimize.least_squares``,
+  the specimen's sensor point). Nonlinear least squares (``scipy.optimize.least_squares`` through
+  :func:`iwan_element.fitting.minimize`,
   log-parameters, bounded), residuals ``(f/f_meas - 1)/f_tol`` and ``(zeta/zeta_meas - 1)/z_tol``;
   standard errors from the Jacobian at the optimum.
 * From a joint or modal Iwan fit: :func:`interface_from_joint` maps a lumped joint
@@ -29,6 +30,8 @@ from scipy import optimize
 
 from iwan_element import AmplitudeCurve, IwanParameters, amplitude_curve
 from iwan_element.core.result_shape import ResultShape, panels
+from iwan_element.fitting import (Parameter, ParameterTable, covariance, fit_success,
+                                  minimize, verdict)
 
 from .interface import contact_points
 from .qsma import linear_modes, modal_amplitude_curve
@@ -40,6 +43,8 @@ __all__ = ["measured_amplitude_curve", "CalibrationResult", "calibrate", "interf
 _FIT = ("stiffness_per_area", "friction", "chi", "damping_floor", "beta")
 _BOUNDS = {"stiffness_per_area": (1e9, 1e15), "friction": (1e-3, 3.0), "chi": (-0.95, 0.0),
            "damping_floor": (1e-6, 0.05), "beta": (1e-4, 10.0)}
+_UNITS = {"stiffness_per_area": "N/m^3", "friction": "1", "chi": "1", "damping_floor": "1",
+          "beta": "1"}
 
 
 def measured_amplitude_curve(path, *, band=(60.0, 120.0), window: float = 0.25,
@@ -60,13 +65,27 @@ def measured_amplitude_curve(path, *, band=(60.0, 120.0), window: float = 0.25,
 
 @dataclass
 class CalibrationResult(ResultShape):
-    """Result of :func:`calibrate`."""
+    """Result of :func:`calibrate`.
+
+    Attributes
+    ----------
+    specimen : Specimen
+        The calibrated specimen.
+    params : ParameterTable
+        The fitted interface parameters with standard errors, search ranges, units and
+        verdicts (:func:`iwan_element.fitting.verdict`); ``params.values``,
+        ``params.stderr`` are the dict views.
+    measured, model : AmplitudeCurve
+    max_frequency_error, max_damping_error : float
+    success : bool
+        Converged, no warning, every fitted parameter identified.
+    warnings : tuple of str
+    """
 
     plot_panels = 2
 
     specimen: Specimen
-    params: dict
-    stderr: dict
+    params: ParameterTable
     measured: AmplitudeCurve
     model: AmplitudeCurve
     max_frequency_error: float
@@ -77,15 +96,15 @@ class CalibrationResult(ResultShape):
     def report(self) -> str:
         lines = [f"Interface calibration of {self.specimen.name!r} "
                  f"({'converged' if self.success else 'NOT converged'})"]
-        for k, v in self.params.items():
-            lines.append(f"  {k:20s} = {v:.6g} +- {self.stderr[k]:.2g}")
+        for k, p in self.params.items():
+            lines.append(f"  {k:20s} = {p.value:.6g} +- {p.stderr:.2g} [{p.unit}]  {p.status}")
         lines.append(f"  max |f/f_meas - 1|      = {self.max_frequency_error:.2e}")
         lines.append(f"  max |zeta/zeta_meas - 1| = {self.max_damping_error:.3f}")
         lines += [f"  warning: {w}" for w in self.warnings]
         return "\n".join(lines)
 
     def to_dict(self) -> dict:
-        return {"params": self.params, "stderr": self.stderr, "success": self.success,
+        return {"params": self.params.to_dict(), "success": self.success,
                 "max_frequency_error": self.max_frequency_error,
                 "max_damping_error": self.max_damping_error, "warnings": list(self.warnings),
                 "model": self.model.to_dict(), "measured": self.measured.to_dict()}
@@ -153,29 +172,37 @@ def calibrate(specimen: Specimen, measured: AmplitudeCurve, *, fit=("stiffness_p
         c = model(x)
         return np.concatenate([(c.frequency / fm - 1) / f_tol, (c.damping_ratio / zm - 1) / z_tol])
 
-    sol = optimize.least_squares(resid, x0, bounds=(lb, ub), x_scale=1.0, diff_step=1e-4,
-                                 max_nfev=200)
+    sol = minimize(resid, x0, lb, ub, method="trf", max_nfev=200, x_scale=1.0, diff_step=1e-4)
     vals = [transform(n, v, True) for n, v in zip(fit, sol.x)]
     fitted = _with(specimen, fit, vals).replace(calibrated_range=(float(X.min()), float(X.max())))
     curve = modal_amplitude_curve(fitted, mode=mode, amplitudes=X)
     warns = []
-    try:
-        dof = max(1, sol.fun.size - len(fit))
-        cov = np.linalg.inv(sol.jac.T @ sol.jac) * (2 * sol.cost / dof)
-        se_t = np.sqrt(np.diag(cov))
-    except np.linalg.LinAlgError:
-        se_t = np.full(len(fit), np.nan)
+    # the package's one covariance routine (docs/fitting.md): s^2 (J^T J)^-1, s^2 = SSR/dof,
+    # with the delta method from the fitted logarithms
+    dlog = np.diag([1.0 if n == "chi" else v for n, v in zip(fit, vals)])
+    se = (covariance(sol.jac, sol.fun, Jp=dlog).stderr if np.all(np.isfinite(sol.jac))
+          else np.full(len(fit), np.nan))
+    if not np.all(np.isfinite(se)):
         warns.append("the Jacobian is singular: some parameters are not identifiable")
-    stderr = {n: (float(s) if n == "chi" else float(v * s)) for n, v, s in zip(fit, vals, se_t)}
     ferr = float(np.max(np.abs(curve.frequency / fm - 1)))
     zerr = float(np.max(np.abs(curve.damping_ratio / zm - 1)))
-    for n, v in zip(fit, sol.x):
-        if min(v - lb[fit.index(n)], ub[fit.index(n)] - v) < 1e-3:
+    rows = []
+    for k, (n, v) in enumerate(zip(fit, sol.x)):
+        at_bound = min(v - lb[k], ub[k] - v) < 1e-3
+        if at_bound:
             warns.append(f"{n} ended on its bound")
-    return CalibrationResult(specimen=fitted, params=dict(zip(fit, map(float, vals))),
-                             stderr=stderr, measured=measured, model=curve,
+        lo, hi = _BOUNDS[n]
+        val = min(max(vals[k], lo), hi)             # exp(ln b) may round past the bound b
+        ok, _ = verdict(n, val, float(se[k]), at_bound=at_bound,
+                        reference=val + 1.0 if n == "chi" else None,
+                        reference_text="chi + 1" if n == "chi" else "its value")
+        rows.append(Parameter(n, val, float(se[k]), lo, hi, _UNITS[n], ok))
+    table = ParameterTable(rows)
+    return CalibrationResult(specimen=fitted, params=table, measured=measured, model=curve,
                              max_frequency_error=ferr, max_damping_error=zerr,
-                             success=bool(sol.success) and not warns, warnings=tuple(warns))
+                             success=fit_success(bool(sol.success) and not warns,
+                                                 table.identified),
+                             warnings=tuple(warns))
 
 
 def interface_from_joint(specimen: Specimen, joint: IwanParameters) -> Specimen:

@@ -11,10 +11,25 @@ from iwan_element import IwanJoint, diagnose, diagnose_many
 from iwan_element.diagnose import simulate_element_test
 
 
-def _clean(seed):
-    d = simulate_element_test(IwanJoint(P), np.array([0.3, 0.8]) * P.phi_max, force_noise=5.0,
+def _clean(seed, amps=(0.3, 0.8)):
+    d = simulate_element_test(IwanJoint(P), np.array(amps) * P.phi_max, force_noise=5.0,
                               seed=seed)
     return d.t, d.u, d.F
+
+
+def test_microslip_only_record_does_not_claim_fs_and_beta():
+    """Below macroslip the loops depend on KT, chi and R only (docs/equations.md section 2): the
+    diagnosis' Jacobian has a degenerate direction in (Fs, beta), so both get no standard
+    error and are not identified (a pseudo-inverse alone claimed Fs to 3e-7 %), while KT and
+    chi are; with a record into macroslip all four are identified."""
+    g = diagnose(*_clean(10))
+    f = g.fit
+    assert not f.identified["Fs"] and not f.identified["beta"] and not g.success
+    assert np.isnan(f.stderr["Fs"]) and np.isnan(f.stderr["beta"])
+    assert f.identified["KT"] and f.identified["chi"]
+    assert any("Fs is not determined by the data" in w for w in f.warnings)
+    g = diagnose(*_clean(10, (0.3, 0.8, 2.0)))
+    assert g.success and all(g.fit.identified.values()), g.fit.report()
 
 
 def test_batch_equals_record_by_record_and_keeps_refusals():
@@ -71,7 +86,7 @@ def test_cli_diagnoses_several_records_with_one_table_and_json(tmp_path, capsys)
     from iwan_element.cli import main
     paths = []
     for k in range(2):
-        t, u, F = _clean(10 + k)
+        t, u, F = _clean(10 + k, (0.3, 0.8, 2.0))       # into macroslip: a success
         p = tmp_path / f"rec{k}.csv"
         p.write_text("time [s],displacement [mm],force [kN]\n" + "\n".join(
             f"{a:.6f},{b:.8f},{c:.7f}" for a, b, c in zip(t, u * 1e3, F * 1e-3)) + "\n")

@@ -50,10 +50,10 @@ def test_brake_reuss_calibrated_from_neutral_start_reproduces_the_measured_curve
     # the preset carries a calibration of this record: every parameter within 2 % or two of
     # its stated standard errors (friction is weakly identified from a microslip ring-down,
     # +- 35 %: the curve fixes the slip combination, not the friction coefficient alone)
-    for k, v in res.params.items():
+    for k, v in res.params.values.items():
         ref = getattr(preset("brake-reuss"), k) if k == "friction" else \
             getattr(preset("brake-reuss").interface, k)
-        assert abs(v - ref) <= max(0.02 * abs(ref), 2.0 * res.stderr[k]), (k, res.report())
+        assert abs(v - ref) <= max(0.02 * abs(ref), 2.0 * res.params.stderr[k]), (k, res.report())
 
 
 def test_a_lumped_joint_maps_onto_the_interface_with_its_totals():

@@ -39,7 +39,7 @@ def test_fit_loops_prints_report_and_writes_json_and_plot(csv_path, tmp_path, ca
     assert "loop fit" in out.out and "KT   [N/m]" in out.out and "units mm, kN, s" in out.out
     assert out.err == ""                              # warnings go into the report, not stderr
     d = json.loads(js.read_text())
-    q = IwanParameters.from_dict(d["params"])
+    q = IwanParameters.from_dict(d["joint"])
     assert q.KT == pytest.approx(P.KT, rel=0.01) and q.Fs == pytest.approx(P.Fs, rel=0.01)
     assert d["data"]["units"] == {"time": "s", "displacement": "mm", "force": "kN"}
     assert png.stat().st_size > 10_000 and png.read_bytes()[:4] == b"\x89PNG"

@@ -115,7 +115,7 @@ def test_clean_data_and_offsets_never_name_an_effect():
         f = g.fit
         assert all(f.identified[k] for k in ("Fs", "KT", "chi")), f.report()
         for k, ok in f.identified.items():
-            scale = abs(getattr(f.params, k) + (1.0 if k == "chi" else 0.0))
+            scale = abs(getattr(f.joint, k) + (1.0 if k == "chi" else 0.0))
             assert not ok or f.stderr[k] <= 0.5 * scale, (k, f.report())
             assert ok or any(k in w for w in f.warnings), (k, f.warnings)
         assert g.offsets["force"] == pytest.approx((50.0, -300.0, 120.0)[seed % 3], abs=5.0)

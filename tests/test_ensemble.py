@@ -297,7 +297,7 @@ def test_from_fit_uses_the_fit_covariance():
     assert all(fit.identified.values())
     unc = ParameterUncertainty.from_fit(fit)
     assert unc.names == ("Fs", "KT", "chi", "beta")
-    scale = np.array([fit.params.Fs, fit.params.KT, 1.0, 1.0 + fit.params.beta])
+    scale = np.array([fit.joint.Fs, fit.joint.KT, 1.0, 1.0 + fit.joint.beta])
     se = np.array([fit.stderr[k] for k in ("Fs", "KT", "chi", "beta")]) / scale
     np.testing.assert_allclose(np.sqrt(np.diag(unc.cov)), se, rtol=1e-9)
     np.testing.assert_allclose(unc.cov[1, 2] / (se[1] * se[2]), fit.correlation[1, 2], rtol=1e-9)
@@ -444,5 +444,5 @@ def test_dissipation_fits_are_propagated_and_a_given_fs_is_held():
     assert "Fs" not in unc_seed.names
     assert any("Fs" in w and "held" in w for w in unc_seed.warnings)
     sets, _ = unc_seed.sample(50, rng=np.random.default_rng(0))
-    assert all(s["Fs"] == seed.params.Fs for s in sets)
+    assert all(s["Fs"] == seed.joint.Fs for s in sets)
     assert len({s["KT"] for s in sets}) == 50

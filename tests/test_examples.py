@@ -32,7 +32,7 @@ def test_jointed_beam_main_job_quick(tmp_path):
         assert (tmp_path / name).stat().st_size > 1000, name
     summary = json.loads((tmp_path / "summary.json").read_text())
     assert summary["data"]["synthetic"] is True
-    assert abs(summary["identified"]["params"]["Fs"] / 9000.0 - 1) < 0.01
+    assert abs(summary["identified"]["joint"]["Fs"] / 9000.0 - 1) < 0.01
     assert "zeta pred" in proc.stdout
 
 

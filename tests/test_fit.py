@@ -21,7 +21,8 @@ from scipy import optimize
 
 from iwan_element import (IwanJoint, IwanParameters, dissipation, force_amplitude,
                           secant_stiffness)
-from iwan_element.identify._solver import _Problem, _lsq_box, _q_to_shape
+from iwan_element.fitting import minimize
+from iwan_element.identify._solver import _Problem, _q_to_shape
 from iwan_element.identify.dissipation import _seed_model
 from iwan_element.identify.result import quiet_fits as _quiet_ctx
 from iwan_element.core.history import History
@@ -91,7 +92,7 @@ def test_box_lm_reaches_the_scipy_least_squares_minimum():
             return prob.projected(*_q_to_shape(q, prob.x_max, None))[1]
 
         q0 = np.array([math.log(1.5), -0.7, 1.0])
-        ours = _lsq_box(fun, q0, lower, upper, max_nfev=400)
+        ours = minimize(fun, q0, lower, upper, method="box-lm", max_nfev=400)
         ref = optimize.least_squares(fun, q0, bounds=(lower, upper), method="trf",
                                      ftol=1e-12, xtol=1e-12, gtol=1e-12, max_nfev=400)
         assert ours.status > 0
@@ -108,7 +109,7 @@ def test_loop_fit_exact_data_is_recovered(p):
     for amps, macro in ((MICRO, False), (MACRO, True)):
         d = simulate_test(p, np.array(amps) * p.phi_max, cycles=2, sample_rate=5)
         r = quiet_fits(fit_loops, d.t, d.u, d.F)
-        q = r.params
+        q = r.joint
         assert r.success and r.identified["Fs"] is macro
         # a parameter at the bound of its range (beta = 0) is never called identified
         assert r.identified["beta"] is (macro and p.beta > 0)
@@ -138,7 +139,7 @@ def test_loop_fit_round_trip_at_one_percent_force_noise(p, macro):
         warnings.simplefilter("always")
         r = fit_loops(d.t, d.u, d.F, max_samples=None, seed=1)
     assert np.array_equal(d.F, F_in)
-    q = r.params
+    q = r.joint
     assert r.success
     assert abs(q.KT / p.KT - 1) < 0.01
     assert abs(q.chi - p.chi) < 0.02
@@ -177,7 +178,7 @@ def test_loop_fit_is_reproducible_and_json_safe():
     assert da == db
     text = json.dumps(a.to_dict(), allow_nan=False)
     back = json.loads(text)
-    assert IwanParameters.from_dict(back["params"]) == a.params
+    assert IwanParameters.from_dict(back["joint"]) == a.joint
     assert back["correlation"]["order"] == ["Fs", "KT", "chi", "beta"]
     rep = a.report()
     for key in ("KT   [N/m]", "correlation", "NRMSE", "identified"):
@@ -187,7 +188,7 @@ def test_loop_fit_is_reproducible_and_json_safe():
     assert a.details["burn_in"] > 0 and a.n_data == d.u.size - a.details["burn_in"]
     # a constant sigma only rescales the residuals: same parameters and standard errors
     w = quiet_fits(fit_loops, d.t, d.u, d.F, seed=42, n_starts=8, noise=np.full(d.u.size, 50.0))
-    assert w.params.KT == pytest.approx(a.params.KT, rel=1e-8)
+    assert w.joint.KT == pytest.approx(a.joint.KT, rel=1e-8)
     assert w.stderr["KT"] == pytest.approx(a.stderr["KT"], rel=1e-6)
     assert w.residual_norm == pytest.approx(a.residual_norm / 50.0, rel=1e-8)
 
@@ -197,7 +198,7 @@ def test_decimation_keeps_reversals_and_accuracy():
     d = simulate_test(p, np.array(MACRO) * p.phi_max, cycles=2, sample_rate=10)
     r = quiet_fits(fit_loops, d.t, d.u, d.F, max_samples=500)
     assert r.details["fitted_samples"] == 500 and r.details["model_samples"] > 500
-    assert r.params.KT == pytest.approx(p.KT, rel=1e-7)
+    assert r.joint.KT == pytest.approx(p.KT, rel=1e-7)
 
 
 def test_smoothing_reduces_the_displacement_noise_bias():
@@ -211,7 +212,7 @@ def test_smoothing_reduces_the_displacement_noise_bias():
     # the de-noised drive and the dead band of 3 sigma against noise reversals remove the
     # errors-in-variables bias (KT low, chi high) that unfiltered noise used to cause
     for r in (raw, smooth):
-        assert abs(r.params.chi - p.chi) < 0.01 and abs(r.params.KT / p.KT - 1) < 0.01
+        assert abs(r.joint.chi - p.chi) < 0.01 and abs(r.joint.KT / p.KT - 1) < 0.01
     assert not any("displacement noise" in w for w in smooth.warnings)
 
 
@@ -267,7 +268,7 @@ def test_seed_method_recovers_exact_microslip_data(p):
     with pytest.warns(IdentifiabilityWarning, match="follows from the given Fs"):
         r = fit_dissipation(*args, u0=u0, method="seed", Fs=p.Fs)
     assert np.array_equal(args[0], F0) and np.array_equal(args[1], D)
-    q = r.params
+    q = r.joint
     assert r.success and r.method == "seed" and r.fixed == ("Fs",)
     assert q.KT == pytest.approx(p.KT, rel=1e-6) and q.chi == pytest.approx(p.chi, abs=1e-6)
     assert q.beta == pytest.approx(p.beta, abs=1e-5)
@@ -281,10 +282,10 @@ def test_seed_beta_is_conditional_on_the_given_fs():
     right = quiet_fits(fit_dissipation, F0, D, u0=u0, method="seed", Fs=p.Fs)
     wrong = quiet_fits(fit_dissipation, F0, D, u0=u0, method="seed", Fs=1.3 * p.Fs)
     # same KT, chi and R (what microslip data determine), different beta, both fit exactly
-    assert wrong.params.KT == pytest.approx(right.params.KT, rel=1e-5)
-    assert wrong.params.chi == pytest.approx(right.params.chi, abs=1e-5)
-    assert wrong.params.R == pytest.approx(right.params.R, rel=1e-4)
-    assert wrong.params.beta < right.params.beta - 0.3      # a larger Fs needs less spike
+    assert wrong.joint.KT == pytest.approx(right.joint.KT, rel=1e-5)
+    assert wrong.joint.chi == pytest.approx(right.joint.chi, abs=1e-5)
+    assert wrong.joint.R == pytest.approx(right.joint.R, rel=1e-4)
+    assert wrong.joint.beta < right.joint.beta - 0.3      # a larger Fs needs less spike
     assert wrong.nrmse < 1e-6 and right.nrmse < 1e-6
 
 
@@ -294,7 +295,7 @@ def test_seed_method_leaves_out_macroslip_cycles():
     r = quiet_fits(fit_dissipation, force_amplitude(u0, p), dissipation(u0, p), u0=u0,
                method="seed", Fs=p.Fs)
     assert any("3 cycle(s) with F0 >= 0.99 Fs were left out" in w for w in r.warnings)
-    assert r.params.KT == pytest.approx(p.KT, rel=1e-6) and r.details["cycles_used"] == 3
+    assert r.joint.KT == pytest.approx(p.KT, rel=1e-6) and r.details["cycles_used"] == 3
 
 
 @pytest.mark.parametrize("p", SETS, ids=lambda p: f"chi={p.chi},beta={p.beta}")
@@ -302,7 +303,7 @@ def test_least_squares_dissipation_fit_on_exact_tables(p):
     for amps, macro in ((MICRO, False), (MACRO, True)):
         u0 = np.array(amps) * p.phi_max
         r = quiet_fits(fit_dissipation, force_amplitude(u0, p), dissipation(u0, p), u0=u0)
-        q = r.params
+        q = r.joint
         assert r.method == "least_squares" and r.identified["Fs"] is macro
         assert q.KT == pytest.approx(p.KT, rel=1e-6) and q.chi == pytest.approx(p.chi, abs=1e-6)
         if macro:
@@ -318,9 +319,9 @@ def test_dissipation_fit_from_noisy_loops():
     ls = quiet_fits(fit_dissipation, tab["F0"], tab["D"], u0=tab["u0"])
     sd = quiet_fits(fit_dissipation, tab["F0"], tab["D"], u0=tab["u0"], method="seed", Fs=p.Fs)
     for r in (ls, sd):
-        assert abs(r.params.KT / p.KT - 1) < 0.02 and abs(r.params.chi - p.chi) < 0.03
-    assert ls.identified["Fs"] and abs(ls.params.Fs / p.Fs - 1) < 0.01
-    assert abs(ls.params.beta - p.beta) < 0.05
+        assert abs(r.joint.KT / p.KT - 1) < 0.02 and abs(r.joint.chi - p.chi) < 0.03
+    assert ls.identified["Fs"] and abs(ls.joint.Fs / p.Fs - 1) < 0.01
+    assert abs(ls.joint.beta - p.beta) < 0.05
 
 
 def test_dissipation_fit_bad_inputs():
@@ -355,10 +356,10 @@ def test_fit_on_the_shipped_example_is_fast_and_close():
     cpu = time.process_time() - c0
     assert cpu < 2.0
     truth = IwanParameters.load(EXAMPLE.with_name("example_test_30kN_params.json"))
-    assert r.identified["Fs"] and r.params.Fs == pytest.approx(truth.Fs, rel=0.01)
-    assert r.params.KT == pytest.approx(truth.KT, rel=0.01)
-    assert r.params.chi == pytest.approx(truth.chi, abs=0.02)
-    assert r.params.beta == pytest.approx(truth.beta, rel=0.1)
+    assert r.identified["Fs"] and r.joint.Fs == pytest.approx(truth.Fs, rel=0.01)
+    assert r.joint.KT == pytest.approx(truth.KT, rel=0.01)
+    assert r.joint.chi == pytest.approx(truth.chi, abs=0.02)
+    assert r.joint.beta == pytest.approx(truth.beta, rel=0.1)
 
 
 # ------------------------------------------------------------------ plots
@@ -378,8 +379,8 @@ def test_fit_plots_return_artists():
     lines = plot_fitted_loops(d.u, d.F, r, ax=ax1)
     assert len(lines) == 2 and lines[0].axes is ax1
     # the fitted line is the exact joint in mm/kN
-    assert np.allclose(lines[1].get_ydata(), IwanJoint(r.params).force_history(d.u) * 1e-3)
-    arts = plot_dissipation_fit(tab["F0"], tab["D"], r.params, ax=ax2)
+    assert np.allclose(lines[1].get_ydata(), IwanJoint(r.joint).force_history(d.u) * 1e-3)
+    arts = plot_dissipation_fit(tab["F0"], tab["D"], r.joint, ax=ax2)
     assert len(arts) == 4 and arts[0].axes is ax2 and arts[2].axes is not ax2   # slope: twin axis
     assert np.array_equal(d.u, u_in)
     assert len(plot_dissipation_fit(tab["F0"], tab["D"], r, ax=ax2, slope=False)) == 2
@@ -440,8 +441,8 @@ def test_sensor_offsets_are_absorbed_and_reported(dF0, du0):
     (f, sf), (d, sd) = r.offsets["force"], r.offsets["displacement"]
     assert abs(f - dF0) < max(4 * sf, 3.0) and abs(d - du0) < max(4 * sd, 0.5e-6)
     assert r.success and all(r.identified.values())
-    assert abs(r.params.Fs / p.Fs - 1) < 0.01 and abs(r.params.KT / p.KT - 1) < 0.03
-    assert abs(r.params.chi - p.chi) < 0.03
+    assert abs(r.joint.Fs / p.Fs - 1) < 0.01 and abs(r.joint.KT / p.KT - 1) < 0.03
+    assert abs(r.joint.chi - p.chi) < 0.03
     text = " ".join(r.warnings)
     assert "at rest" not in text and "drift" not in text
     rep = r.report()
@@ -455,7 +456,7 @@ def test_offset_of_a_record_that_does_not_start_at_rest():
     d = simulate_test(p, np.full(4, 1.5 * p.phi_max), cycles=2, sample_rate=5)
     i0 = d.u.size // 5 + 37                                   # somewhere inside a cycle
     r = quiet_fits(fit_loops, d.t[i0:], d.u[i0:], d.F[i0:] + 120.0)
-    assert r.params.KT == pytest.approx(p.KT, rel=1e-6) and r.params.Fs == pytest.approx(p.Fs, rel=1e-6)
+    assert r.joint.KT == pytest.approx(p.KT, rel=1e-6) and r.joint.Fs == pytest.approx(p.Fs, rel=1e-6)
     assert not any("rest" in w for w in r.warnings)
 
 
@@ -479,7 +480,7 @@ def test_status_column_success_and_warnings_agree():
                       force_noise=0.05 * p.Fs * 0.1, seed=4)
     r = quiet_fits(fit_loops, d.t, d.u, d.F)
     for k in ("Fs", "KT", "chi", "beta"):
-        se, v = r.stderr[k], getattr(r.params, k)
+        se, v = r.stderr[k], getattr(r.joint, k)
         scale = abs(v + 1) if k == "chi" else abs(v)
         if r.identified[k]:
             assert math.isfinite(se) and se <= 0.5 * scale
@@ -548,10 +549,11 @@ def test_fit_force_model_recovers_a_model_with_offsets():
     r = fit_force_model(d.t, d.u + 15e-6, d.F + 200.0, model, [800, 1.5e6, -0.3, 0.5],
                         lower=[1, 1, -0.98, 0], upper=[1e5, 1e9, 0.5, 50],
                         names=["Fs", "KT", "chi", "beta"])
-    assert r.success and r.names[-2:] == ("dF0", "du0")
+    assert r.success and r.params.names[-2:] == ("dF0", "du0")
     for k, true in (("Fs", p.Fs), ("KT", p.KT), ("chi", p.chi), ("beta", p.beta),
                     ("dF0", 200.0), ("du0", 15e-6)):
-        assert abs(r.values[k] - true) < 4 * r.stderr[k] + 1e-12 * abs(true), k
+        assert abs(r.params.values[k] - true) < 4 * r.params.stderr[k] + 1e-12 * abs(true), k
+    assert r.params["dF0"].nuisance and r.params["dF0"].unit == "N" and r.params["du0"].unit == "m"
     assert json.dumps(r.to_dict(), allow_nan=False) and "dF0" in r.report()
     with pytest.raises(ValueError, match="model must be callable"):
         fit_force_model(d.t, d.u, d.F, None, [1.0])

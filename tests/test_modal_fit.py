@@ -51,7 +51,7 @@ def test_microslip_data_report_only_what_they_fix():
     r = fit_modal_iwan(AmplitudeCurve(X, f, z, frequency_std=sf, damping_std=sz))
     assert r.regime == "microslip" and r.success
     assert set(r.parameters) == {"f0", "zeta0", "chi", "delta"}
-    assert r.params is None
+    assert r.joint is None
     assert any("never leave microslip" in w for w in r.warnings)
     x_ref = r.conventions["x_ref"]
     truth = {"f0": math.sqrt(k_inf + p.KT) / (2 * math.pi), "zeta0": 1.5e-3, "chi": p.chi,
@@ -69,7 +69,7 @@ def test_macroslip_data_identify_the_joint():
     f, z, sf, sz = _data(X, p, k_inf, 1e-3, rng)
     r = fit_modal_iwan(X, f, z)                    # no stated uncertainties: from residuals
     assert r.regime == "macroslip", r.report()
-    q = r.params
+    q = r.joint
     assert isinstance(q, IwanParameters)
     assert q.phi_max == pytest.approx(p.phi_max, rel=0.05)
     assert q.KT == pytest.approx(p.KT, rel=0.05)

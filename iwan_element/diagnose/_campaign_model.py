@@ -13,6 +13,7 @@ from scipy.sparse import lil_matrix
 from ..core.validation import finite_array
 from ..effects import EFFECTS
 from ..effects.evaluate import Evaluator
+from ..fitting import normal_inverse
 from . import _model as M
 from ..identify.noise import integrated_time
 from .batch import band_misfit
@@ -176,7 +177,7 @@ def record_from_diagnosis(d, max_samples: int) -> dict:
     uj = np.asarray(d.u, float) - float(d.offsets["displacement"])
     F = np.asarray(d.F, float)
     keep = fitted_samples(uj.size, max_samples)
-    p = d.fit.params
+    p = d.fit.joint
     own = F - np.asarray(d.force_after, float)
     est, se = {"Fs": p.Fs, "log_phi_max": math.log(p.phi_max), "chi": p.chi,
                "log1p_beta": math.log1p(p.beta)}, {}
@@ -191,7 +192,7 @@ def record_from_diagnosis(d, max_samples: int) -> dict:
             s_val = float(e["stderr"].get(sp.name) or math.nan) / p.Fs ** sp.fs_power
             est[k] = to_law(sp, val)
             se[k] = s_val / (val - sp.lower) if log_form(sp) else s_val
-    base = d.base_fit.params
+    base = d.base_fit.joint
     return {"t": t, "u": uj, "F": F, "keep": keep, "effects": tuple(d.effects),
             "estimates": est, "stderr": se, "start": float(d.details["start_displacement"]),
             "sigma": float(d.noise_sigma), "rms_own": float(np.sqrt(np.mean(own[keep] ** 2))),
@@ -420,5 +421,5 @@ def scatter_coef_cov(model, theta, S, skip=None) -> np.ndarray:
         if not np.all(var > 0):
             continue
         sl = model.slices[q]
-        C[sl, sl] = np.linalg.pinv((A / var[:, None]).T @ A, hermitian=True)
+        C[sl, sl] = normal_inverse(A / np.sqrt(var)[:, None])[0]     # (A^T V^-1 A)^-1
     return C

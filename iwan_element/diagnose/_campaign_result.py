@@ -11,6 +11,7 @@ import numpy as np
 
 from ..core.result_shape import ResultShape
 from ..core.serialize import json_safe
+from ..fitting import Parameter, ParameterTable, covariance, verdict
 from ..identify.noise import integrated_time
 from ..plotting import axes_or_new
 from . import _campaign_model as CM
@@ -21,10 +22,13 @@ __all__ = ["CampaignFit", "assemble"]
 Z_AGREE = 3.0                         # |z| above which a record disagrees with a law
 
 
-def _covariance(model, theta):
-    """Covariance of ``theta`` (delta method): rows of record ``r`` weighted by
-    ``1 / (s_r sqrt(tau_r))`` with ``s_r``, ``tau_r`` the RMS and correlation time of the
-    campaign residual on that record. Returns ``(cov, J, s, tau)``."""
+def _covariance(model, theta, T):
+    """Covariance of ``theta`` by the package's one routine
+    (:func:`iwan_element.fitting.covariance`, docs/fitting.md): rows of record ``r`` weighted
+    by ``1 / (s_r sqrt(tau_r))`` with ``s_r``, ``tau_r`` the RMS and correlation time of the
+    campaign residual on that record, ``s^2 = n / (n - p)``; the law coefficients
+    ``T theta[:n_glob]`` by the delta method (NaN along a degenerate direction). Returns
+    ``(cov, J, s, tau, stderr of the coefficients)``."""
     J = model.jacobian(theta)
     s, tau = [], []
     Jw = np.empty_like(J)
@@ -35,8 +39,14 @@ def _covariance(model, theta):
         sl = slice(model.rows[r], model.rows[r + 1])
         Jw[sl] = J[sl] / (s[-1] * math.sqrt(tau[-1]))
     n, p = J.shape
-    cov = np.linalg.pinv(Jw.T @ Jw, rcond=1e-12, hermitian=True) * n / max(n - p, 1)
-    return cov, J, np.array(s), np.array(tau)
+    s2 = n / max(n - p, 1)
+    if not np.all(np.isfinite(Jw)):
+        return (np.full((p, p), np.nan), J, np.array(s), np.array(tau),
+                np.full(T.shape[0], np.nan))
+    Jp = np.zeros((T.shape[0], p))
+    Jp[:, :T.shape[1]] = T
+    cov = covariance(Jw, s2=s2).covariance
+    return cov, J, np.array(s), np.array(tau), covariance(Jw, s2=s2, Jp=Jp).stderr
 
 
 def to_physical(model):
@@ -129,6 +139,12 @@ def _scatter(model, theta, free):
     return {q: float(math.sqrt(S[k, k])) for k, q in enumerate(names)}, S
 
 
+def _coef_unit(unit: str, term: str) -> str:
+    """Unit of a law coefficient: the quantity's, per unit of the condition for a slope
+    (conditions in their own units, ``"[cond]"``)."""
+    return unit if term == "1" else f"{unit}/[{term}]"
+
+
 def _stderr_dict(labels_c, cov_phys):
     out = {}
     for (q, term), e in zip(labels_c, np.sqrt(np.clip(np.diag(cov_phys), 0.0, None))):
@@ -141,18 +157,13 @@ def assemble(*, model, preps, labels, res, units, stack_from, warnings, options,
     """Uncertainty, coefficients, the per-record table, the verdict: a :class:`CampaignFit`."""
     theta = res.x
     t1 = time.perf_counter()
-    cov, J, s, tau = _covariance(model, theta)
+    T, labels_c = to_physical(model)
+    cov, J, s, tau, se = _covariance(model, theta, T)
     times = dict(times, uncertainty=time.perf_counter() - t1)
     ng = model.n_glob
     cov_int = cov[:ng, :ng]
-    T, labels_c = to_physical(model)
     coef = T @ theta[:ng]
     cov_phys = T @ cov_int @ T.T
-    se = np.sqrt(np.clip(np.diag(cov_phys), 0.0, None))
-    coefficients, stderr = {}, {}
-    for (q, term), c, e in zip(labels_c, coef, se):
-        coefficients.setdefault(q, {})[term] = float(c)
-        stderr.setdefault(q, {})[term] = float(e)
     rows, awarn = _rows(model, theta, cov_int, preps, labels)
     scatter, S = _scatter(model, theta, free)
     cov_re = None if S is None else CM.scatter_coef_cov(model, theta, S)
@@ -162,8 +173,15 @@ def assemble(*, model, preps, labels, res, units, stack_from, warnings, options,
     converged = bool(res.status > 0)
     if not converged:
         warns.append(f"the campaign fit did not converge: {res.message}")
-    ident = bool(np.all(np.isfinite(se)) and np.all(se > 0))
-    for q, recs in model.clipped(theta).items():
+    verdicts = [verdict(f"{q}:{t}", float(c), float(e), relative=False)[0] and e > 0
+                for (q, t), c, e in zip(labels_c, coef, se)]
+    ident = all(verdicts)
+    clipped = model.clipped(theta)
+    table = ParameterTable([Parameter(f"{q}:{t}", float(c), float(e),
+                                      unit=_coef_unit(units.get(q, ""), t),
+                                      identified=ok and q not in clipped)
+                            for (q, t), c, e, ok in zip(labels_c, coef, se, verdicts)])
+    for q, recs in clipped.items():
         ident = False
         names = [labels[r] for r in recs]
         warns.append(f"the {q} law leaves the range the model can take on {len(recs)} of "
@@ -184,7 +202,7 @@ def assemble(*, model, preps, labels, res, units, stack_from, warnings, options,
     return CampaignFit(
         records=tuple(labels), condition_names=model.cnames, effects=model.names,
         effects_from=stack_from, laws={q: tuple(v) for q, v in model.laws.items()},
-        units=units, coefficients=coefficients, stderr=stderr, covariance=cov_phys,
+        units=units, params=table, covariance=cov_phys,
         coefficient_labels=tuple(f"{q}:{t}" for q, t in labels_c), rows=tuple(rows),
         scatter=scatter, stderr_scatter=stderr_scatter,
         converged=converged, success=converged and ident, message=str(res.message),
@@ -210,8 +228,14 @@ class CampaignFit(ResultShape):
         ``{quantity: conditions}``: each quantity is ``a + sum_c b_c x_c`` over these.
     units : dict
         Unit of each quantity.
+    params : ParameterTable
+        The law coefficients ``"quantity:term"`` (term ``"1"`` for ``a``, a condition name
+        for its ``b_c``) with their standard errors (delta method), units and verdicts
+        (:func:`iwan_element.fitting.verdict`; a slope of zero is a valid finding, so only a
+        finite standard error, no relative precision, is asked).
     coefficients, stderr : dict
-        ``{quantity: {"1": a, condition: b_c}}`` and their standard errors (delta method).
+        (properties) ``{quantity: {"1": a, condition: b_c}}`` and their standard errors,
+        from ``params``.
     covariance : ndarray
         Of all coefficients, in the order of ``coefficient_labels`` (``"quantity:term"``).
     scatter : dict
@@ -245,8 +269,7 @@ class CampaignFit(ResultShape):
     effects_from: str
     laws: dict
     units: dict
-    coefficients: dict
-    stderr: dict
+    params: ParameterTable
     covariance: np.ndarray
     coefficient_labels: tuple
     rows: tuple
@@ -260,6 +283,23 @@ class CampaignFit(ResultShape):
     warnings: tuple = field(default_factory=tuple)
     details: dict = field(default_factory=dict)
     _state: dict = field(default_factory=dict, repr=False)
+
+    def _nested(self, what: str) -> dict:
+        out = {}
+        for p in self.params.parameters:
+            q, term = p.name.split(":", 1)
+            out.setdefault(q, {})[term] = getattr(p, what)
+        return out
+
+    @property
+    def coefficients(self) -> dict:
+        """``{quantity: {"1": a, condition: b_c}}`` (from ``params``)."""
+        return self._nested("value")
+
+    @property
+    def stderr(self) -> dict:
+        """The coefficients' standard errors, nested as :attr:`coefficients`."""
+        return self._nested("stderr")
 
     def law(self, quantity: str, conditions: dict):
         """``(value, stderr)`` of one quantity's law at ``conditions``."""
@@ -380,7 +420,7 @@ class CampaignFit(ResultShape):
 
     def to_dict(self) -> dict:
         """JSON-safe dict (NaN becomes None)."""
-        return json_safe({k: getattr(self, k) for k in (
+        return json_safe({"params": self.params.to_dict()} | {k: getattr(self, k) for k in (
             "records", "condition_names", "effects", "effects_from", "laws", "units",
             "coefficients", "stderr", "covariance", "coefficient_labels", "rows", "scatter",
             "stderr_scatter",

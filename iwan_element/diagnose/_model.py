@@ -12,8 +12,9 @@ from ..core.history import unit_params
 from ..core.parameters import IwanParameters
 from ..effects import EFFECTS
 from ..effects.evaluate import Evaluator, scale_effect
+from ..fitting import covariance
 from ..identify.noise import integrated_time
-from ..identify.result import FitResult
+from ..identify.result import FitResult, joint_table
 
 __all__: list[str] = []
 
@@ -265,9 +266,11 @@ def flat(p: IwanParameters, effs, names, F0):
 
 
 def uncertainty(model: LoopModel, z, r):
-    """Standard errors and correlation of (Fs, KT, chi, beta, effect params, F0): delta method
-    from the Jacobian in ``(z, start, Fs, F0)``, with the residual variance inflated by its
-    correlation time (a correlated, systematic misfit is not treated as independent noise).
+    """Standard errors and correlation of (Fs, KT, chi, beta, effect params, F0): the package's
+    one covariance routine (:func:`iwan_element.fitting.covariance`, docs/fitting.md) with the
+    delta method from the Jacobian in ``(z, start, Fs, F0)``, the residual variance inflated
+    by its correlation time (a correlated, systematic misfit is not treated as independent
+    noise); NaN for a parameter along a degenerate direction.
 
     A fitted starting state (``model.start != 0``, :func:`fit_start`) is a nuisance variable
     of the fit like the force offset: it has a column in the Jacobian, so its correlation
@@ -311,14 +314,9 @@ def uncertainty(model: LoopModel, z, r):
         cols.append(np.where(_jumps(dr, dr4), 0.0, dr))
         pcols.append(dp)
     J, Jp = np.column_stack(cols), np.column_stack(pcols)
-    s2 = float(r @ r) / max(r.size - theta.size, 1) * integrated_time(r)
-    cov = Jp @ (s2 * np.linalg.pinv(J.T @ J, rcond=1e-12, hermitian=True)) @ Jp.T
-    se = np.sqrt(np.clip(np.diag(cov), 0.0, None))
-    cov, se_start = cov[:-1, :-1], float(se[-1])
-    se = se[:-1]
-    with np.errstate(invalid="ignore", divide="ignore"):
-        corr = cov / np.outer(se, se)
-    return se, corr, se_start
+    c = covariance(J, r, tau=integrated_time(r), dof=max(r.size - theta.size, 1), Jp=Jp)
+    se, corr = c.stderr, c.correlation
+    return se[:-1], corr[:-1, :-1], float(se[-1])
 
 
 def _difference(resid, phys, theta, j, h, lo, hi):
@@ -341,9 +339,13 @@ def _jumps(d1, d4):
     return np.abs(d1 - d4) > 0.1 * np.maximum(np.abs(d1), np.abs(d4)) + 1e-6 * scale
 
 
-def make_fit_result(**kw) -> FitResult:
-    """A :class:`FitResult` from the fields this module knows (others left at None/defaults),
-    so a change of the fit module's result fields does not break the diagnosis."""
+def make_fit_result(*, params: IwanParameters, stderr: dict, identified: dict, correlation,
+                    fixed=(), **kw) -> FitResult:
+    """A :class:`FitResult` from the fitted joint, its standard errors, verdicts and
+    correlation (gathered into its parameter table, :func:`identify.result.joint_table`) and
+    the other fields this module knows (others left at None/defaults), so a change of the
+    fit module's result fields does not break the diagnosis."""
+    kw["params"] = joint_table(params, stderr, identified, fixed=fixed, correlation=correlation)
     args = {}
     for f in dataclasses.fields(FitResult):
         if f.name in kw:

@@ -19,6 +19,7 @@ import numpy as np
 from ..core.serialize import json_safe
 from ..effects import EFFECTS
 from ..effects.evaluate import Evaluator, build_element
+from ..fitting import fit_success
 from ..identify.loops import fit_loops
 from ..identify.result import quiet_fits, settle_verdict
 from . import _model as M
@@ -31,7 +32,7 @@ def _base_start(tt, uj, FF, seed):
     try:
         with quiet_fits():
             res = fit_loops(tt, uj, FF, seed=seed, max_samples=3000, n_starts=3)
-        p = res.params
+        p = res.joint
         return (p.phi_max, p.chi, p.beta)
     except (ValueError, FloatingPointError, ZeroDivisionError):
         return None
@@ -149,7 +150,7 @@ def stack_fit(row, fitter, FF, F_model, t_start, *, noise_only=False):
         params=p, stderr=stderr, correlation=corr[:4, :4], identified=ident, fixed=(),
         ranges=ranges, residual_norm=math.sqrt(float(r @ r)),
         nrmse=float(np.sqrt(np.mean((FF - F_model) ** 2)) / span),
-        success=bool(row["status"] > 0 and all(ident[k] for k in ("Fs", "KT", "chi"))),
+        success=fit_success(row["status"] > 0, ident, ("Fs", "KT", "chi")),
         message=row["message"],
         nfev=int(fitter.nfev), method="loops+" + "+".join(mdl.names) if mdl.names else "loops",
         n_data=int(r.size), warnings=tuple(warns), wall_time=time.perf_counter() - t_start,

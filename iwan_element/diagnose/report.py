@@ -7,6 +7,7 @@ details. It fits nothing.
 """
 from __future__ import annotations
 
+import math
 import time
 
 import numpy as np
@@ -83,6 +84,6 @@ def _details(rec, nl, sel, opts, loc, final, fit, t_start) -> dict:
             "lowpass": rec.lowpass,
             "lowpass_reason": "rig dynamics removed before fitting" if rec.lowpass else None,
             "start_displacement": float(final.get("start", 0.0)),
-            "start_displacement_stderr": float(fit.details.get("start_displacement_stderr",
-                                                               0.0)),
+            "start_displacement_stderr": float(math.nan if (se_s := fit.details.get(
+                "start_displacement_stderr")) is None else se_s),     # None: not determined
             "wall_time": time.perf_counter() - t_start}

@@ -11,6 +11,7 @@ from ..core.serialize import json_safe
 
 from ..core.validation import check_scalar
 from ..effects import EFFECTS
+from ..fitting import Parameter, ParameterTable, verdict
 from ..core.result_shape import ResultShape, panels
 
 __all__ = ["Diagnosis", "VibrationDiagnosis"]
@@ -123,7 +124,7 @@ class Diagnosis(ResultShape):
     def report(self) -> str:
         """Human-readable account: noise, misfit, where, candidates, verdict, before/after."""
         d = self.details
-        p = self.base_fit.params
+        p = self.base_fit.joint
         lines = ["Iwan model diagnosis",
                  f"  {d['samples']} samples; noise {d['noise_from']}, correlation time "
                  f"{d['tau']:.3g} samples ({d['n_eff']:.0f} independent samples fitted)",
@@ -154,7 +155,7 @@ class Diagnosis(ResultShape):
                 ps = ", ".join(f"{k} = {v:.4g} {_unit(e['name'], k)} (+- {e['stderr'][k]:.2g})"
                                for k, v in e["parameters"].items())
                 lines.append(f"    {e['name']}: {ps}")
-            q = self.fit.params
+            q = self.fit.joint
             lines.append(f"    Iwan part: Fs={q.Fs:.5g} N, KT={q.KT:.5g} N/m, chi={q.chi:.4f}, "
                          f"beta={q.beta:.4f}")
         else:
@@ -256,6 +257,10 @@ class VibrationDiagnosis(ResultShape):
     covariance : ndarray or None
         Covariance of the fitted modal values (in the order of ``parameters``), from the
         noise-normalised Jacobian, scaled by the reduced chi-square when above 1.
+    params : ParameterTable
+        (property) The fitted modal values ``"effect.name"`` with their standard errors (the
+        square roots of ``covariance``'s diagonal), units and verdicts
+        (:func:`iwan_element.fitting.verdict`); empty when nothing was named.
     """
 
     plot_panels = 2
@@ -281,6 +286,18 @@ class VibrationDiagnosis(ResultShape):
     warnings: tuple = ()
     details: dict = field(default_factory=dict)
     covariance: np.ndarray | None = None
+
+    @property
+    def params(self) -> ParameterTable:
+        """The fitted modal values as a :class:`~iwan_element.fitting.ParameterTable`."""
+        rows = [(nm, sp, self.parameters[nm][sp.name]) for nm in self.parameters
+                for sp in EFFECTS[nm].modal_specs]
+        cov = self.covariance
+        se = (np.sqrt(np.clip(np.diag(cov), 0.0, None)) if cov is not None
+              and cov.shape == (len(rows),) * 2 else np.full(len(rows), math.nan))
+        return ParameterTable([Parameter(f"{nm}.{sp.name}", v, float(e), unit=sp.unit,
+                                         identified=verdict(sp.name, v, float(e))[0])
+                               for (nm, sp, v), e in zip(rows, se)])
 
     @property
     def success(self) -> bool:

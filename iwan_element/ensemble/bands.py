@@ -257,7 +257,7 @@ def propagate_uncertainty(source, *, system: SingleModeSystem | None = None, amp
                                                                steps_per_period, n_samples, rng)
         system = None
     else:
-        if not isinstance(source, ParameterUncertainty) and not hasattr(source, "params"):
+        if not isinstance(source, ParameterUncertainty) and not hasattr(source, "joint"):
             raise ValueError("source must be a FitResult, a ModalIwanFit or a "
                              f"ParameterUncertainty, got {type(source).__name__}")
         unc = source if isinstance(source, ParameterUncertainty) else \

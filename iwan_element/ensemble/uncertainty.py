@@ -128,18 +128,18 @@ class ParameterUncertainty(ResultShape):
     @classmethod
     def from_fit(cls, fit) -> "ParameterUncertainty":
         """From a :class:`~iwan_element.FitResult` (loop or dissipation fit) or any result with
-        ``params``, ``stderr`` (dict), ``correlation`` (4x4 in ``Fs, KT, chi, beta`` order),
-        ``identified`` and ``fixed``.
+        ``joint`` (IwanParameters), ``stderr`` (dict), ``correlation`` (4x4 in ``Fs, KT, chi,
+        beta`` order), ``identified`` and ``fixed``.
 
         Parameters that were given (``fixed``) or have no finite standard error are held at
         their fitted value (said in ``warnings``). A fit without macroslip is sampled in
         ``(ln KT, chi, ln R)`` (see the module docstring).
         """
-        for attr in ("params", "stderr", "correlation"):
+        for attr in ("joint", "stderr", "correlation"):
             if not hasattr(fit, attr):
-                raise ValueError(f"fit must be a FitResult-like object with params, stderr and "
+                raise ValueError(f"fit must be a FitResult-like object with joint, stderr and "
                                  f"correlation; it has no {attr!r}")
-        p = fit.params
+        p = fit.joint
         warns = [f"the fit reports: {w}" for w in getattr(fit, "warnings", ())]
         if not getattr(fit, "success", True):
             warns.append("the fit did not succeed: its covariance may be meaningless")

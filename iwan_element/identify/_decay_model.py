@@ -14,6 +14,7 @@ from scipy import optimize, signal
 from scipy.integrate import cumulative_simpson
 from scipy.interpolate import CubicSpline
 
+from ..fitting import normal_inverse
 from .modal_result import model_curve
 from ._decay_filter import _analytic_signal
 
@@ -298,10 +299,8 @@ def _covariance(obj, r, J):
         kappa += 2.0 * (1.0 - k / m) * float(np.mean(c.real))
         tau2 += 2.0 * (1.0 - k / m) * abs(rho[k]) ** 2
     omega *= 0.5
-    try:
-        bread = np.linalg.inv(J.T @ J)
-    except np.linalg.LinAlgError:
-        bread = np.linalg.pinv(J.T @ J)
+    bread = (normal_inverse(J)[0] if np.all(np.isfinite(J))       # docs/fitting.md section 1
+             else np.full((J.shape[1], J.shape[1]), np.nan))
     dof = m - float(np.trace(bread @ omega))
     s2 = float(np.sum(np.abs(rr) ** 2)) / max(dof, 1.0)
     return bread @ (s2 * omega) @ bread, max(kappa, 1.0), (dof, 2.0 * max(dof, 0.0) / tau2)

@@ -2,20 +2,21 @@
 
 :class:`_Problem` holds data modelled as ``Fs g(phi_max, chi, beta)`` (plus a force offset
 for loop fits) with ``Fs`` and the offset eliminated in closed form (variable projection);
-:func:`_lsq_box` is a small box-bounded Levenberg-Marquardt; :func:`_uncertainty` turns the
-Jacobian at the optimum into standard errors and correlations.
+:func:`_multistart` runs the box-bounded Levenberg-Marquardt of
+:func:`iwan_element.fitting.minimize` (``method="box-lm"``) from several starts; :func:`_uncertainty` takes the
+Jacobian at the optimum to :func:`iwan_element.fitting.covariance`.
 """
 from __future__ import annotations
 
 import logging
 import math
-from dataclasses import dataclass
 from typing import Callable
 
 import numpy as np
 
 from ..core.history import unit_params
 from ..core.parameters import IwanParameters
+from ..fitting import covariance, minimize
 
 log = logging.getLogger(__name__)
 
@@ -95,81 +96,6 @@ def _q_to_shape(q, x_max, beta_fixed):
     return phi, float(q[1]), beta
 
 
-@dataclass
-class _LsqResult:
-    x: np.ndarray
-    cost: float
-    status: int              # > 0 converged, 0 evaluation budget used up
-    message: str
-    nfev: int
-
-
-def _lsq_box(fun, x0, lower, upper, *, max_nfev: int, ftol: float = 1e-12,
-             xtol: float = 1e-10) -> _LsqResult:
-    """Levenberg-Marquardt with box bounds (projected steps) for a few parameters.
-
-    Minimises ``0.5 |fun(x)|^2`` for ``lower <= x <= upper``. The Jacobian is taken by
-    forward differences; the normal equations are formed with ``einsum``. Why not
-    ``scipy.optimize.least_squares``: for a tall Jacobian (thousands of residuals, three
-    parameters) its trust-region steps spend their time in multithreaded OpenBLAS
-    matrix-vector products, which ran 7-10 times slower than single-threaded on a busy
-    2-core machine; this loop needs no BLAS. ``tests/test_fit.py`` checks that it reaches the
-    same minimum as ``least_squares(method="trf")``.
-    """
-    x = np.clip(np.asarray(x0, float), lower, upper)
-    r = fun(x)
-    nfev = 1
-    cost = 0.5 * float(np.einsum("i,i->", r, r))
-    lam = 1e-3
-    p = x.size
-    while nfev + p < max_nfev:
-        J = np.empty((r.size, p))
-        for j in range(p):
-            h = 1e-7 * max(1.0, abs(x[j]))
-            if x[j] + h > upper[j]:
-                h = -h                                   # step inwards at an upper bound
-            xh = x.copy()
-            xh[j] += h
-            J[:, j] = (fun(xh) - r) / h
-        nfev += p
-        g = np.einsum("ij,i->j", J, r)
-        A = np.einsum("ij,ik->jk", J, J)
-        free = ~(((x <= lower) & (g > 0)) | ((x >= upper) & (g < 0)))
-        if not free.any() or np.max(np.abs(g[free])) <= 1e-14 * max(cost, 1e-300):
-            return _LsqResult(x, cost, 1, "projected gradient is zero", nfev)
-        Af = A[np.ix_(free, free)]
-        while nfev < max_nfev:
-            M = Af + lam * np.diag(np.diag(Af) + 1e-30)
-            try:
-                d = np.zeros(p)
-                d[free] = np.linalg.solve(M, -g[free])
-            except np.linalg.LinAlgError:
-                lam *= 10.0
-                continue
-            x_new = np.clip(x + d, lower, upper)
-            r_new = fun(x_new)
-            nfev += 1
-            cost_new = 0.5 * float(np.einsum("i,i->", r_new, r_new))
-            if cost_new < cost:
-                step = x_new - x
-                predicted = -(g @ step + 0.5 * step @ A @ step)
-                small_f = cost - cost_new <= ftol * cost and predicted <= ftol * cost
-                # a short step means convergence only when damping did not shorten it
-                small_x = lam < 1e-2 and np.all(np.abs(step) <= xtol * (xtol + np.abs(x)))
-                x, r, cost = x_new, r_new, cost_new
-                lam = max(lam / 3.0, 1e-12)
-                if small_f or small_x:
-                    return _LsqResult(x, cost, 2, "relative reduction of the cost below "
-                                      f"{ftol:g}" if small_f else f"step below xtol = {xtol:g}",
-                                      nfev)
-                break
-            lam *= 4.0
-            if lam > 1e16:
-                return _LsqResult(x, cost, 3, "no step reduces the cost further (at a minimum "
-                                  "to round-off)", nfev)
-    return _LsqResult(x, cost, 0, f"evaluation budget max_nfev = {max_nfev} used up", nfev)
-
-
 def _multistart(prob: _Problem, starts, lower, upper, *, beta_fixed, max_nfev):
     """Least squares on ``q = (ln(phi_max/x_max), chi[, ln(1+beta)])`` from each start; best wins."""
     best = None
@@ -178,7 +104,8 @@ def _multistart(prob: _Problem, starts, lower, upper, *, beta_fixed, max_nfev):
         return prob.projected(*_q_to_shape(q, prob.x_max, beta_fixed))[1]
 
     for q0 in starts:
-        res = _lsq_box(fun, np.asarray(q0, float), lower, upper, max_nfev=max_nfev)
+        res = minimize(fun, np.asarray(q0, float), lower, upper, method="box-lm",
+                       max_nfev=max_nfev)
         log.debug("start %s -> cost %.6g (%s)", np.round(q0, 3), res.cost, res.message)
         if best is None or res.cost < best.cost:
             best = res
@@ -201,47 +128,22 @@ def _uncertainty(fun, theta, r, scale, *, at_lower_bound=None, tau: float = 1.0,
                  timeseries: bool = False, block: int = 0):
     """Standard errors and correlations from the Jacobian (see :mod:`.identifiability`).
 
-    ``cov = tau s^2 (J^T J)^-1``: ``tau`` (the residuals' integrated autocorrelation time)
-    widens it when the residuals are correlated (systematic misfit, coloured noise). For a
-    time series (``timeseries=True``) the block sandwich
-    ``(J^T J)^-1 [sum_b (J_b^T r_b)(J_b^T r_b)^T] (J^T J)^-1`` over consecutive blocks of
-    ``max(20, 4 tau, block)`` residuals is also formed (``block``: a half cycle); it follows
-    residuals whose size changes along the record (displacement noise times a tangent
-    stiffness that jumps at every reversal) and errors shared by a whole branch (a turning
-    point displaced by the displacement noise moves every force of the branch that leaves
-    it), with the small-sample factor ``nb / (nb - p)`` for ``nb`` blocks and ``p``
-    parameters. Each variance is the larger of the two.
-
-    ``fun`` maps the transformed parameters ``theta`` to residuals, ``r`` are the residuals at
-    the optimum and ``scale = |d p / d theta|`` is the (diagonal) delta-method factor. A
-    parameter whose index is ``at_lower_bound`` is evaluated one step inside its bound 0.
-    Returns ``(stderr of p, correlation)``.
+    The central-difference Jacobian of ``fun`` (transformed parameters ``theta`` ->
+    residuals) at the optimum goes to the package's one covariance routine,
+    :func:`iwan_element.fitting.covariance` (docs/fitting.md): ``tau s^2 (J^T J)^-1``, for a
+    time series (``timeseries=True``) also the block sandwich over blocks of at least
+    ``block`` residuals (a half cycle), and the delta method with the diagonal factor
+    ``scale = |d p / d theta|``. A parameter whose index is ``at_lower_bound`` is evaluated
+    one step inside its bound 0. Returns ``(stderr of p, correlation)``; NaN for a parameter
+    the data do not determine.
     """
     h = 1e-5
     th = np.array(theta, float)
     if at_lower_bound is not None:
         th[at_lower_bound] = max(th[at_lower_bound], h)
     J = _fd_jacobian(fun, th, np.full(th.size, h))
-    m, p = J.shape
-    s2 = float(np.einsum("i,i->", r, r)) / max(m - p, 1)
-    try:
-        A_inv = np.linalg.pinv(np.einsum("ij,ik->jk", J, J), rcond=1e-12, hermitian=True)
-    except np.linalg.LinAlgError:
-        A_inv = np.full((p, p), np.nan)
-    cov = tau * s2 * A_inv
-    if timeseries and m > 4 * p:
-        L = int(max(20, math.ceil(4.0 * tau), block))
-        nb = m // L
-        if nb >= 2 * p:
-            sc = np.einsum("bij,bi->bj", J[:nb * L].reshape(nb, L, p), r[:nb * L].reshape(nb, L))
-            # small-sample factor nb / (nb - p): p parameters were fitted from nb block scores
-            S = np.einsum("bj,bk->jk", sc, sc) * (m / (nb * L)) * nb / (nb - p)
-            cov_s = A_inv @ S @ A_inv
-            ds, dt = np.diag(cov_s), np.diag(cov)
-            if np.all(ds > 0) and np.all(np.isfinite(ds)):
-                big = np.sqrt(np.maximum(ds, dt) / ds)
-                cov = cov_s * np.outer(big, big)
-    se_t = np.sqrt(np.clip(np.diag(cov), 0, None))
-    with np.errstate(invalid="ignore", divide="ignore"):
-        corr = cov / np.outer(se_t, se_t)
-    return se_t * np.asarray(scale, float), corr
+    if not np.all(np.isfinite(J)):            # the model failed next to the optimum
+        return np.full(th.size, math.nan), np.full((th.size, th.size), math.nan)
+    c = covariance(J, r, tau=tau, block=block if timeseries else None,
+                   Jp=np.diag(np.asarray(scale, float)))
+    return c.stderr, c.correlation

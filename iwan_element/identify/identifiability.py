@@ -22,12 +22,15 @@ Uncertainties
     channels (force noise plus tangent stiffness times the displacement error); the
     displacement that drives the model is de-noised first so that its noise does not create
     spurious reversals (errors in variables). ``benchmarks/bench_coverage.py`` checks the
-    95 % intervals' coverage.
+    95 % intervals' coverage. The covariance is the package's one routine,
+    :func:`iwan_element.fitting.covariance` (docs/fitting.md): column-scaled, a parameter
+    along a degenerate direction gets a NaN error.
 
 Verdict
-    :func:`~iwan_element.identify.result.settle_verdict` applies one rule to every fit: identified
-    means a finite standard error of at most half the value (``chi + 1`` for ``chi``) and not
-    at a bound of the search range.
+    :func:`~iwan_element.identify.result.settle_verdict` applies the package's one rule
+    (:func:`iwan_element.fitting.verdict`, docs/fitting.md section 5): identified means a
+    finite standard error of at most half the value (``chi + 1`` for ``chi``) and not at a
+    bound of the search range.
 """
 from __future__ import annotations
 

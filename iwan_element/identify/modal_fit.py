@@ -31,6 +31,7 @@ import numpy as np
 from scipy import optimize, stats
 
 from ..core.validation import check_scalar
+from ..fitting import covariance
 from .curves import AmplitudeCurve
 from .vibration import DECAY_METHODS
 from .modal_result import ModalIwanFit, model_curve
@@ -106,15 +107,16 @@ def _fit_full(micro, X, f, z, sf, sz, x_ref, stiffness, floor, damping_form):
 
 
 def _covariance(r, n_data):
-    """Covariance of the fitted vector: (J^T J)^-1 times max(1, reduced chi^2)."""
+    """Covariance of the fitted vector: the package's one routine
+    (:func:`iwan_element.fitting.covariance`, docs/fitting.md) with ``s^2 = max(1, reduced
+    chi^2)`` (the weights are the stated uncertainties; a misfit widens them). Returns the
+    covariance (degenerate directions left out) and the reduced chi-square."""
     J = r.jac
     dof = max(n_data - J.shape[1], 1)
     chi2_red = 2.0 * r.cost / dof
-    try:
-        cov = np.linalg.pinv(J.T @ J) * max(chi2_red, 1.0)
-    except np.linalg.LinAlgError:
-        cov = np.full((J.shape[1], J.shape[1]), np.nan)
-    return cov, chi2_red
+    if not np.all(np.isfinite(J)):
+        return np.full((J.shape[1], J.shape[1]), np.nan), chi2_red
+    return covariance(J, s2=max(chi2_red, 1.0)).covariance, chi2_red
 
 
 def fit_modal_iwan(amplitude, frequency=None, damping_ratio=None, *, stiffness: str = "harmonic",
@@ -216,4 +218,5 @@ def fit_modal_iwan(amplitude, frequency=None, damping_ratio=None, *, stiffness: 
     cov, chi2_red = _covariance(chosen, n_data)
     return ModalIwanFit.from_solution(chosen.x, cov, regime, data, conv, chi2_red=chi2_red,
                                       weights=(sf, sz), warnings=tuple(warns),
-                                      optimizer_ok=bool(chosen.success))
+                                      optimizer_ok=bool(chosen.success),
+                                      jac=chosen.jac)

@@ -11,6 +11,7 @@ from scipy import special, stats
 from ..core.modal import modal_iwan_curve, viscous_floor
 from ..core.parameters import IwanParameters
 from ..core.result_shape import ResultShape, panels
+from ..fitting import Parameter, ParameterTable, covariance, fit_success, verdict
 
 __all__ = ["ModalIwanFit", "model_curve", "full_parameters", "harmonic_factor"]
 
@@ -86,10 +87,15 @@ class ModalIwanFit(ResultShape):
         ``f0, zeta0, chi, kappa, log_phi_max, beta`` beyond).
     values, covariance : ndarray
         Fitted vector and its covariance (sample it with :meth:`sample_parameters`).
+    params : ParameterTable
+        Reported parameters with their standard errors (delta method) and verdicts:
+        ``f0`` [Hz], ``zeta0``, ``chi``, and ``delta`` (microslip) or ``beta, kappa,
+        phi_max`` [m at the sensor], ``KT``, ``K_inf`` [1/s^2], ``Fs`` [m/s^2] (unit modal
+        mass, sensor coordinate).
     parameters, stderr : dict
-        Reported parameters and standard errors (delta method): ``f0`` [Hz], ``zeta0``,
-        ``chi``, and ``delta`` (microslip) or ``beta, kappa, phi_max`` [m at the sensor],
-        ``KT``, ``K_inf`` [1/s^2], ``Fs`` [m/s^2] (unit modal mass, sensor coordinate).
+        (properties) ``params.values`` and ``params.stderr``.
+    joint : IwanParameters or None
+        (property) The joint (unit modal mass, sensor coordinate) when the data fix it.
     chi2_red : float
         Reduced chi-square of the weighted fit; the covariance is scaled by it when above 1.
     success : bool
@@ -109,19 +115,25 @@ class ModalIwanFit(ResultShape):
     weights: tuple = ()
     warnings: tuple = ()
     success: bool = False
-    parameters: dict = field(default_factory=dict)
-    stderr: dict = field(default_factory=dict)
+    params: ParameterTable = field(default_factory=lambda: ParameterTable(()))
 
     # ------------------------------------------------------------------ construction
     @classmethod
     def from_solution(cls, theta, cov, regime, data, conv, *, chi2_red, weights, warnings,
-                      optimizer_ok):
+                      optimizer_ok, jac=None):
+        """The result of a weighted least-squares solution ``theta`` with covariance ``cov``;
+        with the solution's Jacobian ``jac`` the reported parameters' standard errors come
+        from :func:`iwan_element.fitting.covariance` with the delta method (NaN along a
+        degenerate direction), else from ``cov``."""
         names = MICRO if regime == "microslip" else FULL
         theta = np.asarray(theta, dtype=float)
         params = _derived(theta, regime)
         grad = _gradient(lambda th: np.array(list(_derived(th, regime).values())), theta)
-        var = np.einsum("ij,jk,ik->i", grad, cov, grad)
-        stderr = dict(zip(params, np.sqrt(np.maximum(var, 0.0))))
+        if jac is not None and np.all(np.isfinite(jac)) and np.all(np.isfinite(grad)):
+            se = covariance(jac, s2=max(chi2_red, 1.0), Jp=grad).stderr
+        else:
+            se = np.sqrt(np.maximum(np.einsum("ij,jk,ik->i", grad, cov, grad), 0.0))
+        stderr = dict(zip(params, map(float, se)))
         warns = list(warnings)
         if chi2_red > 4.0:
             warns.append(f"systematic misfit: reduced chi-square {chi2_red:.3g}; the model does "
@@ -134,8 +146,9 @@ class ModalIwanFit(ResultShape):
                   f"{stderr[n]:.3g})" for n in bad]
         if params["zeta0"] < 1e-9:
             warns.append("zeta0 is at its bound 0: no viscous floor is visible in the data")
+        table = _table(params, stderr, bad)
         return cls(regime, names, theta, np.asarray(cov, dtype=float), data, conv, chi2_red,
-                   weights, tuple(warns), bool(optimizer_ok and not bad), params, stderr)
+                   weights, tuple(warns), fit_success(optimizer_ok, table.identified), table)
 
     @classmethod
     def linear(cls, data, conv, *, warnings):
@@ -145,20 +158,29 @@ class ModalIwanFit(ResultShape):
         sd = np.array([f.std(ddof=1), z.std(ddof=1)]) / math.sqrt(n) if n > 1 else \
             np.full(2, np.nan)
         cov = np.diag(sd ** 2)
+        params, stderr = _derived(theta, "linear"), {"f0": sd[0], "zeta0": sd[1]}
         return cls("linear", ("f0", "zeta0"), theta, cov, data, conv, float("nan"), (),
-                   tuple(warnings), False, _derived(theta, "linear"),
-                   {"f0": sd[0], "zeta0": sd[1]})
+                   tuple(warnings), False,
+                   _table(params, stderr, _unidentified(params, stderr, theta, ())))
 
     # ------------------------------------------------------------------ model access
     @property
     def identified(self) -> tuple:
-        """Names of the reported parameters the data pin down (not named in an
-        "is not identified" warning)."""
-        bad = _unidentified(self.parameters, self.stderr, self.values, self.names)
-        return tuple(k for k in self.parameters if k not in bad)
+        """Names of the reported parameters the data pin down."""
+        return tuple(k for k, p in self.params.items() if p.identified)
 
     @property
-    def params(self) -> IwanParameters | None:
+    def parameters(self) -> dict:
+        """Reported parameters, ``params.values``."""
+        return self.params.values
+
+    @property
+    def stderr(self) -> dict:
+        """Their standard errors, ``params.stderr``."""
+        return self.params.stderr
+
+    @property
+    def joint(self) -> IwanParameters | None:
         """The joint (unit modal mass, sensor coordinate) when the data fix it, else None."""
         return full_parameters(self.values)[0] if self.regime == "macroslip" else None
 
@@ -290,21 +312,24 @@ def _gradient(fun, theta):
     return J
 
 
+def _table(params, stderr, bad) -> ParameterTable:
+    """The reported parameters as a :class:`~iwan_element.fitting.ParameterTable`."""
+    return ParameterTable([Parameter(k, float(v), float(stderr.get(k, math.nan)),
+                                     unit=_UNITS[k], identified=k not in bad)
+                           for k, v in params.items()])
+
+
 def _unidentified(params, stderr, theta, names):
-    """Reported parameters the data do not pin down."""
+    """Reported parameters the data do not pin down: the package's one rule
+    (:func:`iwan_element.fitting.verdict`), ``chi`` against ``chi + 1``, ``beta`` against
+    ``max(beta, 0.2)`` (a joint with little macroslip softening is as good as one without);
+    the viscous floor ``zeta0`` may be zero, so only a finite error is asked of it."""
     bad = []
     for k, v in params.items():
-        s = stderr.get(k, float("nan"))
-        if not np.isfinite(s):
-            bad.append(k)
-        elif k in ("chi",):
-            if s > 0.5:
-                bad.append(k)
-        elif k == "zeta0":
-            continue
-        elif k == "beta":
-            if s > max(0.5 * v, 0.1):
-                bad.append(k)
-        elif s > 0.5 * abs(v):
+        ref, text = {"chi": (v + 1.0, "chi + 1"),
+                     "beta": (max(v, 0.2), "max(beta, 0.2)")}.get(k, (None, "its value"))
+        ok, _ = verdict(k, float(v), float(stderr.get(k, math.nan)), reference=ref,
+                        reference_text=text, nuisance=k == "zeta0")
+        if not ok:
             bad.append(k)
     return bad

@@ -29,7 +29,10 @@ Uncertainty (documented choice: residual-based, widened by the residual's correl
     residual is coloured noise or a systematic misfit, which widens the standard errors by
     ``sqrt(tau)`` instead of hiding behind many correlated samples. The displacement that
     drives the model is de-noised first (``smooth="auto"``, a Savitzky-Golay filter), so
-    noise in ``u`` does not create spurious reversals (the errors-in-variables bias).
+    noise in ``u`` does not create spurious reversals (the errors-in-variables bias). The
+    covariance and the verdict are the package's one routine and rule
+    (:func:`iwan_element.fitting.covariance`, :func:`iwan_element.fitting.verdict`,
+    docs/fitting.md).
 """
 from __future__ import annotations
 
@@ -40,12 +43,13 @@ from dataclasses import dataclass, field
 from typing import Callable, Sequence
 
 import numpy as np
-from scipy import optimize
 from scipy.signal import savgol_coeffs, savgol_filter
 
 from ..core.validation import check_int, check_time, check_magnitude, finite_array, same_length
 from .noise import estimate_noise, integrated_time
 from ..core.result_shape import ResultShape
+from ..fitting import (Parameter, ParameterTable, covariance, fit_success, minimize,
+                       verdict)
 
 __all__ = ["ModelFit", "fit_force_model", "drive_displacement", "burn_in_index"]
 
@@ -108,13 +112,13 @@ class ModelFit(ResultShape):
 
     Attributes
     ----------
-    names : tuple of str
-        Model parameter names, then ``"dF0"`` [N] and ``"du0"`` [m] (when fitted).
-    values, stderr : dict
-        Fitted value and standard error of each name (stderr NaN: not determined).
-    identified : dict
-        ``True`` where the data determine the parameter (finite stderr below half its value,
-        not at a bound).
+    params : ParameterTable
+        The model parameters in the order given, then the nuisances ``"dF0"`` [N] and
+        ``"du0"`` [m] (when fitted): value, standard error (NaN: not determined), bounds,
+        unit, ``identified`` (the package's rule, :func:`iwan_element.fitting.verdict`:
+        finite stderr below half its value, not at a bound; the offsets need only a finite
+        stderr) and their correlation. ``params.values``, ``params.stderr``,
+        ``params.identified`` are the dict views.
     offsets : dict
         ``{"force": (dF0, stderr) [N], "displacement": (du0, stderr) [m]}``.
     t, residual : ndarray
@@ -134,10 +138,7 @@ class ModelFit(ResultShape):
     details : dict
     """
 
-    names: tuple
-    values: dict
-    stderr: dict
-    identified: dict
+    params: ParameterTable
     offsets: dict
     t: np.ndarray
     residual: np.ndarray
@@ -153,13 +154,12 @@ class ModelFit(ResultShape):
     @property
     def theta(self) -> np.ndarray:
         """Fitted model parameters (without the offsets), in the order given."""
-        return np.array([self.values[k] for k in self.names if k not in OFFSET_NAMES])
+        return self.params.array([k for k in self.params.names if k not in OFFSET_NAMES])
 
     def to_dict(self) -> dict:
         """JSON-safe dict (NaN becomes None)."""
         from ..core.serialize import json_safe
-        return json_safe({"names": list(self.names), "values": self.values, "stderr": self.stderr,
-                      "identified": self.identified,
+        return json_safe({"params": self.params.to_dict(),
                       "offsets": {k: list(v) for k, v in self.offsets.items()},
                       "rms": self.rms, "tau": self.tau, "n_eff": self.n_eff,
                       "success": self.success, "message": self.message, "nfev": self.nfev,
@@ -171,12 +171,10 @@ class ModelFit(ResultShape):
         lines = [f"force-model fit: {'success' if self.success else 'NOT successful'} "
                  f"({self.message}), RMS residual {self.rms:.4g} N, tau {self.tau:.3g} samples, "
                  f"n_eff {self.n_eff:.4g}", "  parameter        value    std. error   status"]
-        units = self.details.get("units", {})
-        for k in self.names:
-            v, se = self.values[k], self.stderr[k]
-            lab = f"{k} [{units.get(k, 'N' if k == 'dF0' else 'm' if k == 'du0' else '-')}]"
-            lines.append(f"  {lab:<14} {v:>11.5g} {se:>12.3g}   "
-                         f"{status_text(self.identified[k], k in OFFSET_NAMES)}")
+        for p in self.params.parameters:
+            lab = f"{p.name} [{p.unit or '-'}]"
+            lines.append(f"  {lab:<14} {p.value:>11.5g} {p.stderr:>12.3g}   "
+                         f"{status_text(p.identified, p.nuisance)}")
         lines += [f"  - {w}" for w in self.warnings]
         return "\n".join(lines)
 
@@ -190,43 +188,19 @@ class ModelFit(ResultShape):
         return lines
 
 
-def _covariance(J: np.ndarray, r: np.ndarray, tau: float):
-    """``tau s^2 (J^T J)^-1`` with column scaling; degenerate directions get NaN."""
-    m, p = J.shape
-    s2 = float(r @ r) / max(m - p, 1)
-    scale = np.sqrt(np.einsum("ij,ij->j", J, J))
-    scale[scale == 0] = 1.0
-    Js = J / scale
-    U, sv, Vt = np.linalg.svd(Js, full_matrices=False)
-    good = sv > 1e-7 * sv[0] if sv.size and sv[0] > 0 else np.zeros(p, bool)
-    cov_s = (Vt[good].T / sv[good] ** 2) @ Vt[good]
-    cov = tau * s2 * cov_s / np.outer(scale, scale)
-    # a parameter with a component along a degenerate direction is not determined
-    bad = np.zeros(p, bool)
-    if (~good).any():
-        bad = np.any(np.abs(Vt[~good]) > 1e-3, axis=0)
-    se = np.sqrt(np.clip(np.diag(cov), 0, None))
-    se[bad] = math.nan
-    return se, cov, bad
-
-
 def _identified(names, x, se, at_bound, degenerate, warns) -> dict:
-    """Which fitted values the data identify (finite stderr, off the bounds, a model
-    parameter known to better than half its value), appending to ``warns`` why not."""
+    """Which fitted values the data identify, by the package's one rule
+    (:func:`iwan_element.fitting.verdict`; the offsets are nuisances), appending to ``warns``
+    why not."""
     ident = {}
     for k, name in enumerate(names):
-        ok = math.isfinite(se[k]) and not at_bound[k]
-        if name not in OFFSET_NAMES:
-            ok = ok and se[k] <= 0.5 * abs(x[k])
-        ident[name] = bool(ok)
-        if at_bound[k]:
-            warns.append(f"{name} = {x[k]:.4g} is at a bound of its range: not identified")
-        elif degenerate[k]:
-            why = (" (a joint with no absolute position reference depends on displacement "
-                   "differences only)" if name == "du0" else "")
-            warns.append(f"{name} is not determined by the data{why}")
-        elif not ident[name]:
-            warns.append(f"{name}: std. error {se[k]:.3g} exceeds half its value: not identified")
+        why = (" (a joint with no absolute position reference depends on displacement "
+               "differences only)" if name == "du0" else "")
+        ident[name], warn = verdict(name, float(x[k]), float(se[k]), at_bound=bool(at_bound[k]),
+                                    degenerate=bool(degenerate[k]),
+                                    nuisance=name in OFFSET_NAMES, why_degenerate=why)
+        if warn:
+            warns.append(warn)
     return ident
 
 
@@ -307,26 +281,29 @@ def fit_force_model(t, u, F, model: Callable, theta0, *, lower=None, upper=None,
         all_names = names + OFFSET_NAMES
     else:
         x0, lo_x, hi_x, all_names = np.clip(th0, lo, hi), lo, hi, names
-    res = optimize.least_squares(resid, x0, bounds=(lo_x, hi_x), x_scale="jac",
-                                 max_nfev=max_nfev, method="trf")
+    res = minimize(resid, x0, lo_x, hi_x, method="trf", max_nfev=max_nfev, x_scale="jac")
     r = res.fun
     tau = integrated_time(r)
-    se, cov, degenerate = _covariance(res.jac, r, tau)
+    c = covariance(res.jac, r, tau=tau)
+    se, cov, degenerate = c.stderr, c.covariance, c.degenerate
     warns = []
     at_bound = (np.isclose(res.x, lo_x, rtol=1e-6, atol=1e-12)
                 | np.isclose(res.x, hi_x, rtol=1e-6, atol=1e-12))
-    values = dict(zip(all_names, map(float, res.x)))
-    stderr = dict(zip(all_names, map(float, se)))
     ident = _identified(all_names, res.x, se, at_bound, degenerate, warns)
+    unit_of = {"dF0": "N", "du0": "m", **dict(units or {})}
+    table = ParameterTable([Parameter(k, float(v), float(e), float(a), float(b),
+                                      unit_of.get(k, ""), ident[k], nuisance=k in OFFSET_NAMES)
+                            for k, v, e, a, b in zip(all_names, res.x, se, lo_x, hi_x)],
+                           correlation=c.correlation)
+    values, stderr = table.values, table.stderr
     if tau > 3.0:
         warns.append(f"the residuals are correlated over {tau:.3g} samples (a systematic misfit "
                      f"or coloured noise): the std. errors are widened by sqrt(tau) = "
                      f"{math.sqrt(tau):.3g}")
-    success = bool(res.success and all(ident[k] for k in names))
+    success = fit_success(res.success, ident, names)
     offs = {"force": (values.get("dF0", 0.0), stderr.get("dF0", math.nan)),
             "displacement": (values.get("du0", 0.0), stderr.get("du0", math.nan))}
-    return ModelFit(names=all_names, values=values, stderr=stderr, identified=ident,
-                    offsets=offs, t=tt[keep], residual=-r, rms=float(np.sqrt(np.mean(r * r))),
+    return ModelFit(params=table, offsets=offs, t=tt[keep], residual=-r, rms=float(np.sqrt(np.mean(r * r))),
                     tau=float(tau), n_eff=float(r.size / tau), success=success,
                     message=str(res.message), nfev=int(nfev[0]), warnings=tuple(warns),
                     details={"burn_in": int(b), "fitted_samples": int(keep.size),

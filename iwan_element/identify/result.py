@@ -14,6 +14,7 @@ from ..core.serialize import json_safe
 
 from ..core.parameters import IwanParameters
 from ..core.result_shape import ResultShape
+from ..fitting import Parameter, ParameterTable, fit_success, verdict
 
 __all__ = ["FitResult", "IdentifiabilityWarning", "PARAM_NAMES"]
 
@@ -39,20 +40,23 @@ class FitResult(ResultShape):
 
     Attributes
     ----------
-    params : IwanParameters
-        The fitted joint. When ``Fs`` and ``beta`` are not identified (no macroslip in the
-        data) this is the ``beta = 0`` member of the family that fits the data equally well;
-        ``identified`` and ``ranges`` say so.
-    stderr : dict
-        Standard error of each parameter (``Fs`` [N], ``KT`` [N/m], ``chi``, ``beta``); NaN
-        where the parameter is not identified or was given.
+    params : ParameterTable
+        ``Fs`` [N], ``KT`` [N/m], ``chi``, ``beta``: value, standard error (NaN where the
+        parameter is not identified or was given), verdict, whether it was given
+        (``fixed``), and their correlation matrix (``params.correlation``, in the order of
+        :data:`PARAM_NAMES`; NaN rows/columns for parameters without a standard error).
+        When ``Fs`` and ``beta`` are not identified (no macroslip in the data) the values
+        are the ``beta = 0`` member of the family that fits the data equally well;
+        ``ranges`` gives the family.
+    joint : IwanParameters
+        (property) The fitted joint, built from ``params``.
+    stderr, identified : dict
+        (properties) ``params.stderr`` and ``params.identified``.
     correlation : ndarray, shape (4, 4)
-        Correlation matrix in the order of :data:`PARAM_NAMES`; NaN rows/columns for
-        parameters without a standard error.
-    identified : dict
-        ``True`` for each parameter the data determine.
+        (property) ``params.correlation``.
     fixed : tuple of str
-        Parameters that were given, not fitted (``("Fs",)`` for ``method="seed"``).
+        (property) Parameters that were given, not fitted (``("Fs",)`` for
+        ``method="seed"``).
     ranges : dict
         For parameters that are not identified: ``(low, high)`` range that fits the data
         equally well.
@@ -88,11 +92,7 @@ class FitResult(ResultShape):
         integrated autocorrelation time [samples] by which the variances were multiplied.
     """
 
-    params: IwanParameters
-    stderr: dict
-    correlation: np.ndarray
-    identified: dict
-    fixed: tuple
+    params: ParameterTable
     ranges: dict
     residual_norm: float
     nrmse: float
@@ -108,16 +108,39 @@ class FitResult(ResultShape):
     noise: dict = field(default_factory=dict)
     _curves: dict = field(default_factory=dict, repr=False)
 
+    @property
+    def joint(self) -> IwanParameters:
+        """The fitted joint (``Fs``, ``KT``, ``chi``, ``beta`` of :attr:`params`)."""
+        return IwanParameters(*(self.params[k].value for k in PARAM_NAMES))
+
+    @property
+    def stderr(self) -> dict:
+        """Standard error of each parameter (NaN: not identified or given)."""
+        return self.params.stderr
+
+    @property
+    def identified(self) -> dict:
+        """``True`` for each parameter the data determine."""
+        return self.params.identified
+
+    @property
+    def correlation(self) -> np.ndarray:
+        """Correlation matrix in the order of :data:`PARAM_NAMES` (read-only)."""
+        return self.params.correlation
+
+    @property
+    def fixed(self) -> tuple:
+        """Parameters that were given, not fitted."""
+        return tuple(p.name for p in self.params.parameters if p.fixed)
+
     def to_dict(self) -> dict:
-        """JSON-safe dict (NaN and inf become ``None``). ``IwanParameters.from_dict(d["params"])``
-        rebuilds the parameters."""
+        """JSON-safe dict (NaN and inf become ``None``): ``params`` is the parameter table's
+        dict; ``IwanParameters.from_dict(d["joint"])`` rebuilds the joint."""
         return json_safe({
             "method": self.method,
             "params": self.params.to_dict(),
-            "stderr": dict(self.stderr),
+            "joint": self.joint.to_dict(),
             "correlation": {"order": list(PARAM_NAMES), "matrix": self.correlation},
-            "identified": dict(self.identified),
-            "fixed": list(self.fixed),
             "ranges": {k: list(v) for k, v in self.ranges.items()},
             "residual_norm": self.residual_norm,
             "nrmse": self.nrmse,
@@ -159,7 +182,7 @@ class FitResult(ResultShape):
     def report(self) -> str:
         """Human-readable summary: parameters with standard errors, correlations, fit quality
         and warnings."""
-        p = self.params
+        p = self.joint
         title = {"loops": "loop fit (exact IwanJoint on the measured displacement)",
                  "seed": "dissipation fit, seed-paper procedure (Nelder-Mead + Newton on KT)",
                  "least_squares": "dissipation fit, least squares on the exact F0(u0), D(u0)"}
@@ -213,11 +236,27 @@ class FitResult(ResultShape):
         return "\n".join(lines)
 
 
+#: Domain of each Iwan parameter (``IwanParameters``), the bounds in its table.
+_DOMAIN = {"Fs": (0.0, math.inf), "KT": (0.0, math.inf), "chi": (-1.0, math.inf),
+           "beta": (0.0, math.inf)}
+
+
+def joint_table(params: IwanParameters, stderr: dict, identified: dict, *, fixed=(),
+                correlation=None) -> ParameterTable:
+    """The :class:`~iwan_element.fitting.ParameterTable` of a fitted joint: ``Fs`` [N],
+    ``KT`` [N/m], ``chi``, ``beta`` with their standard errors, verdicts, the ones given
+    (``fixed``) and their correlation (order :data:`PARAM_NAMES`)."""
+    rows = [Parameter(k, getattr(params, k), stderr.get(k, math.nan), *_DOMAIN[k], _UNITS[k],
+                      bool(identified.get(k, False)), fixed=k in fixed) for k in PARAM_NAMES]
+    return ParameterTable(rows, correlation=correlation)
+
+
 def settle_verdict(out: dict, fixed) -> tuple[dict, list[str]]:
-    """The identification verdict, one rule for every fit: a fitted parameter is identified
-    only with a finite standard error of at most half its magnitude (for ``chi``: of
-    ``chi + 1``, the exponent of the slider density, since ``chi = 0`` is a valid value) and
-    not at a bound of its search range."""
+    """The identification verdict of the Iwan parameters: the package's one rule,
+    :func:`iwan_element.fitting.verdict` (docs/fitting.md section 5), with ``chi`` measured
+    against ``chi + 1``. A parameter at a bound of its search range gets, for ``beta`` at 0,
+    the range ``[0, 1.96 stderr]``; one with too large an error gets its 95 % interval as its
+    range."""
     ident = dict(out["identified"])
     warns = []
     for k in PARAM_NAMES:
@@ -225,26 +264,21 @@ def settle_verdict(out: dict, fixed) -> tuple[dict, list[str]]:
             continue
         v = getattr(out["params"], k)
         se = out["stderr"].get(k, math.nan)
-        scale = abs(v + 1.0) if k == "chi" else abs(v)
-        what = "chi + 1" if k == "chi" else "its value"
-        if k in out.get("at_bound", ()):
-            ident[k] = False
-            extra = ""
-            if k == "beta" and v < 1e-6:
-                hi = 1.96 * se if math.isfinite(se) else math.nan
-                out["ranges"]["beta"] = (0.0, hi)
-                extra = f"; the data are compatible with beta in [0, {hi:.3g}] (95 %)"
-            warns.append(f"{k} = {v:.4g} is at a bound of its search range: NOT identified"
-                         + extra)
-        elif not math.isfinite(se):
-            ident[k] = False
-            warns.append(f"{k} has no standard error (singular Jacobian): NOT identified")
-        elif se > 0.5 * scale:
-            ident[k] = False
+        at_bound = k in out.get("at_bound", ())
+        ok, warn = verdict(k, v, se, at_bound=at_bound,
+                           reference=v + 1.0 if k == "chi" else None,
+                           reference_text="chi + 1" if k == "chi" else "its value")
+        if ok:
+            continue
+        ident[k] = False
+        if at_bound and k == "beta" and v < 1e-6:
+            hi = 1.96 * se if math.isfinite(se) else math.nan
+            out["ranges"]["beta"] = (0.0, hi)
+            warn += f"; the data are compatible with beta in [0, {hi:.3g}] (95 %)"
+        elif not at_bound and math.isfinite(se):
             floor = {"chi": -1.0}.get(k, 0.0)
             out["ranges"].setdefault(k, (max(floor, v - 1.96 * se), v + 1.96 * se))
-            warns.append(f"{k}: std. error {se:.3g} exceeds half of {what} ({scale:.3g}): "
-                         "NOT identified")
+        warns.append(warn)
     return ident, warns
 
 
@@ -266,10 +300,11 @@ def _finish(method, out, *, converged, message, nfev, nrmse, t0, extra_warnings=
     explains = out.get("explains", True)
     if not explains:
         ident = {k: False for k in ident}
-    success = bool(converged and explains and all(ident.get(k, False) for k in required
-                                                  if k not in fixed))
-    result = FitResult(params=out["params"], stderr=out["stderr"], correlation=out["correlation"],
-                       identified=ident, fixed=tuple(fixed), ranges=out["ranges"],
+    success = fit_success(converged and explains, ident,
+                          [k for k in required if k not in fixed])
+    table = joint_table(out["params"], out["stderr"], ident, fixed=fixed,
+                        correlation=out["correlation"])
+    result = FitResult(params=table, ranges=out["ranges"],
                        residual_norm=float(np.sqrt(out["r"] @ out["r"])), nrmse=float(nrmse),
                        success=success, message=str(message), nfev=int(nfev),
                        method=method, n_data=int(out["r"].size), warnings=tuple(warns),

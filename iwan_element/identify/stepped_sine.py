@@ -40,6 +40,7 @@ import numpy as np
 from scipy import optimize
 
 from ..core.validation import check_scalar
+from ..fitting import covariance
 from .curves import AmplitudeCurve
 
 __all__ = ["stepped_sine_curve"]
@@ -118,7 +119,7 @@ def _fit_sdof(w, Hd, wr0, z0):
         dp[j] = steps[j]
         J[:, j] = (res6(p + dp) - res6(p - dp)) / (2 * steps[j])
     dof = max(r0.size - 6, 1)
-    cov = np.linalg.pinv(J.T @ J) * float(r0 @ r0) / dof
+    cov = covariance(J, r0, dof=dof).covariance        # docs/fitting.md section 1
     return wr, zeta, A, B, math.sqrt(max(cov[0, 0], 0.0)), math.sqrt(max(cov[1, 1], 0.0))
 
 

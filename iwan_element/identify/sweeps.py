@@ -34,6 +34,7 @@ import numpy as np
 from scipy import optimize
 
 from ..core.validation import check_magnitude, check_scalar, finite_array, same_length
+from ..fitting import covariance
 from .curves import AmplitudeCurve
 from .stepped_sine import _fit_sdof
 
@@ -219,7 +220,7 @@ def _fit(W, X, H, sweeps, deg, residual):
     dof = max(2 * W.size - x0.size, 1)
     rms = math.sqrt(2.0 * sol.cost / dof)
     J = sol.jac
-    cov = np.linalg.pinv(J.T @ J) * rms ** 2
+    cov = covariance(J, s2=rms ** 2).covariance         # docs/fitting.md section 1
     log.debug("sweep fit: %s, rms relative error %.3g", sol.message, rms)
     return m, m.full(sol.x), cov, rms, bool(sol.success)
 
