@@ -30,3 +30,18 @@ def test_installed_package_imports_models_with_its_data(tmp_path):
         pytest.skip("iwan-element is not installed in this environment (run "
                     "`python -m pip install -e \".[test]\"`, as the README says)")
     assert res.returncode == 0, res.stderr
+
+
+def test_every_subpackage_is_listed_for_installation():
+    """A subpackage of the source tree that pyproject.toml does not list is missing from an
+    installed (non-editable) package: its imports fail only after ``pip install .``."""
+    import pathlib
+    import tomllib
+    root = pathlib.Path(__file__).resolve().parents[1]
+    listed = set(tomllib.loads((root / "pyproject.toml").read_text())["tool"]["setuptools"]
+                 ["packages"])
+    found = {".".join(p.parent.relative_to(root).parts)
+             for p in (root / "iwan_element").rglob("__init__.py")
+             if not p.parent.is_symlink() and "models" not in p.parent.relative_to(root).parts}
+    found.add("iwan_element.models")
+    assert found == listed
