@@ -22,7 +22,7 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -63,7 +63,7 @@ def measured_amplitude_curve(path, *, band=(60.0, 120.0), window: float = 0.25,
     return amplitude_curve(t[keep], a[keep], quantity="acceleration", band=band, window=window)
 
 
-@dataclass
+@dataclass(frozen=True)
 class CalibrationResult(ResultShape):
     """Result of :func:`calibrate`.
 
@@ -91,7 +91,6 @@ class CalibrationResult(ResultShape):
     max_frequency_error: float
     max_damping_error: float
     success: bool
-    warnings: tuple = field(default_factory=tuple)
 
     def report(self) -> str:
         lines = [f"Interface calibration of {self.specimen.name!r} "

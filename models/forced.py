@@ -35,7 +35,7 @@ from .transient import _roundoff_force
 __all__ = ["ForcedResponseResult", "forced_response"]
 
 
-@dataclass
+@dataclass(frozen=True)
 class ForcedResponseResult(ResultShape):
     """Stepped-sine response, with the package's result shape.
 
@@ -60,7 +60,6 @@ class ForcedResponseResult(ResultShape):
     amplitude: np.ndarray
     specimen: Specimen
     metadata: dict = field(default_factory=dict)
-    warnings: tuple = field(default_factory=tuple)
 
     def peaks(self) -> tuple[np.ndarray, np.ndarray]:
         """(peak frequency [Hz], peak amplitude [m]) per force level."""

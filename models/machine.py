@@ -11,7 +11,7 @@ so in axial equilibrium the machine force equals their sum (``docs/beam_tests.md
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import exudyn as exu
 import numpy as np
@@ -33,7 +33,7 @@ __all__ = ["QuasiStaticResult", "quasi_static_test"]
 LOOP_TOL = 1e-2
 
 
-@dataclass
+@dataclass(frozen=True)
 class QuasiStaticResult(ResultShape):
     """Result of :func:`quasi_static_test` (SI units), with the package's result shape.
 
@@ -64,7 +64,6 @@ class QuasiStaticResult(ResultShape):
     dissipated: np.ndarray
     specimen: Specimen
     metadata: dict = field(default_factory=dict)
-    warnings: tuple = field(default_factory=tuple)
 
     @property
     def joint_force(self) -> np.ndarray:
@@ -193,8 +192,8 @@ def quasi_static_test(specimen: Specimen, *, amplitude: float = 1e-4, frequency:
         metadata={"amplitude": u0, "frequency": f, "cycles": cycles, "steps_per_cycle": steps})
     if not out.success:
         area, closed = out.loop_check()
-        out.warnings += (f"a contact point's last loop differs from its closed-form "
-                         f"dissipation by {np.max(np.abs(area - closed)):.3g} J (more than "
-                         f"{LOOP_TOL:g} of the interface's {closed.sum():.3g} J): give more "
-                         "steps_per_cycle",)
+        out = replace(out, warnings=out.warnings + (
+            f"a contact point's last loop differs from its closed-form dissipation by "
+            f"{np.max(np.abs(area - closed)):.3g} J (more than {LOOP_TOL:g} of the "
+            f"interface's {closed.sum():.3g} J): give more steps_per_cycle",))
     return out

@@ -55,7 +55,7 @@ __all__ = ["RingdownResult", "ringdown"]
 ENERGY_TOL = 1e-3
 
 
-@dataclass
+@dataclass(frozen=True)
 class RingdownResult(ResultShape):
     """Result of :func:`ringdown`, with the package's result shape (``report``, ``to_dict``,
     ``warnings``, ``success``, ``plot(ax=None)`` on three panels: the mode's response against
@@ -103,7 +103,6 @@ class RingdownResult(ResultShape):
     initial_energy: float
     wall_time: float
     metadata: dict = field(default_factory=dict)
-    warnings: tuple = field(default_factory=tuple)
 
     @property
     def max_energy_error(self) -> float | None:

@@ -19,15 +19,20 @@ supplies the rest.
 from __future__ import annotations
 
 import html
+from dataclasses import dataclass
+from typing import ClassVar
 
 __all__ = ["ResultShape", "panels"]
 
 
+@dataclass(frozen=True, eq=False, kw_only=True)
 class ResultShape:
-    """Mixin of the package's result classes: ``plot_panels`` (how many Axes ``plot`` draws
-    on) and ``_repr_html_`` (the report in a notebook)."""
+    """Base of the package's result classes (frozen dataclasses): the ``warnings`` field
+    (keyword-only, a tuple of str, empty by default), ``plot_panels`` (how many Axes ``plot``
+    draws on) and ``_repr_html_`` (the report in a notebook)."""
 
-    plot_panels: int = 1
+    plot_panels: ClassVar[int] = 1
+    warnings: tuple = ()
 
     def _repr_html_(self) -> str:
         return f"<pre>{html.escape(self.report())}</pre>"

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -47,7 +47,6 @@ class CampaignPrediction(ResultShape):
     conditions: dict
     values: dict
     level: float
-    warnings: tuple = field(default_factory=tuple)
 
     @property
     def success(self) -> bool:
@@ -287,7 +286,6 @@ class LeaveOneOut(ResultShape):
     coverage: float = math.nan
     coverage_coef: float = math.nan
     level: float = 0.95
-    warnings: tuple = field(default_factory=tuple)
 
     @property
     def success(self) -> bool:

@@ -280,7 +280,6 @@ class CampaignFit(ResultShape):
     message: str
     nfev: int
     wall_time: float
-    warnings: tuple = field(default_factory=tuple)
     details: dict = field(default_factory=dict)
     _state: dict = field(default_factory=dict, repr=False)
 

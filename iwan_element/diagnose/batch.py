@@ -16,7 +16,7 @@ from __future__ import annotations
 import json
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -178,7 +178,6 @@ class BatchDiagnosis(ResultShape):
     options: dict
     executor: str
     wall_time: float
-    warnings: tuple = field(default_factory=tuple)
 
     @property
     def success(self) -> bool:

@@ -100,7 +100,6 @@ class Diagnosis(ResultShape):
     model: object
     steps: tuple
     untestable: dict
-    warnings: tuple
     force_before: np.ndarray
     force_after: np.ndarray
     t: np.ndarray
@@ -283,7 +282,6 @@ class VibrationDiagnosis(ResultShape):
     model_frequency: np.ndarray
     model_damping_ratio: np.ndarray
     steps: tuple
-    warnings: tuple = ()
     details: dict = field(default_factory=dict)
     covariance: np.ndarray | None = None
 

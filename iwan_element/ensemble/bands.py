@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 import functools
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -88,7 +88,6 @@ class PredictionBands(ResultShape):
     system: SingleModeSystem | None
     uncertainty: object
     ensemble: EnsembleResult
-    warnings: tuple = field(default_factory=tuple)
 
     @property
     def _source(self) -> str:

@@ -31,7 +31,7 @@ import pickle
 import time
 import traceback
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from numbers import Number
 from os import PathLike
 from pathlib import Path
@@ -94,7 +94,6 @@ class EnsembleResult(ResultShape):
     seed: int
     executor: str
     wall_time: float
-    warnings: tuple = field(default_factory=tuple)
 
     def __len__(self) -> int:
         return len(self.rows)

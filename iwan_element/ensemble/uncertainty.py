@@ -17,7 +17,7 @@ one forcing level (:func:`~iwan_element.ensemble.oscillator.peak_response`).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -78,7 +78,6 @@ class ParameterUncertainty(ResultShape):
     cov: np.ndarray
     source: str = "generic"
     valid_amplitude: float = math.inf
-    warnings: tuple = field(default_factory=tuple)
     success: bool = True
 
     @classmethod

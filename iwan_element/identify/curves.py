@@ -9,7 +9,7 @@ the measurement stops and a statement of how it was made.
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -80,7 +80,6 @@ class AmplitudeCurve(ResultShape):
     noise_floor: float = float("nan")
     method: str = ""
     notes: str = ""
-    warnings: tuple = field(default_factory=tuple)
 
     def __post_init__(self):
         amp = check_magnitude("amplitude", finite_array("amplitude", self.amplitude).copy(), unit="m")

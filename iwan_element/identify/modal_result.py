@@ -113,7 +113,6 @@ class ModalIwanFit(ResultShape):
     conventions: dict
     chi2_red: float = float("nan")
     weights: tuple = ()
-    warnings: tuple = ()
     success: bool = False
     params: ParameterTable = field(default_factory=lambda: ParameterTable(()))
 
@@ -148,7 +147,8 @@ class ModalIwanFit(ResultShape):
             warns.append("zeta0 is at its bound 0: no viscous floor is visible in the data")
         table = _table(params, stderr, bad)
         return cls(regime, names, theta, np.asarray(cov, dtype=float), data, conv, chi2_red,
-                   weights, tuple(warns), fit_success(optimizer_ok, table.identified), table)
+                   weights, fit_success(optimizer_ok, table.identified), table,
+                   warnings=tuple(warns))
 
     @classmethod
     def linear(cls, data, conv, *, warnings):

@@ -148,7 +148,6 @@ class ModelFit(ResultShape):
     success: bool
     message: str
     nfev: int
-    warnings: tuple
     details: dict = field(default_factory=dict)
 
     @property

@@ -40,7 +40,7 @@ Method (``method="savgol"``, what ``"auto"`` uses)
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 from scipy.optimize import minimize_scalar
@@ -92,7 +92,6 @@ class NoiseEstimate(ResultShape):
     n: int
     n_eff: float
     window: float
-    warnings: tuple = field(default_factory=tuple)
     lag_one: float = 0.0
 
     @property
@@ -311,13 +310,13 @@ def estimate_noise(t, y, *, method: str = "auto", window: float | None = None) -
                      "estimate treats the samples as equally spaced")
     if np.ptp(yy) == 0.0:
         return NoiseEstimate(0.0, "savgol+ar1" if method != "difference" else "difference", dt, n,
-                             float(n), dt, tuple(warns + ["y is constant: no noise is visible "
+                             float(n), dt, warnings=tuple(warns + ["y is constant: no noise is visible "
                                                           "(a quantised or switched-off channel?)"]))
     if method == "difference":
         d2 = np.diff(yy, 2)
         s = difference_sigma(yy)
         tau = _correlation_time(_clean_blocks(d2, min(64, d2.size // 4)), s * math.sqrt(6.0))
-        return NoiseEstimate(s, "difference", tau * dt, n, n / tau, dt, tuple(warns))
+        return NoiseEstimate(s, "difference", tau * dt, n, n / tau, dt, warnings=tuple(warns))
     if window is None:
         w = signal_window(yy)
     else:
@@ -349,5 +348,5 @@ def estimate_noise(t, y, *, method: str = "auto", window: float | None = None) -
                      f"noise slower than the {w}-sample window is not counted and the level "
                      "is uncertain")
     tau = (1.0 + rho) / (1.0 - rho) if rho > 0.0 else 1.0
-    return NoiseEstimate(s, "savgol+ar1", tau * dt, n, n / tau, w * dt, tuple(warns),
+    return NoiseEstimate(s, "savgol+ar1", tau * dt, n, n / tau, w * dt, warnings=tuple(warns),
                          lag_one=float(rho))

@@ -101,7 +101,6 @@ class FitResult(ResultShape):
     nfev: int
     method: str
     n_data: int
-    warnings: tuple
     wall_time: float
     details: dict = field(default_factory=dict)
     offsets: dict = field(default_factory=dict)
