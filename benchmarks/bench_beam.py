@@ -174,10 +174,10 @@ def main(argv=None) -> None:
     amps = np.geomspace(2e-6, 60e-6, 20)
     fresh = spec.replace(n_points=args.points + 1)          # not in the matrix cache yet
     t0 = time.perf_counter()
-    modal_amplitude_curve(fresh, amplitudes=amps)
+    modal_amplitude_curve(fresh, amplitude=amps)
     cold = time.perf_counter() - t0
     t0 = time.perf_counter()
-    modal_amplitude_curve(fresh.replace(friction=0.3), amplitudes=amps)
+    modal_amplitude_curve(fresh.replace(friction=0.3), amplitude=amps)
     warm = time.perf_counter() - t0
     print(f"\n(b) QSMA, 20 amplitudes, {args.points + 1} strips: first call {cold:.3f} s "
           f"(matrix extraction included), changed friction {warm:.3f} s")

@@ -47,7 +47,7 @@ def ringdown_task(params, rng, *, cycles=400, steps_per_period=64):
 def quiet_qsma_task(params, rng, *, specimen, amplitudes):
     """specimen_curve_task without Exudyn's solver banner on stdout."""
     with contextlib.redirect_stdout(io.StringIO()):
-        return specimen_curve_task(params, rng, specimen=specimen, amplitudes=amplitudes)
+        return specimen_curve_task(params, rng, specimen=specimen, amplitude=amplitudes)
 
 
 def make(task: str, n: int):

@@ -48,10 +48,10 @@ def _run(method, data, table, p):
     if method == "loops":
         r = fit_loops(data.t, data.u, data.F, max_samples=None)
     elif method == "least_sq":
-        r = fit_dissipation(table["F0"], table["D"], u0=table["u0"])
+        r = fit_dissipation(table["u0"], table["F0"], table["D"])
     else:
         Fs = p.Fs * (1.1 if method.endswith("+10%") else 1.0)
-        r = fit_dissipation(table["F0"], table["D"], u0=table["u0"], method="seed", Fs=Fs)
+        r = fit_dissipation(table["u0"], table["F0"], table["D"], method="seed", Fs=Fs)
     return r, time.perf_counter() - t0
 
 

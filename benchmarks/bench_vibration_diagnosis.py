@@ -68,7 +68,7 @@ def main(argv=None):
             for seed in seeds:
                 Xc, fm, zm, fp, zp, vals = vc.seeded_case(seed, name, size, P=P, X=X, base=base)
                 curve = AmplitudeCurve(X, fm, zm, frequency_std=vc.F_NOISE * fm,
-                                       damping_std=vc.Z_NOISE * zm, method="seeded")
+                                       damping_ratio_std=vc.Z_NOISE * zm, method="seeded")
                 g = diagnose_vibration(curve, predicted_frequency=fp, predicted_damping_ratio=zp,
                                        predicted_zeta0=vc.ZETA0)
                 want = name or "none"

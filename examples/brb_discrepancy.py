@@ -68,7 +68,7 @@ def main(argv=None):
     print(f"hammer: {len(hammer)} points {1e6 * hammer.amplitude.min():.3g}-"
           f"{1e6 * hammer.amplitude.max():.3g} um; sweeps: {len(sweeps)} points "
           f"{1e6 * sweeps.amplitude.min():.3g}-{1e6 * sweeps.amplitude.max():.3g} um")
-    before = models.modal_amplitude_curve(spec, amplitudes=sweeps.amplitude)
+    before = models.modal_amplitude_curve(spec, amplitude=sweeps.amplitude)
     for w in before.warnings:
         print("model:", w)
     # the sweeps are another test than the hammer calibration (shaker attached): the
@@ -80,8 +80,8 @@ def main(argv=None):
     print(diag.report())
     aug = diag.augment(spec)
     Xp = np.array([20e-6, 100e-6, 200e-6, 300e-6, 315e-6])
-    qb = models.modal_amplitude_curve(spec, amplitudes=Xp)
-    qa = models.modal_amplitude_curve(aug, amplitudes=Xp)
+    qb = models.modal_amplitude_curve(spec, amplitude=Xp)
+    qa = models.modal_amplitude_curve(aug, amplitude=Xp)
     band = diag.predict(Xp, base=qb)
     print("\nprediction of the augmented beam model (QSMA; 1-sigma band from the diagnosis)")
     print("  X [um]  f before [Hz]  f after [Hz]       change   zeta before [%]  "
@@ -90,7 +90,7 @@ def main(argv=None):
         print(f"  {1e6 * x:6.0f}  {qb.frequency[i]:13.3f}  {qa.frequency[i]:8.3f} +- "
               f"{band.frequency_std[i]:.3f}  {100 * (qa.frequency[i] / qb.frequency[i] - 1):+.3f} %"
               f"  {100 * qb.damping_ratio[i]:15.3f}  {100 * qa.damping_ratio[i]:8.3f} +- "
-              f"{100 * band.damping_std[i]:.3f}  {qa.damping_ratio[i] / qb.damping_ratio[i]:5.2f}")
+              f"{100 * band.damping_ratio_std[i]:.3f}  {qa.damping_ratio[i] / qb.damping_ratio[i]:5.2f}")
     X0 = float(sweeps.amplitude.max())
     rd = models.ringdown(aug, amplitude=X0, cycles=20 if a.quick else 60)
     print(f"\nExudyn ring-down of the augmented beam from {1e6 * X0:.3g} um "
@@ -104,8 +104,8 @@ def main(argv=None):
 def figure(path, spec, aug, diag, hammer, sweeps, rd):
     import matplotlib.pyplot as plt
     X = np.geomspace(2e-6, 3.15e-4, 60)
-    qb = models.modal_amplitude_curve(spec, amplitudes=X)
-    qa = models.modal_amplitude_curve(aug, amplitudes=X)
+    qb = models.modal_amplitude_curve(spec, amplitude=X)
+    qa = models.modal_amplitude_curve(aug, amplitude=X)
     band = diag.predict(X, base=qb)
     # the sweeps in the calibration test's frame: divided by the fitted between-test ratios
     bt = diag.details["between_tests"]
@@ -113,7 +113,7 @@ def figure(path, spec, aug, diag, hammer, sweeps, rd):
     for ax, yb, ya, sd, ym, ys, yr, scale, off in (
             (a1, qb.frequency, qa.frequency, band.frequency_std, hammer.frequency,
              sweeps.frequency, rd.curve.frequency, 1.0, bt["frequency_offset"]),
-            (a2, qb.damping_ratio, qa.damping_ratio, band.damping_std, hammer.damping_ratio,
+            (a2, qb.damping_ratio, qa.damping_ratio, band.damping_ratio_std, hammer.damping_ratio,
              sweeps.damping_ratio, rd.curve.damping_ratio, 100.0, bt["damping_offset"])):
         ax.semilogx(hammer.amplitude, scale * ym, "o", mfc="none", color="k", ms=4,
                     label="hammer ring-down (calibration)")

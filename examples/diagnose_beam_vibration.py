@@ -74,7 +74,7 @@ def run(effect: str, *, quick: bool):
     a_p, f_p, z_p = per_level(BASE, levels, quick=quick)
     fp, zp = at(a_m, a_p, f_p), at(a_m, a_p, z_p)
     diag = diagnose_vibration(a_m, f_m, z_m, predicted_frequency=fp, predicted_damping_ratio=zp,
-                              frequency_noise=2e-7, damping_noise=0.01)
+                              frequency_noise=2e-7, damping_ratio_noise=0.01)
     result = {"effect_hidden": effect, "diagnosis": diag}
     if diag.effect != "none":
         a_a, f_a, z_a = per_level(diag.augment(BASE), levels, quick=quick)

@@ -219,10 +219,10 @@ def main(argv=None) -> dict:
         for mode in modes:
             f_lin = linear_modes(spec, mode=mode)[0] / (2 * np.pi)
             curves[name].append((f"mode {mode}", modal_amplitude_curve(spec, mode=mode,
-                                                                      amplitudes=amps), f_lin))
+                                                                      amplitude=amps), f_lin))
     amps = np.geomspace(*example.amplitude_range, n_amp)
     curves["example"].append(("mode 2, identified joint", modal_amplitude_curve(
-        example, mode=2, amplitudes=amps), linear_modes(example, mode=2)[0] / (2 * np.pi)))
+        example, mode=2, amplitude=amps), linear_modes(example, mode=2)[0] / (2 * np.pi)))
     data_path = args.data or next((q for q in BRB_DATA if q.exists()), None)
     measured = None
     if data_path is not None and Path(data_path).exists():
@@ -236,7 +236,7 @@ def main(argv=None) -> dict:
     progress(f"transient ring-down of the Brake-Reuss beam in Exudyn "
              f"({len(curves['brake-reuss'][0][1])} QSMA points for comparison)")
     rd = ringdown(brb, amplitude=60e-6, cycles=16 if quick else 60, steps_per_period=48)
-    q_rd = modal_amplitude_curve(brb, amplitudes=np.geomspace(rd.curve.amplitude.min(),
+    q_rd = modal_amplitude_curve(brb, amplitude=np.geomspace(rd.curve.amplitude.min(),
                                                               rd.curve.amplitude.max(), 20))
     plot_ringdown(rd, q_rd, args.out / "free_decay.png")
 
@@ -283,7 +283,7 @@ def main(argv=None) -> dict:
                       f"{c.frequency[i]:11.4f}  {c.damping_ratio[i]:.3e}")
     print("\n  Brake-Reuss ring-down vs QSMA")
     print("  X [um]    f ring [Hz]  f pred [Hz]  zeta ring  zeta pred")
-    qp = modal_amplitude_curve(brb, amplitudes=rd.curve.amplitude)
+    qp = modal_amplitude_curve(brb, amplitude=rd.curve.amplitude)
     for i in np.unique(np.linspace(0, len(qp) - 1, 5).astype(int)):
         print(f"  {rd.curve.amplitude[i] * 1e6:7.2f}  {rd.curve.frequency[i]:11.4f}  "
               f"{qp.frequency[i]:11.4f}  {rd.curve.damping_ratio[i]:.3e}  {qp.damping_ratio[i]:.3e}")

@@ -57,7 +57,7 @@ def main(argv=None) -> dict:
         axes["n_bolts"] = args.bolts
     sets = parameter_grid(**axes)
     amplitudes = np.geomspace(1e-6, 1e-3, 6 if args.quick else 16)
-    task = functools.partial(quiet_task, specimen=specimen, amplitudes=amplitudes)
+    task = functools.partial(quiet_task, specimen=specimen, amplitude=amplitudes)
     client = None
     executor = "serial" if args.quick else None
     if args.scheduler:
@@ -79,7 +79,7 @@ def main(argv=None) -> dict:
         label = ", ".join(f"{k} {v / 1e3:g} kN" if k == "preload" else f"{k} {v:g}"
                           for k, v in row.items() if k in axes)
         ax_f.plot(row["amplitude"], row["frequency"], "-o", ms=3, color=c, label=label)
-        ax_z.plot(row["amplitude"], row["damping"], "-o", ms=3, color=c)
+        ax_z.plot(row["amplitude"], row["damping_ratio"], "-o", ms=3, color=c)
     for a in (ax_f, ax_z):
         a.set_xscale("log")
         a.set_xlabel("transverse displacement amplitude at the sensor [m]")

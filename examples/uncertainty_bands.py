@@ -69,7 +69,7 @@ def main(argv=None) -> dict:
         executor = client
     try:
         bands = ie.propagate_uncertainty(
-            unc, system=system, amplitudes=amplitudes,
+            unc, system=system, amplitude=amplitudes,
             n_samples=16 if args.quick else args.samples, force=args.force,
             cycles=8 if args.quick else 30, seed=2026, executor=executor,
             progress=not args.quick)

@@ -256,10 +256,10 @@ def _run_fit(args) -> int:
                 if args.slip_force is None:
                     raise ValueError("--method seed needs --slip-force (the paper takes Fs as "
                                      "known)")
-                result = fit_dissipation(table["F0"], table["D"], u0=table["u0"], method="seed",
+                result = fit_dissipation(table["u0"], table["F0"], table["D"], method="seed",
                                          Fs=args.slip_force * FORCE_UNITS[fu])
             else:
-                result = fit_dissipation(table["F0"], table["D"], u0=table["u0"],
+                result = fit_dissipation(table["u0"], table["F0"], table["D"],
                                          method="least_squares", seed=args.seed,
                                          n_starts=args.starts)
     wrote = []                  # files first: a closed stdout must not cost the outputs

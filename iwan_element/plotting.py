@@ -71,7 +71,7 @@ def plot_normalized_loops(cases, *, s0: float = 1.0, step: float = 0.002, ax=Non
     return lines
 
 
-def plot_loop(u0: float, params: IwanParameters, *, n: int = 401, ax=None,
+def plot_loop(amplitude: float, params: IwanParameters, *, n: int = 401, ax=None,
               label: str | None = None):
     """Draw the steady Masing loop of amplitude ``u0`` [m] in mm and kN.
 
@@ -80,7 +80,7 @@ def plot_loop(u0: float, params: IwanParameters, *, n: int = 401, ax=None,
     list of matplotlib.lines.Line2D
     """
     ax = axes_or_new(ax)
-    u, F = masing_loop(u0, params, n=n)
+    u, F = masing_loop(amplitude, params, n=n)
     lines = ax.plot(u * 1e3, F * 1e-3, label=label)
     ax.set_xlabel("displacement [mm]")
     ax.set_ylabel("force [kN]")

@@ -165,7 +165,7 @@ def calibrate(specimen: Specimen, measured: AmplitudeCurve, *, fit=("stiffness_p
 
     def model(x):
         s = _with(specimen, fit, [transform(n, v, True) for n, v in zip(fit, x)])
-        return modal_amplitude_curve(s, mode=mode, amplitudes=X)
+        return modal_amplitude_curve(s, mode=mode, amplitude=X)
 
     def resid(x):
         c = model(x)
@@ -174,7 +174,7 @@ def calibrate(specimen: Specimen, measured: AmplitudeCurve, *, fit=("stiffness_p
     sol = minimize(resid, x0, lb, ub, method="trf", max_nfev=200, x_scale=1.0, diff_step=1e-4)
     vals = [transform(n, v, True) for n, v in zip(fit, sol.x)]
     fitted = _with(specimen, fit, vals).replace(calibrated_range=(float(X.min()), float(X.max())))
-    curve = modal_amplitude_curve(fitted, mode=mode, amplitudes=X)
+    curve = modal_amplitude_curve(fitted, mode=mode, amplitude=X)
     warns = []
     # the package's one covariance routine (docs/fitting.md): s^2 (J^T J)^-1, s^2 = SSR/dof,
     # with the delta method from the fitted logarithms

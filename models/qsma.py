@@ -52,14 +52,14 @@ def _check_mode(mode) -> int:
     return int(mode)
 
 
-def _amplitudes(specimen: Specimen, amplitudes) -> np.ndarray:
-    if amplitudes is None:
+def _amplitudes(specimen: Specimen, amplitude) -> np.ndarray:
+    if amplitude is None:
         lo, hi = specimen.amplitude_range
         return np.geomspace(lo, hi, 20)
-    a = check_magnitude("amplitudes", finite_array("amplitudes", amplitudes, ndim=None), unit="m")
+    a = check_magnitude("amplitude", finite_array("amplitude", amplitude, ndim=None), unit="m")
     a = np.atleast_1d(a)
     if a.ndim != 1 or a.size == 0 or not np.all(np.isfinite(a)) or np.any(a <= 0):
-        raise ValueError("amplitudes must be a non-empty 1-D sequence of finite values > 0 [m]")
+        raise ValueError("amplitude must be a non-empty 1-D sequence of finite values > 0 [m]")
     return a
 
 
@@ -161,7 +161,7 @@ def _condensed(key):
             "sb": float(L.S @ Yb), "sG": L.S @ YG, "qb": float(Mphi @ Yb), "qG": Mphi @ YG}
 
 
-def static_modal_load(specimen: Specimen, amplitudes, *, mode: int = 1,
+def static_modal_load(specimen: Specimen, amplitude, *, mode: int = 1,
                       tol: float = 1e-12, max_iter: int = 60):
     """Nonlinear static solutions under ``alpha M phi`` reaching sensor amplitudes ``X``.
 
@@ -175,7 +175,7 @@ def static_modal_load(specimen: Specimen, amplitudes, *, mode: int = 1,
         (n, n_points), ``omega0``, ``phi``, ``system`` (LinearSystem), ``points``
         (ContactPoints), ``warnings``.
     """
-    X = _amplitudes(specimen, amplitudes)
+    X = _amplitudes(specimen, amplitude)
     mode = _check_mode(mode)
     c = _condensed(_prepare_key(specimen, mode))
     pts = contact_points(specimen)
@@ -224,7 +224,7 @@ def static_modal_load(specimen: Specimen, amplitudes, *, mode: int = 1,
             "warnings": warns}
 
 
-def modal_amplitude_curve(specimen: Specimen, *, mode: int = 1, amplitudes=None) -> AmplitudeCurve:
+def modal_amplitude_curve(specimen: Specimen, *, mode: int = 1, amplitude=None) -> AmplitudeCurve:
     """Amplitude-dependent frequency and damping of a mode by quasi-static modal analysis.
 
     Parameters
@@ -232,7 +232,7 @@ def modal_amplitude_curve(specimen: Specimen, *, mode: int = 1, amplitudes=None)
     specimen : Specimen
     mode : int, keyword-only
         Elastic mode number (1: the lowest elastic mode).
-    amplitudes : array_like, optional, keyword-only
+    amplitude : array_like, optional, keyword-only
         Displacement amplitudes at the specimen's sensor point [m]; default 20 log-spaced
         amplitudes over ``specimen.amplitude_range``.
 
@@ -247,7 +247,7 @@ def modal_amplitude_curve(specimen: Specimen, *, mode: int = 1, amplitudes=None)
     """
     if not isinstance(specimen, Specimen):
         raise ValueError(f"specimen must be a Specimen, got {type(specimen).__name__}")
-    r = static_modal_load(specimen, amplitudes, mode=mode)
+    r = static_modal_load(specimen, amplitude, mode=mode)
     slip = np.abs(r["slip"])
     D = np.zeros(r["amplitude"].size)
     for i, p in enumerate(r["points"].params):
@@ -275,12 +275,12 @@ def modal_amplitude_curve(specimen: Specimen, *, mode: int = 1, amplitudes=None)
         warnings=tuple(warns))
 
 
-def extrapolation_warnings(specimen: Specimen, amplitudes) -> list:
+def extrapolation_warnings(specimen: Specimen, amplitude) -> list:
     """Warnings for sensor amplitudes [m] outside the range the specimen was calibrated on,
     or above the range an effect it carries was fitted on (below it the effects' modal forms
     fade or stay constant, and the specimen's own range governs); empty when inside, or when
     no calibrated range is known."""
-    X = np.asarray(amplitudes, float)
+    X = np.asarray(amplitude, float)
     out = []
     for label, cr in [("the specimen", specimen.calibrated_range)] + [
             (f"its {e.name}", e.calibrated_range) for e in specimen.effects]:

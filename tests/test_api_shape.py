@@ -64,7 +64,7 @@ def _fit():
 def _curve():
     a = np.geomspace(1e-5, 1e-3, 8)
     return ie.AmplitudeCurve(a, 100 - 5 * a / a[-1], 1e-3 + 0.01 * a / a[-1],
-                             frequency_std=1e-3, damping_std=1e-5)
+                             frequency_std=1e-3, damping_ratio_std=1e-5)
 
 
 def _vib():
@@ -72,7 +72,7 @@ def _vib():
     return ie.diagnose_vibration(c.amplitude, c.frequency, c.damping_ratio,
                                  predicted_frequency=c.frequency + 0.01,
                                  predicted_damping_ratio=c.damping_ratio,
-                                 frequency_noise=0.01, damping_noise=1e-4)
+                                 frequency_noise=0.01, damping_ratio_noise=1e-4)
 
 
 def _diag():
@@ -117,7 +117,7 @@ def _uncertainty():
 
 def _bands():
     sys_ = ie.SingleModeSystem(mass=1.0, stiffness=4e6, zeta0=1e-3)
-    return ie.propagate_uncertainty(_uncertainty(), system=sys_, amplitudes=[1e-5, 1e-4],
+    return ie.propagate_uncertainty(_uncertainty(), system=sys_, amplitude=[1e-5, 1e-4],
                                     n_samples=4, cycles=4, steps_per_period=32, seed=0,
                                     executor="serial")
 
@@ -183,9 +183,9 @@ def _calibration():
     from iwan_element.models.calibration import calibrate
     s = models.preset("brake-reuss").replace(n_points=8, calibrated_range=None)
     X = np.geomspace(5e-6, 4e-5, 5)
-    q = models.modal_amplitude_curve(s, amplitudes=X)
+    q = models.modal_amplitude_curve(s, amplitude=X)
     meas = ie.AmplitudeCurve(X, q.frequency * (1 + 1e-4), q.damping_ratio * 1.1,
-                             frequency_std=1e-3, damping_std=1e-5)
+                             frequency_std=1e-3, damping_ratio_std=1e-5)
     return calibrate(s, meas, fit=("chi",))
 
 

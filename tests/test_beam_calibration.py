@@ -44,7 +44,7 @@ def test_brake_reuss_calibrated_from_neutral_start_reproduces_the_measured_curve
     assert res.max_frequency_error < 5e-4            # 0.05 %
     assert res.max_damping_error < 0.20
     # the preset carries this calibration (rounded): it meets the same targets
-    c = modal_amplitude_curve(preset("brake-reuss"), amplitudes=measured.amplitude[m])
+    c = modal_amplitude_curve(preset("brake-reuss"), amplitude=measured.amplitude[m])
     assert np.max(np.abs(c.frequency / measured.frequency[m] - 1)) < 5e-4
     assert np.max(np.abs(c.damping_ratio / measured.damping_ratio[m] - 1)) < 0.20
     # the preset carries a calibration of this record: every parameter within 2 % or two of

@@ -251,7 +251,7 @@ def test_system_and_curve_inputs_are_checked():
         SingleModeSystem(mass=0.0, stiffness=1.0)
     with pytest.raises(ValueError, match="zeta0"):
         SingleModeSystem(mass=1.0, stiffness=1.0, zeta0=1.5)
-    with pytest.raises(ValueError, match="amplitudes"):
+    with pytest.raises(ValueError, match="amplitude"):
         modal_curve(JOINT, SYSTEM, [1e-5, -1e-5])
     # in macroslip the joint keeps its secant Fs / X > 0: the curve goes on without K_inf
     f, _ = modal_curve(JOINT, SingleModeSystem(mass=1.0, stiffness=0.0), [1e-2])
@@ -316,7 +316,7 @@ def test_microslip_fit_samples_the_kt_chi_r_family():
     assert all(s["beta"] == 0.0 for s in sets)
     R = np.array([ie.IwanParameters(**s).R for s in sets])
     assert np.log(R).std() == pytest.approx(math.sqrt(unc.cov[2, 2]), rel=0.15)
-    bands = propagate_uncertainty(unc, system=SYSTEM, amplitudes=[1e-5, 2e-4], n_samples=20,
+    bands = propagate_uncertainty(unc, system=SYSTEM, amplitude=[1e-5, 2e-4], n_samples=20,
                                   seed=0, executor="serial")
     assert any("beyond the tested range" in w for w in bands.warnings)
 
@@ -326,10 +326,10 @@ def test_band_width_matches_the_delta_method():
     cov = np.diag([(0.03 * 9e3) ** 2, (0.03 * 5e7) ** 2, 0.01 ** 2, 0.02 ** 2])
     unc = ParameterUncertainty.from_mean_cov(JOINT, cov)
     X = np.array([1e-5, 1e-4])
-    bands = propagate_uncertainty(unc, system=SYSTEM, amplitudes=X, n_samples=600, seed=5,
+    bands = propagate_uncertainty(unc, system=SYSTEM, amplitude=X, n_samples=600, seed=5,
                                   executor="serial", level=0.6827)
     names = ("Fs", "KT", "chi", "beta")
-    for which, col in (("frequency", 0), ("damping", 1)):
+    for which, col in (("frequency", 0), ("damping_ratio", 1)):
         g = []
         for n in names:
             h = 1e-6 * max(abs(getattr(JOINT, n)), 1.0)
@@ -346,12 +346,12 @@ def test_band_width_matches_the_delta_method():
 def test_prediction_bands_result_object(tmp_path):
     cov = np.diag([(0.05 * 9e3) ** 2, (0.05 * 5e7) ** 2])
     unc = ParameterUncertainty.from_mean_cov(JOINT, cov, names=["Fs", "KT"])
-    bands = propagate_uncertainty(unc, system=SYSTEM, amplitudes=np.geomspace(1e-6, 3e-4, 5),
+    bands = propagate_uncertainty(unc, system=SYSTEM, amplitude=np.geomspace(1e-6, 3e-4, 5),
                                   n_samples=16, force=300.0, cycles=6, seed=1, executor="serial")
     lo, _, hi = bands.band("peak")
     assert lo < bands.nominal["peak"] < hi
     d = bands.to_dict()
-    assert d["samples"] == 16 and len(d["bands"]["damping"]["low"]) == 5
+    assert d["samples"] == 16 and len(d["bands"]["damping_ratio"]["low"]) == 5
     assert "peak displacement" in bands.report()
     import matplotlib
     matplotlib.use("Agg")
@@ -359,7 +359,7 @@ def test_prediction_bands_result_object(tmp_path):
     assert len(artists) >= 7
     bands.ensemble.to_csv(tmp_path / "samples.csv")
     with pytest.raises(ValueError, match="SingleModeSystem"):
-        propagate_uncertainty(unc, system=None, amplitudes=[1e-5])
+        propagate_uncertainty(unc, system=None, amplitude=[1e-5])
 
 
 # ------------------------------------------------------------------ sweeps
@@ -393,13 +393,13 @@ def test_modal_fit_is_propagated_in_its_own_coordinates():
                                 z * (1 + 2e-3 * rng.normal(size=14)))
     assert fit.regime == "macroslip"
     Xb = X[::3]
-    bands = propagate_uncertainty(fit, amplitudes=Xb, n_samples=200, seed=2, executor="serial",
+    bands = propagate_uncertainty(fit, amplitude=Xb, n_samples=200, seed=2, executor="serial",
                                   force=5.0, cycles=4, level=0.9)
     assert bands.system is None and "modal fit" in bands.report()
     f_fit, z_fit, fb, zb = fit.predict(Xb, band=0.9)
     np.testing.assert_allclose(bands.nominal["frequency"], f_fit, rtol=1e-12)
-    np.testing.assert_allclose(bands.nominal["damping"], z_fit, rtol=1e-12)
-    lo, _, hi = bands.band("damping")
+    np.testing.assert_allclose(bands.nominal["damping_ratio"], z_fit, rtol=1e-12)
+    lo, _, hi = bands.band("damping_ratio")
     assert np.all(lo < z_fit) and np.all(z_fit < hi)
     # sampling and the fit's own delta-method band agree to first order for the damping
     ratio = (zb[1] - zb[0]) / (hi - lo)
@@ -435,8 +435,8 @@ def test_dissipation_fits_are_propagated_and_a_given_fs_is_held():
     table = data.amplitude_table()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        lsq = ie.fit_dissipation(table["F0"], table["D"], u0=table["u0"])
-        seed = ie.fit_dissipation(table["F0"], table["D"], u0=table["u0"], method="seed",
+        lsq = ie.fit_dissipation(table["u0"], table["F0"], table["D"])
+        seed = ie.fit_dissipation(table["u0"], table["F0"], table["D"], method="seed",
                                   Fs=9e3)
     unc = ParameterUncertainty.from_fit(lsq)
     assert unc.source == "fit (least_squares)" and "KT" in unc.names

@@ -88,7 +88,7 @@ def test_preload_sweep_quick(tmp_path):
         rows = list(csv.DictReader(fh))
     # a lower preload slips more: larger frequency drop and more damping at the top amplitude
     drop = [float(r["frequency_drop"]) for r in rows]
-    zmax = [float(r["damping_max"]) for r in rows]
+    zmax = [float(r["damping_ratio_max"]) for r in rows]
     assert [float(r["preload"]) for r in rows] == [5e3, 15e3, 30e3]
     assert drop[0] > drop[1] > drop[2] > 0 and zmax[0] > zmax[1] > zmax[2]
 

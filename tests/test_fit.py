@@ -266,7 +266,7 @@ def test_seed_method_recovers_exact_microslip_data(p):
     F0, D = force_amplitude(u0, p), dissipation(u0, p)
     args = (F0.copy(), D.copy())
     with pytest.warns(IdentifiabilityWarning, match="follows from the given Fs"):
-        r = fit_dissipation(*args, u0=u0, method="seed", Fs=p.Fs)
+        r = fit_dissipation(u0, *args, method="seed", Fs=p.Fs)
     assert np.array_equal(args[0], F0) and np.array_equal(args[1], D)
     q = r.joint
     assert r.success and r.method == "seed" and r.fixed == ("Fs",)
@@ -279,8 +279,8 @@ def test_seed_beta_is_conditional_on_the_given_fs():
     p = SETS[1]
     u0 = np.array(MICRO) * p.phi_max
     F0, D = force_amplitude(u0, p), dissipation(u0, p)
-    right = quiet_fits(fit_dissipation, F0, D, u0=u0, method="seed", Fs=p.Fs)
-    wrong = quiet_fits(fit_dissipation, F0, D, u0=u0, method="seed", Fs=1.3 * p.Fs)
+    right = quiet_fits(fit_dissipation, u0, F0, D, method="seed", Fs=p.Fs)
+    wrong = quiet_fits(fit_dissipation, u0, F0, D, method="seed", Fs=1.3 * p.Fs)
     # same KT, chi and R (what microslip data determine), different beta, both fit exactly
     assert wrong.joint.KT == pytest.approx(right.joint.KT, rel=1e-5)
     assert wrong.joint.chi == pytest.approx(right.joint.chi, abs=1e-5)
@@ -292,7 +292,7 @@ def test_seed_beta_is_conditional_on_the_given_fs():
 def test_seed_method_leaves_out_macroslip_cycles():
     p = SETS[1]
     u0 = np.array(MACRO) * p.phi_max
-    r = quiet_fits(fit_dissipation, force_amplitude(u0, p), dissipation(u0, p), u0=u0,
+    r = quiet_fits(fit_dissipation, u0, force_amplitude(u0, p), dissipation(u0, p),
                method="seed", Fs=p.Fs)
     assert any("3 cycle(s) with F0 >= 0.99 Fs were left out" in w for w in r.warnings)
     assert r.joint.KT == pytest.approx(p.KT, rel=1e-6) and r.details["cycles_used"] == 3
@@ -302,7 +302,7 @@ def test_seed_method_leaves_out_macroslip_cycles():
 def test_least_squares_dissipation_fit_on_exact_tables(p):
     for amps, macro in ((MICRO, False), (MACRO, True)):
         u0 = np.array(amps) * p.phi_max
-        r = quiet_fits(fit_dissipation, force_amplitude(u0, p), dissipation(u0, p), u0=u0)
+        r = quiet_fits(fit_dissipation, u0, force_amplitude(u0, p), dissipation(u0, p))
         q = r.joint
         assert r.method == "least_squares" and r.identified["Fs"] is macro
         assert q.KT == pytest.approx(p.KT, rel=1e-6) and q.chi == pytest.approx(p.chi, abs=1e-6)
@@ -316,8 +316,8 @@ def test_dissipation_fit_from_noisy_loops():
     d = simulate_test(p, np.array([0.025, 0.05, 0.075, 0.1, 0.15, 0.2, 0.3, 0.45]) * 1e-3,
                       cycles=3, sample_rate=10, force_noise=15.0, seed=3)
     tab = d.amplitude_table()
-    ls = quiet_fits(fit_dissipation, tab["F0"], tab["D"], u0=tab["u0"])
-    sd = quiet_fits(fit_dissipation, tab["F0"], tab["D"], u0=tab["u0"], method="seed", Fs=p.Fs)
+    ls = quiet_fits(fit_dissipation, tab["u0"], tab["F0"], tab["D"])
+    sd = quiet_fits(fit_dissipation, tab["u0"], tab["F0"], tab["D"], method="seed", Fs=p.Fs)
     for r in (ls, sd):
         assert abs(r.joint.KT / p.KT - 1) < 0.02 and abs(r.joint.chi - p.chi) < 0.03
     assert ls.identified["Fs"] and abs(ls.joint.Fs / p.Fs - 1) < 0.01
@@ -328,23 +328,23 @@ def test_dissipation_fit_bad_inputs():
     u0 = np.array([1e-5, 2e-5, 4e-5])
     F0, D = np.array([1e2, 2e2, 3e2]), np.array([1e-6, 5e-6, 3e-5])
     with pytest.raises(ValueError, match="needs Fs"):
-        fit_dissipation(F0, D, u0=u0, method="seed")
+        fit_dissipation(u0, F0, D, method="seed")
     with pytest.raises(ValueError, match="Fs is only used by method='seed'"):
-        fit_dissipation(F0, D, u0=u0, Fs=1e3)
+        fit_dissipation(u0, F0, D, Fs=1e3)
     with pytest.raises(ValueError, match="method must be"):
-        fit_dissipation(F0, D, u0=u0, method="fminsearch")
-    with pytest.raises(ValueError, match="D must be > 0"):
-        fit_dissipation(F0, -D, u0=u0)
-    with pytest.raises(ValueError, match="F0 contains NaN"):
-        fit_dissipation(np.array([1.0, np.nan, 2.0]), D, u0=u0)
+        fit_dissipation(u0, F0, D, method="fminsearch")
+    with pytest.raises(ValueError, match="dissipation must be > 0"):
+        fit_dissipation(u0, F0, -D)
+    with pytest.raises(ValueError, match="force contains NaN"):
+        fit_dissipation(u0, np.array([1.0, np.nan, 2.0]), D)
     with pytest.raises(ValueError, match="at least 2 entries"):
-        fit_dissipation(F0[:1], D[:1], u0=u0[:1])
+        fit_dissipation(u0[:1], F0[:1], D[:1])
     with pytest.raises(ValueError, match="same length"):
-        fit_dissipation(F0, D[:2], u0=u0)
+        fit_dissipation(u0, F0, D[:2])
     with pytest.raises(TypeError):
-        fit_dissipation(F0, D)                         # u0 is required
+        fit_dissipation(u0, F0)                        # the dissipation is required
     with pytest.raises(ValueError, match="at least 2 microslip cycles"):
-        fit_dissipation(F0, D, u0=u0, method="seed", Fs=150.0)
+        fit_dissipation(u0, F0, D, method="seed", Fs=150.0)
 
 
 # ------------------------------------------------------------------ shipped example
@@ -397,7 +397,7 @@ def test_seed_with_too_large_fs_is_flagged():
     with warnings.catch_warnings():
         warnings.simplefilter("error", RuntimeWarning)           # no numpy noise either
         warnings.simplefilter("ignore", IdentifiabilityWarning)
-        r = fit_dissipation(force_amplitude(u0, p), dissipation(u0, p), u0=u0, method="seed",
+        r = fit_dissipation(u0, force_amplitude(u0, p), dissipation(u0, p), method="seed",
                             Fs=1.05 * p.Fs)
     assert any("beta is at its bound 0" in w for w in r.warnings)
     assert r.nrmse > 0.01                                        # and the misfit shows
@@ -518,7 +518,7 @@ def test_fit_result_api_shape():
     assert set(dd["offsets"]) == {"force", "displacement"} and dd["noise"]["force"] > 0
     assert isinstance(r.warnings, tuple)
     tab = d.amplitude_table()
-    rd = quiet_fits(fit_dissipation, tab["F0"], tab["D"], u0=tab["u0"])
+    rd = quiet_fits(fit_dissipation, tab["u0"], tab["F0"], tab["D"])
     assert len(rd.plot(ax=Figure().add_subplot())) == 2 and "Fs   [N]" in rd.report()
 
 
@@ -526,14 +526,14 @@ def test_dissipation_fit_refuses_one_amplitude_and_fails_a_gross_misfit():
     p = SETS[1]
     u0 = np.full(4, 0.5 * p.phi_max) * np.array([1.0, 1.001, 0.999, 1.002])
     F0, D = force_amplitude(u0, p), dissipation(u0, p)
-    with pytest.raises(ValueError, match="u0 holds 1 distinct amplitude"):
-        fit_dissipation(F0, D, u0=u0)
-    with pytest.raises(ValueError, match="u0 holds 1 distinct amplitude"):
-        fit_dissipation(F0, D, u0=u0, method="seed", Fs=p.Fs)
+    with pytest.raises(ValueError, match="amplitude holds 1 distinct value"):
+        fit_dissipation(u0, F0, D)
+    with pytest.raises(ValueError, match="amplitude holds 1 distinct value"):
+        fit_dissipation(u0, F0, D, method="seed", Fs=p.Fs)
     # a table no Iwan joint makes: dissipation falling with amplitude
     u0 = np.array(MACRO) * p.phi_max
     D_bad = dissipation(u0, p)[::-1]
-    r = quiet_fits(fit_dissipation, force_amplitude(u0, p), D_bad, u0=u0)
+    r = quiet_fits(fit_dissipation, u0, force_amplitude(u0, p), D_bad)
     assert r.nrmse > 0.25 and not r.success and not any(r.identified.values())
     assert any("does not describe the data" in w for w in r.warnings)
 

@@ -58,7 +58,7 @@ def test_free_decay_meets_the_targets_or_says_so(zeta, quantity, source):
     # (plus 3e-5 in frequency and 1.5 % in damping for the first-order effects of a frequency
     # that drifts with amplitude, which the correction leaves)
     assert np.all(np.abs(cur.frequency - ft) < 4 * cur.frequency_std + 3e-5 * ft)
-    assert np.all(np.abs(cur.damping_ratio - zt) < 4 * cur.damping_std + 0.015 * zt)
+    assert np.all(np.abs(cur.damping_ratio - zt) < 4 * cur.damping_ratio_std + 0.015 * zt)
     # the curve follows the decay from near its start (at 5 % in a band of +-10 to 20 %, the
     # filter's end effects cost about a neper, and the warning says so)
     assert cur.amplitude[0] > 0.5 * d.a0 or (zeta > 0.02 and "end effects cost" in text)
@@ -85,7 +85,7 @@ def test_linear_decays_are_exact_at_heavy_damping_without_noise():
         np.testing.assert_allclose(cur.frequency[m], 50.0, rtol=1e-4)
         np.testing.assert_allclose(cur.damping_ratio[m], zeta, rtol=0.01)
         assert np.all(np.abs(cur.frequency - 50.0) < 4 * cur.frequency_std + 5e-3)
-        assert np.all(np.abs(cur.damping_ratio - zeta) < 4 * cur.damping_std + 0.01 * zeta)
+        assert np.all(np.abs(cur.damping_ratio - zeta) < 4 * cur.damping_ratio_std + 0.01 * zeta)
 
 
 def test_peak_finding_and_fitting_alone():

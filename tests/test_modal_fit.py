@@ -48,7 +48,7 @@ def test_microslip_data_report_only_what_they_fix():
     p, k_inf = _joint()
     X = np.geomspace(2e-6, 1e-4, 25)               # at most 0.1 phi_max
     f, z, sf, sz = _data(X, p, k_inf, 1.5e-3, rng)
-    r = fit_modal_iwan(AmplitudeCurve(X, f, z, frequency_std=sf, damping_std=sz))
+    r = fit_modal_iwan(AmplitudeCurve(X, f, z, frequency_std=sf, damping_ratio_std=sz))
     assert r.regime == "microslip" and r.success
     assert set(r.parameters) == {"f0", "zeta0", "chi", "delta"}
     assert r.joint is None

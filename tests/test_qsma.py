@@ -15,7 +15,7 @@ def _compare(name, mode, amplitude, cycles, **changes):
     s = preset(name).replace(**changes) if changes else preset(name)
     r = ringdown(s, mode=mode, amplitude=amplitude, cycles=cycles, steps_per_period=48)
     tr = r.curve
-    q = modal_amplitude_curve(s, mode=mode, amplitudes=tr.amplitude)
+    q = modal_amplitude_curve(s, mode=mode, amplitude=tr.amplitude)
     return s, tr, q
 
 
@@ -79,7 +79,7 @@ def test_small_amplitudes_tend_to_the_stuck_linear_mode_and_the_floor():
     s = preset("brake-reuss")
     w0, *_ = linear_modes(s)
     # the joint's share falls as X**(chi+1) (docs/equations.md section 7): slowly, so go far down
-    c = modal_amplitude_curve(s, amplitudes=[1e-15, 1e-13])
+    c = modal_amplitude_curve(s, amplitude=[1e-15, 1e-13])
     f0 = w0 / (2 * math.pi)
     assert c.frequency[0] == pytest.approx(f0, rel=1e-7)
     assert c.damping_ratio[0] == pytest.approx(s.interface.damping_floor, rel=1e-4)
@@ -104,15 +104,15 @@ def test_qsma_curve_softens_and_damps_more_with_amplitude_and_hits_the_asked_amp
 def test_looser_bolts_and_lower_friction_damp_more():
     s = preset("brake-reuss")
     X = [1e-5, 5e-5]
-    base = modal_amplitude_curve(s, amplitudes=X).damping_ratio
-    assert np.all(modal_amplitude_curve(s.replace(preload=s.preload / 2), amplitudes=X)
+    base = modal_amplitude_curve(s, amplitude=X).damping_ratio
+    assert np.all(modal_amplitude_curve(s.replace(preload=s.preload / 2), amplitude=X)
                   .damping_ratio > base)
-    assert np.all(modal_amplitude_curve(s.replace(friction=s.friction / 2), amplitudes=X)
+    assert np.all(modal_amplitude_curve(s.replace(friction=s.friction / 2), amplitude=X)
                   .damping_ratio > base)
 
 
-@pytest.mark.parametrize("kw,match", [({"amplitudes": [-1e-6]}, "amplitudes"),
-                                      ({"amplitudes": [np.nan]}, "amplitudes"),
+@pytest.mark.parametrize("kw,match", [({"amplitude": [-1e-6]}, "amplitude"),
+                                      ({"amplitude": [np.nan]}, "amplitude"),
                                       ({"mode": 0}, "mode"), ({"mode": 1.5}, "mode")])
 def test_bad_qsma_input_is_refused(kw, match):
     with pytest.raises(ValueError, match=match):

@@ -236,7 +236,7 @@ def test_real_brb_sweeps_against_the_hammer_curve():
     assert "receptance-like" in sweep.notes and not sweep.warnings
     assert sweep.amplitude.min() < 30e-6 and sweep.amplitude.max() > 230e-6
     # damping rises with amplitude (microslip) over the whole curve
-    assert np.all(np.diff(sweep.damping_ratio) > -2 * sweep.damping_std[1:])
+    assert np.all(np.diff(sweep.damping_ratio) > -2 * sweep.damping_ratio_std[1:])
     assert sweep.damping_ratio[-1] > 2.5 * sweep.damping_ratio[0]
     X = hammer.amplitude
     inside = (X >= sweep.amplitude.min()) & (X <= sweep.amplitude.max())
@@ -262,5 +262,5 @@ def test_noisy_sweeps_stay_within_their_stated_errors(force_controlled):
     curve = sweep_curve(f, F_n, A_n, ph_n, level=lab)
     ft, zt = truth(curve.amplitude)
     assert np.all(np.abs(curve.frequency - ft) < 3 * curve.frequency_std + 2e-4 * ft)
-    assert np.all(np.abs(curve.damping_ratio - zt) < 3 * curve.damping_std + 0.03 * zt)
-    assert np.all(curve.damping_std < 0.1 * zt)
+    assert np.all(np.abs(curve.damping_ratio - zt) < 3 * curve.damping_ratio_std + 0.03 * zt)
+    assert np.all(curve.damping_ratio_std < 0.1 * zt)

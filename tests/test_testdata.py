@@ -174,7 +174,7 @@ def test_inputs_are_not_modified(clean):
 
 
 def test_simulate_test_validates():
-    with pytest.raises(ValueError, match="amplitudes must all be > 0"):
+    with pytest.raises(ValueError, match="amplitude must all be > 0"):
         simulate_test(P, [1e-4, -1e-4])
     with pytest.raises(ValueError, match="sample_rate"):
         simulate_test(P, [1e-4], sample_rate=0.1)

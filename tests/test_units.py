@@ -50,10 +50,10 @@ def test_curves_in_percent_cannot_be_made_for_the_vibration_functions():
 
 
 def test_diagnose_vibration_takes_an_amplitude_curve():
-    std = AmplitudeCurve(X, F, Z, frequency_std=1e-5 * F, damping_std=0.02 * Z)
+    std = AmplitudeCurve(X, F, Z, frequency_std=1e-5 * F, damping_ratio_std=0.02 * Z)
     kw = dict(predicted_frequency=F, predicted_damping_ratio=Z)
     a = diagnose_vibration(std, **kw)
-    b = diagnose_vibration(X, F, Z, frequency_uncertainty=1e-5, damping_uncertainty=0.02, **kw)
+    b = diagnose_vibration(X, F, Z, frequency_uncertainty=1e-5, damping_ratio_uncertainty=0.02, **kw)
     assert a.effect == b.effect and a.details["noise_from"] == b.details["noise_from"]
     assert a.frequency_noise == pytest.approx(b.frequency_noise)
     with pytest.raises(ValueError, match="not both"):

@@ -28,7 +28,7 @@ def base():
 
 def _diag(case, stated=True):
     Xc, fm, zm, fp, zp, _ = case
-    std = dict(frequency_std=vc.F_NOISE * fm, damping_std=vc.Z_NOISE * zm) if stated else {}
+    std = dict(frequency_std=vc.F_NOISE * fm, damping_ratio_std=vc.Z_NOISE * zm) if stated else {}
     return diagnose_vibration(AmplitudeCurve(Xc, fm, zm, **std), predicted_frequency=fp,
                               predicted_damping_ratio=zp, predicted_zeta0=vc.ZETA0)
 
@@ -114,7 +114,7 @@ def test_unexplained_mismatch_is_stated_with_its_amplitudes(base):
     mid = np.exp(np.mean(np.log(X)))
     dip = 1.0 - 2e-3 * np.exp(-(np.log(X / mid) / 0.3) ** 2)
     g = diagnose_vibration(AmplitudeCurve(Xc, fm * dip, zm, frequency_std=vc.F_NOISE * fm,
-                                          damping_std=vc.Z_NOISE * zm),
+                                          damping_ratio_std=vc.Z_NOISE * zm),
                            predicted_frequency=fp, predicted_damping_ratio=zp,
                            predicted_zeta0=vc.ZETA0)
     w = [x for x in g.warnings if "remains" in x]
@@ -134,7 +134,7 @@ def test_predict_bands_cover_the_hidden_truth_and_extrapolation_is_stated(base):
         assert not p.warnings
         np.testing.assert_allclose(p.frequency, g.model_frequency, rtol=1e-12)
         assert np.all(np.abs(p.frequency - ft) <= 4 * p.frequency_std + 2e-6 * ft)
-        assert np.all(np.abs(p.damping_ratio - zt) <= 4 * p.damping_std + 1e-3 * zt)
+        assert np.all(np.abs(p.damping_ratio - zt) <= 4 * p.damping_ratio_std + 1e-3 * zt)
         assert p.frequency_std.max() > 0
         beyond = g.predict(X * 2.0)
         assert any("extrapolated beyond the diagnosed amplitudes" in w for w in beyond.warnings)
@@ -152,13 +152,13 @@ def test_augmented_specimen_carries_the_effect_and_its_qsma_is_the_fit():
     Xm = np.geomspace(5e-6, 2.75e-4, 30)
     k3 = 4e-3 * (2 * np.pi * 80.5) ** 2 / Xm.max() ** 2        # ~0.15 % rise at the top
     truth = spec.with_effects({"hardening": {"k3_per_mass": k3}})
-    pred = models.modal_amplitude_curve(spec.replace(calibrated_range=None), amplitudes=Xm)
-    meas = models.modal_amplitude_curve(truth.replace(calibrated_range=None), amplitudes=Xm)
+    pred = models.modal_amplitude_curve(spec.replace(calibrated_range=None), amplitude=Xm)
+    meas = models.modal_amplitude_curve(truth.replace(calibrated_range=None), amplitude=Xm)
     rng = np.random.default_rng(3)
     fm = meas.frequency * np.exp(1e-4 * rng.normal(size=Xm.size))
     zm = meas.damping_ratio * np.exp(0.03 * rng.normal(size=Xm.size))
     g = diagnose_vibration(AmplitudeCurve(Xm, fm, zm, frequency_std=1e-4 * fm,
-                                          damping_std=0.03 * zm),
+                                          damping_ratio_std=0.03 * zm),
                            predicted_frequency=pred.frequency,
                            predicted_damping_ratio=pred.damping_ratio,
                            predicted_zeta0=spec.interface.damping_floor)
@@ -167,13 +167,13 @@ def test_augmented_specimen_carries_the_effect_and_its_qsma_is_the_fit():
     aug = g.augment(spec)
     assert [e.name for e in aug.effects] == ["hardening"]
     assert aug.calibrated_range == pytest.approx((2e-6, Xm.max()))
-    q = models.modal_amplitude_curve(aug, amplitudes=Xm)
+    q = models.modal_amplitude_curve(aug, amplitude=Xm)
     np.testing.assert_allclose(q.frequency, g.model_frequency, rtol=1e-10)
     np.testing.assert_allclose(q.damping_ratio, g.model_damping_ratio, rtol=1e-10)
     assert q.warnings == ()
-    far = models.modal_amplitude_curve(aug, amplitudes=[1e-5, 5e-4])
+    far = models.modal_amplitude_curve(aug, amplitude=[1e-5, 5e-4])
     assert any("calibrated on" in w and "extrapolated" in w for w in far.warnings)
-    plain = models.modal_amplitude_curve(spec, amplitudes=[1e-5, 3.15e-4])
+    plain = models.modal_amplitude_curve(spec, amplitude=[1e-5, 3.15e-4])
     assert any("5.25 x beyond" in w for w in plain.warnings), plain.warnings
     assert models.modal_amplitude_curve(spec).warnings == ()
 
@@ -199,7 +199,7 @@ def test_brake_reuss_sweeps_name_an_effect_that_halves_the_mismatch_beyond_the_n
     level, f, F, A, phase = np.loadtxt(_SWEEPS, delimiter=",", skiprows=1).T
     curve = ie.sweep_curve(f, F, A, phase, level=level.astype(int), quantity="acceleration")
     spec = models.preset("brake-reuss")
-    pred = models.modal_amplitude_curve(spec, amplitudes=curve.amplitude)
+    pred = models.modal_amplitude_curve(spec, amplitude=curve.amplitude)
     assert any("extrapolated" in w for w in pred.warnings)
     g = diagnose_vibration(curve, predicted_frequency=pred.frequency,
                            predicted_damping_ratio=pred.damping_ratio,
@@ -209,8 +209,8 @@ def test_brake_reuss_sweeps_name_an_effect_that_halves_the_mismatch_beyond_the_n
     assert bt["frequency_offset"] < 0 and bt["damping_offset"] < 0, g.report()
     assert g.error_after - g.noise_level <= 0.5 * (g.error_before - g.noise_level), g.report()
     aug = g.augment(spec)
-    q = models.modal_amplitude_curve(aug, amplitudes=[1e-4, 3e-4])
-    q0 = models.modal_amplitude_curve(spec, amplitudes=[1e-4, 3e-4])
+    q = models.modal_amplitude_curve(aug, amplitude=[1e-4, 3e-4])
+    q0 = models.modal_amplitude_curve(spec, amplitude=[1e-4, 3e-4])
     assert q.frequency[1] > q0.frequency[1] and q.damping_ratio[1] > q0.damping_ratio[1]
     # the damping the sweeps show keeps growing to their top amplitude: the patch named is a
     # spread one (a whole patch's added damping would already fall beyond 2 X_s), starting
@@ -231,7 +231,7 @@ def test_where_names_a_turn_as_two_ranges_of_opposite_sign():
     fm = fp * np.exp(dev)
     zp = 2e-3 * (1 + X / X.max())
     g = diagnose_vibration(X, fm, zp.copy(), predicted_frequency=fp, predicted_damping_ratio=zp,
-                           frequency_noise=1e-4, damping_noise=0.02)
+                           frequency_noise=1e-4, damping_ratio_noise=0.02)
     w = g.where
     assert "measured frequency beyond 3 x noise of the prediction: below it from" in w.lower(), w
     below, above = w.split(", then ")[:2]
@@ -250,7 +250,7 @@ def test_between_test_offsets_are_nuisances_not_effects(base):
         Xc, fm, zm, fp, zp, _ = vc.seeded_case(seed, None, 0.0, P=vc.BASE, X=X, base=base)
         fm2, zm2 = fm * (1 + df), zm * (1 + dz)
         g = diagnose_vibration(AmplitudeCurve(Xc, fm2, zm2, frequency_std=vc.F_NOISE * fm2,
-                                              damping_std=vc.Z_NOISE * zm2),
+                                              damping_ratio_std=vc.Z_NOISE * zm2),
                                predicted_frequency=fp, predicted_damping_ratio=zp,
                                predicted_zeta0=vc.ZETA0, between_tests=True)
         assert g.effect == "none", g.report()
@@ -259,14 +259,14 @@ def test_between_test_offsets_are_nuisances_not_effects(base):
         assert abs(bt["damping_offset"] - dz) < 4 * bt["damping_offset_stderr"]
         assert bt["untested"] == ["viscous_damping"] and "between-test" in g.report()
         plain = diagnose_vibration(AmplitudeCurve(Xc, fm2, zm2, frequency_std=vc.F_NOISE * fm2,
-                                                  damping_std=vc.Z_NOISE * zm2),
+                                                  damping_ratio_std=vc.Z_NOISE * zm2),
                                    predicted_frequency=fp, predicted_damping_ratio=zp,
                                    predicted_zeta0=vc.ZETA0)
         assert plain.details["misfit_p"] < 1e-3
     Xc, fm, zm, fp, zp, _ = vc.seeded_case(42, "hardening", 2.0, P=vc.BASE, X=X, base=base)
     g = diagnose_vibration(AmplitudeCurve(Xc, fm * (1 + df), zm * (1 + dz),
                                           frequency_std=vc.F_NOISE * fm,
-                                          damping_std=vc.Z_NOISE * zm),
+                                          damping_ratio_std=vc.Z_NOISE * zm),
                            predicted_frequency=fp, predicted_damping_ratio=zp,
                            predicted_zeta0=vc.ZETA0, between_tests=True)
     assert g.effects == ("hardening",), g.report()

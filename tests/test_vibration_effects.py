@@ -290,7 +290,7 @@ def test_augmented_specimen_rings_down_in_exudyn_with_its_energy_balanced():
     assert r.metadata["effects"] == ("hardening", "macroslip_onset")
     assert np.max(np.abs(r.energy_error())) < 1e-3
     assert r.energy["effect_dissipated"][-1] > 0.05 * r.initial_energy
-    q = models.modal_amplitude_curve(aug, amplitudes=r.curve.amplitude)
+    q = models.modal_amplitude_curve(aug, amplitude=r.curve.amplitude)
     np.testing.assert_allclose(r.curve.frequency, q.frequency, rtol=3e-4)
     np.testing.assert_allclose(r.curve.damping_ratio, q.damping_ratio, rtol=0.1)
     plain = models.ringdown(s, amplitude=X0, cycles=8, steps_per_period=96)

@@ -101,31 +101,31 @@ def tangent_stiffness(u, params: IwanParameters):
     return _out(k, u)
 
 
-def force_amplitude(u0, params: IwanParameters):
+def force_amplitude(amplitude, params: IwanParameters):
     """Force amplitude ``F0`` [N] of a steady cycle of displacement amplitude ``u0`` [m]
     (paper eqs. 18-20): the backbone at ``u0``."""
-    x = _as_array("u0", u0)
+    x = _as_array("amplitude", amplitude)
     if np.any(x < 0):
-        raise ValueError("u0 (displacement amplitude) must be >= 0")
-    return backbone(u0, params)
+        raise ValueError("amplitude (the displacement amplitude u0) must be >= 0 [m]")
+    return backbone(amplitude, params)
 
 
-def secant_stiffness(u0, params: IwanParameters):
+def secant_stiffness(amplitude, params: IwanParameters):
     """Secant stiffness ``F0/u0`` [N/m] of a cycle of amplitude ``u0`` (paper eq. 24).
 
     ``K_sec = KT [1 - r**(chi+1) / ((chi+2)(1+beta))]`` with ``r = u0/phi_max <= 1``;
     ``Fs/u0`` in macroslip; ``KT`` at ``u0 = 0``.
     """
     p = _check_params(params)
-    x = _as_array("u0", u0)
+    x = _as_array("amplitude", amplitude)
     if np.any(x < 0):
-        raise ValueError("u0 (displacement amplitude) must be >= 0")
+        raise ValueError("amplitude (the displacement amplitude u0) must be >= 0 [m]")
     r = np.minimum(x / p.phi_max, 1.0)
     micro = p.KT * (1.0 - r ** (p.chi + 1.0) / ((p.chi + 2.0) * (1.0 + p.beta)))
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):   # used above phi_max only
         macro = p.Fs / x
     k = np.where(x <= p.phi_max, micro, macro)
-    return _out(k, u0)
+    return _out(k, amplitude)
 
 
 def slip_energy(y, p: IwanParameters):
@@ -138,7 +138,7 @@ def slip_energy(y, p: IwanParameters):
     return e * r ** (p.chi + 3.0) + p.Fs * np.maximum(y - p.phi_max, 0.0)
 
 
-def dissipation(u0, params: IwanParameters):
+def dissipation(amplitude, params: IwanParameters):
     """Energy dissipated per steady cycle of displacement amplitude ``u0`` [J].
 
     Microslip, ``u0 <= phi_max`` (paper eq. 17, Segalman 2005 eq. 20)::
@@ -151,32 +151,32 @@ def dissipation(u0, params: IwanParameters):
 
     Parameters
     ----------
-    u0 : float or array_like
+    amplitude : float or array_like
         Displacement amplitude [m], ``>= 0``.
     params : IwanParameters
     """
     p = _check_params(params)
-    x = _as_array("u0", u0)
+    x = _as_array("amplitude", amplitude)
     if np.any(x < 0):
-        raise ValueError("u0 (displacement amplitude) must be >= 0")
-    return _finite("u0", _out(4.0 * slip_energy(x, p), u0), "dissipation")
+        raise ValueError("amplitude (the displacement amplitude u0) must be >= 0 [m]")
+    return _finite("amplitude", _out(4.0 * slip_energy(x, p), amplitude), "dissipation")
 
 
-def dissipation_slope(u0, params: IwanParameters):
+def dissipation_slope(amplitude, params: IwanParameters):
     """Local slope ``d ln D / d ln F0`` of dissipation vs force amplitude (paper eq. 21).
 
     Tends to ``chi + 3`` only as ``F0 -> 0`` (paper eq. 22); ``inf`` in macroslip, where
     ``F0 = Fs`` is constant.
     """
     p = _check_params(params)
-    x = _as_array("u0", u0)
+    x = _as_array("amplitude", amplitude)
     if np.any(x <= 0):
-        raise ValueError("u0 (displacement amplitude) must be > 0 for a log slope")
+        raise ValueError("amplitude (the displacement amplitude u0) must be > 0 for a log slope [m]")
     g = np.minimum(x / p.phi_max, 1.0) ** (p.chi + 1.0)
     with np.errstate(divide="ignore"):
         slope = (p.chi + 3.0) * ((p.beta + 1.0) - g / (p.chi + 2.0)) / (p.beta + 1.0 - g)
     slope = np.where(x < p.phi_max, slope, np.inf)
-    return _out(slope, u0)
+    return _out(slope, amplitude)
 
 
 def backbone_work(u, params: IwanParameters):
@@ -195,7 +195,7 @@ def backbone_work(u, params: IwanParameters):
     return _finite("u", _out(g, u), "backbone work")
 
 
-def masing_loop(u0: float, params: IwanParameters, *, n: int = 401):
+def masing_loop(amplitude: float, params: IwanParameters, *, n: int = 401):
     """One closed steady-state hysteresis loop of amplitude ``u0`` (paper eqs. 13-15).
 
     The loop starts at ``(u0, F0)``, follows the descending branch
@@ -204,7 +204,7 @@ def masing_loop(u0: float, params: IwanParameters, *, n: int = 401):
 
     Parameters
     ----------
-    u0 : float
+    amplitude : float
         Displacement amplitude [m], ``> 0``.
     params : IwanParameters
     n : int, keyword-only
@@ -216,14 +216,14 @@ def masing_loop(u0: float, params: IwanParameters, *, n: int = 401):
         Displacement [m] and force [N] around the loop, first point equal to the last.
     """
     p = _check_params(params)
-    u0 = check_scalar("u0", u0, low=0.0, low_open=True)
+    amplitude = check_scalar("amplitude", amplitude, low=0.0, low_open=True)
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or not 3 <= n <= 10_000_000:
         raise ValueError(f"n must be an integer in [3, 1e7], got {n!r}")
-    F0 = backbone(u0, p)
-    down = np.linspace(u0, -u0, n)
-    up = np.linspace(-u0, u0, n)[1:]
-    F_down = F0 - 2.0 * backbone((u0 - down) / 2.0, p)
-    F_up = -F0 + 2.0 * backbone((u0 + up) / 2.0, p)
+    F0 = backbone(amplitude, p)
+    down = np.linspace(amplitude, -amplitude, n)
+    up = np.linspace(-amplitude, amplitude, n)[1:]
+    F_down = F0 - 2.0 * backbone((amplitude - down) / 2.0, p)
+    F_up = -F0 + 2.0 * backbone((amplitude + up) / 2.0, p)
     return np.concatenate([down, up]), np.concatenate([F_down, F_up])
 
 

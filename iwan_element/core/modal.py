@@ -49,7 +49,7 @@ def _check(params):
     return params
 
 
-def harmonic_stiffness(Q, params: IwanParameters):
+def harmonic_stiffness(amplitude, params: IwanParameters):
     """First-harmonic (describing-function) stiffness of the Iwan joint [N/m].
 
     For ``u = Q cos(theta)`` the steady Masing loop has the descending branch
@@ -62,7 +62,7 @@ def harmonic_stiffness(Q, params: IwanParameters):
 
     Parameters
     ----------
-    Q : float or array_like
+    amplitude : float or array_like
         Displacement amplitude [m], ``>= 0``.
     params : IwanParameters
 
@@ -72,9 +72,9 @@ def harmonic_stiffness(Q, params: IwanParameters):
         Stiffness [N/m]; ``KT`` at ``Q = 0``.
     """
     p = _check(params)
-    x = check_magnitude("Q", finite_array("Q", Q, ndim=None), unit="m")
+    x = check_magnitude("amplitude", finite_array("amplitude", amplitude, ndim=None), unit="m")
     if np.any(x < 0):
-        raise ValueError("Q (displacement amplitude) must be >= 0")
+        raise ValueError("amplitude (the modal displacement amplitude Q) must be >= 0 [m]")
     q = np.atleast_1d(x).ravel()
     out = np.full(q.shape, p.KT)
     micro = (q > 0) & (q <= p.phi_max)
@@ -85,7 +85,7 @@ def harmonic_stiffness(Q, params: IwanParameters):
     if np.any(macro):
         out[macro] = _harmonic_quadrature(q[macro], p)
     out = out.reshape(np.shape(x))
-    return float(out) if np.ndim(Q) == 0 else out
+    return float(out) if np.ndim(amplitude) == 0 else out
 
 
 def _harmonic_quadrature(q, p):
@@ -126,7 +126,7 @@ def viscous_floor(zeta0, w0_sq, w_sq, k_e, floor: str):
     return zeta0 * np.sqrt(w0_sq * np.asarray(w_sq)) / k_e
 
 
-def modal_iwan_curve(Q, params: IwanParameters, *, K_inf: float, zeta0: float = 0.0,
+def modal_iwan_curve(amplitude, params: IwanParameters, *, K_inf: float, zeta0: float = 0.0,
                      mass: float = 1.0, stiffness: str = "secant", floor: str = "constant",
                      damping_form: str = "energy"):
     """Natural frequency and damping ratio of a single-mode modal Iwan model.
@@ -137,7 +137,7 @@ def modal_iwan_curve(Q, params: IwanParameters, *, K_inf: float, zeta0: float = 
 
     Parameters
     ----------
-    Q : float or array_like
+    amplitude : float or array_like
         Modal displacement amplitude [m] (or any consistent modal unit), ``> 0``.
     params : IwanParameters
         Iwan joint in the same modal units (Fs [N], KT [N/m]).
@@ -172,9 +172,9 @@ def modal_iwan_curve(Q, params: IwanParameters, *, K_inf: float, zeta0: float = 
         Equivalent viscous damping ratio [-].
     """
     p = _check(params)
-    x = check_magnitude("Q", finite_array("Q", Q, ndim=None), unit="m")
+    x = check_magnitude("amplitude", finite_array("amplitude", amplitude, ndim=None), unit="m")
     if np.any(x <= 0):
-        raise ValueError("Q (modal displacement amplitude) must be > 0")
+        raise ValueError("amplitude (the modal displacement amplitude Q) must be > 0 [m]")
     K_inf = check_scalar("K_inf", K_inf, low=0.0)
     zeta0 = check_scalar("zeta0", zeta0, low=0.0, high=1.0, high_open=True)
     mass = check_scalar("mass", mass, low=0.0, low_open=True)
@@ -195,7 +195,7 @@ def modal_iwan_curve(Q, params: IwanParameters, *, K_inf: float, zeta0: float = 
     zv = viscous_floor(zeta0, w0 * w0, w2, k_e / mass, floor)
     zeta = zv + np.asarray(dissipation(x, p)) / (2.0 * math.pi * k_e * x * x)
     f = np.sqrt(w2) / (2.0 * math.pi)
-    if np.ndim(Q) == 0:
+    if np.ndim(amplitude) == 0:
         return float(f), float(zeta)
     return f, zeta
 

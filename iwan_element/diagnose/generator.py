@@ -42,7 +42,7 @@ def _noise(rng, n, sigma, phi):
     return sigma * e
 
 
-def simulate_element_test(element, amplitudes, *, cycles: int = 3, frequency: float = 1.0,
+def simulate_element_test(element, amplitude, *, cycles: int = 3, frequency: float = 1.0,
                           samples_per_cycle: int = 96, waveform: str = "sine",
                           envelope: str = "steps", force_noise: float = 0.0,
                           displacement_noise: float = 0.0, noise_correlation: float = 0.0,
@@ -55,7 +55,7 @@ def simulate_element_test(element, amplitudes, *, cycles: int = 3, frequency: fl
     ----------
     element : joint element
         Anything with ``force_history(u, v)`` or ``force_history(u)`` (``IwanJoint``).
-    amplitudes : array_like, shape (m,)
+    amplitude : array_like, shape (m,)
         Displacement amplitudes [m], ``> 0``.
     cycles : int, keyword-only
         ``envelope="steps"``: periods per amplitude; ``"linear"``: periods between two
@@ -90,9 +90,9 @@ def simulate_element_test(element, amplitudes, *, cycles: int = 3, frequency: fl
     if not callable(getattr(element, "force_history", None)):
         raise ValueError(f"element must have a force_history(u[, v]) method; "
                          f"{type(element).__name__} has none")
-    amps = check_magnitude("amplitudes", finite_array("amplitudes", amplitudes, ndim=1), unit="m")
+    amps = check_magnitude("amplitude", finite_array("amplitude", amplitude, ndim=1), unit="m")
     if np.any(amps <= 0.0):
-        raise ValueError("amplitudes must all be > 0 [m]")
+        raise ValueError("amplitude must all be > 0 [m]")
     cycles = check_int("cycles", cycles, 1)
     f = check_scalar("frequency", frequency, low=0.0, low_open=True)
     n_per = check_int("samples_per_cycle", samples_per_cycle, 16)

@@ -240,7 +240,7 @@ class VibrationDiagnosis(ResultShape):
         RMS relative mismatch of frequency and damping together [-] (log residuals).
     noise_level : float
         RMS relative noise of the two curves [-].
-    frequency_noise, damping_noise : float
+    frequency_noise, damping_ratio_noise : float
         Relative noise of each curve [-] (estimated or given).
     amplitude, frequency, damping_ratio : ndarray, shape (n,)
         The measured curve (read-only copies).
@@ -273,7 +273,7 @@ class VibrationDiagnosis(ResultShape):
     error_after: float
     noise_level: float
     frequency_noise: float
-    damping_noise: float
+    damping_ratio_noise: float
     amplitude: np.ndarray
     frequency: np.ndarray
     damping_ratio: np.ndarray
@@ -368,7 +368,7 @@ class VibrationDiagnosis(ResultShape):
         Returns
         -------
         AmplitudeCurve
-            ``method="diagnosis"``; ``frequency_std`` and ``damping_std`` are the bands
+            ``method="diagnosis"``; ``frequency_std`` and ``damping_ratio_std`` are the bands
             (1 sigma) from the fitted parameters' covariance (linearised), ``warnings`` states
             extrapolation beyond the diagnosed amplitudes.
         """
@@ -400,7 +400,7 @@ class VibrationDiagnosis(ResultShape):
         z0 = float(self.details.get("predicted_zeta0", 0.0))
         f, z = _apply(self.effects, self.parameters, X, fb, zb, z0)
         sf, sz = self._bands(X, fb, zb, z0, f, z)
-        return AmplitudeCurve(X, f, z, frequency_std=sf, damping_std=sz, method="diagnosis",
+        return AmplitudeCurve(X, f, z, frequency_std=sf, damping_ratio_std=sz, method="diagnosis",
                               notes="prediction + " + (" + ".join(self.effects) or "nothing"),
                               warnings=tuple(warns))
 
@@ -426,7 +426,7 @@ class VibrationDiagnosis(ResultShape):
         """JSON-safe dict."""
         return json_safe({k: getattr(self, k) for k in (
             "effect", "effects", "ambiguous_with", "where", "parameters", "error_before",
-            "error_after", "noise_level", "frequency_noise", "damping_noise", "amplitude",
+            "error_after", "noise_level", "frequency_noise", "damping_ratio_noise", "amplitude",
             "frequency", "damping_ratio", "predicted_frequency", "predicted_damping_ratio",
             "model_frequency", "model_damping_ratio", "steps", "warnings", "details", "covariance")})
 
@@ -435,7 +435,7 @@ class VibrationDiagnosis(ResultShape):
         lines = ["Vibration diagnosis (amplitude-dependent frequency and damping)",
                  f"  {self.amplitude.size} amplitudes, {self.amplitude.min():.3g} .. "
                  f"{self.amplitude.max():.3g} m; noise: frequency {100 * self.frequency_noise:.2g} %, "
-                 f"damping {100 * self.damping_noise:.2g} % ({self.details['noise_from']})"]
+                 f"damping {100 * self.damping_ratio_noise:.2g} % ({self.details['noise_from']})"]
         bt = self.details.get("between_tests")
         if bt:
             lines.append(

@@ -219,14 +219,14 @@ def _measurement(amplitude, frequency, damping_ratio, f_unc, z_unc):
         return r if np.all(np.isfinite(r)) and np.all(r > 0) else None
 
     f_unc = rel(c.frequency_std, c.frequency) if f_unc is None else f_unc
-    z_unc = rel(c.damping_std, c.damping_ratio) if z_unc is None else z_unc
+    z_unc = rel(c.damping_ratio_std, c.damping_ratio) if z_unc is None else z_unc
     return c.amplitude, c.frequency, c.damping_ratio, f_unc, z_unc
 
 
 def diagnose_vibration(amplitude, frequency=None, damping_ratio=None, *, predicted_frequency,
                        predicted_damping_ratio, frequency_noise: float | None = None,
-                       damping_noise: float | None = None,
-                       frequency_uncertainty=None, damping_uncertainty=None,
+                       damping_ratio_noise: float | None = None,
+                       frequency_uncertainty=None, damping_ratio_uncertainty=None,
                        predicted_zeta0: float = 0.0, alpha: float = 1e-3,
                        ambiguity: float = 10.0, max_effects: int = 2,
                        between_tests: bool = False) -> VibrationDiagnosis:
@@ -245,9 +245,9 @@ def diagnose_vibration(amplitude, frequency=None, damping_ratio=None, *, predict
         curve never below 0.05, is refused as percent).
     predicted_frequency, predicted_damping_ratio : array_like, shape (n,), keyword-only
         The model's prediction at the same amplitudes [Hz], [-].
-    frequency_noise, damping_noise : float, optional, keyword-only
+    frequency_noise, damping_ratio_noise : float, optional, keyword-only
         Relative noise standard deviations [-], ``> 0``; when given they are used as they are.
-    frequency_uncertainty, damping_uncertainty : float or array_like, optional, keyword-only
+    frequency_uncertainty, damping_ratio_uncertainty : float or array_like, optional, keyword-only
         Stated per-point relative standard uncertainty [-] (e.g. from
         :class:`~iwan_element.AmplitudeCurve`); the noise is never taken below it.
     predicted_zeta0 : float, keyword-only
@@ -277,8 +277,8 @@ def diagnose_vibration(amplitude, frequency=None, damping_ratio=None, *, predict
         ``2 pi`` times the prediction (rad/s for Hz) or the other way round, damping ratios
         that look like percent (one >= 1, or none below 0.05), or an option out of range.
     """
-    amplitude, frequency, damping_ratio, frequency_uncertainty, damping_uncertainty = _measurement(
-        amplitude, frequency, damping_ratio, frequency_uncertainty, damping_uncertainty)
+    amplitude, frequency, damping_ratio, frequency_uncertainty, damping_ratio_uncertainty = _measurement(
+        amplitude, frequency, damping_ratio, frequency_uncertainty, damping_ratio_uncertainty)
     n, a = _inputs(amplitude, frequency, damping_ratio, predicted_frequency,
                    predicted_damping_ratio)
     X, fm, zm, fp, zp = (a[k] for k in ("amplitude", "frequency", "damping_ratio",
@@ -291,8 +291,8 @@ def diagnose_vibration(amplitude, frequency=None, damping_ratio=None, *, predict
     rf0, rz0 = np.log(fm / fp), np.log(zm / zp)
     warns = []
     sf, src_f = _curve_level("frequency", rf0[o], frequency_noise, frequency_uncertainty, n)
-    sz, src_z = _curve_level("damping", rz0[o], damping_noise, damping_uncertainty, n)
-    if (frequency_noise is None or damping_noise is None) and n < 12:
+    sz, src_z = _curve_level("damping", rz0[o], damping_ratio_noise, damping_ratio_uncertainty, n)
+    if (frequency_noise is None or damping_ratio_noise is None) and n < 12:
         warns.append(f"only {n} amplitudes: the noise taken from their scatter is uncertain "
                      "(state the per-point uncertainty or the noise levels)")
     if not isinstance(between_tests, (bool, np.bool_)):
@@ -364,7 +364,7 @@ def _vib_result(vib, sel, chi_b, err_b, rf0, rz0, warns, alpha, noise_from, cand
         where=_where(vib.X, rf0, rz0, vib.sf, vib.sz, misfit), parameters=params,
         error_before=err_b, error_after=vib.error(names, z),
         noise_level=math.sqrt(0.5 * (vib.sf ** 2 + vib.sz ** 2)), frequency_noise=vib.sf,
-        damping_noise=vib.sz, amplitude=ro(vib.X), frequency=ro(vib.fm), damping_ratio=ro(vib.zm),
+        damping_ratio_noise=vib.sz, amplitude=ro(vib.X), frequency=ro(vib.fm), damping_ratio=ro(vib.zm),
         predicted_frequency=ro(vib.fp), predicted_damping_ratio=ro(vib.zp), model_frequency=ro(f_new),
         model_damping_ratio=ro(z_new), steps=tuple(json_safe(s) for s in steps), warnings=tuple(warns),
         details=json_safe(details), covariance=None if cov is None else ro(cov))

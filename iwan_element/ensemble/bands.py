@@ -17,32 +17,32 @@ from ..core.result_shape import ResultShape, panels
 __all__ = ["PredictionBands", "propagate_uncertainty", "response_task", "modal_fit_task"]
 
 
-def response_task(params: dict, rng, *, system: SingleModeSystem, amplitudes, force=None,
+def response_task(params: dict, rng, *, system: SingleModeSystem, amplitude, force=None,
                   cycles: int = 30, steps_per_period: int = 64) -> dict:
-    """One ensemble task: ``frequency`` [Hz] and ``damping`` [-] at ``amplitudes`` and, with
+    """One ensemble task: ``frequency`` [Hz] and ``damping_ratio`` [-] at ``amplitude`` and, with
     ``force`` [N], the ``peak`` transient displacement [m] (see :mod:`.oscillator`).
     ``params`` holds ``Fs, KT, chi, beta``; ``rng`` is unused (the model is deterministic)."""
     p = IwanParameters(params["Fs"], params["KT"], params["chi"], params["beta"])
-    f, z = modal_curve(p, system, amplitudes)
-    out = {"frequency": f, "damping": z}
+    f, z = modal_curve(p, system, amplitude)
+    out = {"frequency": f, "damping_ratio": z}
     if force is not None:
         out["peak"] = peak_response(p, system, force=force, cycles=cycles,
                                     steps_per_period=steps_per_period)
     return out
 
 
-def modal_fit_task(params: dict, rng, *, names, regime: str, conventions: dict, amplitudes,
+def modal_fit_task(params: dict, rng, *, names, regime: str, conventions: dict, amplitude,
                    force=None, cycles: int = 30, steps_per_period: int = 64) -> dict:
     """One ensemble task for a modal Iwan fit (:func:`iwan_element.fit_modal_iwan`): its model
-    curve at ``amplitudes`` for one sampled fit vector and, in the macroslip regime with
+    curve at ``amplitude`` for one sampled fit vector and, in the macroslip regime with
     ``force`` [N per unit modal mass], the peak transient displacement [m] of the fitted
     single-mode oscillator (fixed dashpot ``2 zeta0 w0``)."""
     from ..identify.modal_result import full_parameters, model_curve
     theta = np.array([params[n] for n in names], dtype=float)
-    f, z = model_curve(theta, np.asarray(amplitudes, float), regime, conventions["x_ref"],
+    f, z = model_curve(theta, np.asarray(amplitude, float), regime, conventions["x_ref"],
                        conventions["stiffness"], conventions["floor"],
                        conventions.get("damping_form", "energy"))
-    out = {"frequency": np.asarray(f, float), "damping": np.asarray(z, float)}
+    out = {"frequency": np.asarray(f, float), "damping_ratio": np.asarray(z, float)}
     if force is not None:
         p, k_inf = full_parameters(theta)
         system = SingleModeSystem(mass=1.0, stiffness=max(k_inf, 0.0), zeta0=theta[1])
@@ -57,9 +57,9 @@ class PredictionBands(ResultShape):
 
     Attributes
     ----------
-    amplitudes : ndarray, shape (m,)
+    amplitude : ndarray, shape (m,)
         Displacement amplitudes [m].
-    frequency, damping : ndarray, shape (n_ok, m)
+    frequency, damping_ratio : ndarray, shape (n_ok, m)
         Per successful sample: frequency [Hz] and damping ratio [-] against amplitude.
     peak : ndarray, shape (n_ok,) or None
         Peak transient displacement [m] at ``force``.
@@ -78,9 +78,9 @@ class PredictionBands(ResultShape):
     warnings : tuple of str
     """
 
-    amplitudes: np.ndarray
+    amplitude: np.ndarray
     frequency: np.ndarray
-    damping: np.ndarray
+    damping_ratio: np.ndarray
     peak: np.ndarray | None
     nominal: dict
     level: float
@@ -95,9 +95,9 @@ class PredictionBands(ResultShape):
             f"modal fit ({getattr(self.uncertainty, 'regime', '?')})"
 
     def band(self, name: str):
-        """``(low, median, high)`` quantiles of ``"frequency"``, ``"damping"`` or ``"peak"``."""
-        if name not in ("frequency", "damping", "peak"):
-            raise ValueError(f"name must be 'frequency', 'damping' or 'peak', got {name!r}")
+        """``(low, median, high)`` quantiles of ``"frequency"``, ``"damping_ratio"`` or ``"peak"``."""
+        if name not in ("frequency", "damping_ratio", "peak"):
+            raise ValueError(f"name must be 'frequency', 'damping_ratio' or 'peak', got {name!r}")
         data = getattr(self, name)
         if data is None:
             raise ValueError("no peak response: propagate_uncertainty was called without force")
@@ -123,10 +123,10 @@ class PredictionBands(ResultShape):
                  f"  {'X [m]':>10} {'f nominal':>11} {'f low':>11} {'f high':>11} "
                  f"{'zeta nom.':>10} {'zeta low':>10} {'zeta high':>10}"]
         fl, _, fh = self.band("frequency")
-        zl, _, zh = self.band("damping")
-        for i, X in enumerate(self.amplitudes):
+        zl, _, zh = self.band("damping_ratio")
+        for i, X in enumerate(self.amplitude):
             lines.append(f"  {X:10.3e} {self.nominal['frequency'][i]:11.6g} {fl[i]:11.6g} "
-                         f"{fh[i]:11.6g} {self.nominal['damping'][i]:10.4e} {zl[i]:10.4e} "
+                         f"{fh[i]:11.6g} {self.nominal['damping_ratio'][i]:10.4e} {zl[i]:10.4e} "
                          f"{zh[i]:10.4e}")
         if self.peak is not None:
             pl, pm, ph = self.band("peak")
@@ -136,10 +136,10 @@ class PredictionBands(ResultShape):
 
     def to_dict(self) -> dict:
         q = {}
-        for name in ("frequency", "damping") + (("peak",) if self.peak is not None else ()):
+        for name in ("frequency", "damping_ratio") + (("peak",) if self.peak is not None else ()):
             lo, med, hi = self.band(name)
             q[name] = {"low": lo, "median": med, "high": hi, "nominal": self.nominal[name]}
-        return json_safe({"amplitudes": self.amplitudes, "level": self.level, "force": self.force,
+        return json_safe({"amplitude": self.amplitude, "level": self.level, "force": self.force,
                       "samples": int(self.frequency.shape[0]),
                       "failed": len(self.ensemble.errors), "bands": q,
                       "system": None if self.system is None else
@@ -169,11 +169,11 @@ class PredictionBands(ResultShape):
             The artists drawn.
         """
         ax = panels(ax, self.plot_panels, figsize=(6, 3.2 * self.plot_panels))
-        X = self.amplitudes
+        X = self.amplitude
         pct = f"{100 * self.level:.0f} % band"
         artists = []
         for a, name, ylabel in ((ax[0], "frequency", "frequency"),
-                                (ax[1], "damping", "damping ratio")):
+                                (ax[1], "damping_ratio", "damping ratio")):
             nom = np.asarray(self.nominal[name], float)
             lo, med, hi = self.band(name)
             if relative:
@@ -203,7 +203,7 @@ class PredictionBands(ResultShape):
 _MAX_SAMPLES = 10 ** 7
 
 
-def propagate_uncertainty(source, *, system: SingleModeSystem | None = None, amplitudes,
+def propagate_uncertainty(source, *, system: SingleModeSystem | None = None, amplitude,
                           n_samples: int = 200, force: float | None = None, cycles: int = 30,
                           steps_per_period: int = 64, level: float = 0.9, seed=None,
                           executor=None, progress: bool = False) -> PredictionBands:
@@ -219,7 +219,7 @@ def propagate_uncertainty(source, *, system: SingleModeSystem | None = None, amp
     system : SingleModeSystem, keyword-only
         The structure the joint sits in (not used with a modal fit, which carries its own
         single-mode structure: unit modal mass, sensor coordinate).
-    amplitudes : array_like, keyword-only
+    amplitude : array_like, keyword-only
         Displacement amplitudes [m] of the f(X), zeta(X) bands, ``> 0``.
     n_samples : int, keyword-only
         Parameter sets drawn, ``>= 2``.
@@ -239,9 +239,9 @@ def propagate_uncertainty(source, *, system: SingleModeSystem | None = None, amp
     -------
     PredictionBands
     """
-    X = check_magnitude("amplitudes", finite_array("amplitudes", amplitudes), unit="m")
+    X = check_magnitude("amplitude", finite_array("amplitude", amplitude), unit="m")
     if np.any(X <= 0):
-        raise ValueError("amplitudes must be > 0 [m]")
+        raise ValueError("amplitude must be > 0 [m]")
     n_samples = check_int("n_samples", n_samples, 2)
     if n_samples > _MAX_SAMPLES:
         raise ValueError(f"n_samples must be in [2, {_MAX_SAMPLES:.0e}], got {n_samples}")
@@ -273,7 +273,7 @@ def propagate_uncertainty(source, *, system: SingleModeSystem | None = None, amp
             warns.append(f"amplitudes above {unc.valid_amplitude:.4g} m are beyond the tested "
                          "range: the fit cannot constrain the joint there (Fs, beta not "
                          "identified)")
-        task = functools.partial(response_task, system=system, amplitudes=X, force=force,
+        task = functools.partial(response_task, system=system, amplitude=X, force=force,
                                  cycles=cycles, steps_per_period=steps_per_period)
         nominal_set = {k: getattr(unc.nominal, k) for k in ("Fs", "KT", "chi", "beta")}
     nominal = task(nominal_set, None)
@@ -284,8 +284,8 @@ def propagate_uncertainty(source, *, system: SingleModeSystem | None = None, amp
         raise RuntimeError(f"only {int(ok.sum())} of {n_samples} runs succeeded; first error: "
                            f"{ens.errors[0].message if ens.errors else '?'}")
     peak = ens.column("peak")[ok] if force is not None else None
-    return PredictionBands(amplitudes=X, frequency=ens.column("frequency")[ok],
-                           damping=ens.column("damping")[ok], peak=peak, nominal=nominal,
+    return PredictionBands(amplitude=X, frequency=ens.column("frequency")[ok],
+                           damping_ratio=ens.column("damping_ratio")[ok], peak=peak, nominal=nominal,
                            level=level, force=force, system=system, uncertainty=unc,
                            ensemble=ens, warnings=tuple(warns))
 
@@ -297,7 +297,7 @@ def _modal_fit_setup(fit, X, force, cycles, steps_per_period, n_samples, rng):
         raise ValueError(f"a peak response needs the whole joint, which a {fit.regime} modal fit "
                          "does not determine; call without force")
     task = functools.partial(modal_fit_task, names=tuple(fit.names), regime=fit.regime,
-                             conventions=dict(fit.conventions), amplitudes=X, force=force,
+                             conventions=dict(fit.conventions), amplitude=X, force=force,
                              cycles=cycles, steps_per_period=steps_per_period)
     span = fit.data["amplitude"]
     if X.max() > 1.001 * np.max(span) or X.min() < 0.999 * np.min(span):

@@ -63,7 +63,7 @@ class SingleModeSystem:
         return math.sqrt((self.stiffness + joint.KT) / self.mass) / (2.0 * math.pi)
 
 
-def modal_curve(joint: IwanParameters, system: SingleModeSystem, amplitudes, *,
+def modal_curve(joint: IwanParameters, system: SingleModeSystem, amplitude, *,
                 stiffness: str = "secant"):
     """Closed-form frequency [Hz] and damping ratio [-] at displacement amplitudes [m].
 
@@ -74,7 +74,7 @@ def modal_curve(joint: IwanParameters, system: SingleModeSystem, amplitudes, *,
     ----------
     joint : IwanParameters
     system : SingleModeSystem
-    amplitudes : array_like, shape (n,)
+    amplitude : array_like, shape (n,)
         Displacement amplitudes ``X`` [m], ``> 0``.
     stiffness : {"secant", "harmonic"}, keyword-only
         Secant (QSMA, docs/equations.md section 7) or first-harmonic stiffness (what a ring-down
@@ -84,9 +84,9 @@ def modal_curve(joint: IwanParameters, system: SingleModeSystem, amplitudes, *,
     -------
     frequency, damping_ratio : ndarray, shape (n,)
     """
-    X = finite_array("amplitudes", amplitudes)
+    X = finite_array("amplitude", amplitude)
     if np.any(X <= 0):
-        raise ValueError("amplitudes must be > 0 [m]")
+        raise ValueError("amplitude must be > 0 [m]")
     if not isinstance(system, SingleModeSystem):
         raise ValueError(f"system must be a SingleModeSystem, got {type(system).__name__}")
     return modal_iwan_curve(X, joint, K_inf=system.stiffness, zeta0=system.zeta0,

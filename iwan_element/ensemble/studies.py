@@ -7,7 +7,7 @@ preload, friction coefficient, bolt count or an interface parameter can be swept
 :func:`~iwan_element.ensemble.run_ensemble`::
 
     from functools import partial
-    task = partial(specimen_curve_task, specimen=preset("example"), amplitudes=X)
+    task = partial(specimen_curve_task, specimen=preset("example"), amplitude=X)
     result = run_ensemble(task, parameter_grid(preload=[10e3, 20e3, 30e3]))
 
 ``iwan_element.models`` (which imports Exudyn) is imported when a task runs, not with this
@@ -35,7 +35,7 @@ def with_changes(specimen, params: dict):
     return specimen.replace(**changes)
 
 
-def specimen_curve_task(params: dict, rng, *, specimen, amplitudes=None, mode: int = 1) -> dict:
+def specimen_curve_task(params: dict, rng, *, specimen, amplitude=None, mode: int = 1) -> dict:
     """One ensemble task: the QSMA amplitude curve of ``specimen`` changed by ``params``.
 
     Parameters
@@ -46,7 +46,7 @@ def specimen_curve_task(params: dict, rng, *, specimen, amplitudes=None, mode: i
         Unused (the model is deterministic).
     specimen : Specimen, keyword-only
         The base specimen (for instance ``iwan_element.models.specimens.preset("example")``).
-    amplitudes : array_like, optional, keyword-only
+    amplitude : array_like, optional, keyword-only
         Displacement amplitudes at the sensor [m]; default the specimen's documented range.
     mode : int, keyword-only
         Elastic mode number.
@@ -54,15 +54,15 @@ def specimen_curve_task(params: dict, rng, *, specimen, amplitudes=None, mode: i
     Returns
     -------
     dict
-        ``amplitude`` [m], ``frequency`` [Hz] and ``damping`` [-] arrays, and the scalars
+        ``amplitude`` [m], ``frequency`` [Hz] and ``damping_ratio`` [-] arrays, and the scalars
         ``f_linear`` (frequency at the smallest amplitude) [Hz], ``frequency_drop``
-        (``1 - f(X_max) / f(X_min)``) and ``damping_max`` [-].
+        (``1 - f(X_max) / f(X_min)``) and ``damping_ratio_max`` [-].
     """
     from iwan_element.models.qsma import modal_amplitude_curve
     curve = modal_amplitude_curve(with_changes(specimen, params), mode=mode,
-                                  amplitudes=amplitudes)
+                                  amplitude=amplitude)
     f = np.asarray(curve.frequency, float)
     z = np.asarray(curve.damping_ratio, float)
-    return {"amplitude": np.asarray(curve.amplitude, float), "frequency": f, "damping": z,
+    return {"amplitude": np.asarray(curve.amplitude, float), "frequency": f, "damping_ratio": z,
             "f_linear": float(f[0]), "frequency_drop": float(1.0 - f[-1] / f[0]),
-            "damping_max": float(z.max())}
+            "damping_ratio_max": float(z.max())}

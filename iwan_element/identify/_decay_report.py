@@ -171,5 +171,5 @@ def _finish(tt, fits, stops, info, opts):
     a[:, 3:6] *= np.sqrt(share)[:, None]
     log.debug("amplitude_curve: %s", notes)
     return AmplitudeCurve(a[:, 0], a[:, 1], a[:, 2], amplitude_std=a[:, 3],
-                          frequency_std=a[:, 4], damping_std=a[:, 5], noise_floor=floor,
+                          frequency_std=a[:, 4], damping_ratio_std=a[:, 5], noise_floor=floor,
                           method=names[0], notes=notes, warnings=tuple(warns))

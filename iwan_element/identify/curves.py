@@ -54,7 +54,7 @@ class AmplitudeCurve(ResultShape):
     damping_ratio : array_like, shape (n,)
         Equivalent viscous damping ratio [-] (finite; a value above 1 is refused as a likely
         percentage).
-    amplitude_std, frequency_std, damping_std : array_like or float, optional
+    amplitude_std, frequency_std, damping_ratio_std : array_like or float, optional
         Standard uncertainty of each point in the same units; ``None`` (the default) means
         unknown and is stored as NaN.
     noise_floor : float, optional
@@ -76,7 +76,7 @@ class AmplitudeCurve(ResultShape):
     damping_ratio: np.ndarray
     amplitude_std: np.ndarray | None = None
     frequency_std: np.ndarray | None = None
-    damping_std: np.ndarray | None = None
+    damping_ratio_std: np.ndarray | None = None
     noise_floor: float = float("nan")
     method: str = ""
     notes: str = ""
@@ -101,7 +101,7 @@ class AmplitudeCurve(ResultShape):
         for name, arr in arrays.items():
             arr.flags.writeable = False
             object.__setattr__(self, name, arr)
-        for name in ("amplitude_std", "frequency_std", "damping_std"):
+        for name in ("amplitude_std", "frequency_std", "damping_ratio_std"):
             object.__setattr__(self, name, _optional_std(getattr(self, name), n, name))
         floor = float(self.noise_floor)
         if not (np.isnan(floor) or (np.isfinite(floor) and floor >= 0)):
@@ -118,7 +118,7 @@ class AmplitudeCurve(ResultShape):
         return AmplitudeCurve(
             self.amplitude[order], self.frequency[order], self.damping_ratio[order],
             amplitude_std=self.amplitude_std[order], frequency_std=self.frequency_std[order],
-            damping_std=self.damping_std[order], noise_floor=self.noise_floor,
+            damping_ratio_std=self.damping_ratio_std[order], noise_floor=self.noise_floor,
             method=self.method, notes=self.notes, warnings=self.warnings)
 
     @property
@@ -136,7 +136,7 @@ class AmplitudeCurve(ResultShape):
             "amplitude": clean(self.amplitude), "frequency": clean(self.frequency),
             "damping_ratio": clean(self.damping_ratio),
             "amplitude_std": clean(self.amplitude_std), "frequency_std": clean(self.frequency_std),
-            "damping_std": clean(self.damping_std),
+            "damping_ratio_std": clean(self.damping_ratio_std),
             "noise_floor": None if np.isnan(self.noise_floor) else self.noise_floor,
             "method": self.method, "notes": self.notes, "warnings": list(self.warnings),
         }
@@ -155,7 +155,7 @@ class AmplitudeCurve(ResultShape):
         for i in range(len(self)):
             lines.append(f"  {self.amplitude[i]:11.4e} {self.frequency[i]:12.6g} "
                          f"{self.frequency_std[i]:9.2e} {self.damping_ratio[i]:11.4e} "
-                         f"{self.damping_std[i]:9.2e}")
+                         f"{self.damping_ratio_std[i]:9.2e}")
         lines += [f"  warning: {w}" for w in self.warnings]
         return "\n".join(lines)
 
@@ -180,7 +180,7 @@ class AmplitudeCurve(ResultShape):
         kw.update(kwargs)
         artists = []
         for a, y, s in ((ax_f, self.frequency, self.frequency_std),
-                        (ax_z, self.damping_ratio, self.damping_std)):
+                        (ax_z, self.damping_ratio, self.damping_ratio_std)):
             if np.all(np.isnan(s)):
                 artists += a.plot(self.amplitude, y, label=label, **kw)
             else:

@@ -448,7 +448,7 @@ def fit_decay(t, y, *, quantity: str = "acceleration", band, order: int = 4,
                      "amplitude dependence rests on very little")
     X, f, zeta, _ = _window_curve(prob, i_s, i_b, info["nw"])
     data = dict(amplitude=X, frequency=f, damping_ratio=zeta,
-                frequency_std=np.full(X.size, np.nan), damping_std=np.full(X.size, np.nan))
+                frequency_std=np.full(X.size, np.nan), damping_ratio_std=np.full(X.size, np.nan))
     fit = ModalIwanFit.from_solution(best.x[:n_th], span["cov"][:n_th, :n_th], regime, data, conv,
                                      chi2_red=span["chi2_red"], weights=(),
                                      warnings=tuple(warns), optimizer_ok=bool(best.success))

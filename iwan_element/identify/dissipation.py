@@ -22,7 +22,7 @@ import numpy as np
 from scipy import optimize
 
 from ..core.validation import check_int, check_magnitude, check_scalar, finite_array, same_length
-from ..core.closed_form import dissipation, force_amplitude
+from ..core.closed_form import dissipation as cycle_dissipation, force_amplitude
 from ..core.parameters import IwanParameters
 from ._solver import _Problem, _uncertainty
 from .identifiability import _identify, _range_warnings
@@ -194,20 +194,22 @@ def _fit_seed(F0, D, u0, Fs, *, t0):
                    t0=t0, fixed=("Fs",), stacklevel=4, curves=curves)
 
 
-def fit_dissipation(F0, D, *, u0, method: str = "least_squares", Fs: float | None = None,
+def fit_dissipation(amplitude, force, dissipation, *, method: str = "least_squares",
+                    Fs: float | None = None,
                     n_starts: int = 6, seed=0, alpha: float = 1e-3,
                     max_nfev: int = 300) -> FitResult:
     """Fit the Iwan parameters to per-cycle force amplitude and dissipation (paper Fig. 7).
 
     Parameters
     ----------
-    F0 : array_like, shape (m,)
-        Force amplitude of each cycle [N], ``> 0``. Not modified.
-    D : array_like, shape (m,)
-        Energy dissipated per cycle [J], ``> 0``. Not modified.
-    u0 : array_like, shape (m,), keyword-only (required)
-        Displacement amplitude of each cycle [m], ``> 0``. The seed method needs it for the
-        secant stiffness ``F0/u0`` of eq. 24; the least-squares fit for ``F0(u0)``, ``D(u0)``.
+    amplitude : array_like, shape (m,)
+        Displacement amplitude ``u0`` of each cycle [m], ``> 0``. The seed method needs it for
+        the secant stiffness ``F0/u0`` of eq. 24; the least-squares fit for ``F0(u0)``,
+        ``D(u0)``. Not modified.
+    force : array_like, shape (m,)
+        Force amplitude ``F0`` of each cycle [N], ``> 0``. Not modified.
+    dissipation : array_like, shape (m,)
+        Energy ``D`` dissipated per cycle [J], ``> 0``. Not modified.
     method : {"least_squares", "seed"}, keyword-only
         ``"least_squares"`` (default): bounded least squares of ``ln F0`` and ``ln D``
         against the exact closed forms (micro- and macroslip), multi-start, with the
@@ -238,11 +240,13 @@ def fit_dissipation(F0, D, *, u0, method: str = "least_squares", Fs: float | Non
         given ``Fs``.
     """
     t0 = time.perf_counter()
-    F0a = check_magnitude("F0", finite_array("F0", F0, ndim=1, min_size=2), unit="N")
-    Da = check_magnitude("D", finite_array("D", D, ndim=1, min_size=2), unit="J")
-    ua = check_magnitude("u0", finite_array("u0", u0, ndim=1, min_size=2), unit="m")
-    same_length(F0=F0a, D=Da, u0=ua)
-    for name, arr in (("F0", F0a), ("D", Da), ("u0", ua)):
+    ua = check_magnitude("amplitude", finite_array("amplitude", amplitude, ndim=1, min_size=2),
+                         unit="m")
+    F0a = check_magnitude("force", finite_array("force", force, ndim=1, min_size=2), unit="N")
+    Da = check_magnitude("dissipation", finite_array("dissipation", dissipation, ndim=1,
+                                                     min_size=2), unit="J")
+    same_length(amplitude=ua, force=F0a, dissipation=Da)
+    for name, arr in (("amplitude", ua), ("force", F0a), ("dissipation", Da)):
         if np.any(arr <= 0):
             raise ValueError(f"{name} must be > 0 for every cycle (got {arr.min():g})")
     if method not in ("least_squares", "seed"):
@@ -250,7 +254,7 @@ def fit_dissipation(F0, D, *, u0, method: str = "least_squares", Fs: float | Non
     need = 2 if method == "seed" else 3
     k = _distinct(ua)
     if k < need:
-        raise ValueError(f"u0 holds {k} distinct amplitude(s) (2 % apart); method={method!r} "
+        raise ValueError(f"amplitude holds {k} distinct value(s) (2 % apart); method={method!r} "
                          f"needs at least {need}: each amplitude gives two numbers (F0, D), "
                          f"too few for {'three' if method == 'seed' else 'four'} parameters. "
                          "Test at more amplitudes, or fit the force history with fit_loops")
@@ -268,7 +272,7 @@ def fit_dissipation(F0, D, *, u0, method: str = "least_squares", Fs: float | Non
     rng = np.random.default_rng(seed)
 
     def unit(p1):
-        return np.concatenate([force_amplitude(ua, p1), dissipation(ua, p1)])
+        return np.concatenate([force_amplitude(ua, p1), cycle_dissipation(ua, p1)])
 
     prob = _Problem(np.concatenate([F0a, Da]), unit, w=np.ones(2 * ua.size), log_space=True,
                     entry_x=np.concatenate([ua, ua]), min_macro=4)

@@ -44,12 +44,12 @@ def _as_data(amplitude, frequency, damping_ratio):
         if frequency is not None or damping_ratio is not None:
             raise ValueError("give either an AmplitudeCurve or three arrays, not both")
         c = amplitude
-        return (c.amplitude, c.frequency, c.damping_ratio, c.frequency_std, c.damping_std,
+        return (c.amplitude, c.frequency, c.damping_ratio, c.frequency_std, c.damping_ratio_std,
                 tuple(c.warnings))
     if frequency is None or damping_ratio is None:
         raise ValueError("frequency and damping_ratio are required with an amplitude array")
     c = AmplitudeCurve(amplitude, frequency, damping_ratio)   # the shared checks and messages
-    return c.amplitude, c.frequency, c.damping_ratio, c.frequency_std, c.damping_std, ()
+    return c.amplitude, c.frequency, c.damping_ratio, c.frequency_std, c.damping_ratio_std, ()
 
 
 def _weights(f, z, fstd, zstd):
@@ -184,7 +184,7 @@ def fit_modal_iwan(amplitude, frequency=None, damping_ratio=None, *, stiffness: 
     x_ref = float(np.exp(np.mean(np.log(X)))) if x_ref is None else \
         check_scalar("x_ref", x_ref, low=0.0, low_open=True)
     conv = dict(stiffness=stiffness, floor=floor, x_ref=x_ref, damping_form=damping_form)
-    data = dict(amplitude=X, frequency=f, damping_ratio=z, frequency_std=fstd, damping_std=zstd)
+    data = dict(amplitude=X, frequency=f, damping_ratio=z, frequency_std=fstd, damping_ratio_std=zstd)
     n_amp = np.unique(np.round(np.log(X), 9)).size
     if n_amp < 3:
         return ModalIwanFit.linear(data, conv, warnings=in_warn + (

@@ -159,9 +159,9 @@ class ModalIwanFit(ResultShape):
             np.full(2, np.nan)
         cov = np.diag(sd ** 2)
         params, stderr = _derived(theta, "linear"), {"f0": sd[0], "zeta0": sd[1]}
-        return cls("linear", ("f0", "zeta0"), theta, cov, data, conv, float("nan"), (),
-                   tuple(warnings), False,
-                   _table(params, stderr, _unidentified(params, stderr, theta, ())))
+        return cls("linear", ("f0", "zeta0"), theta, cov, data, conv, float("nan"), (), False,
+                   _table(params, stderr, _unidentified(params, stderr, theta, ())),
+                   warnings=tuple(warnings))
 
     # ------------------------------------------------------------------ model access
     @property
@@ -282,7 +282,7 @@ class ModalIwanFit(ResultShape):
         f, z, fb, zb = self.predict(X, band=band)
         artists = []
         for a, y, s, m, b in ((ax[0], d["frequency"], d["frequency_std"], f, fb),
-                              (ax[1], d["damping_ratio"], d["damping_std"], z, zb)):
+                              (ax[1], d["damping_ratio"], d["damping_ratio_std"], z, zb)):
             eb = a.errorbar(d["amplitude"], y, yerr=np.nan_to_num(s), fmt="o", ms=3, color="k",
                             label="data")
             artists += [eb.lines[0], *eb.lines[2]]

@@ -231,5 +231,5 @@ def stepped_sine_curve(levels, *, quantity: str = "displacement", control: str =
                 if control == "force" else ""))
     if len(levels) < 3:
         warns.append(f"only {len(levels)} level(s): too few to show an amplitude dependence")
-    return AmplitudeCurve(a[:, 0], a[:, 1], a[:, 2], frequency_std=a[:, 3], damping_std=a[:, 4],
+    return AmplitudeCurve(a[:, 0], a[:, 1], a[:, 2], frequency_std=a[:, 3], damping_ratio_std=a[:, 4],
                           method="stepped-sine", notes=notes, warnings=tuple(warns))

@@ -372,7 +372,7 @@ def sweep_curve(f, F, response, phase, *, level=None, quantity: str = "accelerat
              f"{B:.4g} m/N; smooth curves of degree {deg} in ln X; fit rms relative error "
              f"{rms:.2g}; bins: {len(amp)} of {n_bins} in ln X")
     return AmplitudeCurve(amp, wr / (2 * math.pi), z, frequency_std=sw / (2 * math.pi),
-                          damping_std=sz, method="stepped-sine-sweep", notes=notes,
+                          damping_ratio_std=sz, method="stepped-sine-sweep", notes=notes,
                           warnings=r["warnings"])
 
 

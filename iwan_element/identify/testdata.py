@@ -430,7 +430,7 @@ class TestData:
 
 
 # --------------------------------------------------------------------------- synthetic tests
-def simulate_test(params: IwanParameters, amplitudes, *, cycles: int = 3, frequency: float = 0.02,
+def simulate_test(params: IwanParameters, amplitude, *, cycles: int = 3, frequency: float = 0.02,
                   sample_rate: float = 20.0, force_noise: float = 0.0,
                   displacement_noise: float = 0.0, seed=0) -> TestData:
     """Simulate a displacement-controlled quasi-static test with the exact :class:`IwanJoint`.
@@ -443,7 +443,7 @@ def simulate_test(params: IwanParameters, amplitudes, *, cycles: int = 3, freque
     ----------
     params : IwanParameters
         The joint.
-    amplitudes : array_like, shape (m,)
+    amplitude : array_like, shape (m,)
         Displacement amplitudes [m], ``> 0``, in the order they are applied.
     cycles : int, keyword-only
         Periods per amplitude, ``>= 1``.
@@ -463,9 +463,9 @@ def simulate_test(params: IwanParameters, amplitudes, *, cycles: int = 3, freque
     """
     if not isinstance(params, IwanParameters):
         raise ValueError(f"params must be an IwanParameters instance, got {type(params).__name__}")
-    amps = check_magnitude("amplitudes", finite_array("amplitudes", amplitudes, ndim=1), unit="m")
+    amps = check_magnitude("amplitude", finite_array("amplitude", amplitude, ndim=1), unit="m")
     if np.any(amps <= 0.0):
-        raise ValueError("amplitudes must all be > 0 [m]")
+        raise ValueError("amplitude must all be > 0 [m]")
     cycles = check_int("cycles", cycles, 1)
     f = check_scalar("frequency", frequency, low=0.0, low_open=True)
     fs = check_scalar("sample_rate", sample_rate, low=16.0 * f)
