@@ -30,6 +30,7 @@ from ..identify.curves import AmplitudeCurve
 from ..identify.noise import difference_sigma
 from ..identify.units import check_damping_ratio, check_frequency_ratio
 from ..core.serialize import json_safe
+from ..fitting import covariance
 from .results import VibrationDiagnosis
 from .selection import criterion_text, stepwise_select
 
@@ -386,11 +387,12 @@ def _at_upper_bound(vib, names, z):
 
 
 def _covariance(vib, names, z, chi2):
-    """Covariance of the fitted modal values: ``(J^T J)^+`` of the noise-normalised residual
-    in the fitting variables, scaled by the reduced chi-square when above 1, mapped to the
-    values (each value is its variable over a fixed reference scale). Returns that matrix
-    (None without effects) and the standard errors of the between-test nuisances (relative
-    frequency and damping offsets; empty without them)."""
+    """Covariance of the fitted modal values: ``(J^T J)^-1`` of the noise-normalised residual
+    in the fitting variables (:func:`iwan_element.fitting.covariance`, docs/fitting.md;
+    NaN errors along a degenerate direction), scaled by the reduced chi-square when above 1,
+    mapped to the values (each value is its variable over a fixed reference scale). Returns
+    that matrix (None without effects) and the standard errors of the between-test nuisances
+    (relative frequency and damping offsets; empty without them)."""
     if z.size == 0:
         return None, ()
     h = 1e-6 * np.maximum(np.abs(z), 1e-3)
@@ -401,8 +403,8 @@ def _covariance(vib, names, z, chi2):
         zz[j] += h[j]
         J[:, j] = (vib.resid(names, zz) - r0) / h[j]
     dof = max(r0.size - z.size, 1)
-    Cz = np.linalg.pinv(J.T @ J) * max(1.0, chi2 / dof)
-    sd = np.sqrt(np.diag(Cz))
+    cz = covariance(J, s2=max(1.0, chi2 / dof), dof=dof)
+    Cz, sd = cz.covariance, cz.stderr
     nuis = () if not vib.nn else (float(sd[0] * math.exp(float(z[0]))),
                                   float(sd[1] * math.exp(float(z[1]))))
     if not names:
