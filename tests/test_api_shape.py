@@ -251,3 +251,15 @@ METHOD_RESULTS = {"CampaignPrediction": _prediction, "LeaveOneOut": _loo}
 def test_method_result_objects_have_the_same_shape(name, part, monkeypatch):
     monkeypatch.setitem(RESULTS, name, METHOD_RESULTS[name])
     test_result_objects_have_one_shape(name, part)
+
+
+def test_report_tables_align_their_titles_with_their_columns():
+    """table_lines: every line of a table is as wide as its header; numbers and titles are
+    right-aligned unless the column's spec says left."""
+    from iwan_element.core.result_shape import table_lines
+    lines = table_lines([("record", "<12"), ("band [N]", "9.4g"), ("ratio", "6.2f")],
+                        [("a", 1234.5678, 0.5), ("bb", 1e-7, 12.345)], indent=2)
+    assert len({len(s) for s in lines}) == 1
+    assert lines[0] == "  record        band [N]  ratio"
+    assert lines[1] == "  a                 1235   0.50"
+    assert lines[2].split() == ["bb", "1e-07", "12.35"]

@@ -19,10 +19,11 @@ supplies the rest.
 from __future__ import annotations
 
 import html
+import itertools
 from dataclasses import dataclass
 from typing import ClassVar
 
-__all__ = ["ResultShape", "panels"]
+__all__ = ["ResultShape", "panels", "table_lines"]
 
 
 @dataclass(frozen=True, eq=False, kw_only=True)
@@ -36,6 +37,32 @@ class ResultShape:
 
     def _repr_html_(self) -> str:
         return f"<pre>{html.escape(self.report())}</pre>"
+
+
+def table_lines(columns, rows, *, indent: int = 2) -> list[str]:
+    """The lines of a fixed-width table in a report: a header, then one line per row.
+
+    Parameters
+    ----------
+    columns : sequence of (str, str)
+        ``(title, format spec)`` per column; the spec is Python's (``"<26"``, ``"9.4g"``,
+        ``"11.4e"``), and the title takes its width and alignment (right unless the spec
+        starts with ``<`` or ``^``).
+    rows : iterable of sequences
+        The values of each row, one per column.
+    indent : int, keyword-only
+        Spaces before each line.
+    """
+    pad = " " * indent
+    heads = []
+    for title, spec in columns:
+        align = spec[0] if spec[:1] in ("<", ">", "^") else ">"
+        width = "".join(itertools.takewhile(str.isdigit, spec.lstrip("<>^")))
+        heads.append(format(title, f"{align}{width}"))
+    out = [pad + " ".join(heads)]
+    for row in rows:
+        out.append(pad + " ".join(format(v, spec) for v, (_, spec) in zip(row, columns)))
+    return out
 
 
 def panels(ax, n: int, *, figsize=None, sharex: bool = False) -> list:

@@ -8,7 +8,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..core.result_shape import ResultShape
+from ..core.result_shape import ResultShape, table_lines
 from ..core.serialize import json_safe
 from ..core.validation import check_int, check_scalar, check_time, finite_array
 from ..ensemble import run_ensemble
@@ -295,12 +295,12 @@ class LeaveOneOut(ResultShape):
     def report(self) -> str:
         lines = [f"Leave-one-out ({self.refit}): {100 * self.share_within:.0f} % of "
                  f"{len(self.rows)} records predicted within {LOO_TARGET:g}x their own fit's "
-                 f"band misfit ({self.wall_time:.1f} s)",
-                 f"  {'record':<26} {'own [N]':>9} {'predicted [N]':>13} {'ratio':>6} "
-                 f"{'in band':>8} {'coef only':>9}"]
-        for r in self.rows:
-            lines.append(f"  {r['record']:<26} {r['band_own']:9.4g} {r['band_pred']:13.4g} "
-                         f"{r['ratio']:6.2f} {r['coverage']:8.2f} {r['coverage_coef']:9.2f}")
+                 f"band misfit ({self.wall_time:.1f} s)"]
+        lines += table_lines(
+            [("record", "<26"), ("own [N]", "9.4g"), ("predicted [N]", "13.4g"),
+             ("ratio", "6.2f"), ("in band", "8.2f"), ("coef only", "9.2f")],
+            [[r[k] for k in ("record", "band_own", "band_pred", "ratio", "coverage",
+                             "coverage_coef")] for r in self.rows])
         if math.isfinite(self.coverage_coef):
             lines.append(f"  band samples inside the {100 * self.level:g} % prediction band "
                          f"(median over records): {100 * self.coverage:.0f} % with the "

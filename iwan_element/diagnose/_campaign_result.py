@@ -9,7 +9,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..core.result_shape import ResultShape
+from ..core.result_shape import ResultShape, table_lines
 from ..core.serialize import json_safe
 from ..fitting import Parameter, ParameterTable, covariance, verdict
 from ..identify.noise import integrated_time
@@ -409,11 +409,10 @@ class CampaignFit(ResultShape):
         if self.scatter:
             lines.append("  record-to-record scatter about the laws (standard deviation): "
                          + ", ".join(f"{q} {v:.3g}" for q, v in self.scatter.items()))
-        lines.append(f"  {'record':<26} {'named':<40} {'own band':>9} {'campaign':>9} "
-                     f"{'ratio':>6}")
-        for r in self.rows:
-            lines.append(f"  {r['record']:<26} {r['named']:<40} {r['band_own']:9.4g} "
-                         f"{r['band_campaign']:9.4g} {r['band_ratio']:6.2f}")
+        lines += table_lines([("record", "<26"), ("named", "<40"), ("own band", "9.4g"),
+                              ("campaign", "9.4g"), ("ratio", "6.2f")],
+                             [[r[k] for k in ("record", "named", "band_own", "band_campaign",
+                                              "band_ratio")] for r in self.rows])
         lines += [f"  warning: {w}" for w in self.warnings]
         return "\n".join(lines)
 

@@ -12,7 +12,7 @@ from ..core.serialize import json_safe
 from .oscillator import SingleModeSystem, modal_curve, peak_response
 from .runner import EnsembleResult, run_ensemble
 from .uncertainty import ParameterUncertainty
-from ..core.result_shape import ResultShape, panels
+from ..core.result_shape import ResultShape, panels, table_lines
 
 __all__ = ["PredictionBands", "propagate_uncertainty", "response_task", "modal_fit_task"]
 
@@ -119,15 +119,14 @@ class PredictionBands(ResultShape):
     def report(self) -> str:
         lines = [f"Prediction bands ({100 * self.level:.0f} % central) from {self._source}: "
                  f"{self.frequency.shape[0]} samples on {self.ensemble.executor}, "
-                 f"{len(self.ensemble.errors)} failed",
-                 f"  {'X [m]':>10} {'f nominal':>11} {'f low':>11} {'f high':>11} "
-                 f"{'zeta nom.':>10} {'zeta low':>10} {'zeta high':>10}"]
+                 f"{len(self.ensemble.errors)} failed"]
         fl, _, fh = self.band("frequency")
         zl, _, zh = self.band("damping_ratio")
-        for i, X in enumerate(self.amplitude):
-            lines.append(f"  {X:10.3e} {self.nominal['frequency'][i]:11.6g} {fl[i]:11.6g} "
-                         f"{fh[i]:11.6g} {self.nominal['damping_ratio'][i]:10.4e} {zl[i]:10.4e} "
-                         f"{zh[i]:10.4e}")
+        lines += table_lines(
+            [("X [m]", "10.3e"), ("f nominal", "11.6g"), ("f low", "11.6g"), ("f high", "11.6g"),
+             ("zeta nom.", "10.4e"), ("zeta low", "10.4e"), ("zeta high", "10.4e")],
+            zip(self.amplitude, self.nominal["frequency"], fl, fh,
+                self.nominal["damping_ratio"], zl, zh))
         if self.peak is not None:
             pl, pm, ph = self.band("peak")
             lines.append(f"  peak displacement at F0 = {self.force:g} N: nominal "

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..core.validation import check_magnitude, finite_array
-from ..core.result_shape import ResultShape, panels
+from ..core.result_shape import ResultShape, panels, table_lines
 
 __all__ = ["AmplitudeCurve", "MIN_POINTS"]
 
@@ -151,11 +151,10 @@ class AmplitudeCurve(ResultShape):
             lines.append(f"  {self.notes}")
         if not np.isnan(self.noise_floor):
             lines.append(f"  noise floor: {self.noise_floor:.3e} m")
-        lines.append(f"  {'X [m]':>11} {'f [Hz]':>12} {'+-':>9} {'zeta [-]':>11} {'+-':>9}")
-        for i in range(len(self)):
-            lines.append(f"  {self.amplitude[i]:11.4e} {self.frequency[i]:12.6g} "
-                         f"{self.frequency_std[i]:9.2e} {self.damping_ratio[i]:11.4e} "
-                         f"{self.damping_ratio_std[i]:9.2e}")
+        lines += table_lines([("X [m]", "11.4e"), ("f [Hz]", "12.6g"), ("+-", "9.2e"),
+                              ("zeta [-]", "11.4e"), ("+-", "9.2e")],
+                             zip(self.amplitude, self.frequency, self.frequency_std,
+                                 self.damping_ratio, self.damping_ratio_std))
         lines += [f"  warning: {w}" for w in self.warnings]
         return "\n".join(lines)
 
