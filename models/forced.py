@@ -16,7 +16,7 @@ nothing slips) the response is the linear one, whose peak amplitude per force is
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import exudyn as exu
 import numpy as np
@@ -197,6 +197,10 @@ def forced_response(specimen: Specimen, *, force_levels=(0.5, 2.0), frequencies=
         finite_array("frequencies", frequencies, ndim=1)
     if np.any(freqs <= 0):
         raise ValueError(f"frequencies must be > 0 [Hz], got {frequencies!r}")
+    steps = np.diff(freqs)
+    if freqs.size < 3 or not (np.all(steps > 0) or np.all(steps < 0)):
+        raise ValueError("frequencies must be at least 3 values stepped up or down (strictly "
+                         f"monotonic) [Hz], got {frequencies!r}")
     beta = floor_damping(specimen, mode=mode)
     amp = np.array([_sweep_level(specimen, float(F0), freqs, beta, cycles, spp)
                     for F0 in levels])
@@ -206,6 +210,7 @@ def forced_response(specimen: Specimen, *, force_levels=(0.5, 2.0), frequencies=
                   "settle_cycles": cycles[0], "measure_cycles": cycles[1],
                   "steps_per_period": spp})
     if not out.success:
-        out.warnings += ("a force level's largest amplitude is at the first or last frequency: "
-                         "the resonance peak is not inside the sweep; widen frequencies",)
+        out = replace(out, warnings=out.warnings + (
+            "a force level's largest amplitude is at the first or last frequency: the "
+            "resonance peak is not inside the sweep; widen frequencies",))
     return out

@@ -30,7 +30,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import exudyn as exu
 import numpy as np
@@ -459,9 +459,8 @@ def _checked(out: RingdownResult) -> RingdownResult:
     :data:`ENERGY_TOL`."""
     err = out.max_energy_error
     if err is not None and err > ENERGY_TOL:
-        out.warnings += (f"the energy balance is off by {err:.2g} of the release energy "
-                         f"(more than {ENERGY_TOL:g}; the time integrator's quadrature of the "
-                         f"joint forces accounts for "
-                         f"{out.metadata['joint_quadrature_error']:.2g}): refine "
-                         "steps_per_period",)
+        out = replace(out, warnings=out.warnings + (
+            f"the energy balance is off by {err:.2g} of the release energy (more than "
+            f"{ENERGY_TOL:g}; the time integrator's quadrature of the joint forces accounts for "
+            f"{out.metadata['joint_quadrature_error']:.2g}): refine steps_per_period",))
     return out

@@ -192,9 +192,22 @@ def test_options_are_validated():
         quasi_static_test(EXAMPLE, amplitude=-1e-4)
     with pytest.raises(ValueError, match="frequencies"):
         forced_response(EXAMPLE, frequencies=[0.0])
+    with pytest.raises(ValueError, match="frequencies must be at least 3 values stepped"):
+        forced_response(EXAMPLE, frequencies=[50.0, 52.0, 51.0])
     with pytest.raises(ValueError, match="force_levels"):
         forced_response(EXAMPLE, force_levels=[])
     with pytest.raises(ValueError, match="interface"):
         natural_frequencies(EXAMPLE, interface="bonded")
     with pytest.raises(ValueError, match="drive"):
         build_specimen_model(EXAMPLE, drive=lambda t: 0.0)     # clamped-free: no grip
+
+
+def test_a_sweep_that_misses_the_resonance_says_so():
+    """Every frequency below the resonance: the largest amplitude is at the last one, so the
+    result is not a success and warns (returned, not raised, on the frozen result)."""
+    f1 = natural_frequencies(EXAMPLE, n_modes=1)[0]
+    r = forced_response(EXAMPLE, force_levels=(1.0,), frequencies=np.array([0.90, 0.93, 0.96]) * f1,
+                        settle_cycles=4, measure_cycles=2, steps_per_period=16)
+    assert not r.success
+    assert any("not inside the sweep" in w for w in r.warnings)
+    assert np.argmax(r.amplitude[0]) == 2
