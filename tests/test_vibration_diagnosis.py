@@ -308,3 +308,29 @@ def test_hidden_whole_or_spread_patch_is_named_and_told_apart(base, shape):
             assert fit["kappa_2"] == pytest.approx(vals["kappa_2"], rel=0.1), g.report()
         else:
             assert fit["shape"] > 0.15, g.report()
+
+
+def test_a_value_at_the_end_of_its_fit_range_is_not_identified(base):
+    """A hidden Hertzian patch (shape 1) lies beyond the fit's shape range [0, 1/2]: the
+    fitted shape sits at 1/2, warned, and its row of ``params`` says not identified while the
+    onset and the stiffness, which the data do bound, are identified with finite errors."""
+    fp, zp = base
+    rng = np.random.default_rng(50)
+    vals = {"kappa_2": 1.0, "X_s": 0.25 * X.max(), "shape": 1.0}
+
+    def rms(k):
+        f, z = EFFECTS["macroslip_onset"].modal_form(X, fp, zp, vc.ZETA0, **dict(vals, kappa_2=k))
+        return np.sqrt(np.mean((np.log(f / fp) / vc.F_NOISE) ** 2
+                               + (np.log(z / zp) / vc.Z_NOISE) ** 2))
+
+    vals["kappa_2"] = brentq(lambda k: rms(k) - 2 * vc.NOTICEABLE, 1e-6, 1e6)
+    fm, zm = vc.element_curve(X, vc.BASE, "macroslip_onset", **vc.to_joint("macroslip_onset", vals))
+    fm = fm * np.exp(vc.F_NOISE * rng.normal(size=X.size))
+    zm = zm * np.exp(vc.Z_NOISE * rng.normal(size=X.size))
+    g = _diag((X, fm, zm, fp, zp, vals))
+    assert g.effects == ("macroslip_onset",), g.report()
+    t = g.params
+    assert any("shape sits at the upper end" in w for w in g.warnings)
+    assert not t["macroslip_onset.shape"].identified
+    for k in ("macroslip_onset.kappa_2", "macroslip_onset.X_s"):
+        assert t[k].identified and 0 < t[k].stderr < 0.5 * t[k].value

@@ -257,9 +257,11 @@ class VibrationDiagnosis(ResultShape):
         Covariance of the fitted modal values (in the order of ``parameters``), from the
         noise-normalised Jacobian, scaled by the reduced chi-square when above 1.
     params : ParameterTable
-        (property) The fitted modal values ``"effect.name"`` with their standard errors (the
-        square roots of ``covariance``'s diagonal), units and verdicts
-        (:func:`iwan_element.fitting.verdict`); empty when nothing was named.
+        (property) The fitted modal values ``"effect.name"`` with their standard errors
+        (``details["stderr"]``: from :func:`iwan_element.fitting.covariance`, NaN for a value
+        the data do not determine), units and verdicts (:func:`iwan_element.fitting.verdict`;
+        a value at the upper end of its fit range, ``details["at_bound"]``, is not
+        identified); empty when nothing was named.
     """
 
     plot_panels = 2
@@ -288,14 +290,17 @@ class VibrationDiagnosis(ResultShape):
     @property
     def params(self) -> ParameterTable:
         """The fitted modal values as a :class:`~iwan_element.fitting.ParameterTable`."""
-        rows = [(nm, sp, self.parameters[nm][sp.name]) for nm in self.parameters
+        rows = [(f"{nm}.{sp.name}", sp, self.parameters[nm][sp.name]) for nm in self.parameters
                 for sp in EFFECTS[nm].modal_specs]
-        cov = self.covariance
-        se = (np.sqrt(np.clip(np.diag(cov), 0.0, None)) if cov is not None
-              and cov.shape == (len(rows),) * 2 else np.full(len(rows), math.nan))
-        return ParameterTable([Parameter(f"{nm}.{sp.name}", v, float(e), unit=sp.unit,
-                                         identified=verdict(sp.name, v, float(e))[0])
-                               for (nm, sp, v), e in zip(rows, se)])
+        se = self.details.get("stderr", {})
+        at = set(self.details.get("at_bound", ()))
+        out = []
+        for key, sp, v in rows:
+            e = se.get(key)
+            e = math.nan if e is None else float(e)
+            out.append(Parameter(key, v, e, unit=sp.unit,
+                                 identified=verdict(key, v, e, at_bound=key in at)[0]))
+        return ParameterTable(out)
 
     @property
     def success(self) -> bool:

@@ -292,7 +292,7 @@ def diagnose_vibration(amplitude, frequency=None, damping_ratio=None, *, predict
     rf0, rz0 = np.log(fm / fp), np.log(zm / zp)
     warns = []
     sf, src_f = _curve_level("frequency", rf0[o], frequency_noise, frequency_uncertainty, n)
-    sz, src_z = _curve_level("damping", rz0[o], damping_ratio_noise, damping_ratio_uncertainty, n)
+    sz, src_z = _curve_level("damping_ratio", rz0[o], damping_ratio_noise, damping_ratio_uncertainty, n)
     if (frequency_noise is None or damping_ratio_noise is None) and n < 12:
         warns.append(f"only {n} amplitudes: the noise taken from their scatter is uncertain "
                      "(state the per-point uncertainty or the noise levels)")
@@ -340,11 +340,12 @@ def _vib_result(vib, sel, chi_b, err_b, rf0, rz0, warns, alpha, noise_from, cand
             f" after {' + '.join(sel.named)}" if sel.named else
             f"; no candidate ({', '.join(cands)}) explains it")
             + _left(vib.X, np.log(vib.fm / f_new), np.log(vib.zm / z_new), vib.sf, vib.sz))
-    warns.extend(_at_upper_bound(vib, names, z))
+    bound_warns, at_bound = _at_upper_bound(vib, names, z)
+    warns.extend(bound_warns)
     steps = [{"on": st["on"], "candidates": [
         {k: r.get(k) for k in ("name", "error", "dIC", "explained", "verdict")}
         for r in st["rows"]]} for st in sel.steps]
-    cov, nuis_std = _covariance(vib, names, z, sel.final["chi2"])
+    cov, se, nuis_std = _covariance(vib, names, z, sel.final["chi2"])
     ro = lambda a: (a.setflags(write=False), a)[1]  # noqa: E731
     details = {"noise_from": noise_from, "misfit_p": sel.p_before, "misfit_p_after": sel.p_after,
                "alpha": alpha, "chi2_before": chi_b, "chi2_after": sel.final["chi2"],
@@ -352,7 +353,10 @@ def _vib_result(vib, sel, chi_b, err_b, rf0, rz0, warns, alpha, noise_from, cand
                "frequency_error_before": float(np.sqrt(np.mean(rf0 ** 2))),
                "damping_error_before": float(np.sqrt(np.mean(rz0 ** 2))),
                "frequency_error_after": float(np.sqrt(np.mean(np.log(vib.fm / f_new) ** 2))),
-               "damping_error_after": float(np.sqrt(np.mean(np.log(vib.zm / z_new) ** 2)))}
+               "damping_error_after": float(np.sqrt(np.mean(np.log(vib.zm / z_new) ** 2))),
+               "stderr": dict(zip((f"{nm}.{sp.name}" for nm in names
+                                   for sp in EFFECTS[nm].modal_specs), se)),
+               "at_bound": at_bound}
     if vib.nn:
         df, dz = vib.nuisance(z)
         details["between_tests"] = {
@@ -372,9 +376,10 @@ def _vib_result(vib, sel, chi_b, err_b, rf0, rz0, warns, alpha, noise_from, cand
 
 
 def _at_upper_bound(vib, names, z):
-    """Warnings for fitted values at the upper end of their fit range: the data do not
-    bound them, and predictions beyond the measured amplitudes depend on that end."""
-    out, k = [], vib.nn
+    """Fitted values at the upper end of their fit range (the data do not bound them, and
+    predictions beyond the measured amplitudes depend on that end): ``(warnings, names as
+    "effect.parameter")``."""
+    out, at, k = [], [], vib.nn
     for nm in names:
         for sp in EFFECTS[nm].modal_specs:
             lo, hi = sp.fit_bounds
@@ -382,8 +387,9 @@ def _at_upper_bound(vib, names, z):
                 out.append(f"{nm} {sp.name} sits at the upper end of its fit range "
                            f"({hi:g} in fit units): the data do not bound it, and predictions "
                            "beyond the measured amplitudes depend on that end")
+                at.append(f"{nm}.{sp.name}")
             k += 1
-    return out
+    return out, at
 
 
 def _covariance(vib, names, z, chi2):
@@ -391,10 +397,12 @@ def _covariance(vib, names, z, chi2):
     in the fitting variables (:func:`iwan_element.fitting.covariance`, docs/fitting.md;
     NaN errors along a degenerate direction), scaled by the reduced chi-square when above 1,
     mapped to the values (each value is its variable over a fixed reference scale). Returns
-    that matrix (None without effects) and the standard errors of the between-test nuisances
-    (relative frequency and damping offsets; empty without them)."""
+    that matrix (None without effects; a pseudo-inverse along a degenerate direction, used
+    for the prediction bands), the values' standard errors (NaN for a value the data do not
+    determine) and the standard errors of the between-test nuisances (relative frequency and
+    damping offsets; empty without them)."""
     if z.size == 0:
-        return None, ()
+        return None, np.zeros(0), ()
     h = 1e-6 * np.maximum(np.abs(z), 1e-3)
     r0 = vib.resid(names, z)
     J = np.empty((r0.size, z.size))
@@ -408,7 +416,7 @@ def _covariance(vib, names, z, chi2):
     nuis = () if not vib.nn else (float(sd[0] * math.exp(float(z[0]))),
                                   float(sd[1] * math.exp(float(z[1]))))
     if not names:
-        return None, nuis
+        return None, np.zeros(0), nuis
     scale = np.array([1.0 / vib.refs[sp.ref] ** sp.ref_power
                       for nm in names for sp in EFFECTS[nm].modal_specs])
-    return Cz[vib.nn:, vib.nn:] * np.outer(scale, scale), nuis
+    return Cz[vib.nn:, vib.nn:] * np.outer(scale, scale), sd[vib.nn:] * scale, nuis
