@@ -108,6 +108,24 @@ def test_block_sandwich_widens_for_ar1_residuals():
     assert covariance(J, r, block=0).stderr[0] < 1.3 * covariance(J, r).stderr[0]
 
 
+def test_an_undetermined_column_does_not_switch_the_sandwich_off():
+    """Residuals whose size grows along the record (the plain formula is too narrow for the
+    slope): a zero Jacobian column (a parameter the data do not touch) gets NaN, and the
+    others keep the sandwich's wider errors instead of falling back to the plain ones."""
+    rng = np.random.default_rng(0)
+    m = 300
+    t = np.linspace(0.0, 1.0, m)
+    A = np.column_stack([np.ones(m), t])
+    r = rng.normal(size=m) * (0.2 + 2.0 * t)
+    plain = covariance(A, r).stderr
+    full = covariance(A, r, block=0)
+    with_zero = covariance(np.column_stack([A, np.zeros(m)]), r, block=0)
+    assert full.widened and with_zero.widened and with_zero.block == full.block
+    assert math.isnan(with_zero.stderr[2])
+    assert with_zero.stderr[1] > 1.2 * plain[1]
+    np.testing.assert_allclose(with_zero.stderr[:2], full.stderr, rtol=0.05)   # nb/(nb - p)
+
+
 def test_monte_carlo_coverage_of_a_nonlinear_model():
     """y = a exp(-b t) + noise: 95 % intervals from the Jacobian of least_squares hold the
     truth in 90-98 % of 300 draws, and the stated stderr matches the spread of the estimates."""
@@ -132,7 +150,7 @@ def test_monte_carlo_coverage_of_a_nonlinear_model():
     ({"J": np.ones(5)}, "J"),
     ({"r": np.ones(4)}, "r must have one entry"),
     ({"tau": 0.0}, "tau"),
-    ({"r": None}, "r"),
+    ({"r": None}, "r \\(the residuals\\) is required"),
     ({"Jp": np.ones((2, 3))}, "Jp"),
 ])
 def test_covariance_rejects_bad_input(kw, match):
@@ -178,6 +196,15 @@ def test_fit_success():
     assert fit_success(True, ident, ["a"])
     assert not fit_success(False, ident, ["a"])
     assert not fit_success(True, ident, ["c"])
+    with pytest.raises(ValueError, match="iterable of parameter names"):
+        fit_success(True, ident, "a")
+
+
+def test_verdict_refuses_a_negative_error_and_rejects_a_non_finite_value():
+    with pytest.raises(ValueError, match="stderr of a must be >= 0"):
+        verdict("a", 1.0, -5.0)
+    ok, why = verdict("a", math.nan, 0.1)
+    assert not ok and "no finite value" in why
 
 
 # ---------------------------------------------------------------------------- the table
@@ -228,6 +255,7 @@ def test_table_is_immutable():
     ({"name": ""}, "name"),
     ({"value": "1"}, "real number"),
     ({"value": 1j}, "real number"),
+    ({"identified": "no"}, "identified must be True or False"),
 ])
 def test_parameter_validation(kw, match):
     args = {"name": "a", "value": 1.0}

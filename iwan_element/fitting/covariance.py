@@ -119,9 +119,13 @@ def _sandwich(J, r, A_inv, cov, tau, block):
     S = np.einsum("bj,bk->jk", sc, sc) * (m / (nb * L)) * nb / (nb - p)
     cov_s = A_inv @ S @ A_inv
     ds, dt = np.diag(cov_s), np.diag(cov)
-    if not (np.all(ds > 0) and np.all(np.isfinite(ds))):
-        return cov, L, False
-    big = np.sqrt(np.maximum(ds, dt) / ds)
+    ok = np.isfinite(ds) & (ds > 0)
+    # a parameter with no variance either way (a zero Jacobian column: not determined) keeps
+    # its zero row; any other failure leaves the plain covariance
+    if not np.all(np.isfinite(ds)) or not ok.any() or np.any(~ok & (dt > 0)):
+        return cov, 0, False
+    big = np.ones(p)
+    big[ok] = np.sqrt(np.maximum(ds[ok], dt[ok]) / ds[ok])
     return cov_s * np.outer(big, big), L, bool(np.any(ds > dt))
 
 

@@ -9,7 +9,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import least_squares
 
-from ..core.validation import check_int, finite_array
+from ..core.validation import check_int, check_scalar, finite_array
 
 __all__ = ["MinimizeResult", "minimize", "box_lm", "METHODS"]
 
@@ -88,7 +88,8 @@ def minimize(fun, x0, lower, upper, *, method: str = "trf", max_nfev: int,
         raise ValueError(f"lower and upper must have {x0.size} entries each with lower < upper")
     max_nfev = check_int("max_nfev", max_nfev, 1)
     x0 = np.clip(x0, lo, hi)
-    tol = {k: v for k, v in (("ftol", ftol), ("xtol", xtol)) if v is not None}
+    tol = {k: check_scalar(k, v, low=0.0, high=1.0, low_open=True)
+           for k, v in (("ftol", ftol), ("xtol", xtol)) if v is not None}
     if method == "box-lm":
         if options:
             raise ValueError(f"box-lm takes no options, got {sorted(options)}")

@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..core.serialize import json_safe
+from ..core.result_shape import table_lines
 
 __all__ = ["Parameter", "ParameterTable"]
 
@@ -75,7 +76,10 @@ class Parameter:
             raise ValueError(f"{self.name}: value {self.value:g} must lie in its bounds "
                              f"[{self.lower:g}, {self.upper:g}]")
         for k in ("identified", "nuisance", "fixed"):
-            object.__setattr__(self, k, bool(getattr(self, k)))
+            v = getattr(self, k)
+            if not isinstance(v, (bool, np.bool_)):
+                raise ValueError(f"{self.name}: {k} must be True or False, got {v!r}")
+            object.__setattr__(self, k, bool(v))
         if not isinstance(self.unit, str):
             raise ValueError(f"{self.name}: unit must be a str, got {self.unit!r}")
 
@@ -183,12 +187,15 @@ class ParameterTable:
 
     def report(self) -> str:
         """One row per parameter: name [unit], value, std. error, status."""
-        rows = ["  parameter            value    std. error   status"]
-        for p in self.parameters:
-            se = "" if p.fixed else f"{p.stderr:.4g}" if math.isfinite(p.stderr) else "n/a"
-            lab = f"{p.name} [{p.unit or '-'}]"
-            rows.append(f"  {lab:<16} {p.value:>12.6g} {se:>12}   {p.status}")
-        return "\n".join(rows)
+        labels = [f"{p.name} [{p.unit or '-'}]" for p in self.parameters]
+        width = max([16] + [len(s) for s in labels])
+        errors = ["" if p.fixed else f"{p.stderr:.4g}" if math.isfinite(p.stderr) else "n/a"
+                  for p in self.parameters]
+        return "\n".join(table_lines(
+            [("parameter", f"<{width}"), ("value", "12.6g"), ("std. error", ">12"),
+             ("  status", "<")],
+            [(lab, p.value, se, f"  {p.status}")
+             for lab, p, se in zip(labels, self.parameters, errors)]))
 
     def to_dict(self) -> dict:
         """JSON-safe dict: ``{"parameters": [...], "correlation": ...}``."""

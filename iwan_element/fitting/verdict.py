@@ -60,6 +60,11 @@ def verdict(name: str, value: float, stderr: float, *, at_bound: bool = False,
     warning : str or None
         Why the parameter is not identified; None when it is.
     """
+    value, stderr = float(value), float(stderr)
+    if not (math.isnan(stderr) or stderr >= 0.0):
+        raise ValueError(f"stderr of {name} must be >= 0 or NaN (not determined), got {stderr}")
+    if not math.isfinite(value):
+        return False, f"{name} has no finite value ({value}): NOT identified"
     ref = abs(value) if reference is None else abs(reference)
     if at_bound:
         return False, f"{name} = {value:.4g} is at a bound of its search range: NOT identified"
@@ -88,5 +93,8 @@ def fit_success(converged: bool, identified, required=None) -> bool:
     required : iterable of str, optional
         The parameters that must be identified (default: all in ``identified``).
     """
+    if isinstance(required, str):
+        raise ValueError(f"required must be an iterable of parameter names, not the str "
+                         f"{required!r} (write ({required!r},))")
     keys = identified.keys() if required is None else required
     return bool(converged and all(identified.get(k, False) for k in keys))
