@@ -9,8 +9,9 @@ from __future__ import annotations
 import numpy as np
 
 from .core.validation import check_int, finite_array, same_length
-from .core.closed_form import (dissipation, dissipation_slope, force_amplitude, masing_ascending,
-                          masing_descending, masing_loop, normalized_backbone)
+from .core.closed_form import (dissipation as cycle_dissipation, dissipation_slope,
+                               force_amplitude, masing_ascending, masing_descending,
+                               masing_loop, normalized_backbone)
 from .core.parameters import IwanParameters
 from .core.result_shape import panels
 
@@ -141,7 +142,7 @@ def plot_fitted_loops(u, F, params, *, ax=None, max_points: int = 20000):
     return [meas, fit]
 
 
-def plot_dissipation_fit(F0, D, params, *, ax=None, slope: bool = True, n: int = 200):
+def plot_dissipation_fit(force, dissipation, params, *, ax=None, slope: bool = True, n: int = 200):
     """Log-log dissipation per cycle against force amplitude with the fitted curve (Fig. 7).
 
     The curve is the exact relation ``(F0(u0), D(u0))`` of the fitted joint (vertical at
@@ -150,8 +151,9 @@ def plot_dissipation_fit(F0, D, params, *, ax=None, slope: bool = True, n: int =
 
     Parameters
     ----------
-    F0, D : array_like, shape (m,)
-        Measured force amplitudes [N] and dissipation per cycle [J], ``> 0``. Not modified.
+    force, dissipation : array_like, shape (m,)
+        Measured force amplitudes ``F0`` [N] and dissipation per cycle ``D`` [J], ``> 0``
+        (as :func:`~iwan_element.fit_dissipation` takes them). Not modified.
     params : IwanParameters or FitResult
     ax : matplotlib Axes, optional, keyword-only
     slope : bool, keyword-only
@@ -165,11 +167,11 @@ def plot_dissipation_fit(F0, D, params, *, ax=None, slope: bool = True, n: int =
         ``ax.twinx()``).
     """
     p = _fit_params(params)
-    F0a = finite_array("F0", F0, ndim=1)
-    Da = finite_array("D", D, ndim=1)
-    same_length(F0=F0a, D=Da)
+    F0a = finite_array("force", force, ndim=1)
+    Da = finite_array("dissipation", dissipation, ndim=1)
+    same_length(force=F0a, dissipation=Da)
     if np.any(F0a <= 0) or np.any(Da <= 0):
-        raise ValueError("F0 and D must be > 0 for a log-log plot")
+        raise ValueError("force and dissipation must be > 0 for a log-log plot")
     n = check_int("n", n, 10)
     lo = 0.5 * min(F0a.min() / p.KT, p.phi_max)
     u_grid = np.geomspace(lo, p.phi_max * (1 - 1e-9), n)
@@ -177,7 +179,7 @@ def plot_dissipation_fit(F0, D, params, *, ax=None, slope: bool = True, n: int =
     (data,) = ax.loglog(F0a * 1e-3, Da * 1e3, "o", ms=4, mfc="none", color="k",
                         label="measured cycles")
     F_curve = force_amplitude(u_grid, p)
-    D_curve = dissipation(u_grid, p)
+    D_curve = cycle_dissipation(u_grid, p)
     if Da.max() > D_curve[-1]:          # macroslip: F0 stays at Fs while D keeps growing
         F_curve = np.append(F_curve, p.Fs)
         D_curve = np.append(D_curve, Da.max())

@@ -79,7 +79,11 @@ class CalibrationResult(ResultShape):
     max_frequency_error, max_damping_error : float
     success : bool
         Converged, no warning, every fitted parameter identified.
+    converged : bool
+        The optimiser converged (``success`` also asks for identified parameters).
     warnings : tuple of str
+        Everything the data could not support, one line per parameter that is not
+        identified included.
     """
 
     plot_panels = 2
@@ -91,10 +95,12 @@ class CalibrationResult(ResultShape):
     max_frequency_error: float
     max_damping_error: float
     success: bool
+    converged: bool = True
 
     def report(self) -> str:
-        lines = [f"Interface calibration of {self.specimen.name!r} "
-                 f"({'converged' if self.success else 'NOT converged'})"]
+        state = ("identified" if self.success else "converged, NOT identified"
+                 if self.converged else "NOT converged")
+        lines = [f"Interface calibration of {self.specimen.name!r} ({state})"]
         for k, p in self.params.items():
             lines.append(f"  {k:20s} = {p.value:.6g} +- {p.stderr:.2g} [{p.unit}]  {p.status}")
         lines.append(f"  max |f/f_meas - 1|      = {self.max_frequency_error:.2e}")
@@ -103,7 +109,7 @@ class CalibrationResult(ResultShape):
         return "\n".join(lines)
 
     def to_dict(self) -> dict:
-        return {"params": self.params.to_dict(), "success": self.success,
+        return {"params": self.params.to_dict(), "success": self.success, "converged": self.converged,
                 "max_frequency_error": self.max_frequency_error,
                 "max_damping_error": self.max_damping_error, "warnings": list(self.warnings),
                 "model": self.model.to_dict(), "measured": self.measured.to_dict()}
@@ -192,15 +198,18 @@ def calibrate(specimen: Specimen, measured: AmplitudeCurve, *, fit=("stiffness_p
             warns.append(f"{n} ended on its bound")
         lo, hi = _BOUNDS[n]
         val = min(max(vals[k], lo), hi)             # exp(ln b) may round past the bound b
-        ok, _ = verdict(n, val, float(se[k]), at_bound=at_bound,
-                        reference=val + 1.0 if n == "chi" else None,
-                        reference_text="chi + 1" if n == "chi" else "its value")
+        ok, why = verdict(n, val, float(se[k]), at_bound=at_bound,
+                          reference=val + 1.0 if n == "chi" else None,
+                          reference_text="chi + 1" if n == "chi" else "its value")
+        if why and not at_bound:                    # (at a bound: said above)
+            warns.append(why)
         rows.append(Parameter(n, val, float(se[k]), lo, hi, _UNITS[n], ok))
     table = ParameterTable(rows)
     return CalibrationResult(specimen=fitted, params=table, measured=measured, model=curve,
                              max_frequency_error=ferr, max_damping_error=zerr,
                              success=fit_success(bool(sol.success) and not warns,
                                                  table.identified),
+                             converged=bool(sol.success),
                              warnings=tuple(warns))
 
 

@@ -147,8 +147,8 @@ def test_options_are_validated():
     d = svam_case(0.005, quantity="displacement", rng=np.random.default_rng(2))
     with pytest.raises(ValueError, match="method"):
         amplitude_curve(d.t, d.y, quantity="displacement", band=d.band, method="prony")
-    with pytest.raises(ValueError, match="max_damping_std"):
-        amplitude_curve(d.t, d.y, quantity="displacement", band=d.band, max_damping_std=0.0)
+    with pytest.raises(ValueError, match="max_damping_ratio_std"):
+        amplitude_curve(d.t, d.y, quantity="displacement", band=d.band, max_damping_ratio_std=0.0)
     with pytest.raises(ValueError, match="n_periods"):
         amplitude_curve(d.t, d.y, quantity="displacement", band=d.band, n_periods=2.0)
     with pytest.raises(ValueError, match="too short"):

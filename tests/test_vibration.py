@@ -198,7 +198,7 @@ def test_linear_decay_with_noise_and_second_mode():
     x = _decay(t, 50.0, 0.004, 1e-3) + _decay(t, 80.0, 0.002, 1e-3, 1.0)
     y = x + 0.01 * 1e-3 * rng.standard_normal(t.size)
     cur = amplitude_curve(t, y, quantity="displacement", band=(38.0, 64.0),
-                          max_damping_std=0.05)
+                          max_damping_ratio_std=0.05)
     assert len(cur) >= 4
     np.testing.assert_allclose(cur.frequency[:2], 50.0, rtol=1e-4)
     np.testing.assert_allclose(cur.damping_ratio[:2], 0.004, rtol=0.03)
@@ -211,14 +211,14 @@ def test_linear_decay_with_noise_and_second_mode():
     # in-band noise RMS of white noise with std s through a band B: s sqrt(2 B_eff / fs)
     assert 1e-6 < cur.noise_floor < 1e-4
     # by default every point above the noise floor is kept with its stated uncertainty;
-    # max_damping_std drops the later ones, and says how many in a warning (behaviour
+    # max_damping_ratio_std drops the later ones, and says how many in a warning (behaviour
     # changed with the free-decay work: it used to be the default and said so only in notes)
     full = amplitude_curve(t, y, quantity="displacement", band=(38.0, 64.0))
     strict = amplitude_curve(t, y, quantity="displacement", band=(38.0, 64.0),
-                             max_damping_std=0.01)
+                             max_damping_ratio_std=0.01)
     assert len(strict) < len(full) and strict.noise_floor == full.noise_floor
     assert len(strict) >= 3
-    dropped = [w for w in strict.warnings if "max_damping_std=0.01" in w]
+    dropped = [w for w in strict.warnings if "max_damping_ratio_std=0.01" in w]
     assert dropped and f"{len(full) - len(strict)} point(s)" in dropped[0]
     assert np.all(np.abs(strict.damping_ratio - 0.004) < 4 * strict.damping_ratio_std + 1e-4)
     assert "noise threshold" in full.notes and "last point at" in full.notes
@@ -227,7 +227,7 @@ def test_linear_decay_with_noise_and_second_mode():
     assert 0.2 < np.sqrt(np.mean(z ** 2)) < 3.0
     # the other band picks the other mode
     c2 = amplitude_curve(t, y, quantity="displacement", band=(66.0, 100.0),
-                         max_damping_std=0.05)
+                         max_damping_ratio_std=0.05)
     np.testing.assert_allclose(c2.frequency[:2], 80.0, rtol=1e-4)
 
 

@@ -178,6 +178,13 @@ class _Effect(CommittedState):
         if unknown:
             raise TypeError(f"{cls.__name__}.needs has unknown entries {sorted(unknown)}; "
                             f"known: {NEEDS}")
+        derived = {"slider_level", "needs_energy"} & set(vars(cls))
+        if derived:
+            raise TypeError(f"{cls.__name__} sets {sorted(derived)}: these follow from "
+                            "structure; declare structure instead")
+        if cls.structure == "series" and not callable(getattr(cls, "joint_path", None)):
+            raise TypeError(f"{cls.__name__} is in series with the joint (structure "
+                            "'series') and must define joint_path(u)")
         cls.parameter_names = tuple(s.name for s in cls.specs)
         cls.slider_level = cls.structure in ("slider", "energy")
         cls.needs_energy = cls.structure == "energy"

@@ -117,9 +117,9 @@ def _finish(tt, fits, stops, info, opts):
     if max_zstd is not None:
         rows, n_drop = _cut_uncertain(rows, max_zstd)
         if n_drop:
-            warns.append(f"max_damping_std={max_zstd:g}: {n_drop} point(s) above the noise floor "
+            warns.append(f"max_damping_ratio_std={max_zstd:g}: {n_drop} point(s) above the noise floor "
                          f"were dropped after {rows[-1][0]:.3g} m, their damping known to worse "
-                         f"than {100 * max_zstd:g} %; leave max_damping_std unset to keep them "
+                         f"than {100 * max_zstd:g} %; leave max_damping_ratio_std unset to keep them "
                          "with their uncertainty")
     a = np.array(rows)
     w_ref = 2 * math.pi * float(a[-1, 1])

@@ -479,7 +479,7 @@ def simulate_test(params: IwanParameters, amplitude, *, cycles: int = 3, frequen
     F = IwanJoint(params).force_history(u)
     u_meas = u + rng.normal(0.0, su, u.size) if su > 0 else u
     F_meas = F + rng.normal(0.0, sf, u.size) if sf > 0 else F
-    src = (f"simulate_test({params!r}, amplitudes={np.round(amps, 12).tolist()} m, cycles={cycles}, "
+    src = (f"simulate_test({params!r}, amplitude={np.round(amps, 12).tolist()} m, cycles={cycles}, "
            f"frequency={f:g} Hz, sample_rate={fs:g} Hz, force_noise={sf:g} N, "
            f"displacement_noise={su:g} m)")
     return TestData.from_arrays(t, u_meas, F_meas, source=src)

@@ -50,7 +50,7 @@ to 5 % of damping with its defaults. The equations and their sources are in
    would be ``snr_min`` times the in-band noise RMS. The curve runs to the first window
    whose envelope is below that, or to the end of the record; a window that is not a
    decaying mode in the band (beating, forcing) also stops it, with a warning. No point
-   above the noise floor is dropped for its uncertainty unless ``max_damping_std`` is given;
+   above the noise floor is dropped for its uncertainty unless ``max_damping_ratio_std`` is given;
    then the points after the first one (from the fourth on) whose damping is known to worse
    than that are dropped, with a warning that counts them.
 8. Warnings when the curve has fewer than 10 points, saying why (record too short, noise,
@@ -225,7 +225,7 @@ def _plan(fs, f_peak, n_periods, window):
                       span=_SPAN, hop=_HOP, fixed=fixed)
 
 
-def _check_options(quantity, order, n_periods, window, snr_min, max_damping_std, method):
+def _check_options(quantity, order, n_periods, window, snr_min, max_damping_ratio_std, method):
     if quantity not in _QUANTITY_POWER:
         raise ValueError(f"quantity must be one of {sorted(_QUANTITY_POWER)}, got {quantity!r}")
     if isinstance(order, bool) or not isinstance(order, (int, np.integer)) or not 1 <= order <= 10:
@@ -237,16 +237,16 @@ def _check_options(quantity, order, n_periods, window, snr_min, max_damping_std,
     if window is not None:
         window = check_scalar("window", window, low=0.0, low_open=True)
     snr_min = check_scalar("snr_min", snr_min, low=2.0, high=1e6)
-    if max_damping_std is not None:
-        max_damping_std = check_scalar("max_damping_std", max_damping_std, low=0.0, high=1.0,
+    if max_damping_ratio_std is not None:
+        max_damping_ratio_std = check_scalar("max_damping_ratio_std", max_damping_ratio_std, low=0.0, high=1.0,
                                        low_open=True)
-    return n_periods, window, snr_min, max_damping_std
+    return n_periods, window, snr_min, max_damping_ratio_std
 
 
 def amplitude_curve(t, y, *, quantity: str = "acceleration", band,
                     n_periods: float | None = None, window: float | None = None,
                     order: int = 4, snr_min: float = 10.0,
-                    max_damping_std: float | None = None, method: str = "hilbert",
+                    max_damping_ratio_std: float | None = None, method: str = "hilbert",
                     compare: bool = True):
     """Frequency and damping ratio against amplitude from a free-decay record of one mode.
 
@@ -276,7 +276,7 @@ def amplitude_curve(t, y, *, quantity: str = "acceleration", band,
     snr_min : float, keyword-only
         The curve stops where the envelope is below ``snr_min`` times the in-band noise RMS
         (default 10, range [2, 1e6]).
-    max_damping_std : float, optional
+    max_damping_ratio_std : float, optional
         If given (range (0, 1]), the curve also stops at the first point from the fourth on
         whose damping ratio has a relative standard uncertainty above this; the points dropped
         are counted in a warning. By default every point above the noise floor is kept with
@@ -313,8 +313,8 @@ def amplitude_curve(t, y, *, quantity: str = "acceleration", band,
         raise ValueError(f"y must have at least 64 samples, got {n}")
     tt, dt = _check_uniform_time(t, n)
     fs = 1.0 / dt
-    n_periods, window, snr_min, max_damping_std = _check_options(
-        quantity, order, n_periods, window, snr_min, max_damping_std, method)
+    n_periods, window, snr_min, max_damping_ratio_std = _check_options(
+        quantity, order, n_periods, window, snr_min, max_damping_ratio_std, method)
     k_pow = _QUANTITY_POWER[quantity]
     lo, hi = _check_band(band, fs)
     yy = yy - yy.mean()
@@ -364,6 +364,6 @@ def amplitude_curve(t, y, *, quantity: str = "acceleration", band,
     return _finish(tt, (main, other, wins, names), (stop, odd_stop),
                    (lo, hi, order, f_peak, fs, n_start, n_end, i_pk, noise, how, snr_min, k_pow,
                     route, env[i_pk:i_pk + n_start + 1]),
-                   (max_damping_std, compare, plan))
+                   (max_damping_ratio_std, compare, plan))
 
 
