@@ -92,6 +92,11 @@ class SpecimenModel:
         return float(self.mbs.GetMarkerOutput(self.sensor_marker, _OVT.Position)[1]
                      - self.extra["sensor_y0"])
 
+    def axis_marker(self, x: float) -> int:
+        """A new marker on the beams' axis at ``x`` [m] from the clamp: on beam A up to its
+        length, on beam B beyond (the sensor's and the excitation's placement)."""
+        return _axis_marker(self.mbs, self.specimen, self.elements, x)
+
     def slips(self) -> np.ndarray:
         """Current tangential slip ``x_B - x_A`` at each contact point [m]."""
         pos = self.mbs.GetMarkerOutput
@@ -126,6 +131,16 @@ def _beam(mbs, s: Specimen, x0, y0, edges, heights, beta):
             bendingDamping=beta * EI, axialDamping=beta * EA, length=float(edges[i + 1] - edges[i]),
             nodeNumbers=[nodes[i], nodes[i + 1]])))
     return nodes, elems
+
+
+def _axis_marker(mbs, s: Specimen, elements, x: float) -> int:
+    """A marker on the axis of beam A (``x`` up to its length) or of beam B (beyond); the
+    beams' ``elements`` in build order, A's first."""
+    (a_edges, a_h), (b_edges, _) = _mesh(s)
+    ea, eb = elements[:len(a_h)], elements[len(a_h):]
+    if x <= s.beam_length:
+        return _marker_at(mbs, ea, a_edges, 0.0, x, 0.0)
+    return _marker_at(mbs, eb, b_edges, s.lap_start, x, 0.0)
 
 
 def _marker_at(mbs, elems, edges, x0, x, y_local):
@@ -210,11 +225,7 @@ def build_specimen_model(specimen: Specimen, *, tangential: str = "iwan",
         joints = [IwanJoint(p) for p in pts.params] if joint_elements else list(pts.params)
         normal = [[0.0, float(kn), 0.0] for kn in pts.normal_stiffness] if merged else None
         iface = add_iwan_interface(mbs, pairs, joints, axis=[1.0, 0.0, 0.0], stiffness=normal)
-    xs = s.sensor_position
-    if xs <= s.beam_length:
-        sm = _marker_at(mbs, ea, ae, 0.0, xs, 0.0)
-    else:
-        sm = _marker_at(mbs, eb, be, s.lap_start, xs, 0.0)
+    sm = _axis_marker(mbs, s, ea + eb, s.sensor_position)
     mbs.AddObject(ObjectGround())
     mbs.Assemble()
     fixed = []

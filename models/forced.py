@@ -26,7 +26,7 @@ from iwan_element.core.result_shape import ResultShape, panels
 from iwan_element.core.serialize import json_safe
 from iwan_element.core.validation import check_int, finite_array
 
-from .assembly import _marker_at, _mesh, build_specimen_model, linear_system
+from .assembly import build_specimen_model, linear_system
 from .qsma import linear_modes
 from .solver import floor_damping, solver_settings
 from .specimens import Specimen
@@ -107,16 +107,6 @@ class ForcedResponseResult(ResultShape):
         return arts
 
 
-def _force_marker(model, s: Specimen) -> int:
-    """A marker on the beams' axis at the excitation point."""
-    (ae, ah), (be, _) = _mesh(s)
-    ea, eb = model.elements[:len(ah)], model.elements[len(ah):]
-    x = s.excitation.position
-    if x <= s.beam_length:
-        return _marker_at(model.mbs, ea, ae, 0.0, x, 0.0)
-    return _marker_at(model.mbs, eb, be, s.lap_start, x, 0.0)
-
-
 def _sweep_level(s, F0, freqs, beta, cycles, steps_per_period) -> np.ndarray:
     """Steady sensor amplitude [m] at each frequency of ``freqs`` for one force level ``F0``
     [N], each frequency continuing from the state the previous one left."""
@@ -128,7 +118,8 @@ def _sweep_level(s, F0, freqs, beta, cycles, steps_per_period) -> np.ndarray:
     def load(mbs_, t, load_vector):
         return [0.0, F0 * math.sin(state["phase"] + state["w"] * (t - state["t0"])), 0.0]
 
-    mbs.AddLoad(LoadForceVector(markerNumber=_force_marker(model, s), loadVector=[0, 0, 0],
+    mbs.AddLoad(LoadForceVector(markerNumber=model.axis_marker(s.excitation.position),
+                                loadVector=[0, 0, 0],
                                 loadVectorUserFunction=load))
     sensor = mbs.AddSensor(SensorMarker(markerNumber=model.sensor_marker, storeInternal=True,
                                         outputVariableType=exu.OutputVariableType.Position))
