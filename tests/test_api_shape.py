@@ -224,13 +224,6 @@ def test_every_model_result_class_is_covered():
     assert public == set(MODEL_RESULTS)
 
 
-@pytest.mark.parametrize("name", sorted(MODEL_RESULTS))
-@pytest.mark.parametrize("part", ["report", "to_dict", "warnings", "success", "plot"])
-def test_model_result_objects_have_the_same_shape(name, part, monkeypatch):
-    monkeypatch.setitem(RESULTS, name, MODEL_RESULTS[name])
-    test_result_objects_have_one_shape(name, part)
-
-
 def _prediction():
     fit = _campaign()
     t = np.linspace(0.0, 2.0, 400)
@@ -246,10 +239,11 @@ def _loo():
 METHOD_RESULTS = {"CampaignPrediction": _prediction, "LeaveOneOut": _loo}
 
 
-@pytest.mark.parametrize("name", sorted(METHOD_RESULTS))
+@pytest.mark.parametrize("name", sorted({**MODEL_RESULTS, **METHOD_RESULTS}))
 @pytest.mark.parametrize("part", ["report", "to_dict", "warnings", "success", "plot"])
-def test_method_result_objects_have_the_same_shape(name, part, monkeypatch):
-    monkeypatch.setitem(RESULTS, name, METHOD_RESULTS[name])
+def test_other_result_objects_have_the_same_shape(name, part, monkeypatch):
+    """The beam model's results and the results of public methods, by the same test."""
+    monkeypatch.setitem(RESULTS, name, {**MODEL_RESULTS, **METHOD_RESULTS}[name])
     test_result_objects_have_one_shape(name, part)
 
 
