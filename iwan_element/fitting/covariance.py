@@ -100,8 +100,16 @@ def normal_inverse(J, *, cutoff: float = CUTOFF):
     """
     J = finite_array("J", J, ndim=2)
     cutoff = check_scalar("cutoff", cutoff, low=0.0, high=1.0, low_open=True, high_open=True)
-    A_inv, null, _ = _scaled_svd(J, cutoff)
-    return A_inv, np.any(np.abs(null) > COMPONENT, axis=0)
+    A_inv, null, scale = _scaled_svd(J, cutoff)
+    return A_inv, _degenerate(np.diag(1.0 / scale), null)
+
+
+def _degenerate(Jp_s, null):
+    """Parameters whose gradient in the scaled variables, ``Jp_s`` (rows), has a component
+    above :data:`COMPONENT` of its length along a degenerate direction (rows of ``null``)."""
+    norm = np.sqrt(np.einsum("ij,ij->i", Jp_s, Jp_s))
+    comp = np.abs(Jp_s @ null.T) if null.size else np.zeros((Jp_s.shape[0], 0))
+    return np.any(comp > COMPONENT * norm[:, None], axis=1) & (norm > 0)
 
 
 def _sandwich(J, r, A_inv, cov, tau, block):
@@ -192,10 +200,7 @@ def covariance(J, r=None, *, tau: float = 1.0, s2: float | None = None, dof: int
             raise ValueError(f"Jp must have {p} columns (one per column of J), got {Jp.shape[1]}")
         cov = Jp @ cov @ Jp.T
         Jp_s = Jp / scale                 # d p / d(scaled theta)
-    # a parameter is degenerate when its gradient has a component along a null direction
-    norm = np.sqrt(np.einsum("ij,ij->i", Jp_s, Jp_s))
-    comp = np.abs(Jp_s @ null.T) if null.size else np.zeros((Jp_s.shape[0], 0))
-    bad = np.any(comp > COMPONENT * norm[:, None], axis=1) & (norm > 0)
+    bad = _degenerate(Jp_s, null)
     se = np.sqrt(np.clip(np.diag(cov), 0.0, None))
     se[bad] = math.nan
     with np.errstate(invalid="ignore", divide="ignore"):
