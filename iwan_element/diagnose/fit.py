@@ -80,7 +80,8 @@ class StackFitter:
             full.start = start
             r = full.residual(res.x)
             row = {"names": tuple(names), "ssr": float(r @ r), "z": res.x, "start": start,
-                   "status": int(res.status), "message": str(res.message), "model": full}
+                   "status": int(res.status), "message": str(res.message), "model": full,
+                   "cache": {}}          # shared by the copies handed out (record_force)
             self._memo[key] = row
         return dict(row, chi2=row["ssr"] / self.s2)
 
@@ -161,13 +162,21 @@ def stack_fit(row, fitter, FF, F_model, t_start, *, noise_only=False):
 
 
 def record_force(row, uj, v):
-    """Force [N] of a fitted stack on the whole record, offset included, and the element."""
+    """Force [N] of a fitted stack on the whole record ``uj``, ``v`` (the fitter's record),
+    offset included, and the element. Kept in the row's ``cache``: the noise re-reading of
+    the selection and the final fits ask for the same stack's force."""
+    cache = row.get("cache")
+    if cache is not None and "force" in cache:
+        return cache["force"]
     p, effs, F0 = row["model"].physical(row["z"])
     el = build_element(p, row["names"], effs)
     s = row.get("start", 0.0)
     ue, ve = np.concatenate([[s], uj]), np.concatenate([[0.0], v])
     F = el.force_history(ue, ve) if row["names"] else el.force_history(ue)
-    return F[1:] + F0, el
+    out = (F[1:] + F0, el)
+    if cache is not None:
+        cache["force"] = out
+    return out
 
 
 @dataclass(frozen=True, eq=False)
