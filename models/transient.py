@@ -425,14 +425,15 @@ def ringdown(specimen: Specimen, *, mode: int = 1, amplitude: float, cycles: flo
     mbs.SolveDynamic(sim)
     wall = time.perf_counter() - t0
     quad = _joint_records(model.interface, energy, e0) if record_energy else None
-    t, X, cut = _on_step_grid(np.array(times), np.array(coords)[:, L.free], h, n)
-    modal = (X @ (L.M @ phi)) * float(L.S @ phi)
+    X = np.array(coords)[:, L.free]
+    t, (sensor, modal), cut = _on_step_grid(
+        np.array(times), [X @ L.S, (X @ (L.M @ phi)) * float(L.S @ phi)], h, n)
     curve = _decay_curve(t, modal, h, w0 / (2 * math.pi), n_periods, notes=(
         f"{specimen.name}: Exudyn transient, mode {mode}, {steps_per_period} steps/period, "
         f"released from {amplitude:.3g} m at the sensor; modal filtering"
         + (f"; with {' + '.join(eff.names)}" if eff else "")))
     return _checked(RingdownResult(
-        t=t, sensor=X @ L.S, modal=modal, curve=curve,
+        t=t, sensor=sensor, modal=modal, curve=curve,
         energy={k: np.array(v) for k, v in energy.items()}, initial_energy=e0, wall_time=wall,
         metadata={"h": h, "steps": n, "extra_steps": cut, "beam_damping": beta,
                   "n_points": len(model.points),
@@ -441,9 +442,9 @@ def ringdown(specimen: Specimen, *, mode: int = 1, amplitude: float, cycles: flo
         warnings=tuple(curve.warnings) + _cut_warning(cut, n, w0 * h)))
 
 
-def _on_step_grid(times, X, h, n):
-    """The recorded coordinates ``X`` (one row per accepted step, at ``times`` [s]) on the
-    nominal grid ``k h``, ``k = 0..n``: ``(t, X, cut)``. Where the interface slips hard,
+def _on_step_grid(times, signals, h, n):
+    """Signals recorded once per accepted step (at ``times`` [s]) on the nominal grid
+    ``k h``, ``k = 0..n``: ``(t, signals, cut)``. Where the interface slips hard,
     Exudyn cuts the step (measured: 1,689 accepted steps instead of 512 on the two-bolt
     aluminium beam released from 500 um); the records are then interpolated linearly onto the
     grid (``cut``: how many steps more than ``n`` were taken). Read as if every record were one
@@ -451,9 +452,8 @@ def _on_step_grid(times, X, h, n):
     frequency."""
     t = np.arange(n + 1) * h
     if times.size == n + 1 and np.allclose(times, t, rtol=0.0, atol=1e-9 * h):
-        return t, X, 0
-    X_grid = np.column_stack([np.interp(t, times, X[:, j]) for j in range(X.shape[1])])
-    return t, X_grid, int(times.size - 1 - n)
+        return t, list(signals), 0
+    return t, [np.interp(t, times, y) for y in signals], int(times.size - 1 - n)
 
 
 def _cut_warning(cut: int, n: int, wh: float) -> tuple:
