@@ -262,7 +262,7 @@ class LinearSystem:
 
 def _structure_key(specimen: Specimen) -> Specimen:
     """The specimen with the fields that do not change K0, G, M normalised (cache key)."""
-    return specimen.replace(friction=1.0, chi=0.0, beta=0.0, damping_floor=0.0,
+    return specimen.replace(friction=1.0, chi=0.0, beta=0.0, damping_floor=0.0, modal_damping=(),
                             stiffness_per_area=1.0, amplitude_range=(1.0, 2.0))
 
 

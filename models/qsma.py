@@ -136,7 +136,7 @@ def _interface_law(u, Fs, KT, phimax, chi, beta):
 
 
 def _prepare_key(specimen: Specimen, mode: int):
-    return (specimen.replace(friction=1.0, chi=0.0, beta=0.0, damping_floor=0.0,
+    return (specimen.replace(friction=1.0, chi=0.0, beta=0.0, damping_floor=0.0, modal_damping=(),
                              amplitude_range=(1.0, 2.0), calibrated_range=None, effects=()), mode)
 
 
@@ -254,7 +254,7 @@ def modal_amplitude_curve(specimen: Specimen, *, mode: int = 1, amplitude=None) 
         D += dissipation(slip[:, i], p)
     alpha, q = r["alpha"], r["q"]
     w = np.sqrt(alpha / q)
-    floor = specimen.interface.damping_floor
+    floor = specimen.floor(mode)
     zeta = floor + D / (2 * math.pi * alpha * q)
     f = w / (2 * math.pi)
     X = r["amplitude"]

@@ -232,6 +232,11 @@ class Specimen:
     amplitude_range : tuple of 2 floats
         Documented (measured, for published specimens) displacement amplitude range at the
         sensor [m].
+    modal_damping : tuple of float
+        Linear (floor) damping ratio of each elastic mode [-], mode 1 first: material,
+        boundary and air damping, which differ by mode. A mode beyond the tuple (or every mode
+        when it is empty) takes ``interface.damping_floor``. :meth:`floor` reads it; QSMA,
+        the frequency-domain routes and the transient build their damping from it.
     calibrated_range : tuple of 2 floats or None
         Sensor amplitudes [m] the interface was calibrated on (``None``: not calibrated, or
         unknown). :func:`~iwan_element.models.qsma.modal_amplitude_curve` warns for
@@ -264,6 +269,7 @@ class Specimen:
     sensor_position: float = 0.35
     amplitude_range: tuple = (1e-6, 1e-4)
     interface: InterfaceModel = field(default_factory=InterfaceModel)
+    modal_damping: tuple = ()
     calibrated_range: tuple | None = None
     effects: tuple = ()
     n_elements: int = 16
@@ -299,6 +305,13 @@ class Specimen:
         if self.calibrated_range is not None:
             object.__setattr__(self, "calibrated_range",
                                _range("calibrated_range", self.calibrated_range))
+        md = tuple(self.modal_damping) if not isinstance(self.modal_damping, (str, bytes)) \
+            else None
+        if md is None or any(isinstance(z, bool) or not isinstance(z, (int, float))
+                             or not math.isfinite(z) or not 0.0 <= z < 0.2 for z in md):
+            raise ValueError("modal_damping must be a sequence of damping ratios in [0, 0.2), "
+                             f"one per elastic mode from mode 1, got {self.modal_damping!r}")
+        object.__setattr__(self, "modal_damping", tuple(float(z) for z in md))
         eff = tuple(self.effects)
         if not all(isinstance(e, SpecimenEffect) for e in eff):
             raise ValueError("effects must be a sequence of SpecimenEffect")
@@ -323,6 +336,14 @@ class Specimen:
         (docs/equations.md section 7; ``t`` the lap thickness of one beam)."""
         a = math.radians(self.interface.cone_angle_deg)
         return 0.5 * self.washer_diameter + self.lap_thickness * math.tan(a)
+
+    def floor(self, mode: int) -> float:
+        """Linear damping ratio [-] of elastic mode ``mode`` (1: lowest): its entry of
+        ``modal_damping``, else ``interface.damping_floor``."""
+        if isinstance(mode, bool) or not isinstance(mode, int) or mode < 1:
+            raise ValueError(f"mode must be an integer >= 1, got {mode!r}")
+        md = self.modal_damping
+        return md[mode - 1] if mode <= len(md) else self.interface.damping_floor
 
     def with_effects(self, effects: dict, *, mode: int = 1, calibrated_range=None) -> "Specimen":
         """A copy carrying ``effects`` ({name: modal values}) on ``mode`` in addition to its
