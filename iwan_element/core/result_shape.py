@@ -11,6 +11,8 @@ Every fit, curve, diagnosis, ensemble and uncertainty result offers (the contrac
   contract is one for all: ``ax`` is ``None`` (a new figure with the result's
   ``plot_panels`` panels), one Axes (results with one panel) or a sequence of
   ``plot_panels`` Axes (:func:`panels`);
+* ``verdict() -> str``: the report's first line, ``success`` in a tester's words: "usable"
+  or "NOT usable: <reasons>" (:meth:`ResultShape.failure_reasons`);
 * ``_repr_html_()``: the report in a notebook.
 
 :class:`ResultShape` supplies the notebook representation and the panel count; each class
@@ -34,6 +36,19 @@ class ResultShape:
 
     plot_panels: ClassVar[int] = 1
     warnings: tuple = ()
+
+    def failure_reasons(self) -> tuple:
+        """Why ``success`` is False, each reason in a tester's words (empty when it is True).
+        The base reads the warnings; a class whose verdict has its own reasons (a parameter
+        the data do not identify, a misfit beyond the noise) states them."""
+        if self.success:
+            return ()
+        return tuple(self.warnings) or ("the result did not meet its own success rule",)
+
+    def verdict(self) -> str:
+        """One line: whether the result can be used as it stands, and if not, why."""
+        reasons = self.failure_reasons()
+        return "usable" if not reasons else "NOT usable: " + "; ".join(reasons)
 
     def _repr_html_(self) -> str:
         return f"<pre>{html.escape(self.report())}</pre>"
