@@ -246,9 +246,11 @@ class LinearSystem:
     """Linear matrices of a specimen on its free coordinates (clamped ones removed).
 
     ``K0`` holds the beams and the normal contact springs but no tangential interface
-    stiffness; ``G`` maps coordinates to the tangential slips of the contact points and ``S``
-    to the sensor's transverse displacement; ``Kb`` is the beams' part of ``K0`` (for the
-    stiffness-proportional damping floor). ``free`` are the Exudyn ODE2 indices kept.
+    stiffness; ``G`` maps coordinates to the tangential slips of the contact points, ``S``
+    to the sensor's transverse displacement and ``E`` to the transverse displacement at the
+    excitation point (the force vector of a unit transverse force there is ``E``, by
+    reciprocity); ``Kb`` is the beams' part of ``K0`` (for the stiffness-proportional damping
+    floor). ``free`` are the Exudyn ODE2 indices kept.
     """
 
     M: np.ndarray
@@ -258,6 +260,7 @@ class LinearSystem:
     S: np.ndarray
     free: np.ndarray
     n_coordinates: int
+    E: np.ndarray | None = None
 
 
 def _structure_key(specimen: Specimen) -> Specimen:
@@ -275,6 +278,8 @@ def linear_system(specimen: Specimen) -> LinearSystem:
 def _linear_system(key: Specimen) -> LinearSystem:
     model = build_specimen_model(key, tangential="none")
     mbs = model.mbs
+    em = model.axis_marker(key.excitation.position)
+    mbs.Assemble()
     sim = exu.SimulationSettings()
     sim.solution.file.write = False
     sim.parallel.numberOfThreads = 1
@@ -294,11 +299,12 @@ def _linear_system(key: Specimen) -> LinearSystem:
     G = np.zeros((len(model.marker_pairs), n))
     Gn = np.zeros_like(G)
     S = np.zeros(n)
+    E = np.zeros(n)
 
     def read():
         a = np.array([pos(m, _OVT.Position)[:2] for m, _ in model.marker_pairs])
         b = np.array([pos(m, _OVT.Position)[:2] for _, m in model.marker_pairs])
-        return b - a, pos(model.sensor_marker, _OVT.Position)[1]
+        return b - a, pos(model.sensor_marker, _OVT.Position)[1], pos(em, _OVT.Position)[1]
 
     for k in range(n):
         out = []
@@ -310,10 +316,11 @@ def _linear_system(key: Specimen) -> LinearSystem:
         d = (out[0][0] - out[1][0]) / (2 * eps)
         G[:, k], Gn[:, k] = d[:, 0], d[:, 1]
         S[k] = (out[0][1] - out[1][1]) / (2 * eps)
+        E[k] = (out[0][2] - out[1][2]) / (2 * eps)
     mbs.systemData.SetODE2Coordinates(q0, configuration=cur)
     K = 0.5 * (K + K.T)
     Kb = K - Gn.T @ (model.points.normal_stiffness[:, None] * Gn)
     free = np.setdiff1d(np.arange(n), model.fixed_coordinates)
     ix = np.ix_(free, free)
     return LinearSystem(M=M[ix], K0=K[ix], Kb=Kb[ix], G=G[:, free], S=S[free], free=free,
-                        n_coordinates=n)
+                        n_coordinates=n, E=E[free])

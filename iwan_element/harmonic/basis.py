@@ -1,0 +1,120 @@
+"""Real harmonic coefficients, their samples over one period, and the condensed residual.
+
+A periodic signal with the harmonics ``h`` of :class:`Harmonics` is stored as real
+coefficients ``(a_0 | a_h, b_h, ...)``: ``y(tau) = a_0 + sum_h a_h cos(h tau) + b_h sin(h tau)``,
+``tau = W t``. Its complex amplitude is ``Y_h = a_h - i b_h`` (so ``y = Re sum Y_h e^{i h tau}``),
+and its ``N`` samples over one period are ``E c`` (``P`` projects samples back: the AFT's DFT).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..core.periodic import periodic_harmonic_jacobian, periodic_rows
+
+__all__ = ["Harmonics", "check_harmonics"]
+
+
+def check_harmonics(harmonics, samples) -> tuple[tuple, int]:
+    """Validated ``(harmonics, samples)``: an int ``H`` means every harmonic ``0..H``, a
+    sequence the harmonics it lists (it must hold the fundamental ``1``; ``(1, 3, 5)`` keeps
+    the odd ones, enough for an odd joint law without static load). ``samples`` per period
+    (default the power of two ``>= 8 H``, at least 64: the force has kinks at the
+    reversals)."""
+    if isinstance(harmonics, bool):
+        raise ValueError(f"harmonics must be an int >= 1 or a sequence of ints >= 0, got "
+                         f"{harmonics!r}")
+    if isinstance(harmonics, (int, np.integer)):
+        if harmonics < 1:
+            raise ValueError(f"harmonics must be >= 1, got {harmonics!r}")
+        hs = tuple(range(0, int(harmonics) + 1))
+    else:
+        try:
+            hs = tuple(sorted(set(int(h) for h in harmonics)))
+        except (TypeError, ValueError):
+            raise ValueError("harmonics must be an int >= 1 or a sequence of ints >= 0, got "
+                             f"{harmonics!r}") from None
+        if not hs or hs[0] < 0 or 1 not in hs or any(h != int(h) for h in harmonics):
+            raise ValueError("harmonics must contain the fundamental 1 and only ints >= 0, "
+                             f"got {harmonics!r}")
+    if samples is None:
+        samples = max(64, 1 << int(np.ceil(np.log2(8 * max(hs)))))
+    if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or \
+            samples < 2 * max(hs) + 1:
+        raise ValueError(f"samples must be an int >= 2 H + 1 = {2 * max(hs) + 1}, got "
+                         f"{samples!r}")
+    return hs, int(samples)
+
+
+@dataclass(frozen=True, eq=False)
+class Harmonics:
+    """The harmonics kept, the samples per period, and the transforms between them."""
+
+    harmonics: tuple
+    samples: int
+    E: np.ndarray = field(init=False, repr=False)
+    P: np.ndarray = field(init=False, repr=False)
+    cols: tuple = field(init=False, repr=False)
+
+    def __post_init__(self):
+        tau = 2.0 * np.pi * np.arange(self.samples) / self.samples
+        E, P, cols = [], [], []
+        for h in self.harmonics:
+            if h == 0:
+                cols.append((0, len(E), None))
+                E.append(np.ones_like(tau))
+                P.append(np.ones_like(tau) / self.samples)
+            else:
+                cols.append((h, len(E), len(E) + 1))
+                E += [np.cos(h * tau), np.sin(h * tau)]
+                P += [2.0 * np.cos(h * tau) / self.samples, 2.0 * np.sin(h * tau) / self.samples]
+        object.__setattr__(self, "E", np.array(E).T)
+        object.__setattr__(self, "P", np.array(P))
+        object.__setattr__(self, "cols", tuple(cols))
+
+    @property
+    def n_coefficients(self) -> int:
+        return self.E.shape[1]
+
+    def complex(self, c: np.ndarray) -> np.ndarray:
+        """Complex amplitudes ``(..., n_h)`` of real coefficients ``(..., nc)``."""
+        out = np.empty(c.shape[:-1] + (len(self.cols),), complex)
+        for k, (h, ia, ib) in enumerate(self.cols):
+            out[..., k] = c[..., ia] if ib is None else c[..., ia] - 1j * c[..., ib]
+        return out
+
+    def real(self, Z: np.ndarray) -> np.ndarray:
+        """Real coefficients of complex amplitudes (the inverse of :meth:`complex`)."""
+        out = np.empty(Z.shape[:-1] + (self.n_coefficients,))
+        for k, (h, ia, ib) in enumerate(self.cols):
+            out[..., ia] = Z[..., k].real
+            if ib is not None:
+                out[..., ib] = -Z[..., k].imag
+        return out
+
+    def joint_forces(self, constants, KT, cz, *, jacobian=True):
+        """AFT of the joint deficits ``g = F(z) - KT z`` from the joints' coefficients
+        ``cz`` (n_z, nc): ``(cg, dcg/dcz or None, dissipation per period [J] per joint)``."""
+        Z = cz @ self.E.T
+        F, K, A, D = periodic_rows(constants, Z)
+        cg = (F - KT[:, None] * Z) @ self.P.T
+        J = periodic_harmonic_jacobian(K, A, self.P, self.E, shift=KT) if jacobian else None
+        return cg, J, D
+
+    def linear_operator(self, H_list, rows, cols_):
+        """The real 4-D operator ``L[p, c, q, c']`` of the complex port receptances
+        ``H_list[k][rows][:, cols_]`` (one per kept harmonic ``k``)."""
+        nr, nq = len(rows), len(cols_)
+        nc = self.n_coefficients
+        L = np.zeros((nr, nc, nq, nc))
+        for k, (h, ia, ib) in enumerate(self.cols):
+            H = H_list[k][np.ix_(rows, cols_)]
+            if ib is None:
+                L[:, ia, :, ia] = H.real
+            else:
+                L[:, ia, :, ia] = H.real
+                L[:, ia, :, ib] = H.imag
+                L[:, ib, :, ia] = -H.imag
+                L[:, ib, :, ib] = H.real
+        return L

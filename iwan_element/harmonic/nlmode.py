@@ -1,0 +1,188 @@
+"""Nonlinear modes by the extended periodic motion concept (EPMC), with the exact joints.
+
+Krack (Computers & Structures 154:59-71, 2015): the autonomous system
+``M x'' + (C - xi M) x' + K x + f_nl = 0`` has a periodic solution for the mass-proportional
+self-excitation ``xi`` that cancels the dissipation over a period; the nonlinear mode's
+frequency is ``W`` and its modal damping ratio ``zeta = xi / (2 W)``
+(``docs/harmonic_balance.md`` section 5). On a :class:`~.system.ModalSystem` the self-
+excitation enters every kept mode's denominator, ``w_r^2 - w^2 + i w (2 zeta_r w_r - xi)``.
+
+Unknowns: the joint coefficients ``Z``, ``W``, ``xi`` and the amplitude ``a`` of the mode's
+own fundamental modal coordinate, whose phase is fixed (``q_r = a cos(W t) + ...``: the phase
+normalisation). Equations: the condensed balance of the joint coordinates with the mode's
+fundamental term written out, the mode's own fundamental equation (two real ones), and the
+amplitude normalisation: the sensor's fundamental displacement amplitude equals the
+requested ``X`` (the amplitude QSMA and the ring-downs report). Newton with the exact AFT
+Jacobian; each amplitude starts from the previous one's solution.
+"""
+from __future__ import annotations
+
+import logging
+import math
+import time
+
+import numpy as np
+
+from ..core.threads import one_blas_thread
+from .balance import operators, point_outputs, rate_operators
+from .basis import Harmonics
+
+__all__ = ["epmc_branch"]
+
+log = logging.getLogger(__name__)
+
+
+def _rate_ops(system, basis, W, xi, r):
+    """d/dW and d/dxi of the joint and sensor operators (the mode's own fundamental left
+    out): ``[(dLzz_W, dLsz_W), (dLzz_xi, dLsz_xi)]``."""
+    nz = system.n_joints
+    iz = list(range(nz))
+    zz = rate_operators(system, basis, W, iz, iz, xi=xi, exclude=r)
+    sz = rate_operators(system, basis, W, [nz], iz, xi=xi, exclude=r)
+    return [(zz[0], sz[0]), (zz[1], sz[1])]
+
+
+def _equations(system, basis, y, X, r, *, jacobian=True):
+    """Residual and Jacobian of the EPMC equations in ``y = [Z.ravel(), W, xi, a]``."""
+    nz, nc = system.n_joints, basis.n_coefficients
+    n = nz * nc
+    cz = y[:n].reshape(nz, nc)
+    W, xi, a = y[n], y[n + 1], y[n + 2]
+    Lzz, Lpz, _ = operators(system, basis, W, xi=xi, exclude=r)
+    cg, dcg, D = basis.joint_forces(system.constants, system.KT, cz, jacobian=jacobian)
+    h1 = [c for c in basis.cols if c[0] == 1][0]
+    ia, ib = h1[1], h1[2]
+    Yz, Ys = system.modes[:nz, r], system.modes[nz, r]
+    Rz = cz + np.einsum("pcqd,qd->pc", Lzz, cg)
+    Rz[:, ia] -= Yz * a
+    den = system.denominators(W, xi=xi)[r]
+    G1 = cg[:, ia] - 1j * cg[:, ib]
+    Rm = den * a + Yz @ G1
+    cs = -np.einsum("cqd,qd->c", Lpz[0], cg)
+    cs[ia] += Ys * a
+    amp = math.hypot(cs[ia], cs[ib])
+    R = np.concatenate([Rz.ravel(), [Rm.real, Rm.imag, amp - X]])
+    if not jacobian:
+        return R, None, cg, D
+    J = np.zeros((n + 3, n + 3))
+    Jzz = np.einsum("pcqd,qde->pcqe", Lzz, dcg).reshape(n, n)
+    Jzz[np.diag_indices(n)] += 1.0
+    J[:n, :n] = Jzz
+    (dLzz_W, dLpz_W), (dLzz_X, dLpz_X) = _rate_ops(system, basis, W, xi, r)
+    J[:n, n] = np.einsum("pcqd,qd->pc", dLzz_W, cg).ravel()
+    J[:n, n + 1] = np.einsum("pcqd,qd->pc", dLzz_X, cg).ravel()
+    dRz_a = np.zeros((nz, nc))
+    dRz_a[:, ia] = -Yz
+    J[:n, n + 2] = dRz_a.ravel()
+    dG1 = (Yz[:, None] * (dcg[:, ia, :] - 1j * dcg[:, ib, :])).reshape(n)
+    dden_W = -2.0 * W + 1j * (2.0 * system.zeta[r] * system.omega[r] - xi)
+    for row, part in ((n, np.real), (n + 1, np.imag)):
+        J[row, :n] = part(dG1)
+        J[row, n] = part(dden_W * a)
+        J[row, n + 1] = part(-1j * W * a)
+        J[row, n + 2] = part(den)
+    dcs = -np.einsum("cqd,qde->cqe", Lpz[0], dcg).reshape(nc, n)
+    g = np.array([cs[ia], cs[ib]]) / max(amp, 1e-300)
+    J[n + 2, :n] = g @ dcs[[ia, ib]]
+    for col, dL in ((n, dLpz_W), (n + 1, dLpz_X)):
+        dcsx = -np.einsum("cqd,qd->c", dL[0], cg)
+        J[n + 2, col] = g @ dcsx[[ia, ib]]
+    J[n + 2, n + 2] = g[0] * Ys
+    return R, J, cg, D
+
+
+def _newton(system, basis, y, X, r, *, tol, max_iter):
+    scale = np.abs(y).copy()
+    n = y.size - 3
+    scale[:n] = max(float(np.abs(y[:n]).max()), 1e-300)
+    R, J, cg, D = _equations(system, basis, y, X, r)
+    for it in range(1, max_iter + 1):
+        step = np.linalg.solve(J * scale[None, :], -R) * scale
+        lam = 1.0
+        rn = np.linalg.norm(R)
+        for _ in range(12):
+            trial = y + lam * step
+            R2, J2, cg2, D2 = _equations(system, basis, trial, X, r)
+            if np.linalg.norm(R2) <= rn or lam < 1e-3:
+                break
+            lam *= 0.5
+        y, R, J, cg, D = trial, R2, J2, cg2, D2
+        if np.all(np.abs(lam * step) <= tol * scale):
+            return y, cg, D, True, it
+    return y, cg, D, False, max_iter
+
+
+def epmc_branch(system, basis: Harmonics, amplitude, r: int, *, tol=1e-9, max_iter=40,
+                progress=None):
+    """Nonlinear mode ``r`` (a kept-mode column) (one BLAS thread: :func:`_branch`)."""
+    with one_blas_thread():
+        return _branch(system, basis, amplitude, r, tol=tol, max_iter=max_iter,
+                       progress=progress)
+
+
+def _branch(system, basis, amplitude, r, *, tol, max_iter, progress):
+    """Nonlinear mode ``r`` (a kept-mode column) at sensor amplitudes ``amplitude`` [m]
+    (solved in increasing order). Returns a dict of arrays: ``amplitude``, ``frequency``
+    [Hz], ``damping_ratio`` [-], ``xi`` [1/s], ``converged``, ``iterations``,
+    ``energy_error`` (self-excitation work against the joints' and the floor's loss),
+    ``wall_time``."""
+    X = np.asarray(amplitude, float)
+    order = np.argsort(X)
+    nz, nc = system.n_joints, basis.n_coefficients
+    Ys = system.modes[nz, r]
+    if abs(Ys) < 1e-12 * np.abs(system.modes[:, r]).max():
+        raise ValueError("the sensor sits at a node of this mode: its amplitude cannot set "
+                         "the mode's level")
+    ia = [c for c in basis.cols if c[0] == 1][0][1]
+    w0, z0 = float(system.omega[r]), float(system.zeta[r])
+    y = None
+    out = {k: np.zeros(X.size) for k in ("frequency", "damping_ratio", "xi", "energy_error")}
+    out["converged"] = np.zeros(X.size, bool)
+    out["iterations"] = np.zeros(X.size, int)
+    t0 = time.perf_counter()
+    it_ = order if progress is None else progress(order, total=X.size)
+    for k in it_:
+        if y is None or not out["converged"].any():
+            cz = np.zeros((nz, nc))
+            a0 = X[k] / abs(Ys)
+            cz[:, ia] = system.modes[:nz, r] * a0 * np.sign(Ys)
+            y = np.concatenate([cz.ravel(), [w0, 2 * z0 * w0, a0 * np.sign(Ys)]])
+        else:
+            y = y.copy()
+            y[:-3] *= X[k] / X_prev
+            y[-1] *= X[k] / X_prev
+        y, cg, D, ok, its = _newton(system, basis, y, X[k], r, tol=tol, max_iter=max_iter)
+        W, xi, a = y[-3], y[-2], y[-1]
+        po = point_outputs(system, basis, W, 0.0, cg, D, xi=xi, modal=(r, a),
+                           ops=operators(system, basis, W, xi=xi, exclude=r))
+        # the self-excitation's work per period: xi pi W sum_h h^2 |Q_h|^2 over the modes
+        e_in = _self_work(system, basis, W, xi, cg, r, a)
+        d = po["joint_dissipation"] + po["floor_dissipation"]
+        out["frequency"][k] = W / (2 * math.pi)
+        out["xi"][k] = xi
+        out["damping_ratio"][k] = xi / (2 * W)
+        out["energy_error"][k] = (e_in - d) / e_in if e_in else np.nan
+        out["converged"][k] = ok
+        out["iterations"][k] = its
+        X_prev = X[k]
+        if not ok:
+            log.warning("EPMC did not converge at amplitude %.3g m", X[k])
+    out["amplitude"] = X
+    out["wall_time"] = time.perf_counter() - t0
+    return out
+
+
+def _self_work(system, basis, W, xi, cg, r, a):
+    """Work of the self-excitation ``xi M x'`` over one period [J] (modal coordinates)."""
+    nz = system.n_joints
+    Gc = basis.complex(cg)
+    total = 0.0
+    for k, (h, _, _) in enumerate(basis.cols):
+        if h == 0:
+            continue
+        d = system.denominators(h * W, xi=xi)
+        Q = -(system.modes[:nz].T @ Gc[:, k]) / d
+        if h == 1:
+            Q[r] = a
+        total += xi * math.pi * W * h * h * float(np.sum(np.abs(Q) ** 2))
+    return total

@@ -1,0 +1,164 @@
+"""A linear structure in modal form with Iwan joints on some of its coordinates.
+
+The frequency-domain routes (:mod:`.balance`, :mod:`.continuation`, :mod:`.nlmode`) read one
+object, :class:`ModalSystem`: the structure with its joints *stuck* (each joint's stiffness
+``KT`` in the linear part), described at a few *ports* (``docs/harmonic_balance.md``
+section 1):
+
+* ``n_z`` joint coordinates ``z = T x`` (the slips of the contact points), on which each
+  joint acts with its force deficit ``g(z) = F_iwan(z) - KT z`` (zero while stuck);
+* the sensor ``s = S x`` (the displacement a test reads) and the excitation ``e = b^T x``
+  (the point and direction of the applied force; its work is ``f de``).
+
+Between ports ``i`` and ``j`` the receptance at circular frequency ``w`` is::
+
+    H_ij(w) = sum_r Y_ir Y_jr / (w_r^2 - w^2 + i w c_r)  +  R_ij,    c_r = 2 zeta_r w_r
+
+over the kept modes ``r`` (mass-normalised, ``Y = [T; S; b^T] Phi``; rigid-body modes have
+``w_r = 0`` and are left out at ``w = 0``, where the self-equilibrated joint forces do not
+excite them), plus the residual flexibility ``R`` of the modes not kept (static: the
+MacNeal / Rubin residual-flexibility correction; exact at ``w = 0`` and in the stuck limit's
+statics). A single-degree-of-freedom oscillator with one joint is the smallest such system
+(:meth:`ModalSystem.oscillator`).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..core.masing import constants_from_arrays
+from ..core.parameters import IwanParameters
+
+__all__ = ["ModalSystem"]
+
+
+def _array(name, v, shape):
+    a = np.array(v, dtype=float)
+    if a.shape != shape or not np.all(np.isfinite(a)):
+        raise ValueError(f"{name} must be a finite array of shape {shape}, got "
+                         f"{getattr(a, 'shape', None)}")
+    a.setflags(write=False)
+    return a
+
+
+@dataclass(frozen=True, eq=False)
+class ModalSystem:
+    """A stuck-joint linear structure in modal form, seen at its ports (module docstring).
+
+    Parameters
+    ----------
+    omega : array_like, shape (n_m,)
+        Kept modes' circular frequencies [rad/s] with the joints stuck (0: rigid body).
+    zeta : array_like, shape (n_m,)
+        Their linear (floor) damping ratios [-], in ``[0, 1)``.
+    modes : array_like, shape (n_z + 2, n_m)
+        Mass-normalised mode shapes at the ports: rows ``0..n_z-1`` the joint coordinates
+        [m per unit modal coordinate], then the sensor, then the excitation.
+    joints : sequence of IwanParameters, length n_z
+        The joint on each joint coordinate.
+    residual : array_like, shape (n_z + 2, n_z + 2), optional
+        Residual (static) flexibility between the ports [m/N] of the modes not kept
+        (default: none).
+    n_full : int, optional
+        Coordinates of the model the modes come from (reported).
+    notes : str, optional
+    """
+
+    omega: np.ndarray
+    zeta: np.ndarray
+    modes: np.ndarray
+    joints: tuple
+    residual: np.ndarray | None = None
+    n_full: int | None = None
+    notes: str = ""
+    constants: np.ndarray = field(init=False, repr=False)
+
+    def __post_init__(self):
+        om = np.array(self.omega, dtype=float).ravel()
+        if om.size == 0 or not np.all(np.isfinite(om)) or np.any(om < 0):
+            raise ValueError("omega must be a non-empty array of finite frequencies >= 0 "
+                             "[rad/s]")
+        n_m = om.size
+        js = tuple(self.joints)
+        if not js or not all(isinstance(j, IwanParameters) for j in js):
+            raise ValueError("joints must be a non-empty sequence of IwanParameters")
+        n_z = len(js)
+        z = _array("zeta", np.ravel(self.zeta), (n_m,))
+        if np.any(z < 0) or np.any(z >= 1):
+            raise ValueError("zeta must be damping ratios in [0, 1)")
+        Y = _array("modes", self.modes, (n_z + 2, n_m))
+        R = np.zeros((n_z + 2, n_z + 2)) if self.residual is None else \
+            _array("residual", self.residual, (n_z + 2, n_z + 2))
+        om.setflags(write=False)
+        object.__setattr__(self, "omega", om)
+        object.__setattr__(self, "zeta", z)
+        object.__setattr__(self, "modes", Y)
+        object.__setattr__(self, "joints", js)
+        object.__setattr__(self, "residual", R)
+        c = constants_from_arrays([j.Fs for j in js], [j.KT for j in js], [j.chi for j in js],
+                                  [j.beta for j in js])
+        c.setflags(write=False)
+        object.__setattr__(self, "constants", c)
+
+    @classmethod
+    def oscillator(cls, mass: float, stiffness: float, damping: float,
+                   joint: IwanParameters) -> "ModalSystem":
+        """``m x'' + c x' + k x + F_iwan(x) = f``: one mass [kg] on a spring [N/m] and a
+        dashpot [N s/m] in parallel with one joint; the slip, the sensor and the excitation
+        are all ``x``."""
+        for n, v in (("mass", mass), ("stiffness", stiffness), ("damping", damping)):
+            if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0) or \
+                    (n == "mass" and v == 0):
+                raise ValueError(f"{n} must be a finite number >= 0 (mass > 0), got {v!r}")
+        if not isinstance(joint, IwanParameters):
+            raise ValueError(f"joint must be an IwanParameters, got {type(joint).__name__}")
+        w = math.sqrt((stiffness + joint.KT) / mass)
+        phi = 1.0 / math.sqrt(mass)
+        return cls(omega=[w], zeta=[damping / (2.0 * mass * w)], modes=[[phi]] * 3,
+                   joints=(joint,), n_full=1, notes="single-degree-of-freedom oscillator")
+
+    @property
+    def n_joints(self) -> int:
+        return len(self.joints)
+
+    @property
+    def KT(self) -> np.ndarray:
+        """Each joint's stuck stiffness [N/m]."""
+        return self.constants[:, 0]
+
+    def denominators(self, w: float, *, xi: float = 0.0) -> np.ndarray:
+        """``w_r^2 - w^2 + i w (2 zeta_r w_r - xi)`` of every kept mode at ``w`` [rad/s];
+        ``xi`` [1/s] is a mass-proportional negative damping (the extended periodic motion
+        concept's self-excitation, :mod:`.nlmode`)."""
+        om = self.omega
+        return om * om - w * w + 1j * w * (2.0 * self.zeta * om - xi)
+
+    def receptance(self, w: float, *, xi: float = 0.0, exclude=None) -> np.ndarray:
+        """Port receptance matrix ``H(w)`` [m/N], shape ``(n_z + 2, n_z + 2)`` (module
+        docstring); at ``w = 0`` the rigid-body modes are left out. ``exclude``: a kept mode
+        index whose term is left out (the nonlinear mode's own fundamental)."""
+        d = self.denominators(w, xi=xi)
+        inv = np.zeros_like(d)
+        keep = (self.omega > 0) if w == 0.0 else np.ones(d.size, bool)
+        if exclude is not None:
+            keep[exclude] = False
+        inv[keep] = 1.0 / d[keep]
+        return (self.modes * inv) @ self.modes.T + self.residual
+
+    def receptance_rate(self, w: float, h: int, *, xi: float = 0.0, exclude=None):
+        """``(dH/dW, dH/dxi)`` of the receptance at the ``h``-th harmonic ``w = h W`` with
+        respect to the fundamental ``W`` [rad/s] and to ``xi``."""
+        d = self.denominators(h * w, xi=xi)
+        keep = np.ones(d.size, bool)
+        if exclude is not None:
+            keep[exclude] = False
+        dd_dW = -2.0 * h * h * w + 1j * h * (2.0 * self.zeta * self.omega - xi)
+        dd_dxi = -1j * h * w * np.ones(d.size)
+        out = []
+        for dd in (dd_dW, dd_dxi):
+            g = np.zeros(d.size, complex)
+            g[keep] = -dd[keep] / d[keep] ** 2
+            out.append((self.modes * g) @ self.modes.T)
+        return out[0], out[1]
