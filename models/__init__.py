@@ -14,6 +14,11 @@
   (:func:`quasi_static_test`);
 * :mod:`~iwan_element.models.forced` - stepped-sine forced response at several force levels
   (:func:`forced_response`);
+* :mod:`~iwan_element.models.reduced` - the one reduced model (stuck modes with their floors,
+  residual flexibility, the contact points' joints) that the frequency-domain routes read;
+* :mod:`~iwan_element.models.frequency` - harmonic balance (:func:`harmonic_balance`),
+  continuation (:func:`frequency_response`) and nonlinear modes by EPMC
+  (:func:`nonlinear_mode`);
 * :mod:`~iwan_element.models.solver` - Exudyn solver settings shared by the runs;
 * :mod:`~iwan_element.models.calibration` - interface calibration from vibration data and
   from joint / modal Iwan fits;
@@ -24,6 +29,8 @@ from importlib import resources
 from pathlib import Path
 
 from .forced import ForcedResponseResult, forced_response
+from .frequency import frequency_response, harmonic_balance, nonlinear_mode
+from .reduced import ReducedModel, reduced_model, reduction_error
 from .machine import QuasiStaticResult, quasi_static_test
 from .qsma import modal_amplitude_curve, natural_frequencies
 from .transient import RingdownResult, ringdown
@@ -31,7 +38,9 @@ from .specimens import Excitation, InterfaceModel, Specimen, preset
 
 __all__ = ["example_test_path", "preset", "modal_amplitude_curve", "natural_frequencies",
            "ringdown", "quasi_static_test", "forced_response", "Specimen", "InterfaceModel",
-           "Excitation", "RingdownResult", "QuasiStaticResult", "ForcedResponseResult"]
+           "Excitation", "RingdownResult", "QuasiStaticResult", "ForcedResponseResult",
+           "harmonic_balance", "frequency_response", "nonlinear_mode", "reduced_model",
+           "reduction_error", "ReducedModel"]
 
 
 def example_test_path() -> Path:

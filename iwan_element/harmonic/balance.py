@@ -39,7 +39,7 @@ def operators(system, basis: Harmonics, W: float, *, xi: float = 0.0, exclude=No
     ``(Lzz, Lpz, Lpb)`` with ``p`` the sensor and excitation ports."""
     H = [system.receptance(h * W, xi=xi, exclude=exclude if h == 1 else None)
          for h in basis.harmonics]
-    nz = system.n_joints
+    nz = system.n_z
     iz = list(range(nz))
     return (basis.linear_operator(H, iz, iz), basis.linear_operator(H, [nz, nz + 1], iz),
             basis.linear_operator(H, iz + [nz, nz + 1], [nz + 1]))
@@ -53,7 +53,7 @@ def rate_operators(system, basis: Harmonics, W: float, rows, cols, *, xi: float 
     dW, dX = [], []
     for h in basis.harmonics:
         if h == 0:
-            z = np.zeros((system.n_joints + 2,) * 2, complex)
+            z = np.zeros((system.n_z + 2,) * 2, complex)
             dW.append(z)
             dX.append(z)
             continue
@@ -76,9 +76,9 @@ def residual(system, basis, W, force, cz, *, ops=None, jacobian=True):
     """``(R, J, cg, D)`` of the harmonic balance at ``W`` [rad/s] (module docstring);
     ``R`` shape ``(n_z, nc)``, ``J`` shape ``(n_z nc, n_z nc)``."""
     Lzz, _, Lb = ops if ops is not None else operators(system, basis, W)
-    cg, dcg, D = basis.joint_forces(system.constants, system.KT, cz, jacobian=jacobian)
+    cg, dcg, D = basis.nonlinear_forces(system, cz, W, jacobian=jacobian)
     cf = force_coefficients(basis, force)
-    nz = system.n_joints
+    nz = system.n_z
     R = cz + np.einsum("pcqd,qd->pc", Lzz, cg) - Lb[:nz, :, 0, :] @ cf
     J = None
     if jacobian:
@@ -127,7 +127,7 @@ def point_outputs(system, basis, W, force, cg, D, *, ops=None, xi=0.0, modal=Non
     """
     _, Lpz, Lpb = ops if ops is not None else operators(system, basis, W, xi=xi)
     cf = force_coefficients(basis, force)
-    nz = system.n_joints
+    nz = system.n_z
     ports = -np.einsum("pcqd,qd->pc", Lpz, cg) + Lpb[nz:, :, 0, :] @ cf
     # modal coordinates for the floor's dissipation: Q_rh = (Y_br F_h - Y_zr^T G_h) / den_rh
     Gc = basis.complex(cg)

@@ -13,7 +13,34 @@ import numpy as np
 
 from ..core.periodic import periodic_harmonic_jacobian, periodic_rows
 
-__all__ = ["Harmonics", "check_harmonics"]
+__all__ = ["Harmonics", "check_harmonics", "element_loop"]
+
+
+def element_loop(element, y, v):
+    """Steady-loop force of a history-dependent element over one period of samples.
+
+    The element is reset, loaded to the sample of the largest ``|y|`` and driven through two
+    periods from there (one settles a Masing element, the second is the steady one for any
+    element that settles within a period); returns ``(F samples, dissipation over the second
+    period [J])``.
+    """
+    N = y.size
+    k0 = int(np.argmax(np.abs(y)))
+    element.reset()
+    element.trial(float(y[k0]), float(v[k0]))
+    element.commit()
+    F = np.empty(N)
+    d0 = 0.0
+    for rep in range(2):
+        if rep == 1:
+            d0 = float(getattr(element, "dissipated_energy", 0.0))
+        for j in range(1, N + 1):
+            m = (k0 + j) % N
+            f, _ = element.trial(float(y[m]), float(v[m]))
+            element.commit()
+            if rep == 1:
+                F[m] = f
+    return F, float(getattr(element, "dissipated_energy", 0.0)) - d0
 
 
 def check_harmonics(harmonics, samples) -> tuple[tuple, int]:
@@ -54,22 +81,26 @@ class Harmonics:
     harmonics: tuple
     samples: int
     E: np.ndarray = field(init=False, repr=False)
+    dE: np.ndarray = field(init=False, repr=False)
     P: np.ndarray = field(init=False, repr=False)
     cols: tuple = field(init=False, repr=False)
 
     def __post_init__(self):
         tau = 2.0 * np.pi * np.arange(self.samples) / self.samples
-        E, P, cols = [], [], []
+        E, dE, P, cols = [], [], [], []
         for h in self.harmonics:
             if h == 0:
                 cols.append((0, len(E), None))
                 E.append(np.ones_like(tau))
+                dE.append(np.zeros_like(tau))
                 P.append(np.ones_like(tau) / self.samples)
             else:
                 cols.append((h, len(E), len(E) + 1))
                 E += [np.cos(h * tau), np.sin(h * tau)]
+                dE += [-h * np.sin(h * tau), h * np.cos(h * tau)]
                 P += [2.0 * np.cos(h * tau) / self.samples, 2.0 * np.sin(h * tau) / self.samples]
         object.__setattr__(self, "E", np.array(E).T)
+        object.__setattr__(self, "dE", np.array(dE).T)
         object.__setattr__(self, "P", np.array(P))
         object.__setattr__(self, "cols", tuple(cols))
 
@@ -93,14 +124,39 @@ class Harmonics:
                 out[..., ib] = -Z[..., k].imag
         return out
 
-    def joint_forces(self, constants, KT, cz, *, jacobian=True):
-        """AFT of the joint deficits ``g = F(z) - KT z`` from the joints' coefficients
-        ``cz`` (n_z, nc): ``(cg, dcg/dcz or None, dissipation per period [J] per joint)``."""
-        Z = cz @ self.E.T
-        F, K, A, D = periodic_rows(constants, Z)
-        cg = (F - KT[:, None] * Z) @ self.P.T
-        J = periodic_harmonic_jacobian(K, A, self.P, self.E, shift=KT) if jacobian else None
-        return cg, J, D
+    def nonlinear_forces(self, system, cz, W, *, jacobian=True):
+        """AFT of the nonlinear coordinates' forces from their coefficients ``cz`` (n_z, nc):
+        the joints' deficits ``g = F(z) - KT z`` on their exact steady loops (exact
+        Jacobian), then the element ports' ``gain F(y, y')`` on the steady loop of their
+        elements (:func:`element_loop`; Jacobian by forward differences).
+        Returns ``(cg, dcg/dcz or None, dissipation per period [J] per coordinate)``."""
+        nj = len(system.joints)
+        Z = cz[:nj] @ self.E.T
+        F, K, A, D = periodic_rows(system.constants, Z)
+        cg = np.empty_like(cz)
+        cg[:nj] = (F - system.KT[:, None] * Z) @ self.P.T
+        J = periodic_harmonic_jacobian(K, A, self.P, self.E, shift=system.KT) if jacobian \
+            else None
+        if not system.ports:
+            return cg, J, D
+        De = np.empty(len(system.ports))
+        Je = np.zeros((len(system.ports),) + J.shape[1:]) if jacobian else None
+        for k, port in enumerate(system.ports):
+            c = cz[nj + k]
+            f, De[k] = self._port(port, c, W)
+            cg[nj + k] = f
+            if jacobian:
+                h = 1e-7 * max(float(np.abs(c).max()), 1e-300)
+                for d in range(c.size):
+                    cp = c.copy()
+                    cp[d] += h
+                    Je[k, :, d] = (self._port(port, cp, W)[0] - f) / h
+        return cg, (np.concatenate([J, Je]) if jacobian else None), np.concatenate([D, De])
+
+    def _port(self, port, c, W):
+        y = self.E @ c
+        F, D = element_loop(port.element, y, W * (self.dE @ c))
+        return port.gain * (self.P @ F), port.gain * D
 
     def linear_operator(self, H_list, rows, cols_):
         """The real 4-D operator ``L[p, c, q, c']`` of the complex port receptances

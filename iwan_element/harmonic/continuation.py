@@ -33,7 +33,7 @@ log = logging.getLogger(__name__)
 
 def _augmented(system, basis, y, force, sz, sW):
     """``(R, [dR/dZ, dR/dW], cg, D)`` at scaled ``y`` (residual in units of ``sz``)."""
-    nz = system.n_joints
+    nz = system.n_z
     n = y.size - 1
     cz = y[:n].reshape(nz, -1) * sz
     W = y[n] * sW
@@ -142,7 +142,7 @@ def _walk(system, basis, force, f0, f1, ds, max_points, tol):
         y, t = yc, t_new
         W = y[n] * sW
         cz = y[:n] * sz
-        pt = {"cz": cz.reshape(system.n_joints, -1), "W": W, "force": force,
+        pt = {"cz": cz.reshape(system.n_z, -1), "W": W, "force": force,
               "converged": True, "iterations": its, "cg": cg, "D": D}
         pt.update(point_outputs(system, basis, W, force, cg, D, ops=ops))
         points.append(pt)

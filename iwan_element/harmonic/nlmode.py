@@ -35,7 +35,7 @@ log = logging.getLogger(__name__)
 def _rate_ops(system, basis, W, xi, r):
     """d/dW and d/dxi of the joint and sensor operators (the mode's own fundamental left
     out): ``[(dLzz_W, dLsz_W), (dLzz_xi, dLsz_xi)]``."""
-    nz = system.n_joints
+    nz = system.n_z
     iz = list(range(nz))
     zz = rate_operators(system, basis, W, iz, iz, xi=xi, exclude=r)
     sz = rate_operators(system, basis, W, [nz], iz, xi=xi, exclude=r)
@@ -44,12 +44,12 @@ def _rate_ops(system, basis, W, xi, r):
 
 def _equations(system, basis, y, X, r, *, jacobian=True):
     """Residual and Jacobian of the EPMC equations in ``y = [Z.ravel(), W, xi, a]``."""
-    nz, nc = system.n_joints, basis.n_coefficients
+    nz, nc = system.n_z, basis.n_coefficients
     n = nz * nc
     cz = y[:n].reshape(nz, nc)
     W, xi, a = y[n], y[n + 1], y[n + 2]
     Lzz, Lpz, _ = operators(system, basis, W, xi=xi, exclude=r)
-    cg, dcg, D = basis.joint_forces(system.constants, system.KT, cz, jacobian=jacobian)
+    cg, dcg, D = basis.nonlinear_forces(system, cz, W, jacobian=jacobian)
     h1 = [c for c in basis.cols if c[0] == 1][0]
     ia, ib = h1[1], h1[2]
     Yz, Ys = system.modes[:nz, r], system.modes[nz, r]
@@ -95,6 +95,7 @@ def _newton(system, basis, y, X, r, *, tol, max_iter):
     scale = np.abs(y).copy()
     n = y.size - 3
     scale[:n] = max(float(np.abs(y[:n]).max()), 1e-300)
+    scale[n + 1] = max(scale[n + 1], 1e-4 * abs(y[n]))     # xi is 0 without a floor
     R, J, cg, D = _equations(system, basis, y, X, r)
     for it in range(1, max_iter + 1):
         step = np.linalg.solve(J * scale[None, :], -R) * scale
@@ -128,7 +129,7 @@ def _branch(system, basis, amplitude, r, *, tol, max_iter, progress):
     ``wall_time``."""
     X = np.asarray(amplitude, float)
     order = np.argsort(X)
-    nz, nc = system.n_joints, basis.n_coefficients
+    nz, nc = system.n_z, basis.n_coefficients
     Ys = system.modes[nz, r]
     if abs(Ys) < 1e-12 * np.abs(system.modes[:, r]).max():
         raise ValueError("the sensor sits at a node of this mode: its amplitude cannot set "
@@ -174,7 +175,7 @@ def _branch(system, basis, amplitude, r, *, tol, max_iter, progress):
 
 def _self_work(system, basis, W, xi, cg, r, a):
     """Work of the self-excitation ``xi M x'`` over one period [J] (modal coordinates)."""
-    nz = system.n_joints
+    nz = system.n_z
     Gc = basis.complex(cg)
     total = 0.0
     for k, (h, _, _) in enumerate(basis.cols):

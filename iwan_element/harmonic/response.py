@@ -40,7 +40,7 @@ def check_frequency_force(frequency, force):
 def linear_start(system, basis, W, force):
     """The stuck (linear) response's joint coefficients at ``W``."""
     _, _, Lb = operators(system, basis, W)
-    return Lb[:system.n_joints, :, 0, :] @ force_coefficients(basis, force)
+    return Lb[:system.n_z, :, 0, :] @ force_coefficients(basis, force)
 
 
 def harmonic_balance(system: ModalSystem, frequency, force, *, harmonics=(1, 3, 5),

@@ -5,8 +5,11 @@ object, :class:`ModalSystem`: the structure with its joints *stuck* (each joint'
 ``KT`` in the linear part), described at a few *ports* (``docs/harmonic_balance.md``
 section 1):
 
-* ``n_z`` joint coordinates ``z = T x`` (the slips of the contact points), on which each
+* ``n_j`` joint coordinates ``z = T x`` (the slips of the contact points), on which each
   joint acts with its force deficit ``g(z) = F_iwan(z) - KT z`` (zero while stuck);
+* ``n_e`` element ports (:class:`ElementPort`): a history-dependent element of the package's
+  protocol (``trial``/``commit``/``reset``, e.g. a vibration effect in its modal form) on a
+  port coordinate ``y``, the structure loaded by ``-gain F(y, y')`` at it;
 * the sensor ``s = S x`` (the displacement a test reads) and the excitation ``e = b^T x``
   (the point and direction of the applied force; its work is ``f de``).
 
@@ -31,7 +34,7 @@ import numpy as np
 from ..core.masing import constants_from_arrays
 from ..core.parameters import IwanParameters
 
-__all__ = ["ModalSystem"]
+__all__ = ["ModalSystem", "ElementPort"]
 
 
 def _array(name, v, shape):
@@ -41,6 +44,36 @@ def _array(name, v, shape):
                          f"{getattr(a, 'shape', None)}")
     a.setflags(write=False)
     return a
+
+
+@dataclass(frozen=True, eq=False)
+class ElementPort:
+    """A history-dependent element on one port of a :class:`ModalSystem`.
+
+    Parameters
+    ----------
+    element : object
+        An element of the package's protocol (``trial(u, v) -> (F, K)``, ``commit()``,
+        ``reset()``, ``dissipated_energy``), driven by the port coordinate ``y`` [port
+        units] and its rate.
+    gain : float
+        The structure's generalized force at the port is ``-gain F`` (``gain = 1/s^2`` for a
+        modal effect read at the sensor, ``y = s q``).
+    label : str
+    """
+
+    element: object
+    gain: float
+    label: str = ""
+
+    def __post_init__(self):
+        for m in ("trial", "commit", "reset"):
+            if not callable(getattr(self.element, m, None)):
+                raise TypeError(f"element must have trial/commit/reset methods (the package's "
+                                f"element protocol), missing {m!r}")
+        if isinstance(self.gain, bool) or not isinstance(self.gain, (int, float)) or \
+                not math.isfinite(self.gain):
+            raise ValueError(f"gain must be a finite number, got {self.gain!r}")
 
 
 @dataclass(frozen=True, eq=False)
@@ -54,9 +87,10 @@ class ModalSystem:
     zeta : array_like, shape (n_m,)
         Their linear (floor) damping ratios [-], in ``[0, 1)``.
     modes : array_like, shape (n_z + 2, n_m)
-        Mass-normalised mode shapes at the ports: rows ``0..n_z-1`` the joint coordinates
-        [m per unit modal coordinate], then the sensor, then the excitation.
-    joints : sequence of IwanParameters, length n_z
+        Mass-normalised mode shapes at the ports: rows ``0..n_j-1`` the joint coordinates
+        [m per unit modal coordinate], then the ``n_e`` element ports, then the sensor, then
+        the excitation (``n_z = n_j + n_e``).
+    joints : sequence of IwanParameters, length n_j
         The joint on each joint coordinate.
     residual : array_like, shape (n_z + 2, n_z + 2), optional
         Residual (static) flexibility between the ports [m/N] of the modes not kept
@@ -64,6 +98,8 @@ class ModalSystem:
     n_full : int, optional
         Coordinates of the model the modes come from (reported).
     notes : str, optional
+    ports : sequence of ElementPort, optional
+        The element ports (default none).
     """
 
     omega: np.ndarray
@@ -73,6 +109,7 @@ class ModalSystem:
     residual: np.ndarray | None = None
     n_full: int | None = None
     notes: str = ""
+    ports: tuple = ()
     constants: np.ndarray = field(init=False, repr=False)
 
     def __post_init__(self):
@@ -84,7 +121,10 @@ class ModalSystem:
         js = tuple(self.joints)
         if not js or not all(isinstance(j, IwanParameters) for j in js):
             raise ValueError("joints must be a non-empty sequence of IwanParameters")
-        n_z = len(js)
+        ps = tuple(self.ports)
+        if not all(isinstance(p, ElementPort) for p in ps):
+            raise ValueError("ports must be a sequence of ElementPort")
+        n_z = len(js) + len(ps)
         z = _array("zeta", np.ravel(self.zeta), (n_m,))
         if np.any(z < 0) or np.any(z >= 1):
             raise ValueError("zeta must be damping ratios in [0, 1)")
@@ -96,6 +136,7 @@ class ModalSystem:
         object.__setattr__(self, "zeta", z)
         object.__setattr__(self, "modes", Y)
         object.__setattr__(self, "joints", js)
+        object.__setattr__(self, "ports", ps)
         object.__setattr__(self, "residual", R)
         c = constants_from_arrays([j.Fs for j in js], [j.KT for j in js], [j.chi for j in js],
                                   [j.beta for j in js])
@@ -120,13 +161,28 @@ class ModalSystem:
                    joints=(joint,), n_full=1, notes="single-degree-of-freedom oscillator")
 
     @property
-    def n_joints(self) -> int:
-        return len(self.joints)
+    def n_z(self) -> int:
+        """Nonlinear coordinates: the joints, then the element ports."""
+        return len(self.joints) + len(self.ports)
 
     @property
     def KT(self) -> np.ndarray:
         """Each joint's stuck stiffness [N/m]."""
         return self.constants[:, 0]
+
+    def with_ports(self, ports, rows) -> "ModalSystem":
+        """A copy with element ``ports`` added, ``rows`` (n_e, n_m) their mode shapes (no
+        residual flexibility: ports on kept modes)."""
+        rows = np.atleast_2d(np.asarray(rows, float))
+        nj = self.n_z
+        Y = np.vstack([self.modes[:nj], rows, self.modes[nj:]])
+        ne = rows.shape[0]
+        R = np.zeros((nj + ne + 2,) * 2)
+        keep = list(range(nj)) + [nj + ne, nj + ne + 1]
+        R[np.ix_(keep, keep)] = self.residual
+        return ModalSystem(omega=self.omega, zeta=self.zeta, modes=Y, joints=self.joints,
+                           residual=R, n_full=self.n_full, notes=self.notes,
+                           ports=self.ports + tuple(ports))
 
     def denominators(self, w: float, *, xi: float = 0.0) -> np.ndarray:
         """``w_r^2 - w^2 + i w (2 zeta_r w_r - xi)`` of every kept mode at ``w`` [rad/s];
