@@ -146,8 +146,13 @@ def _condensed(key):
 
     With the stuck tangent ``A = K0 + G^T diag(KT) G`` (plus the rigid-body penalty) and
     the interface force deficit ``d(u) = F(u) - KT u``, every static state is
-    ``x = alpha A^-1 M phi - A^-1 G^T d(u)`` and ``A^-1 M phi = phi / w0^2``.
+    ``x = alpha A^-1 M phi - A^-1 G^T d(u)`` and ``A^-1 M phi = phi / w0^2``. The port
+    quantities (``C = G A^-1 G^T``, ``S A^-1 G^T`` and the mode at the slips and the sensor)
+    are read from the specimen's reduced model (:func:`~.reduced.reduced_model`: its static
+    flexibility at the ports is exact, kept modes plus residual); ``A^-1 G^T`` on every
+    coordinate is kept for the release state ``x`` of the transient.
     """
+    from .reduced import reduced_model
     specimen, mode = key
     w0, phi, R, L, pts = linear_modes(specimen, mode=mode)
     A = L.K0 + L.G.T @ (pts.KT[:, None] * L.G)
@@ -155,10 +160,14 @@ def _condensed(key):
         MR = L.M @ R
         A = A + w0 * w0 * (MR @ MR.T)
     YG = sla.cho_solve(sla.cho_factor(A), L.G.T)
-    Yb = phi / (w0 * w0)
-    Mphi = L.M @ phi
-    return {"w0": w0, "phi": phi, "L": L, "Yb": Yb, "YG": YG, "C": L.G @ YG, "ub": L.G @ Yb,
-            "sb": float(L.S @ Yb), "sG": L.S @ YG, "qb": float(Mphi @ Yb), "qG": Mphi @ YG}
+    red = reduced_model(specimen, n_modes=max(8, mode))
+    sysm = red.system
+    nz = sysm.n_z
+    H0 = sysm.receptance(0.0).real
+    Y = sysm.modes[:, red.mode_index(mode)] / (w0 * w0)
+    return {"w0": w0, "phi": phi, "L": L, "Yb": phi / (w0 * w0), "YG": YG, "C": H0[:nz, :nz],
+            "ub": Y[:nz], "sb": float(Y[nz]), "sG": H0[nz, :nz], "qb": 1.0 / (w0 * w0),
+            "qG": Y[:nz]}
 
 
 def static_modal_load(specimen: Specimen, amplitude, *, mode: int = 1,

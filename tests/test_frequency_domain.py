@@ -1,0 +1,112 @@
+"""The specimen in the frequency domain: the reduced model, harmonic balance, nonlinear modes.
+
+Independent routes: the full model's static condensation and all its modes (reduction), the
+closed-form linear receptance of the stuck limit, QSMA (microslip backbone), the modal form of
+an effect, and the phase-resonance condition linking the forced response to the nonlinear
+mode.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+import scipy.linalg as sla
+
+from iwan_element import models
+from iwan_element.models.assembly import linear_system
+from iwan_element.models.interface import contact_points
+from iwan_element.models.reduced import reduced_model, reduction_error
+
+BRB = models.preset("brake-reuss")
+
+
+def test_reduced_model_statics_are_exact_and_its_error_is_reported():
+    red = reduced_model(BRB)
+    L, pts = linear_system(BRB), contact_points(BRB)
+    A = L.K0 + L.G.T @ (pts.KT[:, None] * L.G)
+    V = sla.eigh(A, L.M, subset_by_index=[0, 2])[1]          # the rigid-body modes
+    MV = L.M @ V
+    Ap = A + 1e6 * MV @ MV.T
+    C = L.G @ np.linalg.solve(Ap, L.G.T)
+    H0 = red.system.receptance(0.0).real[:len(pts), :len(pts)]
+    np.testing.assert_allclose(H0, C, rtol=0, atol=1e-9 * np.abs(C).max())
+    e = reduction_error(BRB, n_modes=8, frequencies=np.linspace(0, 400, 81))
+    assert e["max_relative_error"] < 1e-3 and e["n_full"] == L.M.shape[0]
+    assert red.frequency(1) == pytest.approx(models.natural_frequencies(BRB, n_modes=4)[3],
+                                             rel=1e-8)
+
+
+def test_stuck_specimen_is_its_linear_frf():
+    """Friction so high nothing slips, chi = 1 (microslip ~ (u/phi_max)^2): the harmonic
+    balance is the reduced model's linear receptance to round-off, and the full model's
+    (all modes) to the reduction's error."""
+    s = BRB.replace(friction=1e6, chi=1.0)
+    red = reduced_model(s)
+    f = np.linspace(75, 85, 11)
+    r = models.harmonic_balance(s, f, 0.7)
+    nz = red.system.n_z
+    H = np.array([red.system.receptance(2 * np.pi * fk)[nz, nz + 1] for fk in f])
+    np.testing.assert_allclose(r.amplitude, 0.7 * np.abs(H), rtol=1e-9)
+    np.testing.assert_allclose(r.phase, np.angle(H), atol=1e-9)
+    L = linear_system(s)
+    w2, V = sla.eigh(L.K0 + L.G.T @ (contact_points(s).KT[:, None] * L.G), L.M)
+    V = V / np.sqrt(np.einsum("ij,ij->j", V, L.M @ V))
+    z = np.array([0.0] * 3 + [s.floor(k) for k in range(1, w2.size - 2)])
+    w = np.sqrt(np.clip(w2, 0, None))
+    Hf = [np.sum((L.S @ V) * (L.E @ V) / (w * w - W * W + 2j * z * w * W))
+          for W in 2 * np.pi * f]
+    np.testing.assert_allclose(r.amplitude, 0.7 * np.abs(Hf), rtol=1e-3)
+
+
+def test_nonlinear_mode_agrees_with_qsma_in_microslip():
+    X = np.geomspace(2e-6, 60e-6, 8)
+    c = models.nonlinear_mode(BRB, X)
+    q = models.modal_amplitude_curve(BRB, amplitude=X)
+    assert c.method == "epmc" and len(c) == X.size
+    np.testing.assert_allclose(c.frequency, q.frequency, rtol=2e-4)
+    np.testing.assert_allclose(c.damping_ratio, q.damping_ratio, rtol=0.05)
+
+
+def test_second_mode_has_its_own_floor():
+    s = BRB.replace(modal_damping=(BRB.floor(1), 9.7e-4))
+    c = models.nonlinear_mode(s, [1e-8], mode=2)
+    assert c.frequency[0] == pytest.approx(reduced_model(s).frequency(2), rel=1e-5)
+    assert c.damping_ratio[0] == pytest.approx(9.7e-4, rel=0.02)
+
+
+def test_effects_run_through_the_nonlinear_mode_as_in_their_modal_form():
+    s = BRB.with_effects({"hardening": {"k3_per_mass": 2e12}}, mode=1,
+                         calibrated_range=(2e-6, 60e-6))
+    X = np.geomspace(5e-6, 50e-6, 5)
+    c = models.nonlinear_mode(s, X)
+    q = models.modal_amplitude_curve(s, amplitude=X)
+    plain = models.nonlinear_mode(BRB, X)
+    assert np.all(c.frequency[-2:] > plain.frequency[-2:] + 0.05)     # it hardens
+    np.testing.assert_allclose(c.frequency, q.frequency, rtol=2e-4)
+    np.testing.assert_allclose(c.damping_ratio, q.damping_ratio, rtol=0.05)
+
+
+def test_phase_resonance_lies_on_the_nonlinear_mode():
+    """Where the forced response's phase crosses -pi/2 the drive balances the damping: its
+    frequency is the nonlinear mode's at that amplitude (light damping)."""
+    f = np.linspace(80.0, 80.6, 61)
+    r = models.harmonic_balance(BRB, f, 0.3)
+    assert r.success
+    k = int(np.argmax(r.phase < -np.pi / 2))
+    t = (-np.pi / 2 - r.phase[k - 1]) / (r.phase[k] - r.phase[k - 1])
+    f90 = f[k - 1] + t * (f[k] - f[k - 1])
+    X90 = r.amplitude[k - 1] + t * (r.amplitude[k] - r.amplitude[k - 1])
+    c = models.nonlinear_mode(BRB, [X90])
+    assert f90 == pytest.approx(c.frequency[0], rel=2e-4)
+
+
+def test_specimen_entries_refuse_bad_input():
+    with pytest.raises(ValueError, match="specimen"):
+        models.harmonic_balance("beam", [80.0], 1.0)
+    with pytest.raises(ValueError, match="mode"):
+        models.nonlinear_mode(BRB, [1e-5], mode=12)
+    with pytest.raises(ValueError, match="amplitude"):
+        models.nonlinear_mode(BRB, [-1e-5])
+    with pytest.raises(ValueError, match="n_modes"):
+        reduced_model(BRB, n_modes=0)
