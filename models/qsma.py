@@ -33,11 +33,13 @@ import scipy.linalg as sla
 
 from iwan_element import AmplitudeCurve, dissipation
 from iwan_element.effects import EFFECTS
+from iwan_element.core.threads import one_blas_thread
 from iwan_element.core.validation import check_magnitude, finite_array
 from iwan_element.core.masing import constants_from_arrays, masing_rows
 
 from .assembly import linear_system
 from .interface import contact_points
+from .reduced import reduced_model
 from .specimens import Specimen
 
 __all__ = ["modal_amplitude_curve", "linear_modes", "natural_frequencies",
@@ -152,14 +154,14 @@ def _condensed(key):
     flexibility at the ports is exact, kept modes plus residual); ``A^-1 G^T`` on every
     coordinate is kept for the release state ``x`` of the transient.
     """
-    from .reduced import reduced_model
     specimen, mode = key
-    w0, phi, R, L, pts = linear_modes(specimen, mode=mode)
-    A = L.K0 + L.G.T @ (pts.KT[:, None] * L.G)
-    if R.size:
-        MR = L.M @ R
-        A = A + w0 * w0 * (MR @ MR.T)
-    YG = sla.cho_solve(sla.cho_factor(A), L.G.T)
+    with one_blas_thread():                  # small dense problems: threads only contend
+        w0, phi, R, L, pts = linear_modes(specimen, mode=mode)
+        A = L.K0 + L.G.T @ (pts.KT[:, None] * L.G)
+        if R.size:
+            MR = L.M @ R
+            A = A + w0 * w0 * (MR @ MR.T)
+        YG = sla.cho_solve(sla.cho_factor(A), L.G.T)
     red = reduced_model(specimen, n_modes=max(8, mode))
     sysm = red.system
     nz = sysm.n_z

@@ -26,6 +26,7 @@ from functools import lru_cache
 import numpy as np
 import scipy.linalg as sla
 
+from iwan_element.core.threads import one_blas_thread
 from iwan_element.harmonic import ModalSystem
 
 from .assembly import linear_system
@@ -102,7 +103,8 @@ def _stuck_modes(specimen: Specimen):
     L = linear_system(specimen)
     pts = contact_points(specimen)
     K = L.K0 + L.G.T @ (pts.KT[:, None] * L.G)
-    w2, V = sla.eigh(0.5 * (K + K.T), L.M)
+    with one_blas_thread():                  # small dense problem: threads only contend
+        w2, V = sla.eigh(0.5 * (K + K.T), L.M)
     V = V / np.sqrt(np.einsum("ij,ij->j", V, L.M @ V))[None, :]
     n_rigid = int(np.sum(w2 < (2 * math.pi * _RIGID_HZ) ** 2))
     s = np.sign(L.S @ V)
