@@ -39,7 +39,7 @@ from iwan_element.core.masing import constants_from_arrays, masing_rows
 
 from .assembly import linear_system
 from .interface import contact_points
-from .reduced import reduced_model
+from .reduced import reduced_model, stuck_modes
 from .specimens import Specimen
 
 __all__ = ["modal_amplitude_curve", "linear_modes", "natural_frequencies",
@@ -68,29 +68,24 @@ def _amplitudes(specimen: Specimen, amplitude) -> np.ndarray:
 def linear_modes(specimen: Specimen, *, mode: int = 1):
     """Stuck-interface mode of a specimen: ``(omega [rad/s], phi, rigid, L, points)``.
 
-    ``phi`` (free coordinates) is mass-normalised with a positive sensor displacement;
-    ``rigid`` holds the rigid-body modes (columns, mass-normalised; empty when clamped).
+    Read from the specimen's reduced model's eigenproblem (:func:`~.reduced.stuck_modes`:
+    the same modes harmonic balance, EPMC and the transient use). ``phi`` (free coordinates)
+    is mass-normalised with a positive sensor displacement; ``rigid`` holds the rigid-body
+    modes (columns, mass-normalised; empty when clamped).
     """
     mode = _check_mode(mode)
-    L = linear_system(specimen)
-    pts = contact_points(specimen)
-    K = L.K0 + L.G.T @ (pts.KT[:, None] * L.G)
+    L, pts, w, V, n_low = stuck_modes(specimen)
     n_rigid = 3 if specimen.boundary == "free-free" else 0
-    top = min(n_rigid + mode + 2, K.shape[0]) - 1
-    w2, V = sla.eigh(K, L.M, subset_by_index=[0, top])
-    n_low = int(np.sum(w2 < (2 * math.pi * 0.5) ** 2))
     if n_low > n_rigid:
         log.warning("%d elastic mode(s) below 0.5 Hz (the interface lets the beams slide "
                     "almost freely); mode numbers count from the next one", n_low - n_rigid)
     k = max(n_low, n_rigid) + mode - 1
-    if k >= w2.size:
-        raise ValueError(f"mode must be <= {w2.size - max(n_low, n_rigid)}, got {mode}")
-    phi = V[:, k] / math.sqrt(V[:, k] @ L.M @ V[:, k])
-    if L.S @ phi < 0:
-        phi = -phi
+    if k >= w.size:
+        raise ValueError(f"mode must be <= {w.size - max(n_low, n_rigid)}, got {mode}")
+    phi = V[:, k]
     if abs(L.S @ phi) < 1e-9 * np.max(np.abs(phi)):
         log.warning("the sensor sits at a node of mode %d", mode)
-    return math.sqrt(abs(w2[k])), phi, V[:, :n_rigid], L, pts
+    return float(w[k]), phi.copy(), V[:, :n_rigid].copy(), L, pts
 
 
 def natural_frequencies(specimen: Specimen, *, n_modes: int = 3,

@@ -33,7 +33,7 @@ from .assembly import linear_system
 from .interface import contact_points
 from .specimens import Specimen
 
-__all__ = ["ReducedModel", "reduced_model", "reduction_error"]
+__all__ = ["ReducedModel", "reduced_model", "reduction_error", "stuck_modes"]
 
 _RIGID_HZ = 0.5        # modes below this are the rigid-body ones (free-free), as qsma's
 
@@ -96,6 +96,15 @@ def reduced_model(specimen: Specimen, *, n_modes: int = 8) -> ReducedModel:
     if isinstance(n_modes, bool) or not isinstance(n_modes, (int, np.integer)) or n_modes < 1:
         raise ValueError(f"n_modes must be an integer >= 1, got {n_modes!r}")
     return _reduced(specimen, int(n_modes))
+
+
+def stuck_modes(specimen: Specimen):
+    """Every mode of the specimen with its joints stuck: ``(L, points, omega [rad/s], Phi,
+    n_low)``, ``Phi`` mass-normalised (columns, each with a non-negative sensor
+    displacement), ``n_low`` the modes below 0.5 Hz (rigid-body ones, or an interface that
+    lets the beams slide), whose ``omega`` is set to 0. The one eigenproblem every route
+    reads (cached)."""
+    return _stuck_modes(specimen)
 
 
 @lru_cache(maxsize=16)

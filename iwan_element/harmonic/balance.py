@@ -8,7 +8,7 @@ excitation (``F`` on the fundamental's cosine)::
     R_h = Z_h + H_zz(h W) G_h(Z) - H_zb(h W) F_h = 0          for every kept harmonic h,
 
 the residual of Krack & Gross (Harmonic Balance for Nonlinear Vibration Problems, Springer
-2019, eq. 2.x) multiplied by the dynamic compliance, which is exact for the linear part.
+2019, ch. 2; ``docs/harmonic_balance.md`` section 3) multiplied by the dynamic compliance, which is exact for the linear part.
 ``G(Z)`` is the alternating frequency-time evaluation on the exact steady loop of each joint
 (:mod:`iwan_element.core.periodic`), and the Jacobian ``I + H_zz dG/dZ`` uses its exact sample
 Jacobian (tangent plus reversal columns). Newton's method solves each frequency, starting
