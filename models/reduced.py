@@ -102,8 +102,7 @@ def stuck_modes(specimen: Specimen):
     """Every mode of the specimen with its joints stuck: ``(L, points, omega [rad/s], Phi,
     n_low)``, ``Phi`` mass-normalised (columns, each with a non-negative sensor
     displacement), ``n_low`` the modes below 0.5 Hz (rigid-body ones, or an interface that
-    lets the beams slide), whose ``omega`` is set to 0. The one eigenproblem every route
-    reads (cached)."""
+    lets the beams slide). The one eigenproblem every route reads (cached)."""
     return _stuck_modes(specimen)
 
 
@@ -119,14 +118,14 @@ def _stuck_modes(specimen: Specimen):
     s = np.sign(L.S @ V)
     s[s == 0] = 1.0
     V = V * s[None, :]
-    w = np.sqrt(np.clip(w2, 0.0, None))
-    w[:n_rigid] = 0.0
-    return L, pts, w, V, n_rigid
+    return L, pts, np.sqrt(np.abs(w2)), V, n_rigid
 
 
 @lru_cache(maxsize=16)
 def _reduced(specimen: Specimen, n_modes: int) -> ReducedModel:
     L, pts, w, V, n_rigid = _stuck_modes(specimen)
+    w = w.copy()
+    w[:n_rigid] = 0.0                        # rigid-body modes: exactly zero frequency
     if L.E is None:
         raise ValueError("the specimen's linear system has no excitation row")
     n_keep = min(n_rigid + n_modes, w.size)
@@ -160,6 +159,8 @@ def reduction_error(specimen: Specimen, *, n_modes: int = 8, frequencies=None) -
     """
     red = reduced_model(specimen, n_modes=n_modes)
     L, pts, w, V, n_rigid = _stuck_modes(specimen)
+    w = w.copy()
+    w[:n_rigid] = 0.0
     n_keep = red.system.omega.size
     full = ModalSystem(omega=w, zeta=np.concatenate([red.system.zeta, np.zeros(w.size - n_keep)]),
                        modes=np.vstack([L.G, L.S[None, :], L.E[None, :]]) @ V,
