@@ -1,4 +1,4 @@
-"""Harmonic balance against a peer: pyHarm-os's Jenkins element on a one-degree-of-freedom oscillator.
+"""Harmonic balance against a peer: pyHarm-os's Jenkins element on a one-dof oscillator.
 
 Run (the peer lives in its own virtual environment, ``pip install iwan-element[peer]`` or
 ``python -m venv --system-site-packages VENV && VENV/bin/pip install pyharm-os``)::
@@ -314,12 +314,12 @@ def time_rows(force, ours, peers, case: Case):
     n = case.frequency.size
     rows = [[f"{force:g}", "ours (Newton, exact Iwan kernel)", f"{ours['wall']:.4f}",
              f"{ours['cold']:.4f}", "1.0", f"{int(ours['iterations'].sum())}",
-             f"{int(ours['converged'].sum())}/{n}"]]
+             f"{int(ours['converged'].sum())}/{n}", f"{ours['energy']:.1e}"]]
     for name, res in peers.items():
         rows.append([f"{force:g}", f"pyHarm ({name})", f"{res['wall']:.4f}",
                      f"{res['cold']:.4f}", f"{res['wall'] / ours['wall']:.1f}",
                      f"{int(res['iterations'].sum())}" if name == "newton" else "-",
-                     f"{int(res['converged'].sum())}/{n}"])
+                     f"{int(res['converged'].sum())}/{n}", "-"])
     return rows
 
 
@@ -361,10 +361,12 @@ def main(argv=None) -> int:
     print()
     _print(head, amp, args.markdown, 13)
     print()
-    _print(["F [N]", "route", "best [s]", "cold [s]", "/ ours", "iterations", "converged"],
+    _print(["F [N]", "route", "best [s]", "cold [s]", "/ ours", "iterations", "converged",
+            "energy error"],
            times, args.markdown, 13)
     print(f"\nwall times: whole sweeps of {case.frequency.size} frequencies, best of "
-          f"{args.repeat}; cold: the first sweep (and building pyHarm's model)")
+          f"{args.repeat}; cold: the first sweep (and building pyHarm's model); energy error:"
+          " largest |input work - dissipation| / input work per period over the sweep")
     ok = True
     for s in solvers:
         n = sum(a[s][0] for a in agree)
