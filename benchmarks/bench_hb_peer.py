@@ -38,7 +38,9 @@ import contextlib
 import io
 import logging
 import math
+import os
 import sys
+import tempfile
 import time
 import warnings
 from dataclasses import dataclass
@@ -155,7 +157,10 @@ def run_ours(case: Case, force: float, repeat: int):
 
 # ---------------------------------------------------------------- the peer
 def peer_version():
-    """pyHarm-os's version, or None when it is not installed."""
+    """pyHarm-os's version, or None when it is not installed. pyHarm keeps a state file
+    under the working directory unless told otherwise: it goes to the temporary folder."""
+    os.environ.setdefault("PYHARM_CONTEXT_FILE", str(Path(tempfile.gettempdir())
+                                                     / "iwan-element-pyharm" / "context.json"))
     try:
         from importlib.metadata import version
         import pyHarm  # noqa: F401
