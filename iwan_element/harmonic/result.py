@@ -65,8 +65,10 @@ class FrequencyResponse(ResultShape):
 
     @property
     def energy_error(self) -> np.ndarray:
-        """``(input - joints - floor) / input`` per point [-]: the harmonic truncation's error
-        (it shrinks as harmonics are added)."""
+        """``(input - joints - floor) / input`` per point [-]. The balance holds exactly for
+        the truncated harmonic force; the joints' loss is the exact loop of the sampled slip
+        path: the difference is the error of the harmonic truncation and of the AFT's
+        sampling (it shrinks with more harmonics and more ``samples`` per period)."""
         d = self.joint_dissipation + self.floor_dissipation
         with np.errstate(divide="ignore", invalid="ignore"):
             return (self.input_work - d) / np.abs(self.input_work)
