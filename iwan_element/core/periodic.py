@@ -118,25 +118,25 @@ def periodic_rows(C: np.ndarray, U: np.ndarray):
 
 
 @njit(cache=True)
+def _add_entry(out, r, P, E, n, m, w):
+    """Add the sample Jacobian entry ``dF_n/du_m = w`` of row ``r`` to the harmonic one."""
+    for c in range(P.shape[0]):
+        pcn = P[c, n] * w
+        for d in range(E.shape[1]):
+            out[r, c, d] += pcn * E[m, d]
+
+
+@njit(cache=True)
 def _harmonic_jacobian(K, A, P, E, shift, out):
     m, N = K.shape
-    nc = P.shape[0]
     for r in range(m):
         for n in range(N):
             # row n of the exact sample Jacobian: diagonal K_n - shift, then the chain
-            w = K[r, n] - shift[r]
-            for c in range(nc):
-                pcn = P[c, n]
-                for d in range(nc):
-                    out[r, c, d] += pcn * w * E[n, d]
+            _add_entry(out, r, P, E, n, n, K[r, n] - shift[r])
             prev = n
             a = A[r, n]
             while a >= 0:
-                w = K[r, a] - K[r, prev]
-                for c in range(nc):
-                    pcn = P[c, n]
-                    for d in range(nc):
-                        out[r, c, d] += pcn * w * E[a, d]
+                _add_entry(out, r, P, E, n, a, K[r, a] - K[r, prev])
                 prev = a
                 a = A[r, a]
 
