@@ -52,6 +52,20 @@ def sweeps_curve(path):
     return ie.sweep_curve(f, F, A, phase, level=level.astype(int), quantity="acceleration")
 
 
+def diagnose_sweeps(spec, sweeps):
+    """``(QSMA at the sweeps' amplitudes, diagnosis of the sweeps against it)``.
+
+    The sweeps are another test than the hammer calibration (shaker attached): the
+    between-test relative frequency and damping offsets are fitted as nuisances, not named.
+    """
+    before = models.modal_amplitude_curve(spec, amplitude=sweeps.amplitude)
+    diag = ie.diagnose_vibration(sweeps, predicted_frequency=before.frequency,
+                                 predicted_damping_ratio=before.damping_ratio,
+                                 predicted_zeta0=spec.interface.damping_floor,
+                                 between_tests=True)
+    return before, diag
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", type=Path, default=Path("out") / "brb_discrepancy")
@@ -68,15 +82,9 @@ def main(argv=None):
     print(f"hammer: {len(hammer)} points {1e6 * hammer.amplitude.min():.3g}-"
           f"{1e6 * hammer.amplitude.max():.3g} um; sweeps: {len(sweeps)} points "
           f"{1e6 * sweeps.amplitude.min():.3g}-{1e6 * sweeps.amplitude.max():.3g} um")
-    before = models.modal_amplitude_curve(spec, amplitude=sweeps.amplitude)
+    before, diag = diagnose_sweeps(spec, sweeps)
     for w in before.warnings:
         print("model:", w)
-    # the sweeps are another test than the hammer calibration (shaker attached): the
-    # between-test relative frequency and damping offsets are fitted as nuisances, not named
-    diag = ie.diagnose_vibration(sweeps, predicted_frequency=before.frequency,
-                                 predicted_damping_ratio=before.damping_ratio,
-                                 predicted_zeta0=spec.interface.damping_floor,
-                                 between_tests=True)
     print(diag.report())
     aug = diag.augment(spec)
     Xp = np.array([20e-6, 100e-6, 200e-6, 300e-6, 315e-6])

@@ -13,6 +13,7 @@ system with mode shape ``s`` on mode ``r`` and gain ``1/s^2``.
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 
@@ -63,6 +64,15 @@ def _check(specimen):
         raise ValueError(f"specimen must be a Specimen, got {type(specimen).__name__}")
 
 
+def _with_range_warnings(specimen, response):
+    """The response with a warning where its converged amplitudes leave the specimen's (or an
+    effect's) calibrated range, as QSMA and the nonlinear modes warn."""
+    X = response.amplitude[response.converged]
+    warns = extrapolation_warnings(specimen, X) if X.size else []
+    return replace(response, warnings=tuple(response.warnings) + tuple(warns)) if warns \
+        else response
+
+
 def harmonic_balance(specimen: Specimen, frequency, force, *, harmonics=(1, 3, 5),
                      samples=None, n_modes: int = 8, progress=None) -> FrequencyResponse:
     """Steady forced response of the specimen at given frequencies and forces.
@@ -90,21 +100,24 @@ def harmonic_balance(specimen: Specimen, frequency, force, *, harmonics=(1, 3, 5
     -------
     FrequencyResponse
         ``amplitude`` [m] and ``phase`` [rad] of the sensor's fundamental displacement, every
-        harmonic, per point ``converged`` and the energy per period.
+        harmonic, per point ``converged`` and the energy per period. ``warnings``: converged
+        amplitudes outside the specimen's calibrated range (or above an effect's).
     """
     _check(specimen)
-    return _hb_system(specimen_system(specimen, n_modes=n_modes), frequency, force,
-                      harmonics=harmonics, samples=samples, progress=progress)
+    return _with_range_warnings(specimen, _hb_system(
+        specimen_system(specimen, n_modes=n_modes), frequency, force, harmonics=harmonics,
+        samples=samples, progress=progress))
 
 
 def frequency_response(specimen: Specimen, force: float, band, *, harmonics=(1, 3, 5),
                        samples=None, n_modes: int = 8, step: float = 0.02) -> FrequencyResponse:
     """The frequency response curve at one force level [N] over ``band`` (start, end) [Hz],
     traced by pseudo-arclength continuation through its turning points
-    (:func:`iwan_element.harmonic.trace`)."""
+    (:func:`iwan_element.harmonic.trace`); warned as :func:`harmonic_balance`."""
     _check(specimen)
-    return trace(specimen_system(specimen, n_modes=n_modes), force, band, harmonics=harmonics,
-                 samples=samples, step=step)
+    return _with_range_warnings(specimen, trace(
+        specimen_system(specimen, n_modes=n_modes), force, band, harmonics=harmonics,
+        samples=samples, step=step))
 
 
 def nonlinear_mode(specimen: Specimen, amplitude=None, *, mode: int = 1, harmonics=(1, 3, 5),

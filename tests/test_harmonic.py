@@ -168,3 +168,17 @@ def test_bad_input_is_refused_naming_the_argument(bad, match):
         harmonic_balance("beam", [50.0], 1.0)
     with pytest.raises(ValueError, match="band"):
         trace(sysm, 1.0, (50.0, 50.0))
+
+
+def test_specimen_response_warns_outside_its_calibrated_range():
+    """``models.harmonic_balance`` says when its answer leaves the range the specimen was
+    calibrated on (the Brake-Reuss preset: 2-60 um), as QSMA and the nonlinear modes do;
+    inside the range it stays silent."""
+    from iwan_element import models
+    spec = models.preset("brake-reuss")
+    lo, hi = spec.calibrated_range
+    r = models.harmonic_balance(spec, [79.0, 80.0], [0.05, 1.5])
+    assert r.converged.all() and r.amplitude[0] < hi < r.amplitude[1]
+    assert any("calibrated on" in w and "extrapolated" in w for w in r.warnings), r.warnings
+    quiet = models.harmonic_balance(spec, [79.0], [0.05])
+    assert lo < quiet.amplitude[0] < hi and quiet.warnings == ()
