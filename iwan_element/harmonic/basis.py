@@ -19,27 +19,23 @@ __all__ = ["Harmonics", "check_harmonics", "element_loop"]
 def element_loop(element, y, v):
     """Steady-loop force of a history-dependent element over one period of samples.
 
-    The element is reset, loaded to the sample of the largest ``|y|`` and driven through two
-    periods from there (one settles a Masing element, the second is the steady one for any
-    element that settles within a period); returns ``(F samples, dissipation over the second
-    period [J])``.
+    The element is reset, loaded to the sample of the largest ``|y|`` (its first loading)
+    and driven through one period from there: for the elements the modal effects use
+    (elastic, viscous, Masing banks of Jenkins sliders) the loop then closes on itself, as
+    the joints' do (:mod:`iwan_element.core.periodic`). Returns the force samples and the
+    period's dissipation [J].
     """
     N = y.size
     k0 = int(np.argmax(np.abs(y)))
     element.reset()
     element.trial(float(y[k0]), float(v[k0]))
     element.commit()
+    d0 = float(getattr(element, "dissipated_energy", 0.0))
     F = np.empty(N)
-    d0 = 0.0
-    for rep in range(2):
-        if rep == 1:
-            d0 = float(getattr(element, "dissipated_energy", 0.0))
-        for j in range(1, N + 1):
-            m = (k0 + j) % N
-            f, _ = element.trial(float(y[m]), float(v[m]))
-            element.commit()
-            if rep == 1:
-                F[m] = f
+    for j in range(1, N + 1):
+        m = (k0 + j) % N
+        F[m] = element.trial(float(y[m]), float(v[m]))[0]
+        element.commit()
     return F, float(getattr(element, "dissipated_energy", 0.0)) - d0
 
 
@@ -128,7 +124,9 @@ class Harmonics:
         """AFT of the nonlinear coordinates' forces from their coefficients ``cz`` (n_z, nc):
         the joints' deficits ``g = F(z) - KT z`` on their exact steady loops (exact
         Jacobian), then the element ports' ``gain F(y, y')`` on the steady loop of their
-        elements (:func:`element_loop`; Jacobian by forward differences).
+        elements (:func:`element_loop`; Jacobian by forward differences: the elements'
+        tangents alone leave out their reversal columns, and Newton then failed on the
+        measured Brake-Reuss sweeps).
         Returns ``(cg, dcg/dcz or None, dissipation per period [J] per coordinate)``."""
         nj = len(system.joints)
         Z = cz[:nj] @ self.E.T
@@ -154,8 +152,8 @@ class Harmonics:
         return cg, (np.concatenate([J, Je]) if jacobian else None), np.concatenate([D, De])
 
     def _port(self, port, c, W):
-        y = self.E @ c
-        F, D = element_loop(port.element, y, W * (self.dE @ c))
+        """Force coefficients and dissipation of an element port with coefficients ``c``."""
+        F, D = element_loop(port.element, self.E @ c, W * (self.dE @ c))
         return port.gain * (self.P @ F), port.gain * D
 
     def linear_operator(self, H_list, rows, cols_):
