@@ -50,10 +50,7 @@ def patch_layout(specimen: Specimen, *, patch_size: float) -> PatchLayout:
     """The contact patches of a specimen's lap: grid cells of about ``patch_size`` [m] with
     the cone pressure's force and contact area (module docstring, step 1)."""
     s = specimen
-    if isinstance(patch_size, bool) or not isinstance(patch_size, (int, float)) or \
-            not 0 < patch_size <= s.overlap:
-        raise ValueError(f"patch_size must be a length in (0, overlap={s.overlap}] m, "
-                         f"got {patch_size!r}")
+    _check_build(s, patch_size, 1)
     nx = max(1, int(round(s.overlap / patch_size)))
     ny = max(1, int(round(s.width / patch_size)))
     k = 24                                  # pressure samples per cell and direction
@@ -117,13 +114,11 @@ def _slip_operator(a: SolidPart, b: SolidPart, patches: PatchLayout):
 
 
 def _fixed_coordinates(specimen: Specimen, a: SolidPart) -> np.ndarray:
+    """Beam A's end face x = 0 (clamped-free); none free-free (checked by _check_build)."""
     if specimen.boundary == "free-free":
         return np.zeros(0, int)
-    if specimen.boundary == "clamped-free":
-        nodes = np.nonzero(a.positions[:, 0] < 1e-9 * specimen.beam_length)[0]
-        return (3 * nodes[:, None] + np.arange(3)).ravel()
-    raise ValueError(f"specimen.boundary must be 'free-free' or 'clamped-free' for a solid "
-                     f"specimen, got {specimen.boundary!r}")
+    nodes = np.nonzero(a.positions[:, 0] < 1e-9 * specimen.beam_length)[0]
+    return (3 * nodes[:, None] + np.arange(3)).ravel()
 
 
 def _sensor_row(specimen: Specimen, a: SolidPart, b: SolidPart) -> np.ndarray:
@@ -182,6 +177,21 @@ def _ritz_basis(K_ref, M, Gt, n_keep):
     return T @ Q, np.sort(w2)
 
 
+def _check_build(specimen, patch_size, n_modes):
+    """Refuse bad build options before any meshing."""
+    if not isinstance(specimen, Specimen):
+        raise TypeError(f"specimen must be a Specimen, got {type(specimen).__name__}")
+    if specimen.boundary not in ("free-free", "clamped-free"):
+        raise ValueError(f"specimen.boundary must be 'free-free' or 'clamped-free' for a solid "
+                         f"specimen, got {specimen.boundary!r}")
+    if isinstance(patch_size, bool) or not isinstance(patch_size, (int, float)) or \
+            not 0 < patch_size <= specimen.overlap:
+        raise ValueError(f"patch_size must be a length in (0, overlap={specimen.overlap}] m, "
+                         f"got {patch_size!r}")
+    if isinstance(n_modes, bool) or not isinstance(n_modes, int) or n_modes < 1:
+        raise ValueError(f"n_modes must be an integer >= 1, got {n_modes!r}")
+
+
 def solid_specimen(specimen: Specimen, parts: tuple, *, patch_size: float = 0.005,
                    n_modes: int = 20, keep_full: bool = False) -> SolidSpecimen:
     """A :class:`SolidSpecimen` from a specimen and its two meshed halves.
@@ -202,12 +212,9 @@ def solid_specimen(specimen: Specimen, parts: tuple, *, patch_size: float = 0.00
     keep_full : bool, keyword-only
         Keep the full sparse matrices on ``model.full`` (to check the reduction).
     """
-    if not isinstance(specimen, Specimen):
-        raise TypeError(f"specimen must be a Specimen, got {type(specimen).__name__}")
+    _check_build(specimen, patch_size, n_modes)
     if len(parts) != 2 or not all(isinstance(p, SolidPart) for p in parts):
         raise TypeError("parts must be two SolidPart (beam A, beam B)")
-    if isinstance(n_modes, bool) or not isinstance(n_modes, int) or n_modes < 1:
-        raise ValueError(f"n_modes must be an integer >= 1, got {n_modes!r}")
     t0 = time.perf_counter()
     a, b = parts
     patches = patch_layout(specimen, patch_size=patch_size)
@@ -257,6 +264,7 @@ def solid_preset(name: str, *, mesh_size: float = 0.008, lap_mesh_size: float | 
     poissons_ratio : float, keyword-only
     """
     s = preset(name)
+    _check_build(s, patch_size, n_modes)
     lms = min(mesh_size, 0.5 * patch_size) if lap_mesh_size is None else lap_mesh_size
     t0 = time.perf_counter()
     parts = lap_beam_parts(s, mesh_size=mesh_size, lap_mesh_size=lms,
