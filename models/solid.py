@@ -84,8 +84,9 @@ class SolidModel:
         Sizes and wall times (``n_full``, ``n_reduced``, ``n_modes``, ``mesh_s``,
         ``reduction_s``, ...), JSON-safe.
     full : dict or None
-        The full sparse matrices (``M``, ``K0``, ``Kb``, ``G``, ``S``) when built with
-        ``keep_full=True`` (for checking the reduction), else ``None``.
+        The full sparse matrices (``M``, ``K0``, ``Kb``, ``G``, ``S``), the reduction basis
+        ``basis`` and the kept full coordinates ``free`` when built with ``keep_full=True``
+        (for checking the reduction), else ``None``.
     """
 
     system: object

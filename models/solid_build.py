@@ -210,7 +210,8 @@ def solid_specimen(specimen: Specimen, parts: tuple, *, patch_size: float = 0.00
     n_modes : int, keyword-only
         Elastic modes of the stuck structure kept in the reduction (``>= 1``).
     keep_full : bool, keyword-only
-        Keep the full sparse matrices on ``model.full`` (to check the reduction).
+        Keep the full sparse matrices, the basis ``T`` (full free coordinates = ``T q``)
+        and the free coordinates' indices on ``model.full`` (to check the reduction).
     """
     _check_build(specimen, patch_size, n_modes)
     if len(parts) != 2 or not all(isinstance(p, SolidPart) for p in parts):
@@ -238,7 +239,8 @@ def solid_specimen(specimen: Specimen, parts: tuple, *, patch_size: float = 0.00
             "n_patches": len(patches), "patch_size": [float(v) for v in patches.size],
             "reduction_s": time.perf_counter() - t0,
             "stuck_frequencies_hz": (np.sqrt(np.abs(w2[n_rigid:])) / (2 * math.pi)).tolist()}
-    full = {"M": M, "K0": K0, "Kb": Kb, "G": Gt, "S": S} if keep_full else None
+    full = {"M": M, "K0": K0, "Kb": Kb, "G": Gt, "S": S, "basis": T,
+            "free": free} if keep_full else None
     log.info("solid %s: %d -> %d coordinates, %d patches, %.2f s", specimen.name, M.shape[0],
              T.shape[1], len(patches), info["reduction_s"])
     return SolidSpecimen(specimen, SolidModel(system=red, patches=patches, info=info, full=full))
