@@ -80,7 +80,7 @@ def test_reduction_matches_the_full_model_stuck_and_at_other_interface_stiffness
         KT = contact_points(v).KT
         ref = _full_frequencies(full, KT, 12)[6:]
         red = natural_frequencies(v, n_modes=12)[6:]
-        tol = 1e-6 if factor == 1.0 else 2e-3             # kept modes exact at the reference
+        tol = 1e-6 if factor == 1.0 else 1e-3     # exact at the reference; measured 1e-4 away
         assert np.max(np.abs(red / ref - 1)) < tol, (factor, red, ref)
 
 
@@ -102,7 +102,9 @@ def test_qsma_on_the_solid_gives_the_1d_amplitude_dependence(brb):
     drop3, drop1 = 1 - c3.frequency / f3, 1 - c1.frequency / f1
     z3, z1 = c3.damping_ratio - s.floor(1), c1.damping_ratio - s.floor(1)
     assert np.all(np.diff(c3.frequency) < 0) and np.all(np.diff(z3) > 0)
-    # same order: measured 0.84 (frequency drop) and 0.84 (joint damping) on this mesh
+    # same order: measured 0.85 (frequency drop) and 0.84-0.85 (joint damping) with these
+    # 8.5 mm patches, 1.02-1.03 with 6.4 mm ones (benchmarks/bench_solid.py): coarse patches
+    # lump the cone pressure gradient that makes the microslip
     assert np.all((drop3 / drop1 > 0.6) & (drop3 / drop1 < 1.5))
     assert np.all((z3 / z1 > 0.6) & (z3 / z1 < 1.5))
 
