@@ -29,7 +29,6 @@ per patch). Printed:
 from __future__ import annotations
 
 import argparse
-import math
 import time
 
 import numpy as np

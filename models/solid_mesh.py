@@ -24,7 +24,6 @@ NGsolve is the optional extra ``iwan-element[fem]``; it is imported only when me
 """
 from __future__ import annotations
 
-import logging
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -34,7 +33,6 @@ from .specimens import Specimen
 
 __all__ = ["SolidPart", "part_from_fem", "part_from_ngsolve", "lap_beam_parts", "bar_part"]
 
-log = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True, eq=False)
