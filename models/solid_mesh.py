@@ -34,7 +34,6 @@ from .specimens import Specimen
 __all__ = ["SolidPart", "part_from_fem", "part_from_ngsolve", "lap_beam_parts", "bar_part"]
 
 
-
 @dataclass(frozen=True, eq=False)
 class SolidPart:
     """One body's linear FE data (SI units).
