@@ -140,8 +140,12 @@ def _mesh_boxes(boxes, *, face_z, face_sign, mesh_size, face_mesh_size):
     """Netgen mesh of the union of axis-aligned boxes ((x0,y0,z0), (x1,y1,z1)); the
     horizontal faces at ``z = face_z`` whose outward normal is ``face_sign * z`` named
     ``"lap"`` and meshed at ``face_mesh_size``."""
-    import ngsolve as ngs
-    from netgen.occ import Box, OCCGeometry, Pnt
+    try:
+        import ngsolve as ngs
+        from netgen.occ import Box, OCCGeometry, Pnt
+    except ImportError as err:
+        raise ImportError("meshing a solid specimen needs NGsolve: pip install "
+                          "\"iwan-element[fem]\" (or pip install ngsolve)") from err
     shape = None
     for lo, hi in boxes:
         b = Box(Pnt(*lo), Pnt(*hi))
