@@ -19,6 +19,10 @@
 * :mod:`~iwan_element.models.frequency` - harmonic balance (:func:`harmonic_balance`),
   continuation (:func:`frequency_response`) and nonlinear modes by EPMC
   (:func:`nonlinear_mode`);
+* :mod:`~iwan_element.models.solid_mesh`, :mod:`~iwan_element.models.solid_build`,
+  :mod:`~iwan_element.models.solid` - solid finite-element halves (Netgen, or the user's
+  mesh), contact patches and the reduced linear system QSMA reads (:func:`solid_preset`;
+  extra ``iwan-element[fem]``);
 * :mod:`~iwan_element.models.solver` - Exudyn solver settings shared by the runs;
 * :mod:`~iwan_element.models.calibration` - interface calibration from vibration data and
   from joint / modal Iwan fits;
@@ -34,13 +38,16 @@ from .reduced import ReducedModel, reduced_model, reduction_error
 from .machine import QuasiStaticResult, quasi_static_test
 from .qsma import modal_amplitude_curve, natural_frequencies
 from .transient import RingdownResult, ringdown
+from .solid import SolidSpecimen
+from .solid_build import solid_preset
 from .specimens import Excitation, InterfaceModel, Specimen, preset
 
 __all__ = ["example_test_path", "preset", "modal_amplitude_curve", "natural_frequencies",
            "ringdown", "quasi_static_test", "forced_response", "Specimen", "InterfaceModel",
            "Excitation", "RingdownResult", "QuasiStaticResult", "ForcedResponseResult",
            "harmonic_balance", "frequency_response", "nonlinear_mode", "reduced_model",
-           "reduction_error", "ReducedModel"]
+           "reduction_error", "ReducedModel",
+           "solid_preset", "SolidSpecimen"]
 
 
 def example_test_path() -> Path:

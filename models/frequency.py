@@ -28,6 +28,7 @@ from iwan_element.harmonic.system import ElementPort
 
 from .qsma import extrapolation_warnings
 from .reduced import reduced_model
+from .solid import SolidSpecimen
 from .specimens import Specimen
 from .transient import _Zero
 
@@ -60,8 +61,9 @@ def specimen_system(specimen: Specimen, *, n_modes: int = 8) -> ModalSystem:
 
 
 def _check(specimen):
-    if not isinstance(specimen, Specimen):
-        raise ValueError(f"specimen must be a Specimen, got {type(specimen).__name__}")
+    if not isinstance(specimen, (Specimen, SolidSpecimen)):
+        raise ValueError(f"specimen must be a Specimen or SolidSpecimen, got "
+                         f"{type(specimen).__name__}")
 
 
 def _with_range_warnings(specimen, response):

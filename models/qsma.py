@@ -40,6 +40,7 @@ from iwan_element.core.masing import constants_from_arrays, masing_rows
 from .assembly import linear_system
 from .interface import contact_points
 from .reduced import reduced_model, stuck_modes
+from .solid import SolidSpecimen
 from .specimens import Specimen
 
 __all__ = ["modal_amplitude_curve", "linear_modes", "natural_frequencies",
@@ -75,7 +76,7 @@ def linear_modes(specimen: Specimen, *, mode: int = 1):
     """
     mode = _check_mode(mode)
     L, pts, w, V, n_low = stuck_modes(specimen)
-    n_rigid = 3 if specimen.boundary == "free-free" else 0
+    n_rigid = L.rigid_body_modes
     if n_low > n_rigid:
         log.warning("%d elastic mode(s) below 0.5 Hz (the interface lets the beams slide "
                     "almost freely); mode numbers count from the next one", n_low - n_rigid)
@@ -252,8 +253,9 @@ def modal_amplitude_curve(specimen: Specimen, *, mode: int = 1, amplitude=None) 
         applied on top (``docs/vibration_effects.md``). ``warnings`` states amplitudes
         outside the specimen's (or an effect's) calibrated range (also logged).
     """
-    if not isinstance(specimen, Specimen):
-        raise ValueError(f"specimen must be a Specimen, got {type(specimen).__name__}")
+    if not isinstance(specimen, (Specimen, SolidSpecimen)):
+        raise ValueError(f"specimen must be a Specimen or SolidSpecimen, got "
+                         f"{type(specimen).__name__}")
     r = static_modal_load(specimen, amplitude, mode=mode)
     slip = np.abs(r["slip"])
     D = np.zeros(r["amplitude"].size)

@@ -31,6 +31,7 @@ from iwan_element.harmonic import ModalSystem
 
 from .assembly import linear_system
 from .interface import contact_points
+from .solid import SolidSpecimen
 from .specimens import Specimen
 
 __all__ = ["ReducedModel", "reduced_model", "reduction_error", "stuck_modes"]
@@ -91,8 +92,9 @@ def reduced_model(specimen: Specimen, *, n_modes: int = 8) -> ReducedModel:
     -------
     ReducedModel
     """
-    if not isinstance(specimen, Specimen):
-        raise ValueError(f"specimen must be a Specimen, got {type(specimen).__name__}")
+    if not isinstance(specimen, (Specimen, SolidSpecimen)):
+        raise ValueError(f"specimen must be a Specimen or SolidSpecimen, got "
+                         f"{type(specimen).__name__}")
     if isinstance(n_modes, bool) or not isinstance(n_modes, (int, np.integer)) or n_modes < 1:
         raise ValueError(f"n_modes must be an integer >= 1, got {n_modes!r}")
     return _reduced(specimen, int(n_modes))
