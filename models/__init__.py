@@ -9,7 +9,11 @@
   :func:`~iwan_element.models.qsma.linear_modes`, :func:`natural_frequencies` (with the joint
   stuck or without it);
 * :mod:`~iwan_element.models.transient` - the transient route (:func:`ringdown`, one release
-  level per call; frequency and damping by :func:`iwan_element.amplitude_curve`);
+  level per call, one mode or several at once through the same interface; frequency and
+  damping by :func:`iwan_element.amplitude_curve`; result in
+  :mod:`~iwan_element.models.ringdown_result`);
+* :mod:`~iwan_element.models.damping` - the linear damping floor, one ratio per mode, as the
+  stuck system's modal damping matrix (the ring-down's and the stepped sine's);
 * :mod:`~iwan_element.models.machine` - the joint's quasi-static test in a machine grip
   (:func:`quasi_static_test`);
 * :mod:`~iwan_element.models.forced` - stepped-sine forced response at several force levels
