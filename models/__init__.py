@@ -12,6 +12,8 @@
   level per call, one mode or several at once through the same interface; frequency and
   damping by :func:`iwan_element.amplitude_curve`; result in
   :mod:`~iwan_element.models.ringdown_result`);
+* :mod:`~iwan_element.models.coupling` - each mode's damping with and without the other
+  modes ringing through the same interface (:func:`mode_coupling`);
 * :mod:`~iwan_element.models.damping` - the linear damping floor, one ratio per mode, as the
   stuck system's modal damping matrix (the ring-down's and the stepped sine's);
 * :mod:`~iwan_element.models.machine` - the joint's quasi-static test in a machine grip
@@ -27,6 +29,7 @@
 from importlib import resources
 from pathlib import Path
 
+from .coupling import ModeCouplingResult, mode_coupling
 from .forced import ForcedResponseResult, forced_response
 from .machine import QuasiStaticResult, quasi_static_test
 from .qsma import modal_amplitude_curve, natural_frequencies
@@ -34,8 +37,9 @@ from .transient import RingdownResult, ringdown
 from .specimens import Excitation, InterfaceModel, Specimen, preset
 
 __all__ = ["example_test_path", "preset", "modal_amplitude_curve", "natural_frequencies",
-           "ringdown", "quasi_static_test", "forced_response", "Specimen", "InterfaceModel",
-           "Excitation", "RingdownResult", "QuasiStaticResult", "ForcedResponseResult"]
+           "ringdown", "mode_coupling", "quasi_static_test", "forced_response", "Specimen",
+           "InterfaceModel", "Excitation", "RingdownResult", "ModeCouplingResult",
+           "QuasiStaticResult", "ForcedResponseResult"]
 
 
 def example_test_path() -> Path:

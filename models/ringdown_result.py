@@ -64,7 +64,9 @@ class RingdownResult(ResultShape):
         Positions [m] along the beams' axis where the response is read (default: the
         specimen's ``sensor_position``).
     sensor_displacement, sensor_acceleration : ndarray, shape (n_sensors, n)
-        Transverse displacement [m] and acceleration [m/s^2] there (all modes).
+        Transverse displacement [m] and acceleration [m/s^2] there (all modes); the
+        acceleration by central second differences of the displacement (relative error
+        ``(w h)^2 / 12``, 8e-4 at 64 steps per period).
     warnings : tuple of str
         The decay curves' warnings (prefixed by their mode in a multi-mode run), and an
         energy balance off by more than :data:`ENERGY_TOL` (when recorded).
