@@ -4,7 +4,7 @@ amplitude with and without the other modes ringing through the same joint.
 :func:`mode_coupling` runs the multi-mode ring-down (:func:`~iwan_element.models.ringdown`
 with ``amplitude={mode: X, ...}``) and one single-mode ring-down per mode from the same
 amplitude, for the same duration (each at ``steps_per_period`` of its own period), and compares each mode's
-decay curves at the same amplitudes (:func:`coupling_figure`). A modal Iwan model (one
+decay curves at the same amplitudes (:func:`compare_curves`). A modal Iwan model (one
 uncoupled single-degree-of-freedom system per mode) would give ratio 1; the transient of the
 whole specimen shows how much one mode's slip raises another's damping
 (``docs/multi_mode.md``).
@@ -23,36 +23,37 @@ from .ringdown_result import RingdownResult
 from .specimens import Specimen
 from .transient import ringdown
 
-__all__ = ["coupling_figure", "ModeCouplingResult", "mode_coupling"]
+__all__ = ["compare_curves", "ModeCouplingResult", "mode_coupling"]
 
 
-def coupling_figure(together: AmplitudeCurve, alone: AmplitudeCurve) -> dict:
-    """One mode's decay with the other modes (``together``) against its decay alone, at the
-    amplitudes of ``together`` that lie inside ``alone``'s range (``alone``'s frequency and
-    damping interpolated linearly in log amplitude).
+def compare_curves(curve: AmplitudeCurve, reference: AmplitudeCurve) -> dict:
+    """``curve`` against ``reference`` at the amplitudes of ``curve`` that lie inside
+    ``reference``'s range (``reference``'s frequency and damping interpolated linearly in
+    log amplitude): a mode with the other modes against alone, a prediction against a
+    measurement.
 
     Returns
     -------
     dict of ndarray
-        ``amplitude`` [m], ``frequency_together``, ``frequency_alone`` [Hz],
-        ``damping_together``, ``damping_alone`` [-], ``damping_ratio`` (together over
-        alone [-]) and ``frequency_shift`` (together over alone minus 1 [-]); empty arrays
-        when the ranges do not overlap.
+        ``amplitude`` [m], ``frequency``, ``frequency_reference`` [Hz], ``damping``,
+        ``damping_reference`` [-], ``damping_ratio`` (curve over reference [-]) and
+        ``frequency_shift`` (curve over reference minus 1 [-]); empty arrays when the
+        ranges do not overlap.
     """
-    for name, c in (("together", together), ("alone", alone)):
+    for name, c in (("curve", curve), ("reference", reference)):
         if not isinstance(c, AmplitudeCurve):
             raise ValueError(f"{name} must be an AmplitudeCurve, got {type(c).__name__}")
-    order = np.argsort(alone.amplitude)
-    la = np.log(alone.amplitude[order])
-    X = together.amplitude
-    inside = (len(alone) >= 2) & (X >= alone.amplitude.min()) & (X <= alone.amplitude.max())
+    order = np.argsort(reference.amplitude)
+    la = np.log(reference.amplitude[order])
+    X = curve.amplitude
+    inside = (len(reference) >= 2) & (X >= reference.amplitude.min()) \
+        & (X <= reference.amplitude.max())
     x = np.log(X[inside])
-    fa = np.interp(x, la, alone.frequency[order])
-    za = np.interp(x, la, alone.damping_ratio[order])
-    ft, zt = together.frequency[inside], together.damping_ratio[inside]
-    return {"amplitude": X[inside], "frequency_together": ft, "frequency_alone": fa,
-            "damping_together": zt, "damping_alone": za, "damping_ratio": zt / za,
-            "frequency_shift": ft / fa - 1.0}
+    fr = np.interp(x, la, reference.frequency[order])
+    zr = np.interp(x, la, reference.damping_ratio[order])
+    f, z = curve.frequency[inside], curve.damping_ratio[inside]
+    return {"amplitude": X[inside], "frequency": f, "frequency_reference": fr, "damping": z,
+            "damping_reference": zr, "damping_ratio": z / zr, "frequency_shift": f / fr - 1.0}
 
 
 @dataclass(frozen=True)
@@ -67,7 +68,7 @@ class ModeCouplingResult(ResultShape):
     alone : tuple of RingdownResult
         One single-mode ring-down per mode of ``modes``, same amplitude and duration.
     figures : dict
-        ``{mode: coupling_figure(...)}``.
+        ``{mode: compare_curves(with the other modes, alone)}``.
     warnings : tuple of str
     """
 
@@ -100,9 +101,12 @@ class ModeCouplingResult(ResultShape):
         lines = [f"mode coupling through the interface: modes {', '.join(map(str, self.modes))}"
                  f" released together ({self.together.wall_time:.3g} s wall) and alone"]
         for r, f in self.figures.items():
-            rows = zip(1e6 * f["amplitude"], 100 * f["damping_together"],
-                       100 * f["damping_alone"], f["damping_ratio"], 1e6 * f["frequency_shift"])
-            lines.append(f"  mode {r}:")
+            n = len(f["amplitude"])
+            k = np.unique(np.linspace(0, n - 1, min(n, 12)).round().astype(int))
+            rows = zip(1e6 * f["amplitude"][k], 100 * f["damping"][k],
+                       100 * f["damping_reference"][k], f["damping_ratio"][k],
+                       1e6 * f["frequency_shift"][k])
+            lines.append(f"  mode {r} ({n} points, {len(k)} shown):")
             lines += table_lines((("X [um]", "10.4g"), ("zeta together [%]", "18.4f"),
                                   ("zeta alone [%]", "15.4f"), ("ratio", "7.3f"),
                                   ("df/f [ppm]", "11.1f")), rows, indent=4)
@@ -166,7 +170,7 @@ def mode_coupling(specimen: Specimen, *, amplitude: dict, duration: float,
     alone = tuple(ringdown(specimen, mode=r, amplitude=amplitude[r], duration=duration,
                            steps_per_period=steps_per_period, n_periods=n_periods)
                   for r in modes)
-    figures = {r: coupling_figure(together.mode_curve(r), a.curve) for r, a in zip(modes, alone)}
+    figures = {r: compare_curves(together.mode_curve(r), a.curve) for r, a in zip(modes, alone)}
     warns = [f"mode {r}: its curves with and without the other modes do not overlap in "
              "amplitude" for r, f in figures.items() if not len(f["amplitude"])]
     warns += [f"together: {x}" for x in together.warnings]

@@ -1,15 +1,17 @@
 """The result of the specimen's transient ring-down (:func:`~iwan_element.models.ringdown`)."""
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field, replace
 
 import numpy as np
+from scipy import signal
 
-from iwan_element import AmplitudeCurve
+from iwan_element import AmplitudeCurve, amplitude_curve
 from iwan_element.core.result_shape import ResultShape, panels
 from iwan_element.core.serialize import json_safe
 
-__all__ = ["RingdownResult", "ENERGY_TOL", "with_energy_warning"]
+__all__ = ["RingdownResult", "ENERGY_TOL", "with_energy_warning", "decay_curve"]
 
 #: Largest relative energy-balance error a ring-down may show and still be a success.
 ENERGY_TOL = 1e-3
@@ -51,7 +53,9 @@ class RingdownResult(ResultShape):
         ``kinetic_at_release`` [J] and ``joint_quadrature_error`` [-]: with
         ``record_energy``, the joints' exact work minus the trapezoidal work of their
         recorded forces, over the release energy; the time integrator's share of the energy
-        balance (it converges with ``steps_per_period``), else None.
+        balance (it converges with ``steps_per_period``), else None; ``overflow_steps``:
+        steps that closed more slip loops than the compiled interface law holds (their
+        joint forces not exact; warned).
     modes : tuple of int
         The elastic modes released, ascending (``(mode,)`` for a single-mode call).
     curves : tuple of AmplitudeCurve
@@ -88,6 +92,32 @@ class RingdownResult(ResultShape):
     sensor_positions: np.ndarray | None = None
     sensor_displacement: np.ndarray | None = None
     sensor_acceleration: np.ndarray | None = None
+
+    def sensor_curve(self, sensor: int, band, *, quantity: str = "acceleration",
+                     n_periods: float | None = None) -> AmplitudeCurve:
+        """The decay curve of the mode in ``band`` [Hz] read from sensor ``sensor`` (an index
+        of :attr:`sensor_positions`) the way a measured record is read
+        (:func:`iwan_element.amplitude_curve` on its ``quantity``, "acceleration" or
+        "displacement"; amplitudes are displacements [m]), the trapezoidal rule's period
+        error removed. The record is first decimated (``scipy.signal.decimate``, FIR, zero
+        phase) to about 32 samples per period of the band's centre when it holds more.
+        ``n_periods``: fixed windows (default: windows that follow the decay)."""
+        if quantity not in ("acceleration", "displacement"):
+            raise ValueError(f"quantity must be 'acceleration' or 'displacement', got {quantity!r}")
+        if isinstance(sensor, bool) or not isinstance(sensor, int) or \
+                not 0 <= sensor < len(self.sensor_positions):
+            raise ValueError(f"sensor must be an index below {len(self.sensor_positions)}, "
+                             f"got {sensor!r}")
+        lo, hi = (float(b) for b in band)
+        h = self.metadata["h"]
+        y = (self.sensor_acceleration if quantity == "acceleration"
+             else self.sensor_displacement)[sensor]
+        q = max(1, int(1.0 / (h * 16.0 * (lo + hi))))
+        t = self.t
+        if q > 1:
+            y, t = signal.decimate(y, q, ftype="fir", zero_phase=True), t[::q]
+        return decay_curve(t, y, h, 0.5 * (lo + hi), n_periods, band=(lo, hi),
+                           quantity=quantity, notes=f"sensor at {self.sensor_positions[sensor]:.4g} m")
 
     def mode_curve(self, mode: int) -> AmplitudeCurve:
         """The decay curve of elastic mode ``mode`` (one of :attr:`modes`)."""
@@ -177,3 +207,18 @@ def with_energy_warning(out: RingdownResult) -> RingdownResult:
             f"{ENERGY_TOL:g}; the time integrator's quadrature of the joint forces accounts for "
             f"{out.metadata['joint_quadrature_error']:.2g}): refine steps_per_period",))
     return out
+
+
+def decay_curve(t, y, h, f0, n_periods, *, notes, band=None,
+                quantity: str = "displacement") -> AmplitudeCurve:
+    """Frequency and damping of a computed decay by :func:`iwan_element.amplitude_curve`
+    (``quantity`` of the record ``y`` at times ``t`` [s]; band ``(0.5, 1.5) f0`` around the
+    stuck frequency ``f0`` [Hz] unless ``band`` is given; windows of ``n_periods``, or
+    following the decay when None; no second extraction: the record is noise-free), the
+    trapezoidal rule's period error of the step ``h`` [s] removed
+    (``w_true = tan(w h / 2) 2 / h``)."""
+    band = (0.5 * f0, 1.5 * f0) if band is None else band
+    c = amplitude_curve(t, y, quantity=quantity, band=band, n_periods=n_periods, compare=False)
+    f_true = np.tan(math.pi * c.frequency * h) / (math.pi * h)
+    return replace(c, frequency=f_true, method="ringdown",
+                   notes=f"{notes}; {c.notes}" if c.notes else notes)

@@ -25,21 +25,20 @@ multi-mode run and the coupling of the modes through the interface.
 """
 from __future__ import annotations
 
-import dataclasses
 import math
 import time
 
 import exudyn as exu
 import numpy as np
 
-from iwan_element import AmplitudeCurve, amplitude_curve, backbone_work
+from iwan_element import backbone_work
 from iwan_element.core.validation import check_scalar
 
 from .assembly import axis_rows, build_specimen_model
 from .damping import FloorWork, attach_floor_damping, floor_damping
 from .modal_effects import ModalEffects
 from .qsma import static_modal_load
-from .ringdown_result import RingdownResult, with_energy_warning
+from .ringdown_result import RingdownResult, decay_curve, with_energy_warning
 from .solver import roundoff_force, solver_settings
 from .specimens import Specimen
 
@@ -105,18 +104,6 @@ def _initial_energy(model, rel, effs) -> tuple:
     for eff in effs:
         e0 += eff.start(eff.s * float(eff.a_free @ rel["x"]))
     return kin0, e0
-
-
-def _decay_curve(t, modal, h, f0, n_periods, *, notes) -> AmplitudeCurve:
-    """Frequency and damping of the modal decay by :func:`iwan_element.amplitude_curve`
-    (displacement, band ``(0.5, 1.5) f0`` around the stuck frequency ``f0`` [Hz], windows
-    of ``n_periods``, no second extraction: the record is noise-free), the trapezoidal
-    rule's period error removed (``w_true = tan(w h / 2) 2 / h``)."""
-    c = amplitude_curve(t, modal, quantity="displacement", band=(0.5 * f0, 1.5 * f0),
-                        n_periods=n_periods, compare=False)
-    f_true = np.tan(np.pi * c.frequency * h) / (np.pi * h)
-    return dataclasses.replace(c, frequency=f_true, method="ringdown",
-                               notes=f"{notes}; {c.notes}" if c.notes else notes)
 
 
 class _Recorder:
@@ -249,6 +236,7 @@ def ringdown(specimen: Specimen, *, mode: int | None = None, amplitude, sensors=
     return with_energy_warning(_result(specimen, amp, rec, rel, rows, positions, h, n, {
         "n_periods": n_periods, "steps_per_period": steps_per_period, "wall": wall, "e0": e0,
         "kin0": kin0, "quad": quad, "n_points": len(model.points),
+        "overflow": len(getattr(model.interface, "overflow_times", ())),
         "effects": tuple(nm for eff in effs for nm in eff.names)}))
 
 
@@ -272,7 +260,7 @@ def _result(specimen, amp, rec, rel, rows, positions, h, n, run) -> RingdownResu
         # (scipy.signal.decimate) left end effects that cut the short records' curves.
         q = 1 if k == 1 else max(1, int(run["steps_per_period"] * w0.max() / w0[i] / 32))
         ti, yi = t[::q], modal[i][::q]
-        c = _decay_curve(ti, yi, h, w0[i] / (2 * math.pi), run["n_periods"], notes=(
+        c = decay_curve(ti, yi, h, w0[i] / (2 * math.pi), run["n_periods"], notes=(
             f"{specimen.name}: Exudyn transient, mode {r}"
             + (f" of modes {', '.join(map(str, modes))}" if k > 1 else "")
             + f", {run['steps_per_period']} steps per period of the highest mode, released from "
@@ -287,10 +275,14 @@ def _result(specimen, amp, rec, rel, rows, positions, h, n, run) -> RingdownResu
         metadata={"h": h, "steps": n, "extra_steps": cut, "modes": modes, "amplitude": amp,
                   "floor": {r: specimen.floor(r) for r in modes}, "n_points": run["n_points"],
                   "effects": run["effects"], "kinetic_at_release": run["kin0"],
-                  "joint_quadrature_error": run["quad"]},
+                  "joint_quadrature_error": run["quad"], "overflow_steps": run["overflow"]},
         modes=modes, curves=tuple(curves), modal_responses=modal, sensor_positions=positions,
         sensor_displacement=disp, sensor_acceleration=_second_derivative(disp, h),
-        warnings=tuple(warns) + _cut_warning(cut, n, w0.max() * h))
+        warnings=tuple(warns) + _cut_warning(cut, n, w0.max() * h) + ((
+            f"{run['overflow']} step(s) closed more slip loops than the compiled interface law "
+            "holds (8 reversal points): their joint forces were not exact (the interface's "
+            "overflow_times; the Python route, joint_elements=True, is exact)",)
+            if run["overflow"] else ()))
 
 
 def _second_derivative(y, h):

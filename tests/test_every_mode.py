@@ -14,7 +14,7 @@ from iwan_element.exudyn import add_iwan_interface
 from iwan_element.models import mode_coupling, preset, ringdown
 from iwan_element.models.assembly import axis_rows
 from iwan_element.models.calibration import modal_floor
-from iwan_element.models.coupling import coupling_figure
+from iwan_element.models.coupling import compare_curves
 from iwan_element.models.damping import floor_damping
 from iwan_element.models.qsma import linear_modes, modal_amplitude_curve
 from iwan_element.models.solver import solver_settings
@@ -219,7 +219,7 @@ def test_two_modes_couple_through_one_iwan_element_as_an_independent_stepping_sa
         figs["traj"] = Qt
         together = _curves(Qt, (1, 2))
         alone = {r: _curves(route(_release({r: amp[r]}), n), (r,))[r] for r in (1, 2)}
-        figs[route.__name__] = {r: coupling_figure(together[r], alone[r]) for r in (1, 2)}
+        figs[route.__name__] = {r: compare_curves(together[r], alone[r]) for r in (1, 2)}
     ex, ref = figs["_exudyn_route"][2], figs["_numpy_route"][2]
     assert len(ex["amplitude"]) >= 3
     np.testing.assert_allclose(ex["damping_ratio"], ref["damping_ratio"], rtol=1e-3)
