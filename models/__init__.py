@@ -31,13 +31,14 @@ from pathlib import Path
 
 from .coupling import ModeCouplingResult, mode_coupling
 from .forced import ForcedResponseResult, forced_response
+from .impact import Impact
 from .machine import QuasiStaticResult, quasi_static_test
 from .qsma import modal_amplitude_curve, natural_frequencies
 from .transient import RingdownResult, ringdown
 from .specimens import Excitation, InterfaceModel, Specimen, preset
 
 __all__ = ["example_test_path", "preset", "modal_amplitude_curve", "natural_frequencies",
-           "ringdown", "mode_coupling", "quasi_static_test", "forced_response", "Specimen",
+           "ringdown", "Impact", "mode_coupling", "quasi_static_test", "forced_response", "Specimen",
            "InterfaceModel", "Excitation", "RingdownResult", "ModeCouplingResult",
            "QuasiStaticResult", "ForcedResponseResult"]
 

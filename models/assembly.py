@@ -149,7 +149,8 @@ def _marker_at(mbs, elems, edges, x0, x, y_local):
 
 
 def build_specimen_model(specimen: Specimen, *, tangential: str = "iwan", post_step=None,
-                         joint_elements: bool = False, drive=None) -> SpecimenModel:
+                         joint_elements: bool = False, drive=None,
+                         depth: int = 8) -> SpecimenModel:
     """Build and assemble the Exudyn system of a specimen.
 
     Parameters
@@ -166,6 +167,9 @@ def build_specimen_model(specimen: Specimen, *, tangential: str = "iwan", post_s
         ``drive(t) -> u`` [m], the axial displacement of beam B's end in the machine grip
         (``boundary="clamped-driven"`` only; default: held at zero). The grip's axial
         constraint is ``model.extra["grip"]`` (its force is the machine force).
+    depth : int, keyword-only
+        Reversal points each contact point's compiled law holds (``add_iwan_interface``;
+        default 8): several modes slipping the lap at once nest more loops.
     """
     if not isinstance(specimen, Specimen):
         raise ValueError(f"specimen must be a Specimen, got {type(specimen).__name__}")
@@ -217,7 +221,8 @@ def build_specimen_model(specimen: Specimen, *, tangential: str = "iwan", post_s
     if tangential == "iwan":
         joints = [IwanJoint(p) for p in pts.params] if joint_elements else list(pts.params)
         normal = [[0.0, float(kn), 0.0] for kn in pts.normal_stiffness] if merged else None
-        iface = add_iwan_interface(mbs, pairs, joints, axis=[1.0, 0.0, 0.0], stiffness=normal)
+        iface = add_iwan_interface(mbs, pairs, joints, axis=[1.0, 0.0, 0.0], stiffness=normal,
+                                   depth=depth)
     sm = _axis_marker(mbs, s, ea + eb, s.sensor_position)
     mbs.AddObject(ObjectGround())
     mbs.Assemble()

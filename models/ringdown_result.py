@@ -36,8 +36,10 @@ class RingdownResult(ResultShape):
         The first mode's frequency and damping against amplitude (``method="ringdown"``).
     energy : dict of ndarray
         ``t``, ``kinetic``, ``strain``, ``springs``, ``joint_stored``, ``joint_dissipated``,
-        ``floor_dissipated``, ``effect_stored``, ``effect_dissipated`` [J] (filled when
-        ``record_energy``; the effect terms stay empty without effects).
+        ``floor_dissipated``, ``effect_stored``, ``effect_dissipated``, ``input_work`` [J]
+        (filled when ``record_energy``; the effect terms stay empty without effects, the
+        input work, the impact's trapezoidal work ``sum (F_n + F_n+1) dy / 2`` at its
+        point, without an impact).
         ``floor_dissipated`` is the work of the floor's modal damping matrix ``C``,
         ``v^T C v`` integrated with the step's mean velocity (the trapezoidal rule's own
         damping work); zero without a floor.
@@ -188,13 +190,17 @@ class RingdownResult(ResultShape):
     def energy_error(self) -> np.ndarray:
         """Relative energy balance error over time (needs ``record_energy``):
         ``(kinetic + strain + springs + stored + dissipated) / E0 - 1``, the dissipated
-        energy of the joints, the damping floor and the effects."""
+        energy of the joints, the damping floor and the effects; with an impact,
+        ``(... - E0 - W_in) / (E0 + W_in,end)`` (``W_in`` its input work)."""
         e = self.energy
         total = e["kinetic"] + e["strain"] + e["springs"] + e["joint_stored"] + e["joint_dissipated"]
         total = total + e["floor_dissipated"]
         if e.get("effect_stored") is not None and len(e["effect_stored"]):
             total = total + e["effect_stored"] + e["effect_dissipated"]
-        return total / self.initial_energy - 1.0
+        w_in = e.get("input_work")
+        if w_in is None or not len(w_in):
+            return total / self.initial_energy - 1.0
+        return (total - self.initial_energy - w_in) / (self.initial_energy + w_in[-1])
 
 
 def with_energy_warning(out: RingdownResult) -> RingdownResult:

@@ -30,14 +30,16 @@ import time
 
 import exudyn as exu
 import numpy as np
+from exudyn.itemInterface import LoadForceVector
 
 from iwan_element import backbone_work
 from iwan_element.core.validation import check_scalar
 
 from .assembly import axis_rows, build_specimen_model
 from .damping import FloorWork, attach_floor_damping, floor_damping
+from .impact import Impact
 from .modal_effects import ModalEffects
-from .qsma import static_modal_load
+from .qsma import linear_modes, static_modal_load
 from .ringdown_result import RingdownResult, decay_curve, with_energy_warning
 from .solver import roundoff_force, solver_settings
 from .specimens import Specimen
@@ -45,7 +47,7 @@ from .specimens import Specimen
 __all__ = ["RingdownResult", "ringdown"]
 
 _E_KEYS = ("t", "kinetic", "strain", "springs", "joint_stored", "joint_dissipated",
-           "floor_dissipated", "effect_stored", "effect_dissipated")
+           "floor_dissipated", "effect_stored", "effect_dissipated", "input_work")
 
 
 def _amplitudes(mode, amplitude) -> dict:
@@ -94,6 +96,40 @@ def _release(specimen: Specimen, amp: dict) -> dict:
             "omega0": np.array([st["omega0"] for st in sts])}
 
 
+def _start(specimen: Specimen, mode, amplitude, impact, modes):
+    """``(amp, state)``: ``{mode: release amplitude or None}`` and the start state (the
+    release of :func:`_release`, or rest for an impact, with the stuck modes of ``modes``)."""
+    if (amplitude is None) == (impact is None):
+        raise ValueError("give amplitude (a release) or impact (a force pulse), one of them")
+    if impact is None:
+        if modes is not None:
+            raise ValueError("modes is for an impact; a release names its modes in amplitude")
+        amp = _amplitudes(mode, amplitude)
+        return amp, _release(specimen, amp)
+    if not isinstance(impact, Impact):
+        raise ValueError(f"impact must be an Impact, got {type(impact).__name__}")
+    if mode is not None:
+        raise ValueError("mode is for a release; give an impact's modes as modes=(1, 2, ...)")
+    if impact.position > specimen.total_length:
+        raise ValueError(f"impact position must lie on the assembly (<= "
+                         f"{specimen.total_length:.6g} m), got {impact.position!r}")
+    ms = (1,) if modes is None else tuple(modes)
+    amp = _amplitudes(None, {r: 1.0 for r in ms})          # checks the modes
+    lm = [linear_modes(specimen, mode=r) for r in amp]
+    L = lm[0][3]
+    return {r: None for r in amp}, {
+        "x": np.zeros(L.M.shape[0]), "slip": np.zeros(L.G.shape[0]), "system": L,
+        "phi": [m[1] for m in lm], "omega0": np.array([m[0] for m in lm])}
+
+
+def _add_impact(model, impact: Impact, rec) -> None:
+    """The pulse as a load on the axis at its position; the recorder books its work."""
+    model.mbs.AddLoad(LoadForceVector(
+        markerNumber=model.axis_marker(impact.position), loadVector=[0.0, 0.0, 0.0],
+        loadVectorUserFunction=lambda mbs_, t, lv: [0.0, impact.force(t), 0.0]))
+    rec.impact = (impact, axis_rows(model.specimen, [impact.position])[0])
+
+
 def _initial_energy(model, rel, effs) -> tuple:
     """``(kinetic, total)`` energy [J] at the release: the beams' strain energy, the springs',
     the joint's (the virgin backbone work at the initial slips) and the effects'."""
@@ -115,6 +151,8 @@ class _Recorder:
         self.times, self.coords = [], []
         self.energy = {k: [] for k in _E_KEYS}
         self.model = None
+        self.impact = None                 # (Impact, row of its point) when one acts
+        self.work_in, self.last = 0.0, None
 
     def __call__(self, mbs_, t):
         sd, free = mbs_.systemData, self.L.free
@@ -130,6 +168,13 @@ class _Recorder:
                 e["effect_stored"].append(es)
                 e["effect_dissipated"].append(ed)
             e["floor_dissipated"].append(self.floor_work.step(t, v))
+            if self.impact is not None:
+                imp, row = self.impact
+                F, y = imp.force(t), float(row @ self.coords[-1][free])
+                if self.last is not None:  # the trapezoidal rule's work of the load
+                    self.work_in += 0.5 * (F + self.last[0]) * (y - self.last[1])
+                self.last = (F, y)
+                e["input_work"].append(self.work_in)
             kin, pot = self.model.beam_energy()
             e["t"].append(t)
             e["kinetic"].append(kin)
@@ -138,12 +183,13 @@ class _Recorder:
         return True
 
 
-def ringdown(specimen: Specimen, *, mode: int | None = None, amplitude, sensors=None,
+def ringdown(specimen: Specimen, *, mode: int | None = None, amplitude=None,
+             impact: Impact | None = None, modes=None, sensors=None,
              duration: float | None = None, cycles: float | None = None,
              steps_per_period: int = 64, n_periods: float = 3.0, record_energy: bool = False,
              joint_elements: bool = False) -> RingdownResult:
-    """Release the specimen from a static deflection in one or several modes' load shapes;
-    let it ring down through the interface.
+    """Release the specimen from a static deflection in one or several modes' load shapes,
+    or strike it (``impact``); let it ring down through the interface.
 
     Parameters
     ----------
@@ -155,6 +201,12 @@ def ringdown(specimen: Specimen, *, mode: int | None = None, amplitude, sensors=
         Initial displacement amplitude at the sensor point [m] (> 0) of ``mode``, or
         ``{mode: amplitude}`` to release several modes at once: the sum of the modes'
         static deflections, each reaching its amplitude at ``specimen.sensor_position``.
+    impact : Impact, optional, keyword-only
+        Instead of a release: the specimen at rest struck by a half-sine force pulse
+        (:class:`~iwan_element.models.impact.Impact`); the step also resolves the pulse
+        (at most a sixteenth of its contact time).
+    modes : sequence of int, optional, keyword-only
+        The modes an impact's result separates (modal filter, curves; default ``(1,)``).
     sensors : sequence of float, optional, keyword-only
         Positions [m] along the beams' axis (the axis of ``sensor_position``) where the
         displacement and acceleration are recorded (default: ``sensor_position``).
@@ -194,27 +246,30 @@ def ringdown(specimen: Specimen, *, mode: int | None = None, amplitude, sensors=
     function of the slip given the committed state, which changes only in the post-step of
     an accepted step.
     """
-    amp = _amplitudes(mode, amplitude)
     n_periods, cycles, duration = _check_args(specimen, steps_per_period, n_periods, cycles,
                                               duration)
+    amp, rel = _start(specimen, mode, amplitude, impact, modes)
     positions = np.atleast_1d(np.asarray(
         specimen.sensor_position if sensors is None else sensors, float))
     rows = axis_rows(specimen, positions)
-    rel = _release(specimen, amp)
     L, w0 = rel["system"], rel["omega0"]
     floor = floor_damping(specimen)
     effs = [ModalEffects(specimen, r, L, phi, w) for r, phi, w in zip(amp, rel["phi"], w0)
             if any(e.mode == r for e in specimen.effects)]
     rec = _Recorder(L, effs, FloorWork(floor.C if floor.active else None), record_energy)
+    # several modes nest more slip loops (mode 2's cycles inside mode 1's): a deeper law
     model = build_specimen_model(specimen, tangential="iwan", post_step=rec,
-                                 joint_elements=joint_elements)
+                                 joint_elements=joint_elements,
+                                 depth=8 if len(amp) == 1 else 24)
     rec.model = model
     mbs = model.mbs
     for eff in effs:
         eff.attach(mbs, model.nodes, L.n_coordinates)
     if floor.active:
         attach_floor_damping(mbs, model.nodes, floor, L.free, L.n_coordinates)
-    if effs or floor.active:
+    if impact is not None:
+        _add_impact(model, impact, rec)
+    if effs or floor.active or impact is not None:
         mbs.Assemble()
     x0 = np.zeros(L.n_coordinates)
     x0[L.free] = rel["x"]
@@ -222,9 +277,13 @@ def ringdown(specimen: Specimen, *, mode: int | None = None, amplitude, sensors=
     mbs.systemData.SetODE2Coordinates(x0, configuration=exu.ConfigurationType.Current)
     kin0, e0 = _initial_energy(model, rel, effs)
     h = 2 * math.pi / (w0.max() * steps_per_period)
+    if impact is not None:
+        h = min(h, impact.contact_time / 16)
     n = int(round(duration / h)) if duration is not None else \
-        int(round(cycles * steps_per_period * w0.max() / w0.min()))
-    sim = solver_settings(force_scale=float(np.max(np.abs(L.K0 @ rel["x"]))))
+        int(round(cycles * steps_per_period * w0.max() / w0.min())) if impact is None else \
+        int(round(cycles * 2 * math.pi / (w0.min() * h)))
+    sim = solver_settings(force_scale=max(float(np.max(np.abs(L.K0 @ rel["x"]))),
+                                          0.0 if impact is None else abs(impact.peak_force)))
     newton = sim.timeIntegration.newton
     newton.absoluteTolerance = max(newton.absoluteTolerance, roundoff_force(L, specimen))
     sim.timeIntegration.numberOfSteps = n
@@ -232,12 +291,13 @@ def ringdown(specimen: Specimen, *, mode: int | None = None, amplitude, sensors=
     t0 = time.perf_counter()
     mbs.SolveDynamic(sim)
     wall = time.perf_counter() - t0
-    quad = _joint_records(model.interface, rec.energy, e0) if record_energy else None
+    quad = _joint_records(model.interface, rec.energy, e0 + rec.work_in) if record_energy \
+        else None
     return with_energy_warning(_result(specimen, amp, rec, rel, rows, positions, h, n, {
         "n_periods": n_periods, "steps_per_period": steps_per_period, "wall": wall, "e0": e0,
         "kin0": kin0, "quad": quad, "n_points": len(model.points),
         "overflow": len(getattr(model.interface, "overflow_times", ())),
-        "effects": tuple(nm for eff in effs for nm in eff.names)}))
+        "effects": tuple(nm for eff in effs for nm in eff.names), "impact": impact}))
 
 
 def _result(specimen, amp, rec, rel, rows, positions, h, n, run) -> RingdownResult:
@@ -263,8 +323,11 @@ def _result(specimen, amp, rec, rel, rows, positions, h, n, run) -> RingdownResu
         c = decay_curve(ti, yi, h, w0[i] / (2 * math.pi), run["n_periods"], notes=(
             f"{specimen.name}: Exudyn transient, mode {r}"
             + (f" of modes {', '.join(map(str, modes))}" if k > 1 else "")
-            + f", {run['steps_per_period']} steps per period of the highest mode, released from "
-            f"{amp[r]:.3g} m at the sensor; modal filtering"
+            + f", {run['steps_per_period']} steps per period of the highest mode, "
+            + (f"released from {amp[r]:.3g} m at the sensor" if amp[r] is not None else
+               f"struck by {run['impact'].peak_force:.4g} N over {run['impact'].contact_time:.3g} s"
+               f" at {run['impact'].position:.4g} m")
+            + "; modal filtering"
             + (f"; with {' + '.join(run['effects'])}" if run["effects"] else "")))
         curves.append(c)
         warns += [w if k == 1 else f"mode {r}: {w}" for w in c.warnings]
@@ -275,12 +338,14 @@ def _result(specimen, amp, rec, rel, rows, positions, h, n, run) -> RingdownResu
         metadata={"h": h, "steps": n, "extra_steps": cut, "modes": modes, "amplitude": amp,
                   "floor": {r: specimen.floor(r) for r in modes}, "n_points": run["n_points"],
                   "effects": run["effects"], "kinetic_at_release": run["kin0"],
-                  "joint_quadrature_error": run["quad"], "overflow_steps": run["overflow"]},
+                  "joint_quadrature_error": run["quad"], "overflow_steps": run["overflow"],
+                  "impact": run["impact"]},
         modes=modes, curves=tuple(curves), modal_responses=modal, sensor_positions=positions,
         sensor_displacement=disp, sensor_acceleration=_second_derivative(disp, h),
         warnings=tuple(warns) + _cut_warning(cut, n, w0.max() * h) + ((
             f"{run['overflow']} step(s) closed more slip loops than the compiled interface law "
-            "holds (8 reversal points): their joint forces were not exact (the interface's "
+            "holds (8 reversal points, 24 with several modes): their joint forces were not "
+            "exact (the interface's "
             "overflow_times; the Python route, joint_elements=True, is exact)",)
             if run["overflow"] else ()))
 

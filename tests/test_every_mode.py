@@ -11,6 +11,7 @@ from exudyn.itemInterface import (MarkerNodeCoordinate, NodeGenericODE2, ObjectG
 
 from iwan_element import AmplitudeCurve, IwanJoint, IwanParameters, amplitude_curve
 from iwan_element.exudyn import add_iwan_interface
+from iwan_element import models
 from iwan_element.models import mode_coupling, preset, ringdown
 from iwan_element.models.assembly import axis_rows
 from iwan_element.models.calibration import modal_floor
@@ -229,3 +230,26 @@ def test_two_modes_couple_through_one_iwan_element_as_an_independent_stepping_sa
 def test_mode_coupling_refuses_a_single_mode():
     with pytest.raises(ValueError, match="at least two modes"):
         mode_coupling(TWO_BOLT, amplitude={1: 1e-4}, duration=0.5)
+
+
+def test_an_impact_leaves_each_mode_ringing_at_its_linear_impulse_amplitude():
+    """A half-sine pulse on the stuck two-bolt beam: mode 2 rings at ``|S phi| |phi(x_F)|
+    |F^(w)| / w`` (the pulse's Fourier magnitude, the linear impulse response), and the
+    energy balance books the pulse's work."""
+    s = TWO_BOLT.replace(friction=1e4)
+    imp = models.Impact(position=0.3, peak_force=50.0, contact_time=2e-3)
+    r = ringdown(s, impact=imp, modes=(2,), duration=0.2, steps_per_period=32,
+                 record_energy=True)
+    w, phi, _, L, _ = linear_modes(s, mode=2)
+    X = abs(float(L.S @ phi)) * abs(float(axis_rows(s, [0.3])[0] @ phi)) \
+        * float(imp.spectrum(w)) / w
+    after = (r.t > 0.01) & (r.t < 0.01 + 4 * math.pi / w)
+    peak = np.max(np.abs(r.modal[after])) * math.exp(s.floor(2) * w * 0.01)
+    assert peak == pytest.approx(X, rel=0.01)
+    assert r.max_energy_error < 1e-4 and r.energy["input_work"][-1] > 0
+    assert r.metadata["h"] <= imp.contact_time / 16
+    for kw, match in (({"amplitude": 1e-4}, "one of them"), ({"mode": 2}, "mode is for a release")):
+        with pytest.raises(ValueError, match=match):
+            ringdown(s, impact=imp, duration=0.1, **kw)
+    with pytest.raises(ValueError, match="contact_time"):
+        models.Impact(position=0.3, peak_force=50.0, contact_time=0.0)
