@@ -12,6 +12,8 @@
   level per call, one mode or several at once through the same interface; frequency and
   damping by :func:`iwan_element.amplitude_curve`; result in
   :mod:`~iwan_element.models.ringdown_result`);
+* :mod:`~iwan_element.models.impact` - a hammer impact (:class:`Impact`, a half-sine force
+  pulse) that :func:`ringdown` takes instead of a release;
 * :mod:`~iwan_element.models.coupling` - each mode's damping with and without the other
   modes ringing through the same interface (:func:`mode_coupling`);
 * :mod:`~iwan_element.models.damping` - the linear damping floor, one ratio per mode, as the
