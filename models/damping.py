@@ -67,7 +67,7 @@ def _stuck_modes(key: Specimen):
     K = L.K0 + L.G.T @ (contact_points(key).KT[:, None] * L.G)
     w2, V = sla.eigh(K, L.M)
     w = np.sqrt(np.abs(w2))
-    n_rigid = 3 if key.boundary == "free-free" else 0
+    n_rigid = L.rigid_body_modes
     n_skip = max(n_rigid, int(np.sum(w < 2 * math.pi * 0.5)))
     return w, V, n_skip
 
