@@ -18,7 +18,6 @@ from dataclasses import replace
 import numpy as np
 
 from iwan_element import AmplitudeCurve
-from iwan_element.effects import EFFECTS
 from iwan_element.harmonic import FrequencyResponse, ModalSystem
 from iwan_element.harmonic import harmonic_balance as _hb_system
 from iwan_element.harmonic import trace
@@ -30,7 +29,7 @@ from .qsma import extrapolation_warnings
 from .reduced import reduced_model
 from .solid import SolidSpecimen
 from .specimens import Specimen
-from .transient import _Zero
+from .modal_effects import effect_stack
 
 __all__ = ["harmonic_balance", "frequency_response", "nonlinear_mode", "specimen_system"]
 
@@ -44,15 +43,7 @@ def specimen_system(specimen: Specimen, *, n_modes: int = 8) -> ModalSystem:
     for mode in sorted({e.mode for e in specimen.effects}):
         r = red.mode_index(mode)
         s = float(sysm.modes[nz, r])
-        el = _Zero()
-        names = []
-        for e in specimen.effects:
-            if e.mode == mode:
-                cls = EFFECTS[e.name]
-                el = cls(el, **cls.modal_to_joint(e.parameters, modal_mass=1.0,
-                                                  slip_per_amplitude=1.0,
-                                                  omega0=float(sysm.omega[r])))
-                names.append(e.name)
+        el, names = effect_stack(specimen, mode, float(sysm.omega[r]))
         row = np.zeros(sysm.omega.size)
         row[r] = s
         ports.append(ElementPort(el, 1.0 / (s * s), label=f"mode {mode}: {' + '.join(names)}"))

@@ -139,11 +139,11 @@ def test_continuation_traces_a_duffing_fold():
     """Continuation through the two turning points of a hardening oscillator (the package's
     hardening effect as an element port); with the fundamental alone every traced point
     satisfies the classical relation F^2 = a^2 ((w0^2 + 3/4 k3 a^2 - W^2)^2 + (c W)^2)."""
-    from iwan_element.models.transient import _Zero
+    from iwan_element.models.modal_effects import ZeroElement
     k3, c, F = 1e10, 5.0, 1.0
     stuck = IwanParameters(Fs=1e9, KT=1e3, chi=1.0, beta=0.5)
     base = ModalSystem.oscillator(1.0, 1e4, c, stuck)
-    sysd = base.with_ports([ElementPort(EFFECTS["hardening"](_Zero(), k3=k3), 1.0)], [[1.0]])
+    sysd = base.with_ports([ElementPort(EFFECTS["hardening"](ZeroElement(), k3=k3), 1.0)], [[1.0]])
     f0 = base.omega[0] / (2 * np.pi)
     r = trace(sysd, F, (0.8 * f0, 2.0 * f0), harmonics=(1,))
     assert r.metadata["turning_points"] == 2
