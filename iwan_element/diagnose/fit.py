@@ -20,8 +20,9 @@ from ..core.serialize import json_safe
 from ..effects import EFFECTS
 from ..effects.evaluate import Evaluator, build_element
 from ..fitting import fit_success
+from ..identify.identifiability import microslip_warning, min_macroslip
 from ..identify.loops import fit_loops
-from ..identify.result import quiet_fits, settle_verdict
+from ..identify.result import quiet_fits, required_parameters, settle_verdict
 from . import _model as M
 
 __all__ = ["StackFitter", "FinalFits", "fit_base", "z_start", "stack_fit", "record_force",
@@ -141,6 +142,12 @@ def stack_fit(row, fitter, FF, F_model, t_start, *, noise_only=False):
                         "units": {s.name: s.unit for s in EFFECTS[nm].specs}})
         k0 += q
     warns = list(settle_warns)
+    hist = mdl.ev.hist                   # the backbone argument behind each fitted sample
+    x = hist.x[hist.out]
+    n_macro = int(np.count_nonzero(x > p.phi_max))
+    if n_macro < min_macroslip(x.size) and (ident["Fs"] or ident["beta"]):
+        ident = dict(ident, Fs=False, beta=False)
+        warns.append(microslip_warning(n_macro, x.size, float(x.max()), p.phi_max))
     if noise_only:                       # a force that is noise identifies nothing
         ident = dict.fromkeys(M.PARAM_NAMES, False)
         warns.append("the force is indistinguishable from noise: no parameter is identified")
@@ -151,7 +158,7 @@ def stack_fit(row, fitter, FF, F_model, t_start, *, noise_only=False):
         params=p, stderr=stderr, correlation=corr[:4, :4], identified=ident, fixed=(),
         ranges=ranges, residual_norm=math.sqrt(float(r @ r)),
         nrmse=float(np.sqrt(np.mean((FF - F_model) ** 2)) / span),
-        success=fit_success(row["status"] > 0, ident, ("Fs", "KT", "chi")),
+        success=fit_success(row["status"] > 0, ident, required_parameters(ranges)),
         message=row["message"],
         nfev=int(fitter.nfev), method="loops+" + "+".join(mdl.names) if mdl.names else "loops",
         n_data=int(r.size), warnings=tuple(warns), wall_time=time.perf_counter() - t_start,

@@ -9,6 +9,7 @@ import numpy as np
 
 from ..core.serialize import json_safe
 
+from ..core.protocol import check_element
 from ..core.validation import check_scalar
 from ..effects import EFFECTS
 from ..fitting import Parameter, ParameterTable, verdict
@@ -341,9 +342,12 @@ class VibrationDiagnosis(ResultShape):
         if hasattr(target, "with_effects"):
             if not self.effects:
                 return target
+            diagnosed = (float(self.amplitude.min()), float(self.amplitude.max()))
+            _check_amplitude_units(diagnosed, target)
             return target.with_effects(
                 {n: dict(self.parameters[n]) for n in self.effects}, mode=mode,
-                calibrated_range=(float(self.amplitude.min()), float(self.amplitude.max())))
+                calibrated_range=diagnosed)
+        check_element(target, name="target")
         if modal_mass is None:
             raise ValueError("modal_mass is required to augment a joint element")
         joint = target
@@ -493,4 +497,29 @@ class VibrationDiagnosis(ResultShape):
             a.grid(True, which="both", alpha=0.3)
             a.legend(fontsize=7)
         return arts
+
+
+#: How far [factor] the diagnosed amplitudes may lie outside a specimen's documented and
+#: calibrated amplitudes before augment refuses them as given in other units.
+_UNIT_FACTOR = 30.0
+
+
+def _check_amplitude_units(diagnosed, specimen) -> None:
+    """ValueError when the diagnosed amplitude range [m] lies wholly more than
+    :data:`_UNIT_FACTOR` outside the specimen's ``amplitude_range`` and ``calibrated_range``
+    (amplitudes in mm or um given as metres: the effects' amplitude constants and the
+    calibrated range would be wrong by the factor and QSMA would stop warning)."""
+    ranges = [r for r in (getattr(specimen, "amplitude_range", None),
+                          getattr(specimen, "calibrated_range", None)) if r is not None]
+    if not ranges:
+        return
+    lo, hi = min(r[0] for r in ranges), max(r[1] for r in ranges)
+    if diagnosed[0] > _UNIT_FACTOR * hi or diagnosed[1] < lo / _UNIT_FACTOR:
+        far = diagnosed[0] / hi if diagnosed[0] > hi else lo / diagnosed[1]
+        raise ValueError(
+            f"the diagnosed amplitudes ({diagnosed[0]:.3g} to {diagnosed[1]:.3g} m) lie "
+            f"{far:.3g} times {'above' if diagnosed[0] > hi else 'below'} the target "
+            f"specimen's amplitudes ({lo:.3g} to {hi:.3g} m): were they given in mm or um? "
+            "diagnose_vibration takes amplitudes in metres; diagnose again in metres (or "
+            "widen the specimen's amplitude_range if the test truly went there)")
 

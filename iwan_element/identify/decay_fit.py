@@ -62,6 +62,7 @@ from ._decay_model import (_Objective, _Problem, _covariance, _fit_regime, _loca
                            _misfit_ratio, _neighbours, _polar)
 from .modal_result import ModalIwanFit
 from .modal_fit import fit_modal_iwan
+from .saturation import cut_clipping
 from .vibration import _check_band, _check_uniform_time
 
 __all__ = ["fit_decay"]
@@ -186,6 +187,7 @@ def _prepare(t, y, quantity, band, order, stiffness, floor, x_ref, t_start):
         raise ValueError(f"y must have at least 64 samples, got {yy.size}")
     tt, dt = _check_uniform_time(t, yy.size)
     check_magnitude("t", tt, unit="s")
+    tt, yy, clip_note = cut_clipping(tt, yy)
     _check_options(quantity, order, stiffness, floor)
     lo, hi = _check_band(band, 1.0 / dt)
     if hi * dt < 1e-5:
@@ -218,7 +220,7 @@ def _prepare(t, y, quantity, band, order, stiffness, floor, x_ref, t_start):
     prob.nb_starts = _neighbours(prob, i_s)
     prob.nb = len(prob.nb_starts)
     nuis = [v for nb in prob.nb_starts for v in nb] + nuis
-    return prob, conv, dict(t0=float(tt[0]), i_s=i_s, i_top=i_top, i_a=i_a, env=env, nw=nw,
+    return prob, conv, dict(clip_note=clip_note, t0=float(tt[0]), i_s=i_s, i_top=i_top, i_a=i_a, env=env, nw=nw,
                             nuis=nuis, data=(X, f, zeta))
 
 
@@ -257,6 +259,18 @@ def _bounds(prob, regime, X, x_max, ln_a0):
     return np.array(lb + [ln_a0 - 10.0, -np.inf]), np.array(ub + [ln_a0 + 10.0, np.inf])
 
 
+def _no_mode(prob, snr_min, ratio):
+    """Refuse a record without a decaying mode the model can follow (pure noise, a band
+    without the mode): a ValueError naming ``y`` and the band, not the model's inner range."""
+    lo, hi = prob.band
+    found = "no decay curve fits it" if not math.isfinite(ratio) else \
+        f"its largest envelope is {ratio:.2g} times the noise RMS a decay model leaves"
+    raise ValueError(f"y holds no decaying mode in band ({lo:g}, {hi:g}) Hz above snr_min = "
+                     f"{snr_min:g} times the in-band noise: {found} (pure noise or a band "
+                     "without the mode); check the band around the mode and the record, or "
+                     "lower snr_min")
+
+
 def _fit_micro(prob, info, snr_min, spc):
     """Microslip fit in two stages: over the decay to 5 % of the peak envelope, then over
     every sample above ``snr_min`` x the noise (from the first stage's residual), with the
@@ -270,7 +284,10 @@ def _fit_micro(prob, info, snr_min, spc):
     ref = float(np.abs(prob.z[idx]).max())
     first = _fit_regime(_Objective(prob, "microslip", idx, ref, bnd), starts, bnd)
     lag = math.ceil(2.0 * prob.fs / (prob.bw * step))
-    noise = ref * _local_weights(first.fun, lag)[1] * math.sqrt(2.0)
+    with np.errstate(invalid="ignore", divide="ignore"):    # the weights are not used here
+        noise = ref * _local_weights(first.fun, lag)[1] * math.sqrt(2.0)
+    if not env[i_top] >= snr_min * noise > 0.0:
+        _no_mode(prob, snr_min, env[i_top] / noise if noise > 0 else math.nan)
     low = np.flatnonzero(env[i_top:] < snr_min * noise)
     i_b = max(prob.n if low.size == 0 else i_top + int(low[0]), info["i_s"] + 2 * info["nw"])
     idx, step = _span(prob, info, i_b, spc)
@@ -278,7 +295,10 @@ def _fit_micro(prob, info, snr_min, spc):
     obj = _Objective(prob, "microslip", idx, ref, bnd)
     lag = math.ceil(2.0 * prob.fs / (prob.bw * step))
     weights, _ = _local_weights(obj.resid(first.x), lag)
-    envelope = obj.envelope(first.x)      # weights free of each sample's own noise
+    try:
+        envelope = obj.envelope(first.x)      # weights free of each sample's own noise
+    except ValueError:                        # no decay curve fits: f or zeta out of range
+        _no_mode(prob, snr_min, math.nan)
     obj = _Objective(prob, "microslip", idx, ref, bnd, weights, envelope)
     micro = _fit_regime(obj, [first.x], bnd)
     return micro, obj, dict(idx=idx, step=step, i_b=i_b, noise=noise, ref=ref,
@@ -451,7 +471,8 @@ def fit_decay(t, y, *, quantity: str = "acceleration", band, order: int = 4,
                 frequency_std=np.full(X.size, np.nan), damping_ratio_std=np.full(X.size, np.nan))
     fit = ModalIwanFit.from_solution(best.x[:n_th], span["cov"][:n_th, :n_th], regime, data, conv,
                                      chi2_red=span["chi2_red"], weights=(),
-                                     warnings=tuple(warns), optimizer_ok=bool(best.success))
+                                     warnings=tuple(w for w in [info["clip_note"]] + warns if w),
+                                     optimizer_ok=bool(best.success))
     if span["guard"]:
         fit = dataclasses.replace(fit, success=False)
     log.debug("fit_decay: %s", conv)

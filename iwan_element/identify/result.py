@@ -281,16 +281,29 @@ def settle_verdict(out: dict, fixed) -> tuple[dict, list[str]]:
     return ident, warns
 
 
+def required_parameters(ranges: dict, fixed=()) -> list:
+    """The parameters ``success`` asks to be identified (docs/guards.md): every reported one
+    but those given, and but ``beta`` when its 95 % range in ``ranges`` reaches down to its
+    physical bound 0 with a finite upper limit (a joint without macroslip softening beyond
+    that limit: a finding, stated in the report) or when it follows from a given ``Fs``
+    (conditional on it, as the warning says)."""
+    lo, hi = ranges.get("beta", (math.nan, math.nan))
+    exempt = (lo <= 0.0 and math.isfinite(hi)) or "Fs" in fixed
+    return [k for k in PARAM_NAMES if k not in fixed and not (k == "beta" and exempt)]
+
+
 def _finish(method, out, *, converged, message, nfev, nrmse, t0, extra_warnings=(),
-            fixed=(), stacklevel=3, required=("KT", "chi"), offsets=None, noise=None,
+            fixed=(), stacklevel=3, offsets=None, noise=None,
             curves=None) -> FitResult:
     """Build the FitResult from the dict of :func:`_identify` (or its seed-method twin) and
     issue one IdentifiabilityWarning carrying every warning.
 
-    ``success`` means: the optimiser converged, the data are more than noise
-    (``out["explains"]``, default True) and every parameter in ``required`` (not given) is
-    identified by the rule of :func:`settle_verdict`; so ``success``, the report's status column and
-    the warnings say the same.
+    ``success`` is the package's one rule (docs/guards.md): the optimiser converged, the data
+    are more than noise (``out["explains"]``, default True) and every reported parameter (all
+    four, but those given and a ``beta`` compatible with 0, :func:`required_parameters`)
+    is identified by the rule of :func:`settle_verdict`; so
+    ``success``, the report's status column and the warnings say the same. A fit in
+    microslip reports ``Fs`` and ``beta`` as not identified: it is not a usable joint.
     """
     ident, settle_warns = settle_verdict(out, fixed)
     warns = list(extra_warnings) + out["warnings"] + settle_warns
@@ -300,7 +313,7 @@ def _finish(method, out, *, converged, message, nfev, nrmse, t0, extra_warnings=
     if not explains:
         ident = {k: False for k in ident}
     success = fit_success(converged and explains, ident,
-                          [k for k in required if k not in fixed])
+                          required_parameters(out["ranges"], fixed))
     table = joint_table(out["params"], out["stderr"], ident, fixed=fixed,
                         correlation=out["correlation"])
     result = FitResult(params=table, ranges=out["ranges"],

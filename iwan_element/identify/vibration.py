@@ -69,6 +69,7 @@ from __future__ import annotations
 
 import logging
 import math
+from dataclasses import replace
 
 import numpy as np
 from scipy import signal
@@ -78,6 +79,7 @@ from ._decay_filter import _decay_signal, _drift_terms, _noise_bandwidth
 from ._decay_windows import WindowPlan, _noise_std, drift_correct, hilbert_windows
 from ._decay_report import _finish
 from .peaks import pff_windows
+from .saturation import cut_clipping
 
 __all__ = ["amplitude_curve"]
 
@@ -312,6 +314,8 @@ def amplitude_curve(t, y, *, quantity: str = "acceleration", band,
     if n < 64:
         raise ValueError(f"y must have at least 64 samples, got {n}")
     tt, dt = _check_uniform_time(t, n)
+    tt, yy, clip_note = cut_clipping(tt, yy)
+    n = yy.size
     fs = 1.0 / dt
     n_periods, window, snr_min, max_damping_ratio_std = _check_options(
         quantity, order, n_periods, window, snr_min, max_damping_ratio_std, method)
@@ -361,9 +365,11 @@ def amplitude_curve(t, y, *, quantity: str = "acceleration", band,
         pff = drift_correct(pff, k_pow, terms)
     names = (method, "pff" if method == "hilbert" else "hilbert")
     main, other = (rows, pff) if method == "hilbert" else (pff, rows)
-    return _finish(tt, (main, other, wins, names), (stop, odd_stop),
-                   (lo, hi, order, f_peak, fs, n_start, n_end, i_pk, noise, how, snr_min, k_pow,
-                    route, env[i_pk:i_pk + n_start + 1]),
-                   (max_damping_ratio_std, compare, plan))
+    curve = _finish(tt, (main, other, wins, names), (stop, odd_stop),
+                    (lo, hi, order, f_peak, fs, n_start, n_end, i_pk, noise, how, snr_min, k_pow,
+                     route, env[i_pk:i_pk + n_start + 1]),
+                    (max_damping_ratio_std, compare, plan))
+    return replace(curve, warnings=(clip_note,) + curve.warnings) if clip_note else curve
+
 
 
