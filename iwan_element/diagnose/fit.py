@@ -22,7 +22,8 @@ from ..effects.evaluate import Evaluator, build_element
 from ..fitting import fit_success
 from ..identify.identifiability import microslip_warning, min_macroslip
 from ..identify.loops import fit_loops
-from ..identify.result import quiet_fits, required_parameters, settle_verdict
+from ..identify.result import (failure_list, quiet_fits, required_parameters,
+                               settle_verdict)
 from . import _model as M
 
 __all__ = ["StackFitter", "FinalFits", "fit_base", "z_start", "stack_fit", "record_force",
@@ -154,11 +155,17 @@ def stack_fit(row, fitter, FF, F_model, t_start, *, noise_only=False):
     if row["status"] <= 0:
         warns.append(f"the fit did not converge: {row['message']}")
     span = float(np.ptp(FF)) or 1.0
+    required = required_parameters(ranges)
+    success = fit_success(row["status"] > 0, ident, required)
+    failures = () if success else failure_list(
+        converged=row["status"] > 0, message=row["message"], explains=not noise_only,
+        noise_text="the force is indistinguishable from noise: no parameter is identified",
+        ident=ident, required=required, microslip=n_macro < min_macroslip(x.size))
     return M.make_fit_result(
         params=p, stderr=stderr, correlation=corr[:4, :4], identified=ident, fixed=(),
         ranges=ranges, residual_norm=math.sqrt(float(r @ r)),
         nrmse=float(np.sqrt(np.mean((FF - F_model) ** 2)) / span),
-        success=fit_success(row["status"] > 0, ident, required_parameters(ranges)),
+        success=success, failures=failures,
         message=row["message"],
         nfev=int(fitter.nfev), method="loops+" + "+".join(mdl.names) if mdl.names else "loops",
         n_data=int(r.size), warnings=tuple(warns), wall_time=time.perf_counter() - t_start,

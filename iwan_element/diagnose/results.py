@@ -10,6 +10,7 @@ import numpy as np
 from ..core.serialize import json_safe
 
 from ..core.protocol import check_element
+from ._specimen_units import check_amplitude_units
 from ..core.validation import check_scalar
 from ..effects import EFFECTS
 from ..fitting import Parameter, ParameterTable, verdict
@@ -47,8 +48,9 @@ class Diagnosis(ResultShape):
     where : str
         Where the base misfit lies (part of the cycle, amplitudes, cycles, direction).
     success : bool
-        False when nothing could be identified (a record that is pure noise) or the
-        augmented fit did not converge; ``warnings`` says why.
+        The one rule of docs/guards.md: the augmented fit converged, its every reported
+        parameter is identified, and no misfit beyond the noise is left unexplained (False
+        for a record that is pure noise); :meth:`failure_reasons` says why not.
     offsets : dict
         Sensor offsets treated as nuisance parameters (never named as effects):
         ``force`` [N] (fitted with the model, linear) and ``displacement`` [m] (the rest
@@ -81,6 +83,8 @@ class Diagnosis(ResultShape):
         (read-only copies; ``t`` is the sample index if no time was given).
     details : dict
         Test statistics (JSON-safe).
+    failures : tuple of str
+        Why ``success`` is False, in a tester's words.
     """
 
     plot_panels = 2
@@ -107,13 +111,21 @@ class Diagnosis(ResultShape):
     u: np.ndarray
     F: np.ndarray
     details: dict = field(default_factory=dict)
+    failures: tuple = ()
+
+    def failure_reasons(self) -> tuple:
+        """Why ``success`` is False (empty when it is True), in a tester's words."""
+        if self.success:
+            return ()
+        return tuple(self.failures) or super().failure_reasons()
 
     def to_dict(self) -> dict:
         """JSON-safe dict (NaN/inf become None); the fits as :meth:`FitResult.to_dict`."""
         return json_safe({
             "effect": self.effect, "effects": list(self.effects),
             "ambiguous_with": list(self.ambiguous_with), "where": self.where,
-            "success": self.success, "offsets": dict(self.offsets),
+            "success": self.success, "failure_reasons": list(self.failure_reasons()),
+            "offsets": dict(self.offsets),
             "error_before": self.error_before, "error_after": self.error_after,
             "noise_level": self.noise_level, "noise_sigma": self.noise_sigma,
             "misfit": self.misfit, "steps": list(self.steps), "untestable": dict(self.untestable),
@@ -125,7 +137,7 @@ class Diagnosis(ResultShape):
         """Human-readable account: noise, misfit, where, candidates, verdict, before/after."""
         d = self.details
         p = self.base_fit.joint
-        lines = ["Iwan model diagnosis",
+        lines = [self.verdict(), "Iwan model diagnosis",
                  f"  {d['samples']} samples; noise {d['noise_from']}, correlation time "
                  f"{d['tau']:.3g} samples ({d['n_eff']:.0f} independent samples fitted)",
                  f"  offsets (nuisance): force {self.offsets['force']:.4g} N, displacement "
@@ -305,10 +317,25 @@ class VibrationDiagnosis(ResultShape):
 
     @property
     def success(self) -> bool:
-        """True unless a mismatch beyond the noise remains after the effects named (the same
-        test as the warning saying so: the misfit's p-value below ``alpha`` before and after)."""
+        """The one rule of docs/guards.md: every named effect's reported value is identified
+        and no mismatch beyond the noise remains after the effects named (the same test as
+        the warning saying so: the misfit's p-value below ``alpha`` before and after)."""
+        return not self.failure_reasons()
+
+    def failure_reasons(self) -> tuple:
+        """Why ``success`` is False (empty when it is True), in a tester's words."""
         d = self.details
-        return not (d["misfit_p"] < d["alpha"] and d["misfit_p_after"] < d["alpha"])
+        out = []
+        if d["misfit_p"] < d["alpha"] and d["misfit_p_after"] < d["alpha"]:
+            out.append("misfit well beyond the noise remains: "
+                       + (f"after {' + '.join(self.effects)}" if self.effects else
+                          "no tested effect explains it")
+                       + f" (misfit p-value {d['misfit_p_after']:.2g} < {d['alpha']:g})")
+        bad = [k for k, p in self.params.items() if not p.identified]
+        if bad:
+            out.append(f"{', '.join(bad)} {'is' if len(bad) == 1 else 'are'} not identified by "
+                       "these data (standard error above half the value, or at a bound)")
+        return tuple(out)
 
     def augment(self, target, *, modal_mass: float | None = None,
                 slip_per_amplitude: float = 1.0, mode: int = 1):
@@ -343,7 +370,7 @@ class VibrationDiagnosis(ResultShape):
             if not self.effects:
                 return target
             diagnosed = (float(self.amplitude.min()), float(self.amplitude.max()))
-            _check_amplitude_units(diagnosed, target)
+            check_amplitude_units(diagnosed, target)
             return target.with_effects(
                 {n: dict(self.parameters[n]) for n in self.effects}, mode=mode,
                 calibrated_range=diagnosed)
@@ -441,7 +468,8 @@ class VibrationDiagnosis(ResultShape):
 
     def report(self) -> str:
         """Human-readable account."""
-        lines = ["Vibration diagnosis (amplitude-dependent frequency and damping)",
+        lines = [self.verdict(),
+                 "Vibration diagnosis (amplitude-dependent frequency and damping)",
                  f"  {self.amplitude.size} amplitudes, {self.amplitude.min():.3g} .. "
                  f"{self.amplitude.max():.3g} m; noise: frequency {100 * self.frequency_noise:.2g} %, "
                  f"damping {100 * self.damping_ratio_noise:.2g} % ({self.details['noise_from']})"]
@@ -497,29 +525,3 @@ class VibrationDiagnosis(ResultShape):
             a.grid(True, which="both", alpha=0.3)
             a.legend(fontsize=7)
         return arts
-
-
-#: How far [factor] the diagnosed amplitudes may lie outside a specimen's documented and
-#: calibrated amplitudes before augment refuses them as given in other units.
-_UNIT_FACTOR = 30.0
-
-
-def _check_amplitude_units(diagnosed, specimen) -> None:
-    """ValueError when the diagnosed amplitude range [m] lies wholly more than
-    :data:`_UNIT_FACTOR` outside the specimen's ``amplitude_range`` and ``calibrated_range``
-    (amplitudes in mm or um given as metres: the effects' amplitude constants and the
-    calibrated range would be wrong by the factor and QSMA would stop warning)."""
-    ranges = [r for r in (getattr(specimen, "amplitude_range", None),
-                          getattr(specimen, "calibrated_range", None)) if r is not None]
-    if not ranges:
-        return
-    lo, hi = min(r[0] for r in ranges), max(r[1] for r in ranges)
-    if diagnosed[0] > _UNIT_FACTOR * hi or diagnosed[1] < lo / _UNIT_FACTOR:
-        far = diagnosed[0] / hi if diagnosed[0] > hi else lo / diagnosed[1]
-        raise ValueError(
-            f"the diagnosed amplitudes ({diagnosed[0]:.3g} to {diagnosed[1]:.3g} m) lie "
-            f"{far:.3g} times {'above' if diagnosed[0] > hi else 'below'} the target "
-            f"specimen's amplitudes ({lo:.3g} to {hi:.3g} m): were they given in mm or um? "
-            "diagnose_vibration takes amplitudes in metres; diagnose again in metres (or "
-            "widen the specimen's amplitude_range if the test truly went there)")
-

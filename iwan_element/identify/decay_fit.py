@@ -70,9 +70,6 @@ __all__ = ["fit_decay"]
 log = logging.getLogger(__name__)
 
 _QUANTITY_POWER = {"displacement": 0, "velocity": 1, "acceleration": 2}
-#: Fewest chi-square degrees of freedom of the noise level for a success: below 5, +-2 stated
-#: standard errors cover less than 90 % even with a perfect model (Student t).
-_MIN_NOISE_DOF = 5.0
 
 
 def _windows(prob, i_a, i_b, nw):
@@ -310,7 +307,7 @@ def _fit_models(prob, info, alpha, snr_min, spc):
     micro, obj, span = _fit_micro(prob, info, snr_min, spc)
     idx, ref, X = span["idx"], span["ref"], info["data"][0]
     lags = math.ceil(2.0 * prob.fs / (prob.bw * span["step"]))
-    chosen, regime, warns, guard = micro, "microslip", [], False
+    chosen, regime, warns, guard = micro, "microslip", [], []
     cov, kappa, dof = _covariance(obj, micro.fun, micro.jac)
     x_max = math.exp(micro.x[-2])
     full_starts = _full_starts(micro.x, x_max, prob.conv["x_ref"], span["curve_full"])
@@ -338,13 +335,14 @@ def _fit_models(prob, info, alpha, snr_min, spc):
             chosen, regime, cov, kappa, dof = full, "macroslip", cov_f, kappa_f, dof_f
         elif p_val < alpha or (p_val < 0.05 and phi_known and inside
                                and math.exp(full.x[4]) < math.exp(full.x[-2])):
-            guard = True        # microslip closed forms hold for X << phi_max only
-            warns.append(
+            # microslip closed forms hold for X << phi_max only
+            guard.append(
                 f"the record leaves microslip (likelihood-ratio p = {p_val:.2g}; the full "
                 f"model puts phi_max at {math.exp(full.x[4]):.3g} m against a release "
                 f"amplitude of {math.exp(full.x[-2]):.3g} m) but does not fix the full model: "
                 "the microslip parameters f0, zeta0, chi and delta describe amplitudes beyond "
                 "the validity of the microslip model and may be biased; not a success")
+            warns.append(guard[-1])
         else:
             warns.append(
                 f"the decay never leaves microslip (likelihood-ratio p = {p_val:.2g}, "
@@ -354,22 +352,13 @@ def _fit_models(prob, info, alpha, snr_min, spc):
                 "): KT, phi_max, beta "
                 "and Fs are not identified; reported f0, zeta0, chi and delta")
     if regime == "microslip" and _microslip_saturates(micro.x, prob.conv["x_ref"]):
-        guard = True
-        warns.append("the microslip curve's tangent stiffness vanishes inside the record: "
+        guard.append("the microslip curve's tangent stiffness vanishes inside the record: "
                      "its largest amplitudes are beyond phi_max for any joint not stiffer "
                      "than the mode; the microslip parameters may be biased; not a success")
+        warns.append(guard[-1])
     chi2_red = _misfit_ratio(chosen.fun, lags)
     if chi2_red > 1.0:          # structure beyond the noise model: widen (as fit_modal_iwan)
         cov = cov * chi2_red
-    if dof[1] < _MIN_NOISE_DOF:
-        guard = True
-        cover = 100.0 * (1.0 - 2.0 * stats.t.sf(2.0, max(dof[1], 0.1)))
-        warns.append(
-            f"the noise level rests on {dof[1]:.2g} degrees of freedom (the record holds few "
-            "independent noise samples beyond what the fit absorbs): the standard errors are "
-            f"themselves uncertain by about {100 * math.sqrt(0.5 / max(dof[1], 0.1)):.0f} % "
-            f"and +-2 stderr covers only about {cover:.0f} % (Student t); a longer record, "
-            "a wider band or less noise would help; not a success")
     span.update(kappa=kappa, dof=dof, chi2_red=chi2_red, regime=regime, warns=warns, cov=cov,
                 guard=guard)
     return chosen, span
@@ -472,8 +461,13 @@ def fit_decay(t, y, *, quantity: str = "acceleration", band, order: int = 4,
     fit = ModalIwanFit.from_solution(best.x[:n_th], span["cov"][:n_th, :n_th], regime, data, conv,
                                      chi2_red=span["chi2_red"], weights=(),
                                      warnings=tuple(w for w in [info["clip_note"]] + warns if w),
-                                     optimizer_ok=bool(best.success))
+                                     optimizer_ok=bool(best.success),
+                                     noise_dof=span["dof"][1], noise_source=(
+                                         " (the record holds few independent noise samples "
+                                         "beyond what the fit absorbs; a longer record, a "
+                                         "wider band or less noise would help)"))
     if span["guard"]:
-        fit = dataclasses.replace(fit, success=False)
+        fit = dataclasses.replace(fit, success=False,
+                                  failures=tuple(span["guard"]) + fit.failure_reasons())
     log.debug("fit_decay: %s", conv)
     return fit

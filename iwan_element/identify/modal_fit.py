@@ -198,9 +198,10 @@ def fit_modal_iwan(amplitude, frequency=None, damping_ratio=None, *, stiffness: 
             "identified; reported the mean frequency and damping ratio only",))
     sf, sz, known = _weights(f, z, fstd, zstd)
     micro = _fit_micro(X, f, z, sf, sz, x_ref, stiffness, floor, damping_form)
+    noise_dof = None
     if not known:                      # weights from each curve's own residual scatter
         fm, zm = model_curve(micro.x, X, "microslip", x_ref, stiffness, floor, damping_form)
-        dof = max(X.size - 2, 1)
+        dof = noise_dof = max(X.size - 2, 1)
         sf = np.full(X.size, max(math.sqrt(np.sum((fm - f) ** 2) / dof), 1e-9 * np.median(f)))
         sz = np.full(X.size, max(math.sqrt(np.sum((zm - z) ** 2) / dof), 1e-9 * np.median(z)))
         micro = _fit_micro(X, f, z, sf, sz, x_ref, stiffness, floor, damping_form)
@@ -228,4 +229,4 @@ def fit_modal_iwan(amplitude, frequency=None, damping_ratio=None, *, stiffness: 
     return ModalIwanFit.from_solution(chosen.x, cov, regime, data, conv, chi2_red=chi2_red,
                                       weights=(sf, sz), warnings=tuple(warns),
                                       optimizer_ok=bool(chosen.success),
-                                      jac=chosen.jac)
+                                      jac=chosen.jac, noise_dof=noise_dof)

@@ -69,9 +69,16 @@ def _inputs(f, F, response, phase, level):
     for v in dict.fromkeys(lab.tolist()):
         idx = np.flatnonzero(lab == v)
         idx = idx[np.argsort(arrs["f"][idx], kind="stable")]
-        if idx.size < 5 or np.unique(arrs["f"][idx]).size != idx.size:
-            raise ValueError(f"sweep {v!r} must have >= 5 points at distinct frequencies, "
-                             f"got {idx.size}")
+        fv = arrs["f"][idx]
+        n_distinct = np.unique(fv).size
+        if idx.size < 5 or n_distinct != idx.size:
+            rep = np.unique(fv[1:][np.diff(fv) == 0])
+            again = (f"; f repeats {rep.size} frequenc{'y' if rep.size == 1 else 'ies'} "
+                     f"({', '.join(f'{x:g}' for x in rep[:4])} Hz): give level= to tell "
+                     "sweeps apart, or average the repeats" if rep.size else "")
+            raise ValueError(f"level {v!r}: a sweep must have >= 5 points at distinct "
+                             f"frequencies, got {idx.size} points at {n_distinct} distinct "
+                             f"frequencies{again}")
         sweeps.append(idx)
     return arrs, sweeps
 
@@ -128,7 +135,8 @@ def _convention(W, X, F, ph, sweeps, quantity):
 
     The resonance phase of the sweeps (at the peak of ``|X / F|``) must lie within pi/6 of
     -pi/2, 0, pi/2 or pi and the phase must fall with frequency (``exp(i W t)``); a phase
-    that rises is conjugated (``exp(-i W t)``). Returns the rotated phase and a note.
+    that rises is conjugated (``exp(-i W t)``). Returns the rotated phase, a note and why
+    the curve is not usable ("" when the phase class is the one of ``quantity``).
     """
     stats = [s for s in (_sweep_phase(W[i], X[i] / F[i], ph[i]) for i in sweeps) if s]
     if not stats:
@@ -155,11 +163,18 @@ def _convention(W, X, F, ph, sweeps, quantity):
                          "to the force, in rad?)")
     phd = -sign * ph - (cls + 0.5) * math.pi
     note = f"phase {_CLASS[cls]}" + (", rising with frequency (conjugated)" if sign > 0 else "")
+    failure = ""
     if cls != _EXPECTED[quantity]:
-        note += (f" although the response is {quantity}: the sign of the response or of the "
-                 "force is inverted, or the phase is not that of the given quantity; read as "
-                 f"the displacement phase after adding {-(cls + 0.5) % 2:g} pi")
-    return phd, note
+        note += (f" although the response is {quantity}: read as the displacement phase after "
+                 f"adding {-(cls + 0.5) % 2:g} pi")
+        fits = [q for q, c in _EXPECTED.items() if c == cls]
+        failure = (f"the phase at resonance is {_CLASS[cls]} although quantity="
+                   f"{quantity!r}: " + (f"the response may be {fits[0]} (then give quantity="
+                                        f"{fits[0]!r}: the amplitudes are now wrong by a "
+                                        "factor w^n), " if fits else "")
+                   + "or the sign of the response or of the force is inverted; the curve is "
+                   "not usable until the quantity and the signs are checked")
+    return phd, note, failure
 
 
 class _Model:
@@ -355,7 +370,7 @@ def sweep_curve(f, F, response, phase, *, level=None, quantity: str = "accelerat
     arrs, sweeps = _inputs(f, F, response, phase, level)
     W = 2.0 * math.pi * arrs["f"]
     X = arrs["response"] / W ** _POWER[quantity]
-    phd, conv_note = _convention(W, X, arrs["F"], arrs["phase"], sweeps, quantity)
+    phd, conv_note, failure = _convention(W, X, arrs["F"], arrs["phase"], sweeps, quantity)
     H = X * np.exp(1j * phd) / arrs["F"]
     if max(float(np.ptp(np.log(X[i]))) for i in sweeps) < 0.1:
         deg = min(deg, len(sweeps) - 1)     # response held within 10 %: one amplitude a sweep
@@ -373,7 +388,7 @@ def sweep_curve(f, F, response, phase, *, level=None, quantity: str = "accelerat
              f"{rms:.2g}; bins: {len(amp)} of {n_bins} in ln X")
     return AmplitudeCurve(amp, wr / (2 * math.pi), z, frequency_std=sw / (2 * math.pi),
                           damping_ratio_std=sz, method="stepped-sine-sweep", notes=notes,
-                          warnings=r["warnings"])
+                          warnings=r["warnings"], failures=(failure,) if failure else ())
 
 
 def _identify(W, H, F, sweeps, deg, residual, frac, bins):
