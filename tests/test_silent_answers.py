@@ -10,7 +10,6 @@ or table per family; the Exudyn connector's float marker (case 11) is in
 """
 from __future__ import annotations
 
-import math
 import warnings
 
 import numpy as np

@@ -148,7 +148,7 @@ def test_load_test_bad_content(tmp_path, clean):
     n = 1500                                          # one and a half periods: one cycle only
     with pytest.raises(ValueError, match="found 1 complete cycle"):
         load_test(_write_csv(tmp_path / "short.csv", t[:n], u[:n], F[:n]))
-    (tmp_path / "text.csv").write_text("time,displacement,force\n0,0,0\n0.1,abc,1\n")
+    (tmp_path / "text.csv").write_text("time [s],displacement [mm],force [kN]\n0,0,0\n0.1,abc,1\n")
     with pytest.raises(ValueError, match="line 3 .* displacement value 'abc' is not a number"):
         load_test(tmp_path / "text.csv")
     with pytest.raises(ValueError, match="cannot read"):

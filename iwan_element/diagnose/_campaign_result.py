@@ -435,7 +435,8 @@ class CampaignFit(ResultShape):
             "coefficients", "stderr", "covariance", "coefficient_labels", "rows", "scatter",
             "stderr_scatter",
             "converged",
-            "success", "message", "nfev", "wall_time", "warnings", "details")})
+            "success", "message", "nfev", "wall_time", "warnings", "details")}
+                         | {"failure_reasons": list(self.failure_reasons())})
 
     def plot(self, ax=None, *, quantity: str = "Fs", condition: str | None = None):
         """One quantity against one condition: the records' own estimates (with their

@@ -113,12 +113,6 @@ class Diagnosis(ResultShape):
     details: dict = field(default_factory=dict)
     failures: tuple = ()
 
-    def failure_reasons(self) -> tuple:
-        """Why ``success`` is False (empty when it is True), in a tester's words."""
-        if self.success:
-            return ()
-        return tuple(self.failures) or super().failure_reasons()
-
     def to_dict(self) -> dict:
         """JSON-safe dict (NaN/inf become None); the fits as :meth:`FitResult.to_dict`."""
         return json_safe({
@@ -464,7 +458,9 @@ class VibrationDiagnosis(ResultShape):
             "effect", "effects", "ambiguous_with", "where", "parameters", "error_before",
             "error_after", "noise_level", "frequency_noise", "damping_ratio_noise", "amplitude",
             "frequency", "damping_ratio", "predicted_frequency", "predicted_damping_ratio",
-            "model_frequency", "model_damping_ratio", "steps", "warnings", "details", "covariance")})
+            "model_frequency", "model_damping_ratio", "steps", "warnings", "details", "covariance")}
+                         | {"success": self.success,
+                            "failure_reasons": list(self.failure_reasons())})
 
     def report(self) -> str:
         """Human-readable account."""

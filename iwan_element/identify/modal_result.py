@@ -124,12 +124,6 @@ class ModalIwanFit(ResultShape):
     params: ParameterTable = field(default_factory=lambda: ParameterTable(()))
     failures: tuple = ()
 
-    def failure_reasons(self) -> tuple:
-        """Why ``success`` is False (empty when it is True), in a tester's words."""
-        if self.success:
-            return ()
-        return tuple(self.failures) or super().failure_reasons()
-
     # ------------------------------------------------------------------ construction
     @classmethod
     def from_solution(cls, theta, cov, regime, data, conv, *, chi2_red, weights, warnings,

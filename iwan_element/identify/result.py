@@ -112,12 +112,6 @@ class FitResult(ResultShape):
     _curves: dict = field(default_factory=dict, repr=False)
     failures: tuple = ()
 
-    def failure_reasons(self) -> tuple:
-        """Why ``success`` is False (empty when it is True), in a tester's words."""
-        if self.success:
-            return ()
-        return tuple(self.failures) or super().failure_reasons()
-
     @property
     def joint(self) -> IwanParameters:
         """The fitted joint (``Fs``, ``KT``, ``chi``, ``beta`` of :attr:`params`)."""
