@@ -8,13 +8,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..core.serialize import json_safe
-
-from ..core.protocol import check_element
-from ._specimen_units import check_amplitude_units
-from ..core.validation import check_scalar
 from ..effects import EFFECTS
 from ..fitting import Parameter, ParameterTable, verdict
 from ..core.result_shape import ResultShape, panels
+from ._augment import augmented
 
 __all__ = ["Diagnosis", "VibrationDiagnosis"]
 
@@ -359,28 +356,16 @@ class VibrationDiagnosis(ResultShape):
             and/or ``ViscousDamping(c = 2 zeta_v omega_0 m / r^2)`` around ``joint``, with
             ``omega_0`` the measured angular frequency at the smallest amplitude (each effect's
             ``modal_to_joint``).
+
+        Raises
+        ------
+        ValueError
+            A specimen whose documented and calibrated amplitudes the diagnosed ones miss by
+            more than a factor 30 (amplitudes given in mm or um, docs/guards.md); a target that
+            is neither a specimen nor a joint element; a missing or bad ``modal_mass``.
         """
-        if hasattr(target, "with_effects"):
-            if not self.effects:
-                return target
-            diagnosed = (float(self.amplitude.min()), float(self.amplitude.max()))
-            check_amplitude_units(diagnosed, target)
-            return target.with_effects(
-                {n: dict(self.parameters[n]) for n in self.effects}, mode=mode,
-                calibrated_range=diagnosed)
-        check_element(target, name="target")
-        if modal_mass is None:
-            raise ValueError("modal_mass is required to augment a joint element")
-        joint = target
-        m = check_scalar("modal_mass", modal_mass, low=0.0, low_open=True)
-        r = check_scalar("slip_per_amplitude", slip_per_amplitude, low=0.0, low_open=True)
-        el = joint
-        w0 = 2 * np.pi * float(self.frequency[np.argmin(self.amplitude)])
-        for name in self.effects:
-            cls = EFFECTS[name]
-            el = cls(el, **cls.modal_to_joint(self.parameters[name], modal_mass=m,
-                                              slip_per_amplitude=r, omega0=w0))
-        return el
+        return augmented(self, target, modal_mass=modal_mass,
+                         slip_per_amplitude=slip_per_amplitude, mode=mode)
 
     def predict(self, amplitude, *, base=None):
         """The augmented model's frequency and damping at new amplitudes, with 1-sigma bands.

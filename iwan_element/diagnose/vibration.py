@@ -266,10 +266,13 @@ def diagnose_vibration(amplitude, frequency=None, damping_ratio=None, *, predict
     predicted_frequency, predicted_damping_ratio : array_like, shape (n,), keyword-only
         The model's prediction at the same amplitudes [Hz], [-].
     frequency_noise, damping_ratio_noise : float, optional, keyword-only
-        Relative noise standard deviations [-], ``> 0``; when given they are used as they are.
+        Relative noise standard deviations [-], in ``(0, 0.5]`` (frequency) and ``(0, 1]``
+        (damping ratio); when given they are used as they are. Larger values are refused as
+        percent given for a ratio.
     frequency_uncertainty, damping_ratio_uncertainty : float or array_like, optional, keyword-only
         Stated per-point relative standard uncertainty [-] (e.g. from
-        :class:`~iwan_element.AmplitudeCurve`); the noise is never taken below it.
+        :class:`~iwan_element.AmplitudeCurve`), in the same ranges; the noise is never taken
+        below it.
     predicted_zeta0 : float, keyword-only
         Viscous damping ratio already in the prediction [-], ``>= 0``.
     alpha, ambiguity, max_effects : keyword-only

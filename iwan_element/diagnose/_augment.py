@@ -1,7 +1,38 @@
-"""The units guard of :meth:`VibrationDiagnosis.augment` on a specimen (docs/guards.md)."""
+"""The body of :meth:`VibrationDiagnosis.augment` and its units guard (docs/guards.md)."""
 from __future__ import annotations
 
-__all__ = ["check_amplitude_units"]
+import numpy as np
+
+from ..core.protocol import check_element
+from ..core.validation import check_scalar
+from ..effects import EFFECTS
+
+__all__ = ["augmented", "check_amplitude_units"]
+
+
+def augmented(diag, target, *, modal_mass, slip_per_amplitude, mode):
+    """:meth:`VibrationDiagnosis.augment` of the diagnosis ``diag`` (see there)."""
+    if hasattr(target, "with_effects"):
+        if not diag.effects:
+            return target
+        diagnosed = (float(diag.amplitude.min()), float(diag.amplitude.max()))
+        check_amplitude_units(diagnosed, target)
+        return target.with_effects(
+            {n: dict(diag.parameters[n]) for n in diag.effects}, mode=mode,
+            calibrated_range=diagnosed)
+    check_element(target, name="target")
+    if modal_mass is None:
+        raise ValueError("modal_mass is required to augment a joint element")
+    m = check_scalar("modal_mass", modal_mass, low=0.0, low_open=True)
+    r = check_scalar("slip_per_amplitude", slip_per_amplitude, low=0.0, low_open=True)
+    el = target
+    w0 = 2 * np.pi * float(diag.frequency[np.argmin(diag.amplitude)])
+    for name in diag.effects:
+        cls = EFFECTS[name]
+        el = cls(el, **cls.modal_to_joint(diag.parameters[name], modal_mass=m,
+                                          slip_per_amplitude=r, omega0=w0))
+    return el
+
 
 #: How far [factor] the diagnosed amplitudes may lie outside a specimen's documented and
 #: calibrated amplitudes before augment refuses them as given in other units.
