@@ -25,6 +25,8 @@ from __future__ import annotations
 
 import math
 
+from scipy import stats
+
 __all__ = ["verdict", "fit_success", "noise_dof_warning", "RELATIVE", "MIN_NOISE_DOF"]
 
 #: Largest standard error, as a fraction of the reference magnitude, of an identified parameter.
@@ -39,7 +41,6 @@ def noise_dof_warning(dof: float, source: str = "") -> str | None:
     freedom (``source``: where it came from, for the text), or None when ``dof`` suffices."""
     if dof >= MIN_NOISE_DOF:
         return None
-    from scipy import stats
     cover = 100.0 * (1.0 - 2.0 * stats.t.sf(2.0, max(dof, 0.1)))
     return (f"the noise level rests on {dof:.2g} degrees of freedom{source}: the standard "
             f"errors are themselves uncertain by about {100 * math.sqrt(0.5 / max(dof, 0.1)):.0f}"
