@@ -352,8 +352,9 @@ def _finish(method, out, *, converged, message, nfev, nrmse, t0, extra_warnings=
                         correlation=out["correlation"])
     failures = failure_list(
         converged=converged, message=str(message), explains=explains,
-        noise_text=next((w for w in warns if "noise" in w),
-                        "the joint does not explain the data beyond the noise"),
+        noise_text=next((w for w in warns if "indistinguishable from noise" in w),
+                        f"misfit well beyond the noise remains: the joint does not follow the "
+                        f"data (NRMSE {float(nrmse):.3g})"),
         ident=ident, required=required_parameters(out["ranges"], fixed),
         microslip=out["details"].get("macroslip_reached") is False) if not success else ()
     result = FitResult(params=table, ranges=out["ranges"],
