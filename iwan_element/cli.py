@@ -22,8 +22,12 @@ diagnose
         iwan-element diagnose runs/*.csv --units in,lbf --lowpass 20 --jobs 2 --progress
                      [--json campaign.json] [--table campaign.csv]
 
-Exit status: 0 on success, 1 on bad input (one line on stderr saying why), 2 on a usage error,
-3 when the optimiser did not converge (the report is still printed).
+Units are read from the header (``time [s],displacement [mm],force [kN]``) or given with
+``--units``; a unit neither given nor labelled is refused (exit status 1), never guessed.
+
+Exit status follows the result's ``success`` (docs/guards.md): 0 when it is usable, 3 when
+it is not (the report is still printed; its first line says why), 1 on bad input (one line on
+stderr saying why), 2 on a usage error.
 """
 from __future__ import annotations
 
@@ -37,7 +41,7 @@ from pathlib import Path
 __all__ = ["main", "build_parser"]
 
 PROG = "iwan-element"
-EXIT_OK, EXIT_INPUT, EXIT_USAGE, EXIT_NOT_CONVERGED = 0, 1, 2, 3
+EXIT_OK, EXIT_INPUT, EXIT_USAGE, EXIT_NOT_USABLE = 0, 1, 2, 3
 
 
 class _UsageError(Exception):
@@ -58,10 +62,11 @@ def _add_record_args(parser, *, many: bool = False) -> None:
                             help="test record(s): time, displacement, force columns")
     else:
         parser.add_argument("csv", type=Path, help="test record: time, displacement, force columns")
-    parser.add_argument("--units", required=True, metavar="DISP,FORCE[,TIME]",
+    parser.add_argument("--units", metavar="DISP,FORCE[,TIME]",
                         help="units of the displacement, force (and time) columns, e.g. mm,kN "
                              "(displacement: m, mm, um, in; force: N, kN, MN, lbf, kip; "
-                             "time: s, ms, min; default time unit s)")
+                             "time: s, ms, min; default time unit s). Default: read from the "
+                             "header ('displacement [mm]'); a unit is never guessed")
     parser.add_argument("--columns", metavar="T,U,F",
                         help="names or 0-based indices of the time, displacement, force columns")
     parser.add_argument("--delimiter", help="field separator (default: guessed)")
@@ -133,7 +138,7 @@ def _run_diagnose(args) -> int:
     du, fu, tu = _parse_units(args.units)
     data = load_test(args.csv[0], displacement_unit=du, force_unit=fu, time_unit=tu,
                      columns=_parse_columns(args.columns), delimiter=args.delimiter)
-    noise = None if args.noise is None else args.noise * FORCE_UNITS[fu]
+    noise = None if args.noise is None else args.noise * FORCE_UNITS[data.units["force"]]
     result = diagnose(data.t, data.u, data.F, max_effects=args.max_effects, noise=noise,
                       lowpass=args.lowpass, seed=args.seed, progress=args.progress)
     wrote = []                  # files first: a closed stdout must not cost the outputs
@@ -147,9 +152,9 @@ def _run_diagnose(args) -> int:
         fig.tight_layout()
         fig.savefig(args.plot, dpi=120)
         wrote.append(f"wrote {args.plot}")
-    status = EXIT_OK if result.fit.success or not result.effects else EXIT_NOT_CONVERGED
+    status = EXIT_OK if result.success else EXIT_NOT_USABLE
     return status, [f"{data.source}: {len(data.u)} samples, {len(data.cycles)} cycles, units "
-                    f"{du}, {fu}, {tu} (converted to SI)", result.report()] + wrote
+                    f"{_units_text(data)} (converted to SI)", result.report()] + wrote
 
 
 def _run_diagnose_many(args) -> int:
@@ -171,7 +176,7 @@ def _run_diagnose_many(args) -> int:
         data = load_test(path, displacement_unit=du, force_unit=fu, time_unit=tu, columns=cols,
                          delimiter=args.delimiter)
         records.append((data.t, data.u, data.F))
-    noise = None if args.noise is None else args.noise * FORCE_UNITS[fu]
+    noise = None if args.noise is None else args.noise * FORCE_UNITS[data.units["force"]]
     opts = {"max_effects": args.max_effects, "noise": noise, "lowpass": args.lowpass,
             "seed": args.seed}
     names = [p.name for p in args.csv]
@@ -188,10 +193,17 @@ def _run_diagnose_many(args) -> int:
         wrote.append(f"wrote {args.json}")
     if args.table is not None:
         wrote.append(f"wrote {batch.to_csv(args.table)}")
-    return EXIT_OK if batch.success else EXIT_NOT_CONVERGED, [batch.report()] + wrote
+    return EXIT_OK if batch.success else EXIT_NOT_USABLE, [batch.report()] + wrote
 
 
-def _parse_units(text: str) -> tuple[str, str, str]:
+def _units_text(data) -> str:
+    u = data.units
+    return f"{u['displacement']}, {u['force']}, {u['time']}"
+
+
+def _parse_units(text: str | None) -> tuple:
+    if text is None:                       # from the file's header (load_test refuses a guess)
+        return None, None, None
     parts = [s.strip() for s in text.split(",")]
     if len(parts) not in (2, 3) or not all(parts):
         raise ValueError(f"--units must be DISP,FORCE or DISP,FORCE,TIME (e.g. mm,kN), got {text!r}")
@@ -257,7 +269,7 @@ def _run_fit(args) -> int:
                     raise ValueError("--method seed needs --slip-force (the paper takes Fs as "
                                      "known)")
                 result = fit_dissipation(table["u0"], table["F0"], table["D"], method="seed",
-                                         Fs=args.slip_force * FORCE_UNITS[fu])
+                                         Fs=args.slip_force * FORCE_UNITS[data.units["force"]])
             else:
                 result = fit_dissipation(table["u0"], table["F0"], table["D"],
                                          method="least_squares", seed=args.seed,
@@ -273,8 +285,8 @@ def _run_fit(args) -> int:
         _write_plot(args.plot, data, result)
         wrote.append(f"wrote {args.plot}")
     head = (f"{data.source}: {len(data.u)} samples, {len(data.cycles)} cycles "
-            f"({len(data.usable_cycles())} usable), units {du}, {fu}, {tu} (converted to SI)")
-    return EXIT_OK if result.success else EXIT_NOT_CONVERGED, [head, result.report()] + wrote
+            f"({len(data.usable_cycles())} usable), units {_units_text(data)} (converted to SI)")
+    return EXIT_OK if result.success else EXIT_NOT_USABLE, [head, result.report()] + wrote
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -495,6 +495,8 @@ def _write(path, text):
     ("two columns", "time,displacement\n" + "".join(f"{i},{i}\n" for i in range(50)), ""),
     ("zero displacement", "time,displacement,force\n" + "".join(
         f"{i},0,{math.sin(i / 5)}\n" for i in range(400)), "displacement"),
+    ("constant force", "time,displacement,force\n" + "".join(      # issue 34 case 5
+        f"{i},{0.1 * math.sin(i / 5)},3\n" for i in range(400)), "F is constant"),
 ])
 def test_cli_bad_files_exit_1_with_one_line(tmp_path, capsys, label, text, match):
     from iwan_element.cli import main
@@ -547,7 +549,7 @@ def test_cli_wrong_units_by_1000_is_flagged(tmp_path, capsys):
 def test_load_test_bad_files(tmp_path, label, text, match):
     path = _write(tmp_path / "bad.csv", text)
     with pytest.raises(ValueError, match=match or None):
-        ie.load_test(path, displacement_unit="mm", force_unit="kN")
+        ie.load_test(path, displacement_unit="mm", force_unit="kN", time_unit="s")
 
 
 # ---------------------------------------------------------------- magnitude range at the boundary

@@ -56,7 +56,6 @@ def test_fit_dissipation_methods(csv_path, capsys, method, extra):
 
 
 @pytest.mark.parametrize("argv, code, match", [
-    (["fit", "{csv}"], 2, "required: --units"),
     (["fit", "{csv}", "--units", "mm"], 1, "--units must be"),
     (["fit", "{csv}", "--units", "mm,tonne"], 1, "not a known unit"),
     (["fit", "{csv}", "--units", "m,kN"], 1, "labelled in 'mm'"),
@@ -71,6 +70,18 @@ def test_bad_input_exits_nonzero_with_one_line(csv_path, capsys, argv, code, mat
     argv = [a.replace("{csv}", str(csv_path)) for a in argv]
     assert main(argv) == code
     _one_line_error(capsys.readouterr().err, match)
+
+
+def test_units_come_from_the_header_or_are_refused(csv_path, tmp_path, capsys):
+    """Issue 34 case 8: without --units the header's labels are the units; a header without
+    them (or no header) is refused naming the columns, never read as mm and kN."""
+    assert main(["fit", str(csv_path), "--method", "dissipation"]) == 0
+    assert "units mm, kN, s" in capsys.readouterr().out
+    bare = tmp_path / "bare.csv"
+    bare.write_text("time,displacement,force\n" + "\n".join(
+        line.replace(" ", "") for line in csv_path.read_text().splitlines()[2:]) + "\n")
+    assert main(["fit", str(bare)]) == 1
+    _one_line_error(capsys.readouterr().err, "is not stated: the header names the columns")
 
 
 def test_bad_data_files(tmp_path, capsys):

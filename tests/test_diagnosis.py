@@ -371,7 +371,11 @@ def test_cli_diagnose(tmp_path, capsys):
     assert main(["diagnose", str(path), "--units", "mm,kN", "--max-effects", "0"]) == 1
     err = capsys.readouterr().err
     assert err.startswith("iwan-element: error:") and "max_effects" in err and err.count("\n") == 1
-    assert main(["diagnose", str(path)]) == 2
+    # without --units the header's labels are the units (issue 34); unlabelled, it is refused
+    bare = tmp_path / "bare.csv"
+    bare.write_text("time,displacement,force\n" + "\n".join(path.read_text().splitlines()[1:]))
+    assert main(["diagnose", str(bare)]) == 1
+    assert "is not stated" in capsys.readouterr().err
 
 
 def test_example_runs(tmp_path):

@@ -147,6 +147,8 @@ def parts():
     (lambda d: dict(markerNumbers=[d["coord0"], 99]), r"markerNumbers\[1\] = 99 is not a marker"),
     (lambda d: dict(markerNumbers=[-1, d["coord1"]]), r"markerNumbers\[0\] = -1 is not a marker"),
     (lambda d: dict(markerNumbers=["a", d["coord1"]]), r"markerNumbers\[0\] must be a marker number"),
+    (lambda d: dict(markerNumbers=[d["coord0"], 1.7]), r"markerNumbers\[1\] must be a marker number .*float"),
+    (lambda d: dict(markerNumbers=[d["coord0"], 2.0]), r"markerNumbers\[1\] must be a marker number .*float"),
     (lambda d: dict(markerNumbers=[d["coord1"], d["coord1"]]), "two different markers"),
     (lambda d: dict(markerNumbers=[d["coord0"], d["pos1"]]), "two coordinate markers .* or two position"),
     (lambda d: dict(markerNumbers=[d["pos0"], d["pos1"]]), "axis is required for position markers"),

@@ -110,7 +110,9 @@ def test_loop_fit_exact_data_is_recovered(p):
         d = simulate_test(p, np.array(amps) * p.phi_max, cycles=2, sample_rate=5)
         r = quiet_fits(fit_loops, d.t, d.u, d.F)
         q = r.joint
-        assert r.success and r.identified["Fs"] is macro
+        # microslip data fix KT, chi and R only: Fs and beta are reported NOT identified, so
+        # the fit is not a usable joint (success False; the one rule of docs/guards.md)
+        assert r.success is macro and r.identified["Fs"] is macro
         # a parameter at the bound of its range (beta = 0) is never called identified
         assert r.identified["beta"] is (macro and p.beta > 0)
         assert q.KT == pytest.approx(p.KT, rel=1e-7) and q.chi == pytest.approx(p.chi, abs=1e-7)
@@ -140,7 +142,7 @@ def test_loop_fit_round_trip_at_one_percent_force_noise(p, macro):
         r = fit_loops(d.t, d.u, d.F, max_samples=None, seed=1)
     assert np.array_equal(d.F, F_in)
     q = r.joint
-    assert r.success
+    assert r.success is macro      # microslip: Fs and beta not identified, not a usable joint
     assert abs(q.KT / p.KT - 1) < 0.01
     assert abs(q.chi - p.chi) < 0.02
     # the reported standard errors account for the errors
@@ -232,7 +234,7 @@ def test_loop_fit_bad_inputs_and_no_mutation():
         fit_loops(t_bad, u, F)
     with pytest.raises(ValueError, match="F is all zero"):
         fit_loops(t, u, 0 * F)
-    with pytest.raises(ValueError, match="displacement. does not vary"):
+    with pytest.raises(ValueError, match="u is constant"):
         fit_loops(t, 0 * u + 1e-4, F)
     with pytest.raises(ValueError, match="sign of the displacement"):
         fit_loops(t, u, -F)

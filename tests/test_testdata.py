@@ -95,7 +95,8 @@ def test_load_test_columns_by_index_and_other_units(tmp_path, clean):
     rows = np.column_stack([clean.F, clean.t, clean.u * 1e6])
     path = tmp_path / "b.csv"
     path.write_text("\n".join(";".join(f"{x:.10g}" for x in r) for r in rows))
-    data = load_test(path, displacement_unit="um", force_unit="N", columns=(1, 2, 0))
+    data = load_test(path, displacement_unit="um", force_unit="N", time_unit="s",
+                     columns=(1, 2, 0))
     assert np.allclose(data.u, clean.u, rtol=1e-8, atol=1e-15)
     assert np.allclose(data.F, clean.F, rtol=1e-8)
 
@@ -111,12 +112,16 @@ def test_load_test_columns_by_name(tmp_path, clean):
                       header="seconds,ext_mm,load_kN")
     with pytest.raises(ValueError, match="cannot tell which column"):
         load_test(path)
-    data = load_test(path, columns=("seconds", "ext_mm", "load_kN"))
+    with pytest.raises(ValueError, match=r"unit of the time, displacement, force column\(s\) "
+                       r"is not stated: the header names the columns \['seconds'"):
+        load_test(path, columns=("seconds", "ext_mm", "load_kN"))
+    data = load_test(path, columns=("seconds", "ext_mm", "load_kN"), time_unit="s",
+                     displacement_unit="mm", force_unit="kN")
     assert len(data.cycles) == len(clean.cycles)
 
 
 @pytest.mark.parametrize("kwargs, match", [
-    ({"displacement_unit": None}, "displacement_unit is missing"),
+    ({"displacement_unit": ""}, "displacement_unit is missing"),
     ({"force_unit": ""}, "force_unit is missing"),
     ({"force_unit": "tonne"}, "not a known unit"),
     ({"time_unit": "h"}, "not a known unit"),
@@ -143,7 +148,7 @@ def test_load_test_bad_content(tmp_path, clean):
     n = 1500                                          # one and a half periods: one cycle only
     with pytest.raises(ValueError, match="found 1 complete cycle"):
         load_test(_write_csv(tmp_path / "short.csv", t[:n], u[:n], F[:n]))
-    (tmp_path / "text.csv").write_text("time,displacement,force\n0,0,0\n0.1,abc,1\n")
+    (tmp_path / "text.csv").write_text("time [s],displacement [mm],force [kN]\n0,0,0\n0.1,abc,1\n")
     with pytest.raises(ValueError, match="line 3 .* displacement value 'abc' is not a number"):
         load_test(tmp_path / "text.csv")
     with pytest.raises(ValueError, match="cannot read"):

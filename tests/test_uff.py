@@ -151,3 +151,20 @@ def test_shared_brb_sweep_file_reads_by_its_header():
     assert d["quantity"] == "acceleration" and d["f"].size == 164
     assert set(np.unique(d["level"])) == {1.0, 2.0, 3.0, 4.0}
     assert 79.1 < d["f"].min() < d["f"].max() < 81.3
+
+
+def test_a_kind_the_file_does_not_hold_is_refused_not_an_empty_list(tmp_path):
+    """Issue 34: read_uff(kind="frf") on a file of time series returned [] with no word."""
+    path = _write(tmp_path / "ringdown.uff", [_time_set(*_ringdown(), "m/s^2")])
+    with pytest.raises(ValueError, match=r"no dataset 58 of kind='frf'.*1 record\(s\) of kind "
+                                         r"\['time'\]"):
+        read_uff(path, kind="frf")
+    assert len(read_uff(path, kind="time")) == 1
+
+
+def test_a_ragged_sweep_csv_row_is_named_by_its_line(tmp_path):
+    """Issue 34: a row with a missing field surfaced numpy's 'inhomogeneous shape' message."""
+    path = tmp_path / "ragged.csv"
+    path.write_text("f [Hz],F [N],a [m/s^2],phase [rad]\n49,1,2,0.1\n50,1,2\n51,1,2,0.2\n")
+    with pytest.raises(ValueError, match="line 3 has 3 fields where the header has 4"):
+        read_sweep_csv(path)

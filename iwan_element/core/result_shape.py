@@ -39,11 +39,13 @@ class ResultShape:
 
     def failure_reasons(self) -> tuple:
         """Why ``success`` is False, each reason in a tester's words (empty when it is True).
-        The base reads the warnings; a class whose verdict has its own reasons (a parameter
-        the data do not identify, a misfit beyond the noise) states them."""
+        The base reads the result's ``failures`` (the reasons its maker stated where it
+        decided ``success``), else the warnings; a class whose verdict has its own reasons
+        (a parameter the data do not identify, a misfit beyond the noise) states them."""
         if self.success:
             return ()
-        return tuple(self.warnings) or ("the result did not meet its own success rule",)
+        return (tuple(getattr(self, "failures", ())) or tuple(self.warnings)
+                or ("the result did not meet its own success rule",))
 
     def verdict(self) -> str:
         """One line: whether the result can be used as it stands, and if not, why."""

@@ -119,3 +119,14 @@ def check_magnitude(name: str, arr: np.ndarray, *, unit: str = "") -> np.ndarray
         raise ValueError(f"{name} must have magnitudes in [{lo:g}, {hi:g}]{u} (largest |{name}| "
                          f"is {peak:g}{u}); rescale the units")
     return arr
+
+
+def check_varies(name: str, arr: np.ndarray, *, unit: str = "", what: str = "") -> np.ndarray:
+    """Return ``arr`` unchanged if it is not constant; ``ValueError`` naming ``name``, its
+    constant value and ``what`` the caller needs of it otherwise (a constant record has no
+    scale: every misfit and noise level measured against it divides by zero)."""
+    if np.size(arr) and float(np.ptp(arr)) == 0.0:
+        u = f" {unit}" if unit else ""
+        raise ValueError(f"{name} is constant ({float(arr.flat[0]):g}{u} everywhere)"
+                         + (f": {what}" if what else ""))
+    return arr

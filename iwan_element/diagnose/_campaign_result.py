@@ -254,7 +254,8 @@ class CampaignFit(ResultShape):
         their ratio, force offset [N], start [m], law values and the z-scores of its own
         estimates against the laws.
     converged, success : bool
-        The fit converged; and every coefficient has a finite, non-zero standard error.
+        The fit converged; and (the one rule of docs/guards.md) every law coefficient is
+        identified (:meth:`failure_reasons` says why not).
     message : str
     nfev : int
     wall_time : float
@@ -392,10 +393,21 @@ class CampaignFit(ResultShape):
                              max_nfev=max_nfev, coverage=coverage, draws=draws, level=level,
                              seed=seed)
 
+    def failure_reasons(self) -> tuple:
+        """Why ``success`` is False (empty when it is True), in a tester's words."""
+        if self.success:
+            return ()
+        out = [] if self.converged else [f"the joint fit did not converge ({self.message})"]
+        bad = [k for k, p in self.params.items() if not p.identified]
+        if bad:
+            out.append(f"law coefficients {', '.join(bad)} are not identified by the records "
+                       "(see the warnings: a clipped law, or too few records or conditions)")
+        return tuple(out) or super().failure_reasons()
+
     def report(self) -> str:
         """Laws with their coefficients, the per-record table, warnings and times."""
         tm = self.details["times"]
-        lines = [f"Campaign fit of {len(self.records)} records: stack "
+        lines = [self.verdict(), f"Campaign fit of {len(self.records)} records: stack "
                  f"{' + '.join(self.effects) or 'Iwan'} ({self.effects_from}); "
                  f"{'converged' if self.converged else 'NOT converged'}, {self.nfev} "
                  f"evaluations; {self.wall_time:.1f} s (diagnoses {tm['diagnoses']:.1f} s, "
@@ -423,7 +435,8 @@ class CampaignFit(ResultShape):
             "coefficients", "stderr", "covariance", "coefficient_labels", "rows", "scatter",
             "stderr_scatter",
             "converged",
-            "success", "message", "nfev", "wall_time", "warnings", "details")})
+            "success", "message", "nfev", "wall_time", "warnings", "details")}
+                         | {"failure_reasons": list(self.failure_reasons())})
 
     def plot(self, ax=None, *, quantity: str = "Fs", condition: str | None = None):
         """One quantity against one condition: the records' own estimates (with their

@@ -90,7 +90,7 @@ def noise_level(rec, r, noise) -> NoiseLevel:
             tau = max(tau, 1.0 / frac)
             text += f", reduced to the {rec.lowpass:g} Hz band"
         if not sigma > 0:
-            sigma = 1e-9 * float(np.max(np.abs(r))) or 1e-300
+            sigma = 1e-9 * float(np.max(np.abs(rec.F_raw)))
             warns = tuple(warns) + ("no noise found in the force: a floor of 1e-9 x max|F| "
                                     "is used",)
     tau_k = max(1.0, tau * rec.keep.size / rec.n)

@@ -184,11 +184,22 @@ class BatchDiagnosis(ResultShape):
         """True when every record was diagnosed and every diagnosis succeeded."""
         return all(r["status"] == "ok" and bool(r["success"]) for r in self.rows)
 
+    def failure_reasons(self) -> tuple:
+        """Which records are not usable and why (empty when every one is)."""
+        out = []
+        for r, d in zip(self.rows, self.diagnoses):
+            if r["status"] != "ok":
+                out.append(f"{r['record']}: {r['status']}")
+            elif not r["success"]:
+                why = "; ".join((d or {}).get("failure_reasons") or ()) or "not usable"
+                out.append(f"{r['record']}: {why}")
+        return tuple(out)
+
     def report(self) -> str:
         """The table: one line per record, then the batch's totals and warnings."""
         head = (f"{'record':<28} {'named':<36} {'NRMSE before':>12} {'after':>8} "
                 f"{'band before':>11} {'after':>9} {'ratio':>6} {'time [s]':>8}")
-        lines = [f"Batch diagnosis of {len(self.rows)} records on {self.executor} "
+        lines = [self.verdict(), f"Batch diagnosis of {len(self.rows)} records on {self.executor} "
                  f"({self.wall_time:.1f} s)", head]
         for r in self.rows:
             if r["status"] != "ok":

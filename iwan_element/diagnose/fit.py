@@ -20,8 +20,10 @@ from ..core.serialize import json_safe
 from ..effects import EFFECTS
 from ..effects.evaluate import Evaluator, build_element
 from ..fitting import fit_success
+from ..identify.identifiability import microslip_warning, min_macroslip
 from ..identify.loops import fit_loops
-from ..identify.result import quiet_fits, settle_verdict
+from ..identify.result import (failure_list, quiet_fits, required_parameters,
+                               settle_verdict)
 from . import _model as M
 
 __all__ = ["StackFitter", "FinalFits", "fit_base", "z_start", "stack_fit", "record_force",
@@ -141,17 +143,29 @@ def stack_fit(row, fitter, FF, F_model, t_start, *, noise_only=False):
                         "units": {s.name: s.unit for s in EFFECTS[nm].specs}})
         k0 += q
     warns = list(settle_warns)
+    hist = mdl.ev.hist                   # the backbone argument behind each fitted sample
+    x = hist.x[hist.out]
+    n_macro = int(np.count_nonzero(x > p.phi_max))
+    if n_macro < min_macroslip(x.size) and (ident["Fs"] or ident["beta"]):
+        ident = dict(ident, Fs=False, beta=False)
+        warns.append(microslip_warning(n_macro, x.size, float(x.max()), p.phi_max))
     if noise_only:                       # a force that is noise identifies nothing
         ident = dict.fromkeys(M.PARAM_NAMES, False)
         warns.append("the force is indistinguishable from noise: no parameter is identified")
     if row["status"] <= 0:
         warns.append(f"the fit did not converge: {row['message']}")
     span = float(np.ptp(FF)) or 1.0
+    required = required_parameters(ranges)
+    success = fit_success(row["status"] > 0, ident, required)
+    failures = () if success else failure_list(
+        converged=row["status"] > 0, message=row["message"], explains=not noise_only,
+        noise_text="the force is indistinguishable from noise: no parameter is identified",
+        ident=ident, required=required, microslip=n_macro < min_macroslip(x.size))
     return M.make_fit_result(
         params=p, stderr=stderr, correlation=corr[:4, :4], identified=ident, fixed=(),
         ranges=ranges, residual_norm=math.sqrt(float(r @ r)),
         nrmse=float(np.sqrt(np.mean((FF - F_model) ** 2)) / span),
-        success=fit_success(row["status"] > 0, ident, ("Fs", "KT", "chi")),
+        success=success, failures=failures,
         message=row["message"],
         nfev=int(fitter.nfev), method="loops+" + "+".join(mdl.names) if mdl.names else "loops",
         n_data=int(r.size), warnings=tuple(warns), wall_time=time.perf_counter() - t_start,

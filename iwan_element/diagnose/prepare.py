@@ -15,7 +15,7 @@ from scipy.signal import butter, sosfiltfilt
 
 from ..core.history import REVERSAL_TOL, unit_params
 from ..core.validation import (MAGNITUDE_RANGE, check_magnitude, check_scalar, check_time,
-                                finite_array, same_length)
+                               check_varies, finite_array, same_length)
 from ..effects import EFFECTS
 from ..effects.evaluate import Evaluator
 from ..identify.testdata import find_reversals, split_cycles
@@ -103,8 +103,9 @@ def check_record(t, u, F, noise, lowpass):
     FF = check_magnitude("F", finite_array("F", F, ndim=1, min_size=40), unit="N")
     n = same_length(u=uu, F=FF)
     tt = None if t is None else check_time(t, n)
-    if not np.ptp(uu) > 0:
-        raise ValueError("u never moves: a displacement-driven test is needed")
+    check_varies("u", uu, unit="m", what="a displacement-driven test is needed")
+    check_varies("F", FF, unit="N", what="the joint force does not follow the displacement; "
+                 "check the force channel")
     scale_F = max(float(np.max(np.abs(FF))), 1e-300)
     if noise is not None:
         noise = check_scalar("noise", noise, low=MAGNITUDE_RANGE[0], high=MAGNITUDE_RANGE[1])

@@ -37,7 +37,8 @@ def assemble(rec, sel, fits, opts, t_start) -> Diagnosis:
     if not misfit:
         where = (f"The residual is consistent with the noise (RMS {np.sqrt(np.mean(r0 ** 2)):.3g} "
                  f"N vs {nl.sigma:.3g} N); there is no misfit to explain.")
-    warns += _verdict_warnings(sel, misfit, alpha)
+    unexplained = _verdict_warnings(sel, misfit, alpha)
+    warns += unexplained
     details = _details(rec, nl, sel, opts, loc, final, fit, t_start)
     if final.get("start", 0.0) != 0.0:
         warns.append(f"the record does not start from the joint's rest: a path to "
@@ -52,7 +53,8 @@ def assemble(rec, sel, fits, opts, t_start) -> Diagnosis:
     return Diagnosis(
         effect=sel.named[0] if sel.named else "none", effects=tuple(sel.named),
         ambiguous_with=sel.ambiguous, where=where,
-        success=bool(not sel.noise_only and fit.success),
+        success=bool(not sel.noise_only and fit.success and not unexplained),
+        failures=_failures(sel, fit, unexplained),
         offsets={"force": fit.details["force_offset"], "displacement": rec.u_offset},
         error_before=float(np.sqrt(np.mean(r0 ** 2)) / span),
         error_after=float(np.sqrt(np.mean((FF - F_after) ** 2)) / span),
@@ -62,6 +64,14 @@ def assemble(rec, sel, fits, opts, t_start) -> Diagnosis:
         force_after=ro(np.array(F_after)),
         t=ro(np.arange(rec.n, dtype=float) if rec.t is None else rec.t),
         u=ro(rec.u), F=ro(FF), details=json_safe(details))
+
+
+def _failures(sel, fit, unexplained) -> tuple:
+    """Why the diagnosis is not usable (docs/guards.md), in a tester's words."""
+    if sel.noise_only:
+        return ("the force is indistinguishable from noise: nothing is identified",)
+    return tuple(f"misfit well beyond the noise remains: {w}" for w in unexplained) \
+        + tuple(fit.failure_reasons())
 
 
 def _verdict_warnings(sel, misfit, alpha) -> list:

@@ -8,11 +8,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..core.serialize import json_safe
-
-from ..core.validation import check_scalar
 from ..effects import EFFECTS
 from ..fitting import Parameter, ParameterTable, verdict
 from ..core.result_shape import ResultShape, panels
+from ._augment import augmented
 
 __all__ = ["Diagnosis", "VibrationDiagnosis"]
 
@@ -46,8 +45,9 @@ class Diagnosis(ResultShape):
     where : str
         Where the base misfit lies (part of the cycle, amplitudes, cycles, direction).
     success : bool
-        False when nothing could be identified (a record that is pure noise) or the
-        augmented fit did not converge; ``warnings`` says why.
+        The one rule of docs/guards.md: the augmented fit converged, its every reported
+        parameter is identified, and no misfit beyond the noise is left unexplained (False
+        for a record that is pure noise); :meth:`failure_reasons` says why not.
     offsets : dict
         Sensor offsets treated as nuisance parameters (never named as effects):
         ``force`` [N] (fitted with the model, linear) and ``displacement`` [m] (the rest
@@ -80,6 +80,8 @@ class Diagnosis(ResultShape):
         (read-only copies; ``t`` is the sample index if no time was given).
     details : dict
         Test statistics (JSON-safe).
+    failures : tuple of str
+        Why ``success`` is False, in a tester's words.
     """
 
     plot_panels = 2
@@ -106,13 +108,15 @@ class Diagnosis(ResultShape):
     u: np.ndarray
     F: np.ndarray
     details: dict = field(default_factory=dict)
+    failures: tuple = ()
 
     def to_dict(self) -> dict:
         """JSON-safe dict (NaN/inf become None); the fits as :meth:`FitResult.to_dict`."""
         return json_safe({
             "effect": self.effect, "effects": list(self.effects),
             "ambiguous_with": list(self.ambiguous_with), "where": self.where,
-            "success": self.success, "offsets": dict(self.offsets),
+            "success": self.success, "failure_reasons": list(self.failure_reasons()),
+            "offsets": dict(self.offsets),
             "error_before": self.error_before, "error_after": self.error_after,
             "noise_level": self.noise_level, "noise_sigma": self.noise_sigma,
             "misfit": self.misfit, "steps": list(self.steps), "untestable": dict(self.untestable),
@@ -124,7 +128,7 @@ class Diagnosis(ResultShape):
         """Human-readable account: noise, misfit, where, candidates, verdict, before/after."""
         d = self.details
         p = self.base_fit.joint
-        lines = ["Iwan model diagnosis",
+        lines = [self.verdict(), "Iwan model diagnosis",
                  f"  {d['samples']} samples; noise {d['noise_from']}, correlation time "
                  f"{d['tau']:.3g} samples ({d['n_eff']:.0f} independent samples fitted)",
                  f"  offsets (nuisance): force {self.offsets['force']:.4g} N, displacement "
@@ -304,10 +308,25 @@ class VibrationDiagnosis(ResultShape):
 
     @property
     def success(self) -> bool:
-        """True unless a mismatch beyond the noise remains after the effects named (the same
-        test as the warning saying so: the misfit's p-value below ``alpha`` before and after)."""
+        """The one rule of docs/guards.md: every named effect's reported value is identified
+        and no mismatch beyond the noise remains after the effects named (the same test as
+        the warning saying so: the misfit's p-value below ``alpha`` before and after)."""
+        return not self.failure_reasons()
+
+    def failure_reasons(self) -> tuple:
+        """Why ``success`` is False (empty when it is True), in a tester's words."""
         d = self.details
-        return not (d["misfit_p"] < d["alpha"] and d["misfit_p_after"] < d["alpha"])
+        out = []
+        if d["misfit_p"] < d["alpha"] and d["misfit_p_after"] < d["alpha"]:
+            out.append("misfit well beyond the noise remains: "
+                       + (f"after {' + '.join(self.effects)}" if self.effects else
+                          "no tested effect explains it")
+                       + f" (misfit p-value {d['misfit_p_after']:.2g} < {d['alpha']:g})")
+        bad = [k for k, p in self.params.items() if not p.identified]
+        if bad:
+            out.append(f"{', '.join(bad)} {'is' if len(bad) == 1 else 'are'} not identified by "
+                       "these data (standard error above half the value, or at a bound)")
+        return tuple(out)
 
     def augment(self, target, *, modal_mass: float | None = None,
                 slip_per_amplitude: float = 1.0, mode: int = 1):
@@ -337,25 +356,16 @@ class VibrationDiagnosis(ResultShape):
             and/or ``ViscousDamping(c = 2 zeta_v omega_0 m / r^2)`` around ``joint``, with
             ``omega_0`` the measured angular frequency at the smallest amplitude (each effect's
             ``modal_to_joint``).
+
+        Raises
+        ------
+        ValueError
+            A specimen whose documented and calibrated amplitudes the diagnosed ones miss by
+            more than a factor 30 (amplitudes given in mm or um, docs/guards.md); a target that
+            is neither a specimen nor a joint element; a missing or bad ``modal_mass``.
         """
-        if hasattr(target, "with_effects"):
-            if not self.effects:
-                return target
-            return target.with_effects(
-                {n: dict(self.parameters[n]) for n in self.effects}, mode=mode,
-                calibrated_range=(float(self.amplitude.min()), float(self.amplitude.max())))
-        if modal_mass is None:
-            raise ValueError("modal_mass is required to augment a joint element")
-        joint = target
-        m = check_scalar("modal_mass", modal_mass, low=0.0, low_open=True)
-        r = check_scalar("slip_per_amplitude", slip_per_amplitude, low=0.0, low_open=True)
-        el = joint
-        w0 = 2 * np.pi * float(self.frequency[np.argmin(self.amplitude)])
-        for name in self.effects:
-            cls = EFFECTS[name]
-            el = cls(el, **cls.modal_to_joint(self.parameters[name], modal_mass=m,
-                                              slip_per_amplitude=r, omega0=w0))
-        return el
+        return augmented(self, target, modal_mass=modal_mass,
+                         slip_per_amplitude=slip_per_amplitude, mode=mode)
 
     def predict(self, amplitude, *, base=None):
         """The augmented model's frequency and damping at new amplitudes, with 1-sigma bands.
@@ -433,11 +443,14 @@ class VibrationDiagnosis(ResultShape):
             "effect", "effects", "ambiguous_with", "where", "parameters", "error_before",
             "error_after", "noise_level", "frequency_noise", "damping_ratio_noise", "amplitude",
             "frequency", "damping_ratio", "predicted_frequency", "predicted_damping_ratio",
-            "model_frequency", "model_damping_ratio", "steps", "warnings", "details", "covariance")})
+            "model_frequency", "model_damping_ratio", "steps", "warnings", "details", "covariance")}
+                         | {"success": self.success,
+                            "failure_reasons": list(self.failure_reasons())})
 
     def report(self) -> str:
         """Human-readable account."""
-        lines = ["Vibration diagnosis (amplitude-dependent frequency and damping)",
+        lines = [self.verdict(),
+                 "Vibration diagnosis (amplitude-dependent frequency and damping)",
                  f"  {self.amplitude.size} amplitudes, {self.amplitude.min():.3g} .. "
                  f"{self.amplitude.max():.3g} m; noise: frequency {100 * self.frequency_noise:.2g} %, "
                  f"damping {100 * self.damping_ratio_noise:.2g} % ({self.details['noise_from']})"]
@@ -493,4 +506,3 @@ class VibrationDiagnosis(ResultShape):
             a.grid(True, which="both", alpha=0.3)
             a.legend(fontsize=7)
         return arts
-

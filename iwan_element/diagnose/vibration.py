@@ -57,11 +57,30 @@ def _noise(r, stated, n, name):
     return s, f"{name}: {src}"
 
 
+#: Largest relative standard uncertainty or noise [-] accepted per curve: a frequency known
+#: to 50 % or a damping ratio to 100 % carries no amplitude dependence; larger values are
+#: percent given for a ratio (5.0 for 5 %).
+_RELATIVE_MAX = {"frequency": 0.5, "damping_ratio": 1.0}
+
+
 def _curve_level(name, r, given, stated, n):
     """Noise of one curve: ``given`` if set, else max(scatter, stated uncertainty)."""
     if given is not None:
-        return check_scalar(f"{name}_noise", given, low=0.0, low_open=True), f"{name}: given"
+        return _relative(f"{name}_noise", name, check_scalar(f"{name}_noise", given, low=0.0,
+                                                             low_open=True)), f"{name}: given"
     return _noise(r, _stated(f"{name}_uncertainty", stated, n), n, name)
+
+
+def _relative(arg, curve, a):
+    """``a`` (a relative standard deviation [-] of ``curve``), or a ValueError naming ``arg``
+    when it exceeds :data:`_RELATIVE_MAX` (most likely percent)."""
+    top = _RELATIVE_MAX[curve]
+    peak = float(np.max(a))
+    if peak > top:
+        raise ValueError(f"{arg} must be a relative standard uncertainty in (0, {top:g}] [-], "
+                         f"got {peak:g} ({100 * peak:g} %); a ratio, not percent: give "
+                         f"{peak / 100:g} for {peak:g} %")
+    return a
 
 
 def _stated(name, value, n):
@@ -247,10 +266,13 @@ def diagnose_vibration(amplitude, frequency=None, damping_ratio=None, *, predict
     predicted_frequency, predicted_damping_ratio : array_like, shape (n,), keyword-only
         The model's prediction at the same amplitudes [Hz], [-].
     frequency_noise, damping_ratio_noise : float, optional, keyword-only
-        Relative noise standard deviations [-], ``> 0``; when given they are used as they are.
+        Relative noise standard deviations [-], in ``(0, 0.5]`` (frequency) and ``(0, 1]``
+        (damping ratio); when given they are used as they are. Larger values are refused as
+        percent given for a ratio.
     frequency_uncertainty, damping_ratio_uncertainty : float or array_like, optional, keyword-only
         Stated per-point relative standard uncertainty [-] (e.g. from
-        :class:`~iwan_element.AmplitudeCurve`); the noise is never taken below it.
+        :class:`~iwan_element.AmplitudeCurve`), in the same ranges; the noise is never taken
+        below it.
     predicted_zeta0 : float, keyword-only
         Viscous damping ratio already in the prediction [-], ``>= 0``.
     alpha, ambiguity, max_effects : keyword-only
@@ -278,6 +300,10 @@ def diagnose_vibration(amplitude, frequency=None, damping_ratio=None, *, predict
         ``2 pi`` times the prediction (rad/s for Hz) or the other way round, damping ratios
         that look like percent (one >= 1, or none below 0.05), or an option out of range.
     """
+    for arg, v in (("frequency_uncertainty", frequency_uncertainty),
+                   ("damping_ratio_uncertainty", damping_ratio_uncertainty)):
+        if v is not None:          # the caller's (not a curve's own scatter, which may be wide)
+            _relative(arg, arg.rsplit("_", 1)[0], finite_array(arg, v, ndim=None))
     amplitude, frequency, damping_ratio, frequency_uncertainty, damping_ratio_uncertainty = _measurement(
         amplitude, frequency, damping_ratio, frequency_uncertainty, damping_ratio_uncertainty)
     n, a = _inputs(amplitude, frequency, damping_ratio, predicted_frequency,

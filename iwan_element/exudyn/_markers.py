@@ -1,6 +1,7 @@
 """Checks of markers, axes and visualization arguments of the Exudyn adapters."""
 from __future__ import annotations
 
+import operator
 from collections.abc import Mapping
 
 import numpy as np
@@ -21,11 +22,11 @@ _VISUALIZATION_KEYS = ("show", "drawSize", "color")
 def _marker_type(mbs, marker, label: str) -> str:
     if isinstance(marker, bool):
         raise ValueError(f"{label} must be a marker number, got {marker!r}")
-    try:
-        idx = int(marker)
-    except (TypeError, ValueError):
+    try:                       # an integer or MarkerIndex; a float (1.7) is not truncated
+        idx = operator.index(marker)
+    except TypeError:
         raise ValueError(f"{label} must be a marker number (int or exudyn MarkerIndex), "
-                         f"got {marker!r}") from None
+                         f"got {marker!r} ({type(marker).__name__})") from None
     n = mbs.systemData.NumberOfMarkers()
     if not 0 <= idx < n:
         raise ValueError(f"{label} = {idx} is not a marker of this system: allowed range is "

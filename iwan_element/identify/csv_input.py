@@ -87,26 +87,56 @@ def _resolve_columns(header: list[str] | None, columns, ncol: int) -> list[int]:
     return idx
 
 
-def load_test(path: str | PathLike, *, displacement_unit: str = "mm", force_unit: str = "kN",
-              time_unit: str = "s", columns: Sequence | None = None, delimiter: str | None = None,
+def _header_units(header, idx, given: dict) -> dict:
+    """The unit of each of time, displacement, force: the caller's, else the header's label
+    (``"force [kN]"``), never a guess. ``ValueError`` when they contradict, or when a unit is
+    neither given nor labelled (naming the columns found and how to pass it)."""
+    units, missing = {}, []
+    for q, k in zip(_QUANTITIES, idx):
+        said = _column_unit(header[k]) if header is not None else None
+        unit = given[q]
+        if unit is not None and said is not None and said != unit.strip():
+            raise ValueError(f"column {header[k]!r} is labelled in {said!r} but "
+                             f"{q}_unit={unit!r}; pass the unit of the file")
+        if unit is None and said is None:
+            missing.append(q)
+        units[q] = unit if unit is not None else said
+    if missing:
+        found = (f"the header names the columns {header} without a unit in brackets"
+                 if header is not None else "the file has no header")
+        example = {"time": "s", "displacement": "mm", "force": "kN"}
+        raise ValueError(
+            f"the unit of the {', '.join(missing)} column(s) is not stated: {found}, and a "
+            "unit is never guessed (SI and mm/kN records look alike); pass "
+            + ", ".join(f"{q}_unit='{example[q]}'" for q in missing)
+            + " (the file's units) or label the header as "
+            + ", ".join(f"'{q} [{example[q]}]'" for q in missing))
+    return units
+
+
+def load_test(path: str | PathLike, *, displacement_unit: str | None = None,
+              force_unit: str | None = None, time_unit: str | None = None, columns: Sequence | None = None, delimiter: str | None = None,
               hysteresis: float | None = None, close_tol: float = 0.02,
               drift_tol: float = 0.05) -> TestData:
     """Read a CSV of time, displacement and force, convert to SI and split into cycles.
 
     Lines starting with ``#`` are comments. If the first other line is not numeric it is a
-    header; a unit in brackets at the end of a column name (``"force [kN]"``) must agree with
-    the unit argument.
+    header. Units are read, never guessed: a unit in brackets at the end of a column name
+    (``"time [s]"``, ``"displacement [mm]"``, ``"force [kN]"``) is the column's unit, and a
+    unit argument, when given, must agree with it; a column with neither is refused, naming
+    the columns found (an SI record read as mm and kN is wrong by 1e3 in u and F).
 
     Parameters
     ----------
     path : str or path-like
         The CSV file.
-    displacement_unit : str, keyword-only
-        Unit of the displacement column, one of :data:`DISPLACEMENT_UNITS`.
-    force_unit : str, keyword-only
-        Unit of the force column, one of :data:`FORCE_UNITS`.
-    time_unit : str, keyword-only
-        Unit of the time column, one of :data:`TIME_UNITS`.
+    displacement_unit : str, optional, keyword-only
+        Unit of the displacement column, one of :data:`DISPLACEMENT_UNITS`; default: the
+        header's label.
+    force_unit : str, optional, keyword-only
+        Unit of the force column, one of :data:`FORCE_UNITS`; default: the header's label.
+    time_unit : str, optional, keyword-only
+        Unit of the time column, one of :data:`TIME_UNITS`; default: the header's label.
     columns : sequence of 3 str or int, optional, keyword-only
         Names or 0-based indices of the (time, displacement, force) columns. Default: found
         from the header names (``time``/``t``, ``displacement``/``u``/..., ``force``/``F``/
@@ -123,12 +153,15 @@ def load_test(path: str | PathLike, *, displacement_unit: str = "mm", force_unit
     Raises
     ------
     ValueError
-        Missing or unknown units, unreadable or non-numeric cells, NaN, non-increasing time,
+        A unit neither given nor in the header, unknown or contradicting units, unreadable or
+        non-numeric cells, a ragged row, NaN, non-increasing time,
         an all-zero force column, a constant displacement, or fewer than two cycles.
     """
-    fu = _unit_factor("displacement", displacement_unit, DISPLACEMENT_UNITS)
-    ff = _unit_factor("force", force_unit, FORCE_UNITS)
-    ft = _unit_factor("time", time_unit, TIME_UNITS)
+    given = {"time": time_unit, "displacement": displacement_unit, "force": force_unit}
+    for q, table in (("time", TIME_UNITS), ("displacement", DISPLACEMENT_UNITS),
+                     ("force", FORCE_UNITS)):
+        if given[q] is not None:
+            _unit_factor(q, given[q], table)
     p = Path(path)
     try:
         text = p.read_text(encoding="utf-8-sig")       # tolerate a byte-order mark
@@ -160,12 +193,10 @@ def load_test(path: str | PathLike, *, displacement_unit: str = "mm", force_unit
         raise ValueError(f"{str(p)!r} has a header but no data rows")
     ncol = len(header) if header is not None else len(head)
     idx = _resolve_columns(header, columns, ncol)
-    if header is not None:
-        for q, k, unit in zip(_QUANTITIES, idx, (time_unit, displacement_unit, force_unit)):
-            said = _column_unit(header[k])
-            if said is not None and said != unit.strip():
-                raise ValueError(f"column {header[k]!r} is labelled in {said!r} but "
-                                 f"{q}_unit={unit!r}; pass the unit of the file")
+    units = _header_units(header, idx, given)
+    ft = _unit_factor("time", units["time"], TIME_UNITS)
+    fu = _unit_factor("displacement", units["displacement"], DISPLACEMENT_UNITS)
+    ff = _unit_factor("force", units["force"], FORCE_UNITS)
     data = np.empty((len(lines), 3))
     for r, (lineno, line) in enumerate(lines):
         row = fields(line)
@@ -186,8 +217,7 @@ def load_test(path: str | PathLike, *, displacement_unit: str = "mm", force_unit
                              f"{lineno} of {str(p)!r})")
     if not np.any(data[:, 2] != 0.0):
         raise ValueError(f"the force column of {str(p)!r} is all zero")
-    units = {"time": time_unit.strip(), "displacement": displacement_unit.strip(),
-             "force": force_unit.strip()}
+    units = {q: u.strip() for q, u in units.items()}
     return TestData.from_arrays(data[:, 0] * ft, data[:, 1] * fu, data[:, 2] * ff, units=units,
                                 source=str(p), hysteresis=hysteresis, close_tol=close_tol,
                                 drift_tol=drift_tol)

@@ -65,6 +65,9 @@ class AmplitudeCurve(ResultShape):
         Free text: trimming of filter end effects, sensor point, mode number.
     warnings : tuple of str
         What the maker of the curve could not vouch for.
+    failures : tuple of str
+        Why the curve is not usable as it stands (each also among ``warnings``): e.g. a
+        response whose phase contradicts its declared quantity. Empty by default.
 
     The arrays are copied and made read-only; nothing the caller passed is changed.
     """
@@ -80,6 +83,7 @@ class AmplitudeCurve(ResultShape):
     noise_floor: float = float("nan")
     method: str = ""
     notes: str = ""
+    failures: tuple = ()
 
     def __post_init__(self):
         amp = check_magnitude("amplitude", finite_array("amplitude", self.amplitude).copy(), unit="m")
@@ -107,7 +111,9 @@ class AmplitudeCurve(ResultShape):
         if not (np.isnan(floor) or (np.isfinite(floor) and floor >= 0)):
             raise ValueError(f"noise_floor must be >= 0 [m] or NaN, got {self.noise_floor!r}")
         object.__setattr__(self, "noise_floor", floor)
-        object.__setattr__(self, "warnings", tuple(str(w) for w in self.warnings))
+        object.__setattr__(self, "failures", tuple(str(w) for w in self.failures))
+        object.__setattr__(self, "warnings", tuple(str(w) for w in self.warnings)
+                           + tuple(w for w in self.failures if w not in self.warnings))
 
     def __len__(self) -> int:
         return int(self.amplitude.size)
@@ -119,14 +125,24 @@ class AmplitudeCurve(ResultShape):
             self.amplitude[order], self.frequency[order], self.damping_ratio[order],
             amplitude_std=self.amplitude_std[order], frequency_std=self.frequency_std[order],
             damping_ratio_std=self.damping_ratio_std[order], noise_floor=self.noise_floor,
-            method=self.method, notes=self.notes, warnings=self.warnings)
+            method=self.method, notes=self.notes, warnings=self.warnings,
+            failures=self.failures)
 
     @property
     def success(self) -> bool:
         """True when the curve has at least :data:`MIN_POINTS` points with finite frequency
-        and damping (a modal fit needs them; fewer points are reported in ``warnings``)."""
+        and damping (a modal fit needs them; fewer points are reported in ``warnings``) and
+        no ``failures`` (docs/guards.md)."""
+        return not self.failure_reasons()
+
+    def failure_reasons(self) -> tuple:
+        """Why the curve is not usable: its ``failures``, and too few points."""
         ok = np.isfinite(self.frequency) & np.isfinite(self.damping_ratio)
-        return bool(np.count_nonzero(ok) >= MIN_POINTS)
+        n = int(np.count_nonzero(ok))
+        few = () if n >= MIN_POINTS else (
+            f"only {n} point(s) with a finite frequency and damping ratio: a modal fit needs "
+            f"{MIN_POINTS}",)
+        return tuple(self.failures) + few
 
     def to_dict(self) -> dict:
         """Plain JSON-ready dictionary (NaN written as ``None``)."""
@@ -139,6 +155,7 @@ class AmplitudeCurve(ResultShape):
             "damping_ratio_std": clean(self.damping_ratio_std),
             "noise_floor": None if np.isnan(self.noise_floor) else self.noise_floor,
             "method": self.method, "notes": self.notes, "warnings": list(self.warnings),
+            "failures": list(self.failures), "success": self.success,
         }
 
     def to_json(self) -> str:
@@ -146,7 +163,8 @@ class AmplitudeCurve(ResultShape):
 
     def report(self) -> str:
         """A short table of the curve: amplitude, frequency and damping with uncertainties."""
-        lines = [f"Amplitude curve ({self.method or 'unspecified method'}), {len(self)} points"]
+        lines = [self.verdict(),
+                 f"Amplitude curve ({self.method or 'unspecified method'}), {len(self)} points"]
         if self.notes:
             lines.append(f"  {self.notes}")
         if not np.isnan(self.noise_floor):

@@ -62,6 +62,7 @@ from ._decay_model import (_Objective, _Problem, _covariance, _fit_regime, _loca
                            _misfit_ratio, _neighbours, _polar)
 from .modal_result import ModalIwanFit
 from .modal_fit import fit_modal_iwan
+from .saturation import cut_clipping
 from .vibration import _check_band, _check_uniform_time
 
 __all__ = ["fit_decay"]
@@ -69,9 +70,6 @@ __all__ = ["fit_decay"]
 log = logging.getLogger(__name__)
 
 _QUANTITY_POWER = {"displacement": 0, "velocity": 1, "acceleration": 2}
-#: Fewest chi-square degrees of freedom of the noise level for a success: below 5, +-2 stated
-#: standard errors cover less than 90 % even with a perfect model (Student t).
-_MIN_NOISE_DOF = 5.0
 
 
 def _windows(prob, i_a, i_b, nw):
@@ -186,6 +184,7 @@ def _prepare(t, y, quantity, band, order, stiffness, floor, x_ref, t_start):
         raise ValueError(f"y must have at least 64 samples, got {yy.size}")
     tt, dt = _check_uniform_time(t, yy.size)
     check_magnitude("t", tt, unit="s")
+    tt, yy, clip_note = cut_clipping(tt, yy)
     _check_options(quantity, order, stiffness, floor)
     lo, hi = _check_band(band, 1.0 / dt)
     if hi * dt < 1e-5:
@@ -218,7 +217,7 @@ def _prepare(t, y, quantity, band, order, stiffness, floor, x_ref, t_start):
     prob.nb_starts = _neighbours(prob, i_s)
     prob.nb = len(prob.nb_starts)
     nuis = [v for nb in prob.nb_starts for v in nb] + nuis
-    return prob, conv, dict(t0=float(tt[0]), i_s=i_s, i_top=i_top, i_a=i_a, env=env, nw=nw,
+    return prob, conv, dict(clip_note=clip_note, t0=float(tt[0]), i_s=i_s, i_top=i_top, i_a=i_a, env=env, nw=nw,
                             nuis=nuis, data=(X, f, zeta))
 
 
@@ -257,6 +256,18 @@ def _bounds(prob, regime, X, x_max, ln_a0):
     return np.array(lb + [ln_a0 - 10.0, -np.inf]), np.array(ub + [ln_a0 + 10.0, np.inf])
 
 
+def _no_mode(prob, snr_min, ratio):
+    """Refuse a record without a decaying mode the model can follow (pure noise, a band
+    without the mode): a ValueError naming ``y`` and the band, not the model's inner range."""
+    lo, hi = prob.band
+    found = "no decay curve fits it" if not math.isfinite(ratio) else \
+        f"its largest envelope is {ratio:.2g} times the noise RMS a decay model leaves"
+    raise ValueError(f"y holds no decaying mode in band ({lo:g}, {hi:g}) Hz above snr_min = "
+                     f"{snr_min:g} times the in-band noise: {found} (pure noise or a band "
+                     "without the mode); check the band around the mode and the record, or "
+                     "lower snr_min")
+
+
 def _fit_micro(prob, info, snr_min, spc):
     """Microslip fit in two stages: over the decay to 5 % of the peak envelope, then over
     every sample above ``snr_min`` x the noise (from the first stage's residual), with the
@@ -270,7 +281,10 @@ def _fit_micro(prob, info, snr_min, spc):
     ref = float(np.abs(prob.z[idx]).max())
     first = _fit_regime(_Objective(prob, "microslip", idx, ref, bnd), starts, bnd)
     lag = math.ceil(2.0 * prob.fs / (prob.bw * step))
-    noise = ref * _local_weights(first.fun, lag)[1] * math.sqrt(2.0)
+    with np.errstate(invalid="ignore", divide="ignore"):    # the weights are not used here
+        noise = ref * _local_weights(first.fun, lag)[1] * math.sqrt(2.0)
+    if not env[i_top] >= snr_min * noise > 0.0:
+        _no_mode(prob, snr_min, env[i_top] / noise if noise > 0 else math.nan)
     low = np.flatnonzero(env[i_top:] < snr_min * noise)
     i_b = max(prob.n if low.size == 0 else i_top + int(low[0]), info["i_s"] + 2 * info["nw"])
     idx, step = _span(prob, info, i_b, spc)
@@ -278,7 +292,10 @@ def _fit_micro(prob, info, snr_min, spc):
     obj = _Objective(prob, "microslip", idx, ref, bnd)
     lag = math.ceil(2.0 * prob.fs / (prob.bw * step))
     weights, _ = _local_weights(obj.resid(first.x), lag)
-    envelope = obj.envelope(first.x)      # weights free of each sample's own noise
+    try:
+        envelope = obj.envelope(first.x)      # weights free of each sample's own noise
+    except ValueError:                        # no decay curve fits: f or zeta out of range
+        _no_mode(prob, snr_min, math.nan)
     obj = _Objective(prob, "microslip", idx, ref, bnd, weights, envelope)
     micro = _fit_regime(obj, [first.x], bnd)
     return micro, obj, dict(idx=idx, step=step, i_b=i_b, noise=noise, ref=ref,
@@ -290,7 +307,7 @@ def _fit_models(prob, info, alpha, snr_min, spc):
     micro, obj, span = _fit_micro(prob, info, snr_min, spc)
     idx, ref, X = span["idx"], span["ref"], info["data"][0]
     lags = math.ceil(2.0 * prob.fs / (prob.bw * span["step"]))
-    chosen, regime, warns, guard = micro, "microslip", [], False
+    chosen, regime, warns, guard = micro, "microslip", [], []
     cov, kappa, dof = _covariance(obj, micro.fun, micro.jac)
     x_max = math.exp(micro.x[-2])
     full_starts = _full_starts(micro.x, x_max, prob.conv["x_ref"], span["curve_full"])
@@ -318,13 +335,14 @@ def _fit_models(prob, info, alpha, snr_min, spc):
             chosen, regime, cov, kappa, dof = full, "macroslip", cov_f, kappa_f, dof_f
         elif p_val < alpha or (p_val < 0.05 and phi_known and inside
                                and math.exp(full.x[4]) < math.exp(full.x[-2])):
-            guard = True        # microslip closed forms hold for X << phi_max only
-            warns.append(
+            # microslip closed forms hold for X << phi_max only
+            guard.append(
                 f"the record leaves microslip (likelihood-ratio p = {p_val:.2g}; the full "
                 f"model puts phi_max at {math.exp(full.x[4]):.3g} m against a release "
                 f"amplitude of {math.exp(full.x[-2]):.3g} m) but does not fix the full model: "
                 "the microslip parameters f0, zeta0, chi and delta describe amplitudes beyond "
                 "the validity of the microslip model and may be biased; not a success")
+            warns.append(guard[-1])
         else:
             warns.append(
                 f"the decay never leaves microslip (likelihood-ratio p = {p_val:.2g}, "
@@ -334,22 +352,13 @@ def _fit_models(prob, info, alpha, snr_min, spc):
                 "): KT, phi_max, beta "
                 "and Fs are not identified; reported f0, zeta0, chi and delta")
     if regime == "microslip" and _microslip_saturates(micro.x, prob.conv["x_ref"]):
-        guard = True
-        warns.append("the microslip curve's tangent stiffness vanishes inside the record: "
+        guard.append("the microslip curve's tangent stiffness vanishes inside the record: "
                      "its largest amplitudes are beyond phi_max for any joint not stiffer "
                      "than the mode; the microslip parameters may be biased; not a success")
+        warns.append(guard[-1])
     chi2_red = _misfit_ratio(chosen.fun, lags)
     if chi2_red > 1.0:          # structure beyond the noise model: widen (as fit_modal_iwan)
         cov = cov * chi2_red
-    if dof[1] < _MIN_NOISE_DOF:
-        guard = True
-        cover = 100.0 * (1.0 - 2.0 * stats.t.sf(2.0, max(dof[1], 0.1)))
-        warns.append(
-            f"the noise level rests on {dof[1]:.2g} degrees of freedom (the record holds few "
-            "independent noise samples beyond what the fit absorbs): the standard errors are "
-            f"themselves uncertain by about {100 * math.sqrt(0.5 / max(dof[1], 0.1)):.0f} % "
-            f"and +-2 stderr covers only about {cover:.0f} % (Student t); a longer record, "
-            "a wider band or less noise would help; not a success")
     span.update(kappa=kappa, dof=dof, chi2_red=chi2_red, regime=regime, warns=warns, cov=cov,
                 guard=guard)
     return chosen, span
@@ -451,8 +460,14 @@ def fit_decay(t, y, *, quantity: str = "acceleration", band, order: int = 4,
                 frequency_std=np.full(X.size, np.nan), damping_ratio_std=np.full(X.size, np.nan))
     fit = ModalIwanFit.from_solution(best.x[:n_th], span["cov"][:n_th, :n_th], regime, data, conv,
                                      chi2_red=span["chi2_red"], weights=(),
-                                     warnings=tuple(warns), optimizer_ok=bool(best.success))
+                                     warnings=tuple(w for w in [info["clip_note"]] + warns if w),
+                                     optimizer_ok=bool(best.success),
+                                     noise_dof=span["dof"][1], noise_source=(
+                                         " (the record holds few independent noise samples "
+                                         "beyond what the fit absorbs; a longer record, a "
+                                         "wider band or less noise would help)"))
     if span["guard"]:
-        fit = dataclasses.replace(fit, success=False)
+        fit = dataclasses.replace(fit, success=False,
+                                  failures=tuple(span["guard"]) + fit.failure_reasons())
     log.debug("fit_decay: %s", conv)
     return fit

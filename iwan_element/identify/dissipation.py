@@ -25,7 +25,7 @@ from ..core.validation import check_int, check_magnitude, check_scalar, finite_a
 from ..core.closed_form import dissipation as cycle_dissipation, force_amplitude
 from ..core.parameters import IwanParameters
 from ._solver import _Problem, _uncertainty
-from .identifiability import _identify, _range_warnings
+from .identifiability import MIN_MACRO_POINTS, _identify, _range_warnings
 from .result import FitResult, _finish
 
 __all__ = ["fit_dissipation", "NRMSE_LIMIT"]
@@ -275,7 +275,7 @@ def fit_dissipation(amplitude, force, dissipation, *, method: str = "least_squar
         return np.concatenate([force_amplitude(ua, p1), cycle_dissipation(ua, p1)])
 
     prob = _Problem(np.concatenate([F0a, Da]), unit, w=np.ones(2 * ua.size), log_space=True,
-                    entry_x=np.concatenate([ua, ua]), min_macro=4)
+                    entry_x=np.concatenate([ua, ua]), min_macro=MIN_MACRO_POINTS)
     out = _identify(prob, n_starts=n_starts, rng=rng, alpha=alpha, max_nfev=max_nfev,
                     initial=None)
     fit = unit(out["params"])

@@ -178,8 +178,8 @@ def read_uff(path: str | PathLike, *, kind: str | None = None) -> list:
     ImportError
         ``pyuff`` is not installed (``pip install iwan-element[uff]``).
     ValueError
-        No dataset 58 in the file, a function type other than 1 or 4, an unknown unit label
-        or one that contradicts the specific data type.
+        No dataset 58 in the file (or none of ``kind``), a function type other than 1 or 4,
+        an unknown unit label or one that contradicts the specific data type.
     """
     if kind not in (None, "time", "frf"):
         raise ValueError(f"kind must be None, 'time' or 'frf', got {kind!r}")
@@ -197,6 +197,11 @@ def read_uff(path: str | PathLike, *, kind: str | None = None) -> list:
         raise ValueError(f"{p.name}: no dataset 58 (function at nodal DOF) in the file")
     out = [_record(i, d) for i, d in found if kind is None or
            _FUNC_TYPE.get(int(d.get("func_type", 0))) in (kind, None)]
+    if not out:
+        held = sorted({str(_FUNC_TYPE.get(int(d.get("func_type", 0)))) for _, d in found})
+        raise ValueError(f"{p.name}: no dataset 58 of kind={kind!r} in the file; it holds "
+                         f"{len(found)} record(s) of kind {held}: pass kind=None or the kind "
+                         "the file holds")
     return out
 
 
@@ -245,7 +250,8 @@ def read_sweep_csv(path: str | PathLike) -> dict:
     Raises
     ------
     ValueError
-        A column without a known unit, a role given twice or missing, non-numeric data.
+        A column without a known unit, a role given twice or missing, a row with another
+        number of fields than the header, non-numeric data.
     """
     p = Path(path)
     if not p.is_file():
@@ -263,6 +269,12 @@ def read_sweep_csv(path: str | PathLike) -> dict:
     missing = [r for r in ("f", "F", "response", "phase") if r not in cols]
     if missing:
         raise ValueError(f"{p.name}: no column for {missing} (units in the header decide)")
+    width = len(rows[0])
+    ragged = next((k for k, r in enumerate(rows[1:], start=2) if len(r) != width), None)
+    if ragged is not None:
+        raise ValueError(f"{p.name}: line {ragged} has {len(rows[ragged - 1])} fields where the "
+                         f"header has {width} ({', '.join(c.strip() for c in rows[0])}); "
+                         "every row needs one value per column")
     try:
         data = np.array([[float(c) for c in r] for r in rows[1:]])
     except ValueError as exc:

@@ -51,6 +51,30 @@ _BETA_MAX = 100.0
 _PHI_RANGE = (1e-3, 1e4)              # search range of phi_max / x_max
 
 
+#: Fewest amplitude points (of a dissipation or modal curve) beyond the fitted ``phi_max``
+#: before the joint's macroslip parameters count as identified: fewer, and the fit may put
+#: its slip onset among the last points to bend them (noise), which fixes nothing.
+MIN_MACRO_POINTS = 4
+
+
+def min_macroslip(n: int) -> int:
+    """Fitted samples that must lie in macroslip (backbone argument above the fitted
+    ``phi_max``) before ``Fs`` and ``beta`` can count as identified: ``max(10, 0.5 %)`` of the
+    ``n`` fitted samples. Fewer, and the fit may put its slip onset at the largest excursion
+    to bend the last few samples (noise), which fixes nothing (docs/guards.md)."""
+    return max(10, int(0.005 * n))
+
+
+def microslip_warning(n_macro: int, n: int, x_max: float, phi_max: float) -> str:
+    """Why ``Fs`` and ``beta`` are not identified when only ``n_macro`` of ``n`` samples
+    reach macroslip (the tester's words of :func:`min_macroslip`)."""
+    return (f"Fs and beta are NOT identified by these data: the loops stay in microslip (only "
+            f"{n_macro} of {n} fitted samples beyond the fitted slip onset phi_max = "
+            f"{phi_max:.4g} m, largest excursion {x_max:.4g} m; {min_macroslip(n)} needed); "
+            "only KT, chi and their microslip combination are fixed. Test to larger amplitudes "
+            "to identify them")
+
+
 def _range_warnings(params: IwanParameters) -> list[str]:
     out = []
     if params.chi > 0:

@@ -35,11 +35,11 @@ import numpy as np
 from scipy.special import fdtrc
 
 from ..core.history import REVERSAL_TOL, History
-from ..core.validation import (check_int, check_time, check_magnitude, check_scalar, finite_array,
-                                same_length)
+from ..core.validation import (check_int, check_time, check_magnitude, check_scalar, check_varies,
+                               finite_array, same_length)
 from ..core.parameters import IwanParameters
 from ._solver import _Problem
-from .identifiability import _identify
+from .identifiability import _identify, min_macroslip
 from .model_fit import burn_in_index, drive_displacement
 from .noise import estimate_noise
 from .result import FitResult, _finish
@@ -55,9 +55,9 @@ def _check_record(t, u, F):
     tt = check_time(t, n)
     if not np.any(FF != 0.0):
         raise ValueError("F is all zero: there is no force to fit")
-    if np.ptp(uu) == 0.0:
-        raise ValueError("u (displacement) does not vary: it is constant "
-                         f"({uu[0]:g} m everywhere); a loop fit needs cycles of displacement")
+    check_varies("u", uu, unit="m", what="a loop fit needs cycles of displacement")
+    check_varies("F", FF, unit="N", what="the joint force does not follow the displacement; "
+                 "check the force channel")
     c = np.corrcoef(uu, FF)[0, 1] if np.ptp(FF) > 0 else 0.0
     if c < -0.2:
         raise ValueError(f"F decreases with u (correlation {c:.2f}): the joint force must have "
@@ -79,7 +79,7 @@ def _weights(noise, n):
 def _setup(u_drive, FF, w_full, keep, hysteresis_tol):
     hist = History(u_drive, keep=keep, tol=hysteresis_tol)
     prob = _Problem(FF[keep], hist.forces, w=w_full[keep], log_space=False,
-                    entry_x=hist.x[hist.out], min_macro=max(10, int(0.005 * keep.size)),
+                    entry_x=hist.x[hist.out], min_macro=min_macroslip(keep.size),
                     offset=True, timeseries=True)
     return hist, prob
 

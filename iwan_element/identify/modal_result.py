@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import json
 import math
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -11,7 +12,9 @@ from scipy import special, stats
 from ..core.modal import modal_iwan_curve, viscous_floor
 from ..core.parameters import IwanParameters
 from ..core.result_shape import ResultShape, panels
-from ..fitting import Parameter, ParameterTable, covariance, fit_success, verdict
+from .result import IdentifiabilityWarning
+from ..fitting import (Parameter, ParameterTable, covariance, fit_success, noise_dof_warning,
+                       verdict)
 
 __all__ = ["ModalIwanFit", "model_curve", "full_parameters", "harmonic_factor"]
 
@@ -99,8 +102,12 @@ class ModalIwanFit(ResultShape):
     chi2_red : float
         Reduced chi-square of the weighted fit; the covariance is scaled by it when above 1.
     success : bool
-        Optimiser converged and every reported parameter is identified.
+        The one rule of docs/guards.md: the optimiser converged, every reported parameter is
+        identified and no misfit beyond the stated uncertainty remains (reduced chi-square
+        at most 4).
     warnings : tuple of str
+    failures : tuple of str
+        Why ``success`` is False, in a tester's words (:meth:`failure_reasons`).
     """
 
     plot_panels = 2
@@ -115,15 +122,18 @@ class ModalIwanFit(ResultShape):
     weights: tuple = ()
     success: bool = False
     params: ParameterTable = field(default_factory=lambda: ParameterTable(()))
+    failures: tuple = ()
 
     # ------------------------------------------------------------------ construction
     @classmethod
     def from_solution(cls, theta, cov, regime, data, conv, *, chi2_red, weights, warnings,
-                      optimizer_ok, jac=None):
+                      optimizer_ok, jac=None, noise_dof=None, noise_source=None):
         """The result of a weighted least-squares solution ``theta`` with covariance ``cov``;
         with the solution's Jacobian ``jac`` the reported parameters' standard errors come
         from :func:`iwan_element.fitting.covariance` with the delta method (NaN along a
-        degenerate direction), else from ``cov``."""
+        degenerate direction), else from ``cov``. ``noise_dof``: degrees of freedom of a
+        noise level taken from the residuals (None: stated), the verdict's rule 4;
+        ``noise_source``: where that noise level came from, for the warning."""
         names = MICRO if regime == "microslip" else FULL
         theta = np.asarray(theta, dtype=float)
         params = _derived(theta, regime)
@@ -140,15 +150,24 @@ class ModalIwanFit(ResultShape):
                          f"errors were widened by {math.sqrt(chi2_red):.3g}")
         if not optimizer_ok:
             warns.append("the optimiser did not report convergence")
-        bad = _unidentified(params, stderr, theta, names)
-        warns += [f"{n} is not identified by these data (value {params[n]:.4g}, stderr "
-                  f"{stderr[n]:.3g})" for n in bad]
+        bad = _unidentified(params, stderr, theta, names, noise_dof)
+        few = None
+        if noise_dof is not None:
+            few = noise_dof_warning(noise_dof, noise_source if noise_source is not None else (
+                f" (weights from the residuals of {len(data['amplitude'])} amplitudes; state "
+                "the per-point uncertainties or measure more amplitudes)"))
+        if few:
+            warns.append(few)
+        else:
+            warns += [f"{n} is not identified by these data (value {params[n]:.4g}, stderr "
+                      f"{stderr[n]:.3g})" for n in bad]
         if params["zeta0"] < 1e-9:
             warns.append("zeta0 is at its bound 0: no viscous floor is visible in the data")
         table = _table(params, stderr, bad)
+        success = fit_success(optimizer_ok, table.identified, explained=chi2_red <= 4.0)
+        failures = () if success else _failures(optimizer_ok, chi2_red, few, bad, regime)
         return cls(regime, names, theta, np.asarray(cov, dtype=float), data, conv, chi2_red,
-                   weights, fit_success(optimizer_ok, table.identified), table,
-                   warnings=tuple(warns))
+                   weights, success, table, warnings=tuple(warns), failures=failures)
 
     @classmethod
     def linear(cls, data, conv, *, warnings):
@@ -161,7 +180,9 @@ class ModalIwanFit(ResultShape):
         params, stderr = _derived(theta, "linear"), {"f0": sd[0], "zeta0": sd[1]}
         return cls("linear", ("f0", "zeta0"), theta, cov, data, conv, float("nan"), (), False,
                    _table(params, stderr, _unidentified(params, stderr, theta, ())),
-                   warnings=tuple(warnings))
+                   warnings=tuple(warnings), failures=(
+                       f"the amplitude dependence is not identified: only {n} point(s) at too "
+                       "few distinct amplitudes (at least 3 are needed)",))
 
     # ------------------------------------------------------------------ model access
     @property
@@ -191,16 +212,32 @@ class ModalIwanFit(ResultShape):
         return model_curve(theta, X, self.regime, c["x_ref"], c["stiffness"], c["floor"],
                            c.get("damping_form", "energy"))
 
+    @property
+    def fitted_range(self) -> tuple:
+        """``(lowest, highest)`` amplitude [m] the fit rests on (the curve's points, and the
+        fitted span of a direct decay fit); :meth:`predict` warns beyond it."""
+        X = np.asarray(self.data["amplitude"], dtype=float)
+        span = list(self.conventions.get("amplitude_range", ())) + [X.min(), X.max()]
+        return float(min(span)), float(max(span))
+
     def predict(self, amplitude, band: float | None = None):
         """Frequency [Hz] and damping ratio [-] of the fitted model at ``amplitude`` [m].
 
         With ``band`` (a probability in (0, 1), e.g. 0.95) also returns the two-sided band
         of the fitted curve from the parameter covariance (delta method, normal quantile):
-        ``(frequency, damping_ratio, (f_lo, f_hi), (zeta_lo, zeta_hi))``.
+        ``(frequency, damping_ratio, (f_lo, f_hi), (zeta_lo, zeta_hi))``. Amplitudes beyond
+        :attr:`fitted_range` issue an :class:`~iwan_element.IdentifiabilityWarning`
+        (extrapolation).
         """
         X = np.atleast_1d(np.asarray(amplitude, dtype=float))
         if X.ndim != 1 or np.any(~np.isfinite(X)) or np.any(X <= 0):
             raise ValueError("amplitude must be finite and > 0 [m]")
+        lo, hi = self.fitted_range
+        if np.any(X < lo * (1 - 1e-9)) or np.any(X > hi * (1 + 1e-9)):
+            warnings.warn(f"ModalIwanFit.predict: amplitudes {X.min():.3g} .. {X.max():.3g} m "
+                          f"reach beyond the fitted ones ({lo:.3g} .. {hi:.3g} m, up to "
+                          f"{max(X.max() / hi, lo / X.min()):.3g} x): the {self.regime} model "
+                          "is extrapolated there", IdentifiabilityWarning, stacklevel=2)
         f, z = (np.asarray(v, dtype=float) for v in self._curve(self.values, X))
         if band is None:
             return f, z
@@ -242,6 +279,7 @@ class ModalIwanFit(ResultShape):
         def num(x):
             return None if not np.isfinite(x) else float(x)
         return {"regime": self.regime, "success": self.success,
+                "failure_reasons": list(self.failure_reasons()),
                 "parameters": {k: num(v) for k, v in self.parameters.items()},
                 "stderr": {k: num(v) for k, v in self.stderr.items()},
                 "units": {k: _UNITS[k] for k in self.parameters},
@@ -255,8 +293,9 @@ class ModalIwanFit(ResultShape):
 
     def report(self) -> str:
         c = self.conventions
-        lines = [f"Modal Iwan fit ({self.regime}; {c['stiffness']} stiffness, {c['floor']} "
-                 f"floor), success={self.success}",
+        lines = [self.verdict(),
+                 f"Modal Iwan fit ({self.regime}; {c['stiffness']} stiffness, {c['floor']} "
+                 "floor)",
                  f"  {len(self.data['amplitude'])} amplitudes, reduced chi-square "
                  f"{self.chi2_red:.3g}, RMS error f {100 * self.rms_errors()['frequency']:.4f} %,"
                  f" zeta {100 * self.rms_errors()['damping_ratio']:.2f} %"]
@@ -298,6 +337,25 @@ class ModalIwanFit(ResultShape):
         return artists
 
 
+def _failures(optimizer_ok, chi2_red, few, bad, regime) -> tuple:
+    """The reasons a modal fit is not usable, in a tester's words."""
+    out = []
+    if not optimizer_ok:
+        out.append("the optimiser did not converge")
+    if chi2_red > 4.0:
+        out.append(f"misfit well beyond the noise remains: reduced chi-square {chi2_red:.3g} "
+                   "(the model does not follow the data within their uncertainty)")
+    if few:
+        out.append(few)
+    elif bad:
+        why = ("the curve shows too little amplitude dependence to fix them (standard "
+               "errors above half their values)" if regime == "microslip" else
+               "their standard errors exceed half their values")
+        out.append(f"{', '.join(bad)} {'is' if len(bad) == 1 else 'are'} not identified by "
+                   f"these data: {why}")
+    return tuple(out)
+
+
 def _gradient(fun, theta):
     """Central-difference Jacobian of ``fun`` at ``theta``."""
     theta = np.asarray(theta, dtype=float)
@@ -319,7 +377,7 @@ def _table(params, stderr, bad) -> ParameterTable:
                            for k, v in params.items()])
 
 
-def _unidentified(params, stderr, theta, names):
+def _unidentified(params, stderr, theta, names, noise_dof=None):
     """Reported parameters the data do not pin down: the package's one rule
     (:func:`iwan_element.fitting.verdict`), ``chi`` against ``chi + 1``, ``beta`` against
     ``max(beta, 0.2)`` (a joint with little macroslip softening is as good as one without);
@@ -329,7 +387,7 @@ def _unidentified(params, stderr, theta, names):
         ref, text = {"chi": (v + 1.0, "chi + 1"),
                      "beta": (max(v, 0.2), "max(beta, 0.2)")}.get(k, (None, "its value"))
         ok, _ = verdict(k, float(v), float(stderr.get(k, math.nan)), reference=ref,
-                        reference_text=text, nuisance=k == "zeta0")
+                        reference_text=text, nuisance=k == "zeta0", noise_dof=noise_dof)
         if not ok:
             bad.append(k)
     return bad

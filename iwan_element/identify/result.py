@@ -67,9 +67,11 @@ class FitResult(ResultShape):
         Normalised RMS error [-]: for loop fits the RMS force error over the force range
         ``max F - min F``; for dissipation fits the RMS relative error of the fitted quantities.
     success : bool
-        The optimiser converged and the covariance could be computed.
+        The one rule of docs/guards.md: the fit converged, every reported parameter is
+        identified and the joint explains the data beyond the noise.
     message : str
-        Optimiser message.
+        The optimiser's stop message (kept apart from the verdict: a normal stop is no
+        reason for failure).
     nfev : int
         Model evaluations (all starts, the Jacobian and the identifiability check included).
     method : str
@@ -90,6 +92,8 @@ class FitResult(ResultShape):
         Loop fits: ``{"force": sigma [N], "displacement": sigma [m]}`` from
         :func:`~iwan_element.identify.noise.estimate_noise`, and ``"tau"``, the residuals'
         integrated autocorrelation time [samples] by which the variances were multiplied.
+    failures : tuple of str
+        Why ``success`` is False, in a tester's words (:meth:`failure_reasons`).
     """
 
     params: ParameterTable
@@ -106,6 +110,7 @@ class FitResult(ResultShape):
     offsets: dict = field(default_factory=dict)
     noise: dict = field(default_factory=dict)
     _curves: dict = field(default_factory=dict, repr=False)
+    failures: tuple = ()
 
     @property
     def joint(self) -> IwanParameters:
@@ -144,6 +149,7 @@ class FitResult(ResultShape):
             "residual_norm": self.residual_norm,
             "nrmse": self.nrmse,
             "success": self.success,
+            "failure_reasons": list(self.failure_reasons()),
             "message": self.message,
             "nfev": self.nfev,
             "n_data": self.n_data,
@@ -185,9 +191,10 @@ class FitResult(ResultShape):
         title = {"loops": "loop fit (exact IwanJoint on the measured displacement)",
                  "seed": "dissipation fit, seed-paper procedure (Nelder-Mead + Newton on KT)",
                  "least_squares": "dissipation fit, least squares on the exact F0(u0), D(u0)"}
-        lines = [f"Iwan joint identification: {title.get(self.method, self.method)}",
+        lines = [self.verdict(),
+                 f"Iwan joint identification: {title.get(self.method, self.method)}",
                  f"  {self.n_data} residuals, {self.nfev} model evaluations, {self.wall_time:.2f} s, "
-                 f"{'success' if self.success else 'NOT successful'} (optimiser: {self.message})",
+                 f"optimiser stop: {self.message}",
                  "",
                  "  parameter        value        std. error   status"]
         fmt = {"Fs": ("Fs   [N]  ", "{:.6g}"), "KT": ("KT   [N/m]", "{:.6g}"),
@@ -281,16 +288,56 @@ def settle_verdict(out: dict, fixed) -> tuple[dict, list[str]]:
     return ident, warns
 
 
+def required_parameters(ranges: dict, fixed=()) -> list:
+    """The parameters ``success`` asks to be identified (docs/guards.md): every reported one
+    but those given, and but ``beta`` when its 95 % range in ``ranges`` reaches down to its
+    physical bound 0 with a finite upper limit (a joint without macroslip softening beyond
+    that limit: a finding, stated in the report) or when it follows from a given ``Fs``
+    (conditional on it, as the warning says)."""
+    lo, hi = ranges.get("beta", (math.nan, math.nan))
+    exempt = (lo <= 0.0 and math.isfinite(hi)) or "Fs" in fixed
+    return [k for k in PARAM_NAMES if k not in fixed and not (k == "beta" and exempt)]
+
+
+def not_identified_reason(missing, *, microslip: bool) -> str:
+    """The failure reason for the reported parameters ``missing`` the data do not identify:
+    in microslip, the loops never slipped far enough to fix them."""
+    names = ", ".join(missing[:-1]) + " and " + missing[-1] if len(missing) > 1 else missing[0]
+    verb = "is" if len(missing) == 1 else "are"
+    why = ("the loops stay in microslip (test to larger amplitudes)" if microslip else
+           "their standard errors are too large or they sit at a bound of the search range "
+           "(see the warnings)")
+    return f"{names} {verb} not identified by these data: {why}"
+
+
+def failure_list(*, converged: bool, message: str, explains: bool, noise_text: str,
+                 ident: dict, required, microslip: bool) -> tuple:
+    """The reasons ``success`` is False for a fitted joint (empty when it is True)."""
+    out = []
+    if not converged:
+        out.append(f"the optimiser did not converge ({message})")
+    if not explains:
+        out.append(noise_text)
+    if microslip:                 # beta's range then reaches 0 only because Fs is free too
+        required = [k for k in PARAM_NAMES if k in required or k == "beta"]
+    missing = [k for k in required if not ident.get(k, False)]
+    if missing and explains:
+        out.append(not_identified_reason(missing, microslip=microslip))
+    return tuple(out)
+
+
 def _finish(method, out, *, converged, message, nfev, nrmse, t0, extra_warnings=(),
-            fixed=(), stacklevel=3, required=("KT", "chi"), offsets=None, noise=None,
+            fixed=(), stacklevel=3, offsets=None, noise=None,
             curves=None) -> FitResult:
     """Build the FitResult from the dict of :func:`_identify` (or its seed-method twin) and
     issue one IdentifiabilityWarning carrying every warning.
 
-    ``success`` means: the optimiser converged, the data are more than noise
-    (``out["explains"]``, default True) and every parameter in ``required`` (not given) is
-    identified by the rule of :func:`settle_verdict`; so ``success``, the report's status column and
-    the warnings say the same.
+    ``success`` is the package's one rule (docs/guards.md): the optimiser converged, the data
+    are more than noise (``out["explains"]``, default True) and every reported parameter (all
+    four, but those given and a ``beta`` compatible with 0, :func:`required_parameters`)
+    is identified by the rule of :func:`settle_verdict`; so
+    ``success``, the report's status column and the warnings say the same. A fit in
+    microslip reports ``Fs`` and ``beta`` as not identified: it is not a usable joint.
     """
     ident, settle_warns = settle_verdict(out, fixed)
     warns = list(extra_warnings) + out["warnings"] + settle_warns
@@ -300,16 +347,23 @@ def _finish(method, out, *, converged, message, nfev, nrmse, t0, extra_warnings=
     if not explains:
         ident = {k: False for k in ident}
     success = fit_success(converged and explains, ident,
-                          [k for k in required if k not in fixed])
+                          required_parameters(out["ranges"], fixed))
     table = joint_table(out["params"], out["stderr"], ident, fixed=fixed,
                         correlation=out["correlation"])
+    failures = failure_list(
+        converged=converged, message=str(message), explains=explains,
+        noise_text=next((w for w in warns if "indistinguishable from noise" in w),
+                        f"misfit well beyond the noise remains: the joint does not follow the "
+                        f"data (NRMSE {float(nrmse):.3g})"),
+        ident=ident, required=required_parameters(out["ranges"], fixed),
+        microslip=out["details"].get("macroslip_reached") is False) if not success else ()
     result = FitResult(params=table, ranges=out["ranges"],
                        residual_norm=float(np.sqrt(out["r"] @ out["r"])), nrmse=float(nrmse),
                        success=success, message=str(message), nfev=int(nfev),
                        method=method, n_data=int(out["r"].size), warnings=tuple(warns),
                        wall_time=time.perf_counter() - t0, details=json_safe(out["details"]),
                        offsets=dict(offsets or {}), noise=dict(noise or {}),
-                       _curves=dict(curves or {}))
+                       _curves=dict(curves or {}), failures=failures)
     if warns and _EMIT.get():
         warnings.warn("Iwan identification: " + " | ".join(warns), IdentifiabilityWarning,
                       stacklevel=stacklevel)

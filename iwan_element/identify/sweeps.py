@@ -48,6 +48,10 @@ _CLASS = {-0.5: "receptance-like (displacement)", 0.0: "velocity-like (mobility)
           0.5: "accelerance-like", 1.0: "inverted velocity-like"}
 _EXPECTED = {"displacement": -0.5, "velocity": 0.0, "acceleration": 0.5}
 _PHASE_TOL = math.pi / 6          # largest distance of the resonance phase from its class
+#: Largest velocity amplitude [m/s] a vibration test of a jointed structure reaches; a
+#: response read as displacement beyond it is another quantity (issue 34 case 7: acceleration
+#: declared displacement moved at thousands of m/s).
+_V_MAX = 10.0
 
 
 def _inputs(f, F, response, phase, level):
@@ -69,9 +73,16 @@ def _inputs(f, F, response, phase, level):
     for v in dict.fromkeys(lab.tolist()):
         idx = np.flatnonzero(lab == v)
         idx = idx[np.argsort(arrs["f"][idx], kind="stable")]
-        if idx.size < 5 or np.unique(arrs["f"][idx]).size != idx.size:
-            raise ValueError(f"sweep {v!r} must have >= 5 points at distinct frequencies, "
-                             f"got {idx.size}")
+        fv = arrs["f"][idx]
+        n_distinct = np.unique(fv).size
+        if idx.size < 5 or n_distinct != idx.size:
+            rep = np.unique(fv[1:][np.diff(fv) == 0])
+            again = (f"; f repeats {rep.size} frequenc{'y' if rep.size == 1 else 'ies'} "
+                     f"({', '.join(f'{x:g}' for x in rep[:4])} Hz): give level= to tell "
+                     "sweeps apart, or average the repeats" if rep.size else "")
+            raise ValueError(f"level {v!r}: a sweep must have >= 5 points at distinct "
+                             f"frequencies, got {idx.size} points at {n_distinct} distinct "
+                             f"frequencies{again}")
         sweeps.append(idx)
     return arrs, sweeps
 
@@ -128,7 +139,8 @@ def _convention(W, X, F, ph, sweeps, quantity):
 
     The resonance phase of the sweeps (at the peak of ``|X / F|``) must lie within pi/6 of
     -pi/2, 0, pi/2 or pi and the phase must fall with frequency (``exp(i W t)``); a phase
-    that rises is conjugated (``exp(-i W t)``). Returns the rotated phase and a note.
+    that rises is conjugated (``exp(-i W t)``). Returns the rotated phase, a note and the
+    phase class (:func:`_quantity_failure` judges it).
     """
     stats = [s for s in (_sweep_phase(W[i], X[i] / F[i], ph[i]) for i in sweeps) if s]
     if not stats:
@@ -159,7 +171,28 @@ def _convention(W, X, F, ph, sweeps, quantity):
         note += (f" although the response is {quantity}: the sign of the response or of the "
                  "force is inverted, or the phase is not that of the given quantity; read as "
                  f"the displacement phase after adding {-(cls + 0.5) % 2:g} pi")
-    return phd, note
+    return phd, note, cls
+
+
+def _quantity_failure(cls, quantity, W, X):
+    """Why the response cannot be the declared ``quantity`` ("" when it can be): its phase
+    class ``cls`` at resonance is a quarter period off (no sign convention does that), or
+    half a period off (a sign convention, as in many real records, or displacement and
+    acceleration swapped) with displacement amplitudes ``X`` [m] whose velocity ``W X``
+    exceeds :data:`_V_MAX`."""
+    shift = (cls - _EXPECTED[quantity]) % 2
+    if shift == 0:
+        return ""
+    fits = [q for q, c in _EXPECTED.items() if c == cls]
+    v = float(np.max(W * X))
+    if shift == 1 and v <= _V_MAX:
+        return ""
+    why = (f"read as {quantity} it moves at up to {v:.3g} m/s, beyond any vibration test "
+           f"({_V_MAX:g} m/s)" if shift == 1 else "a quarter period off, which no sign "
+           "convention gives")
+    return (f"the phase at resonance is {_CLASS[cls]} although quantity={quantity!r} ({why}): "
+            + (f"the response is likely {fits[0]} (give quantity={fits[0]!r}); " if fits
+               else "") + "the curve is not usable until the quantity is checked")
 
 
 class _Model:
@@ -355,7 +388,8 @@ def sweep_curve(f, F, response, phase, *, level=None, quantity: str = "accelerat
     arrs, sweeps = _inputs(f, F, response, phase, level)
     W = 2.0 * math.pi * arrs["f"]
     X = arrs["response"] / W ** _POWER[quantity]
-    phd, conv_note = _convention(W, X, arrs["F"], arrs["phase"], sweeps, quantity)
+    phd, conv_note, cls = _convention(W, X, arrs["F"], arrs["phase"], sweeps, quantity)
+    failure = _quantity_failure(cls, quantity, W, X)
     H = X * np.exp(1j * phd) / arrs["F"]
     if max(float(np.ptp(np.log(X[i]))) for i in sweeps) < 0.1:
         deg = min(deg, len(sweeps) - 1)     # response held within 10 %: one amplitude a sweep
@@ -373,7 +407,7 @@ def sweep_curve(f, F, response, phase, *, level=None, quantity: str = "accelerat
              f"{rms:.2g}; bins: {len(amp)} of {n_bins} in ln X")
     return AmplitudeCurve(amp, wr / (2 * math.pi), z, frequency_std=sw / (2 * math.pi),
                           damping_ratio_std=sz, method="stepped-sine-sweep", notes=notes,
-                          warnings=r["warnings"])
+                          warnings=r["warnings"], failures=(failure,) if failure else ())
 
 
 def _identify(W, H, F, sweeps, deg, residual, frac, bins):
