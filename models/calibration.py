@@ -29,6 +29,7 @@ import numpy as np
 from scipy import optimize
 
 from iwan_element import AmplitudeCurve, IwanParameters, amplitude_curve
+from iwan_element.core.progress import finish, progress_bar, tick
 from iwan_element.core.result_shape import ResultShape, panels
 from iwan_element.fitting import (Parameter, ParameterTable, covariance, fit_success,
                                   minimize, verdict)
@@ -129,7 +130,7 @@ def _with(specimen: Specimen, names, values) -> Specimen:
 
 def calibrate(specimen: Specimen, measured: AmplitudeCurve, *, fit=("stiffness_per_area",
               "friction", "chi", "damping_floor"), mode: int = 1, f_tol: float = 2e-4,
-              z_tol: float = 0.05) -> CalibrationResult:
+              z_tol: float = 0.05, progress: bool = False) -> CalibrationResult:
     """Fit interface parameters so the QSMA curve matches a measured amplitude curve.
 
     Parameters
@@ -144,6 +145,9 @@ def calibrate(specimen: Specimen, measured: AmplitudeCurve, *, fit=("stiffness_p
         ``damping_floor``, ``beta``.
     f_tol, z_tol : float, keyword-only
         Residual scales of the relative frequency and damping errors.
+    progress : bool, keyword-only
+        Show a tqdm bar over the QSMA evaluations (total: the fit's budget, lowered to the
+        count reached at the end); needs tqdm.
     """
     fit = tuple(fit)
     bad = [n for n in fit if n not in _FIT]
@@ -174,10 +178,17 @@ def calibrate(specimen: Specimen, measured: AmplitudeCurve, *, fit=("stiffness_p
         return modal_amplitude_curve(s, mode=mode, amplitude=X)
 
     def resid(x):
+        tick(bar)
         c = model(x)
         return np.concatenate([(c.frequency / fm - 1) / f_tol, (c.damping_ratio / zm - 1) / z_tol])
 
-    sol = minimize(resid, x0, lb, ub, method="trf", max_nfev=200, x_scale=1.0, diff_step=1e-4)
+    # each iteration costs one evaluation and one per fitted parameter (its Jacobian)
+    bar = progress_bar(progress, total=200 * (len(fit) + 1), desc="calibrate", unit="QSMA")
+    try:
+        sol = minimize(resid, x0, lb, ub, method="trf", max_nfev=200, x_scale=1.0,
+                       diff_step=1e-4)
+    finally:
+        finish(bar)
     vals = [transform(n, v, True) for n, v in zip(fit, sol.x)]
     fitted = _with(specimen, fit, vals).replace(calibrated_range=(float(X.min()), float(X.max())))
     curve = modal_amplitude_curve(fitted, mode=mode, amplitude=X)

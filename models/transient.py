@@ -38,6 +38,7 @@ import numpy as np
 from exudyn.itemInterface import ObjectGenericODE2
 
 from iwan_element import AmplitudeCurve, amplitude_curve
+from iwan_element.core.progress import finish, progress_bar, tick
 from iwan_element.core.result_shape import ResultShape, panels
 from iwan_element.core.serialize import json_safe
 from iwan_element.core.validation import check_scalar
@@ -325,7 +326,7 @@ def _decay_curve(t, modal, h, f0, n_periods, *, notes) -> AmplitudeCurve:
 
 def ringdown(specimen: Specimen, *, mode: int = 1, amplitude: float, cycles: float = 30,
              steps_per_period: int = 64, n_periods: float = 3.0, record_energy: bool = False,
-             joint_elements: bool = False) -> RingdownResult:
+             joint_elements: bool = False, progress: bool = False) -> RingdownResult:
     """Release the specimen from a static deflection in a mode's load shape; let it ring down.
 
     Parameters
@@ -347,6 +348,8 @@ def ringdown(specimen: Specimen, *, mode: int = 1, amplitude: float, cycles: flo
     joint_elements : bool, keyword-only
         Use one Python ``IwanJoint`` connector per point (reference route) instead of the
         compiled interface law.
+    progress : bool, keyword-only
+        Show a tqdm bar over the time steps with its ETA; needs tqdm.
 
     Returns
     -------
@@ -377,12 +380,14 @@ def ringdown(specimen: Specimen, *, mode: int = 1, amplitude: float, cycles: flo
     floor_work = _FloorWork(beta, L)
     energy = {k: [] for k in e_keys}
     coords, times = [], []
-    handle = {}
+    handle = {"bar": None}
     eff = _ModalEffects(specimen, mode, L, phi, w0) if any(
         e.mode == mode for e in specimen.effects) else None
 
     def post_step(mbs_, t):
         times.append(t)
+        if handle["bar"] is not None and len(times) % 50 == 0:
+            tick(handle["bar"], 50)
         coords.append(mbs_.systemData.GetODE2Coordinates())
         if eff is not None:
             eff.commit(coords[-1][L.free], np.asarray(
@@ -422,7 +427,11 @@ def ringdown(specimen: Specimen, *, mode: int = 1, amplitude: float, cycles: flo
     sim.timeIntegration.numberOfSteps = n
     sim.timeIntegration.endTime = n * h
     t0 = time.perf_counter()
-    mbs.SolveDynamic(sim)
+    handle["bar"] = progress_bar(progress, total=n + 1, desc="ringdown", unit="step")
+    try:
+        mbs.SolveDynamic(sim)
+    finally:
+        finish(handle["bar"])
     wall = time.perf_counter() - t0
     quad = _joint_records(model.interface, energy, e0) if record_energy else None
     X = np.array(coords)[:, L.free]
