@@ -12,7 +12,7 @@ from ..core.serialize import json_safe
 from ..core.validation import check_scalar
 from ..effects import EFFECTS
 from ..fitting import Parameter, ParameterTable, verdict
-from ..core.result_shape import ResultShape, panels
+from ..core.result_shape import ResultShape, panels, value_stderr, wrap
 
 __all__ = ["Diagnosis", "VibrationDiagnosis"]
 
@@ -28,8 +28,17 @@ def _verdict_lines(word: str, result) -> list:
     lines = [f"  {word} before {100 * result.error_before:.3g} % -> after "
              f"{100 * result.error_after:.3g} % (noise {100 * result.noise_level:.3g} %)"]
     if result.warnings:
-        lines += ["  warnings:"] + [f"  - {w}" for w in result.warnings]
+        lines.append("  warnings:")
+        for w in result.warnings:
+            lines += wrap(f"  - {w}", indent="    ")
     return lines
+
+
+#: What a vibration diagnosis' "mismatch" is, said once in its report and its tables.
+MISMATCH = ("mismatch: RMS relative difference between measured and modelled frequency and "
+            "damping ratio together (log residuals, each curve over its own noise), in %; "
+            "dIC: change of the information criterion when the candidate is added "
+            "(negative: better)")
 
 @dataclass(frozen=True, eq=False)
 class Diagnosis(ResultShape):
@@ -107,12 +116,20 @@ class Diagnosis(ResultShape):
     F: np.ndarray
     details: dict = field(default_factory=dict)
 
+    @property
+    def params(self):
+        """The augmented fit's parameters (``fit.params``, a ``ParameterTable``)."""
+        return self.fit.params
+
     def to_dict(self) -> dict:
         """JSON-safe dict (NaN/inf become None); the fits as :meth:`FitResult.to_dict`."""
         return json_safe({
             "effect": self.effect, "effects": list(self.effects),
             "ambiguous_with": list(self.ambiguous_with), "where": self.where,
-            "success": self.success, "offsets": dict(self.offsets),
+            "success": self.success, "params": self.params.to_dict(),
+            "offsets": value_stderr({"force": (self.offsets["force"],
+                                               self.fit.details.get("force_offset_stderr")),
+                                     "displacement": self.offsets["displacement"]}),
             "error_before": self.error_before, "error_after": self.error_after,
             "noise_level": self.noise_level, "noise_sigma": self.noise_sigma,
             "misfit": self.misfit, "steps": list(self.steps), "untestable": dict(self.untestable),
@@ -429,8 +446,8 @@ class VibrationDiagnosis(ResultShape):
 
     def to_dict(self) -> dict:
         """JSON-safe dict."""
-        return json_safe({k: getattr(self, k) for k in (
-            "effect", "effects", "ambiguous_with", "where", "parameters", "error_before",
+        return json_safe({"params": self.params.to_dict()} | {k: getattr(self, k) for k in (
+            "effect", "effects", "ambiguous_with", "where", "error_before",
             "error_after", "noise_level", "frequency_noise", "damping_ratio_noise", "amplitude",
             "frequency", "damping_ratio", "predicted_frequency", "predicted_damping_ratio",
             "model_frequency", "model_damping_ratio", "steps", "warnings", "details", "covariance")})
@@ -449,12 +466,14 @@ class VibrationDiagnosis(ResultShape):
                 f" damping offset {100 * bt['damping_offset']:+.3g} % "
                 f"(+- {100 * bt['damping_offset_stderr']:.2g}); not testable against them: "
                 f"{', '.join(bt['untested']) or 'none'}")
-        lines.append(f"  where: {self.where}")
+        lines += wrap(f"  where: {self.where}", indent="    ")
+        if self.steps:
+            lines += wrap("  " + MISMATCH, indent="    ")
         for k, st in enumerate(self.steps):
             lines.append(f"  step {k + 1}: candidates on {' + '.join(st['on']) or 'prediction'}")
             for c in st["candidates"]:
                 lines.append(f"    {c['name']:<18} mismatch {100 * c['error']:7.3g} %  dIC "
-                             f"{c['dIC']:8.1f}  explains {100 * c['explained']:5.3g} %  "
+                             f"{c['dIC']:9.4g}  explains {100 * c['explained']:5.3g} %  "
                              f"{c['verdict']}")
         if self.effects:
             lines.append("  named: " + ", ".join(
@@ -468,6 +487,27 @@ class VibrationDiagnosis(ResultShape):
         else:
             lines.append("  named: none")
         return "\n".join(lines + _verdict_lines("mismatch", self))
+
+    def _tables(self) -> list:
+        out = [t for t in super()._tables() if t[0] == "parameters"]
+        cols = ("amplitude [m]", "frequency [Hz]", "predicted frequency [Hz]",
+                "model frequency [Hz]", "damping_ratio [-]", "predicted damping_ratio [-]",
+                "model damping_ratio [-]")
+        out.append(("points", cols, list(zip(*(map(float, a) for a in (
+            self.amplitude, self.frequency, self.predicted_frequency, self.model_frequency,
+            self.damping_ratio, self.predicted_damping_ratio, self.model_damping_ratio))))))
+        steps = [(k + 1, " + ".join(st["on"]) or "prediction", c["name"], 100 * c["error"],
+                  c["dIC"], 100 * c["explained"], c["verdict"])
+                 for k, st in enumerate(self.steps) for c in st["candidates"]]
+        if steps:
+            out.append(("candidates (" + MISMATCH + ")",
+                        ("step", "on", "candidate", "mismatch [%]", "dIC [-]", "explains [%]",
+                         "verdict"), steps))
+        fit = [("mismatch before [%]", 100 * self.error_before),
+               ("mismatch after [%]", 100 * self.error_after),
+               ("noise [%]", 100 * self.noise_level), ("named", ", ".join(self.effects)
+                                                         or "none"), ("where", self.where)]
+        return out + [("goodness of fit", ("quantity", "value"), fit)]
 
     def plot(self, ax=None):
         """Frequency and damping against amplitude: measured, predicted, augmented.

@@ -249,11 +249,17 @@ class EnergyBalance(ResultShape):
                 "external_work": self.external_work[-1]}
 
     def _tables(self) -> list:
+        history = ("energies over time", ("t [s]", "kinetic [J]", "elastic [J]",
+                                          "joint_stored [J]", "joint_dissipated [J]",
+                                          "external_work [J]", "error [-]"),
+                   list(zip(*(map(float, a) for a in (
+                       self.t, self.kinetic, self.elastic, self.joint_stored,
+                       self.joint_dissipated, self.external_work, self.error())))))
         rows = [(k.replace("_", " "), "J", v) for k, v in self._final().items()]
         stats = [("steps", "-", len(self.t)), ("energy level", "J", self.scale),
                  ("largest balance error", "-", self.max_error),
                  ("tolerance", "-", self.tolerance)]
-        return [("energies at the end", ("quantity", "unit", "value"), rows),
+        return [history, ("energies at the end", ("quantity", "unit", "value"), rows),
                 ("balance", ("quantity", "unit", "value"), stats)]
 
     def report(self) -> str:
@@ -271,15 +277,6 @@ class EnergyBalance(ResultShape):
                 "tolerance": self.tolerance, "n_steps": len(self.t),
                 "final": {k: float(v) for k, v in self._final().items()},
                 "warnings": list(self.warnings)}
-
-    def to_dataframe(self):
-        """The energies over time as a ``pandas.DataFrame`` (one row per step, SI units)."""
-        import pandas as pd
-        return pd.DataFrame({"t [s]": self.t, "kinetic [J]": self.kinetic,
-                             "elastic [J]": self.elastic, "joint_stored [J]": self.joint_stored,
-                             "joint_dissipated [J]": self.joint_dissipated,
-                             "external_work [J]": self.external_work,
-                             "error [-]": self.error()})
 
     def plot(self, ax=None) -> list:
         (a,) = panels(ax, 1)

@@ -242,10 +242,7 @@ class ModalIwanFit(ResultShape):
         def num(x):
             return None if not np.isfinite(x) else float(x)
         return {"regime": self.regime, "success": self.success,
-                "parameters": {k: num(v) for k, v in self.parameters.items()},
-                "stderr": {k: num(v) for k, v in self.stderr.items()},
-                "units": {k: _UNITS[k] for k in self.parameters},
-                "names": list(self.names), "values": [float(v) for v in self.values],
+                "params": self.params.to_dict(), "names": list(self.names),
                 "covariance": [[float(x) for x in row] for row in self.covariance],
                 "chi2_red": num(self.chi2_red), "rms_errors": self.rms_errors(),
                 "conventions": dict(self.conventions), "warnings": list(self.warnings)}
