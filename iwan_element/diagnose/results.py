@@ -37,8 +37,7 @@ def _verdict_lines(word: str, result) -> list:
 #: What a vibration diagnosis' "mismatch" is, said once in its report and its tables.
 MISMATCH = ("mismatch: RMS relative difference between measured and modelled frequency and "
             "damping ratio together (log residuals, each curve over its own noise), in %; "
-            "dIC: change of the information criterion when the candidate is added "
-            "(negative: better)")
+            "dIC: information criterion above the step's best candidate (0: the best)")
 
 @dataclass(frozen=True, eq=False)
 class Diagnosis(ResultShape):
@@ -141,26 +140,31 @@ class Diagnosis(ResultShape):
         """Human-readable account: noise, misfit, where, candidates, verdict, before/after."""
         d = self.details
         p = self.base_fit.joint
-        lines = ["Iwan model diagnosis",
-                 f"  {d['samples']} samples; noise {d['noise_from']}, correlation time "
-                 f"{d['tau']:.3g} samples ({d['n_eff']:.0f} independent samples fitted)",
-                 f"  offsets (nuisance): force {self.offsets['force']:.4g} N, displacement "
-                 f"{self.offsets['displacement']:.4g} m" + (
-                     f"; low-pass {d['lowpass']:g} Hz ({d['lowpass_reason']})"
-                     if d.get("lowpass") else ""),
-                 f"  noise: sigma = {self.noise_sigma:.4g} N (NRMSE {100 * self.noise_level:.3g} %)",
-                 f"  base Iwan fit: Fs={p.Fs:.5g} N, KT={p.KT:.5g} N/m, chi={p.chi:.4f}, "
-                 f"beta={p.beta:.4f}; NRMSE {100 * self.error_before:.3g} % "
-                 f"= {self.error_before / self.noise_level:.3g} x noise "
-                 f"(misfit p-value {d['misfit_p']:.2g}, level {d['alpha']:g})",
-                 f"  selection: {d['criterion']}",
-                 f"  where: {self.where}"]
+        head = [f"{d['samples']} samples; noise {d['noise_from']}, correlation time "
+                f"{d['tau']:.3g} samples ({d['n_eff']:.0f} independent samples fitted)",
+                f"offsets (nuisance): force {self.offsets['force']:.4g} N, displacement "
+                f"{self.offsets['displacement']:.4g} m" + (
+                    f"; low-pass {d['lowpass']:g} Hz ({d['lowpass_reason']})"
+                    if d.get("lowpass") else ""),
+                f"noise: sigma = {self.noise_sigma:.4g} N (NRMSE {100 * self.noise_level:.3g} %)",
+                f"base Iwan fit: Fs={p.Fs:.5g} N, KT={p.KT:.5g} N/m, chi={p.chi:.4f}, "
+                f"beta={p.beta:.4f}; NRMSE {100 * self.error_before:.3g} % "
+                f"= {self.error_before / self.noise_level:.3g} x noise "
+                f"(misfit p-value {d['misfit_p']:.2g}, level {d['alpha']:g})",
+                f"selection: {d['criterion']}", f"where: {self.where}"]
+        lines = ["Iwan model diagnosis"]
+        for h in head:
+            lines += wrap("  " + h, indent="    ")
+        if self.steps:
+            lines += wrap("  NRMSE: RMS force residual over the force range; x noise: its "
+                          "ratio to the noise; dIC: information criterion above the step's "
+                          "best candidate (0: the best)", indent="    ")
         for k, st in enumerate(self.steps):
             lines.append(f"  step {k + 1}: candidates on {' + '.join(st['on']) or 'Iwan'}")
-            lines.append("    effect               NRMSE[%]  x noise      dIC  explains  verdict")
+            lines.append("    effect               NRMSE[%]  x noise       dIC  explains  verdict")
             for c in st["candidates"]:
                 lines.append(f"    {c['name']:<20} {100 * c['nrmse']:8.3g} {c['ratio']:8.3g} "
-                             f"{c['dIC']:8.1f} {100 * c['explained']:7.3g} %  {c['verdict']}")
+                             f"{c['dIC']:9.4g} {100 * c['explained']:7.3g} %  {c['verdict']}")
         for name, why in self.untestable.items():
             lines.append(f"  cannot test {name}: {why}")
         if self.effects:
