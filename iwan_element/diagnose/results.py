@@ -12,14 +12,14 @@ from ..core.serialize import json_safe
 from ..core.validation import check_scalar
 from ..effects import EFFECTS
 from ..fitting import Parameter, ParameterTable, verdict
-from ..core.result_shape import ResultShape, panels, value_stderr, wrap
+from ..core.result_shape import ResultShape, panels, unit_label, value_stderr, wrap
 
 __all__ = ["Diagnosis", "VibrationDiagnosis"]
 
 
 def _unit(name: str, key: str, modal: bool = False) -> str:
     specs = EFFECTS[name].modal_specs if modal else EFFECTS[name].specs
-    return next((s.unit for s in specs if s.name == key), "")
+    return "[" + unit_label(next((s.unit for s in specs if s.name == key), "")) + "]"
 
 
 
@@ -458,10 +458,12 @@ class VibrationDiagnosis(ResultShape):
 
     def report(self) -> str:
         """Human-readable account."""
-        lines = ["Vibration diagnosis (amplitude-dependent frequency and damping)",
-                 f"  {self.amplitude.size} amplitudes, {self.amplitude.min():.3g} .. "
-                 f"{self.amplitude.max():.3g} m; noise: frequency {100 * self.frequency_noise:.2g} %, "
-                 f"damping {100 * self.damping_ratio_noise:.2g} % ({self.details['noise_from']})"]
+        lines = ["Vibration diagnosis (amplitude-dependent frequency and damping)"]
+        lines += wrap(f"  {self.amplitude.size} amplitudes, {self.amplitude.min():.3g} .. "
+                      f"{self.amplitude.max():.3g} m; noise: frequency "
+                      f"{100 * self.frequency_noise:.2g} %, damping "
+                      f"{100 * self.damping_ratio_noise:.2g} % ({self.details['noise_from']})",
+                      indent="    ")
         bt = self.details.get("between_tests")
         if bt:
             lines.append(
