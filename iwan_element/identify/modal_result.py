@@ -10,7 +10,7 @@ from scipy import special, stats
 
 from ..core.modal import modal_iwan_curve, viscous_floor
 from ..core.parameters import IwanParameters
-from ..core.result_shape import ResultShape, panels
+from ..core.result_shape import ResultShape, panels, wrap
 from ..fitting import Parameter, ParameterTable, covariance, fit_success, verdict
 
 __all__ = ["ModalIwanFit", "model_curve", "full_parameters", "harmonic_factor"]
@@ -253,17 +253,16 @@ class ModalIwanFit(ResultShape):
     def report(self) -> str:
         c = self.conventions
         lines = [f"Modal Iwan fit ({self.regime}; {c['stiffness']} stiffness, {c['floor']} "
-                 f"floor), success={self.success}",
-                 f"  {len(self.data['amplitude'])} amplitudes, reduced chi-square "
-                 f"{self.chi2_red:.3g}, RMS error f {100 * self.rms_errors()['frequency']:.4f} %,"
-                 f" zeta {100 * self.rms_errors()['damping_ratio']:.2f} %"]
+                 f"floor), success={self.success}"]
+        lines += self.params.report().splitlines()
         if self.regime == "microslip":
             lines.append(f"  delta = relative drop of w^2 at X_ref = {c['x_ref']:.4g} m")
-        for k, v in self.parameters.items():
-            s = self.stderr.get(k, float("nan"))
-            rel = f"({100 * s / abs(v):.2g} %)" if v else ""
-            lines.append(f"  {k:>8} = {v:12.6g} +- {s:9.3g} {rel:>9} [{_UNITS[k]}]")
-        lines += [f"  warning: {w}" for w in self.warnings]
+        lines.append(f"  goodness of fit: {len(self.data['amplitude'])} amplitudes, reduced "
+                     f"chi-square {self.chi2_red:.3g}, RMS error f "
+                     f"{100 * self.rms_errors()['frequency']:.4f} %, zeta "
+                     f"{100 * self.rms_errors()['damping_ratio']:.2f} %")
+        for w in self.warnings:
+            lines += wrap(f"  warning: {w}", indent="    ")
         return "\n".join(lines)
 
     def plot(self, ax=None, *, band: float = 0.95, label: str = "fit"):
