@@ -430,6 +430,7 @@ def ringdown(specimen: Specimen, *, mode: int = 1, amplitude: float, cycles: flo
     handle["bar"] = progress_bar(progress, total=n + 1, desc="ringdown", unit="step")
     try:
         mbs.SolveDynamic(sim)
+        tick(handle["bar"], len(times) % 50)          # the steps since the last tick
     finally:
         finish(handle["bar"])
     wall = time.perf_counter() - t0
