@@ -61,9 +61,9 @@ def test_linked_documentation_pages_exist():
 def test_recipe_runs_as_it_stands(name, monkeypatch):
     import matplotlib.pyplot as plt
     monkeypatch.chdir(ROOT)
-    t0 = time.perf_counter()
+    t0 = time.process_time()                    # CPU time: the machine may be shared
     try:
         exec(compile(RECIPES[name], f"README recipe {name}", "exec"), {"__name__": "__main__"})
     finally:
         plt.close("all")
-    assert time.perf_counter() - t0 < 30, "a recipe must stay quick (small data, few points)"
+    assert time.process_time() - t0 < 30, "a recipe must stay quick (small data, few points)"
