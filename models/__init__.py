@@ -14,6 +14,10 @@
   (:func:`quasi_static_test`);
 * :mod:`~iwan_element.models.forced` - stepped-sine forced response at several force levels
   (:func:`forced_response`);
+* :mod:`~iwan_element.models.solid_mesh`, :mod:`~iwan_element.models.solid_build`,
+  :mod:`~iwan_element.models.solid` - solid finite-element halves (Netgen, or the user's
+  mesh), contact patches and the reduced linear system QSMA reads (:func:`solid_preset`;
+  extra ``iwan-element[fem]``);
 * :mod:`~iwan_element.models.solver` - Exudyn solver settings shared by the runs;
 * :mod:`~iwan_element.models.calibration` - interface calibration from vibration data and
   from joint / modal Iwan fits;
@@ -27,11 +31,14 @@ from .forced import ForcedResponseResult, forced_response
 from .machine import QuasiStaticResult, quasi_static_test
 from .qsma import modal_amplitude_curve, natural_frequencies
 from .transient import RingdownResult, ringdown
+from .solid import SolidSpecimen
+from .solid_build import solid_preset
 from .specimens import Excitation, InterfaceModel, Specimen, preset
 
 __all__ = ["example_test_path", "preset", "modal_amplitude_curve", "natural_frequencies",
            "ringdown", "quasi_static_test", "forced_response", "Specimen", "InterfaceModel",
-           "Excitation", "RingdownResult", "QuasiStaticResult", "ForcedResponseResult"]
+           "Excitation", "RingdownResult", "QuasiStaticResult", "ForcedResponseResult",
+           "solid_preset", "SolidSpecimen"]
 
 
 def example_test_path() -> Path:

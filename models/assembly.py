@@ -39,6 +39,7 @@ from iwan_element import IwanJoint
 from iwan_element.exudyn import add_iwan_interface
 
 from .interface import ContactPoints, contact_points
+from .solid import SolidSpecimen
 from .specimens import Specimen
 
 __all__ = ["SpecimenModel", "build_specimen_model", "LinearSystem", "linear_system"]
@@ -249,6 +250,8 @@ class LinearSystem:
     stiffness; ``G`` maps coordinates to the tangential slips of the contact points and ``S``
     to the sensor's transverse displacement; ``Kb`` is the beams' part of ``K0`` (for the
     stiffness-proportional damping floor). ``free`` are the Exudyn ODE2 indices kept.
+    ``rigid_body_modes``: how many zero-frequency modes ``(K0 + G^T diag(KT) G, M)`` has (3
+    for a free-free planar specimen, 6 for a free-free solid, 0 when clamped).
     """
 
     M: np.ndarray
@@ -258,6 +261,7 @@ class LinearSystem:
     S: np.ndarray
     free: np.ndarray
     n_coordinates: int
+    rigid_body_modes: int = 0
 
 
 def _structure_key(specimen: Specimen) -> Specimen:
@@ -266,8 +270,11 @@ def _structure_key(specimen: Specimen) -> Specimen:
                             stiffness_per_area=1.0, amplitude_range=(1.0, 2.0))
 
 
-def linear_system(specimen: Specimen) -> LinearSystem:
-    """Linear matrices of a specimen (cached on its geometry, material and contact layout)."""
+def linear_system(specimen: Specimen | SolidSpecimen) -> LinearSystem:
+    """Linear matrices of a specimen (cached on its geometry, material and contact layout);
+    a :class:`~iwan_element.models.solid.SolidSpecimen` carries its own (reduced)."""
+    if isinstance(specimen, SolidSpecimen):
+        return specimen.linear_system()
     return _linear_system(_structure_key(specimen))
 
 
@@ -316,4 +323,4 @@ def _linear_system(key: Specimen) -> LinearSystem:
     free = np.setdiff1d(np.arange(n), model.fixed_coordinates)
     ix = np.ix_(free, free)
     return LinearSystem(M=M[ix], K0=K[ix], Kb=Kb[ix], G=G[:, free], S=S[free], free=free,
-                        n_coordinates=n)
+                        n_coordinates=n, rigid_body_modes=3 if key.boundary == "free-free" else 0)

@@ -28,7 +28,7 @@ from iwan_element import IwanParameters
 
 from .specimens import Specimen
 
-__all__ = ["ContactPoints", "pressure_field", "contact_points"]
+__all__ = ["ContactPoints", "pressure_field", "contact_points", "points_from_forces"]
 
 
 def pressure_field(specimen: Specimen, *, nx: int = 600, ny: int = 41):
@@ -107,8 +107,12 @@ def contact_points(specimen: Specimen) -> ContactPoints:
     """Contact points, normal forces and Iwan elements of a specimen's interface (module doc).
 
     The ``"lumped"`` interface puts two points per bolt at ``+-r_c/2`` with half the bolt's
-    preload and half its cone area each (equal sharing, no pressure gradient).
+    preload and half its cone area each (equal sharing, no pressure gradient). A
+    :class:`~iwan_element.models.solid.SolidSpecimen` gives its patches' elements.
     """
+    from .solid import SolidSpecimen          # solid.py builds on this module
+    if isinstance(specimen, SolidSpecimen):
+        return specimen.contact_points()
     s, itf = specimen, specimen.interface
     if itf.model == "lumped":
         xs, N, A = [], [], []
@@ -130,10 +134,19 @@ def contact_points(specimen: Specimen) -> ContactPoints:
         x = (np.arange(n) + 0.5) * s.overlap / n
         keep = (N > 1e-9 * s.preload) & (A > 0)
         x, N, A = x[keep], N[keep], A[keep]
+    return points_from_forces(s, x + s.lap_start, N, A)
+
+
+def points_from_forces(specimen: Specimen, x, normal_force, area) -> ContactPoints:
+    """The Iwan elements of contact points with given normal forces [N] and contact areas
+    [m^2] (``Fs_i = mu N_i``, ``KT_i = k_t A_i (p_i / p_mean)**m``, module docstring), at
+    positions ``x`` [m] along the assembly; the 1-D strips and the solid's patches share it."""
+    s, itf = specimen, specimen.interface
+    x, N, A = (np.asarray(v, float) for v in (x, normal_force, area))
     p_i = N / A
     p_mean = N.sum() / A.sum()
     KT = itf.stiffness_per_area * A * (p_i / p_mean) ** itf.stiffness_pressure_exponent
     params = tuple(IwanParameters(Fs=float(s.friction * n_), KT=float(k), chi=itf.chi,
                                   beta=itf.beta) for n_, k in zip(N, KT))
-    return ContactPoints(x=x + s.lap_start, normal_force=N, area=A, params=params,
+    return ContactPoints(x=x, normal_force=N, area=A, params=params,
                          normal_stiffness=itf.normal_stiffness_per_area * A)

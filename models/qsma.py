@@ -38,6 +38,7 @@ from iwan_element.core.masing import constants_from_arrays, masing_rows
 
 from .assembly import linear_system
 from .interface import contact_points
+from .solid import SolidSpecimen
 from .specimens import Specimen
 
 __all__ = ["modal_amplitude_curve", "linear_modes", "natural_frequencies",
@@ -73,7 +74,7 @@ def linear_modes(specimen: Specimen, *, mode: int = 1):
     L = linear_system(specimen)
     pts = contact_points(specimen)
     K = L.K0 + L.G.T @ (pts.KT[:, None] * L.G)
-    n_rigid = 3 if specimen.boundary == "free-free" else 0
+    n_rigid = L.rigid_body_modes
     top = min(n_rigid + mode + 2, K.shape[0]) - 1
     w2, V = sla.eigh(K, L.M, subset_by_index=[0, top])
     n_low = int(np.sum(w2 < (2 * math.pi * 0.5) ** 2))
@@ -245,8 +246,9 @@ def modal_amplitude_curve(specimen: Specimen, *, mode: int = 1, amplitude=None) 
         applied on top (``docs/vibration_effects.md``). ``warnings`` states amplitudes
         outside the specimen's (or an effect's) calibrated range (also logged).
     """
-    if not isinstance(specimen, Specimen):
-        raise ValueError(f"specimen must be a Specimen, got {type(specimen).__name__}")
+    if not isinstance(specimen, (Specimen, SolidSpecimen)):
+        raise ValueError(f"specimen must be a Specimen or SolidSpecimen, got "
+                         f"{type(specimen).__name__}")
     r = static_modal_load(specimen, amplitude, mode=mode)
     slip = np.abs(r["slip"])
     D = np.zeros(r["amplitude"].size)

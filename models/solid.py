@@ -1,0 +1,163 @@
+"""A solid (finite-element) lap-jointed specimen that the 1-D analyses accept.
+
+:class:`SolidSpecimen` pairs the 1-D :class:`~iwan_element.models.specimens.Specimen` (the
+interface law, bolts, preload, friction, sensor, damping floor, amplitude range: everything
+that is not the bodies' geometry) with a :class:`SolidModel`: the reduced linear system of the
+two meshed halves (:class:`~iwan_element.models.assembly.LinearSystem`, built by
+:mod:`~iwan_element.models.solid_build`) and the contact patches on the lap
+(:class:`PatchLayout`). :func:`~iwan_element.models.assembly.linear_system` and
+:func:`~iwan_element.models.interface.contact_points` dispatch on it, so
+:func:`~iwan_element.models.qsma.natural_frequencies` and
+:func:`~iwan_element.models.qsma.modal_amplitude_curve` run on the solid unchanged.
+
+Contact points of a solid: every patch carries two uncoupled Iwan elements, one per
+tangential direction of the lap plane (``x`` along the beam, then ``y`` across it), each with
+``Fs = mu N_patch`` and ``KT = k_t A_patch (p/p_mean)**m`` (the 1-D law,
+:func:`~iwan_element.models.interface.points_from_forces`). The entries of
+:class:`~iwan_element.models.interface.ContactPoints` therefore come in pairs (patch 0 x,
+patch 0 y, patch 1 x, ...), and ``normal_force`` repeats each patch's force twice: its sum is
+twice the bolts' preload. Two uncoupled directions make a square friction limit: exact for
+a slip along one axis (the height-bending modes slip along ``x``), ``sqrt(2)`` too strong for a
+diagonal slip (docs/solid.md).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field, fields
+
+import numpy as np
+
+from .interface import ContactPoints, points_from_forces
+from .specimens import InterfaceModel, Specimen
+
+__all__ = ["PatchLayout", "SolidModel", "SolidSpecimen", "solid_contact_points"]
+
+# Specimen fields a SolidSpecimen may change without rebuilding its bodies: they enter only
+# the Iwan elements (and the analyses' damping floor, amplitudes and effects), not M, K0, G
+_FREE_FIELDS = {"name", "preload", "friction", "amplitude_range", "modal_damping",
+                "calibrated_range", "effects", "reference"}
+_FREE_INTERFACE = {"stiffness_per_area", "stiffness_pressure_exponent", "chi", "beta",
+                   "damping_floor"}
+
+
+@dataclass(frozen=True, eq=False)
+class PatchLayout:
+    """Contact patches of the lap: cells of a grid on the lap plane with contact pressure.
+
+    Attributes
+    ----------
+    x, y : ndarray, shape (n,)
+        Patch centres [m]: along the assembly and across the width.
+    normal_force : ndarray, shape (n,)
+        Integral of the cone pressure over the patch [N] at ``preload`` per bolt.
+    area : ndarray, shape (n,)
+        Contact area of the patch (where the pressure is > 0) [m^2].
+    preload : float
+        Bolt preload the forces were integrated at [N].
+    size : tuple of 2 floats
+        Cell size along and across the beam [m].
+    """
+
+    x: np.ndarray
+    y: np.ndarray
+    normal_force: np.ndarray
+    area: np.ndarray
+    preload: float
+    size: tuple
+
+    def __len__(self) -> int:
+        return int(self.x.size)
+
+
+@dataclass(frozen=True, eq=False)
+class SolidModel:
+    """The reduced linear system of two solid halves and their contact patches.
+
+    Attributes
+    ----------
+    system : LinearSystem
+        Reduced coordinates: ``M`` (identity), ``K0`` (bodies and normal patch springs),
+        ``Kb`` (bodies), ``G`` (2 rows per patch: the tangential slips ``x`` and ``y`` of
+        body B's patch average minus body A's), ``S`` (the sensor node's ``z``
+        displacement); ``rigid_body_modes`` 6 free-free, 0 clamped.
+    patches : PatchLayout
+    info : dict
+        Sizes and wall times (``n_full``, ``n_reduced``, ``n_modes``, ``mesh_s``,
+        ``reduction_s``, ...), JSON-safe.
+    full : dict or None
+        The full sparse matrices (``M``, ``K0``, ``Kb``, ``G``, ``S``), the reduction basis
+        ``basis`` and the kept full coordinates ``free`` when built with ``keep_full=True``
+        (for checking the reduction), else ``None``.
+    """
+
+    system: object
+    patches: PatchLayout
+    info: dict = field(default_factory=dict)
+    full: dict | None = field(default=None, repr=False)
+
+
+@dataclass(frozen=True)
+class SolidSpecimen:
+    """A specimen whose two halves are solid finite-element bodies (module docstring).
+
+    Parameters
+    ----------
+    specimen : Specimen
+        Everything but the bodies' geometry: bolts, preload, friction, interface law, sensor
+        position, boundary, damping floor, amplitude range, effects. Its fields are read
+        through the SolidSpecimen (``solid.friction``, ``solid.interface``, ...).
+    model : SolidModel
+        The reduced bodies and patches, built for this specimen's geometry, boundary and
+        normal stiffness (:func:`~iwan_element.models.solid_build.solid_specimen`).
+    """
+
+    specimen: Specimen
+    model: SolidModel
+
+    def __post_init__(self):
+        if not isinstance(self.specimen, Specimen):
+            raise TypeError(f"specimen must be a Specimen, got {type(self.specimen).__name__}")
+        if not isinstance(self.model, SolidModel):
+            raise TypeError(f"model must be a SolidModel, got {type(self.model).__name__}")
+
+    def __getattr__(self, name):
+        if name in ("specimen", "model") or name.startswith("__"):
+            raise AttributeError(name)
+        return getattr(self.specimen, name)
+
+    def replace(self, **changes) -> "SolidSpecimen":
+        """A copy with interface or test fields changed (``friction``, ``preload``,
+        ``stiffness_per_area``, ``chi``, ``beta``, ``damping_floor``, ``modal_damping``,
+        ``amplitude_range``, ``calibrated_range``, ``effects``, ...). Fields that change the
+        bodies, the patches' normal springs or the sensor need a new build (ValueError)."""
+        inames = {f.name for f in fields(InterfaceModel)}
+        fixed = set(changes) - _FREE_FIELDS - _FREE_INTERFACE - {"interface"}
+        if "interface" in changes:
+            old, new = self.specimen.interface, changes["interface"]
+            fixed |= {n for n in inames - _FREE_INTERFACE if getattr(old, n) != getattr(new, n)}
+        if fixed:
+            raise ValueError(f"{sorted(fixed)} change the solid bodies or their patches; build a "
+                             "new solid (models.solid_preset / solid_build.solid_specimen) "
+                             f"instead; a SolidSpecimen may change {sorted(_FREE_FIELDS | _FREE_INTERFACE)}")
+        return SolidSpecimen(self.specimen.replace(**changes), self.model)
+
+    def with_effects(self, effects: dict, *, mode: int = 1, calibrated_range=None):
+        """:meth:`Specimen.with_effects` on the solid (the bodies unchanged)."""
+        return SolidSpecimen(self.specimen.with_effects(effects, mode=mode,
+                                                        calibrated_range=calibrated_range),
+                             self.model)
+
+    def linear_system(self):
+        """The reduced :class:`~iwan_element.models.assembly.LinearSystem`."""
+        return self.model.system
+
+    def contact_points(self) -> ContactPoints:
+        """The patches' Iwan elements (two per patch, module docstring)."""
+        return solid_contact_points(self.specimen, self.model.patches)
+
+
+def solid_contact_points(specimen: Specimen, patches: PatchLayout) -> ContactPoints:
+    """Iwan elements of the patches for a specimen's interface law: per patch an ``x`` and a
+    ``y`` element (module docstring); the normal forces scale with ``specimen.preload``."""
+    N = patches.normal_force * (specimen.preload / patches.preload)
+    two = np.repeat
+    return points_from_forces(specimen, two(patches.x, 2), two(N, 2), two(patches.area, 2))

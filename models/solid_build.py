@@ -1,0 +1,278 @@
+"""Build a :class:`~iwan_element.models.solid.SolidSpecimen`: patches, assembly, reduction.
+
+1. **Patches.** The lap (``x`` in ``[lap_start, beam_length]``, the full width) is cut into a
+   grid of cells of about ``patch_size``; the bolts' cone pressure of the 1-D model
+   (:func:`~iwan_element.models.interface.pressure_field`: same cone radius, shape and
+   preload) is integrated over each cell, and cells without pressure are dropped. The lap
+   plane is a contact only inside the cones: the rest of the lap is free, as in the 1-D model.
+2. **Patch points.** Each body's displacement at a patch is the area average of its contact
+   face over the cell (the face's triangles assigned to the cell holding their centroid,
+   each node weighted by a third of its triangles' area: an RBE3-like average, not a rigid
+   patch). The rows of ``G`` are body B's average minus body A's, in ``x`` and ``y``
+   (tangential slips); the normal rows (``z``) carry a spring ``k_n A`` per patch in ``K0``.
+3. **Reduction.** The assembled bodies with the patches stuck (``K_ref = K0 + G^T diag(KT) G``
+   at the specimen's stiffness per area) are reduced by a Ritz basis: the rigid-body modes,
+   the lowest ``n_modes`` elastic modes of ``K_ref``, and one static attachment shape
+   ``(K_ref + c M)^-1 G^T`` per tangential slip (``c = (2 pi 1 Hz)^2``, the mass shift that
+   makes the free-free ``K_ref`` invertible; the loads ``G^T`` are self-equilibrated). The
+   basis is made mass-orthonormal and diagonalises ``K_ref``. Why: the kept modes of the
+   stuck structure are exact (Ritz vectors that are eigenvectors), and the attachment shapes
+   carry the static flexibility under the interface forces (the static response of QSMA
+   to any interface force lies in the basis up to the mass shift); unlike a Craig-Bampton
+   reduction with rigid (RBE2) patches, nothing stiffens the lap. Cost: one sparse
+   factorisation of the full system; the reduced size is ``6 + n_modes + 2 n_patches``.
+"""
+from __future__ import annotations
+
+import logging
+import math
+import time
+
+import numpy as np
+import scipy.linalg as sla
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from .assembly import LinearSystem
+from .interface import pressure_field
+from .solid import PatchLayout, SolidModel, SolidSpecimen, solid_contact_points
+from .solid_mesh import SolidPart, lap_beam_parts
+from .specimens import Specimen, preset
+
+__all__ = ["patch_layout", "solid_specimen", "solid_preset"]
+
+log = logging.getLogger(__name__)
+
+_SHIFT = (2 * math.pi * 1.0) ** 2       # mass shift of the factorised K_ref [1/s^2]
+
+
+def patch_layout(specimen: Specimen, *, patch_size: float) -> PatchLayout:
+    """The contact patches of a specimen's lap: grid cells of about ``patch_size`` [m] with
+    the cone pressure's force and contact area (module docstring, step 1)."""
+    s = specimen
+    _check_build(s, patch_size, 1)
+    nx = max(1, int(round(s.overlap / patch_size)))
+    ny = max(1, int(round(s.width / patch_size)))
+    k = 24                                  # pressure samples per cell and direction
+    xg, yg, p = pressure_field(s, nx=nx * k, ny=ny * k)
+    dA = (s.overlap / xg.size) * (s.width / yg.size)
+    N = p.reshape(nx, k, ny, k).sum(axis=(1, 3)) * dA
+    A = (p > 0).reshape(nx, k, ny, k).sum(axis=(1, 3)) * dA
+    xc = s.lap_start + (np.arange(nx) + 0.5) * s.overlap / nx
+    yc = (np.arange(ny) + 0.5) * s.width / ny - 0.5 * s.width
+    X, Y = np.meshgrid(xc, yc, indexing="ij")
+    keep = (N > 1e-9 * s.preload) & (A > 0)
+    return PatchLayout(x=X[keep], y=Y[keep], normal_force=N[keep], area=A[keep],
+                       preload=s.preload, size=(s.overlap / nx, s.width / ny))
+
+
+def _patch_average(part: SolidPart, patches: PatchLayout) -> sp.csr_matrix:
+    """(n_patches, n_nodes) area-average weights of the part's contact face per patch."""
+    c, area = part.face_areas()
+    hx, hy = patches.size
+    # the patch of each triangle: the cell holding its centroid
+    inside = (np.abs(c[:, None, 0] - patches.x[None, :]) <= 0.5 * hx * (1 + 1e-9)) & \
+        (np.abs(c[:, None, 1] - patches.y[None, :]) <= 0.5 * hy * (1 + 1e-9))
+    tri, pat = np.nonzero(inside)
+    tri, first = np.unique(tri, return_index=True)      # a centroid on a cell edge: one cell
+    pat = pat[first]
+    rows = np.repeat(pat, 3)
+    cols = part.face_triangles[tri].ravel()
+    vals = np.repeat(area[tri] / 3.0, 3)
+    W = sp.csr_matrix((vals, (rows, cols)), shape=(len(patches), len(part.positions)))
+    W.sum_duplicates()
+    tot = np.asarray(W.sum(axis=1)).ravel()
+    if np.any(tot <= 0):
+        raise ValueError(f"{int(np.sum(tot <= 0))} contact patches hold no triangle of part "
+                         f"{part.name}'s contact face: mesh the face finer than the patch size "
+                         f"{patches.size} m (lap_mesh_size) or enlarge patch_size")
+    W = (sp.diags(1.0 / tot) @ W).tocsr()
+    # least-norm correction of each patch's weights so that its point (the weighted node
+    # position in the lap plane) is the cell centre on both faces: a rigid-body motion then
+    # makes no slip (G R = 0), which two independent meshes' raw averages miss by microns
+    for i in range(len(patches)):
+        lo, hi = W.indptr[i], W.indptr[i + 1]
+        P = part.positions[W.indices[lo:hi], :2].T
+        C = np.vstack([np.ones(hi - lo), P - [[patches.x[i]], [patches.y[i]]]])
+        w = W.data[lo:hi]
+        W.data[lo:hi] = w - C.T @ np.linalg.lstsq(C @ C.T, C @ w - [1.0, 0.0, 0.0], rcond=None)[0]
+    return W
+
+
+def _slip_operator(a: SolidPart, b: SolidPart, patches: PatchLayout):
+    """(G_t, G_n): tangential slips (x, y per patch, interleaved) and normal gaps (z) of B's
+    patch average minus A's, on the coordinates [A's, B's] (x, y, z per node)."""
+    Wa, Wb = _patch_average(a, patches), _patch_average(b, patches)
+    def rows(d):
+        ea = sp.kron(Wa, sp.csr_matrix(np.eye(3)[d]))
+        eb = sp.kron(Wb, sp.csr_matrix(np.eye(3)[d]))
+        return sp.hstack([-ea, eb]).tocsr()
+    gx, gy, gz = rows(0), rows(1), rows(2)
+    n = len(patches)
+    order = np.arange(2 * n).reshape(2, n).T.ravel()       # x0, y0, x1, y1, ...
+    return sp.vstack([gx, gy]).tocsr()[order], gz
+
+
+def _fixed_coordinates(specimen: Specimen, a: SolidPart) -> np.ndarray:
+    """Beam A's end face x = 0 (clamped-free); none free-free (checked by _check_build)."""
+    if specimen.boundary == "free-free":
+        return np.zeros(0, int)
+    nodes = np.nonzero(a.positions[:, 0] < 1e-9 * specimen.beam_length)[0]
+    return (3 * nodes[:, None] + np.arange(3)).ravel()
+
+
+def _sensor_row(specimen: Specimen, a: SolidPart, b: SolidPart) -> np.ndarray:
+    """Unit row on the z coordinate of the node nearest the section centre at the sensor."""
+    s = specimen
+    xs = s.sensor_position
+    on_b = xs > s.beam_length
+    part, off = (b, 3 * len(a.positions)) if on_b else (a, 0)
+    zc = np.mean(part.positions[np.abs(part.positions[:, 0] - xs)
+                                <= np.ptp(part.positions[:, 0]) * 0.02][:, 2])
+    j = int(np.argmin(np.linalg.norm(part.positions - [xs, 0.0, zc], axis=1)))
+    S = np.zeros(3 * (len(a.positions) + len(b.positions)))
+    S[off + 3 * j + 2] = 1.0
+    return S
+
+
+def _factor(A):
+    """Solver of the sparse symmetric positive definite ``A``: NGsolve's sparse Cholesky
+    (nested dissection; 2 s for 55k coordinates here) when NGsolve is installed, else
+    SuperLU (about 10 x slower on 3-D meshes)."""
+    try:
+        from ngsolve.la import SparseMatrixd
+    except ImportError:
+        lu = spla.splu(A.tocsc(), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+                       options={"SymmetricMode": True})
+        return lu.solve
+    C = A.tocoo()
+    mat = SparseMatrixd.CreateFromCOO(C.row, C.col, C.data, A.shape[0], A.shape[1])
+    inv = mat.Inverse(inverse="sparsecholesky")
+    r, v = mat.CreateColVector(), mat.CreateColVector()
+
+    def solve(b):
+        b = np.asarray(b, float)
+        cols = b.reshape(b.shape[0], -1)
+        out = np.empty_like(cols)
+        for k in range(cols.shape[1]):
+            r.FV().NumPy()[:] = cols[:, k]
+            v.data = inv * r
+            out[:, k] = v.FV().NumPy()
+        return out.reshape(b.shape)
+    return solve
+
+
+def _ritz_basis(K_ref, M, Gt, n_keep):
+    """Mass-orthonormal basis [modes, attachment shapes] diagonalising K_ref (step 3)."""
+    solve = _factor((K_ref + _SHIFT * M).tocsr())
+    op = spla.LinearOperator(K_ref.shape, matvec=solve, dtype=float)
+    w2, Phi = spla.eigsh(K_ref, k=n_keep, M=M, sigma=-_SHIFT, OPinv=op, which="LM")
+    Psi = solve(np.asarray(Gt.T.todense()))
+    Psi /= np.sqrt(np.einsum("ij,ij->j", Psi, M @ Psi))
+    T = np.hstack([Phi, Psi])
+    lam, V = sla.eigh(T.T @ (M @ T))
+    ok = lam > 1e-10 * lam.max()
+    T = T @ (V[:, ok] / np.sqrt(lam[ok]))
+    mu, Q = sla.eigh(T.T @ (K_ref @ T))
+    return T @ Q, np.sort(w2)
+
+
+def _check_build(specimen, patch_size, n_modes):
+    """Refuse bad build options before any meshing."""
+    if not isinstance(specimen, Specimen):
+        raise TypeError(f"specimen must be a Specimen, got {type(specimen).__name__}")
+    if specimen.boundary not in ("free-free", "clamped-free"):
+        raise ValueError(f"specimen.boundary must be 'free-free' or 'clamped-free' for a solid "
+                         f"specimen, got {specimen.boundary!r}")
+    if isinstance(patch_size, bool) or not isinstance(patch_size, (int, float)) or \
+            not 0 < patch_size <= specimen.overlap:
+        raise ValueError(f"patch_size must be a length in (0, overlap={specimen.overlap}] m, "
+                         f"got {patch_size!r}")
+    if isinstance(n_modes, bool) or not isinstance(n_modes, int) or n_modes < 1:
+        raise ValueError(f"n_modes must be an integer >= 1, got {n_modes!r}")
+
+
+def solid_specimen(specimen: Specimen, parts: tuple, *, patch_size: float = 0.005,
+                   n_modes: int = 20, keep_full: bool = False) -> SolidSpecimen:
+    """A :class:`SolidSpecimen` from a specimen and its two meshed halves.
+
+    Parameters
+    ----------
+    specimen : Specimen
+        Bolts, preload, interface law, sensor, boundary (``"free-free"`` or
+        ``"clamped-free"``: beam A's end face ``x = 0`` clamped).
+    parts : (SolidPart, SolidPart)
+        Beam A and beam B in the assembly frame (:mod:`~iwan_element.models.solid_mesh`),
+        each with its lap face as contact face.
+    patch_size : float, keyword-only
+        Contact patch size [m] (finer than the lap mesh: each patch must hold triangles of
+        both faces).
+    n_modes : int, keyword-only
+        Elastic modes of the stuck structure kept in the reduction (``>= 1``).
+    keep_full : bool, keyword-only
+        Keep the full sparse matrices, the basis ``T`` (full free coordinates = ``T q``)
+        and the free coordinates' indices on ``model.full`` (to check the reduction).
+    """
+    _check_build(specimen, patch_size, n_modes)
+    if len(parts) != 2 or not all(isinstance(p, SolidPart) for p in parts):
+        raise TypeError("parts must be two SolidPart (beam A, beam B)")
+    t0 = time.perf_counter()
+    a, b = parts
+    patches = patch_layout(specimen, patch_size=patch_size)
+    Gt, Gn = _slip_operator(a, b, patches)
+    kn = specimen.interface.normal_stiffness_per_area * patches.area
+    M = sp.block_diag([a.M, b.M], format="csr")
+    Kb = sp.block_diag([a.K, b.K], format="csr")
+    K0 = (Kb + Gn.T @ sp.diags(kn) @ Gn).tocsr()
+    S = _sensor_row(specimen, a, b)
+    fixed = _fixed_coordinates(specimen, a)
+    free = np.setdiff1d(np.arange(M.shape[0]), fixed)
+    M, K0, Kb, Gt, S = M[free][:, free], K0[free][:, free], Kb[free][:, free], Gt[:, free], S[free]
+    KT = solid_contact_points(specimen, patches).KT
+    K_ref = (K0 + Gt.T @ sp.diags(KT) @ Gt).tocsr()
+    n_rigid = 6 if specimen.boundary == "free-free" else 0
+    T, w2 = _ritz_basis(K_ref, M, Gt, n_rigid + n_modes)
+    red = LinearSystem(M=T.T @ (M @ T), K0=T.T @ (K0 @ T), Kb=T.T @ (Kb @ T), G=Gt @ T,
+                       S=S @ T, free=np.arange(T.shape[1]), n_coordinates=T.shape[1],
+                       rigid_body_modes=n_rigid)
+    info = {"n_full": int(M.shape[0]), "n_reduced": int(T.shape[1]), "n_modes": n_modes,
+            "n_patches": len(patches), "patch_size": [float(v) for v in patches.size],
+            "reduction_s": time.perf_counter() - t0,
+            "stuck_frequencies_hz": (np.sqrt(np.abs(w2[n_rigid:])) / (2 * math.pi)).tolist()}
+    full = {"M": M, "K0": K0, "Kb": Kb, "G": Gt, "S": S, "basis": T,
+            "free": free} if keep_full else None
+    log.info("solid %s: %d -> %d coordinates, %d patches, %.2f s", specimen.name, M.shape[0],
+             T.shape[1], len(patches), info["reduction_s"])
+    return SolidSpecimen(specimen, SolidModel(system=red, patches=patches, info=info, full=full))
+
+
+def solid_preset(name: str, *, mesh_size: float = 0.008, lap_mesh_size: float | None = None,
+                 patch_size: float = 0.005, n_modes: int = 20,
+                 poissons_ratio: float = 0.3) -> SolidSpecimen:
+    """A preset (:func:`~iwan_element.models.specimens.preset`) as a solid specimen: its two
+    halves meshed from its dimensions (:func:`~iwan_element.models.solid_mesh.lap_beam_parts`),
+    patched and reduced (:func:`solid_specimen`). Needs the extra ``iwan-element[fem]``.
+
+    Parameters
+    ----------
+    name : str
+        A preset with boundary ``"free-free"`` or ``"clamped-free"``.
+    mesh_size : float, keyword-only
+        Largest element size [m].
+    lap_mesh_size : float, optional, keyword-only
+        Element size on the lap faces [m]; default ``min(mesh_size, patch_size / 2)``.
+    patch_size, n_modes : keyword-only
+        As :func:`solid_specimen`.
+    poissons_ratio : float, keyword-only
+    """
+    s = preset(name)
+    _check_build(s, patch_size, n_modes)
+    lms = min(mesh_size, 0.5 * patch_size) if lap_mesh_size is None else lap_mesh_size
+    t0 = time.perf_counter()
+    parts = lap_beam_parts(s, mesh_size=mesh_size, lap_mesh_size=lms,
+                           poissons_ratio=poissons_ratio)
+    t_mesh = time.perf_counter() - t0
+    solid = solid_specimen(s, parts, patch_size=patch_size, n_modes=n_modes)
+    solid.model.info.update(mesh_s=t_mesh, mesh_size=mesh_size, lap_mesh_size=lms,
+                            poissons_ratio=poissons_ratio)
+    return solid
