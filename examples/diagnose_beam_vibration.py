@@ -7,7 +7,7 @@ example specimen with a loosened bolt (3 kN instead of 30 kN, so the joint's amp
 visible), released at several amplitudes, with an effect the plain specimen lacks, hidden
 from the workflow:
 
-* ``viscous``: a damping floor (material damping, as stiffness-proportional beam damping;
+* ``viscous``: a damping floor (material damping, as the modal damping matrix of the floor;
   1e-5 of critical in the first mode), which shows at low amplitude where the joint's
   hysteresis fades;
 * ``pinning``: a pinning stiffness on the first mode (the bolt shank bearing on the hole

@@ -9,7 +9,15 @@
   :func:`~iwan_element.models.qsma.linear_modes`, :func:`natural_frequencies` (with the joint
   stuck or without it);
 * :mod:`~iwan_element.models.transient` - the transient route (:func:`ringdown`, one release
-  level per call; frequency and damping by :func:`iwan_element.amplitude_curve`);
+  level per call, one mode or several at once through the same interface; frequency and
+  damping by :func:`iwan_element.amplitude_curve`; result in
+  :mod:`~iwan_element.models.ringdown_result`);
+* :mod:`~iwan_element.models.impact` - a hammer impact (:class:`Impact`, a half-sine force
+  pulse) that :func:`ringdown` takes instead of a release;
+* :mod:`~iwan_element.models.coupling` - each mode's damping with and without the other
+  modes ringing through the same interface (:func:`mode_coupling`);
+* :mod:`~iwan_element.models.damping` - the linear damping floor, one ratio per mode, as the
+  stuck system's modal damping matrix (the ring-down's and the stepped sine's);
 * :mod:`~iwan_element.models.machine` - the joint's quasi-static test in a machine grip
   (:func:`quasi_static_test`);
 * :mod:`~iwan_element.models.forced` - stepped-sine forced response at several force levels
@@ -27,7 +35,9 @@
 from importlib import resources
 from pathlib import Path
 
+from .coupling import ModeCouplingResult, mode_coupling
 from .forced import ForcedResponseResult, forced_response
+from .impact import Impact
 from .machine import QuasiStaticResult, quasi_static_test
 from .qsma import modal_amplitude_curve, natural_frequencies
 from .transient import RingdownResult, ringdown
@@ -36,9 +46,9 @@ from .solid_build import solid_preset
 from .specimens import Excitation, InterfaceModel, Specimen, preset
 
 __all__ = ["example_test_path", "preset", "modal_amplitude_curve", "natural_frequencies",
-           "ringdown", "quasi_static_test", "forced_response", "Specimen", "InterfaceModel",
-           "Excitation", "RingdownResult", "QuasiStaticResult", "ForcedResponseResult",
-           "solid_preset", "SolidSpecimen"]
+           "ringdown", "Impact", "mode_coupling", "quasi_static_test", "forced_response",
+           "Specimen", "InterfaceModel", "Excitation", "RingdownResult", "ModeCouplingResult",
+           "QuasiStaticResult", "ForcedResponseResult", "solid_preset", "SolidSpecimen"]
 
 
 def example_test_path() -> Path:

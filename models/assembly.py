@@ -25,7 +25,6 @@ elements instead (one Python connector per point; the reference route).
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 from functools import lru_cache
 
@@ -42,7 +41,8 @@ from .interface import ContactPoints, contact_points
 from .solid import SolidSpecimen
 from .specimens import Specimen
 
-__all__ = ["SpecimenModel", "build_specimen_model", "LinearSystem", "linear_system"]
+__all__ = ["SpecimenModel", "build_specimen_model", "LinearSystem", "linear_system",
+           "axis_rows"]
 
 _OVT = exu.OutputVariableType
 
@@ -62,7 +62,6 @@ class SpecimenModel:
     interface: object
     sensor_marker: int
     fixed_coordinates: list
-    beam_damping: float = 0.0
     extra: dict = field(default_factory=dict)
 
     def beam_energy(self) -> tuple[float, float]:
@@ -120,7 +119,7 @@ def _mesh(specimen: Specimen):
     return (a_edges, a_h), (b_edges, b_h)
 
 
-def _beam(mbs, s: Specimen, x0, y0, edges, heights, beta):
+def _beam(mbs, s: Specimen, x0, y0, edges, heights):
     nodes = [mbs.AddNode(NodePoint2DSlope1(referenceCoordinates=[x0 + e, y0, 1.0, 0.0]))
              for e in edges]
     elems = []
@@ -129,7 +128,7 @@ def _beam(mbs, s: Specimen, x0, y0, edges, heights, beta):
         EA = s.youngs_modulus * s.width * h
         elems.append(mbs.AddObject(ObjectANCFCable2D(
             massPerLength=s.density * s.width * h, bendingStiffness=EI, axialStiffness=EA,
-            bendingDamping=beta * EI, axialDamping=beta * EA, length=float(edges[i + 1] - edges[i]),
+            length=float(edges[i + 1] - edges[i]),
             nodeNumbers=[nodes[i], nodes[i + 1]])))
     return nodes, elems
 
@@ -150,9 +149,9 @@ def _marker_at(mbs, elems, edges, x0, x, y_local):
                                             localPosition=[x - x0 - edges[i], y_local, 0.0]))
 
 
-def build_specimen_model(specimen: Specimen, *, tangential: str = "iwan",
-                         beam_damping: float = 0.0, post_step=None,
-                         joint_elements: bool = False, drive=None) -> SpecimenModel:
+def build_specimen_model(specimen: Specimen, *, tangential: str = "iwan", post_step=None,
+                         joint_elements: bool = False, drive=None,
+                         depth: int = 8) -> SpecimenModel:
     """Build and assemble the Exudyn system of a specimen.
 
     Parameters
@@ -160,9 +159,6 @@ def build_specimen_model(specimen: Specimen, *, tangential: str = "iwan",
     specimen : Specimen
     tangential : {"iwan", "linear", "none"}, keyword-only
         Tangential law of the contact points (module docstring).
-    beam_damping : float, keyword-only
-        Stiffness-proportional damping of the beams [s] (Cable2D bending and axial damping
-        ``beam_damping * EI``, ``beam_damping * EA``), ``>= 0``.
     post_step : callable, optional, keyword-only
         ``post_step(mbs, t) -> bool``, installed before the interface (which chains it).
     joint_elements : bool, keyword-only
@@ -172,13 +168,14 @@ def build_specimen_model(specimen: Specimen, *, tangential: str = "iwan",
         ``drive(t) -> u`` [m], the axial displacement of beam B's end in the machine grip
         (``boundary="clamped-driven"`` only; default: held at zero). The grip's axial
         constraint is ``model.extra["grip"]`` (its force is the machine force).
+    depth : int, keyword-only
+        Reversal points each contact point's compiled law holds (``add_iwan_interface``;
+        default 8): several modes slipping the lap at once nest more loops.
     """
     if not isinstance(specimen, Specimen):
         raise ValueError(f"specimen must be a Specimen, got {type(specimen).__name__}")
     if tangential not in ("iwan", "linear", "none"):
         raise ValueError(f"tangential must be 'iwan', 'linear' or 'none', got {tangential!r}")
-    if not (math.isfinite(beam_damping) and beam_damping >= 0):
-        raise ValueError(f"beam_damping must be >= 0 [s], got {beam_damping!r}")
     if drive is not None and (specimen.boundary != "clamped-driven" or not callable(drive)):
         raise ValueError("drive must be a callable u(t) [m], given with boundary='clamped-driven'")
     s = specimen
@@ -187,8 +184,8 @@ def build_specimen_model(specimen: Specimen, *, tangential: str = "iwan",
     mbs = SC.AddSystem()
     (ae, ah), (be, bh) = _mesh(s)
     tl = s.lap_thickness
-    na, ea = _beam(mbs, s, 0.0, 0.0, ae, ah, beam_damping)
-    nb, eb = _beam(mbs, s, s.lap_start, tl, be, bh, beam_damping)
+    na, ea = _beam(mbs, s, 0.0, 0.0, ae, ah)
+    nb, eb = _beam(mbs, s, s.lap_start, tl, be, bh)
     ground = mbs.AddNode(NodePointGround(referenceCoordinates=[0, 0, 0]))
     mg = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=ground, coordinate=0))
     fixed_nodes = []
@@ -225,7 +222,8 @@ def build_specimen_model(specimen: Specimen, *, tangential: str = "iwan",
     if tangential == "iwan":
         joints = [IwanJoint(p) for p in pts.params] if joint_elements else list(pts.params)
         normal = [[0.0, float(kn), 0.0] for kn in pts.normal_stiffness] if merged else None
-        iface = add_iwan_interface(mbs, pairs, joints, axis=[1.0, 0.0, 0.0], stiffness=normal)
+        iface = add_iwan_interface(mbs, pairs, joints, axis=[1.0, 0.0, 0.0], stiffness=normal,
+                                   depth=depth)
     sm = _axis_marker(mbs, s, ea + eb, s.sensor_position)
     mbs.AddObject(ObjectGround())
     mbs.Assemble()
@@ -235,8 +233,7 @@ def build_specimen_model(specimen: Specimen, *, tangential: str = "iwan",
         fixed += [i0 + c for c in coords]
     model = SpecimenModel(specimen=s, SC=SC, mbs=mbs, points=pts, elements=ea + eb,
                           nodes=na + nb, marker_pairs=pairs, springs=springs, interface=iface,
-                          sensor_marker=sm, fixed_coordinates=fixed,
-                          beam_damping=beam_damping, extra=extra)
+                          sensor_marker=sm, fixed_coordinates=fixed, extra=extra)
     model.extra["sensor_y0"] = float(mbs.GetMarkerOutput(sm, _OVT.Position,
                                                          configuration=exu.ConfigurationType.Reference)[1])
     return model
@@ -248,8 +245,8 @@ class LinearSystem:
 
     ``K0`` holds the beams and the normal contact springs but no tangential interface
     stiffness; ``G`` maps coordinates to the tangential slips of the contact points and ``S``
-    to the sensor's transverse displacement; ``Kb`` is the beams' part of ``K0`` (for the
-    stiffness-proportional damping floor). ``free`` are the Exudyn ODE2 indices kept.
+    to the sensor's transverse displacement; ``Kb`` is the beams' part of ``K0`` (without the
+    contact springs). ``free`` are the Exudyn ODE2 indices kept.
     ``rigid_body_modes``: how many zero-frequency modes ``(K0 + G^T diag(KT) G, M)`` has (3
     for a free-free planar specimen, 6 for a free-free solid, 0 when clamped).
     """
@@ -295,32 +292,64 @@ def _linear_system(key: Specimen) -> LinearSystem:
     n = M.shape[0]
     # slips and sensor by central differences of the marker positions (linearisation)
     pos = mbs.GetMarkerOutput
-    cur = exu.ConfigurationType.Current
-    q0 = np.zeros(n)
-    eps = 1e-8
-    G = np.zeros((len(model.marker_pairs), n))
-    Gn = np.zeros_like(G)
-    S = np.zeros(n)
 
     def read():
         a = np.array([pos(m, _OVT.Position)[:2] for m, _ in model.marker_pairs])
         b = np.array([pos(m, _OVT.Position)[:2] for _, m in model.marker_pairs])
-        return b - a, pos(model.sensor_marker, _OVT.Position)[1]
+        return np.concatenate([(b - a).T.ravel(), [pos(model.sensor_marker, _OVT.Position)[1]]])
 
-    for k in range(n):
-        out = []
-        for sgn in (1.0, -1.0):
-            q = q0.copy()
-            q[k] = sgn * eps
-            mbs.systemData.SetODE2Coordinates(q, configuration=cur)
-            out.append(read())
-        d = (out[0][0] - out[1][0]) / (2 * eps)
-        G[:, k], Gn[:, k] = d[:, 0], d[:, 1]
-        S[k] = (out[0][1] - out[1][1]) / (2 * eps)
-    mbs.systemData.SetODE2Coordinates(q0, configuration=cur)
+    D = _coordinate_jacobian(mbs, read, n)
+    n_p = len(model.marker_pairs)
+    G, Gn, S = D[:n_p], D[n_p:2 * n_p], D[2 * n_p]
     K = 0.5 * (K + K.T)
     Kb = K - Gn.T @ (model.points.normal_stiffness[:, None] * Gn)
     free = np.setdiff1d(np.arange(n), model.fixed_coordinates)
     ix = np.ix_(free, free)
     return LinearSystem(M=M[ix], K0=K[ix], Kb=Kb[ix], G=G[:, free], S=S[free], free=free,
-                        n_coordinates=n, rigid_body_modes=3 if key.boundary == "free-free" else 0)
+                        n_coordinates=n,
+                        rigid_body_modes=3 if key.boundary == "free-free" else 0)
+
+
+def _coordinate_jacobian(mbs, read, n: int, eps: float = 1e-8) -> np.ndarray:
+    """``d read / d q`` at ``q = 0`` by central differences over the ``n`` ODE2 coordinates
+    (``read() -> 1-D array``; exact for the Cable2D positions, which are linear in the
+    coordinates); the coordinates are left at zero."""
+    cur = exu.ConfigurationType.Current
+    out = []
+    for k in range(n):
+        pm = []
+        for sgn in (1.0, -1.0):
+            q = np.zeros(n)
+            q[k] = sgn * eps
+            mbs.systemData.SetODE2Coordinates(q, configuration=cur)
+            pm.append(np.asarray(read(), float))
+        out.append((pm[0] - pm[1]) / (2 * eps))
+    mbs.systemData.SetODE2Coordinates(np.zeros(n), configuration=cur)
+    return np.array(out).T
+
+
+def axis_rows(specimen: Specimen, positions) -> np.ndarray:
+    """Rows mapping the free coordinates to the transverse displacement [m] of the beams'
+    axis at ``positions`` [m] along the assembly (the axis of ``sensor_position``; beam A up
+    to its length, beam B beyond): shape ``(len(positions), n_free)``."""
+    x = np.atleast_1d(np.asarray(positions, float))
+    if x.ndim != 1 or x.size == 0 or not np.all(np.isfinite(x)) or np.any(x < 0) \
+            or np.any(x > specimen.total_length):
+        raise ValueError(f"positions must be a non-empty sequence in [0, "
+                         f"{specimen.total_length:.6g}] m, got {positions!r}")
+    return _axis_rows(_structure_key(specimen), tuple(float(v) for v in x))
+
+
+@lru_cache(maxsize=16)
+def _axis_rows(key: Specimen, positions: tuple) -> np.ndarray:
+    model = build_specimen_model(key, tangential="none")
+    markers = [model.axis_marker(x) for x in positions]
+    mbs = model.mbs
+    mbs.Assemble()
+    pos = mbs.GetMarkerOutput
+    n = mbs.systemData.GetODE2Coordinates().size
+    D = _coordinate_jacobian(mbs, lambda: [pos(m, _OVT.Position)[1] for m in markers], n)
+    free = np.setdiff1d(np.arange(n), model.fixed_coordinates)
+    D = D[:, free]
+    D.setflags(write=False)
+    return D

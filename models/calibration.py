@@ -7,7 +7,10 @@
   the specimen's sensor point). Nonlinear least squares (``scipy.optimize.least_squares`` through
   :func:`iwan_element.fitting.minimize`,
   log-parameters, bounded), residuals ``(f/f_meas - 1)/f_tol`` and ``(zeta/zeta_meas - 1)/z_tol``;
-  standard errors from the Jacobian at the optimum.
+  standard errors from the Jacobian at the optimum. The joint's parameters come from the
+  calibration ``mode`` only; the other modes' measured curves (``floors``) set only their
+  own linear floors, each from its lowest-amplitude points (:func:`modal_floor`): the
+  floor is linear damping, not the joint.
 * From a joint or modal Iwan fit: :func:`interface_from_joint` maps a lumped joint
   (``Fs, KT, chi, beta``, e.g. from ``fit_loops`` of a lap-shear test) onto the distributed
   interface: ``mu = Fs / sum(preloads)`` (in a shear test every point slips at
@@ -38,8 +41,8 @@ from .interface import contact_points
 from .qsma import linear_modes, modal_amplitude_curve
 from .specimens import Specimen
 
-__all__ = ["measured_amplitude_curve", "CalibrationResult", "calibrate", "interface_from_joint",
-           "interface_from_modal_iwan"]
+__all__ = ["measured_amplitude_curve", "CalibrationResult", "calibrate", "modal_floor",
+           "interface_from_joint", "interface_from_modal_iwan"]
 
 _FIT = ("stiffness_per_area", "friction", "chi", "damping_floor", "beta")
 _BOUNDS = {"stiffness_per_area": (1e9, 1e15), "friction": (1e-3, 3.0), "chi": (-0.95, 0.0),
@@ -124,13 +127,75 @@ class CalibrationResult(ResultShape):
         return arts
 
 
-def _with(specimen: Specimen, names, values) -> Specimen:
-    return specimen.replace(**{n: float(v) for n, v in zip(names, values)})
+def _with(specimen: Specimen, names, values, mode: int = 1) -> Specimen:
+    """``specimen`` with the named parameters set; ``damping_floor`` is the calibration
+    mode's floor, so it also sets that mode's entry of ``modal_damping`` when there is one."""
+    ch = {n: float(v) for n, v in zip(names, values)}
+    md = list(specimen.modal_damping)
+    if "damping_floor" in ch and mode <= len(md):
+        md[mode - 1] = ch["damping_floor"]
+        ch["modal_damping"] = tuple(md)
+    return specimen.replace(**ch)
+
+
+def modal_floor(specimen: Specimen, measured: AmplitudeCurve, *, mode: int,
+                decades: float = 1.0) -> tuple[float, float, list]:
+    """A mode's linear damping floor from its own lowest-amplitude points.
+
+    The points of ``measured`` (amplitude at ``specimen.sensor_position``) within
+    ``decades`` of its lowest amplitude, each with the joint's share at its amplitude
+    removed (QSMA of ``specimen``'s interface on ``mode`` with no floor), averaged with
+    weights ``1 / damping_ratio_std**2`` (equal weights when the curve has no spread).
+
+    Parameters
+    ----------
+    specimen : Specimen
+        The interface (calibrated on another mode) whose joint share is removed.
+    measured : AmplitudeCurve
+        The mode's measured curve.
+    mode : int, keyword-only
+        Elastic mode number of ``measured`` (1: lowest).
+    decades : float, keyword-only
+        Amplitude span of the points used [decades], in (0, 3].
+
+    Returns
+    -------
+    (floor, stderr, warnings) : (float, float, list of str)
+        Floor [-] and its standard error [-] (the weighted scatter of the points, at least
+        the weights' own error); warnings when fewer than 3 points are used or the joint's
+        share there exceeds 10 % of the measured damping (the floor then leans on the joint
+        model).
+    """
+    if not isinstance(measured, AmplitudeCurve) or len(measured) == 0:
+        raise ValueError("measured must be a non-empty AmplitudeCurve")
+    if not (isinstance(decades, (int, float)) and 0 < decades <= 3):
+        raise ValueError(f"decades must be in (0, 3], got {decades!r}")
+    X = measured.amplitude
+    m = X <= X.min() * 10.0 ** decades * (1 + 1e-12)
+    bare = specimen.replace(damping_floor=0.0, modal_damping=(), calibrated_range=None,
+                            effects=())
+    joint = modal_amplitude_curve(bare, mode=mode, amplitude=X[m]).damping_ratio
+    z = measured.damping_ratio[m] - joint
+    sd = measured.damping_ratio_std[m] if measured.damping_ratio_std is not None else None
+    ok = sd is not None and np.all(np.isfinite(sd)) and np.all(sd > 0)
+    w = 1.0 / sd ** 2 if ok else np.ones(z.size)
+    floor = float(np.sum(w * z) / np.sum(w))
+    scatter = math.sqrt(float(np.sum(w * (z - floor) ** 2) / np.sum(w)) / max(z.size - 1, 1))
+    se = max(scatter, math.sqrt(1.0 / float(np.sum(w)))) if ok else scatter
+    warns = []
+    if z.size < 3:
+        warns.append(f"mode {mode}'s floor rests on {z.size} point(s) (fewer than 3)")
+    share = float(np.max(joint / measured.damping_ratio[m]))
+    if share > 0.1:
+        warns.append(f"the joint's share of mode {mode}'s damping at its lowest measured "
+                     f"amplitudes is up to {100 * share:.0f} %: its floor leans on the joint model")
+    return floor, se, warns
 
 
 def calibrate(specimen: Specimen, measured: AmplitudeCurve, *, fit=("stiffness_per_area",
               "friction", "chi", "damping_floor"), mode: int = 1, f_tol: float = 2e-4,
-              z_tol: float = 0.05, progress: bool = False) -> CalibrationResult:
+              z_tol: float = 0.05, floors: dict | None = None,
+              progress: bool = False) -> CalibrationResult:
     """Fit interface parameters so the QSMA curve matches a measured amplitude curve.
 
     Parameters
@@ -143,12 +208,25 @@ def calibrate(specimen: Specimen, measured: AmplitudeCurve, *, fit=("stiffness_p
     fit : sequence of str, keyword-only
         Parameters to fit, from ``stiffness_per_area``, ``friction``, ``chi``,
         ``damping_floor``, ``beta``.
+    mode : int, keyword-only
+        The calibration mode of ``measured`` (1: lowest); the joint comes from it alone.
     f_tol, z_tol : float, keyword-only
         Residual scales of the relative frequency and damping errors.
+    floors : dict, optional, keyword-only
+        ``{mode: AmplitudeCurve}``: other modes' measured curves (amplitudes at the same
+        sensor), each setting only that mode's linear floor from its lowest-amplitude points
+        (:func:`modal_floor`, with the calibrated joint's share removed). The calibrated
+        specimen's ``modal_damping`` then lists the calibration mode's fitted floor and
+        these; its parameter table adds a row ``floor_mode_<r>`` per mode.
     progress : bool, keyword-only
         Show a tqdm bar over the QSMA evaluations (total: the fit's budget, lowered to the
         count reached at the end); needs tqdm.
     """
+    floors = {} if floors is None else dict(floors)
+    if any(isinstance(r, bool) or not isinstance(r, int) or r < 1 or r == mode for r in floors) \
+            or not all(isinstance(c, AmplitudeCurve) for c in floors.values()):
+        raise ValueError(f"floors must map modes >= 1 other than the calibration mode {mode} to "
+                         f"AmplitudeCurves, got {floors!r}")
     fit = tuple(fit)
     bad = [n for n in fit if n not in _FIT]
     if bad or not fit:
@@ -174,7 +252,7 @@ def calibrate(specimen: Specimen, measured: AmplitudeCurve, *, fit=("stiffness_p
     ub = np.array([transform(n, _BOUNDS[n][1]) for n in fit])
 
     def model(x):
-        s = _with(specimen, fit, [transform(n, v, True) for n, v in zip(fit, x)])
+        s = _with(specimen, fit, [transform(n, v, True) for n, v in zip(fit, x)], mode)
         return modal_amplitude_curve(s, mode=mode, amplitude=X)
 
     def resid(x):
@@ -190,7 +268,8 @@ def calibrate(specimen: Specimen, measured: AmplitudeCurve, *, fit=("stiffness_p
     finally:
         finish(bar)
     vals = [transform(n, v, True) for n, v in zip(fit, sol.x)]
-    fitted = _with(specimen, fit, vals).replace(calibrated_range=(float(X.min()), float(X.max())))
+    fitted = _with(specimen, fit, vals, mode).replace(
+        calibrated_range=(float(X.min()), float(X.max())))
     curve = modal_amplitude_curve(fitted, mode=mode, amplitude=X)
     warns = []
     # the package's one covariance routine (docs/fitting.md): s^2 (J^T J)^-1, s^2 = SSR/dof,
@@ -215,13 +294,37 @@ def calibrate(specimen: Specimen, measured: AmplitudeCurve, *, fit=("stiffness_p
         if why and not at_bound:                    # (at a bound: said above)
             warns.append(why)
         rows.append(Parameter(n, val, float(se[k]), lo, hi, _UNITS[n], ok))
-    table = ParameterTable(rows)
+    fitted, floor_rows = _floors(fitted, mode, floors, warns)
+    table = ParameterTable(rows + floor_rows)
     return CalibrationResult(specimen=fitted, params=table, measured=measured, model=curve,
                              max_frequency_error=ferr, max_damping_error=zerr,
                              success=fit_success(bool(sol.success) and not warns,
                                                  table.identified),
                              converged=bool(sol.success),
                              warnings=tuple(warns))
+
+
+def _floors(fitted: Specimen, mode: int, floors: dict, warns: list):
+    """The calibrated specimen with each mode's floor of ``floors`` (:func:`modal_floor`)
+    and the calibration mode's own in ``modal_damping``; the table rows of those floors
+    (their warnings appended to ``warns``)."""
+    if not floors:
+        return fitted, []
+    md = [fitted.floor(r) for r in range(1, max(max(floors), mode) + 1)]
+    rows = []
+    for r, curve in sorted(floors.items()):
+        z, se, w = modal_floor(fitted, curve, mode=r)
+        warns += w
+        lo, hi = _BOUNDS["damping_floor"]
+        ok, why = verdict(f"floor_mode_{r}", z, se, at_bound=not lo <= z <= hi)
+        if why:
+            warns.append(why)
+        if not lo <= z <= hi:
+            warns.append(f"mode {r}'s floor {z:.3g} lies outside [{lo:g}, {hi:g}]: clipped")
+            z = min(max(z, lo), hi)
+        md[r - 1] = z
+        rows.append(Parameter(f"floor_mode_{r}", z, se, lo, hi, "1", ok))
+    return fitted.replace(modal_damping=tuple(md)), rows
 
 
 def interface_from_joint(specimen: Specimen, joint: IwanParameters) -> Specimen:

@@ -4,14 +4,14 @@ A transverse force ``F sin(2 pi f t)`` acts at the specimen's excitation point (
 at each frequency of the step the run continues from the state the previous frequency left
 (the force's phase kept continuous) for ``settle_cycles`` periods, and the steady amplitude
 at the sensor is half the peak-to-peak displacement over the next ``measure_cycles``. The
-beams carry the specimen's damping floor as stiffness-proportional damping (the ring-down's,
-:func:`~iwan_element.models.solver.floor_damping`); the joint damps through the contact
-points' Iwan elements. Time integration: generalized-alpha at spectral radius 0.98 (a little
+beams carry the specimen's damping floor, one ratio per mode, as the modal damping matrix
+of the stuck system (the ring-down's, :func:`~iwan_element.models.damping.floor_damping`);
+the joint damps through the contact points' Iwan elements. Time integration: generalized-alpha at spectral radius 0.98 (a little
 numerical damping of the kHz axial and contact modes the force's switch-on excites).
 
 Check (``docs/beam_tests.md``): with the contact points stuck (a friction so high that
 nothing slips) the response is the linear one, whose peak amplitude per force is
-``|S phi| |E phi| / (2 zeta w^2)`` at ``w`` for the mode's stiffness-proportional damping.
+``|S phi| |E phi| / (2 zeta w^2)`` at ``w`` for the mode's floor ``zeta``.
 """
 from __future__ import annotations
 
@@ -29,9 +29,9 @@ from iwan_element.core.validation import check_int, finite_array
 
 from .assembly import build_specimen_model, linear_system
 from .qsma import linear_modes
-from .solver import floor_damping, solver_settings
+from .damping import attach_floor_damping, floor_damping
+from .solver import roundoff_force, solver_settings
 from .specimens import Specimen
-from .transient import _roundoff_force
 
 __all__ = ["ForcedResponseResult", "forced_response"]
 
@@ -50,7 +50,8 @@ class ForcedResponseResult(ResultShape):
         Steady displacement amplitude at the sensor [m].
     specimen : Specimen
     metadata : dict
-        ``mode``, ``linear_frequency_Hz``, ``beam_damping`` [s], ``settle_cycles``,
+        ``mode``, ``linear_frequency_Hz``, ``floor`` (the mode's damping floor [-]),
+        ``settle_cycles``,
         ``measure_cycles``, ``steps_per_period``.
     warnings : tuple of str
         A peak at the first or last frequency (the resonance is not inside the sweep).
@@ -108,12 +109,15 @@ class ForcedResponseResult(ResultShape):
         return arts
 
 
-def _sweep_level(s, F0, freqs, beta, cycles, steps_per_period, bar=None) -> np.ndarray:
+def _sweep_level(s, F0, freqs, floor, cycles, steps_per_period, bar=None) -> np.ndarray:
     """Steady sensor amplitude [m] at each frequency of ``freqs`` for one force level ``F0``
     [N], each frequency continuing from the state the previous one left."""
     settle, measure = cycles
-    model = build_specimen_model(s, beam_damping=beta)
+    model = build_specimen_model(s)
     mbs = model.mbs
+    L = linear_system(s)
+    if floor.active:
+        attach_floor_damping(mbs, model.nodes, floor, L.free, L.n_coordinates)
     state = {"w": 2 * math.pi * freqs[0], "t0": 0.0, "phase": 0.0}
 
     def load(mbs_, t, load_vector):
@@ -127,7 +131,7 @@ def _sweep_level(s, F0, freqs, beta, cycles, steps_per_period, bar=None) -> np.n
     mbs.Assemble()
     sim = solver_settings(force_scale=F0)
     newton = sim.timeIntegration.newton          # not below the model's round-off
-    newton.absoluteTolerance = max(newton.absoluteTolerance, _roundoff_force(linear_system(s), s))
+    newton.absoluteTolerance = max(newton.absoluteTolerance, roundoff_force(L, s))
     sim.timeIntegration.generalizedAlpha.spectralRadius = 0.98
     ti = sim.timeIntegration
     amp = np.zeros(len(freqs))
@@ -196,17 +200,17 @@ def forced_response(specimen: Specimen, *, force_levels=(0.5, 2.0), frequencies=
     if freqs.size < 3 or not (np.all(steps > 0) or np.all(steps < 0)):
         raise ValueError("frequencies must be at least 3 values stepped up or down (strictly "
                          f"monotonic) [Hz], got {frequencies!r}")
-    beta = floor_damping(specimen, mode=mode)
+    floor = floor_damping(specimen)
     bar = progress_bar(progress, total=levels.size * freqs.size, desc="forced_response",
                        unit="point")
     try:
-        amp = np.array([_sweep_level(specimen, float(F0), freqs, beta, cycles, spp, bar)
+        amp = np.array([_sweep_level(specimen, float(F0), freqs, floor, cycles, spp, bar)
                         for F0 in levels])
     finally:
         finish(bar)
     out = ForcedResponseResult(
         force_levels=levels, frequencies=freqs, amplitude=amp, specimen=specimen,
-        metadata={"mode": mode, "linear_frequency_Hz": f_lin, "beam_damping": beta,
+        metadata={"mode": mode, "linear_frequency_Hz": f_lin, "floor": specimen.floor(mode),
                   "settle_cycles": cycles[0], "measure_cycles": cycles[1],
                   "steps_per_period": spp})
     if not out.success:

@@ -237,16 +237,25 @@ def _forced():
                                   settle_cycles=5, measure_cycles=2, steps_per_period=16)
 
 
+@functools.lru_cache(maxsize=1)
+def _coupling():
+    from iwan_element import models
+    s = models.preset("two-bolt-aluminium").replace(n_points=8)
+    return models.mode_coupling(s, amplitude={1: 1e-4, 2: 2e-5}, duration=0.75,
+                                steps_per_period=32)
+
+
 #: Results of the beam model (``iwan_element.models``), with the same shape.
 MODEL_RESULTS = {"CalibrationResult": _calibration, "RingdownResult": _ringdown,
-                 "QuasiStaticResult": _quasi_static, "ForcedResponseResult": _forced}
+                 "QuasiStaticResult": _quasi_static, "ForcedResponseResult": _forced,
+                 "ModeCouplingResult": _coupling}
 
 
 def test_every_model_result_class_is_covered():
     """Every result class the beam model's public functions return is in MODEL_RESULTS."""
     from iwan_element import models
-    from iwan_element.models import calibration, forced, machine, transient
-    public = {n for mod in (models, calibration, transient, machine, forced)
+    from iwan_element.models import calibration, coupling, forced, machine, transient
+    public = {n for mod in (models, calibration, transient, machine, forced, coupling)
               for n in getattr(mod, "__all__", ())
               if n.endswith("Result") and inspect.isclass(getattr(mod, n))}
     assert public == set(MODEL_RESULTS)

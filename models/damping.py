@@ -1,0 +1,133 @@
+"""The specimen's linear damping floor, one ratio per mode, as a modal damping matrix.
+
+Real structures damp each mode by its own linear amount (material, boundaries, air), which
+``Specimen.modal_damping`` / :meth:`~iwan_element.models.specimens.Specimen.floor` carry.
+The transient routes (the ring-down, the stepped sine) build it into the beams as the modal
+damping matrix of the stuck-interface system on the free coordinates,
+
+    C = M Phi diag(2 zeta_r w_r) Phi^T M,
+
+over every mode ``(w_r, phi_r)`` of ``(K0 + G^T diag(KT) G, M)`` (mass-normalised),
+``zeta_r = specimen.floor(r)`` for elastic mode ``r`` (numbered as
+:func:`~iwan_element.models.qsma.linear_modes` numbers them) and the rigid-body modes (and
+any elastic mode below 0.5 Hz, which ``linear_modes`` does not number) undamped. Then
+``phi_r^T C phi_s = 2 zeta_r w_r delta_rs``: each stuck mode decays at its own floor and the
+floor couples no modes. (The stiffness-proportional beam damping used before gave one mode
+its floor and every other mode the floor times its frequency ratio.) The matrix acts on the
+beams' nodes through an Exudyn ``ObjectGenericODE2`` (:func:`attach_floor_damping`); its
+work is booked exactly by :class:`FloorWork`.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numpy as np
+import scipy.linalg as sla
+from exudyn.itemInterface import ObjectGenericODE2
+
+from .assembly import linear_system
+from .interface import contact_points
+from .specimens import Specimen
+
+__all__ = ["FloorDamping", "floor_damping", "attach_floor_damping", "FloorWork"]
+
+
+@dataclass(frozen=True)
+class FloorDamping:
+    """The modal damping floor of a specimen on its free coordinates.
+
+    Attributes
+    ----------
+    C : ndarray, shape (n_free, n_free)
+        Damping matrix [N s/m and consistent units].
+    omega : ndarray, shape (n_free,)
+        Stuck natural frequencies [rad/s], ascending (rigid-body modes first).
+    zeta : ndarray, shape (n_free,)
+        Damping ratio given to each of them [-] (0 for the rigid-body modes).
+    n_rigid : int
+        Modes left undamped below the first elastic mode.
+    """
+
+    C: np.ndarray
+    omega: np.ndarray
+    zeta: np.ndarray
+    n_rigid: int
+
+    @property
+    def active(self) -> bool:
+        """True when some mode is damped."""
+        return bool(np.any(self.zeta > 0))
+
+
+@lru_cache(maxsize=16)
+def _stuck_modes(key: Specimen):
+    L = linear_system(key)
+    K = L.K0 + L.G.T @ (contact_points(key).KT[:, None] * L.G)
+    w2, V = sla.eigh(K, L.M)
+    w = np.sqrt(np.abs(w2))
+    n_rigid = L.rigid_body_modes
+    n_skip = max(n_rigid, int(np.sum(w < 2 * math.pi * 0.5)))
+    return w, V, n_skip
+
+
+def floor_damping(specimen: Specimen) -> FloorDamping:
+    """The modal damping matrix of ``specimen``'s floor (module docstring).
+
+    Parameters
+    ----------
+    specimen : Specimen
+        Its ``floor(r)`` gives elastic mode ``r``'s ratio.
+
+    Returns
+    -------
+    FloorDamping
+    """
+    if not isinstance(specimen, Specimen):
+        raise ValueError(f"specimen must be a Specimen, got {type(specimen).__name__}")
+    key = specimen.replace(friction=1.0, chi=0.0, beta=0.0, damping_floor=0.0, modal_damping=(),
+                           amplitude_range=(1.0, 2.0), calibrated_range=None, effects=())
+    w, V, n_skip = _stuck_modes(key)
+    zeta = np.array([0.0 if k < n_skip else specimen.floor(k - n_skip + 1)
+                     for k in range(w.size)])
+    MV = linear_system(specimen).M @ V
+    C = (MV * (2.0 * zeta * w)) @ MV.T
+    return FloorDamping(C=0.5 * (C + C.T), omega=w.copy(), zeta=zeta, n_rigid=n_skip)
+
+
+def attach_floor_damping(mbs, nodes, floor: FloorDamping, free, n_coordinates: int) -> int:
+    """Add ``floor.C`` to the system ``mbs`` as an ``ObjectGenericODE2`` on the beams'
+    ``nodes`` (4 ODE2 coordinates each, in the order of the system's coordinates; ``free``
+    the system indices of the free coordinates, out of ``n_coordinates``). The system must
+    be assembled again afterwards. Returns the object's number."""
+    idx = np.concatenate([np.arange(mbs.GetNodeODE2Index(n), mbs.GetNodeODE2Index(n) + 4)
+                          for n in nodes])
+    if not np.array_equal(np.sort(idx), np.arange(n_coordinates)):
+        raise ValueError("nodes must carry every ODE2 coordinate of the system")
+    full = np.zeros((n_coordinates, n_coordinates))
+    full[np.ix_(free, free)] = floor.C
+    D = full[np.ix_(idx, idx)]
+    n = idx.size
+    return mbs.AddObject(ObjectGenericODE2(nodeNumbers=list(nodes), massMatrix=np.zeros((n, n)),
+                                           stiffnessMatrix=np.zeros((n, n)), dampingMatrix=D))
+
+
+class FloorWork:
+    """Work done by the floor's damping matrix ``C`` (free coordinates) [J]: per step
+    ``h v_m^T C v_m`` with ``v_m`` the mean of the step's end velocities, which is the
+    damping work of the trapezoidal rule exactly (its force is ``C v_m`` over a displacement
+    ``h v_m``) and of any second-order scheme to ``O(h^2)``."""
+
+    def __init__(self, C):
+        self.C = None if C is None else np.asarray(C)
+        self.t = self.v = None
+        self.total = 0.0
+
+    def step(self, t: float, v: np.ndarray) -> float:
+        """Cumulative work up to time ``t`` [s] with the free velocities ``v`` [m/s]."""
+        if self.C is not None and self.t is not None and t > self.t:
+            vm = 0.5 * (v + self.v)
+            self.total += (t - self.t) * float(vm @ self.C @ vm)
+        self.t, self.v = t, v.copy()
+        return self.total
