@@ -22,6 +22,7 @@ import exudyn as exu
 import numpy as np
 from exudyn.itemInterface import LoadForceVector, SensorMarker
 
+from iwan_element.core.progress import finish, progress_bar, tick
 from iwan_element.core.result_shape import ResultShape, panels
 from iwan_element.core.serialize import json_safe
 from iwan_element.core.validation import check_int, finite_array
@@ -108,7 +109,7 @@ class ForcedResponseResult(ResultShape):
         return arts
 
 
-def _sweep_level(s, F0, freqs, floor, cycles, steps_per_period) -> np.ndarray:
+def _sweep_level(s, F0, freqs, floor, cycles, steps_per_period, bar=None) -> np.ndarray:
     """Steady sensor amplitude [m] at each frequency of ``freqs`` for one force level ``F0``
     [N], each frequency continuing from the state the previous one left."""
     settle, measure = cycles
@@ -147,13 +148,14 @@ def _sweep_level(s, F0, freqs, floor, cycles, steps_per_period) -> np.ndarray:
         d = mbs.GetSensorStoredData(sensor)
         keep = d[:, 0] >= t_now + settle * steps_per_period * h * (1 - 1e-12)
         amp[j] = 0.5 * np.ptp(d[keep, 2])
+        tick(bar, text=f"{F0:.3g} N, {f:.5g} Hz")
         t_now = ti.endTime
     return amp
 
 
 def forced_response(specimen: Specimen, *, force_levels=(0.5, 2.0), frequencies=None,
                     mode: int = 1, settle_cycles: int = 60, measure_cycles: int = 10,
-                    steps_per_period: int = 60) -> ForcedResponseResult:
+                    steps_per_period: int = 60, progress: bool = False) -> ForcedResponseResult:
     """Transverse force ``F sin(2 pi f t)`` at the excitation point, stepped through a
     resonance at each force level (module docstring).
 
@@ -174,6 +176,8 @@ def forced_response(specimen: Specimen, *, force_levels=(0.5, 2.0), frequencies=
         settles slowly: raise ``settle_cycles`` for a sharper peak.
     steps_per_period : int, keyword-only
         Time steps per excitation period (>= 8).
+    progress : bool, keyword-only
+        Show a tqdm bar over the (level, frequency) points with its ETA; needs tqdm.
 
     Returns
     -------
@@ -197,8 +201,13 @@ def forced_response(specimen: Specimen, *, force_levels=(0.5, 2.0), frequencies=
         raise ValueError("frequencies must be at least 3 values stepped up or down (strictly "
                          f"monotonic) [Hz], got {frequencies!r}")
     floor = floor_damping(specimen)
-    amp = np.array([_sweep_level(specimen, float(F0), freqs, floor, cycles, spp)
-                    for F0 in levels])
+    bar = progress_bar(progress, total=levels.size * freqs.size, desc="forced_response",
+                       unit="point")
+    try:
+        amp = np.array([_sweep_level(specimen, float(F0), freqs, floor, cycles, spp, bar)
+                        for F0 in levels])
+    finally:
+        finish(bar)
     out = ForcedResponseResult(
         force_levels=levels, frequencies=freqs, amplitude=amp, specimen=specimen,
         metadata={"mode": mode, "linear_frequency_Hz": f_lin, "floor": specimen.floor(mode),
