@@ -5,7 +5,7 @@ import os
 import exudyn as exu
 from exudyn.itemInterface import LoadCoordinate, Mass1D, MarkerNodeCoordinate, Node1D, NodePointGround
 
-from iwan_element import IwanJoint, IwanParameters
+from iwan_element import IwanParameters
 from iwan_element.exudyn import add_iwan_connector
 
 steps = int(os.environ.get("IWAN_QUICKSTART_STEPS", "20000"))       # h = 10 us
@@ -18,7 +18,7 @@ mMass = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=node, coordinate=0))
 mbs.AddLoad(LoadCoordinate(markerNumber=mMass,                        # 400 N at 50 Hz
                            loadUserFunction=lambda mbs, t, load: 400.0 * math.sin(2 * math.pi * 50.0 * t)))
 params = IwanParameters(Fs=1000.0, KT=1e6, chi=-0.5, beta=0.2)        # N, N/m, -, -
-joint = add_iwan_connector(mbs, [mGround, mMass], IwanJoint(params))
+joint = add_iwan_connector(mbs, [mGround, mMass], params)
 mbs.Assemble()
 sim = exu.SimulationSettings()
 sim.timeIntegration.numberOfSteps, sim.timeIntegration.endTime = steps, steps * 1e-5

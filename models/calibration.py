@@ -32,6 +32,7 @@ import numpy as np
 from scipy import optimize
 
 from iwan_element import AmplitudeCurve, IwanParameters, amplitude_curve
+from iwan_element.core.progress import finish, progress_bar, tick
 from iwan_element.core.result_shape import ResultShape, panels
 from iwan_element.fitting import (Parameter, ParameterTable, covariance, fit_success,
                                   minimize, verdict)
@@ -193,7 +194,8 @@ def modal_floor(specimen: Specimen, measured: AmplitudeCurve, *, mode: int,
 
 def calibrate(specimen: Specimen, measured: AmplitudeCurve, *, fit=("stiffness_per_area",
               "friction", "chi", "damping_floor"), mode: int = 1, f_tol: float = 2e-4,
-              z_tol: float = 0.05, floors: dict | None = None) -> CalibrationResult:
+              z_tol: float = 0.05, floors: dict | None = None,
+              progress: bool = False) -> CalibrationResult:
     """Fit interface parameters so the QSMA curve matches a measured amplitude curve.
 
     Parameters
@@ -216,6 +218,9 @@ def calibrate(specimen: Specimen, measured: AmplitudeCurve, *, fit=("stiffness_p
         (:func:`modal_floor`, with the calibrated joint's share removed). The calibrated
         specimen's ``modal_damping`` then lists the calibration mode's fitted floor and
         these; its parameter table adds a row ``floor_mode_<r>`` per mode.
+    progress : bool, keyword-only
+        Show a tqdm bar over the QSMA evaluations (total: the fit's budget, lowered to the
+        count reached at the end); needs tqdm.
     """
     floors = {} if floors is None else dict(floors)
     if any(isinstance(r, bool) or not isinstance(r, int) or r < 1 or r == mode for r in floors) \
@@ -251,10 +256,17 @@ def calibrate(specimen: Specimen, measured: AmplitudeCurve, *, fit=("stiffness_p
         return modal_amplitude_curve(s, mode=mode, amplitude=X)
 
     def resid(x):
+        tick(bar)
         c = model(x)
         return np.concatenate([(c.frequency / fm - 1) / f_tol, (c.damping_ratio / zm - 1) / z_tol])
 
-    sol = minimize(resid, x0, lb, ub, method="trf", max_nfev=200, x_scale=1.0, diff_step=1e-4)
+    # each iteration costs one evaluation and one per fitted parameter (its Jacobian)
+    bar = progress_bar(progress, total=200 * (len(fit) + 1), desc="calibrate", unit="QSMA")
+    try:
+        sol = minimize(resid, x0, lb, ub, method="trf", max_nfev=200, x_scale=1.0,
+                       diff_step=1e-4)
+    finally:
+        finish(bar)
     vals = [transform(n, v, True) for n, v in zip(fit, sol.x)]
     fitted = _with(specimen, fit, vals, mode).replace(
         calibrated_range=(float(X.min()), float(X.max())))

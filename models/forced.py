@@ -28,6 +28,7 @@ import exudyn as exu
 import numpy as np
 from exudyn.itemInterface import LoadForceVector, SensorMarker
 
+from iwan_element.core.progress import finish, progress_bar, tick
 from iwan_element.core.result_shape import ResultShape, panels
 from iwan_element.core.serialize import json_safe
 from iwan_element.core.validation import check_int, check_scalar, finite_array
@@ -125,7 +126,7 @@ def _lock_in(t, y, theta):
     return math.hypot(c[2], c[3]), math.atan2(c[3], c[2])
 
 
-def _sweep_level(s, F0, freqs, floor, cycles, steps_per_period, rho):
+def _sweep_level(s, F0, freqs, floor, cycles, steps_per_period, rho, bar=None):
     """Steady fundamental amplitude [m] and phase [rad] at the sensor at each frequency of
     ``freqs`` for one force level ``F0`` [N], each frequency continuing from the state the
     previous one left."""
@@ -168,14 +169,15 @@ def _sweep_level(s, F0, freqs, floor, cycles, steps_per_period, rho):
         keep = d[:, 0] >= t_now + settle * steps_per_period * h * (1 - 1e-12)
         tk = d[keep, 0]
         amp[j], phase[j] = _lock_in(tk, d[keep, 2], state["phase"] + state["w"] * (tk - t_now))
+        tick(bar, text=f"{F0:.3g} N, {f:.5g} Hz")
         t_now = ti.endTime
     return amp, phase
 
 
 def forced_response(specimen: Specimen, *, force_levels=(0.5, 2.0), frequencies=None,
                     mode: int = 1, settle_cycles: int = 60, measure_cycles: int = 10,
-                    steps_per_period: int = 60,
-                    spectral_radius: float = 0.98) -> ForcedResponseResult:
+                    steps_per_period: int = 60, spectral_radius: float = 0.98,
+                    progress: bool = False) -> ForcedResponseResult:
     """Transverse force ``F sin(2 pi f t)`` at the excitation point, stepped through a
     resonance at each force level (module docstring).
 
@@ -203,6 +205,8 @@ def forced_response(specimen: Specimen, *, force_levels=(0.5, 2.0), frequencies=
         ``(1 - rho) W h / 4``: about 2 % of the response at 2 % damping and 64 steps a
         period); 1.0 is the trapezoidal rule, with no algorithmic damping and only its
         period error, the frequency warping ``W' = (2/h) tan(W h / 2)``.
+    progress : bool, keyword-only
+        Show a tqdm bar over the (level, frequency) points with its ETA; needs tqdm.
 
     Returns
     -------
@@ -227,7 +231,13 @@ def forced_response(specimen: Specimen, *, force_levels=(0.5, 2.0), frequencies=
         raise ValueError("frequencies must be at least 3 values stepped up or down (strictly "
                          f"monotonic) [Hz], got {frequencies!r}")
     floor = floor_damping(specimen)
-    runs = [_sweep_level(specimen, float(F0), freqs, floor, cycles, spp, rho) for F0 in levels]
+    bar = progress_bar(progress, total=levels.size * freqs.size, desc="forced_response",
+                       unit="point")
+    try:
+        runs = [_sweep_level(specimen, float(F0), freqs, floor, cycles, spp, rho, bar)
+                for F0 in levels]
+    finally:
+        finish(bar)
     out = ForcedResponseResult(
         force_levels=levels, frequencies=freqs, amplitude=np.array([a for a, _ in runs]),
         phase=np.array([p for _, p in runs]), specimen=specimen,

@@ -33,6 +33,7 @@ import numpy as np
 from exudyn.itemInterface import LoadForceVector
 
 from iwan_element import backbone_work
+from iwan_element.core.progress import finish, progress_bar, tick
 from iwan_element.core.validation import check_scalar
 
 from .assembly import axis_rows, build_specimen_model
@@ -153,10 +154,13 @@ class _Recorder:
         self.model = None
         self.impact = None                 # (Impact, row of its point) when one acts
         self.work_in, self.last = 0.0, None
+        self.bar = None                    # a progress bar over the steps, if asked
 
     def __call__(self, mbs_, t):
         sd, free = mbs_.systemData, self.L.free
         self.times.append(t)
+        if self.bar is not None and len(self.times) % 50 == 0:
+            tick(self.bar, 50)
         self.coords.append(sd.GetODE2Coordinates())
         v = np.asarray(sd.GetODE2Coordinates_t())[free]
         e = self.energy
@@ -187,7 +191,7 @@ def ringdown(specimen: Specimen, *, mode: int | None = None, amplitude=None,
              impact: Impact | None = None, modes=None, sensors=None,
              duration: float | None = None, cycles: float | None = None,
              steps_per_period: int = 64, n_periods: float = 3.0, record_energy: bool = False,
-             joint_elements: bool = False) -> RingdownResult:
+             joint_elements: bool = False, progress: bool = False) -> RingdownResult:
     """Release the specimen from a static deflection in one or several modes' load shapes,
     or strike it (``impact``); let it ring down through the interface.
 
@@ -225,6 +229,8 @@ def ringdown(specimen: Specimen, *, mode: int | None = None, amplitude=None,
     joint_elements : bool, keyword-only
         Use one Python ``IwanJoint`` connector per point (reference route) instead of the
         compiled interface law.
+    progress : bool, keyword-only
+        Show a tqdm bar over the time steps with its ETA; needs tqdm.
 
     Returns
     -------
@@ -289,7 +295,12 @@ def ringdown(specimen: Specimen, *, mode: int | None = None, amplitude=None,
     sim.timeIntegration.numberOfSteps = n
     sim.timeIntegration.endTime = n * h
     t0 = time.perf_counter()
-    mbs.SolveDynamic(sim)
+    rec.bar = progress_bar(progress, total=n + 1, desc="ringdown", unit="step")
+    try:
+        mbs.SolveDynamic(sim)
+        tick(rec.bar, len(rec.times) % 50)            # the steps since the last tick
+    finally:
+        finish(rec.bar)
     wall = time.perf_counter() - t0
     quad = _joint_records(model.interface, rec.energy, e0 + rec.work_in) if record_energy \
         else None

@@ -5,6 +5,7 @@ contract of ``iwan_element.core.result_shape``; time-series functions take time 
 from __future__ import annotations
 
 import functools
+import html
 import inspect
 import json
 import warnings
@@ -146,17 +147,44 @@ def test_every_public_result_class_is_covered():
     assert public - {"IwanParameters", "UffRecord"} == set(RESULTS)
 
 
-@pytest.mark.parametrize("name", sorted(RESULTS))
-@pytest.mark.parametrize("part", ["report", "to_dict", "warnings", "success", "plot"])
-def test_result_objects_have_one_shape(name, part):
+@functools.lru_cache(maxsize=None)
+def _built(name):
+    """One result per class, built once (the parts below only read it)."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")         # identifiability warnings of the short record
-        res = RESULTS[name]()
+        return ALL_RESULTS[name]()
+
+
+@pytest.mark.parametrize("name", sorted(RESULTS))
+@pytest.mark.parametrize("part", ["report", "html", "dataframe", "to_dict", "warnings",
+                                  "success", "plot"])
+def test_result_objects_have_one_shape(name, part):
+    res = _built(name)
     if part == "report":
         assert isinstance(res.report(), str) and res.report().strip()
-        assert res._repr_html_().startswith("<pre>")
+    elif part == "html":                        # real tables, the verdict on top
+        page = res._repr_html_()
+        assert "<pre>" not in page and page.count("<table>") == len(res._tables()) >= 1
+        assert page.index(html.escape(res.verdict())) < page.index("<table>")
+        if res.warnings:
+            assert page.count("<li>") >= len(res.warnings)
+    elif part == "dataframe":                   # every table reaches pandas as it stands
+        pd = pytest.importorskip("pandas")
+        for title, cols, rows in res._tables():
+            frame = pd.DataFrame([list(r) for r in rows], columns=list(cols))
+            assert frame.shape == (len(rows), len(cols)) and all(len(r) == len(cols)
+                                                                  for r in rows)
+            assert res.to_dataframe(title).equals(frame)
+        assert isinstance(res.to_dataframe(), pd.DataFrame)
+        with pytest.raises(ValueError, match="table must be one of"):
+            res.to_dataframe("no such table")
     elif part == "to_dict":
-        json.dumps(res.to_dict(), allow_nan=False)
+        d = res.to_dict()
+        json.dumps(d, allow_nan=False)
+        if hasattr(res, "params"):              # one layout: the ParameterTable's
+            assert [p["name"] for p in d["params"]["parameters"]] == list(res.params.names)
+        for pair in d.get("offsets", {}).values():
+            assert set(pair) == {"value", "stderr"}
     elif part == "warnings":
         assert isinstance(res.warnings, tuple)
     elif part == "success":
@@ -248,11 +276,28 @@ def _loo():
 METHOD_RESULTS = {"CampaignPrediction": _prediction, "LeaveOneOut": _loo}
 
 
-@pytest.mark.parametrize("name", sorted({**MODEL_RESULTS, **METHOD_RESULTS}))
-@pytest.mark.parametrize("part", ["report", "to_dict", "warnings", "success", "plot"])
-def test_other_result_objects_have_the_same_shape(name, part, monkeypatch):
+def _energy_balance():
+    from _connector_models import Chain, settings
+    from iwan_element.exudyn import record_energy
+    chain = Chain([1.0], v0=[0.5])
+    chain.spring(-1, 0, 1e5)
+    conn = chain.joint(-1, 0, P)
+    rec = record_energy(chain.mbs, conn)
+    chain.solve(settings(2e-5, 200))
+    return rec.balance()
+
+
+#: Results of the Exudyn adapter (``iwan_element.exudyn``), with the same shape.
+EXUDYN_RESULTS = {"EnergyBalance": _energy_balance}
+
+ALL_RESULTS = {**RESULTS, **MODEL_RESULTS, **METHOD_RESULTS, **EXUDYN_RESULTS}
+
+
+@pytest.mark.parametrize("name", sorted({**MODEL_RESULTS, **METHOD_RESULTS, **EXUDYN_RESULTS}))
+@pytest.mark.parametrize("part", ["report", "html", "dataframe", "to_dict", "warnings",
+                                  "success", "plot"])
+def test_other_result_objects_have_the_same_shape(name, part):
     """The beam model's results and the results of public methods, by the same test."""
-    monkeypatch.setitem(RESULTS, name, {**MODEL_RESULTS, **METHOD_RESULTS}[name])
     test_result_objects_have_one_shape(name, part)
 
 
@@ -266,3 +311,24 @@ def test_report_tables_align_their_titles_with_their_columns():
     assert lines[0] == "  record        band [N]  ratio"
     assert lines[1] == "  a                 1235   0.50"
     assert lines[2].split() == ["bb", "1e-07", "12.35"]
+
+
+def test_every_exudyn_result_class_is_covered():
+    """Every result class of the Exudyn adapter's public names is in EXUDYN_RESULTS."""
+    from iwan_element import exudyn as ex
+    from iwan_element.core.result_shape import ResultShape
+    public = {n for n in ex.__all__ if inspect.isclass(getattr(ex, n))
+              and issubclass(getattr(ex, n), ResultShape)}
+    assert public == set(EXUDYN_RESULTS)
+
+
+def test_test_data_reaches_notebooks_and_pandas():
+    """The record load_test returns: an HTML table of its cycles, a JSON-safe dict and a
+    data frame in SI units, one row per cycle."""
+    pd = pytest.importorskip("pandas")
+    d = _record()
+    frame = d.to_dataframe()
+    assert isinstance(frame, pd.DataFrame) and len(frame) == len(d.cycles)
+    assert frame["u0 [m]"].tolist() == [c.u0 for c in d.cycles]
+    json.dumps(d.to_dict(), allow_nan=False)
+    assert d._repr_html_().count("<tr>") == len(d.cycles) + 1

@@ -104,8 +104,9 @@ def test_cli_diagnoses_several_records_with_one_table_and_json(tmp_path, capsys)
     assert main(["diagnose", *paths, "--units", "mm,kN", "--plot", str(tmp_path / "x.png")]) == 1
 
 
-def test_progress_bar_when_asked(capsys):
+def test_progress_bar_when_asked(capsys, monkeypatch):
     pytest.importorskip("tqdm")
+    monkeypatch.delenv("CI", raising=False)      # bars are silent under CI
     t, u, F = _clean(5)
     quiet = diagnose(t, u, F)
     assert capsys.readouterr().err == ""

@@ -114,7 +114,7 @@ def _max_rel(a, b):
 def test_matches_independent_newmark_integration(make, solver):
     conn, chain, t, x, v = _forced_one_mass(make(), h=5e-5, n=2000, solver=solver)
     assert np.max(np.abs(x)) > 1.5 * P.phi_max                  # the run reaches macroslip
-    assert np.allclose(conn.time, t, rtol=0, atol=1e-12)
+    assert np.allclose(conn.time_history, t, rtol=0, atol=1e-12)
     assert _max_rel(conn.slip_history, x) < 1e-8
     assert abs(chain.velocity(0) - v[-1]) / np.max(np.abs(v)) < 1e-8
 
@@ -210,8 +210,8 @@ def test_history_holds_accepted_states_for_every_solver(solver, kw, end_of_step_
     assert np.array_equal(u, np.array(accepted))           # committed exactly at accepted states
     assert np.max(np.abs(u)) > P.phi_max and len(_reversal_indices(u)) >= 8
     assert np.max(np.abs(IwanJoint(P).force_history(u) - conn.force_history)) / P.Fs < 1e-12
-    assert conn.time[0] == 0.0 and conn.time[-1] == pytest.approx(0.04, rel=1e-9)
-    assert np.all(np.diff(conn.time) > 0)
+    assert conn.time_history[0] == 0.0 and conn.time_history[-1] == pytest.approx(0.04, rel=1e-9)
+    assert np.all(np.diff(conn.time_history) > 0)
 
 
 class _RateRecorder:
@@ -290,7 +290,7 @@ def test_two_connectors_with_different_parameters_and_user_functions():
     def user_post_step(mbs, t):
         calls["post"] += 1
         for c in conns:                          # the connectors have committed already
-            assert c.time[-1] == t
+            assert c.time_history[-1] == t
         return True
 
     chain.mbs.SetPreStepUserFunction(user_pre_step)

@@ -111,7 +111,7 @@ def test_rotating_axis_slip_is_the_projection_on_the_current_axis():
     mbs.SetPostStepUserFunction(user_post_step)              # set after: chained automatically
     mbs.Assemble()
     mbs.SolveDynamic(settings(5e-5, 400))
-    t = conn.time
+    t = conn.time_history
     p = np.array(positions)
     axes = np.stack([np.cos(angle0 + spin * t), np.sin(angle0 + spin * t)], axis=1)
     projected = np.sum(p[:, :2] * axes, axis=1)
@@ -255,7 +255,7 @@ def test_post_step_function_set_after_the_connectors_is_chained_and_can_stop_the
     seen = []
 
     def user_post_step(mbs, t):
-        seen.append((t, conn.time[-1]))
+        seen.append((t, conn.time_history[-1]))
         return t < 0.01 - 1e-12                                 # stop after t = 0.01
 
     chain.mbs.SetPostStepUserFunction(user_post_step)
@@ -279,7 +279,7 @@ def test_user_function_that_calls_the_previous_one_by_hand_does_not_commit_twice
     chain.mbs.SetPostStepUserFunction(user_post_step)
     chain.solve(settings(1e-4, 200))
     assert calls[0] == 201
-    assert conn.n_records == 201 and np.all(np.diff(conn.time) > 0)
+    assert conn.n_records == 201 and np.all(np.diff(conn.time_history) > 0)
 
 
 def test_reset_gives_an_identical_second_run_and_a_forgotten_reset_is_reported(caplog):
@@ -396,7 +396,7 @@ def test_continued_run_after_reassemble_reads_the_moved_coordinates():
     u = conn.slip_history
     k = conn.n_records - n_before       # n steps, plus the initial state if the start time
     assert k in (n, n + 1)              # differs in the last bit from the last accepted time
-    assert np.array_equal(conn.time[n_before:], accepted[-k:, 0])
+    assert np.array_equal(conn.time_history[n_before:], accepted[-k:, 0])
     assert np.array_equal(u[n_before:], accepted[-k:, 1])
     assert np.max(np.abs(IwanJoint(P).force_history(u) - conn.force_history)) / P.Fs < 1e-12
 
@@ -410,7 +410,7 @@ def test_post_step_function_set_between_runs_of_a_continued_simulation_is_chaine
     conn = chain.joint(-1, 0, IwanJoint(P), law="python")
     sim = settings(1e-4, 200)
     chain.solve(sim, solver)
-    n1, t1 = conn.n_records, conn.time[-1]
+    n1, t1 = conn.n_records, conn.time_history[-1]
     seen = []
     chain.mbs.SetPostStepUserFunction(lambda mbs, t: seen.append(t) or True)
     ti = sim.timeIntegration
@@ -418,7 +418,7 @@ def test_post_step_function_set_between_runs_of_a_continued_simulation_is_chaine
     chain.mbs.SolveDynamic(sim, solverType=solver, updateInitialValues=True)
     assert len(seen) >= 200
     assert conn.n_records >= n1 + 200
-    assert conn.time[-1] == pytest.approx(t1 + 0.02, rel=1e-9)
+    assert conn.time_history[-1] == pytest.approx(t1 + 0.02, rel=1e-9)
     # the joint followed the motion: its committed slip is the final coordinate
     x_end = float(np.atleast_1d(chain.mbs.GetNodeOutput(chain.nodes[0], exu.OutputVariableType.Coordinates))[0])
     assert conn.joint.displacement == pytest.approx(x_end, rel=1e-12, abs=1e-15)

@@ -52,7 +52,7 @@ def test_interface_equals_one_python_law_connector_per_point():
     assert np.max(np.abs(iface.force_history - F_ref)) <= 1e-9 * max(p.Fs for p in PARAMS)
     np.testing.assert_allclose(iface.dissipated_energy_history,
                                sum(c.dissipated_energy_history for c in conns), rtol=1e-9)
-    np.testing.assert_array_equal(iface.time, conns[0].time)
+    np.testing.assert_array_equal(iface.time_history, conns[0].time_history)
     assert len(iface.overflow_times) == 0
     assert np.max(np.abs(iface.slip_history)) > min(p.phi_max for p in PARAMS)   # macroslip
 

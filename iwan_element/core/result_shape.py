@@ -13,19 +13,81 @@ Every fit, curve, diagnosis, ensemble and uncertainty result offers (the contrac
   ``plot_panels`` Axes (:func:`panels`);
 * ``verdict() -> str``: the report's first line, ``success`` in a tester's words: "usable"
   or "NOT usable: <reasons>" (:meth:`ResultShape.failure_reasons`);
-* ``_repr_html_()``: the report in a notebook.
+* ``_repr_html_()``: the result in a notebook as HTML tables: the verdict on top, then
+  the tables of :meth:`ResultShape._tables` (parameters, goodness of fit, data), then the
+  warnings;
+* ``to_dataframe(table=None)``: one of those tables as a ``pandas.DataFrame`` (pandas is
+  imported only then: ``pip install "iwan-element[pandas]"``).
 
-:class:`ResultShape` supplies the notebook representation and the panel count; each class
-supplies the rest.
+:class:`ResultShape` supplies the notebook representation, the data frames and the panel
+count from one hook, :meth:`ResultShape._tables` (titled rows built from what the class
+exposes); each class supplies the rest.
 """
 from __future__ import annotations
 
 import html
 import itertools
+import math
+import numbers
+import textwrap
 from dataclasses import dataclass
 from typing import ClassVar
 
-__all__ = ["ResultShape", "panels", "table_lines"]
+import numpy as np
+
+__all__ = ["ResultShape", "panels", "table_lines", "unit_label", "format_value",
+           "value_stderr", "parameter_rows", "html_table", "wrap", "PARAMETER_COLUMNS"]
+
+#: Rows an HTML table shows before it shows only its ends.
+HTML_ROWS = 40
+
+#: Column titles of a parameter table (:func:`parameter_rows`).
+PARAMETER_COLUMNS = ("parameter", "value", "std. error", "unit", "status")
+
+
+def unit_label(unit) -> str:
+    """A unit as reports print it: ``"-"`` for dimensionless (``""``, ``"1"``, ``"-"``)."""
+    unit = "" if unit is None else str(unit).strip("[] ")
+    return "-" if unit in ("", "1", "-") else unit
+
+
+def format_value(x, digits: int = 6) -> str:
+    """A number for a table: ``digits`` significant digits, exponent notation outside
+    1e-3 .. 1e5 (no ``33366692.9``), ``nan`` and ``inf`` spelled; other values as ``str``."""
+    if isinstance(x, (bool, np.bool_)) or not isinstance(x, numbers.Real):
+        return str(x)
+    x = float(x)
+    if not math.isfinite(x):
+        return str(x)
+    if x != 0.0 and not 1e-3 <= abs(x) < 1e5:
+        return f"{x:.{max(digits - 2, 1)}e}"
+    return f"{x:.{digits}g}"
+
+
+def wrap(text: str, *, width: int = 92, indent: str = "  ") -> list[str]:
+    """A long report line wrapped to ``width`` columns, continuation lines indented."""
+    return textwrap.wrap(text, width=width, subsequent_indent=indent,
+                         break_on_hyphens=False) or [text]
+
+
+def value_stderr(pairs) -> dict:
+    """``{name: {"value": v, "stderr": se}}`` from ``{name: (v, se)}`` or ``{name: v}``
+    (stderr ``None`` when not given or not finite): the one layout of offsets and other
+    estimated quantities in every ``to_dict``."""
+    def num(x):
+        return float(x) if x is not None and math.isfinite(float(x)) else None
+    out = {}
+    for k, v in pairs.items():
+        v, se = (v if isinstance(v, (tuple, list)) else (v, None))
+        out[str(k)] = {"value": num(v), "stderr": num(se)}
+    return out
+
+
+def parameter_rows(params) -> list:
+    """Rows of :data:`PARAMETER_COLUMNS` for a ``ParameterTable`` (anything with
+    ``parameters`` holding ``name, value, stderr, unit, status``)."""
+    return [(p.name, float(p.value), float(p.stderr), unit_label(p.unit), p.status)
+            for p in params.parameters]
 
 
 @dataclass(frozen=True, eq=False, kw_only=True)
@@ -52,8 +114,104 @@ class ResultShape:
         reasons = self.failure_reasons()
         return "usable" if not reasons else "NOT usable: " + "; ".join(reasons)
 
+    def _tables(self) -> list:
+        """The result's tables, ``[(title, column titles, rows), ...]``: what the notebook
+        shows and :meth:`to_dataframe` returns. The default reads what the class exposes:
+        its ``params`` (a ``ParameterTable``) as "parameters", the ``rows`` of its
+        ``to_dict()`` (one dict per row) as "rows", its flat numeric lists of one length as
+        "data" (one column each), and its scalar ``to_dict()`` entries as "goodness of fit
+        and run" (quantity, value). Classes with data of their own (curves, bands) put
+        those first."""
+        out = []
+        params = getattr(self, "params", None)
+        if hasattr(params, "parameters") and len(params.parameters):
+            out.append(("parameters", PARAMETER_COLUMNS, parameter_rows(params)))
+        d = self.to_dict()
+        rows = d.get("rows")
+        if isinstance(rows, list) and rows and all(isinstance(r, dict) for r in rows):
+            cols = tuple(dict.fromkeys(k for r in rows for k, v in r.items()
+                                       if not isinstance(v, (dict, list))))
+            out.append(("rows", cols, [tuple(r.get(c) for c in cols) for r in rows]))
+        columns = {}
+        for k, v in d.items():
+            if k != "rows" and isinstance(v, list) and v and all(
+                    v_ is None or (isinstance(v_, numbers.Real) and not isinstance(v_, bool))
+                    for v_ in v):
+                columns.setdefault(len(v), []).append(k)
+        for n, keys in sorted(columns.items()):
+            title = "data" if len(columns) == 1 else f"data ({n} rows)"
+            out.append((title, tuple(keys), list(zip(*(d[k] for k in keys)))))
+        stats = [(k, v) for k, v in d.items() if k not in ("warnings", "success")
+                 and (isinstance(v, (numbers.Real, bool)) or v is None
+                      or (isinstance(v, str) and len(v) <= 200))]
+        if stats:
+            out.append(("goodness of fit and run", ("quantity", "value"), stats))
+        return out
+
+    def to_dataframe(self, table: str | None = None):
+        """One of the result's tables (:meth:`_tables`) as a ``pandas.DataFrame``.
+
+        Parameters
+        ----------
+        table : str, optional
+            Its title; default the first (the parameters, or the data of a curve).
+
+        Raises
+        ------
+        ValueError
+            No table of that title (the message lists them).
+        ImportError
+            pandas is not installed (``pip install "iwan-element[pandas]"``).
+        """
+        tables = self._tables()
+        titles = [t for t, _, _ in tables]
+        if table is None and tables:
+            table = titles[0]
+        if table not in titles:
+            raise ValueError(f"table must be one of {titles}, got {table!r}")
+        try:
+            import pandas as pd
+        except ImportError:
+            raise ImportError("to_dataframe needs pandas: "
+                              "pip install 'iwan-element[pandas]'") from None
+        _, cols, rows = tables[titles.index(table)]
+        return pd.DataFrame([list(r) for r in rows], columns=list(cols))
+
     def _repr_html_(self) -> str:
-        return f"<pre>{html.escape(self.report())}</pre>"
+        """The verdict, the tables and the warnings as HTML (a notebook's display)."""
+        ok = "usable" if self.success else "NOT usable"
+        color = "#1a7f37" if self.success else "#b42318"
+        parts = [f'<div class="iwan-result"><p><b>{html.escape(type(self).__name__)}</b>: '
+                 f'<span style="color:{color}">{html.escape(self.verdict() or ok)}</span></p>']
+        for title, cols, rows in self._tables():
+            parts.append(html_table(title, cols, rows))
+        if self.warnings:
+            parts.append("<p><b>warnings</b></p><ul>" + "".join(
+                f"<li>{html.escape(str(w))}</li>" for w in self.warnings) + "</ul>")
+        return "".join(parts) + "</div>"
+
+
+def html_table(title: str, columns, rows) -> str:
+    """One titled HTML table; numbers right-aligned and formatted (:func:`format_value`)."""
+    head = "".join(f"<th>{html.escape(str(c))}</th>" for c in columns)
+    body = []
+    rows = list(rows)
+    cut = len(rows) > HTML_ROWS
+    if cut:           # a long table shows its ends (to_dataframe has every row)
+        n = len(rows)
+        rows = rows[:HTML_ROWS - 5] + [("...",) * len(columns)] + rows[-5:]
+    for r in rows:
+        cells = []
+        for v in r:
+            num = isinstance(v, numbers.Real) and not isinstance(v, (bool, np.bool_))
+            text = "" if v is None else format_value(v) if num else str(v)
+            align = ' style="text-align:right"' if num else ""
+            cells.append(f"<td{align}>{html.escape(text)}</td>")
+        body.append("<tr>" + "".join(cells) + "</tr>")
+    if cut:
+        title = f"{title} ({n} rows; to_dataframe() has them all)"
+    return (f"<table><caption>{html.escape(title)}</caption><thead><tr>{head}</tr></thead>"
+            f"<tbody>{''.join(body)}</tbody></table>")
 
 
 def table_lines(columns, rows, *, indent: int = 2) -> list[str]:

@@ -9,7 +9,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..core.result_shape import ResultShape, table_lines
+from ..core.result_shape import ResultShape, table_lines, unit_label
 from ..core.serialize import json_safe
 from ..fitting import Parameter, ParameterTable, covariance, verdict
 from ..identify.noise import integrated_time
@@ -417,7 +417,7 @@ class CampaignFit(ResultShape):
             parts = [f"{c:.5g} +- {self.stderr[q][k]:.2g}"
                      + (f" ({self.stderr_scatter[q][k]:.2g})" if self.stderr_scatter else "")
                      + ("" if k == "1" else f" x {k}") for k, c in terms.items()]
-            lines.append(f"    {q} [{self.units[q]}] = " + " + ".join(parts))
+            lines.append(f"    {q} [{unit_label(self.units[q])}] = " + " + ".join(parts))
         if self.scatter:
             lines.append("  record-to-record scatter about the laws (standard deviation): "
                          + ", ".join(f"{q} {v:.3g}" for q, v in self.scatter.items()))

@@ -47,7 +47,7 @@ from ..core.validation import check_int
 from ..effects import EFFECTS
 from ..effects.evaluate import order_stack, stack_ok
 from ..ensemble import run_ensemble
-from ..ensemble.runner import progress_bar
+from ..core.progress import finish, progress_bar
 from . import _campaign_model as CM
 from ._campaign_result import CampaignFit
 from .batch import _check_options, _check_records
@@ -327,7 +327,7 @@ def fit_campaign(records, conditions, *, effects=None, laws=None, names=None, di
         t_fit = time.perf_counter() - t1
     finally:
         if bar is not None:
-            bar.close()
+            finish(bar)
     t2 = time.perf_counter()
     free = record_values(model, res.x, preps) if scatter else None
     times = {"diagnoses": t_diag, "joint_fit": t_fit, "scatter": time.perf_counter() - t2}

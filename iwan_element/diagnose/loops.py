@@ -41,7 +41,7 @@ from ..core.threads import one_blas_thread
 from ..core.validation import check_int, check_scalar
 from ..effects import EFFECTS
 from ..effects.evaluate import order_stack, stack_ok
-from ..ensemble.runner import progress_bar
+from ..core.progress import finish, progress_bar, set_total, tick
 from ._locate import _check_candidates
 from ._noise import NoiseLevel, noise_level, pure_noise
 from .fit import StackFitter, final_fits, fit_base, record_force, z_start
@@ -167,7 +167,7 @@ def diagnose(t, u, F, *, candidates=None, max_effects: int = 3, noise: float | N
             rec = prepare_record(tt, uu, FF, n, lp, max_samples)
             fitter = StackFitter(rec)
             base = fit_base(fitter, rec, seed=seed)
-            _tick(bar, "Iwan")
+            tick(bar, text="Iwan")
             nl = noise_level(rec, rec.F_raw - record_force(base, rec.uj, rec.v)[0], noise)
             shape_b, _ = base["model"].decode(base["z"])
             fitter.scales["D_ref"] = dissipation_scale(rec.ev, shape_b)
@@ -178,13 +178,7 @@ def diagnose(t, u, F, *, candidates=None, max_effects: int = 3, noise: float | N
             return assemble(rec, sel, fits, opts, t_start)
     finally:
         if bar is not None:
-            bar.close()
-
-
-def _tick(bar, text):
-    if bar is not None:
-        bar.set_postfix_str(text)
-        bar.update(1)
+            finish(bar)
 
 
 def select(fitter: StackFitter, base: dict, rec: PreparedRecord, nl: NoiseLevel, cand, opts,
@@ -196,6 +190,7 @@ def select(fitter: StackFitter, base: dict, rec: PreparedRecord, nl: NoiseLevel,
     why = untestable(rec, cand)
     testable = tuple(c for c in cand if c not in why)
     cycles = record_cycles(rec)
+    set_total(bar, 1 + len(testable) * (opts["max_effects"] + 1))    # base, rounds, pairs
     for k in range(3):
         fitter.s2 = nl.sigma ** 2
         base["chi2"] = base["ssr"] / fitter.s2
@@ -225,11 +220,8 @@ def _run_rule(fitter, base, rec, testable, nl, opts, bar) -> SelectionResult:
         names = order_stack(cur["names"] + (name,))
         k = max(len(s.fit_starts) for s in EFFECTS[name].specs)
         starts = [z_start(names, cur["names"], cur["state"]["z"], j) for j in range(k)]
-        if bar is not None:
-            bar.set_postfix_str(" + ".join(names))
         row = fitter.run(names, starts, scan=name)
-        if bar is not None:
-            bar.update(1)
+        tick(bar, text=" + ".join(names))
         q = len(EFFECTS[name].specs)
         ssr = row["chi2"] * fitter.s2
         return {"names": names, "chi2": row["chi2"], "q": q, "state": row,

@@ -10,7 +10,7 @@ import numpy as np
 from ..core.serialize import json_safe
 from ..effects import EFFECTS
 from ..fitting import Parameter, ParameterTable, verdict
-from ..core.result_shape import ResultShape, panels
+from ..core.result_shape import ResultShape, panels, unit_label, value_stderr, wrap
 from ._augment import augmented
 
 __all__ = ["Diagnosis", "VibrationDiagnosis"]
@@ -18,7 +18,7 @@ __all__ = ["Diagnosis", "VibrationDiagnosis"]
 
 def _unit(name: str, key: str, modal: bool = False) -> str:
     specs = EFFECTS[name].modal_specs if modal else EFFECTS[name].specs
-    return next((s.unit for s in specs if s.name == key), "")
+    return "[" + unit_label(next((s.unit for s in specs if s.name == key), "")) + "]"
 
 
 
@@ -27,8 +27,16 @@ def _verdict_lines(word: str, result) -> list:
     lines = [f"  {word} before {100 * result.error_before:.3g} % -> after "
              f"{100 * result.error_after:.3g} % (noise {100 * result.noise_level:.3g} %)"]
     if result.warnings:
-        lines += ["  warnings:"] + [f"  - {w}" for w in result.warnings]
+        lines.append("  warnings:")
+        for w in result.warnings:
+            lines += wrap(f"  - {w}", indent="    ")
     return lines
+
+
+#: What a vibration diagnosis' "mismatch" is, said once in its report and its tables.
+MISMATCH = ("mismatch: RMS relative difference between measured and modelled frequency and "
+            "damping ratio together (log residuals, each curve over its own noise), in %; "
+            "dIC: information criterion above the step's best candidate (0: the best)")
 
 @dataclass(frozen=True, eq=False)
 class Diagnosis(ResultShape):
@@ -110,13 +118,21 @@ class Diagnosis(ResultShape):
     details: dict = field(default_factory=dict)
     failures: tuple = ()
 
+    @property
+    def params(self):
+        """The augmented fit's parameters (``fit.params``, a ``ParameterTable``)."""
+        return self.fit.params
+
     def to_dict(self) -> dict:
         """JSON-safe dict (NaN/inf become None); the fits as :meth:`FitResult.to_dict`."""
         return json_safe({
             "effect": self.effect, "effects": list(self.effects),
             "ambiguous_with": list(self.ambiguous_with), "where": self.where,
-            "success": self.success, "failure_reasons": list(self.failure_reasons()),
-            "offsets": dict(self.offsets),
+            "success": self.success,
+            "failure_reasons": list(self.failure_reasons()), "params": self.params.to_dict(),
+            "offsets": value_stderr({"force": (self.offsets["force"],
+                                               self.fit.details.get("force_offset_stderr")),
+                                     "displacement": self.offsets["displacement"]}),
             "error_before": self.error_before, "error_after": self.error_after,
             "noise_level": self.noise_level, "noise_sigma": self.noise_sigma,
             "misfit": self.misfit, "steps": list(self.steps), "untestable": dict(self.untestable),
@@ -128,26 +144,31 @@ class Diagnosis(ResultShape):
         """Human-readable account: noise, misfit, where, candidates, verdict, before/after."""
         d = self.details
         p = self.base_fit.joint
-        lines = [self.verdict(), "Iwan model diagnosis",
-                 f"  {d['samples']} samples; noise {d['noise_from']}, correlation time "
-                 f"{d['tau']:.3g} samples ({d['n_eff']:.0f} independent samples fitted)",
-                 f"  offsets (nuisance): force {self.offsets['force']:.4g} N, displacement "
-                 f"{self.offsets['displacement']:.4g} m" + (
-                     f"; low-pass {d['lowpass']:g} Hz ({d['lowpass_reason']})"
-                     if d.get("lowpass") else ""),
-                 f"  noise: sigma = {self.noise_sigma:.4g} N (NRMSE {100 * self.noise_level:.3g} %)",
-                 f"  base Iwan fit: Fs={p.Fs:.5g} N, KT={p.KT:.5g} N/m, chi={p.chi:.4f}, "
-                 f"beta={p.beta:.4f}; NRMSE {100 * self.error_before:.3g} % "
-                 f"= {self.error_before / self.noise_level:.3g} x noise "
-                 f"(misfit p-value {d['misfit_p']:.2g}, level {d['alpha']:g})",
-                 f"  selection: {d['criterion']}",
-                 f"  where: {self.where}"]
+        head = [f"{d['samples']} samples; noise {d['noise_from']}, correlation time "
+                f"{d['tau']:.3g} samples ({d['n_eff']:.0f} independent samples fitted)",
+                f"offsets (nuisance): force {self.offsets['force']:.4g} N, displacement "
+                f"{self.offsets['displacement']:.4g} m" + (
+                    f"; low-pass {d['lowpass']:g} Hz ({d['lowpass_reason']})"
+                    if d.get("lowpass") else ""),
+                f"noise: sigma = {self.noise_sigma:.4g} N (NRMSE {100 * self.noise_level:.3g} %)",
+                f"base Iwan fit: Fs={p.Fs:.5g} N, KT={p.KT:.5g} N/m, chi={p.chi:.4f}, "
+                f"beta={p.beta:.4f}; NRMSE {100 * self.error_before:.3g} % "
+                f"= {self.error_before / self.noise_level:.3g} x noise "
+                f"(misfit p-value {d['misfit_p']:.2g}, level {d['alpha']:g})",
+                f"selection: {d['criterion']}", f"where: {self.where}"]
+        lines = [self.verdict(), "Iwan model diagnosis"]
+        for h in head:
+            lines += wrap("  " + h, indent="    ")
+        if self.steps:
+            lines += wrap("  NRMSE: RMS force residual over the force range; x noise: its "
+                          "ratio to the noise; dIC: information criterion above the step's "
+                          "best candidate (0: the best)", indent="    ")
         for k, st in enumerate(self.steps):
             lines.append(f"  step {k + 1}: candidates on {' + '.join(st['on']) or 'Iwan'}")
-            lines.append("    effect               NRMSE[%]  x noise      dIC  explains  verdict")
+            lines.append("    effect               NRMSE[%]  x noise       dIC  explains  verdict")
             for c in st["candidates"]:
                 lines.append(f"    {c['name']:<20} {100 * c['nrmse']:8.3g} {c['ratio']:8.3g} "
-                             f"{c['dIC']:8.1f} {100 * c['explained']:7.3g} %  {c['verdict']}")
+                             f"{c['dIC']:9.4g} {100 * c['explained']:7.3g} %  {c['verdict']}")
         for name, why in self.untestable.items():
             lines.append(f"  cannot test {name}: {why}")
         if self.effects:
@@ -439,8 +460,8 @@ class VibrationDiagnosis(ResultShape):
 
     def to_dict(self) -> dict:
         """JSON-safe dict."""
-        return json_safe({k: getattr(self, k) for k in (
-            "effect", "effects", "ambiguous_with", "where", "parameters", "error_before",
+        return json_safe({"params": self.params.to_dict()} | {k: getattr(self, k) for k in (
+            "effect", "effects", "ambiguous_with", "where", "error_before",
             "error_after", "noise_level", "frequency_noise", "damping_ratio_noise", "amplitude",
             "frequency", "damping_ratio", "predicted_frequency", "predicted_damping_ratio",
             "model_frequency", "model_damping_ratio", "steps", "warnings", "details", "covariance")}
@@ -450,10 +471,12 @@ class VibrationDiagnosis(ResultShape):
     def report(self) -> str:
         """Human-readable account."""
         lines = [self.verdict(),
-                 "Vibration diagnosis (amplitude-dependent frequency and damping)",
-                 f"  {self.amplitude.size} amplitudes, {self.amplitude.min():.3g} .. "
-                 f"{self.amplitude.max():.3g} m; noise: frequency {100 * self.frequency_noise:.2g} %, "
-                 f"damping {100 * self.damping_ratio_noise:.2g} % ({self.details['noise_from']})"]
+                 "Vibration diagnosis (amplitude-dependent frequency and damping)"]
+        lines += wrap(f"  {self.amplitude.size} amplitudes, {self.amplitude.min():.3g} .. "
+                      f"{self.amplitude.max():.3g} m; noise: frequency "
+                      f"{100 * self.frequency_noise:.2g} %, damping "
+                      f"{100 * self.damping_ratio_noise:.2g} % ({self.details['noise_from']})",
+                      indent="    ")
         bt = self.details.get("between_tests")
         if bt:
             lines.append(
@@ -462,12 +485,14 @@ class VibrationDiagnosis(ResultShape):
                 f" damping offset {100 * bt['damping_offset']:+.3g} % "
                 f"(+- {100 * bt['damping_offset_stderr']:.2g}); not testable against them: "
                 f"{', '.join(bt['untested']) or 'none'}")
-        lines.append(f"  where: {self.where}")
+        lines += wrap(f"  where: {self.where}", indent="    ")
+        if self.steps:
+            lines += wrap("  " + MISMATCH, indent="    ")
         for k, st in enumerate(self.steps):
             lines.append(f"  step {k + 1}: candidates on {' + '.join(st['on']) or 'prediction'}")
             for c in st["candidates"]:
                 lines.append(f"    {c['name']:<18} mismatch {100 * c['error']:7.3g} %  dIC "
-                             f"{c['dIC']:8.1f}  explains {100 * c['explained']:5.3g} %  "
+                             f"{c['dIC']:9.4g}  explains {100 * c['explained']:5.3g} %  "
                              f"{c['verdict']}")
         if self.effects:
             lines.append("  named: " + ", ".join(
@@ -481,6 +506,27 @@ class VibrationDiagnosis(ResultShape):
         else:
             lines.append("  named: none")
         return "\n".join(lines + _verdict_lines("mismatch", self))
+
+    def _tables(self) -> list:
+        out = [t for t in super()._tables() if t[0] == "parameters"]
+        cols = ("amplitude [m]", "frequency [Hz]", "predicted frequency [Hz]",
+                "model frequency [Hz]", "damping_ratio [-]", "predicted damping_ratio [-]",
+                "model damping_ratio [-]")
+        out.append(("points", cols, list(zip(*(map(float, a) for a in (
+            self.amplitude, self.frequency, self.predicted_frequency, self.model_frequency,
+            self.damping_ratio, self.predicted_damping_ratio, self.model_damping_ratio))))))
+        steps = [(k + 1, " + ".join(st["on"]) or "prediction", c["name"], 100 * c["error"],
+                  c["dIC"], 100 * c["explained"], c["verdict"])
+                 for k, st in enumerate(self.steps) for c in st["candidates"]]
+        if steps:
+            out.append(("candidates (" + MISMATCH + ")",
+                        ("step", "on", "candidate", "mismatch [%]", "dIC [-]", "explains [%]",
+                         "verdict"), steps))
+        fit = [("mismatch before [%]", 100 * self.error_before),
+               ("mismatch after [%]", 100 * self.error_after),
+               ("noise [%]", 100 * self.noise_level), ("named", ", ".join(self.effects)
+                                                         or "none"), ("where", self.where)]
+        return out + [("goodness of fit", ("quantity", "value"), fit)]
 
     def plot(self, ax=None):
         """Frequency and damping against amplitude: measured, predicted, augmented.

@@ -38,6 +38,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..core.progress import finish, progress_bar
 from ..core.serialize import json_safe
 from ..core.result_shape import ResultShape, panels
 
@@ -346,23 +347,8 @@ def run_ensemble(func, parameter_sets, *, executor=None, seed=None,
         raw, where, warns = _dispatch(func, sets, children, executor, bar)
     finally:
         if bar is not None:
-            bar.close()
+            finish(bar)
     return _assemble(sets, raw, root, where, time.perf_counter() - t0, warns)
-
-
-def progress_bar(progress, *, total=None, desc: str, unit: str):
-    """A tqdm progress bar when ``progress`` is True, else None (the package's one way to
-    show progress; tqdm is optional: ``pip install 'iwan-element[progress]'``)."""
-    if not isinstance(progress, (bool, np.bool_)):
-        raise ValueError(f"progress must be True or False, got {progress!r}")
-    if not progress:
-        return None
-    try:
-        from tqdm.auto import tqdm
-    except ImportError:
-        raise ImportError("progress=True needs tqdm: "
-                          "pip install 'iwan-element[progress]'") from None
-    return tqdm(total=total, desc=desc, unit=unit)
 
 
 def _dispatch(func, sets, children, executor, bar):

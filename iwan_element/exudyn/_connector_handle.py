@@ -307,7 +307,7 @@ class IwanConnector:
         return (len(self._rec) + len(self._buf)) // _NCOL
 
     @property
-    def time(self) -> np.ndarray:
+    def time_history(self) -> np.ndarray:
         """Times of the accepted steps [s], shape (n,)."""
         return self._column(0)
 

@@ -104,6 +104,7 @@ from exudyn.itemInterface import (ObjectConnectorCartesianSpringDamper,
 
 from ..core.validation import check_scalar
 from ..core.joint import IwanJoint
+from ..core.parameters import IwanParameters
 from ..core.protocol import check_element
 from . import _symbolic_connector as _symbolic
 from ._dispatch import _claim, _dispatcher_for
@@ -136,10 +137,13 @@ def add_iwan_connector(mbs, markerNumbers, joint, *, axis=None, axisMarker=None,
         ``MarkerNodeRigid`` ...): ``u = a . (p1 - p0) - offset`` with the unit axis ``a``.
         The joint force ``F = joint.trial(u, v)[0]`` acts as ``-F`` (along ``a``) on marker 1
         and ``+F`` on marker 0, i.e. it resists positive slip.
-    joint : JointElement
-        Any element following the package's element protocol (``trial``, ``commit``,
-        ``revert``, ``reset``, energy read-outs, ``displacement`` and ``force``). It is
-        used exclusively by this connector; its current state is the initial history.
+    joint : IwanParameters or JointElement
+        :class:`~iwan_element.IwanParameters` build a new exact, virgin
+        :class:`~iwan_element.IwanJoint` (as :func:`add_iwan_interface` does; read it back
+        as :attr:`IwanConnector.joint`). Otherwise any element following the package's
+        element protocol (``trial``, ``commit``, ``revert``, ``reset``, energy read-outs,
+        ``displacement`` and ``force``): it is used exclusively by this connector and its
+        current state is the initial history.
     axis : array_like, shape (3,) or (2,), keyword-only
         Direction of the joint force for position markers (normalised here; a 2-vector
         gets ``z = 0``). Required for position markers, not allowed for coordinate markers.
@@ -197,10 +201,12 @@ def add_iwan_connector(mbs, markerNumbers, joint, *, axis=None, axisMarker=None,
 
     Examples
     --------
-    >>> conn = add_iwan_connector(mbs, [mGround, mMass], IwanJoint(params))   # doctest: +SKIP
+    >>> conn = add_iwan_connector(mbs, [mGround, mMass], params)   # doctest: +SKIP
     >>> mbs.Assemble(); mbs.SolveDynamic(simulationSettings)                  # doctest: +SKIP
     >>> conn.dissipated_energy_history[-1]                                    # doctest: +SKIP
     """
+    if isinstance(joint, IwanParameters):
+        joint = IwanJoint(joint)
     _check_options(mbs, markerNumbers, joint, name=name, record=record, law=law, depth=depth,
                    allow_adaptive_explicit=allow_adaptive_explicit)
     offset = check_scalar("offset", offset)
@@ -228,7 +234,11 @@ def _check_options(mbs, markerNumbers, joint, *, name, record, law, depth,
     if isinstance(markerNumbers, (str, bytes)) or not hasattr(markerNumbers, "__len__") \
             or len(markerNumbers) != 2:
         raise ValueError(f"markerNumbers must be a list of two marker numbers, got {markerNumbers!r}")
-    check_element(joint, name="joint")
+    try:
+        check_element(joint, name="joint")
+    except ValueError as err:
+        raise ValueError(f"{err}; give IwanParameters (an exact IwanJoint is built) or a "
+                         "joint element such as IwanJoint(params)") from None
     missing = [a for a in ("displacement", "force") if not hasattr(joint, a)]
     if missing:
         raise ValueError(f"joint must expose the committed {missing} (element protocol); "

@@ -150,7 +150,7 @@ class IwanInterface:
         return self._rec.n
 
     @property
-    def time(self) -> np.ndarray:
+    def time_history(self) -> np.ndarray:
         """Times of the accepted steps [s], shape (n,)."""
         return self._table()["time"]
 

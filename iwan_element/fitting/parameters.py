@@ -8,14 +8,14 @@ the fit's input.
 """
 from __future__ import annotations
 
-import html
 import math
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from ..core.serialize import json_safe
-from ..core.result_shape import table_lines
+from ..core.result_shape import (PARAMETER_COLUMNS, html_table, parameter_rows, table_lines,
+                                 unit_label)
 
 __all__ = ["Parameter", "ParameterTable"]
 
@@ -187,7 +187,7 @@ class ParameterTable:
 
     def report(self) -> str:
         """One row per parameter: name [unit], value, std. error, status."""
-        labels = [f"{p.name} [{p.unit or '-'}]" for p in self.parameters]
+        labels = [f"{p.name} [{unit_label(p.unit)}]" for p in self.parameters]
         width = max([16] + [len(s) for s in labels])
         errors = ["" if p.fixed else f"{p.stderr:.4g}" if math.isfinite(p.stderr) else "n/a"
                   for p in self.parameters]
@@ -203,4 +203,14 @@ class ParameterTable:
                           "correlation": self.correlation})
 
     def _repr_html_(self) -> str:
-        return f"<pre>{html.escape(self.report())}</pre>"
+        return html_table("parameters", PARAMETER_COLUMNS, parameter_rows(self))
+
+    def to_dataframe(self):
+        """The table as a ``pandas.DataFrame`` (one row per parameter: value, std. error,
+        unit, status; pandas imported only here: ``pip install "iwan-element[pandas]"``)."""
+        try:
+            import pandas as pd
+        except ImportError:
+            raise ImportError("to_dataframe needs pandas: "
+                              "pip install 'iwan-element[pandas]'") from None
+        return pd.DataFrame(parameter_rows(self), columns=list(PARAMETER_COLUMNS))

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..core.validation import check_magnitude, finite_array
-from ..core.result_shape import ResultShape, panels, table_lines
+from ..core.result_shape import ResultShape, panels, table_lines, wrap
 
 __all__ = ["AmplitudeCurve", "MIN_POINTS"]
 
@@ -166,15 +166,30 @@ class AmplitudeCurve(ResultShape):
         lines = [self.verdict(),
                  f"Amplitude curve ({self.method or 'unspecified method'}), {len(self)} points"]
         if self.notes:
-            lines.append(f"  {self.notes}")
+            lines += wrap(f"  {self.notes}", indent="    ")
         if not np.isnan(self.noise_floor):
             lines.append(f"  noise floor: {self.noise_floor:.3e} m")
         lines += table_lines([("X [m]", "11.4e"), ("f [Hz]", "12.6g"), ("+-", "9.2e"),
                               ("zeta [-]", "11.4e"), ("+-", "9.2e")],
                              zip(self.amplitude, self.frequency, self.frequency_std,
                                  self.damping_ratio, self.damping_ratio_std))
-        lines += [f"  warning: {w}" for w in self.warnings]
+        for w in self.warnings:
+            lines += wrap(f"  warning: {w}", indent="    ")
         return "\n".join(lines)
+
+    #: Column titles of the curve's points (:meth:`to_dataframe`).
+    POINT_COLUMNS = ("amplitude [m]", "amplitude_std [m]", "frequency [Hz]",
+                     "frequency_std [Hz]", "damping_ratio [-]", "damping_ratio_std [-]")
+
+    def _tables(self) -> list:
+        rows = list(zip(*(map(float, a) for a in (
+            self.amplitude, self.amplitude_std, self.frequency, self.frequency_std,
+            self.damping_ratio, self.damping_ratio_std))))
+        out = [("points", self.POINT_COLUMNS, rows)]
+        info = [("method", self.method or "unspecified"), ("points", len(self)),
+                ("noise floor [m]", None if np.isnan(self.noise_floor) else
+                 float(self.noise_floor)), ("notes", self.notes)]
+        return out + [("curve", ("quantity", "value"), info)]
 
     def plot(self, ax=None, *, label=None, **kwargs):
         """Frequency and damping ratio against amplitude on log amplitude axes.

@@ -57,6 +57,7 @@ import math
 import numpy as np
 from scipy import stats
 
+from ..core.progress import finish, progress_bar, tick
 from ..core.validation import check_magnitude, check_scalar, finite_array
 from ._decay_model import (_Objective, _Problem, _covariance, _fit_regime, _local_weights,
                            _misfit_ratio, _neighbours, _polar)
@@ -302,9 +303,11 @@ def _fit_micro(prob, info, snr_min, spc):
                             curve_full=curve_full, weights=weights, envelope=envelope)
 
 
-def _fit_models(prob, info, alpha, snr_min, spc):
-    """Microslip fit, then the full model and the likelihood-ratio test between them."""
+def _fit_models(prob, info, alpha, snr_min, spc, bar=None):
+    """Microslip fit, then the full model and the likelihood-ratio test between them
+    (``bar``: a progress bar, advanced after each)."""
     micro, obj, span = _fit_micro(prob, info, snr_min, spc)
+    tick(bar, text="microslip fitted")
     idx, ref, X = span["idx"], span["ref"], info["data"][0]
     lags = math.ceil(2.0 * prob.fs / (prob.bw * span["step"]))
     chosen, regime, warns, guard = micro, "microslip", [], []
@@ -316,6 +319,7 @@ def _fit_models(prob, info, alpha, snr_min, spc):
         obj_f = _Objective(prob, "macroslip", idx, ref, bnd, span["weights"],
                            span["envelope"])
         full = _fit_regime(obj_f, full_starts, bnd)
+        tick(bar, text="full model fitted")
         cov_f, kappa_f, dof_f = _covariance(obj_f, full.fun, full.jac)
         s2 = float(np.mean(full.fun ** 2))
         stat = 2.0 * (micro.cost - full.cost) / max(s2 * kappa_f, 1e-300)
@@ -367,7 +371,8 @@ def _fit_models(prob, info, alpha, snr_min, spc):
 def fit_decay(t, y, *, quantity: str = "acceleration", band, order: int = 4,
               stiffness: str = "harmonic", floor: str = "dashpot", x_ref: float | None = None,
               t_start: float | None = None, snr_min: float = 10.0,
-              samples_per_correlation: float = 4.0, significance: float = 1e-3) -> ModalIwanFit:
+              samples_per_correlation: float = 4.0, significance: float = 1e-3,
+              progress: bool = False) -> ModalIwanFit:
     """Fit the modal Iwan model directly to a free-decay record of one mode.
 
     The slowly varying amplitude and phase of the mode (averaging) with the modal Iwan
@@ -412,6 +417,9 @@ def fit_decay(t, y, *, quantity: str = "acceleration", band, order: int = 4,
         not identified, so the statistic's null distribution is heavier than the chi-square
         with 2 degrees of freedom it is compared with (Davies 1987, Biometrika 74:33-43);
         the small default allows for that.
+    progress : bool, keyword-only
+        Show a tqdm bar over the stages (record prepared, microslip fit, full-model fit,
+        uncertainty) with its ETA; needs tqdm (:mod:`iwan_element.core.progress`).
 
     Returns
     -------
@@ -436,8 +444,15 @@ def fit_decay(t, y, *, quantity: str = "acceleration", band, order: int = 4,
     spc = check_scalar("samples_per_correlation", samples_per_correlation, low=1.0, high=100.0)
     alpha = check_scalar("significance", significance, low=0.0, high=0.5, low_open=True,
                          high_open=True)
-    prob, conv, info = _prepare(t, y, quantity, band, order, stiffness, floor, x_ref, t_start)
-    best, span = _fit_models(prob, info, alpha, snr_min, spc)
+    bar = progress_bar(progress, total=4, desc="fit_decay", unit="stage")
+    try:
+        prob, conv, info = _prepare(t, y, quantity, band, order, stiffness, floor, x_ref,
+                                    t_start)
+        tick(bar, text="record prepared")
+        best, span = _fit_models(prob, info, alpha, snr_min, spc, bar)
+        tick(bar, text="uncertainty")
+    finally:
+        finish(bar)
     regime, warns, i_s, i_b = span["regime"], span["warns"], info["i_s"], span["i_b"]
     t0 = info["t0"]
     n_th = best.x.size - prob.n_nuis

@@ -11,7 +11,7 @@ from scipy import special, stats
 
 from ..core.modal import modal_iwan_curve, viscous_floor
 from ..core.parameters import IwanParameters
-from ..core.result_shape import ResultShape, panels
+from ..core.result_shape import ResultShape, panels, wrap
 from .result import IdentifiabilityWarning
 from ..fitting import (Parameter, ParameterTable, covariance, fit_success, noise_dof_warning,
                        verdict)
@@ -280,10 +280,7 @@ class ModalIwanFit(ResultShape):
             return None if not np.isfinite(x) else float(x)
         return {"regime": self.regime, "success": self.success,
                 "failure_reasons": list(self.failure_reasons()),
-                "parameters": {k: num(v) for k, v in self.parameters.items()},
-                "stderr": {k: num(v) for k, v in self.stderr.items()},
-                "units": {k: _UNITS[k] for k in self.parameters},
-                "names": list(self.names), "values": [float(v) for v in self.values],
+                "params": self.params.to_dict(), "names": list(self.names),
                 "covariance": [[float(x) for x in row] for row in self.covariance],
                 "chi2_red": num(self.chi2_red), "rms_errors": self.rms_errors(),
                 "conventions": dict(self.conventions), "warnings": list(self.warnings)}
@@ -295,17 +292,16 @@ class ModalIwanFit(ResultShape):
         c = self.conventions
         lines = [self.verdict(),
                  f"Modal Iwan fit ({self.regime}; {c['stiffness']} stiffness, {c['floor']} "
-                 "floor)",
-                 f"  {len(self.data['amplitude'])} amplitudes, reduced chi-square "
-                 f"{self.chi2_red:.3g}, RMS error f {100 * self.rms_errors()['frequency']:.4f} %,"
-                 f" zeta {100 * self.rms_errors()['damping_ratio']:.2f} %"]
+                 "floor)"]
+        lines += self.params.report().splitlines()
         if self.regime == "microslip":
             lines.append(f"  delta = relative drop of w^2 at X_ref = {c['x_ref']:.4g} m")
-        for k, v in self.parameters.items():
-            s = self.stderr.get(k, float("nan"))
-            rel = f"({100 * s / abs(v):.2g} %)" if v else ""
-            lines.append(f"  {k:>8} = {v:12.6g} +- {s:9.3g} {rel:>9} [{_UNITS[k]}]")
-        lines += [f"  warning: {w}" for w in self.warnings]
+        lines.append(f"  goodness of fit: {len(self.data['amplitude'])} amplitudes, reduced "
+                     f"chi-square {self.chi2_red:.3g}, RMS error f "
+                     f"{100 * self.rms_errors()['frequency']:.4f} %, zeta "
+                     f"{100 * self.rms_errors()['damping_ratio']:.2f} %")
+        for w in self.warnings:
+            lines += wrap(f"  warning: {w}", indent="    ")
         return "\n".join(lines)
 
     def plot(self, ax=None, *, band: float = 0.95, label: str = "fit"):

@@ -47,7 +47,7 @@ from scipy.signal import savgol_coeffs, savgol_filter
 
 from ..core.validation import check_int, check_time, check_magnitude, finite_array, same_length
 from .noise import estimate_noise, integrated_time
-from ..core.result_shape import ResultShape
+from ..core.result_shape import ResultShape, value_stderr
 from ..fitting import (Parameter, ParameterTable, covariance, fit_success, minimize,
                        verdict)
 
@@ -159,7 +159,7 @@ class ModelFit(ResultShape):
         """JSON-safe dict (NaN becomes None)."""
         from ..core.serialize import json_safe
         return json_safe({"params": self.params.to_dict(),
-                      "offsets": {k: list(v) for k, v in self.offsets.items()},
+                      "offsets": value_stderr(self.offsets),
                       "rms": self.rms, "tau": self.tau, "n_eff": self.n_eff,
                       "success": self.success, "message": self.message, "nfev": self.nfev,
                       "warnings": list(self.warnings), "details": self.details})

@@ -13,7 +13,7 @@ import numpy as np
 from ..core.serialize import json_safe
 
 from ..core.parameters import IwanParameters
-from ..core.result_shape import ResultShape
+from ..core.result_shape import ResultShape, value_stderr
 from ..fitting import Parameter, ParameterTable, fit_success, verdict
 
 __all__ = ["FitResult", "IdentifiabilityWarning", "PARAM_NAMES"]
@@ -156,7 +156,7 @@ class FitResult(ResultShape):
             "warnings": list(self.warnings),
             "wall_time": self.wall_time,
             "details": self.details,
-            "offsets": {k: list(v) for k, v in self.offsets.items()},
+            "offsets": value_stderr(self.offsets),
             "noise": dict(self.noise),
         })
 

@@ -18,6 +18,7 @@ All arrays are in SI units: time [s], displacement [m], force [N], energy [J].
 """
 from __future__ import annotations
 
+import html
 import math
 from dataclasses import dataclass, field
 
@@ -26,6 +27,8 @@ import numpy as np
 from ..core.validation import (check_int, check_time, check_magnitude, check_scalar, finite_array,
                                 same_length)
 from ..core.joint import IwanJoint
+from ..core.result_shape import html_table, table_lines
+from ..core.serialize import json_safe
 from ..core.parameters import IwanParameters
 from .noise import difference_sigma, estimate_noise
 
@@ -418,15 +421,46 @@ class TestData:
                              + (" ..." if len(bad) > 5 else ""))
         return {k: np.array([getattr(c, k) for c in good]) for k in ("u0", "F0", "D", "k_sec")}
 
+    #: Column titles of the cycle table (SI units), :meth:`summary` and :meth:`to_dataframe`.
+    CYCLE_COLUMNS = ("cycle", "t0 [s]", "u0 [m]", "F0 [N]", "D [J]", "k_sec [N/m]", "flags")
+
+    def cycle_rows(self) -> list:
+        """One row per cycle, in :attr:`CYCLE_COLUMNS` (SI units; flags ``"ok"`` if none)."""
+        return [(c.index, c.t_start, c.u0, c.F0, c.D, c.k_sec, "; ".join(c.flags) or "ok")
+                for c in self.cycles]
+
     def summary(self) -> str:
-        """Text table of the cycles (amplitudes in mm and kN, energy in mJ)."""
+        """Text table of the cycles in SI units (4 significant digits)."""
         lines = [f"{len(self.u)} samples, {self.t[-1] - self.t[0]:.4g} s, {len(self.cycles)} cycles "
-                 f"({len(self.usable_cycles())} usable); source: {self.source or 'arrays'}",
-                 "  cycle   t0 [s]   u0 [mm]   F0 [kN]    D [mJ]  k_sec [kN/mm]  flags"]
-        for c in self.cycles:
-            lines.append(f"  {c.index:5d} {c.t_start:8.2f} {c.u0 * 1e3:9.4f} {c.F0 * 1e-3:9.4f} "
-                         f"{c.D * 1e3:9.4f} {c.k_sec * 1e-6:12.3f}  {'; '.join(c.flags) or 'ok'}")
+                 f"({len(self.usable_cycles())} usable); source: {self.source or 'arrays'}"]
+        lines += table_lines([(self.CYCLE_COLUMNS[0], "5d")]
+                             + [(c, "11.4g") for c in self.CYCLE_COLUMNS[1:-1]]
+                             + [("  flags", "<")],
+                             [r[:-1] + ("  " + r[-1],) for r in self.cycle_rows()])
         return "\n".join(lines)
+
+    def to_dict(self) -> dict:
+        """JSON-safe dict: samples, duration [s], source units, source and the cycles (SI)."""
+        keys = ("index", "t0", "u0", "F0", "D", "k_sec", "flags")
+        return json_safe({"samples": len(self.u), "duration": float(self.t[-1] - self.t[0]),
+                          "units": dict(self.units), "source": self.source,
+                          "cycles": [dict(zip(keys, r)) for r in self.cycle_rows()]})
+
+    def to_dataframe(self):
+        """The cycle table as a ``pandas.DataFrame`` (SI units; pandas imported only here)."""
+        try:
+            import pandas as pd
+        except ImportError:
+            raise ImportError("to_dataframe needs pandas: "
+                              "pip install 'iwan-element[pandas]'") from None
+        return pd.DataFrame(self.cycle_rows(), columns=list(self.CYCLE_COLUMNS))
+
+    def _repr_html_(self) -> str:
+        head = html.escape(f"{len(self.u)} samples, {self.t[-1] - self.t[0]:.4g} s, "
+                           f"{len(self.usable_cycles())} of {len(self.cycles)} cycles usable; "
+                           f"source: {self.source or 'arrays'}")
+        return (f"<p><b>TestData</b>: {head}</p>"
+                + html_table("cycles", self.CYCLE_COLUMNS, self.cycle_rows()))
 
 
 # --------------------------------------------------------------------------- synthetic tests
