@@ -67,7 +67,7 @@ def _with_range_warnings(specimen, response):
 
 
 def harmonic_balance(specimen: Specimen, frequency, force, *, harmonics=(1, 3, 5),
-                     samples=None, n_modes: int = 8, progress=None) -> FrequencyResponse:
+                     samples=None, n_modes: int = 8, progress: bool = False) -> FrequencyResponse:
     """Steady forced response of the specimen at given frequencies and forces.
 
     Parameters
@@ -86,8 +86,8 @@ def harmonic_balance(specimen: Specimen, frequency, force, *, harmonics=(1, 3, 5
         AFT samples per period.
     n_modes : int, keyword-only
         Elastic modes kept in the reduced model (the rest as residual flexibility).
-    progress : callable, optional, keyword-only
-        ``progress(iterable, total=n)``, e.g. ``tqdm.tqdm``.
+    progress : bool, keyword-only
+        Show a tqdm bar with its ETA (silent under CI).
 
     Returns
     -------
@@ -114,7 +114,7 @@ def frequency_response(specimen: Specimen, force: float, band, *, harmonics=(1, 
 
 
 def nonlinear_mode(specimen: Specimen, amplitude=None, *, mode: int = 1, harmonics=(1, 3, 5),
-                   samples=None, n_modes: int = 8, progress=None) -> AmplitudeCurve:
+                   samples=None, n_modes: int = 8, progress: bool = False) -> AmplitudeCurve:
     """Amplitude-dependent frequency and damping of a mode by EPMC.
 
     Parameters

@@ -17,6 +17,8 @@ import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 
+from iwan_element.core.result_shape import ResultShape  # noqa: E402
+
 import iwan_element as ie  # noqa: E402
 from iwan_element import plotting  # noqa: E402
 
@@ -245,19 +247,27 @@ def _coupling():
                                 steps_per_period=32)
 
 
+def _frequency_response():
+    from iwan_element import models
+    s = models.preset("brake-reuss").replace(n_points=8)
+    return models.harmonic_balance(s, np.linspace(80.0, 80.8, 5), 0.3)
+
+
 #: Results of the beam model (``iwan_element.models``), with the same shape.
 MODEL_RESULTS = {"CalibrationResult": _calibration, "RingdownResult": _ringdown,
                  "QuasiStaticResult": _quasi_static, "ForcedResponseResult": _forced,
-                 "ModeCouplingResult": _coupling}
+                 "ModeCouplingResult": _coupling, "FrequencyResponse": _frequency_response}
 
 
 def test_every_model_result_class_is_covered():
     """Every result class the beam model's public functions return is in MODEL_RESULTS."""
     from iwan_element import models
+    from iwan_element import harmonic
     from iwan_element.models import calibration, coupling, forced, machine, transient
-    public = {n for mod in (models, calibration, transient, machine, forced, coupling)
+    public = {n for mod in (models, calibration, transient, machine, forced, coupling, harmonic)
               for n in getattr(mod, "__all__", ())
-              if n.endswith("Result") and inspect.isclass(getattr(mod, n))}
+              if (n.endswith("Result") or n.endswith("Response")) and
+              inspect.isclass(getattr(mod, n)) and issubclass(getattr(mod, n), ResultShape)}
     assert public == set(MODEL_RESULTS)
 
 

@@ -23,6 +23,7 @@ import time
 
 import numpy as np
 
+from ..core.progress import finish, progress_bar, tick
 from ..core.threads import one_blas_thread
 from .balance import operators, point_outputs, rate_operators
 from .basis import Harmonics
@@ -114,14 +115,18 @@ def _newton(system, basis, y, X, r, *, tol, max_iter):
 
 
 def epmc_branch(system, basis: Harmonics, amplitude, r: int, *, tol=1e-9, max_iter=40,
-                progress=None):
+                progress: bool = False):
     """Nonlinear mode ``r`` (a kept-mode column) (one BLAS thread: :func:`_branch`)."""
-    with one_blas_thread():
-        return _branch(system, basis, amplitude, r, tol=tol, max_iter=max_iter,
-                       progress=progress)
+    bar = progress_bar(progress, total=np.size(amplitude), desc="nonlinear_mode",
+                       unit="amplitude")
+    try:
+        with one_blas_thread():
+            return _branch(system, basis, amplitude, r, tol=tol, max_iter=max_iter, bar=bar)
+    finally:
+        finish(bar)
 
 
-def _branch(system, basis, amplitude, r, *, tol, max_iter, progress):
+def _branch(system, basis, amplitude, r, *, tol, max_iter, bar):
     """Nonlinear mode ``r`` (a kept-mode column) at sensor amplitudes ``amplitude`` [m]
     (solved in increasing order). Returns a dict of arrays: ``amplitude``, ``frequency``
     [Hz], ``damping_ratio`` [-], ``xi`` [1/s], ``converged``, ``iterations``,
@@ -141,8 +146,7 @@ def _branch(system, basis, amplitude, r, *, tol, max_iter, progress):
     out["converged"] = np.zeros(X.size, bool)
     out["iterations"] = np.zeros(X.size, int)
     t0 = time.perf_counter()
-    it_ = order if progress is None else progress(order, total=X.size)
-    for k in it_:
+    for k in order:
         if y is None or not out["converged"].any():
             cz = np.zeros((nz, nc))
             a0 = X[k] / abs(Ys)
@@ -168,6 +172,7 @@ def _branch(system, basis, amplitude, r, *, tol, max_iter, progress):
         X_prev = X[k]
         if not ok:
             log.warning("EPMC did not converge at amplitude %.3g m", X[k])
+        tick(bar, text=f"{X[k]:.3g} m")
     out["amplitude"] = X
     out["wall_time"] = time.perf_counter() - t0
     return out

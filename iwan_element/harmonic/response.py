@@ -7,6 +7,7 @@ import time
 
 import numpy as np
 
+from ..core.progress import finish, progress_bar, tick
 from ..core.threads import one_blas_thread
 from ..core.validation import finite_array
 from .balance import force_coefficients, operators, solve_point
@@ -45,7 +46,7 @@ def linear_start(system, basis, W, force):
 
 def harmonic_balance(system: ModalSystem, frequency, force, *, harmonics=(1, 3, 5),
                      samples=None, tol: float = 1e-9, max_iter: int = 40,
-                     progress=None) -> FrequencyResponse:
+                     progress: bool = False) -> FrequencyResponse:
     """Steady response of a :class:`ModalSystem` to ``force cos(2 pi f t)`` at each frequency.
 
     Each point starts from the previous one's solution (scaled by the force ratio; from the
@@ -68,8 +69,9 @@ def harmonic_balance(system: ModalSystem, frequency, force, *, harmonics=(1, 3, 
         Newton's relative tolerance on the step and the residual.
     max_iter : int, keyword-only
         Newton iterations per point.
-    progress : callable or None, keyword-only
-        ``progress(iterable, total=n)`` wrapping the loop over frequencies (a tqdm).
+    progress : bool, keyword-only
+        Show a tqdm bar over the frequencies with its ETA (``iwan_element.core.progress``;
+        silent under CI).
 
     Returns
     -------
@@ -82,16 +84,19 @@ def harmonic_balance(system: ModalSystem, frequency, force, *, harmonics=(1, 3, 
     if not (isinstance(tol, float) and 0 < tol < 1e-3):
         raise ValueError(f"tol must be a float in (0, 1e-3), got {tol!r}")
     t0 = time.perf_counter()
-    with one_blas_thread():
-        points = _sweep(system, basis, f, F, tol, max_iter, progress)
+    bar = progress_bar(progress, total=f.size, desc="harmonic_balance", unit="point")
+    try:
+        with one_blas_thread():
+            points = _sweep(system, basis, f, F, tol, max_iter, bar)
+    finally:
+        finish(bar)
     return assemble_response(points, basis, system, time.perf_counter() - t0)
 
 
-def _sweep(system, basis, f, F, tol, max_iter, progress):
+def _sweep(system, basis, f, F, tol, max_iter, bar):
     """Solve every frequency in order, each from its neighbour (see harmonic_balance)."""
     points, prev = [], None
-    idx = range(f.size) if progress is None else progress(range(f.size), total=f.size)
-    for k in idx:
+    for k in range(f.size):
         W = 2 * math.pi * f[k]
         starts = [] if prev is None else [prev["cz"] * (F[k] / prev["force"])]
         starts.append(linear_start(system, basis, W, F[k]))
@@ -103,6 +108,7 @@ def _sweep(system, basis, f, F, tol, max_iter, progress):
             log.warning("harmonic balance did not converge at %.6g Hz", f[k])
         points.append(p)
         prev = p if p["converged"] else prev
+        tick(bar, text=f"{f[k]:.6g} Hz")
     return points
 
 
