@@ -127,3 +127,14 @@ def test_harmonic_balance_matches_the_exudyn_stepped_sine():
     hb = models.harmonic_balance(s, warped, 0.02)
     np.testing.assert_allclose(ts.amplitude[0], hb.amplitude, rtol=5e-3)
     np.testing.assert_allclose(ts.phase[0], hb.phase, atol=1e-2)
+
+
+def test_nonlinear_mode_agrees_with_the_transient_ring_down():
+    """EPMC against the Exudyn ring-down's curve (modal filter, free-decay route) of the
+    Brake-Reuss beam from the top of its range, with the tolerances QSMA meets there."""
+    s = BRB.replace(n_points=20)
+    tr = models.ringdown(s, amplitude=s.amplitude_range[1], cycles=12, steps_per_period=48).curve
+    c = models.nonlinear_mode(s, tr.amplitude)
+    assert len(tr) >= 3 and tr.amplitude.max() / tr.amplitude.min() > 1.02
+    np.testing.assert_array_less(np.abs(tr.frequency / c.frequency - 1), 1e-3)
+    np.testing.assert_array_less(np.abs(tr.damping_ratio / c.damping_ratio - 1), 0.10)
