@@ -10,7 +10,8 @@ from .batch import BatchDiagnosis, diagnose_many
 from .campaign import CampaignFit, fit_campaign
 from .generator import simulate_element_test
 from .loops import diagnose, loop_candidates
-from .results import Diagnosis, VibrationDiagnosis
+from .results import Diagnosis
+from .vibration_result import VibrationDiagnosis
 from .vibration import diagnose_vibration
 
 __all__ = ["BatchDiagnosis", "CampaignFit", "fit_campaign", "Diagnosis", "VibrationDiagnosis",

@@ -31,7 +31,7 @@ from ..identify.noise import difference_sigma
 from ..identify.units import check_damping_ratio, check_frequency_ratio
 from ..core.serialize import json_safe
 from ..fitting import covariance
-from .results import VibrationDiagnosis
+from .vibration_result import VibrationDiagnosis
 from .selection import criterion_text, stepwise_select
 
 __all__ = ["diagnose_vibration", "vibration_candidates"]
