@@ -122,8 +122,10 @@ def point_outputs(system, basis, W, force, cg, D, *, ops=None, xi=0.0, modal=Non
     """Sensor and excitation-point coefficients and the energy per period of a solution.
 
     Returns a dict: ``sensor`` (nc,) [m], ``excitation`` (nc,) [m], ``input_work``,
-    ``joint_dissipation``, ``floor_dissipation`` [J per period]; ``modal`` adds the explicit
-    coefficients of a nonlinear mode (:mod:`.nlmode`): ``(r, cq)``.
+    ``joint_dissipation``, ``floor_dissipation`` and ``self_excitation_work`` (the work of
+    the self-excitation ``xi M x'`` of a nonlinear mode, 0 without it) [J per period];
+    ``modal = (r, a)`` puts in the explicit fundamental ``a`` of a nonlinear mode
+    (:mod:`.nlmode`).
     """
     _, Lpz, Lpb = ops if ops is not None else operators(system, basis, W, xi=xi)
     cf = force_coefficients(basis, force)
@@ -133,8 +135,8 @@ def point_outputs(system, basis, W, force, cg, D, *, ops=None, xi=0.0, modal=Non
     Gc = basis.complex(cg)
     Fc = basis.complex(cf[None, :])[0]
     Y = system.modes
-    c_r = 2.0 * system.zeta * system.omega - xi
-    D_floor = 0.0
+    c_r = 2.0 * system.zeta * system.omega
+    D_floor = W_self = 0.0
     for k, (h, _, _) in enumerate(basis.cols):
         if h == 0:
             continue
@@ -143,7 +145,9 @@ def point_outputs(system, basis, W, force, cg, D, *, ops=None, xi=0.0, modal=Non
         if modal is not None and h == 1:
             r, q1 = modal
             Q[r] = q1
-        D_floor += float(np.sum((c_r + xi) * math.pi * W * h * h * np.abs(Q) ** 2))
+        q2 = math.pi * W * h * h * np.abs(Q) ** 2
+        D_floor += float(np.sum(c_r * q2))
+        W_self += xi * float(np.sum(q2))
     if modal is not None:
         r, q1 = modal
         ports = ports + np.outer(Y[nz:, r], basis.real(np.array(
@@ -151,4 +155,5 @@ def point_outputs(system, basis, W, force, cg, D, *, ops=None, xi=0.0, modal=Non
     sin1 = [ib for h, _, ib in basis.cols if h == 1][0]
     return {"sensor": ports[0], "excitation": ports[1],
             "input_work": math.pi * force * float(ports[1][sin1]),
-            "joint_dissipation": float(np.sum(D)), "floor_dissipation": D_floor}
+            "joint_dissipation": float(np.sum(D)), "floor_dissipation": D_floor,
+            "self_excitation_work": W_self}

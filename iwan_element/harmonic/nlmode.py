@@ -141,27 +141,27 @@ def _branch(system, basis, amplitude, r, *, tol, max_iter, bar):
                          "the mode's level")
     ia = [c for c in basis.cols if c[0] == 1][0][1]
     w0, z0 = float(system.omega[r]), float(system.zeta[r])
-    y = None
+    last = None                                   # (y, X) of the last converged amplitude
     out = {k: np.zeros(X.size) for k in ("frequency", "damping_ratio", "xi", "energy_error")}
     out["converged"] = np.zeros(X.size, bool)
     out["iterations"] = np.zeros(X.size, int)
     t0 = time.perf_counter()
     for k in order:
-        if y is None or not out["converged"].any():
+        if last is None:                          # the linear mode at this amplitude
             cz = np.zeros((nz, nc))
             a0 = X[k] / abs(Ys)
             cz[:, ia] = system.modes[:nz, r] * a0 * np.sign(Ys)
             y = np.concatenate([cz.ravel(), [w0, 2 * z0 * w0, a0 * np.sign(Ys)]])
-        else:
-            y = y.copy()
-            y[:-3] *= X[k] / X_prev
-            y[-1] *= X[k] / X_prev
+        else:                                     # the neighbour, scaled to this amplitude
+            y = last[0].copy()
+            y[:-3] *= X[k] / last[1]
+            y[-1] *= X[k] / last[1]
         y, cg, D, ok, its = _newton(system, basis, y, X[k], r, tol=tol, max_iter=max_iter)
         W, xi, a = y[-3], y[-2], y[-1]
         po = point_outputs(system, basis, W, 0.0, cg, D, xi=xi, modal=(r, a),
                            ops=operators(system, basis, W, xi=xi, exclude=r))
         # the self-excitation's work per period: xi pi W sum_h h^2 |Q_h|^2 over the modes
-        e_in = _self_work(system, basis, W, xi, cg, r, a)
+        e_in = po["self_excitation_work"]
         d = po["joint_dissipation"] + po["floor_dissipation"]
         out["frequency"][k] = W / (2 * math.pi)
         out["xi"][k] = xi
@@ -169,26 +169,11 @@ def _branch(system, basis, amplitude, r, *, tol, max_iter, bar):
         out["energy_error"][k] = (e_in - d) / e_in if e_in else np.nan
         out["converged"][k] = ok
         out["iterations"][k] = its
-        X_prev = X[k]
+        if ok:
+            last = (y, X[k])
         if not ok:
             log.warning("EPMC did not converge at amplitude %.3g m", X[k])
         tick(bar, text=f"{X[k]:.3g} m")
     out["amplitude"] = X
     out["wall_time"] = time.perf_counter() - t0
     return out
-
-
-def _self_work(system, basis, W, xi, cg, r, a):
-    """Work of the self-excitation ``xi M x'`` over one period [J] (modal coordinates)."""
-    nz = system.n_z
-    Gc = basis.complex(cg)
-    total = 0.0
-    for k, (h, _, _) in enumerate(basis.cols):
-        if h == 0:
-            continue
-        d = system.denominators(h * W, xi=xi)
-        Q = -(system.modes[:nz].T @ Gc[:, k]) / d
-        if h == 1:
-            Q[r] = a
-        total += xi * math.pi * W * h * h * float(np.sum(np.abs(Q) ** 2))
-    return total

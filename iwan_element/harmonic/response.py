@@ -98,12 +98,13 @@ def _sweep(system, basis, f, F, tol, max_iter, bar):
     points, prev = [], None
     for k in range(f.size):
         W = 2 * math.pi * f[k]
-        starts = [] if prev is None else [prev["cz"] * (F[k] / prev["force"])]
-        starts.append(linear_start(system, basis, W, F[k]))
-        for s in starts:
-            p = solve_point(system, basis, W, F[k], s, tol=tol, max_iter=max_iter)
-            if p["converged"]:
-                break
+        p = None
+        if prev is not None:
+            p = solve_point(system, basis, W, F[k], prev["cz"] * (F[k] / prev["force"]),
+                            tol=tol, max_iter=max_iter)
+        if p is None or not p["converged"]:           # the linear response as the start
+            p = solve_point(system, basis, W, F[k], linear_start(system, basis, W, F[k]),
+                            tol=tol, max_iter=max_iter)
         if not p["converged"]:
             log.warning("harmonic balance did not converge at %.6g Hz", f[k])
         points.append(p)
