@@ -22,7 +22,7 @@ diagonal slip (docs/solid.md).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field, fields, replace
 
 import numpy as np
 
@@ -32,11 +32,12 @@ from .specimens import InterfaceModel, Specimen
 __all__ = ["PatchLayout", "SolidModel", "SolidSpecimen", "solid_contact_points"]
 
 # Specimen fields a SolidSpecimen may change without rebuilding its bodies: they enter only
-# the Iwan elements (and the analyses' damping floor, amplitudes and effects), not M, K0, G
+# the Iwan elements, the patches' normal springs (the reduction holds the normal gaps'
+# attachment shapes) and the analyses' damping floor, amplitudes and effects, not M, Kb, G
 _FREE_FIELDS = {"name", "preload", "friction", "amplitude_range", "modal_damping",
                 "calibrated_range", "effects", "reference"}
 _FREE_INTERFACE = {"stiffness_per_area", "stiffness_pressure_exponent", "chi", "beta",
-                   "damping_floor"}
+                   "damping_floor", "normal_stiffness_per_area"}
 
 
 @dataclass(frozen=True, eq=False)
@@ -75,11 +76,15 @@ class SolidModel:
     Attributes
     ----------
     system : LinearSystem
-        Reduced coordinates: ``M`` (identity), ``K0`` (bodies and normal patch springs),
-        ``Kb`` (bodies), ``G`` (2 rows per patch: the tangential slips ``x`` and ``y`` of
-        body B's patch average minus body A's), ``S`` (the sensor node's ``z``
-        displacement); ``rigid_body_modes`` 6 free-free, 0 clamped.
+        Reduced coordinates: ``M`` (identity), ``K0`` (bodies and normal patch springs at
+        the normal stiffness per area the model was built with), ``Kb`` (bodies), ``G``
+        (2 rows per patch: the tangential slips ``x`` and ``y`` of body B's patch average
+        minus body A's), ``S`` (the sensor node's ``z`` displacement); ``rigid_body_modes``
+        6 free-free, 0 clamped.
     patches : PatchLayout
+    normal_gaps : ndarray, shape (n_patches, n_reduced)
+        The patches' normal gaps ``z`` (body B's patch average minus body A's) on the
+        reduced coordinates: ``K0 = Kb + normal_gaps^T diag(k_n A) normal_gaps``.
     info : dict
         Sizes and wall times (``n_full``, ``n_reduced``, ``n_modes``, ``mesh_s``,
         ``reduction_s``, ...), JSON-safe.
@@ -91,6 +96,7 @@ class SolidModel:
 
     system: object
     patches: PatchLayout
+    normal_gaps: np.ndarray
     info: dict = field(default_factory=dict)
     full: dict | None = field(default=None, repr=False)
 
@@ -106,8 +112,8 @@ class SolidSpecimen:
         position, boundary, damping floor, amplitude range, effects. Its fields are read
         through the SolidSpecimen (``solid.friction``, ``solid.interface``, ...).
     model : SolidModel
-        The reduced bodies and patches, built for this specimen's geometry, boundary and
-        normal stiffness (:func:`~iwan_element.models.solid_build.solid_specimen`).
+        The reduced bodies and patches, built for this specimen's geometry and boundary
+        (:func:`~iwan_element.models.solid_build.solid_specimen`).
     """
 
     specimen: Specimen
@@ -127,8 +133,9 @@ class SolidSpecimen:
     def replace(self, **changes) -> "SolidSpecimen":
         """A copy with interface or test fields changed (``friction``, ``preload``,
         ``stiffness_per_area``, ``chi``, ``beta``, ``damping_floor``, ``modal_damping``,
-        ``amplitude_range``, ``calibrated_range``, ``effects``, ...). Fields that change the
-        bodies, the patches' normal springs or the sensor need a new build (ValueError)."""
+        ``amplitude_range``, ``calibrated_range``, ``effects``, ``normal_stiffness_per_area``,
+        ...). Fields that change the bodies, the patches or the sensor need a new build
+        (ValueError)."""
         inames = {f.name for f in fields(InterfaceModel)}
         fixed = set(changes) - _FREE_FIELDS - _FREE_INTERFACE - {"interface"}
         if "interface" in changes:
@@ -147,8 +154,12 @@ class SolidSpecimen:
                              self.model)
 
     def linear_system(self):
-        """The reduced :class:`~iwan_element.models.assembly.LinearSystem`."""
-        return self.model.system
+        """The reduced :class:`~iwan_element.models.assembly.LinearSystem`, its ``K0``
+        holding the patches' normal springs at this specimen's
+        ``interface.normal_stiffness_per_area`` (``k_n A`` per patch on the normal gaps)."""
+        sysm, Gn = self.model.system, self.model.normal_gaps
+        kn = self.specimen.interface.normal_stiffness_per_area * self.model.patches.area
+        return replace(sysm, K0=sysm.Kb + Gn.T @ (kn[:, None] * Gn))
 
     def contact_points(self) -> ContactPoints:
         """The patches' Iwan elements (two per patch, module docstring)."""

@@ -9,18 +9,22 @@
    face over the cell (the face's triangles assigned to the cell holding their centroid,
    each node weighted by a third of its triangles' area: an RBE3-like average, not a rigid
    patch). The rows of ``G`` are body B's average minus body A's, in ``x`` and ``y``
-   (tangential slips); the normal rows (``z``) carry a spring ``k_n A`` per patch in ``K0``.
+   (tangential slips); the normal rows (``z``, the gaps ``G_n``) carry a spring ``k_n A``
+   per patch in ``K0``.
 3. **Reduction.** The assembled bodies with the patches stuck (``K_ref = K0 + G^T diag(KT) G``
    at the specimen's stiffness per area) are reduced by a Ritz basis: the rigid-body modes,
    the lowest ``n_modes`` elastic modes of ``K_ref``, and one static attachment shape
-   ``(K_ref + c M)^-1 G^T`` per tangential slip (``c = (2 pi 1 Hz)^2``, the mass shift that
-   makes the free-free ``K_ref`` invertible; the loads ``G^T`` are self-equilibrated). The
-   basis is made mass-orthonormal and diagonalises ``K_ref``. Why: the kept modes of the
-   stuck structure are exact (Ritz vectors that are eigenvectors), and the attachment shapes
-   carry the static flexibility under the interface forces (the static response of QSMA
-   to any interface force lies in the basis up to the mass shift); unlike a Craig-Bampton
-   reduction with rigid (RBE2) patches, nothing stiffens the lap. Cost: one sparse
-   factorisation of the full system; the reduced size is ``6 + n_modes + 2 n_patches``.
+   ``(K_ref + c M)^-1 [G; G_n]^T`` per tangential slip and per normal gap
+   (``c = (2 pi 1 Hz)^2``, the mass shift that makes the free-free ``K_ref`` invertible; the
+   loads are self-equilibrated). The basis is made mass-orthonormal and diagonalises
+   ``K_ref``. Why: the kept modes of the stuck structure are exact (Ritz vectors that are
+   eigenvectors), and the attachment shapes carry the static flexibility under the
+   interface forces, tangential and normal (the static response to any patch force lies in
+   the basis up to the mass shift), so both the tangential and the normal stiffness per
+   area may change after the reduction (:meth:`SolidSpecimen.linear_system` rebuilds the
+   reduced ``K0`` from the normal gaps); unlike a Craig-Bampton reduction with rigid (RBE2)
+   patches, nothing stiffens the lap. Cost: one sparse factorisation of the full system;
+   the reduced size is ``6 + n_modes + 3 n_patches``.
 """
 from __future__ import annotations
 
@@ -163,12 +167,13 @@ def _factor(A):
     return solve
 
 
-def _ritz_basis(K_ref, M, Gt, n_keep):
-    """Mass-orthonormal basis [modes, attachment shapes] diagonalising K_ref (step 3)."""
+def _ritz_basis(K_ref, M, G_ports, n_keep):
+    """Mass-orthonormal basis [modes, attachment shapes of the rows of ``G_ports``: the
+    tangential slips and the normal gaps] diagonalising K_ref (step 3)."""
     solve = _factor((K_ref + _SHIFT * M).tocsr())
     op = spla.LinearOperator(K_ref.shape, matvec=solve, dtype=float)
     w2, Phi = spla.eigsh(K_ref, k=n_keep, M=M, sigma=-_SHIFT, OPinv=op, which="LM")
-    Psi = solve(np.asarray(Gt.T.todense()))
+    Psi = solve(np.asarray(G_ports.T.todense()))
     Psi /= np.sqrt(np.einsum("ij,ij->j", Psi, M @ Psi))
     T = np.hstack([Phi, Psi])
     lam, V = sla.eigh(T.T @ (M @ T))
@@ -229,12 +234,12 @@ def solid_specimen(specimen: Specimen, parts: tuple, *, patch_size: float = 0.00
     E = _point_row(specimen, a, b, specimen.excitation.position)
     fixed = _fixed_coordinates(specimen, a)
     free = np.setdiff1d(np.arange(M.shape[0]), fixed)
-    M, K0, Kb, Gt, S, E = (M[free][:, free], K0[free][:, free], Kb[free][:, free], Gt[:, free],
-                           S[free], E[free])
+    M, K0, Kb, Gt, Gn, S, E = (M[free][:, free], K0[free][:, free], Kb[free][:, free],
+                               Gt[:, free], Gn[:, free], S[free], E[free])
     KT = solid_contact_points(specimen, patches).KT
     K_ref = (K0 + Gt.T @ sp.diags(KT) @ Gt).tocsr()
     n_rigid = 6 if specimen.boundary == "free-free" else 0
-    T, w2 = _ritz_basis(K_ref, M, Gt, n_rigid + n_modes)
+    T, w2 = _ritz_basis(K_ref, M, sp.vstack([Gt, Gn]).tocsr(), n_rigid + n_modes)
     red = LinearSystem(M=T.T @ (M @ T), K0=T.T @ (K0 @ T), Kb=T.T @ (Kb @ T), G=Gt @ T,
                        S=S @ T, free=np.arange(T.shape[1]), n_coordinates=T.shape[1],
                        rigid_body_modes=n_rigid, E=E @ T)
@@ -242,11 +247,12 @@ def solid_specimen(specimen: Specimen, parts: tuple, *, patch_size: float = 0.00
             "n_patches": len(patches), "patch_size": [float(v) for v in patches.size],
             "reduction_s": time.perf_counter() - t0,
             "stuck_frequencies_hz": (np.sqrt(np.abs(w2[n_rigid:])) / (2 * math.pi)).tolist()}
-    full = {"M": M, "K0": K0, "Kb": Kb, "G": Gt, "S": S, "basis": T,
+    full = {"M": M, "K0": K0, "Kb": Kb, "G": Gt, "Gn": Gn, "S": S, "basis": T,
             "free": free} if keep_full else None
     log.info("solid %s: %d -> %d coordinates, %d patches, %.2f s", specimen.name, M.shape[0],
              T.shape[1], len(patches), info["reduction_s"])
-    return SolidSpecimen(specimen, SolidModel(system=red, patches=patches, info=info, full=full))
+    return SolidSpecimen(specimen, SolidModel(system=red, patches=patches, info=info, full=full,
+                                              normal_gaps=Gn @ T))
 
 
 def solid_preset(name: str, *, mesh_size: float = 0.008, lap_mesh_size: float | None = None,
