@@ -1,11 +1,11 @@
 """The Brake-Reuss beam as a solid: natural frequencies against the hammer record, and cost.
 
 Run:  python benchmarks/bench_solid.py [--mesh 0.012 0.008 0.006] [--patch 0.0064]
-      [--modes 20]
+      [--modes 20] [--normal-ratio 1.22 1 2 5 14] [--exponent 0 1] [--calibrate]
 
 For each mesh size (largest element [m]; the lap faces at 0.6 x the patch size): the two
 halves meshed (second-order tetrahedra, ``models.solid_mesh.lap_beam_parts``), patched and
-reduced (``models.solid_build.solid_specimen``, ``--modes`` stuck modes + 2 attachment shapes
+reduced (``models.solid_build.solid_specimen``, ``--modes`` stuck modes + 3 attachment shapes
 per patch). Printed:
 
 * mesh and reduction sizes, wall times of meshing (Netgen + exudyn import), reduction, and a
@@ -19,16 +19,26 @@ per patch). Printed:
   families' frequencies then (a linear check, not the amplitude calibration);
 * mode 1's QSMA curve (frequency drop and joint damping at 5, 20, 60 um) next to the 1-D
   preset's, same interface law and pressure;
+* with ``--normal-ratio R ...`` (for each mesh): the normal contact stiffness tied to the
+  tangential one, ``k_n = R k_t`` (Mindlin's elastic ratio ``k_t/k_n = 2(1-nu)/(2-nu)`` =
+  0.82 at nu = 0.3 gives R = 1.22; the preset's independent ``k_n`` = 1e13 is R = 14 at
+  its calibrated ``k_t``), ONE scale ``k_t`` found by brentq so that the stuck mode 1 is on
+  80.4 Hz, and then the first in-plane, second and fourth height-bending frequencies against
+  the peaks, with each family's sensitivities ``d ln f / d ln k_t`` and
+  ``d ln f / d ln k_n`` there (``--exponent m ...``: the same with the tangential stiffness
+  following the pressure, ``KT_i ~ A_i (p_i/p_mean)^m``; the normal springs stay ``k_n A``);
 * with ``--calibrate`` (needs the GPL record ``../shared/data/brb-hammer/hammer_acc3.csv``,
   read in place): ``models.calibration.calibrate`` on the solid of the first mesh size,
   fitted on mode 1 of the hammer ring-down (k_t, mu, chi, damping floor; wall time), the
-  calibrated solid's frequencies by family against the peaks, and the second height-bending
-  mode's QSMA curve against the record's 270-330 Hz band at acc3 (its damping floor is the
-  one fitted on mode 1: the record gives no floor of its own for that mode).
+  second height-bending mode's floor from its own lowest-amplitude points of the record's
+  270-330 Hz band (``floors={3: ...}``, ``calibration.modal_floor``; the solid's elastic
+  mode 2 bends in-plane), the calibrated solid's frequencies by family against the peaks,
+  and that mode's QSMA curve against the band's measured one at acc3.
 """
 from __future__ import annotations
 
 import argparse
+import math
 import time
 
 import numpy as np
@@ -63,6 +73,35 @@ def _families(solid, n):
     return out
 
 
+def _targets(solid):
+    """Stuck frequencies [Hz] of the first height, first in-plane, second and fourth height
+    bending modes (the families of the hammer peaks), from the lowest 8 elastic modes."""
+    fam = {}
+    for fk, lab in zip(natural_frequencies(solid, n_modes=14)[6:], _families(solid, 8)):
+        fam.setdefault(lab[0], []).append(fk)
+    return np.array([fam["z"][0], fam["y"][0], fam["z"][1], fam["z"][3]])
+
+
+def run_normal_ratio(solid, ratios, exponents, h=1e-3):
+    """One stiffness scale on mode 1 with ``k_n = R k_t``: the other families (docstring)."""
+    print("  k_n = R k_t, k_t by brentq on the stuck mode 1 = 80.4 Hz; frequencies [Hz] and "
+          "% against 221.7, 297.7, 845.6; d ln f / d ln k_t and d ln k_n of (z1, y1, z2, z4)")
+    for m in exponents:
+        for r in ratios:
+            def at(kt, kn):
+                return solid.replace(stiffness_per_area=kt, normal_stiffness_per_area=kn,
+                                     stiffness_pressure_exponent=m)
+            k = brentq(lambda v: natural_frequencies(at(v, r * v), n_modes=7)[6] - PEAKS[0],
+                       1e10, 1e15, rtol=1e-9)
+            f = _targets(at(k, r * k))
+            st = np.log(_targets(at(k * (1 + h), r * k)) / f) / math.log1p(h)
+            sn = np.log(_targets(at(k, r * k * (1 + h))) / f) / math.log1p(h)
+            err = 100 * (f[1:] / PEAKS[1:] - 1)
+            print(f"  m {m:g} R {r:6.3f}: k_t {k:.4g}, k_n {r * k:.4g} N/m^3 | z1 {f[0]:.2f} "
+                  f"y1 {f[1]:.2f} ({err[0]:+.2f} %) z2 {f[2]:.2f} ({err[1]:+.2f} %) z4 "
+                  f"{f[3]:.2f} ({err[2]:+.2f} %) | k_t {np.round(st, 4)} k_n {np.round(sn, 4)}")
+
+
 def _line(label, f, fam=None):
     parts = []
     for i, v in enumerate(f):
@@ -78,13 +117,14 @@ def run_calibration(solid):
     if not RECORD.exists():
         print(f"--calibrate: {RECORD} absent (GPL data are read from ../shared only); skipped")
         return
+    meas = measured_amplitude_curve(RECORD, band=(270.0, 330.0))
     t0 = time.perf_counter()
-    res = calibrate(solid, measured_amplitude_curve(RECORD))
-    print(f"calibrate on mode 1 ({time.perf_counter() - t0:.1f} s):")
+    res = calibrate(solid, measured_amplitude_curve(RECORD), floors={3: meas})
+    print(f"calibrate on mode 1, the 2nd height bending's floor from its own curve "
+          f"({time.perf_counter() - t0:.1f} s):")
     print("  " + res.report().replace("\n", "\n  "))
     cal = res.specimen
     _line("calibrated, stuck", natural_frequencies(cal, n_modes=12)[6:], _families(cal, 6))
-    meas = measured_amplitude_curve(RECORD, band=(270.0, 330.0))
     X = meas.amplitude
     model = modal_amplitude_curve(cal.replace(amplitude_range=(X.min(), X.max()),
                                               calibrated_range=None), mode=3, amplitude=X)
@@ -94,7 +134,7 @@ def run_calibration(solid):
               f"zeta {100 * model.damping_ratio[k]:.4f} / {100 * meas.damping_ratio[k]:.4f} %")
 
 
-def run(mesh, patch, modes):
+def run(mesh, patch, modes, ratios=(), exponents=(0.0,)):
     s = preset("brake-reuss")
     t0 = time.perf_counter()
     parts = lap_beam_parts(s, mesh_size=mesh, lap_mesh_size=0.6 * patch)
@@ -106,7 +146,7 @@ def run(mesh, patch, modes):
     t_qsma = time.perf_counter() - t0
     print(f"mesh {mesh * 1e3:.1f} mm (lap {0.6 * patch * 1e3:.2f} mm), patches {patch * 1e3:.2f} mm:"
           f" {info['n_full']} coordinates -> {info['n_reduced']} ({modes} modes + "
-          f"{2 * info['n_patches']} attachment shapes, {info['n_patches']} patches); meshing "
+          f"{3 * info['n_patches']} attachment shapes, {info['n_patches']} patches); meshing "
           f"{t_mesh:.1f} s, reduction {info['reduction_s']:.1f} s, QSMA (20 amplitudes) "
           f"{t_qsma:.2f} s")
     fs = natural_frequencies(solid, n_modes=12)[6:]
@@ -131,6 +171,8 @@ def run(mesh, patch, modes):
         zj = 100 * (c.damping_ratio - s.floor(1))
         print(f"  QSMA mode 1 {label:<6s} f0 {f0:7.3f} Hz; drop % {np.round(drop, 4)}; "
               f"joint zeta % {np.round(zj, 4)} at X = 5, 20, 60 um")
+    if ratios:
+        run_normal_ratio(solid, ratios, exponents)
     return solid
 
 
@@ -139,10 +181,12 @@ def main():
     ap.add_argument("--mesh", type=float, nargs="+", default=[0.012, 0.008, 0.006])
     ap.add_argument("--patch", type=float, default=0.0064)
     ap.add_argument("--modes", type=int, default=20)
+    ap.add_argument("--normal-ratio", type=float, nargs="*", default=[])
+    ap.add_argument("--exponent", type=float, nargs="+", default=[0.0])
     ap.add_argument("--calibrate", action="store_true")
     a = ap.parse_args()
     print(f"hammer peaks (brb-hammer acc3): {PEAKS} Hz")
-    solids = [run(m, a.patch, a.modes) for m in a.mesh]
+    solids = [run(m, a.patch, a.modes, a.normal_ratio, a.exponent) for m in a.mesh]
     if a.calibrate:
         run_calibration(solids[0])
 
