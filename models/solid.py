@@ -47,7 +47,9 @@ class PatchLayout:
     Attributes
     ----------
     x, y : ndarray, shape (n,)
-        Patch centres [m]: along the assembly and across the width.
+        Patch points [m], along the assembly and across the width: the centroid of the
+        patch's contact area (the part of its cell where the pressure is > 0), where the
+        patch's slips are measured.
     normal_force : ndarray, shape (n,)
         Integral of the cone pressure over the patch [N] at ``preload`` per bolt.
     area : ndarray, shape (n,)
@@ -56,6 +58,8 @@ class PatchLayout:
         Bolt preload the forces were integrated at [N].
     size : tuple of 2 floats
         Cell size along and across the beam [m].
+    cells : ndarray, shape (n, 2)
+        Centres of the patches' grid cells [m].
     """
 
     x: np.ndarray
@@ -64,6 +68,7 @@ class PatchLayout:
     area: np.ndarray
     preload: float
     size: tuple
+    cells: np.ndarray
 
     def __len__(self) -> int:
         return int(self.x.size)
