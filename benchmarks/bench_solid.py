@@ -2,11 +2,12 @@
 
 Run:  python benchmarks/bench_solid.py [--mesh 0.012 0.008 0.006] [--patch 0.0064]
       [--modes 20] [--lap 0.0025] [--normal-ratio 1.22 1 2 5 14] [--exponent 0 1] [--scan]
-      [--calibrate]
+      [--no-holes] [--calibrate]
 
 For each mesh size (largest element [m]; the lap faces at ``--lap``, default 0.6 x the patch
 size; the patches' tied limit needs 2.5 mm there, docs/solid.md): the two halves meshed
-(second-order tetrahedra, ``models.solid_mesh.lap_beam_parts``), patched and reduced
+(second-order tetrahedra, ``models.solid_mesh.lap_beam_parts``; the bolt holes cut unless
+``--no-holes``), patched and reduced
 (``models.solid_build.solid_specimen``, ``--modes`` stuck modes + 3 attachment shapes per
 patch). Printed:
 
@@ -185,18 +186,19 @@ def run_calibration(solid):
               f"zeta {100 * model.damping_ratio[k]:.4f} / {100 * meas.damping_ratio[k]:.4f} %")
 
 
-def run(mesh, patch, modes, ratios=(), exponents=(0.0,), lap=None, scan=False):
+def run(mesh, patch, modes, ratios=(), exponents=(0.0,), lap=None, scan=False, holes=True):
     s = preset("brake-reuss")
     lap = 0.6 * patch if lap is None else lap
     t0 = time.perf_counter()
-    parts = lap_beam_parts(s, mesh_size=mesh, lap_mesh_size=lap)
+    parts = lap_beam_parts(s, mesh_size=mesh, lap_mesh_size=lap, holes=holes)
     t_mesh = time.perf_counter() - t0
     solid = solid_specimen(s, parts, patch_size=patch, n_modes=modes, keep_full=True)
     info = solid.model.info
     t0 = time.perf_counter()
     modal_amplitude_curve(solid)
     t_qsma = time.perf_counter() - t0
-    print(f"mesh {mesh * 1e3:.1f} mm (lap {lap * 1e3:.2f} mm), patches {patch * 1e3:.2f} mm:"
+    print(f"mesh {mesh * 1e3:.1f} mm (lap {lap * 1e3:.2f} mm, bolt holes "
+          f"{'cut' if holes else 'not cut'}), patches {patch * 1e3:.2f} mm:"
           f" {info['n_full']} coordinates -> {info['n_reduced']} ({modes} modes + "
           f"{3 * info['n_patches']} attachment shapes, {info['n_patches']} patches); meshing "
           f"{t_mesh:.1f} s, reduction {info['reduction_s']:.1f} s, QSMA (20 amplitudes) "
@@ -240,11 +242,12 @@ def main():
     ap.add_argument("--normal-ratio", type=float, nargs="*", default=[])
     ap.add_argument("--exponent", type=float, nargs="+", default=[0.0])
     ap.add_argument("--scan", action="store_true", help="scan k_x, k_y, k_n separately")
+    ap.add_argument("--no-holes", action="store_true", help="mesh the bolt holes solid")
     ap.add_argument("--calibrate", action="store_true")
     a = ap.parse_args()
     print(f"hammer peaks (brb-hammer acc3): {PEAKS} Hz")
-    solids = [run(m, a.patch, a.modes, a.normal_ratio, a.exponent, a.lap, a.scan)
-              for m in a.mesh]
+    solids = [run(m, a.patch, a.modes, a.normal_ratio, a.exponent, a.lap, a.scan,
+                  not a.no_holes) for m in a.mesh]
     if a.calibrate:
         run_calibration(solids[0])
 

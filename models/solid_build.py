@@ -301,7 +301,7 @@ def solid_specimen(specimen: Specimen, parts: tuple, *, patch_size: float = 0.00
 
 def solid_preset(name: str, *, mesh_size: float = 0.008, lap_mesh_size: float | None = None,
                  patch_size: float = 0.005, n_modes: int = 20,
-                 poissons_ratio: float = 0.3) -> SolidSpecimen:
+                 poissons_ratio: float = 0.3, holes: bool = True) -> SolidSpecimen:
     """A preset (:func:`~iwan_element.models.specimens.preset`) as a solid specimen: its two
     halves meshed from its dimensions (:func:`~iwan_element.models.solid_mesh.lap_beam_parts`),
     patched and reduced (:func:`solid_specimen`). Needs the extra ``iwan-element[fem]``.
@@ -317,15 +317,17 @@ def solid_preset(name: str, *, mesh_size: float = 0.008, lap_mesh_size: float | 
     patch_size, n_modes : keyword-only
         As :func:`solid_specimen`.
     poissons_ratio : float, keyword-only
+    holes : bool, keyword-only
+        Cut the bolt holes (:func:`~iwan_element.models.solid_mesh.lap_beam_parts`).
     """
     s = preset(name)
     _check_build(s, patch_size, n_modes)
     lms = min(mesh_size, 0.5 * patch_size) if lap_mesh_size is None else lap_mesh_size
     t0 = time.perf_counter()
     parts = lap_beam_parts(s, mesh_size=mesh_size, lap_mesh_size=lms,
-                           poissons_ratio=poissons_ratio)
+                           poissons_ratio=poissons_ratio, holes=holes)
     t_mesh = time.perf_counter() - t0
     solid = solid_specimen(s, parts, patch_size=patch_size, n_modes=n_modes)
     solid.model.info.update(mesh_s=t_mesh, mesh_size=mesh_size, lap_mesh_size=lms,
-                            poissons_ratio=poissons_ratio)
+                            poissons_ratio=poissons_ratio, holes=holes)
     return solid

@@ -19,7 +19,8 @@ Routes:
 
 Frame (every route): ``x`` along the assembly from beam A's end, ``y`` across the width
 (centred), ``z`` the height (bending direction), the lap plane at ``z = 0``; beam A below
-it, beam B above. Bolt holes are not meshed (the cone pressure is zero inside them).
+it, beam B above. :func:`lap_beam_parts` cuts the bolt holes (``holes=True``); bolts and
+washers are not meshed (the cone pressure is zero inside the holes).
 NGsolve is the optional extra ``iwan-element[fem]``; it is imported only when meshing.
 """
 from __future__ import annotations
@@ -136,13 +137,14 @@ def part_from_ngsolve(mesh, *, contact_face: str, youngs_modulus: float, poisson
     return part_from_fem(fem, contact_nodes=nodes, name=name)
 
 
-def _mesh_boxes(boxes, *, face_z, face_sign, mesh_size, face_mesh_size):
-    """Netgen mesh of the union of axis-aligned boxes ((x0,y0,z0), (x1,y1,z1)); the
-    horizontal faces at ``z = face_z`` whose outward normal is ``face_sign * z`` named
-    ``"lap"`` and meshed at ``face_mesh_size``."""
+def _mesh_boxes(boxes, *, face_z, face_sign, mesh_size, face_mesh_size, holes=()):
+    """Netgen mesh of the union of axis-aligned boxes ((x0,y0,z0), (x1,y1,z1)) less the
+    vertical through-holes ``holes`` ((x, y, radius) [m]); the horizontal faces at
+    ``z = face_z`` whose outward normal is ``face_sign * z`` named ``"lap"`` and meshed at
+    ``face_mesh_size``."""
     try:
         import ngsolve as ngs
-        from netgen.occ import Box, OCCGeometry, Pnt
+        from netgen.occ import Z, Box, Cylinder, OCCGeometry, Pnt
     except ImportError as err:
         raise ImportError("meshing a solid specimen needs NGsolve: pip install "
                           "\"iwan-element[fem]\" (or pip install ngsolve)") from err
@@ -150,6 +152,10 @@ def _mesh_boxes(boxes, *, face_z, face_sign, mesh_size, face_mesh_size):
     for lo, hi in boxes:
         b = Box(Pnt(*lo), Pnt(*hi))
         shape = b if shape is None else shape + b
+    z0 = min(lo[2] for lo, _ in boxes)
+    height = max(hi[2] for _, hi in boxes) - z0
+    for x, y, r in holes:
+        shape = shape - Cylinder(Pnt(x, y, z0 - height), Z, r=r, h=3 * height)
     zmid = np.mean([0.5 * (lo[2] + hi[2]) for lo, hi in boxes])
     for f in shape.faces:
         lo, hi = f.bounding_box                 # OCC pads it by about 1e-7 m
@@ -168,7 +174,8 @@ def _check_sizes(specimen, mesh_size, lap_mesh_size):
 
 
 def lap_beam_parts(specimen: Specimen, *, mesh_size: float, lap_mesh_size: float,
-                   poissons_ratio: float = 0.3) -> tuple[SolidPart, SolidPart]:
+                   poissons_ratio: float = 0.3,
+                   holes: bool = True) -> tuple[SolidPart, SolidPart]:
     """The two halves of a specimen's lap-jointed beam, meshed (second-order tetrahedra).
 
     Beam A: ``x`` in ``[0, L]``, height ``thickness`` outside the lap, ``lap_thickness``
@@ -184,6 +191,11 @@ def lap_beam_parts(specimen: Specimen, *, mesh_size: float, lap_mesh_size: float
         Largest element size [m] overall and on the lap faces.
     poissons_ratio : float, keyword-only
         [-] (the Specimen carries no Poisson's ratio; 0.3 for steel).
+    holes : bool, keyword-only
+        Cut the bolt holes (diameter ``bolt_diameter``, the hole of the cone pressure) through
+        both lap halves; ``False`` meshes them solid. On the Brake-Reuss beam the holes
+        remove a third of the width at the lap's centre line: they lower the height-bending
+        modes and raise the in-plane one (docs/solid.md).
 
     Returns
     -------
@@ -198,10 +210,13 @@ def lap_beam_parts(specimen: Specimen, *, mesh_size: float, lap_mesh_size: float
     end = 2 * L - s.overlap
     a_boxes = [((0.0, -w, -tl), (ls, w, T - tl)), ((ls, -w, -tl), (L, w, 0.0))]
     b_boxes = [((ls, -w, 0.0), (L, w, tl)), ((L, -w, tl - T), (end, w, tl))]
+    if not isinstance(holes, bool):
+        raise TypeError(f"holes must be True or False, got {holes!r}")
+    cut = [(ls + xb, 0.0, 0.5 * s.bolt_diameter) for xb in s.bolt_positions] if holes else []
     parts = []
     for name, boxes, sign in (("A", a_boxes, +1), ("B", b_boxes, -1)):
         mesh = _mesh_boxes(boxes, face_z=0.0, face_sign=sign, mesh_size=mesh_size,
-                           face_mesh_size=lap_mesh_size)
+                           face_mesh_size=lap_mesh_size, holes=cut)
         parts.append(part_from_ngsolve(mesh, contact_face="lap", name=name,
                                        youngs_modulus=s.youngs_modulus,
                                        poissons_ratio=poissons_ratio, density=s.density))

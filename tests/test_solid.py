@@ -28,8 +28,9 @@ PATCH = 0.0085
 
 @pytest.fixture(scope="module")
 def brb():
+    # no bolt holes: the 1-D model, which these tests compare with, has none
     s = preset("brake-reuss")
-    parts = lap_beam_parts(s, **COARSE)
+    parts = lap_beam_parts(s, **COARSE, holes=False)
     return s, parts, solid_specimen(s, parts, patch_size=PATCH, n_modes=12, keep_full=True)
 
 
@@ -78,6 +79,26 @@ def test_patch_slips_vanish_under_rigid_motion_and_forces_match_the_preload(brb)
     assert math.isclose(pts.normal_force.sum(), 2 * 3 * s.preload, rel_tol=1e-9)
     # the same cone pressure as the 1-D strips
     assert math.isclose(contact_points(s).normal_force.sum(), 3 * s.preload, rel_tol=1e-9)
+
+
+def test_bolt_holes_are_cut_through_both_lap_halves():
+    # the two halves' mass is the boxes' less 6 holes x pi r^2 x lap thickness (measured
+    # within 1e-4 of the holes' mass: second-order elements follow the circle), and no
+    # node lies inside a hole
+    s = preset("brake-reuss")
+    cut = lap_beam_parts(s, **COARSE)
+    r = 0.5 * s.bolt_diameter
+    boxes = 2 * s.width * (s.lap_start * s.thickness + s.overlap * s.lap_thickness)
+    holes = 6 * math.pi * r * r * s.lap_thickness
+    ex = [np.tile([1.0, 0.0, 0.0], len(p.positions)) for p in cut]
+    mass = sum(e @ (p.M @ e) for e, p in zip(ex, cut))
+    assert abs(mass - s.density * (boxes - holes)) < 1e-2 * s.density * holes
+    for p in cut:
+        d = np.hypot(p.positions[:, 0:1] - s.lap_start - np.array(s.bolt_positions)[None, :],
+                     p.positions[:, 1:2])
+        assert d.min() >= r * (1 - 1e-9)
+    with pytest.raises(TypeError, match="holes"):
+        lap_beam_parts(s, **COARSE, holes="yes")
 
 
 def test_patches_average_the_contact_area_only(brb):
@@ -199,7 +220,7 @@ def test_a_contact_face_given_as_a_node_set_is_the_named_face(brb):
 
 def test_a_clamped_solid_has_no_rigid_modes_and_bends_as_the_1d_cantilever():
     s = preset("two-bolt-aluminium")                      # clamped-free: beam A's end face
-    parts = lap_beam_parts(s, mesh_size=0.0127, lap_mesh_size=0.0064)
+    parts = lap_beam_parts(s, mesh_size=0.0127, lap_mesh_size=0.0064, holes=False)
     solid = solid_specimen(s, parts, patch_size=0.0127, n_modes=4)
     clamped = int(np.sum(parts[0].positions[:, 0] < 1e-12))
     assert solid.model.info["n_full"] == 3 * (len(parts[0].positions) + len(parts[1].positions)
