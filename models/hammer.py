@@ -43,7 +43,7 @@ from iwan_element.core.serialize import json_safe
 from iwan_element.core.validation import check_scalar
 
 from .calibration import CalibrationResult, calibrate
-from .coupling import compare_curves
+from .coupling import compare_curves, plot_curve_pairs
 from .qsma import linear_modes
 from .ringdown_result import RingdownResult
 from .transient import ringdown
@@ -213,7 +213,8 @@ class HammerPrediction(ResultShape):
         """JSON-safe: bands, release, the summary, ratios, the calibration, verdict."""
         key = lambda k: f"mode {k[0]} at {k[1]}"   # noqa: E731
         return json_safe({"calibration_mode": self.calibration_mode,
-                          "calibration_sensor": self.calibration_sensor, "bands": {str(r): b for r, b in self.bands.items()},
+                          "calibration_sensor": self.calibration_sensor,
+                          "bands": {str(r): b for r, b in self.bands.items()},
                           "release": {str(r): x for r, x in self.release.items()},
                           "summary": {key(k): v for k, v in self.summary().items()},
                           "ratios": {key(k): v for k, v in self.ratios.items()},
@@ -224,18 +225,9 @@ class HammerPrediction(ResultShape):
         """Measured (points) and predicted (lines) damping ratio [%] and frequency [Hz]
         against amplitude for every curve, on ``ax = (ax_z, ax_f)``; returns the artists."""
         ax_z, ax_f = panels(ax, 2, figsize=(6, 6))
-        arts = []
-        for i, key in enumerate(self.predicted):
-            lab = f"mode {key[0]} at {key[1]}"
-            for c, st, tag in ((self.measured[key], "o", "measured"),
-                               (self.predicted[key], "-", "predicted")):
-                kw = {"color": f"C{i}", "ms": 3, "label": f"{lab}, {tag}"}
-                arts += ax_z.semilogx(c.amplitude, 100 * c.damping_ratio, st, **kw)
-                arts += ax_f.semilogx(c.amplitude, c.frequency, st, **kw)
-        ax_z.set(xlabel="amplitude [m]", ylabel="damping ratio [%]")
-        ax_f.set(xlabel="amplitude [m]", ylabel="frequency [Hz]")
-        ax_z.legend(fontsize=6)
-        return arts
+        pairs = [(f"mode {r} at {name}", self.measured[(r, name)], "measured",
+                  self.predicted[(r, name)], "predicted") for r, name in self.predicted]
+        return plot_curve_pairs(ax_z, ax_f, pairs, ("o", "-"))
 
 
 def predict_hammer_test(specimen, records: dict, *, modes=(1, 2), calibration_mode: int = 1,
