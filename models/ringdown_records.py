@@ -11,7 +11,7 @@ import numpy as np
 from iwan_element import backbone_work
 from iwan_element.core.progress import finish, progress_bar, tick
 
-from .ringdown_result import RingdownResult, decay_curve, with_energy_warning
+from .ringdown_result import RingdownResult, decay_curve
 
 __all__ = ["Recorder", "step_grid", "solve_timed", "virgin_joint_energy", "build_result",
            "joint_records"]
