@@ -173,6 +173,9 @@ def check_solid_release(specimen: SolidSpecimen, modes, impact) -> None:
     if specimen.effects:
         raise ValueError("a SolidSpecimen's ring-down takes no vibration effects; give the "
                          "solid without effects (specimen.replace(effects=()))")
+    if specimen.model.axis is None:
+        raise ValueError("specimen.model holds no axis rows (SolidModel.axis): build the solid "
+                         "with solid_build.solid_specimen")
     for r in modes:
         _, phi, _, L, _ = linear_modes(specimen, mode=r)
         along = np.max(np.abs(specimen.model.axis[1] @ phi))
