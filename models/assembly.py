@@ -151,7 +151,7 @@ def _marker_at(mbs, elems, edges, x0, x, y_local):
 
 def build_specimen_model(specimen: Specimen, *, tangential: str = "iwan", post_step=None,
                          joint_elements: bool = False, drive=None,
-                         depth: int = 8) -> SpecimenModel:
+                         depth: int = 24) -> SpecimenModel:
     """Build and assemble the Exudyn system of a specimen.
 
     Parameters
@@ -170,7 +170,9 @@ def build_specimen_model(specimen: Specimen, *, tangential: str = "iwan", post_s
         constraint is ``model.extra["grip"]`` (its force is the machine force).
     depth : int, keyword-only
         Reversal points each contact point's compiled law holds (``add_iwan_interface``;
-        default 8): several modes slipping the lap at once nest more loops.
+        default 24): a decaying or multi-mode response nests loops, and a step that closes
+        more than ``depth // 2`` of them is not exact (warned). 24 costs no more than 8 per
+        step where nothing overflows (docs/multi_mode.md section 2).
     """
     if not isinstance(specimen, Specimen):
         raise ValueError(f"specimen must be a Specimen, got {type(specimen).__name__}")

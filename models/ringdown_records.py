@@ -148,7 +148,7 @@ def build_result(specimen, amp, rec, X, rel, rows, positions, h, n, run) -> Ring
         sensor_displacement=disp, sensor_acceleration=second_derivative(disp, h),
         warnings=tuple(warns) + cut_warning(cut, n, w0.max() * h) + ((
             f"{run['overflow']} step(s) closed more slip loops than the compiled interface law "
-            "holds (8 reversal points, 24 with several modes): their joint forces were not "
+            "holds (24 reversal points): their joint forces were not "
             "exact (the interface's "
             "overflow_times; the Python route, joint_elements=True, is exact)",)
             if run["overflow"] else ()))

@@ -101,7 +101,7 @@ class SolidRingdownModel:
 
 
 def build_solid_model(specimen: SolidSpecimen, *, tangential: str = "iwan", post_step=None,
-                      joint_elements: bool = False, depth: int = 8,
+                      joint_elements: bool = False, depth: int = 24,
                       floor: bool = True) -> SolidRingdownModel:
     """Build and assemble the Exudyn system of a solid specimen (module docstring).
 
@@ -115,7 +115,8 @@ def build_solid_model(specimen: SolidSpecimen, *, tangential: str = "iwan", post
     joint_elements : bool, keyword-only
         One Python ``IwanJoint`` connector per element (reference route).
     depth : int, keyword-only
-        Reversal points each compiled law holds (``add_iwan_interface``).
+        Reversal points each compiled law holds (``add_iwan_interface``; 24 as the beams':
+        a decaying or multi-mode response nests loops).
     floor : bool, keyword-only
         Add the specimen's damping floor (``Specimen.floor`` per stuck mode).
     """
@@ -201,8 +202,7 @@ def solid_ringdown(specimen: SolidSpecimen, amp: dict, rel: dict, rows, position
     rec = Recorder(slice(None), [], fw, opts["record_energy"])
     tangential = opts["tangential"]
     model = build_solid_model(specimen, tangential=tangential, post_step=rec,
-                              joint_elements=opts["joint_elements"],
-                              depth=8 if len(amp) == 1 else 24)
+                              joint_elements=opts["joint_elements"])
     fw.C = model.floor_C
     rec.model = model
     model.set_state(rel["x"])

@@ -237,10 +237,8 @@ def ringdown(specimen: Specimen | SolidSpecimen, *, mode: int | None = None, amp
     effs = [ModalEffects(specimen, r, L, phi, w) for r, phi, w in zip(amp, rel["phi"], w0)
             if any(e.mode == r for e in specimen.effects)]
     rec = Recorder(L.free, effs, FloorWork(floor.C if floor.active else None), record_energy)
-    # several modes nest more slip loops (mode 2's cycles inside mode 1's): a deeper law
     model = build_specimen_model(specimen, tangential=tangential, post_step=rec,
-                                 joint_elements=joint_elements,
-                                 depth=8 if len(amp) == 1 else 24)
+                                 joint_elements=joint_elements)
     rec.model = model
     mbs = model.mbs
     for eff in effs:
