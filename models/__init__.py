@@ -11,7 +11,9 @@
 * :mod:`~iwan_element.models.transient` - the transient route (:func:`ringdown`, one release
   level per call, one mode or several at once through the same interface; frequency and
   damping by :func:`iwan_element.amplitude_curve`; result in
-  :mod:`~iwan_element.models.ringdown_result`);
+  :mod:`~iwan_element.models.ringdown_result`; the pieces the 1-D and the solid ring-down share
+  in :mod:`~iwan_element.models.ringdown_records`; a solid specimen's run in
+  :mod:`~iwan_element.models.solid_transient`);
 * :mod:`~iwan_element.models.impact` - a hammer impact (:class:`Impact`, a half-sine force
   pulse) that :func:`ringdown` takes instead of a release;
 * :mod:`~iwan_element.models.coupling` - each mode's damping with and without the other

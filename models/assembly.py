@@ -336,15 +336,19 @@ def _coordinate_jacobian(mbs, read, n: int, eps: float = 1e-8) -> np.ndarray:
     return np.array(out).T
 
 
-def axis_rows(specimen: Specimen, positions) -> np.ndarray:
+def axis_rows(specimen: Specimen | SolidSpecimen, positions) -> np.ndarray:
     """Rows mapping the free coordinates to the transverse displacement [m] of the beams'
     axis at ``positions`` [m] along the assembly (the axis of ``sensor_position``; beam A up
-    to its length, beam B beyond): shape ``(len(positions), n_free)``."""
+    to its length, beam B beyond): shape ``(len(positions), n_free)``. A
+    :class:`~iwan_element.models.solid.SolidSpecimen` reads its stored rows
+    (:meth:`~iwan_element.models.solid.SolidSpecimen.axis_rows`)."""
     x = np.atleast_1d(np.asarray(positions, float))
     if x.ndim != 1 or x.size == 0 or not np.all(np.isfinite(x)) or np.any(x < 0) \
             or np.any(x > specimen.total_length):
         raise ValueError(f"positions must be a non-empty sequence in [0, "
                          f"{specimen.total_length:.6g}] m, got {positions!r}")
+    if isinstance(specimen, SolidSpecimen):
+        return specimen.axis_rows(x)
     return _axis_rows(_structure_key(specimen), tuple(float(v) for v in x))
 
 
