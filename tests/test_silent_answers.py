@@ -66,14 +66,14 @@ def test_amplitude_curve_on_a_clipped_decay_measures_only_below_the_clip():
         ie.amplitude_curve(t[:1450], y[:1450], quantity="displacement", band=(60, 100))
 
 
-@pytest.mark.parametrize("seed", [1, 2, 3])
+@pytest.mark.parametrize("seed", [1, 2])
 def test_clipping_under_noise_is_cut_and_a_noisy_or_two_mode_decay_is_not(seed):
     """Clipping with noise added after it has no flat tops: the first point's damping was
-    0.00047-0.00049 against 0.002 at a 0.6 clip level (seeds 1-3), success True, silent.
+    0.00047-0.00049 against 0.002 at a 0.6 clip level (16 s records, seeds 1-3), success True, silent.
     Now the record is cut after its last flattened cycle (truth: the last sample beyond the
     clip, 0.506 s), and nothing is cut from
     an unclipped decay with 3 % noise or from a small mode read beside a 20 x larger one."""
-    t, x = _decay(n=4 * 8192, noise=0.0, seed=seed)
+    t, x = _decay(n=8192, noise=0.0, seed=seed)
     rng = np.random.default_rng(seed)
     y = np.clip(x, -0.6, 0.6) + 0.005 * rng.standard_normal(t.size)
     truth = t[np.flatnonzero(np.abs(x) > 0.6)[-1]]
@@ -87,7 +87,7 @@ def test_clipping_under_noise_is_cut_and_a_noisy_or_two_mode_decay_is_not(seed):
     d = ie.fit_decay(t, y, quantity="displacement", band=(60, 100))
     assert any("flattened below" in w for w in d.warnings), d.warnings
     # unclipped, 3 % noise: nothing cut
-    _, x3 = _decay(n=4 * 8192, noise=0.03, seed=seed)
+    _, x3 = _decay(n=8192, noise=0.03, seed=seed)
     assert cut_flattened_peaks(t, x3, (60.0, 100.0))[2] == ""
     # a small mode at 300 Hz read beside the 80 Hz one 20 x larger: nothing cut
     w2 = 2 * np.pi * 300.0
