@@ -49,12 +49,12 @@ def prediction(d, duration: float):
     t0 = time.perf_counter()
     out = example.predict(d, duration=duration)
     wall = time.perf_counter() - t0
-    print(example.report(out))
-    rd = out["ringdown"]
+    print(out.report())
+    rd = out.ringdown
     print(f"\n(a) wall time: {wall:.1f} s in all, {rd.wall_time:.1f} s in SolveDynamic for "
           f"{rd.metadata['steps']} steps ({1e3 * rd.wall_time / rd.metadata['steps']:.2f} ms "
           "per step)")
-    meas, pred = out["measured"][(2, "acc3")], out["predicted"][(2, "acc3")]
+    meas, pred = out.measured[(2, "acc3")], out.predicted[(2, "acc3")]
     print(f"    mode 2's first (coupled) measured window: {1e6 * meas.amplitude[0]:.3g} um, "
           f"f {meas.frequency[0]:.3f} Hz, zeta {100 * meas.damping_ratio[0]:.4f} %; the "
           f"prediction's first window: {1e6 * pred.amplitude[0]:.3g} um, f "
@@ -66,7 +66,7 @@ def prediction(d, duration: float):
 
 def coupling(out, duration: float):
     t0 = time.perf_counter()
-    c = models.mode_coupling(out["calibration"].specimen, amplitude=out["amplitude"],
+    c = models.mode_coupling(out.calibration.specimen, amplitude=out.release,
                              duration=duration)
     print(f"\n(b) {time.perf_counter() - t0:.1f} s")
     print(c.report().split("  warning:")[0])

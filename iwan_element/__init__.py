@@ -43,7 +43,8 @@ from .identify.stepped_sine import stepped_sine_curve
 from .identify.sweeps import sweep_curve
 from .identify.formats import UffRecord, read_sweep_csv, read_uff
 from .identify.csv_input import load_test
-from .identify.testdata import Cycle, TestData, find_reversals, simulate_test, split_cycles
+from .identify.cycles import Cycle, find_reversals, split_cycles
+from .identify.testdata import TestData, simulate_test
 
 __version__ = "0.1.0"
 

@@ -11,11 +11,16 @@
 * :mod:`~iwan_element.models.transient` - the transient route (:func:`ringdown`, one release
   level per call, one mode or several at once through the same interface; frequency and
   damping by :func:`iwan_element.amplitude_curve`; result in
-  :mod:`~iwan_element.models.ringdown_result`);
+  :mod:`~iwan_element.models.ringdown_result`; the pieces the 1-D and the solid ring-down share
+  in :mod:`~iwan_element.models.ringdown_records`; a solid specimen's run in
+  :mod:`~iwan_element.models.solid_transient`);
 * :mod:`~iwan_element.models.impact` - a hammer impact (:class:`Impact`, a half-sine force
   pulse) that :func:`ringdown` takes instead of a release;
 * :mod:`~iwan_element.models.coupling` - each mode's damping with and without the other
   modes ringing through the same interface (:func:`mode_coupling`);
+* :mod:`~iwan_element.models.hammer` - a whole hammer test predicted from one mode
+  (:func:`predict_hammer_test`: calibrate on it, each other mode's floor from its lowest
+  amplitudes, the multi-mode ring-down against every record);
 * :mod:`~iwan_element.models.damping` - the linear damping floor, one ratio per mode, as the
   stuck system's modal damping matrix (the ring-down's and the stepped sine's);
 * :mod:`~iwan_element.models.machine` - the joint's quasi-static test in a machine grip
@@ -44,6 +49,7 @@ from .coupling import ModeCouplingResult, mode_coupling
 from .forced import ForcedResponseResult, forced_response
 from .frequency import frequency_response, harmonic_balance, nonlinear_mode
 from .reduced import ReducedModel, reduced_model, reduction_error
+from .hammer import HammerPrediction, predict_hammer_test
 from .impact import Impact
 from .machine import QuasiStaticResult, quasi_static_test
 from .qsma import modal_amplitude_curve, natural_frequencies
@@ -57,7 +63,7 @@ __all__ = ["example_test_path", "preset", "modal_amplitude_curve", "natural_freq
            "Specimen", "InterfaceModel", "Excitation", "RingdownResult", "ModeCouplingResult",
            "QuasiStaticResult", "ForcedResponseResult", "solid_preset", "SolidSpecimen",
            "harmonic_balance", "frequency_response", "nonlinear_mode", "reduced_model",
-           "reduction_error", "ReducedModel"]
+           "reduction_error", "ReducedModel", "predict_hammer_test", "HammerPrediction"]
 
 
 def example_test_path() -> Path:

@@ -151,7 +151,7 @@ def _marker_at(mbs, elems, edges, x0, x, y_local):
 
 def build_specimen_model(specimen: Specimen, *, tangential: str = "iwan", post_step=None,
                          joint_elements: bool = False, drive=None,
-                         depth: int = 8) -> SpecimenModel:
+                         depth: int = 24) -> SpecimenModel:
     """Build and assemble the Exudyn system of a specimen.
 
     Parameters
@@ -170,7 +170,9 @@ def build_specimen_model(specimen: Specimen, *, tangential: str = "iwan", post_s
         constraint is ``model.extra["grip"]`` (its force is the machine force).
     depth : int, keyword-only
         Reversal points each contact point's compiled law holds (``add_iwan_interface``;
-        default 8): several modes slipping the lap at once nest more loops.
+        default 24): a decaying or multi-mode response nests loops, and a step that closes
+        more than ``depth // 2`` of them is not exact (warned). 24 costs no more than 8 per
+        step where nothing overflows (docs/multi_mode.md section 2).
     """
     if not isinstance(specimen, Specimen):
         raise ValueError(f"specimen must be a Specimen, got {type(specimen).__name__}")
@@ -334,15 +336,19 @@ def _coordinate_jacobian(mbs, read, n: int, eps: float = 1e-8) -> np.ndarray:
     return np.array(out).T
 
 
-def axis_rows(specimen: Specimen, positions) -> np.ndarray:
+def axis_rows(specimen: Specimen | SolidSpecimen, positions) -> np.ndarray:
     """Rows mapping the free coordinates to the transverse displacement [m] of the beams'
     axis at ``positions`` [m] along the assembly (the axis of ``sensor_position``; beam A up
-    to its length, beam B beyond): shape ``(len(positions), n_free)``."""
+    to its length, beam B beyond): shape ``(len(positions), n_free)``. A
+    :class:`~iwan_element.models.solid.SolidSpecimen` reads its stored rows
+    (:meth:`~iwan_element.models.solid.SolidSpecimen.axis_rows`)."""
     x = np.atleast_1d(np.asarray(positions, float))
     if x.ndim != 1 or x.size == 0 or not np.all(np.isfinite(x)) or np.any(x < 0) \
             or np.any(x > specimen.total_length):
         raise ValueError(f"positions must be a non-empty sequence in [0, "
                          f"{specimen.total_length:.6g}] m, got {positions!r}")
+    if isinstance(specimen, SolidSpecimen):
+        return specimen.axis_rows(x)
     return _axis_rows(_structure_key(specimen), tuple(float(v) for v in x))
 
 

@@ -33,7 +33,7 @@ from scipy import optimize
 
 from iwan_element import AmplitudeCurve, IwanParameters, amplitude_curve
 from iwan_element.core.progress import finish, progress_bar, tick
-from iwan_element.core.result_shape import ResultShape, panels
+from iwan_element.core.result_shape import ResultShape, panels, unit_label
 from iwan_element.fitting import (Parameter, ParameterTable, covariance, fit_success,
                                   minimize, verdict)
 
@@ -101,12 +101,19 @@ class CalibrationResult(ResultShape):
     success: bool
     converged: bool = True
 
+    def failure_reasons(self) -> tuple:
+        """Why ``success`` is False in a tester's words: the optimiser's stop, then every
+        warning (a parameter the curve does not identify, a floor leaning on the joint)."""
+        if self.success:
+            return ()
+        own = () if self.converged else ("the fit did not converge",)
+        return own + tuple(self.warnings) or super().failure_reasons()
+
     def report(self) -> str:
-        state = ("identified" if self.success else "converged, NOT identified"
-                 if self.converged else "NOT converged")
-        lines = [f"Interface calibration of {self.specimen.name!r} ({state})"]
+        lines = [f"Interface calibration of {self.specimen.name!r}: {self.verdict()}"]
         for k, p in self.params.items():
-            lines.append(f"  {k:20s} = {p.value:.6g} +- {p.stderr:.2g} [{p.unit}]  {p.status}")
+            lines.append(f"  {k:20s} = {p.value:.6g} +- {p.stderr:.2g} [{unit_label(p.unit)}]  "
+                         f"{p.status}")
         lines.append(f"  max |f/f_meas - 1|      = {self.max_frequency_error:.2e}")
         lines.append(f"  max |zeta/zeta_meas - 1| = {self.max_damping_error:.3f}")
         lines += [f"  warning: {w}" for w in self.warnings]

@@ -23,7 +23,7 @@ from .ringdown_result import RingdownResult
 from .specimens import Specimen
 from .transient import ringdown
 
-__all__ = ["compare_curves", "ModeCouplingResult", "mode_coupling"]
+__all__ = ["compare_curves", "ModeCouplingResult", "mode_coupling", "plot_curve_pairs"]
 
 
 def compare_curves(curve: AmplitudeCurve, reference: AmplitudeCurve) -> dict:
@@ -125,19 +125,27 @@ class ModeCouplingResult(ResultShape):
         """Each mode's damping ratio [%] and frequency [Hz] against its amplitude, together
         (filled) and alone (open), on ``ax = (ax_z, ax_f)``; returns the artists."""
         ax_z, ax_f = panels(ax, 2, figsize=(6, 6))
-        arts = []
-        for i, (r, rd) in enumerate(zip(self.modes, self.alone)):
-            c_t, c_a = self.together.mode_curve(r), rd.curve
-            for c, mk, lab in ((c_t, "o-", "with the other modes"), (c_a, "s--", "alone")):
-                kw = {"color": f"C{i}", "ms": 3, "label": f"mode {r} {lab}"}
-                if mk.startswith("s"):
-                    kw["mfc"] = "none"
-                arts += ax_z.semilogx(c.amplitude, 100 * c.damping_ratio, mk, **kw)
-                arts += ax_f.semilogx(c.amplitude, c.frequency, mk, **kw)
-        ax_z.set(xlabel="amplitude at the sensor [m]", ylabel="damping ratio [%]")
-        ax_f.set(xlabel="amplitude at the sensor [m]", ylabel="frequency [Hz]")
-        ax_z.legend(fontsize=7)
-        return arts
+        pairs = [(f"mode {r}", self.together.mode_curve(r), "with the other modes", rd.curve,
+                  "alone") for r, rd in zip(self.modes, self.alone)]
+        return plot_curve_pairs(ax_z, ax_f, pairs, ("o-", "s--"))
+
+
+def plot_curve_pairs(ax_z, ax_f, pairs, formats) -> list:
+    """Damping ratio [%] (on ``ax_z``) and frequency [Hz] (on ``ax_f``) against amplitude of
+    ``pairs = [(name, curve, label, other curve, other label), ...]``, one colour per pair,
+    the second curve of each drawn in ``formats[1]`` with open markers; returns the artists."""
+    arts = []
+    for i, (name, c1, l1, c2, l2) in enumerate(pairs):
+        for c, fmt, lab, fill in ((c1, formats[0], l1, True), (c2, formats[1], l2, False)):
+            kw = {"color": f"C{i}", "ms": 3, "label": f"{name} {lab}"}
+            if not fill:
+                kw["mfc"] = "none"
+            arts += ax_z.semilogx(c.amplitude, 100 * c.damping_ratio, fmt, **kw)
+            arts += ax_f.semilogx(c.amplitude, c.frequency, fmt, **kw)
+    ax_z.set(xlabel="amplitude at the sensor [m]", ylabel="damping ratio [%]")
+    ax_f.set(xlabel="amplitude at the sensor [m]", ylabel="frequency [Hz]")
+    ax_z.legend(fontsize=7)
+    return arts
 
 
 def mode_coupling(specimen: Specimen, *, amplitude: dict, duration: float,

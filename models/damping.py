@@ -25,6 +25,7 @@ import numpy as np
 from exudyn.itemInterface import ObjectGenericODE2
 
 from .reduced import stuck_modes
+from .solid import SolidSpecimen
 from .specimens import Specimen
 
 __all__ = ["FloorDamping", "floor_damping", "attach_floor_damping", "FloorWork"]
@@ -62,15 +63,16 @@ def floor_damping(specimen: Specimen) -> FloorDamping:
 
     Parameters
     ----------
-    specimen : Specimen
+    specimen : Specimen or SolidSpecimen
         Its ``floor(r)`` gives elastic mode ``r``'s ratio.
 
     Returns
     -------
     FloorDamping
     """
-    if not isinstance(specimen, Specimen):
-        raise ValueError(f"specimen must be a Specimen, got {type(specimen).__name__}")
+    if not isinstance(specimen, (Specimen, SolidSpecimen)):
+        raise ValueError(f"specimen must be a Specimen or SolidSpecimen, got "
+                         f"{type(specimen).__name__}")
     key = specimen.replace(friction=1.0, chi=0.0, beta=0.0, damping_floor=0.0, modal_damping=(),
                            amplitude_range=(1.0, 2.0), calibrated_range=None, effects=())
     L, _, w, V, n_low = stuck_modes(key)         # the one stuck eigenproblem

@@ -131,9 +131,10 @@ def _sweep_level(s, F0, freqs, floor, cycles, steps_per_period, rho, bar=None):
     ``freqs`` for one force level ``F0`` [N], each frequency continuing from the state the
     previous one left."""
     settle, measure = cycles
-    # the switch-on transient beats with the forced response: a decaying envelope nests
-    # the joints' loops (depth 8 overflowed 54 times on the Brake-Reuss beam at 2 N)
-    model = build_specimen_model(s, depth=24)
+    # the switch-on transient beats with the forced response and nests the joints' loops:
+    # the model's default depth (24) holds them (8 overflowed 54 times on the Brake-Reuss
+    # beam at 2 N)
+    model = build_specimen_model(s)
     mbs = model.mbs
     L = linear_system(s)
     if floor.active:

@@ -195,7 +195,7 @@ def static_modal_load(specimen: Specimen, amplitude, *, mode: int = 1,
     out_u = np.zeros((X.size, n))
     out_a = np.zeros(X.size)
     warns = []
-    u, alpha = None, 0.0
+    u, alpha, X_prev = None, 0.0, None
     for j in np.argsort(X):
         Xt = X[j]
         if u is None:

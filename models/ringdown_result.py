@@ -29,7 +29,8 @@ class RingdownResult(ResultShape):
     t : ndarray, shape (n,)
         Time [s] from the release.
     sensor : ndarray, shape (n,)
-        Transverse displacement at the specimen's sensor point [m] (all modes).
+        Transverse displacement at the specimen's sensor point [m] (all modes; on a solid
+        specimen the z displacement of the node nearest the section centre there).
     modal : ndarray, shape (n,)
         The first (lowest) mode's contribution at the sensor, ``(S phi) q(t)`` [m].
     curve : AmplitudeCurve
@@ -57,7 +58,10 @@ class RingdownResult(ResultShape):
         recorded forces, over the release energy; the time integrator's share of the energy
         balance (it converges with ``steps_per_period``), else None; ``overflow_steps``:
         steps that closed more slip loops than the compiled interface law holds (their
-        joint forces not exact; warned).
+        joint forces not exact; warned); ``newton_iterations`` and ``jacobians``: Exudyn's
+        Newton iterations and Jacobians over the run; ``tangential`` (``"iwan"``, or
+        ``"linear"``: springs at the stuck stiffness); a solid specimen's run also gives
+        ``n_coordinates`` (the reduced coordinates integrated).
     modes : tuple of int
         The elastic modes released, ascending (``(mode,)`` for a single-mode call).
     curves : tuple of AmplitudeCurve

@@ -97,6 +97,10 @@ class SolidModel:
         The full sparse matrices (``M``, ``K0``, ``Kb``, ``G``, ``S``), the reduction basis
         ``basis`` and the kept full coordinates ``free`` when built with ``keep_full=True``
         (for checking the reduction), else ``None``.
+    axis : tuple or None
+        ``(x, rows)``: positions [m] every millimetre along the assembly and, per position,
+        the reduced row of the z displacement of the node nearest the section centre there
+        (read as ``S``; the ring-down's sensors), shape ``(len(x), n_reduced)``.
     """
 
     system: object
@@ -104,6 +108,7 @@ class SolidModel:
     normal_gaps: np.ndarray
     info: dict = field(default_factory=dict)
     full: dict | None = field(default=None, repr=False)
+    axis: tuple | None = field(default=None, repr=False)
 
 
 @dataclass(frozen=True)
@@ -165,6 +170,18 @@ class SolidSpecimen:
         sysm, Gn = self.model.system, self.model.normal_gaps
         kn = self.specimen.interface.normal_stiffness_per_area * self.model.patches.area
         return replace(sysm, K0=sysm.Kb + Gn.T @ (kn[:, None] * Gn))
+
+    def axis_rows(self, positions) -> np.ndarray:
+        """Reduced rows of the z displacement at ``positions`` [m] along the assembly (the
+        node nearest the section centre, read as the sensor's ``S``; each position taken at
+        the nearest millimetre of :attr:`SolidModel.axis`): shape ``(n, n_reduced)``."""
+        if self.model.axis is None:
+            raise ValueError("this solid model holds no axis rows: build it with "
+                             "solid_build.solid_specimen")
+        x, rows = self.model.axis
+        k = np.clip(np.rint(np.asarray(positions, float) / (x[1] - x[0])).astype(int), 0,
+                    x.size - 1)
+        return rows[k]
 
     def contact_points(self) -> ContactPoints:
         """The patches' Iwan elements (two per patch, module docstring)."""

@@ -52,6 +52,7 @@ __all__ = ["patch_layout", "solid_specimen", "solid_preset"]
 log = logging.getLogger(__name__)
 
 _SHIFT = (2 * math.pi * 1.0) ** 2       # mass shift of the factorised K_ref [1/s^2]
+AXIS_STEP = 1e-3                        # grid of the stored sensor rows along the axis [m]
 
 
 def patch_layout(specimen: Specimen, *, patch_size: float) -> PatchLayout:
@@ -169,19 +170,38 @@ def _fixed_coordinates(specimen: Specimen, a: SolidPart) -> np.ndarray:
     return (3 * nodes[:, None] + np.arange(3)).ravel()
 
 
-def _point_row(specimen: Specimen, a: SolidPart, b: SolidPart, xs: float) -> np.ndarray:
-    """Unit row on the z coordinate of the node nearest the section centre at ``xs`` [m]
-    along the assembly (the sensor's, or the excitation's: a unit force there has this
-    row as its load vector)."""
+def _point_index(specimen: Specimen, a: SolidPart, b: SolidPart, xs: float) -> int:
+    """Index (in the coordinates [A's, B's], x, y, z per node) of the z coordinate of the
+    node nearest the section centre at ``xs`` [m] along the assembly."""
     s = specimen
     on_b = xs > s.beam_length
     part, off = (b, 3 * len(a.positions)) if on_b else (a, 0)
     zc = np.mean(part.positions[np.abs(part.positions[:, 0] - xs)
                                 <= np.ptp(part.positions[:, 0]) * 0.02][:, 2])
     j = int(np.argmin(np.linalg.norm(part.positions - [xs, 0.0, zc], axis=1)))
+    return off + 3 * j + 2
+
+
+def _point_row(specimen: Specimen, a: SolidPart, b: SolidPart, xs: float) -> np.ndarray:
+    """Unit row on the z coordinate of the node nearest the section centre at ``xs`` [m]
+    along the assembly (the sensor's, or the excitation's: a unit force there has this
+    row as its load vector)."""
     S = np.zeros(3 * (len(a.positions) + len(b.positions)))
-    S[off + 3 * j + 2] = 1.0
+    S[_point_index(specimen, a, b, xs)] = 1.0
     return S
+
+
+def _axis_grid(specimen: Specimen, a: SolidPart, b: SolidPart, T, free):
+    """``(x, rows)``: the reduced rows of the z displacement read as :func:`_point_row` reads
+    the sensor's, at every millimetre ``x`` [m] along the assembly (where a ring-down's
+    sensors are read)."""
+    x = np.arange(0.0, specimen.total_length + 0.5 * AXIS_STEP, AXIS_STEP)
+    idx = np.array([_point_index(specimen, a, b, v) for v in x])
+    pos = np.minimum(np.searchsorted(free, idx), free.size - 1)
+    ok = free[pos] == idx
+    rows = np.zeros((x.size, T.shape[1]))
+    rows[ok] = T[pos[ok]]                   # a clamped node's row stays zero
+    return x, rows
 
 
 def _factor(A):
@@ -287,6 +307,7 @@ def solid_specimen(specimen: Specimen, parts: tuple, *, patch_size: float = 0.00
     red = LinearSystem(M=T.T @ (M @ T), K0=T.T @ (K0 @ T), Kb=T.T @ (Kb @ T), G=Gt @ T,
                        S=S @ T, free=np.arange(T.shape[1]), n_coordinates=T.shape[1],
                        rigid_body_modes=n_rigid, E=E @ T)
+    axis = _axis_grid(specimen, a, b, T, free)
     info = {"n_full": int(M.shape[0]), "n_reduced": int(T.shape[1]), "n_modes": n_modes,
             "n_patches": len(patches), "patch_size": [float(v) for v in patches.size],
             "reduction_s": time.perf_counter() - t0,
@@ -296,7 +317,7 @@ def solid_specimen(specimen: Specimen, parts: tuple, *, patch_size: float = 0.00
     log.info("solid %s: %d -> %d coordinates, %d patches, %.2f s", specimen.name, M.shape[0],
              T.shape[1], len(patches), info["reduction_s"])
     return SolidSpecimen(specimen, SolidModel(system=red, patches=patches, info=info, full=full,
-                                              normal_gaps=Gn @ T))
+                                              normal_gaps=Gn @ T, axis=axis))
 
 
 def solid_preset(name: str, *, mesh_size: float = 0.008, lap_mesh_size: float | None = None,

@@ -26,14 +26,11 @@ multi-mode run and the coupling of the modes through the interface.
 from __future__ import annotations
 
 import math
-import time
 
 import exudyn as exu
 import numpy as np
 from exudyn.itemInterface import LoadForceVector
 
-from iwan_element import backbone_work
-from iwan_element.core.progress import finish, progress_bar, tick
 from iwan_element.core.validation import check_scalar
 
 from .assembly import axis_rows, build_specimen_model
@@ -41,14 +38,15 @@ from .damping import FloorWork, attach_floor_damping, floor_damping
 from .impact import Impact
 from .modal_effects import ModalEffects
 from .qsma import linear_modes, static_modal_load
-from .ringdown_result import RingdownResult, decay_curve, with_energy_warning
+from .ringdown_records import (Recorder, build_result, joint_records, solve_timed, step_grid,
+                               virgin_joint_energy)
+from .ringdown_result import RingdownResult, with_energy_warning
+from .solid import SolidSpecimen
+from .solid_transient import check_solid_release, solid_ringdown
 from .solver import roundoff_force, solver_settings
 from .specimens import Specimen
 
 __all__ = ["RingdownResult", "ringdown"]
-
-_E_KEYS = ("t", "kinetic", "strain", "springs", "joint_stored", "joint_dissipated",
-           "floor_dissipated", "effect_stored", "effect_dissipated", "input_work")
 
 
 def _amplitudes(mode, amplitude) -> dict:
@@ -74,8 +72,9 @@ def _amplitudes(mode, amplitude) -> dict:
 
 def _check_args(specimen, steps_per_period, n_periods, cycles, duration):
     """Checks of :func:`ringdown`'s other arguments: ``(n_periods, cycles, duration)``."""
-    if not isinstance(specimen, Specimen):
-        raise ValueError(f"specimen must be a Specimen, got {type(specimen).__name__}")
+    if not isinstance(specimen, (Specimen, SolidSpecimen)):
+        raise ValueError(f"specimen must be a Specimen or SolidSpecimen, got "
+                         f"{type(specimen).__name__}")
     if isinstance(steps_per_period, bool) or not isinstance(steps_per_period, int) \
             or steps_per_period < 16:
         raise ValueError(f"steps_per_period must be an integer >= 16, got {steps_per_period!r}")
@@ -135,69 +134,29 @@ def _initial_energy(model, rel, effs) -> tuple:
     """``(kinetic, total)`` energy [J] at the release: the beams' strain energy, the springs',
     the joint's (the virgin backbone work at the initial slips) and the effects'."""
     kin0, pot0 = model.beam_energy()
-    u0 = np.abs(rel["slip"])
-    e_joint0 = float(sum(backbone_work(u, p) for u, p in zip(u0, model.points.params)))
-    e0 = pot0 + model.spring_energy() + e_joint0
+    e0 = pot0 + model.spring_energy()
+    if model.interface is not None:
+        e0 += virgin_joint_energy(rel["slip"], model.points.params)
     for eff in effs:
         e0 += eff.start(eff.s * float(eff.a_free @ rel["x"]))
     return kin0, e0
 
 
-class _Recorder:
-    """The post-step function of a ring-down: the coordinates and (with
-    ``record_energy``) the energy terms of every accepted step, and the effects' commits."""
-
-    def __init__(self, L, effs, floor_work, record_energy: bool):
-        self.L, self.effs, self.floor_work, self.record = L, effs, floor_work, record_energy
-        self.times, self.coords = [], []
-        self.energy = {k: [] for k in _E_KEYS}
-        self.model = None
-        self.impact = None                 # (Impact, row of its point) when one acts
-        self.work_in, self.last = 0.0, None
-        self.bar = None                    # a progress bar over the steps, if asked
-
-    def __call__(self, mbs_, t):
-        sd, free = mbs_.systemData, self.L.free
-        self.times.append(t)
-        if self.bar is not None and len(self.times) % 50 == 0:
-            tick(self.bar, 50)
-        self.coords.append(sd.GetODE2Coordinates())
-        v = np.asarray(sd.GetODE2Coordinates_t())[free]
-        e = self.energy
-        for eff in self.effs:
-            eff.commit(self.coords[-1][free], v)
-        if self.record:
-            if self.effs:
-                es, ed = np.sum([eff.energy() for eff in self.effs], axis=0)
-                e["effect_stored"].append(es)
-                e["effect_dissipated"].append(ed)
-            e["floor_dissipated"].append(self.floor_work.step(t, v))
-            if self.impact is not None:
-                imp, row = self.impact
-                F, y = imp.force(t), float(row @ self.coords[-1][free])
-                if self.last is not None:  # the trapezoidal rule's work of the load
-                    self.work_in += 0.5 * (F + self.last[0]) * (y - self.last[1])
-                self.last = (F, y)
-                e["input_work"].append(self.work_in)
-            kin, pot = self.model.beam_energy()
-            e["t"].append(t)
-            e["kinetic"].append(kin)
-            e["strain"].append(pot)
-            e["springs"].append(self.model.spring_energy())
-        return True
-
-
-def ringdown(specimen: Specimen, *, mode: int | None = None, amplitude=None,
+def ringdown(specimen: Specimen | SolidSpecimen, *, mode: int | None = None, amplitude=None,
              impact: Impact | None = None, modes=None, sensors=None,
              duration: float | None = None, cycles: float | None = None,
              steps_per_period: int = 64, n_periods: float = 3.0, record_energy: bool = False,
-             joint_elements: bool = False, progress: bool = False) -> RingdownResult:
+             joint_elements: bool = False, progress: bool = False,
+             tangential: str = "iwan") -> RingdownResult:
     """Release the specimen from a static deflection in one or several modes' load shapes,
     or strike it (``impact``); let it ring down through the interface.
 
     Parameters
     ----------
-    specimen : Specimen
+    specimen : Specimen or SolidSpecimen
+        A 1-D specimen (Exudyn beams), or a solid one (its reduced bodies in Exudyn,
+        :mod:`~iwan_element.models.solid_transient`; releases only, no effects, its modes
+        numbered as the solid's stuck modes: a mode must move the sensor's z displacement).
     mode : int, optional, keyword-only
         Elastic mode number (1: lowest) of a single-mode release (default 1); not with a
         dict ``amplitude``.
@@ -231,6 +190,10 @@ def ringdown(specimen: Specimen, *, mode: int | None = None, amplitude=None,
         compiled interface law.
     progress : bool, keyword-only
         Show a tqdm bar over the time steps with its ETA; needs tqdm.
+    tangential : {"iwan", "linear"}, keyword-only
+        The contact points' tangential law: the Iwan elements (default), or linear springs
+        at their stuck stiffness ``KT_i`` (the same bodies with the stuck interface: the
+        linear reference of cost and decay; the release state is still the Iwan one).
 
     Returns
     -------
@@ -254,19 +217,28 @@ def ringdown(specimen: Specimen, *, mode: int | None = None, amplitude=None,
     """
     n_periods, cycles, duration = _check_args(specimen, steps_per_period, n_periods, cycles,
                                               duration)
+    if tangential not in ("iwan", "linear"):
+        raise ValueError(f"tangential must be 'iwan' or 'linear', got {tangential!r}")
+    if isinstance(specimen, SolidSpecimen):
+        check_solid_release(specimen, () if amplitude is None else _amplitudes(mode, amplitude),
+                            impact)
     amp, rel = _start(specimen, mode, amplitude, impact, modes)
     positions = np.atleast_1d(np.asarray(
         specimen.sensor_position if sensors is None else sensors, float))
     rows = axis_rows(specimen, positions)
+    if isinstance(specimen, SolidSpecimen):
+        return solid_ringdown(specimen, amp, rel, rows, positions, {
+            "n_periods": n_periods, "steps_per_period": steps_per_period,
+            "duration": duration, "cycles": cycles, "record_energy": record_energy,
+            "joint_elements": joint_elements, "progress": progress,
+            "tangential": tangential})
     L, w0 = rel["system"], rel["omega0"]
     floor = floor_damping(specimen)
     effs = [ModalEffects(specimen, r, L, phi, w) for r, phi, w in zip(amp, rel["phi"], w0)
             if any(e.mode == r for e in specimen.effects)]
-    rec = _Recorder(L, effs, FloorWork(floor.C if floor.active else None), record_energy)
-    # several modes nest more slip loops (mode 2's cycles inside mode 1's): a deeper law
-    model = build_specimen_model(specimen, tangential="iwan", post_step=rec,
-                                 joint_elements=joint_elements,
-                                 depth=8 if len(amp) == 1 else 24)
+    rec = Recorder(L.free, effs, FloorWork(floor.C if floor.active else None), record_energy)
+    model = build_specimen_model(specimen, tangential=tangential, post_step=rec,
+                                 joint_elements=joint_elements)
     rec.model = model
     mbs = model.mbs
     for eff in effs:
@@ -282,135 +254,20 @@ def ringdown(specimen: Specimen, *, mode: int | None = None, amplitude=None,
     mbs.systemData.SetODE2Coordinates(x0, configuration=exu.ConfigurationType.Initial)
     mbs.systemData.SetODE2Coordinates(x0, configuration=exu.ConfigurationType.Current)
     kin0, e0 = _initial_energy(model, rel, effs)
-    h = 2 * math.pi / (w0.max() * steps_per_period)
-    if impact is not None:
-        h = min(h, impact.contact_time / 16)
-    n = int(round(duration / h)) if duration is not None else \
-        int(round(cycles * steps_per_period * w0.max() / w0.min())) if impact is None else \
-        int(round(cycles * 2 * math.pi / (w0.min() * h)))
+    h, n = step_grid(w0, steps_per_period, duration=duration, cycles=cycles, impact=impact)
     sim = solver_settings(force_scale=max(float(np.max(np.abs(L.K0 @ rel["x"]))),
                                           0.0 if impact is None else abs(impact.peak_force)))
     newton = sim.timeIntegration.newton
     newton.absoluteTolerance = max(newton.absoluteTolerance, roundoff_force(L, specimen))
     sim.timeIntegration.numberOfSteps = n
     sim.timeIntegration.endTime = n * h
-    t0 = time.perf_counter()
-    rec.bar = progress_bar(progress, total=n + 1, desc="ringdown", unit="step")
-    try:
-        mbs.SolveDynamic(sim)
-        tick(rec.bar, len(rec.times) % 50)            # the steps since the last tick
-    finally:
-        finish(rec.bar)
-    wall = time.perf_counter() - t0
-    quad = _joint_records(model.interface, rec.energy, e0 + rec.work_in) if record_energy \
+    solve = solve_timed(mbs, sim, rec, n, progress)
+    quad = joint_records(model.interface, rec.energy, e0 + rec.work_in) if record_energy \
         else None
-    return with_energy_warning(_result(specimen, amp, rec, rel, rows, positions, h, n, {
-        "n_periods": n_periods, "steps_per_period": steps_per_period, "wall": wall, "e0": e0,
+    X = np.array(rec.coords)[:, L.free]
+    return with_energy_warning(build_result(specimen, amp, rec, X, rel, rows, positions, h, n, {
+        "n_periods": n_periods, "steps_per_period": steps_per_period, "solve": solve, "e0": e0,
         "kin0": kin0, "quad": quad, "n_points": len(model.points),
         "overflow": len(getattr(model.interface, "overflow_times", ())),
-        "effects": tuple(nm for eff in effs for nm in eff.names), "impact": impact}))
-
-
-def _result(specimen, amp, rec, rel, rows, positions, h, n, run) -> RingdownResult:
-    """The ring-down's result from its records: every signal on the nominal step grid, one
-    decay curve per mode from its modal filter."""
-    L, w0, modes = rel["system"], rel["omega0"], tuple(amp)
-    X = np.array(rec.coords)[:, L.free]
-    k = len(modes)
-    s_phi = np.array([float(L.S @ phi) for phi in rel["phi"]])
-    sig = np.vstack([X @ L.S, (X @ (L.M @ np.array(rel["phi"]).T) * s_phi).T, rows @ X.T])
-    t, sig, cut = _on_step_grid(np.array(rec.times), sig, h, n)
-    sig = np.array(sig)
-    modal, disp = sig[1:1 + k], sig[1 + k:]
-    curves, warns = [], []
-    for i, r in enumerate(modes):
-        # several modes: each modally filtered record (the other modes filtered out, so
-        # nothing to alias) is read every q-th step, about 32 samples per period of its mode;
-        # the curve's filter costs grow steeply with the samples per period (measured: 6.7 s
-        # at 64, 0.5 s at 32, whatever the record's length). An anti-aliasing decimation
-        # (scipy.signal.decimate) left end effects that cut the short records' curves.
-        q = 1 if k == 1 else max(1, int(run["steps_per_period"] * w0.max() / w0[i] / 32))
-        ti, yi = t[::q], modal[i][::q]
-        c = decay_curve(ti, yi, h, w0[i] / (2 * math.pi), run["n_periods"], notes=(
-            f"{specimen.name}: Exudyn transient, mode {r}"
-            + (f" of modes {', '.join(map(str, modes))}" if k > 1 else "")
-            + f", {run['steps_per_period']} steps per period of the highest mode, "
-            + (f"released from {amp[r]:.3g} m at the sensor" if amp[r] is not None else
-               f"struck by {run['impact'].peak_force:.4g} N over {run['impact'].contact_time:.3g} s"
-               f" at {run['impact'].position:.4g} m")
-            + "; modal filtering"
-            + (f"; with {' + '.join(run['effects'])}" if run["effects"] else "")))
-        curves.append(c)
-        warns += [w if k == 1 else f"mode {r}: {w}" for w in c.warnings]
-    return RingdownResult(
-        t=t, sensor=sig[0], modal=modal[0], curve=curves[0],
-        energy={key: np.array(v) for key, v in rec.energy.items()}, initial_energy=run["e0"],
-        wall_time=run["wall"],
-        metadata={"h": h, "steps": n, "extra_steps": cut, "modes": modes, "amplitude": amp,
-                  "floor": {r: specimen.floor(r) for r in modes}, "n_points": run["n_points"],
-                  "effects": run["effects"], "kinetic_at_release": run["kin0"],
-                  "joint_quadrature_error": run["quad"], "overflow_steps": run["overflow"],
-                  "impact": run["impact"]},
-        modes=modes, curves=tuple(curves), modal_responses=modal, sensor_positions=positions,
-        sensor_displacement=disp, sensor_acceleration=_second_derivative(disp, h),
-        warnings=tuple(warns) + _cut_warning(cut, n, w0.max() * h) + ((
-            f"{run['overflow']} step(s) closed more slip loops than the compiled interface law "
-            "holds (8 reversal points, 24 with several modes): their joint forces were not "
-            "exact (the interface's "
-            "overflow_times; the Python route, joint_elements=True, is exact)",)
-            if run["overflow"] else ()))
-
-
-def _second_derivative(y, h):
-    """``d2y/dt2`` of records on the step grid (last axis) by central second differences
-    (relative error ``(w h)^2 / 12`` at ``w`` [rad/s]), the ends extrapolated linearly. The
-    integrator's own acceleration variable is not used: at spectral radius 1 the
-    generalized-alpha acceleration alternates about the physical one by the start's
-    mismatch (measured on the example beam: a sawtooth of the acceleration's size)."""
-    a = np.empty_like(y)
-    a[..., 1:-1] = (y[..., 2:] - 2 * y[..., 1:-1] + y[..., :-2]) / (h * h)
-    a[..., 0] = 2 * a[..., 1] - a[..., 2]
-    a[..., -1] = 2 * a[..., -2] - a[..., -3]
-    return a
-
-
-def _on_step_grid(times, signals, h, n):
-    """Signals recorded once per accepted step (at ``times`` [s]) on the nominal grid
-    ``k h``, ``k = 0..n``: ``(t, signals, cut)``. Where the interface slips hard,
-    Exudyn cuts the step (measured: 1,689 accepted steps instead of 512 on the two-bolt
-    aluminium beam released from 500 um); the records are then interpolated linearly onto the
-    grid (``cut``: how many steps more than ``n`` were taken). Read as if every record were one
-    nominal step apart, they had stretched the time scale: the decay came out at half its
-    frequency."""
-    t = np.arange(n + 1) * h
-    if times.size == n + 1 and np.allclose(times, t, rtol=0.0, atol=1e-9 * h):
-        return t, list(signals), 0
-    return t, [np.interp(t, times, y) for y in signals], int(times.size - 1 - n)
-
-
-def _cut_warning(cut: int, n: int, wh: float) -> tuple:
-    """The warning of a ring-down whose solver took ``cut`` steps more than its ``n``
-    nominal ones (``wh``: the nominal step times the linear frequency [rad])."""
-    if not cut:
-        return ()
-    return (f"the solver took {cut} steps more than the {n} nominal ones (the interface "
-            "slipping hard); the records were interpolated onto the nominal step, whose "
-            f"trapezoidal period correction (up to {wh * wh / 12:.1e} of the frequency) is "
-            "applied as if no step had been cut: give more steps_per_period for a frequency "
-            "closer than that",)
-
-
-def _joint_records(itf, energy: dict, e0: float) -> float:
-    """Fill the joints' stored and dissipated energy into ``energy`` from the interface's
-    records, and return their exact work minus the trapezoidal work ``sum (F_n + F_n+1) du / 2``
-    of the same slips and forces, over the release energy ``e0`` [-]: the time integrator's
-    quadrature error of the hysteretic forces, which is what the energy balance measures
-    when the bookkeeping is right."""
-    # the interface commits after the user post-step of the same step: its records (one per
-    # accepted step, and one at t = 0) line up with ours
-    m = len(energy["t"])
-    energy["joint_stored"] = list(itf.stored_energy_history[-m:])
-    energy["joint_dissipated"] = list(itf.dissipated_energy_history[-m:])
-    u, F, W = itf.slip_history[-m:], itf.force_history[-m:], itf.work_history[-m:]
-    trap = float(np.sum(0.5 * (F[1:] + F[:-1]) * np.diff(u, axis=0)))
-    return (float(W[-1] - W[0]) - trap) / e0
+        "effects": tuple(nm for eff in effs for nm in eff.names), "impact": impact,
+        "extra": {"tangential": tangential}}))

@@ -253,20 +253,27 @@ def _frequency_response():
     return models.harmonic_balance(s, np.linspace(80.0, 80.8, 5), 0.3)
 
 
+def _hammer():
+    from test_hammer_prediction import round_trip
+    return round_trip()[1]
+
+
 #: Results of the beam model (``iwan_element.models``), with the same shape.
 MODEL_RESULTS = {"CalibrationResult": _calibration, "RingdownResult": _ringdown,
                  "QuasiStaticResult": _quasi_static, "ForcedResponseResult": _forced,
-                 "ModeCouplingResult": _coupling, "FrequencyResponse": _frequency_response}
+                 "ModeCouplingResult": _coupling, "FrequencyResponse": _frequency_response,
+                 "HammerPrediction": _hammer}
 
 
 def test_every_model_result_class_is_covered():
     """Every result class the beam model's public functions return is in MODEL_RESULTS."""
     from iwan_element import models
     from iwan_element import harmonic
-    from iwan_element.models import calibration, coupling, forced, machine, transient
-    public = {n for mod in (models, calibration, transient, machine, forced, coupling, harmonic)
+    from iwan_element.models import calibration, coupling, forced, hammer, machine, transient
+    public = {n for mod in (models, calibration, transient, machine, forced, coupling, hammer,
+                            harmonic)
               for n in getattr(mod, "__all__", ())
-              if (n.endswith("Result") or n.endswith("Response")) and
+              if n.endswith(("Result", "Response", "Prediction")) and
               inspect.isclass(getattr(mod, n)) and issubclass(getattr(mod, n), ResultShape)}
     assert public == set(MODEL_RESULTS)
 

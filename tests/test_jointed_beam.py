@@ -153,6 +153,20 @@ def test_stuck_ring_down_is_the_linear_mode():
     assert np.max(r.curve.damping_ratio) < 1e-5
 
 
+def test_ring_down_with_linear_springs_is_the_stuck_mode_at_its_floor():
+    """tangential="linear": springs KT_i instead of the Iwan elements (the release state is
+    still the Iwan one): the stuck frequency, the floor, and the energy balance closed with
+    no joint terms."""
+    s = preset("brake-reuss").replace(n_points=8)
+    r = ringdown(s, amplitude=30e-6, cycles=16, steps_per_period=32, record_energy=True,
+                 tangential="linear")
+    f0 = natural_frequencies(s, n_modes=4)[-1]
+    assert r.metadata["tangential"] == "linear" and not np.any(r.energy["joint_dissipated"])
+    np.testing.assert_allclose(r.curve.frequency, f0, rtol=1e-5)        # measured 1e-6
+    np.testing.assert_allclose(r.curve.damping_ratio, s.floor(1), rtol=0.02)   # 0.7 %
+    assert r.max_energy_error < 1e-4                                    # measured 5e-6
+
+
 def test_stuck_stepped_sine_is_the_linear_frequency_response():
     """Stepped sine with nothing slipping and a 5 % floor (the modal damping matrix ``C``):
     the steady amplitudes are the linear system's frequency response

@@ -18,7 +18,7 @@ from hypothesis import given, strategies as st
 
 import iwan_element as ie
 from iwan_element import IwanJoint, IwanParameters
-from iwan_element.identify.saturation import cut_clipping, find_clipping
+from iwan_element.identify.saturation import cut_clipping, cut_flattened_peaks, find_clipping
 
 FS, F0 = 2048.0, 80.0
 
@@ -64,6 +64,36 @@ def test_amplitude_curve_on_a_clipped_decay_measures_only_below_the_clip():
     assert tc[0] > 0.68 and np.all(np.abs(yc) < 0.5) and "clipped" in note
     with pytest.raises(ValueError, match="y: the record is clipped"):   # nothing left after it
         ie.amplitude_curve(t[:1450], y[:1450], quantity="displacement", band=(60, 100))
+
+
+@pytest.mark.parametrize("seed", [1, 2])
+def test_clipping_under_noise_is_cut_and_a_noisy_or_two_mode_decay_is_not(seed):
+    """Clipping with noise added after it has no flat tops: the first point's damping was
+    0.00047-0.00049 against 0.002 at a 0.6 clip level (16 s records, seeds 1-3), success True, silent.
+    Now the record is cut after its last flattened cycle (truth: the last sample beyond the
+    clip, 0.506 s), and nothing is cut from
+    an unclipped decay with 3 % noise or from a small mode read beside a 20 x larger one."""
+    t, x = _decay(n=8192, noise=0.0, seed=seed)
+    rng = np.random.default_rng(seed)
+    y = np.clip(x, -0.6, 0.6) + 0.005 * rng.standard_normal(t.size)
+    truth = t[np.flatnonzero(np.abs(x) > 0.6)[-1]]
+    c = ie.amplitude_curve(t, y, quantity="displacement", band=(60, 100))
+    assert any("flattened below" in w for w in c.warnings), c.warnings
+    assert c.amplitude.max() < 0.6
+    np.testing.assert_allclose(c.damping_ratio[:5], 0.002, rtol=0.03)
+    _, _, note = cut_flattened_peaks(t, y, (60.0, 100.0))
+    cut = float(note.split("until t = ")[1].split(" s")[0])
+    assert 0.8 * truth < cut <= truth + 2 / F0
+    d = ie.fit_decay(t, y, quantity="displacement", band=(60, 100))
+    assert any("flattened below" in w for w in d.warnings), d.warnings
+    # unclipped, 3 % noise: nothing cut
+    _, x3 = _decay(n=8192, noise=0.03, seed=seed)
+    assert cut_flattened_peaks(t, x3, (60.0, 100.0))[2] == ""
+    # a small mode at 300 Hz read beside the 80 Hz one 20 x larger: nothing cut
+    w2 = 2 * np.pi * 300.0
+    two = 20 * x + np.exp(-0.001 * w2 * t) * np.cos(w2 * t)
+    assert cut_flattened_peaks(t, two, (270.0, 330.0))[2] == ""
+    assert cut_flattened_peaks(t, two, (60.0, 100.0))[2] == ""
 
 
 # ------------------------------------------------------------------ cases 2, 3: modal fit

@@ -63,7 +63,7 @@ from ._decay_model import (_Objective, _Problem, _covariance, _fit_regime, _loca
                            _misfit_ratio, _neighbours, _polar)
 from .modal_result import ModalIwanFit
 from .modal_fit import fit_modal_iwan
-from .saturation import cut_clipping
+from .saturation import cut_clipping, cut_flattened_peaks
 from .vibration import _check_band, _check_uniform_time
 
 __all__ = ["fit_decay"]
@@ -191,6 +191,8 @@ def _prepare(t, y, quantity, band, order, stiffness, floor, x_ref, t_start):
     if hi * dt < 1e-5:
         raise ValueError(f"band ({lo:g}, {hi:g}) Hz is below 1e-5 of the sampling rate "
                          f"{1.0 / dt:.3g} Hz (from t): check the unit of t")
+    tt, yy, flat_note = cut_flattened_peaks(tt, yy, (lo, hi))
+    clip_note = " ".join(x for x in (clip_note, flat_note) if x)
     conv = dict(stiffness=stiffness, floor=floor, x_ref=None, damping_form="decay",
                 method="direct signal fit",
                 quantity=quantity, band=[lo, hi], order=int(order))

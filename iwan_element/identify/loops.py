@@ -43,7 +43,7 @@ from .identifiability import _identify, min_macroslip
 from .model_fit import burn_in_index, drive_displacement
 from .noise import estimate_noise
 from .result import FitResult, _finish
-from .testdata import split_cycles
+from .cycles import split_cycles
 
 __all__ = ["fit_loops"]
 
@@ -178,7 +178,7 @@ def fit_loops(t, u, F, *, noise=None, smooth="auto", max_samples: int | None = 2
         Significance level, in ``(0, 0.5)``, of the test that the data reach macroslip and of
         the test that the joint explains more than noise.
     hysteresis : float, optional, keyword-only
-        Dead band [m] to count cycles (see :func:`iwan_element.identify.testdata.find_reversals`).
+        Dead band [m] to count cycles (see :func:`iwan_element.identify.cycles.find_reversals`).
     initial : IwanParameters, optional, keyword-only
         An extra start (for instance a previous fit).
     max_nfev : int, keyword-only

@@ -50,6 +50,7 @@ from .noise import estimate_noise, integrated_time
 from ..core.result_shape import ResultShape, value_stderr
 from ..fitting import (Parameter, ParameterTable, covariance, fit_success, minimize,
                        verdict)
+from .cycles import find_reversals
 
 __all__ = ["ModelFit", "fit_force_model", "drive_displacement", "burn_in_index"]
 
@@ -59,7 +60,6 @@ OFFSET_NAMES = ("dF0", "du0")
 
 def burn_in_index(u: np.ndarray, *, hysteresis: float | None = None) -> int:
     """First sample after the second turning point of ``u`` (0 if there are fewer than 2)."""
-    from .testdata import find_reversals                 # testdata imports this module's users
     rev = find_reversals(u, hysteresis=hysteresis)
     return int(rev[1]) if rev.size >= 2 else 0
 

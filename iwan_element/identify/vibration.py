@@ -79,7 +79,7 @@ from ._decay_filter import _decay_signal, _drift_terms, _noise_bandwidth
 from ._decay_windows import WindowPlan, _noise_std, drift_correct, hilbert_windows
 from ._decay_report import _finish
 from .peaks import pff_windows
-from .saturation import cut_clipping
+from .saturation import cut_clipping, cut_flattened_peaks
 
 __all__ = ["amplitude_curve"]
 
@@ -348,6 +348,9 @@ def amplitude_curve(t, y, *, quantity: str = "acceleration", band,
         quantity, order, n_periods, window, snr_min, max_damping_ratio_std, method)
     k_pow = _QUANTITY_POWER[quantity]
     lo, hi = _check_band(band, fs)
+    tt, yy, flat_note = cut_flattened_peaks(tt, yy, (lo, hi))
+    notes = tuple(x for x in (clip_note, flat_note) if x)
+    n = yy.size
     yy = yy - yy.mean()
     f_peak = _check_mode(yy, fs, lo, hi)
     sos, yf, z, (n_start, n_end), i_pk, route = _decay_signal(yy, fs, lo, hi, int(order))
@@ -396,7 +399,7 @@ def amplitude_curve(t, y, *, quantity: str = "acceleration", band,
                     (lo, hi, order, f_peak, fs, n_start, n_end, i_pk, noise, how, snr_min, k_pow,
                      route, env[i_pk:i_pk + n_start + 1]),
                     (max_damping_ratio_std, compare, plan))
-    return replace(curve, warnings=(clip_note,) + curve.warnings) if clip_note else curve
+    return replace(curve, warnings=notes + curve.warnings) if notes else curve
 
 
 

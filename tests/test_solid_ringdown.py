@@ -1,0 +1,108 @@
+"""The Exudyn ring-down of a solid specimen (models.solid_transient, issue 36) on the coarse mesh.
+
+Independent routes: the energy balance (the bodies' kinetic and strain energy from the reduced
+matrices, the joints' exact records, the floor's work); the stuck interface against the stuck
+eigenproblem and the per-mode floor (each mode decays at its own floor at its stuck
+frequency); the slipping mode 1 against QSMA of the same solid.
+"""
+from __future__ import annotations
+
+
+import numpy as np
+import pytest
+
+pytest.importorskip("ngsolve", reason="the solid specimens need the extra iwan-element[fem] "
+                                      "(ngsolve)")
+
+from iwan_element.models import (Impact, modal_amplitude_curve,  # noqa: E402
+                                 natural_frequencies, preset, ringdown)
+from iwan_element.models.solid_build import solid_specimen  # noqa: E402
+from iwan_element.models.solid_mesh import lap_beam_parts  # noqa: E402
+from iwan_element.models.solid_transient import slip_basis  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def solid():
+    """The coarse Brake-Reuss solid of tests/test_solid.py (104 reduced coordinates, 30
+    patches): stuck modes 1 (first height bending), 2 (in-plane), 3 (second height)."""
+    s = preset("brake-reuss")
+    parts = lap_beam_parts(s, mesh_size=0.012, lap_mesh_size=0.0051)
+    return solid_specimen(s, parts, patch_size=0.0085, n_modes=8)
+
+
+def test_the_slip_basis_makes_the_slips_coordinates(solid):
+    G = solid.linear_system().G
+    T, T_inv, n_eta = slip_basis(G)
+    m = G.shape[0]
+    assert n_eta == G.shape[1] - m
+    assert np.allclose(G @ T, np.hstack([np.zeros((m, n_eta)), np.eye(m)]), atol=1e-12)
+    assert np.allclose(T_inv @ T, np.eye(T.shape[1]), atol=1e-12)
+    with pytest.raises(ValueError, match="full row rank"):
+        slip_basis(np.vstack([G, G[:1]]))
+
+
+def test_a_two_mode_solid_ring_down_closes_its_energy_balance(solid):
+    r = ringdown(solid, amplitude={1: 60e-6, 3: 8e-6}, duration=0.16, steps_per_period=32,
+                 record_energy=True)
+    e = r.energy
+    assert r.metadata["tangential"] == "iwan"
+    assert r.metadata["n_coordinates"] == solid.model.info["n_reduced"]
+    assert e["joint_dissipated"][-1] > 0.01 * r.initial_energy      # the joints slipped
+    assert e["floor_dissipated"][-1] > 0.01 * r.initial_energy      # and the floor acted
+    assert r.metadata["overflow_steps"] == 0
+    # measured 9e-5 (the trapezoidal rule's quadrature of the joint forces: the same 9e-5)
+    assert r.max_energy_error < 1e-3 and r.success
+    assert abs(r.max_energy_error - abs(r.metadata["joint_quadrature_error"])) < 2e-4
+
+
+def test_the_compiled_law_on_slip_coordinates_equals_the_python_joints(solid):
+    kw = {"amplitude": 60e-6, "duration": 0.1, "record_energy": True}
+    a, b = ringdown(solid, **kw), ringdown(solid, joint_elements=True, **kw)
+    # measured 7e-14 of the amplitude with two attachment shapes per patch, 4e-10 to 1.5e-9
+    # with the normal gaps' shapes too (the two routes then part at Newton's tolerance, 1e-10
+    # relative, not in the law); the same energy balance (9.4e-5)
+    assert np.max(np.abs(a.sensor - b.sensor)) < 1e-8 * np.max(np.abs(a.sensor))
+    assert abs(a.max_energy_error - b.max_energy_error) < 1e-9
+
+
+def test_a_stuck_solid_rings_each_mode_at_its_own_floor_and_stuck_frequency(solid):
+    # a friction so high that the patches never leave their linear range: the Iwan route
+    # and the linear springs must give the stuck modes with their own floors
+    stuck = solid.replace(friction=1e4, modal_damping=(0.002, 0.01, 0.004))
+    f = natural_frequencies(stuck, n_modes=9)[6:]
+    for tangential in ("iwan", "linear"):
+        r = ringdown(stuck, amplitude={1: 20e-6, 3: 4e-6}, duration=0.25, steps_per_period=32,
+                     tangential=tangential)
+        for mode, zeta in ((1, 0.002), (3, 0.004)):
+            c = r.mode_curve(mode)
+            # measured: frequency within 7e-6, damping within 0.63 % (iwan and linear)
+            assert np.all(np.abs(c.frequency / f[mode - 1] - 1) < 2e-5), (tangential, mode)
+            assert np.all(np.abs(c.damping_ratio / zeta - 1) < 0.02), (tangential, mode)
+
+
+def test_mode_1_of_the_solid_rings_down_as_qsma_says(solid):
+    r = ringdown(solid, amplitude=60e-6, cycles=16, steps_per_period=64,
+                 sensors=(0.1, solid.sensor_position))
+    # the sensor rows along the axis read the sensor as S does; the release amplitude is met
+    assert np.allclose(r.sensor_displacement[1], r.sensor, rtol=0, atol=1e-15)
+    assert abs(r.sensor[0] / 60e-6 - 1) < 1e-9 and abs(r.sensor_displacement[0, 0]) > 1e-6
+    c = r.curve
+    q = modal_amplitude_curve(solid, amplitude=c.amplitude)
+    assert len(c) >= 3
+    # measured: frequency within 4e-5, damping within 0.3 % (QSMA neglects the inertia of
+    # the joint's microslip and holds the load shape fixed)
+    assert np.all(np.abs(c.frequency / q.frequency - 1) < 2e-4)
+    assert np.all(np.abs(c.damping_ratio / q.damping_ratio - 1) < 0.02)
+    drop = 1 - c.frequency / natural_frequencies(solid, n_modes=7)[-1]
+    assert np.all(drop > 1e-3)                    # it slips: well above the tolerance
+
+
+def test_the_solid_ring_down_refuses_what_it_cannot_do(solid):
+    with pytest.raises(ValueError, match="in-plane"):
+        ringdown(solid, amplitude={2: 1e-5}, cycles=4)
+    with pytest.raises(ValueError, match="impact"):
+        ringdown(solid, impact=Impact(position=0.1, peak_force=100.0, contact_time=1e-4))
+    with pytest.raises(ValueError, match="tangential"):
+        ringdown(solid, amplitude=1e-5, tangential="stuck")
+    with pytest.raises(ValueError, match="positions"):
+        ringdown(solid, amplitude=1e-5, sensors=[-0.1])
