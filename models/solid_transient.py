@@ -23,7 +23,7 @@ decay).
 The release, the time step, the records and the result are the 1-D ring-down's
 (:mod:`~iwan_element.models.ringdown_records`); the energy is ``1/2 v'^T M' v'`` (kinetic),
 ``1/2 z^T T^T Kb T z`` (the bodies' strain) and ``1/2 z^T T^T (K0 - Kb) T z`` plus the linear
-tangential springs' (springs). The dense system (``6 + n_modes + 2 n_patches`` coordinates, a
+tangential springs' (springs). The dense system (``6 + n_modes + 3 n_patches`` coordinates, a
 full ``K'``) is solved with Exudyn's dense LU (10 times faster than its sparse solver here,
 docs/solid.md).
 """
