@@ -226,19 +226,26 @@ def ringdown(specimen: Specimen | SolidSpecimen, *, mode: int | None = None, amp
     positions = np.atleast_1d(np.asarray(
         specimen.sensor_position if sensors is None else sensors, float))
     rows = axis_rows(specimen, positions)
-    if isinstance(specimen, SolidSpecimen):
-        return solid_ringdown(specimen, amp, rel, rows, positions, {
-            "n_periods": n_periods, "steps_per_period": steps_per_period,
+    opts = {"n_periods": n_periods, "steps_per_period": steps_per_period,
             "duration": duration, "cycles": cycles, "record_energy": record_energy,
-            "joint_elements": joint_elements, "progress": progress,
-            "tangential": tangential})
+            "joint_elements": joint_elements, "progress": progress, "tangential": tangential}
+    if isinstance(specimen, SolidSpecimen):
+        return solid_ringdown(specimen, amp, rel, rows, positions, opts)
+    return _beam_ringdown(specimen, amp, rel, rows, positions, opts, impact)
+
+
+def _beam_ringdown(specimen, amp, rel, rows, positions, opts, impact):
+    """The 1-D specimen's ring-down in Exudyn (beams, contact points, floor, effects, impact)
+    from the release ``rel`` of the modes ``amp``: :func:`ringdown`'s work after the checks
+    (``opts``: its keyword options)."""
+    tangential, record_energy = opts["tangential"], opts["record_energy"]
     L, w0 = rel["system"], rel["omega0"]
     floor = floor_damping(specimen)
     effs = [ModalEffects(specimen, r, L, phi, w) for r, phi, w in zip(amp, rel["phi"], w0)
             if any(e.mode == r for e in specimen.effects)]
     rec = Recorder(L.free, effs, FloorWork(floor.C if floor.active else None), record_energy)
     model = build_specimen_model(specimen, tangential=tangential, post_step=rec,
-                                 joint_elements=joint_elements)
+                                 joint_elements=opts["joint_elements"])
     rec.model = model
     mbs = model.mbs
     for eff in effs:
@@ -254,19 +261,21 @@ def ringdown(specimen: Specimen | SolidSpecimen, *, mode: int | None = None, amp
     mbs.systemData.SetODE2Coordinates(x0, configuration=exu.ConfigurationType.Initial)
     mbs.systemData.SetODE2Coordinates(x0, configuration=exu.ConfigurationType.Current)
     kin0, e0 = _initial_energy(model, rel, effs)
-    h, n = step_grid(w0, steps_per_period, duration=duration, cycles=cycles, impact=impact)
+    h, n = step_grid(w0, opts["steps_per_period"], duration=opts["duration"],
+                     cycles=opts["cycles"], impact=impact)
     sim = solver_settings(force_scale=max(float(np.max(np.abs(L.K0 @ rel["x"]))),
                                           0.0 if impact is None else abs(impact.peak_force)))
     newton = sim.timeIntegration.newton
     newton.absoluteTolerance = max(newton.absoluteTolerance, roundoff_force(L, specimen))
     sim.timeIntegration.numberOfSteps = n
     sim.timeIntegration.endTime = n * h
-    solve = solve_timed(mbs, sim, rec, n, progress)
+    solve = solve_timed(mbs, sim, rec, n, opts["progress"])
     quad = joint_records(model.interface, rec.energy, e0 + rec.work_in) if record_energy \
         else None
     X = np.array(rec.coords)[:, L.free]
     return with_energy_warning(build_result(specimen, amp, rec, X, rel, rows, positions, h, n, {
-        "n_periods": n_periods, "steps_per_period": steps_per_period, "solve": solve, "e0": e0,
+        "n_periods": opts["n_periods"], "steps_per_period": opts["steps_per_period"],
+        "solve": solve, "e0": e0,
         "kin0": kin0, "quad": quad, "n_points": len(model.points),
         "overflow": len(getattr(model.interface, "overflow_times", ())),
         "effects": tuple(nm for eff in effs for nm in eff.names), "impact": impact,
