@@ -282,13 +282,8 @@ def predict_hammer_test(specimen, records: dict, *, modes=(1, 2), calibration_mo
     check_scalar("duration", duration, low=0.0, low_open=True)
     n_cal = check_scalar("calibration_periods", calibration_periods, low=3.0)
     f_cal = float(_elastic_frequencies(specimen, calibration_mode)[-1])
-    measured = {}
-    for name, (_, t, a) in recs.items():
-        keep = t >= t[np.argmax(np.abs(a))]
-        for r in modes:
-            win = {"window": n_cal / f_cal} if r == calibration_mode else {}
-            measured[(r, name)] = amplitude_curve(t[keep], a[keep], quantity="acceleration",
-                                                  band=bands[r], **win)
+    windows = {r: ({"window": n_cal / f_cal} if r == calibration_mode else {}) for r in modes}
+    measured, skipped = _measured_curves(recs, cal_name, bands, windows)
     _, t_c, a_c = recs[cal_name]
     release = release_amplitudes(t_c, a_c, bands, release_time=release_time,
                                  fit_span=fit_span)
@@ -300,10 +295,11 @@ def predict_hammer_test(specimen, records: dict, *, modes=(1, 2), calibration_mo
                   sensors=tuple(recs[n][0] for n in names))
     predicted = {(r, n): rd.sensor_curve(i, bands[r], n_periods=n_cal if r == calibration_mode
                                          else None)
-                 for i, n in enumerate(names) for r in modes}
+                 for i, n in enumerate(names) for r in modes if (r, n) in measured}
     errors = {k: compare_curves(predicted[k], measured[k]) for k in predicted}
     ratios = _ratios(recs, cal_name, rd, bands, modes, release_time)
     warns = [f"calibration: {w}" for w in cal.warnings] + [f"ring-down: {w}" for w in rd.warnings]
+    warns += skipped
     thin = [f"mode {r} at {n}" for (r, n), e in errors.items() if len(e["amplitude"]) < 3]
     if thin:
         warns.append(f"fewer than 3 common amplitudes of prediction and measurement: "
@@ -314,6 +310,29 @@ def predict_hammer_test(specimen, records: dict, *, modes=(1, 2), calibration_mo
                             ringdown=rd, measured=measured, predicted=predicted, errors=errors,
                             ratios=ratios, success=bool(cal.success and not thin),
                             warnings=tuple(warns))
+
+
+def _measured_curves(recs, cal_name, bands, windows):
+    """``({(mode, sensor): AmplitudeCurve}, warnings)``: every mode at every sensor from the
+    impact on (the calibration record's largest sample: one clock). A mode the calibration
+    sensor does not give is an error; one another sensor does not (a node, noise) is left out
+    with a warning."""
+    _, t_c, a_c = recs[cal_name]
+    t_imp = t_c[np.argmax(np.abs(a_c))]
+    out, skipped = {}, []
+    for name, (_, t, a) in recs.items():
+        keep = t >= t_imp
+        for r, band in bands.items():
+            try:
+                out[(r, name)] = amplitude_curve(t[keep], a[keep], quantity="acceleration",
+                                                 band=band, **windows[r])
+            except ValueError as exc:
+                if name == cal_name:
+                    raise ValueError(f"records[{name!r}] (the calibration sensor), mode {r}: "
+                                     f"{exc}") from exc
+                skipped.append(f"mode {r} at {name} not read from the record ({exc}); left "
+                               "out of the comparison")
+    return out, skipped
 
 
 def _ratios(recs, cal_name, rd, bands, modes, release_time) -> dict:
