@@ -63,6 +63,7 @@ from ._decay_model import (_Objective, _Problem, _covariance, _fit_regime, _loca
                            _misfit_ratio, _neighbours, _polar)
 from .modal_result import ModalIwanFit
 from .modal_fit import fit_modal_iwan
+from ..core.threads import one_blas_thread
 from .saturation import cut_clipping, cut_flattened_peaks
 from .vibration import _check_band, _check_uniform_time
 
@@ -451,7 +452,8 @@ def fit_decay(t, y, *, quantity: str = "acceleration", band, order: int = 4,
         prob, conv, info = _prepare(t, y, quantity, band, order, stiffness, floor, x_ref,
                                     t_start)
         tick(bar, text="record prepared")
-        best, span = _fit_models(prob, info, alpha, snr_min, spc, bar)
+        with one_blas_thread():          # the Jacobian's SVD per step is small: threads cost
+            best, span = _fit_models(prob, info, alpha, snr_min, spc, bar)
         tick(bar, text="uncertainty")
     finally:
         finish(bar)
