@@ -30,7 +30,7 @@ class RingdownResult(ResultShape):
         Time [s] from the release.
     sensor : ndarray, shape (n,)
         Transverse displacement at the specimen's sensor point [m] (all modes; on a solid
-        specimen the z displacement of the node nearest the section centre there).
+        specimen the section's z displacement there, as its sensor is read).
     modal : ndarray, shape (n,)
         The first (lowest) mode's contribution at the sensor, ``(S phi) q(t)`` [m].
     curve : AmplitudeCurve

@@ -99,7 +99,7 @@ class SolidModel:
         (for checking the reduction), else ``None``.
     axis : tuple or None
         ``(x, rows)``: positions [m] every millimetre along the assembly and, per position,
-        the reduced row of the z displacement of the node nearest the section centre there
+        the reduced row of the section's z displacement there (``solid_build._point_weights``)
         (read as ``S``; the ring-down's sensors), shape ``(len(x), n_reduced)``.
     """
 
@@ -173,15 +173,17 @@ class SolidSpecimen:
 
     def axis_rows(self, positions) -> np.ndarray:
         """Reduced rows of the z displacement at ``positions`` [m] along the assembly (the
-        node nearest the section centre, read as the sensor's ``S``; each position taken at
-        the nearest millimetre of :attr:`SolidModel.axis`): shape ``(n, n_reduced)``."""
+        section's deflection, read as the sensor's ``S`` is: ``solid_build._point_weights``),
+        interpolated linearly between the millimetres of :attr:`SolidModel.axis`: shape
+        ``(n, n_reduced)``."""
         if self.model.axis is None:
             raise ValueError("this solid model holds no axis rows: build it with "
                              "solid_build.solid_specimen")
         x, rows = self.model.axis
-        k = np.clip(np.rint(np.asarray(positions, float) / (x[1] - x[0])).astype(int), 0,
-                    x.size - 1)
-        return rows[k]
+        u = np.clip(np.asarray(positions, float) / (x[1] - x[0]), 0, x.size - 1)
+        k = np.minimum(np.floor(u).astype(int), x.size - 2)
+        f = (u - k)[:, None]
+        return (1 - f) * rows[k] + f * rows[k + 1]
 
     def contact_points(self) -> ContactPoints:
         """The patches' Iwan elements (two per patch, module docstring)."""

@@ -83,8 +83,10 @@ def test_a_stuck_solid_rings_each_mode_at_its_own_floor_and_stuck_frequency(soli
 def test_mode_1_of_the_solid_rings_down_as_qsma_says(solid):
     r = ringdown(solid, amplitude=60e-6, cycles=16, steps_per_period=64,
                  sensors=(0.1, solid.sensor_position))
-    # the sensor rows along the axis read the sensor as S does; the release amplitude is met
-    assert np.allclose(r.sensor_displacement[1], r.sensor, rtol=0, atol=1e-15)
+    # the sensor rows along the axis read the sensor as S does (interpolated between the
+    # stored millimetres: the read-out's curvature over 1 mm); the release amplitude is met
+    assert np.allclose(r.sensor_displacement[1], r.sensor, rtol=0,
+                       atol=1e-4 * np.max(np.abs(r.sensor)))
     assert abs(r.sensor[0] / 60e-6 - 1) < 1e-9 and abs(r.sensor_displacement[0, 0]) > 1e-6
     c = r.curve
     q = modal_amplitude_curve(solid, amplitude=c.amplitude)
