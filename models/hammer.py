@@ -40,7 +40,7 @@ from scipy import signal
 from iwan_element import amplitude_curve
 from iwan_element.core.result_shape import ResultShape, panels, table_lines
 from iwan_element.core.serialize import json_safe
-from iwan_element.core.validation import check_scalar
+from iwan_element.core.validation import check_scalar, check_uniform_time, finite_array
 
 from .calibration import CalibrationResult, calibrate
 from .coupling import compare_curves, plot_curve_pairs
@@ -383,17 +383,10 @@ def _bands(bands, modes) -> dict:
 
 
 def _series(tn, an, t, a):
-    t = np.array(t, dtype=float)
-    a = np.array(a, dtype=float)
-    if t.ndim != 1 or a.shape != t.shape or t.size < 64:
-        raise ValueError(f"{tn} and {an} must be 1-D of one length >= 64, got shapes "
-                         f"{t.shape} and {a.shape}")
-    if not (np.all(np.isfinite(t)) and np.all(np.isfinite(a))):
-        raise ValueError(f"{tn} and {an} must be finite (NaN or inf found)")
-    dt = np.diff(t)
-    if np.any(dt <= 0) or np.max(np.abs(dt - dt.mean())) > 0.05 * dt.mean():
-        raise ValueError(f"{tn} must be increasing and uniformly sampled [s] (steps within "
-                         "5 % of their mean: the rounding of a written time column, no gaps)")
+    """``(t, a)`` as new arrays: ``a`` finite with at least 64 samples, ``t`` its uniform
+    time grid (:func:`~iwan_element.core.validation.check_uniform_time`)."""
+    a = finite_array(an, a, min_size=64)
+    t, _ = check_uniform_time(t, a.size, name=tn, data=an)
     return t, a
 
 

@@ -45,6 +45,8 @@ def test_release_amplitudes_refuse_a_span_beyond_the_record():
     with pytest.raises(ValueError, match="finite"):
         release_amplitudes(t, np.where(t > 0.1, np.nan, a), {1: (60.0, 120.0)})
     with pytest.raises(ValueError, match="uniformly"):
+        release_amplitudes(np.where(t > 0.1, t + 0.01, t), a, {1: (60.0, 120.0)})   # a gap
+    with pytest.raises(ValueError, match="strictly increasing"):
         release_amplitudes(t[::-1], a, {1: (60.0, 120.0)})
 
 

@@ -97,6 +97,28 @@ def check_time(t, n: int, name: str = "t") -> np.ndarray:
     return tt
 
 
+def check_uniform_time(t, n: int, name: str = "t", data: str = "y") -> tuple[np.ndarray, float]:
+    """``(t, dt)``: ``t`` as a new finite, strictly increasing array of length ``n`` (that of
+    ``data``) on a uniform grid, and its step [s] (the least-squares grid: the first and last
+    samples carry jitter too, so a line through them would double it). Steps may depart from
+    the grid by up to 5 % (the rounding of a written time column), not more (gaps)."""
+    tt = finite_array(name, t)
+    if tt.size != n:
+        raise ValueError(f"{name} must have the same length as {data} ({n}), got {tt.size}")
+    d = np.diff(tt)
+    if np.any(d <= 0):
+        i = int(np.flatnonzero(d <= 0)[0])
+        raise ValueError(f"{name} (time) must be strictly increasing; it goes from {tt[i]:g} to "
+                         f"{tt[i + 1]:g} at samples {i}..{i + 1}")
+    idx = np.arange(n) - 0.5 * (n - 1)
+    dt = float(idx @ (tt - tt.mean()) / (idx @ idx))
+    jitter = float(np.max(np.abs(tt - tt.mean() - idx * dt)))
+    if jitter > 0.05 * dt:
+        raise ValueError(f"{name} must be uniformly sampled: it departs from a uniform grid by "
+                         f"{jitter:.3g} s, more than 5 % of the mean step {dt:.3g} s; resample first")
+    return tt, dt
+
+
 #: Magnitude range accepted for measured records and amplitudes (in SI units). Far outside any
 #: physical joint test (nm..km, uN..GN), and far enough inside the float range that the squares,
 #: products and sums of squares the identification forms (up to ~1e200 / 1e-200 for a record of

@@ -58,14 +58,14 @@ import numpy as np
 from scipy import stats
 
 from ..core.progress import finish, progress_bar, tick
-from ..core.validation import check_magnitude, check_scalar, finite_array
+from ..core.validation import check_magnitude, check_scalar, check_uniform_time, finite_array
 from ._decay_model import (_Objective, _Problem, _covariance, _fit_regime, _local_weights,
                            _misfit_ratio, _neighbours, _polar)
 from .modal_result import ModalIwanFit
 from .modal_fit import fit_modal_iwan
 from ..core.threads import one_blas_thread
 from .saturation import cut_clipping, cut_flattened_peaks
-from .vibration import _check_band, _check_uniform_time
+from .vibration import _check_band
 
 __all__ = ["fit_decay"]
 
@@ -184,7 +184,7 @@ def _prepare(t, y, quantity, band, order, stiffness, floor, x_ref, t_start):
     yy = check_magnitude("y", finite_array("y", y))
     if yy.size < 64:
         raise ValueError(f"y must have at least 64 samples, got {yy.size}")
-    tt, dt = _check_uniform_time(t, yy.size)
+    tt, dt = check_uniform_time(t, yy.size)
     check_magnitude("t", tt, unit="s")
     tt, yy, clip_note = cut_clipping(tt, yy)
     _check_options(quantity, order, stiffness, floor)

@@ -74,7 +74,7 @@ from dataclasses import replace
 import numpy as np
 from scipy import signal
 
-from ..core.validation import check_magnitude, check_scalar, finite_array
+from ..core.validation import check_magnitude, check_scalar, check_uniform_time, finite_array
 from ._decay_filter import _decay_signal, _drift_terms, _noise_bandwidth
 from ._decay_windows import WindowPlan, _noise_std, drift_correct, hilbert_windows
 from ._decay_report import _finish
@@ -86,26 +86,6 @@ __all__ = ["amplitude_curve"]
 log = logging.getLogger(__name__)
 
 _QUANTITY_POWER = {"displacement": 0, "velocity": 1, "acceleration": 2}
-
-
-def _check_uniform_time(t, n):
-    tt = finite_array("t", t)
-    if tt.size != n:
-        raise ValueError(f"t must have the same length as y ({n}), got {tt.size}")
-    d = np.diff(tt)
-    if np.any(d <= 0):
-        i = int(np.flatnonzero(d <= 0)[0])
-        raise ValueError(f"t (time) must be strictly increasing; it goes from {tt[i]:g} to "
-                         f"{tt[i + 1]:g} at samples {i}..{i + 1}")
-    # the uniform grid that fits best (least squares): the first and last samples carry
-    # jitter too, so a line through them would double it
-    idx = np.arange(n) - 0.5 * (n - 1)
-    dt = float(idx @ (tt - tt.mean()) / (idx @ idx))
-    jitter = float(np.max(np.abs(tt - tt.mean() - idx * dt)))
-    if jitter > 0.05 * dt:
-        raise ValueError(f"t must be uniformly sampled: it departs from a uniform grid by "
-                         f"{jitter:.3g} s, more than 5 % of the mean step {dt:.3g} s; resample first")
-    return tt, dt
 
 
 def _check_band(band, fs):
@@ -340,7 +320,7 @@ def amplitude_curve(t, y, *, quantity: str = "acceleration", band,
     n = yy.size
     if n < 64:
         raise ValueError(f"y must have at least 64 samples, got {n}")
-    tt, dt = _check_uniform_time(t, n)
+    tt, dt = check_uniform_time(t, n)
     tt, yy, clip_note = cut_clipping(tt, yy)
     n = yy.size
     fs = 1.0 / dt
