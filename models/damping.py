@@ -24,8 +24,8 @@ from dataclasses import dataclass
 import numpy as np
 from exudyn.itemInterface import ObjectGenericODE2
 
-from .reduced import stuck_modes
-from .solid import SolidSpecimen
+from .reduced import stuck_key, stuck_modes
+from .solid import check_specimen
 from .specimens import Specimen
 
 __all__ = ["FloorDamping", "floor_damping", "attach_floor_damping", "FloorWork"]
@@ -70,12 +70,8 @@ def floor_damping(specimen: Specimen) -> FloorDamping:
     -------
     FloorDamping
     """
-    if not isinstance(specimen, (Specimen, SolidSpecimen)):
-        raise ValueError(f"specimen must be a Specimen or SolidSpecimen, got "
-                         f"{type(specimen).__name__}")
-    key = specimen.replace(friction=1.0, chi=0.0, beta=0.0, damping_floor=0.0, modal_damping=(),
-                           amplitude_range=(1.0, 2.0), calibrated_range=None, effects=())
-    L, _, w, V, n_low = stuck_modes(key)         # the one stuck eigenproblem
+    check_specimen(specimen)
+    L, _, w, V, n_low = stuck_modes(stuck_key(specimen))   # the one stuck eigenproblem
     n_skip = max(L.rigid_body_modes, n_low)
     zeta = np.array([0.0 if k < n_skip else specimen.floor(k - n_skip + 1)
                      for k in range(w.size)])

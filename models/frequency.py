@@ -12,7 +12,6 @@ system with mode shape ``s`` on mode ``r`` and gain ``1/s^2``.
 """
 from __future__ import annotations
 
-import math
 from dataclasses import replace
 
 import numpy as np
@@ -27,7 +26,7 @@ from iwan_element.harmonic.system import ElementPort
 
 from .qsma import extrapolation_warnings
 from .reduced import reduced_model
-from .solid import SolidSpecimen
+from .solid import check_specimen
 from .specimens import Specimen
 from .modal_effects import effect_stack
 
@@ -52,9 +51,7 @@ def specimen_system(specimen: Specimen, *, n_modes: int = 8) -> ModalSystem:
 
 
 def _check(specimen):
-    if not isinstance(specimen, (Specimen, SolidSpecimen)):
-        raise ValueError(f"specimen must be a Specimen or SolidSpecimen, got "
-                         f"{type(specimen).__name__}")
+    check_specimen(specimen)
 
 
 def _with_range_warnings(specimen, response):

@@ -39,8 +39,8 @@ from iwan_element.core.masing import constants_from_arrays, masing_rows
 
 from .assembly import linear_system
 from .interface import contact_points
-from .reduced import reduced_model, stuck_modes
-from .solid import SolidSpecimen
+from .reduced import reduced_model, stuck_key, stuck_modes
+from .solid import check_specimen
 from .specimens import Specimen
 
 __all__ = ["modal_amplitude_curve", "linear_modes", "natural_frequencies",
@@ -135,8 +135,7 @@ def _interface_law(u, Fs, KT, phimax, chi, beta):
 
 
 def _prepare_key(specimen: Specimen, mode: int):
-    return (specimen.replace(friction=1.0, chi=0.0, beta=0.0, damping_floor=0.0, modal_damping=(),
-                             amplitude_range=(1.0, 2.0), calibrated_range=None, effects=()), mode)
+    return stuck_key(specimen), mode
 
 
 @lru_cache(maxsize=32)
@@ -253,9 +252,7 @@ def modal_amplitude_curve(specimen: Specimen, *, mode: int = 1, amplitude=None) 
         applied on top (``docs/vibration_effects.md``). ``warnings`` states amplitudes
         outside the specimen's (or an effect's) calibrated range (also logged).
     """
-    if not isinstance(specimen, (Specimen, SolidSpecimen)):
-        raise ValueError(f"specimen must be a Specimen or SolidSpecimen, got "
-                         f"{type(specimen).__name__}")
+    check_specimen(specimen)
     r = static_modal_load(specimen, amplitude, mode=mode)
     slip = np.abs(r["slip"])
     D = np.zeros(r["amplitude"].size)

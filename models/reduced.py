@@ -31,7 +31,7 @@ from iwan_element.harmonic import ModalSystem
 
 from .assembly import linear_system
 from .interface import contact_points
-from .solid import SolidSpecimen
+from .solid import check_specimen
 from .specimens import Specimen
 
 __all__ = ["ReducedModel", "reduced_model", "reduction_error", "stuck_modes"]
@@ -92,12 +92,18 @@ def reduced_model(specimen: Specimen, *, n_modes: int = 8) -> ReducedModel:
     -------
     ReducedModel
     """
-    if not isinstance(specimen, (Specimen, SolidSpecimen)):
-        raise ValueError(f"specimen must be a Specimen or SolidSpecimen, got "
-                         f"{type(specimen).__name__}")
+    check_specimen(specimen)
     if isinstance(n_modes, bool) or not isinstance(n_modes, (int, np.integer)) or n_modes < 1:
         raise ValueError(f"n_modes must be an integer >= 1, got {n_modes!r}")
     return _reduced(specimen, int(n_modes))
+
+
+def stuck_key(specimen):
+    """The specimen with the fields that do not change its stuck-interface eigenproblem
+    (friction, Iwan shape, floors, ranges, effects) set to fixed values: the cache key of
+    the routes that read only the stuck modes and the contact points' stiffness."""
+    return specimen.replace(friction=1.0, chi=0.0, beta=0.0, damping_floor=0.0, modal_damping=(),
+                            amplitude_range=(1.0, 2.0), calibrated_range=None, effects=())
 
 
 def stuck_modes(specimen: Specimen):

@@ -190,6 +190,15 @@ class SolidSpecimen:
         return solid_contact_points(self.specimen, self.model.patches)
 
 
+def check_specimen(specimen):
+    """``specimen`` if it is a 1-D :class:`Specimen` or a :class:`SolidSpecimen` (what every
+    analysis of the beam model accepts), else ValueError naming it."""
+    if not isinstance(specimen, (Specimen, SolidSpecimen)):
+        raise ValueError(f"specimen must be a Specimen or SolidSpecimen, got "
+                         f"{type(specimen).__name__}")
+    return specimen
+
+
 def solid_contact_points(specimen: Specimen, patches: PatchLayout) -> ContactPoints:
     """Iwan elements of the patches for a specimen's interface law: per patch an ``x`` and a
     ``y`` element (module docstring); the normal forces scale with ``specimen.preload``."""

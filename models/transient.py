@@ -41,7 +41,7 @@ from .qsma import linear_modes, static_modal_load
 from .ringdown_records import (Recorder, build_result, joint_records, solve_timed, step_grid,
                                virgin_joint_energy)
 from .ringdown_result import RingdownResult, with_energy_warning
-from .solid import SolidSpecimen
+from .solid import SolidSpecimen, check_specimen
 from .solid_transient import check_solid_release, solid_ringdown
 from .solver import roundoff_force, solver_settings
 from .specimens import Specimen
@@ -72,9 +72,7 @@ def _amplitudes(mode, amplitude) -> dict:
 
 def _check_args(specimen, steps_per_period, n_periods, cycles, duration):
     """Checks of :func:`ringdown`'s other arguments: ``(n_periods, cycles, duration)``."""
-    if not isinstance(specimen, (Specimen, SolidSpecimen)):
-        raise ValueError(f"specimen must be a Specimen or SolidSpecimen, got "
-                         f"{type(specimen).__name__}")
+    check_specimen(specimen)
     if isinstance(steps_per_period, bool) or not isinstance(steps_per_period, int) \
             or steps_per_period < 16:
         raise ValueError(f"steps_per_period must be an integer >= 16, got {steps_per_period!r}")
