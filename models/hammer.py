@@ -344,15 +344,17 @@ def _ratios(recs, cal_name, rd, bands, modes, release_time) -> dict:
     _, t_c, a_c = recs[cal_name]
     t0 = t_c[np.argmax(np.abs(a_c))] + release_time
     i_c = tuple(recs).index(cal_name)
+    mp = (rd.t >= span[0]) & (rd.t <= span[1])
+    # the calibration sensor's envelopes, measured and predicted, once per mode
+    ref = {r: (_envelope(t_c, a_c, bands[r]),
+               _envelope(rd.t, rd.sensor_acceleration[i_c], bands[r])[mp]) for r in modes}
     for i, (name, (_, t, a)) in enumerate(recs.items()):
         if name == cal_name:
             continue
         m = (t - t0 >= span[0]) & (t - t0 <= span[1])
-        mp = (rd.t >= span[0]) & (rd.t <= span[1])
         for r in modes:
-            meas = np.median(_envelope(t, a, bands[r])[m] / _envelope(t_c, a_c, bands[r])[m])
-            pred = np.median(_envelope(rd.t, rd.sensor_acceleration[i], bands[r])[mp]
-                             / _envelope(rd.t, rd.sensor_acceleration[i_c], bands[r])[mp])
+            meas = np.median(_envelope(t, a, bands[r])[m] / ref[r][0][m])
+            pred = np.median(_envelope(rd.t, rd.sensor_acceleration[i], bands[r])[mp] / ref[r][1])
             out[(r, name)] = (float(meas), float(pred))
     return out
 
