@@ -237,10 +237,15 @@ def fit_sinusoids(tau, Y, s0, *, rho=None, max_nfev=200):
 
     scale = np.concatenate([np.full(2 * p, 1.0 / max(tau[-1] - tau[0], 1e-300)),
                             np.full(2 * p * m, max(float(np.abs(C0).max()), 1e-300))])
-    sol = optimize.least_squares(fun, x0, jac=jac, method="lm", x_scale=scale,
-                                 xtol=1e-12, ftol=1e-12, max_nfev=max_nfev)
-    x = sol.x
-    model, J = _model_jac(x, tau, p, m)
+    with np.errstate(over="ignore", invalid="ignore"):
+        sol = optimize.least_squares(fun, x0, jac=jac, method="lm", x_scale=scale,
+                                     xtol=1e-12, ftol=1e-12, max_nfev=max_nfev)
+        x, ok = sol.x, bool(sol.success)
+        model, J = _model_jac(x, tau, p, m)
+    if not (np.all(np.isfinite(model)) and np.all(np.isfinite(J)) and sol.cost
+            <= 0.5 * float(np.sum(fun(x0) ** 2))):     # diverged: keep the subspace start
+        x, ok = x0, False
+        model, J = _model_jac(x, tau, p, m)
     resid = (target - model).T
     dof = max(n * m - x.size, 1)
     s2 = float(np.sum(resid ** 2)) / dof
@@ -248,4 +253,4 @@ def fit_sinusoids(tau, Y, s0, *, rho=None, max_nfev=200):
     rho = np.ones(1) if rho is None else np.asarray(rho, float)
     cov = _correlated_cov(J, rho, s2)
     s, C = _unpack(x, p, m)
-    return SinusoidFit(s, C, cov, rms, resid, bool(sol.success))
+    return SinusoidFit(s, C, cov, rms, resid, ok)

@@ -367,7 +367,10 @@ def _half_drift(tau, Yw, fit, phys_idx, rho):
             # sigma omega domega) / w^3
             gf = np.array([h.s[i].real, h.s[i].imag]) / (2 * math.pi * w)
             gz = -np.array([h.s[i].imag ** 2, -h.s[i].real * h.s[i].imag]) / w ** 3
-            fz.append((f[0], math.sqrt(gf @ cov @ gf), z[0], math.sqrt(gz @ cov @ gz)))
+            vf, vz = float(gf @ cov @ gf), float(gz @ cov @ gz)
+            if not (h.converged and vf >= 0 and vz >= 0 and math.isfinite(vf + vz)):
+                return None                     # a half that cannot be fitted: not measured
+            fz.append((f[0], math.sqrt(vf), z[0], math.sqrt(vz)))
         out.append(fz)
     return out
 
