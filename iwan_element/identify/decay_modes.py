@@ -13,15 +13,15 @@ Per frequency band (given, or one per spectral peak):
    ``H(exp(s dt))`` (exact once the filter's start-up transient has died; the window starts
    eight of the filter's slowest time constants after the band's envelope peak); the gain is
    divided out of every amplitude, the same for all sensors, so shapes keep their phases.
-2. Noise and signal in consecutive blocks of 20 periods: a subspace fit of modest order per
-   block; each channel's in-band noise is the median of the lower half of its block
-   residuals (:mod:`._poles`), each block's SNR the rms of its in-band model over that noise
-   (best channel).
-3. The window: it ends where the band's SNR first falls below ``snr_min`` (or at the record's
-   end) and spans ``span`` nepers of the band's decay before that (at least ``min_periods``
-   periods): the lowest amplitudes that still carry enough signal, where a joint's
-   amplitude dependence is weakest. ``window=(t0, t1)`` overrides it.
-4. In the window (channels weighted by their noise): the stabilisation diagram of
+2. The band's envelope in blocks (rms per channel); a channel's noise floor is the median of
+   its last quarter of blocks when their decay has stopped (else the decay never reaches it).
+3. The window: it ends where the best channel's SNR over its floor first falls below
+   ``snr_min`` (or at the record's end) and spans ``span`` nepers of the band's local decay
+   before that (at least ``min_periods`` periods): the lowest amplitudes that still carry
+   enough signal, where a joint's amplitude dependence is weakest. If a mode in it is not
+   linear (step 5), the next window, one window length earlier, is tried (up to six) and the
+   latest linear one is kept; else the latest, flagged. ``window=(t0, t1)`` overrides it.
+4. In the window (channels weighted by their rms, then by their residual noise): the stabilisation diagram of
    multi-channel LS-ESPRIT over model orders 2 ... ``max_order``; the poles of the highest
    order that were stable over its last four orders are physical (in the band, damped below
    20 %) or nuisance (stable, outside the band: another mode's leakage through the
