@@ -42,6 +42,9 @@ from .identify.decay_fit import fit_decay
 from .identify.stepped_sine import stepped_sine_curve
 from .identify.sweeps import sweep_curve
 from .identify.formats import UffRecord, read_sweep_csv, read_uff
+from .identify.decay_modes import free_decay_modes
+from .identify.frf_modes import frf_modes, sweep_modes
+from .identify.modal_targets import ModalTargets, ModeTarget, mac
 from .identify.csv_input import load_test
 from .identify.cycles import Cycle, find_reversals, split_cycles
 from .identify.testdata import TestData, simulate_test
@@ -91,6 +94,12 @@ __all__ = [
     "UffRecord",
     "read_sweep_csv",
     "ModalIwanFit",
+    "free_decay_modes",
+    "frf_modes",
+    "sweep_modes",
+    "ModalTargets",
+    "ModeTarget",
+    "mac",
     "fit_loops",
     "fit_dissipation",
     "FitResult",
