@@ -13,22 +13,20 @@ over every mode ``(w_r, phi_r)`` of ``(K0 + G^T diag(KT) G, M)`` (mass-normalise
 any elastic mode below 0.5 Hz, which ``linear_modes`` does not number) undamped. Then
 ``phi_r^T C phi_s = 2 zeta_r w_r delta_rs``: each stuck mode decays at its own floor and the
 floor couples no modes. (The stiffness-proportional beam damping used before gave one mode
-its floor and every other mode the floor times its frequency ratio.) The matrix acts on the
-beams' nodes through an Exudyn ``ObjectGenericODE2`` (:func:`attach_floor_damping`); its
-work is booked exactly by :class:`FloorWork`.
+its floor and every other mode the floor times its frequency ratio.) The matrix is the
+damping matrix of the host's generic body (:mod:`~iwan_element.models.host`); its work is
+booked exactly by :class:`FloorWork`.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
 
 import numpy as np
-from exudyn.itemInterface import ObjectGenericODE2
-
 from .reduced import stuck_key, stuck_modes
 from .solid import check_specimen
 from .specimens import Specimen
 
-__all__ = ["FloorDamping", "floor_damping", "attach_floor_damping", "FloorWork"]
+__all__ = ["FloorDamping", "floor_damping", "FloorWork"]
 
 
 @dataclass(frozen=True)
@@ -80,25 +78,8 @@ def floor_damping(specimen: Specimen) -> FloorDamping:
     return FloorDamping(C=0.5 * (C + C.T), omega=w.copy(), zeta=zeta, n_rigid=n_skip)
 
 
-def attach_floor_damping(mbs, nodes, floor: FloorDamping, free, n_coordinates: int) -> int:
-    """Add ``floor.C`` to the system ``mbs`` as an ``ObjectGenericODE2`` on the beams'
-    ``nodes`` (4 ODE2 coordinates each, in the order of the system's coordinates; ``free``
-    the system indices of the free coordinates, out of ``n_coordinates``). The system must
-    be assembled again afterwards. Returns the object's number."""
-    idx = np.concatenate([np.arange(mbs.GetNodeODE2Index(n), mbs.GetNodeODE2Index(n) + 4)
-                          for n in nodes])
-    if not np.array_equal(np.sort(idx), np.arange(n_coordinates)):
-        raise ValueError("nodes must carry every ODE2 coordinate of the system")
-    full = np.zeros((n_coordinates, n_coordinates))
-    full[np.ix_(free, free)] = floor.C
-    D = full[np.ix_(idx, idx)]
-    n = idx.size
-    return mbs.AddObject(ObjectGenericODE2(nodeNumbers=list(nodes), massMatrix=np.zeros((n, n)),
-                                           stiffnessMatrix=np.zeros((n, n)), dampingMatrix=D))
-
-
 class FloorWork:
-    """Work done by the floor's damping matrix ``C`` (free coordinates) [J]: per step
+    """Work done by the floor's damping matrix ``C`` (the host's coordinates) [J]: per step
     ``h v_m^T C v_m`` with ``v_m`` the mean of the step's end velocities, which is the
     damping work of the trapezoidal rule exactly (its force is ``C v_m`` over a displacement
     ``h v_m``) and of any second-order scheme to ``O(h^2)``."""
@@ -109,7 +90,8 @@ class FloorWork:
         self.total = 0.0
 
     def step(self, t: float, v: np.ndarray) -> float:
-        """Cumulative work up to time ``t`` [s] with the free velocities ``v`` [m/s]."""
+        """Cumulative work up to time ``t`` [s] with the velocities ``v`` of ``C``'s
+        coordinates."""
         if self.C is not None and self.t is not None and t > self.t:
             vm = 0.5 * (v + self.v)
             self.total += (t - self.t) * float(vm @ self.C @ vm)

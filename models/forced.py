@@ -26,17 +26,17 @@ from dataclasses import dataclass, field, replace
 
 import exudyn as exu
 import numpy as np
-from exudyn.itemInterface import LoadForceVector, SensorMarker
+from exudyn.itemInterface import SensorNode
 
 from iwan_element.core.progress import finish, progress_bar, tick
 from iwan_element.core.result_shape import ResultShape, panels
 from iwan_element.core.serialize import json_safe
 from iwan_element.core.validation import check_int, check_scalar, finite_array
 
-from .assembly import build_specimen_model, linear_system
+from .assembly import linear_system
+from .host import build_host
 from .qsma import linear_modes
-from .damping import attach_floor_damping, floor_damping
-from .solver import roundoff_force, solver_settings
+from .solver import solver_settings
 from .specimens import Specimen
 
 __all__ = ["ForcedResponseResult", "forced_response"]
@@ -126,33 +126,26 @@ def _lock_in(t, y, theta):
     return math.hypot(c[2], c[3]), math.atan2(c[3], c[2])
 
 
-def _sweep_level(s, F0, freqs, floor, cycles, steps_per_period, rho, bar=None):
+def _sweep_level(s, F0, freqs, cycles, steps_per_period, rho, bar=None):
     """Steady fundamental amplitude [m] and phase [rad] at the sensor at each frequency of
     ``freqs`` for one force level ``F0`` [N], each frequency continuing from the state the
     previous one left."""
     settle, measure = cycles
     # the switch-on transient beats with the forced response and nests the joints' loops:
-    # the model's default depth (24) holds them (8 overflowed 54 times on the Brake-Reuss
+    # the host's default depth (24) holds them (8 overflowed 54 times on the Brake-Reuss
     # beam at 2 N)
-    model = build_specimen_model(s)
-    mbs = model.mbs
     L = linear_system(s)
-    if floor.active:
-        attach_floor_damping(mbs, model.nodes, floor, L.free, L.n_coordinates)
+    model = build_host(s, ports={"excitation": L.E}, assemble=False)
+    mbs = model.mbs
     state = {"w": 2 * math.pi * freqs[0], "t0": 0.0, "phase": 0.0}
-
-    def load(mbs_, t, load_vector):
-        return [0.0, F0 * math.sin(state["phase"] + state["w"] * (t - state["t0"])), 0.0]
-
-    mbs.AddLoad(LoadForceVector(markerNumber=model.axis_marker(s.excitation.position),
-                                loadVector=[0, 0, 0],
-                                loadVectorUserFunction=load))
-    sensor = mbs.AddSensor(SensorMarker(markerNumber=model.sensor_marker, storeInternal=True,
-                                        outputVariableType=exu.OutputVariableType.Position))
+    model.add_port_force("excitation", lambda t: F0 * math.sin(
+        state["phase"] + state["w"] * (t - state["t0"])))
+    sensor = mbs.AddSensor(SensorNode(nodeNumber=model.node, storeInternal=True,
+                                      outputVariableType=exu.OutputVariableType.Coordinates))
+    read = model.T.T @ L.S                       # the sensor's row in the host's coordinates
     mbs.Assemble()
     sim = solver_settings(force_scale=F0)
-    newton = sim.timeIntegration.newton          # not below the model's round-off
-    newton.absoluteTolerance = max(newton.absoluteTolerance, roundoff_force(L, s))
+    sim.linearSolver.solverType = exu.LinearSolverType.EigenDense
     sim.timeIntegration.generalizedAlpha.spectralRadius = rho
     ti = sim.timeIntegration
     amp, phase = np.zeros(len(freqs)), np.zeros(len(freqs))
@@ -169,7 +162,8 @@ def _sweep_level(s, F0, freqs, floor, cycles, steps_per_period, rho, bar=None):
         d = mbs.GetSensorStoredData(sensor)
         keep = d[:, 0] >= t_now + settle * steps_per_period * h * (1 - 1e-12)
         tk = d[keep, 0]
-        amp[j], phase[j] = _lock_in(tk, d[keep, 2], state["phase"] + state["w"] * (tk - t_now))
+        amp[j], phase[j] = _lock_in(tk, d[keep, 1:] @ read,
+                                    state["phase"] + state["w"] * (tk - t_now))
         tick(bar, text=f"{F0:.3g} N, {f:.5g} Hz")
         t_now = ti.endTime
     return amp, phase
@@ -231,11 +225,10 @@ def forced_response(specimen: Specimen, *, force_levels=(0.5, 2.0), frequencies=
     if freqs.size < 3 or not (np.all(steps > 0) or np.all(steps < 0)):
         raise ValueError("frequencies must be at least 3 values stepped up or down (strictly "
                          f"monotonic) [Hz], got {frequencies!r}")
-    floor = floor_damping(specimen)
     bar = progress_bar(progress, total=levels.size * freqs.size, desc="forced_response",
                        unit="point")
     try:
-        runs = [_sweep_level(specimen, float(F0), freqs, floor, cycles, spp, rho, bar)
+        runs = [_sweep_level(specimen, float(F0), freqs, cycles, spp, rho, bar)
                 for F0 in levels]
     finally:
         finish(bar)

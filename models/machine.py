@@ -22,7 +22,8 @@ from iwan_element.core.result_shape import ResultShape, panels
 from iwan_element.core.serialize import json_safe
 from iwan_element.core.validation import check_int, check_scalar
 
-from .assembly import build_specimen_model
+from .assembly import linear_system
+from .host import build_host
 from .solver import solver_settings
 from .specimens import Specimen
 
@@ -170,9 +171,10 @@ def quasi_static_test(specimen: Specimen, *, amplitude: float = 1e-4, frequency:
     cycles = check_int("cycles", cycles, 1)
     steps = check_int("steps_per_cycle", steps_per_cycle, 8)
     w = 2.0 * math.pi * f
-    model = build_specimen_model(s, drive=lambda t: u0 * math.sin(w * t))
+    model = build_host(s, ports={"grip": linear_system(s).drive}, floor=False, assemble=False)
     mbs = model.mbs
-    sensor = mbs.AddSensor(SensorObject(objectNumber=model.extra["grip"], storeInternal=True,
+    grip = model.prescribe_port("grip", lambda t: u0 * math.sin(w * t))
+    sensor = mbs.AddSensor(SensorObject(objectNumber=grip, storeInternal=True,
                                         outputVariableType=exu.OutputVariableType.Force))
     mbs.Assemble()
     n, duration = cycles * steps, cycles / f

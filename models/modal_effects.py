@@ -4,8 +4,9 @@ The specimen's vibration effects on a mode (``specimen.effects``, modal form, am
 the sensor; ``docs/vibration_effects.md``) act as a modal force: their elements
 (``EFFECTS[name]`` around a zero-force element, joint values from ``modal_to_joint`` with
 unit modal mass in sensor units) are driven by the sensor-scaled modal coordinate
-``Y = s q``, ``q = phi^T M x``, ``s = S phi``, and apply ``-M phi F(Y) / s`` to the beams
-(an Exudyn ``ObjectGenericODE2`` with its exact Jacobian ``M phi phi^T M F'(Y)``), which the
+``Y = s q``, ``q = phi^T M x``, ``s = S phi``, and apply ``-M phi F(Y) / s`` to the bodies
+(an Exudyn ``ObjectGenericODE2`` on the host's coordinates, :mod:`~iwan_element.models.host`,
+with its exact Jacobian ``M phi phi^T M F'(Y)``), which the
 mass-orthogonality of the modes keeps on this mode. Their work is ``(1/s^2) int F dY``.
 """
 from __future__ import annotations
@@ -57,21 +58,20 @@ def effect_stack(specimen: Specimen, mode: int, omega0: float):
 
 
 class ModalEffects:
-    """The specimen's effects on one mode as a modal force on the beams (module docstring)."""
+    """The specimen's effects on one mode as a modal force on the host's bodies (module
+    docstring)."""
 
     def __init__(self, specimen: Specimen, mode: int, L, phi, omega0: float):
         self.el, self.names = effect_stack(specimen, mode, omega0)
         self.s = float(L.S @ phi)
         self.a_free = L.M @ phi
-        self.free = L.free
+        self.a = None
 
-    def attach(self, mbs, nodes, n_coordinates: int):
-        """Add the ObjectGenericODE2 on ``nodes`` (4 ODE2 coordinates each)."""
-        idx = np.concatenate([np.arange(mbs.GetNodeODE2Index(n), mbs.GetNodeODE2Index(n) + 4)
-                              for n in nodes])
-        a = np.zeros(n_coordinates)
-        a[self.free] = self.a_free
-        self.a = a[idx]
+    def attach(self, model):
+        """Add the ObjectGenericODE2 on the host's node (:class:`~.host.HostModel`; the
+        system must be assembled again afterwards): the row ``a = T^T M phi`` in the host's
+        coordinates."""
+        self.a = model.T.T @ self.a_free
         self.aa = np.outer(self.a, self.a)
         el, s, av = self.el, self.s, self.a
 
@@ -84,9 +84,11 @@ class ModalEffects:
             c = sum(getattr(x, "c", 0.0) for x in self._stack())
             return self.aa * (K * f_q + c * f_v)
 
-        n = idx.size
-        mbs.AddObject(ObjectGenericODE2(nodeNumbers=list(nodes), massMatrix=np.zeros((n, n)),
-                                        forceUserFunction=force, jacobianUserFunction=jacobian))
+        n = av.size
+        model.mbs.AddObject(ObjectGenericODE2(nodeNumbers=[model.node],
+                                              massMatrix=np.zeros((n, n)),
+                                              forceUserFunction=force,
+                                              jacobianUserFunction=jacobian))
 
     def _stack(self):
         el = self.el
@@ -96,17 +98,18 @@ class ModalEffects:
 
     def start(self, Y0: float, n: int = 400) -> float:
         """Drive the elements from rest to ``Y0`` (virgin loading, as the static release
-        state); returns their work on the beams' modal coordinate [J]."""
+        state); returns their work on the bodies' modal coordinate [J]."""
         for y in np.linspace(0.0, Y0, n + 1)[1:]:
             self.el.trial(float(y), 0.0)
             self.el.commit()
         return self.el.work / self.s ** 2
 
-    def commit(self, x_free, v_free):
-        self.el.trial(self.s * float(self.a_free @ x_free), self.s * float(self.a_free @ v_free))
+    def commit(self, z, vz):
+        """Commit at the host coordinates ``z`` and their rates ``vz``."""
+        self.el.trial(self.s * float(self.a @ z), self.s * float(self.a @ vz))
         self.el.commit()
 
     def energy(self) -> tuple[float, float]:
-        """(stored, dissipated) [J] on the beams' modal coordinate."""
+        """(stored, dissipated) [J] on the bodies' modal coordinate."""
         s2 = self.s ** 2
         return self.el.stored_energy / s2, self.el.dissipated_energy / s2

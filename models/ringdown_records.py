@@ -21,28 +21,29 @@ E_KEYS = ("t", "kinetic", "strain", "springs", "joint_stored", "joint_dissipated
 
 
 class Recorder:
-    """The post-step function of a ring-down: the coordinates and (with
-    ``record_energy``) the energy terms of every accepted step, and the effects' commits."""
+    """The post-step function of a ring-down: the host's coordinates and (with
+    ``record_energy``) the energy terms of every accepted step, and the effects' commits
+    (everything in the host's coordinates, :mod:`~iwan_element.models.host`)."""
 
-    def __init__(self, free, effs, floor_work, record_energy: bool):
-        self.free, self.effs, self.floor_work, self.record = free, effs, floor_work, record_energy
+    def __init__(self, effs, floor_work, record_energy: bool):
+        self.effs, self.floor_work, self.record = effs, floor_work, record_energy
         self.times, self.coords = [], []
         self.energy = {k: [] for k in E_KEYS}
         self.model = None
-        self.impact = None                 # (Impact, row of its point) when one acts
+        self.impact = None                 # (Impact, row of its point in z) when one acts
         self.work_in, self.last = 0.0, None
         self.bar = None                    # a progress bar over the steps, if asked
 
     def __call__(self, mbs_, t):
-        sd, free = mbs_.systemData, self.free
+        sd = mbs_.systemData
         self.times.append(t)
         if self.bar is not None and len(self.times) % 50 == 0:
             tick(self.bar, 50)
         self.coords.append(sd.GetODE2Coordinates())
-        v = np.asarray(sd.GetODE2Coordinates_t())[free]
+        v = np.asarray(sd.GetODE2Coordinates_t())
         e = self.energy
         for eff in self.effs:
-            eff.commit(self.coords[-1][free], v)
+            eff.commit(self.coords[-1], v)
         if self.record:
             if self.effs:
                 es, ed = np.sum([eff.energy() for eff in self.effs], axis=0)
@@ -51,7 +52,7 @@ class Recorder:
             e["floor_dissipated"].append(self.floor_work.step(t, v))
             if self.impact is not None:
                 imp, row = self.impact
-                F, y = imp.force(t), float(row @ self.coords[-1][free])
+                F, y = imp.force(t), float(row @ self.coords[-1])
                 if self.last is not None:  # the trapezoidal rule's work of the load
                     self.work_in += 0.5 * (F + self.last[0]) * (y - self.last[1])
                 self.last = (F, y)

@@ -27,6 +27,7 @@ from dataclasses import dataclass, field, fields, replace
 import numpy as np
 
 from .interface import ContactPoints, points_from_forces
+from .linear import attach_setup
 from .specimens import InterfaceModel, Specimen
 
 __all__ = ["PatchLayout", "SolidModel", "SolidSpecimen", "solid_contact_points"]
@@ -35,7 +36,7 @@ __all__ = ["PatchLayout", "SolidModel", "SolidSpecimen", "solid_contact_points"]
 # the Iwan elements, the patches' normal springs (the reduction holds the normal gaps'
 # attachment shapes) and the analyses' damping floor, amplitudes and effects, not M, Kb, G
 _FREE_FIELDS = {"name", "preload", "friction", "amplitude_range", "modal_damping",
-                "calibrated_range", "effects", "reference"}
+                "calibrated_range", "effects", "reference", "setup", "youngs_modulus", "density"}
 _FREE_INTERFACE = {"stiffness_per_area", "stiffness_pressure_exponent", "chi", "beta",
                    "damping_floor", "normal_stiffness_per_area"}
 
@@ -101,6 +102,10 @@ class SolidModel:
         ``(x, rows)``: positions [m] every millimetre along the assembly and, per position,
         the reduced row of the section's z displacement there (``solid_build._point_weights``)
         (read as ``S``; the ring-down's sensors), shape ``(len(x), n_reduced)``.
+    material : tuple or None
+        ``(youngs_modulus [Pa], density [kg/m^3])`` the bodies were built with; a specimen
+        with other values scales the bodies' stiffness and mass by the ratios (a homogeneous
+        material: the reduction basis stays a Ritz basis of the scaled bodies).
     """
 
     system: object
@@ -109,6 +114,7 @@ class SolidModel:
     info: dict = field(default_factory=dict)
     full: dict | None = field(default=None, repr=False)
     axis: tuple | None = field(default=None, repr=False)
+    material: tuple | None = None
 
 
 @dataclass(frozen=True)
@@ -134,6 +140,10 @@ class SolidSpecimen:
             raise TypeError(f"specimen must be a Specimen, got {type(self.specimen).__name__}")
         if not isinstance(self.model, SolidModel):
             raise TypeError(f"model must be a SolidModel, got {type(self.model).__name__}")
+        if self.specimen.setup.clamp is not None:
+            raise ValueError("setup.clamp (springs at the root) is not available on solid "
+                             "bodies: their clamped face is held rigidly; give the setup "
+                             "without a clamp")
 
     def __getattr__(self, name):
         if name in ("specimen", "model") or name.startswith("__"):
@@ -164,12 +174,22 @@ class SolidSpecimen:
                              self.model)
 
     def linear_system(self):
-        """The reduced :class:`~iwan_element.models.assembly.LinearSystem`, its ``K0``
-        holding the patches' normal springs at this specimen's
-        ``interface.normal_stiffness_per_area`` (``k_n A`` per patch on the normal gaps)."""
+        """The reduced :class:`~iwan_element.models.linear.LinearSystem`: the bodies scaled
+        to this specimen's ``youngs_modulus`` and ``density`` (:attr:`SolidModel.material`),
+        ``K0`` holding the patches' normal springs at its
+        ``interface.normal_stiffness_per_area`` (``k_n A`` per patch on the normal gaps), and
+        its setup's masses and shaker on the axis rows
+        (:func:`~iwan_element.models.linear.attach_setup`)."""
         sysm, Gn = self.model.system, self.model.normal_gaps
         kn = self.specimen.interface.normal_stiffness_per_area * self.model.patches.area
-        return replace(sysm, K0=sysm.Kb + Gn.T @ (kn[:, None] * Gn))
+        sE, sR = 1.0, 1.0
+        if self.model.material is not None:
+            sE = self.specimen.youngs_modulus / self.model.material[0]
+            sR = self.specimen.density / self.model.material[1]
+        Kb = sE * sysm.Kb
+        L = replace(sysm, M=sR * sysm.M, Kb=Kb, K0=Kb + Gn.T @ (kn[:, None] * Gn), Gn=Gn)
+        return attach_setup(L, self.specimen.setup,
+                            lambda x: (None, self.axis_rows(np.asarray(x, float)), None))
 
     def axis_rows(self, positions) -> np.ndarray:
         """Reduced rows of the z displacement at ``positions`` [m] along the assembly (the

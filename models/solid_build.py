@@ -41,7 +41,7 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from .assembly import LinearSystem
+from .linear import LinearSystem
 from .interface import pressure_field
 from .solid import PatchLayout, SolidModel, SolidSpecimen, solid_contact_points
 from .solid_mesh import SolidPart, lap_beam_parts
@@ -334,7 +334,9 @@ def solid_specimen(specimen: Specimen, parts: tuple, *, patch_size: float = 0.00
     log.info("solid %s: %d -> %d coordinates, %d patches, %.2f s", specimen.name, M.shape[0],
              T.shape[1], len(patches), info["reduction_s"])
     return SolidSpecimen(specimen, SolidModel(system=red, patches=patches, info=info, full=full,
-                                              normal_gaps=Gn @ T, axis=axis))
+                                              normal_gaps=Gn @ T, axis=axis,
+                                              material=(specimen.youngs_modulus,
+                                                        specimen.density)))
 
 
 def solid_preset(name: str, *, mesh_size: float = 0.008, lap_mesh_size: float | None = None,

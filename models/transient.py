@@ -5,9 +5,11 @@ The specimen is held in the static deflection that the modal load ``alpha M phi`
 slips) and released from rest at ``t = 0``. Several modes may be released at once: the
 release state is then the sum of each mode's static deflection, each reaching its own
 amplitude at the sensor, and the Iwan elements start virgin at the summed slips. Exudyn
-integrates the geometrically nonlinear Cable2D beams with the history-dependent Iwan element
-of every contact point (generalized-alpha with spectral radius 1, i.e. the trapezoidal rule:
-no numerical damping), all modes through the same interface. Each mode's response is
+integrates the specimen's linear bodies (1-D Timoshenko beams or reduced solid bodies, one
+generic body: :mod:`~iwan_element.models.host`) with the history-dependent Iwan element of
+every contact point (generalized-alpha with spectral radius 1, i.e. the trapezoidal rule: no
+numerical damping), all modes through the same interface. A hammer impact instead of a
+release is a force pulse on the struck point's port coordinate. Each mode's response is
 separated by modal filtering, ``q_r(t) = phi_r^T M x(t)``, and expressed at the sensor
 (``X_r = (S phi_r) q_r``); frequency and damping against amplitude follow from the
 package's free-decay route, :func:`iwan_element.amplitude_curve` (band-pass ``(0.5, 1.5)``
@@ -29,12 +31,12 @@ import math
 
 import exudyn as exu
 import numpy as np
-from exudyn.itemInterface import LoadForceVector
 
 from iwan_element.core.validation import check_scalar
 
-from .assembly import axis_rows, build_specimen_model
-from .damping import FloorWork, attach_floor_damping, floor_damping
+from .assembly import axis_rows
+from .damping import FloorWork
+from .host import build_host
 from .impact import Impact
 from .modal_effects import ModalEffects
 from .qsma import linear_modes, static_modal_load
@@ -42,11 +44,14 @@ from .ringdown_records import (Recorder, build_result, joint_records, solve_time
                                virgin_joint_energy)
 from .ringdown_result import RingdownResult, with_energy_warning
 from .solid import SolidSpecimen, check_specimen
-from .solid_transient import check_solid_release, solid_ringdown
-from .solver import roundoff_force, solver_settings
+from .solver import solver_settings
 from .specimens import Specimen
 
-__all__ = ["RingdownResult", "ringdown"]
+__all__ = ["RingdownResult", "ringdown", "check_solid_release"]
+
+#: Smallest share of a mode's largest z displacement along the axis that the sensor must see
+#: for a solid's release amplitude to be set there.
+SENSOR_SHARE = 0.05
 
 
 def _amplitudes(mode, amplitude) -> dict:
@@ -120,24 +125,36 @@ def _start(specimen: Specimen, mode, amplitude, impact, modes):
         "phi": [m[1] for m in lm], "omega0": np.array([m[0] for m in lm])}
 
 
-def _add_impact(model, impact: Impact, rec) -> None:
-    """The pulse as a load on the axis at its position; the recorder books its work."""
-    model.mbs.AddLoad(LoadForceVector(
-        markerNumber=model.axis_marker(impact.position), loadVector=[0.0, 0.0, 0.0],
-        loadVectorUserFunction=lambda mbs_, t, lv: [0.0, impact.force(t), 0.0]))
-    rec.impact = (impact, axis_rows(model.specimen, [impact.position])[0])
-
-
-def _initial_energy(model, rel, effs) -> tuple:
-    """``(kinetic, total)`` energy [J] at the release: the beams' strain energy, the springs',
-    the joint's (the virgin backbone work at the initial slips) and the effects'."""
+def _initial_energy(model, rel, effs, tangential) -> tuple:
+    """``(kinetic, total)`` energy [J] at the release: the bodies' strain energy, the
+    springs', the joint's (the virgin backbone work at the initial slips) and the
+    effects'."""
     kin0, pot0 = model.beam_energy()
     e0 = pot0 + model.spring_energy()
-    if model.interface is not None:
+    if tangential == "iwan":
         e0 += virgin_joint_energy(rel["slip"], model.points.params)
     for eff in effs:
         e0 += eff.start(eff.s * float(eff.a_free @ rel["x"]))
     return kin0, e0
+
+
+def check_solid_release(specimen: SolidSpecimen, modes) -> None:
+    """Refuse a solid's release in a mode the sensor barely sees (its release amplitude at
+    the sensor could not set it)."""
+    if specimen.model.axis is None:
+        raise ValueError("specimen.model holds no axis rows (SolidModel.axis): build the solid "
+                         "with solid_build.solid_specimen")
+    for r in modes:
+        _, phi, _, L, _ = linear_modes(specimen, mode=r)
+        along = np.max(np.abs(axis_rows(specimen, specimen.model.axis[0]) @ phi))
+        share = abs(float(L.S @ phi)) / along
+        if share < SENSOR_SHARE:
+            raise ValueError(
+                f"mode {r} moves the sensor's z displacement by {share:.1e} of its largest "
+                "z displacement along the axis (an in-plane or torsion mode): its release "
+                "amplitude at the sensor cannot set it. The solid numbers its stuck modes "
+                "as natural_frequencies does (the Brake-Reuss solid: 1 first height bending, "
+                "2 in-plane bending, 3 second height bending); release height-bending modes")
 
 
 def ringdown(specimen: Specimen | SolidSpecimen, *, mode: int | None = None, amplitude=None,
@@ -152,9 +169,9 @@ def ringdown(specimen: Specimen | SolidSpecimen, *, mode: int | None = None, amp
     Parameters
     ----------
     specimen : Specimen or SolidSpecimen
-        A 1-D specimen (Exudyn beams), or a solid one (its reduced bodies in Exudyn,
-        :mod:`~iwan_element.models.solid_transient`; releases only, no effects, its modes
-        numbered as the solid's stuck modes: a mode must move the sensor's z displacement).
+        A 1-D specimen (Timoshenko beams) or a solid one (its reduced bodies), in Exudyn as
+        one generic body (:mod:`~iwan_element.models.host`); a solid's modes are numbered as
+        its stuck modes (a released mode must move the sensor's z displacement).
     mode : int, optional, keyword-only
         Elastic mode number (1: lowest) of a single-mode release (default 1); not with a
         dict ``amplitude``.
@@ -202,24 +219,19 @@ def ringdown(specimen: Specimen | SolidSpecimen, *, mode: int | None = None, amp
     Notes
     -----
     Newton (modified Newton, relative tolerance 1e-10) stops when the residual norm falls
-    below ``max(1e-7 F, F_ro)`` [N]: ``F = max |K0 x0|``, the largest elastic force of the
-    release state, scales with the amplitude; ``F_ro = eps k_max span sqrt(n)`` is the
-    amplitude-independent round-off of the residual
-    (:func:`~iwan_element.models.solver.roundoff_force`). Below about 10 um on the
-    Brake-Reuss beam ``1e-7 F`` fell under the round-off (residual stalling at 1e-6 to
-    2.5e-6 N), Newton never converged and the step was cut without end; with the bound the
-    2 um run takes seconds and agrees with QSMA (``tests/test_qsma.py``). No discontinuous
-    iteration is involved (one per step, Exudyn's default): the compiled law is an explicit
-    function of the slip given the committed state, which changes only in the post-step of
-    an accepted step.
+    below ``1e-7 F`` [N], ``F = max |K0 x0|`` the largest elastic force of the release state
+    (or an impact's peak force): it scales with the amplitude. The host's coordinates are
+    displacements, so the residual's round-off stays far below that at any amplitude. No
+    discontinuous iteration is involved (one per step, Exudyn's default): the compiled law is
+    an explicit function of the slip given the committed state, which changes only in the
+    post-step of an accepted step.
     """
     n_periods, cycles, duration = _check_args(specimen, steps_per_period, n_periods, cycles,
                                               duration)
     if tangential not in ("iwan", "linear"):
         raise ValueError(f"tangential must be 'iwan' or 'linear', got {tangential!r}")
     if isinstance(specimen, SolidSpecimen):
-        check_solid_release(specimen, () if amplitude is None else _amplitudes(mode, amplitude),
-                            impact)
+        check_solid_release(specimen, () if amplitude is None else _amplitudes(mode, amplitude))
     amp, rel = _start(specimen, mode, amplitude, impact, modes)
     positions = np.atleast_1d(np.asarray(
         specimen.sensor_position if sensors is None else sensors, float))
@@ -227,54 +239,47 @@ def ringdown(specimen: Specimen | SolidSpecimen, *, mode: int | None = None, amp
     opts = {"n_periods": n_periods, "steps_per_period": steps_per_period,
             "duration": duration, "cycles": cycles, "record_energy": record_energy,
             "joint_elements": joint_elements, "progress": progress, "tangential": tangential}
-    if isinstance(specimen, SolidSpecimen):
-        return solid_ringdown(specimen, amp, rel, rows, positions, opts)
-    return _beam_ringdown(specimen, amp, rel, rows, positions, opts, impact)
+    return _run(specimen, amp, rel, rows, positions, opts, impact)
 
 
-def _beam_ringdown(specimen, amp, rel, rows, positions, opts, impact):
-    """The 1-D specimen's ring-down in Exudyn (beams, contact points, floor, effects, impact)
-    from the release ``rel`` of the modes ``amp``: :func:`ringdown`'s work after the checks
-    (``opts``: its keyword options)."""
+def _run(specimen, amp, rel, rows, positions, opts, impact):
+    """The ring-down in Exudyn (:mod:`~iwan_element.models.host`: bodies, contact points,
+    floor, effects, impact) from the release ``rel`` of the modes ``amp``: :func:`ringdown`'s
+    work after the checks (``opts``: its keyword options)."""
     tangential, record_energy = opts["tangential"], opts["record_energy"]
     L, w0 = rel["system"], rel["omega0"]
-    floor = floor_damping(specimen)
     effs = [ModalEffects(specimen, r, L, phi, w) for r, phi, w in zip(amp, rel["phi"], w0)
             if any(e.mode == r for e in specimen.effects)]
-    rec = Recorder(L.free, effs, FloorWork(floor.C if floor.active else None), record_energy)
-    model = build_specimen_model(specimen, tangential=tangential, post_step=rec,
-                                 joint_elements=opts["joint_elements"])
+    fw = FloorWork(None)
+    rec = Recorder(effs, fw, record_energy)
+    ports = {"impact": axis_rows(specimen, [impact.position])[0]} if impact is not None else None
+    model = build_host(specimen, tangential=tangential, post_step=rec, ports=ports,
+                       joint_elements=opts["joint_elements"], assemble=False)
+    fw.C = model.floor_C
     rec.model = model
-    mbs = model.mbs
     for eff in effs:
-        eff.attach(mbs, model.nodes, L.n_coordinates)
-    if floor.active:
-        attach_floor_damping(mbs, model.nodes, floor, L.free, L.n_coordinates)
+        eff.attach(model)
     if impact is not None:
-        _add_impact(model, impact, rec)
-    if effs or floor.active or impact is not None:
-        mbs.Assemble()
-    x0 = np.zeros(L.n_coordinates)
-    x0[L.free] = rel["x"]
-    mbs.systemData.SetODE2Coordinates(x0, configuration=exu.ConfigurationType.Initial)
-    mbs.systemData.SetODE2Coordinates(x0, configuration=exu.ConfigurationType.Current)
-    kin0, e0 = _initial_energy(model, rel, effs)
+        model.add_port_force("impact", impact.force)
+        rec.impact = (impact, np.eye(model.T.shape[1])[model.ports["impact"]])
+    model.mbs.Assemble()
+    model.set_state(rel["x"])
+    kin0, e0 = _initial_energy(model, rel, effs, tangential)
     h, n = step_grid(w0, opts["steps_per_period"], duration=opts["duration"],
                      cycles=opts["cycles"], impact=impact)
-    sim = solver_settings(force_scale=max(float(np.max(np.abs(L.K0 @ rel["x"]))),
+    z0 = model.T_inv @ rel["x"]
+    sim = solver_settings(force_scale=max(float(np.max(np.abs((model.Kb + model.Ks) @ z0))),
                                           0.0 if impact is None else abs(impact.peak_force)))
-    newton = sim.timeIntegration.newton
-    newton.absoluteTolerance = max(newton.absoluteTolerance, roundoff_force(L, specimen))
+    sim.linearSolver.solverType = exu.LinearSolverType.EigenDense
     sim.timeIntegration.numberOfSteps = n
     sim.timeIntegration.endTime = n * h
-    solve = solve_timed(mbs, sim, rec, n, opts["progress"])
+    solve = solve_timed(model.mbs, sim, rec, n, opts["progress"])
     quad = joint_records(model.interface, rec.energy, e0 + rec.work_in) if record_energy \
         else None
-    X = np.array(rec.coords)[:, L.free]
+    X = model.to_free(np.array(rec.coords))
     return with_energy_warning(build_result(specimen, amp, rec, X, rel, rows, positions, h, n, {
         "n_periods": opts["n_periods"], "steps_per_period": opts["steps_per_period"],
-        "solve": solve, "e0": e0,
-        "kin0": kin0, "quad": quad, "n_points": len(model.points),
+        "solve": solve, "e0": e0, "kin0": kin0, "quad": quad, "n_points": len(model.points),
         "overflow": len(getattr(model.interface, "overflow_times", ())),
         "effects": tuple(nm for eff in effs for nm in eff.names), "impact": impact,
-        "extra": {"tangential": tangential}}))
+        "extra": {"tangential": tangential, "n_coordinates": int(model.T.shape[1])}}))

@@ -11,7 +11,6 @@ from scipy.linalg import eigh
 
 from iwan_element.models import (forced_response, natural_frequencies, preset,
                                  quasi_static_test, ringdown)
-from iwan_element.models.assembly import build_specimen_model
 from iwan_element.models.interface import contact_points
 from iwan_element.models.qsma import linear_modes
 from iwan_element.models.damping import floor_damping
@@ -80,9 +79,10 @@ def euler_bernoulli_assembly(s, *, tangential: bool, n_per_beam: int = 160):
 @pytest.mark.parametrize("interface", ["stuck", "none"])
 def test_natural_frequencies_match_an_euler_bernoulli_frame_model(interface):
     """With the joint stuck (contact points at KT_i) and without it (normal springs only:
-    beam B's axial sliding is a 0 Hz mode), the Cable2D model's frequencies are those of a
-    fine Euler-Bernoulli frame model with the same contact springs."""
-    s = EXAMPLE.replace(n_elements=32)
+    beam B's axial sliding is a 0 Hz mode), the 1-D model's frequencies with its
+    Euler-Bernoulli option are those of a fine Euler-Bernoulli frame model with the same
+    contact springs (its Timoshenko elements: tests/test_beam_fe.py)."""
+    s = EXAMPLE.replace(n_elements=32, beam_theory="euler-bernoulli")
     f = natural_frequencies(s, n_modes=3, interface=interface)
     ref = euler_bernoulli_assembly(s, tangential=interface == "stuck")
     if interface == "none":          # the sliding mode is 0 Hz up to round-off in both
@@ -95,33 +95,6 @@ def test_natural_frequencies_match_an_euler_bernoulli_frame_model(interface):
         assert abs(euler_bernoulli_assembly(s, tangential=True, n_per_beam=80)[2] / ref[2] - 1) < 1e-3
     else:                            # without the joint the bending mode is lower
         assert f[0] < natural_frequencies(s, n_modes=1)[0]
-
-
-def test_uniform_cantilever_limit_matches_theory():
-    """Sanity of the beam element: one Cable2D cantilever of the specimen's section against
-    Euler-Bernoulli's first clamped-free frequency."""
-    import exudyn as exu
-    from exudyn.itemInterface import (CoordinateConstraint, MarkerNodeCoordinate,
-                                      NodePoint2DSlope1, NodePointGround, ObjectANCFCable2D)
-    s = EXAMPLE
-    L, EI = s.beam_length, s.youngs_modulus * s.width * s.thickness ** 3 / 12
-    mu = s.density * s.width * s.thickness
-    f1 = 1.875104068711961 ** 2 / (2 * math.pi) * math.sqrt(EI / (mu * L ** 4))
-    SC = exu.SystemContainer()
-    mbs = SC.AddSystem()
-    n = s.n_elements
-    nodes = [mbs.AddNode(NodePoint2DSlope1(referenceCoordinates=[i * L / n, 0, 1, 0])) for i in range(n + 1)]
-    for i in range(n):
-        mbs.AddObject(ObjectANCFCable2D(massPerLength=mu, bendingStiffness=EI,
-                                        axialStiffness=s.youngs_modulus * s.width * s.thickness,
-                                        length=L / n, nodeNumbers=[nodes[i], nodes[i + 1]]))
-    g = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=mbs.AddNode(NodePointGround()), coordinate=0))
-    for c in (0, 1, 3):
-        mbs.AddObject(CoordinateConstraint(markerNumbers=[g, mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=nodes[0], coordinate=c))]))
-    mbs.Assemble()
-    w2, _ = mbs.ComputeODE2Eigenvalues(constrainedCoordinates=[0, 1, 3], ignoreAlgebraicEquations=True,
-                                       numberOfEigenvalues=1)
-    assert math.sqrt(w2[0]) / (2 * math.pi) == pytest.approx(f1, rel=1e-4)
 
 
 def test_quasi_static_loops_equal_the_closed_form_dissipation():
@@ -213,8 +186,6 @@ def test_options_are_validated():
         forced_response(EXAMPLE, force_levels=[])
     with pytest.raises(ValueError, match="interface"):
         natural_frequencies(EXAMPLE, interface="bonded")
-    with pytest.raises(ValueError, match="drive"):
-        build_specimen_model(EXAMPLE, drive=lambda t: 0.0)     # clamped-free: no grip
 
 
 def test_a_sweep_that_misses_the_resonance_says_so():
