@@ -4,7 +4,12 @@
   (:func:`preset`: ``"example"``, ``"brake-reuss"``, ``"two-bolt-aluminium"``);
 * :mod:`~iwan_element.models.interface` - contact pressure cones and the distributed
   interface's Iwan elements;
-* :mod:`~iwan_element.models.assembly` - the Exudyn model of a specimen and its linear matrices;
+* :mod:`~iwan_element.models.setups` - the test setup (sensor masses, shaker, clamp springs)
+  that a specimen carries and every analysis includes;
+* :mod:`~iwan_element.models.beam_fe` and :mod:`~iwan_element.models.assembly` - the 1-D
+  Timoshenko beams and the specimen's linear system (:mod:`~iwan_element.models.linear`);
+* :mod:`~iwan_element.models.host` - a specimen in Exudyn: its linear system as one generic
+  body, the contact points' Iwan elements on slip coordinates (the transient routes' model);
 * :mod:`~iwan_element.models.qsma` - quasi-static modal analysis (:func:`modal_amplitude_curve`);
   :func:`~iwan_element.models.qsma.linear_modes`, :func:`natural_frequencies` (with the joint
   stuck or without it);
@@ -37,6 +42,9 @@
   mesh), contact patches and the reduced linear system QSMA reads (:func:`solid_preset`;
   extra ``iwan-element[fem]``);
 * :mod:`~iwan_element.models.solver` - Exudyn solver settings shared by the runs;
+* :mod:`~iwan_element.models.updating` and :mod:`~iwan_element.models.update` - linear
+  model updating on low-level test data (:func:`updatable`, :func:`linear_update`): material,
+  boundary, setup and the stuck joint's stiffness, before any joint calibration;
 * :mod:`~iwan_element.models.calibration` - interface calibration from vibration data and
   from joint / modal Iwan fits;
 * ``example_test_30kN.csv`` - a SYNTHETIC quasi-static test of the seed paper's specimen
@@ -56,14 +64,19 @@ from .qsma import modal_amplitude_curve, natural_frequencies
 from .transient import RingdownResult, ringdown
 from .solid import SolidSpecimen
 from .solid_build import solid_preset
+from .setups import Clamp, PointMass, Setup, Shaker
 from .specimens import Excitation, InterfaceModel, Specimen, preset
+from .update import LinearUpdateResult, linear_update
+from .updating import updatable
 
 __all__ = ["example_test_path", "preset", "modal_amplitude_curve", "natural_frequencies",
            "ringdown", "Impact", "mode_coupling", "quasi_static_test", "forced_response",
            "Specimen", "InterfaceModel", "Excitation", "RingdownResult", "ModeCouplingResult",
            "QuasiStaticResult", "ForcedResponseResult", "solid_preset", "SolidSpecimen",
            "harmonic_balance", "frequency_response", "nonlinear_mode", "reduced_model",
-           "reduction_error", "ReducedModel", "predict_hammer_test", "HammerPrediction"]
+           "reduction_error", "ReducedModel", "predict_hammer_test", "HammerPrediction",
+           "Setup", "PointMass", "Shaker", "Clamp", "linear_update", "LinearUpdateResult",
+           "updatable"]
 
 
 def example_test_path() -> Path:

@@ -236,6 +236,34 @@ def _sweeps():
     return {k: np.concatenate(v) for k, v in out.items()}
 
 
+def _low_level_sweep():
+    """The first (lowest) level of :func:`_sweeps`, without its level column."""
+    d = _sweeps()
+    m = d["level"] == 0
+    return {k: d[k][m].copy() for k in ("f", "F", "response", "phase")}
+
+
+def _frf():
+    """A linear single-mode receptance at 50 Hz, 1 % damping, modal constant 0.5 1/kg."""
+    f = np.linspace(45.0, 55.0, 41)
+    w, wr = 2 * np.pi * f, 2 * np.pi * 50.0
+    return dict(f=f, H=0.5 / (wr ** 2 - w ** 2 + 2j * 0.01 * wr * w))
+
+
+def _two_sensor_decay():
+    """Two sensors of one 20 Hz mode (zeta 0.5 %) with 1e-3 noise, sampled at 400 Hz for 8 s."""
+    if "decay2" not in _CACHE:
+        t = np.arange(3200) / 400.0
+        w = 2 * np.pi * 20.0
+        y = np.exp(-0.005 * w * t) * np.sin(w * t)
+        rng = np.random.default_rng(0)
+        _CACHE["decay2"] = (t, {"a": (0.1, y + 1e-3 * rng.standard_normal(t.size)),
+                                "b": (0.3, -0.5 * y + 1e-3 * rng.standard_normal(t.size))})
+    t, rec = _CACHE["decay2"]
+    return dict(t=t.copy(), records={k: (x, v.copy()) for k, (x, v) in rec.items()},
+                quantity="displacement", bands={"m1": (15.0, 25.0)})
+
+
 def _spring_model(u, theta):
     """A linear spring F = k u (module level: the fit may pickle it)."""
     return theta[0] * np.asarray(u)
@@ -296,6 +324,15 @@ REGISTRY.update({
         func=_ensemble_task, parameter_sets=[{"Fs": 9e3}, {"Fs": 1e4}], executor="serial", seed=0)),
         {"func": "object", "parameter_sets": "object"}),
     "EnsembleResult": Entry(skip=_RESULT.format("run_ensemble")),
+    "free_decay_modes": Entry(lambda: (ie.free_decay_modes, _two_sensor_decay()),
+                              {"t": "time", "records": "object"}),
+    "frf_modes": Entry(lambda: (ie.frf_modes, _frf()), {"f": "data", "H": "data"}),
+    "sweep_modes": Entry(lambda: (ie.sweep_modes, _low_level_sweep()),
+                         {"f": "data", "F": "data", "response": "data", "phase": "data"}),
+    "mac": Entry(lambda: (ie.mac, dict(a=np.array([1.0, 0.5, -0.2]), b=np.array([0.9, 0.6, -0.1]))),
+                 {"a": "object", "b": "object"}),
+    "ModalTargets": Entry(skip=_RESULT.format("free_decay_modes, frf_modes, sweep_modes")),
+    "ModeTarget": Entry(skip=_RESULT.format("free_decay_modes, frf_modes, sweep_modes")),
     "parameter_grid": Entry(skip="its axis values are free-form (whatever run_ensemble's func "
                                  "accepts, text included): nothing to refuse"),
     "parameter_samples": Entry(lambda: (ie.parameter_samples, dict(n=4, seed=0, Fs=(8e3, 1e4),
@@ -588,6 +625,10 @@ MODEL_REGISTRY = {
     "ringdown": (lambda m: (m.ringdown, dict(specimen=m.preset("example"), amplitude=1e-5,
                                              cycles=3, steps_per_period=16)),
                  {"specimen": "object", "amplitude": "scalar", "cycles": "scalar"}, True),
+    "linear_update": (lambda m: (m.linear_update, dict(
+        specimen=m.preset("example"), frequencies={1: 68.0, 2: 410.0},
+        parameters=("youngs_modulus", "stiffness_per_area"))),
+        {"specimen": "object", "frequencies": "object", "parameters": "object"}, True),
 }
 
 

@@ -133,6 +133,11 @@ def _bands(bands, fs, Y, t):
         if not (math.isfinite(lo) and math.isfinite(hi) and 0 < lo < hi < 0.8 * nyq):
             raise ValueError(f"bands[{label!r}] must satisfy 0 < f_lo < f_hi < 0.8 x Nyquist "
                              f"({0.8 * nyq:g} Hz), got ({lo:g}, {hi:g})")
+        span = float(t[-1] - t[0])
+        if span * lo < 5.0:
+            raise ValueError(f"t spans {span:.3g} s: fewer than 5 periods of bands[{label!r}]'s "
+                             f"lower edge ({lo:g} Hz); check the unit of t (ms given as s?) "
+                             "and the band")
         out[str(label)] = (lo, hi)
     return out
 

@@ -97,6 +97,15 @@ def _targets(W, H, X, label, residual, source, notes):
     return ModalTargets(modes=(mode,), source=source, notes=notes, warnings=tuple(warns))
 
 
+def _complex_array(name, v) -> np.ndarray:
+    """``v`` as a new complex array, or a ValueError naming ``name``."""
+    try:
+        return np.array(v, dtype=complex, copy=True)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be an array of complex numbers, got "
+                         f"{type(v).__name__}") from None
+
+
 def frf_modes(f, H, *, quantity: str = "displacement", residual: bool = True,
               label: str = "frf") -> ModalTargets:
     """Natural frequency, damping ratio and modal constant from a low-level complex FRF.
@@ -131,7 +140,7 @@ def frf_modes(f, H, *, quantity: str = "displacement", residual: bool = True,
     ff = check_magnitude("f", finite_array("f", f, min_size=6), unit="Hz")
     if np.any(ff <= 0) or np.unique(ff).size != ff.size:
         raise ValueError("f must be > 0 [Hz] and distinct")
-    Hc = np.array(H, dtype=complex, copy=True)
+    Hc = _complex_array("H", H)
     if Hc.shape != ff.shape or not np.all(np.isfinite(Hc)) or np.any(Hc == 0):
         raise ValueError(f"H must be finite, non-zero and of the shape of f {ff.shape}, got "
                          f"{Hc.shape}")

@@ -43,14 +43,24 @@ def mac(a, b) -> float:
                              f"and {sorted(map(str, b))}")
         keys = list(a)
         a, b = [a[k] for k in keys], [b[k] for k in keys]
-    a = np.asarray(a, dtype=complex).ravel()
-    b = np.asarray(b, dtype=complex).ravel()
+    try:
+        a = np.asarray(a, dtype=complex).ravel()
+    except (TypeError, ValueError):
+        raise ValueError(f"a must be an array of (complex) amplitudes, got {type(a).__name__}") \
+            from None
+    try:
+        b = np.asarray(b, dtype=complex).ravel()
+    except (TypeError, ValueError):
+        raise ValueError(f"b must be an array of (complex) amplitudes, got {type(b).__name__}") \
+            from None
     if a.shape != b.shape or a.size == 0:
         raise ValueError(f"a and b must be shapes at the same sensors, got sizes {a.size} and "
                          f"{b.size}")
     den = float(np.vdot(a, a).real * np.vdot(b, b).real)
     if not (den > 0 and math.isfinite(den)):
         raise ValueError("a and b must be finite and not all zero")
+    if a.size < 2:
+        raise ValueError("a and b must be shapes at 2 or more sensors")
     return float(abs(np.vdot(a, b)) ** 2 / den)
 
 
