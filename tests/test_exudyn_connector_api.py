@@ -282,29 +282,35 @@ def test_user_function_that_calls_the_previous_one_by_hand_does_not_commit_twice
     assert conn.n_records == 201 and np.all(np.diff(conn.time_history) > 0)
 
 
-def test_reset_gives_an_identical_second_run_and_a_forgotten_reset_is_reported(caplog):
+@pytest.mark.parametrize("law", ["symbolic", "python"])
+def test_a_second_solve_starts_a_fresh_history_by_itself(caplog, law):
+    """reset() gives an identical second run; a solve started again from t = 0 without it
+    does the same by itself (the joint was virgin again before the first step: same records
+    to the last bit, with either solver), and says so in the log."""
     chain = Chain([1.0], v0=[3.0])
     chain.spring(-1, 0, 2e5)
-    conn = chain.joint(-1, 0, DiscreteIwan(P, 20))
+    element = IwanJoint(P) if law == "symbolic" else DiscreteIwan(P, 20)
+    conn = chain.joint(-1, 0, element)
+    assert conn.route == law
     sim = settings(1e-4, 300)
-    chain.solve(sim)
-    first = conn.records()
-    conn.reset()
-    assert conn.n_records == 0 and conn.joint.dissipated_energy == 0.0
-    chain.mbs.SolveDynamic(sim)
-    second = conn.records()
-    for key in first:
-        assert np.array_equal(first[key], second[key]), key
+    runs = {}
     for solver in (exu.DynamicSolverType.GeneralizedAlpha, exu.DynamicSolverType.RK44):
+        chain.solve(sim, solver)
+        first = conn.records()
+        conn.reset()
+        assert conn.n_records == 0 and conn.joint.dissipated_energy == 0.0
+        chain.mbs.SolveDynamic(sim, solverType=solver)
+        second = conn.records()
         caplog.clear()
-        with caplog.at_level(logging.WARNING, logger="iwan_element.exudyn"):
-            chain.mbs.SolveDynamic(sim, solverType=solver)         # no reset: history continues
-        assert any("call reset()" in r.getMessage() for r in caplog.records), solver
-    caplog.clear()
-    conn.reset()
-    with caplog.at_level(logging.WARNING, logger="iwan_element.exudyn"):
-        chain.mbs.SolveDynamic(sim)
-    assert not caplog.records
+        with caplog.at_level(logging.INFO, logger="iwan_element.exudyn"):
+            chain.mbs.SolveDynamic(sim, solverType=solver)           # no reset()
+        assert any("fresh history" in r.getMessage() for r in caplog.records), solver
+        third = conn.records()
+        for key in first:
+            assert np.array_equal(first[key], second[key]), key
+            assert np.array_equal(first[key], third[key]), key
+        runs[solver] = first
+    assert runs[exu.DynamicSolverType.RK44]["dissipated_energy"][-1] > 0
 
 
 def test_generic_route_equals_the_node_coordinate_shortcut():

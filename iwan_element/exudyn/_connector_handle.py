@@ -245,11 +245,12 @@ class IwanConnector:
 
     # -------------------------------------------------------------- user API
     def reset(self) -> None:
-        """Return the joint to its virgin state and clear the records (for a new run).
+        """Return the joint to its virgin state and clear the records; energy recorders
+        holding the connector start again.
 
-        Exudyn restarts each ``SolveDynamic`` from the initial conditions; call this before
-        such a run unless the run continues from the state the joint holds (e.g. a
-        dynamic run started from a static solution).
+        A solve that starts before the last accepted time (``SolveDynamic`` from the
+        initial conditions again) does this by itself before its first step; a solve that
+        starts at the last accepted time continues the history.
         """
         self._lazy_last = _no_pending
         self._joint.reset()
@@ -263,6 +264,7 @@ class IwanConnector:
         self._t_acc = -_INF
         if self._dispatcher is not None:
             self._dispatcher.last_t = _NAN
+            self._dispatcher.joint_reset(self)
 
     def _check_running(self) -> None:
         """The symbolic route has no Python force function to notice a replaced post-step

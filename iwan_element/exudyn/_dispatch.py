@@ -2,6 +2,7 @@
 the settings they refuse, and the ownership of joint elements."""
 from __future__ import annotations
 
+import logging
 import math
 import weakref
 
@@ -9,6 +10,7 @@ import exudyn as exu
 
 __all__: list[str] = []
 
+_log = logging.getLogger("iwan_element.exudyn.connector")
 _NAN = math.nan
 
 # ---------------------------------------------------------------------------- dispatcher
@@ -51,6 +53,7 @@ class _PostStepDispatcher:
         self.risky = []            # connectors whose stack is deeper than their law holds
         self.pn_prev = None        # post-Newton function found when ours was installed
         self.pn_big = 1e10         # "discontinuous error" that asks for a re-solve
+        self.recorders = []        # energy recorders of this system (follow resets)
         self.mbs = mbs
         disp = self
         self.sysd = mbs.sys        # Exudyn's SolveDynamic/SolveStatic store their solver here
@@ -169,6 +172,29 @@ class _PostStepDispatcher:
         self.accepts = tuple(c._accept for c in self.connectors)
         self.solo = self.accepts[0] if len(self.accepts) == 1 else None
 
+    def before_solve(self, settings, kind: str) -> None:
+        """A solve is about to start (announced by the ``mbs.sys`` hook, before Exudyn's
+        solver runs): refuse settings the joints cannot serve, and give every joint a fresh
+        history if the solve starts before the last accepted time (a new run, not a
+        continuation): the joints return to their virgin state, their records and the energy
+        recorders of this system start again (an initial slip is then reached by monotone
+        virgin loading, as in the first run)."""
+        check_settings(settings, self.connectors)
+        t0 = (settings.timeIntegration.startTime if kind == "dynamicSolver"
+              else settings.staticSolver.loadStepStart)
+        last = self.last_t
+        if last == last and t0 < last - 1e-12 * max(1.0, abs(last)):
+            for c in self.connectors:
+                c.reset()
+            _log.info("a solve starts at t=%g, before the last accepted time t=%g: %d Iwan "
+                      "joint(s) start a fresh history", t0, last, len(self.connectors))
+        self.last_t = _NAN
+
+    def joint_reset(self, joint) -> None:
+        """A joint of this system was reset: the energy recorders holding it start again."""
+        for r in self.recorders:
+            r._joint_reset(joint)
+
     def new_solve(self, mbs) -> None:
         """Start of a solve: refuse settings the connectors cannot serve, then refresh."""
         settings = self.sysd.get("simulationSettings")
@@ -247,18 +273,27 @@ ADAPTIVE_EXPLICIT = frozenset({exu.DynamicSolverType.ODE23, exu.DynamicSolverTyp
 
 class _SolveHook(dict):
     """Replaces ``mbs.sys`` (same content): ``SolveDynamic``/``SolveStatic`` store their solver
-    in it before the first step, which puts every dispatcher of the system back in front of
-    a post-step function set after the connectors (it is then chained, not lost)."""
+    and then their settings in it before the first step (exudyn 1.13.6, ``storeSolver=True``,
+    the default). The solver puts every dispatcher of the system back in front of a
+    post-step function set after the connectors (it is then chained, not lost); the settings
+    let each dispatcher refuse what its joints cannot serve and start a fresh history
+    (:meth:`_PostStepDispatcher.before_solve`) - a ``ValueError`` raised here leaves
+    ``SolveDynamic`` before the solver starts."""
 
     def __setitem__(self, key, value):
         super().__setitem__(key, value)
         if key in ("dynamicSolver", "staticSolver"):
             self.kind = key            # the solve about to start
+            self.pending = True
             mbs = self.mbs
             for d in self.dispatchers:
                 d.stale = True
                 if not d.reachable_from(_installed_post_step(mbs)):
                     d.install(mbs)
+        elif key == "simulationSettings" and getattr(self, "pending", False):
+            self.pending = False
+            for d in self.dispatchers:
+                d.before_solve(value, self.kind)
 
 
 def _dispatcher_for(mbs) -> _PostStepDispatcher:
