@@ -138,6 +138,7 @@ def parts():
         pos0=mbs.AddMarker(MarkerNodePosition(nodeNumber=ground)),
         pos1=mbs.AddMarker(MarkerBodyPosition(bodyNumber=body)),
         rigid=mbs.AddMarker(MarkerBodyRigid(bodyNumber=rb)),
+        body=body, node=n1,
     )
     return d
 
@@ -164,6 +165,14 @@ def parts():
      "unknown visualization keys"),
     (lambda d: dict(markerNumbers=[d["coord0"], d["coord1"]], record=1), "record must be True or False"),
     (lambda d: dict(mbs=d["SC"], markerNumbers=[d["coord0"], d["coord1"]]), "mbs must be an exudyn.MainSystem"),
+    (lambda d: dict(markerNumbers=[d["pos0"], d["body"]], axis=[1, 0, 0]),
+     r"markerNumbers\[1\] = .* is a body or object \(ObjectIndex\), but markers belong here"),
+    (lambda d: dict(markerNumbers=[d["node"], d["coord1"]]),
+     r"markerNumbers\[0\] = .* is a node \(NodeIndex\), but markers belong here"),
+    (lambda d: dict(markerNumbers=[d["coord0"], d["coord1"]], damping=-1.0), r"damping must be in \[0, inf\)"),
+    (lambda d: dict(markerNumbers=[d["coord0"], d["coord1"]], offset=[0.1, 0, 0]), "offset must be a real number"),
+    (lambda d: dict(markerNumbers=[d["pos0"], d["pos1"]], axis=[1, 0, 0], offset=[0.1, math.nan, 0]),
+     "offset must be a number or a finite vector"),
 ])
 def test_invalid_set_up_raises_value_error_before_anything_is_added(parts, case, message):
     kw = case(parts)
@@ -357,12 +366,15 @@ def test_offset_shifts_the_unloaded_position():
     assert np.allclose(xd - d, x0, rtol=0, atol=1e-12 * np.max(np.abs(x0)) + 1e-15)
     # position markers: the offset is measured along the axis
     a = np.array([0.6, 0.8, 0.0])
-    SC, mbs, node, m_ground, m_body = _point_mass_system(3.0 * a)
-    conn = add_iwan_connector(mbs, [m_ground, m_body], IwanJoint(P), axis=a, offset=-d)
-    mbs.Assemble()
-    mbs.SolveDynamic(settings(h, n))
-    assert conn.slip_history[0] == pytest.approx(d, rel=1e-12)               # u = a.(p1 - p0) - offset
-    assert conn.force_history[0] == pytest.approx(IwanJoint(P).trial(d)[0], rel=1e-12)
+    for off in (-d, [0.0, 0.0, 5.0], -d * a + [0.8, -0.6, 2.0]):   # a vector: Exudyn's d0
+        SC, mbs, node, m_ground, m_body = _point_mass_system(3.0 * a)
+        conn = add_iwan_connector(mbs, [m_ground, m_body], IwanJoint(P), axis=a, offset=off)
+        mbs.Assemble()
+        mbs.SolveDynamic(settings(h, n))
+        want = d if np.ndim(off) == 0 else -float(a @ off)        # u = a.(p1 - p0 - d0)
+        assert conn.offset == pytest.approx(-want, rel=1e-12)
+        assert conn.slip_history[0] == pytest.approx(want, rel=1e-12, abs=1e-15)
+        assert conn.force_history[0] == pytest.approx(IwanJoint(P).trial(want)[0], rel=1e-12)
 
 
 # ---------------------------------------------------------------------------- coordinate views
