@@ -171,6 +171,8 @@ class _PostStepDispatcher:
                 c._refresh(mbs)
         self.accepts = tuple(c._accept for c in self.connectors)
         self.solo = self.accepts[0] if len(self.accepts) == 1 else None
+        for r in self.recorders:
+            r._refresh(mbs)
 
     def before_solve(self, settings, kind: str) -> None:
         """A solve is about to start (announced by the ``mbs.sys`` hook, before Exudyn's
