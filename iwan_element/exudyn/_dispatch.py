@@ -124,9 +124,12 @@ class _PostStepDispatcher:
     def lazy_until(self) -> float:
         """Accepted steps before this time may commit joints lazily: the last step of the
         dynamic run being solved, known only if the ``mbs.sys`` hook saw it start and no
-        other post-step function (which might read the joints) is chained; else never."""
+        other post-step function (which might read the joints) is chained - the energy
+        recorder reads none (it is marked ``_iwan_passive``); else never."""
         sysd = self.sysd
-        if self.chained is not None or getattr(sysd, "kind", None) != "dynamicSolver":
+        chained = self.chained
+        if (chained is not None and not getattr(chained, "_iwan_passive", False)) \
+                or getattr(sysd, "kind", None) != "dynamicSolver":
             return -math.inf
         settings = sysd.get("simulationSettings")
         if settings is None:

@@ -124,6 +124,9 @@ class EnergyRecorder:
                 vs.frombytes(views[1].tobytes())
             return True if previous is None else previous(mbs_, t)
 
+        # reads no joint during the run: the connectors may still commit lazily
+        energy_post_step._iwan_passive = previous is None or getattr(previous, "_iwan_passive",
+                                                                     False)
         disp.chained = energy_post_step
         self._n0 = [j.n_records for j in self._joints]
 
