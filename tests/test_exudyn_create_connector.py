@@ -162,3 +162,22 @@ def test_body_fixed_frame_turns_the_axis_and_the_springs_with_body_zero():
     assert np.allclose(force[1:], k * local[1:] + 2.0 * vel[1:], rtol=1e-12)
     A = np.asarray(mbs.GetMarkerOutput(d.markerNumbers[0], _OVT.RotationMatrix)).reshape(3, 3)
     assert math.atan2(A[1, 0], A[0, 0]) == pytest.approx(25.0 * 0.08 - 2 * math.pi * 0, abs=0.05)
+
+
+def test_exudyn_has_no_potential_energy_route_for_a_user_function_connector():
+    """Evidence for the docs: Exudyn 1.13.6 refuses ``PotentialEnergy`` for a connector whose
+    force a user function (symbolic or Python) defines, so the joint's stored energy cannot
+    be reported to Exudyn (it is in the connector's records and in ``record_energy``). The
+    Cartesian form's springs are Exudyn's own object, which reports theirs. Should a later
+    Exudyn offer a route, this test fails and the connector should use it."""
+    SC, mbs, ground = _system()
+    body = mbs.CreateMassPoint(referencePosition=[0.0, 0.0, 0.0], mass=1.0,
+                               initialDisplacement=[0.0, 1e-3, 0.0])
+    conn = create_iwan_connector(mbs, bodyNumbers=[ground, body], axis=[1, 0, 0], parameters=P,
+                                 stiffness=[0.0, 2e3, 0.0])
+    mbs.Assemble()
+    for law_object in conn.objectNumbers[:-1]:
+        with pytest.raises(Exception, match="no PotentialEnergy, its springForceUserFunction"):
+            mbs.GetObjectOutput(law_object, _OVT.PotentialEnergy)
+    assert mbs.GetObjectOutput(conn.springDamper, _OVT.PotentialEnergy) == \
+        pytest.approx(0.5 * 2e3 * 1e-6, rel=1e-12)

@@ -22,8 +22,9 @@ joint to the accepted state, commits it and appends a row to the connector's rec
 
 Two force laws (``law=``), chosen automatically:
 
-* **symbolic** (an :class:`~iwan_element.IwanJoint` on two ``MarkerNodeCoordinate`` markers
-  or on position markers with a global axis): the exact Iwan law as an Exudyn symbolic
+* **symbolic** (an :class:`~iwan_element.IwanJoint` on two ``MarkerNodeCoordinate`` markers,
+  on position markers with a global axis, or on two rigid markers with the axis fixed in
+  marker 0's frame, a ``RigidBodySpringDamper``): the exact Iwan law as an Exudyn symbolic
   expression (:mod:`._symbolic_law`), evaluated in C++ without Python and without Exudyn
   API calls (safe with several solver threads). Its state (the committed slip, the branch
   through it and the newest ``depth`` reversal points) lives in symbolic variables; the
@@ -41,7 +42,7 @@ Two force laws (``law=``), chosen automatically:
   window from far away (more than ten times the branch's step increments) is still
   detected (the law at the accepted slip against the exact force), logged, and listed in
   :attr:`IwanConnector.overflow_times`.
-* **python** (any element, e.g. the effects, or a rotating ``axisMarker``): a Python force
+* **python** (any element, e.g. the effects, or an ``axisMarker`` other than marker 0): a Python force
   function calling ``joint.trial(u, v)``. For two node coordinates the post-step reads the
   accepted slip and its rate through coordinate views and evaluates a new trial only if the
   last one was elsewhere; otherwise it calls ``mbs.GetObjectOutput``, which evaluates the
@@ -51,8 +52,13 @@ Exudyn calls the post-step function only after accepted steps (and once at the s
 run, which commits the initial state: an initial slip is reached by monotone virgin
 loading); rejected attempts leave no trace. ``SolveStatic`` calls it after every load step,
 so a static run commits a quasi-static loading history. A new solve is recognised by the
-solver object that ``SolveDynamic``/``SolveStatic`` store in ``mbs.sys`` (the coordinate
-views are then renewed and the settings checked, see :func:`._dispatch.check_settings`).
+solver object and settings that ``SolveDynamic``/``SolveStatic`` store in ``mbs.sys`` before
+the solver starts: the settings are checked then (:func:`._dispatch.check_settings`; a
+refusal is a ``ValueError`` out of ``SolveDynamic``), a solve that starts before the last
+accepted time gives every joint of the system a fresh history, and the coordinate views are
+renewed at its first step. The accepted slip is read exactly on any marker: an affine row
+of the coordinates where the markers' relative position is affine (checked jointly, see
+:mod:`._slip_map`), else the connector object's displacement output.
 
 Post-step chaining
 ------------------
@@ -69,12 +75,14 @@ Exudyn settings to remember
 * Newton's ``absoluteTolerance`` is a residual in force units; for stiff joints use a
   tight ``relativeTolerance`` (the default 1e-8 of the step's initial residual is fine
   for plots, use ~1e-10 or below for energy checks).
-* Several solver threads are refused (``ValueError`` at the start of the run) for
+* Several solver threads are refused (``ValueError`` before the solver starts) for
   connectors with the Python force law: with two threads Exudyn 1.13.6 was observed to hang
   with about 20 or more Python-function connectors. The symbolic law is allowed.
 * ODE23/DOPRI5 with automatic step size are refused (see :func:`check_settings`).
-* A user-function connector reports no potential energy to Exudyn; use the connector's
-  records (:attr:`IwanConnector.stored_energy_history`, ...).
+* A user-function connector reports no potential energy to Exudyn (Exudyn 1.13.6 refuses
+  ``PotentialEnergy`` for any connector whose force a user function defines); use the
+  connector's records (:attr:`IwanConnector.stored_energy_history`, ...) or
+  :func:`~iwan_element.exudyn.record_energy`.
 * Python law with position markers: the accepted state is obtained through
   ``mbs.GetObjectOutput``, which allocates; on long runs Exudyn may then print a harmless
   "large amount of memory allocations" warning.
@@ -177,8 +185,9 @@ def add_iwan_connector(mbs, markerNumbers, joint, *, axis=None, axisMarker=None,
     law : {"auto", "symbolic", "python"}, keyword-only
         How the force is evaluated. ``"symbolic"``: the exact Iwan law as an Exudyn symbolic
         expression (no Python call per force evaluation; thread-safe); only for an
-        :class:`~iwan_element.IwanJoint` on two ``MarkerNodeCoordinate`` markers or on
-        position markers with a global axis. ``"python"``: a Python force function calling
+        :class:`~iwan_element.IwanJoint` on two ``MarkerNodeCoordinate`` markers, on
+        position markers with a global axis, or with ``axisMarker`` = marker 0 on two
+        rigid markers. ``"python"``: a Python force function calling
         ``joint.trial`` (any element). ``"auto"`` (default) picks ``"symbolic"`` where it
         applies.
     depth : int, keyword-only
@@ -189,7 +198,8 @@ def add_iwan_connector(mbs, markerNumbers, joint, *, axis=None, axisMarker=None,
         :attr:`IwanConnector.overflow_times`.
     allow_adaptive_explicit : bool, keyword-only
         Run with ODE23/DOPRI5 and automatic step size, which are refused by default
-        (a run starting with them raises ``ValueError``): a reversal inside a step is not
+        (``SolveDynamic`` with them raises ``ValueError`` before the solver starts; the
+        solver is not known when the connector is added): a reversal inside a step is not
         seen by their error estimate and the result does not converge with the tolerance.
 
     Returns

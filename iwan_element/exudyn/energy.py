@@ -403,8 +403,11 @@ class EnergyBalance(ResultShape):
     def report(self) -> str:
         lines = [self.verdict(), f"Energy balance over {len(self.t)} steps, "
                  f"t = {self.t[0]:.4g} to {self.t[-1]:.4g} s"]
-        lines += table_lines([("at the end", "<20"), ("[J]", "12.5g")],
-                             [(k.replace("_", " "), v) for k, v in self._final().items()])
+        always = ("kinetic", "joint_stored", "joint_dissipated", "external_work")
+        small = 1e-9 * self.energy_level          # the terms this model has
+        rows = [(k.replace("_", " "), v) for k, v in self._final().items()
+                if k in always or np.max(np.abs(getattr(self, k))) > small]
+        lines += table_lines([("at the end", "<20"), ("[J]", "12.5g")], rows)
         lines.append(f"  largest balance error {self.max_error:.2e} [-] of the joints' own "
                      f"{self.scale:.4g} J (tolerance {self.tolerance:.0e}; the model holds up "
                      f"to {self.energy_level:.4g} J)")
