@@ -54,6 +54,9 @@ def test_rotor_joint_dissipation_by_the_default_route_equals_the_exact_read_out(
     u = d.slip_history[:, 0]
     assert np.max(np.abs(u)) > 1.2 * rotor.JOINT.phi_max  # macroslip
     assert np.max(np.abs(u + (y - y[0]))) <= 1e-9 * np.max(np.abs(u))   # markers [rotor, ground]
+    mbs = runs["auto"].mbs                                # the force Exudyn applied at the end
+    applied = mbs.GetObjectOutput(d.connectors[0].objectNumber, _OVT.Force)
+    assert np.allclose(applied, [0.0, d.force_history[-1, 0], 0.0], rtol=1e-12, atol=1e-12)
     monkeypatch.setattr(slip_map, "JOINT_CHECKS", 0)      # the old one-coordinate test
     frozen = rotor.build("iwan", fem=fem)
     rotor.run(frozen)
@@ -156,3 +159,12 @@ def test_the_unswapped_duffing_script_is_booked_through_its_force_function():
     bal = rec.balance()
     assert bal.connector_work[-1] > 100.0 and not bal.not_booked
     assert abs(bal.total[-1] - bal.total[0]) < 1e-3 * bal.connector_work[-1]
+
+
+@pytest.mark.parametrize("module, args", [(rotor, ["--t-end", "0.005"]),
+                                          (cartesian, ["--steps", "2000", "--gravity"]),
+                                          (duffing, ["--steps", "2000"])])
+def test_the_examples_run_as_scripts(module, args, capsys):
+    module.main(args)
+    out = capsys.readouterr().out
+    assert ("dissipated" in out) and ("Energy balance" in out or "relative" in out)

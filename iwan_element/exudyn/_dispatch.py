@@ -54,6 +54,7 @@ class _PostStepDispatcher:
         self.pn_prev = None        # post-Newton function found when ours was installed
         self.pn_big = 1e10         # "discontinuous error" that asks for a re-solve
         self.recorders = []        # energy recorders of this system (follow resets)
+        self.solve_info = None     # (kind, solver type, spectral radius) of the last solve
         self.mbs = mbs
         disp = self
         self.sysd = mbs.sys        # Exudyn's SolveDynamic/SolveStatic store their solver here
@@ -124,12 +125,10 @@ class _PostStepDispatcher:
     def lazy_until(self) -> float:
         """Accepted steps before this time may commit joints lazily: the last step of the
         dynamic run being solved, known only if the ``mbs.sys`` hook saw it start and no
-        other post-step function (which might read the joints) is chained - the energy
-        recorder reads none (it is marked ``_iwan_passive``); else never."""
+        other post-step function (which might read the joints) is chained (the energy
+        recorders, called among the accept functions, read none); else never."""
         sysd = self.sysd
-        chained = self.chained
-        if (chained is not None and not getattr(chained, "_iwan_passive", False)) \
-                or getattr(sysd, "kind", None) != "dynamicSolver":
+        if self.chained is not None or getattr(sysd, "kind", None) != "dynamicSolver":
             return -math.inf
         settings = sysd.get("simulationSettings")
         if settings is None:
@@ -172,10 +171,11 @@ class _PostStepDispatcher:
                 c._refresh(mbs, lazy)
             else:
                 c._refresh(mbs)
-        self.accepts = tuple(c._accept for c in self.connectors)
-        self.solo = self.accepts[0] if len(self.accepts) == 1 else None
         for r in self.recorders:
             r._refresh(mbs)
+        self.accepts = (tuple(c._accept for c in self.connectors)
+                        + tuple(r._record for r in self.recorders))   # after the joints
+        self.solo = self.accepts[0] if len(self.accepts) == 1 else None
 
     def before_solve(self, settings, kind: str) -> None:
         """A solve is about to start (announced by the ``mbs.sys`` hook, before Exudyn's
@@ -185,6 +185,8 @@ class _PostStepDispatcher:
         recorders of this system start again (an initial slip is then reached by monotone
         virgin loading, as in the first run)."""
         check_settings(settings, self.connectors)
+        ti = settings.timeIntegration
+        self.solve_info = (kind, ti.solverType, ti.generalizedAlpha.spectralRadius)
         t0 = (settings.timeIntegration.startTime if kind == "dynamicSolver"
               else settings.staticSolver.loadStepStart)
         last = self.last_t
@@ -194,6 +196,12 @@ class _PostStepDispatcher:
             _log.info("a solve starts at t=%g, before the last accepted time t=%g: %d Iwan "
                       "joint(s) start a fresh history", t0, last, len(self.connectors))
         self.last_t = _NAN
+
+    def add_recorder(self, recorder) -> None:
+        """An energy recorder, called after the joints at every accepted step (not chained:
+        a post-step function set later by the user does not drop it)."""
+        self.recorders.append(recorder)
+        self.stale = True
 
     def joint_reset(self, joint) -> None:
         """A joint of this system was reset: the energy recorders holding it start again."""

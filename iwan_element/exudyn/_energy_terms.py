@@ -91,7 +91,10 @@ class Terms:
         what = f"object {o} ({kind}{', ' + item['name'] if item.get('name') else ''})"
         if kind == "Ground":
             return
-        can = set(mbs.ComputeItem(exu.ObjectIndex(o)))
+        try:
+            can = set(mbs.ComputeItem(exu.ObjectIndex(o)))
+        except Exception:  # noqa: BLE001  (an item Exudyn computes nothing for)
+            can = set()
         if _CIT.AlgebraicEquations in can or _CIT.ReactionForces in can:
             if any(_set(item.get(p, 0)) for p in _PRESCRIBED):
                 self.missing.append(f"the work of the prescribed motion of {what}")

@@ -1,8 +1,9 @@
 """Energy balance of a user's own Exudyn model with Iwan connectors or interfaces.
 
-:func:`record_energy` attaches a recorder behind the connectors' post-step dispatcher. Per
-accepted step it copies the time and the ODE2 coordinates and velocities (two byte copies:
-the recording costs about a microsecond a step, less than the connector itself); the
+:func:`record_energy` attaches a recorder to the connectors' post-step dispatcher (called
+after the joints; a post-step function the user sets later does not drop it). Per accepted
+step it copies the time and the ODE2 coordinates and velocities (two byte copies:
+about half a microsecond a step, less than the connector itself); the
 energies are evaluated from these states when :meth:`EnergyRecorder.balance` is called,
 by setting each recorded state back into the system and reading what Exudyn reports
 (:mod:`._energy_terms`: kinetic energy of the bodies, strain energy of reduced flexible
@@ -107,27 +108,22 @@ class EnergyRecorder:
         self._v = array("d")
         self._n = None                # coordinates per recorded state
         self._views = None
-        disp = _dispatcher_for(mbs)
-        if not disp.reachable_from(_installed_post_step(mbs)):
-            disp.install(mbs)
-        disp.recorders.append(self)
-        previous = disp.chained
         ts, qs, vs = self._t, self._q, self._v
 
-        def energy_post_step(mbs_, t):
+        def record(t):
             if not ts or t != ts[-1]:
                 views = self._views
                 if views is None:
-                    views = self._refresh(mbs_)
+                    views = self._refresh(mbs)
                 ts.append(t)
                 qs.frombytes(views[0].tobytes())
                 vs.frombytes(views[1].tobytes())
-            return True if previous is None else previous(mbs_, t)
 
-        # reads no joint during the run: the connectors may still commit lazily
-        energy_post_step._iwan_passive = previous is None or getattr(previous, "_iwan_passive",
-                                                                     False)
-        disp.chained = energy_post_step
+        self._record = record
+        disp = _dispatcher_for(mbs)
+        if not disp.reachable_from(_installed_post_step(mbs)):
+            disp.install(mbs)
+        disp.add_recorder(self)
         self._n0 = [j.n_records for j in self._joints]
 
     def _refresh(self, mbs):
@@ -228,17 +224,18 @@ class EnergyRecorder:
         return _assemble(states, t)
 
     def _notes(self) -> tuple:
-        """What the solver's settings say about the balance (numerical damping)."""
-        settings = self._mbs.sys.get("simulationSettings")
-        if settings is None:
+        """What the last solve's settings say about the balance (numerical damping), as the
+        dispatcher saw them when the solve started (``SolveDynamic`` sets its ``solverType``
+        into the settings only while it runs)."""
+        info = _dispatcher_for(self._mbs).solve_info
+        if info is None:
             return ()
-        ti = settings.timeIntegration
-        rho = ti.generalizedAlpha.spectralRadius
-        implicit = ti.solverType in (exu.DynamicSolverType.GeneralizedAlpha,
-                                     exu.DynamicSolverType.TrapezoidalIndex2)
-        if implicit and rho < 1.0 and not ti.generalizedAlpha.useNewmark:
+        kind, solver, rho = info
+        if kind == "dynamicSolver" and solver == exu.DynamicSolverType.GeneralizedAlpha \
+                and rho < 1.0:
             return (f"the solver damps numerically (generalized-alpha, spectralRadius "
-                    f"{rho:g} < 1): energy that no item books; set 1 for a balance",)
+                    f"{rho:g} < 1): energy that no item books; set 1 (or use "
+                    "TrapezoidalIndex2) for a balance",)
         return ()
 
 
