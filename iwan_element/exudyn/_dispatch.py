@@ -115,6 +115,14 @@ class _PostStepDispatcher:
             for a in self.accepts:
                 a(t)
         elif t != self.last_t:         # a new run (never commit twice at one time)
+            # not announced by the mbs.sys hook (storeSolver=False): a fresh history from
+            # here; the solver's initial accelerations still saw the old one
+            for c in self.connectors:
+                c.reset()
+            _log.warning("a run starts at t=%g, before the last accepted time, without "
+                         "SolveDynamic's storeSolver=True: the Iwan joints start a fresh "
+                         "history at its first step (its initial accelerations used the old "
+                         "one; keep storeSolver=True)", t)
             self.last_t = t
             self.refresh(mbs)
             for a in self.accepts:
