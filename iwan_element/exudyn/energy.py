@@ -177,10 +177,11 @@ class EnergyRecorder:
             raise ValueError(f"tolerance must be in (0, 1), got {tolerance!r}")
         t = np.array(self._t)
         stored, dissipated = self._joint_energies(t)
-        own = set()
+        own = set()                   # booked by the joints themselves
         for j in self._joints:
             own.update(int(o) for o in (j.objectNumbers if hasattr(j, "objectNumbers")
                                         else [j.objectNumber]))
+            own.update(int(o) for o in getattr(j, "_spring_objects", ()))  # linear_energy
         terms = Terms(self._mbs, own)
         levels = self._evaluate(terms, t)
         return EnergyBalance(t=t, joint_stored=stored, joint_dissipated=dissipated,
