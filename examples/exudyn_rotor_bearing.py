@@ -102,8 +102,8 @@ def build(joint: str = "iwan", *, law: str = "auto", t_end: float = 0.05, h: flo
                                                        stiffness=[k, k, k], damping=[d, d, d]))
     connector = None
     if joint == "spring":
-        mbs.AddObject(ObjectConnectorCartesianSpringDamper(markerNumbers=[m_right, g_right],
-                                                           stiffness=[0.0, k, k], damping=[d, d, d]))
+        mbs.AddObject(ObjectConnectorCartesianSpringDamper(
+            markerNumbers=[m_right, g_right], stiffness=[0.0, k, k], damping=[d, d, d]))
     else:                                         # the swap: one call
         connector = create_iwan_connector(mbs, bodyNumbers=[m_right, g_right], axis=[0, 1, 0],
                                           parameters=JOINT, stiffness=[0.0, 0.0, k],

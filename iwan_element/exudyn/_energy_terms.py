@@ -166,7 +166,8 @@ class Terms:
             return value, np.atleast_1d(mbs.GetMarkerOutput(m, _OVT.Coordinates)), None
         if kind == "ForceVector":
             if fixed:
-                value = np.asarray(mbs.GetMarkerOutput(m, _OVT.RotationMatrix)).reshape(3, 3) @ value
+                A = np.asarray(mbs.GetMarkerOutput(m, _OVT.RotationMatrix)).reshape(3, 3)
+                value = A @ value
             return value, np.asarray(mbs.GetMarkerOutput(m, _OVT.Position)), None
         if kind == "TorqueVector":
             w = mbs.GetMarkerOutput(m, _OVT.AngularVelocityLocal if fixed else _OVT.AngularVelocity)

@@ -58,7 +58,8 @@ def symbolic_item(conn, depth: int, name: str, vis):
     m = [int(x) for x in conn._markers]
     kind = "rigid" if conn._axis_marker is not None else conn._kind
     if kind == "coordinate":
-        fn = CreateSymbolicUserFunction(conn._mbs, coordinate_law(st, off, c), "springForceUserFunction",
+        fn = CreateSymbolicUserFunction(conn._mbs, coordinate_law(st, off, c),
+                                        "springForceUserFunction",
                                         itemTypeName="ObjectConnectorCoordinateSpringDamper")
         item = ObjectConnectorCoordinateSpringDamper(
             name=name, markerNumbers=m, stiffness=0.0, damping=0.0, offset=off,

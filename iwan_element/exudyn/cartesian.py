@@ -239,7 +239,8 @@ def create_iwan_connector(mbs, *, bodyNumbers, localPosition0=(0.0, 0.0, 0.0),
     if along:
         raise ValueError(f"stiffness = {k.tolist()} has a spring along the Iwan axis "
                          f"{axes[along[0]].tolist()}: stiffness acts on the remaining axes only "
-                         "(a spring in parallel would stiffen the identified joint; fold it into KT)")
+                         "(a spring in parallel would stiffen the identified joint; fold it into "
+                         "KT)")
     d0 = np.zeros(3) if offset is None else _vector3("offset", offset)
     c, dvec = _damping(damping)
     if not useGlobalFrame:

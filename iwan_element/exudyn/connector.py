@@ -42,11 +42,11 @@ Two force laws (``law=``), chosen automatically:
   window from far away (more than ten times the branch's step increments) is still
   detected (the law at the accepted slip against the exact force), logged, and listed in
   :attr:`IwanConnector.overflow_times`.
-* **python** (any element, e.g. the effects, or an ``axisMarker`` other than marker 0): a Python force
-  function calling ``joint.trial(u, v)``. For two node coordinates the post-step reads the
-  accepted slip and its rate through coordinate views and evaluates a new trial only if the
-  last one was elsewhere; otherwise it calls ``mbs.GetObjectOutput``, which evaluates the
-  force function at the accepted state.
+* **python** (any element, e.g. the effects, or an ``axisMarker`` other than marker 0): a
+  Python force function calling ``joint.trial(u, v)``. For two node coordinates the
+  post-step reads the accepted slip and its rate through coordinate views and evaluates a
+  new trial only if the last one was elsewhere; otherwise it calls ``mbs.GetObjectOutput``,
+  which evaluates the force function at the accepted state.
 
 Exudyn calls the post-step function only after accepted steps (and once at the start of a
 run, which commits the initial state: an initial slip is reached by monotone virgin
