@@ -475,3 +475,15 @@ def test_bad_stiffness_is_refused_with_the_argument_named():
     with pytest.raises(ValueError, match="stiffness applies to position markers"):
         add_iwan_interface(chain.mbs, [(chain.marker(-1), chain.marker(0))], [P],
                            stiffness=[[1.0, 0.0, 0.0]])
+
+
+def test_a_second_solve_of_an_interface_starts_a_fresh_history():
+    chain, iface = _chain(4, interface=True)
+    sim = settings(1e-5, 1500)
+    chain.solve(sim)
+    first = iface.records()
+    assert np.max(np.abs(first["slip"])) > 0 and first["dissipated_energy"][-1] > 0
+    chain.mbs.SolveDynamic(sim)                   # no reset(): fresh by itself
+    second = iface.records()
+    for key in first:
+        np.testing.assert_array_equal(first[key], second[key])

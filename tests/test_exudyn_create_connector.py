@@ -80,6 +80,9 @@ def parts():
     (lambda d: dict(bodyNumbers=[d["coord"], d["coord1"]], stiffness=[1, 0, 0]),
      "coordinate markers take a number as damping and no stiffness"),
     (lambda d: dict(bodyNumbers=[d["coord"], d["coord1"]], offset=[0.5, 0, 0]), "offset must be a real"),
+    (lambda d: dict(bodyNumbers=[d["ground"], d["body"]], axis=[1, 0, 0], law="exact"), "law must be"),
+    (lambda d: dict(bodyNumbers=[d["ground"], d["body"]], axis=[1, 0, 0], parameters="P"),
+     "parameters must be IwanParameters"),
 ])
 def test_invalid_items_are_refused_before_anything_is_added(parts, case, message):
     kw = {"parameters": P, **case(parts)}

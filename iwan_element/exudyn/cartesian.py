@@ -27,7 +27,7 @@ from exudyn.itemInterface import (MarkerBodyPosition, MarkerBodyRigid, MarkerNod
 from ..core.parameters import IwanParameters
 from ..core.validation import check_scalar
 from ._markers import _COORDINATE_MARKERS, _ORIENTATION_MARKERS, _marker_type
-from .connector import add_iwan_connector
+from .connector import add_iwan_connector, check_run_options
 
 __all__ = ["create_iwan_connector", "IwanCartesianConnector"]
 
@@ -224,6 +224,9 @@ def create_iwan_connector(mbs, *, bodyNumbers, localPosition0=(0.0, 0.0, 0.0),
     items = _items(bodyNumbers, localPosition0, localPosition1)
     common = dict(record=record, law=law, depth=depth,
                   allow_adaptive_explicit=allow_adaptive_explicit)
+    check_run_options(**common)
+    if not isinstance(name, str):
+        raise ValueError(f"name must be a str, got {type(name).__name__}")
     if all(k == "marker" for k, _, _ in items) and all(
             _marker_type(mbs, it, f"bodyNumbers[{i}]") in _COORDINATE_MARKERS
             for i, (_, it, _) in enumerate(items)):

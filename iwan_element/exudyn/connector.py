@@ -269,6 +269,13 @@ def _check_options(mbs, markerNumbers, joint, *, name, record, law, depth,
                          f"{type(joint).__name__} does not")
     if not isinstance(name, str):
         raise ValueError(f"name must be a str, got {type(name).__name__}")
+    check_run_options(record=record, law=law, depth=depth,
+                      allow_adaptive_explicit=allow_adaptive_explicit)
+
+
+def check_run_options(*, record, law, depth, allow_adaptive_explicit) -> None:
+    """The options of :func:`add_iwan_connector` that do not depend on the markers (also
+    checked by :func:`~iwan_element.exudyn.create_iwan_connector` before it makes any)."""
     if not isinstance(record, bool):
         raise ValueError(f"record must be True or False, got {record!r}")
     if not isinstance(allow_adaptive_explicit, bool):
