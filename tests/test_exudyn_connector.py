@@ -17,6 +17,7 @@ import exudyn as exu
 import numpy as np
 import pytest
 from _connector_models import SOLVERS, Chain, CommitOnTrial, newmark_reference, settings
+from exudyn.itemInterface import CoordinateSpringDamper
 
 from iwan_element import DiscreteIwan, IwanJoint, IwanParameters, backbone, dissipation
 
@@ -62,6 +63,41 @@ def test_energy_balance_free_vibration_from_macroslip_to_deep_microslip():
     assert np.max(np.abs(energy - e0)) / e0 < 1e-4
     # the work column is stored + dissipated, and the force column is the joint force
     assert np.allclose(rec["work"], rec["stored_energy"] + rec["dissipated_energy"], rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("law", ["symbolic", "python"])
+def test_dashpot_in_parallel_equals_exudyns_damper_and_is_booked(law):
+    """``damping=c`` on the connector moves the mass as Exudyn's own damper in parallel
+    (an independent force), its force is ``c v`` on top of the joint's, its dissipation is
+    ``int c v du`` from Exudyn's node velocities, and the energy balance closes with it."""
+    m, k, c, v0 = 1.0, 1e5, 30.0, 3.0
+    h, n = 2e-5, 6000
+    runs = {}
+    for own in (True, False):
+        chain = Chain([m], v0=[v0])
+        chain.spring(-1, 0, k)
+        if not own:
+            chain.mbs.AddObject(CoordinateSpringDamper(
+                markerNumbers=[chain.marker(-1), chain.marker(0)], stiffness=0.0, damping=c))
+        vel = []
+        chain.mbs.SetPostStepUserFunction(lambda mbs, t: vel.append(chain.velocity(0)) or True)
+        conn = chain.joint(-1, 0, IwanJoint(P), law=law, damping=c if own else 0.0)
+        assert conn.route == law and conn.damping == (c if own else 0.0)
+        chain.solve(settings(h, n))
+        runs[own] = (conn.records(), np.array(vel).ravel())
+    (mine, v), (theirs, v_ref) = runs[True], runs[False]
+    u = mine["slip"]
+    assert np.max(np.abs(u)) > P.phi_max
+    assert np.max(np.abs(u - theirs["slip"])) < 1e-10 * np.max(np.abs(u))
+    assert np.allclose(mine["force"] - theirs["force"], c * v_ref, rtol=0, atol=1e-9 * P.Fs)
+    dash = np.concatenate([[0.0], np.cumsum(c * 0.5 * (v_ref[1:] + v_ref[:-1]) * np.diff(u))])
+    assert np.allclose(mine["dissipated_energy"] - theirs["dissipated_energy"], dash,
+                       rtol=1e-9, atol=1e-12)
+    assert np.allclose(mine["work"] - mine["dissipated_energy"], theirs["stored_energy"],
+                       rtol=0, atol=1e-12)
+    e0 = 0.5 * m * v0 ** 2
+    total = 0.5 * m * v ** 2 + 0.5 * k * u ** 2 + mine["work"]
+    assert dash[-1] > 0.1 * e0 and np.max(np.abs(total - e0)) / e0 < 1e-4
 
 
 # ---------------------------------------------------------------------------- loops

@@ -138,6 +138,7 @@ def parts():
         pos0=mbs.AddMarker(MarkerNodePosition(nodeNumber=ground)),
         pos1=mbs.AddMarker(MarkerBodyPosition(bodyNumber=body)),
         rigid=mbs.AddMarker(MarkerBodyRigid(bodyNumber=rb)),
+        body=body, node=n1,
     )
     return d
 
@@ -164,6 +165,14 @@ def parts():
      "unknown visualization keys"),
     (lambda d: dict(markerNumbers=[d["coord0"], d["coord1"]], record=1), "record must be True or False"),
     (lambda d: dict(mbs=d["SC"], markerNumbers=[d["coord0"], d["coord1"]]), "mbs must be an exudyn.MainSystem"),
+    (lambda d: dict(markerNumbers=[d["pos0"], d["body"]], axis=[1, 0, 0]),
+     r"markerNumbers\[1\] = .* is a body or object \(ObjectIndex\), but markers belong here"),
+    (lambda d: dict(markerNumbers=[d["node"], d["coord1"]]),
+     r"markerNumbers\[0\] = .* is a node \(NodeIndex\), but markers belong here"),
+    (lambda d: dict(markerNumbers=[d["coord0"], d["coord1"]], damping=-1.0), r"damping must be in \[0, inf\)"),
+    (lambda d: dict(markerNumbers=[d["coord0"], d["coord1"]], offset=[0.1, 0, 0]), "offset must be a real number"),
+    (lambda d: dict(markerNumbers=[d["pos0"], d["pos1"]], axis=[1, 0, 0], offset=[0.1, math.nan, 0]),
+     "offset must be a number or a finite vector"),
 ])
 def test_invalid_set_up_raises_value_error_before_anything_is_added(parts, case, message):
     kw = case(parts)
@@ -282,29 +291,54 @@ def test_user_function_that_calls_the_previous_one_by_hand_does_not_commit_twice
     assert conn.n_records == 201 and np.all(np.diff(conn.time_history) > 0)
 
 
-def test_reset_gives_an_identical_second_run_and_a_forgotten_reset_is_reported(caplog):
+@pytest.mark.parametrize("law", ["symbolic", "python"])
+def test_a_second_solve_starts_a_fresh_history_by_itself(caplog, law):
+    """reset() gives an identical second run; a solve started again from t = 0 without it
+    does the same by itself (the joint was virgin again before the first step: same records
+    to the last bit, with either solver), and says so in the log."""
     chain = Chain([1.0], v0=[3.0])
     chain.spring(-1, 0, 2e5)
-    conn = chain.joint(-1, 0, DiscreteIwan(P, 20))
+    element = IwanJoint(P) if law == "symbolic" else DiscreteIwan(P, 20)
+    conn = chain.joint(-1, 0, element)
+    assert conn.route == law
+    sim = settings(1e-4, 300)
+    runs = {}
+    for solver in (exu.DynamicSolverType.GeneralizedAlpha, exu.DynamicSolverType.RK44):
+        chain.solve(sim, solver)
+        first = conn.records()
+        conn.reset()
+        assert conn.n_records == 0 and conn.joint.dissipated_energy == 0.0
+        chain.mbs.SolveDynamic(sim, solverType=solver)
+        second = conn.records()
+        caplog.clear()
+        with caplog.at_level(logging.INFO, logger="iwan_element.exudyn"):
+            chain.mbs.SolveDynamic(sim, solverType=solver)           # no reset()
+        assert any("fresh history" in r.getMessage() for r in caplog.records), solver
+        third = conn.records()
+        for key in first:
+            assert np.array_equal(first[key], second[key]), key
+            assert np.array_equal(first[key], third[key]), key
+        runs[solver] = first
+    assert runs[exu.DynamicSolverType.RK44]["dissipated_energy"][-1] > 0
+
+
+def test_a_second_solve_without_the_solver_hook_still_starts_afresh(caplog):
+    """storeSolver=False: SolveDynamic does not announce itself; the restart is seen at its
+    first step, the history starts again there, and the log says what that costs."""
+    chain = Chain([1.0], v0=[3.0])
+    chain.spring(-1, 0, 2e5)
+    conn = chain.joint(-1, 0, IwanJoint(P))
     sim = settings(1e-4, 300)
     chain.solve(sim)
     first = conn.records()
-    conn.reset()
-    assert conn.n_records == 0 and conn.joint.dissipated_energy == 0.0
-    chain.mbs.SolveDynamic(sim)
-    second = conn.records()
-    for key in first:
-        assert np.array_equal(first[key], second[key]), key
-    for solver in (exu.DynamicSolverType.GeneralizedAlpha, exu.DynamicSolverType.RK44):
-        caplog.clear()
-        with caplog.at_level(logging.WARNING, logger="iwan_element.exudyn"):
-            chain.mbs.SolveDynamic(sim, solverType=solver)         # no reset: history continues
-        assert any("call reset()" in r.getMessage() for r in caplog.records), solver
-    caplog.clear()
-    conn.reset()
     with caplog.at_level(logging.WARNING, logger="iwan_element.exudyn"):
-        chain.mbs.SolveDynamic(sim)
-    assert not caplog.records
+        chain.mbs.SolveDynamic(sim, storeSolver=False)
+    assert any("storeSolver" in r.getMessage() for r in caplog.records)
+    second = conn.records()
+    assert conn.n_records == 301 and second["time"][0] == 0.0 and second["force"][0] == 0.0
+    # not exact: the first step's initial acceleration saw the old history (1.6 % measured)
+    gap = np.max(np.abs(second["slip"] - first["slip"])) / np.max(np.abs(first["slip"]))
+    assert 0.0 < gap < 0.05
 
 
 def test_generic_route_equals_the_node_coordinate_shortcut():
@@ -351,12 +385,15 @@ def test_offset_shifts_the_unloaded_position():
     assert np.allclose(xd - d, x0, rtol=0, atol=1e-12 * np.max(np.abs(x0)) + 1e-15)
     # position markers: the offset is measured along the axis
     a = np.array([0.6, 0.8, 0.0])
-    SC, mbs, node, m_ground, m_body = _point_mass_system(3.0 * a)
-    conn = add_iwan_connector(mbs, [m_ground, m_body], IwanJoint(P), axis=a, offset=-d)
-    mbs.Assemble()
-    mbs.SolveDynamic(settings(h, n))
-    assert conn.slip_history[0] == pytest.approx(d, rel=1e-12)               # u = a.(p1 - p0) - offset
-    assert conn.force_history[0] == pytest.approx(IwanJoint(P).trial(d)[0], rel=1e-12)
+    for off in (-d, [0.0, 0.0, 5.0], -d * a + [0.8, -0.6, 2.0]):   # a vector: Exudyn's d0
+        SC, mbs, node, m_ground, m_body = _point_mass_system(3.0 * a)
+        conn = add_iwan_connector(mbs, [m_ground, m_body], IwanJoint(P), axis=a, offset=off)
+        mbs.Assemble()
+        mbs.SolveDynamic(settings(h, n))
+        want = d if np.ndim(off) == 0 else -float(a @ off)        # u = a.(p1 - p0 - d0)
+        assert conn.offset == pytest.approx(-want, rel=1e-12)
+        assert conn.slip_history[0] == pytest.approx(want, rel=1e-12, abs=1e-15)
+        assert conn.force_history[0] == pytest.approx(IwanJoint(P).trial(want)[0], rel=1e-12)
 
 
 # ---------------------------------------------------------------------------- coordinate views

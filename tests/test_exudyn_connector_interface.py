@@ -16,7 +16,7 @@ from exudyn.itemInterface import (CoordinateConstraint, LoadForceVector, MarkerB
                                   ObjectGround, NodePoint2DSlope1, MarkerNodePosition)
 
 from iwan_element import DiscreteIwan, IwanJoint, IwanJointBank, IwanParameters
-from iwan_element.exudyn import IwanInterface, add_iwan_connector, add_iwan_interface
+from iwan_element.exudyn import IwanInterface, add_iwan_connector, add_iwan_interface, record_energy
 
 P = IwanParameters(Fs=1000.0, KT=1e6, chi=-0.5, beta=0.2)
 PARAMS = [IwanParameters(Fs=800.0 + 100.0 * k, KT=1e6 * (1.0 + 0.2 * k), chi=-0.5 + 0.1 * k,
@@ -410,7 +410,7 @@ def test_springs_carried_by_the_interface_equal_built_in_springs():
     built-in springs instead, with the same result."""
     a = np.array([0.6, 0.8, 0.0])
     k = [[2e5, 0.0, 1e5], [0.0, 3e5, 1e5], [1e5, 1e5, 0.0]]
-    results, energies = [], []
+    results, energies, balances = [], [], []
     for variant in ("builtin", "carried", "python"):
         SC = exu.SystemContainer()
         mbs = SC.AddSystem()
@@ -432,8 +432,10 @@ def test_springs_carried_by_the_interface_equal_built_in_springs():
         assert h.route == ("python" if variant == "python" else "symbolic")
         if variant == "carried":
             assert mbs.systemData.NumberOfObjects() == 7     # ground, 3 masses, 3 joints
+        rec = record_energy(mbs, h)
         mbs.Assemble()
         mbs.SolveDynamic(settings(1e-5, 2000))
+        balances.append(rec.balance())
         if variant == "carried":          # the overflow probe sees the joint alone
             u, F = h.slip_history[-1], h.force_history[-1]
             for i, st in enumerate(h._states):
@@ -451,6 +453,10 @@ def test_springs_carried_by_the_interface_equal_built_in_springs():
     assert energies[0] > 0.0
     for e in energies[1:]:
         assert e == pytest.approx(energies[0], rel=1e-9)
+    # the energy balance books each spring once, whoever carries it, and closes
+    for bal in balances:
+        assert bal.success, bal.report()
+        assert np.allclose(bal.elastic, balances[0].elastic, rtol=1e-8, atol=1e-12)
 
 
 def test_bad_stiffness_is_refused_with_the_argument_named():
@@ -469,3 +475,15 @@ def test_bad_stiffness_is_refused_with_the_argument_named():
     with pytest.raises(ValueError, match="stiffness applies to position markers"):
         add_iwan_interface(chain.mbs, [(chain.marker(-1), chain.marker(0))], [P],
                            stiffness=[[1.0, 0.0, 0.0]])
+
+
+def test_a_second_solve_of_an_interface_starts_a_fresh_history():
+    chain, iface = _chain(4, interface=True)
+    sim = settings(1e-5, 1500)
+    chain.solve(sim)
+    first = iface.records()
+    assert np.max(np.abs(first["slip"])) > 0 and first["dissipated_energy"][-1] > 0
+    chain.mbs.SolveDynamic(sim)                   # no reset(): fresh by itself
+    second = iface.records()
+    for key in first:
+        np.testing.assert_array_equal(first[key], second[key])

@@ -1,14 +1,19 @@
 """The Exudyn adapter: the only part of the package that imports exudyn.
 
-:func:`add_iwan_connector` puts any joint element between two Exudyn markers (see
-:mod:`iwan_element.exudyn.connector`); :func:`add_iwan_interface` puts one exact Iwan joint at
-each of many contact points, committed together once per step (see
-:mod:`iwan_element.exudyn.interface`); :func:`record_energy` books the energy balance of a
-model holding them (:mod:`iwan_element.exudyn.energy`).
+:func:`create_iwan_connector` puts Iwan joints between two bodies, nodes or markers in
+Exudyn's own idiom (as ``mbs.CreateCartesianSpringDamper``; see
+:mod:`iwan_element.exudyn.cartesian`); :func:`add_iwan_connector` puts any joint element
+between two Exudyn markers (see :mod:`iwan_element.exudyn.connector`);
+:func:`add_iwan_interface` puts one exact Iwan joint at each of many contact points,
+committed together once per step (see :mod:`iwan_element.exudyn.interface`);
+:func:`record_energy` books the energy balance of a model holding them
+(:mod:`iwan_element.exudyn.energy`).
 """
+from .cartesian import IwanCartesianConnector, create_iwan_connector
 from .connector import IwanConnector, add_iwan_connector
 from .energy import EnergyBalance, EnergyRecorder, record_energy
 from .interface import IwanInterface, add_iwan_interface
 
-__all__ = ["add_iwan_connector", "IwanConnector", "add_iwan_interface", "IwanInterface",
-           "record_energy", "EnergyRecorder", "EnergyBalance"]
+__all__ = ["create_iwan_connector", "IwanCartesianConnector", "add_iwan_connector",
+           "IwanConnector", "add_iwan_interface", "IwanInterface", "record_energy",
+           "EnergyRecorder", "EnergyBalance"]

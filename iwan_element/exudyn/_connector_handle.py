@@ -40,7 +40,8 @@ class IwanConnector:
     connector is created.
     """
 
-    def __init__(self, mbs, markerNumbers, joint, kind, axis, axisMarker, offset, record):
+    def __init__(self, mbs, markerNumbers, joint, kind, axis, axisMarker, offset, record,
+                 damping=0.0):
         self._mbs = mbs
         self._markers = tuple(markerNumbers)
         self._joint = joint
@@ -48,6 +49,8 @@ class IwanConnector:
         self._axis = axis
         self._axis_marker = axisMarker
         self._offset = offset
+        self._damping = damping     # dashpot in parallel with the joint [N s/m]
+        self._dash = None           # its (u, v, dissipated) at the last accepted step
         self._record_on = record
         self._rec = array("d")      # the records, row-major, _NCOL values per row
         self._buf = []              # newest rows, moved to _rec in blocks (list.extend is
@@ -80,6 +83,7 @@ class IwanConnector:
         state, which leaves (u, F) of that state in the cache; commit and record."""
         self._mbs.GetObjectOutput(self._object, _FORCE)
         u = self._lu
+        v = self._lv
         F = self._lF
         if t < self._t_acc:
             self._new_run(t, u)
@@ -89,10 +93,21 @@ class IwanConnector:
         self._guard = t
         self._t_acc = t
         if self._record_on:
+            d = self._dash_step(u, v) if self._damping else 0.0
             buf = self._buf
-            buf.extend((t, u, F, j.dissipated_energy, j.work))
+            buf.extend((t, u, F + self._damping * v, j.dissipated_energy + d, j.work + d))
             if len(buf) >= _BLOCK:
                 self._flush()
+
+    def _dash_step(self, u, v) -> float:
+        """The dashpot's dissipation [J] up to the accepted state ``(u, v)``: the previous
+        one plus ``c (v0 + v) / 2 (u - u0)``, the trapezoidal ``int c v du`` (as
+        :class:`~iwan_element.effects.ViscousDamping`), exact when the velocity is linear in
+        time over the step, as in the average-acceleration (Newmark) scheme."""
+        prev = self._dash
+        d = 0.0 if prev is None else prev[2] + self._damping * 0.5 * (prev[1] + v) * (u - prev[0])
+        self._dash = (u, v, d)
+        return d
 
     def _fast_accept(self, q, qt, i0, i1):
         """Post-step function for two node coordinates: reads the accepted slip and its rate
@@ -108,6 +123,8 @@ class IwanConnector:
         flush = self._flush
         item = q.item
         item_t = qt.item
+        c = self._damping
+        dash = self._dash_step
 
         def accept(t):
             # the same operations as the force function's u = deltaL - offset with
@@ -128,7 +145,8 @@ class IwanConnector:
             conn._guard = t
             conn._t_acc = t
             if extend is not None:
-                extend((t, u, F, joint.dissipated_energy, joint.work))
+                d = dash(u, v) if c else 0.0
+                extend((t, u, F + c * v, joint.dissipated_energy + d, joint.work + d))
                 if len(buf) >= _BLOCK:
                     flush()
 
@@ -238,6 +256,13 @@ class IwanConnector:
         return self._axis_marker
 
     @property
+    def damping(self) -> float:
+        """Coefficient of the dashpot in parallel with the joint [N s/m] (0: none). Its
+        force is in :attr:`force_history`, its dissipation in
+        :attr:`dissipated_energy_history` and :attr:`work_history`."""
+        return self._damping
+
+    @property
     def offset(self) -> float:
         """Slip at which the virgin joint is unloaded [m] (or [rad] for rotation
         coordinates)."""
@@ -245,13 +270,15 @@ class IwanConnector:
 
     # -------------------------------------------------------------- user API
     def reset(self) -> None:
-        """Return the joint to its virgin state and clear the records (for a new run).
+        """Return the joint to its virgin state and clear the records; energy recorders
+        holding the connector start again.
 
-        Exudyn restarts each ``SolveDynamic`` from the initial conditions; call this before
-        such a run unless the run continues from the state the joint holds (e.g. a
-        dynamic run started from a static solution).
+        A solve that starts before the last accepted time (``SolveDynamic`` from the
+        initial conditions again) does this by itself before its first step; a solve that
+        starts at the last accepted time continues the history.
         """
         self._lazy_last = _no_pending
+        self._dash = None
         self._joint.reset()
         if self._route == "symbolic":
             _symbolic.reset_state(self)
@@ -263,6 +290,7 @@ class IwanConnector:
         self._t_acc = -_INF
         if self._dispatcher is not None:
             self._dispatcher.last_t = _NAN
+            self._dispatcher.joint_reset(self)
 
     def _check_running(self) -> None:
         """The symbolic route has no Python force function to notice a replaced post-step
@@ -303,7 +331,7 @@ class IwanConnector:
     def n_records(self) -> int:
         """Number of recorded rows."""
         if self._route == "symbolic":
-            return (len(self._rec) + len(self._buf)) // 2
+            return (len(self._rec) + len(self._buf)) // _symbolic.stride(self)
         return (len(self._rec) + len(self._buf)) // _NCOL
 
     @property
@@ -318,13 +346,14 @@ class IwanConnector:
 
     @property
     def force_history(self) -> np.ndarray:
-        """Joint force at the accepted steps [N], shape (n,); positive when it pulls
-        marker 1 back towards marker 0 (resists positive slip)."""
+        """Joint force at the accepted steps [N], shape (n,), the dashpot's included;
+        positive when it pulls marker 1 back towards marker 0 (resists positive slip)."""
         return self._column(2)
 
     @property
     def dissipated_energy_history(self) -> np.ndarray:
-        """Energy dissipated by the joint since the last reset [J], shape (n,)."""
+        """Energy dissipated by the joint (and its dashpot) since the last reset [J],
+        shape (n,)."""
         return self._column(3)
 
     @property

@@ -2,6 +2,7 @@
 the settings they refuse, and the ownership of joint elements."""
 from __future__ import annotations
 
+import logging
 import math
 import weakref
 
@@ -9,6 +10,7 @@ import exudyn as exu
 
 __all__: list[str] = []
 
+_log = logging.getLogger("iwan_element.exudyn.connector")
 _NAN = math.nan
 
 # ---------------------------------------------------------------------------- dispatcher
@@ -51,6 +53,8 @@ class _PostStepDispatcher:
         self.risky = []            # connectors whose stack is deeper than their law holds
         self.pn_prev = None        # post-Newton function found when ours was installed
         self.pn_big = 1e10         # "discontinuous error" that asks for a re-solve
+        self.recorders = []        # energy recorders of this system (follow resets)
+        self.solve_info = None     # (kind, solver type, spectral radius) of the last solve
         self.mbs = mbs
         disp = self
         self.sysd = mbs.sys        # Exudyn's SolveDynamic/SolveStatic store their solver here
@@ -111,6 +115,14 @@ class _PostStepDispatcher:
             for a in self.accepts:
                 a(t)
         elif t != self.last_t:         # a new run (never commit twice at one time)
+            # not announced by the mbs.sys hook (storeSolver=False): a fresh history from
+            # here; the solver's initial accelerations still saw the old one
+            for c in self.connectors:
+                c.reset()
+            _log.warning("a run starts at t=%g, before the last accepted time, without "
+                         "SolveDynamic's storeSolver=True: the Iwan joints start a fresh "
+                         "history at its first step (its initial accelerations used the old "
+                         "one; keep storeSolver=True)", t)
             self.last_t = t
             self.refresh(mbs)
             for a in self.accepts:
@@ -121,7 +133,8 @@ class _PostStepDispatcher:
     def lazy_until(self) -> float:
         """Accepted steps before this time may commit joints lazily: the last step of the
         dynamic run being solved, known only if the ``mbs.sys`` hook saw it start and no
-        other post-step function (which might read the joints) is chained; else never."""
+        other post-step function (which might read the joints) is chained (the energy
+        recorders, called among the accept functions, read none); else never."""
         sysd = self.sysd
         if self.chained is not None or getattr(sysd, "kind", None) != "dynamicSolver":
             return -math.inf
@@ -166,8 +179,42 @@ class _PostStepDispatcher:
                 c._refresh(mbs, lazy)
             else:
                 c._refresh(mbs)
-        self.accepts = tuple(c._accept for c in self.connectors)
+        for r in self.recorders:
+            r._refresh(mbs)
+        self.accepts = (tuple(c._accept for c in self.connectors)
+                        + tuple(r._record for r in self.recorders))   # after the joints
         self.solo = self.accepts[0] if len(self.accepts) == 1 else None
+
+    def before_solve(self, settings, kind: str) -> None:
+        """A solve is about to start (announced by the ``mbs.sys`` hook, before Exudyn's
+        solver runs): refuse settings the joints cannot serve, and give every joint a fresh
+        history if the solve starts before the last accepted time (a new run, not a
+        continuation): the joints return to their virgin state, their records and the energy
+        recorders of this system start again (an initial slip is then reached by monotone
+        virgin loading, as in the first run)."""
+        check_settings(settings, self.connectors)
+        ti = settings.timeIntegration
+        self.solve_info = (kind, ti.solverType, ti.generalizedAlpha.spectralRadius)
+        t0 = (settings.timeIntegration.startTime if kind == "dynamicSolver"
+              else settings.staticSolver.loadStepStart)
+        last = self.last_t
+        if last == last and t0 < last - 1e-12 * max(1.0, abs(last)):
+            for c in self.connectors:
+                c.reset()
+            _log.info("a solve starts at t=%g, before the last accepted time t=%g: %d Iwan "
+                      "joint(s) start a fresh history", t0, last, len(self.connectors))
+        self.last_t = _NAN
+
+    def add_recorder(self, recorder) -> None:
+        """An energy recorder, called after the joints at every accepted step (not chained:
+        a post-step function set later by the user does not drop it)."""
+        self.recorders.append(recorder)
+        self.stale = True
+
+    def joint_reset(self, joint) -> None:
+        """A joint of this system was reset: the energy recorders holding it start again."""
+        for r in self.recorders:
+            r._joint_reset(joint)
 
     def new_solve(self, mbs) -> None:
         """Start of a solve: refuse settings the connectors cannot serve, then refresh."""
@@ -247,18 +294,27 @@ ADAPTIVE_EXPLICIT = frozenset({exu.DynamicSolverType.ODE23, exu.DynamicSolverTyp
 
 class _SolveHook(dict):
     """Replaces ``mbs.sys`` (same content): ``SolveDynamic``/``SolveStatic`` store their solver
-    in it before the first step, which puts every dispatcher of the system back in front of
-    a post-step function set after the connectors (it is then chained, not lost)."""
+    and then their settings in it before the first step (exudyn 1.13.6, ``storeSolver=True``,
+    the default). The solver puts every dispatcher of the system back in front of a
+    post-step function set after the connectors (it is then chained, not lost); the settings
+    let each dispatcher refuse what its joints cannot serve and start a fresh history
+    (:meth:`_PostStepDispatcher.before_solve`) - a ``ValueError`` raised here leaves
+    ``SolveDynamic`` before the solver starts."""
 
     def __setitem__(self, key, value):
         super().__setitem__(key, value)
         if key in ("dynamicSolver", "staticSolver"):
             self.kind = key            # the solve about to start
+            self.pending = True
             mbs = self.mbs
             for d in self.dispatchers:
                 d.stale = True
                 if not d.reachable_from(_installed_post_step(mbs)):
                     d.install(mbs)
+        elif key == "simulationSettings" and getattr(self, "pending", False):
+            self.pending = False
+            for d in self.dispatchers:
+                d.before_solve(value, self.kind)
 
 
 def _dispatcher_for(mbs) -> _PostStepDispatcher:

@@ -4,6 +4,7 @@ from __future__ import annotations
 import operator
 from collections.abc import Mapping
 
+import exudyn as exu
 import numpy as np
 
 __all__: list[str] = []
@@ -19,9 +20,25 @@ _VISUALIZATION_KEYS = ("show", "drawSize", "color")
 
 
 # ---------------------------------------------------------------------------- validation
+#: Exudyn's typed indices that are not markers, and what they number.
+_NOT_MARKERS = ((exu.ObjectIndex, "a body or object (ObjectIndex)"),
+                (exu.NodeIndex, "a node (NodeIndex)"),
+                (exu.LoadIndex, "a load (LoadIndex)"), (exu.SensorIndex, "a sensor (SensorIndex)"))
+
+
 def _marker_type(mbs, marker, label: str) -> str:
+    """The ``markerType`` of ``marker``; a ``ValueError`` naming ``label`` for anything
+    else than an existing marker (an Exudyn index of another kind is refused by its type,
+    as Exudyn refuses it where a ``MarkerIndex`` belongs; a plain int is a marker number)."""
     if isinstance(marker, bool):
         raise ValueError(f"{label} must be a marker number, got {marker!r}")
+    for kind, what in _NOT_MARKERS:
+        if isinstance(marker, kind):
+            raise ValueError(
+                f"{label} = {marker!r} is {what}, but markers belong here (a MarkerIndex as "
+                "mbs.AddMarker returns it): add a marker on it (MarkerBodyPosition, "
+                "MarkerNodePosition, MarkerNodeCoordinate ...), or let "
+                "create_iwan_connector(mbs, bodyNumbers=[...]) make the markers")
     try:                       # an integer or MarkerIndex; a float (1.7) is not truncated
         idx = operator.index(marker)
     except TypeError:

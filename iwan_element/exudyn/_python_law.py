@@ -12,22 +12,24 @@ _ROTATION_MATRIX = exu.OutputVariableType.RotationMatrix
 # ---------------------------------------------------------------------------- force functions
 # These closures are the hot path: they run at every force evaluation of the solver. They
 # read the connector's small state by attribute access and call the bound trial method;
-# no numpy and no allocation beyond the return value.
+# no numpy and no allocation beyond the return value. The cache ``conn._lF`` holds the
+# element's force; the dashpot in parallel (``conn._damping``) is added on return.
 def _coordinate_force_function(conn):
     trial = conn._joint.trial
     off = conn._offset               # fixed at creation (the object's own offset is not read)
+    c = conn._damping                # the dashpot in parallel (0.0: none)
 
     def iwan_coordinate_force(mbs, t, itemNumber, deltaL, deltaL_t, stiffness, damping, offset):
         u = deltaL - off
         if t <= conn._guard:
             conn._check(mbs, t, u)
         if u == conn._lu and deltaL_t == conn._lv:
-            return conn._lF
+            return conn._lF + c * deltaL_t
         F = trial(u, deltaL_t)[0]
         conn._lu = u
         conn._lv = deltaL_t
         conn._lF = F
-        return F
+        return F + c * deltaL_t
 
     return iwan_coordinate_force
 
@@ -46,6 +48,7 @@ def _axial_force(conn, trial, mbs, t, displacement, velocity, a0, a1, a2, off):
         conn._lu = u
         conn._lv = v
         conn._lF = F
+    F += conn._damping * v
     return [F * a0, F * a1, F * a2]
 
 

@@ -17,8 +17,10 @@ class SlipMap:
     """Accepted slips ``u = C q + c`` of all points from a view of the ODE2 coordinates.
 
     Exact for markers whose position is affine in the coordinates (node coordinates, point
-    nodes, mass points, ANCF cable elements); checked at set-up with two perturbations.
-    Points with other markers are read with ``GetMarkerOutput`` (post-step only).
+    nodes, mass points, ANCF cable elements at their axis); checked at set-up by perturbing
+    each coordinate alone and all of them jointly (:func:`_affine_position_row`). Points with
+    other markers (rigid bodies off their reference point, flexible bodies on a floating
+    frame, ANCF surface points) are read with ``GetMarkerOutput`` (post-step only).
     """
 
     def __init__(self, mbs, pairs, kind, axis, offsets):
@@ -81,10 +83,22 @@ def _marker_coordinates(mbs, m):
     return None
 
 
+#: Joint perturbations of all coordinates a position row is checked at (after the
+#: one-coordinate differences gave its coefficients): a map that is affine in each coordinate
+#: alone but not jointly (a modal coordinate times the rotation of a floating frame, as in a
+#: reduced flexible body, ``p = p_ref + A(theta) (x + Phi q)``) fails here.
+JOINT_CHECKS = 3
+
+
 def _affine_position_row(mbs, m0, m1, axis, off):
     """``(indices, coefficients, constant)`` with ``a . (p1 - p0) - off = coef . q[idx] + c``,
     found by perturbing the current coordinates (restored after), or ``None`` if the map is
-    not affine (e.g. a rigid body's rotation)."""
+    not affine (a rigid body's rotation; a flexible body on a floating frame).
+
+    The coefficients come from one-coordinate differences (+1 and -2 from the current value,
+    which also test each coordinate alone); the row is then checked at :data:`JOINT_CHECKS`
+    perturbations of all coordinates at once (pseudo-random, fixed seed), which a product of
+    two coordinates fails."""
     sd = mbs.systemData
     cols = []
     for m in (m0, m1):
@@ -102,7 +116,6 @@ def _affine_position_row(mbs, m0, m1, axis, off):
     q0 = sd.GetODE2Coordinates(_CURRENT)
     base = proj()
     coef = []
-    affine = True
     try:
         for c in cols:
             for step, store in ((1.0, True), (-2.0, False)):
@@ -112,13 +125,22 @@ def _affine_position_row(mbs, m0, m1, axis, off):
                 val = proj() - base
                 if store:
                     coef.append(val)
-                elif abs(val + 2.0 * coef[-1]) > 1e-9 * (1.0 + abs(coef[-1])):
-                    affine = False
+                elif not _close(val, -2.0 * coef[-1], 1.0 + abs(coef[-1])):
+                    return None
+        rng = np.random.default_rng(20261128)
+        for _ in range(JOINT_CHECKS if len(cols) > 1 else 0):
+            dq = rng.uniform(-1.0, 1.0, len(cols))
+            q = q0.copy()
+            q[cols] += dq
+            sd.SetODE2Coordinates(q, _CURRENT)
+            want = float(np.dot(coef, dq))
+            if not _close(proj() - base, want, 1.0 + float(np.abs(coef) @ np.abs(dq))):
+                return None
     finally:
         sd.SetODE2Coordinates(q0, _CURRENT)
-    if not affine:
-        return None
     c0 = base - float(np.dot(coef, q0[cols])) - off if cols else base - off
     return cols, coef, c0
 
 
+def _close(got: float, want: float, scale: float) -> bool:
+    return abs(got - want) <= 1e-9 * scale

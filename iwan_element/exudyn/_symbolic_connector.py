@@ -32,17 +32,20 @@ import math
 
 import numpy as np
 from exudyn.advancedUtilities import CreateSymbolicUserFunction
+import exudyn as exu
 from exudyn.itemInterface import (ObjectConnectorCartesianSpringDamper,
-                                  ObjectConnectorCoordinateSpringDamper)
+                                  ObjectConnectorCoordinateSpringDamper,
+                                  ObjectConnectorRigidBodySpringDamper)
 
 from ._slip_map import SlipMap
 from ._symbolic_law import (SymbolicIwanState, branch_of, cartesian_law, coordinate_law,
-                            make_probe)
+                            make_probe, rigid_law)
 
 __all__: list[str] = []
 
 _log = logging.getLogger(__name__)
 _INF = math.inf
+_OVT = exu.OutputVariableType
 
 
 def symbolic_item(conn, depth: int, name: str, vis):
@@ -51,21 +54,30 @@ def symbolic_item(conn, depth: int, name: str, vis):
     st = SymbolicIwanState(joint.params, depth, joint_tolerance(joint))
     conn._state = st
     off = conn._offset
+    c = conn._damping
     m = [int(x) for x in conn._markers]
-    if conn._kind == "coordinate":
-        fn = CreateSymbolicUserFunction(conn._mbs, coordinate_law(st, off), "springForceUserFunction",
+    kind = "rigid" if conn._axis_marker is not None else conn._kind
+    if kind == "coordinate":
+        fn = CreateSymbolicUserFunction(conn._mbs, coordinate_law(st, off, c),
+                                        "springForceUserFunction",
                                         itemTypeName="ObjectConnectorCoordinateSpringDamper")
         item = ObjectConnectorCoordinateSpringDamper(
             name=name, markerNumbers=m, stiffness=0.0, damping=0.0, offset=off,
             springForceUserFunction=fn, visualization=vis)
+    elif kind == "rigid":        # the axis turns with marker 0 (RigidBodySpringDamper's J0)
+        fn = CreateSymbolicUserFunction(conn._mbs, rigid_law(st, conn._axis, off, c),
+                                        "springForceTorqueUserFunction",
+                                        itemTypeName="ObjectConnectorRigidBodySpringDamper")
+        item = ObjectConnectorRigidBodySpringDamper(
+            name=name, markerNumbers=m, springForceTorqueUserFunction=fn, visualization=vis)
     else:
-        fn = CreateSymbolicUserFunction(conn._mbs, cartesian_law(st, conn._axis, off),
+        fn = CreateSymbolicUserFunction(conn._mbs, cartesian_law(st, conn._axis, off, c=c),
                                         "springForceUserFunction",
                                         itemTypeName="ObjectConnectorCartesianSpringDamper")
         item = ObjectConnectorCartesianSpringDamper(
             name=name, markerNumbers=m, springForceUserFunction=fn, visualization=vis)
     conn._function = fn          # keep the expression tree alive
-    st.probe = make_probe(conn._mbs, fn, conn._kind, conn._axis, off)
+    st.probe = make_probe(conn._mbs, fn, kind, conn._axis, off, st=st)
     conn._snapshot = copy.deepcopy(joint)     # the records start from this state
     return item
 
@@ -79,16 +91,56 @@ def symbolic_refresh(conn, mbs, lazy_until=-_INF) -> None:
     """Start of a run: the slip reader, and the accept function bound to it. Steps at
     ``t < lazy_until`` may commit the joint lazily (see the module docstring)."""
     conn._flush_joint()
-    smap = SlipMap(mbs, [conn._markers], conn._kind, conn._axis, [conn._offset])
+    if conn._axis_marker is None:
+        smap = SlipMap(mbs, [conn._markers], conn._kind, conn._axis, [conn._offset])
+        conn._slip = _slip_reader(conn, smap)
+    else:
+        smap = None                # the axis turns: read in the joint frame J0
+        conn._slip = _output_reader(conn, _OVT.DisplacementLocal, conn._offset)
     conn._read = smap              # the dispatcher then checks for a re-assembly per step
-    conn._slip = _slip_reader(smap)
+    conn._rate = (_rate_reader(conn, mbs, smap) if conn._damping and conn._record_on
+                  else None)
     conn._accept = _accept_function(conn, lazy_until)
 
 
-def _slip_reader(smap):
-    """``() -> u``: the accepted slip from the view of the ODE2 coordinates (no copy)."""
+def _output_reader(conn, variable, off):
+    """``() -> a . out - off`` of the connector object's output ``variable`` (a vector: the
+    displacement or velocity of marker 1 relative to marker 0, global or in J0): one Exudyn
+    call, for markers whose position is not affine in the coordinates."""
+    get = conn._mbs.GetObjectOutput
+    obj = conn._object
+    a0, a1, a2 = conn._axis
+
+    def read():
+        d = get(obj, variable)
+        return float(a0 * d[0] + a1 * d[1] + a2 * d[2]) - off
+    return read
+
+
+def _rate_reader(conn, mbs, smap):
+    """``() -> v``: the accepted slip rate (the dashpot's velocity, recorded per step): the
+    slip map's row on a view of the ODE2 velocities, or the object's velocity output."""
+    if smap is None:
+        return _output_reader(conn, _OVT.VelocityLocal, 0.0)
     if smap.generic:
-        return lambda: float(smap.slips()[0])
+        return _output_reader(conn, _OVT.Velocity, 0.0)
+    qt = mbs.systemData.GetODE2Coordinates_t(copy=False)
+    item = qt.item
+    terms = [(int(i), float(c)) for i, c in zip(smap.idx[0], smap.coef[0]) if c != 0.0]
+
+    def rate():
+        v = 0.0
+        for i, c in terms:
+            v += c * item(i)
+        return v
+    return rate
+
+
+def _slip_reader(conn, smap):
+    """``() -> u``: the accepted slip from the view of the ODE2 coordinates (no copy), or
+    from the connector's displacement output where the markers are not affine."""
+    if smap.generic:
+        return _output_reader(conn, _OVT.Displacement, conn._offset)
     item = smap.q.item
     terms = [(int(i), float(c)) for i, c in zip(smap.idx[0], smap.coef[0]) if c != 0.0]
     c0 = float(smap.c[0])
@@ -191,6 +243,7 @@ def _accept_function(conn, lazy_until):
     read = conn._slip
     buf = conn._buf             # (t, u) of the newest steps; list.append is ~3x faster than
     rec = buf.append if conn._record_on else None      # array.append (moved at events)
+    rate = conn._rate           # () -> v, recorded with (t, u) when there is a dashpot
     keep = conn._rec.fromlist
     lo = hi = 0.0               # the open interval of plain continuations (empty: slow path)
     up = True
@@ -247,6 +300,8 @@ def _accept_function(conn, lazy_until):
         if rec is not None:
             rec(t)
             rec(u)
+            if rate is not None:
+                rec(rate())
 
     def last_accepted():
         """The last accepted slip while steps are left uncommitted, else ``None``."""
@@ -362,26 +417,42 @@ def newton_check(conn, big: float) -> float:
 
 
 # ---------------------------------------------------------------------------- records
+def stride(conn) -> int:
+    """Values recorded per step: ``(t, u)``, or ``(t, u, v)`` with a dashpot."""
+    return 3 if conn._damping else 2
+
+
 def replay_records(conn) -> np.ndarray:
-    """The records as rows ``(t, u, F, dissipated, work)``: the pairs ``(t, u)`` replayed
-    on a copy of the joint taken where the records start (cached, extended incrementally)."""
+    """The records as rows ``(t, u, F, dissipated, work)``: the rows ``(t, u[, v])``
+    replayed on a copy of the joint taken where the records start (cached, extended
+    incrementally); a dashpot adds ``c v`` to the force and ``c (v0 + v) / 2 (u - u0)`` per
+    step to the dissipation and the work (as the Python law books it)."""
     raw = conn._rec
-    n = len(raw) // 2
+    w = stride(conn)
+    n = len(raw) // w
     cache = conn._replay
     if cache is None or cache[1] > n:
-        cache = conn._replay = [copy.deepcopy(conn._snapshot), 0, np.empty((0, 5))]
-    j, done, table = cache
+        cache = conn._replay = [copy.deepcopy(conn._snapshot), 0, np.empty((0, 5)), None]
+    j, done, table, dash = cache
     if done < n:
         new = np.empty((n - done, 5))
-        pairs = raw[2 * done:2 * n].tolist()
+        rows = raw[w * done:w * n].tolist()
         trial, commit = j.trial, j.commit
+        c = conn._damping
         for k in range(n - done):
-            t, u = pairs[2 * k], pairs[2 * k + 1]
+            t, u = rows[w * k], rows[w * k + 1]
             F = trial(u)[0]
             commit()
-            new[k] = (t, u, F, j.dissipated_energy, j.work)
+            if c:
+                v = rows[w * k + 2]
+                d = 0.0 if dash is None else dash[2] + c * 0.5 * (dash[1] + v) * (u - dash[0])
+                dash = (u, v, d)
+                F += c * v
+            else:
+                d = 0.0
+            new[k] = (t, u, F, j.dissipated_energy + d, j.work + d)
         table = np.concatenate([table, new]) if done else new
-        cache[1], cache[2] = n, table
+        cache[1], cache[2], cache[3] = n, table, dash
     return table
 
 

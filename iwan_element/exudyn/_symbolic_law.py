@@ -52,6 +52,7 @@ import itertools
 import math
 
 import exudyn as exu
+from exudyn.advancedUtilities import CreateSymbolicUserFunction
 
 __all__: list[str] = []
 
@@ -243,9 +244,16 @@ class SymbolicIwanState:
         return esym.IfThenElse(fast, cont, self.exact(u))
 
 
-def make_probe(mbs, fn, kind, axis, off, k=None):
+def make_probe(mbs, fn, kind, axis, off, k=None, st=None):
     """``u -> F`` through the symbolic user function ``fn`` (no new expression); ``k``: the
-    linear springs the function also carries (see :func:`cartesian_law`), taken out again."""
+    linear springs the function also carries (see :func:`cartesian_law`), taken out again.
+    ``kind="rigid"`` (a ``RigidBodySpringDamper`` law, whose ``Evaluate`` takes no matrix
+    arguments in exudyn 1.13.6): a coordinate law on the same state ``st`` is made for the
+    probe."""
+    if kind == "rigid":
+        fn = CreateSymbolicUserFunction(mbs, coordinate_law(st, 0.0), "springForceUserFunction",
+                                        itemTypeName="ObjectConnectorCoordinateSpringDamper")
+        return lambda u, fn=fn: fn.Evaluate(mbs, 0.0, 0, u, 0.0, 0.0, 0.0, 0.0)
     if kind == "coordinate":
         return lambda u: fn.Evaluate(mbs, 0.0, 0, u + off, 0.0, 0.0, 0.0, 0.0)
     a = axis
@@ -260,28 +268,39 @@ def make_probe(mbs, fn, kind, axis, off, k=None):
     return probe
 
 
-def coordinate_law(st: SymbolicIwanState, off: float):
-    """Spring-force user function (ObjectConnectorCoordinateSpringDamper) to be traced."""
+def coordinate_law(st: SymbolicIwanState, off: float, c: float = 0.0):
+    """Spring-force user function (ObjectConnectorCoordinateSpringDamper) to be traced;
+    ``c`` [N s/m]: a dashpot in parallel (``c deltaL_t`` added)."""
     def law(mbs, t, itemNumber, deltaL, deltaL_t, stiffness, damping, offset):
-        return st.force(deltaL - off if off else deltaL)
+        F = st.force(deltaL - off if off else deltaL)
+        return F + c * deltaL_t if c else F
     return law
 
 
-def cartesian_law(st: SymbolicIwanState, a, off: float, k=None):
+def _along(a, vec):
+    """``a . vec`` as an expression, without the terms of zero components."""
+    u = None
+    for i in range(3):
+        if a[i] != 0.0:
+            term = vec[i] if a[i] == 1.0 else vec[i] * a[i]
+            u = term if u is None else u + term
+    return u
+
+
+def cartesian_law(st: SymbolicIwanState, a, off: float, k=None, c: float = 0.0):
     """Spring-force user function (ObjectConnectorCartesianSpringDamper) along the unit
     axis ``a``; components with ``a_k = 0`` are constant zeros (a shared sub-expression is
     evaluated once per appearance, so the law appears only in the non-zero components).
     ``k`` (3 floats, optional): linear springs along the global axes added in the same
-    object, ``k_i d_i`` as Exudyn's built-in Cartesian spring (no offset, no damping)."""
+    object, ``k_i d_i`` as Exudyn's built-in Cartesian spring (no offset, no damping);
+    ``c`` [N s/m]: a dashpot in parallel with the law along ``a``."""
     k = (0.0, 0.0, 0.0) if k is None else tuple(float(x) for x in k)
 
     def law(mbs, t, itemNumber, displacement, velocity, stiffness, damping, offset):
-        u = None
-        for i in range(3):
-            if a[i] != 0.0:
-                term = displacement[i] if a[i] == 1.0 else displacement[i] * a[i]
-                u = term if u is None else u + term
+        u = _along(a, displacement)
         F = st.force(u - off if off else u)
+        if c:
+            F = F + c * _along(a, velocity)
         out = []
         for i in range(3):
             f = None if a[i] == 0.0 else (F if a[i] == 1.0 else F * a[i])
@@ -289,4 +308,21 @@ def cartesian_law(st: SymbolicIwanState, a, off: float, k=None):
                 f = displacement[i] * k[i] if f is None else f + displacement[i] * k[i]
             out.append(esym.Real(0.0) if f is None else f)
         return out
+    return law
+
+
+def rigid_law(st: SymbolicIwanState, a, off: float, c: float = 0.0):
+    """Spring-force-torque user function (ObjectConnectorRigidBodySpringDamper) along the
+    unit axis ``a`` fixed in the frame of marker 0 (the joint frame J0; ``displacement`` and
+    ``velocity`` are given in it): the force ``F a`` in J0, no torque; ``c`` [N s/m]: a
+    dashpot in parallel along ``a``."""
+    def law(mbs, t, itemNumber, displacement, rotation, velocity, angularVelocity, stiffness,
+            damping, rotJ0, rotJ1, offset):
+        u = _along(a, displacement)
+        F = st.force(u - off if off else u)
+        if c:
+            F = F + c * _along(a, velocity)
+        out = [esym.Real(0.0) if a[i] == 0.0 else (F if a[i] == 1.0 else F * a[i])
+               for i in range(3)]
+        return out + [esym.Real(0.0)] * 3
     return law

@@ -22,8 +22,9 @@ joint to the accepted state, commits it and appends a row to the connector's rec
 
 Two force laws (``law=``), chosen automatically:
 
-* **symbolic** (an :class:`~iwan_element.IwanJoint` on two ``MarkerNodeCoordinate`` markers
-  or on position markers with a global axis): the exact Iwan law as an Exudyn symbolic
+* **symbolic** (an :class:`~iwan_element.IwanJoint` on two ``MarkerNodeCoordinate`` markers,
+  on position markers with a global axis, or on two rigid markers with the axis fixed in
+  marker 0's frame, a ``RigidBodySpringDamper``): the exact Iwan law as an Exudyn symbolic
   expression (:mod:`._symbolic_law`), evaluated in C++ without Python and without Exudyn
   API calls (safe with several solver threads). Its state (the committed slip, the branch
   through it and the newest ``depth`` reversal points) lives in symbolic variables; the
@@ -41,18 +42,23 @@ Two force laws (``law=``), chosen automatically:
   window from far away (more than ten times the branch's step increments) is still
   detected (the law at the accepted slip against the exact force), logged, and listed in
   :attr:`IwanConnector.overflow_times`.
-* **python** (any element, e.g. the effects, or a rotating ``axisMarker``): a Python force
-  function calling ``joint.trial(u, v)``. For two node coordinates the post-step reads the
-  accepted slip and its rate through coordinate views and evaluates a new trial only if the
-  last one was elsewhere; otherwise it calls ``mbs.GetObjectOutput``, which evaluates the
-  force function at the accepted state.
+* **python** (any element, e.g. the effects, or an ``axisMarker`` other than marker 0): a
+  Python force function calling ``joint.trial(u, v)``. For two node coordinates the
+  post-step reads the accepted slip and its rate through coordinate views and evaluates a
+  new trial only if the last one was elsewhere; otherwise it calls ``mbs.GetObjectOutput``,
+  which evaluates the force function at the accepted state.
 
 Exudyn calls the post-step function only after accepted steps (and once at the start of a
 run, which commits the initial state: an initial slip is reached by monotone virgin
 loading); rejected attempts leave no trace. ``SolveStatic`` calls it after every load step,
 so a static run commits a quasi-static loading history. A new solve is recognised by the
-solver object that ``SolveDynamic``/``SolveStatic`` store in ``mbs.sys`` (the coordinate
-views are then renewed and the settings checked, see :func:`._dispatch.check_settings`).
+solver object and settings that ``SolveDynamic``/``SolveStatic`` store in ``mbs.sys`` before
+the solver starts: the settings are checked then (:func:`._dispatch.check_settings`; a
+refusal is a ``ValueError`` out of ``SolveDynamic``), a solve that starts before the last
+accepted time gives every joint of the system a fresh history, and the coordinate views are
+renewed at its first step. The accepted slip is read exactly on any marker: an affine row
+of the coordinates where the markers' relative position is affine (checked jointly, see
+:mod:`._slip_map`), else the connector object's displacement output.
 
 Post-step chaining
 ------------------
@@ -69,12 +75,14 @@ Exudyn settings to remember
 * Newton's ``absoluteTolerance`` is a residual in force units; for stiff joints use a
   tight ``relativeTolerance`` (the default 1e-8 of the step's initial residual is fine
   for plots, use ~1e-10 or below for energy checks).
-* Several solver threads are refused (``ValueError`` at the start of the run) for
+* Several solver threads are refused (``ValueError`` before the solver starts) for
   connectors with the Python force law: with two threads Exudyn 1.13.6 was observed to hang
   with about 20 or more Python-function connectors. The symbolic law is allowed.
 * ODE23/DOPRI5 with automatic step size are refused (see :func:`check_settings`).
-* A user-function connector reports no potential energy to Exudyn; use the connector's
-  records (:attr:`IwanConnector.stored_energy_history`, ...).
+* A user-function connector reports no potential energy to Exudyn (Exudyn 1.13.6 refuses
+  ``PotentialEnergy`` for any connector whose force a user function defines); use the
+  connector's records (:attr:`IwanConnector.stored_energy_history`, ...) or
+  :func:`~iwan_element.exudyn.record_energy`.
 * Python law with position markers: the accepted state is obtained through
   ``mbs.GetObjectOutput``, which allocates; on long runs Exudyn may then print a harmless
   "large amount of memory allocations" warning.
@@ -121,7 +129,7 @@ IwanConnector.__module__ = __name__          # documented here (defined in _conn
 
 
 def add_iwan_connector(mbs, markerNumbers, joint, *, axis=None, axisMarker=None,
-                       offset: float = 0.0, name: str = "", visualization=None,
+                       offset=0.0, damping: float = 0.0, name: str = "", visualization=None,
                        record: bool = True, law: str = "auto", depth: int = 8,
                        allow_adaptive_explicit: bool = False) -> IwanConnector:
     """Add a history-dependent joint element between two markers of an Exudyn system.
@@ -131,7 +139,9 @@ def add_iwan_connector(mbs, markerNumbers, joint, *, axis=None, axisMarker=None,
     mbs : exudyn.MainSystem
         The system (items added, not necessarily assembled yet).
     markerNumbers : sequence of 2 marker numbers
-        ``[m0, m1]``. Both coordinate markers (``MarkerNodeCoordinate``,
+        ``[m0, m1]`` (``MarkerIndex`` as ``mbs.AddMarker`` returns it, or ``int``; a body's
+        ``ObjectIndex`` or a ``NodeIndex`` is refused: :func:`create_iwan_connector` makes
+        the markers from bodies and nodes). Both coordinate markers (``MarkerNodeCoordinate``,
         ``MarkerNodeRotationCoordinate`` ...): the slip is ``u = q1 - q0 - offset``. Both
         position markers (``MarkerBodyPosition``, ``MarkerNodePosition``, ``MarkerBodyRigid``,
         ``MarkerNodeRigid`` ...): ``u = a . (p1 - p0) - offset`` with the unit axis ``a``.
@@ -153,9 +163,18 @@ def add_iwan_connector(mbs, markerNumbers, joint, *, axis=None, axisMarker=None,
         given, ``axis`` is expressed in that marker's frame and rotates with it; the force
         then stays along the current axis and the moment of the axis rotation is neglected
         (exact when the two points coincide, as for the interface points of a lap joint).
-    offset : float, keyword-only
-        Slip at which the joint is unloaded in its virgin state [m] (default 0); fixed at
+        When ``axisMarker`` is ``markerNumbers[0]`` and both markers have an orientation,
+        the symbolic law runs on an ``ObjectConnectorRigidBodySpringDamper``, whose joint
+        frame is that marker's; otherwise the Python law is used.
+    offset : float or array_like of 3, keyword-only
+        Slip at which the joint is unloaded in its virgin state [m] (default 0); for
+        position markers also a vector ``d0`` as Exudyn's Cartesian spring takes it (the
+        joint is unloaded at ``p1 - p0 = d0``: the slip offset is ``a . d0``). Fixed at
         creation (the Exudyn object's own ``offset`` parameter is not read).
+    damping : float, keyword-only
+        A dashpot in parallel with the joint along its axis [N s/m] (default 0): the force
+        becomes ``F + c v`` with the slip rate ``v``; the records hold it (force,
+        dissipation ``int c v du`` per step by the trapezoidal rule, work).
     name : str, keyword-only
         Name of the Exudyn object.
     visualization : dict, optional, keyword-only
@@ -166,8 +185,9 @@ def add_iwan_connector(mbs, markerNumbers, joint, *, axis=None, axisMarker=None,
     law : {"auto", "symbolic", "python"}, keyword-only
         How the force is evaluated. ``"symbolic"``: the exact Iwan law as an Exudyn symbolic
         expression (no Python call per force evaluation; thread-safe); only for an
-        :class:`~iwan_element.IwanJoint` on two ``MarkerNodeCoordinate`` markers or on
-        position markers with a global axis. ``"python"``: a Python force function calling
+        :class:`~iwan_element.IwanJoint` on two ``MarkerNodeCoordinate`` markers, on
+        position markers with a global axis, or with ``axisMarker`` = marker 0 on two
+        rigid markers. ``"python"``: a Python force function calling
         ``joint.trial`` (any element). ``"auto"`` (default) picks ``"symbolic"`` where it
         applies.
     depth : int, keyword-only
@@ -178,7 +198,8 @@ def add_iwan_connector(mbs, markerNumbers, joint, *, axis=None, axisMarker=None,
         :attr:`IwanConnector.overflow_times`.
     allow_adaptive_explicit : bool, keyword-only
         Run with ODE23/DOPRI5 and automatic step size, which are refused by default
-        (a run starting with them raises ``ValueError``): a reversal inside a step is not
+        (``SolveDynamic`` with them raises ``ValueError`` before the solver starts; the
+        solver is not known when the connector is added): a reversal inside a step is not
         seen by their error estimate and the result does not converge with the tolerance.
 
     Returns
@@ -209,17 +230,20 @@ def add_iwan_connector(mbs, markerNumbers, joint, *, axis=None, axisMarker=None,
         joint = IwanJoint(joint)
     _check_options(mbs, markerNumbers, joint, name=name, record=record, law=law, depth=depth,
                    allow_adaptive_explicit=allow_adaptive_explicit)
-    offset = check_scalar("offset", offset)
+    damping = check_scalar("damping", damping, low=0.0)
     vis = _visualization(visualization)
-    kind, unit, axis_marker = _classify_markers(mbs, markerNumbers, axis, axisMarker)
+    kind, unit, axis_marker, rigid = _classify_markers(mbs, markerNumbers, axis, axisMarker)
+    offset = _slip_offset(offset, kind, unit)
     dispatcher = _dispatcher_for(mbs)
-    conn = IwanConnector(mbs, markerNumbers, joint, kind, unit, axis_marker, offset, record)
+    conn = IwanConnector(mbs, markerNumbers, joint, kind, unit, axis_marker, offset, record,
+                         damping)
     _claim(joint, conn)
     conn._dispatcher = dispatcher
     conn._allow_adaptive_explicit = allow_adaptive_explicit
     if kind == "coordinate":
         conn._fast_nodes = _node_coordinate_nodes(mbs, markerNumbers)
-    route = _choose_route(law, joint, kind, conn._fast_nodes, axis_marker)
+    frame0 = axis_marker is not None and axis_marker == int(markerNumbers[0]) and rigid
+    route = _choose_route(law, joint, kind, conn._fast_nodes, axis_marker, frame0)
     conn._object = mbs.AddObject(_connector_item(conn, joint, route, int(depth), name, vis))
     dispatcher.add(conn)
     _log.debug("added %r", conn)
@@ -245,6 +269,13 @@ def _check_options(mbs, markerNumbers, joint, *, name, record, law, depth,
                          f"{type(joint).__name__} does not")
     if not isinstance(name, str):
         raise ValueError(f"name must be a str, got {type(name).__name__}")
+    check_run_options(record=record, law=law, depth=depth,
+                      allow_adaptive_explicit=allow_adaptive_explicit)
+
+
+def check_run_options(*, record, law, depth, allow_adaptive_explicit) -> None:
+    """The options of :func:`add_iwan_connector` that do not depend on the markers (also
+    checked by :func:`~iwan_element.exudyn.create_iwan_connector` before it makes any)."""
     if not isinstance(record, bool):
         raise ValueError(f"record must be True or False, got {record!r}")
     if not isinstance(allow_adaptive_explicit, bool):
@@ -256,9 +287,21 @@ def _check_options(mbs, markerNumbers, joint, *, name, record, law, depth,
         raise ValueError(f"depth must be an int in [2, 64], got {depth!r}")
 
 
+def _slip_offset(offset, kind, unit) -> float:
+    """The slip offset [m]: a number, or for position markers a vector ``d0`` (Exudyn's
+    Cartesian offset), projected on the axis."""
+    if kind == "position" and np.ndim(offset) == 1:
+        d0 = np.asarray(offset, dtype=float) if np.size(offset) in (2, 3) else None
+        if d0 is None or not np.all(np.isfinite(d0)):
+            raise ValueError(f"offset must be a number or a finite vector of 2 or 3 numbers "
+                             f"[m], got {offset!r}")
+        return float(np.dot(np.asarray(unit)[:d0.size], d0))
+    return check_scalar("offset", offset)
+
+
 def _classify_markers(mbs, markerNumbers, axis, axisMarker):
-    """``(kind, unit axis or None, axis marker or None)`` of two coordinate or position
-    markers."""
+    """``(kind, unit axis or None, axis marker or None, both markers have an orientation)``
+    of two coordinate or position markers."""
     t0 = _marker_type(mbs, markerNumbers[0], "markerNumbers[0]")
     t1 = _marker_type(mbs, markerNumbers[1], "markerNumbers[1]")
     if int(markerNumbers[0]) == int(markerNumbers[1]):
@@ -267,7 +310,7 @@ def _classify_markers(mbs, markerNumbers, axis, axisMarker):
         if axis is not None or axisMarker is not None:
             raise ValueError("axis and axisMarker apply to position markers only; markerNumbers "
                              f"are coordinate markers ({t0}, {t1})")
-        return "coordinate", None, None
+        return "coordinate", None, None, False
     if not (t0 in _POSITION_MARKERS and t1 in _POSITION_MARKERS):
         raise ValueError(
             f"markerNumbers must be two coordinate markers ({sorted(_COORDINATE_MARKERS)}) or two "
@@ -276,13 +319,14 @@ def _classify_markers(mbs, markerNumbers, axis, axisMarker):
         raise ValueError(f"axis is required for position markers ({t0}, {t1}): give the "
                          "direction of the joint force, e.g. axis=[1, 0, 0]")
     unit = _unit_axis(axis, "axis")
+    rigid = t0 in _ORIENTATION_MARKERS and t1 in _ORIENTATION_MARKERS
     if axisMarker is None:
-        return "position", unit, None
+        return "position", unit, None, rigid
     ta = _marker_type(mbs, axisMarker, "axisMarker")
     if ta not in _ORIENTATION_MARKERS:
         raise ValueError(f"axisMarker must be a marker with an orientation "
                          f"({sorted(_ORIENTATION_MARKERS)}), got {ta}")
-    return "position", unit, int(axisMarker)
+    return "position", unit, int(axisMarker), rigid
 
 
 def _connector_item(conn, joint, route, depth, name, vis):
@@ -309,14 +353,15 @@ def _connector_item(conn, joint, route, depth, name, vis):
         visualization=vis)
 
 
-def _choose_route(law, joint, kind, fast_nodes, axis_marker) -> str:
+def _choose_route(law, joint, kind, fast_nodes, axis_marker, frame0) -> str:
     why = None
     if type(joint) is not IwanJoint:
         why = f"the joint is a {type(joint).__name__} (the symbolic law is the IwanJoint's)"
     elif kind == "coordinate" and fast_nodes is None:
         why = "the coordinate markers are not both MarkerNodeCoordinate"
-    elif axis_marker is not None:
-        why = "the axis rotates with axisMarker"
+    elif axis_marker is not None and not frame0:
+        why = ("the axis rotates with an axisMarker that is not markerNumbers[0], or a "
+               "marker has no orientation (the symbolic law turns with marker 0's frame)")
     if law == "symbolic" and why is not None:
         raise ValueError(f"law='symbolic' is not available here: {why}; use law='python'")
     if law == "python" or why is not None:

@@ -1,70 +1,67 @@
 """Energy balance of a user's own Exudyn model with Iwan connectors or interfaces.
 
-:func:`record_energy` attaches a recorder behind the connectors' post-step dispatcher: at
-every accepted step, after the joints are committed, it reads
+:func:`record_energy` attaches a recorder to the connectors' post-step dispatcher (called
+after the joints; a post-step function the user sets later does not drop it). Per accepted
+step it copies the time and the ODE2 coordinates and velocities (two byte copies:
+about half a microsecond a step, less than the connector itself); the
+energies are evaluated from these states when :meth:`EnergyRecorder.balance` is called,
+by setting each recorded state back into the system and reading what Exudyn reports
+(:mod:`._energy_terms`: kinetic energy of the bodies, strain energy of reduced flexible
+bodies, the work of internal forces of beams and of every connector - springs, dampers,
+the user's own force functions - with their potential energy where Exudyn reports one, the
+work of every load, gravity included). The joints' stored and dissipated energy come from
+their own records (exact replay of the recorded slips, dashpots included). The balance
 
-* the kinetic energy of every body that reports one (Exudyn's ``KineticEnergy`` output:
-  mass points, ``Mass1D``, rigid bodies, beam elements);
-* the elastic energy of every object that reports one (``PotentialEnergy``: springs,
-  spring-dampers, beams), except the joints' own objects (a user-function or symbolic
-  connector reports none), plus the linear springs an interface carries
-  (:meth:`IwanInterface.linear_energy`);
-* the power of every load (``LoadCoordinate``: load times the coordinate's rate;
-  ``LoadForceVector``: force dot the marker's velocity), integrated by the trapezoidal rule
-  (exact for the generalized-alpha method at spectral radius 1 on a linear model).
+    kinetic + elastic + dissipated in dampers + work into other connectors and bodies
+    + joint stored + joint dissipated - external work = its initial value
 
-The joints' stored and dissipated energy come from the connectors' own records (exact
-replay of the recorded slips). The balance (``docs/equations.md`` section 5 for the joint's
-energies) is
+is judged against the joints' own energy: the largest of their total work and
+dissipation over the run (:attr:`EnergyBalance.scale`), not the model's total energy (a
+spinning rotor's kinetic energy would hide any error). Whatever the balance cannot book
+(a prescribed motion, an ODE1 object ...) is named in :attr:`EnergyBalance.not_booked`
+and the balance is then not usable; loads of another type are refused by
+:func:`record_energy`, before the solve.
 
-    kinetic + elastic + joint stored + joint dissipated - external work = initial energy,
-
-and :class:`EnergyBalance` reports its error relative to the largest energy level of the
-run. Damping of the user's own spring-dampers and the work of prescribed motions are not
-booked: they appear as an error, so a model with them will not balance.
+The works are trapezoidal sums in the coordinates, the generalized-alpha method's own
+energy identity at spectral radius 1 (it closes exactly on a linear model); numerical
+damping (spectral radius below 1) dissipates energy that nothing books, and the verdict
+says so.
 """
 from __future__ import annotations
 
 import logging
+from array import array
 from dataclasses import dataclass
 
 import exudyn as exu
 import numpy as np
 
-from ..core.result_shape import ResultShape, panels, table_lines
+from ..core.result_shape import ResultShape, panels, table_lines, wrap
 from ._dispatch import _dispatcher_for, _installed_post_step
+from ._energy_terms import Terms, check_loads, power_work, trapezoid
 
 __all__ = ["record_energy", "EnergyRecorder", "EnergyBalance"]
 
 _log = logging.getLogger(__name__)
-_OVT = exu.OutputVariableType
-_ORIGIN = [0.0, 0.0, 0.0]
+_CUR = exu.ConfigurationType.Current
 
-#: Largest relative balance error of a run that is a success (the connectors' own tests
-#: close the balance of a 1-DOF model to 1e-4 at about 190 steps per period).
+#: Largest balance error, relative to the joints' own energy, of a usable run.
 BALANCE_TOLERANCE = 1e-3
-
-
-def _probe(call) -> bool:
-    try:
-        call()
-    except Exception:      # noqa: BLE001  (Exudyn raises RuntimeError or SystemError)
-        return False
-    return True
 
 
 def record_energy(mbs, joints) -> "EnergyRecorder":
     """Record the energy balance of a model at every accepted step.
 
-    Call it after the joints were added (:func:`add_iwan_connector`,
-    :func:`add_iwan_interface`) and before ``mbs.SolveDynamic``; read
-    :meth:`EnergyRecorder.balance` after the run.
+    Call it after the joints were added (:func:`create_iwan_connector`,
+    :func:`add_iwan_connector`, :func:`add_iwan_interface`) and before ``mbs.SolveDynamic``;
+    read :meth:`EnergyRecorder.balance` after the run. A new run (a solve that starts
+    before the last accepted time) and a joint's ``reset()`` start the recording again.
 
     Parameters
     ----------
     mbs : exudyn.MainSystem
         The system holding the joints.
-    joints : IwanConnector, IwanInterface or a sequence of them
+    joints : IwanCartesianConnector, IwanConnector, IwanInterface or a sequence of them
         Every joint of the model (their stored and dissipated energies enter the balance).
 
     Returns
@@ -75,113 +72,209 @@ def record_energy(mbs, joints) -> "EnergyRecorder":
     ------
     ValueError
         ``mbs`` is not an Exudyn system, ``joints`` is empty or holds something else than
-        connectors and interfaces of this system.
+        joints of this system, or the model has a load the balance cannot book.
     """
+    from .cartesian import IwanCartesianConnector
     from .connector import IwanConnector
     from .interface import IwanInterface
+    kinds = (IwanConnector, IwanInterface, IwanCartesianConnector)
     if not isinstance(mbs, exu.MainSystem):
         raise ValueError(f"mbs must be an exudyn.MainSystem, got {type(mbs).__name__}")
-    if isinstance(joints, (IwanConnector, IwanInterface)):
+    if isinstance(joints, kinds):
         joints = [joints]
     joints = list(joints) if not isinstance(joints, (str, bytes)) else []
-    if not joints or not all(isinstance(j, (IwanConnector, IwanInterface)) for j in joints):
-        raise ValueError("joints must be an IwanConnector or IwanInterface, or a non-empty "
-                         "sequence of them (from add_iwan_connector / add_iwan_interface)")
-    if any(j._mbs is not mbs for j in joints):
-        raise ValueError("joints must belong to mbs (a connector of another system was given)")
-    return EnergyRecorder(mbs, joints)
+    if not joints or not all(isinstance(j, kinds) for j in joints):
+        raise ValueError("joints must be an IwanCartesianConnector, IwanConnector or "
+                         "IwanInterface, or a non-empty sequence of them (from "
+                         "create_iwan_connector / add_iwan_connector / add_iwan_interface)")
+    flat = []
+    for j in joints:
+        flat += list(j.connectors) if isinstance(j, IwanCartesianConnector) else [j]
+    if any(j._mbs is not mbs for j in flat):
+        raise ValueError("joints must belong to mbs (a joint of another system was given)")
+    check_loads(mbs)
+    return EnergyRecorder(mbs, flat)
 
 
 class EnergyRecorder:
-    """Reads the model's energies at every accepted step (made by :func:`record_energy`)."""
+    """Records the states of a run and books its energy balance (made by
+    :func:`record_energy`)."""
 
     def __init__(self, mbs, joints):
         self._mbs = mbs
         self._joints = tuple(joints)
-        self._rows = []               # (t, kinetic, elastic, external power)
-        self._bodies = self._springs = self._loads = None
+        self._t = array("d")
+        self._q = array("d")
+        self._v = array("d")
+        self._n = None                # coordinates per recorded state
+        self._views = None
+        ts, qs, vs = self._t, self._q, self._v
+
+        def record(t):
+            if not ts or t != ts[-1]:
+                views = self._views
+                if views is None:
+                    views = self._refresh(mbs)
+                ts.append(t)
+                qs.frombytes(views[0].tobytes())
+                vs.frombytes(views[1].tobytes())
+
+        self._record = record
         disp = _dispatcher_for(mbs)
         if not disp.reachable_from(_installed_post_step(mbs)):
             disp.install(mbs)
-        previous = disp.chained
-
-        def energy_post_step(mbs_, t):
-            if not self._rows or t != self._rows[-1][0]:
-                self._rows.append(self._read(t))
-            return True if previous is None else previous(mbs_, t)
-
-        disp.chained = energy_post_step
+        disp.add_recorder(self)
         self._n0 = [j.n_records for j in self._joints]
 
-    def _classify(self) -> None:
-        """Which objects report kinetic or elastic energy, which loads do work (once)."""
-        mbs = self._mbs
-        own = set()
-        for j in self._joints:
-            own.update(j.objectNumbers if hasattr(j, "objectNumbers") else [j.objectNumber])
-        objs = [o for o in range(mbs.systemData.NumberOfObjects()) if o not in own]
-        self._bodies = [o for o in objs if _probe(lambda o=o: mbs.GetObjectOutputBody(
-            o, _OVT.KineticEnergy, localPosition=_ORIGIN))]
-        self._springs = [o for o in objs if _probe(lambda o=o: mbs.GetObjectOutput(
-            o, _OVT.PotentialEnergy))]
-        self._loads = []
-        for n in range(mbs.systemData.NumberOfLoads()):
-            kind = mbs.GetLoad(n)["loadType"]
-            if kind not in ("Coordinate", "ForceVector"):
-                raise ValueError(f"load {n} is a {kind} load; the energy balance books the "
-                                 "work of Coordinate and ForceVector loads only")
-            self._loads.append((n, mbs.GetLoad(n)["markerNumber"], kind))
+    def _refresh(self, mbs):
+        """Views of the system coordinates (taken at the start of every run; an ``Assemble``
+        may move them); a run with another number of coordinates starts the recording
+        again."""
+        sd = mbs.systemData
+        q = sd.GetODE2Coordinates(_CUR, copy=False)
+        if self._n is not None and q.size != self._n and len(self._t):
+            _log.warning("the system now has %d ODE2 coordinates instead of %d: the energy "
+                         "recording starts again", q.size, self._n)
+            self._clear()
+        self._n = q.size
+        self._views = (q, sd.GetODE2Coordinates_t(_CUR, copy=False))
+        return self._views
 
-    def _read(self, t) -> tuple:
-        mbs = self._mbs
-        if self._bodies is None:
-            self._classify()
-        kin = sum(float(mbs.GetObjectOutputBody(o, _OVT.KineticEnergy, localPosition=_ORIGIN))
-                  for o in self._bodies)
-        ela = sum(float(mbs.GetObjectOutput(o, _OVT.PotentialEnergy)) for o in self._springs)
-        ela += sum(j.linear_energy() for j in self._joints if hasattr(j, "linear_energy"))
-        power = 0.0
-        for n, m, kind in self._loads:
-            value = np.asarray(mbs.GetLoadValues(n), dtype=float)
-            rate = _OVT.Coordinates_t if kind == "Coordinate" else _OVT.Velocity
-            power += float(np.dot(value.ravel(),
-                                  np.asarray(mbs.GetMarkerOutput(m, rate)).ravel()))
-        return (float(t), kin, ela, power)
+    def _clear(self) -> None:
+        for a in (self._t, self._q, self._v):
+            del a[:]
+        self._n0 = [j.n_records for j in self._joints]
+
+    def _joint_reset(self, joint) -> None:
+        """A joint was reset (by the user or by a new run): start again."""
+        mine = [j for j in self._joints if j is joint or joint in getattr(j, "connectors", ())]
+        inner = getattr(joint, "connectors", ())
+        if mine or any(c in self._joints for c in inner):
+            self._clear()
+
+    @property
+    def n_records(self) -> int:
+        """Recorded states."""
+        return len(self._t)
 
     def balance(self, *, tolerance: float = BALANCE_TOLERANCE) -> "EnergyBalance":
-        """The energy balance of what was recorded so far.
+        """The energy balance of what was recorded so far (see the module docstring).
 
         Parameters
         ----------
         tolerance : float, keyword-only
-            Largest relative error [-] of a balance that is a success (default 1e-3).
+            Largest balance error [-], relative to the joints' own energy, of a usable run
+            (default 1e-3).
 
         Raises
         ------
         RuntimeError
-            Nothing was recorded, or the joints' records are not in step with the recorder
-            (a joint was reset, or recorded before the recorder was attached).
+            Nothing was recorded, or the joints' records are not in step with the recorder.
         """
-        if not self._rows:
+        if not len(self._t):
             raise RuntimeError("nothing recorded: run mbs.SolveDynamic after record_energy")
         if not (np.isfinite(tolerance) and 0 < tolerance < 1):
             raise ValueError(f"tolerance must be in (0, 1), got {tolerance!r}")
-        rows = np.array(self._rows)
-        t = rows[:, 0]
+        t = np.array(self._t)
+        stored, dissipated = self._joint_energies(t)
+        own = set()                   # booked by the joints themselves
+        for j in self._joints:
+            own.update(int(o) for o in (j.objectNumbers if hasattr(j, "objectNumbers")
+                                        else [j.objectNumber]))
+            own.update(int(o) for o in getattr(j, "_spring_objects", ()))  # linear_energy
+        terms = Terms(self._mbs, own)
+        levels = self._evaluate(terms, t)
+        return EnergyBalance(t=t, joint_stored=stored, joint_dissipated=dissipated,
+                             not_booked=tuple(terms.missing), notes=self._notes(),
+                             tolerance=float(tolerance), **levels)
+
+    def _joint_energies(self, t):
         stored = np.zeros(len(t))
         dissipated = np.zeros(len(t))
         for j, n0 in zip(self._joints, self._n0):
             tj = j.time_history[n0:]
             if len(tj) != len(t) or not np.allclose(tj, t, rtol=0, atol=1e-12 * max(1, t[-1])):
                 raise RuntimeError("the joints' records are not in step with the energy "
-                                   "recorder (a joint was reset or run without it)")
+                                   "recorder (a joint recorded without it: record=False?)")
             stored += j.stored_energy_history[n0:]
             dissipated += j.dissipated_energy_history[n0:]
-        power = rows[:, 3]
-        work = np.concatenate([[0.0], np.cumsum(0.5 * (power[1:] + power[:-1]) * np.diff(t))])
-        return EnergyBalance(t=t, kinetic=rows[:, 1], elastic=rows[:, 2], joint_stored=stored,
-                             joint_dissipated=dissipated, external_work=work,
-                             tolerance=float(tolerance))
+        return stored, dissipated
+
+    def _evaluate(self, terms, t) -> dict:
+        """Every term at every recorded state (set into the system, then restored)."""
+        mbs = self._mbs
+        sd = mbs.systemData
+        n = self._n
+        Q = np.frombuffer(self._q, dtype=float).reshape(-1, n)
+        V = np.frombuffer(self._v, dtype=float).reshape(-1, n)
+        keep = (sd.GetODE2Coordinates(_CUR), sd.GetODE2Coordinates_t(_CUR), sd.GetTime())
+        linear = [j.linear_energy for j in self._joints if hasattr(j, "linear_energy")]
+        states = []
+        try:
+            for k in range(len(t)):
+                sd.SetODE2Coordinates(Q[k], _CUR)
+                sd.SetODE2Coordinates_t(V[k], _CUR)
+                sd.SetTime(float(t[k]))
+                st = terms.state()
+                st["elastic"] += sum(f() for f in linear)
+                states.append(st)
+        finally:
+            sd.SetODE2Coordinates(keep[0], _CUR)
+            sd.SetODE2Coordinates_t(keep[1], _CUR)
+            sd.SetTime(keep[2])
+        return _assemble(states, t)
+
+    def _notes(self) -> tuple:
+        """What the last solve's settings say about the balance (numerical damping), as the
+        dispatcher saw them when the solve started (``SolveDynamic`` sets its ``solverType``
+        into the settings only while it runs)."""
+        info = _dispatcher_for(self._mbs).solve_info
+        if info is None:
+            return ()
+        kind, solver, rho = info
+        if kind == "dynamicSolver" and solver == exu.DynamicSolverType.GeneralizedAlpha \
+                and rho < 1.0:
+            return (f"the solver damps numerically (generalized-alpha, spectralRadius "
+                    f"{rho:g} < 1): energy that no item books; set 1 (or use "
+                    "TrapezoidalIndex2) for a balance",)
+        return ()
+
+
+def _assemble(states, t) -> dict:
+    """The per-step states stacked into the balance's histories."""
+    n = len(states)
+    kinetic = np.array([s["kinetic"] for s in states])
+    elastic = np.array([s["elastic"] for s in states])
+    internal = np.zeros(n)
+    dampers = np.zeros(n)
+    connectors = np.zeros(n)
+    c = 0                             # connectors in the order of their pairs
+    for i, (tag, _, _) in enumerate(states[0]["pairs"]):
+        f = np.array([s["pairs"][i][1] for s in states])
+        x = np.array([s["pairs"][i][2] for s in states])
+        w = trapezoid(f, x)
+        if tag == "internal":
+            internal += w
+        elif tag == "damping":
+            dampers += w
+        else:
+            pe = np.array([s["potential"][c] for s in states])
+            c += 1
+            if np.any(pe):
+                elastic += pe
+                dampers += w - (pe - pe[0])
+            else:
+                connectors += w
+    external = np.zeros(n)
+    for i in range(len(states[0]["loads"])):
+        f = np.array([np.atleast_1d(s["loads"][i][0]) for s in states])
+        if states[0]["loads"][i][1] is None:
+            external += power_work(np.array([s["loads"][i][2] for s in states]), t)
+        else:
+            external += trapezoid(f, np.array([np.atleast_1d(s["loads"][i][1]) for s in states]))
+    return {"kinetic": kinetic, "elastic": elastic, "internal_work": internal,
+            "damper_dissipation": dampers, "connector_work": connectors,
+            "external_work": external}
 
 
 @dataclass(frozen=True, eq=False, kw_only=True)
@@ -192,38 +285,74 @@ class EnergyBalance(ResultShape):
     ----------
     t : ndarray
         Times [s].
-    kinetic, elastic, joint_stored, joint_dissipated, external_work : ndarray
-        Kinetic energy of the bodies, elastic energy of the other objects, the joints'
-        stored and dissipated energy, and the work of the loads since the first step [J].
+    kinetic : ndarray
+        Kinetic energy of the bodies [J].
+    elastic : ndarray
+        Strain energy of reduced flexible bodies, potential energy of the springs Exudyn
+        reports it for, and of an interface's own linear springs [J].
+    internal_work : ndarray
+        Work into the internal forces of beams and generic ODE2 bodies (their strain energy
+        and internal damping together) since the first step [J].
+    damper_dissipation : ndarray
+        Energy dissipated by the model's dampers (spring-dampers, modal damping of reduced
+        bodies) since the first step [J].
+    connector_work : ndarray
+        Work into the connectors that report no potential energy (the user's own force
+        functions: stored and dissipated together) since the first step [J].
+    joint_stored, joint_dissipated : ndarray
+        The Iwan joints' stored and dissipated energy (dashpots in parallel included) [J].
+    external_work : ndarray
+        Work of the loads since the first step [J].
+    not_booked : tuple of str
+        Energies the balance cannot book (named); the balance is then not usable.
+    notes : tuple of str
+        What the solver settings say about the balance (numerical damping).
     tolerance : float
-        Largest relative error [-] of a successful balance.
+        Largest relative error [-] of a usable balance.
     """
 
     t: np.ndarray
     kinetic: np.ndarray
     elastic: np.ndarray
+    internal_work: np.ndarray
+    damper_dissipation: np.ndarray
+    connector_work: np.ndarray
     joint_stored: np.ndarray
     joint_dissipated: np.ndarray
     external_work: np.ndarray
-    tolerance: float
+    not_booked: tuple = ()
+    notes: tuple = ()
+    tolerance: float = BALANCE_TOLERANCE
+
+    _PARTS = ("kinetic", "elastic", "internal_work", "damper_dissipation", "connector_work",
+              "joint_stored", "joint_dissipated", "external_work")
 
     @property
     def total(self) -> np.ndarray:
         """Energy held or dissipated minus the external work [J] (constant when balanced)."""
-        return (self.kinetic + self.elastic + self.joint_stored + self.joint_dissipated
+        return (self.kinetic + self.elastic + self.internal_work + self.damper_dissipation
+                + self.connector_work + self.joint_stored + self.joint_dissipated
                 - self.external_work)
 
     @property
     def scale(self) -> float:
-        """The run's energy level [J]: the largest of the energies' magnitudes."""
-        parts = (self.kinetic, self.elastic, self.joint_stored, self.joint_dissipated,
-                 self.external_work)
-        return float(max(np.max(np.abs(p)) for p in parts))
+        """The joints' own energy [J], the basis of the error: the largest, over the run,
+        of their total work (stored + dissipated) and of their dissipation."""
+        w = self.joint_stored + self.joint_dissipated
+        return float(max(np.max(np.abs(w)), np.max(np.abs(self.joint_dissipated))))
+
+    @property
+    def energy_level(self) -> float:
+        """The model's largest energy [J] (for comparison; not the basis of the error)."""
+        return float(max(np.max(np.abs(getattr(self, p))) for p in self._PARTS))
 
     def error(self) -> np.ndarray:
-        """Relative balance error over time [-]: ``(total - total[0]) / scale``."""
-        scale = self.scale
-        return (self.total - self.total[0]) / scale if scale > 0 else np.zeros(len(self.t))
+        """Balance error over time [-]: ``(total - total[0]) / scale`` (``inf`` where the
+        joints did no work but the balance moved)."""
+        d = self.total - self.total[0]
+        if self.scale > 0:
+            return d / self.scale
+        return np.where(d == 0.0, 0.0, np.inf)
 
     @property
     def max_error(self) -> float:
@@ -232,31 +361,38 @@ class EnergyBalance(ResultShape):
 
     @property
     def success(self) -> bool:
-        """True when the balance closes within ``tolerance``."""
-        return bool(self.max_error <= self.tolerance)
+        """True when every energy is booked and the balance closes within ``tolerance``
+        of the joints' own energy."""
+        return bool(not self.not_booked and self.scale > 0 and self.max_error <= self.tolerance)
 
     def failure_reasons(self) -> tuple:
         if self.success:
             return ()
-        return (f"the energy balance is off by {self.max_error:.2e} of the run's energy "
-                f"(tolerance {self.tolerance:.0e}): a step too large, a damper or a "
-                "prescribed motion that is not booked",)
+        out = []
+        if self.not_booked:
+            out.append("not booked: " + "; ".join(self.not_booked))
+        if self.scale == 0:
+            out.append("the joints did no work: there is no energy of theirs to judge the "
+                       "balance against")
+        elif self.max_error > self.tolerance:
+            out.append(f"the balance is off by {self.max_error:.2e} of the joints' own energy "
+                       f"({self.scale:.4g} J; tolerance {self.tolerance:.0e}): "
+                       + ("; ".join(self.notes) if self.notes else
+                          "the step is too large (the error falls with its square)"))
+        return tuple(out)
 
     def _final(self) -> dict:
-        return {"kinetic": self.kinetic[-1], "elastic": self.elastic[-1],
-                "joint_stored": self.joint_stored[-1],
-                "joint_dissipated": self.joint_dissipated[-1],
-                "external_work": self.external_work[-1]}
+        return {p: float(getattr(self, p)[-1]) for p in self._PARTS}
 
     def _tables(self) -> list:
-        history = ("energies over time", ("t [s]", "kinetic [J]", "elastic [J]",
-                                          "joint_stored [J]", "joint_dissipated [J]",
-                                          "external_work [J]", "error [-]"),
+        cols = ("t [s]",) + tuple(f"{p} [J]" for p in self._PARTS) + ("error [-]",)
+        history = ("energies over time", cols,
                    list(zip(*(map(float, a) for a in (
-                       self.t, self.kinetic, self.elastic, self.joint_stored,
-                       self.joint_dissipated, self.external_work, self.error())))))
+                       (self.t,) + tuple(getattr(self, p) for p in self._PARTS)
+                       + (self.error(),))))))
         rows = [(k.replace("_", " "), "J", v) for k, v in self._final().items()]
-        stats = [("steps", "-", len(self.t)), ("energy level", "J", self.scale),
+        stats = [("steps", "-", len(self.t)), ("joints' own energy (scale)", "J", self.scale),
+                 ("model's energy level", "J", self.energy_level),
                  ("largest balance error", "-", self.max_error),
                  ("tolerance", "-", self.tolerance)]
         return [history, ("energies at the end", ("quantity", "unit", "value"), rows),
@@ -265,27 +401,35 @@ class EnergyBalance(ResultShape):
     def report(self) -> str:
         lines = [self.verdict(), f"Energy balance over {len(self.t)} steps, "
                  f"t = {self.t[0]:.4g} to {self.t[-1]:.4g} s"]
-        lines += table_lines([("at the end", "<20"), ("[J]", "12.5g")],
-                             [(k.replace("_", " "), v) for k, v in self._final().items()])
-        lines.append(f"  largest balance error {self.max_error:.2e} [-] of "
-                     f"{self.scale:.4g} J (tolerance {self.tolerance:.0e})")
-        lines += [f"  warning: {w}" for w in self.warnings]
+        always = ("kinetic", "joint_stored", "joint_dissipated", "external_work")
+        small = 1e-9 * self.energy_level          # the terms this model has
+        rows = [(k.replace("_", " "), v) for k, v in self._final().items()
+                if k in always or np.max(np.abs(getattr(self, k))) > small]
+        lines += table_lines([("at the end", "<20"), ("[J]", "12.5g")], rows)
+        lines.append(f"  largest balance error {self.max_error:.2e} [-] of the joints' own "
+                     f"{self.scale:.4g} J (tolerance {self.tolerance:.0e}; the model holds up "
+                     f"to {self.energy_level:.4g} J)")
+        for text in self.not_booked:
+            lines += wrap(f"  not booked: {text}", indent="    ")
+        for text in self.notes + tuple(self.warnings):
+            lines += wrap(f"  note: {text}", indent="    ")
         return "\n".join(lines)
 
     def to_dict(self) -> dict:
         return {"success": self.success, "max_error": self.max_error, "scale": self.scale,
-                "tolerance": self.tolerance, "n_steps": len(self.t),
-                "final": {k: float(v) for k, v in self._final().items()},
+                "energy_level": self.energy_level, "tolerance": self.tolerance,
+                "n_steps": len(self.t), "final": self._final(),
+                "not_booked": list(self.not_booked), "notes": list(self.notes),
                 "warnings": list(self.warnings)}
 
     def plot(self, ax=None) -> list:
         (a,) = panels(ax, 1)
         out = []
-        for name in ("kinetic", "elastic", "joint_stored", "joint_dissipated", "external_work"):
-            out += a.plot(self.t, getattr(self, name), label=name.replace("_", " "))
+        for name in self._PARTS:
+            if np.any(getattr(self, name)):
+                out += a.plot(self.t, getattr(self, name), label=name.replace("_", " "))
         out += a.plot(self.t, self.total, "k--", label="balance")
         a.set_xlabel("t [s]")
         a.set_ylabel("energy [J]")
         a.legend(fontsize="small")
         return out
-

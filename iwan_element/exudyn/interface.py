@@ -194,7 +194,9 @@ class IwanInterface:
         return linear_energy(self._mbs, self._pairs, self._stiffness)
 
     def reset(self) -> None:
-        """Return every joint to its virgin state and clear the records (for a new run)."""
+        """Return every joint to its virgin state and clear the records; energy recorders
+        holding the interface start again. A solve that starts before the last accepted
+        time does this by itself (see :meth:`IwanConnector.reset`)."""
         if self._route == "python":
             for c in self._connectors:
                 c.reset()
@@ -209,6 +211,7 @@ class IwanInterface:
         self._t_acc = -math.inf
         if self._dispatcher is not None:
             self._dispatcher.last_t = math.nan
+            self._dispatcher.joint_reset(self)
 
     def __repr__(self) -> str:
         return (f"IwanInterface(n_points={self.n_points}, kind={self._kind!r}, "
