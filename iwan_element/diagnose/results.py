@@ -9,6 +9,7 @@ import numpy as np
 from ..core.serialize import json_safe
 from ..effects import EFFECTS
 from ..core.result_shape import ResultShape, panels, unit_label, value_stderr, wrap
+from .probabilities import Probable
 
 __all__ = ["Diagnosis"]
 
@@ -31,7 +32,7 @@ def _verdict_lines(word: str, result) -> list:
 
 
 @dataclass(frozen=True, eq=False)
-class Diagnosis(ResultShape):
+class Diagnosis(Probable, ResultShape):
     """What the four-parameter Iwan fit misses in a test record, and the augmented model.
 
     Attributes
@@ -82,6 +83,12 @@ class Diagnosis(ResultShape):
         Test statistics (JSON-safe).
     failures : tuple of str
         Why ``success`` is False, in a tester's words.
+    explanations : tuple of Explanation
+        Every explanation the diagnosis fitted (the plain joint, each single effect, each
+        stack fitted on the way) with its evidence and posterior probability, most probable
+        first (:mod:`~iwan_element.diagnose.probabilities`); the named effects are the
+        first. ``probabilities`` and ``effect_probability(name)`` read them, and
+        ``averaged_band`` predicts with them.
     """
 
     plot_panels = 2
@@ -109,6 +116,7 @@ class Diagnosis(ResultShape):
     F: np.ndarray
     details: dict = field(default_factory=dict)
     failures: tuple = ()
+    explanations: tuple = ()
 
     @property
     def params(self):
@@ -130,6 +138,7 @@ class Diagnosis(ResultShape):
             "misfit": self.misfit, "steps": list(self.steps), "untestable": dict(self.untestable),
             "warnings": list(self.warnings), "base_fit": self.base_fit.to_dict(),
             "fit": self.fit.to_dict(), "model": _describe(self.model), "details": self.details,
+            "probabilities": self.probabilities_dict(),
         })
 
     def report(self) -> str:
@@ -176,7 +185,15 @@ class Diagnosis(ResultShape):
                          f"beta={q.beta:.4f}")
         else:
             lines.append("  named: none")
+        lines += self.probability_lines()
+        rule = tuple(d.get("rule_named", self.effects))
+        if set(rule) != set(self.effects):
+            lines.append(f"    (the stepwise rule alone names {' + '.join(rule) or 'nothing'})")
         return "\n".join(lines + _verdict_lines("error", self))
+
+    def _tables(self) -> list:
+        base = super()._tables()
+        return base[:1] + self.probability_tables() + base[1:]
 
     def plot(self, ax=None):
         """Data, base fit and augmented fit (force-displacement, mm and kN) and the residual

@@ -52,6 +52,12 @@ class ParamSpec:
     open_range : bool
         True when the ends of ``[lower, upper]`` are excluded (e.g. an asymmetry of +-1
         would leave one direction without friction).
+    prior : tuple of float or None
+        The prior of the parameter in the diagnosis' model probabilities
+        (:mod:`iwan_element.diagnose.probabilities`): uniform over this range of the
+        fitting variable (the same units as ``fit_bounds``, inside them), stated with the
+        effect as its physical range in the record's own scales (e.g. a gap of up to half
+        the largest stroke). ``None``: the whole of ``fit_bounds``.
     """
 
     name: str
@@ -66,6 +72,19 @@ class ParamSpec:
     fit_bounds: tuple = (0.0, 1.0)
     fit_starts: tuple = (0.0,)
     open_range: bool = False
+    prior: tuple | None = None
+
+    def __post_init__(self):
+        lo, hi = self.fit_bounds
+        if self.prior is not None and not (lo <= self.prior[0] < self.prior[1] <= hi):
+            raise ValueError(f"prior of {self.name!r} must be a range inside fit_bounds "
+                             f"{self.fit_bounds}, got {self.prior}")
+
+    @property
+    def prior_range(self) -> tuple:
+        """``(low, high)`` of the uniform prior in fitting units (``prior`` or
+        ``fit_bounds``)."""
+        return tuple(float(x) for x in (self.prior or self.fit_bounds))
 
 
 def _find_zero(trial, a: float, Fa: float, b: float, Fb: float, *, rtol: float = 1e-13,

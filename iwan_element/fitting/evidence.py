@@ -1,0 +1,298 @@
+"""The evidence (marginal likelihood) of a fitted least-squares model, by the Laplace
+approximation on a box prior, and posterior model probabilities from evidences
+(docs/fitting.md section 6, docs/diagnosis.md "How sure is the diagnosis").
+
+A model with parameters ``theta`` (``k`` of them), noise-normalised residual ``r(theta)``
+(residual over the noise standard deviation) and ``chi2 = |r|^2`` has the likelihood
+``L = exp(-chi2 / (2 tau))`` on ``n / tau`` effective independent samples (``tau``: the
+noise's correlation time in samples), up to a constant that is the same for every model of
+the same data. With a uniform prior on the box ``lower <= theta <= upper`` its evidence is
+
+``Z = (1 / V) int_box L(theta) dtheta``,  ``V`` the box's volume.
+
+The Laplace approximation (MacKay 2003, *Information Theory, Inference, and Learning
+Algorithms*, ch. 27-28; Beck and Yuen 2004, J. Eng. Mech. 130:192-203) expands ``chi2``
+to second order about the fitted ``theta*`` with the Gauss-Newton Hessian ``J^T J``
+(``J = dr/dtheta``) **and its gradient** ``2 J^T r``: at a bound of the box the fitted value
+is a constrained optimum whose gradient does not vanish, and the quadratic's own optimum lies
+outside the box. The Gaussian is then integrated over the box (a truncated multivariate
+normal, :func:`scipy.stats.multivariate_normal.cdf` over the parameters whose Gaussian
+reaches a bound), so an effect fitted at zero size (its parameter at the bound) gets the
+half-Gaussian (or less) it has, not a whole one. For a model linear in ``theta`` this is
+exact (tests/test_evidence.py checks it against the closed form and a quadrature). A
+direction the data do not determine (a singular ``J^T J``) integrates to the box's width
+along it: the Occam factor of a parameter the data say nothing about is 1.
+
+What it does not do: a likelihood that is not quadratic over its posterior's width (a force
+that changes only to second order in a parameter near its bound, a posterior with two
+modes). :mod:`iwan_element.diagnose.nested` checks such cases by nested sampling.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.special import log_ndtr
+from scipy.stats import multivariate_normal
+
+from ..core.validation import check_scalar, finite_array
+
+__all__ = ["Evidence", "laplace_evidence", "posterior_probabilities"]
+
+#: Ridge added to the box-scaled Hessian (units: box widths^-2): a direction the data do not
+#: determine is a Gaussian of 1000 box widths, whose box mass is then computed exactly.
+RIDGE = 1e-6
+#: A parameter whose Gaussian is farther than this many standard deviations from both ends
+#: of its box is not truncated (its box mass is 1 to 1e-9).
+REACH = 6.0
+
+
+@dataclass(frozen=True, eq=False)
+class Evidence:
+    """Result of :func:`laplace_evidence`.
+
+    Attributes
+    ----------
+    log_evidence : float
+        ``ln Z`` [-], without the constant ``-(n/2) ln(2 pi sigma^2)`` common to every model
+        of the same data (differences between models are what count).
+    log_likelihood : float
+        ``-chi2 / (2 tau)`` at the fitted parameters.
+    log_occam : float
+        ``log_evidence - log_likelihood``: the Occam factor, the fraction of the prior box
+        the data allow, with the gain of the quadratic's optimum beyond a bound.
+    covariance : ndarray, shape (k, k)
+        Posterior covariance of ``theta`` in the Gaussian approximation, ``(J^T J / tau)^-1``
+        (with the ridge along directions the data do not determine).
+    truncated : tuple of int
+        Parameters whose Gaussian reaches a bound of the box (integrated as truncated).
+    """
+
+    log_evidence: float
+    log_likelihood: float
+    log_occam: float
+    covariance: np.ndarray
+    truncated: tuple
+
+
+def laplace_evidence(J, r, theta, lower, upper, *, tau: float = 1.0,
+                     chi2_at=None) -> Evidence:
+    """Laplace-approximated evidence of a least-squares model on a uniform box prior.
+
+    Parameters
+    ----------
+    J : array_like, shape (n, k)
+        Jacobian of the noise-normalised residual ``r`` in ``theta`` at the fit.
+    r : array_like, shape (n,)
+        Noise-normalised residual at the fit (residual over the noise std [-]).
+    theta : array_like, shape (k,)
+        Fitted parameters, inside the box.
+    lower, upper : array_like, shape (k,)
+        The prior box (finite, ``upper > lower``), in the units of ``theta``.
+    tau : float, keyword-only
+        Correlation time of the residual [samples], ``>= 1``: the likelihood is
+        ``exp(-chi2 / (2 tau))``.
+    chi2_at : callable, optional, keyword-only
+        ``chi2_at(theta) -> chi2`` (the model's noise-normalised chi-square). When given,
+        each parameter fitted **at a bound** of the box is integrated numerically along its
+        profile line instead (:func:`_line_integral`): the likelihood of an effect fitted at
+        zero size is often not a Gaussian in its parameter (a force that changes only to
+        second order in it, a Jacobian column that vanishes there), where the Gaussian
+        would call the parameter undetermined and give it no Occam penalty. "Near a bound":
+        within :data:`NEAR` of the box's width, or within 3 Gaussian standard deviations.
+
+    Returns
+    -------
+    Evidence
+
+    Raises
+    ------
+    ValueError
+        Shapes that do not match, a box that is not finite or empty, ``theta`` outside it.
+    """
+    r = finite_array("r", r, ndim=1)
+    theta = finite_array("theta", theta, ndim=1, min_size=0)
+    k = theta.size
+    J = finite_array("J", J, ndim=None, min_size=0).reshape(r.size, k)
+    lo = finite_array("lower", lower, ndim=1, min_size=0)
+    hi = finite_array("upper", upper, ndim=1, min_size=0)
+    if lo.size != k or hi.size != k or not np.all(hi > lo):
+        raise ValueError("lower and upper must have one finite entry per parameter, "
+                         "upper > lower")
+    width = hi - lo
+    if np.any(theta < lo - 1e-9 * width) or np.any(theta > hi + 1e-9 * width):
+        raise ValueError("theta must lie inside the box [lower, upper]")
+    tau = check_scalar("tau", tau, low=1.0)
+    log_like = -0.5 * float(r @ r) / tau
+    if k == 0:
+        return Evidence(log_like, log_like, 0.0, np.zeros((0, 0)), ())
+    Ju = J * width / math.sqrt(tau)              # box units: u = (theta - lower) / width
+    H = Ju.T @ Ju + RIDGE * np.eye(k)
+    g = Ju.T @ (r / math.sqrt(tau))              # chi2/(2 tau) ~ c + g.d + d.H.d / 2
+    Hinv, logdet = _inverse(H)
+    shift = -Hinv @ g                            # the quadratic's optimum, from the fit
+    gain = 0.5 * float(g @ Hinv @ g)             # its log-likelihood above the fit's
+    centre = (theta - lo) / width + shift
+    sd = np.sqrt(np.maximum(np.diag(Hinv), 1e-300))
+    reach = (np.minimum(centre, 1.0 - centre) < REACH * sd) | (centre < 0) | (centre > 1)
+    idx = np.flatnonzero(reach)
+    log_mass = _box_mass(centre[idx], Hinv[np.ix_(idx, idx)])
+    log_gauss = 0.5 * k * math.log(2.0 * math.pi) - 0.5 * logdet
+    log_occam = gain + log_gauss + log_mass
+    cov = Hinv * np.outer(width, width)
+    if chi2_at is not None:
+        dist = np.minimum(theta - lo, hi - theta) / width
+        near = np.flatnonzero((dist < NEAR) | (dist < 3.0 * sd))
+        if near.size:
+            return _with_lines(J, r, theta, lo, hi, tau, near, chi2_at, log_like, sd * width)
+    return Evidence(log_like + log_occam, log_like, log_occam, cov, tuple(int(i) for i in idx))
+
+
+#: Steps of the line integral from the bound, as fractions of the box width (geometric,
+#: factor 2), to which steps of a sixth of the Gaussian's standard deviation around the
+#: fitted value are added.
+LINE_STEPS = np.geomspace(1e-8, 1.0, 28)
+#: A parameter this close to a bound (fraction of the box width) is integrated along its line.
+NEAR = 1e-3
+#: The line integral stops where the likelihood has fallen by this many nats.
+LINE_DEPTH = 30.0
+
+
+def _with_lines(J, r, theta, lo, hi, tau, at, chi2_at, log_like, sd) -> Evidence:
+    """The evidence with the parameters ``at`` (near a bound) integrated along their profile
+    lines from that bound across the box, and the others by the Laplace approximation
+    (:func:`laplace_evidence`); ``sd``: the Gaussian's standard deviations."""
+    k = theta.size
+    free = np.setdiff1d(np.arange(k), at)
+    inner = laplace_evidence(J[:, free], r, theta[free], lo[free], hi[free], tau=tau)
+    H = J.T @ J
+    chi0 = float(r @ r)
+    log_occam = inner.log_occam
+    cov = np.zeros((k, k))
+    cov[np.ix_(free, free)] = inner.covariance
+    for i in at:
+        d = np.zeros(k)
+        d[i] = 1.0 if theta[i] - lo[i] <= hi[i] - theta[i] else -1.0
+        if free.size:                    # the others follow their regression on theta_i
+            Hff = H[np.ix_(free, free)] + 1e-12 * np.diag(np.diag(H)[free] + 1e-300)
+            d[free] = -np.linalg.solve(Hff, H[free, i]) * d[i]
+        bound = lo[i] if d[i] > 0 else hi[i]
+        t_fit = abs(theta[i] - bound)
+        origin = theta - t_fit * d              # the line through the fit, from the bound
+        mean, second, log_int = _line_integral(chi2_at, origin, d, i, lo, hi, tau, chi0,
+                                               t_fit, sd[i])
+        log_occam += log_int - math.log(hi[i] - lo[i])
+        cov[i, i] = max(second - mean * mean, 0.0)
+    return Evidence(log_like + log_occam, log_like, log_occam, cov,
+                    tuple(int(i) for i in inner.truncated) + tuple(int(i) for i in at))
+
+
+def _line_integral(chi2_at, theta, d, i, lo, hi, tau, chi0, t_fit, sd):
+    """``(mean, second moment, ln integral)`` of ``exp(-(chi2(theta + t d) - chi0)/(2 tau))``
+    over ``t`` from 0 to the box's width along ``d`` (the moving parameter's; the others
+    clipped to the box): geometric steps (:data:`LINE_STEPS`), each piece integrated as
+    an exponential between its ends (exact for an exponential decay), stopped
+    :data:`LINE_DEPTH` nats down; ``i``: the moving parameter."""
+    w = hi[i] - lo[i]
+    grid = w * LINE_STEPS
+    if t_fit > 0 and sd < w:
+        grid = np.concatenate([grid, t_fit + sd * np.linspace(-8.0, 8.0, 49)])
+    grid = np.unique(np.concatenate([[0.0], np.clip(grid, 0.0, w)]))
+    ts, fs = [], []                          # t, log integrand
+    for t in grid:
+        th = np.clip(theta + t * d, lo, hi)
+        ts.append(t)
+        fs.append(-0.5 * (float(chi2_at(th)) - chi0) / tau)
+        if t > t_fit and fs[-1] < max(fs) - LINE_DEPTH:
+            break
+    ts, fs = np.array(ts), np.array(fs)
+    fs = np.where(np.isfinite(fs), fs, -1e300)
+    top = fs.max()
+    total = m1 = m2 = 0.0
+    for a, b, fa, fb in zip(ts[:-1], ts[1:], fs[:-1] - top, fs[1:] - top):
+        h = b - a
+        s = (fb - fa) / h                    # log slope of the piece
+        ea, eb = math.exp(fa), math.exp(fb)
+        if abs(s * h) < 1e-6:                # flat: the trapezoid
+            i0, i1, i2 = h * 0.5 * (ea + eb), h * 0.5 * (a * ea + b * eb), \
+                h * 0.5 * (a * a * ea + b * b * eb)
+        else:                                # int exp(fa + s (t - a)) t^j dt, j = 0, 1, 2
+            i0 = (eb - ea) / s
+            i1 = (b * eb - a * ea) / s - i0 / s
+            i2 = (b * b * eb - a * a * ea) / s - 2.0 * i1 / s
+        total += i0
+        m1 += i1
+        m2 += i2
+    if not total > 0:
+        return 0.0, 0.0, -math.inf
+    return m1 / total, m2 / total, top + math.log(total)
+
+
+def _inverse(H):
+    """``(H^-1, ln det H)`` of a symmetric positive definite ``H`` whose diagonal may span
+    many decades (the ridge along an undetermined direction next to a well-determined one):
+    scaled to a unit diagonal first, then by its eigenvalues (no cut-off, which would drop
+    the ridge's direction)."""
+    d = np.sqrt(np.diag(H))
+    Hs = H / np.outer(d, d)
+    w, V = np.linalg.eigh(Hs)
+    w = np.maximum(w, 1e-300)
+    inv = (V / w) @ V.T / np.outer(d, d)
+    return 0.5 * (inv + inv.T), float(np.sum(np.log(w)) + 2.0 * np.sum(np.log(d)))
+
+
+def _box_mass(centre, cov) -> float:
+    """``ln P(N(centre, cov) in [0, 1]^m)``."""
+    m = centre.size
+    if m == 0:
+        return 0.0
+    sd = np.sqrt(np.diag(cov))
+    a, b = (0.0 - centre) / sd, (1.0 - centre) / sd
+    if m == 1:
+        return float(_log_interval(a[0], b[0]))
+    corr = cov / np.outer(sd, sd)
+    if np.max(np.abs(corr - np.eye(m))) < 1e-3:  # independent: one interval each
+        return float(sum(_log_interval(x, y) for x, y in zip(a, b)))
+    mvn = multivariate_normal(mean=np.zeros(m), cov=corr, allow_singular=True,
+                              seed=np.random.default_rng(0), abseps=1e-7, releps=1e-4)
+    p = float(mvn.cdf(b, lower_limit=a))
+    if not p > 0:                     # below the integrator's resolution: the independent bound
+        return float(sum(_log_interval(x, y) for x, y in zip(a, b)))
+    return math.log(p)
+
+
+def _log_interval(a: float, b: float) -> float:
+    """``ln (Phi(b) - Phi(a))`` for ``a < b``, accurate in either tail."""
+    if a > 0:                          # both in the upper tail: use the lower by symmetry
+        a, b = -b, -a
+    lb, la = float(log_ndtr(b)), float(log_ndtr(a))
+    return lb + math.log1p(-math.exp(min(la - lb, 0.0))) if la < lb else -math.inf
+
+
+def posterior_probabilities(log_evidence: dict, log_prior: dict | None = None) -> dict:
+    """Posterior probabilities of models from their log evidences and log prior weights.
+
+    Parameters
+    ----------
+    log_evidence : dict
+        ``{model key: ln Z}`` (same data, same constant left out).
+    log_prior : dict, optional
+        ``{model key: ln prior weight}`` (normalised here); default: equal.
+
+    Returns
+    -------
+    dict
+        ``{model key: probability}``, summing to 1, in the order of ``log_evidence``.
+    """
+    if not log_evidence:
+        raise ValueError("log_evidence must hold at least one model")
+    keys = list(log_evidence)
+    lp = np.array([log_evidence[k] + (0.0 if log_prior is None else log_prior[k])
+                   for k in keys], float)
+    if not np.any(np.isfinite(lp)):
+        raise ValueError("no model has a finite log evidence")
+    lp = np.where(np.isfinite(lp), lp, -np.inf)
+    w = np.exp(lp - lp.max())
+    w /= w.sum()
+    return {k: float(p) for k, p in zip(keys, w)}
