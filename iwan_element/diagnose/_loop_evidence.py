@@ -89,7 +89,9 @@ def loop_evaluator(sigma: float, span: float):
             finally:
                 model.start = s0
             return float(res @ res) / sigma ** 2
-        return J / sigma, r / sigma, theta, lo, hi, chi2_at
+        specs = [None] * 3 + [sp for nm in stack for sp in EFFECTS[nm].specs]
+        specs += [None] * (theta.size - len(specs))
+        return J / sigma, r / sigma, theta, lo, hi, chi2_at, specs
     return evaluate
 
 
@@ -129,3 +131,37 @@ def bounds_ok(stack, theta) -> bool:
 
 
 __all__ += ["member_physical", "bounds_ok"]
+
+
+def loop_band(diag, t, u, level: float):
+    """The model-averaged force of a loop diagnosis ``diag`` on the drive ``(t, u)`` (None:
+    the record as fitted): :class:`.averaging.AveragedBand` with channel ``"force"`` [N]."""
+    from ..core.validation import check_time, finite_array
+    from .averaging import band, linear_spread, members
+    if not diag.explanations:
+        raise ValueError("this diagnosis has no probabilities (diagnose(..., "
+                         "probabilities=False)): nothing to average")
+    if u is None:
+        uj = np.asarray(diag.u, float) - float(diag.offsets["displacement"])
+        tt = None if diag.details.get("time_given") is False else np.asarray(diag.t, float)
+    else:
+        uj = finite_array("u", u, ndim=1, min_size=3)
+        tt = None if t is None else check_time(t, uj.size)
+    v = np.zeros(uj.size) if tt is None else np.gradient(uj, tt)
+    x_max, scales = diag.details["x_max"], diag.details["scales"]
+    parts = []
+    for e, w in members(diag.explanations):
+        if e.theta.size == 0:
+            continue
+
+        def predict(th, stack=e.stack):
+            return member_force(stack, th, x_max, scales, uj, v)
+        mu, sd = linear_spread(predict, e.theta, e.covariance)
+        parts.append((e.effects, w, {"force": (mu, sd, "N")}))
+    s = sum(p[1] for p in parts)
+    parts = [(a, w / s, c) for a, w, c in parts]
+    x = np.arange(uj.size, dtype=float) if tt is None else tt
+    return band(x, "time [s]" if tt is not None else "sample", parts, level)
+
+
+__all__ += ["loop_band"]

@@ -111,7 +111,7 @@ class LoopSelection:
 def diagnose(t, u, F, *, candidates=None, max_effects: int = 3, noise: float | None = None,
              alpha: float = 1e-3, ambiguity: float = 10.0, max_samples: int = 1500,
              lowpass: float | None = None, seed=0, progress: bool = False,
-             effect_prior=None) -> Diagnosis:
+             effect_prior=None, probabilities: bool = True) -> Diagnosis:
     """Find what the four-parameter Iwan model misses in a displacement-driven test.
 
     See the module docstring for the procedure.
@@ -154,6 +154,10 @@ def diagnose(t, u, F, *, candidates=None, max_effects: int = 3, noise: float | N
         probabilities of the explanations (:mod:`~iwan_element.diagnose.probabilities`).
         Default ``1 - 2**(-1/K)`` for ``K`` testable candidates: even prior odds that the
         plain joint is enough.
+    probabilities : bool, keyword-only
+        Compute the explanations' probabilities (default True). False: the stepwise rule
+        alone names the effects, the single effects are fitted only where the rule needs
+        them, and ``explanations`` is empty (today's cost, for comparison).
 
     Returns
     -------
@@ -173,6 +177,7 @@ def diagnose(t, u, F, *, candidates=None, max_effects: int = 3, noise: float | N
                 ambiguity=check_scalar("ambiguity", ambiguity, low=0.0),
                 max_effects=check_int("max_effects", max_effects, 1))
     max_samples = check_int("max_samples", max_samples, 100)
+    check_effect_prior(effect_prior, cand)          # a bad prior is refused before any fit
     bar = progress_bar(progress, desc="diagnose", unit="fit")
     try:
         with one_blas_thread():          # tall, narrow least squares: threads only spin
@@ -183,9 +188,12 @@ def diagnose(t, u, F, *, candidates=None, max_effects: int = 3, noise: float | N
             nl = noise_level(rec, rec.F_raw - record_force(base, rec.uj, rec.v)[0], noise)
             shape_b, _ = base["model"].decode(base["z"])
             fitter.scales["D_ref"] = dissipation_scale(rec.ev, shape_b)
+            if not isinstance(probabilities, (bool, np.bool_)):
+                raise ValueError(f"probabilities must be True or False, got {probabilities!r}")
             sel = select(fitter, base, rec, nl, cand, opts, fixed_noise=noise is not None,
-                         bar=bar)
-            sel = most_probable(sel, base, rec, effect_prior)
+                         bar=bar, explore=bool(probabilities))
+            if probabilities:
+                sel = most_probable(sel, base, rec, effect_prior)
             fits = final_fits(fitter, rec, base, sel.final, noise_only=sel.noise_only,
                               t_start=t_start)
             return assemble(rec, sel, fits, opts, t_start)
@@ -195,7 +203,7 @@ def diagnose(t, u, F, *, candidates=None, max_effects: int = 3, noise: float | N
 
 
 def select(fitter: StackFitter, base: dict, rec: PreparedRecord, nl: NoiseLevel, cand, opts,
-           *, fixed_noise: bool, bar=None) -> LoopSelection:
+           *, fixed_noise: bool, bar=None, explore: bool = True) -> LoopSelection:
     """The selection stage: the rule over the candidates the record can test, repeated with
     the noise re-read from the residual of the model it selected unless the noise was given
     (a large misfit leaks into the plain fit's residual and inflates the noise estimate, which
@@ -206,8 +214,8 @@ def select(fitter: StackFitter, base: dict, rec: PreparedRecord, nl: NoiseLevel,
     set_total(bar, 1 + len(testable) * (opts["max_effects"] + 1))    # base, rounds, pairs
     # a record that is noise can test no effect: the candidates are then fitted only where
     # the rule needs them (never), not for the probabilities
-    explore = not pure_noise(rec.F[rec.keep], base["ssr"] / nl.sigma ** 2, nl.sigma, nl.tau_k,
-                             nl.n_eff)
+    explore = explore and not pure_noise(rec.F[rec.keep], base["ssr"] / nl.sigma ** 2,
+                                         nl.sigma, nl.tau_k, nl.n_eff)
     for k in range(3):
         fitter.s2 = nl.sigma ** 2
         base["chi2"] = base["ssr"] / fitter.s2
@@ -237,7 +245,9 @@ def most_probable(sel: LoopSelection, base: dict, rec: PreparedRecord,
     nl = sel.noise
     fits = collect_fits(base, sel.steps)
     expl = rank(fits, tau=nl.tau_k, n_eff=nl.n_eff,
-                prior=check_effect_prior(effect_prior, sel.candidates),
+                prior=check_effect_prior(
+                    {k: v for k, v in effect_prior.items() if k in sel.candidates}
+                    if isinstance(effect_prior, dict) else effect_prior, sel.candidates),
                 evaluate=loop_evaluator(nl.sigma, float(np.ptp(rec.F)) or 1.0))
     top = expl[0]
     if sel.noise_only or key(top.stack) == key(sel.named):

@@ -161,10 +161,13 @@ def rank(fitted, *, tau: float, n_eff: float, prior: dict, evaluate) -> list:
     prior : dict
         ``{effect: prior probability}`` (:func:`check_effect_prior`).
     evaluate : callable
-        ``evaluate(stack, state) -> (J, r, theta, lower, upper, chi2_at)``: the
-        noise-normalised Jacobian and residual of a fit, its variables, its prior box and
-        its chi-square as a function of the variables (for the parameters fitted at a
-        bound, :func:`~iwan_element.fitting.evidence.laplace_evidence`).
+        ``evaluate(stack, state) -> (J, r, theta, lower, upper, chi2_at, specs)``: the
+        noise-normalised Jacobian and residual of a fit, its variables, its prior box, its
+        chi-square as a function of the variables (for the parameters fitted near a
+        bound, :func:`~iwan_element.fitting.evidence.laplace_evidence`) and the
+        :class:`~iwan_element.effects.ParamSpec` of each variable (None: uniform over the
+        box), whose declared priors (:meth:`~iwan_element.effects.ParamSpec.log_prior`) are
+        used.
 
     Returns
     -------
@@ -182,8 +185,10 @@ def rank(fitted, *, tau: float, n_eff: float, prior: dict, evaluate) -> list:
         if ll_best - ll > NEGLIGIBLE:
             rows[k] = (stack, chi2, q, ll, math.nan, np.zeros(0), np.zeros((0, 0)))
             continue
-        J, r, theta, lo, hi, chi2_at = evaluate(stack, state)
-        ev = laplace_evidence(J, r, np.clip(theta, lo, hi), lo, hi, tau=ts, chi2_at=chi2_at)
+        J, r, theta, lo, hi, chi2_at, specs = evaluate(stack, state)
+        log_prior, knots = spec_prior(specs, lo, hi)
+        ev = laplace_evidence(J, r, np.clip(theta, lo, hi), lo, hi, tau=ts, chi2_at=chi2_at,
+                              log_prior=log_prior, prior_knots=knots)
         rows[k] = (stack, chi2, q, ll, ev.log_occam, np.clip(theta, lo, hi), ev.covariance)
     occ = [v[4] for v in rows.values() if math.isfinite(v[4])]
     floor = min(occ) if occ else 0.0            # an unevaluated one: no better than the worst
@@ -195,6 +200,22 @@ def rank(fitted, *, tau: float, n_eff: float, prior: dict, evaluate) -> list:
                        probability=post[k], theta=v[5], covariance=v[6])
            for k, v in rows.items()]
     return sorted(out, key=lambda e: -e.probability)
+
+
+def spec_prior(specs, lo, hi):
+    """``(log_prior(theta), knots)`` for :func:`~iwan_element.fitting.evidence.laplace_evidence`
+    from each variable's ParamSpec (None: uniform over ``[lo, hi]``)."""
+    uniform = -np.log(np.asarray(hi, float) - np.asarray(lo, float))
+    knots = np.array([np.nan if sp is None or sp.neutral is None else float(sp.neutral)
+                      for sp in specs])
+
+    def log_prior(th):
+        out = uniform.copy()
+        for j, sp in enumerate(specs):
+            if sp is not None:
+                out[j] = float(sp.log_prior(th[j]))
+        return out
+    return log_prior, knots
 
 
 def effect_probability(probabilities: dict, name: str) -> float:

@@ -195,6 +195,29 @@ class Diagnosis(Probable, ResultShape):
         base = super()._tables()
         return base[:1] + self.probability_tables() + base[1:]
 
+    def averaged_band(self, t=None, u=None, *, level: float = 0.95):
+        """The force predicted with the doubt about the model: every probable explanation's
+        fitted model weighted by its probability, each with its parameters' posterior
+        covariance (:mod:`~iwan_element.diagnose.averaging`).
+
+        Parameters
+        ----------
+        t, u : array_like, shape (n,), optional
+            Time [s] and displacement [m] from the joint's rest position of the drive to
+            predict; default the record as fitted. The fitted starting state and force
+            offset are kept.
+        level : float, keyword-only
+            Probability of the band, in (0, 1).
+
+        Returns
+        -------
+        AveragedBand
+            Channel ``"force"`` [N]: ``mean``, ``std``, ``lower``, ``upper``; the members
+            and their weights.
+        """
+        from ._loop_evidence import loop_band
+        return loop_band(self, t, u, level)
+
     def plot(self, ax=None):
         """Data, base fit and augmented fit (force-displacement, mm and kN) and the residual
         before and after against time.

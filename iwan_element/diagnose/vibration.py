@@ -32,7 +32,8 @@ from ..identify.units import check_damping_ratio, check_frequency_ratio
 from ..core.serialize import json_safe
 from ..fitting import covariance
 from .vibration_result import VibrationDiagnosis
-from .selection import criterion_text, stepwise_select
+from .selection import criterion_text, misfit_p, stepwise_select
+from .probabilities import check_effect_prior, key, rank
 
 __all__ = ["diagnose_vibration", "vibration_candidates"]
 
@@ -249,7 +250,7 @@ def diagnose_vibration(amplitude, frequency=None, damping_ratio=None, *, predict
                        frequency_uncertainty=None, damping_ratio_uncertainty=None,
                        predicted_zeta0: float = 0.0, alpha: float = 1e-3,
                        ambiguity: float = 10.0, max_effects: int = 2,
-                       between_tests: bool = False) -> VibrationDiagnosis:
+                       between_tests: bool = False, effect_prior=None) -> VibrationDiagnosis:
     """Compare measured and predicted amplitude-dependent frequency and damping; name what the
     jointed model misses (see the module docstring).
 
@@ -288,6 +289,9 @@ def diagnose_vibration(amplitude, frequency=None, damping_ratio=None, *, predict
         effect whose modal form is a constant floor (viscous damping) cannot be told from a
         between-test difference of the linear damping and is not tested. Default False (same
         test, or a synthetic curve).
+    effect_prior : float or dict, optional, keyword-only
+        Prior probability that each candidate effect is present, as in
+        :func:`~iwan_element.diagnose` (default: even prior odds for the plain prediction).
 
     Returns
     -------
@@ -337,26 +341,82 @@ def diagnose_vibration(amplitude, frequency=None, damping_ratio=None, *, predict
                 "q": len(EFFECTS[name].modal_specs), "error": vib.error(names, res.x)}
 
     base = {"names": (), "chi2": chi_b, "q": 0, "state": z_b}
+    prior = check_effect_prior(effect_prior, cands)
     sel = stepwise_select(fit_candidate, cands, base, tau=1.0, n_eff=2.0 * n,
-                          alpha=alpha, max_effects=max_effects, ambiguity=ambiguity)
+                          alpha=alpha, max_effects=max_effects, ambiguity=ambiguity,
+                          first_step=True)
     # never name a set of effects that leaves the unweighted mismatch higher than before (by
     # more than a tenth of the noise: a hidden frequency effect changes the damping-dominated
     # unweighted mismatch by less than the damping noise's own scatter)
     tol = 0.1 * math.sqrt(0.5 * (sf ** 2 + sz ** 2))
-    while sel.named and vib.error(sel.final["names"], sel.final["state"]) > err_b + tol:
+    fits = _collect(base, sel.steps)
+    raises = {k for k, f in fits.items() if k and vib.error(f[0], f[3]) > err_b + tol}
+    expl = rank({k: f for k, f in fits.items() if k not in raises}, tau=1.0, n_eff=2.0 * n,
+                prior=prior, evaluate=lambda stack, z: _evaluate(vib, stack, z))
+    rule_named = tuple(sel.named)
+    if sel.named and key(sel.named) in raises:
         warns.append(f"{' + '.join(sel.named)} lowers the noise-weighted misfit but raises the "
                      "mismatch; not named")
-        sel.named, sel.ambiguous = [], ()
-        sel.final = base
-        sel.p_after = sel.p_before
+    for k in sorted(raises - {key(sel.named)}):
+        if fits[k][1] < min(f[1] for kk, f in fits.items() if kk not in raises):
+            warns.append(f"{' + '.join(k)} lowers the noise-weighted misfit but raises the "
+                         "mismatch; not considered")
+    top = expl[0]
+    if key(top.stack) != key(sel.named):
+        f = fits[top.effects]
+        sel.named, sel.ambiguous = list(top.stack), ()
+        sel.final = {"names": f[0], "chi2": f[1], "q": f[2] - vib.nn, "state": f[3]}
+        sel.p_after = misfit_p(f[1], 1.0, 2.0 * n, f[2] - vib.nn)
     if vib.nn:                          # where: what is left after the between-test offsets
         f_b, z_b_curve = vib.curves((), z_b)
         rf0, rz0 = np.log(fm / f_b), np.log(zm / z_b_curve)
     return _vib_result(vib, sel, chi_b, err_b, rf0, rz0, warns, alpha, f"{src_f}; {src_z}",
-                       cands)
+                       cands, tuple(expl), rule_named)
 
 
-def _vib_result(vib, sel, chi_b, err_b, rf0, rz0, warns, alpha, noise_from, cands):
+def _collect(base, steps) -> dict:
+    """``{key: (stack, chi2, n_params, z)}``: the best fit of each explanation fitted."""
+    out = {(): ((), float(base["chi2"]), int(base["state"].size), base["state"])}
+    for st in steps:
+        for r in st["rows"]:
+            k = key(r["names"])
+            if k not in out or r["chi2"] < out[k][1]:
+                out[k] = (tuple(r["names"]), float(r["chi2"]), int(r["state"].size), r["state"])
+    return out
+
+
+def _jacobian(vib, names, z):
+    """Forward-difference Jacobian of the noise-normalised residual in ``z``."""
+    h = 1e-6 * np.maximum(np.abs(z), 1e-3)
+    r0 = vib.resid(names, z)
+    J = np.empty((r0.size, z.size))
+    for j in range(z.size):
+        zz = z.copy()
+        zz[j] += h[j]
+        J[:, j] = (vib.resid(names, zz) - r0) / h[j]
+    return J, r0
+
+
+def _evaluate(vib, names, z):
+    """What :func:`.probabilities.rank` needs of a vibration fit: Jacobian, residual,
+    variables, prior box (the nuisances' fit bounds, each effect variable's declared prior
+    range) and the chi-square as a function of the variables."""
+    J, r0 = _jacobian(vib, names, z)
+    specs = [s for nm in names for s in EFFECTS[nm].modal_specs]
+    lo = np.array([s.prior_range[0] for s in specs])
+    hi = np.array([s.prior_range[1] for s in specs])
+    if vib.nn:
+        lo = np.concatenate([vib.nuisance_bounds[0], lo])
+        hi = np.concatenate([vib.nuisance_bounds[1], hi])
+
+    def chi2_at(th):
+        r = vib.resid(names, th)
+        return float(r @ r) if np.all(np.isfinite(r)) else math.inf
+    return J, r0, np.asarray(z, float), lo, hi, chi2_at, [None] * vib.nn + specs
+
+
+def _vib_result(vib, sel, chi_b, err_b, rf0, rz0, warns, alpha, noise_from, cands,
+                explanations=(), rule_named=()):
     names, z = sel.final["names"], sel.final["state"]
     params = vib.decode(names, z)
     f_new, z_new = vib.curves(names, z)
@@ -382,7 +442,8 @@ def _vib_result(vib, sel, chi_b, err_b, rf0, rz0, warns, alpha, noise_from, cand
                "damping_error_after": float(np.sqrt(np.mean(np.log(vib.zm / z_new) ** 2))),
                "stderr": dict(zip((f"{nm}.{sp.name}" for nm in names
                                    for sp in EFFECTS[nm].modal_specs), se)),
-               "at_bound": at_bound}
+               "at_bound": at_bound, "rule_named": list(rule_named),
+               "refs": dict(vib.refs), "nuisances": vib.nn}
     if vib.nn:
         df, dz = vib.nuisance(z)
         details["between_tests"] = {
@@ -398,7 +459,8 @@ def _vib_result(vib, sel, chi_b, err_b, rf0, rz0, warns, alpha, noise_from, cand
         damping_ratio_noise=vib.sz, amplitude=ro(vib.X), frequency=ro(vib.fm), damping_ratio=ro(vib.zm),
         predicted_frequency=ro(vib.fp), predicted_damping_ratio=ro(vib.zp), model_frequency=ro(f_new),
         model_damping_ratio=ro(z_new), steps=tuple(json_safe(s) for s in steps), warnings=tuple(warns),
-        details=json_safe(details), covariance=None if cov is None else ro(cov))
+        details=json_safe(details), covariance=None if cov is None else ro(cov),
+        explanations=explanations)
 
 
 def _at_upper_bound(vib, names, z):

@@ -168,7 +168,7 @@ class MacroslipOnset(JenkinsBank):
 
     effect = "macroslip_onset"
     specs = (ParamSpec("k_2", "N/m", "stiffness of the patch that slides between u_s and "
-                       "2 u_s", fs_power=1, ref="u_max", fit_bounds=(0.0, 5.0), prior=(0.0, 5.0),
+                       "2 u_s", fs_power=1, ref="u_max", fit_bounds=(0.0, 5.0), prior=(0.0, 5.0), neutral=0.0,
                        fit_starts=(0.0, 0.3, 1.0)),
              ParamSpec("u_s", "m", "slip displacement at which the patch starts to slide",
                        lower=0.0, default=None, ref="u_max", ref_power=-1,
@@ -179,7 +179,7 @@ class MacroslipOnset(JenkinsBank):
              )
     modal_specs = (ParamSpec("kappa_2", "1/s^2", "stiffness over modal mass that slides "
                              "between X_s and 2 X_s", ref="omega2_ref", ref_power=-1,
-                             fit_bounds=(0.0, 0.3), prior=(0.0, 0.3),
+                             fit_bounds=(0.0, 0.3), prior=(0.0, 0.3), neutral=0.0,
                              fit_starts=(0.0, 0.01, 0.05, 0.003, 0.02, 0.05, 0.02, 0.01)),
                    ParamSpec("X_s", "m", "amplitude at which the patch starts to slide",
                              ref="X_max", ref_power=-1, fit_bounds=(0.02, 1.0), prior=(0.02, 1.0),

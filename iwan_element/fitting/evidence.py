@@ -63,8 +63,10 @@ class Evidence:
         ``log_evidence - log_likelihood``: the Occam factor, the fraction of the prior box
         the data allow, with the gain of the quadratic's optimum beyond a bound.
     covariance : ndarray, shape (k, k)
-        Posterior covariance of ``theta`` in the Gaussian approximation, ``(J^T J / tau)^-1``
-        (with the ridge along directions the data do not determine).
+        Posterior covariance of ``theta`` in the Gaussian approximation, ``(J^T J / tau)^-1``,
+        each standard deviation at most the uniform box's (``width / sqrt(12)``, along a
+        direction the data do not determine); a parameter integrated along its line has
+        that line's variance (and no correlation).
     truncated : tuple of int
         Parameters whose Gaussian reaches a bound of the box (integrated as truncated).
     """
@@ -77,7 +79,7 @@ class Evidence:
 
 
 def laplace_evidence(J, r, theta, lower, upper, *, tau: float = 1.0,
-                     chi2_at=None) -> Evidence:
+                     chi2_at=None, log_prior=None, prior_knots=None) -> Evidence:
     """Laplace-approximated evidence of a least-squares model on a uniform box prior.
 
     Parameters
@@ -101,6 +103,17 @@ def laplace_evidence(J, r, theta, lower, upper, *, tau: float = 1.0,
         second order in it, a Jacobian column that vanishes there), where the Gaussian
         would call the parameter undetermined and give it no Occam penalty. "Near a bound":
         within :data:`NEAR` of the box's width, or within 3 Gaussian standard deviations.
+    log_prior : callable, optional, keyword-only
+        ``log_prior(theta) -> ndarray (k,)``: each parameter's log prior density (the prior
+        is the product of independent ones over the box, each normalised over its range).
+        Default: uniform. The density is taken at the fitted value for the Laplace part
+        (it must vary slowly over the posterior's width there) and along the line for a
+        parameter near a bound.
+    prior_knots : array_like, shape (k,), optional, keyword-only
+        Where each parameter's prior density peaks (NaN: nowhere), e.g. a log-uniform size
+        prior about the "no effect" value: a parameter whose Gaussian reaches its knot
+        (within 5 standard deviations) is integrated along its line too, with the grid
+        refined about the knot.
 
     Returns
     -------
@@ -127,6 +140,9 @@ def laplace_evidence(J, r, theta, lower, upper, *, tau: float = 1.0,
     log_like = -0.5 * float(r @ r) / tau
     if k == 0:
         return Evidence(log_like, log_like, 0.0, np.zeros((0, 0)), ())
+    # each parameter's log prior density relative to the uniform box's, as a function
+    rel = (lambda th: np.zeros(k)) if log_prior is None else \
+        (lambda th: np.asarray(log_prior(th), float) + np.log(hi - lo))
     Ju = J * width / math.sqrt(tau)              # box units: u = (theta - lower) / width
     H = Ju.T @ Ju + RIDGE * np.eye(k)
     g = Ju.T @ (r / math.sqrt(tau))              # chi2/(2 tau) ~ c + g.d + d.H.d / 2
@@ -139,13 +155,18 @@ def laplace_evidence(J, r, theta, lower, upper, *, tau: float = 1.0,
     idx = np.flatnonzero(reach)
     log_mass = _box_mass(centre[idx], Hinv[np.ix_(idx, idx)])
     log_gauss = 0.5 * k * math.log(2.0 * math.pi) - 0.5 * logdet
-    log_occam = gain + log_gauss + log_mass
-    cov = Hinv * np.outer(width, width)
+    log_occam = gain + log_gauss + log_mass + float(np.sum(rel(theta)))
+    cov = _capped(Hinv, 1.0) * np.outer(width, width)
     if chi2_at is not None:
         dist = np.minimum(theta - lo, hi - theta) / width
         near = np.flatnonzero((dist < NEAR) | (dist < 3.0 * sd))
+        knots = np.full(k, np.nan) if prior_knots is None else \
+            np.asarray(prior_knots, float).reshape(k)
+        spike = np.isfinite(knots) & (np.abs(theta - np.nan_to_num(knots)) < 5.0 * sd * width)
+        near = np.flatnonzero((dist < NEAR) | (dist < 3.0 * sd) | spike)
         if near.size:
-            return _with_lines(J, r, theta, lo, hi, tau, near, chi2_at, log_like, sd * width)
+            return _with_lines(J, r, theta, lo, hi, tau, near, chi2_at, log_like, sd * width,
+                               rel, knots)
     return Evidence(log_like + log_occam, log_like, log_occam, cov, tuple(int(i) for i in idx))
 
 
@@ -159,16 +180,18 @@ NEAR = 1e-3
 LINE_DEPTH = 30.0
 
 
-def _with_lines(J, r, theta, lo, hi, tau, at, chi2_at, log_like, sd) -> Evidence:
+def _with_lines(J, r, theta, lo, hi, tau, at, chi2_at, log_like, sd, rel,
+                knots) -> Evidence:
     """The evidence with the parameters ``at`` (near a bound) integrated along their profile
     lines from that bound across the box, and the others by the Laplace approximation
-    (:func:`laplace_evidence`); ``sd``: the Gaussian's standard deviations."""
+    (:func:`laplace_evidence`); ``sd``: the Gaussian's standard deviations, ``rel``: the
+    log prior densities relative to the box's."""
     k = theta.size
     free = np.setdiff1d(np.arange(k), at)
     inner = laplace_evidence(J[:, free], r, theta[free], lo[free], hi[free], tau=tau)
     H = J.T @ J
     chi0 = float(r @ r)
-    log_occam = inner.log_occam
+    log_occam = inner.log_occam + float(np.sum(rel(theta)[free]))
     cov = np.zeros((k, k))
     cov[np.ix_(free, free)] = inner.covariance
     for i in at:
@@ -181,33 +204,56 @@ def _with_lines(J, r, theta, lo, hi, tau, at, chi2_at, log_like, sd) -> Evidence
         t_fit = abs(theta[i] - bound)
         origin = theta - t_fit * d              # the line through the fit, from the bound
         mean, second, log_int = _line_integral(chi2_at, origin, d, i, lo, hi, tau, chi0,
-                                               t_fit, sd[i])
+                                               t_fit, sd[i], rel, knots[i])
         log_occam += log_int - math.log(hi[i] - lo[i])
-        cov[i, i] = max(second - mean * mean, 0.0)
+        cov[i, i] = min(max(second - mean * mean, 0.0), (hi[i] - lo[i]) ** 2 / 12.0)
     return Evidence(log_like + log_occam, log_like, log_occam, cov,
                     tuple(int(i) for i in inner.truncated) + tuple(int(i) for i in at))
 
 
-def _line_integral(chi2_at, theta, d, i, lo, hi, tau, chi0, t_fit, sd):
-    """``(mean, second moment, ln integral)`` of ``exp(-(chi2(theta + t d) - chi0)/(2 tau))``
-    over ``t`` from 0 to the box's width along ``d`` (the moving parameter's; the others
-    clipped to the box): geometric steps (:data:`LINE_STEPS`), each piece integrated as
-    an exponential between its ends (exact for an exponential decay), stopped
-    :data:`LINE_DEPTH` nats down; ``i``: the moving parameter."""
+def _line_integral(chi2_at, theta, d, i, lo, hi, tau, chi0, t_fit, sd, rel, knot):
+    """``(mean, second moment, ln integral)`` over ``t`` of the likelihood
+    ``exp(-(chi2(theta + t d) - chi0) / (2 tau))`` times the moving parameter's prior density
+    relative to the box's (``rel``), from the bound (``t = 0``) across the box along ``d``
+    (others clipped to the box); ``i``: the moving parameter, ``t_fit`` the fit's place on
+    the line, ``sd`` its Gaussian standard deviation, ``knot`` the place of a peak of its
+    prior density (NaN: none).
+
+    The likelihood is evaluated at geometric steps from the bound (:data:`LINE_STEPS`; left
+    out when the bound is more than 10 ``sd`` away) and at 49 steps over ``t_fit +- 8 sd``,
+    stopped :data:`LINE_DEPTH` nats below its top past the fit; the log-likelihood is
+    interpolated linearly between them onto a grid that adds geometric steps about the
+    prior's peak, where the prior density is evaluated exactly; each piece is integrated as
+    an exponential between its ends (exact for an exponential decay)."""
     w = hi[i] - lo[i]
-    grid = w * LINE_STEPS
-    if t_fit > 0 and sd < w:
+    near = t_fit < 10.0 * sd
+    grid = w * LINE_STEPS if near else np.zeros(0)
+    if sd < w:
         grid = np.concatenate([grid, t_fit + sd * np.linspace(-8.0, 8.0, 49)])
-    grid = np.unique(np.concatenate([[0.0], np.clip(grid, 0.0, w)]))
-    ts, fs = [], []                          # t, log integrand
+    grid = np.unique(np.clip(np.concatenate([[0.0] if near else [], grid]), 0.0, w))
+    ts, ll = [], []
     for t in grid:
-        th = np.clip(theta + t * d, lo, hi)
         ts.append(t)
-        fs.append(-0.5 * (float(chi2_at(th)) - chi0) / tau)
-        if t > t_fit and fs[-1] < max(fs) - LINE_DEPTH:
+        ll.append(-0.5 * (float(chi2_at(np.clip(theta + t * d, lo, hi))) - chi0) / tau)
+        if not math.isfinite(ll[-1]):
+            ll[-1] = -1e300
+        if t > t_fit and ll[-1] < max(ll) - LINE_DEPTH:
             break
-    ts, fs = np.array(ts), np.array(fs)
-    fs = np.where(np.isfinite(fs), fs, -1e300)
+    ts, ll = np.array(ts), np.array(ll)
+    fine = ts
+    if math.isfinite(knot):
+        tk = abs(knot - (lo[i] if d[i] > 0 else hi[i]))
+        off = w * np.geomspace(1e-7, 1.0, 57)
+        fine = np.unique(np.concatenate([ts, np.clip(np.concatenate([tk - off, [tk], tk + off]),
+                                                     ts[0], ts[-1])]))
+    fs = np.interp(fine, ts, ll) + np.array([float(rel(np.clip(theta + t * d, lo, hi))[i])
+                                              for t in fine])
+    return _exp_pieces(fine, fs)
+
+
+def _exp_pieces(ts, fs):
+    """``(mean, second moment, ln integral)`` of ``exp(f(t))`` given at ``ts``, each piece an
+    exponential between its ends."""
     top = fs.max()
     total = m1 = m2 = 0.0
     for a, b, fa, fb in zip(ts[:-1], ts[1:], fs[:-1] - top, fs[1:] - top):
@@ -227,6 +273,15 @@ def _line_integral(chi2_at, theta, d, i, lo, hi, tau, chi0, t_fit, sd):
     if not total > 0:
         return 0.0, 0.0, -math.inf
     return m1 / total, m2 / total, top + math.log(total)
+
+
+def _capped(cov, width):
+    """``cov`` with each standard deviation at most the uniform box's, ``width / sqrt(12)``
+    (a direction the data do not determine has the prior's spread, not the ridge's)."""
+    sd = np.sqrt(np.maximum(np.diag(cov), 0.0))
+    cap = np.minimum(sd, np.asarray(width, float) / math.sqrt(12.0))
+    f = np.where(sd > 0, cap / np.where(sd > 0, sd, 1.0), 0.0)
+    return cov * np.outer(f, f)
 
 
 def _inverse(H):
