@@ -5,14 +5,16 @@ seeds than ``tests/_diagnosis_cases.py``):
 
 * **loops** (:func:`iwan_element.diagnose`): the two joints of ``bench_diagnosis.py``, three
   amplitude envelopes, a force offset; one hidden effect of the six loop candidates at a
-  size from a grid (the RMS of the force it adds, in units of the noise RMS, from 1/4 to 8:
-  from below the noise to dominant), two noise levels (0.2 % and 1 % of Fs) and two record
-  lengths (1-3 cycles of 64 samples per amplitude, 3-6 of 128); and as many records with no
+  size from a grid of 1/8 to 4 x "noticeable" (the project's unit for each diagnosis: for
+  loops the RMS of the force the effect adds is twice the noise RMS, so 1/4 to 8 x the
+  noise: from below the noise to dominant), two noise levels (0.2 % and 1 % of Fs) and two
+  record lengths (1-3 cycles of 64 samples per amplitude, 3-6 of 128); and as many records with no
   effect (the default prior gives the plain joint even odds, and so does the case mix);
 * **vibration curves** (:func:`iwan_element.diagnose_vibration`): the modal joint of
   ``bench_vibration_diagnosis.py``, curves from the time-domain elements (not the modal
   forms the diagnosis fits), one hidden effect of the four with a modal form at a size from
-  the grid (RMS change of the noise-normalised curves, 1/4 to 8 x noise), two noise levels
+  the grid (noticeable: an RMS change of the noise-normalised curves of 4, as in
+  ``bench_vibration_diagnosis.py``; so 1/2 to 16 x the noise), two noise levels
   (damping 1 % and 3 %) and two lengths (12 and 36 amplitudes); and as many without.
 
 Scored (every case):
@@ -24,14 +26,14 @@ Scored (every case):
 * the **log score** ``-ln p(truth)`` (``p`` the probability of the true explanation,
   clipped to ``[1e-3, 1 - 1e-3]``) of the probabilities and of today's yes/no answer (the
   stepwise rule: probability 1 for what it names), over all cases and in the **transition
-  zone**: hidden effects of 1/2 to 4 x the noise, where the rule's answer turns from miss
+  zone**: hidden effects of 1/4 to 2 x noticeable, where the rule's answer turns from miss
   to hit; and how many cases there the probability warned (below 0.9) where the yes/no
   answer was wrong;
 * the **cost** per record: CPU time of the diagnosis with and without the probabilities
   (``diagnose(..., probabilities=False)`` on the same loop records, ``--timing N`` of them).
 
     nice -n 10 python benchmarks/bench_diagnosis_calibration.py [--repeats 1] [--timing 12]
-        [--only loops|vibration] [--json out.json] [--stride K]
+        [--only loops|vibration] [--json out.json] [--stride K] [--nested N]
 """
 from __future__ import annotations
 
@@ -62,12 +64,13 @@ ENVELOPES = {"constant": ("steps", (0.4, 0.9, 1.7)),
 SHAPES = {"viscous_damping": ("c", {}), "pinning_stiffness": ("k_p", {"delta": 0.6}),
           "backlash": ("gap", {}), "slip_degradation": ("rate", {}),
           "asymmetric_slip": ("asymmetry", {}), "breakaway": ("ratio", {})}
-SIZES = (0.25, 0.5, 1.0, 2.0, 4.0, 8.0)          # added RMS / noise RMS
+SIZES = (0.125, 0.25, 0.5, 1.0, 2.0, 4.0)        # x noticeable
+LOOP_NOTICEABLE = 2.0                             # added force RMS / noise RMS
 LOOP_NOISE = (0.002, 0.01)                        # force noise / Fs
 #: cycles per amplitude (per envelope: constant, ramped, triangular) and samples per cycle
 LENGTHS = {"short": ({"constant": 1, "ramped": 3, "triangular": 2}, 64),
            "long": ({"constant": 3, "ramped": 6, "triangular": 4}, 128)}
-ZONE = (0.5, 4.0)                                 # the transition zone's sizes
+ZONE = (0.25, 2.0)                                # the transition zone's sizes
 VIB_P = IwanParameters(250.0, 1.8e5, -0.35, 0.5)
 VIB_NOISE = (0.01, 0.03)                          # damping noise (frequency: 1e-4)
 VIB_LENGTHS = (12, 36)
@@ -150,7 +153,8 @@ def run_loop(case, *, probabilities=True):
     if name is None:
         el = IwanJoint(p)
     else:
-        el = _element(p, name, _parameter(p, env, length, name, size * noise * p.Fs))
+        el = _element(p, name, _parameter(p, env, length, name,
+                                          size * LOOP_NOTICEABLE * noise * p.Fs))
     t, u, F = _loop_record(p, env, length, el, noise, seed)
     c0 = time.process_time()
     d = diagnose(t, u, F, probabilities=probabilities)
@@ -166,7 +170,7 @@ def run_vibration(case):
     X = np.geomspace(0.01, 1.2, n) * VIB_P.phi_max
     if n not in _VIB_BASE:
         _VIB_BASE[n] = vc.element_curve(X, VIB_P)
-    X, fm, zm, fp, zp, _ = vc.seeded_case(seed, name, size / vc.NOTICEABLE, P=VIB_P, X=X,
+    X, fm, zm, fp, zp, _ = vc.seeded_case(seed, name, size, P=VIB_P, X=X,
                                           base=_VIB_BASE[n], z_noise=z_noise)
     curve = AmplitudeCurve(X, fm, zm, frequency_std=vc.F_NOISE * fm,
                            damping_ratio_std=z_noise * zm, method="seeded")
@@ -251,6 +255,54 @@ def print_summary(s):
           f"{s['warned_where_rule_wrong']} of the {s['rule_wrong']} the rule got wrong")
 
 
+def nested_check(cases):
+    """Laplace against nested sampling (dynesty) on vibration cases: per explanation the
+    difference of the log evidences and the sampler's stated error, split into explanations
+    whose size parameter sits at its "no effect" value (within 1e-3 of the range) and the
+    others."""
+    from iwan_element.effects import EFFECTS
+    rows = []
+    for case in cases:
+        _, name, size, z_noise, n, seed = case
+        X = np.geomspace(0.01, 1.2, n) * VIB_P.phi_max
+        if n not in _VIB_BASE:
+            _VIB_BASE[n] = vc.element_curve(X, VIB_P)
+        X, fm, zm, fp, zp, _ = vc.seeded_case(seed, name, size, P=VIB_P, X=X,
+                                              base=_VIB_BASE[n], z_noise=z_noise)
+        curve = AmplitudeCurve(X, fm, zm, frequency_std=vc.F_NOISE * fm,
+                               damping_ratio_std=z_noise * zm, method="seeded")
+        d = diagnose_vibration(curve, predicted_frequency=fp, predicted_damping_ratio=zp,
+                               predicted_zeta0=vc.ZETA0, evidence="nested",
+                               nested={"rng": seed, "nlive": 200})
+        for e in d.explanations:
+            if not e.effects or not np.isfinite(e.log_evidence_nested):
+                continue
+            at_zero, k = False, 0
+            for nm in e.stack:
+                for sp in EFFECTS[nm].modal_specs:
+                    lo, hi = sp.prior_range
+                    if sp.neutral is not None and abs(e.theta[k] - sp.neutral) < 1e-3 * (hi - lo):
+                        at_zero = True
+                    k += 1
+            rows.append((name, size, e.effects, e.n_params, at_zero,
+                         e.log_evidence_laplace - e.log_evidence_nested, e.nested_error))
+    print("\nLaplace against nested sampling (vibration; ln Z difference, sampler's error):")
+    for label, sel in (("effect at zero size", [r for r in rows if r[4]]),
+                       ("effect fitted away from zero", [r for r in rows if not r[4]])):
+        if not sel:
+            continue
+        dz = np.array([r[5] for r in sel])
+        err = np.array([r[6] for r in sel])
+        within = int(np.sum(np.abs(dz) <= 3 * np.maximum(err, 0.05)))
+        print(f"  {label}: {len(sel)} explanations, median |dlnZ| {np.median(np.abs(dz)):.3f},"
+              f" max {np.max(np.abs(dz)):.3f}, within 3 errors {within}/{len(sel)}")
+        for eff in sorted({r[2] for r in sel}):
+            d_e = np.array([r[5] for r in sel if r[2] == eff])
+            print(f"    {' + '.join(eff):<20} n={d_e.size:3d} mean {d_e.mean():+.3f} "
+                  f"max |.| {np.max(np.abs(d_e)):.3f}")
+    return rows
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeats", type=int, default=1)
@@ -259,6 +311,9 @@ def main(argv=None):
     ap.add_argument("--only", choices=("loops", "vibration"))
     ap.add_argument("--json", type=Path)
     ap.add_argument("--stride", type=int, default=1, help="every STRIDE-th case (a pilot)")
+    ap.add_argument("--nested", type=int, default=0,
+                    help="vibration cases whose evidences are also computed by nested "
+                         "sampling (dynesty), Laplace against it")
     a = ap.parse_args(argv)
     t0 = time.perf_counter()
     rows, cost = [], {"with": [], "without": []}
@@ -281,6 +336,9 @@ def main(argv=None):
         print(f"{i + 1:4d}/{len(cases)} {case[0]:<9} {str(name):<18} {size:5.2f} "
               f"p(truth) {r['p_truth']:.3f} top {r['p_top']:.3f} {'ok ' if r['top_right'] else 'BAD'}"
               f" rule {'ok ' if r['rule_right'] else 'bad'} {cpu:6.2f} s", flush=True)
+    if a.nested:
+        vib = [c for c in cases if c[0] == "vibration"]
+        nested_check(vib[::max(1, len(vib) // a.nested)][:a.nested])
     loops = [c for c in cases if c[0] == "loop"]
     for case in loops[:a.timing]:
         _, cpu = run_loop(case, probabilities=False)
@@ -293,7 +351,7 @@ def main(argv=None):
             out.append(summary(sel, f"{kind} cases"))
     if zone:
         out.append(summary(zone, f"transition zone (hidden effect {ZONE[0]:g}-{ZONE[1]:g} x "
-                                 "noise)"))
+                                 "noticeable)"))
     for s in out:
         print_summary(s)
     if cost["with"]:

@@ -51,6 +51,7 @@ from .report import assemble
 from .results import Diagnosis
 from .selection import SelectionResult, misfit_p, stepwise_select
 from ._loop_evidence import collect_fits, loop_evaluator
+from ._vib_evidence import nested_options
 from .probabilities import check_effect_prior, key, rank
 
 __all__ = ["diagnose", "loop_candidates", "LoopSelection", "select"]
@@ -111,7 +112,8 @@ class LoopSelection:
 def diagnose(t, u, F, *, candidates=None, max_effects: int = 3, noise: float | None = None,
              alpha: float = 1e-3, ambiguity: float = 10.0, max_samples: int = 1500,
              lowpass: float | None = None, seed=0, progress: bool = False,
-             effect_prior=None, probabilities: bool = True) -> Diagnosis:
+             effect_prior=None, probabilities: bool = True, evidence: str = "laplace",
+             nested=None) -> Diagnosis:
     """Find what the four-parameter Iwan model misses in a displacement-driven test.
 
     See the module docstring for the procedure.
@@ -158,6 +160,12 @@ def diagnose(t, u, F, *, candidates=None, max_effects: int = 3, noise: float | N
         Compute the explanations' probabilities (default True). False: the stepwise rule
         alone names the effects, the single effects are fitted only where the rule needs
         them, and ``explanations`` is empty (today's cost, for comparison).
+    evidence : {"laplace", "nested"}, keyword-only
+        How each explanation's evidence is computed: the Laplace approximation (default),
+        or nested sampling as well (:mod:`~iwan_element.diagnose.nested`, the ``nested``
+        extra; minutes per record), which then gives the probabilities.
+    nested : dict, optional, keyword-only
+        Options of the nested sampler (``sampler``, ``nlive``, ``dlogz``, ``rng``).
 
     Returns
     -------
@@ -178,6 +186,7 @@ def diagnose(t, u, F, *, candidates=None, max_effects: int = 3, noise: float | N
                 max_effects=check_int("max_effects", max_effects, 1))
     max_samples = check_int("max_samples", max_samples, 100)
     check_effect_prior(effect_prior, cand)          # a bad prior is refused before any fit
+    nest = nested_options(evidence, nested)
     bar = progress_bar(progress, desc="diagnose", unit="fit")
     try:
         with one_blas_thread():          # tall, narrow least squares: threads only spin
@@ -193,7 +202,7 @@ def diagnose(t, u, F, *, candidates=None, max_effects: int = 3, noise: float | N
             sel = select(fitter, base, rec, nl, cand, opts, fixed_noise=noise is not None,
                          bar=bar, explore=bool(probabilities))
             if probabilities:
-                sel = most_probable(sel, base, rec, effect_prior)
+                sel = most_probable(sel, base, rec, effect_prior, nest)
             fits = final_fits(fitter, rec, base, sel.final, noise_only=sel.noise_only,
                               t_start=t_start)
             return assemble(rec, sel, fits, opts, t_start)
@@ -237,7 +246,7 @@ def select(fitter: StackFitter, base: dict, rec: PreparedRecord, nl: NoiseLevel,
 
 
 def most_probable(sel: LoopSelection, base: dict, rec: PreparedRecord,
-                  effect_prior) -> LoopSelection:
+                  effect_prior, nested=None) -> LoopSelection:
     """The probability stage: every explanation the selection fitted with its posterior
     probability (:mod:`.probabilities`), and the most probable one named (the rule's own
     answer kept in ``rule_named``). A record that is noise names nothing whatever the
@@ -248,7 +257,7 @@ def most_probable(sel: LoopSelection, base: dict, rec: PreparedRecord,
                 prior=check_effect_prior(
                     {k: v for k, v in effect_prior.items() if k in sel.candidates}
                     if isinstance(effect_prior, dict) else effect_prior, sel.candidates),
-                evaluate=loop_evaluator(nl.sigma, float(np.ptp(rec.F)) or 1.0))
+                evaluate=loop_evaluator(nl.sigma, float(np.ptp(rec.F)) or 1.0), nested=nested)
     top = expl[0]
     if sel.noise_only or key(top.stack) == key(sel.named):
         return replace(sel, explanations=tuple(expl), rule_named=tuple(sel.named))

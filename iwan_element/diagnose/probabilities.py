@@ -78,6 +78,11 @@ class Explanation:
     theta, covariance : ndarray
         Fitted variables and their posterior covariance (Laplace, model-error factor
         included); empty when not evaluated.
+    log_evidence_laplace : float
+        The Laplace evidence (equal to ``log_evidence`` unless nested sampling was asked).
+    log_evidence_nested, nested_error : float
+        The nested-sampling evidence and its standard error (:mod:`.nested`), NaN when it
+        was not asked; ``log_evidence`` is then this one.
     """
 
     effects: tuple
@@ -91,12 +96,18 @@ class Explanation:
     probability: float
     theta: np.ndarray
     covariance: np.ndarray
+    log_evidence_laplace: float = math.nan
+    log_evidence_nested: float = math.nan
+    nested_error: float = math.nan
 
     def to_dict(self) -> dict:
         return {"effects": list(self.effects), "probability": self.probability,
                 "log_evidence": self.log_evidence, "log_likelihood": self.log_likelihood,
                 "log_occam": self.log_occam, "log_prior": self.log_prior,
-                "chi2": self.chi2, "n_params": self.n_params}
+                "chi2": self.chi2, "n_params": self.n_params,
+                "log_evidence_laplace": self.log_evidence_laplace,
+                "log_evidence_nested": self.log_evidence_nested,
+                "nested_error": self.nested_error}
 
 
 def default_effect_prior(n_candidates: int) -> float:
@@ -149,7 +160,8 @@ def model_error_scale(chi2: float, tau: float, n_eff: float, q: int) -> float:
     return max(1.0, chi2 / tau / max(n_eff - q, 1.0))
 
 
-def rank(fitted, *, tau: float, n_eff: float, prior: dict, evaluate) -> list:
+def rank(fitted, *, tau: float, n_eff: float, prior: dict, evaluate,
+         nested: dict | None = None) -> list:
     """Evidences and probabilities of the fitted explanations.
 
     Parameters
@@ -168,6 +180,12 @@ def rank(fitted, *, tau: float, n_eff: float, prior: dict, evaluate) -> list:
         :class:`~iwan_element.effects.ParamSpec` of each variable (None: uniform over the
         box), whose declared priors (:meth:`~iwan_element.effects.ParamSpec.log_prior`) are
         used.
+    nested : dict, optional
+        Also compute each evaluated explanation's evidence by nested sampling
+        (:func:`.nested.nested_log_evidence` with these keyword options, e.g.
+        ``{"sampler": "dynesty", "nlive": 200, "rng": 0}``; ``"explanations"``: the keys to
+        sample, default all) and use it for the probabilities (the Laplace evidence where
+        it was not sampled).
 
     Returns
     -------
@@ -178,7 +196,10 @@ def rank(fitted, *, tau: float, n_eff: float, prior: dict, evaluate) -> list:
     s = model_error_scale(best[1], tau, n_eff, best[2])
     ts = tau * s
     lp = log_model_prior(list(fitted), prior)
-    rows = {}
+    nested = None if nested is None else dict(nested)
+    only = None if nested is None else nested.pop("explanations", None)
+    only = None if only is None else {key(k) for k in only}
+    rows, ns = {}, {}
     ll_best = -0.5 * best[1] / ts
     for k, (stack, chi2, q, state) in fitted.items():
         ll = -0.5 * chi2 / ts
@@ -188,16 +209,27 @@ def rank(fitted, *, tau: float, n_eff: float, prior: dict, evaluate) -> list:
         J, r, theta, lo, hi, chi2_at, specs = evaluate(stack, state)
         log_prior, knots = spec_prior(specs, lo, hi)
         ev = laplace_evidence(J, r, np.clip(theta, lo, hi), lo, hi, tau=ts, chi2_at=chi2_at,
-                              log_prior=log_prior, prior_knots=knots)
+                              log_prior=log_prior, prior_knots=knots,
+                              switched_off=switched_off(specs))
         rows[k] = (stack, chi2, q, ll, ev.log_occam, np.clip(theta, lo, hi), ev.covariance)
+        if nested is not None and (only is None or k in only):
+            from .nested import nested_log_evidence
+            ns[k] = nested_log_evidence(chi2_at, lo, hi, specs, tau=ts, chi2_ref=chi2,
+                                        **nested)
     occ = [v[4] for v in rows.values() if math.isfinite(v[4])]
     floor = min(occ) if occ else 0.0            # an unevaluated one: no better than the worst
     le = {k: v[3] + (v[4] if math.isfinite(v[4]) else floor) for k, v in rows.items()}
-    post = posterior_probabilities(le, lp)
+    use = dict(le)
+    if nested is not None:                      # the nested evidences decide
+        use.update({k: v[0] for k, v in ns.items()})
+    post = posterior_probabilities(use, lp)
     out = [Explanation(effects=k, stack=tuple(v[0]), chi2=float(v[1]), n_params=int(v[2]),
                        log_likelihood=float(v[3]), log_occam=float(v[4]),
-                       log_evidence=float(le[k]), log_prior=float(lp[k]),
-                       probability=post[k], theta=v[5], covariance=v[6])
+                       log_evidence=float(use[k]), log_prior=float(lp[k]),
+                       probability=post[k], theta=v[5], covariance=v[6],
+                       log_evidence_laplace=float(le[k]),
+                       log_evidence_nested=float(ns[k][0]) if k in ns else math.nan,
+                       nested_error=float(ns[k][1]) if k in ns else math.nan)
            for k, v in rows.items()]
     return sorted(out, key=lambda e: -e.probability)
 
@@ -216,6 +248,50 @@ def spec_prior(specs, lo, hi):
                 out[j] = float(sp.log_prior(th[j]))
         return out
     return log_prior, knots
+
+
+#: Points (midpoint rule over prior probability) at which an effect's other parameters are
+#: taken when its size is zero: per number of other parameters.
+OFF_POINTS = {1: 7, 2: 3}
+
+
+def switched_off(specs) -> dict:
+    """``{size index: (other indices, values)}`` for
+    :func:`~iwan_element.fitting.evidence.laplace_evidence`: an effect's parameters other
+    than its size (its first with a ``neutral`` value: a gap's drag, a pinning spring's
+    clearance, a slipping patch's onset and shape) do nothing at zero size; their values:
+    the product grid of
+    :data:`OFF_POINTS` quantiles of their declared priors. ``specs`` lists each variable's
+    ParamSpec (None for the joint's own), the effects' in declaration order."""
+    out, j = {}, 0
+    while j < len(specs):
+        sp = specs[j]
+        if sp is None:
+            j += 1
+            continue
+        group = [j]                         # one effect's variables: consecutive, its own
+        while j + len(group) < len(specs) and specs[j + len(group)] is not None and \
+                specs[j + len(group)] in _siblings(sp):
+            group.append(j + len(group))
+        sizes = [g for g in group if specs[g].neutral is not None][:1]
+        others = [g for g in group if g not in sizes]
+        if sizes and others:
+            m = OFF_POINTS.get(len(others), 2)
+            q = (np.arange(m) + 0.5) / m
+            grids = np.meshgrid(*[specs[g].prior_quantile(q) for g in others], indexing="ij")
+            out[sizes[0]] = (tuple(others), np.column_stack([g.ravel() for g in grids]))
+        j += len(group)
+    return out
+
+
+def _siblings(sp):
+    """The ParamSpecs declared with ``sp`` (of the same effect, loop or modal)."""
+    from ..effects import EFFECTS
+    for cls in EFFECTS.values():
+        for specs in (cls.specs, cls.modal_specs):
+            if any(s is sp for s in specs):
+                return specs
+    return (sp,)
 
 
 def effect_probability(probabilities: dict, name: str) -> float:

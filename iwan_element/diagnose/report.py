@@ -95,6 +95,7 @@ def _details(rec, nl, sel, opts, loc, final, fit, t_start) -> dict:
             "lowpass_reason": "rig dynamics removed before fitting" if rec.lowpass else None,
             "start_displacement": float(final.get("start", 0.0)),
             "rule_named": list(sel.rule_named), "time_given": rec.t is not None,
+            "candidates": list(sel.candidates),
             "x_max": float(rec.ev.x_max), "scales": dict(final["model"].scales),
             "start_displacement_stderr": float(math.nan if (se_s := fit.details.get(
                 "start_displacement_stderr")) is None else se_s),     # None: not determined

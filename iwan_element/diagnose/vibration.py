@@ -34,6 +34,7 @@ from ..fitting import covariance
 from .vibration_result import VibrationDiagnosis
 from .selection import criterion_text, misfit_p, stepwise_select
 from .probabilities import check_effect_prior, key, rank
+from ._vib_evidence import collect, evaluate, jacobian, nested_options
 
 __all__ = ["diagnose_vibration", "vibration_candidates"]
 
@@ -250,7 +251,8 @@ def diagnose_vibration(amplitude, frequency=None, damping_ratio=None, *, predict
                        frequency_uncertainty=None, damping_ratio_uncertainty=None,
                        predicted_zeta0: float = 0.0, alpha: float = 1e-3,
                        ambiguity: float = 10.0, max_effects: int = 2,
-                       between_tests: bool = False, effect_prior=None) -> VibrationDiagnosis:
+                       between_tests: bool = False, effect_prior=None,
+                       evidence: str = "laplace", nested=None) -> VibrationDiagnosis:
     """Compare measured and predicted amplitude-dependent frequency and damping; name what the
     jointed model misses (see the module docstring).
 
@@ -292,6 +294,12 @@ def diagnose_vibration(amplitude, frequency=None, damping_ratio=None, *, predict
     effect_prior : float or dict, optional, keyword-only
         Prior probability that each candidate effect is present, as in
         :func:`~iwan_element.diagnose` (default: even prior odds for the plain prediction).
+    evidence : {"laplace", "nested"}, keyword-only
+        How each explanation's evidence is computed: the Laplace approximation (default),
+        or nested sampling as well (:mod:`~iwan_element.diagnose.nested`, needs the
+        ``nested`` extra), which then gives the probabilities.
+    nested : dict, optional, keyword-only
+        Options of the nested sampler (``sampler``, ``nlive``, ``dlogz``, ``rng``).
 
     Returns
     -------
@@ -342,6 +350,7 @@ def diagnose_vibration(amplitude, frequency=None, damping_ratio=None, *, predict
 
     base = {"names": (), "chi2": chi_b, "q": 0, "state": z_b}
     prior = check_effect_prior(effect_prior, cands)
+    nest = nested_options(evidence, nested)
     sel = stepwise_select(fit_candidate, cands, base, tau=1.0, n_eff=2.0 * n,
                           alpha=alpha, max_effects=max_effects, ambiguity=ambiguity,
                           first_step=True)
@@ -349,10 +358,10 @@ def diagnose_vibration(amplitude, frequency=None, damping_ratio=None, *, predict
     # more than a tenth of the noise: a hidden frequency effect changes the damping-dominated
     # unweighted mismatch by less than the damping noise's own scatter)
     tol = 0.1 * math.sqrt(0.5 * (sf ** 2 + sz ** 2))
-    fits = _collect(base, sel.steps)
+    fits = collect(base, sel.steps)
     raises = {k for k, f in fits.items() if k and vib.error(f[0], f[3]) > err_b + tol}
     expl = rank({k: f for k, f in fits.items() if k not in raises}, tau=1.0, n_eff=2.0 * n,
-                prior=prior, evaluate=lambda stack, z: _evaluate(vib, stack, z))
+                prior=prior, evaluate=lambda stack, z: evaluate(vib, stack, z), nested=nest)
     rule_named = tuple(sel.named)
     if sel.named and key(sel.named) in raises:
         warns.append(f"{' + '.join(sel.named)} lowers the noise-weighted misfit but raises the "
@@ -372,47 +381,6 @@ def diagnose_vibration(amplitude, frequency=None, damping_ratio=None, *, predict
         rf0, rz0 = np.log(fm / f_b), np.log(zm / z_b_curve)
     return _vib_result(vib, sel, chi_b, err_b, rf0, rz0, warns, alpha, f"{src_f}; {src_z}",
                        cands, tuple(expl), rule_named)
-
-
-def _collect(base, steps) -> dict:
-    """``{key: (stack, chi2, n_params, z)}``: the best fit of each explanation fitted."""
-    out = {(): ((), float(base["chi2"]), int(base["state"].size), base["state"])}
-    for st in steps:
-        for r in st["rows"]:
-            k = key(r["names"])
-            if k not in out or r["chi2"] < out[k][1]:
-                out[k] = (tuple(r["names"]), float(r["chi2"]), int(r["state"].size), r["state"])
-    return out
-
-
-def _jacobian(vib, names, z):
-    """Forward-difference Jacobian of the noise-normalised residual in ``z``."""
-    h = 1e-6 * np.maximum(np.abs(z), 1e-3)
-    r0 = vib.resid(names, z)
-    J = np.empty((r0.size, z.size))
-    for j in range(z.size):
-        zz = z.copy()
-        zz[j] += h[j]
-        J[:, j] = (vib.resid(names, zz) - r0) / h[j]
-    return J, r0
-
-
-def _evaluate(vib, names, z):
-    """What :func:`.probabilities.rank` needs of a vibration fit: Jacobian, residual,
-    variables, prior box (the nuisances' fit bounds, each effect variable's declared prior
-    range) and the chi-square as a function of the variables."""
-    J, r0 = _jacobian(vib, names, z)
-    specs = [s for nm in names for s in EFFECTS[nm].modal_specs]
-    lo = np.array([s.prior_range[0] for s in specs])
-    hi = np.array([s.prior_range[1] for s in specs])
-    if vib.nn:
-        lo = np.concatenate([vib.nuisance_bounds[0], lo])
-        hi = np.concatenate([vib.nuisance_bounds[1], hi])
-
-    def chi2_at(th):
-        r = vib.resid(names, th)
-        return float(r @ r) if np.all(np.isfinite(r)) else math.inf
-    return J, r0, np.asarray(z, float), lo, hi, chi2_at, [None] * vib.nn + specs
 
 
 def _vib_result(vib, sel, chi_b, err_b, rf0, rz0, warns, alpha, noise_from, cands,
@@ -491,13 +459,7 @@ def _covariance(vib, names, z, chi2):
     damping offsets; empty without them)."""
     if z.size == 0:
         return None, np.zeros(0), ()
-    h = 1e-6 * np.maximum(np.abs(z), 1e-3)
-    r0 = vib.resid(names, z)
-    J = np.empty((r0.size, z.size))
-    for j in range(z.size):
-        zz = z.copy()
-        zz[j] += h[j]
-        J[:, j] = (vib.resid(names, zz) - r0) / h[j]
+    J, r0 = jacobian(vib, names, z)
     dof = max(r0.size - z.size, 1)
     cz = covariance(J, s2=max(1.0, chi2 / dof), dof=dof)
     Cz, sd = cz.covariance, cz.stderr

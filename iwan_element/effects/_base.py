@@ -114,6 +114,21 @@ class ParamSpec:
         norm = sum(math.log1p(d / f) for d in (n - lo, hi - n) if d > 0)
         return -np.log(np.abs(z - n) + f) - math.log(norm)
 
+    def prior_quantile(self, q):
+        """The fitting variable at prior probability ``q`` in [0, 1] (the inverse of the
+        prior's distribution function; for nested sampling's prior transform)."""
+        lo, hi = self.prior_range
+        q = np.asarray(q, float)
+        if self.neutral is None:
+            return lo + q * (hi - lo)
+        n = min(max(self.neutral, lo), hi)
+        f = PRIOR_FLOOR * max(n - lo, hi - n)
+        a, b = math.log1p((n - lo) / f), math.log1p((hi - n) / f)     # masses x norm
+        m = q * (a + b)
+        left = n - f * np.expm1(np.maximum(a - m, 0.0))
+        right = n + f * np.expm1(np.maximum(m - a, 0.0))
+        return np.clip(np.where(m < a, left, right), lo, hi)
+
 
 def _find_zero(trial, a: float, Fa: float, b: float, Fb: float, *, rtol: float = 1e-13,
                max_iter: int = 100) -> float:

@@ -79,7 +79,8 @@ class Evidence:
 
 
 def laplace_evidence(J, r, theta, lower, upper, *, tau: float = 1.0,
-                     chi2_at=None, log_prior=None, prior_knots=None) -> Evidence:
+                     chi2_at=None, log_prior=None, prior_knots=None,
+                     switched_off=None) -> Evidence:
     """Laplace-approximated evidence of a least-squares model on a uniform box prior.
 
     Parameters
@@ -114,6 +115,14 @@ def laplace_evidence(J, r, theta, lower, upper, *, tau: float = 1.0,
         prior about the "no effect" value: a parameter whose Gaussian reaches its knot
         (within 5 standard deviations) is integrated along its line too, with the grid
         refined about the knot.
+    switched_off : dict, optional, keyword-only
+        ``{i: (dependents, values)}``: parameters ``dependents`` (indices) that do nothing
+        when parameter ``i`` (a size with a knot) sits at its knot (a clearance when the
+        spring behind it has zero stiffness): the data then say nothing about them, and
+        ``i``'s line integral is averaged over ``values`` (an array, one row per point of
+        their prior, e.g. its quantiles) instead of taken at their fitted values, their
+        Gaussian left out. Without it the evidence of an absent effect with such
+        parameters is under-counted (tests/test_evidence.py).
 
     Returns
     -------
@@ -166,34 +175,40 @@ def laplace_evidence(J, r, theta, lower, upper, *, tau: float = 1.0,
         near = np.flatnonzero((dist < NEAR) | (dist < 3.0 * sd) | spike)
         if near.size:
             return _with_lines(J, r, theta, lo, hi, tau, near, chi2_at, log_like, sd * width,
-                               rel, knots)
+                               rel, knots, dict(switched_off or {}))
     return Evidence(log_like + log_occam, log_like, log_occam, cov, tuple(int(i) for i in idx))
 
 
 #: Steps of the line integral from the bound, as fractions of the box width (geometric,
-#: factor 2), to which steps of a sixth of the Gaussian's standard deviation around the
-#: fitted value are added.
-LINE_STEPS = np.geomspace(1e-8, 1.0, 28)
+#: factor sqrt(2)), to which steps of a sixth of the Gaussian's standard deviation around
+#: the fitted value are added.
+LINE_STEPS = np.geomspace(1e-8, 1.0, 55)
 #: A parameter this close to a bound (fraction of the box width) is integrated along its line.
 NEAR = 1e-3
 #: The line integral stops where the likelihood has fallen by this many nats.
 LINE_DEPTH = 30.0
 
 
-def _with_lines(J, r, theta, lo, hi, tau, at, chi2_at, log_like, sd, rel,
-                knots) -> Evidence:
+def _with_lines(J, r, theta, lo, hi, tau, at, chi2_at, log_like, sd, rel, knots,
+                groups) -> Evidence:
     """The evidence with the parameters ``at`` (near a bound) integrated along their profile
     lines from that bound across the box, and the others by the Laplace approximation
     (:func:`laplace_evidence`); ``sd``: the Gaussian's standard deviations, ``rel``: the
-    log prior densities relative to the box's."""
+    log prior densities relative to the box's, ``groups``: ``{size: (dependents, values)}``
+    (see :func:`laplace_evidence`'s ``switched_off``)."""
     k = theta.size
-    free = np.setdiff1d(np.arange(k), at)
+    off = {i: g for i, g in groups.items() if i in at and math.isfinite(knots[i])
+           and abs(theta[i] - knots[i]) <= NEAR * (hi[i] - lo[i])}
+    deps = sorted({j for dep, _ in off.values() for j in dep} - set(at))
+    free = np.setdiff1d(np.arange(k), np.concatenate([at, deps]).astype(int))
     inner = laplace_evidence(J[:, free], r, theta[free], lo[free], hi[free], tau=tau)
     H = J.T @ J
     chi0 = float(r @ r)
     log_occam = inner.log_occam + float(np.sum(rel(theta)[free]))
     cov = np.zeros((k, k))
     cov[np.ix_(free, free)] = inner.covariance
+    for j in deps:                           # their prior's spread (the data say nothing)
+        cov[j, j] = (hi[j] - lo[j]) ** 2 / 12.0
     for i in at:
         d = np.zeros(k)
         d[i] = 1.0 if theta[i] - lo[i] <= hi[i] - theta[i] else -1.0
@@ -203,9 +218,20 @@ def _with_lines(J, r, theta, lo, hi, tau, at, chi2_at, log_like, sd, rel,
         bound = lo[i] if d[i] > 0 else hi[i]
         t_fit = abs(theta[i] - bound)
         origin = theta - t_fit * d              # the line through the fit, from the bound
-        mean, second, log_int = _line_integral(chi2_at, origin, d, i, lo, hi, tau, chi0,
-                                               t_fit, sd[i], rel, knots[i])
-        log_occam += log_int - math.log(hi[i] - lo[i])
+        dep, values = off.get(i, ((), np.zeros((1, 0))))
+        logs, moments = [], []
+        for vals in values:                     # the switched-off parameters over their prior
+            o = origin.copy()
+            o[list(dep)] = vals
+            mean, second, log_int = _line_integral(chi2_at, o, d, i, lo, hi, tau, chi0,
+                                                   t_fit, sd[i], rel, knots[i])
+            logs.append(log_int)
+            moments.append((mean, second))
+        top = max(logs)
+        wts = np.exp(np.array(logs) - top)
+        log_occam += top + math.log(wts.mean()) - math.log(hi[i] - lo[i])
+        mean, second = (np.average(np.array(moments), axis=0, weights=wts) if wts.sum() > 0
+                        else moments[0])
         cov[i, i] = min(max(second - mean * mean, 0.0), (hi[i] - lo[i]) ** 2 / 12.0)
     return Evidence(log_like + log_occam, log_like, log_occam, cov,
                     tuple(int(i) for i in inner.truncated) + tuple(int(i) for i in at))
