@@ -26,6 +26,7 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
 
 
 def shared(name):
@@ -95,8 +96,11 @@ def main(argv=None):
                  for p in sorted(shared(name).glob("*.csv"))]
         if not files:
             print("../shared/data/arts-damper* absent: skipped")
-        with ProcessPoolExecutor(a.jobs) as ex:
-            rows = list(ex.map(run_record, files))
+        if a.jobs == 1:
+            rows = [run_record(f) for f in files]
+        else:
+            with ProcessPoolExecutor(a.jobs) as ex:
+                rows = list(ex.map(run_record, files))
         out["arts"] = rows
         print(f"{'record':<24} {'rule (yes/no)':<36} {'most probable (p)':<44} next")
         for r in rows:

@@ -238,6 +238,15 @@ class VibrationDiagnosis(Probable, ResultShape):
                               notes="prediction + " + (" + ".join(self.effects) or "nothing"),
                               warnings=tuple(warns))
 
+    def averaged_band(self, amplitude, *, base=None, level: float = 0.95):
+        """Frequency and damping predicted with the doubt about the model: every probable
+        explanation's modal forms weighted by its probability, each with its parameters'
+        posterior covariance (:mod:`~iwan_element.diagnose.averaging`); ``base`` as in
+        :meth:`predict`. Returns an ``AveragedBand`` (channels ``"frequency"`` [Hz] and
+        ``"damping_ratio"`` [-])."""
+        from ._vib_evidence import vibration_band
+        return vibration_band(self, amplitude, base, level)
+
     def _bands(self, X, fb, zb, z0, f, z):
         """Linearised 1-sigma bands [Hz], [-] from the covariance of the fitted values."""
         keys = [(n, k) for n in self.effects for k in self.parameters[n]]
