@@ -7,9 +7,10 @@ seeds than ``tests/_diagnosis_cases.py``):
   amplitude envelopes, a force offset; one hidden effect of the six loop candidates at a
   size from a grid of 1/8 to 4 x "noticeable" (the project's unit for each diagnosis: for
   loops the RMS of the force the effect adds is twice the noise RMS, so 1/4 to 8 x the
-  noise: from below the noise to dominant), two noise levels (0.2 % and 1 % of Fs) and two
-  record lengths (1-3 cycles of 64 samples per amplitude, 3-6 of 128); and as many records with no
-  effect (the default prior gives the plain joint even odds, and so does the case mix);
+  noise: from below the noise to dominant), at two noise levels (0.2 % and 1 % of Fs), each
+  on one of two record lengths (1-3 cycles of 64 samples per amplitude, or 3-6 of 128;
+  alternating over the sizes, so every effect meets both lengths at both noise levels); and
+  as many records with no effect (the default prior gives the plain joint even odds, and so does the case mix);
 * **vibration curves** (:func:`iwan_element.diagnose_vibration`): the modal joint of
   ``bench_vibration_diagnosis.py``, curves from the time-domain elements (not the modal
   forms the diagnosis fits), one hidden effect of the four with a modal form at a size from
@@ -119,17 +120,18 @@ def loop_cases(repeats: int):
     """(kind, joint, envelope, length, noise, effect or None, size, seed) of every loop case."""
     cases, seed = [], 50_000
     joints, envs = list(JOINTS), list(ENVELOPES)
+    lengths = list(LENGTHS)
     for rep in range(repeats):
         for name in SHAPES:
-            for size in SIZES:
-                for noise in LOOP_NOISE:
-                    for length in LENGTHS:
-                        seed += 1
-                        cases.append(("loop", joints[seed % 2], envs[seed % 3], length, noise,
-                                      name, size, seed))
-                        seed += 1                   # and one without effect
-                        cases.append(("loop", joints[seed % 2], envs[seed % 3], length, noise,
-                                      None, 0.0, seed))
+            for ks, size in enumerate(SIZES):
+                for kn, noise in enumerate(LOOP_NOISE):   # both noises, both lengths
+                    length = lengths[(ks + kn + rep) % 2]
+                    seed += 1
+                    cases.append(("loop", joints[seed % 2], envs[seed % 3], length, noise,
+                                  name, size, seed))
+                    seed += 1                       # and one without effect
+                    cases.append(("loop", joints[seed % 2], envs[seed % 3], length, noise,
+                                  None, 0.0, seed))
     return cases
 
 

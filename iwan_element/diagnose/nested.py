@@ -7,7 +7,7 @@ evidence="nested")``) every explanation's evidence is also computed by nested sa
 ``exp(-chi2 / (2 tau s))`` and the same priors (each variable's declared prior through its
 distribution function's inverse, :meth:`~iwan_element.effects.ParamSpec.prior_quantile`;
 uniform over the box for the others). dynesty was chosen over UltraNest by measuring both on
-the vibration diagnosis (docs/diagnosis.md: for the same stated error, dynesty's static
+the vibration diagnosis (docs/probabilities.md: for the same stated error, dynesty's static
 sampler needed fewer likelihood calls and a tenth of the time on these 1-4 parameter
 problems; both agreed with each other within their errors).
 

@@ -1,7 +1,7 @@
 """How sure a diagnosis is: posterior probabilities of the explanations it considered.
 
 Every explanation a diagnosis fits (the plain joint, each single effect, each pair or larger
-stack it fitted on the way) gets a probability (docs/diagnosis.md, "How sure is the
+stack it fitted on the way) gets a probability (docs/probabilities.md, "How sure is the
 diagnosis"; Beck and Yuen 2004, J. Eng. Mech. 130:192-203; Hoeting et al. 1999, Statist.
 Sci. 14:382-417):
 

@@ -1,6 +1,6 @@
 """The evidence (marginal likelihood) of a fitted least-squares model, by the Laplace
 approximation on a box prior, and posterior model probabilities from evidences
-(docs/fitting.md section 6, docs/diagnosis.md "How sure is the diagnosis").
+(docs/probabilities.md; docs/fitting.md section 9).
 
 A model with parameters ``theta`` (``k`` of them), noise-normalised residual ``r(theta)``
 (residual over the noise standard deviation) and ``chi2 = |r|^2`` has the likelihood
