@@ -210,7 +210,8 @@ def rank(fitted, *, tau: float, n_eff: float, prior: dict, evaluate,
         log_prior, knots = spec_prior(specs, lo, hi)
         ev = laplace_evidence(J, r, np.clip(theta, lo, hi), lo, hi, tau=ts, chi2_at=chi2_at,
                               log_prior=log_prior, prior_knots=knots,
-                              switched_off=switched_off(specs))
+                              switched_off=switched_off(specs),
+                              lines=[sp is not None for sp in specs])
         rows[k] = (stack, chi2, q, ll, ev.log_occam, np.clip(theta, lo, hi), ev.covariance)
         if nested is not None and (only is None or k in only):
             from .nested import nested_log_evidence

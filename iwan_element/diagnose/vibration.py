@@ -11,10 +11,10 @@ the one shared with the loop diagnosis (:mod:`iwan_element.diagnose.selection`),
 residuals of frequency and damping divided by their noise. When the prediction is a beam
 specimen's QSMA curve, the fitted modal forms are exactly the augmented specimen's
 (``VibrationDiagnosis.augment``). A mismatch no candidate explains is stated with the
-amplitudes where it lies. The noise is the larger of the scatter the
-data show about a smooth curve (robust, from second differences along amplitude) and the
-per-point uncertainty the caller states; with too few amplitudes to trust a scatter
-estimate a warning says so.
+amplitudes where it lies. The noise is the per-point uncertainty the caller states, unless
+the scatter the data show about a smooth curve (robust, from second differences along
+amplitude) lies above that statement's 99 % range, then that scatter; with nothing stated,
+the scatter; with too few amplitudes to trust a scatter estimate a warning says so.
 """
 from __future__ import annotations
 
@@ -22,6 +22,7 @@ import math
 
 import numpy as np
 from scipy.optimize import least_squares
+from scipy.stats import chi2 as _chi2
 
 from ..core.validation import (check_int, check_magnitude, check_scalar, finite_array,
                                 same_length)
@@ -51,12 +52,28 @@ def _check_units(fm, fp, zm, zp):
     check_damping_ratio("predicted_damping_ratio", zp)
 
 
+#: Efficiency of the second differences' MAD scale against the standard deviation: its
+#: sampling spread is that of a chi-square with about this fraction of the differences'
+#: count as degrees of freedom.
+MAD_EFFICIENCY = 0.37
+
+
 def _noise(r, stated, n, name):
-    """Noise of one log-residual curve [-]: max(scatter, stated); and its source text."""
+    """Noise of one log-residual curve [-] and its source text: the stated uncertainty when
+    there is one, unless the curve's own scatter (second differences along amplitude) lies
+    above the stated value's 99 % range (then the scatter: the curve is noisier than stated);
+    the scatter when none is stated. (Taking the larger of the two whenever the scatter
+    happens to exceed the stated value would bias the noise upwards: with 12 points the
+    scatter's own spread is a factor 1.9, and a noise set too high makes every effect's
+    evidence too small.)"""
     scatter = difference_sigma(r) if n >= 5 else 0.0    # second differences along amplitude
-    s = max(scatter, float(np.median(stated)) if stated is not None else 0.0, 1e-12)
-    src = "scatter" if stated is None or scatter >= float(np.median(stated)) else "stated"
-    return s, f"{name}: {src}"
+    if stated is None:
+        return max(scatter, 1e-12), f"{name}: scatter"
+    st = float(np.median(stated))
+    dof = max(MAD_EFFICIENCY * (n - 2), 1.0)
+    if scatter > st * math.sqrt(float(_chi2.ppf(0.99, dof)) / dof):
+        return scatter, f"{name}: scatter (above the stated uncertainty's 99 % range)"
+    return max(st, 1e-12), f"{name}: stated"
 
 
 #: Largest relative standard uncertainty or noise [-] accepted per curve: a frequency known
@@ -66,7 +83,8 @@ _RELATIVE_MAX = {"frequency": 0.5, "damping_ratio": 1.0}
 
 
 def _curve_level(name, r, given, stated, n):
-    """Noise of one curve: ``given`` if set, else max(scatter, stated uncertainty)."""
+    """Noise of one curve: ``given`` if set, else the stated uncertainty unless the scatter is
+    clearly above it (:func:`_noise`)."""
     if given is not None:
         return _relative(f"{name}_noise", name, check_scalar(f"{name}_noise", given, low=0.0,
                                                              low_open=True)), f"{name}: given"

@@ -13,9 +13,9 @@ the same data. With a uniform prior on the box ``lower <= theta <= upper`` its e
 The Laplace approximation (MacKay 2003, *Information Theory, Inference, and Learning
 Algorithms*, ch. 27-28; Beck and Yuen 2004, J. Eng. Mech. 130:192-203) expands ``chi2``
 to second order about the fitted ``theta*`` with the Gauss-Newton Hessian ``J^T J``
-(``J = dr/dtheta``) **and its gradient** ``2 J^T r``: at a bound of the box the fitted value
-is a constrained optimum whose gradient does not vanish, and the quadratic's own optimum lies
-outside the box. The Gaussian is then integrated over the box (a truncated multivariate
+(``J = dr/dtheta``) **and, for the parameters fitted on a bound, its gradient** ``2 J^T r``:
+there the fitted value is a constrained optimum whose gradient does not vanish, and the
+quadratic's own optimum lies outside the box. The Gaussian is then integrated over the box (a truncated multivariate
 normal, :func:`scipy.stats.multivariate_normal.cdf` over the parameters whose Gaussian
 reaches a bound), so an effect fitted at zero size (its parameter at the bound) gets the
 half-Gaussian (or less) it has, not a whole one. For a model linear in ``theta`` this is
@@ -80,7 +80,7 @@ class Evidence:
 
 def laplace_evidence(J, r, theta, lower, upper, *, tau: float = 1.0,
                      chi2_at=None, log_prior=None, prior_knots=None,
-                     switched_off=None) -> Evidence:
+                     switched_off=None, lines=None) -> Evidence:
     """Laplace-approximated evidence of a least-squares model on a uniform box prior.
 
     Parameters
@@ -103,7 +103,9 @@ def laplace_evidence(J, r, theta, lower, upper, *, tau: float = 1.0,
         zero size is often not a Gaussian in its parameter (a force that changes only to
         second order in it, a Jacobian column that vanishes there), where the Gaussian
         would call the parameter undetermined and give it no Occam penalty. "Near a bound":
-        within :data:`NEAR` of the box's width, or within 3 Gaussian standard deviations.
+        within :data:`NEAR` of the box's width, or within 3 Gaussian standard deviations
+        when these are below a third of the box (a parameter the data hardly determine is
+        integrated by the Gaussian over the box).
     log_prior : callable, optional, keyword-only
         ``log_prior(theta) -> ndarray (k,)``: each parameter's log prior density (the prior
         is the product of independent ones over the box, each normalised over its range).
@@ -123,6 +125,10 @@ def laplace_evidence(J, r, theta, lower, upper, *, tau: float = 1.0,
         their prior, e.g. its quantiles) instead of taken at their fitted values, their
         Gaussian left out. Without it the evidence of an absent effect with such
         parameters is under-counted (tests/test_evidence.py).
+    lines : array_like of bool, shape (k,), optional, keyword-only
+        Which parameters may be integrated along their line (default all); the others are
+        always left to the Gaussian (e.g. nuisances on boxes far wider than the data's
+        range, where "near a bound" means nothing).
 
     Returns
     -------
@@ -155,6 +161,11 @@ def laplace_evidence(J, r, theta, lower, upper, *, tau: float = 1.0,
     Ju = J * width / math.sqrt(tau)              # box units: u = (theta - lower) / width
     H = Ju.T @ Ju + RIDGE * np.eye(k)
     g = Ju.T @ (r / math.sqrt(tau))              # chi2/(2 tau) ~ c + g.d + d.H.d / 2
+    # the gradient counts only where the fit sits on a bound (a constrained optimum); inside,
+    # it is the fit's stopping tolerance and, along a direction the data hardly determine,
+    # would move the quadratic's optimum by box widths for nothing
+    on = (theta <= lo + NEAR * width) | (theta >= hi - NEAR * width)
+    g = np.where(on, g, 0.0)
     Hinv, logdet = _inverse(H)
     shift = -Hinv @ g                            # the quadratic's optimum, from the fit
     gain = 0.5 * float(g @ Hinv @ g)             # its log-likelihood above the fit's
@@ -172,7 +183,10 @@ def laplace_evidence(J, r, theta, lower, upper, *, tau: float = 1.0,
         knots = np.full(k, np.nan) if prior_knots is None else \
             np.asarray(prior_knots, float).reshape(k)
         spike = np.isfinite(knots) & (np.abs(theta - np.nan_to_num(knots)) < 5.0 * sd * width)
-        near = np.flatnonzero((dist < NEAR) | (dist < 3.0 * sd) | spike)
+        # a parameter the data hardly determine (its Gaussian wider than a third of the box)
+        # is left to the Gaussian, which integrates it over the box
+        ok = np.ones(k, bool) if lines is None else np.asarray(lines, bool).reshape(k)
+        near = np.flatnonzero(ok & ((dist < NEAR) | ((dist < 3.0 * sd) & (sd < 0.3)) | spike))
         if near.size:
             return _with_lines(J, r, theta, lo, hi, tau, near, chi2_at, log_like, sd * width,
                                rel, knots, dict(switched_off or {}))
@@ -212,9 +226,8 @@ def _with_lines(J, r, theta, lo, hi, tau, at, chi2_at, log_like, sd, rel, knots,
     for i in at:
         d = np.zeros(k)
         d[i] = 1.0 if theta[i] - lo[i] <= hi[i] - theta[i] else -1.0
-        if free.size:                    # the others follow their regression on theta_i
-            Hff = H[np.ix_(free, free)] + 1e-12 * np.diag(np.diag(H)[free] + 1e-300)
-            d[free] = -np.linalg.solve(Hff, H[free, i]) * d[i]
+        if free.size:                    # the others follow their regression on theta_i,
+            d[free] = _regression(H, free, i) * d[i]      # along determined directions
         bound = lo[i] if d[i] > 0 else hi[i]
         t_fit = abs(theta[i] - bound)
         origin = theta - t_fit * d              # the line through the fit, from the bound
@@ -235,6 +248,16 @@ def _with_lines(J, r, theta, lo, hi, tau, at, chi2_at, log_like, sd, rel, knots,
         cov[i, i] = min(max(second - mean * mean, 0.0), (hi[i] - lo[i]) ** 2 / 12.0)
     return Evidence(log_like + log_occam, log_like, log_occam, cov,
                     tuple(int(i) for i in inner.truncated) + tuple(int(i) for i in at))
+
+
+def _regression(H, free, i):
+    """``-H_ff^+ H_fi``: how the parameters ``free`` follow parameter ``i`` at the quadratic's
+    optimum, through the pseudo-inverse of the diagonally scaled ``H_ff`` (a direction the
+    data do not determine, 1e-9 of the largest, does not follow)."""
+    Hff = H[np.ix_(free, free)]
+    dsc = np.sqrt(np.maximum(np.diag(Hff), 1e-300))
+    inv = np.linalg.pinv(Hff / np.outer(dsc, dsc), rcond=1e-9, hermitian=True)
+    return -(inv @ (H[free, i] / dsc)) / dsc
 
 
 def _line_integral(chi2_at, theta, d, i, lo, hi, tau, chi0, t_fit, sd, rel, knot):
