@@ -137,8 +137,8 @@ def test_prior_is_stated_and_overridable():
 
 def test_averaged_band_matches_sampling_the_posterior(dominant):
     """One member (probability ~1): the band's mean is the fitted force, and its standard
-    deviation (linearised) matches 300 draws of the parameters from their posterior run
-    through the elements (within 20 %)."""
+    deviation (linearised) matches 120 draws of the parameters from their posterior run
+    through the elements (median ratio within 20 %)."""
     from iwan_element.diagnose._loop_evidence import member_force
     b = dominant.averaged_band()
     assert b.members[0][0] == ("backlash",)
@@ -148,7 +148,7 @@ def test_averaged_band_matches_sampling_the_posterior(dominant):
     rng = np.random.default_rng(0)
     uj = np.asarray(dominant.u) - dominant.offsets["displacement"]
     v = np.gradient(uj, dominant.t)
-    draws = rng.multivariate_normal(e.theta, e.covariance, size=300)
+    draws = rng.multivariate_normal(e.theta, e.covariance, size=120)
     from iwan_element.effects import EFFECTS
     lows = [sp.prior_range[0] for nm in e.stack for sp in EFFECTS[nm].specs]
     for j, lo in enumerate(lows):               # a size at its bound: its half-Gaussian
