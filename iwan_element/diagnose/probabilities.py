@@ -13,8 +13,11 @@ Sci. 14:382-417):
   the noise's correlation time (``n / tau`` effective samples, as in the rule) and ``s`` the
   model-error factor: when even the best explanation leaves more misfit than the noise
   (``chi2 / tau`` above ``n_eff - q``), the misfit no candidate explains is treated as more
-  noise (``s = chi2_best / (tau (n_eff - q_best))``, at least 1), so an explanation is not
-  declared certain by differences that a missing physics makes;
+  noise (``s = chi2_best / (tau (n_eff - q_best))``, at least 1), and, when that excess is
+  significant (``s > 1 + 3 sqrt(2 / n_eff)``), ``tau`` becomes the best explanation's
+  residual correlation time where that is longer (model error is correlated over far more
+  samples than the noise), so an explanation is not declared certain by differences that a
+  missing physics makes;
 * each effect parameter's prior is uniform over its declared range
   (``ParamSpec.prior_range``, written with the effect), the joint's own variables over the
   loop model's bounds, the force scale, force offset and starting state over boxes that are
@@ -36,6 +39,7 @@ import numpy as np
 
 from ..core.validation import check_scalar
 from ..fitting.evidence import laplace_evidence, posterior_probabilities
+from ..identify.noise import integrated_time
 
 __all__ = ["Explanation", "key", "default_effect_prior", "check_effect_prior",
            "log_model_prior", "model_error_scale", "rank", "effect_probability",
@@ -195,6 +199,11 @@ def rank(fitted, *, tau: float, n_eff: float, prior: dict, evaluate,
     best = min(fitted.values(), key=lambda f: f[1])
     s = model_error_scale(best[1], tau, n_eff, best[2])
     ts = tau * s
+    if s > 1.0 + 3.0 * math.sqrt(2.0 / max(n_eff, 1.0)):
+        # a misfit beyond the noise is left: it is model error, correlated over far more
+        # samples than the noise; counted with its own correlation time
+        r_best = evaluate(best[0], best[3])[1]
+        ts = s * max(tau, integrated_time(r_best))
     lp = log_model_prior(list(fitted), prior)
     nested = None if nested is None else dict(nested)
     only = None if nested is None else nested.pop("explanations", None)

@@ -164,7 +164,7 @@ def laplace_evidence(J, r, theta, lower, upper, *, tau: float = 1.0,
     # the gradient counts only where the fit sits on a bound (a constrained optimum); inside,
     # it is the fit's stopping tolerance and, along a direction the data hardly determine,
     # would move the quadratic's optimum by box widths for nothing
-    on = (theta <= lo + NEAR * width) | (theta >= hi - NEAR * width)
+    on = (theta <= lo + ON_BOUND * width) | (theta >= hi - ON_BOUND * width)
     g = np.where(on, g, 0.0)
     Hinv, logdet = _inverse(H)
     shift = -Hinv @ g                            # the quadratic's optimum, from the fit
@@ -199,6 +199,9 @@ def laplace_evidence(J, r, theta, lower, upper, *, tau: float = 1.0,
 LINE_STEPS = np.geomspace(1e-8, 1.0, 55)
 #: A parameter this close to a bound (fraction of the box width) is integrated along its line.
 NEAR = 1e-3
+#: A parameter this close to a bound (fraction of the box width) is fitted on it (an active
+#: bound of the bounded least squares): only there does the gradient count.
+ON_BOUND = 1e-6
 #: The line integral stops where the likelihood has fallen by this many nats.
 LINE_DEPTH = 30.0
 
@@ -288,7 +291,10 @@ def _line_integral(chi2_at, theta, d, i, lo, hi, tau, chi0, t_fit, sd, rel, knot
             ll[-1] = -1e300
         if t > t_fit and ll[-1] < max(ll) - LINE_DEPTH:
             break
-    ts, ll = np.array(ts), np.array(ll)
+    # a line that finds a far better likelihood than the fit (a force that jumps with the
+    # parameter, a fit stopped on the wrong side of a cliff) does not count it: the
+    # explanation is scored at its fit, as its likelihood is reported
+    ts, ll = np.array(ts), np.minimum(np.array(ll), 0.0)
     fine = ts
     if math.isfinite(knot):
         tk = abs(knot - (lo[i] if d[i] > 0 else hi[i]))
@@ -361,8 +367,8 @@ def _box_mass(centre, cov) -> float:
     mvn = multivariate_normal(mean=np.zeros(m), cov=corr, allow_singular=True,
                               seed=np.random.default_rng(0), abseps=1e-7, releps=1e-4)
     p = float(mvn.cdf(b, lower_limit=a))
-    if not p > 0:                     # below the integrator's resolution: the independent bound
-        return float(sum(_log_interval(x, y) for x, y in zip(a, b)))
+    if not p > 1e-6:                  # near the integrator's resolution: the tightest bound
+        return float(min(_log_interval(x, y) for x, y in zip(a, b)))   # P(all) <= min P_i
     return math.log(p)
 
 
