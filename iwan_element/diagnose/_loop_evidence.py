@@ -125,12 +125,7 @@ def member_force(stack, theta, x_max, scales, u, v):
     return F[1:] + F0
 
 
-def bounds_ok(stack, theta) -> bool:
-    """Whether ``theta`` gives a joint the element accepts (``Fs > 0``)."""
-    return bool(theta[-2] > 0 and np.all(np.isfinite(theta)))
-
-
-__all__ += ["member_physical", "bounds_ok"]
+__all__ += ["member_physical"]
 
 
 def loop_band(diag, t, u, level: float):

@@ -15,8 +15,8 @@ Algorithms*, ch. 27-28; Beck and Yuen 2004, J. Eng. Mech. 130:192-203) expands `
 to second order about the fitted ``theta*`` with the Gauss-Newton Hessian ``J^T J``
 (``J = dr/dtheta``) **and, for the parameters fitted on a bound, its gradient** ``2 J^T r``:
 there the fitted value is a constrained optimum whose gradient does not vanish, and the
-quadratic's own optimum lies outside the box. The Gaussian is then integrated over the box (a truncated multivariate
-normal, :func:`scipy.stats.multivariate_normal.cdf` over the parameters whose Gaussian
+quadratic's own optimum lies outside the box. The Gaussian is then integrated over the
+box (a truncated multivariate normal, :func:`scipy.stats.multivariate_normal.cdf` over the parameters whose Gaussian
 reaches a bound), so an effect fitted at zero size (its parameter at the bound) gets the
 half-Gaussian (or less) it has, not a whole one. For a model linear in ``theta`` this is
 exact (tests/test_evidence.py checks it against the closed form and a quadrature). A
