@@ -295,9 +295,15 @@ def _loo():
     return _campaign().leave_one_out()
 
 
+def _averaged():
+    v = _vib()
+    return v.averaged_band(v.amplitude)
+
+
 #: Results that public methods of other results return (the campaign's prediction and
-#: leave-one-out), with the same shape.
-METHOD_RESULTS = {"CampaignPrediction": _prediction, "LeaveOneOut": _loo}
+#: leave-one-out, a diagnosis' model-averaged band), with the same shape.
+METHOD_RESULTS = {"CampaignPrediction": _prediction, "LeaveOneOut": _loo,
+                  "AveragedBand": _averaged}
 
 
 def _energy_balance():

@@ -264,3 +264,26 @@ def test_record_scatter_is_estimated_and_carried_in_the_band():
 def _plain_scatter():
     recs, conds = campaign(5)
     return fit_campaign(recs, conds, **OPTS).scatter["ln Fs"]
+
+
+def test_campaign_probabilities_and_model_averaged_band(fitted):
+    """The campaign's explanations: the records' evidences added (one device, independent
+    noise), probabilities summing to 1 with the stack the most probable; its averaged band
+    with one probable explanation is that explanation's prediction."""
+    fit = fitted[0]
+    p = fit.probabilities
+    assert set(p) == {(), ("backlash",)} and sum(p.values()) == pytest.approx(1.0)
+    assert max(p, key=p.get) == ("backlash",) and fit.effect_probability("backlash") > 0.99
+    preps = fit._state["preps"]
+    for e in fit.explanations:
+        assert e.log_evidence == pytest.approx(sum(
+            z for pr in preps for eff, z, *_ in pr["explanations"] if tuple(eff) == e.effects))
+    assert "most probable: backlash" in fit.report()
+    assert fit.to_dataframe("probabilities")["probability"].sum() == pytest.approx(1.0)
+    cond = {"tension": 25.0, "frequency": 0.75}
+    t = np.arange(300) / 200.0
+    u = 2e-3 * np.sin(2 * np.pi * 0.75 * t)
+    band = fit.averaged_band(cond, t, u, draws=16)
+    pred = fit.predict(cond, t, u, draws=16)
+    assert band.members[0][0] == ("backlash",)
+    assert np.allclose(band.channels["force"]["mean"], pred.force, atol=1e-6 * np.ptp(pred.force))

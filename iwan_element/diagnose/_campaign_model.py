@@ -18,6 +18,7 @@ from . import _model as M
 from ..identify.noise import integrated_time
 from .batch import band_misfit
 from .prepare import dissipation_scale, drive_structure, effect_scales, fitted_samples
+from ._campaign_probability import record_explanations
 
 __all__: list[str] = []
 
@@ -198,7 +199,8 @@ def record_from_diagnosis(d, max_samples: int) -> dict:
             "sigma": float(d.noise_sigma), "rms_own": float(np.sqrt(np.mean(own[keep] ** 2))),
             "tau_own": max(1.0, integrated_time(own[keep])),
             "band_own": band_misfit(F, F - own, BAND),
-            "base_shape": (base.phi_max, base.chi, base.beta), "success": bool(d.success)}
+            "base_shape": (base.phi_max, base.chi, base.beta), "success": bool(d.success),
+            **record_explanations(d)}
 
 
 class RecordModel:

@@ -16,6 +16,7 @@ from ..identify.noise import integrated_time
 from ..plotting import axes_or_new
 from . import _campaign_model as CM
 from .batch import band_misfit
+from .probabilities import Probable
 
 __all__ = ["CampaignFit", "assemble"]
 
@@ -214,7 +215,7 @@ def assemble(*, model, preps, labels, res, units, stack_from, warnings, options,
 
 
 @dataclass(frozen=True, eq=False)
-class CampaignFit(ResultShape):
+class CampaignFit(Probable, ResultShape):
     """What :func:`~iwan_element.diagnose.campaign.fit_campaign` returns.
 
     Attributes
@@ -262,6 +263,12 @@ class CampaignFit(ResultShape):
         [s], with ``details["times"]`` split into diagnoses, joint fit and uncertainty.
     warnings : tuple of str
     details : dict
+    explanations : tuple of Explanation
+        The explanations over all records together with their probabilities
+        (:mod:`._campaign_probability`): ``probabilities``, ``effect_probability(name)``.
+    alternatives : dict
+        ``{explanation: CampaignFit}``: the campaign model of every other probable
+        explanation, which :meth:`averaged_band` mixes in.
     """
 
     records: tuple
@@ -283,6 +290,19 @@ class CampaignFit(ResultShape):
     wall_time: float
     details: dict = field(default_factory=dict)
     _state: dict = field(default_factory=dict, repr=False)
+    explanations: tuple = ()
+    alternatives: dict = field(default_factory=dict)
+
+    def averaged_band(self, conditions, t, u, *, level: float = 0.95, **options):
+        """The force at ``conditions`` (tested or not) under ``(t, u)`` averaged over the
+        probable explanations, each campaign model with its own band (:meth:`predict`,
+        ``options`` passed on): :class:`~iwan_element.diagnose.averaging.AveragedBand`."""
+        from ._campaign_probability import campaign_band
+        return campaign_band(self, conditions, t, u, level=level, **options)
+
+    def _tables(self) -> list:
+        base = super()._tables()
+        return base[:1] + self.probability_tables() + base[1:]
 
     def _nested(self, what: str) -> dict:
         out = {}
@@ -425,7 +445,7 @@ class CampaignFit(ResultShape):
                               ("campaign", "9.4g"), ("ratio", "6.2f")],
                              [[r[k] for k in ("record", "named", "band_own", "band_campaign",
                                               "band_ratio")] for r in self.rows])
-        lines += [f"  warning: {w}" for w in self.warnings]
+        lines += self.probability_lines() + [f"  warning: {w}" for w in self.warnings]
         return "\n".join(lines)
 
     def to_dict(self) -> dict:
@@ -436,7 +456,8 @@ class CampaignFit(ResultShape):
             "stderr_scatter",
             "converged",
             "success", "message", "nfev", "wall_time", "warnings", "details")}
-                         | {"failure_reasons": list(self.failure_reasons())})
+                         | {"failure_reasons": list(self.failure_reasons()),
+                            "probabilities": self.probabilities_dict()})
 
     def plot(self, ax=None, *, quantity: str = "Fs", condition: str | None = None):
         """One quantity against one condition: the records' own estimates (with their

@@ -265,17 +265,13 @@ def flat(p: IwanParameters, effs, names, F0):
     return np.array(out + [F0]), labels + ["force_offset"]
 
 
-def uncertainty(model: LoopModel, z, r):
-    """Standard errors and correlation of (Fs, KT, chi, beta, effect params, F0): the package's
-    one covariance routine (:func:`iwan_element.fitting.covariance`, docs/fitting.md) with the
-    delta method from the Jacobian in ``(z, start, Fs, F0)``, the residual variance inflated
-    by its correlation time (a correlated, systematic misfit is not treated as independent
-    noise); NaN for a parameter along a degenerate direction.
-
-    A fitted starting state (``model.start != 0``, :func:`fit_start`) is a nuisance variable
-    of the fit like the force offset: it has a column in the Jacobian, so its correlation
-    with the joint's variables widens their errors; ``start = 0`` (kept when no start fits
-    better) is held. Returns ``(se, corr, se_start)`` (``se_start`` [m], 0 when held)."""
+def jacobian(model: LoopModel, z):
+    """Jacobian of the residual [N per variable] and of the physical parameters in the fit's
+    variables ``theta = (z, [start], Fs, F0)`` (``start`` only when the fit freed it,
+    ``model.start != 0``; ``F0`` only when it is fitted): central differences at two steps,
+    samples whose force jumps between them left out (:func:`_jumps`). Returns
+    ``(J, Jp, theta, lower, upper)``, the bounds of ``theta`` (infinite for the linear ones
+    and the start)."""
     Fs, F0 = model.linear(model.unit(z))
     s0 = model.start
     free_start = s0 != 0.0
@@ -301,7 +297,8 @@ def uncertainty(model: LoopModel, z, r):
         return np.append(flat(p, effs, model.names, th[-1])[0], th[nz] if free_start else 0.0)
 
     cols, pcols = [], []
-    for j in range(theta.size - (1 if fixed else 0)):
+    m = theta.size - (1 if fixed else 0)
+    for j in range(m):
         if j == theta.size - 2:                  # Fs: a relative step that stays positive
             h = 1e-5 * theta[j]
         elif j == theta.size - 1:
@@ -313,7 +310,22 @@ def uncertainty(model: LoopModel, z, r):
         (dr, dp), (dr4, _) = (_difference(resid, phys, theta, j, f * h, lo, hi) for f in (1, 4))
         cols.append(np.where(_jumps(dr, dr4), 0.0, dr))
         pcols.append(dp)
-    J, Jp = np.column_stack(cols), np.column_stack(pcols)
+    return (np.column_stack(cols), np.column_stack(pcols), theta[:m], lo[:m], hi[:m])
+
+
+def uncertainty(model: LoopModel, z, r, jac=None):
+    """Standard errors and correlation of (Fs, KT, chi, beta, effect params, F0): the package's
+    one covariance routine (:func:`iwan_element.fitting.covariance`, docs/fitting.md) with the
+    delta method from the Jacobian in ``(z, start, Fs, F0)`` (:func:`jacobian`, or ``jac``,
+    its result when already computed), the residual variance inflated by its correlation time
+    (a correlated, systematic misfit is not treated as independent noise); NaN for a
+    parameter along a degenerate direction.
+
+    A fitted starting state (``model.start != 0``, :func:`fit_start`) is a nuisance variable
+    of the fit like the force offset: it has a column in the Jacobian, so its correlation
+    with the joint's variables widens their errors; ``start = 0`` (kept when no start fits
+    better) is held. Returns ``(se, corr, se_start)`` (``se_start`` [m], 0 when held)."""
+    J, Jp, theta, _, _ = jacobian(model, z) if jac is None else jac
     c = covariance(J, r, tau=integrated_time(r), dof=max(r.size - theta.size, 1), Jp=Jp)
     se, corr = c.stderr, c.correlation
     return se[:-1], corr[:-1, :-1], float(se[-1])

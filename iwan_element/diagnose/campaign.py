@@ -9,8 +9,11 @@ condition that was not tested (:meth:`CampaignFit.predict`). The procedure
 1. every record is diagnosed on its own (:func:`~iwan_element.diagnose`, in parallel through
    :func:`~iwan_element.ensemble.run_ensemble`): the effects it names, its own fit (the
    yardstick of the campaign model), its noise and the record as fitted (offsets, low-pass);
-2. the campaign's effect stack is the effects named on at least half of the records (or
-   ``effects=``); each quantity ``q`` of the stack (``Fs``, ``ln phi_max``, ``chi``,
+2. the campaign's effect stack is the most probable explanation over all records together
+   (the product of the records' evidences, :mod:`._campaign_probability`; the effects named
+   on at least half of the records when they were diagnosed without probabilities), or
+   ``effects=``; every other explanation probable enough to be averaged gets its own
+   campaign model (``CampaignFit.alternatives``, for :meth:`CampaignFit.averaged_band`); each quantity ``q`` of the stack (``Fs``, ``ln phi_max``, ``chi``,
    ``ln(1 + beta)``, every effect parameter per ``Fs**fs_power``, as ``ln(value - lower)``
    when it is bounded on one side only, e.g. a gap or a drag) follows a law linear in
    the conditions, ``q = a + sum_c b_c x_c`` (by default in every condition that varies;
@@ -38,6 +41,7 @@ import json
 import logging
 import math
 import time
+from dataclasses import replace
 
 import numpy as np
 from scipy.optimize import least_squares
@@ -49,6 +53,7 @@ from ..effects.evaluate import order_stack, stack_ok
 from ..ensemble import run_ensemble
 from ..core.progress import finish, progress_bar
 from . import _campaign_model as CM
+from ._campaign_probability import campaign_explanations, probable_alternatives
 from ._campaign_result import CampaignFit
 from .batch import _check_options, _check_records
 from .loops import diagnose
@@ -125,8 +130,10 @@ def _diagnose_records(recs, labels, opts, diagnoses, jobs, client, progress):
     return preps, warns
 
 
-def _common_stack(preps, effects):
-    """The campaign's effect stack: ``effects`` or the effects named on >= half the records."""
+def _common_stack(preps, effects, explanations=()):
+    """The campaign's effect stack: ``effects``, or the most probable explanation over all
+    records (:mod:`._campaign_probability`), or (records diagnosed without probabilities)
+    the effects named on >= half the records."""
     if effects is not None:
         names = (effects,) if isinstance(effects, str) else tuple(effects)
         unknown = [n for n in names if n not in EFFECTS]
@@ -137,6 +144,10 @@ def _common_stack(preps, effects):
             raise ValueError(f"effects {list(names)} cannot share one joint (at most one "
                              "slider-level effect unless all are composable)")
         return names, "given"
+    if explanations and stack_ok(order_stack(explanations[0].effects)):
+        top = explanations[0]
+        return order_stack(top.effects), (f"the most probable explanation over the records, "
+                                          f"probability {top.probability:.3g}")
     count = {}
     for p in preps:
         for nm in p["effects"]:
@@ -265,7 +276,9 @@ def fit_campaign(records, conditions, *, effects=None, laws=None, names=None, di
         Per record the named test conditions, the same names for every record, finite numbers
         (e.g. ``{"tension": 30.0, "frequency": 0.5}``: band tension [lb], drive frequency [Hz]).
     effects : sequence of str, optional, keyword-only
-        The campaign's effect stack (default: the effects named on at least half the records).
+        The campaign's effect stack (default: the most probable explanation over all the
+        records; with records diagnosed without probabilities, the effects named on at
+        least half of them).
     laws : dict, optional, keyword-only
         ``{quantity: conditions}`` for quantities whose law is not linear in every condition
         that varies (the default), e.g. ``{"Fs": ("tension",), "chi": ()}``. Quantities:
@@ -315,7 +328,22 @@ def fit_campaign(records, conditions, *, effects=None, laws=None, names=None, di
     if not preps:
         raise ValueError("no record could be diagnosed: nothing to fit")
     t_diag = time.perf_counter() - t0
-    names_, stack_from = _common_stack(preps, effects)
+    expl = campaign_explanations(preps, opts.get("effect_prior"))
+    names_, stack_from = _common_stack(preps, effects, expl)
+    args = dict(preps=preps, labels=labels, X=X, laws=laws, cnames=cnames, max_nfev=max_nfev,
+                scatter=scatter, progress=progress, opts=opts, t0=t0, t_diag=t_diag)
+    fit = _fit_stack(names_, stack_from, warns, **args)
+    alts = {}
+    for alt in probable_alternatives(expl, names_):
+        if stack_ok(order_stack(alt)):
+            alts[alt] = _fit_stack(order_stack(alt), "an alternative explanation", [], **args)
+    return replace(fit, explanations=expl, alternatives=alts)
+
+
+def _fit_stack(names_, stack_from, warns, *, preps, labels, X, laws, cnames, max_nfev,
+               scatter, progress, opts, t0, t_diag):
+    """The campaign model with the stack ``names_`` fitted to the prepared records: laws,
+    joint fit, record scatter, result (steps 2-6 of the module docstring)."""
     qnames, units, _ = CM.quantities(names_)
     laws_, lwarn = CM.resolve_laws(laws, qnames, cnames, X)
     model = build_model(preps, names_, laws_, cnames, X)

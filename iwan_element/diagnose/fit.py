@@ -124,7 +124,7 @@ def stack_fit(row, fitter, FF, F_model, t_start, *, noise_only=False):
     mdl, z = row["model"], row["z"]
     p, effs, F0 = mdl.physical(z)
     r = mdl.residual(z)
-    se, corr, se_start = M.uncertainty(mdl, z, r)
+    se, corr, se_start = M.uncertainty(mdl, z, r, jac=row.get("cache", {}).get("jac"))
     vals, labels = M.flat(p, effs, mdl.names, F0)
     stderr = dict(zip(M.PARAM_NAMES, se[:4].tolist()))
     at_bound = np.isclose(z, mdl.lower, atol=1e-6) | np.isclose(z, mdl.upper, atol=1e-6)

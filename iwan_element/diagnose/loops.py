@@ -49,7 +49,10 @@ from .prepare import (PreparedRecord, check_record, dissipation_scale, prepare_r
                       record_cycles, untestable)
 from .report import assemble
 from .results import Diagnosis
-from .selection import SelectionResult, stepwise_select
+from .selection import SelectionResult, misfit_p, stepwise_select
+from ._loop_evidence import collect_fits, loop_evaluator
+from ._vib_evidence import nested_options
+from .probabilities import check_effect_prior, key, rank
 
 __all__ = ["diagnose", "loop_candidates", "LoopSelection", "select"]
 
@@ -101,11 +104,16 @@ class LoopSelection:
     cycles: list
     noise: NoiseLevel
     noise_only: bool
+    candidates: tuple = ()
+    explanations: tuple = ()
+    rule_named: tuple = ()
 
 
 def diagnose(t, u, F, *, candidates=None, max_effects: int = 3, noise: float | None = None,
              alpha: float = 1e-3, ambiguity: float = 10.0, max_samples: int = 1500,
-             lowpass: float | None = None, seed=0, progress: bool = False) -> Diagnosis:
+             lowpass: float | None = None, seed=0, progress: bool = False,
+             effect_prior=None, probabilities: bool = True, evidence: str = "laplace",
+             nested=None) -> Diagnosis:
     """Find what the four-parameter Iwan model misses in a displacement-driven test.
 
     See the module docstring for the procedure.
@@ -142,6 +150,22 @@ def diagnose(t, u, F, *, candidates=None, max_effects: int = 3, noise: float | N
     progress : bool, keyword-only
         Show a tqdm progress bar counting the model fits (the base fit, then each
         candidate stack), with the stack being fitted (needs tqdm).
+    effect_prior : float or dict, optional, keyword-only
+        Prior probability that each candidate effect is present (independently), in
+        ``(0, 1)``, or ``{effect: probability}`` for some of them: the prior model
+        probabilities of the explanations (:mod:`~iwan_element.diagnose.probabilities`).
+        Default ``1 - 2**(-1/K)`` for ``K`` testable candidates: even prior odds that the
+        plain joint is enough.
+    probabilities : bool, keyword-only
+        Compute the explanations' probabilities (default True). False: the stepwise rule
+        alone names the effects, the single effects are fitted only where the rule needs
+        them, and ``explanations`` is empty (today's cost, for comparison).
+    evidence : {"laplace", "nested"}, keyword-only
+        How each explanation's evidence is computed: the Laplace approximation (default),
+        or nested sampling as well (:mod:`~iwan_element.diagnose.nested`, the ``nested``
+        extra; minutes per record), which then gives the probabilities.
+    nested : dict, optional, keyword-only
+        Options of the nested sampler (``sampler``, ``nlive``, ``dlogz``, ``rng``).
 
     Returns
     -------
@@ -161,6 +185,8 @@ def diagnose(t, u, F, *, candidates=None, max_effects: int = 3, noise: float | N
                 ambiguity=check_scalar("ambiguity", ambiguity, low=0.0),
                 max_effects=check_int("max_effects", max_effects, 1))
     max_samples = check_int("max_samples", max_samples, 100)
+    check_effect_prior(effect_prior, cand)          # a bad prior is refused before any fit
+    nest = nested_options(evidence, nested)
     bar = progress_bar(progress, desc="diagnose", unit="fit")
     try:
         with one_blas_thread():          # tall, narrow least squares: threads only spin
@@ -171,8 +197,12 @@ def diagnose(t, u, F, *, candidates=None, max_effects: int = 3, noise: float | N
             nl = noise_level(rec, rec.F_raw - record_force(base, rec.uj, rec.v)[0], noise)
             shape_b, _ = base["model"].decode(base["z"])
             fitter.scales["D_ref"] = dissipation_scale(rec.ev, shape_b)
+            if not isinstance(probabilities, (bool, np.bool_)):
+                raise ValueError(f"probabilities must be True or False, got {probabilities!r}")
             sel = select(fitter, base, rec, nl, cand, opts, fixed_noise=noise is not None,
-                         bar=bar)
+                         bar=bar, explore=bool(probabilities))
+            if probabilities:
+                sel = most_probable(sel, base, rec, effect_prior, nest)
             fits = final_fits(fitter, rec, base, sel.final, noise_only=sel.noise_only,
                               t_start=t_start)
             return assemble(rec, sel, fits, opts, t_start)
@@ -182,7 +212,7 @@ def diagnose(t, u, F, *, candidates=None, max_effects: int = 3, noise: float | N
 
 
 def select(fitter: StackFitter, base: dict, rec: PreparedRecord, nl: NoiseLevel, cand, opts,
-           *, fixed_noise: bool, bar=None) -> LoopSelection:
+           *, fixed_noise: bool, bar=None, explore: bool = True) -> LoopSelection:
     """The selection stage: the rule over the candidates the record can test, repeated with
     the noise re-read from the residual of the model it selected unless the noise was given
     (a large misfit leaks into the plain fit's residual and inflates the noise estimate, which
@@ -191,10 +221,14 @@ def select(fitter: StackFitter, base: dict, rec: PreparedRecord, nl: NoiseLevel,
     testable = tuple(c for c in cand if c not in why)
     cycles = record_cycles(rec)
     set_total(bar, 1 + len(testable) * (opts["max_effects"] + 1))    # base, rounds, pairs
+    # a record that is noise can test no effect: the candidates are then fitted only where
+    # the rule needs them (never), not for the probabilities
+    explore = explore and not pure_noise(rec.F[rec.keep], base["ssr"] / nl.sigma ** 2,
+                                         nl.sigma, nl.tau_k, nl.n_eff)
     for k in range(3):
         fitter.s2 = nl.sigma ** 2
         base["chi2"] = base["ssr"] / fitter.s2
-        rule = _run_rule(fitter, base, rec, testable, nl, opts, bar)
+        rule = _run_rule(fitter, base, rec, testable, nl, opts, bar, explore)
         if fixed_noise or not rule.named or k == 2:
             break
         new = noise_level(rec, rec.F_raw - record_force(rule.final["state"], rec.uj,
@@ -207,12 +241,37 @@ def select(fitter: StackFitter, base: dict, rec: PreparedRecord, nl: NoiseLevel,
     return LoopSelection(named=named, ambiguous=() if noise_only else tuple(rule.ambiguous),
                          steps=rule.steps, final=rule.final["state"] if named else None,
                          p_before=rule.p_before, p_after=rule.p_after,
-                         untestable=why, cycles=cycles, noise=nl, noise_only=noise_only)
+                         untestable=why, cycles=cycles, noise=nl, noise_only=noise_only,
+                         candidates=testable)
 
 
-def _run_rule(fitter, base, rec, testable, nl, opts, bar) -> SelectionResult:
+def most_probable(sel: LoopSelection, base: dict, rec: PreparedRecord,
+                  effect_prior, nested=None) -> LoopSelection:
+    """The probability stage: every explanation the selection fitted with its posterior
+    probability (:mod:`.probabilities`), and the most probable one named (the rule's own
+    answer kept in ``rule_named``). A record that is noise names nothing whatever the
+    probabilities say (nothing is identified on it)."""
+    nl = sel.noise
+    fits = collect_fits(base, sel.steps)
+    expl = rank(fits, tau=nl.tau_k, n_eff=nl.n_eff,
+                prior=check_effect_prior(
+                    {k: v for k, v in effect_prior.items() if k in sel.candidates}
+                    if isinstance(effect_prior, dict) else effect_prior, sel.candidates),
+                evaluate=loop_evaluator(nl.sigma, float(np.ptp(rec.F)) or 1.0), nested=nested)
+    top = expl[0]
+    if sel.noise_only or key(top.stack) == key(sel.named):
+        return replace(sel, explanations=tuple(expl), rule_named=tuple(sel.named))
+    row = fits[top.effects][3]
+    q = fits[top.effects][2]
+    return replace(sel, named=tuple(top.stack), ambiguous=(), final=row if top.stack else None,
+                   p_after=misfit_p(row["chi2"], nl.tau_k, nl.n_eff, q),
+                   explanations=tuple(expl), rule_named=tuple(sel.named))
+
+
+def _run_rule(fitter, base, rec, testable, nl, opts, bar, explore=True) -> SelectionResult:
     """One run of the shared selection rule over ``testable`` (``bar``: a progress bar
-    counting the fits)."""
+    counting the fits; ``explore``: fit the single effects even when the plain joint's
+    misfit is noise, for the probabilities)."""
     span = float(np.ptp(rec.F)) or 1.0
     nf = fitter.y.size
 
@@ -231,4 +290,5 @@ def _run_rule(fitter, base, rec, testable, nl, opts, bar) -> SelectionResult:
 
     base_state = {"names": (), "chi2": base["chi2"], "q": 5, "state": base}
     return stepwise_select(fit_candidate, testable, base_state, tau=nl.tau_k, n_eff=nl.n_eff,
-                           allowed=lambda names, c: stack_ok(tuple(names) + (c,)), **opts)
+                           allowed=lambda names, c: stack_ok(tuple(names) + (c,)),
+                           first_step=explore, **opts)

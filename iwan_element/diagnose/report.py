@@ -63,7 +63,7 @@ def assemble(rec, sel, fits, opts, t_start) -> Diagnosis:
         untestable=sel.untestable, warnings=tuple(warns), force_before=ro(F_base),
         force_after=ro(np.array(F_after)),
         t=ro(np.arange(rec.n, dtype=float) if rec.t is None else rec.t),
-        u=ro(rec.u), F=ro(FF), details=json_safe(details))
+        u=ro(rec.u), F=ro(FF), details=json_safe(details), explanations=sel.explanations)
 
 
 def _failures(sel, fit, unexplained) -> tuple:
@@ -94,6 +94,9 @@ def _details(rec, nl, sel, opts, loc, final, fit, t_start) -> dict:
             "lowpass": rec.lowpass,
             "lowpass_reason": "rig dynamics removed before fitting" if rec.lowpass else None,
             "start_displacement": float(final.get("start", 0.0)),
+            "rule_named": list(sel.rule_named), "time_given": rec.t is not None,
+            "candidates": list(sel.candidates),
+            "x_max": float(rec.ev.x_max), "scales": dict(final["model"].scales),
             "start_displacement_stderr": float(math.nan if (se_s := fit.details.get(
                 "start_displacement_stderr")) is None else se_s),     # None: not determined
             "wall_time": time.perf_counter() - t_start}

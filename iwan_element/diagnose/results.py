@@ -9,6 +9,7 @@ import numpy as np
 from ..core.serialize import json_safe
 from ..effects import EFFECTS
 from ..core.result_shape import ResultShape, panels, unit_label, value_stderr, wrap
+from .probabilities import Probable
 
 __all__ = ["Diagnosis"]
 
@@ -31,7 +32,7 @@ def _verdict_lines(word: str, result) -> list:
 
 
 @dataclass(frozen=True, eq=False)
-class Diagnosis(ResultShape):
+class Diagnosis(Probable, ResultShape):
     """What the four-parameter Iwan fit misses in a test record, and the augmented model.
 
     Attributes
@@ -82,6 +83,12 @@ class Diagnosis(ResultShape):
         Test statistics (JSON-safe).
     failures : tuple of str
         Why ``success`` is False, in a tester's words.
+    explanations : tuple of Explanation
+        Every explanation the diagnosis fitted (the plain joint, each single effect, each
+        stack fitted on the way) with its evidence and posterior probability, most probable
+        first (:mod:`~iwan_element.diagnose.probabilities`); the named effects are the
+        first. ``probabilities`` and ``effect_probability(name)`` read them, and
+        ``averaged_band`` predicts with them.
     """
 
     plot_panels = 2
@@ -109,6 +116,7 @@ class Diagnosis(ResultShape):
     F: np.ndarray
     details: dict = field(default_factory=dict)
     failures: tuple = ()
+    explanations: tuple = ()
 
     @property
     def params(self):
@@ -130,6 +138,7 @@ class Diagnosis(ResultShape):
             "misfit": self.misfit, "steps": list(self.steps), "untestable": dict(self.untestable),
             "warnings": list(self.warnings), "base_fit": self.base_fit.to_dict(),
             "fit": self.fit.to_dict(), "model": _describe(self.model), "details": self.details,
+            "probabilities": self.probabilities_dict(),
         })
 
     def report(self) -> str:
@@ -176,7 +185,38 @@ class Diagnosis(ResultShape):
                          f"beta={q.beta:.4f}")
         else:
             lines.append("  named: none")
+        lines += self.probability_lines()
+        rule = tuple(d.get("rule_named", self.effects))
+        if set(rule) != set(self.effects):
+            lines.append(f"    (the stepwise rule alone names {' + '.join(rule) or 'nothing'})")
         return "\n".join(lines + _verdict_lines("error", self))
+
+    def _tables(self) -> list:
+        base = super()._tables()
+        return base[:1] + self.probability_tables() + base[1:]
+
+    def averaged_band(self, t=None, u=None, *, level: float = 0.95):
+        """The force predicted with the doubt about the model: every probable explanation's
+        fitted model weighted by its probability, each with its parameters' posterior
+        covariance (:mod:`~iwan_element.diagnose.averaging`).
+
+        Parameters
+        ----------
+        t, u : array_like, shape (n,), optional
+            Time [s] and displacement [m] from the joint's rest position of the drive to
+            predict; default the record as fitted. The fitted starting state and force
+            offset are kept.
+        level : float, keyword-only
+            Probability of the band, in (0, 1).
+
+        Returns
+        -------
+        AveragedBand
+            Channel ``"force"`` [N]: ``mean``, ``std``, ``lower``, ``upper``; the members
+            and their weights.
+        """
+        from ._loop_evidence import loop_band
+        return loop_band(self, t, u, level)
 
     def plot(self, ax=None):
         """Data, base fit and augmented fit (force-displacement, mm and kN) and the residual

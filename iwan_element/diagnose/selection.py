@@ -94,7 +94,7 @@ def _verdicts(rows, best, ambiguity):
 def stepwise_select(fit_candidate, candidates, base: dict, *, tau: float, n_eff: float,
                     alpha: float = 1e-3, max_effects: int = 2, ambiguity: float = 10.0,
                     explain_fraction: float = EXPLAIN_FRACTION, allowed=None,
-                    guard=None, pairs: bool = True) -> SelectionResult:
+                    guard=None, pairs: bool = True, first_step: bool = False) -> SelectionResult:
     """Run the selection rule (module docstring).
 
     Parameters
@@ -114,13 +114,19 @@ def stepwise_select(fit_candidate, candidates, base: dict, *, tau: float, n_eff:
         ``guard(current, row) -> bool``: an extra condition for naming (True: passes).
     pairs : bool
         Whether the pair step (module docstring) is tried when no single effect is eligible.
+    first_step : bool
+        Fit every candidate on the base model even when the base's misfit is noise (the
+        step's rows then say so and nothing is named): the model probabilities
+        (:mod:`.probabilities`) need the single effects' fits on every record, the rule's
+        answer is the same.
     """
     cur = dict(base)
     p0 = misfit_p(cur["chi2"], tau, n_eff, cur["q"])
     named, ambiguous, steps = [], (), []
     pen = math.log(max(n_eff, 2.0))
     while len(named) < max_effects:
-        if misfit_p(cur["chi2"], tau, n_eff, cur["q"]) >= alpha:
+        noise = misfit_p(cur["chi2"], tau, n_eff, cur["q"]) >= alpha
+        if noise and not (first_step and not steps):
             break
         rest = [c for c in candidates if c not in cur["names"]
                 and (allowed is None or allowed(cur["names"], c))]
@@ -135,9 +141,14 @@ def stepwise_select(fit_candidate, candidates, base: dict, *, tau: float, n_eff:
             r["name"] = name
             rows.append(score(r, r["q"]))
         ok = [r for r in rows if r["lowers_ic"] and r["enough"] and r["guard_ok"]]
-        best = min(ok, key=lambda r: r["ic"]) if ok else None
+        best = min(ok, key=lambda r: r["ic"]) if ok and not noise else None
         _verdicts(rows, best, ambiguity)
+        if noise:
+            for r in rows:
+                r["verdict"] = "not needed (rest is noise)"
         steps.append({"on": list(cur["names"]), "rows": rows})
+        if noise:
+            break
         if best is None and pairs and len(named) + 2 <= max_effects:
             pair, tried = _pair_step(fit_candidate, cur, rows, score, allowed)
             if tried:

@@ -11,10 +11,10 @@ the one shared with the loop diagnosis (:mod:`iwan_element.diagnose.selection`),
 residuals of frequency and damping divided by their noise. When the prediction is a beam
 specimen's QSMA curve, the fitted modal forms are exactly the augmented specimen's
 (``VibrationDiagnosis.augment``). A mismatch no candidate explains is stated with the
-amplitudes where it lies. The noise is the larger of the scatter the
-data show about a smooth curve (robust, from second differences along amplitude) and the
-per-point uncertainty the caller states; with too few amplitudes to trust a scatter
-estimate a warning says so.
+amplitudes where it lies. The noise is the per-point uncertainty the caller states, unless
+the scatter the data show about a smooth curve (robust, from second differences along
+amplitude) lies above that statement's 99 % range, then that scatter; with nothing stated,
+the scatter; with too few amplitudes to trust a scatter estimate a warning says so.
 """
 from __future__ import annotations
 
@@ -22,6 +22,7 @@ import math
 
 import numpy as np
 from scipy.optimize import least_squares
+from scipy.stats import chi2 as _chi2
 
 from ..core.validation import (check_int, check_magnitude, check_scalar, finite_array,
                                 same_length)
@@ -32,7 +33,9 @@ from ..identify.units import check_damping_ratio, check_frequency_ratio
 from ..core.serialize import json_safe
 from ..fitting import covariance
 from .vibration_result import VibrationDiagnosis
-from .selection import criterion_text, stepwise_select
+from .selection import criterion_text, misfit_p, stepwise_select
+from .probabilities import check_effect_prior, key, rank
+from ._vib_evidence import collect, evaluate, jacobian, nested_options
 
 __all__ = ["diagnose_vibration", "vibration_candidates"]
 
@@ -49,12 +52,28 @@ def _check_units(fm, fp, zm, zp):
     check_damping_ratio("predicted_damping_ratio", zp)
 
 
+#: Efficiency of the second differences' MAD scale against the standard deviation: its
+#: sampling spread is that of a chi-square with about this fraction of the differences'
+#: count as degrees of freedom.
+MAD_EFFICIENCY = 0.37
+
+
 def _noise(r, stated, n, name):
-    """Noise of one log-residual curve [-]: max(scatter, stated); and its source text."""
+    """Noise of one log-residual curve [-] and its source text: the stated uncertainty when
+    there is one, unless the curve's own scatter (second differences along amplitude) lies
+    above the stated value's 99 % range (then the scatter: the curve is noisier than stated);
+    the scatter when none is stated. (Taking the larger of the two whenever the scatter
+    happens to exceed the stated value would bias the noise upwards: with 12 points the
+    scatter's own spread is a factor 1.9, and a noise set too high makes every effect's
+    evidence too small.)"""
     scatter = difference_sigma(r) if n >= 5 else 0.0    # second differences along amplitude
-    s = max(scatter, float(np.median(stated)) if stated is not None else 0.0, 1e-12)
-    src = "scatter" if stated is None or scatter >= float(np.median(stated)) else "stated"
-    return s, f"{name}: {src}"
+    if stated is None:
+        return max(scatter, 1e-12), f"{name}: scatter"
+    st = float(np.median(stated))
+    dof = max(MAD_EFFICIENCY * (n - 2), 1.0)
+    if scatter > st * math.sqrt(float(_chi2.ppf(0.99, dof)) / dof):
+        return scatter, f"{name}: scatter (above the stated uncertainty's 99 % range)"
+    return max(st, 1e-12), f"{name}: stated"
 
 
 #: Largest relative standard uncertainty or noise [-] accepted per curve: a frequency known
@@ -64,7 +83,8 @@ _RELATIVE_MAX = {"frequency": 0.5, "damping_ratio": 1.0}
 
 
 def _curve_level(name, r, given, stated, n):
-    """Noise of one curve: ``given`` if set, else max(scatter, stated uncertainty)."""
+    """Noise of one curve: ``given`` if set, else the stated uncertainty unless the scatter is
+    clearly above it (:func:`_noise`)."""
     if given is not None:
         return _relative(f"{name}_noise", name, check_scalar(f"{name}_noise", given, low=0.0,
                                                              low_open=True)), f"{name}: given"
@@ -249,7 +269,8 @@ def diagnose_vibration(amplitude, frequency=None, damping_ratio=None, *, predict
                        frequency_uncertainty=None, damping_ratio_uncertainty=None,
                        predicted_zeta0: float = 0.0, alpha: float = 1e-3,
                        ambiguity: float = 10.0, max_effects: int = 2,
-                       between_tests: bool = False) -> VibrationDiagnosis:
+                       between_tests: bool = False, effect_prior=None,
+                       evidence: str = "laplace", nested=None) -> VibrationDiagnosis:
     """Compare measured and predicted amplitude-dependent frequency and damping; name what the
     jointed model misses (see the module docstring).
 
@@ -288,6 +309,15 @@ def diagnose_vibration(amplitude, frequency=None, damping_ratio=None, *, predict
         effect whose modal form is a constant floor (viscous damping) cannot be told from a
         between-test difference of the linear damping and is not tested. Default False (same
         test, or a synthetic curve).
+    effect_prior : float or dict, optional, keyword-only
+        Prior probability that each candidate effect is present, as in
+        :func:`~iwan_element.diagnose` (default: even prior odds for the plain prediction).
+    evidence : {"laplace", "nested"}, keyword-only
+        How each explanation's evidence is computed: the Laplace approximation (default),
+        or nested sampling as well (:mod:`~iwan_element.diagnose.nested`, needs the
+        ``nested`` extra), which then gives the probabilities.
+    nested : dict, optional, keyword-only
+        Options of the nested sampler (``sampler``, ``nlive``, ``dlogz``, ``rng``).
 
     Returns
     -------
@@ -337,26 +367,42 @@ def diagnose_vibration(amplitude, frequency=None, damping_ratio=None, *, predict
                 "q": len(EFFECTS[name].modal_specs), "error": vib.error(names, res.x)}
 
     base = {"names": (), "chi2": chi_b, "q": 0, "state": z_b}
+    prior = check_effect_prior(effect_prior, cands)
+    nest = nested_options(evidence, nested)
     sel = stepwise_select(fit_candidate, cands, base, tau=1.0, n_eff=2.0 * n,
-                          alpha=alpha, max_effects=max_effects, ambiguity=ambiguity)
+                          alpha=alpha, max_effects=max_effects, ambiguity=ambiguity,
+                          first_step=True)
     # never name a set of effects that leaves the unweighted mismatch higher than before (by
     # more than a tenth of the noise: a hidden frequency effect changes the damping-dominated
     # unweighted mismatch by less than the damping noise's own scatter)
     tol = 0.1 * math.sqrt(0.5 * (sf ** 2 + sz ** 2))
-    while sel.named and vib.error(sel.final["names"], sel.final["state"]) > err_b + tol:
+    fits = collect(base, sel.steps)
+    raises = {k for k, f in fits.items() if k and vib.error(f[0], f[3]) > err_b + tol}
+    expl = rank({k: f for k, f in fits.items() if k not in raises}, tau=1.0, n_eff=2.0 * n,
+                prior=prior, evaluate=lambda stack, z: evaluate(vib, stack, z), nested=nest)
+    rule_named = tuple(sel.named)
+    if sel.named and key(sel.named) in raises:
         warns.append(f"{' + '.join(sel.named)} lowers the noise-weighted misfit but raises the "
                      "mismatch; not named")
-        sel.named, sel.ambiguous = [], ()
-        sel.final = base
-        sel.p_after = sel.p_before
+    for k in sorted(raises - {key(sel.named)}):
+        if fits[k][1] < min(f[1] for kk, f in fits.items() if kk not in raises):
+            warns.append(f"{' + '.join(k)} lowers the noise-weighted misfit but raises the "
+                         "mismatch; not considered")
+    top = expl[0]
+    if key(top.stack) != key(sel.named):
+        f = fits[top.effects]
+        sel.named, sel.ambiguous = list(top.stack), ()
+        sel.final = {"names": f[0], "chi2": f[1], "q": f[2] - vib.nn, "state": f[3]}
+        sel.p_after = misfit_p(f[1], 1.0, 2.0 * n, f[2] - vib.nn)
     if vib.nn:                          # where: what is left after the between-test offsets
         f_b, z_b_curve = vib.curves((), z_b)
         rf0, rz0 = np.log(fm / f_b), np.log(zm / z_b_curve)
     return _vib_result(vib, sel, chi_b, err_b, rf0, rz0, warns, alpha, f"{src_f}; {src_z}",
-                       cands)
+                       cands, tuple(expl), rule_named)
 
 
-def _vib_result(vib, sel, chi_b, err_b, rf0, rz0, warns, alpha, noise_from, cands):
+def _vib_result(vib, sel, chi_b, err_b, rf0, rz0, warns, alpha, noise_from, cands,
+                explanations=(), rule_named=()):
     names, z = sel.final["names"], sel.final["state"]
     params = vib.decode(names, z)
     f_new, z_new = vib.curves(names, z)
@@ -382,7 +428,8 @@ def _vib_result(vib, sel, chi_b, err_b, rf0, rz0, warns, alpha, noise_from, cand
                "damping_error_after": float(np.sqrt(np.mean(np.log(vib.zm / z_new) ** 2))),
                "stderr": dict(zip((f"{nm}.{sp.name}" for nm in names
                                    for sp in EFFECTS[nm].modal_specs), se)),
-               "at_bound": at_bound}
+               "at_bound": at_bound, "rule_named": list(rule_named),
+               "refs": dict(vib.refs), "nuisances": vib.nn}
     if vib.nn:
         df, dz = vib.nuisance(z)
         details["between_tests"] = {
@@ -398,7 +445,8 @@ def _vib_result(vib, sel, chi_b, err_b, rf0, rz0, warns, alpha, noise_from, cand
         damping_ratio_noise=vib.sz, amplitude=ro(vib.X), frequency=ro(vib.fm), damping_ratio=ro(vib.zm),
         predicted_frequency=ro(vib.fp), predicted_damping_ratio=ro(vib.zp), model_frequency=ro(f_new),
         model_damping_ratio=ro(z_new), steps=tuple(json_safe(s) for s in steps), warnings=tuple(warns),
-        details=json_safe(details), covariance=None if cov is None else ro(cov))
+        details=json_safe(details), covariance=None if cov is None else ro(cov),
+        explanations=explanations)
 
 
 def _at_upper_bound(vib, names, z):
@@ -429,13 +477,7 @@ def _covariance(vib, names, z, chi2):
     damping offsets; empty without them)."""
     if z.size == 0:
         return None, np.zeros(0), ()
-    h = 1e-6 * np.maximum(np.abs(z), 1e-3)
-    r0 = vib.resid(names, z)
-    J = np.empty((r0.size, z.size))
-    for j in range(z.size):
-        zz = z.copy()
-        zz[j] += h[j]
-        J[:, j] = (vib.resid(names, zz) - r0) / h[j]
+    J, r0 = jacobian(vib, names, z)
     dof = max(r0.size - z.size, 1)
     cz = covariance(J, s2=max(1.0, chi2 / dof), dof=dof)
     Cz, sd = cz.covariance, cz.stderr

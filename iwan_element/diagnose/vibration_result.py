@@ -13,6 +13,7 @@ from ..fitting import Parameter, ParameterTable, verdict
 from ..core.result_shape import ResultShape, panels, wrap
 from ._augment import augmented
 from .results import _unit, _verdict_lines
+from .probabilities import Probable
 
 __all__ = ["VibrationDiagnosis"]
 
@@ -31,7 +32,7 @@ def _apply(names, parameters, X, f, z, zeta0):
 
 
 @dataclass(frozen=True, eq=False)
-class VibrationDiagnosis(ResultShape):
+class VibrationDiagnosis(Probable, ResultShape):
     """Measured against predicted amplitude-dependent frequency and damping: what is missing.
 
     Attributes
@@ -78,6 +79,11 @@ class VibrationDiagnosis(ResultShape):
         the data do not determine), units and verdicts (:func:`iwan_element.fitting.verdict`;
         a value at the upper end of its fit range, ``details["at_bound"]``, is not
         identified); empty when nothing was named.
+    explanations : tuple of Explanation
+        Every explanation fitted (the prediction alone, each single effect, each stack
+        fitted on the way) with its evidence and posterior probability, most probable
+        first (:mod:`~iwan_element.diagnose.probabilities`); ``probabilities`` and
+        ``effect_probability(name)`` read them, ``averaged_band`` predicts with them.
     """
 
     plot_panels = 2
@@ -102,6 +108,7 @@ class VibrationDiagnosis(ResultShape):
     steps: tuple
     details: dict = field(default_factory=dict)
     covariance: np.ndarray | None = None
+    explanations: tuple = ()
 
     @property
     def params(self) -> ParameterTable:
@@ -231,6 +238,15 @@ class VibrationDiagnosis(ResultShape):
                               notes="prediction + " + (" + ".join(self.effects) or "nothing"),
                               warnings=tuple(warns))
 
+    def averaged_band(self, amplitude, *, base=None, level: float = 0.95):
+        """Frequency and damping predicted with the doubt about the model: every probable
+        explanation's modal forms weighted by its probability, each with its parameters'
+        posterior covariance (:mod:`~iwan_element.diagnose.averaging`); ``base`` as in
+        :meth:`predict`. Returns an ``AveragedBand`` (channels ``"frequency"`` [Hz] and
+        ``"damping_ratio"`` [-])."""
+        from ._vib_evidence import vibration_band
+        return vibration_band(self, amplitude, base, level)
+
     def _bands(self, X, fb, zb, z0, f, z):
         """Linearised 1-sigma bands [Hz], [-] from the covariance of the fitted values."""
         keys = [(n, k) for n in self.effects for k in self.parameters[n]]
@@ -257,7 +273,8 @@ class VibrationDiagnosis(ResultShape):
             "frequency", "damping_ratio", "predicted_frequency", "predicted_damping_ratio",
             "model_frequency", "model_damping_ratio", "steps", "warnings", "details", "covariance")}
                          | {"success": self.success,
-                            "failure_reasons": list(self.failure_reasons())})
+                            "failure_reasons": list(self.failure_reasons()),
+                            "probabilities": self.probabilities_dict()})
 
     def report(self) -> str:
         """Human-readable account."""
@@ -296,6 +313,10 @@ class VibrationDiagnosis(ResultShape):
                     f"{k} = {v:.4g} {_unit(name, k, modal=True)}" for k, v in d.items()))
         else:
             lines.append("  named: none")
+        lines += self.probability_lines()
+        rule = tuple(self.details.get("rule_named", self.effects))
+        if set(rule) != set(self.effects):
+            lines.append(f"    (the stepwise rule alone names {' + '.join(rule) or 'nothing'})")
         return "\n".join(lines + _verdict_lines("mismatch", self))
 
     def _tables(self) -> list:
@@ -317,7 +338,8 @@ class VibrationDiagnosis(ResultShape):
                ("mismatch after [%]", 100 * self.error_after),
                ("noise [%]", 100 * self.noise_level), ("named", ", ".join(self.effects)
                                                          or "none"), ("where", self.where)]
-        return out + [("goodness of fit", ("quantity", "value"), fit)]
+        return out[:1] + self.probability_tables() + out[1:] + [
+            ("goodness of fit", ("quantity", "value"), fit)]
 
     def plot(self, ax=None):
         """Frequency and damping against amplitude: measured, predicted, augmented.

@@ -18,6 +18,11 @@ from ..core.protocol import CommittedState, check_element
 __all__ = ["ParamSpec", "_Effect", "_find_zero"]
 
 
+#: The smallest size an effect's size prior spreads its decades down to, as a fraction of
+#: the declared range (:attr:`ParamSpec.neutral`): three decades.
+PRIOR_FLOOR = 1e-3
+
+
 @dataclass(frozen=True)
 class ParamSpec:
     """One named parameter of an effect.
@@ -52,6 +57,19 @@ class ParamSpec:
     open_range : bool
         True when the ends of ``[lower, upper]`` are excluded (e.g. an asymmetry of +-1
         would leave one direction without friction).
+    prior : tuple of float or None
+        The prior of the parameter in the diagnosis' model probabilities
+        (:mod:`iwan_element.diagnose.probabilities`): uniform over this range of the
+        fitting variable (the same units as ``fit_bounds``, inside them), stated with the
+        effect as its physical range in the record's own scales (e.g. a gap of up to half
+        the largest stroke). ``None``: the whole of ``fit_bounds``.
+    neutral : float or None
+        The fitting variable's "no effect" value (0 for a size, 1 for a break-away ratio)
+        when the parameter is the effect's size: its prior is then uniform in the
+        logarithm of the distance from it, over the decades from :data:`PRIOR_FLOOR` of the
+        range to the range's end (density ``1 / (|z - neutral| + floor)``: a size is a
+        priori as likely in each of those decades, and flat below the floor). ``None``: a
+        uniform prior (a shape, a position).
     """
 
     name: str
@@ -66,6 +84,50 @@ class ParamSpec:
     fit_bounds: tuple = (0.0, 1.0)
     fit_starts: tuple = (0.0,)
     open_range: bool = False
+    prior: tuple | None = None
+    neutral: float | None = None
+
+    def __post_init__(self):
+        lo, hi = self.fit_bounds
+        if self.prior is not None and not (lo <= self.prior[0] < self.prior[1] <= hi):
+            raise ValueError(f"prior of {self.name!r} must be a range inside fit_bounds "
+                             f"{self.fit_bounds}, got {self.prior}")
+
+        if self.neutral is not None and not lo <= self.neutral <= hi:
+            raise ValueError(f"neutral of {self.name!r} must lie in fit_bounds {self.fit_bounds}")
+
+    @property
+    def prior_range(self) -> tuple:
+        """``(low, high)`` of the prior in fitting units (``prior`` or ``fit_bounds``)."""
+        return tuple(float(x) for x in (self.prior or self.fit_bounds))
+
+    def log_prior(self, z):
+        """Log prior density of the fitting variable ``z`` (array or float) over
+        :attr:`prior_range` [1 / fitting unit]: uniform, or log-uniform in the distance
+        from :attr:`neutral` (see there)."""
+        lo, hi = self.prior_range
+        z = np.asarray(z, float)
+        if self.neutral is None:
+            return np.full(z.shape, -math.log(hi - lo))
+        n = min(max(self.neutral, lo), hi)
+        f = PRIOR_FLOOR * max(n - lo, hi - n)
+        norm = sum(math.log1p(d / f) for d in (n - lo, hi - n) if d > 0)
+        return -np.log(np.abs(z - n) + f) - math.log(norm)
+
+    def prior_quantile(self, q):
+        """The fitting variable at prior probability ``q`` in [0, 1] (the inverse of the
+        prior's distribution function; for nested sampling's prior transform)."""
+        lo, hi = self.prior_range
+        q = np.asarray(q, float)
+        if self.neutral is None:
+            return lo + q * (hi - lo)
+        n = min(max(self.neutral, lo), hi)
+        f = PRIOR_FLOOR * max(n - lo, hi - n)
+        a, b = math.log1p((n - lo) / f), math.log1p((hi - n) / f)     # masses x norm
+        m = q * (a + b)
+        left = n - f * np.expm1(np.maximum(a - m, 0.0))
+        right = n + f * np.expm1(np.maximum(m - a, 0.0))
+        return np.clip(np.where(m < a, left, right), lo, hi)
 
 
 def _find_zero(trial, a: float, Fa: float, b: float, Fb: float, *, rtol: float = 1e-13,

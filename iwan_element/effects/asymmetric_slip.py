@@ -40,6 +40,7 @@ class AsymmetricSlip(_LawEffect):
     loop_rank = 50
     specs = (ParamSpec("asymmetry", "1", "relative difference of the forward and backward "
                        "slip thresholds", lower=-1.0, upper=1.0, fit_bounds=(-0.9, 0.9),
+                       prior=(-0.9, 0.9), neutral=0.0,
                        fit_starts=(0.0, 0.1, -0.1), open_range=True),)
 
     def __init__(self, inner, *, asymmetry: float):

@@ -64,9 +64,11 @@ class Backlash(_Effect):
     structure = "series"
     loop_rank = 30
     specs = (ParamSpec("gap", "m", "half width of the free play in series with the joint",
-                       ref="u_max", ref_power=-1, fit_bounds=(0.0, 0.5), fit_starts=(0.0, 0.01, 0.08)),
+                       ref="u_max", ref_power=-1, fit_bounds=(0.0, 0.5),
+                       prior=(0.0, 0.5), neutral=0.0, fit_starts=(0.0, 0.01, 0.08)),
              ParamSpec("drag", "N", "friction force resisting the motion across the open gap",
-                       default=0.0, fs_power=1, fit_bounds=(0.0, 0.5), fit_starts=(0.0, 0.05, 0.1)))
+                       default=0.0, fs_power=1, fit_bounds=(0.0, 0.5),
+                       prior=(0.0, 0.5), neutral=0.0, fit_starts=(0.0, 0.05, 0.1)))
     #: Gap values (fraction of the largest |u|) scanned for a start before the fit: the gap
     #: must land near the record's zero-force plateau before the joint's shape can follow.
     fit_scan = (0.0, 0.003, 0.006, 0.01, 0.015, 0.02, 0.03, 0.045, 0.06, 0.08, 0.1, 0.13, 0.17,

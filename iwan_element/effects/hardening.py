@@ -53,10 +53,12 @@ class Hardening(_Effect):
     effect = "hardening"
     specs = (ParamSpec("k3", "N/m^3", "cubic stiffness in parallel with the joint",
                        fs_power=1, ref="u_max", ref_power=3, fit_bounds=(0.0, 5.0),
+                       prior=(0.0, 5.0), neutral=0.0,
                        fit_starts=(0.0, 0.1, 1.0)),)
     modal_specs = (ParamSpec("k3_per_mass", "1/(m^2 s^2)",
                              "cubic modal stiffness over modal mass (amplitude in curve units)",
                              ref="omega2_per_X2", ref_power=-1, fit_bounds=(0.0, 1.0),
+                             prior=(0.0, 1.0), neutral=0.0,
                              fit_starts=(0.0, 1e-3, 2e-2)),)
     kind = "stiffness"
 

@@ -168,25 +168,25 @@ class MacroslipOnset(JenkinsBank):
 
     effect = "macroslip_onset"
     specs = (ParamSpec("k_2", "N/m", "stiffness of the patch that slides between u_s and "
-                       "2 u_s", fs_power=1, ref="u_max", fit_bounds=(0.0, 5.0),
+                       "2 u_s", fs_power=1, ref="u_max", fit_bounds=(0.0, 5.0), prior=(0.0, 5.0), neutral=0.0,
                        fit_starts=(0.0, 0.3, 1.0)),
              ParamSpec("u_s", "m", "slip displacement at which the patch starts to slide",
                        lower=0.0, default=None, ref="u_max", ref_power=-1,
-                       fit_bounds=(0.02, 1.0), fit_starts=(0.5, 0.3, 0.7)),
+                       fit_bounds=(0.02, 1.0), prior=(0.02, 1.0), fit_starts=(0.5, 0.3, 0.7)),
              ParamSpec("shape", "1", "shape of the threshold law (0: slides as a whole, "
                        "1/2: thresholds spread evenly)", upper=1.0, default=0.0,
-                       fit_bounds=(0.0, 0.5), fit_starts=(0.0, 0.0, 0.3)),
+                       fit_bounds=(0.0, 0.5), prior=(0.0, 0.5), fit_starts=(0.0, 0.0, 0.3)),
              )
     modal_specs = (ParamSpec("kappa_2", "1/s^2", "stiffness over modal mass that slides "
                              "between X_s and 2 X_s", ref="omega2_ref", ref_power=-1,
-                             fit_bounds=(0.0, 0.3),
+                             fit_bounds=(0.0, 0.3), prior=(0.0, 0.3), neutral=0.0,
                              fit_starts=(0.0, 0.01, 0.05, 0.003, 0.02, 0.05, 0.02, 0.01)),
                    ParamSpec("X_s", "m", "amplitude at which the patch starts to slide",
-                             ref="X_max", ref_power=-1, fit_bounds=(0.02, 1.0),
+                             ref="X_max", ref_power=-1, fit_bounds=(0.02, 1.0), prior=(0.02, 1.0),
                              fit_starts=(0.5, 0.3, 0.6, 0.8, 0.8, 0.9, 0.4, 0.3)),
                    ParamSpec("shape", "1", "shape of the threshold law (0: slides as a "
                              "whole, 1/2: thresholds spread evenly)", upper=1.0,
-                             default=0.0, fit_bounds=(0.0, 0.5),
+                             default=0.0, fit_bounds=(0.0, 0.5), prior=(0.0, 0.5),
                              fit_starts=(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.3, 0.45)))
     kind = "dissipation"
     options = ("u_e", "bins")

@@ -43,14 +43,17 @@ class PinningStiffness(_Effect):
     loop_rank = 20
     kind = "stiffness"
     specs = (ParamSpec("k_p", "N/m", "stiffness in parallel after the clearance", fs_power=1,
-                       ref="u_max", fit_bounds=(0.0, 20.0), fit_starts=(0.0, 0.2, 0.3)),
+                       ref="u_max", fit_bounds=(0.0, 20.0),
+                       prior=(0.0, 20.0), neutral=0.0, fit_starts=(0.0, 0.2, 0.3)),
              ParamSpec("delta", "m", "clearance before the pin bears", default=0.0, ref="u_max", ref_power=-1,
-                       fit_bounds=(0.0, 0.95), fit_starts=(0.0, 0.0, 0.5)))
+                       fit_bounds=(0.0, 0.95), prior=(0.0, 0.95), fit_starts=(0.0, 0.0, 0.5)))
     modal_specs = (ParamSpec("k_p_per_mass", "1/s^2", "added modal stiffness over modal mass",
                              ref="omega2_ref", ref_power=-1, fit_bounds=(0.0, 10.0),
+                             prior=(0.0, 10.0), neutral=0.0,
                              fit_starts=(0.0, 0.05, 0.05)),
                    ParamSpec("delta", "m", "clearance in amplitude units", ref="X_max", ref_power=-1,
-                             fit_bounds=(0.0, 0.99), fit_starts=(0.0, 0.0, 0.3)))
+                             fit_bounds=(0.0, 0.99),
+                             prior=(0.0, 0.99), fit_starts=(0.0, 0.0, 0.3)))
 
     def __init__(self, inner, *, k_p: float, delta: float = 0.0):
         super().__init__(inner)

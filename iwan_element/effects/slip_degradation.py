@@ -99,7 +99,8 @@ class SlipDegradation(_SliderEffect):
     effect = "slip_degradation"
     loop_rank = 40
     specs = (ParamSpec("rate", "1/J", "relative loss of slip capacity per joule dissipated",
-                       fs_power=-1, ref="D_ref", fit_bounds=(0.0, 5.0), fit_starts=(0.0, 0.2)),)
+                       fs_power=-1, ref="D_ref", fit_bounds=(0.0, 5.0),
+                       prior=(0.0, 5.0), neutral=0.0, fit_starts=(0.0, 0.2)),)
 
     def __init__(self, inner, *, rate: float, n_sliders: int = 128):
         super().__init__(inner, n_sliders=n_sliders)

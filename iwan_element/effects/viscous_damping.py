@@ -34,9 +34,11 @@ class ViscousDamping(_Effect):
     kind = "dissipation"
     modal_floor = True
     specs = (ParamSpec("c", "N s/m", "dashpot coefficient in parallel with the joint",
-                       fs_power=1, ref="v_rms", fit_bounds=(0.0, 2.0), fit_starts=(0.0, 0.03)),)
+                       fs_power=1, ref="v_rms", fit_bounds=(0.0, 2.0),
+                       prior=(0.0, 2.0), neutral=0.0, fit_starts=(0.0, 0.03)),)
     modal_specs = (ParamSpec("zeta_v", "1", "added modal viscous damping ratio",
-                             ref="zeta_ref", ref_power=-1, fit_bounds=(0.0, 100.0), fit_starts=(0.0, 0.5, 5.0)),)
+                             ref="zeta_ref", ref_power=-1, fit_bounds=(0.0, 100.0),
+                             prior=(0.0, 100.0), neutral=0.0, fit_starts=(0.0, 0.5, 5.0)),)
 
     def __init__(self, inner, *, c: float):
         super().__init__(inner)

@@ -1,0 +1,408 @@
+"""The evidence (marginal likelihood) of a fitted least-squares model, by the Laplace
+approximation on a box prior, and posterior model probabilities from evidences
+(docs/probabilities.md; docs/fitting.md section 9).
+
+A model with parameters ``theta`` (``k`` of them), noise-normalised residual ``r(theta)``
+(residual over the noise standard deviation) and ``chi2 = |r|^2`` has the likelihood
+``L = exp(-chi2 / (2 tau))`` on ``n / tau`` effective independent samples (``tau``: the
+noise's correlation time in samples), up to a constant that is the same for every model of
+the same data. With a uniform prior on the box ``lower <= theta <= upper`` its evidence is
+
+``Z = (1 / V) int_box L(theta) dtheta``,  ``V`` the box's volume.
+
+The Laplace approximation (MacKay 2003, *Information Theory, Inference, and Learning
+Algorithms*, ch. 27-28; Beck and Yuen 2004, J. Eng. Mech. 130:192-203) expands ``chi2``
+to second order about the fitted ``theta*`` with the Gauss-Newton Hessian ``J^T J``
+(``J = dr/dtheta``) **and, for the parameters fitted on a bound, its gradient** ``2 J^T r``:
+there the fitted value is a constrained optimum whose gradient does not vanish, and the
+quadratic's own optimum lies outside the box. The Gaussian is then integrated over the
+box (a truncated multivariate normal, :func:`scipy.stats.multivariate_normal.cdf` over the parameters whose Gaussian
+reaches a bound), so an effect fitted at zero size (its parameter at the bound) gets the
+half-Gaussian (or less) it has, not a whole one. For a model linear in ``theta`` this is
+exact (tests/test_evidence.py checks it against the closed form and a quadrature). A
+direction the data do not determine (a singular ``J^T J``) integrates to the box's width
+along it: the Occam factor of a parameter the data say nothing about is 1.
+
+What it does not do: a likelihood that is not quadratic over its posterior's width (a force
+that changes only to second order in a parameter near its bound, a posterior with two
+modes). :mod:`iwan_element.diagnose.nested` checks such cases by nested sampling.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.special import log_ndtr
+from scipy.stats import multivariate_normal
+
+from ..core.validation import check_scalar, finite_array
+
+__all__ = ["Evidence", "laplace_evidence", "posterior_probabilities"]
+
+#: Ridge added to the box-scaled Hessian (units: box widths^-2): a direction the data do not
+#: determine is a Gaussian of 1000 box widths, whose box mass is then computed exactly.
+RIDGE = 1e-6
+#: A parameter whose Gaussian is farther than this many standard deviations from both ends
+#: of its box is not truncated (its box mass is 1 to 1e-9).
+REACH = 6.0
+
+
+@dataclass(frozen=True, eq=False)
+class Evidence:
+    """Result of :func:`laplace_evidence`.
+
+    Attributes
+    ----------
+    log_evidence : float
+        ``ln Z`` [-], without the constant ``-(n/2) ln(2 pi sigma^2)`` common to every model
+        of the same data (differences between models are what count).
+    log_likelihood : float
+        ``-chi2 / (2 tau)`` at the fitted parameters.
+    log_occam : float
+        ``log_evidence - log_likelihood``: the Occam factor, the fraction of the prior box
+        the data allow, with the gain of the quadratic's optimum beyond a bound.
+    covariance : ndarray, shape (k, k)
+        Posterior covariance of ``theta`` in the Gaussian approximation, ``(J^T J / tau)^-1``,
+        each standard deviation at most the uniform box's (``width / sqrt(12)``, along a
+        direction the data do not determine); a parameter integrated along its line has
+        that line's variance (and no correlation).
+    truncated : tuple of int
+        Parameters whose Gaussian reaches a bound of the box (integrated as truncated).
+    """
+
+    log_evidence: float
+    log_likelihood: float
+    log_occam: float
+    covariance: np.ndarray
+    truncated: tuple
+
+
+def laplace_evidence(J, r, theta, lower, upper, *, tau: float = 1.0,
+                     chi2_at=None, log_prior=None, prior_knots=None,
+                     switched_off=None, lines=None) -> Evidence:
+    """Laplace-approximated evidence of a least-squares model on a uniform box prior.
+
+    Parameters
+    ----------
+    J : array_like, shape (n, k)
+        Jacobian of the noise-normalised residual ``r`` in ``theta`` at the fit.
+    r : array_like, shape (n,)
+        Noise-normalised residual at the fit (residual over the noise std [-]).
+    theta : array_like, shape (k,)
+        Fitted parameters, inside the box.
+    lower, upper : array_like, shape (k,)
+        The prior box (finite, ``upper > lower``), in the units of ``theta``.
+    tau : float, keyword-only
+        Correlation time of the residual [samples], ``>= 1``: the likelihood is
+        ``exp(-chi2 / (2 tau))``.
+    chi2_at : callable, optional, keyword-only
+        ``chi2_at(theta) -> chi2`` (the model's noise-normalised chi-square). When given,
+        each parameter fitted **at a bound** of the box is integrated numerically along its
+        profile line instead (:func:`_line_integral`): the likelihood of an effect fitted at
+        zero size is often not a Gaussian in its parameter (a force that changes only to
+        second order in it, a Jacobian column that vanishes there), where the Gaussian
+        would call the parameter undetermined and give it no Occam penalty. "Near a bound":
+        within :data:`NEAR` of the box's width, or within 3 Gaussian standard deviations
+        when these are below a third of the box (a parameter the data hardly determine is
+        integrated by the Gaussian over the box).
+    log_prior : callable, optional, keyword-only
+        ``log_prior(theta) -> ndarray (k,)``: each parameter's log prior density (the prior
+        is the product of independent ones over the box, each normalised over its range).
+        Default: uniform. The density is taken at the fitted value for the Laplace part
+        (it must vary slowly over the posterior's width there) and along the line for a
+        parameter near a bound.
+    prior_knots : array_like, shape (k,), optional, keyword-only
+        Where each parameter's prior density peaks (NaN: nowhere), e.g. a log-uniform size
+        prior about the "no effect" value: a parameter whose Gaussian reaches its knot
+        (within 5 standard deviations) is integrated along its line too, with the grid
+        refined about the knot.
+    switched_off : dict, optional, keyword-only
+        ``{i: (dependents, values)}``: parameters ``dependents`` (indices) that do nothing
+        when parameter ``i`` (a size with a knot) sits at its knot (a clearance when the
+        spring behind it has zero stiffness): the data then say nothing about them, and
+        ``i``'s line integral is averaged over ``values`` (an array, one row per point of
+        their prior, e.g. its quantiles) instead of taken at their fitted values, their
+        Gaussian left out. Without it the evidence of an absent effect with such
+        parameters is under-counted (tests/test_evidence.py).
+    lines : array_like of bool, shape (k,), optional, keyword-only
+        Which parameters may be integrated along their line (default all); the others are
+        always left to the Gaussian (e.g. nuisances on boxes far wider than the data's
+        range, where "near a bound" means nothing).
+
+    Returns
+    -------
+    Evidence
+
+    Raises
+    ------
+    ValueError
+        Shapes that do not match, a box that is not finite or empty, ``theta`` outside it.
+    """
+    r = finite_array("r", r, ndim=1)
+    theta = finite_array("theta", theta, ndim=1, min_size=0)
+    k = theta.size
+    J = finite_array("J", J, ndim=None, min_size=0).reshape(r.size, k)
+    lo = finite_array("lower", lower, ndim=1, min_size=0)
+    hi = finite_array("upper", upper, ndim=1, min_size=0)
+    if lo.size != k or hi.size != k or not np.all(hi > lo):
+        raise ValueError("lower and upper must have one finite entry per parameter, "
+                         "upper > lower")
+    width = hi - lo
+    if np.any(theta < lo - 1e-9 * width) or np.any(theta > hi + 1e-9 * width):
+        raise ValueError("theta must lie inside the box [lower, upper]")
+    tau = check_scalar("tau", tau, low=1.0)
+    log_like = -0.5 * float(r @ r) / tau
+    if k == 0:
+        return Evidence(log_like, log_like, 0.0, np.zeros((0, 0)), ())
+    # each parameter's log prior density relative to the uniform box's, as a function
+    rel = (lambda th: np.zeros(k)) if log_prior is None else \
+        (lambda th: np.asarray(log_prior(th), float) + np.log(hi - lo))
+    Ju = J * width / math.sqrt(tau)              # box units: u = (theta - lower) / width
+    H = Ju.T @ Ju + RIDGE * np.eye(k)
+    g = Ju.T @ (r / math.sqrt(tau))              # chi2/(2 tau) ~ c + g.d + d.H.d / 2
+    # the gradient counts only where the fit sits on a bound (a constrained optimum); inside,
+    # it is the fit's stopping tolerance and, along a direction the data hardly determine,
+    # would move the quadratic's optimum by box widths for nothing
+    on = (theta <= lo + ON_BOUND * width) | (theta >= hi - ON_BOUND * width)
+    g = np.where(on, g, 0.0)
+    Hinv, logdet = _inverse(H)
+    shift = -Hinv @ g                            # the quadratic's optimum, from the fit
+    gain = 0.5 * float(g @ Hinv @ g)             # its log-likelihood above the fit's
+    centre = (theta - lo) / width + shift
+    sd = np.sqrt(np.maximum(np.diag(Hinv), 1e-300))
+    reach = (np.minimum(centre, 1.0 - centre) < REACH * sd) | (centre < 0) | (centre > 1)
+    idx = np.flatnonzero(reach)
+    log_mass = _box_mass(centre[idx], Hinv[np.ix_(idx, idx)])
+    log_gauss = 0.5 * k * math.log(2.0 * math.pi) - 0.5 * logdet
+    log_occam = gain + log_gauss + log_mass + float(np.sum(rel(theta)))
+    cov = _capped(Hinv, 1.0) * np.outer(width, width)
+    if chi2_at is not None:
+        dist = np.minimum(theta - lo, hi - theta) / width
+        near = np.flatnonzero((dist < NEAR) | (dist < 3.0 * sd))
+        knots = np.full(k, np.nan) if prior_knots is None else \
+            np.asarray(prior_knots, float).reshape(k)
+        spike = np.isfinite(knots) & (np.abs(theta - np.nan_to_num(knots)) < 5.0 * sd * width)
+        # a parameter the data hardly determine (its Gaussian wider than a third of the box)
+        # is left to the Gaussian, which integrates it over the box
+        ok = np.ones(k, bool) if lines is None else np.asarray(lines, bool).reshape(k)
+        near = np.flatnonzero(ok & ((dist < NEAR) | ((dist < 3.0 * sd) & (sd < 0.3)) | spike))
+        if near.size:
+            return _with_lines(J, r, theta, lo, hi, tau, near, chi2_at, log_like, sd * width,
+                               rel, knots, dict(switched_off or {}))
+    return Evidence(log_like + log_occam, log_like, log_occam, cov, tuple(int(i) for i in idx))
+
+
+#: Steps of the line integral from the bound, as fractions of the box width (geometric,
+#: factor sqrt(2)), to which steps of a sixth of the Gaussian's standard deviation around
+#: the fitted value are added.
+LINE_STEPS = np.geomspace(1e-8, 1.0, 55)
+#: A parameter this close to a bound (fraction of the box width) is integrated along its line.
+NEAR = 1e-3
+#: A parameter this close to a bound (fraction of the box width) is fitted on it (an active
+#: bound of the bounded least squares): only there does the gradient count.
+ON_BOUND = 1e-6
+#: The line integral stops where the likelihood has fallen by this many nats.
+LINE_DEPTH = 30.0
+
+
+def _with_lines(J, r, theta, lo, hi, tau, at, chi2_at, log_like, sd, rel, knots,
+                groups) -> Evidence:
+    """The evidence with the parameters ``at`` (near a bound) integrated along their profile
+    lines from that bound across the box, and the others by the Laplace approximation
+    (:func:`laplace_evidence`); ``sd``: the Gaussian's standard deviations, ``rel``: the
+    log prior densities relative to the box's, ``groups``: ``{size: (dependents, values)}``
+    (see :func:`laplace_evidence`'s ``switched_off``)."""
+    k = theta.size
+    off = {i: g for i, g in groups.items() if i in at and math.isfinite(knots[i])
+           and abs(theta[i] - knots[i]) <= NEAR * (hi[i] - lo[i])}
+    deps = sorted({j for dep, _ in off.values() for j in dep} - set(at))
+    free = np.setdiff1d(np.arange(k), np.concatenate([at, deps]).astype(int))
+    inner = laplace_evidence(J[:, free], r, theta[free], lo[free], hi[free], tau=tau)
+    H = J.T @ J
+    chi0 = float(r @ r)
+    log_occam = inner.log_occam + float(np.sum(rel(theta)[free]))
+    cov = np.zeros((k, k))
+    cov[np.ix_(free, free)] = inner.covariance
+    for j in deps:                           # their prior's spread (the data say nothing)
+        cov[j, j] = (hi[j] - lo[j]) ** 2 / 12.0
+    for i in at:
+        d = np.zeros(k)
+        d[i] = 1.0 if theta[i] - lo[i] <= hi[i] - theta[i] else -1.0
+        if free.size:                    # the others follow their regression on theta_i,
+            d[free] = _regression(H, free, i) * d[i]      # along determined directions
+        bound = lo[i] if d[i] > 0 else hi[i]
+        t_fit = abs(theta[i] - bound)
+        origin = theta - t_fit * d              # the line through the fit, from the bound
+        dep, values = off.get(i, ((), np.zeros((1, 0))))
+        logs, moments = [], []
+        for vals in values:                     # the switched-off parameters over their prior
+            o = origin.copy()
+            o[list(dep)] = vals
+            mean, second, log_int = _line_integral(chi2_at, o, d, i, lo, hi, tau, chi0,
+                                                   t_fit, sd[i], rel, knots[i])
+            logs.append(log_int)
+            moments.append((mean, second))
+        top = max(logs)
+        wts = np.exp(np.array(logs) - top)
+        log_occam += top + math.log(wts.mean()) - math.log(hi[i] - lo[i])
+        mean, second = (np.average(np.array(moments), axis=0, weights=wts) if wts.sum() > 0
+                        else moments[0])
+        cov[i, i] = min(max(second - mean * mean, 0.0), (hi[i] - lo[i]) ** 2 / 12.0)
+    return Evidence(log_like + log_occam, log_like, log_occam, cov,
+                    tuple(int(i) for i in inner.truncated) + tuple(int(i) for i in at))
+
+
+def _regression(H, free, i):
+    """``-H_ff^+ H_fi``: how the parameters ``free`` follow parameter ``i`` at the quadratic's
+    optimum, through the pseudo-inverse of the diagonally scaled ``H_ff`` (a direction the
+    data do not determine, 1e-9 of the largest, does not follow)."""
+    Hff = H[np.ix_(free, free)]
+    dsc = np.sqrt(np.maximum(np.diag(Hff), 1e-300))
+    inv = np.linalg.pinv(Hff / np.outer(dsc, dsc), rcond=1e-9, hermitian=True)
+    return -(inv @ (H[free, i] / dsc)) / dsc
+
+
+def _line_integral(chi2_at, theta, d, i, lo, hi, tau, chi0, t_fit, sd, rel, knot):
+    """``(mean, second moment, ln integral)`` over ``t`` of the likelihood
+    ``exp(-(chi2(theta + t d) - chi0) / (2 tau))`` times the moving parameter's prior density
+    relative to the box's (``rel``), from the bound (``t = 0``) across the box along ``d``
+    (others clipped to the box); ``i``: the moving parameter, ``t_fit`` the fit's place on
+    the line, ``sd`` its Gaussian standard deviation, ``knot`` the place of a peak of its
+    prior density (NaN: none).
+
+    The likelihood is evaluated at geometric steps from the bound (:data:`LINE_STEPS`; left
+    out when the bound is more than 10 ``sd`` away) and at 49 steps over ``t_fit +- 8 sd``,
+    stopped :data:`LINE_DEPTH` nats below its top past the fit; the log-likelihood is
+    interpolated linearly between them onto a grid that adds geometric steps about the
+    prior's peak, where the prior density is evaluated exactly; each piece is integrated as
+    an exponential between its ends (exact for an exponential decay)."""
+    w = hi[i] - lo[i]
+    near = t_fit < 10.0 * sd
+    grid = w * LINE_STEPS if near else np.zeros(0)
+    if sd < w:
+        grid = np.concatenate([grid, t_fit + sd * np.linspace(-8.0, 8.0, 49)])
+    grid = np.unique(np.clip(np.concatenate([[0.0] if near else [], grid]), 0.0, w))
+    ts, ll = [], []
+    for t in grid:
+        ts.append(t)
+        ll.append(-0.5 * (float(chi2_at(np.clip(theta + t * d, lo, hi))) - chi0) / tau)
+        if not math.isfinite(ll[-1]):
+            ll[-1] = -1e300
+        if t > t_fit and ll[-1] < max(ll) - LINE_DEPTH:
+            break
+    # a line that finds a far better likelihood than the fit (a force that jumps with the
+    # parameter, a fit stopped on the wrong side of a cliff) does not count it: the
+    # explanation is scored at its fit, as its likelihood is reported
+    ts, ll = np.array(ts), np.minimum(np.array(ll), 0.0)
+    fine = ts
+    if math.isfinite(knot):
+        tk = abs(knot - (lo[i] if d[i] > 0 else hi[i]))
+        off = w * np.geomspace(1e-7, 1.0, 57)
+        fine = np.unique(np.concatenate([ts, np.clip(np.concatenate([tk - off, [tk], tk + off]),
+                                                     ts[0], ts[-1])]))
+    fs = np.interp(fine, ts, ll) + np.array([float(rel(np.clip(theta + t * d, lo, hi))[i])
+                                              for t in fine])
+    return _exp_pieces(fine, fs)
+
+
+def _exp_pieces(ts, fs):
+    """``(mean, second moment, ln integral)`` of ``exp(f(t))`` given at ``ts``, each piece an
+    exponential between its ends."""
+    top = fs.max()
+    total = m1 = m2 = 0.0
+    for a, b, fa, fb in zip(ts[:-1], ts[1:], fs[:-1] - top, fs[1:] - top):
+        h = b - a
+        s = (fb - fa) / h                    # log slope of the piece
+        ea, eb = math.exp(fa), math.exp(fb)
+        if abs(s * h) < 1e-6:                # flat: the trapezoid
+            i0, i1, i2 = h * 0.5 * (ea + eb), h * 0.5 * (a * ea + b * eb), \
+                h * 0.5 * (a * a * ea + b * b * eb)
+        else:                                # int exp(fa + s (t - a)) t^j dt, j = 0, 1, 2
+            i0 = (eb - ea) / s
+            i1 = (b * eb - a * ea) / s - i0 / s
+            i2 = (b * b * eb - a * a * ea) / s - 2.0 * i1 / s
+        total += i0
+        m1 += i1
+        m2 += i2
+    if not total > 0:
+        return 0.0, 0.0, -math.inf
+    return m1 / total, m2 / total, top + math.log(total)
+
+
+def _capped(cov, width):
+    """``cov`` with each standard deviation at most the uniform box's, ``width / sqrt(12)``
+    (a direction the data do not determine has the prior's spread, not the ridge's)."""
+    sd = np.sqrt(np.maximum(np.diag(cov), 0.0))
+    cap = np.minimum(sd, np.asarray(width, float) / math.sqrt(12.0))
+    f = np.where(sd > 0, cap / np.where(sd > 0, sd, 1.0), 0.0)
+    return cov * np.outer(f, f)
+
+
+def _inverse(H):
+    """``(H^-1, ln det H)`` of a symmetric positive definite ``H`` whose diagonal may span
+    many decades (the ridge along an undetermined direction next to a well-determined one):
+    scaled to a unit diagonal first, then by its eigenvalues (no cut-off, which would drop
+    the ridge's direction)."""
+    d = np.sqrt(np.diag(H))
+    Hs = H / np.outer(d, d)
+    w, V = np.linalg.eigh(Hs)
+    w = np.maximum(w, 1e-300)
+    inv = (V / w) @ V.T / np.outer(d, d)
+    return 0.5 * (inv + inv.T), float(np.sum(np.log(w)) + 2.0 * np.sum(np.log(d)))
+
+
+def _box_mass(centre, cov) -> float:
+    """``ln P(N(centre, cov) in [0, 1]^m)``."""
+    m = centre.size
+    if m == 0:
+        return 0.0
+    sd = np.sqrt(np.diag(cov))
+    a, b = (0.0 - centre) / sd, (1.0 - centre) / sd
+    if m == 1:
+        return float(_log_interval(a[0], b[0]))
+    corr = cov / np.outer(sd, sd)
+    if np.max(np.abs(corr - np.eye(m))) < 1e-3:  # independent: one interval each
+        return float(sum(_log_interval(x, y) for x, y in zip(a, b)))
+    mvn = multivariate_normal(mean=np.zeros(m), cov=corr, allow_singular=True,
+                              seed=np.random.default_rng(0), abseps=1e-7, releps=1e-4)
+    p = float(mvn.cdf(b, lower_limit=a))
+    if not p > 1e-6:                  # near the integrator's resolution: the tightest bound
+        return float(min(_log_interval(x, y) for x, y in zip(a, b)))   # P(all) <= min P_i
+    return math.log(p)
+
+
+def _log_interval(a: float, b: float) -> float:
+    """``ln (Phi(b) - Phi(a))`` for ``a < b``, accurate in either tail."""
+    if a > 0:                          # both in the upper tail: use the lower by symmetry
+        a, b = -b, -a
+    lb, la = float(log_ndtr(b)), float(log_ndtr(a))
+    return lb + math.log1p(-math.exp(min(la - lb, 0.0))) if la < lb else -math.inf
+
+
+def posterior_probabilities(log_evidence: dict, log_prior: dict | None = None) -> dict:
+    """Posterior probabilities of models from their log evidences and log prior weights.
+
+    Parameters
+    ----------
+    log_evidence : dict
+        ``{model key: ln Z}`` (same data, same constant left out).
+    log_prior : dict, optional
+        ``{model key: ln prior weight}`` (normalised here); default: equal.
+
+    Returns
+    -------
+    dict
+        ``{model key: probability}``, summing to 1, in the order of ``log_evidence``.
+    """
+    if not log_evidence:
+        raise ValueError("log_evidence must hold at least one model")
+    keys = list(log_evidence)
+    lp = np.array([log_evidence[k] + (0.0 if log_prior is None else log_prior[k])
+                   for k in keys], float)
+    if not np.any(np.isfinite(lp)):
+        raise ValueError("no model has a finite log evidence")
+    lp = np.where(np.isfinite(lp), lp, -np.inf)
+    w = np.exp(lp - lp.max())
+    w /= w.sum()
+    return {k: float(p) for k, p in zip(keys, w)}
