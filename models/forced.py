@@ -26,7 +26,6 @@ from dataclasses import dataclass, field, replace
 
 import exudyn as exu
 import numpy as np
-from exudyn.itemInterface import SensorNode
 
 from iwan_element.core.progress import finish, progress_bar, tick
 from iwan_element.core.result_shape import ResultShape, panels
@@ -135,14 +134,18 @@ def _sweep_level(s, F0, freqs, cycles, steps_per_period, rho, bar=None):
     # the host's default depth (24) holds them (8 overflowed 54 times on the Brake-Reuss
     # beam at 2 N)
     L = linear_system(s)
-    model = build_host(s, ports={"excitation": L.E}, assemble=False)
+    rec = {"t": [], "y": []}
+
+    def record(mbs_, t):                         # the sensor, once per accepted step (a
+        rec["t"].append(t)                       # stored sensor of every coordinate grew
+        rec["y"].append(float(read @ mbs_.systemData.GetODE2Coordinates()))   # as n^2)
+        return True
+    model = build_host(s, ports={"excitation": L.E}, post_step=record, assemble=False)
     mbs = model.mbs
+    read = model.T.T @ L.S                       # the sensor's row in the host's coordinates
     state = {"w": 2 * math.pi * freqs[0], "t0": 0.0, "phase": 0.0}
     model.add_port_force("excitation", lambda t: F0 * math.sin(
         state["phase"] + state["w"] * (t - state["t0"])))
-    sensor = mbs.AddSensor(SensorNode(nodeNumber=model.node, storeInternal=True,
-                                      outputVariableType=exu.OutputVariableType.Coordinates))
-    read = model.T.T @ L.S                       # the sensor's row in the host's coordinates
     mbs.Assemble()
     sim = solver_settings(force_scale=F0)
     sim.linearSolver.solverType = exu.LinearSolverType.EigenDense
@@ -155,15 +158,15 @@ def _sweep_level(s, F0, freqs, cycles, steps_per_period, rho, bar=None):
         state["w"], state["t0"] = 2 * math.pi * f, t_now
         n, h = (settle + measure) * steps_per_period, 1.0 / (f * steps_per_period)
         ti.startTime, ti.endTime, ti.numberOfSteps = t_now, t_now + n * h, n
-        sim.solution.sensors.writePeriod = h
         if j > 0:
             ti.initialStepSize = h
+        rec["t"].clear()
+        rec["y"].clear()
         mbs.SolveDynamic(sim, updateInitialValues=True)
-        d = mbs.GetSensorStoredData(sensor)
-        keep = d[:, 0] >= t_now + settle * steps_per_period * h * (1 - 1e-12)
-        tk = d[keep, 0]
-        amp[j], phase[j] = _lock_in(tk, d[keep, 1:] @ read,
-                                    state["phase"] + state["w"] * (tk - t_now))
+        tt, yy = np.array(rec["t"]), np.array(rec["y"])
+        keep = tt >= t_now + settle * steps_per_period * h * (1 - 1e-12)
+        tk = tt[keep]
+        amp[j], phase[j] = _lock_in(tk, yy[keep], state["phase"] + state["w"] * (tk - t_now))
         tick(bar, text=f"{F0:.3g} N, {f:.5g} Hz")
         t_now = ti.endTime
     return amp, phase
