@@ -25,7 +25,7 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -85,6 +85,9 @@ class CalibrationResult(ResultShape):
         Converged, no warning, every fitted parameter identified.
     converged : bool
         The optimiser converged (``success`` also asks for identified parameters).
+    start : dict
+        Each fitted parameter's starting value (the given specimen's: after a linear
+        update, the report states how far the calibration moved a parameter the two share).
     warnings : tuple of str
         Everything the data could not support, one line per parameter that is not
         identified included.
@@ -100,6 +103,7 @@ class CalibrationResult(ResultShape):
     max_damping_error: float
     success: bool
     converged: bool = True
+    start: dict = field(default_factory=dict)
 
     def failure_reasons(self) -> tuple:
         """Why ``success`` is False in a tester's words: the optimiser's stop, then every
@@ -112,15 +116,18 @@ class CalibrationResult(ResultShape):
     def report(self) -> str:
         lines = [f"Interface calibration of {self.specimen.name!r}: {self.verdict()}"]
         for k, p in self.params.items():
+            moved = (f"  (from {self.start[k]:.6g}: {100 * (p.value / self.start[k] - 1):+.2f} %)"
+                     if self.start.get(k) else "")
             lines.append(f"  {k:20s} = {p.value:.6g} +- {p.stderr:.2g} [{unit_label(p.unit)}]  "
-                         f"{p.status}")
+                         f"{p.status}{moved}")
         lines.append(f"  max |f/f_meas - 1|      = {self.max_frequency_error:.2e}")
         lines.append(f"  max |zeta/zeta_meas - 1| = {self.max_damping_error:.3f}")
         lines += [f"  warning: {w}" for w in self.warnings]
         return "\n".join(lines)
 
     def to_dict(self) -> dict:
-        return {"params": self.params.to_dict(), "success": self.success, "converged": self.converged,
+        return {"params": self.params.to_dict(), "start": dict(self.start),
+                "success": self.success, "converged": self.converged,
                 "max_frequency_error": self.max_frequency_error,
                 "max_damping_error": self.max_damping_error, "warnings": list(self.warnings),
                 "model": self.model.to_dict(), "measured": self.measured.to_dict()}
@@ -304,6 +311,7 @@ def calibrate(specimen: Specimen, measured: AmplitudeCurve, *, fit=("stiffness_p
     fitted, floor_rows = _floors(fitted, mode, floors, warns)
     table = ParameterTable(rows + floor_rows)
     return CalibrationResult(specimen=fitted, params=table, measured=measured, model=curve,
+                             start={n: float(get(specimen, n)) for n in fit},
                              max_frequency_error=ferr, max_damping_error=zerr,
                              success=fit_success(bool(sol.success) and not warns,
                                                  table.identified),

@@ -7,6 +7,11 @@ section 4:
 1. **Bands.** Each mode's band around the specimen's stuck frequency (``band_width``
    either side), cut at the geometric mean with the neighbouring modes' frequencies
    (:func:`mode_bands`), unless given.
+1a. **Linear update** (``update``, on by default): every mode's natural frequency in its
+   latest linear (low-amplitude) window of all the records (:func:`iwan_element.
+   free_decay_modes`), and :func:`~iwan_element.models.update.linear_update` of the named
+   parameters on them before any joint calibration (docs/linear_update.md): the linear
+   structure from the low-level data, then the joint from the amplitude dependence.
 2. **Measured curves.** f(X), zeta(X) of every mode at every sensor
    (:func:`iwan_element.amplitude_curve`, from the impact on: the largest sample of the
    calibration record). The calibration mode is read in fixed windows of
@@ -37,7 +42,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import signal
 
-from iwan_element import amplitude_curve
+from iwan_element import amplitude_curve, free_decay_modes
 from iwan_element.core.result_shape import ResultShape, panels, table_lines
 from iwan_element.core.serialize import json_safe
 from iwan_element.core.validation import check_scalar, check_uniform_time, finite_array
@@ -47,6 +52,7 @@ from .coupling import compare_curves, plot_curve_pairs
 from .qsma import linear_modes
 from .ringdown_result import RingdownResult
 from .transient import ringdown
+from .update import LinearUpdateResult, linear_update
 
 __all__ = ["mode_bands", "release_amplitudes", "predict_hammer_test", "HammerPrediction"]
 
@@ -144,8 +150,10 @@ class HammerPrediction(ResultShape):
         ``{(mode, sensor name): (measured, predicted)}``: the mode's amplitude at that sensor
         over the calibration sensor's.
     success : bool
-        The calibration is usable and every predicted curve overlaps its measured one in
-        at least 3 amplitudes.
+        The linear update (when made) and the calibration are usable and every predicted
+        curve overlaps its measured one in at least 3 amplitudes.
+    update : LinearUpdateResult or None
+        The linear update on the modes' low-amplitude frequencies (``None``: not made).
     warnings : tuple of str
     """
 
@@ -162,6 +170,7 @@ class HammerPrediction(ResultShape):
     errors: dict
     ratios: dict
     success: bool
+    update: LinearUpdateResult | None = None
 
     def summary(self) -> dict:
         """``{(mode, sensor): {points, max_frequency_error, max_damping_error, first_...}}``:
@@ -186,8 +195,17 @@ class HammerPrediction(ResultShape):
     def report(self) -> str:
         """The verdict, the calibration, the release, and each predicted curve against the
         measured one; the mode-shape check."""
-        lines = [f"Hammer test predicted from mode {self.calibration_mode}: {self.verdict()}",
-                 self.calibration.report(),
+        lines = [f"Hammer test predicted from mode {self.calibration_mode}: {self.verdict()}"]
+        if self.update is not None:
+            fitted = ", ".join(n for n, p in self.update.params.items() if p.identified)
+            lines += [f"linear structure ({fitted}) updated on the low-amplitude frequencies of "
+                      "modes " + ", ".join(r["target"][1:] for r in self.update.residuals
+                                           if r["target"].startswith("f")) + ":",
+                      self.update.report()]
+        lines += [f"joint calibrated on the amplitude curve of mode {self.calibration_mode} at "
+                  f"{self.calibration_sensor} (the other modes' curves give only their floors "
+                  "from their lowest amplitudes):",
+                  self.calibration.report(),
                  "release: " + ", ".join(f"mode {r} {1e6 * x:.4g} um"
                                          for r, x in self.release.items()),
                  "prediction against the measured curve at the same amplitudes:"]
@@ -219,6 +237,7 @@ class HammerPrediction(ResultShape):
                           "summary": {key(k): v for k, v in self.summary().items()},
                           "ratios": {key(k): v for k, v in self.ratios.items()},
                           "calibration": self.calibration.to_dict(),
+                          "update": None if self.update is None else self.update.to_dict(),
                           "success": self.success, "warnings": list(self.warnings)})
 
     def plot(self, ax=None):
@@ -235,6 +254,7 @@ def predict_hammer_test(specimen, records: dict, *, modes=(1, 2), calibration_mo
                         bands: dict | None = None, band_width: float = 0.12,
                         release_time: float = 0.05, fit_span: float = 0.3,
                         duration: float = 1.0, calibration_periods: float = 20.0,
+                        update=("youngs_modulus", "stiffness_per_area"),
                         progress: bool = False) -> HammerPrediction:
     """Calibrate the interface on one mode of a hammer test and predict every other mode at
     every sensor by the multi-mode ring-down (module docstring; ``docs/multi_mode.md``).
@@ -265,6 +285,10 @@ def predict_hammer_test(specimen, records: dict, *, modes=(1, 2), calibration_mo
         Length of the predicted ring-down [s] (> 0).
     calibration_periods : float, keyword-only
         Window of the calibration mode's curves in its periods (>= 3).
+    update : sequence of str or None, keyword-only
+        Parameters (or groups) of :func:`~iwan_element.models.updating.updatable` updated on
+        the modes' low-amplitude natural frequencies before the calibration (module
+        docstring, step 1a); ``None``: the specimen's linear structure as given.
     progress : bool, keyword-only
         Progress bars of the calibration and the ring-down.
 
@@ -287,6 +311,10 @@ def predict_hammer_test(specimen, records: dict, *, modes=(1, 2), calibration_mo
     _, t_c, a_c = recs[cal_name]
     release = release_amplitudes(t_c, a_c, bands, release_time=release_time,
                                  fit_span=fit_span)
+    upd = None
+    if update is not None:
+        upd = _linear_update(specimen, recs, cal_name, bands, update)
+        specimen = upd.specimen
     floors = {r: measured[(r, cal_name)] for r in modes if r != calibration_mode}
     cal = calibrate(specimen, measured[(calibration_mode, cal_name)], fit=fit,
                     mode=calibration_mode, floors=floors or None, progress=progress)
@@ -298,7 +326,8 @@ def predict_hammer_test(specimen, records: dict, *, modes=(1, 2), calibration_mo
                  for i, n in enumerate(names) for r in modes if (r, n) in measured}
     errors = {k: compare_curves(predicted[k], measured[k]) for k in predicted}
     ratios = _ratios(recs, cal_name, rd, bands, modes, release_time)
-    warns = [f"calibration: {w}" for w in cal.warnings] + [f"ring-down: {w}" for w in rd.warnings]
+    warns = [f"linear update: {w}" for w in (upd.warnings if upd is not None else ())]
+    warns += [f"calibration: {w}" for w in cal.warnings] + [f"ring-down: {w}" for w in rd.warnings]
     warns += skipped
     thin = [f"mode {r} at {n}" for (r, n), e in errors.items() if len(e["amplitude"]) < 3]
     if thin:
@@ -308,8 +337,28 @@ def predict_hammer_test(specimen, records: dict, *, modes=(1, 2), calibration_mo
     return HammerPrediction(calibration=cal, calibration_mode=calibration_mode,
                             calibration_sensor=cal_name, bands=bands, release=release,
                             ringdown=rd, measured=measured, predicted=predicted, errors=errors,
-                            ratios=ratios, success=bool(cal.success and not thin),
+                            ratios=ratios, update=upd,
+                            success=bool(cal.success and not thin
+                                         and (upd is None or upd.success)),
                             warnings=tuple(warns))
+
+
+def _linear_update(specimen, recs, cal_name, bands, parameters) -> LinearUpdateResult:
+    """Step 1a: the modes' natural frequencies in their latest linear windows of all the
+    records (from the impact on) and the linear update of ``parameters`` on them."""
+    _, t_c, a_c = recs[cal_name]
+    t_imp = t_c[np.argmax(np.abs(a_c))]
+    keep = t_c >= t_imp
+    targets = free_decay_modes(t_c[keep], {n: (x, a[t >= t_imp]) for n, (x, t, a) in recs.items()},
+                               bands={str(r): b for r, b in bands.items()})
+    found = {int(m.label): m.index for m in targets.modes}
+    missing = sorted(set(bands) - set(found))
+    if missing:
+        raise ValueError(f"the linear update needs every mode's low-amplitude frequency; modes "
+                         f"{missing} gave none in their bands (pass update=None, or other "
+                         "bands)")
+    freqs = {r: (targets.frequencies[k], targets.frequency_stderr[k]) for r, k in found.items()}
+    return linear_update(specimen, frequencies=freqs, parameters=parameters)
 
 
 def _measured_curves(recs, cal_name, bands, windows):
