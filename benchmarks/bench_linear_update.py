@@ -102,7 +102,12 @@ def main(argv=None):
             print(f"  {key} (mode {m}): predicted {fp:.2f} +- {se:.2f} Hz, measured {meas:.2f}:"
                   f" {100 * (fp / meas - 1):+.2f} % ({abs(fp - meas) / se:.2f} stderr)")
         if not a.no_calibrate:
-            cal(r2.specimen, solid=True)
+            c2 = cal(r2.specimen, solid=True)
+            fs = models.natural_frequencies(c2.specimen, n_modes=12)[6:]
+            print("  calibrated solid, stuck: " + ", ".join(
+                f"{key} {fs[m - 1]:.2f} Hz ({100 * (fs[m - 1] / f[lab][0] - 1):+.2f} %)"
+                for key, m, lab in (("height 1", 1, "h1"), ("in-plane", 2, "ip1"),
+                                    ("height 2", 3, "h2"), ("height 4", 6, "h4"))))
     return 0
 
 

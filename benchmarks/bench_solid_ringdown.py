@@ -32,7 +32,7 @@ from iwan_element.models import modal_amplitude_curve, preset, ringdown
 from iwan_element.models.qsma import static_modal_load
 from iwan_element.models.solid_build import solid_specimen
 from iwan_element.models.solid_mesh import lap_beam_parts
-from iwan_element.models.solid_transient import build_solid_model
+from iwan_element.models.host import build_host
 from iwan_element.models.solver import solver_settings
 
 
@@ -66,7 +66,7 @@ def _solvers(solid, duration):
             ("dense", exu.LinearSolverType.EigenDense, True, duration),
             ("sparse", exu.LinearSolverType.EigenSparse, True, duration),
             ("dense, full Newton", exu.LinearSolverType.EigenDense, False, 0.1 * duration)):
-        model = build_solid_model(solid)
+        model = build_host(solid)
         model.set_state(st["x"][0])
         h = 2 * np.pi / (st["omega0"] * 64)
         n = int(round(dur / h))

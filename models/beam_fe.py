@@ -22,7 +22,7 @@ exact one of a uniform element and the consistent mass
 inertia. Axial: linear bar elements, consistent mass. Integrals by 4-point Gauss quadrature
 (exact for these polynomials). Shear modulus ``G = E / (2 (1 + nu))``, shear coefficient
 ``kappa`` (``Specimen.shear_coefficient``, 5/6 for a rectangle); docs/equations.md
-section 11.
+section 12.
 
 Geometry (as the specimens describe it): beam A's axis at ``y = 0`` from ``x = 0`` to
 ``beam_length``, beam B's at ``y = lap_thickness`` from ``lap_start``; elements of height

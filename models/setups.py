@@ -6,7 +6,7 @@ drive point), a clamp that is never rigid. A :class:`Setup` declares these besid
 specimen (``Specimen.setup``); every analysis of that specimen (QSMA, harmonic balance,
 nonlinear modes, the ring-down, the solid bodies) reads the specimen's linear system, which
 includes it (:func:`~iwan_element.models.assembly.linear_system`). The relations
-(docs/equations.md section 11, docs/linear_update.md):
+(docs/equations.md section 12, docs/linear_update.md):
 
 * :class:`PointMass`: a mass (and rotary inertia) on the beams' axis at a position: an
   accelerometer, the part of a force gauge below its sensing element, a fixture.

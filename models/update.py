@@ -447,11 +447,11 @@ class LinearUpdateResult(ResultShape):
 
     def report(self) -> str:
         lines = [f"Linear update of {self.initial.name!r}: {self.verdict()}",
-                 f"  {'parameter':26s} {'nominal':>12s} {'updated':>12s} {'stderr':>10s} "
+                 f"  {'parameter':34s} {'nominal':>12s} {'updated':>12s} {'stderr':>10s} "
                  f"{'range':>23s}  status"]
         for n, p in self.params.items():
             se = f"{p.stderr:.3g}" if math.isfinite(p.stderr) else "n/a"
-            lines.append(f"  {n + ' [' + p.unit + ']':26s} {self.nominal[n]:12.5g} {p.value:12.5g} "
+            lines.append(f"  {n + ' [' + p.unit + ']':34s} {self.nominal[n]:12.5g} {p.value:12.5g} "
                          f"{se:>10s} {p.lower:11.4g}..{p.upper:<10.4g}  {p.status}")
         lines.append(f"  singular values of the weighted sensitivity: "
                      + ", ".join(f"{s:.3g}" for s in self.singular_values))

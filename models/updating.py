@@ -49,7 +49,8 @@ _FACTORS = {"youngs_modulus": (0.9, 1.1), "density": (0.95, 1.05),
             "clamp.translational": (0.01, 100.0), "clamp.rotational": (0.01, 100.0),
             "shaker.stinger_stiffness": (0.1, 10.0), "shaker.suspension_stiffness": (0.1, 10.0)}
 _MASS_RANGE = (0.25, 4.0)           # a mass's range as factors of its nominal
-_MASS_DEFAULT_HIGH = 0.05           # [kg]: the upper end of a mass given as 0
+#: Ranges of values given as 0 (a mass or a suspension not known to be there).
+_ZERO_RANGES = {"mass": (0.0, 0.05), "shaker.suspension_stiffness": (0.0, 2.0e4)}
 _UNITS = {"youngs_modulus": "Pa", "density": "kg/m^3", "stiffness_per_area": "N/m^3",
           "normal_stiffness_per_area": "N/m^3", "clamp.translational": "N/m",
           "clamp.rotational": "N m/rad", "shaker.gauge_mass": "kg", "shaker.moving_mass": "kg",
@@ -151,13 +152,12 @@ def updatable(specimen, *, ranges: dict | None = None) -> tuple:
         unit = "kg" if name.startswith("mass:") else _UNITS[name]
         if name in given:
             lo, hi = (float(v) for v in given[name])
-        elif name.startswith("mass:") or name in ("shaker.gauge_mass", "shaker.moving_mass"):
-            lo, hi = ((nom * _MASS_RANGE[0], nom * _MASS_RANGE[1]) if nom > 0
-                      else (0.0, _MASS_DEFAULT_HIGH))
+        elif nom > 0 and unit == "kg":
+            lo, hi = nom * _MASS_RANGE[0], nom * _MASS_RANGE[1]
         elif nom > 0:
             lo, hi = nom * _FACTORS[name][0], nom * _FACTORS[name][1]
         else:
-            lo, hi = 0.0, 1.0
+            lo, hi = _ZERO_RANGES["mass" if unit == "kg" else name]
         if not (0 <= lo <= nom <= hi and lo < hi):
             raise ValueError(f"the range of {name} must hold its nominal {nom:g} {unit}, "
                              f"got ({lo:g}, {hi:g})")
@@ -271,16 +271,16 @@ def _inverse(u: Updatable, theta: float) -> float:
 def matrix_derivatives(specimen, params, *, step: float = 1e-4) -> list:
     """``[(dK, dM), ...]``: the stuck stiffness's and the mass's derivatives by each
     parameter's transformed value (``ln p``, or ``p`` for a range from 0), by central
-    differences of the assembled system (module docstring). ``params``: Updatable rows."""
+    differences of the assembled system (one-sided where a step would leave the range: a
+    mass at 0); module docstring. ``params``: Updatable rows."""
     out = []
     for u in params:
         th = _transform(u, u.nominal)
         h = step if u.log else step * max(u.upper - u.lower, 1e-30)
-        mats = []
-        for sgn in (1.0, -1.0):
-            v = _inverse(u, th + sgn * h)
-            mats.append(_matrices(with_parameters(specimen, {u.name: v}))[:2])
-        out.append(((mats[0][0] - mats[1][0]) / (2 * h), (mats[0][1] - mats[1][1]) / (2 * h)))
+        hi, lo = th + h, (th - h if u.log or u.nominal - h >= u.lower else th)
+        mats = [_matrices(with_parameters(specimen, {u.name: _inverse(u, x)}))[:2]
+                for x in (hi, lo)]
+        out.append(((mats[0][0] - mats[1][0]) / (hi - lo), (mats[0][1] - mats[1][1]) / (hi - lo)))
     return out
 
 

@@ -60,6 +60,8 @@ def test_linked_documentation_pages_exist():
 @pytest.mark.parametrize("name", sorted(RECIPES))
 def test_recipe_runs_as_it_stands(name, monkeypatch):
     import matplotlib.pyplot as plt
+    if "../shared" in RECIPES[name] and not (ROOT.parent / "shared").is_dir():
+        pytest.skip("the recipe reads GPL data from ../shared beside the checkout, absent here")
     monkeypatch.chdir(ROOT)
     t0 = time.process_time()                    # CPU time: the machine may be shared
     try:
