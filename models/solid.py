@@ -30,7 +30,8 @@ from .interface import ContactPoints, points_from_forces
 from .linear import attach_setup
 from .specimens import InterfaceModel, Specimen
 
-__all__ = ["PatchLayout", "SolidModel", "SolidSpecimen", "solid_contact_points"]
+__all__ = ["PatchLayout", "SolidModel", "SolidSpecimen", "solid_contact_points",
+           "clamp_stiffness"]
 
 # Specimen fields a SolidSpecimen may change without rebuilding its bodies: they enter only
 # the Iwan elements, the patches' normal springs (the reduction holds the normal gaps'
@@ -106,6 +107,11 @@ class SolidModel:
         ``(youngs_modulus [Pa], density [kg/m^3])`` the bodies were built with; a specimen
         with other values scales the bodies' stiffness and mass by the ratios (a homogeneous
         material: the reduction basis stays a Ritz basis of the scaled bodies).
+    clamp_rows : ndarray or None
+        ``(6, n_reduced)``: the clamped face's rigid-body fit (translations, rotations) on
+        the reduced coordinates when the bodies were built on a setup's clamp springs
+        (their attachment shapes are in the basis, so the springs may change after the
+        build); ``None``: a rigid clamp, or free-free.
     """
 
     system: object
@@ -115,6 +121,7 @@ class SolidModel:
     full: dict | None = field(default=None, repr=False)
     axis: tuple | None = field(default=None, repr=False)
     material: tuple | None = None
+    clamp_rows: np.ndarray | None = field(default=None, repr=False)
 
 
 @dataclass(frozen=True)
@@ -140,10 +147,13 @@ class SolidSpecimen:
             raise TypeError(f"specimen must be a Specimen, got {type(self.specimen).__name__}")
         if not isinstance(self.model, SolidModel):
             raise TypeError(f"model must be a SolidModel, got {type(self.model).__name__}")
-        if self.specimen.setup.clamp is not None:
-            raise ValueError("setup.clamp (springs at the root) is not available on solid "
-                             "bodies: their clamped face is held rigidly; give the setup "
-                             "without a clamp")
+        if (self.specimen.setup.clamp is None) != (self.model.clamp_rows is None) \
+                and self.specimen.boundary != "free-free":
+            raise ValueError("setup.clamp: the solid bodies were built "
+                             + ("with a rigid clamp" if self.model.clamp_rows is None
+                                else "on clamp springs")
+                             + "; a clamp held rigidly and one on springs need different "
+                             "bodies: build the solid with the setup it is to carry")
 
     def __getattr__(self, name):
         if name in ("specimen", "model") or name.startswith("__"):
@@ -178,7 +188,8 @@ class SolidSpecimen:
         to this specimen's ``youngs_modulus`` and ``density`` (:attr:`SolidModel.material`),
         ``K0`` holding the patches' normal springs at its
         ``interface.normal_stiffness_per_area`` (``k_n A`` per patch on the normal gaps), and
-        its setup's masses and shaker on the axis rows
+        its setup's clamp springs on the clamped face's rigid-body fit
+        (:attr:`SolidModel.clamp_rows`) and masses and shaker on the axis rows
         (:func:`~iwan_element.models.linear.attach_setup`)."""
         sysm, Gn = self.model.system, self.model.normal_gaps
         kn = self.specimen.interface.normal_stiffness_per_area * self.model.patches.area
@@ -187,7 +198,11 @@ class SolidSpecimen:
             sE = self.specimen.youngs_modulus / self.model.material[0]
             sR = self.specimen.density / self.model.material[1]
         Kb = sE * sysm.Kb
-        L = replace(sysm, M=sR * sysm.M, Kb=Kb, K0=Kb + Gn.T @ (kn[:, None] * Gn), Gn=Gn)
+        K0 = Kb + Gn.T @ (kn[:, None] * Gn)
+        if self.model.clamp_rows is not None:
+            Gc = self.model.clamp_rows
+            K0 = K0 + Gc.T @ (clamp_stiffness(self.specimen.setup.clamp)[:, None] * Gc)
+        L = replace(sysm, M=sR * sysm.M, Kb=Kb, K0=K0, Gn=Gn)
         return attach_setup(L, self.specimen.setup,
                             lambda x: (None, self.axis_rows(np.asarray(x, float)), None))
 
@@ -208,6 +223,14 @@ class SolidSpecimen:
     def contact_points(self) -> ContactPoints:
         """The patches' Iwan elements (two per patch, module docstring)."""
         return solid_contact_points(self.specimen, self.model.patches)
+
+
+def clamp_stiffness(clamp) -> np.ndarray:
+    """The six springs of a setup's clamp on :attr:`SolidModel.clamp_rows`: its
+    translational stiffness on the face's translations [N/m], its rotational one on the
+    face's rotations [N m/rad]."""
+    k, kr = clamp.translational, clamp.rotational
+    return np.array([k, k, k, kr, kr, kr])
 
 
 def check_specimen(specimen):

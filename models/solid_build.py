@@ -43,7 +43,7 @@ import scipy.sparse.linalg as spla
 
 from .linear import LinearSystem
 from .interface import pressure_field
-from .solid import PatchLayout, SolidModel, SolidSpecimen, solid_contact_points
+from .solid import PatchLayout, SolidModel, SolidSpecimen, clamp_stiffness, solid_contact_points
 from .solid_mesh import SolidPart, lap_beam_parts
 from .specimens import Specimen, preset
 
@@ -162,12 +162,38 @@ def _slip_operator(specimen: Specimen, a: SolidPart, b: SolidPart, patches: Patc
     return sp.vstack([gx, gy]).tocsr()[order], gz
 
 
-def _fixed_coordinates(specimen: Specimen, a: SolidPart) -> np.ndarray:
-    """Beam A's end face x = 0 (clamped-free); none free-free (checked by _check_build)."""
+def _clamp_nodes(specimen: Specimen, a: SolidPart) -> np.ndarray:
+    """Beam A's end-face nodes (x = 0), empty for a free-free specimen."""
     if specimen.boundary == "free-free":
         return np.zeros(0, int)
-    nodes = np.nonzero(a.positions[:, 0] < 1e-9 * specimen.beam_length)[0]
+    return np.nonzero(a.positions[:, 0] < 1e-9 * specimen.beam_length)[0]
+
+
+def _fixed_coordinates(specimen: Specimen, a: SolidPart) -> np.ndarray:
+    """Beam A's end face x = 0 held rigidly (clamped-free with no clamp springs in the
+    setup); none free-free (checked by _check_build) or on clamp springs."""
+    if specimen.setup.clamp is not None:
+        return np.zeros(0, int)
+    nodes = _clamp_nodes(specimen, a)
     return (3 * nodes[:, None] + np.arange(3)).ravel()
+
+
+def _clamp_rows(specimen: Specimen, a: SolidPart, n: int) -> sp.csr_matrix:
+    """(6, n) rows of the clamped face's rigid-body fit, translations ``x, y, z`` then
+    rotations about ``x, y, z`` [m, rad]: the least-squares ``(t, w)`` of the face nodes'
+    displacements ``u_i = t + w x (p_i - c)`` (``c`` the face centroid), on which a setup's
+    clamp springs act (translational stiffness on ``t``, rotational on ``w``)."""
+    nodes = _clamp_nodes(specimen, a)
+    r = a.positions[nodes] - a.positions[nodes].mean(axis=0)
+    B = np.zeros((3 * nodes.size, 6))
+    for i, (x, y, z) in enumerate(r):
+        B[3 * i:3 * i + 3, :3] = np.eye(3)
+        B[3 * i:3 * i + 3, 3:] = [[0.0, z, -y], [-z, 0.0, x], [y, -x, 0.0]]
+    P = np.linalg.pinv(B)                                   # (6, 3 n_face)
+    cols = (3 * nodes[:, None] + np.arange(3)).ravel()
+    return sp.csr_matrix((P.ravel(), (np.repeat(np.arange(6), cols.size),
+                                      np.tile(cols, 6))), shape=(6, n))
+
 
 
 #: Nodes of the section slab that the z read-out at a point is fitted over.
@@ -315,12 +341,16 @@ def solid_specimen(specimen: Specimen, parts: tuple, *, patch_size: float = 0.00
     E = _point_row(specimen, a, b, specimen.excitation.position)
     fixed = _fixed_coordinates(specimen, a)
     free = np.setdiff1d(np.arange(M.shape[0]), fixed)
-    M, K0, Kb, Gt, Gn, S, E = (M[free][:, free], K0[free][:, free], Kb[free][:, free],
-                               Gt[:, free], Gn[:, free], S[free], E[free])
+    Gc = (_clamp_rows(specimen, a, M.shape[0]) if specimen.setup.clamp is not None
+          else sp.csr_matrix((0, M.shape[0])))
+    M, K0, Kb, Gt, Gn, Gc, S, E = (M[free][:, free], K0[free][:, free], Kb[free][:, free],
+                                   Gt[:, free], Gn[:, free], Gc[:, free], S[free], E[free])
+    if Gc.shape[0]:
+        K0 = (K0 + Gc.T @ sp.diags(clamp_stiffness(specimen.setup.clamp)) @ Gc).tocsr()
     KT = solid_contact_points(specimen, patches).KT
     K_ref = (K0 + Gt.T @ sp.diags(KT) @ Gt).tocsr()
     n_rigid = 6 if specimen.boundary == "free-free" else 0
-    T, w2 = _ritz_basis(K_ref, M, sp.vstack([Gt, Gn]).tocsr(), n_rigid + n_modes)
+    T, w2 = _ritz_basis(K_ref, M, sp.vstack([Gt, Gn, Gc]).tocsr(), n_rigid + n_modes)
     red = LinearSystem(M=T.T @ (M @ T), K0=T.T @ (K0 @ T), Kb=T.T @ (Kb @ T), G=Gt @ T,
                        S=S @ T, free=np.arange(T.shape[1]), n_coordinates=T.shape[1],
                        rigid_body_modes=n_rigid, E=E @ T)
@@ -336,7 +366,8 @@ def solid_specimen(specimen: Specimen, parts: tuple, *, patch_size: float = 0.00
     return SolidSpecimen(specimen, SolidModel(system=red, patches=patches, info=info, full=full,
                                               normal_gaps=Gn @ T, axis=axis,
                                               material=(specimen.youngs_modulus,
-                                                        specimen.density)))
+                                                        specimen.density),
+                                              clamp_rows=Gc @ T if Gc.shape[0] else None))
 
 
 def solid_preset(name: str, *, mesh_size: float = 0.008, lap_mesh_size: float | None = None,

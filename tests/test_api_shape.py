@@ -265,11 +265,18 @@ def _hammer():
     return round_trip()[1]
 
 
+def _linear_update():
+    from iwan_element import models
+    s = models.preset("example").replace(n_points=8)
+    return models.linear_update(s, frequencies={1: 70.0, 2: 420.0},
+                                parameters=("youngs_modulus", "stiffness_per_area"))
+
+
 #: Results of the beam model (``iwan_element.models``), with the same shape.
 MODEL_RESULTS = {"CalibrationResult": _calibration, "RingdownResult": _ringdown,
                  "QuasiStaticResult": _quasi_static, "ForcedResponseResult": _forced,
                  "ModeCouplingResult": _coupling, "FrequencyResponse": _frequency_response,
-                 "HammerPrediction": _hammer}
+                 "HammerPrediction": _hammer, "LinearUpdateResult": _linear_update}
 
 
 def test_every_model_result_class_is_covered():
