@@ -125,6 +125,34 @@ def _lock_in(t, y, theta):
     return math.hypot(c[2], c[3]), math.atan2(c[3], c[2])
 
 
+def _force_scale(model, F0, freqs) -> float:
+    """Newton's force scale [N] of a sweep at force amplitude ``F0`` [N] over ``freqs``
+    [Hz]: the largest elastic force of the host (bodies and springs, as the ring-down's)
+    in the stuck interface's linear steady response at any of the frequencies, or ``F0``
+    if larger.
+
+    ``F0`` alone was far too small near a resonance: the residual of the host's dense
+    stiffness has a round-off floor of about ``eps sum_j |K'_ij z_j|``, and with the
+    Brake-Reuss beam at 0.02 N (elastic forces 0.2-0.5 N, terms of 1e5 N; the free-free
+    beam's drift adds to ``z`` as the run goes on) Newton's ``1e-7 F0`` = 2e-9 N met that
+    floor: modified Newton stalled at a contraction of 0.8-0.96 and took a new Jacobian,
+    560 times over one frequency (docs/transient_cost.md)."""
+    n_eta, m = model.n_eta, len(model.points)
+    K = model.Kb + model.Ks
+    Kt = K.copy()
+    if model.interface is not None:                 # the Iwan elements' stuck stiffness
+        i = np.arange(n_eta, n_eta + m)
+        Kt[i, i] += model.points.KT
+    C = np.zeros_like(K) if model.floor_C is None else model.floor_C
+    f = np.zeros(K.shape[0])
+    f[model.ports["excitation"]] = F0
+    scale = F0
+    for w in 2 * math.pi * np.asarray(freqs, float):
+        z = np.linalg.solve(Kt - w * w * model.Mz + 1j * w * C, f)
+        scale = max(scale, float(np.max(np.abs(K @ z))))
+    return scale
+
+
 def _sweep_level(s, F0, freqs, cycles, steps_per_period, rho, bar=None):
     """Steady fundamental amplitude [m] and phase [rad] at the sensor at each frequency of
     ``freqs`` for one force level ``F0`` [N], each frequency continuing from the state the
@@ -147,7 +175,7 @@ def _sweep_level(s, F0, freqs, cycles, steps_per_period, rho, bar=None):
     model.add_port_force("excitation", lambda t: F0 * math.sin(
         state["phase"] + state["w"] * (t - state["t0"])))
     mbs.Assemble()
-    sim = solver_settings(force_scale=F0)
+    sim = solver_settings(force_scale=_force_scale(model, F0, freqs))
     sim.linearSolver.solverType = exu.LinearSolverType.EigenDense
     sim.timeIntegration.generalizedAlpha.spectralRadius = rho
     ti = sim.timeIntegration
