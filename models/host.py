@@ -11,8 +11,7 @@ basis of the null space of ``R`` and ``R^+`` its pseudo-inverse (``R T = [0 | I]
 ``u = G x`` and the ports ``p``. ``M' = T^T M T`` is block diagonal (``N^T R^+ = 0``),
 ``K' = T^T K0 T``. One Exudyn ``NodeGenericODE2`` carries every ``z``; one
 ``ObjectGenericODE2`` carries ``M'``, ``K'`` and the floor's modal damping matrix
-``C' = T^T C T`` (:mod:`~iwan_element.models.damping`; constant matrices, so Exudyn's
-Jacobian of the bodies is exact with no differencing), and each tangential Iwan element is a
+``C' = T^T C T`` (:mod:`~iwan_element.models.damping`), and each tangential Iwan element is a
 coordinate-marker pair (the slip coordinate against a ground coordinate) of
 :func:`iwan_element.exudyn.add_iwan_interface`: the compiled per-point law, one commit of all
 points per accepted step and the energy records. The interface force ``-F_i`` acts on slip
@@ -21,6 +20,12 @@ is the force ``F R_j^T`` in ``x`` (its virtual work is ``F dp_j``); a prescribed
 coordinate constraint, whose force is the reaction. With ``tangential="linear"`` a built-in
 ``CoordinateSpringDamper`` of stiffness ``KT_i`` replaces each Iwan element (the linear
 reference of cost and decay).
+
+The bodies' Jacobian ``f_q K' + f_v C'`` is handed to Exudyn as it is: the object carries a
+``jacobianUserFunction`` (which adds nothing), because without one Exudyn takes an
+``ObjectGenericODE2``'s Jacobian by finite differences, one residual of the whole object per
+coordinate and per derivative (about ``4 n^3`` operations: measured 124 ms a Jacobian at
+``n = 276`` against 8.5 ms with the function, on a loaded machine; ``docs/transient_cost.md``).
 
 The energy is ``1/2 v'^T M' v'`` (kinetic), ``1/2 z^T T^T Kb T z`` (the bodies' strain) and
 ``1/2 z^T T^T (K0 - Kb) T z`` plus the linear tangential springs' (springs). The system
@@ -163,8 +168,13 @@ def build_host(specimen, *, tangential: str = "iwan", post_step=None,
                                        initialCoordinates=[0.0] * n,
                                        initialCoordinates_t=[0.0] * n,
                                        numberOfODE2Coordinates=n))
+    zero = np.zeros((n, n))
+
+    def no_more(mbs_, t, item, q, q_t, f_q, f_v):
+        return zero                      # Exudyn adds f_q K' + f_v C' itself
     mbs.AddObject(ObjectGenericODE2(nodeNumbers=[node], massMatrix=Mz, stiffnessMatrix=K0,
-                                    dampingMatrix=np.zeros((n, n)) if C is None else C))
+                                    dampingMatrix=zero if C is None else C,
+                                    jacobianUserFunction=no_more))
     ground = mbs.AddNode(NodePointGround(referenceCoordinates=[0.0, 0.0, 0.0]))
     mg = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=ground, coordinate=0))
     pairs = [(mg, mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=node, coordinate=n_eta + i)))
