@@ -37,6 +37,7 @@ from scipy.special import log_ndtr
 from scipy.stats import multivariate_normal
 
 from ..core.validation import check_scalar, finite_array
+from ._lines import exp_pieces, line_integral
 
 __all__ = ["Evidence", "laplace_evidence", "posterior_probabilities"]
 
@@ -99,7 +100,7 @@ def laplace_evidence(J, r, theta, lower, upper, *, tau: float = 1.0,
     chi2_at : callable, optional, keyword-only
         ``chi2_at(theta) -> chi2`` (the model's noise-normalised chi-square). When given,
         each parameter fitted **at a bound** of the box is integrated numerically along its
-        profile line instead (:func:`_line_integral`): the likelihood of an effect fitted at
+        profile line instead (:func:`._lines.line_integral`): the likelihood of an effect fitted at
         zero size is often not a Gaussian in its parameter (a force that changes only to
         second order in it, a Jacobian column that vanishes there), where the Gaussian
         would call the parameter undetermined and give it no Occam penalty. "Near a bound":
@@ -193,17 +194,11 @@ def laplace_evidence(J, r, theta, lower, upper, *, tau: float = 1.0,
     return Evidence(log_like + log_occam, log_like, log_occam, cov, tuple(int(i) for i in idx))
 
 
-#: Steps of the line integral from the bound, as fractions of the box width (geometric,
-#: factor sqrt(2)), to which steps of a sixth of the Gaussian's standard deviation around
-#: the fitted value are added.
-LINE_STEPS = np.geomspace(1e-8, 1.0, 55)
 #: A parameter this close to a bound (fraction of the box width) is integrated along its line.
 NEAR = 1e-3
 #: A parameter this close to a bound (fraction of the box width) is fitted on it (an active
 #: bound of the bounded least squares): only there does the gradient count.
 ON_BOUND = 1e-6
-#: The line integral stops where the likelihood has fallen by this many nats.
-LINE_DEPTH = 30.0
 
 
 def _with_lines(J, r, theta, lo, hi, tau, at, chi2_at, log_like, sd, rel, knots,
@@ -239,7 +234,7 @@ def _with_lines(J, r, theta, lo, hi, tau, at, chi2_at, log_like, sd, rel, knots,
         for vals in values:                     # the switched-off parameters over their prior
             o = origin.copy()
             o[list(dep)] = vals
-            mean, second, log_int = _line_integral(chi2_at, o, d, i, lo, hi, tau, chi0,
+            mean, second, log_int = line_integral(chi2_at, o, d, i, lo, hi, tau, chi0,
                                                    t_fit, sd[i], rel, knots[i])
             logs.append(log_int)
             moments.append((mean, second))
@@ -261,73 +256,6 @@ def _regression(H, free, i):
     dsc = np.sqrt(np.maximum(np.diag(Hff), 1e-300))
     inv = np.linalg.pinv(Hff / np.outer(dsc, dsc), rcond=1e-9, hermitian=True)
     return -(inv @ (H[free, i] / dsc)) / dsc
-
-
-def _line_integral(chi2_at, theta, d, i, lo, hi, tau, chi0, t_fit, sd, rel, knot):
-    """``(mean, second moment, ln integral)`` over ``t`` of the likelihood
-    ``exp(-(chi2(theta + t d) - chi0) / (2 tau))`` times the moving parameter's prior density
-    relative to the box's (``rel``), from the bound (``t = 0``) across the box along ``d``
-    (others clipped to the box); ``i``: the moving parameter, ``t_fit`` the fit's place on
-    the line, ``sd`` its Gaussian standard deviation, ``knot`` the place of a peak of its
-    prior density (NaN: none).
-
-    The likelihood is evaluated at geometric steps from the bound (:data:`LINE_STEPS`; left
-    out when the bound is more than 10 ``sd`` away) and at 49 steps over ``t_fit +- 8 sd``,
-    stopped :data:`LINE_DEPTH` nats below its top past the fit; the log-likelihood is
-    interpolated linearly between them onto a grid that adds geometric steps about the
-    prior's peak, where the prior density is evaluated exactly; each piece is integrated as
-    an exponential between its ends (exact for an exponential decay)."""
-    w = hi[i] - lo[i]
-    near = t_fit < 10.0 * sd
-    grid = w * LINE_STEPS if near else np.zeros(0)
-    if sd < w:
-        grid = np.concatenate([grid, t_fit + sd * np.linspace(-8.0, 8.0, 49)])
-    grid = np.unique(np.clip(np.concatenate([[0.0] if near else [], grid]), 0.0, w))
-    ts, ll = [], []
-    for t in grid:
-        ts.append(t)
-        ll.append(-0.5 * (float(chi2_at(np.clip(theta + t * d, lo, hi))) - chi0) / tau)
-        if not math.isfinite(ll[-1]):
-            ll[-1] = -1e300
-        if t > t_fit and ll[-1] < max(ll) - LINE_DEPTH:
-            break
-    # a line that finds a far better likelihood than the fit (a force that jumps with the
-    # parameter, a fit stopped on the wrong side of a cliff) does not count it: the
-    # explanation is scored at its fit, as its likelihood is reported
-    ts, ll = np.array(ts), np.minimum(np.array(ll), 0.0)
-    fine = ts
-    if math.isfinite(knot):
-        tk = abs(knot - (lo[i] if d[i] > 0 else hi[i]))
-        off = w * np.geomspace(1e-7, 1.0, 57)
-        fine = np.unique(np.concatenate([ts, np.clip(np.concatenate([tk - off, [tk], tk + off]),
-                                                     ts[0], ts[-1])]))
-    fs = np.interp(fine, ts, ll) + np.array([float(rel(np.clip(theta + t * d, lo, hi))[i])
-                                              for t in fine])
-    return _exp_pieces(fine, fs)
-
-
-def _exp_pieces(ts, fs):
-    """``(mean, second moment, ln integral)`` of ``exp(f(t))`` given at ``ts``, each piece an
-    exponential between its ends."""
-    top = fs.max()
-    total = m1 = m2 = 0.0
-    for a, b, fa, fb in zip(ts[:-1], ts[1:], fs[:-1] - top, fs[1:] - top):
-        h = b - a
-        s = (fb - fa) / h                    # log slope of the piece
-        ea, eb = math.exp(fa), math.exp(fb)
-        if abs(s * h) < 1e-6:                # flat: the trapezoid
-            i0, i1, i2 = h * 0.5 * (ea + eb), h * 0.5 * (a * ea + b * eb), \
-                h * 0.5 * (a * a * ea + b * b * eb)
-        else:                                # int exp(fa + s (t - a)) t^j dt, j = 0, 1, 2
-            i0 = (eb - ea) / s
-            i1 = (b * eb - a * ea) / s - i0 / s
-            i2 = (b * b * eb - a * a * ea) / s - 2.0 * i1 / s
-        total += i0
-        m1 += i1
-        m2 += i2
-    if not total > 0:
-        return 0.0, 0.0, -math.inf
-    return m1 / total, m2 / total, top + math.log(total)
 
 
 def _capped(cov, width):
