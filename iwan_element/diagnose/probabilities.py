@@ -224,15 +224,16 @@ def rank(fitted, *, tau: float, n_eff: float, prior: dict, evaluate,
         if ll_best - ll > NEGLIGIBLE:
             rows[k] = (stack, chi2, q, ll, math.nan, np.zeros(0), np.zeros((0, 0)))
             continue
-        J, r, theta, lo, hi, chi2_at, specs = evaluate(stack, state)
+        J, r, theta, lo, hi, chi2_at, specs, *rdg = evaluate(stack, state)
+        rdg = rdg[0] if rdg else None
         theta = np.clip(theta, lo, hi)
         log_prior, knots = spec_prior(specs, lo, hi)
         ev = laplace_evidence(J, r, theta, lo, hi, tau=ts, log_prior=log_prior)
-        if nested is not None or ev.log_evidence + lp[k] >= top - BOUNDED:
+        if nested is not None or rdg is not None or ev.log_evidence + lp[k] >= top - BOUNDED:
             ev = laplace_evidence(J, r, theta, lo, hi, tau=ts, chi2_at=chi2_at,
                                   log_prior=log_prior, prior_knots=knots,
                                   switched_off=switched_off(specs),
-                                  lines=[sp is not None for sp in specs])
+                                  lines=[sp is not None for sp in specs], ridge=rdg)
             top = max(top, ev.log_evidence + lp[k])
         rows[k] = (stack, chi2, q, ll, ev.log_occam, theta, ev.covariance)
         if nested is not None and (only is None or k in only):

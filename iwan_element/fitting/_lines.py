@@ -9,7 +9,8 @@ import math
 
 import numpy as np
 
-__all__ = ["line_integral", "adaptive_line", "exp_pieces", "LINE_STEPS", "LINE_DEPTH"]
+__all__ = ["line_integral", "ridge_integral", "adaptive_line", "exp_pieces", "LINE_STEPS",
+           "LINE_DEPTH"]
 
 #: Steps of the line integral from the bound, as fractions of the box width (geometric,
 #: factor sqrt(2)), to which steps of a sixth of the Gaussian's standard deviation around
@@ -126,3 +127,40 @@ def exp_pieces(ts, fs):
     if not total > 0:
         return 0.0, 0.0, -math.inf
     return m1 / total, m2 / total, top + math.log(total)
+
+
+def ridge_integral(chi2_at, curve, s_fit, s_lo, s_hi, lo, hi, tau, chi0, rel, width):
+    """``(mean, second moment, ln integral)`` over ``s`` in ``[s_lo, s_hi]`` of
+    ``exp(-(chi2(curve(s)) - chi0) / (2 tau))`` times the density ratio of the curve's
+    parametrisation and the prior's along it, relative to the fit's (``s_fit``):
+    ``curve(s) -> (theta, ln jacobian)``, ``rel(theta)``: each parameter's log prior
+    density relative to its box's, ``width``: the box width of ``s``'s parameter (the
+    integral includes its uniform prior, ``1 / width``). A point of the curve outside the
+    box ``[lo, hi]`` has no prior mass. The grid: geometric steps either side of the fit
+    (:data:`LINE_STEPS` of ``width``) and 33 even steps over the range, evaluated by
+    :func:`adaptive_line`."""
+    th0, w0 = curve(s_fit)
+    r0 = float(np.sum(rel(th0)))
+
+    def point(s):
+        th, w = curve(s)
+        inside = np.all(th >= lo) and np.all(th <= hi)
+        return th, (w - w0 + float(np.sum(rel(th))) - r0) if inside else -1e300
+
+    def loglike(s):
+        th, w = point(s)
+        if w <= -1e300:
+            return -1e300
+        v = -0.5 * (float(chi2_at(th)) - chi0) / tau
+        return min(v, 0.0) if math.isfinite(v) else -1e300
+
+    grid = np.concatenate([s_fit - width * LINE_STEPS, s_fit + width * LINE_STEPS,
+                           np.linspace(s_lo, s_hi, 33), [s_fit]])
+    grid = np.unique(np.clip(grid, s_lo, s_hi))
+    ts, ll = adaptive_line(loglike, lambda s: point(s)[1], grid, s_fit)
+    # the density ratio on every point of the grid (it costs no evaluation of the model),
+    # the log-likelihood interpolated between the points evaluated
+    fine = grid[(grid >= ts[0]) & (grid <= ts[-1])]
+    f = np.interp(fine, ts, ll) + np.array([point(s)[1] for s in fine])
+    mean, second, log_int = exp_pieces(fine, f)
+    return mean, second, log_int - math.log(width)
