@@ -201,3 +201,75 @@ def test_vibration_averaged_band_mixes_the_explanations():
     plain = [m[0] for m in b.members].index(())
     assert np.allclose(b.member_means["damping_ratio"][plain], zp, rtol=1e-12)
     assert b.to_dataframe("members")["weight"].sum() == pytest.approx(1.0)
+
+
+def _drive(amplitudes):
+    from _diagnosis_cases import P
+    from iwan_element import IwanJoint
+    from iwan_element.diagnose import simulate_element_test
+    d = simulate_element_test(IwanJoint(P), np.array(amplitudes) * P.phi_max)
+    return d.u, np.gradient(d.u, d.t)
+
+
+def test_microslip_ridge_keeps_the_force_and_states_its_density():
+    """Below ``phi_max`` the Iwan force depends on ``KT``, ``chi`` and ``R`` alone: along the
+    curve of ``microslip_ridge`` the force of the elements (a joint with a pinning spring,
+    run in time by the element: not the fitted model's evaluator) stays the same on a drive
+    that never reaches macroslip, and no ridge is found on one that does. The curve's log
+    Jacobian against finite differences of ``(KT, R)`` in ``(ln(1 + beta), Fs)`` (and the
+    pinning spring's ``Fs``-scaled variable)."""
+    from _diagnosis_cases import P
+    from iwan_element.core.history import unit_params
+    from iwan_element.diagnose._loop_evidence import member_force, microslip_ridge
+    from iwan_element.diagnose.prepare import effect_scales
+    stack = ("pinning_stiffness",)
+    for amps, on_ridge in (((0.5, 1.5), False), ((0.3, 0.6, 0.9), True)):
+        u, v = _drive(amps)
+        x_max, scales = float(np.max(np.abs(u))), effect_scales(u, v)
+        theta = np.array([math.log(P.phi_max / x_max), P.chi, math.log1p(P.beta),
+                          0.3, 0.5, P.Fs, 2.0])
+        F = member_force(stack, theta, x_max, scales, u, v)
+
+        def chi2_at(th):
+            return float(np.sum((F - member_force(stack, th, x_max, scales, u, v)) ** 2))
+        hi = np.array([math.log(1e4), 1.0, math.log(101.0), 20.0, 0.95, 1e9, 1e9])
+        ridge = microslip_ridge(stack, theta, hi, chi2_at)
+        assert (ridge is not None) == on_ridge
+    pts = [theta[0] - 0.04, theta[0] + 0.05, ridge.upper - 0.01]
+    for s in pts:
+        th, _ = ridge.curve(s)
+        assert np.max(np.abs(member_force(stack, th, x_max, scales, u, v) - F)) < \
+            1e-9 * np.max(np.abs(F))
+
+    def invariants(lb, Fs, z0):
+        phi = x_max * math.exp(z0)
+        p1 = unit_params(phi, P.chi, math.expm1(lb))
+        KT = Fs * p1.KT
+        return np.array([KT, KT / (1 + p1.beta) * (P.chi + 1) / phi ** (P.chi + 1)])
+
+    def log_density(s):                  # ln |d(lb, Fs, z_kp) / d(KT, R, k_p)| at fixed s
+        th, _ = ridge.curve(s)
+        h = np.array([1e-6, 1e-6 * th[5]])
+        cols = [(invariants(th[2] + h[0], th[5], s) - invariants(th[2] - h[0], th[5], s)) /
+                (2 * h[0]),
+                (invariants(th[2], th[5] + h[1], s) - invariants(th[2], th[5] - h[1], s)) /
+                (2 * h[1])]
+        return -math.log(abs(np.linalg.det(np.column_stack(cols)))) - math.log(th[5])
+    ref = [log_density(s) - log_density(pts[0]) for s in pts]
+    got = [ridge.curve(s)[1] - ridge.curve(pts[0])[1] for s in pts]
+    assert got == pytest.approx(ref, abs=1e-5)
+
+
+def test_clean_microslip_record_puts_the_plain_joint_above_0_9():
+    """A clean record that never reaches macroslip (0.3, 0.6, 0.9 phi_max): every
+    explanation's joint lies on the microslip ridge, whose evidence is integrated along it;
+    the plain joint above 0.9 (with the Gaussian at the fits, which stopped where the ridge
+    ends, break-away was named at 0.80)."""
+    from _diagnosis_cases import P
+    from iwan_element import IwanJoint
+    from iwan_element.diagnose import simulate_element_test
+    d = simulate_element_test(IwanJoint(P), np.array([0.3, 0.6, 0.9]) * P.phi_max,
+                              force_noise=SIGMA, seed=23)
+    g = diagnose(d.t, d.u, d.F)
+    _check_shape(g)
+    assert g.effects == () and g.probabilities[()] > 0.9

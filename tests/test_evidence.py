@@ -108,6 +108,54 @@ def test_log_prior_along_the_line_matches_quadrature():
     assert e.log_evidence == pytest.approx(-0.5 * c0 + math.log(val), abs=0.02)
 
 
+def test_ridge_integral_matches_quadrature():
+    """``y = (a b) x``: the data determine the product alone, so the likelihood is a ridge
+    ``b = p / a`` (a singular Hessian), curved, which the Gaussian replaces by its tangent
+    across the box. Along the ridge (``Ridge``: ``b = p / a``, the density of
+    ``b`` per unit ``p`` is ``1 / a``) the evidence is the quadrature's wherever along the
+    ridge the fit sits, inside or at its end (the box cuts the ridge at ``b = 2``); the
+    Gaussian's changes by 0.55 nat between those places."""
+    from iwan_element.fitting.evidence import Ridge
+    rng = np.random.default_rng(4)
+    x = np.linspace(0.0, 1.0, 50)
+    s = 0.05
+    y = 1.2 * x + s * rng.normal(size=x.size)
+    p = float(x @ y / (x @ x))
+    lo, hi = np.array([0.5, 0.0]), np.array([4.0, 2.0])
+
+    def chi2(th):
+        rr = (y - th[0] * th[1] * x) / s
+        return float(rr @ rr)
+
+    def curve(a):
+        return np.array([a, p / a]), -math.log(a)
+    c0 = chi2([1.0, p])
+    # quadrature: the likelihood is Gaussian in the product ``a b`` (sd ``s / |x|``), so its
+    # integral over ``b`` in [0, 2] at each ``a`` is a normal probability, divided by ``a``
+    sd = s / math.sqrt(x @ x)
+
+    def inner(a):
+        cdf = math.erf((2.0 * a - p) / (sd * math.sqrt(2))) + math.erf(p / (sd * math.sqrt(2)))
+        return 0.5 * cdf * sd * math.sqrt(2 * math.pi) / a
+    val, _ = quad(inner, lo[0], hi[0], points=[p / 2.0], epsabs=0, epsrel=1e-10, limit=200)
+    ref = -0.5 * c0 + math.log(val) - math.log(np.prod(hi - lo))
+    gauss = []
+    for a in (1.0, 2.0, p / 2.0):                 # inside the ridge, at its end
+        th = np.array([a, p / a])
+        r = (y - p * x) / s
+        J = -np.column_stack([th[1] * x, th[0] * x]) / s
+        e = laplace_evidence(J, r, th, lo, hi, chi2_at=chi2,
+                             ridge=Ridge(0, curve, p / hi[1], hi[0]))
+        assert e.log_evidence == pytest.approx(ref, abs=0.005), a
+        # the ridge's spread is along its tangent: it changes no prediction
+        assert abs(float(th[1] * th[1] * e.covariance[0, 0] + 2 * th[0] * th[1] *
+                         e.covariance[0, 1] + th[0] * th[0] * e.covariance[1, 1])) < \
+            1e-3 * p * p
+        gauss.append(laplace_evidence(J, r, th, lo, hi).log_evidence)
+    # the Gaussian's value depends on where along the ridge the fit stopped
+    assert max(gauss) - min(gauss) > 0.4
+
+
 def test_declared_priors_are_normalised_and_invertible():
     """Every effect parameter's declared prior integrates to 1 over its range and its
     quantile function inverts its distribution function."""

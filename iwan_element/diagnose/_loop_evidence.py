@@ -20,6 +20,7 @@ from ..core.history import unit_params
 from ..core.parameters import IwanParameters
 from ..effects import EFFECTS
 from ..effects.evaluate import build_element, scale_effect
+from ..fitting.evidence import Ridge
 from . import _model as M
 from .probabilities import key
 
@@ -91,8 +92,70 @@ def loop_evaluator(sigma: float, span: float):
             return float(res @ res) / sigma ** 2
         specs = [None] * 3 + [sp for nm in stack for sp in EFFECTS[nm].specs]
         specs += [None] * (theta.size - len(specs))
-        return J / sigma, r / sigma, theta, lo, hi, chi2_at, specs
+        rdg = microslip_ridge(stack, np.clip(theta, lo, hi), hi, chi2_at, J=J / sigma)
+        return J / sigma, r / sigma, theta, lo, hi, chi2_at, specs, rdg
     return evaluate
+
+
+#: Step along the microslip ridge (in ``ln phi_max``) at which a record is tested for it.
+RIDGE_STEP = 0.02
+
+
+def microslip_ridge(stack, theta, hi, chi2_at, *, J=None) -> Ridge | None:
+    """The curve along which a loop fit's force does not change when no sample reaches the
+    joint's macroslip (:class:`~iwan_element.fitting.evidence.Ridge`), or None.
+
+    Below ``phi_max`` the Iwan force depends on ``KT``, ``chi`` and the density ``R`` of the
+    sliders' strengths alone (Segalman 2005, J. Appl. Mech. 72:752-760: ``F = KT u - R
+    u^(chi+2) / ((chi+1)(chi+2))`` on the virgin curve, Masing's rule after it): ``phi_max``
+    and the spike ``S`` trade along a curve that keeps ``KT = r (1 + beta)`` and ``R``,
+    ``r = R phi_max^(chi+1) / (chi+1)``. With ``Delta = ln(phi_max' / phi_max)``:
+    ``ln(1 + beta') = ln(1 + beta) - (chi+1) Delta``, ``Fs' = Fs e^((chi+2) Delta) c' / c``,
+    ``c = beta + (chi+1)/(chi+2)``, and each effect variable scaled by ``(Fs / Fs')^p``
+    (``p`` its ``fs_power``: the effect's physical value kept); it ends where ``beta' = 0``.
+    The Jacobian of the box variables ``(ln(1+beta), Fs, effects)`` in the invariants
+    ``(KT, R, physical effects)`` at fixed ``phi_max``: ``(phi_max / R) (1 - 1 / ((1 + beta)
+    (chi + 2))) prod Fs^-p``.
+
+    The record is on the ridge when ``chi2_at`` is the same (to 1e-9 of it) at two points
+    of the curve on one side of the fit, :data:`RIDGE_STEP` and twice that away (the fit
+    itself may sit where the ridge ends, macroslip just reached at the largest
+    displacement); not tested (None) when the noise-normalised Jacobian ``J`` at the fit
+    predicts a change of ``chi2`` above 1e4 at the first point (a record well into
+    macroslip: no evaluation of the model)."""
+    nz = n_variables(stack)
+    chi, lb0, Fs0 = float(theta[1]), float(theta[2]), float(theta[-2])
+    k, a = chi + 1.0, (chi + 1.0) / (chi + 2.0)
+    c0 = math.expm1(lb0) + a
+    pw = np.array([sp.fs_power for nm in stack for sp in EFFECTS[nm].specs], float)
+
+    def curve(s):
+        d = s - theta[0]
+        lb = lb0 - k * d
+        beta = math.expm1(lb)
+        Fs = Fs0 * math.exp((chi + 2.0) * d) * (beta + a) / c0
+        th = theta.copy()
+        th[0], th[2], th[-2] = s, lb, Fs
+        th[3:nz] = theta[3:nz] * (Fs0 / Fs) ** pw
+        return th, d + math.log1p(-1.0 / ((1.0 + beta) * (chi + 2.0))) - \
+            float(pw.sum()) * math.log(Fs / Fs0)
+    s_hi = theta[0] + lb0 / k                     # beta' = 0
+    s_lo = theta[0] + (lb0 - hi[2]) / k           # beta' at its bound
+    if J is not None:
+        h = 1e-6
+        t = (curve(theta[0] + h)[0] - curve(theta[0] - h)[0]) / (2 * h)
+        if (RIDGE_STEP * float(np.linalg.norm(J @ t))) ** 2 > 1e4:
+            return None
+    for sign in (1.0, -1.0):                      # away from macroslip first
+        s1, s2 = theta[0] + sign * RIDGE_STEP, theta[0] + 2.0 * sign * RIDGE_STEP
+        if not (s_lo <= min(s1, s2) and max(s1, s2) <= s_hi):
+            continue
+        c1, c2 = chi2_at(curve(s1)[0]), chi2_at(curve(s2)[0])
+        return Ridge(0, curve, s_lo, s_hi) if abs(c1 - c2) <= 1e-9 * max(c1, 1.0) else None
+    return None
+
+
+__all__ += ["microslip_ridge"]
 
 
 def member_physical(stack, theta, x_max: float, scales: dict):

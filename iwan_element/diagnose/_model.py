@@ -269,10 +269,14 @@ def jacobian(model: LoopModel, z):
     """Jacobian of the residual [N per variable] and of the physical parameters in the fit's
     variables ``theta = (z, [start], Fs, F0)`` (``start`` only when the fit freed it,
     ``model.start != 0``; ``F0`` only when it is fitted): central differences at two steps,
-    samples whose force jumps between them left out (:func:`_jumps`). Returns
+    samples whose force jumps between them left out (:func:`_jumps`); the columns of ``Fs``
+    and ``F0``, in which the residual ``y - Fs g(z) - F0`` is linear, exactly (``-g``,
+    ``-1``), and the physical parameters' by their closed form (no force evaluated: a
+    Jacobian costs four force evaluations per variable of ``z`` and the start). Returns
     ``(J, Jp, theta, lower, upper)``, the bounds of ``theta`` (infinite for the linear ones
     and the start)."""
-    Fs, F0 = model.linear(model.unit(z))
+    g = model.unit(z)
+    Fs, F0 = model.linear(g)
     s0 = model.start
     free_start = s0 != 0.0
     nz = z.size
@@ -290,10 +294,10 @@ def jacobian(model: LoopModel, z):
             model.start = s0
 
     def phys(th):
-        p, effs, _ = model.physical(th[:nz])
-        s = th[-2] / p.Fs
-        p = IwanParameters(th[-2], p.KT * s, p.chi, p.beta)
-        effs = [scale_effect(nm, d, s, to_unit=False) for nm, d in zip(model.names, effs)]
+        shape, vals = model.decode(th[:nz])
+        p1 = unit_params(*shape)
+        p = IwanParameters(th[-2], th[-2] * p1.KT, p1.chi, p1.beta)
+        effs = [scale_effect(nm, d, th[-2], to_unit=False) for nm, d in zip(model.names, vals)]
         return np.append(flat(p, effs, model.names, th[-1])[0], th[nz] if free_start else 0.0)
 
     cols, pcols = [], []
@@ -307,9 +311,12 @@ def jacobian(model: LoopModel, z):
             h = 1e-5 * model.ev.x_max
         else:
             h = 1e-5
-        (dr, dp), (dr4, _) = (_difference(resid, phys, theta, j, f * h, lo, hi) for f in (1, 4))
+        pcols.append(_difference(phys, theta, j, h, lo, hi))
+        if j >= theta.size - 2:
+            cols.append(-g if j == theta.size - 2 else -np.ones_like(g))
+            continue
+        dr, dr4 = (_difference(resid, theta, j, f * h, lo, hi) for f in (1, 4))
         cols.append(np.where(_jumps(dr, dr4), 0.0, dr))
-        pcols.append(dp)
     return (np.column_stack(cols), np.column_stack(pcols), theta[:m], lo[:m], hi[:m])
 
 
@@ -331,14 +338,12 @@ def uncertainty(model: LoopModel, z, r, jac=None):
     return se[:-1], corr[:-1, :-1], float(se[-1])
 
 
-def _difference(resid, phys, theta, j, h, lo, hi):
-    """Central difference quotients of the residual and the physical parameters in
-    ``theta[j]`` (one-sided at a bound)."""
+def _difference(fn, theta, j, h, lo, hi):
+    """Central difference quotient of ``fn`` in ``theta[j]`` (one-sided at a bound)."""
     tp, tm = theta.copy(), theta.copy()
     tp[j] = min(theta[j] + h, hi[j])
     tm[j] = max(theta[j] - h, lo[j])
-    dh = tp[j] - tm[j]
-    return (resid(tp) - resid(tm)) / dh, (phys(tp) - phys(tm)) / dh
+    return (fn(tp) - fn(tm)) / (tp[j] - tm[j])
 
 
 def _jumps(d1, d4):

@@ -51,6 +51,13 @@ CONFIDENT = 0.9
 #: their probability is below ``exp(-NEGLIGIBLE)`` of the best's times the Occam factors'
 #: ratio (bounded by the plain joint's, about ``exp(-40)`` on a record).
 NEGLIGIBLE = 120.0
+#: An explanation whose evidence by the Gaussian alone (:func:`laplace_evidence` without its
+#: line integrals), times its prior, is this many nats below the best explanation's is
+#: given that evidence: its probability is below ``exp(-BOUNDED)`` of the best's (about
+#: 3e-7) and its line integrals, each 20-100 evaluations of its model, are not computed.
+#: (The Gaussian over-counts an effect at zero size, where the line integrals lower the
+#: evidence: docs/probabilities.md section 3.)
+BOUNDED = 15.0
 
 
 def key(names) -> tuple:
@@ -210,18 +217,25 @@ def rank(fitted, *, tau: float, n_eff: float, prior: dict, evaluate,
     only = None if only is None else {key(k) for k in only}
     rows, ns = {}, {}
     ll_best = -0.5 * best[1] / ts
-    for k, (stack, chi2, q, state) in fitted.items():
+    top = -math.inf                     # the best ln Z + ln prior evaluated in full so far
+    for k in sorted(fitted, key=lambda k: 0.5 * fitted[k][1] / ts - lp[k]):
+        stack, chi2, q, state = fitted[k]
         ll = -0.5 * chi2 / ts
         if ll_best - ll > NEGLIGIBLE:
             rows[k] = (stack, chi2, q, ll, math.nan, np.zeros(0), np.zeros((0, 0)))
             continue
-        J, r, theta, lo, hi, chi2_at, specs = evaluate(stack, state)
+        J, r, theta, lo, hi, chi2_at, specs, *rdg = evaluate(stack, state)
+        rdg = rdg[0] if rdg else None
+        theta = np.clip(theta, lo, hi)
         log_prior, knots = spec_prior(specs, lo, hi)
-        ev = laplace_evidence(J, r, np.clip(theta, lo, hi), lo, hi, tau=ts, chi2_at=chi2_at,
-                              log_prior=log_prior, prior_knots=knots,
-                              switched_off=switched_off(specs),
-                              lines=[sp is not None for sp in specs])
-        rows[k] = (stack, chi2, q, ll, ev.log_occam, np.clip(theta, lo, hi), ev.covariance)
+        ev = laplace_evidence(J, r, theta, lo, hi, tau=ts, log_prior=log_prior)
+        if nested is not None or rdg is not None or ev.log_evidence + lp[k] >= top - BOUNDED:
+            ev = laplace_evidence(J, r, theta, lo, hi, tau=ts, chi2_at=chi2_at,
+                                  log_prior=log_prior, prior_knots=knots,
+                                  switched_off=switched_off(specs),
+                                  lines=[sp is not None for sp in specs], ridge=rdg)
+            top = max(top, ev.log_evidence + lp[k])
+        rows[k] = (stack, chi2, q, ll, ev.log_occam, theta, ev.covariance)
         if nested is not None and (only is None or k in only):
             from .nested import nested_log_evidence
             ns[k] = nested_log_evidence(chi2_at, lo, hi, specs, tau=ts, chi2_ref=chi2,

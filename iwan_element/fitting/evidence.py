@@ -37,8 +37,9 @@ from scipy.special import log_ndtr
 from scipy.stats import multivariate_normal
 
 from ..core.validation import check_scalar, finite_array
+from ._lines import exp_pieces, line_integral, ridge_integral
 
-__all__ = ["Evidence", "laplace_evidence", "posterior_probabilities"]
+__all__ = ["Evidence", "Ridge", "laplace_evidence", "posterior_probabilities"]
 
 #: Ridge added to the box-scaled Hessian (units: box widths^-2): a direction the data do not
 #: determine is a Gaussian of 1000 box widths, whose box mass is then computed exactly.
@@ -80,7 +81,8 @@ class Evidence:
 
 def laplace_evidence(J, r, theta, lower, upper, *, tau: float = 1.0,
                      chi2_at=None, log_prior=None, prior_knots=None,
-                     switched_off=None, lines=None) -> Evidence:
+                     switched_off=None, lines=None, ridge=None,
+                     open_ends=None) -> Evidence:
     """Laplace-approximated evidence of a least-squares model on a uniform box prior.
 
     Parameters
@@ -99,7 +101,7 @@ def laplace_evidence(J, r, theta, lower, upper, *, tau: float = 1.0,
     chi2_at : callable, optional, keyword-only
         ``chi2_at(theta) -> chi2`` (the model's noise-normalised chi-square). When given,
         each parameter fitted **at a bound** of the box is integrated numerically along its
-        profile line instead (:func:`_line_integral`): the likelihood of an effect fitted at
+        profile line instead (:func:`._lines.line_integral`): the likelihood of an effect fitted at
         zero size is often not a Gaussian in its parameter (a force that changes only to
         second order in it, a Jacobian column that vanishes there), where the Gaussian
         would call the parameter undetermined and give it no Occam penalty. "Near a bound":
@@ -129,6 +131,16 @@ def laplace_evidence(J, r, theta, lower, upper, *, tau: float = 1.0,
         Which parameters may be integrated along their line (default all); the others are
         always left to the Gaussian (e.g. nuisances on boxes far wider than the data's
         range, where "near a bound" means nothing).
+    ridge : Ridge, optional, keyword-only
+        A curve through the fit along which the model does not change (with ``chi2_at``):
+        the likelihood is then a ridge, not a peak, and its Gaussian depends on where along
+        it the fit stopped (a singular Hessian: the box's width; at a kink where the ridge
+        ends: a narrow peak). The evidence is the others' (Gaussian and lines) at the fit
+        times the integral along the curve (:func:`_along_ridge`).
+    open_ends : array_like of bool, shape (k,), optional, keyword-only
+        Parameters whose Gaussian is neither truncated by their box nor moved by their
+        gradient on a bound (default none): the cross-section of a ridge that goes on
+        inside the box where it meets the box at the fit (:func:`_along_ridge`).
 
     Returns
     -------
@@ -155,6 +167,9 @@ def laplace_evidence(J, r, theta, lower, upper, *, tau: float = 1.0,
     log_like = -0.5 * float(r @ r) / tau
     if k == 0:
         return Evidence(log_like, log_like, 0.0, np.zeros((0, 0)), ())
+    if ridge is not None and chi2_at is not None:
+        return _along_ridge(J, r, theta, lo, hi, tau, chi2_at, log_prior, prior_knots,
+                            switched_off, lines, ridge)
     # each parameter's log prior density relative to the uniform box's, as a function
     rel = (lambda th: np.zeros(k)) if log_prior is None else \
         (lambda th: np.asarray(log_prior(th), float) + np.log(hi - lo))
@@ -164,14 +179,16 @@ def laplace_evidence(J, r, theta, lower, upper, *, tau: float = 1.0,
     # the gradient counts only where the fit sits on a bound (a constrained optimum); inside,
     # it is the fit's stopping tolerance and, along a direction the data hardly determine,
     # would move the quadratic's optimum by box widths for nothing
-    on = (theta <= lo + ON_BOUND * width) | (theta >= hi - ON_BOUND * width)
+    opened = np.zeros(k, bool) if open_ends is None else np.asarray(open_ends, bool).reshape(k)
+    on = ((theta <= lo + ON_BOUND * width) | (theta >= hi - ON_BOUND * width)) & ~opened
     g = np.where(on, g, 0.0)
     Hinv, logdet = _inverse(H)
     shift = -Hinv @ g                            # the quadratic's optimum, from the fit
     gain = 0.5 * float(g @ Hinv @ g)             # its log-likelihood above the fit's
     centre = (theta - lo) / width + shift
     sd = np.sqrt(np.maximum(np.diag(Hinv), 1e-300))
-    reach = (np.minimum(centre, 1.0 - centre) < REACH * sd) | (centre < 0) | (centre > 1)
+    reach = ((np.minimum(centre, 1.0 - centre) < REACH * sd) | (centre < 0) | (centre > 1)) \
+        & ~opened
     idx = np.flatnonzero(reach)
     log_mass = _box_mass(centre[idx], Hinv[np.ix_(idx, idx)])
     log_gauss = 0.5 * k * math.log(2.0 * math.pi) - 0.5 * logdet
@@ -189,25 +206,19 @@ def laplace_evidence(J, r, theta, lower, upper, *, tau: float = 1.0,
         near = np.flatnonzero(ok & ((dist < NEAR) | ((dist < 3.0 * sd) & (sd < 0.3)) | spike))
         if near.size:
             return _with_lines(J, r, theta, lo, hi, tau, near, chi2_at, log_like, sd * width,
-                               rel, knots, dict(switched_off or {}))
+                               rel, knots, dict(switched_off or {}), opened)
     return Evidence(log_like + log_occam, log_like, log_occam, cov, tuple(int(i) for i in idx))
 
 
-#: Steps of the line integral from the bound, as fractions of the box width (geometric,
-#: factor sqrt(2)), to which steps of a sixth of the Gaussian's standard deviation around
-#: the fitted value are added.
-LINE_STEPS = np.geomspace(1e-8, 1.0, 55)
 #: A parameter this close to a bound (fraction of the box width) is integrated along its line.
 NEAR = 1e-3
 #: A parameter this close to a bound (fraction of the box width) is fitted on it (an active
 #: bound of the bounded least squares): only there does the gradient count.
 ON_BOUND = 1e-6
-#: The line integral stops where the likelihood has fallen by this many nats.
-LINE_DEPTH = 30.0
 
 
 def _with_lines(J, r, theta, lo, hi, tau, at, chi2_at, log_like, sd, rel, knots,
-                groups) -> Evidence:
+                groups, opened) -> Evidence:
     """The evidence with the parameters ``at`` (near a bound) integrated along their profile
     lines from that bound across the box, and the others by the Laplace approximation
     (:func:`laplace_evidence`); ``sd``: the Gaussian's standard deviations, ``rel``: the
@@ -218,7 +229,8 @@ def _with_lines(J, r, theta, lo, hi, tau, at, chi2_at, log_like, sd, rel, knots,
            and abs(theta[i] - knots[i]) <= NEAR * (hi[i] - lo[i])}
     deps = sorted({j for dep, _ in off.values() for j in dep} - set(at))
     free = np.setdiff1d(np.arange(k), np.concatenate([at, deps]).astype(int))
-    inner = laplace_evidence(J[:, free], r, theta[free], lo[free], hi[free], tau=tau)
+    inner = laplace_evidence(J[:, free], r, theta[free], lo[free], hi[free], tau=tau,
+                             open_ends=opened[free])
     H = J.T @ J
     chi0 = float(r @ r)
     log_occam = inner.log_occam + float(np.sum(rel(theta)[free]))
@@ -239,7 +251,7 @@ def _with_lines(J, r, theta, lo, hi, tau, at, chi2_at, log_like, sd, rel, knots,
         for vals in values:                     # the switched-off parameters over their prior
             o = origin.copy()
             o[list(dep)] = vals
-            mean, second, log_int = _line_integral(chi2_at, o, d, i, lo, hi, tau, chi0,
+            mean, second, log_int = line_integral(chi2_at, o, d, i, lo, hi, tau, chi0,
                                                    t_fit, sd[i], rel, knots[i])
             logs.append(log_int)
             moments.append((mean, second))
@@ -253,6 +265,76 @@ def _with_lines(J, r, theta, lo, hi, tau, at, chi2_at, log_like, sd, rel, knots,
                     tuple(int(i) for i in inner.truncated) + tuple(int(i) for i in at))
 
 
+@dataclass(frozen=True)
+class Ridge:
+    """A curve through a fit along which the model does not change (for
+    :func:`laplace_evidence`).
+
+    Attributes
+    ----------
+    index : int
+        The parameter that moves along the curve (its value is the curve's coordinate).
+    curve : callable
+        ``curve(s) -> (theta, ln jacobian)``: the parameters where ``theta[index] = s``, and
+        the log of ``|det d(others) / d(invariants)|`` there (the density of the others'
+        box measure per unit of what the data determine; constants left out).
+    lower, upper : float
+        The range of ``s`` over which the curve is defined.
+    """
+
+    index: int
+    curve: object
+    lower: float
+    upper: float
+
+
+def _along_ridge(J, r, theta, lo, hi, tau, chi2_at, log_prior, knots, switched_off, lines,
+                 ridge) -> Evidence:
+    """:func:`laplace_evidence` with parameter ``ridge.index`` held at the fit, times the
+    integral of the likelihood along ``ridge.curve`` (:func:`._lines.ridge_integral`): ``Z =
+    int ds Z_others(s)``, ``Z_others(s)`` the others' evidence at ``s``, which is the fit's
+    times the curve's density ratio (the likelihood the same along the ridge). The
+    covariance of the moving parameter is the curve's spread along its tangent."""
+    k, i = theta.size, int(ridge.index)
+    keep = np.array([j for j in range(k) if j != i])
+    pos = {int(j): n for n, j in enumerate(keep)}
+
+    def full(th_sub):
+        th = theta.copy()
+        th[keep] = th_sub
+        return th
+    groups = {pos[a]: (tuple(pos[j] for j in dep), vals)
+              for a, (dep, vals) in (switched_off or {}).items()
+              if a != i and i not in dep}
+    width = hi[i] - lo[i]
+    eps = 1e-6 * width
+    tangent = (ridge.curve(theta[i] + eps)[0] - ridge.curve(theta[i] - eps)[0]) / (2 * eps)
+    # the parameters that move along the ridge are not truncated by their box at the fit
+    # (where the ridge meets it, it goes on inside) nor integrated along a line from it:
+    # their box is the ridge integral's
+    moving = (np.abs(tangent) > 1e-9 * (hi - lo) / width)[keep]
+    ok = np.ones(k - 1, bool) if lines is None else np.asarray(lines, bool)[keep]
+    sub = laplace_evidence(
+        J[:, keep], r, theta[keep], lo[keep], hi[keep], tau=tau, open_ends=moving,
+        chi2_at=lambda th_sub: chi2_at(full(th_sub)),
+        log_prior=None if log_prior is None else
+        (lambda th_sub: np.asarray(log_prior(full(th_sub)), float)[keep]),
+        prior_knots=None if knots is None else np.asarray(knots, float)[keep],
+        switched_off=groups, lines=ok & ~moving)
+    rel = (lambda th: np.zeros(k)) if log_prior is None else \
+        (lambda th: np.asarray(log_prior(th), float) + np.log(hi - lo))
+    s_lo, s_hi = max(ridge.lower, lo[i]), min(ridge.upper, hi[i])
+    mean, second, log_int = ridge_integral(chi2_at, ridge.curve, theta[i], s_lo, s_hi, lo, hi,
+                                           tau, float(r @ r), rel, width)
+    log_occam = sub.log_occam + log_int + float(rel(theta)[i])
+    cov = np.zeros((k, k))
+    cov[np.ix_(keep, keep)] = sub.covariance
+    cov += min(max(second - mean * mean, 0.0), width ** 2 / 12.0) * np.outer(tangent, tangent)
+    log_like = sub.log_likelihood
+    return Evidence(log_like + log_occam, log_like, log_occam, cov,
+                    tuple(int(keep[j]) for j in sub.truncated) + (i,))
+
+
 def _regression(H, free, i):
     """``-H_ff^+ H_fi``: how the parameters ``free`` follow parameter ``i`` at the quadratic's
     optimum, through the pseudo-inverse of the diagonally scaled ``H_ff`` (a direction the
@@ -261,73 +343,6 @@ def _regression(H, free, i):
     dsc = np.sqrt(np.maximum(np.diag(Hff), 1e-300))
     inv = np.linalg.pinv(Hff / np.outer(dsc, dsc), rcond=1e-9, hermitian=True)
     return -(inv @ (H[free, i] / dsc)) / dsc
-
-
-def _line_integral(chi2_at, theta, d, i, lo, hi, tau, chi0, t_fit, sd, rel, knot):
-    """``(mean, second moment, ln integral)`` over ``t`` of the likelihood
-    ``exp(-(chi2(theta + t d) - chi0) / (2 tau))`` times the moving parameter's prior density
-    relative to the box's (``rel``), from the bound (``t = 0``) across the box along ``d``
-    (others clipped to the box); ``i``: the moving parameter, ``t_fit`` the fit's place on
-    the line, ``sd`` its Gaussian standard deviation, ``knot`` the place of a peak of its
-    prior density (NaN: none).
-
-    The likelihood is evaluated at geometric steps from the bound (:data:`LINE_STEPS`; left
-    out when the bound is more than 10 ``sd`` away) and at 49 steps over ``t_fit +- 8 sd``,
-    stopped :data:`LINE_DEPTH` nats below its top past the fit; the log-likelihood is
-    interpolated linearly between them onto a grid that adds geometric steps about the
-    prior's peak, where the prior density is evaluated exactly; each piece is integrated as
-    an exponential between its ends (exact for an exponential decay)."""
-    w = hi[i] - lo[i]
-    near = t_fit < 10.0 * sd
-    grid = w * LINE_STEPS if near else np.zeros(0)
-    if sd < w:
-        grid = np.concatenate([grid, t_fit + sd * np.linspace(-8.0, 8.0, 49)])
-    grid = np.unique(np.clip(np.concatenate([[0.0] if near else [], grid]), 0.0, w))
-    ts, ll = [], []
-    for t in grid:
-        ts.append(t)
-        ll.append(-0.5 * (float(chi2_at(np.clip(theta + t * d, lo, hi))) - chi0) / tau)
-        if not math.isfinite(ll[-1]):
-            ll[-1] = -1e300
-        if t > t_fit and ll[-1] < max(ll) - LINE_DEPTH:
-            break
-    # a line that finds a far better likelihood than the fit (a force that jumps with the
-    # parameter, a fit stopped on the wrong side of a cliff) does not count it: the
-    # explanation is scored at its fit, as its likelihood is reported
-    ts, ll = np.array(ts), np.minimum(np.array(ll), 0.0)
-    fine = ts
-    if math.isfinite(knot):
-        tk = abs(knot - (lo[i] if d[i] > 0 else hi[i]))
-        off = w * np.geomspace(1e-7, 1.0, 57)
-        fine = np.unique(np.concatenate([ts, np.clip(np.concatenate([tk - off, [tk], tk + off]),
-                                                     ts[0], ts[-1])]))
-    fs = np.interp(fine, ts, ll) + np.array([float(rel(np.clip(theta + t * d, lo, hi))[i])
-                                              for t in fine])
-    return _exp_pieces(fine, fs)
-
-
-def _exp_pieces(ts, fs):
-    """``(mean, second moment, ln integral)`` of ``exp(f(t))`` given at ``ts``, each piece an
-    exponential between its ends."""
-    top = fs.max()
-    total = m1 = m2 = 0.0
-    for a, b, fa, fb in zip(ts[:-1], ts[1:], fs[:-1] - top, fs[1:] - top):
-        h = b - a
-        s = (fb - fa) / h                    # log slope of the piece
-        ea, eb = math.exp(fa), math.exp(fb)
-        if abs(s * h) < 1e-6:                # flat: the trapezoid
-            i0, i1, i2 = h * 0.5 * (ea + eb), h * 0.5 * (a * ea + b * eb), \
-                h * 0.5 * (a * a * ea + b * b * eb)
-        else:                                # int exp(fa + s (t - a)) t^j dt, j = 0, 1, 2
-            i0 = (eb - ea) / s
-            i1 = (b * eb - a * ea) / s - i0 / s
-            i2 = (b * b * eb - a * a * ea) / s - 2.0 * i1 / s
-        total += i0
-        m1 += i1
-        m2 += i2
-    if not total > 0:
-        return 0.0, 0.0, -math.inf
-    return m1 / total, m2 / total, top + math.log(total)
 
 
 def _capped(cov, width):
