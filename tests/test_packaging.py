@@ -5,6 +5,7 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 
@@ -32,16 +33,39 @@ def test_installed_package_imports_models_with_its_data(tmp_path):
     assert res.returncode == 0, res.stderr
 
 
-def test_every_subpackage_is_listed_for_installation():
-    """A subpackage of the source tree that pyproject.toml does not list is missing from an
-    installed (non-editable) package: its imports fail only after ``pip install .``."""
-    import pathlib
-    import tomllib
-    root = pathlib.Path(__file__).resolve().parents[1]
-    listed = set(tomllib.loads((root / "pyproject.toml").read_text())["tool"]["setuptools"]
-                 ["packages"])
-    found = {".".join(p.parent.relative_to(root).parts)
-             for p in (root / "iwan_element").rglob("__init__.py")
-             if not p.parent.is_symlink() and "models" not in p.parent.relative_to(root).parts}
-    found.add("iwan_element.models")
-    assert found == listed
+def _source_packages(root: Path) -> set[str]:
+    """Every folder holding an ``__init__.py`` under ``iwan_element/`` and ``models/``, named as
+    installed (``models/`` is ``iwan_element.models``)."""
+    found = set()
+    for top, name in (("iwan_element", "iwan_element"), ("models", "iwan_element.models")):
+        for init in (root / top).rglob("__init__.py"):
+            rel = init.parent.relative_to(root / top)
+            if any(p.is_symlink() for p in (root / top / rel).parents) or init.parent.is_symlink():
+                continue
+            if top == "iwan_element" and rel.parts[:1] == ("models",):
+                continue                     # a development link to models/, not a package
+            found.add(".".join((name, *rel.parts)))
+    return found
+
+
+def test_a_built_package_holds_every_subpackage_and_data_file(tmp_path):
+    """What a non-editable install copies (setuptools' ``build_py``, the step a wheel is built
+    with): every subpackage of the source tree and the data files of ``models/``, whatever the
+    rooms are. A subpackage missing here imports only from the checkout, never after
+    ``pip install .``."""
+    pytest.importorskip("setuptools", reason="setuptools (in the test extra) builds the package")
+    root = Path(__file__).resolve().parents[1]
+    lib = tmp_path / "lib"
+    # the file list made afresh in tmp_path: an old *.egg-info of the checkout would add the
+    # files it once listed as data files
+    res = subprocess.run([sys.executable, "setup.py", "-q", "egg_info", "--egg-base", str(tmp_path),
+                          "build_py", "--build-lib", str(lib)],
+                         cwd=root, capture_output=True, text=True, timeout=120)
+    assert res.returncode == 0, res.stderr
+    built = {".".join(p.parent.relative_to(lib).parts) for p in lib.rglob("__init__.py")}
+    assert built == _source_packages(root)
+    data = {p.relative_to(root / "models") for ext in ("csv", "json", "md")
+            for p in (root / "models").rglob(f"*.{ext}")}
+    assert data, "models/ holds the example records"
+    missing = sorted(str(d) for d in data if not (lib / "iwan_element" / "models" / d).is_file())
+    assert not missing, f"data files of models/ left out of the package: {missing}"
