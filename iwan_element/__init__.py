@@ -49,7 +49,7 @@ from .identify.csv_input import load_test
 from .identify.cycles import Cycle, find_reversals, split_cycles
 from .identify.testdata import TestData, simulate_test
 
-__version__ = "0.1.0"
+from importlib.metadata import version as _version; __version__ = _version("iwan-element")
 
 __all__ = [
     *closed_form.__all__,              # the paper's closed forms, as that module lists them

@@ -69,3 +69,17 @@ def test_a_built_package_holds_every_subpackage_and_data_file(tmp_path):
     assert data, "models/ holds the example records"
     missing = sorted(str(d) for d in data if not (lib / "iwan_element" / "models" / d).is_file())
     assert not missing, f"data files of models/ left out of the package: {missing}"
+
+
+def test_version_is_the_installed_metadata():
+    """``iwan_element.__version__`` is read from the installed metadata, which pyproject.toml
+    writes: one version, stated once."""
+    import re
+
+    import iwan_element
+
+    text = (Path(__file__).resolve().parents[1] / "pyproject.toml").read_text(encoding="utf-8")
+    project = text.split("[project]", 1)[1].split("\n[", 1)[0]
+    assert re.search(r'^version = "([^"]+)"$', project, re.MULTILINE).group(1) == (
+        iwan_element.__version__
+    )
