@@ -18,10 +18,10 @@
    method, residual variance inflated by the residual's correlation time).
 
 The stages and their modules, each reading only what the one before returned: prepare
-(:mod:`.prepare`, :class:`~.prepare.PreparedRecord`), noise (:mod:`._noise`,
-:class:`~._noise.NoiseLevel`), fit (:mod:`.fit`), select (:func:`select`, the rule of
-:mod:`.selection`; :class:`LoopSelection`) and report (:mod:`.report`,
-:class:`~.results.Diagnosis`). An effect the record cannot test (its class' ``needs``) is
+(:mod:`.prepare`, :class:`~.prepare.PreparedRecord`), noise (:mod:`.noise`,
+:class:`~.noise.NoiseLevel`), fit (:mod:`.fit`), select (:func:`select`, the rule of
+:mod:`..selection.rule`; :class:`LoopSelection`) and report (:mod:`.report`,
+:class:`~.result.Diagnosis`). An effect the record cannot test (its class' ``needs``) is
 reported as untestable, not tried.
 
 A property of the test rig is not an effect of the joint: ``lowpass`` removes structural
@@ -37,22 +37,22 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..core.threads import one_blas_thread
-from ..core.validation import check_int, check_scalar
-from ..effects import EFFECTS
-from ..effects.evaluate import order_stack, stack_ok
-from ..core.progress import finish, progress_bar, set_total, tick
-from ._locate import _check_candidates
-from ._noise import NoiseLevel, noise_level, pure_noise
+from ...core.threads import one_blas_thread
+from ...core.validation import check_int, check_scalar
+from ...effects import EFFECTS
+from ...effects.evaluate import order_stack, stack_ok
+from ...core.progress import finish, progress_bar, set_total, tick
+from .locate import _check_candidates
+from .noise import NoiseLevel, noise_level, pure_noise
 from .fit import StackFitter, final_fits, fit_base, record_force, z_start
 from .prepare import (PreparedRecord, check_record, dissipation_scale, prepare_record,
                       record_cycles, untestable)
 from .report import assemble
-from .results import Diagnosis
-from .selection import SelectionResult, misfit_p, stepwise_select
-from ._loop_evidence import collect_fits, loop_evaluator
-from ._vib_evidence import nested_options
-from .probabilities import check_effect_prior, key, rank
+from .result import Diagnosis
+from ..selection.rule import SelectionResult, misfit_p, stepwise_select
+from .evidence import collect_fits, loop_evaluator
+from ..selection.nested import nested_options
+from ..selection.probabilities import check_effect_prior, key, rank
 
 __all__ = ["diagnose", "loop_candidates", "LoopSelection", "select"]
 
@@ -248,7 +248,7 @@ def select(fitter: StackFitter, base: dict, rec: PreparedRecord, nl: NoiseLevel,
 def most_probable(sel: LoopSelection, base: dict, rec: PreparedRecord,
                   effect_prior, nested=None) -> LoopSelection:
     """The probability stage: every explanation the selection fitted with its posterior
-    probability (:mod:`.probabilities`), and the most probable one named (the rule's own
+    probability (:mod:`..selection.probabilities`), and the most probable one named (the rule's own
     answer kept in ``rule_named``). A record that is noise names nothing whatever the
     probabilities say (nothing is identified on it)."""
     nl = sel.noise

@@ -1,8 +1,8 @@
-"""The report stage of a loop diagnosis: the :class:`~.results.Diagnosis` of a record.
+"""The report stage of a loop diagnosis: the :class:`~.result.Diagnosis` of a record.
 
 It reads what the earlier stages returned (the prepared record, its noise level, the
 selection and the fitted stacks) and states it: where the plain joint misfits
-(:func:`._locate._locate`), what the selection leaves unexplained, the starting state, the
+(:func:`.locate._locate`), what the selection leaves unexplained, the starting state, the
 details. It fits nothing.
 """
 from __future__ import annotations
@@ -12,10 +12,10 @@ import time
 
 import numpy as np
 
-from ..core.serialize import json_safe
-from ._locate import _locate
-from .results import Diagnosis
-from .selection import criterion_text
+from ...core.serialize import json_safe
+from .locate import _locate
+from .result import Diagnosis
+from ..selection.rule import criterion_text
 
 __all__ = ["assemble"]
 

@@ -10,7 +10,7 @@ condition that was not tested (:meth:`CampaignFit.predict`). The procedure
    :func:`~iwan_element.ensemble.run_ensemble`): the effects it names, its own fit (the
    yardstick of the campaign model), its noise and the record as fitted (offsets, low-pass);
 2. the campaign's effect stack is the most probable explanation over all records together
-   (the product of the records' evidences, :mod:`._campaign_probability`; the effects named
+   (the product of the records' evidences, :mod:`.probability`; the effects named
    on at least half of the records when they were diagnosed without probabilities), or
    ``effects=``; every other explanation probable enough to be averaged gets its own
    campaign model (``CampaignFit.alternatives``, for :meth:`CampaignFit.averaged_band`); each quantity ``q`` of the stack (``Fs``, ``ln phi_max``, ``chi``,
@@ -46,17 +46,19 @@ from dataclasses import replace
 import numpy as np
 from scipy.optimize import least_squares
 
-from ..core.serialize import json_safe
-from ..core.validation import check_int
-from ..effects import EFFECTS
-from ..effects.evaluate import order_stack, stack_ok
-from ..ensemble import run_ensemble
-from ..core.progress import finish, progress_bar
-from . import _campaign_model as CM
-from ._campaign_probability import campaign_explanations, probable_alternatives
-from ._campaign_result import CampaignFit
-from .batch import _check_options, _check_records
-from .loops import diagnose
+from ...core.serialize import json_safe
+from ...core.validation import check_int
+from ...effects import EFFECTS
+from ...effects.evaluate import order_stack, stack_ok
+from ...ensemble import run_ensemble
+from ...core.progress import finish, progress_bar
+from . import model as CM
+from .assemble import assemble
+from .model import build_model, solve
+from .probability import campaign_explanations, probable_alternatives
+from .result import CampaignFit
+from ..loops.batch import check_options, check_records, executor_for
+from ..loops.diagnosis import diagnose
 
 __all__ = ["fit_campaign", "CampaignFit"]
 
@@ -89,15 +91,6 @@ def _unpack(row: dict) -> dict:
     return prep
 
 
-def _executor(jobs, client):
-    if client is not None:
-        return client
-    if jobs == 1:
-        return "serial"
-    from concurrent.futures import ProcessPoolExecutor
-    return ProcessPoolExecutor(jobs)
-
-
 def _diagnose_records(recs, labels, opts, diagnoses, jobs, client, progress):
     """Per-record preparations (None where a record could not be diagnosed) and warnings."""
     max_samples = int(opts.get("max_samples", diagnose.__kwdefaults__["max_samples"]))
@@ -113,7 +106,7 @@ def _diagnose_records(recs, labels, opts, diagnoses, jobs, client, progress):
         return [CM.record_from_diagnosis(d, max_samples) for d in diags], []
     sets = [{"t": t, "u": u, "F": F, "options": opts, "max_samples": max_samples}
             for t, u, F in recs]
-    ex = _executor(jobs, client)
+    ex = executor_for(jobs, client)
     try:
         res = run_ensemble(_record_task, sets, executor=ex, seed=0, progress=progress)
     finally:
@@ -132,7 +125,7 @@ def _diagnose_records(recs, labels, opts, diagnoses, jobs, client, progress):
 
 def _common_stack(preps, effects, explanations=()):
     """The campaign's effect stack: ``effects``, or the most probable explanation over all
-    records (:mod:`._campaign_probability`), or (records diagnosed without probabilities)
+    records (:mod:`.probability`), or (records diagnosed without probabilities)
     the effects named on >= half the records."""
     if effects is not None:
         names = (effects,) if isinstance(effects, str) else tuple(effects)
@@ -191,37 +184,11 @@ def _no_effect(model, q) -> float:
     return CM.to_law(sp, max(sp.lower + z * unit, sp.lower + 1e-3 * unit))
 
 
-def build_model(preps, names, laws, cnames, X):
-    """The :class:`CampaignModel` of prepared records (scales and centring from them)."""
-    records = [CM.RecordModel(p) for p in preps]
-    centre = X.mean(axis=0)
-    cscale = np.where(X.std(axis=0) > 0, X.std(axis=0), 1.0)
-    qscale = {"Fs": float(np.median([p["estimates"]["Fs"] for p in preps])),
-              "log_phi_max": 1.0, "chi": 1.0, "log1p_beta": 1.0}
-    for nm in names:
-        for sp in EFFECTS[nm].specs:
-            qscale[CM.effect_quantity(nm, sp)] = 1.0 if CM.log_form(sp) else float(np.median(
-                [rm.scales[sp.ref] ** -sp.ref_power for rm in records]))
-    free = [p["start"] != 0.0 for p in preps]
-    return CM.CampaignModel(records, names, laws, cnames, X, centre, cscale, qscale, free)
-
-
-def solve(model, theta0, *, max_nfev, bar=None):
-    """The joint weighted least-squares fit (trust region, sparse finite differences)."""
-    def fun(th):
-        if bar is not None:
-            bar.update(1)
-        return model.residual(th)
-
-    return least_squares(fun, theta0, jac_sparsity=model.sparsity(), method="trf",
-                         x_scale="jac", diff_step=1e-6, max_nfev=max_nfev)
-
-
 def record_values(model, theta, preps, *, max_nfev: int = 60):
     """Each record's own values with the campaign's stack (its quantities fitted to it alone,
     every law a constant; warm-started at its own estimates, else at the laws), in the form
-    :func:`_campaign_model.in_range` gives; None where that fit fails. The record-to-record
-    scatter about the laws is read from them (:func:`_campaign_model.deviations`)."""
+    :func:`.model.in_range` gives; None where that fit fails. The record-to-record
+    scatter about the laws is read from them (:func:`.model.deviations`)."""
     out = []
     for r, p in enumerate(preps):
         sub = build_model([p], model.names, {q: () for q in model.qnames}, model.cnames,
@@ -249,9 +216,9 @@ def _check_input(records, conditions, names, laws, effects, jobs, max_nfev, opti
     """Everything that can be checked before the records are diagnosed."""
     if not isinstance(scatter, bool):
         raise ValueError(f"scatter must be True or False, got {scatter!r}")
-    recs, labels = _check_records(records, names)
+    recs, labels = check_records(records, names)
     cnames, X = CM.check_conditions(conditions, len(recs))
-    opts = _check_options(options)
+    opts = check_options(options)
     check_int("jobs", jobs, 1)
     check_int("max_nfev", max_nfev, 1)
     CM.precheck_laws(laws, cnames, X)
@@ -359,7 +326,6 @@ def _fit_stack(names_, stack_from, warns, *, preps, labels, X, laws, cnames, max
     t2 = time.perf_counter()
     free = record_values(model, res.x, preps) if scatter else None
     times = {"diagnoses": t_diag, "joint_fit": t_fit, "scatter": time.perf_counter() - t2}
-    from ._campaign_result import assemble
     return assemble(model=model, preps=preps, labels=labels, res=res, units=units,
                     stack_from=stack_from, warnings=warns + lwarn, options=opts,
                     times=times, t0=t0, free=free)

@@ -1,8 +1,8 @@
 """The probability stage of a loop diagnosis: the evidence of every stack the selection fitted
-(:mod:`.probabilities`), and the force of a fitted stack from its variables (for the
-model-averaged band, :mod:`.averaging`).
+(:mod:`..selection.probabilities`), and the force of a fitted stack from its variables (for the
+model-averaged band, :mod:`..selection.averaging`).
 
-The variables of a loop fit are ``theta = (z, [start], Fs, F0)`` (:func:`._model.jacobian`):
+The variables of a loop fit are ``theta = (z, [start], Fs, F0)`` (:func:`.model.jacobian`):
 the joint's shape ``z[:3] = (ln(phi_max / x_max), chi, ln(1 + beta))``, the effects' fitting
 variables, the starting state when the fit freed it, the force scale and the force offset.
 Their prior box: the loop model's bounds for the shape, each effect variable's declared
@@ -16,13 +16,13 @@ import math
 
 import numpy as np
 
-from ..core.history import unit_params
-from ..core.parameters import IwanParameters
-from ..effects import EFFECTS
-from ..effects.evaluate import build_element, scale_effect
-from ..fitting.evidence import Ridge
-from . import _model as M
-from .probabilities import key
+from ...core.history import unit_params
+from ...core.parameters import IwanParameters
+from ...effects import EFFECTS
+from ...effects.evaluate import build_element, scale_effect
+from ...fitting.evidence import Ridge
+from . import model as M
+from ..selection.probabilities import key
 
 __all__ = ["loop_evaluator", "collect_fits", "member_force", "n_variables"]
 
@@ -194,8 +194,8 @@ __all__ += ["member_physical"]
 def loop_band(diag, t, u, level: float):
     """The model-averaged force of a loop diagnosis ``diag`` on the drive ``(t, u)`` (None:
     the record as fitted): :class:`.averaging.AveragedBand` with channel ``"force"`` [N]."""
-    from ..core.validation import check_time, finite_array
-    from .averaging import band, linear_spread, members
+    from ...core.validation import check_time, finite_array
+    from ..selection.averaging import band, linear_spread, members
     if not diag.explanations:
         raise ValueError("this diagnosis has no probabilities (diagnose(..., "
                          "probabilities=False)): nothing to average")

@@ -5,7 +5,7 @@ import math
 
 import numpy as np
 
-from ..effects import EFFECTS
+from ...effects import EFFECTS
 
 __all__: list[str] = []
 

@@ -1,14 +1,15 @@
-"""How sure a campaign's stack is (private module of :mod:`.campaign`): the probabilities of
-the explanations over all records together, and the model-averaged prediction.
+"""How sure a campaign's stack is (:mod:`.fit`): the probabilities of the explanations over
+all records together, and the model-averaged prediction.
 
 The records of one device share its explanation: the campaign's evidence of an explanation
 is the product of the records' evidences (each record's noise independent of the others'),
 ``ln Z_M = sum_r ln Z_M,r``, over the explanations every record's diagnosis fitted (an
 explanation some record did not fit is not compared); the prior is the diagnosis' default
 or ``effect_prior`` over the candidates the records tested. The probabilities follow as for
-one record (:mod:`.probabilities`). Their model-averaged prediction at a condition mixes the
-campaign models of every probable explanation (:mod:`.averaging`), each with its band from
-the law coefficients and the record-to-record scatter.
+one record (:mod:`..selection.probabilities`). Their model-averaged prediction at a
+condition mixes the campaign models of every probable explanation
+(:mod:`..selection.averaging`), each with its band from the law coefficients and the
+record-to-record scatter.
 """
 from __future__ import annotations
 
@@ -17,9 +18,9 @@ import math
 import numpy as np
 from scipy.special import ndtri
 
-from ..fitting.evidence import posterior_probabilities
-from .averaging import MIN_WEIGHT, band, members
-from .probabilities import Explanation, check_effect_prior, log_model_prior
+from ...fitting.evidence import posterior_probabilities
+from ..selection.averaging import MIN_WEIGHT, band, members
+from ..selection.probabilities import Explanation, check_effect_prior, log_model_prior
 
 __all__ = ["record_explanations", "campaign_explanations", "campaign_band"]
 

@@ -1,5 +1,6 @@
-"""Prediction of a campaign model at conditions, and its leave-one-out check (private module
-of :mod:`iwan_element.diagnose.campaign`; equations in ``docs/campaign.md``)."""
+"""Prediction of a campaign model at conditions, and its leave-one-out check; the methods
+:meth:`~.result.CampaignFit.predict` and :meth:`~.result.CampaignFit.leave_one_out` call
+these (equations in ``docs/campaign.md``)."""
 from __future__ import annotations
 
 import math
@@ -8,17 +9,18 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..core.result_shape import ResultShape, table_lines
-from ..core.serialize import json_safe
-from ..core.validation import check_int, check_scalar, check_time, finite_array
-from ..ensemble import run_ensemble
-from ..plotting import axes_or_new
-from . import _campaign_model as CM
-from . import _model as M
-from ._campaign_result import full_force
-from .batch import band_misfit
+from ...core.result_shape import ResultShape, table_lines
+from ...core.serialize import json_safe
+from ...core.validation import check_int, check_scalar, check_time, finite_array
+from ...ensemble import run_ensemble
+from ...plotting import axes_or_new
+from . import model as CM
+from ..loops import model as M
+from .model import build_model, full_force, solve
+from ..loops.batch import band_misfit, executor_for
 
-__all__ = ["CampaignPrediction", "LeaveOneOut", "condition_vector", "predict", "leave_one_out"]
+__all__ = ["CampaignPrediction", "LeaveOneOut", "condition_vector", "predict", "leave_one_out",
+           "predict_record", "draw_values"]
 
 LOO_TARGET = 1.5                      # prediction band misfit / own fit's: the issue's target
 
@@ -106,7 +108,7 @@ def _force(model, rm, vals, start):
 def draw_values(model, theta, cov, S, x, rng, draws):
     """``draws`` law-value dicts at conditions ``x``: coefficients from ``N(theta, cov)`` and,
     when ``S`` (the scatter covariance) is given, a record-to-record deviation from
-    ``N(0, S)`` (:func:`_campaign_model.perturb`). Draws with ``Fs <= 0`` are left out."""
+    ``N(0, S)`` (:func:`.model.perturb`). Draws with ``Fs <= 0`` are left out."""
     ng = model.n_glob
     L = _chol(cov)
     Ls = None if S is None else _chol(S)
@@ -177,7 +179,7 @@ def _chol(cov):
     return V * np.sqrt(np.clip(w, 0.0, None))
 
 
-def _predict_record(model, theta, r, prep, bands=(), vals=None):
+def predict_record(model, theta, r, prep, bands=(), vals=None):
     """``(band misfit [N], coverages)`` of the device predicted from ``theta`` on record
     ``r``; the record's nuisances (force offset, starting state) are fitted to it once, with
     the device held. Each of ``bands``, ``(cov, S, draws, level, rng)``, gives one coverage:
@@ -233,7 +235,7 @@ def _loo_predict(model, th, i, prep, free, cov, cover) -> dict:
     from the other records (``coverage``) and by the coefficients' band alone
     (``coverage_coef``)."""
     if cover is None:
-        return {"band_pred": _predict_record(model, th, i, prep)[0], "coverage": math.nan,
+        return {"band_pred": predict_record(model, th, i, prep)[0], "coverage": math.nan,
                 "coverage_coef": math.nan}
     draws, level, seed = cover
     S, cov_s = None, cov
@@ -243,7 +245,7 @@ def _loo_predict(model, th, i, prep, free, cov, cover) -> dict:
             S = CM.scatter_cov(D, dof)
             cov_s = cov + CM.scatter_coef_cov(model, th, S, skip=i)
     rng = np.random.default_rng([seed, i])
-    band, (cov_re, cov_coef) = _predict_record(
+    band, (cov_re, cov_coef) = predict_record(
         model, th, i, prep, ((cov_s, S, draws, level, rng), (cov, None, draws, level, rng)))
     return {"band_pred": band, "coverage": cov_re if S is not None else math.nan,
             "coverage_coef": cov_coef}
@@ -252,7 +254,6 @@ def _loo_predict(model, th, i, prep, free, cov, cover) -> dict:
 def _loo_task(params, rng):
     """Refit without record ``i`` (warm start), predict it (module level: picklable)."""
     del rng
-    from .campaign import build_model, solve
     i, preps = params["i"], params["preps"]
     X = params["X"]
     others = [k for k in range(len(preps)) if k != i]
@@ -336,12 +337,11 @@ def leave_one_out(fit, *, refit="step", jobs=1, client=None, progress=False, max
     the record (no new model evaluations but the prediction's); ``"full"``: a warm-started
     least-squares refit per record, on ``jobs`` local processes or a Dask ``client``. The
     prediction holds the device at the laws; the record's nuisances (force offset, starting
-    state on :data:`_model.START_GRID`) are fitted to it. ``coverage=True`` also draws
+    state on :data:`..loops.model.START_GRID`) are fitted to it. ``coverage=True`` also draws
     ``draws`` devices per record (coefficients from the full fit's covariance, scatter read
     from the other records) and states how much of the record's band the ``level`` band
     holds. Returns :class:`LeaveOneOut`.
     """
-    from .campaign import _executor
     if refit not in ("step", "full"):
         raise ValueError(f"refit must be 'step' or 'full', got {refit!r}")
     jobs = check_int("jobs", jobs, 1)
@@ -367,7 +367,7 @@ def leave_one_out(fit, *, refit="step", jobs=1, client=None, progress=False, max
                   "cnames": model.cnames, "centre": model.centre, "cscale": model.cscale,
                   "qscale": model.qscale, "theta": theta, "max_nfev": max_nfev,
                   "free": st.get("free"), "cov": st["cov_int"], "cover": cover}
-        ex = _executor(jobs, client)
+        ex = executor_for(jobs, client)
         try:
             res = run_ensemble(_loo_task, [dict(common, i=i) for i in range(n)], executor=ex,
                                seed=0, progress=progress)

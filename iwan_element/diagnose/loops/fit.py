@@ -1,7 +1,7 @@
 """The fit stage of a loop diagnosis: effect stacks fitted on a prepared record.
 
 :class:`StackFitter` fits a stack of effects on the Iwan joint to a
-:class:`~.prepare.PreparedRecord` (the loop model of :mod:`._model`: ``Fs`` and the force
+:class:`~.prepare.PreparedRecord` (the loop model of :mod:`.model`: ``Fs`` and the force
 offset eliminated in closed form, the joint's starting state as a nuisance) and scores it as a
 noise-normalised chi-square; :func:`fit_base` fits the plain joint; :func:`stack_fit` states
 a fitted stack on the whole record with its uncertainty (:class:`~iwan_element.FitResult`);
@@ -16,15 +16,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..core.serialize import json_safe
-from ..effects import EFFECTS
-from ..effects.evaluate import Evaluator, build_element
-from ..fitting import fit_success
-from ..identify.identifiability import microslip_warning, min_macroslip
-from ..identify.loops import fit_loops
-from ..identify.result import (failure_list, quiet_fits, required_parameters,
-                               settle_verdict)
-from . import _model as M
+from ...core.serialize import json_safe
+from ...effects import EFFECTS
+from ...effects.evaluate import Evaluator, build_element
+from ...fitting import fit_success
+from ...identify.identifiability import microslip_warning, min_macroslip
+from ...identify.loops import fit_loops
+from ...identify.result import failure_list, quiet_fits, required_parameters, settle_verdict
+from . import model as M
 
 __all__ = ["StackFitter", "FinalFits", "fit_base", "z_start", "stack_fit", "record_force",
            "final_fits"]
@@ -58,7 +57,7 @@ class StackFitter:
 
     def run(self, names, starts, scan=None):
         """Fit ``names`` from ``starts``; ``scan``: the newly added effect, whose ``fit_scan``
-        grid (if it has one) seeds the starts by a 1-D scan (:func:`_model.scan_starts`).
+        grid (if it has one) seeds the starts by a 1-D scan (:func:`.model.scan_starts`).
         Fits do not depend on sigma, so a re-selection reuses them (memo)."""
         key = (tuple(names), scan, b"".join(np.asarray(z, float).tobytes() for z in starts))
         row = self.__dict__.setdefault("_memo", {}).get(key)

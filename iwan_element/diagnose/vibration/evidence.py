@@ -1,27 +1,16 @@
-"""The probability stage of a vibration diagnosis (:mod:`.vibration`): the explanations it
+"""The probability stage of a vibration diagnosis (:mod:`.diagnosis`): the explanations it
 fitted, each one's Jacobian, prior box and chi-square for the evidence
-(:func:`.probabilities.rank`), and the nested sampler's options."""
+(:func:`..selection.probabilities.rank`)."""
 from __future__ import annotations
 
 import math
 
 import numpy as np
 
-from ..effects import EFFECTS
-from .probabilities import key
+from ...effects import EFFECTS
+from ..selection.probabilities import key
 
-__all__ = ["collect", "jacobian", "evaluate", "nested_options"]
-
-
-def nested_options(evidence, nested):
-    """The nested sampler's options (None: Laplace only); ValueError for a bad choice."""
-    if evidence not in ("laplace", "nested"):
-        raise ValueError(f"evidence must be 'laplace' or 'nested', got {evidence!r}")
-    if nested is not None and not isinstance(nested, dict):
-        raise ValueError(f"nested must be a dict of sampler options, got {nested!r}")
-    if evidence == "laplace":
-        return None
-    return {"sampler": "dynesty", "nlive": 200, "rng": 0} | dict(nested or {})
+__all__ = ["collect", "jacobian", "evaluate"]
 
 
 def collect(base, steps) -> dict:
@@ -70,8 +59,8 @@ def vibration_band(diag, amplitude, base, level):
     ``amplitude`` (:class:`.averaging.AveragedBand`, channels ``"frequency"`` [Hz] and
     ``"damping_ratio"`` [-]); ``base``: the model without effects there (None: the
     prediction the diagnosis was given, interpolated in log amplitude, held at its ends)."""
-    from ..core.validation import finite_array
-    from .averaging import band, linear_spread, members
+    from ...core.validation import finite_array
+    from ..selection.averaging import band, linear_spread, members
     X = finite_array("amplitude", amplitude, ndim=1, min_size=1)
     if np.any(X <= 0):
         raise ValueError("amplitude must be > 0 [m]")

@@ -13,13 +13,13 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.signal import butter, sosfiltfilt
 
-from ..core.history import REVERSAL_TOL, unit_params
-from ..core.validation import (MAGNITUDE_RANGE, check_magnitude, check_scalar, check_time,
-                               check_varies, finite_array, same_length)
-from ..effects import EFFECTS
-from ..effects.evaluate import Evaluator
-from ..identify.cycles import find_reversals, split_cycles
-from ._noise import noise_estimate
+from ...core.history import REVERSAL_TOL, unit_params
+from ...core.validation import (MAGNITUDE_RANGE, check_magnitude, check_scalar, check_time,
+                                check_varies, finite_array, same_length)
+from ...effects import EFFECTS
+from ...effects.evaluate import Evaluator
+from ...identify.cycles import find_reversals, split_cycles
+from .noise import noise_estimate
 
 __all__ = ["PreparedRecord", "check_record", "prepare_record", "fitted_samples",
            "effect_scales", "dissipation_scale", "drive_structure", "untestable",

@@ -1,26 +1,26 @@
 """The device model of a campaign fit: parameter laws over the test conditions, the records
-as the diagnosis prepared them, and the joint residual over all records.
-
-Private module of :mod:`iwan_element.diagnose.campaign` (equations: ``docs/campaign.md``).
+as the diagnosis prepared them, the joint residual over all records, and its weighted
+least-squares fit (:func:`build_model`, :func:`solve`; equations: ``docs/campaign.md``).
 """
 from __future__ import annotations
 
 import math
 
 import numpy as np
+from scipy.optimize import least_squares
 from scipy.sparse import lil_matrix
 
-from ..core.validation import finite_array
-from ..effects import EFFECTS
-from ..effects.evaluate import Evaluator
-from ..fitting import normal_inverse
-from . import _model as M
-from ..identify.noise import integrated_time
-from .batch import band_misfit
-from .prepare import dissipation_scale, drive_structure, effect_scales, fitted_samples
-from ._campaign_probability import record_explanations
+from ...core.validation import finite_array
+from ...effects import EFFECTS
+from ...effects.evaluate import Evaluator
+from ...fitting import normal_inverse
+from ..loops import model as M
+from ...identify.noise import integrated_time
+from ..loops.batch import band_misfit
+from ..loops.prepare import dissipation_scale, drive_structure, effect_scales, fitted_samples
+from .probability import record_explanations
 
-__all__: list[str] = []
+__all__ = ["CampaignModel", "RecordModel", "build_model", "solve", "full_force"]
 
 #: The joint's quantities every campaign model has a law for (the law's form of each).
 BASE_QUANTITIES = ("Fs", "log_phi_max", "chi", "log1p_beta")
@@ -336,7 +336,7 @@ class CampaignModel:
 
     def jacobian(self, theta):
         """Unweighted Jacobian ``d residual / d theta`` by central differences (two steps;
-        samples whose force jumps between them are left out, :func:`_model._jumps`)."""
+        samples whose force jumps between them are left out, :func:`..loops.model.jumps`)."""
         J = np.zeros((int(self.rows[-1]), self.n_theta))
 
         def diff(j, h, rs):
@@ -348,7 +348,7 @@ class CampaignModel:
                 out.append([(self.record_residual(tp, r) - self.record_residual(tm, r))
                             / (2 * f * h) for r in rs])
             for r, d1, d4 in zip(rs, *out):
-                J[self.rows[r]:self.rows[r + 1], j] = np.where(M._jumps(d1, d4), 0.0, d1)
+                J[self.rows[r]:self.rows[r + 1], j] = np.where(M.jumps(d1, d4), 0.0, d1)
 
         every = range(len(self.records))
         for j in range(self.n_glob):
@@ -425,3 +425,44 @@ def scatter_coef_cov(model, theta, S, skip=None) -> np.ndarray:
         sl = model.slices[q]
         C[sl, sl] = normal_inverse(A / np.sqrt(var)[:, None])[0]     # (A^T V^-1 A)^-1
     return C
+
+
+def build_model(preps, names, laws, cnames, X):
+    """The :class:`CampaignModel` of prepared records (scales and centring from them)."""
+    records = [RecordModel(p) for p in preps]
+    centre = X.mean(axis=0)
+    cscale = np.where(X.std(axis=0) > 0, X.std(axis=0), 1.0)
+    qscale = {"Fs": float(np.median([p["estimates"]["Fs"] for p in preps])),
+              "log_phi_max": 1.0, "chi": 1.0, "log1p_beta": 1.0}
+    for nm in names:
+        for sp in EFFECTS[nm].specs:
+            qscale[effect_quantity(nm, sp)] = 1.0 if log_form(sp) else float(np.median(
+                [rm.scales[sp.ref] ** -sp.ref_power for rm in records]))
+    free = [p["start"] != 0.0 for p in preps]
+    return CampaignModel(records, names, laws, cnames, X, centre, cscale, qscale, free)
+
+
+def solve(model, theta0, *, max_nfev, bar=None):
+    """The joint weighted least-squares fit (trust region, sparse finite differences)."""
+    def fun(th):
+        if bar is not None:
+            bar.update(1)
+        return model.residual(th)
+
+    return least_squares(fun, theta0, jac_sparsity=model.sparsity(), method="trf",
+                         x_scale="jac", diff_step=1e-6, max_nfev=max_nfev)
+
+
+def full_force(model, theta, r, prep, vals=None, start=None):
+    """Campaign force [N] of record ``r`` at every sample, offset included (fitted on the
+    record's fitted samples), and the offset."""
+    rm_full = RecordModel(prep, full=True)
+    vals = model.law_values(theta, model.X[r]) if vals is None else vals
+    start = model.start(theta, r) if start is None else start
+    m_keep = model.record_force(theta, r, vals=vals, start=start)
+    if m_keep is None:
+        return None, math.nan
+    F0 = float(np.mean(model.records[r].y - m_keep))
+    Fs, shape, effs = model.physical(vals, rm_full)
+    rm_full.ev.set_start(start)
+    return Fs * rm_full.ev.unit_force(shape, model.names, effs) + F0, F0

@@ -1,34 +1,17 @@
-"""Result object of the loop diagnosis, :class:`Diagnosis`, and the report pieces both
-diagnoses share (:mod:`.vibration_result` holds :class:`VibrationDiagnosis`)."""
+"""Result object of the loop diagnosis, :class:`Diagnosis` (the report pieces both diagnoses
+share are in :mod:`..selection.lines`)."""
 from __future__ import annotations
 
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..core.serialize import json_safe
-from ..effects import EFFECTS
-from ..core.result_shape import ResultShape, panels, unit_label, value_stderr, wrap
-from .probabilities import Probable
+from ...core.serialize import json_safe
+from ...core.result_shape import ResultShape, panels, value_stderr, wrap
+from ..selection.lines import effect_unit, verdict_lines
+from ..selection.probabilities import Probable
 
 __all__ = ["Diagnosis"]
-
-
-def _unit(name: str, key: str, modal: bool = False) -> str:
-    specs = EFFECTS[name].modal_specs if modal else EFFECTS[name].specs
-    return "[" + unit_label(next((s.unit for s in specs if s.name == key), "")) + "]"
-
-
-
-def _verdict_lines(word: str, result) -> list:
-    """The closing lines of a diagnosis report: misfit before and after, noise, warnings."""
-    lines = [f"  {word} before {100 * result.error_before:.3g} % -> after "
-             f"{100 * result.error_after:.3g} % (noise {100 * result.noise_level:.3g} %)"]
-    if result.warnings:
-        lines.append("  warnings:")
-        for w in result.warnings:
-            lines += wrap(f"  - {w}", indent="    ")
-    return lines
 
 
 @dataclass(frozen=True, eq=False)
@@ -177,7 +160,7 @@ class Diagnosis(Probable, ResultShape):
                          + (f" (nearly as good: {', '.join(self.ambiguous_with)})"
                             if self.ambiguous_with else ""))
             for e in self.fit.details.get("effects", []):
-                ps = ", ".join(f"{k} = {v:.4g} {_unit(e['name'], k)} (+- {e['stderr'][k]:.2g})"
+                ps = ", ".join(f"{k} = {v:.4g} {effect_unit(e['name'], k)} (+- {e['stderr'][k]:.2g})"
                                for k, v in e["parameters"].items())
                 lines.append(f"    {e['name']}: {ps}")
             q = self.fit.joint
@@ -189,7 +172,7 @@ class Diagnosis(Probable, ResultShape):
         rule = tuple(d.get("rule_named", self.effects))
         if set(rule) != set(self.effects):
             lines.append(f"    (the stepwise rule alone names {' + '.join(rule) or 'nothing'})")
-        return "\n".join(lines + _verdict_lines("error", self))
+        return "\n".join(lines + verdict_lines("error", self))
 
     def _tables(self) -> list:
         base = super()._tables()
@@ -215,7 +198,7 @@ class Diagnosis(Probable, ResultShape):
             Channel ``"force"`` [N]: ``mean``, ``std``, ``lower``, ``upper``; the members
             and their weights.
         """
-        from ._loop_evidence import loop_band
+        from .evidence import loop_band
         return loop_band(self, t, u, level)
 
     def plot(self, ax=None):

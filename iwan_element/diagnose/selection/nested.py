@@ -22,10 +22,21 @@ import math
 
 import numpy as np
 
-__all__ = ["nested_log_evidence", "SAMPLERS"]
+__all__ = ["nested_log_evidence", "nested_options", "SAMPLERS"]
 
 #: The samplers this module can use.
 SAMPLERS = ("dynesty", "ultranest")
+
+
+def nested_options(evidence, nested):
+    """The nested sampler's options (None: Laplace only); ValueError for a bad choice."""
+    if evidence not in ("laplace", "nested"):
+        raise ValueError(f"evidence must be 'laplace' or 'nested', got {evidence!r}")
+    if nested is not None and not isinstance(nested, dict):
+        raise ValueError(f"nested must be a dict of sampler options, got {nested!r}")
+    if evidence == "laplace":
+        return None
+    return {"sampler": "dynesty", "nlive": 200, "rng": 0} | dict(nested or {})
 
 
 def _transform(specs, lo, hi):

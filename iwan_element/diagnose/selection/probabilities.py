@@ -37,9 +37,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..core.validation import check_scalar
-from ..fitting.evidence import laplace_evidence, posterior_probabilities
-from ..identify.noise import integrated_time
+from ...core.validation import check_scalar
+from ...fitting.evidence import laplace_evidence, posterior_probabilities
+from ...identify.noise import integrated_time
 
 __all__ = ["Explanation", "key", "default_effect_prior", "check_effect_prior",
            "log_model_prior", "model_error_scale", "rank", "effect_probability",
@@ -310,7 +310,7 @@ def switched_off(specs) -> dict:
 
 def _siblings(sp):
     """The ParamSpecs declared with ``sp`` (of the same effect, loop or modal)."""
-    from ..effects import EFFECTS
+    from ...effects import EFFECTS
     for cls in EFFECTS.values():
         for specs in (cls.specs, cls.modal_specs):
             if any(s is sp for s in specs):
@@ -342,7 +342,7 @@ def confidence_text(probabilities: dict) -> str:
 
 class Probable:
     """What every diagnosis result offers about its explanations' probabilities (a mixin of
-    :class:`~.results.Diagnosis`, :class:`~.vibration_result.VibrationDiagnosis` and
+    :class:`~..loops.result.Diagnosis`, :class:`~..vibration.result.VibrationDiagnosis` and
     :class:`~.campaign.CampaignFit`; reads the result's ``explanations``)."""
 
     @property
@@ -361,7 +361,7 @@ class Probable:
         ValueError
             ``name`` is not an effect of :data:`~iwan_element.EFFECTS`.
         """
-        from ..effects import EFFECTS
+        from ...effects import EFFECTS
         if name not in EFFECTS:
             raise ValueError(f"name must be one of {sorted(EFFECTS)}, got {name!r}")
         return effect_probability(self.probabilities, name)

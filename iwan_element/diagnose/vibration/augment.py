@@ -3,9 +3,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..core.protocol import check_element
-from ..core.validation import check_scalar
-from ..effects import EFFECTS
+from ...core.protocol import check_element
+from ...core.validation import check_scalar
+from ...effects import EFFECTS
 
 __all__ = ["augmented", "check_amplitude_units"]
 

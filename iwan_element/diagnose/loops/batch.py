@@ -21,12 +21,13 @@ from pathlib import Path
 
 import numpy as np
 
-from ..core.validation import check_scalar, finite_array
-from ..ensemble import run_ensemble
-from .loops import diagnose
-from ..core.result_shape import ResultShape, panels
+from ...core.validation import check_scalar, finite_array
+from ...ensemble import run_ensemble
+from .diagnosis import diagnose
+from ...core.result_shape import ResultShape, panels
 
-__all__ = ["diagnose_many", "BatchDiagnosis"]
+__all__ = ["diagnose_many", "BatchDiagnosis", "band_misfit", "check_records", "check_options",
+           "executor_for"]
 
 #: Table columns of :class:`BatchDiagnosis` (besides the record's name).
 COLUMNS = ("samples", "named", "error_before", "error_after", "band_before", "band_after",
@@ -60,7 +61,8 @@ def _diagnose_task(params, rng):
             "seconds": time.perf_counter() - t0, "json": json.dumps(d.to_dict())}
 
 
-def _check_records(records, names):
+def check_records(records, names):
+    """The records as triples of finite arrays and their labels (``names`` or ``record i``)."""
     try:
         recs = list(records)
     except TypeError:
@@ -82,12 +84,24 @@ def _check_records(records, names):
     return out, names
 
 
-def _check_options(options):
+def check_options(options):
+    """``options`` as a dict, every key an option of :func:`~iwan_element.diagnose`."""
     unknown = sorted(set(options) - set(diagnose.__kwdefaults__))
     if unknown:
         raise ValueError(f"options {unknown} are not options of diagnose(); it takes "
                          f"{sorted(diagnose.__kwdefaults__)}")
     return dict(options)
+
+
+def executor_for(jobs: int, client):
+    """The executor of ``run_ensemble`` for ``jobs`` local processes or a Dask ``client``
+    (``"serial"`` for one job); the caller shuts down a process pool it gets."""
+    if client is not None:
+        return client
+    if jobs == 1:
+        return "serial"
+    from concurrent.futures import ProcessPoolExecutor
+    return ProcessPoolExecutor(jobs)
 
 
 def diagnose_many(records, *, names=None, executor=None, progress: bool = False,
@@ -126,9 +140,9 @@ def diagnose_many(records, *, names=None, executor=None, progress: bool = False,
         Records that are not triples of finite arrays, names of the wrong length, an option
         :func:`~iwan_element.diagnose` does not take, a band outside (0, 1].
     """
-    recs, labels = _check_records(records, names)
+    recs, labels = check_records(records, names)
     band = check_scalar("band", band, low=0.0, high=1.0, low_open=True)
-    opts = _check_options(options)
+    opts = check_options(options)
     sets = [{"t": t, "u": u, "F": F, "options": opts, "band": band} for t, u, F in recs]
     res = run_ensemble(_diagnose_task, sets, executor=executor, seed=seed, progress=progress)
     rows, docs, warns = [], [], list(res.warnings)

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..identify.noise import MIN_WINDOW, signal_window, estimate_noise
+from ...identify.noise import MIN_WINDOW, signal_window, estimate_noise
 
 __all__ = ["noise_estimate", "NoiseLevel", "noise_level"]
 

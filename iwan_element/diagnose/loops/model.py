@@ -8,15 +8,16 @@ import math
 import numpy as np
 from scipy.optimize import least_squares, minimize_scalar
 
-from ..core.history import unit_params
-from ..core.parameters import IwanParameters
-from ..effects import EFFECTS
-from ..effects.evaluate import Evaluator, scale_effect
-from ..fitting import covariance
-from ..identify.noise import integrated_time
-from ..identify.result import FitResult, joint_table
+from ...core.history import unit_params
+from ...core.parameters import IwanParameters
+from ...effects import EFFECTS
+from ...effects.evaluate import Evaluator, scale_effect
+from ...fitting import covariance
+from ...identify.noise import integrated_time
+from ...identify.result import FitResult, joint_table
 
-__all__: list[str] = []
+__all__ = ["LoopModel", "PARAM_NAMES", "CHI_BOUNDS", "BETA_MAX", "PHI_RANGE", "START_GRID",
+           "jumps"]
 
 PARAM_NAMES = ("Fs", "KT", "chi", "beta")
 CHI_BOUNDS = (-0.98, 1.0)
@@ -269,7 +270,7 @@ def jacobian(model: LoopModel, z):
     """Jacobian of the residual [N per variable] and of the physical parameters in the fit's
     variables ``theta = (z, [start], Fs, F0)`` (``start`` only when the fit freed it,
     ``model.start != 0``; ``F0`` only when it is fitted): central differences at two steps,
-    samples whose force jumps between them left out (:func:`_jumps`); the columns of ``Fs``
+    samples whose force jumps between them left out (:func:`jumps`); the columns of ``Fs``
     and ``F0``, in which the residual ``y - Fs g(z) - F0`` is linear, exactly (``-g``,
     ``-1``), and the physical parameters' by their closed form (no force evaluated: a
     Jacobian costs four force evaluations per variable of ``z`` and the start). Returns
@@ -316,7 +317,7 @@ def jacobian(model: LoopModel, z):
             cols.append(-g if j == theta.size - 2 else -np.ones_like(g))
             continue
         dr, dr4 = (_difference(resid, theta, j, f * h, lo, hi) for f in (1, 4))
-        cols.append(np.where(_jumps(dr, dr4), 0.0, dr))
+        cols.append(np.where(jumps(dr, dr4), 0.0, dr))
     return (np.column_stack(cols), np.column_stack(pcols), theta[:m], lo[:m], hi[:m])
 
 
@@ -346,7 +347,7 @@ def _difference(fn, theta, j, h, lo, hi):
     return (fn(tp) - fn(tm)) / (tp[j] - tm[j])
 
 
-def _jumps(d1, d4):
+def jumps(d1, d4):
     """Samples whose force jumps between the two difference steps (quotients that do not
     agree; a jump gives ``jump / step``): a force that is discontinuous in a parameter
     (sliders breaking at once at one sample or the next, e.g. the spike ``S`` of a joint

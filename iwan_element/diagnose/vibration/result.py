@@ -7,13 +7,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..core.serialize import json_safe
-from ..effects import EFFECTS
-from ..fitting import Parameter, ParameterTable, verdict
-from ..core.result_shape import ResultShape, panels, wrap
-from ._augment import augmented
-from .results import _unit, _verdict_lines
-from .probabilities import Probable
+from ...core.serialize import json_safe
+from ...effects import EFFECTS
+from ...fitting import Parameter, ParameterTable, verdict
+from ...core.result_shape import ResultShape, panels, wrap
+from .augment import augmented
+from ..selection.lines import effect_unit, verdict_lines
+from ..selection.probabilities import Probable
 
 __all__ = ["VibrationDiagnosis"]
 
@@ -206,8 +206,8 @@ class VibrationDiagnosis(Probable, ResultShape):
             (1 sigma) from the fitted parameters' covariance (linearised), ``warnings`` states
             extrapolation beyond the diagnosed amplitudes.
         """
-        from ..core.validation import finite_array
-        from ..identify.curves import AmplitudeCurve
+        from ...core.validation import finite_array
+        from ...identify.curves import AmplitudeCurve
         X = finite_array("amplitude", amplitude, ndim=1, min_size=1)
         if np.any(X <= 0):
             raise ValueError("amplitude must be > 0 [m]")
@@ -244,7 +244,7 @@ class VibrationDiagnosis(Probable, ResultShape):
         posterior covariance (:mod:`~iwan_element.diagnose.averaging`); ``base`` as in
         :meth:`predict`. Returns an ``AveragedBand`` (channels ``"frequency"`` [Hz] and
         ``"damping_ratio"`` [-])."""
-        from ._vib_evidence import vibration_band
+        from .evidence import vibration_band
         return vibration_band(self, amplitude, base, level)
 
     def _bands(self, X, fb, zb, z0, f, z):
@@ -310,14 +310,14 @@ class VibrationDiagnosis(Probable, ResultShape):
                 if self.ambiguous_with else ""))
             for name, d in self.parameters.items():
                 lines.append("    " + name + ": " + ", ".join(
-                    f"{k} = {v:.4g} {_unit(name, k, modal=True)}" for k, v in d.items()))
+                    f"{k} = {v:.4g} {effect_unit(name, k, modal=True)}" for k, v in d.items()))
         else:
             lines.append("  named: none")
         lines += self.probability_lines()
         rule = tuple(self.details.get("rule_named", self.effects))
         if set(rule) != set(self.effects):
             lines.append(f"    (the stepwise rule alone names {' + '.join(rule) or 'nothing'})")
-        return "\n".join(lines + _verdict_lines("mismatch", self))
+        return "\n".join(lines + verdict_lines("mismatch", self))
 
     def _tables(self) -> list:
         out = [t for t in super()._tables() if t[0] == "parameters"]
