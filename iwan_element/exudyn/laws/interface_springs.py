@@ -14,7 +14,7 @@ import exudyn as exu
 import numpy as np
 from exudyn.itemInterface import ObjectConnectorCartesianSpringDamper
 
-__all__: list[str] = []
+__all__ = ["check_stiffness", "linear_energy", "add_builtin_springs"]
 
 _POSITION = exu.OutputVariableType.Position
 _HIDDEN = {"show": False, "drawSize": -1.0, "color": [-1.0, -1.0, -1.0, -1.0]}

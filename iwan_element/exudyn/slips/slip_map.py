@@ -7,7 +7,7 @@ from __future__ import annotations
 import exudyn as exu
 import numpy as np
 
-__all__: list[str] = []
+__all__ = ["SlipMap", "JOINT_CHECKS"]
 
 _POSITION = exu.OutputVariableType.Position
 _CURRENT = exu.ConfigurationType.Current

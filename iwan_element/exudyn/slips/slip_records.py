@@ -10,9 +10,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..core.joint_bank import IwanJointBank
+from ...core.joint_bank import IwanJointBank
 
-__all__: list[str] = []
+__all__ = ["SlipRecords"]
 
 _START = 1024
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import exudyn as exu
 
-__all__: list[str] = []
+__all__ = ["coordinate_force_function", "position_force_function", "rotating_axis_force_function"]
 
 _ROTATION_MATRIX = exu.OutputVariableType.RotationMatrix
 
@@ -14,7 +14,7 @@ _ROTATION_MATRIX = exu.OutputVariableType.RotationMatrix
 # read the connector's small state by attribute access and call the bound trial method;
 # no numpy and no allocation beyond the return value. The cache ``conn._lF`` holds the
 # element's force; the dashpot in parallel (``conn._damping``) is added on return.
-def _coordinate_force_function(conn):
+def coordinate_force_function(conn):
     trial = conn._joint.trial
     off = conn._offset               # fixed at creation (the object's own offset is not read)
     c = conn._damping                # the dashpot in parallel (0.0: none)
@@ -52,7 +52,7 @@ def _axial_force(conn, trial, mbs, t, displacement, velocity, a0, a1, a2, off):
     return [F * a0, F * a1, F * a2]
 
 
-def _position_force_function(conn):
+def position_force_function(conn):
     trial = conn._joint.trial
     a0, a1, a2 = conn._axis
     off = conn._offset
@@ -63,7 +63,7 @@ def _position_force_function(conn):
     return iwan_position_force
 
 
-def _rotating_axis_force_function(conn):
+def rotating_axis_force_function(conn):
     trial = conn._joint.trial
     l0, l1, l2 = conn._axis
     off = conn._offset

@@ -54,7 +54,8 @@ import math
 import exudyn as exu
 from exudyn.advancedUtilities import CreateSymbolicUserFunction
 
-__all__: list[str] = []
+__all__ = ["VIRGIN", "SymbolicIwanState", "committed_slip_matrix", "branch_of", "make_probe",
+           "coordinate_law", "cartesian_law", "rigid_law"]
 
 esym = exu.symbolic
 _IDS = itertools.count()

@@ -15,7 +15,7 @@ from __future__ import annotations
 import exudyn as exu
 import numpy as np
 
-__all__: list[str] = []
+__all__ = ["SurfaceSlips"]
 
 _POSITION = exu.OutputVariableType.Position
 _CURRENT = exu.ConfigurationType.Current

@@ -1,7 +1,7 @@
 """The symbolic route of :func:`~iwan_element.exudyn.add_iwan_connector` (an ``IwanJoint``).
 
 The force law is the exact Iwan law as an Exudyn symbolic expression
-(:mod:`._symbolic_law`): no Python call and no Exudyn API call per force evaluation, so it
+(:mod:`.symbolic_law`): no Python call and no Exudyn API call per force evaluation, so it
 is safe with several solver threads. Once per accepted step the post-step work reads the
 accepted slip (a view of the system coordinates) and writes it to the law's variable
 ``u_c``. That is all it does while the slip moves on along the current branch without
@@ -37,11 +37,13 @@ from exudyn.itemInterface import (ObjectConnectorCartesianSpringDamper,
                                   ObjectConnectorCoordinateSpringDamper,
                                   ObjectConnectorRigidBodySpringDamper)
 
-from ._slip_map import SlipMap
-from ._symbolic_law import (SymbolicIwanState, branch_of, cartesian_law, coordinate_law,
-                            make_probe, rigid_law)
+from ..slips.slip_map import SlipMap
+from .symbolic_law import (SymbolicIwanState, branch_of, cartesian_law, coordinate_law,
+                           make_probe, rigid_law)
 
-__all__: list[str] = []
+__all__ = ["symbolic_item", "joint_tolerance", "symbolic_refresh", "branch_interval",
+           "law_window", "flush_joint", "sync_stack", "walk_states", "newton_check", "stride",
+           "replay_records", "reset_state"]
 
 _log = logging.getLogger(__name__)
 _INF = math.inf
