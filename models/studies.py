@@ -1,4 +1,5 @@
-"""Ready-made ensemble tasks for parameter studies of the lap-jointed beam specimens.
+"""Ready-made ensemble tasks for parameter studies of the lap-jointed beam specimens (here,
+beside the models they run, so that the ensemble runner below never imports the models).
 
 :func:`specimen_curve_task` runs the quasi-static modal analysis
 (:func:`iwan_element.models.qsma.modal_amplitude_curve`, docs/equations.md section 7) of a
@@ -10,12 +11,12 @@ preload, friction coefficient, bolt count or an interface parameter can be swept
     task = partial(specimen_curve_task, specimen=preset("example"), amplitude=X)
     result = run_ensemble(task, parameter_grid(preload=[10e3, 20e3, 30e3]))
 
-``iwan_element.models`` (which imports Exudyn) is imported when a task runs, not with this
-module.
 """
 from __future__ import annotations
 
 import numpy as np
+
+from .qsma import modal_amplitude_curve
 
 __all__ = ["specimen_curve_task", "with_changes"]
 
@@ -58,7 +59,6 @@ def specimen_curve_task(params: dict, rng, *, specimen, amplitude=None, mode: in
         ``f_linear`` (frequency at the smallest amplitude) [Hz], ``frequency_drop``
         (``1 - f(X_max) / f(X_min)``) and ``damping_ratio_max`` [-].
     """
-    from iwan_element.models.qsma import modal_amplitude_curve
     curve = modal_amplitude_curve(with_changes(specimen, params), mode=mode,
                                   amplitude=amplitude)
     f = np.asarray(curve.frequency, float)
