@@ -1,4 +1,4 @@
-"""Drop-in Exudyn connector for any joint element of this package (the only module importing exudyn).
+"""Drop-in Exudyn connector for any joint element of this package.
 
 :func:`add_iwan_connector` puts a history-dependent joint (an :class:`~iwan_element.IwanJoint`,
 a :class:`~iwan_element.DiscreteIwan`, or anything else following
