@@ -185,7 +185,7 @@ def attribute(fit):
     the record's own values of that group (``law+own``) and the record's own values with the
     laws' values of that group (``own+law``). Nuisances (offset, start) fitted as in the
     leave-one-out."""
-    from iwan_element.diagnose._campaign_predict import _predict_record
+    from iwan_element.diagnose.campaign.predict import predict_record
     st = fit._state
     model, theta, preps, free = st["model"], st["theta"], st["preps"], st["free"]
     groups = {g: [q for q in qs if q in model.qnames] for g, qs in GROUPS.items()}
@@ -199,7 +199,7 @@ def attribute(fit):
         f = free[r] if free[r] is not None else law
 
         def ratio(vals):
-            return _predict_record(model, theta, r, p, vals=vals)[0] / own
+            return predict_record(model, theta, r, p, vals=vals)[0] / own
         out = {"laws": ratio(law), "free": ratio(dict(f))}
         for g, qs in groups.items():
             out[f"law+own {g}"] = ratio(dict(law, **{q: f[q] for q in qs}))
@@ -219,7 +219,7 @@ def neighbours(fit):
     the same campaign and band tension (``same T``), and of those among them nearest in
     frequency, then in stroke (``nearest``). Band misfit over the record's own fit's."""
     import math
-    from iwan_element.diagnose._campaign_predict import _predict_record
+    from iwan_element.diagnose.campaign.predict import predict_record
     st = fit._state
     model, theta, preps, free = st["model"], st["theta"], st["preps"], st["free"]
     col = {c: j for j, c in enumerate(model.cnames)}
@@ -241,7 +241,7 @@ def neighbours(fit):
                 out.append(math.nan)
                 continue
             vals = {q: float(np.median([free[k][q] for k in g])) for q in model.qnames}
-            out.append(_predict_record(model, theta, r, preps[r], vals=vals)[0]
+            out.append(predict_record(model, theta, r, preps[r], vals=vals)[0]
                        / preps[r]["band_own"])
             counts[name] += out[-1] <= 1.5
         print(f"  neighbours {fit.records[r]:<24} same T ({len(grp)}) {out[0]:5.2f}   "

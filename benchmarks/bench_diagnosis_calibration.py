@@ -54,8 +54,8 @@ from _diagnosis_cases import _calibrate  # noqa: E402
 
 from iwan_element import AmplitudeCurve, IwanJoint, IwanParameters, make_effect  # noqa: E402
 from iwan_element.diagnose import diagnose, diagnose_vibration, simulate_element_test  # noqa: E402
-from iwan_element.diagnose.loops import loop_candidates  # noqa: E402
-from iwan_element.diagnose.vibration import vibration_candidates  # noqa: E402
+from iwan_element.diagnose.loops.diagnosis import loop_candidates  # noqa: E402
+from iwan_element.diagnose.vibration.diagnosis import vibration_candidates  # noqa: E402
 
 JOINTS = {"stiff": IwanParameters(2500.0, 4e6, -0.3, 0.6),
           "soft": IwanParameters(400.0, 5e5, -0.7, 0.05)}

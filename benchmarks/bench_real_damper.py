@@ -29,7 +29,7 @@ ROOT = Path(__file__).resolve().parents[1]
 
 def run(path, lowpass):
     from iwan_element import diagnose
-    from iwan_element.diagnose.batch import band_misfit
+    from iwan_element.diagnose.loops.batch import band_misfit
     t, u, F = np.loadtxt(path, delimiter=",", skiprows=1).T
     t0, c0 = time.perf_counter(), time.process_time()
     try:

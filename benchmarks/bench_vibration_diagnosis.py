@@ -32,7 +32,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 import _vibration_cases as vc  # noqa: E402
 
 from iwan_element import AmplitudeCurve, IwanParameters, diagnose_vibration  # noqa: E402
-from iwan_element.diagnose.vibration import vibration_candidates  # noqa: E402
+from iwan_element.diagnose.vibration.diagnosis import vibration_candidates  # noqa: E402
 
 P = IwanParameters(250.0, 1.8e5, -0.35, 0.5)
 

@@ -27,7 +27,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from iwan_element.ensemble import parameter_grid, run_ensemble, specimen_curve_task  # noqa: E402
+from iwan_element.ensemble import parameter_grid, run_ensemble  # noqa: E402
+from iwan_element.models.studies import specimen_curve_task  # noqa: E402
 from iwan_element.models.specimens import preset  # noqa: E402
 
 

@@ -12,9 +12,9 @@ import pytest
 
 from _diagnosis_cases import SIGMA, ZETA0, record, vibration_case
 from iwan_element import diagnose, diagnose_vibration
-from iwan_element.diagnose.averaging import mixture
-from iwan_element.diagnose.probabilities import (confidence_text, default_effect_prior,
-                                                 log_model_prior)
+from iwan_element.diagnose.selection.averaging import mixture
+from iwan_element.diagnose.selection.probabilities import (confidence_text, default_effect_prior,
+                                                           log_model_prior)
 
 
 @pytest.fixture(scope="module")
@@ -139,7 +139,7 @@ def test_averaged_band_matches_sampling_the_posterior(dominant):
     """One member (probability ~1): the band's mean is the fitted force, and its standard
     deviation (linearised) matches 120 draws of the parameters from their posterior run
     through the elements (median ratio within 20 %)."""
-    from iwan_element.diagnose._loop_evidence import member_force
+    from iwan_element.diagnose.loops.evidence import member_force
     b = dominant.averaged_band()
     assert b.members[0][0] == ("backlash",)
     f = b.channels["force"]
@@ -220,8 +220,8 @@ def test_microslip_ridge_keeps_the_force_and_states_its_density():
     pinning spring's ``Fs``-scaled variable)."""
     from _diagnosis_cases import P
     from iwan_element.core.history import unit_params
-    from iwan_element.diagnose._loop_evidence import member_force, microslip_ridge
-    from iwan_element.diagnose.prepare import effect_scales
+    from iwan_element.diagnose.loops.evidence import member_force, microslip_ridge
+    from iwan_element.diagnose.loops.prepare import effect_scales
     stack = ("pinning_stiffness",)
     for amps, on_ridge in (((0.5, 1.5), False), ((0.3, 0.6, 0.9), True)):
         u, v = _drive(amps)

@@ -13,7 +13,7 @@ import pytest
 from _connector_models import SOLVERS, Chain, settings
 
 from iwan_element import IwanJoint, IwanParameters
-from iwan_element.exudyn._symbolic_law import SymbolicIwanState
+from iwan_element.exudyn.laws.symbolic_law import SymbolicIwanState
 
 P = IwanParameters(Fs=1000.0, KT=1e6, chi=-0.5, beta=0.2)
 esym = exu.symbolic
@@ -206,7 +206,7 @@ def test_branch_shortcut_interval_is_empty_at_rest_and_the_law_still_matches():
     """The shortcut applies for trials strictly between u_c and the branch's bound; a point at
     rest (direction 0) holds bound = u_c, so every trial goes to the exact law. Checked on
     the virgin point at rest and on committed states with a stack, against IwanJoint."""
-    from iwan_element.exudyn._symbolic_law import branch_of
+    from iwan_element.exudyn.laws.symbolic_law import branch_of
     assert branch_of([], [], 0.0) == (0.0, 0.0, 1.0, 1.0, 0.0, 0.0)
     assert branch_of([2e-4], [50.0], 2e-4)[4:] == (0.0, 2e-4)       # at its reversal point
     ur, Fr, c1, c2, s, bound = branch_of([2e-4], [50.0], 1e-4)

@@ -18,7 +18,7 @@ import exudyn_duffing_sweep as duffing  # noqa: E402
 import exudyn_rotor_bearing as rotor  # noqa: E402
 
 from iwan_element.exudyn import IwanCartesianConnector  # noqa: E402
-import iwan_element.exudyn._slip_map as slip_map  # noqa: E402
+import iwan_element.exudyn.slips.slip_map as slip_map  # noqa: E402
 
 _OVT = exu.OutputVariableType
 

@@ -1,4 +1,4 @@
-"""The 1-D scans that start the break-away and backlash fits (diagnose/_model.scan_starts),
+"""The 1-D scans that start the break-away and backlash fits (diagnose/loops/model.scan_starts),
 checked on records made by routes independent of the effect classes: a
 Jenkins slider bank with static/kinetic thresholds (tests/_jenkins_bank.py) and a gap-in-series
 stepper written here."""

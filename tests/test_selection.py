@@ -1,9 +1,9 @@
-"""The stepwise selection rule (diagnose/selection.py) on tables of chi2 values, so each
+"""The stepwise selection rule (diagnose/selection/rule.py) on tables of chi2 values, so each
 clause of the rule is checked on its own: the misfit test, the IC and "explains little"
 tests, and the pair step for two effects that each hide the other."""
 import math
 
-from iwan_element.diagnose.selection import stepwise_select
+from iwan_element.diagnose.selection.rule import stepwise_select
 
 N_EFF = 400.0
 

@@ -6,18 +6,15 @@ from a fit's covariance, and parameter studies.
   prediction bands of f(X), zeta(X) and a transient peak response from a fit's covariance;
 * :class:`SingleModeSystem`, :func:`modal_curve`, :func:`peak_response` -
   the single-mode jointed structure the bands are computed for;
-* :func:`parameter_grid`, :func:`parameter_samples` - the parameter sets of a study;
-  :func:`specimen_curve_task` - the QSMA amplitude curve of a lap-jointed beam specimen with
-  preload, friction, bolt count or interface inputs changed (a ready-made task).
+* :func:`parameter_grid`, :func:`parameter_samples` - the parameter sets of a study
+  (ready-made tasks for the lap-jointed beams: :mod:`iwan_element.models.studies`).
 """
 from .bands import PredictionBands, propagate_uncertainty, response_task
 from .oscillator import SingleModeSystem, modal_curve, peak_response
 from .runner import EnsembleResult, TaskError, run_ensemble
-from .studies import specimen_curve_task, with_changes
 from .sweep import parameter_grid, parameter_samples
 from .uncertainty import ParameterUncertainty
 
 __all__ = ["run_ensemble", "EnsembleResult", "TaskError", "ParameterUncertainty",
            "PredictionBands", "propagate_uncertainty", "response_task", "SingleModeSystem",
-           "modal_curve", "peak_response", "parameter_grid", "parameter_samples",
-           "specimen_curve_task", "with_changes"]
+           "modal_curve", "peak_response", "parameter_grid", "parameter_samples"]

@@ -7,7 +7,12 @@ between two Exudyn markers (see :mod:`iwan_element.exudyn.connector`);
 :func:`add_iwan_interface` puts one exact Iwan joint at each of many contact points,
 committed together once per step (see :mod:`iwan_element.exudyn.interface`);
 :func:`record_energy` books the energy balance of a model holding them
-(:mod:`iwan_element.exudyn.energy`).
+(:mod:`iwan_element.exudyn.energy`). The post-step dispatcher they share is
+:mod:`._dispatch`.
+
+Inside (bottom to top): :mod:`.slips` (the accepted slips read from Exudyn's coordinates
+after each step, and their records), :mod:`.laws` (the force laws Exudyn evaluates:
+symbolic, Python, the interface's springs), then this folder's public adapters.
 """
 from .cartesian import IwanCartesianConnector, create_iwan_connector
 from .connector import IwanConnector, add_iwan_connector

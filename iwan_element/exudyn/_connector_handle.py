@@ -1,6 +1,6 @@
 """The handle of a connector placed by :func:`~iwan_element.exudyn.add_iwan_connector`:
 records, read-outs, reset, and the per-step work of the Python force law (the symbolic
-law's is in :mod:`._symbolic_connector`). See :mod:`iwan_element.exudyn.connector` for how
+law's is in :mod:`.laws.symbolic_connector`). See :mod:`iwan_element.exudyn.connector` for how
 the history is kept."""
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ from array import array
 import exudyn as exu
 import numpy as np
 
-from . import _symbolic_connector as _symbolic
+from .laws import symbolic_connector as _symbolic
 from ._dispatch import _installed_post_step
 
 __all__: list[str] = []

@@ -1,4 +1,4 @@
-"""Drop-in Exudyn connector for any joint element of this package (the only module importing exudyn).
+"""Drop-in Exudyn connector for any joint element of this package.
 
 :func:`add_iwan_connector` puts a history-dependent joint (an :class:`~iwan_element.IwanJoint`,
 a :class:`~iwan_element.DiscreteIwan`, or anything else following
@@ -25,7 +25,7 @@ Two force laws (``law=``), chosen automatically:
 * **symbolic** (an :class:`~iwan_element.IwanJoint` on two ``MarkerNodeCoordinate`` markers,
   on position markers with a global axis, or on two rigid markers with the axis fixed in
   marker 0's frame, a ``RigidBodySpringDamper``): the exact Iwan law as an Exudyn symbolic
-  expression (:mod:`._symbolic_law`), evaluated in C++ without Python and without Exudyn
+  expression (:mod:`.laws.symbolic_law`), evaluated in C++ without Python and without Exudyn
   API calls (safe with several solver threads). Its state (the committed slip, the branch
   through it and the newest ``depth`` reversal points) lives in symbolic variables; the
   interface uses the same law. Per accepted step the
@@ -33,7 +33,7 @@ Two force laws (``law=``), chosen automatically:
   variable; while the slip continues the current branch (one interval test) nothing else
   happens: the ``IwanJoint`` (the reference, holding the energies) is committed lazily, at
   the next reversal or loop closure, at the last step of the run, and when read through
-  the connector (:mod:`._symbolic_connector`). Records hold ``(t, u)`` per step; force and
+  the connector (:mod:`.laws.symbolic_connector`). Records hold ``(t, u)`` per step; force and
   energies are replayed on a copy of the joint when read. A step that needs an older
   reversal point than the law holds (possible only while the stack is deeper than
   ``depth``) is re-solved exactly: near the end of the law's exact window a post-Newton
@@ -58,7 +58,7 @@ refusal is a ``ValueError`` out of ``SolveDynamic``), a solve that starts before
 accepted time gives every joint of the system a fresh history, and the coordinate views are
 renewed at its first step. The accepted slip is read exactly on any marker: an affine row
 of the coordinates where the markers' relative position is affine (checked jointly, see
-:mod:`._slip_map`), else the connector object's displacement output.
+:mod:`.slips.slip_map`), else the connector object's displacement output.
 
 Post-step chaining
 ------------------
@@ -114,13 +114,13 @@ from ..core.validation import check_scalar
 from ..core.joint import IwanJoint
 from ..core.parameters import IwanParameters
 from ..core.protocol import check_element
-from . import _symbolic_connector as _symbolic
+from .laws import symbolic_connector as _symbolic
 from ._dispatch import _claim, _dispatcher_for
 from ._markers import (_COORDINATE_MARKERS, _ORIENTATION_MARKERS, _POSITION_MARKERS,
                        _marker_type, _node_coordinate_nodes, _unit_axis, _visualization)
 from ._connector_handle import IwanConnector
-from ._python_law import (_coordinate_force_function, _position_force_function,
-                          _rotating_axis_force_function)
+from .laws.python_law import (coordinate_force_function, position_force_function,
+                              rotating_axis_force_function)
 
 __all__ = ["add_iwan_connector", "IwanConnector"]
 
@@ -344,10 +344,10 @@ def _connector_item(conn, joint, route, depth, name, vis):
     if conn.kind == "coordinate":
         return ObjectConnectorCoordinateSpringDamper(
             name=name, markerNumbers=list(conn.markerNumbers), stiffness=0.0, damping=0.0,
-            offset=conn.offset, springForceUserFunction=_coordinate_force_function(conn),
+            offset=conn.offset, springForceUserFunction=coordinate_force_function(conn),
             visualization=vis)
-    uf = (_position_force_function(conn) if conn.axisMarker is None
-          else _rotating_axis_force_function(conn))
+    uf = (position_force_function(conn) if conn.axisMarker is None
+          else rotating_axis_force_function(conn))
     return ObjectConnectorCartesianSpringDamper(
         name=name, markerNumbers=list(conn.markerNumbers), springForceUserFunction=uf,
         visualization=vis)

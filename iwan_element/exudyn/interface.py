@@ -5,11 +5,11 @@ lap joint). Two routes, chosen automatically:
 
 * **symbolic** (every joint given as :class:`~iwan_element.IwanParameters`, a global axis or
   coordinate markers): each point's force is an Exudyn symbolic expression evaluated in C++
-  with no Python call and no Exudyn API call (:mod:`._symbolic_law`: the Masing branch
+  with no Python call and no Exudyn API call (:mod:`.laws.symbolic_law`: the Masing branch
   formula while the trial slip continues the point's branch, else the full exact law; the
   same law as the connector's). Once per accepted step one Python post-step reads the accepted
   slips of all points (one product of a view of the system coordinates; ANCF Cable2D
-  surface points by :mod:`._surface_slips`), commits all points at once in an
+  surface points by :mod:`.slips.surface_slips`), commits all points at once in an
   :class:`~iwan_element.core.joint_bank.IwanJointBank`, writes the committed slips to
   one symbolic 1 x n matrix (one ``SetMatrix``), and only for the points that
   left their branch the new branch (five ``SetValue``) and, if it changed, the reversal
@@ -42,13 +42,13 @@ from exudyn.itemInterface import (ObjectConnectorCartesianSpringDamper,
 from ..core.joint_bank import IwanJointBank
 from ..core.parameters import IwanParameters
 from ..core.validation import check_scalar
-from ._slip_map import SlipMap
-from ._slip_records import SlipRecords
-from ._surface_slips import SurfaceSlips
-from ._symbolic_law import (VIRGIN, SymbolicIwanState, cartesian_law, committed_slip_matrix,
-                            coordinate_law, make_probe)
+from .slips.slip_map import SlipMap
+from .slips.slip_records import SlipRecords
+from .slips.surface_slips import SurfaceSlips
+from .laws.symbolic_law import (VIRGIN, SymbolicIwanState, cartesian_law, committed_slip_matrix,
+                                coordinate_law, make_probe)
 from ._dispatch import _dispatcher_for, _installed_post_step
-from ._interface_springs import add_builtin_springs, check_stiffness, linear_energy
+from .laws.interface_springs import add_builtin_springs, check_stiffness, linear_energy
 from ._markers import _COORDINATE_MARKERS, _POSITION_MARKERS, _marker_type, _unit_axis
 from .connector import add_iwan_connector
 
