@@ -1,7 +1,7 @@
 """Preload sweep of the example lap-jointed beam: the family of f(X), zeta(X) curves.
 
 Each preload is one ensemble task: the quasi-static modal analysis (QSMA) of the first
-bending mode of ``iwan_element.models.specimens.preset("example")`` (two 200 x 40 x 10 mm
+bending mode of ``iwan_element.models.specimens.presets.preset("example")`` (two 200 x 40 x 10 mm
 steel beams, one M16 bolt, clamped-free) with the bolt preload changed. In the specimen
 model the preload sets the normal force of each contact point through the pressure cone, and
 so its slip force ``mu N``; the tangential stiffness follows the contact area (see

@@ -2,9 +2,9 @@
 
 * :mod:`~iwan_element.models.specimens` - two-beam lap-joint specimens and presets
   (:func:`preset`: ``"example"``, ``"brake-reuss"``, ``"two-bolt-aluminium"``);
-* :mod:`~iwan_element.models.interface` - contact pressure cones and the distributed
+* :mod:`~iwan_element.models.specimens.contact` - contact pressure cones and the distributed
   interface's Iwan elements;
-* :mod:`~iwan_element.models.setups` - the test setup (sensor masses, shaker, clamp springs)
+* :mod:`~iwan_element.models.specimens.setups` - the test setup (sensor masses, shaker, clamp springs)
   that a specimen carries and every analysis includes;
 * :mod:`~iwan_element.models.beam_fe` and :mod:`~iwan_element.models.assembly` - the 1-D
   Timoshenko beams and the specimen's linear system (:mod:`~iwan_element.models.linear`);
@@ -26,7 +26,7 @@
 * :mod:`~iwan_element.models.hammer` - a whole hammer test predicted from one mode
   (:func:`predict_hammer_test`: calibrate on it, each other mode's floor from its lowest
   amplitudes, the multi-mode ring-down against every record);
-* :mod:`~iwan_element.models.damping` - the linear damping floor, one ratio per mode, as the
+* :mod:`~iwan_element.models.reduced.damping` - the linear damping floor, one ratio per mode, as the
   stuck system's modal damping matrix (the ring-down's and the stepped sine's);
 * :mod:`~iwan_element.models.machine` - the joint's quasi-static test in a machine grip
   (:func:`quasi_static_test`);
@@ -64,8 +64,8 @@ from .qsma import modal_amplitude_curve, natural_frequencies
 from .transient import RingdownResult, ringdown
 from .solid import SolidSpecimen
 from .solid_build import solid_preset
-from .setups import Clamp, PointMass, Setup, Shaker
-from .specimens import Excitation, InterfaceModel, Specimen, preset
+from .specimens import (Clamp, Excitation, InterfaceModel, PointMass, Setup, Shaker, Specimen,
+                        preset)
 from .update import LinearUpdateResult, linear_update
 from .updating import updatable
 

@@ -1,4 +1,4 @@
-"""The linear system of a 1-D :class:`~iwan_element.models.specimens.Specimen`: Timoshenko
+"""The linear system of a 1-D :class:`~iwan_element.models.specimens.specimen.Specimen`: Timoshenko
 beams, the contact points' normal springs, the boundary and the test setup.
 
 From the beams' finite elements (:mod:`~iwan_element.models.beam_fe`):
@@ -8,7 +8,7 @@ From the beams' finite elements (:mod:`~iwan_element.models.beam_fe`):
   spring ``k_n,i`` on its normal gap (the lap cannot open or close without it), a clamp's
   springs at beam A's root (``Setup.clamp``), a shaker's stinger and suspension;
 * ``G``: the tangential slips of the contact points
-  (:func:`~iwan_element.models.interface.contact_points`); ``S``, ``E``: the transverse
+  (:func:`~iwan_element.models.specimens.contact.beam_contact_points`); ``S``, ``E``: the transverse
   displacement at the sensor and at the excitation point.
 
 Boundaries: ``"free-free"`` (3 rigid-body modes); ``"clamped-free"``: beam A's root (``u, w,
@@ -27,12 +27,11 @@ import numpy as np
 
 from .beam_fe import NODE_DOFS, beam_matrices, beam_mesh, grip_coordinates, interface_rows, \
     point_rows
-from .interface import contact_points
+from .specimens.contact import beam_contact_points
 from .linear import LinearSystem, attach_setup
-from .solid import SolidSpecimen
-from .specimens import Specimen
+from .specimens.specimen import Specimen
 
-__all__ = ["LinearSystem", "linear_system", "axis_rows"]
+__all__ = ["beam_linear_system", "beam_axis_rows"]
 
 
 def _structure_key(specimen: Specimen) -> Specimen:
@@ -42,12 +41,10 @@ def _structure_key(specimen: Specimen) -> Specimen:
                             calibrated_range=None, effects=())
 
 
-def linear_system(specimen: Specimen | SolidSpecimen) -> LinearSystem:
-    """Linear matrices of a specimen (module docstring; cached on its geometry, material,
-    contact layout and setup); a :class:`~iwan_element.models.solid.SolidSpecimen` carries
-    its own (reduced)."""
-    if isinstance(specimen, SolidSpecimen):
-        return specimen.linear_system()
+def beam_linear_system(specimen: Specimen) -> LinearSystem:
+    """Linear matrices of a 1-D specimen (module docstring; cached on its geometry,
+    material, contact layout and setup). The analyses read
+    :func:`~iwan_element.models.reduced.dispatch.linear_system`, which also takes a solid."""
     return _linear_system(_structure_key(specimen))
 
 
@@ -66,7 +63,7 @@ def _linear_system(key: Specimen) -> LinearSystem:
     s = key
     mesh = beam_mesh(s)
     Kb, M = beam_matrices(s, mesh)
-    pts = contact_points(s)
+    pts = beam_contact_points(s)
     G, Gn = interface_rows(s, pts.x, mesh)
     K0 = Kb + Gn.T @ (pts.normal_stiffness[:, None] * Gn)
     if s.setup.clamp is not None and s.boundary != "free-free":
@@ -90,22 +87,13 @@ def _linear_system(key: Specimen) -> LinearSystem:
     return L
 
 
-def axis_rows(specimen: Specimen | SolidSpecimen, positions) -> np.ndarray:
+def beam_axis_rows(specimen: Specimen, positions) -> np.ndarray:
     """Rows mapping the free coordinates to the transverse displacement [m] of the beams'
-    axis at ``positions`` [m] along the assembly (the axis of ``sensor_position``; beam A up
-    to its length, beam B beyond): shape ``(len(positions), n_free)`` (a setup's extra
-    coordinates read zero). A :class:`~iwan_element.models.solid.SolidSpecimen` reads its
-    stored rows (:meth:`~iwan_element.models.solid.SolidSpecimen.axis_rows`)."""
-    x = np.atleast_1d(np.asarray(positions, float))
-    if x.ndim != 1 or x.size == 0 or not np.all(np.isfinite(x)) or np.any(x < 0) \
-            or np.any(x > specimen.total_length):
-        raise ValueError(f"positions must be a non-empty sequence in [0, "
-                         f"{specimen.total_length:.6g}] m, got {positions!r}")
-    if isinstance(specimen, SolidSpecimen):
-        rows = specimen.axis_rows(x)
-        return np.concatenate([rows, np.zeros((rows.shape[0], linear_system(specimen).n_extra))],
-                              axis=1)
-    return _axis_rows(_structure_key(specimen), tuple(float(v) for v in x))
+    axis at ``positions`` [m] along the assembly (a 1-D array in ``[0, total_length]``, as
+    :func:`~iwan_element.models.reduced.dispatch.axis_rows` checks it; the axis of
+    ``sensor_position``; beam A up to its length, beam B beyond): shape
+    ``(len(positions), n_free)`` (a setup's extra coordinates read zero)."""
+    return _axis_rows(_structure_key(specimen), tuple(float(v) for v in positions))
 
 
 @lru_cache(maxsize=16)

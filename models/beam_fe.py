@@ -1,6 +1,6 @@
 """The 1-D lap-jointed beam as planar Timoshenko finite elements: matrices and read-out rows.
 
-Each beam of a :class:`~iwan_element.models.specimens.Specimen` is a chain of two-node
+Each beam of a :class:`~iwan_element.models.specimens.specimen.Specimen` is a chain of two-node
 elements with three coordinates per node, ``(u, w, theta)``: axial and transverse
 displacement of the axis and the rotation of the cross-section [m, m, rad], positive
 anticlockwise (``x`` along the assembly, ``y`` up, the bending direction). A point at height
@@ -42,8 +42,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .interface import contact_points
-from .specimens import Specimen
+from .specimens.contact import beam_contact_points
+from .specimens.specimen import Specimen
 
 __all__ = ["BeamMesh", "beam_mesh", "element_matrices", "beam_matrices", "point_rows",
            "interface_rows", "grip_coordinates", "NODE_DOFS"]
@@ -134,13 +134,13 @@ class BeamMesh:
 
 def beam_mesh(specimen: Specimen) -> BeamMesh:
     """Element boundaries of both beams: in the lap a node at every contact point
-    (:func:`~iwan_element.models.interface.contact_points`; at least 4 elements), so that the
+    (:func:`~iwan_element.models.specimens.contact.beam_contact_points`; at least 4 elements), so that the
     points' slips are independent coordinates of the Exudyn host; outside it
     ``n_elements`` minus the lap's share of them by length (at least 2)."""
     s = specimen
     n_lap = max(4, int(round(s.n_elements * s.overlap / s.beam_length)))
     n_out = max(2, s.n_elements - n_lap)
-    inner = np.unique(np.clip(contact_points(s).x - s.lap_start, 0.0, s.overlap))
+    inner = np.unique(np.clip(beam_contact_points(s).x - s.lap_start, 0.0, s.overlap))
     lap = np.unique(np.concatenate([[0.0, s.overlap], inner]))
     lap = lap[np.concatenate([[True], np.diff(lap) > 1e-9 * s.overlap])]
     while lap.size < 5:                         # at least 4 elements: halve the longest

@@ -37,9 +37,9 @@ from iwan_element.core.result_shape import ResultShape, panels, unit_label
 from iwan_element.fitting import (Parameter, ParameterTable, covariance, fit_success,
                                   minimize, verdict)
 
-from .interface import contact_points
+from .reduced.dispatch import contact_points
 from .qsma import linear_modes, modal_amplitude_curve
-from .specimens import Specimen
+from .specimens.specimen import Specimen
 
 __all__ = ["measured_amplitude_curve", "CalibrationResult", "calibrate", "modal_floor",
            "interface_from_joint", "interface_from_modal_iwan"]

@@ -11,7 +11,7 @@ gives the rigid body a net momentum ``F / (W m)``, and its drift, read as half t
 peak-to-peak displacement (as before), put up to six times the steady amplitude into the
 Brake-Reuss beam's results. The
 beams carry the specimen's damping floor, one ratio per mode, as the modal damping matrix
-of the stuck system (the ring-down's, :func:`~iwan_element.models.damping.floor_damping`);
+of the stuck system (the ring-down's, :func:`~iwan_element.models.reduced.damping.floor_damping`);
 the joint damps through the contact points' Iwan elements. Time integration: generalized-alpha at spectral radius 0.98 (a little
 numerical damping of the kHz axial and contact modes the force's switch-on excites). The
 trapezoidal rule answers a force at ``W_d`` as the continuous system answers one at
@@ -39,11 +39,11 @@ from iwan_element.core.result_shape import ResultShape, panels
 from iwan_element.core.serialize import json_safe
 from iwan_element.core.validation import check_int, check_scalar, finite_array
 
-from .assembly import linear_system
+from .reduced.dispatch import linear_system
 from .host import build_host
 from .qsma import linear_modes
 from .solver import solver_settings
-from .specimens import Specimen
+from .specimens.specimen import Specimen
 
 __all__ = ["ForcedResponseResult", "forced_response", "prewarp"]
 

@@ -11,7 +11,7 @@ basis of the null space of ``R`` and ``R^+`` its pseudo-inverse (``R T = [0 | I]
 ``u = G x`` and the ports ``p``. ``M' = T^T M T`` is block diagonal (``N^T R^+ = 0``),
 ``K' = T^T K0 T``. One Exudyn ``NodeGenericODE2`` carries every ``z``; one
 ``ObjectGenericODE2`` carries ``M'``, ``K'`` and the floor's modal damping matrix
-``C' = T^T C T`` (:mod:`~iwan_element.models.damping`), and each tangential Iwan element is a
+``C' = T^T C T`` (:mod:`~iwan_element.models.reduced.damping`), and each tangential Iwan element is a
 coordinate-marker pair (the slip coordinate against a ground coordinate) of
 :func:`iwan_element.exudyn.add_iwan_interface`: the compiled per-point law, one commit of all
 points per accepted step and the energy records. The interface force ``-F_i`` acts on slip
@@ -43,9 +43,9 @@ from exudyn.itemInterface import (CoordinateConstraint, LoadCoordinate, MarkerNo
 from iwan_element import IwanJoint
 from iwan_element.exudyn import add_iwan_interface
 
-from .assembly import linear_system
-from .damping import floor_damping
-from .interface import contact_points
+from .reduced.dispatch import linear_system
+from .reduced.damping import floor_damping
+from .reduced.dispatch import contact_points
 from .linear import LinearSystem
 
 __all__ = ["port_basis", "HostModel", "build_host"]

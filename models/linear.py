@@ -2,12 +2,12 @@
 
 :class:`LinearSystem` holds a specimen's mass and stiffness on its free coordinates with the
 rows that read the contact points' slips and gaps, the sensor and the excitation: the 1-D
-Timoshenko beams (:func:`~iwan_element.models.assembly.linear_system`) and the reduced solid
+Timoshenko beams (:func:`~iwan_element.models.reduced.dispatch.linear_system`) and the reduced solid
 bodies (:meth:`~iwan_element.models.solid.SolidSpecimen.linear_system`) give the same type.
-:func:`attach_setup` adds a :class:`~iwan_element.models.setups.Setup` to it, the same way
+:func:`attach_setup` adds a :class:`~iwan_element.models.specimens.setups.Setup` to it, the same way
 for both hosts: point masses through the rows of their positions, a shaker's gauge mass at
 the drive point and, when its moving mass is in the model, one more coordinate (the moving
-mass) on the stinger and the suspension (:mod:`~iwan_element.models.setups`).
+mass) on the stinger and the suspension (:mod:`~iwan_element.models.specimens.setups`).
 """
 from __future__ import annotations
 
@@ -15,7 +15,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from .setups import Setup
+from .specimens.setups import Setup
 
 __all__ = ["LinearSystem", "attach_setup"]
 

@@ -16,7 +16,7 @@ from exudyn.itemInterface import ObjectGenericODE2
 
 from iwan_element.effects import EFFECTS
 
-from .specimens import Specimen
+from .specimens.specimen import Specimen
 
 __all__ = ["ZeroElement", "ModalEffects", "effect_stack"]
 

@@ -1,7 +1,7 @@
 """Quasi-static modal analysis (QSMA) of a lap-jointed specimen.
 
 Lacayo & Allen (MSSP 118:133-157, 2019; docs/equations.md section 7 steps 1-6), on the linear beam
-matrices extracted once from the Exudyn model (:func:`~iwan_element.models.assembly.linear_system`)
+matrices extracted once from the Exudyn model (:func:`~iwan_element.models.reduced.dispatch.linear_system`)
 and the closed-form Iwan backbones of the contact points:
 
 1. preload: the normal preload does not load the tangential elements here (no Poisson
@@ -37,11 +37,10 @@ from iwan_element.core.threads import one_blas_thread
 from iwan_element.core.validation import check_magnitude, finite_array
 from iwan_element.core.masing import constants_from_arrays, masing_rows
 
-from .assembly import linear_system
-from .interface import contact_points
-from .reduced import reduced_model, stuck_key, stuck_modes
-from .solid import check_specimen
-from .specimens import Specimen
+from .reduced.dispatch import linear_system, contact_points
+from .reduced.model import reduced_model, stuck_key, stuck_modes
+from .reduced.dispatch import check_specimen
+from .specimens.specimen import Specimen
 
 __all__ = ["modal_amplitude_curve", "linear_modes", "natural_frequencies",
            "static_modal_load", "extrapolation_warnings"]

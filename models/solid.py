@@ -1,20 +1,20 @@
 """A solid (finite-element) lap-jointed specimen that the 1-D analyses accept.
 
-:class:`SolidSpecimen` pairs the 1-D :class:`~iwan_element.models.specimens.Specimen` (the
+:class:`SolidSpecimen` pairs the 1-D :class:`~iwan_element.models.specimens.specimen.Specimen` (the
 interface law, bolts, preload, friction, sensor, damping floor, amplitude range: everything
 that is not the bodies' geometry) with a :class:`SolidModel`: the reduced linear system of the
 two meshed halves (:class:`~iwan_element.models.assembly.LinearSystem`, built by
 :mod:`~iwan_element.models.solid_build`) and the contact patches on the lap
-(:class:`PatchLayout`). :func:`~iwan_element.models.assembly.linear_system` and
-:func:`~iwan_element.models.interface.contact_points` dispatch on it, so
+(:class:`PatchLayout`). :func:`~iwan_element.models.reduced.dispatch.linear_system` and
+:func:`~iwan_element.models.reduced.dispatch.contact_points` dispatch on it, so
 :func:`~iwan_element.models.qsma.natural_frequencies` and
 :func:`~iwan_element.models.qsma.modal_amplitude_curve` run on the solid unchanged.
 
 Contact points of a solid: every patch carries two uncoupled Iwan elements, one per
 tangential direction of the lap plane (``x`` along the beam, then ``y`` across it), each with
 ``Fs = mu N_patch`` and ``KT = k_t A_patch (p/p_mean)**m`` (the 1-D law,
-:func:`~iwan_element.models.interface.points_from_forces`). The entries of
-:class:`~iwan_element.models.interface.ContactPoints` therefore come in pairs (patch 0 x,
+:func:`~iwan_element.models.specimens.contact.points_from_forces`). The entries of
+:class:`~iwan_element.models.specimens.contact.ContactPoints` therefore come in pairs (patch 0 x,
 patch 0 y, patch 1 x, ...), and ``normal_force`` repeats each patch's force twice: its sum is
 twice the bolts' preload. Two uncoupled directions make a square friction limit: exact for
 a slip along one axis (the height-bending modes slip along ``x``), ``sqrt(2)`` too strong for a
@@ -26,9 +26,9 @@ from dataclasses import dataclass, field, fields, replace
 
 import numpy as np
 
-from .interface import ContactPoints, points_from_forces
+from .specimens.contact import ContactPoints, points_from_forces
 from .linear import attach_setup
-from .specimens import InterfaceModel, Specimen
+from .specimens.specimen import InterfaceModel, Specimen
 
 __all__ = ["PatchLayout", "SolidModel", "SolidSpecimen", "solid_contact_points",
            "clamp_stiffness"]
@@ -231,15 +231,6 @@ def clamp_stiffness(clamp) -> np.ndarray:
     face's rotations [N m/rad]."""
     k, kr = clamp.translational, clamp.rotational
     return np.array([k, k, k, kr, kr, kr])
-
-
-def check_specimen(specimen):
-    """``specimen`` if it is a 1-D :class:`Specimen` or a :class:`SolidSpecimen` (what every
-    analysis of the beam model accepts), else ValueError naming it."""
-    if not isinstance(specimen, (Specimen, SolidSpecimen)):
-        raise ValueError(f"specimen must be a Specimen or SolidSpecimen, got "
-                         f"{type(specimen).__name__}")
-    return specimen
 
 
 def solid_contact_points(specimen: Specimen, patches: PatchLayout) -> ContactPoints:

@@ -2,7 +2,7 @@
 
 1. **Patches.** The lap (``x`` in ``[lap_start, beam_length]``, the full width) is cut into a
    grid of cells of about ``patch_size``; the bolts' cone pressure of the 1-D model
-   (:func:`~iwan_element.models.interface.pressure_field`: same cone radius, shape and
+   (:func:`~iwan_element.models.specimens.contact.pressure_field`: same cone radius, shape and
    preload) is integrated over each cell, and cells without pressure are dropped. The lap
    plane is a contact only inside the cones: the rest of the lap is free, as in the 1-D model.
 2. **Patch points.** Each body's displacement at a patch is the area average of its contact
@@ -42,10 +42,11 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from .linear import LinearSystem
-from .interface import pressure_field
+from .specimens.contact import pressure_field
 from .solid import PatchLayout, SolidModel, SolidSpecimen, clamp_stiffness, solid_contact_points
 from .solid_mesh import SolidPart, lap_beam_parts
-from .specimens import Specimen, preset
+from .specimens.specimen import Specimen
+from .specimens.presets import preset
 
 __all__ = ["patch_layout", "solid_specimen", "solid_preset"]
 
@@ -85,7 +86,7 @@ def patch_layout(specimen: Specimen, *, patch_size: float) -> PatchLayout:
 
 def _in_contact(specimen: Specimen, xy: np.ndarray) -> np.ndarray:
     """Points (n, 2) of the lap plane [m] inside a bolt's contact annulus (``r_h <= r <= r_c``,
-    where :func:`~iwan_element.models.interface.pressure_field` is non-zero)."""
+    where :func:`~iwan_element.models.specimens.contact.pressure_field` is non-zero)."""
     s = specimen
     r = np.hypot(xy[:, None, 0] - s.lap_start - np.asarray(s.bolt_positions)[None, :],
                  xy[:, None, 1])
@@ -373,7 +374,7 @@ def solid_specimen(specimen: Specimen, parts: tuple, *, patch_size: float = 0.00
 def solid_preset(name: str, *, mesh_size: float = 0.008, lap_mesh_size: float | None = None,
                  patch_size: float = 0.005, n_modes: int = 20,
                  poissons_ratio: float = 0.3, holes: bool = True) -> SolidSpecimen:
-    """A preset (:func:`~iwan_element.models.specimens.preset`) as a solid specimen: its two
+    """A preset (:func:`~iwan_element.models.specimens.presets.preset`) as a solid specimen: its two
     halves meshed from its dimensions (:func:`~iwan_element.models.solid_mesh.lap_beam_parts`),
     patched and reduced (:func:`solid_specimen`). Needs the extra ``iwan-element[fem]``.
 

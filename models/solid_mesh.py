@@ -9,7 +9,7 @@ of whose nodes lie in the contact node set).
 Routes:
 
 * :func:`lap_beam_parts` - the two halves of a specimen's lap-jointed beam from its
-  dimensions (:class:`~iwan_element.models.specimens.Specimen`): Netgen OCC boxes, second-order
+  dimensions (:class:`~iwan_element.models.specimens.specimen.Specimen`): Netgen OCC boxes, second-order
   tetrahedra, the lap faces named ``"lap"`` and meshed finer (``lap_mesh_size``);
 * :func:`part_from_ngsolve` - an NGsolve mesh the user already has, the contact face given
   by its boundary name;
@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.sparse as sp
 
-from .specimens import Specimen
+from .specimens.specimen import Specimen
 
 __all__ = ["SolidPart", "part_from_fem", "part_from_ngsolve", "lap_beam_parts", "bar_part"]
 

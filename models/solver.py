@@ -3,7 +3,7 @@
 :func:`solver_settings` is used by the ring-down (:mod:`~iwan_element.models.transient`), the
 machine test (:mod:`~iwan_element.models.machine`) and the stepped sine
 (:mod:`~iwan_element.models.forced`). The damping floor is in
-:mod:`~iwan_element.models.damping`.
+:mod:`~iwan_element.models.reduced.damping`.
 """
 from __future__ import annotations
 

@@ -20,7 +20,7 @@ the frequencies are corrected for it (``docs/beam_tests.md``). The time step is 
 highest mode released.
 
 The specimen's damping floor, one ratio per mode (``Specimen.floor``), is the modal damping
-matrix of the stuck system (:mod:`~iwan_element.models.damping`); its work is booked exactly.
+matrix of the stuck system (:mod:`~iwan_element.models.reduced.damping`); its work is booked exactly.
 The specimen's vibration effects on a released mode act as a modal force
 (:mod:`~iwan_element.models.modal_effects`). ``docs/multi_mode.md`` describes the
 multi-mode run and the coupling of the modes through the interface.
@@ -34,8 +34,8 @@ import numpy as np
 
 from iwan_element.core.validation import check_scalar
 
-from .assembly import axis_rows
-from .damping import FloorWork
+from .reduced.dispatch import axis_rows
+from .reduced.damping import FloorWork
 from .host import build_host
 from .impact import Impact
 from .modal_effects import ModalEffects
@@ -43,9 +43,10 @@ from .qsma import linear_modes, static_modal_load
 from .ringdown_records import (Recorder, build_result, joint_records, solve_timed, step_grid,
                                virgin_joint_energy)
 from .ringdown_result import RingdownResult, with_energy_warning
-from .solid import SolidSpecimen, check_specimen
+from .solid import SolidSpecimen
+from .reduced.dispatch import check_specimen
 from .solver import solver_settings
-from .specimens import Specimen
+from .specimens.specimen import Specimen
 
 __all__ = ["RingdownResult", "ringdown", "check_solid_release"]
 

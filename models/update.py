@@ -39,7 +39,7 @@ from iwan_element.core.result_shape import ResultShape, panels, table_lines
 from iwan_element.core.serialize import json_safe
 from iwan_element.fitting import Parameter, ParameterTable, minimize
 
-from .solid import check_specimen
+from .reduced.dispatch import check_specimen
 from .updating import (GROUPS, Updatable, modal_sensitivities, modal_state, pair_modes,
                        updatable, with_parameters)
 

@@ -32,10 +32,9 @@ import scipy.linalg as sla
 
 from iwan_element.core.threads import one_blas_thread
 
-from .assembly import axis_rows, linear_system
-from .interface import contact_points
-from .setups import Clamp, Setup
-from .solid import check_specimen
+from .reduced.dispatch import axis_rows, linear_system, contact_points
+from .specimens.setups import Clamp, Setup
+from .reduced.dispatch import check_specimen
 
 __all__ = ["Updatable", "GROUPS", "updatable", "parameter_value", "with_parameters",
            "ModalState", "modal_state", "modal_sensitivities", "pair_modes", "prior_band"]

@@ -11,9 +11,9 @@ from scipy.linalg import eigh
 
 from iwan_element.models import (forced_response, natural_frequencies, preset,
                                  quasi_static_test, ringdown)
-from iwan_element.models.interface import contact_points
+from iwan_element.models.reduced import contact_points
 from iwan_element.models.qsma import linear_modes
-from iwan_element.models.damping import floor_damping
+from iwan_element.models.reduced import floor_damping
 
 #: the example specimen (two plain 200 x 40 x 10 mm steel bars), contact points thinned out
 EXAMPLE = preset("example").replace(n_points=12)

@@ -19,8 +19,8 @@ pytest.importorskip("ngsolve", reason="the solid specimens need the extra iwan-e
 
 from iwan_element.models import (modal_amplitude_curve, natural_frequencies,  # noqa: E402
                                  preset, solid_preset)
-from iwan_element.models.interface import contact_points  # noqa: E402
-from iwan_element.models.setups import Clamp, Setup  # noqa: E402
+from iwan_element.models.reduced import contact_points  # noqa: E402
+from iwan_element.models.specimens import Clamp, Setup  # noqa: E402
 from iwan_element.models.solid_build import solid_specimen  # noqa: E402
 from iwan_element.models.solid_mesh import bar_part, lap_beam_parts, part_from_fem  # noqa: E402
 

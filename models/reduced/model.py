@@ -1,6 +1,6 @@
 """One reduced model of a specimen, read by QSMA, harmonic balance and the nonlinear modes.
 
-From the specimen's linear matrices (:func:`~iwan_element.models.assembly.linear_system`:
+From the specimen's linear matrices (:func:`~iwan_element.models.reduced.dispatch.linear_system`:
 mass ``M``, stiffness ``K0`` without the tangential interface, the slip map ``G``, the sensor
 row ``S`` and the excitation row ``E``) and its contact points' Iwan elements:
 
@@ -29,12 +29,10 @@ import scipy.linalg as sla
 from iwan_element.core.threads import one_blas_thread
 from iwan_element.harmonic import ModalSystem
 
-from .assembly import linear_system
-from .interface import contact_points
-from .solid import check_specimen
-from .specimens import Specimen
+from .dispatch import linear_system, contact_points, check_specimen
+from ..specimens.specimen import Specimen
 
-__all__ = ["ReducedModel", "reduced_model", "reduction_error", "stuck_modes"]
+__all__ = ["ReducedModel", "reduced_model", "reduction_error", "stuck_modes", "stuck_key"]
 
 _RIGID_HZ = 0.5        # modes below this are the rigid-body ones (free-free), as qsma's
 

@@ -14,7 +14,7 @@ Contact points: the lap is cut into ``n_points`` strips of equal length across t
 width; point ``i`` sits at the strip centre with normal force ``N_i`` (integral of ``p``
 over the strip) and contact area ``A_i`` (where ``p > 0``). Its Iwan element has
 ``Fs_i = mu N_i`` and ``KT_i = k_t A_i (p_i / p_mean)**m`` (``k_t`` stiffness per area,
-:class:`~iwan_element.models.specimens.InterfaceModel`); strips without contact get no
+:class:`~iwan_element.models.specimens.specimen.InterfaceModel`); strips without contact get no
 element. Points near a cone's edge carry little pressure but comparable area, so they reach
 macroslip first: the microslip of real lap joints.
 """
@@ -26,9 +26,9 @@ import numpy as np
 
 from iwan_element import IwanParameters
 
-from .specimens import Specimen
+from .specimen import Specimen
 
-__all__ = ["ContactPoints", "pressure_field", "contact_points", "points_from_forces"]
+__all__ = ["ContactPoints", "pressure_field", "beam_contact_points", "points_from_forces"]
 
 
 def pressure_field(specimen: Specimen, *, nx: int = 600, ny: int = 41):
@@ -103,16 +103,15 @@ class ContactPoints:
         return np.array([p.phi_max for p in self.params])
 
 
-def contact_points(specimen: Specimen) -> ContactPoints:
-    """Contact points, normal forces and Iwan elements of a specimen's interface (module doc).
+def beam_contact_points(specimen: Specimen) -> ContactPoints:
+    """Contact points, normal forces and Iwan elements of a 1-D specimen's interface (module
+    doc).
 
     The ``"lumped"`` interface puts two points per bolt at ``+-r_c/2`` with half the bolt's
-    preload and half its cone area each (equal sharing, no pressure gradient). A
-    :class:`~iwan_element.models.solid.SolidSpecimen` gives its patches' elements.
+    preload and half its cone area each (equal sharing, no pressure gradient). The analyses
+    read :func:`~iwan_element.models.reduced.dispatch.contact_points`, which also takes a
+    :class:`~iwan_element.models.solid.specimen.SolidSpecimen` (its patches' elements).
     """
-    from .solid import SolidSpecimen          # solid.py builds on this module
-    if isinstance(specimen, SolidSpecimen):
-        return specimen.contact_points()
     s, itf = specimen, specimen.interface
     if itf.model == "lumped":
         xs, N, A = [], [], []

@@ -1,7 +1,7 @@
 """The specimen's linear damping floor, one ratio per mode, as a modal damping matrix.
 
 Real structures damp each mode by its own linear amount (material, boundaries, air), which
-``Specimen.modal_damping`` / :meth:`~iwan_element.models.specimens.Specimen.floor` carry.
+``Specimen.modal_damping`` / :meth:`~iwan_element.models.specimens.specimen.Specimen.floor` carry.
 The transient routes (the ring-down, the stepped sine) build it into the beams as the modal
 damping matrix of the stuck-interface system on the free coordinates,
 
@@ -22,9 +22,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from .reduced import stuck_key, stuck_modes
-from .solid import check_specimen
-from .specimens import Specimen
+from .model import stuck_key, stuck_modes
+from .dispatch import check_specimen
+from ..specimens.specimen import Specimen
 
 __all__ = ["FloorDamping", "floor_damping", "FloorWork"]
 

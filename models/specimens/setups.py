@@ -5,7 +5,7 @@ few accelerometers), a shaker test (the shaker's moving parts, stinger and force
 drive point), a clamp that is never rigid. A :class:`Setup` declares these beside the
 specimen (``Specimen.setup``); every analysis of that specimen (QSMA, harmonic balance,
 nonlinear modes, the ring-down, the solid bodies) reads the specimen's linear system, which
-includes it (:func:`~iwan_element.models.assembly.linear_system`). The relations
+includes it (:func:`~iwan_element.models.reduced.dispatch.linear_system`). The relations
 (docs/equations.md section 12, docs/linear_update.md):
 
 * :class:`PointMass`: a mass (and rotary inertia) on the beams' axis at a position: an
