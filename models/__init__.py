@@ -6,7 +6,7 @@
   interface's Iwan elements;
 * :mod:`~iwan_element.models.specimens.setups` - the test setup (sensor masses, shaker, clamp springs)
   that a specimen carries and every analysis includes;
-* :mod:`~iwan_element.models.beam_fe` and :mod:`~iwan_element.models.assembly` - the 1-D
+* :mod:`~iwan_element.models.beam.elements` and :mod:`~iwan_element.models.beam.assembly` - the 1-D
   Timoshenko beams and the specimen's linear system (:mod:`~iwan_element.models.linear`);
 * :mod:`~iwan_element.models.host` - a specimen in Exudyn: its linear system as one generic
   body, the contact points' Iwan elements on slip coordinates (the transient routes' model);
@@ -37,7 +37,7 @@
 * :mod:`~iwan_element.models.frequency` - harmonic balance (:func:`harmonic_balance`),
   continuation (:func:`frequency_response`) and nonlinear modes by EPMC
   (:func:`nonlinear_mode`);
-* :mod:`~iwan_element.models.solid_mesh`, :mod:`~iwan_element.models.solid_build`,
+* :mod:`~iwan_element.models.solid.mesh`, :mod:`~iwan_element.models.solid.build`,
   :mod:`~iwan_element.models.solid` - solid finite-element halves (Netgen, or the user's
   mesh), contact patches and the reduced linear system QSMA reads (:func:`solid_preset`;
   extra ``iwan-element[fem]``);
@@ -62,8 +62,7 @@ from .impact import Impact
 from .machine import QuasiStaticResult, quasi_static_test
 from .qsma import modal_amplitude_curve, natural_frequencies
 from .transient import RingdownResult, ringdown
-from .solid import SolidSpecimen
-from .solid_build import solid_preset
+from .solid import SolidSpecimen, solid_preset
 from .specimens import (Clamp, Excitation, InterfaceModel, PointMass, Setup, Shaker, Specimen,
                         preset)
 from .update import LinearUpdateResult, linear_update

@@ -46,7 +46,7 @@ from iwan_element.exudyn import add_iwan_interface
 from .reduced.dispatch import linear_system
 from .reduced.damping import floor_damping
 from .reduced.dispatch import contact_points
-from .linear import LinearSystem
+from .linear.system import LinearSystem
 
 __all__ = ["port_basis", "HostModel", "build_host"]
 

@@ -43,7 +43,7 @@ from .qsma import linear_modes, static_modal_load
 from .ringdown_records import (Recorder, build_result, joint_records, solve_timed, step_grid,
                                virgin_joint_energy)
 from .ringdown_result import RingdownResult, with_energy_warning
-from .solid import SolidSpecimen
+from .solid.specimen import SolidSpecimen
 from .reduced.dispatch import check_specimen
 from .solver import solver_settings
 from .specimens.specimen import Specimen

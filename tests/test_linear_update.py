@@ -11,7 +11,7 @@ from scipy.optimize import brentq
 
 from iwan_element.models import (Clamp, PointMass, Setup, Shaker, linear_update,
                                  natural_frequencies, preset, updatable)
-from iwan_element.models.beam_fe import element_matrices
+from iwan_element.models.beam import element_matrices
 from iwan_element.models.linear import LinearSystem, attach_setup
 from iwan_element.models.updating import (modal_sensitivities, modal_state, pair_modes,
                                           with_parameters)

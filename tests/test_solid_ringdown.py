@@ -16,8 +16,8 @@ pytest.importorskip("ngsolve", reason="the solid specimens need the extra iwan-e
 
 from iwan_element.models import (Impact, modal_amplitude_curve,  # noqa: E402
                                  natural_frequencies, preset, ringdown)
-from iwan_element.models.solid_build import solid_specimen  # noqa: E402
-from iwan_element.models.solid_mesh import lap_beam_parts  # noqa: E402
+from iwan_element.models.solid import solid_specimen  # noqa: E402
+from iwan_element.models.solid import lap_beam_parts  # noqa: E402
 from iwan_element.models.host import port_basis  # noqa: E402
 
 

@@ -12,9 +12,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..assembly import beam_axis_rows, beam_linear_system
-from ..linear import LinearSystem
-from ..solid import SolidSpecimen
+from ..beam.assembly import beam_axis_rows, beam_linear_system
+from ..linear.system import LinearSystem
+from ..solid.specimen import SolidSpecimen
 from ..specimens.contact import ContactPoints, beam_contact_points
 from ..specimens.specimen import Specimen
 

@@ -202,7 +202,7 @@ class Specimen:
     shear_coefficient : float
         Timoshenko's ``kappa`` of the section [-], in (0, 1] (5/6 for a rectangle).
     beam_theory : {"timoshenko", "euler-bernoulli"}
-        The 1-D beams' theory (:mod:`~iwan_element.models.beam_fe`): shear and rotary
+        The 1-D beams' theory (:mod:`~iwan_element.models.beam.elements`): shear and rotary
         inertia, or neither.
     overlap : float
         Lap length [m], ``< beam_length``.

@@ -15,7 +15,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from .specimens.setups import Setup
+from ..specimens.setups import Setup
 
 __all__ = ["LinearSystem", "attach_setup"]
 

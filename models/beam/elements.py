@@ -42,8 +42,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .specimens.contact import beam_contact_points
-from .specimens.specimen import Specimen
+from ..specimens.contact import beam_contact_points
+from ..specimens.specimen import Specimen
 
 __all__ = ["BeamMesh", "beam_mesh", "element_matrices", "beam_matrices", "point_rows",
            "interface_rows", "grip_coordinates", "NODE_DOFS"]

@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.sparse as sp
 
-from .specimens.specimen import Specimen
+from ..specimens.specimen import Specimen
 
 __all__ = ["SolidPart", "part_from_fem", "part_from_ngsolve", "lap_beam_parts", "bar_part"]
 

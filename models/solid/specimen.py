@@ -3,8 +3,8 @@
 :class:`SolidSpecimen` pairs the 1-D :class:`~iwan_element.models.specimens.specimen.Specimen` (the
 interface law, bolts, preload, friction, sensor, damping floor, amplitude range: everything
 that is not the bodies' geometry) with a :class:`SolidModel`: the reduced linear system of the
-two meshed halves (:class:`~iwan_element.models.assembly.LinearSystem`, built by
-:mod:`~iwan_element.models.solid_build`) and the contact patches on the lap
+two meshed halves (:class:`~iwan_element.models.linear.LinearSystem`, built by
+:mod:`~iwan_element.models.solid.build`) and the contact patches on the lap
 (:class:`PatchLayout`). :func:`~iwan_element.models.reduced.dispatch.linear_system` and
 :func:`~iwan_element.models.reduced.dispatch.contact_points` dispatch on it, so
 :func:`~iwan_element.models.qsma.natural_frequencies` and
@@ -26,9 +26,9 @@ from dataclasses import dataclass, field, fields, replace
 
 import numpy as np
 
-from .specimens.contact import ContactPoints, points_from_forces
-from .linear import attach_setup
-from .specimens.specimen import InterfaceModel, Specimen
+from ..specimens.contact import ContactPoints, points_from_forces
+from ..linear.system import attach_setup
+from ..specimens.specimen import InterfaceModel, Specimen
 
 __all__ = ["PatchLayout", "SolidModel", "SolidSpecimen", "solid_contact_points",
            "clamp_stiffness"]
@@ -136,7 +136,7 @@ class SolidSpecimen:
         through the SolidSpecimen (``solid.friction``, ``solid.interface``, ...).
     model : SolidModel
         The reduced bodies and patches, built for this specimen's geometry and boundary
-        (:func:`~iwan_element.models.solid_build.solid_specimen`).
+        (:func:`~iwan_element.models.solid.solid_specimen`).
     """
 
     specimen: Specimen

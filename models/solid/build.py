@@ -41,12 +41,12 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from .linear import LinearSystem
-from .specimens.contact import pressure_field
-from .solid import PatchLayout, SolidModel, SolidSpecimen, clamp_stiffness, solid_contact_points
-from .solid_mesh import SolidPart, lap_beam_parts
-from .specimens.specimen import Specimen
-from .specimens.presets import preset
+from ..linear.system import LinearSystem
+from ..specimens.contact import pressure_field
+from .specimen import PatchLayout, SolidModel, SolidSpecimen, clamp_stiffness, solid_contact_points
+from .mesh import SolidPart, lap_beam_parts
+from ..specimens.specimen import Specimen
+from ..specimens.presets import preset
 
 __all__ = ["patch_layout", "solid_specimen", "solid_preset"]
 
@@ -316,7 +316,7 @@ def solid_specimen(specimen: Specimen, parts: tuple, *, patch_size: float = 0.00
         Bolts, preload, interface law, sensor, boundary (``"free-free"`` or
         ``"clamped-free"``: beam A's end face ``x = 0`` clamped).
     parts : (SolidPart, SolidPart)
-        Beam A and beam B in the assembly frame (:mod:`~iwan_element.models.solid_mesh`),
+        Beam A and beam B in the assembly frame (:mod:`~iwan_element.models.solid.mesh`),
         each with its lap face as contact face.
     patch_size : float, keyword-only
         Contact patch size [m] (finer than the lap mesh: each patch must hold triangles of
@@ -375,7 +375,7 @@ def solid_preset(name: str, *, mesh_size: float = 0.008, lap_mesh_size: float | 
                  patch_size: float = 0.005, n_modes: int = 20,
                  poissons_ratio: float = 0.3, holes: bool = True) -> SolidSpecimen:
     """A preset (:func:`~iwan_element.models.specimens.presets.preset`) as a solid specimen: its two
-    halves meshed from its dimensions (:func:`~iwan_element.models.solid_mesh.lap_beam_parts`),
+    halves meshed from its dimensions (:func:`~iwan_element.models.solid.lap_beam_parts`),
     patched and reduced (:func:`solid_specimen`). Needs the extra ``iwan-element[fem]``.
 
     Parameters
@@ -390,7 +390,7 @@ def solid_preset(name: str, *, mesh_size: float = 0.008, lap_mesh_size: float | 
         As :func:`solid_specimen`.
     poissons_ratio : float, keyword-only
     holes : bool, keyword-only
-        Cut the bolt holes (:func:`~iwan_element.models.solid_mesh.lap_beam_parts`).
+        Cut the bolt holes (:func:`~iwan_element.models.solid.lap_beam_parts`).
     """
     s = preset(name)
     _check_build(s, patch_size, n_modes)

@@ -1,7 +1,7 @@
 """The linear system of a 1-D :class:`~iwan_element.models.specimens.specimen.Specimen`: Timoshenko
 beams, the contact points' normal springs, the boundary and the test setup.
 
-From the beams' finite elements (:mod:`~iwan_element.models.beam_fe`):
+From the beams' finite elements (:mod:`~iwan_element.models.beam.elements`):
 
 * ``Kb``, ``M``: both beams;
 * ``K0 = Kb + G_n^T diag(k_n,i) G_n`` plus the setup's springs: each contact point's normal
@@ -25,11 +25,11 @@ from functools import lru_cache
 
 import numpy as np
 
-from .beam_fe import NODE_DOFS, beam_matrices, beam_mesh, grip_coordinates, interface_rows, \
-    point_rows
-from .specimens.contact import beam_contact_points
-from .linear import LinearSystem, attach_setup
-from .specimens.specimen import Specimen
+from .elements import (NODE_DOFS, beam_matrices, beam_mesh, grip_coordinates, interface_rows,
+                       point_rows)
+from ..specimens.contact import beam_contact_points
+from ..linear.system import LinearSystem, attach_setup
+from ..specimens.specimen import Specimen
 
 __all__ = ["beam_linear_system", "beam_axis_rows"]
 
