@@ -42,7 +42,7 @@
   mesh), contact patches and the reduced linear system QSMA reads (:func:`solid_preset`;
   extra ``iwan-element[fem]``);
 * :mod:`~iwan_element.models.solver` - Exudyn solver settings shared by the runs;
-* :mod:`~iwan_element.models.updating` and :mod:`~iwan_element.models.update` - linear
+* :mod:`~iwan_element.models.updating` and :mod:`~iwan_element.models.updating.update` - linear
   model updating on low-level test data (:func:`updatable`, :func:`linear_update`): material,
   boundary, setup and the stuck joint's stiffness, before any joint calibration;
 * :mod:`~iwan_element.models.calibration` - interface calibration from vibration data and
@@ -65,8 +65,7 @@ from .transient import RingdownResult, ringdown
 from .solid import SolidSpecimen, solid_preset
 from .specimens import (Clamp, Excitation, InterfaceModel, PointMass, Setup, Shaker, Specimen,
                         preset)
-from .update import LinearUpdateResult, linear_update
-from .updating import updatable
+from .updating import LinearUpdateResult, linear_update, updatable
 
 __all__ = ["example_test_path", "preset", "modal_amplitude_curve", "natural_frequencies",
            "ringdown", "Impact", "mode_coupling", "quasi_static_test", "forced_response",

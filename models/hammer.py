@@ -9,7 +9,7 @@ section 4:
    (:func:`mode_bands`), unless given.
 1a. **Linear update** (``update``, on by default): every mode's natural frequency in its
    latest linear (low-amplitude) window of all the records (:func:`iwan_element.
-   free_decay_modes`), and :func:`~iwan_element.models.update.linear_update` of the named
+   free_decay_modes`), and :func:`~iwan_element.models.updating.linear_update` of the named
    parameters on them before any joint calibration (docs/linear_update.md): the linear
    structure from the low-level data, then the joint from the amplitude dependence.
 2. **Measured curves.** f(X), zeta(X) of every mode at every sensor
@@ -52,7 +52,8 @@ from .coupling import compare_curves, plot_curve_pairs
 from .qsma import linear_modes
 from .ringdown_result import RingdownResult
 from .transient import ringdown
-from .update import LinearUpdateResult, linear_update
+from .updating.result import LinearUpdateResult
+from .updating.update import linear_update
 
 __all__ = ["mode_bands", "release_amplitudes", "predict_hammer_test", "HammerPrediction"]
 
