@@ -8,40 +8,40 @@
   that a specimen carries and every analysis includes;
 * :mod:`~iwan_element.models.beam.elements` and :mod:`~iwan_element.models.beam.assembly` - the 1-D
   Timoshenko beams and the specimen's linear system (:mod:`~iwan_element.models.linear`);
-* :mod:`~iwan_element.models.host` - a specimen in Exudyn: its linear system as one generic
+* :mod:`~iwan_element.models.simulation.host` - a specimen in Exudyn: its linear system as one generic
   body, the contact points' Iwan elements on slip coordinates (the transient routes' model);
-* :mod:`~iwan_element.models.qsma` - quasi-static modal analysis (:func:`modal_amplitude_curve`);
-  :func:`~iwan_element.models.qsma.linear_modes`, :func:`natural_frequencies` (with the joint
+* :mod:`~iwan_element.models.modal.qsma` - quasi-static modal analysis (:func:`modal_amplitude_curve`);
+  :func:`~iwan_element.models.modal.linear_modes`, :func:`natural_frequencies` (with the joint
   stuck or without it);
-* :mod:`~iwan_element.models.transient` - the transient route (:func:`ringdown`, one release
+* :mod:`~iwan_element.models.simulation.transient` - the transient route (:func:`ringdown`, one release
   level per call, one mode or several at once through the same interface; frequency and
   damping by :func:`iwan_element.amplitude_curve`; result in
-  :mod:`~iwan_element.models.ringdown_result`; the pieces the 1-D and the solid ring-down share
-  in :mod:`~iwan_element.models.ringdown_records`; a solid specimen's run in
+  :mod:`~iwan_element.models.simulation.ringdown_result`; the pieces the 1-D and the solid ring-down share
+  in :mod:`~iwan_element.models.simulation.ringdown_records`; a solid specimen's run in
   :mod:`~iwan_element.models.solid_transient`);
-* :mod:`~iwan_element.models.impact` - a hammer impact (:class:`Impact`, a half-sine force
+* :mod:`~iwan_element.models.simulation.impact` - a hammer impact (:class:`Impact`, a half-sine force
   pulse) that :func:`ringdown` takes instead of a release;
-* :mod:`~iwan_element.models.coupling` - each mode's damping with and without the other
+* :mod:`~iwan_element.models.simulation.coupling` - each mode's damping with and without the other
   modes ringing through the same interface (:func:`mode_coupling`);
 * :mod:`~iwan_element.models.hammer` - a whole hammer test predicted from one mode
   (:func:`predict_hammer_test`: calibrate on it, each other mode's floor from its lowest
   amplitudes, the multi-mode ring-down against every record);
 * :mod:`~iwan_element.models.reduced.damping` - the linear damping floor, one ratio per mode, as the
   stuck system's modal damping matrix (the ring-down's and the stepped sine's);
-* :mod:`~iwan_element.models.machine` - the joint's quasi-static test in a machine grip
+* :mod:`~iwan_element.models.simulation.machine` - the joint's quasi-static test in a machine grip
   (:func:`quasi_static_test`);
-* :mod:`~iwan_element.models.forced` - stepped-sine forced response at several force levels
+* :mod:`~iwan_element.models.simulation.forced` - stepped-sine forced response at several force levels
   (:func:`forced_response`);
 * :mod:`~iwan_element.models.reduced` - the one reduced model (stuck modes with their floors,
   residual flexibility, the contact points' joints) that the frequency-domain routes read;
-* :mod:`~iwan_element.models.frequency` - harmonic balance (:func:`harmonic_balance`),
+* :mod:`~iwan_element.models.modal.frequency` - harmonic balance (:func:`harmonic_balance`),
   continuation (:func:`frequency_response`) and nonlinear modes by EPMC
   (:func:`nonlinear_mode`);
 * :mod:`~iwan_element.models.solid.mesh`, :mod:`~iwan_element.models.solid.build`,
   :mod:`~iwan_element.models.solid` - solid finite-element halves (Netgen, or the user's
   mesh), contact patches and the reduced linear system QSMA reads (:func:`solid_preset`;
   extra ``iwan-element[fem]``);
-* :mod:`~iwan_element.models.solver` - Exudyn solver settings shared by the runs;
+* :mod:`~iwan_element.models.simulation.solver` - Exudyn solver settings shared by the runs;
 * :mod:`~iwan_element.models.updating` and :mod:`~iwan_element.models.updating.update` - linear
   model updating on low-level test data (:func:`updatable`, :func:`linear_update`): material,
   boundary, setup and the stuck joint's stiffness, before any joint calibration;
@@ -53,15 +53,13 @@
 from importlib import resources
 from pathlib import Path
 
-from .coupling import ModeCouplingResult, mode_coupling
-from .forced import ForcedResponseResult, forced_response
-from .frequency import frequency_response, harmonic_balance, nonlinear_mode
+from .simulation import ModeCouplingResult, mode_coupling, ForcedResponseResult, forced_response
+from .modal import frequency_response, harmonic_balance, nonlinear_mode
 from .reduced import ReducedModel, reduced_model, reduction_error
 from .hammer import HammerPrediction, predict_hammer_test
-from .impact import Impact
-from .machine import QuasiStaticResult, quasi_static_test
-from .qsma import modal_amplitude_curve, natural_frequencies
-from .transient import RingdownResult, ringdown
+from .simulation import Impact, QuasiStaticResult, quasi_static_test
+from .modal import modal_amplitude_curve, natural_frequencies
+from .simulation import RingdownResult, ringdown
 from .solid import SolidSpecimen, solid_preset
 from .specimens import (Clamp, Excitation, InterfaceModel, PointMass, Setup, Shaker, Specimen,
                         preset)

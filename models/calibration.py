@@ -2,7 +2,7 @@
 
 * From vibration data: :func:`calibrate` fits interface parameters (by default the
   tangential stiffness per area, the friction coefficient, chi and the modal damping floor)
-  so that the QSMA curve (:func:`~iwan_element.models.qsma.modal_amplitude_curve`) matches a
+  so that the QSMA curve (:func:`~iwan_element.models.modal.modal_amplitude_curve`) matches a
   measured :class:`~iwan_element.AmplitudeCurve` (frequency and damping against amplitude at
   the specimen's sensor point). Nonlinear least squares (``scipy.optimize.least_squares`` through
   :func:`iwan_element.fitting.minimize`,
@@ -38,7 +38,7 @@ from iwan_element.fitting import (Parameter, ParameterTable, covariance, fit_suc
                                   minimize, verdict)
 
 from .reduced.dispatch import contact_points
-from .qsma import linear_modes, modal_amplitude_curve
+from .modal.qsma import linear_modes, modal_amplitude_curve
 from .specimens.specimen import Specimen
 
 __all__ = ["measured_amplitude_curve", "CalibrationResult", "calibrate", "modal_floor",

@@ -30,7 +30,7 @@ section 4:
    ``amplitude={mode: X}``, ``sensors=`` every record's position), each predicted record
    read like the measured one (:meth:`RingdownResult.sensor_curve`), every predicted curve
    against the measured one at the same amplitudes
-   (:func:`~iwan_element.models.coupling.compare_curves`), and per mode the ratio of its
+   (:func:`~iwan_element.models.simulation.compare_curves`), and per mode the ratio of its
    amplitude at each other sensor to the calibration sensor's, measured and predicted (a
    mode-shape check, median envelope ratio over the ring-down).
 """
@@ -48,10 +48,10 @@ from iwan_element.core.serialize import json_safe
 from iwan_element.core.validation import check_scalar, check_uniform_time, finite_array
 
 from .calibration import CalibrationResult, calibrate
-from .coupling import compare_curves, plot_curve_pairs
-from .qsma import linear_modes
-from .ringdown_result import RingdownResult
-from .transient import ringdown
+from .simulation.coupling import compare_curves, plot_curve_pairs
+from .modal.qsma import linear_modes
+from .simulation.ringdown_result import RingdownResult
+from .simulation.transient import ringdown
 from .updating.result import LinearUpdateResult
 from .updating.update import linear_update
 

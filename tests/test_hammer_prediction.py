@@ -59,7 +59,7 @@ def test_release_amplitudes_refuse_a_span_beyond_the_record():
 
 def test_mode_bands_hold_each_stuck_frequency_and_do_not_overlap():
     spec = models.preset("two-bolt-aluminium").replace(n_points=12)
-    f = [models.qsma.linear_modes(spec, mode=r)[0] / (2 * math.pi) for r in (1, 2, 3, 4)]
+    f = [models.modal.linear_modes(spec, mode=r)[0] / (2 * math.pi) for r in (1, 2, 3, 4)]
     bands = mode_bands(spec, (1, 2, 3), band_width=0.4)
     for r in (1, 2, 3):
         lo, hi = bands[r]

@@ -18,7 +18,7 @@ from iwan_element.models import (Impact, modal_amplitude_curve,  # noqa: E402
                                  natural_frequencies, preset, ringdown)
 from iwan_element.models.solid import solid_specimen  # noqa: E402
 from iwan_element.models.solid import lap_beam_parts  # noqa: E402
-from iwan_element.models.host import port_basis  # noqa: E402
+from iwan_element.models.simulation import port_basis  # noqa: E402
 
 
 @pytest.fixture(scope="module")
@@ -109,7 +109,7 @@ def test_the_solid_ring_down_refuses_what_it_cannot_do(solid):
 
 
 def test_the_solid_takes_a_hammer_impact_and_books_its_work(solid):
-    """The host is the 1-D beams' (models/host.py): an impact is a force on the struck
+    """The host is the 1-D beams' (models/simulation/host.py): an impact is a force on the struck
     point's port coordinate; its work (the trapezoidal rule's) balances the energy."""
     r = ringdown(solid, impact=Impact(position=0.6438, peak_force=50.0, contact_time=1e-3),
                  modes=(1,), cycles=8, record_energy=True)

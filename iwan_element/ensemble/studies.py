@@ -58,7 +58,7 @@ def specimen_curve_task(params: dict, rng, *, specimen, amplitude=None, mode: in
         ``f_linear`` (frequency at the smallest amplitude) [Hz], ``frequency_drop``
         (``1 - f(X_max) / f(X_min)``) and ``damping_ratio_max`` [-].
     """
-    from iwan_element.models.qsma import modal_amplitude_curve
+    from iwan_element.models.modal import modal_amplitude_curve
     curve = modal_amplitude_curve(with_changes(specimen, params), mode=mode,
                                   amplitude=amplitude)
     f = np.asarray(curve.frequency, float)

@@ -17,7 +17,7 @@ theta`` of its first node) held rigidly, or by the setup's clamp springs; ``"cla
 its axial displacement the prescribed ``drive`` coordinate. The setup's masses and shaker
 enter through :func:`~iwan_element.models.linear.attach_setup`. The interface's tangential
 law is not in these matrices: QSMA, harmonic balance and the Exudyn host
-(:mod:`~iwan_element.models.host`) add it.
+(:mod:`~iwan_element.models.simulation.host`) add it.
 """
 from __future__ import annotations
 

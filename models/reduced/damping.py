@@ -9,12 +9,12 @@ damping matrix of the stuck-interface system on the free coordinates,
 
 over every mode ``(w_r, phi_r)`` of ``(K0 + G^T diag(KT) G, M)`` (mass-normalised),
 ``zeta_r = specimen.floor(r)`` for elastic mode ``r`` (numbered as
-:func:`~iwan_element.models.qsma.linear_modes` numbers them) and the rigid-body modes (and
+:func:`~iwan_element.models.modal.linear_modes` numbers them) and the rigid-body modes (and
 any elastic mode below 0.5 Hz, which ``linear_modes`` does not number) undamped. Then
 ``phi_r^T C phi_s = 2 zeta_r w_r delta_rs``: each stuck mode decays at its own floor and the
 floor couples no modes. (The stiffness-proportional beam damping used before gave one mode
 its floor and every other mode the floor times its frequency ratio.) The matrix is the
-damping matrix of the host's generic body (:mod:`~iwan_element.models.host`); its work is
+damping matrix of the host's generic body (:mod:`~iwan_element.models.simulation.host`); its work is
 booked exactly by :class:`FloorWork`.
 """
 from __future__ import annotations

@@ -7,8 +7,8 @@ two meshed halves (:class:`~iwan_element.models.linear.LinearSystem`, built by
 :mod:`~iwan_element.models.solid.build`) and the contact patches on the lap
 (:class:`PatchLayout`). :func:`~iwan_element.models.reduced.dispatch.linear_system` and
 :func:`~iwan_element.models.reduced.dispatch.contact_points` dispatch on it, so
-:func:`~iwan_element.models.qsma.natural_frequencies` and
-:func:`~iwan_element.models.qsma.modal_amplitude_curve` run on the solid unchanged.
+:func:`~iwan_element.models.modal.natural_frequencies` and
+:func:`~iwan_element.models.modal.modal_amplitude_curve` run on the solid unchanged.
 
 Contact points of a solid: every patch carries two uncoupled Iwan elements, one per
 tangential direction of the lap plane (``x`` along the beam, then ``y`` across it), each with

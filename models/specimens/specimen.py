@@ -133,7 +133,7 @@ class SpecimenEffect:
         Sensor amplitudes [m] the values were fitted on.
 
     The effect's modal form (``modal_form(X, f, zeta, zeta_floor, **values)``) is applied on
-    top of the QSMA curve of that mode (:func:`~iwan_element.models.qsma.modal_amplitude_curve`).
+    top of the QSMA curve of that mode (:func:`~iwan_element.models.modal.modal_amplitude_curve`).
     """
 
     name: str
@@ -230,7 +230,7 @@ class Specimen:
         the frequency-domain routes and the transient build their damping from it.
     calibrated_range : tuple of 2 floats or None
         Sensor amplitudes [m] the interface was calibrated on (``None``: not calibrated, or
-        unknown). :func:`~iwan_element.models.qsma.modal_amplitude_curve` warns for
+        unknown). :func:`~iwan_element.models.modal.modal_amplitude_curve` warns for
         amplitudes outside it.
     effects : tuple of SpecimenEffect
         Vibration effects beyond the Iwan interface (hardening, macroslip onset, ...) in their

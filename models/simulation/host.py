@@ -43,10 +43,10 @@ from exudyn.itemInterface import (CoordinateConstraint, LoadCoordinate, MarkerNo
 from iwan_element import IwanJoint
 from iwan_element.exudyn import add_iwan_interface
 
-from .reduced.dispatch import linear_system
-from .reduced.damping import floor_damping
-from .reduced.dispatch import contact_points
-from .linear.system import LinearSystem
+from ..reduced.dispatch import linear_system
+from ..reduced.damping import floor_damping
+from ..reduced.dispatch import contact_points
+from ..linear.system import LinearSystem
 
 __all__ = ["port_basis", "HostModel", "build_host"]
 

@@ -1,8 +1,8 @@
 """Exudyn solver settings shared by the specimen's time and load-step runs.
 
-:func:`solver_settings` is used by the ring-down (:mod:`~iwan_element.models.transient`), the
-machine test (:mod:`~iwan_element.models.machine`) and the stepped sine
-(:mod:`~iwan_element.models.forced`). The damping floor is in
+:func:`solver_settings` is used by the ring-down (:mod:`~iwan_element.models.simulation.transient`), the
+machine test (:mod:`~iwan_element.models.simulation.machine`) and the stepped sine
+(:mod:`~iwan_element.models.simulation.forced`). The damping floor is in
 :mod:`~iwan_element.models.reduced.damping`.
 """
 from __future__ import annotations

@@ -6,7 +6,7 @@ slips) and released from rest at ``t = 0``. Several modes may be released at onc
 release state is then the sum of each mode's static deflection, each reaching its own
 amplitude at the sensor, and the Iwan elements start virgin at the summed slips. Exudyn
 integrates the specimen's linear bodies (1-D Timoshenko beams or reduced solid bodies, one
-generic body: :mod:`~iwan_element.models.host`) with the history-dependent Iwan element of
+generic body: :mod:`~iwan_element.models.simulation.host`) with the history-dependent Iwan element of
 every contact point (generalized-alpha with spectral radius 1, i.e. the trapezoidal rule: no
 numerical damping), all modes through the same interface. A hammer impact instead of a
 release is a force pulse on the struck point's port coordinate. Each mode's response is
@@ -22,7 +22,7 @@ highest mode released.
 The specimen's damping floor, one ratio per mode (``Specimen.floor``), is the modal damping
 matrix of the stuck system (:mod:`~iwan_element.models.reduced.damping`); its work is booked exactly.
 The specimen's vibration effects on a released mode act as a modal force
-(:mod:`~iwan_element.models.modal_effects`). ``docs/multi_mode.md`` describes the
+(:mod:`~iwan_element.models.simulation.modal_force`). ``docs/multi_mode.md`` describes the
 multi-mode run and the coupling of the modes through the interface.
 """
 from __future__ import annotations
@@ -34,19 +34,19 @@ import numpy as np
 
 from iwan_element.core.validation import check_scalar
 
-from .reduced.dispatch import axis_rows
-from .reduced.damping import FloorWork
+from ..reduced.dispatch import axis_rows
+from ..reduced.damping import FloorWork
 from .host import build_host
 from .impact import Impact
-from .modal_effects import ModalEffects
-from .qsma import linear_modes, static_modal_load
+from .modal_force import ModalEffects
+from ..modal.qsma import linear_modes, static_modal_load
 from .ringdown_records import (Recorder, build_result, joint_records, solve_timed, step_grid,
                                virgin_joint_energy)
 from .ringdown_result import RingdownResult, with_energy_warning
-from .solid.specimen import SolidSpecimen
-from .reduced.dispatch import check_specimen
+from ..solid.specimen import SolidSpecimen
+from ..reduced.dispatch import check_specimen
 from .solver import solver_settings
-from .specimens.specimen import Specimen
+from ..specimens.specimen import Specimen
 
 __all__ = ["RingdownResult", "ringdown", "check_solid_release"]
 
@@ -171,7 +171,7 @@ def ringdown(specimen: Specimen | SolidSpecimen, *, mode: int | None = None, amp
     ----------
     specimen : Specimen or SolidSpecimen
         A 1-D specimen (Timoshenko beams) or a solid one (its reduced bodies), in Exudyn as
-        one generic body (:mod:`~iwan_element.models.host`); a solid's modes are numbered as
+        one generic body (:mod:`~iwan_element.models.simulation.host`); a solid's modes are numbered as
         its stuck modes (a released mode must move the sensor's z displacement).
     mode : int, optional, keyword-only
         Elastic mode number (1: lowest) of a single-mode release (default 1); not with a
@@ -182,7 +182,7 @@ def ringdown(specimen: Specimen | SolidSpecimen, *, mode: int | None = None, amp
         static deflections, each reaching its amplitude at ``specimen.sensor_position``.
     impact : Impact, optional, keyword-only
         Instead of a release: the specimen at rest struck by a half-sine force pulse
-        (:class:`~iwan_element.models.impact.Impact`); the step also resolves the pulse
+        (:class:`~iwan_element.models.simulation.Impact`); the step also resolves the pulse
         (at most a sixteenth of its contact time).
     modes : sequence of int, optional, keyword-only
         The modes an impact's result separates (modal filter, curves; default ``(1,)``).
@@ -244,7 +244,7 @@ def ringdown(specimen: Specimen | SolidSpecimen, *, mode: int | None = None, amp
 
 
 def _run(specimen, amp, rel, rows, positions, opts, impact):
-    """The ring-down in Exudyn (:mod:`~iwan_element.models.host`: bodies, contact points,
+    """The ring-down in Exudyn (:mod:`~iwan_element.models.simulation.host`: bodies, contact points,
     floor, effects, impact) from the release ``rel`` of the modes ``amp``: :func:`ringdown`'s
     work after the checks (``opts``: its keyword options)."""
     tangential, record_energy = opts["tangential"], opts["record_energy"]

@@ -37,10 +37,10 @@ from iwan_element.core.threads import one_blas_thread
 from iwan_element.core.validation import check_magnitude, finite_array
 from iwan_element.core.masing import constants_from_arrays, masing_rows
 
-from .reduced.dispatch import linear_system, contact_points
-from .reduced.model import reduced_model, stuck_key, stuck_modes
-from .reduced.dispatch import check_specimen
-from .specimens.specimen import Specimen
+from ..reduced.dispatch import linear_system, contact_points
+from ..reduced.model import reduced_model, stuck_key, stuck_modes
+from ..reduced.dispatch import check_specimen
+from ..specimens.specimen import Specimen
 
 __all__ = ["modal_amplitude_curve", "linear_modes", "natural_frequencies",
            "static_modal_load", "extrapolation_warnings"]

@@ -22,10 +22,10 @@ from iwan_element.core.result_shape import ResultShape, panels
 from iwan_element.core.serialize import json_safe
 from iwan_element.core.validation import check_int, check_scalar
 
-from .reduced.dispatch import linear_system
+from ..reduced.dispatch import linear_system
 from .host import build_host
 from .solver import solver_settings
-from .specimens.specimen import Specimen
+from ..specimens.specimen import Specimen
 
 __all__ = ["QuasiStaticResult", "quasi_static_test"]
 
@@ -88,7 +88,7 @@ class QuasiStaticResult(ResultShape):
         s, F = self.slip[m], self.force[m]
         area = np.sum(0.5 * (F[1:] + F[:-1]) * np.diff(s, axis=0), axis=0)
         amp = 0.5 * (s.max(axis=0) - s.min(axis=0))
-        from .reduced.dispatch import contact_points
+        from ..reduced.dispatch import contact_points
         pts = contact_points(self.specimen)
         return area, np.array([dissipation(a, p) for a, p in zip(amp, pts.params)])
 

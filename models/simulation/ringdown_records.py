@@ -23,7 +23,7 @@ E_KEYS = ("t", "kinetic", "strain", "springs", "joint_stored", "joint_dissipated
 class Recorder:
     """The post-step function of a ring-down: the host's coordinates and (with
     ``record_energy``) the energy terms of every accepted step, and the effects' commits
-    (everything in the host's coordinates, :mod:`~iwan_element.models.host`)."""
+    (everything in the host's coordinates, :mod:`~iwan_element.models.simulation.host`)."""
 
     def __init__(self, effs, floor_work, record_energy: bool):
         self.effs, self.floor_work, self.record = effs, floor_work, record_energy

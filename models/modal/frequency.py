@@ -25,10 +25,10 @@ from iwan_element.harmonic.nlmode import epmc_branch
 from iwan_element.harmonic.system import ElementPort
 
 from .qsma import extrapolation_warnings
-from .reduced.model import reduced_model
-from .reduced.dispatch import check_specimen
-from .specimens.specimen import Specimen
-from .modal_effects import effect_stack
+from ..reduced.model import reduced_model
+from ..reduced.dispatch import check_specimen
+from ..specimens.specimen import Specimen
+from .effects import effect_stack
 
 __all__ = ["harmonic_balance", "frequency_response", "nonlinear_mode", "specimen_system"]
 

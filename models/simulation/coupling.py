@@ -20,7 +20,7 @@ from iwan_element.core.result_shape import ResultShape, panels, table_lines
 from iwan_element.core.serialize import json_safe
 
 from .ringdown_result import RingdownResult
-from .specimens.specimen import Specimen
+from ..specimens.specimen import Specimen
 from .transient import ringdown
 
 __all__ = ["compare_curves", "ModeCouplingResult", "mode_coupling", "plot_curve_pairs"]

@@ -39,11 +39,11 @@ from iwan_element.core.result_shape import ResultShape, panels
 from iwan_element.core.serialize import json_safe
 from iwan_element.core.validation import check_int, check_scalar, finite_array
 
-from .reduced.dispatch import linear_system
+from ..reduced.dispatch import linear_system
 from .host import build_host
-from .qsma import linear_modes
+from ..modal.qsma import linear_modes
 from .solver import solver_settings
-from .specimens.specimen import Specimen
+from ..specimens.specimen import Specimen
 
 __all__ = ["ForcedResponseResult", "forced_response", "prewarp"]
 

@@ -2,10 +2,11 @@
 
 The specimen's vibration effects on a mode (``specimen.effects``, modal form, amplitudes at
 the sensor; ``docs/vibration_effects.md``) act as a modal force: their elements
-(``EFFECTS[name]`` around a zero-force element, joint values from ``modal_to_joint`` with
-unit modal mass in sensor units) are driven by the sensor-scaled modal coordinate
+(:func:`~iwan_element.models.modal.effects.effect_stack`: ``EFFECTS[name]`` around a
+zero-force element, joint values from ``modal_to_joint`` with unit modal mass in sensor
+units) are driven by the sensor-scaled modal coordinate
 ``Y = s q``, ``q = phi^T M x``, ``s = S phi``, and apply ``-M phi F(Y) / s`` to the bodies
-(an Exudyn ``ObjectGenericODE2`` on the host's coordinates, :mod:`~iwan_element.models.host`,
+(an Exudyn ``ObjectGenericODE2`` on the host's coordinates, :mod:`~iwan_element.models.simulation.host`,
 with its exact Jacobian ``M phi phi^T M F'(Y)``), which the
 mass-orthogonality of the modes keeps on this mode. Their work is ``(1/s^2) int F dY``.
 """
@@ -14,47 +15,10 @@ from __future__ import annotations
 import numpy as np
 from exudyn.itemInterface import ObjectGenericODE2
 
-from iwan_element.effects import EFFECTS
+from ..modal.effects import ZeroElement, effect_stack
+from ..specimens.specimen import Specimen
 
-from .specimens.specimen import Specimen
-
-__all__ = ["ZeroElement", "ModalEffects", "effect_stack"]
-
-
-class ZeroElement:
-    """A zero-force element following the joint element protocol (the base the modal
-    effects wrap)."""
-
-    force = displacement = work = stored_energy = dissipated_energy = 0.0
-
-    def trial(self, u, v=0.0):
-        return 0.0, 0.0
-
-    def commit(self):
-        pass
-
-    def revert(self):
-        pass
-
-    def reset(self):
-        pass
-
-
-def effect_stack(specimen: Specimen, mode: int, omega0: float):
-    """``(element, names)``: the specimen's effects on ``mode`` as one element stack around a
-    :class:`ZeroElement` (joint values from ``modal_to_joint`` at unit modal mass in sensor
-    units; ``omega0`` the stuck circular frequency [rad/s]), driven by the sensor-scaled
-    modal coordinate. The transient's modal force and the frequency-domain routes' element
-    ports both use it."""
-    el = ZeroElement()
-    names = []
-    for e in specimen.effects:
-        if e.mode == mode:
-            cls = EFFECTS[e.name]
-            el = cls(el, **cls.modal_to_joint(e.parameters, modal_mass=1.0,
-                                              slip_per_amplitude=1.0, omega0=omega0))
-            names.append(e.name)
-    return el, names
+__all__ = ["ModalEffects"]
 
 
 class ModalEffects:
