@@ -1,6 +1,6 @@
 """Every mode from one joint: calibrate the Brake-Reuss beam on mode 1, predict mode 2.
 
-One call, ``models.predict_hammer_test`` (``models/hammer.py``), which any hammer test of a
+One call, ``models.predict_hammer_test`` (``models/calibration/hammer.py``), which any hammer test of a
 beam specimen can go through (records at positions along the axis):
 
 1. The beam model (``models.preset("brake-reuss")``) is calibrated on mode 1 of the hammer

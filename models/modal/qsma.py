@@ -68,7 +68,7 @@ def _amplitudes(specimen: Specimen, amplitude) -> np.ndarray:
 def linear_modes(specimen: Specimen, *, mode: int = 1):
     """Stuck-interface mode of a specimen: ``(omega [rad/s], phi, rigid, L, points)``.
 
-    Read from the specimen's reduced model's eigenproblem (:func:`~.reduced.stuck_modes`:
+    Read from the specimen's reduced model's eigenproblem (:func:`~iwan_element.models.reduced.model.stuck_modes`:
     the same modes harmonic balance, EPMC and the transient use). ``phi`` (free coordinates)
     is mass-normalised with a positive sensor displacement; ``rigid`` holds the rigid-body
     modes (columns, mass-normalised; empty when clamped).
@@ -145,7 +145,7 @@ def _condensed(key):
     the interface force deficit ``d(u) = F(u) - KT u``, every static state is
     ``x = alpha A^-1 M phi - A^-1 G^T d(u)`` and ``A^-1 M phi = phi / w0^2``. The port
     quantities (``C = G A^-1 G^T``, ``S A^-1 G^T`` and the mode at the slips and the sensor)
-    are read from the specimen's reduced model (:func:`~.reduced.reduced_model`: its static
+    are read from the specimen's reduced model (:func:`~iwan_element.models.reduced.model.reduced_model`: its static
     flexibility at the ports is exact, kept modes plus residual); ``A^-1 G^T`` on every
     coordinate is kept for the release state ``x`` of the transient.
     """

@@ -144,7 +144,7 @@ def check_solid_release(specimen: SolidSpecimen, modes) -> None:
     the sensor could not set it)."""
     if specimen.model.axis is None:
         raise ValueError("specimen.model holds no axis rows (SolidModel.axis): build the solid "
-                         "with solid_build.solid_specimen")
+                         "with models.solid.solid_specimen")
     for r in modes:
         _, phi, _, L, _ = linear_modes(specimen, mode=r)
         along = np.max(np.abs(axis_rows(specimen, specimen.model.axis[0]) @ phi))

@@ -101,7 +101,7 @@ class SolidModel:
         (for checking the reduction), else ``None``.
     axis : tuple or None
         ``(x, rows)``: positions [m] every millimetre along the assembly and, per position,
-        the reduced row of the section's z displacement there (``solid_build._point_weights``)
+        the reduced row of the section's z displacement there (``solid.build._point_weights``)
         (read as ``S``; the ring-down's sensors), shape ``(len(x), n_reduced)``.
     material : tuple or None
         ``(youngs_modulus [Pa], density [kg/m^3])`` the bodies were built with; a specimen
@@ -173,7 +173,7 @@ class SolidSpecimen:
             fixed |= {n for n in inames - _FREE_INTERFACE if getattr(old, n) != getattr(new, n)}
         if fixed:
             raise ValueError(f"{sorted(fixed)} change the solid bodies or their patches; build a "
-                             "new solid (models.solid_preset / solid_build.solid_specimen) "
+                             "new solid (models.solid_preset / models.solid.solid_specimen) "
                              f"instead; a SolidSpecimen may change {sorted(_FREE_FIELDS | _FREE_INTERFACE)}")
         return SolidSpecimen(self.specimen.replace(**changes), self.model)
 
@@ -208,12 +208,12 @@ class SolidSpecimen:
 
     def axis_rows(self, positions) -> np.ndarray:
         """Reduced rows of the z displacement at ``positions`` [m] along the assembly (the
-        section's deflection, read as the sensor's ``S`` is: ``solid_build._point_weights``),
+        section's deflection, read as the sensor's ``S`` is: ``solid.build._point_weights``),
         interpolated linearly between the millimetres of :attr:`SolidModel.axis`: shape
         ``(n, n_reduced)``."""
         if self.model.axis is None:
             raise ValueError("this solid model holds no axis rows: build it with "
-                             "solid_build.solid_specimen")
+                             "models.solid.solid_specimen")
         x, rows = self.model.axis
         u = np.clip(np.asarray(positions, float) / (x[1] - x[0]), 0, x.size - 1)
         k = np.minimum(np.floor(u).astype(int), x.size - 2)

@@ -1,4 +1,4 @@
-"""Calibration of a specimen's interface, both ways.
+"""Calibration of a specimen's interface from vibration data.
 
 * From vibration data: :func:`calibrate` fits interface parameters (by default the
   tangential stiffness per area, the friction coefficient, chi and the modal damping floor)
@@ -11,16 +11,7 @@
   calibration ``mode`` only; the other modes' measured curves (``floors``) set only their
   own linear floors, each from its lowest-amplitude points (:func:`modal_floor`): the
   floor is linear damping, not the joint.
-* From a joint or modal Iwan fit: :func:`interface_from_joint` maps a lumped joint
-  (``Fs, KT, chi, beta``, e.g. from ``fit_loops`` of a lap-shear test) onto the distributed
-  interface: ``mu = Fs / sum(preloads)`` (in a shear test every point slips at
-  ``mu N_i``, and ``sum N_i = sum P``) and ``k_t = KT / A_contact``; chi and beta carry over.
-  :func:`interface_from_modal_iwan` maps a modal Iwan model (modal units, Segalman 2005,
-  docs/equations.md section 7, ``w0^2 = K_inf + KT``): ``k_t`` such that the stuck mode's
-  ``w^2`` exceeds that of the tangentially free lap (``K_inf``, macroslip) by ``KT_modal``,
-  and ``mu`` such that the points' slip forces weighted by the mode's slip shape
-  ``g_i = du_i/dq`` sum to the modal macroslip force, ``sum |g_i| mu N_i = Fs_modal``
-  (an approximation: the points do not all reach macroslip at once).
+* From a joint or modal Iwan fit: :mod:`~iwan_element.models.calibration.joint`.
 """
 from __future__ import annotations
 
@@ -29,20 +20,17 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-from scipy import optimize
 
-from iwan_element import AmplitudeCurve, IwanParameters, amplitude_curve
+from iwan_element import AmplitudeCurve, amplitude_curve
 from iwan_element.core.progress import finish, progress_bar, tick
 from iwan_element.core.result_shape import ResultShape, panels, unit_label
 from iwan_element.fitting import (Parameter, ParameterTable, covariance, fit_success,
                                   minimize, verdict)
 
-from .reduced.dispatch import contact_points
-from .modal.qsma import linear_modes, modal_amplitude_curve
-from .specimens.specimen import Specimen
+from ..modal.qsma import modal_amplitude_curve
+from ..specimens.specimen import Specimen
 
-__all__ = ["measured_amplitude_curve", "CalibrationResult", "calibrate", "modal_floor",
-           "interface_from_joint", "interface_from_modal_iwan"]
+__all__ = ["measured_amplitude_curve", "CalibrationResult", "calibrate", "modal_floor"]
 
 _FIT = ("stiffness_per_area", "friction", "chi", "damping_floor", "beta")
 _BOUNDS = {"stiffness_per_area": (1e9, 1e15), "friction": (1e-3, 3.0), "chi": (-0.95, 0.0),
@@ -236,6 +224,37 @@ def calibrate(specimen: Specimen, measured: AmplitudeCurve, *, fit=("stiffness_p
         Show a tqdm bar over the QSMA evaluations (total: the fit's budget, lowered to the
         count reached at the end); needs tqdm.
     """
+    floors, fit, X, fm, zm = _fit_points(specimen, measured, floors, fit, mode)
+    sol, lb, ub = _solve(specimen, fit, mode, X, fm, zm, f_tol, z_tol, progress)
+    vals = [_transform(n, v, True) for n, v in zip(fit, sol.x)]
+    fitted = _with(specimen, fit, vals, mode).replace(
+        calibrated_range=(float(X.min()), float(X.max())))
+    curve = modal_amplitude_curve(fitted, mode=mode, amplitude=X)
+    warns = []
+    # the package's one covariance routine (docs/fitting.md): s^2 (J^T J)^-1, s^2 = SSR/dof,
+    # with the delta method from the fitted logarithms
+    dlog = np.diag([1.0 if n == "chi" else v for n, v in zip(fit, vals)])
+    se = (covariance(sol.jac, sol.fun, Jp=dlog).stderr if np.all(np.isfinite(sol.jac))
+          else np.full(len(fit), np.nan))
+    if not np.all(np.isfinite(se)):
+        warns.append("the Jacobian is singular: some parameters are not identifiable")
+    ferr = float(np.max(np.abs(curve.frequency / fm - 1)))
+    zerr = float(np.max(np.abs(curve.damping_ratio / zm - 1)))
+    rows = _rows(fit, sol.x, vals, se, lb, ub, warns)
+    fitted, floor_rows = _floors(fitted, mode, floors, warns)
+    table = ParameterTable(rows + floor_rows)
+    return CalibrationResult(specimen=fitted, params=table, measured=measured, model=curve,
+                             start={n: float(_get(specimen, n)) for n in fit},
+                             max_frequency_error=ferr, max_damping_error=zerr,
+                             success=fit_success(bool(sol.success) and not warns,
+                                                 table.identified),
+                             converged=bool(sol.success),
+                             warnings=tuple(warns))
+
+
+def _fit_points(specimen, measured, floors, fit, mode):
+    """:func:`calibrate`'s checked ``floors`` and ``fit`` and the measured points inside the
+    specimen's amplitude range: ``(floors, fit, X, f, zeta)``."""
     floors = {} if floors is None else dict(floors)
     if any(isinstance(r, bool) or not isinstance(r, int) or r < 1 or r == mode for r in floors) \
             or not all(isinstance(c, AmplitudeCurve) for c in floors.values()):
@@ -250,23 +269,31 @@ def calibrate(specimen: Specimen, measured: AmplitudeCurve, *, fit=("stiffness_p
     if m.sum() < len(fit) + 2:
         raise ValueError(f"the measured curve has {m.sum()} points in the specimen's amplitude "
                          f"range; need at least {len(fit) + 2}")
-    X, fm, zm = measured.amplitude[m], measured.frequency[m], measured.damping_ratio[m]
+    return floors, fit, measured.amplitude[m], measured.frequency[m], measured.damping_ratio[m]
 
-    def get(s, n):
-        return getattr(s, n) if n == "friction" else getattr(s.interface, n)
 
-    def transform(n, v, inverse=False):
-        if n == "chi":
-            return v
-        return math.exp(v) if inverse else math.log(v)
+def _get(s, n):
+    """A fitted parameter's value on ``s``."""
+    return getattr(s, n) if n == "friction" else getattr(s.interface, n)
 
-    x0 = np.array([transform(n, min(max(get(specimen, n), _BOUNDS[n][0] * 1.01), _BOUNDS[n][1]))
-                   for n in fit])
-    lb = np.array([transform(n, _BOUNDS[n][0]) for n in fit])
-    ub = np.array([transform(n, _BOUNDS[n][1]) for n in fit])
+
+def _transform(n, v, inverse=False):
+    """The fit's coordinate of parameter ``n`` (its logarithm; chi itself), or back."""
+    if n == "chi":
+        return v
+    return math.exp(v) if inverse else math.log(v)
+
+
+def _solve(specimen, fit, mode, X, fm, zm, f_tol, z_tol, progress):
+    """The bounded least squares of :func:`calibrate` over the QSMA curve at the measured
+    amplitudes ``X``: ``(solution, lower, upper)`` in the fit's coordinates."""
+    x0 = np.array([_transform(n, min(max(_get(specimen, n), _BOUNDS[n][0] * 1.01),
+                                     _BOUNDS[n][1])) for n in fit])
+    lb = np.array([_transform(n, _BOUNDS[n][0]) for n in fit])
+    ub = np.array([_transform(n, _BOUNDS[n][1]) for n in fit])
 
     def model(x):
-        s = _with(specimen, fit, [transform(n, v, True) for n, v in zip(fit, x)], mode)
+        s = _with(specimen, fit, [_transform(n, v, True) for n, v in zip(fit, x)], mode)
         return modal_amplitude_curve(s, mode=mode, amplitude=X)
 
     def resid(x):
@@ -281,22 +308,14 @@ def calibrate(specimen: Specimen, measured: AmplitudeCurve, *, fit=("stiffness_p
                        diff_step=1e-4)
     finally:
         finish(bar)
-    vals = [transform(n, v, True) for n, v in zip(fit, sol.x)]
-    fitted = _with(specimen, fit, vals, mode).replace(
-        calibrated_range=(float(X.min()), float(X.max())))
-    curve = modal_amplitude_curve(fitted, mode=mode, amplitude=X)
-    warns = []
-    # the package's one covariance routine (docs/fitting.md): s^2 (J^T J)^-1, s^2 = SSR/dof,
-    # with the delta method from the fitted logarithms
-    dlog = np.diag([1.0 if n == "chi" else v for n, v in zip(fit, vals)])
-    se = (covariance(sol.jac, sol.fun, Jp=dlog).stderr if np.all(np.isfinite(sol.jac))
-          else np.full(len(fit), np.nan))
-    if not np.all(np.isfinite(se)):
-        warns.append("the Jacobian is singular: some parameters are not identifiable")
-    ferr = float(np.max(np.abs(curve.frequency / fm - 1)))
-    zerr = float(np.max(np.abs(curve.damping_ratio / zm - 1)))
+    return sol, lb, ub
+
+
+def _rows(fit, x, vals, se, lb, ub, warns):
+    """The parameter table's rows of the fitted parameters, each with its verdict
+    (:func:`iwan_element.fitting.verdict`); what a row cannot support goes to ``warns``."""
     rows = []
-    for k, (n, v) in enumerate(zip(fit, sol.x)):
+    for k, (n, v) in enumerate(zip(fit, x)):
         at_bound = min(v - lb[k], ub[k] - v) < 1e-3
         if at_bound:
             warns.append(f"{n} ended on its bound")
@@ -308,15 +327,7 @@ def calibrate(specimen: Specimen, measured: AmplitudeCurve, *, fit=("stiffness_p
         if why and not at_bound:                    # (at a bound: said above)
             warns.append(why)
         rows.append(Parameter(n, val, float(se[k]), lo, hi, _UNITS[n], ok))
-    fitted, floor_rows = _floors(fitted, mode, floors, warns)
-    table = ParameterTable(rows + floor_rows)
-    return CalibrationResult(specimen=fitted, params=table, measured=measured, model=curve,
-                             start={n: float(get(specimen, n)) for n in fit},
-                             max_frequency_error=ferr, max_damping_error=zerr,
-                             success=fit_success(bool(sol.success) and not warns,
-                                                 table.identified),
-                             converged=bool(sol.success),
-                             warnings=tuple(warns))
+    return rows
 
 
 def _floors(fitted: Specimen, mode: int, floors: dict, warns: list):
@@ -340,48 +351,3 @@ def _floors(fitted: Specimen, mode: int, floors: dict, warns: list):
         md[r - 1] = z
         rows.append(Parameter(f"floor_mode_{r}", z, se, lo, hi, "1", ok))
     return fitted.replace(modal_damping=tuple(md)), rows
-
-
-def interface_from_joint(specimen: Specimen, joint: IwanParameters) -> Specimen:
-    """Distributed interface carrying a lumped joint's parameters (module docstring).
-
-    ``joint`` describes the whole lap in shear (``Fs`` [N], ``KT`` [N/m]), e.g. a loop fit.
-    """
-    if not isinstance(joint, IwanParameters):
-        raise ValueError("joint must be IwanParameters")
-    pts = contact_points(specimen.replace(stiffness_pressure_exponent=0.0))
-    return specimen.replace(friction=joint.Fs / pts.normal_force.sum(),
-                            stiffness_per_area=joint.KT / pts.area.sum(),
-                            stiffness_pressure_exponent=0.0, chi=joint.chi, beta=joint.beta)
-
-
-def interface_from_modal_iwan(specimen: Specimen, modal: IwanParameters, *,
-                              mode: int = 1) -> Specimen:
-    """Distributed interface reproducing a modal Iwan joint (modal units, module docstring).
-
-    ``modal.KT`` [1/s^2, i.e. N/m per kg with mass-normalised modes] is the joint's share of
-    the mode's stiffness and ``modal.Fs`` its macroslip modal force; the slip shape of the
-    stuck mode distributes them over the contact points.
-    """
-    if not isinstance(modal, IwanParameters):
-        raise ValueError("modal must be IwanParameters (modal units)")
-    # the joint's modal stiffness is what it adds to the mode, KT_modal = w_stuck^2 - K_inf,
-    # with K_inf = w^2 of the tangentially free lap (macroslip); w_stuck rises monotonically
-    # with k_t (eigenvalue monotonicity), so k_t follows by bracketing
-    k0 = math.log(specimen.interface.stiffness_per_area)
-    w_inf, *_ = linear_modes(specimen.replace(stiffness_per_area=math.exp(k0 - 25.0)), mode=mode)
-
-    def modal_stiffness(log_kt):
-        sp = specimen.replace(stiffness_per_area=math.exp(log_kt))
-        w, phi, _, L, pts = linear_modes(sp, mode=mode)
-        return w * w - w_inf * w_inf, float(np.sum(np.abs(L.G @ phi) * pts.normal_force))
-
-    lo, hi = k0 - 8.0, k0 + 8.0
-    f_lo, f_hi = modal_stiffness(lo)[0] - modal.KT, modal_stiffness(hi)[0] - modal.KT
-    if f_lo > 0 or f_hi < 0:
-        raise ValueError(f"modal.KT = {modal.KT:.4g} is outside what this interface can carry "
-                         f"in mode {mode} ({f_lo + modal.KT:.4g} .. {f_hi + modal.KT:.4g})")
-    log_kt = optimize.brentq(lambda v: modal_stiffness(v)[0] - modal.KT, lo, hi, xtol=1e-10)
-    _, gN = modal_stiffness(log_kt)
-    return specimen.replace(friction=modal.Fs / gN, stiffness_per_area=math.exp(log_kt),
-                            chi=modal.chi, beta=modal.beta)

@@ -47,13 +47,13 @@ from iwan_element.core.result_shape import ResultShape, panels, table_lines
 from iwan_element.core.serialize import json_safe
 from iwan_element.core.validation import check_scalar, check_uniform_time, finite_array
 
-from .calibration import CalibrationResult, calibrate
-from .simulation.coupling import compare_curves, plot_curve_pairs
-from .modal.qsma import linear_modes
-from .simulation.ringdown_result import RingdownResult
-from .simulation.transient import ringdown
-from .updating.result import LinearUpdateResult
-from .updating.update import linear_update
+from .vibration import CalibrationResult, calibrate
+from ..simulation.coupling import compare_curves, plot_curve_pairs
+from ..modal.qsma import linear_modes
+from ..simulation.ringdown_result import RingdownResult
+from ..simulation.transient import ringdown
+from ..updating.result import LinearUpdateResult
+from ..updating.update import linear_update
 
 __all__ = ["mode_bands", "release_amplitudes", "predict_hammer_test", "HammerPrediction"]
 
@@ -297,15 +297,9 @@ def predict_hammer_test(specimen, records: dict, *, modes=(1, 2), calibration_mo
     -------
     HammerPrediction
     """
-    modes = _modes(modes)
-    if calibration_mode not in modes:
-        raise ValueError(f"calibration_mode must be one of modes {modes}, got {calibration_mode!r}")
-    recs = _records(specimen, records)
-    cal_name = _calibration_sensor(specimen, recs)
-    bands = mode_bands(specimen, modes, band_width=band_width) if bands is None \
-        else _bands(bands, modes)
-    check_scalar("duration", duration, low=0.0, low_open=True)
-    n_cal = check_scalar("calibration_periods", calibration_periods, low=3.0)
+    modes, recs, cal_name, bands, n_cal = _inputs(specimen, records, modes, calibration_mode,
+                                                  bands, band_width, duration,
+                                                  calibration_periods)
     f_cal = float(_elastic_frequencies(specimen, calibration_mode)[-1])
     windows = {r: ({"window": n_cal / f_cal} if r == calibration_mode else {}) for r in modes}
     measured, skipped = _measured_curves(recs, cal_name, bands, windows)
@@ -327,6 +321,35 @@ def predict_hammer_test(specimen, records: dict, *, modes=(1, 2), calibration_mo
                  for i, n in enumerate(names) for r in modes if (r, n) in measured}
     errors = {k: compare_curves(predicted[k], measured[k]) for k in predicted}
     ratios = _ratios(recs, cal_name, rd, bands, modes, release_time)
+    warns, thin = _warnings(upd, cal, rd, skipped, errors)
+    return HammerPrediction(calibration=cal, calibration_mode=calibration_mode,
+                            calibration_sensor=cal_name, bands=bands, release=release,
+                            ringdown=rd, measured=measured, predicted=predicted, errors=errors,
+                            ratios=ratios, update=upd,
+                            success=bool(cal.success and not thin
+                                         and (upd is None or upd.success)),
+                            warnings=tuple(warns))
+
+
+def _inputs(specimen, records, modes, calibration_mode, bands, band_width, duration,
+            calibration_periods):
+    """:func:`predict_hammer_test`'s checked inputs: ``(modes, records, calibration sensor,
+    bands, calibration periods)``."""
+    modes = _modes(modes)
+    if calibration_mode not in modes:
+        raise ValueError(f"calibration_mode must be one of modes {modes}, got {calibration_mode!r}")
+    recs = _records(specimen, records)
+    cal_name = _calibration_sensor(specimen, recs)
+    bands = mode_bands(specimen, modes, band_width=band_width) if bands is None \
+        else _bands(bands, modes)
+    check_scalar("duration", duration, low=0.0, low_open=True)
+    n_cal = check_scalar("calibration_periods", calibration_periods, low=3.0)
+    return modes, recs, cal_name, bands, n_cal
+
+
+def _warnings(upd, cal, rd, skipped, errors):
+    """``(warnings, thin)``: the update's, calibration's and ring-down's warnings, the
+    records left out, and the (mode, sensor) pairs with fewer than 3 common amplitudes."""
     warns = [f"linear update: {w}" for w in (upd.warnings if upd is not None else ())]
     warns += [f"calibration: {w}" for w in cal.warnings] + [f"ring-down: {w}" for w in rd.warnings]
     warns += skipped
@@ -335,13 +358,7 @@ def predict_hammer_test(specimen, records: dict, *, modes=(1, 2), calibration_mo
         warns.append(f"fewer than 3 common amplitudes of prediction and measurement: "
                      f"{', '.join(thin)} (a sensor near a node of the mode, or a band that "
                      "misses it)")
-    return HammerPrediction(calibration=cal, calibration_mode=calibration_mode,
-                            calibration_sensor=cal_name, bands=bands, release=release,
-                            ringdown=rd, measured=measured, predicted=predicted, errors=errors,
-                            ratios=ratios, update=upd,
-                            success=bool(cal.success and not thin
-                                         and (upd is None or upd.success)),
-                            warnings=tuple(warns))
+    return warns, thin
 
 
 def _linear_update(specimen, recs, cal_name, bands, parameters) -> LinearUpdateResult:
