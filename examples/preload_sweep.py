@@ -5,7 +5,7 @@ bending mode of ``iwan_element.models.specimens.presets.preset("example")`` (two
 steel beams, one M16 bolt, clamped-free) with the bolt preload changed. In the specimen
 model the preload sets the normal force of each contact point through the pressure cone, and
 so its slip force ``mu N``; the tangential stiffness follows the contact area (see
-``models/specimens.py``). The runs go to local processes by default or to a Dask cluster.
+``models/specimens/contact.py``). The runs go to local processes by default or to a Dask cluster.
 
     python examples/preload_sweep.py                     # 8 preloads, local processes
     python examples/preload_sweep.py --quick             # 3 preloads, serial (test suite)

@@ -1,5 +1,5 @@
-"""Linear model updating (models/updating.py, models/updating/update.py) and the test setup built into
-the linear system (models/specimens/setups.py, models/linear.py): sensitivities against finite
+"""Linear model updating (models/updating/) and the test setup built into the linear system
+(models/specimens/setups.py, models/linear/system.py): sensitivities against finite
 differences of the whole modal solution, a setup against closed forms, and the update of a
 synthetic specimen back to its known truth."""
 import math

@@ -38,7 +38,8 @@ def test_qsma_agrees_with_the_transient_ring_down_at_the_bottom_of_the_range(nam
     # At the bottom of every preset's range the damping floor dominates (the joint adds 3-12 %
     # of zeta), so the preset as documented is compared first, then the joint's share alone
     # (no floor), which a wrong interface law could not pass. The forces there are ~1 N: the
-    # run needs Newton's tolerance above the model's round-off (models.simulation.solver.roundoff_force).
+    # run needs Newton's tolerance above the model's round-off
+    # (models.simulation.solver.roundoff_force).
     s = preset(name)
     low = s.amplitude_range[0]
     for changes in ({}, {"damping_floor": 0.0}):

@@ -134,8 +134,8 @@ class BeamMesh:
 
 def beam_mesh(specimen: Specimen) -> BeamMesh:
     """Element boundaries of both beams: in the lap a node at every contact point
-    (:func:`~iwan_element.models.specimens.contact.beam_contact_points`; at least 4 elements), so that the
-    points' slips are independent coordinates of the Exudyn host; outside it
+    (:func:`~iwan_element.models.specimens.contact.beam_contact_points`; at least 4 elements), so
+    that the points' slips are independent coordinates of the Exudyn host; outside it
     ``n_elements`` minus the lap's share of them by length (at least 2)."""
     s = specimen
     n_lap = max(4, int(round(s.n_elements * s.overlap / s.beam_length)))

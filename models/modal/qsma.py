@@ -1,8 +1,9 @@
 """Quasi-static modal analysis (QSMA) of a lap-jointed specimen.
 
 Lacayo & Allen (MSSP 118:133-157, 2019; docs/equations.md section 7 steps 1-6), on the linear beam
-matrices extracted once from the Exudyn model (:func:`~iwan_element.models.reduced.dispatch.linear_system`)
-and the closed-form Iwan backbones of the contact points:
+matrices extracted once from the Exudyn model
+(:func:`~iwan_element.models.reduced.dispatch.linear_system`) and the closed-form Iwan backbones of
+the contact points:
 
 1. preload: the normal preload does not load the tangential elements here (no Poisson
    coupling), so ``x0 = 0`` and the stuck tangent is ``K = K0 + G^T diag(KT_i) G``;
@@ -68,8 +69,9 @@ def _amplitudes(specimen: Specimen, amplitude) -> np.ndarray:
 def linear_modes(specimen: Specimen, *, mode: int = 1):
     """Stuck-interface mode of a specimen: ``(omega [rad/s], phi, rigid, L, points)``.
 
-    Read from the specimen's reduced model's eigenproblem (:func:`~iwan_element.models.reduced.model.stuck_modes`:
-    the same modes harmonic balance, EPMC and the transient use). ``phi`` (free coordinates)
+    Read from the specimen's reduced model's eigenproblem
+    (:func:`~iwan_element.models.reduced.model.stuck_modes`: the same modes harmonic balance, EPMC
+    and the transient use). ``phi`` (free coordinates)
     is mass-normalised with a positive sensor displacement; ``rigid`` holds the rigid-body
     modes (columns, mass-normalised; empty when clamped).
     """
@@ -145,8 +147,9 @@ def _condensed(key):
     the interface force deficit ``d(u) = F(u) - KT u``, every static state is
     ``x = alpha A^-1 M phi - A^-1 G^T d(u)`` and ``A^-1 M phi = phi / w0^2``. The port
     quantities (``C = G A^-1 G^T``, ``S A^-1 G^T`` and the mode at the slips and the sensor)
-    are read from the specimen's reduced model (:func:`~iwan_element.models.reduced.model.reduced_model`: its static
-    flexibility at the ports is exact, kept modes plus residual); ``A^-1 G^T`` on every
+    are read from the specimen's reduced model
+    (:func:`~iwan_element.models.reduced.model.reduced_model`: its static flexibility at the ports
+    is exact, kept modes plus residual); ``A^-1 G^T`` on every
     coordinate is kept for the release state ``x`` of the transient.
     """
     specimen, mode = key

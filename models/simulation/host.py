@@ -11,8 +11,8 @@ basis of the null space of ``R`` and ``R^+`` its pseudo-inverse (``R T = [0 | I]
 ``u = G x`` and the ports ``p``. ``M' = T^T M T`` is block diagonal (``N^T R^+ = 0``),
 ``K' = T^T K0 T``. One Exudyn ``NodeGenericODE2`` carries every ``z``; one
 ``ObjectGenericODE2`` carries ``M'``, ``K'`` and the floor's modal damping matrix
-``C' = T^T C T`` (:mod:`~iwan_element.models.reduced.damping`), and each tangential Iwan element is a
-coordinate-marker pair (the slip coordinate against a ground coordinate) of
+``C' = T^T C T`` (:mod:`~iwan_element.models.reduced.damping`), and each tangential Iwan element is
+a coordinate-marker pair (the slip coordinate against a ground coordinate) of
 :func:`iwan_element.exudyn.add_iwan_interface`: the compiled per-point law, one commit of all
 points per accepted step and the energy records. The interface force ``-F_i`` acts on slip
 coordinate ``u_i``, which is ``G^T F`` in ``x``. A force ``F(t)`` on a port coordinate ``p_j``

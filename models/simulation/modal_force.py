@@ -6,8 +6,9 @@ the sensor; ``docs/vibration_effects.md``) act as a modal force: their elements
 zero-force element, joint values from ``modal_to_joint`` with unit modal mass in sensor
 units) are driven by the sensor-scaled modal coordinate
 ``Y = s q``, ``q = phi^T M x``, ``s = S phi``, and apply ``-M phi F(Y) / s`` to the bodies
-(an Exudyn ``ObjectGenericODE2`` on the host's coordinates, :mod:`~iwan_element.models.simulation.host`,
-with its exact Jacobian ``M phi phi^T M F'(Y)``), which the
+(an Exudyn ``ObjectGenericODE2`` on the host's coordinates,
+:mod:`~iwan_element.models.simulation.host`, with its exact Jacobian ``M phi phi^T M F'(Y)``),
+which the
 mass-orthogonality of the modes keeps on this mode. Their work is ``(1/s^2) int F dY``.
 """
 from __future__ import annotations

@@ -1,7 +1,8 @@
 """Exudyn solver settings shared by the specimen's time and load-step runs.
 
-:func:`solver_settings` is used by the ring-down (:mod:`~iwan_element.models.simulation.transient`), the
-machine test (:mod:`~iwan_element.models.simulation.machine`) and the stepped sine
+:func:`solver_settings` is used by the ring-down
+(:mod:`~iwan_element.models.simulation.transient`), the machine test
+(:mod:`~iwan_element.models.simulation.machine`) and the stepped sine
 (:mod:`~iwan_element.models.simulation.forced`). The damping floor is in
 :mod:`~iwan_element.models.reduced.damping`.
 """

@@ -6,8 +6,8 @@ slips) and released from rest at ``t = 0``. Several modes may be released at onc
 release state is then the sum of each mode's static deflection, each reaching its own
 amplitude at the sensor, and the Iwan elements start virgin at the summed slips. Exudyn
 integrates the specimen's linear bodies (1-D Timoshenko beams or reduced solid bodies, one
-generic body: :mod:`~iwan_element.models.simulation.host`) with the history-dependent Iwan element of
-every contact point (generalized-alpha with spectral radius 1, i.e. the trapezoidal rule: no
+generic body: :mod:`~iwan_element.models.simulation.host`) with the history-dependent Iwan element
+of every contact point (generalized-alpha with spectral radius 1, i.e. the trapezoidal rule: no
 numerical damping), all modes through the same interface. A hammer impact instead of a
 release is a force pulse on the struck point's port coordinate. Each mode's response is
 separated by modal filtering, ``q_r(t) = phi_r^T M x(t)``, and expressed at the sensor
@@ -20,8 +20,8 @@ the frequencies are corrected for it (``docs/beam_tests.md``). The time step is 
 highest mode released.
 
 The specimen's damping floor, one ratio per mode (``Specimen.floor``), is the modal damping
-matrix of the stuck system (:mod:`~iwan_element.models.reduced.damping`); its work is booked exactly.
-The specimen's vibration effects on a released mode act as a modal force
+matrix of the stuck system (:mod:`~iwan_element.models.reduced.damping`); its work is booked
+exactly. The specimen's vibration effects on a released mode act as a modal force
 (:mod:`~iwan_element.models.simulation.modal_force`). ``docs/multi_mode.md`` describes the
 multi-mode run and the coupling of the modes through the interface.
 """
@@ -171,8 +171,8 @@ def ringdown(specimen: Specimen | SolidSpecimen, *, mode: int | None = None, amp
     ----------
     specimen : Specimen or SolidSpecimen
         A 1-D specimen (Timoshenko beams) or a solid one (its reduced bodies), in Exudyn as
-        one generic body (:mod:`~iwan_element.models.simulation.host`); a solid's modes are numbered as
-        its stuck modes (a released mode must move the sensor's z displacement).
+        one generic body (:mod:`~iwan_element.models.simulation.host`); a solid's modes are
+        numbered as its stuck modes (a released mode must move the sensor's z displacement).
     mode : int, optional, keyword-only
         Elastic mode number (1: lowest) of a single-mode release (default 1); not with a
         dict ``amplitude``.

@@ -9,8 +9,8 @@ of whose nodes lie in the contact node set).
 Routes:
 
 * :func:`lap_beam_parts` - the two halves of a specimen's lap-jointed beam from its
-  dimensions (:class:`~iwan_element.models.specimens.specimen.Specimen`): Netgen OCC boxes, second-order
-  tetrahedra, the lap faces named ``"lap"`` and meshed finer (``lap_mesh_size``);
+  dimensions (:class:`~iwan_element.models.specimens.specimen.Specimen`): Netgen OCC boxes,
+  second-order tetrahedra, the lap faces named ``"lap"`` and meshed finer (``lap_mesh_size``);
 * :func:`part_from_ngsolve` - an NGsolve mesh the user already has, the contact face given
   by its boundary name;
 * :func:`part_from_fem` - any ``FEMinterface`` (``ImportFromAbaqusInputFile`` with

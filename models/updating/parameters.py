@@ -96,8 +96,9 @@ def updatable(specimen, *, ranges: dict | None = None) -> tuple:
     -------
     tuple of Updatable
         Material (Young's modulus, density), boundary (the setup's clamp springs, when the
-        specimen is clamped and the setup declares a :class:`~iwan_element.models.specimens.setups.Clamp`), attachments
-        (each point mass, the shaker's gauge mass, moving mass, stinger and suspension
+        specimen is clamped and the setup declares a
+        :class:`~iwan_element.models.specimens.setups.Clamp`), attachments (each point mass, the
+        shaker's gauge mass, moving mass, stinger and suspension
         stiffness), joint (the tangential stiffness per area of the stuck interface, the
         normal contact stiffness per area).
     """
