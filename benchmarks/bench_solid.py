@@ -6,9 +6,9 @@ Run:  python benchmarks/bench_solid.py [--mesh 0.012 0.008 0.006] [--patch 0.006
 
 For each mesh size (largest element [m]; the lap faces at ``--lap``, default 0.6 x the patch
 size; the patches' tied limit needs 2.5 mm there, docs/solid.md): the two halves meshed
-(second-order tetrahedra, ``models.solid_mesh.lap_beam_parts``; the bolt holes cut unless
+(second-order tetrahedra, ``models.solid.lap_beam_parts``; the bolt holes cut unless
 ``--no-holes``), patched and reduced
-(``models.solid_build.solid_specimen``, ``--modes`` stuck modes + 3 attachment shapes per
+(``models.solid.solid_specimen``, ``--modes`` stuck modes + 3 attachment shapes per
 patch). Printed:
 
 * mesh and reduction sizes, wall times of meshing (Netgen + exudyn import), reduction, and a
@@ -59,8 +59,7 @@ from pathlib import Path
 
 from iwan_element.models import modal_amplitude_curve, natural_frequencies, preset
 from iwan_element.models.calibration import calibrate, measured_amplitude_curve
-from iwan_element.models.solid_build import solid_specimen
-from iwan_element.models.solid_mesh import lap_beam_parts
+from iwan_element.models.solid import solid_specimen, lap_beam_parts
 
 PEAKS = np.array([80.4, 221.7, 297.7, 845.6])
 RECORD = Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "brb-hammer" / "hammer_acc3.csv"

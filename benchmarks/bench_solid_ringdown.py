@@ -29,11 +29,9 @@ import exudyn as exu
 import numpy as np
 
 from iwan_element.models import modal_amplitude_curve, preset, ringdown
-from iwan_element.models.qsma import static_modal_load
-from iwan_element.models.solid_build import solid_specimen
-from iwan_element.models.solid_mesh import lap_beam_parts
-from iwan_element.models.host import build_host
-from iwan_element.models.solver import solver_settings
+from iwan_element.models.modal import static_modal_load
+from iwan_element.models.solid import solid_specimen, lap_beam_parts
+from iwan_element.models.simulation import build_host, solver_settings
 
 
 def _cost(label, r):

@@ -78,8 +78,7 @@ exu.MainSystem.SolveDynamic = _counted
 
 
 def _solid():
-    from iwan_element.models.solid_build import solid_specimen
-    from iwan_element.models.solid_mesh import lap_beam_parts
+    from iwan_element.models.solid import solid_specimen, lap_beam_parts
     s = models.preset("brake-reuss")
     parts = lap_beam_parts(s, mesh_size=0.012, lap_mesh_size=0.0051)
     return solid_specimen(s, parts, patch_size=0.0085, n_modes=8)

@@ -1,7 +1,7 @@
 """Every mode from one joint: calibrate the Brake-Reuss beam on mode 1, predict mode 2.
 
-One call, ``models.predict_hammer_test`` (``models/hammer.py``), which any hammer test of a
-beam specimen can go through (records at positions along the axis):
+One call, ``models.predict_hammer_test`` (``models/calibration/hammer.py``), which any hammer test
+of a beam specimen can go through (records at positions along the axis):
 
 1. The beam model (``models.preset("brake-reuss")``) is calibrated on mode 1 of the hammer
    ring-down at accelerometer 3 (``calibrate``, as ``brb_discrepancy.py`` does); mode 2's

@@ -42,7 +42,7 @@ from iwan_element.models import (example_test_path, forced_response,  # noqa: E4
                                  modal_amplitude_curve, preset, quasi_static_test, ringdown)
 from iwan_element.models.calibration import (interface_from_joint,  # noqa: E402
                                              measured_amplitude_curve)
-from iwan_element.models.qsma import linear_modes  # noqa: E402
+from iwan_element.models.modal import linear_modes  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 BRB_DATA = [ROOT.parent / "shared" / "data" / "brb-hammer" / "hammer_acc3.csv",

@@ -1,11 +1,11 @@
 """Preload sweep of the example lap-jointed beam: the family of f(X), zeta(X) curves.
 
 Each preload is one ensemble task: the quasi-static modal analysis (QSMA) of the first
-bending mode of ``iwan_element.models.specimens.preset("example")`` (two 200 x 40 x 10 mm
+bending mode of ``iwan_element.models.specimens.presets.preset("example")`` (two 200 x 40 x 10 mm
 steel beams, one M16 bolt, clamped-free) with the bolt preload changed. In the specimen
 model the preload sets the normal force of each contact point through the pressure cone, and
 so its slip force ``mu N``; the tangential stiffness follows the contact area (see
-``models/specimens.py``). The runs go to local processes by default or to a Dask cluster.
+``models/specimens/contact.py``). The runs go to local processes by default or to a Dask cluster.
 
     python examples/preload_sweep.py                     # 8 preloads, local processes
     python examples/preload_sweep.py --quick             # 3 preloads, serial (test suite)

@@ -1,73 +1,54 @@
 """Models built on iwan_element's public API; installed as ``iwan_element.models``.
 
-* :mod:`~iwan_element.models.specimens` - two-beam lap-joint specimens and presets
-  (:func:`preset`: ``"example"``, ``"brake-reuss"``, ``"two-bolt-aluminium"``);
-* :mod:`~iwan_element.models.interface` - contact pressure cones and the distributed
-  interface's Iwan elements;
-* :mod:`~iwan_element.models.setups` - the test setup (sensor masses, shaker, clamp springs)
-  that a specimen carries and every analysis includes;
-* :mod:`~iwan_element.models.beam_fe` and :mod:`~iwan_element.models.assembly` - the 1-D
-  Timoshenko beams and the specimen's linear system (:mod:`~iwan_element.models.linear`);
-* :mod:`~iwan_element.models.host` - a specimen in Exudyn: its linear system as one generic
-  body, the contact points' Iwan elements on slip coordinates (the transient routes' model);
-* :mod:`~iwan_element.models.qsma` - quasi-static modal analysis (:func:`modal_amplitude_curve`);
-  :func:`~iwan_element.models.qsma.linear_modes`, :func:`natural_frequencies` (with the joint
-  stuck or without it);
-* :mod:`~iwan_element.models.transient` - the transient route (:func:`ringdown`, one release
-  level per call, one mode or several at once through the same interface; frequency and
-  damping by :func:`iwan_element.amplitude_curve`; result in
-  :mod:`~iwan_element.models.ringdown_result`; the pieces the 1-D and the solid ring-down share
-  in :mod:`~iwan_element.models.ringdown_records`; a solid specimen's run in
-  :mod:`~iwan_element.models.solid_transient`);
-* :mod:`~iwan_element.models.impact` - a hammer impact (:class:`Impact`, a half-sine force
-  pulse) that :func:`ringdown` takes instead of a release;
-* :mod:`~iwan_element.models.coupling` - each mode's damping with and without the other
-  modes ringing through the same interface (:func:`mode_coupling`);
-* :mod:`~iwan_element.models.hammer` - a whole hammer test predicted from one mode
-  (:func:`predict_hammer_test`: calibrate on it, each other mode's floor from its lowest
-  amplitudes, the multi-mode ring-down against every record);
-* :mod:`~iwan_element.models.damping` - the linear damping floor, one ratio per mode, as the
-  stuck system's modal damping matrix (the ring-down's and the stepped sine's);
-* :mod:`~iwan_element.models.machine` - the joint's quasi-static test in a machine grip
-  (:func:`quasi_static_test`);
-* :mod:`~iwan_element.models.forced` - stepped-sine forced response at several force levels
-  (:func:`forced_response`);
-* :mod:`~iwan_element.models.reduced` - the one reduced model (stuck modes with their floors,
-  residual flexibility, the contact points' joints) that the frequency-domain routes read;
-* :mod:`~iwan_element.models.frequency` - harmonic balance (:func:`harmonic_balance`),
-  continuation (:func:`frequency_response`) and nonlinear modes by EPMC
-  (:func:`nonlinear_mode`);
-* :mod:`~iwan_element.models.solid_mesh`, :mod:`~iwan_element.models.solid_build`,
-  :mod:`~iwan_element.models.solid` - solid finite-element halves (Netgen, or the user's
-  mesh), contact patches and the reduced linear system QSMA reads (:func:`solid_preset`;
-  extra ``iwan-element[fem]``);
-* :mod:`~iwan_element.models.solver` - Exudyn solver settings shared by the runs;
-* :mod:`~iwan_element.models.updating` and :mod:`~iwan_element.models.update` - linear
-  model updating on low-level test data (:func:`updatable`, :func:`linear_update`): material,
-  boundary, setup and the stuck joint's stiffness, before any joint calibration;
-* :mod:`~iwan_element.models.calibration` - interface calibration from vibration data and
-  from joint / modal Iwan fits;
+The lap-jointed beams, in rooms from the bottom up (a room imports only the rooms listed
+before it; ``docs/architecture.md``):
+
+* :mod:`~iwan_element.models.specimens` - what a specimen is: the validated description
+  (:class:`Specimen`, :class:`InterfaceModel`), the published presets (:func:`preset`:
+  ``"example"``, ``"brake-reuss"``, ``"two-bolt-aluminium"``), the test setup it carries
+  (:class:`Setup`: sensor masses, shaker, clamp springs), the contact pressure cones and the
+  1-D contact points' Iwan elements;
+* :mod:`~iwan_element.models.linear` - the one linear system every analysis reads, and the
+  setup built into it;
+* :mod:`~iwan_element.models.beam` - the 1-D Timoshenko beams and their linear system;
+* :mod:`~iwan_element.models.solid` - solid finite-element halves (Netgen, or the user's
+  mesh), contact patches and the reduced linear system (:func:`solid_preset`,
+  :class:`SolidSpecimen`; extra ``iwan-element[fem]``);
+* :mod:`~iwan_element.models.reduced` - what the analyses read of a specimen, 1-D or solid
+  alike (linear system, contact points, axis rows), the stuck modes, the one reduced model
+  of the frequency-domain routes (:func:`reduced_model`, :func:`reduction_error`) and the
+  linear damping floor, one ratio per mode;
+* :mod:`~iwan_element.models.updating` - linear model updating on low-level test data
+  (:func:`updatable`, :func:`linear_update`): material, boundary, setup and the stuck
+  joint's stiffness, before any joint calibration;
+* :mod:`~iwan_element.models.modal` - quasi-static modal analysis
+  (:func:`modal_amplitude_curve`, :func:`natural_frequencies`), harmonic balance
+  (:func:`harmonic_balance`), continuation (:func:`frequency_response`) and nonlinear
+  modes by EPMC (:func:`nonlinear_mode`), the vibration effects' modal form;
+* :mod:`~iwan_element.models.simulation` - a specimen in Exudyn: the ring-down after a
+  release or a hammer :class:`Impact` (:func:`ringdown`), modes ringing together
+  (:func:`mode_coupling`), the stepped-sine forced response (:func:`forced_response`), the
+  machine test (:func:`quasi_static_test`);
+* :mod:`~iwan_element.models.calibration` - the interface from vibration data and from
+  joint / modal Iwan fits, and a whole hammer test predicted from one mode
+  (:func:`predict_hammer_test`);
 * ``example_test_30kN.csv`` - a SYNTHETIC quasi-static test of the seed paper's specimen
   (see ``README.md`` here and ``make_example_test.py``); :func:`example_test_path` finds it.
 """
 from importlib import resources
 from pathlib import Path
 
-from .coupling import ModeCouplingResult, mode_coupling
-from .forced import ForcedResponseResult, forced_response
-from .frequency import frequency_response, harmonic_balance, nonlinear_mode
+from .calibration import HammerPrediction, predict_hammer_test
+from .modal import (frequency_response, harmonic_balance, modal_amplitude_curve,
+                    natural_frequencies, nonlinear_mode)
 from .reduced import ReducedModel, reduced_model, reduction_error
-from .hammer import HammerPrediction, predict_hammer_test
-from .impact import Impact
-from .machine import QuasiStaticResult, quasi_static_test
-from .qsma import modal_amplitude_curve, natural_frequencies
-from .transient import RingdownResult, ringdown
-from .solid import SolidSpecimen
-from .solid_build import solid_preset
-from .setups import Clamp, PointMass, Setup, Shaker
-from .specimens import Excitation, InterfaceModel, Specimen, preset
-from .update import LinearUpdateResult, linear_update
-from .updating import updatable
+from .simulation import (ForcedResponseResult, Impact, ModeCouplingResult, QuasiStaticResult,
+                         RingdownResult, forced_response, mode_coupling, quasi_static_test,
+                         ringdown)
+from .solid import SolidSpecimen, solid_preset
+from .specimens import (Clamp, Excitation, InterfaceModel, PointMass, Setup, Shaker, Specimen,
+                        preset)
+from .updating import LinearUpdateResult, linear_update, updatable
 
 __all__ = ["example_test_path", "preset", "modal_amplitude_curve", "natural_frequencies",
            "ringdown", "Impact", "mode_coupling", "quasi_static_test", "forced_response",

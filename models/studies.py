@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .qsma import modal_amplitude_curve
+from .modal import modal_amplitude_curve
 
 __all__ = ["specimen_curve_task", "with_changes"]
 

@@ -1,4 +1,4 @@
-"""The 1-D Timoshenko beam elements (models/beam_fe.py) against the closed-form Timoshenko
+"""The 1-D Timoshenko beam elements (models/beam/elements.py) against the closed-form Timoshenko
 beam (tests/_timoshenko_reference.py, written independently from the exact frequency
 equations) and the element's own published closed-form stiffness."""
 import numpy as np
@@ -6,7 +6,7 @@ import pytest
 from scipy.linalg import eigh
 
 from iwan_element.models import natural_frequencies, preset
-from iwan_element.models.beam_fe import element_matrices, point_rows
+from iwan_element.models.beam import element_matrices, point_rows
 
 from _timoshenko_reference import timoshenko_frequencies
 
@@ -81,7 +81,7 @@ def test_point_rows_interpolate_the_element_shapes():
     """Reading w at a node gives its coordinate; between nodes a rigid rotation of the whole
     specimen (w = c + a x, theta = a, u = 0 on the axis) is read exactly."""
     s = preset("brake-reuss")
-    from iwan_element.models.beam_fe import beam_mesh
+    from iwan_element.models.beam import beam_mesh
     mesh = beam_mesh(s)
     x = np.concatenate([mesh.x_a, mesh.x_b])
     q = np.zeros(3 * x.size)

@@ -14,9 +14,8 @@ import pytest
 import scipy.linalg as sla
 
 from iwan_element import models
-from iwan_element.models.assembly import linear_system
-from iwan_element.models.interface import contact_points
-from iwan_element.models.reduced import reduced_model, reduction_error
+from iwan_element.models.reduced import (linear_system, contact_points, reduced_model,
+                                         reduction_error)
 
 BRB = models.preset("brake-reuss")
 

@@ -1,4 +1,4 @@
-"""models.hammer: the pieces of a hammer test's prediction from one mode.
+"""models.calibration.hammer: the pieces of a hammer test's prediction from one mode.
 
 The full route (calibration, multi-mode ring-down, every curve against the record) runs in
 ``examples/brb_every_mode.py`` and ``benchmarks/bench_every_mode.py`` (about 25 s); here the
@@ -18,7 +18,7 @@ DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "brb-hammer"
 needs_data = pytest.mark.skipif(
     not DATA.is_dir(), reason="the measured Brake-Reuss hammer record (GPL-3.0) is read from "
                               "../shared only and is absent here")
-from iwan_element.models.hammer import mode_bands, release_amplitudes
+from iwan_element.models.calibration import mode_bands, release_amplitudes
 
 FS = 12800.0
 
@@ -59,7 +59,7 @@ def test_release_amplitudes_refuse_a_span_beyond_the_record():
 
 def test_mode_bands_hold_each_stuck_frequency_and_do_not_overlap():
     spec = models.preset("two-bolt-aluminium").replace(n_points=12)
-    f = [models.qsma.linear_modes(spec, mode=r)[0] / (2 * math.pi) for r in (1, 2, 3, 4)]
+    f = [models.modal.linear_modes(spec, mode=r)[0] / (2 * math.pi) for r in (1, 2, 3, 4)]
     bands = mode_bands(spec, (1, 2, 3), band_width=0.4)
     for r in (1, 2, 3):
         lo, hi = bands[r]
@@ -136,7 +136,8 @@ def test_the_hammer_route_updates_the_linear_structure_on_the_low_amplitude_wind
     linear windows of the three accelerometers, Young's modulus and the stuck interface's
     stiffness updated on them; the preset already carries that update (it moves < 2 stderr)
     and the second mode is met within its error after it."""
-    from iwan_element.models.hammer import _linear_update, mode_bands
+    from iwan_element.models.calibration.hammer import _linear_update
+    from iwan_element.models.calibration import mode_bands
     spec = models.preset("brake-reuss")
     recs = {}
     for name, x in (("acc1", 0.0254), ("acc2", 0.5549), ("acc3", 0.6438)):

@@ -139,7 +139,7 @@ def test_continuation_traces_a_duffing_fold():
     """Continuation through the two turning points of a hardening oscillator (the package's
     hardening effect as an element port); with the fundamental alone every traced point
     satisfies the classical relation F^2 = a^2 ((w0^2 + 3/4 k3 a^2 - W^2)^2 + (c W)^2)."""
-    from iwan_element.models.modal_effects import ZeroElement
+    from iwan_element.models.modal import ZeroElement
     k3, c, F = 1e10, 5.0, 1.0
     stuck = IwanParameters(Fs=1e9, KT=1e3, chi=1.0, beta=0.5)
     base = ModalSystem.oscillator(1.0, 1e4, c, stuck)

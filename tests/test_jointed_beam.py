@@ -11,9 +11,9 @@ from scipy.linalg import eigh
 
 from iwan_element.models import (forced_response, natural_frequencies, preset,
                                  quasi_static_test, ringdown)
-from iwan_element.models.interface import contact_points
-from iwan_element.models.qsma import linear_modes
-from iwan_element.models.damping import floor_damping
+from iwan_element.models.reduced import contact_points
+from iwan_element.models.modal import linear_modes
+from iwan_element.models.reduced import floor_damping
 
 #: the example specimen (two plain 200 x 40 x 10 mm steel bars), contact points thinned out
 EXAMPLE = preset("example").replace(n_points=12)
@@ -144,7 +144,7 @@ def test_stuck_stepped_sine_is_the_linear_frequency_response():
     """Stepped sine with nothing slipping and a 5 % floor (the modal damping matrix ``C``):
     the steady amplitudes are the linear system's frequency response
     ``|S (K - w^2 M + i w C)^-1 S|`` (force and sensor at the tip) at the frequencies asked
-    for (the force pre-warped, ``models.forced.prewarp``). ``C`` itself is checked against
+    for (the force pre-warped, ``models.simulation.prewarp``). ``C`` itself is checked against
     its definition in tests/test_every_mode.py."""
     s = EXAMPLE.replace(friction=1e4, damping_floor=0.05)
     w0, _, _, L, pts = linear_modes(s)

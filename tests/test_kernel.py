@@ -15,7 +15,7 @@ from iwan_element import IwanJoint, IwanJointBank, IwanParameters, dissipation
 from iwan_element.core.history import History
 from iwan_element.core.masing import (constants_from_arrays, masing_constants, masing_history,
                                       masing_rows, reversal_structure)
-from iwan_element.models.qsma import _interface_law
+from iwan_element.models.modal.qsma import _interface_law
 
 
 

@@ -1,5 +1,5 @@
-"""Linear model updating (models/updating.py, models/update.py) and the test setup built into
-the linear system (models/setups.py, models/linear.py): sensitivities against finite
+"""Linear model updating (models/updating/) and the test setup built into the linear system
+(models/specimens/setups.py, models/linear/system.py): sensitivities against finite
 differences of the whole modal solution, a setup against closed forms, and the update of a
 synthetic specimen back to its known truth."""
 import math
@@ -11,7 +11,7 @@ from scipy.optimize import brentq
 
 from iwan_element.models import (Clamp, PointMass, Setup, Shaker, linear_update,
                                  natural_frequencies, preset, updatable)
-from iwan_element.models.beam_fe import element_matrices
+from iwan_element.models.beam import element_matrices
 from iwan_element.models.linear import LinearSystem, attach_setup
 from iwan_element.models.updating import (modal_sensitivities, modal_state, pair_modes,
                                           with_parameters)
@@ -35,7 +35,7 @@ def _fd(specimen, name, modes, positions, h=1e-3):
         s = with_parameters(specimen, {name: p0 * math.exp(sgn * h)})
         st = modal_state(s)
         pairs = pair_modes(st, ref, modes)
-        from iwan_element.models.assembly import axis_rows
+        from iwan_element.models.reduced import axis_rows
         R = axis_rows(s, positions)
         vals = []
         for r, k in pairs.items():
@@ -125,7 +125,7 @@ def test_the_shakers_moving_mass_limits():
 
 def _targets(truth, modes, positions):
     st = modal_state(truth)
-    from iwan_element.models.assembly import axis_rows
+    from iwan_element.models.reduced import axis_rows
     R = axis_rows(truth, positions)
     freqs = {r: st.frequency(st.index(r)) for r in modes}
     shapes = {r: dict(zip(positions, R @ st.phi[:, st.index(r)])) for r in modes}

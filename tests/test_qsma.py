@@ -6,7 +6,7 @@ import pytest
 
 from iwan_element import AmplitudeCurve, dissipation
 from iwan_element.models import modal_amplitude_curve, preset, ringdown
-from iwan_element.models.qsma import linear_modes, static_modal_load
+from iwan_element.models.modal import linear_modes, static_modal_load
 
 NAMES = ("example", "brake-reuss", "two-bolt-aluminium")
 
@@ -38,7 +38,8 @@ def test_qsma_agrees_with_the_transient_ring_down_at_the_bottom_of_the_range(nam
     # At the bottom of every preset's range the damping floor dominates (the joint adds 3-12 %
     # of zeta), so the preset as documented is compared first, then the joint's share alone
     # (no floor), which a wrong interface law could not pass. The forces there are ~1 N: the
-    # run needs Newton's tolerance above the model's round-off (models.solver.roundoff_force).
+    # run needs Newton's tolerance above the model's round-off
+    # (models.simulation.solver.roundoff_force).
     s = preset(name)
     low = s.amplitude_range[0]
     for changes in ({}, {"damping_floor": 0.0}):
@@ -140,7 +141,7 @@ def test_bad_ringdown_input_is_refused(kw, match):
 
 def test_the_two_bolt_beam_at_the_top_of_its_range_runs_without_step_cuts():
     """The two-bolt aluminium beam released from 500 um (the top of its range), where the
-    Cable2D beams made Exudyn cut about 1,700 steps: on the host (models/host.py) none is
+    Cable2D beams made Exudyn cut about 1,700 steps: on the host (models/simulation/host.py) none is
     cut, and the decay rings at the QSMA frequency and damping."""
     s = preset("two-bolt-aluminium")
     r = ringdown(s, amplitude=5e-4, cycles=12)
@@ -156,7 +157,7 @@ def test_records_of_cut_steps_are_put_back_on_the_nominal_grid():
     nominal step apart they would stretch the time scale. on_step_grid interpolates them
     onto the nominal grid (a decaying sine at 20 Hz keeps its frequency) and cut_warning
     says so."""
-    from iwan_element.models.ringdown_records import cut_warning, on_step_grid
+    from iwan_element.models.simulation.ringdown_records import cut_warning, on_step_grid
     h, n = 1e-3, 1000
     rng = np.random.default_rng(3)
     times = np.sort(np.concatenate([np.arange(n + 1) * h, rng.uniform(0, n * h, 700)]))

@@ -19,10 +19,10 @@ pytest.importorskip("ngsolve", reason="the solid specimens need the extra iwan-e
 
 from iwan_element.models import (modal_amplitude_curve, natural_frequencies,  # noqa: E402
                                  preset, solid_preset)
-from iwan_element.models.interface import contact_points  # noqa: E402
-from iwan_element.models.setups import Clamp, Setup  # noqa: E402
-from iwan_element.models.solid_build import solid_specimen  # noqa: E402
-from iwan_element.models.solid_mesh import bar_part, lap_beam_parts, part_from_fem  # noqa: E402
+from iwan_element.models.reduced import contact_points  # noqa: E402
+from iwan_element.models.specimens import Clamp, Setup  # noqa: E402
+from iwan_element.models.solid import solid_specimen  # noqa: E402
+from iwan_element.models.solid import bar_part, lap_beam_parts, part_from_fem  # noqa: E402
 
 COARSE = {"mesh_size": 0.012, "lap_mesh_size": 0.0051}
 PATCH = 0.0085
@@ -252,7 +252,7 @@ def test_the_sensor_reads_the_section_deflection_between_nodes():
     nodes: exact for a deflection quadratic in x plus a twist (linear in y), and on a smooth
     bending shape far closer than the nearest node (which sits up to half an element off).
     Measured on a 12 mm mesh: 6e-15 and 1.2e-6 against the nearest node's 5.6e-3 and 1.8e-2."""
-    from iwan_element.models.solid_build import _point_weights
+    from iwan_element.models.solid.build import _point_weights
     s = preset("brake-reuss")
     bar = bar_part(0.4, 0.0254, 0.0127, youngs_modulus=2e11, poissons_ratio=0.3,
                    density=8000.0, mesh_size=0.012)

@@ -1,4 +1,4 @@
-"""The Exudyn ring-down of a solid specimen (models.solid_transient, issue 36) on the coarse mesh.
+"""The Exudyn ring-down of a solid specimen (models.simulation.transient, issue 36) on the coarse mesh.
 
 Independent routes: the energy balance (the bodies' kinetic and strain energy from the reduced
 matrices, the joints' exact records, the floor's work); the stuck interface against the stuck
@@ -16,9 +16,9 @@ pytest.importorskip("ngsolve", reason="the solid specimens need the extra iwan-e
 
 from iwan_element.models import (Impact, modal_amplitude_curve,  # noqa: E402
                                  natural_frequencies, preset, ringdown)
-from iwan_element.models.solid_build import solid_specimen  # noqa: E402
-from iwan_element.models.solid_mesh import lap_beam_parts  # noqa: E402
-from iwan_element.models.host import port_basis  # noqa: E402
+from iwan_element.models.solid import solid_specimen  # noqa: E402
+from iwan_element.models.solid import lap_beam_parts  # noqa: E402
+from iwan_element.models.simulation import port_basis  # noqa: E402
 
 
 @pytest.fixture(scope="module")
@@ -109,7 +109,7 @@ def test_the_solid_ring_down_refuses_what_it_cannot_do(solid):
 
 
 def test_the_solid_takes_a_hammer_impact_and_books_its_work(solid):
-    """The host is the 1-D beams' (models/host.py): an impact is a force on the struck
+    """The host is the 1-D beams' (models/simulation/host.py): an impact is a force on the struck
     point's port coordinate; its work (the trapezoidal rule's) balances the energy."""
     r = ringdown(solid, impact=Impact(position=0.6438, peak_force=50.0, contact_time=1e-3),
                  modes=(1,), cycles=8, record_energy=True)

@@ -11,8 +11,7 @@ import numpy as np
 import pytest
 
 from iwan_element import models
-from iwan_element.models.host import build_host
-from iwan_element.models.solver import solver_settings
+from iwan_element.models.simulation import build_host, solver_settings
 
 
 def _system_jacobian(specimen, differences: bool) -> np.ndarray:

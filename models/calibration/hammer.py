@@ -1,0 +1,484 @@
+"""A whole hammer test predicted from one mode: calibrate on mode 1, predict the others.
+
+:func:`predict_hammer_test` takes a specimen and the hammer ring-down records of several
+accelerometers along the beam's axis and runs the route of ``docs/multi_mode.md``
+section 4:
+
+1. **Bands.** Each mode's band around the specimen's stuck frequency (``band_width``
+   either side), cut at the geometric mean with the neighbouring modes' frequencies
+   (:func:`mode_bands`), unless given.
+1a. **Linear update** (``update``, on by default): every mode's natural frequency in its
+   latest linear (low-amplitude) window of all the records (:func:`iwan_element.
+   free_decay_modes`), and :func:`~iwan_element.models.updating.linear_update` of the named
+   parameters on them before any joint calibration (docs/linear_update.md): the linear
+   structure from the low-level data, then the joint from the amplitude dependence.
+2. **Measured curves.** f(X), zeta(X) of every mode at every sensor
+   (:func:`iwan_element.amplitude_curve`, from the impact on: the largest sample of the
+   calibration record). The calibration mode is read in fixed windows of
+   ``calibration_periods`` periods, the other modes in windows that follow the decay.
+3. **Calibration.** :func:`~iwan_element.models.calibration.calibrate` on the calibration
+   mode at the calibration sensor (the record at ``specimen.sensor_position``): the joint
+   comes from that mode alone; each other mode gives only its linear floor, from its
+   lowest-amplitude points at that sensor (``floors=``).
+4. **Release.** ``release_time`` after the impact, each mode's displacement amplitude at the
+   calibration sensor from a straight-line fit of its log envelope over the next
+   ``fit_span`` seconds (:func:`release_amplitudes`; zero-phase Butterworth band-pass and
+   Hilbert magnitude, :mod:`scipy.signal`). Right after an impact the envelopes hold the
+   band-pass filters' response to it; ``release_time`` should exceed about two time
+   constants of the narrowest band's filter.
+5. **Prediction.** The multi-mode ring-down (:func:`~iwan_element.models.ringdown`,
+   ``amplitude={mode: X}``, ``sensors=`` every record's position), each predicted record
+   read like the measured one (:meth:`RingdownResult.sensor_curve`), every predicted curve
+   against the measured one at the same amplitudes
+   (:func:`~iwan_element.models.simulation.compare_curves`), and per mode the ratio of its
+   amplitude at each other sensor to the calibration sensor's, measured and predicted (a
+   mode-shape check, median envelope ratio over the ring-down).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import signal
+
+from iwan_element import amplitude_curve, free_decay_modes
+from iwan_element.core.result_shape import ResultShape, panels, table_lines
+from iwan_element.core.serialize import json_safe
+from iwan_element.core.validation import check_scalar, check_uniform_time, finite_array
+
+from .vibration import CalibrationResult, calibrate
+from ..simulation.coupling import compare_curves, plot_curve_pairs
+from ..modal.qsma import linear_modes
+from ..simulation.ringdown_result import RingdownResult
+from ..simulation.transient import ringdown
+from ..updating.result import LinearUpdateResult
+from ..updating.update import linear_update
+
+__all__ = ["mode_bands", "release_amplitudes", "predict_hammer_test", "HammerPrediction"]
+
+
+def mode_bands(specimen, modes, *, band_width: float = 0.12) -> dict:
+    """``{mode: (low, high)}`` [Hz]: each mode's stuck frequency times ``1 -+ band_width``,
+    cut at the geometric mean with its neighbours' frequencies."""
+    modes = _modes(modes)
+    w = check_scalar("band_width", band_width, low=0.01, high=0.5)
+    f = _elastic_frequencies(specimen, max(modes) + 1)
+    out = {}
+    for r in modes:
+        lo, hi = f[r - 1] * (1 - w), f[r - 1] * (1 + w)
+        if r >= 2:
+            lo = max(lo, math.sqrt(f[r - 2] * f[r - 1]))
+        hi = min(hi, math.sqrt(f[r - 1] * f[r]))
+        out[r] = (float(lo), float(hi))
+    return out
+
+
+def _elastic_frequencies(specimen, n: int) -> np.ndarray:
+    """The ``n`` lowest elastic stuck frequencies [Hz] (rigid-body modes left out)."""
+    return np.array([linear_modes(specimen, mode=k)[0] for k in range(1, n + 1)]) / (2 * math.pi)
+
+
+def _envelope(t, a, band, span=None):
+    """Displacement envelope [m] of the mode in ``band`` [Hz]: zero-phase Butterworth
+    band-pass (order 4), Hilbert magnitude over ``w^2``, ``w`` the analytic signal's mean
+    phase rate over ``span`` (a boolean mask; default the whole record): the mode's own
+    frequency, not the band's centre (80.4 Hz in a 60-120 Hz band: a centre's ``w^2`` reads
+    the displacement 20 % low)."""
+    fs = (t.size - 1) / (t[-1] - t[0])
+    sos = signal.butter(4, band, btype="bandpass", fs=fs, output="sos")
+    h = signal.hilbert(signal.sosfiltfilt(sos, a))
+    m = slice(None) if span is None else span
+    w = np.polyfit(t[m], np.unwrap(np.angle(h))[m], 1)[0]
+    return np.abs(h) / (w * w)
+
+
+def release_amplitudes(t, a, bands: dict, *, release_time: float = 0.05,
+                       fit_span: float = 0.3) -> dict:
+    """``{mode: X}``: each mode's displacement amplitude [m] ``release_time`` [s] after the
+    impact (the largest sample of ``a``), from a straight-line fit of its log envelope over
+    ``[release_time, release_time + fit_span]`` (module docstring, step 4).
+
+    Parameters
+    ----------
+    t : array_like, shape (n,)
+        Times [s], uniformly sampled.
+    a : array_like, shape (n,)
+        Acceleration [m/s^2].
+    bands : dict
+        ``{mode: (low, high)}`` [Hz].
+    release_time, fit_span : float, keyword-only
+        [s], ``release_time >= 0``, ``fit_span > 0``.
+    """
+    t, a = _series("t", "a", t, a)
+    t_r = check_scalar("release_time", release_time, low=0.0)
+    span = check_scalar("fit_span", fit_span, low=0.0, low_open=True)
+    t = t - t[np.argmax(np.abs(a))]
+    fit = (t >= t_r) & (t <= t_r + span)
+    if t[-1] < t_r + span or fit.sum() < 16:
+        raise ValueError(f"release_time + fit_span = {t_r + span:g} s reaches beyond the "
+                         f"record's {t[-1]:.4g} s after the impact (or holds fewer than 16 "
+                         "samples): shorten them or give a longer record")
+    out = {}
+    for r, band in bands.items():
+        slope, icpt = np.polyfit(t[fit], np.log(_envelope(t, a, band, fit)[fit]), 1)
+        out[int(r)] = float(math.exp(icpt + slope * t_r))
+    return out
+
+
+@dataclass(frozen=True)
+class HammerPrediction(ResultShape):
+    """Result of :func:`predict_hammer_test`.
+
+    Attributes
+    ----------
+    calibration : CalibrationResult
+        The joint from the calibration mode, the other modes' floors.
+    calibration_mode : int
+    calibration_sensor : str
+        The record at the specimen's sensor position.
+    bands : dict
+        ``{mode: (low, high)}`` [Hz].
+    release : dict
+        ``{mode: X}`` [m] at the calibration sensor, ``release_time`` after the impact.
+    ringdown : RingdownResult
+        The multi-mode ring-down of the calibrated specimen.
+    measured, predicted : dict
+        ``{(mode, sensor name): AmplitudeCurve}``.
+    errors : dict
+        ``{(mode, sensor name): compare_curves(predicted, measured)}``.
+    ratios : dict
+        ``{(mode, sensor name): (measured, predicted)}``: the mode's amplitude at that sensor
+        over the calibration sensor's.
+    success : bool
+        The linear update (when made) and the calibration are usable and every predicted
+        curve overlaps its measured one in at least 3 amplitudes.
+    update : LinearUpdateResult or None
+        The linear update on the modes' low-amplitude frequencies (``None``: not made).
+    warnings : tuple of str
+    """
+
+    plot_panels = 2
+
+    calibration: CalibrationResult
+    calibration_mode: int
+    calibration_sensor: str
+    bands: dict
+    release: dict
+    ringdown: RingdownResult
+    measured: dict
+    predicted: dict
+    errors: dict
+    ratios: dict
+    success: bool
+    update: LinearUpdateResult | None = None
+
+    def summary(self) -> dict:
+        """``{(mode, sensor): {points, max_frequency_error, max_damping_error, first_...}}``:
+        the largest relative errors [-] over the common amplitudes and the first (largest
+        amplitude) common window's."""
+        out = {}
+        for key, e in self.errors.items():
+            n = len(e["amplitude"])
+            if not n:
+                out[key] = {"points": 0}
+                continue
+            first = int(np.argmax(e["amplitude"]))
+            out[key] = {"points": n,
+                        "amplitude_range": (float(e["amplitude"].min()),
+                                            float(e["amplitude"].max())),
+                        "max_frequency_error": float(np.max(np.abs(e["frequency_shift"]))),
+                        "max_damping_error": float(np.max(np.abs(e["damping_ratio"] - 1))),
+                        "first_frequency_error": float(e["frequency_shift"][first]),
+                        "first_damping_error": float(e["damping_ratio"][first] - 1)}
+        return out
+
+    def report(self) -> str:
+        """The verdict, the calibration, the release, and each predicted curve against the
+        measured one; the mode-shape check."""
+        lines = [f"Hammer test predicted from mode {self.calibration_mode}: {self.verdict()}"]
+        if self.update is not None:
+            fitted = ", ".join(n for n, p in self.update.params.items() if p.identified)
+            lines += [f"linear structure ({fitted}) updated on the low-amplitude frequencies of "
+                      "modes " + ", ".join(r["target"][1:] for r in self.update.residuals
+                                           if r["target"].startswith("f")) + ":",
+                      self.update.report()]
+        lines += [f"joint calibrated on the amplitude curve of mode {self.calibration_mode} at "
+                  f"{self.calibration_sensor} (the other modes' curves give only their floors "
+                  "from their lowest amplitudes):",
+                  self.calibration.report(),
+                 "release: " + ", ".join(f"mode {r} {1e6 * x:.4g} um"
+                                         for r, x in self.release.items()),
+                 "prediction against the measured curve at the same amplitudes:"]
+        rows = []
+        for (r, name), s in self.summary().items():
+            if not s["points"]:
+                rows.append((r, name, 0, math.nan, math.nan, math.nan, math.nan))
+                continue
+            rows.append((r, name, s["points"], 100 * s["max_frequency_error"],
+                         100 * s["max_damping_error"], 100 * s["first_frequency_error"],
+                         100 * s["first_damping_error"]))
+        lines += table_lines((("mode", "5d"), ("sensor", ">8s"), ("points", "7d"),
+                              ("max|df/f| [%]", "15.3f"), ("max|dz/z| [%]", "14.1f"),
+                              ("first df/f [%]", "15.3f"), ("first dz/z [%]", "15.1f")),
+                             rows, indent=2)
+        for (r, name), (m, p) in self.ratios.items():
+            lines.append(f"  mode {r} amplitude {name}/calibration sensor: measured {m:.3f}, "
+                         f"predicted {p:.3f} ({100 * (p / m - 1):+.1f} %)")
+        lines += [f"  warning: {w}" for w in self.warnings]
+        return "\n".join(lines)
+
+    def to_dict(self) -> dict:
+        """JSON-safe: bands, release, the summary, ratios, the calibration, verdict."""
+        key = lambda k: f"mode {k[0]} at {k[1]}"   # noqa: E731
+        return json_safe({"calibration_mode": self.calibration_mode,
+                          "calibration_sensor": self.calibration_sensor,
+                          "bands": {str(r): b for r, b in self.bands.items()},
+                          "release": {str(r): x for r, x in self.release.items()},
+                          "summary": {key(k): v for k, v in self.summary().items()},
+                          "ratios": {key(k): v for k, v in self.ratios.items()},
+                          "calibration": self.calibration.to_dict(),
+                          "update": None if self.update is None else self.update.to_dict(),
+                          "success": self.success, "warnings": list(self.warnings)})
+
+    def plot(self, ax=None):
+        """Measured (points) and predicted (lines) damping ratio [%] and frequency [Hz]
+        against amplitude for every curve, on ``ax = (ax_z, ax_f)``; returns the artists."""
+        ax_z, ax_f = panels(ax, 2, figsize=(6, 6))
+        pairs = [(f"mode {r} at {name}", self.measured[(r, name)], "measured",
+                  self.predicted[(r, name)], "predicted") for r, name in self.predicted]
+        return plot_curve_pairs(ax_z, ax_f, pairs, ("o", "-"))
+
+
+def predict_hammer_test(specimen, records: dict, *, modes=(1, 2), calibration_mode: int = 1,
+                        fit=("stiffness_per_area", "friction", "chi", "damping_floor"),
+                        bands: dict | None = None, band_width: float = 0.12,
+                        release_time: float = 0.05, fit_span: float = 0.3,
+                        duration: float = 1.0, calibration_periods: float = 20.0,
+                        update=("youngs_modulus", "stiffness_per_area"),
+                        progress: bool = False) -> HammerPrediction:
+    """Calibrate the interface on one mode of a hammer test and predict every other mode at
+    every sensor by the multi-mode ring-down (module docstring; ``docs/multi_mode.md``).
+
+    Parameters
+    ----------
+    specimen : Specimen
+        The specimen to calibrate (its interface, friction and floors are fitted).
+    records : dict
+        ``{sensor name: (position [m], t [s], a [m/s^2])}``: each accelerometer's position
+        along the beam's axis (the axis of ``specimen.sensor_position``) and its record,
+        all on the same clock from before the impact on. One record must sit at
+        ``specimen.sensor_position`` (within 1 mm): the calibration sensor.
+    modes : sequence of int, keyword-only
+        The modes to predict (1: lowest elastic), the calibration mode among them.
+    calibration_mode : int, keyword-only
+        The mode the joint is calibrated on (default 1).
+    fit : sequence of str, keyword-only
+        The interface parameters the calibration fits (``calibrate``'s ``fit``).
+    bands : dict, optional, keyword-only
+        ``{mode: (low, high)}`` [Hz]; default :func:`mode_bands` of the specimen.
+    band_width : float, keyword-only
+        Relative half-width of the default bands, [0.01, 0.5].
+    release_time, fit_span : float, keyword-only
+        When the prediction starts after the impact and the span of the envelope fit that
+        reads its amplitudes [s] (:func:`release_amplitudes`).
+    duration : float, keyword-only
+        Length of the predicted ring-down [s] (> 0).
+    calibration_periods : float, keyword-only
+        Window of the calibration mode's curves in its periods (>= 3).
+    update : sequence of str or None, keyword-only
+        Parameters (or groups) of :func:`~iwan_element.models.updating.updatable` updated on
+        the modes' low-amplitude natural frequencies before the calibration (module
+        docstring, step 1a); ``None``: the specimen's linear structure as given.
+    progress : bool, keyword-only
+        Progress bars of the calibration and the ring-down.
+
+    Returns
+    -------
+    HammerPrediction
+    """
+    modes, recs, cal_name, bands, n_cal = _inputs(specimen, records, modes, calibration_mode,
+                                                  bands, band_width, duration,
+                                                  calibration_periods)
+    f_cal = float(_elastic_frequencies(specimen, calibration_mode)[-1])
+    windows = {r: ({"window": n_cal / f_cal} if r == calibration_mode else {}) for r in modes}
+    measured, skipped = _measured_curves(recs, cal_name, bands, windows)
+    _, t_c, a_c = recs[cal_name]
+    release = release_amplitudes(t_c, a_c, bands, release_time=release_time,
+                                 fit_span=fit_span)
+    upd = None
+    if update is not None:
+        upd = _linear_update(specimen, recs, cal_name, bands, update)
+        specimen = upd.specimen
+    floors = {r: measured[(r, cal_name)] for r in modes if r != calibration_mode}
+    cal = calibrate(specimen, measured[(calibration_mode, cal_name)], fit=fit,
+                    mode=calibration_mode, floors=floors or None, progress=progress)
+    names = tuple(recs)
+    rd = ringdown(cal.specimen, amplitude=release, duration=duration, progress=progress,
+                  sensors=tuple(recs[n][0] for n in names))
+    predicted = {(r, n): rd.sensor_curve(i, bands[r], n_periods=n_cal if r == calibration_mode
+                                         else None)
+                 for i, n in enumerate(names) for r in modes if (r, n) in measured}
+    errors = {k: compare_curves(predicted[k], measured[k]) for k in predicted}
+    ratios = _ratios(recs, cal_name, rd, bands, modes, release_time)
+    warns, thin = _warnings(upd, cal, rd, skipped, errors)
+    return HammerPrediction(calibration=cal, calibration_mode=calibration_mode,
+                            calibration_sensor=cal_name, bands=bands, release=release,
+                            ringdown=rd, measured=measured, predicted=predicted, errors=errors,
+                            ratios=ratios, update=upd,
+                            success=bool(cal.success and not thin
+                                         and (upd is None or upd.success)),
+                            warnings=tuple(warns))
+
+
+def _inputs(specimen, records, modes, calibration_mode, bands, band_width, duration,
+            calibration_periods):
+    """:func:`predict_hammer_test`'s checked inputs: ``(modes, records, calibration sensor,
+    bands, calibration periods)``."""
+    modes = _modes(modes)
+    if calibration_mode not in modes:
+        raise ValueError(f"calibration_mode must be one of modes {modes}, got {calibration_mode!r}")
+    recs = _records(specimen, records)
+    cal_name = _calibration_sensor(specimen, recs)
+    bands = mode_bands(specimen, modes, band_width=band_width) if bands is None \
+        else _bands(bands, modes)
+    check_scalar("duration", duration, low=0.0, low_open=True)
+    n_cal = check_scalar("calibration_periods", calibration_periods, low=3.0)
+    return modes, recs, cal_name, bands, n_cal
+
+
+def _warnings(upd, cal, rd, skipped, errors):
+    """``(warnings, thin)``: the update's, calibration's and ring-down's warnings, the
+    records left out, and the (mode, sensor) pairs with fewer than 3 common amplitudes."""
+    warns = [f"linear update: {w}" for w in (upd.warnings if upd is not None else ())]
+    warns += [f"calibration: {w}" for w in cal.warnings] + [f"ring-down: {w}" for w in rd.warnings]
+    warns += skipped
+    thin = [f"mode {r} at {n}" for (r, n), e in errors.items() if len(e["amplitude"]) < 3]
+    if thin:
+        warns.append(f"fewer than 3 common amplitudes of prediction and measurement: "
+                     f"{', '.join(thin)} (a sensor near a node of the mode, or a band that "
+                     "misses it)")
+    return warns, thin
+
+
+def _linear_update(specimen, recs, cal_name, bands, parameters) -> LinearUpdateResult:
+    """Step 1a: the modes' natural frequencies in their latest linear windows of all the
+    records (from the impact on) and the linear update of ``parameters`` on them."""
+    _, t_c, a_c = recs[cal_name]
+    t_imp = t_c[np.argmax(np.abs(a_c))]
+    keep = t_c >= t_imp
+    targets = free_decay_modes(t_c[keep], {n: (x, a[t >= t_imp]) for n, (x, t, a) in recs.items()},
+                               bands={str(r): b for r, b in bands.items()})
+    found = {int(m.label): m.index for m in targets.modes}
+    missing = sorted(set(bands) - set(found))
+    if missing:
+        raise ValueError(f"the linear update needs every mode's low-amplitude frequency; modes "
+                         f"{missing} gave none in their bands (pass update=None, or other "
+                         "bands)")
+    freqs = {r: (targets.frequencies[k], targets.frequency_stderr[k]) for r, k in found.items()}
+    return linear_update(specimen, frequencies=freqs, parameters=parameters)
+
+
+def _measured_curves(recs, cal_name, bands, windows):
+    """``({(mode, sensor): AmplitudeCurve}, warnings)``: every mode at every sensor from the
+    impact on (the calibration record's largest sample: one clock). A mode the calibration
+    sensor does not give is an error; one another sensor does not (a node, noise) is left out
+    with a warning."""
+    _, t_c, a_c = recs[cal_name]
+    t_imp = t_c[np.argmax(np.abs(a_c))]
+    out, skipped = {}, []
+    for name, (_, t, a) in recs.items():
+        keep = t >= t_imp
+        for r, band in bands.items():
+            try:
+                out[(r, name)] = amplitude_curve(t[keep], a[keep], quantity="acceleration",
+                                                 band=band, **windows[r])
+            except ValueError as exc:
+                if name == cal_name:
+                    raise ValueError(f"records[{name!r}] (the calibration sensor), mode {r}: "
+                                     f"{exc}") from exc
+                skipped.append(f"mode {r} at {name} not read from the record ({exc}); left "
+                               "out of the comparison")
+    return out, skipped
+
+
+def _ratios(recs, cal_name, rd, bands, modes, release_time) -> dict:
+    """``{(mode, sensor): (measured, predicted)}`` median envelope ratios to the calibration
+    sensor over the ring-down (its first and last 50 ms left out: filter end effects)."""
+    out = {}
+    edge = 0.05
+    span = (edge, rd.t[-1] - edge)
+    _, t_c, a_c = recs[cal_name]
+    t0 = t_c[np.argmax(np.abs(a_c))] + release_time
+    i_c = tuple(recs).index(cal_name)
+    mp = (rd.t >= span[0]) & (rd.t <= span[1])
+    # the calibration sensor's envelopes, measured and predicted, once per mode
+    ref = {r: (_envelope(t_c, a_c, bands[r]),
+               _envelope(rd.t, rd.sensor_acceleration[i_c], bands[r])[mp]) for r in modes}
+    for i, (name, (_, t, a)) in enumerate(recs.items()):
+        if name == cal_name:
+            continue
+        m = (t - t0 >= span[0]) & (t - t0 <= span[1])
+        for r in modes:
+            meas = np.median(_envelope(t, a, bands[r])[m] / ref[r][0][m])
+            pred = np.median(_envelope(rd.t, rd.sensor_acceleration[i], bands[r])[mp] / ref[r][1])
+            out[(r, name)] = (float(meas), float(pred))
+    return out
+
+
+def _modes(modes) -> tuple:
+    try:
+        out = tuple(modes)
+    except TypeError:
+        out = ()
+    if not out or any(isinstance(r, bool) or not isinstance(r, (int, np.integer)) or r < 1
+                      for r in out) or len(set(out)) != len(out):
+        raise ValueError(f"modes must be distinct mode numbers >= 1, got {modes!r}")
+    return tuple(sorted(int(r) for r in out))
+
+
+def _bands(bands, modes) -> dict:
+    if not isinstance(bands, dict) or set(bands) != set(modes):
+        raise ValueError(f"bands must be a dict {{mode: (low, high)}} [Hz] for modes {modes}, "
+                         f"got {bands!r}")
+    out = {}
+    for r in modes:
+        lo, hi = (float(b) for b in bands[r])
+        if not (math.isfinite(lo) and math.isfinite(hi) and 0 < lo < hi):
+            raise ValueError(f"bands[{r}] must be (low, high) with 0 < low < high [Hz], "
+                             f"got {bands[r]!r}")
+        out[r] = (lo, hi)
+    return out
+
+
+def _series(tn, an, t, a):
+    """``(t, a)`` as new arrays: ``a`` finite with at least 64 samples, ``t`` its uniform
+    time grid (:func:`~iwan_element.core.validation.check_uniform_time`)."""
+    a = finite_array(an, a, min_size=64)
+    t, _ = check_uniform_time(t, a.size, name=tn, data=an)
+    return t, a
+
+
+def _records(specimen, records) -> dict:
+    if not isinstance(records, dict) or not records:
+        raise ValueError("records must be a non-empty dict {name: (position [m], t [s], "
+                         "a [m/s^2])}")
+    length = 2 * specimen.beam_length - specimen.overlap
+    out = {}
+    for name, rec in records.items():
+        if not isinstance(rec, (tuple, list)) or len(rec) != 3:
+            raise ValueError(f"records[{name!r}] must be (position [m], t [s], a [m/s^2])")
+        x = check_scalar(f"records[{name!r}] position", rec[0], low=0.0, high=length)
+        t, a = _series(f"records[{name!r}] t", f"records[{name!r}] a", rec[1], rec[2])
+        out[str(name)] = (x, t, a)
+    return out
+
+
+def _calibration_sensor(specimen, recs) -> str:
+    near = [n for n, (x, _, _) in recs.items() if abs(x - specimen.sensor_position) <= 1e-3]
+    if not near:
+        raise ValueError(f"records must hold one record at the specimen's sensor position "
+                         f"{specimen.sensor_position:g} m (within 1 mm): the calibration "
+                         f"sensor; positions given: "
+                         f"{', '.join(f'{n} {x:g}' for n, (x, _, _) in recs.items())}")
+    return near[0]

@@ -1,0 +1,52 @@
+"""A specimen's vibration effects on one mode as one element stack (the modal form).
+
+The specimen's vibration effects on a mode (``specimen.effects``, modal form, amplitudes at
+the sensor; ``docs/vibration_effects.md``) become one element stack (``EFFECTS[name]``
+around a :class:`ZeroElement`, joint values from ``modal_to_joint`` with unit modal mass in
+sensor units) driven by the sensor-scaled modal coordinate: the frequency-domain routes'
+element ports read it, and the transient's modal force
+(:class:`~iwan_element.models.simulation.modal_force.ModalEffects`) drives it in Exudyn.
+"""
+from __future__ import annotations
+
+from iwan_element.effects import EFFECTS
+
+from ..specimens.specimen import Specimen
+
+__all__ = ["ZeroElement", "effect_stack"]
+
+
+class ZeroElement:
+    """A zero-force element following the joint element protocol (the base the modal
+    effects wrap)."""
+
+    force = displacement = work = stored_energy = dissipated_energy = 0.0
+
+    def trial(self, u, v=0.0):
+        return 0.0, 0.0
+
+    def commit(self):
+        pass
+
+    def revert(self):
+        pass
+
+    def reset(self):
+        pass
+
+
+def effect_stack(specimen: Specimen, mode: int, omega0: float):
+    """``(element, names)``: the specimen's effects on ``mode`` as one element stack around a
+    :class:`ZeroElement` (joint values from ``modal_to_joint`` at unit modal mass in sensor
+    units; ``omega0`` the stuck circular frequency [rad/s]), driven by the sensor-scaled
+    modal coordinate. The transient's modal force and the frequency-domain routes' element
+    ports both use it."""
+    el = ZeroElement()
+    names = []
+    for e in specimen.effects:
+        if e.mode == mode:
+            cls = EFFECTS[e.name]
+            el = cls(el, **cls.modal_to_joint(e.parameters, modal_mass=1.0,
+                                              slip_per_amplitude=1.0, omega0=omega0))
+            names.append(e.name)
+    return el, names

@@ -1,0 +1,187 @@
+"""Mode coupling through the interface, made visible: each mode's damping against its own
+amplitude with and without the other modes ringing through the same joint.
+
+:func:`mode_coupling` runs the multi-mode ring-down (:func:`~iwan_element.models.ringdown`
+with ``amplitude={mode: X, ...}``) and one single-mode ring-down per mode from the same
+amplitude, for the same duration (each at ``steps_per_period`` of its own period), and compares each mode's
+decay curves at the same amplitudes (:func:`compare_curves`). A modal Iwan model (one
+uncoupled single-degree-of-freedom system per mode) would give ratio 1; the transient of the
+whole specimen shows how much one mode's slip raises another's damping
+(``docs/multi_mode.md``).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from iwan_element import AmplitudeCurve
+from iwan_element.core.result_shape import ResultShape, panels, table_lines
+from iwan_element.core.serialize import json_safe
+
+from .ringdown_result import RingdownResult
+from ..specimens.specimen import Specimen
+from .transient import ringdown
+
+__all__ = ["compare_curves", "ModeCouplingResult", "mode_coupling", "plot_curve_pairs"]
+
+
+def compare_curves(curve: AmplitudeCurve, reference: AmplitudeCurve) -> dict:
+    """``curve`` against ``reference`` at the amplitudes of ``curve`` that lie inside
+    ``reference``'s range (``reference``'s frequency and damping interpolated linearly in
+    log amplitude): a mode with the other modes against alone, a prediction against a
+    measurement.
+
+    Returns
+    -------
+    dict of ndarray
+        ``amplitude`` [m], ``frequency``, ``frequency_reference`` [Hz], ``damping``,
+        ``damping_reference`` [-], ``damping_ratio`` (curve over reference [-]) and
+        ``frequency_shift`` (curve over reference minus 1 [-]); empty arrays when the
+        ranges do not overlap.
+    """
+    for name, c in (("curve", curve), ("reference", reference)):
+        if not isinstance(c, AmplitudeCurve):
+            raise ValueError(f"{name} must be an AmplitudeCurve, got {type(c).__name__}")
+    order = np.argsort(reference.amplitude)
+    la = np.log(reference.amplitude[order])
+    X = curve.amplitude
+    inside = (len(reference) >= 2) & (X >= reference.amplitude.min()) \
+        & (X <= reference.amplitude.max())
+    x = np.log(X[inside])
+    fr = np.interp(x, la, reference.frequency[order])
+    zr = np.interp(x, la, reference.damping_ratio[order])
+    f, z = curve.frequency[inside], curve.damping_ratio[inside]
+    return {"amplitude": X[inside], "frequency": f, "frequency_reference": fr, "damping": z,
+            "damping_reference": zr, "damping_ratio": z / zr, "frequency_shift": f / fr - 1.0}
+
+
+@dataclass(frozen=True)
+class ModeCouplingResult(ResultShape):
+    """Result of :func:`mode_coupling`, with the package's result shape.
+
+    Attributes
+    ----------
+    modes : tuple of int
+    together : RingdownResult
+        The multi-mode ring-down.
+    alone : tuple of RingdownResult
+        One single-mode ring-down per mode of ``modes``, same amplitude and duration.
+    figures : dict
+        ``{mode: compare_curves(with the other modes, alone)}``.
+    warnings : tuple of str
+    """
+
+    plot_panels = 2
+
+    modes: tuple
+    together: RingdownResult
+    alone: tuple
+    figures: dict
+
+    @property
+    def success(self) -> bool:
+        """True when every run succeeded and every mode's curves overlap in amplitude."""
+        return bool(self.together.success and all(r.success for r in self.alone)
+                    and all(len(f["amplitude"]) for f in self.figures.values()))
+
+    def summary(self) -> dict:
+        """Per mode: the largest damping raise and frequency shift from the other modes."""
+        out = {}
+        for r, f in self.figures.items():
+            k = int(np.argmax(f["damping_ratio"])) if len(f["amplitude"]) else None
+            out[r] = {"points": len(f["amplitude"]),
+                      "max_damping_ratio": None if k is None else float(f["damping_ratio"][k]),
+                      "at_amplitude": None if k is None else float(f["amplitude"][k]),
+                      "frequency_shift": None if k is None else float(f["frequency_shift"][k])}
+        return out
+
+    def report(self) -> str:
+        """Human-readable account: per mode, its damping with and without the others."""
+        lines = [f"mode coupling through the interface: modes {', '.join(map(str, self.modes))}"
+                 f" released together ({self.together.wall_time:.3g} s wall) and alone"]
+        for r, f in self.figures.items():
+            n = len(f["amplitude"])
+            k = np.unique(np.linspace(0, n - 1, min(n, 12)).round().astype(int))
+            rows = zip(1e6 * f["amplitude"][k], 100 * f["damping"][k],
+                       100 * f["damping_reference"][k], f["damping_ratio"][k],
+                       1e6 * f["frequency_shift"][k])
+            lines.append(f"  mode {r} ({n} points, {len(k)} shown):")
+            lines += table_lines((("X [um]", "10.4g"), ("zeta together [%]", "18.4f"),
+                                  ("zeta alone [%]", "15.4f"), ("ratio", "7.3f"),
+                                  ("df/f [ppm]", "11.1f")), rows, indent=4)
+        lines += [f"  warning: {w}" for w in self.warnings]
+        return "\n".join(lines)
+
+    def to_dict(self) -> dict:
+        """JSON-safe: the figures, the summary, success and warnings."""
+        return json_safe({"modes": list(self.modes), "figures": {str(k): v for k, v in
+                                                                 self.figures.items()},
+                          "summary": {str(k): v for k, v in self.summary().items()},
+                          "wall_time": self.together.wall_time, "success": self.success,
+                          "warnings": list(self.warnings)})
+
+    def plot(self, ax=None):
+        """Each mode's damping ratio [%] and frequency [Hz] against its amplitude, together
+        (filled) and alone (open), on ``ax = (ax_z, ax_f)``; returns the artists."""
+        ax_z, ax_f = panels(ax, 2, figsize=(6, 6))
+        pairs = [(f"mode {r}", self.together.mode_curve(r), "with the other modes", rd.curve,
+                  "alone") for r, rd in zip(self.modes, self.alone)]
+        return plot_curve_pairs(ax_z, ax_f, pairs, ("o-", "s--"))
+
+
+def plot_curve_pairs(ax_z, ax_f, pairs, formats) -> list:
+    """Damping ratio [%] (on ``ax_z``) and frequency [Hz] (on ``ax_f``) against amplitude of
+    ``pairs = [(name, curve, label, other curve, other label), ...]``, one colour per pair,
+    the second curve of each drawn in ``formats[1]`` with open markers; returns the artists."""
+    arts = []
+    for i, (name, c1, l1, c2, l2) in enumerate(pairs):
+        for c, fmt, lab, fill in ((c1, formats[0], l1, True), (c2, formats[1], l2, False)):
+            kw = {"color": f"C{i}", "ms": 3, "label": f"{name} {lab}"}
+            if not fill:
+                kw["mfc"] = "none"
+            arts += ax_z.semilogx(c.amplitude, 100 * c.damping_ratio, fmt, **kw)
+            arts += ax_f.semilogx(c.amplitude, c.frequency, fmt, **kw)
+    ax_z.set(xlabel="amplitude at the sensor [m]", ylabel="damping ratio [%]")
+    ax_f.set(xlabel="amplitude at the sensor [m]", ylabel="frequency [Hz]")
+    ax_z.legend(fontsize=7)
+    return arts
+
+
+def mode_coupling(specimen: Specimen, *, amplitude: dict, duration: float,
+                  steps_per_period: int = 64, n_periods: float = 3.0) -> ModeCouplingResult:
+    """Each mode's damping with and without the other modes through the same interface.
+
+    Parameters
+    ----------
+    specimen : Specimen
+    amplitude : dict, keyword-only
+        ``{mode: amplitude at the sensor [m]}``, at least two modes.
+    duration : float, keyword-only
+        Duration of every run [s] (> 0).
+    steps_per_period : int, keyword-only
+        Steps per period of the highest mode in the multi-mode run, of its own mode in each
+        single-mode run (>= 16).
+    n_periods : float, keyword-only
+        Periods per window of the decay curves (range [3, 1000]).
+
+    Returns
+    -------
+    ModeCouplingResult
+    """
+    if not isinstance(amplitude, dict) or len(amplitude) < 2:
+        raise ValueError(f"amplitude must be a dict of at least two modes {{mode: X [m]}}, "
+                         f"got {amplitude!r}")
+    together = ringdown(specimen, amplitude=amplitude, duration=duration,
+                        steps_per_period=steps_per_period, n_periods=n_periods)
+    modes = together.modes
+    alone = tuple(ringdown(specimen, mode=r, amplitude=amplitude[r], duration=duration,
+                           steps_per_period=steps_per_period, n_periods=n_periods)
+                  for r in modes)
+    figures = {r: compare_curves(together.mode_curve(r), a.curve) for r, a in zip(modes, alone)}
+    warns = [f"mode {r}: its curves with and without the other modes do not overlap in "
+             "amplitude" for r, f in figures.items() if not len(f["amplitude"])]
+    warns += [f"together: {x}" for x in together.warnings]
+    warns += [f"mode {r} alone: {x}" for r, a in zip(modes, alone) for x in a.warnings]
+    return ModeCouplingResult(modes=modes, together=together, alone=alone, figures=figures,
+                              warnings=tuple(warns))
