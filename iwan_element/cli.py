@@ -251,7 +251,7 @@ def _run_fit(args) -> int:
     if args.method != "seed" and args.slip_force is not None:
         raise ValueError("--slip-force is only used by --method seed")
     if args.slip_force is not None:
-        from .core.validation import check_scalar
+        from .base.validation import check_scalar
         check_scalar("--slip-force", args.slip_force, low=0.0, low_open=True)
     with warnings.catch_warnings(record=True):       # the report lists every warning
         warnings.simplefilter("always")

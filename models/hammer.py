@@ -43,9 +43,9 @@ import numpy as np
 from scipy import signal
 
 from iwan_element import amplitude_curve, free_decay_modes
-from iwan_element.core.result_shape import ResultShape, panels, table_lines
-from iwan_element.core.serialize import json_safe
-from iwan_element.core.validation import check_scalar, check_uniform_time, finite_array
+from iwan_element.base.result_shape import ResultShape, panels, table_lines
+from iwan_element.base.serialize import json_safe
+from iwan_element.base.validation import check_scalar, check_uniform_time, finite_array
 
 from .calibration import CalibrationResult, calibrate
 from .coupling import compare_curves, plot_curve_pairs
@@ -435,7 +435,7 @@ def _bands(bands, modes) -> dict:
 
 def _series(tn, an, t, a):
     """``(t, a)`` as new arrays: ``a`` finite with at least 64 samples, ``t`` its uniform
-    time grid (:func:`~iwan_element.core.validation.check_uniform_time`)."""
+    time grid (:func:`~iwan_element.base.validation.check_uniform_time`)."""
     a = finite_array(an, a, min_size=64)
     t, _ = check_uniform_time(t, a.size, name=tn, data=an)
     return t, a

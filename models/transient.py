@@ -32,7 +32,7 @@ import math
 import exudyn as exu
 import numpy as np
 
-from iwan_element.core.validation import check_scalar
+from iwan_element.base.validation import check_scalar
 
 from .assembly import axis_rows
 from .damping import FloorWork

@@ -34,9 +34,9 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.linalg as sla
 
-from iwan_element.core.threads import one_blas_thread
-from iwan_element.core.result_shape import ResultShape, panels, table_lines
-from iwan_element.core.serialize import json_safe
+from iwan_element.base.threads import one_blas_thread
+from iwan_element.base.result_shape import ResultShape, panels, table_lines
+from iwan_element.base.serialize import json_safe
 from iwan_element.fitting import Parameter, ParameterTable, minimize
 
 from .solid import check_specimen

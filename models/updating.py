@@ -30,7 +30,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 import scipy.linalg as sla
 
-from iwan_element.core.threads import one_blas_thread
+from iwan_element.base.threads import one_blas_thread
 
 from .assembly import axis_rows, linear_system
 from .interface import contact_points

@@ -255,7 +255,7 @@ def test_one_blas_thread_limits_and_restores():
     """The fits' BLAS limit (core.threads): one thread inside, the previous limits after."""
     from threadpoolctl import threadpool_info
 
-    from iwan_element.core.threads import one_blas_thread
+    from iwan_element.base.threads import one_blas_thread
 
     np.linalg.svd(np.ones((4, 2)))                  # a BLAS is loaded by now
     before = [(p["filepath"], p["num_threads"]) for p in threadpool_info()

@@ -10,7 +10,7 @@ import math
 import numpy as np
 from scipy.sparse import lil_matrix
 
-from ..core.validation import finite_array
+from ..base.validation import finite_array
 from ..effects import EFFECTS
 from ..effects.evaluate import Evaluator
 from ..fitting import normal_inverse

@@ -9,8 +9,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..core.result_shape import ResultShape, table_lines, unit_label
-from ..core.serialize import json_safe
+from ..base.result_shape import ResultShape, table_lines, unit_label
+from ..base.serialize import json_safe
 from ..fitting import Parameter, ParameterTable, covariance, verdict
 from ..identify.noise import integrated_time
 from ..plotting import axes_or_new

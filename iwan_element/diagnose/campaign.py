@@ -46,12 +46,12 @@ from dataclasses import replace
 import numpy as np
 from scipy.optimize import least_squares
 
-from ..core.serialize import json_safe
-from ..core.validation import check_int
+from ..base.serialize import json_safe
+from ..base.validation import check_int
 from ..effects import EFFECTS
 from ..effects.evaluate import order_stack, stack_ok
 from ..ensemble import run_ensemble
-from ..core.progress import finish, progress_bar
+from ..base.progress import finish, progress_bar
 from . import _campaign_model as CM
 from ._campaign_probability import campaign_explanations, probable_alternatives
 from ._campaign_result import CampaignFit

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..core.serialize import json_safe
+from ..base.serialize import json_safe
 from ..effects import EFFECTS
 from ..effects.evaluate import Evaluator, build_element
 from ..fitting import fit_success

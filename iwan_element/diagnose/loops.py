@@ -37,11 +37,11 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..core.threads import one_blas_thread
-from ..core.validation import check_int, check_scalar
+from ..base.threads import one_blas_thread
+from ..base.validation import check_int, check_scalar
 from ..effects import EFFECTS
 from ..effects.evaluate import order_stack, stack_ok
-from ..core.progress import finish, progress_bar, set_total, tick
+from ..base.progress import finish, progress_bar, set_total, tick
 from ._locate import _check_candidates
 from ._noise import NoiseLevel, noise_level, pure_noise
 from .fit import StackFitter, final_fits, fit_base, record_force, z_start

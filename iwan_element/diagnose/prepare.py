@@ -14,7 +14,7 @@ import numpy as np
 from scipy.signal import butter, sosfiltfilt
 
 from ..core.history import REVERSAL_TOL, unit_params
-from ..core.validation import (MAGNITUDE_RANGE, check_magnitude, check_scalar, check_time,
+from ..base.validation import (MAGNITUDE_RANGE, check_magnitude, check_scalar, check_time,
                                check_varies, finite_array, same_length)
 from ..effects import EFFECTS
 from ..effects.evaluate import Evaluator

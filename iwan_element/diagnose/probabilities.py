@@ -37,7 +37,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..core.validation import check_scalar
+from ..base.validation import check_scalar
 from ..fitting.evidence import laplace_evidence, posterior_probabilities
 from ..identify.noise import integrated_time
 

@@ -12,7 +12,7 @@ import time
 
 import numpy as np
 
-from ..core.serialize import json_safe
+from ..base.serialize import json_safe
 from ._locate import _locate
 from .results import Diagnosis
 from .selection import criterion_text

@@ -6,9 +6,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..core.serialize import json_safe
+from ..base.serialize import json_safe
 from ..effects import EFFECTS
-from ..core.result_shape import ResultShape, panels, unit_label, value_stderr, wrap
+from ..base.result_shape import ResultShape, panels, unit_label, value_stderr, wrap
 from .probabilities import Probable
 
 __all__ = ["Diagnosis"]
@@ -226,7 +226,7 @@ class Diagnosis(Probable, ResultShape):
         ----------
         ax : None or a sequence of two Axes
             ``(ax_loops, ax_residual)``; ``None``: a new figure with two panels
-            (:mod:`iwan_element.core.result_shape`).
+            (:mod:`iwan_element.base.result_shape`).
 
         Returns
         -------

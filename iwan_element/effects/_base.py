@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..core.validation import check_scalar, finite_array, same_length
+from ..base.validation import check_scalar, finite_array, same_length
 from ..core.parameters import IwanParameters
 from ..core.protocol import CommittedState, check_element
 

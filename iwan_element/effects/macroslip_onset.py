@@ -61,7 +61,7 @@ import math
 
 import numpy as np
 
-from ..core.validation import check_scalar
+from ..base.validation import check_scalar
 from ._base import ParamSpec
 from ._jenkins import JenkinsBank, jenkins_gain
 

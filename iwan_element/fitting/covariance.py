@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..core.validation import check_int, check_scalar, finite_array
+from ..base.validation import check_int, check_scalar, finite_array
 
 __all__ = ["Covariance", "covariance", "normal_inverse"]
 

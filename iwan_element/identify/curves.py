@@ -13,8 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..core.validation import check_magnitude, finite_array
-from ..core.result_shape import ResultShape, panels, table_lines, wrap
+from ..base.validation import check_magnitude, finite_array
+from ..base.result_shape import ResultShape, panels, table_lines, wrap
 
 __all__ = ["AmplitudeCurve", "MIN_POINTS"]
 
@@ -198,7 +198,7 @@ class AmplitudeCurve(ResultShape):
         ----------
         ax : sequence of two matplotlib Axes, optional
             ``(ax_frequency, ax_damping)``; a new figure with two panels if omitted (the
-            package's axes contract, :mod:`iwan_element.core.result_shape`).
+            package's axes contract, :mod:`iwan_element.base.result_shape`).
         label : str, optional
             Legend label.
 

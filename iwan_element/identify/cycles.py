@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..core.validation import check_magnitude, check_scalar, check_time, finite_array, same_length
+from ..base.validation import check_magnitude, check_scalar, check_time, finite_array, same_length
 from .noise import difference_sigma, estimate_noise
 
 __all__ = ["Cycle", "find_reversals", "split_cycles", "check_varies", "default_hysteresis"]

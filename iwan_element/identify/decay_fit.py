@@ -57,13 +57,13 @@ import math
 import numpy as np
 from scipy import stats
 
-from ..core.progress import finish, progress_bar, tick
-from ..core.validation import check_magnitude, check_scalar, check_uniform_time, finite_array
+from ..base.progress import finish, progress_bar, tick
+from ..base.validation import check_magnitude, check_scalar, check_uniform_time, finite_array
 from ._decay_model import (_Objective, _Problem, _covariance, _fit_regime, _local_weights,
                            _misfit_ratio, _neighbours, _polar)
 from .modal_result import ModalIwanFit
 from .modal_fit import fit_modal_iwan
-from ..core.threads import one_blas_thread
+from ..base.threads import one_blas_thread
 from .saturation import cut_clipping, cut_flattened_peaks
 from .vibration import _check_band
 
@@ -422,7 +422,7 @@ def fit_decay(t, y, *, quantity: str = "acceleration", band, order: int = 4,
         the small default allows for that.
     progress : bool, keyword-only
         Show a tqdm bar over the stages (record prepared, microslip fit, full-model fit,
-        uncertainty) with its ETA; needs tqdm (:mod:`iwan_element.core.progress`).
+        uncertainty) with its ETA; needs tqdm (:mod:`iwan_element.base.progress`).
 
     Returns
     -------

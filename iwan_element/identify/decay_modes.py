@@ -53,7 +53,7 @@ from collections.abc import Mapping
 import numpy as np
 from scipy import signal
 
-from ..core.validation import check_magnitude, check_scalar, check_uniform_time, finite_array
+from ..base.validation import check_magnitude, check_scalar, check_uniform_time, finite_array
 from ._poles import amplitudes, basis, fit_sinusoids, stable_poles, subspace_poles
 from .modal_targets import ModalTargets, ModeTarget
 

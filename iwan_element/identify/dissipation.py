@@ -21,7 +21,7 @@ import time
 import numpy as np
 from scipy import optimize
 
-from ..core.validation import check_int, check_magnitude, check_scalar, finite_array, same_length
+from ..base.validation import check_int, check_magnitude, check_scalar, finite_array, same_length
 from ..core.closed_form import dissipation as cycle_dissipation, force_amplitude
 from ..core.parameters import IwanParameters
 from ._solver import _Problem, _uncertainty

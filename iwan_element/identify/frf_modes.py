@@ -21,7 +21,7 @@ import math
 import numpy as np
 from scipy import optimize
 
-from ..core.validation import check_magnitude, finite_array
+from ..base.validation import check_magnitude, finite_array
 from ..fitting import covariance
 from .modal_targets import ModalTargets, ModeTarget
 from .sweeps import _convention, _inputs

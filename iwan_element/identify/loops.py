@@ -35,7 +35,7 @@ import numpy as np
 from scipy.special import fdtrc
 
 from ..core.history import REVERSAL_TOL, History
-from ..core.validation import (check_int, check_time, check_magnitude, check_scalar, check_varies,
+from ..base.validation import (check_int, check_time, check_magnitude, check_scalar, check_varies,
                                finite_array, same_length)
 from ..core.parameters import IwanParameters
 from ._solver import _Problem

@@ -30,7 +30,7 @@ import math
 import numpy as np
 from scipy import optimize, stats
 
-from ..core.validation import check_scalar
+from ..base.validation import check_scalar
 from ..fitting import covariance
 from .curves import AmplitudeCurve
 from .identifiability import MIN_MACRO_POINTS

@@ -11,7 +11,7 @@ from scipy import special, stats
 
 from ..core.modal import modal_iwan_curve, viscous_floor
 from ..core.parameters import IwanParameters
-from ..core.result_shape import ResultShape, panels, wrap
+from ..base.result_shape import ResultShape, panels, wrap
 from .result import IdentifiabilityWarning
 from ..fitting import (Parameter, ParameterTable, covariance, fit_success, noise_dof_warning,
                        verdict)
@@ -308,7 +308,7 @@ class ModalIwanFit(ResultShape):
         """Data (with error bars), fitted curves and their band against amplitude.
 
         ``ax`` is a sequence of two Axes ``(ax_frequency, ax_damping)``; a new figure if
-        omitted (:mod:`iwan_element.core.result_shape`). Returns the list of artists drawn.
+        omitted (:mod:`iwan_element.base.result_shape`). Returns the list of artists drawn.
         """
         ax = panels(ax, 2, sharex=True, figsize=(6, 6))
         from matplotlib.ticker import NullFormatter

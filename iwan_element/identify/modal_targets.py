@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..core.result_shape import ResultShape, format_value, panels, table_lines, wrap
+from ..base.result_shape import ResultShape, format_value, panels, table_lines, wrap
 
 __all__ = ["ModalTargets", "ModeTarget", "mac"]
 

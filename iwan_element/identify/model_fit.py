@@ -45,9 +45,9 @@ from typing import Callable, Sequence
 import numpy as np
 from scipy.signal import savgol_coeffs, savgol_filter
 
-from ..core.validation import check_int, check_time, check_magnitude, finite_array, same_length
+from ..base.validation import check_int, check_time, check_magnitude, finite_array, same_length
 from .noise import estimate_noise, integrated_time
-from ..core.result_shape import ResultShape, value_stderr
+from ..base.result_shape import ResultShape, value_stderr
 from ..fitting import (Parameter, ParameterTable, covariance, fit_success, minimize,
                        verdict)
 from .cycles import find_reversals
@@ -157,7 +157,7 @@ class ModelFit(ResultShape):
 
     def to_dict(self) -> dict:
         """JSON-safe dict (NaN becomes None)."""
-        from ..core.serialize import json_safe
+        from ..base.serialize import json_safe
         return json_safe({"params": self.params.to_dict(),
                       "offsets": value_stderr(self.offsets),
                       "rms": self.rms, "tau": self.tau, "n_eff": self.n_eff,

@@ -46,9 +46,8 @@ import numpy as np
 from scipy.optimize import minimize_scalar
 from scipy.signal import savgol_coeffs, savgol_filter
 
-from ..core.validation import (check_time, check_magnitude, check_scalar, finite_array,
-                                same_length)
-from ..core.result_shape import ResultShape, panels
+from ..base.validation import check_time, check_magnitude, check_scalar, finite_array, same_length
+from ..base.result_shape import ResultShape, panels
 
 __all__ = ["NoiseEstimate", "estimate_noise", "integrated_time", "difference_sigma"]
 
@@ -110,7 +109,7 @@ class NoiseEstimate(ResultShape):
     def plot(self, ax=None, *, lags: int | None = None):
         """The noise model's autocorrelation ``rho**|k|`` (AR(1)) against the lag [s], with the
         integrated correlation time marked. Returns the artists (one Axes,
-        :mod:`iwan_element.core.result_shape`)."""
+        :mod:`iwan_element.base.result_shape`)."""
         ax, = panels(ax, 1, figsize=(5, 3.5))
         dt = self.correlation_time / self.tau if self.tau > 0 else 1.0
         k = np.arange(lags if lags is not None else max(10, int(6 * self.tau)) + 1)

@@ -10,10 +10,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..core.serialize import json_safe
+from ..base.serialize import json_safe
 
 from ..core.parameters import IwanParameters
-from ..core.result_shape import ResultShape, value_stderr
+from ..base.result_shape import ResultShape, value_stderr
 from ..fitting import Parameter, ParameterTable, fit_success, verdict
 
 __all__ = ["FitResult", "IdentifiabilityWarning", "PARAM_NAMES"]

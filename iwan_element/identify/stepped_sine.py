@@ -39,7 +39,7 @@ import math
 import numpy as np
 from scipy import optimize
 
-from ..core.validation import check_scalar
+from ..base.validation import check_scalar
 from ..fitting import covariance
 from .curves import AmplitudeCurve
 

@@ -33,7 +33,7 @@ import math
 import numpy as np
 from scipy import optimize
 
-from ..core.validation import check_magnitude, check_scalar, finite_array, same_length
+from ..base.validation import check_magnitude, check_scalar, finite_array, same_length
 from ..fitting import covariance
 from .curves import AmplitudeCurve
 from .stepped_sine import _fit_sdof

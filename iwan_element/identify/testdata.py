@@ -16,11 +16,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..core.validation import (check_int, check_time, check_magnitude, check_scalar, finite_array,
-                                same_length)
+from ..base.validation import (check_int, check_time, check_magnitude, check_scalar, finite_array,
+                               same_length)
 from ..core.joint import IwanJoint
-from ..core.result_shape import html_table, table_lines
-from ..core.serialize import json_safe
+from ..base.result_shape import html_table, table_lines
+from ..base.serialize import json_safe
 from ..core.parameters import IwanParameters
 from .cycles import Cycle, check_varies, default_hysteresis, split_cycles
 

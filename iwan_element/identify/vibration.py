@@ -74,7 +74,7 @@ from dataclasses import replace
 import numpy as np
 from scipy import signal
 
-from ..core.validation import check_magnitude, check_scalar, check_uniform_time, finite_array
+from ..base.validation import check_magnitude, check_scalar, check_uniform_time, finite_array
 from ._decay_filter import _decay_signal, _drift_terms, _noise_bandwidth
 from ._decay_windows import WindowPlan, _noise_std, drift_correct, hilbert_windows
 from ._decay_report import _finish
