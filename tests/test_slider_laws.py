@@ -10,7 +10,7 @@ import pytest
 from _helpers import stepped_sine
 from iwan_element import DiscreteIwan, IwanJoint, IwanParameters
 from iwan_element.effects import AsymmetricSlip, BreakAway, SlipDegradation
-from iwan_element.effects.evaluate import Evaluator
+from iwan_element.effects.engine.evaluate import Evaluator
 from _jenkins_bank import directional_bank
 
 P = IwanParameters(1000.0, 1e6, -0.5, 0.2)

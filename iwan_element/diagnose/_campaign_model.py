@@ -12,7 +12,7 @@ from scipy.sparse import lil_matrix
 
 from ..base.validation import finite_array
 from ..effects import EFFECTS
-from ..effects.evaluate import Evaluator
+from ..effects.engine.evaluate import Evaluator
 from ..fitting import normal_inverse
 from . import _model as M
 from ..identify.noise import integrated_time

@@ -19,7 +19,7 @@ import numpy as np
 from ..core.history import unit_params
 from ..core.parameters import IwanParameters
 from ..effects import EFFECTS
-from ..effects.evaluate import build_element, scale_effect
+from ..effects.engine.evaluate import build_element, scale_effect
 from ..fitting.evidence import Ridge
 from . import _model as M
 from .probabilities import key

@@ -11,7 +11,7 @@ from scipy.optimize import least_squares, minimize_scalar
 from ..core.history import unit_params
 from ..core.parameters import IwanParameters
 from ..effects import EFFECTS
-from ..effects.evaluate import Evaluator, scale_effect
+from ..effects.engine.evaluate import Evaluator, scale_effect
 from ..fitting import covariance
 from ..identify.noise import integrated_time
 from ..identify.result import FitResult, joint_table

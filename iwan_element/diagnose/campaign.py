@@ -49,7 +49,7 @@ from scipy.optimize import least_squares
 from ..base.serialize import json_safe
 from ..base.validation import check_int
 from ..effects import EFFECTS
-from ..effects.evaluate import order_stack, stack_ok
+from ..effects.engine.evaluate import order_stack, stack_ok
 from ..ensemble import run_ensemble
 from ..base.progress import finish, progress_bar
 from . import _campaign_model as CM

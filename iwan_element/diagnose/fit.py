@@ -18,7 +18,7 @@ import numpy as np
 
 from ..base.serialize import json_safe
 from ..effects import EFFECTS
-from ..effects.evaluate import Evaluator, build_element
+from ..effects.engine.evaluate import Evaluator, build_element
 from ..fitting import fit_success
 from ..identify.identifiability import microslip_warning, min_macroslip
 from ..identify.loops import fit_loops

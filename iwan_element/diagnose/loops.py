@@ -40,7 +40,7 @@ import numpy as np
 from ..base.threads import one_blas_thread
 from ..base.validation import check_int, check_scalar
 from ..effects import EFFECTS
-from ..effects.evaluate import order_stack, stack_ok
+from ..effects.engine.evaluate import order_stack, stack_ok
 from ..base.progress import finish, progress_bar, set_total, tick
 from ._locate import _check_candidates
 from ._noise import NoiseLevel, noise_level, pure_noise

@@ -17,7 +17,7 @@ from ..core.history import REVERSAL_TOL, unit_params
 from ..base.validation import (MAGNITUDE_RANGE, check_magnitude, check_scalar, check_time,
                                check_varies, finite_array, same_length)
 from ..effects import EFFECTS
-from ..effects.evaluate import Evaluator
+from ..effects.engine.evaluate import Evaluator
 from ..identify.cycles import find_reversals, split_cycles
 from ._noise import noise_estimate
 

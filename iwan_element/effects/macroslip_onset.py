@@ -62,8 +62,8 @@ import math
 import numpy as np
 
 from ..base.validation import check_scalar
-from ._base import ParamSpec
-from ._jenkins import JenkinsBank, jenkins_gain
+from .base import ParamSpec
+from .engine.jenkins import JenkinsBank, jenkins_gain
 
 __all__ = ["MacroslipOnset", "patch_cumulative", "patch_stiffness_loss",
            "patch_dissipation"]

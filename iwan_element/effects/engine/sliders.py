@@ -24,19 +24,21 @@ is integrated per slider, and the dissipation is the work minus the stored elast
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numba import njit
 
-from ..core.discrete import slider_distribution
-from ._base import _Effect, _require_plain_joint
+from ...core.discrete import slider_distribution
+from ..base import Effect, require_plain_joint
 
-__all__ = ["_SliderEffect"]
+__all__ = ["SliderEffect"]
 
 N_SLIDERS = 128
 
 
 @njit(cache=True)
-def _bank_step(e, s, k, sgn, cs, ck, du, e_new, s_new):
+def bank_step(e, s, k, sgn, cs, ck, du, e_new, s_new):
     """Every slider's exact linear move ``du`` [m] (compiled): stick until the stretch in the
     direction of motion reaches the static cap ``cs``, then slide at the kinetic cap ``ck``.
 
@@ -82,7 +84,30 @@ def _bank_step(e, s, k, sgn, cs, ck, du, e_new, s_new):
     return W, F, K
 
 
-class _SliderEffect(_Effect):
+@njit(cache=True)
+def degrade(e, sgn, k, phi, D_inner, Wb, rate, cap_s, cap_k):
+    """The commit of the correction bank (compiled): ``lambda = exp(-rate D)`` from the energy
+    dissipated so far (``D = D_inner + Wb - stored``), the modified sliders clipped to their
+    shrunken caps ``lambda phi`` (``e`` changed in place) and the caps of the modified bank
+    written to the first entries of ``cap_s``, ``cap_k``. Returns ``(lambda, stored energy
+    after the clip [J])``."""
+    n = phi.size
+    stored = 0.0
+    for j in range(2 * n):
+        stored += sgn[j] * k[j] * (e[j] * e[j])
+    lam = math.exp(-rate * max(D_inner + Wb - 0.5 * stored, 0.0))
+    after = 0.0
+    for j in range(2 * n):
+        if j < n:
+            c = lam * phi[j]
+            e[j] = max(min(e[j], c), -c)
+            cap_s[j] = c
+            cap_k[j] = c
+        after += sgn[j] * k[j] * (e[j] * e[j])
+    return lam, 0.5 * after
+
+
+class SliderEffect(Effect):
     """Base of slider-level effects whose thresholds evolve with the dissipated energy.
     Subclasses define :meth:`_caps` (static and kinetic thresholds of the modified bank,
     forward and back, as stretches [m]), :meth:`_after_commit` and
@@ -92,7 +117,7 @@ class _SliderEffect(_Effect):
 
     def __init__(self, inner, *, n_sliders: int = N_SLIDERS):
         super().__init__(inner)
-        _require_plain_joint(inner, "a slider-level effect")
+        require_plain_joint(inner, "a slider-level effect")
         k, phi = slider_distribution(inner.params, n_sliders)
         self._k = np.concatenate([k, k])         # modified bank, then the plain reference bank
         self._phi = phi
@@ -130,10 +155,10 @@ class _SliderEffect(_Effect):
 
     def _step(self, du: float):
         """Stretches, slip states and the signed work, force and stiffness of both banks for a
-        linear move ``du`` [m] (:func:`_bank_step`)."""
+        linear move ``du`` [m] (:func:`bank_step`)."""
         cs, ck = self._cap_up if du > 0.0 else self._cap_dn
         e, s = np.empty(self._e.size), np.empty(self._e.size)
-        W, F, K = _bank_step(self._e, self._slip, self._k, self._sign, cs, ck, du, e, s)
+        W, F, K = bank_step(self._e, self._slip, self._k, self._sign, cs, ck, du, e, s)
         return e, s, W, F, K
 
     def _stored(self, e):

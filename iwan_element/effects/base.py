@@ -15,7 +15,7 @@ from ..base.validation import check_scalar, finite_array, same_length
 from ..core.parameters import IwanParameters
 from ..core.protocol import CommittedState, check_element
 
-__all__ = ["ParamSpec", "_Effect", "_find_zero"]
+__all__ = ["ParamSpec", "Effect", "_find_zero"]
 
 
 #: The smallest size an effect's size prior spreads its decades down to, as a fraction of
@@ -170,24 +170,24 @@ def monotone_runs(u: np.ndarray):
     return [(int(a), int(b), float(np.sign(du[a]))) for a, b in zip(starts, ends)]
 
 
-def _require_plain_joint(inner, subject: str) -> None:
+def require_plain_joint(inner, subject: str) -> None:
     """Refuse an ``inner`` that is not a plain Iwan joint (``IwanJoint`` or ``DiscreteIwan``
     with ``IwanParameters``): ``subject`` (e.g. ``"break-away"``) changes the joint's own
     sliders, so it must wrap the joint directly."""
-    if isinstance(inner, _Effect) or not isinstance(getattr(inner, "params", None),
+    if isinstance(inner, Effect) or not isinstance(getattr(inner, "params", None),
                                                     IwanParameters):
         raise ValueError("inner must be a plain Iwan joint (IwanJoint or DiscreteIwan with "
                          f"IwanParameters): {subject} changes the joint's own sliders, so "
                          "it wraps the joint directly (put other effects around it)")
 
 
-#: The ways an effect can sit on the joint (``_Effect.structure``).
+#: The ways an effect can sit on the joint (``Effect.structure``).
 STRUCTURES = ("parallel", "series", "slider", "energy")
-#: The data requirements an effect can declare (``_Effect.needs``).
+#: The data requirements an effect can declare (``Effect.needs``).
 NEEDS = ("rate",)
 
 
-class _Effect(CommittedState):
+class Effect(CommittedState):
     """Shared plumbing: the wrapped element, energy counters and a generic force history."""
 
     effect = ""
@@ -275,7 +275,7 @@ class _Effect(CommittedState):
     def describe(self) -> str:
         """One line naming this effect and every effect below it."""
         own = ", ".join(f"{k}={v:.4g}" for k, v in self.parameters.items())
-        below = self._inner.describe() if isinstance(self._inner, _Effect) else repr(self._inner.params)
+        below = self._inner.describe() if isinstance(self._inner, Effect) else repr(self._inner.params)
         return f"{self.effect}({own}) on {below}"
 
     def reset(self) -> None:

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._base import _Effect
+from ..base import Effect
 
 __all__ = ["jenkins_gain", "JenkinsBank"]
 
@@ -28,7 +28,7 @@ def jenkins_gain(X, phi):
     return (th - np.sin(th) * c) / np.pi
 
 
-class JenkinsBank(_Effect):
+class JenkinsBank(Effect):
     """A bank of parallel Jenkins elements that replaces the same stiffness of the wrapped
     joint: ``F = F_j(u) + sum_i z_i - (sum_i k_i) u``, identical to the joint until the
     first element slides. Subclasses call :meth:`_set_bank` with the elements' slip

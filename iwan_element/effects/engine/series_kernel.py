@@ -7,11 +7,11 @@ commit, so the joint's path behind the gap cannot be found run by run
 (:meth:`~iwan_element.effects.Backlash.joint_path` needs a joint whose state depends only on
 its turning points). This module runs the elements' own per-sample rule, compiled: for every
 sample the backlash solve (rigid stops, or the gap sliding against ``drag``, with the
-safeguarded Newton search of :func:`._base._find_zero` for the point where the joint's force
-reaches the drag), then the commit of the gap, the joint (:func:`iwan_element.core.masing.
-masing_step`), the wear bank (:func:`._sliders._bank_step`, :func:`.slip_degradation.
-_degrade`) and the law table (:mod:`._law_kernel`). The numbers are those of the elements'
-``trial``/``commit`` to round-off (``tests/test_kernel.py``).
+safeguarded Newton search of :func:`iwan_element.effects.base._find_zero` for the point
+where the joint's force reaches the drag), then the commit of the gap, the joint
+(:func:`iwan_element.core.masing.masing_step`), the wear bank (:func:`.sliders.bank_step`,
+:func:`.sliders.degrade`) and the law table (:mod:`.law_kernel`). The numbers are those of
+the elements' ``trial``/``commit`` to round-off (``tests/test_kernel.py``).
 
 State vectors (float arrays, changed in place): joint ``J = [n, u_c, F_c, G_c, I_c, D]``
 (depth, committed displacement [m], force [N], ``G`` and ``I_H`` [J], dissipation [J]);
@@ -26,12 +26,11 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ..core.masing import masing_step
-from ._law_kernel import _advance as _law_advance
-from ._law_kernel import force_at as _law_force
-from ._law_kernel import monotone_runs
-from ._sliders import _bank_step
-from .slip_degradation import _degrade
+from ...core.masing import masing_step
+from .law_kernel import _advance as _law_advance
+from .law_kernel import force_at as _law_force
+from .law_kernel import monotone_runs
+from .sliders import bank_step, degrade
 
 __all__: list[str] = []
 
@@ -43,7 +42,7 @@ def _trial(c, st, J, e, sl, k, sg, caps, S, L, w, e_new, s_new):
                                       w, st[3])
     du = w - S[2]
     if k.size:
-        _, dF, dK = _bank_step(e, sl, k, sg, caps, caps, du, e_new, s_new)
+        _, dF, dK = bank_step(e, sl, k, sg, caps, caps, du, e_new, s_new)
         F += dF
         K += dK
     if L[0].shape[1]:             # no move: the tangent of going on in the last direction
@@ -65,11 +64,11 @@ def _commit(c, st, J, e, sl, k, sg, phi, caps, S, L, rate, w, e_new, s_new):
     du = w - S[2]
     table = L[0]
     if k.size:
-        W, _, _ = _bank_step(e, sl, k, sg, caps, caps, du, e_new, s_new)
+        W, _, _ = bank_step(e, sl, k, sg, caps, caps, du, e_new, s_new)
         e[:] = e_new
         sl[:] = s_new
         S[1] += W
-        S[0], _ = _degrade(e, sg, k, phi, J[5], S[1], rate, caps, caps)
+        S[0], _ = degrade(e, sg, k, phi, J[5], S[1], rate, caps, caps)
     if table.shape[1] and du != 0.0:
         S[3] = 1.0 if du > 0.0 else -1.0
         table, _ = _law_advance(table, S[3], abs(du), L[1], L[2], L[3])
@@ -79,7 +78,7 @@ def _commit(c, st, J, e, sl, k, sg, phi, caps, S, L, rate, w, e_new, s_new):
 
 @njit(cache=True)
 def _zero(c, st, J, e, sl, k, sg, caps, S, L, shift, a, Fa, b, Fb, e_new, s_new):
-    """:func:`._base._find_zero` on the wearing joint's force minus ``shift`` along
+    """:func:`iwan_element.effects.base._find_zero` on the wearing joint's force minus ``shift`` along
     ``a -> b`` (``Fa``, ``Fb`` of opposite sign): Newton on the tangent, bisection safeguard."""
     lo, hi = (a, b) if Fa < 0.0 else (b, a)
     x = a

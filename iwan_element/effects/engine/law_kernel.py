@@ -1,4 +1,4 @@
-"""Compiled state of the exact slider laws (:mod:`iwan_element.effects._law`).
+"""Compiled state of the exact slider laws (:mod:`iwan_element.effects.engine.law`).
 
 The sliders' state is a table of rows (one column per row): an interval ``[a, b]`` of slip
 displacement ``phi`` [m] (``a == b`` for a point mass of stiffness ``w`` [N/m]), the state

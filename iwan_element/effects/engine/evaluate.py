@@ -28,14 +28,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..core.history import REVERSAL_TOL, History, unit_params
-from ..core.closed_form import slip_energy
-from ..core.joint import IwanJoint
-from ..core.masing import masing_constants, masing_rows, reversal_structure
-from ..core.parameters import IwanParameters
-from . import EFFECTS
-from ._base import _Effect
-from ._series_kernel import backlash_history, backlash_path
+from ...core.history import REVERSAL_TOL, History, unit_params
+from ...core.closed_form import slip_energy
+from ...core.joint import IwanJoint
+from ...core.masing import masing_constants, masing_rows, reversal_structure
+from ...core.parameters import IwanParameters
+from .. import EFFECTS
+from ..base import Effect
+from .series_kernel import backlash_history, backlash_path
 
 __all__: list[str] = []
 
@@ -82,7 +82,7 @@ def wear_behind_gap(names) -> bool:
 
 def has_vector_form(name: str) -> bool:
     """True if the effect has a history-free vectorised force."""
-    return EFFECTS[name].vector_force.__func__ is not _Effect.vector_force.__func__
+    return EFFECTS[name].vector_force.__func__ is not Effect.vector_force.__func__
 
 
 def dissipation_segments(u: np.ndarray, tol: float):

@@ -21,13 +21,13 @@ spike ``S`` at ``phi_max``),
 
 in closed form, so the force, and the misfit of a fit, are continuous in the law's
 parameters (a bank of discrete sliders makes them a staircase). The state table is moved and
-evaluated by compiled functions (:mod:`._law_kernel`). A
+evaluated by compiled functions (:mod:`.law_kernel`). A
 :class:`~iwan_element.core.discrete.DiscreteIwan` is handled the same way with its sliders as
 point masses. Checked against independent plain-Python slider banks
 (``tests/test_breakaway.py``, ``tests/test_effects.py``).
 
-**Law effects compose.** :class:`_LawEffect` is the element of one such law (an effect
-defines its own factors, :meth:`_LawEffect.own_law`). Wrapping another law effect, its
+**Law effects compose.** :class:`LawEffect` is the element of one such law (an effect
+defines its own factors, :meth:`LawEffect.own_law`). Wrapping another law effect, its
 factors multiply those below (direction-dependent slip on a contact with break-away is
 ``sigma_d = r (1 +- a)``, ``kappa_d = 1 +- a``), and it adds the force of the product law's
 bank minus that of the law below: each element of the chain is exact on its own and their
@@ -37,10 +37,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..core.discrete import DiscreteIwan
-from ..core.parameters import IwanParameters
-from . import _law_kernel as K
-from ._base import _Effect, _require_plain_joint
+from ...core.discrete import DiscreteIwan
+from ...core.parameters import IwanParameters
+from . import law_kernel as K
+from ..base import Effect, require_plain_joint
 
 __all__: list[str] = []
 
@@ -50,7 +50,7 @@ MASING = (1.0, 1.0, 1.0, 1.0)
 
 class _Pieces:
     """Slider states on intervals of ``phi`` for a set of banks (each with its own law), each
-    bank weighted by a sign: the state table of :mod:`._law_kernel` (one column per piece),
+    bank weighted by a sign: the state table of :mod:`.law_kernel` (one column per piece),
     moved and evaluated by its compiled functions.
 
     Rows: ``a, b`` interval [m] (``a == b`` for a point mass of stiffness ``w`` [N/m]),
@@ -110,7 +110,7 @@ def law_history(pieces: _Pieces, u) -> np.ndarray:
     """Signed bank force along a displacement history ``u`` [m] from the state of ``pieces``
     (which is advanced): one evaluation per monotone run of ``u`` (breaking is monotone
     within a run, so this equals the step-by-step rule), compiled
-    (:func:`._law_kernel.law_history`)."""
+    (:func:`.law_kernel.law_history`)."""
     out, pieces.state = K.law_history(pieces.state, np.ascontiguousarray(u, dtype=float),
                                       pieces.pm, pieces.p, pieces.C)
     pieces._last = None
@@ -122,7 +122,7 @@ def _product(law, below) -> tuple:
     return tuple(a * b for a, b in zip(law, below))
 
 
-class _LawEffect(_Effect):
+class LawEffect(Effect):
     """Element of a slider law (module docstring): wraps a plain joint or another law effect.
 
     Subclasses set :attr:`specs` and define :meth:`own_law`; their constructor stores the
@@ -135,9 +135,9 @@ class _LawEffect(_Effect):
     def __init__(self, inner):
         super().__init__(inner)
         joint = inner
-        while isinstance(joint, _LawEffect):
+        while isinstance(joint, LawEffect):
             joint = joint.inner
-        _require_plain_joint(joint, f"{self.effect} (a slider law)")
+        require_plain_joint(joint, f"{self.effect} (a slider law)")
         self._joint = joint
         self._atoms = ((joint.slider_stiffness, joint.slider_slip)
                        if isinstance(joint, DiscreteIwan) else None)
@@ -148,7 +148,7 @@ class _LawEffect(_Effect):
 
     def _below(self) -> tuple:
         """The law of the element this one wraps (Masing for the plain joint)."""
-        return self._inner.law() if isinstance(self._inner, _LawEffect) else MASING
+        return self._inner.law() if isinstance(self._inner, LawEffect) else MASING
 
     def law(self) -> tuple:
         """The law of this effect times every law effect below it."""
