@@ -17,18 +17,10 @@ import math
 import numpy as np
 from scipy import signal
 
+from .envelope import _filter_extent, _hilbert, _ramp_ends, analytic_signal
+
 _TRIM_LEVEL = 1e-3        # end-effect error allowed, relative to the mode's local envelope
 _ZERO_PHASE_RATIO = 0.3   # zero-phase if the mode decays at < 0.3 x the filter's ringing rate
-
-
-def _filter_extent(sos, fs, lo, hi):
-    """Samples until the one-pass impulse response stays below 1e-3 of its peak."""
-    n = int(max(64, 40.0 * fs / (hi - lo)))
-    imp = np.zeros(n)
-    imp[0] = 1.0
-    h = np.abs(signal.sosfilt(sos, imp))
-    above = np.flatnonzero(h > 1e-3 * h.max())
-    return int(above[-1]) + 1
 
 
 def _noise_bandwidth(sos, fs):
@@ -68,11 +60,6 @@ def _taper_far_end(ext):
     return out
 
 
-def _hilbert(y):
-    """Analytic signal, zero-padded to at least twice the length (no circular wrap)."""
-    return signal.hilbert(y, N=int(2 ** math.ceil(math.log2(2 * y.size))))[:y.size]
-
-
 def _reversed_filter(sos, x):
     """The band-pass run causally twice over the time-reversed record (``|H|**2``, as the
     zero-phase filter), reversed back."""
@@ -84,16 +71,6 @@ def _group_delay(sos, fs, f):
     w, h = signal.sosfreqz(sos, worN=np.array([0.999, 1.001]) * f, fs=fs)
     ph = np.unwrap(2.0 * np.angle(h))
     return float(-(ph[1] - ph[0]) / (2 * math.pi * (w[1] - w[0])))
-
-
-def _ramp_ends(x, n0, n1):
-    """Half-Hann ramps over the first ``n0`` and the last ``n1`` samples (copy)."""
-    out = x.copy()
-    for n, sl, rev in ((n0, slice(0, n0), False), (n1, slice(x.size - n1, x.size), True)):
-        if n > 0:
-            r = 0.5 - 0.5 * np.cos(np.pi * (np.arange(n) + 0.5) / n)
-            out[sl] *= r[::-1] if rev else r
-    return out
 
 
 def _continued_pass(sos, decay, p, m, pads, zero_phase):
@@ -261,24 +238,21 @@ def _reverse_gain(sos, fs, sigma, wd, route):
 
 
 def _analytic_signal(yy, fs, lo, hi, order):
-    """Zero-phase band-passed signal and its analytic signal.
+    """Zero-phase band-passed signal and its analytic signal
+    (:func:`.envelope.analytic_signal`, the ends tapered over the filter's end effects and
+    the transform zero-padded).
 
     Returns ``(sos, yf, z, n_trim, i_pk)``: the filter, the filtered signal, its Hilbert
     transform, the number of samples spoiled by the filter's end effects at each end and the
     index of the largest filtered sample.
     """
-    n = yy.size
-    sos = signal.butter(order, [lo, hi], btype="bandpass", fs=fs, output="sos")
-    yf = signal.sosfiltfilt(sos, yy)
     # zero padding to >= 2n: the FFT-based transform is circular, and without padding the
     # large start of a ring-down would leak into its quiet end. The first and last n_trim
     # samples (cut anyway) are tapered: a record cropped at the impact starts abruptly, and
     # the Hilbert kernel's slow 1/t decay would spread that step over the whole record.
+    sos, yf, z = analytic_signal(yy, fs, (lo, hi), order=order, taper_ends=True, pad=True)
     n_trim = _filter_extent(sos, fs, lo, hi)
     i_pk = int(np.argmax(np.abs(yf)))
-    m = min(n_trim, n // 4)
-    yt = _ramp_ends(yf, m, m)
-    z = _hilbert(yt)
     return sos, yf, z, n_trim, i_pk
 
 

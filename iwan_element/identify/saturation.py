@@ -12,9 +12,9 @@ effects) and say so in a warning (docs/guards.md).
 Clipping with noise added after it (an amplifier driven past its range ahead of a noisy
 stage) has no exactly flat tops. :func:`cut_flattened_peaks` finds it by what it does to the
 mode in the analysed band: the record's peaks fall short of the band's own oscillation
-(``Re z``, the band-passed analytic signal). Per cycle of ``z`` the deficit ``d = (Re z - y)
-sign(cos phase)`` is averaged over the samples near the peaks (``|cos phase| >= 0.975``);
-for an unclipped record it is the out-of-band content (other modes) and the noise there,
+(``Re z``, the band-passed analytic signal of :func:`.envelope.analytic_signal`). Per cycle
+of ``z`` the deficit ``d = (Re z - y) sign(cos phase)`` is averaged over the samples near
+the peaks (``|cos phase| >= 0.975``); for an unclipped record it is the out-of-band content (other modes) and the noise there,
 of either sign from cycle to cycle; a clipped cycle falls short systematically. A cycle
 counts as flattened when its mean deficit exceeds 1 % of the envelope and the mean over the
 five cycles around it exceeds five of its standard errors (their scatter) and 1 % of the
@@ -28,7 +28,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import signal
+
+from .envelope import analytic_signal
 
 __all__ = ["Clipping", "cut_clipping", "find_clipping", "cut_flattened_peaks"]
 
@@ -106,8 +107,7 @@ def _flattened_cycles(y, fs, band):
     """``(flattened, end index, envelope)`` per cycle of the band's oscillation in ``y``
     (module docstring), cycles within three periods of the band's low edge of either end
     of the record left out."""
-    sos = signal.butter(4, band, btype="bandpass", fs=fs, output="sos")
-    z = signal.hilbert(signal.sosfiltfilt(sos, y))
+    _, _, z = analytic_signal(y, fs, band)
     phase = np.unwrap(np.angle(z))
     edge = int(3 * fs / band[0])
     if y.size <= 2 * edge + 8:
