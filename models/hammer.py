@@ -45,7 +45,7 @@ from iwan_element import amplitude_curve, free_decay_modes
 from iwan_element.base.result_shape import ResultShape, panels, table_lines
 from iwan_element.base.serialize import json_safe
 from iwan_element.base.validation import check_scalar, check_uniform_time, finite_array
-from iwan_element.identify.envelope import mode_envelope
+from iwan_element.identify.decays.envelope import mode_envelope
 
 from .calibration import CalibrationResult, calibrate
 from .coupling import compare_curves, plot_curve_pairs

@@ -35,7 +35,7 @@ from typing import ClassVar
 
 import numpy as np
 
-__all__ = ["ResultShape", "panels", "table_lines", "unit_label", "format_value",
+__all__ = ["ResultShape", "panels", "axes_or_new", "table_lines", "unit_label", "format_value",
            "value_stderr", "parameter_rows", "html_table", "wrap", "PARAMETER_COLUMNS"]
 
 #: Rows an HTML table shows before it shows only its ends.
@@ -267,3 +267,14 @@ def panels(ax, n: int, *, figsize=None, sharex: bool = False) -> list:
         raise TypeError(f"ax must be a sequence of {n} Axes for this result, got {len(axs)} "
                         "items")
     return axs
+
+
+def axes_or_new(ax):
+    """One matplotlib Axes: ``ax`` itself, or a new figure's if ``None`` (the one-panel case
+    of the axes contract, :func:`panels`)."""
+    if ax is None:
+        try:
+            import matplotlib.pyplot  # noqa: F401
+        except ImportError as exc:  # pragma: no cover - depends on the environment
+            raise ImportError("plotting needs matplotlib: pip install matplotlib") from exc
+    return panels(ax, 1, figsize=(6.4, 4.8))[0]

@@ -15,7 +15,7 @@ from ..effects import EFFECTS
 from ..effects.engine.evaluate import Evaluator
 from ..fitting import normal_inverse
 from . import _model as M
-from ..identify.noise import integrated_time
+from ..identify.loops.noise import integrated_time
 from .batch import band_misfit
 from .prepare import dissipation_scale, drive_structure, effect_scales, fitted_samples
 from ._campaign_probability import record_explanations

@@ -12,7 +12,7 @@ from ..base.result_shape import ResultShape, table_lines
 from ..base.serialize import json_safe
 from ..base.validation import check_int, check_scalar, check_time, finite_array
 from ..ensemble import run_ensemble
-from ..plotting import axes_or_new
+from ..base.result_shape import axes_or_new
 from . import _campaign_model as CM
 from . import _model as M
 from ._campaign_result import full_force

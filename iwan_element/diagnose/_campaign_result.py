@@ -12,8 +12,8 @@ import numpy as np
 from ..base.result_shape import ResultShape, table_lines, unit_label
 from ..base.serialize import json_safe
 from ..fitting import Parameter, ParameterTable, covariance, verdict
-from ..identify.noise import integrated_time
-from ..plotting import axes_or_new
+from ..identify.loops.noise import integrated_time
+from ..base.result_shape import axes_or_new
 from . import _campaign_model as CM
 from .batch import band_misfit
 from .probabilities import Probable

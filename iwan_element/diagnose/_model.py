@@ -13,8 +13,8 @@ from ..core.parameters import IwanParameters
 from ..effects import EFFECTS
 from ..effects.engine.evaluate import Evaluator, scale_effect
 from ..fitting import covariance
-from ..identify.noise import integrated_time
-from ..identify.result import FitResult, joint_table
+from ..identify.loops.noise import integrated_time
+from ..identify.loops.result import FitResult, joint_table
 
 __all__: list[str] = []
 

@@ -8,7 +8,7 @@
    unloaded joint carries no force) being part of the fitted data. Offsets are nuisance
    parameters: reported, never named as an effect;
 2. the force noise and its correlation time are estimated from the record itself
-   (:func:`iwan_element.identify.noise.estimate_noise`; no repeated cycles needed, so
+   (:func:`iwan_element.identify.loops.noise.estimate_noise`; no repeated cycles needed, so
    ramped, swept and random-amplitude protocols work), unless ``noise`` is given;
 3. the plain Iwan model is fitted, then effects of :data:`~iwan_element.EFFECTS` are tried
    one after the other with the selection rule of :mod:`iwan_element.diagnose.selection`

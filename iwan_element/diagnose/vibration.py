@@ -26,9 +26,9 @@ from scipy.stats import chi2 as _chi2
 
 from ..base.validation import check_int, check_magnitude, check_scalar, finite_array, same_length
 from ..effects import EFFECTS
-from ..identify.curves import AmplitudeCurve
-from ..identify.noise import difference_sigma
-from ..identify.units import check_damping_ratio, check_frequency_ratio
+from ..identify.modal.curves import AmplitudeCurve
+from ..identify.loops.noise import difference_sigma
+from ..identify.files.units import check_damping_ratio, check_frequency_ratio
 from ..base.serialize import json_safe
 from ..fitting import covariance
 from .vibration_result import VibrationDiagnosis

@@ -207,7 +207,7 @@ class VibrationDiagnosis(Probable, ResultShape):
             extrapolation beyond the diagnosed amplitudes.
         """
         from ..base.validation import finite_array
-        from ..identify.curves import AmplitudeCurve
+        from ..identify.modal.curves import AmplitudeCurve
         X = finite_array("amplitude", amplitude, ndim=1, min_size=1)
         if np.any(X <= 0):
             raise ValueError("amplitude must be > 0 [m]")

@@ -37,7 +37,7 @@ def modal_fit_task(params: dict, rng, *, names, regime: str, conventions: dict, 
     curve at ``amplitude`` for one sampled fit vector and, in the macroslip regime with
     ``force`` [N per unit modal mass], the peak transient displacement [m] of the fitted
     single-mode oscillator (fixed dashpot ``2 zeta0 w0``)."""
-    from ..identify.modal_result import full_parameters, model_curve
+    from ..identify.modal.result import full_parameters, model_curve
     theta = np.array([params[n] for n in names], dtype=float)
     f, z = model_curve(theta, np.asarray(amplitude, float), regime, conventions["x_ref"],
                        conventions["stiffness"], conventions["floor"],

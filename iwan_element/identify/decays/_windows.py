@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._decay_filter import _reverse_gain
+from ._filter import _reverse_gain
 
 
 @dataclass(frozen=True)

@@ -57,15 +57,15 @@ import math
 import numpy as np
 from scipy import stats
 
-from ..base.progress import finish, progress_bar, tick
-from ..base.validation import check_magnitude, check_scalar, check_uniform_time, finite_array
-from ._decay_model import (_Objective, _Problem, _covariance, _fit_regime, _local_weights,
-                           _misfit_ratio, _neighbours, _polar)
-from .modal_result import ModalIwanFit
-from .modal_fit import fit_modal_iwan
-from ..base.threads import one_blas_thread
+from ...base.progress import finish, progress_bar, tick
+from ...base.validation import check_magnitude, check_scalar, check_uniform_time, finite_array
+from ._fit_model import (_Objective, _Problem, _covariance, _fit_regime, _local_weights,
+                         _misfit_ratio, _neighbours, _polar)
+from ..modal.result import ModalIwanFit
+from ..modal.fit import fit_modal_iwan
+from ...base.threads import one_blas_thread
 from .saturation import cut_clipping, cut_flattened_peaks
-from .vibration import _check_band
+from .curve import _check_band
 
 __all__ = ["fit_decay"]
 

@@ -25,7 +25,7 @@ import math
 import numpy as np
 from scipy import signal
 
-from ._decay_filter import _reverse_gain
+from ._filter import _reverse_gain
 
 __all__ = ["extrema", "pff_windows"]
 

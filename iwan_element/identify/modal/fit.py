@@ -30,13 +30,12 @@ import math
 import numpy as np
 from scipy import optimize, stats
 
-from ..base.validation import check_scalar
-from ..fitting import covariance
-from .curves import AmplitudeCurve
-from .identifiability import MIN_MACRO_POINTS
-from .vibration import DECAY_METHODS
-from .modal_result import ModalIwanFit, model_curve
-from .units import check_damping_ratio
+from ...base.validation import check_scalar
+from ...fitting import covariance
+from .curves import DECAY_METHODS, AmplitudeCurve
+from ..loops.identifiability import MIN_MACRO_POINTS
+from .result import ModalIwanFit, model_curve
+from ..files.units import check_damping_ratio
 
 __all__ = ["fit_modal_iwan", "ModalIwanFit"]
 

@@ -9,12 +9,12 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import special, stats
 
-from ..core.modal import modal_iwan_curve, viscous_floor
-from ..core.parameters import IwanParameters
-from ..base.result_shape import ResultShape, panels, wrap
-from .result import IdentifiabilityWarning
-from ..fitting import (Parameter, ParameterTable, covariance, fit_success, noise_dof_warning,
-                       verdict)
+from ...core.modal import modal_iwan_curve, viscous_floor
+from ...core.parameters import IwanParameters
+from ...base.result_shape import ResultShape, panels, wrap
+from ..loops.result import IdentifiabilityWarning
+from ...fitting import (Parameter, ParameterTable, covariance, fit_success, noise_dof_warning,
+                        verdict)
 
 __all__ = ["ModalIwanFit", "model_curve", "full_parameters", "harmonic_factor"]
 

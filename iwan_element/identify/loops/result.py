@@ -10,11 +10,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..base.serialize import json_safe
+from ...base.serialize import json_safe
 
-from ..core.parameters import IwanParameters
-from ..base.result_shape import ResultShape, value_stderr
-from ..fitting import Parameter, ParameterTable, fit_success, verdict
+from ...core.parameters import IwanParameters
+from ...base.result_shape import ResultShape, value_stderr
+from ...fitting import Parameter, ParameterTable, fit_success, verdict
 
 __all__ = ["FitResult", "IdentifiabilityWarning", "PARAM_NAMES"]
 
@@ -90,7 +90,7 @@ class FitResult(ResultShape):
         data). ``measured = model(u - du0) + dF0``. Empty for dissipation fits.
     noise : dict
         Loop fits: ``{"force": sigma [N], "displacement": sigma [m]}`` from
-        :func:`~iwan_element.identify.noise.estimate_noise`, and ``"tau"``, the residuals'
+        :func:`~iwan_element.identify.loops.noise.estimate_noise`, and ``"tau"``, the residuals'
         integrated autocorrelation time [samples] by which the variances were multiplied.
     failures : tuple of str
         Why ``success`` is False, in a tester's words (:meth:`failure_reasons`).
@@ -163,7 +163,7 @@ class FitResult(ResultShape):
     def plot(self, ax=None):
         """Loop fits: measured and fitted force [kN] vs displacement [mm]; dissipation fits:
         measured and fitted ``D`` [J] vs ``F0`` [N] (log-log). Returns the list of artists."""
-        from ..plotting import axes_or_new
+        from ...base.result_shape import axes_or_new
         ax = axes_or_new(ax)
         c = self._curves
         if not c:

@@ -1,4 +1,4 @@
-"""Model and statistics of :func:`iwan_element.identify.decay_fit.fit_decay`.
+"""Model and statistics of :func:`iwan_element.identify.decays.fit.fit_decay`.
 
 The record's linear processing ``L`` (decimation, zero padding, zero-phase band-pass,
 Hilbert transform), the averaged modal Iwan decay passed through it, the log-polar residuals
@@ -14,9 +14,9 @@ from scipy import optimize, signal
 from scipy.integrate import cumulative_simpson
 from scipy.interpolate import CubicSpline
 
-from ..fitting import normal_inverse
-from .modal_result import model_curve
-from ._decay_filter import _analytic_signal
+from ...fitting import normal_inverse
+from ..modal.result import model_curve
+from ._filter import _analytic_signal
 
 _GRID = 2000            # log-amplitude grid of the quadrature
 _PER_PERIOD = 8.0       # working rate: samples per period of the band's upper edge

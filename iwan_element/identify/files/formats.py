@@ -27,7 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..base.validation import finite_array
+from ...base.validation import finite_array
 from .csv_input import DISPLACEMENT_UNITS, FORCE_UNITS, TIME_UNITS, _column_unit
 
 __all__ = ["UffRecord", "read_uff", "read_sweep_csv", "RESPONSE_UNITS"]

@@ -10,7 +10,7 @@ from typing import Sequence
 
 import numpy as np
 
-from .testdata import TestData
+from ..loops.testdata import TestData
 
 __all__ = ["DISPLACEMENT_UNITS", "FORCE_UNITS", "TIME_UNITS", "load_test"]
 

@@ -46,8 +46,8 @@ import numpy as np
 from scipy.optimize import minimize_scalar
 from scipy.signal import savgol_coeffs, savgol_filter
 
-from ..base.validation import check_time, check_magnitude, check_scalar, finite_array, same_length
-from ..base.result_shape import ResultShape, panels
+from ...base.validation import check_time, check_magnitude, check_scalar, finite_array, same_length
+from ...base.result_shape import ResultShape, panels
 
 __all__ = ["NoiseEstimate", "estimate_noise", "integrated_time", "difference_sigma"]
 

@@ -1,7 +1,7 @@
 """From a measured free decay to frequency and damping against amplitude.
 
 :func:`amplitude_curve` turns a ring-down record (hammer impact, release test, a simulated
-free decay) into an :class:`~iwan_element.identify.curves.AmplitudeCurve`, from about 0.02 %
+free decay) into an :class:`~iwan_element.identify.modal.curves.AmplitudeCurve`, from about 0.02 %
 to 5 % of damping with its defaults. The equations and their sources are in
 ``docs/free_decay.md``.
 
@@ -74,11 +74,12 @@ from dataclasses import replace
 import numpy as np
 from scipy import signal
 
-from ..base.validation import check_magnitude, check_scalar, check_uniform_time, finite_array
-from ._decay_filter import _decay_signal, _drift_terms, _noise_bandwidth
-from ._decay_windows import WindowPlan, _noise_std, drift_correct, hilbert_windows
-from ._decay_report import _finish
+from ...base.validation import check_magnitude, check_scalar, check_uniform_time, finite_array
+from ._filter import _decay_signal, _drift_terms, _noise_bandwidth
+from ._windows import WindowPlan, _noise_std, drift_correct, hilbert_windows
+from ._report import _finish
 from .peaks import pff_windows
+from ..modal.curves import DECAY_METHODS
 from .saturation import cut_clipping, cut_flattened_peaks
 
 __all__ = ["amplitude_curve"]
@@ -216,8 +217,6 @@ def _noise_rms(yf, z, fs, span, f_peak):
 
 _SPAN = 0.5            # decay across a window [neper]
 _HOP = 0.15            # decay between window starts [neper]
-#: The extractions of a free decay (their curves carry the damping a decay shows).
-DECAY_METHODS = ("hilbert", "pff")
 
 
 def _plan(fs, f_peak, n_periods, window):
@@ -292,7 +291,7 @@ def amplitude_curve(t, y, *, quantity: str = "acceleration", band,
         its stated uncertainty.
     method : {"hilbert", "pff"}, keyword-only
         Envelope and phase of the analytic signal (default), or peak finding and fitting on
-        the extrema of the filtered decay (:mod:`iwan_element.identify.peaks`).
+        the extrema of the filtered decay (:mod:`iwan_element.identify.decays.peaks`).
     compare : bool, keyword-only
         Also run the other method in the same windows and warn where the two differ by more
         than three combined standard uncertainties (default True).

@@ -27,7 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import optimize, signal
 
-__all__ = ["subspace_poles", "stable_poles", "fit_sinusoids", "SinusoidFit", "basis"]
+__all__ = ["subspace_poles", "stable_poles", "fit_sinusoids", "SinusoidFit", "basis", "amplitudes"]
 
 
 def _hankel(y, rows):

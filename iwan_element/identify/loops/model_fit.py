@@ -45,11 +45,10 @@ from typing import Callable, Sequence
 import numpy as np
 from scipy.signal import savgol_coeffs, savgol_filter
 
-from ..base.validation import check_int, check_time, check_magnitude, finite_array, same_length
+from ...base.validation import check_int, check_time, check_magnitude, finite_array, same_length
 from .noise import estimate_noise, integrated_time
-from ..base.result_shape import ResultShape, value_stderr
-from ..fitting import (Parameter, ParameterTable, covariance, fit_success, minimize,
-                       verdict)
+from ...base.result_shape import ResultShape, value_stderr
+from ...fitting import Parameter, ParameterTable, covariance, fit_success, minimize, verdict
 from .cycles import find_reversals
 
 __all__ = ["ModelFit", "fit_force_model", "drive_displacement", "burn_in_index"]
@@ -73,7 +72,7 @@ def drive_displacement(t, u, smooth="auto"):
         Time [s] and measured displacement [m].
     smooth : "auto", 0 or odd int >= 5
         ``0``: ``u`` as measured. An odd window: quintic Savitzky-Golay filter over that many
-        samples. ``"auto"``: the window of :func:`~iwan_element.identify.noise.estimate_noise`
+        samples. ``"auto"``: the window of :func:`~iwan_element.identify.loops.noise.estimate_noise`
         (``1/8`` of the fastest loading period) when the noise exceeds ``1e-4`` of the half
         range of ``u``, else no filter.
 
@@ -157,7 +156,7 @@ class ModelFit(ResultShape):
 
     def to_dict(self) -> dict:
         """JSON-safe dict (NaN becomes None)."""
-        from ..base.serialize import json_safe
+        from ...base.serialize import json_safe
         return json_safe({"params": self.params.to_dict(),
                       "offsets": value_stderr(self.offsets),
                       "rms": self.rms, "tau": self.tau, "n_eff": self.n_eff,
@@ -179,7 +178,7 @@ class ModelFit(ResultShape):
 
     def plot(self, ax=None):
         """Residual [N] vs time [s]; returns the list of artists."""
-        from ..plotting import axes_or_new
+        from ...base.result_shape import axes_or_new
         ax = axes_or_new(ax)
         lines = ax.plot(self.t, self.residual, "-", lw=0.6, label="measured - model")
         ax.set_xlabel("t [s]")

@@ -21,10 +21,10 @@ import time
 import numpy as np
 from scipy import optimize
 
-from ..base.validation import check_int, check_magnitude, check_scalar, finite_array, same_length
-from ..core.closed_form import dissipation as cycle_dissipation, force_amplitude
-from ..core.parameters import IwanParameters
-from ._solver import _Problem, _uncertainty
+from ...base.validation import check_int, check_magnitude, check_scalar, finite_array, same_length
+from ...core.closed_form import dissipation as cycle_dissipation, force_amplitude
+from ...core.parameters import IwanParameters
+from .solver import _Problem, _uncertainty
 from .identifiability import MIN_MACRO_POINTS, _identify, _range_warnings
 from .result import FitResult, _finish
 

@@ -13,14 +13,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..base.validation import check_magnitude, finite_array
-from ..base.result_shape import ResultShape, panels, table_lines, wrap
+from ...base.validation import check_magnitude, finite_array
+from ...base.result_shape import ResultShape, panels, table_lines, wrap
 
-__all__ = ["AmplitudeCurve", "MIN_POINTS"]
+__all__ = ["AmplitudeCurve", "MIN_POINTS", "DECAY_METHODS"]
 
 #: Fewest curve points a modal fit can use (:func:`~iwan_element.fit_modal_iwan` needs three
 #: amplitudes: frequency and damping each carry up to three parameters of the microslip form).
 MIN_POINTS = 3
+#: The extractions of a free decay (:func:`~iwan_element.amplitude_curve`; their curves carry
+#: the damping a decay shows, :attr:`AmplitudeCurve.method`).
+DECAY_METHODS = ("hilbert", "pff")
 
 
 def _optional_std(value, n: int, name: str) -> np.ndarray:

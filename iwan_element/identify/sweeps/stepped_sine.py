@@ -39,9 +39,9 @@ import math
 import numpy as np
 from scipy import optimize
 
-from ..base.validation import check_scalar
-from ..fitting import covariance
-from .curves import AmplitudeCurve
+from ...base.validation import check_scalar
+from ...fitting import covariance
+from ..modal.curves import AmplitudeCurve
 
 __all__ = ["stepped_sine_curve"]
 

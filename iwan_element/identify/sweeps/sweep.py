@@ -33,9 +33,9 @@ import math
 import numpy as np
 from scipy import optimize
 
-from ..base.validation import check_magnitude, check_scalar, finite_array, same_length
-from ..fitting import covariance
-from .curves import AmplitudeCurve
+from ...base.validation import check_magnitude, check_scalar, finite_array, same_length
+from ...fitting import covariance
+from ..modal.curves import AmplitudeCurve
 from .stepped_sine import _fit_sdof
 
 __all__ = ["sweep_curve"]

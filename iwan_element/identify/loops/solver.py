@@ -14,9 +14,9 @@ from typing import Callable
 
 import numpy as np
 
-from ..core.history import unit_params
-from ..core.parameters import IwanParameters
-from ..fitting import covariance, minimize
+from ...core.history import unit_params
+from ...core.parameters import IwanParameters
+from ...fitting import covariance, minimize
 
 log = logging.getLogger(__name__)
 

@@ -21,10 +21,10 @@ import math
 import numpy as np
 from scipy import optimize
 
-from ..base.validation import check_magnitude, finite_array
-from ..fitting import covariance
-from .modal_targets import ModalTargets, ModeTarget
-from .sweeps import _convention, _inputs
+from ...base.validation import check_magnitude, finite_array
+from ...fitting import covariance
+from ..modal.targets import ModalTargets, ModeTarget
+from .sweep import _convention, _inputs
 
 __all__ = ["frf_modes", "sweep_modes"]
 

@@ -16,14 +16,14 @@ How it is made fast
 
 Start of the record and offsets
     The residuals are taken from the second turning point of the displacement on (see
-    :mod:`iwan_element.identify.model_fit`): the joint's state at the start of a measured
+    :mod:`iwan_element.identify.loops.model_fit`): the joint's state at the start of a measured
     record is unknown, and after one full sweep it differs from the model's only by a constant
     force, which ``dF0`` absorbs. The displacement offset ``du0`` is estimated from the
     curvature of the residual sum of squares in ``du0`` (a Gauss-Newton step from 0, refitted
     once if it is large); when the record depends only on displacement differences (no
     excursion beyond the first sweep) it is reported as not determined.
 
-Identifiability, uncertainties and the verdict: :mod:`iwan_element.identify.identifiability`.
+Identifiability, uncertainties and the verdict: :mod:`iwan_element.identify.loops.identifiability`.
 """
 from __future__ import annotations
 
@@ -34,11 +34,11 @@ import time
 import numpy as np
 from scipy.special import fdtrc
 
-from ..core.history import REVERSAL_TOL, History
-from ..base.validation import (check_int, check_time, check_magnitude, check_scalar, check_varies,
-                               finite_array, same_length)
-from ..core.parameters import IwanParameters
-from ._solver import _Problem
+from ...core.history import REVERSAL_TOL, History
+from ...base.validation import (check_int, check_time, check_magnitude, check_scalar,
+                                check_varies, finite_array, same_length)
+from ...core.parameters import IwanParameters
+from .solver import _Problem
 from .identifiability import _identify, min_macroslip
 from .model_fit import burn_in_index, drive_displacement
 from .noise import estimate_noise
@@ -162,7 +162,7 @@ def fit_loops(t, u, F, *, noise=None, smooth="auto", max_samples: int | None = 2
         It overrides the estimated noise in the report.
     smooth : "auto", 0 or odd int, keyword-only
         De-noising of the displacement that drives the model (quintic Savitzky-Golay window,
-        see :func:`~iwan_element.identify.model_fit.drive_displacement`); ``"auto"``
+        see :func:`~iwan_element.identify.loops.model_fit.drive_displacement`); ``"auto"``
         (default) filters only when the displacement noise exceeds ``1e-4`` of its half
         range. Displacement noise is an error in the model's input: unfiltered it creates
         spurious reversals and biases ``KT`` low and ``chi`` high.
@@ -178,7 +178,7 @@ def fit_loops(t, u, F, *, noise=None, smooth="auto", max_samples: int | None = 2
         Significance level, in ``(0, 0.5)``, of the test that the data reach macroslip and of
         the test that the joint explains more than noise.
     hysteresis : float, optional, keyword-only
-        Dead band [m] to count cycles (see :func:`iwan_element.identify.cycles.find_reversals`).
+        Dead band [m] to count cycles (see :func:`iwan_element.identify.loops.cycles.find_reversals`).
     initial : IwanParameters, optional, keyword-only
         An extra start (for instance a previous fit).
     max_nfev : int, keyword-only

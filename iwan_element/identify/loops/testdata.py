@@ -2,8 +2,8 @@
 
 A quasi-static joint test (the seed paper's section 3.2: imposed ``u(t) = u0 sin(w t)``, force
 measured) is read from a CSV file by :func:`load_test`, converted to SI units at the boundary
-and split into cycles by :func:`~iwan_element.identify.cycles.split_cycles` (turning points
-with a dead band, refined peaks, loop areas, flags: :mod:`iwan_element.identify.cycles`).
+and split into cycles by :func:`~iwan_element.identify.loops.cycles.split_cycles` (turning points
+with a dead band, refined peaks, loop areas, flags: :mod:`iwan_element.identify.loops.cycles`).
 :class:`TestData` holds the record and its cycles; :func:`simulate_test` makes one from an
 exact Iwan joint.
 
@@ -16,12 +16,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..base.validation import (check_int, check_time, check_magnitude, check_scalar, finite_array,
-                               same_length)
-from ..core.joint import IwanJoint
-from ..base.result_shape import html_table, table_lines
-from ..base.serialize import json_safe
-from ..core.parameters import IwanParameters
+from ...base.validation import (check_int, check_time, check_magnitude, check_scalar,
+                                finite_array, same_length)
+from ...core.joint import IwanJoint
+from ...base.result_shape import html_table, table_lines
+from ...base.serialize import json_safe
+from ...core.parameters import IwanParameters
 from .cycles import Cycle, check_varies, default_hysteresis, split_cycles
 
 __all__ = ["TestData", "simulate_test"]

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..base.validation import check_magnitude, check_scalar, check_time, finite_array, same_length
+from ...base.validation import check_magnitude, check_scalar, check_time, finite_array, same_length
 from .noise import difference_sigma, estimate_noise
 
 __all__ = ["Cycle", "find_reversals", "split_cycles", "check_varies", "default_hysteresis"]
@@ -90,7 +90,7 @@ class Cycle:
 def _noise_sigma(u: np.ndarray) -> float:
     """Robust noise standard deviation of a slowly varying signal.
 
-    :func:`~iwan_element.identify.noise.estimate_noise` (Savitzky-Golay residual, per sample);
+    :func:`~iwan_element.identify.loops.noise.estimate_noise` (Savitzky-Golay residual, per sample);
     below 32 samples the MAD of the second differences. The second differences alone mistook
     the curvature of a clean, coarsely sampled record for noise."""
     if u.size < 5:

@@ -16,7 +16,7 @@ Uncertainties
     ``dF0`` of a loop fit), central differences at the optimum:
     ``cov = tau s^2 (J^T J)^-1`` with ``s^2 = SSR/(m - p)``, mapped back to
     ``(Fs, KT, chi, beta)`` with the delta method. ``tau`` is the integrated autocorrelation
-    time of the residuals (:func:`~iwan_element.identify.noise.integrated_time`): 1 for
+    time of the residuals (:func:`~iwan_element.identify.loops.noise.integrated_time`): 1 for
     white residuals, large for coloured noise or a systematic misfit, so a model that does not
     follow the data gets wider, not narrower, intervals. ``s^2`` holds the noise of both
     channels (force noise plus tangent stiffness times the displacement error); the
@@ -27,7 +27,7 @@ Uncertainties
     along a degenerate direction gets a NaN error.
 
 Verdict
-    :func:`~iwan_element.identify.result.settle_verdict` applies the package's one rule
+    :func:`~iwan_element.identify.loops.result.settle_verdict` applies the package's one rule
     (:func:`iwan_element.fitting.verdict`, docs/fitting.md section 5): identified means a
     finite standard error of at most half the value (``chi + 1`` for ``chi``) and not at a
     bound of the search range.
@@ -39,10 +39,10 @@ import math
 import numpy as np
 from scipy.special import fdtrc
 
-from ..core.history import unit_params
-from ..core.closed_form import backbone
-from ..core.parameters import IwanParameters
-from ._solver import _multistart, _Problem, _q_to_shape, _uncertainty
+from ...core.history import unit_params
+from ...core.closed_form import backbone
+from ...core.parameters import IwanParameters
+from .solver import _multistart, _Problem, _q_to_shape, _uncertainty
 from .noise import integrated_time
 from .result import PARAM_NAMES
 

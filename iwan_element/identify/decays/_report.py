@@ -1,6 +1,6 @@
 """Assembly of a free-decay amplitude curve: uncertainties for overlapping windows, the
 comparison of the two extractions, and the warnings (too few points, too little precision,
-points dropped, an early stop); see :mod:`iwan_element.identify.vibration`."""
+points dropped, an early stop); see :mod:`iwan_element.identify.decays.curve`."""
 from __future__ import annotations
 
 import logging
@@ -8,9 +8,9 @@ import math
 
 import numpy as np
 
-from .curves import AmplitudeCurve
+from ..modal.curves import AmplitudeCurve
 
-log = logging.getLogger("iwan_element.identify.vibration")
+log = logging.getLogger("iwan_element.identify.decays.curve")
 
 _MIN_POINTS = 10       # fewer points than this (in the decay's first decade) draw a warning
 _F_TARGET, _Z_TARGET = 1e-4, 0.03     # precision below which the curve draws a warning

@@ -6,8 +6,8 @@ ratios) and, where the force was measured, the modal constant, each with its sta
 and a statement of where it was measured (the window of a ring-down, the amplitude range of a
 sweep) and whether the structure was linear there. Made by
 :func:`~iwan_element.identify.free_decay.free_decay_modes`,
-:func:`~iwan_element.identify.frf_modes.frf_modes` and
-:func:`~iwan_element.identify.frf_modes.sweep_modes` (``docs/modal_targets.md``).
+:func:`~iwan_element.identify.sweeps.frf_modes.frf_modes` and
+:func:`~iwan_element.identify.sweeps.frf_modes.sweep_modes` (``docs/modal_targets.md``).
 
 Modes are numbered 1, 2, ... by ascending frequency of the identified physical poles; this is
 not a model's mode number (an in-plane mode, a mode no sensor sees): pair them with a model's
@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..base.result_shape import ResultShape, format_value, panels, table_lines, wrap
+from ...base.result_shape import ResultShape, format_value, panels, table_lines, wrap
 
 __all__ = ["ModalTargets", "ModeTarget", "mac"]
 
