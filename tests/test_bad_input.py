@@ -366,7 +366,7 @@ _EFF = "effects.py owner: "
 PENDING: dict[tuple[str, str, str], str] = {
     ("simulate_test", "sample_rate", "huge"): _FIT + "numpy 'Maximum allowed size exceeded' "
                                               "does not name sample_rate",
-    ("fit_force_model", "theta0", "huge"): "identify/model_fit.py: theta0 x1e300 gives scipy's "
+    ("fit_force_model", "theta0", "huge"): "identify/loops/model_fit.py: theta0 x1e300 gives scipy's "
                                             "'array must not contain infs or NaNs', not naming "
                                             "theta0 (the model's force overflows)",
 }

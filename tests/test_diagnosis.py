@@ -167,7 +167,7 @@ def test_two_hidden_effects_are_named_in_two_steps():
 
 def test_two_slider_laws_on_one_joint_are_both_named():
     """A contact that grips harder one way and breaks away above its sliding force: the two
-    slider laws multiply on the same sliders (effects/_law.py), and the diagnosis names both
+    slider laws multiply on the same sliders (effects/engine/law.py), and the diagnosis names both
     and fits them down to the noise."""
     a = calibrated("asymmetric_slip", 8.0, "ladder")
     r = calibrated("breakaway", 8.0, "ladder")

@@ -1,4 +1,4 @@
-"""Slider laws that compose (effects/_law.py): asymmetric slip and break-away on one joint.
+"""Slider laws that compose (effects/engine/law.py): asymmetric slip and break-away on one joint.
 
 Independent routes: a plain-Python bank of Jenkins sliders with static and kinetic thresholds
 per direction (tests/_jenkins_bank.py), to which the element is equal on a DiscreteIwan and to

@@ -25,7 +25,7 @@ __all__ = ["SlipDegradation"]
 @njit(cache=True)
 def _degrade_history(e, slip, k, sgn, phi, lam, Wb, rate, u, prev, D_inner):
     """The per-sample rule of the correction bank along ``u`` [m] (compiled): each step moves
-    every slider exactly (:func:`._sliders._bank_step`, caps ``lambda phi`` in the modified
+    every slider exactly (:func:`.engine.sliders.bank_step`, caps ``lambda phi`` in the modified
     bank, ``phi`` in the plain one), then ``lambda = exp(-rate D)`` from the energy
     dissipated so far and the modified sliders are clipped to their shrunken caps.
 

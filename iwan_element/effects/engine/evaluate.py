@@ -13,7 +13,7 @@ force is evaluated
   vectorised form (viscous damping, pinning stiffness);
 * slip degradation behind a backlash (then vector forms), whose wear makes the joint's path
   depend on every commit, by the elements' per-sample rule compiled
-  (:mod:`._series_kernel`) on the drive samples (the fitted samples plus every turning
+  (:mod:`.series_kernel`) on the drive samples (the fitted samples plus every turning
   point of the record); a backlash around a joint whose state depends only on its turning
   points is found run by run instead (``Backlash.joint_path``: measured twice as fast on
   the damper records);

@@ -78,8 +78,9 @@ def _commit(c, st, J, e, sl, k, sg, phi, caps, S, L, rate, w, e_new, s_new):
 
 @njit(cache=True)
 def _zero(c, st, J, e, sl, k, sg, caps, S, L, shift, a, Fa, b, Fb, e_new, s_new):
-    """:func:`iwan_element.effects.base._find_zero` on the wearing joint's force minus ``shift`` along
-    ``a -> b`` (``Fa``, ``Fb`` of opposite sign): Newton on the tangent, bisection safeguard."""
+    """:func:`iwan_element.effects.base._find_zero` on the wearing joint's force minus
+    ``shift`` along ``a -> b`` (``Fa``, ``Fb`` of opposite sign): Newton on the tangent,
+    bisection safeguard."""
     lo, hi = (a, b) if Fa < 0.0 else (b, a)
     x = a
     F = Fa

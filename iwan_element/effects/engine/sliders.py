@@ -5,7 +5,7 @@ Coulomb slider that slips at stretch ``phi_i``, docs/equations.md section 1, pap
 that change *how the sliders slip* (different thresholds forward and back, thresholds
 falling with wear, a static threshold above the kinetic one) cannot be written as a function
 of the joint's force; they act on each slider. Laws fixed per direction (asymmetric slip,
-break-away) are evaluated exactly on the continuous density (:mod:`._law`); thresholds that
+break-away) are evaluated exactly on the continuous density (:mod:`.law`); thresholds that
 evolve with the state (slip degradation) use this module, without giving up the exact
 joint:
 

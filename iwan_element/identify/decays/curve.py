@@ -23,7 +23,7 @@ to 5 % of damping with its defaults. The equations and their sources are in
    times the predictor's relative residual) by more than 1e-3; at the end, if the mode still
    rings there, where two continuations (predictors fitted on ten and on six periods) give
    outputs differing by more than 1e-3 of the envelope; at least one period each.
-4. Windows that follow the decay (:mod:`._decay_windows`): each spans at most ``span``
+4. Windows that follow the decay (:mod:`._windows`): each spans at most ``span``
    (0.15) nepers of decay and at least three periods (at most ``n_max``, 200 periods); they
    step by the same decay, overlapping where three periods decay by more (heavy damping), so
    the curve has about seven points per neper of decay whatever the damping. ``n_periods``
