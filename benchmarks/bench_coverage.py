@@ -22,7 +22,7 @@ from concurrent.futures import ProcessPoolExecutor
 import numpy as np
 
 from iwan_element import IwanParameters, fit_loops, force_amplitude, simulate_test
-from iwan_element.identify.result import IdentifiabilityWarning
+from iwan_element.identify.loops.result import IdentifiabilityWarning
 
 NAMES = ("Fs", "KT", "chi", "beta")
 

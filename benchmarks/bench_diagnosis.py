@@ -119,7 +119,7 @@ def agree(g) -> bool:
 def _pair_element(p, env, names, size):
     """Two effects stacked on the joint (slider-level innermost), each calibrated alone to
     ``size`` x noticeable."""
-    from iwan_element.effects.evaluate import order_stack
+    from iwan_element.effects.engine.evaluate import order_stack
     el = IwanJoint(p)
     for nm in order_stack(names):
         el = _element(p, nm, _parameter(p, env, nm, size), inner=el)
@@ -147,7 +147,7 @@ def timing(repeats: int) -> None:
     the per-sample reference loop, interleaved (A, B, A, B, ...), minimum per variant; the
     named effects and the residual after must be the same."""
     from iwan_element.effects import SlipDegradation
-    from iwan_element.effects._sliders import _SliderEffect
+    from iwan_element.effects.engine.sliders import SliderEffect
     fast = SlipDegradation._correction_energy
     recs = []
     for joint, env, seed in (("soft", "constant", 1), ("stiff", "ramped", 2),
@@ -159,7 +159,7 @@ def timing(repeats: int) -> None:
     for joint, env, (t, u, F) in recs:
         times, out = {"run": [], "sample": []}, {}
         for _ in range(repeats):
-            for tag, meth in (("run", fast), ("sample", _SliderEffect._correction_energy)):
+            for tag, meth in (("run", fast), ("sample", SliderEffect._correction_energy)):
                 SlipDegradation._correction_energy = meth
                 t0 = time.perf_counter()
                 g = diagnose(t, u, F, candidates=("slip_degradation", "asymmetric_slip"))

@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from iwan_element import fit_loops
-from iwan_element.identify.result import IdentifiabilityWarning
+from iwan_element.identify.loops.result import IdentifiabilityWarning
 
 _ROOT = Path(__file__).resolve().parents[1]
 # ../shared next to the project (a checkout in /work/main or a worktree in /work/wt/<name>)

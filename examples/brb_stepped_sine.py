@@ -41,7 +41,7 @@ from pathlib import Path
 import numpy as np
 
 from iwan_element import models
-from iwan_element.core.result_shape import table_lines
+from iwan_element.base.result_shape import table_lines
 
 from brb_discrepancy import data_dir, diagnose_sweeps, sweeps_curve
 

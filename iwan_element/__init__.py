@@ -23,31 +23,31 @@ from .diagnose import CampaignFit, fit_campaign
 from .core.discrete import DiscreteIwan, slider_distribution
 from .effects import (EFFECTS, AsymmetricSlip, Backlash, BreakAway, Hardening, MacroslipOnset,
                       PinningStiffness, SlipDegradation, ViscousDamping, base_joint, make_effect)
-from .identify.dissipation import fit_dissipation
-from .identify.loops import fit_loops
-from .identify.result import FitResult, IdentifiabilityWarning
+from .identify.loops.dissipation import fit_dissipation
+from .identify.loops.fit import fit_loops
+from .identify.loops.result import FitResult, IdentifiabilityWarning
 from .core.joint import IwanJoint
 from .core.joint_bank import IwanJointBank
 from .core.parameters import IwanParameters
 from .core.protocol import JointElement, check_element
-from .identify.curves import AmplitudeCurve
+from .identify.modal.curves import AmplitudeCurve
 from .ensemble import (EnsembleResult, ParameterUncertainty, PredictionBands, SingleModeSystem,
                        parameter_grid, parameter_samples, propagate_uncertainty, run_ensemble)
-from .identify.noise import NoiseEstimate, estimate_noise
-from .identify.model_fit import ModelFit, fit_force_model
+from .identify.loops.noise import NoiseEstimate, estimate_noise
+from .identify.loops.model_fit import ModelFit, fit_force_model
 from .core.modal import harmonic_stiffness, modal_iwan_curve, modal_ringdown
-from .identify.vibration import amplitude_curve
-from .identify.modal_fit import ModalIwanFit, fit_modal_iwan
-from .identify.decay_fit import fit_decay
-from .identify.stepped_sine import stepped_sine_curve
-from .identify.sweeps import sweep_curve
-from .identify.formats import UffRecord, read_sweep_csv, read_uff
-from .identify.decay_modes import free_decay_modes
-from .identify.frf_modes import frf_modes, sweep_modes
-from .identify.modal_targets import ModalTargets, ModeTarget, mac
-from .identify.csv_input import load_test
-from .identify.cycles import Cycle, find_reversals, split_cycles
-from .identify.testdata import TestData, simulate_test
+from .identify.decays.curve import amplitude_curve
+from .identify.modal.fit import ModalIwanFit, fit_modal_iwan
+from .identify.decays.fit import fit_decay
+from .identify.sweeps.stepped_sine import stepped_sine_curve
+from .identify.sweeps.sweep import sweep_curve
+from .identify.files.formats import UffRecord, read_sweep_csv, read_uff
+from .identify.decays.modes import free_decay_modes
+from .identify.sweeps.frf_modes import frf_modes, sweep_modes
+from .identify.modal.targets import ModalTargets, ModeTarget, mac
+from .identify.files.csv_input import load_test
+from .identify.loops.cycles import Cycle, find_reversals, split_cycles
+from .identify.loops.testdata import TestData, simulate_test
 
 from importlib.metadata import version as _version; __version__ = _version("iwan-element")
 

@@ -131,7 +131,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 def _run_diagnose(args) -> int:
     from .diagnose import diagnose
-    from .identify.csv_input import FORCE_UNITS, load_test
+    from .identify.files.csv_input import FORCE_UNITS, load_test
 
     if len(args.csv) > 1 or args.jobs is not None or args.table is not None:
         return _run_diagnose_many(args)
@@ -162,7 +162,7 @@ def _run_diagnose_many(args) -> int:
     from concurrent.futures import ProcessPoolExecutor
 
     from .diagnose import diagnose_many
-    from .identify.csv_input import FORCE_UNITS, load_test
+    from .identify.files.csv_input import FORCE_UNITS, load_test
 
     if args.plot is not None:
         raise ValueError("--plot draws one record; with several records use --json/--table "
@@ -241,9 +241,9 @@ def _write_plot(path: Path, data, result) -> None:
 
 
 def _run_fit(args) -> int:
-    from .identify.dissipation import fit_dissipation
-    from .identify.loops import fit_loops
-    from .identify.csv_input import FORCE_UNITS, load_test
+    from .identify.loops.dissipation import fit_dissipation
+    from .identify.loops.fit import fit_loops
+    from .identify.files.csv_input import FORCE_UNITS, load_test
 
     du, fu, tu = _parse_units(args.units)
     data = load_test(args.csv, displacement_unit=du, force_unit=fu, time_unit=tu,
@@ -251,7 +251,7 @@ def _run_fit(args) -> int:
     if args.method != "seed" and args.slip_force is not None:
         raise ValueError("--slip-force is only used by --method seed")
     if args.slip_force is not None:
-        from .core.validation import check_scalar
+        from .base.validation import check_scalar
         check_scalar("--slip-force", args.slip_force, low=0.0, low_open=True)
     with warnings.catch_warnings(record=True):       # the report lists every warning
         warnings.simplefilter("always")

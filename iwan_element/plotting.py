@@ -8,30 +8,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from .core.validation import check_int, finite_array, same_length
+from .base.validation import check_int, finite_array, same_length
 from .core.closed_form import (dissipation as cycle_dissipation, dissipation_slope,
                                force_amplitude, masing_ascending, masing_descending,
                                masing_loop, normalized_backbone)
 from .core.parameters import IwanParameters
-from .core.result_shape import panels
+from .base.result_shape import axes_or_new
 
 __all__ = ["plot_normalized_loops", "plot_loop", "plot_fitted_loops", "plot_dissipation_fit"]
-
-
-def _pyplot():
-    try:
-        import matplotlib.pyplot as plt
-    except ImportError as exc:  # pragma: no cover - depends on the environment
-        raise ImportError("plotting needs matplotlib: pip install matplotlib") from exc
-    return plt
-
-
-def axes_or_new(ax):
-    """One matplotlib Axes: ``ax`` itself, or a new figure's if ``None`` (the one-panel case
-    of the package's axes contract, :func:`iwan_element.core.result_shape.panels`)."""
-    if ax is None:
-        _pyplot()
-    return panels(ax, 1, figsize=(6.4, 4.8))[0]
 
 
 def plot_normalized_loops(cases, *, s0: float = 1.0, step: float = 0.002, ax=None):

@@ -31,7 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from iwan_element import IwanParameters
-from iwan_element.identify.testdata import simulate_test
+from iwan_element.identify.loops.testdata import simulate_test
 
 __all__ = ["main", "PARAMS", "AMPLITUDES_MM"]
 

@@ -2,7 +2,7 @@
 beside the models they run, so that the ensemble runner below never imports the models).
 
 :func:`specimen_curve_task` runs the quasi-static modal analysis
-(:func:`iwan_element.models.qsma.modal_amplitude_curve`, docs/equations.md section 7) of a
+(:func:`iwan_element.models.modal.modal_amplitude_curve`, docs/equations.md section 7) of a
 :class:`~iwan_element.models.specimens.Specimen` with some of its inputs changed, so that
 preload, friction coefficient, bolt count or an interface parameter can be swept with
 :func:`~iwan_element.ensemble.run_ensemble`::

@@ -17,7 +17,7 @@ import numpy as np
 
 from iwan_element import IwanParameters
 from iwan_element.diagnose import simulate_element_test
-from iwan_element.effects.evaluate import build_element
+from iwan_element.effects.engine.evaluate import build_element
 
 #: True laws: quantity -> (intercept, per tension [N/lb or 1/lb], per frequency [1/Hz]).
 LAWS = {"Fs": (400.0, 20.0, 0.0), "log_phi_max": (math.log(2.0e-3), 0.0, 0.0),

@@ -1,7 +1,7 @@
 """One API shape: plotting functions take ``ax=`` and return the artists they drew on it;
 every public result class has ``report()``, a JSON-safe ``to_dict()``, ``warnings``,
 ``success``, ``_repr_html_()`` and ``plot(ax=None)`` returning artists, with the one axes
-contract of ``iwan_element.core.result_shape``; time-series functions take time first."""
+contract of ``iwan_element.base.result_shape``; time-series functions take time first."""
 from __future__ import annotations
 
 import functools
@@ -17,7 +17,7 @@ import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 
-from iwan_element.core.result_shape import ResultShape  # noqa: E402
+from iwan_element.base.result_shape import ResultShape  # noqa: E402
 
 import iwan_element as ie  # noqa: E402
 from iwan_element import plotting  # noqa: E402
@@ -343,7 +343,7 @@ def test_other_result_objects_have_the_same_shape(name, part):
 def test_report_tables_align_their_titles_with_their_columns():
     """table_lines: every line of a table is as wide as its header; numbers and titles are
     right-aligned unless the column's spec says left."""
-    from iwan_element.core.result_shape import table_lines
+    from iwan_element.base.result_shape import table_lines
     lines = table_lines([("record", "<12"), ("band [N]", "9.4g"), ("ratio", "6.2f")],
                         [("a", 1234.5678, 0.5), ("bb", 1e-7, 12.345)], indent=2)
     assert len({len(s) for s in lines}) == 1
@@ -355,7 +355,7 @@ def test_report_tables_align_their_titles_with_their_columns():
 def test_every_exudyn_result_class_is_covered():
     """Every result class of the Exudyn adapter's public names is in EXUDYN_RESULTS."""
     from iwan_element import exudyn as ex
-    from iwan_element.core.result_shape import ResultShape
+    from iwan_element.base.result_shape import ResultShape
     public = {n for n in ex.__all__ if inspect.isclass(getattr(ex, n))
               and issubclass(getattr(ex, n), ResultShape)}
     assert public == set(EXUDYN_RESULTS)

@@ -366,7 +366,7 @@ _EFF = "effects.py owner: "
 PENDING: dict[tuple[str, str, str], str] = {
     ("simulate_test", "sample_rate", "huge"): _FIT + "numpy 'Maximum allowed size exceeded' "
                                               "does not name sample_rate",
-    ("fit_force_model", "theta0", "huge"): "identify/model_fit.py: theta0 x1e300 gives scipy's "
+    ("fit_force_model", "theta0", "huge"): "identify/loops/model_fit.py: theta0 x1e300 gives scipy's "
                                             "'array must not contain infs or NaNs', not naming "
                                             "theta0 (the model's force overflows)",
 }
@@ -593,7 +593,7 @@ def test_load_test_bad_files(tmp_path, label, text, match):
 def test_magnitude_check_refuses_only_what_floats_cannot_carry():
     """Records of nanometres and micro-newtons (or GN) are physical and pass; 1e120 or 1e-120
     (squares overflow / everything below float resolution) are refused naming the argument."""
-    from iwan_element.core.validation import check_magnitude
+    from iwan_element.base.validation import check_magnitude
     for ok in (np.array([0.0, 1e-9, -2e-9]), np.array([1e9, -3e9]), np.zeros(3), np.array([])):
         assert check_magnitude("u", ok) is ok
     for bad in (np.array([0.0, 1e120]), np.array([1e-120, -2e-120])):

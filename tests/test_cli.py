@@ -13,7 +13,7 @@ import pytest
 from _helpers import write_record_csv
 from iwan_element import IwanParameters
 from iwan_element.cli import main
-from iwan_element.identify.testdata import simulate_test
+from iwan_element.identify.loops.testdata import simulate_test
 
 P = IwanParameters(9e3, 5e7, -0.5, 0.5)
 

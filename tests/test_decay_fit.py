@@ -21,7 +21,7 @@ from scipy.integrate import solve_ivp  # noqa: E402
 
 from _decays import joint_decay, svam_decay  # noqa: E402
 from iwan_element import IwanParameters, ModalIwanFit, fit_decay, modal_iwan_curve  # noqa: E402
-from iwan_element.identify import _decay_model as D  # noqa: E402
+from iwan_element.identify.decays import _fit_model as D  # noqa: E402
 
 F0 = 80.0
 PHI_MAX = 1e-3

@@ -18,7 +18,7 @@ from _helpers import write_record_csv
 from iwan_element import (AsymmetricSlip, BreakAway, IwanJoint, PinningStiffness, ViscousDamping,
                           make_effect)
 from iwan_element.core.history import REVERSAL_TOL, unit_params
-from iwan_element.effects.evaluate import Evaluator, build_element, dissipation_segments
+from iwan_element.effects.engine.evaluate import Evaluator, build_element, dissipation_segments
 from iwan_element.diagnose import diagnose, diagnose_vibration, simulate_element_test
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -167,7 +167,7 @@ def test_two_hidden_effects_are_named_in_two_steps():
 
 def test_two_slider_laws_on_one_joint_are_both_named():
     """A contact that grips harder one way and breaks away above its sliding force: the two
-    slider laws multiply on the same sliders (effects/_law.py), and the diagnosis names both
+    slider laws multiply on the same sliders (effects/engine/law.py), and the diagnosis names both
     and fits them down to the noise."""
     a = calibrated("asymmetric_slip", 8.0, "ladder")
     r = calibrated("breakaway", 8.0, "ladder")
@@ -476,12 +476,12 @@ def test_loop_candidates_come_from_the_effects_declarations():
     an effect registered later joins (as vibration_candidates does for modal forms)."""
     from iwan_element import loop_candidates
     from iwan_element.effects import EFFECTS, ParamSpec, register_effect
-    from iwan_element.effects._base import _Effect
+    from iwan_element.effects.base import Effect
     assert loop_candidates() == ("viscous_damping", "pinning_stiffness", "backlash",
                                  "slip_degradation", "asymmetric_slip", "breakaway")
     assert "hardening" not in loop_candidates()          # a beam-vibration effect only
 
-    class _Probe(_Effect):
+    class _Probe(Effect):
         effect = "probe_loop"
         loop_rank = 5
         specs = (ParamSpec("c", "N s/m", "probe"),)

@@ -161,7 +161,7 @@ def test_slip_degradation_run_solver_equals_the_per_sample_steps(rate_x):
     walk (many short runs, where capacities may fall back to the reference), also through the
     element route (trial/commit): a wrong run formula (clip order, pre-clip force, pauses)
     fails this."""
-    from iwan_element.effects._sliders import _SliderEffect
+    from iwan_element.effects.engine.sliders import SliderEffect
     rng = np.random.default_rng(11)
     t = np.arange(900) / 100.0
     u1 = A * np.interp(t, [0, t[-1]], [0.2, 2.5]) * np.sin(2 * np.pi * t)
@@ -172,7 +172,7 @@ def test_slip_degradation_run_solver_equals_the_per_sample_steps(rate_x):
         D = run(IwanJoint(P), u)[2]
         fast = SlipDegradation(IwanJoint(P), rate=rate).correction_history(u, D)
         ref_el = SlipDegradation(IwanJoint(P), rate=rate)
-        ref = _SliderEffect._correction_energy(ref_el, u, D)
+        ref = SliderEffect._correction_energy(ref_el, u, D)
         np.testing.assert_allclose(fast, ref, rtol=0, atol=1e-11 * P.Fs)
         if u is u2:      # the element route (trial/commit), on a record without pauses (the
             # element also commits at a pause and re-reads the energy after its clip there)

@@ -22,15 +22,15 @@ from scipy import optimize
 from iwan_element import (IwanJoint, IwanParameters, dissipation, force_amplitude,
                           secant_stiffness)
 from iwan_element.fitting import minimize
-from iwan_element.identify._solver import _Problem, _q_to_shape
-from iwan_element.identify.dissipation import _seed_model
-from iwan_element.identify.result import quiet_fits as _quiet_ctx
+from iwan_element.identify.loops.solver import _Problem, _q_to_shape
+from iwan_element.identify.loops.dissipation import _seed_model
+from iwan_element.identify.loops.result import quiet_fits as _quiet_ctx
 from iwan_element.core.history import History
-from iwan_element.identify.dissipation import fit_dissipation
-from iwan_element.identify.loops import fit_loops
-from iwan_element.identify.result import FitResult, IdentifiabilityWarning
-from iwan_element.identify.csv_input import load_test
-from iwan_element.identify.testdata import simulate_test
+from iwan_element.identify.loops.dissipation import fit_dissipation
+from iwan_element.identify.loops.fit import fit_loops
+from iwan_element.identify.loops.result import FitResult, IdentifiabilityWarning
+from iwan_element.identify.files.csv_input import load_test
+from iwan_element.identify.loops.testdata import simulate_test
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "models" / "example_test_30kN.csv"
 

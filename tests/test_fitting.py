@@ -280,7 +280,7 @@ def test_fit_result_params_table_and_joint():
     """fit_loops: params is a ParameterTable, .joint the IwanParameters built from it, and
     stderr/identified/correlation/fixed are views of the same table."""
     from iwan_element import IwanParameters, fit_loops
-    from iwan_element.identify.testdata import simulate_test
+    from iwan_element.identify.loops.testdata import simulate_test
     p = IwanParameters(1000.0, 2e6, -0.5, 0.3)
     d = simulate_test(p, np.array([0.3, 1.0, 2.0]) * p.phi_max, cycles=2, force_noise=2.0,
                       seed=1)

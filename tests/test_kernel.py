@@ -179,7 +179,7 @@ def test_compiled_routes_work_in_either_order_in_a_fresh_process():
     code = """
 import numpy as np
 from iwan_element import IwanJoint, IwanParameters, SlipDegradation, BreakAway, Backlash
-from iwan_element.effects.evaluate import Evaluator
+from iwan_element.effects.engine.evaluate import Evaluator
 p = IwanParameters(1.0, 100.0, -0.5, 0.2)
 u = 0.02 * np.sin(np.linspace(0, 12, 400))
 ev = Evaluator(u, np.zeros(400), np.arange(400), np.arange(400), tol=0.0)
@@ -206,7 +206,7 @@ def test_compiled_wear_behind_a_gap_equals_the_elements(drag):
     """The diagnosis evaluates slip degradation inside backlash (then a spring and a dashpot)
     with the elements' per-sample rule compiled; it must give their forces."""
     from iwan_element.core.history import unit_params
-    from iwan_element.effects.evaluate import Evaluator, build_element
+    from iwan_element.effects.engine.evaluate import Evaluator, build_element
     rng = np.random.default_rng(int(drag * 100) + 4)
     t = np.linspace(0.0, 6.0, 600)
     u = 0.02 * np.sin(2 * np.pi * t) + 2e-4 * rng.normal(size=t.size)
@@ -232,8 +232,8 @@ def test_compiled_joint_path_behind_a_gap_equals_the_element(drag):
     laws, through a pause and a rest at the start."""
     from iwan_element import AsymmetricSlip, Backlash, BreakAway
     from iwan_element.core.history import unit_params
-    from iwan_element.effects.evaluate import _constants, _laws
-    from iwan_element.effects._series_kernel import backlash_path
+    from iwan_element.effects.engine.evaluate import _constants, _laws
+    from iwan_element.effects.engine.series_kernel import backlash_path
     rng = np.random.default_rng(int(drag * 100) + 9)
     p1 = unit_params(0.01, -0.5, 0.2)
     t = np.linspace(0.0, 6.0, 700)
@@ -255,7 +255,7 @@ def test_one_blas_thread_limits_and_restores():
     """The fits' BLAS limit (core.threads): one thread inside, the previous limits after."""
     from threadpoolctl import threadpool_info
 
-    from iwan_element.core.threads import one_blas_thread
+    from iwan_element.base.threads import one_blas_thread
 
     np.linalg.svd(np.ones((4, 2)))                  # a BLAS is loaded by now
     before = [(p["filepath"], p["num_threads"]) for p in threadpool_info()

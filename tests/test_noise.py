@@ -6,7 +6,7 @@ import pytest
 from scipy.signal import lfilter
 
 from iwan_element import IwanJoint, IwanParameters
-from iwan_element.identify.noise import NoiseEstimate, estimate_noise
+from iwan_element.identify.loops.noise import NoiseEstimate, estimate_noise
 
 P = IwanParameters(Fs=800.0, KT=3e6, chi=-0.4, beta=0.5)
 FS, N = 500.0, 6000                      # 500 Hz, 12 s, 0.5 Hz loading: 1000 samples a period

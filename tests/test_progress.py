@@ -1,4 +1,4 @@
-"""Progress bars (``iwan_element.core.progress``): a total and so an ETA on every long call,
+"""Progress bars (``iwan_element.base.progress``): a total and so an ETA on every long call,
 off by default, silent under CI, a clear error without tqdm or for a non-bool."""
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ import pytest
 
 import iwan_element as ie
 from iwan_element import models
-from iwan_element.core import progress as pg
+from iwan_element.base import progress as pg
 from iwan_element.models.calibration import calibrate
 
 LONG_CALLS = [ie.fit_decay, ie.diagnose, ie.diagnose_many, ie.fit_campaign, ie.run_ensemble,

@@ -1,4 +1,4 @@
-"""Slider laws that compose (effects/_law.py): asymmetric slip and break-away on one joint.
+"""Slider laws that compose (effects/engine/law.py): asymmetric slip and break-away on one joint.
 
 Independent routes: a plain-Python bank of Jenkins sliders with static and kinetic thresholds
 per direction (tests/_jenkins_bank.py), to which the element is equal on a DiscreteIwan and to
@@ -10,7 +10,7 @@ import pytest
 from _helpers import stepped_sine
 from iwan_element import DiscreteIwan, IwanJoint, IwanParameters
 from iwan_element.effects import AsymmetricSlip, BreakAway, SlipDegradation
-from iwan_element.effects.evaluate import Evaluator
+from iwan_element.effects.engine.evaluate import Evaluator
 from _jenkins_bank import directional_bank
 
 P = IwanParameters(1000.0, 1e6, -0.5, 0.2)

@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 
 from iwan_element import IwanJoint, IwanParameters, dissipation, force_amplitude, secant_stiffness
-from iwan_element.identify.csv_input import load_test
-from iwan_element.identify.cycles import find_reversals, split_cycles
-from iwan_element.identify.testdata import TestData, simulate_test
+from iwan_element.identify.files.csv_input import load_test
+from iwan_element.identify.loops.cycles import find_reversals, split_cycles
+from iwan_element.identify.loops.testdata import TestData, simulate_test
 
 P = IwanParameters(Fs=9e3, KT=5e7, chi=-0.5, beta=0.5)        # phi_max = 0.324 mm
 

@@ -14,7 +14,7 @@ from scipy.optimize import brentq
 import _vibration_cases as vc
 from iwan_element import AmplitudeCurve, diagnose_vibration
 from iwan_element.effects import EFFECTS, ParamSpec, register_effect
-from iwan_element.effects._base import _Effect
+from iwan_element.effects.base import Effect
 from iwan_element.diagnose.vibration.diagnosis import vibration_candidates
 
 X = np.geomspace(0.02, 1.5, 30) * vc.BASE.phi_max
@@ -89,7 +89,7 @@ def test_candidates_come_from_the_effects_declarations():
     assert set(vibration_candidates()) == {n for n, c in EFFECTS.items() if c.modal_specs}
     assert {"hardening", "macroslip_onset"} <= set(vibration_candidates())
 
-    class _Probe(_Effect):
+    class _Probe(Effect):
         effect = "probe_floor"
         kind = "dissipation"
         specs = (ParamSpec("c", "N s/m", "probe"),)

@@ -136,7 +136,7 @@ def test_spread_patch_integrals_against_adaptive_quadrature(shape):
     and the Hertzian end (shape 1) included, and ``K(2 X_s) = 1``."""
     from scipy.integrate import quad
 
-    from iwan_element.effects._jenkins import jenkins_gain
+    from iwan_element.effects.engine.jenkins import jenkins_gain
     from iwan_element.effects.macroslip_onset import (patch_cumulative, patch_dissipation,
                                                       patch_stiffness_loss)
     Xs = 1e-5

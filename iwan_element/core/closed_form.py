@@ -11,7 +11,7 @@ import warnings
 
 import numpy as np
 
-from .validation import check_scalar, finite_array
+from ..base.validation import check_scalar, finite_array
 from .parameters import CHI_MAX, IwanParameters
 
 __all__ = [

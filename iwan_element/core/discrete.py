@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .validation import check_scalar, finite_array, same_length
+from ..base.validation import check_scalar, finite_array, same_length
 from .parameters import IwanParameters
 from .protocol import CommittedState
 

@@ -17,7 +17,7 @@ The per-sample backbone terms ``G`` are the only parameter-dependent part; the b
 ``(phi_max, chi, beta)``. Only the samples that are fitted and their chains of anchors are
 kept, so a decimated fit still uses the exact reversal points of the full record.
 
-Used by :mod:`iwan_element.identify.loops`; verified against ``IwanJoint.force_history``.
+Used by :mod:`iwan_element.identify.loops.fit`; verified against ``IwanJoint.force_history``.
 """
 from __future__ import annotations
 

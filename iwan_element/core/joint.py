@@ -28,7 +28,7 @@ import math
 
 import numpy as np
 
-from .validation import check_scalar, finite_array, same_length
+from ..base.validation import check_scalar, finite_array, same_length
 from .history import REVERSAL_TOL
 from .masing import _NOSEG, masing_step, masing_constants, masing_history
 from .parameters import IwanParameters

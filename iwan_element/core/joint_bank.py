@@ -28,7 +28,7 @@ import math
 import numpy as np
 
 from .history import REVERSAL_TOL
-from .validation import check_scalar, finite_array
+from ..base.validation import check_scalar, finite_array
 from .joint import REVERSAL_TOL_MAX
 from .masing import _NOSEG, masing_step, masing_constants
 from .parameters import IwanParameters

@@ -28,7 +28,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .validation import check_scalar, finite_array
+from ..base.validation import check_scalar, finite_array
 from .parameters import IwanParameters
 
 __all__ = ["masing_constants", "constants_from_arrays", "masing_history", "masing_rows",

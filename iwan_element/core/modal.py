@@ -33,7 +33,7 @@ import math
 
 import numpy as np
 
-from .validation import check_magnitude, check_scalar, finite_array
+from ..base.validation import check_magnitude, check_scalar, finite_array
 from .closed_form import backbone, dissipation, secant_stiffness, tangent_stiffness
 from .joint import IwanJoint
 from .parameters import IwanParameters

@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .validation import check_scalar
+from ..base.validation import check_scalar
 
 __all__ = ["IwanParameters"]
 

@@ -6,9 +6,9 @@ import math
 import numpy as np
 from scipy.signal import lfilter
 
-from ..core.validation import check_int, check_magnitude, check_scalar, finite_array
+from ..base.validation import check_int, check_magnitude, check_scalar, finite_array
 from ..core.protocol import check_element
-from ..identify.testdata import TestData
+from ..identify.loops.testdata import TestData
 
 __all__ = ["simulate_element_test"]
 

@@ -6,7 +6,11 @@ joint, its parameters as :class:`ParamSpec` (bounds, unit, meaning, scaling used
 fits), a docstring with the physics and its source, and where one exists its
 amplitude-domain (modal) form used by :func:`~iwan_element.diagnose_vibration`.
 :data:`EFFECTS` is filled by discovering every module of this package, so adding an effect
-means adding one file that defines a subclass of the shared base with an ``effect`` name.
+means adding one file that defines a subclass of the shared base (:class:`Effect`, in
+:mod:`.base` with :class:`ParamSpec`) with an ``effect`` name. The machinery below and behind
+the effects lives in :mod:`.engine`: the exact slider laws, the slider banks and Jenkins banks
+the slider-level effects are built on, their compiled kernels, and the whole-history
+evaluator the diagnoses run (:mod:`.engine.evaluate`, which reads :data:`EFFECTS`).
 
 ========================  =====================================================================
 name                      physics
@@ -26,7 +30,7 @@ name                      physics
 
 Slider-level effects (the last three) wrap a plain joint directly; the others wrap anything.
 Asymmetric slip and break-away are one slider law each and may wrap one another (their
-thresholds multiply: :mod:`iwan_element.effects._law`); slip degradation stands alone.
+thresholds multiply: :mod:`iwan_element.effects.engine.law`); slip degradation stands alone.
 Every effect reduces exactly to the wrapped element at its neutral parameter values.
 """
 from __future__ import annotations
@@ -36,7 +40,7 @@ import inspect
 import pkgutil
 
 from ..core.protocol import check_element
-from ._base import ParamSpec, _Effect
+from .base import Effect, ParamSpec
 from .asymmetric_slip import AsymmetricSlip
 from .backlash import Backlash
 from .breakaway import BreakAway
@@ -46,7 +50,7 @@ from .pinning_stiffness import PinningStiffness
 from .slip_degradation import SlipDegradation
 from .viscous_damping import ViscousDamping
 
-__all__ = ["EFFECTS", "ParamSpec", "ViscousDamping", "PinningStiffness", "Backlash",
+__all__ = ["EFFECTS", "Effect", "ParamSpec", "ViscousDamping", "PinningStiffness", "Backlash",
            "SlipDegradation", "AsymmetricSlip", "BreakAway", "Hardening", "MacroslipOnset",
            "make_effect", "base_joint",
            "register_effect"]
@@ -58,7 +62,7 @@ EFFECTS: dict = {}
 def register_effect(cls):
     """Add an effect class (a subclass of the shared base with a unique ``effect`` name and
     ``specs``) to :data:`EFFECTS`; returns it, so it can be used as a decorator."""
-    if not (inspect.isclass(cls) and issubclass(cls, _Effect) and cls.effect):
+    if not (inspect.isclass(cls) and issubclass(cls, Effect) and cls.effect):
         raise ValueError(f"cls must be an effect class with an 'effect' name, got {cls!r}")
     if cls.effect in EFFECTS and EFFECTS[cls.effect] is not cls:
         raise ValueError(f"an effect named {cls.effect!r} is already registered")
@@ -68,11 +72,11 @@ def register_effect(cls):
 
 def _discover() -> None:
     for info in sorted(pkgutil.iter_modules(__path__), key=lambda m: m.name):
-        if info.name.startswith("_"):
+        if info.name.startswith("_") or info.ispkg or info.name == "base":
             continue
         mod = importlib.import_module(f"{__name__}.{info.name}")
         for obj in vars(mod).values():
-            if (inspect.isclass(obj) and issubclass(obj, _Effect) and obj.effect
+            if (inspect.isclass(obj) and issubclass(obj, Effect) and obj.effect
                     and obj.__module__ == mod.__name__):
                 register_effect(obj)
 
@@ -105,6 +109,6 @@ def base_joint(element):
     """The innermost element below any stack of effects (``ValueError`` if ``element`` is no
     joint element)."""
     check_element(element, name="element")
-    while isinstance(element, _Effect):
+    while isinstance(element, Effect):
         element = element.inner
     return element

@@ -11,20 +11,20 @@ shifted by ``a Fs``, but the shift only builds up as sliders slip (a microslip l
 by ``a`` times the slipped capacity only) and the virgin curves differ forward and back,
 whereas a load-cell offset shifts every force by the same constant from the first sample.
 
-Exact on the continuous density (:mod:`iwan_element.effects._law`, law
+Exact on the continuous density (:mod:`iwan_element.effects.engine.law`, law
 ``sigma_d = kappa_d = 1 +- a``). Wrapped by :class:`~iwan_element.effects.BreakAway`, the laws
 multiply: a contact that grips harder one way and whose static friction exceeds its kinetic
 friction (a band brake, whose self-energising wrap favours one direction).
 """
 from __future__ import annotations
 
-from ._base import ParamSpec
-from ._law import _LawEffect
+from .base import ParamSpec
+from .engine.law import LawEffect
 
 __all__ = ["AsymmetricSlip"]
 
 
-class AsymmetricSlip(_LawEffect):
+class AsymmetricSlip(LawEffect):
     """Slip thresholds ``(1 + a) phi_i`` forward and ``(1 - a) phi_i`` back on every slider.
 
     Parameters

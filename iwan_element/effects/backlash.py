@@ -31,7 +31,7 @@ import copy
 
 import numpy as np
 
-from ._base import ParamSpec, _Effect, _find_zero, monotone_runs
+from .base import ParamSpec, Effect, _find_zero, monotone_runs
 
 __all__ = ["Backlash"]
 
@@ -40,7 +40,7 @@ def _shifted(FK, f):
     return FK[0] - f, FK[1]
 
 
-class Backlash(_Effect):
+class Backlash(Effect):
     """A dead zone of total width ``2 gap`` in series with the joint, crossed against a
     friction ``drag`` (module docstring).
 

@@ -14,7 +14,7 @@ that drop with its own structural ringing (40-50 Hz on the damper rig), which is
 of the rig, not of the joint, and is removed before fitting (see :func:`iwan_element.diagnose`
 ``lowpass``).
 
-Exact on the continuous density (no slider bank; :mod:`iwan_element.effects._law`, whose
+Exact on the continuous density (no slider bank; :mod:`iwan_element.effects.engine.law`, whose
 law is here ``sigma = r``, ``kappa = 1`` both ways), so the force, and the misfit of a fit,
 are continuous in ``r`` (a bank of discrete sliders makes them a staircase: each slider
 breaks at one sample or the next). On a :class:`~iwan_element.core.discrete.DiscreteIwan` it
@@ -26,13 +26,13 @@ independent plain-Python slider bank, to which a dense bank converges
 """
 from __future__ import annotations
 
-from ._base import ParamSpec
-from ._law import _LawEffect
+from .base import ParamSpec
+from .engine.law import LawEffect
 
 __all__ = ["BreakAway"]
 
 
-class BreakAway(_LawEffect):
+class BreakAway(LawEffect):
     """Static threshold ``r phi``, kinetic threshold ``phi`` on every slider of the joint.
 
     Parameters

@@ -28,12 +28,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._base import ParamSpec, _Effect
+from .base import ParamSpec, Effect
 
 __all__ = ["Hardening"]
 
 
-class Hardening(_Effect):
+class Hardening(Effect):
     """A cubic spring in parallel with the joint: ``F = F_j(u) + k3 u^3``.
 
     Parameters

@@ -43,7 +43,7 @@ per unit modal mass that slides between ``X_s`` and ``2 X_s``, ``c = kappa_2 / B
     D(X)   = 4 int phi (X - phi) dK = 4 c [X X_s E(1 - q) - X_s^2 E(2 - q)],
     zeta = zeta0 + (zeta_base - zeta0) w_base^2 / w^2 + D / (2 pi w^2 X^2),
 
-with ``g`` the Jenkins element's first-harmonic gain (:func:`._jenkins.jenkins_gain`); the
+with ``g`` the Jenkins element's first-harmonic gain (:func:`.engine.jenkins.jenkins_gain`); the
 stiffness integral by 48-point Gauss-Legendre quadrature over the sliding stiffness ``K``
 (:func:`patch_stiffness_loss`), the dissipation in closed form (:func:`patch_dissipation`).
 Equations and derivation: ``docs/vibration_effects.md``.
@@ -61,9 +61,9 @@ import math
 
 import numpy as np
 
-from ..core.validation import check_scalar
-from ._base import ParamSpec
-from ._jenkins import JenkinsBank, jenkins_gain
+from ..base.validation import check_scalar
+from .base import ParamSpec
+from .engine.jenkins import JenkinsBank, jenkins_gain
 
 __all__ = ["MacroslipOnset", "patch_cumulative", "patch_stiffness_loss",
            "patch_dissipation"]

@@ -14,7 +14,7 @@ import math
 
 import numpy as np
 
-from ._base import ParamSpec, _Effect
+from .base import ParamSpec, Effect
 
 __all__ = ["PinningStiffness", "dead_zone_gain"]
 
@@ -26,7 +26,7 @@ def dead_zone_gain(X, delta):
     return 1.0 - (2.0 / np.pi) * (np.arcsin(r) + r * np.sqrt(1.0 - r * r))
 
 
-class PinningStiffness(_Effect):
+class PinningStiffness(Effect):
     """A spring in parallel that engages after a clearance: ``k_p sign(u) max(|u| - delta, 0)``.
 
     Parameters

@@ -16,39 +16,16 @@ import math
 import numpy as np
 from numba import njit
 
-from ._base import ParamSpec
-from ._sliders import _SliderEffect, _bank_step
+from .base import ParamSpec
+from .engine.sliders import SliderEffect, bank_step, degrade
 
 __all__ = ["SlipDegradation"]
 
 
 @njit(cache=True)
-def _degrade(e, sgn, k, phi, D_inner, Wb, rate, cap_s, cap_k):
-    """The commit of the correction bank (compiled): ``lambda = exp(-rate D)`` from the energy
-    dissipated so far (``D = D_inner + Wb - stored``), the modified sliders clipped to their
-    shrunken caps ``lambda phi`` (``e`` changed in place) and the caps of the modified bank
-    written to the first entries of ``cap_s``, ``cap_k``. Returns ``(lambda, stored energy
-    after the clip [J])``."""
-    n = phi.size
-    stored = 0.0
-    for j in range(2 * n):
-        stored += sgn[j] * k[j] * (e[j] * e[j])
-    lam = math.exp(-rate * max(D_inner + Wb - 0.5 * stored, 0.0))
-    after = 0.0
-    for j in range(2 * n):
-        if j < n:
-            c = lam * phi[j]
-            e[j] = max(min(e[j], c), -c)
-            cap_s[j] = c
-            cap_k[j] = c
-        after += sgn[j] * k[j] * (e[j] * e[j])
-    return lam, 0.5 * after
-
-
-@njit(cache=True)
 def _degrade_history(e, slip, k, sgn, phi, lam, Wb, rate, u, prev, D_inner):
     """The per-sample rule of the correction bank along ``u`` [m] (compiled): each step moves
-    every slider exactly (:func:`._sliders._bank_step`, caps ``lambda phi`` in the modified
+    every slider exactly (:func:`.engine.sliders.bank_step`, caps ``lambda phi`` in the modified
     bank, ``phi`` in the plain one), then ``lambda = exp(-rate D)`` from the energy
     dissipated so far and the modified sliders are clipped to their shrunken caps.
 
@@ -73,17 +50,17 @@ def _degrade_history(e, slip, k, sgn, phi, lam, Wb, rate, u, prev, D_inner):
                 F += sgn[j] * k[j] * e[j]
             out[i] = F
             continue
-        W, F, _ = _bank_step(e, slip, k, sgn, caps, caps, du, e_new, s_new)
+        W, F, _ = bank_step(e, slip, k, sgn, caps, caps, du, e_new, s_new)
         e[:] = e_new
         slip[:] = s_new
         Wb += W
         out[i] = F                                   # the step's force, before the commit
-        lam, _ = _degrade(e, sgn, k, phi, D_inner[i], Wb, rate, caps, caps)
+        lam, _ = degrade(e, sgn, k, phi, D_inner[i], Wb, rate, caps, caps)
         prev = u[i]
     return out, lam, Wb
 
 
-class SlipDegradation(_SliderEffect):
+class SlipDegradation(SliderEffect):
     """Slider thresholds ``lambda phi_i``, ``lambda = exp(-rate D)``, stiffness unchanged.
 
     Parameters
@@ -137,10 +114,10 @@ class SlipDegradation(_SliderEffect):
 
     def _after_commit_energy(self, D_inner: float) -> float:
         """Update ``lambda`` from the joint's dissipated energy, clip the stretches and the
-        caps (:func:`_degrade`); returns the stored energy of the banks after the clip [J]."""
+        caps (:func:`degrade`); returns the stored energy of the banks after the clip [J]."""
         if self._cap_up is None:
             self._refresh_caps()
-        self._lam, stored = _degrade(self._e, self._sign, self._k, self._phi, D_inner,
+        self._lam, stored = degrade(self._e, self._sign, self._k, self._phi, D_inner,
                                      self._Wb, self.rate, *self._cap_up)
         np.copyto(self._cap_dn[0], self._cap_up[0])
         np.copyto(self._cap_dn[1], self._cap_up[1])

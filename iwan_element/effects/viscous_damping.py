@@ -7,12 +7,12 @@ domain it is a constant added modal damping ratio ``zeta_v = c r^2 / (2 m omega)
 """
 from __future__ import annotations
 
-from ._base import ParamSpec, _Effect
+from .base import ParamSpec, Effect
 
 __all__ = ["ViscousDamping"]
 
 
-class ViscousDamping(_Effect):
+class ViscousDamping(Effect):
     """A dashpot in parallel with the joint: ``F = F_j + c v``.
 
     Parameters

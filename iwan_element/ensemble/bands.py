@@ -6,13 +6,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..core.validation import check_int, check_magnitude, check_scalar, finite_array
+from ..base.validation import check_int, check_magnitude, check_scalar, finite_array
 from ..core.parameters import IwanParameters
-from ..core.serialize import json_safe
+from ..base.serialize import json_safe
 from .oscillator import SingleModeSystem, modal_curve, peak_response
 from .runner import EnsembleResult, run_ensemble
 from .uncertainty import ParameterUncertainty
-from ..core.result_shape import ResultShape, panels, table_lines
+from ..base.result_shape import ResultShape, panels, table_lines
 
 __all__ = ["PredictionBands", "propagate_uncertainty", "response_task", "modal_fit_task"]
 
@@ -37,7 +37,7 @@ def modal_fit_task(params: dict, rng, *, names, regime: str, conventions: dict, 
     curve at ``amplitude`` for one sampled fit vector and, in the macroslip regime with
     ``force`` [N per unit modal mass], the peak transient displacement [m] of the fitted
     single-mode oscillator (fixed dashpot ``2 zeta0 w0``)."""
-    from ..identify.modal_result import full_parameters, model_curve
+    from ..identify.modal.result import full_parameters, model_curve
     theta = np.array([params[n] for n in names], dtype=float)
     f, z = model_curve(theta, np.asarray(amplitude, float), regime, conventions["x_ref"],
                        conventions["stiffness"], conventions["floor"],
@@ -155,7 +155,7 @@ class PredictionBands(ResultShape):
         ax : sequence of matplotlib Axes, optional
             ``plot_panels`` Axes: ``(ax_frequency, ax_damping)`` or, with a peak response,
             ``(ax_frequency, ax_damping, ax_peak)``; new axes if omitted
-            (:mod:`iwan_element.core.result_shape`).
+            (:mod:`iwan_element.base.result_shape`).
         color, label : keyword-only
             Colour and legend label of the bands.
         relative : bool, keyword-only

@@ -25,7 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..core.validation import check_int, check_scalar, finite_array
+from ..base.validation import check_int, check_scalar, finite_array
 from ..core.joint import IwanJoint
 from ..core.modal import modal_iwan_curve
 from ..core.parameters import IwanParameters

@@ -38,9 +38,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..core.progress import finish, progress_bar
-from ..core.serialize import json_safe
-from ..core.result_shape import ResultShape, panels
+from ..base.progress import finish, progress_bar
+from ..base.serialize import json_safe
+from ..base.result_shape import ResultShape, panels
 
 __all__ = ["run_ensemble", "EnsembleResult", "TaskError"]
 
@@ -162,7 +162,7 @@ class EnsembleResult(ResultShape):
 
     def plot(self, ax=None, *, output: str | None = None, bins: int = 30):
         """Histogram of one scalar output over the successful tasks (default: the first
-        scalar output). Returns the artists (one Axes, :mod:`iwan_element.core.result_shape`).
+        scalar output). Returns the artists (one Axes, :mod:`iwan_element.base.result_shape`).
         Raises ``ValueError`` when there is no scalar output to draw."""
         names = [output] if output is not None else list(self.outputs)
         for name in names:

@@ -7,7 +7,7 @@ import math
 import numpy as np
 from scipy.stats import qmc
 
-from ..core.validation import check_int, check_scalar
+from ..base.validation import check_int, check_scalar
 
 __all__ = ["parameter_grid", "parameter_samples"]
 

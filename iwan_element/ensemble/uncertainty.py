@@ -1,7 +1,7 @@
 """From a fit's parameters and covariance to prediction bands of the structure's response.
 
 :class:`ParameterUncertainty` holds a Gaussian in the coordinates the fits use for their
-covariance (``ln Fs, ln KT, chi, ln(1 + beta)``, see :mod:`iwan_element.identify.loops`), so that
+covariance (``ln Fs, ln KT, chi, ln(1 + beta)``, see :mod:`iwan_element.identify.loops.fit`), so that
 samples keep ``Fs, KT > 0`` and ``1 + beta > 0`` by construction; the remaining bounds
 (``beta >= 0``, ``chi > -1``) are kept by rejection, which makes the distribution the
 truncated normal (the rejected fraction is reported). A fit that did not reach macroslip
@@ -21,11 +21,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..core.validation import check_int, finite_array
+from ..base.validation import check_int, finite_array
 from ..core.parameters import IwanParameters
-from ..core.serialize import json_safe
-from ..identify.result import PARAM_NAMES
-from ..core.result_shape import ResultShape, panels
+from ..base.serialize import json_safe
+from ..identify.loops.result import PARAM_NAMES
+from ..base.result_shape import ResultShape, panels
 
 __all__ = ["ParameterUncertainty"]
 
@@ -229,7 +229,7 @@ class ParameterUncertainty(ResultShape):
         """One standard deviation of each sampled coordinate (``ln Fs``, ``ln KT``, ``chi``,
         ``ln(1 + beta)``, ``ln R``; a logarithm's is a relative error) as bars, with the
         correlation matrix written on them. Returns the artists (one Axes,
-        :mod:`iwan_element.core.result_shape`)."""
+        :mod:`iwan_element.base.result_shape`)."""
         ax, = panels(ax, 1, figsize=(5, 3.5))
         se = np.sqrt(np.diag(self.cov))
         x = np.arange(len(self.names))

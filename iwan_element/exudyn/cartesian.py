@@ -25,7 +25,7 @@ from exudyn.itemInterface import (MarkerBodyPosition, MarkerBodyRigid, MarkerNod
                                   ObjectConnectorRigidBodySpringDamper)
 
 from ..core.parameters import IwanParameters
-from ..core.validation import check_scalar
+from ..base.validation import check_scalar
 from ._markers import _COORDINATE_MARKERS, _ORIENTATION_MARKERS, _marker_type
 from .connector import add_iwan_connector, check_run_options
 

@@ -110,7 +110,7 @@ import numpy as np
 from exudyn.itemInterface import (ObjectConnectorCartesianSpringDamper,
                                   ObjectConnectorCoordinateSpringDamper)
 
-from ..core.validation import check_scalar
+from ..base.validation import check_scalar
 from ..core.joint import IwanJoint
 from ..core.parameters import IwanParameters
 from ..core.protocol import check_element

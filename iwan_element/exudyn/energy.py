@@ -36,7 +36,7 @@ from dataclasses import dataclass
 import exudyn as exu
 import numpy as np
 
-from ..core.result_shape import ResultShape, panels, table_lines, wrap
+from ..base.result_shape import ResultShape, panels, table_lines, wrap
 from ._dispatch import _dispatcher_for, _installed_post_step
 from ._energy_terms import Terms, check_loads, power_work, trapezoid
 

@@ -41,7 +41,7 @@ from exudyn.itemInterface import (ObjectConnectorCartesianSpringDamper,
 
 from ..core.joint_bank import IwanJointBank
 from ..core.parameters import IwanParameters
-from ..core.validation import check_scalar
+from ..base.validation import check_scalar
 from .slips.slip_map import SlipMap
 from .slips.slip_records import SlipRecords
 from .slips.surface_slips import SurfaceSlips

@@ -13,7 +13,7 @@
   :func:`box_lm`, the box-bounded Levenberg-Marquardt of the loop fit.
 
 The residuals' correlation time and the second-difference noise formula have their one home
-in :mod:`iwan_element.identify.noise` (``integrated_time``, ``difference_sigma``); the
+in :mod:`iwan_element.identify.loops.noise` (``integrated_time``, ``difference_sigma``); the
 covariance takes the correlation time as an argument. This subpackage imports only
 :mod:`iwan_element.core`.
 """

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..core.validation import check_int, check_scalar, finite_array
+from ..base.validation import check_int, check_scalar, finite_array
 
 __all__ = ["Covariance", "covariance", "normal_inverse"]
 
@@ -152,7 +152,7 @@ def covariance(J, r=None, *, tau: float = 1.0, s2: float | None = None, dof: int
         Residuals at the optimum; required unless ``s2`` is given and ``block`` is None.
     tau : float, keyword-only
         Integrated autocorrelation time of the residuals [residuals], ``> 0`` (1: white;
-        :func:`iwan_element.identify.noise.integrated_time`).
+        :func:`iwan_element.identify.loops.noise.integrated_time`).
     s2 : float, optional, keyword-only
         Residual variance; default ``r @ r / dof``.
     dof : int, optional, keyword-only

@@ -36,7 +36,7 @@ import numpy as np
 from scipy.special import log_ndtr
 from scipy.stats import multivariate_normal
 
-from ..core.validation import check_scalar, finite_array
+from ..base.validation import check_scalar, finite_array
 from ._lines import exp_pieces, line_integral, ridge_integral
 
 __all__ = ["Evidence", "Ridge", "laplace_evidence", "posterior_probabilities"]

@@ -9,7 +9,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import least_squares
 
-from ..core.validation import check_int, check_scalar, finite_array
+from ..base.validation import check_int, check_scalar, finite_array
 
 __all__ = ["MinimizeResult", "minimize", "box_lm", "METHODS"]
 

@@ -13,8 +13,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..core.serialize import json_safe
-from ..core.result_shape import (PARAMETER_COLUMNS, html_table, parameter_rows, table_lines,
+from ..base.serialize import json_safe
+from ..base.result_shape import (PARAMETER_COLUMNS, html_table, parameter_rows, table_lines,
                                  unit_label)
 
 __all__ = ["Parameter", "ParameterTable"]

@@ -18,7 +18,7 @@ import time
 
 import numpy as np
 
-from ..core.threads import one_blas_thread
+from ..base.threads import one_blas_thread
 from .balance import (force_coefficients, operators, point_outputs, rate_operators, residual,
                       solve_point)
 from .basis import Harmonics, check_harmonics

@@ -23,8 +23,8 @@ import time
 
 import numpy as np
 
-from ..core.progress import finish, progress_bar, tick
-from ..core.threads import one_blas_thread
+from ..base.progress import finish, progress_bar, tick
+from ..base.threads import one_blas_thread
 from .balance import operators, point_outputs, rate_operators
 from .basis import Harmonics
 

@@ -7,9 +7,9 @@ import time
 
 import numpy as np
 
-from ..core.progress import finish, progress_bar, tick
-from ..core.threads import one_blas_thread
-from ..core.validation import finite_array
+from ..base.progress import finish, progress_bar, tick
+from ..base.threads import one_blas_thread
+from ..base.validation import finite_array
 from .balance import force_coefficients, operators, solve_point
 from .basis import Harmonics, check_harmonics
 from .result import FrequencyResponse
@@ -70,7 +70,7 @@ def harmonic_balance(system: ModalSystem, frequency, force, *, harmonics=(1, 3, 
     max_iter : int, keyword-only
         Newton iterations per point.
     progress : bool, keyword-only
-        Show a tqdm bar over the frequencies with its ETA (``iwan_element.core.progress``;
+        Show a tqdm bar over the frequencies with its ETA (``iwan_element.base.progress``;
         silent under CI).
 
     Returns

@@ -5,8 +5,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..core.result_shape import ResultShape, panels, table_lines
-from ..core.serialize import json_safe
+from ..base.result_shape import ResultShape, panels, table_lines
+from ..base.serialize import json_safe
 
 __all__ = ["FrequencyResponse", "ENERGY_TOL"]
 

@@ -40,12 +40,12 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import signal
 
 from iwan_element import amplitude_curve, free_decay_modes
-from iwan_element.core.result_shape import ResultShape, panels, table_lines
-from iwan_element.core.serialize import json_safe
-from iwan_element.core.validation import check_scalar, check_uniform_time, finite_array
+from iwan_element.base.result_shape import ResultShape, panels, table_lines
+from iwan_element.base.serialize import json_safe
+from iwan_element.base.validation import check_scalar, check_uniform_time, finite_array
+from iwan_element.identify.decays.envelope import mode_envelope
 
 from .vibration import CalibrationResult, calibrate
 from ..simulation.coupling import compare_curves, plot_curve_pairs
@@ -79,20 +79,6 @@ def _elastic_frequencies(specimen, n: int) -> np.ndarray:
     return np.array([linear_modes(specimen, mode=k)[0] for k in range(1, n + 1)]) / (2 * math.pi)
 
 
-def _envelope(t, a, band, span=None):
-    """Displacement envelope [m] of the mode in ``band`` [Hz]: zero-phase Butterworth
-    band-pass (order 4), Hilbert magnitude over ``w^2``, ``w`` the analytic signal's mean
-    phase rate over ``span`` (a boolean mask; default the whole record): the mode's own
-    frequency, not the band's centre (80.4 Hz in a 60-120 Hz band: a centre's ``w^2`` reads
-    the displacement 20 % low)."""
-    fs = (t.size - 1) / (t[-1] - t[0])
-    sos = signal.butter(4, band, btype="bandpass", fs=fs, output="sos")
-    h = signal.hilbert(signal.sosfiltfilt(sos, a))
-    m = slice(None) if span is None else span
-    w = np.polyfit(t[m], np.unwrap(np.angle(h))[m], 1)[0]
-    return np.abs(h) / (w * w)
-
-
 def release_amplitudes(t, a, bands: dict, *, release_time: float = 0.05,
                        fit_span: float = 0.3) -> dict:
     """``{mode: X}``: each mode's displacement amplitude [m] ``release_time`` [s] after the
@@ -121,7 +107,8 @@ def release_amplitudes(t, a, bands: dict, *, release_time: float = 0.05,
                          "samples): shorten them or give a longer record")
     out = {}
     for r, band in bands.items():
-        slope, icpt = np.polyfit(t[fit], np.log(_envelope(t, a, band, fit)[fit]), 1)
+        env = mode_envelope(t, a, band, integrate=2, span=fit)
+        slope, icpt = np.polyfit(t[fit], np.log(env[fit]), 1)
         out[int(r)] = float(math.exp(icpt + slope * t_r))
     return out
 
@@ -413,15 +400,17 @@ def _ratios(recs, cal_name, rd, bands, modes, release_time) -> dict:
     i_c = tuple(recs).index(cal_name)
     mp = (rd.t >= span[0]) & (rd.t <= span[1])
     # the calibration sensor's envelopes, measured and predicted, once per mode
-    ref = {r: (_envelope(t_c, a_c, bands[r]),
-               _envelope(rd.t, rd.sensor_acceleration[i_c], bands[r])[mp]) for r in modes}
+    ref = {r: (mode_envelope(t_c, a_c, bands[r], integrate=2),
+               mode_envelope(rd.t, rd.sensor_acceleration[i_c], bands[r], integrate=2)[mp])
+           for r in modes}
     for i, (name, (_, t, a)) in enumerate(recs.items()):
         if name == cal_name:
             continue
         m = (t - t0 >= span[0]) & (t - t0 <= span[1])
         for r in modes:
-            meas = np.median(_envelope(t, a, bands[r])[m] / ref[r][0][m])
-            pred = np.median(_envelope(rd.t, rd.sensor_acceleration[i], bands[r])[mp] / ref[r][1])
+            meas = np.median(mode_envelope(t, a, bands[r], integrate=2)[m] / ref[r][0][m])
+            pred = np.median(mode_envelope(rd.t, rd.sensor_acceleration[i], bands[r],
+                                           integrate=2)[mp] / ref[r][1])
             out[(r, name)] = (float(meas), float(pred))
     return out
 
@@ -453,7 +442,7 @@ def _bands(bands, modes) -> dict:
 
 def _series(tn, an, t, a):
     """``(t, a)`` as new arrays: ``a`` finite with at least 64 samples, ``t`` its uniform
-    time grid (:func:`~iwan_element.core.validation.check_uniform_time`)."""
+    time grid (:func:`~iwan_element.base.validation.check_uniform_time`)."""
     a = finite_array(an, a, min_size=64)
     t, _ = check_uniform_time(t, a.size, name=tn, data=an)
     return t, a

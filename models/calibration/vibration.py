@@ -22,8 +22,8 @@ from pathlib import Path
 import numpy as np
 
 from iwan_element import AmplitudeCurve, amplitude_curve
-from iwan_element.core.progress import finish, progress_bar, tick
-from iwan_element.core.result_shape import ResultShape, panels, unit_label
+from iwan_element.base.progress import finish, progress_bar, tick
+from iwan_element.base.result_shape import ResultShape, panels, unit_label
 from iwan_element.fitting import (Parameter, ParameterTable, covariance, fit_success,
                                   minimize, verdict)
 
@@ -122,7 +122,7 @@ class CalibrationResult(ResultShape):
 
     def plot(self, ax=None):
         """Measured and model f(X), zeta(X) on ``ax = (ax_f, ax_z)`` (a new figure if
-        ``None``; :mod:`iwan_element.core.result_shape`); returns the artists."""
+        ``None``; :mod:`iwan_element.base.result_shape`); returns the artists."""
         ax = panels(ax, 2, sharex=True, figsize=(6, 6))
         arts = self.measured.plot(ax, label="measured", ls="none")
         arts += self.model.plot(ax, label="model (QSMA)", marker="", ls="-")

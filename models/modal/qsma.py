@@ -34,8 +34,8 @@ import scipy.linalg as sla
 
 from iwan_element import AmplitudeCurve, dissipation
 from iwan_element.effects import EFFECTS
-from iwan_element.core.threads import one_blas_thread
-from iwan_element.core.validation import check_magnitude, finite_array
+from iwan_element.base.threads import one_blas_thread
+from iwan_element.base.validation import check_magnitude, finite_array
 from iwan_element.core.masing import constants_from_arrays, masing_rows
 
 from ..reduced.dispatch import linear_system, contact_points

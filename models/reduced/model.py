@@ -26,7 +26,7 @@ from functools import lru_cache
 import numpy as np
 import scipy.linalg as sla
 
-from iwan_element.core.threads import one_blas_thread
+from iwan_element.base.threads import one_blas_thread
 from iwan_element.harmonic import ModalSystem
 
 from .dispatch import linear_system, contact_points, check_specimen

@@ -16,8 +16,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from iwan_element import AmplitudeCurve
-from iwan_element.core.result_shape import ResultShape, panels, table_lines
-from iwan_element.core.serialize import json_safe
+from iwan_element.base.result_shape import ResultShape, panels, table_lines
+from iwan_element.base.serialize import json_safe
 
 from .ringdown_result import RingdownResult
 from ..specimens.specimen import Specimen

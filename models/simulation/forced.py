@@ -34,10 +34,10 @@ from dataclasses import dataclass, field, replace
 import exudyn as exu
 import numpy as np
 
-from iwan_element.core.progress import finish, progress_bar, tick
-from iwan_element.core.result_shape import ResultShape, panels
-from iwan_element.core.serialize import json_safe
-from iwan_element.core.validation import check_int, check_scalar, finite_array
+from iwan_element.base.progress import finish, progress_bar, tick
+from iwan_element.base.result_shape import ResultShape, panels
+from iwan_element.base.serialize import json_safe
+from iwan_element.base.validation import check_int, check_scalar, finite_array
 
 from ..reduced.dispatch import linear_system
 from .host import build_host

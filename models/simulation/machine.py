@@ -18,9 +18,9 @@ import numpy as np
 from exudyn.itemInterface import SensorObject
 
 from iwan_element import dissipation
-from iwan_element.core.result_shape import ResultShape, panels
-from iwan_element.core.serialize import json_safe
-from iwan_element.core.validation import check_int, check_scalar
+from iwan_element.base.result_shape import ResultShape, panels
+from iwan_element.base.serialize import json_safe
+from iwan_element.base.validation import check_int, check_scalar
 
 from ..reduced.dispatch import linear_system
 from .host import build_host

@@ -9,7 +9,7 @@ import time
 import numpy as np
 
 from iwan_element import backbone_work
-from iwan_element.core.progress import finish, progress_bar, tick
+from iwan_element.base.progress import finish, progress_bar, tick
 
 from .ringdown_result import RingdownResult, decay_curve
 

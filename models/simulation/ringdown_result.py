@@ -7,8 +7,8 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from iwan_element import AmplitudeCurve, amplitude_curve
-from iwan_element.core.result_shape import ResultShape, panels
-from iwan_element.core.serialize import json_safe
+from iwan_element.base.result_shape import ResultShape, panels
+from iwan_element.base.serialize import json_safe
 
 __all__ = ["RingdownResult", "ENERGY_TOL", "with_energy_warning", "decay_curve"]
 
@@ -177,7 +177,7 @@ class RingdownResult(ResultShape):
     def plot(self, ax=None):
         """Each mode's response at the sensor against time, then the decays' frequency and
         damping against amplitude, on ``ax = (ax_t, ax_f, ax_z)`` (a new figure if
-        ``None``; :mod:`iwan_element.core.result_shape`); returns the artists."""
+        ``None``; :mod:`iwan_element.base.result_shape`); returns the artists."""
         ax_t, ax_f, ax_z = panels(ax, 3, figsize=(6, 8))
         resp = self.modal_responses if self.modal_responses is not None else self.modal[None]
         arts = []

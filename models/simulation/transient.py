@@ -32,7 +32,7 @@ import math
 import exudyn as exu
 import numpy as np
 
-from iwan_element.core.validation import check_scalar
+from iwan_element.base.validation import check_scalar
 
 from ..reduced.dispatch import axis_rows
 from ..reduced.damping import FloorWork

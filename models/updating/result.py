@@ -6,8 +6,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from iwan_element.core.result_shape import ResultShape, panels, table_lines
-from iwan_element.core.serialize import json_safe
+from iwan_element.base.result_shape import ResultShape, panels, table_lines
+from iwan_element.base.serialize import json_safe
 from iwan_element.fitting import ParameterTable
 
 __all__ = ["LinearUpdateResult"]

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg as sla
 
-from iwan_element.core.threads import one_blas_thread
+from iwan_element.base.threads import one_blas_thread
 
 from ..reduced.dispatch import axis_rows, contact_points, linear_system
 from .parameters import Updatable, with_parameters

@@ -34,7 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg as sla
 
-from iwan_element.core.threads import one_blas_thread
+from iwan_element.base.threads import one_blas_thread
 from iwan_element.fitting import Parameter, ParameterTable, minimize
 
 from ..reduced.dispatch import check_specimen

@@ -10,7 +10,7 @@ import time
 import numpy as np
 
 from ...fitting import Parameter, ParameterTable, covariance, verdict
-from ...identify.noise import integrated_time
+from ...identify.loops.noise import integrated_time
 from . import model as CM
 from ..loops.batch import band_misfit
 from .model import full_force

@@ -46,12 +46,12 @@ from dataclasses import replace
 import numpy as np
 from scipy.optimize import least_squares
 
-from ...core.serialize import json_safe
-from ...core.validation import check_int
+from ...base.serialize import json_safe
+from ...base.validation import check_int
 from ...effects import EFFECTS
-from ...effects.evaluate import order_stack, stack_ok
+from ...effects.engine.evaluate import order_stack, stack_ok
 from ...ensemble import run_ensemble
-from ...core.progress import finish, progress_bar
+from ...base.progress import finish, progress_bar
 from . import model as CM
 from .assemble import assemble
 from .model import build_model, solve

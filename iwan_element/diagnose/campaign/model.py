@@ -10,12 +10,12 @@ import numpy as np
 from scipy.optimize import least_squares
 from scipy.sparse import lil_matrix
 
-from ...core.validation import finite_array
+from ...base.validation import finite_array
 from ...effects import EFFECTS
-from ...effects.evaluate import Evaluator
+from ...effects.engine.evaluate import Evaluator
 from ...fitting import normal_inverse
 from ..loops import model as M
-from ...identify.noise import integrated_time
+from ...identify.loops.noise import integrated_time
 from ..loops.batch import band_misfit
 from ..loops.prepare import dissipation_scale, drive_structure, effect_scales, fitted_samples
 from .probability import record_explanations

@@ -9,11 +9,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ...core.result_shape import ResultShape, table_lines
-from ...core.serialize import json_safe
-from ...core.validation import check_int, check_scalar, check_time, finite_array
+from ...base.result_shape import ResultShape, table_lines
+from ...base.serialize import json_safe
+from ...base.validation import check_int, check_scalar, check_time, finite_array
 from ...ensemble import run_ensemble
-from ...plotting import axes_or_new
+from ...base.result_shape import axes_or_new
 from . import model as CM
 from ..loops import model as M
 from .model import build_model, full_force, solve

@@ -8,10 +8,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ...core.result_shape import ResultShape, table_lines, unit_label
-from ...core.serialize import json_safe
+from ...base.result_shape import ResultShape, table_lines, unit_label
+from ...base.serialize import json_safe
 from ...fitting import ParameterTable
-from ...plotting import axes_or_new
+from ...base.result_shape import axes_or_new
 from . import model as CM
 from ..selection.probabilities import Probable
 from .predict import condition_vector

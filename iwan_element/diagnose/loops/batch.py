@@ -21,10 +21,10 @@ from pathlib import Path
 
 import numpy as np
 
-from ...core.validation import check_scalar, finite_array
+from ...base.validation import check_scalar, finite_array
 from ...ensemble import run_ensemble
 from .diagnosis import diagnose
-from ...core.result_shape import ResultShape, panels
+from ...base.result_shape import ResultShape, panels
 
 __all__ = ["diagnose_many", "BatchDiagnosis", "band_misfit", "check_records", "check_options",
            "executor_for"]

@@ -8,7 +8,7 @@
    unloaded joint carries no force) being part of the fitted data. Offsets are nuisance
    parameters: reported, never named as an effect;
 2. the force noise and its correlation time are estimated from the record itself
-   (:func:`iwan_element.identify.noise.estimate_noise`; no repeated cycles needed, so
+   (:func:`iwan_element.identify.loops.noise.estimate_noise`; no repeated cycles needed, so
    ramped, swept and random-amplitude protocols work), unless ``noise`` is given;
 3. the plain Iwan model is fitted, then effects of :data:`~iwan_element.EFFECTS` are tried
    one after the other with the selection rule of :mod:`iwan_element.diagnose.selection`
@@ -37,11 +37,11 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ...core.threads import one_blas_thread
-from ...core.validation import check_int, check_scalar
+from ...base.threads import one_blas_thread
+from ...base.validation import check_int, check_scalar
 from ...effects import EFFECTS
-from ...effects.evaluate import order_stack, stack_ok
-from ...core.progress import finish, progress_bar, set_total, tick
+from ...effects.engine.evaluate import order_stack, stack_ok
+from ...base.progress import finish, progress_bar, set_total, tick
 from .locate import _check_candidates
 from .noise import NoiseLevel, noise_level, pure_noise
 from .fit import StackFitter, final_fits, fit_base, record_force, z_start

@@ -19,7 +19,7 @@ import numpy as np
 from ...core.history import unit_params
 from ...core.parameters import IwanParameters
 from ...effects import EFFECTS
-from ...effects.evaluate import build_element, scale_effect
+from ...effects.engine.evaluate import build_element, scale_effect
 from ...fitting.evidence import Ridge
 from . import model as M
 from ..selection.probabilities import key
@@ -194,7 +194,7 @@ __all__ += ["member_physical"]
 def loop_band(diag, t, u, level: float):
     """The model-averaged force of a loop diagnosis ``diag`` on the drive ``(t, u)`` (None:
     the record as fitted): :class:`.averaging.AveragedBand` with channel ``"force"`` [N]."""
-    from ...core.validation import check_time, finite_array
+    from ...base.validation import check_time, finite_array
     from ..selection.averaging import band, linear_spread, members
     if not diag.explanations:
         raise ValueError("this diagnosis has no probabilities (diagnose(..., "

@@ -16,13 +16,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ...core.serialize import json_safe
+from ...base.serialize import json_safe
 from ...effects import EFFECTS
-from ...effects.evaluate import Evaluator, build_element
+from ...effects.engine.evaluate import Evaluator, build_element
 from ...fitting import fit_success
-from ...identify.identifiability import microslip_warning, min_macroslip
-from ...identify.loops import fit_loops
-from ...identify.result import failure_list, quiet_fits, required_parameters, settle_verdict
+from ...identify.loops.identifiability import microslip_warning, min_macroslip
+from ...identify.loops.fit import fit_loops
+from ...identify.loops.result import failure_list, quiet_fits, required_parameters, settle_verdict
 from . import model as M
 
 __all__ = ["StackFitter", "FinalFits", "fit_base", "z_start", "stack_fit", "record_force",

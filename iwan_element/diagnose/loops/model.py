@@ -11,10 +11,10 @@ from scipy.optimize import least_squares, minimize_scalar
 from ...core.history import unit_params
 from ...core.parameters import IwanParameters
 from ...effects import EFFECTS
-from ...effects.evaluate import Evaluator, scale_effect
+from ...effects.engine.evaluate import Evaluator, scale_effect
 from ...fitting import covariance
-from ...identify.noise import integrated_time
-from ...identify.result import FitResult, joint_table
+from ...identify.loops.noise import integrated_time
+from ...identify.loops.result import FitResult, joint_table
 
 __all__ = ["LoopModel", "PARAM_NAMES", "CHI_BOUNDS", "BETA_MAX", "PHI_RANGE", "START_GRID",
            "jumps"]

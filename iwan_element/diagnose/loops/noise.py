@@ -1,6 +1,6 @@
 """The diagnoses' use of the package's one noise estimator.
 
-:func:`iwan_element.identify.noise.estimate_noise` (Savitzky-Golay residual, robust scale,
+:func:`iwan_element.identify.loops.noise.estimate_noise` (Savitzky-Golay residual, robust scale,
 AR(1) noise model matched to the residual's robust autocorrelation) is applied to the
 *residual of the plain fit*, which on clean data is the noise itself. A residual's own
 spectrum says nothing about the loading, so the smoothing window comes from the measured
@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ...identify.noise import MIN_WINDOW, signal_window, estimate_noise
+from ...identify.loops.noise import MIN_WINDOW, signal_window, estimate_noise
 
 __all__ = ["noise_estimate", "NoiseLevel", "noise_level"]
 

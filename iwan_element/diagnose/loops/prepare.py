@@ -14,11 +14,11 @@ import numpy as np
 from scipy.signal import butter, sosfiltfilt
 
 from ...core.history import REVERSAL_TOL, unit_params
-from ...core.validation import (MAGNITUDE_RANGE, check_magnitude, check_scalar, check_time,
+from ...base.validation import (MAGNITUDE_RANGE, check_magnitude, check_scalar, check_time,
                                 check_varies, finite_array, same_length)
 from ...effects import EFFECTS
-from ...effects.evaluate import Evaluator
-from ...identify.cycles import find_reversals, split_cycles
+from ...effects.engine.evaluate import Evaluator
+from ...identify.loops.cycles import find_reversals, split_cycles
 from .noise import noise_estimate
 
 __all__ = ["PreparedRecord", "check_record", "prepare_record", "fitted_samples",
@@ -152,7 +152,7 @@ def untestable(rec: PreparedRecord, candidates) -> dict:
 
 
 def record_cycles(rec: PreparedRecord) -> list:
-    """The record's load cycles (:func:`~iwan_element.identify.cycles.split_cycles`; the
+    """The record's load cycles (:func:`~iwan_element.identify.loops.cycles.split_cycles`; the
     sample index stands for the time when there is none), or [] when it has none."""
     t = np.arange(rec.uj.size, dtype=float) if rec.t is None else rec.t
     try:

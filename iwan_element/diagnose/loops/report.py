@@ -12,7 +12,7 @@ import time
 
 import numpy as np
 
-from ...core.serialize import json_safe
+from ...base.serialize import json_safe
 from .locate import _locate
 from .result import Diagnosis
 from ..selection.rule import criterion_text

@@ -6,8 +6,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ...core.serialize import json_safe
-from ...core.result_shape import ResultShape, panels, value_stderr, wrap
+from ...base.serialize import json_safe
+from ...base.result_shape import ResultShape, panels, value_stderr, wrap
 from ..selection.lines import effect_unit, verdict_lines
 from ..selection.probabilities import Probable
 
@@ -209,7 +209,7 @@ class Diagnosis(Probable, ResultShape):
         ----------
         ax : None or a sequence of two Axes
             ``(ax_loops, ax_residual)``; ``None``: a new figure with two panels
-            (:mod:`iwan_element.core.result_shape`).
+            (:mod:`iwan_element.base.result_shape`).
 
         Returns
         -------

@@ -17,9 +17,9 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.special import ndtr
 
-from ...core.result_shape import ResultShape, panels
-from ...core.serialize import json_safe
-from ...core.validation import check_scalar
+from ...base.result_shape import ResultShape, panels
+from ...base.serialize import json_safe
+from ...base.validation import check_scalar
 
 __all__ = ["AveragedBand", "members", "mixture", "linear_spread", "MIN_WEIGHT",
            "MAX_MEMBERS"]

@@ -3,7 +3,7 @@ and :class:`~iwan_element.diagnose.vibration.result.VibrationDiagnosis`): an eff
 parameter's unit label and the closing verdict lines."""
 from __future__ import annotations
 
-from ...core.result_shape import unit_label, wrap
+from ...base.result_shape import unit_label, wrap
 from ...effects import EFFECTS
 
 __all__ = ["effect_unit", "verdict_lines"]

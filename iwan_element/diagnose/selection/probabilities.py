@@ -37,9 +37,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ...core.validation import check_scalar
+from ...base.validation import check_scalar
 from ...fitting.evidence import laplace_evidence, posterior_probabilities
-from ...identify.noise import integrated_time
+from ...identify.loops.noise import integrated_time
 
 __all__ = ["Explanation", "key", "default_effect_prior", "check_effect_prior",
            "log_model_prior", "model_error_scale", "rank", "effect_probability",

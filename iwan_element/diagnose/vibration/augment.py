@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 
 from ...core.protocol import check_element
-from ...core.validation import check_scalar
+from ...base.validation import check_scalar
 from ...effects import EFFECTS
 
 __all__ = ["augmented", "check_amplitude_units"]

@@ -24,12 +24,12 @@ import numpy as np
 from scipy.optimize import least_squares
 from scipy.stats import chi2 as _chi2
 
-from ...core.validation import check_int, check_magnitude, check_scalar, finite_array, same_length
+from ...base.validation import check_int, check_magnitude, check_scalar, finite_array, same_length
 from ...effects import EFFECTS
-from ...identify.curves import AmplitudeCurve
-from ...identify.noise import difference_sigma
-from ...identify.units import check_damping_ratio, check_frequency_ratio
-from ...core.serialize import json_safe
+from ...identify.modal.curves import AmplitudeCurve
+from ...identify.loops.noise import difference_sigma
+from ...identify.files.units import check_damping_ratio, check_frequency_ratio
+from ...base.serialize import json_safe
 from ...fitting import covariance
 from .result import VibrationDiagnosis
 from ..selection.rule import criterion_text, misfit_p, stepwise_select

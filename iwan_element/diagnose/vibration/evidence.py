@@ -59,7 +59,7 @@ def vibration_band(diag, amplitude, base, level):
     ``amplitude`` (:class:`.averaging.AveragedBand`, channels ``"frequency"`` [Hz] and
     ``"damping_ratio"`` [-]); ``base``: the model without effects there (None: the
     prediction the diagnosis was given, interpolated in log amplitude, held at its ends)."""
-    from ...core.validation import finite_array
+    from ...base.validation import finite_array
     from ..selection.averaging import band, linear_spread, members
     X = finite_array("amplitude", amplitude, ndim=1, min_size=1)
     if np.any(X <= 0):

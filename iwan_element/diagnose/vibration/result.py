@@ -7,10 +7,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ...core.serialize import json_safe
+from ...base.serialize import json_safe
 from ...effects import EFFECTS
 from ...fitting import Parameter, ParameterTable, verdict
-from ...core.result_shape import ResultShape, panels, wrap
+from ...base.result_shape import ResultShape, panels, wrap
 from .augment import augmented
 from ..selection.lines import effect_unit, verdict_lines
 from ..selection.probabilities import Probable
@@ -206,8 +206,8 @@ class VibrationDiagnosis(Probable, ResultShape):
             (1 sigma) from the fitted parameters' covariance (linearised), ``warnings`` states
             extrapolation beyond the diagnosed amplitudes.
         """
-        from ...core.validation import finite_array
-        from ...identify.curves import AmplitudeCurve
+        from ...base.validation import finite_array
+        from ...identify.modal.curves import AmplitudeCurve
         X = finite_array("amplitude", amplitude, ndim=1, min_size=1)
         if np.any(X <= 0):
             raise ValueError("amplitude must be > 0 [m]")
@@ -345,7 +345,7 @@ class VibrationDiagnosis(Probable, ResultShape):
         """Frequency and damping against amplitude: measured, predicted, augmented.
 
         ``ax``: ``None`` (new figure, two panels) or a sequence of two Axes (frequency,
-        damping; :mod:`iwan_element.core.result_shape`). Returns the artists."""
+        damping; :mod:`iwan_element.base.result_shape`). Returns the artists."""
         a1, a2 = panels(ax, 2, figsize=(6, 7))
         X = self.amplitude
         o = np.argsort(X)

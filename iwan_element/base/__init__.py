@@ -1,0 +1,8 @@
+"""The package's conventions that every room uses: the one result shape
+(:mod:`.result_shape`), JSON-safe values (:mod:`.serialize`), argument checks
+(:mod:`.validation`), progress reporting (:mod:`.progress`) and the BLAS thread limit
+(:mod:`.threads`).
+
+Imports only numpy and threadpoolctl (pandas and matplotlib inside the functions that need
+them); no other room of iwan_element.
+"""

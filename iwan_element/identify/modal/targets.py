@@ -1,0 +1,412 @@
+"""Linear modal targets from a test: the result type shared by free decays, FRFs and sweeps.
+
+:class:`ModalTargets` holds what a linear model update needs of a test: per mode the natural
+frequency, the damping ratio, the amplitude at every sensor (a shape, compared by MAC and by
+ratios) and, where the force was measured, the modal constant, each with its standard error
+and a statement of where it was measured (the window of a ring-down, the amplitude range of a
+sweep) and whether the structure was linear there. Made by
+:func:`~iwan_element.identify.free_decay.free_decay_modes`,
+:func:`~iwan_element.identify.sweeps.frf_modes.frf_modes` and
+:func:`~iwan_element.identify.sweeps.frf_modes.sweep_modes` (``docs/modal_targets.md``).
+
+Modes are numbered 1, 2, ... by ascending frequency of the identified physical poles; this is
+not a model's mode number (an in-plane mode, a mode no sensor sees): pair them with a model's
+modes by frequency and MAC (:func:`mac`).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ...base.result_shape import ResultShape, format_value, panels, table_lines, wrap
+
+__all__ = ["ModalTargets", "ModeTarget", "mac"]
+
+
+def mac(a, b) -> float:
+    """Modal assurance criterion ``|a^H b|^2 / ((a^H a)(b^H b))`` of two shapes [-].
+
+    Parameters
+    ----------
+    a, b : array_like of complex or real, or mappings {position: amplitude}
+        Two shapes at the same sensors (mappings are matched by position; a position missing
+        from either is a ``ValueError``).
+    """
+    if isinstance(a, dict) or isinstance(b, dict):
+        if not (isinstance(a, dict) and isinstance(b, dict)):
+            raise ValueError("a and b must both be arrays or both be {position: amplitude} "
+                             "mappings")
+        if set(a) != set(b):
+            raise ValueError(f"a and b must hold the same positions, got {sorted(map(str, a))} "
+                             f"and {sorted(map(str, b))}")
+        keys = list(a)
+        a, b = [a[k] for k in keys], [b[k] for k in keys]
+    try:
+        a = np.asarray(a, dtype=complex).ravel()
+    except (TypeError, ValueError):
+        raise ValueError(f"a must be an array of (complex) amplitudes, got {type(a).__name__}") \
+            from None
+    try:
+        b = np.asarray(b, dtype=complex).ravel()
+    except (TypeError, ValueError):
+        raise ValueError(f"b must be an array of (complex) amplitudes, got {type(b).__name__}") \
+            from None
+    if a.shape != b.shape or a.size == 0:
+        raise ValueError(f"a and b must be shapes at the same sensors, got sizes {a.size} and "
+                         f"{b.size}")
+    den = float(np.vdot(a, a).real * np.vdot(b, b).real)
+    if not (den > 0 and math.isfinite(den)):
+        raise ValueError("a and b must be finite and not all zero")
+    if a.size < 2:
+        raise ValueError("a and b must be shapes at 2 or more sensors")
+    return float(abs(np.vdot(a, b)) ** 2 / den)
+
+
+def _nan(x):
+    return float("nan") if x is None else float(x)
+
+
+@dataclass(frozen=True, eq=False)
+class ModeTarget:
+    """One identified mode (see :class:`ModalTargets` for the units and conventions).
+
+    Attributes
+    ----------
+    index : int
+        1, 2, ... by ascending frequency among the test's identified modes.
+    label : str
+        The band or fit it came from.
+    frequency, frequency_std : float
+        Undamped natural frequency ``|s| / 2 pi`` [Hz] and its statistical standard error.
+    damping_ratio, damping_ratio_std : float
+        Viscous damping ratio ``-Re s / |s|`` [-] and its standard error.
+    sensors, positions : tuple
+        Sensor names and positions [m] (empty for a fit without shapes).
+    amplitude : ndarray of complex, shape (m,)
+        Complex displacement amplitude at each sensor [m] at ``t_ref`` (the motion is
+        ``Re(amplitude exp(s (t - t_ref)))``), common phase reference: the same pole for all.
+    amplitude_std : ndarray, shape (m, 2)
+        Standard errors of its real and imaginary parts [m].
+    shape : ndarray of complex, shape (m,)
+        ``amplitude`` turned by one phase so that it is as nearly real as possible (the sum
+        of its squares real and positive), the largest real part positive; for a real
+        (proportionally damped) mode the imaginary parts are noise.
+    shape_std : ndarray, shape (m, 2)
+        Standard errors of the real and imaginary parts of ``shape`` [m].
+    modal_constant, modal_constant_std : float
+        ``phi_drive phi_response`` [1/kg] of the mass-normalised mode (NaN unless a force
+        was measured).
+    t_ref : float
+        Reference time of ``amplitude`` [s] (the window's start; NaN for an FRF).
+    window : tuple of float
+        ``(t0, t1)`` [s] of a ring-down's window; ``(f0, f1)`` [Hz] of an FRF's lines.
+    amplitude_range : tuple of float
+        Largest displacement amplitude over the sensors at the start and at the end of the
+        window [m] (for an FRF: the smallest and largest response amplitude of its points).
+    frequency_drift, frequency_drift_std, damping_drift, damping_drift_std : float
+        Second half of the window minus its first half, with the combined standard error
+        (NaN where not measured).
+    linear : bool or None
+        Whether the drifts are within three combined standard errors (None: not checked).
+    complexity : float
+        ``|Im shape| / |shape|`` [-].
+    method : str
+        How the mode was identified.
+    """
+
+    index: int
+    label: str
+    frequency: float
+    frequency_std: float
+    damping_ratio: float
+    damping_ratio_std: float
+    sensors: tuple = ()
+    positions: tuple = ()
+    amplitude: np.ndarray = field(default_factory=lambda: np.zeros(0, complex))
+    amplitude_std: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
+    shape: np.ndarray = field(default_factory=lambda: np.zeros(0, complex))
+    shape_std: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
+    modal_constant: float = float("nan")
+    modal_constant_std: float = float("nan")
+    t_ref: float = float("nan")
+    window: tuple = (float("nan"), float("nan"))
+    amplitude_range: tuple = (float("nan"), float("nan"))
+    frequency_drift: float = float("nan")
+    frequency_drift_std: float = float("nan")
+    damping_drift: float = float("nan")
+    damping_drift_std: float = float("nan")
+    linear: bool | None = None
+    complexity: float = float("nan")
+    method: str = ""
+
+    def __post_init__(self):
+        if not (self.frequency > 0 and math.isfinite(self.frequency)):
+            raise ValueError(f"frequency must be > 0 and finite [Hz], got {self.frequency!r}")
+        if not (math.isfinite(self.damping_ratio) and abs(self.damping_ratio) < 1):
+            raise ValueError(f"damping_ratio must be a finite ratio below 1, got "
+                             f"{self.damping_ratio!r}")
+        m = len(self.sensors)
+        if len(self.positions) != m:
+            raise ValueError("positions must hold one position per sensor")
+        for name, dt, shp in (("amplitude", complex, (m,)), ("shape", complex, (m,)),
+                              ("amplitude_std", float, (m, 2)), ("shape_std", float, (m, 2))):
+            arr = np.array(getattr(self, name), dtype=dt, copy=True).reshape(shp)
+            arr.flags.writeable = False
+            object.__setattr__(self, name, arr)
+        for name in ("frequency", "frequency_std", "damping_ratio", "damping_ratio_std",
+                     "modal_constant", "modal_constant_std", "t_ref", "frequency_drift",
+                     "frequency_drift_std", "damping_drift", "damping_drift_std",
+                     "complexity"):
+            object.__setattr__(self, name, _nan(getattr(self, name)))
+        object.__setattr__(self, "window", tuple(map(float, self.window)))
+        object.__setattr__(self, "amplitude_range", tuple(map(float, self.amplitude_range)))
+        object.__setattr__(self, "sensors", tuple(map(str, self.sensors)))
+        object.__setattr__(self, "positions", tuple(self.positions))
+
+    def _widened(self, std, drift):
+        """The statistical error, with the drift added in quadrature where it is significant."""
+        if self.linear is False and math.isfinite(drift):
+            return math.hypot(std, drift)
+        return std
+
+    @property
+    def frequency_stderr(self) -> float:
+        """Standard error of the frequency target [Hz]: the statistical one, combined in
+        quadrature with the drift across the window when that drift is significant (the
+        structure was not quite linear there)."""
+        return self._widened(self.frequency_std, self.frequency_drift)
+
+    @property
+    def damping_ratio_stderr(self) -> float:
+        """Standard error of the damping target [-], widened like :attr:`frequency_stderr`."""
+        return self._widened(self.damping_ratio_std, self.damping_drift)
+
+    def to_dict(self) -> dict:
+        """JSON-safe dictionary (complex numbers as ``[re, im]``, NaN as ``None``)."""
+        def num(x):
+            return float(x) if x is not None and math.isfinite(float(x)) else None
+
+        def cplx(z):
+            return [[num(v.real), num(v.imag)] for v in np.asarray(z).ravel()]
+
+        return {"index": self.index, "label": self.label, "method": self.method,
+                "frequency": num(self.frequency), "frequency_std": num(self.frequency_std),
+                "frequency_stderr": num(self.frequency_stderr),
+                "damping_ratio": num(self.damping_ratio),
+                "damping_ratio_std": num(self.damping_ratio_std),
+                "damping_ratio_stderr": num(self.damping_ratio_stderr),
+                "sensors": list(self.sensors),
+                "positions": [list(p) if isinstance(p, tuple) else num(p)
+                              for p in self.positions],
+                "amplitude": cplx(self.amplitude),
+                "amplitude_std": [[num(a), num(b)] for a, b in self.amplitude_std],
+                "shape": cplx(self.shape),
+                "shape_std": [[num(a), num(b)] for a, b in self.shape_std],
+                "modal_constant": num(self.modal_constant),
+                "modal_constant_std": num(self.modal_constant_std),
+                "t_ref": num(self.t_ref), "window": [num(w) for w in self.window],
+                "amplitude_range": [num(a) for a in self.amplitude_range],
+                "frequency_drift": num(self.frequency_drift),
+                "frequency_drift_std": num(self.frequency_drift_std),
+                "damping_drift": num(self.damping_drift),
+                "damping_drift_std": num(self.damping_drift_std),
+                "linear": self.linear, "complexity": num(self.complexity)}
+
+
+@dataclass(frozen=True, eq=False)
+class ModalTargets(ResultShape):
+    """Linear modal targets of one test (see the module docstring).
+
+    Parameters
+    ----------
+    modes : sequence of ModeTarget
+        By ascending frequency, indexed 1, 2, ...
+    source : str
+        ``"free decay"``, ``"frf"`` or ``"sweep"``.
+    notes : str
+        How the targets were made (filters, orders, windows).
+    warnings : tuple of str
+        What the data could not support.
+    failures : tuple of str
+        Why the targets are not usable as they stand (also among ``warnings``).
+
+    The views for a model update (:attr:`frequencies`, :attr:`shapes`,
+    :attr:`modal_constants` and their ``*_stderr``) map the mode index to the value.
+    """
+
+    modes: tuple = ()
+    source: str = ""
+    notes: str = ""
+    failures: tuple = ()
+
+    def __post_init__(self):
+        modes = tuple(self.modes)
+        if not all(isinstance(m, ModeTarget) for m in modes):
+            raise ValueError("modes must be a sequence of ModeTarget")
+        if [m.index for m in modes] != list(range(1, len(modes) + 1)):
+            raise ValueError("modes must be indexed 1, 2, ... in order")
+        object.__setattr__(self, "modes", modes)
+        object.__setattr__(self, "failures", tuple(str(w) for w in self.failures))
+        object.__setattr__(self, "warnings", tuple(str(w) for w in self.warnings)
+                           + tuple(w for w in self.failures if w not in self.warnings))
+
+    # ---- views for the updater ---------------------------------------------------------
+    @property
+    def frequencies(self) -> dict:
+        """``{mode index: natural frequency [Hz]}``."""
+        return {m.index: m.frequency for m in self.modes}
+
+    @property
+    def frequency_stderr(self) -> dict:
+        """``{mode index: standard error [Hz]}`` (:attr:`ModeTarget.frequency_stderr`)."""
+        return {m.index: m.frequency_stderr for m in self.modes}
+
+    @property
+    def damping_ratios(self) -> dict:
+        """``{mode index: damping ratio [-]}``."""
+        return {m.index: m.damping_ratio for m in self.modes}
+
+    @property
+    def damping_ratio_stderr(self) -> dict:
+        """``{mode index: standard error [-]}``."""
+        return {m.index: m.damping_ratio_stderr for m in self.modes}
+
+    @property
+    def shapes(self) -> dict:
+        """``{mode index: {position: signed real amplitude [m]}}``: the real part of
+        :attr:`ModeTarget.shape` (modes with sensors only)."""
+        return {m.index: {p: float(v.real) for p, v in zip(m.positions, m.shape)}
+                for m in self.modes if m.positions}
+
+    @property
+    def shape_stderr(self) -> dict:
+        """``{mode index: {position: standard error of the real amplitude [m]}}``."""
+        return {m.index: {p: float(s[0]) for p, s in zip(m.positions, m.shape_std)}
+                for m in self.modes if m.positions}
+
+    @property
+    def complex_shapes(self) -> dict:
+        """``{mode index: {position: complex amplitude [m]}}`` (:attr:`ModeTarget.shape`)."""
+        return {m.index: {p: complex(v) for p, v in zip(m.positions, m.shape)}
+                for m in self.modes if m.positions}
+
+    @property
+    def modal_constants(self) -> dict:
+        """``{mode index: modal constant [1/kg]}`` (modes with a measured force only)."""
+        return {m.index: m.modal_constant for m in self.modes
+                if math.isfinite(m.modal_constant)}
+
+    @property
+    def modal_constant_stderr(self) -> dict:
+        """``{mode index: standard error [1/kg]}``."""
+        return {m.index: m.modal_constant_std for m in self.modes
+                if math.isfinite(m.modal_constant)}
+
+    def mac(self, index: int, shape) -> float:
+        """MAC of mode ``index``'s complex shape with ``shape`` ({position: amplitude})."""
+        if index not in self.complex_shapes:
+            raise ValueError(f"index must be a mode with a shape, one of "
+                             f"{sorted(self.complex_shapes)}, got {index!r}")
+        return mac(self.complex_shapes[index], dict(shape))
+
+    # ---- result shape --------------------------------------------------------------------
+    @property
+    def success(self) -> bool:
+        """At least one mode and no failures."""
+        return not self.failure_reasons()
+
+    def failure_reasons(self) -> tuple:
+        none = () if self.modes else ("no physical mode was identified",)
+        return tuple(self.failures) + none
+
+    def to_dict(self) -> dict:
+        return {"source": self.source, "notes": self.notes,
+                "modes": [m.to_dict() for m in self.modes],
+                "warnings": list(self.warnings), "failures": list(self.failures),
+                "success": self.success}
+
+    def _mode_rows(self):
+        return [(m.index, m.label, m.frequency, m.frequency_stderr, m.damping_ratio,
+                 m.damping_ratio_stderr, m.modal_constant if math.isfinite(m.modal_constant)
+                 else None, m.modal_constant_std if math.isfinite(m.modal_constant_std)
+                 else None, m.window[0], m.window[1], m.amplitude_range[0],
+                 m.amplitude_range[1], m.frequency_drift if math.isfinite(m.frequency_drift)
+                 else None, "-" if m.linear is None else ("yes" if m.linear else "no"))
+                for m in self.modes]
+
+    def _shape_rows(self):
+        return [(m.index, s, p if not isinstance(p, tuple) else str(p), float(v.real),
+                 float(e[0]), float(v.imag), float(e[1]))
+                for m in self.modes for s, p, v, e in zip(m.sensors, m.positions, m.shape,
+                                                           m.shape_std)]
+
+    def _tables(self) -> list:
+        out = [("modes", ("mode", "label", "frequency [Hz]", "stderr [Hz]", "damping [-]",
+                          "stderr [-]", "modal constant [1/kg]", "stderr [1/kg]",
+                          "window start", "window end", "amplitude start [m]",
+                          "amplitude end [m]", "frequency drift [Hz]", "linear"),
+                self._mode_rows())]
+        if any(m.positions for m in self.modes):
+            out.append(("shapes", ("mode", "sensor", "position [m]", "real [m]",
+                                   "stderr real [m]", "imag [m]", "stderr imag [m]"),
+                        self._shape_rows()))
+        out.append(("run", ("quantity", "value"), [("source", self.source),
+                                                    ("modes", len(self.modes)),
+                                                    ("notes", self.notes)]))
+        return out
+
+    def report(self) -> str:
+        """The verdict, then one line per mode and the shapes, units in brackets."""
+        lines = [self.verdict(), f"Modal targets ({self.source}), {len(self.modes)} mode(s)"]
+        if self.notes:
+            lines += wrap(f"  {self.notes}", indent="    ")
+        lines += table_lines(
+            [("mode", "4d"), ("f [Hz]", "11.6g"), ("+-", "8.2g"), ("zeta [-]", "10.4g"),
+             ("+-", "8.2g"), ("c [1/kg]", "9.4g"), ("+-", "8.2g"), ("window", "<19"),
+             ("X [m]", "<19"), ("linear", "<6")],
+            [(m.index, m.frequency, m.frequency_stderr, m.damping_ratio,
+              m.damping_ratio_stderr, m.modal_constant, m.modal_constant_std,
+              f"{format_value(m.window[0], 4)}-{format_value(m.window[1], 4)}",
+              f"{format_value(m.amplitude_range[0], 3)}-{format_value(m.amplitude_range[1], 3)}",
+              "-" if m.linear is None else ("yes" if m.linear else "no"))
+             for m in self.modes])
+        if any(m.positions for m in self.modes):
+            lines.append("  shapes (displacement at the window start, one phase per mode):")
+            lines += table_lines([("mode", "4d"), ("sensor", "<8"), ("x [m]", "<8"),
+                                  ("real [m]", "11.4e"), ("+-", "9.2e"), ("imag [m]", "11.4e"),
+                                  ("+-", "9.2e")],
+                                 [(i, s, format_value(p, 4) if not isinstance(p, tuple)
+                                   else str(p), r, er, im, ei)
+                                  for i, s, p, r, er, im, ei in self._shape_rows()])
+        for w in self.warnings:
+            lines += wrap(f"  warning: {w}", indent="    ")
+        return "\n".join(lines)
+
+    def plot(self, ax=None):
+        """The signed real shapes against sensor position, each scaled to its largest
+        amplitude, with error bars; returns the artists. One panel."""
+        (a,) = panels(ax, 1)
+        artists = []
+        for m in self.modes:
+            if not m.positions or isinstance(m.positions[0], tuple):
+                continue
+            x = np.array(m.positions, float)
+            order = np.argsort(x)
+            v = m.shape.real[order]
+            scale = float(np.max(np.abs(v))) or 1.0
+            eb = a.errorbar(x[order], v / scale, yerr=m.shape_std[order, 0] / scale,
+                            marker="o", ls="-", label=f"mode {m.index}: {m.frequency:.5g} Hz")
+            artists += [eb.lines[0], *eb.lines[2]]
+        if not artists:        # no shapes (an FRF fit): the frequencies with their errors
+            f = [m.frequency for m in self.modes] or [0.0]
+            artists += a.plot(range(1, len(f) + 1), f, "o")
+            a.set_xlabel("mode")
+            a.set_ylabel("frequency [Hz]")
+            return artists
+        a.axhline(0.0, color="0.6", lw=0.8)
+        a.set_xlabel("sensor position [m]")
+        a.set_ylabel("shape / largest amplitude [-]")
+        a.legend(fontsize="small")
+        return artists
