@@ -21,9 +21,9 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
-import bench_diagnosis as B  # noqa: E402
+import bench_diagnosis as B
 
-from iwan_element.diagnose import diagnose  # noqa: E402
+from iwan_element.diagnose import diagnose
 
 NAMES = ("ratio", "Fs", "KT", "chi", "beta")
 

@@ -39,8 +39,10 @@ sys.path.insert(0, str(ROOT / "tests"))
 def coverage(n, fs_scatter=0.0):
     """Share of true law coefficients within 2 stated standard errors (``stderr``, and
     ``stderr_scatter``: with the record-to-record scatter) over ``n`` seeded campaigns whose
-    records' Fs scatter by ``fs_scatter`` (ln Fs standard deviation) about the law."""
+    records' Fs scatter by ``fs_scatter`` (ln Fs standard deviation) about the law.
+    """
     from _campaign_cases import LAWS, campaign
+
     from iwan_element import fit_campaign
     hits, per_q, t0, bad = [], {q: [] for q in LAWS}, time.perf_counter(), 0
     hits_s, per_q_s = [], {q: [] for q in LAWS}
@@ -184,7 +186,8 @@ def attribute(fit):
     own values with the campaign stack (``free``), and with one group swapped: the laws with
     the record's own values of that group (``law+own``) and the record's own values with the
     laws' values of that group (``own+law``). Nuisances (offset, start) fitted as in the
-    leave-one-out."""
+    leave-one-out.
+    """
     from iwan_element.diagnose.campaign.predict import predict_record
     st = fit._state
     model, theta, preps, free = st["model"], st["theta"], st["preps"], st["free"]
@@ -217,8 +220,10 @@ def neighbours(fit):
     """What the nominal conditions can predict at best, with no law at all: each record
     predicted from the median of the own values (campaign stack) of the other records of
     the same campaign and band tension (``same T``), and of those among them nearest in
-    frequency, then in stroke (``nearest``). Band misfit over the record's own fit's."""
+    frequency, then in stroke (``nearest``). Band misfit over the record's own fit's.
+    """
     import math
+
     from iwan_element.diagnose.campaign.predict import predict_record
     st = fit._state
     model, theta, preps, free = st["model"], st["theta"], st["preps"], st["free"]

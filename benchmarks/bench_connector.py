@@ -56,11 +56,17 @@ from pathlib import Path
 import exudyn as exu
 import numpy as np
 from exudyn.advancedUtilities import CreateSymbolicUserFunction
-from exudyn.itemInterface import (CoordinateSpringDamper, Mass1D, MarkerNodeCoordinate, Node1D,
-                                  NodePointGround, ObjectConnectorCoordinateSpringDamper)
+from exudyn.itemInterface import (
+    CoordinateSpringDamper,
+    MarkerNodeCoordinate,
+    Mass1D,
+    Node1D,
+    NodePointGround,
+    ObjectConnectorCoordinateSpringDamper,
+)
 
 import iwan_element
-import iwan_element.exudyn  # noqa: F401  (the connector module)
+import iwan_element.exudyn
 from iwan_element import IwanParameters
 
 P = IwanParameters(Fs=1000.0, KT=1e6, chi=-0.5, beta=0.2)
@@ -274,7 +280,7 @@ def main(argv=None):
         return
     variants = ["builtin", "python-lin", "python-lin+post", "python-nonlin+post",
                 "symbolic-nonlin+set"] + conn
-    best = {v: (math.inf, math.nan) for v in variants}
+    best = dict.fromkeys(variants, (math.inf, math.nan))
     for _ in range(args.repeat):           # interleaved rounds: load changes hit all variants
         for v in variants:
             if v.startswith("conn-discrete") and _ > 1:
@@ -329,7 +335,8 @@ def build_chain(variant, n):
 
 def symbolic_backbone(mbs, m0, m1):
     """A spring whose force is the Iwan virgin backbone as an Exudyn symbolic expression: a
-    stateless nonlinear symbolic law (no post-step), the floor of any symbolic Iwan law."""
+    stateless nonlinear symbolic law (no post-step), the floor of any symbolic Iwan law.
+    """
     from exudyn.advancedUtilities import CreateSymbolicUserFunction
     esym = exu.symbolic
     a, e1, pm = P.R / ((P.chi + 1.0) * (P.chi + 2.0)), P.chi + 1.0, P.phi_max
@@ -347,12 +354,13 @@ def symbolic_backbone(mbs, m0, m1):
 
 def contact_table(n, steps, repeat):
     """The chain table: wall and CPU time (best of the interleaved rounds), Newton iterations
-    per step, and the trajectory against the Python-law connectors."""
+    per step, and the trajectory against the Python-law connectors.
+    """
     variants = ["builtin", "symbolic-backbone", "interface", "connectors-symbolic",
                 "connectors-python"]
     if "base" in PACKAGES:
         variants.insert(2, "interface@base")
-    best = {v: (math.inf, math.inf, math.nan) for v in variants}
+    best = dict.fromkeys(variants, (math.inf, math.inf, math.nan))
     slips = {}
     for _ in range(repeat):
         for v in variants:

@@ -27,9 +27,9 @@ import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "examples"))
-import exudyn_cartesian_mass as cartesian  # noqa: E402
-import exudyn_duffing_sweep as duffing  # noqa: E402
-import exudyn_rotor_bearing as rotor  # noqa: E402
+import exudyn_cartesian_mass as cartesian
+import exudyn_duffing_sweep as duffing
+import exudyn_rotor_bearing as rotor
 
 
 def _scripts(quick: bool):

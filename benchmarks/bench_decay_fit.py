@@ -26,9 +26,9 @@ import numpy as np
 from scipy.optimize import brentq
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
-from _decays import QUANTITIES, joint_decay, svam_decay  # noqa: E402
+from _decays import QUANTITIES, joint_decay, svam_decay
 
-from iwan_element import IwanParameters, fit_decay, modal_iwan_curve  # noqa: E402
+from iwan_element import IwanParameters, fit_decay, modal_iwan_curve
 
 PHI_MAX = 1e-3
 

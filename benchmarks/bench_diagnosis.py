@@ -33,10 +33,10 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
-from _diagnosis_cases import _calibrate  # noqa: E402
+from _diagnosis_cases import _calibrate
 
-from iwan_element import IwanJoint, IwanParameters, make_effect  # noqa: E402
-from iwan_element.diagnose import diagnose, simulate_element_test  # noqa: E402
+from iwan_element import IwanJoint, IwanParameters, make_effect
+from iwan_element.diagnose import diagnose, simulate_element_test
 
 JOINTS = {"stiff": IwanParameters(2500.0, 4e6, -0.3, 0.6),
           "soft": IwanParameters(400.0, 5e5, -0.7, 0.05)}
@@ -95,7 +95,8 @@ def agree(g) -> bool:
     """``success``, the report's status column and the warnings say the same: a parameter
     called identified in the status column has a finite stderr of at most half its value
     (chi: of chi + 1) and is not at a bound of its search range; one that is not is named in
-    a warning; ``success`` holds only when Fs, KT and chi are identified."""
+    a warning; ``success`` holds only when Fs, KT and chi are identified.
+    """
     f = g.fit
     rows = {line.split()[0]: line for line in f.report().splitlines()
             if line.strip().split(" ")[0] in ("Fs", "KT", "chi", "beta") and "identified" in line}
@@ -118,7 +119,8 @@ def agree(g) -> bool:
 
 def _pair_element(p, env, names, size):
     """Two effects stacked on the joint (slider-level innermost), each calibrated alone to
-    ``size`` x noticeable."""
+    ``size`` x noticeable.
+    """
     from iwan_element.effects.engine.evaluate import order_stack
     el = IwanJoint(p)
     for nm in order_stack(names):
@@ -145,7 +147,8 @@ def one(case):
 def timing(repeats: int) -> None:
     """Diagnosis time with the slip-degradation bank solved per monotone run (as shipped) vs
     the per-sample reference loop, interleaved (A, B, A, B, ...), minimum per variant; the
-    named effects and the residual after must be the same."""
+    named effects and the residual after must be the same.
+    """
     from iwan_element.effects import SlipDegradation
     from iwan_element.effects.engine.sliders import SliderEffect
     fast = SlipDegradation._correction_energy

@@ -49,13 +49,13 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
-import _vibration_cases as vc  # noqa: E402
-from _diagnosis_cases import _calibrate  # noqa: E402
+import _vibration_cases as vc
+from _diagnosis_cases import _calibrate
 
-from iwan_element import AmplitudeCurve, IwanJoint, IwanParameters, make_effect  # noqa: E402
-from iwan_element.diagnose import diagnose, diagnose_vibration, simulate_element_test  # noqa: E402
-from iwan_element.diagnose.loops.diagnosis import loop_candidates  # noqa: E402
-from iwan_element.diagnose.vibration.diagnosis import vibration_candidates  # noqa: E402
+from iwan_element import AmplitudeCurve, IwanJoint, IwanParameters, make_effect
+from iwan_element.diagnose import diagnose, diagnose_vibration, simulate_element_test
+from iwan_element.diagnose.loops.diagnosis import loop_candidates
+from iwan_element.diagnose.vibration.diagnosis import vibration_candidates
 
 JOINTS = {"stiff": IwanParameters(2500.0, 4e6, -0.3, 0.6),
           "soft": IwanParameters(400.0, 5e5, -0.7, 0.05)}
@@ -185,7 +185,8 @@ def run_vibration(case):
 def score(d, truth, candidates):
     """Per case: the probability of the truth, the top explanation's probability and
     whether it is the truth, each candidate's marginal probability and presence, and the
-    rule's yes/no answer."""
+    rule's yes/no answer.
+    """
     probs = d.probabilities
     truth = tuple(sorted(truth))
     top = max(probs, key=probs.get)
@@ -261,7 +262,8 @@ def nested_check(cases):
     """Laplace against nested sampling (dynesty) on vibration cases: per explanation the
     difference of the log evidences and the sampler's stated error, split into explanations
     whose size parameter sits at its "no effect" value (within 1e-3 of the range) and the
-    others."""
+    others.
+    """
     from iwan_element.effects import EFFECTS
     rows = []
     for case in cases:

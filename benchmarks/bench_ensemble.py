@@ -26,10 +26,10 @@ import time
 import warnings
 
 import numpy as np
+from iwan_element.models.studies import specimen_curve_task
 
 from iwan_element import IwanParameters
 from iwan_element.ensemble import SingleModeSystem, parameter_samples, run_ensemble
-from iwan_element.models.studies import specimen_curve_task
 from iwan_element.ensemble.oscillator import _integrate
 
 

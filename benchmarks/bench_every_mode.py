@@ -27,13 +27,12 @@ import sys
 import time
 from pathlib import Path
 
-
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "examples"))
 
-import brb_every_mode as example                      # noqa: E402
+import brb_every_mode as example  # noqa: E402
 
-from iwan_element import models                        # noqa: E402
+from iwan_element import models  # noqa: E402
 
 
 def prediction(d, duration: float):

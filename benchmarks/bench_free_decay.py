@@ -22,9 +22,9 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
-from _decays import QUANTITIES, joint_case, svam_case  # noqa: E402
+from _decays import QUANTITIES, joint_case, svam_case
 
-from iwan_element import amplitude_curve  # noqa: E402
+from iwan_element import amplitude_curve
 
 DAMPING = tuple(float(z) for z in np.geomspace(0.0005, 0.03, 7).round(5))
 RATIOS = (0.8, 1.25, 1.4)

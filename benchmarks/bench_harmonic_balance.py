@@ -23,13 +23,12 @@ Run:  python benchmarks/bench_harmonic_balance.py [--time-stepped N] [--levels 0
 from __future__ import annotations
 
 import argparse
-import math
 import time
 
 import numpy as np
+from iwan_element.models.reduced import reduced_model, reduction_error
 
 from iwan_element import models
-from iwan_element.models.reduced import reduced_model, reduction_error
 
 GRID = np.round(np.arange(79.2, 81.2001, 0.05), 4)
 

@@ -104,7 +104,8 @@ def parse(argv=None):
 # ---------------------------------------------------------------- the one-slider limit
 def jenkins_closed_form(u, KT, Fs):
     """Force [N] of the Jenkins element along the sampled path ``u`` [m] from the relaxed
-    state: ``KT (u - z)``, the slider ``z`` moving only to keep ``|KT (u - z)| <= Fs``."""
+    state: ``KT (u - z)``, the slider ``z`` moving only to keep ``|KT (u - z)| <= Fs``.
+    """
     phi = Fs / KT
     z = 0.0
     out = np.empty(len(u))
@@ -118,7 +119,8 @@ def jenkins_limit(case: Case, levels=(0.5, 0.999, 2.0, 5.0)):
     """Largest ``|F_iwan - F_jenkins| / Fs`` over virgin-plus-cyclic histories
     (:func:`~iwan_element.core.masing.masing_history`) and over the steady loops of the
     harmonic balance's kernel (:func:`~iwan_element.core.periodic.periodic_rows`), at
-    amplitudes ``levels * Fs/KT``."""
+    amplitudes ``levels * Fs/KT``.
+    """
     p = case.joint
     phi = case.Fs / case.KT
     tau = 2 * np.pi * np.arange(case.samples) / case.samples
@@ -158,11 +160,13 @@ def run_ours(case: Case, force: float, repeat: int):
 # ---------------------------------------------------------------- the peer
 def peer_version():
     """pyHarm-os's version, or None when it is not installed. pyHarm keeps a state file
-    under the working directory unless told otherwise: it goes to the temporary folder."""
+    under the working directory unless told otherwise: it goes to the temporary folder.
+    """
     os.environ.setdefault("PYHARM_CONTEXT_FILE", str(Path(tempfile.gettempdir())
                                                      / "iwan-element-pyharm" / "context.json"))
     try:
         from importlib.metadata import version
+
         import pyHarm  # noqa: F401
         return version("pyharm-os")
     except ImportError:
@@ -173,9 +177,10 @@ PEER_SOLVERS = ("hybr", "newton")
 
 
 def peer_input(case: Case, force: float, solver: str) -> dict:
-    """pyHarm's input dictionary of the oscillator (one substructure of one dof, grounded
+    """PyHarm's input dictionary of the oscillator (one substructure of one dof, grounded
     connectors) with a no-continuation frequency-response analysis. ``solver``: ``"hybr"``
-    (pyHarm's default solver, scipy's ``root``) or ``"newton"`` (its Newton-Raphson)."""
+    (pyHarm's default solver, scipy's ``root``) or ``"newton"`` (its Newton-Raphson).
+    """
     node = {"connect": {"osc": [0]}, "dirs": [0]}
     W = 2 * np.pi * case.frequency
     phi = case.Fs / case.KT
@@ -205,8 +210,9 @@ def peer_input(case: Case, force: float, solver: str) -> dict:
 
 @contextlib.contextmanager
 def quiet():
-    """pyHarm logs a banner and per-step lines to stdout, and numba warns about array
-    layouts in its elements: keep both out of the table."""
+    """PyHarm logs a banner and per-step lines to stdout, and numba warns about array
+    layouts in its elements: keep both out of the table.
+    """
     with contextlib.redirect_stdout(io.StringIO()), warnings.catch_warnings():
         warnings.simplefilter("ignore")
         logging.disable(logging.CRITICAL)
@@ -221,7 +227,8 @@ def _peer_sweep(analysis, W, index, rtol):
     linear start), as :func:`harmonic_balance` does; fundamental coefficients out. A point
     counts as converged when its residual is below ``rtol`` [N], whatever the solver's status
     (pyHarm accepts any first point of its scipy route, and scipy's ``hybr`` may stop with
-    "not making good progress" on a residual at round-off)."""
+    "not making good progress" on a residual at round-off).
+    """
     a1 = np.full(W.size, np.nan, complex)
     ok = np.zeros(W.size, bool)
     its = np.zeros(W.size, int)
@@ -288,7 +295,8 @@ def _print(head, rows, markdown, width):
 
 def amplitude_rows(case: Case, force, ours, peers):
     """Table rows of one force level: frequency, force, our amplitude and convergence, and
-    per peer solver its amplitude, relative difference and convergence."""
+    per peer solver its amplitude, relative difference and convergence.
+    """
     rows = []
     for k, f in enumerate(case.frequency):
         cells = [f"{f:.2f}", f"{force:g}", _cell("{:.4f}", ours["amplitude"][k] * 1e6),
@@ -304,7 +312,8 @@ def amplitude_rows(case: Case, force, ours, peers):
 
 def agreement(ours, peers):
     """Per peer solver: (points both converged, largest |relative amplitude difference|,
-    largest |phase difference| [rad]) over those points."""
+    largest |phase difference| [rad]) over those points.
+    """
     out = {}
     for name, res in peers.items():
         both = ours["converged"] & res["converged"]

@@ -29,10 +29,10 @@ from pathlib import Path
 import numpy as np
 
 from iwan_element import IwanParameters, force_amplitude
+from iwan_element.identify.files.csv_input import load_test
 from iwan_element.identify.loops.dissipation import fit_dissipation
 from iwan_element.identify.loops.fit import fit_loops
 from iwan_element.identify.loops.result import IdentifiabilityWarning
-from iwan_element.identify.files.csv_input import load_test
 from iwan_element.identify.loops.testdata import simulate_test
 
 SETS = [IwanParameters(9e3, 5e7, -0.8, 0.0), IwanParameters(9e3, 5e7, -0.5, 1.0),

@@ -18,16 +18,15 @@ Data: ``../shared/data/brb-hammer`` (GPL-3.0, read in place; Chen et al., MSSP 1
 from __future__ import annotations
 
 import argparse
-import math
 import sys
 import time
 from pathlib import Path
 
 import numpy as np
+from iwan_element.models.calibration import calibrate, measured_amplitude_curve
 
 import iwan_element as ie
 from iwan_element import models
-from iwan_element.models.calibration import calibrate, measured_amplitude_curve
 
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "brb-hammer"
 POSITIONS = {"acc1": 0.0254, "acc2": 0.5549, "acc3": 0.6438}
@@ -113,7 +112,8 @@ def main(argv=None):
 
 def cal(spec, *, solid=False):
     """The joint on mode 1's amplitude curve at acc3 (the preset's calibration route),
-    starting from the updated specimen: how far the shared stiffness per area moves."""
+    starting from the updated specimen: how far the shared stiffness per area moves.
+    """
     curve = measured_amplitude_curve(DATA / "hammer_acc3.csv", start=0.2)
     t0 = time.perf_counter()
     k0 = spec.interface.stiffness_per_area

@@ -26,14 +26,20 @@ import tracemalloc
 from pathlib import Path
 
 import exudyn as exu
-from exudyn.itemInterface import (CoordinateSpringDamper, LoadCoordinate, Mass1D,
-                                  MarkerNodeCoordinate, Node1D, NodePointGround)
+from exudyn.itemInterface import (
+    CoordinateSpringDamper,
+    LoadCoordinate,
+    MarkerNodeCoordinate,
+    Mass1D,
+    Node1D,
+    NodePointGround,
+)
 
 import iwan_element
-import iwan_element.exudyn  # noqa: F401
+import iwan_element.exudyn
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from bench_connector import PACKAGES, load_package  # noqa: E402
+from bench_connector import PACKAGES, load_package
 
 P = iwan_element.IwanParameters(Fs=1000.0, KT=1e6, chi=-0.5, beta=0.2)
 H = 1e-5

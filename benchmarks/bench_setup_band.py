@@ -11,8 +11,9 @@ import argparse
 import sys
 import time
 
-from iwan_element import models
 from iwan_element.models.updating import prior_band
+
+from iwan_element import models
 
 
 def main(argv=None):

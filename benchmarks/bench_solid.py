@@ -51,15 +51,13 @@ import argparse
 import math
 import time
 from functools import lru_cache
-
-import numpy as np
-from scipy.optimize import brentq
-
 from pathlib import Path
 
+import numpy as np
 from iwan_element.models import modal_amplitude_curve, natural_frequencies, preset
 from iwan_element.models.calibration import calibrate, measured_amplitude_curve
-from iwan_element.models.solid import solid_specimen, lap_beam_parts
+from iwan_element.models.solid import lap_beam_parts, solid_specimen
+from scipy.optimize import brentq
 
 PEAKS = np.array([80.4, 221.7, 297.7, 845.6])
 RECORD = Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "brb-hammer" / "hammer_acc3.csv"
@@ -67,7 +65,8 @@ RECORD = Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "brb-h
 
 def _direction_forms(solid):
     """``Q[d] = T^T P_d T`` (d = x, y, z): ``v^T Q[d] v`` is the share of direction d in the
-    full displacement ``T v`` of a reduced vector ``v``."""
+    full displacement ``T v`` of a reduced vector ``v``.
+    """
     return _forms(solid.model)
 
 
@@ -85,7 +84,8 @@ def _classify(Q, V):
 
 def _families(solid, n):
     """'z' (height bending) or 'y' (in-plane) or 'x' per elastic stuck mode, with its
-    share of the full displacement."""
+    share of the full displacement.
+    """
     L = solid.linear_system()
     KT = solid.contact_points().KT
     K = L.K0 + L.G.T @ (KT[:, None] * L.G)
@@ -97,7 +97,8 @@ def _families(solid, n):
 def _direction_targets(solid):
     """``targets(kx, ky, kn)``: the stuck frequencies [Hz] of the first height, first
     in-plane, second and fourth height bending modes with a uniform interface stiffness per
-    area in each direction (pressure exponent 0)."""
+    area in each direction (pressure exponent 0).
+    """
     L, Q = solid.linear_system(), _direction_forms(solid)
     A, Gn = solid.model.patches.area, solid.model.normal_gaps
     Gx, Gy = L.G[0::2], L.G[1::2]
@@ -116,7 +117,8 @@ def run_wave_speed(solid, factors):
     """The material's wave speed ``sqrt(E / rho)`` times ``c``: every body frequency scales
     by ``c`` when ``E`` and the interface stiffnesses scale by ``c^2``, so the calibration on
     the stuck mode 1 = 80.4 Hz is the unscaled model's on ``80.4 / c`` (``k_t = k_x = k_y`` by
-    brentq, ``k_n`` the specimen's); the other families' errors then."""
+    brentq, ``k_n`` the specimen's); the other families' errors then.
+    """
     targets = _direction_targets(solid)
     kn = solid.interface.normal_stiffness_per_area
     print("  wave speed x c (E / rho x c^2), k_t on the stuck mode 1 = 80.4 Hz: errors of "
@@ -133,7 +135,8 @@ def run_wave_speed(solid, factors):
 def run_stiffness_scan(solid, decades=(11, 16)):
     """Any uniform interface stiffness per area, direction by direction: ``k_y`` and ``k_n``
     on a grid of decades, ``k_x`` by brentq on the stuck mode 1 = 80.4 Hz; the settings with
-    the smallest largest error of the other three families (pressure exponent 0)."""
+    the smallest largest error of the other three families (pressure exponent 0).
+    """
     targets = _direction_targets(solid)
 
     rows = []
@@ -155,7 +158,8 @@ def run_stiffness_scan(solid, decades=(11, 16)):
 
 def _targets(solid):
     """Stuck frequencies [Hz] of the first height, first in-plane, second and fourth height
-    bending modes (the families of the hammer peaks), from the lowest 8 elastic modes."""
+    bending modes (the families of the hammer peaks), from the lowest 8 elastic modes.
+    """
     fam = {}
     for fk, lab in zip(natural_frequencies(solid, n_modes=14)[6:], _families(solid, 8)):
         fam.setdefault(lab[0], []).append(fk)

@@ -27,11 +27,10 @@ import time
 
 import exudyn as exu
 import numpy as np
-
 from iwan_element.models import modal_amplitude_curve, preset, ringdown
 from iwan_element.models.modal import static_modal_load
-from iwan_element.models.solid import solid_specimen, lap_beam_parts
 from iwan_element.models.simulation import build_host, solver_settings
+from iwan_element.models.solid import lap_beam_parts, solid_specimen
 
 
 def _cost(label, r):
@@ -57,7 +56,8 @@ def _qsma(solid, r):
 
 def _solvers(solid, duration):
     """The mode-1 Iwan release on the same model with Exudyn's sparse solver (its default)
-    and with full Newton (a Jacobian per iteration; over a tenth of the duration)."""
+    and with full Newton (a Jacobian per iteration; over a tenth of the duration).
+    """
     st = static_modal_load(solid, [60e-6], mode=1)
     out = {}
     for name, kind, modified, dur in (

@@ -22,9 +22,9 @@ import time
 from pathlib import Path
 
 import numpy as np
+from iwan_element.models.calibration import measured_amplitude_curve
 
 from iwan_element import read_sweep_csv, sweep_curve
-from iwan_element.models.calibration import measured_amplitude_curve
 
 
 def shared_file(*parts):

@@ -78,7 +78,7 @@ exu.MainSystem.SolveDynamic = _counted
 
 
 def _solid():
-    from iwan_element.models.solid import solid_specimen, lap_beam_parts
+    from iwan_element.models.solid import lap_beam_parts, solid_specimen
     s = models.preset("brake-reuss")
     parts = lap_beam_parts(s, mesh_size=0.012, lap_mesh_size=0.0051)
     return solid_specimen(s, parts, patch_size=0.0085, n_modes=8)
@@ -157,7 +157,8 @@ def _line(label, d, other=None):
 def _gap(a, b):
     """Largest relative frequency and damping gaps of curve ``a`` against curve ``b`` at
     ``a``'s amplitudes inside ``b``'s range (``b`` interpolated in log amplitude), and the
-    number of points compared."""
+    number of points compared.
+    """
     la, lb = np.log(a.amplitude), np.log(b.amplitude)
     o = np.argsort(lb)
     keep = (la >= lb.min()) & (la <= lb.max())

@@ -23,8 +23,13 @@ from pathlib import Path
 
 import numpy as np
 
-from iwan_element import (IwanParameters, amplitude_curve, fit_modal_iwan, modal_iwan_curve,
-                          modal_ringdown)
+from iwan_element import (
+    IwanParameters,
+    amplitude_curve,
+    fit_modal_iwan,
+    modal_iwan_curve,
+    modal_ringdown,
+)
 
 FS = 12800.0
 F0 = 80.0

@@ -29,10 +29,10 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
-import _vibration_cases as vc  # noqa: E402
+import _vibration_cases as vc
 
-from iwan_element import AmplitudeCurve, IwanParameters, diagnose_vibration  # noqa: E402
-from iwan_element.diagnose.vibration.diagnosis import vibration_candidates  # noqa: E402
+from iwan_element import AmplitudeCurve, IwanParameters, diagnose_vibration
+from iwan_element.diagnose.vibration.diagnosis import vibration_candidates
 
 P = IwanParameters(250.0, 1.8e5, -0.35, 0.5)
 

@@ -28,10 +28,10 @@ import argparse
 from pathlib import Path
 
 import numpy as np
+from iwan_element.models.calibration import measured_amplitude_curve
 
 import iwan_element as ie
 from iwan_element import models
-from iwan_element.models.calibration import measured_amplitude_curve
 
 ROOT = Path(__file__).resolve().parents[1]
 

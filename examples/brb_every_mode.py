@@ -60,7 +60,8 @@ def records(d) -> dict:
 def predict(d, *, duration=1.2, quick=False, solid=False) -> models.HammerPrediction:
     """Calibrate on mode 1 at acc3, predict mode 2 everywhere (and mode 1 at acc2, acc1).
     ``solid``: the beam as solid bodies (``models.solid_preset``, extra ``[fem]``), whose
-    second height-bending mode is its stuck mode 3 (mode 2 bends in-plane)."""
+    second height-bending mode is its stuck mode 3 (mode 2 bends in-plane).
+    """
     if solid:
         spec = models.solid_preset("brake-reuss", mesh_size=0.012, lap_mesh_size=0.0025,
                                    patch_size=0.0064)

@@ -39,11 +39,10 @@ import time
 from pathlib import Path
 
 import numpy as np
+from brb_discrepancy import data_dir, diagnose_sweeps, sweeps_curve
 
 from iwan_element import models
 from iwan_element.base.result_shape import table_lines
-
-from brb_discrepancy import data_dir, diagnose_sweeps, sweeps_curve
 
 HARMONICS = (1, 3, 5)
 N_MODES = 8
@@ -83,7 +82,8 @@ def phase_convention(levels):
 
 def linear_receptance(spec, curve, *, f=80.3):
     """The drive point's linear receptance split as in ``docs/sweeps.md`` (1), model against
-    records: mode 1's modal constant and the real residual of the rest at ``f`` [Hz]."""
+    records: mode 1's modal constant and the real residual of the rest at ``f`` [Hz].
+    """
     red = models.reduced_model(spec, n_modes=N_MODES)
     sysm, r = red.system, red.mode_index(1)
     nz, W = sysm.n_z, 2 * math.pi * f

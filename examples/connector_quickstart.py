@@ -3,7 +3,13 @@ import math
 import os
 
 import exudyn as exu
-from exudyn.itemInterface import LoadCoordinate, Mass1D, MarkerNodeCoordinate, Node1D, NodePointGround
+from exudyn.itemInterface import (
+                           LoadCoordinate,
+                           MarkerNodeCoordinate,
+                           Mass1D,
+                           Node1D,
+                           NodePointGround,
+)
 
 from iwan_element import IwanParameters
 from iwan_element.exudyn import add_iwan_connector

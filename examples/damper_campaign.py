@@ -55,7 +55,8 @@ if shared is None:
 def conditions(path):
     """Band tension [lb], frequency [Hz] and, with ``--all``, campaign (0: 2022, 1: 2023),
     nominal stroke [in] (dataset-1: about 1 in) and the products the per-campaign laws use,
-    from the file name."""
+    from the file name.
+    """
     ds, f, T, a = re.match(r"ds(\d)_(\d+(?:p\d+)?)Hz_(\d+)lb(?:_(\d+(?:p\d+)?)in)?",
                            path.stem).groups()
     c = {"tension": float(T), "frequency": float(f.replace("p", "."))}
@@ -117,9 +118,10 @@ print(f"predicted {held_out.stem} from {pred.conditions}: Fs = {pred.values['Fs'
       f"{100 * np.sqrt(np.mean((F - pred.force) ** 2)) / np.ptp(F):.1f} % of the force range"
       + "".join(f"; {w}" for w in pred.warnings))
 
-import matplotlib                                                     # noqa: E402
+import matplotlib  # noqa: E402
+
 matplotlib.use("Agg")
-from matplotlib.figure import Figure                                  # noqa: E402
+from matplotlib.figure import Figure  # noqa: E402
 
 out = Path(args.out)
 out.mkdir(parents=True, exist_ok=True)

@@ -29,11 +29,11 @@ from pathlib import Path
 import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
+import matplotlib.pyplot as plt
+import numpy as np
+from iwan_element.models import natural_frequencies, preset, ringdown
 
-from iwan_element import diagnose_vibration  # noqa: E402
-from iwan_element.models import natural_frequencies, preset, ringdown  # noqa: E402
+from iwan_element import diagnose_vibration
 
 # a loosened bolt (friction 0.3 x 3 kN = 0.9 kN over the lap), no damping floor
 BASE = preset("example").replace(preload=3000.0, damping_floor=0.0, n_points=12)
@@ -52,7 +52,8 @@ def hidden_truth(effect: str):
 
 def per_level(specimen, levels, *, quick: bool):
     """One ring-down per release amplitude [m] at the sensor; per run the median amplitude,
-    frequency and damping of its curve (the amplitude barely changes within a run)."""
+    frequency and damping of its curve (the amplitude barely changes within a run).
+    """
     rows = []
     for X0 in levels:
         c = ringdown(specimen, amplitude=float(X0), cycles=16 if quick else 24,

@@ -28,9 +28,10 @@ data = simulate_element_test(hidden, np.array([0.3, 0.6, 1.0, 1.5]) * params.phi
 result = diagnose(data.t, data.u, data.F)
 print(result.report())
 
-import matplotlib                                                     # noqa: E402
+import matplotlib  # noqa: E402
+
 matplotlib.use("Agg")
-from matplotlib.figure import Figure                                  # noqa: E402
+from matplotlib.figure import Figure  # noqa: E402
 
 fig = Figure(figsize=(11, 4.5))
 result.plot(ax=[fig.add_subplot(1, 2, 1), fig.add_subplot(1, 2, 2)])

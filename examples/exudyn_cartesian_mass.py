@@ -34,7 +34,8 @@ def build(joint: str = "iwan", *, steps: int = 100_000, t_end: float = 1.0, law:
           energy: bool = False, gravity: bool = False):
     """The model. ``joint="spring"``: Exudyn's Cartesian spring-damper as it is; ``"iwan"``:
     the Iwan joint swapped in along x. Returns a namespace with ``SC, mbs, sim, connector,
-    recorder, body``."""
+    recorder, body``.
+    """
     SC = exu.SystemContainer()
     mbs = SC.AddSystem()
     ground = mbs.CreateGround(referencePosition=[0.0, 0.0, 0.0])

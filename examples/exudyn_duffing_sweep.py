@@ -20,8 +20,14 @@ from types import SimpleNamespace
 
 import exudyn as exu
 import numpy as np
-from exudyn.itemInterface import (CoordinateSpringDamper, LoadCoordinate, MarkerNodeCoordinate,
-                                  MassPoint, NodePoint, NodePointGround)
+from exudyn.itemInterface import (
+    CoordinateSpringDamper,
+    LoadCoordinate,
+    MarkerNodeCoordinate,
+    MassPoint,
+    NodePoint,
+    NodePointGround,
+)
 
 from iwan_element import IwanParameters
 from iwan_element.exudyn import create_iwan_connector, record_energy
@@ -45,7 +51,8 @@ def hardening_spring(mbs, t, itemNumber, u, v, k, d, offset):
 def build(joint: str = "iwan", *, steps: int = 5000, law: str = "auto", energy: bool = False,
           t_end: float = T_END):
     """The model. ``joint="spring"``: the script's user-function spring; ``"iwan"``: the
-    Iwan joint swapped in. Returns a namespace with ``SC, mbs, sim, connector, recorder``."""
+    Iwan joint swapped in. Returns a namespace with ``SC, mbs, sim, connector, recorder``.
+    """
     SC = exu.SystemContainer()
     mbs = SC.AddSystem()
     node = mbs.AddNode(NodePoint(referenceCoordinates=[0.5, 0.0, 0.0]))

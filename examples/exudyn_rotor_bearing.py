@@ -24,8 +24,13 @@ import exudyn as exu
 import numpy as np
 import scipy.sparse as sp
 from exudyn.FEM import FEMinterface, ObjectFFRFreducedOrderInterface
-from exudyn.itemInterface import (MarkerBodyPosition, MarkerSuperElementPosition,
-                                  ObjectConnectorCartesianSpringDamper, ObjectGround, SensorMarker)
+from exudyn.itemInterface import (
+    MarkerBodyPosition,
+    MarkerSuperElementPosition,
+    ObjectConnectorCartesianSpringDamper,
+    ObjectGround,
+    SensorMarker,
+)
 
 from iwan_element import IwanParameters
 from iwan_element.exudyn import create_iwan_connector, record_energy
@@ -43,7 +48,8 @@ def truss_rotor() -> FEMinterface:
     """The rotor's finite-element model: ``BAYS + 1`` square sections of four nodes along x,
     joined by longitudinal and face-diagonal bars, each section braced by its edges and both
     diagonals (a stable space truss: exactly six rigid-body modes), bar stiffness ``EA / l``,
-    the mass lumped equally at the nodes, plus the unbalance at a mid-span corner."""
+    the mass lumped equally at the nodes, plus the unbalance at a mid-span corner.
+    """
     r = HALF_WIDTH
     corners = np.array([[0.0, r, r], [0.0, -r, r], [0.0, -r, -r], [0.0, r, -r]])
     pos = np.concatenate([corners + [i * LENGTH / BAYS, 0.0, 0.0] for i in range(BAYS + 1)])
@@ -85,7 +91,8 @@ def build(joint: str = "iwan", *, law: str = "auto", t_end: float = 0.05, h: flo
     """The rotor model, solved by :func:`run`. ``joint="spring"``: Exudyn's bearing as it is;
     ``"iwan"``: the right bearing's y direction an Iwan joint (``law`` as in
     ``add_iwan_connector``). Returns a namespace with ``SC, mbs, sim, connector, recorder,
-    sensor, fem``."""
+    sensor, fem``.
+    """
     fem = truss_rotor() if fem is None else fem
     SC = exu.SystemContainer()
     mbs = SC.AddSystem()

@@ -31,18 +31,22 @@ from pathlib import Path
 import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
+import matplotlib.pyplot as plt
+import numpy as np
+from iwan_element.models import (
+    example_test_path,
+    forced_response,
+    modal_amplitude_curve,
+    preset,
+    quasi_static_test,
+    ringdown,
+)
+from iwan_element.models.calibration import interface_from_joint, measured_amplitude_curve
+from iwan_element.models.modal import linear_modes
+from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
+from scipy.signal import hilbert
 
-from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter  # noqa: E402
-from scipy.signal import hilbert  # noqa: E402
-
-from iwan_element import fit_loops, load_test  # noqa: E402
-from iwan_element.models import (example_test_path, forced_response,  # noqa: E402
-                                 modal_amplitude_curve, preset, quasi_static_test, ringdown)
-from iwan_element.models.calibration import (interface_from_joint,  # noqa: E402
-                                             measured_amplitude_curve)
-from iwan_element.models.modal import linear_modes  # noqa: E402
+from iwan_element import fit_loops, load_test
 
 ROOT = Path(__file__).resolve().parents[1]
 BRB_DATA = [ROOT.parent / "shared" / "data" / "brb-hammer" / "hammer_acc3.csv",

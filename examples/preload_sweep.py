@@ -24,12 +24,12 @@ from pathlib import Path
 import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
+import matplotlib.pyplot as plt
+import numpy as np
+from iwan_element.models.specimens import preset
+from iwan_element.models.studies import specimen_curve_task
 
-from iwan_element.ensemble import parameter_grid, run_ensemble  # noqa: E402
-from iwan_element.models.studies import specimen_curve_task  # noqa: E402
-from iwan_element.models.specimens import preset  # noqa: E402
+from iwan_element.ensemble import parameter_grid, run_ensemble
 
 
 def quiet_task(params, rng, **kwargs):

@@ -51,9 +51,10 @@ before, after = rms(result.F - result.force_before), rms(result.F - result.force
 print(f"named: {', '.join(result.effects) or 'none'}; RMS misfit where |F| < 0.25 max|F|: "
       f"{before:.0f} N -> {after:.0f} N (ratio {after / before:.2f})")
 
-import matplotlib                                                     # noqa: E402
+import matplotlib  # noqa: E402
+
 matplotlib.use("Agg")
-from matplotlib.figure import Figure                                  # noqa: E402
+from matplotlib.figure import Figure  # noqa: E402
 
 out = Path(args.out)
 out.mkdir(parents=True, exist_ok=True)
@@ -80,7 +81,7 @@ ax.grid(True, alpha=0.3)
 ax.legend(fontsize=7)
 fig.tight_layout()
 fig.savefig(out / f"{name}_residual.png", dpi=120)
-from scipy.signal import find_peaks                                   # noqa: E402
+from scipy.signal import find_peaks  # noqa: E402
 
 fig = Figure(figsize=(9, 3.8))
 axes = fig.subplots(1, 2, sharey=True)

@@ -19,12 +19,16 @@ from pathlib import Path
 import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
+import matplotlib.pyplot as plt
+import numpy as np
 
-from iwan_element import (IwanParameters, amplitude_curve, fit_modal_iwan,  # noqa: E402
-                          modal_iwan_curve, modal_ringdown)
-
+from iwan_element import (
+    IwanParameters,
+    amplitude_curve,
+    fit_modal_iwan,
+    modal_iwan_curve,
+    modal_ringdown,
+)
 
 
 def find_brb(name="hammer_acc3.csv"):

@@ -16,9 +16,9 @@ from pathlib import Path
 import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
+import matplotlib.pyplot as plt
 
-from iwan_element.plotting import plot_normalized_loops  # noqa: E402
+from iwan_element.plotting import plot_normalized_loops
 
 PANELS = {
     "(a) beta=0, chi=1/2 and beta=1, chi=1/2": [(0.0, 0.5), (1.0, 0.5)],

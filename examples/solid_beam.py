@@ -21,9 +21,9 @@ import time
 from pathlib import Path
 
 import numpy as np
+from iwan_element.models.calibration import calibrate, measured_amplitude_curve
 
 from iwan_element import models
-from iwan_element.models.calibration import calibrate, measured_amplitude_curve
 
 RECORD = Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "brb-hammer" / \
     "hammer_acc3.csv"

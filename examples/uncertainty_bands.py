@@ -27,11 +27,11 @@ from pathlib import Path
 import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
+import matplotlib.pyplot as plt
+import numpy as np
+from iwan_element.models import example_test_path
 
-import iwan_element as ie  # noqa: E402
-from iwan_element.models import example_test_path  # noqa: E402
+import iwan_element as ie
 
 
 def main(argv=None) -> dict:

@@ -241,9 +241,9 @@ def _write_plot(path: Path, data, result) -> None:
 
 
 def _run_fit(args) -> int:
+    from .identify.files.csv_input import FORCE_UNITS, load_test
     from .identify.loops.dissipation import fit_dissipation
     from .identify.loops.fit import fit_loops
-    from .identify.files.csv_input import FORCE_UNITS, load_test
 
     du, fu, tu = _parse_units(args.units)
     data = load_test(args.csv, displacement_unit=du, force_unit=fu, time_unit=tu,

@@ -8,12 +8,18 @@ from __future__ import annotations
 
 import numpy as np
 
-from .base.validation import check_int, finite_array, same_length
-from .core.closed_form import (dissipation as cycle_dissipation, dissipation_slope,
-                               force_amplitude, masing_ascending, masing_descending,
-                               masing_loop, normalized_backbone)
-from .core.parameters import IwanParameters
 from .base.result_shape import axes_or_new
+from .base.validation import check_int, finite_array, same_length
+from .core.closed_form import dissipation as cycle_dissipation
+from .core.closed_form import (
+    dissipation_slope,
+    force_amplitude,
+    masing_ascending,
+    masing_descending,
+    masing_loop,
+    normalized_backbone,
+)
+from .core.parameters import IwanParameters
 
 __all__ = ["plot_normalized_loops", "plot_loop", "plot_fitted_loops", "plot_dissipation_fit"]
 

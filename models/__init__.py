@@ -39,15 +39,27 @@ from importlib import resources
 from pathlib import Path
 
 from .calibration import HammerPrediction, predict_hammer_test
-from .modal import (frequency_response, harmonic_balance, modal_amplitude_curve,
-                    natural_frequencies, nonlinear_mode)
+from .modal import (
+    frequency_response,
+    harmonic_balance,
+    modal_amplitude_curve,
+    natural_frequencies,
+    nonlinear_mode,
+)
 from .reduced import ReducedModel, reduced_model, reduction_error
-from .simulation import (ForcedResponseResult, Impact, ModeCouplingResult, QuasiStaticResult,
-                         RingdownResult, forced_response, mode_coupling, quasi_static_test,
-                         ringdown)
+from .simulation import (
+    ForcedResponseResult,
+    Impact,
+    ModeCouplingResult,
+    QuasiStaticResult,
+    RingdownResult,
+    forced_response,
+    mode_coupling,
+    quasi_static_test,
+    ringdown,
+)
 from .solid import SolidSpecimen, solid_preset
-from .specimens import (Clamp, Excitation, InterfaceModel, PointMass, Setup, Shaker, Specimen,
-                        preset)
+from .specimens import Clamp, Excitation, InterfaceModel, PointMass, Setup, Shaker, Specimen, preset
 from .updating import LinearUpdateResult, linear_update, updatable
 
 __all__ = ["example_test_path", "preset", "modal_amplitude_curve", "natural_frequencies",

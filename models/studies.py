@@ -25,7 +25,8 @@ def with_changes(specimen, params: dict):
     """The specimen with ``params`` applied: any ``Specimen`` or ``InterfaceModel`` field by
     name (``preload`` [N], ``friction`` [-], ``chi``, ``stiffness_per_area``, ...) and
     ``n_bolts``, which places that many bolts evenly along the lap (centres at
-    ``overlap (k + 1/2) / n_bolts``; an assumption of the study, not of a real specimen)."""
+    ``overlap (k + 1/2) / n_bolts``; an assumption of the study, not of a real specimen).
+    """
     changes = dict(params)
     n = changes.pop("n_bolts", None)
     if n is not None:

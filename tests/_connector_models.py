@@ -11,8 +11,15 @@ import math
 
 import exudyn as exu
 import numpy as np
-from exudyn.itemInterface import (CoordinateConstraint, CoordinateSpringDamper, LoadCoordinate,
-                                  Mass1D, MarkerNodeCoordinate, Node1D, NodePointGround)
+from exudyn.itemInterface import (
+    CoordinateConstraint,
+    CoordinateSpringDamper,
+    LoadCoordinate,
+    MarkerNodeCoordinate,
+    Mass1D,
+    Node1D,
+    NodePointGround,
+)
 
 from iwan_element.exudyn import add_iwan_connector
 

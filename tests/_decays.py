@@ -22,8 +22,8 @@ record's largest absolute value, from an explicit ``numpy.random.Generator``.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 import numpy as np
 from scipy.integrate import solve_ivp

@@ -55,7 +55,7 @@ def effect_rms(name, value, protocol):
     return float(np.sqrt(np.mean((element(name, value).force_history(u, v) - base) ** 2)))
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def calibrated(name, magnitude, protocol):
     """Effect parameter whose added force has RMS ``magnitude * SIGMA`` on ``protocol`` (to
     0.5 %), by secant steps on ``log rms`` against ``log parameter``."""

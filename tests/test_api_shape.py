@@ -13,14 +13,13 @@ import warnings
 import matplotlib
 
 matplotlib.use("Agg")
-import numpy as np  # noqa: E402
-import pytest  # noqa: E402
-from matplotlib.figure import Figure  # noqa: E402
+import numpy as np
+import pytest
+from matplotlib.figure import Figure
 
-from iwan_element.base.result_shape import ResultShape  # noqa: E402
-
-import iwan_element as ie  # noqa: E402
-from iwan_element import plotting  # noqa: E402
+import iwan_element as ie
+from iwan_element import plotting
+from iwan_element.base.result_shape import ResultShape
 
 P = ie.IwanParameters(9e3, 5e7, -0.5, 0.5)
 
@@ -156,7 +155,7 @@ def test_every_public_result_class_is_covered():
     assert public - {"IwanParameters", "UffRecord", "ModeTarget"} == set(RESULTS)
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _built(name):
     """One result per class, built once (the parts below only read it)."""
     with warnings.catch_warnings():
@@ -216,8 +215,9 @@ def test_time_series_functions_take_time_first(fn):
 
 
 def _calibration():
-    from iwan_element import models
     from iwan_element.models.calibration import calibrate
+
+    from iwan_element import models
     s = models.preset("brake-reuss").replace(n_points=8, calibrated_range=None)
     X = np.geomspace(5e-6, 4e-5, 5)
     q = models.modal_amplitude_curve(s, amplitude=X)
@@ -281,11 +281,11 @@ MODEL_RESULTS = {"CalibrationResult": _calibration, "RingdownResult": _ringdown,
 
 def test_every_model_result_class_is_covered():
     """Every result class the beam model's public functions return is in MODEL_RESULTS."""
-    from iwan_element import models
-    from iwan_element import harmonic
     from iwan_element.models import calibration
     from iwan_element.models.calibration import hammer
     from iwan_element.models.simulation import coupling, forced, machine, transient
+
+    from iwan_element import harmonic, models
     public = {n for mod in (models, calibration, transient, machine, forced, coupling, hammer,
                             harmonic)
               for n in getattr(mod, "__all__", ())
@@ -317,6 +317,7 @@ METHOD_RESULTS = {"CampaignPrediction": _prediction, "LeaveOneOut": _loo,
 
 def _energy_balance():
     from _connector_models import Chain, settings
+
     from iwan_element.exudyn import record_energy
     chain = Chain([1.0], v0=[0.5])
     chain.spring(-1, 0, 1e5)

@@ -18,14 +18,14 @@ import dataclasses
 import inspect
 import math
 import warnings
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Callable
 
 import numpy as np
 import pytest
+from _helpers import write_record_csv
 
 import iwan_element as ie
-from _helpers import write_record_csv
 from iwan_element import IwanJoint, IwanParameters
 
 P = IwanParameters(9e3, 5e7, -0.5, 0.5)

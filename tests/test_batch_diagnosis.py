@@ -5,8 +5,8 @@ import json
 
 import numpy as np
 import pytest
-
 from _diagnosis_cases import P, record
+
 from iwan_element import IwanJoint, diagnose, diagnose_many
 from iwan_element.diagnose import simulate_element_test
 

@@ -5,13 +5,17 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from iwan_element.models import modal_amplitude_curve, preset
+from iwan_element.models.calibration import (
+    calibrate,
+    interface_from_joint,
+    interface_from_modal_iwan,
+    measured_amplitude_curve,
+)
+from iwan_element.models.modal import linear_modes
+from iwan_element.models.reduced import contact_points
 
 from iwan_element import IwanParameters
-from iwan_element.models import modal_amplitude_curve, preset
-from iwan_element.models.calibration import (calibrate, interface_from_joint,
-                                             interface_from_modal_iwan, measured_amplitude_curve)
-from iwan_element.models.reduced import contact_points
-from iwan_element.models.modal import linear_modes
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "brb-hammer" / "hammer_acc3.csv"
 if not DATA.exists():

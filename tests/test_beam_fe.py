@@ -3,12 +3,10 @@ beam (tests/_timoshenko_reference.py, written independently from the exact frequ
 equations) and the element's own published closed-form stiffness."""
 import numpy as np
 import pytest
-from scipy.linalg import eigh
-
+from _timoshenko_reference import timoshenko_frequencies
 from iwan_element.models import natural_frequencies, preset
 from iwan_element.models.beam import element_matrices, point_rows
-
-from _timoshenko_reference import timoshenko_frequencies
+from scipy.linalg import eigh
 
 E, NU, RHO, KAPPA = 192.31e9, 0.3, 8000.0, 5.0 / 6.0
 G = E / (2 * (1 + NU))

@@ -4,11 +4,11 @@ routes: the closed-form virgin and first unloading branches written here from th
 in tests/_jenkins_bank.py, which converges to the element as the bank gets dense."""
 import numpy as np
 import pytest
-
 from _helpers import stepped_sine
+from _jenkins_bank import jenkins_bank
+
 from iwan_element import DiscreteIwan, IwanJoint, IwanParameters
 from iwan_element.effects import BreakAway
-from _jenkins_bank import jenkins_bank
 
 P = IwanParameters(1000.0, 1e6, -0.5, 0.2)
 P0 = IwanParameters(1000.0, 1e6, -0.3, 0.0)          # no spike: force continuous in time

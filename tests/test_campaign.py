@@ -11,8 +11,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
 from _campaign_cases import LAWS, campaign, element, truth
+
 from iwan_element import fit_campaign
 
 OPTS = {"effects": ("backlash",), "candidates": ("backlash",)}

@@ -9,8 +9,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
 from _helpers import write_record_csv
+
 from iwan_element import IwanParameters
 from iwan_element.cli import main
 from iwan_element.identify.loops.testdata import simulate_test

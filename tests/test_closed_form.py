@@ -3,10 +3,20 @@ import numpy as np
 import pytest
 from scipy import integrate
 
-from iwan_element import (IwanParameters, backbone, backbone_work, dissipation,
-                          dissipation_slope, force_amplitude, masing_ascending,
-                          masing_descending, masing_loop, normalized_backbone,
-                          secant_stiffness, tangent_stiffness)
+from iwan_element import (
+    IwanParameters,
+    backbone,
+    backbone_work,
+    dissipation,
+    dissipation_slope,
+    force_amplitude,
+    masing_ascending,
+    masing_descending,
+    masing_loop,
+    normalized_backbone,
+    secant_stiffness,
+    tangent_stiffness,
+)
 
 P_REF = IwanParameters(3.0, 2.0, -0.1, 0.1)
 PARAMS = [P_REF, IwanParameters(400.0, 2.5266e5, -0.5, 1.0), IwanParameters(1000.0, 1e6, -0.5, 0.2),

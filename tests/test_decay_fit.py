@@ -14,14 +14,14 @@ import math
 import matplotlib
 
 matplotlib.use("Agg")
-import numpy as np  # noqa: E402
-import pytest  # noqa: E402
-from scipy import signal  # noqa: E402
-from scipy.integrate import solve_ivp  # noqa: E402
+import numpy as np
+import pytest
+from _decays import joint_decay, svam_decay
+from scipy import signal
+from scipy.integrate import solve_ivp
 
-from _decays import joint_decay, svam_decay  # noqa: E402
-from iwan_element import IwanParameters, ModalIwanFit, fit_decay, modal_iwan_curve  # noqa: E402
-from iwan_element.identify.decays import _fit_model as D  # noqa: E402
+from iwan_element import IwanParameters, ModalIwanFit, fit_decay, modal_iwan_curve
+from iwan_element.identify.decays import _fit_model as D
 
 F0 = 80.0
 PHI_MAX = 1e-3

@@ -10,16 +10,34 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
-from _diagnosis_cases import (MODAL, P, PROTOCOLS, SHAPES, SIGMA, ZETA0, calibrated,
-                              effect_rms, element, modal_curves, record, vibration_case,
-                              vibration_case_elements)
+from _diagnosis_cases import (
+    MODAL,
+    PROTOCOLS,
+    SHAPES,
+    SIGMA,
+    ZETA0,
+    P,
+    calibrated,
+    effect_rms,
+    element,
+    modal_curves,
+    record,
+    vibration_case,
+    vibration_case_elements,
+)
 from _helpers import write_record_csv
-from iwan_element import (AsymmetricSlip, BreakAway, IwanJoint, PinningStiffness, ViscousDamping,
-                          make_effect)
+
+from iwan_element import (
+    AsymmetricSlip,
+    BreakAway,
+    IwanJoint,
+    PinningStiffness,
+    ViscousDamping,
+    make_effect,
+)
 from iwan_element.core.history import REVERSAL_TOL, unit_params
-from iwan_element.effects.engine.evaluate import Evaluator, build_element, dissipation_segments
 from iwan_element.diagnose import diagnose, diagnose_vibration, simulate_element_test
+from iwan_element.effects.engine.evaluate import Evaluator, build_element, dissipation_segments
 
 ROOT = Path(__file__).resolve().parents[1]
 

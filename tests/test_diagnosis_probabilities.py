@@ -9,12 +9,15 @@ import math
 
 import numpy as np
 import pytest
-
 from _diagnosis_cases import SIGMA, ZETA0, record, vibration_case
+
 from iwan_element import diagnose, diagnose_vibration
 from iwan_element.diagnose.selection.averaging import mixture
-from iwan_element.diagnose.selection.probabilities import (confidence_text, default_effect_prior,
-                                                           log_model_prior)
+from iwan_element.diagnose.selection.probabilities import (
+    confidence_text,
+    default_effect_prior,
+    log_model_prior,
+)
 
 
 @pytest.fixture(scope="module")
@@ -205,6 +208,7 @@ def test_vibration_averaged_band_mixes_the_explanations():
 
 def _drive(amplitudes):
     from _diagnosis_cases import P
+
     from iwan_element import IwanJoint
     from iwan_element.diagnose import simulate_element_test
     d = simulate_element_test(IwanJoint(P), np.array(amplitudes) * P.phi_max)
@@ -219,6 +223,7 @@ def test_microslip_ridge_keeps_the_force_and_states_its_density():
     Jacobian against finite differences of ``(KT, R)`` in ``(ln(1 + beta), Fs)`` (and the
     pinning spring's ``Fs``-scaled variable)."""
     from _diagnosis_cases import P
+
     from iwan_element.core.history import unit_params
     from iwan_element.diagnose.loops.evidence import member_force, microslip_ridge
     from iwan_element.diagnose.loops.prepare import effect_scales
@@ -266,6 +271,7 @@ def test_clean_microslip_record_puts_the_plain_joint_above_0_9():
     the plain joint above 0.9 (with the Gaussian at the fits, which stopped where the ridge
     ends, break-away was named at 0.80)."""
     from _diagnosis_cases import P
+
     from iwan_element import IwanJoint
     from iwan_element.diagnose import simulate_element_test
     d = simulate_element_test(IwanJoint(P), np.array([0.3, 0.6, 0.9]) * P.phi_max,

@@ -4,9 +4,9 @@ import numpy as np
 import pytest
 
 from iwan_element import IwanJoint, IwanParameters
+from iwan_element.diagnose.loops.prepare import check_record, prepare_record, untestable
 from iwan_element.effects import EFFECTS, ViscousDamping, make_effect
 from iwan_element.effects.base import NEEDS, STRUCTURES
-from iwan_element.diagnose.loops.prepare import check_record, prepare_record, untestable
 
 P = IwanParameters(Fs=1000.0, KT=1e6, chi=-0.5, beta=0.2)
 Q = IwanParameters(Fs=600.0, KT=2.5e6, chi=-0.2, beta=1.0)

@@ -4,12 +4,20 @@ import math
 
 import numpy as np
 import pytest
-
-from iwan_element import IwanJoint, IwanParameters, backbone, dissipation
-from iwan_element import DiscreteIwan
 from _jenkins_bank import directional_bank
-from iwan_element.effects import (EFFECTS, AsymmetricSlip, Backlash, BreakAway, PinningStiffness,
-                                  SlipDegradation, ViscousDamping, base_joint, make_effect)
+
+from iwan_element import DiscreteIwan, IwanJoint, IwanParameters, backbone, dissipation
+from iwan_element.effects import (
+    EFFECTS,
+    AsymmetricSlip,
+    Backlash,
+    BreakAway,
+    PinningStiffness,
+    SlipDegradation,
+    ViscousDamping,
+    base_joint,
+    make_effect,
+)
 
 P = IwanParameters(1000.0, 1e6, -0.5, 0.2)
 A = P.phi_max

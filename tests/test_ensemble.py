@@ -12,9 +12,16 @@ import numpy as np
 import pytest
 
 import iwan_element as ie
-from iwan_element.ensemble import (ParameterUncertainty, SingleModeSystem, modal_curve,
-                                   parameter_grid, parameter_samples, peak_response,
-                                   propagate_uncertainty, run_ensemble)
+from iwan_element.ensemble import (
+    ParameterUncertainty,
+    SingleModeSystem,
+    modal_curve,
+    parameter_grid,
+    parameter_samples,
+    peak_response,
+    propagate_uncertainty,
+    run_ensemble,
+)
 from iwan_element.ensemble.oscillator import _integrate
 
 

@@ -7,18 +7,15 @@ import math
 import exudyn as exu
 import numpy as np
 import pytest
-from exudyn.itemInterface import (MarkerNodeCoordinate, NodeGenericODE2, ObjectGenericODE2)
-
-from iwan_element import AmplitudeCurve, IwanJoint, IwanParameters, amplitude_curve
-from iwan_element.exudyn import add_iwan_interface
-from iwan_element import models
+from exudyn.itemInterface import MarkerNodeCoordinate, NodeGenericODE2, ObjectGenericODE2
 from iwan_element.models import mode_coupling, preset, ringdown
-from iwan_element.models.reduced import axis_rows
 from iwan_element.models.calibration import modal_floor
-from iwan_element.models.simulation import compare_curves
-from iwan_element.models.reduced import floor_damping
 from iwan_element.models.modal import linear_modes, modal_amplitude_curve
-from iwan_element.models.simulation import solver_settings
+from iwan_element.models.reduced import axis_rows, floor_damping
+from iwan_element.models.simulation import compare_curves, solver_settings
+
+from iwan_element import AmplitudeCurve, IwanJoint, IwanParameters, amplitude_curve, models
+from iwan_element.exudyn import add_iwan_interface
 
 #: the two-bolt beam (clamped-free), contact points thinned out, its own floor per mode
 TWO_BOLT = preset("two-bolt-aluminium").replace(n_points=12, modal_damping=(2e-3, 6e-4))

@@ -198,6 +198,7 @@ def _nested(seed, only, **hidden):
     nested sampling (dynesty, 100 live points)."""
     pytest.importorskip("dynesty")
     from _diagnosis_cases import ZETA0, vibration_case
+
     from iwan_element import diagnose_vibration
     X, fm, zm, fp, zp = vibration_case(seed, **hidden)
     return diagnose_vibration(X, fm, zm, predicted_frequency=fp, predicted_damping_ratio=zp,

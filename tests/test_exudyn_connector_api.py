@@ -12,10 +12,21 @@ import exudyn as exu
 import numpy as np
 import pytest
 from _connector_models import Chain, settings
-from exudyn.itemInterface import (CoordinateConstraint, Mass1D, MarkerBodyPosition, MarkerBodyRigid,
-                                  MarkerNodeCoordinate, MarkerNodePosition, MassPoint, Node1D,
-                                  NodePoint, NodePointGround, NodeRigidBody2D, ObjectRigidBody2D,
-                                  SensorNode)
+from exudyn.itemInterface import (
+    CoordinateConstraint,
+    MarkerBodyPosition,
+    MarkerBodyRigid,
+    MarkerNodeCoordinate,
+    MarkerNodePosition,
+    Mass1D,
+    MassPoint,
+    Node1D,
+    NodePoint,
+    NodePointGround,
+    NodeRigidBody2D,
+    ObjectRigidBody2D,
+    SensorNode,
+)
 
 from iwan_element import DiscreteIwan, IwanJoint, IwanParameters
 from iwan_element.exudyn import IwanConnector, add_iwan_connector

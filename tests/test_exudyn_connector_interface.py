@@ -10,10 +10,20 @@ import exudyn as exu
 import numpy as np
 import pytest
 from _connector_models import Chain, settings
-from exudyn.itemInterface import (CoordinateConstraint, LoadForceVector, MarkerBodyPosition,
-                                  MarkerNodeCoordinate, MassPoint, NodePoint, NodePointGround,
-                                  ObjectANCFCable2D, ObjectConnectorCartesianSpringDamper,
-                                  ObjectGround, NodePoint2DSlope1, MarkerNodePosition)
+from exudyn.itemInterface import (
+    CoordinateConstraint,
+    LoadForceVector,
+    MarkerBodyPosition,
+    MarkerNodeCoordinate,
+    MarkerNodePosition,
+    MassPoint,
+    NodePoint,
+    NodePoint2DSlope1,
+    NodePointGround,
+    ObjectANCFCable2D,
+    ObjectConnectorCartesianSpringDamper,
+    ObjectGround,
+)
 
 from iwan_element import DiscreteIwan, IwanJoint, IwanJointBank, IwanParameters
 from iwan_element.exudyn import IwanInterface, add_iwan_connector, add_iwan_interface, record_energy

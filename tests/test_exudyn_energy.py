@@ -150,6 +150,7 @@ def test_a_pendulum_on_a_revolute_joint_with_gravity_balances():
     constraint does no work, and the balance closes against the joint's energy, better as
     the step falls (TrapezoidalIndex2: no numerical damping)."""
     from exudyn.utilities import InertiaCuboid
+
     from iwan_element.exudyn import create_iwan_connector
     errors = []
     for steps in (2000, 8000):

@@ -3,16 +3,21 @@ against the exact read-out of the Python law and against the markers' positions 
 reports them at every accepted step (an independent read: the user's own post-step)."""
 from __future__ import annotations
 
-import math
-
 import exudyn as exu
 import numpy as np
 import pytest
 from _connector_models import settings
-from exudyn.itemInterface import (CoordinateConstraint, MarkerBodyPosition, MarkerBodyRigid,
-                                  MarkerNodeCoordinate, NodePoint2DSlope1, NodePointGround,
-                                  ObjectANCFCable2D, ObjectConnectorCartesianSpringDamper,
-                                  ObjectGround)
+from exudyn.itemInterface import (
+    CoordinateConstraint,
+    MarkerBodyPosition,
+    MarkerBodyRigid,
+    MarkerNodeCoordinate,
+    NodePoint2DSlope1,
+    NodePointGround,
+    ObjectANCFCable2D,
+    ObjectConnectorCartesianSpringDamper,
+    ObjectGround,
+)
 from exudyn.utilities import InertiaCuboid
 
 from iwan_element import IwanJoint, IwanParameters

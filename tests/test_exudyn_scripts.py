@@ -13,12 +13,12 @@ import numpy as np
 import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "examples"))
-import exudyn_cartesian_mass as cartesian  # noqa: E402
-import exudyn_duffing_sweep as duffing  # noqa: E402
-import exudyn_rotor_bearing as rotor  # noqa: E402
+import exudyn_cartesian_mass as cartesian
+import exudyn_duffing_sweep as duffing
+import exudyn_rotor_bearing as rotor
 
-from iwan_element.exudyn import IwanCartesianConnector  # noqa: E402
-import iwan_element.exudyn.slips.slip_map as slip_map  # noqa: E402
+import iwan_element.exudyn.slips.slip_map as slip_map
+from iwan_element.exudyn import IwanCartesianConnector
 
 _OVT = exu.OutputVariableType
 
@@ -144,10 +144,10 @@ def test_duffing_sweep_default_route_equals_the_python_law():
 def test_the_unswapped_duffing_script_is_booked_through_its_force_function():
     """Without the joint the user's own spring function is booked as work into the
     connector (stored and dissipated together), so even the script as it is balances."""
-    from iwan_element.exudyn import record_energy
-    from iwan_element import IwanParameters
-    from iwan_element.exudyn import add_iwan_connector
     from exudyn.itemInterface import MarkerNodeCoordinate, NodePointGround
+
+    from iwan_element import IwanParameters
+    from iwan_element.exudyn import add_iwan_connector, record_energy
     model = duffing.build("spring", steps=40_000)
     mbs = model.mbs
     g = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=mbs.AddNode(NodePointGround()), coordinate=0))

@@ -19,17 +19,15 @@ import numpy as np
 import pytest
 from scipy import optimize
 
-from iwan_element import (IwanJoint, IwanParameters, dissipation, force_amplitude,
-                          secant_stiffness)
-from iwan_element.fitting import minimize
-from iwan_element.identify.loops.solver import _Problem, _q_to_shape
-from iwan_element.identify.loops.dissipation import _seed_model
-from iwan_element.identify.loops.result import quiet_fits as _quiet_ctx
+from iwan_element import IwanJoint, IwanParameters, dissipation, force_amplitude, secant_stiffness
 from iwan_element.core.history import History
-from iwan_element.identify.loops.dissipation import fit_dissipation
+from iwan_element.fitting import minimize
+from iwan_element.identify.files.csv_input import load_test
+from iwan_element.identify.loops.dissipation import _seed_model, fit_dissipation
 from iwan_element.identify.loops.fit import fit_loops
 from iwan_element.identify.loops.result import FitResult, IdentifiabilityWarning
-from iwan_element.identify.files.csv_input import load_test
+from iwan_element.identify.loops.result import quiet_fits as _quiet_ctx
+from iwan_element.identify.loops.solver import _Problem, _q_to_shape
 from iwan_element.identify.loops.testdata import simulate_test
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "models" / "example_test_30kN.csv"

@@ -4,11 +4,11 @@ Jenkins slider bank with static/kinetic thresholds (tests/_jenkins_bank.py) and 
 stepper written here."""
 import numpy as np
 import pytest
-
 from _helpers import stepped_sine
+from _jenkins_bank import jenkins_bank
+
 from iwan_element import IwanJoint, IwanParameters, diagnose
 from iwan_element.core.discrete import DiscreteIwan
-from _jenkins_bank import jenkins_bank
 
 P = IwanParameters(1000.0, 1e6, -0.5, 0.2)
 SIGMA = 4.0

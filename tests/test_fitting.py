@@ -7,8 +7,14 @@ import numpy as np
 import pytest
 from scipy.optimize import least_squares
 
-from iwan_element.fitting import (Parameter, ParameterTable, covariance, fit_success,
-                                  normal_inverse, verdict)
+from iwan_element.fitting import (
+    Parameter,
+    ParameterTable,
+    covariance,
+    fit_success,
+    normal_inverse,
+    verdict,
+)
 
 
 def _linear(seed, m=200, sigma=0.3):

@@ -15,11 +15,11 @@ import numpy as np
 import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _decays import joint_case, svam_case  # noqa: E402
+from _decays import joint_case, svam_case
 
-from iwan_element import amplitude_curve  # noqa: E402
-from iwan_element.identify.decays.peaks import extrema  # noqa: E402
-from iwan_element.identify.decays._report import _compare  # noqa: E402
+from iwan_element import amplitude_curve
+from iwan_element.identify.decays._report import _compare
+from iwan_element.identify.decays.peaks import extrema
 
 RATIOS = (0.8, 1.25, 1.4)
 CASES = [(z, q, "svam") for z in (0.0002, 0.0005, 0.005, 0.02, 0.05)

@@ -7,15 +7,17 @@ mode.
 """
 from __future__ import annotations
 
-import math
-
 import numpy as np
 import pytest
 import scipy.linalg as sla
+from iwan_element.models.reduced import (
+    contact_points,
+    linear_system,
+    reduced_model,
+    reduction_error,
+)
 
 from iwan_element import models
-from iwan_element.models.reduced import (linear_system, contact_points, reduced_model,
-                                         reduction_error)
 
 BRB = models.preset("brake-reuss")
 

@@ -6,11 +6,10 @@ release read-out against an analytic two-mode decay, the bands, and the input gu
 """
 import functools
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
-
-from pathlib import Path
 
 from iwan_element import models
 
@@ -136,8 +135,8 @@ def test_the_hammer_route_updates_the_linear_structure_on_the_low_amplitude_wind
     linear windows of the three accelerometers, Young's modulus and the stuck interface's
     stiffness updated on them; the preset already carries that update (it moves < 2 stderr)
     and the second mode is met within its error after it."""
-    from iwan_element.models.calibration.hammer import _linear_update
     from iwan_element.models.calibration import mode_bands
+    from iwan_element.models.calibration.hammer import _linear_update
     spec = models.preset("brake-reuss")
     recs = {}
     for name, x in (("acc1", 0.0254), ("acc2", 0.5549), ("acc3", 0.6438)):

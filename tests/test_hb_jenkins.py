@@ -13,9 +13,9 @@ two facts checked here against independent routes, without the peer:
 """
 import numpy as np
 import pytest
+from _jenkins_bank import jenkins_bank
 from scipy.optimize import fsolve
 
-from _jenkins_bank import jenkins_bank
 from iwan_element import IwanParameters
 from iwan_element.core.masing import masing_constants, masing_history
 from iwan_element.core.periodic import periodic_rows

@@ -5,8 +5,14 @@ import math
 import numpy as np
 import pytest
 
-from iwan_element import (IwanJoint, IwanParameters, backbone, dissipation, masing_ascending,
-                          masing_descending)
+from iwan_element import (
+    IwanJoint,
+    IwanParameters,
+    backbone,
+    dissipation,
+    masing_ascending,
+    masing_descending,
+)
 
 PARAMS = [
     IwanParameters(3.0, 2.0, -0.1, 0.1),

@@ -7,13 +7,16 @@ import math
 
 import numpy as np
 import pytest
-from scipy.linalg import eigh
-
-from iwan_element.models import (forced_response, natural_frequencies, preset,
-                                 quasi_static_test, ringdown)
-from iwan_element.models.reduced import contact_points
+from iwan_element.models import (
+    forced_response,
+    natural_frequencies,
+    preset,
+    quasi_static_test,
+    ringdown,
+)
 from iwan_element.models.modal import linear_modes
-from iwan_element.models.reduced import floor_damping
+from iwan_element.models.reduced import contact_points, floor_damping
+from scipy.linalg import eigh
 
 #: the example specimen (two plain 200 x 40 x 10 mm steel bars), contact points thinned out
 EXAMPLE = preset("example").replace(n_points=12)

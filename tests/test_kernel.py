@@ -6,17 +6,21 @@ import os
 
 import numpy as np
 import pytest
-from hypothesis import given
-from hypothesis import strategies as st
-
 from _helpers import params_strategy
 from _masing_reference import reference_history
-from iwan_element import IwanJoint, IwanJointBank, IwanParameters, dissipation
-from iwan_element.core.history import History
-from iwan_element.core.masing import (constants_from_arrays, masing_constants, masing_history,
-                                      masing_rows, reversal_structure)
+from hypothesis import given
+from hypothesis import strategies as st
 from iwan_element.models.modal.qsma import _interface_law
 
+from iwan_element import IwanJoint, IwanJointBank, IwanParameters, dissipation
+from iwan_element.core.history import History
+from iwan_element.core.masing import (
+    constants_from_arrays,
+    masing_constants,
+    masing_history,
+    masing_rows,
+    reversal_structure,
+)
 
 
 @st.composite

@@ -6,15 +6,26 @@ import math
 
 import numpy as np
 import pytest
-from scipy.linalg import eigh
-from scipy.optimize import brentq
-
-from iwan_element.models import (Clamp, PointMass, Setup, Shaker, linear_update,
-                                 natural_frequencies, preset, updatable)
+from iwan_element.models import (
+    Clamp,
+    PointMass,
+    Setup,
+    Shaker,
+    linear_update,
+    natural_frequencies,
+    preset,
+    updatable,
+)
 from iwan_element.models.beam import element_matrices
 from iwan_element.models.linear import LinearSystem, attach_setup
-from iwan_element.models.updating import (modal_sensitivities, modal_state, pair_modes,
-                                          with_parameters)
+from iwan_element.models.updating import (
+    modal_sensitivities,
+    modal_state,
+    pair_modes,
+    with_parameters,
+)
+from scipy.linalg import eigh
+from scipy.optimize import brentq
 
 #: the example specimen (clamped-free) with a setup: a non-rigid clamp, an accelerometer at
 #: the free end and a shaker near the clamp whose moving mass is in the model

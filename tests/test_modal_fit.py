@@ -9,8 +9,15 @@ import math
 import numpy as np
 import pytest
 
-from iwan_element import (AmplitudeCurve, IwanParameters, ModalIwanFit, amplitude_curve,
-                          fit_modal_iwan, modal_iwan_curve, modal_ringdown)
+from iwan_element import (
+    AmplitudeCurve,
+    IwanParameters,
+    ModalIwanFit,
+    amplitude_curve,
+    fit_modal_iwan,
+    modal_iwan_curve,
+    modal_ringdown,
+)
 from iwan_element.identify.modal.result import model_curve
 
 

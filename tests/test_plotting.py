@@ -2,11 +2,11 @@
 import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import pytest  # noqa: E402
+import matplotlib.pyplot as plt
+import pytest
 
-from iwan_element import IwanParameters  # noqa: E402
-from iwan_element.plotting import plot_loop, plot_normalized_loops  # noqa: E402
+from iwan_element import IwanParameters
+from iwan_element.plotting import plot_loop, plot_normalized_loops
 
 
 def test_normalized_loops_returns_three_lines_per_case():

@@ -6,11 +6,11 @@ import inspect
 
 import numpy as np
 import pytest
+from iwan_element.models.calibration import calibrate
 
 import iwan_element as ie
 from iwan_element import models
 from iwan_element.base import progress as pg
-from iwan_element.models.calibration import calibrate
 
 LONG_CALLS = [ie.fit_decay, ie.diagnose, ie.diagnose_many, ie.fit_campaign, ie.run_ensemble,
               ie.propagate_uncertainty, calibrate, models.ringdown, models.forced_response]

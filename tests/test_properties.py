@@ -9,12 +9,20 @@ import math
 
 import numpy as np
 import pytest
+from _helpers import log_uniform, params_strategy, step_element
 from hypothesis import assume, given
 from hypothesis import strategies as st
 
-from _helpers import log_uniform, params_strategy, step_element
-from iwan_element import (IwanJoint, IwanParameters, backbone, backbone_work, dissipation,
-                          dissipation_slope, secant_stiffness, tangent_stiffness)
+from iwan_element import (
+    IwanJoint,
+    IwanParameters,
+    backbone,
+    backbone_work,
+    dissipation,
+    dissipation_slope,
+    secant_stiffness,
+    tangent_stiffness,
+)
 
 # reversal targets as fractions of phi_max: large, small and tiny excursions mixed
 _targets = st.lists(st.one_of(st.floats(-3.0, 3.0), st.floats(-1e-3, 1e-3)), min_size=1, max_size=12)

@@ -3,10 +3,10 @@ import math
 
 import numpy as np
 import pytest
-
-from iwan_element import AmplitudeCurve, dissipation
 from iwan_element.models import modal_amplitude_curve, preset, ringdown
 from iwan_element.models.modal import linear_modes, static_modal_load
+
+from iwan_element import AmplitudeCurve, dissipation
 
 NAMES = ("example", "brake-reuss", "two-bolt-aluminium")
 

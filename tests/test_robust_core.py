@@ -14,8 +14,15 @@ import numpy as np
 import pytest
 from scipy.integrate import quad
 
-from iwan_element import (IwanJoint, IwanParameters, backbone, backbone_work, dissipation,
-                          secant_stiffness, tangent_stiffness)
+from iwan_element import (
+    IwanJoint,
+    IwanParameters,
+    backbone,
+    backbone_work,
+    dissipation,
+    secant_stiffness,
+    tangent_stiffness,
+)
 from iwan_element.identify.loops.testdata import simulate_test
 
 P = IwanParameters(Fs=1000.0, KT=1e6, chi=-0.5, beta=0.2)

@@ -14,12 +14,12 @@ import warnings
 
 import numpy as np
 import pytest
-from hypothesis import given, strategies as st
+from hypothesis import given
+from hypothesis import strategies as st
 
 import iwan_element as ie
 from iwan_element import IwanJoint, IwanParameters
-from iwan_element.identify.decays.saturation import (cut_clipping, cut_flattened_peaks,
-                                                     find_clipping)
+from iwan_element.identify.decays.saturation import cut_clipping, cut_flattened_peaks, find_clipping
 
 FS, F0 = 2048.0, 80.0
 

@@ -6,12 +6,12 @@ which dense banks converge on the continuous joint; the element's exact work aga
 trapezoidal rule over its forces; the diagnosis evaluator's run route against the element."""
 import numpy as np
 import pytest
-
 from _helpers import stepped_sine
+from _jenkins_bank import directional_bank
+
 from iwan_element import DiscreteIwan, IwanJoint, IwanParameters
 from iwan_element.effects import AsymmetricSlip, BreakAway, SlipDegradation
 from iwan_element.effects.engine.evaluate import Evaluator
-from _jenkins_bank import directional_bank
 
 P = IwanParameters(1000.0, 1e6, -0.5, 0.2)
 A = P.phi_max

@@ -17,12 +17,15 @@ import scipy.sparse.linalg as spla
 pytest.importorskip("ngsolve", reason="the solid specimens need the extra iwan-element[fem] "
                                       "(ngsolve)")
 
-from iwan_element.models import (modal_amplitude_curve, natural_frequencies,  # noqa: E402
-                                 preset, solid_preset)
-from iwan_element.models.reduced import contact_points  # noqa: E402
-from iwan_element.models.specimens import Clamp, Setup  # noqa: E402
-from iwan_element.models.solid import solid_specimen  # noqa: E402
-from iwan_element.models.solid import bar_part, lap_beam_parts, part_from_fem  # noqa: E402
+from iwan_element.models import modal_amplitude_curve, natural_frequencies, preset, solid_preset
+from iwan_element.models.reduced import contact_points
+from iwan_element.models.solid import (
+    bar_part,
+    lap_beam_parts,
+    part_from_fem,
+    solid_specimen,
+)
+from iwan_element.models.specimens import Clamp, Setup
 
 COARSE = {"mesh_size": 0.012, "lap_mesh_size": 0.0051}
 PATCH = 0.0085

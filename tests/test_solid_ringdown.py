@@ -7,18 +7,18 @@ frequency); the slipping mode 1 against QSMA of the same solid.
 """
 from __future__ import annotations
 
-
 import numpy as np
 import pytest
 
 pytest.importorskip("ngsolve", reason="the solid specimens need the extra iwan-element[fem] "
                                       "(ngsolve)")
 
-from iwan_element.models import (Impact, modal_amplitude_curve,  # noqa: E402
-                                 natural_frequencies, preset, ringdown)
-from iwan_element.models.solid import solid_specimen  # noqa: E402
-from iwan_element.models.solid import lap_beam_parts  # noqa: E402
-from iwan_element.models.simulation import port_basis  # noqa: E402
+from iwan_element.models import Impact, modal_amplitude_curve, natural_frequencies, preset, ringdown
+from iwan_element.models.simulation import port_basis
+from iwan_element.models.solid import (
+    lap_beam_parts,
+    solid_specimen,
+)
 
 
 @pytest.fixture(scope="module")

@@ -4,15 +4,13 @@ import math
 
 import numpy as np
 import pytest
+from iwan_element.models import preset
+from iwan_element.models.modal.qsma import _interface_law
+from iwan_element.models.reduced import contact_points, linear_system
+from iwan_element.models.simulation import build_host
+from iwan_element.models.specimens import PRESETS, Specimen, pressure_field
 
 from iwan_element import backbone, tangent_stiffness
-from iwan_element.models import preset
-from iwan_element.models.reduced import linear_system
-from iwan_element.models.simulation import build_host
-from iwan_element.models.reduced import contact_points
-from iwan_element.models.specimens import pressure_field
-from iwan_element.models.modal.qsma import _interface_law
-from iwan_element.models.specimens import PRESETS, Specimen
 
 NAMES = ("example", "brake-reuss", "two-bolt-aluminium")
 

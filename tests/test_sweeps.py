@@ -229,8 +229,9 @@ def test_real_brb_sweeps_against_the_hammer_curve():
     hammer ring-down of the same point where they overlap: within 0.15 % in frequency (the
     two tests were made on different set-ups; the data README expects about 0.1 Hz) and
     within 35 % in damping (README: 10-20 % between test types; measured here 20-29 %)."""
-    from iwan_element import read_sweep_csv
     from iwan_element.models.calibration import measured_amplitude_curve
+
+    from iwan_element import read_sweep_csv
     sweep = sweep_curve(**read_sweep_csv(SWEEPS))
     hammer = measured_amplitude_curve(HAMMER)
     assert "receptance-like" in sweep.notes and not sweep.warnings

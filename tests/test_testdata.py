@@ -203,6 +203,7 @@ def test_clean_coarsely_sampled_record_shows_no_displacement_noise(tmp_path):
     """Issue 14: the curvature of a clean record sampled 50 times a period was taken for
     displacement noise (second differences), and the fit warned about it."""
     import warnings as _w
+
     from iwan_element import fit_loops
     p = IwanParameters(9e3, 5e7, -0.5, 0.5)
     d = simulate_test(p, np.array([0.2, 0.5, 1.0, 1.5]) * p.phi_max, cycles=2, sample_rate=1.0)

@@ -17,15 +17,14 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from numpy.polynomial import legendre as leg
-from scipy.linalg import eigh, null_space
-from scipy.optimize import brentq
-
 from _timoshenko_reference import (
     BOUNDARY_CONDITIONS,
     cutoff_frequency,
     timoshenko_frequencies,
 )
+from numpy.polynomial import legendre as leg
+from scipy.linalg import eigh, null_space
+from scipy.optimize import brentq
 
 E_STEEL = 200e9
 NU = 0.3

@@ -9,9 +9,9 @@ from __future__ import annotations
 import exudyn as exu
 import numpy as np
 import pytest
+from iwan_element.models.simulation import build_host, solver_settings
 
 from iwan_element import models
-from iwan_element.models.simulation import build_host, solver_settings
 
 
 def _system_jacobian(specimen, differences: bool) -> np.ndarray:

@@ -10,8 +10,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from iwan_element import (UffRecord, amplitude_curve, read_sweep_csv, read_uff,
-                          stepped_sine_curve, sweep_curve)
+from iwan_element import (
+    UffRecord,
+    amplitude_curve,
+    read_sweep_csv,
+    read_uff,
+    stepped_sine_curve,
+    sweep_curve,
+)
 
 pyuff = pytest.importorskip("pyuff", reason="pyuff is the optional 'uff' extra")
 

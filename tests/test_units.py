@@ -9,8 +9,14 @@ import math
 import numpy as np
 import pytest
 
-from iwan_element import (AmplitudeCurve, IwanParameters, diagnose_vibration, fit_modal_iwan,
-                          modal_iwan_curve, sweep_curve)
+from iwan_element import (
+    AmplitudeCurve,
+    IwanParameters,
+    diagnose_vibration,
+    fit_modal_iwan,
+    modal_iwan_curve,
+    sweep_curve,
+)
 
 W02 = (2 * math.pi * 80.0) ** 2
 _KT = 0.02 * W02

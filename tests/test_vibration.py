@@ -12,9 +12,18 @@ import numpy as np
 import pytest
 from scipy import integrate, optimize, special
 
-from iwan_element import (AmplitudeCurve, IwanParameters, amplitude_curve, backbone, dissipation,
-                          harmonic_stiffness, modal_iwan_curve, modal_ringdown, secant_stiffness,
-                          stepped_sine_curve)
+from iwan_element import (
+    AmplitudeCurve,
+    IwanParameters,
+    amplitude_curve,
+    backbone,
+    dissipation,
+    harmonic_stiffness,
+    modal_iwan_curve,
+    modal_ringdown,
+    secant_stiffness,
+    stepped_sine_curve,
+)
 
 P_MODAL = IwanParameters(400.0, 2.5266e5, -0.5, 1.0)
 

@@ -4,18 +4,17 @@ candidates from the effects' declarations, and an unexplained mismatch located."
 from __future__ import annotations
 
 import math
-
 from pathlib import Path
 
+import _vibration_cases as vc
 import numpy as np
 import pytest
 from scipy.optimize import brentq
 
-import _vibration_cases as vc
 from iwan_element import AmplitudeCurve, diagnose_vibration
+from iwan_element.diagnose.vibration.diagnosis import vibration_candidates
 from iwan_element.effects import EFFECTS, ParamSpec, register_effect
 from iwan_element.effects.base import Effect
-from iwan_element.diagnose.vibration.diagnosis import vibration_candidates
 
 X = np.geomspace(0.02, 1.5, 30) * vc.BASE.phi_max
 NOISE = float(np.sqrt(0.5 * (vc.F_NOISE ** 2 + vc.Z_NOISE ** 2)))

@@ -137,8 +137,11 @@ def test_spread_patch_integrals_against_adaptive_quadrature(shape):
     from scipy.integrate import quad
 
     from iwan_element.effects.engine.jenkins import jenkins_gain
-    from iwan_element.effects.macroslip_onset import (patch_cumulative, patch_dissipation,
-                                                      patch_stiffness_loss)
+    from iwan_element.effects.macroslip_onset import (
+        patch_cumulative,
+        patch_dissipation,
+        patch_stiffness_loss,
+    )
     Xs = 1e-5
     q = 1.0 / shape - 3.0
     b2 = math.log(2.0) if abs(q) < 1e-12 else (1.0 - 2.0 ** -q) / q

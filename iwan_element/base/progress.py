@@ -51,7 +51,8 @@ def progress_bar(progress, *, total=None, desc: str, unit: str):
 
 def tick(bar, n: int = 1, *, text: str | None = None) -> None:
     """Advance ``bar`` (``None``: nothing) by ``n`` steps, optionally naming the current
-    work; a total that turned out too small grows with the count."""
+    work; a total that turned out too small grows with the count.
+    """
     if bar is None:
         return
     if text is not None:

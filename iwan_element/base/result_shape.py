@@ -53,7 +53,8 @@ def unit_label(unit) -> str:
 
 def format_value(x, digits: int = 6) -> str:
     """A number for a table: ``digits`` significant digits, exponent notation outside
-    1e-3 .. 1e5 (no ``33366692.9``), ``nan`` and ``inf`` spelled; other values as ``str``."""
+    1e-3 .. 1e5 (no ``33366692.9``), ``nan`` and ``inf`` spelled; other values as ``str``.
+    """
     if isinstance(x, (bool, np.bool_)) or not isinstance(x, numbers.Real):
         return str(x)
     x = float(x)
@@ -73,7 +74,8 @@ def wrap(text: str, *, width: int = 92, indent: str = "  ") -> list[str]:
 def value_stderr(pairs) -> dict:
     """``{name: {"value": v, "stderr": se}}`` from ``{name: (v, se)}`` or ``{name: v}``
     (stderr ``None`` when not given or not finite): the one layout of offsets and other
-    estimated quantities in every ``to_dict``."""
+    estimated quantities in every ``to_dict``.
+    """
     def num(x):
         return float(x) if x is not None and math.isfinite(float(x)) else None
     out = {}
@@ -85,7 +87,8 @@ def value_stderr(pairs) -> dict:
 
 def parameter_rows(params) -> list:
     """Rows of :data:`PARAMETER_COLUMNS` for a ``ParameterTable`` (anything with
-    ``parameters`` holding ``name, value, stderr, unit, status``)."""
+    ``parameters`` holding ``name, value, stderr, unit, status``).
+    """
     return [(p.name, float(p.value), float(p.stderr), unit_label(p.unit), p.status)
             for p in params.parameters]
 
@@ -94,7 +97,8 @@ def parameter_rows(params) -> list:
 class ResultShape:
     """Base of the package's result classes (frozen dataclasses): the ``warnings`` field
     (keyword-only, a tuple of str, empty by default), ``plot_panels`` (how many Axes ``plot``
-    draws on) and ``_repr_html_`` (the report in a notebook)."""
+    draws on) and ``_repr_html_`` (the report in a notebook).
+    """
 
     plot_panels: ClassVar[int] = 1
     warnings: tuple = ()
@@ -103,7 +107,8 @@ class ResultShape:
         """Why ``success`` is False, each reason in a tester's words (empty when it is True).
         The base reads the result's ``failures`` (the reasons its maker stated where it
         decided ``success``), else the warnings; a class whose verdict has its own reasons
-        (a parameter the data do not identify, a misfit beyond the noise) states them."""
+        (a parameter the data do not identify, a misfit beyond the noise) states them.
+        """
         if self.success:
             return ()
         return (tuple(getattr(self, "failures", ())) or tuple(self.warnings)
@@ -121,7 +126,8 @@ class ResultShape:
         ``to_dict()`` (one dict per row) as "rows", its flat numeric lists of one length as
         "data" (one column each), and its scalar ``to_dict()`` entries as "goodness of fit
         and run" (quantity, value). Classes with data of their own (curves, bands) put
-        those first."""
+        those first.
+        """
         out = []
         params = getattr(self, "params", None)
         if hasattr(params, "parameters") and len(params.parameters):
@@ -271,7 +277,8 @@ def panels(ax, n: int, *, figsize=None, sharex: bool = False) -> list:
 
 def axes_or_new(ax):
     """One matplotlib Axes: ``ax`` itself, or a new figure's if ``None`` (the one-panel case
-    of the axes contract, :func:`panels`)."""
+    of the axes contract, :func:`panels`).
+    """
     if ax is None:
         try:
             import matplotlib.pyplot  # noqa: F401

@@ -11,7 +11,8 @@ __all__ = ["json_safe"]
 def json_safe(x):
     """Recursively convert to JSON-safe Python types: dicts (keys as str), lists, bool, int,
     float (NaN and inf become None), None and str; an object with ``to_dict()`` becomes that
-    dict; anything else its ``str``."""
+    dict; anything else its ``str``.
+    """
     if isinstance(x, dict):
         return {str(k): json_safe(v) for k, v in x.items()}
     if isinstance(x, (list, tuple, np.ndarray)):

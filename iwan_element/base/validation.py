@@ -57,7 +57,8 @@ def finite_array(name: str, value, *, ndim: int | None = 1, min_size: int = 1) -
 
 def _reject_non_real(name: str, value) -> None:
     """Raise ``ValueError`` for text, complex or non-numeric object input, which numpy would
-    otherwise parse (``"1.5"``) or truncate (``1+2j -> 1``) silently."""
+    otherwise parse (``"1.5"``) or truncate (``1+2j -> 1``) silently.
+    """
     if isinstance(value, (str, bytes)):
         raise ValueError(f"{name} must be numeric array-like, got text {value!r:.40}")
     kind = np.asarray(value).dtype.kind if not isinstance(value, np.ndarray) else value.dtype.kind
@@ -101,7 +102,8 @@ def check_uniform_time(t, n: int, name: str = "t", data: str = "y") -> tuple[np.
     """``(t, dt)``: ``t`` as a new finite, strictly increasing array of length ``n`` (that of
     ``data``) on a uniform grid, and its step [s] (the least-squares grid: the first and last
     samples carry jitter too, so a line through them would double it). Steps may depart from
-    the grid by up to 5 % (the rounding of a written time column), not more (gaps)."""
+    the grid by up to 5 % (the rounding of a written time column), not more (gaps).
+    """
     tt = finite_array(name, t)
     if tt.size != n:
         raise ValueError(f"{name} must have the same length as {data} ({n}), got {tt.size}")
@@ -146,7 +148,8 @@ def check_magnitude(name: str, arr: np.ndarray, *, unit: str = "") -> np.ndarray
 def check_varies(name: str, arr: np.ndarray, *, unit: str = "", what: str = "") -> np.ndarray:
     """Return ``arr`` unchanged if it is not constant; ``ValueError`` naming ``name``, its
     constant value and ``what`` the caller needs of it otherwise (a constant record has no
-    scale: every misfit and noise level measured against it divides by zero)."""
+    scale: every misfit and noise level measured against it divides by zero).
+    """
     if np.size(arr) and float(np.ptp(arr)) == 0.0:
         u = f" {unit}" if unit else ""
         raise ValueError(f"{name} is constant ({float(arr.flat[0]):g}{u} everywhere)"

@@ -42,7 +42,8 @@ def _check_params(params) -> IwanParameters:
 
 def _ratio(a, p: IwanParameters):
     """``min(a/phi_max, 1)``: every power in the closed forms is a power of this ratio, never
-    of ``phi_max`` (whose unit power overflows for large ``chi``; see ``IwanParameters.R``)."""
+    of ``phi_max`` (whose unit power overflows for large ``chi``; see ``IwanParameters.R``).
+    """
     with np.errstate(over="ignore"):
         return np.minimum(a / p.phi_max, 1.0)
 
@@ -103,7 +104,8 @@ def tangent_stiffness(u, params: IwanParameters):
 
 def force_amplitude(amplitude, params: IwanParameters):
     """Force amplitude ``F0`` [N] of a steady cycle of displacement amplitude ``u0`` [m]
-    (paper eqs. 18-20): the backbone at ``u0``."""
+    (paper eqs. 18-20): the backbone at ``u0``.
+    """
     x = _as_array("amplitude", amplitude)
     if np.any(x < 0):
         raise ValueError("amplitude (the displacement amplitude u0) must be >= 0 [m]")
@@ -262,7 +264,7 @@ def normalized_backbone(s, chi: float, beta: float):
 def masing_descending(s, s0: float, chi: float, beta: float):
     """Descending (unloading) branch from the reversal ``(s0, f(s0))`` (paper eq. 13)::
 
-        f_u(s) = f(s0) - 2 f((s0 - s)/2)
+    f_u(s) = f(s0) - 2 f((s0 - s)/2)
     """
     chi, beta, den = _dimensionless_check(chi, beta)
     s0 = check_scalar("s0", s0)

@@ -166,7 +166,8 @@ class DiscreteIwan(CommittedState):
 
     def commit(self) -> None:
         """Accept the last trial (no-op if there is none). Each slider dissipates
-        ``k phi |slip|`` exactly, since its slip happens at the constant force ``k phi``."""
+        ``k phi |slip|`` exactly, since its slip happens at the constant force ``k phi``.
+        """
         if self._tz is None:
             return
         slip = np.abs((self._tu - self._u) - (self._tz - self._z))
@@ -192,7 +193,8 @@ class DiscreteIwan(CommittedState):
         """Forces [N] for a whole history ``u`` [m], shape (n,), from the virgin state (on a
         private copy; this element is untouched). Rate independent: velocities ``v`` [m/s]
         (shape (n,)), accepted like every element's, are checked and do not change the
-        forces."""
+        forces.
+        """
         arr = finite_array("u", u, ndim=1)
         if v is not None:
             same_length(u=arr, v=finite_array("v", v, ndim=1))

@@ -30,7 +30,7 @@ import numpy as np
 
 from ..base.validation import check_scalar, finite_array, same_length
 from .history import REVERSAL_TOL
-from .masing import _NOSEG, masing_step, masing_constants, masing_history
+from .masing import _NOSEG, masing_constants, masing_history, masing_step
 from .parameters import IwanParameters
 from .protocol import CommittedState
 
@@ -295,7 +295,8 @@ class IwanJoint(CommittedState):
         """Forces [N] for a whole displacement history ``u`` [m], shape (n,), from the virgin
         state. Each sample is committed in turn on a private copy; this element is untouched.
         The joint is rate independent: velocities ``v`` [m/s] (shape (n,)), accepted like
-        every element's, are checked and do not change the forces."""
+        every element's, are checked and do not change the forces.
+        """
         arr = finite_array("u", u, ndim=1)
         if v is not None:
             same_length(u=arr, v=finite_array("v", v, ndim=1))
@@ -308,7 +309,8 @@ class IwanJoint(CommittedState):
     def _kernel(self, u: float):
         """The compiled walk (:func:`iwan_element.core.masing.masing_step`) from the committed
         state to ``u``: ``(n, F, K, dW, dD, G, I_H)``; the new stack is the first ``n``
-        entries of the arrays (a reversal is written above the committed ones)."""
+        entries of the arrays (a reversal is written above the committed ones).
+        """
         if self._n + 1 >= self._us.size:        # room for one more reversal
             grow = self._us.size
             self._us = np.concatenate([self._us, np.empty(grow)])

@@ -27,10 +27,10 @@ import math
 
 import numpy as np
 
-from .history import REVERSAL_TOL
 from ..base.validation import check_scalar, finite_array
+from .history import REVERSAL_TOL
 from .joint import REVERSAL_TOL_MAX
-from .masing import _NOSEG, masing_step, masing_constants
+from .masing import _NOSEG, masing_constants, masing_step
 from .parameters import IwanParameters
 
 __all__ = ["IwanJointBank"]
@@ -211,7 +211,8 @@ class IwanJointBank:
         not reach the bound of the new branch from ``(u_c, F_c)`` (the newest older reversal
         point, or ``-u_c`` on the virgin curve): ``IwanJoint``'s walk then pushes ``(u_c, F_c)``
         and moves on the new branch, ``F = F_c + 2 F_bb(x/2)``, work ``F_c x + 4 G(|x|/2)``,
-        dissipation ``2 I_H(|x|/2)`` with ``x = u - u_c`` (docs/equations.md section 2)."""
+        dissipation ``2 I_H(|x|/2)`` with ``x = u - u_c`` (docs/equations.md section 2).
+        """
         uu = u[slow]
         uc = self.u[slow]
         du = uu - uc
@@ -265,7 +266,8 @@ class IwanJointBank:
     def _sync(self) -> None:
         """Force and energies of every point at its committed ``u`` from its branch: the branch
         formula ``F_r + c2 sign(x) F_bb(c1 |x|)`` and the closed-form work and dissipation since
-        the branch started (the same formulas as ``IwanJoint``'s fast path)."""
+        the branch started (the same formulas as ``IwanJoint``'s fast path).
+        """
         u = self.u
         x = u - self.bur
         h = self.bc1 * np.abs(x)
@@ -304,7 +306,8 @@ class IwanJointBank:
 
     def _walk_commit(self, i: int, u: float) -> None:
         """Exact Masing walk of point ``i`` from its committed state to ``u`` (the compiled
-        kernel, :func:`iwan_element.core.masing.masing_step`), committed."""
+        kernel, :func:`iwan_element.core.masing.masing_step`), committed.
+        """
         self._room(i)
         n, F, _, dW, dD, G, I = masing_step(
             self._consts[i], self._us[i], self._Fr[i], self._at[i], int(self._nst[i]),
@@ -322,7 +325,8 @@ class IwanJointBank:
     def _set_branch(self, i: int) -> None:
         """Cache the branch through the committed state of point ``i`` (see
         ``IwanJoint._set_branch``): the open interval ``(blo, bhi)`` of displacements that
-        continue it without a reversal or a closed loop."""
+        continue it without a reversal or a closed loop.
+        """
         n = int(self._nst[i])
         us = self._us[i]
         uc = float(self.u[i])
@@ -350,7 +354,8 @@ class IwanJointBank:
 
     def force_history(self, u) -> np.ndarray:
         """Forces [N] of every point for a displacement history ``u`` [m] of shape
-        (n_steps, n_points), from the virgin state, on a private copy (this bank is untouched)."""
+        (n_steps, n_points), from the virgin state, on a private copy (this bank is untouched).
+        """
         arr = finite_array("u", u, ndim=2)
         if arr.shape[1] != self.n_points:
             raise ValueError(f"u must have shape (n_steps, {self.n_points}), got {arr.shape}")
@@ -367,7 +372,8 @@ class IwanJointBank:
 
 class _Stacks:
     """Read-only access to the live reversal stacks of a bank: ``stacks[i]`` is a view of the
-    committed entries of point ``i`` (oldest first)."""
+    committed entries of point ``i`` (oldest first).
+    """
 
     __slots__ = ("_arrs", "_n")
 

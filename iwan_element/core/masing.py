@@ -67,7 +67,8 @@ def constants_from_arrays(Fs, KT, chi, beta, tol=0.0, phi_max=None) -> np.ndarra
     """:func:`masing_constants` for arrays of parameters (broadcast together), shape
     ``(m, 15)``; ``phi_max`` [m] from paper eq. 11 as :class:`IwanParameters` computes it
     unless given. The values are not validated here (the callers hold validated parameters).
-    ``tol``: relative reversal tolerance (times ``phi_max``)."""
+    ``tol``: relative reversal tolerance (times ``phi_max``).
+    """
     Fs, KT, chi, beta, tol = np.broadcast_arrays(*(np.asarray(x, float).ravel()
                                                    for x in (Fs, KT, chi, beta, tol)))
     if phi_max is None:
@@ -104,7 +105,8 @@ def _energies(c, r):
 @njit(cache=True)
 def _segment(c, us, Fr, n, ua, ub):
     """Work, dissipation and ``(G, I_H)`` at ``ub`` of the monotone move ``ua -> ub`` on the
-    branch from the stack top ``us[n-1]`` (the virgin curve when ``n == 0``)."""
+    branch from the stack top ``us[n-1]`` (the virgin curve when ``n == 0``).
+    """
     if n == 0:
         Gb, Ib = _energies(c, c[IPM] * abs(ub))
         Ga, Ia = _energies(c, c[IPM] * abs(ua))
@@ -252,7 +254,8 @@ def _rows(C, U, F, K, W, D):
 def masing_rows(C: np.ndarray, U: np.ndarray):
     """The kernel on raw arrays (no validation): constants ``C`` of shape ``(m, 15)``
     (:func:`constants_from_arrays`) and histories ``U`` of shape ``(m, n)`` [m], each from
-    the virgin state. Returns ``F, K, W, D``, each ``(m, n)`` (see :func:`masing_history`)."""
+    the virgin state. Returns ``F, K, W, D``, each ``(m, n)`` (see :func:`masing_history`).
+    """
     C = np.ascontiguousarray(C, dtype=float)
     U = np.ascontiguousarray(U, dtype=float)
     F, K, W, D = (np.empty(U.shape) for _ in range(4))

@@ -118,7 +118,8 @@ class IwanParameters:
     @property
     def K_slider(self) -> float:
         """Stiffness of the continuous part of the density, ``KT - S = KT/(1+beta)`` [N/m]
-        (so that ``R phi_max**(chi+1) = (chi+1) K_slider``, free of overflow)."""
+        (so that ``R phi_max**(chi+1) = (chi+1) K_slider``, free of overflow).
+        """
         return self.KT / (1.0 + self.beta)
 
     @property
@@ -146,7 +147,8 @@ class IwanParameters:
     @property
     def S(self) -> float:
         """Strength of the Dirac spike at ``phi_max`` [N/m] (paper eq. 8, corrected:
-        ``S = (Fs/phi_max) beta / (beta + (chi+1)/(chi+2)) = KT beta/(1+beta)``)."""
+        ``S = (Fs/phi_max) beta / (beta + (chi+1)/(chi+2)) = KT beta/(1+beta)``).
+        """
         return self._derived[1]
 
     @property
@@ -161,9 +163,10 @@ class IwanParameters:
                 "units": {"Fs": "N", "KT": "N/m", "chi": "1", "beta": "1"}}
 
     @classmethod
-    def from_dict(cls, data: dict) -> "IwanParameters":
+    def from_dict(cls, data: dict) -> IwanParameters:
         """Build from a dict as written by :meth:`to_dict` (extra keys other than ``units``
-        are rejected so that a misspelt key is not silently ignored)."""
+        are rejected so that a misspelt key is not silently ignored).
+        """
         if not isinstance(data, dict):
             raise ValueError(f"data must be a dict, got {type(data).__name__}")
         allowed = {"Fs", "KT", "chi", "beta", "units"}
@@ -191,11 +194,11 @@ class IwanParameters:
         return p
 
     @classmethod
-    def load(cls, path: str | PathLike) -> "IwanParameters":
+    def load(cls, path: str | PathLike) -> IwanParameters:
         """Read parameters written by :meth:`save`."""
         return cls.from_dict(json.loads(Path(path).read_text()))
 
-    def replace(self, **changes: float) -> "IwanParameters":
+    def replace(self, **changes: float) -> IwanParameters:
         """Return a copy with some of ``Fs, KT, chi, beta`` changed (validated again)."""
         fields = {"Fs", "KT", "chi", "beta"}
         bad = set(changes) - fields

@@ -41,7 +41,8 @@ _NOSEG = np.empty((4, 0))
 @njit(cache=True)
 def _periodic_row(c, u, F, K, anchor, seg):
     """Steady loop of one row (module docstring); fills ``F, K, anchor`` in sample order and
-    returns the dissipation of one period [J]."""
+    returns the dissipation of one period [J].
+    """
     N = u.size
     k0 = 0
     big = -1.0

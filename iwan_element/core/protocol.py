@@ -76,7 +76,8 @@ class CommittedState:
     """Read-outs of an element's committed state, from its attributes ``_u`` [m], ``_F``
     [N], ``_W`` (work) and ``_D`` (dissipated energy) [J]: the one implementation of the
     protocol's properties for the package's elements (an element with another stored energy
-    overrides :attr:`stored_energy`)."""
+    overrides :attr:`stored_energy`).
+    """
 
     __slots__ = ()
 

@@ -40,9 +40,9 @@ import inspect
 import pkgutil
 
 from ..core.protocol import check_element
-from .base import Effect, ParamSpec
 from .asymmetric_slip import AsymmetricSlip
 from .backlash import Backlash
+from .base import Effect, ParamSpec
 from .breakaway import BreakAway
 from .hardening import Hardening
 from .macroslip_onset import MacroslipOnset
@@ -61,7 +61,8 @@ EFFECTS: dict = {}
 
 def register_effect(cls):
     """Add an effect class (a subclass of the shared base with a unique ``effect`` name and
-    ``specs``) to :data:`EFFECTS`; returns it, so it can be used as a decorator."""
+    ``specs``) to :data:`EFFECTS`; returns it, so it can be used as a decorator.
+    """
     if not (inspect.isclass(cls) and issubclass(cls, Effect) and cls.effect):
         raise ValueError(f"cls must be an effect class with an 'effect' name, got {cls!r}")
     if cls.effect in EFFECTS and EFFECTS[cls.effect] is not cls:
@@ -107,7 +108,8 @@ def make_effect(name: str, inner, **parameters: float):
 
 def base_joint(element):
     """The innermost element below any stack of effects (``ValueError`` if ``element`` is no
-    joint element)."""
+    joint element).
+    """
     check_element(element, name="element")
     while isinstance(element, Effect):
         element = element.inner

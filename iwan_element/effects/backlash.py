@@ -31,7 +31,7 @@ import copy
 
 import numpy as np
 
-from .base import ParamSpec, Effect, _find_zero, monotone_runs
+from .base import Effect, ParamSpec, _find_zero, monotone_runs
 
 __all__ = ["Backlash"]
 
@@ -99,7 +99,8 @@ class Backlash(Effect):
         reaches ``d drag``, where the gap slides open (``w`` held at that point ``w_s``),
         until contact on the far side (``w = u - d gap``); the run's trial gives ``w_s``.
         So ``w = max(min(u - e0, w_s), u - gap)`` for ``d = +1`` (mirrored for ``-1``), the
-        element's own per-sample steps (checked in ``tests/test_effects.py``)."""
+        element's own per-sample steps (checked in ``tests/test_effects.py``).
+        """
         uu = np.asarray(u, float)
         el = copy.deepcopy(self)
         el.reset()
@@ -127,7 +128,8 @@ class Backlash(Effect):
     def _solve_drag(self, u: float, v: float):
         """Rigid stops with a friction ``drag`` across the gap: the gap opening ``e = u - w``
         sticks while ``|F| < drag`` (or while pressed against a stop), slides at
-        ``F = +-drag`` otherwise, up to the stop at ``+-gap``."""
+        ``F = +-drag`` otherwise, up to the stop at ``+-gap``.
+        """
         inner, g, fd, wc, ec = self._inner, self.gap, self.drag, self._w, self._e
         self._slide_at = None
         w = u - ec

@@ -104,7 +104,8 @@ class ParamSpec:
     def log_prior(self, z):
         """Log prior density of the fitting variable ``z`` (array or float) over
         :attr:`prior_range` [1 / fitting unit]: uniform, or log-uniform in the distance
-        from :attr:`neutral` (see there)."""
+        from :attr:`neutral` (see there).
+        """
         lo, hi = self.prior_range
         z = np.asarray(z, float)
         if self.neutral is None:
@@ -116,7 +117,8 @@ class ParamSpec:
 
     def prior_quantile(self, q):
         """The fitting variable at prior probability ``q`` in [0, 1] (the inverse of the
-        prior's distribution function; for nested sampling's prior transform)."""
+        prior's distribution function; for nested sampling's prior transform).
+        """
         lo, hi = self.prior_range
         q = np.asarray(q, float)
         if self.neutral is None:
@@ -134,7 +136,8 @@ def _find_zero(trial, a: float, Fa: float, b: float, Fb: float, *, rtol: float =
                max_iter: int = 100) -> float:
     """Zero of a force monotone along the path ``a -> b`` (``Fa``, ``Fb`` of opposite sign),
     by Newton steps on the element's tangent, safeguarded by bisection. ``trial(x)`` returns
-    ``(force, tangent)`` for the move from the committed state to ``x``."""
+    ``(force, tangent)`` for the move from the committed state to ``x``.
+    """
     lo, hi = (a, b) if Fa < 0.0 else (b, a)          # F(lo) < 0 < F(hi)
     x = a
     F = Fa
@@ -159,7 +162,8 @@ def monotone_runs(u: np.ndarray):
     """Monotone runs of a displacement history that starts from rest at 0: ``(a, b, d)`` for
     each, samples ``a:b`` moving in direction ``d`` (+1/-1) from ``u[a - 1]`` (0 before the
     first sample). Pauses belong to the run they interrupt; samples before the first move to
-    none."""
+    none.
+    """
     du = np.diff(u, prepend=0.0)
     nz = np.flatnonzero(du)
     if nz.size == 0:
@@ -173,7 +177,8 @@ def monotone_runs(u: np.ndarray):
 def require_plain_joint(inner, subject: str) -> None:
     """Refuse an ``inner`` that is not a plain Iwan joint (``IwanJoint`` or ``DiscreteIwan``
     with ``IwanParameters``): ``subject`` (e.g. ``"break-away"``) changes the joint's own
-    sliders, so it must wrap the joint directly."""
+    sliders, so it must wrap the joint directly.
+    """
     if isinstance(inner, Effect) or not isinstance(getattr(inner, "params", None),
                                                     IwanParameters):
         raise ValueError("inner must be a plain Iwan joint (IwanJoint or DiscreteIwan with "
@@ -305,7 +310,8 @@ class Effect(CommittedState):
     def vector_force(cls, F, u, v, **values):
         """Force of this effect around an inner force history ``F`` [N] at displacements ``u``
         [m] and velocities ``v`` [m/s] (arrays), or ``None`` when the effect has no
-        history-free vectorised form (the evaluator then runs the element itself)."""
+        history-free vectorised form (the evaluator then runs the element itself).
+        """
         return None
 
     def revert(self) -> None:
@@ -333,7 +339,8 @@ class Effect(CommittedState):
 
     def force_history(self, u, v=None) -> np.ndarray:
         """Forces [N] for a history ``u`` [m] (and velocities ``v`` [m/s], default zero), shape
-        (n,), from the virgin state, on a private copy; this element is untouched."""
+        (n,), from the virgin state, on a private copy; this element is untouched.
+        """
         uu = finite_array("u", u, ndim=1)
         vv = np.zeros_like(uu) if v is None else finite_array("v", v, ndim=1)
         same_length(u=uu, v=vv)

@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .base import ParamSpec, Effect
+from .base import Effect, ParamSpec
 
 __all__ = ["Hardening"]
 
@@ -73,7 +73,8 @@ class Hardening(Effect):
     @classmethod
     def modal_form(cls, X, frequency, damping, zeta0, *, k3_per_mass):
         """Frequency [Hz] raised by the Duffing first harmonic ``(3/4) kappa3 X^2`` [1/s^2];
-        the hysteretic damping scaled by ``(f_base / f)^2``, the floor ``zeta0`` unchanged."""
+        the hysteretic damping scaled by ``(f_base / f)^2``, the floor ``zeta0`` unchanged.
+        """
         X = np.asarray(X, float)
         f = np.sqrt(frequency ** 2 + 0.75 * k3_per_mass * X ** 2 / (4 * np.pi ** 2))
         return f, zeta0 + (damping - zeta0) * (frequency / f) ** 2

@@ -89,14 +89,16 @@ def _E(a, L):
 
 def _b2(q):
     """``B(2) = (1 - 2^-q) / q`` (``ln 2`` at ``q = 0``): the law's stiffness between the
-    onset and twice it, per unit of its density scale."""
+    onset and twice it, per unit of its density scale.
+    """
     return _E(-q, np.log(2.0))
 
 
 def patch_cumulative(phi, X_s, shape):
     """Stiffness fraction ``K(phi) / k_2`` [-] of the patch with slip displacement in
     ``[X_s, phi]``: ``B(phi / X_s) / B(2)``, ``B(r) = (1 - r^-q) / q`` (module docstring;
-    0 below ``X_s``, 1 above it at ``shape = 0``)."""
+    0 below ``X_s``, 1 above it at ``shape = 0``).
+    """
     L = np.log(np.maximum(np.asarray(phi, float) / X_s, 1.0))
     if shape <= 0.0:
         return np.where(L > 0.0, 1.0, 0.0)
@@ -106,7 +108,8 @@ def patch_cumulative(phi, X_s, shape):
 
 def _thresholds(kappa, X_s, shape):
     """Slip displacement [m] below which the stiffness fraction ``kappa`` (of ``k_2``) lies:
-    the inverse of :func:`patch_cumulative`."""
+    the inverse of :func:`patch_cumulative`.
+    """
     q = _q(shape)
     k = np.asarray(kappa, float) * _b2(q)
     t = k if q == 0.0 else -np.log1p(-q * k) / q
@@ -116,7 +119,8 @@ def _thresholds(kappa, X_s, shape):
 def patch_stiffness_loss(X, X_s, shape):
     """Lost first-harmonic stiffness at amplitude ``X`` [m] per unit ``k_2`` [-]:
     ``int_0^K(X) (1 - g(X, phi(K))) dK`` over the stiffness that slides, by 48-point
-    Gauss-Legendre quadrature (``shape = 0``: ``1 - jenkins_gain(X, X_s)``)."""
+    Gauss-Legendre quadrature (``shape = 0``: ``1 - jenkins_gain(X, X_s)``).
+    """
     X = np.asarray(X, float)
     if shape <= 0.0:
         return np.where(X > X_s, 1.0 - jenkins_gain(X, X_s), 0.0)
@@ -130,7 +134,8 @@ def patch_stiffness_loss(X, X_s, shape):
 def patch_dissipation(X, X_s, shape):
     """Energy dissipated per cycle at amplitude ``X`` [m] per unit ``k_2`` [m^2]:
     ``4 int phi (X - phi) dK = 4 c [X X_s E(1 - q) - X_s^2 E(2 - q)]``, ``c = 1 / B(2)``, in
-    closed form (module docstring; ``shape = 0``: ``4 X_s (X - X_s)``)."""
+    closed form (module docstring; ``shape = 0``: ``4 X_s (X - X_s)``).
+    """
     X = np.asarray(X, float)
     L = np.log(np.maximum(X / X_s, 1.0))
     if shape <= 0.0:
@@ -216,7 +221,8 @@ class MacroslipOnset(JenkinsBank):
     @classmethod
     def modal_form(cls, X, frequency, damping, zeta0, *, kappa_2, X_s, shape=0.0):
         """Frequency [Hz] lowered by the lost stiffness of the sliding part of the patch and
-        damping ratio [-] raised by its dissipation (module docstring)."""
+        damping ratio [-] raised by its dissipation (module docstring).
+        """
         X = np.asarray(X, float)
         w2b = (2 * np.pi * frequency) ** 2
         w2 = np.maximum(w2b - kappa_2 * patch_stiffness_loss(X, X_s, shape), 1e-6 * w2b)
@@ -228,7 +234,8 @@ class MacroslipOnset(JenkinsBank):
     def modal_to_joint(cls, values, *, modal_mass, slip_per_amplitude, omega0):
         """Stiffness ``k_2 = kappa_2 m / r^2`` [N/m], onset ``u_s = X_s r`` [m], the shape
         unchanged; the bank reaches ``u_e = SPAN u_s`` (``SPAN = 8``: exact for slips up to
-        eight times the onset, its bins where a ring-down slides)."""
+        eight times the onset, its bins where a ring-down slides).
+        """
         r = slip_per_amplitude
         u_s = values["X_s"] * r
         return {"k_2": values["kappa_2"] * modal_mass / r ** 2, "u_s": u_s,

@@ -14,14 +14,15 @@ import math
 
 import numpy as np
 
-from .base import ParamSpec, Effect
+from .base import Effect, ParamSpec
 
 __all__ = ["PinningStiffness", "dead_zone_gain"]
 
 
 def dead_zone_gain(X, delta):
     """Describing function of ``sign(u) max(|u| - delta, 0)`` at amplitude ``X``: the
-    equivalent linear stiffness per unit ``k_p`` [-] (1 for ``delta = 0``)."""
+    equivalent linear stiffness per unit ``k_p`` [-] (1 for ``delta = 0``).
+    """
     r = np.clip(delta / np.asarray(X, float), 0.0, 1.0)
     return 1.0 - (2.0 / np.pi) * (np.arcsin(r) + r * np.sqrt(1.0 - r * r))
 
@@ -68,7 +69,8 @@ class PinningStiffness(Effect):
     def modal_form(cls, X, frequency, damping, zeta0, *, k_p_per_mass, delta):
         """Frequency [Hz] raised by the dead-zone spring's describing-function stiffness; the
         hysteretic part of the damping ratio scaled by ``(f_old/f_new)^2`` (same dissipation,
-        stiffer mode); the viscous floor ``zeta0`` unchanged."""
+        stiffer mode); the viscous floor ``zeta0`` unchanged.
+        """
         f = np.sqrt(frequency ** 2 + k_p_per_mass * dead_zone_gain(X, delta) / (4 * np.pi ** 2))
         return f, zeta0 + (damping - zeta0) * (frequency / f) ** 2
 

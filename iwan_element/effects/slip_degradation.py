@@ -11,8 +11,6 @@ commit (the elastic energy released is dissipated).
 """
 from __future__ import annotations
 
-import math
-
 import numpy as np
 from numba import njit
 
@@ -102,7 +100,8 @@ class SlipDegradation(SliderEffect):
 
     def _correction_energy(self, u: np.ndarray, D_inner) -> np.ndarray:
         """The per-sample rule of :meth:`_SliderEffect._correction_energy`, compiled
-        (:func:`_degrade_history`), from the virgin state."""
+        (:func:`_degrade_history`), from the virgin state.
+        """
         D_inner = np.ascontiguousarray(D_inner, dtype=float)
         e, slip = self._e.copy(), self._slip.copy()
         out, self._lam, self._Wb = _degrade_history(
@@ -114,7 +113,8 @@ class SlipDegradation(SliderEffect):
 
     def _after_commit_energy(self, D_inner: float) -> float:
         """Update ``lambda`` from the joint's dissipated energy, clip the stretches and the
-        caps (:func:`degrade`); returns the stored energy of the banks after the clip [J]."""
+        caps (:func:`degrade`); returns the stored energy of the banks after the clip [J].
+        """
         if self._cap_up is None:
             self._refresh_caps()
         self._lam, stored = degrade(self._e, self._sign, self._k, self._phi, D_inner,

@@ -7,7 +7,7 @@ domain it is a constant added modal damping ratio ``zeta_v = c r^2 / (2 m omega)
 """
 from __future__ import annotations
 
-from .base import ParamSpec, Effect
+from .base import Effect, ParamSpec
 
 __all__ = ["ViscousDamping"]
 

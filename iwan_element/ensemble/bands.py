@@ -6,13 +6,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..base.result_shape import ResultShape, panels, table_lines
+from ..base.serialize import json_safe
 from ..base.validation import check_int, check_magnitude, check_scalar, finite_array
 from ..core.parameters import IwanParameters
-from ..base.serialize import json_safe
 from .oscillator import SingleModeSystem, modal_curve, peak_response
 from .runner import EnsembleResult, run_ensemble
 from .uncertainty import ParameterUncertainty
-from ..base.result_shape import ResultShape, panels, table_lines
 
 __all__ = ["PredictionBands", "propagate_uncertainty", "response_task", "modal_fit_task"]
 
@@ -21,7 +21,8 @@ def response_task(params: dict, rng, *, system: SingleModeSystem, amplitude, for
                   cycles: int = 30, steps_per_period: int = 64) -> dict:
     """One ensemble task: ``frequency`` [Hz] and ``damping_ratio`` [-] at ``amplitude`` and, with
     ``force`` [N], the ``peak`` transient displacement [m] (see :mod:`.oscillator`).
-    ``params`` holds ``Fs, KT, chi, beta``; ``rng`` is unused (the model is deterministic)."""
+    ``params`` holds ``Fs, KT, chi, beta``; ``rng`` is unused (the model is deterministic).
+    """
     p = IwanParameters(params["Fs"], params["KT"], params["chi"], params["beta"])
     f, z = modal_curve(p, system, amplitude)
     out = {"frequency": f, "damping_ratio": z}
@@ -36,7 +37,8 @@ def modal_fit_task(params: dict, rng, *, names, regime: str, conventions: dict, 
     """One ensemble task for a modal Iwan fit (:func:`iwan_element.fit_modal_iwan`): its model
     curve at ``amplitude`` for one sampled fit vector and, in the macroslip regime with
     ``force`` [N per unit modal mass], the peak transient displacement [m] of the fitted
-    single-mode oscillator (fixed dashpot ``2 zeta0 w0``)."""
+    single-mode oscillator (fixed dashpot ``2 zeta0 w0``).
+    """
     from ..identify.modal.result import full_parameters, model_curve
     theta = np.array([params[n] for n in names], dtype=float)
     f, z = model_curve(theta, np.asarray(amplitude, float), regime, conventions["x_ref"],
@@ -112,7 +114,8 @@ class PredictionBands(ResultShape):
     @property
     def success(self) -> bool:
         """True when at least two thirds of the sampled parameter sets ran (the bands are
-        quantiles of the successful ones; failures are listed in the ensemble)."""
+        quantiles of the successful ones; failures are listed in the ensemble).
+        """
         n = len(self.ensemble)
         return bool(n > 0 and len(self.ensemble.errors) <= n / 3)
 

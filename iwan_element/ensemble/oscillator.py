@@ -136,7 +136,8 @@ def _integrate(joint, system, *, h, n, load, x0=0.0):
     """Average-acceleration Newmark with Newton on the joint; returns ``(t, x)``.
 
     ``x0 > 0`` starts from rest at ``x0`` with the joint loaded along its backbone (a free
-    decay, used by the tests against :func:`iwan_element.modal_ringdown`)."""
+    decay, used by the tests against :func:`iwan_element.modal_ringdown`).
+    """
     m, k = system.mass, system.stiffness
     c = 2.0 * system.zeta0 * math.sqrt((k + joint.KT) * m)
     j = IwanJoint(joint)

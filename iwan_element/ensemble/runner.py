@@ -39,8 +39,8 @@ from pathlib import Path
 import numpy as np
 
 from ..base.progress import finish, progress_bar
-from ..base.serialize import json_safe
 from ..base.result_shape import ResultShape, panels
+from ..base.serialize import json_safe
 
 __all__ = ["run_ensemble", "EnsembleResult", "TaskError"]
 
@@ -51,7 +51,8 @@ log = logging.getLogger(__name__)
 @dataclass(frozen=True)
 class TaskError:
     """One failed task: ``index`` in the input, its ``params``, the error ``message``
-    (``"ExceptionType: text"``) and the ``traceback`` text from the worker."""
+    (``"ExceptionType: text"``) and the ``traceback`` text from the worker.
+    """
 
     index: int
     params: dict
@@ -109,7 +110,8 @@ class EnsembleResult(ResultShape):
     def column(self, name: str) -> np.ndarray:
         """Values of one parameter or output over the rows: shape ``(n,)`` for scalars,
         ``(n, m)`` for array outputs of a common shape ``(m,)``; NaN for failed tasks'
-        outputs. Raises ``ValueError`` for an unknown name or arrays of different shapes."""
+        outputs. Raises ``ValueError`` for an unknown name or arrays of different shapes.
+        """
         if name not in self.outputs and name not in self.parameters:
             raise ValueError(f"unknown column {name!r}; parameters are {list(self.parameters)}, "
                              f"outputs are {list(self.outputs)}")
@@ -124,7 +126,8 @@ class EnsembleResult(ResultShape):
 
     def to_csv(self, path: str | PathLike) -> Path:
         """Write the tidy table (one row per parameter set, an ``ok`` column, array outputs
-        expanded to ``name[0], name[1], ...``) to ``path``; return the path."""
+        expanded to ``name[0], name[1], ...``) to ``path``; return the path.
+        """
         p = Path(path)
         expanded = []
         for name in self.parameters + self.outputs:
@@ -163,7 +166,8 @@ class EnsembleResult(ResultShape):
     def plot(self, ax=None, *, output: str | None = None, bins: int = 30):
         """Histogram of one scalar output over the successful tasks (default: the first
         scalar output). Returns the artists (one Axes, :mod:`iwan_element.base.result_shape`).
-        Raises ``ValueError`` when there is no scalar output to draw."""
+        Raises ``ValueError`` when there is no scalar output to draw.
+        """
         names = [output] if output is not None else list(self.outputs)
         for name in names:
             col = self.column(name)

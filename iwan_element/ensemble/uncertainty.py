@@ -21,11 +21,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..base.result_shape import ResultShape, panels
+from ..base.serialize import json_safe
 from ..base.validation import check_int, finite_array
 from ..core.parameters import IwanParameters
-from ..base.serialize import json_safe
 from ..identify.loops.result import PARAM_NAMES
-from ..base.result_shape import ResultShape, panels
 
 __all__ = ["ParameterUncertainty"]
 
@@ -82,7 +82,7 @@ class ParameterUncertainty(ResultShape):
 
     @classmethod
     def from_mean_cov(cls, mean: IwanParameters, cov, names=PARAM_NAMES, *,
-                      source: str = "generic") -> "ParameterUncertainty":
+                      source: str = "generic") -> ParameterUncertainty:
         """From nominal parameters and a covariance in physical units.
 
         Parameters
@@ -125,7 +125,7 @@ class ParameterUncertainty(ResultShape):
                    success=bool(success))
 
     @classmethod
-    def from_fit(cls, fit) -> "ParameterUncertainty":
+    def from_fit(cls, fit) -> ParameterUncertainty:
         """From a :class:`~iwan_element.FitResult` (loop or dissipation fit) or any result with
         ``joint`` (IwanParameters), ``stderr`` (dict), ``correlation`` (4x4 in ``Fs, KT, chi,
         beta`` order), ``identified`` and ``fixed``.
@@ -229,7 +229,8 @@ class ParameterUncertainty(ResultShape):
         """One standard deviation of each sampled coordinate (``ln Fs``, ``ln KT``, ``chi``,
         ``ln(1 + beta)``, ``ln R``; a logarithm's is a relative error) as bars, with the
         correlation matrix written on them. Returns the artists (one Axes,
-        :mod:`iwan_element.base.result_shape`)."""
+        :mod:`iwan_element.base.result_shape`).
+        """
         ax, = panels(ax, 1, figsize=(5, 3.5))
         se = np.sqrt(np.diag(self.cov))
         x = np.arange(len(self.names))

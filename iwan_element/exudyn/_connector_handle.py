@@ -1,7 +1,8 @@
 """The handle of a connector placed by :func:`~iwan_element.exudyn.add_iwan_connector`:
 records, read-outs, reset, and the per-step work of the Python force law (the symbolic
 law's is in :mod:`.laws.symbolic_connector`). See :mod:`iwan_element.exudyn.connector` for how
-the history is kept."""
+the history is kept.
+"""
 from __future__ import annotations
 
 import logging
@@ -11,8 +12,8 @@ from array import array
 import exudyn as exu
 import numpy as np
 
-from .laws import symbolic_connector as _symbolic
 from ._dispatch import _installed_post_step
+from .laws import symbolic_connector as _symbolic
 
 __all__: list[str] = []
 
@@ -80,7 +81,8 @@ class IwanConnector:
     # -------------------------------------------------------------- per-step work
     def _generic_accept(self, t):
         """Post-step (generic route): Exudyn evaluates the force function at the accepted
-        state, which leaves (u, F) of that state in the cache; commit and record."""
+        state, which leaves (u, F) of that state in the cache; commit and record.
+        """
         self._mbs.GetObjectOutput(self._object, _FORCE)
         u = self._lu
         v = self._lv
@@ -103,7 +105,8 @@ class IwanConnector:
         """The dashpot's dissipation [J] up to the accepted state ``(u, v)``: the previous
         one plus ``c (v0 + v) / 2 (u - u0)``, the trapezoidal ``int c v du`` (as
         :class:`~iwan_element.effects.ViscousDamping`), exact when the velocity is linear in
-        time over the step, as in the average-acceleration (Newmark) scheme."""
+        time over the step, as in the average-acceleration (Newmark) scheme.
+        """
         prev = self._dash
         d = 0.0 if prev is None else prev[2] + self._damping * 0.5 * (prev[1] + v) * (u - prev[0])
         self._dash = (u, v, d)
@@ -112,7 +115,8 @@ class IwanConnector:
     def _fast_accept(self, q, qt, i0, i1):
         """Post-step function for two node coordinates: reads the accepted slip and its rate
         through views ``q``, ``q_t`` of Exudyn's current system coordinates (no copy) and
-        evaluates a new trial only if the last one was elsewhere."""
+        evaluates a new trial only if the last one was elsewhere.
+        """
         conn = self
         joint = self._joint
         trial = joint.trial
@@ -157,7 +161,8 @@ class IwanConnector:
 
     def _flush_joint(self) -> None:
         """Symbolic route: commit the joint at the last accepted slip if that was left
-        pending (the joint is committed lazily along a branch)."""
+        pending (the joint is committed lazily along a branch).
+        """
         if self._route == "symbolic":
             _symbolic.flush_joint(self)
 
@@ -172,7 +177,8 @@ class IwanConnector:
     def _new_run(self, t, u):
         """A run restarts before the last accepted time: warn if it starts from another slip
         than the joint holds (a forgotten reset, not a continuation such as static ->
-        dynamic)."""
+        dynamic).
+        """
         held = self._joint.displacement
         if u != held:
             _log.warning(
@@ -183,7 +189,8 @@ class IwanConnector:
     def _refresh(self, mbs, lazy_until=-_INF):
         """Start of a run: resolve the global coordinate indices and take fresh views of the
         system coordinates (Assemble may have moved them); the views stay valid during a
-        run (checked at every accepted step for all solvers, see the tests)."""
+        run (checked at every accepted step for all solvers, see the tests).
+        """
         if self._route == "symbolic":
             _symbolic.symbolic_refresh(self, mbs, lazy_until)
             return
@@ -207,7 +214,8 @@ class IwanConnector:
         run from an earlier time, or a continued run, whose first evaluation (generalized-alpha's
         initial accelerations, an explicit method's first stage) is at that time. Within a run
         only explicit methods evaluate there again (their first stage of every step), at the
-        cost of one check per step."""
+        cost of one check per step.
+        """
         d = self._dispatcher
         d.refresh(mbs)
         if not d.reachable_from(_installed_post_step(mbs)):
@@ -234,20 +242,23 @@ class IwanConnector:
         Symbolic route: during a run the element is committed lazily (at every reversal or
         loop closure, at the last step of a run and when read through the connector); a
         Python function that reads the element itself during a run should read it through
-        this property."""
+        this property.
+        """
         self._flush_joint()
         return self._joint
 
     @property
     def kind(self) -> str:
         """``"coordinate"`` (ObjectConnectorCoordinateSpringDamper) or ``"position"``
-        (ObjectConnectorCartesianSpringDamper)."""
+        (ObjectConnectorCartesianSpringDamper).
+        """
         return self._kind
 
     @property
     def axis(self):
         """Unit axis, tuple of 3 floats (global, or in the frame of :attr:`axisMarker`);
-        ``None`` for coordinate markers."""
+        ``None`` for coordinate markers.
+        """
         return self._axis
 
     @property
@@ -259,13 +270,15 @@ class IwanConnector:
     def damping(self) -> float:
         """Coefficient of the dashpot in parallel with the joint [N s/m] (0: none). Its
         force is in :attr:`force_history`, its dissipation in
-        :attr:`dissipated_energy_history` and :attr:`work_history`."""
+        :attr:`dissipated_energy_history` and :attr:`work_history`.
+        """
         return self._damping
 
     @property
     def offset(self) -> float:
         """Slip at which the virgin joint is unloaded [m] (or [rad] for rotation
-        coordinates)."""
+        coordinates).
+        """
         return self._offset
 
     # -------------------------------------------------------------- user API
@@ -294,7 +307,8 @@ class IwanConnector:
 
     def _check_running(self) -> None:
         """The symbolic route has no Python force function to notice a replaced post-step
-        function; refuse to return records of a run in which the joint was not committed."""
+        function; refuse to return records of a run in which the joint was not committed.
+        """
         d = self._dispatcher
         if self._route == "symbolic" and d is not None \
                 and not d.reachable_from(_installed_post_step(self._mbs)):
@@ -306,14 +320,16 @@ class IwanConnector:
     @property
     def route(self) -> str:
         """``"symbolic"`` (the exact Iwan law as an Exudyn symbolic expression) or
-        ``"python"`` (a Python force function calling ``joint.trial``)."""
+        ``"python"`` (a Python force function calling ``joint.trial``).
+        """
         return self._route
 
     @property
     def overflow_times(self) -> np.ndarray:
         """Symbolic route: times [s] of accepted steps that read an older reversal point
         than the law holds and could not be re-solved (a jump from far outside the window
-        at which the re-solve is armed; not exact: raise ``depth``). Empty in a sound run."""
+        at which the re-solve is armed; not exact: raise ``depth``). Empty in a sound run.
+        """
         return np.array(self._overflows)
 
     def _table(self) -> np.ndarray:
@@ -347,13 +363,15 @@ class IwanConnector:
     @property
     def force_history(self) -> np.ndarray:
         """Joint force at the accepted steps [N], shape (n,), the dashpot's included;
-        positive when it pulls marker 1 back towards marker 0 (resists positive slip)."""
+        positive when it pulls marker 1 back towards marker 0 (resists positive slip).
+        """
         return self._column(2)
 
     @property
     def dissipated_energy_history(self) -> np.ndarray:
         """Energy dissipated by the joint (and its dashpot) since the last reset [J],
-        shape (n,)."""
+        shape (n,).
+        """
         return self._column(3)
 
     @property
@@ -364,12 +382,14 @@ class IwanConnector:
     @property
     def stored_energy_history(self) -> np.ndarray:
         """Elastic energy stored in the joint [J], shape (n,): ``work - dissipated_energy``
-        (the element protocol's identity; only these two are recorded per step)."""
+        (the element protocol's identity; only these two are recorded per step).
+        """
         return self._column(4) - self._column(3)
 
     def records(self) -> dict:
         """All records as a dict of arrays of shape (n,): ``time [s], slip [m], force [N],
-        stored_energy [J], dissipated_energy [J], work [J]``."""
+        stored_energy [J], dissipated_energy [J], work [J]``.
+        """
         data = self._table()
         return {"time": data[:, 0].copy(), "slip": data[:, 1].copy(),
                 "force": data[:, 2].copy(), "stored_energy": data[:, 4] - data[:, 3],

@@ -1,5 +1,6 @@
 """The post-step dispatcher shared by all Iwan connectors and interfaces of one system,
-the settings they refuse, and the ownership of joint elements."""
+the settings they refuse, and the ownership of joint elements.
+"""
 from __future__ import annotations
 
 import logging
@@ -134,7 +135,8 @@ class _PostStepDispatcher:
         """Accepted steps before this time may commit joints lazily: the last step of the
         dynamic run being solved, known only if the ``mbs.sys`` hook saw it start and no
         other post-step function (which might read the joints) is chained (the energy
-        recorders, called among the accept functions, read none); else never."""
+        recorders, called among the accept functions, read none); else never.
+        """
         sysd = self.sysd
         if self.chained is not None or getattr(sysd, "kind", None) != "dynamicSolver":
             return -math.inf
@@ -147,7 +149,8 @@ class _PostStepDispatcher:
 
     def set_risky(self, connector, risky: bool) -> None:
         """Install the post-Newton check while some connector's committed stack is deeper
-        than its law holds (only then can a step need points the law does not hold)."""
+        than its law holds (only then can a step need points the law does not hold).
+        """
         if risky and connector not in self.risky:
             self.risky.append(connector)
         elif not risky and connector in self.risky:
@@ -161,7 +164,7 @@ class _PostStepDispatcher:
             mbs.SetPostNewtonUserFunction(0 if self.pn_prev is None else self.pn_prev)
             self.pn_prev = None
 
-    def add(self, connector: "IwanConnector") -> None:
+    def add(self, connector: IwanConnector) -> None:
         self.connectors.append(connector)
         self.stale = True
 
@@ -191,7 +194,8 @@ class _PostStepDispatcher:
         history if the solve starts before the last accepted time (a new run, not a
         continuation): the joints return to their virgin state, their records and the energy
         recorders of this system start again (an initial slip is then reached by monotone
-        virgin loading, as in the first run)."""
+        virgin loading, as in the first run).
+        """
         check_settings(settings, self.connectors)
         ti = settings.timeIntegration
         self.solve_info = (kind, ti.solverType, ti.generalizedAlpha.spectralRadius)
@@ -207,7 +211,8 @@ class _PostStepDispatcher:
 
     def add_recorder(self, recorder) -> None:
         """An energy recorder, called after the joints at every accepted step (not chained:
-        a post-step function set later by the user does not drop it)."""
+        a post-step function set later by the user does not drop it).
+        """
         self.recorders.append(recorder)
         self.stale = True
 
@@ -299,7 +304,8 @@ class _SolveHook(dict):
     post-step function set after the connectors (it is then chained, not lost); the settings
     let each dispatcher refuse what its joints cannot serve and start a fresh history
     (:meth:`_PostStepDispatcher.before_solve`) - a ``ValueError`` raised here leaves
-    ``SolveDynamic`` before the solver starts."""
+    ``SolveDynamic`` before the solver starts.
+    """
 
     def __setitem__(self, key, value):
         super().__setitem__(key, value)
@@ -341,7 +347,8 @@ _ATTACHED: dict = {}        # id(element) -> (weakref to its connector, the elem
 
 def _claim(joint, handle) -> None:
     """Refuse an element that a live connector (of any system) already uses: its history
-    would be shared by two force laws."""
+    would be shared by two force laws.
+    """
     key = id(joint)
     got = _ATTACHED.get(key)
     if got is not None and got[1] is joint:

@@ -135,7 +135,8 @@ class Terms:
     def state(self) -> dict:
         """Every energy quantity at the current state of the system (set by the caller):
         levels (kinetic, elastic) and the generalized forces and displacements whose
-        trapezoidal products give the works."""
+        trapezoidal products give the works.
+        """
         mbs = self.mbs
         q = mbs.systemData.GetODE2Coordinates(_CUR)
         qt = mbs.systemData.GetODE2Coordinates_t(_CUR)
@@ -203,7 +204,8 @@ def _has_kinetic(mbs, o) -> bool:
 
 def _reduced(mbs, o, item):
     """(modal coordinate indices, reduced stiffness, reduced damping or None) of a reduced
-    flexible body: its second node holds the modal coordinates."""
+    flexible body: its second node holds the modal coordinates.
+    """
     node = int(item["nodeNumbers"][1])
     idx = np.array(list(mbs.systemData.GetNodeLTGODE2(node)), dtype=np.intp)
     K, D = (_dense(item[k], idx.size) for k in ("stiffnessMatrixReduced", "dampingMatrixReduced"))

@@ -29,7 +29,8 @@ _NOT_MARKERS = ((exu.ObjectIndex, "a body or object (ObjectIndex)"),
 def _marker_type(mbs, marker, label: str) -> str:
     """The ``markerType`` of ``marker``; a ``ValueError`` naming ``label`` for anything
     else than an existing marker (an Exudyn index of another kind is refused by its type,
-    as Exudyn refuses it where a ``MarkerIndex`` belongs; a plain int is a marker number)."""
+    as Exudyn refuses it where a ``MarkerIndex`` belongs; a plain int is a marker number).
+    """
     if isinstance(marker, bool):
         raise ValueError(f"{label} must be a marker number, got {marker!r}")
     for kind, what in _NOT_MARKERS:
@@ -84,7 +85,8 @@ def _visualization(visualization) -> dict:
 
 def _node_coordinate_nodes(mbs, markerNumbers):
     """For two ``NodeCoordinate`` markers: ``[(node, coordinate), ...]`` with ``node = None``
-    for a ground node (its coordinate is always 0); ``None`` for other marker types."""
+    for a ground node (its coordinate is always 0); ``None`` for other marker types.
+    """
     out = []
     for m in markerNumbers:
         mk = mbs.GetMarker(int(m))

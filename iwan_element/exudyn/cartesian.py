@@ -20,12 +20,17 @@ from numbers import Integral
 
 import exudyn as exu
 import numpy as np
-from exudyn.itemInterface import (MarkerBodyPosition, MarkerBodyRigid, MarkerNodePosition,
-                                  MarkerNodeRigid, ObjectConnectorCartesianSpringDamper,
-                                  ObjectConnectorRigidBodySpringDamper)
+from exudyn.itemInterface import (
+    MarkerBodyPosition,
+    MarkerBodyRigid,
+    MarkerNodePosition,
+    MarkerNodeRigid,
+    ObjectConnectorCartesianSpringDamper,
+    ObjectConnectorRigidBodySpringDamper,
+)
 
-from ..core.parameters import IwanParameters
 from ..base.validation import check_scalar
+from ..core.parameters import IwanParameters
 from ._markers import _COORDINATE_MARKERS, _ORIENTATION_MARKERS, _marker_type
 from .connector import add_iwan_connector, check_run_options
 
@@ -71,7 +76,8 @@ class IwanCartesianConnector:
     def springDamper(self):
         """Exudyn's built-in spring-damper on the remaining axes (``ObjectIndex``), or
         ``None``. Exudyn reports its potential energy; :func:`record_energy` books its
-        damping."""
+        damping.
+        """
         return self._spring
 
     @property
@@ -83,7 +89,8 @@ class IwanCartesianConnector:
     @property
     def axes(self) -> np.ndarray:
         """The Iwan axes, shape (n_axes, 3) (unit; global, or in the frame of marker 0 when
-        ``useGlobalFrame=False``); empty (0, 3) for coordinate markers."""
+        ``useGlobalFrame=False``); empty (0, 3) for coordinate markers.
+        """
         return self._axes.copy()
 
     @property
@@ -132,7 +139,8 @@ class IwanCartesianConnector:
 
     def records(self) -> dict:
         """All records: ``time`` (n,), ``slip``, ``force`` (n, n_axes), ``stored_energy``,
-        ``dissipated_energy``, ``work`` (n,)."""
+        ``dissipated_energy``, ``work`` (n,).
+        """
         w, d = self.work_history, self.dissipated_energy_history
         return {"time": self.time_history, "slip": self.slip_history,
                 "force": self.force_history, "stored_energy": w - d,
@@ -140,7 +148,8 @@ class IwanCartesianConnector:
 
     def reset(self) -> None:
         """Return every Iwan law to its virgin state and clear the records (a solve that
-        starts before the last accepted time does this by itself)."""
+        starts before the last accepted time does this by itself).
+        """
         for c in self._connectors:
             c.reset()
 
@@ -345,7 +354,8 @@ def _damping(damping):
 
 def _check_orientation(mbs, items) -> None:
     """useGlobalFrame=False: refuse items without an orientation before any marker is made
-    (Exudyn would refuse a rigid marker on them only at ``Assemble``)."""
+    (Exudyn would refuse a rigid marker on them only at ``Assemble``).
+    """
     for i, (kind, item, _) in enumerate(items):
         if kind == "marker":
             if _marker_type(mbs, item, f"bodyNumbers[{i}]") not in _ORIENTATION_MARKERS:
@@ -374,7 +384,8 @@ def _marker(mbs, name, i, kind, item, pos, rigid):
 
 def _linear_part(mbs, m0, m1, k, d, d0, global_frame, name, vis):
     """Exudyn's built-in spring-damper on the remaining axes (global, or in marker 0's
-    frame as a RigidBodySpringDamper with no rotational stiffness)."""
+    frame as a RigidBodySpringDamper with no rotational stiffness).
+    """
     label = f"{name}:springDamper" if name else ""
     if global_frame:
         return mbs.AddObject(ObjectConnectorCartesianSpringDamper(

@@ -107,20 +107,32 @@ import logging
 
 import exudyn as exu
 import numpy as np
-from exudyn.itemInterface import (ObjectConnectorCartesianSpringDamper,
-                                  ObjectConnectorCoordinateSpringDamper)
+from exudyn.itemInterface import (
+    ObjectConnectorCartesianSpringDamper,
+    ObjectConnectorCoordinateSpringDamper,
+)
 
 from ..base.validation import check_scalar
 from ..core.joint import IwanJoint
 from ..core.parameters import IwanParameters
 from ..core.protocol import check_element
-from .laws import symbolic_connector as _symbolic
-from ._dispatch import _claim, _dispatcher_for
-from ._markers import (_COORDINATE_MARKERS, _ORIENTATION_MARKERS, _POSITION_MARKERS,
-                       _marker_type, _node_coordinate_nodes, _unit_axis, _visualization)
 from ._connector_handle import IwanConnector
-from .laws.python_law import (coordinate_force_function, position_force_function,
-                              rotating_axis_force_function)
+from ._dispatch import _claim, _dispatcher_for
+from ._markers import (
+    _COORDINATE_MARKERS,
+    _ORIENTATION_MARKERS,
+    _POSITION_MARKERS,
+    _marker_type,
+    _node_coordinate_nodes,
+    _unit_axis,
+    _visualization,
+)
+from .laws import symbolic_connector as _symbolic
+from .laws.python_law import (
+    coordinate_force_function,
+    position_force_function,
+    rotating_axis_force_function,
+)
 
 __all__ = ["add_iwan_connector", "IwanConnector"]
 
@@ -275,7 +287,8 @@ def _check_options(mbs, markerNumbers, joint, *, name, record, law, depth,
 
 def check_run_options(*, record, law, depth, allow_adaptive_explicit) -> None:
     """The options of :func:`add_iwan_connector` that do not depend on the markers (also
-    checked by :func:`~iwan_element.exudyn.create_iwan_connector` before it makes any)."""
+    checked by :func:`~iwan_element.exudyn.create_iwan_connector` before it makes any).
+    """
     if not isinstance(record, bool):
         raise ValueError(f"record must be True or False, got {record!r}")
     if not isinstance(allow_adaptive_explicit, bool):
@@ -289,7 +302,8 @@ def check_run_options(*, record, law, depth, allow_adaptive_explicit) -> None:
 
 def _slip_offset(offset, kind, unit) -> float:
     """The slip offset [m]: a number, or for position markers a vector ``d0`` (Exudyn's
-    Cartesian offset), projected on the axis."""
+    Cartesian offset), projected on the axis.
+    """
     if kind == "position" and np.ndim(offset) == 1:
         d0 = np.asarray(offset, dtype=float) if np.size(offset) in (2, 3) else None
         if d0 is None or not np.all(np.isfinite(d0)):
@@ -301,7 +315,8 @@ def _slip_offset(offset, kind, unit) -> float:
 
 def _classify_markers(mbs, markerNumbers, axis, axisMarker):
     """``(kind, unit axis or None, axis marker or None, both markers have an orientation)``
-    of two coordinate or position markers."""
+    of two coordinate or position markers.
+    """
     t0 = _marker_type(mbs, markerNumbers[0], "markerNumbers[0]")
     t1 = _marker_type(mbs, markerNumbers[1], "markerNumbers[1]")
     if int(markerNumbers[0]) == int(markerNumbers[1]):
@@ -331,7 +346,8 @@ def _classify_markers(mbs, markerNumbers, axis, axisMarker):
 
 def _connector_item(conn, joint, route, depth, name, vis):
     """The Exudyn object of the connector: the symbolic law, or a Python user function on a
-    coordinate or Cartesian spring-damper."""
+    coordinate or Cartesian spring-damper.
+    """
     if route == "symbolic":
         conn._route = "symbolic"
         conn._lazy = True

@@ -49,7 +49,7 @@ _CUR = exu.ConfigurationType.Current
 BALANCE_TOLERANCE = 1e-3
 
 
-def record_energy(mbs, joints) -> "EnergyRecorder":
+def record_energy(mbs, joints) -> EnergyRecorder:
     """Record the energy balance of a model at every accepted step.
 
     Call it after the joints were added (:func:`create_iwan_connector`,
@@ -98,7 +98,8 @@ def record_energy(mbs, joints) -> "EnergyRecorder":
 
 class EnergyRecorder:
     """Records the states of a run and books its energy balance (made by
-    :func:`record_energy`)."""
+    :func:`record_energy`).
+    """
 
     def __init__(self, mbs, joints):
         self._mbs = mbs
@@ -129,7 +130,8 @@ class EnergyRecorder:
     def _refresh(self, mbs):
         """Views of the system coordinates (taken at the start of every run; an ``Assemble``
         may move them); a run with another number of coordinates starts the recording
-        again."""
+        again.
+        """
         sd = mbs.systemData
         q = sd.GetODE2Coordinates(_CUR, copy=False)
         if self._n is not None and q.size != self._n and len(self._t):
@@ -157,7 +159,7 @@ class EnergyRecorder:
         """Recorded states."""
         return len(self._t)
 
-    def balance(self, *, tolerance: float = BALANCE_TOLERANCE) -> "EnergyBalance":
+    def balance(self, *, tolerance: float = BALANCE_TOLERANCE) -> EnergyBalance:
         """The energy balance of what was recorded so far (see the module docstring).
 
         Parameters
@@ -227,7 +229,8 @@ class EnergyRecorder:
     def _notes(self) -> tuple:
         """What the last solve's settings say about the balance (numerical damping), as the
         dispatcher saw them when the solve started (``SolveDynamic`` sets its ``solverType``
-        into the settings only while it runs)."""
+        into the settings only while it runs).
+        """
         info = _dispatcher_for(self._mbs).solve_info
         if info is None:
             return ()
@@ -337,7 +340,8 @@ class EnergyBalance(ResultShape):
     @property
     def scale(self) -> float:
         """The joints' own energy [J], the basis of the error: the largest, over the run,
-        of their total work (stored + dissipated) and of their dissipation."""
+        of their total work (stored + dissipated) and of their dissipation.
+        """
         w = self.joint_stored + self.joint_dissipated
         return float(max(np.max(np.abs(w)), np.max(np.abs(self.joint_dissipated))))
 
@@ -348,7 +352,8 @@ class EnergyBalance(ResultShape):
 
     def error(self) -> np.ndarray:
         """Balance error over time [-]: ``(total - total[0]) / scale`` (``inf`` where the
-        joints did no work but the balance moved)."""
+        joints did no work but the balance moved).
+        """
         d = self.total - self.total[0]
         if self.scale > 0:
             return d / self.scale
@@ -362,7 +367,8 @@ class EnergyBalance(ResultShape):
     @property
     def success(self) -> bool:
         """True when every energy is booked and the balance closes within ``tolerance``
-        of the joints' own energy."""
+        of the joints' own energy.
+        """
         return bool(not self.not_booked and self.scale > 0 and self.max_error <= self.tolerance)
 
     def failure_reasons(self) -> tuple:

@@ -36,21 +36,29 @@ import math
 import exudyn as exu
 import numpy as np
 from exudyn.advancedUtilities import CreateSymbolicUserFunction
-from exudyn.itemInterface import (ObjectConnectorCartesianSpringDamper,
-                                  ObjectConnectorCoordinateSpringDamper)
+from exudyn.itemInterface import (
+    ObjectConnectorCartesianSpringDamper,
+    ObjectConnectorCoordinateSpringDamper,
+)
 
+from ..base.validation import check_scalar
 from ..core.joint_bank import IwanJointBank
 from ..core.parameters import IwanParameters
-from ..base.validation import check_scalar
+from ._dispatch import _dispatcher_for, _installed_post_step
+from ._markers import _COORDINATE_MARKERS, _POSITION_MARKERS, _marker_type, _unit_axis
+from .connector import add_iwan_connector
+from .laws.interface_springs import add_builtin_springs, check_stiffness, linear_energy
+from .laws.symbolic_law import (
+    VIRGIN,
+    SymbolicIwanState,
+    cartesian_law,
+    committed_slip_matrix,
+    coordinate_law,
+    make_probe,
+)
 from .slips.slip_map import SlipMap
 from .slips.slip_records import SlipRecords
 from .slips.surface_slips import SurfaceSlips
-from .laws.symbolic_law import (VIRGIN, SymbolicIwanState, cartesian_law, committed_slip_matrix,
-                                coordinate_law, make_probe)
-from ._dispatch import _dispatcher_for, _installed_post_step
-from .laws.interface_springs import add_builtin_springs, check_stiffness, linear_energy
-from ._markers import _COORDINATE_MARKERS, _POSITION_MARKERS, _marker_type, _unit_axis
-from .connector import add_iwan_connector
 
 __all__ = ["add_iwan_interface", "IwanInterface"]
 
@@ -117,7 +125,8 @@ class IwanInterface:
     @property
     def overflow_times(self) -> np.ndarray:
         """Times [s] of accepted steps whose symbolic force read an older reversal point than
-        the expression holds (not exact; raise ``depth``). Empty in a sound run."""
+        the expression holds (not exact; raise ``depth``). Empty in a sound run.
+        """
         return np.array(self._overflows)
 
     # ------------------------------------------------------------------ records
@@ -182,7 +191,8 @@ class IwanInterface:
 
     def records(self) -> dict:
         """All records: ``time [s]`` (n,), ``slip [m]``, ``force [N]`` (n, n_points),
-        ``stored_energy``, ``dissipated_energy``, ``work [J]`` (n,)."""
+        ``stored_energy``, ``dissipated_energy``, ``work [J]`` (n,).
+        """
         tab = self._table()
         return {"time": tab["time"], "slip": tab["slip"], "force": tab["force"],
                 "stored_energy": tab["work"] - tab["diss"], "dissipated_energy": tab["diss"],
@@ -190,13 +200,15 @@ class IwanInterface:
 
     def linear_energy(self) -> float:
         """Potential energy [J] of the linear springs given as ``stiffness`` at the current
-        configuration (0 without them): Exudyn reports none for a user-function object."""
+        configuration (0 without them): Exudyn reports none for a user-function object.
+        """
         return linear_energy(self._mbs, self._pairs, self._stiffness)
 
     def reset(self) -> None:
         """Return every joint to its virgin state and clear the records; energy recorders
         holding the interface start again. A solve that starts before the last accepted
-        time does this by itself (see :meth:`IwanConnector.reset`)."""
+        time does this by itself (see :meth:`IwanConnector.reset`).
+        """
         if self._route == "python":
             for c in self._connectors:
                 c.reset()
@@ -279,7 +291,8 @@ class IwanInterface:
         point) or no change of the stack at all (same length). Only a step that closed a loop
         from a stack deeper than the law holds can have read a point the law does not hold,
         so only those are checked against the exact force, and an unchanged stack is not
-        written again."""
+        written again.
+        """
         bank = self._bank
         states = self._states
         us_all, Fr_all = bank.us, bank.Fr

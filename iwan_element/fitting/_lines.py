@@ -2,7 +2,8 @@
 for :func:`iwan_element.fitting.evidence.laplace_evidence` where its Gaussian is not enough
 (docs/probabilities.md section 3): the log-likelihood evaluated adaptively on a grid
 (:func:`adaptive_line`), each piece between two evaluated points integrated as an
-exponential (:func:`exp_pieces`)."""
+exponential (:func:`exp_pieces`).
+"""
 from __future__ import annotations
 
 import math
@@ -33,7 +34,8 @@ def line_integral(chi2_at, theta, d, i, lo, hi, tau, chi0, t_fit, sd, rel, knot)
     stopped :data:`LINE_DEPTH` nats below its top past the fit; the log-likelihood is
     interpolated linearly between them onto a grid that adds geometric steps about the
     prior's peak, where the prior density is evaluated exactly; each piece is integrated as
-    an exponential between its ends (exact for an exponential decay)."""
+    an exponential between its ends (exact for an exponential decay).
+    """
     w = hi[i] - lo[i]
     near = t_fit < 10.0 * sd
     grid = w * LINE_STEPS if near else np.zeros(0)
@@ -78,7 +80,8 @@ def adaptive_line(loglike, logw, grid, t_fit):
     log-likelihood may make on it, its mass times ``min(|d ll|, 1) / 2``, is above
     :data:`LINE_TOL` of the integral so far. Where the likelihood is flat or negligible
     (most of a size's geometric steps from zero, the far tail past the fit) the grid's
-    points are left out; where it falls, every point is evaluated."""
+    points are left out; where it falls, every point is evaluated.
+    """
     n = grid.size
     first = set(range(0, n, LINE_STRIDE)) | {n - 1, int(np.argmin(np.abs(grid - t_fit)))}
     vals, top = {}, -math.inf
@@ -107,7 +110,8 @@ def adaptive_line(loglike, logw, grid, t_fit):
 
 def exp_pieces(ts, fs):
     """``(mean, second moment, ln integral)`` of ``exp(f(t))`` given at ``ts``, each piece an
-    exponential between its ends."""
+    exponential between its ends.
+    """
     top = fs.max()
     total = m1 = m2 = 0.0
     for a, b, fa, fb in zip(ts[:-1], ts[1:], fs[:-1] - top, fs[1:] - top):
@@ -138,7 +142,8 @@ def ridge_integral(chi2_at, curve, s_fit, s_lo, s_hi, lo, hi, tau, chi0, rel, wi
     integral includes its uniform prior, ``1 / width``). A point of the curve outside the
     box ``[lo, hi]`` has no prior mass. The grid: geometric steps either side of the fit
     (:data:`LINE_STEPS` of ``width``) and 33 even steps over the range, evaluated by
-    :func:`adaptive_line`."""
+    :func:`adaptive_line`.
+    """
     th0, w0 = curve(s_fit)
     r0 = float(np.sum(rel(th0)))
 

@@ -106,7 +106,8 @@ def normal_inverse(J, *, cutoff: float = CUTOFF):
 
 def _degenerate(Jp_s, null):
     """Parameters whose gradient in the scaled variables, ``Jp_s`` (rows), has a component
-    above :data:`COMPONENT` of its length along a degenerate direction (rows of ``null``)."""
+    above :data:`COMPONENT` of its length along a degenerate direction (rows of ``null``).
+    """
     norm = np.sqrt(np.einsum("ij,ij->i", Jp_s, Jp_s))
     comp = np.abs(Jp_s @ null.T) if null.size else np.zeros((Jp_s.shape[0], 0))
     return np.any(comp > COMPONENT * norm[:, None], axis=1) & (norm > 0)
@@ -115,7 +116,8 @@ def _degenerate(Jp_s, null):
 def _sandwich(J, r, A_inv, cov, tau, block):
     """The block sandwich (module docstring): ``cov`` widened where it is larger, the block
     length, and whether it widened anything. Blocks of ``max(20, 4 tau, block)`` residuals;
-    small-sample factor ``nb / (nb - p)``; not formed with fewer than ``2 p`` blocks."""
+    small-sample factor ``nb / (nb - p)``; not formed with fewer than ``2 p`` blocks.
+    """
     m, p = J.shape
     if m <= 4 * p:
         return cov, 0, False

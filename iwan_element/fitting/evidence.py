@@ -37,7 +37,7 @@ from scipy.special import log_ndtr
 from scipy.stats import multivariate_normal
 
 from ..base.validation import check_scalar, finite_array
-from ._lines import exp_pieces, line_integral, ridge_integral
+from ._lines import line_integral, ridge_integral
 
 __all__ = ["Evidence", "Ridge", "laplace_evidence", "posterior_probabilities"]
 
@@ -223,7 +223,8 @@ def _with_lines(J, r, theta, lo, hi, tau, at, chi2_at, log_like, sd, rel, knots,
     lines from that bound across the box, and the others by the Laplace approximation
     (:func:`laplace_evidence`); ``sd``: the Gaussian's standard deviations, ``rel``: the
     log prior densities relative to the box's, ``groups``: ``{size: (dependents, values)}``
-    (see :func:`laplace_evidence`'s ``switched_off``)."""
+    (see :func:`laplace_evidence`'s ``switched_off``).
+    """
     k = theta.size
     off = {i: g for i, g in groups.items() if i in at and math.isfinite(knots[i])
            and abs(theta[i] - knots[i]) <= NEAR * (hi[i] - lo[i])}
@@ -294,7 +295,8 @@ def _along_ridge(J, r, theta, lo, hi, tau, chi2_at, log_prior, knots, switched_o
     integral of the likelihood along ``ridge.curve`` (:func:`._lines.ridge_integral`): ``Z =
     int ds Z_others(s)``, ``Z_others(s)`` the others' evidence at ``s``, which is the fit's
     times the curve's density ratio (the likelihood the same along the ridge). The
-    covariance of the moving parameter is the curve's spread along its tangent."""
+    covariance of the moving parameter is the curve's spread along its tangent.
+    """
     k, i = theta.size, int(ridge.index)
     keep = np.array([j for j in range(k) if j != i])
     pos = {int(j): n for n, j in enumerate(keep)}
@@ -338,7 +340,8 @@ def _along_ridge(J, r, theta, lo, hi, tau, chi2_at, log_prior, knots, switched_o
 def _regression(H, free, i):
     """``-H_ff^+ H_fi``: how the parameters ``free`` follow parameter ``i`` at the quadratic's
     optimum, through the pseudo-inverse of the diagonally scaled ``H_ff`` (a direction the
-    data do not determine, 1e-9 of the largest, does not follow)."""
+    data do not determine, 1e-9 of the largest, does not follow).
+    """
     Hff = H[np.ix_(free, free)]
     dsc = np.sqrt(np.maximum(np.diag(Hff), 1e-300))
     inv = np.linalg.pinv(Hff / np.outer(dsc, dsc), rcond=1e-9, hermitian=True)
@@ -347,7 +350,8 @@ def _regression(H, free, i):
 
 def _capped(cov, width):
     """``cov`` with each standard deviation at most the uniform box's, ``width / sqrt(12)``
-    (a direction the data do not determine has the prior's spread, not the ridge's)."""
+    (a direction the data do not determine has the prior's spread, not the ridge's).
+    """
     sd = np.sqrt(np.maximum(np.diag(cov), 0.0))
     cap = np.minimum(sd, np.asarray(width, float) / math.sqrt(12.0))
     f = np.where(sd > 0, cap / np.where(sd > 0, sd, 1.0), 0.0)
@@ -358,7 +362,8 @@ def _inverse(H):
     """``(H^-1, ln det H)`` of a symmetric positive definite ``H`` whose diagonal may span
     many decades (the ridge along an undetermined direction next to a well-determined one):
     scaled to a unit diagonal first, then by its eigenvalues (no cut-off, which would drop
-    the ridge's direction)."""
+    the ridge's direction).
+    """
     d = np.sqrt(np.diag(H))
     Hs = H / np.outer(d, d)
     w, V = np.linalg.eigh(Hs)

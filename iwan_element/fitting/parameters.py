@@ -13,9 +13,14 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..base.result_shape import (
+    PARAMETER_COLUMNS,
+    html_table,
+    parameter_rows,
+    table_lines,
+    unit_label,
+)
 from ..base.serialize import json_safe
-from ..base.result_shape import (PARAMETER_COLUMNS, html_table, parameter_rows, table_lines,
-                                 unit_label)
 
 __all__ = ["Parameter", "ParameterTable"]
 
@@ -207,7 +212,8 @@ class ParameterTable:
 
     def to_dataframe(self):
         """The table as a ``pandas.DataFrame`` (one row per parameter: value, std. error,
-        unit, status; pandas imported only here: ``pip install "iwan-element[pandas]"``)."""
+        unit, status; pandas imported only here: ``pip install "iwan-element[pandas]"``).
+        """
         try:
             import pandas as pd
         except ImportError:

@@ -38,7 +38,8 @@ MIN_NOISE_DOF = 5.0
 
 def noise_dof_warning(dof: float, source: str = "") -> str | None:
     """Why no parameter is identified when the noise level rests on ``dof`` degrees of
-    freedom (``source``: where it came from, for the text), or None when ``dof`` suffices."""
+    freedom (``source``: where it came from, for the text), or None when ``dof`` suffices.
+    """
     if dof >= MIN_NOISE_DOF:
         return None
     cover = 100.0 * (1.0 - 2.0 * stats.t.sf(2.0, max(dof, 0.1)))

@@ -7,9 +7,9 @@ frequency-time evaluation of its joints on their exact steady loops
 (:func:`trace`), and nonlinear modes by the extended periodic motion concept
 (:func:`nonlinear_mode`). Equations: ``docs/harmonic_balance.md``.
 """
-from .system import ModalSystem
-from .result import FrequencyResponse
-from .response import harmonic_balance
 from .continuation import trace
+from .response import harmonic_balance
+from .result import FrequencyResponse
+from .system import ModalSystem
 
 __all__ = ["ModalSystem", "FrequencyResponse", "harmonic_balance", "trace"]

@@ -31,12 +31,14 @@ log = logging.getLogger(__name__)
 
 class HBPoint(dict):
     """One converged (or not) point: ``cz`` (joint coefficients), ``W`` [rad/s], ``force`` [N],
-    ``converged``, ``iterations``, ``residual`` (relative), plus :func:`point_outputs`."""
+    ``converged``, ``iterations``, ``residual`` (relative), plus :func:`point_outputs`.
+    """
 
 
 def operators(system, basis: Harmonics, W: float, *, xi: float = 0.0, exclude=None):
     """The receptances at every kept harmonic of ``W`` as real 4-D operators:
-    ``(Lzz, Lpz, Lpb)`` with ``p`` the sensor and excitation ports."""
+    ``(Lzz, Lpz, Lpb)`` with ``p`` the sensor and excitation ports.
+    """
     H = [system.receptance(h * W, xi=xi, exclude=exclude if h == 1 else None)
          for h in basis.harmonics]
     nz = system.n_z
@@ -49,7 +51,8 @@ def rate_operators(system, basis: Harmonics, W: float, rows, cols, *, xi: float 
                    exclude=None):
     """``(dL/dW, dL/dxi)``: the derivatives of the real operator of the receptances between
     ports ``rows`` and ``cols`` with respect to the fundamental ``W`` [rad/s] and to the
-    self-excitation ``xi`` [1/s] (:meth:`ModalSystem.receptance_rate`)."""
+    self-excitation ``xi`` [1/s] (:meth:`ModalSystem.receptance_rate`).
+    """
     dW, dX = [], []
     for h in basis.harmonics:
         if h == 0:
@@ -74,7 +77,8 @@ def force_coefficients(basis: Harmonics, force: float) -> np.ndarray:
 
 def residual(system, basis, W, force, cz, *, ops=None, jacobian=True):
     """``(R, J, cg, D)`` of the harmonic balance at ``W`` [rad/s] (module docstring);
-    ``R`` shape ``(n_z, nc)``, ``J`` shape ``(n_z nc, n_z nc)``."""
+    ``R`` shape ``(n_z, nc)``, ``J`` shape ``(n_z nc, n_z nc)``.
+    """
     Lzz, _, Lb = ops if ops is not None else operators(system, basis, W)
     cg, dcg, D = basis.nonlinear_forces(system, cz, W, jacobian=jacobian)
     cf = force_coefficients(basis, force)

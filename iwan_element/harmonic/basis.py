@@ -44,7 +44,8 @@ def check_harmonics(harmonics, samples) -> tuple[tuple, int]:
     sequence the harmonics it lists (it must hold the fundamental ``1``; ``(1, 3, 5)`` keeps
     the odd ones, enough for an odd joint law without static load). ``samples`` per period
     (default the power of two ``>= 8 H``, at least 64: the force has kinks at the
-    reversals)."""
+    reversals).
+    """
     if isinstance(harmonics, bool):
         raise ValueError(f"harmonics must be an int >= 1 or a sequence of ints >= 0, got "
                          f"{harmonics!r}")
@@ -127,7 +128,8 @@ class Harmonics:
         elements (:func:`element_loop`; Jacobian by forward differences: the elements'
         tangents alone leave out their reversal columns, and Newton then failed on the
         measured Brake-Reuss sweeps).
-        Returns ``(cg, dcg/dcz or None, dissipation per period [J] per coordinate)``."""
+        Returns ``(cg, dcg/dcz or None, dissipation per period [J] per coordinate)``.
+        """
         nj = len(system.joints)
         Z = cz[:nj] @ self.E.T
         F, K, A, D = periodic_rows(system.constants, Z)
@@ -158,7 +160,8 @@ class Harmonics:
 
     def linear_operator(self, H_list, rows, cols_):
         """The real 4-D operator ``L[p, c, q, c']`` of the complex port receptances
-        ``H_list[k][rows][:, cols_]`` (one per kept harmonic ``k``)."""
+        ``H_list[k][rows][:, cols_]`` (one per kept harmonic ``k``).
+        """
         nr, nq = len(rows), len(cols_)
         nc = self.n_coefficients
         L = np.zeros((nr, nc, nq, nc))

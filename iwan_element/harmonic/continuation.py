@@ -19,8 +19,14 @@ import time
 import numpy as np
 
 from ..base.threads import one_blas_thread
-from .balance import (force_coefficients, operators, point_outputs, rate_operators, residual,
-                      solve_point)
+from .balance import (
+    force_coefficients,
+    operators,
+    point_outputs,
+    rate_operators,
+    residual,
+    solve_point,
+)
 from .basis import Harmonics, check_harmonics
 from .response import assemble_response, linear_start
 from .result import FrequencyResponse

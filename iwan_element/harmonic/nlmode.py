@@ -35,7 +35,8 @@ log = logging.getLogger(__name__)
 
 def _rate_ops(system, basis, W, xi, r):
     """d/dW and d/dxi of the joint and sensor operators (the mode's own fundamental left
-    out): ``[(dLzz_W, dLsz_W), (dLzz_xi, dLsz_xi)]``."""
+    out): ``[(dLzz_W, dLsz_W), (dLzz_xi, dLsz_xi)]``.
+    """
     nz = system.n_z
     iz = list(range(nz))
     zz = rate_operators(system, basis, W, iz, iz, xi=xi, exclude=r)
@@ -131,7 +132,8 @@ def _branch(system, basis, amplitude, r, *, tol, max_iter, bar):
     (solved in increasing order). Returns a dict of arrays: ``amplitude``, ``frequency``
     [Hz], ``damping_ratio`` [-], ``xi`` [1/s], ``converged``, ``iterations``,
     ``energy_error`` (self-excitation work against the joints' and the floor's loss),
-    ``wall_time``."""
+    ``wall_time``.
+    """
     X = np.asarray(amplitude, float)
     order = np.argsort(X)
     nz, nc = system.n_z, basis.n_coefficients

@@ -22,7 +22,8 @@ log = logging.getLogger(__name__)
 
 def check_frequency_force(frequency, force):
     """Validated ``(frequency [Hz], force [N])`` arrays of one length (a scalar force is
-    repeated)."""
+    repeated).
+    """
     f = np.atleast_1d(finite_array("frequency", frequency, ndim=None)).astype(float)
     if f.ndim != 1 or f.size == 0 or np.any(f <= 0):
         raise ValueError("frequency must be a non-empty 1-D array of frequencies > 0 [Hz], "

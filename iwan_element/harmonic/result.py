@@ -68,7 +68,8 @@ class FrequencyResponse(ResultShape):
         """``(input - joints - floor) / input`` per point [-]. The balance holds exactly for
         the truncated harmonic force; the joints' loss is the exact loop of the sampled slip
         path: the difference is the error of the harmonic truncation and of the AFT's
-        sampling (it shrinks with more harmonics and more ``samples`` per period)."""
+        sampling (it shrinks with more harmonics and more ``samples`` per period).
+        """
         d = self.joint_dissipation + self.floor_dissipation
         with np.errstate(divide="ignore", invalid="ignore"):
             return (self.input_work - d) / np.abs(self.input_work)
@@ -120,7 +121,8 @@ class FrequencyResponse(ResultShape):
 
     def plot(self, ax=None, *, label="harmonic balance"):
         """Amplitude per force [m/N] and phase [rad] against frequency on ``ax = (ax_a,
-        ax_p)``; returns the artists."""
+        ax_p)``; returns the artists.
+        """
         a, p = panels(ax, 2, sharex=True)
         arts = a.plot(self.frequency, self.amplitude / self.force, "-", label=label)
         arts += p.plot(self.frequency, self.phase, "-", label=label)

@@ -145,10 +145,11 @@ class ModalSystem:
 
     @classmethod
     def oscillator(cls, mass: float, stiffness: float, damping: float,
-                   joint: IwanParameters) -> "ModalSystem":
+                   joint: IwanParameters) -> ModalSystem:
         """``m x'' + c x' + k x + F_iwan(x) = f``: one mass [kg] on a spring [N/m] and a
         dashpot [N s/m] in parallel with one joint; the slip, the sensor and the excitation
-        are all ``x``."""
+        are all ``x``.
+        """
         for n, v in (("mass", mass), ("stiffness", stiffness), ("damping", damping)):
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0) or \
                     (n == "mass" and v == 0):
@@ -170,9 +171,10 @@ class ModalSystem:
         """Each joint's stuck stiffness [N/m]."""
         return self.constants[:, 0]
 
-    def with_ports(self, ports, rows) -> "ModalSystem":
+    def with_ports(self, ports, rows) -> ModalSystem:
         """A copy with element ``ports`` added, ``rows`` (n_e, n_m) their mode shapes (no
-        residual flexibility: ports on kept modes)."""
+        residual flexibility: ports on kept modes).
+        """
         rows = np.atleast_2d(np.asarray(rows, float))
         nj = self.n_z
         Y = np.vstack([self.modes[:nj], rows, self.modes[nj:]])
@@ -187,14 +189,16 @@ class ModalSystem:
     def denominators(self, w: float, *, xi: float = 0.0) -> np.ndarray:
         """``w_r^2 - w^2 + i w (2 zeta_r w_r - xi)`` of every kept mode at ``w`` [rad/s];
         ``xi`` [1/s] is a mass-proportional negative damping (the extended periodic motion
-        concept's self-excitation, :mod:`.nlmode`)."""
+        concept's self-excitation, :mod:`.nlmode`).
+        """
         om = self.omega
         return om * om - w * w + 1j * w * (2.0 * self.zeta * om - xi)
 
     def receptance(self, w: float, *, xi: float = 0.0, exclude=None) -> np.ndarray:
         """Port receptance matrix ``H(w)`` [m/N], shape ``(n_z + 2, n_z + 2)`` (module
         docstring); at ``w = 0`` the rigid-body modes are left out. ``exclude``: a kept mode
-        index whose term is left out (the nonlinear mode's own fundamental)."""
+        index whose term is left out (the nonlinear mode's own fundamental).
+        """
         d = self.denominators(w, xi=xi)
         inv = np.zeros_like(d)
         keep = (self.omega > 0) if w == 0.0 else np.ones(d.size, bool)
@@ -205,7 +209,8 @@ class ModalSystem:
 
     def receptance_rate(self, w: float, h: int, *, xi: float = 0.0, exclude=None):
         """``(dH/dW, dH/dxi)`` of the receptance at the ``h``-th harmonic ``w = h W`` with
-        respect to the fundamental ``W`` [rad/s] and to ``xi``."""
+        respect to the fundamental ``W`` [rad/s] and to ``xi``.
+        """
         d = self.denominators(h * w, xi=xi)
         keep = np.ones(d.size, bool)
         if exclude is not None:

@@ -25,11 +25,17 @@ from functools import lru_cache
 
 import numpy as np
 
-from .elements import (NODE_DOFS, beam_matrices, beam_mesh, grip_coordinates, interface_rows,
-                       point_rows)
-from ..specimens.contact import beam_contact_points
 from ..linear.system import LinearSystem, attach_setup
+from ..specimens.contact import beam_contact_points
 from ..specimens.specimen import Specimen
+from .elements import (
+    NODE_DOFS,
+    beam_matrices,
+    beam_mesh,
+    grip_coordinates,
+    interface_rows,
+    point_rows,
+)
 
 __all__ = ["beam_linear_system", "beam_axis_rows"]
 
@@ -44,7 +50,8 @@ def _structure_key(specimen: Specimen) -> Specimen:
 def beam_linear_system(specimen: Specimen) -> LinearSystem:
     """Linear matrices of a 1-D specimen (module docstring; cached on its geometry,
     material, contact layout and setup). The analyses read
-    :func:`~iwan_element.models.reduced.dispatch.linear_system`, which also takes a solid."""
+    :func:`~iwan_element.models.reduced.dispatch.linear_system`, which also takes a solid.
+    """
     return _linear_system(_structure_key(specimen))
 
 
@@ -92,7 +99,8 @@ def beam_axis_rows(specimen: Specimen, positions) -> np.ndarray:
     axis at ``positions`` [m] along the assembly (a 1-D array in ``[0, total_length]``, as
     :func:`~iwan_element.models.reduced.dispatch.axis_rows` checks it; the axis of
     ``sensor_position``; beam A up to its length, beam B beyond): shape
-    ``(len(positions), n_free)`` (a setup's extra coordinates read zero)."""
+    ``(len(positions), n_free)`` (a setup's extra coordinates read zero).
+    """
     return _axis_rows(_structure_key(specimen), tuple(float(v) for v in positions))
 
 

@@ -56,7 +56,8 @@ NODE_DOFS = 3                      # u, w, theta
 
 def _bending_shapes(s, l, phi):
     """``(N_w, N_theta)`` at ``s`` in [0, 1] of an element of length ``l`` [m] and shear
-    parameter ``phi`` (module docstring); each shape (4,) over ``(w1, th1, w2, th2)``."""
+    parameter ``phi`` (module docstring); each shape (4,) over ``(w1, th1, w2, th2)``.
+    """
     d = 1.0 + phi
     nw = np.array([1 + phi - phi * s - 3 * s * s + 2 * s ** 3,
                    l * (s * (1 + phi / 2) - s * s * (2 + phi / 2) + s ** 3),
@@ -80,7 +81,8 @@ def _bending_derivatives(s, l, phi):
 def element_matrices(length: float, *, E: float, G: float, kappa: float, rho: float,
                      area: float, inertia: float, timoshenko: bool = True):
     """Stiffness and mass of one element, ``(K, M)``, each (6, 6) over
-    ``(u1, w1, th1, u2, w2, th2)`` [N/m, N, N m; kg, kg m, kg m^2] (module docstring)."""
+    ``(u1, w1, th1, u2, w2, th2)`` [N/m, N, N m; kg, kg m, kg m^2] (module docstring).
+    """
     l = float(length)
     EI, GA = E * inertia, kappa * G * area
     phi = 12.0 * EI / (GA * l * l) if timoshenko else 0.0
@@ -136,7 +138,8 @@ def beam_mesh(specimen: Specimen) -> BeamMesh:
     """Element boundaries of both beams: in the lap a node at every contact point
     (:func:`~iwan_element.models.specimens.contact.beam_contact_points`; at least 4 elements), so
     that the points' slips are independent coordinates of the Exudyn host; outside it
-    ``n_elements`` minus the lap's share of them by length (at least 2)."""
+    ``n_elements`` minus the lap's share of them by length (at least 2).
+    """
     s = specimen
     n_lap = max(4, int(round(s.n_elements * s.overlap / s.beam_length)))
     n_out = max(2, s.n_elements - n_lap)
@@ -166,7 +169,8 @@ def _phi(specimen: Specimen, h: float, l: float) -> float:
 def beam_matrices(specimen: Specimen, mesh: BeamMesh | None = None):
     """Stiffness and mass of both beams on all their coordinates, ``(K, M)`` (dense,
     ``(3 n_nodes, 3 n_nodes)``; beam A's nodes first), with no boundary condition and no
-    interface."""
+    interface.
+    """
     s = specimen
     mesh = beam_mesh(s) if mesh is None else mesh
     n = mesh.n_coordinates
@@ -188,7 +192,8 @@ def beam_matrices(specimen: Specimen, mesh: BeamMesh | None = None):
 
 def _beam_rows(specimen: Specimen, mesh: BeamMesh, beam: str, x: float):
     """``(row_u, row_w, row_theta)`` over all beam coordinates at ``x`` [m] on the axis of
-    ``beam`` ("a" or "b")."""
+    ``beam`` ("a" or "b").
+    """
     nodes, heights = (mesh.x_a, mesh.h_a) if beam == "a" else (mesh.x_b, mesh.h_b)
     off = 0 if beam == "a" else NODE_DOFS * mesh.x_a.size
     e = int(np.clip(np.searchsorted(nodes, x, side="right") - 1, 0, heights.size - 1))
@@ -206,7 +211,8 @@ def _beam_rows(specimen: Specimen, mesh: BeamMesh, beam: str, x: float):
 def point_rows(specimen: Specimen, positions, mesh: BeamMesh | None = None):
     """``(U, W, Theta)``: rows (one per position) of the axial and transverse displacement and
     the rotation on the beams' axis at ``positions`` [m] along the assembly (beam A up to
-    its length, beam B beyond), over all beam coordinates."""
+    its length, beam B beyond), over all beam coordinates.
+    """
     mesh = beam_mesh(specimen) if mesh is None else mesh
     rows = [_beam_rows(specimen, mesh, "a" if x <= specimen.beam_length else "b", float(x))
             for x in np.atleast_1d(np.asarray(positions, float))]
@@ -215,7 +221,8 @@ def point_rows(specimen: Specimen, positions, mesh: BeamMesh | None = None):
 
 def interface_rows(specimen: Specimen, x, mesh: BeamMesh | None = None):
     """``(G, G_n)``: the tangential slips and normal gaps of the contact points at ``x`` [m]
-    (module docstring), rows over all beam coordinates."""
+    (module docstring), rows over all beam coordinates.
+    """
     mesh = beam_mesh(specimen) if mesh is None else mesh
     half = 0.5 * specimen.lap_thickness
     G, Gn = [], []
@@ -229,5 +236,6 @@ def interface_rows(specimen: Specimen, x, mesh: BeamMesh | None = None):
 
 def grip_coordinates(mesh: BeamMesh) -> np.ndarray:
     """Beam B's last node's ``u, w, theta`` (the machine grip of the quasi-static test); beam
-    A's first node's are ``0, 1, 2`` (the clamp)."""
+    A's first node's are ``0, 1, 2`` (the clamp).
+    """
     return mesh.n_coordinates - NODE_DOFS + np.arange(NODE_DOFS)

@@ -1,6 +1,7 @@
 """A specimen's interface calibrated on test data: from a measured amplitude curve (QSMA
 fitted to it, other modes' floors), from a joint or modal Iwan fit, and a whole hammer test
-predicted from one calibrated mode."""
+predicted from one calibrated mode.
+"""
 from .hammer import HammerPrediction, mode_bands, predict_hammer_test, release_amplitudes
 from .joint import interface_from_joint, interface_from_modal_iwan
 from .vibration import CalibrationResult, calibrate, measured_amplitude_curve, modal_floor

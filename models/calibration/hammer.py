@@ -47,20 +47,21 @@ from iwan_element.base.serialize import json_safe
 from iwan_element.base.validation import check_scalar, check_uniform_time, finite_array
 from iwan_element.identify.decays.envelope import mode_envelope
 
-from .vibration import CalibrationResult, calibrate
-from ..simulation.coupling import compare_curves, plot_curve_pairs
 from ..modal.qsma import linear_modes
+from ..simulation.coupling import compare_curves, plot_curve_pairs
 from ..simulation.ringdown_result import RingdownResult
 from ..simulation.transient import ringdown
 from ..updating.result import LinearUpdateResult
 from ..updating.update import linear_update
+from .vibration import CalibrationResult, calibrate
 
 __all__ = ["mode_bands", "release_amplitudes", "predict_hammer_test", "HammerPrediction"]
 
 
 def mode_bands(specimen, modes, *, band_width: float = 0.12) -> dict:
     """``{mode: (low, high)}`` [Hz]: each mode's stuck frequency times ``1 -+ band_width``,
-    cut at the geometric mean with its neighbours' frequencies."""
+    cut at the geometric mean with its neighbours' frequencies.
+    """
     modes = _modes(modes)
     w = check_scalar("band_width", band_width, low=0.01, high=0.5)
     f = _elastic_frequencies(specimen, max(modes) + 1)
@@ -163,7 +164,8 @@ class HammerPrediction(ResultShape):
     def summary(self) -> dict:
         """``{(mode, sensor): {points, max_frequency_error, max_damping_error, first_...}}``:
         the largest relative errors [-] over the common amplitudes and the first (largest
-        amplitude) common window's."""
+        amplitude) common window's.
+        """
         out = {}
         for key, e in self.errors.items():
             n = len(e["amplitude"])
@@ -182,7 +184,8 @@ class HammerPrediction(ResultShape):
 
     def report(self) -> str:
         """The verdict, the calibration, the release, and each predicted curve against the
-        measured one; the mode-shape check."""
+        measured one; the mode-shape check.
+        """
         lines = [f"Hammer test predicted from mode {self.calibration_mode}: {self.verdict()}"]
         if self.update is not None:
             fitted = ", ".join(n for n, p in self.update.params.items() if p.identified)
@@ -230,7 +233,8 @@ class HammerPrediction(ResultShape):
 
     def plot(self, ax=None):
         """Measured (points) and predicted (lines) damping ratio [%] and frequency [Hz]
-        against amplitude for every curve, on ``ax = (ax_z, ax_f)``; returns the artists."""
+        against amplitude for every curve, on ``ax = (ax_z, ax_f)``; returns the artists.
+        """
         ax_z, ax_f = panels(ax, 2, figsize=(6, 6))
         pairs = [(f"mode {r} at {name}", self.measured[(r, name)], "measured",
                   self.predicted[(r, name)], "predicted") for r, name in self.predicted]
@@ -321,7 +325,8 @@ def predict_hammer_test(specimen, records: dict, *, modes=(1, 2), calibration_mo
 def _inputs(specimen, records, modes, calibration_mode, bands, band_width, duration,
             calibration_periods):
     """:func:`predict_hammer_test`'s checked inputs: ``(modes, records, calibration sensor,
-    bands, calibration periods)``."""
+    bands, calibration periods)``.
+    """
     modes = _modes(modes)
     if calibration_mode not in modes:
         raise ValueError(f"calibration_mode must be one of modes {modes}, got {calibration_mode!r}")
@@ -336,7 +341,8 @@ def _inputs(specimen, records, modes, calibration_mode, bands, band_width, durat
 
 def _warnings(upd, cal, rd, skipped, errors):
     """``(warnings, thin)``: the update's, calibration's and ring-down's warnings, the
-    records left out, and the (mode, sensor) pairs with fewer than 3 common amplitudes."""
+    records left out, and the (mode, sensor) pairs with fewer than 3 common amplitudes.
+    """
     warns = [f"linear update: {w}" for w in (upd.warnings if upd is not None else ())]
     warns += [f"calibration: {w}" for w in cal.warnings] + [f"ring-down: {w}" for w in rd.warnings]
     warns += skipped
@@ -350,7 +356,8 @@ def _warnings(upd, cal, rd, skipped, errors):
 
 def _linear_update(specimen, recs, cal_name, bands, parameters) -> LinearUpdateResult:
     """Step 1a: the modes' natural frequencies in their latest linear windows of all the
-    records (from the impact on) and the linear update of ``parameters`` on them."""
+    records (from the impact on) and the linear update of ``parameters`` on them.
+    """
     _, t_c, a_c = recs[cal_name]
     t_imp = t_c[np.argmax(np.abs(a_c))]
     keep = t_c >= t_imp
@@ -370,7 +377,8 @@ def _measured_curves(recs, cal_name, bands, windows):
     """``({(mode, sensor): AmplitudeCurve}, warnings)``: every mode at every sensor from the
     impact on (the calibration record's largest sample: one clock). A mode the calibration
     sensor does not give is an error; one another sensor does not (a node, noise) is left out
-    with a warning."""
+    with a warning.
+    """
     _, t_c, a_c = recs[cal_name]
     t_imp = t_c[np.argmax(np.abs(a_c))]
     out, skipped = {}, []
@@ -391,7 +399,8 @@ def _measured_curves(recs, cal_name, bands, windows):
 
 def _ratios(recs, cal_name, rd, bands, modes, release_time) -> dict:
     """``{(mode, sensor): (measured, predicted)}`` median envelope ratios to the calibration
-    sensor over the ring-down (its first and last 50 ms left out: filter end effects)."""
+    sensor over the ring-down (its first and last 50 ms left out: filter end effects).
+    """
     out = {}
     edge = 0.05
     span = (edge, rd.t[-1] - edge)
@@ -442,7 +451,8 @@ def _bands(bands, modes) -> dict:
 
 def _series(tn, an, t, a):
     """``(t, a)`` as new arrays: ``a`` finite with at least 64 samples, ``t`` its uniform
-    time grid (:func:`~iwan_element.base.validation.check_uniform_time`)."""
+    time grid (:func:`~iwan_element.base.validation.check_uniform_time`).
+    """
     a = finite_array(an, a, min_size=64)
     t, _ = check_uniform_time(t, a.size, name=tn, data=an)
     return t, a

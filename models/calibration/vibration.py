@@ -24,8 +24,14 @@ import numpy as np
 from iwan_element import AmplitudeCurve, amplitude_curve
 from iwan_element.base.progress import finish, progress_bar, tick
 from iwan_element.base.result_shape import ResultShape, panels, unit_label
-from iwan_element.fitting import (Parameter, ParameterTable, covariance, fit_success,
-                                  minimize, verdict)
+from iwan_element.fitting import (
+    Parameter,
+    ParameterTable,
+    covariance,
+    fit_success,
+    minimize,
+    verdict,
+)
 
 from ..modal.qsma import modal_amplitude_curve
 from ..specimens.specimen import Specimen
@@ -95,7 +101,8 @@ class CalibrationResult(ResultShape):
 
     def failure_reasons(self) -> tuple:
         """Why ``success`` is False in a tester's words: the optimiser's stop, then every
-        warning (a parameter the curve does not identify, a floor leaning on the joint)."""
+        warning (a parameter the curve does not identify, a floor leaning on the joint).
+        """
         if self.success:
             return ()
         own = () if self.converged else ("the fit did not converge",)
@@ -122,7 +129,8 @@ class CalibrationResult(ResultShape):
 
     def plot(self, ax=None):
         """Measured and model f(X), zeta(X) on ``ax = (ax_f, ax_z)`` (a new figure if
-        ``None``; :mod:`iwan_element.base.result_shape`); returns the artists."""
+        ``None``; :mod:`iwan_element.base.result_shape`); returns the artists.
+        """
         ax = panels(ax, 2, sharex=True, figsize=(6, 6))
         arts = self.measured.plot(ax, label="measured", ls="none")
         arts += self.model.plot(ax, label="model (QSMA)", marker="", ls="-")
@@ -131,7 +139,8 @@ class CalibrationResult(ResultShape):
 
 def _with(specimen: Specimen, names, values, mode: int = 1) -> Specimen:
     """``specimen`` with the named parameters set; ``damping_floor`` is the calibration
-    mode's floor, so it also sets that mode's entry of ``modal_damping`` when there is one."""
+    mode's floor, so it also sets that mode's entry of ``modal_damping`` when there is one.
+    """
     ch = {n: float(v) for n, v in zip(names, values)}
     md = list(specimen.modal_damping)
     if "damping_floor" in ch and mode <= len(md):
@@ -254,7 +263,8 @@ def calibrate(specimen: Specimen, measured: AmplitudeCurve, *, fit=("stiffness_p
 
 def _fit_points(specimen, measured, floors, fit, mode):
     """:func:`calibrate`'s checked ``floors`` and ``fit`` and the measured points inside the
-    specimen's amplitude range: ``(floors, fit, X, f, zeta)``."""
+    specimen's amplitude range: ``(floors, fit, X, f, zeta)``.
+    """
     floors = {} if floors is None else dict(floors)
     if any(isinstance(r, bool) or not isinstance(r, int) or r < 1 or r == mode for r in floors) \
             or not all(isinstance(c, AmplitudeCurve) for c in floors.values()):
@@ -286,7 +296,8 @@ def _transform(n, v, inverse=False):
 
 def _solve(specimen, fit, mode, X, fm, zm, f_tol, z_tol, progress):
     """The bounded least squares of :func:`calibrate` over the QSMA curve at the measured
-    amplitudes ``X``: ``(solution, lower, upper)`` in the fit's coordinates."""
+    amplitudes ``X``: ``(solution, lower, upper)`` in the fit's coordinates.
+    """
     x0 = np.array([_transform(n, min(max(_get(specimen, n), _BOUNDS[n][0] * 1.01),
                                      _BOUNDS[n][1])) for n in fit])
     lb = np.array([_transform(n, _BOUNDS[n][0]) for n in fit])
@@ -313,7 +324,8 @@ def _solve(specimen, fit, mode, X, fm, zm, f_tol, z_tol, progress):
 
 def _rows(fit, x, vals, se, lb, ub, warns):
     """The parameter table's rows of the fitted parameters, each with its verdict
-    (:func:`iwan_element.fitting.verdict`); what a row cannot support goes to ``warns``."""
+    (:func:`iwan_element.fitting.verdict`); what a row cannot support goes to ``warns``.
+    """
     rows = []
     for k, (n, v) in enumerate(zip(fit, x)):
         at_bound = min(v - lb[k], ub[k] - v) < 1e-3
@@ -333,7 +345,8 @@ def _rows(fit, x, vals, se, lb, ub, warns):
 def _floors(fitted: Specimen, mode: int, floors: dict, warns: list):
     """The calibrated specimen with each mode's floor of ``floors`` (:func:`modal_floor`)
     and the calibration mode's own in ``modal_damping``; the table rows of those floors
-    (their warnings appended to ``warns``)."""
+    (their warnings appended to ``warns``).
+    """
     if not floors:
         return fitted, []
     md = [fitted.floor(r) for r in range(1, max(max(floors), mode) + 1)]

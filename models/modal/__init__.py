@@ -1,11 +1,17 @@
 """The analyses that read a specimen's modes without a time simulation: quasi-static modal
 analysis (QSMA: one mode's frequency and damping against amplitude), harmonic balance,
 frequency responses and nonlinear modes on the reduced model, and the specimen's vibration
-effects in their modal form."""
+effects in their modal form.
+"""
 from .effects import ZeroElement, effect_stack
 from .frequency import frequency_response, harmonic_balance, nonlinear_mode, specimen_system
-from .qsma import (extrapolation_warnings, linear_modes, modal_amplitude_curve,
-                   natural_frequencies, static_modal_load)
+from .qsma import (
+                   extrapolation_warnings,
+                   linear_modes,
+                   modal_amplitude_curve,
+                   natural_frequencies,
+                   static_modal_load,
+)
 
 __all__ = ["modal_amplitude_curve", "linear_modes", "natural_frequencies", "static_modal_load",
            "extrapolation_warnings", "harmonic_balance", "frequency_response", "nonlinear_mode",

@@ -18,7 +18,8 @@ __all__ = ["ZeroElement", "effect_stack"]
 
 class ZeroElement:
     """A zero-force element following the joint element protocol (the base the modal
-    effects wrap)."""
+    effects wrap).
+    """
 
     force = displacement = work = stored_energy = dissipated_energy = 0.0
 
@@ -40,7 +41,8 @@ def effect_stack(specimen: Specimen, mode: int, omega0: float):
     :class:`ZeroElement` (joint values from ``modal_to_joint`` at unit modal mass in sensor
     units; ``omega0`` the stuck circular frequency [rad/s]), driven by the sensor-scaled
     modal coordinate. The transient's modal force and the frequency-domain routes' element
-    ports both use it."""
+    ports both use it.
+    """
     el = ZeroElement()
     names = []
     for e in specimen.effects:

@@ -17,18 +17,17 @@ from dataclasses import replace
 import numpy as np
 
 from iwan_element import AmplitudeCurve
-from iwan_element.harmonic import FrequencyResponse, ModalSystem
+from iwan_element.harmonic import FrequencyResponse, ModalSystem, trace
 from iwan_element.harmonic import harmonic_balance as _hb_system
-from iwan_element.harmonic import trace
 from iwan_element.harmonic.basis import Harmonics, check_harmonics
 from iwan_element.harmonic.nlmode import epmc_branch
 from iwan_element.harmonic.system import ElementPort
 
-from .qsma import extrapolation_warnings
-from ..reduced.model import reduced_model
 from ..reduced.dispatch import check_specimen
+from ..reduced.model import reduced_model
 from ..specimens.specimen import Specimen
 from .effects import effect_stack
+from .qsma import extrapolation_warnings
 
 __all__ = ["harmonic_balance", "frequency_response", "nonlinear_mode", "specimen_system"]
 
@@ -56,7 +55,8 @@ def _check(specimen):
 
 def _with_range_warnings(specimen, response):
     """The response with a warning where its converged amplitudes leave the specimen's (or an
-    effect's) calibrated range, as QSMA and the nonlinear modes warn."""
+    effect's) calibrated range, as QSMA and the nonlinear modes warn.
+    """
     X = response.amplitude[response.converged]
     warns = extrapolation_warnings(specimen, X) if X.size else []
     return replace(response, warnings=tuple(response.warnings) + tuple(warns)) if warns \
@@ -103,7 +103,8 @@ def frequency_response(specimen: Specimen, force: float, band, *, harmonics=(1, 
                        samples=None, n_modes: int = 8, step: float = 0.02) -> FrequencyResponse:
     """The frequency response curve at one force level [N] over ``band`` (start, end) [Hz],
     traced by pseudo-arclength continuation through its turning points
-    (:func:`iwan_element.harmonic.trace`); warned as :func:`harmonic_balance`."""
+    (:func:`iwan_element.harmonic.trace`); warned as :func:`harmonic_balance`.
+    """
     _check(specimen)
     return _with_range_warnings(specimen, trace(
         specimen_system(specimen, n_modes=n_modes), force, band, harmonics=harmonics,

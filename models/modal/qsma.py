@@ -33,14 +33,13 @@ import numpy as np
 import scipy.linalg as sla
 
 from iwan_element import AmplitudeCurve, dissipation
-from iwan_element.effects import EFFECTS
 from iwan_element.base.threads import one_blas_thread
 from iwan_element.base.validation import check_magnitude, finite_array
 from iwan_element.core.masing import constants_from_arrays, masing_rows
+from iwan_element.effects import EFFECTS
 
-from ..reduced.dispatch import linear_system, contact_points
+from ..reduced.dispatch import check_specimen, contact_points, linear_system
 from ..reduced.model import reduced_model, stuck_key, stuck_modes
-from ..reduced.dispatch import check_specimen
 from ..specimens.specimen import Specimen
 
 __all__ = ["modal_amplitude_curve", "linear_modes", "natural_frequencies",
@@ -127,7 +126,8 @@ def natural_frequencies(specimen: Specimen, *, n_modes: int = 3,
 def _interface_law(u, Fs, KT, phimax, chi, beta):
     """Virgin-curve force [N] and tangent [N/m] of every point: one step from rest of the
     package's exact Masing kernel (:func:`iwan_element.core.masing.masing_rows`), one
-    parameter set per point."""
+    parameter set per point.
+    """
     u = np.asarray(u, float)
     Fs, KT, phimax = (np.broadcast_to(x, u.shape) for x in (Fs, KT, phimax))
     C = constants_from_arrays(Fs, KT, chi, beta, phi_max=phimax)
@@ -287,7 +287,8 @@ def extrapolation_warnings(specimen: Specimen, amplitude) -> list:
     """Warnings for sensor amplitudes [m] outside the range the specimen was calibrated on,
     or above the range an effect it carries was fitted on (below it the effects' modal forms
     fade or stay constant, and the specimen's own range governs); empty when inside, or when
-    no calibrated range is known."""
+    no calibrated range is known.
+    """
     X = np.asarray(amplitude, float)
     out = []
     for label, cr in [("the specimen", specimen.calibrated_range)] + [

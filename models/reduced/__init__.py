@@ -1,6 +1,7 @@
 """The analyses' view of a specimen, 1-D or solid: the dispatch over the two bodies' rooms,
 the stuck-interface modes and the one reduced model the frequency-domain routes read, and
-the linear damping floor as a modal damping matrix."""
+the linear damping floor as a modal damping matrix.
+"""
 from .damping import FloorDamping, FloorWork, floor_damping
 from .dispatch import axis_rows, check_specimen, contact_points, linear_system
 from .model import ReducedModel, reduced_model, reduction_error, stuck_key, stuck_modes

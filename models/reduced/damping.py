@@ -22,9 +22,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from .model import stuck_key, stuck_modes
-from .dispatch import check_specimen
+
 from ..specimens.specimen import Specimen
+from .dispatch import check_specimen
+from .model import stuck_key, stuck_modes
 
 __all__ = ["FloorDamping", "floor_damping", "FloorWork"]
 
@@ -82,7 +83,8 @@ class FloorWork:
     """Work done by the floor's damping matrix ``C`` (the host's coordinates) [J]: per step
     ``h v_m^T C v_m`` with ``v_m`` the mean of the step's end velocities, which is the
     damping work of the trapezoidal rule exactly (its force is ``C v_m`` over a displacement
-    ``h v_m``) and of any second-order scheme to ``O(h^2)``."""
+    ``h v_m``) and of any second-order scheme to ``O(h^2)``.
+    """
 
     def __init__(self, C):
         self.C = None if C is None else np.asarray(C)
@@ -91,7 +93,8 @@ class FloorWork:
 
     def step(self, t: float, v: np.ndarray) -> float:
         """Cumulative work up to time ``t`` [s] with the velocities ``v`` of ``C``'s
-        coordinates."""
+        coordinates.
+        """
         if self.C is not None and self.t is not None and t > self.t:
             vm = 0.5 * (v + self.v)
             self.total += (t - self.t) * float(vm @ self.C @ vm)

@@ -23,7 +23,8 @@ __all__ = ["check_specimen", "linear_system", "axis_rows", "contact_points"]
 
 def check_specimen(specimen):
     """``specimen`` if it is a 1-D :class:`Specimen` or a :class:`SolidSpecimen` (what every
-    analysis of the beam model accepts), else ValueError naming it."""
+    analysis of the beam model accepts), else ValueError naming it.
+    """
     if not isinstance(specimen, (Specimen, SolidSpecimen)):
         raise ValueError(f"specimen must be a Specimen or SolidSpecimen, got "
                          f"{type(specimen).__name__}")
@@ -34,7 +35,8 @@ def linear_system(specimen: Specimen | SolidSpecimen) -> LinearSystem:
     """Linear matrices of a specimen: the 1-D beams'
     (:func:`~iwan_element.models.beam.assembly.beam_linear_system`, cached on its geometry,
     material, contact layout and setup), or the reduced system a
-    :class:`~iwan_element.models.solid.specimen.SolidSpecimen` carries."""
+    :class:`~iwan_element.models.solid.specimen.SolidSpecimen` carries.
+    """
     if isinstance(specimen, SolidSpecimen):
         return specimen.linear_system()
     return beam_linear_system(specimen)
@@ -45,7 +47,8 @@ def axis_rows(specimen: Specimen | SolidSpecimen, positions) -> np.ndarray:
     axis at ``positions`` [m] along the assembly (the axis of ``sensor_position``; beam A up
     to its length, beam B beyond): shape ``(len(positions), n_free)`` (a setup's extra
     coordinates read zero). A :class:`~iwan_element.models.solid.specimen.SolidSpecimen`
-    reads its stored rows (:meth:`~iwan_element.models.solid.specimen.SolidSpecimen.axis_rows`)."""
+    reads its stored rows (:meth:`~iwan_element.models.solid.specimen.SolidSpecimen.axis_rows`).
+    """
     x = np.atleast_1d(np.asarray(positions, float))
     if x.ndim != 1 or x.size == 0 or not np.all(np.isfinite(x)) or np.any(x < 0) \
             or np.any(x > specimen.total_length):
@@ -62,7 +65,8 @@ def contact_points(specimen: Specimen | SolidSpecimen) -> ContactPoints:
     """Contact points, normal forces and Iwan elements of a specimen's interface: the 1-D
     pressure strips (:func:`~iwan_element.models.specimens.contact.beam_contact_points`) or
     a solid's patches (two elements each,
-    :meth:`~iwan_element.models.solid.specimen.SolidSpecimen.contact_points`)."""
+    :meth:`~iwan_element.models.solid.specimen.SolidSpecimen.contact_points`).
+    """
     if isinstance(specimen, SolidSpecimen):
         return specimen.contact_points()
     return beam_contact_points(specimen)

@@ -29,8 +29,8 @@ import scipy.linalg as sla
 from iwan_element.base.threads import one_blas_thread
 from iwan_element.harmonic import ModalSystem
 
-from .dispatch import linear_system, contact_points, check_specimen
 from ..specimens.specimen import Specimen
+from .dispatch import check_specimen, contact_points, linear_system
 
 __all__ = ["ReducedModel", "reduced_model", "reduction_error", "stuck_modes", "stuck_key"]
 
@@ -99,7 +99,8 @@ def reduced_model(specimen: Specimen, *, n_modes: int = 8) -> ReducedModel:
 def stuck_key(specimen):
     """The specimen with the fields that do not change its stuck-interface eigenproblem
     (friction, Iwan shape, floors, ranges, effects) set to fixed values: the cache key of
-    the routes that read only the stuck modes and the contact points' stiffness."""
+    the routes that read only the stuck modes and the contact points' stiffness.
+    """
     return specimen.replace(friction=1.0, chi=0.0, beta=0.0, damping_floor=0.0, modal_damping=(),
                             amplitude_range=(1.0, 2.0), calibrated_range=None, effects=())
 
@@ -108,7 +109,8 @@ def stuck_modes(specimen: Specimen):
     """Every mode of the specimen with its joints stuck: ``(L, points, omega [rad/s], Phi,
     n_low)``, ``Phi`` mass-normalised (columns, each with a non-negative sensor
     displacement), ``n_low`` the modes below 0.5 Hz (rigid-body ones, or an interface that
-    lets the beams slide). The one eigenproblem every route reads (cached)."""
+    lets the beams slide). The one eigenproblem every route reads (cached).
+    """
     return _stuck_modes(specimen)
 
 

@@ -1,7 +1,8 @@
 """A specimen simulated in Exudyn: the host (its linear system as one generic body, the
 contact points' Iwan elements on slip coordinates), the solver settings, ring-downs after a
 release or a hammer impact, the coupling of modes ringing together, the stepped-sine forced
-response and the quasi-static machine test."""
+response and the quasi-static machine test.
+"""
 from .coupling import ModeCouplingResult, compare_curves, mode_coupling, plot_curve_pairs
 from .forced import ForcedResponseResult, forced_response, prewarp
 from .host import HostModel, build_host, port_basis

@@ -19,8 +19,8 @@ from iwan_element import AmplitudeCurve
 from iwan_element.base.result_shape import ResultShape, panels, table_lines
 from iwan_element.base.serialize import json_safe
 
-from .ringdown_result import RingdownResult
 from ..specimens.specimen import Specimen
+from .ringdown_result import RingdownResult
 from .transient import ringdown
 
 __all__ = ["compare_curves", "ModeCouplingResult", "mode_coupling", "plot_curve_pairs"]
@@ -123,7 +123,8 @@ class ModeCouplingResult(ResultShape):
 
     def plot(self, ax=None):
         """Each mode's damping ratio [%] and frequency [Hz] against its amplitude, together
-        (filled) and alone (open), on ``ax = (ax_z, ax_f)``; returns the artists."""
+        (filled) and alone (open), on ``ax = (ax_z, ax_f)``; returns the artists.
+        """
         ax_z, ax_f = panels(ax, 2, figsize=(6, 6))
         pairs = [(f"mode {r}", self.together.mode_curve(r), "with the other modes", rd.curve,
                   "alone") for r, rd in zip(self.modes, self.alone)]
@@ -133,7 +134,8 @@ class ModeCouplingResult(ResultShape):
 def plot_curve_pairs(ax_z, ax_f, pairs, formats) -> list:
     """Damping ratio [%] (on ``ax_z``) and frequency [Hz] (on ``ax_f``) against amplitude of
     ``pairs = [(name, curve, label, other curve, other label), ...]``, one colour per pair,
-    the second curve of each drawn in ``formats[1]`` with open markers; returns the artists."""
+    the second curve of each drawn in ``formats[1]`` with open markers; returns the artists.
+    """
     arts = []
     for i, (name, c1, l1, c2, l2) in enumerate(pairs):
         for c, fmt, lab, fill in ((c1, formats[0], l1, True), (c2, formats[1], l2, False)):

@@ -39,11 +39,11 @@ from iwan_element.base.result_shape import ResultShape, panels
 from iwan_element.base.serialize import json_safe
 from iwan_element.base.validation import check_int, check_scalar, finite_array
 
-from ..reduced.dispatch import linear_system
-from .host import build_host
 from ..modal.qsma import linear_modes
-from .solver import solver_settings
+from ..reduced.dispatch import linear_system
 from ..specimens.specimen import Specimen
+from .host import build_host
+from .solver import solver_settings
 
 __all__ = ["ForcedResponseResult", "forced_response", "prewarp"]
 
@@ -116,7 +116,8 @@ class ForcedResponseResult(ResultShape):
 
     def plot(self, ax=None):
         """Amplitude per force [m/N] against frequency, one line per level; returns the
-        artists."""
+        artists.
+        """
         (a,) = panels(ax, 1)
         arts = []
         for F, amp in zip(self.force_levels, self.amplitude):
@@ -130,14 +131,16 @@ def prewarp(w: float, steps_per_period: int) -> tuple[float, float]:
     """``(h, w_d)``: the time step [s] and the drive frequency [rad/s] at which the
     trapezoidal rule responds as the continuous system does at ``w`` [rad/s]:
     ``(2/h) tan(w_d h / 2) = w`` with ``w_d h = 2 pi / steps_per_period``, i.e.
-    ``h = 2 tan(pi / steps_per_period) / w`` (module docstring)."""
+    ``h = 2 tan(pi / steps_per_period) / w`` (module docstring).
+    """
     h = 2.0 * math.tan(math.pi / steps_per_period) / w
     return h, 2.0 * math.pi / (steps_per_period * h)
 
 
 def _lock_in(t, y, theta):
     """``(X, phi)`` of ``y(t) = a + b t + X sin(theta + phi)``, least squares (``theta`` the
-    force's phase at each sample [rad])."""
+    force's phase at each sample [rad]).
+    """
     A = np.column_stack([np.ones_like(t), t - t.mean(), np.sin(theta), np.cos(theta)])
     c = np.linalg.lstsq(A, y, rcond=None)[0]
     return math.hypot(c[2], c[3]), math.atan2(c[3], c[2])
@@ -154,7 +157,8 @@ def _force_scale(model, F0, freqs) -> float:
     Brake-Reuss beam at 0.02 N (elastic forces 0.2-0.5 N, terms of 1e5 N; the free-free
     beam's drift adds to ``z`` as the run goes on) Newton's ``1e-7 F0`` = 2e-9 N met that
     floor: modified Newton stalled at a contraction of 0.8-0.96 and took a new Jacobian,
-    560 times over one frequency (docs/transient_cost.md)."""
+    560 times over one frequency (docs/transient_cost.md).
+    """
     n_eta, m = model.n_eta, len(model.points)
     K = model.Kb + model.Ks
     Kt = K.copy()
@@ -175,7 +179,8 @@ def _sweep_level(s, F0, freqs, cycles, steps_per_period, rho, bar=None):
     """Steady fundamental amplitude [m] and phase [rad] at the sensor at each frequency of
     ``freqs`` for one force level ``F0`` [N], each frequency continuing from the state the
     previous one left, and the solver's counts per frequency (Newton iterations, Jacobians,
-    step cuts)."""
+    step cuts).
+    """
     settle, measure = cycles
     # the switch-on transient beats with the forced response and nests the joints' loops:
     # the host's default depth (24) holds them (8 overflowed 54 times on the Brake-Reuss

@@ -36,17 +36,22 @@ from __future__ import annotations
 import exudyn as exu
 import numpy as np
 import scipy.linalg as sla
-from exudyn.itemInterface import (CoordinateConstraint, LoadCoordinate, MarkerNodeCoordinate,
-                                  NodeGenericODE2, NodePointGround,
-                                  ObjectConnectorCoordinateSpringDamper, ObjectGenericODE2)
+from exudyn.itemInterface import (
+    CoordinateConstraint,
+    LoadCoordinate,
+    MarkerNodeCoordinate,
+    NodeGenericODE2,
+    NodePointGround,
+    ObjectConnectorCoordinateSpringDamper,
+    ObjectGenericODE2,
+)
 
 from iwan_element import IwanJoint
 from iwan_element.exudyn import add_iwan_interface
 
-from ..reduced.dispatch import linear_system
-from ..reduced.damping import floor_damping
-from ..reduced.dispatch import contact_points
 from ..linear.system import LinearSystem
+from ..reduced.damping import floor_damping
+from ..reduced.dispatch import contact_points, linear_system
 
 __all__ = ["port_basis", "HostModel", "build_host"]
 
@@ -54,7 +59,8 @@ __all__ = ["port_basis", "HostModel", "build_host"]
 def port_basis(R) -> tuple:
     """``(T, T_inv, n_eta)``: the basis ``T = [N, R^+]`` whose last ``R.shape[0]``
     coordinates are the rows ``R x`` (module docstring), its inverse ``[N^T; R]`` and the
-    number of the other coordinates. ``R`` must have full row rank (ValueError)."""
+    number of the other coordinates. ``R`` must have full row rank (ValueError).
+    """
     R = np.asarray(R, float)
     N = sla.null_space(R)
     if N.shape[1] != R.shape[1] - R.shape[0]:
@@ -92,7 +98,8 @@ class HostModel:
 
     def prescribe_port(self, name: str, motion) -> int:
         """Hold port ``name`` at ``motion(t)`` [m]; returns the constraint (its Force output
-        is the reaction on the ground side)."""
+        is the reaction on the ground side).
+        """
         return self.mbs.AddObject(CoordinateConstraint(
             markerNumbers=[self.ground, self.port_marker(name)],
             offsetUserFunction=lambda mbs_, t, item, off: float(motion(t))))
@@ -105,7 +112,8 @@ class HostModel:
 
     def spring_energy(self) -> float:
         """Energy of the normal contact springs, the setup's springs and the linear
-        tangential ones [J]."""
+        tangential ones [J].
+        """
         z = self.mbs.systemData.GetODE2Coordinates()
         return 0.5 * float(z @ self.Ks @ z)
 

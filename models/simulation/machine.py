@@ -23,9 +23,9 @@ from iwan_element.base.serialize import json_safe
 from iwan_element.base.validation import check_int, check_scalar
 
 from ..reduced.dispatch import linear_system
+from ..specimens.specimen import Specimen
 from .host import build_host
 from .solver import solver_settings
-from ..specimens.specimen import Specimen
 
 __all__ = ["QuasiStaticResult", "quasi_static_test"]
 
@@ -83,7 +83,8 @@ class QuasiStaticResult(ResultShape):
 
     def loop_check(self) -> tuple[np.ndarray, np.ndarray]:
         """Per contact point, the last cycle's loop area (trapezoid of its force against its
-        slip) and the closed-form dissipation per cycle at the cycle's slip amplitude [J]."""
+        slip) and the closed-form dissipation per cycle at the cycle's slip amplitude [J].
+        """
         m = self.last_cycle()
         s, F = self.slip[m], self.force[m]
         area = np.sum(0.5 * (F[1:] + F[:-1]) * np.diff(s, axis=0), axis=0)
@@ -95,7 +96,8 @@ class QuasiStaticResult(ResultShape):
     @property
     def success(self) -> bool:
         """True when every point's loop area matches its closed-form dissipation to
-        :data:`LOOP_TOL` of the interface's total."""
+        :data:`LOOP_TOL` of the interface's total.
+        """
         area, closed = self.loop_check()
         return bool(np.max(np.abs(area - closed)) <= LOOP_TOL * max(closed.sum(), 1e-300))
 
@@ -131,7 +133,8 @@ class QuasiStaticResult(ResultShape):
 
     def plot(self, ax=None):
         """The joint's loop (summed force against mean slip) and the machine's loop (force
-        against grip displacement) on ``ax = (ax_joint, ax_machine)``; returns the artists."""
+        against grip displacement) on ``ax = (ax_joint, ax_machine)``; returns the artists.
+        """
         a1, a2 = panels(ax, 2, figsize=(6, 7))
         arts = a1.plot(self.mean_slip, self.joint_force, lw=1.0)
         a1.set(xlabel="mean slip [m]", ylabel="joint force [N]")

@@ -24,7 +24,8 @@ __all__ = ["ModalEffects"]
 
 class ModalEffects:
     """The specimen's effects on one mode as a modal force on the host's bodies (module
-    docstring)."""
+    docstring).
+    """
 
     def __init__(self, specimen: Specimen, mode: int, L, phi, omega0: float):
         self.el, self.names = effect_stack(specimen, mode, omega0)
@@ -35,7 +36,8 @@ class ModalEffects:
     def attach(self, model):
         """Add the ObjectGenericODE2 on the host's node (:class:`~.host.HostModel`; the
         system must be assembled again afterwards): the row ``a = T^T M phi`` in the host's
-        coordinates."""
+        coordinates.
+        """
         self.a = model.T.T @ self.a_free
         self.aa = np.outer(self.a, self.a)
         el, s, av = self.el, self.s, self.a
@@ -63,7 +65,8 @@ class ModalEffects:
 
     def start(self, Y0: float, n: int = 400) -> float:
         """Drive the elements from rest to ``Y0`` (virgin loading, as the static release
-        state); returns their work on the bodies' modal coordinate [J]."""
+        state); returns their work on the bodies' modal coordinate [J].
+        """
         for y in np.linspace(0.0, Y0, n + 1)[1:]:
             self.el.trial(float(y), 0.0)
             self.el.commit()

@@ -1,6 +1,7 @@
 """The pieces every ring-down shares (:func:`~iwan_element.models.ringdown`, 1-D beams and
 solid bodies): the post-step recorder, the time grid, the timed solve, the release energy of
-the joints, and the result built from the records."""
+the joints, and the result built from the records.
+"""
 from __future__ import annotations
 
 import math
@@ -23,7 +24,8 @@ E_KEYS = ("t", "kinetic", "strain", "springs", "joint_stored", "joint_dissipated
 class Recorder:
     """The post-step function of a ring-down: the host's coordinates and (with
     ``record_energy``) the energy terms of every accepted step, and the effects' commits
-    (everything in the host's coordinates, :mod:`~iwan_element.models.simulation.host`)."""
+    (everything in the host's coordinates, :mod:`~iwan_element.models.simulation.host`).
+    """
 
     def __init__(self, effs, floor_work, record_energy: bool):
         self.effs, self.floor_work, self.record = effs, floor_work, record_energy
@@ -68,7 +70,8 @@ class Recorder:
 def step_grid(w0, steps_per_period: int, *, duration=None, cycles=None, impact=None):
     """``(h, n)``: the time step [s] (``steps_per_period`` per period of the highest of the
     modes' stuck frequencies ``w0`` [rad/s]; at most a sixteenth of an impact's contact time)
-    and the number of steps (``duration`` [s], or ``cycles`` periods of the lowest mode)."""
+    and the number of steps (``duration`` [s], or ``cycles`` periods of the lowest mode).
+    """
     h = 2 * math.pi / (w0.max() * steps_per_period)
     if impact is not None:
         h = min(h, impact.contact_time / 16)
@@ -82,7 +85,8 @@ def step_grid(w0, steps_per_period: int, *, duration=None, cycles=None, impact=N
 def solve_timed(mbs, sim, rec, n: int, progress: bool) -> dict:
     """``mbs.SolveDynamic(sim)`` over ``n`` steps with the recorder's progress bar (if asked):
     ``{"wall": seconds in SolveDynamic, "newton_iterations": total, "jacobians": Newton
-    Jacobians computed}``."""
+    Jacobians computed}``.
+    """
     t0 = time.perf_counter()
     rec.bar = progress_bar(progress, total=n + 1, desc="ringdown", unit="step")
     try:
@@ -98,7 +102,8 @@ def solve_timed(mbs, sim, rec, n: int, progress: bool) -> dict:
 
 def virgin_joint_energy(slip, params) -> float:
     """Energy [J] stored by virgin Iwan elements (``params``) loaded to the slips ``slip``
-    [m] along their backbones: the joints' share of a release state's energy."""
+    [m] along their backbones: the joints' share of a release state's energy.
+    """
     return float(sum(backbone_work(abs(u), p) for u, p in zip(slip, params)))
 
 
@@ -106,7 +111,8 @@ def build_result(specimen, amp, rec, X, rel, rows, positions, h, n, run) -> Ring
     """The ring-down's result from its records (``rec``: times and energy terms; ``X``:
     the free coordinates of the linear system at every recorded step, shape
     ``(n_records, n_free)``): every signal on the nominal step grid, one decay curve per
-    mode from its modal filter."""
+    mode from its modal filter.
+    """
     L, w0, modes = rel["system"], rel["omega0"], tuple(amp)
     k = len(modes)
     s_phi = np.array([float(L.S @ phi) for phi in rel["phi"]])
@@ -160,7 +166,8 @@ def second_derivative(y, h):
     (relative error ``(w h)^2 / 12`` at ``w`` [rad/s]), the ends extrapolated linearly. The
     integrator's own acceleration variable is not used: at spectral radius 1 the
     generalized-alpha acceleration alternates about the physical one by the start's
-    mismatch (measured on the example beam: a sawtooth of the acceleration's size)."""
+    mismatch (measured on the example beam: a sawtooth of the acceleration's size).
+    """
     a = np.empty_like(y)
     a[..., 1:-1] = (y[..., 2:] - 2 * y[..., 1:-1] + y[..., :-2]) / (h * h)
     a[..., 0] = 2 * a[..., 1] - a[..., 2]
@@ -175,7 +182,8 @@ def on_step_grid(times, signals, h, n):
     aluminium beam released from 500 um); the records are then interpolated linearly onto the
     grid (``cut``: how many steps more than ``n`` were taken). Read as if every record were one
     nominal step apart, they had stretched the time scale: the decay came out at half its
-    frequency."""
+    frequency.
+    """
     t = np.arange(n + 1) * h
     if times.size == n + 1 and np.allclose(times, t, rtol=0.0, atol=1e-9 * h):
         return t, list(signals), 0
@@ -184,7 +192,8 @@ def on_step_grid(times, signals, h, n):
 
 def cut_warning(cut: int, n: int, wh: float) -> tuple:
     """The warning of a ring-down whose solver took ``cut`` steps more than its ``n``
-    nominal ones (``wh``: the nominal step times the linear frequency [rad])."""
+    nominal ones (``wh``: the nominal step times the linear frequency [rad]).
+    """
     if not cut:
         return ()
     return (f"the solver took {cut} steps more than the {n} nominal ones (the interface "
@@ -200,7 +209,8 @@ def joint_records(itf, energy: dict, e0: float) -> float:
     of the same slips and forces, over the release energy ``e0`` [-]: the time integrator's
     quadrature error of the hysteretic forces, which is what the energy balance measures
     when the bookkeeping is right. Without an Iwan interface (``itf`` None: linear springs)
-    the joints' terms are zeros and so is the error."""
+    the joints' terms are zeros and so is the error.
+    """
     m = len(energy["t"])
     if itf is None:
         energy["joint_stored"] = energy["joint_dissipated"] = [0.0] * m

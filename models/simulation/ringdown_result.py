@@ -108,7 +108,8 @@ class RingdownResult(ResultShape):
         FIR, zero phase) put its filter's end effects into the last window (a 0.6 s
         Brake-Reuss ring-down read 1.30e-3 there for 1.81e-3), which the curve's own trimming
         does not see. ``n_periods``: fixed windows (default: windows that follow the
-        decay)."""
+        decay).
+        """
         if quantity not in ("acceleration", "displacement"):
             raise ValueError(f"quantity must be 'acceleration' or 'displacement', got {quantity!r}")
         if isinstance(sensor, bool) or not isinstance(sensor, int) or \
@@ -136,7 +137,8 @@ class RingdownResult(ResultShape):
     @property
     def success(self) -> bool:
         """True when every mode's decay gave at least three curve points and the energy
-        balance (when recorded) closes to :data:`ENERGY_TOL`."""
+        balance (when recorded) closes to :data:`ENERGY_TOL`.
+        """
         err = self.max_energy_error
         return bool(all(len(c) >= 3 for c in self.curves or (self.curve,))
                     and (err is None or err <= ENERGY_TOL))
@@ -177,7 +179,8 @@ class RingdownResult(ResultShape):
     def plot(self, ax=None):
         """Each mode's response at the sensor against time, then the decays' frequency and
         damping against amplitude, on ``ax = (ax_t, ax_f, ax_z)`` (a new figure if
-        ``None``; :mod:`iwan_element.base.result_shape`); returns the artists."""
+        ``None``; :mod:`iwan_element.base.result_shape`); returns the artists.
+        """
         ax_t, ax_f, ax_z = panels(ax, 3, figsize=(6, 8))
         resp = self.modal_responses if self.modal_responses is not None else self.modal[None]
         arts = []
@@ -192,7 +195,8 @@ class RingdownResult(ResultShape):
         """Relative energy balance error over time (needs ``record_energy``):
         ``(kinetic + strain + springs + stored + dissipated) / E0 - 1``, the dissipated
         energy of the joints, the damping floor and the effects; with an impact,
-        ``(... - E0 - W_in) / (E0 + W_in,end)`` (``W_in`` its input work)."""
+        ``(... - E0 - W_in) / (E0 + W_in,end)`` (``W_in`` its input work).
+        """
         e = self.energy
         total = e["kinetic"] + e["strain"] + e["springs"] + e["joint_stored"] + e["joint_dissipated"]
         total = total + e["floor_dissipated"]
@@ -206,7 +210,8 @@ class RingdownResult(ResultShape):
 
 def with_energy_warning(out: RingdownResult) -> RingdownResult:
     """The result with a warning when its recorded energy balance is off by more than
-    :data:`ENERGY_TOL`."""
+    :data:`ENERGY_TOL`.
+    """
     err = out.max_energy_error
     if err is not None and err > ENERGY_TOL:
         out = replace(out, warnings=out.warnings + (
@@ -223,7 +228,8 @@ def decay_curve(t, y, h, f0, n_periods, *, notes, band=None,
     stuck frequency ``f0`` [Hz] unless ``band`` is given; windows of ``n_periods``, or
     following the decay when None; no second extraction: the record is noise-free), the
     trapezoidal rule's period error of the step ``h`` [s] removed
-    (``w_true = tan(w h / 2) 2 / h``)."""
+    (``w_true = tan(w h / 2) 2 / h``).
+    """
     band = (0.5 * f0, 1.5 * f0) if band is None else band
     c = amplitude_curve(t, y, quantity=quantity, band=band, n_periods=n_periods, compare=False)
     f_true = np.tan(math.pi * c.frequency * h) / (math.pi * h)

@@ -34,19 +34,24 @@ import numpy as np
 
 from iwan_element.base.validation import check_scalar
 
-from ..reduced.dispatch import axis_rows
+from ..modal.qsma import linear_modes, static_modal_load
 from ..reduced.damping import FloorWork
+from ..reduced.dispatch import axis_rows, check_specimen
+from ..solid.specimen import SolidSpecimen
+from ..specimens.specimen import Specimen
 from .host import build_host
 from .impact import Impact
 from .modal_force import ModalEffects
-from ..modal.qsma import linear_modes, static_modal_load
-from .ringdown_records import (Recorder, build_result, joint_records, solve_timed, step_grid,
-                               virgin_joint_energy)
+from .ringdown_records import (
+    Recorder,
+    build_result,
+    joint_records,
+    solve_timed,
+    step_grid,
+    virgin_joint_energy,
+)
 from .ringdown_result import RingdownResult, with_energy_warning
-from ..solid.specimen import SolidSpecimen
-from ..reduced.dispatch import check_specimen
 from .solver import solver_settings
-from ..specimens.specimen import Specimen
 
 __all__ = ["RingdownResult", "ringdown", "check_solid_release"]
 
@@ -93,7 +98,8 @@ def _check_args(specimen, steps_per_period, n_periods, cycles, duration):
 
 def _release(specimen: Specimen, amp: dict) -> dict:
     """The release state: the sum of each mode's static deflection under ``alpha_r M phi_r``
-    reaching its amplitude at the sensor (:func:`static_modal_load`), and the modes."""
+    reaching its amplitude at the sensor (:func:`static_modal_load`), and the modes.
+    """
     sts = [static_modal_load(specimen, [X], mode=r) for r, X in amp.items()]
     return {"x": sum(st["x"][0] for st in sts), "slip": sum(st["slip"][0] for st in sts),
             "system": sts[0]["system"], "phi": [st["phi"] for st in sts],
@@ -102,7 +108,8 @@ def _release(specimen: Specimen, amp: dict) -> dict:
 
 def _start(specimen: Specimen, mode, amplitude, impact, modes):
     """``(amp, state)``: ``{mode: release amplitude or None}`` and the start state (the
-    release of :func:`_release`, or rest for an impact, with the stuck modes of ``modes``)."""
+    release of :func:`_release`, or rest for an impact, with the stuck modes of ``modes``).
+    """
     if (amplitude is None) == (impact is None):
         raise ValueError("give amplitude (a release) or impact (a force pulse), one of them")
     if impact is None:
@@ -118,10 +125,10 @@ def _start(specimen: Specimen, mode, amplitude, impact, modes):
         raise ValueError(f"impact position must lie on the assembly (<= "
                          f"{specimen.total_length:.6g} m), got {impact.position!r}")
     ms = (1,) if modes is None else tuple(modes)
-    amp = _amplitudes(None, {r: 1.0 for r in ms})          # checks the modes
+    amp = _amplitudes(None, dict.fromkeys(ms, 1.0))          # checks the modes
     lm = [linear_modes(specimen, mode=r) for r in amp]
     L = lm[0][3]
-    return {r: None for r in amp}, {
+    return dict.fromkeys(amp), {
         "x": np.zeros(L.M.shape[0]), "slip": np.zeros(L.G.shape[0]), "system": L,
         "phi": [m[1] for m in lm], "omega0": np.array([m[0] for m in lm])}
 
@@ -129,7 +136,8 @@ def _start(specimen: Specimen, mode, amplitude, impact, modes):
 def _initial_energy(model, rel, effs, tangential) -> tuple:
     """``(kinetic, total)`` energy [J] at the release: the bodies' strain energy, the
     springs', the joint's (the virgin backbone work at the initial slips) and the
-    effects'."""
+    effects'.
+    """
     kin0, pot0 = model.beam_energy()
     e0 = pot0 + model.spring_energy()
     if tangential == "iwan":
@@ -141,7 +149,8 @@ def _initial_energy(model, rel, effs, tangential) -> tuple:
 
 def check_solid_release(specimen: SolidSpecimen, modes) -> None:
     """Refuse a solid's release in a mode the sensor barely sees (its release amplitude at
-    the sensor could not set it)."""
+    the sensor could not set it).
+    """
     if specimen.model.axis is None:
         raise ValueError("specimen.model holds no axis rows (SolidModel.axis): build the solid "
                          "with models.solid.solid_specimen")
@@ -246,7 +255,8 @@ def ringdown(specimen: Specimen | SolidSpecimen, *, mode: int | None = None, amp
 def _run(specimen, amp, rel, rows, positions, opts, impact):
     """The ring-down in Exudyn (:mod:`~iwan_element.models.simulation.host`: bodies, contact points,
     floor, effects, impact) from the release ``rel`` of the modes ``amp``: :func:`ringdown`'s
-    work after the checks (``opts``: its keyword options)."""
+    work after the checks (``opts``: its keyword options).
+    """
     tangential, record_energy = opts["tangential"], opts["record_energy"]
     L, w0 = rel["system"], rel["omega0"]
     effs = [ModalEffects(specimen, r, L, phi, w) for r, phi, w in zip(amp, rel["phi"], w0)

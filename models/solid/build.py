@@ -43,10 +43,10 @@ import scipy.sparse.linalg as spla
 
 from ..linear.system import LinearSystem
 from ..specimens.contact import pressure_field
-from .specimen import PatchLayout, SolidModel, SolidSpecimen, clamp_stiffness, solid_contact_points
-from .mesh import SolidPart, lap_beam_parts
-from ..specimens.specimen import Specimen
 from ..specimens.presets import preset
+from ..specimens.specimen import Specimen
+from .mesh import SolidPart, lap_beam_parts
+from .specimen import PatchLayout, SolidModel, SolidSpecimen, clamp_stiffness, solid_contact_points
 
 __all__ = ["patch_layout", "solid_specimen", "solid_preset"]
 
@@ -59,7 +59,8 @@ AXIS_STEP = 1e-3                        # grid of the stored sensor rows along t
 def patch_layout(specimen: Specimen, *, patch_size: float) -> PatchLayout:
     """The contact patches of a specimen's lap: grid cells of about ``patch_size`` [m] with
     the cone pressure's force, contact area and the centroid of that area (module
-    docstring, step 1)."""
+    docstring, step 1).
+    """
     s = specimen
     _check_build(s, patch_size, 1)
     nx = max(1, int(round(s.overlap / patch_size)))
@@ -86,7 +87,8 @@ def patch_layout(specimen: Specimen, *, patch_size: float) -> PatchLayout:
 
 def _in_contact(specimen: Specimen, xy: np.ndarray) -> np.ndarray:
     """Points (n, 2) of the lap plane [m] inside a bolt's contact annulus (``r_h <= r <= r_c``,
-    where :func:`~iwan_element.models.specimens.contact.pressure_field` is non-zero)."""
+    where :func:`~iwan_element.models.specimens.contact.pressure_field` is non-zero).
+    """
     s = specimen
     r = np.hypot(xy[:, None, 0] - s.lap_start - np.asarray(s.bolt_positions)[None, :],
                  xy[:, None, 1])
@@ -96,7 +98,8 @@ def _in_contact(specimen: Specimen, xy: np.ndarray) -> np.ndarray:
 def _face_samples(part: SolidPart, n: int = 6):
     """Quadrature of the contact face: the centroids of each triangle's ``n^2`` congruent
     sub-triangles, ``(points (m, 2) [m], weights (m,) [m^2], nodes (m, 3), barycentric
-    coordinates (m, 3))``: ``sum w u(point)`` integrates the linearly interpolated ``u``."""
+    coordinates (m, 3))``: ``sum w u(point)`` integrates the linearly interpolated ``u``.
+    """
     i, j = np.meshgrid(np.arange(n), np.arange(n), indexing="ij")
     up = (i + j <= n - 1)
     dn = (i + j <= n - 2)
@@ -113,7 +116,8 @@ def _face_samples(part: SolidPart, n: int = 6):
 
 def _patch_average(part: SolidPart, patches: PatchLayout, specimen: Specimen) -> sp.csr_matrix:
     """(n_patches, n_nodes) weights of the part's contact face averaged over each patch's
-    contact area (the part of its cell inside a bolt's contact annulus)."""
+    contact area (the part of its cell inside a bolt's contact annulus).
+    """
     pts, w, nodes, lam = _face_samples(part)
     on = _in_contact(specimen, pts)
     pts, w, nodes, lam = pts[on], w[on], nodes[on], lam[on]
@@ -151,7 +155,8 @@ def _patch_average(part: SolidPart, patches: PatchLayout, specimen: Specimen) ->
 
 def _slip_operator(specimen: Specimen, a: SolidPart, b: SolidPart, patches: PatchLayout):
     """(G_t, G_n): tangential slips (x, y per patch, interleaved) and normal gaps (z) of B's
-    patch average minus A's, on the coordinates [A's, B's] (x, y, z per node)."""
+    patch average minus A's, on the coordinates [A's, B's] (x, y, z per node).
+    """
     Wa, Wb = _patch_average(a, patches, specimen), _patch_average(b, patches, specimen)
     def rows(d):
         ea = sp.kron(Wa, sp.csr_matrix(np.eye(3)[d]))
@@ -172,7 +177,8 @@ def _clamp_nodes(specimen: Specimen, a: SolidPart) -> np.ndarray:
 
 def _fixed_coordinates(specimen: Specimen, a: SolidPart) -> np.ndarray:
     """Beam A's end face x = 0 held rigidly (clamped-free with no clamp springs in the
-    setup); none free-free (checked by _check_build) or on clamp springs."""
+    setup); none free-free (checked by _check_build) or on clamp springs.
+    """
     if specimen.setup.clamp is not None:
         return np.zeros(0, int)
     nodes = _clamp_nodes(specimen, a)
@@ -183,7 +189,8 @@ def _clamp_rows(specimen: Specimen, a: SolidPart, n: int) -> sp.csr_matrix:
     """(6, n) rows of the clamped face's rigid-body fit, translations ``x, y, z`` then
     rotations about ``x, y, z`` [m, rad]: the least-squares ``(t, w)`` of the face nodes'
     displacements ``u_i = t + w x (p_i - c)`` (``c`` the face centroid), on which a setup's
-    clamp springs act (translational stiffness on ``t``, rotational on ``w``)."""
+    clamp springs act (translational stiffness on ``t``, rotational on ``w``).
+    """
     nodes = _clamp_nodes(specimen, a)
     r = a.positions[nodes] - a.positions[nodes].mean(axis=0)
     B = np.zeros((3 * nodes.size, 6))
@@ -210,7 +217,8 @@ def _point_weights(specimen: Specimen, a: SolidPart, b: SolidPart, xs: float):
     mode's z displacement is uniform over the section, so this is the beam's deflection
     there, wherever a face accelerometer sits; the nearest node alone is up to half an
     element off in x (2.3 mm at acc3 on a 12 mm mesh, 13 % of the second height-bending
-    mode's reading there)."""
+    mode's reading there).
+    """
     s = specimen
     on_b = xs > s.beam_length
     part, off = (b, 3 * len(a.positions)) if on_b else (a, 0)
@@ -227,7 +235,8 @@ def _point_weights(specimen: Specimen, a: SolidPart, b: SolidPart, xs: float):
 def _point_row(specimen: Specimen, a: SolidPart, b: SolidPart, xs: float) -> np.ndarray:
     """Row reading the z displacement at ``xs`` [m] along the assembly
     (:func:`_point_weights`): the sensor's, or the excitation's (a unit force there has
-    this row as its load vector: its work is the force times that displacement)."""
+    this row as its load vector: its work is the force times that displacement).
+    """
     S = np.zeros(3 * (len(a.positions) + len(b.positions)))
     idx, w = _point_weights(specimen, a, b, xs)
     np.add.at(S, idx, w)
@@ -237,7 +246,8 @@ def _point_row(specimen: Specimen, a: SolidPart, b: SolidPart, xs: float) -> np.
 def _axis_grid(specimen: Specimen, a: SolidPart, b: SolidPart, T, free):
     """``(x, rows)``: the reduced rows of the z displacement read as :func:`_point_row` reads
     the sensor's, at every millimetre ``x`` [m] along the assembly (where a ring-down's
-    sensors are read)."""
+    sensors are read).
+    """
     x = np.arange(0.0, specimen.total_length + 0.5 * AXIS_STEP, AXIS_STEP)
     rows = np.zeros((x.size, T.shape[1]))
     for k, v in enumerate(x):
@@ -251,7 +261,8 @@ def _axis_grid(specimen: Specimen, a: SolidPart, b: SolidPart, T, free):
 def _factor(A):
     """Solver of the sparse symmetric positive definite ``A``: NGsolve's sparse Cholesky
     (nested dissection; 2 s for 55k coordinates here) when NGsolve is installed, else
-    SuperLU (about 10 x slower on 3-D meshes)."""
+    SuperLU (about 10 x slower on 3-D meshes).
+    """
     try:
         from ngsolve.la import SparseMatrixd
     except ImportError:
@@ -277,7 +288,8 @@ def _factor(A):
 
 def _ritz_basis(K_ref, M, G_ports, n_keep):
     """Mass-orthonormal basis [modes, attachment shapes of the rows of ``G_ports``: the
-    tangential slips and the normal gaps] diagonalising K_ref (step 3)."""
+    tangential slips and the normal gaps] diagonalising K_ref (step 3).
+    """
     solve = _factor((K_ref + _SHIFT * M).tocsr())
     op = spla.LinearOperator(K_ref.shape, matvec=solve, dtype=float)
     w2, Phi = spla.eigsh(K_ref, k=n_keep, M=M, sigma=-_SHIFT, OPinv=op, which="LM")

@@ -141,10 +141,11 @@ def _mesh_boxes(boxes, *, face_z, face_sign, mesh_size, face_mesh_size, holes=()
     """Netgen mesh of the union of axis-aligned boxes ((x0,y0,z0), (x1,y1,z1)) less the
     vertical through-holes ``holes`` ((x, y, radius) [m]); the horizontal faces at
     ``z = face_z`` whose outward normal is ``face_sign * z`` named ``"lap"`` and meshed at
-    ``face_mesh_size``."""
+    ``face_mesh_size``.
+    """
     try:
         import ngsolve as ngs
-        from netgen.occ import Z, Box, Cylinder, OCCGeometry, Pnt
+        from netgen.occ import Box, Cylinder, OCCGeometry, Pnt, Z
     except ImportError as err:
         raise ImportError("meshing a solid specimen needs NGsolve: pip install "
                           "\"iwan-element[fem]\" (or pip install ngsolve)") from err
@@ -227,7 +228,8 @@ def bar_part(length: float, width: float, height: float, *, youngs_modulus: floa
              poissons_ratio: float, density: float, mesh_size: float) -> SolidPart:
     """A jointless rectangular bar ``[0, length] x [-width/2, width/2] x [-height/2,
     height/2]`` [m], second-order tetrahedra (the Euler-Bernoulli check); its top face is the
-    contact face."""
+    contact face.
+    """
     for label, v in (("length", length), ("width", width), ("height", height),
                      ("mesh_size", mesh_size)):
         if isinstance(v, bool) or not isinstance(v, (int, float)) or not v > 0:

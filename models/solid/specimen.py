@@ -26,8 +26,8 @@ from dataclasses import dataclass, field, fields, replace
 
 import numpy as np
 
-from ..specimens.contact import ContactPoints, points_from_forces
 from ..linear.system import attach_setup
+from ..specimens.contact import ContactPoints, points_from_forces
 from ..specimens.specimen import InterfaceModel, Specimen
 
 __all__ = ["PatchLayout", "SolidModel", "SolidSpecimen", "solid_contact_points",
@@ -160,12 +160,13 @@ class SolidSpecimen:
             raise AttributeError(name)
         return getattr(self.specimen, name)
 
-    def replace(self, **changes) -> "SolidSpecimen":
+    def replace(self, **changes) -> SolidSpecimen:
         """A copy with interface or test fields changed (``friction``, ``preload``,
         ``stiffness_per_area``, ``chi``, ``beta``, ``damping_floor``, ``modal_damping``,
         ``amplitude_range``, ``calibrated_range``, ``effects``, ``normal_stiffness_per_area``,
         ...). Fields that change the bodies, the patches or the sensor need a new build
-        (ValueError)."""
+        (ValueError).
+        """
         inames = {f.name for f in fields(InterfaceModel)}
         fixed = set(changes) - _FREE_FIELDS - _FREE_INTERFACE - {"interface"}
         if "interface" in changes:
@@ -190,7 +191,8 @@ class SolidSpecimen:
         ``interface.normal_stiffness_per_area`` (``k_n A`` per patch on the normal gaps), and
         its setup's clamp springs on the clamped face's rigid-body fit
         (:attr:`SolidModel.clamp_rows`) and masses and shaker on the axis rows
-        (:func:`~iwan_element.models.linear.attach_setup`)."""
+        (:func:`~iwan_element.models.linear.attach_setup`).
+        """
         sysm, Gn = self.model.system, self.model.normal_gaps
         kn = self.specimen.interface.normal_stiffness_per_area * self.model.patches.area
         sE, sR = 1.0, 1.0
@@ -210,7 +212,8 @@ class SolidSpecimen:
         """Reduced rows of the z displacement at ``positions`` [m] along the assembly (the
         section's deflection, read as the sensor's ``S`` is: ``solid.build._point_weights``),
         interpolated linearly between the millimetres of :attr:`SolidModel.axis`: shape
-        ``(n, n_reduced)``."""
+        ``(n, n_reduced)``.
+        """
         if self.model.axis is None:
             raise ValueError("this solid model holds no axis rows: build it with "
                              "models.solid.solid_specimen")
@@ -228,14 +231,16 @@ class SolidSpecimen:
 def clamp_stiffness(clamp) -> np.ndarray:
     """The six springs of a setup's clamp on :attr:`SolidModel.clamp_rows`: its
     translational stiffness on the face's translations [N/m], its rotational one on the
-    face's rotations [N m/rad]."""
+    face's rotations [N m/rad].
+    """
     k, kr = clamp.translational, clamp.rotational
     return np.array([k, k, k, kr, kr, kr])
 
 
 def solid_contact_points(specimen: Specimen, patches: PatchLayout) -> ContactPoints:
     """Iwan elements of the patches for a specimen's interface law: per patch an ``x`` and a
-    ``y`` element (module docstring); the normal forces scale with ``specimen.preload``."""
+    ``y`` element (module docstring); the normal forces scale with ``specimen.preload``.
+    """
     N = patches.normal_force * (specimen.preload / patches.preload)
     two = np.repeat
     return points_from_forces(specimen, two(patches.x, 2), two(N, 2), two(patches.area, 2))

@@ -1,5 +1,6 @@
 """What a lap-jointed specimen is: its validated description, the published presets, the
-test setup it carries, and the contact pressure and contact points of its lap."""
+test setup it carries, and the contact pressure and contact points of its lap.
+"""
 from .contact import ContactPoints, beam_contact_points, points_from_forces, pressure_field
 from .presets import PRESET_SETUPS, PRESETS, preset
 from .setups import Clamp, PointMass, Setup, Shaker

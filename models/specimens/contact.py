@@ -139,7 +139,8 @@ def beam_contact_points(specimen: Specimen) -> ContactPoints:
 def points_from_forces(specimen: Specimen, x, normal_force, area) -> ContactPoints:
     """The Iwan elements of contact points with given normal forces [N] and contact areas
     [m^2] (``Fs_i = mu N_i``, ``KT_i = k_t A_i (p_i / p_mean)**m``, module docstring), at
-    positions ``x`` [m] along the assembly; the 1-D strips and the solid's patches share it."""
+    positions ``x`` [m] along the assembly; the 1-D strips and the solid's patches share it.
+    """
     s, itf = specimen, specimen.interface
     x, N, A = (np.asarray(v, float) for v in (x, normal_force, area))
     p_i = N / A

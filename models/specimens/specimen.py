@@ -103,7 +103,8 @@ class InterfaceModel:
 @dataclass(frozen=True)
 class Excitation:
     """How the test excites the specimen: ``kind`` in {"hammer", "shaker", "base"} and the
-    ``position`` [m] along the assembly (ignored for base motion)."""
+    ``position`` [m] along the assembly (ignored for base motion).
+    """
 
     kind: str = "hammer"
     position: float = 0.0
@@ -342,29 +343,32 @@ class Specimen:
 
     @property
     def lap_start(self) -> float:
-        """x of the start of the lap (= start of beam B) [m]."""
+        """X of the start of the lap (= start of beam B) [m]."""
         return self.beam_length - self.overlap
 
     @property
     def cone_radius(self) -> float:
         """Radius of the pressure cone at the interface, ``D_w/2 + t tan(a)`` [m]
-        (docs/equations.md section 7; ``t`` the lap thickness of one beam)."""
+        (docs/equations.md section 7; ``t`` the lap thickness of one beam).
+        """
         a = math.radians(self.interface.cone_angle_deg)
         return 0.5 * self.washer_diameter + self.lap_thickness * math.tan(a)
 
     def floor(self, mode: int) -> float:
         """Linear damping ratio [-] of elastic mode ``mode`` (1: lowest): its entry of
-        ``modal_damping``, else ``interface.damping_floor``."""
+        ``modal_damping``, else ``interface.damping_floor``.
+        """
         if isinstance(mode, bool) or not isinstance(mode, int) or mode < 1:
             raise ValueError(f"mode must be an integer >= 1, got {mode!r}")
         md = self.modal_damping
         return md[mode - 1] if mode <= len(md) else self.interface.damping_floor
 
-    def with_effects(self, effects: dict, *, mode: int = 1, calibrated_range=None) -> "Specimen":
+    def with_effects(self, effects: dict, *, mode: int = 1, calibrated_range=None) -> Specimen:
         """A copy carrying ``effects`` ({name: modal values}) on ``mode`` in addition to its
         own (an effect already carried on that mode is replaced). ``calibrated_range`` [m]:
         the amplitudes the values were fitted on; the copy's calibrated range then spans
-        its own and that one."""
+        its own and that one.
+        """
         new = tuple(SpecimenEffect(n, tuple(v.items()), mode, calibrated_range)
                     for n, v in effects.items())
         keep = tuple(e for e in self.effects if not (e.mode == mode and e.name in effects))
@@ -374,7 +378,7 @@ class Specimen:
             cr = (lo, hi) if cr is None else (min(cr[0], lo), max(cr[1], hi))
         return replace(self, effects=keep + new, calibrated_range=cr)
 
-    def replace(self, **changes) -> "Specimen":
+    def replace(self, **changes) -> Specimen:
         """A validated copy with fields changed; interface fields may be given by name too."""
         names = {f.name for f in fields(self)}
         inames = {f.name for f in fields(InterfaceModel)}

@@ -1,5 +1,6 @@
 """The natural frequencies a specimen's physical parameter ranges allow (the prior band):
-each parameter drawn from its prior, the stuck modes followed by their shapes (MAC)."""
+each parameter drawn from its prior, the stuck modes followed by their shapes (MAC).
+"""
 from __future__ import annotations
 
 import math

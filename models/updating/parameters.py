@@ -158,7 +158,8 @@ def parameter_value(specimen, name: str) -> float:
 
 def with_parameters(specimen, values: dict):
     """A copy of ``specimen`` with the updatable parameters ``values`` ({name: value}) set
-    (the same type: a solid keeps its bodies, scaled for the material)."""
+    (the same type: a solid keeps its bodies, scaled for the material).
+    """
     changes, st = {}, _setup(specimen)
     masses = {m.name: m for m in st.masses}
     sh, cl = st.shaker, st.clamp

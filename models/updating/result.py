@@ -64,7 +64,8 @@ class LinearUpdateResult(ResultShape):
     @property
     def success(self) -> bool:
         """Converged, every asked parameter identified, none on its bound, no misfit beyond
-        the stated errors."""
+        the stated errors.
+        """
         return self.converged and not self.warnings
 
     def failure_reasons(self) -> tuple:
@@ -85,7 +86,7 @@ class LinearUpdateResult(ResultShape):
             se = f"{p.stderr:.3g}" if math.isfinite(p.stderr) else "n/a"
             lines.append(f"  {n + ' [' + p.unit + ']':34s} {self.nominal[n]:12.5g} {p.value:12.5g} "
                          f"{se:>10s} {p.lower:11.4g}..{p.upper:<10.4g}  {p.status}")
-        lines.append(f"  singular values of the weighted sensitivity: "
+        lines.append("  singular values of the weighted sensitivity: "
                      + ", ".join(f"{s:.3g}" for s in self.singular_values))
         lines += table_lines([("target", "<16"), ("measured", "12.6g"), ("before", "12.6g"),
                               ("after", "12.6g"), ("res. before", "11.3f"),
@@ -114,7 +115,8 @@ class LinearUpdateResult(ResultShape):
 
     def plot(self, ax=None):
         """Weighted residual of every target before and after (bars); returns the
-        artists."""
+        artists.
+        """
         (a,) = panels(ax, 1, figsize=(7, 3.5))
         x = np.arange(len(self.residuals))
         arts = list(a.bar(x - 0.2, [r["residual_before"] for r in self.residuals], 0.4,

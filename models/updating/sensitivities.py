@@ -100,7 +100,8 @@ def matrix_derivatives(specimen, params, *, step: float = 1e-4) -> list:
     """``[(dK, dM), ...]``: the stuck stiffness's and the mass's derivatives by each
     parameter's transformed value (``ln p``, or ``p`` for a range from 0), by central
     differences of the assembled system (one-sided where a step would leave the range: a
-    mass at 0); module docstring. ``params``: Updatable rows."""
+    mass at 0); module docstring. ``params``: Updatable rows.
+    """
     out = []
     for u in params:
         th = _transform(u, u.nominal)
@@ -162,7 +163,8 @@ def modal_sensitivities(specimen, modes, params, *, positions=(), state=None) ->
 
 def pair_modes(state: ModalState, reference: ModalState, modes) -> dict:
     """``{mode: column}``: each numbered elastic ``mode`` of ``reference`` followed into
-    ``state`` by the largest mass-weighted MAC (modes may change order as parameters move)."""
+    ``state`` by the largest mass-weighted MAC (modes may change order as parameters move).
+    """
     out = {}
     cross = np.abs(reference.phi.T @ (state.M @ state.phi))
     for r in modes:

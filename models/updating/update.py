@@ -64,7 +64,8 @@ def _pair(v):
 def _real_shape(values: dict) -> tuple:
     """Positions, real signed amplitudes and stderr of a measured shape ``{position [m]:
     amplitude or (amplitude, stderr)}`` (complex amplitudes rotated to the real axis by their
-    mean phase)."""
+    mean phase).
+    """
     items = sorted(((float(p), v) for p, v in values.items()), key=lambda pv: pv[0])
     pos = np.array([p for p, _ in items])
     vals = [v if isinstance(v, (tuple, list)) else (v, 0.0) for _, v in items]
@@ -180,7 +181,8 @@ class _Problem:
     def evaluate(self, theta):
         """``(r, J, raw, (specimen, state, pairs))``: weighted residuals, their Jacobian by
         ``theta``, the model's raw values (the last evaluation is kept: the solver asks for
-        the residuals and the Jacobian at the same point)."""
+        the residuals and the Jacobian at the same point).
+        """
         key = tuple(np.asarray(theta, float))
         if self._last[0] != key:
             with one_blas_thread():         # small dense problems: threads only contend
@@ -220,7 +222,8 @@ class _Problem:
 
 def _identifiable(Js, names) -> tuple:
     """Column-pivoted QR of the prior-scaled weighted sensitivity ``Js``: ``(kept indices,
-    {name: pivot})`` (module docstring, step 3)."""
+    {name: pivot})`` (module docstring, step 3).
+    """
     if Js.shape[0] == 0:
         return [], {}
     _, R, piv = sla.qr(Js, mode="economic", pivoting=True)
@@ -232,7 +235,7 @@ def _identifiable(Js, names) -> tuple:
 
 def linear_update(specimen, *, frequencies, shapes=None, modal_constants=None, parameters,
                   model_error: dict | None = None, ranges: dict | None = None,
-                  predict=None, max_nfev: int = 60) -> "LinearUpdateResult":
+                  predict=None, max_nfev: int = 60) -> LinearUpdateResult:
     """Update a specimen's linear parameters on low-level test data (module docstring).
 
     Parameters
@@ -293,7 +296,8 @@ def linear_update(specimen, *, frequencies, shapes=None, modal_constants=None, p
 def _solve(prob, params, keep, th0, sig, max_nfev, warns):
     """The regularised least squares of :func:`linear_update` over the identifiable
     parameters ``keep`` (module docstring, step 4): ``(theta, converged, nfev)``; a
-    parameter ending on its bound is named in ``warns``."""
+    parameter ending on its bound is named in ``warns``.
+    """
     lo = np.array([_theta(params[k], params[k].lower) for k in keep])
     hi = np.array([_theta(params[k], params[k].upper) for k in keep])
 

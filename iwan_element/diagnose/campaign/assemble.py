@@ -1,7 +1,8 @@
 """Assembly of a campaign fit's result: the law coefficients' covariance (delta method),
 the coefficients in the conditions' own units, the per-record agreement table and the
 record-to-record scatter, gathered into a :class:`~.result.CampaignFit`
-(steps 4-6 of :mod:`.fit`; equations in ``docs/campaign.md``)."""
+(steps 4-6 of :mod:`.fit`; equations in ``docs/campaign.md``).
+"""
 from __future__ import annotations
 
 import math
@@ -11,8 +12,8 @@ import numpy as np
 
 from ...fitting import Parameter, ParameterTable, covariance, verdict
 from ...identify.loops.noise import integrated_time
-from . import model as CM
 from ..loops.batch import band_misfit
+from . import model as CM
 from .model import full_force
 from .result import CampaignFit, law_at
 
@@ -27,7 +28,8 @@ def _covariance(model, theta, T):
     by ``1 / (s_r sqrt(tau_r))`` with ``s_r``, ``tau_r`` the RMS and correlation time of the
     campaign residual on that record, ``s^2 = n / (n - p)``; the law coefficients
     ``T theta[:n_glob]`` by the delta method (NaN along a degenerate direction). Returns
-    ``(cov, J, s, tau, stderr of the coefficients)``."""
+    ``(cov, J, s, tau, stderr of the coefficients)``.
+    """
     J = model.jacobian(theta)
     s, tau = [], []
     Jw = np.empty_like(J)
@@ -50,7 +52,8 @@ def _covariance(model, theta, T):
 
 def to_physical(model):
     """Matrix ``T`` with ``coefficients = T theta[:n_glob]`` (laws in the conditions' own
-    units: ``q = a + sum_c b_c x_c``) and the coefficient labels ``(quantity, term)``."""
+    units: ``q = a + sum_c b_c x_c``) and the coefficient labels ``(quantity, term)``.
+    """
     T = np.zeros((model.n_glob, model.n_glob))
     labels = []
     for q in model.qnames:
@@ -102,7 +105,8 @@ def _rows(model, theta, cov_int, preps, labels):
 
 def _scatter(model, theta, free):
     """``(sd per quantity, covariance)`` of the record-to-record scatter about the laws
-    (empty dict and None without ``free``)."""
+    (empty dict and None without ``free``).
+    """
     if free is None or sum(f is not None for f in free) < 2:
         return {}, None
     D, dof = CM.deviations(model, theta, free)
@@ -113,7 +117,8 @@ def _scatter(model, theta, free):
 
 def _coef_unit(unit: str, term: str) -> str:
     """Unit of a law coefficient: the quantity's, per unit of the condition for a slope
-    (conditions in their own units, ``"[cond]"``)."""
+    (conditions in their own units, ``"[cond]"``).
+    """
     return unit if term == "1" else f"{unit}/[{term}]"
 
 

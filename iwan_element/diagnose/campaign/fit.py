@@ -44,21 +44,20 @@ import time
 from dataclasses import replace
 
 import numpy as np
-from scipy.optimize import least_squares
 
+from ...base.progress import finish, progress_bar
 from ...base.serialize import json_safe
 from ...base.validation import check_int
 from ...effects import EFFECTS
 from ...effects.engine.evaluate import order_stack, stack_ok
 from ...ensemble import run_ensemble
-from ...base.progress import finish, progress_bar
+from ..loops.batch import check_options, check_records, executor_for
+from ..loops.diagnosis import diagnose
 from . import model as CM
 from .assemble import assemble
 from .model import build_model, solve
 from .probability import campaign_explanations, probable_alternatives
 from .result import CampaignFit
-from ..loops.batch import check_options, check_records, executor_for
-from ..loops.diagnosis import diagnose
 
 __all__ = ["fit_campaign", "CampaignFit"]
 
@@ -126,7 +125,8 @@ def _diagnose_records(recs, labels, opts, diagnoses, jobs, client, progress):
 def _common_stack(preps, effects, explanations=()):
     """The campaign's effect stack: ``effects``, or the most probable explanation over all
     records (:mod:`.probability`), or (records diagnosed without probabilities)
-    the effects named on >= half the records."""
+    the effects named on >= half the records.
+    """
     if effects is not None:
         names = (effects,) if isinstance(effects, str) else tuple(effects)
         unknown = [n for n in names if n not in EFFECTS]
@@ -156,7 +156,8 @@ def _common_stack(preps, effects, explanations=()):
 
 def _start_values(model, preps):
     """Law start: each quantity's per-record estimates regressed on its conditions (records
-    without an estimate, e.g. an effect they did not name, left out of that regression)."""
+    without an estimate, e.g. an effect they did not name, left out of that regression).
+    """
     theta = np.zeros(model.n_theta)
     for q in model.qnames:
         A = CM.design(model.X, model.cnames, model.laws[q], model.centre, model.cscale)
@@ -175,7 +176,8 @@ def _start_values(model, preps):
 
 def _no_effect(model, q) -> float:
     """An effect parameter's first non-zero fitting start, in internal units (the law's
-    internal scale is the physical value of fitting variable 1, :func:`build_model`)."""
+    internal scale is the physical value of fitting variable 1, :func:`build_model`).
+    """
     nm, sp = CM.quantities(model.names)[2][q]
     z = float(sp.fit_starts[min(1, len(sp.fit_starts) - 1)])
     if not CM.log_form(sp):
@@ -188,10 +190,11 @@ def record_values(model, theta, preps, *, max_nfev: int = 60):
     """Each record's own values with the campaign's stack (its quantities fitted to it alone,
     every law a constant; warm-started at its own estimates, else at the laws), in the form
     :func:`.model.in_range` gives; None where that fit fails. The record-to-record
-    scatter about the laws is read from them (:func:`.model.deviations`)."""
+    scatter about the laws is read from them (:func:`.model.deviations`).
+    """
     out = []
     for r, p in enumerate(preps):
-        sub = build_model([p], model.names, {q: () for q in model.qnames}, model.cnames,
+        sub = build_model([p], model.names, dict.fromkeys(model.qnames, ()), model.cnames,
                           model.X[[r]])
         law = model.law_values(theta, model.X[r])
         th0 = np.zeros(sub.n_theta)
@@ -310,7 +313,8 @@ def fit_campaign(records, conditions, *, effects=None, laws=None, names=None, di
 def _fit_stack(names_, stack_from, warns, *, preps, labels, X, laws, cnames, max_nfev,
                scatter, progress, opts, t0, t_diag):
     """The campaign model with the stack ``names_`` fitted to the prepared records: laws,
-    joint fit, record scatter, result (steps 2-6 of the module docstring)."""
+    joint fit, record scatter, result (steps 2-6 of the module docstring).
+    """
     qnames, units, _ = CM.quantities(names_)
     laws_, lwarn = CM.resolve_laws(laws, qnames, cnames, X)
     model = build_model(preps, names_, laws_, cnames, X)

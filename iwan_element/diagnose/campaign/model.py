@@ -14,8 +14,8 @@ from ...base.validation import finite_array
 from ...effects import EFFECTS
 from ...effects.engine.evaluate import Evaluator
 from ...fitting import normal_inverse
-from ..loops import model as M
 from ...identify.loops.noise import integrated_time
+from ..loops import model as M
 from ..loops.batch import band_misfit
 from ..loops.prepare import dissipation_scale, drive_structure, effect_scales, fitted_samples
 from .probability import record_explanations
@@ -30,14 +30,16 @@ BAND = 0.25                          # the band misfit's |F| < BAND max|F|
 
 def log_form(spec) -> bool:
     """True for a parameter bounded on one side only (a gap, a drag, a ratio >= 1): its law
-    is on ``ln(value - lower)``, which keeps every law value in range without clipping."""
+    is on ``ln(value - lower)``, which keeps every law value in range without clipping.
+    """
     return math.isfinite(spec.lower) and math.isinf(spec.upper)
 
 
 def effect_quantity(name: str, spec) -> str:
     """Law name of an effect parameter: its value per ``Fs**fs_power`` (the unit-force form,
     homogeneous of degree zero in the force scale), as ``ln(value - lower)`` for a parameter
-    bounded on one side (:func:`log_form`)."""
+    bounded on one side (:func:`log_form`).
+    """
     suffix = {0: "", 1: "/Fs", -1: "*Fs"}.get(spec.fs_power, f"/Fs^{spec.fs_power}")
     q = f"{name}.{spec.name}{suffix}"
     if log_form(spec):
@@ -47,7 +49,8 @@ def effect_quantity(name: str, spec) -> str:
 
 def to_law(spec, value: float) -> float:
     """A unit-force parameter value in its law's form (NaN at the lower bound of a log form:
-    no information on the logarithm's scale)."""
+    no information on the logarithm's scale).
+    """
     if not log_form(spec):
         return value
     d = value - spec.lower
@@ -61,7 +64,8 @@ def from_law(spec, v: float) -> float:
 
 def quantities(names) -> tuple:
     """``(law names, units, specs)`` of the stack ``names``: the joint's four, then every
-    effect parameter in its law form (``specs``: quantity -> (effect, ParamSpec))."""
+    effect parameter in its law form (``specs``: quantity -> (effect, ParamSpec)).
+    """
     q, units, specs = list(BASE_QUANTITIES), dict(BASE_UNITS), {}
     for nm in names:
         for sp in EFFECTS[nm].specs:
@@ -106,7 +110,8 @@ def check_conditions(conditions, n: int):
 def precheck_laws(laws, cnames, X):
     """The checks of :func:`resolve_laws` that need no effect stack (made before the records
     are diagnosed): quantities of known form, conditions that exist and vary, enough
-    records for the joint's default laws."""
+    records for the joint's default laws.
+    """
     if laws is not None and not isinstance(laws, dict):
         raise ValueError(f"laws must be a dict {{quantity: conditions}}, got {type(laws).__name__}")
     known = set(BASE_QUANTITIES) | {effect_quantity(nm, sp) for nm, cls in EFFECTS.items()
@@ -121,7 +126,8 @@ def precheck_laws(laws, cnames, X):
 
 def resolve_laws(laws, qnames, cnames, X):
     """Conditions of each quantity's law: ``laws[q]`` if given (each must vary over the
-    records), else every condition that varies. Returns ``(dict q -> tuple, warnings)``."""
+    records), else every condition that varies. Returns ``(dict q -> tuple, warnings)``.
+    """
     varies = {c: bool(np.ptp(X[:, j]) > 0) for j, c in enumerate(cnames)}
     laws = {} if laws is None else dict(laws)
     out, warns = {}, []
@@ -173,7 +179,8 @@ def design(X, cnames, conds, centre=None, scale=None):
 def record_from_diagnosis(d, max_samples: int) -> dict:
     """What the campaign fit needs of one record's :class:`Diagnosis`: the record as fitted
     (low-passed, displacement from the rest position), the fitted samples, the per-record
-    estimates, the noise and the own fit's misfit (plain arrays, picklable)."""
+    estimates, the noise and the own fit's misfit (plain arrays, picklable).
+    """
     t = np.asarray(d.t, float)
     uj = np.asarray(d.u, float) - float(d.offsets["displacement"])
     F = np.asarray(d.F, float)
@@ -254,7 +261,8 @@ class CampaignModel:
 
     def physical(self, vals, rm):
         """``(Fs, shape, effect dicts)`` of law values on record model ``rm`` (clipped into
-        the range a fit may take there)."""
+        the range a fit may take there).
+        """
         x = rm.x_max
         phi = x * min(max(math.exp(min(vals["log_phi_max"], 700.0)) / x, M.PHI_RANGE[0]),
                       M.PHI_RANGE[1])
@@ -275,7 +283,8 @@ class CampaignModel:
         """Quantities whose law leaves the range a record's fit may take, with the records
         where it does: ``{quantity: [record index, ...]}``. There :meth:`physical` clips the
         value, the misfit no longer depends on the law's coefficients, and their standard
-        errors claim a precision the records do not give."""
+        errors claim a precision the records do not give.
+        """
         out = {}
         for r, rm in enumerate(self.records):
             vals = self.law_values(theta, self.X[r])
@@ -298,7 +307,8 @@ class CampaignModel:
 
     def record_force(self, theta, r, vals=None, start=None):
         """``Fs g`` [N] of record ``r`` at its fitted samples (no offset), or None if the
-        model cannot be evaluated there."""
+        model cannot be evaluated there.
+        """
         rm = self.records[r]
         vals = self.law_values(theta, self.X[r]) if vals is None else vals
         Fs, shape, effs = self.physical(vals, rm)
@@ -327,7 +337,8 @@ class CampaignModel:
 
     def sparsity(self):
         """Jacobian structure: every row depends on the law coefficients, a start only on
-        its own record's rows."""
+        its own record's rows.
+        """
         S = lil_matrix((int(self.rows[-1]), self.n_theta), dtype=np.int8)
         S[:, :self.n_glob] = 1
         for r, k in self.start_pos.items():
@@ -336,7 +347,8 @@ class CampaignModel:
 
     def jacobian(self, theta):
         """Unweighted Jacobian ``d residual / d theta`` by central differences (two steps;
-        samples whose force jumps between them are left out, :func:`..loops.model.jumps`)."""
+        samples whose force jumps between them are left out, :func:`..loops.model.jumps`).
+        """
         J = np.zeros((int(self.rows[-1]), self.n_theta))
 
         def diff(j, h, rs):
@@ -360,7 +372,8 @@ class CampaignModel:
 
 def in_range(model, vals, rm) -> dict:
     """Law-form values as the model uses them on record model ``rm`` (clipped where
-    :meth:`CampaignModel.physical` clips; NaN for a one-sided parameter at its bound)."""
+    :meth:`CampaignModel.physical` clips; NaN for a one-sided parameter at its bound).
+    """
     Fs, (phi, chi, beta), effs = model.physical(vals, rm)
     out = {"Fs": Fs, "log_phi_max": math.log(phi), "chi": chi, "log1p_beta": math.log1p(beta)}
     for nm, d in zip(model.names, effs):
@@ -374,7 +387,8 @@ def deviations(model, theta, free, skip=None):
     campaign's stack (``free[r]``, :func:`in_range` form; None: no such fit) from the laws at
     its conditions, one column per quantity (``Fs`` as ``ln(Fs_r / Fs_law)``: the slip
     force scatters in proportion, not by a fixed number of newtons); NaN where a value is
-    missing. ``dof`` per quantity: records with a value minus the law's coefficients."""
+    missing. ``dof`` per quantity: records with a value minus the law's coefficients.
+    """
     rows = []
     for r, f in enumerate(free):
         if r == skip or f is None:
@@ -392,7 +406,8 @@ def deviations(model, theta, free, skip=None):
 def scatter_cov(D, dof) -> np.ndarray:
     """Covariance of the record-to-record scatter about the laws (a random effect per record
     and quantity, method of moments): ``S_kl = sum_r d_rk d_rl / sqrt(dof_k dof_l)`` over the
-    records with both values (docs/campaign.md section 6)."""
+    records with both values (docs/campaign.md section 6).
+    """
     ok = np.isfinite(D)
     Z = np.where(ok, D, 0.0)
     return (Z.T @ Z) / np.sqrt(np.outer(dof, dof))
@@ -412,7 +427,8 @@ def scatter_coef_cov(model, theta, S, skip=None) -> np.ndarray:
     quantity) that the record-to-record scatter ``S`` gives: each record's value of a
     quantity off its law by a random effect of variance ``S_kk`` (``Fs``: relative, so
     ``(S_00 Fs_law(x_r)^2``), the generalised least-squares covariance
-    ``(A^T V^-1 A)^-1`` of the law over the records (``skip`` left out)."""
+    ``(A^T V^-1 A)^-1`` of the law over the records (``skip`` left out).
+    """
     C = np.zeros((model.n_glob, model.n_glob))
     rs = [r for r in range(model.X.shape[0]) if r != skip]
     for k, q in enumerate(model.qnames):
@@ -455,7 +471,8 @@ def solve(model, theta0, *, max_nfev, bar=None):
 
 def full_force(model, theta, r, prep, vals=None, start=None):
     """Campaign force [N] of record ``r`` at every sample, offset included (fitted on the
-    record's fitted samples), and the offset."""
+    record's fitted samples), and the offset.
+    """
     rm_full = RecordModel(prep, full=True)
     vals = model.law_values(theta, model.X[r]) if vals is None else vals
     start = model.start(theta, r) if start is None else start

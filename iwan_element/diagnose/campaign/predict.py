@@ -1,6 +1,7 @@
 """Prediction of a campaign model at conditions, and its leave-one-out check; the methods
 :meth:`~.result.CampaignFit.predict` and :meth:`~.result.CampaignFit.leave_one_out` call
-these (equations in ``docs/campaign.md``)."""
+these (equations in ``docs/campaign.md``).
+"""
 from __future__ import annotations
 
 import math
@@ -9,15 +10,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ...base.result_shape import ResultShape, table_lines
+from ...base.result_shape import ResultShape, axes_or_new, table_lines
 from ...base.serialize import json_safe
 from ...base.validation import check_int, check_scalar, check_time, finite_array
 from ...ensemble import run_ensemble
-from ...base.result_shape import axes_or_new
-from . import model as CM
 from ..loops import model as M
-from .model import build_model, full_force, solve
 from ..loops.batch import band_misfit, executor_for
+from . import model as CM
+from .model import build_model, full_force, solve
 
 __all__ = ["CampaignPrediction", "LeaveOneOut", "condition_vector", "predict", "leave_one_out",
            "predict_record", "draw_values"]
@@ -39,7 +39,8 @@ def condition_vector(cnames, conditions) -> np.ndarray:
 class CampaignPrediction(ResultShape):
     """Predicted force history at a condition: ``force`` [N] and its band ``lower``,
     ``upper`` [N] (probability ``level``, from the law coefficients' uncertainty), with the
-    law values used and ``warnings`` (extrapolation)."""
+    law values used and ``warnings`` (extrapolation).
+    """
 
     t: np.ndarray
     u: np.ndarray
@@ -73,7 +74,8 @@ class CampaignPrediction(ResultShape):
     def plot(self, ax=None, *, measured=None):
         """Force against displacement: the prediction, its band (as a shaded envelope in
         time order) and ``measured`` (a force array of the same length) if given. Returns
-        the artists."""
+        the artists.
+        """
         ax = axes_or_new(ax)
         arts = []
         if measured is not None:
@@ -108,7 +110,8 @@ def _force(model, rm, vals, start):
 def draw_values(model, theta, cov, S, x, rng, draws):
     """``draws`` law-value dicts at conditions ``x``: coefficients from ``N(theta, cov)`` and,
     when ``S`` (the scatter covariance) is given, a record-to-record deviation from
-    ``N(0, S)`` (:func:`.model.perturb`). Draws with ``Fs <= 0`` are left out."""
+    ``N(0, S)`` (:func:`.model.perturb`). Draws with ``Fs <= 0`` are left out.
+    """
     ng = model.n_glob
     L = _chol(cov)
     Ls = None if S is None else _chol(S)
@@ -187,7 +190,8 @@ def predict_record(model, theta, r, prep, bands=(), vals=None):
     whose measured force lies in the prediction's band (coefficients from ``cov``, scatter
     from ``S``; nuisances held at the central prediction's), NaN where none can be drawn.
     ``vals``: law values to use instead of ``theta``'s (e.g. some of the record's own, to
-    attribute the misfit)."""
+    attribute the misfit).
+    """
     best = (math.inf, 0.0)
     vals = model.law_values(theta, model.X[r]) if vals is None else vals
     for g in M.START_GRID:
@@ -217,7 +221,8 @@ def predict_record(model, theta, r, prep, bands=(), vals=None):
 
 def _loo_step(model, theta, J, i):
     """One Gauss-Newton step from the full fit to the fit without record ``i`` (the weighted
-    normal equations with its rows and its start column removed)."""
+    normal equations with its rows and its start column removed).
+    """
     rows = np.r_[0:model.rows[i], model.rows[i + 1]:model.rows[-1]]
     cols = [k for k in range(model.n_theta) if k != model.start_pos.get(i, -1)]
     w = np.concatenate([np.full(rm.y.size, rm.weight) for rm in model.records])
@@ -233,7 +238,8 @@ def _loo_predict(model, th, i, prep, free, cov, cover) -> dict:
     """Band misfit of record ``i`` predicted from ``th`` and, when ``cover = (draws, level,
     seed)``, the coverage of its band samples by the prediction band with the scatter read
     from the other records (``coverage``) and by the coefficients' band alone
-    (``coverage_coef``)."""
+    (``coverage_coef``).
+    """
     if cover is None:
         return {"band_pred": predict_record(model, th, i, prep)[0], "coverage": math.nan,
                 "coverage_coef": math.nan}
@@ -278,7 +284,8 @@ class LeaveOneOut(ResultShape):
     fit, their ratio, and the share of records within :data:`LOO_TARGET` (1.5); with
     ``coverage=True`` also the share of its band samples inside the prediction band, with
     the record-to-record scatter (``coverage``) and without it (``coverage_coef``), and
-    their medians over the records (``coverage``, ``coverage_coef``, NaN if not asked)."""
+    their medians over the records (``coverage``, ``coverage_coef``, NaN if not asked).
+    """
 
     rows: tuple
     refit: str
@@ -312,7 +319,8 @@ class LeaveOneOut(ResultShape):
 
     def plot(self, ax=None):
         """Ratio of the prediction's band misfit to the own fit's per record (bars), with the
-        1.5 target. Returns the artists."""
+        1.5 target. Returns the artists.
+        """
         ax = axes_or_new(ax)
         x = np.arange(len(self.rows))
         arts = list(ax.bar(x, [r["ratio"] for r in self.rows], 0.6))

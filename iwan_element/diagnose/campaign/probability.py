@@ -27,7 +27,8 @@ __all__ = ["record_explanations", "campaign_explanations", "campaign_band"]
 
 def record_explanations(d) -> dict:
     """What the campaign keeps of a record's diagnosis ``d``: ``{"explanations": [[effects,
-    ln Z, chi2, n_params]], "candidates": [...]}`` (JSON-safe)."""
+    ln Z, chi2, n_params]], "candidates": [...]}`` (JSON-safe).
+    """
     cands = sorted({n for e in d.explanations for n in e.effects}
                    | set(d.details.get("candidates", ())))
     return {"explanations": [[list(e.effects), float(e.log_evidence), float(e.chi2),
@@ -37,7 +38,8 @@ def record_explanations(d) -> dict:
 
 def campaign_explanations(preps, effect_prior=None) -> tuple:
     """The campaign's explanations with their probabilities (module docstring), most probable
-    first; empty when a record has none (diagnosed without probabilities)."""
+    first; empty when a record has none (diagnosed without probabilities).
+    """
     if not preps or any(not p.get("explanations") for p in preps):
         return ()
     common = None
@@ -46,9 +48,9 @@ def campaign_explanations(preps, effect_prior=None) -> tuple:
         common = keys if common is None else common & keys
     if not common:
         return ()
-    lz = {k: 0.0 for k in common}
-    chi2 = {k: 0.0 for k in common}
-    npar = {k: 0 for k in common}
+    lz = dict.fromkeys(common, 0.0)
+    chi2 = dict.fromkeys(common, 0.0)
+    npar = dict.fromkeys(common, 0)
     for p in preps:
         for eff, z, c, q in p["explanations"]:
             k = tuple(eff)
@@ -76,7 +78,8 @@ def campaign_band(fit, conditions, t, u, *, level: float = 0.95, **options):
     explanation's campaign model (:attr:`CampaignFit.alternatives`, the fit itself for its
     own stack) predicts with its band (:meth:`CampaignFit.predict`, ``options`` passed on),
     read as a Gaussian of the band's half-width over the normal quantile; weights their
-    probabilities."""
+    probabilities.
+    """
     parts, warns = [], []
     z = float(ndtri(0.5 * (1.0 + level)))
     mem = members(fit.explanations) if fit.explanations else []
@@ -104,7 +107,8 @@ def campaign_band(fit, conditions, t, u, *, level: float = 0.95, **options):
 
 def probable_alternatives(explanations, stack) -> list:
     """Explanations other than ``stack`` probable enough to be averaged (their campaign
-    models are fitted too)."""
+    models are fitted too).
+    """
     return [e.effects for e in explanations
             if e.probability >= MIN_WEIGHT and set(e.effects) != set(stack)]
 

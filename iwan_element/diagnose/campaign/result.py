@@ -1,6 +1,7 @@
 """The result of a campaign fit, :class:`CampaignFit`: law coefficients with their
 uncertainty, the per-record agreement table, and the methods that predict and cross-check
-(:mod:`.predict`); :mod:`.assemble` builds it."""
+(:mod:`.predict`); :mod:`.assemble` builds it.
+"""
 from __future__ import annotations
 
 import math
@@ -8,12 +9,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ...base.result_shape import ResultShape, table_lines, unit_label
+from ...base.result_shape import ResultShape, axes_or_new, table_lines, unit_label
 from ...base.serialize import json_safe
 from ...fitting import ParameterTable
-from ...base.result_shape import axes_or_new
-from . import model as CM
 from ..selection.probabilities import Probable
+from . import model as CM
 from .predict import condition_vector
 from .predict import leave_one_out as campaign_leave_one_out
 from .predict import predict as campaign_predict
@@ -116,7 +116,8 @@ class CampaignFit(Probable, ResultShape):
     def averaged_band(self, conditions, t, u, *, level: float = 0.95, **options):
         """The force at ``conditions`` (tested or not) under ``(t, u)`` averaged over the
         probable explanations, each campaign model with its own band (:meth:`predict`,
-        ``options`` passed on): :class:`~iwan_element.diagnose.averaging.AveragedBand`."""
+        ``options`` passed on): :class:`~iwan_element.diagnose.averaging.AveragedBand`.
+        """
         return campaign_band(self, conditions, t, u, level=level, **options)
 
     def _tables(self) -> list:

@@ -21,10 +21,10 @@ from pathlib import Path
 
 import numpy as np
 
+from ...base.result_shape import ResultShape, panels
 from ...base.validation import check_scalar, finite_array
 from ...ensemble import run_ensemble
 from .diagnosis import diagnose
-from ...base.result_shape import ResultShape, panels
 
 __all__ = ["diagnose_many", "BatchDiagnosis", "band_misfit", "check_records", "check_options",
            "executor_for"]
@@ -95,7 +95,8 @@ def check_options(options):
 
 def executor_for(jobs: int, client):
     """The executor of ``run_ensemble`` for ``jobs`` local processes or a Dask ``client``
-    (``"serial"`` for one job); the caller shuts down a process pool it gets."""
+    (``"serial"`` for one job); the caller shuts down a process pool it gets.
+    """
     if client is not None:
         return client
     if jobs == 1:
@@ -105,7 +106,7 @@ def executor_for(jobs: int, client):
 
 
 def diagnose_many(records, *, names=None, executor=None, progress: bool = False,
-                  band: float = 0.25, seed=None, **options) -> "BatchDiagnosis":
+                  band: float = 0.25, seed=None, **options) -> BatchDiagnosis:
     """Diagnose every record of a campaign, on local processes, serially or on Dask.
 
     Parameters

@@ -37,22 +37,28 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from ...base.progress import finish, progress_bar, set_total, tick
 from ...base.threads import one_blas_thread
 from ...base.validation import check_int, check_scalar
 from ...effects import EFFECTS
 from ...effects.engine.evaluate import order_stack, stack_ok
-from ...base.progress import finish, progress_bar, set_total, tick
-from .locate import _check_candidates
-from .noise import NoiseLevel, noise_level, pure_noise
-from .fit import StackFitter, final_fits, fit_base, record_force, z_start
-from .prepare import (PreparedRecord, check_record, dissipation_scale, prepare_record,
-                      record_cycles, untestable)
-from .report import assemble
-from .result import Diagnosis
-from ..selection.rule import SelectionResult, misfit_p, stepwise_select
-from .evidence import collect_fits, loop_evaluator
 from ..selection.nested import nested_options
 from ..selection.probabilities import check_effect_prior, key, rank
+from ..selection.rule import SelectionResult, misfit_p, stepwise_select
+from .evidence import collect_fits, loop_evaluator
+from .fit import StackFitter, final_fits, fit_base, record_force, z_start
+from .locate import _check_candidates
+from .noise import NoiseLevel, noise_level, pure_noise
+from .prepare import (
+    PreparedRecord,
+    check_record,
+    dissipation_scale,
+    prepare_record,
+    record_cycles,
+    untestable,
+)
+from .report import assemble
+from .result import Diagnosis
 
 __all__ = ["diagnose", "loop_candidates", "LoopSelection", "select"]
 
@@ -63,7 +69,8 @@ def loop_candidates() -> tuple:
     """Names of the effects :func:`diagnose` tries by default, in the order they are reported:
     every effect in :data:`~iwan_element.EFFECTS` that declares a ``loop_rank``, by that rank
     (read when called, as :func:`~iwan_element.diagnose.vibration.vibration_candidates` is, so
-    an effect registered later joins too)."""
+    an effect registered later joins too).
+    """
     return tuple(sorted((n for n, c in EFFECTS.items() if c.loop_rank is not None),
                         key=lambda n: EFFECTS[n].loop_rank))
 
@@ -216,7 +223,8 @@ def select(fitter: StackFitter, base: dict, rec: PreparedRecord, nl: NoiseLevel,
     """The selection stage: the rule over the candidates the record can test, repeated with
     the noise re-read from the residual of the model it selected unless the noise was given
     (a large misfit leaks into the plain fit's residual and inflates the noise estimate, which
-    can hide a further effect; the fits are reused)."""
+    can hide a further effect; the fits are reused).
+    """
     why = untestable(rec, cand)
     testable = tuple(c for c in cand if c not in why)
     cycles = record_cycles(rec)
@@ -250,7 +258,8 @@ def most_probable(sel: LoopSelection, base: dict, rec: PreparedRecord,
     """The probability stage: every explanation the selection fitted with its posterior
     probability (:mod:`..selection.probabilities`), and the most probable one named (the rule's own
     answer kept in ``rule_named``). A record that is noise names nothing whatever the
-    probabilities say (nothing is identified on it)."""
+    probabilities say (nothing is identified on it).
+    """
     nl = sel.noise
     fits = collect_fits(base, sel.steps)
     expl = rank(fits, tau=nl.tau_k, n_eff=nl.n_eff,
@@ -271,7 +280,8 @@ def most_probable(sel: LoopSelection, base: dict, rec: PreparedRecord,
 def _run_rule(fitter, base, rec, testable, nl, opts, bar, explore=True) -> SelectionResult:
     """One run of the shared selection rule over ``testable`` (``bar``: a progress bar
     counting the fits; ``explore``: fit the single effects even when the plain joint's
-    misfit is noise, for the probabilities)."""
+    misfit is noise, for the probabilities).
+    """
     span = float(np.ptp(rec.F)) or 1.0
     nf = fitter.y.size
 

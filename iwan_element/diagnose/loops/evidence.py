@@ -21,8 +21,8 @@ from ...core.parameters import IwanParameters
 from ...effects import EFFECTS
 from ...effects.engine.evaluate import build_element, scale_effect
 from ...fitting.evidence import Ridge
-from . import model as M
 from ..selection.probabilities import key
+from . import model as M
 
 __all__ = ["loop_evaluator", "collect_fits", "member_force", "n_variables"]
 
@@ -34,7 +34,8 @@ def n_variables(stack) -> int:
 
 def collect_fits(base: dict, steps) -> dict:
     """``{key: (stack, chi2, n_params, fitter row)}``: the best fit of each explanation the
-    selection fitted (``base``: the plain joint's row; ``steps``: the rule's step table)."""
+    selection fitted (``base``: the plain joint's row; ``steps``: the rule's step table).
+    """
     out = {(): ((), float(base["chi2"]), 5, base)}
     for st in steps:
         for r in st["rows"]:
@@ -67,7 +68,8 @@ def loop_evaluator(sigma: float, span: float):
     """``evaluate(stack, row)`` for :func:`.probabilities.rank` on a loop record: the
     noise-normalised Jacobian (kept in the row's cache, where the final fit's uncertainty
     finds it) and residual, the variables and their prior box; ``sigma`` [N]: the noise the
-    selection scored against, ``span`` [N]: the force range."""
+    selection scored against, ``span`` [N]: the force range.
+    """
     def evaluate(stack, row):
         cache = row.setdefault("cache", {})
         if "jac" not in cache:
@@ -122,7 +124,8 @@ def microslip_ridge(stack, theta, hi, chi2_at, *, J=None) -> Ridge | None:
     itself may sit where the ridge ends, macroslip just reached at the largest
     displacement); not tested (None) when the noise-normalised Jacobian ``J`` at the fit
     predicts a change of ``chi2`` above 1e4 at the first point (a record well into
-    macroslip: no evaluation of the model)."""
+    macroslip: no evaluation of the model).
+    """
     nz = n_variables(stack)
     chi, lb0, Fs0 = float(theta[1]), float(theta[2]), float(theta[-2])
     k, a = chi + 1.0, (chi + 1.0) / (chi + 2.0)
@@ -161,7 +164,8 @@ __all__ += ["microslip_ridge"]
 def member_physical(stack, theta, x_max: float, scales: dict):
     """``(IwanParameters, effect dicts [SI], F0 [N], start [m])`` of a loop fit's variables
     ``theta`` (module docstring) on a record of largest |u| ``x_max`` and fit scales
-    ``scales``."""
+    ``scales``.
+    """
     nz = n_variables(stack)
     z = theta[:nz]
     start = float(theta[nz]) if theta.size - nz == 3 else 0.0
@@ -180,7 +184,8 @@ def member_physical(stack, theta, x_max: float, scales: dict):
 
 def member_force(stack, theta, x_max, scales, u, v):
     """Force [N] of a loop fit's variables ``theta`` on the drive ``u`` [m], ``v`` [m/s]
-    from the joint's rest, its fitted starting state and force offset included."""
+    from the joint's rest, its fitted starting state and force offset included.
+    """
     p, effs, F0, start = member_physical(stack, theta, x_max, scales)
     el = build_element(p, stack, effs)
     ue, ve = np.concatenate([[start], u]), np.concatenate([[0.0], v])
@@ -193,7 +198,8 @@ __all__ += ["member_physical"]
 
 def loop_band(diag, t, u, level: float):
     """The model-averaged force of a loop diagnosis ``diag`` on the drive ``(t, u)`` (None:
-    the record as fitted): :class:`.averaging.AveragedBand` with channel ``"force"`` [N]."""
+    the record as fitted): :class:`.averaging.AveragedBand` with channel ``"force"`` [N].
+    """
     from ...base.validation import check_time, finite_array
     from ..selection.averaging import band, linear_spread, members
     if not diag.explanations:

@@ -20,8 +20,8 @@ from ...base.serialize import json_safe
 from ...effects import EFFECTS
 from ...effects.engine.evaluate import Evaluator, build_element
 from ...fitting import fit_success
-from ...identify.loops.identifiability import microslip_warning, min_macroslip
 from ...identify.loops.fit import fit_loops
+from ...identify.loops.identifiability import microslip_warning, min_macroslip
 from ...identify.loops.result import failure_list, quiet_fits, required_parameters, settle_verdict
 from . import model as M
 
@@ -58,7 +58,8 @@ class StackFitter:
     def run(self, names, starts, scan=None):
         """Fit ``names`` from ``starts``; ``scan``: the newly added effect, whose ``fit_scan``
         grid (if it has one) seeds the starts by a 1-D scan (:func:`.model.scan_starts`).
-        Fits do not depend on sigma, so a re-selection reuses them (memo)."""
+        Fits do not depend on sigma, so a re-selection reuses them (memo).
+        """
         key = (tuple(names), scan, b"".join(np.asarray(z, float).tobytes() for z in starts))
         row = self.__dict__.setdefault("_memo", {}).get(key)
         if row is None:
@@ -106,7 +107,8 @@ def z_start(names, prev_names, prev_z, which):
 def fit_base(fitter, rec, *, seed):
     """The plain Iwan model (with the force offset) on the prepared record ``rec``, from the
     plain loop fit's shape (:func:`~iwan_element.fit_loops`, ``seed`` its random starts) and
-    from defaults."""
+    from defaults.
+    """
     ev, shape0 = rec.ev, _base_start(rec.t, rec.uj, rec.F, seed)
     starts = [np.array([0.0, -0.5, math.log1p(0.5)]), np.array([-1.0, -0.8, math.log1p(3.0)])]
     if shape0 is not None:
@@ -177,7 +179,8 @@ def stack_fit(row, fitter, FF, F_model, t_start, *, noise_only=False):
 def record_force(row, uj, v):
     """Force [N] of a fitted stack on the whole record ``uj``, ``v`` (the fitter's record),
     offset included, and the element. Kept in the row's ``cache``: the noise re-reading of
-    the selection and the final fits ask for the same stack's force."""
+    the selection and the final fits ask for the same stack's force.
+    """
     cache = row.get("cache")
     if cache is not None and "force" in cache:
         return cache["force"]
@@ -219,7 +222,8 @@ class FinalFits:
 def final_fits(fitter, rec, base, selected, *, noise_only, t_start) -> FinalFits:
     """State the plain fit ``base`` and the ``selected`` stack's row (None: nothing named) on
     the whole prepared record ``rec``; ``noise_only``: the record is noise, nothing is
-    identified."""
+    identified.
+    """
     F_base, _ = record_force(base, rec.uj, rec.v)
     final = base if selected is None else selected
     F_after, model = record_force(final, rec.uj, rec.v)

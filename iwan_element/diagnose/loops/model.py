@@ -1,5 +1,6 @@
 """The loop model every diagnosis step fits: an effect stack on the Iwan joint with the
-force offset and ``Fs`` eliminated in closed form, its fit and its uncertainty."""
+force offset and ``Fs`` eliminated in closed form, its fit and its uncertainty.
+"""
 from __future__ import annotations
 
 import dataclasses
@@ -36,7 +37,8 @@ FIT_TOL = 1e-6
 
 class LoopModel:
     """Transformed vector ``z = (ln(phi_max/x_max), chi, ln(1+beta), effect variables...)``;
-    the force is ``Fs g(z) + F0`` with ``(Fs, F0)`` from linear least squares."""
+    the force is ``Fs g(z) + F0`` with ``(Fs, F0)`` from linear least squares.
+    """
 
     def __init__(self, ev: Evaluator, y, names, scales, F0=None):
         self.ev, self.y, self.names, self.scales = ev, y, tuple(names), scales
@@ -201,7 +203,8 @@ def _polish_start(model: LoopModel, s, res, *, max_nfev: int):
     """One least-squares fit of the start together with the other variables, from the
     alternation's result (fitting in turn stops where each variable is optimal with the
     others held, which is not the joint optimum when the start and the joint's shape are
-    correlated). Kept only if it lowers the misfit. Returns ``(start, result, nfev)``."""
+    correlated). Kept only if it lowers the misfit. Returns ``(start, result, nfev)``.
+    """
     x = model.ev.x_max
     lo, hi = -1.5 * x, 1.5 * x
 
@@ -275,7 +278,8 @@ def jacobian(model: LoopModel, z):
     ``-1``), and the physical parameters' by their closed form (no force evaluated: a
     Jacobian costs four force evaluations per variable of ``z`` and the start). Returns
     ``(J, Jp, theta, lower, upper)``, the bounds of ``theta`` (infinite for the linear ones
-    and the start)."""
+    and the start).
+    """
     g = model.unit(z)
     Fs, F0 = model.linear(g)
     s0 = model.start
@@ -332,7 +336,8 @@ def uncertainty(model: LoopModel, z, r, jac=None):
     A fitted starting state (``model.start != 0``, :func:`fit_start`) is a nuisance variable
     of the fit like the force offset: it has a column in the Jacobian, so its correlation
     with the joint's variables widens their errors; ``start = 0`` (kept when no start fits
-    better) is held. Returns ``(se, corr, se_start)`` (``se_start`` [m], 0 when held)."""
+    better) is held. Returns ``(se, corr, se_start)`` (``se_start`` [m], 0 when held).
+    """
     J, Jp, theta, _, _ = jacobian(model, z) if jac is None else jac
     c = covariance(J, r, tau=integrated_time(r), dof=max(r.size - theta.size, 1), Jp=Jp)
     se, corr = c.stderr, c.correlation
@@ -352,7 +357,8 @@ def jumps(d1, d4):
     agree; a jump gives ``jump / step``): a force that is discontinuous in a parameter
     (sliders breaking at once at one sample or the next, e.g. the spike ``S`` of a joint
     with break-away) has no derivative there, and its difference quotient would claim a
-    precision the data do not hold, so these samples are left out of the Jacobian."""
+    precision the data do not hold, so these samples are left out of the Jacobian.
+    """
     scale = float(np.sqrt(np.mean(d1 * d1 + d4 * d4))) + 1e-300
     return np.abs(d1 - d4) > 0.1 * np.maximum(np.abs(d1), np.abs(d4)) + 1e-6 * scale
 
@@ -362,7 +368,8 @@ def make_fit_result(*, params: IwanParameters, stderr: dict, identified: dict, c
     """A :class:`FitResult` from the fitted joint, its standard errors, verdicts and
     correlation (gathered into its parameter table, :func:`identify.result.joint_table`) and
     the other fields this module knows (others left at None/defaults), so a change of the
-    fit module's result fields does not break the diagnosis."""
+    fit module's result fields does not break the diagnosis.
+    """
     kw["params"] = joint_table(params, stderr, identified, fixed=fixed, correlation=correlation)
     args = {}
     for f in dataclasses.fields(FitResult):

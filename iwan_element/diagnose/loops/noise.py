@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ...identify.loops.noise import MIN_WINDOW, signal_window, estimate_noise
+from ...identify.loops.noise import MIN_WINDOW, estimate_noise, signal_window
 
 __all__ = ["noise_estimate", "NoiseLevel", "noise_level"]
 
@@ -26,7 +26,8 @@ _RESIDUAL_MIN = 25               # samples: the AR(1) match is poorly conditione
 
 def noise_estimate(t, y, channel=None) -> tuple[float, float, str, tuple]:
     """``(sigma [units of y], tau [samples], method, warnings)`` of ``y``; with ``channel``
-    (the measured signal ``y`` is the fit residual of) the window is the channel's."""
+    (the measured signal ``y`` is the fit residual of) the window is the channel's.
+    """
     y = np.asarray(y, float)
     tt = np.arange(y.size, dtype=float) if t is None else np.asarray(t, float)
     window = None
@@ -42,7 +43,8 @@ def noise_estimate(t, y, channel=None) -> tuple[float, float, str, tuple]:
 def pure_noise(y, chi2_model, sigma, tau, n_eff) -> bool:
     """True when a model with misfit ``chi2_model`` explains the record ``y`` no better than
     a constant would (BIC with ``n_eff`` independent samples, residuals correlated over
-    ``tau`` samples): a record that is noise identifies nothing."""
+    ``tau`` samples): a record that is noise identifies nothing.
+    """
     chi0 = float(np.sum((y - y.mean()) ** 2)) / sigma ** 2
     return (chi0 - chi2_model) / tau < 4.0 * math.log(max(n_eff, 2.0))
 
@@ -77,7 +79,8 @@ class NoiseLevel:
 def noise_level(rec, r, noise) -> NoiseLevel:
     """The noise of a prepared record ``rec`` (:class:`~.prepare.PreparedRecord`) from the
     residual ``r`` [N] of a fit to the raw force (the model removes the loops' corners, the
-    estimator the smooth rest of any model error), or ``noise`` [N] when given (white)."""
+    estimator the smooth rest of any model error), or ``noise`` [N] when given (white).
+    """
     if noise is not None:
         sigma, tau, text, warns = noise, 1.0, "given", ()
     else:

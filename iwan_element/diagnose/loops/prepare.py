@@ -13,9 +13,16 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.signal import butter, sosfiltfilt
 
+from ...base.validation import (
+    MAGNITUDE_RANGE,
+    check_magnitude,
+    check_scalar,
+    check_time,
+    check_varies,
+    finite_array,
+    same_length,
+)
 from ...core.history import REVERSAL_TOL, unit_params
-from ...base.validation import (MAGNITUDE_RANGE, check_magnitude, check_scalar, check_time,
-                                check_varies, finite_array, same_length)
 from ...effects import EFFECTS
 from ...effects.engine.evaluate import Evaluator
 from ...identify.loops.cycles import find_reversals, split_cycles
@@ -72,27 +79,31 @@ class PreparedRecord:
     @property
     def scales(self) -> dict:
         """Reference sizes of the effect variables (:func:`effect_scales`; ``D_ref`` 1 until
-        a plain fit gives it, :func:`dissipation_scale`)."""
+        a plain fit gives it, :func:`dissipation_scale`).
+        """
         return effect_scales(self.uj, self.v)
 
 
 def effect_scales(uj, v, d_ref: float = 1.0) -> dict:
     """Reference sizes of the effect variables (``ParamSpec.ref``) of a record: largest |u|
     [m], RMS velocity [m/s], the plain unit-``Fs`` fit's dissipation over the record ``d_ref``
-    [J per N of Fs] and 1."""
+    [J per N of Fs] and 1.
+    """
     return {"u_max": float(np.abs(uj).max()), "1": 1.0,
             "v_rms": float(np.sqrt(np.mean(v ** 2))) or 1.0, "D_ref": d_ref}
 
 
 def dissipation_scale(ev: Evaluator, shape) -> float:
     """Energy the plain unit-``Fs`` joint of ``shape = (phi_max, chi, beta)`` dissipates over
-    the record of ``ev`` (the energy-dependent effects' scale, ``D_ref``), 1 if none."""
+    the record of ``ev`` (the energy-dependent effects' scale, ``D_ref``), 1 if none.
+    """
     return float(ev.unit_dissipation(unit_params(*shape))[-1]) or 1.0
 
 
 def drive_structure(uj):
     """``(reversal indices, absolute reversal tolerance [m])`` of a record's displacement from
-    its rest position, as every evaluator of it uses them."""
+    its rest position, as every evaluator of it uses them.
+    """
     rev = find_reversals(uj) if uj.size > 2 else np.zeros(0, np.intp)
     return rev, REVERSAL_TOL * float(np.abs(uj).max())
 
@@ -141,7 +152,8 @@ def _rate_missing(t, v) -> str:
 
 def untestable(rec: PreparedRecord, candidates) -> dict:
     """``{effect: why}`` for each of ``candidates`` whose declared data needs
-    (``needs`` of its class in :data:`~iwan_element.EFFECTS`) the record ``rec`` lacks."""
+    (``needs`` of its class in :data:`~iwan_element.EFFECTS`) the record ``rec`` lacks.
+    """
     missing = {"rate": _rate_missing(rec.t, rec.v)}
     out = {}
     for c in candidates:
@@ -153,7 +165,8 @@ def untestable(rec: PreparedRecord, candidates) -> dict:
 
 def record_cycles(rec: PreparedRecord) -> list:
     """The record's load cycles (:func:`~iwan_element.identify.loops.cycles.split_cycles`; the
-    sample index stands for the time when there is none), or [] when it has none."""
+    sample index stands for the time when there is none), or [] when it has none.
+    """
     t = np.arange(rec.uj.size, dtype=float) if rec.t is None else rec.t
     try:
         return split_cycles(t, rec.uj, rec.F)
@@ -176,7 +189,8 @@ def _rest_index(u, noise_u):
 
 def fitted_samples(n: int, max_samples: int) -> np.ndarray:
     """Indices of the samples a diagnosis fits: at most ``max_samples``, evenly spaced over
-    the ``n`` samples of the record (the first and last included)."""
+    the ``n`` samples of the record (the first and last included).
+    """
     return np.unique(np.round(np.linspace(0, n - 1, min(n, max_samples))).astype(np.intp))
 
 

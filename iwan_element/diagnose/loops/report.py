@@ -13,9 +13,9 @@ import time
 import numpy as np
 
 from ...base.serialize import json_safe
+from ..selection.rule import criterion_text
 from .locate import _locate
 from .result import Diagnosis
-from ..selection.rule import criterion_text
 
 __all__ = ["assemble"]
 
@@ -23,7 +23,8 @@ __all__ = ["assemble"]
 def assemble(rec, sel, fits, opts, t_start) -> Diagnosis:
     """The diagnosis of the prepared record ``rec`` from the selection ``sel``
     (:class:`~.loops.LoopSelection`) and the fitted stacks ``fits``
-    (:class:`~.fit.FinalFits`); ``opts``: the rule's options, ``t_start``: when it began."""
+    (:class:`~.fit.FinalFits`); ``opts``: the rule's options, ``t_start``: when it began.
+    """
     FF, uj, alpha, nl = rec.F, rec.uj, opts["alpha"], sel.noise
     warns = [f"noise estimate: {w}" for w in nl.warnings]
     if sel.noise_only:

@@ -1,13 +1,14 @@
 """Result object of the loop diagnosis, :class:`Diagnosis` (the report pieces both diagnoses
-share are in :mod:`..selection.lines`)."""
+share are in :mod:`..selection.lines`).
+"""
 from __future__ import annotations
 
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from ...base.serialize import json_safe
 from ...base.result_shape import ResultShape, panels, value_stderr, wrap
+from ...base.serialize import json_safe
 from ..selection.lines import effect_unit, verdict_lines
 from ..selection.probabilities import Probable
 

@@ -32,7 +32,8 @@ MAX_MEMBERS = 6
 
 def members(explanations) -> list:
     """``[(explanation, weight)]``: the probable explanations (:data:`MIN_WEIGHT`,
-    :data:`MAX_MEMBERS`), weights renormalised to 1."""
+    :data:`MAX_MEMBERS`), weights renormalised to 1.
+    """
     top = [e for e in explanations if e.probability >= MIN_WEIGHT][:MAX_MEMBERS]
     if not top:
         top = list(explanations[:1])
@@ -44,7 +45,8 @@ def linear_spread(predict, theta, cov, lower=None, upper=None) -> tuple:
     """``(prediction, its standard deviation)`` of ``predict(theta)`` (an array) under
     ``theta ~ N(theta, cov)``, linearised by forward differences of a tenth of each
     parameter's standard deviation (stepping back at an upper bound); parameters without
-    spread are skipped."""
+    spread are skipped.
+    """
     y0 = np.asarray(predict(theta), float)
     sd = np.sqrt(np.maximum(np.diag(cov), 0.0)) if cov.size else np.zeros(0)
     cols, idx = [], []
@@ -69,7 +71,8 @@ def linear_spread(predict, theta, cov, lower=None, upper=None) -> tuple:
 def mixture(weights, means, sds, level: float):
     """Mean, standard deviation and the central ``level`` band of a Gaussian mixture at each
     sample: ``weights`` (m,), ``means`` and ``sds`` (m, n). The band's ends are the
-    mixture's quantiles (bisection on its distribution function)."""
+    mixture's quantiles (bisection on its distribution function).
+    """
     w = np.asarray(weights, float)[:, None]
     mu, sd = np.asarray(means, float), np.maximum(np.asarray(sds, float), 0.0)
     mean = (w * mu).sum(axis=0)
@@ -175,7 +178,8 @@ class AveragedBand(ResultShape):
 
 def band(x, x_label, parts, level, warnings=()) -> AveragedBand:
     """An :class:`AveragedBand` from ``parts = [(effects, weight, {channel: (mean, std,
-    unit)})]``."""
+    unit)})]``.
+    """
     level = check_scalar("level", level, low=0.0, high=1.0, low_open=True, high_open=True)
     w = np.array([p[1] for p in parts])
     chans, means = {}, {}

@@ -1,6 +1,7 @@
 """The report pieces both diagnoses share (:class:`~iwan_element.diagnose.loops.result.Diagnosis`
 and :class:`~iwan_element.diagnose.vibration.result.VibrationDiagnosis`): an effect
-parameter's unit label and the closing verdict lines."""
+parameter's unit label and the closing verdict lines.
+"""
 from __future__ import annotations
 
 from ...base.result_shape import unit_label, wrap

@@ -123,7 +123,8 @@ class Explanation:
 
 def default_effect_prior(n_candidates: int) -> float:
     """``1 - 2**(-1/K)``: each of ``K`` effects present independently with this probability
-    gives the plain joint a prior probability of 1/2."""
+    gives the plain joint a prior probability of 1/2.
+    """
     return 1.0 - 2.0 ** (-1.0 / max(int(n_candidates), 1))
 
 
@@ -156,7 +157,8 @@ def check_effect_prior(effect_prior, candidates) -> dict:
 
 def log_model_prior(explanations, prior: dict) -> dict:
     """Log prior probabilities of ``explanations`` (keys) under independent effect priors
-    ``prior`` (:func:`check_effect_prior`), normalised over them."""
+    ``prior`` (:func:`check_effect_prior`), normalised over them.
+    """
     lp = {}
     for ex in explanations:
         lp[ex] = sum(math.log(p) if e in ex else math.log1p(-p) for e, p in prior.items())
@@ -167,7 +169,8 @@ def log_model_prior(explanations, prior: dict) -> dict:
 
 def model_error_scale(chi2: float, tau: float, n_eff: float, q: int) -> float:
     """``s = chi2 / (tau (n_eff - q))``, at least 1: the misfit the best explanation leaves
-    beyond the noise, counted as more noise (module docstring)."""
+    beyond the noise, counted as more noise (module docstring).
+    """
     return max(1.0, chi2 / tau / max(n_eff - q, 1.0))
 
 
@@ -260,7 +263,8 @@ def rank(fitted, *, tau: float, n_eff: float, prior: dict, evaluate,
 
 def spec_prior(specs, lo, hi):
     """``(log_prior(theta), knots)`` for :func:`~iwan_element.fitting.evidence.laplace_evidence`
-    from each variable's ParamSpec (None: uniform over ``[lo, hi]``)."""
+    from each variable's ParamSpec (None: uniform over ``[lo, hi]``).
+    """
     uniform = -np.log(np.asarray(hi, float) - np.asarray(lo, float))
     knots = np.array([np.nan if sp is None or sp.neutral is None else float(sp.neutral)
                       for sp in specs])
@@ -286,7 +290,8 @@ def switched_off(specs) -> dict:
     clearance, a slipping patch's onset and shape) do nothing at zero size; their values:
     the product grid of
     :data:`OFF_POINTS` quantiles of their declared priors. ``specs`` lists each variable's
-    ParamSpec (None for the joint's own), the effects' in declaration order."""
+    ParamSpec (None for the joint's own), the effects' in declaration order.
+    """
     out, j = {}, 0
     while j < len(specs):
         sp = specs[j]
@@ -320,7 +325,8 @@ def _siblings(sp):
 
 def effect_probability(probabilities: dict, name: str) -> float:
     """Marginal probability that effect ``name`` is present: the sum over the explanations
-    (keys of ``probabilities``) that contain it."""
+    (keys of ``probabilities``) that contain it.
+    """
     if not isinstance(name, str):
         raise ValueError(f"name must be an effect name (str), got {name!r}")
     return float(sum(p for k, p in probabilities.items() if name in k))
@@ -328,7 +334,8 @@ def effect_probability(probabilities: dict, name: str) -> float:
 
 def confidence_text(probabilities: dict) -> str:
     """One line: the most probable explanation and, when it is not above
-    :data:`CONFIDENT`, that the diagnosis is not sure and what competes."""
+    :data:`CONFIDENT`, that the diagnosis is not sure and what competes.
+    """
     items = sorted(probabilities.items(), key=lambda kv: -kv[1])
     (top, p), rest = items[0], items[1:]
     name = " + ".join(top) or "the plain joint (no effect)"
@@ -343,13 +350,15 @@ def confidence_text(probabilities: dict) -> str:
 class Probable:
     """What every diagnosis result offers about its explanations' probabilities (a mixin of
     :class:`~..loops.result.Diagnosis`, :class:`~..vibration.result.VibrationDiagnosis` and
-    :class:`~.campaign.CampaignFit`; reads the result's ``explanations``)."""
+    :class:`~.campaign.CampaignFit`; reads the result's ``explanations``).
+    """
 
     @property
     def probabilities(self) -> dict:
         """``{explanation: posterior probability}``: each explanation the diagnosis fitted,
         a tuple of effect names (sorted; ``()`` the plain joint), most probable first;
-        the values sum to 1."""
+        the values sum to 1.
+        """
         return {e.effects: e.probability for e in self.explanations}
 
     def effect_probability(self, name: str) -> float:
@@ -368,7 +377,8 @@ class Probable:
 
     def probability_lines(self, *, rows: int = 6) -> list:
         """Report lines: the confidence sentence, the most probable explanations, the
-        effects' marginal probabilities."""
+        effects' marginal probabilities.
+        """
         if not self.explanations:
             return []
         probs = self.probabilities
@@ -391,7 +401,8 @@ class Probable:
 
     def probability_tables(self) -> list:
         """The tables ``"probabilities"`` (one row per explanation) and ``"effect
-        probabilities"`` (one row per effect) for ``_tables``."""
+        probabilities"`` (one row per effect) for ``_tables``.
+        """
         if not self.explanations:
             return []
         rows = [(" + ".join(e.effects) or "plain joint", e.probability, e.log_evidence,

@@ -171,7 +171,8 @@ def stepwise_select(fit_candidate, candidates, base: dict, *, tau: float, n_eff:
 def _scorer(cur, excess, ic_cur, tau, pen, explain_fraction, guard):
     """The rule's tests of a fitted model ``r`` on top of ``cur`` that adds ``q`` parameters:
     its IC, whether it lowers the current IC, the fraction of the excess misfit it explains,
-    whether that is enough, and the caller's guard. Returns ``score(r, q) -> r``."""
+    whether that is enough, and the caller's guard. Returns ``score(r, q) -> r``.
+    """
     def score(r, q):
         gain = max(cur["chi2"] - r["chi2"], 0.0) / tau
         r["ic"] = r["chi2"] / tau + (cur["q"] + q) * pen
@@ -185,7 +186,8 @@ def _scorer(cur, excess, ic_cur, tau, pen, explain_fraction, guard):
 
 def _pair_step(fit_candidate, cur, rows, score, allowed):
     """The pair step of the rule (module docstring): ``((names, row, new current) or None,
-    rows of the pairs tried)``; ``score`` is the step's :func:`_scorer`."""
+    rows of the pairs tried)``; ``score`` is the step's :func:`_scorer`.
+    """
     singles = sorted((r for r in rows if r["lowers_ic"]), key=lambda r: r["ic"])
     if len(singles) < 2:
         return None, []

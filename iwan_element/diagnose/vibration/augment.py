@@ -3,8 +3,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...core.protocol import check_element
 from ...base.validation import check_scalar
+from ...core.protocol import check_element
 from ...effects import EFFECTS
 
 __all__ = ["augmented", "check_amplitude_units"]
@@ -43,7 +43,8 @@ def check_amplitude_units(diagnosed, specimen) -> None:
     """ValueError when the diagnosed amplitude range [m] lies wholly more than
     :data:`_UNIT_FACTOR` outside the specimen's ``amplitude_range`` and ``calibrated_range``
     (amplitudes in mm or um given as metres: the effects' amplitude constants and the
-    calibrated range would be wrong by the factor and QSMA would stop warning)."""
+    calibrated range would be wrong by the factor and QSMA would stop warning).
+    """
     ranges = [r for r in (getattr(specimen, "amplitude_range", None),
                           getattr(specimen, "calibrated_range", None)) if r is not None]
     if not ranges:

@@ -24,18 +24,18 @@ import numpy as np
 from scipy.optimize import least_squares
 from scipy.stats import chi2 as _chi2
 
+from ...base.serialize import json_safe
 from ...base.validation import check_int, check_magnitude, check_scalar, finite_array, same_length
 from ...effects import EFFECTS
-from ...identify.modal.curves import AmplitudeCurve
-from ...identify.loops.noise import difference_sigma
-from ...identify.files.units import check_damping_ratio, check_frequency_ratio
-from ...base.serialize import json_safe
 from ...fitting import covariance
-from .result import VibrationDiagnosis
-from ..selection.rule import criterion_text, misfit_p, stepwise_select
-from ..selection.probabilities import check_effect_prior, key, rank
-from .evidence import collect, evaluate, jacobian
+from ...identify.files.units import check_damping_ratio, check_frequency_ratio
+from ...identify.loops.noise import difference_sigma
+from ...identify.modal.curves import AmplitudeCurve
 from ..selection.nested import nested_options
+from ..selection.probabilities import check_effect_prior, key, rank
+from ..selection.rule import criterion_text, misfit_p, stepwise_select
+from .evidence import collect, evaluate, jacobian
+from .result import VibrationDiagnosis
 
 __all__ = ["diagnose_vibration", "vibration_candidates"]
 
@@ -65,7 +65,8 @@ def _noise(r, stated, n, name):
     the scatter when none is stated. (Taking the larger of the two whenever the scatter
     happens to exceed the stated value would bias the noise upwards: with 12 points the
     scatter's own spread is a factor 1.9, and a noise set too high makes every effect's
-    evidence too small.)"""
+    evidence too small.)
+    """
     scatter = difference_sigma(r) if n >= 5 else 0.0    # second differences along amplitude
     if stated is None:
         return max(scatter, 1e-12), f"{name}: scatter"
@@ -84,7 +85,8 @@ _RELATIVE_MAX = {"frequency": 0.5, "damping_ratio": 1.0}
 
 def _curve_level(name, r, given, stated, n):
     """Noise of one curve: ``given`` if set, else the stated uncertainty unless the scatter is
-    clearly above it (:func:`_noise`)."""
+    clearly above it (:func:`_noise`).
+    """
     if given is not None:
         return _relative(f"{name}_noise", name, check_scalar(f"{name}_noise", given, low=0.0,
                                                              low_open=True)), f"{name}: given"
@@ -93,7 +95,8 @@ def _curve_level(name, r, given, stated, n):
 
 def _relative(arg, curve, a):
     """``a`` (a relative standard deviation [-] of ``curve``), or a ValueError naming ``arg``
-    when it exceeds :data:`_RELATIVE_MAX` (most likely percent)."""
+    when it exceeds :data:`_RELATIVE_MAX` (most likely percent).
+    """
     top = _RELATIVE_MAX[curve]
     peak = float(np.max(a))
     if peak > top:
@@ -191,7 +194,8 @@ def _where(X, rf0, rz0, sf, sz, misfit):
     """Where the measured curves leave the prediction by more than 3 x noise: per curve, the
     amplitude ranges (in increasing amplitude) where the measurement is above or below, with
     the largest relative difference in each (a turn, e.g. a frequency that falls and then
-    rises again, shows as two ranges of opposite sign)."""
+    rises again, shows as two ranges of opposite sign).
+    """
     order = np.argsort(X)
     parts = []
     for label, r, s in (("frequency", rf0[order], sf), ("damping", rz0[order], sz)):
@@ -452,7 +456,8 @@ def _vib_result(vib, sel, chi_b, err_b, rf0, rz0, warns, alpha, noise_from, cand
 def _at_upper_bound(vib, names, z):
     """Fitted values at the upper end of their fit range (the data do not bound them, and
     predictions beyond the measured amplitudes depend on that end): ``(warnings, names as
-    "effect.parameter")``."""
+    "effect.parameter")``.
+    """
     out, at, k = [], [], vib.nn
     for nm in names:
         for sp in EFFECTS[nm].modal_specs:
@@ -474,7 +479,8 @@ def _covariance(vib, names, z, chi2):
     that matrix (None without effects; a pseudo-inverse along a degenerate direction, used
     for the prediction bands), the values' standard errors (NaN for a value the data do not
     determine) and the standard errors of the between-test nuisances (relative frequency and
-    damping offsets; empty without them)."""
+    damping offsets; empty without them).
+    """
     if z.size == 0:
         return None, np.zeros(0), ()
     J, r0 = jacobian(vib, names, z)

@@ -1,6 +1,7 @@
 """The probability stage of a vibration diagnosis (:mod:`.diagnosis`): the explanations it
 fitted, each one's Jacobian, prior box and chi-square for the evidence
-(:func:`..selection.probabilities.rank`)."""
+(:func:`..selection.probabilities.rank`).
+"""
 from __future__ import annotations
 
 import math
@@ -39,7 +40,8 @@ def jacobian(vib, names, z):
 def evaluate(vib, names, z):
     """What :func:`.probabilities.rank` needs of a vibration fit: Jacobian, residual,
     variables, prior box (the nuisances' fit bounds, each effect variable's declared prior
-    range) and the chi-square as a function of the variables."""
+    range) and the chi-square as a function of the variables.
+    """
     J, r0 = jacobian(vib, names, z)
     specs = [s for nm in names for s in EFFECTS[nm].modal_specs]
     lo = np.array([s.prior_range[0] for s in specs])
@@ -58,7 +60,8 @@ def vibration_band(diag, amplitude, base, level):
     """The model-averaged frequency and damping of a vibration diagnosis ``diag`` at
     ``amplitude`` (:class:`.averaging.AveragedBand`, channels ``"frequency"`` [Hz] and
     ``"damping_ratio"`` [-]); ``base``: the model without effects there (None: the
-    prediction the diagnosis was given, interpolated in log amplitude, held at its ends)."""
+    prediction the diagnosis was given, interpolated in log amplitude, held at its ends).
+    """
     from ...base.validation import finite_array
     from ..selection.averaging import band, linear_spread, members
     X = finite_array("amplitude", amplitude, ndim=1, min_size=1)

@@ -1,5 +1,6 @@
 """Result object of the vibration diagnosis: :class:`VibrationDiagnosis` (measured against
-predicted amplitude-dependent frequency and damping, and what is missing)."""
+predicted amplitude-dependent frequency and damping, and what is missing).
+"""
 from __future__ import annotations
 
 import math
@@ -7,13 +8,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ...base.result_shape import ResultShape, panels, wrap
 from ...base.serialize import json_safe
 from ...effects import EFFECTS
 from ...fitting import Parameter, ParameterTable, verdict
-from ...base.result_shape import ResultShape, panels, wrap
-from .augment import augmented
 from ..selection.lines import effect_unit, verdict_lines
 from ..selection.probabilities import Probable
+from .augment import augmented
 
 __all__ = ["VibrationDiagnosis"]
 
@@ -129,7 +130,8 @@ class VibrationDiagnosis(Probable, ResultShape):
     def success(self) -> bool:
         """The one rule of docs/guards.md: every named effect's reported value is identified
         and no mismatch beyond the noise remains after the effects named (the same test as
-        the warning saying so: the misfit's p-value below ``alpha`` before and after)."""
+        the warning saying so: the misfit's p-value below ``alpha`` before and after).
+        """
         return not self.failure_reasons()
 
     def failure_reasons(self) -> tuple:
@@ -243,7 +245,8 @@ class VibrationDiagnosis(Probable, ResultShape):
         explanation's modal forms weighted by its probability, each with its parameters'
         posterior covariance (:mod:`~iwan_element.diagnose.averaging`); ``base`` as in
         :meth:`predict`. Returns an ``AveragedBand`` (channels ``"frequency"`` [Hz] and
-        ``"damping_ratio"`` [-])."""
+        ``"damping_ratio"`` [-]).
+        """
         from .evidence import vibration_band
         return vibration_band(self, amplitude, base, level)
 
@@ -345,7 +348,8 @@ class VibrationDiagnosis(Probable, ResultShape):
         """Frequency and damping against amplitude: measured, predicted, augmented.
 
         ``ax``: ``None`` (new figure, two panels) or a sequence of two Axes (frequency,
-        damping; :mod:`iwan_element.base.result_shape`). Returns the artists."""
+        damping; :mod:`iwan_element.base.result_shape`). Returns the artists.
+        """
         a1, a2 = panels(ax, 2, figsize=(6, 7))
         X = self.amplitude
         o = np.argsort(X)

@@ -28,8 +28,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...core.history import REVERSAL_TOL, History, unit_params
 from ...core.closed_form import slip_energy
+from ...core.history import REVERSAL_TOL, History, unit_params
 from ...core.joint import IwanJoint
 from ...core.masing import masing_constants, masing_rows, reversal_structure
 from ...core.parameters import IwanParameters
@@ -50,7 +50,8 @@ def order_stack(names) -> tuple:
 def stack_ok(names) -> bool:
     """Whether the slider-level effects among ``names`` may share one joint: at most one,
     since each rebuilds the joint's sliders, unless all are composable slider laws (their
-    thresholds multiply)."""
+    thresholds multiply).
+    """
     sliders = [n for n in names if EFFECTS[n].slider_level]
     return len(sliders) <= 1 or all(EFFECTS[n].composable for n in sliders)
 
@@ -59,7 +60,8 @@ def _layers(names) -> tuple:
     """``(chain, series, rest)`` of a stack (innermost first): the innermost slider-level
     effects; an effect in series with the joint (``structure == "series"``, e.g. backlash)
     right around them if there is one and nothing below it depends on the rate or the
-    dissipated energy; and everything else."""
+    dissipated energy; and everything else.
+    """
     names = tuple(names)
     k = 0
     while k < len(names) and EFFECTS[names[k]].slider_level:
@@ -74,7 +76,8 @@ def _layers(names) -> tuple:
 
 def wear_behind_gap(names) -> bool:
     """True for slip degradation with backlash around it (then vector forms only): the
-    stack :func:`backlash_history` evaluates compiled, sample by sample."""
+    stack :func:`backlash_history` evaluates compiled, sample by sample.
+    """
     names = tuple(names)
     return (names[:2] == ("slip_degradation", "backlash")
             and all(has_vector_form(n) for n in names[2:]))
@@ -186,7 +189,8 @@ class Evaluator:
         innermost slider-level effects (one, or a chain of composable ones), whose
         corrections run on the drive samples; then optionally an effect in series with the
         joint (``joint_path``: the joint's own displacement, found run by run) around
-        rate-independent ones; then vector forms."""
+        rate-independent ones; then vector forms.
+        """
         chain, series, rest = _layers(names)
         return stack_ok(chain) and all(has_vector_form(n) for n in rest)
 
@@ -202,7 +206,8 @@ class Evaluator:
 
     def unit_force(self, shape, names, values) -> np.ndarray:
         """Force with ``Fs = 1`` at the kept samples. ``shape = (phi_max, chi, beta)``;
-        ``values``: unit-``Fs`` parameter dicts, one per effect (innermost first)."""
+        ``values``: unit-``Fs`` parameter dicts, one per effect (innermost first).
+        """
         self.n_eval += 1
         p1 = unit_params(*shape)
         u, v, drive, pos = self._ext
@@ -235,7 +240,8 @@ class Evaluator:
 
     def _wear_behind_gap(self, p1: IwanParameters, names, values) -> np.ndarray:
         """Unit force of ``slip_degradation, backlash[, vector forms]`` (:func:`wear_behind_gap`)
-        at the kept samples: the elements' per-sample rule on the drive samples, compiled."""
+        at the kept samples: the elements' per-sample rule on the drive samples, compiled.
+        """
         u, _, drive, pos = self._ext
         wear = EFFECTS["slip_degradation"](IwanJoint(p1), **values[0])
         gap = values[1]
@@ -254,7 +260,8 @@ def _constants(p1: IwanParameters) -> np.ndarray:
 
 def _laws(els) -> tuple:
     """``(table, pm, p, C)``: the joint's slider-law state (the law effects ``els``, each
-    wrapping the one before, their tables side by side; no columns for none)."""
+    wrapping the one before, their tables side by side; no columns for none).
+    """
     if not els:
         return np.zeros((11, 0)), 1.0, 1.0, 0.0
     tables = [el._new_pieces() for el in els]

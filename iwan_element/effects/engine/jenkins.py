@@ -21,7 +21,8 @@ __all__ = ["jenkins_gain", "JenkinsBank"]
 def jenkins_gain(X, phi):
     """First-harmonic (in-phase) stiffness of a Jenkins element at amplitude ``X`` [m] per
     unit spring stiffness [-]: 1 while stuck (``X <= phi``), ``(theta - sin theta cos
-    theta)/pi`` with ``cos theta = 1 - 2 phi / X`` above."""
+    theta)/pi`` with ``cos theta = 1 - 2 phi / X`` above.
+    """
     X = np.asarray(X, float)
     c = np.clip(1.0 - 2.0 * phi / X, -1.0, 1.0)
     th = np.arccos(c)
@@ -32,7 +33,8 @@ class JenkinsBank(Effect):
     """A bank of parallel Jenkins elements that replaces the same stiffness of the wrapped
     joint: ``F = F_j(u) + sum_i z_i - (sum_i k_i) u``, identical to the joint until the
     first element slides. Subclasses call :meth:`_set_bank` with the elements' slip
-    displacements [m] and stiffnesses [N/m] after setting their parameters."""
+    displacements [m] and stiffnesses [N/m] after setting their parameters.
+    """
 
     def _set_bank(self, phi, k) -> None:
         self._phi = np.asarray(phi, float)

@@ -39,8 +39,8 @@ import numpy as np
 
 from ...core.discrete import DiscreteIwan
 from ...core.parameters import IwanParameters
-from . import law_kernel as K
 from ..base import Effect, require_plain_joint
+from . import law_kernel as K
 
 __all__: list[str] = []
 
@@ -79,7 +79,8 @@ class _Pieces:
     def force(self, d: float, delta):
         """Signed force of the banks (sum of ``sg`` x bank force) after a travel ``delta``
         [m] (scalar or 1-D array) from the current state in direction ``d``, and the
-        tangent [N/m] (continuous part; a point mass breaking is a jump)."""
+        tangent [N/m] (continuous part; a point mass breaking is a jump).
+        """
         if np.ndim(delta) == 0:
             delta = float(delta)
             last = self._last
@@ -95,7 +96,8 @@ class _Pieces:
     def advance(self, d: float, delta: float) -> float:
         """Move the state by a travel ``delta >= 0`` in direction ``d``; returns the signed
         work done on the banks [J] (exact: stick to ``sigma_d phi``, slide at
-        ``kappa_d phi``)."""
+        ``kappa_d phi``).
+        """
         self.state, work = K.law_advance(self.state, float(d), float(delta), self.pm, self.p,
                                          self.C)
         self._last = None
@@ -110,7 +112,8 @@ def law_history(pieces: _Pieces, u) -> np.ndarray:
     """Signed bank force along a displacement history ``u`` [m] from the state of ``pieces``
     (which is advanced): one evaluation per monotone run of ``u`` (breaking is monotone
     within a run, so this equals the step-by-step rule), compiled
-    (:func:`.law_kernel.law_history`)."""
+    (:func:`.law_kernel.law_history`).
+    """
     out, pieces.state = K.law_history(pieces.state, np.ascontiguousarray(u, dtype=float),
                                       pieces.pm, pieces.p, pieces.C)
     pieces._last = None
@@ -195,5 +198,6 @@ class LawEffect(Effect):
         """This element's force minus its inner element's [N] along a displacement history
         ``u`` [m] from the virgin state (private state; this element is untouched): one
         vectorised evaluation per monotone run of ``u`` (:func:`law_history`), equal to the
-        step-by-step rule of :meth:`trial`/:meth:`commit`. ``D_inner`` is not used."""
+        step-by-step rule of :meth:`trial`/:meth:`commit`. ``D_inner`` is not used.
+        """
         return law_history(self._new_pieces(), u)

@@ -21,7 +21,8 @@ N_ROWS = 11
 @njit(cache=True)
 def _moments(st, r, x, brk, pm, p, Cc):
     """``int rho phi^k`` over ``[a, x]`` of row ``r`` for ``k = 0, 1, 2`` (a point mass: all
-    its weight if ``brk``)."""
+    its weight if ``brk``).
+    """
     a = st[A, r]
     w = st[W, r]
     if w > 0.0:
@@ -46,7 +47,8 @@ def _moments(st, r, x, brk, pm, p, Cc):
 def _limit(st, r, d, delta):
     """Broken part of row ``r`` after a travel ``delta >= 0`` in direction ``d``: the sliders
     below ``raw = (c_d + delta)/(sigma_d - s_d)`` have reached their static threshold.
-    Returns ``(x, brk, s_d, c_d, raw, den)``, ``x`` = ``raw`` clipped to the row."""
+    Returns ``(x, brk, s_d, c_d, raw, den)``, ``x`` = ``raw`` clipped to the row.
+    """
     s_d = d * st[S, r]
     c_d = d * st[C, r]
     num = c_d + delta
@@ -67,7 +69,8 @@ def _limit(st, r, d, delta):
 def _row_force(st, r, d, dl, M0t, M1t, pm, p, Cc):
     """Force [N] and tangent [N/m] of row ``r`` (unsigned, in direction ``d``) after a travel
     ``dl >= 0``: ``kappa_d`` times the broken sliders' moment plus the stuck sliders'
-    stretch; ``M0t, M1t``: the row's total moments."""
+    stretch; ``M0t, M1t``: the row's total moments.
+    """
     sig = st[SU, r] if d > 0 else st[SD, r]
     kap = st[KU, r] if d > 0 else st[KD, r]
     x, brk, s_d, c_d, raw, den = _limit(st, r, d, dl)
@@ -83,7 +86,8 @@ def _row_force(st, r, d, dl, M0t, M1t, pm, p, Cc):
 @njit(cache=True)
 def _force(st, d, deltas, pm, p, Cc):
     """Signed force [N] and tangent [N/m] of the banks after each travel ``deltas[j] >= 0``
-    [m] from the current state in direction ``d``."""
+    [m] from the current state in direction ``d``.
+    """
     m = deltas.size
     F = np.zeros(m)
     K = np.zeros(m)
@@ -113,7 +117,8 @@ def force_at(st, d, delta, pm, p, Cc):
 @njit(cache=True)
 def _advance(st, d, delta, pm, p, Cc):
     """Move the state by a travel ``delta >= 0`` in direction ``d`` (stick to
-    ``sigma_d phi``, slide at ``kappa_d phi``): the new table and the signed work [J]."""
+    ``sigma_d phi``, slide at ``kappa_d phi``): the new table and the signed work [J].
+    """
     nr = st.shape[1]
     out = np.empty((N_ROWS, 2 * nr))
     n = 0
@@ -203,7 +208,8 @@ def monotone_runs(u):
     """Monotone runs of ``u`` (as ``_base.monotone_runs``): a run starts where the sign of the
     (nonzero) increment from the previous sample (0 before the first) changes; pauses belong
     to the run they interrupt. Returns ``(starts, dirs, m)``: ``starts[:m]`` the first samples,
-    ``starts[m] = len(u)``, ``dirs[:m]`` the directions (+1/-1)."""
+    ``starts[m] = len(u)``, ``dirs[:m]`` the directions (+1/-1).
+    """
     n = u.size
     starts = np.empty(n + 1, np.int64)
     dirs = np.empty(n)
@@ -229,7 +235,8 @@ def law_history(st, u, pm, p, Cc):
     """Signed bank force [N] along the displacement history ``u`` [m] from the state ``st``:
     one :func:`_force` per monotone run of ``u`` (:func:`monotone_runs`; breaking is monotone
     within a run), then :func:`_advance` to its end; samples before the first move carry no
-    force. Returns ``(force, final state)``."""
+    force. Returns ``(force, final state)``.
+    """
     out = np.zeros(u.size)
     starts, dirs, m = monotone_runs(u)
     for r in range(m):

@@ -56,7 +56,8 @@ def _trial(c, st, J, e, sl, k, sg, caps, S, L, w, e_new, s_new):
 @njit(cache=True)
 def _commit(c, st, J, e, sl, k, sg, phi, caps, S, L, rate, w, e_new, s_new):
     """Commit the inner element at ``w``: its force there [N] (before the wear bank's clip)
-    and the slider laws' new state table."""
+    and the slider laws' new state table.
+    """
     Fw, _ = _trial(c, st, J, e, sl, k, sg, caps, S, L, w, e_new, s_new)
     n, F, _, _, dD, G, I = masing_step(c, st[0], st[1], st[2], int(J[0]), J[1], J[2], J[3],
                                        J[4], w, st[3])
@@ -80,7 +81,8 @@ def _commit(c, st, J, e, sl, k, sg, phi, caps, S, L, rate, w, e_new, s_new):
 def _zero(c, st, J, e, sl, k, sg, caps, S, L, shift, a, Fa, b, Fb, e_new, s_new):
     """:func:`iwan_element.effects.base._find_zero` on the wearing joint's force minus
     ``shift`` along ``a -> b`` (``Fa``, ``Fb`` of opposite sign): Newton on the tangent,
-    bisection safeguard."""
+    bisection safeguard.
+    """
     lo, hi = (a, b) if Fa < 0.0 else (b, a)
     x = a
     F = Fa
@@ -106,7 +108,8 @@ def _zero(c, st, J, e, sl, k, sg, caps, S, L, shift, a, Fa, b, Fb, e_new, s_new)
 def _solve(c, st, J, e, sl, k, sg, caps, S, L, B, u, gap, drag, e_new, s_new):
     """``Backlash._solve_drag`` (``drag > 0``) or ``_solve_rigid``: the joint displacement,
     the contact side, the force at drive displacement ``u`` and the joint displacement where
-    the gap began to slide open (``Backlash._slide_at``; NaN for none)."""
+    the gap began to slide open (``Backlash._slide_at``; NaN for none).
+    """
     wc, side, Fin = B[0], B[2], B[3]
     if drag > 0.0:
         w = u - B[1]
@@ -150,7 +153,8 @@ def _walk_gap(u, c, k, sg, phi, rate, table, pm, p, Cc, gap, drag, ends, out, pa
     ``path=True``: the ends are the last samples of the monotone runs of ``u`` and ``out``
     gets the joint's displacement at every sample (``Backlash.joint_path``: within a run of
     direction ``d`` it follows the drive with the gap's opening held, stops where the gap
-    slides open, follows the far stop after contact)."""
+    slides open, follows the far stop after contact).
+    """
     m = u.size
     st = np.empty((2, m + 2))                       # joint stack: u_r, F_r
     at = np.empty(m + 2, np.int64)
@@ -211,7 +215,8 @@ def backlash_history(u, c, k, sg, phi, rate, table, pm, p, Cc, gap, drag):
 def backlash_path(u, c, table, pm, p, Cc, gap, drag):
     """``Backlash(inner).joint_path(u)`` [m] for an inner element whose state depends only on
     its turning points (the joint, optionally with slider laws: ``table, pm, p, Cc``): one
-    trial and commit per monotone run of ``u``."""
+    trial and commit per monotone run of ``u``.
+    """
     starts, dirs, m = monotone_runs(u)
     ends = starts[1:m + 1] - 1
     out = np.zeros(u.size)

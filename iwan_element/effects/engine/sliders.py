@@ -90,7 +90,8 @@ def degrade(e, sgn, k, phi, D_inner, Wb, rate, cap_s, cap_k):
     dissipated so far (``D = D_inner + Wb - stored``), the modified sliders clipped to their
     shrunken caps ``lambda phi`` (``e`` changed in place) and the caps of the modified bank
     written to the first entries of ``cap_s``, ``cap_k``. Returns ``(lambda, stored energy
-    after the clip [J])``."""
+    after the clip [J])``.
+    """
     n = phi.size
     stored = 0.0
     for j in range(2 * n):
@@ -111,7 +112,8 @@ class SliderEffect(Effect):
     """Base of slider-level effects whose thresholds evolve with the dissipated energy.
     Subclasses define :meth:`_caps` (static and kinetic thresholds of the modified bank,
     forward and back, as stretches [m]), :meth:`_after_commit` and
-    :meth:`_after_commit_energy` (the thresholds' update from the committed state)."""
+    :meth:`_after_commit_energy` (the thresholds' update from the committed state).
+    """
 
     structure = "energy"
 
@@ -129,7 +131,8 @@ class SliderEffect(Effect):
     # ---- thresholds
     def _caps(self):
         """``(static_up, static_down, kinetic_up, kinetic_down)`` of the modified bank, each
-        an array of positive stretches [m] (``down`` is the magnitude for negative force)."""
+        an array of positive stretches [m] (``down`` is the magnitude for negative force).
+        """
         raise NotImplementedError
 
     def _refresh_caps(self) -> None:
@@ -155,7 +158,8 @@ class SliderEffect(Effect):
 
     def _step(self, du: float):
         """Stretches, slip states and the signed work, force and stiffness of both banks for a
-        linear move ``du`` [m] (:func:`bank_step`)."""
+        linear move ``du`` [m] (:func:`bank_step`).
+        """
         cs, ck = self._cap_up if du > 0.0 else self._cap_dn
         e, s = np.empty(self._e.size), np.empty(self._e.size)
         W, F, K = bank_step(self._e, self._slip, self._k, self._sign, cs, ck, du, e, s)
@@ -200,7 +204,8 @@ class SliderEffect(Effect):
         history ``u`` [m] from the virgin state, on a private state (this element is
         untouched). ``D_inner``: dissipated energy of the wrapped joint after each step [J].
         The same slider steps as :meth:`trial`/
-        :meth:`commit`, with the bookkeeping the force does not need left out."""
+        :meth:`commit`, with the bookkeeping the force does not need left out.
+        """
         state = (self._e, self._slip, self._Wb, self._Db, self._ub, self._last)
         lam = getattr(self, "_lam", None)
         try:
@@ -215,7 +220,8 @@ class SliderEffect(Effect):
     def _correction_energy(self, u: np.ndarray, D_inner, prev: float = 0.0) -> np.ndarray:
         """Thresholds that fall with the dissipated energy: step by step (the reference;
         :class:`~iwan_element.effects.SlipDegradation` runs the same rule compiled).
-        ``prev``: the displacement the state was committed at [m]."""
+        ``prev``: the displacement the state was committed at [m].
+        """
         sk = self._sk
         out = np.empty(u.size)
         for i, x in enumerate(u.tolist()):

@@ -7,10 +7,21 @@ route: closures calling ``joint.trial``), :mod:`.interface_springs` (linear spri
 by the interface's own objects).
 """
 from .interface_springs import add_builtin_springs, check_stiffness, linear_energy
-from .python_law import (coordinate_force_function, position_force_function,
-                         rotating_axis_force_function)
-from .symbolic_law import (VIRGIN, SymbolicIwanState, branch_of, cartesian_law,
-                           committed_slip_matrix, coordinate_law, make_probe, rigid_law)
+from .python_law import (
+                         coordinate_force_function,
+                         position_force_function,
+                         rotating_axis_force_function,
+)
+from .symbolic_law import (
+                         VIRGIN,
+                         SymbolicIwanState,
+                         branch_of,
+                         cartesian_law,
+                         committed_slip_matrix,
+                         coordinate_law,
+                         make_probe,
+                         rigid_law,
+)
 
 __all__ = ["add_builtin_springs", "check_stiffness", "linear_energy",
            "coordinate_force_function", "position_force_function",

@@ -44,7 +44,8 @@ def check_stiffness(stiffness, n: int, kind: str):
 
 def linear_energy(mbs, pairs, k) -> float:
     """Potential energy [J] of the springs ``k`` at the current configuration:
-    ``sum 0.5 k_i d_i^2`` with ``d = p1 - p0`` (as Exudyn's built-in Cartesian spring)."""
+    ``sum 0.5 k_i d_i^2`` with ``d = p1 - p0`` (as Exudyn's built-in Cartesian spring).
+    """
     if k is None:
         return 0.0
     get = mbs.GetMarkerOutput
@@ -58,7 +59,8 @@ def linear_energy(mbs, pairs, k) -> float:
 
 def add_builtin_springs(mbs, pairs, k, name: str) -> list:
     """Built-in Cartesian springs ``k`` on the pairs (the Python route: its connectors have no
-    symbolic law to carry them)."""
+    symbolic law to carry them).
+    """
     out = []
     for i, ((m0, m1), ki) in enumerate(zip(pairs, k)):
         if ki.any():

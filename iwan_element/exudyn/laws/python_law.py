@@ -1,5 +1,6 @@
 """The Python force law of the connector: closures calling ``joint.trial`` (the reference
-route, and the only one for elements without a symbolic form)."""
+route, and the only one for elements without a symbolic form).
+"""
 from __future__ import annotations
 
 import exudyn as exu
@@ -36,7 +37,8 @@ def coordinate_force_function(conn):
 
 def _axial_force(conn, trial, mbs, t, displacement, velocity, a0, a1, a2, off):
     """Force vector of the joint along the unit axis ``(a0, a1, a2)`` (the position routes;
-    their elements' trials cost far more than this call)."""
+    their elements' trials cost far more than this call).
+    """
     u = displacement[0] * a0 + displacement[1] * a1 + displacement[2] * a2 - off
     if t <= conn._guard:
         conn._check(mbs, t, u)

@@ -30,16 +30,24 @@ import copy
 import logging
 import math
 
+import exudyn as exu
 import numpy as np
 from exudyn.advancedUtilities import CreateSymbolicUserFunction
-import exudyn as exu
-from exudyn.itemInterface import (ObjectConnectorCartesianSpringDamper,
-                                  ObjectConnectorCoordinateSpringDamper,
-                                  ObjectConnectorRigidBodySpringDamper)
+from exudyn.itemInterface import (
+    ObjectConnectorCartesianSpringDamper,
+    ObjectConnectorCoordinateSpringDamper,
+    ObjectConnectorRigidBodySpringDamper,
+)
 
 from ..slips.slip_map import SlipMap
-from .symbolic_law import (SymbolicIwanState, branch_of, cartesian_law, coordinate_law,
-                           make_probe, rigid_law)
+from .symbolic_law import (
+    SymbolicIwanState,
+    branch_of,
+    cartesian_law,
+    coordinate_law,
+    make_probe,
+    rigid_law,
+)
 
 __all__ = ["symbolic_item", "joint_tolerance", "symbolic_refresh", "branch_interval",
            "law_window", "flush_joint", "sync_stack", "walk_states", "newton_check", "stride",
@@ -91,7 +99,8 @@ def joint_tolerance(joint) -> float:
 
 def symbolic_refresh(conn, mbs, lazy_until=-_INF) -> None:
     """Start of a run: the slip reader, and the accept function bound to it. Steps at
-    ``t < lazy_until`` may commit the joint lazily (see the module docstring)."""
+    ``t < lazy_until`` may commit the joint lazily (see the module docstring).
+    """
     conn._flush_joint()
     if conn._axis_marker is None:
         smap = SlipMap(mbs, [conn._markers], conn._kind, conn._axis, [conn._offset])
@@ -108,7 +117,8 @@ def symbolic_refresh(conn, mbs, lazy_until=-_INF) -> None:
 def _output_reader(conn, variable, off):
     """``() -> a . out - off`` of the connector object's output ``variable`` (a vector: the
     displacement or velocity of marker 1 relative to marker 0, global or in J0): one Exudyn
-    call, for markers whose position is not affine in the coordinates."""
+    call, for markers whose position is not affine in the coordinates.
+    """
     get = conn._mbs.GetObjectOutput
     obj = conn._object
     a0, a1, a2 = conn._axis
@@ -121,7 +131,8 @@ def _output_reader(conn, variable, off):
 
 def _rate_reader(conn, mbs, smap):
     """``() -> v``: the accepted slip rate (the dashpot's velocity, recorded per step): the
-    slip map's row on a view of the ODE2 velocities, or the object's velocity output."""
+    slip map's row on a view of the ODE2 velocities, or the object's velocity output.
+    """
     if smap is None:
         return _output_reader(conn, _OVT.VelocityLocal, 0.0)
     if smap.generic:
@@ -140,7 +151,8 @@ def _rate_reader(conn, mbs, smap):
 
 def _slip_reader(conn, smap):
     """``() -> u``: the accepted slip from the view of the ODE2 coordinates (no copy), or
-    from the connector's displacement output where the markers are not affine."""
+    from the connector's displacement output where the markers are not affine.
+    """
     if smap.generic:
         return _output_reader(conn, _OVT.Displacement, conn._offset)
     item = smap.q.item
@@ -168,7 +180,8 @@ def branch_interval(joint) -> tuple[float, float, bool]:
     without a reversal or a loop closure (the extended Masing rules: between the committed
     slip and, ahead, the point where the branch's loop closes; the interval of
     ``IwanJoint``'s own shortcut), and the branch's direction; empty before the first
-    motion."""
+    motion.
+    """
     us, _ = joint.reversal_points()
     uc = joint.displacement
     if len(us):
@@ -188,7 +201,8 @@ def law_window(joint, depth: int) -> tuple[float, float]:
     """Open interval of slips at which the law, holding the newest ``depth`` reversal points
     of the joint's committed stack, is exact for the next step: ends at the ``depth // 2``-th
     loop-closing point the walk passes either way (docs/equations.md section 2); the whole line
-    when the stack fits."""
+    when the stack fits.
+    """
     us, Fr = joint.reversal_points()
     if len(us) <= depth:
         return -_INF, _INF
@@ -229,7 +243,8 @@ def _commit_event(conn, t, u) -> None:
 
 def _risk(conn, u, margin):
     """The law's exact window ``(wa, wb)`` and whether ``u`` is within ``margin`` of its
-    ends (then every step is committed); tells the dispatcher when that changes."""
+    ends (then every step is committed); tells the dispatcher when that changes.
+    """
     wa, wb = law_window(conn._joint, conn._state.depth)
     risky = not wa + margin < u < wb - margin
     if risky != conn._risky:
@@ -326,7 +341,8 @@ def flush_joint(conn) -> None:
 def sync_stack(conn, t=None) -> None:
     """Write the joint's committed state (reversal stack, slip and the branch through it) to
     the law's variables, and check that the step just committed read no point deeper than
-    the expression holds (possible only from a stack deeper than ``depth``)."""
+    the expression holds (possible only from a stack deeper than ``depth``).
+    """
     joint = conn._joint
     us, Fr = joint.reversal_points()
     us, Fr = us.tolist(), Fr.tolist()
@@ -428,7 +444,8 @@ def replay_records(conn) -> np.ndarray:
     """The records as rows ``(t, u, F, dissipated, work)``: the rows ``(t, u[, v])``
     replayed on a copy of the joint taken where the records start (cached, extended
     incrementally); a dashpot adds ``c v`` to the force and ``c (v0 + v) / 2 (u - u0)`` per
-    step to the dissipation and the work (as the Python law books it)."""
+    step to the dissipation and the work (as the Python law books it).
+    """
     raw = conn._rec
     w = stride(conn)
     n = len(raw) // w

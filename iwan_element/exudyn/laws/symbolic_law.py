@@ -72,14 +72,16 @@ def committed_slip_matrix(n: int):
     """A symbolic 1 x ``n`` matrix holding the committed slips of ``n`` points: one
     ``SetMatrix`` per accepted step (``Get(0, i)`` reads entry ``i`` live; unlike a
     ``Vector``, a long ``Matrix`` row did not crash Exudyn 1.13.6 and costs 1 call instead
-    of ``n / 6``)."""
+    of ``n / 6``).
+    """
     return esym.Matrix(f"iwanuc{next(_IDS)}", [[0.0] * n])
 
 
 def branch_of(us, Fr, uc: float) -> tuple:
     """``(u_r, F_r, c1, c2, s, bound)``: the branch through the committed slip ``uc`` of a
     joint with the reversal stack ``us``, ``Fr`` (oldest first; the same branch as
-    ``IwanJoint._set_branch`` and ``IwanJointBank._set_branch``)."""
+    ``IwanJoint._set_branch`` and ``IwanJointBank._set_branch``).
+    """
     if len(us):
         ur = float(us[-1])
         d = uc - ur
@@ -141,7 +143,8 @@ class SymbolicIwanState:
     # ------------------------------------------------------------------ state transfer
     def set_stack(self, us, Fr) -> None:
         """Write the newest ``depth`` reversal points of the stack (oldest first) and its
-        length (only the vectors holding live entries)."""
+        length (only the vectors holding live entries).
+        """
         n = len(us)
         m = min(n, self.depth)
         v = self._vals
@@ -159,7 +162,8 @@ class SymbolicIwanState:
 
     def set_branch(self, ur, Fr, c1, c2, direction, bound) -> None:
         """Write the branch through the committed state (``direction`` +1, -1 or 0; with
-        0, ``bound`` must be the committed slip)."""
+        0, ``bound`` must be the committed slip).
+        """
         self.set_branch_values((ur, Fr, c1 * direction, c2 * direction, bound))
 
     def set_branch_values(self, values) -> None:
@@ -177,7 +181,8 @@ class SymbolicIwanState:
 
     def set_state(self, us, Fr, uc: float) -> None:
         """Write the whole committed state: stack ``us``, ``Fr`` (oldest first), slip ``uc``
-        and the branch through it."""
+        and the branch through it.
+        """
         self.set_stack(us, Fr)
         self.set_uc(uc)
         self.set_branch(*branch_of(us, Fr, uc))
@@ -187,7 +192,8 @@ class SymbolicIwanState:
         committed), does not give the exact ``force`` [N] at the accepted slip ``u`` [m]:
         the step needed an older reversal point than the expression holds. Only a step from
         a stack deeper than ``depth`` can (:attr:`held`); evaluated through :attr:`probe`
-        (``u -> F``, set by the owner to evaluate its symbolic user function)."""
+        (``u -> F``, set by the owner to evaluate its symbolic user function).
+        """
         return not abs(self.probe(u) - force) <= 1e-9 * self.Fs
 
     # ------------------------------------------------------------------ the law
@@ -205,7 +211,8 @@ class SymbolicIwanState:
 
     def exact(self, u):
         """Trial force [N] at the symbolic slip ``u`` by the full reversal-point law (no
-        shortcut)."""
+        shortcut).
+        """
         uc, n = self.uc, self.n
         du = u - uc
         moving = du != 0.0
@@ -238,7 +245,8 @@ class SymbolicIwanState:
 
     def force(self, u):
         """Trial force [N] at the symbolic slip ``u`` (an expression of the solver's marker
-        quantities): the branch shortcut in front of :meth:`exact`."""
+        quantities): the branch shortcut in front of :meth:`exact`.
+        """
         ur, Fr, s1, s2, bound = self._branch
         cont = Fr + s2 * self.backbone(s1 * (u - ur))
         fast = (u - self.uc) * (bound - u) > 0.0
@@ -250,7 +258,8 @@ def make_probe(mbs, fn, kind, axis, off, k=None, st=None):
     linear springs the function also carries (see :func:`cartesian_law`), taken out again.
     ``kind="rigid"`` (a ``RigidBodySpringDamper`` law, whose ``Evaluate`` takes no matrix
     arguments in exudyn 1.13.6): a coordinate law on the same state ``st`` is made for the
-    probe."""
+    probe.
+    """
     if kind == "rigid":
         fn = CreateSymbolicUserFunction(mbs, coordinate_law(st, 0.0), "springForceUserFunction",
                                         itemTypeName="ObjectConnectorCoordinateSpringDamper")
@@ -271,7 +280,8 @@ def make_probe(mbs, fn, kind, axis, off, k=None, st=None):
 
 def coordinate_law(st: SymbolicIwanState, off: float, c: float = 0.0):
     """Spring-force user function (ObjectConnectorCoordinateSpringDamper) to be traced;
-    ``c`` [N s/m]: a dashpot in parallel (``c deltaL_t`` added)."""
+    ``c`` [N s/m]: a dashpot in parallel (``c deltaL_t`` added).
+    """
     def law(mbs, t, itemNumber, deltaL, deltaL_t, stiffness, damping, offset):
         F = st.force(deltaL - off if off else deltaL)
         return F + c * deltaL_t if c else F
@@ -294,7 +304,8 @@ def cartesian_law(st: SymbolicIwanState, a, off: float, k=None, c: float = 0.0):
     evaluated once per appearance, so the law appears only in the non-zero components).
     ``k`` (3 floats, optional): linear springs along the global axes added in the same
     object, ``k_i d_i`` as Exudyn's built-in Cartesian spring (no offset, no damping);
-    ``c`` [N s/m]: a dashpot in parallel with the law along ``a``."""
+    ``c`` [N s/m]: a dashpot in parallel with the law along ``a``.
+    """
     k = (0.0, 0.0, 0.0) if k is None else tuple(float(x) for x in k)
 
     def law(mbs, t, itemNumber, displacement, velocity, stiffness, damping, offset):
@@ -316,7 +327,8 @@ def rigid_law(st: SymbolicIwanState, a, off: float, c: float = 0.0):
     """Spring-force-torque user function (ObjectConnectorRigidBodySpringDamper) along the
     unit axis ``a`` fixed in the frame of marker 0 (the joint frame J0; ``displacement`` and
     ``velocity`` are given in it): the force ``F a`` in J0, no torque; ``c`` [N s/m]: a
-    dashpot in parallel along ``a``."""
+    dashpot in parallel along ``a``.
+    """
     def law(mbs, t, itemNumber, displacement, rotation, velocity, angularVelocity, stiffness,
             damping, rotJ0, rotJ1, offset):
         u = _along(a, displacement)

@@ -64,7 +64,8 @@ class SlipMap:
 
     def marker_slips(self, u: np.ndarray, points) -> None:
         """Write into ``u`` the slips of ``points`` read from Exudyn's marker positions
-        (pairs with no affine row; one ``GetMarkerOutput`` per marker)."""
+        (pairs with no affine row; one ``GetMarkerOutput`` per marker).
+        """
         a = np.asarray(self.axis, float)
         get = self.mbs.GetMarkerOutput
         for i in points:
@@ -98,7 +99,8 @@ def _affine_position_row(mbs, m0, m1, axis, off):
     The coefficients come from one-coordinate differences (+1 and -2 from the current value,
     which also test each coordinate alone); the row is then checked at :data:`JOINT_CHECKS`
     perturbations of all coordinates at once (pseudo-random, fixed seed), which a product of
-    two coordinates fails."""
+    two coordinates fails.
+    """
     sd = mbs.systemData
     cols = []
     for m in (m0, m1):

@@ -32,7 +32,8 @@ def _hermite(xi, L):
 
 def _cable_marker(mbs, m):
     """(ODE2 indices (8,), reference coordinates (8,), weights of x and y of r and r' (4, 8),
-    y) of a MarkerBodyPosition on an ANCFCable2D with two Point2DSlope1 nodes, or None."""
+    y) of a MarkerBodyPosition on an ANCFCable2D with two Point2DSlope1 nodes, or None.
+    """
     mk = mbs.GetMarker(m)
     if mk.get("markerType") != "BodyPosition":
         return None
@@ -110,7 +111,8 @@ class SurfaceSlips:
 
     def slips(self) -> np.ndarray:
         """Slips of :attr:`points` [m] (a buffer reused at every call; about ten numpy calls
-        whatever the number of points)."""
+        whatever the number of points).
+        """
         G = self.q[self.idx]
         G += self.ref
         rx, ry, tx, ty = np.einsum("mk,jmk->jm", G, self.W)
@@ -128,7 +130,8 @@ class SurfaceSlips:
 
     def _matches(self, mbs, pairs, offsets) -> bool:
         """The formula equals Exudyn's marker positions at the current configuration and at a
-        perturbed one (restored after)."""
+        perturbed one (restored after).
+        """
         sd = mbs.systemData
         q0 = sd.GetODE2Coordinates(_CURRENT)
         a = np.array([self.ax, self.ay, 0.0])

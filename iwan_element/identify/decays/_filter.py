@@ -32,7 +32,8 @@ def _noise_bandwidth(sos, fs):
 def _lp_fit(seg, p):
     """Least-squares forward predictor ``x[n] = sum_k c_k x[n - k]`` of order ``p`` over
     ``seg`` (the covariance method of linear prediction, S. M. Kay, *Modern Spectral
-    Estimation*, 1988; singular values below 1e-7 of the largest dropped)."""
+    Estimation*, 1988; singular values below 1e-7 of the largest dropped).
+    """
     m = seg.size
     A = np.column_stack([seg[p - k:m - k] for k in range(1, p + 1)])
     c, *_ = np.linalg.lstsq(A, seg[p:], rcond=1e-7)
@@ -42,7 +43,8 @@ def _lp_fit(seg, p):
 def _lp_extend(seg, c, n_pad, growth=1e3):
     """Continue ``seg`` past its end by at most ``n_pad`` samples with the predictor ``c``
     (``scipy.signal.lfilter`` with zero input and ``lfiltic`` initial conditions), cut where it
-    would exceed ``growth`` times the segment's largest value."""
+    would exceed ``growth`` times the segment's largest value.
+    """
     p = c.size
     a_poly = np.concatenate([[1.0], -c])
     zi = signal.lfiltic([1.0], a_poly, seg[::-1][:p])
@@ -62,7 +64,8 @@ def _taper_far_end(ext):
 
 def _reversed_filter(sos, x):
     """The band-pass run causally twice over the time-reversed record (``|H|**2``, as the
-    zero-phase filter), reversed back."""
+    zero-phase filter), reversed back.
+    """
     return signal.sosfilt(np.vstack([sos, sos]), x[::-1])[::-1]
 
 
@@ -77,7 +80,8 @@ def _continued_pass(sos, decay, p, m, pads, zero_phase):
     """Continue ``decay`` at both ends (predictor of order ``p`` on ``m`` samples; forwards it
     may not grow, backwards by at most 1e3) and filter it: zero-phase (``sosfiltfilt``) or
     backwards in time. Returns the output, the index of the decay's first sample in it and
-    the predictor's one-step residual RMS relative to the RMS of the first ``m`` samples."""
+    the predictor's one-step residual RMS relative to the RMS of the first ``m`` samples.
+    """
     n_head, n_tail = pads
     first = decay[:m][::-1]
     c = _lp_fit(first, p)
@@ -98,7 +102,8 @@ def _filter_decay_rate(sos, fs):
 
 def _envelope_decay_rate(yz, fs):
     """Rough decay rate [1/s] of a band-passed decay: one over the time its envelope takes
-    to fall by e from its peak (0 if it never does)."""
+    to fall by e from its peak (0 if it never does).
+    """
     env = np.abs(_hilbert(yz))
     j = int(np.argmax(env))
     below = np.flatnonzero(env[j:] < env[j] / math.e)
@@ -107,7 +112,8 @@ def _envelope_decay_rate(yz, fs):
 
 def _head_weight(sos, n):
     """Share of the reversed pass's impulse response (``|h|``, ``sos`` twice) beyond each lag:
-    ``W[u] = sum_{v < u} |h[v]| / sum |h|``."""
+    ``W[u] = sum_{v < u} |h[v]| / sum |h|``.
+    """
     imp = np.zeros(n)
     imp[0] = 1.0
     h = np.abs(signal.sosfilt(np.vstack([sos, sos]), imp))
@@ -162,7 +168,8 @@ def _decay_signal(yy, fs, lo, hi, order):
 
 def _route(yy, yz, sos, spec, zero_phase):
     """One filtering route of :func:`_decay_signal`: ``(yf, z, (n_start, n_end), (zero_phase,
-    shift))``."""
+    shift))``.
+    """
     fs, f_c, n_ext, i_pk = spec
     n = yy.size
     per = fs / f_c
@@ -227,7 +234,8 @@ def _reverse_gain(sos, fs, sigma, wd, route):
     angular frequency ``wd`` [rad/s], divided out of the amplitude (1 to first order in
     ``sigma``). ``route = (zero_phase, shift)``. Backwards: ``|H(z)|**2 exp(sigma shift dt)``
     at ``z = exp((sigma + i wd) dt)`` (the reversed record grows at ``sigma``); zero-phase:
-    ``|H(z) H(1/z)|`` at ``z = exp((-sigma + i wd) dt)``."""
+    ``|H(z) H(1/z)|`` at ``z = exp((-sigma + i wd) dt)``.
+    """
     zero_phase, shift = route
     if zero_phase:
         zz = complex(math.exp(-sigma / fs) * math.cos(wd / fs),
@@ -259,7 +267,8 @@ def _analytic_signal(yy, fs, lo, hi, order):
 def _drift_terms(sos, fs, w, zero_phase=False):
     """``(g', tau')`` of ``sos`` applied twice at ``w`` [rad/s]: the slopes of the log-gain
     ``ln|H|**2`` [s] and of the group delay [s**2] against angular frequency (0 for the
-    zero-phase route, which has no delay)."""
+    zero-phase route, which has no delay).
+    """
     f = w / (2 * math.pi)
     h = 1e-3 * f
     _, H = signal.sosfreqz(sos, worN=np.array([f - h, f, f + h]), fs=fs)

@@ -24,7 +24,8 @@ _PER_PERIOD = 8.0       # working rate: samples per period of the band's upper e
 
 class _Problem:
     """Record at the working rate, the linear operator ``L`` (decimation, zero padding,
-    band-pass, Hilbert) and the model record that goes through it."""
+    band-pass, Hilbert) and the model record that goes through it.
+    """
 
     def __init__(self, yy, fs, band, order, k, conv):
         # working rate: at least 8 samples per period of the band's upper edge. The model is
@@ -47,7 +48,8 @@ class _Problem:
     @property
     def n_nuis(self):
         """Nuisance entries at the end of a parameter vector: four per neighbouring mode
-        (frequency [Hz], decay rate [1/s], two amplitudes / ``scale``), then ``ln a0, phi_s``."""
+        (frequency [Hz], decay rate [1/s], two amplitudes / ``scale``), then ``ln a0, phi_s``.
+        """
         return 4 * self.nb + 2
 
     def theta(self, x):
@@ -71,7 +73,8 @@ class _Problem:
 
     def _segment(self, theta, regime, u, X):
         """Quadrature of one smooth piece of the curves: amplitudes ``X`` at ``u`` (a uniform
-        grid, decreasing); returns the time, phase, ln w, asin(zeta), zeta and w on it."""
+        grid, decreasing); returns the time, phase, ln w, asin(zeta), zeta and w on it.
+        """
         f, zeta = model_curve(theta, X, regime, self.conv["x_ref"],
                               self.conv["stiffness"], self.conv["floor"], "decay")
         f, zeta = np.asarray(f, float), np.asarray(zeta, float)
@@ -87,7 +90,7 @@ class _Problem:
         return tu, th, np.log(w), np.arcsin(zeta), zeta, w
 
     def trajectory(self, theta, regime, ln_a0, t_rel):
-        """ln a, theta, ln w and asin(zeta) at ``t_rel`` [s] after the start of the decay.
+        """Ln a, theta, ln w and asin(zeta) at ``t_rel`` [s] after the start of the decay.
 
         Quadrature in ``u = ln a`` on a fixed grid (cumulative Simpson), cubic spline in time.
         The decay-form damping of the full model jumps at ``X = phi_max`` (the joint's tangent
@@ -130,7 +133,8 @@ class _Problem:
 
     def record(self, x, regime):
         """Model record ``a w**k cos(theta + k asin(zeta) + phi_s)`` at the record's rate,
-        zero before the start."""
+        zero before the start.
+        """
         i0 = self.i_s * self.q
         t_rel = np.arange(self.n_full - i0) / self.fs_full
         u, th, lw, asz = self.trajectory(self.theta(x), regime, x[-2], t_rel).T
@@ -144,7 +148,8 @@ class _Problem:
 
     def neighbour_columns(self, x):
         """Exact derivatives of :meth:`record` by the neighbours' four entries each
-        (frequency, decay rate, amplitudes), in the order of ``x``."""
+        (frequency, decay rate, amplitudes), in the order of ``x``.
+        """
         i0 = self.i_s * self.q
         t_rel = np.arange(self.n_full - i0) / self.fs_full
         cols = np.zeros((self.n_full, 4 * self.nb))
@@ -165,7 +170,8 @@ def _polar(z):
 
 class _Objective:
     """Log-polar residuals on the samples ``idx`` and their Jacobian (``L`` is linear, so
-    ``dz/dx = L(dy/dx)``; ``dy/dx`` by forward differences of the model record)."""
+    ``dz/dx = L(dy/dx)``; ``dy/dx`` by forward differences of the model record).
+    """
 
     def __init__(self, prob, regime, idx, ref, bounds, weights=None, envelope=None):
         self.prob, self.regime, self.idx, self.ub = prob, regime, idx, bounds[1]
@@ -259,7 +265,8 @@ def _solve(obj, x0, lb, ub):
 
 def _noise_correlation(prob, lags):
     """Correlation ``rho(k dt)`` of the analytic signal of white noise after the band-pass
-    (``sum_f |H(f)|**4 exp(2 pi i f tau)`` over ``f >= 0``, normalised to 1 at 0)."""
+    (``sum_f |H(f)|**4 exp(2 pi i f tau)`` over ``f >= 0``, normalised to 1 at 0).
+    """
     nf = max(16384, int(2 ** math.ceil(math.log2(lags + 1))))
     _, H = signal.sosfreqz(prob.sos, worN=nf, fs=prob.fs)     # f_j = j fs / (2 nf)
     P = np.zeros(2 * nf)
@@ -309,7 +316,8 @@ def _covariance(obj, r, J):
 def _misfit_ratio(r, lag):
     """Mean square residual over its noise part: half the mean square of differences ``lag``
     samples apart (beyond the noise correlation time, so a slowly varying misfit cancels in
-    them); about 1 when the residual is noise only."""
+    them); about 1 when the residual is noise only.
+    """
     m = r.size // 2
     rr = r[:m] + 1j * r[m:]
     if m <= lag + 2:

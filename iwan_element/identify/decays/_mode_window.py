@@ -23,7 +23,8 @@ _DRIFT_Z = 3.0
 
 def _band_pass(Y, fs, lo, hi, order):
     """Band-passed, decimated channels; the filter, its decimation and the noise's
-    autocorrelation at the decimated lags."""
+    autocorrelation at the decimated lags.
+    """
     sos = signal.butter(order, [lo, hi], btype="bandpass", fs=fs, output="sos")
     q = max(1, int(fs // (_OVERSAMPLE * hi)))
     yf = signal.sosfilt(sos, Y, axis=1)
@@ -73,7 +74,8 @@ def _slope(x, y):
 def _floors(tc, E):
     """Noise floor of each channel's block rms (NaN where the decay has not reached it): the
     median of the last quarter of the blocks when their log-rms no longer falls at more than
-    0.3 times the early rate (or not significantly, 3 standard errors)."""
+    0.3 times the early rate (or not significantly, 3 standard errors).
+    """
     nb = len(tc)
     q = max(nb // 4, 3)
     out = np.full(E.shape[1], np.nan)
@@ -89,7 +91,8 @@ def _floors(tc, E):
 def _local_rates(tc, e):
     """Decay rate [1/s] of ``e`` at each block: the slope of ``ln e`` over the last
     ``max(6, b / 4)`` blocks up to block ``b``; NaN where it is not positive by three
-    standard errors (no clear decay there)."""
+    standard errors (no clear decay there).
+    """
     le = np.log(np.maximum(e, 1e-300))
     out = np.full(tc.size, np.nan)
     for b in range(tc.size):
@@ -107,7 +110,8 @@ def _auto_windows(y, td, i0, lo, hi, snr_min, span, min_periods, n_max=6):
     module docstring: the band's envelope in blocks; the first ends where the best channel's
     SNR over its noise floor first falls below ``snr_min`` (the record's end if no channel
     reaches its floor), each spans ``span`` nepers of the band's local decay before its end
-    (at least ``min_periods`` periods), and each next one ends half a window earlier."""
+    (at least ``min_periods`` periods), and each next one ends half a window earlier.
+    """
     fc = 0.5 * (lo + hi)
     dt = td[1] - td[0]
     n_block = int(max(5.0 / fc, 1.0 / (hi - lo)) / dt) + 1
@@ -256,7 +260,8 @@ def _fit_window(tau, yw, dtd, lo, hi, opts, rho):
 
 def _try_window(y, td, t0, t1, dtd, lo, hi, opts, rho):
     """The fit of one window, or None when it holds no mode: (times, tau, fit, physical
-    indices, weights, counts, halves, linear flag per mode)."""
+    indices, weights, counts, halves, linear flag per mode).
+    """
     sel = (td >= t0) & (td <= t1)
     if sel.sum() < 32:
         return None

@@ -1,6 +1,7 @@
 """Assembly of a free-decay amplitude curve: uncertainties for overlapping windows, the
 comparison of the two extractions, and the warnings (too few points, too little precision,
-points dropped, an early stop); see :mod:`iwan_element.identify.decays.curve`."""
+points dropped, an early stop); see :mod:`iwan_element.identify.decays.curve`.
+"""
 from __future__ import annotations
 
 import logging
@@ -18,7 +19,8 @@ _F_TARGET, _Z_TARGET = 1e-4, 0.03     # precision below which the curve draws a 
 
 def _overlap(wins):
     """Per point: its window's length over the spacing of the window centres (>= 1), the
-    number of points that share each sample of data."""
+    number of points that share each sample of data.
+    """
     if len(wins) < 2:
         return np.ones(len(wins))
     c = np.array([0.5 * (s + e) for s, e in wins])
@@ -30,7 +32,8 @@ def _overlap(wins):
 
 def _cut_uncertain(rows, max_zstd):
     """Rows up to the first (from the fourth on) whose damping is known to worse than
-    ``max_zstd`` (relative); and how many were dropped."""
+    ``max_zstd`` (relative); and how many were dropped.
+    """
     for i, r in enumerate(rows):
         if i >= 3 and r[5] > max_zstd * r[2]:
             return rows[:i], len(rows) - i
@@ -39,7 +42,8 @@ def _cut_uncertain(rows, max_zstd):
 
 def _few_points_warning(n_pts, stop, usable, trim_np, noise_stop, x_start, hop):
     """Why the curve has fewer than ``_MIN_POINTS`` points in the first decade of the decay,
-    and what to change."""
+    and what to change.
+    """
     x0, x1 = usable
     nep = math.log(x0 / x1) if x1 > 0 else 0.0
     msg = (f"only {n_pts} curve point(s) (fewer than {_MIN_POINTS}) in the first decade of the "
@@ -59,7 +63,8 @@ def _few_points_warning(n_pts, stop, usable, trim_np, noise_stop, x_start, hop):
 def _precision_warning(a):
     """A warning when the stated uncertainty reaches 1e-4 in frequency or 3 % in damping (the
     precision a joint identification needs) over less than a decade of amplitude from the
-    curve's first point."""
+    curve's first point.
+    """
     x = a[:, 0]
     parts = []
     for col, target, name in ((4, _F_TARGET, "frequency"), (5, _Z_TARGET, "damping")):

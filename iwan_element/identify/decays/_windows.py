@@ -36,7 +36,8 @@ def _line_fit(tw, yv, n_block):
     changes across the window (on a centred window the linear coefficient is orthogonal to
     it). The errors come from the residuals averaged over blocks of ``n_block`` samples (the
     block means drop the deterministic ripple of harmonics and are nearly independent
-    samples of the noise), at least four blocks."""
+    samples of the noise), at least four blocks.
+    """
     X = np.column_stack([np.ones_like(tw), tw, tw ** 2])
     coef, *_ = np.linalg.lstsq(X, yv, rcond=None)
     nb = max(tw.size // n_block, 4)
@@ -50,7 +51,8 @@ def _line_fit(tw, yv, n_block):
 def _noise_std(noise, amp, T, bw):
     """Standard errors of intercept and slope of a line through ``ln A`` (or the phase) over
     a window of ``T`` seconds, from in-band noise of RMS ``noise`` on an envelope ``amp``:
-    ``noise / amp`` per sample, ``max(B T, 2)`` independent samples."""
+    ``noise / amp`` per sample, ``max(B T, 2)`` independent samples.
+    """
     n_ind = max(bw * T, 2.0)
     r = noise / amp
     return r / math.sqrt(n_ind), math.sqrt(12.0) * r / (T * math.sqrt(n_ind))
@@ -164,7 +166,8 @@ def hilbert_windows(tt, env, phase, span, plan, noise_spec, mode):
 
 def _log_slope(ln_x, ln_w, j, half=1.0):
     """``d ln w / d ln X`` at point ``j``: derivative of the least-squares parabola through the
-    points within ``half`` nepers of amplitude of it (a line if fewer than five)."""
+    points within ``half`` nepers of amplitude of it (a line if fewer than five).
+    """
     near = np.flatnonzero(np.abs(ln_x - ln_x[j]) <= half)
     if near.size < 3:
         near = np.arange(max(j - 1, 0), min(j + 2, ln_x.size))

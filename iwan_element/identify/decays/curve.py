@@ -75,11 +75,11 @@ import numpy as np
 from scipy import signal
 
 from ...base.validation import check_magnitude, check_scalar, check_uniform_time, finite_array
-from ._filter import _decay_signal, _drift_terms, _noise_bandwidth
-from ._windows import WindowPlan, _noise_std, drift_correct, hilbert_windows
-from ._report import _finish
-from .peaks import pff_windows
 from ..modal.curves import DECAY_METHODS
+from ._filter import _decay_signal, _drift_terms, _noise_bandwidth
+from ._report import _finish
+from ._windows import WindowPlan, _noise_std, drift_correct, hilbert_windows
+from .peaks import pff_windows
 from .saturation import cut_clipping, cut_flattened_peaks
 
 __all__ = ["amplitude_curve"]
@@ -104,7 +104,8 @@ def _check_band(band, fs):
 def _decays_in_band(y, fs, lo, hi):
     """Whether the band-passed record's envelope falls tenfold from its peak to the mean of
     its last fifth: a heavily damped mode fills a narrow band, so that its spectral peak is
-    only a few times the band's median, but it decays; noise does not."""
+    only a few times the band's median, but it decays; noise does not.
+    """
     sos = signal.butter(2, [lo, hi], btype="bandpass", fs=fs, output="sos")
     env = np.abs(signal.hilbert(signal.sosfiltfilt(sos, y)))
     return bool(env.max() > 10.0 * np.mean(env[-max(env.size // 5, 1):]))
@@ -120,7 +121,8 @@ def _check_mode(y, fs, lo, hi):
     A band that seems to hold two modes is looked at again in one unwindowed periodogram of
     the whole record: a free decay is its own window, while Welch's taper suppresses its
     start, where a heavily damped decay lives, and the tapered remnant can split into
-    several peaks (a 10 % damped mode at 80 Hz was refused as "81 and 67 Hz")."""
+    several peaks (a 10 % damped mode at 80 Hz was refused as "81 and 67 Hz").
+    """
     # (zero padding at most 16 times the record: a nonsensical time axis cannot blow it up)
     nfft = int(2 ** min(math.ceil(math.log2(fs / ((hi - lo) / 64.0))),
                         math.ceil(math.log2(16 * y.size))))

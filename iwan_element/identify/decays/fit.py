@@ -58,14 +58,22 @@ import numpy as np
 from scipy import stats
 
 from ...base.progress import finish, progress_bar, tick
-from ...base.validation import check_magnitude, check_scalar, check_uniform_time, finite_array
-from ._fit_model import (_Objective, _Problem, _covariance, _fit_regime, _local_weights,
-                         _misfit_ratio, _neighbours, _polar)
-from ..modal.result import ModalIwanFit
-from ..modal.fit import fit_modal_iwan
 from ...base.threads import one_blas_thread
-from .saturation import cut_clipping, cut_flattened_peaks
+from ...base.validation import check_magnitude, check_scalar, check_uniform_time, finite_array
+from ..modal.fit import fit_modal_iwan
+from ..modal.result import ModalIwanFit
+from ._fit_model import (
+    _covariance,
+    _fit_regime,
+    _local_weights,
+    _misfit_ratio,
+    _neighbours,
+    _Objective,
+    _polar,
+    _Problem,
+)
 from .curve import _check_band
+from .saturation import cut_clipping, cut_flattened_peaks
 
 __all__ = ["fit_decay"]
 
@@ -103,7 +111,8 @@ def _summary(prob, rows):
 
 def _starts(X, f, zeta, conv):
     """Curve start values from the modal Iwan fit of the window estimates (microslip ones,
-    and the full vector when that fit leaves microslip) and a near-linear mode."""
+    and the full vector when that fit leaves microslip) and a near-linear mode.
+    """
     starts, full = [], None
     if X.size >= 4 and np.unique(np.round(np.log(X), 6)).size >= 3:
         try:
@@ -131,7 +140,8 @@ def _decay_start(prob, t_start, t0):
     """Working-rate index of the start of the free decay: given, else the first sample above
     0.3 of the record's largest magnitude (an impact or a release), taken as the record's
     start when it is within the first period (a release, or a record cropped in the decay,
-    whose first samples may be near a zero crossing)."""
+    whose first samples may be near a zero crossing).
+    """
     if t_start is not None:
         t_end = t0 + (prob.n - 1) / prob.fs
         t_start = check_scalar("t_start", t_start, low=t0, high=t_end)
@@ -146,7 +156,8 @@ def _full_starts(micro_x, X_max, x_ref, curve_full):
     """Starts of the full model: the window-curve fit's macroslip solution if any, and
     ``phi_max`` at 0.3, 1 and 3 times the initial amplitude with the microslip ``chi`` (and
     ``chi = -0.5``, since microslip estimates are biased when the data leave microslip), the
-    stiffness ratio matching the microslip ``delta``."""
+    stiffness ratio matching the microslip ``delta``.
+    """
     f0, z0, chi_m, delta = micro_x[:4]
     out = [] if curve_full is None else [np.concatenate([curve_full, micro_x[4:]])]
     for ratio in (0.3, 1.0, 3.0):
@@ -163,7 +174,8 @@ def _microslip_saturates(x, x_ref):
     """True when the microslip law reaches, at the release amplitude ``exp(x[-2])``,
     ``(chi + 2) delta (X / X_ref)**(chi + 1) >= 1``: the tangent's relative drop. In the full
     model that drop is ``kappa r**(chi+1) / (1 + beta)`` at ``r = X / phi_max < 1``, below 1
-    for ``kappa <= 1``, ``beta >= 0``; reaching 1 means the record passes ``phi_max``."""
+    for ``kappa <= 1``, ``beta >= 0``; reaching 1 means the record passes ``phi_max``.
+    """
     chi, delta = x[2], x[3]
     return (chi + 2.0) * delta * (math.exp(x[-2]) / x_ref) ** (chi + 1.0) >= 1.0
 
@@ -227,7 +239,8 @@ def _prepare(t, y, quantity, band, order, stiffness, floor, x_ref, t_start):
 
 def _window_curve(prob, i_s, i_b, nw):
     """Window estimates over ``[i_s, i_b)``, clear of the filter's end effects
-    where possible (the fit itself models it): start values and the plot's data."""
+    where possible (the fit itself models it): start values and the plot's data.
+    """
     m = prob.n_trim
     a, b = (max(i_s, m), min(i_b, prob.n - m)) if min(i_b, prob.n - m) - max(i_s, m) >= 2 * nw \
         else (i_s, i_b)
@@ -262,7 +275,8 @@ def _bounds(prob, regime, X, x_max, ln_a0):
 
 def _no_mode(prob, snr_min, ratio):
     """Refuse a record without a decaying mode the model can follow (pure noise, a band
-    without the mode): a ValueError naming ``y`` and the band, not the model's inner range."""
+    without the mode): a ValueError naming ``y`` and the band, not the model's inner range.
+    """
     lo, hi = prob.band
     found = "no decay curve fits it" if not math.isfinite(ratio) else \
         f"its largest envelope is {ratio:.2g} times the noise RMS a decay model leaves"
@@ -275,7 +289,8 @@ def _no_mode(prob, snr_min, ratio):
 def _fit_micro(prob, info, snr_min, spc):
     """Microslip fit in two stages: over the decay to 5 % of the peak envelope, then over
     every sample above ``snr_min`` x the noise (from the first stage's residual), with the
-    local-noise weights of the first stage's residual, starting from its solution."""
+    local-noise weights of the first stage's residual, starting from its solution.
+    """
     X, f, zeta = info["data"]
     nuis, env, i_top = info["nuis"], info["env"], info["i_top"]
     bnd = _bounds(prob, "microslip", X, None, nuis[-2])
@@ -308,7 +323,8 @@ def _fit_micro(prob, info, snr_min, spc):
 
 def _fit_models(prob, info, alpha, snr_min, spc, bar=None):
     """Microslip fit, then the full model and the likelihood-ratio test between them
-    (``bar``: a progress bar, advanced after each)."""
+    (``bar``: a progress bar, advanced after each).
+    """
     micro, obj, span = _fit_micro(prob, info, snr_min, spc)
     tick(bar, text="microslip fitted")
     idx, ref, X = span["idx"], span["ref"], info["data"][0]

@@ -56,8 +56,7 @@ from scipy import signal
 
 from ...base.validation import check_magnitude, check_scalar, check_uniform_time, finite_array
 from ..modal.targets import ModalTargets, ModeTarget
-from ._mode_window import (_NoWindow, _auto_windows, _band_pass, _linear, _propagate,
-                           _try_window)
+from ._mode_window import _auto_windows, _band_pass, _linear, _NoWindow, _propagate, _try_window
 
 __all__ = ["free_decay_modes"]
 
@@ -144,7 +143,8 @@ def _auto_bands(Y, fs, duration, *, width=0.08, prominence=10.0):
     """One band of +-``width`` per peak of the channels' summed normalised Welch spectrum
     (segments of about an eighth of the record, Hann) that stands ``prominence`` times above
     its surroundings and above the spectrum's median, between 20 periods over the record
-    and 0.35 fs; neighbouring bands are cut at the midpoint between their peaks."""
+    and 0.35 fs; neighbouring bands are cut at the midpoint between their peaks.
+    """
     n = Y.shape[1]
     nper = int(min(n, max(256, 2 ** int(round(math.log2(max(n / 8.0, 1.0)))))))
     f, P = signal.welch(Y, fs=fs, nperseg=nper, axis=1)
@@ -273,7 +273,8 @@ def _options(quantity, window, span, snr_min, max_order, min_periods, filter_ord
 
 def _cross_warnings(modes, envelopes):
     """Warn when another band rang well above its own window's level during a mode's window
-    (the joint is then loaded by that mode)."""
+    (the joint is then loaded by that mode).
+    """
     warns = []
     for a in modes:
         tc = 0.5 * (a["window"][0] + a["window"][1])

@@ -67,7 +67,8 @@ class Clipping:
 def find_clipping(y) -> Clipping | None:
     """The clipping of ``y`` (1-D, finite), or None when it has none: at least
     :data:`MIN_SAMPLES` samples within ``TOL`` of the range of its maximum (or minimum), in at
-    least two separate runs."""
+    least two separate runs.
+    """
     y = np.asarray(y, dtype=float)
     span = float(np.ptp(y)) if y.size else 0.0
     if span == 0.0:
@@ -88,7 +89,8 @@ def find_clipping(y) -> Clipping | None:
 def cut_clipping(t, y, *, min_samples: int = 64):
     """``(t, y, note)``: the record after its last clipped sample and the warning saying so,
     or the record unchanged and ``""``. ValueError naming ``y`` when fewer than
-    ``min_samples`` samples follow the clipping."""
+    ``min_samples`` samples follow the clipping.
+    """
     clip = find_clipping(y)
     if clip is None:
         return t, y, ""
@@ -106,7 +108,8 @@ def cut_clipping(t, y, *, min_samples: int = 64):
 def _flattened_cycles(y, fs, band):
     """``(flattened, end index, envelope)`` per cycle of the band's oscillation in ``y``
     (module docstring), cycles within three periods of the band's low edge of either end
-    of the record left out."""
+    of the record left out.
+    """
     _, _, z = analytic_signal(y, fs, band)
     phase = np.unwrap(np.angle(z))
     edge = int(3 * fs / band[0])
@@ -142,7 +145,8 @@ def cut_flattened_peaks(t, y, band, *, min_samples: int = 64):
     """``(t, y, note)``: the record after its last clipped cycle when its peaks are
     flattened below the mode in ``band`` [Hz] (clipping under noise, module docstring) and
     the warning saying so, or the record unchanged and ``""``. ValueError naming ``y`` when
-    fewer than ``min_samples`` samples follow."""
+    fewer than ``min_samples`` samples follow.
+    """
     t = np.asarray(t, dtype=float)
     y = np.asarray(y, dtype=float)
     fs = (t.size - 1) / (t[-1] - t[0])

@@ -4,9 +4,9 @@ from __future__ import annotations
 import csv
 import io
 import re
+from collections.abc import Sequence
 from os import PathLike
 from pathlib import Path
-from typing import Sequence
 
 import numpy as np
 
@@ -90,7 +90,8 @@ def _resolve_columns(header: list[str] | None, columns, ncol: int) -> list[int]:
 def _header_units(header, idx, given: dict) -> dict:
     """The unit of each of time, displacement, force: the caller's, else the header's label
     (``"force [kN]"``), never a guess. ``ValueError`` when they contradict, or when a unit is
-    neither given nor labelled (naming the columns found and how to pass it)."""
+    neither given nor labelled (naming the columns found and how to pass it).
+    """
     units, missing = {}, []
     for q, k in zip(_QUANTITIES, idx):
         said = _column_unit(header[k]) if header is not None else None

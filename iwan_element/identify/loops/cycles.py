@@ -92,7 +92,8 @@ def _noise_sigma(u: np.ndarray) -> float:
 
     :func:`~iwan_element.identify.loops.noise.estimate_noise` (Savitzky-Golay residual, per sample);
     below 32 samples the MAD of the second differences. The second differences alone mistook
-    the curvature of a clean, coarsely sampled record for noise."""
+    the curvature of a clean, coarsely sampled record for noise.
+    """
     if u.size < 5:
         return 0.0
     if u.size >= 32:
@@ -162,7 +163,8 @@ def find_reversals(u, *, hysteresis: float | None = None) -> np.ndarray:
 
 def _window(u: np.ndarray, i: int, lo: int, hi: int, band: float, sign: float) -> tuple[int, int]:
     """Contiguous samples around the extremum ``i`` (within ``[lo, hi]``) whose value stays
-    within ``band`` of the extremum."""
+    within ``band`` of the extremum.
+    """
     a = i
     while a > lo and sign * (u[i] - u[a - 1]) <= band:
         a -= 1

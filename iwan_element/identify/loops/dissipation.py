@@ -22,11 +22,12 @@ import numpy as np
 from scipy import optimize
 
 from ...base.validation import check_int, check_magnitude, check_scalar, finite_array, same_length
-from ...core.closed_form import dissipation as cycle_dissipation, force_amplitude
+from ...core.closed_form import dissipation as cycle_dissipation
+from ...core.closed_form import force_amplitude
 from ...core.parameters import IwanParameters
-from .solver import _Problem, _uncertainty
 from .identifiability import MIN_MACRO_POINTS, _identify, _range_warnings
 from .result import FitResult, _finish
+from .solver import _Problem, _uncertainty
 
 __all__ = ["fit_dissipation", "NRMSE_LIMIT"]
 
@@ -51,7 +52,8 @@ def _misfit_warning(nrmse: float) -> list[str]:
 
 def _seed_gamma(F0n, chi, beta):
     """Solve paper eq. 20, ``F0/Fs = g (beta + 1 - g**(chi+1)/(chi+2)) / c``, for ``g = u0/phi_max``
-    in ``(0, 1]`` (safeguarded Newton; the right side increases monotonically to 1 at g = 1)."""
+    in ``(0, 1]`` (safeguarded Newton; the right side increases monotonically to 1 at g = 1).
+    """
     c = beta + (chi + 1.0) / (chi + 2.0)
     lo = np.zeros_like(F0n)
     hi = np.ones_like(F0n)
@@ -84,7 +86,8 @@ def _seed_model(F0, u0, Fs, KT, chi, beta):
 
 def _seed_solve(F0, D, u0, Fs, counter, *, max_newton=50):
     """Seed paper sec. 2 for one set of cycles: ``KT`` by Newton, ``chi(KT), beta(KT)`` by
-    Nelder-Mead. Returns ``(KT, chi, beta, converged, message, iterations)``."""
+    Nelder-Mead. Returns ``(KT, chi, beta, converged, message, iterations)``.
+    """
     lnD = np.log(D)
     lnK = np.log(F0 / u0)
 
@@ -92,7 +95,7 @@ def _seed_solve(F0, D, u0, Fs, counter, *, max_newton=50):
         return -1.0 + math.exp(z[0]), z[1] * z[1]          # chi > -1, beta >= 0, unconstrained z
 
     def inner(KT, z0):
-        """fminsearch for chi(KT), beta(KT): least squares of ln D (eqs. 17, 20)."""
+        """Fminsearch for chi(KT), beta(KT): least squares of ln D (eqs. 17, 20)."""
         def obj(z):
             chi, beta = decode(z)
             if not -1.0 < chi < 50.0:
@@ -132,7 +135,8 @@ def _fit_seed(F0, D, u0, Fs, *, t0):
     """The seed paper's identification (sec. 2) with a microslip guard: cycles with
     ``F0 >= 0.99 Fs`` (at or near the macroslip plateau) are left out, and cycles whose
     measured ``u0`` exceeds the fitted ``phi_max`` are dropped and the fit repeated (up to three
-    times): eqs. 17 and 20 hold only in microslip."""
+    times): eqs. 17 and 20 hold only in microslip.
+    """
     counter = [0]
     warns = []
     keep = F0 < (1.0 - _SEED_PLATEAU) * Fs

@@ -34,16 +34,23 @@ import time
 import numpy as np
 from scipy.special import fdtrc
 
+from ...base.validation import (
+    check_int,
+    check_magnitude,
+    check_scalar,
+    check_time,
+    check_varies,
+    finite_array,
+    same_length,
+)
 from ...core.history import REVERSAL_TOL, History
-from ...base.validation import (check_int, check_time, check_magnitude, check_scalar,
-                                check_varies, finite_array, same_length)
 from ...core.parameters import IwanParameters
-from .solver import _Problem
+from .cycles import split_cycles
 from .identifiability import _identify, min_macroslip
 from .model_fit import burn_in_index, drive_displacement
 from .noise import estimate_noise
 from .result import FitResult, _finish
-from .cycles import split_cycles
+from .solver import _Problem
 
 __all__ = ["fit_loops"]
 
@@ -89,7 +96,8 @@ def _shifted(hist: History, u_drive: np.ndarray, shift: float) -> History:
 
     On a Masing branch the backbone argument depends on displacement differences only; the
     shift changes the samples on the virgin curve (``|mult| == 1``), whose argument is ``|u|``.
-    For a small shift the structure itself does not change."""
+    For a small shift the structure itself does not change.
+    """
     hs = copy.copy(hist)
     v = np.abs(hist.mult) == 1.0
     uu = u_drive[hist.index[v]] - shift
@@ -102,7 +110,8 @@ def _shifted(hist: History, u_drive: np.ndarray, shift: float) -> History:
 
 def _ssr_at(hist, u_drive, shift, prob, params):
     """Residual sum of squares with the displacement shifted by ``-shift``, shape fixed,
-    ``Fs`` and ``dF0`` re-projected."""
+    ``Fs`` and ``dF0`` re-projected.
+    """
     g = _shifted(hist, u_drive, shift).forces(
         IwanParameters(1.0, params.KT / params.Fs, params.chi, params.beta))
     _, r = prob.project_g(g)
@@ -111,7 +120,8 @@ def _ssr_at(hist, u_drive, shift, prob, params):
 
 def _displacement_offset(hist, u_drive, prob, out, amp):
     """``(du0, stderr)`` from the curvature of the SSR in ``du0`` (NaN stderr: not determined,
-    i.e. the standard error would exceed 10 % of the half range)."""
+    i.e. the standard error would exceed 10 % of the half range).
+    """
     h = 2e-3 * amp
     p = out["params"]
     s0 = _ssr_at(hist, u_drive, 0.0, prob, p)
@@ -129,7 +139,8 @@ def _displacement_offset(hist, u_drive, prob, out, amp):
 
 def _explains(out, prob):
     """F-test of the fitted joint against a constant force (offset only), with the effective
-    number of residuals: ``(p_value, R^2)``."""
+    number of residuals: ``(p_value, R^2)``.
+    """
     y, w = prob.y, prob.w
     ybar = float(np.sum(w * w * y) / np.sum(w * w))
     ssr0 = float(np.sum((w * (y - ybar)) ** 2))
@@ -279,7 +290,8 @@ def _fit_displacement_offset(setup, out, u_drive, FF, w_full, keep, tol, amp, op
     4 steps; a shift that does not lower the misfit is not taken). ``setup``: the current
     ``(hist, prob)``; ``amp``: half the measured displacement range [m]; ``opts``: ``rng``,
     ``alpha``, ``max_nfev`` of the joint's fit.
-    Returns ``(du0, se_du0, hist, prob, out)`` (``se_du0`` NaN: not determined)."""
+    Returns ``(du0, se_du0, hist, prob, out)`` (``se_du0`` NaN: not determined).
+    """
     hist, prob = setup
     half = prob.block
     du0, se_du0 = 0.0, math.nan

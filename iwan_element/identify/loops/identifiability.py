@@ -39,12 +39,12 @@ import math
 import numpy as np
 from scipy.special import fdtrc
 
-from ...core.history import unit_params
 from ...core.closed_form import backbone
+from ...core.history import unit_params
 from ...core.parameters import IwanParameters
-from .solver import _multistart, _Problem, _q_to_shape, _uncertainty
 from .noise import integrated_time
 from .result import PARAM_NAMES
+from .solver import _multistart, _Problem, _q_to_shape, _uncertainty
 
 _CHI_BOUNDS = (-0.98, 1.0)            # search range of chi (physical joints: -1 < chi <= 0)
 _BETA_MAX = 100.0
@@ -61,13 +61,15 @@ def min_macroslip(n: int) -> int:
     """Fitted samples that must lie in macroslip (backbone argument above the fitted
     ``phi_max``) before ``Fs`` and ``beta`` can count as identified: ``max(10, 0.5 %)`` of the
     ``n`` fitted samples. Fewer, and the fit may put its slip onset at the largest excursion
-    to bend the last few samples (noise), which fixes nothing (docs/guards.md)."""
+    to bend the last few samples (noise), which fixes nothing (docs/guards.md).
+    """
     return max(10, int(0.005 * n))
 
 
 def microslip_warning(n_macro: int, n: int, x_max: float, phi_max: float) -> str:
     """Why ``Fs`` and ``beta`` are not identified when only ``n_macro`` of ``n`` samples
-    reach macroslip (the tester's words of :func:`min_macroslip`)."""
+    reach macroslip (the tester's words of :func:`min_macroslip`).
+    """
     return (f"Fs and beta are NOT identified by these data: the loops stay in microslip (only "
             f"{n_macro} of {n} fitted samples beyond the fitted slip onset phi_max = "
             f"{phi_max:.4g} m, largest excursion {x_max:.4g} m; {min_macroslip(n)} needed); "
@@ -104,7 +106,8 @@ def _identify(prob: _Problem, *, n_starts: int, rng: np.random.Generator, alpha:
 
 def _fit_microslip(prob: _Problem, *, max_nfev: int) -> dict:
     """The microslip-only fit: beta = 0, phi_max >= x_max (it represents every microslip
-    model, docs/equations.md section 2 (seed paper eq. 10))."""
+    model, docs/equations.md section 2 (seed paper eq. 10)).
+    """
     lower = np.array([0.0, _CHI_BOUNDS[0]])
     upper = np.array([math.log(_PHI_RANGE[1]), _CHI_BOUNDS[1]])
     starts = [(math.log(2.0), -0.5), (math.log(1.2), -0.2), (math.log(5.0), -0.8),
@@ -118,7 +121,8 @@ def _fit_microslip(prob: _Problem, *, max_nfev: int) -> dict:
 def _fit_full(prob: _Problem, micro: dict, *, n_starts: int, rng: np.random.Generator,
               max_nfev: int, initial: IwanParameters | None) -> dict:
     """The four-parameter multi-start fit, started from the microslip fit, the user's
-    ``initial`` and random shapes."""
+    ``initial`` and random shapes.
+    """
     xm, chi_m = prob.x_max, micro["chi"]
     lower = np.array([math.log(_PHI_RANGE[0]), _CHI_BOUNDS[0], 0.0])
     upper = np.array([math.log(_PHI_RANGE[1]), _CHI_BOUNDS[1], math.log1p(_BETA_MAX)])
@@ -145,7 +149,8 @@ def _tau(prob: _Problem, r) -> float:
 def _macroslip_test(prob: _Problem, micro: dict, full: dict, alpha: float):
     """Whether the data reach macroslip: the four-parameter fit puts macroslip samples in the
     data and lowers the residual significantly (F test on the effective samples).
-    Returns ``(macro, details)``."""
+    Returns ``(macro, details)``.
+    """
     xm, r_f = prob.x_max, full["r"]
     ssr_m, ssr_f = float(micro["r"] @ micro["r"]), float(r_f @ r_f)
     m = r_f.size
@@ -195,7 +200,8 @@ def _macro_result(prob: _Problem, full: dict, details: dict) -> dict:
 
 def _micro_result(prob: _Problem, micro: dict, full: dict, details: dict) -> dict:
     """Microslip only: KT, chi and R identified (docs/equations.md section 2 (seed paper eq. 10)); Fs and beta given as
-    the range of the family that fits equally, with a warning that says why."""
+    the range of the family that fits equally, with a warning that says why.
+    """
     xm, off = prob.x_max, prob.offset
     Fs0, phi0, chi = micro["Fs"], micro["phi"], micro["chi"]
     KT = Fs0 * unit_params(phi0, chi, 0.0).KT

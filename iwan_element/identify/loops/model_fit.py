@@ -39,17 +39,17 @@ from __future__ import annotations
 import logging
 import math
 import time
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Callable, Sequence
 
 import numpy as np
 from scipy.signal import savgol_coeffs, savgol_filter
 
-from ...base.validation import check_int, check_time, check_magnitude, finite_array, same_length
-from .noise import estimate_noise, integrated_time
 from ...base.result_shape import ResultShape, value_stderr
+from ...base.validation import check_int, check_magnitude, check_time, finite_array, same_length
 from ...fitting import Parameter, ParameterTable, covariance, fit_success, minimize, verdict
 from .cycles import find_reversals
+from .noise import estimate_noise, integrated_time
 
 __all__ = ["ModelFit", "fit_force_model", "drive_displacement", "burn_in_index"]
 
@@ -189,7 +189,8 @@ class ModelFit(ResultShape):
 def _identified(names, x, se, at_bound, degenerate, warns) -> dict:
     """Which fitted values the data identify, by the package's one rule
     (:func:`iwan_element.fitting.verdict`; the offsets are nuisances), appending to ``warns``
-    why not."""
+    why not.
+    """
     ident = {}
     for k, name in enumerate(names):
         why = (" (a joint with no absolute position reference depends on displacement "

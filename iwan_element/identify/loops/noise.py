@@ -46,8 +46,8 @@ import numpy as np
 from scipy.optimize import minimize_scalar
 from scipy.signal import savgol_coeffs, savgol_filter
 
-from ...base.validation import check_time, check_magnitude, check_scalar, finite_array, same_length
 from ...base.result_shape import ResultShape, panels
+from ...base.validation import check_magnitude, check_scalar, check_time, finite_array, same_length
 
 __all__ = ["NoiseEstimate", "estimate_noise", "integrated_time", "difference_sigma"]
 
@@ -102,14 +102,16 @@ class NoiseEstimate(ResultShape):
     def success(self) -> bool:
         """True for a finite, positive level from at least :data:`MIN_EFFECTIVE` independent
         samples (then its relative standard error, about ``1 / sqrt(2 n_eff)``, is below
-        about 22 %)."""
+        about 22 %).
+        """
         return bool(math.isfinite(self.sigma) and self.sigma > 0
                     and self.n_eff >= MIN_EFFECTIVE)
 
     def plot(self, ax=None, *, lags: int | None = None):
         """The noise model's autocorrelation ``rho**|k|`` (AR(1)) against the lag [s], with the
         integrated correlation time marked. Returns the artists (one Axes,
-        :mod:`iwan_element.base.result_shape`)."""
+        :mod:`iwan_element.base.result_shape`).
+        """
         ax, = panels(ax, 1, figsize=(5, 3.5))
         dt = self.correlation_time / self.tau if self.tau > 0 else 1.0
         k = np.arange(lags if lags is not None else max(10, int(6 * self.tau)) + 1)
@@ -159,7 +161,8 @@ def signal_window(y: np.ndarray) -> int:
 def _clean_blocks(r: np.ndarray, L: int) -> np.ndarray:
     """Residual in blocks of ``L`` samples, shape (m, L), keeping only the blocks whose robust
     scale is at most 1.5 times the median block scale: blocks around force kinks (reversals,
-    break-away peaks), signal leaks and bursts of load-frame chatter are left out."""
+    break-away peaks), signal leaks and bursts of load-frame chatter are left out.
+    """
     m = r.size // L
     B = r[:m * L].reshape(m, L)
     B = B - np.median(B, axis=1, keepdims=True)
@@ -171,7 +174,8 @@ def _clean_blocks(r: np.ndarray, L: int) -> np.ndarray:
 def _filtered_ar1_acf(w: int, rho: float, lags: int) -> np.ndarray:
     """Autocovariance at lags ``0..lags`` of ``(I - H) e`` (interior of the record) for
     unit-variance AR(1) noise ``e`` of lag-one correlation ``rho``; ``H``: the quintic
-    Savitzky-Golay smoother over ``w`` samples."""
+    Savitzky-Golay smoother over ``w`` samples.
+    """
     c = -savgol_coeffs(w, _POLY)
     c[w // 2] += 1.0
     a = np.correlate(c, c, mode="full")          # filter autocorrelation, lags -(w-1)..w-1
@@ -183,7 +187,8 @@ def _block_acf(B: np.ndarray, lags: int) -> np.ndarray:
     """Robust autocorrelation at lags ``0..lags`` of the residual blocks ``B`` (shape (m, L)):
     ``(S - D)/(S + D)`` with ``S``, ``D`` the squared MAD scales of the sums and differences of
     samples ``k`` apart within a block (a kink, a spike or a chatter burst moves neither
-    median; for Gaussian noise it is the ordinary correlation)."""
+    median; for Gaussian noise it is the ordinary correlation).
+    """
     out = np.ones(lags + 1)
     for k in range(1, lags + 1):
         a, b = B[:, k:].ravel(), B[:, :B.shape[1] - k].ravel()
@@ -195,7 +200,8 @@ def _block_acf(B: np.ndarray, lags: int) -> np.ndarray:
 
 def _ar1_match(w: int, rho_hat: np.ndarray) -> tuple[float, float, bool]:
     """``(rho, variance factor, capped)``: the AR(1) noise whose filtered residual has the
-    autocorrelation ``rho_hat`` (lags ``0..K``, least squares over lags ``1..K``)."""
+    autocorrelation ``rho_hat`` (lags ``0..K``, least squares over lags ``1..K``).
+    """
     K = rho_hat.size - 1
 
     def cost(rho):
@@ -226,7 +232,8 @@ def _savgol_sigma(y: np.ndarray, w: int) -> tuple[float, float, bool]:
 def _correlation_time(B: np.ndarray, sigma: float) -> float:
     """Integrated autocorrelation time [samples] of the residual blocks ``B`` (shape (m, L)),
     averaged over the blocks, summed over Geyer's initial positive sequence (winsorised at
-    4 sigma so that isolated spikes do not dominate)."""
+    4 sigma so that isolated spikes do not dominate).
+    """
     if sigma <= 0.0 or B.size == 0:
         return 1.0
     x = np.clip(B, -4.0 * sigma, 4.0 * sigma)
@@ -250,7 +257,8 @@ def _correlation_time(B: np.ndarray, sigma: float) -> float:
 def integrated_time(r: np.ndarray) -> float:
     """Integrated autocorrelation time of the residual sequence ``r`` [samples], ``>= 1``: the
     package's one estimate (Geyer's initial positive sequence on a robustly scaled residual),
-    used by every fit and diagnosis to widen its stated uncertainty for correlated misfit."""
+    used by every fit and diagnosis to widen its stated uncertainty for correlated misfit.
+    """
     r = np.asarray(r, float)
     if r.size < 8:
         return 1.0
@@ -263,7 +271,8 @@ def difference_sigma(y) -> float:
     """Noise standard deviation of a sequence from its second differences: ``1.4826 MAD``
     of ``y[i-1] - 2 y[i] + y[i+1]`` divided by ``sqrt(6)`` (white noise of variance
     ``s**2`` gives second differences of variance ``6 s**2``; the MAD ignores a smooth signal's
-    slowly varying curvature and isolated outliers). The package's one copy of this rule."""
+    slowly varying curvature and isolated outliers). The package's one copy of this rule.
+    """
     d2 = np.diff(np.asarray(y, float), 2)
     return _MAD * float(np.median(np.abs(d2 - np.median(d2)))) / math.sqrt(6.0)
 

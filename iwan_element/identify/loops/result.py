@@ -10,10 +10,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ...base.serialize import json_safe
-
-from ...core.parameters import IwanParameters
 from ...base.result_shape import ResultShape, value_stderr
+from ...base.serialize import json_safe
+from ...core.parameters import IwanParameters
 from ...fitting import Parameter, ParameterTable, fit_success, verdict
 
 __all__ = ["FitResult", "IdentifiabilityWarning", "PARAM_NAMES"]
@@ -139,7 +138,8 @@ class FitResult(ResultShape):
 
     def to_dict(self) -> dict:
         """JSON-safe dict (NaN and inf become ``None``): ``params`` is the parameter table's
-        dict; ``IwanParameters.from_dict(d["joint"])`` rebuilds the joint."""
+        dict; ``IwanParameters.from_dict(d["joint"])`` rebuilds the joint.
+        """
         return json_safe({
             "method": self.method,
             "params": self.params.to_dict(),
@@ -162,7 +162,8 @@ class FitResult(ResultShape):
 
     def plot(self, ax=None):
         """Loop fits: measured and fitted force [kN] vs displacement [mm]; dissipation fits:
-        measured and fitted ``D`` [J] vs ``F0`` [N] (log-log). Returns the list of artists."""
+        measured and fitted ``D`` [J] vs ``F0`` [N] (log-log). Returns the list of artists.
+        """
         from ...base.result_shape import axes_or_new
         ax = axes_or_new(ax)
         c = self._curves
@@ -186,7 +187,8 @@ class FitResult(ResultShape):
 
     def report(self) -> str:
         """Human-readable summary: parameters with standard errors, correlations, fit quality
-        and warnings."""
+        and warnings.
+        """
         p = self.joint
         title = {"loops": "loop fit (exact IwanJoint on the measured displacement)",
                  "seed": "dissipation fit, seed-paper procedure (Nelder-Mead + Newton on KT)",
@@ -251,7 +253,8 @@ def joint_table(params: IwanParameters, stderr: dict, identified: dict, *, fixed
                 correlation=None) -> ParameterTable:
     """The :class:`~iwan_element.fitting.ParameterTable` of a fitted joint: ``Fs`` [N],
     ``KT`` [N/m], ``chi``, ``beta`` with their standard errors, verdicts, the ones given
-    (``fixed``) and their correlation (order :data:`PARAM_NAMES`)."""
+    (``fixed``) and their correlation (order :data:`PARAM_NAMES`).
+    """
     rows = [Parameter(k, getattr(params, k), stderr.get(k, math.nan), *_DOMAIN[k], _UNITS[k],
                       bool(identified.get(k, False)), fixed=k in fixed) for k in PARAM_NAMES]
     return ParameterTable(rows, correlation=correlation)
@@ -262,7 +265,8 @@ def settle_verdict(out: dict, fixed) -> tuple[dict, list[str]]:
     :func:`iwan_element.fitting.verdict` (docs/fitting.md section 5), with ``chi`` measured
     against ``chi + 1``. A parameter at a bound of its search range gets, for ``beta`` at 0,
     the range ``[0, 1.96 stderr]``; one with too large an error gets its 95 % interval as its
-    range."""
+    range.
+    """
     ident = dict(out["identified"])
     warns = []
     for k in PARAM_NAMES:
@@ -293,7 +297,8 @@ def required_parameters(ranges: dict, fixed=()) -> list:
     but those given, and but ``beta`` when its 95 % range in ``ranges`` reaches down to its
     physical bound 0 with a finite upper limit (a joint without macroslip softening beyond
     that limit: a finding, stated in the report) or when it follows from a given ``Fs``
-    (conditional on it, as the warning says)."""
+    (conditional on it, as the warning says).
+    """
     lo, hi = ranges.get("beta", (math.nan, math.nan))
     exempt = (lo <= 0.0 and math.isfinite(hi)) or "Fs" in fixed
     return [k for k in PARAM_NAMES if k not in fixed and not (k == "beta" and exempt)]
@@ -301,7 +306,8 @@ def required_parameters(ranges: dict, fixed=()) -> list:
 
 def not_identified_reason(missing, *, microslip: bool) -> str:
     """The failure reason for the reported parameters ``missing`` the data do not identify:
-    in microslip, the loops never slipped far enough to fix them."""
+    in microslip, the loops never slipped far enough to fix them.
+    """
     names = ", ".join(missing[:-1]) + " and " + missing[-1] if len(missing) > 1 else missing[0]
     verb = "is" if len(missing) == 1 else "are"
     why = ("the loops stay in microslip (test to larger amplitudes)" if microslip else
@@ -345,7 +351,7 @@ def _finish(method, out, *, converged, message, nfev, nrmse, t0, extra_warnings=
         warns.append(f"the optimiser did not converge: {message}")
     explains = out.get("explains", True)
     if not explains:
-        ident = {k: False for k in ident}
+        ident = dict.fromkeys(ident, False)
     success = fit_success(converged and explains, ident,
                           required_parameters(out["ranges"], fixed))
     table = joint_table(out["params"], out["stderr"], ident, fixed=fixed,

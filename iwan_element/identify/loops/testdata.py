@@ -16,11 +16,17 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ...base.validation import (check_int, check_time, check_magnitude, check_scalar,
-                                finite_array, same_length)
-from ...core.joint import IwanJoint
 from ...base.result_shape import html_table, table_lines
 from ...base.serialize import json_safe
+from ...base.validation import (
+    check_int,
+    check_magnitude,
+    check_scalar,
+    check_time,
+    finite_array,
+    same_length,
+)
+from ...core.joint import IwanJoint
 from ...core.parameters import IwanParameters
 from .cycles import Cycle, check_varies, default_hysteresis, split_cycles
 
@@ -79,7 +85,7 @@ class TestData:
     @classmethod
     def from_arrays(cls, t, u, F, *, units: dict | None = None, source: str | None = None,
                     hysteresis: float | None = None, close_tol: float = 0.02,
-                    drift_tol: float = 0.05) -> "TestData":
+                    drift_tol: float = 0.05) -> TestData:
         """Validate SI arrays and split them into cycles.
 
         Parameters

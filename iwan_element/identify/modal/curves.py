@@ -13,8 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ...base.validation import check_magnitude, finite_array
 from ...base.result_shape import ResultShape, panels, table_lines, wrap
+from ...base.validation import check_magnitude, finite_array
 
 __all__ = ["AmplitudeCurve", "MIN_POINTS", "DECAY_METHODS"]
 
@@ -121,7 +121,7 @@ class AmplitudeCurve(ResultShape):
     def __len__(self) -> int:
         return int(self.amplitude.size)
 
-    def sorted(self) -> "AmplitudeCurve":
+    def sorted(self) -> AmplitudeCurve:
         """The same curve with the points in increasing amplitude."""
         order = np.argsort(self.amplitude, kind="stable")
         return AmplitudeCurve(
@@ -135,7 +135,8 @@ class AmplitudeCurve(ResultShape):
     def success(self) -> bool:
         """True when the curve has at least :data:`MIN_POINTS` points with finite frequency
         and damping (a modal fit needs them; fewer points are reported in ``warnings``) and
-        no ``failures`` (docs/guards.md)."""
+        no ``failures`` (docs/guards.md).
+        """
         return not self.failure_reasons()
 
     def failure_reasons(self) -> tuple:

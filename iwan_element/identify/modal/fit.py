@@ -32,10 +32,10 @@ from scipy import optimize, stats
 
 from ...base.validation import check_scalar
 from ...fitting import covariance
-from .curves import DECAY_METHODS, AmplitudeCurve
-from ..loops.identifiability import MIN_MACRO_POINTS
-from .result import ModalIwanFit, model_curve
 from ..files.units import check_damping_ratio
+from ..loops.identifiability import MIN_MACRO_POINTS
+from .curves import DECAY_METHODS, AmplitudeCurve
+from .result import ModalIwanFit, model_curve
 
 __all__ = ["fit_modal_iwan", "ModalIwanFit"]
 
@@ -110,7 +110,8 @@ def _covariance(r, n_data):
     """Covariance of the fitted vector: the package's one routine
     (:func:`iwan_element.fitting.covariance`, docs/fitting.md) with ``s^2 = max(1, reduced
     chi^2)`` (the weights are the stated uncertainties; a misfit widens them). Returns the
-    covariance (degenerate directions left out) and the reduced chi-square."""
+    covariance (degenerate directions left out) and the reduced chi-square.
+    """
     J = r.jac
     dof = max(n_data - J.shape[1], 1)
     chi2_red = 2.0 * r.cost / dof

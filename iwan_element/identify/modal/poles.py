@@ -134,7 +134,8 @@ def stable_poles(poles, *, f_tol=2e-3, z_tol=0.2, z_abs=2e-4, min_orders=4):
 
 def basis(tau, s):
     """Real regressors ``exp(sigma tau) cos(w tau)`` and ``-exp(sigma tau) sin(w tau)``,
-    shape (N, 2p): the model ``Re(C exp(s tau))`` with ``C = a + i b`` is ``basis @ [a; b]``."""
+    shape (N, 2p): the model ``Re(C exp(s tau))`` with ``C = a + i b`` is ``basis @ [a; b]``.
+    """
     e = np.exp(np.outer(tau, s.real))
     ph = np.outer(tau, s.imag)
     return np.hstack([e * np.cos(ph), -e * np.sin(ph)])
@@ -199,7 +200,8 @@ def _model_jac(x, tau, p, m):
 
 def _correlated_cov(J, rho, s2):
     """``s2 A^-1 (sum_j J_j^T R J_j) A^-1``: ``R`` the Toeplitz noise correlation ``rho``,
-    the same for every channel ``j`` (its product with ``J_j`` by FFT convolution)."""
+    the same for every channel ``j`` (its product with ``J_j`` by FFT convolution).
+    """
     n, m, P = J.shape
     A = np.einsum("tjp,tjq->pq", J, J)
     if rho.size > 1:

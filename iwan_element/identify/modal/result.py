@@ -9,12 +9,18 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import special, stats
 
+from ...base.result_shape import ResultShape, panels, wrap
 from ...core.modal import modal_iwan_curve, viscous_floor
 from ...core.parameters import IwanParameters
-from ...base.result_shape import ResultShape, panels, wrap
+from ...fitting import (
+    Parameter,
+    ParameterTable,
+    covariance,
+    fit_success,
+    noise_dof_warning,
+    verdict,
+)
 from ..loops.result import IdentifiabilityWarning
-from ...fitting import (Parameter, ParameterTable, covariance, fit_success, noise_dof_warning,
-                        verdict)
 
 __all__ = ["ModalIwanFit", "model_curve", "full_parameters", "harmonic_factor"]
 
@@ -45,7 +51,8 @@ def full_parameters(theta):
 
 def model_curve(theta, X, regime, x_ref, stiffness, floor, damping_form="energy"):
     """Frequency [Hz] and damping ratio of the model at amplitudes ``X`` (``damping_form``: the
-    energy form or the form a free decay shows, :func:`~iwan_element.modal_iwan_curve`)."""
+    energy form or the form a free decay shows, :func:`~iwan_element.modal_iwan_curve`).
+    """
     f0, z0, chi = theta[0], theta[1], theta[2]
     if regime == "microslip":
         delta = theta[3]
@@ -133,7 +140,8 @@ class ModalIwanFit(ResultShape):
         from :func:`iwan_element.fitting.covariance` with the delta method (NaN along a
         degenerate direction), else from ``cov``. ``noise_dof``: degrees of freedom of a
         noise level taken from the residuals (None: stated), the verdict's rule 4;
-        ``noise_source``: where that noise level came from, for the warning."""
+        ``noise_source``: where that noise level came from, for the warning.
+        """
         names = MICRO if regime == "microslip" else FULL
         theta = np.asarray(theta, dtype=float)
         params = _derived(theta, regime)
@@ -215,7 +223,8 @@ class ModalIwanFit(ResultShape):
     @property
     def fitted_range(self) -> tuple:
         """``(lowest, highest)`` amplitude [m] the fit rests on (the curve's points, and the
-        fitted span of a direct decay fit); :meth:`predict` warns beyond it."""
+        fitted span of a direct decay fit); :meth:`predict` warns beyond it.
+        """
         X = np.asarray(self.data["amplitude"], dtype=float)
         span = list(self.conventions.get("amplitude_range", ())) + [X.min(), X.max()]
         return float(min(span)), float(max(span))
@@ -377,7 +386,8 @@ def _unidentified(params, stderr, theta, names, noise_dof=None):
     """Reported parameters the data do not pin down: the package's one rule
     (:func:`iwan_element.fitting.verdict`), ``chi`` against ``chi + 1``, ``beta`` against
     ``max(beta, 0.2)`` (a joint with little macroslip softening is as good as one without);
-    the viscous floor ``zeta0`` may be zero, so only a finite error is asked of it."""
+    the viscous floor ``zeta0`` may be zero, so only a finite error is asked of it.
+    """
     bad = []
     for k, v in params.items():
         ref, text = {"chi": (v + 1.0, "chi + 1"),

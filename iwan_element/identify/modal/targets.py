@@ -175,7 +175,8 @@ class ModeTarget:
     def frequency_stderr(self) -> float:
         """Standard error of the frequency target [Hz]: the statistical one, combined in
         quadrature with the drift across the window when that drift is significant (the
-        structure was not quite linear there)."""
+        structure was not quite linear there).
+        """
         return self._widened(self.frequency_std, self.frequency_drift)
 
     @property
@@ -276,7 +277,8 @@ class ModalTargets(ResultShape):
     @property
     def shapes(self) -> dict:
         """``{mode index: {position: signed real amplitude [m]}}``: the real part of
-        :attr:`ModeTarget.shape` (modes with sensors only)."""
+        :attr:`ModeTarget.shape` (modes with sensors only).
+        """
         return {m.index: {p: float(v.real) for p, v in zip(m.positions, m.shape)}
                 for m in self.modes if m.positions}
 
@@ -386,7 +388,8 @@ class ModalTargets(ResultShape):
 
     def plot(self, ax=None):
         """The signed real shapes against sensor position, each scaled to its largest
-        amplitude, with error bars; returns the artists. One panel."""
+        amplitude, with error bars; returns the artists. One panel.
+        """
         (a,) = panels(ax, 1)
         artists = []
         for m in self.modes:

@@ -89,7 +89,8 @@ def _inputs(f, F, response, phase, level):
 
 def _split(f):
     """Sweep labels when none are given: a new sweep starts where ``f`` turns round or
-    repeats a frequency."""
+    repeats a frequency.
+    """
     lab = np.zeros(f.size, int)
     direction = 0.0
     for i in range(1, f.size):
@@ -104,7 +105,8 @@ def _split(f):
 
 def _groups(lx, n_bins):
     """Bin index of each ``ln X``: clusters split at gaps wider than 0.1, each cluster cut
-    into equal pieces no narrower than the whole range / ``n_bins``."""
+    into equal pieces no narrower than the whole range / ``n_bins``.
+    """
     order = np.argsort(lx)
     srt = lx[order]
     width = max(np.ptp(lx) / n_bins, 1e-9)
@@ -179,7 +181,8 @@ def _quantity_failure(cls, quantity, W, X):
     class ``cls`` at resonance is a quarter period off (no sign convention does that), or
     half a period off (a sign convention, as in many real records, or displacement and
     acceleration swapped) with displacement amplitudes ``X`` [m] whose velocity ``W X``
-    exceeds :data:`_V_MAX`."""
+    exceeds :data:`_V_MAX`.
+    """
     shift = (cls - _EXPECTED[quantity]) % 2
     if shift == 0:
         return ""
