@@ -9,6 +9,7 @@ stated standard error, their ratio and how often the stated 95 % interval holds 
     python benchmarks/bench_breakaway_scatter.py [--repeats 20] [--joint soft] [--envelope ramped]
                                                 [--size 1] [--jobs 2]
 """
+
 from __future__ import annotations
 
 import argparse
@@ -54,20 +55,27 @@ def main(argv=None):
     ratio = B._parameter(p, a.envelope, "breakaway", a.size)
     truth = np.array([ratio, p.Fs, p.KT, p.chi, p.beta])
     with ProcessPoolExecutor(a.jobs) as ex:
-        rows = list(ex.map(one, [(a.joint, a.envelope, ratio, a.seed + k)
-                                 for k in range(a.repeats)]))
+        rows = list(
+            ex.map(one, [(a.joint, a.envelope, ratio, a.seed + k) for k in range(a.repeats)])
+        )
     ok = [r for r in rows if r is not None]
     est = np.array([r[0] for r in ok])
     se = np.array([r[1] for r in ok])
-    print(f"{a.joint} joint, {a.envelope} envelope, ratio {ratio:.4f} ({a.size:g} x noticeable); "
-          f"break-away named in {len(ok)}/{len(rows)} repeats")
-    print(f"{'parameter':>9} {'truth':>11} {'mean':>11} {'scatter':>10} {'median se':>10} "
-          f"{'se/scatter':>10} {'95% holds':>9}")
+    print(
+        f"{a.joint} joint, {a.envelope} envelope, ratio {ratio:.4f} ({a.size:g} x noticeable); "
+        f"break-away named in {len(ok)}/{len(rows)} repeats"
+    )
+    print(
+        f"{'parameter':>9} {'truth':>11} {'mean':>11} {'scatter':>10} {'median se':>10} "
+        f"{'se/scatter':>10} {'95% holds':>9}"
+    )
     for j, k in enumerate(NAMES):
         sd = float(np.std(est[:, j], ddof=1))
         cover = float(np.mean(np.abs(est[:, j] - truth[j]) <= 1.96 * se[:, j]))
-        print(f"{k:>9} {truth[j]:11.5g} {np.mean(est[:, j]):11.5g} {sd:10.3g} "
-              f"{np.median(se[:, j]):10.3g} {np.median(se[:, j]) / sd:10.2f} {100 * cover:8.0f}%")
+        print(
+            f"{k:>9} {truth[j]:11.5g} {np.mean(est[:, j]):11.5g} {sd:10.3g} "
+            f"{np.median(se[:, j]):10.3g} {np.median(se[:, j]) / sd:10.2f} {100 * cover:8.0f}%"
+        )
     return 0
 
 

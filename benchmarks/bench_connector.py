@@ -44,6 +44,7 @@ symbolic connectors (``connectors-symbolic``) and with N Python-law connectors
 Run: ``python benchmarks/bench_connector.py [--steps 100000] [--repeat 5] [--contacts 50]
 [--contact-steps 20000] [--compare-with DIR]``
 """
+
 from __future__ import annotations
 
 import argparse
@@ -131,7 +132,8 @@ def load_package(directory):
     """Import ``directory/iwan_element`` under the name ``iwan_element_base``."""
     path = Path(directory).resolve() / "iwan_element"
     spec = importlib.util.spec_from_file_location(
-        "iwan_element_base", path / "__init__.py", submodule_search_locations=[str(path)])
+        "iwan_element_base", path / "__init__.py", submodule_search_locations=[str(path)]
+    )
     module = importlib.util.module_from_spec(spec)
     sys.modules["iwan_element_base"] = module
     spec.loader.exec_module(module)
@@ -151,7 +153,7 @@ def backbone_law():
 
     def backbone(mbs_, t, itemNumber, deltaL, deltaL_t, stiffness, damping, offset):
         x = abs(deltaL)
-        return copysign(x * (KT - a * x ** e1) if x < pm else Fs, deltaL)
+        return copysign(x * (KT - a * x**e1) if x < pm else Fs, deltaL)
 
     return backbone
 
@@ -169,11 +171,13 @@ def symbolic_backbone_with_variable(mbs):
 
     def law(mbs_, t, itemNumber, deltaL, deltaL_t, stiffness, damping, offset):
         x = esym.abs(deltaL)
-        return esym.sign(deltaL) * esym.IfThenElse(x < pm, x * (KT - a * esym.pow(x, e1)),
-                                                   esym.Real(Fs))
+        return esym.sign(deltaL) * esym.IfThenElse(
+            x < pm, x * (KT - a * esym.pow(x, e1)), esym.Real(Fs)
+        )
 
-    fn = CreateSymbolicUserFunction(mbs, law, "springForceUserFunction",
-                                    itemTypeName="ObjectConnectorCoordinateSpringDamper")
+    fn = CreateSymbolicUserFunction(
+        mbs, law, "springForceUserFunction", itemTypeName="ObjectConnectorCoordinateSpringDamper"
+    )
     return fn, var
 
 
@@ -189,43 +193,55 @@ def build(variant, counter=None):
         mbs.AddObject(CoordinateSpringDamper(markerNumbers=[m0, m1], stiffness=P.KT))
     elif variant == "symbolic-nonlin+set":
         fn, var = symbolic_backbone_with_variable(mbs)
-        mbs.AddObject(ObjectConnectorCoordinateSpringDamper(
-            markerNumbers=[m0, m1], stiffness=0.0, damping=0.0, springForceUserFunction=fn))
+        mbs.AddObject(
+            ObjectConnectorCoordinateSpringDamper(
+                markerNumbers=[m0, m1], stiffness=0.0, damping=0.0, springForceUserFunction=fn
+            )
+        )
         set_value = var.SetValue
         item = None
 
         def post(mbs_, t):
             set_value(item(0))
             return True
+
         mbs.SetPostStepUserFunction(post)
         mbs.Assemble()
         item = mbs.systemData.GetODE2Coordinates(copy=False).item
-        _KEEP[:] = [fn, var]           # the expression must outlive the run
+        _KEEP[:] = [fn, var]  # the expression must outlive the run
         return SC, mbs
     elif variant.startswith("python-"):
+
         def linear(mbs_, t, itemNumber, deltaL, deltaL_t, stiffness, damping, offset):
             return stiffness * deltaL
+
         law = backbone_law() if variant.startswith("python-nonlin") else linear
-        mbs.AddObject(CoordinateSpringDamper(markerNumbers=[m0, m1], stiffness=P.KT,
-                                             springForceUserFunction=law))
+        mbs.AddObject(
+            CoordinateSpringDamper(
+                markerNumbers=[m0, m1], stiffness=P.KT, springForceUserFunction=law
+            )
+        )
         if variant.endswith("+post"):
             mbs.SetPostStepUserFunction(lambda mbs_, t: True)
     else:
         name, _, tag = variant.partition("@")
         pkg = PACKAGES[tag]
         params = pkg.IwanParameters(Fs=P.Fs, KT=P.KT, chi=P.chi, beta=P.beta)
-        element = {"conn-linear": lambda: LinearElement(P.KT),
-                   "conn-iwan": lambda: pkg.IwanJoint(params),
-                   "conn-iwan-norecord": lambda: pkg.IwanJoint(params),
-                   "conn-iwan-python": lambda: pkg.IwanJoint(params),
-                   "conn-discrete": lambda: pkg.DiscreteIwan(params, 100)}[name]()
+        element = {
+            "conn-linear": lambda: LinearElement(P.KT),
+            "conn-iwan": lambda: pkg.IwanJoint(params),
+            "conn-iwan-norecord": lambda: pkg.IwanJoint(params),
+            "conn-iwan-python": lambda: pkg.IwanJoint(params),
+            "conn-discrete": lambda: pkg.DiscreteIwan(params, 100),
+        }[name]()
         if counter is not None:
             element = Counting(element, counter)
         kw = {}
-        if not tag:                        # the law keyword is new
+        if not tag:  # the law keyword is new
             kw["law"] = "python" if name == "conn-iwan-python" else "auto"
-        pkg.exudyn.add_iwan_connector(mbs, [m0, m1], element,
-                                      record=(name != "conn-iwan-norecord"), **kw)
+        pkg.exudyn.add_iwan_connector(
+            mbs, [m0, m1], element, record=(name != "conn-iwan-norecord"), **kw
+        )
     mbs.Assemble()
     return SC, mbs
 
@@ -263,10 +279,15 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--steps", type=int, default=100_000, help="1-mass table (0: skip it)")
     ap.add_argument("--repeat", type=int, default=5)
-    ap.add_argument("--compare-with", metavar="DIR",
-                    help="also run the conn-* variants with DIR/iwan_element (rows '@base')")
+    ap.add_argument(
+        "--compare-with",
+        metavar="DIR",
+        help="also run the conn-* variants with DIR/iwan_element (rows '@base')",
+    )
     ap.add_argument("--no-discrete", action="store_true", help="skip the slow conn-discrete")
-    ap.add_argument("--contacts", type=int, default=50, help="contacts of the chain table (0: skip)")
+    ap.add_argument(
+        "--contacts", type=int, default=50, help="contacts of the chain table (0: skip)"
+    )
     ap.add_argument("--contact-steps", type=int, default=20_000)
     args = ap.parse_args(argv)
     conn = ["conn-linear", "conn-iwan", "conn-iwan-norecord", "conn-iwan-python"]
@@ -275,13 +296,18 @@ def main(argv=None):
     if args.compare_with:
         PACKAGES["base"] = load_package(args.compare_with)
         conn = [c for v in conn for c in (v + "@base", v)]
-    if args.steps <= 0:                    # only the contact table
+    if args.steps <= 0:  # only the contact table
         contact_table(args.contacts, args.contact_steps, args.repeat)
         return
-    variants = ["builtin", "python-lin", "python-lin+post", "python-nonlin+post",
-                "symbolic-nonlin+set"] + conn
+    variants = [
+        "builtin",
+        "python-lin",
+        "python-lin+post",
+        "python-nonlin+post",
+        "symbolic-nonlin+set",
+    ] + conn
     best = dict.fromkeys(variants, (math.inf, math.nan))
-    for _ in range(args.repeat):           # interleaved rounds: load changes hit all variants
+    for _ in range(args.repeat):  # interleaved rounds: load changes hit all variants
         for v in variants:
             if v.startswith("conn-discrete") and _ > 1:
                 continue
@@ -289,16 +315,21 @@ def main(argv=None):
             if wall < best[v][0]:
                 best[v] = (wall, newton)
     base = best["builtin"][0]
-    print(f"one mass, {args.steps} steps, generalized-alpha (default settings), h = {H:g} s, "
-          f"exudyn {exu.__version__}, best of {args.repeat} interleaved rounds")
-    print(f"{'variant':<24} {'wall [s]':>9} {'ratio':>7} {'us/step':>8} {'Newton it/step':>15} "
-          f"{'trials/step':>12}")
+    print(
+        f"one mass, {args.steps} steps, generalized-alpha (default settings), h = {H:g} s, "
+        f"exudyn {exu.__version__}, best of {args.repeat} interleaved rounds"
+    )
+    print(
+        f"{'variant':<24} {'wall [s]':>9} {'ratio':>7} {'us/step':>8} {'Newton it/step':>15} "
+        f"{'trials/step':>12}"
+    )
     for v in variants:
         t, newton = best[v]
         evals = count_trials(v, args.steps)
         ev = "-" if evals != evals else f"{evals:.2f}"
-        print(f"{v:<24} {t:9.3f} {t / base:7.1f} {1e6 * t / args.steps:8.2f} {newton:15.2f} "
-              f"{ev:>12}")
+        print(
+            f"{v:<24} {t:9.3f} {t / base:7.1f} {1e6 * t / args.steps:8.2f} {newton:15.2f} {ev:>12}"
+        )
     if args.contacts > 0:
         contact_table(args.contacts, args.contact_steps, args.repeat)
 
@@ -310,8 +341,7 @@ def build_chain(variant, n):
     ground = mbs.AddNode(NodePointGround())
     markers = [mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=ground, coordinate=0))]
     for k in range(n):
-        node = mbs.AddNode(Node1D(referenceCoordinates=[0.0],
-                                  initialVelocities=[V0 * (k + 1) / n]))
+        node = mbs.AddNode(Node1D(referenceCoordinates=[0.0], initialVelocities=[V0 * (k + 1) / n]))
         mbs.AddObject(Mass1D(mass=1.0, nodeNumber=node))
         markers.append(mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=node, coordinate=0)))
     pairs = [(markers[k], markers[k + 1]) for k in range(n)]
@@ -320,15 +350,19 @@ def build_chain(variant, n):
         for m0, m1 in pairs:
             mbs.AddObject(CoordinateSpringDamper(markerNumbers=[m0, m1], stiffness=P.KT))
     elif variant == "symbolic-backbone":
-        handle = [symbolic_backbone(mbs, m0, m1) for m0, m1 in pairs]   # keep them alive
+        handle = [symbolic_backbone(mbs, m0, m1) for m0, m1 in pairs]  # keep them alive
     elif variant.startswith("interface"):
         pkg = PACKAGES[variant.partition("@")[2]]
         params = pkg.IwanParameters(Fs=P.Fs, KT=P.KT, chi=P.chi, beta=P.beta)
         handle = pkg.exudyn.add_iwan_interface(mbs, pairs, [params] * n)
     else:
         law = "python" if variant == "connectors-python" else "symbolic"
-        handle = [iwan_element.exudyn.add_iwan_connector(mbs, list(pr), iwan_element.IwanJoint(P),
-                                                         law=law) for pr in pairs]
+        handle = [
+            iwan_element.exudyn.add_iwan_connector(
+                mbs, list(pr), iwan_element.IwanJoint(P), law=law
+            )
+            for pr in pairs
+        ]
     mbs.Assemble()
     return SC, mbs, handle
 
@@ -338,17 +372,22 @@ def symbolic_backbone(mbs, m0, m1):
     stateless nonlinear symbolic law (no post-step), the floor of any symbolic Iwan law.
     """
     from exudyn.advancedUtilities import CreateSymbolicUserFunction
+
     esym = exu.symbolic
     a, e1, pm = P.R / ((P.chi + 1.0) * (P.chi + 2.0)), P.chi + 1.0, P.phi_max
 
     def law(mbs_, t, itemNumber, deltaL, deltaL_t, stiffness, damping, offset):
         x = esym.abs(deltaL)
-        return esym.sign(deltaL) * esym.IfThenElse(x < pm, x * (P.KT - a * esym.pow(x, e1)),
-                                                   esym.Real(P.Fs))
-    fn = CreateSymbolicUserFunction(mbs, law, "springForceUserFunction",
-                                    itemTypeName="ObjectConnectorCoordinateSpringDamper")
-    mbs.AddObject(CoordinateSpringDamper(markerNumbers=[m0, m1], stiffness=0.0,
-                                         springForceUserFunction=fn))
+        return esym.sign(deltaL) * esym.IfThenElse(
+            x < pm, x * (P.KT - a * esym.pow(x, e1)), esym.Real(P.Fs)
+        )
+
+    fn = CreateSymbolicUserFunction(
+        mbs, law, "springForceUserFunction", itemTypeName="ObjectConnectorCoordinateSpringDamper"
+    )
+    mbs.AddObject(
+        CoordinateSpringDamper(markerNumbers=[m0, m1], stiffness=0.0, springForceUserFunction=fn)
+    )
     return fn
 
 
@@ -356,8 +395,13 @@ def contact_table(n, steps, repeat):
     """The chain table: wall and CPU time (best of the interleaved rounds), Newton iterations
     per step, and the trajectory against the Python-law connectors.
     """
-    variants = ["builtin", "symbolic-backbone", "interface", "connectors-symbolic",
-                "connectors-python"]
+    variants = [
+        "builtin",
+        "symbolic-backbone",
+        "interface",
+        "connectors-symbolic",
+        "connectors-python",
+    ]
     if "base" in PACKAGES:
         variants.insert(2, "interface@base")
     best = dict.fromkeys(variants, (math.inf, math.inf, math.nan))
@@ -377,16 +421,25 @@ def contact_table(n, steps, repeat):
                 slips[v] = np.stack([c.slip_history for c in handle], axis=1)
     base_w, base_c, _ = best["builtin"]
     amp = float(np.max(np.abs(slips["connectors-python"])))
-    print(f"\nchain of {n} masses and {n} contacts, {steps} steps, h = {H:g} s, best of {repeat} "
-          "interleaved rounds (CPU: process time, less sensitive to other load)")
-    print(f"{'variant':<24} {'wall [s]':>9} {'ratio':>7} {'us/step':>8} {'CPU ratio':>10} "
-          f"{'Newton it/step':>15} {'max |slip - python| / amp':>26}")
+    print(
+        f"\nchain of {n} masses and {n} contacts, {steps} steps, h = {H:g} s, best of {repeat} "
+        "interleaved rounds (CPU: process time, less sensitive to other load)"
+    )
+    print(
+        f"{'variant':<24} {'wall [s]':>9} {'ratio':>7} {'us/step':>8} {'CPU ratio':>10} "
+        f"{'Newton it/step':>15} {'max |slip - python| / amp':>26}"
+    )
     for v in variants:
         w, c, newton = best[v]
-        dev = "-" if v not in slips else \
-            f"{np.max(np.abs(slips[v] - slips['connectors-python'])) / amp:.1e}"
-        print(f"{v:<24} {w:9.3f} {w / base_w:7.2f} {1e6 * w / steps:8.2f} {c / base_c:10.2f} "
-              f"{newton:15.2f} {dev:>26}")
+        dev = (
+            "-"
+            if v not in slips
+            else f"{np.max(np.abs(slips[v] - slips['connectors-python'])) / amp:.1e}"
+        )
+        print(
+            f"{v:<24} {w:9.3f} {w / base_w:7.2f} {1e6 * w / steps:8.2f} {c / base_c:10.2f} "
+            f"{newton:15.2f} {dev:>26}"
+        )
 
 
 if __name__ == "__main__":

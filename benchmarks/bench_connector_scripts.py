@@ -19,6 +19,7 @@ Wall time of ``mbs.SolveDynamic`` only, the best of ``--repeat`` rounds, per ste
 
 Run: ``python benchmarks/bench_connector_scripts.py [--repeat 5] [--quick]``
 """
+
 from __future__ import annotations
 
 import argparse
@@ -36,12 +37,21 @@ def _scripts(quick: bool):
     fem = rotor.truss_rotor()
     scale = 5 if quick else 1
     return {
-        "duffing sweep (user-function coordinate spring)":
-            (duffing, dict(steps=40_000 // scale), 40_000 // scale),
-        "Cartesian mass (built-in Cartesian spring)":
-            (cartesian, dict(steps=100_000 // scale), 100_000 // scale),
-        "reduced rotor (built-in Cartesian bearing)":
-            (rotor, dict(t_end=0.2 / scale, fem=fem), int(round(2000 / scale))),
+        "duffing sweep (user-function coordinate spring)": (
+            duffing,
+            dict(steps=40_000 // scale),
+            40_000 // scale,
+        ),
+        "Cartesian mass (built-in Cartesian spring)": (
+            cartesian,
+            dict(steps=100_000 // scale),
+            100_000 // scale,
+        ),
+        "reduced rotor (built-in Cartesian bearing)": (
+            rotor,
+            dict(t_end=0.2 / scale, fem=fem),
+            int(round(2000 / scale)),
+        ),
     }
 
 

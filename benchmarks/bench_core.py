@@ -13,6 +13,7 @@ side by side in the same run: the before/after figure for a change to the hot pa
 (b) Cost per ``trial()`` and ``commit()`` call in microseconds, all elements measured side by
     side in this run (best of several repeats), within steps of a decaying vibration.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -39,7 +40,8 @@ def load_baseline(src: str):
 
     init = Path(src) / "iwan_element" / "__init__.py"
     spec = importlib.util.spec_from_file_location(
-        "iwan_element_baseline", init, submodule_search_locations=[str(init.parent)])
+        "iwan_element_baseline", init, submodule_search_locations=[str(init.parent)]
+    )
     mod = importlib.util.module_from_spec(spec)
     sys.modules["iwan_element_baseline"] = mod
     spec.loader.exec_module(mod)
@@ -68,7 +70,7 @@ def loop_area(el, u0: float, n: int = 200) -> float:
         el.trial(x)
         el.commit()
     W0 = el.work
-    for x in u[n + 1:]:
+    for x in u[n + 1 :]:
         el.trial(x)
         el.commit()
     return el.work - W0
@@ -117,13 +119,15 @@ def cost_table(n_steps: int, repeats: int, exact_only: bool = False):
     """
     rng = np.random.default_rng(0)
     t = np.arange(n_steps)
-    u = PARAMS.phi_max * (1.5 * np.exp(-t / (0.3 * n_steps)) * np.sin(2 * np.pi * t / 50)
-                          + 1e-3 * rng.normal(size=n_steps))
+    u = PARAMS.phi_max * (
+        1.5 * np.exp(-t / (0.3 * n_steps)) * np.sin(2 * np.pi * t / 50)
+        + 1e-3 * rng.normal(size=n_steps)
+    )
     du = np.abs(np.diff(u, prepend=0.0))
     probes = (u[:, None] + du[:, None] * rng.normal(scale=0.3, size=(n_steps, 8))).tolist()
     els = {k: v for k, v in elements().items() if not (exact_only and "sliders" in k)}
     best = {name: [math.inf, math.inf] for name in els}
-    for _ in range(repeats):            # round-robin, so that a load change hits all alike
+    for _ in range(repeats):  # round-robin, so that a load change hits all alike
         for name, el in els.items():
             best[name][0] = min(best[name][0], _time_steps(el, u, probes, False))
             best[name][1] = min(best[name][1], _time_steps(el, u, probes, True))
@@ -138,10 +142,16 @@ def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="fewer timing samples")
     ap.add_argument("--repeats", type=int, default=None, help="timing repeats (default 5, 3 quick)")
-    ap.add_argument("--timing-only", action="store_true",
-                    help="skip the accuracy table and the slider banks (exact joints only)")
-    ap.add_argument("--baseline", metavar="DIR",
-                    help="also time the IwanJoint of the iwan_element package under DIR")
+    ap.add_argument(
+        "--timing-only",
+        action="store_true",
+        help="skip the accuracy table and the slider banks (exact joints only)",
+    )
+    ap.add_argument(
+        "--baseline",
+        metavar="DIR",
+        help="also time the IwanJoint of the iwan_element package under DIR",
+    )
     args = ap.parse_args(argv)
     if args.baseline:
         _BASELINE["mod"] = load_baseline(args.baseline)
@@ -149,7 +159,9 @@ def main(argv=None) -> None:
     print(f"python {platform.python_version()}, numpy {np.__version__}, {platform.machine()}\n")
     if not args.timing_only:
         names, rows = accuracy_table()
-        print("(a) relative error of dissipation per cycle (loop area of a simulated steady cycle)\n")
+        print(
+            "(a) relative error of dissipation per cycle (loop area of a simulated steady cycle)\n"
+        )
         print("| r = u0/phi_max | " + " | ".join(names) + " |")
         print("|---|" + "---|" * len(names))
         for r, errs in rows:
@@ -157,8 +169,10 @@ def main(argv=None) -> None:
     repeats = args.repeats or (3 if args.quick else 5)
     costs = cost_table(5000 if args.quick else 50000, repeats, exact_only=args.timing_only)
     print("\n(b) cost per call, best of repeats, measured side by side in this run\n")
-    print("| element | us per trial() | us per commit() | us per step (9 trials + commit) "
-          "| trial cost / exact |")
+    print(
+        "| element | us per trial() | us per commit() | us per step (9 trials + commit) "
+        "| trial cost / exact |"
+    )
     print("|---|---|---|---|---|")
     base = costs["exact IwanJoint"][0]
     for name, (tr, cm, st) in costs.items():

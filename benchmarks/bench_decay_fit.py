@@ -13,6 +13,7 @@ printed over all fits and over those with ``success=True``, with each fit's ``no
 
     PYTHONPATH=. python benchmarks/bench_decay_fit.py --cases 50 [--workers 2]
 """
+
 from __future__ import annotations
 
 import argparse
@@ -48,28 +49,54 @@ def draw_case(seed):
 
     def joint_part(q):
         return modal_iwan_curve(q, p, K_inf=k_inf, stiffness="harmonic")[1] - (zeta_target - zeta0)
+
     hi = 3 * PHI_MAX
     q0 = brentq(joint_part, 1e-7 * PHI_MAX, hi) if joint_part(hi) > 0 else hi
     ratio = rng.choice([rng.uniform(0.8, 0.9), rng.uniform(1.1, 1.4)])
     fs = f0 * rng.uniform(20.0, 40.0)
     duration = min(5.0 / (zeta0 * 2 * math.pi * f0), 8.0, 40000 / fs)
-    return dict(p=p, k_inf=k_inf, zeta0=zeta0, q0=q0, ratio=ratio, fs=fs, duration=duration,
-                f0=f0, quantity=QUANTITIES[seed % 3], route="joint" if seed % 2 == 0 else "svam",
-                rng=rng)
+    return dict(
+        p=p,
+        k_inf=k_inf,
+        zeta0=zeta0,
+        q0=q0,
+        ratio=ratio,
+        fs=fs,
+        duration=duration,
+        f0=f0,
+        quantity=QUANTITIES[seed % 3],
+        route="joint" if seed % 2 == 0 else "svam",
+        rng=rng,
+    )
 
 
 def make_record(c):
     p, k_inf, zeta0 = c["p"], c["k_inf"], c["zeta0"]
-    kw = dict(duration=c["duration"], fs=c["fs"], quantity=c["quantity"], ratio=c["ratio"],
-              second=0.3, noise=0.01, rng=c["rng"])
+    kw = dict(
+        duration=c["duration"],
+        fs=c["fs"],
+        quantity=c["quantity"],
+        ratio=c["ratio"],
+        second=0.3,
+        noise=0.01,
+        rng=c["rng"],
+    )
     if c["route"] == "joint":
         return joint_decay(p, K_inf=k_inf, zeta0=zeta0, q0=c["q0"], **kw)
 
     def curves(a):
         a = np.asarray(a, dtype=float)
-        f, z = modal_iwan_curve(np.atleast_1d(a), p, K_inf=k_inf, zeta0=zeta0,
-                                stiffness="harmonic", floor="dashpot", damping_form="decay")
+        f, z = modal_iwan_curve(
+            np.atleast_1d(a),
+            p,
+            K_inf=k_inf,
+            zeta0=zeta0,
+            stiffness="harmonic",
+            floor="dashpot",
+            damping_form="decay",
+        )
         return np.asarray(f).reshape(a.shape), np.asarray(z).reshape(a.shape)
+
     return svam_decay(lambda a: curves(a)[0], lambda a: curves(a)[1], a0=c["q0"], **kw)
 
 
@@ -77,8 +104,12 @@ def truth(c, fit):
     p, k_inf = c["p"], c["k_inf"]
     x_ref = fit.conventions["x_ref"]
     w02 = k_inf + p.KT
-    out = {"f0": math.sqrt(w02) / (2 * math.pi), "zeta0": c["zeta0"], "chi": p.chi,
-           "delta": p.KT * (x_ref / p.phi_max) ** (p.chi + 1) / (w02 * (p.chi + 2) * (1 + p.beta))}
+    out = {
+        "f0": math.sqrt(w02) / (2 * math.pi),
+        "zeta0": c["zeta0"],
+        "chi": p.chi,
+        "delta": p.KT * (x_ref / p.phi_max) ** (p.chi + 1) / (w02 * (p.chi + 2) * (1 + p.beta)),
+    }
     out.update(beta=p.beta, kappa=p.KT / w02, phi_max=p.phi_max, KT=p.KT, K_inf=k_inf, Fs=p.Fs)
     return out
 
@@ -92,19 +123,39 @@ def run_case(seed):
     except ValueError as exc:
         return dict(seed=seed, error=str(exc), c=_describe(c))
     tr = truth(c, fit)
-    z = {k: (fit.parameters[k] - tr[k]) / fit.stderr[k] if fit.stderr[k] > 0 else math.inf
-         for k in fit.identified}
-    zeta_q0 = float(modal_iwan_curve(c["q0"], c["p"], K_inf=c["k_inf"], zeta0=c["zeta0"],
-                                     stiffness="harmonic", floor="dashpot")[1])
-    return dict(seed=seed, c=_describe(c), zeta_q0=zeta_q0, regime=fit.regime,
-                success=fit.success, z=z, reported=list(fit.parameters),
-                nu=fit.conventions["noise_dof"],
-                beyond=c["q0"] > c["p"].phi_max, seconds=time.perf_counter() - t0)
+    z = {
+        k: (fit.parameters[k] - tr[k]) / fit.stderr[k] if fit.stderr[k] > 0 else math.inf
+        for k in fit.identified
+    }
+    zeta_q0 = float(
+        modal_iwan_curve(
+            c["q0"],
+            c["p"],
+            K_inf=c["k_inf"],
+            zeta0=c["zeta0"],
+            stiffness="harmonic",
+            floor="dashpot",
+        )[1]
+    )
+    return dict(
+        seed=seed,
+        c=_describe(c),
+        zeta_q0=zeta_q0,
+        regime=fit.regime,
+        success=fit.success,
+        z=z,
+        reported=list(fit.parameters),
+        nu=fit.conventions["noise_dof"],
+        beyond=c["q0"] > c["p"].phi_max,
+        seconds=time.perf_counter() - t0,
+    )
 
 
 def _describe(c):
-    return (f"{c['route']:5s} {c['quantity'][:5]:5s} f0={c['f0']:6.1f} ratio={c['ratio']:.2f} "
-            f"q0/phimax={c['q0'] / PHI_MAX:.3g} T={c['duration']:.3g}s fs={c['fs']:.0f}")
+    return (
+        f"{c['route']:5s} {c['quantity'][:5]:5s} f0={c['f0']:6.1f} ratio={c['ratio']:.2f} "
+        f"q0/phimax={c['q0'] / PHI_MAX:.3g} T={c['duration']:.3g}s fs={c['fs']:.0f}"
+    )
 
 
 def main(argv=None):
@@ -128,9 +179,11 @@ def main(argv=None):
     ok = [r for r in rows if "error" not in r]
     for r in ok:
         zs = " ".join(f"{k}={v:+.2f}" for k, v in r["z"].items())
-        print(f"seed {r['seed']:3d} {r['c']} zeta(q0)={100 * r['zeta_q0']:.3f}% "
-              f"{r['regime']:9s} success={str(r['success']):5s} nu={r['nu']:5.1f} "
-              f"{r['seconds']:5.1f}s  {zs}")
+        print(
+            f"seed {r['seed']:3d} {r['c']} zeta(q0)={100 * r['zeta_q0']:.3f}% "
+            f"{r['regime']:9s} success={str(r['success']):5s} nu={r['nu']:5.1f} "
+            f"{r['seconds']:5.1f}s  {zs}"
+        )
     _coverage(ok, "all fits")
     _coverage([r for r in ok if r["success"]], "fits with success=True")
     _regime_counts(ok)
@@ -149,8 +202,10 @@ def _coverage(rows, label):
         print(f"  {k:8s} {hits[k]:3d}/{counts[k]:3d} = {100 * hits[k] / counts[k]:5.1f} %")
     tot_h, tot_n = sum(hits.values()), sum(counts.values())
     if tot_n:
-        print(f"  overall  {tot_h:3d}/{tot_n:3d} = {100 * tot_h / tot_n:5.1f} %  "
-              f"(largest |z| {max(worst):.3g})")
+        print(
+            f"  overall  {tot_h:3d}/{tot_n:3d} = {100 * tot_h / tot_n:5.1f} %  "
+            f"(largest |z| {max(worst):.3g})"
+        )
 
 
 def _regime_counts(rows):
@@ -162,8 +217,10 @@ def _regime_counts(rows):
         for r in sub:
             key = f"{r['regime']}, success={r['success']}"
             tally[key] = tally.get(key, 0) + 1
-        print(f"  {'above' if beyond else 'below'} ({len(sub)}): "
-              + "; ".join(f"{k}: {v}" for k, v in sorted(tally.items())))
+        print(
+            f"  {'above' if beyond else 'below'} ({len(sub)}): "
+            + "; ".join(f"{k}: {v}" for k, v in sorted(tally.items()))
+        )
 
 
 if __name__ == "__main__":

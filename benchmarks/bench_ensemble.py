@@ -14,6 +14,7 @@ processes take cores from the workers and lower the speed-up.
     python benchmarks/bench_ensemble.py                 # 100 QSMA tasks, 1 and 2 workers
     python benchmarks/bench_ensemble.py --task ringdown --tasks 40
 """
+
 from __future__ import annotations
 
 import argparse
@@ -38,8 +39,9 @@ def ringdown_task(params, rng, *, cycles=400, steps_per_period=64):
     p = IwanParameters(Fs=params["Fs"], KT=5e7, chi=-0.5, beta=0.5)
     system = SingleModeSystem(mass=10.0, stiffness=2.5e7, zeta0=1e-3)
     h = 1.0 / (system.linear_frequency(p) * steps_per_period)
-    _, x = _integrate(p, system, h=h, n=cycles * steps_per_period, load=lambda t: 0.0,
-                      x0=params["x0"])
+    _, x = _integrate(
+        p, system, h=h, n=cycles * steps_per_period, load=lambda t: 0.0, x0=params["x0"]
+    )
     peaks = x[:-1].reshape(cycles, steps_per_period).max(axis=1)
     return {"peaks": peaks[::20]}
 
@@ -53,8 +55,10 @@ def quiet_qsma_task(params, rng, *, specimen, amplitudes):
 def make(task: str, n: int):
     if task == "qsma":
         from iwan_element.models.specimens import preset
-        func = functools.partial(quiet_qsma_task, specimen=preset("example"),
-                                 amplitudes=np.geomspace(1e-6, 1e-3, 20))
+
+        func = functools.partial(
+            quiet_qsma_task, specimen=preset("example"), amplitudes=np.geomspace(1e-6, 1e-3, 20)
+        )
         sets = parameter_samples(n, seed=1, preload=(5e3, 40e3), friction=(0.15, 0.5))
     else:
         func = ringdown_task
@@ -68,10 +72,16 @@ def warm_up(func, params):
 
 def start(workers: int):
     from distributed import Client, LocalCluster
+
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                               dashboard_address=None, silence_logs=logging.CRITICAL)
+        cluster = LocalCluster(
+            n_workers=workers,
+            threads_per_worker=1,
+            processes=True,
+            dashboard_address=None,
+            silence_logs=logging.CRITICAL,
+        )
         return cluster, Client(cluster)
 
 
@@ -92,16 +102,20 @@ def main() -> None:
     args = ap.parse_args()
     logging.getLogger("distributed").setLevel(logging.CRITICAL)
     func, sets = make(args.task, args.tasks)
-    print(f"{args.tasks} '{args.task}' tasks on a dask LocalCluster (processes, 1 thread per "
-          f"worker); machine: {os.cpu_count()} cores; {args.repeat} alternating repeats")
-    print(f"{'run':>4} {'workers':>8} {'wall [s]':>9} {'s/task':>8} {'load before':>12} "
-          f"{'load after':>11} {'failed':>7}")
+    print(
+        f"{args.tasks} '{args.task}' tasks on a dask LocalCluster (processes, 1 thread per "
+        f"worker); machine: {os.cpu_count()} cores; {args.repeat} alternating repeats"
+    )
+    print(
+        f"{'run':>4} {'workers':>8} {'wall [s]':>9} {'s/task':>8} {'load before':>12} "
+        f"{'load after':>11} {'failed':>7}"
+    )
     clusters = {w: start(w) for w in args.workers}
-    logging.getLogger("distributed").setLevel(logging.CRITICAL)   # LocalCluster resets it
+    logging.getLogger("distributed").setLevel(logging.CRITICAL)  # LocalCluster resets it
     walls = {w: [] for w in args.workers}
     ref = None
     try:
-        for _, client in clusters.values():      # warm-up on every worker (imports, caches)
+        for _, client in clusters.values():  # warm-up on every worker (imports, caches)
             client.run(warm_up, func, sets[0])
         for r in range(args.repeat):
             for w, (_, client) in clusters.items():
@@ -112,22 +126,31 @@ def main() -> None:
                 for a, b in zip(ref.rows, res.rows):
                     for k in a:
                         np.testing.assert_array_equal(a[k], b[k])
-                print(f"{r + 1:4d} {w:8d} {wall:9.2f} {wall / len(sets):8.3f} {l0:12.2f} "
-                      f"{l1:11.2f} {len(res.errors):7d}", flush=True)
+                print(
+                    f"{r + 1:4d} {w:8d} {wall:9.2f} {wall / len(sets):8.3f} {l0:12.2f} "
+                    f"{l1:11.2f} {len(res.errors):7d}",
+                    flush=True,
+                )
     finally:
         for cluster, client in clusters.values():
             client.close()
             cluster.close()
     w0 = args.workers[0]
-    print(f"\n{'workers':>8} {'best [s]':>9} {'median [s]':>11} {'speed-up (best)':>16} "
-          f"{'speed-up (median)':>18} {'paired speed-up':>16}")
+    print(
+        f"\n{'workers':>8} {'best [s]':>9} {'median [s]':>11} {'speed-up (best)':>16} "
+        f"{'speed-up (median)':>18} {'paired speed-up':>16}"
+    )
     for w in args.workers:
         paired = np.median(np.array(walls[w0]) / np.array(walls[w]))
-        print(f"{w:8d} {min(walls[w]):9.2f} {np.median(walls[w]):11.2f} "
-              f"{min(walls[w0]) / min(walls[w]):16.2f} "
-              f"{np.median(walls[w0]) / np.median(walls[w]):18.2f} {paired:16.2f}")
-    print("paired speed-up: median over the repeats of (wall with the first worker count) / "
-          "(wall of the run right after it); it cancels slow drifts of the machine's load")
+        print(
+            f"{w:8d} {min(walls[w]):9.2f} {np.median(walls[w]):11.2f} "
+            f"{min(walls[w0]) / min(walls[w]):16.2f} "
+            f"{np.median(walls[w0]) / np.median(walls[w]):18.2f} {paired:16.2f}"
+        )
+    print(
+        "paired speed-up: median over the repeats of (wall with the first worker count) / "
+        "(wall of the run right after it); it cancels slow drifts of the machine's load"
+    )
     print("results identical across worker counts and repeats: yes")
 
 

@@ -20,6 +20,7 @@ Run:  python benchmarks/bench_every_mode.py [--duration 1.2] [--no-coupling]
 The data (GPL-3.0) are read in place from ``../shared/data/brb-hammer``; (a) and (b) are
 skipped when it is absent.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -41,28 +42,33 @@ def prediction(d, duration: float):
     wall = time.perf_counter() - t0
     print(out.report())
     rd = out.ringdown
-    print(f"\n(a) wall time: {wall:.1f} s in all, {rd.wall_time:.1f} s in SolveDynamic for "
-          f"{rd.metadata['steps']} steps ({1e3 * rd.wall_time / rd.metadata['steps']:.2f} ms "
-          "per step)")
+    print(
+        f"\n(a) wall time: {wall:.1f} s in all, {rd.wall_time:.1f} s in SolveDynamic for "
+        f"{rd.metadata['steps']} steps ({1e3 * rd.wall_time / rd.metadata['steps']:.2f} ms "
+        "per step)"
+    )
     meas, pred = out.measured[(2, "acc3")], out.predicted[(2, "acc3")]
-    print(f"    mode 2's first (coupled) measured window: {1e6 * meas.amplitude[0]:.3g} um, "
-          f"f {meas.frequency[0]:.3f} Hz, zeta {100 * meas.damping_ratio[0]:.4f} %; the "
-          f"prediction's first window: {1e6 * pred.amplitude[0]:.3g} um, f "
-          f"{pred.frequency[0]:.3f} Hz ({100 * (pred.frequency[0] / meas.frequency[0] - 1):+.3f} %), "
-          f"zeta {100 * pred.damping_ratio[0]:.4f} % "
-          f"({100 * (pred.damping_ratio[0] / meas.damping_ratio[0] - 1):+.1f} %)")
+    print(
+        f"    mode 2's first (coupled) measured window: {1e6 * meas.amplitude[0]:.3g} um, "
+        f"f {meas.frequency[0]:.3f} Hz, zeta {100 * meas.damping_ratio[0]:.4f} %; the "
+        f"prediction's first window: {1e6 * pred.amplitude[0]:.3g} um, f "
+        f"{pred.frequency[0]:.3f} Hz ({100 * (pred.frequency[0] / meas.frequency[0] - 1):+.3f} %), "
+        f"zeta {100 * pred.damping_ratio[0]:.4f} % "
+        f"({100 * (pred.damping_ratio[0] / meas.damping_ratio[0] - 1):+.1f} %)"
+    )
     return out
 
 
 def coupling(out, duration: float):
     t0 = time.perf_counter()
-    c = models.mode_coupling(out.calibration.specimen, amplitude=out.release,
-                             duration=duration)
+    c = models.mode_coupling(out.calibration.specimen, amplitude=out.release, duration=duration)
     print(f"\n(b) {time.perf_counter() - t0:.1f} s")
     print(c.report().split("  warning:")[0])
     for r, s in c.summary().items():
-        print(f"    mode {r}: largest damping raise by the other mode x{s['max_damping_ratio']:.3f} "
-              f"at {1e6 * s['at_amplitude']:.3g} um (frequency {1e6 * s['frequency_shift']:+.0f} ppm)")
+        print(
+            f"    mode {r}: largest damping raise by the other mode x{s['max_damping_ratio']:.3f} "
+            f"at {1e6 * s['at_amplitude']:.3g} um (frequency {1e6 * s['frequency_shift']:+.0f} ppm)"
+        )
 
 
 def main(argv=None):

@@ -12,6 +12,7 @@ the warnings. Target: >= 10 points, frequency within 1e-4, damping within 3 %, o
 
     python benchmarks/bench_free_decay.py [--seeds 2] [--method hilbert|pff]
 """
+
 from __future__ import annotations
 
 import argparse
@@ -45,9 +46,18 @@ def run(zeta, quantity, source, seed, method):
         zt = np.asarray(d.damping(X[sel]), dtype=float)
         ef = float(np.sqrt(np.mean((cur.frequency[sel] / ft - 1) ** 2)))
         ez = float(np.sqrt(np.mean((cur.damping_ratio[sel] / zt - 1) ** 2)))
-    return {"zeta": zeta, "quantity": quantity, "source": source, "seed": seed, "ratio": ratio,
-            "n": int(np.count_nonzero(sel)), "n_all": len(cur), "ef": ef, "ez": ez,
-            "warnings": list(cur.warnings)}
+    return {
+        "zeta": zeta,
+        "quantity": quantity,
+        "source": source,
+        "seed": seed,
+        "ratio": ratio,
+        "n": int(np.count_nonzero(sel)),
+        "n_all": len(cur),
+        "ef": ef,
+        "ez": ez,
+        "warnings": list(cur.warnings),
+    }
 
 
 def main():
@@ -58,8 +68,10 @@ def main():
     args = ap.parse_args()
     t0 = time.perf_counter()
     rows = []
-    print(f"{'zeta %':>7} {'quantity':>12} {'source':>6} {'seed':>4} {'f2/f0':>5} {'pts':>4} "
-          f"{'f rel rms':>10} {'zeta rel rms':>12}  ok  warnings")
+    print(
+        f"{'zeta %':>7} {'quantity':>12} {'source':>6} {'seed':>4} {'f2/f0':>5} {'pts':>4} "
+        f"{'f rel rms':>10} {'zeta rel rms':>12}  ok  warnings"
+    )
     damping = tuple(args.zeta) if args.zeta else DAMPING
     case = 0
     for zeta in damping:
@@ -72,20 +84,26 @@ def main():
                     r["ok"] = r["n"] >= 10 and r["ef"] < 1e-4 and r["ez"] < 0.03
                     rows.append(r)
                     w = "; ".join(x[:70] for x in r["warnings"]) or "-"
-                    print(f"{100 * zeta:7.3g} {quantity:>12} {source:>6} {seed:4d} "
-                          f"{r['ratio']:5.2f} {r['n']:4d} {r['ef']:10.2e} {r['ez']:12.2e}  "
-                          f"{'yes' if r['ok'] else 'NO ':>3} {w}")
+                    print(
+                        f"{100 * zeta:7.3g} {quantity:>12} {source:>6} {seed:4d} "
+                        f"{r['ratio']:5.2f} {r['n']:4d} {r['ef']:10.2e} {r['ez']:12.2e}  "
+                        f"{'yes' if r['ok'] else 'NO ':>3} {w}"
+                    )
     ok = [r["ok"] for r in rows]
     warned = [not r["ok"] and bool(r["warnings"]) for r in rows]
     silent = [not r["ok"] and not r["warnings"] for r in rows]
-    print(f"\n{len(rows)} cases ({args.method}): target met in {sum(ok)}; missed with a warning "
-          f"in {sum(warned)}; missed silently in {sum(silent)}")
+    print(
+        f"\n{len(rows)} cases ({args.method}): target met in {sum(ok)}; missed with a warning "
+        f"in {sum(warned)}; missed silently in {sum(silent)}"
+    )
     for zeta in damping:
         sub = [r for r in rows if r["zeta"] == zeta]
-        print(f"  zeta {100 * zeta:5.3g} %: met {sum(r['ok'] for r in sub)}/{len(sub)}, median "
-              f"points {np.median([r['n'] for r in sub]):.0f}, max f err "
-              f"{np.nanmax([r['ef'] for r in sub]):.1e}, max zeta err "
-              f"{np.nanmax([r['ez'] for r in sub]):.1e}")
+        print(
+            f"  zeta {100 * zeta:5.3g} %: met {sum(r['ok'] for r in sub)}/{len(sub)}, median "
+            f"points {np.median([r['n'] for r in sub]):.0f}, max f err "
+            f"{np.nanmax([r['ef'] for r in sub]):.1e}, max zeta err "
+            f"{np.nanmax([r['ez'] for r in sub]):.1e}"
+        )
     print(f"{time.perf_counter() - t0:.1f} s")
 
 

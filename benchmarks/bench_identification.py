@@ -18,6 +18,7 @@ Run from the repository root::
 
     python benchmarks/bench_identification.py [--seeds 5]
 """
+
 from __future__ import annotations
 
 import argparse
@@ -35,10 +36,16 @@ from iwan_element.identify.loops.fit import fit_loops
 from iwan_element.identify.loops.result import IdentifiabilityWarning
 from iwan_element.identify.loops.testdata import simulate_test
 
-SETS = [IwanParameters(9e3, 5e7, -0.8, 0.0), IwanParameters(9e3, 5e7, -0.5, 1.0),
-        IwanParameters(9e3, 5e7, -0.1, 2.0), IwanParameters(9e3, 5e7, -0.8, 2.0)]
-PROTOCOLS = {"microslip": [0.1, 0.2, 0.35, 0.5, 0.7, 0.9],
-             "macroslip": [0.2, 0.4, 0.7, 1.0, 1.5, 2.5]}
+SETS = [
+    IwanParameters(9e3, 5e7, -0.8, 0.0),
+    IwanParameters(9e3, 5e7, -0.5, 1.0),
+    IwanParameters(9e3, 5e7, -0.1, 2.0),
+    IwanParameters(9e3, 5e7, -0.8, 2.0),
+]
+PROTOCOLS = {
+    "microslip": [0.1, 0.2, 0.35, 0.5, 0.7, 0.9],
+    "macroslip": [0.2, 0.4, 0.7, 1.0, 1.5, 2.5],
+}
 METHODS = ("seed", "seed Fs+10%", "least_sq", "loops")
 EXAMPLE = Path(__file__).resolve().parents[1] / "models" / "example_test_30kN.csv"
 
@@ -59,21 +66,36 @@ def _cell(errs, ok, fmt):
     if not ok:
         return "n.i."
     e = np.array(errs)
-    return fmt.format(float(np.sqrt(np.mean(e ** 2))))
+    return fmt.format(float(np.sqrt(np.mean(e**2))))
 
 
 def bench_methods(n_seeds: int) -> list[str]:
-    lines = ["| chi | beta | protocol | method | KT err | chi err | Fs err | beta err | time | success |",
-             "| ---: | ---: | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: |"]
+    lines = [
+        "| chi | beta | protocol | method | KT err | chi err | Fs err | beta err | time | success |",
+        "| ---: | ---: | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: |",
+    ]
     for p in SETS:
         for proto, rs in PROTOCOLS.items():
             amps = np.array(rs) * p.phi_max
             noise = 0.01 * force_amplitude(amps.max(), p)
-            acc = {m: {"KT": [], "chi": [], "Fs": [], "beta": [], "t": [], "idFs": True,
-                       "idbeta": True, "fixed": (), "ok": 0} for m in METHODS}
+            acc = {
+                m: {
+                    "KT": [],
+                    "chi": [],
+                    "Fs": [],
+                    "beta": [],
+                    "t": [],
+                    "idFs": True,
+                    "idbeta": True,
+                    "fixed": (),
+                    "ok": 0,
+                }
+                for m in METHODS
+            }
             for seed in range(n_seeds):
-                data = simulate_test(p, amps, cycles=3, sample_rate=20.0, force_noise=noise,
-                                     seed=100 + seed)
+                data = simulate_test(
+                    p, amps, cycles=3, sample_rate=20.0, force_noise=noise, seed=100 + seed
+                )
                 table = data.amplitude_table()
                 for m in METHODS:
                     r, dt = _run(m, data, table, p)
@@ -96,7 +118,8 @@ def bench_methods(n_seeds: int) -> list[str]:
                     f"| {p.chi:g} | {p.beta:g} | {proto} | {m} | {_cell(a['KT'], True, '{:.2%}')} | "
                     f"{_cell(a['chi'], True, '{:.4f}')} | {fs} | "
                     f"{_cell(a['beta'], a['idbeta'], '{:.3f}')} | "
-                    f"{1e3 * statistics.median(a['t']):.0f} ms | {a['ok']}/{n_seeds} |")
+                    f"{1e3 * statistics.median(a['t']):.0f} ms | {a['ok']}/{n_seeds} |"
+                )
     return lines
 
 
@@ -105,8 +128,10 @@ def bench_example(repeats: int = 5) -> list[str]:
         return ["(example record not found; run python models/make_example_test.py)"]
     data = load_test(EXAMPLE)
     truth = IwanParameters.load(EXAMPLE.with_name("example_test_30kN_params.json"))
-    lines = ["| fit on models/example_test_30kN.csv | median wall time | CPU time | Fs | KT | chi | beta |",
-             "| --- | ---: | ---: | ---: | ---: | ---: | ---: |"]
+    lines = [
+        "| fit on models/example_test_30kN.csv | median wall time | CPU time | Fs | KT | chi | beta |",
+        "| --- | ---: | ---: | ---: | ---: | ---: | ---: |",
+    ]
     for label, kwargs in (("fit_loops", {}), ("fit_loops, smooth=15", {"smooth": 15})):
         walls, cpus = [], []
         for _ in range(repeats):
@@ -115,9 +140,11 @@ def bench_example(repeats: int = 5) -> list[str]:
             walls.append(time.perf_counter() - t0)
             cpus.append(time.process_time() - c0)
         q = r.joint
-        lines.append(f"| {label} | {statistics.median(walls):.2f} s | {statistics.median(cpus):.2f} s "
-                     f"| {q.Fs / truth.Fs - 1:+.2%} | {q.KT / truth.KT - 1:+.2%} | "
-                     f"{q.chi - truth.chi:+.4f} | {q.beta - truth.beta:+.4f} |")
+        lines.append(
+            f"| {label} | {statistics.median(walls):.2f} s | {statistics.median(cpus):.2f} s "
+            f"| {q.Fs / truth.Fs - 1:+.2%} | {q.KT / truth.KT - 1:+.2%} | "
+            f"{q.chi - truth.chi:+.4f} | {q.beta - truth.beta:+.4f} |"
+        )
     t0 = time.perf_counter()
     load_test(EXAMPLE)
     lines.append(f"| (load_test + cycle split) | {time.perf_counter() - t0:.2f} s | | | | | |")
@@ -130,8 +157,10 @@ def main() -> None:
     args = ap.parse_args()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", IdentifiabilityWarning)
-        print(f"RMS errors over {args.seeds} noise seeds (1 % force noise); KT, Fs relative, "
-              "chi, beta absolute; time = median wall time per fit\n")
+        print(
+            f"RMS errors over {args.seeds} noise seeds (1 % force noise); KT, Fs relative, "
+            "chi, beta absolute; time = median wall time per fit\n"
+        )
         print("\n".join(bench_methods(args.seeds)))
         print()
         print("\n".join(bench_example()))

@@ -19,6 +19,7 @@ best of several repeats, one core:
 The per-call cost of ``IwanJoint.trial`` (fast path, and at a reversal every call) is also
 printed, since the Exudyn connector calls it once per step.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -35,8 +36,9 @@ sys.path.insert(0, str(ROOT))
 
 def load(src: str, name: str):
     init = Path(src) / "iwan_element" / "__init__.py"
-    spec = importlib.util.spec_from_file_location(name, init,
-                                                  submodule_search_locations=[str(init.parent)])
+    spec = importlib.util.spec_from_file_location(
+        name, init, submodule_search_locations=[str(init.parent)]
+    )
     mod = importlib.util.module_from_spec(spec)
     sys.modules[name] = mod
     spec.loader.exec_module(mod)
@@ -54,26 +56,32 @@ def best(f, repeat=5):
 
 def history(n, p, rng):
     t = np.linspace(0.0, 20.0, n)
-    return p.phi_max * (1.5 * np.sin(2 * np.pi * t) * (1 + 0.2 * t / 20)
-                        + 0.002 * rng.normal(size=n))
+    return p.phi_max * (
+        1.5 * np.sin(2 * np.pi * t) * (1 + 0.2 * t / 20) + 0.002 * rng.normal(size=n)
+    )
 
 
 def routes(pkg, label, u, ps):
     """(label, seconds per history and parameter set) for the routes ``pkg`` has."""
     from importlib import import_module
-    try:                                # the module's name before and after it went public
+
+    try:  # the module's name before and after it went public
         hist_mod = import_module(pkg.__name__ + ".core.history")
     except ImportError:
         hist_mod = import_module(pkg.__name__ + ".core._history")
     p = ps[0]
     tol = 1e-12 * p.phi_max
     rows = []
-    walk = getattr(hist_mod, "walk", None)             # the Python walk before the kernel
+    walk = getattr(hist_mod, "walk", None)  # the Python walk before the kernel
     if walk is None:
         walk = import_module(pkg.__name__ + ".core.masing").reversal_structure
     rows.append((f"{label} reversal structure walk", best(lambda: walk(u, tol), 3)))
-    rows.append((f"{label} numpy: structure + forces",
-                 best(lambda: hist_mod.History(u, tol=tol).forces(p), 3)))
+    rows.append(
+        (
+            f"{label} numpy: structure + forces",
+            best(lambda: hist_mod.History(u, tol=tol).forces(p), 3),
+        )
+    )
     h = hist_mod.History(u, tol=tol)
     rows.append((f"{label} numpy: forces of a known structure", best(lambda: h.forces(p))))
 
@@ -83,15 +91,20 @@ def routes(pkg, label, u, ps):
         for x in u.tolist():
             tr(x)
             cm()
+
     rows.append((f"{label} element: trial/commit per sample", best(element, 3)))
     try:
         masing = import_module(pkg.__name__ + ".core.masing")
     except ImportError:
         return rows
-    masing.masing_history(u[:10], p)                     # compile (or load the cache)
+    masing.masing_history(u[:10], p)  # compile (or load the cache)
     rows.append((f"{label} kernel: F, K, W, D", best(lambda: masing.masing_history(u, p))))
-    rows.append((f"{label} kernel: batch of {len(ps)}, per set",
-                 best(lambda: masing.masing_history(u, ps)) / len(ps)))
+    rows.append(
+        (
+            f"{label} kernel: batch of {len(ps)}, per set",
+            best(lambda: masing.masing_history(u, ps)) / len(ps),
+        )
+    )
     return rows
 
 
@@ -105,18 +118,23 @@ def per_call(pkg, label, p):
     def fast():
         for v in x[2:]:
             tr(v)
+
     t_fast = best(fast, 3) / (len(x) - 2)
-    zig = (p.phi_max * 0.3 * np.where(np.arange(100001) % 2, 1.0, -1.0)
-           * np.linspace(1.0, 0.5, 100001)).tolist()
+    zig = (
+        p.phi_max * 0.3 * np.where(np.arange(100001) % 2, 1.0, -1.0) * np.linspace(1.0, 0.5, 100001)
+    ).tolist()
 
     def slow():
         j.reset()
         for v in zig:
             tr(v)
             cm()
+
     t_slow = best(slow, 3) / len(zig)
-    return [(f"{label} IwanJoint.trial, fast path [per call]", t_fast),
-            (f"{label} trial+commit, a reversal every step [per call]", t_slow)]
+    return [
+        (f"{label} IwanJoint.trial, fast path [per call]", t_fast),
+        (f"{label} trial+commit, a reversal every step [per call]", t_slow),
+    ]
 
 
 def main(argv=None):
@@ -125,6 +143,7 @@ def main(argv=None):
     ap.add_argument("--baseline", default=None)
     args = ap.parse_args(argv)
     import iwan_element as cur
+
     rng = np.random.default_rng(0)
     ps = [cur.IwanParameters(1000.0 * (1 + 0.01 * k), 1e6, -0.5, 0.1) for k in range(16)]
     u = history(args.n, ps[0], rng)
@@ -135,8 +154,9 @@ def main(argv=None):
         bps = [base.IwanParameters(p.Fs, p.KT, p.chi, p.beta) for p in ps]
         rows += routes(base, "baseline", u, bps)
         calls += per_call(base, "baseline", bps[0])
-    print(f"history of {args.n} samples, {int(np.sum(np.diff(np.sign(np.diff(u))) != 0))} "
-          "reversals")
+    print(
+        f"history of {args.n} samples, {int(np.sum(np.diff(np.sign(np.diff(u))) != 0))} reversals"
+    )
     for name, t in rows:
         print(f"{name:<52} {t * 1e3:10.3f} ms   {t / args.n * 1e9:8.1f} ns/sample")
     for name, t in calls:

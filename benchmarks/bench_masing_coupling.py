@@ -23,6 +23,7 @@ energy taken from a small mode 2 riding on mode 1's slip goes as ``A2^2``: mode 
 adds a linear (amplitude-independent) damping to mode 2, where mode 2 alone has the
 microslip law ``A2^(3 + chi)``.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -69,9 +70,11 @@ def main(argv=None) -> None:
     ridden = [mode2_work(0.1, a, p) for a in A2s]
     s_alone = np.polyfit(np.log(A2s), np.log(alone), 1)[0]
     s_ridden = np.polyfit(np.log(A2s), np.log(ridden), 1)[0]
-    print(f"log-log slope of W2 in A2 (0.001-0.01): alone {s_alone:.3f} "
-          f"(closed form 3 + chi = {3 + args.chi:.3f}); on mode 1's slip (A1 = 0.1) "
-          f"{s_ridden:.3f} (viscous: 2)")
+    print(
+        f"log-log slope of W2 in A2 (0.001-0.01): alone {s_alone:.3f} "
+        f"(closed form 3 + chi = {3 + args.chi:.3f}); on mode 1's slip (A1 = 0.1) "
+        f"{s_ridden:.3f} (viscous: 2)"
+    )
 
 
 if __name__ == "__main__":

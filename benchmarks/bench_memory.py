@@ -15,6 +15,7 @@ variants also run with ``DIR/iwan_element`` (an older revision).
 
 Run: ``python benchmarks/bench_memory.py [--steps 1000000] [--warm 100000] [--bound 65536]``
 """
+
 from __future__ import annotations
 
 import argparse
@@ -67,8 +68,9 @@ def build(variant, points):
         handle = pkg.exudyn.add_iwan_interface(mbs, pairs, [params] * n, record=False)
     else:
         kw = {} if tag else {"law": "python" if name == "connector-python" else "symbolic"}
-        handle = pkg.exudyn.add_iwan_connector(mbs, list(pairs[0]), pkg.IwanJoint(params),
-                                               record=False, **kw)
+        handle = pkg.exudyn.add_iwan_connector(
+            mbs, list(pairs[0]), pkg.IwanJoint(params), record=False, **kw
+        )
     mbs.Assemble()
     return SC, mbs, handle
 
@@ -76,6 +78,7 @@ def build(variant, points):
 def _force(amp):
     def load(mbs, t, load):
         return amp * math.sin(700.0 * t)
+
     return load
 
 
@@ -106,17 +109,24 @@ def main(argv=None):
     ap.add_argument("--points", type=int, default=10)
     ap.add_argument("--bound", type=int, default=65536, help="allowed growth [bytes]")
     ap.add_argument("--compare-with", metavar="DIR")
-    ap.add_argument("--variants", default="connector-symbolic,connector-python,interface",
-                    help="comma-separated among connector-symbolic, connector-python, interface")
+    ap.add_argument(
+        "--variants",
+        default="connector-symbolic,connector-python,interface",
+        help="comma-separated among connector-symbolic, connector-python, interface",
+    )
     args = ap.parse_args(argv)
     variants = args.variants.split(",")
     if args.compare_with:
         PACKAGES["base"] = load_package(args.compare_with)
         variants = ["connector@base"] + variants
-    print(f"record=False, generalized-alpha, h = {H:g} s, exudyn {exu.__version__}; traced Python "
-          f"heap kept by a run of {args.warm} and of {args.steps} steps")
-    print(f"{'variant':<22} {'kept short [B]':>15} {'kept long [B]':>14} {'growth [B]':>11} "
-          f"{'B/step':>8} {'wall long [s]':>13} {'within bound':>13}")
+    print(
+        f"record=False, generalized-alpha, h = {H:g} s, exudyn {exu.__version__}; traced Python "
+        f"heap kept by a run of {args.warm} and of {args.steps} steps"
+    )
+    print(
+        f"{'variant':<22} {'kept short [B]':>15} {'kept long [B]':>14} {'growth [B]':>11} "
+        f"{'B/step':>8} {'wall long [s]':>13} {'within bound':>13}"
+    )
     ok = True
     for v in variants:
         short, _, _ = traced_growth(v, args.warm, args.points)
@@ -125,8 +135,10 @@ def main(argv=None):
         per = growth / (args.steps - args.warm)
         within = growth <= args.bound
         ok = ok and (within or "@base" in v)
-        print(f"{v:<22} {short:15d} {long_:14d} {growth:11d} {per:8.3f} {wall:13.1f} "
-              f"{'yes' if within else 'NO':>13}")
+        print(
+            f"{v:<22} {short:15d} {long_:14d} {growth:11d} {per:8.3f} {wall:13.1f} "
+            f"{'yes' if within else 'NO':>13}"
+        )
     return 0 if ok else 1
 
 

@@ -7,6 +7,7 @@ this script sets ``IWAN_HYPOTHESIS_EXAMPLES`` and runs them in a fresh pytest se
 random (not derandomized) generation, then prints one row per property: outcome, examples
 asked for and wall time.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -46,8 +47,10 @@ def main(argv=None) -> int:
     t0 = time.perf_counter()
     code = pytest.main(pargs, plugins=[timer])
     total = time.perf_counter() - t0
-    print(f"\npython {platform.python_version()}, {platform.machine()}; "
-          f"{args.examples} examples per property; total {total:.1f} s\n")
+    print(
+        f"\npython {platform.python_version()}, {platform.machine()}; "
+        f"{args.examples} examples per property; total {total:.1f} s\n"
+    )
     print("| property | outcome | examples | wall time [s] |")
     print("|---|---|---|---|")
     for name, (outcome, dur) in timer.rows.items():

@@ -16,6 +16,7 @@ docs/damper_range.md).
 
     python benchmarks/bench_real_damper.py [--data DIR] [--lowpass 20] [--jobs 1]
 """
+
 import argparse
 import sys
 import time
@@ -30,38 +31,61 @@ ROOT = Path(__file__).resolve().parents[1]
 def run(path, lowpass):
     from iwan_element import diagnose
     from iwan_element.diagnose.loops.batch import band_misfit
+
     t, u, F = np.loadtxt(path, delimiter=",", skiprows=1).T
     t0, c0 = time.perf_counter(), time.process_time()
     try:
         g = diagnose(t, u, F, lowpass=lowpass)
-    except ValueError as exc:                     # a refusal is a result, reported as such
-        return (path.name, f"REFUSED: {exc}", np.nan, np.nan, time.perf_counter() - t0,
-                (0, np.nan, np.nan), time.process_time() - c0)
+    except ValueError as exc:  # a refusal is a result, reported as such
+        return (
+            path.name,
+            f"REFUSED: {exc}",
+            np.nan,
+            np.nan,
+            time.perf_counter() - t0,
+            (0, np.nan, np.nan),
+            time.process_time() - c0,
+        )
     cpu = time.process_time() - c0
     rb, ra = band_misfit(g.F, g.force_before, 0.25), band_misfit(g.F, g.force_after, 0.25)
     band = np.abs(g.F) < 0.25 * np.abs(g.F).max()
     lags = np.arange(-10, 11)
-    shifted = [np.sqrt(np.mean((g.F - np.interp(g.t - k / fs, g.t, g.force_after))[band] ** 2))
-               for fs in [1.0 / float(np.median(np.diff(g.t)))] for k in lags]
+    shifted = [
+        np.sqrt(np.mean((g.F - np.interp(g.t - k / fs, g.t, g.force_after))[band] ** 2))
+        for fs in [1.0 / float(np.median(np.diff(g.t)))]
+        for k in lags
+    ]
     lag = (int(lags[int(np.argmin(shifted))]), float(np.min(shifted)))
     speed = np.abs(np.gradient(g.u, g.t))
     r2 = np.where(band, (g.F - g.force_after) ** 2, 0.0)
     fast = 100.0 * r2[speed > 0.9 * speed.max()].sum() / max(r2.sum(), 1e-300)
-    return (path.name, " + ".join(g.effects) or "none", rb, ra, time.perf_counter() - t0,
-            (*lag, fast), cpu)
+    return (
+        path.name,
+        " + ".join(g.effects) or "none",
+        rb,
+        ra,
+        time.perf_counter() - t0,
+        (*lag, fast),
+        cpu,
+    )
 
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--data", default=None,
-                    help="folder of the records (default: ../shared/data/arts-damper next to "
-                         "the repository or the current directory)")
+    ap.add_argument(
+        "--data",
+        default=None,
+        help="folder of the records (default: ../shared/data/arts-damper next to "
+        "the repository or the current directory)",
+    )
     ap.add_argument("--lowpass", type=float, default=20.0)
     ap.add_argument("--jobs", type=int, default=1)
     args = ap.parse_args(argv)
     if args.data is None:
-        where = [p / "shared" / "data" / "arts-damper"
-                 for p in (Path.cwd().parent, ROOT.parent, ROOT.parent.parent)]
+        where = [
+            p / "shared" / "data" / "arts-damper"
+            for p in (Path.cwd().parent, ROOT.parent, ROOT.parent.parent)
+        ]
         args.data = str(next((p for p in where if p.is_dir()), where[0]))
     files = sorted(Path(args.data).glob("*.csv"))
     if not files:
@@ -69,13 +93,17 @@ def main(argv=None):
         return 0
     with ProcessPoolExecutor(args.jobs) as ex:
         rows = list(ex.map(run, files, [args.lowpass] * len(files)))
-    print(f"{'record':<26} {'named':<44} {'band before [N]':>15} {'after [N]':>10} "
-          f"{'ratio':>6} {'time [s]':>8} {'CPU [s]':>7} {'lag':>4} {'at lag [N]':>10} "
-          f"{'at speed':>8}")
+    print(
+        f"{'record':<26} {'named':<44} {'band before [N]':>15} {'after [N]':>10} "
+        f"{'ratio':>6} {'time [s]':>8} {'CPU [s]':>7} {'lag':>4} {'at lag [N]':>10} "
+        f"{'at speed':>8}"
+    )
     ok = 0
     for name, eff, rb, ra, dt, lag, cpu in rows:
-        print(f"{name:<26} {eff:<44} {rb:15.0f} {ra:10.0f} {ra / rb:6.2f} {dt:8.1f} {cpu:7.1f} "
-              f"{lag[0]:4d} {lag[1]:10.0f} {lag[2]:7.0f}%")
+        print(
+            f"{name:<26} {eff:<44} {rb:15.0f} {ra:10.0f} {ra / rb:6.2f} {dt:8.1f} {cpu:7.1f} "
+            f"{lag[0]:4d} {lag[1]:10.0f} {lag[2]:7.0f}%"
+        )
         ok += ("backlash" in eff) and ra <= 0.5 * rb
     print(f"{ok}/{len(rows)} records: backlash named and band misfit at least halved")
     return 0

@@ -12,6 +12,7 @@ Run::
 
     python benchmarks/bench_real_loops_fit.py [--data ../shared/data/arts-damper] [--markdown]
 """
+
 from __future__ import annotations
 
 import argparse
@@ -27,9 +28,17 @@ from iwan_element.identify.loops.result import IdentifiabilityWarning
 
 _ROOT = Path(__file__).resolve().parents[1]
 # ../shared next to the project (a checkout in /work/main or a worktree in /work/wt/<name>)
-DEFAULT = next((c for c in (_ROOT.parent / "shared" / "data" / "arts-damper",
-                            _ROOT.parent.parent / "shared" / "data" / "arts-damper")
-                if c.is_dir()), _ROOT.parent / "shared" / "data" / "arts-damper")
+DEFAULT = next(
+    (
+        c
+        for c in (
+            _ROOT.parent / "shared" / "data" / "arts-damper",
+            _ROOT.parent.parent / "shared" / "data" / "arts-damper",
+        )
+        if c.is_dir()
+    ),
+    _ROOT.parent / "shared" / "data" / "arts-damper",
+)
 
 
 def _pm(v, se, ident=None, fmt="{:.4g}"):
@@ -46,8 +55,20 @@ def main(argv=None):
     if not files:
         print(f"no records under {a.data} (the shared data are absent): skipped")
         return
-    head = ["record", "dF0 [N]", "du0 [um]", "Fs [N]", "KT [kN/mm]", "chi", "beta", "success",
-            "NRMSE %", "tau", "noise F [N]", "time [s]"]
+    head = [
+        "record",
+        "dF0 [N]",
+        "du0 [um]",
+        "Fs [N]",
+        "KT [kN/mm]",
+        "chi",
+        "beta",
+        "success",
+        "NRMSE %",
+        "tau",
+        "noise F [N]",
+        "time [s]",
+    ]
     rows = []
     for f in files:
         d = np.loadtxt(f, delimiter=",", skiprows=1)
@@ -58,12 +79,22 @@ def main(argv=None):
         dt = time.perf_counter() - t0
         p, se, idf = r.joint, r.stderr, r.identified
         (f0, sf0), (u0, su0) = r.offsets["force"], r.offsets["displacement"]
-        rows.append([f.stem, _pm(f0, sf0), _pm(u0 * 1e6, su0 * 1e6),
-                     _pm(p.Fs, se["Fs"], idf["Fs"]), _pm(p.KT * 1e-6, se["KT"] * 1e-6, idf["KT"]),
-                     _pm(p.chi, se["chi"], idf["chi"], "{:.3f}"),
-                     _pm(p.beta, se["beta"], idf["beta"], "{:.3f}"), str(r.success),
-                     f"{100 * r.nrmse:.2f}", f"{r.noise['tau']:.3g}", f"{r.noise['force']:.3g}",
-                     f"{dt:.2f}"])
+        rows.append(
+            [
+                f.stem,
+                _pm(f0, sf0),
+                _pm(u0 * 1e6, su0 * 1e6),
+                _pm(p.Fs, se["Fs"], idf["Fs"]),
+                _pm(p.KT * 1e-6, se["KT"] * 1e-6, idf["KT"]),
+                _pm(p.chi, se["chi"], idf["chi"], "{:.3f}"),
+                _pm(p.beta, se["beta"], idf["beta"], "{:.3f}"),
+                str(r.success),
+                f"{100 * r.nrmse:.2f}",
+                f"{r.noise['tau']:.3g}",
+                f"{r.noise['force']:.3g}",
+                f"{dt:.2f}",
+            ]
+        )
     if a.markdown:
         print("| " + " | ".join(head) + " |")
         print("|" + "---|" * len(head))
@@ -74,8 +105,10 @@ def main(argv=None):
         print("  ".join(h.ljust(w[k]) for k, h in enumerate(head)))
         for row in rows:
             print("  ".join(c.ljust(w[k]) for k, c in enumerate(row)))
-    print("* = identified (finite std. error <= half the value, chi: of chi + 1, not at a bound); "
-          "std. errors are widened by sqrt(tau)")
+    print(
+        "* = identified (finite std. error <= half the value, chi: of chi + 1, not at a bound); "
+        "std. errors are widened by sqrt(tau)"
+    )
 
 
 if __name__ == "__main__":

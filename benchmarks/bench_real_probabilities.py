@@ -14,6 +14,7 @@
     nice -n 10 python benchmarks/bench_real_probabilities.py [--jobs 2] [--only arts|brb]
         [--json out.json]
 """
+
 from __future__ import annotations
 
 import argparse
@@ -38,12 +39,12 @@ def shared(name):
 
 
 def _rows(d, top=3):
-    return [(" + ".join(e.effects) or "plain", float(e.probability))
-            for e in d.explanations[:top]]
+    return [(" + ".join(e.effects) or "plain", float(e.probability)) for e in d.explanations[:top]]
 
 
 def run_record(path):
     from iwan_element import diagnose
+
     t, u, F = np.loadtxt(path, delimiter=",", skiprows=1).T
     c0 = time.process_time()
     d = diagnose(t, u, F, lowpass=20.0)
@@ -52,16 +53,23 @@ def run_record(path):
     g = diagnose(t, u, F, lowpass=20.0, probabilities=False)
     cpu0 = time.process_time() - c0
     effs = sorted({n for e in d.explanations for n in e.effects})
-    return {"record": path.stem, "rule": " + ".join(d.details["rule_named"]) or "none",
-            "rule_without": " + ".join(g.effects) or "none",
-            "named": " + ".join(d.effects) or "none", "top": _rows(d),
-            "effects": {n: d.effect_probability(n) for n in effs},
-            "cpu": cpu, "cpu_without": cpu0, "explanations": len(d.explanations)}
+    return {
+        "record": path.stem,
+        "rule": " + ".join(d.details["rule_named"]) or "none",
+        "rule_without": " + ".join(g.effects) or "none",
+        "named": " + ".join(d.effects) or "none",
+        "top": _rows(d),
+        "effects": {n: d.effect_probability(n) for n in effs},
+        "cpu": cpu,
+        "cpu_without": cpu0,
+        "explanations": len(d.explanations),
+    }
 
 
 def run_brb():
     import iwan_element as ie
     from iwan_element import models
+
     d = shared("brb-steppedsine-fc")
     if d is None:
         return None
@@ -71,17 +79,24 @@ def run_brb():
     spec = models.preset("brake-reuss")
     before = models.modal_amplitude_curve(spec, amplitude=sweeps.amplitude)
     c0 = time.process_time()
-    g = ie.diagnose_vibration(sweeps, predicted_frequency=before.frequency,
-                              predicted_damping_ratio=before.damping_ratio,
-                              predicted_zeta0=spec.interface.damping_floor,
-                              between_tests=True)
+    g = ie.diagnose_vibration(
+        sweeps,
+        predicted_frequency=before.frequency,
+        predicted_damping_ratio=before.damping_ratio,
+        predicted_zeta0=spec.interface.damping_floor,
+        between_tests=True,
+    )
     cpu = time.process_time() - c0
     effs = sorted({n for e in g.explanations for n in e.effects})
-    return {"record": "brb fc_sweeps (4 levels)",
-            "rule": " + ".join(g.details["rule_named"]) or "none",
-            "named": " + ".join(g.effects) or "none", "top": _rows(g, 4),
-            "effects": {n: g.effect_probability(n) for n in effs}, "cpu": cpu,
-            "report": g.report()}
+    return {
+        "record": "brb fc_sweeps (4 levels)",
+        "rule": " + ".join(g.details["rule_named"]) or "none",
+        "named": " + ".join(g.effects) or "none",
+        "top": _rows(g, 4),
+        "effects": {n: g.effect_probability(n) for n in effs},
+        "cpu": cpu,
+        "report": g.report(),
+    }
 
 
 def main(argv=None):
@@ -92,8 +107,12 @@ def main(argv=None):
     a = ap.parse_args(argv)
     out = {}
     if a.only != "brb":
-        files = [p for name in ("arts-damper", "arts-damper-ds2") if shared(name)
-                 for p in sorted(shared(name).glob("*.csv"))]
+        files = [
+            p
+            for name in ("arts-damper", "arts-damper-ds2")
+            if shared(name)
+            for p in sorted(shared(name).glob("*.csv"))
+        ]
         if not files:
             print("../shared/data/arts-damper* absent: skipped")
         if a.jobs == 1:
@@ -106,26 +125,34 @@ def main(argv=None):
         for r in rows:
             (n0, p0), rest = r["top"][0], r["top"][1:]
             flag = "" if r["rule"] == r["named"] else "   <- differs"
-            print(f"{r['record']:<24} {r['rule']:<36} {n0 + f' ({p0:.3g})':<44} "
-                  + ", ".join(f"{n} {p:.2g}" for n, p in rest) + flag)
-        cpu, cpu0 = np.array([r["cpu"] for r in rows]), np.array([r["cpu_without"]
-                                                                for r in rows])
+            print(
+                f"{r['record']:<24} {r['rule']:<36} {n0 + f' ({p0:.3g})':<44} "
+                + ", ".join(f"{n} {p:.2g}" for n, p in rest)
+                + flag
+            )
+        cpu, cpu0 = np.array([r["cpu"] for r in rows]), np.array([r["cpu_without"] for r in rows])
         diff = [r for r in rows if r["rule"] != r["named"]]
-        print(f"\n{len(rows)} records; the most probable explanation differs from the rule's "
-              f"answer on {len(diff)}; below 0.9 on "
-              f"{sum(r['top'][0][1] <= 0.9 for r in rows)}")
-        print(f"CPU per record: with probabilities median {np.median(cpu):.1f} s (max "
-              f"{cpu.max():.1f}), without {np.median(cpu0):.1f} s (max {cpu0.max():.1f}); "
-              f"total ratio {cpu.sum() / cpu0.sum():.2f}")
+        print(
+            f"\n{len(rows)} records; the most probable explanation differs from the rule's "
+            f"answer on {len(diff)}; below 0.9 on "
+            f"{sum(r['top'][0][1] <= 0.9 for r in rows)}"
+        )
+        print(
+            f"CPU per record: with probabilities median {np.median(cpu):.1f} s (max "
+            f"{cpu.max():.1f}), without {np.median(cpu0):.1f} s (max {cpu0.max():.1f}); "
+            f"total ratio {cpu.sum() / cpu0.sum():.2f}"
+        )
     if a.only != "arts":
         b = run_brb()
         out["brb"] = b
         if b is None:
             print("../shared/data/brb-steppedsine-fc absent: skipped")
         else:
-            print(f"\n{b['record']}: rule {b['rule']}, named {b['named']}; "
-                  + ", ".join(f"{n} {p:.3g}" for n, p in b["top"])
-                  + f"; CPU {b['cpu']:.2f} s")
+            print(
+                f"\n{b['record']}: rule {b['rule']}, named {b['named']}; "
+                + ", ".join(f"{n} {p:.3g}" for n, p in b["top"])
+                + f"; CPU {b['cpu']:.2f} s"
+            )
             print(b["report"])
     if a.json:
         a.json.write_text(json.dumps(out, indent=1, default=float))

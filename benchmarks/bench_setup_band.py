@@ -5,6 +5,7 @@ drawn from its prior, the 2.5, 50 and 97.5 % quantiles of each mode's stuck freq
 
     python benchmarks/bench_setup_band.py [--draws 200] [--seed 0]
 """
+
 from __future__ import annotations
 
 import argparse
@@ -27,14 +28,19 @@ def main(argv=None):
     bare = models.natural_frequencies(spec.replace(setup=models.Setup()), n_modes=2)
     print(f"without the setup (rigid clamp, no shaker): {bare[0]:.2f}, {bare[1]:.2f} Hz")
     t0 = time.perf_counter()
-    band = prior_band(spec, parameters=("attachments", "boundary"), modes=(1, 2), n=a.draws,
-                      rng=a.seed)
-    print(f"with the setup, {a.draws} draws from the setup's ranges "
-          f"({time.perf_counter() - t0:.1f} s):")
+    band = prior_band(
+        spec, parameters=("attachments", "boundary"), modes=(1, 2), n=a.draws, rng=a.seed
+    )
+    print(
+        f"with the setup, {a.draws} draws from the setup's ranges "
+        f"({time.perf_counter() - t0:.1f} s):"
+    )
     for r, b in band.items():
         q = b["quantiles"]
-        print(f"  mode {r}: nominal {b['nominal']:.2f} Hz, median {q[0.5]:.2f}, 95 % band "
-              f"{q[0.025]:.2f} .. {q[0.975]:.2f} Hz")
+        print(
+            f"  mode {r}: nominal {b['nominal']:.2f} Hz, median {q[0.5]:.2f}, 95 % band "
+            f"{q[0.025]:.2f} .. {q[0.975]:.2f} Hz"
+        )
     return 0
 
 

@@ -14,6 +14,7 @@ Run::
 
     python benchmarks/bench_silent_answers.py --seeds 60
 """
+
 from __future__ import annotations
 
 import argparse
@@ -38,8 +39,9 @@ def config(n: int, seeds: int) -> dict:
         rng = np.random.default_rng(s)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            r = ie.fit_modal_iwan(X, f * (1 + 1e-4 * rng.standard_normal(n)),
-                                  z * (1 + 0.01 * rng.standard_normal(n)))
+            r = ie.fit_modal_iwan(
+                X, f * (1 + 1e-4 * rng.standard_normal(n)), z * (1 + 0.01 * rng.standard_normal(n))
+            )
         macro += r.regime == "macroslip"
         if r.success:
             success += 1
@@ -54,12 +56,16 @@ def main() -> None:
     ap.add_argument("--seeds", type=int, default=60)
     args = ap.parse_args()
     t0 = time.perf_counter()
-    print(f"{'amplitudes':>10} {'macro':>6} {'success':>8} {'f0 within 2 se':>15} "
-          f"{'chi within 2 se':>16}")
+    print(
+        f"{'amplitudes':>10} {'macro':>6} {'success':>8} {'f0 within 2 se':>15} "
+        f"{'chi within 2 se':>16}"
+    )
     for n in (3, 5, 8, 12, 20):
         c = config(n, args.seeds)
-        print(f"{c['n']:>10} {c['macro']:>6} {c['success']:>8} {c['f0']:>15} "
-              f"{c['chi']:>16}   (of {c['success']} usable, {args.seeds} seeds)")
+        print(
+            f"{c['n']:>10} {c['macro']:>6} {c['success']:>8} {c['f0']:>15} "
+            f"{c['chi']:>16}   (of {c['success']} usable, {args.seeds} seeds)"
+        )
     print(f"{time.perf_counter() - t0:.1f} s")
 
 

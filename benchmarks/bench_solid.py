@@ -45,6 +45,7 @@ patch). Printed:
   mode 2 bends in-plane), the calibrated solid's frequencies by family against the peaks,
   and that mode's QSMA curve against the band's measured one at acc3.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -60,7 +61,14 @@ from iwan_element.models.solid import lap_beam_parts, solid_specimen
 from scipy.optimize import brentq
 
 PEAKS = np.array([80.4, 221.7, 297.7, 845.6])
-RECORD = Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "brb-hammer" / "hammer_acc3.csv"
+RECORD = (
+    Path(__file__).resolve().parents[1]
+    / ".."
+    / "shared"
+    / "data"
+    / "brb-hammer"
+    / "hammer_acc3.csv"
+)
 
 
 def _direction_forms(solid):
@@ -89,8 +97,8 @@ def _families(solid, n):
     L = solid.linear_system()
     KT = solid.contact_points().KT
     K = L.K0 + L.G.T @ (KT[:, None] * L.G)
-    w2, V = np.linalg.eigh(K)          # M = I in the reduced coordinates
-    fam, share = _classify(_direction_forms(solid), V[:, 6:6 + n])
+    w2, V = np.linalg.eigh(K)  # M = I in the reduced coordinates
+    fam, share = _classify(_direction_forms(solid), V[:, 6 : 6 + n])
     return [f"{f}({v:.2f})" for f, v in zip(fam, share)]
 
 
@@ -110,6 +118,7 @@ def _direction_targets(solid):
         fam, _ = _classify(Q, V[:, 6:14])
         z, y = f[[c == "z" for c in fam]], f[[c == "y" for c in fam]]
         return np.array([z[0], y[0], z[1], z[3]])
+
     return targets
 
 
@@ -121,15 +130,18 @@ def run_wave_speed(solid, factors):
     """
     targets = _direction_targets(solid)
     kn = solid.interface.normal_stiffness_per_area
-    print("  wave speed x c (E / rho x c^2), k_t on the stuck mode 1 = 80.4 Hz: errors of "
-          "in-plane, 2nd and 4th height bending against 221.7, 297.7, 845.6 Hz")
+    print(
+        "  wave speed x c (E / rho x c^2), k_t on the stuck mode 1 = 80.4 Hz: errors of "
+        "in-plane, 2nd and 4th height bending against 221.7, 297.7, 845.6 Hz"
+    )
     for c in factors:
-        lk = brentq(lambda lk: targets(10 ** lk, 10 ** lk, kn)[0] - PEAKS[0] / c, 10.0, 16.0,
-                    xtol=1e-6)
-        err = 100 * (c * targets(10 ** lk, 10 ** lk, kn)[1:] / PEAKS[1:] - 1)
-        print(f"    c = {c:.3f} (E / rho x {c * c:.4f}): k_t {10 ** lk:.3g} N/m^3 (x c^2: "
-              f"{c * c * 10 ** lk:.3g}); in-plane {err[0]:+.2f} %, 2nd {err[1]:+.2f} %, "
-              f"4th {err[2]:+.2f} %")
+        lk = brentq(lambda lk: targets(10**lk, 10**lk, kn)[0] - PEAKS[0] / c, 10.0, 16.0, xtol=1e-6)
+        err = 100 * (c * targets(10**lk, 10**lk, kn)[1:] / PEAKS[1:] - 1)
+        print(
+            f"    c = {c:.3f} (E / rho x {c * c:.4f}): k_t {10**lk:.3g} N/m^3 (x c^2: "
+            f"{c * c * 10**lk:.3g}); in-plane {err[0]:+.2f} %, 2nd {err[1]:+.2f} %, "
+            f"4th {err[2]:+.2f} %"
+        )
 
 
 def run_stiffness_scan(solid, decades=(11, 16)):
@@ -142,18 +154,22 @@ def run_stiffness_scan(solid, decades=(11, 16)):
     rows = []
     for ky in 10.0 ** np.arange(decades[0], decades[1] + 1):
         for kn in 10.0 ** np.arange(decades[0], decades[1] + 1):
-            g = lambda lk: targets(10 ** lk, ky, kn)[0] - PEAKS[0]
+            g = lambda lk: targets(10**lk, ky, kn)[0] - PEAKS[0]
             if g(8.0) > 0 or g(18.0) < 0:
                 continue
             kx = 10 ** brentq(g, 8.0, 18.0, xtol=1e-6)
             err = 100 * (targets(kx, ky, kn)[1:] / PEAKS[1:] - 1)
             rows.append((np.max(np.abs(err)), kx, ky, kn, err))
-    print(f"  tied limit (k = 1e16 every direction): "
-          f"{np.round(targets(1e16, 1e16, 1e16), 2)} Hz (z1, y1, z2, z4)")
+    print(
+        f"  tied limit (k = 1e16 every direction): "
+        f"{np.round(targets(1e16, 1e16, 1e16), 2)} Hz (z1, y1, z2, z4)"
+    )
     print("  k_x on mode 1, k_y and k_n on a grid: the five smallest largest errors of y1, z2, z4")
     for e, kx, ky, kn, err in sorted(rows, key=lambda r: r[0])[:5]:
-        print(f"    {e:.2f} %: k_x {kx:.3g}, k_y {ky:.0e}, k_n {kn:.0e} N/m^3; y1, z2, z4 "
-              f"{np.round(err, 2)} %")
+        print(
+            f"    {e:.2f} %: k_x {kx:.3g}, k_y {ky:.0e}, k_n {kn:.0e} N/m^3; y1, z2, z4 "
+            f"{np.round(err, 2)} %"
+        )
 
 
 def _targets(solid):
@@ -168,30 +184,46 @@ def _targets(solid):
 
 def run_normal_ratio(solid, ratios, exponents, h=1e-3):
     """One stiffness scale on mode 1 with ``k_n = R k_t``: the other families (docstring)."""
-    print("  k_n = R k_t, k_t by brentq on the stuck mode 1 = 80.4 Hz; frequencies [Hz] and "
-          "% against 221.7, 297.7, 845.6; d ln f / d ln k_t and d ln k_n of (z1, y1, z2, z4)")
+    print(
+        "  k_n = R k_t, k_t by brentq on the stuck mode 1 = 80.4 Hz; frequencies [Hz] and "
+        "% against 221.7, 297.7, 845.6; d ln f / d ln k_t and d ln k_n of (z1, y1, z2, z4)"
+    )
     for m in exponents:
         for r in ratios:
+
             def at(kt, kn):
-                return solid.replace(stiffness_per_area=kt, normal_stiffness_per_area=kn,
-                                     stiffness_pressure_exponent=m)
-            k = brentq(lambda v: natural_frequencies(at(v, r * v), n_modes=7)[6] - PEAKS[0],
-                       1e10, 1e15, rtol=1e-9)
+                return solid.replace(
+                    stiffness_per_area=kt,
+                    normal_stiffness_per_area=kn,
+                    stiffness_pressure_exponent=m,
+                )
+
+            k = brentq(
+                lambda v: natural_frequencies(at(v, r * v), n_modes=7)[6] - PEAKS[0],
+                1e10,
+                1e15,
+                rtol=1e-9,
+            )
             f = _targets(at(k, r * k))
             st = np.log(_targets(at(k * (1 + h), r * k)) / f) / math.log1p(h)
             sn = np.log(_targets(at(k, r * k * (1 + h))) / f) / math.log1p(h)
             err = 100 * (f[1:] / PEAKS[1:] - 1)
-            print(f"  m {m:g} R {r:6.3f}: k_t {k:.4g}, k_n {r * k:.4g} N/m^3 | z1 {f[0]:.2f} "
-                  f"y1 {f[1]:.2f} ({err[0]:+.2f} %) z2 {f[2]:.2f} ({err[1]:+.2f} %) z4 "
-                  f"{f[3]:.2f} ({err[2]:+.2f} %) | k_t {np.round(st, 4)} k_n {np.round(sn, 4)}")
+            print(
+                f"  m {m:g} R {r:6.3f}: k_t {k:.4g}, k_n {r * k:.4g} N/m^3 | z1 {f[0]:.2f} "
+                f"y1 {f[1]:.2f} ({err[0]:+.2f} %) z2 {f[2]:.2f} ({err[1]:+.2f} %) z4 "
+                f"{f[3]:.2f} ({err[2]:+.2f} %) | k_t {np.round(st, 4)} k_n {np.round(sn, 4)}"
+            )
 
 
 def _line(label, f, fam=None):
     parts = []
     for i, v in enumerate(f):
         j = int(np.argmin(np.abs(PEAKS - v)))
-        near = f" [{PEAKS[j]:.1f}: {100 * (v / PEAKS[j] - 1):+.2f}%]" \
-            if abs(v / PEAKS[j] - 1) < 0.05 else ""
+        near = (
+            f" [{PEAKS[j]:.1f}: {100 * (v / PEAKS[j] - 1):+.2f}%]"
+            if abs(v / PEAKS[j] - 1) < 0.05
+            else ""
+        )
         parts.append(f"{v:8.2f}{'' if fam is None else ' ' + fam[i]}{near}")
     print(f"  {label:<22s}" + " | ".join(parts))
 
@@ -204,18 +236,23 @@ def run_calibration(solid):
     meas = measured_amplitude_curve(RECORD, band=(270.0, 330.0))
     t0 = time.perf_counter()
     res = calibrate(solid, measured_amplitude_curve(RECORD), floors={3: meas})
-    print(f"calibrate on mode 1, the 2nd height bending's floor from its own curve "
-          f"({time.perf_counter() - t0:.1f} s):")
+    print(
+        f"calibrate on mode 1, the 2nd height bending's floor from its own curve "
+        f"({time.perf_counter() - t0:.1f} s):"
+    )
     print("  " + res.report().replace("\n", "\n  "))
     cal = res.specimen
     _line("calibrated, stuck", natural_frequencies(cal, n_modes=12)[6:], _families(cal, 6))
     X = meas.amplitude
-    model = modal_amplitude_curve(cal.replace(amplitude_range=(X.min(), X.max()),
-                                              calibrated_range=None), mode=3, amplitude=X)
+    model = modal_amplitude_curve(
+        cal.replace(amplitude_range=(X.min(), X.max()), calibrated_range=None), mode=3, amplitude=X
+    )
     print("  2nd height bending (QSMA mode 3) vs the record's 270-330 Hz band at acc3:")
     for k in np.linspace(0, X.size - 1, 6).astype(int):
-        print(f"    X {X[k]:9.3e} m: f {model.frequency[k]:8.3f} / {meas.frequency[k]:8.3f} Hz, "
-              f"zeta {100 * model.damping_ratio[k]:.4f} / {100 * meas.damping_ratio[k]:.4f} %")
+        print(
+            f"    X {X[k]:9.3e} m: f {model.frequency[k]:8.3f} / {meas.frequency[k]:8.3f} Hz, "
+            f"zeta {100 * model.damping_ratio[k]:.4f} / {100 * meas.damping_ratio[k]:.4f} %"
+        )
 
 
 def run(mesh, patch, modes, ratios=(), exponents=(0.0,), lap=None, scan=False, holes=True):
@@ -229,12 +266,14 @@ def run(mesh, patch, modes, ratios=(), exponents=(0.0,), lap=None, scan=False, h
     t0 = time.perf_counter()
     modal_amplitude_curve(solid)
     t_qsma = time.perf_counter() - t0
-    print(f"mesh {mesh * 1e3:.1f} mm (lap {lap * 1e3:.2f} mm, bolt holes "
-          f"{'cut' if holes else 'not cut'}), patches {patch * 1e3:.2f} mm:"
-          f" {info['n_full']} coordinates -> {info['n_reduced']} ({modes} modes + "
-          f"{3 * info['n_patches']} attachment shapes, {info['n_patches']} patches); meshing "
-          f"{t_mesh:.1f} s, reduction {info['reduction_s']:.1f} s, QSMA (20 amplitudes) "
-          f"{t_qsma:.2f} s")
+    print(
+        f"mesh {mesh * 1e3:.1f} mm (lap {lap * 1e3:.2f} mm, bolt holes "
+        f"{'cut' if holes else 'not cut'}), patches {patch * 1e3:.2f} mm:"
+        f" {info['n_full']} coordinates -> {info['n_reduced']} ({modes} modes + "
+        f"{3 * info['n_patches']} attachment shapes, {info['n_patches']} patches); meshing "
+        f"{t_mesh:.1f} s, reduction {info['reduction_s']:.1f} s, QSMA (20 amplitudes) "
+        f"{t_qsma:.2f} s"
+    )
     fs = natural_frequencies(solid, n_modes=12)[6:]
     _line("stuck (preset k_t)", fs, _families(solid, 6))
     _line("released", natural_frequencies(solid, interface="none", n_modes=15)[9:15])
@@ -242,10 +281,13 @@ def run(mesh, patch, modes, ratios=(), exponents=(0.0,), lap=None, scan=False, h
 
     def f1(k):
         return natural_frequencies(solid.replace(stiffness_per_area=k), n_modes=7)[6] - PEAKS[0]
+
     try:
         k = brentq(f1, 0.05 * kt0, 50 * kt0, rtol=1e-6)
-        _line(f"stuck k_t={k:.3g}", natural_frequencies(
-            solid.replace(stiffness_per_area=k), n_modes=12)[6:])
+        _line(
+            f"stuck k_t={k:.3g}",
+            natural_frequencies(solid.replace(stiffness_per_area=k), n_modes=12)[6:],
+        )
     except ValueError:
         print("  no stiffness per area in [0.05, 50] x the preset's puts mode 1 on 80.4 Hz")
     X = np.array([5e-6, 2e-5, 6e-5])
@@ -255,8 +297,10 @@ def run(mesh, patch, modes, ratios=(), exponents=(0.0,), lap=None, scan=False, h
         f0 = natural_frequencies(sp_, n_modes=n_rigid + 1)[-1]
         drop = 100 * (1 - c.frequency / f0)
         zj = 100 * (c.damping_ratio - s.floor(1))
-        print(f"  QSMA mode 1 {label:<6s} f0 {f0:7.3f} Hz; drop % {np.round(drop, 4)}; "
-              f"joint zeta % {np.round(zj, 4)} at X = 5, 20, 60 um")
+        print(
+            f"  QSMA mode 1 {label:<6s} f0 {f0:7.3f} Hz; drop % {np.round(drop, 4)}; "
+            f"joint zeta % {np.round(zj, 4)} at X = 5, 20, 60 um"
+        )
     if ratios:
         run_normal_ratio(solid, ratios, exponents)
     if scan:
@@ -269,19 +313,30 @@ def main():
     ap.add_argument("--mesh", type=float, nargs="+", default=[0.012, 0.008, 0.006])
     ap.add_argument("--patch", type=float, default=0.0064)
     ap.add_argument("--modes", type=int, default=20)
-    ap.add_argument("--lap", type=float, default=None, help="lap face mesh size [m] "
-                    "(default 0.6 x the patch size)")
+    ap.add_argument(
+        "--lap",
+        type=float,
+        default=None,
+        help="lap face mesh size [m] (default 0.6 x the patch size)",
+    )
     ap.add_argument("--normal-ratio", type=float, nargs="*", default=[])
     ap.add_argument("--exponent", type=float, nargs="+", default=[0.0])
     ap.add_argument("--scan", action="store_true", help="scan k_x, k_y, k_n separately")
     ap.add_argument("--no-holes", action="store_true", help="mesh the bolt holes solid")
     ap.add_argument("--calibrate", action="store_true")
-    ap.add_argument("--wave-speed", type=float, nargs="*", default=[],
-                    help="material wave-speed factors c to try on the first mesh")
+    ap.add_argument(
+        "--wave-speed",
+        type=float,
+        nargs="*",
+        default=[],
+        help="material wave-speed factors c to try on the first mesh",
+    )
     a = ap.parse_args()
     print(f"hammer peaks (brb-hammer acc3): {PEAKS} Hz")
-    solids = [run(m, a.patch, a.modes, a.normal_ratio, a.exponent, a.lap, a.scan,
-                  not a.no_holes) for m in a.mesh]
+    solids = [
+        run(m, a.patch, a.modes, a.normal_ratio, a.exponent, a.lap, a.scan, not a.no_holes)
+        for m in a.mesh
+    ]
     if a.wave_speed:
         run_wave_speed(solids[0], a.wave_speed)
     if a.calibrate:

@@ -20,6 +20,7 @@ frequency and damping against the solid's QSMA curve at the same amplitudes (ind
 routes). Last, the solver: the mode-1 Iwan run with Exudyn's sparse solver instead of the
 dense one the ring-down uses, and with full Newton instead of modified Newton.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -36,10 +37,12 @@ from iwan_element.models.solid import lap_beam_parts, solid_specimen
 def _cost(label, r):
     m = r.metadata
     err = r.max_energy_error
-    print(f"  {label:<34s} {m['steps']:6d} steps {r.wall_time:7.2f} s "
-          f"{1e3 * r.wall_time / m['steps']:6.3f} ms/step, Newton {m['newton_iterations'] / m['steps']:.2f}"
-          f"/step, {m['jacobians']} Jacobian(s)"
-          + ("" if err is None else f", energy error {err:.1e}"))
+    print(
+        f"  {label:<34s} {m['steps']:6d} steps {r.wall_time:7.2f} s "
+        f"{1e3 * r.wall_time / m['steps']:6.3f} ms/step, Newton {m['newton_iterations'] / m['steps']:.2f}"
+        f"/step, {m['jacobians']} Jacobian(s)"
+        + ("" if err is None else f", energy error {err:.1e}")
+    )
 
 
 def _qsma(solid, r):
@@ -47,11 +50,13 @@ def _qsma(solid, r):
     q = modal_amplitude_curve(solid, amplitude=c.amplitude)
     df = c.frequency / q.frequency - 1
     dz = c.damping_ratio / q.damping_ratio - 1
-    print(f"  mode 1 vs QSMA ({len(c)} points, {c.amplitude.min() * 1e6:.1f}-"
-          f"{c.amplitude.max() * 1e6:.1f} um): frequency {c.frequency.max():.4f}-"
-          f"{c.frequency.min():.4f} Hz, off by {np.abs(df).max():.1e}; damping "
-          f"{100 * c.damping_ratio.min():.4f}-{100 * c.damping_ratio.max():.4f} %, off by "
-          f"{100 * np.abs(dz).max():.2f} %")
+    print(
+        f"  mode 1 vs QSMA ({len(c)} points, {c.amplitude.min() * 1e6:.1f}-"
+        f"{c.amplitude.max() * 1e6:.1f} um): frequency {c.frequency.max():.4f}-"
+        f"{c.frequency.min():.4f} Hz, off by {np.abs(df).max():.1e}; damping "
+        f"{100 * c.damping_ratio.min():.4f}-{100 * c.damping_ratio.max():.4f} %, off by "
+        f"{100 * np.abs(dz).max():.2f} %"
+    )
 
 
 def _solvers(solid, duration):
@@ -61,9 +66,10 @@ def _solvers(solid, duration):
     st = static_modal_load(solid, [60e-6], mode=1)
     out = {}
     for name, kind, modified, dur in (
-            ("dense", exu.LinearSolverType.EigenDense, True, duration),
-            ("sparse", exu.LinearSolverType.EigenSparse, True, duration),
-            ("dense, full Newton", exu.LinearSolverType.EigenDense, False, 0.1 * duration)):
+        ("dense", exu.LinearSolverType.EigenDense, True, duration),
+        ("sparse", exu.LinearSolverType.EigenSparse, True, duration),
+        ("dense, full Newton", exu.LinearSolverType.EigenDense, False, 0.1 * duration),
+    ):
         model = build_host(solid)
         model.set_state(st["x"][0])
         h = 2 * np.pi / (st["omega0"] * 64)
@@ -77,11 +83,18 @@ def _solvers(solid, duration):
         t0 = time.perf_counter()
         model.mbs.SolveDynamic(sim)
         it = model.mbs.sys["dynamicSolver"].it
-        out[name] = (1e3 * (time.perf_counter() - t0) / n, it.newtonStepsCount / n,
-                     it.newtonJacobiCount / n)
-    print("  mode 1 Iwan, solver variants: " + "; ".join(
-        f"{k} {v[0]:.3f} ms/step ({v[1]:.2f} iterations, {v[2]:.2f} Jacobians per step)"
-        for k, v in out.items()))
+        out[name] = (
+            1e3 * (time.perf_counter() - t0) / n,
+            it.newtonStepsCount / n,
+            it.newtonJacobiCount / n,
+        )
+    print(
+        "  mode 1 Iwan, solver variants: "
+        + "; ".join(
+            f"{k} {v[0]:.3f} ms/step ({v[1]:.2f} iterations, {v[2]:.2f} Jacobians per step)"
+            for k, v in out.items()
+        )
+    )
 
 
 def run(mesh, patch, modes, duration):
@@ -91,11 +104,15 @@ def run(mesh, patch, modes, duration):
     t_mesh = time.perf_counter() - t0
     solid = solid_specimen(s, parts, patch_size=patch, n_modes=modes)
     info = solid.model.info
-    print(f"mesh {mesh * 1e3:.1f} mm: {info['n_full']} coordinates -> {info['n_reduced']} "
-          f"({info['n_patches']} patches, {2 * info['n_patches']} Iwan elements); meshing "
-          f"{t_mesh:.1f} s, reduction {info['reduction_s']:.1f} s; {duration} s ring-downs:")
-    for label, amp in (("mode 1, 60 um", {1: 60e-6}), ("modes 1 + 3, 60 + 20 um",
-                                                        {1: 60e-6, 3: 20e-6})):
+    print(
+        f"mesh {mesh * 1e3:.1f} mm: {info['n_full']} coordinates -> {info['n_reduced']} "
+        f"({info['n_patches']} patches, {2 * info['n_patches']} Iwan elements); meshing "
+        f"{t_mesh:.1f} s, reduction {info['reduction_s']:.1f} s; {duration} s ring-downs:"
+    )
+    for label, amp in (
+        ("mode 1, 60 um", {1: 60e-6}),
+        ("modes 1 + 3, 60 + 20 um", {1: 60e-6, 3: 20e-6}),
+    ):
         kw = {"amplitude": amp, "duration": duration, "steps_per_period": 64}
         r = ringdown(solid, **kw)
         _cost(f"{label}, Iwan", r)
@@ -105,9 +122,11 @@ def run(mesh, patch, modes, duration):
             _qsma(solid, r)
         else:
             for mode, c in zip(r.modes, r.curves):
-                print(f"  mode {mode}: {len(c)} points, f {c.frequency.min():.3f}-"
-                      f"{c.frequency.max():.3f} Hz, zeta {100 * c.damping_ratio.min():.4f}-"
-                      f"{100 * c.damping_ratio.max():.4f} %")
+                print(
+                    f"  mode {mode}: {len(c)} points, f {c.frequency.min():.3f}-"
+                    f"{c.frequency.max():.3f} Hz, zeta {100 * c.damping_ratio.min():.4f}-"
+                    f"{100 * c.damping_ratio.max():.4f} %"
+                )
     _solvers(solid, duration)
 
 

@@ -19,6 +19,7 @@ the setup updated on the lowest level only, the joint the hammer-calibrated one.
 Data: ``../shared/data/brb-steppedsine-fc/fc_sweeps.csv`` (GPL-3.0, read in place; Chen et
 al., MSSP 166:108401, 2022).
 """
+
 from __future__ import annotations
 
 import math
@@ -45,7 +46,7 @@ def errors(spec, f, F, A, ph):
     ok = r.converged
     e = np.log(r.amplitude[ok] / X[ok])
     dph = np.angle(np.exp(1j * (r.phase[ok] - ph[ok])))
-    return float(np.sqrt(np.mean(e ** 2))), float(np.sqrt(np.mean(dph ** 2)))
+    return float(np.sqrt(np.mean(e**2))), float(np.sqrt(np.mean(dph**2)))
 
 
 def main():
@@ -58,33 +59,53 @@ def main():
     m = tg.modes[0]
     f1, sf1 = tg.frequencies[m.index], tg.frequency_stderr[m.index]
     c1, sc1 = tg.modal_constants[m.index], tg.modal_constant_stderr[m.index]
-    print(f"level 1 linear fit: f {f1:.4f} +- {sf1:.4f} Hz, zeta {100 * m.damping_ratio:.4f} %, "
-          f"c {c1:.4f} +- {sc1:.4f} 1/kg; warnings: {list(tg.warnings)}")
+    print(
+        f"level 1 linear fit: f {f1:.4f} +- {sf1:.4f} Hz, zeta {100 * m.damping_ratio:.4f} %, "
+        f"c {c1:.4f} +- {sc1:.4f} 1/kg; warnings: {list(tg.warnings)}"
+    )
     hammer = models.preset("brake-reuss")
     shaker = models.preset("brake-reuss", setup="shaker")
     X_peak = float(np.max(A / (2 * math.pi * f) ** 2))
-    soft = (models.modal_amplitude_curve(hammer, amplitude=[X_peak]).frequency[0]
-            / models.natural_frequencies(hammer, n_modes=4)[3])
+    soft = (
+        models.modal_amplitude_curve(hammer, amplitude=[X_peak]).frequency[0]
+        / models.natural_frequencies(hammer, n_modes=4)[3]
+    )
     f_lin = f1 / soft
-    print(f"the hammer-calibrated joint softens mode 1 by {100 * (1 - soft):.3f} % at the "
-          f"level's peak {1e6 * X_peak:.0f} um: linear target {f_lin:.4f} Hz")
+    print(
+        f"the hammer-calibrated joint softens mode 1 by {100 * (1 - soft):.3f} % at the "
+        f"level's peak {1e6 * X_peak:.0f} um: linear target {f_lin:.4f} Hz"
+    )
     t0 = time.perf_counter()
-    upd = models.linear_update(shaker, frequencies={1: (f_lin, sf1)},
-                               modal_constants={1: (c1, sc1)}, parameters="attachments")
+    upd = models.linear_update(
+        shaker,
+        frequencies={1: (f_lin, sf1)},
+        modal_constants={1: (c1, sc1)},
+        parameters="attachments",
+    )
     print(f"\nupdate of the shaker setup on level 1 ({time.perf_counter() - t0:.1f} s):")
     print(upd.report())
-    specs = {"(a) hammer setup": hammer, "(b) shaker setup, nominal": shaker,
-             "(c) shaker setup, updated on level 1": upd.specimen}
-    print("\nharmonic balance at the measured f and F: rms log(X_pred / X_meas), rms phase "
-          "error [rad]")
+    specs = {
+        "(a) hammer setup": hammer,
+        "(b) shaker setup, nominal": shaker,
+        "(c) shaker setup, updated on level 1": upd.specimen,
+    }
+    print(
+        "\nharmonic balance at the measured f and F: rms log(X_pred / X_meas), rms phase "
+        "error [rad]"
+    )
     print(f"  {'model':40s}" + "".join(f"   level {k}       " for k in levels))
     for name, s in specs.items():
         t0 = time.perf_counter()
         row = [errors(s, *levels[k]) for k in levels]
-        print(f"  {name:40s}" + "".join(f"  {a:6.3f} / {p:5.3f} " for a, p in row)
-              + f"  ({time.perf_counter() - t0:.1f} s)")
-    print("  measured peak of |X/F| per level [Hz]: " + ", ".join(
-        f"{k}: {v[0][np.argmax(v[2] / v[1])]:.2f}" for k, v in levels.items()))
+        print(
+            f"  {name:40s}"
+            + "".join(f"  {a:6.3f} / {p:5.3f} " for a, p in row)
+            + f"  ({time.perf_counter() - t0:.1f} s)"
+        )
+    print(
+        "  measured peak of |X/F| per level [Hz]: "
+        + ", ".join(f"{k}: {v[0][np.argmax(v[2] / v[1])]:.2f}" for k, v in levels.items())
+    )
     return 0
 
 

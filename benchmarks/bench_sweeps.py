@@ -16,6 +16,7 @@ method's choices (``peak_fraction``, ``degree``, the residual term). Runs in a f
 
     PYTHONPATH=. python benchmarks/bench_sweeps.py
 """
+
 from __future__ import annotations
 
 import time
@@ -49,14 +50,23 @@ def variants(data):
     """The sweep curve's spread over the method's choices, at three amplitudes."""
     at = np.array([30e-6, 80e-6, 200e-6])
     rows = []
-    for label, kw in (("default", {}), ("peak_fraction=0.4", {"peak_fraction": 0.4}),
-                      ("degree=2", {"degree": 2}), ("degree=5", {"degree": 5}),
-                      ("no residual", {"residual": False})):
+    for label, kw in (
+        ("default", {}),
+        ("peak_fraction=0.4", {"peak_fraction": 0.4}),
+        ("degree=2", {"degree": 2}),
+        ("degree=5", {"degree": 5}),
+        ("no residual", {"residual": False}),
+    ):
         c = sweep_curve(**data, **kw)
         lx = np.log(c.amplitude)
-        out = (np.log(at) < lx.min()) | (np.log(at) > lx.max())      # no extrapolation
-        rows.append((label, np.where(out, np.nan, np.interp(np.log(at), lx, c.frequency)),
-                     np.where(out, np.nan, np.interp(np.log(at), lx, c.damping_ratio))))
+        out = (np.log(at) < lx.min()) | (np.log(at) > lx.max())  # no extrapolation
+        rows.append(
+            (
+                label,
+                np.where(out, np.nan, np.interp(np.log(at), lx, c.frequency)),
+                np.where(out, np.nan, np.interp(np.log(at), lx, c.damping_ratio)),
+            )
+        )
     print("\nSensitivity to the method's choices (f [Hz] / zeta [%] at 30, 80, 200 um):")
     for label, f, z in rows:
         print(f"  {label:18s} " + "  ".join(f"{a:8.3f} / {100 * b:.3f}" for a, b in zip(f, z)))
@@ -64,14 +74,20 @@ def variants(data):
     z_all = np.array([r[2] for r in rows])
     f_sp = (np.nanmax(f_all, 0) - np.nanmin(f_all, 0)) / np.nanmean(f_all, 0)
     z_sp = (np.nanmax(z_all, 0) - np.nanmin(z_all, 0)) / np.nanmean(z_all, 0)
-    print("  spread (max-min)/mean where defined: f " + ", ".join(f"{v:.1e}" for v in f_sp)
-          + "; zeta " + ", ".join(f"{v:.1%}" for v in z_sp))
+    print(
+        "  spread (max-min)/mean where defined: f "
+        + ", ".join(f"{v:.1e}" for v in f_sp)
+        + "; zeta "
+        + ", ".join(f"{v:.1%}" for v in z_sp)
+    )
 
 
 def figure(sweep, hammer, path):
     import matplotlib
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+
     fig, ax = plt.subplots(2, 1, sharex=True, figsize=(7, 6.5))
     hammer.plot(ax, label="hammer ring-down (Hilbert)", ms=3)
     sweep.plot(ax, label="force-controlled sweeps (single nonlinear mode)", ms=4, capsize=2)
@@ -84,8 +100,10 @@ def figure(sweep, hammer, path):
 
 
 def main():
-    fs, fh = shared_file("brb-steppedsine-fc", "fc_sweeps.csv"), shared_file("brb-hammer",
-                                                                             "hammer_acc3.csv")
+    fs, fh = (
+        shared_file("brb-steppedsine-fc", "fc_sweeps.csv"),
+        shared_file("brb-hammer", "hammer_acc3.csv"),
+    )
     if fs is None or fh is None:
         print("skipped: ../shared/data/brb-steppedsine-fc or brb-hammer is absent")
         return
@@ -98,14 +116,20 @@ def main():
     print(f"  ({t1 - t0:.2f} s)\n")
     print(hammer.sorted().report())
     X, f_s, z_s, f_h, z_h = compare(sweep, hammer)
-    print(f"\nOverlap {X.min() * 1e6:.1f}-{X.max() * 1e6:.1f} um (sweep curve interpolated in "
-          "ln X at the hammer amplitudes):")
-    print(f"  {'X [um]':>8} {'f sweep':>9} {'f hammer':>9} {'df [%]':>7} {'z sweep %':>10} "
-          f"{'z hammer %':>10} {'dz [%]':>7}")
+    print(
+        f"\nOverlap {X.min() * 1e6:.1f}-{X.max() * 1e6:.1f} um (sweep curve interpolated in "
+        "ln X at the hammer amplitudes):"
+    )
+    print(
+        f"  {'X [um]':>8} {'f sweep':>9} {'f hammer':>9} {'df [%]':>7} {'z sweep %':>10} "
+        f"{'z hammer %':>10} {'dz [%]':>7}"
+    )
     for row in zip(X, f_s, f_h, z_s, z_h):
         x, a, b, c, d = row
-        print(f"  {x * 1e6:8.1f} {a:9.3f} {b:9.3f} {100 * (a / b - 1):7.3f} {100 * c:10.4f} "
-              f"{100 * d:10.4f} {100 * (c / d - 1):7.1f}")
+        print(
+            f"  {x * 1e6:8.1f} {a:9.3f} {b:9.3f} {100 * (a / b - 1):7.3f} {100 * c:10.4f} "
+            f"{100 * d:10.4f} {100 * (c / d - 1):7.1f}"
+        )
     variants(data)
     out = Path(__file__).resolve().parents[1] / "out" / "sweeps" / "brb_sweeps_vs_hammer.png"
     figure(sweep, hammer, out)

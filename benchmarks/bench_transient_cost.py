@@ -37,6 +37,7 @@ damping differences over the curve's points (the reference curve interpolated in
 amplitude); the stepped sine's amplitudes (60 settling periods) at 32 and 64 steps against
 128 and 256.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -51,8 +52,12 @@ import numpy as np
 
 from iwan_element import models
 
-RINGDOWN = (("brake-reuss", 20e-6), ("brake-reuss", 200e-6),
-            ("two-bolt-aluminium", 20e-6), ("two-bolt-aluminium", 200e-6))
+RINGDOWN = (
+    ("brake-reuss", 20e-6),
+    ("brake-reuss", 200e-6),
+    ("two-bolt-aluminium", 20e-6),
+    ("two-bolt-aluminium", 200e-6),
+)
 _COUNTS = []
 _SOLVE = exu.MainSystem.SolveDynamic
 
@@ -65,12 +70,19 @@ def _counted(self, sim, *args, **kw):
     wall = time.perf_counter() - t0
     s = self.sys["dynamicSolver"]
     it, tm = s.it, s.timer
-    _COUNTS.append({"wall": wall, "n": int(s.GetODE2size()),
-                    "steps": int(sim.timeIntegration.numberOfSteps),
-                    "taken": int(it.currentStepIndex) - 1,
-                    "newton": int(it.newtonStepsCount), "jacobians": int(it.newtonJacobiCount),
-                    "t_jac": float(tm.totalJacobian + tm.factorization),
-                    "t_rhs": float(tm.ODE2RHS), "t_py": float(tm.python)})
+    _COUNTS.append(
+        {
+            "wall": wall,
+            "n": int(s.GetODE2size()),
+            "steps": int(sim.timeIntegration.numberOfSteps),
+            "taken": int(it.currentStepIndex) - 1,
+            "newton": int(it.newtonStepsCount),
+            "jacobians": int(it.newtonJacobiCount),
+            "t_jac": float(tm.totalJacobian + tm.factorization),
+            "t_rhs": float(tm.ODE2RHS),
+            "t_py": float(tm.python),
+        }
+    )
     return out
 
 
@@ -79,6 +91,7 @@ exu.MainSystem.SolveDynamic = _counted
 
 def _solid():
     from iwan_element.models.solid import lap_beam_parts, solid_specimen
+
     s = models.preset("brake-reuss")
     parts = lap_beam_parts(s, mesh_size=0.012, lap_mesh_size=0.0051)
     return solid_specimen(s, parts, patch_size=0.0085, n_modes=8)
@@ -90,25 +103,57 @@ def _rows(kinds):
     if "ringdown" in kinds:
         for name, X in RINGDOWN:
             p = models.preset(name)
-            rows.append((f"{name} {X * 1e6:g} um", lambda t, p=p, X=X: models.ringdown(
-                p, amplitude=X, cycles=10, steps_per_period=32, tangential=t)))
+            rows.append(
+                (
+                    f"{name} {X * 1e6:g} um",
+                    lambda t, p=p, X=X: models.ringdown(
+                        p, amplitude=X, cycles=10, steps_per_period=32, tangential=t
+                    ),
+                )
+            )
     if "solid" in kinds:
         solid = _solid()
-        rows.append(("solid brake-reuss 60 um", lambda t: models.ringdown(
-            solid, amplitude=60e-6, duration=0.1, steps_per_period=32, tangential=t)))
+        rows.append(
+            (
+                "solid brake-reuss 60 um",
+                lambda t: models.ringdown(
+                    solid, amplitude=60e-6, duration=0.1, steps_per_period=32, tangential=t
+                ),
+            )
+        )
     if "multi" in kinds:
         p = models.preset("brake-reuss")
-        rows.append(("brake-reuss modes 1+2 (60 + 15 um)", lambda t: models.ringdown(
-            p, amplitude={1: 60e-6, 2: 15e-6}, cycles=10, steps_per_period=32,
-            tangential=t)))
+        rows.append(
+            (
+                "brake-reuss modes 1+2 (60 + 15 um)",
+                lambda t: models.ringdown(
+                    p, amplitude={1: 60e-6, 2: 15e-6}, cycles=10, steps_per_period=32, tangential=t
+                ),
+            )
+        )
     if "sine" in kinds:
         from iwan_element.models.reduced import reduced_model
+
         s = models.preset("brake-reuss").replace(damping_floor=0.02, modal_damping=())
         f = np.array([0.985, 1.0, 1.012]) * reduced_model(s).frequency(1)
-        rows.append(("stepped sine brake-reuss 0.02 N", lambda t: None if t == "linear" else
-                     models.forced_response(s, force_levels=(0.02,), frequencies=f,
-                                            settle_cycles=20, measure_cycles=10,
-                                            steps_per_period=64, spectral_radius=1.0)))
+        rows.append(
+            (
+                "stepped sine brake-reuss 0.02 N",
+                lambda t: (
+                    None
+                    if t == "linear"
+                    else models.forced_response(
+                        s,
+                        force_levels=(0.02,),
+                        frequencies=f,
+                        settle_cycles=20,
+                        measure_cycles=10,
+                        steps_per_period=64,
+                        spectral_radius=1.0,
+                    )
+                ),
+            )
+        )
     return rows
 
 
@@ -120,8 +165,10 @@ def _measure(run, repeat):
         if run() is None:
             return None
         walls.append(sum(c["wall"] for c in _COUNTS))
-        last = {k: sum(c[k] for c in _COUNTS) for k in
-                ("steps", "taken", "newton", "jacobians", "t_jac", "t_rhs", "t_py")}
+        last = {
+            k: sum(c[k] for c in _COUNTS)
+            for k in ("steps", "taken", "newton", "jacobians", "t_jac", "t_rhs", "t_py")
+        }
         last["n"] = _COUNTS[0]["n"]
     return {**last, "wall_min": min(walls), "wall_median": statistics.median(walls)}
 
@@ -137,20 +184,25 @@ def measure(kinds, repeat) -> dict:
 def _line(label, d, other=None):
     a, b = d["iwan"], d["linear"]
     ms = 1e3 * a["wall_median"] / a["steps"]
-    txt = (f"{label:36s} {a['n']:4d} {a['steps']:6d} {a['taken'] - a['steps']:5d} "
-           f"{a['newton'] / a['taken']:5.2f} {a['jacobians']:5d} "
-           f"{1e3 * a['t_jac'] / max(a['jacobians'], 1):7.2f} "
-           f"{a['wall_min']:7.2f} {a['wall_median']:7.2f} {ms:7.3f}")
+    txt = (
+        f"{label:36s} {a['n']:4d} {a['steps']:6d} {a['taken'] - a['steps']:5d} "
+        f"{a['newton'] / a['taken']:5.2f} {a['jacobians']:5d} "
+        f"{1e3 * a['t_jac'] / max(a['jacobians'], 1):7.2f} "
+        f"{a['wall_min']:7.2f} {a['wall_median']:7.2f} {ms:7.3f}"
+    )
     if b is not None:
         txt += f" {1e3 * b['wall_median'] / b['steps']:7.3f} {a['wall_median'] / b['wall_median']:5.2f}"
     else:
         txt += f" {'-':>7s} {'-':>5s}"
-    txt += "".join(f" {100 * a.get(k, 0.0) / a['wall_min']:4.0f}"
-                   for k in ("t_jac", "t_rhs", "t_py"))
+    txt += "".join(
+        f" {100 * a.get(k, 0.0) / a['wall_min']:4.0f}" for k in ("t_jac", "t_rhs", "t_py")
+    )
     if other is not None:
         o = other["iwan"]
-        txt += (f" | {o['wall_median']:7.2f} {1e3 * o['wall_median'] / o['steps']:7.3f} "
-                f"{o['taken'] - o['steps']:5d} {o['jacobians']:5d}")
+        txt += (
+            f" | {o['wall_median']:7.2f} {1e3 * o['wall_median'] / o['steps']:7.3f} "
+            f"{o['taken'] - o['steps']:5d} {o['jacobians']:5d}"
+        )
     return txt
 
 
@@ -164,8 +216,11 @@ def _gap(a, b):
     keep = (la >= lb.min()) & (la <= lb.max())
     fb = np.interp(la[keep], lb[o], b.frequency[o])
     zb = np.interp(la[keep], lb[o], b.damping_ratio[o])
-    return (float(np.max(np.abs(a.frequency[keep] / fb - 1))),
-            float(np.max(np.abs(a.damping_ratio[keep] / zb - 1))), int(keep.sum()))
+    return (
+        float(np.max(np.abs(a.frequency[keep] / fb - 1))),
+        float(np.max(np.abs(a.damping_ratio[keep] / zb - 1))),
+        int(keep.sum()),
+    )
 
 
 def _accuracy_rows():
@@ -173,49 +228,86 @@ def _accuracy_rows():
     rows = []
     for name, X in RINGDOWN:
         p = models.preset(name)
-        rows.append((f"{name} {X * 1e6:g} um", lambda s, p=p, X=X: [models.ringdown(
-            p, amplitude=X, cycles=20, steps_per_period=s).curve]))
+        rows.append(
+            (
+                f"{name} {X * 1e6:g} um",
+                lambda s, p=p, X=X: [
+                    models.ringdown(p, amplitude=X, cycles=20, steps_per_period=s).curve
+                ],
+            )
+        )
     p = models.preset("brake-reuss")
-    rows.append(("brake-reuss modes 1+2 (60 + 15 um)", lambda s: list(models.ringdown(
-        p, amplitude={1: 60e-6, 2: 15e-6}, cycles=20, steps_per_period=s).curves)))
+    rows.append(
+        (
+            "brake-reuss modes 1+2 (60 + 15 um)",
+            lambda s: list(
+                models.ringdown(
+                    p, amplitude={1: 60e-6, 2: 15e-6}, cycles=20, steps_per_period=s
+                ).curves
+            ),
+        )
+    )
     solid = _solid()
-    rows.append(("solid brake-reuss 60 um", lambda s: [models.ringdown(
-        solid, amplitude=60e-6, duration=0.25, steps_per_period=s).curve]))
+    rows.append(
+        (
+            "solid brake-reuss 60 um",
+            lambda s: [
+                models.ringdown(solid, amplitude=60e-6, duration=0.25, steps_per_period=s).curve
+            ],
+        )
+    )
     return rows
 
 
 def accuracy():
-    print("amplitude curves (20 periods; the solid 0.25 s) against 4x the steps per period: "
-          "largest relative gaps over the curve's points (several modes: the worst mode)")
+    print(
+        "amplitude curves (20 periods; the solid 0.25 s) against 4x the steps per period: "
+        "largest relative gaps over the curve's points (several modes: the worst mode)"
+    )
     print(f"{'row':36s} {'spp':>4s} {'points':>6s} {'frequency':>10s} {'damping':>9s}")
     for label, run in _accuracy_rows():
         for spp in (32, 64):
             gaps = [_gap(a, b) for a, b in zip(run(spp), run(4 * spp))]
-            df, dz, k = (max(g[0] for g in gaps), max(g[1] for g in gaps),
-                         min(g[2] for g in gaps))
+            df, dz, k = (max(g[0] for g in gaps), max(g[1] for g in gaps), min(g[2] for g in gaps))
             print(f"{label:36s} {spp:4d} {k:6d} {df:10.2e} {100 * dz:8.2f}%", flush=True)
     from iwan_element.models.reduced import reduced_model
+
     s = models.preset("brake-reuss").replace(damping_floor=0.02, modal_damping=())
     f = np.array([0.985, 1.0, 1.012]) * reduced_model(s).frequency(1)
     amp = {}
     for spp in (32, 64, 128, 256):
-        amp[spp] = models.forced_response(s, force_levels=(0.02,), frequencies=f,
-                                          settle_cycles=60, measure_cycles=10,
-                                          steps_per_period=spp,
-                                          spectral_radius=1.0).amplitude[0]
+        amp[spp] = models.forced_response(
+            s,
+            force_levels=(0.02,),
+            frequencies=f,
+            settle_cycles=60,
+            measure_cycles=10,
+            steps_per_period=spp,
+            spectral_radius=1.0,
+        ).amplitude[0]
     for spp in (32, 64):
-        print(f"{'stepped sine brake-reuss 0.02 N':36s} {spp:4d} {f.size:6d} "
-              f"{'-':>10s} {100 * np.max(np.abs(amp[spp] / amp[4 * spp] - 1)):8.2f}% "
-              "(amplitude)", flush=True)
+        print(
+            f"{'stepped sine brake-reuss 0.02 N':36s} {spp:4d} {f.size:6d} "
+            f"{'-':>10s} {100 * np.max(np.abs(amp[spp] / amp[4 * spp] - 1)):8.2f}% "
+            "(amplitude)",
+            flush=True,
+        )
 
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=3)
-    ap.add_argument("--rows", nargs="+", default=["ringdown", "solid", "multi", "sine"],
-                    choices=["ringdown", "solid", "multi", "sine"])
-    ap.add_argument("--before", help="interpreter of an older checkout to run the same rows, "
-                    "or a --json file of an earlier run")
+    ap.add_argument(
+        "--rows",
+        nargs="+",
+        default=["ringdown", "solid", "multi", "sine"],
+        choices=["ringdown", "solid", "multi", "sine"],
+    )
+    ap.add_argument(
+        "--before",
+        help="interpreter of an older checkout to run the same rows, "
+        "or a --json file of an earlier run",
+    )
     ap.add_argument("--json", help="write the measurements to this file (and print nothing)")
     ap.add_argument("--accuracy", action="store_true")
     a = ap.parse_args(argv)
@@ -231,14 +323,18 @@ def main(argv=None):
         path = a.before
         if not path.endswith(".json"):
             path = "/tmp/bench_transient_cost_before.json"
-            subprocess.run([a.before, __file__, "--repeat", str(a.repeat), "--rows", *a.rows,
-                            "--json", path], check=True)
+            subprocess.run(
+                [a.before, __file__, "--repeat", str(a.repeat), "--rows", *a.rows, "--json", path],
+                check=True,
+            )
         with open(path) as fh:
             before = json.load(fh)
     print(f"exudyn {exu.__version__}; wall = seconds in SolveDynamic over {a.repeat} runs")
-    head = (f"{'row':36s} {'n':>4s} {'steps':>6s} {'cuts':>5s} {'it/st':>5s} {'jacs':>5s} "
-            f"{'ms/jac':>7s} {'min s':>7s} {'med s':>7s} {'ms/st':>7s} {'lin ms':>7s} {'ratio':>5s} "
-            f"{'%jac':>4s} {'%res':>4s} {'%py':>4s}")
+    head = (
+        f"{'row':36s} {'n':>4s} {'steps':>6s} {'cuts':>5s} {'it/st':>5s} {'jacs':>5s} "
+        f"{'ms/jac':>7s} {'min s':>7s} {'med s':>7s} {'ms/st':>7s} {'lin ms':>7s} {'ratio':>5s} "
+        f"{'%jac':>4s} {'%res':>4s} {'%py':>4s}"
+    )
     if before:
         head += f" | {'bef s':>7s} {'ms/st':>7s} {'cuts':>5s} {'jacs':>5s}"
     print(head)

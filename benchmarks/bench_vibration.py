@@ -13,6 +13,7 @@ Part B (real): the hammer ring-down of the Brake-Reuss beam in ../shared/data/br
 
     python benchmarks/bench_vibration.py --cases 50 --workers 2
 """
+
 from __future__ import annotations
 
 import argparse
@@ -56,28 +57,49 @@ def run_case(seed, duration=4.0):
     t = np.arange(0.0, duration, 1 / FS)
     q0 = 0.1 * p.phi_max
     _, _, a = modal_ringdown(t, p, K_inf=k_inf, q0=q0, zeta0=zeta0)
-    f2, z2 = 1.3 * F0, 2e-3                       # the second mode, outside the band
+    f2, z2 = 1.3 * F0, 2e-3  # the second mode, outside the band
     w2 = 2 * math.pi * f2
     a = a + 0.5 * np.abs(a).max() * np.exp(-z2 * w2 * t) * np.cos(w2 * t + 0.4)
-    a = a + 0.01 * np.std(a) * rng.standard_normal(t.size)    # 1 % of the signal's RMS
+    a = a + 0.01 * np.std(a) * rng.standard_normal(t.size)  # 1 % of the signal's RMS
     cur = amplitude_curve(t, a, quantity="acceleration", band=BAND)
-    f_t, z_t = modal_iwan_curve(cur.amplitude, p, K_inf=k_inf, zeta0=zeta0,
-                                stiffness="harmonic", floor="dashpot")
+    f_t, z_t = modal_iwan_curve(
+        cur.amplitude, p, K_inf=k_inf, zeta0=zeta0, stiffness="harmonic", floor="dashpot"
+    )
     ef = np.abs(cur.frequency / f_t - 1)
     ez = np.abs(cur.damping_ratio / z_t - 1)
     fit = fit_modal_iwan(cur)
     x_ref = fit.conventions["x_ref"]
-    truth = {"f0": math.sqrt(k_inf + p.KT) / (2 * math.pi), "zeta0": zeta0, "chi": p.chi,
-             "delta": p.KT * (x_ref / p.phi_max) ** (p.chi + 1)
-             / ((k_inf + p.KT) * (p.chi + 2) * (1 + p.beta))}
+    truth = {
+        "f0": math.sqrt(k_inf + p.KT) / (2 * math.pi),
+        "zeta0": zeta0,
+        "chi": p.chi,
+        "delta": p.KT
+        * (x_ref / p.phi_max) ** (p.chi + 1)
+        / ((k_inf + p.KT) * (p.chi + 2) * (1 + p.beta)),
+    }
     if fit.regime == "macroslip":
-        truth.update(beta=p.beta, phi_max=p.phi_max, KT=p.KT, K_inf=k_inf, Fs=p.Fs,
-                     kappa=p.KT / (k_inf + p.KT))
+        truth.update(
+            beta=p.beta,
+            phi_max=p.phi_max,
+            KT=p.KT,
+            K_inf=k_inf,
+            Fs=p.Fs,
+            kappa=p.KT / (k_inf + p.KT),
+        )
     z_scores = {k: (fit.parameters[k] - truth[k]) / fit.stderr[k] for k in fit.parameters}
-    return {"seed": seed, "n": len(cur), "ef_max": float(ef.max()), "ez_max": float(ez.max()),
-            "ef_frac": float(np.mean(ef < 1e-4)), "ez_frac": float(np.mean(ez < 0.03)),
-            "x_min": float(cur.amplitude.min()), "x_max": float(cur.amplitude.max()),
-            "regime": fit.regime, "success": fit.success, "z": z_scores}
+    return {
+        "seed": seed,
+        "n": len(cur),
+        "ef_max": float(ef.max()),
+        "ez_max": float(ez.max()),
+        "ef_frac": float(np.mean(ef < 1e-4)),
+        "ez_frac": float(np.mean(ez < 0.03)),
+        "x_min": float(cur.amplitude.min()),
+        "x_max": float(cur.amplitude.max()),
+        "regime": fit.regime,
+        "success": fit.success,
+        "z": z_scores,
+    }
 
 
 def part_a(cases, workers, seed0):
@@ -87,30 +109,44 @@ def part_a(cases, workers, seed0):
             rows = list(ex.map(run_case, seeds))
     else:
         rows = [run_case(s) for s in seeds]
-    print(f"Part A: {cases} seeded ring-downs, f0 = {F0} Hz, 1 % noise, second mode at "
-          f"{1.3 * F0:g} Hz (half the peak), band {BAND}")
-    print(f"{'seed':>5} {'pts':>4} {'X range [um]':>17} {'max|df/f|':>10} {'max|dz/z|':>10} "
-          f"{'regime':>10}  |z| of " + ", ".join(rows[0]["z"]))
+    print(
+        f"Part A: {cases} seeded ring-downs, f0 = {F0} Hz, 1 % noise, second mode at "
+        f"{1.3 * F0:g} Hz (half the peak), band {BAND}"
+    )
+    print(
+        f"{'seed':>5} {'pts':>4} {'X range [um]':>17} {'max|df/f|':>10} {'max|dz/z|':>10} "
+        f"{'regime':>10}  |z| of " + ", ".join(rows[0]["z"])
+    )
     for r in rows:
         zs = " ".join(f"{abs(v):5.2f}" for v in r["z"].values())
-        print(f"{r['seed']:5d} {r['n']:4d} {r['x_min'] * 1e6:8.3f}-{r['x_max'] * 1e6:8.3f} "
-              f"{r['ef_max']:10.2e} {r['ez_max']:10.2e} {r['regime']:>10}  {zs}")
+        print(
+            f"{r['seed']:5d} {r['n']:4d} {r['x_min'] * 1e6:8.3f}-{r['x_max'] * 1e6:8.3f} "
+            f"{r['ef_max']:10.2e} {r['ez_max']:10.2e} {r['regime']:>10}  {zs}"
+        )
     ef = np.array([r["ef_max"] for r in rows])
     ez = np.array([r["ez_max"] for r in rows])
     pts_f = np.mean([r["ef_frac"] for r in rows])
     pts_z = np.mean([r["ez_frac"] for r in rows])
-    print(f"\ncases with every point |df/f| < 1e-4: {np.mean(ef < 1e-4):.0%}; with every point "
-          f"|dzeta/zeta| < 3 %: {np.mean(ez < 0.03):.0%}")
-    print(f"points within 1e-4 in f: {pts_f:.1%}; within 3 % in zeta: {pts_z:.1%}; "
-          f"median of per-case max |df/f| {np.median(ef):.2e}, max |dz/z| {np.median(ez):.2e}")
+    print(
+        f"\ncases with every point |df/f| < 1e-4: {np.mean(ef < 1e-4):.0%}; with every point "
+        f"|dzeta/zeta| < 3 %: {np.mean(ez < 0.03):.0%}"
+    )
+    print(
+        f"points within 1e-4 in f: {pts_f:.1%}; within 3 % in zeta: {pts_z:.1%}; "
+        f"median of per-case max |df/f| {np.median(ef):.2e}, max |dz/z| {np.median(ez):.2e}"
+    )
     names = rows[0]["z"].keys()
     for k in names:
         zk = np.array([r["z"].get(k, np.nan) for r in rows])
-        print(f"  {k:>6}: within 2 stderr in {np.mean(np.abs(zk) < 2):.0%} of cases "
-              f"(RMS z {np.sqrt(np.nanmean(zk ** 2)):.2f})")
+        print(
+            f"  {k:>6}: within 2 stderr in {np.mean(np.abs(zk) < 2):.0%} of cases "
+            f"(RMS z {np.sqrt(np.nanmean(zk**2)):.2f})"
+        )
     allin = np.mean([all(abs(v) < 2 for v in r["z"].values()) for r in rows])
-    print(f"  all identified parameters within 2 stderr together: {allin:.0%}; success in "
-          f"{np.mean([r['success'] for r in rows]):.0%}")
+    print(
+        f"  all identified parameters within 2 stderr together: {allin:.0%}; success in "
+        f"{np.mean([r['success'] for r in rows]):.0%}"
+    )
 
 
 def brb_file():
@@ -128,14 +164,18 @@ def part_b():
         return
     d = np.loadtxt(f, delimiter=",", skiprows=1)
     cur = amplitude_curve(d[:, 0], d[:, 1], quantity="acceleration", band=(60.0, 120.0))
-    print(f"\nPart B: {f.name}, {len(cur)} points, X {cur.amplitude.min() * 1e6:.2f}-"
-          f"{cur.amplitude.max() * 1e6:.2f} um")
+    print(
+        f"\nPart B: {f.name}, {len(cur)} points, X {cur.amplitude.min() * 1e6:.2f}-"
+        f"{cur.amplitude.max() * 1e6:.2f} um"
+    )
     for stiffness, floor in (("harmonic", "dashpot"), ("secant", "constant")):
         fit = fit_modal_iwan(cur, stiffness=stiffness, floor=floor)
         e = fit.rms_errors()
-        print(f"  {stiffness:>8}/{floor:<8}: regime {fit.regime}, RMS error f "
-              f"{100 * e['frequency']:.4f} %, zeta {100 * e['damping_ratio']:.2f} %, "
-              f"success {fit.success}")
+        print(
+            f"  {stiffness:>8}/{floor:<8}: regime {fit.regime}, RMS error f "
+            f"{100 * e['frequency']:.4f} %, zeta {100 * e['damping_ratio']:.2f} %, "
+            f"success {fit.success}"
+        )
     print(fit_modal_iwan(cur).report())
 
 

@@ -18,6 +18,7 @@ pass when nothing is named (their mismatch is the noise draw itself; the last co
 
     python benchmarks/bench_vibration_diagnosis.py [--seeds 6] [--sizes 0.5 1 2 3]
 """
+
 from __future__ import annotations
 
 import argparse
@@ -53,29 +54,42 @@ def main(argv=None):
     vc.K_INF = 1.2e5
     X = np.geomspace(0.01, 1.2, 36) * P.phi_max
     base = vc.element_curve(X, P)
-    noise = float(np.sqrt(0.5 * (vc.F_NOISE ** 2 + vc.Z_NOISE ** 2)))
+    noise = float(np.sqrt(0.5 * (vc.F_NOISE**2 + vc.Z_NOISE**2)))
     t0 = time.perf_counter()
-    print(f"{'hidden':<18}{'size':>5}{'df max %':>10}{'dz max %':>10}{'named':>8}"
-          f"{'or amb.':>8}{'after/noise':>13}  misnamed as")
+    print(
+        f"{'hidden':<18}{'size':>5}{'df max %':>10}{'dz max %':>10}{'named':>8}"
+        f"{'or amb.':>8}{'after/noise':>13}  misnamed as"
+    )
     rows, hidden_ok, hidden_n, clean_ok, clean_n = [], 0, 0, 0, 0
     for ke, name in enumerate(vibration_candidates() + (None,)):
         sizes = a.sizes if name else [0.0]
         for ks, size in enumerate(sizes):
             ok = amb = 0
             after, dfs, dzs, wrong = [], [], [], []
-            s0 = 1000 + 1000 * ke + 100 * ks          # independent noise for every row
+            s0 = 1000 + 1000 * ke + 100 * ks  # independent noise for every row
             seeds = range(s0, s0 + (a.seeds if name else 4 * a.seeds))
             for seed in seeds:
                 Xc, fm, zm, fp, zp, vals = vc.seeded_case(seed, name, size, P=P, X=X, base=base)
-                curve = AmplitudeCurve(X, fm, zm, frequency_std=vc.F_NOISE * fm,
-                                       damping_ratio_std=vc.Z_NOISE * zm, method="seeded")
-                g = diagnose_vibration(curve, predicted_frequency=fp, predicted_damping_ratio=zp,
-                                       predicted_zeta0=vc.ZETA0)
+                curve = AmplitudeCurve(
+                    X,
+                    fm,
+                    zm,
+                    frequency_std=vc.F_NOISE * fm,
+                    damping_ratio_std=vc.Z_NOISE * zm,
+                    method="seeded",
+                )
+                g = diagnose_vibration(
+                    curve,
+                    predicted_frequency=fp,
+                    predicted_damping_ratio=zp,
+                    predicted_zeta0=vc.ZETA0,
+                )
                 want = name or "none"
                 good = g.effect == want and (g.error_after <= 1.3 * noise or name is None)
                 ok += good
-                amb += (g.effect == want or want in g.ambiguous_with) and \
-                    (g.error_after <= 1.3 * noise or name is None)
+                amb += (g.effect == want or want in g.ambiguous_with) and (
+                    g.error_after <= 1.3 * noise or name is None
+                )
                 after.append(g.error_after / noise)
                 d = top_change(name, vals, X, fp, zp)
                 dfs.append(d[0])
@@ -83,17 +97,21 @@ def main(argv=None):
                 if g.effect != want:
                     wrong.append(g.effect)
             k = len(seeds)
-            print(f"{name or 'clean':<18}{size:5.1f}{100 * np.median(dfs):10.3g}"
-                  f"{100 * np.median(dzs):10.3g}{ok:>5}/{k:<2}{amb:>5}/{k:<2}"
-                  f"{np.max(after):13.2f}  {','.join(sorted(set(wrong)))}")
+            print(
+                f"{name or 'clean':<18}{size:5.1f}{100 * np.median(dfs):10.3g}"
+                f"{100 * np.median(dzs):10.3g}{ok:>5}/{k:<2}{amb:>5}/{k:<2}"
+                f"{np.max(after):13.2f}  {','.join(sorted(set(wrong)))}"
+            )
             if name:
                 hidden_ok += ok
                 hidden_n += k
             else:
                 clean_ok += ok
                 clean_n += k
-    print(f"\nhidden cases named right (and mismatch after <= 1.3 x noise): {hidden_ok}/{hidden_n}"
-          f" = {100 * hidden_ok / hidden_n:.1f} %")
+    print(
+        f"\nhidden cases named right (and mismatch after <= 1.3 x noise): {hidden_ok}/{hidden_n}"
+        f" = {100 * hidden_ok / hidden_n:.1f} %"
+    )
     print(f"clean cases naming nothing: {clean_ok}/{clean_n}")
     print(f"time {time.perf_counter() - t0:.1f} s")
 

@@ -22,6 +22,7 @@ from the plain model.
 
     python examples/brb_discrepancy.py [--out DIR] [--quick]
 """
+
 from __future__ import annotations
 
 import argparse
@@ -59,10 +60,13 @@ def diagnose_sweeps(spec, sweeps):
     between-test relative frequency and damping offsets are fitted as nuisances, not named.
     """
     before = models.modal_amplitude_curve(spec, amplitude=sweeps.amplitude)
-    diag = ie.diagnose_vibration(sweeps, predicted_frequency=before.frequency,
-                                 predicted_damping_ratio=before.damping_ratio,
-                                 predicted_zeta0=spec.interface.damping_floor,
-                                 between_tests=True)
+    diag = ie.diagnose_vibration(
+        sweeps,
+        predicted_frequency=before.frequency,
+        predicted_damping_ratio=before.damping_ratio,
+        predicted_zeta0=spec.interface.damping_floor,
+        between_tests=True,
+    )
     return before, diag
 
 
@@ -79,9 +83,11 @@ def main(argv=None):
     spec = models.preset("brake-reuss")
     hammer = measured_amplitude_curve(d / "brb-hammer" / "hammer_acc3.csv")
     sweeps = sweeps_curve(d / "brb-steppedsine-fc" / "fc_sweeps.csv")
-    print(f"hammer: {len(hammer)} points {1e6 * hammer.amplitude.min():.3g}-"
-          f"{1e6 * hammer.amplitude.max():.3g} um; sweeps: {len(sweeps)} points "
-          f"{1e6 * sweeps.amplitude.min():.3g}-{1e6 * sweeps.amplitude.max():.3g} um")
+    print(
+        f"hammer: {len(hammer)} points {1e6 * hammer.amplitude.min():.3g}-"
+        f"{1e6 * hammer.amplitude.max():.3g} um; sweeps: {len(sweeps)} points "
+        f"{1e6 * sweeps.amplitude.min():.3g}-{1e6 * sweeps.amplitude.max():.3g} um"
+    )
     before, diag = diagnose_sweeps(spec, sweeps)
     for w in before.warnings:
         print("model:", w)
@@ -92,18 +98,24 @@ def main(argv=None):
     qa = models.modal_amplitude_curve(aug, amplitude=Xp)
     band = diag.predict(Xp, base=qb)
     print("\nprediction of the augmented beam model (QSMA; 1-sigma band from the diagnosis)")
-    print("  X [um]  f before [Hz]  f after [Hz]       change   zeta before [%]  "
-          "zeta after [%]   ratio")
+    print(
+        "  X [um]  f before [Hz]  f after [Hz]       change   zeta before [%]  "
+        "zeta after [%]   ratio"
+    )
     for i, x in enumerate(Xp):
-        print(f"  {1e6 * x:6.0f}  {qb.frequency[i]:13.3f}  {qa.frequency[i]:8.3f} +- "
-              f"{band.frequency_std[i]:.3f}  {100 * (qa.frequency[i] / qb.frequency[i] - 1):+.3f} %"
-              f"  {100 * qb.damping_ratio[i]:15.3f}  {100 * qa.damping_ratio[i]:8.3f} +- "
-              f"{100 * band.damping_ratio_std[i]:.3f}  {qa.damping_ratio[i] / qb.damping_ratio[i]:5.2f}")
+        print(
+            f"  {1e6 * x:6.0f}  {qb.frequency[i]:13.3f}  {qa.frequency[i]:8.3f} +- "
+            f"{band.frequency_std[i]:.3f}  {100 * (qa.frequency[i] / qb.frequency[i] - 1):+.3f} %"
+            f"  {100 * qb.damping_ratio[i]:15.3f}  {100 * qa.damping_ratio[i]:8.3f} +- "
+            f"{100 * band.damping_ratio_std[i]:.3f}  {qa.damping_ratio[i] / qb.damping_ratio[i]:5.2f}"
+        )
     X0 = float(sweeps.amplitude.max())
     rd = models.ringdown(aug, amplitude=X0, cycles=20 if a.quick else 60)
-    print(f"\nExudyn ring-down of the augmented beam from {1e6 * X0:.3g} um "
-          f"({rd.wall_time:.1f} s): effects {rd.metadata['effects']}, {len(rd.curve)} points "
-          f"{1e6 * rd.curve.amplitude.min():.3g}-{1e6 * rd.curve.amplitude.max():.3g} um")
+    print(
+        f"\nExudyn ring-down of the augmented beam from {1e6 * X0:.3g} um "
+        f"({rd.wall_time:.1f} s): effects {rd.metadata['effects']}, {len(rd.curve)} points "
+        f"{1e6 * rd.curve.amplitude.min():.3g}-{1e6 * rd.curve.amplitude.max():.3g} um"
+    )
     figure(a.out / "brb_discrepancy.png", spec, aug, diag, hammer, sweeps, rd)
     print(f"wrote {a.out / 'brb_discrepancy.png'}")
     return 0
@@ -111,6 +123,7 @@ def main(argv=None):
 
 def figure(path, spec, aug, diag, hammer, sweeps, rd):
     import matplotlib.pyplot as plt
+
     X = np.geomspace(2e-6, 3.15e-4, 60)
     qb = models.modal_amplitude_curve(spec, amplitude=X)
     qa = models.modal_amplitude_curve(aug, amplitude=X)
@@ -119,23 +132,76 @@ def figure(path, spec, aug, diag, hammer, sweeps, rd):
     bt = diag.details["between_tests"]
     fig, (a1, a2) = plt.subplots(1, 2, figsize=(11, 4.2))
     for ax, yb, ya, sd, ym, ys, yr, scale, off in (
-            (a1, qb.frequency, qa.frequency, band.frequency_std, hammer.frequency,
-             sweeps.frequency, rd.curve.frequency, 1.0, bt["frequency_offset"]),
-            (a2, qb.damping_ratio, qa.damping_ratio, band.damping_ratio_std, hammer.damping_ratio,
-             sweeps.damping_ratio, rd.curve.damping_ratio, 100.0, bt["damping_offset"])):
-        ax.semilogx(hammer.amplitude, scale * ym, "o", mfc="none", color="k", ms=4,
-                    label="hammer ring-down (calibration)")
-        ax.semilogx(sweeps.amplitude, scale * ys, "s", mfc="none", color="C2", ms=4,
-                    label="stepped-sine sweeps, as measured")
-        ax.semilogx(sweeps.amplitude, scale * ys / (1 + off), "s", color="C2", ms=4,
-                    label="sweeps / between-test ratio")
+        (
+            a1,
+            qb.frequency,
+            qa.frequency,
+            band.frequency_std,
+            hammer.frequency,
+            sweeps.frequency,
+            rd.curve.frequency,
+            1.0,
+            bt["frequency_offset"],
+        ),
+        (
+            a2,
+            qb.damping_ratio,
+            qa.damping_ratio,
+            band.damping_ratio_std,
+            hammer.damping_ratio,
+            sweeps.damping_ratio,
+            rd.curve.damping_ratio,
+            100.0,
+            bt["damping_offset"],
+        ),
+    ):
+        ax.semilogx(
+            hammer.amplitude,
+            scale * ym,
+            "o",
+            mfc="none",
+            color="k",
+            ms=4,
+            label="hammer ring-down (calibration)",
+        )
+        ax.semilogx(
+            sweeps.amplitude,
+            scale * ys,
+            "s",
+            mfc="none",
+            color="C2",
+            ms=4,
+            label="stepped-sine sweeps, as measured",
+        )
+        ax.semilogx(
+            sweeps.amplitude,
+            scale * ys / (1 + off),
+            "s",
+            color="C2",
+            ms=4,
+            label="sweeps / between-test ratio",
+        )
         ax.semilogx(X, scale * yb, "-", color="C0", label="beam model (QSMA)")
-        ax.semilogx(X, scale * ya, "--", color="C3",
-                    label="+ " + (" + ".join(diag.effects) or "nothing"))
-        ax.fill_between(X, scale * (ya - 2 * sd), scale * (ya + 2 * sd), color="C3", alpha=0.2,
-                        label="2-sigma band")
-        ax.semilogx(rd.curve.amplitude, scale * yr, "-", color="C1", lw=3, alpha=0.6,
-                    label="augmented, Exudyn ring-down")
+        ax.semilogx(
+            X, scale * ya, "--", color="C3", label="+ " + (" + ".join(diag.effects) or "nothing")
+        )
+        ax.fill_between(
+            X,
+            scale * (ya - 2 * sd),
+            scale * (ya + 2 * sd),
+            color="C3",
+            alpha=0.2,
+            label="2-sigma band",
+        )
+        ax.semilogx(
+            rd.curve.amplitude,
+            scale * yr,
+            "-",
+            color="C1",
+            lw=3,
+            alpha=0.6,
+            label="augmented, Exudyn ring-down",
+        )
         ax.axvspan(*spec.calibrated_range, color="0.9", zorder=0)
         ax.set_xlabel("amplitude at accelerometer 3 [m]")
         ax.grid(True, which="both", alpha=0.3)

@@ -23,6 +23,7 @@ copied): ``brb-hammer/hammer_acc{1,2,3}.csv`` (Chen et al., MSSP 166:108401, 202
 
     python examples/brb_every_mode.py [--out DIR] [--duration 1.2] [--quick] [--solid]
 """
+
 from __future__ import annotations
 
 import argparse
@@ -63,26 +64,35 @@ def predict(d, *, duration=1.2, quick=False, solid=False) -> models.HammerPredic
     second height-bending mode is its stuck mode 3 (mode 2 bends in-plane).
     """
     if solid:
-        spec = models.solid_preset("brake-reuss", mesh_size=0.012, lap_mesh_size=0.0025,
-                                   patch_size=0.0064)
+        spec = models.solid_preset(
+            "brake-reuss", mesh_size=0.012, lap_mesh_size=0.0025, patch_size=0.0064
+        )
         second = 3
     else:
         spec, second = models.preset("brake-reuss"), 2
-    return models.predict_hammer_test(spec, records(d), modes=(1, second),
-                                      bands={1: BANDS[1], second: BANDS[2]}, release_time=0.05,
-                                      fit_span=0.3, duration=0.6 if quick else duration)
+    return models.predict_hammer_test(
+        spec,
+        records(d),
+        modes=(1, second),
+        bands={1: BANDS[1], second: BANDS[2]},
+        release_time=0.05,
+        fit_span=0.3,
+        duration=0.6 if quick else duration,
+    )
 
 
 def figure(path, out: models.HammerPrediction):
     """Measured and predicted f(X), zeta(X) of mode 1 at acc3 and mode 2 at acc3 and acc2."""
     import matplotlib.pyplot as plt
+
     fig, axs = plt.subplots(2, 3, figsize=(13, 6.5))
     second = max(m for m, _ in out.measured)
     for j, key in enumerate([(1, "acc3"), (second, "acc3"), (second, "acc2")]):
         meas, pred = out.measured[key], out.predicted[key]
         meas.plot((axs[0, j], axs[1, j]), label="measured", ls="none")
-        pred.plot((axs[0, j], axs[1, j]), label="predicted (multi-mode ring-down)",
-                  marker="", ls="-")
+        pred.plot(
+            (axs[0, j], axs[1, j]), label="predicted (multi-mode ring-down)", marker="", ls="-"
+        )
         axs[0, j].set_title(f"mode {key[0]} at {key[1]}")
         axs[0, j].legend(fontsize=7)
     fig.tight_layout()
@@ -95,8 +105,11 @@ def main(argv=None):
     ap.add_argument("--out", type=Path, default=Path("out") / "brb_every_mode")
     ap.add_argument("--duration", type=float, default=1.2, help="ring-down length [s]")
     ap.add_argument("--quick", action="store_true", help="a 0.6 s ring-down")
-    ap.add_argument("--solid", action="store_true",
-                    help="the beam as solid bodies (needs the [fem] extra; 12 mm mesh)")
+    ap.add_argument(
+        "--solid",
+        action="store_true",
+        help="the beam as solid bodies (needs the [fem] extra; 12 mm mesh)",
+    )
     a = ap.parse_args(argv)
     d = data_dir()
     if d is None:

@@ -27,6 +27,7 @@ only the laws' own uncertainty.
 
     python examples/damper_campaign.py [--out out/] [--all] [--jobs 2]
 """
+
 import argparse
 import re
 import sys
@@ -44,11 +45,18 @@ ap.add_argument("--all", action="store_true", help="every given record of both c
 ap.add_argument("--jobs", type=int, default=1, help="local processes for the diagnoses")
 args = ap.parse_args()
 
-shared = next((p / "shared" / "data" for p in (ROOT.parent, ROOT.parent.parent, Path.cwd().parent)
-               if (p / "shared" / "data" / "arts-damper").is_dir()), None)
+shared = next(
+    (
+        p / "shared" / "data"
+        for p in (ROOT.parent, ROOT.parent.parent, Path.cwd().parent)
+        if (p / "shared" / "data" / "arts-damper").is_dir()
+    ),
+    None,
+)
 if shared is None:
-    print("the damper records (../shared/data/arts-damper, CC BY-SA 4.0) are not here: "
-          "nothing to do")
+    print(
+        "the damper records (../shared/data/arts-damper, CC BY-SA 4.0) are not here: nothing to do"
+    )
     sys.exit(0)
 
 
@@ -57,14 +65,19 @@ def conditions(path):
     nominal stroke [in] (dataset-1: about 1 in) and the products the per-campaign laws use,
     from the file name.
     """
-    ds, f, T, a = re.match(r"ds(\d)_(\d+(?:p\d+)?)Hz_(\d+)lb(?:_(\d+(?:p\d+)?)in)?",
-                           path.stem).groups()
+    ds, f, T, a = re.match(
+        r"ds(\d)_(\d+(?:p\d+)?)Hz_(\d+)lb(?:_(\d+(?:p\d+)?)in)?", path.stem
+    ).groups()
     c = {"tension": float(T), "frequency": float(f.replace("p", "."))}
     if args.all:
         k = float(int(ds) - 1)
-        c.update(campaign=k, stroke=float(a.replace("p", ".")) if a else 1.0,
-                 campaign_x_tension=k * c["tension"], tension_squared=c["tension"] ** 2,
-                 campaign_x_tension_squared=k * c["tension"] ** 2)
+        c.update(
+            campaign=k,
+            stroke=float(a.replace("p", ".")) if a else 1.0,
+            campaign_x_tension=k * c["tension"],
+            tension_squared=c["tension"] ** 2,
+            campaign_x_tension_squared=k * c["tension"] ** 2,
+        )
     return c
 
 
@@ -73,14 +86,28 @@ def conditions(path):
 #: campaign, rate and stroke; the gap in campaign, tension and stroke; the drag in campaign
 #: and tension; the shape only as far as the records determine it.
 CAMPAIGN_LAWS = {
-    "Fs": ("campaign", "tension", "campaign_x_tension", "tension_squared",
-           "campaign_x_tension_squared", "frequency", "stroke"),
-    "asymmetric_slip.asymmetry": ("campaign", "tension", "campaign_x_tension", "frequency",
-                                  "stroke"),
+    "Fs": (
+        "campaign",
+        "tension",
+        "campaign_x_tension",
+        "tension_squared",
+        "campaign_x_tension_squared",
+        "frequency",
+        "stroke",
+    ),
+    "asymmetric_slip.asymmetry": (
+        "campaign",
+        "tension",
+        "campaign_x_tension",
+        "frequency",
+        "stroke",
+    ),
     "ln(backlash.gap)": ("campaign", "tension", "stroke"),
     "ln(backlash.drag/Fs)": ("campaign", "tension"),
     "log_phi_max": ("campaign", "tension", "campaign_x_tension"),
-    "log1p_beta": ("campaign",), "chi": ()}
+    "log1p_beta": ("campaign",),
+    "chi": (),
+}
 
 
 def load(path):
@@ -90,17 +117,25 @@ def load(path):
 held_out = shared / "arts-damper" / "ds1_1Hz_35lb.csv"
 if args.all:
     files = sorted((shared / "arts-damper").glob("*.csv")) + sorted(
-        (shared / "arts-damper-ds2").glob("*.csv"))
+        (shared / "arts-damper-ds2").glob("*.csv")
+    )
     files.remove(held_out)
     laws, opts = CAMPAIGN_LAWS, {"effects": ("backlash", "asymmetric_slip")}
 else:
-    files = [shared / "arts-damper" / f"ds1_{f}_{T}lb.csv" for f in ("0p5Hz", "1Hz")
-             for T in (25, 70)]
+    files = [
+        shared / "arts-damper" / f"ds1_{f}_{T}lb.csv" for f in ("0p5Hz", "1Hz") for T in (25, 70)
+    ]
     laws = {"Fs": ("tension", "frequency"), "log_phi_max": (), "chi": (), "log1p_beta": ()}
-    opts = {"candidates": ("backlash", "asymmetric_slip"), "max_effects": 2}   # quicker
-fit = fit_campaign([load(p) for p in files], [conditions(p) for p in files],
-                   names=[p.stem for p in files], laws=laws, lowpass=20.0, jobs=args.jobs,
-                   **opts)
+    opts = {"candidates": ("backlash", "asymmetric_slip"), "max_effects": 2}  # quicker
+fit = fit_campaign(
+    [load(p) for p in files],
+    [conditions(p) for p in files],
+    names=[p.stem for p in files],
+    laws=laws,
+    lowpass=20.0,
+    jobs=args.jobs,
+    **opts,
+)
 print(fit.report())
 
 # the held-out record, from its conditions alone: same low-pass, displacement from the rest
@@ -108,15 +143,22 @@ print(fit.report())
 t, u, F = load(held_out)
 sos = butter(4, 20.0, fs=1.0 / float(np.median(np.diff(t))), output="sos")
 u, F = sosfiltfilt(sos, u), sosfiltfilt(sos, F)
-rest = slice(0, 50)                           # the first 50 ms, before the motion starts
-pred = fit.predict(conditions(held_out), t, u - u[rest].mean(), F0=float(F[rest].mean()),
-                   rng=np.random.default_rng(0))
+rest = slice(0, 50)  # the first 50 ms, before the motion starts
+pred = fit.predict(
+    conditions(held_out),
+    t,
+    u - u[rest].mean(),
+    F0=float(F[rest].mean()),
+    rng=np.random.default_rng(0),
+)
 band = np.abs(F) < 0.25 * np.abs(F).max()
 rms = float(np.sqrt(np.mean((F - pred.force)[band] ** 2)))
-print(f"predicted {held_out.stem} from {pred.conditions}: Fs = {pred.values['Fs']:.0f} N; "
-      f"RMS misfit where |F| < 0.25 max|F|: {rms:.0f} N; whole record "
-      f"{100 * np.sqrt(np.mean((F - pred.force) ** 2)) / np.ptp(F):.1f} % of the force range"
-      + "".join(f"; {w}" for w in pred.warnings))
+print(
+    f"predicted {held_out.stem} from {pred.conditions}: Fs = {pred.values['Fs']:.0f} N; "
+    f"RMS misfit where |F| < 0.25 max|F|: {rms:.0f} N; whole record "
+    f"{100 * np.sqrt(np.mean((F - pred.force) ** 2)) / np.ptp(F):.1f} % of the force range"
+    + "".join(f"; {w}" for w in pred.warnings)
+)
 
 import matplotlib  # noqa: E402
 

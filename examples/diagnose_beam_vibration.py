@@ -19,6 +19,7 @@ dependent frequency and damping with ``diagnose_vibration``, add the named effec
 specimen (``VibrationDiagnosis.augment(specimen)``), ring it down again and report the
 mismatch before and after.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -45,8 +46,7 @@ def hidden_truth(effect: str):
         return BASE.replace(damping_floor=1e-5)
     if effect == "pinning":
         w2 = (2 * math.pi * natural_frequencies(BASE, n_modes=1)[0]) ** 2
-        return BASE.with_effects({"pinning_stiffness": {"k_p_per_mass": 5e-3 * w2,
-                                                        "delta": 1e-5}})
+        return BASE.with_effects({"pinning_stiffness": {"k_p_per_mass": 5e-3 * w2, "delta": 1e-5}})
     raise ValueError(f"effect must be 'viscous' or 'pinning', got {effect!r}")
 
 
@@ -56,8 +56,12 @@ def per_level(specimen, levels, *, quick: bool):
     """
     rows = []
     for X0 in levels:
-        c = ringdown(specimen, amplitude=float(X0), cycles=16 if quick else 24,
-                     steps_per_period=32 if quick else 48).curve
+        c = ringdown(
+            specimen,
+            amplitude=float(X0),
+            cycles=16 if quick else 24,
+            steps_per_period=32 if quick else 48,
+        ).curve
         rows.append((np.median(c.amplitude), np.median(c.frequency), np.median(c.damping_ratio)))
     return tuple(np.array(x) for x in zip(*rows))
 
@@ -75,8 +79,15 @@ def run(effect: str, *, quick: bool):
     a_m, f_m, z_m = per_level(hidden_truth(effect), levels, quick=quick)
     a_p, f_p, z_p = per_level(BASE, levels, quick=quick)
     fp, zp = at(a_m, a_p, f_p), at(a_m, a_p, z_p)
-    diag = diagnose_vibration(a_m, f_m, z_m, predicted_frequency=fp, predicted_damping_ratio=zp,
-                              frequency_noise=2e-7, damping_ratio_noise=0.01)
+    diag = diagnose_vibration(
+        a_m,
+        f_m,
+        z_m,
+        predicted_frequency=fp,
+        predicted_damping_ratio=zp,
+        frequency_noise=2e-7,
+        damping_ratio_noise=0.01,
+    )
     result = {"effect_hidden": effect, "diagnosis": diag}
     if diag.effect != "none":
         a_a, f_a, z_a = per_level(diag.augment(BASE), levels, quick=quick)
@@ -87,8 +98,10 @@ def run(effect: str, *, quick: bool):
 
 def mismatch(f, z, fm, zm):
     """RMS log mismatch of frequency [ppm] and damping [%] against the measurement."""
-    return (1e6 * float(np.sqrt(np.mean(np.log(f / fm) ** 2))),
-            100 * float(np.sqrt(np.mean(np.log(z / zm) ** 2))))
+    return (
+        1e6 * float(np.sqrt(np.mean(np.log(f / fm) ** 2))),
+        100 * float(np.sqrt(np.mean(np.log(z / zm) ** 2))),
+    )
 
 
 def main(argv=None) -> dict:
@@ -103,8 +116,12 @@ def main(argv=None) -> dict:
     a_m, f_m, z_m, fp, zp = res["curves"]
     print(diag.report())
     before = mismatch(fp, zp, f_m, z_m)
-    summary = {"effect_hidden": args.effect, "effect_named": diag.effect,
-               "effects": list(diag.effects), "mismatch_before_ppm_percent": before}
+    summary = {
+        "effect_hidden": args.effect,
+        "effect_named": diag.effect,
+        "effects": list(diag.effects),
+        "mismatch_before_ppm_percent": before,
+    }
     fig, (a1, a2) = plt.subplots(1, 2, figsize=(11, 4.2))
     a1.semilogx(a_m * 1e3, 1e6 * (f_m / fp[0] - 1), "o", label="measured (hidden effect)")
     a1.semilogx(a_m * 1e3, 1e6 * (fp / fp[0] - 1), "-", label="plain model")

@@ -8,6 +8,7 @@ and the before/after plot saved.
 
     python examples/diagnose_missing_effect.py [--out diagnosis.png] [--quick]
 """
+
 import argparse
 
 import numpy as np
@@ -20,11 +21,16 @@ ap.add_argument("--out", default="diagnosis.png", help="PNG for the before/after
 ap.add_argument("--quick", action="store_true", help="fewer samples (used by the test suite)")
 args = ap.parse_args()
 
-params = IwanParameters(Fs=1000.0, KT=1e6, chi=-0.5, beta=0.2)        # N, N/m, -, -
-hidden = Backlash(IwanJoint(params), gap=4e-5)                       # 0.04 mm half gap
-data = simulate_element_test(hidden, np.array([0.3, 0.6, 1.0, 1.5]) * params.phi_max,
-                             cycles=3, samples_per_cycle=64 if args.quick else 200,
-                             force_noise=5.0, seed=1)
+params = IwanParameters(Fs=1000.0, KT=1e6, chi=-0.5, beta=0.2)  # N, N/m, -, -
+hidden = Backlash(IwanJoint(params), gap=4e-5)  # 0.04 mm half gap
+data = simulate_element_test(
+    hidden,
+    np.array([0.3, 0.6, 1.0, 1.5]) * params.phi_max,
+    cycles=3,
+    samples_per_cycle=64 if args.quick else 200,
+    force_noise=5.0,
+    seed=1,
+)
 result = diagnose(data.t, data.u, data.F)
 print(result.report())
 

@@ -12,6 +12,7 @@ and optional gravity make the remaining axes work too. The swap: the spring-damp
     python examples/exudyn_cartesian_mass.py                 # 1 s in 100 000 steps
     python examples/exudyn_cartesian_mass.py --gravity       # with gravity along -y
 """
+
 from __future__ import annotations
 
 import argparse
@@ -24,14 +25,21 @@ import numpy as np
 from iwan_element import IwanParameters
 from iwan_element.exudyn import create_iwan_connector, record_energy
 
-L, MASS, K = 0.5, 1.6, 4000.0                    # m, kg, N/m
-D = 0.05 * 2.0 * np.sqrt(MASS * K)               # N s/m (5 % of critical)
-FORCE, U0, V0 = 80.0, -0.08, 1.0                 # N, m, m/s
-JOINT = IwanParameters(Fs=120.0, KT=K, chi=-0.5, beta=0.5)          # N, N/m, -, -
+L, MASS, K = 0.5, 1.6, 4000.0  # m, kg, N/m
+D = 0.05 * 2.0 * np.sqrt(MASS * K)  # N s/m (5 % of critical)
+FORCE, U0, V0 = 80.0, -0.08, 1.0  # N, m, m/s
+JOINT = IwanParameters(Fs=120.0, KT=K, chi=-0.5, beta=0.5)  # N, N/m, -, -
 
 
-def build(joint: str = "iwan", *, steps: int = 100_000, t_end: float = 1.0, law: str = "auto",
-          energy: bool = False, gravity: bool = False):
+def build(
+    joint: str = "iwan",
+    *,
+    steps: int = 100_000,
+    t_end: float = 1.0,
+    law: str = "auto",
+    energy: bool = False,
+    gravity: bool = False,
+):
     """The model. ``joint="spring"``: Exudyn's Cartesian spring-damper as it is; ``"iwan"``:
     the Iwan joint swapped in along x. Returns a namespace with ``SC, mbs, sim, connector,
     recorder, body``.
@@ -39,17 +47,32 @@ def build(joint: str = "iwan", *, steps: int = 100_000, t_end: float = 1.0, law:
     SC = exu.SystemContainer()
     mbs = SC.AddSystem()
     ground = mbs.CreateGround(referencePosition=[0.0, 0.0, 0.0])
-    body = mbs.CreateMassPoint(referencePosition=[L, 0.0, 0.0], initialDisplacement=[U0, 0.0, 0.0],
-                               initialVelocity=[V0, 0.3, 0.0], mass=MASS,
-                               gravity=[0.0, -9.81, 0.0] if gravity else [0.0, 0.0, 0.0])
+    body = mbs.CreateMassPoint(
+        referencePosition=[L, 0.0, 0.0],
+        initialDisplacement=[U0, 0.0, 0.0],
+        initialVelocity=[V0, 0.3, 0.0],
+        mass=MASS,
+        gravity=[0.0, -9.81, 0.0] if gravity else [0.0, 0.0, 0.0],
+    )
     connector = None
     if joint == "spring":
-        mbs.CreateCartesianSpringDamper(itemNumbers=[ground, body], stiffness=[K, K, K],
-                                        damping=[D, 0.0, 0.0], offset=[L, 0.0, 0.0])
-    else:                                         # the swap: one call
-        connector = create_iwan_connector(mbs, bodyNumbers=[ground, body], axis=[1, 0, 0],
-                                          parameters=JOINT, stiffness=[0.0, K, K],
-                                          damping=[D, 0.0, 0.0], offset=[L, 0.0, 0.0], law=law)
+        mbs.CreateCartesianSpringDamper(
+            itemNumbers=[ground, body],
+            stiffness=[K, K, K],
+            damping=[D, 0.0, 0.0],
+            offset=[L, 0.0, 0.0],
+        )
+    else:  # the swap: one call
+        connector = create_iwan_connector(
+            mbs,
+            bodyNumbers=[ground, body],
+            axis=[1, 0, 0],
+            parameters=JOINT,
+            stiffness=[0.0, K, K],
+            damping=[D, 0.0, 0.0],
+            offset=[L, 0.0, 0.0],
+            law=law,
+        )
     mbs.CreateForce(itemNumber=body, loadVector=[FORCE, 0.0, 0.0])
     recorder = record_energy(mbs, connector) if energy else None
     mbs.Assemble()
@@ -60,8 +83,9 @@ def build(joint: str = "iwan", *, steps: int = 100_000, t_end: float = 1.0, law:
     ti.generalizedAlpha.spectralRadius = 1.0
     ti.verboseMode = 0
     sim.solution.file.write = False
-    return SimpleNamespace(SC=SC, mbs=mbs, sim=sim, connector=connector, recorder=recorder,
-                           body=body)
+    return SimpleNamespace(
+        SC=SC, mbs=mbs, sim=sim, connector=connector, recorder=recorder, body=body
+    )
 
 
 def run(model) -> float:
@@ -81,9 +105,11 @@ def main(argv=None) -> None:
     conn = model.connector
     u = conn.slip_history[:, 0]
     p = model.mbs.GetObjectOutputBody(model.body, exu.OutputVariableType.Displacement)
-    print(f"{args.steps} steps ({wall:.2f} s): slip from {u[0] * 1e3:.1f} to {u[-1] * 1e3:.2f} mm, "
-          f"final displacement {np.round(np.asarray(p) * 1e3, 3)} mm, joint dissipated "
-          f"{conn.dissipated_energy_history[-1]:.4f} J")
+    print(
+        f"{args.steps} steps ({wall:.2f} s): slip from {u[0] * 1e3:.1f} to {u[-1] * 1e3:.2f} mm, "
+        f"final displacement {np.round(np.asarray(p) * 1e3, 3)} mm, joint dissipated "
+        f"{conn.dissipated_energy_history[-1]:.4f} J"
+    )
     print(model.recorder.balance().report())
 
 

@@ -11,6 +11,7 @@ joint's dashpot in parallel (``damping=d``). Run::
     python examples/exudyn_duffing_sweep.py          # the script's own 5000 steps
     python examples/exudyn_duffing_sweep.py --steps 40000
 """
+
 from __future__ import annotations
 
 import argparse
@@ -32,10 +33,10 @@ from exudyn.itemInterface import (
 from iwan_element import IwanParameters
 from iwan_element.exudyn import create_iwan_connector, record_energy
 
-MASS, K, D, LOAD = 1.6, 4000.0, 4.0, 80.0        # kg, N/m, N s/m, N
-T_END = 50.0                                     # s
-F1 = math.sqrt(K / MASS) / (2.0 * math.pi)       # Hz, end of the sweep (linear resonance)
-JOINT = IwanParameters(Fs=120.0, KT=K, chi=-0.5, beta=0.5)          # N, N/m, -, -
+MASS, K, D, LOAD = 1.6, 4000.0, 4.0, 80.0  # kg, N/m, N s/m, N
+T_END = 50.0  # s
+F1 = math.sqrt(K / MASS) / (2.0 * math.pi)  # Hz, end of the sweep (linear resonance)
+JOINT = IwanParameters(Fs=120.0, KT=K, chi=-0.5, beta=0.5)  # N, N/m, -, -
 
 
 def sweep_load(mbs, t, load):
@@ -45,11 +46,17 @@ def sweep_load(mbs, t, load):
 
 def hardening_spring(mbs, t, itemNumber, u, v, k, d, offset):
     """The script's own user-function spring: ``0.1 k u + k u^3 + d v`` [N]."""
-    return 0.1 * k * u + k * u ** 3 + d * v
+    return 0.1 * k * u + k * u**3 + d * v
 
 
-def build(joint: str = "iwan", *, steps: int = 5000, law: str = "auto", energy: bool = False,
-          t_end: float = T_END):
+def build(
+    joint: str = "iwan",
+    *,
+    steps: int = 5000,
+    law: str = "auto",
+    energy: bool = False,
+    t_end: float = T_END,
+):
     """The model. ``joint="spring"``: the script's user-function spring; ``"iwan"``: the
     Iwan joint swapped in. Returns a namespace with ``SC, mbs, sim, connector, recorder``.
     """
@@ -57,16 +64,24 @@ def build(joint: str = "iwan", *, steps: int = 5000, law: str = "auto", energy: 
     mbs = SC.AddSystem()
     node = mbs.AddNode(NodePoint(referenceCoordinates=[0.5, 0.0, 0.0]))
     mbs.AddObject(MassPoint(mass=MASS, nodeNumber=node))
-    ground = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=mbs.AddNode(NodePointGround()),
-                                                coordinate=0))
+    ground = mbs.AddMarker(
+        MarkerNodeCoordinate(nodeNumber=mbs.AddNode(NodePointGround()), coordinate=0)
+    )
     marker = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=node, coordinate=0))
     connector = None
     if joint == "spring":
-        mbs.AddObject(CoordinateSpringDamper(markerNumbers=[ground, marker], stiffness=K,
-                                             damping=D, springForceUserFunction=hardening_spring))
-    else:                                         # the swap: one call
-        connector = create_iwan_connector(mbs, bodyNumbers=[ground, marker], parameters=JOINT,
-                                          damping=D, law=law)
+        mbs.AddObject(
+            CoordinateSpringDamper(
+                markerNumbers=[ground, marker],
+                stiffness=K,
+                damping=D,
+                springForceUserFunction=hardening_spring,
+            )
+        )
+    else:  # the swap: one call
+        connector = create_iwan_connector(
+            mbs, bodyNumbers=[ground, marker], parameters=JOINT, damping=D, law=law
+        )
     mbs.AddLoad(LoadCoordinate(markerNumber=marker, load=LOAD, loadUserFunction=sweep_load))
     recorder = record_energy(mbs, connector) if energy else None
     mbs.Assemble()
@@ -76,8 +91,9 @@ def build(joint: str = "iwan", *, steps: int = 5000, law: str = "auto", energy: 
     ti.generalizedAlpha.spectralRadius = 1.0
     ti.verboseMode = 0
     sim.solution.file.write = False
-    return SimpleNamespace(SC=SC, mbs=mbs, sim=sim, connector=connector, recorder=recorder,
-                           node=node)
+    return SimpleNamespace(
+        SC=SC, mbs=mbs, sim=sim, connector=connector, recorder=recorder, node=node
+    )
 
 
 def run(model) -> float:
@@ -95,9 +111,11 @@ def main(argv=None) -> None:
     wall = run(model)
     conn = model.connector
     u = conn.slip_history[:, 0]
-    print(f"{args.steps} steps ({wall:.2f} s): peak slip {np.max(np.abs(u)) * 1e3:.2f} mm "
-          f"(phi_max {JOINT.phi_max * 1e3:.2f} mm), the joint and its dashpot dissipated "
-          f"{conn.dissipated_energy_history[-1]:.3f} J")
+    print(
+        f"{args.steps} steps ({wall:.2f} s): peak slip {np.max(np.abs(u)) * 1e3:.2f} mm "
+        f"(phi_max {JOINT.phi_max * 1e3:.2f} mm), the joint and its dashpot dissipated "
+        f"{conn.dissipated_energy_history[-1]:.3f} J"
+    )
     print(model.recorder.balance().report())
 
 

@@ -14,6 +14,7 @@ coordinates; the default route reads the slip exactly every step. Run::
 
     python examples/exudyn_rotor_bearing.py            # 0.05 s, default route and law="python"
 """
+
 from __future__ import annotations
 
 import argparse
@@ -35,13 +36,13 @@ from exudyn.itemInterface import (
 from iwan_element import IwanParameters
 from iwan_element.exudyn import create_iwan_connector, record_energy
 
-LENGTH, HALF_WIDTH, BAYS = 0.5, 0.02, 10          # m, m, -
-BAR_EA, MASS = 4.0e6, 6.28                        # N, kg
-UNBALANCE = 0.1                                   # kg at a mid-span corner node
-SPIN = 50.0                                       # Hz
-K_BEARING = 2.0e7                                 # N/m
-D_BEARING = 0.01 * K_BEARING                      # N s/m (as Exudyn's test: 1 % of k)
-JOINT = IwanParameters(Fs=30.0, KT=K_BEARING, chi=-0.5, beta=0.5)    # N, N/m, -, -
+LENGTH, HALF_WIDTH, BAYS = 0.5, 0.02, 10  # m, m, -
+BAR_EA, MASS = 4.0e6, 6.28  # N, kg
+UNBALANCE = 0.1  # kg at a mid-span corner node
+SPIN = 50.0  # Hz
+K_BEARING = 2.0e7  # N/m
+D_BEARING = 0.01 * K_BEARING  # N s/m (as Exudyn's test: 1 % of k)
+JOINT = IwanParameters(Fs=30.0, KT=K_BEARING, chi=-0.5, beta=0.5)  # N, N/m, -, -
 
 
 def truss_rotor() -> FEMinterface:
@@ -64,7 +65,7 @@ def truss_rotor() -> FEMinterface:
     for a, b in bars:
         e = pos[b] - pos[a]
         length = np.linalg.norm(e)
-        ke = BAR_EA / length * np.outer(e, e) / length ** 2
+        ke = BAR_EA / length * np.outer(e, e) / length**2
         for i, j, s in ((a, a, 1.0), (b, b, 1.0), (a, b, -1.0), (b, a, -1.0)):
             ii, jj = np.meshgrid(3 * i + np.arange(3), 3 * j + np.arange(3), indexing="ij")
             rows += ii.ravel().tolist()
@@ -82,12 +83,23 @@ def truss_rotor() -> FEMinterface:
 
 def _face_marker(mbs, body, fem, x):
     nodes = fem.GetNodesInPlane([x, 0.0, 0.0], [1.0, 0.0, 0.0])
-    return mbs.AddMarker(MarkerSuperElementPosition(
-        bodyNumber=body, meshNodeNumbers=nodes, weightingFactors=[1.0 / len(nodes)] * len(nodes)))
+    return mbs.AddMarker(
+        MarkerSuperElementPosition(
+            bodyNumber=body, meshNodeNumbers=nodes, weightingFactors=[1.0 / len(nodes)] * len(nodes)
+        )
+    )
 
 
-def build(joint: str = "iwan", *, law: str = "auto", t_end: float = 0.05, h: float = 1e-4,
-          rho: float = 0.5, energy: bool = False, fem=None):
+def build(
+    joint: str = "iwan",
+    *,
+    law: str = "auto",
+    t_end: float = 0.05,
+    h: float = 1e-4,
+    rho: float = 0.5,
+    energy: bool = False,
+    fem=None,
+):
     """The rotor model, solved by :func:`run`. ``joint="spring"``: Exudyn's bearing as it is;
     ``"iwan"``: the right bearing's y direction an Iwan joint (``law`` as in
     ``add_iwan_connector``). Returns a namespace with ``SC, mbs, sim, connector, recorder,
@@ -97,26 +109,46 @@ def build(joint: str = "iwan", *, law: str = "auto", t_end: float = 0.05, h: flo
     SC = exu.SystemContainer()
     mbs = SC.AddSystem()
     rotor = ObjectFFRFreducedOrderInterface(fem).AddObjectFFRFreducedOrder(
-        mbs, positionRef=[0.0, 0.0, 0.0], initialVelocity=[0.0, 0.0, 0.0],
-        initialAngularVelocity=[2.0 * np.pi * SPIN, 0.0, 0.0])
+        mbs,
+        positionRef=[0.0, 0.0, 0.0],
+        initialVelocity=[0.0, 0.0, 0.0],
+        initialAngularVelocity=[2.0 * np.pi * SPIN, 0.0, 0.0],
+    )
     body = rotor["oFFRFreducedOrder"]
     m_left, m_right = _face_marker(mbs, body, fem, 0.0), _face_marker(mbs, body, fem, LENGTH)
     ground = mbs.AddObject(ObjectGround())
     g_left = mbs.AddMarker(MarkerBodyPosition(bodyNumber=ground, localPosition=[0.0, 0.0, 0.0]))
     g_right = mbs.AddMarker(MarkerBodyPosition(bodyNumber=ground, localPosition=[LENGTH, 0.0, 0.0]))
     k, d = K_BEARING, D_BEARING
-    mbs.AddObject(ObjectConnectorCartesianSpringDamper(markerNumbers=[m_left, g_left],
-                                                       stiffness=[k, k, k], damping=[d, d, d]))
+    mbs.AddObject(
+        ObjectConnectorCartesianSpringDamper(
+            markerNumbers=[m_left, g_left], stiffness=[k, k, k], damping=[d, d, d]
+        )
+    )
     connector = None
     if joint == "spring":
-        mbs.AddObject(ObjectConnectorCartesianSpringDamper(
-            markerNumbers=[m_right, g_right], stiffness=[0.0, k, k], damping=[d, d, d]))
-    else:                                         # the swap: one call
-        connector = create_iwan_connector(mbs, bodyNumbers=[m_right, g_right], axis=[0, 1, 0],
-                                          parameters=JOINT, stiffness=[0.0, 0.0, k],
-                                          damping=[d, d, d], law=law)
-    sensor = mbs.AddSensor(SensorMarker(markerNumber=m_right, storeInternal=True,
-                                        outputVariableType=exu.OutputVariableType.Position))
+        mbs.AddObject(
+            ObjectConnectorCartesianSpringDamper(
+                markerNumbers=[m_right, g_right], stiffness=[0.0, k, k], damping=[d, d, d]
+            )
+        )
+    else:  # the swap: one call
+        connector = create_iwan_connector(
+            mbs,
+            bodyNumbers=[m_right, g_right],
+            axis=[0, 1, 0],
+            parameters=JOINT,
+            stiffness=[0.0, 0.0, k],
+            damping=[d, d, d],
+            law=law,
+        )
+    sensor = mbs.AddSensor(
+        SensorMarker(
+            markerNumber=m_right,
+            storeInternal=True,
+            outputVariableType=exu.OutputVariableType.Position,
+        )
+    )
     recorder = record_energy(mbs, connector) if energy else None
     mbs.Assemble()
     sim = exu.SimulationSettings()
@@ -127,8 +159,16 @@ def build(joint: str = "iwan", *, law: str = "auto", t_end: float = 0.05, h: flo
     ti.verboseMode = 0
     sim.solution.file.write = False
     sim.solution.sensors.writePeriod = h
-    return SimpleNamespace(SC=SC, mbs=mbs, sim=sim, connector=connector, recorder=recorder,
-                           sensor=sensor, fem=fem, right=m_right)
+    return SimpleNamespace(
+        SC=SC,
+        mbs=mbs,
+        sim=sim,
+        connector=connector,
+        recorder=recorder,
+        sensor=sensor,
+        fem=fem,
+        right=m_right,
+    )
 
 
 def run(model) -> float:
@@ -150,8 +190,10 @@ def main(argv=None) -> None:
         wall = run(model)
         conn = model.connector
         out[law] = conn.dissipated_energy_history[-1]
-        print(f"law={law:6s} ({conn.connectors[0].route}): joint dissipated {out[law]:.6e} J, "
-              f"peak slip {np.max(np.abs(conn.slip_history)) * 1e6:.3f} um, {wall:.2f} s")
+        print(
+            f"law={law:6s} ({conn.connectors[0].route}): joint dissipated {out[law]:.6e} J, "
+            f"peak slip {np.max(np.abs(conn.slip_history)) * 1e6:.3f} um, {wall:.2f} s"
+        )
     rel = abs(out["auto"] - out["python"]) / out["python"]
     print(f"default route against the exact read-out (law='python'): {rel:.2e} relative")
 

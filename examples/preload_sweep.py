@@ -13,6 +13,7 @@ so its slip force ``mu N``; the tangential stiffness follows the contact area (s
     python examples/preload_sweep.py --bolts 1 2         # preload x bolt count grid
     python examples/preload_sweep.py --scheduler tcp://scheduler:8786
 """
+
 from __future__ import annotations
 
 import argparse
@@ -49,8 +50,9 @@ def main(argv=None) -> dict:
     args = ap.parse_args(argv)
 
     specimen = preset("example")
-    preloads = args.preloads or ([5e3, 15e3, 30e3] if args.quick else
-                                 [2.5e3, 5e3, 7.5e3, 10e3, 15e3, 20e3, 30e3, 40e3])
+    preloads = args.preloads or (
+        [5e3, 15e3, 30e3] if args.quick else [2.5e3, 5e3, 7.5e3, 10e3, 15e3, 20e3, 30e3, 40e3]
+    )
     axes = {"preload": preloads}
     if args.friction:
         axes["friction"] = args.friction
@@ -63,6 +65,7 @@ def main(argv=None) -> dict:
     executor = "serial" if args.quick else None
     if args.scheduler:
         from distributed import Client
+
         client = Client(args.scheduler)
         executor = client
     try:
@@ -76,9 +79,12 @@ def main(argv=None) -> dict:
     colors = plt.cm.viridis(np.linspace(0, 0.9, len(res.rows)))
     for row, c in zip(res.rows, colors):
         if not np.all(np.isfinite(row["frequency"])):
-            continue                                   # a failed task (listed in the report)
-        label = ", ".join(f"{k} {v / 1e3:g} kN" if k == "preload" else f"{k} {v:g}"
-                          for k, v in row.items() if k in axes)
+            continue  # a failed task (listed in the report)
+        label = ", ".join(
+            f"{k} {v / 1e3:g} kN" if k == "preload" else f"{k} {v:g}"
+            for k, v in row.items()
+            if k in axes
+        )
         ax_f.plot(row["amplitude"], row["frequency"], "-o", ms=3, color=c, label=label)
         ax_z.plot(row["amplitude"], row["damping_ratio"], "-o", ms=3, color=c)
     for a in (ax_f, ax_z):
@@ -88,8 +94,10 @@ def main(argv=None) -> dict:
     ax_f.set_ylabel("frequency of mode 1 [Hz]")
     ax_z.set_ylabel("damping ratio [-]")
     ax_f.legend(fontsize=7)
-    fig.suptitle(f"{specimen.name} specimen, QSMA: family of curves over "
-                 f"{', '.join(axes)} ({len(sets)} runs, {res.executor})")
+    fig.suptitle(
+        f"{specimen.name} specimen, QSMA: family of curves over "
+        f"{', '.join(axes)} ({len(sets)} runs, {res.executor})"
+    )
     out = Path(args.out)
     fig.savefig(out, dpi=120)
     plt.close(fig)

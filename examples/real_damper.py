@@ -28,6 +28,7 @@ displacement with a tapered envelope. The workflow:
 
     python examples/real_damper.py [--record PATH] [--out out/]
 """
+
 import argparse
 from pathlib import Path
 
@@ -48,8 +49,10 @@ print(result.report())
 band = np.abs(result.F) < 0.25 * np.abs(result.F).max()
 rms = lambda r: float(np.sqrt(np.mean(r[band] ** 2)))  # noqa: E731
 before, after = rms(result.F - result.force_before), rms(result.F - result.force_after)
-print(f"named: {', '.join(result.effects) or 'none'}; RMS misfit where |F| < 0.25 max|F|: "
-      f"{before:.0f} N -> {after:.0f} N (ratio {after / before:.2f})")
+print(
+    f"named: {', '.join(result.effects) or 'none'}; RMS misfit where |F| < 0.25 max|F|: "
+    f"{before:.0f} N -> {after:.0f} N (ratio {after / before:.2f})"
+)
 
 import matplotlib  # noqa: E402
 
@@ -63,8 +66,14 @@ fig = Figure(figsize=(6.5, 4.8))
 ax = fig.add_subplot(1, 1, 1)
 ax.plot(u * 1e3, result.F * 1e-3, ".", ms=1, color="0.6", label="measured (20 Hz low-pass)")
 ax.plot(u * 1e3, result.force_before * 1e-3, "-", lw=0.8, color="C0", label="Iwan fit")
-ax.plot(u * 1e3, result.force_after * 1e-3, "--", lw=0.8, color="C3",
-        label="+ " + (" + ".join(result.effects) or "nothing"))
+ax.plot(
+    u * 1e3,
+    result.force_after * 1e-3,
+    "--",
+    lw=0.8,
+    color="C3",
+    label="+ " + (" + ".join(result.effects) or "nothing"),
+)
 ax.set_xlabel("displacement [mm]")
 ax.set_ylabel("force [kN]")
 ax.grid(True, alpha=0.3)
@@ -85,11 +94,11 @@ from scipy.signal import find_peaks  # noqa: E402
 
 fig = Figure(figsize=(9, 3.8))
 axes = fig.subplots(1, 2, sharey=True)
-span = 0.4 * float(np.ptp(u))                  # travel shown after each reversal
+span = 0.4 * float(np.ptp(u))  # travel shown after each reversal
 for sgn, ax in zip((1, -1), axes):
     for k in find_peaks(sgn * u, prominence=0.02 * np.ptp(u))[0]:
         x = -sgn * (u[k:] - u[k])
-        back = x < np.maximum.accumulate(x) - 0.005 * span     # the next reversal
+        back = x < np.maximum.accumulate(x) - 0.005 * span  # the next reversal
         stop = np.flatnonzero((x > span) | back)
         m = np.arange(x.size) < (stop[0] if stop.size else x.size)
         F0 = result.offsets["force"]
@@ -101,5 +110,7 @@ for sgn, ax in zip((1, -1), axes):
 axes[0].set_ylabel("force toward the new direction [kN]\n(grey measured, red fitted)")
 fig.tight_layout()
 fig.savefig(out / f"{name}_reversals.png", dpi=120)
-print(f"wrote {out / (name + '_loops.png')}, {out / (name + '_residual.png')} and "
-      f"{out / (name + '_reversals.png')}")
+print(
+    f"wrote {out / (name + '_loops.png')}, {out / (name + '_residual.png')} and "
+    f"{out / (name + '_reversals.png')}"
+)

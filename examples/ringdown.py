@@ -9,6 +9,7 @@
 
 PNGs go to out/ (or --out DIR). Run:  python examples/ringdown.py [--quick]
 """
+
 from __future__ import annotations
 
 import argparse
@@ -73,22 +74,35 @@ def synthetic(out, duration):
     fit = fit_modal_iwan(cur)
     x_ref = fit.conventions["x_ref"]
     delta = KT * (x_ref / phimax) ** (chi + 1) / (w02 * (chi + 2) * (1 + beta))
-    print("Synthetic ring-down (truth: f0 = 80 Hz, zeta0 = 1.5e-3, chi = -0.5, "
-          f"delta = {delta:.4g} at X_ref = {x_ref:.3g} m)")
+    print(
+        "Synthetic ring-down (truth: f0 = 80 Hz, zeta0 = 1.5e-3, chi = -0.5, "
+        f"delta = {delta:.4g} at X_ref = {x_ref:.3g} m)"
+    )
     print(fit.report())
 
     def truth(X):
-        return modal_iwan_curve(X, p, K_inf=k_inf, zeta0=zeta0, stiffness="harmonic",
-                                floor="dashpot")
-    return figure(t, a, cur, fit, "synthetic modal Iwan ring-down, 1 % noise",
-                  out / "ringdown_synthetic.png", truth)
+        return modal_iwan_curve(
+            X, p, K_inf=k_inf, zeta0=zeta0, stiffness="harmonic", floor="dashpot"
+        )
+
+    return figure(
+        t,
+        a,
+        cur,
+        fit,
+        "synthetic modal Iwan ring-down, 1 % noise",
+        out / "ringdown_synthetic.png",
+        truth,
+    )
 
 
 def real(out):
     f = find_brb()
     if f is None:
-        print("The real ring-down ../shared/data/brb-hammer/hammer_acc3.csv is absent; "
-              "skipping it (the data are GPL-3.0 and are read from ../shared only).")
+        print(
+            "The real ring-down ../shared/data/brb-hammer/hammer_acc3.csv is absent; "
+            "skipping it (the data are GPL-3.0 and are read from ../shared only)."
+        )
         return None
     d = np.loadtxt(f, delimiter=",", skiprows=1)
     t, a = d[:, 0], d[:, 1]
@@ -98,16 +112,18 @@ def real(out):
     fit = fit_modal_iwan(cur)
     print(fit.report())
     e = fit.rms_errors()
-    print(f"RMS error of the fit: frequency {100 * e['frequency']:.4f} %, damping ratio "
-          f"{100 * e['damping_ratio']:.2f} %")
-    return figure(t, a, cur, fit, "Brake-Reuss beam, hammer ring-down (acc3)",
-                  out / "ringdown_brb.png")
+    print(
+        f"RMS error of the fit: frequency {100 * e['frequency']:.4f} %, damping ratio "
+        f"{100 * e['damping_ratio']:.2f} %"
+    )
+    return figure(
+        t, a, cur, fit, "Brake-Reuss beam, hammer ring-down (acc3)", out / "ringdown_brb.png"
+    )
 
 
 def main():
     ap = argparse.ArgumentParser(description="ring-down -> amplitude curve -> modal Iwan fit")
-    ap.add_argument("--out", type=Path,
-                    default=Path(__file__).resolve().parent.parent / "out")
+    ap.add_argument("--out", type=Path, default=Path(__file__).resolve().parent.parent / "out")
     ap.add_argument("--quick", action="store_true", help="a 2 s synthetic record")
     args = ap.parse_args()
     args.out.mkdir(parents=True, exist_ok=True)

@@ -7,6 +7,7 @@ s0 = 1 and s = -1:0.002:1 as in the paper (eqs. 12, 13 and the corrected eq. 15)
 beta = -1/2 is non-physical (negative spike stiffness) and is drawn only as a dimensionless
 curve; the library warns about it, and this script says so on the figure.
 """
+
 from __future__ import annotations
 
 import argparse

@@ -14,6 +14,7 @@ without it the calibration step uses the 1D preset's QSMA curve as the "test".
 
     python examples/solid_beam.py [--mesh 0.012] [--out DIR]
 """
+
 from __future__ import annotations
 
 import argparse
@@ -25,15 +26,24 @@ from iwan_element.models.calibration import calibrate, measured_amplitude_curve
 
 from iwan_element import models
 
-RECORD = Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "brb-hammer" / \
-    "hammer_acc3.csv"
-PEAKS = (80.4, 221.7, 297.7, 845.6)          # the hammer record's spectral peaks [Hz]
+RECORD = (
+    Path(__file__).resolve().parents[1]
+    / ".."
+    / "shared"
+    / "data"
+    / "brb-hammer"
+    / "hammer_acc3.csv"
+)
+PEAKS = (80.4, 221.7, 297.7, 845.6)  # the hammer record's spectral peaks [Hz]
 
 
 def _frequencies(label, spec):
-    f = models.natural_frequencies(spec, n_modes=12)[6:]      # six rigid-body modes first
-    near = [f"{fk:.1f}" + "".join(f" ({100 * (fk / p - 1):+.1f} % of {p})" for p in PEAKS
-                                  if abs(fk / p - 1) < 0.05) for fk in f]
+    f = models.natural_frequencies(spec, n_modes=12)[6:]  # six rigid-body modes first
+    near = [
+        f"{fk:.1f}"
+        + "".join(f" ({100 * (fk / p - 1):+.1f} % of {p})" for p in PEAKS if abs(fk / p - 1) < 0.05)
+        for fk in f
+    ]
     print(f"{label}: " + ", ".join(near) + " Hz")
 
 
@@ -44,9 +54,11 @@ def main(argv=None):
     a = ap.parse_args(argv)
     t0 = time.perf_counter()
     solid = models.solid_preset("brake-reuss", mesh_size=a.mesh)
-    print(f"solid Brake-Reuss beam: meshed and reduced in {time.perf_counter() - t0:.1f} s "
-          f"({solid.model.info['n_full']} -> {solid.model.info['n_reduced']} coordinates, "
-          f"{solid.model.info['n_patches']} patches)")
+    print(
+        f"solid Brake-Reuss beam: meshed and reduced in {time.perf_counter() - t0:.1f} s "
+        f"({solid.model.info['n_full']} -> {solid.model.info['n_reduced']} coordinates, "
+        f"{solid.model.info['n_patches']} patches)"
+    )
     _frequencies("stuck, as built", solid)
     floors = {}
     if RECORD.exists():
@@ -67,9 +79,13 @@ def main(argv=None):
     _frequencies("stuck, calibrated", spec)
     X = np.geomspace(2e-6, 60e-6, 8)
     m1 = models.nonlinear_mode(spec, X, mode=1)
-    print("mode 1 (EPMC) at the sensor: " + ", ".join(
-        f"{1e6 * x:.0f} um: {f:.3f} Hz {100 * z:.3f} %"
-        for x, f, z in zip(m1.amplitude[::2], m1.frequency[::2], m1.damping_ratio[::2])))
+    print(
+        "mode 1 (EPMC) at the sensor: "
+        + ", ".join(
+            f"{1e6 * x:.0f} um: {f:.3f} Hz {100 * z:.3f} %"
+            for x, f, z in zip(m1.amplitude[::2], m1.frequency[::2], m1.damping_ratio[::2])
+        )
+    )
     # the second height-bending mode
     if RECORD.exists():
         meas3 = floors[3]
@@ -83,8 +99,10 @@ def main(argv=None):
         print(f"2nd height bending at {x:.2e} m: {f:.2f} Hz, {100 * z:.3f} %{seen}")
     a.out.mkdir(parents=True, exist_ok=True)
     import matplotlib
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+
     fig, axs = plt.subplots(2, 1, figsize=(6, 6), sharex=True)
     m1.plot(axs, label="solid, calibrated (EPMC)")
     test.plot(axs, label=source.split(" (")[0])

@@ -3,6 +3,9 @@
 The physics core (this package's top level) depends only on numpy, scipy and numba. The Exudyn
 connector lives in :mod:`iwan_element.exudyn`, which is the only module importing exudyn.
 """
+
+from importlib.metadata import version as _version
+
 from .core import closed_form
 from .core.closed_form import (
     backbone,
@@ -17,42 +20,70 @@ from .core.closed_form import (
     secant_stiffness,
     tangent_stiffness,
 )
-from .diagnose import (BatchDiagnosis, Diagnosis, VibrationDiagnosis, diagnose, loop_candidates,
-                       diagnose_many, diagnose_vibration, simulate_element_test)
-from .diagnose import CampaignFit, fit_campaign
 from .core.discrete import DiscreteIwan, slider_distribution
-from .effects import (EFFECTS, AsymmetricSlip, Backlash, BreakAway, Hardening, MacroslipOnset,
-                      PinningStiffness, SlipDegradation, ViscousDamping, base_joint, make_effect)
-from .identify.loops.dissipation import fit_dissipation
-from .identify.loops.fit import fit_loops
-from .identify.loops.result import FitResult, IdentifiabilityWarning
 from .core.joint import IwanJoint
 from .core.joint_bank import IwanJointBank
+from .core.modal import harmonic_stiffness, modal_iwan_curve, modal_ringdown
 from .core.parameters import IwanParameters
 from .core.protocol import JointElement, check_element
-from .identify.modal.curves import AmplitudeCurve
-from .ensemble import (EnsembleResult, ParameterUncertainty, PredictionBands, SingleModeSystem,
-                       parameter_grid, parameter_samples, propagate_uncertainty, run_ensemble)
-from .identify.loops.noise import NoiseEstimate, estimate_noise
-from .identify.loops.model_fit import ModelFit, fit_force_model
-from .core.modal import harmonic_stiffness, modal_iwan_curve, modal_ringdown
+from .diagnose import (
+    BatchDiagnosis,
+    CampaignFit,
+    Diagnosis,
+    VibrationDiagnosis,
+    diagnose,
+    diagnose_many,
+    diagnose_vibration,
+    fit_campaign,
+    loop_candidates,
+    simulate_element_test,
+)
+from .effects import (
+    EFFECTS,
+    AsymmetricSlip,
+    Backlash,
+    BreakAway,
+    Hardening,
+    MacroslipOnset,
+    PinningStiffness,
+    SlipDegradation,
+    ViscousDamping,
+    base_joint,
+    make_effect,
+)
+from .ensemble import (
+    EnsembleResult,
+    ParameterUncertainty,
+    PredictionBands,
+    SingleModeSystem,
+    parameter_grid,
+    parameter_samples,
+    propagate_uncertainty,
+    run_ensemble,
+)
 from .identify.decays.curve import amplitude_curve
-from .identify.modal.fit import ModalIwanFit, fit_modal_iwan
 from .identify.decays.fit import fit_decay
+from .identify.decays.modes import free_decay_modes
+from .identify.files.csv_input import load_test
+from .identify.files.formats import UffRecord, read_sweep_csv, read_uff
+from .identify.loops.cycles import Cycle, find_reversals, split_cycles
+from .identify.loops.dissipation import fit_dissipation
+from .identify.loops.fit import fit_loops
+from .identify.loops.model_fit import ModelFit, fit_force_model
+from .identify.loops.noise import NoiseEstimate, estimate_noise
+from .identify.loops.result import FitResult, IdentifiabilityWarning
+from .identify.loops.testdata import TestData, simulate_test
+from .identify.modal.curves import AmplitudeCurve
+from .identify.modal.fit import ModalIwanFit, fit_modal_iwan
+from .identify.modal.targets import ModalTargets, ModeTarget, mac
+from .identify.sweeps.frf_modes import frf_modes, sweep_modes
 from .identify.sweeps.stepped_sine import stepped_sine_curve
 from .identify.sweeps.sweep import sweep_curve
-from .identify.files.formats import UffRecord, read_sweep_csv, read_uff
-from .identify.decays.modes import free_decay_modes
-from .identify.sweeps.frf_modes import frf_modes, sweep_modes
-from .identify.modal.targets import ModalTargets, ModeTarget, mac
-from .identify.files.csv_input import load_test
-from .identify.loops.cycles import Cycle, find_reversals, split_cycles
-from .identify.loops.testdata import TestData, simulate_test
 
-from importlib.metadata import version as _version; __version__ = _version("iwan-element")
+__version__ = _version("iwan-element")
 
 __all__ = [
-    *closed_form.__all__,              # the paper's closed forms, as that module lists them
+    *closed_form.__all__,  # the paper's closed forms, as that module lists them
     "IwanParameters",
     "IwanJoint",
     "IwanJointBank",

@@ -29,6 +29,7 @@ Exit status follows the result's ``success`` (docs/guards.md): 0 when it is usab
 it is not (the report is still printed; its first line says why), 1 on bad input (one line on
 stderr saying why), 2 on a usage error.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -58,17 +59,24 @@ class _Parser(argparse.ArgumentParser):
 def _add_record_args(parser, *, many: bool = False) -> None:
     """The arguments that locate and read a test record (shared by the subcommands)."""
     if many:
-        parser.add_argument("csv", type=Path, nargs="+",
-                            help="test record(s): time, displacement, force columns")
+        parser.add_argument(
+            "csv", type=Path, nargs="+", help="test record(s): time, displacement, force columns"
+        )
     else:
         parser.add_argument("csv", type=Path, help="test record: time, displacement, force columns")
-    parser.add_argument("--units", metavar="DISP,FORCE[,TIME]",
-                        help="units of the displacement, force (and time) columns, e.g. mm,kN "
-                             "(displacement: m, mm, um, in; force: N, kN, MN, lbf, kip; "
-                             "time: s, ms, min; default time unit s). Default: read from the "
-                             "header ('displacement [mm]'); a unit is never guessed")
-    parser.add_argument("--columns", metavar="T,U,F",
-                        help="names or 0-based indices of the time, displacement, force columns")
+    parser.add_argument(
+        "--units",
+        metavar="DISP,FORCE[,TIME]",
+        help="units of the displacement, force (and time) columns, e.g. mm,kN "
+        "(displacement: m, mm, um, in; force: N, kN, MN, lbf, kip; "
+        "time: s, ms, min; default time unit s). Default: read from the "
+        "header ('displacement [mm]'); a unit is never guessed",
+    )
+    parser.add_argument(
+        "--columns",
+        metavar="T,U,F",
+        help="names or 0-based indices of the time, displacement, force columns",
+    )
     parser.add_argument("--delimiter", help="field separator (default: guessed)")
 
 
@@ -81,51 +89,89 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", metavar="<command>", parser_class=_Parser)
     sub.required = True
     fit = sub.add_parser(
-        "fit", help="identify Fs, KT, chi, beta from a quasi-static test record (CSV)",
+        "fit",
+        help="identify Fs, KT, chi, beta from a quasi-static test record (CSV)",
         description="Identify the four Iwan parameters from a CSV of time, displacement and "
-                    "force and print the report. Methods: 'loops' fits the measured force "
-                    "history with the exact model (default); 'dissipation' fits the per-cycle "
-                    "force amplitude and dissipation by least squares; 'seed' is the seed "
-                    "paper's procedure (needs --slip-force).")
+        "force and print the report. Methods: 'loops' fits the measured force "
+        "history with the exact model (default); 'dissipation' fits the per-cycle "
+        "force amplitude and dissipation by least squares; 'seed' is the seed "
+        "paper's procedure (needs --slip-force).",
+    )
     _add_record_args(fit)
     fit.add_argument("--method", choices=("loops", "dissipation", "seed"), default="loops")
-    fit.add_argument("--slip-force", type=float, metavar="FS",
-                     help="slip force Fs in the force unit of --units (method 'seed' only)")
-    fit.add_argument("--smooth", type=int, default=None, metavar="N",
-                     help="Savitzky-Golay window (odd, samples, >= 7; 0 = none) for the "
-                          "displacement that drives the model (method 'loops'; default: "
-                          "automatic, from the estimated displacement noise)")
+    fit.add_argument(
+        "--slip-force",
+        type=float,
+        metavar="FS",
+        help="slip force Fs in the force unit of --units (method 'seed' only)",
+    )
+    fit.add_argument(
+        "--smooth",
+        type=int,
+        default=None,
+        metavar="N",
+        help="Savitzky-Golay window (odd, samples, >= 7; 0 = none) for the "
+        "displacement that drives the model (method 'loops'; default: "
+        "automatic, from the estimated displacement noise)",
+    )
     fit.add_argument("--seed", type=int, default=0, help="seed of the random starts (default 0)")
     fit.add_argument("--starts", type=int, default=6, help="optimiser starts (default 6)")
-    fit.add_argument("--plot", type=Path, metavar="PNG",
-                     help="write measured vs fitted loops and the dissipation plot")
-    fit.add_argument("--json", type=Path, metavar="FILE",
-                     help="write the result as JSON (params loadable with "
-                          "IwanParameters.from_dict(d['joint']))")
+    fit.add_argument(
+        "--plot",
+        type=Path,
+        metavar="PNG",
+        help="write measured vs fitted loops and the dissipation plot",
+    )
+    fit.add_argument(
+        "--json",
+        type=Path,
+        metavar="FILE",
+        help="write the result as JSON (params loadable with IwanParameters.from_dict(d['joint']))",
+    )
     dg = sub.add_parser(
-        "diagnose", help="find which physical effect the Iwan fit misses (CSV test record)",
+        "diagnose",
+        help="find which physical effect the Iwan fit misses (CSV test record)",
         description="Fit the four-parameter Iwan model with the sensor offsets as nuisance "
-                    "parameters, estimate the force noise from the record, decide whether the "
-                    "misfit is more than noise, locate it, refit with each candidate effect and "
-                    "name the ones the data support (or none).")
+        "parameters, estimate the force noise from the record, decide whether the "
+        "misfit is more than noise, locate it, refit with each candidate effect and "
+        "name the ones the data support (or none).",
+    )
     _add_record_args(dg, many=True)
-    dg.add_argument("--max-effects", type=int, default=3, metavar="N",
-                    help="most effects named (default 3)")
-    dg.add_argument("--noise", type=float, metavar="SIGMA",
-                    help="force noise standard deviation in the force unit of --units "
-                         "(default: estimated from the record)")
-    dg.add_argument("--lowpass", type=float, metavar="HZ",
-                    help="zero-phase low-pass [Hz] removing test-rig ringing before fitting")
+    dg.add_argument(
+        "--max-effects", type=int, default=3, metavar="N", help="most effects named (default 3)"
+    )
+    dg.add_argument(
+        "--noise",
+        type=float,
+        metavar="SIGMA",
+        help="force noise standard deviation in the force unit of --units "
+        "(default: estimated from the record)",
+    )
+    dg.add_argument(
+        "--lowpass",
+        type=float,
+        metavar="HZ",
+        help="zero-phase low-pass [Hz] removing test-rig ringing before fitting",
+    )
     dg.add_argument("--seed", type=int, default=0, help="seed of the base fit's random starts")
-    dg.add_argument("--plot", type=Path, metavar="PNG",
-                    help="write data, base and augmented fit and the residuals before/after")
+    dg.add_argument(
+        "--plot",
+        type=Path,
+        metavar="PNG",
+        help="write data, base and augmented fit and the residuals before/after",
+    )
     dg.add_argument("--json", type=Path, metavar="FILE", help="write the diagnosis as JSON")
-    dg.add_argument("--jobs", type=int, default=None, metavar="N",
-                    help="with several records: worker processes (default: one per core)")
-    dg.add_argument("--table", type=Path, metavar="CSV",
-                    help="with several records: write the table as CSV")
-    dg.add_argument("--progress", action="store_true",
-                    help="show a progress bar (needs tqdm)")
+    dg.add_argument(
+        "--jobs",
+        type=int,
+        default=None,
+        metavar="N",
+        help="with several records: worker processes (default: one per core)",
+    )
+    dg.add_argument(
+        "--table", type=Path, metavar="CSV", help="with several records: write the table as CSV"
+    )
+    dg.add_argument("--progress", action="store_true", help="show a progress bar (needs tqdm)")
     return parser
 
 
@@ -136,25 +182,43 @@ def _run_diagnose(args) -> int:
     if len(args.csv) > 1 or args.jobs is not None or args.table is not None:
         return _run_diagnose_many(args)
     du, fu, tu = _parse_units(args.units)
-    data = load_test(args.csv[0], displacement_unit=du, force_unit=fu, time_unit=tu,
-                     columns=_parse_columns(args.columns), delimiter=args.delimiter)
+    data = load_test(
+        args.csv[0],
+        displacement_unit=du,
+        force_unit=fu,
+        time_unit=tu,
+        columns=_parse_columns(args.columns),
+        delimiter=args.delimiter,
+    )
     noise = None if args.noise is None else args.noise * FORCE_UNITS[data.units["force"]]
-    result = diagnose(data.t, data.u, data.F, max_effects=args.max_effects, noise=noise,
-                      lowpass=args.lowpass, seed=args.seed, progress=args.progress)
-    wrote = []                  # files first: a closed stdout must not cost the outputs
+    result = diagnose(
+        data.t,
+        data.u,
+        data.F,
+        max_effects=args.max_effects,
+        noise=noise,
+        lowpass=args.lowpass,
+        seed=args.seed,
+        progress=args.progress,
+    )
+    wrote = []  # files first: a closed stdout must not cost the outputs
     if args.json is not None:
         args.json.write_text(json.dumps(result.to_dict(), indent=2, allow_nan=False) + "\n")
         wrote.append(f"wrote {args.json}")
     if args.plot is not None:
         from matplotlib.figure import Figure
+
         fig = Figure(figsize=(11, 4.5))
         result.plot(ax=[fig.add_subplot(1, 2, 1), fig.add_subplot(1, 2, 2)])
         fig.tight_layout()
         fig.savefig(args.plot, dpi=120)
         wrote.append(f"wrote {args.plot}")
     status = EXIT_OK if result.success else EXIT_NOT_USABLE
-    return status, [f"{data.source}: {len(data.u)} samples, {len(data.cycles)} cycles, units "
-                    f"{_units_text(data)} (converted to SI)", result.report()] + wrote
+    return status, [
+        f"{data.source}: {len(data.u)} samples, {len(data.cycles)} cycles, units "
+        f"{_units_text(data)} (converted to SI)",
+        result.report(),
+    ] + wrote
 
 
 def _run_diagnose_many(args) -> int:
@@ -165,28 +229,42 @@ def _run_diagnose_many(args) -> int:
     from .identify.files.csv_input import FORCE_UNITS, load_test
 
     if args.plot is not None:
-        raise ValueError("--plot draws one record; with several records use --json/--table "
-                         "(or diagnose the record alone)")
+        raise ValueError(
+            "--plot draws one record; with several records use --json/--table "
+            "(or diagnose the record alone)"
+        )
     if args.jobs is not None and args.jobs < 1:
         raise ValueError(f"--jobs must be >= 1, got {args.jobs}")
     du, fu, tu = _parse_units(args.units)
     cols = _parse_columns(args.columns)
     records = []
     for path in args.csv:
-        data = load_test(path, displacement_unit=du, force_unit=fu, time_unit=tu, columns=cols,
-                         delimiter=args.delimiter)
+        data = load_test(
+            path,
+            displacement_unit=du,
+            force_unit=fu,
+            time_unit=tu,
+            columns=cols,
+            delimiter=args.delimiter,
+        )
         records.append((data.t, data.u, data.F))
     noise = None if args.noise is None else args.noise * FORCE_UNITS[data.units["force"]]
-    opts = {"max_effects": args.max_effects, "noise": noise, "lowpass": args.lowpass,
-            "seed": args.seed}
+    opts = {
+        "max_effects": args.max_effects,
+        "noise": noise,
+        "lowpass": args.lowpass,
+        "seed": args.seed,
+    }
     names = [p.name for p in args.csv]
     if args.jobs == 1:
-        batch = diagnose_many(records, names=names, executor="serial", progress=args.progress,
-                              **opts)
+        batch = diagnose_many(
+            records, names=names, executor="serial", progress=args.progress, **opts
+        )
     else:
         with ProcessPoolExecutor(args.jobs) as pool:
-            batch = diagnose_many(records, names=names, executor=pool, progress=args.progress,
-                                  **opts)
+            batch = diagnose_many(
+                records, names=names, executor=pool, progress=args.progress, **opts
+            )
     wrote = []
     if args.json is not None:
         args.json.write_text(json.dumps(batch.to_dict(), indent=2, allow_nan=False) + "\n")
@@ -202,11 +280,13 @@ def _units_text(data) -> str:
 
 
 def _parse_units(text: str | None) -> tuple:
-    if text is None:                       # from the file's header (load_test refuses a guess)
+    if text is None:  # from the file's header (load_test refuses a guess)
         return None, None, None
     parts = [s.strip() for s in text.split(",")]
     if len(parts) not in (2, 3) or not all(parts):
-        raise ValueError(f"--units must be DISP,FORCE or DISP,FORCE,TIME (e.g. mm,kN), got {text!r}")
+        raise ValueError(
+            f"--units must be DISP,FORCE or DISP,FORCE,TIME (e.g. mm,kN), got {text!r}"
+        )
     return parts[0], parts[1], parts[2] if len(parts) == 3 else "s"
 
 
@@ -246,46 +326,75 @@ def _run_fit(args) -> int:
     from .identify.loops.fit import fit_loops
 
     du, fu, tu = _parse_units(args.units)
-    data = load_test(args.csv, displacement_unit=du, force_unit=fu, time_unit=tu,
-                     columns=_parse_columns(args.columns), delimiter=args.delimiter)
+    data = load_test(
+        args.csv,
+        displacement_unit=du,
+        force_unit=fu,
+        time_unit=tu,
+        columns=_parse_columns(args.columns),
+        delimiter=args.delimiter,
+    )
     if args.method != "seed" and args.slip_force is not None:
         raise ValueError("--slip-force is only used by --method seed")
     if args.slip_force is not None:
         from .base.validation import check_scalar
+
         check_scalar("--slip-force", args.slip_force, low=0.0, low_open=True)
-    with warnings.catch_warnings(record=True):       # the report lists every warning
+    with warnings.catch_warnings(record=True):  # the report lists every warning
         warnings.simplefilter("always")
         if args.method == "loops":
-            result = fit_loops(data.t, data.u, data.F,
-                               smooth="auto" if args.smooth is None else args.smooth,
-                               seed=args.seed,
-                               n_starts=args.starts)
+            result = fit_loops(
+                data.t,
+                data.u,
+                data.F,
+                smooth="auto" if args.smooth is None else args.smooth,
+                seed=args.seed,
+                n_starts=args.starts,
+            )
         else:
             if args.smooth is not None:
                 raise ValueError("--smooth is only used by --method loops")
             table = data.amplitude_table()
             if args.method == "seed":
                 if args.slip_force is None:
-                    raise ValueError("--method seed needs --slip-force (the paper takes Fs as "
-                                     "known)")
-                result = fit_dissipation(table["u0"], table["F0"], table["D"], method="seed",
-                                         Fs=args.slip_force * FORCE_UNITS[data.units["force"]])
+                    raise ValueError(
+                        "--method seed needs --slip-force (the paper takes Fs as known)"
+                    )
+                result = fit_dissipation(
+                    table["u0"],
+                    table["F0"],
+                    table["D"],
+                    method="seed",
+                    Fs=args.slip_force * FORCE_UNITS[data.units["force"]],
+                )
             else:
-                result = fit_dissipation(table["u0"], table["F0"], table["D"],
-                                         method="least_squares", seed=args.seed,
-                                         n_starts=args.starts)
-    wrote = []                  # files first: a closed stdout must not cost the outputs
+                result = fit_dissipation(
+                    table["u0"],
+                    table["F0"],
+                    table["D"],
+                    method="least_squares",
+                    seed=args.seed,
+                    n_starts=args.starts,
+                )
+    wrote = []  # files first: a closed stdout must not cost the outputs
     if args.json is not None:
         out = result.to_dict()
-        out["data"] = {"source": data.source, "units": data.units, "samples": len(data.u),
-                       "cycles": len(data.cycles), "usable_cycles": len(data.usable_cycles())}
+        out["data"] = {
+            "source": data.source,
+            "units": data.units,
+            "samples": len(data.u),
+            "cycles": len(data.cycles),
+            "usable_cycles": len(data.usable_cycles()),
+        }
         args.json.write_text(json.dumps(out, indent=2, allow_nan=False) + "\n")
         wrote.append(f"wrote {args.json}")
     if args.plot is not None:
         _write_plot(args.plot, data, result)
         wrote.append(f"wrote {args.plot}")
-    head = (f"{data.source}: {len(data.u)} samples, {len(data.cycles)} cycles "
-            f"({len(data.usable_cycles())} usable), units {_units_text(data)} (converted to SI)")
+    head = (
+        f"{data.source}: {len(data.u)} samples, {len(data.cycles)} cycles "
+        f"({len(data.usable_cycles())} usable), units {_units_text(data)} (converted to SI)"
+    )
     return EXIT_OK if result.success else EXIT_NOT_USABLE, [head, result.report()] + wrote
 
 
@@ -322,7 +431,7 @@ def _print_or_drop(text: str, stream) -> None:
             devnull = os.open(os.devnull, os.O_WRONLY)
             os.dup2(devnull, stream.fileno())
             os.close(devnull)
-        except (OSError, ValueError, AttributeError):   # not a real file (e.g. captured)
+        except (OSError, ValueError, AttributeError):  # not a real file (e.g. captured)
             pass
 
 

@@ -4,6 +4,7 @@ matplotlib is imported only when a function here is called. Every function takes
 ``ax=None`` (a new figure is made), returns the artists it drew and never calls
 ``plt.show()``.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -50,10 +51,12 @@ def plot_normalized_loops(cases, *, s0: float = 1.0, step: float = 0.002, ax=Non
         f = normalized_backbone(s[s >= 0], chi, beta)
         (l1,) = ax.plot(s[s >= 0], f, "-", lw=1.0, label=f"{label}: f(s)")
         c = l1.get_color()
-        (l2,) = ax.plot(s, masing_descending(s, s0, chi, beta), "--", color=c, lw=1.2,
-                        label=f"{label}: f_u(s)")
-        (l3,) = ax.plot(s, masing_ascending(s, s0, chi, beta), ":", color=c, lw=1.5,
-                        label=f"{label}: f_d(s)")
+        (l2,) = ax.plot(
+            s, masing_descending(s, s0, chi, beta), "--", color=c, lw=1.2, label=f"{label}: f_u(s)"
+        )
+        (l3,) = ax.plot(
+            s, masing_ascending(s, s0, chi, beta), ":", color=c, lw=1.5, label=f"{label}: f_d(s)"
+        )
         lines += [l1, l2, l3]
     ax.set_xlabel("s = u / phi_max")
     ax.set_ylabel("f = F / Fs")
@@ -62,8 +65,9 @@ def plot_normalized_loops(cases, *, s0: float = 1.0, step: float = 0.002, ax=Non
     return lines
 
 
-def plot_loop(amplitude: float, params: IwanParameters, *, n: int = 401, ax=None,
-              label: str | None = None):
+def plot_loop(
+    amplitude: float, params: IwanParameters, *, n: int = 401, ax=None, label: str | None = None
+):
     """Draw the steady Masing loop of amplitude ``u0`` [m] in mm and kN.
 
     Returns
@@ -83,9 +87,11 @@ def plot_loop(amplitude: float, params: IwanParameters, *, n: int = 401, ax=None
 
 
 def _fit_params(params) -> IwanParameters:
-    p = getattr(params, "joint", params)             # a FitResult or IwanParameters
+    p = getattr(params, "joint", params)  # a FitResult or IwanParameters
     if not isinstance(p, IwanParameters):
-        raise ValueError(f"params must be IwanParameters or a FitResult, got {type(params).__name__}")
+        raise ValueError(
+            f"params must be IwanParameters or a FitResult, got {type(params).__name__}"
+        )
     return p
 
 
@@ -120,11 +126,20 @@ def plot_fitted_loops(u, F, params, *, ax=None, max_points: int = 20000):
     F_fit = IwanJoint(p).force_history(uu)
     step = max(1, -(-uu.size // max_points))
     ax = axes_or_new(ax)
-    (meas,) = ax.plot(uu[::step] * 1e3, FF[::step] * 1e-3, ".", ms=1.5, color="0.55",
-                      label="measured")
-    (fit,) = ax.plot(uu[::step] * 1e3, F_fit[::step] * 1e-3, "-", lw=1.0, color="C3",
-                     label=(f"Iwan fit: Fs={p.Fs * 1e-3:.4g} kN, KT={p.KT * 1e-6:.4g} kN/mm, "
-                            f"chi={p.chi:.3f}, beta={p.beta:.3f}"))
+    (meas,) = ax.plot(
+        uu[::step] * 1e3, FF[::step] * 1e-3, ".", ms=1.5, color="0.55", label="measured"
+    )
+    (fit,) = ax.plot(
+        uu[::step] * 1e3,
+        F_fit[::step] * 1e-3,
+        "-",
+        lw=1.0,
+        color="C3",
+        label=(
+            f"Iwan fit: Fs={p.Fs * 1e-3:.4g} kN, KT={p.KT * 1e-6:.4g} kN/mm, "
+            f"chi={p.chi:.3f}, beta={p.beta:.3f}"
+        ),
+    )
     ax.set_xlabel("displacement [mm]")
     ax.set_ylabel("force [kN]")
     ax.grid(True, alpha=0.3)
@@ -166,25 +181,32 @@ def plot_dissipation_fit(force, dissipation, params, *, ax=None, slope: bool = T
     lo = 0.5 * min(F0a.min() / p.KT, p.phi_max)
     u_grid = np.geomspace(lo, p.phi_max * (1 - 1e-9), n)
     ax = axes_or_new(ax)
-    (data,) = ax.loglog(F0a * 1e-3, Da * 1e3, "o", ms=4, mfc="none", color="k",
-                        label="measured cycles")
+    (data,) = ax.loglog(
+        F0a * 1e-3, Da * 1e3, "o", ms=4, mfc="none", color="k", label="measured cycles"
+    )
     F_curve = force_amplitude(u_grid, p)
     D_curve = cycle_dissipation(u_grid, p)
-    if Da.max() > D_curve[-1]:          # macroslip: F0 stays at Fs while D keeps growing
+    if Da.max() > D_curve[-1]:  # macroslip: F0 stays at Fs while D keeps growing
         F_curve = np.append(F_curve, p.Fs)
         D_curve = np.append(D_curve, Da.max())
-    (curve,) = ax.loglog(F_curve * 1e-3, D_curve * 1e3, "-", color="C3",
-                         label="Iwan fit (exact)")
+    (curve,) = ax.loglog(F_curve * 1e-3, D_curve * 1e3, "-", color="C3", label="Iwan fit (exact)")
     ax.set_xlabel("force amplitude F0 [kN]")
     ax.set_ylabel("dissipation per cycle D [mJ]")
     ax.grid(True, which="both", alpha=0.3)
     artists = [data, curve]
     if slope:
         ax2 = ax.twinx()
-        (sl,) = ax2.semilogx(force_amplitude(u_grid, p) * 1e-3, dissipation_slope(u_grid, p),
-                             "--", color="C0", lw=1.0, label="local slope d ln D / d ln F0")
-        asym = ax2.axhline(p.chi + 3.0, color="C0", lw=0.8, ls=":",
-                           label=f"chi + 3 = {p.chi + 3:.3f} (F0 -> 0)")
+        (sl,) = ax2.semilogx(
+            force_amplitude(u_grid, p) * 1e-3,
+            dissipation_slope(u_grid, p),
+            "--",
+            color="C0",
+            lw=1.0,
+            label="local slope d ln D / d ln F0",
+        )
+        asym = ax2.axhline(
+            p.chi + 3.0, color="C0", lw=0.8, ls=":", label=f"chi + 3 = {p.chi + 3:.3f} (F0 -> 0)"
+        )
         ax2.set_ylabel("local slope [-]")
         ax2.set_ylim(max(0.0, p.chi + 2.5), p.chi + 5.0)
         artists += [sl, asym]

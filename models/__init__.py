@@ -35,6 +35,7 @@ before it; ``docs/architecture.md``):
 * ``example_test_30kN.csv`` - a SYNTHETIC quasi-static test of the seed paper's specimen
   (see ``README.md`` here and ``make_example_test.py``); :func:`example_test_path` finds it.
 """
+
 from importlib import resources
 from pathlib import Path
 
@@ -62,14 +63,41 @@ from .solid import SolidSpecimen, solid_preset
 from .specimens import Clamp, Excitation, InterfaceModel, PointMass, Setup, Shaker, Specimen, preset
 from .updating import LinearUpdateResult, linear_update, updatable
 
-__all__ = ["example_test_path", "preset", "modal_amplitude_curve", "natural_frequencies",
-           "ringdown", "Impact", "mode_coupling", "quasi_static_test", "forced_response",
-           "Specimen", "InterfaceModel", "Excitation", "RingdownResult", "ModeCouplingResult",
-           "QuasiStaticResult", "ForcedResponseResult", "solid_preset", "SolidSpecimen",
-           "harmonic_balance", "frequency_response", "nonlinear_mode", "reduced_model",
-           "reduction_error", "ReducedModel", "predict_hammer_test", "HammerPrediction",
-           "Setup", "PointMass", "Shaker", "Clamp", "linear_update", "LinearUpdateResult",
-           "updatable"]
+__all__ = [
+    "example_test_path",
+    "preset",
+    "modal_amplitude_curve",
+    "natural_frequencies",
+    "ringdown",
+    "Impact",
+    "mode_coupling",
+    "quasi_static_test",
+    "forced_response",
+    "Specimen",
+    "InterfaceModel",
+    "Excitation",
+    "RingdownResult",
+    "ModeCouplingResult",
+    "QuasiStaticResult",
+    "ForcedResponseResult",
+    "solid_preset",
+    "SolidSpecimen",
+    "harmonic_balance",
+    "frequency_response",
+    "nonlinear_mode",
+    "reduced_model",
+    "reduction_error",
+    "ReducedModel",
+    "predict_hammer_test",
+    "HammerPrediction",
+    "Setup",
+    "PointMass",
+    "Shaker",
+    "Clamp",
+    "linear_update",
+    "LinearUpdateResult",
+    "updatable",
+]
 
 
 def example_test_path() -> Path:

@@ -12,6 +12,7 @@ preload, friction coefficient, bolt count or an interface parameter can be swept
     result = run_ensemble(task, parameter_grid(preload=[10e3, 20e3, 30e3]))
 
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -60,10 +61,14 @@ def specimen_curve_task(params: dict, rng, *, specimen, amplitude=None, mode: in
         ``f_linear`` (frequency at the smallest amplitude) [Hz], ``frequency_drop``
         (``1 - f(X_max) / f(X_min)``) and ``damping_ratio_max`` [-].
     """
-    curve = modal_amplitude_curve(with_changes(specimen, params), mode=mode,
-                                  amplitude=amplitude)
+    curve = modal_amplitude_curve(with_changes(specimen, params), mode=mode, amplitude=amplitude)
     f = np.asarray(curve.frequency, float)
     z = np.asarray(curve.damping_ratio, float)
-    return {"amplitude": np.asarray(curve.amplitude, float), "frequency": f, "damping_ratio": z,
-            "f_linear": float(f[0]), "frequency_drop": float(1.0 - f[-1] / f[0]),
-            "damping_ratio_max": float(z.max())}
+    return {
+        "amplitude": np.asarray(curve.amplitude, float),
+        "frequency": f,
+        "damping_ratio": z,
+        "f_linear": float(f[0]),
+        "frequency_drop": float(1.0 - f[-1] / f[0]),
+        "damping_ratio_max": float(z.max()),
+    }

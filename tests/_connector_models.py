@@ -5,6 +5,7 @@ gamma = 1/2), which is what Exudyn's generalized-alpha method reduces to at spec
 radius 1. It solves each step's nonlinear equations with Newton's method to round-off,
 using its own joint instances; it shares no code with :mod:`iwan_element.exudyn`.
 """
+
 from __future__ import annotations
 
 import math
@@ -78,7 +79,7 @@ def newmark_reference(masses, joints, *, h, n_steps, springs=(), x0=None, v0=Non
     for step in range(1, n_steps + 1):
         t = step * h
         f = ext(t)
-        xn = x + h * v + 0.5 * h * h * a                     # start from the predictor
+        xn = x + h * v + 0.5 * h * h * a  # start from the predictor
         for _ in range(60):
             an = c0 * (xn - x - h * v) - (0.5 / beta - 1.0) * a
             g, K = internal(xn)
@@ -91,7 +92,7 @@ def newmark_reference(masses, joints, *, h, n_steps, springs=(), x0=None, v0=Non
                 break
         else:
             raise RuntimeError(f"reference Newton did not converge at step {step}")
-        internal(xn)                                          # last trial at the solution
+        internal(xn)  # last trial at the solution
         for _, _, el in joints:
             el.commit()
         an = c0 * (xn - x - h * v) - (0.5 / beta - 1.0) * a
@@ -154,8 +155,9 @@ class Chain:
         self.nodes = []
         self.markers = []
         for m, xi, vi in zip(masses, x0, v0):
-            nd = mbs.AddNode(Node1D(referenceCoordinates=[0.0], initialCoordinates=[xi],
-                                    initialVelocities=[vi]))
+            nd = mbs.AddNode(
+                Node1D(referenceCoordinates=[0.0], initialCoordinates=[xi], initialVelocities=[vi])
+            )
             mbs.AddObject(Mass1D(mass=m, nodeNumber=nd))
             self.nodes.append(nd)
             self.markers.append(mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=nd, coordinate=0)))
@@ -164,21 +166,29 @@ class Chain:
         return self.ground_marker if i < 0 else self.markers[i]
 
     def spring(self, i0, i1, k):
-        self.mbs.AddObject(CoordinateSpringDamper(markerNumbers=[self.marker(i0), self.marker(i1)],
-                                                  stiffness=k))
+        self.mbs.AddObject(
+            CoordinateSpringDamper(markerNumbers=[self.marker(i0), self.marker(i1)], stiffness=k)
+        )
 
     def joint(self, i0, i1, element, **kw):
         return add_iwan_connector(self.mbs, [self.marker(i0), self.marker(i1)], element, **kw)
 
     def harmonic_force(self, i, f0, omega):
-        self.mbs.AddLoad(LoadCoordinate(markerNumber=self.marker(i),
-                                        loadUserFunction=lambda mbs, t, load: f0 * math.sin(omega * t)))
+        self.mbs.AddLoad(
+            LoadCoordinate(
+                markerNumber=self.marker(i),
+                loadUserFunction=lambda mbs, t, load: f0 * math.sin(omega * t),
+            )
+        )
 
     def prescribe(self, i, motion):
         """Prescribe ``x[i](t) = motion(t)`` with a coordinate constraint to ground."""
-        self.mbs.AddObject(CoordinateConstraint(
-            markerNumbers=[self.ground_marker, self.marker(i)],
-            offsetUserFunction=lambda mbs, t, itemNumber, lOffset: motion(t)))
+        self.mbs.AddObject(
+            CoordinateConstraint(
+                markerNumbers=[self.ground_marker, self.marker(i)],
+                offsetUserFunction=lambda mbs, t, itemNumber, lOffset: motion(t),
+            )
+        )
 
     def velocity(self, i):
         return self.mbs.GetNodeOutput(self.nodes[i], exu.OutputVariableType.Coordinates_t)

@@ -19,6 +19,7 @@ Two independent routes, neither of which is the extraction code under test:
 Both add a second, linear mode at ``ratio * f0`` and white noise of ``noise`` times the
 record's largest absolute value, from an explicit ``numpy.random.Generator``.
 """
+
 from __future__ import annotations
 
 import math
@@ -59,7 +60,7 @@ def _second_mode(t, ratio, f0, level, rng):
     w2 = 2 * math.pi * ratio * f0
     z2 = 0.003
     ph = rng.uniform(0, 2 * math.pi)
-    return level * np.exp(-z2 * w2 * t) * np.cos(w2 * math.sqrt(1 - z2 ** 2) * t + ph)
+    return level * np.exp(-z2 * w2 * t) * np.cos(w2 * math.sqrt(1 - z2**2) * t + ph)
 
 
 def _band(f0, ratio):
@@ -73,17 +74,28 @@ def _finish(t, y_mode, quantity, f0, ratio, second, noise, rng):
     y = y_mode.copy()
     if second > 0:
         scale = (2 * math.pi * ratio * f0) ** k
-        y += scale * _second_mode(t, ratio, f0, second * float(np.max(np.abs(y_mode)))
-                                  / (2 * math.pi * f0) ** k, rng)
+        y += scale * _second_mode(
+            t, ratio, f0, second * float(np.max(np.abs(y_mode))) / (2 * math.pi * f0) ** k, rng
+        )
     if noise > 0:
         y += noise * float(np.max(np.abs(y))) * rng.standard_normal(t.size)
     return y
 
 
-def svam_decay(frequency: Callable, damping: Callable, *, a0: float, duration: float,
-               fs: float, quantity: str = "acceleration", ratio: float = 1.3,
-               second: float = 0.3, noise: float = 0.01, rng: np.random.Generator,
-               truth: dict | None = None) -> Decay:
+def svam_decay(
+    frequency: Callable,
+    damping: Callable,
+    *,
+    a0: float,
+    duration: float,
+    fs: float,
+    quantity: str = "acceleration",
+    ratio: float = 1.3,
+    second: float = 0.3,
+    noise: float = 0.01,
+    rng: np.random.Generator,
+    truth: dict | None = None,
+) -> Decay:
     """A free decay from the slowly-varying-amplitude model of one mode.
 
     ``frequency(a)`` [Hz] and ``damping(a)`` [-] are vectorised callables of the
@@ -101,33 +113,37 @@ def svam_decay(frequency: Callable, damping: Callable, *, a0: float, duration: f
         w = float(wn(a))
         return [-z * w, w * math.sqrt(1 - z * z)]
 
-    sol = solve_ivp(rhs, (0.0, t[-1]), [math.log(a0), 0.0], t_eval=t, rtol=1e-11, atol=1e-12,
-                    method="DOP853")
+    sol = solve_ivp(
+        rhs, (0.0, t[-1]), [math.log(a0), 0.0], t_eval=t, rtol=1e-11, atol=1e-12, method="DOP853"
+    )
     a = np.exp(sol.y[0])
     th = sol.y[1]
     z = np.asarray(damping(a), dtype=float)
     w = np.asarray(wn(a), dtype=float)
     wd = w * np.sqrt(1 - z * z)
-    g = z * w * a                              # -da/dt
+    g = z * w * a  # -da/dt
     h = 1e-6 * a
     dg = (damping(a + h) * wn(a + h) * (a + h) - damping(a - h) * wn(a - h) * (a - h)) / (2 * h)
-    dwd = (wn(a + h) * np.sqrt(1 - damping(a + h) ** 2)
-           - wn(a - h) * np.sqrt(1 - damping(a - h) ** 2)) / (2 * h)
+    dwd = (
+        wn(a + h) * np.sqrt(1 - damping(a + h) ** 2) - wn(a - h) * np.sqrt(1 - damping(a - h) ** 2)
+    ) / (2 * h)
     da = -g
     dda = -dg * da
     dth, ddth = wd, dwd * da
     c, s = np.cos(th), np.sin(th)
-    sig = {"displacement": a * c,
-           "velocity": da * c - a * dth * s,
-           "acceleration": dda * c - 2 * da * dth * s - a * ddth * s - a * dth ** 2 * c}
+    sig = {
+        "displacement": a * c,
+        "velocity": da * c - a * dth * s,
+        "acceleration": dda * c - 2 * da * dth * s - a * ddth * s - a * dth**2 * c,
+    }
     f0 = float(frequency(1e-3 * a0))
     y = _finish(t, sig[quantity], quantity, f0, ratio, second, noise, rng)
-    return Decay(t, y, quantity, float(a0), f0, _band(f0, ratio), frequency, damping,
-                 dict(truth or {}))
+    return Decay(
+        t, y, quantity, float(a0), f0, _band(f0, ratio), frequency, damping, dict(truth or {})
+    )
 
 
-def modal_curves(f0: float, zeta0: float, dzeta: float, df: float, x_ref: float,
-                 chi: float = -0.5):
+def modal_curves(f0: float, zeta0: float, dzeta: float, df: float, x_ref: float, chi: float = -0.5):
     """Microslip-like truth curves: ``f = f0 (1 - df (a/x_ref)**(chi+1))``,
     ``zeta = zeta0 + dzeta (a/x_ref)**(chi+1)``."""
     n = chi + 1.0
@@ -141,10 +157,20 @@ def modal_curves(f0: float, zeta0: float, dzeta: float, df: float, x_ref: float,
     return frequency, damping
 
 
-def joint_decay(params: IwanParameters, *, K_inf: float, zeta0: float, q0: float,
-                duration: float, fs: float, quantity: str = "acceleration",
-                ratio: float = 1.3, second: float = 0.3, noise: float = 0.01,
-                rng: np.random.Generator) -> Decay:
+def joint_decay(
+    params: IwanParameters,
+    *,
+    K_inf: float,
+    zeta0: float,
+    q0: float,
+    duration: float,
+    fs: float,
+    quantity: str = "acceleration",
+    ratio: float = 1.3,
+    second: float = 0.3,
+    noise: float = 0.01,
+    rng: np.random.Generator,
+) -> Decay:
     """A free decay of the unit-mass modal oscillator with the exact Iwan joint.
 
     Released from rest at ``q0`` [m]; the truth is :func:`modal_iwan_curve` with the
@@ -156,23 +182,53 @@ def joint_decay(params: IwanParameters, *, K_inf: float, zeta0: float, q0: float
     sig = {"displacement": q, "velocity": v, "acceleration": acc}[quantity]
 
     def curve(a):
-        f, z = modal_iwan_curve(np.atleast_1d(np.asarray(a, dtype=float)), params,
-                                K_inf=K_inf, zeta0=zeta0, stiffness="harmonic",
-                                floor="dashpot", damping_form="decay")
+        f, z = modal_iwan_curve(
+            np.atleast_1d(np.asarray(a, dtype=float)),
+            params,
+            K_inf=K_inf,
+            zeta0=zeta0,
+            stiffness="harmonic",
+            floor="dashpot",
+            damping_form="decay",
+        )
         return np.asarray(f), np.asarray(z)
 
     f0 = math.sqrt(K_inf + params.KT) / (2 * math.pi)
     y = _finish(t, sig, quantity, f0, ratio, second, noise, rng)
-    truth = {"Fs": params.Fs, "KT": params.KT, "chi": params.chi, "beta": params.beta,
-             "K_inf": K_inf, "zeta0": zeta0}
-    return Decay(t, y, quantity, abs(float(q0)), f0, _band(f0, ratio),
-                 lambda a: curve(a)[0], lambda a: curve(a)[1], truth)
+    truth = {
+        "Fs": params.Fs,
+        "KT": params.KT,
+        "chi": params.chi,
+        "beta": params.beta,
+        "K_inf": K_inf,
+        "zeta0": zeta0,
+    }
+    return Decay(
+        t,
+        y,
+        quantity,
+        abs(float(q0)),
+        f0,
+        _band(f0, ratio),
+        lambda a: curve(a)[0],
+        lambda a: curve(a)[1],
+        truth,
+    )
 
 
-def svam_case(zeta: float, *, quantity: str = "acceleration", ratio: float = 1.3,
-              second: float = 0.3, noise: float = 0.01, rng: np.random.Generator,
-              f0: float = 20.0, fs: float = 800.0, a0: float = 1e-4,
-              end: float = 0.02) -> Decay:
+def svam_case(
+    zeta: float,
+    *,
+    quantity: str = "acceleration",
+    ratio: float = 1.3,
+    second: float = 0.3,
+    noise: float = 0.01,
+    rng: np.random.Generator,
+    f0: float = 20.0,
+    fs: float = 800.0,
+    a0: float = 1e-4,
+    end: float = 0.02,
+) -> Decay:
     """A :func:`svam_decay` whose damping is about ``zeta`` at the start.
 
     Microslip-like truth (:func:`modal_curves`, chi = -0.5): ``zeta(a) = zeta (0.5 + 0.5
@@ -181,14 +237,33 @@ def svam_case(zeta: float, *, quantity: str = "acceleration", ratio: float = 1.3
     """
     frequency, damping = modal_curves(f0, 0.5 * zeta, 0.5 * zeta, 0.005, a0)
     duration = math.log(1.0 / end) / (0.5 * zeta * 2 * math.pi * f0)
-    return svam_decay(frequency, damping, a0=a0, duration=duration, fs=fs, quantity=quantity,
-                      ratio=ratio, second=second, noise=noise, rng=rng,
-                      truth={"zeta": zeta, "source": "svam"})
+    return svam_decay(
+        frequency,
+        damping,
+        a0=a0,
+        duration=duration,
+        fs=fs,
+        quantity=quantity,
+        ratio=ratio,
+        second=second,
+        noise=noise,
+        rng=rng,
+        truth={"zeta": zeta, "source": "svam"},
+    )
 
 
-def joint_case(zeta: float, *, quantity: str = "acceleration", ratio: float = 1.3,
-               second: float = 0.3, noise: float = 0.01, rng: np.random.Generator,
-               f0: float = 20.0, fs: float = 800.0, end: float = 0.02) -> Decay:
+def joint_case(
+    zeta: float,
+    *,
+    quantity: str = "acceleration",
+    ratio: float = 1.3,
+    second: float = 0.3,
+    noise: float = 0.01,
+    rng: np.random.Generator,
+    f0: float = 20.0,
+    fs: float = 800.0,
+    end: float = 0.02,
+) -> Decay:
     """A :func:`joint_decay` whose damping is about ``zeta`` at the release.
 
     Unit-mass modal Iwan joint (chi = -0.5, beta = 0.5, KT = 0.5 w0**2, phi_max = 1 mm): the
@@ -198,6 +273,7 @@ def joint_case(zeta: float, *, quantity: str = "acceleration", ratio: float = 1.
     brought the release amplitude down to ``end`` times it.
     """
     from scipy.optimize import brentq
+
     chi, beta, phimax = -0.5, 0.5, 1e-3
     w02 = (2 * math.pi * f0) ** 2
     KT = 0.5 * w02
@@ -206,12 +282,32 @@ def joint_case(zeta: float, *, quantity: str = "acceleration", ratio: float = 1.
     k_inf = w02 - KT
 
     def joint_zeta(q, z0):
-        return float(modal_iwan_curve(np.array([q]), p, K_inf=k_inf, zeta0=z0,
-                                      stiffness="harmonic", floor="dashpot")[1][0])
+        return float(
+            modal_iwan_curve(
+                np.array([q]), p, K_inf=k_inf, zeta0=z0, stiffness="harmonic", floor="dashpot"
+            )[1][0]
+        )
 
     zeta0 = max(zeta / 3.0, zeta - joint_zeta(0.9 * phimax, 0.0))
-    q0 = math.exp(brentq(lambda lq: joint_zeta(math.exp(lq), zeta0) - zeta,
-                         math.log(1e-9 * phimax), math.log(0.9 * phimax), xtol=1e-10))
+    q0 = math.exp(
+        brentq(
+            lambda lq: joint_zeta(math.exp(lq), zeta0) - zeta,
+            math.log(1e-9 * phimax),
+            math.log(0.9 * phimax),
+            xtol=1e-10,
+        )
+    )
     duration = math.log(1.0 / end) / (zeta0 * 2 * math.pi * f0)
-    return joint_decay(p, K_inf=k_inf, zeta0=zeta0, q0=q0, duration=duration, fs=fs,
-                       quantity=quantity, ratio=ratio, second=second, noise=noise, rng=rng)
+    return joint_decay(
+        p,
+        K_inf=k_inf,
+        zeta0=zeta0,
+        q0=q0,
+        duration=duration,
+        fs=fs,
+        quantity=quantity,
+        ratio=ratio,
+        second=second,
+        noise=noise,
+        rng=rng,
+    )

@@ -8,6 +8,7 @@ noise is 5 N (0.5 % of Fs), white or AR(1)-coloured.
 The magnitude of an effect is the RMS of the force it adds on the protocol,
 ``rms(F_effect - F_iwan)`` with the same Iwan parameters, in units of the noise RMS.
 """
+
 from __future__ import annotations
 
 import functools
@@ -38,8 +39,9 @@ SHAPES = {
 
 def drive(protocol, waveform="sine"):
     """(u, v) of a protocol without noise, as simulate_element_test builds them."""
-    d = simulate_element_test(IwanJoint(P), np.array(PROTOCOLS[protocol]) * P.phi_max,
-                              waveform=waveform)
+    d = simulate_element_test(
+        IwanJoint(P), np.array(PROTOCOLS[protocol]) * P.phi_max, waveform=waveform
+    )
     v = np.gradient(d.u, d.t)
     return d.u, v
 
@@ -61,7 +63,7 @@ def calibrated(name, magnitude, protocol):
     0.5 %), by secant steps on ``log rms`` against ``log parameter``."""
     target = magnitude * SIGMA
     key = SHAPES[name][0]
-    if key == "ratio":                   # break-away: the size is ratio - 1
+    if key == "ratio":  # break-away: the size is ratio - 1
         x = _calibrate(lambda y: effect_rms(name, 1.0 + y, protocol), 0.05, target)
         return 1.0 + x
     x0 = {"c": 1.0, "k_p": 1e4, "gap": 1e-5, "rate": 1e-3, "asymmetry": 0.01}[key]
@@ -75,6 +77,7 @@ def _calibrate(rms, x0, target):
 
     def g(lx):
         return math.log(max(rms(math.exp(lx)), 1e-300) / target)
+
     lo = hi = math.log(x0)
     glo = ghi = g(lo)
     while glo > 0:
@@ -92,13 +95,18 @@ def record(name, magnitude, protocol, seed, *, colour=0.0, waveform="sine", el=N
     """TestData with the named effect hidden (``name=None``: clean Iwan joint)."""
     if el is None:
         el = IwanJoint(P) if name is None else element(name, calibrated(name, magnitude, protocol))
-    return simulate_element_test(el, np.array(PROTOCOLS[protocol]) * P.phi_max,
-                                 force_noise=SIGMA, noise_correlation=colour, seed=seed,
-                                 waveform=waveform)
+    return simulate_element_test(
+        el,
+        np.array(PROTOCOLS[protocol]) * P.phi_max,
+        force_noise=SIGMA,
+        noise_correlation=colour,
+        seed=seed,
+        waveform=waveform,
+    )
 
 
 # ----------------------------------------------------------------------------- vibration
-MODAL = IwanParameters(400.0, 2.5266e5, -0.5, 1.0)     # docs/equations.md section 5, modal Iwan
+MODAL = IwanParameters(400.0, 2.5266e5, -0.5, 1.0)  # docs/equations.md section 5, modal Iwan
 K_INF, M_MODAL, ZETA0 = 1.4212e5, 1.0, 1e-4
 
 
@@ -107,10 +115,11 @@ def modal_curves(X, *, zeta_v=0.0, k_p=0.0, delta=0.0):
     amplitudes X [m], with a hidden viscous ratio ``zeta_v`` and/or a pinning spring
     ``k_p`` [N/m] beyond ``delta`` [m] (harmonic-balance stiffness of the dead-zone spring)."""
     from iwan_element import dissipation, secant_stiffness
+
     r = np.clip(delta / X, 0.0, 1.0)
     k_eq = k_p * (1 - (2 / np.pi) * (np.arcsin(r) + r * np.sqrt(1 - r * r)))
     wn2 = (K_INF + secant_stiffness(X, MODAL) + k_eq) / M_MODAL
-    zeta = dissipation(X, MODAL) / (2 * np.pi * M_MODAL * wn2 * X ** 2) + ZETA0 + zeta_v
+    zeta = dissipation(X, MODAL) / (2 * np.pi * M_MODAL * wn2 * X**2) + ZETA0 + zeta_v
     return np.sqrt(wn2) / (2 * np.pi), zeta
 
 
@@ -132,23 +141,25 @@ def modal_curves_from_elements(X, *, k_p=0.0, delta=0.0, zeta_v=0.0, n=720):
     ``(1/(pi X)) int F sin(theta) dtheta`` and the loop area, both by quadrature of the
     simulated force. No closed form and no describing function is used."""
     from iwan_element import PinningStiffness
+
     th = np.linspace(0.0, 0.5 * np.pi + 2 * np.pi, n // 4 + n + 1)
     f_out, z_out = [], []
     for x in np.atleast_1d(X):
         el = PinningStiffness(IwanJoint(MODAL), k_p=k_p, delta=delta)
         u = x * np.sin(th)
         F = el.force_history(u)
-        Fc, uc, thc = F[-(n + 1):], u[-(n + 1):], th[-(n + 1):]
+        Fc, uc, thc = F[-(n + 1) :], u[-(n + 1) :], th[-(n + 1) :]
         k1 = np.trapezoid(Fc * np.sin(thc), thc) / (np.pi * x)
         D = abs(np.trapezoid(Fc, uc))
         wn2 = (K_INF + k1) / M_MODAL
         f_out.append(np.sqrt(wn2) / (2 * np.pi))
-        z_out.append(D / (2 * np.pi * M_MODAL * wn2 * x ** 2) + ZETA0 + zeta_v)
+        z_out.append(D / (2 * np.pi * M_MODAL * wn2 * x**2) + ZETA0 + zeta_v)
     return np.array(f_out), np.array(z_out)
 
 
-def vibration_case_elements(seed, *, n=30, zeta_v=0.0, k_p=0.0, delta=0.0, f_noise=2e-4,
-                            z_noise=0.02):
+def vibration_case_elements(
+    seed, *, n=30, zeta_v=0.0, k_p=0.0, delta=0.0, f_noise=2e-4, z_noise=0.02
+):
     """As :func:`vibration_case`, prediction and measurement both from the elements."""
     rng = np.random.default_rng(seed)
     X = np.geomspace(1e-3, 3.0, n) * MODAL.phi_max

@@ -1,4 +1,5 @@
 """Test helpers used by several test modules (one copy each)."""
+
 from __future__ import annotations
 
 import math
@@ -11,13 +12,17 @@ from iwan_element import IwanParameters
 
 def log_uniform(lo: float, hi: float):
     """Hypothesis strategy: floats log-uniform in ``[lo, hi]``."""
-    return st.floats(math.log10(lo), math.log10(hi)).map(lambda e: 10.0 ** e)
+    return st.floats(math.log10(lo), math.log10(hi)).map(lambda e: 10.0**e)
 
 
 #: Random joints over the package's whole parameter range (Fs 1e-2-1e6 N, KT 1e2-1e10 N/m).
-params_strategy = st.builds(IwanParameters, Fs=log_uniform(1e-2, 1e6),
-                            KT=log_uniform(1e2, 1e10), chi=st.floats(-0.95, 2.0),
-                            beta=st.one_of(st.just(0.0), st.floats(0.0, 5.0)))
+params_strategy = st.builds(
+    IwanParameters,
+    Fs=log_uniform(1e-2, 1e6),
+    KT=log_uniform(1e2, 1e10),
+    chi=st.floats(-0.95, 2.0),
+    beta=st.one_of(st.just(0.0), st.floats(0.0, 5.0)),
+)
 
 
 def stepped_sine(scale: float, per: int, amps):
@@ -39,8 +44,9 @@ def step_element(el, u) -> np.ndarray:
     return F
 
 
-def write_record_csv(path, t, u, F, *, header="time [s],displacement [mm],force [kN]",
-                     digits=(6, 8, 7), comment=None):
+def write_record_csv(
+    path, t, u, F, *, header="time [s],displacement [mm],force [kN]", digits=(6, 8, 7), comment=None
+):
     """Write a test record in the lab units of the header (mm, kN) and return ``path``."""
     a, b, c = digits
     rows = "\n".join(f"{x:.{a}f},{y:.{b}f},{z:.{c}f}" for x, y, z in zip(t, u * 1e3, F * 1e-3))

@@ -1,6 +1,7 @@
 """Banks of Jenkins sliders with static/kinetic thresholds, stepped here: the independent
 routes the slider-law tests compare with (tests/test_breakaway.py, tests/test_fit_scan.py,
 tests/test_effects.py, tests/test_slider_laws.py)."""
+
 import numpy as np
 
 
@@ -9,7 +10,7 @@ def jenkins_bank(u, k, s, ratio):
     vectorised over the sliders: a stuck slider breaks when its stretch exceeds ``ratio s``,
     slides at ``s`` while the motion keeps its direction, sticks again when it reverses."""
     k, s = np.asarray(k, float), np.asarray(s, float)
-    x = np.zeros_like(k)                  # slider positions
+    x = np.zeros_like(k)  # slider positions
     slide = np.zeros(k.size, bool)
     direc = np.zeros(k.size)
     out = np.empty(len(u))

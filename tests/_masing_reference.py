@@ -9,6 +9,7 @@ virgin curve. Forces and tangents come from the closed forms ``backbone`` and
 ``tangent_stiffness`` (Segalman 2005, eq. 17 and its derivative): ``F_r + 2 F_bb((u - u_r)/2)``
 on a branch, ``F_bb(u)`` on the virgin curve.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -20,7 +21,7 @@ def reference_history(u, p, tol=0.0):
     """Force [N], tangent [N/m] and anchor sample (-1: virgin curve) of every sample of the
     displacement history ``u`` [m] from the virgin state; ``tol``: absolute reversal
     tolerance [m]."""
-    stack = []                       # (u_r, F_r, sample index of the turning point)
+    stack = []  # (u_r, F_r, sample index of the turning point)
     uc, Fc, ic = 0.0, 0.0, -1
     F = np.empty(len(u))
     K = np.empty(len(u))

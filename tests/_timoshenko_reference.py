@@ -41,6 +41,7 @@ separated). The search stops at the Euler-Bernoulli frequency of the same mode n
 1.1 (with ``(n + 1) pi`` in place of ``beta_n L``), an upper bound: shear flexibility and rotary
 inertia only lower eigenvalues (min-max principle).
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -54,8 +55,15 @@ _POINTS_PER_PI = 200
 
 
 def _check_inputs(E, G, kappa, rho, A, I, L, bc, n_modes):
-    for name, value in (("E", E), ("G", G), ("kappa", kappa), ("rho", rho), ("A", A),
-                        ("I", I), ("L", L)):
+    for name, value in (
+        ("E", E),
+        ("G", G),
+        ("kappa", kappa),
+        ("rho", rho),
+        ("A", A),
+        ("I", I),
+        ("L", L),
+    ):
         if not (np.isfinite(value) and value > 0):
             raise ValueError(f"{name} must be a finite number > 0, got {value!r}")
     if bc not in BOUNDARY_CONDITIONS:
@@ -144,7 +152,7 @@ def _column_quantities(lam, Omega, a, b, sign):
     ``w / L = (1 - a (lam + b Omega^2)) S``) solution; shape (..., 4, 2)."""
     C, S = _end_values(lam)
     W2 = Omega**2
-    g = lam + a * W2                       # psi / w' factor of the even solution
+    g = lam + a * W2  # psi / w' factor of the even solution
     h = lam + b * W2
     even = np.stack([C, sign * g * S, g * C, -sign * g * h * S], axis=-1)
     odd = np.stack([sign * (1.0 - a * h) * S, C, sign * lam * S, -h * C], axis=-1)
@@ -160,8 +168,13 @@ def boundary_matrix(Omega, a, b, bc):
     lam1, lam2 = wavenumber_roots(Omega, a, b)
     blocks = []
     for end, sign in ((left, -1.0), (right, 1.0)):
-        q = np.concatenate([_column_quantities(lam1, Omega, a, b, sign),
-                            _column_quantities(lam2, Omega, a, b, sign)], axis=-1)
+        q = np.concatenate(
+            [
+                _column_quantities(lam1, Omega, a, b, sign),
+                _column_quantities(lam2, Omega, a, b, sign),
+            ],
+            axis=-1,
+        )
         blocks.append(q[:, list(_END_ROWS[end]), :])
     mat = np.concatenate(blocks, axis=1)
     col = np.max(np.abs(mat), axis=1, keepdims=True)
@@ -196,7 +209,7 @@ def determinant_roots(a, b, bc, n_modes):
     grid = _search_grid(Omega_max, a, b)
     det = np.empty_like(grid)
     change = np.empty(0, dtype=int)
-    for start in range(0, len(grid), 2000):          # stop once n_modes brackets are found
+    for start in range(0, len(grid), 2000):  # stop once n_modes brackets are found
         stop = min(start + 2001, len(grid))
         det[start:stop] = frequency_determinant(grid[start:stop], a, b, bc)
         sign = np.sign(det[:stop])
@@ -204,16 +217,22 @@ def determinant_roots(a, b, bc, n_modes):
         if len(change) >= n_modes:
             break
     if len(change) < n_modes:
-        raise RuntimeError(f"found {len(change)} roots below the Euler-Bernoulli bound "
-                           f"Omega = {Omega_max:.4g}, expected at least {n_modes}")
+        raise RuntimeError(
+            f"found {len(change)} roots below the Euler-Bernoulli bound "
+            f"Omega = {Omega_max:.4g}, expected at least {n_modes}"
+        )
 
     def scalar(W):
         return frequency_determinant(W, a, b, bc)[0]
+
     roots = []
     for i in change[:n_modes]:
         lo, hi = grid[i], grid[i + 1]
-        roots.append(hi if det[i + 1] == 0 else brentq(scalar, lo, hi, xtol=1e-15 * hi,
-                                                       rtol=4 * np.finfo(float).eps))
+        roots.append(
+            hi
+            if det[i + 1] == 0
+            else brentq(scalar, lo, hi, xtol=1e-15 * hi, rtol=4 * np.finfo(float).eps)
+        )
     return np.array(roots)
 
 
@@ -226,7 +245,7 @@ def pinned_roots(a, b, n_modes):
     which satisfies ``w = 0`` and ``psi' = 0`` at both ends)."""
     k2 = (np.arange(1, n_modes + 1) * np.pi) ** 2
     p = 1.0 + (a + b) * k2
-    disc = np.sqrt((a - b) ** 2 * k2**2 + 2.0 * (a + b) * k2 + 1.0)   # sqrt(p^2 - 4 a b k^4)
+    disc = np.sqrt((a - b) ** 2 * k2**2 + 2.0 * (a + b) * k2 + 1.0)  # sqrt(p^2 - 4 a b k^4)
     lower = np.sqrt(2.0 * k2**2 / (p + disc))
     roots = [lower]
     if a * b > 0:
@@ -234,8 +253,9 @@ def pinned_roots(a, b, n_modes):
     return np.sort(np.concatenate(roots))[:n_modes]
 
 
-def timoshenko_frequencies(*, E, G, kappa, rho, A, I, L, bc, n_modes, shear=True,
-                           rotary_inertia=True, method="auto"):
+def timoshenko_frequencies(
+    *, E, G, kappa, rho, A, I, L, bc, n_modes, shear=True, rotary_inertia=True, method="auto"
+):
     """Natural frequencies of a uniform Timoshenko beam from the exact frequency equation.
 
     Parameters
@@ -274,8 +294,9 @@ def timoshenko_frequencies(*, E, G, kappa, rho, A, I, L, bc, n_modes, shear=True
         raise ValueError(f"method must be 'auto', 'determinant' or 'closed-form', got {method!r}")
     if method == "closed-form" and bc != "pinned-pinned":
         raise ValueError(f"method='closed-form' needs bc='pinned-pinned', got {bc!r}")
-    a, b, omega_unit = beam_parameters(E=E, G=G, kappa=kappa, rho=rho, A=A, I=I, L=L,
-                                       shear=shear, rotary_inertia=rotary_inertia)
+    a, b, omega_unit = beam_parameters(
+        E=E, G=G, kappa=kappa, rho=rho, A=A, I=I, L=L, shear=shear, rotary_inertia=rotary_inertia
+    )
     closed = method == "closed-form" or (method == "auto" and bc == "pinned-pinned")
     Omega = pinned_roots(a, b, n_modes) if closed else determinant_roots(a, b, bc, n_modes)
     return Omega * omega_unit / (2.0 * np.pi)

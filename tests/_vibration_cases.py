@@ -9,6 +9,7 @@ which the effect changes the curves by ``size`` times "noticeable", noticeable m
 change over the points, in units of each curve's noise, of ``NOTICEABLE`` (module constant).
 Noise: relative, log-normal, frequency ``F_NOISE`` and damping ``Z_NOISE`` by default.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -32,12 +33,12 @@ def element_curve(X, P, name=None, n=720, **values):
         el = IwanJoint(P) if name is None else make_effect(name, IwanJoint(P), **values)
         u = x * np.sin(th)
         F = el.force_history(u)
-        Fc, uc, thc = F[-(n + 1):], u[-(n + 1):], th[-(n + 1):]
+        Fc, uc, thc = F[-(n + 1) :], u[-(n + 1) :], th[-(n + 1) :]
         k1 = np.trapezoid(Fc * np.sin(thc), thc) / (np.pi * x)
         D = abs(np.trapezoid(Fc, uc))
         wn2 = K_INF + k1
         f_out.append(np.sqrt(wn2) / (2 * np.pi))
-        z_out.append(D / (2 * np.pi * wn2 * x ** 2) + ZETA0)
+        z_out.append(D / (2 * np.pi * wn2 * x**2) + ZETA0)
     return np.array(f_out), np.array(z_out)
 
 
@@ -47,7 +48,7 @@ def _shape(name, X, rng):
     Xm = float(X.max())
     if name == "hardening":
         return {"k3_per_mass": 1.0}, "k3_per_mass"
-    if name == "macroslip_onset":       # half the cases a whole patch, half a spread one
+    if name == "macroslip_onset":  # half the cases a whole patch, half a spread one
         xs = float(rng.uniform(0.3, 0.7)) * Xm
         shape = float(rng.uniform(0.15, 0.5)) if rng.uniform() < 0.5 else 0.0
         return {"kappa_2": 1.0, "X_s": xs, "shape": shape}, "kappa_2"
@@ -78,8 +79,7 @@ def hidden_values(name, X, fp, zp, size, rng, *, f_noise=F_NOISE, z_noise=Z_NOIS
 
 def to_joint(name, values):
     """Joint parameters of the modal values (m = 1, slip per amplitude 1)."""
-    return EFFECTS[name].modal_to_joint(values, modal_mass=1.0, slip_per_amplitude=1.0,
-                                        omega0=1.0)
+    return EFFECTS[name].modal_to_joint(values, modal_mass=1.0, slip_per_amplitude=1.0, omega0=1.0)
 
 
 def seeded_case(seed, name, size, *, P, X, base=None, f_noise=F_NOISE, z_noise=Z_NOISE):
@@ -92,7 +92,7 @@ def seeded_case(seed, name, size, *, P, X, base=None, f_noise=F_NOISE, z_noise=Z
         fm, zm, vals = fp, zp, {}
     else:
         vals = hidden_values(name, X, fp, zp, size, rng, f_noise=f_noise, z_noise=z_noise)
-        if name == "viscous_damping":      # a dashpot needs the velocity: added in closed form
+        if name == "viscous_damping":  # a dashpot needs the velocity: added in closed form
             fm, zm = fp, zp + vals["zeta_v"]
         else:
             fm, zm = element_curve(X, P, name, **to_joint(name, vals))

@@ -2,6 +2,7 @@
 every public result class has ``report()``, a JSON-safe ``to_dict()``, ``warnings``,
 ``success``, ``_repr_html_()`` and ``plot(ax=None)`` returning artists, with the one axes
 contract of ``iwan_element.base.result_shape``; time-series functions take time first."""
+
 from __future__ import annotations
 
 import functools
@@ -25,35 +26,43 @@ P = ie.IwanParameters(9e3, 5e7, -0.5, 0.5)
 
 
 def _record():
-    return ie.simulate_test(P, np.array([0.05, 0.1, 0.2, 0.3]) * 1e-3, cycles=3, sample_rate=4,
-                            force_noise=5.0, seed=0)
+    return ie.simulate_test(
+        P, np.array([0.05, 0.1, 0.2, 0.3]) * 1e-3, cycles=3, sample_rate=4, force_noise=5.0, seed=0
+    )
 
 
 PLOTS = {
     "plot_normalized_loops": lambda ax: plotting.plot_normalized_loops([(0.0, 0.5)], ax=ax),
     "plot_loop": lambda ax: plotting.plot_loop(1e-4, P, ax=ax),
     "plot_fitted_loops": lambda ax: plotting.plot_fitted_loops(
-        np.linspace(0, 1e-4, 50), ie.backbone(np.linspace(0, 1e-4, 50), P), P, ax=ax),
+        np.linspace(0, 1e-4, 50), ie.backbone(np.linspace(0, 1e-4, 50), P), P, ax=ax
+    ),
     "plot_dissipation_fit": lambda ax: plotting.plot_dissipation_fit(
         ie.force_amplitude(np.geomspace(1e-5, 1e-4, 5), P),
-        ie.dissipation(np.geomspace(1e-5, 1e-4, 5), P), P, ax=ax),
+        ie.dissipation(np.geomspace(1e-5, 1e-4, 5), P),
+        P,
+        ax=ax,
+    ),
 }
 
 
 def test_every_plotting_function_is_covered():
-    public = {n for n, f in vars(plotting).items()
-              if n.startswith("plot_") and inspect.isfunction(f)}
+    public = {
+        n for n, f in vars(plotting).items() if n.startswith("plot_") and inspect.isfunction(f)
+    }
     assert public == set(PLOTS)
 
 
 @pytest.mark.parametrize("name", sorted(PLOTS))
 def test_plotting_functions_take_ax_and_return_its_artists(name):
     assert "ax" in inspect.signature(getattr(plotting, name)).parameters
-    assert inspect.signature(getattr(plotting, name)).parameters["ax"].kind == \
-        inspect.Parameter.KEYWORD_ONLY
+    assert (
+        inspect.signature(getattr(plotting, name)).parameters["ax"].kind
+        == inspect.Parameter.KEYWORD_ONLY
+    )
     ax = Figure().add_subplot()
     artists = PLOTS[name](ax)
-    twins = ax.get_shared_x_axes().get_siblings(ax)     # a twinx() of ax counts as ax
+    twins = ax.get_shared_x_axes().get_siblings(ax)  # a twinx() of ax counts as ax
     assert len(artists) > 0 and all(a.axes is ax or a.axes in twins for a in artists)
 
 
@@ -65,16 +74,22 @@ def _fit():
 
 def _curve():
     a = np.geomspace(1e-5, 1e-3, 8)
-    return ie.AmplitudeCurve(a, 100 - 5 * a / a[-1], 1e-3 + 0.01 * a / a[-1],
-                             frequency_std=1e-3, damping_ratio_std=1e-5)
+    return ie.AmplitudeCurve(
+        a, 100 - 5 * a / a[-1], 1e-3 + 0.01 * a / a[-1], frequency_std=1e-3, damping_ratio_std=1e-5
+    )
 
 
 def _vib():
     c = _curve()
-    return ie.diagnose_vibration(c.amplitude, c.frequency, c.damping_ratio,
-                                 predicted_frequency=c.frequency + 0.01,
-                                 predicted_damping_ratio=c.damping_ratio,
-                                 frequency_noise=0.01, damping_ratio_noise=1e-4)
+    return ie.diagnose_vibration(
+        c.amplitude,
+        c.frequency,
+        c.damping_ratio,
+        predicted_frequency=c.frequency + 0.01,
+        predicted_damping_ratio=c.damping_ratio,
+        frequency_noise=0.01,
+        damping_ratio_noise=1e-4,
+    )
 
 
 def _diag():
@@ -84,8 +99,9 @@ def _diag():
 
 def _batch():
     d = _record()
-    return ie.diagnose_many([(d.t, d.u, d.F)], executor="serial", max_samples=300,
-                            max_effects=1, noise=5.0)
+    return ie.diagnose_many(
+        [(d.t, d.u, d.F)], executor="serial", max_samples=300, max_effects=1, noise=5.0
+    )
 
 
 def _modal():
@@ -95,8 +111,9 @@ def _modal():
 
 def _model_fit():
     d = _record()
-    return ie.fit_force_model(d.t, d.u, d.F, lambda u, th: th[0] * u, [1e7], names=["k"],
-                              max_nfev=20)
+    return ie.fit_force_model(
+        d.t, d.u, d.F, lambda u, th: th[0] * u, [1e7], names=["k"], max_nfev=20
+    )
 
 
 def _noise():
@@ -109,8 +126,7 @@ def _square(params, rng):
 
 
 def _ensemble():
-    return ie.run_ensemble(_square, [{"x": float(x)} for x in range(5)], executor="serial",
-                           seed=1)
+    return ie.run_ensemble(_square, [{"x": float(x)} for x in range(5)], executor="serial", seed=1)
 
 
 def _uncertainty():
@@ -119,39 +135,62 @@ def _uncertainty():
 
 def _bands():
     sys_ = ie.SingleModeSystem(mass=1.0, stiffness=4e6, zeta0=1e-3)
-    return ie.propagate_uncertainty(_uncertainty(), system=sys_, amplitude=[1e-5, 1e-4],
-                                    n_samples=4, cycles=4, steps_per_period=32, seed=0,
-                                    executor="serial")
+    return ie.propagate_uncertainty(
+        _uncertainty(),
+        system=sys_,
+        amplitude=[1e-5, 1e-4],
+        n_samples=4,
+        cycles=4,
+        steps_per_period=32,
+        seed=0,
+        executor="serial",
+    )
 
 
 @functools.lru_cache(maxsize=1)
 def _campaign():
     """One small campaign fit, shared by its own shape test and its results' (read only)."""
     from _campaign_cases import campaign
-    recs, conds = campaign(3, conditions=tuple({"tension": T, "frequency": 1.0}
-                                               for T in (10.0, 20.0, 30.0, 40.0)))
-    return ie.fit_campaign(recs, conds, effects=("backlash",), candidates=("backlash",),
-                           laws={"Fs": ("tension",)})
+
+    recs, conds = campaign(
+        3, conditions=tuple({"tension": T, "frequency": 1.0} for T in (10.0, 20.0, 30.0, 40.0))
+    )
+    return ie.fit_campaign(
+        recs, conds, effects=("backlash",), candidates=("backlash",), laws={"Fs": ("tension",)}
+    )
 
 
 def _targets():
     f = np.linspace(45.0, 55.0, 30)
     W = 2 * np.pi * f
-    H = 0.64 / ((2 * np.pi * 50) ** 2 - W ** 2 + 2j * 0.008 * (2 * np.pi * 50) * W)
+    H = 0.64 / ((2 * np.pi * 50) ** 2 - W**2 + 2j * 0.008 * (2 * np.pi * 50) * W)
     return ie.frf_modes(f, H * (1 + 0.01 * np.cos(7 * f)))
 
 
-RESULTS = {"FitResult": _fit, "ModalTargets": _targets, "AmplitudeCurve": _curve, "VibrationDiagnosis": _vib,
-           "Diagnosis": _diag, "BatchDiagnosis": _batch, "ModalIwanFit": _modal,
-           "ModelFit": _model_fit, "NoiseEstimate": _noise, "EnsembleResult": _ensemble,
-           "ParameterUncertainty": _uncertainty, "PredictionBands": _bands,
-           "CampaignFit": _campaign}
+RESULTS = {
+    "FitResult": _fit,
+    "ModalTargets": _targets,
+    "AmplitudeCurve": _curve,
+    "VibrationDiagnosis": _vib,
+    "Diagnosis": _diag,
+    "BatchDiagnosis": _batch,
+    "ModalIwanFit": _modal,
+    "ModelFit": _model_fit,
+    "NoiseEstimate": _noise,
+    "EnsembleResult": _ensemble,
+    "ParameterUncertainty": _uncertainty,
+    "PredictionBands": _bands,
+    "CampaignFit": _campaign,
+}
 
 
 def test_every_public_result_class_is_covered():
     """Every public class with a report is a result and is in RESULTS (a new one must join)."""
-    public = {n for n in ie.__all__ if inspect.isclass(getattr(ie, n))
-              and hasattr(getattr(ie, n), "report")}
+    public = {
+        n
+        for n in ie.__all__
+        if inspect.isclass(getattr(ie, n)) and hasattr(getattr(ie, n), "report")
+    }
     assert public - {"IwanParameters", "UffRecord", "ModeTarget"} == set(RESULTS)
 
 
@@ -159,29 +198,29 @@ def test_every_public_result_class_is_covered():
 def _built(name):
     """One result per class, built once (the parts below only read it)."""
     with warnings.catch_warnings():
-        warnings.simplefilter("ignore")         # identifiability warnings of the short record
+        warnings.simplefilter("ignore")  # identifiability warnings of the short record
         return ALL_RESULTS[name]()
 
 
 @pytest.mark.parametrize("name", sorted(RESULTS))
-@pytest.mark.parametrize("part", ["report", "html", "dataframe", "to_dict", "warnings",
-                                  "success", "plot"])
+@pytest.mark.parametrize(
+    "part", ["report", "html", "dataframe", "to_dict", "warnings", "success", "plot"]
+)
 def test_result_objects_have_one_shape(name, part):
     res = _built(name)
     if part == "report":
         assert isinstance(res.report(), str) and res.report().strip()
-    elif part == "html":                        # real tables, the verdict on top
+    elif part == "html":  # real tables, the verdict on top
         page = res._repr_html_()
         assert "<pre>" not in page and page.count("<table>") == len(res._tables()) >= 1
         assert page.index(html.escape(res.verdict())) < page.index("<table>")
         if res.warnings:
             assert page.count("<li>") >= len(res.warnings)
-    elif part == "dataframe":                   # every table reaches pandas as it stands
+    elif part == "dataframe":  # every table reaches pandas as it stands
         pd = pytest.importorskip("pandas")
         for title, cols, rows in res._tables():
             frame = pd.DataFrame([list(r) for r in rows], columns=list(cols))
-            assert frame.shape == (len(rows), len(cols)) and all(len(r) == len(cols)
-                                                                  for r in rows)
+            assert frame.shape == (len(rows), len(cols)) and all(len(r) == len(cols) for r in rows)
             assert res.to_dataframe(title).equals(frame)
         assert isinstance(res.to_dataframe(), pd.DataFrame)
         with pytest.raises(ValueError, match="table must be one of"):
@@ -189,7 +228,7 @@ def test_result_objects_have_one_shape(name, part):
     elif part == "to_dict":
         d = res.to_dict()
         json.dumps(d, allow_nan=False)
-        if hasattr(res, "params"):              # one layout: the ParameterTable's
+        if hasattr(res, "params"):  # one layout: the ParameterTable's
             assert [p["name"] for p in d["params"]["parameters"]] == list(res.params.names)
         for pair in d.get("offsets", {}).values():
             assert set(pair) == {"value", "stderr"}
@@ -197,7 +236,7 @@ def test_result_objects_have_one_shape(name, part):
         assert isinstance(res.warnings, tuple)
     elif part == "success":
         assert isinstance(res.success, bool)
-    else:                                       # the one axes contract (core.result_shape)
+    else:  # the one axes contract (core.result_shape)
         n = res.plot_panels
         fig = Figure()
         axes = [fig.add_subplot(1, n, k + 1) for k in range(n)]
@@ -218,65 +257,90 @@ def _calibration():
     from iwan_element.models.calibration import calibrate
 
     from iwan_element import models
+
     s = models.preset("brake-reuss").replace(n_points=8, calibrated_range=None)
     X = np.geomspace(5e-6, 4e-5, 5)
     q = models.modal_amplitude_curve(s, amplitude=X)
-    meas = ie.AmplitudeCurve(X, q.frequency * (1 + 1e-4), q.damping_ratio * 1.1,
-                             frequency_std=1e-3, damping_ratio_std=1e-5)
+    meas = ie.AmplitudeCurve(
+        X,
+        q.frequency * (1 + 1e-4),
+        q.damping_ratio * 1.1,
+        frequency_std=1e-3,
+        damping_ratio_std=1e-5,
+    )
     return calibrate(s, meas, fit=("chi",))
 
 
 def _ringdown():
     from iwan_element import models
+
     s = models.preset("brake-reuss").replace(n_points=8)
-    return models.ringdown(s, amplitude=30e-6, cycles=8, steps_per_period=32,
-                           record_energy=True)
+    return models.ringdown(s, amplitude=30e-6, cycles=8, steps_per_period=32, record_energy=True)
 
 
 def _quasi_static():
     from iwan_element import models
-    return models.quasi_static_test(models.preset("example").replace(n_points=8), cycles=1,
-                                    steps_per_cycle=40)
+
+    return models.quasi_static_test(
+        models.preset("example").replace(n_points=8), cycles=1, steps_per_cycle=40
+    )
 
 
 def _forced():
     from iwan_element import models
+
     s = models.preset("example").replace(n_points=8, damping_floor=0.05)
-    return models.forced_response(s, force_levels=(1.0,), frequencies=[60.0, 66.6, 73.0],
-                                  settle_cycles=5, measure_cycles=2, steps_per_period=16)
+    return models.forced_response(
+        s,
+        force_levels=(1.0,),
+        frequencies=[60.0, 66.6, 73.0],
+        settle_cycles=5,
+        measure_cycles=2,
+        steps_per_period=16,
+    )
 
 
 @functools.lru_cache(maxsize=1)
 def _coupling():
     from iwan_element import models
+
     s = models.preset("two-bolt-aluminium").replace(n_points=8)
-    return models.mode_coupling(s, amplitude={1: 1e-4, 2: 2e-5}, duration=0.75,
-                                steps_per_period=32)
+    return models.mode_coupling(s, amplitude={1: 1e-4, 2: 2e-5}, duration=0.75, steps_per_period=32)
 
 
 def _frequency_response():
     from iwan_element import models
+
     s = models.preset("brake-reuss").replace(n_points=8)
     return models.harmonic_balance(s, np.linspace(80.0, 80.8, 5), 0.3)
 
 
 def _hammer():
     from test_hammer_prediction import round_trip
+
     return round_trip()[1]
 
 
 def _linear_update():
     from iwan_element import models
+
     s = models.preset("example").replace(n_points=8)
-    return models.linear_update(s, frequencies={1: 70.0, 2: 420.0},
-                                parameters=("youngs_modulus", "stiffness_per_area"))
+    return models.linear_update(
+        s, frequencies={1: 70.0, 2: 420.0}, parameters=("youngs_modulus", "stiffness_per_area")
+    )
 
 
 #: Results of the beam model (``iwan_element.models``), with the same shape.
-MODEL_RESULTS = {"CalibrationResult": _calibration, "RingdownResult": _ringdown,
-                 "QuasiStaticResult": _quasi_static, "ForcedResponseResult": _forced,
-                 "ModeCouplingResult": _coupling, "FrequencyResponse": _frequency_response,
-                 "HammerPrediction": _hammer, "LinearUpdateResult": _linear_update}
+MODEL_RESULTS = {
+    "CalibrationResult": _calibration,
+    "RingdownResult": _ringdown,
+    "QuasiStaticResult": _quasi_static,
+    "ForcedResponseResult": _forced,
+    "ModeCouplingResult": _coupling,
+    "FrequencyResponse": _frequency_response,
+    "HammerPrediction": _hammer,
+    "LinearUpdateResult": _linear_update,
+}
 
 
 def test_every_model_result_class_is_covered():
@@ -286,11 +350,15 @@ def test_every_model_result_class_is_covered():
     from iwan_element.models.simulation import coupling, forced, machine, transient
 
     from iwan_element import harmonic, models
-    public = {n for mod in (models, calibration, transient, machine, forced, coupling, hammer,
-                            harmonic)
-              for n in getattr(mod, "__all__", ())
-              if n.endswith(("Result", "Response", "Prediction")) and
-              inspect.isclass(getattr(mod, n)) and issubclass(getattr(mod, n), ResultShape)}
+
+    public = {
+        n
+        for mod in (models, calibration, transient, machine, forced, coupling, hammer, harmonic)
+        for n in getattr(mod, "__all__", ())
+        if n.endswith(("Result", "Response", "Prediction"))
+        and inspect.isclass(getattr(mod, n))
+        and issubclass(getattr(mod, n), ResultShape)
+    }
     assert public == set(MODEL_RESULTS)
 
 
@@ -311,14 +379,14 @@ def _averaged():
 
 #: Results that public methods of other results return (the campaign's prediction and
 #: leave-one-out, a diagnosis' model-averaged band), with the same shape.
-METHOD_RESULTS = {"CampaignPrediction": _prediction, "LeaveOneOut": _loo,
-                  "AveragedBand": _averaged}
+METHOD_RESULTS = {"CampaignPrediction": _prediction, "LeaveOneOut": _loo, "AveragedBand": _averaged}
 
 
 def _energy_balance():
     from _connector_models import Chain, settings
 
     from iwan_element.exudyn import record_energy
+
     chain = Chain([1.0], v0=[0.5])
     chain.spring(-1, 0, 1e5)
     conn = chain.joint(-1, 0, P)
@@ -334,8 +402,9 @@ ALL_RESULTS = {**RESULTS, **MODEL_RESULTS, **METHOD_RESULTS, **EXUDYN_RESULTS}
 
 
 @pytest.mark.parametrize("name", sorted({**MODEL_RESULTS, **METHOD_RESULTS, **EXUDYN_RESULTS}))
-@pytest.mark.parametrize("part", ["report", "html", "dataframe", "to_dict", "warnings",
-                                  "success", "plot"])
+@pytest.mark.parametrize(
+    "part", ["report", "html", "dataframe", "to_dict", "warnings", "success", "plot"]
+)
 def test_other_result_objects_have_the_same_shape(name, part):
     """The beam model's results and the results of public methods, by the same test."""
     test_result_objects_have_one_shape(name, part)
@@ -345,8 +414,12 @@ def test_report_tables_align_their_titles_with_their_columns():
     """table_lines: every line of a table is as wide as its header; numbers and titles are
     right-aligned unless the column's spec says left."""
     from iwan_element.base.result_shape import table_lines
-    lines = table_lines([("record", "<12"), ("band [N]", "9.4g"), ("ratio", "6.2f")],
-                        [("a", 1234.5678, 0.5), ("bb", 1e-7, 12.345)], indent=2)
+
+    lines = table_lines(
+        [("record", "<12"), ("band [N]", "9.4g"), ("ratio", "6.2f")],
+        [("a", 1234.5678, 0.5), ("bb", 1e-7, 12.345)],
+        indent=2,
+    )
     assert len({len(s) for s in lines}) == 1
     assert lines[0] == "  record        band [N]  ratio"
     assert lines[1] == "  a                 1235   0.50"
@@ -357,8 +430,12 @@ def test_every_exudyn_result_class_is_covered():
     """Every result class of the Exudyn adapter's public names is in EXUDYN_RESULTS."""
     from iwan_element import exudyn as ex
     from iwan_element.base.result_shape import ResultShape
-    public = {n for n in ex.__all__ if inspect.isclass(getattr(ex, n))
-              and issubclass(getattr(ex, n), ResultShape)}
+
+    public = {
+        n
+        for n in ex.__all__
+        if inspect.isclass(getattr(ex, n)) and issubclass(getattr(ex, n), ResultShape)
+    }
     assert public == set(EXUDYN_RESULTS)
 
 

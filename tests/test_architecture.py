@@ -4,6 +4,7 @@ Read from the source with ``ast`` (every ``import`` at module level and inside f
 never by importing the package, so a circle that Python's lazy imports tolerate still
 fails here. ``models/`` is the package ``iwan_element.models`` (pyproject's package-dir).
 """
+
 from __future__ import annotations
 
 import ast
@@ -17,13 +18,43 @@ SOURCES = (("iwan_element", "iwan_element"), ("models", "iwan_element.models"))
 #: may import itself and the rooms before it only (docs/architecture.md draws the same
 #: order). ``(modules)`` is a room's own modules beside its sub-rooms; ``__init__`` its face.
 LAYERS = {
-    "iwan_element": ["base", "core", "fitting", "plotting", "effects", "harmonic", "identify",
-                     "exudyn", "ensemble", "diagnose", "__init__", "cli", "models"],
-    "iwan_element.models": ["specimens", "linear", "beam", "solid", "reduced", "updating",
-                            "modal", "simulation", "calibration", "(modules)", "__init__"],
+    "iwan_element": [
+        "base",
+        "core",
+        "fitting",
+        "plotting",
+        "effects",
+        "harmonic",
+        "identify",
+        "exudyn",
+        "ensemble",
+        "diagnose",
+        "__init__",
+        "cli",
+        "models",
+    ],
+    "iwan_element.models": [
+        "specimens",
+        "linear",
+        "beam",
+        "solid",
+        "reduced",
+        "updating",
+        "modal",
+        "simulation",
+        "calibration",
+        "(modules)",
+        "__init__",
+    ],
     "iwan_element.identify": ["loops", "files", "modal", "decays", "sweeps", "__init__"],
-    "iwan_element.diagnose": ["(modules)", "selection", "loops", "vibration", "campaign",
-                              "__init__"],
+    "iwan_element.diagnose": [
+        "(modules)",
+        "selection",
+        "loops",
+        "vibration",
+        "campaign",
+        "__init__",
+    ],
     "iwan_element.exudyn": ["slips", "laws", "(modules)", "__init__"],
 }
 MAX_MODULES, MAX_LINES, MAX_FUNCTION = 12, 500, 80
@@ -95,7 +126,7 @@ def _sub_room(module: str, parent: str) -> str | None:
         return "__init__"
     if not module.startswith(parent + "."):
         return None
-    head = module[len(parent) + 1:].split(".")[0]
+    head = module[len(parent) + 1 :].split(".")[0]
     path = MODULES.get(f"{parent}.{head}")
     if path is not None and path.name == "__init__.py":
         return head
@@ -171,12 +202,20 @@ def test_no_private_name_crosses_a_package():
         for mod, nm, line in _imports(a):
             tgt = _resolve(mod, nm)
             owner = _package(tgt)
-            private_module = any(p.startswith("_") and not p.startswith("__")
-                                 for p in tgt.split("."))
-            private_name = nm is not None and nm.startswith("_") and not nm.startswith("__") \
+            private_module = any(
+                p.startswith("_") and not p.startswith("__") for p in tgt.split(".")
+            )
+            private_name = (
+                nm is not None
+                and nm.startswith("_")
+                and not nm.startswith("__")
                 and f"{mod}.{nm}" not in MODULES
-            if (private_module or private_name) and _package(a) != owner \
-                    and not (private_module and not private_name and _package(a) == owner):
+            )
+            if (
+                (private_module or private_name)
+                and _package(a) != owner
+                and not (private_module and not private_name and _package(a) == owner)
+            ):
                 bad.append(f"{MODULES[a].relative_to(ROOT)}:{line} {mod} import {nm}")
     assert not bad, "private names across packages:\n" + "\n".join(bad)
 
@@ -184,24 +223,35 @@ def test_no_private_name_crosses_a_package():
 def test_rooms_and_modules_stay_small():
     folders = collections.Counter(p.parent for p in MODULES.values())
     big = [f"{f.relative_to(ROOT)}: {n} modules" for f, n in folders.items() if n > MAX_MODULES]
-    long_modules = [f"{p.relative_to(ROOT)}: {n} lines" for p in MODULES.values()
-                    if (n := len(p.read_text(encoding="utf-8").splitlines())) > MAX_LINES]
+    long_modules = [
+        f"{p.relative_to(ROOT)}: {n} lines"
+        for p in MODULES.values()
+        if (n := len(p.read_text(encoding="utf-8").splitlines())) > MAX_LINES
+    ]
     long_functions = []
     for name, tree in TREES.items():
         for node in ast.walk(tree):
             if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
                 body = node.body
-                doc = body[0] if (isinstance(body[0], ast.Expr) and isinstance(
-                    body[0].value, ast.Constant) and isinstance(body[0].value.value, str)) \
+                doc = (
+                    body[0]
+                    if (
+                        isinstance(body[0], ast.Expr)
+                        and isinstance(body[0].value, ast.Constant)
+                        and isinstance(body[0].value.value, str)
+                    )
                     else None
+                )
                 n = node.end_lineno - node.lineno + 1
-                if doc is not None:       # the numpydoc docstring is documentation, not code
+                if doc is not None:  # the numpydoc docstring is documentation, not code
                     n -= doc.end_lineno - doc.lineno + 1
                 if n > MAX_FUNCTION:
-                    long_functions.append(f"{MODULES[name].relative_to(ROOT)}:{node.lineno} "
-                                          f"{node.name}: {n} lines")
-    assert not (big or long_modules or long_functions), \
-        "\n".join(big + long_modules + long_functions)
+                    long_functions.append(
+                        f"{MODULES[name].relative_to(ROOT)}:{node.lineno} {node.name}: {n} lines"
+                    )
+    assert not (big or long_modules or long_functions), "\n".join(
+        big + long_modules + long_functions
+    )
 
 
 def test_the_checks_find_what_they_claim():
@@ -209,8 +259,7 @@ def test_the_checks_find_what_they_claim():
     above are only as good as these)."""
     assert _circles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == [["a", "b", "c"]]
     assert _circles({"a": {"b"}, "b": {"c"}, "d": {"a", "c"}}) == []
-    assert _circles({"a": {"b"}, "b": {"a"}, "c": {"d"}, "d": {"c"}}) == [["a", "b"],
-                                                                           ["c", "d"]]
+    assert _circles({"a": {"b"}, "b": {"a"}, "c": {"d"}, "d": {"c"}}) == [["a", "b"], ["c", "d"]]
     assert _resolve("iwan_element.models", "preset") == "iwan_element.models"
     assert _resolve("iwan_element.models.no_such_module", None) == "iwan_element.models"
     assert _package("iwan_element.models") == "iwan_element.models"

@@ -1,6 +1,7 @@
 """diagnose_many / ``iwan-element diagnose a.csv b.csv --jobs N``: a campaign in one call, the
 same answers as record by record, refusals kept as rows, one table and one JSON per run, and a
 progress bar when asked."""
+
 import json
 
 import numpy as np
@@ -12,8 +13,7 @@ from iwan_element.diagnose import simulate_element_test
 
 
 def _clean(seed, amps=(0.3, 0.8)):
-    d = simulate_element_test(IwanJoint(P), np.array(amps) * P.phi_max, force_noise=5.0,
-                              seed=seed)
+    d = simulate_element_test(IwanJoint(P), np.array(amps) * P.phi_max, force_noise=5.0, seed=seed)
     return d.t, d.u, d.F
 
 
@@ -34,11 +34,14 @@ def test_microslip_only_record_does_not_claim_fs_and_beta():
 
 def test_batch_equals_record_by_record_and_keeps_refusals():
     hidden = record("backlash", 8.0, "ladder", 3)
-    recs = [(hidden.t, hidden.u, hidden.F), _clean(1),
-            (np.arange(10.0), np.zeros(10), np.zeros(10))]           # refused: too short
+    recs = [
+        (hidden.t, hidden.u, hidden.F),
+        _clean(1),
+        (np.arange(10.0), np.zeros(10), np.zeros(10)),
+    ]  # refused: too short
     before = [tuple(np.array(a, copy=True) for a in r) for r in recs]
     b = diagnose_many(recs, names=["gap", "clean", "short"], executor="serial", seed=0)
-    for r, r0 in zip(recs, before):                                   # nothing mutated
+    for r, r0 in zip(recs, before):  # nothing mutated
         assert all(np.array_equal(x, y) for x, y in zip(r, r0))
     rows = {r["record"]: r for r in b.rows}
     assert rows["short"]["status"].startswith("refused:") and b.diagnoses[2] is None
@@ -84,16 +87,32 @@ def test_bad_batch_input_is_named():
 
 def test_cli_diagnoses_several_records_with_one_table_and_json(tmp_path, capsys):
     from iwan_element.cli import main
+
     paths = []
     for k in range(2):
-        t, u, F = _clean(10 + k, (0.3, 0.8, 2.0))       # into macroslip: a success
+        t, u, F = _clean(10 + k, (0.3, 0.8, 2.0))  # into macroslip: a success
         p = tmp_path / f"rec{k}.csv"
-        p.write_text("time [s],displacement [mm],force [kN]\n" + "\n".join(
-            f"{a:.6f},{b:.8f},{c:.7f}" for a, b, c in zip(t, u * 1e3, F * 1e-3)) + "\n")
+        p.write_text(
+            "time [s],displacement [mm],force [kN]\n"
+            + "\n".join(f"{a:.6f},{b:.8f},{c:.7f}" for a, b, c in zip(t, u * 1e3, F * 1e-3))
+            + "\n"
+        )
         paths.append(str(p))
     js, tab = tmp_path / "run.json", tmp_path / "run.csv"
-    code = main(["diagnose", *paths, "--units", "mm,kN", "--jobs", "1", "--json", str(js),
-                 "--table", str(tab)])
+    code = main(
+        [
+            "diagnose",
+            *paths,
+            "--units",
+            "mm,kN",
+            "--jobs",
+            "1",
+            "--json",
+            str(js),
+            "--table",
+            str(tab),
+        ]
+    )
     out = capsys.readouterr().out
     assert code == 0, out
     assert "rec0.csv" in out and "rec1.csv" in out
@@ -106,7 +125,7 @@ def test_cli_diagnoses_several_records_with_one_table_and_json(tmp_path, capsys)
 
 def test_progress_bar_when_asked(capsys, monkeypatch):
     pytest.importorskip("tqdm")
-    monkeypatch.delenv("CI", raising=False)      # bars are silent under CI
+    monkeypatch.delenv("CI", raising=False)  # bars are silent under CI
     t, u, F = _clean(5)
     quiet = diagnose(t, u, F)
     assert capsys.readouterr().err == ""

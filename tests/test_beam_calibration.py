@@ -1,5 +1,6 @@
 """Calibration of the Brake-Reuss interface on the measured hammer ring-down, and the mappings
 of joint and modal Iwan fits onto the distributed interface."""
+
 import math
 from pathlib import Path
 
@@ -21,8 +22,9 @@ DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "brb-hammer" / 
 if not DATA.exists():
     DATA = Path("/work/shared/data/brb-hammer/hammer_acc3.csv")
 needs_data = pytest.mark.skipif(
-    not DATA.exists(), reason="measured BRB ring-down (GPL-3.0) is read from ../shared only and "
-                              "is absent here")
+    not DATA.exists(),
+    reason="measured BRB ring-down (GPL-3.0) is read from ../shared only and is absent here",
+)
 
 
 @needs_data
@@ -38,8 +40,9 @@ def test_measured_curve_matches_the_data_readme_table():
 @needs_data
 def test_brake_reuss_calibrated_from_neutral_start_reproduces_the_measured_curve():
     measured = measured_amplitude_curve(DATA)
-    start = preset("brake-reuss").replace(stiffness_per_area=2e12, friction=0.2, chi=-0.3,
-                                          damping_floor=1e-3)
+    start = preset("brake-reuss").replace(
+        stiffness_per_area=2e12, friction=0.2, chi=-0.3, damping_floor=1e-3
+    )
     res = calibrate(start, measured)
     assert res.success, res.report()
     head = res.report().splitlines()
@@ -48,7 +51,7 @@ def test_brake_reuss_calibrated_from_neutral_start_reproduces_the_measured_curve
     lo, hi = start.amplitude_range
     m = (measured.amplitude >= lo) & (measured.amplitude <= hi)
     assert m.sum() >= 12
-    assert res.max_frequency_error < 5e-4            # 0.05 %
+    assert res.max_frequency_error < 5e-4  # 0.05 %
     assert res.max_damping_error < 0.20
     # the preset carries this calibration (rounded): it meets the same targets
     c = modal_amplitude_curve(preset("brake-reuss"), amplitude=measured.amplitude[m])
@@ -58,8 +61,11 @@ def test_brake_reuss_calibrated_from_neutral_start_reproduces_the_measured_curve
     # its stated standard errors (friction is weakly identified from a microslip ring-down,
     # +- 35 %: the curve fixes the slip combination, not the friction coefficient alone)
     for k, v in res.params.values.items():
-        ref = getattr(preset("brake-reuss"), k) if k == "friction" else \
-            getattr(preset("brake-reuss").interface, k)
+        ref = (
+            getattr(preset("brake-reuss"), k)
+            if k == "friction"
+            else getattr(preset("brake-reuss").interface, k)
+        )
         assert abs(v - ref) <= max(0.02 * abs(ref), 2.0 * res.params.stderr[k]), (k, res.report())
 
 
@@ -77,18 +83,19 @@ def test_a_modal_iwan_fit_maps_onto_the_interface_and_keeps_its_modal_stiffness(
     s = preset("brake-reuss")
     w0, phi, _, L, pts = linear_modes(s)
     w_inf, *_ = linear_modes(s.replace(stiffness_per_area=1e-3))
-    kt_modal = w0 ** 2 - w_inf ** 2
+    kt_modal = w0**2 - w_inf**2
     g = L.G @ phi
-    modal = IwanParameters(Fs=0.5 * float(np.sum(np.abs(g) * pts.Fs)), KT=0.6 * kt_modal,
-                           chi=-0.35, beta=0.05)
+    modal = IwanParameters(
+        Fs=0.5 * float(np.sum(np.abs(g) * pts.Fs)), KT=0.6 * kt_modal, chi=-0.35, beta=0.05
+    )
     m = interface_from_modal_iwan(s, modal)
     w1, phi1, _, L1, pts1 = linear_modes(m)
     # the mapped interface adds the modal joint's stiffness to the free-lap mode (w0^2 = K_inf + KT)
-    assert w1 ** 2 - w_inf ** 2 == pytest.approx(modal.KT, rel=1e-6)
+    assert w1**2 - w_inf**2 == pytest.approx(modal.KT, rel=1e-6)
     assert float(np.sum(np.abs(L1.G @ phi1) * pts1.Fs)) == pytest.approx(modal.Fs, rel=1e-6)
     assert w1 < w0 and (m.interface.chi, m.interface.beta) == (-0.35, 0.05)
     with pytest.raises(ValueError, match="modal"):
         interface_from_modal_iwan(s, (1, 2, 3, 4))
     with pytest.raises(ValueError, match="outside what this interface can carry"):
-        interface_from_modal_iwan(s, modal.replace(KT=10 * (w0 ** 2)))
+        interface_from_modal_iwan(s, modal.replace(KT=10 * (w0**2)))
     assert math.isfinite(m.friction)

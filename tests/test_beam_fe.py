@@ -1,6 +1,7 @@
 """The 1-D Timoshenko beam elements (models/beam/elements.py) against the closed-form Timoshenko
 beam (tests/_timoshenko_reference.py, written independently from the exact frequency
 equations) and the element's own published closed-form stiffness."""
+
 import numpy as np
 import pytest
 from _timoshenko_reference import timoshenko_frequencies
@@ -13,7 +14,7 @@ G = E / (2 * (1 + NU))
 
 
 def _section(b, h):
-    return b * h, b * h ** 3 / 12
+    return b * h, b * h**3 / 12
 
 
 def test_element_stiffness_is_friedman_and_kosmatkas_closed_form():
@@ -23,34 +24,48 @@ def test_element_stiffness_is_friedman_and_kosmatkas_closed_form():
     for l in (0.002, 0.03, 0.4):
         K, _ = element_matrices(l, E=E, G=G, kappa=KAPPA, rho=RHO, area=A, inertia=I)
         phi = 12 * E * I / (KAPPA * G * A * l * l)
-        ref = E * I / (l ** 3 * (1 + phi)) * np.array(
-            [[12, 6 * l, -12, 6 * l], [6 * l, (4 + phi) * l * l, -6 * l, (2 - phi) * l * l],
-             [-12, -6 * l, 12, -6 * l], [6 * l, (2 - phi) * l * l, -6 * l, (4 + phi) * l * l]])
+        ref = (
+            E
+            * I
+            / (l**3 * (1 + phi))
+            * np.array(
+                [
+                    [12, 6 * l, -12, 6 * l],
+                    [6 * l, (4 + phi) * l * l, -6 * l, (2 - phi) * l * l],
+                    [-12, -6 * l, 12, -6 * l],
+                    [6 * l, (2 - phi) * l * l, -6 * l, (4 + phi) * l * l],
+                ]
+            )
+        )
         ib = [1, 2, 4, 5]
-        np.testing.assert_allclose(K[np.ix_(ib, ib)], ref, rtol=1e-10, atol=1e-9 * np.abs(ref).max())
-        np.testing.assert_allclose(K[np.ix_([0, 3], [0, 3])],
-                                   E * A / l * np.array([[1, -1], [-1, 1]]), rtol=1e-12)
+        np.testing.assert_allclose(
+            K[np.ix_(ib, ib)], ref, rtol=1e-10, atol=1e-9 * np.abs(ref).max()
+        )
+        np.testing.assert_allclose(
+            K[np.ix_([0, 3], [0, 3])], E * A / l * np.array([[1, -1], [-1, 1]]), rtol=1e-12
+        )
 
 
 def _uniform_beam(L, b, h, n, *, timoshenko=True):
     A, I = _section(b, h)
     K, M = np.zeros((3 * (n + 1),) * 2), np.zeros((3 * (n + 1),) * 2)
     for e in range(n):
-        ke, me = element_matrices(L / n, E=E, G=G, kappa=KAPPA, rho=RHO, area=A, inertia=I,
-                                  timoshenko=timoshenko)
-        K[3 * e:3 * e + 6, 3 * e:3 * e + 6] += ke
-        M[3 * e:3 * e + 6, 3 * e:3 * e + 6] += me
+        ke, me = element_matrices(
+            L / n, E=E, G=G, kappa=KAPPA, rho=RHO, area=A, inertia=I, timoshenko=timoshenko
+        )
+        K[3 * e : 3 * e + 6, 3 * e : 3 * e + 6] += ke
+        M[3 * e : 3 * e + 6, 3 * e : 3 * e + 6] += me
     return K, M, A, I
 
 
 def _bending_frequencies(K, M, keep, n_modes, skip):
     """Transverse-dominated eigenfrequencies [Hz] (axial modes removed by holding u)."""
     w2 = eigh(K[np.ix_(keep, keep)], M[np.ix_(keep, keep)], eigvals_only=True)
-    return np.sqrt(np.abs(w2[skip:skip + n_modes])) / (2 * np.pi)
+    return np.sqrt(np.abs(w2[skip : skip + n_modes])) / (2 * np.pi)
 
 
 @pytest.mark.parametrize("bc", ["free-free", "clamped-free", "pinned-pinned"])
-@pytest.mark.parametrize("h", [0.0127, 0.06])          # slender and thick (L/r = 196, 42)
+@pytest.mark.parametrize("h", [0.0127, 0.06])  # slender and thick (L/r = 196, 42)
 def test_timoshenko_elements_converge_to_the_exact_beam(bc, h):
     """Within 2e-4 for the first four modes (the element's shear strain is constant, so
     its frequencies converge as h^2: 4e-4 at 60 elements for the thick beam's 4th mode)."""
@@ -58,7 +73,7 @@ def test_timoshenko_elements_converge_to_the_exact_beam(bc, h):
     n = 60 if h < 0.02 else 120
     K, M, A, I = _uniform_beam(L, b, h, n)
     dofs = np.arange(3 * (n + 1)).reshape(-1, 3)
-    held = set(dofs[:, 0])                                  # no axial motion: bending only
+    held = set(dofs[:, 0])  # no axial motion: bending only
     if bc == "clamped-free":
         held |= {1, 2}
     if bc == "pinned-pinned":
@@ -68,9 +83,20 @@ def test_timoshenko_elements_converge_to_the_exact_beam(bc, h):
     fe = _bending_frequencies(K, M, keep, 4, skip)
     ref = timoshenko_frequencies(E=E, G=G, kappa=KAPPA, rho=RHO, A=A, I=I, L=L, bc=bc, n_modes=4)
     np.testing.assert_allclose(fe, ref, rtol=2e-4)
-    eb = timoshenko_frequencies(E=E, G=G, kappa=KAPPA, rho=RHO, A=A, I=I, L=L, bc=bc, n_modes=4,
-                                shear=False, rotary_inertia=False)
-    assert np.all(ref < eb) and np.max(1 - ref / eb) > 5e-3   # the effect tested is not small
+    eb = timoshenko_frequencies(
+        E=E,
+        G=G,
+        kappa=KAPPA,
+        rho=RHO,
+        A=A,
+        I=I,
+        L=L,
+        bc=bc,
+        n_modes=4,
+        shear=False,
+        rotary_inertia=False,
+    )
+    assert np.all(ref < eb) and np.max(1 - ref / eb) > 5e-3  # the effect tested is not small
     K, M, *_ = _uniform_beam(L, b, h, n, timoshenko=False)
     np.testing.assert_allclose(_bending_frequencies(K, M, keep, 4, skip), eb, rtol=1e-4)
 
@@ -80,6 +106,7 @@ def test_point_rows_interpolate_the_element_shapes():
     specimen (w = c + a x, theta = a, u = 0 on the axis) is read exactly."""
     s = preset("brake-reuss")
     from iwan_element.models.beam import beam_mesh
+
     mesh = beam_mesh(s)
     x = np.concatenate([mesh.x_a, mesh.x_b])
     q = np.zeros(3 * x.size)

@@ -2,6 +2,7 @@
 routes: the closed-form virgin and first unloading branches written here from the density
 (docs/equations.md section 2), and a bank of Jenkins sliders with static/kinetic thresholds stepped
 in tests/_jenkins_bank.py, which converges to the element as the bank gets dense."""
+
 import numpy as np
 import pytest
 from _helpers import stepped_sine
@@ -11,11 +12,11 @@ from iwan_element import DiscreteIwan, IwanJoint, IwanParameters
 from iwan_element.effects import BreakAway
 
 P = IwanParameters(1000.0, 1e6, -0.5, 0.2)
-P0 = IwanParameters(1000.0, 1e6, -0.3, 0.0)          # no spike: force continuous in time
+P0 = IwanParameters(1000.0, 1e6, -0.3, 0.0)  # no spike: force continuous in time
 A = P.phi_max
 
 
-AMPS = (0.4, 1.6, 0.7, 2.5, 0.3, 1.1)        # fractions of phi_max
+AMPS = (0.4, 1.6, 0.7, 2.5, 0.3, 1.1)  # fractions of phi_max
 
 
 def _drive(per=150):
@@ -26,9 +27,9 @@ def _moments(p, x):
     """Continuous density of ``p`` (docs/equations.md section 2): ``int_0^x rho`` and
     ``int_0^x rho phi``, ``rho = R phi^chi``."""
     q = p.chi + 1.0
-    C = q * p.KT / (1.0 + p.beta)                     # R phi_max^(chi+1)
+    C = q * p.KT / (1.0 + p.beta)  # R phi_max^(chi+1)
     r = np.minimum(x, p.phi_max) / p.phi_max
-    return C * r ** q / q, C * p.phi_max * r ** (q + 1) / (q + 1)
+    return C * r**q / q, C * p.phi_max * r ** (q + 1) / (q + 1)
 
 
 @pytest.mark.parametrize("p", [P, P0])
@@ -46,15 +47,15 @@ def test_virgin_and_first_unloading_branches_in_closed_form(p):
     el = BreakAway(IwanJoint(p), ratio=r)
     np.testing.assert_allclose(el.force_history(d), F_virgin, rtol=1e-12, atol=1e-9 * p.Fs)
 
-    d0 = 0.8 * pm                                     # below r phi_max: the spike stays stuck
+    d0 = 0.8 * pm  # below r phi_max: the spike stays stuck
     y = np.linspace(0.0, 3.0 * pm, 301)[1:]
-    b = d0 / r                                        # sliders below b slid on the way up
+    b = d0 / r  # sliders below b slid on the way up
     M0b, M1b = _moments(p, b)
-    x1 = np.minimum(y / (r + 1.0), b)                 # those break again below x1
+    x1 = np.minimum(y / (r + 1.0), b)  # those break again below x1
     M0x, M1x = _moments(p, x1)
-    x2 = np.clip((y - d0) / r, b, pm)                 # stuck ones (stretch d0) break below x2
+    x2 = np.clip((y - d0) / r, b, pm)  # stuck ones (stretch d0) break below x2
     M0y, M1y = _moments(p, x2)
-    F_slid = -M1x + (M1b - M1x) - y * (M0b - M0x)     # force of [0, b] (e = phi - y or -phi)
+    F_slid = -M1x + (M1b - M1x) - y * (M0b - M0x)  # force of [0, b] (e = phi - y or -phi)
     F_stuck = -(M1y - M1b) + (d0 - y) * (M0_all - M0y)
     spike = S * np.where(y - d0 > r * pm, -pm, d0 - y)
     F_down = F_slid + F_stuck + spike
@@ -69,8 +70,12 @@ def test_dense_slider_banks_converge_to_the_element():
     errs = []
     for n in (100, 400, 1600):
         d = DiscreteIwan(P, n)
-        errs.append(float(np.sqrt(np.mean((jenkins_bank(u, d.slider_stiffness, d.slider_slip, r)
-                                           - F) ** 2))) / P.Fs)
+        errs.append(
+            float(
+                np.sqrt(np.mean((jenkins_bank(u, d.slider_stiffness, d.slider_slip, r) - F) ** 2))
+            )
+            / P.Fs
+        )
     # first order in 1/n (a slider breaks one sample early or late): 4x denser, about 4x closer
     assert errs[0] / errs[1] > 2.5 and errs[1] / errs[2] > 2.5, errs
     assert errs[2] < 2e-3, errs
@@ -80,14 +85,15 @@ def test_on_a_discrete_joint_it_is_that_bank():
     u = _drive(60)
     d = DiscreteIwan(P, 15)
     F = BreakAway(DiscreteIwan(P, 15), ratio=1.45).force_history(u)
-    np.testing.assert_allclose(F, jenkins_bank(u, d.slider_stiffness, d.slider_slip, 1.45),
-                               rtol=0, atol=1e-9 * P.Fs)
+    np.testing.assert_allclose(
+        F, jenkins_bank(u, d.slider_stiffness, d.slider_slip, 1.45), rtol=0, atol=1e-9 * P.Fs
+    )
 
 
 def test_ratio_one_is_the_plain_joint_and_the_run_route_is_the_element():
     rng = np.random.default_rng(5)
     u = np.concatenate([_drive(40), np.cumsum(rng.normal(size=400)) * 0.2 * A])
-    u[300:310] = u[300]                                   # a pause inside a run
+    u[300:310] = u[300]  # a pause inside a run
     F1 = BreakAway(IwanJoint(P), ratio=1.0).force_history(u)
     np.testing.assert_allclose(F1, IwanJoint(P).force_history(u), rtol=0, atol=1e-10 * P.Fs)
     for inner in (IwanJoint(P), DiscreteIwan(P, 20)):
@@ -102,8 +108,9 @@ def test_energy_balance_and_tangent(p):
     u = p.phi_max * np.array([0.0, 0.7, -0.3, 1.2, 0.5, 2.0, -1.4, 0.1, -0.2])
     works = []
     for m in (200, 2000):
-        uf = np.concatenate([np.linspace(a, b, m, endpoint=False) for a, b in zip(u[:-1], u[1:])]
-                            + [u[-1:]])
+        uf = np.concatenate(
+            [np.linspace(a, b, m, endpoint=False) for a, b in zip(u[:-1], u[1:])] + [u[-1:]]
+        )
         el = BreakAway(IwanJoint(p), ratio=1.8)
         F, D = np.empty(uf.size), np.empty(uf.size)
         for i, x in enumerate(uf):
@@ -128,8 +135,9 @@ def test_energy_balance_and_tangent(p):
     h = 1e-7 * p.phi_max
     for x in (-1.3 * p.phi_max, -0.25 * p.phi_max, 0.5 * p.phi_max, 2.2 * p.phi_max):
         F0, K = el.trial(x)
-        assert K == pytest.approx((el.trial(x + h)[0] - el.trial(x - h)[0]) / (2 * h),
-                                  rel=1e-4, abs=1e-6 * p.KT)
+        assert K == pytest.approx(
+            (el.trial(x + h)[0] - el.trial(x - h)[0]) / (2 * h), rel=1e-4, abs=1e-6 * p.KT
+        )
     el.revert()
 
 

@@ -5,6 +5,7 @@ elements (IwanJoint + Backlash through build_element, driven by simulate_element
 known linear laws and white noise; the fit is never told the laws' values. Plus one check on
 three real damper records (skipped when ../shared/data is absent).
 """
+
 import json
 import math
 from pathlib import Path
@@ -43,7 +44,7 @@ def test_law_coefficients_recovered_within_their_stderr(fitted):
 
 def test_predict_an_untested_condition_matches_the_generator(fitted):
     fit = fitted[0]
-    cond = {"tension": 25.0, "frequency": 0.75}                  # not a tested condition
+    cond = {"tension": 25.0, "frequency": 0.75}  # not a tested condition
     phi = math.exp(truth(cond)["log_phi_max"])
     t = np.arange(600) / 200.0
     u = 2.5 * phi * np.sin(2 * np.pi * 0.75 * t) * np.minimum(1.0, t / 1.5)
@@ -93,8 +94,10 @@ def test_result_api(fitted):
     assert d["coefficients"]["Fs"]["tension"] == fit.coefficients["Fs"]["tension"]
     assert fit.covariance.shape == (len(fit.coefficient_labels),) * 2
     import matplotlib
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+
     fig, ax = plt.subplots()
     arts = fit.plot(ax, quantity="Fs", condition="tension")
     assert arts and all(a.axes is ax for a in arts)
@@ -108,18 +111,27 @@ def test_result_api(fitted):
         fit.plot(ax, quantity="nope")
     plt.close(fig)
     before = [tuple(np.array(a, copy=True) for a in r) for r in recs]
-    fit_campaign(recs[:4], conds[:4], laws={"Fs": ("tension",), "chi": (),
-                                            "log_phi_max": (), "log1p_beta": (),
-                                            "ln(backlash.gap)": (),
-                                            "ln(backlash.drag/Fs)": ()},
-                 **OPTS)
-    for r, r0 in zip(recs, before):                              # nothing mutated
+    fit_campaign(
+        recs[:4],
+        conds[:4],
+        laws={
+            "Fs": ("tension",),
+            "chi": (),
+            "log_phi_max": (),
+            "log1p_beta": (),
+            "ln(backlash.gap)": (),
+            "ln(backlash.drag/Fs)": (),
+        },
+        **OPTS,
+    )
+    for r, r0 in zip(recs, before):  # nothing mutated
         assert all(np.array_equal(x, y) for x, y in zip(r, r0))
 
 
 def test_the_processes_give_the_serial_answer():
-    recs, conds = campaign(4, conditions=[{"tension": T, "frequency": 1.0}
-                                          for T in (10.0, 20.0, 30.0, 40.0)])
+    recs, conds = campaign(
+        4, conditions=[{"tension": T, "frequency": 1.0} for T in (10.0, 20.0, 30.0, 40.0)]
+    )
     laws = {"Fs": ("tension",)}
     a = fit_campaign(recs, conds, laws=laws, **OPTS)
     b = fit_campaign(recs, conds, laws=laws, jobs=2, **OPTS)
@@ -163,12 +175,15 @@ def test_bad_input_is_refused_by_name(fitted):
 
 
 _DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "arts-damper"
-if not _DATA.is_dir():                       # a worktree beside the main checkout
+if not _DATA.is_dir():  # a worktree beside the main checkout
     _DATA = Path(__file__).resolve().parents[3] / "shared" / "data" / "arts-damper"
 
 
-@pytest.mark.skipif(not _DATA.is_dir(), reason="../shared/data/arts-damper (CC BY-SA 4.0 "
-                    "records of the ARTS friction damper) is absent")
+@pytest.mark.skipif(
+    not _DATA.is_dir(),
+    reason="../shared/data/arts-damper (CC BY-SA 4.0 "
+    "records of the ARTS friction damper) is absent",
+)
 def test_real_damper_records_give_a_tension_law():
     """Three 1 Hz records of dataset-1 (25, 35, 70 lb), backlash only (to stay quick): the
     slip force grows with band tension (README: median sliding force 7.7-8.1 kN at 25 lb,
@@ -179,8 +194,15 @@ def test_real_damper_records_give_a_tension_law():
         t, u, F = np.loadtxt(_DATA / f"ds1_1Hz_{T}lb.csv", delimiter=",", skiprows=1).T
         recs.append((t, u, F))
         conds.append({"tension": float(T)})
-    fit = fit_campaign(recs, conds, effects=("backlash",), candidates=("backlash",),
-                       max_effects=1, lowpass=20.0, laws={"chi": (), "log1p_beta": ()})
+    fit = fit_campaign(
+        recs,
+        conds,
+        effects=("backlash",),
+        candidates=("backlash",),
+        max_effects=1,
+        lowpass=20.0,
+        laws={"chi": (), "log1p_beta": ()},
+    )
     assert fit.converged
     assert fit.coefficients["Fs"]["tension"] > 3 * fit.stderr["Fs"]["tension"] > 0
     for T in (25.0, 70.0):
@@ -196,7 +218,7 @@ def test_a_law_that_leaves_the_model_range_is_found(fitted):
     model, theta = fit._state["model"], np.array(fit._state["theta"], copy=True)
     assert model.clipped(theta) == {}
     sl = model.slices["chi"]
-    theta[sl.start] = -5.0 / model.qscale["chi"]     # chi law far below -1 everywhere
+    theta[sl.start] = -5.0 / model.qscale["chi"]  # chi law far below -1 everywhere
     assert model.clipped(theta) == {"chi": list(range(len(recs)))}
     assert not any("leaves the range" in w for w in fit.warnings)
 
@@ -208,14 +230,20 @@ def test_record_scatter_is_estimated_and_carried_in_the_band():
     about a law (computed here by numpy's lstsq on the generator's factors), and only the
     band that carries it holds a device 1.2x off the law."""
     from _campaign_cases import CONDITIONS, fs_factors
+
     s_true = 0.15
     recs, conds = campaign(5, fs_scatter=s_true)
     fit = fit_campaign(recs, conds, **OPTS)
     factors = fs_factors(5, len(conds), s_true)
     for f, c, k in zip(fit._state["free"], conds, factors):
         assert f["Fs"] == pytest.approx(truth(c)["Fs"] * k, rel=0.01)
-    A = np.column_stack([np.ones(len(conds)), [c["tension"] for c in CONDITIONS],
-                         [c["frequency"] for c in CONDITIONS]])
+    A = np.column_stack(
+        [
+            np.ones(len(conds)),
+            [c["tension"] for c in CONDITIONS],
+            [c["frequency"] for c in CONDITIONS],
+        ]
+    )
     y = np.log(factors * [truth(c)["Fs"] for c in CONDITIONS])
     # the law is fitted to Fs, not ln Fs: compare with a generous but failing tolerance
     res = y - A @ np.linalg.lstsq(A, y, rcond=None)[0]
@@ -276,8 +304,9 @@ def test_campaign_probabilities_and_model_averaged_band(fitted):
     assert max(p, key=p.get) == ("backlash",) and fit.effect_probability("backlash") > 0.99
     preps = fit._state["preps"]
     for e in fit.explanations:
-        assert e.log_evidence == pytest.approx(sum(
-            z for pr in preps for eff, z, *_ in pr["explanations"] if tuple(eff) == e.effects))
+        assert e.log_evidence == pytest.approx(
+            sum(z for pr in preps for eff, z, *_ in pr["explanations"] if tuple(eff) == e.effects)
+        )
     assert "most probable: backlash" in fit.report()
     assert fit.to_dataframe("probabilities")["probability"].sum() == pytest.approx(1.0)
     cond = {"tension": 25.0, "frequency": 0.75}

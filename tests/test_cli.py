@@ -1,4 +1,5 @@
 """Command line: ``iwan-element fit data.csv --units mm,kN ...``."""
+
 from __future__ import annotations
 
 import json
@@ -20,10 +21,22 @@ P = IwanParameters(9e3, 5e7, -0.5, 0.5)
 
 @pytest.fixture(scope="module")
 def csv_path(tmp_path_factory):
-    d = simulate_test(P, np.array([0.025, 0.05, 0.1, 0.2, 0.3, 0.45]) * 1e-3, cycles=3,
-                      sample_rate=5, force_noise=15.0, seed=0)
-    return write_record_csv(tmp_path_factory.mktemp("cli") / "test.csv", d.t, d.u, d.F,
-                            digits=(2, 7, 6), comment="# SYNTHETIC")
+    d = simulate_test(
+        P,
+        np.array([0.025, 0.05, 0.1, 0.2, 0.3, 0.45]) * 1e-3,
+        cycles=3,
+        sample_rate=5,
+        force_noise=15.0,
+        seed=0,
+    )
+    return write_record_csv(
+        tmp_path_factory.mktemp("cli") / "test.csv",
+        d.t,
+        d.u,
+        d.F,
+        digits=(2, 7, 6),
+        comment="# SYNTHETIC",
+    )
 
 
 def _one_line_error(err: str, match: str) -> None:
@@ -37,7 +50,7 @@ def test_fit_loops_prints_report_and_writes_json_and_plot(csv_path, tmp_path, ca
     out = capsys.readouterr()
     assert code == 0, out.err
     assert "loop fit" in out.out and "KT   [N/m]" in out.out and "units mm, kN, s" in out.out
-    assert out.err == ""                              # warnings go into the report, not stderr
+    assert out.err == ""  # warnings go into the report, not stderr
     d = json.loads(js.read_text())
     q = IwanParameters.from_dict(d["joint"])
     assert q.KT == pytest.approx(P.KT, rel=0.01) and q.Fs == pytest.approx(P.Fs, rel=0.01)
@@ -52,20 +65,27 @@ def test_fit_dissipation_methods(csv_path, capsys, method, extra):
     assert code == 0
     assert ("seed-paper procedure" in out) == (method == "seed")
     if method == "seed":
-        assert "given (not fitted)" in out and "9000" in out     # --slip-force in kN -> N
+        assert "given (not fitted)" in out and "9000" in out  # --slip-force in kN -> N
 
 
-@pytest.mark.parametrize("argv, code, match", [
-    (["fit", "{csv}", "--units", "mm"], 1, "--units must be"),
-    (["fit", "{csv}", "--units", "mm,tonne"], 1, "not a known unit"),
-    (["fit", "{csv}", "--units", "m,kN"], 1, "labelled in 'mm'"),
-    (["fit", "{csv}", "--units", "mm,kN", "--method", "seed"], 1, "needs --slip-force"),
-    (["fit", "{csv}", "--units", "mm,kN", "--slip-force", "9"], 1, "only used by --method seed"),
-    (["fit", "{csv}", "--units", "mm,kN", "--method", "fminsearch"], 2, "invalid choice"),
-    (["fit", "{csv}", "--units", "mm,kN", "--smooth", "4"], 1, "smooth must be"),
-    (["fit", "missing.csv", "--units", "mm,kN"], 1, "cannot read"),
-    ([], 2, "required: <command>"),
-])
+@pytest.mark.parametrize(
+    "argv, code, match",
+    [
+        (["fit", "{csv}", "--units", "mm"], 1, "--units must be"),
+        (["fit", "{csv}", "--units", "mm,tonne"], 1, "not a known unit"),
+        (["fit", "{csv}", "--units", "m,kN"], 1, "labelled in 'mm'"),
+        (["fit", "{csv}", "--units", "mm,kN", "--method", "seed"], 1, "needs --slip-force"),
+        (
+            ["fit", "{csv}", "--units", "mm,kN", "--slip-force", "9"],
+            1,
+            "only used by --method seed",
+        ),
+        (["fit", "{csv}", "--units", "mm,kN", "--method", "fminsearch"], 2, "invalid choice"),
+        (["fit", "{csv}", "--units", "mm,kN", "--smooth", "4"], 1, "smooth must be"),
+        (["fit", "missing.csv", "--units", "mm,kN"], 1, "cannot read"),
+        ([], 2, "required: <command>"),
+    ],
+)
 def test_bad_input_exits_nonzero_with_one_line(csv_path, capsys, argv, code, match):
     argv = [a.replace("{csv}", str(csv_path)) for a in argv]
     assert main(argv) == code
@@ -78,8 +98,11 @@ def test_units_come_from_the_header_or_are_refused(csv_path, tmp_path, capsys):
     assert main(["fit", str(csv_path), "--method", "dissipation"]) == 0
     assert "units mm, kN, s" in capsys.readouterr().out
     bare = tmp_path / "bare.csv"
-    bare.write_text("time,displacement,force\n" + "\n".join(
-        line.replace(" ", "") for line in csv_path.read_text().splitlines()[2:]) + "\n")
+    bare.write_text(
+        "time,displacement,force\n"
+        + "\n".join(line.replace(" ", "") for line in csv_path.read_text().splitlines()[2:])
+        + "\n"
+    )
     assert main(["fit", str(bare)]) == 1
     _one_line_error(capsys.readouterr().err, "is not stated: the header names the columns")
 
@@ -98,8 +121,22 @@ def test_bad_data_files(tmp_path, capsys):
 
 def test_console_entry_point_runs_as_module(csv_path):
     env = dict(os.environ, PYTHONPATH=str(Path(__file__).resolve().parents[1]))
-    res = subprocess.run([sys.executable, "-m", "iwan_element.cli", "fit", str(csv_path),
-                          "--units", "mm,kN", "--method", "dissipation"],
-                         capture_output=True, text=True, env=env, timeout=120)
+    res = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "iwan_element.cli",
+            "fit",
+            str(csv_path),
+            "--units",
+            "mm,kN",
+            "--method",
+            "dissipation",
+        ],
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=120,
+    )
     assert res.returncode == 0, res.stderr
     assert "least squares" in res.stdout

@@ -6,6 +6,7 @@ the exact Iwan oscillator in time. The covariance is checked against the scatter
 seeded fits, the noise correlation against simulated noise, the quadrature against
 ``solve_ivp``.
 """
+
 from __future__ import annotations
 
 import json
@@ -40,38 +41,76 @@ P, K_INF = _joint()
 def _reference_decay(fr, dm, a0, T):
     """``(t, [ln a, theta])`` of the averaging equations by an independent ODE solver (DOP853
     to 1e-12) from ``a0`` over ``T`` [s], 301 samples."""
+
     def rhs(_, s):
         a = math.exp(s[0])
         zz, w = float(dm(a)), 2 * math.pi * float(fr(a))
         return [-zz * w, w * math.sqrt(1 - zz * zz)]
+
     t = np.linspace(0.0, T, 301)
-    return t, solve_ivp(rhs, (0, T), [math.log(a0), 0.0], t_eval=t, rtol=1e-12, atol=1e-12,
-                        method="DOP853").y
+    return t, solve_ivp(
+        rhs, (0, T), [math.log(a0), 0.0], t_eval=t, rtol=1e-12, atol=1e-12, method="DOP853"
+    ).y
 
 
 def _curves(zeta0, p=P, k_inf=K_INF):
     def both(a):
         a = np.asarray(a, dtype=float)
-        f, z = modal_iwan_curve(np.atleast_1d(a), p, K_inf=k_inf, zeta0=zeta0,
-                                stiffness="harmonic", floor="dashpot", damping_form="decay")
+        f, z = modal_iwan_curve(
+            np.atleast_1d(a),
+            p,
+            K_inf=k_inf,
+            zeta0=zeta0,
+            stiffness="harmonic",
+            floor="dashpot",
+            damping_form="decay",
+        )
         return np.asarray(f).reshape(a.shape), np.asarray(z).reshape(a.shape)
+
     return (lambda a: both(a)[0]), (lambda a: both(a)[1])
 
 
 def _truth(fit, zeta0, p=P, k_inf=K_INF):
     x_ref = fit.conventions["x_ref"]
     w02 = k_inf + p.KT
-    return {"f0": math.sqrt(w02) / (2 * math.pi), "zeta0": zeta0, "chi": p.chi,
-            "delta": p.KT * (x_ref / p.phi_max) ** (p.chi + 1) / (w02 * (p.chi + 2) * (1 + p.beta)),
-            "beta": p.beta, "kappa": p.KT / w02, "phi_max": p.phi_max, "KT": p.KT,
-            "K_inf": k_inf, "Fs": p.Fs}
+    return {
+        "f0": math.sqrt(w02) / (2 * math.pi),
+        "zeta0": zeta0,
+        "chi": p.chi,
+        "delta": p.KT * (x_ref / p.phi_max) ** (p.chi + 1) / (w02 * (p.chi + 2) * (1 + p.beta)),
+        "beta": p.beta,
+        "kappa": p.KT / w02,
+        "phi_max": p.phi_max,
+        "KT": p.KT,
+        "K_inf": k_inf,
+        "Fs": p.Fs,
+    }
 
 
-def _svam(zeta0=2e-3, a0=1e-4, duration=2.0, fs=2000.0, quantity="acceleration", noise=0.01,
-          second=0.3, seed=0, ratio=1.3):
+def _svam(
+    zeta0=2e-3,
+    a0=1e-4,
+    duration=2.0,
+    fs=2000.0,
+    quantity="acceleration",
+    noise=0.01,
+    second=0.3,
+    seed=0,
+    ratio=1.3,
+):
     f, z = _curves(zeta0)
-    return svam_decay(f, z, a0=a0, duration=duration, fs=fs, quantity=quantity, ratio=ratio,
-                      second=second, noise=noise, rng=np.random.default_rng(seed))
+    return svam_decay(
+        f,
+        z,
+        a0=a0,
+        duration=duration,
+        fs=fs,
+        quantity=quantity,
+        ratio=ratio,
+        second=second,
+        noise=noise,
+        rng=np.random.default_rng(seed),
+    )
 
 
 # ------------------------------------------------------------------ building blocks
@@ -82,15 +121,25 @@ def test_quadrature_trajectory_matches_solve_ivp():
     a0, T = 3e-4, 1.5
 
     t, ref = _reference_decay(fr, dm, a0, T)
-    prob = D._Problem(np.zeros(4096), 2000.0, (70.0, 90.0), 4, 2,
-                      dict(stiffness="harmonic", floor="dashpot", x_ref=3e-5))
+    prob = D._Problem(
+        np.zeros(4096),
+        2000.0,
+        (70.0, 90.0),
+        4,
+        2,
+        dict(stiffness="harmonic", floor="dashpot", x_ref=3e-5),
+    )
     prob.span = 12.0
     w02 = K_INF + P.KT
-    theta = [math.sqrt(w02) / (2 * math.pi), zeta0, P.chi,
-             P.KT * (3e-5 / P.phi_max) ** (P.chi + 1) / (w02 * (P.chi + 2) * (1 + P.beta))]
+    theta = [
+        math.sqrt(w02) / (2 * math.pi),
+        zeta0,
+        P.chi,
+        P.KT * (3e-5 / P.phi_max) ** (P.chi + 1) / (w02 * (P.chi + 2) * (1 + P.beta)),
+    ]
     out = prob.trajectory(np.array(theta), "microslip", math.log(a0), t)
-    assert np.max(np.abs(out[:, 0] - ref[0])) < 1e-6          # ln a
-    assert np.max(np.abs(out[:, 1] - ref[1])) < 1e-5          # phase [rad], ~750 rad total
+    assert np.max(np.abs(out[:, 0] - ref[0])) < 1e-6  # ln a
+    assert np.max(np.abs(out[:, 1] - ref[1])) < 1e-5  # phase [rad], ~750 rad total
 
 
 def test_quadrature_through_phi_max_matches_solve_ivp():
@@ -103,16 +152,23 @@ def test_quadrature_through_phi_max_matches_solve_ivp():
     assert float(dm(PHI_MAX * (1 + 1e-9))) > float(dm(PHI_MAX * (1 - 1e-9))) * 1.001
 
     t, ref = _reference_decay(fr, dm, a0, T)
-    assert ref[0, -1] < math.log(0.3 * PHI_MAX)              # the decay passes phi_max
-    prob = D._Problem(np.zeros(4096), 2000.0, (70.0, 90.0), 4, 2,
-                      dict(stiffness="harmonic", floor="dashpot", x_ref=3e-4))
+    assert ref[0, -1] < math.log(0.3 * PHI_MAX)  # the decay passes phi_max
+    prob = D._Problem(
+        np.zeros(4096),
+        2000.0,
+        (70.0, 90.0),
+        4,
+        2,
+        dict(stiffness="harmonic", floor="dashpot", x_ref=3e-4),
+    )
     prob.span = 12.0
     w02 = K_INF + P.KT
-    theta = np.array([math.sqrt(w02) / (2 * math.pi), zeta0, P.chi, P.KT / w02,
-                      math.log(P.phi_max), P.beta])
+    theta = np.array(
+        [math.sqrt(w02) / (2 * math.pi), zeta0, P.chi, P.KT / w02, math.log(P.phi_max), P.beta]
+    )
     out = prob.trajectory(theta, "macroslip", math.log(a0), t)
-    assert np.max(np.abs(out[:, 0] - ref[0])) < 1e-6          # ln a
-    assert np.max(np.abs(out[:, 1] - ref[1])) < 1e-5          # phase [rad]
+    assert np.max(np.abs(out[:, 0] - ref[0])) < 1e-6  # ln a
+    assert np.max(np.abs(out[:, 1] - ref[1])) < 1e-5  # phase [rad]
 
 
 def test_model_record_is_smooth_in_phi_max():
@@ -121,12 +177,28 @@ def test_model_record_is_smooth_in_phi_max():
     stepped whenever phi_max crossed a node, since the decay-form damping jumps at phi_max;
     finite differences then overstated the sensitivity ~50-fold and the stated stderr of
     phi_max was far too small: z = -68 in the benchmark.)"""
-    prob = D._Problem(np.zeros(4000), 2000.0, (70.0, 90.0), 4, 0,
-                      dict(stiffness="harmonic", floor="dashpot", x_ref=3e-4))
+    prob = D._Problem(
+        np.zeros(4000),
+        2000.0,
+        (70.0, 90.0),
+        4,
+        0,
+        dict(stiffness="harmonic", floor="dashpot", x_ref=3e-4),
+    )
     prob.span, prob.i_s = 8.0, 0
     w02 = K_INF + P.KT
-    x = np.array([math.sqrt(w02) / (2 * math.pi), 2e-3, P.chi, P.KT / w02,
-                  math.log(P.phi_max), P.beta, math.log(3 * PHI_MAX), 0.3])
+    x = np.array(
+        [
+            math.sqrt(w02) / (2 * math.pi),
+            2e-3,
+            P.chi,
+            P.KT / w02,
+            math.log(P.phi_max),
+            P.beta,
+            math.log(3 * PHI_MAX),
+            0.3,
+        ]
+    )
     cell = prob.span / (D._GRID - 1)
     recs = []
     for k in range(41):
@@ -141,14 +213,20 @@ def test_model_record_is_smooth_in_phi_max():
 
 def test_noise_correlation_matches_simulated_noise():
     """rho(tau) from |H|^4 equals the correlation of band-passed white noise's analytic signal."""
-    prob = D._Problem(np.zeros(4096), 1000.0, (70.0, 90.0), 4, 0,
-                      dict(stiffness="harmonic", floor="dashpot", x_ref=1.0))
+    prob = D._Problem(
+        np.zeros(4096),
+        1000.0,
+        (70.0, 90.0),
+        4,
+        0,
+        dict(stiffness="harmonic", floor="dashpot", x_ref=1.0),
+    )
     rho = D._noise_correlation(prob, 60)
-    x = np.random.default_rng(3).standard_normal(2 ** 21)     # ~4e4 correlation times
+    x = np.random.default_rng(3).standard_normal(2**21)  # ~4e4 correlation times
     z = signal.hilbert(signal.sosfiltfilt(prob.sos, x))
-    emp = np.array([np.mean(z[:z.size - k] * np.conj(z[k:])) for k in range(0, 61, 6)])
+    emp = np.array([np.mean(z[: z.size - k] * np.conj(z[k:])) for k in range(0, 61, 6)])
     emp /= emp[0]
-    assert np.max(np.abs(emp - np.conj(rho[::6]))) < 0.025       # sampling error ~0.005
+    assert np.max(np.abs(emp - np.conj(rho[::6]))) < 0.025  # sampling error ~0.005
 
 
 def test_noise_level_over_its_degrees_of_freedom_matches_simulated_noise():
@@ -160,8 +238,14 @@ def test_noise_level_over_its_degrees_of_freedom_matches_simulated_noise():
     understates the noise by a third; the sum of squares over ``m - tr(B Omega / s2)`` does
     not, its scatter matches the stated chi-square degrees of freedom, and the sandwich
     covariance matches the scatter of the estimates."""
-    prob = D._Problem(np.zeros(1024), 1000.0, (70.0, 90.0), 4, 0,
-                      dict(stiffness="harmonic", floor="dashpot", x_ref=1.0))
+    prob = D._Problem(
+        np.zeros(1024),
+        1000.0,
+        (70.0, 90.0),
+        4,
+        0,
+        dict(stiffness="harmonic", floor="dashpot", x_ref=1.0),
+    )
     idx = np.arange(100, 900, 2)
     t = idx / 1000.0
     obj = type("Obj", (), dict(prob=prob, idx=idx, phd=2 * math.pi * 80.0 * t))()
@@ -177,16 +261,16 @@ def test_noise_level_over_its_degrees_of_freedom_matches_simulated_noise():
         res = r - J @ b
         cov, _, (dof, nu) = D._covariance(obj, res, J)
         s2_true.append(np.mean(np.abs(rr) ** 2))
-        s2_plain.append(np.mean(res ** 2) * 2.0)
-        s2_dof.append(np.sum(res ** 2) / dof)
+        s2_plain.append(np.mean(res**2) * 2.0)
+        s2_dof.append(np.sum(res**2) / dof)
         est.append(b)
         var.append(np.diag(cov))
     s2 = np.mean(s2_true)
-    assert np.mean(s2_plain) < 0.8 * s2                          # what the fit absorbed
-    assert np.mean(s2_dof) == pytest.approx(s2, rel=0.05)        # sampling error ~2 %
-    assert np.var(s2_dof) / s2 ** 2 == pytest.approx(2.0 / nu, rel=0.3)
+    assert np.mean(s2_plain) < 0.8 * s2  # what the fit absorbed
+    assert np.mean(s2_dof) == pytest.approx(s2, rel=0.05)  # sampling error ~2 %
+    assert np.var(s2_dof) / s2**2 == pytest.approx(2.0 / nu, rel=0.3)
     ratio = np.var(est, axis=0) / np.mean(var, axis=0)
-    assert np.all(np.abs(ratio - 1.0) < 0.3), ratio              # sampling error ~8 %
+    assert np.all(np.abs(ratio - 1.0) < 0.3), ratio  # sampling error ~8 %
 
 
 # ------------------------------------------------------------------ recovery
@@ -236,9 +320,17 @@ def test_exact_iwan_oscillator_within_three_stderr(seed):
     rng = np.random.default_rng(seed)
     zeta0 = float(rng.uniform(1e-3, 5e-3))
     q0 = float(rng.uniform(0.05, 0.3)) * PHI_MAX
-    d = joint_decay(P, K_inf=K_INF, zeta0=zeta0, q0=q0, duration=1.5, fs=2000.0,
-                    quantity=("displacement", "velocity", "acceleration")[seed % 3],
-                    ratio=1.25, rng=rng)
+    d = joint_decay(
+        P,
+        K_inf=K_INF,
+        zeta0=zeta0,
+        q0=q0,
+        duration=1.5,
+        fs=2000.0,
+        quantity=("displacement", "velocity", "acceleration")[seed % 3],
+        ratio=1.25,
+        rng=rng,
+    )
     fit = fit_decay(d.t, d.y, quantity=d.quantity, band=d.band)
     tr = _truth(fit, zeta0)
     assert fit.identified
@@ -251,8 +343,9 @@ def test_short_heavily_damped_decay_uses_the_release():
     the release (nothing is trimmed), fixes f0 and zeta0 and follows the truth's curves over
     the decay. (With a strong nearby mode the transient its abrupt start leaks through the
     band-pass dominates so short a record; see docs/decay_fit.md, limits.)"""
-    d = _svam(zeta0=0.02, a0=0.8 * PHI_MAX, duration=0.4, quantity="acceleration", seed=5,
-              second=0.0)
+    d = _svam(
+        zeta0=0.02, a0=0.8 * PHI_MAX, duration=0.4, quantity="acceleration", seed=5, second=0.0
+    )
     fit = fit_decay(d.t, d.y, quantity="acceleration", band=d.band)
     assert fit.conventions["t_fit"][0] == 0.0
     tr = _truth(fit, 0.02)
@@ -266,7 +359,7 @@ def test_short_heavily_damped_decay_uses_the_release():
     ft, zt = _curves(0.02)
     assert np.all((fb[0] <= ft(X)) & (ft(X) <= fb[1]))
     assert np.all((zb[0] <= zt(X)) & (zt(X) <= zb[1]))
-    assert np.all(zb[1] - zb[0] < 0.1 * zt(X))          # and the band is informative
+    assert np.all(zb[1] - zb[0] < 0.1 * zt(X))  # and the band is informative
     if set(fit.parameters) - set(fit.identified):
         assert not fit.success
         assert any("not identified" in w for w in fit.warnings)
@@ -286,10 +379,12 @@ def test_nearby_mode_is_modelled_not_taken_for_the_joint():
     """A strong linear mode 12 % above the band (released with the mode, so its abrupt start
     leaks through the band-pass): the fit models it as a neighbour, finds its frequency, and
     the joint's microslip parameters agree with the fit of the same decay without it."""
-    base = _svam(zeta0=3e-3, a0=3e-4, duration=1.0, quantity="acceleration", seed=21,
-                 second=0.0, ratio=1.24)
-    with_nb = _svam(zeta0=3e-3, a0=3e-4, duration=1.0, quantity="acceleration", seed=21,
-                    second=0.6, ratio=1.24)
+    base = _svam(
+        zeta0=3e-3, a0=3e-4, duration=1.0, quantity="acceleration", seed=21, second=0.0, ratio=1.24
+    )
+    with_nb = _svam(
+        zeta0=3e-3, a0=3e-4, duration=1.0, quantity="acceleration", seed=21, second=0.6, ratio=1.24
+    )
     f_a = fit_decay(base.t, base.y, quantity="acceleration", band=base.band)
     f_b = fit_decay(with_nb.t, with_nb.y, quantity="acceleration", band=with_nb.band)
     nb = f_b.conventions["neighbour_modes"]
@@ -298,7 +393,7 @@ def test_nearby_mode_is_modelled_not_taken_for_the_joint():
     for k in ("f0", "zeta0", "chi", "delta"):
         assert k in f_b.identified
         assert abs(f_b.parameters[k] - tr[k]) < 3 * f_b.stderr[k], (k, f_b.report())
-        assert f_b.stderr[k] < 3 * f_a.stderr[k]                  # the neighbour costs little
+        assert f_b.stderr[k] < 3 * f_a.stderr[k]  # the neighbour costs little
 
 
 def test_macroslip_release_next_to_a_mode_is_not_silently_microslip():
@@ -307,8 +402,17 @@ def test_macroslip_release_next_to_a_mode_is_not_silently_microslip():
     neighbour's start hid the macroslip and microslip was reported with success and chi 11
     stderr off): the fit reports the full model within 3 stderr, or says it failed."""
     p, k_inf = _joint(kappa=0.07, chi=-0.55, beta=0.75)
-    d = joint_decay(p, K_inf=k_inf, zeta0=7e-3, q0=3 * PHI_MAX, duration=1.2, fs=2400.0,
-                    quantity="acceleration", ratio=1.25, rng=np.random.default_rng(38))
+    d = joint_decay(
+        p,
+        K_inf=k_inf,
+        zeta0=7e-3,
+        q0=3 * PHI_MAX,
+        duration=1.2,
+        fs=2400.0,
+        quantity="acceleration",
+        ratio=1.25,
+        rng=np.random.default_rng(38),
+    )
     fit = fit_decay(d.t, d.y, quantity="acceleration", band=d.band)
     if fit.regime != "macroslip":
         assert not fit.success and any("phi_max" in w for w in fit.warnings), fit.report()
@@ -329,8 +433,17 @@ def test_short_macroslip_release_with_few_noise_samples_is_not_a_success():
     w02 = (2 * math.pi * 131.848) ** 2
     KT, chi, beta = 0.02344 * w02, -0.4017, 0.36
     p = IwanParameters(KT * (beta + (chi + 1) / (chi + 2)) * PHI_MAX / (1 + beta), KT, chi, beta)
-    d = joint_decay(p, K_inf=w02 - KT, zeta0=0.01772, q0=3 * PHI_MAX, duration=0.3406,
-                    fs=3138.0, quantity="velocity", ratio=0.879, rng=np.random.default_rng(100))
+    d = joint_decay(
+        p,
+        K_inf=w02 - KT,
+        zeta0=0.01772,
+        q0=3 * PHI_MAX,
+        duration=0.3406,
+        fs=3138.0,
+        quantity="velocity",
+        ratio=0.879,
+        rng=np.random.default_rng(100),
+    )
     fit = fit_decay(d.t, d.y, quantity="velocity", band=d.band)
     nu = fit.conventions["noise_dof"]
     assert 0.0 < nu < fit.conventions["residual_dof"] < fit.conventions["samples"]
@@ -373,6 +486,7 @@ def test_result_api_and_no_mutation():
     f, z, fb, zb = fit.predict(np.array([1e-5, 5e-5]), band=0.95)
     assert np.all(fb[0] <= f) and np.all(f <= fb[1])
     from matplotlib.figure import Figure
+
     fig = Figure()
     axes = (fig.add_subplot(2, 1, 1), fig.add_subplot(2, 1, 2))
     artists = fit.plot(ax=axes)
@@ -384,20 +498,23 @@ def _ok():
     return d.t, d.y, d.band
 
 
-@pytest.mark.parametrize("change, match", [
-    (lambda t, y, b: (t, np.where(np.arange(y.size) == 50, np.nan, y), b, {}), "y"),
-    (lambda t, y, b: (t[:-1], y, b, {}), "t"),
-    (lambda t, y, b: (t * np.r_[1.0, np.ones(t.size - 2) * 1.0, 1.3], y, b, {}), "t"),
-    (lambda t, y, b: (t, y, (b[0], 5000.0), {}), "band"),
-    (lambda t, y, b: (t, y, (b[1], b[0]), {}), "band"),
-    (lambda t, y, b: (t, y, b, {"quantity": "jerk"}), "quantity"),
-    (lambda t, y, b: (t, y, b, {"order": 0}), "order"),
-    (lambda t, y, b: (t, y, b, {"snr_min": 1.0}), "snr_min"),
-    (lambda t, y, b: (t, y, b, {"significance": 0.0}), "significance"),
-    (lambda t, y, b: (t, y, b, {"t_start": -1.0}), "t_start"),
-    (lambda t, y, b: (t, y, b, {"floor": "none"}), "floor"),
-    (lambda t, y, b: (t[:30], y[:30], b, {}), "y"),
-])
+@pytest.mark.parametrize(
+    "change, match",
+    [
+        (lambda t, y, b: (t, np.where(np.arange(y.size) == 50, np.nan, y), b, {}), "y"),
+        (lambda t, y, b: (t[:-1], y, b, {}), "t"),
+        (lambda t, y, b: (t * np.r_[1.0, np.ones(t.size - 2) * 1.0, 1.3], y, b, {}), "t"),
+        (lambda t, y, b: (t, y, (b[0], 5000.0), {}), "band"),
+        (lambda t, y, b: (t, y, (b[1], b[0]), {}), "band"),
+        (lambda t, y, b: (t, y, b, {"quantity": "jerk"}), "quantity"),
+        (lambda t, y, b: (t, y, b, {"order": 0}), "order"),
+        (lambda t, y, b: (t, y, b, {"snr_min": 1.0}), "snr_min"),
+        (lambda t, y, b: (t, y, b, {"significance": 0.0}), "significance"),
+        (lambda t, y, b: (t, y, b, {"t_start": -1.0}), "t_start"),
+        (lambda t, y, b: (t, y, b, {"floor": "none"}), "floor"),
+        (lambda t, y, b: (t[:30], y[:30], b, {}), "y"),
+    ],
+)
 def test_bad_input_raises_naming_the_argument(change, match):
     t, y, band = _ok()
     tt, yy, bb, kw = change(t, y, band)

@@ -1,6 +1,7 @@
 """diagnose / diagnose_vibration: exact fast evaluation, detection of hidden effects (reduced
 matrix; benchmarks/bench_diagnosis.py runs the full one), no false positives on clean data,
 two effects in two steps, the augmented model in the Exudyn connector, bad input."""
+
 import json
 import math
 import os
@@ -47,23 +48,30 @@ def test_fast_evaluation_equals_the_elements():
     rng = np.random.default_rng(3)
     t = np.linspace(0, 8, 1601)
     u = P.phi_max * np.sin(2 * np.pi * t) * np.append(np.repeat([0.3, 1.5, 0.5, 1.1], 400), 1.1)
-    u = u + 2e-6 * rng.normal(size=u.size)              # jitter: many small reversals
+    u = u + 2e-6 * rng.normal(size=u.size)  # jitter: many small reversals
     v = np.gradient(u, t)
     keep = np.arange(0, u.size, 3)
     ev = Evaluator(u, v, keep, np.arange(u.size), tol=REVERSAL_TOL * np.abs(u).max())
     shape = (P.phi_max, P.chi, P.beta)
-    cases = [((), ()), (("viscous_damping",), ({"c": 0.01},)),
-             (("pinning_stiffness",), ({"k_p": 300.0, "delta": 1e-3},)),
-             (("asymmetric_slip",), ({"asymmetry": 0.2},)),
-             (("slip_degradation",), ({"rate": 30.0},)),
-             (("breakaway",), ({"ratio": 1.4},)),
-             (("slip_degradation", "viscous_damping"), ({"rate": 30.0}, {"c": 0.01})),
-             (("asymmetric_slip", "pinning_stiffness"), ({"asymmetry": 0.2},
-                                                         {"k_p": 300.0, "delta": 1e-3})),
-             (("backlash",), ({"gap": 2e-4},)),
-             (("backlash", "viscous_damping"), ({"gap": 2e-4, "drag": 0.05}, {"c": 0.01})),
-             (("asymmetric_slip", "breakaway", "backlash"), ({"asymmetry": 0.2}, {"ratio": 1.4},
-                                                             {"gap": 1e-4, "drag": 0.1}))]
+    cases = [
+        ((), ()),
+        (("viscous_damping",), ({"c": 0.01},)),
+        (("pinning_stiffness",), ({"k_p": 300.0, "delta": 1e-3},)),
+        (("asymmetric_slip",), ({"asymmetry": 0.2},)),
+        (("slip_degradation",), ({"rate": 30.0},)),
+        (("breakaway",), ({"ratio": 1.4},)),
+        (("slip_degradation", "viscous_damping"), ({"rate": 30.0}, {"c": 0.01})),
+        (
+            ("asymmetric_slip", "pinning_stiffness"),
+            ({"asymmetry": 0.2}, {"k_p": 300.0, "delta": 1e-3}),
+        ),
+        (("backlash",), ({"gap": 2e-4},)),
+        (("backlash", "viscous_damping"), ({"gap": 2e-4, "drag": 0.05}, {"c": 0.01})),
+        (
+            ("asymmetric_slip", "breakaway", "backlash"),
+            ({"asymmetry": 0.2}, {"ratio": 1.4}, {"gap": 1e-4, "drag": 0.1}),
+        ),
+    ]
     for names, vals in cases:
         assert ev.fast(names)
         fast = ev.unit_force(shape, names, vals)
@@ -72,8 +80,11 @@ def test_fast_evaluation_equals_the_elements():
         np.testing.assert_allclose(fast, ref, rtol=0, atol=1e-9)
     # rate- or energy-dependent elements inside the gap, and a slider effect outside it,
     # are run element by element
-    for names in (("viscous_damping", "backlash"), ("slip_degradation", "backlash"),
-                  ("viscous_damping", "asymmetric_slip")):
+    for names in (
+        ("viscous_damping", "backlash"),
+        ("slip_degradation", "backlash"),
+        ("viscous_damping", "asymmetric_slip"),
+    ):
         assert not ev.fast(names)
 
 
@@ -118,13 +129,18 @@ def test_hidden_effect_is_named_and_fitted_to_the_noise(name):
 def test_clean_data_and_offsets_never_name_an_effect():
     for seed in range(6):
         proto = list(PROTOCOLS)[seed % 2]
-        colour = 0.5 if seed % 3 == 2 else 0.0           # see notes: 0.8 fails (tau)
+        colour = 0.5 if seed % 3 == 2 else 0.0  # see notes: 0.8 fails (tau)
         el = IwanJoint(P)
-        d = simulate_element_test(el, np.array(PROTOCOLS[proto]) * P.phi_max,
-                                  force_noise=SIGMA, noise_correlation=colour, seed=500 + seed,
-                                  force_offset=(50.0, -300.0, 120.0)[seed % 3],
-                                  displacement_offset=(5e-6, -20e-6, 12e-6)[seed % 3],
-                                  rest_samples=20)
+        d = simulate_element_test(
+            el,
+            np.array(PROTOCOLS[proto]) * P.phi_max,
+            force_noise=SIGMA,
+            noise_correlation=colour,
+            seed=500 + seed,
+            force_offset=(50.0, -300.0, 120.0)[seed % 3],
+            displacement_offset=(5e-6, -20e-6, 12e-6)[seed % 3],
+            rest_samples=20,
+        )
         g = diagnose(d.t, d.u, d.F)
         assert g.effect == "none" and g.effects == (), (seed, g.report())
         assert g.fit is g.base_fit and g.success
@@ -137,9 +153,8 @@ def test_clean_data_and_offsets_never_name_an_effect():
             assert not ok or f.stderr[k] <= 0.5 * scale, (k, f.report())
             assert ok or any(k in w for w in f.warnings), (k, f.warnings)
         assert g.offsets["force"] == pytest.approx((50.0, -300.0, 120.0)[seed % 3], abs=5.0)
-        assert g.offsets["displacement"] == pytest.approx((5e-6, -20e-6, 12e-6)[seed % 3],
-                                                          abs=1e-9)
-        if colour:              # coloured noise (AR(1) 0.5: tau = 3 samples) recognised as such
+        assert g.offsets["displacement"] == pytest.approx((5e-6, -20e-6, 12e-6)[seed % 3], abs=1e-9)
+        if colour:  # coloured noise (AR(1) 0.5: tau = 3 samples) recognised as such
             assert 2.0 < g.details["tau"] < 4.5, g.details["tau"]
             assert abs(g.noise_sigma / SIGMA - 1) < 0.2, g.noise_sigma
 
@@ -150,10 +165,16 @@ def test_pure_noise_names_nothing_and_fails():
     g = diagnose(d.t, d.u, rng.normal(0.0, SIGMA, d.F.size))
     assert g.effects == () and not g.success
     assert any("indistinguishable from noise" in w for w in g.warnings)
-    assert not any(g.fit.identified.values()) and not g.fit.success     # nothing identified
+    assert not any(g.fit.identified.values()) and not g.fit.success  # nothing identified
     # with rest samples (force offset measured there) and a ramped envelope too
-    r = simulate_element_test(IwanJoint(P), np.array([0.15, 1.9]) * P.phi_max, envelope="linear",
-                              cycles=5, samples_per_cycle=128, rest_samples=20)
+    r = simulate_element_test(
+        IwanJoint(P),
+        np.array([0.15, 1.9]) * P.phi_max,
+        envelope="linear",
+        cycles=5,
+        samples_per_cycle=128,
+        rest_samples=20,
+    )
     g = diagnose(r.t, r.u, 100.0 + rng.normal(0.0, SIGMA, r.F.size))
     assert g.effects == () and not g.success
 
@@ -162,23 +183,31 @@ def test_ramped_and_triangular_envelopes_are_not_refused():
     """No repeated amplitude anywhere: the noise comes from the record itself."""
     for env_amps, seed in (((0.2, 1.6), 1), ((0.3, 1.4, 0.3), 2)):
         el = element("backlash", calibrated("backlash", 6.0, "ladder"))
-        d = simulate_element_test(el, np.array(env_amps) * P.phi_max, envelope="linear",
-                                  cycles=4, samples_per_cycle=128, force_noise=SIGMA, seed=seed)
+        d = simulate_element_test(
+            el,
+            np.array(env_amps) * P.phi_max,
+            envelope="linear",
+            cycles=4,
+            samples_per_cycle=128,
+            force_noise=SIGMA,
+            seed=seed,
+        )
         g = diagnose(d.t, d.u, d.F, max_effects=1)
         assert g.effect == "backlash", g.report()
         assert abs(g.noise_sigma / SIGMA - 1) < 0.35
 
 
 def test_two_hidden_effects_are_named_in_two_steps():
-    el = ViscousDamping(AsymmetricSlip(IwanJoint(P), asymmetry=calibrated("asymmetric_slip", 8.0,
-                                                                          "ladder")),
-                        c=calibrated("viscous_damping", 8.0, "ladder"))
+    el = ViscousDamping(
+        AsymmetricSlip(IwanJoint(P), asymmetry=calibrated("asymmetric_slip", 8.0, "ladder")),
+        c=calibrated("viscous_damping", 8.0, "ladder"),
+    )
     d = record(None, 0, "ladder", 11, el=el)
     g = diagnose(d.t, d.u, d.F, candidates=("viscous_damping", "asymmetric_slip", "backlash"))
     assert set(g.effects) == {"viscous_damping", "asymmetric_slip"}, g.report()
     assert len(g.steps) == 2 and g.effect == g.effects[0]
     assert g.error_after / g.noise_level <= 1.3
-    assert type(g.model).__name__ == "ViscousDamping"          # slider effect innermost
+    assert type(g.model).__name__ == "ViscousDamping"  # slider effect innermost
     g1 = diagnose(d.t, d.u, d.F, max_effects=1, candidates=("viscous_damping", "asymmetric_slip"))
     assert len(g1.effects) == 1 and any("remains" in w for w in g1.warnings)
 
@@ -194,8 +223,7 @@ def test_two_slider_laws_on_one_joint_are_both_named():
     g = diagnose(d.t, d.u, d.F, candidates=("viscous_damping", "asymmetric_slip", "breakaway"))
     assert set(g.effects) == {"asymmetric_slip", "breakaway"}, g.report()
     assert g.error_after / g.noise_level <= 1.3, g.report()
-    assert {type(g.model).__name__, type(g.model.inner).__name__} == {"BreakAway",
-                                                                     "AsymmetricSlip"}
+    assert {type(g.model).__name__, type(g.model.inner).__name__} == {"BreakAway", "AsymmetricSlip"}
     assert g.model.law() == pytest.approx(el.law(), rel=0.05), (g.model.law(), el.law())
 
 
@@ -216,8 +244,10 @@ def test_result_reports_serialises_and_plots(tmp_path):
     se = g.fit.details["effects"][0]["stderr"]["rate"]
     assert abs(rate - true) < 3 * se + 0.05 * true
     import matplotlib
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+
     arts = g.plot()
     assert len(arts) >= 6
     plt.gcf().savefig(tmp_path / "d.png")
@@ -231,11 +261,12 @@ def test_bad_input():
     d = record(None, 0, "ladder", 0)
     with pytest.raises(ValueError, match="at least 40"):
         diagnose(d.t[:30], d.u[:30], d.F[:30])
-    one = simulate_element_test(IwanJoint(P), np.array([0.3, 0.6, 1.0, 1.5]) * P.phi_max,
-                                cycles=1, force_noise=SIGMA)
-    g = diagnose(one.t, one.u, one.F)                           # one cycle per amplitude: fine
+    one = simulate_element_test(
+        IwanJoint(P), np.array([0.3, 0.6, 1.0, 1.5]) * P.phi_max, cycles=1, force_noise=SIGMA
+    )
+    g = diagnose(one.t, one.u, one.F)  # one cycle per amplitude: fine
     assert g.effect == "none"
-    g = diagnose(one.t, one.u, one.F, noise=SIGMA)              # given noise: works
+    g = diagnose(one.t, one.u, one.F, noise=SIGMA)  # given noise: works
     assert g.effect == "none" and g.details["noise_from"] == "given"
     with pytest.raises(ValueError, match="candidates"):
         diagnose(d.t, d.u, d.F, candidates=["friction"])
@@ -281,9 +312,13 @@ def test_protocols_that_cannot_reveal_an_effect_say_so():
 def test_augmented_model_in_the_exudyn_connector_reproduces_the_fit(name):
     from _connector_models import Chain, settings
 
-    d = simulate_element_test(element(name, calibrated(name, 8.0, "ladder")),
-                              np.array([0.3, 1.0, 1.5]) * P.phi_max, samples_per_cycle=48,
-                              force_noise=SIGMA, seed=4)
+    d = simulate_element_test(
+        element(name, calibrated(name, 8.0, "ladder")),
+        np.array([0.3, 1.0, 1.5]) * P.phi_max,
+        samples_per_cycle=48,
+        force_noise=SIGMA,
+        seed=4,
+    )
     g = diagnose(d.t, d.u, d.F, max_effects=1)
     assert g.effect == name
     chain = Chain([1.0])
@@ -295,8 +330,12 @@ def test_augmented_model_in_the_exudyn_connector_reproduces_the_fit(name):
     assert conn.n_records == tt.size
     np.testing.assert_allclose(conn.slip_history, uu, rtol=0, atol=1e-12 * np.abs(uu).max())
     # force_after includes the fitted force offset (a sensor nuisance, not in the element)
-    np.testing.assert_allclose(conn.force_history + g.offsets["force"], g.force_after, rtol=0,
-                               atol=1e-8 * np.abs(d.F).max())
+    np.testing.assert_allclose(
+        conn.force_history + g.offsets["force"],
+        g.force_after,
+        rtol=0,
+        atol=1e-8 * np.abs(d.F).max(),
+    )
 
 
 # ----------------------------------------------------------------------------- vibration
@@ -306,34 +345,47 @@ def test_modal_curves_match_the_reference_vector():
     np.testing.assert_allclose(z, [9.64789e-4, 9.31094e-3, 3.46287e-2], rtol=2e-5)
 
 
-@pytest.mark.parametrize("hidden, name", [
-    ({"zeta_v": 1e-3}, "viscous_damping"), ({"zeta_v": 3e-4}, "viscous_damping"),
-    ({"k_p": 3e4}, "pinning_stiffness"), ({"k_p": 1e4, "delta": 0.5 * MODAL.phi_max},
-                                          "pinning_stiffness")])
+@pytest.mark.parametrize(
+    "hidden, name",
+    [
+        ({"zeta_v": 1e-3}, "viscous_damping"),
+        ({"zeta_v": 3e-4}, "viscous_damping"),
+        ({"k_p": 3e4}, "pinning_stiffness"),
+        ({"k_p": 1e4, "delta": 0.5 * MODAL.phi_max}, "pinning_stiffness"),
+    ],
+)
 def test_vibration_floor_is_named_and_sized(hidden, name):
     """Truth from the time-domain elements (quadrature of simulated cycles), not from the
     describing function the diagnosis uses."""
     for seed in (1, 2):
         X, fm, zm, fp, zp = vibration_case_elements(seed, **hidden)
-        g = diagnose_vibration(X, fm, zm, predicted_frequency=fp, predicted_damping_ratio=zp,
-                               predicted_zeta0=ZETA0)
+        g = diagnose_vibration(
+            X, fm, zm, predicted_frequency=fp, predicted_damping_ratio=zp, predicted_zeta0=ZETA0
+        )
         assert g.effects == (name,), g.report()
         par = g.parameters[name]
         if name == "viscous_damping":
             assert par["zeta_v"] == pytest.approx(hidden["zeta_v"], rel=0.1)
-            assert "measured damping beyond 3 x noise of the prediction: above it from" in g.where.lower()
+            assert (
+                "measured damping beyond 3 x noise of the prediction: above it from"
+                in g.where.lower()
+            )
         else:
             assert par["k_p_per_mass"] == pytest.approx(hidden["k_p"], rel=0.1)
             assert par["delta"] == pytest.approx(hidden.get("delta", 0.0), abs=0.1 * MODAL.phi_max)
-            assert "measured frequency beyond 3 x noise of the prediction: above it from" in g.where.lower()
-        truth = math.sqrt(0.5 * (2e-4 ** 2 + 0.02 ** 2))
+            assert (
+                "measured frequency beyond 3 x noise of the prediction: above it from"
+                in g.where.lower()
+            )
+        truth = math.sqrt(0.5 * (2e-4**2 + 0.02**2))
         assert g.error_after <= 1.25 * truth and g.error_after < g.error_before
 
 
 def test_vibration_two_effects_clean_curves_and_augment():
     X, fm, zm, fp, zp = vibration_case(5, zeta_v=1e-3, k_p=3e4)
-    g = diagnose_vibration(X, fm, zm, predicted_frequency=fp, predicted_damping_ratio=zp,
-                           predicted_zeta0=ZETA0)
+    g = diagnose_vibration(
+        X, fm, zm, predicted_frequency=fp, predicted_damping_ratio=zp, predicted_zeta0=ZETA0
+    )
     assert set(g.effects) == {"viscous_damping", "pinning_stiffness"}
     el = g.augment(IwanJoint(MODAL), modal_mass=1.0)
     kinds = {type(el).__name__, type(el.inner).__name__}
@@ -355,8 +407,9 @@ def test_vibration_two_effects_clean_curves_and_augment():
             named += 1
             assert max(g.probabilities.values()) < 0.9 and "NOT SURE" in g.report()
     assert named <= 1
-    g5 = diagnose_vibration(X[:5], fm[:5], zm[:5], predicted_frequency=fp[:5],
-                            predicted_damping_ratio=zp[:5])
+    g5 = diagnose_vibration(
+        X[:5], fm[:5], zm[:5], predicted_frequency=fp[:5], predicted_damping_ratio=zp[:5]
+    )
     assert any("only 5 amplitudes" in w for w in g5.warnings)
     with pytest.raises(ValueError, match="damping_ratio must be > 0"):
         diagnose_vibration(X, fm, -zm, predicted_frequency=fp, predicted_damping_ratio=zp)
@@ -365,18 +418,24 @@ def test_vibration_two_effects_clean_curves_and_augment():
 def test_vibration_unit_mistakes_are_flagged():
     X, fm, zm, fp, zp = vibration_case(3)
     with pytest.raises(ValueError, match="frequency .*rad/s"):
-        diagnose_vibration(X, 2 * np.pi * fm, zm, predicted_frequency=fp, predicted_damping_ratio=zp)
+        diagnose_vibration(
+            X, 2 * np.pi * fm, zm, predicted_frequency=fp, predicted_damping_ratio=zp
+        )
     with pytest.raises(ValueError, match="predicted_frequency .*rad/s"):
-        diagnose_vibration(X, fm, zm, predicted_frequency=2 * np.pi * fp, predicted_damping_ratio=zp)
+        diagnose_vibration(
+            X, fm, zm, predicted_frequency=2 * np.pi * fp, predicted_damping_ratio=zp
+        )
     with pytest.raises(ValueError, match="damping .*percent"):
-        diagnose_vibration(X, fm, 100 * zm + 1.0, predicted_frequency=fp, predicted_damping_ratio=zp)
+        diagnose_vibration(
+            X, fm, 100 * zm + 1.0, predicted_frequency=fp, predicted_damping_ratio=zp
+        )
 
 
 def test_vibration_never_names_what_raises_the_mismatch():
     """A mismatch no modal form explains (a frequency that dips in the middle) is left
     unnamed, with a warning, and the mismatch after is never above the mismatch before."""
     X, fm, zm, fp, zp = vibration_case(4)
-    bump = 1.0 - 0.004 * np.exp(-np.log(X / np.median(X)) ** 2)
+    bump = 1.0 - 0.004 * np.exp(-(np.log(X / np.median(X)) ** 2))
     g = diagnose_vibration(X, fm * bump, zm, predicted_frequency=fp, predicted_damping_ratio=zp)
     assert g.error_after <= g.error_before
     assert g.effect == "none" or g.error_after < 0.8 * g.error_before, g.report()
@@ -387,10 +446,14 @@ def test_vibration_never_names_what_raises_the_mismatch():
 # ----------------------------------------------------------------------------- CLI, example
 def test_cli_diagnose(tmp_path, capsys):
     from iwan_element.cli import main
+
     d = record("asymmetric_slip", 8.0, "ladder", 5)
     path = write_record_csv(tmp_path / "t.csv", d.t, d.u, d.F)
     js, png = tmp_path / "d.json", tmp_path / "d.png"
-    assert main(["diagnose", str(path), "--units", "mm,kN", "--json", str(js), "--plot", str(png)]) == 0
+    assert (
+        main(["diagnose", str(path), "--units", "mm,kN", "--json", str(js), "--plot", str(png)])
+        == 0
+    )
     out = capsys.readouterr()
     assert "named: asymmetric_slip" in out.out and out.err == ""
     assert json.loads(js.read_text())["effect"] == "asymmetric_slip"
@@ -407,9 +470,19 @@ def test_cli_diagnose(tmp_path, capsys):
 
 def test_example_runs(tmp_path):
     out = tmp_path / "diag.png"
-    proc = subprocess.run([sys.executable, str(ROOT / "examples" / "diagnose_missing_effect.py"),
-                           "--quick", "--out", str(out)], capture_output=True, text=True,
-                          timeout=120, env={**os.environ, "MPLBACKEND": "Agg"})
+    proc = subprocess.run(
+        [
+            sys.executable,
+            str(ROOT / "examples" / "diagnose_missing_effect.py"),
+            "--quick",
+            "--out",
+            str(out),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env={**os.environ, "MPLBACKEND": "Agg"},
+    )
     assert proc.returncode == 0, proc.stderr
     assert "named: backlash" in proc.stdout and out.stat().st_size > 10_000
 
@@ -420,8 +493,14 @@ def test_backlash_crossed_against_drag_is_named_with_its_drag():
     same width leaves a misfit."""
     g_true, fd_true = 0.15 * P.phi_max, 0.06 * P.Fs
     el = make_effect("backlash", IwanJoint(P), gap=g_true, drag=fd_true)
-    d = simulate_element_test(el, np.array(PROTOCOLS["ladder"]) * P.phi_max, force_noise=SIGMA,
-                              seed=611, force_offset=-80.0, rest_samples=20)
+    d = simulate_element_test(
+        el,
+        np.array(PROTOCOLS["ladder"]) * P.phi_max,
+        force_noise=SIGMA,
+        seed=611,
+        force_offset=-80.0,
+        rest_samples=20,
+    )
     g = diagnose(d.t, d.u, d.F, max_effects=1)
     assert g.effects == ("backlash",), g.report()
     assert g.error_after / g.noise_level <= 1.3, g.report()
@@ -462,7 +541,7 @@ def test_a_record_that_starts_loaded_gets_a_starting_state_not_an_effect():
     assert any("does not start from the joint's rest" in w for w in g.warnings)
     g0 = diagnose(t, u, forces[0.0], noise=SIGMA)
     assert g0.effects == () and g0.details["start_displacement"] == 0.0
-    assert g0.details["start_displacement_stderr"] == 0.0       # held at rest, not fitted
+    assert g0.details["start_displacement_stderr"] == 0.0  # held at rest, not fitted
     assert not any("does not start from the joint's rest" in w for w in g0.warnings)
 
 
@@ -477,16 +556,20 @@ def test_evaluator_start_equals_the_elements_driven_from_the_start():
     shape = (P.phi_max, P.chi, P.beta)
     for s in (0.8 * P.phi_max, -0.5 * P.phi_max):
         ev.set_start(s)
-        for names, vals in [((), ()), (("slip_degradation",), ({"rate": 30.0},)),
-                            (("backlash",), ({"gap": 0.1 * P.phi_max},))]:
+        for names, vals in [
+            ((), ()),
+            (("slip_degradation",), ({"rate": 30.0},)),
+            (("backlash",), ({"gap": 0.1 * P.phi_max},)),
+        ]:
             el = build_element(unit_params(*shape), names, vals)
             ue, ve = np.concatenate([[s], u]), np.concatenate([[0.0], v])
             ref = (el.force_history(ue, ve) if names else el.force_history(ue))[1:][keep]
             np.testing.assert_allclose(ev.unit_force(shape, names, vals), ref, rtol=0, atol=1e-9)
     ev.set_start(0.0)
     el = build_element(unit_params(*shape), (), ())
-    np.testing.assert_allclose(ev.unit_force(shape, (), ()), el.force_history(u)[keep],
-                               rtol=0, atol=1e-9)
+    np.testing.assert_allclose(
+        ev.unit_force(shape, (), ()), el.force_history(u)[keep], rtol=0, atol=1e-9
+    )
 
 
 def test_loop_candidates_come_from_the_effects_declarations():
@@ -495,9 +578,16 @@ def test_loop_candidates_come_from_the_effects_declarations():
     from iwan_element import loop_candidates
     from iwan_element.effects import EFFECTS, ParamSpec, register_effect
     from iwan_element.effects.base import Effect
-    assert loop_candidates() == ("viscous_damping", "pinning_stiffness", "backlash",
-                                 "slip_degradation", "asymmetric_slip", "breakaway")
-    assert "hardening" not in loop_candidates()          # a beam-vibration effect only
+
+    assert loop_candidates() == (
+        "viscous_damping",
+        "pinning_stiffness",
+        "backlash",
+        "slip_degradation",
+        "asymmetric_slip",
+        "breakaway",
+    )
+    assert "hardening" not in loop_candidates()  # a beam-vibration effect only
 
     class _Probe(Effect):
         effect = "probe_loop"

@@ -3,6 +3,7 @@
 plain joint above 0.9, a dominant effect puts itself above 0.99, the report says when no
 explanation is above 0.9, the prior is stated and overridable, and the model-averaged band
 agrees with sampling the parameters' posterior (an independent route)."""
+
 from __future__ import annotations
 
 import math
@@ -38,10 +39,11 @@ def _check_shape(d):
     assert all(k == tuple(sorted(k)) for k in p)
     assert () in p
     top = max(p, key=p.get)
-    assert top == tuple(sorted(d.effects))          # the named effects: the most probable
+    assert top == tuple(sorted(d.effects))  # the named effects: the most probable
     for name in {n for k in p for n in k}:
         assert d.effect_probability(name) == pytest.approx(
-            sum(v for k, v in p.items() if name in k))
+            sum(v for k, v in p.items() if name in k)
+        )
     with pytest.raises(ValueError, match="name must be one of"):
         d.effect_probability("gremlins")
 
@@ -58,7 +60,8 @@ def test_clean_record_puts_the_plain_joint_above_0_9(clean):
     assert diagnose(d.t, d.u, d.F).probabilities[()] > 0.9
     # every single candidate was fitted for the probabilities, though the rule needed none
     assert {k for k in clean.probabilities if len(k) == 1} == {
-        (c,) for c in clean.details["candidates"]}
+        (c,) for c in clean.details["candidates"]
+    }
 
 
 def test_pure_noise_puts_the_plain_joint_above_0_9():
@@ -89,19 +92,22 @@ def test_tables_html_and_dict_show_the_probabilities(dominant):
 
 def test_vibration_probabilities_clean_dominant_and_not_sure():
     X, fm, zm, fp, zp = vibration_case(1)
-    c = diagnose_vibration(X, fm, zm, predicted_frequency=fp, predicted_damping_ratio=zp,
-                           predicted_zeta0=ZETA0)
+    c = diagnose_vibration(
+        X, fm, zm, predicted_frequency=fp, predicted_damping_ratio=zp, predicted_zeta0=ZETA0
+    )
     _check_shape(c)
     assert c.probabilities[()] > 0.9
     X, fm, zm, fp, zp = vibration_case(1, k_p=1e4, delta=1e-4)
-    g = diagnose_vibration(X, fm, zm, predicted_frequency=fp, predicted_damping_ratio=zp,
-                           predicted_zeta0=ZETA0)
+    g = diagnose_vibration(
+        X, fm, zm, predicted_frequency=fp, predicted_damping_ratio=zp, predicted_zeta0=ZETA0
+    )
     _check_shape(g)
     assert g.effect_probability("pinning_stiffness") > 0.99
     # a small dashpot on 12 amplitudes: neither explanation is sure, and the report says so
     X, fm, zm, fp, zp = vibration_case(2, n=12, zeta_v=6e-5)
-    u = diagnose_vibration(X, fm, zm, predicted_frequency=fp, predicted_damping_ratio=zp,
-                           predicted_zeta0=ZETA0)
+    u = diagnose_vibration(
+        X, fm, zm, predicted_frequency=fp, predicted_damping_ratio=zp, predicted_zeta0=ZETA0
+    )
     _check_shape(u)
     assert max(u.probabilities.values()) < 0.9
     assert "NOT SURE: no explanation is above 0.9" in u.report()
@@ -128,8 +134,7 @@ def test_prior_is_stated_and_overridable():
     b = diagnose_vibration(X, fm, zm, effect_prior={"viscous_damping": 0.5}, **kw)
     odds_a = a.probabilities[("viscous_damping",)] / a.probabilities[()]
     odds_b = b.probabilities[("viscous_damping",)] / b.probabilities[()]
-    pv = default_effect_prior(len(a.details["candidates"]) if "candidates" in a.details
-                              else 4)
+    pv = default_effect_prior(len(a.details["candidates"]) if "candidates" in a.details else 4)
     assert odds_b / odds_a == pytest.approx((0.5 / 0.5) / (pv / (1 - pv)), rel=1e-6)
     for bad in (0.0, 1.0, {"gremlins": 0.2}, "half"):
         with pytest.raises(ValueError):
@@ -143,6 +148,7 @@ def test_averaged_band_matches_sampling_the_posterior(dominant):
     deviation (linearised) matches 120 draws of the parameters from their posterior run
     through the elements (median ratio within 20 %)."""
     from iwan_element.diagnose.loops.evidence import member_force
+
     b = dominant.averaged_band()
     assert b.members[0][0] == ("backlash",)
     f = b.channels["force"]
@@ -153,11 +159,16 @@ def test_averaged_band_matches_sampling_the_posterior(dominant):
     v = np.gradient(uj, dominant.t)
     draws = rng.multivariate_normal(e.theta, e.covariance, size=120)
     from iwan_element.effects import EFFECTS
+
     lows = [sp.prior_range[0] for nm in e.stack for sp in EFFECTS[nm].specs]
-    for j, lo in enumerate(lows):               # a size at its bound: its half-Gaussian
+    for j, lo in enumerate(lows):  # a size at its bound: its half-Gaussian
         draws[:, 3 + j] = lo + np.abs(draws[:, 3 + j] - lo)
-    sims = np.array([member_force(e.stack, th, dominant.details["x_max"],
-                                  dominant.details["scales"], uj, v) for th in draws])
+    sims = np.array(
+        [
+            member_force(e.stack, th, dominant.details["x_max"], dominant.details["scales"], uj, v)
+            for th in draws
+        ]
+    )
     sd_mc = sims.std(axis=0)
     big = sd_mc > np.median(sd_mc)
     assert np.median(f["std"][big] / sd_mc[big]) == pytest.approx(1.0, rel=0.2)
@@ -193,8 +204,9 @@ def test_vibration_averaged_band_mixes_the_explanations():
     is the probability-weighted mean of the members' curves, its ends bracket it, and the
     plain member's curve is the prediction itself."""
     X, fm, zm, fp, zp = vibration_case(2, n=12, zeta_v=6e-5)
-    u = diagnose_vibration(X, fm, zm, predicted_frequency=fp, predicted_damping_ratio=zp,
-                           predicted_zeta0=ZETA0)
+    u = diagnose_vibration(
+        X, fm, zm, predicted_frequency=fp, predicted_damping_ratio=zp, predicted_zeta0=ZETA0
+    )
     b = u.averaged_band(X)
     w = np.array([m[1] for m in b.members])
     assert w.sum() == pytest.approx(1.0) and len(b.members) >= 2
@@ -211,6 +223,7 @@ def _drive(amplitudes):
 
     from iwan_element import IwanJoint
     from iwan_element.diagnose import simulate_element_test
+
     d = simulate_element_test(IwanJoint(P), np.array(amplitudes) * P.phi_max)
     return d.u, np.gradient(d.u, d.t)
 
@@ -227,24 +240,28 @@ def test_microslip_ridge_keeps_the_force_and_states_its_density():
     from iwan_element.core.history import unit_params
     from iwan_element.diagnose.loops.evidence import member_force, microslip_ridge
     from iwan_element.diagnose.loops.prepare import effect_scales
+
     stack = ("pinning_stiffness",)
     for amps, on_ridge in (((0.5, 1.5), False), ((0.3, 0.6, 0.9), True)):
         u, v = _drive(amps)
         x_max, scales = float(np.max(np.abs(u))), effect_scales(u, v)
-        theta = np.array([math.log(P.phi_max / x_max), P.chi, math.log1p(P.beta),
-                          0.3, 0.5, P.Fs, 2.0])
+        theta = np.array(
+            [math.log(P.phi_max / x_max), P.chi, math.log1p(P.beta), 0.3, 0.5, P.Fs, 2.0]
+        )
         F = member_force(stack, theta, x_max, scales, u, v)
 
         def chi2_at(th):
             return float(np.sum((F - member_force(stack, th, x_max, scales, u, v)) ** 2))
+
         hi = np.array([math.log(1e4), 1.0, math.log(101.0), 20.0, 0.95, 1e9, 1e9])
         ridge = microslip_ridge(stack, theta, hi, chi2_at)
         assert (ridge is not None) == on_ridge
     pts = [theta[0] - 0.04, theta[0] + 0.05, ridge.upper - 0.01]
     for s in pts:
         th, _ = ridge.curve(s)
-        assert np.max(np.abs(member_force(stack, th, x_max, scales, u, v) - F)) < \
-            1e-9 * np.max(np.abs(F))
+        assert np.max(np.abs(member_force(stack, th, x_max, scales, u, v) - F)) < 1e-9 * np.max(
+            np.abs(F)
+        )
 
     def invariants(lb, Fs, z0):
         phi = x_max * math.exp(z0)
@@ -252,14 +269,15 @@ def test_microslip_ridge_keeps_the_force_and_states_its_density():
         KT = Fs * p1.KT
         return np.array([KT, KT / (1 + p1.beta) * (P.chi + 1) / phi ** (P.chi + 1)])
 
-    def log_density(s):                  # ln |d(lb, Fs, z_kp) / d(KT, R, k_p)| at fixed s
+    def log_density(s):  # ln |d(lb, Fs, z_kp) / d(KT, R, k_p)| at fixed s
         th, _ = ridge.curve(s)
         h = np.array([1e-6, 1e-6 * th[5]])
-        cols = [(invariants(th[2] + h[0], th[5], s) - invariants(th[2] - h[0], th[5], s)) /
-                (2 * h[0]),
-                (invariants(th[2], th[5] + h[1], s) - invariants(th[2], th[5] - h[1], s)) /
-                (2 * h[1])]
+        cols = [
+            (invariants(th[2] + h[0], th[5], s) - invariants(th[2] - h[0], th[5], s)) / (2 * h[0]),
+            (invariants(th[2], th[5] + h[1], s) - invariants(th[2], th[5] - h[1], s)) / (2 * h[1]),
+        ]
         return -math.log(abs(np.linalg.det(np.column_stack(cols)))) - math.log(th[5])
+
     ref = [log_density(s) - log_density(pts[0]) for s in pts]
     got = [ridge.curve(s)[1] - ridge.curve(pts[0])[1] for s in pts]
     assert got == pytest.approx(ref, abs=1e-5)
@@ -274,8 +292,10 @@ def test_clean_microslip_record_puts_the_plain_joint_above_0_9():
 
     from iwan_element import IwanJoint
     from iwan_element.diagnose import simulate_element_test
-    d = simulate_element_test(IwanJoint(P), np.array([0.3, 0.6, 0.9]) * P.phi_max,
-                              force_noise=SIGMA, seed=23)
+
+    d = simulate_element_test(
+        IwanJoint(P), np.array([0.3, 0.6, 0.9]) * P.phi_max, force_noise=SIGMA, seed=23
+    )
     g = diagnose(d.t, d.u, d.F)
     _check_shape(g)
     assert g.effects == () and g.probabilities[()] > 0.9

@@ -1,10 +1,11 @@
 """DiscreteIwan: slider layout, docs/equations.md section 4 figures, protocol and energy."""
+
 import numpy as np
 import pytest
 
 from iwan_element import DiscreteIwan, IwanJoint, IwanParameters, dissipation, slider_distribution
 
-P = IwanParameters(1.0, 1.0, -0.5, 0.1)      # the case of docs/equations.md section 4
+P = IwanParameters(1.0, 1.0, -0.5, 0.1)  # the case of docs/equations.md section 4
 
 
 def steady_cycle_dissipation(el, u0, n=40):
@@ -29,13 +30,16 @@ def test_moment_matched_bins_keep_KT_and_Fs():
 
 def test_uniform_midpoint_underestimates_KT_as_in_reference():
     k, _ = slider_distribution(P, 100, spacing="uniform")
-    assert k.sum() / P.KT - 1 == pytest.approx(-0.0275, abs=5e-4)     # docs/equations.md section 4
+    assert k.sum() / P.KT - 1 == pytest.approx(-0.0275, abs=5e-4)  # docs/equations.md section 4
 
 
-@pytest.mark.parametrize("spacing,lowest,expected", [
-    ("uniform", None, [2.4e-4, 8.6e-3, 3.3e-1, 1.0, 1.0]),
-    ("log", 1e-5, [1.7e-3, 6.1e-4, 2.3e-3, 2.4e-3, 2.8e-3]),
-])
+@pytest.mark.parametrize(
+    "spacing,lowest,expected",
+    [
+        ("uniform", None, [2.4e-4, 8.6e-3, 3.3e-1, 1.0, 1.0]),
+        ("log", 1e-5, [1.7e-3, 6.1e-4, 2.3e-3, 2.4e-3, 2.8e-3]),
+    ],
+)
 def test_dissipation_errors_reproduce_reference_table(spacing, lowest, expected):
     kw = {} if lowest is None else {"lowest_edge": lowest}
     el = DiscreteIwan(P, 100, spacing=spacing, **kw)
@@ -62,7 +66,7 @@ def test_dense_discrete_converges_to_exact():
 def test_protocol_and_energy_balance():
     el = DiscreteIwan(P, 50)
     el.trial(0.5 * P.phi_max)
-    assert el.displacement == 0.0 and el.work == 0.0       # trial commits nothing
+    assert el.displacement == 0.0 and el.work == 0.0  # trial commits nothing
     el.revert()
     u = P.phi_max * np.concatenate([np.linspace(0, 1.5, 3001), np.linspace(1.5, -0.3, 3001)])
     F = []
@@ -81,11 +85,16 @@ def test_protocol_and_energy_balance():
     assert K1 == pytest.approx((F1 - el.force) / (1e-9 * P.phi_max), rel=1e-5)
 
 
-@pytest.mark.parametrize("kw,name", [
-    (dict(n_sliders=0), "n_sliders"), (dict(n_sliders=2.5), "n_sliders"),
-    (dict(spacing="linear"), "spacing"), (dict(lowest_edge=0.0), "lowest_edge"),
-    (dict(lowest_edge=1.5), "lowest_edge"),
-])
+@pytest.mark.parametrize(
+    "kw,name",
+    [
+        (dict(n_sliders=0), "n_sliders"),
+        (dict(n_sliders=2.5), "n_sliders"),
+        (dict(spacing="linear"), "spacing"),
+        (dict(lowest_edge=0.0), "lowest_edge"),
+        (dict(lowest_edge=1.5), "lowest_edge"),
+    ],
+)
 def test_bad_arguments(kw, name):
     with pytest.raises(ValueError, match=name):
         DiscreteIwan(P, **kw)

@@ -1,5 +1,6 @@
 """Effects declare what they are (structure, data needs); the declarations are checked
 against what the elements do, and the diagnosis takes its untestable reasons from them."""
+
 import numpy as np
 import pytest
 
@@ -14,11 +15,16 @@ Q = IwanParameters(Fs=600.0, KT=2.5e6, chi=-0.2, beta=1.0)
 
 #: Parameters of each effect that change the force of joint P by a visible amount on
 #: :func:`_history` (2 mm); a new effect adds its own.
-VALUES = {"asymmetric_slip": {"asymmetry": 0.2}, "backlash": {"gap": 3e-4, "drag": 5.0},
-          "breakaway": {"ratio": 1.3}, "hardening": {"k3": 6e10},
-          "macroslip_onset": {"k_2": 2e5, "u_s": 3e-4, "shape": 0.3},
-          "pinning_stiffness": {"k_p": 3e5, "delta": 5e-4}, "slip_degradation": {"rate": 1e-2},
-          "viscous_damping": {"c": 1e4}}
+VALUES = {
+    "asymmetric_slip": {"asymmetry": 0.2},
+    "backlash": {"gap": 3e-4, "drag": 5.0},
+    "breakaway": {"ratio": 1.3},
+    "hardening": {"k3": 6e10},
+    "macroslip_onset": {"k_2": 2e5, "u_s": 3e-4, "shape": 0.3},
+    "pinning_stiffness": {"k_p": 3e5, "delta": 5e-4},
+    "slip_degradation": {"rate": 1e-2},
+    "viscous_damping": {"c": 1e4},
+}
 
 
 def _history(x=2e-3, n=600):
@@ -28,10 +34,16 @@ def _history(x=2e-3, n=600):
 
 #: What each shipped effect is, from its physics (module docstrings): a new effect adds its
 #: own line, and a changed declaration must change this table too.
-KINDS = {"viscous_damping": ("parallel", ("rate",)), "hardening": ("parallel", ()),
-         "pinning_stiffness": ("parallel", ()), "macroslip_onset": ("parallel", ()),
-         "backlash": ("series", ()), "asymmetric_slip": ("slider", ()),
-         "breakaway": ("slider", ()), "slip_degradation": ("energy", ())}
+KINDS = {
+    "viscous_damping": ("parallel", ("rate",)),
+    "hardening": ("parallel", ()),
+    "pinning_stiffness": ("parallel", ()),
+    "macroslip_onset": ("parallel", ()),
+    "backlash": ("series", ()),
+    "asymmetric_slip": ("slider", ()),
+    "breakaway": ("slider", ()),
+    "slip_degradation": ("energy", ()),
+}
 
 
 def test_each_effect_declares_what_its_physics_is():
@@ -50,7 +62,7 @@ def test_a_parallel_effect_adds_a_force_that_does_not_depend_on_the_joint(name):
     for p in (P, Q):
         el = make_effect(name, IwanJoint(p), **vals)
         added.append(el.force_history(u, v) - IwanJoint(p).force_history(u, v))
-    assert np.max(np.abs(added[0])) > 10.0          # newtons: the effect acts
+    assert np.max(np.abs(added[0])) > 10.0  # newtons: the effect acts
     # the joint forces (up to 1 kN) cancel to round-off in the differences
     np.testing.assert_allclose(added[0], added[1], rtol=1e-9, atol=1e-12 * P.Fs)
 
@@ -69,9 +81,12 @@ def test_a_series_effect_gives_the_joints_own_displacement(name):
     t, u = _history()
     el = make_effect(name, IwanJoint(P), **VALUES[name])
     uj = el.joint_path(u)
-    np.testing.assert_allclose(el.force_history(u, np.gradient(u, t)),
-                               IwanJoint(P).force_history(uj, np.zeros_like(uj)), rtol=1e-9,
-                               atol=1e-9 * P.Fs)
+    np.testing.assert_allclose(
+        el.force_history(u, np.gradient(u, t)),
+        IwanJoint(P).force_history(uj, np.zeros_like(uj)),
+        rtol=1e-9,
+        atol=1e-9 * P.Fs,
+    )
 
 
 def test_an_inconsistent_declaration_is_refused_when_the_class_is_made():

@@ -1,5 +1,6 @@
 """Ensemble runner: reproducibility across executors (serial, processes, Dask), failures,
 validation, the tidy table; uncertainty propagation and sweeps."""
+
 from __future__ import annotations
 
 import concurrent.futures as cf
@@ -28,6 +29,7 @@ from iwan_element.ensemble.oscillator import _integrate
 def ring_down(joint, system, *, x0, cycles, steps_per_period):
     h = 1.0 / (system.linear_frequency(joint) * steps_per_period)
     return _integrate(joint, system, h=h, n=cycles * steps_per_period, load=lambda t: 0.0, x0=x0)
+
 
 JOINT = ie.IwanParameters(Fs=9e3, KT=5e7, chi=-0.5, beta=0.5)
 SYSTEM = SingleModeSystem(mass=10.0, stiffness=2.5e7, zeta0=1e-3)
@@ -76,8 +78,13 @@ def dask_client():
     distributed = pytest.importorskip("distributed")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        cluster = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                                           dashboard_address=None, silence_logs=40)
+        cluster = distributed.LocalCluster(
+            n_workers=2,
+            threads_per_worker=1,
+            processes=True,
+            dashboard_address=None,
+            silence_logs=40,
+        )
         client = distributed.Client(cluster)
     yield client
     client.close()
@@ -119,9 +126,10 @@ def test_a_killed_dask_worker_loses_no_result(dask_client, tmp_path):
     assert marker.exists(), "the task did not kill its worker: the test proves nothing"
     assert not res.errors and len(res.rows) == 6
     killed_pid = int(marker.read_text())
-    assert res.rows[2]["pid"] != killed_pid          # re-run on a live worker
-    ref = run_ensemble(kill_once_task, [dict(s, marker=str(marker)) for s in sets],
-                       executor="serial", seed=11)
+    assert res.rows[2]["pid"] != killed_pid  # re-run on a live worker
+    ref = run_ensemble(
+        kill_once_task, [dict(s, marker=str(marker)) for s in sets], executor="serial", seed=11
+    )
     np.testing.assert_array_equal(res.column("y"), ref.column("y"))
 
 
@@ -145,8 +153,9 @@ def test_a_failing_task_is_reported_and_the_others_kept(executor):
 
 
 def test_bad_outputs_are_task_errors_with_a_reason():
-    res = run_ensemble(bad_output_task, [{"k": 0, "x": 1}, {"k": 1}, {"k": 2}],
-                       executor="serial", seed=0)
+    res = run_ensemble(
+        bad_output_task, [{"k": 0, "x": 1}, {"k": 1}, {"k": 2}], executor="serial", seed=0
+    )
     msgs = {e.index: e.message for e in res.errors}
     assert "name of a parameter" in msgs[0]
     assert "'y' must be a number" in msgs[1]
@@ -199,7 +208,7 @@ def test_csv_is_a_tidy_table(tmp_path):
 
 def test_progress_bar_runs(capsys, monkeypatch):
     pytest.importorskip("tqdm")
-    monkeypatch.delenv("CI", raising=False)      # bars are silent under CI
+    monkeypatch.delenv("CI", raising=False)  # bars are silent under CI
     res = run_ensemble(failing_task, [{"x": 1}, {"x": 2}], executor="serial", progress=True)
     assert res.ok.all() and "2/2" in capsys.readouterr().err
 
@@ -215,6 +224,7 @@ def test_closed_form_curve_matches_a_transient_ring_down():
     """
     t, x = ring_down(JOINT, SYSTEM, x0=1e-4, cycles=25, steps_per_period=256)
     from scipy.signal import find_peaks
+
     pk, _ = find_peaks(x)
     # refine the peak times by a parabola through the three samples
     y0, y1, y2 = x[pk - 1], x[pk], x[pk + 1]
@@ -235,22 +245,36 @@ def test_closed_form_curve_matches_a_transient_ring_down():
 def test_transient_integrator_matches_an_independent_one():
     """Newmark + Newton (this module) against central differences (iwan_element.modal_ringdown)."""
     t, x = ring_down(JOINT, SYSTEM, x0=1e-4, cycles=12, steps_per_period=400)
-    q, _, _ = ie.modal_ringdown(t, JOINT, K_inf=SYSTEM.stiffness, q0=1e-4, zeta0=SYSTEM.zeta0,
-                                mass=SYSTEM.mass, max_phase_step=0.005)
-    assert x.min() < -0.3e-4                   # it swung: a real nonlinear decay
+    q, _, _ = ie.modal_ringdown(
+        t,
+        JOINT,
+        K_inf=SYSTEM.stiffness,
+        q0=1e-4,
+        zeta0=SYSTEM.zeta0,
+        mass=SYSTEM.mass,
+        max_phase_step=0.005,
+    )
+    assert x.min() < -0.3e-4  # it swung: a real nonlinear decay
     np.testing.assert_allclose(x, q, atol=2e-3 * 1e-4)
 
 
 def test_peak_response_matches_the_linear_solution_at_small_force():
     from scipy.integrate import solve_ivp
+
     m, k, KT = SYSTEM.mass, SYSTEM.stiffness, JOINT.KT
     c = 2 * SYSTEM.zeta0 * math.sqrt((k + KT) * m)
     f0 = SYSTEM.linear_frequency(JOINT)
     w = 2 * math.pi * f0
-    F0 = 1e-4                                     # amplitudes ~1e-10 m: the joint is linear
+    F0 = 1e-4  # amplitudes ~1e-10 m: the joint is linear
     peak = peak_response(JOINT, SYSTEM, force=F0, cycles=10, steps_per_period=256)
-    sol = solve_ivp(lambda t, y: [y[1], (F0 * math.sin(w * t) - c * y[1] - (k + KT) * y[0]) / m],
-                    (0, 10 / f0), [0, 0], rtol=1e-10, atol=1e-18, max_step=1 / (400 * f0))
+    sol = solve_ivp(
+        lambda t, y: [y[1], (F0 * math.sin(w * t) - c * y[1] - (k + KT) * y[0]) / m],
+        (0, 10 / f0),
+        [0, 0],
+        rtol=1e-10,
+        atol=1e-18,
+        max_step=1 / (400 * f0),
+    )
     assert peak == pytest.approx(np.abs(sol.y[0]).max(), rel=2e-3)
 
 
@@ -270,13 +294,14 @@ def test_system_and_curve_inputs_are_checked():
 
 # ------------------------------------------------------------------ uncertainty
 def test_samples_follow_the_covariance_in_transformed_coordinates():
-    cov = np.diag([90.0 ** 2, (0.02 * 5e7) ** 2, 0.02 ** 2, 0.03 ** 2])
+    cov = np.diag([90.0**2, (0.02 * 5e7) ** 2, 0.02**2, 0.03**2])
     cov[0, 1] = cov[1, 0] = 0.6 * 90.0 * 0.02 * 5e7
     unc = ParameterUncertainty.from_mean_cov(JOINT, cov)
     sets, rejected = unc.sample(4000, rng=np.random.default_rng(0))
     assert rejected == 0.0
-    th = np.array([[math.log(s["Fs"]), math.log(s["KT"]), s["chi"], math.log1p(s["beta"])]
-                   for s in sets])
+    th = np.array(
+        [[math.log(s["Fs"]), math.log(s["KT"]), s["chi"], math.log1p(s["beta"])] for s in sets]
+    )
     # delta method: std of ln Fs = std Fs / Fs, etc.
     expected = np.sqrt(np.diag(cov)) / np.array([9e3, 5e7, 1.0, 1.5])
     np.testing.assert_allclose(th.std(axis=0), expected, rtol=0.05)
@@ -285,7 +310,7 @@ def test_samples_follow_the_covariance_in_transformed_coordinates():
 
 def test_bounds_are_kept_by_rejection():
     p = JOINT.replace(beta=0.0)
-    unc = ParameterUncertainty.from_mean_cov(p, [[0.05 ** 2]], names=["beta"])
+    unc = ParameterUncertainty.from_mean_cov(p, [[0.05**2]], names=["beta"])
     sets, rejected = unc.sample(500, rng=np.random.default_rng(1))
     assert min(s["beta"] for s in sets) >= 0.0
     assert rejected == pytest.approx(0.5, abs=0.08)
@@ -297,8 +322,9 @@ def test_bounds_are_kept_by_rejection():
 
 
 def test_from_fit_uses_the_fit_covariance():
-    data = ie.simulate_test(JOINT, [5e-5, 1e-4, 2e-4, 4e-4, 6e-4], cycles=2, sample_rate=2.0,
-                            force_noise=20.0, seed=3)
+    data = ie.simulate_test(
+        JOINT, [5e-5, 1e-4, 2e-4, 4e-4, 6e-4], cycles=2, sample_rate=2.0, force_noise=20.0, seed=3
+    )
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         fit = ie.fit_loops(t=data.t, u=data.u, F=data.F)
@@ -312,8 +338,9 @@ def test_from_fit_uses_the_fit_covariance():
 
 
 def test_microslip_fit_samples_the_kt_chi_r_family():
-    data = ie.simulate_test(JOINT, [2e-5, 4e-5, 8e-5], cycles=2, sample_rate=2.0,
-                            force_noise=5.0, seed=4)
+    data = ie.simulate_test(
+        JOINT, [2e-5, 4e-5, 8e-5], cycles=2, sample_rate=2.0, force_noise=5.0, seed=4
+    )
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         fit = ie.fit_loops(t=data.t, u=data.u, F=data.F)
@@ -324,18 +351,20 @@ def test_microslip_fit_samples_the_kt_chi_r_family():
     assert all(s["beta"] == 0.0 for s in sets)
     R = np.array([ie.IwanParameters(**s).R for s in sets])
     assert np.log(R).std() == pytest.approx(math.sqrt(unc.cov[2, 2]), rel=0.15)
-    bands = propagate_uncertainty(unc, system=SYSTEM, amplitude=[1e-5, 2e-4], n_samples=20,
-                                  seed=0, executor="serial")
+    bands = propagate_uncertainty(
+        unc, system=SYSTEM, amplitude=[1e-5, 2e-4], n_samples=20, seed=0, executor="serial"
+    )
     assert any("beyond the tested range" in w for w in bands.warnings)
 
 
 def test_band_width_matches_the_delta_method():
     """Independent route: the linearised std of f(X), zeta(X), sqrt(g^T C g)."""
-    cov = np.diag([(0.03 * 9e3) ** 2, (0.03 * 5e7) ** 2, 0.01 ** 2, 0.02 ** 2])
+    cov = np.diag([(0.03 * 9e3) ** 2, (0.03 * 5e7) ** 2, 0.01**2, 0.02**2])
     unc = ParameterUncertainty.from_mean_cov(JOINT, cov)
     X = np.array([1e-5, 1e-4])
-    bands = propagate_uncertainty(unc, system=SYSTEM, amplitude=X, n_samples=600, seed=5,
-                                  executor="serial", level=0.6827)
+    bands = propagate_uncertainty(
+        unc, system=SYSTEM, amplitude=X, n_samples=600, seed=5, executor="serial", level=0.6827
+    )
     names = ("Fs", "KT", "chi", "beta")
     for which, col in (("frequency", 0), ("damping_ratio", 1)):
         g = []
@@ -354,14 +383,23 @@ def test_band_width_matches_the_delta_method():
 def test_prediction_bands_result_object(tmp_path):
     cov = np.diag([(0.05 * 9e3) ** 2, (0.05 * 5e7) ** 2])
     unc = ParameterUncertainty.from_mean_cov(JOINT, cov, names=["Fs", "KT"])
-    bands = propagate_uncertainty(unc, system=SYSTEM, amplitude=np.geomspace(1e-6, 3e-4, 5),
-                                  n_samples=16, force=300.0, cycles=6, seed=1, executor="serial")
+    bands = propagate_uncertainty(
+        unc,
+        system=SYSTEM,
+        amplitude=np.geomspace(1e-6, 3e-4, 5),
+        n_samples=16,
+        force=300.0,
+        cycles=6,
+        seed=1,
+        executor="serial",
+    )
     lo, _, hi = bands.band("peak")
     assert lo < bands.nominal["peak"] < hi
     d = bands.to_dict()
     assert d["samples"] == 16 and len(d["bands"]["damping_ratio"]["low"]) == 5
     assert "peak displacement" in bands.report()
     import matplotlib
+
     matplotlib.use("Agg")
     artists = bands.plot()
     assert len(artists) >= 7
@@ -390,19 +428,22 @@ def test_parameter_grid_and_samples():
 
 
 def test_modal_fit_is_propagated_in_its_own_coordinates():
-    p = ie.IwanParameters(Fs=0.6, KT=1.2e5, chi=-0.4, beta=0.8)      # unit modal mass
+    p = ie.IwanParameters(Fs=0.6, KT=1.2e5, chi=-0.4, beta=0.8)  # unit modal mass
     X = np.geomspace(0.05, 3, 14) * p.phi_max
-    f, z = ie.modal_iwan_curve(X, p, K_inf=2.8e5, zeta0=0.002, stiffness="harmonic",
-                               floor="dashpot")
+    f, z = ie.modal_iwan_curve(
+        X, p, K_inf=2.8e5, zeta0=0.002, stiffness="harmonic", floor="dashpot"
+    )
     rng = np.random.default_rng(0)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        fit = ie.fit_modal_iwan(X, f * (1 + 2e-5 * rng.normal(size=14)),
-                                z * (1 + 2e-3 * rng.normal(size=14)))
+        fit = ie.fit_modal_iwan(
+            X, f * (1 + 2e-5 * rng.normal(size=14)), z * (1 + 2e-3 * rng.normal(size=14))
+        )
     assert fit.regime == "macroslip"
     Xb = X[::3]
-    bands = propagate_uncertainty(fit, amplitude=Xb, n_samples=200, seed=2, executor="serial",
-                                  force=5.0, cycles=4, level=0.9)
+    bands = propagate_uncertainty(
+        fit, amplitude=Xb, n_samples=200, seed=2, executor="serial", force=5.0, cycles=4, level=0.9
+    )
     assert bands.system is None and "modal fit" in bands.report()
     f_fit, z_fit, fb, zb = fit.predict(Xb, band=0.9)
     np.testing.assert_allclose(bands.nominal["frequency"], f_fit, rtol=1e-12)
@@ -438,14 +479,19 @@ def test_rows_follow_the_input_order_on_any_executor():
 
 
 def test_dissipation_fits_are_propagated_and_a_given_fs_is_held():
-    data = ie.simulate_test(JOINT, [5e-5, 1e-4, 2e-4, 3e-4, 4e-4, 6e-4], cycles=2,
-                            sample_rate=2.0, force_noise=10.0, seed=5)
+    data = ie.simulate_test(
+        JOINT,
+        [5e-5, 1e-4, 2e-4, 3e-4, 4e-4, 6e-4],
+        cycles=2,
+        sample_rate=2.0,
+        force_noise=10.0,
+        seed=5,
+    )
     table = data.amplitude_table()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         lsq = ie.fit_dissipation(table["u0"], table["F0"], table["D"])
-        seed = ie.fit_dissipation(table["u0"], table["F0"], table["D"], method="seed",
-                                  Fs=9e3)
+        seed = ie.fit_dissipation(table["u0"], table["F0"], table["D"], method="seed", Fs=9e3)
     unc = ParameterUncertainty.from_fit(lsq)
     assert unc.source == "fit (least_squares)" and "KT" in unc.names
     unc_seed = ParameterUncertainty.from_fit(seed)

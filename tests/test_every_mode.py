@@ -2,6 +2,7 @@
 multi-mode ring-down through the shared interface, its energy balance, the floor per mode
 from calibration, and the coupling of two modes through one Iwan element against an
 independent time stepping of the exact element outside Exudyn."""
+
 import math
 
 import exudyn as exu
@@ -32,7 +33,7 @@ def test_the_floor_matrix_gives_each_stuck_mode_its_own_ratio_and_couples_none()
     w = np.array([m[0] for m in shapes])
     want = np.diag(2 * np.array([1.3e-3, 9.6e-4, s.interface.damping_floor]) * w)
     np.testing.assert_allclose(P.T @ C @ P, want, atol=1e-9 * want.max())
-    R = shapes[0][2]                                    # rigid-body modes
+    R = shapes[0][2]  # rigid-body modes
     assert np.max(np.abs(C @ R)) < 1e-9 * np.max(np.abs(C))
     with pytest.raises(ValueError, match="specimen"):
         floor_damping("brake-reuss")
@@ -43,11 +44,14 @@ def test_one_mode_given_as_a_dict_is_the_single_mode_call():
     sensor is ``sensor`` and the accelerations are the displacement's second derivative."""
     s = preset("example").replace(n_points=12)
     a = ringdown(s, amplitude=1e-4, cycles=8, steps_per_period=32)
-    b = ringdown(s, amplitude={1: 1e-4}, cycles=8, steps_per_period=32,
-                 sensors=(s.sensor_position, 0.2))
+    b = ringdown(
+        s, amplitude={1: 1e-4}, cycles=8, steps_per_period=32, sensors=(s.sensor_position, 0.2)
+    )
     np.testing.assert_array_equal(a.modal, b.modal)
     np.testing.assert_array_equal(a.curve.damping_ratio, b.curve.damping_ratio)
-    assert b.modes == (1,) and b.curves[0] is b.curve and b.sensor_displacement.shape == (2, a.t.size)
+    assert (
+        b.modes == (1,) and b.curves[0] is b.curve and b.sensor_displacement.shape == (2, a.t.size)
+    )
     np.testing.assert_allclose(b.sensor_displacement[0], a.sensor, rtol=0, atol=1e-15)
     with pytest.raises(ValueError, match="mode must not be given"):
         ringdown(s, mode=2, amplitude={1: 1e-4})
@@ -75,8 +79,14 @@ def test_stuck_modes_do_not_couple_each_decays_with_its_own_floor():
     # on a raw record: atan(pi f h) / (pi h))
     h = r.metadata["h"]
     f2 = math.atan(linear_modes(s, mode=2)[0] * h / 2) / (math.pi * h)
-    a = amplitude_curve(r.t, r.sensor_acceleration[0], quantity="acceleration",
-                        band=(0.5 * f2, 1.5 * f2), n_periods=3, compare=False)
+    a = amplitude_curve(
+        r.t,
+        r.sensor_acceleration[0],
+        quantity="acceleration",
+        band=(0.5 * f2, 1.5 * f2),
+        n_periods=3,
+        compare=False,
+    )
     assert len(a) >= 10
     assert np.median(a.frequency) == pytest.approx(f2, rel=1e-4)
     assert np.median(a.damping_ratio) == pytest.approx(6e-4, rel=0.02)
@@ -89,8 +99,9 @@ def test_two_modes_through_the_slipping_interface_keep_the_energy_balance():
     energy to 1e-3; what is left is the integrator's quadrature of the joint forces (the
     floor's work is booked exactly)."""
     s = preset("brake-reuss").replace(n_points=24, modal_damping=(1.3e-3, 9.6e-4))
-    r = ringdown(s, amplitude={1: 60e-6, 2: 3e-6}, duration=0.16, steps_per_period=32,
-                 record_energy=True)
+    r = ringdown(
+        s, amplitude={1: 60e-6, 2: 3e-6}, duration=0.16, steps_per_period=32, record_energy=True
+    )
     e = r.energy
     assert e["joint_dissipated"][-1] > 0.02 * r.initial_energy
     assert e["floor_dissipated"][-1] > 0.05 * r.initial_energy
@@ -105,13 +116,14 @@ def test_a_mode_floor_from_its_lowest_points_removes_the_joint_share():
     share is large."""
     s = preset("brake-reuss")
     X = np.geomspace(1e-8, 3e-6, 30)
-    joint = modal_amplitude_curve(s.replace(damping_floor=0.0, calibrated_range=None), mode=2,
-                                  amplitude=X)
+    joint = modal_amplitude_curve(
+        s.replace(damping_floor=0.0, calibrated_range=None), mode=2, amplitude=X
+    )
     z = joint.damping_ratio + 8e-4
     c = AmplitudeCurve(X, joint.frequency, z, damping_ratio_std=np.full(X.size, 1e-6))
     floor, se, warns = modal_floor(s, c, mode=2)
     assert floor == pytest.approx(8e-4, rel=1e-6) and se < 1e-6 and not warns
-    big = s.replace(friction=0.01, calibrated_range=None)         # a joint that slips early
+    big = s.replace(friction=0.01, calibrated_range=None)  # a joint that slips early
     _, _, warns = modal_floor(big, AmplitudeCurve(X[-5:], joint.frequency[-5:], z[-5:]), mode=2)
     assert any("leans on the joint" in w for w in warns)
 
@@ -119,10 +131,10 @@ def test_a_mode_floor_from_its_lowest_points_removes_the_joint_share():
 # --- two modes through one Iwan element: Exudyn against an independent time stepping -------
 
 M2 = np.eye(2)
-K2 = np.array([[8000.0, -4000.0], [-4000.0, 4000.0]])   # ground-k-m1-k-m2 [N/m], m = 1 kg
-E2 = np.array([-1.0, 1.0])                              # slip u = q2 - q1
+K2 = np.array([[8000.0, -4000.0], [-4000.0, 4000.0]])  # ground-k-m1-k-m2 [N/m], m = 1 kg
+E2 = np.array([-1.0, 1.0])  # slip u = q2 - q1
 JOINT = IwanParameters(Fs=0.6, KT=3000.0, chi=-0.5, beta=0.1)
-H = 1.0 / (64 * 21.0)                                   # 64 steps per period of mode 2
+H = 1.0 / (64 * 21.0)  # 64 steps per period of mode 2
 
 
 def _modes():
@@ -132,7 +144,7 @@ def _modes():
 
 def _release(amp):
     _, V = _modes()
-    return sum(a * V[:, r - 1] / V[1, r - 1] for r, a in amp.items())   # amplitude at m2
+    return sum(a * V[:, r - 1] / V[1, r - 1] for r, a in amp.items())  # amplitude at m2
 
 
 def _numpy_route(q0, n):
@@ -147,14 +159,14 @@ def _numpy_route(q0, n):
     for _ in range(n):
         qn = q + H * v
         for _ in range(50):
-            an = 4 / H ** 2 * (qn - q - H * v) - a
+            an = 4 / H**2 * (qn - q - H * v) - a
             F, kt = j.trial(float(E2 @ qn))
             R = M2 @ an + K2 @ qn + E2 * F
-            dq = np.linalg.solve(4 / H ** 2 * M2 + K2 + kt * np.outer(E2, E2), -R)
+            dq = np.linalg.solve(4 / H**2 * M2 + K2 + kt * np.outer(E2, E2), -R)
             qn += dq
             if np.max(np.abs(dq)) < 1e-14:
                 break
-        an = 4 / H ** 2 * (qn - q - H * v) - a
+        an = 4 / H**2 * (qn - q - H * v) - a
         F, _ = j.trial(float(E2 @ qn))
         j.commit()
         v = v + 0.5 * H * (a + an)
@@ -169,14 +181,20 @@ def _exudyn_route(q0, n):
     radius 1 (the trapezoidal rule)."""
     SC = exu.SystemContainer()
     mbs = SC.AddSystem()
-    node = mbs.AddNode(NodeGenericODE2(numberOfODE2Coordinates=2, referenceCoordinates=[0, 0],
-                                       initialCoordinates=list(q0),
-                                       initialCoordinates_t=[0, 0]))
+    node = mbs.AddNode(
+        NodeGenericODE2(
+            numberOfODE2Coordinates=2,
+            referenceCoordinates=[0, 0],
+            initialCoordinates=list(q0),
+            initialCoordinates_t=[0, 0],
+        )
+    )
     mbs.AddObject(ObjectGenericODE2(nodeNumbers=[node], massMatrix=M2, stiffnessMatrix=K2))
     m = [mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=node, coordinate=i)) for i in (0, 1)]
     rec = []
-    mbs.SetPostStepUserFunction(lambda mbs_, t: rec.append(
-        mbs_.systemData.GetODE2Coordinates()) or True)
+    mbs.SetPostStepUserFunction(
+        lambda mbs_, t: rec.append(mbs_.systemData.GetODE2Coordinates()) or True
+    )
     add_iwan_interface(mbs, [(m[0], m[1])], [JOINT])
     mbs.Assemble()
     sim = solver_settings(force_scale=float(np.max(np.abs(K2 @ q0))))
@@ -196,8 +214,14 @@ def _curves(Q, modes):
         y = (Q @ (M2 @ V[:, r - 1])) * V[1, r - 1]
         k = max(1, int(w[1] / w[r - 1] * 2))
         f = w[r - 1] / (2 * math.pi)
-        out[r] = amplitude_curve(t[::k], y[::k], quantity="displacement",
-                                 band=(0.5 * f, 1.5 * f), n_periods=4, compare=False)
+        out[r] = amplitude_curve(
+            t[::k],
+            y[::k],
+            quantity="displacement",
+            band=(0.5 * f, 1.5 * f),
+            n_periods=4,
+            compare=False,
+        )
     return out
 
 
@@ -221,7 +245,7 @@ def test_two_modes_couple_through_one_iwan_element_as_an_independent_stepping_sa
     ex, ref = figs["_exudyn_route"][2], figs["_numpy_route"][2]
     assert len(ex["amplitude"]) >= 3
     np.testing.assert_allclose(ex["damping_ratio"], ref["damping_ratio"], rtol=1e-3)
-    assert np.max(ref["damping_ratio"]) > 1.2          # the coupling is visible (1.33)
+    assert np.max(ref["damping_ratio"]) > 1.2  # the coupling is visible (1.33)
 
 
 def test_mode_coupling_refuses_a_single_mode():
@@ -235,11 +259,14 @@ def test_an_impact_leaves_each_mode_ringing_at_its_linear_impulse_amplitude():
     energy balance books the pulse's work."""
     s = TWO_BOLT.replace(friction=1e4)
     imp = models.Impact(position=0.3, peak_force=50.0, contact_time=2e-3)
-    r = ringdown(s, impact=imp, modes=(2,), duration=0.2, steps_per_period=32,
-                 record_energy=True)
+    r = ringdown(s, impact=imp, modes=(2,), duration=0.2, steps_per_period=32, record_energy=True)
     w, phi, _, L, _ = linear_modes(s, mode=2)
-    X = abs(float(L.S @ phi)) * abs(float(axis_rows(s, [0.3])[0] @ phi)) \
-        * float(imp.spectrum(w)) / w
+    X = (
+        abs(float(L.S @ phi))
+        * abs(float(axis_rows(s, [0.3])[0] @ phi))
+        * float(imp.spectrum(w))
+        / w
+    )
     after = (r.t > 0.01) & (r.t < 0.01 + 4 * math.pi / w)
     peak = np.max(np.abs(r.modal[after])) * math.exp(s.floor(2) * w * 0.01)
     assert peak == pytest.approx(X, rel=0.01)

@@ -2,6 +2,7 @@
 the closed form of a linear-Gaussian model, quadrature where the box truncates the posterior
 or the likelihood is not Gaussian, the declared priors' normalisation, and nested sampling
 (dynesty) on a small vibration diagnosis."""
+
 from __future__ import annotations
 
 import math
@@ -32,9 +33,13 @@ def test_linear_gaussian_matches_closed_form():
     lo, hi = np.array([-2.0, -3.0]), np.array([2.0, 3.0])
     for tau in (1.0, 2.5):
         e = laplace_evidence(J, r, th, lo, hi, tau=tau)
-        H = A.T @ A / s ** 2 / tau
-        closed = (-0.5 * r @ r / tau + math.log(2 * math.pi) - 0.5 * np.linalg.slogdet(H)[1]
-                  - math.log(np.prod(hi - lo)))
+        H = A.T @ A / s**2 / tau
+        closed = (
+            -0.5 * r @ r / tau
+            + math.log(2 * math.pi)
+            - 0.5 * np.linalg.slogdet(H)[1]
+            - math.log(np.prod(hi - lo))
+        )
         assert e.log_evidence == pytest.approx(closed, abs=1e-7)
         assert np.allclose(e.covariance, np.linalg.inv(H), rtol=1e-6)
 
@@ -45,7 +50,7 @@ def test_fit_at_a_bound_matches_quadrature():
     quadrature of the likelihood over the box is the independent value."""
     A, y, s = _line(slope=0.05)
     lo, hi = np.array([-1.0, 0.2]), np.array([1.0, 1.0])
-    th = np.array([np.mean(y - 0.2 * A[:, 1]), 0.2])          # constrained optimum
+    th = np.array([np.mean(y - 0.2 * A[:, 1]), 0.2])  # constrained optimum
     r, J = (y - A @ th) / s, -A / s
     e = laplace_evidence(J, r, th, lo, hi)
     c0 = float(r @ r)
@@ -53,6 +58,7 @@ def test_fit_at_a_bound_matches_quadrature():
     def f(b, a):
         rr = (y - A @ [a, b]) / s
         return math.exp(-0.5 * (rr @ rr - c0))
+
     val, _ = dblquad(f, lo[0], hi[0], lo[1], hi[1], epsabs=0, epsrel=1e-9)
     ref = -0.5 * c0 + math.log(val) - math.log(np.prod(hi - lo))
     assert e.log_evidence == pytest.approx(ref, abs=1e-6)
@@ -65,24 +71,26 @@ def test_non_gaussian_parameter_at_its_bound_integrated_on_its_line():
     value, and with it the plain model (no ``a``) wins as it should."""
     rng = np.random.default_rng(5)
     x = np.linspace(0.0, 1.0, 60)
-    y = 0.1 * rng.normal(size=x.size)                      # truth: a = 0
+    y = 0.1 * rng.normal(size=x.size)  # truth: a = 0
     s = 0.1
 
     def chi2(th):
         rr = (y - th[0] ** 2 * x) / s
         return float(rr @ rr)
+
     th = np.array([0.0])
     r = y / s
-    J = np.zeros((x.size, 1))                              # d/da (a^2 x) = 0 at a = 0
+    J = np.zeros((x.size, 1))  # d/da (a^2 x) = 0 at a = 0
     lo, hi = np.array([0.0]), np.array([2.0])
     gauss = laplace_evidence(J, r, th, lo, hi)
     line = laplace_evidence(J, r, th, lo, hi, chi2_at=chi2)
     c0 = float(r @ r)
-    val, _ = quad(lambda a: math.exp(-0.5 * (chi2([a]) - c0)), 0.0, 2.0, points=[0.05, 0.2],
-                  limit=200)
+    val, _ = quad(
+        lambda a: math.exp(-0.5 * (chi2([a]) - c0)), 0.0, 2.0, points=[0.05, 0.2], limit=200
+    )
     ref = -0.5 * c0 + math.log(val / 2.0)
     assert line.log_evidence == pytest.approx(ref, abs=0.02)
-    assert gauss.log_evidence > ref + 2.0                  # the Gaussian's failure, named
+    assert gauss.log_evidence > ref + 2.0  # the Gaussian's failure, named
 
 
 def test_log_prior_along_the_line_matches_quadrature():
@@ -97,14 +105,28 @@ def test_log_prior_along_the_line_matches_quadrature():
     def chi2(th):
         rr = (y - th[0] * x) / s
         return float(rr @ rr)
+
     lo, hi = np.array(sp.prior_range[:1]), np.array(sp.prior_range[1:])
     th = np.array([max(float(x @ y / (x @ x)), 0.0)])
     r, J = (y - th[0] * x) / s, -x[:, None] / s
-    e = laplace_evidence(J, r, th, lo, hi, chi2_at=chi2,
-                         log_prior=lambda t: sp.log_prior(t[:1]), prior_knots=[sp.neutral])
+    e = laplace_evidence(
+        J,
+        r,
+        th,
+        lo,
+        hi,
+        chi2_at=chi2,
+        log_prior=lambda t: sp.log_prior(t[:1]),
+        prior_knots=[sp.neutral],
+    )
     c0 = float(r @ r)
-    val, _ = quad(lambda a: math.exp(-0.5 * (chi2([a]) - c0) + float(sp.log_prior(a))),
-                  lo[0], hi[0], points=[1e-3, 0.01, 0.05], limit=400)
+    val, _ = quad(
+        lambda a: math.exp(-0.5 * (chi2([a]) - c0) + float(sp.log_prior(a))),
+        lo[0],
+        hi[0],
+        points=[1e-3, 0.01, 0.05],
+        limit=400,
+    )
     assert e.log_evidence == pytest.approx(-0.5 * c0 + math.log(val), abs=0.02)
 
 
@@ -116,6 +138,7 @@ def test_ridge_integral_matches_quadrature():
     ridge the fit sits, inside or at its end (the box cuts the ridge at ``b = 2``); the
     Gaussian's changes by 0.55 nat between those places."""
     from iwan_element.fitting.evidence import Ridge
+
     rng = np.random.default_rng(4)
     x = np.linspace(0.0, 1.0, 50)
     s = 0.05
@@ -129,6 +152,7 @@ def test_ridge_integral_matches_quadrature():
 
     def curve(a):
         return np.array([a, p / a]), -math.log(a)
+
     c0 = chi2([1.0, p])
     # quadrature: the likelihood is Gaussian in the product ``a b`` (sd ``s / |x|``), so its
     # integral over ``b`` in [0, 2] at each ``a`` is a normal probability, divided by ``a``
@@ -137,20 +161,29 @@ def test_ridge_integral_matches_quadrature():
     def inner(a):
         cdf = math.erf((2.0 * a - p) / (sd * math.sqrt(2))) + math.erf(p / (sd * math.sqrt(2)))
         return 0.5 * cdf * sd * math.sqrt(2 * math.pi) / a
+
     val, _ = quad(inner, lo[0], hi[0], points=[p / 2.0], epsabs=0, epsrel=1e-10, limit=200)
     ref = -0.5 * c0 + math.log(val) - math.log(np.prod(hi - lo))
     gauss = []
-    for a in (1.0, 2.0, p / 2.0):                 # inside the ridge, at its end
+    for a in (1.0, 2.0, p / 2.0):  # inside the ridge, at its end
         th = np.array([a, p / a])
         r = (y - p * x) / s
         J = -np.column_stack([th[1] * x, th[0] * x]) / s
-        e = laplace_evidence(J, r, th, lo, hi, chi2_at=chi2,
-                             ridge=Ridge(0, curve, p / hi[1], hi[0]))
+        e = laplace_evidence(
+            J, r, th, lo, hi, chi2_at=chi2, ridge=Ridge(0, curve, p / hi[1], hi[0])
+        )
         assert e.log_evidence == pytest.approx(ref, abs=0.005), a
         # the ridge's spread is along its tangent: it changes no prediction
-        assert abs(float(th[1] * th[1] * e.covariance[0, 0] + 2 * th[0] * th[1] *
-                         e.covariance[0, 1] + th[0] * th[0] * e.covariance[1, 1])) < \
-            1e-3 * p * p
+        assert (
+            abs(
+                float(
+                    th[1] * th[1] * e.covariance[0, 0]
+                    + 2 * th[0] * th[1] * e.covariance[0, 1]
+                    + th[0] * th[0] * e.covariance[1, 1]
+                )
+            )
+            < 1e-3 * p * p
+        )
         gauss.append(laplace_evidence(J, r, th, lo, hi).log_evidence)
     # the Gaussian's value depends on where along the ridge the fit stopped
     assert max(gauss) - min(gauss) > 0.4
@@ -163,13 +196,17 @@ def test_declared_priors_are_normalised_and_invertible():
         for sp in cls.specs + cls.modal_specs:
             lo, hi = sp.prior_range
             pts = [sp.neutral] if sp.neutral is not None and lo < sp.neutral < hi else None
-            mass, _ = quad(lambda z: float(np.exp(sp.log_prior(z))), lo, hi, points=pts,
-                           limit=400)
+            mass, _ = quad(lambda z: float(np.exp(sp.log_prior(z))), lo, hi, points=pts, limit=400)
             assert mass == pytest.approx(1.0, abs=1e-6), (name, sp.name)
             for q in (0.05, 0.5, 0.95):
                 z = float(sp.prior_quantile(q))
-                cdf, _ = quad(lambda t: float(np.exp(sp.log_prior(t))), lo, z, limit=400,
-                              points=[sp.neutral] if pts and lo < sp.neutral < z else None)
+                cdf, _ = quad(
+                    lambda t: float(np.exp(sp.log_prior(t))),
+                    lo,
+                    z,
+                    limit=400,
+                    points=[sp.neutral] if pts and lo < sp.neutral < z else None,
+                )
                 assert cdf == pytest.approx(q, abs=1e-6), (name, sp.name, q)
 
 
@@ -200,10 +237,18 @@ def _nested(seed, only, **hidden):
     from _diagnosis_cases import ZETA0, vibration_case
 
     from iwan_element import diagnose_vibration
+
     X, fm, zm, fp, zp = vibration_case(seed, **hidden)
-    return diagnose_vibration(X, fm, zm, predicted_frequency=fp, predicted_damping_ratio=zp,
-                              predicted_zeta0=ZETA0, evidence="nested",
-                              nested={"nlive": 100, "rng": 1, "explanations": only})
+    return diagnose_vibration(
+        X,
+        fm,
+        zm,
+        predicted_frequency=fp,
+        predicted_damping_ratio=zp,
+        predicted_zeta0=ZETA0,
+        evidence="nested",
+        nested={"nlive": 100, "rng": 1, "explanations": only},
+    )
 
 
 @pytest.fixture(scope="module")
@@ -228,8 +273,9 @@ def test_laplace_with_line_integral_agrees_for_one_parameter_at_zero(clean_neste
     ex = {e.effects: e for e in clean_nested.explanations}
     for k in ((), ("hardening",), ("viscous_damping",)):
         e = ex[k]
-        assert abs(e.log_evidence_laplace - e.log_evidence_nested) <= \
-            max(3 * e.nested_error, 0.1), k
+        assert abs(e.log_evidence_laplace - e.log_evidence_nested) <= max(
+            3 * e.nested_error, 0.1
+        ), k
 
 
 def test_non_gaussian_case_named_pinning_stiffness_at_zero_size(clean_nested):

@@ -1,4 +1,5 @@
 """Every example runs as a script (small settings) and writes what it promises."""
+
 import csv
 import os
 import subprocess
@@ -11,9 +12,13 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 def run_example(name, *args, timeout=300):
-    proc = subprocess.run([sys.executable, str(ROOT / "examples" / name), *args],
-                          capture_output=True, text=True, timeout=timeout,
-                          env={**os.environ, "MPLBACKEND": "Agg"})
+    proc = subprocess.run(
+        [sys.executable, str(ROOT / "examples" / name), *args],
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+        env={**os.environ, "MPLBACKEND": "Agg"},
+    )
     assert proc.returncode == 0, proc.stderr
     return proc
 
@@ -27,6 +32,7 @@ def test_seed_figure3(tmp_path):
 
 def test_jointed_beam_main_job_quick(tmp_path):
     import json
+
     proc = run_example("jointed_beam.py", "--quick", "--forced", "--out", str(tmp_path))
     for name in ("fig8_quasi_static.png", "free_decay.png", "forced_response.png", "summary.json"):
         assert (tmp_path / name).stat().st_size > 1000, name
@@ -36,16 +42,19 @@ def test_jointed_beam_main_job_quick(tmp_path):
     assert "zeta pred" in proc.stdout
 
 
-@pytest.mark.parametrize("effect,name", [("viscous", "viscous_damping"), ("pinning", "pinning_stiffness")])
+@pytest.mark.parametrize(
+    "effect,name", [("viscous", "viscous_damping"), ("pinning", "pinning_stiffness")]
+)
 def test_diagnose_beam_vibration_names_and_shrinks_the_gap(tmp_path, effect, name):
     import json
+
     run_example("diagnose_beam_vibration.py", "--effect", effect, "--quick", "--out", str(tmp_path))
     s = json.loads((tmp_path / f"diagnose_beam_{effect}.json").read_text())
     assert s["effect_named"] == name
     before, after = s["mismatch_before_ppm_percent"], s["mismatch_after_ppm_percent"]
-    assert after[1] < 0.2 * before[1]                     # damping mismatch shrinks 5x or more
+    assert after[1] < 0.2 * before[1]  # damping mismatch shrinks 5x or more
     if effect == "pinning":
-        assert after[0] < 0.5 * before[0]                 # and the frequency mismatch halves
+        assert after[0] < 0.5 * before[0]  # and the frequency mismatch halves
 
 
 def test_real_damper_records_carry_their_licence():
@@ -53,6 +62,7 @@ def test_real_damper_records_carry_their_licence():
     with the README's sample rate (the full example takes minutes: run
     examples/real_damper.py or benchmarks/bench_real_damper.py)."""
     import numpy as np
+
     data = Path(__file__).resolve().parents[1] / "examples" / "data"
     text = (data / "README.md").read_text()
     assert "CC BY-SA 4.0" in text and "Coble" in text and "Changes from the original" in text
@@ -93,12 +103,21 @@ def test_preload_sweep_quick(tmp_path):
     assert drop[0] > drop[1] > drop[2] > 0 and zmax[0] > zmax[1] > zmax[2]
 
 
-_SHARED_DATA = next((d for d in (ROOT.parent / "shared" / "data", ROOT.parents[1] / "shared" / "data")
-                     if (d / "brb-steppedsine-fc" / "fc_sweeps.csv").exists()), None)
+_SHARED_DATA = next(
+    (
+        d
+        for d in (ROOT.parent / "shared" / "data", ROOT.parents[1] / "shared" / "data")
+        if (d / "brb-steppedsine-fc" / "fc_sweeps.csv").exists()
+    ),
+    None,
+)
 
 
-@pytest.mark.skipif(_SHARED_DATA is None, reason="../shared/data/brb-* (GPL data, read from "
-                    "../shared only, never copied into the project) is absent")
+@pytest.mark.skipif(
+    _SHARED_DATA is None,
+    reason="../shared/data/brb-* (GPL data, read from "
+    "../shared only, never copied into the project) is absent",
+)
 def test_brb_discrepancy_example_names_adds_and_predicts(tmp_path):
     """The beam workflow end to end: the sweeps' disagreement is named, the augmented beam
     predicts more frequency and damping than the plain one at 300 um, the figure is written."""
@@ -107,12 +126,20 @@ def test_brb_discrepancy_example_names_adds_and_predicts(tmp_path):
     assert "named: " in out and "named: none" not in out, out
     assert (tmp_path / "brb_discrepancy.png").stat().st_size > 10_000
     row = next(line.split() for line in out.splitlines() if line.strip().startswith("300 "))
-    f_before, f_after, z_before, z_after = float(row[1]), float(row[2]), float(row[7]), float(row[8])
+    f_before, f_after, z_before, z_after = (
+        float(row[1]),
+        float(row[2]),
+        float(row[7]),
+        float(row[8]),
+    )
     assert f_after > f_before and z_after > 1.2 * z_before, out
 
 
-@pytest.mark.skipif(_SHARED_DATA is None, reason="../shared/data/brb-steppedsine-fc (GPL data, "
-                    "read from ../shared only, never copied into the project) is absent")
+@pytest.mark.skipif(
+    _SHARED_DATA is None,
+    reason="../shared/data/brb-steppedsine-fc (GPL data, "
+    "read from ../shared only, never copied into the project) is absent",
+)
 def test_brb_stepped_sine_quick_predicts_the_measured_points(tmp_path):
     """The top force-controlled sweep (every fourth point) against the beam model's harmonic
     balance at its measured frequencies and forces: every point converges and closes its
@@ -120,6 +147,7 @@ def test_brb_stepped_sine_quick_predicts_the_measured_points(tmp_path):
     or a +pi slip would put the phase errors near pi), and the augmented model (built from
     these sweeps) follows them far closer than the hammer-calibrated preset."""
     import json
+
     proc = run_example("brb_stepped_sine.py", "--quick", "--out", str(tmp_path))
     assert "11 of 11 measured phases lie in (-pi, 0)" in proc.stdout, proc.stdout
     assert (tmp_path / "brb_stepped_sine.png").stat().st_size > 10_000

@@ -1,4 +1,5 @@
 """Connector set-up: position markers and axes, validation, chaining, reset, the example."""
+
 from __future__ import annotations
 
 import logging
@@ -56,7 +57,7 @@ def _one_dof_slip(v_axis, h, n):
 
 def test_position_markers_with_global_axis_equal_the_coordinate_joint():
     a = np.array([1.0, 2.0, 2.0]) / 3.0
-    b = np.array([2.0, -1.0, 0.0]) / math.sqrt(5.0)           # perpendicular to a
+    b = np.array([2.0, -1.0, 0.0]) / math.sqrt(5.0)  # perpendicular to a
     h, n = 5e-5, 600
     SC, mbs, node, m_ground, m_body = _point_mass_system(3.0 * a + 0.5 * b)
     conn = add_iwan_connector(mbs, [m_ground, m_body], IwanJoint(P), axis=[1.0, 2.0, 2.0])
@@ -67,7 +68,7 @@ def test_position_markers_with_global_axis_equal_the_coordinate_joint():
     assert np.max(np.abs(reference)) > P.phi_max
     assert np.max(np.abs(conn.slip_history - reference)) / np.max(np.abs(reference)) < 1e-9
     p_end = np.array(mbs.GetNodeOutput(node, exu.OutputVariableType.Position))
-    assert p_end @ b == pytest.approx(0.5 * n * h, rel=1e-9)     # free motion across the axis
+    assert p_end @ b == pytest.approx(0.5 * n * h, rel=1e-9)  # free motion across the axis
     assert p_end @ a == pytest.approx(conn.slip_history[-1], rel=1e-12)
 
 
@@ -80,8 +81,11 @@ def _rigid_frame(mbs, angle, rotation=None):
     for i in range(3):
         mi = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=node, coordinate=i))
         if i == 2 and rotation is not None:
-            mbs.AddObject(CoordinateConstraint(markerNumbers=[mg, mi],
-                                               offsetUserFunction=lambda m, t, item, off: rotation(t)))
+            mbs.AddObject(
+                CoordinateConstraint(
+                    markerNumbers=[mg, mi], offsetUserFunction=lambda m, t, item, off: rotation(t)
+                )
+            )
         else:
             mbs.AddObject(CoordinateConstraint(markerNumbers=[mg, mi]))
     return mbs.AddMarker(MarkerBodyRigid(bodyNumber=body))
@@ -96,8 +100,9 @@ def test_axis_in_a_rotated_body_frame_equals_the_rotated_global_axis():
         SC, mbs, node, m_ground, m_body = _point_mass_system(3.0 * a)
         if attached:
             frame = _rigid_frame(mbs, angle)
-            conn = add_iwan_connector(mbs, [m_ground, m_body], IwanJoint(P), axis=[1.0, 0.0, 0.0],
-                                      axisMarker=frame)
+            conn = add_iwan_connector(
+                mbs, [m_ground, m_body], IwanJoint(P), axis=[1.0, 0.0, 0.0], axisMarker=frame
+            )
         else:
             conn = add_iwan_connector(mbs, [m_ground, m_body], IwanJoint(P), axis=a)
         mbs.Assemble()
@@ -108,7 +113,7 @@ def test_axis_in_a_rotated_body_frame_equals_the_rotated_global_axis():
 
 
 def test_rotating_axis_slip_is_the_projection_on_the_current_axis():
-    angle0, spin = 0.3, 20.0                                   # rad, rad/s
+    angle0, spin = 0.3, 20.0  # rad, rad/s
     SC, mbs, node, m_ground, m_body = _point_mass_system([2.0, 1.0, 0.0])
     frame = _rigid_frame(mbs, angle0, rotation=lambda t: spin * t)
     positions = []
@@ -117,9 +122,10 @@ def test_rotating_axis_slip_is_the_projection_on_the_current_axis():
         positions.append(mbs_.GetNodeOutput(node, exu.OutputVariableType.Position))
         return True
 
-    conn = add_iwan_connector(mbs, [m_ground, m_body], IwanJoint(P), axis=[1.0, 0.0],
-                              axisMarker=frame)
-    mbs.SetPostStepUserFunction(user_post_step)              # set after: chained automatically
+    conn = add_iwan_connector(
+        mbs, [m_ground, m_body], IwanJoint(P), axis=[1.0, 0.0], axisMarker=frame
+    )
+    mbs.SetPostStepUserFunction(user_post_step)  # set after: chained automatically
     mbs.Assemble()
     mbs.SolveDynamic(settings(5e-5, 400))
     t = conn.time_history
@@ -127,8 +133,10 @@ def test_rotating_axis_slip_is_the_projection_on_the_current_axis():
     axes = np.stack([np.cos(angle0 + spin * t), np.sin(angle0 + spin * t)], axis=1)
     projected = np.sum(p[:, :2] * axes, axis=1)
     assert len(p) == len(t)
-    assert np.max(np.abs(conn.slip_history - projected)) < 1e-12 * max(1.0, np.max(np.abs(projected)))
-    assert np.ptp(angle0 + spin * t) > 0.3                     # the axis really turned
+    assert np.max(np.abs(conn.slip_history - projected)) < 1e-12 * max(
+        1.0, np.max(np.abs(projected))
+    )
+    assert np.ptp(angle0 + spin * t) > 0.3  # the axis really turned
 
 
 # ---------------------------------------------------------------------------- validation
@@ -143,48 +151,118 @@ def parts():
     rb_node = mbs.AddNode(NodeRigidBody2D(referenceCoordinates=[0.0, 0.0, 0.0]))
     rb = mbs.AddObject(ObjectRigidBody2D(mass=1.0, inertia=1.0, nodeNumber=rb_node))
     d = dict(
-        mbs=mbs, SC=SC,
+        mbs=mbs,
+        SC=SC,
         coord0=mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=ground, coordinate=0)),
         coord1=mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=n1, coordinate=0)),
         pos0=mbs.AddMarker(MarkerNodePosition(nodeNumber=ground)),
         pos1=mbs.AddMarker(MarkerBodyPosition(bodyNumber=body)),
         rigid=mbs.AddMarker(MarkerBodyRigid(bodyNumber=rb)),
-        body=body, node=n1,
+        body=body,
+        node=n1,
     )
     return d
 
 
-@pytest.mark.parametrize("case, message", [
-    (lambda d: dict(markerNumbers=[d["coord0"]]), "markerNumbers must be a list of two"),
-    (lambda d: dict(markerNumbers=[d["coord0"], 99]), r"markerNumbers\[1\] = 99 is not a marker"),
-    (lambda d: dict(markerNumbers=[-1, d["coord1"]]), r"markerNumbers\[0\] = -1 is not a marker"),
-    (lambda d: dict(markerNumbers=["a", d["coord1"]]), r"markerNumbers\[0\] must be a marker number"),
-    (lambda d: dict(markerNumbers=[d["coord0"], 1.7]), r"markerNumbers\[1\] must be a marker number .*float"),
-    (lambda d: dict(markerNumbers=[d["coord0"], 2.0]), r"markerNumbers\[1\] must be a marker number .*float"),
-    (lambda d: dict(markerNumbers=[d["coord1"], d["coord1"]]), "two different markers"),
-    (lambda d: dict(markerNumbers=[d["coord0"], d["pos1"]]), "two coordinate markers .* or two position"),
-    (lambda d: dict(markerNumbers=[d["pos0"], d["pos1"]]), "axis is required for position markers"),
-    (lambda d: dict(markerNumbers=[d["pos0"], d["pos1"]], axis=[0, 0, 0]), "axis must be a non-zero"),
-    (lambda d: dict(markerNumbers=[d["pos0"], d["pos1"]], axis=[1, 0, 0, 0]), "axis must be a finite vector"),
-    (lambda d: dict(markerNumbers=[d["pos0"], d["pos1"]], axis=[1, np.nan]), "axis must be a finite vector"),
-    (lambda d: dict(markerNumbers=[d["coord0"], d["coord1"]], axis=[1, 0, 0]), "apply to position markers only"),
-    (lambda d: dict(markerNumbers=[d["pos0"], d["pos1"]], axis=[1, 0], axisMarker=d["pos1"]),
-     "axisMarker must be a marker with an orientation"),
-    (lambda d: dict(markerNumbers=[d["coord0"], d["coord1"]], joint=object()), "joint must follow"),
-    (lambda d: dict(markerNumbers=[d["coord0"], d["coord1"]], offset=math.nan), "offset must be finite"),
-    (lambda d: dict(markerNumbers=[d["coord0"], d["coord1"]], visualization={"colour": [1, 0, 0, 1]}),
-     "unknown visualization keys"),
-    (lambda d: dict(markerNumbers=[d["coord0"], d["coord1"]], record=1), "record must be True or False"),
-    (lambda d: dict(mbs=d["SC"], markerNumbers=[d["coord0"], d["coord1"]]), "mbs must be an exudyn.MainSystem"),
-    (lambda d: dict(markerNumbers=[d["pos0"], d["body"]], axis=[1, 0, 0]),
-     r"markerNumbers\[1\] = .* is a body or object \(ObjectIndex\), but markers belong here"),
-    (lambda d: dict(markerNumbers=[d["node"], d["coord1"]]),
-     r"markerNumbers\[0\] = .* is a node \(NodeIndex\), but markers belong here"),
-    (lambda d: dict(markerNumbers=[d["coord0"], d["coord1"]], damping=-1.0), r"damping must be in \[0, inf\)"),
-    (lambda d: dict(markerNumbers=[d["coord0"], d["coord1"]], offset=[0.1, 0, 0]), "offset must be a real number"),
-    (lambda d: dict(markerNumbers=[d["pos0"], d["pos1"]], axis=[1, 0, 0], offset=[0.1, math.nan, 0]),
-     "offset must be a number or a finite vector"),
-])
+@pytest.mark.parametrize(
+    "case, message",
+    [
+        (lambda d: dict(markerNumbers=[d["coord0"]]), "markerNumbers must be a list of two"),
+        (
+            lambda d: dict(markerNumbers=[d["coord0"], 99]),
+            r"markerNumbers\[1\] = 99 is not a marker",
+        ),
+        (
+            lambda d: dict(markerNumbers=[-1, d["coord1"]]),
+            r"markerNumbers\[0\] = -1 is not a marker",
+        ),
+        (
+            lambda d: dict(markerNumbers=["a", d["coord1"]]),
+            r"markerNumbers\[0\] must be a marker number",
+        ),
+        (
+            lambda d: dict(markerNumbers=[d["coord0"], 1.7]),
+            r"markerNumbers\[1\] must be a marker number .*float",
+        ),
+        (
+            lambda d: dict(markerNumbers=[d["coord0"], 2.0]),
+            r"markerNumbers\[1\] must be a marker number .*float",
+        ),
+        (lambda d: dict(markerNumbers=[d["coord1"], d["coord1"]]), "two different markers"),
+        (
+            lambda d: dict(markerNumbers=[d["coord0"], d["pos1"]]),
+            "two coordinate markers .* or two position",
+        ),
+        (
+            lambda d: dict(markerNumbers=[d["pos0"], d["pos1"]]),
+            "axis is required for position markers",
+        ),
+        (
+            lambda d: dict(markerNumbers=[d["pos0"], d["pos1"]], axis=[0, 0, 0]),
+            "axis must be a non-zero",
+        ),
+        (
+            lambda d: dict(markerNumbers=[d["pos0"], d["pos1"]], axis=[1, 0, 0, 0]),
+            "axis must be a finite vector",
+        ),
+        (
+            lambda d: dict(markerNumbers=[d["pos0"], d["pos1"]], axis=[1, np.nan]),
+            "axis must be a finite vector",
+        ),
+        (
+            lambda d: dict(markerNumbers=[d["coord0"], d["coord1"]], axis=[1, 0, 0]),
+            "apply to position markers only",
+        ),
+        (
+            lambda d: dict(markerNumbers=[d["pos0"], d["pos1"]], axis=[1, 0], axisMarker=d["pos1"]),
+            "axisMarker must be a marker with an orientation",
+        ),
+        (
+            lambda d: dict(markerNumbers=[d["coord0"], d["coord1"]], joint=object()),
+            "joint must follow",
+        ),
+        (
+            lambda d: dict(markerNumbers=[d["coord0"], d["coord1"]], offset=math.nan),
+            "offset must be finite",
+        ),
+        (
+            lambda d: dict(
+                markerNumbers=[d["coord0"], d["coord1"]], visualization={"colour": [1, 0, 0, 1]}
+            ),
+            "unknown visualization keys",
+        ),
+        (
+            lambda d: dict(markerNumbers=[d["coord0"], d["coord1"]], record=1),
+            "record must be True or False",
+        ),
+        (
+            lambda d: dict(mbs=d["SC"], markerNumbers=[d["coord0"], d["coord1"]]),
+            "mbs must be an exudyn.MainSystem",
+        ),
+        (
+            lambda d: dict(markerNumbers=[d["pos0"], d["body"]], axis=[1, 0, 0]),
+            r"markerNumbers\[1\] = .* is a body or object \(ObjectIndex\), but markers belong here",
+        ),
+        (
+            lambda d: dict(markerNumbers=[d["node"], d["coord1"]]),
+            r"markerNumbers\[0\] = .* is a node \(NodeIndex\), but markers belong here",
+        ),
+        (
+            lambda d: dict(markerNumbers=[d["coord0"], d["coord1"]], damping=-1.0),
+            r"damping must be in \[0, inf\)",
+        ),
+        (
+            lambda d: dict(markerNumbers=[d["coord0"], d["coord1"]], offset=[0.1, 0, 0]),
+            "offset must be a real number",
+        ),
+        (
+            lambda d: dict(
+                markerNumbers=[d["pos0"], d["pos1"]], axis=[1, 0, 0], offset=[0.1, math.nan, 0]
+            ),
+            "offset must be a number or a finite vector",
+        ),
+    ],
+)
 def test_invalid_set_up_raises_value_error_before_anything_is_added(parts, case, message):
     kw = case(parts)
     mbs = kw.pop("mbs", parts["mbs"])
@@ -198,7 +276,7 @@ def test_invalid_set_up_raises_value_error_before_anything_is_added(parts, case,
 def test_options_are_keyword_only_and_typos_are_rejected(parts):
     ms = [parts["coord0"], parts["coord1"]]
     with pytest.raises(TypeError):
-        add_iwan_connector(parts["mbs"], ms, IwanJoint(P), None)            # axis positionally
+        add_iwan_connector(parts["mbs"], ms, IwanJoint(P), None)  # axis positionally
     with pytest.raises(TypeError):
         add_iwan_connector(parts["mbs"], ms, IwanJoint(P), axsi=[1, 0, 0])  # misspelt keyword
 
@@ -229,16 +307,21 @@ def test_a_joint_instance_is_refused_by_a_second_system():
 
 
 def test_visualization_and_name_reach_the_exudyn_object(parts):
-    conn = add_iwan_connector(parts["mbs"], [parts["coord0"], parts["coord1"]], IwanJoint(P),
-                              name="boltJoint", visualization={"show": False, "drawSize": 0.01})
+    conn = add_iwan_connector(
+        parts["mbs"],
+        [parts["coord0"], parts["coord1"]],
+        IwanJoint(P),
+        name="boltJoint",
+        visualization={"show": False, "drawSize": 0.01},
+    )
     obj = parts["mbs"].GetObject(conn.objectNumber)
     assert obj["name"] == "boltJoint" and obj["Vshow"] is False
-    assert obj["VdrawSize"] == pytest.approx(0.01, rel=1e-6)          # stored as float32
+    assert obj["VdrawSize"] == pytest.approx(0.01, rel=1e-6)  # stored as float32
     assert obj["objectType"] == "ConnectorCoordinateSpringDamper"
     assert isinstance(conn, IwanConnector)
     assert conn.markerNumbers == (parts["coord0"], parts["coord1"])
     for attribute in ("offset", "joint", "axis", "markerNumbers", "objectNumber"):
-        with pytest.raises(AttributeError):                  # the set-up is read-only
+        with pytest.raises(AttributeError):  # the set-up is read-only
             setattr(conn, attribute, None)
 
 
@@ -276,7 +359,7 @@ def test_post_step_function_set_after_the_connectors_is_chained_and_can_stop_the
 
     def user_post_step(mbs, t):
         seen.append((t, conn.time_history[-1]))
-        return t < 0.01 - 1e-12                                 # stop after t = 0.01
+        return t < 0.01 - 1e-12  # stop after t = 0.01
 
     chain.mbs.SetPostStepUserFunction(user_post_step)
     chain.solve(settings(1e-4, 400))
@@ -323,7 +406,7 @@ def test_a_second_solve_starts_a_fresh_history_by_itself(caplog, law):
         second = conn.records()
         caplog.clear()
         with caplog.at_level(logging.INFO, logger="iwan_element.exudyn"):
-            chain.mbs.SolveDynamic(sim, solverType=solver)           # no reset()
+            chain.mbs.SolveDynamic(sim, solverType=solver)  # no reset()
         assert any("fresh history" in r.getMessage() for r in caplog.records), solver
         third = conn.records()
         for key in first:
@@ -372,8 +455,13 @@ def test_generic_route_equals_the_node_coordinate_shortcut():
 # ---------------------------------------------------------------------------- example
 def test_quickstart_example_runs():
     env = dict(os.environ, IWAN_QUICKSTART_STEPS="400")
-    out = subprocess.run([sys.executable, str(ROOT / "examples" / "connector_quickstart.py")],
-                         env=env, capture_output=True, text=True, timeout=120)
+    out = subprocess.run(
+        [sys.executable, str(ROOT / "examples" / "connector_quickstart.py")],
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert out.returncode == 0, out.stderr
     assert "dissipated" in out.stdout and "peak slip" in out.stdout
 
@@ -386,8 +474,14 @@ def test_offset_shifts_the_unloaded_position():
         chain = Chain([1.0], x0=[offset], v0=[3.0])
         conn = chain.joint(-1, 0, IwanJoint(P), offset=offset, law="python")
         positions = []
-        chain.mbs.SetPostStepUserFunction(lambda mbs, t: positions.append(
-            mbs.GetNodeOutput(chain.nodes[0], exu.OutputVariableType.Coordinates)) or True)
+        chain.mbs.SetPostStepUserFunction(
+            lambda mbs, t: (
+                positions.append(
+                    mbs.GetNodeOutput(chain.nodes[0], exu.OutputVariableType.Coordinates)
+                )
+                or True
+            )
+        )
         chain.solve(settings(h, n))
         runs[offset] = (conn.slip_history, np.array(positions))
     (u0, x0), (ud, xd) = runs[0.0], runs[d]
@@ -396,12 +490,12 @@ def test_offset_shifts_the_unloaded_position():
     assert np.allclose(xd - d, x0, rtol=0, atol=1e-12 * np.max(np.abs(x0)) + 1e-15)
     # position markers: the offset is measured along the axis
     a = np.array([0.6, 0.8, 0.0])
-    for off in (-d, [0.0, 0.0, 5.0], -d * a + [0.8, -0.6, 2.0]):   # a vector: Exudyn's d0
+    for off in (-d, [0.0, 0.0, 5.0], -d * a + [0.8, -0.6, 2.0]):  # a vector: Exudyn's d0
         SC, mbs, node, m_ground, m_body = _point_mass_system(3.0 * a)
         conn = add_iwan_connector(mbs, [m_ground, m_body], IwanJoint(P), axis=a, offset=off)
         mbs.Assemble()
         mbs.SolveDynamic(settings(h, n))
-        want = d if np.ndim(off) == 0 else -float(a @ off)        # u = a.(p1 - p0 - d0)
+        want = d if np.ndim(off) == 0 else -float(a @ off)  # u = a.(p1 - p0 - d0)
         assert conn.offset == pytest.approx(-want, rel=1e-12)
         assert conn.slip_history[0] == pytest.approx(want, rel=1e-12, abs=1e-15)
         assert conn.force_history[0] == pytest.approx(IwanJoint(P).trial(want)[0], rel=1e-12)
@@ -421,18 +515,23 @@ def test_continued_run_after_reassemble_reads_the_moved_coordinates():
     mbs = chain.mbs
     q_end = mbs.systemData.GetODE2Coordinates()
     v_end = mbs.systemData.GetODE2Coordinates_t()
-    for _ in range(50):                      # grow the coordinate vectors
+    for _ in range(50):  # grow the coordinate vectors
         nd = mbs.AddNode(Node1D(referenceCoordinates=[0.0]))
         mbs.AddObject(Mass1D(mass=1.0, nodeNumber=nd))
     mbs.Assemble()
     q0 = mbs.systemData.GetODE2Coordinates(configuration=exu.ConfigurationType.Initial)
     v0 = mbs.systemData.GetODE2Coordinates_t(configuration=exu.ConfigurationType.Initial)
-    q0[:q_end.size] = q_end
-    v0[:v_end.size] = v_end
+    q0[: q_end.size] = q_end
+    v0[: v_end.size] = v_end
     mbs.systemData.SetODE2Coordinates(q0, configuration=exu.ConfigurationType.Initial)
     mbs.systemData.SetODE2Coordinates_t(v0, configuration=exu.ConfigurationType.Initial)
-    sensor = mbs.AddSensor(SensorNode(nodeNumber=chain.nodes[0], storeInternal=True,
-                                      outputVariableType=exu.OutputVariableType.Coordinates))
+    sensor = mbs.AddSensor(
+        SensorNode(
+            nodeNumber=chain.nodes[0],
+            storeInternal=True,
+            outputVariableType=exu.OutputVariableType.Coordinates,
+        )
+    )
     mbs.Assemble()
     sim = settings(h, n)
     sim.timeIntegration.startTime = n * h
@@ -442,14 +541,16 @@ def test_continued_run_after_reassemble_reads_the_moved_coordinates():
     mbs.SolveDynamic(sim)
     accepted = mbs.GetSensorStoredData(sensor)
     u = conn.slip_history
-    k = conn.n_records - n_before       # n steps, plus the initial state if the start time
-    assert k in (n, n + 1)              # differs in the last bit from the last accepted time
+    k = conn.n_records - n_before  # n steps, plus the initial state if the start time
+    assert k in (n, n + 1)  # differs in the last bit from the last accepted time
     assert np.array_equal(conn.time_history[n_before:], accepted[-k:, 0])
     assert np.array_equal(u[n_before:], accepted[-k:, 1])
     assert np.max(np.abs(IwanJoint(P).force_history(u) - conn.force_history)) / P.Fs < 1e-12
 
 
-@pytest.mark.parametrize("solver", [exu.DynamicSolverType.GeneralizedAlpha, exu.DynamicSolverType.RK44])
+@pytest.mark.parametrize(
+    "solver", [exu.DynamicSolverType.GeneralizedAlpha, exu.DynamicSolverType.RK44]
+)
 def test_post_step_function_set_between_runs_of_a_continued_simulation_is_chained(solver):
     """Run 1, then the user sets a post-step function and continues from the last time: the
     connector must keep committing (its dispatcher put back in front) and the user's function
@@ -468,5 +569,9 @@ def test_post_step_function_set_between_runs_of_a_continued_simulation_is_chaine
     assert conn.n_records >= n1 + 200
     assert conn.time_history[-1] == pytest.approx(t1 + 0.02, rel=1e-9)
     # the joint followed the motion: its committed slip is the final coordinate
-    x_end = float(np.atleast_1d(chain.mbs.GetNodeOutput(chain.nodes[0], exu.OutputVariableType.Coordinates))[0])
+    x_end = float(
+        np.atleast_1d(chain.mbs.GetNodeOutput(chain.nodes[0], exu.OutputVariableType.Coordinates))[
+            0
+        ]
+    )
     assert conn.joint.displacement == pytest.approx(x_end, rel=1e-12, abs=1e-15)

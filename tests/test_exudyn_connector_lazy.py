@@ -2,6 +2,7 @@
 along a branch, records replayed, and steps that need more reversal points than the law
 holds re-solved exactly. Every case is compared with the Python law (the reference route,
 ``joint.trial`` in the force function, committed at every step)."""
+
 from __future__ import annotations
 
 import math
@@ -50,7 +51,7 @@ def test_steps_beyond_the_law_depth_are_re_solved_exactly():
     _, sym = _run("symbolic", depth=2)
     amp = np.max(np.abs(py.slip_history))
     assert sym.joint.reversal_depth > 2 or sym._n_resolved > 0
-    assert sym._n_resolved > 0                           # the case was exercised
+    assert sym._n_resolved > 0  # the case was exercised
     assert len(sym.overflow_times) == 0
     assert np.max(np.abs(sym.slip_history - py.slip_history)) <= 1e-9 * amp
     assert np.max(np.abs(sym.force_history - py.force_history)) <= 1e-9 * P.Fs
@@ -63,7 +64,7 @@ def test_lazy_joint_ends_every_run_in_the_python_law_state(record):
     the joint committed at every step, with records on or off."""
     _, py = _run("python", seed=5)
     _, sym = _run("symbolic", seed=5, record=record)
-    j = sym._joint                                   # the caller's reference, not the property
+    j = sym._joint  # the caller's reference, not the property
     _same_joint(j, py.joint)
     assert sym.n_records == (py.n_records if record else 0)
 
@@ -86,7 +87,7 @@ def test_reversal_exactly_at_a_step_and_two_solves_in_a_row():
     h = 1e-4
     s = 2.0 * P.phi_max
     knots = np.array([0.0, 1.0, 0.3, 0.7, 0.5, -0.2, 0.6]) * s
-    times = np.arange(len(knots)) * 10 * h                  # kinks at step times
+    times = np.arange(len(knots)) * 10 * h  # kinks at step times
     chain = Chain([1.0])
     chain.prescribe(0, lambda t: float(np.interp(t, times, knots)))
     conn = chain.joint(-1, 0, IwanJoint(P))
@@ -98,10 +99,9 @@ def test_reversal_exactly_at_a_step_and_two_solves_in_a_row():
     sim2 = settings(h, len(times) * 10 - 10 - n1)
     sim2.timeIntegration.startTime = n1 * h
     sim2.timeIntegration.endTime = times[-1]
-    sd = chain.mbs.systemData                         # continue from the end of run 1
+    sd = chain.mbs.systemData  # continue from the end of run 1
     sd.SetODE2Coordinates(sd.GetODE2Coordinates(), configuration=exu.ConfigurationType.Initial)
-    sd.SetODE2Coordinates_t(sd.GetODE2Coordinates_t(),
-                            configuration=exu.ConfigurationType.Initial)
+    sd.SetODE2Coordinates_t(sd.GetODE2Coordinates_t(), configuration=exu.ConfigurationType.Initial)
     chain.mbs.SolveDynamic(sim2)
     u = conn.slip_history
     assert conn.time_history[-1] == pytest.approx(times[-1])
@@ -123,7 +123,7 @@ def test_reset_between_solves_repeats_the_run_and_a_reader_during_the_run_sees_e
     conn = chain.joint(-1, 0, IwanJoint(P))
     seen = []
 
-    def reader(mbs, t):             # a post-step function set after: chained, reads the joint
+    def reader(mbs, t):  # a post-step function set after: chained, reads the joint
         seen.append((conn.joint.displacement, conn.joint.force))
         return True
 

@@ -1,5 +1,6 @@
 """The symbolic Iwan law (issue 15): exact against the Python law, its depth overflow, the
 solver settings it refuses, and its thread safety."""
+
 from __future__ import annotations
 
 import subprocess
@@ -42,16 +43,18 @@ def test_symbolic_law_trajectory_equals_the_python_law(model):
     sym, py = model("symbolic"), model("python")
     assert sym.route == "symbolic" and py.route == "python"
     amp = np.max(np.abs(py.slip_history))
-    assert amp > P.phi_max                                    # reaches macroslip
+    assert amp > P.phi_max  # reaches macroslip
     assert np.max(np.abs(sym.slip_history - py.slip_history)) <= 1e-9 * amp
     assert np.max(np.abs(sym.force_history - py.force_history)) <= 1e-9 * P.Fs
     assert sym.joint.reversal_depth >= 2 and len(sym.overflow_times) == 0
-    np.testing.assert_allclose(sym.dissipated_energy_history, py.dissipated_energy_history,
-                               rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(
+        sym.dissipated_energy_history, py.dissipated_energy_history, rtol=1e-9, atol=1e-12
+    )
 
 
 def test_auto_picks_symbolic_for_an_iwan_joint_and_python_otherwise():
     from iwan_element import DiscreteIwan
+
     chain = Chain([1.0, 1.0])
     assert chain.joint(-1, 0, IwanJoint(P)).route == "symbolic"
     assert chain.joint(0, 1, DiscreteIwan(P, 20)).route == "python"
@@ -71,6 +74,7 @@ def _state_expression(depth):
     def probe(x):
         u.SetValue(x)
         return expr.Evaluate()
+
     st.probe = probe
     return st, u, expr
 
@@ -99,7 +103,7 @@ def test_symbolic_expression_equals_trial_when_within_depth_and_overflow_is_dete
             j.commit()
             flagged = st.disagrees(target, F)
             overflows += flagged
-            assert flagged == (abs(got - F) > 1e-9 * P.Fs)   # the check is the law itself
+            assert flagged == (abs(got - F) > 1e-9 * P.Fs)  # the check is the law itself
             if not flagged:
                 assert abs(got - F) <= 1e-12 * max(abs(F), P.Fs)
         assert (overflows > 0) == expect_overflow
@@ -111,7 +115,7 @@ def _prescribed_nested_then_jump(depth, law="symbolic"):
     pts = np.array([0.0, 1.0, 0.2, 0.8, 0.4, 0.6, 0.5]) * s
     h, per = 1e-4, 20
     times = np.arange(len(pts)) * per * h
-    times = np.append(times, times[-1] + h)              # the jump: one step
+    times = np.append(times, times[-1] + h)  # the jump: one step
     pts = np.append(pts, -0.1 * s)
     chain = Chain([1.0])
     chain.prescribe(0, lambda t: float(np.interp(t, times, pts)))
@@ -153,6 +157,7 @@ def test_adaptive_explicit_solvers_are_refused_up_front(capfd, solver):
 def test_fixed_step_explicit_solver_converges_to_the_implicit_reference():
     """RK44 (fixed step) is allowed: halving the step brings it to the converged implicit
     result (generalized-alpha extrapolated from two fine steps)."""
+
     def final_x(solver, h, t_end=0.01):
         chain = Chain([1.0], v0=[3.0])
         chain.joint(-1, 0, IwanJoint(P))
@@ -162,8 +167,8 @@ def test_fixed_step_explicit_solver_converges_to_the_implicit_reference():
     x1, x2 = final_x(SOLVERS.GeneralizedAlpha, 2e-6), final_x(SOLVERS.GeneralizedAlpha, 1e-6)
     ref = x2 - (x1 - x2) / 3.0
     rk = [final_x(SOLVERS.RK44, h) for h in (1e-5, 4e-6, 1e-6)]
-    assert abs(rk[2] - rk[1]) < abs(rk[1] - rk[0])               # self-convergence
-    assert abs(rk[2] - ref) < 1e-6 * 5e-3                          # amplitude ~5 mm
+    assert abs(rk[2] - rk[1]) < abs(rk[1] - rk[0])  # self-convergence
+    assert abs(rk[2] - ref) < 1e-6 * 5e-3  # amplitude ~5 mm
 
 
 def test_python_law_with_two_threads_is_refused_up_front():
@@ -196,8 +201,9 @@ def test_fifty_symbolic_connectors_with_two_threads_finish():
     """Issue 15: with two solver threads 50 connectors must finish (run in a subprocess
     with a time-out, since a hang would otherwise stop the suite)."""
     script = _THREADS_SCRIPT.format(tests=str(Path(__file__).resolve().parent))
-    out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
-                         timeout=240)
+    out = subprocess.run(
+        [sys.executable, "-c", script], capture_output=True, text=True, timeout=240
+    )
     assert out.returncode == 0, out.stderr[-2000:]
     assert "done 301" in out.stdout
 
@@ -207,8 +213,9 @@ def test_branch_shortcut_interval_is_empty_at_rest_and_the_law_still_matches():
     rest (direction 0) holds bound = u_c, so every trial goes to the exact law. Checked on
     the virgin point at rest and on committed states with a stack, against IwanJoint."""
     from iwan_element.exudyn.laws.symbolic_law import branch_of
+
     assert branch_of([], [], 0.0) == (0.0, 0.0, 1.0, 1.0, 0.0, 0.0)
-    assert branch_of([2e-4], [50.0], 2e-4)[4:] == (0.0, 2e-4)       # at its reversal point
+    assert branch_of([2e-4], [50.0], 2e-4)[4:] == (0.0, 2e-4)  # at its reversal point
     ur, Fr, c1, c2, s, bound = branch_of([2e-4], [50.0], 1e-4)
     assert (ur, Fr, c1, c2, s, bound) == (2e-4, 50.0, 0.5, 2.0, -1.0, -2e-4)
     st, uvar, expr = _state_expression(8)

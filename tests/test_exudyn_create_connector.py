@@ -1,6 +1,7 @@
 """``create_iwan_connector``: Exudyn's idiom (markers made from bodies and nodes, items checked
 by their type), the Cartesian form (a law per axis, Exudyn's springs on the remaining axes)
 and the body-fixed frame, each against an independent route."""
+
 from __future__ import annotations
 
 import math
@@ -31,20 +32,32 @@ def test_markers_are_made_as_exudyn_makes_them():
     SC, mbs, ground = _system()
     body = mbs.CreateMassPoint(referencePosition=[1.0, 0.0, 0.0], mass=1.0)
     node = mbs.GetObject(body)["nodeNumber"]
-    a = create_iwan_connector(mbs, bodyNumbers=[ground, body], localPosition0=[1.0, 0.5, 0.0],
-                              axis=[1, 0, 0], parameters=P, name="bolt")
+    a = create_iwan_connector(
+        mbs,
+        bodyNumbers=[ground, body],
+        localPosition0=[1.0, 0.5, 0.0],
+        axis=[1, 0, 0],
+        parameters=P,
+        name="bolt",
+    )
     m0, m1 = (mbs.GetMarker(m) for m in a.markerNumbers)
-    assert (m0["markerType"], m0["name"], list(m0["localPosition"])) == \
-        ("BodyPosition", "Marker0:bolt", [1.0, 0.5, 0.0])
+    assert (m0["markerType"], m0["name"], list(m0["localPosition"])) == (
+        "BodyPosition",
+        "Marker0:bolt",
+        [1.0, 0.5, 0.0],
+    )
     assert (m1["markerType"], m1["name"]) == ("BodyPosition", "Marker1:bolt")
-    b = create_iwan_connector(mbs, bodyNumbers=[int(ground), exu.NodeIndex(int(node))],
-                              axis=[0, 1, 0], parameters=P)           # an int is a body
+    b = create_iwan_connector(
+        mbs, bodyNumbers=[int(ground), exu.NodeIndex(int(node))], axis=[0, 1, 0], parameters=P
+    )  # an int is a body
     assert mbs.GetMarker(b.markerNumbers[1])["markerType"] == "NodePosition"
-    c = create_iwan_connector(mbs, bodyNumbers=list(a.markerNumbers), axis=[0, 0, 1],
-                              parameters=P)                            # markers as they are
+    c = create_iwan_connector(
+        mbs, bodyNumbers=list(a.markerNumbers), axis=[0, 0, 1], parameters=P
+    )  # markers as they are
     assert c.markerNumbers == a.markerNumbers and c.springDamper is None
-    assert [mbs.GetObject(o)["objectType"] for o in a.objectNumbers] == \
-        ["ConnectorCartesianSpringDamper"]
+    assert [mbs.GetObject(o)["objectType"] for o in a.objectNumbers] == [
+        "ConnectorCartesianSpringDamper"
+    ]
 
 
 @pytest.fixture()
@@ -53,37 +66,87 @@ def parts():
     body = mbs.CreateMassPoint(referencePosition=[1.0, 0.0, 0.0], mass=1.0)
     g = mbs.AddNode(NodePointGround())
     coord = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=g, coordinate=0))
-    coord1 = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=mbs.GetObject(body)["nodeNumber"],
-                                                coordinate=0))
-    return dict(SC=SC, mbs=mbs, ground=ground, body=body, coord=coord, coord1=coord1,
-                node=exu.NodeIndex(int(mbs.GetObject(body)["nodeNumber"])))
+    coord1 = mbs.AddMarker(
+        MarkerNodeCoordinate(nodeNumber=mbs.GetObject(body)["nodeNumber"], coordinate=0)
+    )
+    return dict(
+        SC=SC,
+        mbs=mbs,
+        ground=ground,
+        body=body,
+        coord=coord,
+        coord1=coord1,
+        node=exu.NodeIndex(int(mbs.GetObject(body)["nodeNumber"])),
+    )
 
 
-@pytest.mark.parametrize("case, message", [
-    (lambda d: dict(bodyNumbers=[d["ground"], 1.5]), r"bodyNumbers\[1\] must be a body .* got 1.5"),
-    (lambda d: dict(bodyNumbers=[d["ground"]]), "bodyNumbers must be a list of two items"),
-    (lambda d: dict(bodyNumbers=[d["ground"], exu.LoadIndex(0)]), r"bodyNumbers\[1\] must be a body"),
-    (lambda d: dict(bodyNumbers=[d["ground"], d["node"]], localPosition1=[0.1, 0, 0]),
-     r"localPosition1 must be \(0, 0, 0\) for a node"),
-    (lambda d: dict(bodyNumbers=[d["ground"], d["body"]], axis=[[1, 0, 0], [1, 1, 0]]),
-     "mutually orthogonal"),
-    (lambda d: dict(bodyNumbers=[d["ground"], d["body"]], axis=[1, 0, 0], stiffness=[1e3, 1e3, 1e3]),
-     "has a spring along the Iwan axis"),
-    (lambda d: dict(bodyNumbers=[d["ground"], d["body"]], axis=[[1, 0, 0], [0, 1, 0]], parameters=[P]),
-     "a list of 2 of them"),
-    (lambda d: dict(bodyNumbers=[d["ground"], d["body"]], axis=[1, 0, 0], useGlobalFrame=False),
-     r"bodyNumbers\[1\] = .* has no orientation"),
-    (lambda d: dict(bodyNumbers=[d["ground"], d["body"]]), "axis is required"),
-    (lambda d: dict(bodyNumbers=[d["ground"], d["body"]], axis=[1, 0, 0], damping=[1, -1, 0]),
-     "damping must be >= 0"),
-    (lambda d: dict(bodyNumbers=[d["coord"], d["coord1"]], axis=[1, 0, 0]), "axis applies to position"),
-    (lambda d: dict(bodyNumbers=[d["coord"], d["coord1"]], stiffness=[1, 0, 0]),
-     "coordinate markers take a number as damping and no stiffness"),
-    (lambda d: dict(bodyNumbers=[d["coord"], d["coord1"]], offset=[0.5, 0, 0]), "offset must be a real"),
-    (lambda d: dict(bodyNumbers=[d["ground"], d["body"]], axis=[1, 0, 0], law="exact"), "law must be"),
-    (lambda d: dict(bodyNumbers=[d["ground"], d["body"]], axis=[1, 0, 0], parameters="P"),
-     "parameters must be IwanParameters"),
-])
+@pytest.mark.parametrize(
+    "case, message",
+    [
+        (
+            lambda d: dict(bodyNumbers=[d["ground"], 1.5]),
+            r"bodyNumbers\[1\] must be a body .* got 1.5",
+        ),
+        (lambda d: dict(bodyNumbers=[d["ground"]]), "bodyNumbers must be a list of two items"),
+        (
+            lambda d: dict(bodyNumbers=[d["ground"], exu.LoadIndex(0)]),
+            r"bodyNumbers\[1\] must be a body",
+        ),
+        (
+            lambda d: dict(bodyNumbers=[d["ground"], d["node"]], localPosition1=[0.1, 0, 0]),
+            r"localPosition1 must be \(0, 0, 0\) for a node",
+        ),
+        (
+            lambda d: dict(bodyNumbers=[d["ground"], d["body"]], axis=[[1, 0, 0], [1, 1, 0]]),
+            "mutually orthogonal",
+        ),
+        (
+            lambda d: dict(
+                bodyNumbers=[d["ground"], d["body"]], axis=[1, 0, 0], stiffness=[1e3, 1e3, 1e3]
+            ),
+            "has a spring along the Iwan axis",
+        ),
+        (
+            lambda d: dict(
+                bodyNumbers=[d["ground"], d["body"]], axis=[[1, 0, 0], [0, 1, 0]], parameters=[P]
+            ),
+            "a list of 2 of them",
+        ),
+        (
+            lambda d: dict(
+                bodyNumbers=[d["ground"], d["body"]], axis=[1, 0, 0], useGlobalFrame=False
+            ),
+            r"bodyNumbers\[1\] = .* has no orientation",
+        ),
+        (lambda d: dict(bodyNumbers=[d["ground"], d["body"]]), "axis is required"),
+        (
+            lambda d: dict(
+                bodyNumbers=[d["ground"], d["body"]], axis=[1, 0, 0], damping=[1, -1, 0]
+            ),
+            "damping must be >= 0",
+        ),
+        (
+            lambda d: dict(bodyNumbers=[d["coord"], d["coord1"]], axis=[1, 0, 0]),
+            "axis applies to position",
+        ),
+        (
+            lambda d: dict(bodyNumbers=[d["coord"], d["coord1"]], stiffness=[1, 0, 0]),
+            "coordinate markers take a number as damping and no stiffness",
+        ),
+        (
+            lambda d: dict(bodyNumbers=[d["coord"], d["coord1"]], offset=[0.5, 0, 0]),
+            "offset must be a real",
+        ),
+        (
+            lambda d: dict(bodyNumbers=[d["ground"], d["body"]], axis=[1, 0, 0], law="exact"),
+            "law must be",
+        ),
+        (
+            lambda d: dict(bodyNumbers=[d["ground"], d["body"]], axis=[1, 0, 0], parameters="P"),
+            "parameters must be IwanParameters",
+        ),
+    ],
+)
 def test_invalid_items_are_refused_before_anything_is_added(parts, case, message):
     kw = {"parameters": P, **case(parts)}
     mbs = parts["mbs"]
@@ -102,7 +165,9 @@ def test_a_law_per_axis_each_as_a_one_dimensional_joint():
     params = [P, Q, P]
     h, n = 5e-5, 800
     SC, mbs, ground = _system()
-    body = mbs.CreateMassPoint(referencePosition=[0.0, 0.0, 0.0], mass=1.0, initialVelocity=list(v0))
+    body = mbs.CreateMassPoint(
+        referencePosition=[0.0, 0.0, 0.0], mass=1.0, initialVelocity=list(v0)
+    )
     conn = create_iwan_connector(mbs, bodyNumbers=[ground, body], axis=axes, parameters=params)
     mbs.Assemble()
     mbs.SolveDynamic(settings(h, n))
@@ -128,15 +193,26 @@ def test_body_fixed_frame_turns_the_axis_and_the_springs_with_body_zero():
     runs = {}
     for law in ("auto", "python"):
         SC, mbs, ground = _system()
-        spinner = mbs.CreateRigidBody(referencePosition=[0.0, 0.0, 0.0],
-                                      inertia=InertiaCuboid(2000.0, [0.2, 0.2, 0.05]),
-                                      initialAngularVelocity=[0.0, 0.0, 25.0])
-        slider = mbs.CreateRigidBody(referencePosition=[0.0, 0.0, 0.0],
-                                     inertia=InertiaCuboid(2000.0, [0.05, 0.05, 0.05]),
-                                     initialVelocity=[1.6, 0.8, 0.2])
-        conn = create_iwan_connector(mbs, bodyNumbers=[spinner, slider], axis=[1, 0, 0],
-                                     parameters=P, stiffness=[0.0, k, k], damping=[0.0, 2.0, 2.0],
-                                     useGlobalFrame=False, law=law)
+        spinner = mbs.CreateRigidBody(
+            referencePosition=[0.0, 0.0, 0.0],
+            inertia=InertiaCuboid(2000.0, [0.2, 0.2, 0.05]),
+            initialAngularVelocity=[0.0, 0.0, 25.0],
+        )
+        slider = mbs.CreateRigidBody(
+            referencePosition=[0.0, 0.0, 0.0],
+            inertia=InertiaCuboid(2000.0, [0.05, 0.05, 0.05]),
+            initialVelocity=[1.6, 0.8, 0.2],
+        )
+        conn = create_iwan_connector(
+            mbs,
+            bodyNumbers=[spinner, slider],
+            axis=[1, 0, 0],
+            parameters=P,
+            stiffness=[0.0, k, k],
+            damping=[0.0, 2.0, 2.0],
+            useGlobalFrame=False,
+            law=law,
+        )
         m0, m1 = conn.markerNumbers
         reads = []
 
@@ -174,13 +250,16 @@ def test_exudyn_has_no_potential_energy_route_for_a_user_function_connector():
     Cartesian form's springs are Exudyn's own object, which reports theirs. Should a later
     Exudyn offer a route, this test fails and the connector should use it."""
     SC, mbs, ground = _system()
-    body = mbs.CreateMassPoint(referencePosition=[0.0, 0.0, 0.0], mass=1.0,
-                               initialDisplacement=[0.0, 1e-3, 0.0])
-    conn = create_iwan_connector(mbs, bodyNumbers=[ground, body], axis=[1, 0, 0], parameters=P,
-                                 stiffness=[0.0, 2e3, 0.0])
+    body = mbs.CreateMassPoint(
+        referencePosition=[0.0, 0.0, 0.0], mass=1.0, initialDisplacement=[0.0, 1e-3, 0.0]
+    )
+    conn = create_iwan_connector(
+        mbs, bodyNumbers=[ground, body], axis=[1, 0, 0], parameters=P, stiffness=[0.0, 2e3, 0.0]
+    )
     mbs.Assemble()
     for law_object in conn.objectNumbers[:-1]:
         with pytest.raises(Exception, match="no PotentialEnergy, its springForceUserFunction"):
             mbs.GetObjectOutput(law_object, _OVT.PotentialEnergy)
-    assert mbs.GetObjectOutput(conn.springDamper, _OVT.PotentialEnergy) == \
-        pytest.approx(0.5 * 2e3 * 1e-6, rel=1e-12)
+    assert mbs.GetObjectOutput(conn.springDamper, _OVT.PotentialEnergy) == pytest.approx(
+        0.5 * 2e3 * 1e-6, rel=1e-12
+    )

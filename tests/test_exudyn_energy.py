@@ -2,6 +2,7 @@
 each claim checked against an independent route: the initial energy in closed form, the
 external work against the reference Newmark integrator's ``int F v dt``, and a damper the
 balance does not book shown as an error."""
+
 from __future__ import annotations
 
 import math
@@ -23,14 +24,14 @@ def test_free_decay_holds_its_initial_energy():
     m, k, v0 = 1.0, 1e5, 1.5
     chain = Chain([m], v0=[v0])
     chain.spring(-1, 0, k)
-    conn = chain.joint(-1, 0, P)                 # IwanParameters build the exact joint
+    conn = chain.joint(-1, 0, P)  # IwanParameters build the exact joint
     rec = record_energy(chain.mbs, conn)
     chain.solve(settings(H, N))
     bal = rec.balance()
     assert isinstance(conn.joint, IwanJoint)
-    assert bal.kinetic[0] == pytest.approx(0.5 * m * v0 ** 2, rel=1e-12)
+    assert bal.kinetic[0] == pytest.approx(0.5 * m * v0**2, rel=1e-12)
     assert np.all(bal.external_work == 0.0)
-    assert bal.joint_dissipated[-1] > 0.05 * bal.kinetic[0]    # the joint slipped
+    assert bal.joint_dissipated[-1] > 0.05 * bal.kinetic[0]  # the joint slipped
     assert bal.max_error < 1e-4 and bal.success  # the joint work by quadrature
     np.testing.assert_array_equal(bal.t, conn.time_history)
 
@@ -43,9 +44,14 @@ def test_external_work_equals_the_reference_integrators():
     rec = record_energy(chain.mbs, [conn])
     chain.solve(settings(H, N))
     bal = rec.balance()
-    t, x, _ = newmark_reference([1.0], [(-1, 0, IwanJoint(P))], h=H, n_steps=N,
-                                force=lambda t: np.array([f0 * math.sin(omega * t)]))
-    f = f0 * np.sin(omega * t)                    # the load's work over each step's travel
+    t, x, _ = newmark_reference(
+        [1.0],
+        [(-1, 0, IwanJoint(P))],
+        h=H,
+        n_steps=N,
+        force=lambda t: np.array([f0 * math.sin(omega * t)]),
+    )
+    f = f0 * np.sin(omega * t)  # the load's work over each step's travel
     work = float(np.sum(0.5 * (f[1:] + f[:-1]) * np.diff(x[:, 0])))
     assert bal.external_work[-1] == pytest.approx(work, rel=1e-9)
     assert bal.max_error < 1e-4 and bal.success  # the joint work by quadrature
@@ -59,12 +65,27 @@ def test_a_damper_is_booked_by_its_own_force_and_the_balance_closes():
     c, k = 50.0, 1e5
     chain = Chain([1.0], v0=[1.5])
     mbs = chain.mbs
-    mbs.AddObject(CoordinateSpringDamper(markerNumbers=[chain.ground_marker, chain.markers[0]],
-                                         stiffness=k, damping=c))
+    mbs.AddObject(
+        CoordinateSpringDamper(
+            markerNumbers=[chain.ground_marker, chain.markers[0]], stiffness=k, damping=c
+        )
+    )
     xv = []
-    mbs.SetPostStepUserFunction(lambda m, t: xv.append(
-        (float(np.atleast_1d(m.GetNodeOutput(chain.nodes[0], exu.OutputVariableType.Coordinates))[0]),
-         float(np.atleast_1d(chain.velocity(0))[0]))) or True)
+    mbs.SetPostStepUserFunction(
+        lambda m, t: (
+            xv.append(
+                (
+                    float(
+                        np.atleast_1d(
+                            m.GetNodeOutput(chain.nodes[0], exu.OutputVariableType.Coordinates)
+                        )[0]
+                    ),
+                    float(np.atleast_1d(chain.velocity(0))[0]),
+                )
+            )
+            or True
+        )
+    )
     conn = chain.joint(-1, 0, P)
     rec = record_energy(mbs, conn)
     chain.solve(settings(H, N))
@@ -72,11 +93,12 @@ def test_a_damper_is_booked_by_its_own_force_and_the_balance_closes():
     x, v = np.array(xv).T
     want = np.concatenate([[0.0], np.cumsum(0.5 * c * (v[1:] + v[:-1]) * np.diff(x))])
     assert np.allclose(bal.damper_dissipation, want, rtol=1e-9, atol=1e-12)
-    assert np.allclose(bal.elastic, 0.5 * k * x ** 2, rtol=1e-12, atol=1e-15)
+    assert np.allclose(bal.elastic, 0.5 * k * x**2, rtol=1e-12, atol=1e-15)
     assert bal.damper_dissipation[-1] > 0.1 * bal.kinetic[0]
     assert bal.success and bal.max_error < 1e-4 and not bal.not_booked
-    assert bal.scale == pytest.approx(max(np.max(conn.work_history),
-                                          np.max(conn.dissipated_energy_history)), rel=1e-12)
+    assert bal.scale == pytest.approx(
+        max(np.max(conn.work_history), np.max(conn.dissipated_energy_history)), rel=1e-12
+    )
 
 
 def test_what_cannot_be_booked_is_named_and_the_run_not_usable():
@@ -99,7 +121,7 @@ def test_the_balance_is_judged_against_the_joints_own_energy():
     is large against the joint's own, and the verdict names the numerical damping."""
     chain = Chain([1.0, 100.0], v0=[0.3, 10.0])
     conn = chain.joint(-1, 0, P)
-    chain.spring(-1, 1, 1e7)                       # 5 kJ oscillating at 50 Hz
+    chain.spring(-1, 1, 1e7)  # 5 kJ oscillating at 50 Hz
     rec = record_energy(chain.mbs, conn)
     chain.solve(settings(H, N, rho=0.5))
     bal = rec.balance()
@@ -117,7 +139,7 @@ def test_a_new_run_and_a_reset_start_the_recording_again():
     sim = settings(H, 300)
     chain.solve(sim)
     first = rec.balance()
-    chain.mbs.SolveDynamic(sim)                    # a new run: both start again
+    chain.mbs.SolveDynamic(sim)  # a new run: both start again
     second = rec.balance()
     assert rec.n_records == conn.n_records == 301
     for name in ("kinetic", "elastic", "joint_dissipated", "total"):
@@ -152,26 +174,47 @@ def test_a_pendulum_on_a_revolute_joint_with_gravity_balances():
     from exudyn.utilities import InertiaCuboid
 
     from iwan_element.exudyn import create_iwan_connector
+
     errors = []
     for steps in (2000, 8000):
         SC = exu.SystemContainer()
         mbs = SC.AddSystem()
         ground = mbs.CreateGround()
-        rod = mbs.CreateRigidBody(referencePosition=[0.5, 0.0, 0.0],
-                                  inertia=InertiaCuboid(1000.0, [1.0, 0.05, 0.05]),
-                                  gravity=[0.0, -9.81, 0.0], initialVelocity=[0.0, 1.0, 0.0],
-                                  initialAngularVelocity=[0.0, 0.0, 2.0])
-        mbs.CreateRevoluteJoint(itemNumbers=[ground, rod], position=[0.0, 0.0, 0.0],
-                                axis=[0.0, 0.0, 1.0])
-        conn = create_iwan_connector(mbs, bodyNumbers=[ground, rod], localPosition0=[1.0, 0.0, 0.0],
-                                     localPosition1=[0.5, 0.0, 0.0], axis=[0, 1, 0],
-                                     parameters=IwanParameters(Fs=5.0, KT=2e3, chi=-0.5, beta=0.5))
+        rod = mbs.CreateRigidBody(
+            referencePosition=[0.5, 0.0, 0.0],
+            inertia=InertiaCuboid(1000.0, [1.0, 0.05, 0.05]),
+            gravity=[0.0, -9.81, 0.0],
+            initialVelocity=[0.0, 1.0, 0.0],
+            initialAngularVelocity=[0.0, 0.0, 2.0],
+        )
+        mbs.CreateRevoluteJoint(
+            itemNumbers=[ground, rod], position=[0.0, 0.0, 0.0], axis=[0.0, 0.0, 1.0]
+        )
+        conn = create_iwan_connector(
+            mbs,
+            bodyNumbers=[ground, rod],
+            localPosition0=[1.0, 0.0, 0.0],
+            localPosition1=[0.5, 0.0, 0.0],
+            axis=[0, 1, 0],
+            parameters=IwanParameters(Fs=5.0, KT=2e3, chi=-0.5, beta=0.5),
+        )
         rec = record_energy(mbs, conn)
         seen = []
-        mbs.SetPostStepUserFunction(lambda m, t: seen.append(
-            (m.GetObjectOutputBody(rod, exu.OutputVariableType.Position, localPosition=[0, 0, 0])[1],
-             m.GetObjectOutputBody(rod, exu.OutputVariableType.KineticEnergy,
-                                   localPosition=[0, 0, 0]))) or True)
+        mbs.SetPostStepUserFunction(
+            lambda m, t: (
+                seen.append(
+                    (
+                        m.GetObjectOutputBody(
+                            rod, exu.OutputVariableType.Position, localPosition=[0, 0, 0]
+                        )[1],
+                        m.GetObjectOutputBody(
+                            rod, exu.OutputVariableType.KineticEnergy, localPosition=[0, 0, 0]
+                        ),
+                    )
+                )
+                or True
+            )
+        )
         mbs.Assemble()
         sim = settings(2.0 / steps, steps)
         mbs.SolveDynamic(sim, solverType=exu.DynamicSolverType.TrapezoidalIndex2)

@@ -3,6 +3,7 @@ user-function test, Cartesian spring-damper example and reduced-order rotor test
 one spring-damper swapped for ``create_iwan_connector`` in one call, checked against
 independent routes: the exact read-out of the Python law, Exudyn's own sensors and the
 unswapped model's motion on the axes the swap leaves to Exudyn's springs."""
+
 from __future__ import annotations
 
 import sys
@@ -49,15 +50,15 @@ def test_rotor_joint_dissipation_by_the_default_route_equals_the_exact_read_out(
     assert d.connectors[0].route == "symbolic" and e.connectors[0].route == "python"
     D, De = d.dissipated_energy_history[-1], e.dissipated_energy_history[-1]
     assert De > 0 and abs(D - De) <= 0.05 * De
-    assert abs(D - De) <= 1e-6 * De                       # in fact to round-off
+    assert abs(D - De) <= 1e-6 * De  # in fact to round-off
     y = runs["auto"].mbs.GetSensorStoredData(runs["auto"].sensor)[:, 2]
     u = d.slip_history[:, 0]
     assert np.max(np.abs(u)) > 1.2 * rotor.JOINT.phi_max  # macroslip
-    assert np.max(np.abs(u + (y - y[0]))) <= 1e-9 * np.max(np.abs(u))   # markers [rotor, ground]
-    mbs = runs["auto"].mbs                                # the force Exudyn applied at the end
+    assert np.max(np.abs(u + (y - y[0]))) <= 1e-9 * np.max(np.abs(u))  # markers [rotor, ground]
+    mbs = runs["auto"].mbs  # the force Exudyn applied at the end
     applied = mbs.GetObjectOutput(d.connectors[0].objectNumber, _OVT.Force)
     assert np.allclose(applied, [0.0, d.force_history[-1, 0], 0.0], rtol=1e-12, atol=1e-12)
-    monkeypatch.setattr(slip_map, "JOINT_CHECKS", 0)      # the old one-coordinate test
+    monkeypatch.setattr(slip_map, "JOINT_CHECKS", 0)  # the old one-coordinate test
     frozen = rotor.build("iwan", fem=fem)
     rotor.run(frozen)
     assert frozen.connector.dissipated_energy_history[-1] > 10 * De
@@ -88,15 +89,15 @@ def test_cartesian_mass_swap_keeps_the_other_axes_and_balances(gravity):
     cartesian.run(model)
     conn = model.connector
     assert isinstance(conn, IwanCartesianConnector) and len(conn.objectNumbers) == 2
-    assert n0 == _objects(spring) + 1                    # the law, beside Exudyn's springs
+    assert n0 == _objects(spring) + 1  # the law, beside Exudyn's springs
     p = [m.mbs.GetObjectOutputBody(m.body, _OVT.Displacement) for m in (spring, model)]
-    assert np.allclose(p[1][1:], p[0][1:], rtol=1e-10, atol=1e-14)    # y, z: Exudyn's springs
+    assert np.allclose(p[1][1:], p[0][1:], rtol=1e-10, atol=1e-14)  # y, z: Exudyn's springs
     u = conn.slip_history[:, 0]
-    assert u[0] == pytest.approx(cartesian.U0, rel=1e-12)             # offset [L, 0, 0]
+    assert u[0] == pytest.approx(cartesian.U0, rel=1e-12)  # offset [L, 0, 0]
     assert np.max(np.abs(u)) > cartesian.JOINT.phi_max
     pe = model.mbs.GetObjectOutput(conn.springDamper, _OVT.PotentialEnergy)
     y, z = p[1][1], p[1][2]
-    assert pe == pytest.approx(0.5 * cartesian.K * (y * y + z * z), rel=1e-9)   # reported
+    assert pe == pytest.approx(0.5 * cartesian.K * (y * y + z * z), rel=1e-9)  # reported
     bal = model.recorder.balance()
     assert bal.success and bal.max_error < 1e-3, bal.report()
     assert bal.damper_dissipation[-1] > 0 and bal.external_work[-1] != 0
@@ -126,7 +127,7 @@ def test_duffing_sweep_swap_is_one_call_and_its_balance_converges_with_the_step(
         errors[steps] = bal.max_error
         assert not bal.not_booked and bal.connector_work[-1] == 0.0
     assert errors[5000] > 1e-3 > errors[40_000]
-    assert errors[5000] / errors[40_000] > 30                      # second order: 64
+    assert errors[5000] / errors[40_000] > 30  # second order: 64
 
 
 def test_duffing_sweep_default_route_equals_the_python_law():
@@ -135,8 +136,8 @@ def test_duffing_sweep_default_route_equals_the_python_law():
         duffing.run(m)
     c = [m.connector for m in runs]
     assert c[0].connectors[0].route == "symbolic" and c[1].connectors[0].route == "python"
-    u = [x.slip_history for x in c]                 # Newton's tolerance over 50 s of sweep:
-    assert np.max(np.abs(u[0] - u[1])) <= 1e-7 * np.max(np.abs(u[1]))     # measured 2e-9
+    u = [x.slip_history for x in c]  # Newton's tolerance over 50 s of sweep:
+    assert np.max(np.abs(u[0] - u[1])) <= 1e-7 * np.max(np.abs(u[1]))  # measured 2e-9
     D = [x.dissipated_energy_history[-1] for x in c]
     assert D[0] == pytest.approx(D[1], rel=1e-7)
 
@@ -148,10 +149,11 @@ def test_the_unswapped_duffing_script_is_booked_through_its_force_function():
 
     from iwan_element import IwanParameters
     from iwan_element.exudyn import add_iwan_connector, record_energy
+
     model = duffing.build("spring", steps=40_000)
     mbs = model.mbs
     g = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=mbs.AddNode(NodePointGround()), coordinate=0))
-    m = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=model.node, coordinate=1))   # idle y joint
+    m = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=model.node, coordinate=1))  # idle y joint
     conn = add_iwan_connector(mbs, [g, m], IwanParameters(Fs=1.0, KT=10.0, chi=-0.5, beta=0.5))
     rec = record_energy(mbs, conn)
     mbs.Assemble()
@@ -161,9 +163,14 @@ def test_the_unswapped_duffing_script_is_booked_through_its_force_function():
     assert abs(bal.total[-1] - bal.total[0]) < 1e-3 * bal.connector_work[-1]
 
 
-@pytest.mark.parametrize("module, args", [(rotor, ["--t-end", "0.005"]),
-                                          (cartesian, ["--steps", "2000", "--gravity"]),
-                                          (duffing, ["--steps", "2000"])])
+@pytest.mark.parametrize(
+    "module, args",
+    [
+        (rotor, ["--t-end", "0.005"]),
+        (cartesian, ["--steps", "2000", "--gravity"]),
+        (duffing, ["--steps", "2000"]),
+    ],
+)
 def test_the_examples_run_as_scripts(module, args, capsys):
     module.main(args)
     out = capsys.readouterr().out

@@ -7,6 +7,7 @@ Independent routes used here:
 * the box-bounded Levenberg-Marquardt loop against ``scipy.optimize.least_squares``;
 * round trips: data simulated with the exact IwanJoint, fitted back.
 """
+
 from __future__ import annotations
 
 import json
@@ -33,10 +34,13 @@ from iwan_element.identify.loops.testdata import simulate_test
 EXAMPLE = Path(__file__).resolve().parents[1] / "models" / "example_test_30kN.csv"
 
 # The three parameter sets of the round trip span chi = -0.8 .. -0.1 and beta = 0 .. 2.
-SETS = [IwanParameters(9e3, 5e7, -0.8, 0.0), IwanParameters(9e3, 5e7, -0.5, 1.0),
-        IwanParameters(9e3, 5e7, -0.1, 2.0)]
-MICRO = [0.1, 0.2, 0.35, 0.5, 0.7, 0.9]          # amplitudes / phi_max: microslip only
-MACRO = [0.2, 0.4, 0.7, 1.0, 1.5, 2.5]           # reaching macroslip
+SETS = [
+    IwanParameters(9e3, 5e7, -0.8, 0.0),
+    IwanParameters(9e3, 5e7, -0.5, 1.0),
+    IwanParameters(9e3, 5e7, -0.1, 2.0),
+]
+MICRO = [0.1, 0.2, 0.35, 0.5, 0.7, 0.9]  # amplitudes / phi_max: microslip only
+MACRO = [0.2, 0.4, 0.7, 1.0, 1.5, 2.5]  # reaching macroslip
 
 
 def quiet_fits(func, *args, **kwargs):
@@ -58,15 +62,16 @@ def _histories(rng):
     }
 
 
-@pytest.mark.parametrize("p", [IwanParameters(1000, 1e6, -0.5, 0.2),
-                               IwanParameters(3.0, 2.0, -0.1, 0.1)])
+@pytest.mark.parametrize(
+    "p", [IwanParameters(1000, 1e6, -0.5, 0.2), IwanParameters(3.0, 2.0, -0.1, 0.1)]
+)
 def test_history_evaluator_matches_iwanjoint(p):
     rng = np.random.default_rng(5)
     for name, u in _histories(rng).items():
         u = u * p.phi_max / 2.25e-3
         ref = IwanJoint(p).force_history(u)
         scale = np.abs(ref).max()
-        h = History(u, tol=1e-12 * p.phi_max)      # IwanJoint's default reversal_tol
+        h = History(u, tol=1e-12 * p.phi_max)  # IwanJoint's default reversal_tol
         assert np.abs(h.forces(p) - ref).max() <= 1e-12 * scale, name
         keep = np.sort(rng.choice(u.size, 700, replace=False))
         hk = History(u, keep=keep, tol=1e-12 * p.phi_max)
@@ -78,11 +83,23 @@ def test_history_evaluator_matches_iwanjoint(p):
 def test_box_lm_reaches_the_scipy_least_squares_minimum():
     p = SETS[1]
     for noise in (0.0, 0.01):
-        d = simulate_test(p, np.array(MACRO) * p.phi_max, cycles=2, sample_rate=5,
-                          force_noise=noise * p.Fs, seed=2)
+        d = simulate_test(
+            p,
+            np.array(MACRO) * p.phi_max,
+            cycles=2,
+            sample_rate=5,
+            force_noise=noise * p.Fs,
+            seed=2,
+        )
         h = History(d.u, tol=1e-15)
-        prob = _Problem(d.F.copy(), h.forces, w=np.ones(d.u.size), log_space=False,
-                               entry_x=h.x[h.out], min_macro=10)
+        prob = _Problem(
+            d.F.copy(),
+            h.forces,
+            w=np.ones(d.u.size),
+            log_space=False,
+            entry_x=h.x[h.out],
+            min_macro=10,
+        )
         lower = np.array([math.log(1e-3), -0.98, 0.0])
         upper = np.array([math.log(1e4), 1.0, math.log(101)])
 
@@ -91,12 +108,20 @@ def test_box_lm_reaches_the_scipy_least_squares_minimum():
 
         q0 = np.array([math.log(1.5), -0.7, 1.0])
         ours = minimize(fun, q0, lower, upper, method="box-lm", max_nfev=400)
-        ref = optimize.least_squares(fun, q0, bounds=(lower, upper), method="trf",
-                                     ftol=1e-12, xtol=1e-12, gtol=1e-12, max_nfev=400)
+        ref = optimize.least_squares(
+            fun,
+            q0,
+            bounds=(lower, upper),
+            method="trf",
+            ftol=1e-12,
+            xtol=1e-12,
+            gtol=1e-12,
+            max_nfev=400,
+        )
         assert ours.status > 0
         if noise == 0:
-            assert ours.cost < 1e-12 * np.sum(d.F ** 2) and np.allclose(ours.x, ref.x, atol=1e-7)
-        else:   # same minimum: costs agree to far below one noise variance
+            assert ours.cost < 1e-12 * np.sum(d.F**2) and np.allclose(ours.x, ref.x, atol=1e-7)
+        else:  # same minimum: costs agree to far below one noise variance
             s2 = 2 * ref.cost / d.u.size
             assert abs(ours.cost - ref.cost) < 0.05 * s2
 
@@ -114,7 +139,7 @@ def test_loop_fit_exact_data_is_recovered(p):
         # a parameter at the bound of its range (beta = 0) is never called identified
         assert r.identified["beta"] is (macro and p.beta > 0)
         assert q.KT == pytest.approx(p.KT, rel=1e-7) and q.chi == pytest.approx(p.chi, abs=1e-7)
-        assert q.R == pytest.approx(p.R, rel=1e-6)            # what microslip data determine
+        assert q.R == pytest.approx(p.R, rel=1e-6)  # what microslip data determine
         if macro:
             assert q.Fs == pytest.approx(p.Fs, rel=1e-7)
             assert q.beta == pytest.approx(p.beta, abs=1e-6)
@@ -140,16 +165,17 @@ def test_loop_fit_round_trip_at_one_percent_force_noise(p, macro):
         r = fit_loops(d.t, d.u, d.F, max_samples=None, seed=1)
     assert np.array_equal(d.F, F_in)
     q = r.joint
-    assert r.success is macro      # microslip: Fs and beta not identified, not a usable joint
+    assert r.success is macro  # microslip: Fs and beta not identified, not a usable joint
     assert abs(q.KT / p.KT - 1) < 0.01
     assert abs(q.chi - p.chi) < 0.02
     # the reported standard errors account for the errors
     assert abs(q.KT - p.KT) < 4 * r.stderr["KT"] and abs(q.chi - p.chi) < 4 * r.stderr["chi"]
-    assert r.nrmse * np.ptp(d.F) == pytest.approx(noise, rel=0.03)   # residuals = the noise
+    assert r.nrmse * np.ptp(d.F) == pytest.approx(noise, rel=0.03)  # residuals = the noise
     if macro:
         # beta = 0 lies on the bound of its range: never called identified, but its range holds it
         assert r.identified == {"Fs": True, "KT": True, "chi": True, "beta": p.beta > 0} or (
-            p.beta == 0 and q.beta > 0 and r.identified["Fs"])
+            p.beta == 0 and q.beta > 0 and r.identified["Fs"]
+        )
         if not r.identified["beta"]:
             assert r.ranges["beta"][0] <= p.beta <= r.ranges["beta"][1]
         assert abs(q.Fs / p.Fs - 1) < 0.01
@@ -168,8 +194,9 @@ def test_loop_fit_round_trip_at_one_percent_force_noise(p, macro):
 
 def test_loop_fit_is_reproducible_and_json_safe():
     p = SETS[1]
-    d = simulate_test(p, np.array(MACRO) * p.phi_max, cycles=2, sample_rate=5,
-                      force_noise=50.0, seed=3)
+    d = simulate_test(
+        p, np.array(MACRO) * p.phi_max, cycles=2, sample_rate=5, force_noise=50.0, seed=3
+    )
     a = quiet_fits(fit_loops, d.t, d.u, d.F, seed=42, n_starts=8)
     b = quiet_fits(fit_loops, d.t, d.u, d.F, seed=np.random.default_rng(42), n_starts=8)
     da, db = a.to_dict(), b.to_dict()
@@ -203,11 +230,18 @@ def test_decimation_keeps_reversals_and_accuracy():
 
 def test_smoothing_reduces_the_displacement_noise_bias():
     p = IwanParameters(9e3, 5e7, -0.5, 0.5)
-    d = simulate_test(p, np.array([0.025, 0.05, 0.1, 0.2, 0.3, 0.45]) * 1e-3, cycles=3,
-                      sample_rate=10, force_noise=15.0, displacement_noise=1e-6, seed=0)
+    d = simulate_test(
+        p,
+        np.array([0.025, 0.05, 0.1, 0.2, 0.3, 0.45]) * 1e-3,
+        cycles=3,
+        sample_rate=10,
+        force_noise=15.0,
+        displacement_noise=1e-6,
+        seed=0,
+    )
     with pytest.warns(IdentifiabilityWarning, match="displacement noise"):
         raw = fit_loops(d.t, d.u, d.F, smooth=0)
-    smooth = quiet_fits(fit_loops, d.t, d.u, d.F)                # smooth="auto" is the default
+    smooth = quiet_fits(fit_loops, d.t, d.u, d.F)  # smooth="auto" is the default
     assert smooth.details["smooth"] >= 7
     # the de-noised drive and the dead band of 3 sigma against noise reversals remove the
     # errors-in-variables bias (KT low, chi high) that unfiltered noise used to cause
@@ -237,13 +271,18 @@ def test_loop_fit_bad_inputs_and_no_mutation():
     with pytest.raises(ValueError, match="sign of the displacement"):
         fit_loops(t, u, -F)
     with pytest.raises(ValueError, match="at least 2 are needed"):
-        fit_loops(t[:150], u[:150], F[:150])                    # one and a half periods
-    for kwargs, match in [({"noise": -1.0}, "noise"), ({"max_samples": 5}, "max_samples"),
-                          ({"n_starts": 0}, "n_starts"), ({"alpha": 0.7}, "alpha"),
-                          ({"smooth": 4}, "smooth"), ({"initial": "x"}, "initial")]:
+        fit_loops(t[:150], u[:150], F[:150])  # one and a half periods
+    for kwargs, match in [
+        ({"noise": -1.0}, "noise"),
+        ({"max_samples": 5}, "max_samples"),
+        ({"n_starts": 0}, "n_starts"),
+        ({"alpha": 0.7}, "alpha"),
+        ({"smooth": 4}, "smooth"),
+        ({"initial": "x"}, "initial"),
+    ]:
         with pytest.raises(ValueError, match=match):
             fit_loops(t, u, F, **kwargs)
-    u.setflags(write=False)                             # read-only input is fine
+    u.setflags(write=False)  # read-only input is fine
     quiet_fits(fit_loops, t, u, F, n_starts=2)
     assert np.array_equal(u, d.u) and np.array_equal(F, d.F) and np.array_equal(t, d.t)
 
@@ -285,15 +324,16 @@ def test_seed_beta_is_conditional_on_the_given_fs():
     assert wrong.joint.KT == pytest.approx(right.joint.KT, rel=1e-5)
     assert wrong.joint.chi == pytest.approx(right.joint.chi, abs=1e-5)
     assert wrong.joint.R == pytest.approx(right.joint.R, rel=1e-4)
-    assert wrong.joint.beta < right.joint.beta - 0.3      # a larger Fs needs less spike
+    assert wrong.joint.beta < right.joint.beta - 0.3  # a larger Fs needs less spike
     assert wrong.nrmse < 1e-6 and right.nrmse < 1e-6
 
 
 def test_seed_method_leaves_out_macroslip_cycles():
     p = SETS[1]
     u0 = np.array(MACRO) * p.phi_max
-    r = quiet_fits(fit_dissipation, u0, force_amplitude(u0, p), dissipation(u0, p),
-               method="seed", Fs=p.Fs)
+    r = quiet_fits(
+        fit_dissipation, u0, force_amplitude(u0, p), dissipation(u0, p), method="seed", Fs=p.Fs
+    )
     assert any("3 cycle(s) with F0 >= 0.99 Fs were left out" in w for w in r.warnings)
     assert r.joint.KT == pytest.approx(p.KT, rel=1e-6) and r.details["cycles_used"] == 3
 
@@ -313,8 +353,14 @@ def test_least_squares_dissipation_fit_on_exact_tables(p):
 
 def test_dissipation_fit_from_noisy_loops():
     p = IwanParameters(9e3, 5e7, -0.5, 0.5)
-    d = simulate_test(p, np.array([0.025, 0.05, 0.075, 0.1, 0.15, 0.2, 0.3, 0.45]) * 1e-3,
-                      cycles=3, sample_rate=10, force_noise=15.0, seed=3)
+    d = simulate_test(
+        p,
+        np.array([0.025, 0.05, 0.075, 0.1, 0.15, 0.2, 0.3, 0.45]) * 1e-3,
+        cycles=3,
+        sample_rate=10,
+        force_noise=15.0,
+        seed=3,
+    )
     tab = d.amplitude_table()
     ls = quiet_fits(fit_dissipation, tab["u0"], tab["F0"], tab["D"])
     sd = quiet_fits(fit_dissipation, tab["u0"], tab["F0"], tab["D"], method="seed", Fs=p.Fs)
@@ -342,7 +388,7 @@ def test_dissipation_fit_bad_inputs():
     with pytest.raises(ValueError, match="same length"):
         fit_dissipation(u0, F0, D[:2])
     with pytest.raises(TypeError):
-        fit_dissipation(u0, F0)                        # the dissipation is required
+        fit_dissipation(u0, F0)  # the dissipation is required
     with pytest.raises(ValueError, match="at least 2 microslip cycles"):
         fit_dissipation(u0, F0, D, method="seed", Fs=150.0)
 
@@ -381,7 +427,7 @@ def test_fit_plots_return_artists():
     # the fitted line is the exact joint in mm/kN
     assert np.allclose(lines[1].get_ydata(), IwanJoint(r.joint).force_history(d.u) * 1e-3)
     arts = plot_dissipation_fit(tab["F0"], tab["D"], r.joint, ax=ax2)
-    assert len(arts) == 4 and arts[0].axes is ax2 and arts[2].axes is not ax2   # slope: twin axis
+    assert len(arts) == 4 and arts[0].axes is ax2 and arts[2].axes is not ax2  # slope: twin axis
     assert np.array_equal(d.u, u_in)
     assert len(plot_dissipation_fit(tab["F0"], tab["D"], r, ax=ax2, slope=False)) == 2
     with pytest.raises(ValueError, match="must be > 0"):
@@ -395,12 +441,13 @@ def test_seed_with_too_large_fs_is_flagged():
     p = SETS[0]
     u0 = np.array(MICRO) * p.phi_max
     with warnings.catch_warnings():
-        warnings.simplefilter("error", RuntimeWarning)           # no numpy noise either
+        warnings.simplefilter("error", RuntimeWarning)  # no numpy noise either
         warnings.simplefilter("ignore", IdentifiabilityWarning)
-        r = fit_dissipation(u0, force_amplitude(u0, p), dissipation(u0, p), method="seed",
-                            Fs=1.05 * p.Fs)
+        r = fit_dissipation(
+            u0, force_amplitude(u0, p), dissipation(u0, p), method="seed", Fs=1.05 * p.Fs
+        )
     assert any("beta is at its bound 0" in w for w in r.warnings)
-    assert r.nrmse > 0.01                                        # and the misfit shows
+    assert r.nrmse > 0.01  # and the misfit shows
 
 
 def test_quiet_context_silences_only_its_own_context_and_keeps_the_warnings_in_the_result():
@@ -411,9 +458,9 @@ def test_quiet_context_silences_only_its_own_context_and_keeps_the_warnings_in_t
         with _quiet_ctx():
             quiet = fit_loops(d.t, d.u, d.F)
         assert not [w for w in caught if issubclass(w.category, IdentifiabilityWarning)]
-        loud = fit_loops(d.t, d.u, d.F)              # back to normal after the context
+        loud = fit_loops(d.t, d.u, d.F)  # back to normal after the context
         assert [w for w in caught if issubclass(w.category, IdentifiabilityWarning)]
-    assert quiet.warnings and quiet.warnings == loud.warnings   # microslip: Fs, beta not identified
+    assert quiet.warnings and quiet.warnings == loud.warnings  # microslip: Fs, beta not identified
 
 
 # ------------------------------------------------------------------ offsets, noise, honesty
@@ -427,7 +474,7 @@ def _exact_record(p, amps, *, fs_per_period=400):
 
 @pytest.mark.parametrize("dF0,du0", [(50.0, 5e-6), (-300.0, 20e-6), (180.0, -12e-6)])
 def test_sensor_offsets_are_absorbed_and_reported(dF0, du0):
-    p = IwanParameters(2000.0, 2e7, -0.5, 0.5)               # phi_max = 0.15 mm
+    p = IwanParameters(2000.0, 2e7, -0.5, 0.5)  # phi_max = 0.15 mm
     # ramped up from rest: each new peak runs up the virgin curve in microslip, which is what
     # fixes the displacement zero; the last amplitude reaches macroslip
     amps = np.array([0.3, 0.6, 1.0, 1.6]) * p.phi_max
@@ -454,9 +501,11 @@ def test_offset_of_a_record_that_does_not_start_at_rest():
     start after one full sweep, so it costs nothing but an offset."""
     p = SETS[1]
     d = simulate_test(p, np.full(4, 1.5 * p.phi_max), cycles=2, sample_rate=5)
-    i0 = d.u.size // 5 + 37                                   # somewhere inside a cycle
+    i0 = d.u.size // 5 + 37  # somewhere inside a cycle
     r = quiet_fits(fit_loops, d.t[i0:], d.u[i0:], d.F[i0:] + 120.0)
-    assert r.joint.KT == pytest.approx(p.KT, rel=1e-6) and r.joint.Fs == pytest.approx(p.Fs, rel=1e-6)
+    assert r.joint.KT == pytest.approx(p.KT, rel=1e-6) and r.joint.Fs == pytest.approx(
+        p.Fs, rel=1e-6
+    )
     assert not any("rest" in w for w in r.warnings)
 
 
@@ -468,7 +517,11 @@ def test_pure_noise_force_identifies_nothing():
         r = quiet_fits(fit_loops, d.t, d.u, F)
         assert not r.success and not any(r.identified.values())
         assert any("indistinguishable from noise" in w for w in r.warnings)
-        rows = [ln for ln in r.report().splitlines() if ln.strip()[:5] in ("Fs   ", "KT   ", "chi  ", "beta ") and "[" in ln]
+        rows = [
+            ln
+            for ln in r.report().splitlines()
+            if ln.strip()[:5] in ("Fs   ", "KT   ", "chi  ", "beta ") and "[" in ln
+        ]
         assert len(rows) == 4 and all("NOT identified" in ln for ln in rows)
 
 
@@ -476,8 +529,14 @@ def test_status_column_success_and_warnings_agree():
     """A microslip-only record with chi near its bound: whatever is not identified is NOT
     identified in the report, in ``identified`` and in the warnings alike."""
     p = IwanParameters(9e3, 5e7, -0.97, 0.2)
-    d = simulate_test(p, np.array(MICRO[:3]) * p.phi_max, cycles=2, sample_rate=5,
-                      force_noise=0.05 * p.Fs * 0.1, seed=4)
+    d = simulate_test(
+        p,
+        np.array(MICRO[:3]) * p.phi_max,
+        cycles=2,
+        sample_rate=5,
+        force_noise=0.05 * p.Fs * 0.1,
+        seed=4,
+    )
     r = quiet_fits(fit_loops, d.t, d.u, d.F)
     for k in ("Fs", "KT", "chi", "beta"):
         se, v = r.stderr[k], getattr(r.joint, k)
@@ -495,7 +554,7 @@ def test_systematic_misfit_widens_the_stated_uncertainty():
     p = SETS[1]
     d = simulate_test(p, np.array(MACRO) * p.phi_max, cycles=2, sample_rate=5, force_noise=20.0)
     gap = 0.1 * p.phi_max
-    ub = np.sign(d.u) * np.maximum(np.abs(d.u) - gap, 0.0)    # a crude dead zone
+    ub = np.sign(d.u) * np.maximum(np.abs(d.u) - gap, 0.0)  # a crude dead zone
     F = IwanJoint(p).force_history(ub) + np.random.default_rng(0).normal(0, 20.0, d.u.size)
     r = quiet_fits(fit_loops, d.t, d.u, F)
     assert r.noise["tau"] > 5.0
@@ -507,6 +566,7 @@ def test_systematic_misfit_widens_the_stated_uncertainty():
 def test_fit_result_api_shape():
     pytest.importorskip("matplotlib")
     from matplotlib.figure import Figure
+
     p = SETS[1]
     d = simulate_test(p, np.array(MACRO) * p.phi_max, cycles=2, sample_rate=5, force_noise=10.0)
     r = quiet_fits(fit_loops, d.t, d.u, d.F)
@@ -540,18 +600,32 @@ def test_dissipation_fit_refuses_one_amplitude_and_fails_a_gross_misfit():
 
 def test_fit_force_model_recovers_a_model_with_offsets():
     from iwan_element import fit_force_model
+
     p = IwanParameters(1000.0, 2e6, -0.5, 0.3)
     d = simulate_test(p, [0.5e-3, 1.5e-3, 2e-3], cycles=2, sample_rate=3, force_noise=3.0, seed=2)
 
     def model(u, th):
         return IwanJoint(IwanParameters(*th)).force_history(u)
 
-    r = fit_force_model(d.t, d.u + 15e-6, d.F + 200.0, model, [800, 1.5e6, -0.3, 0.5],
-                        lower=[1, 1, -0.98, 0], upper=[1e5, 1e9, 0.5, 50],
-                        names=["Fs", "KT", "chi", "beta"])
+    r = fit_force_model(
+        d.t,
+        d.u + 15e-6,
+        d.F + 200.0,
+        model,
+        [800, 1.5e6, -0.3, 0.5],
+        lower=[1, 1, -0.98, 0],
+        upper=[1e5, 1e9, 0.5, 50],
+        names=["Fs", "KT", "chi", "beta"],
+    )
     assert r.success and r.params.names[-2:] == ("dF0", "du0")
-    for k, true in (("Fs", p.Fs), ("KT", p.KT), ("chi", p.chi), ("beta", p.beta),
-                    ("dF0", 200.0), ("du0", 15e-6)):
+    for k, true in (
+        ("Fs", p.Fs),
+        ("KT", p.KT),
+        ("chi", p.chi),
+        ("beta", p.beta),
+        ("dF0", 200.0),
+        ("du0", 15e-6),
+    ):
         assert abs(r.params.values[k] - true) < 4 * r.params.stderr[k] + 1e-12 * abs(true), k
     assert r.params["dF0"].nuisance and r.params["dF0"].unit == "N" and r.params["du0"].unit == "m"
     assert json.dumps(r.to_dict(), allow_nan=False) and "dF0" in r.report()

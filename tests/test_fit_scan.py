@@ -2,6 +2,7 @@
 checked on records made by routes independent of the effect classes: a
 Jenkins slider bank with static/kinetic thresholds (tests/_jenkins_bank.py) and a gap-in-series
 stepper written here."""
+
 import numpy as np
 import pytest
 from _helpers import stepped_sine
@@ -40,7 +41,7 @@ def test_breakaway_ratio_is_found_by_the_scan():
     ratio = g.fit.details["effects"][0]["parameters"]["ratio"]
     assert ratio == pytest.approx(1.45, abs=0.05), g.report()
     se = g.fit.details["effects"][0]["stderr"]["ratio"]
-    assert 1e-4 < se < 0.1, g.report()                 # a real uncertainty, not a zero slope
+    assert 1e-4 < se < 0.1, g.report()  # a real uncertainty, not a zero slope
     # near the noise (measured 1.38 x; this 300-slider bank itself differs from the continuous
     # density the fit uses by 0.61 x the noise RMS, its sliders breaking a sample early or
     # late). With the bank's staircase form the fit stopped at 1.6 x after the scan and at its
@@ -60,16 +61,16 @@ def _gap_series(u, gap):
         if side != 0:
             wt = ui - side * gap
             Ft = j.trial(wt)[0]
-            if Ft * side < 0.0:                       # unloads past zero: open the gap
+            if Ft * side < 0.0:  # unloads past zero: open the gap
                 lo, hi = w, wt
-                for _ in range(80):                   # bisection for the zero-force point
+                for _ in range(80):  # bisection for the zero-force point
                     mid = 0.5 * (lo + hi)
                     if j.trial(mid)[0] * side > 0.0:
                         lo = mid
                     else:
                         hi = mid
                 wt, side = 0.5 * (lo + hi), 0
-                if abs(ui - wt) > gap:                 # crossed it within the step
+                if abs(ui - wt) > gap:  # crossed it within the step
                     j.trial(wt)
                     j.commit()
                     side = 1 if ui > wt else -1
@@ -83,7 +84,7 @@ def _gap_series(u, gap):
 
 def test_backlash_gap_is_found_from_a_poor_start():
     t, u = _drive(300)
-    gap = 0.4 * P.phi_max                        # between the fixed starts 0.01 and 0.08 x max|u|
+    gap = 0.4 * P.phi_max  # between the fixed starts 0.01 and 0.08 x max|u|
     rng = np.random.default_rng(12)
     F = _gap_series(u, gap) + SIGMA * rng.normal(size=u.size)
     g = diagnose(t, u, F, candidates=("backlash",), max_effects=1, noise=SIGMA)

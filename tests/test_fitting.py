@@ -1,5 +1,6 @@
 """The fitting engine (iwan_element.fitting): covariance against independent routes, the
 verdict rule, the parameter table's validation and immutability."""
+
 import dataclasses
 import math
 
@@ -32,7 +33,7 @@ def test_linear_model_matches_textbook_formula():
     m, p = A.shape
     s2 = r @ r / (m - p)
     textbook = np.sqrt(np.diag(s2 * np.linalg.inv(A.T @ A)))
-    c = covariance(-A, r)                    # the residual's Jacobian is -A
+    c = covariance(-A, r)  # the residual's Jacobian is -A
     np.testing.assert_allclose(c.stderr, textbook, rtol=1e-10)
     assert not c.degenerate.any() and c.block == 0
     np.testing.assert_allclose(np.diag(c.correlation), 1.0, rtol=1e-12)
@@ -45,8 +46,7 @@ def test_columns_of_very_different_scale():
     A, r = _linear(2)
     B = A * np.array([1.0, 1e6, 1e-6])
     textbook = np.sqrt(np.diag(r @ r / (A.shape[0] - 3) * np.linalg.inv(A.T @ A)))
-    np.testing.assert_allclose(covariance(B, r).stderr, textbook / [1.0, 1e6, 1e-6],
-                               rtol=1e-8)
+    np.testing.assert_allclose(covariance(B, r).stderr, textbook / [1.0, 1e6, 1e-6], rtol=1e-8)
 
 
 def test_delta_method_equals_direct_parametrisation():
@@ -54,14 +54,14 @@ def test_delta_method_equals_direct_parametrisation():
     A, r = _linear(3)
     x = np.array([1.0, 2.0, 0.5])
     direct = covariance(A, r)
-    via = covariance(A * x, r, Jp=np.diag(x))           # d r / d theta = A diag(x)
+    via = covariance(A * x, r, Jp=np.diag(x))  # d r / d theta = A diag(x)
     np.testing.assert_allclose(via.covariance, direct.covariance, rtol=1e-9)
     np.testing.assert_allclose(via.stderr, direct.stderr, rtol=1e-9)
 
 
 def test_degenerate_column_gives_nan():
     A, r = _linear(4)
-    J = np.column_stack([A, 2.0 * A[:, 1]])            # column 3 = 2 x column 1
+    J = np.column_stack([A, 2.0 * A[:, 1]])  # column 3 = 2 x column 1
     c = covariance(J, r)
     assert c.degenerate.tolist() == [False, True, False, True]
     assert np.isnan(c.stderr[[1, 3]]).all() and np.isfinite(c.stderr[[0, 2]]).all()
@@ -74,7 +74,7 @@ def test_degenerate_column_gives_nan():
     # the model depends on theta1 + 2 theta3 only: that combination is determined, with the
     # standard error of the coefficient of column 1 in the fit without the duplicate
     Jp = np.array([[1.0, 0, 0, 0], [0, 1.0, 0, 2.0], [0, 1.0, 0, 0]])
-    d = covariance(J, r, Jp=Jp, dof=A.shape[0] - 3)     # the rank is 3
+    d = covariance(J, r, Jp=Jp, dof=A.shape[0] - 3)  # the rank is 3
     assert d.degenerate.tolist() == [False, False, True]
     np.testing.assert_allclose(d.stderr[:2], covariance(A, r).stderr[:2], rtol=1e-8)
 
@@ -82,7 +82,7 @@ def test_degenerate_column_gives_nan():
 def _ar1(rng, m, phi):
     e = rng.normal(size=m)
     out = np.empty(m)
-    out[0] = e[0] / math.sqrt(1 - phi ** 2)
+    out[0] = e[0] / math.sqrt(1 - phi**2)
     for i in range(1, m):
         out[i] = phi * out[i - 1] + e[i]
     return out
@@ -96,7 +96,7 @@ def test_block_sandwich_widens_for_ar1_residuals():
     m, phi = 4000, 0.8
     J = -np.ones((m, 1))
     ratios_plain, ratios_block = [], []
-    truth = math.sqrt((1 + phi) / (1 - phi) / (1 - phi ** 2) / m)   # sd of the mean, unit e
+    truth = math.sqrt((1 + phi) / (1 - phi) / (1 - phi**2) / m)  # sd of the mean, unit e
     for _ in range(20):
         y = _ar1(rng, m, phi)
         r = y - y.mean()
@@ -129,7 +129,7 @@ def test_an_undetermined_column_does_not_switch_the_sandwich_off():
     assert full.widened and with_zero.widened and with_zero.block == full.block
     assert math.isnan(with_zero.stderr[2])
     assert with_zero.stderr[1] > 1.2 * plain[1]
-    np.testing.assert_allclose(with_zero.stderr[:2], full.stderr, rtol=0.05)   # nb/(nb - p)
+    np.testing.assert_allclose(with_zero.stderr[:2], full.stderr, rtol=0.05)  # nb/(nb - p)
 
 
 def test_monte_carlo_coverage_of_a_nonlinear_model():
@@ -151,14 +151,17 @@ def test_monte_carlo_coverage_of_a_nonlinear_model():
     np.testing.assert_allclose(np.mean(ses, axis=0), np.std(est, axis=0), rtol=0.12)
 
 
-@pytest.mark.parametrize("kw, match", [
-    ({"J": np.array([[1.0, np.nan]] * 5)}, "J"),
-    ({"J": np.ones(5)}, "J"),
-    ({"r": np.ones(4)}, "r must have one entry"),
-    ({"tau": 0.0}, "tau"),
-    ({"r": None}, "r \\(the residuals\\) is required"),
-    ({"Jp": np.ones((2, 3))}, "Jp"),
-])
+@pytest.mark.parametrize(
+    "kw, match",
+    [
+        ({"J": np.array([[1.0, np.nan]] * 5)}, "J"),
+        ({"J": np.ones(5)}, "J"),
+        ({"r": np.ones(4)}, "r must have one entry"),
+        ({"tau": 0.0}, "tau"),
+        ({"r": None}, "r \\(the residuals\\) is required"),
+        ({"Jp": np.ones((2, 3))}, "Jp"),
+    ],
+)
 def test_covariance_rejects_bad_input(kw, match):
     args = {"J": np.eye(5)[:, :2], "r": np.ones(5)}
     args.update(kw)
@@ -176,16 +179,20 @@ def test_covariance_does_not_modify_input():
 
 # ------------------------------------------------------------------------------ verdict
 
-@pytest.mark.parametrize("args, kw, ok, text", [
-    (("KT", 1e6, 1e5), {}, True, None),
-    (("KT", 1e6, 6e5), {}, False, "exceeds half of its value"),
-    (("KT", 1e6, 1e5), {"at_bound": True}, False, "at a bound"),
-    (("KT", 1e6, math.nan), {}, False, "not determined"),
-    (("dF0", 1.0, 30.0), {"nuisance": True}, True, None),
-    (("du0", 0.0, math.nan), {"nuisance": True}, False, "not determined"),
-    (("chi", -0.05, 0.3), {"reference": 0.95, "reference_text": "chi + 1"}, True, None),
-    (("chi", -0.8, 0.3), {"reference": 0.2, "reference_text": "chi + 1"}, False, "chi + 1"),
-])
+
+@pytest.mark.parametrize(
+    "args, kw, ok, text",
+    [
+        (("KT", 1e6, 1e5), {}, True, None),
+        (("KT", 1e6, 6e5), {}, False, "exceeds half of its value"),
+        (("KT", 1e6, 1e5), {"at_bound": True}, False, "at a bound"),
+        (("KT", 1e6, math.nan), {}, False, "not determined"),
+        (("dF0", 1.0, 30.0), {"nuisance": True}, True, None),
+        (("du0", 0.0, math.nan), {"nuisance": True}, False, "not determined"),
+        (("chi", -0.05, 0.3), {"reference": 0.95, "reference_text": "chi + 1"}, True, None),
+        (("chi", -0.8, 0.3), {"reference": 0.2, "reference_text": "chi + 1"}, False, "chi + 1"),
+    ],
+)
 def test_verdict_rule(args, kw, ok, text):
     got, warn = verdict(*args, **kw)
     assert got is ok
@@ -215,11 +222,16 @@ def test_verdict_refuses_a_negative_error_and_rejects_a_non_finite_value():
 
 # ---------------------------------------------------------------------------- the table
 
+
 def _table():
-    return ParameterTable([Parameter("Fs", 1000.0, 10.0, 0.0, math.inf, "N", True),
-                           Parameter("dF0", 3.0, 1.0, unit="N", identified=True, nuisance=True),
-                           Parameter("beta", 0.0, math.nan, 0.0, 100.0, "1", fixed=True)],
-                          correlation=np.eye(3))
+    return ParameterTable(
+        [
+            Parameter("Fs", 1000.0, 10.0, 0.0, math.inf, "N", True),
+            Parameter("dF0", 3.0, 1.0, unit="N", identified=True, nuisance=True),
+            Parameter("beta", 0.0, math.nan, 0.0, 100.0, "1", fixed=True),
+        ],
+        correlation=np.eye(3),
+    )
 
 
 def test_table_views_and_report():
@@ -233,7 +245,7 @@ def test_table_views_and_report():
     assert "identified" in rows[1] and "nuisance (fitted)" in rows[2] and "given" in rows[3]
     d = t.to_dict()
     assert d["parameters"][2]["stderr"] is None and d["parameters"][0]["upper"] is None
-    page = t._repr_html_()                  # a real table: header + one row per parameter
+    page = t._repr_html_()  # a real table: header + one row per parameter
     assert "<pre>" not in page and page.count("<tr>") == len(t) + 1
 
 
@@ -252,18 +264,21 @@ def test_table_is_immutable():
     assert t["Fs"].value == 1000.0
 
 
-@pytest.mark.parametrize("kw, match", [
-    ({"value": math.nan}, "value must be finite"),
-    ({"value": math.inf}, "value must be finite"),
-    ({"stderr": -1.0}, "stderr"),
-    ({"stderr": math.inf}, "stderr"),
-    ({"lower": 2.0, "upper": 1.0, "value": 1.5}, "bounds must be ordered"),
-    ({"lower": 2.0}, "must lie in its bounds"),
-    ({"name": ""}, "name"),
-    ({"value": "1"}, "real number"),
-    ({"value": 1j}, "real number"),
-    ({"identified": "no"}, "identified must be True or False"),
-])
+@pytest.mark.parametrize(
+    "kw, match",
+    [
+        ({"value": math.nan}, "value must be finite"),
+        ({"value": math.inf}, "value must be finite"),
+        ({"stderr": -1.0}, "stderr"),
+        ({"stderr": math.inf}, "stderr"),
+        ({"lower": 2.0, "upper": 1.0, "value": 1.5}, "bounds must be ordered"),
+        ({"lower": 2.0}, "must lie in its bounds"),
+        ({"name": ""}, "name"),
+        ({"value": "1"}, "real number"),
+        ({"value": 1j}, "real number"),
+        ({"identified": "no"}, "identified must be True or False"),
+    ],
+)
 def test_parameter_validation(kw, match):
     args = {"name": "a", "value": 1.0}
     args.update(kw)
@@ -282,14 +297,15 @@ def test_table_validation():
 
 # ------------------------------------------------------------- the fits carry the table
 
+
 def test_fit_result_params_table_and_joint():
     """fit_loops: params is a ParameterTable, .joint the IwanParameters built from it, and
     stderr/identified/correlation/fixed are views of the same table."""
     from iwan_element import IwanParameters, fit_loops
     from iwan_element.identify.loops.testdata import simulate_test
+
     p = IwanParameters(1000.0, 2e6, -0.5, 0.3)
-    d = simulate_test(p, np.array([0.3, 1.0, 2.0]) * p.phi_max, cycles=2, force_noise=2.0,
-                      seed=1)
+    d = simulate_test(p, np.array([0.3, 1.0, 2.0]) * p.phi_max, cycles=2, force_noise=2.0, seed=1)
     r = fit_loops(d.t, d.u, d.F, seed=0)
     assert isinstance(r.params, ParameterTable) and r.params.names == ("Fs", "KT", "chi", "beta")
     assert r.joint == IwanParameters(*(r.params[k].value for k in r.params.names))
@@ -304,10 +320,12 @@ def test_fit_result_params_table_and_joint():
 
 # ------------------------------------------------------------------- the minimiser entry
 
+
 def test_minimize_box_lm_and_trf_reach_the_same_bounded_minimum():
     """y = a exp(-b t) with b bounded below its unconstrained optimum: both solvers stop on
     the bound at the same a (the 1-D least squares in a with b held, closed form)."""
     from iwan_element.fitting import minimize
+
     rng = np.random.default_rng(8)
     t = np.linspace(0, 3, 80)
     y = 2.0 * np.exp(-1.3 * t) + 0.01 * rng.normal(size=t.size)
@@ -323,17 +341,20 @@ def test_minimize_box_lm_and_trf_reach_the_same_bounded_minimum():
         assert r.cost == pytest.approx(0.5 * float(fun(r.x) @ fun(r.x)), rel=1e-12)
 
 
-@pytest.mark.parametrize("kw, match", [
-    ({"method": "nelder"}, "method"),
-    ({"lower": [1.0, 0.0], "upper": [0.0, 1.0]}, "lower < upper"),
-    ({"x0": [np.nan, 1.0]}, "x0"),
-    ({"max_nfev": 0}, "max_nfev"),
-    ({"method": "box-lm", "x_scale": "jac"}, "no options"),
-])
+@pytest.mark.parametrize(
+    "kw, match",
+    [
+        ({"method": "nelder"}, "method"),
+        ({"lower": [1.0, 0.0], "upper": [0.0, 1.0]}, "lower < upper"),
+        ({"x0": [np.nan, 1.0]}, "x0"),
+        ({"max_nfev": 0}, "max_nfev"),
+        ({"method": "box-lm", "x_scale": "jac"}, "no options"),
+    ],
+)
 def test_minimize_rejects_bad_input(kw, match):
     from iwan_element.fitting import minimize
+
     args = {"x0": [0.5, 0.5], "lower": [0.0, 0.0], "upper": [1.0, 1.0], "max_nfev": 10}
     args.update(kw)
     with pytest.raises(ValueError, match=match):
-        minimize(lambda x: x - 0.3, args.pop("x0"), args.pop("lower"), args.pop("upper"),
-                 **args)
+        minimize(lambda x: x - 0.3, args.pop("x0"), args.pop("lower"), args.pop("upper"), **args)

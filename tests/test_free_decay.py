@@ -7,6 +7,7 @@ Each seeded case has a second mode at 0.8, 1.25 or 1.4 times the frequency and 1
 Where the curve cannot reach the targets (at least 10 points between 0.1 and 0.95 of the
 initial amplitude, frequency to 1e-4, damping to 3 %, relative RMS), it must say so.
 """
+
 import math
 import sys
 from pathlib import Path
@@ -22,8 +23,11 @@ from iwan_element.identify.decays._report import _compare
 from iwan_element.identify.decays.peaks import extrema
 
 RATIOS = (0.8, 1.25, 1.4)
-CASES = [(z, q, "svam") for z in (0.0002, 0.0005, 0.005, 0.02, 0.05)
-         for q in ("displacement", "velocity", "acceleration")]
+CASES = [
+    (z, q, "svam")
+    for z in (0.0002, 0.0005, 0.005, 0.02, 0.05)
+    for q in ("displacement", "velocity", "acceleration")
+]
 CASES += [(z, q, "joint") for z in (0.005, 0.02) for q in ("displacement", "acceleration")]
 
 
@@ -62,7 +66,7 @@ def test_free_decay_meets_the_targets_or_says_so(zeta, quantity, source):
     # the curve follows the decay from near its start (at 5 % in a band of +-10 to 20 %, the
     # filter's end effects cost about a neper, and the warning says so)
     assert cur.amplitude[0] > 0.5 * d.a0 or (zeta > 0.02 and "end effects cost" in text)
-    if zeta <= 0.002:     # light damping: the targets themselves are met
+    if zeta <= 0.002:  # light damping: the targets themselves are met
         assert n >= 10 and ef < 1e-4 and ez < 0.03, (n, ef, ez, cur.warnings)
 
 
@@ -73,7 +77,7 @@ def test_linear_decays_are_exact_at_heavy_damping_without_noise():
     for zeta in (0.005, 0.02, 0.05):
         t = np.arange(0.0, 4.5 / (zeta * 2 * math.pi * 50.0), 1 / fs)
         wn = 2 * math.pi * 50.0
-        x = 1e-3 * np.exp(-zeta * wn * t) * np.cos(wn * math.sqrt(1 - zeta ** 2) * t + 0.3)
+        x = 1e-3 * np.exp(-zeta * wn * t) * np.cos(wn * math.sqrt(1 - zeta**2) * t + 0.3)
         x2 = 3e-4 * np.exp(-0.003 * 2.0 * wn * t) * np.cos(2.0 * wn * t + 1.0)
         cur = amplitude_curve(t, x + x2, quantity="displacement", band=(40.0, 60.0))
         # while the mode is above 20 % of its start (later the second mode, which hardly
@@ -95,7 +99,7 @@ def test_peak_finding_and_fitting_alone():
     t = np.arange(0.0, 12.0, 1 / fs)
     zeta, f0, X0 = 0.004, 20.0, 2e-3
     wn = 2 * math.pi * f0
-    x = X0 * np.exp(-zeta * wn * t) * np.cos(wn * math.sqrt(1 - zeta ** 2) * t + 0.7)
+    x = X0 * np.exp(-zeta * wn * t) * np.cos(wn * math.sqrt(1 - zeta**2) * t + 0.7)
     cur = amplitude_curve(t, x, quantity="displacement", band=(15.0, 25.0), method="pff")
     assert cur.method == "pff" and len(cur) >= 10
     np.testing.assert_allclose(cur.frequency, f0, rtol=2e-5)
@@ -108,7 +112,7 @@ def test_peak_finding_and_fitting_alone():
     pos, val = extrema(x, 100, 4000)
     assert np.all(np.sign(val[1:]) == -np.sign(val[:-1]))
     half = np.diff(pos) / fs
-    np.testing.assert_allclose(half, 0.5 / (f0 * math.sqrt(1 - zeta ** 2)), rtol=1e-3)
+    np.testing.assert_allclose(half, 0.5 / (f0 * math.sqrt(1 - zeta**2)), rtol=1e-3)
 
 
 def test_the_two_methods_agree_on_a_nonlinear_decay_and_disagreement_is_flagged():
@@ -163,8 +167,11 @@ def _brb():
     return None
 
 
-@pytest.mark.skipif(_brb() is None, reason="../shared/data/brb-hammer is absent (GPL-3.0 data, "
-                    "read from ../shared only, never copied)")
+@pytest.mark.skipif(
+    _brb() is None,
+    reason="../shared/data/brb-hammer is absent (GPL-3.0 data, "
+    "read from ../shared only, never copied)",
+)
 def test_brb_hammer_curve_covers_at_least_the_old_range():
     """Before the free-decay work the defaults gave 19 points from 1.63 to 65.9 um."""
     d = np.loadtxt(_brb(), delimiter=",", skiprows=1)

@@ -5,6 +5,7 @@ closed-form linear receptance of the stuck limit, QSMA (microslip backbone), the
 an effect, and the phase-resonance condition linking the forced response to the nonlinear
 mode.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -26,16 +27,17 @@ def test_reduced_model_statics_are_exact_and_its_error_is_reported():
     red = reduced_model(BRB)
     L, pts = linear_system(BRB), contact_points(BRB)
     A = L.K0 + L.G.T @ (pts.KT[:, None] * L.G)
-    V = sla.eigh(A, L.M, subset_by_index=[0, 2])[1]          # the rigid-body modes
+    V = sla.eigh(A, L.M, subset_by_index=[0, 2])[1]  # the rigid-body modes
     MV = L.M @ V
     Ap = A + 1e6 * MV @ MV.T
     C = L.G @ np.linalg.solve(Ap, L.G.T)
-    H0 = red.system.receptance(0.0).real[:len(pts), :len(pts)]
+    H0 = red.system.receptance(0.0).real[: len(pts), : len(pts)]
     np.testing.assert_allclose(H0, C, rtol=0, atol=1e-9 * np.abs(C).max())
     e = reduction_error(BRB, n_modes=8, frequencies=np.linspace(0, 400, 81))
     assert e["max_relative_error"] < 1e-3 and e["n_full"] == L.M.shape[0]
-    assert red.frequency(1) == pytest.approx(models.natural_frequencies(BRB, n_modes=4)[3],
-                                             rel=1e-8)
+    assert red.frequency(1) == pytest.approx(
+        models.natural_frequencies(BRB, n_modes=4)[3], rel=1e-8
+    )
 
 
 def test_stuck_specimen_is_its_linear_frf():
@@ -55,8 +57,7 @@ def test_stuck_specimen_is_its_linear_frf():
     V = V / np.sqrt(np.einsum("ij,ij->j", V, L.M @ V))
     z = np.array([0.0] * 3 + [s.floor(k) for k in range(1, w2.size - 2)])
     w = np.sqrt(np.clip(w2, 0, None))
-    Hf = [np.sum((L.S @ V) * (L.E @ V) / (w * w - W * W + 2j * z * w * W))
-          for W in 2 * np.pi * f]
+    Hf = [np.sum((L.S @ V) * (L.E @ V) / (w * w - W * W + 2j * z * w * W)) for W in 2 * np.pi * f]
     np.testing.assert_allclose(r.amplitude, 0.7 * np.abs(Hf), rtol=1e-3)
 
 
@@ -77,13 +78,14 @@ def test_second_mode_has_its_own_floor():
 
 
 def test_effects_run_through_the_nonlinear_mode_as_in_their_modal_form():
-    s = BRB.with_effects({"hardening": {"k3_per_mass": 2e12}}, mode=1,
-                         calibrated_range=(2e-6, 60e-6))
+    s = BRB.with_effects(
+        {"hardening": {"k3_per_mass": 2e12}}, mode=1, calibrated_range=(2e-6, 60e-6)
+    )
     X = np.geomspace(5e-6, 50e-6, 5)
     c = models.nonlinear_mode(s, X)
     q = models.modal_amplitude_curve(s, amplitude=X)
     plain = models.nonlinear_mode(BRB, X)
-    assert np.all(c.frequency[-2:] > plain.frequency[-2:] + 0.05)     # it hardens
+    assert np.all(c.frequency[-2:] > plain.frequency[-2:] + 0.05)  # it hardens
     np.testing.assert_allclose(c.frequency, q.frequency, rtol=2e-4)
     np.testing.assert_allclose(c.damping_ratio, q.damping_ratio, rtol=0.05)
 
@@ -120,8 +122,15 @@ def test_harmonic_balance_matches_the_exudyn_stepped_sine():
     above the resonance, the interface barely slipping (0.02 N)."""
     s = BRB.replace(damping_floor=0.02, modal_damping=())
     f = np.array([0.985, 1.0, 1.012]) * reduced_model(s).frequency(1)
-    ts = models.forced_response(s, force_levels=(0.02,), frequencies=f, settle_cycles=60,
-                                measure_cycles=10, steps_per_period=64, spectral_radius=1.0)
+    ts = models.forced_response(
+        s,
+        force_levels=(0.02,),
+        frequencies=f,
+        settle_cycles=60,
+        measure_cycles=10,
+        steps_per_period=64,
+        spectral_radius=1.0,
+    )
     hb = models.harmonic_balance(s, f, 0.02)
     np.testing.assert_allclose(ts.amplitude[0], hb.amplitude, rtol=5e-3)
     np.testing.assert_allclose(ts.phase[0], hb.phase, atol=1e-2)

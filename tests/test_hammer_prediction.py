@@ -4,6 +4,7 @@ The full route (calibration, multi-mode ring-down, every curve against the recor
 ``examples/brb_every_mode.py`` and ``benchmarks/bench_every_mode.py`` (about 25 s); here the
 release read-out against an analytic two-mode decay, the bands, and the input guards.
 """
+
 import functools
 import math
 from pathlib import Path
@@ -15,8 +16,10 @@ from iwan_element import models
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "brb-hammer"
 needs_data = pytest.mark.skipif(
-    not DATA.is_dir(), reason="the measured Brake-Reuss hammer record (GPL-3.0) is read from "
-                              "../shared only and is absent here")
+    not DATA.is_dir(),
+    reason="the measured Brake-Reuss hammer record (GPL-3.0) is read from "
+    "../shared only and is absent here",
+)
 from iwan_element.models.calibration import mode_bands, release_amplitudes
 
 FS = 12800.0
@@ -51,7 +54,7 @@ def test_release_amplitudes_refuse_a_span_beyond_the_record():
     with pytest.raises(ValueError, match="finite"):
         release_amplitudes(t, np.where(t > 0.1, np.nan, a), {1: (60.0, 120.0)})
     with pytest.raises(ValueError, match="uniformly"):
-        release_amplitudes(np.where(t > 0.1, t + 0.01, t), a, {1: (60.0, 120.0)})   # a gap
+        release_amplitudes(np.where(t > 0.1, t + 0.01, t), a, {1: (60.0, 120.0)})  # a gap
     with pytest.raises(ValueError, match="strictly increasing"):
         release_amplitudes(t[::-1], a, {1: (60.0, 120.0)})
 
@@ -92,18 +95,33 @@ def round_trip():
     """A two-mode "hammer test" made by the beam model itself (modes 1 and 2 released from
     60 and 3 um at acc3, records at acc3 and acc2), predicted from a start whose chi is
     wrong (-0.3 for -0.4687), calibrating chi only: ``(truth specimen, HammerPrediction)``."""
-    s = models.preset("brake-reuss").replace(n_points=8, modal_damping=(1.3e-3, 1e-3),
-                                             calibrated_range=None)
+    s = models.preset("brake-reuss").replace(
+        n_points=8, modal_damping=(1.3e-3, 1e-3), calibrated_range=None
+    )
     x2 = 0.72 - 0.1651
-    rd = models.ringdown(s, amplitude={1: 60e-6, 2: 3e-6}, sensors=(s.sensor_position, x2),
-                         duration=0.8, steps_per_period=64)
-    recs = {"acc3": (s.sensor_position, rd.t, rd.sensor_acceleration[0]),
-            "acc2": (x2, rd.t, rd.sensor_acceleration[1])}
+    rd = models.ringdown(
+        s,
+        amplitude={1: 60e-6, 2: 3e-6},
+        sensors=(s.sensor_position, x2),
+        duration=0.8,
+        steps_per_period=64,
+    )
+    recs = {
+        "acc3": (s.sensor_position, rd.t, rd.sensor_acceleration[0]),
+        "acc2": (x2, rd.t, rd.sensor_acceleration[1]),
+    }
     # the 0.8 s records hold no low-amplitude (linear) window for a linear update; the truth's
     # linear structure is the start's
-    return s, models.predict_hammer_test(s.replace(chi=-0.3), recs, fit=("chi",),
-                                         release_time=0.02, fit_span=0.2, duration=0.6,
-                                         calibration_periods=10, update=None)
+    return s, models.predict_hammer_test(
+        s.replace(chi=-0.3),
+        recs,
+        fit=("chi",),
+        release_time=0.02,
+        fit_span=0.2,
+        duration=0.6,
+        calibration_periods=10,
+        update=None,
+    )
 
 
 def test_a_hammer_test_made_by_the_model_is_predicted_back():
@@ -123,10 +141,14 @@ def test_a_hammer_test_made_by_the_model_is_predicted_back():
         assert s["max_damping_error"] < 0.06, (r, name, s)
     for (r, name), (m, q) in p.ratios.items():
         assert q == pytest.approx(m, rel=0.02), (r, name)
-    assert p.release[2] == pytest.approx(3e-6, rel=0.1)    # read 20 ms after the largest sample
+    assert p.release[2] == pytest.approx(3e-6, rel=0.1)  # read 20 ms after the largest sample
     assert "Hammer test predicted from mode 1" in p.report()
-    assert set(p.to_dict()["summary"]) == {"mode 1 at acc3", "mode 2 at acc3", "mode 1 at acc2",
-                                           "mode 2 at acc2"}
+    assert set(p.to_dict()["summary"]) == {
+        "mode 1 at acc3",
+        "mode 2 at acc3",
+        "mode 1 at acc2",
+        "mode 2 at acc2",
+    }
 
 
 @needs_data
@@ -137,13 +159,15 @@ def test_the_hammer_route_updates_the_linear_structure_on_the_low_amplitude_wind
     and the second mode is met within its error after it."""
     from iwan_element.models.calibration import mode_bands
     from iwan_element.models.calibration.hammer import _linear_update
+
     spec = models.preset("brake-reuss")
     recs = {}
     for name, x in (("acc1", 0.0254), ("acc2", 0.5549), ("acc3", 0.6438)):
         d = np.loadtxt(DATA / f"hammer_{name}.csv", delimiter=",", skiprows=1)
         recs[name] = (x, d[:, 0], d[:, 1])
-    upd = _linear_update(spec, recs, "acc3", mode_bands(spec, (1, 2)), ("youngs_modulus",
-                                                                       "stiffness_per_area"))
+    upd = _linear_update(
+        spec, recs, "acc3", mode_bands(spec, (1, 2)), ("youngs_modulus", "stiffness_per_area")
+    )
     for n, p in upd.params.items():
         assert p.identified and abs(p.value - upd.nominal[n]) < 2 * p.stderr, (n, upd.report())
     f2 = next(r for r in upd.residuals if r["target"] == "f2")

@@ -9,6 +9,7 @@
 * EPMC against QSMA on the Brake-Reuss beam; continuation through a Duffing fold against the
   classical first-harmonic frequency-amplitude relation.
 """
+
 from __future__ import annotations
 
 import math
@@ -38,9 +39,9 @@ def test_periodic_kernel_is_the_steady_loop_of_the_history_kernel(seed):
     C = constants_from_arrays(np.full(6, 100.0), np.full(6, 1e6), -0.5, 0.2)
     U = (rng.normal(size=(6, b.n_coefficients)) * 5e-5) @ b.E.T
     F, K, A, D = periodic_rows(C, U)
-    F3, K3, W3, D3 = masing_rows(C, np.tile(U, 3))      # from the virgin state, 3 periods
+    F3, K3, W3, D3 = masing_rows(C, np.tile(U, 3))  # from the virgin state, 3 periods
     N = U.shape[1]
-    np.testing.assert_allclose(F, F3[:, 2 * N:], rtol=0, atol=1e-12 * np.abs(F).max())
+    np.testing.assert_allclose(F, F3[:, 2 * N :], rtol=0, atol=1e-12 * np.abs(F).max())
     np.testing.assert_allclose(D, D3[:, 3 * N - 1] - D3[:, 2 * N - 1], rtol=1e-10, atol=1e-18)
     # the loop's area is its dissipation: closed trapezoid of F du over the period
     loop = 0.5 * np.sum((F + np.roll(F, -1, axis=1)) * (np.roll(U, -1, axis=1) - U), axis=1)
@@ -68,7 +69,7 @@ def test_periodic_jacobian_matches_finite_differences(seed):
 
 def test_stuck_oscillator_is_the_linear_receptance():
     m, k, c = 2.0, 3e4, 4.0
-    stuck = IwanParameters(Fs=1e12, KT=2e4, chi=1.0, beta=0.1)   # microslip ~ (u/phi_max)^2
+    stuck = IwanParameters(Fs=1e12, KT=2e4, chi=1.0, beta=0.1)  # microslip ~ (u/phi_max)^2
     sysm = ModalSystem.oscillator(m, k, c, stuck)
     f = np.linspace(10, 40, 13)
     r = harmonic_balance(sysm, f, 3.0)
@@ -95,28 +96,28 @@ def _newmark_steady(m, k, c, joint, F, f, *, periods, spp=256):
         t = i * h
         xn = x
         for _ in range(30):
-            an = 4 / h ** 2 * (xn - x - h * v) - a
+            an = 4 / h**2 * (xn - x - h * v) - a
             vn = v + 0.5 * h * (a + an)
             Fj, Kj = el.trial(xn)
             r = m * an + c * vn + k * xn + Fj - F * math.cos(W * t)
-            dx = -r / (4 * m / h ** 2 + 2 * c / h + k + Kj)
+            dx = -r / (4 * m / h**2 + 2 * c / h + k + Kj)
             xn += dx
             if abs(dx) <= 1e-13 * max(abs(xn), 1e-12):
                 break
-        an = 4 / h ** 2 * (xn - x - h * v) - a
+        an = 4 / h**2 * (xn - x - h * v) - a
         v = v + 0.5 * h * (a + an)
         x, a = xn, an
         el.trial(x)
         el.commit()
         xs[i] = x
-    tail = xs[-10 * spp:]
-    tt = np.arange(n + 1)[-10 * spp:] * h
+    tail = xs[-10 * spp :]
+    tt = np.arange(n + 1)[-10 * spp :] * h
     return 2 * np.mean(tail * np.cos(W * tt)) - 2j * np.mean(tail * np.sin(W * tt))
 
 
 @pytest.mark.parametrize("ratio", [0.9, 0.985, 1.05])
 def test_oscillator_matches_a_time_integration_to_steady_state(ratio):
-    m, k, c, F = 1.0, 1e5, 20.0, 4.0          # zeta 2.2 %: settles in tens of periods
+    m, k, c, F = 1.0, 1e5, 20.0, 4.0  # zeta 2.2 %: settles in tens of periods
     sysm = ModalSystem.oscillator(m, k, c, JOINT)
     f = ratio * sysm.omega[0] / (2 * np.pi)
     r = harmonic_balance(sysm, [f], F, harmonics=(1, 3, 5, 7, 9))
@@ -129,8 +130,10 @@ def test_oscillator_matches_a_time_integration_to_steady_state(ratio):
 def test_energy_error_shrinks_with_the_harmonics():
     sysm = ModalSystem.oscillator(1.0, 1e5, 2.0, JOINT)
     f = 0.95 * sysm.omega[0] / (2 * np.pi)
-    errs = [abs(harmonic_balance(sysm, [f], 8.0, harmonics=hs).energy_error[0])
-            for hs in ((1,), (1, 3, 5), (1, 3, 5, 7, 9, 11))]
+    errs = [
+        abs(harmonic_balance(sysm, [f], 8.0, harmonics=hs).energy_error[0])
+        for hs in ((1,), (1, 3, 5), (1, 3, 5, 7, 9, 11))
+    ]
     assert errs[0] > errs[1] > errs[2]
     assert errs[2] < 1e-3
 
@@ -140,6 +143,7 @@ def test_continuation_traces_a_duffing_fold():
     hardening effect as an element port); with the fundamental alone every traced point
     satisfies the classical relation F^2 = a^2 ((w0^2 + 3/4 k3 a^2 - W^2)^2 + (c W)^2)."""
     from iwan_element.models.modal import ZeroElement
+
     k3, c, F = 1e10, 5.0, 1.0
     stuck = IwanParameters(Fs=1e9, KT=1e3, chi=1.0, beta=0.5)
     base = ModalSystem.oscillator(1.0, 1e4, c, stuck)
@@ -150,14 +154,21 @@ def test_continuation_traces_a_duffing_fold():
     W, a = 2 * np.pi * r.frequency, r.amplitude
     lhs = a * a * ((base.omega[0] ** 2 + 0.75 * k3 * a * a - W * W) ** 2 + (c * W) ** 2)
     np.testing.assert_allclose(np.sqrt(lhs), F, rtol=1e-7)
-    assert np.any(np.diff(r.frequency) < 0)      # the traced curve runs back past the fold
+    assert np.any(np.diff(r.frequency) < 0)  # the traced curve runs back past the fold
 
 
-@pytest.mark.parametrize("bad, match", [
-    (dict(frequency=[-1.0, 2.0]), "frequency"), (dict(force=[1.0, 2.0, 3.0]), "force"),
-    (dict(force=0.0), "force"), (dict(harmonics=(3, 5)), "harmonics"),
-    (dict(harmonics=0), "harmonics"), (dict(samples=4), "samples"),
-    (dict(frequency=[np.nan]), "frequency")])
+@pytest.mark.parametrize(
+    "bad, match",
+    [
+        (dict(frequency=[-1.0, 2.0]), "frequency"),
+        (dict(force=[1.0, 2.0, 3.0]), "force"),
+        (dict(force=0.0), "force"),
+        (dict(harmonics=(3, 5)), "harmonics"),
+        (dict(harmonics=0), "harmonics"),
+        (dict(samples=4), "samples"),
+        (dict(frequency=[np.nan]), "frequency"),
+    ],
+)
 def test_bad_input_is_refused_naming_the_argument(bad, match):
     sysm = ModalSystem.oscillator(1.0, 1e5, 2.0, JOINT)
     kw = dict(frequency=[50.0, 51.0], force=1.0)
@@ -175,6 +186,7 @@ def test_specimen_response_warns_outside_its_calibrated_range():
     calibrated on (the Brake-Reuss preset: 2-60 um), as QSMA and the nonlinear modes do;
     inside the range it stays silent."""
     from iwan_element import models
+
     spec = models.preset("brake-reuss")
     lo, hi = spec.calibrated_range
     r = models.harmonic_balance(spec, [79.0, 80.0], [0.05, 1.5])

@@ -11,6 +11,7 @@ two facts checked here against independent routes, without the peer:
   harmonic balance written here with numpy and scipy's ``fsolve`` on the stepped slider
   (steady loop: three periods from rest, the last kept), through the stick-slip resonance.
 """
+
 import numpy as np
 import pytest
 from _jenkins_bank import jenkins_bank
@@ -38,7 +39,7 @@ def test_large_beta_iwan_is_the_jenkins_element(level):
     u = level * PHI * np.sin(np.linspace(0.0, 6 * np.pi, 1501))
     assert np.max(np.abs(masing_history(u, p)[0] - jenkins(u))) < 2.0 / BETA * FS
     tau = 2 * np.pi * np.arange(N) / N
-    up = level * PHI * (np.cos(tau) + 0.3 * np.cos(3 * tau + 0.4))    # inner reversals
+    up = level * PHI * (np.cos(tau) + 0.3 * np.cos(3 * tau + 0.4))  # inner reversals
     F = periodic_rows(masing_constants(p, 0.0)[None, :], up[None, :])[0][0]
     assert np.max(np.abs(F - jenkins(np.tile(up, 3))[-N:])) < 2.0 / BETA * FS
     # and the limit is not trivially met: beta = 1e2 is 100x further off
@@ -83,4 +84,4 @@ def test_harmonic_balance_of_the_jenkins_oscillator(force):
         ref = reference_hb(fk, force, ours * 1.05)
         A = np.hypot(ref[0], ref[1])
         assert r.amplitude[k] == pytest.approx(A, rel=2e-5)
-        assert np.max(np.abs(ours - ref)) < 2e-5 * A             # the 3rd and 5th too
+        assert np.max(np.abs(ours - ref)) < 2e-5 * A  # the 3rd and 5th too

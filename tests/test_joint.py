@@ -1,5 +1,6 @@
 """The exact IwanJoint against independent routes: a dense slider model written here, the
 closed-form dissipation, Masing branches (paper eqs. 13-15) and finite differences."""
+
 import math
 
 import numpy as np
@@ -98,18 +99,18 @@ def test_exact_matches_dense_sliders_on_random_histories(pi):
 @pytest.mark.parametrize("r", [1e-6, 1e-3, 0.5, 1.0, 3.0])
 def test_steady_cycle_loop_area_equals_dissipation(p, r):
     u0 = r * p.phi_max
-    t = np.linspace(0.0, 3.0, 3 * 64 + 1)                 # three cycles, peaks on samples
+    t = np.linspace(0.0, 3.0, 3 * 64 + 1)  # three cycles, peaks on samples
     u = u0 * np.sin(2 * np.pi * t + np.pi / 2) * np.minimum(1.0, t * 4)  # ramp in, then steady
     j = IwanJoint(p)
     for x in u[: 2 * 64 + 1]:
         j.trial(x)
         j.commit()
     W0, D0 = j.work, j.dissipated_energy
-    for x in u[2 * 64 + 1:]:
+    for x in u[2 * 64 + 1 :]:
         j.trial(x)
         j.commit()
     D = dissipation(u0, p)
-    assert (j.work - W0) == pytest.approx(D, rel=1e-9)          # loop area = closed-path work
+    assert (j.work - W0) == pytest.approx(D, rel=1e-9)  # loop area = closed-path work
     assert (j.dissipated_energy - D0) == pytest.approx(D, rel=1e-9)
 
 
@@ -135,8 +136,9 @@ def test_masing_branches_eq13_eq15(p):
     j.commit()
     down = [j.trial(x * p.phi_max)[0] for x in s]
     # trial without commit is a pure evaluation from the tip
-    np.testing.assert_allclose(np.array(down) / p.Fs, masing_descending(s, s0, p.chi, p.beta),
-                               rtol=1e-12, atol=1e-13)
+    np.testing.assert_allclose(
+        np.array(down) / p.Fs, masing_descending(s, s0, p.chi, p.beta), rtol=1e-12, atol=1e-13
+    )
     for x in s:
         j.trial(x * p.phi_max)
         j.commit()
@@ -145,8 +147,9 @@ def test_masing_branches_eq13_eq15(p):
     for x in up:
         Fu.append(j.trial(x * p.phi_max)[0])
         j.commit()
-    np.testing.assert_allclose(np.array(Fu) / p.Fs, masing_ascending(up, s0, p.chi, p.beta),
-                               rtol=1e-12, atol=1e-13)
+    np.testing.assert_allclose(
+        np.array(Fu) / p.Fs, masing_ascending(up, s0, p.chi, p.beta), rtol=1e-12, atol=1e-13
+    )
     # after the loop closes the joint is back on the virgin curve
     j.trial(0.9 * p.phi_max)
     assert j.trial(0.9 * p.phi_max)[0] == pytest.approx(backbone(0.9 * p.phi_max, p), rel=1e-12)
@@ -157,12 +160,12 @@ def test_nested_loop_closes_and_rejoins_outer_branch():
     p = PARAMS[1]
     a = p.phi_max
     j = IwanJoint(p)
-    for x in [0.8 * a, -0.2 * a, 0.3 * a]:          # outer descent, inner reversal, inner ascent
+    for x in [0.8 * a, -0.2 * a, 0.3 * a]:  # outer descent, inner reversal, inner ascent
         j.trial(x)
         j.commit()
     assert j.reversal_depth == 2
     F_outer = IwanJoint(p).force_history(np.array([0.8 * a, -0.5 * a]))[-1]
-    j.trial(-0.5 * a)        # passes -0.2 a: the inner loop (0.3a, -0.2a) closes
+    j.trial(-0.5 * a)  # passes -0.2 a: the inner loop (0.3a, -0.2a) closes
     j.commit()
     assert j.force == pytest.approx(F_outer, rel=1e-13)
     assert j.reversal_depth == 1
@@ -220,10 +223,16 @@ def test_trial_does_not_commit_and_revert_restores():
     F_back = j.trial(0.1 * p.phi_max)[0]
     for x in [-2 * p.phi_max, 0.9 * p.phi_max, 0.0]:
         j.trial(x)
-    assert (j.displacement, j.force, j.stiffness, j.work, j.dissipated_energy,
-            j.reversal_depth) == state
+    assert (
+        j.displacement,
+        j.force,
+        j.stiffness,
+        j.work,
+        j.dissipated_energy,
+        j.reversal_depth,
+    ) == state
     j.revert()
-    j.commit()                       # nothing to commit after a revert
+    j.commit()  # nothing to commit after a revert
     assert j.displacement == state[0]
     assert j.trial(0.1 * p.phi_max)[0] == F_back
     j.reset()
@@ -249,7 +258,9 @@ def test_reversal_stack_bounded_on_long_random_histories():
     depth = []
     # i.i.d. random targets (heavy-tailed amplitudes) and a bounded random walk
     u1 = p.phi_max * rng.standard_t(3, 50000) * 0.5
-    u2 = np.clip(np.cumsum(rng.normal(size=50000)) * 0.01 * p.phi_max, -2 * p.phi_max, 2 * p.phi_max)
+    u2 = np.clip(
+        np.cumsum(rng.normal(size=50000)) * 0.01 * p.phi_max, -2 * p.phi_max, 2 * p.phi_max
+    )
     for u in (u1, u2):
         j.reset()
         for x in u:
@@ -298,8 +309,12 @@ def test_fast_paths_equal_the_general_walk_bit_for_bit(p):
     force, tangent, work and dissipation must be exactly those of the general walk."""
     rng = np.random.default_rng(5)
     j = IwanJoint(p)
-    u = np.concatenate([random_history(rng, p), p.phi_max * 1.5 * np.sin(np.arange(3000) / 40.0)
-                        * np.exp(-np.arange(3000) / 1500.0)])
+    u = np.concatenate(
+        [
+            random_history(rng, p),
+            p.phi_max * 1.5 * np.sin(np.arange(3000) / 40.0) * np.exp(-np.arange(3000) / 1500.0),
+        ]
+    )
     fast = 0
     for i, x in enumerate(u.tolist()):
         step = abs(x - j.displacement) + 1e-9 * p.phi_max
@@ -312,13 +327,14 @@ def test_fast_paths_equal_the_general_walk_bit_for_bit(p):
         W, D = j.work + acc[0], j.dissipated_energy + acc[1]
         j.commit()
         assert (j.work, j.dissipated_energy) == (W, D), i
-    assert 0.3 * len(u) < fast < len(u)        # both routes were exercised
+    assert 0.3 * len(u) < fast < len(u)  # both routes were exercised
 
 
 def test_force_history_takes_velocities_like_every_element_and_checks_them():
     """The plain joints are rate independent: velocities change nothing, but a velocity
     history of the wrong length or with NaN is refused naming ``v``."""
     from iwan_element import DiscreteIwan
+
     p = IwanParameters(400.0, 2.5e5, -0.5, 1.0)
     u = 1.5 * p.phi_max * np.sin(np.linspace(0, 4 * np.pi, 200))
     v = np.gradient(u)

@@ -1,5 +1,6 @@
 """The compiled Masing kernel (``iwan_element.core.masing``) against an independent
 plain-Python reference, the package's elements, the closed forms and energy balance."""
+
 from __future__ import annotations
 
 import os
@@ -60,10 +61,10 @@ def test_kernel_equals_the_reference_and_the_elements(case, rtol):
     assert np.max(np.abs(K - Kr)) <= 1e-12 * p.KT
     assert np.array_equal(reversal_structure(u, rtol * p.phi_max)[0], anchor)
     el = _element(p, u, rtol)
-    assert np.array_equal(el, np.array([F, K, W, D]))          # IwanJoint: bit for bit
+    assert np.array_equal(el, np.array([F, K, W, D]))  # IwanJoint: bit for bit
     bank = IwanJointBank([p, p], reversal_tol=rtol).force_history(np.column_stack([u, -u]))
     assert np.max(np.abs(bank[:, 0] - F)) <= 1e-12 * p.Fs
-    assert np.max(np.abs(bank[:, 1] + F)) <= 1e-12 * p.Fs    # odd in u
+    assert np.max(np.abs(bank[:, 1] + F)) <= 1e-12 * p.Fs  # odd in u
     hist = History(u, tol=rtol * p.phi_max).forces(p)
     assert np.max(np.abs(hist - F)) <= 1e-12 * p.Fs
 
@@ -86,7 +87,7 @@ def test_work_is_the_integral_of_the_force_and_dissipation_never_decreases(case)
     travel = np.cumsum(np.abs(np.diff(x)))
     assert np.all(np.abs(W - W_trap) <= 1e-3 * p.Fs * travel + 1e-12 * p.Fs * p.phi_max)
     assert np.all(np.diff(D) >= -1e-12 * p.Fs * p.phi_max)
-    assert np.all(W - D >= -1e-9 * p.Fs * p.phi_max)           # stored energy >= 0
+    assert np.all(W - D >= -1e-9 * p.Fs * p.phi_max)  # stored energy >= 0
 
 
 @pytest.mark.parametrize("chi, beta", [(-0.5, 0.2), (0.0, 0.0), (-0.9, 3.0), (1.5, 1.0)])
@@ -100,7 +101,7 @@ def test_a_closed_cycle_dissipates_the_closed_form_energy(chi, beta, amp):
     s = np.linspace(0.0, 1.0, 200)[1:]
     u = np.concatenate([u0 * s, u0 * (1 - 2 * s), -u0 * (1 - 2 * s)])
     F, _, W, D = masing_history(u, p)
-    k = 198                                         # the sample at the first u0
+    k = 198  # the sample at the first u0
     expected = dissipation(u0, p)
     assert W[-1] - W[k] == pytest.approx(expected, rel=1e-11)
     assert D[-1] - D[k] == pytest.approx(expected, rel=1e-11)
@@ -109,18 +110,26 @@ def test_a_closed_cycle_dissipates_the_closed_form_energy(chi, beta, amp):
 
 def test_a_batch_of_parameter_sets_is_each_row_alone():
     rng = np.random.default_rng(3)
-    ps = [IwanParameters(10 ** rng.uniform(0, 4), 10 ** rng.uniform(4, 8), rng.uniform(-0.9, 1),
-                         rng.uniform(0, 2)) for _ in range(6)]
+    ps = [
+        IwanParameters(
+            10 ** rng.uniform(0, 4),
+            10 ** rng.uniform(4, 8),
+            rng.uniform(-0.9, 1),
+            rng.uniform(0, 2),
+        )
+        for _ in range(6)
+    ]
     u = np.cumsum(rng.normal(size=(6, 400)), axis=1) * 1e-5
     F, K, W, D = masing_history(u, ps)
     for k, p in enumerate(ps):
         one = masing_history(u[k], p)
         for a, b in zip((F[k], K[k], W[k], D[k]), one):
             assert np.array_equal(a, b)
-    shared = masing_history(u[0], ps)[0]            # one history, every parameter set
+    shared = masing_history(u[0], ps)[0]  # one history, every parameter set
     assert np.array_equal(shared[2], masing_history(u[0], ps[2])[0])
-    C = constants_from_arrays([p.Fs for p in ps], [p.KT for p in ps], [p.chi for p in ps],
-                              [p.beta for p in ps], 1e-12)
+    C = constants_from_arrays(
+        [p.Fs for p in ps], [p.KT for p in ps], [p.chi for p in ps], [p.beta for p in ps], 1e-12
+    )
     C1 = np.array([masing_constants(p, 1e-12 * p.phi_max) for p in ps])
     np.testing.assert_allclose(C, C1, rtol=1e-14)
     np.testing.assert_allclose(masing_rows(C, u)[0], F, rtol=0, atol=1e-12 * max(p.Fs for p in ps))
@@ -129,8 +138,9 @@ def test_a_batch_of_parameter_sets_is_each_row_alone():
 def test_the_qsma_interface_law_is_the_virgin_curve():
     p = IwanParameters(300.0, 2e7, -0.4, 0.3)
     u = np.linspace(-2, 2, 41)[None, :] * p.phi_max * np.array([[1.0], [0.5]])
-    F, K = _interface_law(u, np.full(41, p.Fs), np.full(41, p.KT), np.full(41, p.phi_max),
-                          p.chi, p.beta)
+    F, K = _interface_law(
+        u, np.full(41, p.Fs), np.full(41, p.KT), np.full(41, p.phi_max), p.chi, p.beta
+    )
     Fr = np.array([reference_history([x], p)[0][0] for x in u.ravel()]).reshape(u.shape)
     Kr = np.array([reference_history([x], p)[1][0] for x in u.ravel()]).reshape(u.shape)
     assert np.max(np.abs(F - Fr)) <= 1e-12 * p.Fs
@@ -151,13 +161,16 @@ def test_segments_tile_the_path():
         assert anc[sel][-1] == anchor[i]
 
 
-@pytest.mark.parametrize("u, params, match", [
-    (np.array([0.0, np.nan]), IwanParameters(1.0, 1.0, 0.0, 0.0), "u"),
-    (np.zeros((2, 2, 2)), IwanParameters(1.0, 1.0, 0.0, 0.0), "u"),
-    (np.zeros((3, 5)), [IwanParameters(1.0, 1.0, 0.0, 0.0)] * 2, "rows"),
-    (np.zeros(4), [], "params"),
-    (np.zeros(4), "joint", "params"),
-])
+@pytest.mark.parametrize(
+    "u, params, match",
+    [
+        (np.array([0.0, np.nan]), IwanParameters(1.0, 1.0, 0.0, 0.0), "u"),
+        (np.zeros((2, 2, 2)), IwanParameters(1.0, 1.0, 0.0, 0.0), "u"),
+        (np.zeros((3, 5)), [IwanParameters(1.0, 1.0, 0.0, 0.0)] * 2, "rows"),
+        (np.zeros(4), [], "params"),
+        (np.zeros(4), "joint", "params"),
+    ],
+)
 def test_bad_input_is_refused(u, params, match):
     with pytest.raises(ValueError, match=match):
         masing_history(u, params)
@@ -180,6 +193,7 @@ def test_compiled_routes_work_in_either_order_in_a_fresh_process():
     import subprocess
     import sys
     from pathlib import Path
+
     code = """
 import numpy as np
 from iwan_element import IwanJoint, IwanParameters, SlipDegradation, BreakAway, Backlash
@@ -198,9 +212,14 @@ Backlash(b, gap=1e-3, drag=0.05).force_history(u[:50])
 print("ok")
 """
     root = Path(__file__).resolve().parents[1]
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                         cwd=root, env={**os.environ, "PYTHONPATH": str(root)},
-                         timeout=600)
+    out = subprocess.run(
+        [sys.executable, "-c", code],
+        capture_output=True,
+        text=True,
+        cwd=root,
+        env={**os.environ, "PYTHONPATH": str(root)},
+        timeout=600,
+    )
     assert out.returncode == 0, out.stderr[-2000:]
     assert out.stdout.strip() == "ok"
 
@@ -211,6 +230,7 @@ def test_compiled_wear_behind_a_gap_equals_the_elements(drag):
     with the elements' per-sample rule compiled; it must give their forces."""
     from iwan_element.core.history import unit_params
     from iwan_element.effects.engine.evaluate import Evaluator, build_element
+
     rng = np.random.default_rng(int(drag * 100) + 4)
     t = np.linspace(0.0, 6.0, 600)
     u = 0.02 * np.sin(2 * np.pi * t) + 2e-4 * rng.normal(size=t.size)
@@ -219,10 +239,14 @@ def test_compiled_wear_behind_a_gap_equals_the_elements(drag):
     names = ("slip_degradation", "backlash", "pinning_stiffness", "viscous_damping")
     keep = np.arange(0, u.size, 3)
     ev = Evaluator(u, v, keep, np.arange(u.size), tol=1e-12 * 0.02)
-    assert not ev.fast(names)                   # the route below, not the run-by-run one
+    assert not ev.fast(names)  # the route below, not the run-by-run one
     for rate, gap in [(0.0, 0.0), (0.8, 0.002), (3.0, 0.006)]:
-        vals = [{"rate": rate}, {"gap": gap, "drag": drag}, {"k_p": 2.0, "delta": 0.01},
-                {"c": 0.01}]
+        vals = [
+            {"rate": rate},
+            {"gap": gap, "drag": drag},
+            {"k_p": 2.0, "delta": 0.01},
+            {"c": 0.01},
+        ]
         F = ev.unit_force(shape, names, vals)
         ref = build_element(unit_params(*shape), names, vals).force_history(u, v)[keep]
         assert np.max(np.abs(F - ref)) <= 1e-12
@@ -238,14 +262,18 @@ def test_compiled_joint_path_behind_a_gap_equals_the_element(drag):
     from iwan_element.core.history import unit_params
     from iwan_element.effects.engine.evaluate import _constants, _laws
     from iwan_element.effects.engine.series_kernel import backlash_path
+
     rng = np.random.default_rng(int(drag * 100) + 9)
     p1 = unit_params(0.01, -0.5, 0.2)
     t = np.linspace(0.0, 6.0, 700)
     u = 0.02 * np.sin(2 * np.pi * t) + 3e-4 * rng.normal(size=t.size)
     u[:5] = 0.0
     u[300:310] = u[300]
-    for make in (lambda j: [j], lambda j: [j, BreakAway(j, ratio=1.6)],
-                 lambda j: [j, AsymmetricSlip(j, asymmetry=0.2)]):
+    for make in (
+        lambda j: [j],
+        lambda j: [j, BreakAway(j, ratio=1.6)],
+        lambda j: [j, AsymmetricSlip(j, asymmetry=0.2)],
+    ):
         els = make(IwanJoint(p1))
         if len(els) == 2 and isinstance(els[1], AsymmetricSlip):
             els.append(BreakAway(els[1], ratio=1.3))
@@ -261,13 +289,15 @@ def test_one_blas_thread_limits_and_restores():
 
     from iwan_element.base.threads import one_blas_thread
 
-    np.linalg.svd(np.ones((4, 2)))                  # a BLAS is loaded by now
-    before = [(p["filepath"], p["num_threads"]) for p in threadpool_info()
-              if p["user_api"] == "blas"]
+    np.linalg.svd(np.ones((4, 2)))  # a BLAS is loaded by now
+    before = [
+        (p["filepath"], p["num_threads"]) for p in threadpool_info() if p["user_api"] == "blas"
+    ]
     assert before, "numpy's BLAS is not visible to threadpoolctl"
     with one_blas_thread():
         inside = [p["num_threads"] for p in threadpool_info() if p["user_api"] == "blas"]
-    after = [(p["filepath"], p["num_threads"]) for p in threadpool_info()
-             if p["user_api"] == "blas"]
+    after = [
+        (p["filepath"], p["num_threads"]) for p in threadpool_info() if p["user_api"] == "blas"
+    ]
     assert inside == [1] * len(before)
     assert after == before

@@ -2,6 +2,7 @@
 (models/specimens/setups.py, models/linear/system.py): sensitivities against finite
 differences of the whole modal solution, a setup against closed forms, and the update of a
 synthetic specimen back to its known truth."""
+
 import math
 
 import numpy as np
@@ -29,10 +30,19 @@ from scipy.optimize import brentq
 
 #: the example specimen (clamped-free) with a setup: a non-rigid clamp, an accelerometer at
 #: the free end and a shaker near the clamp whose moving mass is in the model
-SETUP = Setup(name="bench", masses=(PointMass("acc", 0.34, 0.012),),
-              shaker=Shaker(0.08, gauge_mass=0.004, moving_mass=0.05, stinger_stiffness=2e5,
-                            suspension_stiffness=2e3, force_at="armature"),
-              clamp=Clamp(translational=5e8, rotational=3e4))
+SETUP = Setup(
+    name="bench",
+    masses=(PointMass("acc", 0.34, 0.012),),
+    shaker=Shaker(
+        0.08,
+        gauge_mass=0.004,
+        moving_mass=0.05,
+        stinger_stiffness=2e5,
+        suspension_stiffness=2e3,
+        force_at="armature",
+    ),
+    clamp=Clamp(translational=5e8, rotational=3e4),
+)
 SPEC = preset("example").replace(n_points=12, setup=SETUP, excitation=preset("example").excitation)
 
 
@@ -47,26 +57,37 @@ def _fd(specimen, name, modes, positions, h=1e-3):
         st = modal_state(s)
         pairs = pair_modes(st, ref, modes)
         from iwan_element.models.reduced import axis_rows
+
         R = axis_rows(s, positions)
         vals = []
         for r, k in pairs.items():
             phi = st.phi[:, k] * np.sign(ref.phi[:, ref.index(r)] @ st.M @ st.phi[:, k])
-            vals.append(np.concatenate([[st.frequency(k)], R @ phi,
-                                        [(st.S @ phi) * (st.E @ phi)]]))
+            vals.append(np.concatenate([[st.frequency(k)], R @ phi, [(st.S @ phi) * (st.E @ phi)]]))
         out.append(np.array(vals))
     return (out[0] - out[1]) / (2 * h)
 
 
-@pytest.mark.parametrize("name", ["youngs_modulus", "density", "clamp.rotational",
-                                  "clamp.translational", "mass:acc", "shaker.moving_mass",
-                                  "shaker.stinger_stiffness", "stiffness_per_area",
-                                  "normal_stiffness_per_area"])
+@pytest.mark.parametrize(
+    "name",
+    [
+        "youngs_modulus",
+        "density",
+        "clamp.rotational",
+        "clamp.translational",
+        "mass:acc",
+        "shaker.moving_mass",
+        "shaker.stinger_stiffness",
+        "stiffness_per_area",
+        "normal_stiffness_per_area",
+    ],
+)
 def test_sensitivities_equal_finite_differences_of_the_whole_solution(name):
     modes, positions = (1, 2, 3), [0.1, 0.25, 0.34]
     u = next(u for u in updatable(SPEC) if u.name == name)
     st = modal_state(SPEC)
-    sens = modal_sensitivities(SPEC, {r: st.index(r) for r in modes}, [u], positions=positions,
-                               state=st)
+    sens = modal_sensitivities(
+        SPEC, {r: st.index(r) for r in modes}, [u], positions=positions, state=st
+    )
     fd = _fd(SPEC, name, modes, positions)
     for i, r in enumerate(modes):
         an = np.concatenate([sens["df"][r], sens["dshape"][r][:, 0], sens["dc"][r]])
@@ -81,34 +102,47 @@ def test_a_point_mass_is_the_closed_form_tip_mass_cantilever():
     the elements): a tip mass m gives the roots of
     1 + cos(bL) cosh(bL) + (m/(rho A L)) bL (cos(bL) sinh(bL) - sin(bL) cosh(bL)) = 0."""
     L, b, h, E, rho, n = 0.5, 0.02, 0.01, 2e11, 7800.0, 80
-    A, I = b * h, b * h ** 3 / 12
+    A, I = b * h, b * h**3 / 12
     K, M = np.zeros((3 * (n + 1),) * 2), np.zeros((3 * (n + 1),) * 2)
     for e in range(n):
-        ke, me = element_matrices(L / n, E=E, G=E / 2.6, kappa=5 / 6, rho=rho, area=A,
-                                  inertia=I, timoshenko=False)
-        K[3 * e:3 * e + 6, 3 * e:3 * e + 6] += ke
-        M[3 * e:3 * e + 6, 3 * e:3 * e + 6] += me
+        ke, me = element_matrices(
+            L / n, E=E, G=E / 2.6, kappa=5 / 6, rho=rho, area=A, inertia=I, timoshenko=False
+        )
+        K[3 * e : 3 * e + 6, 3 * e : 3 * e + 6] += ke
+        M[3 * e : 3 * e + 6, 3 * e : 3 * e + 6] += me
     free = np.arange(3, 3 * (n + 1))
     ix = np.ix_(free, free)
-    Ls = LinearSystem(M=M[ix], K0=K[ix], Kb=K[ix], G=np.zeros((0, free.size)),
-                      S=np.zeros(free.size), free=free, n_coordinates=3 * (n + 1),
-                      E=np.zeros(free.size))
+    Ls = LinearSystem(
+        M=M[ix],
+        K0=K[ix],
+        Kb=K[ix],
+        G=np.zeros((0, free.size)),
+        S=np.zeros(free.size),
+        free=free,
+        n_coordinates=3 * (n + 1),
+        E=np.zeros(free.size),
+    )
 
-    def rows(x):                          # the free end only
+    def rows(x):  # the free end only
         U, W, T = (np.zeros((1, free.size)) for _ in range(3))
         U[0, -3], W[0, -2], T[0, -1] = 1, 1, 1
         return U, W, T
+
     ratio = 0.3
     La = attach_setup(Ls, Setup(masses=(PointMass("tip", L, ratio * rho * A * L),)), rows)
     w2 = eigh(La.K0, La.M, eigvals_only=True)
     f_fe = np.sort(np.sqrt(w2))[:3] / (2 * np.pi)
 
     def g(bl):
-        return 1 + math.cos(bl) * math.cosh(bl) + ratio * bl * (
-            math.cos(bl) * math.sinh(bl) - math.sin(bl) * math.cosh(bl))
+        return (
+            1
+            + math.cos(bl) * math.cosh(bl)
+            + ratio * bl * (math.cos(bl) * math.sinh(bl) - math.sin(bl) * math.cosh(bl))
+        )
+
     grid = np.linspace(0.5, 12, 2000)
     roots = [brentq(g, a, c) for a, c in zip(grid[:-1], grid[1:]) if g(a) * g(c) < 0][:3]
-    f_ref = np.array(roots) ** 2 / (2 * np.pi * L ** 2) * math.sqrt(E * I / (rho * A))
+    f_ref = np.array(roots) ** 2 / (2 * np.pi * L**2) * math.sqrt(E * I / (rho * A))
     # transverse modes only (the axial ones are kHz higher and carry the mass too)
     np.testing.assert_allclose(f_fe[:2], f_ref[:2], rtol=1e-5)
 
@@ -120,23 +154,43 @@ def test_the_shakers_moving_mass_limits():
     force)."""
     base = preset("example").replace(n_points=12)
     bare = natural_frequencies(base, n_modes=3)
-    point = natural_frequencies(base.replace(setup=Setup(masses=(PointMass("m", 0.08, 0.05),))),
-                                n_modes=3)
-    stiff = natural_frequencies(base.replace(setup=Setup(shaker=Shaker(
-        0.08, moving_mass=0.05, stinger_stiffness=1e12, force_at="armature"))), n_modes=3)
-    soft = natural_frequencies(base.replace(setup=Setup(shaker=Shaker(
-        0.08, moving_mass=0.05, stinger_stiffness=1e-3, force_at="armature"))), n_modes=4)
+    point = natural_frequencies(
+        base.replace(setup=Setup(masses=(PointMass("m", 0.08, 0.05),))), n_modes=3
+    )
+    stiff = natural_frequencies(
+        base.replace(
+            setup=Setup(
+                shaker=Shaker(0.08, moving_mass=0.05, stinger_stiffness=1e12, force_at="armature")
+            )
+        ),
+        n_modes=3,
+    )
+    soft = natural_frequencies(
+        base.replace(
+            setup=Setup(
+                shaker=Shaker(0.08, moving_mass=0.05, stinger_stiffness=1e-3, force_at="armature")
+            )
+        ),
+        n_modes=4,
+    )
     np.testing.assert_allclose(stiff, point, rtol=1e-5)
     assert soft[0] < 1.0
     np.testing.assert_allclose(soft[1:], bare, rtol=1e-6)
-    gauge = natural_frequencies(base.replace(setup=Setup(shaker=Shaker(
-        0.08, gauge_mass=0.05, moving_mass=0.5, stinger_stiffness=1e5))), n_modes=3)
+    gauge = natural_frequencies(
+        base.replace(
+            setup=Setup(
+                shaker=Shaker(0.08, gauge_mass=0.05, moving_mass=0.5, stinger_stiffness=1e5)
+            )
+        ),
+        n_modes=3,
+    )
     np.testing.assert_allclose(gauge, point, rtol=1e-9)
 
 
 def _targets(truth, modes, positions):
     st = modal_state(truth)
     from iwan_element.models.reduced import axis_rows
+
     R = axis_rows(truth, positions)
     freqs = {r: st.frequency(st.index(r)) for r in modes}
     shapes = {r: dict(zip(positions, R @ st.phi[:, st.index(r)])) for r in modes}
@@ -147,20 +201,33 @@ def test_update_recovers_a_known_truth_and_leaves_what_it_cannot_see():
     """Wrong E, clamp stiffness and sensor mass: updated from the truth's own frequencies
     and shapes back to the truth within stderr; the shaker's moving mass, behind the
     measured force (force_at="gauge"), is invisible: named in a warning, left nominal."""
-    spec = SPEC.replace(setup=Setup(
-        masses=SETUP.masses, clamp=SETUP.clamp,
-        shaker=Shaker(0.08, gauge_mass=0.004, moving_mass=0.05, force_at="gauge")))
-    truth = with_parameters(spec, {"youngs_modulus": spec.youngs_modulus * 1.04,
-                                   "clamp.rotational": 1.5e4, "mass:acc": 0.035})
+    spec = SPEC.replace(
+        setup=Setup(
+            masses=SETUP.masses,
+            clamp=SETUP.clamp,
+            shaker=Shaker(0.08, gauge_mass=0.004, moving_mass=0.05, force_at="gauge"),
+        )
+    )
+    truth = with_parameters(
+        spec,
+        {
+            "youngs_modulus": spec.youngs_modulus * 1.04,
+            "clamp.rotational": 1.5e4,
+            "mass:acc": 0.035,
+        },
+    )
     freqs, shapes = _targets(truth, (1, 2, 3, 4), [0.05, 0.15, 0.25, 0.3, 0.34])
-    r = linear_update(spec, frequencies=freqs, shapes=shapes,
-                      parameters=("youngs_modulus", "clamp.rotational", "mass:acc",
-                                  "shaker.moving_mass"))
+    r = linear_update(
+        spec,
+        frequencies=freqs,
+        shapes=shapes,
+        parameters=("youngs_modulus", "clamp.rotational", "mass:acc", "shaker.moving_mass"),
+    )
     want = {"youngs_modulus": truth.youngs_modulus, "clamp.rotational": 1.5e4, "mass:acc": 0.035}
     for n, v in want.items():
         p = r.params[n]
         assert p.identified and abs(p.value - v) < 2 * p.stderr, (n, p, v)
-        assert abs(r.nominal[n] - v) > 3 * p.stderr          # the nominal was clearly off
+        assert abs(r.nominal[n] - v) > 3 * p.stderr  # the nominal was clearly off
     mm = r.params["shaker.moving_mass"]
     assert not mm.identified and mm.value == 0.05
     assert any("shaker.moving_mass" in w and "cannot see" in w for w in r.warnings)
@@ -170,7 +237,7 @@ def test_update_recovers_a_known_truth_and_leaves_what_it_cannot_see():
     # after the update the targets are met far better than before
     before = np.array([row["residual_before"] for row in r.residuals])
     after = np.array([row["residual_after"] for row in r.residuals])
-    assert np.sqrt(np.mean(after ** 2)) < 0.2 * np.sqrt(np.mean(before ** 2))
+    assert np.sqrt(np.mean(after**2)) < 0.2 * np.sqrt(np.mean(before**2))
     # a mode that was no target: predicted within its stated band
     st = modal_state(truth)
     f5, se5 = r.predict(5)
@@ -187,8 +254,9 @@ def test_bad_input_is_refused_naming_the_argument():
     with pytest.raises(ValueError, match="mode"):
         linear_update(s, frequencies={500: 60.0}, parameters="material")
     with pytest.raises(ValueError, match="model_error"):
-        linear_update(s, frequencies={1: 60.0}, parameters="material",
-                      model_error={"frequency": -1})
+        linear_update(
+            s, frequencies={1: 60.0}, parameters="material", model_error={"frequency": -1}
+        )
     with pytest.raises(ValueError, match="setup"):
         s.replace(setup=Setup(masses=(PointMass("far", 5.0, 0.01),)))
     with pytest.raises(ValueError, match="clamp"):

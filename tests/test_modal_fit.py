@@ -3,6 +3,7 @@
 Truth comes from the closed forms of core.modal (checked against docs/equations.md section 5 and a time
 simulation in test_vibration.py) and, end to end, from a ring-down of the exact IwanJoint.
 """
+
 import json
 import math
 
@@ -29,8 +30,7 @@ def _joint(f0=20.0, kappa=0.3, chi=-0.5, beta=0.5, phimax=1e-3):
 
 
 def _data(X, p, k_inf, zeta0, rng, f_noise=2e-6, z_noise=0.005):
-    f, z = modal_iwan_curve(X, p, K_inf=k_inf, zeta0=zeta0, stiffness="harmonic",
-                            floor="dashpot")
+    f, z = modal_iwan_curve(X, p, K_inf=k_inf, zeta0=zeta0, stiffness="harmonic", floor="dashpot")
     sf, sz = f_noise * f, z_noise * z
     return (f + sf * rng.standard_normal(X.size), z + sz * rng.standard_normal(X.size), sf, sz)
 
@@ -39,13 +39,19 @@ def test_microslip_formula_is_the_small_amplitude_limit():
     """The fit's microslip form against the full closed form at X << phi_max."""
     p, k_inf = _joint()
     X = np.geomspace(1e-9, 1e-7, 5)
-    f, z = modal_iwan_curve(X, p, K_inf=k_inf, zeta0=1e-3, stiffness="harmonic",
-                            floor="dashpot")
+    f, z = modal_iwan_curve(X, p, K_inf=k_inf, zeta0=1e-3, stiffness="harmonic", floor="dashpot")
     x_ref = 1e-8
-    delta = p.KT * (x_ref / p.phi_max) ** (p.chi + 1) / ((k_inf + p.KT) * (p.chi + 2)
-                                                        * (1 + p.beta))
-    fm, zm = model_curve([math.sqrt(k_inf + p.KT) / (2 * math.pi), 1e-3, p.chi, delta], X,
-                         "microslip", x_ref, "harmonic", "dashpot")
+    delta = (
+        p.KT * (x_ref / p.phi_max) ** (p.chi + 1) / ((k_inf + p.KT) * (p.chi + 2) * (1 + p.beta))
+    )
+    fm, zm = model_curve(
+        [math.sqrt(k_inf + p.KT) / (2 * math.pi), 1e-3, p.chi, delta],
+        X,
+        "microslip",
+        x_ref,
+        "harmonic",
+        "dashpot",
+    )
     np.testing.assert_allclose(fm, f, rtol=1e-12)
     np.testing.assert_allclose(zm, z, rtol=1e-6)
 
@@ -53,7 +59,7 @@ def test_microslip_formula_is_the_small_amplitude_limit():
 def test_microslip_data_report_only_what_they_fix():
     rng = np.random.default_rng(3)
     p, k_inf = _joint()
-    X = np.geomspace(2e-6, 1e-4, 25)               # at most 0.1 phi_max
+    X = np.geomspace(2e-6, 1e-4, 25)  # at most 0.1 phi_max
     f, z, sf, sz = _data(X, p, k_inf, 1.5e-3, rng)
     r = fit_modal_iwan(AmplitudeCurve(X, f, z, frequency_std=sf, damping_ratio_std=sz))
     assert r.regime == "microslip" and r.success
@@ -61,9 +67,14 @@ def test_microslip_data_report_only_what_they_fix():
     assert r.joint is None
     assert any("never leave microslip" in w for w in r.warnings)
     x_ref = r.conventions["x_ref"]
-    truth = {"f0": math.sqrt(k_inf + p.KT) / (2 * math.pi), "zeta0": 1.5e-3, "chi": p.chi,
-             "delta": p.KT * (x_ref / p.phi_max) ** (p.chi + 1)
-             / ((k_inf + p.KT) * (p.chi + 2) * (1 + p.beta))}
+    truth = {
+        "f0": math.sqrt(k_inf + p.KT) / (2 * math.pi),
+        "zeta0": 1.5e-3,
+        "chi": p.chi,
+        "delta": p.KT
+        * (x_ref / p.phi_max) ** (p.chi + 1)
+        / ((k_inf + p.KT) * (p.chi + 2) * (1 + p.beta)),
+    }
     for k, v in truth.items():
         assert abs(r.parameters[k] - v) < 4 * r.stderr[k], k
     assert r.stderr["chi"] < 0.05
@@ -74,7 +85,7 @@ def test_macroslip_data_identify_the_joint():
     p, k_inf = _joint(beta=0.3)
     X = np.geomspace(0.01, 4.0, 40) * p.phi_max
     f, z, sf, sz = _data(X, p, k_inf, 1e-3, rng)
-    r = fit_modal_iwan(X, f, z)                    # no stated uncertainties: from residuals
+    r = fit_modal_iwan(X, f, z)  # no stated uncertainties: from residuals
     assert r.regime == "macroslip", r.report()
     q = r.joint
     assert isinstance(q, IwanParameters)
@@ -87,8 +98,9 @@ def test_macroslip_data_identify_the_joint():
         truth = {"phi_max": p.phi_max, "KT": p.KT, "Fs": p.Fs, "chi": p.chi}[k]
         assert abs(r.parameters[k] - truth) < 4 * r.stderr[k], k
     f_fit, z_fit, fb, zb = r.predict(X, band=0.95)
-    f_true, z_true = modal_iwan_curve(X, p, K_inf=k_inf, zeta0=1e-3, stiffness="harmonic",
-                                      floor="dashpot")
+    f_true, z_true = modal_iwan_curve(
+        X, p, K_inf=k_inf, zeta0=1e-3, stiffness="harmonic", floor="dashpot"
+    )
     assert np.mean((fb[0] <= f_true) & (f_true <= fb[1])) > 0.8
     assert np.mean((zb[0] <= z_true) & (z_true <= zb[1])) > 0.8
     assert np.all(fb[1] > fb[0])
@@ -132,8 +144,10 @@ def test_result_api_and_no_mutation():
     with pytest.raises(ValueError, match="rng"):
         r.sample_parameters(3, rng=0)
     import matplotlib
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+
     fig, ax = plt.subplots(2, 1)
     artists = r.plot(ax=ax)
     assert len(artists) >= 6
@@ -155,12 +169,17 @@ def test_ringdown_end_to_end():
     r = fit_modal_iwan(cur)
     assert r.regime == "microslip" and r.conventions["damping_form"] == "decay"
     x_ref = r.conventions["x_ref"]
-    truth = {"f0": math.sqrt(k_inf + p.KT) / (2 * math.pi), "zeta0": 2e-3, "chi": p.chi,
-             "delta": p.KT * (x_ref / p.phi_max) ** (p.chi + 1)
-             / ((k_inf + p.KT) * (p.chi + 2) * (1 + p.beta))}
+    truth = {
+        "f0": math.sqrt(k_inf + p.KT) / (2 * math.pi),
+        "zeta0": 2e-3,
+        "chi": p.chi,
+        "delta": p.KT
+        * (x_ref / p.phi_max) ** (p.chi + 1)
+        / ((k_inf + p.KT) * (p.chi + 2) * (1 + p.beta)),
+    }
     for k, v in truth.items():
         assert abs(r.parameters[k] - v) < 4 * r.stderr[k], (k, r.report())
-    assert r.chi2_red < 4.0          # the fit follows the curve within its stated scatter
+    assert r.chi2_red < 4.0  # the fit follows the curve within its stated scatter
 
 
 def test_a_free_decay_shows_the_decay_form_of_the_damping():
@@ -176,8 +195,9 @@ def test_a_free_decay_shows_the_decay_form_of_the_damping():
     c = amplitude_curve(t, q, quantity="displacement", band=(8.0, 30.0), compare=False)
     m = (c.amplitude > 0.05 * p.phi_max) & (c.amplitude < 0.2 * p.phi_max)
     assert m.sum() >= 5
-    _, z_decay = modal_iwan_curve(c.amplitude[m], p, K_inf=k_inf, stiffness="harmonic",
-                                  damping_form="decay")
+    _, z_decay = modal_iwan_curve(
+        c.amplitude[m], p, K_inf=k_inf, stiffness="harmonic", damping_form="decay"
+    )
     _, z_energy = modal_iwan_curve(c.amplitude[m], p, K_inf=k_inf, stiffness="harmonic")
     assert np.max(np.abs(c.damping_ratio[m] / z_decay - 1)) < 0.01
     assert np.min(c.damping_ratio[m] / z_energy - 1) > 0.03

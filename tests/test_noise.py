@@ -1,4 +1,5 @@
 """Noise estimation from one record (no repeated cycles): known synthetic noise, every protocol."""
+
 import zlib
 
 import numpy as np
@@ -9,7 +10,7 @@ from iwan_element import IwanJoint, IwanParameters
 from iwan_element.identify.loops.noise import NoiseEstimate, estimate_noise
 
 P = IwanParameters(Fs=800.0, KT=3e6, chi=-0.4, beta=0.5)
-FS, N = 500.0, 6000                      # 500 Hz, 12 s, 0.5 Hz loading: 1000 samples a period
+FS, N = 500.0, 6000  # 500 Hz, 12 s, 0.5 Hz loading: 1000 samples a period
 T = np.arange(N) / FS
 
 
@@ -19,15 +20,15 @@ def _protocol(name, rng):
         return 1e-3 * np.sin(w * T)
     if name == "ramped":
         return 1e-3 * np.linspace(0.1, 1.0, N) * np.sin(w * T)
-    if name == "swept":                  # 0.2 -> 1 Hz
-        return 1e-3 * np.sin(2 * np.pi * (0.2 * T + 0.4 * T ** 2 / T[-1]))
-    amps = np.repeat(rng.uniform(0.1, 1.0, N // 1000 + 1), 1000)[:N]   # random per cycle
+    if name == "swept":  # 0.2 -> 1 Hz
+        return 1e-3 * np.sin(2 * np.pi * (0.2 * T + 0.4 * T**2 / T[-1]))
+    amps = np.repeat(rng.uniform(0.1, 1.0, N // 1000 + 1), 1000)[:N]  # random per cycle
     return 1e-3 * amps * np.sin(w * T)
 
 
 def _noise(kind, rng, sigma):
     e = rng.normal(size=N)
-    if kind == "ar":                     # AR(1), phi = 0.6, unit stationary variance
+    if kind == "ar":  # AR(1), phi = 0.6, unit stationary variance
         e = lfilter([np.sqrt(1 - 0.36)], [1, -0.6], e)
     return sigma * e
 
@@ -38,16 +39,16 @@ def test_estimate_matches_known_noise_on_both_channels(protocol, kind):
     # a stable seed: hash() of strings changes with every interpreter (PYTHONHASHSEED)
     rng = np.random.default_rng(zlib.crc32(f"{protocol}-{kind}".encode()))
     u = _protocol(protocol, rng)
-    F = IwanJoint(P).force_history(u)    # independent route: the exact element, kinks included
+    F = IwanJoint(P).force_history(u)  # independent route: the exact element, kinks included
     for y, s in ((u, 2e-6), (F, 4.0)):
         est = estimate_noise(T, y + _noise(kind, rng, s))
-        lo = 0.85 if kind == "white" else 0.75     # noise correlated over ~4 samples: most is seen
+        lo = 0.85 if kind == "white" else 0.75  # noise correlated over ~4 samples: most is seen
         assert lo * s < est.sigma < 1.15 * s, (protocol, kind, est)
         if kind == "white":
             # u is smooth: n_eff ~ n. The force has kinks at macroslip entry whose leak into the
             # residual is correlated, which lowers n_eff (conservative), but not by much
             assert est.n_eff > (0.8 if y is u else 0.2) * N, est
-        else:                             # AR(1) 0.6: integrated time (1+phi)/(1-phi) = 4 samples
+        else:  # AR(1) 0.6: integrated time (1+phi)/(1-phi) = 4 samples
             # (the force's kinks leak a little correlated signal: a longer time, conservative)
             assert 2.5 < est.correlation_time * FS < (6.0 if y is u else 8.0), est
             assert 0.3 < est.lag_one < 0.8, est
@@ -61,7 +62,7 @@ def test_coloured_residual_with_the_channel_window(rho):
     sig, tau = [], []
     for seed in range(12):
         rng = np.random.default_rng(100 + seed)
-        e = lfilter([np.sqrt(1 - rho ** 2)], [1, -rho], rng.normal(size=1400))[200:]
+        e = lfilter([np.sqrt(1 - rho**2)], [1, -rho], rng.normal(size=1400))[200:]
         est = estimate_noise(np.arange(1200) / 128.0, 3.0 * e, window=32 / 128.0)
         sig.append(est.sigma / 3.0)
         tau.append(est.tau)
@@ -87,9 +88,9 @@ def test_chatter_bursts_do_not_dominate():
     u = _protocol("constant", rng)
     F = IwanJoint(P).force_history(u) + rng.normal(0, 3.0, N)
     rev = np.flatnonzero(np.diff(np.sign(np.diff(u)))) + 1
-    for i in rev:                        # 45 Hz ringing, 60 ms, after each reversal
+    for i in rev:  # 45 Hz ringing, 60 ms, after each reversal
         k = np.arange(min(30, N - i))
-        F[i:i + k.size] += 150.0 * np.exp(-k / 10.0) * np.sin(2 * np.pi * 45 * k / FS)
+        F[i : i + k.size] += 150.0 * np.exp(-k / 10.0) * np.sin(2 * np.pi * 45 * k / FS)
     est = estimate_noise(T, F)
     assert est.sigma < 1.3 * 3.0
 

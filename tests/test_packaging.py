@@ -1,5 +1,6 @@
 """The installed package: ``models/`` (beside the package in the source tree) is importable as
 ``iwan_element.models`` from anywhere, with its data files (the design card's layout)."""
+
 from __future__ import annotations
 
 import os
@@ -25,11 +26,19 @@ assert callable(m.preset)
 def test_installed_package_imports_models_with_its_data(tmp_path):
     # outside the checkout and without PYTHONPATH: only an installed package can be found
     env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
-    res = subprocess.run([sys.executable, "-c", _CHECK], cwd=tmp_path, env=env,
-                         capture_output=True, text=True, timeout=120)
+    res = subprocess.run(
+        [sys.executable, "-c", _CHECK],
+        cwd=tmp_path,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     if res.returncode == 3:
-        pytest.skip("iwan-element is not installed in this environment (run "
-                    "`python -m pip install -e \".[test]\"`, as the README says)")
+        pytest.skip(
+            "iwan-element is not installed in this environment (run "
+            '`python -m pip install -e ".[test]"`, as the README says)'
+        )
     assert res.returncode == 0, res.stderr
 
 
@@ -43,7 +52,7 @@ def _source_packages(root: Path) -> set[str]:
             if any(p.is_symlink() for p in (root / top / rel).parents) or init.parent.is_symlink():
                 continue
             if top == "iwan_element" and rel.parts[:1] == ("models",):
-                continue                     # a development link to models/, not a package
+                continue  # a development link to models/, not a package
             found.add(".".join((name, *rel.parts)))
     return found
 
@@ -58,14 +67,31 @@ def test_a_built_package_holds_every_subpackage_and_data_file(tmp_path):
     lib = tmp_path / "lib"
     # the file list made afresh in tmp_path: an old *.egg-info of the checkout would add the
     # files it once listed as data files
-    res = subprocess.run([sys.executable, "setup.py", "-q", "egg_info", "--egg-base", str(tmp_path),
-                          "build_py", "--build-lib", str(lib)],
-                         cwd=root, capture_output=True, text=True, timeout=120)
+    res = subprocess.run(
+        [
+            sys.executable,
+            "setup.py",
+            "-q",
+            "egg_info",
+            "--egg-base",
+            str(tmp_path),
+            "build_py",
+            "--build-lib",
+            str(lib),
+        ],
+        cwd=root,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert res.returncode == 0, res.stderr
     built = {".".join(p.parent.relative_to(lib).parts) for p in lib.rglob("__init__.py")}
     assert built == _source_packages(root)
-    data = {p.relative_to(root / "models") for ext in ("csv", "json", "md")
-            for p in (root / "models").rglob(f"*.{ext}")}
+    data = {
+        p.relative_to(root / "models")
+        for ext in ("csv", "json", "md")
+        for p in (root / "models").rglob(f"*.{ext}")
+    }
     assert data, "models/ holds the example records"
     missing = sorted(str(d) for d in data if not (lib / "iwan_element" / "models" / d).is_file())
     assert not missing, f"data files of models/ left out of the package: {missing}"

@@ -1,4 +1,5 @@
 """IwanParameters: derived quantities (docs/equations.md section 5), validation, JSON round trip."""
+
 import dataclasses
 import json
 import math
@@ -23,7 +24,9 @@ def test_reference_vectors(args, R, S, phi_max):
     assert p.phi_max == pytest.approx(phi_max, rel=2e-6)
 
 
-@pytest.mark.parametrize("args", [v[0] for v in VECTORS] + [(1.0, 1.0, 0.5, 0.0), (5.0, 3.0, -0.9, 3.0)])
+@pytest.mark.parametrize(
+    "args", [v[0] for v in VECTORS] + [(1.0, 1.0, 0.5, 0.0), (5.0, 3.0, -0.9, 3.0)]
+)
 def test_definitions_consistent(args):
     """KT and Fs are recovered from the density integrals (paper eqs. 5 and 10)."""
     p = IwanParameters(*args)
@@ -35,12 +38,23 @@ def test_definitions_consistent(args):
     assert p.S / p.KT == pytest.approx(p.beta / (1 + p.beta), rel=1e-12, abs=1e-15)
 
 
-@pytest.mark.parametrize("kw,name", [
-    (dict(Fs=0.0), "Fs"), (dict(Fs=-1.0), "Fs"), (dict(KT=0.0), "KT"), (dict(KT=-2.0), "KT"),
-    (dict(chi=-1.0), "chi"), (dict(chi=-1.5), "chi"), (dict(beta=-0.1), "beta"),
-    (dict(Fs=math.nan), "Fs"), (dict(KT=math.inf), "KT"), (dict(chi=math.nan), "chi"),
-    (dict(beta="1"), "beta"), (dict(Fs=True), "Fs"),
-])
+@pytest.mark.parametrize(
+    "kw,name",
+    [
+        (dict(Fs=0.0), "Fs"),
+        (dict(Fs=-1.0), "Fs"),
+        (dict(KT=0.0), "KT"),
+        (dict(KT=-2.0), "KT"),
+        (dict(chi=-1.0), "chi"),
+        (dict(chi=-1.5), "chi"),
+        (dict(beta=-0.1), "beta"),
+        (dict(Fs=math.nan), "Fs"),
+        (dict(KT=math.inf), "KT"),
+        (dict(chi=math.nan), "chi"),
+        (dict(beta="1"), "beta"),
+        (dict(Fs=True), "Fs"),
+    ],
+)
 def test_invalid_values_name_the_argument(kw, name):
     base = dict(Fs=1.0, KT=1.0, chi=-0.5, beta=0.1)
     base.update(kw)
@@ -71,8 +85,7 @@ def test_from_dict_rejects_bad_keys_and_units():
     with pytest.raises(ValueError, match="lacks"):
         IwanParameters.from_dict({"Fs": 1, "KT": 1, "chi": -0.5})
     with pytest.raises(ValueError, match="SI"):
-        IwanParameters.from_dict({"Fs": 1, "KT": 1, "chi": -0.5, "beta": 0,
-                                  "units": {"Fs": "kN"}})
+        IwanParameters.from_dict({"Fs": 1, "KT": 1, "chi": -0.5, "beta": 0, "units": {"Fs": "kN"}})
 
 
 def test_replace_validates():

@@ -1,4 +1,5 @@
 """Plot functions: ax=None makes a figure, artists are returned, nothing is shown."""
+
 import matplotlib
 
 matplotlib.use("Agg")
@@ -28,6 +29,6 @@ def test_plot_loop_units():
     fig, ax = plt.subplots()
     (line,) = plot_loop(1e-4, p, ax=ax, label="loop")
     x, y = line.get_data()
-    assert abs(max(x) - 0.1) < 1e-12          # mm
-    assert max(y) < 1.0                       # kN, below Fs = 1 kN
+    assert abs(max(x) - 0.1) < 1e-12  # mm
+    assert max(y) < 1.0  # kN, below Fs = 1 kN
     plt.close(fig)

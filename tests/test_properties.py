@@ -3,6 +3,7 @@
 The number of examples is bounded by the settings profiles of ``tests/conftest.py`` (``ci``
 by default); ``benchmarks/bench_properties.py`` runs them with many more examples.
 """
+
 from __future__ import annotations
 
 import math
@@ -25,7 +26,9 @@ from iwan_element import (
 )
 
 # reversal targets as fractions of phi_max: large, small and tiny excursions mixed
-_targets = st.lists(st.one_of(st.floats(-3.0, 3.0), st.floats(-1e-3, 1e-3)), min_size=1, max_size=12)
+_targets = st.lists(
+    st.one_of(st.floats(-3.0, 3.0), st.floats(-1e-3, 1e-3)), min_size=1, max_size=12
+)
 
 
 @st.composite
@@ -36,7 +39,7 @@ def histories(draw):
     pts = [0.0]
     for a in draw(_targets):
         if draw(st.booleans()):
-            a = pts[-1] + draw(st.floats(-1e-3, 1e-3))      # a small loop inside a big one
+            a = pts[-1] + draw(st.floats(-1e-3, 1e-3))  # a small loop inside a big one
         pts.append(a)
     legs = [np.linspace(a, b, draw(st.integers(2, 6)))[1:] for a, b in zip(pts[:-1], pts[1:])]
     return p, p.phi_max * np.concatenate(legs)
@@ -44,8 +47,15 @@ def histories(draw):
 
 def _state(j):
     us, Fr = j.reversal_points()
-    return (j.displacement, j.force, j.stiffness, j.work, j.dissipated_energy,
-            tuple(us.tolist()), tuple(Fr.tolist()))
+    return (
+        j.displacement,
+        j.force,
+        j.stiffness,
+        j.work,
+        j.dissipated_energy,
+        tuple(us.tolist()),
+        tuple(Fr.tolist()),
+    )
 
 
 # ---------------------------------------------------------------- the element
@@ -58,13 +68,13 @@ def _slider_bank(p, n=20000):
     by at most k_i (hi_i - lo_i))."""
     e = np.linspace(0.0, 1.0, n + 1)
     c = p.chi
-    m0 = e[1:] ** (c + 1) - e[:-1] ** (c + 1)               # int_lo^hi (c+1) s^c ds
+    m0 = e[1:] ** (c + 1) - e[:-1] ** (c + 1)  # int_lo^hi (c+1) s^c ds
     m1 = e[1:] ** (c + 2) - e[:-1] ** (c + 2)
-    k = p.KT / (1.0 + p.beta) * m0                          # R phi_max^(c+1)/(c+1) = KT/(1+beta)
+    k = p.KT / (1.0 + p.beta) * m0  # R phi_max^(c+1)/(c+1) = KT/(1+beta)
     with np.errstate(invalid="ignore", divide="ignore"):
         s = np.where(m0 > 0, (c + 1) / (c + 2) * m1 / m0, e[1:])
     bound = float(np.sum(k * np.diff(e)) * p.phi_max)
-    k = np.append(k, p.KT * p.beta / (1.0 + p.beta))        # spike S at phi_max
+    k = np.append(k, p.KT * p.beta / (1.0 + p.beta))  # spike S at phi_max
     phi = np.append(s, 1.0) * p.phi_max
     return k, phi, bound
 
@@ -77,7 +87,7 @@ def test_exact_joint_agrees_with_a_dense_slider_bank(case):
     x = np.zeros_like(k)
     Fb = np.empty(len(u))
     for i, ui in enumerate(u):
-        x = np.clip(x, ui - phi, ui + phi)                  # each Jenkins slider: |u - x| <= phi
+        x = np.clip(x, ui - phi, ui + phi)  # each Jenkins slider: |u - x| <= phi
         Fb[i] = np.dot(k, ui - x)
     assert np.max(np.abs(F - Fb)) <= bound + 1e-9 * p.Fs
 
@@ -96,7 +106,7 @@ def test_closed_cycles_dissipate_non_negative_energy(case, frac):
         D_prev = j.dissipated_energy
     before = _state(j)
     us = j.reversal_points()[0]
-    bound = us[-1] if len(us) else -j.displacement     # the current branch closes there
+    bound = us[-1] if len(us) else -j.displacement  # the current branch closes there
     us_ = j.displacement
     a = us_ + frac * (bound - us_)
     assume(abs(a - us_) > 1e-6 * p.phi_max)
@@ -106,7 +116,7 @@ def test_closed_cycles_dissipate_non_negative_energy(case, frac):
         assert j.dissipated_energy >= D_prev
         D_prev = j.dissipated_energy
     after = _state(j)
-    assert after[5:] == before[5:]                          # memory restored (Madelung)
+    assert after[5:] == before[5:]  # memory restored (Madelung)
     assert after[1] == pytest.approx(before[1], abs=1e-9 * p.Fs)
     dW, dD = after[3] - before[3], after[4] - before[4]
     expected = dissipation(abs(a - us_) / 2.0, p)
@@ -169,7 +179,7 @@ def test_force_is_continuous_and_tangent_bounded(case, log_h, up):
     is in [0, KT]."""
     p, u = case
     j = IwanJoint(p)
-    h = (1.0 if up else -1.0) * 10.0 ** log_h * p.phi_max
+    h = (1.0 if up else -1.0) * 10.0**log_h * p.phi_max
     for x in u.tolist():
         F, K = j.trial(x)
         assert 0.0 <= K <= p.KT
@@ -204,15 +214,22 @@ def test_closed_forms_are_finite_and_monotone(p):
     assert np.all(slope[_r[1:] < 1.0] >= (p.chi + 3.0) * (1.0 - 1e-9))
 
 
-_bad = st.one_of(st.just(math.nan), st.just(math.inf), st.just(-math.inf),
-                 st.floats(-1e6, 0.0), st.text(max_size=3), st.none(), st.just(1 + 1j))
+_bad = st.one_of(
+    st.just(math.nan),
+    st.just(math.inf),
+    st.just(-math.inf),
+    st.floats(-1e6, 0.0),
+    st.text(max_size=3),
+    st.none(),
+    st.just(1 + 1j),
+)
 
 
 @given(st.sampled_from(["Fs", "KT", "chi", "beta"]), _bad)
 def test_invalid_parameters_give_a_clear_error(name, bad):
     kw = dict(Fs=1e3, KT=1e6, chi=-0.5, beta=0.2)
     if name == "chi" and isinstance(bad, float) and -1.0 < bad <= 0.0:
-        bad = bad - 1.0                                   # (-1, 0] is valid for chi
+        bad = bad - 1.0  # (-1, 0] is valid for chi
     if name == "beta" and bad == 0.0:
         bad = -1.0
     kw[name] = bad
@@ -220,9 +237,12 @@ def test_invalid_parameters_give_a_clear_error(name, bad):
         IwanParameters(**kw)
 
 
-_wide_params = st.tuples(log_uniform(1e-120, 1e120), log_uniform(1e-120, 1e120),
-                         st.one_of(st.floats(-0.999999, 2.0), log_uniform(1.0, 1e6)),
-                         st.one_of(st.just(0.0), log_uniform(1e-12, 1e12)))
+_wide_params = st.tuples(
+    log_uniform(1e-120, 1e120),
+    log_uniform(1e-120, 1e120),
+    st.one_of(st.floats(-0.999999, 2.0), log_uniform(1.0, 1e6)),
+    st.one_of(st.just(0.0), log_uniform(1e-12, 1e12)),
+)
 
 
 @given(_wide_params)
@@ -231,6 +251,7 @@ def test_extreme_valid_parameters_compute_or_are_refused_clearly(vals):
     element are finite without numpy overflow warnings, or is refused with a ValueError
     saying which derived quantity leaves the float range."""
     import warnings
+
     try:
         p = IwanParameters(*vals)
     except ValueError as exc:
@@ -239,8 +260,14 @@ def test_extreme_valid_parameters_compute_or_are_refused_clearly(vals):
     u = _r * p.phi_max
     with warnings.catch_warnings():
         warnings.simplefilter("error", RuntimeWarning)
-        out = [backbone(u, p), tangent_stiffness(u, p), secant_stiffness(u, p),
-               dissipation(u, p), backbone_work(u, p), dissipation_slope(u[1:50], p)]
+        out = [
+            backbone(u, p),
+            tangent_stiffness(u, p),
+            secant_stiffness(u, p),
+            dissipation(u, p),
+            backbone_work(u, p),
+            dissipation_slope(u[1:50], p),
+        ]
         j = IwanJoint(p)
         for x in (0.5, -0.3, 2.0, -2.0, 0.1):
             out.append(np.array(j.trial(x * p.phi_max)))

@@ -1,4 +1,5 @@
 """Quasi-static modal analysis against the transient ring-down (two independent routes)."""
+
 import math
 
 import numpy as np
@@ -26,7 +27,7 @@ CASES = [("example", 2), ("brake-reuss", 1), ("two-bolt-aluminium", 2)]
 def test_qsma_agrees_with_the_transient_ring_down_at_the_top_of_the_range(name, mode):
     s = preset(name)
     s, tr, q = _compare(name, mode, s.amplitude_range[1], 12)
-    assert tr.amplitude.max() / tr.amplitude.min() > 1.02          # it really decayed
+    assert tr.amplitude.max() / tr.amplitude.min() > 1.02  # it really decayed
     np.testing.assert_array_less(np.abs(tr.frequency / q.frequency - 1), 1e-3)
     np.testing.assert_array_less(np.abs(tr.damping_ratio / q.damping_ratio - 1), 0.10)
     # the joint's share is a visible part of the damping (the test could fail on it)
@@ -47,7 +48,7 @@ def test_qsma_agrees_with_the_transient_ring_down_at_the_bottom_of_the_range(nam
         assert len(tr) >= 3 and tr.amplitude.max() <= low * 1.001
         np.testing.assert_array_less(np.abs(tr.frequency / q.frequency - 1), 1e-3)
         np.testing.assert_array_less(np.abs(tr.damping_ratio / q.damping_ratio - 1), 0.10)
-    assert q.damping_ratio.min() > 0.02 * s.interface.damping_floor     # the joint damps
+    assert q.damping_ratio.min() > 0.02 * s.interface.damping_floor  # the joint damps
 
 
 @pytest.mark.parametrize("floor", [0.0, None], ids=["no floor", "preset floor"])
@@ -61,7 +62,7 @@ def test_energy_closes_with_the_distributed_interface(floor):
     r = ringdown(s, amplitude=60e-6, cycles=12, steps_per_period=48, record_energy=True)
     err = r.energy_error()
     dissipated = r.energy["joint_dissipated"][-1] - r.energy["joint_dissipated"][0]
-    assert dissipated > 0.05 * r.initial_energy                       # the joint did work
+    assert dissipated > 0.05 * r.initial_energy  # the joint did work
     if floor is None:
         assert r.energy["floor_dissipated"][-1] > 0.05 * r.initial_energy
     else:
@@ -116,24 +117,37 @@ def test_looser_bolts_and_lower_friction_damp_more():
     s = preset("brake-reuss")
     X = [1e-5, 5e-5]
     base = modal_amplitude_curve(s, amplitude=X).damping_ratio
-    assert np.all(modal_amplitude_curve(s.replace(preload=s.preload / 2), amplitude=X)
-                  .damping_ratio > base)
-    assert np.all(modal_amplitude_curve(s.replace(friction=s.friction / 2), amplitude=X)
-                  .damping_ratio > base)
+    assert np.all(
+        modal_amplitude_curve(s.replace(preload=s.preload / 2), amplitude=X).damping_ratio > base
+    )
+    assert np.all(
+        modal_amplitude_curve(s.replace(friction=s.friction / 2), amplitude=X).damping_ratio > base
+    )
 
 
-@pytest.mark.parametrize("kw,match", [({"amplitude": [-1e-6]}, "amplitude"),
-                                      ({"amplitude": [np.nan]}, "amplitude"),
-                                      ({"mode": 0}, "mode"), ({"mode": 1.5}, "mode")])
+@pytest.mark.parametrize(
+    "kw,match",
+    [
+        ({"amplitude": [-1e-6]}, "amplitude"),
+        ({"amplitude": [np.nan]}, "amplitude"),
+        ({"mode": 0}, "mode"),
+        ({"mode": 1.5}, "mode"),
+    ],
+)
 def test_bad_qsma_input_is_refused(kw, match):
     with pytest.raises(ValueError, match=match):
         modal_amplitude_curve(preset("example"), **kw)
 
 
-@pytest.mark.parametrize("kw,match", [({"amplitude": -1.0}, "amplitude"),
-                                      ({"amplitude": 1e-5, "cycles": 1}, "cycles"),
-                                      ({"amplitude": 1e-5, "steps_per_period": 4}, "steps_per_period"),
-                                      ({"amplitude": 1e-5, "n_periods": 2}, "n_periods")])
+@pytest.mark.parametrize(
+    "kw,match",
+    [
+        ({"amplitude": -1.0}, "amplitude"),
+        ({"amplitude": 1e-5, "cycles": 1}, "cycles"),
+        ({"amplitude": 1e-5, "steps_per_period": 4}, "steps_per_period"),
+        ({"amplitude": 1e-5, "n_periods": 2}, "n_periods"),
+    ],
+)
 def test_bad_ringdown_input_is_refused(kw, match):
     with pytest.raises(ValueError, match=match):
         ringdown(preset("example"), **kw)
@@ -158,6 +172,7 @@ def test_records_of_cut_steps_are_put_back_on_the_nominal_grid():
     onto the nominal grid (a decaying sine at 20 Hz keeps its frequency) and cut_warning
     says so."""
     from iwan_element.models.simulation.ringdown_records import cut_warning, on_step_grid
+
     h, n = 1e-3, 1000
     rng = np.random.default_rng(3)
     times = np.sort(np.concatenate([np.arange(n + 1) * h, rng.uniform(0, n * h, 700)]))

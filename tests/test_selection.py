@@ -1,6 +1,7 @@
 """The stepwise selection rule (diagnose/selection/rule.py) on tables of chi2 values, so each
 clause of the rule is checked on its own: the misfit test, the IC and "explains little"
 tests, and the pair step for two effects that each hide the other."""
+
 import math
 
 from iwan_element.diagnose.selection.rule import stepwise_select
@@ -10,9 +11,11 @@ N_EFF = 400.0
 
 def _candidate(table):
     """fit_candidate from a table {stack (frozenset of names): chi2}; one parameter each."""
+
     def fit(cur, name):
         names = tuple(cur["names"]) + (name,)
         return {"names": names, "chi2": table[frozenset(names)], "q": 1, "state": names}
+
     return fit
 
 
@@ -40,7 +43,7 @@ def test_single_effect_named_greedily_and_pair_not_needed():
 
 def test_pair_named_when_each_alone_explains_little():
     excess = 10000.0 - (N_EFF - 5)
-    a, b = 10000.0 - 0.20 * excess, 10000.0 - 0.15 * excess        # 20 % and 15 %
+    a, b = 10000.0 - 0.20 * excess, 10000.0 - 0.15 * excess  # 20 % and 15 %
     sel = _run(_table(a, b, 9990.0, 10000.0 - 0.6 * excess), 10000.0)
     assert set(sel.named) == {"a", "b"} and len(sel.named) == 2
     assert sel.final["q"] == 7
@@ -75,8 +78,11 @@ def test_pair_partner_need_not_be_the_runner_up_alone():
     sel = _run(_table(a, b, c, a, ac=10000.0 - 0.6 * excess, bc=b), 10000.0)
     assert set(sel.named) == {"a", "c"}
     tried = {r["name"]: r["verdict"] for r in sel.steps[-1]["rows"]}
-    assert tried == {"a + b": "pair explains little", "a + c": "NAMED (pair)",
-                     "b + a": "pair explains little"}
+    assert tried == {
+        "a + b": "pair explains little",
+        "a + c": "NAMED (pair)",
+        "b + a": "pair explains little",
+    }
 
 
 def test_pair_partner_that_does_not_lower_the_ic_alone_is_not_tried():

@@ -8,6 +8,7 @@ or table per family; the Exudyn connector's float marker (case 11) is in
 ``tests/test_exudyn_connector_api.py``, the UFF and sweep-CSV readers' findings in
 ``tests/test_uff.py``.
 """
+
 from __future__ import annotations
 
 import warnings
@@ -29,19 +30,25 @@ def _decay(zeta=0.002, n=8192, noise=1e-3, seed=0, t=None):
     rng = np.random.default_rng(seed)
     t = np.arange(n) / FS if t is None else t
     w = 2 * np.pi * F0
-    return t, np.exp(-zeta * w * t) * np.cos(w * np.sqrt(1 - zeta ** 2) * t) \
-        + noise * rng.standard_normal(t.size)
+    return t, np.exp(-zeta * w * t) * np.cos(
+        w * np.sqrt(1 - zeta**2) * t
+    ) + noise * rng.standard_normal(t.size)
 
 
 def _not_a_convergence_message(reasons):
     """A report never gives a normal stop of the optimiser as the reason for failure."""
-    normal = ("relative reduction", "`xtol` termination", "`ftol` termination",
-              "`gtol` termination", "converged")
+    normal = (
+        "relative reduction",
+        "`xtol` termination",
+        "`ftol` termination",
+        "`gtol` termination",
+        "converged",
+    )
     return not any(m in r for r in reasons for m in normal)
 
 
 # ------------------------------------------------------------------ case 1: saturation
-@given(level=st.floats(0.2, 0.8), seed=st.integers(0, 10 ** 6))
+@given(level=st.floats(0.2, 0.8), seed=st.integers(0, 10**6))
 def test_clipping_is_found_at_any_level_and_never_in_an_unclipped_decay(level, seed):
     t, x = _decay(n=2048, seed=seed)
     clip = find_clipping(np.clip(x, -level, level))
@@ -50,7 +57,7 @@ def test_clipping_is_found_at_any_level_and_never_in_an_unclipped_decay(level, s
     assert clip.last == int(np.flatnonzero(np.abs(x) >= level)[-1])
     assert find_clipping(x) is None
     # quantised (ADC counts): an unclipped peak is one run, not a flat top on many cycles
-    assert find_clipping(np.round(x * 2 ** 12)) is None
+    assert find_clipping(np.round(x * 2**12)) is None
 
 
 def test_amplitude_curve_on_a_clipped_decay_measures_only_below_the_clip():
@@ -63,7 +70,7 @@ def test_amplitude_curve_on_a_clipped_decay_measures_only_below_the_clip():
     np.testing.assert_allclose(c.damping_ratio, 0.002, rtol=0.02)
     tc, yc, note = cut_clipping(t, y)
     assert tc[0] > 0.68 and np.all(np.abs(yc) < 0.5) and "clipped" in note
-    with pytest.raises(ValueError, match="y: the record is clipped"):   # nothing left after it
+    with pytest.raises(ValueError, match="y: the record is clipped"):  # nothing left after it
         ie.amplitude_curve(t[:1450], y[:1450], quantity="displacement", band=(60, 100))
 
 
@@ -111,14 +118,14 @@ def test_microslip_data_never_make_a_macroslip_joint(seed):
     """Case 2: these seeds (1 % damping noise) gave phi_max 0.14 mm against 1 mm, success."""
     X, f, z = _microslip_curve(20)
     rng = np.random.default_rng(seed)
-    r = ie.fit_modal_iwan(X, f * (1 + 1e-4 * rng.standard_normal(20)),
-                          z * (1 + 0.01 * rng.standard_normal(20)))
+    r = ie.fit_modal_iwan(
+        X, f * (1 + 1e-4 * rng.standard_normal(20)), z * (1 + 0.01 * rng.standard_normal(20))
+    )
     assert r.regime == "microslip" and r.joint is None, r.report()
     assert any("never leave microslip" in w for w in r.warnings)
 
 
-@pytest.mark.parametrize("n, usable", [(3, False), (4, False), (5, False), (6, False),
-                                       (8, True)])
+@pytest.mark.parametrize("n, usable", [(3, False), (4, False), (5, False), (6, False), (8, True)])
 def test_weights_from_too_few_residuals_identify_nothing(n, usable):
     """Case 3: three amplitudes gave success in 60 of 60 seeds, the truth inside 2 stderr in
     only 70-83 %: the weights rested on one degree of freedom."""
@@ -137,19 +144,26 @@ def test_weights_from_too_few_residuals_identify_nothing(n, usable):
 
 def test_verdict_rule_four_and_noise_dof_warning():
     from iwan_element.fitting import MIN_NOISE_DOF, noise_dof_warning, verdict
+
     assert verdict("a", 1.0, 0.01, noise_dof=1)[0] is False
     assert verdict("a", 1.0, 0.01, noise_dof=MIN_NOISE_DOF)[0] is True
     text = noise_dof_warning(1.0)
-    assert "covers only about 70 %" in text          # Student t, 1 dof: P(|t| < 2) = 0.705
+    assert "covers only about 70 %" in text  # Student t, 1 dof: P(|t| < 2) = 0.705
     assert noise_dof_warning(5.0) is None
 
 
 # ------------------------------------------------------------------ cases 4, 5: loop records
 def test_diagnose_under_two_cycles_of_microslip_does_not_identify_fs_and_beta():
     """Case 4: Fs = 368 +- 1.1 N and beta = 1.69 were marked identified (truth 1000 N, 0.2)."""
-    d = ie.simulate_element_test(IwanJoint(IwanParameters(1000., 1e6, -.5, .2)), [5e-4],
-                                 cycles=4, samples_per_cycle=64, force_noise=5.,
-                                 displacement_noise=1e-7, seed=1)
+    d = ie.simulate_element_test(
+        IwanJoint(IwanParameters(1000.0, 1e6, -0.5, 0.2)),
+        [5e-4],
+        cycles=4,
+        samples_per_cycle=64,
+        force_noise=5.0,
+        displacement_noise=1e-7,
+        seed=1,
+    )
     r = ie.diagnose(d.t[:100], d.u[:100], d.F[:100], max_effects=1)
     assert not r.fit.identified["Fs"] and not r.fit.identified["beta"]
     assert not r.success and "the loops stay in microslip" in r.verdict()
@@ -184,15 +198,21 @@ def _accelerance_sweeps():
     out = {k: [] for k in ("f", "F", "response", "phase", "level")}
     for k in range(2):
         wk, F = 2 * np.pi * 50.0 * (1 - 0.005 * k), (1.0 + k) * np.ones(f.size)
-        H = -w ** 2 * 0.5 / (wk ** 2 - w ** 2 + 2j * 0.01 * (1 + 0.2 * k) * wk * w)
-        for key, v in (("f", f), ("F", F), ("response", np.abs(H) * F),
-                       ("phase", np.angle(H)), ("level", np.full(f.size, k))):
+        H = -(w**2) * 0.5 / (wk**2 - w**2 + 2j * 0.01 * (1 + 0.2 * k) * wk * w)
+        for key, v in (
+            ("f", f),
+            ("F", F),
+            ("response", np.abs(H) * F),
+            ("phase", np.angle(H)),
+            ("level", np.full(f.size, k)),
+        ):
             out[key].append(v)
     return {k: np.concatenate(v) for k, v in out.items()}
 
 
-@pytest.mark.parametrize("quantity, usable", [("acceleration", True), ("displacement", False),
-                                              ("velocity", False)])
+@pytest.mark.parametrize(
+    "quantity, usable", [("acceleration", True), ("displacement", False), ("velocity", False)]
+)
 def test_sweep_declared_as_another_quantity_is_flagged(quantity, usable):
     """Case 7: acceleration declared displacement gave 12-156 'm', success, no warning."""
     c = ie.sweep_curve(**_accelerance_sweeps(), quantity=quantity)
@@ -200,22 +220,31 @@ def test_sweep_declared_as_another_quantity_is_flagged(quantity, usable):
     if not usable:
         assert "give quantity='acceleration'" in c.verdict() and c.failures[0] in c.warnings
     else:
-        assert c.amplitude.max() < 1e-3          # |H| F / w^2: a fraction of a millimetre
+        assert c.amplitude.max() < 1e-3  # |H| F / w^2: a fraction of a millimetre
 
 
 def test_sweep_with_a_repeated_frequency_says_so():
     d = _accelerance_sweeps()
     d["f"][3] = d["f"][2]
-    with pytest.raises(ValueError, match=r"17 points at 16 distinct frequencies; f repeats 1 "
-                                         r"frequency \(48\.5 Hz\)"):
+    with pytest.raises(
+        ValueError,
+        match=r"17 points at 16 distinct frequencies; f repeats 1 "
+        r"frequency \(48\.5 Hz\)",
+    ):
         ie.sweep_curve(**d)
 
 
 # ------------------------------------------------------------------ case 8: units of a CSV
-@pytest.mark.parametrize("header, match", [
-    ("time,displacement,force", r"header names the columns \['time', 'displacement', 'force'\]"),
-    (None, "the file has no header"),
-])
+@pytest.mark.parametrize(
+    "header, match",
+    [
+        (
+            "time,displacement,force",
+            r"header names the columns \['time', 'displacement', 'force'\]",
+        ),
+        (None, "the file has no header"),
+    ],
+)
 def test_load_test_never_guesses_units(tmp_path, header, match):
     P = IwanParameters(9e3, 5e7, -0.5, 0.5)
     d = ie.simulate_test(P, np.array([0.2, 0.5]) * P.phi_max, cycles=3, sample_rate=2.0)
@@ -224,7 +253,7 @@ def test_load_test_never_guesses_units(tmp_path, header, match):
     path.write_text((header + "\n" if header else "") + rows + "\n")
     with pytest.raises(ValueError, match=match + r".*pass time_unit='s', displacement_unit="):
         ie.load_test(path)
-    path.write_text("t [s],u [m],F [N]\n" + rows + "\n")       # units in the header: SI
+    path.write_text("t [s],u [m],F [N]\n" + rows + "\n")  # units in the header: SI
     data = ie.load_test(path)
     np.testing.assert_allclose(data.u, d.u, rtol=1e-8)
     np.testing.assert_allclose(data.F, d.F, rtol=1e-8)
@@ -234,23 +263,34 @@ def test_load_test_never_guesses_units(tmp_path, header, match):
 # ------------------------------------------------------------------ cases 9, 10: vibration
 def _curve():
     a = np.geomspace(1e-5, 1e-3, 8)
-    return dict(amplitude=a, frequency=100.0 - 5.0 * a / a[-1],
-                damping_ratio=1e-3 + 0.01 * a / a[-1])
+    return dict(
+        amplitude=a, frequency=100.0 - 5.0 * a / a[-1], damping_ratio=1e-3 + 0.01 * a / a[-1]
+    )
 
 
-@pytest.mark.parametrize("kwargs, name", [
-    ({"frequency_uncertainty": 5.0}, "frequency_uncertainty"),
-    ({"damping_ratio_uncertainty": [2.0] * 8}, "damping_ratio_uncertainty"),
-    ({"frequency_noise": 3.0}, "frequency_noise"),
-    ({"damping_ratio_noise": 1.5}, "damping_ratio_noise"),
-])
+@pytest.mark.parametrize(
+    "kwargs, name",
+    [
+        ({"frequency_uncertainty": 5.0}, "frequency_uncertainty"),
+        ({"damping_ratio_uncertainty": [2.0] * 8}, "damping_ratio_uncertainty"),
+        ({"frequency_noise": 3.0}, "frequency_noise"),
+        ({"damping_ratio_noise": 1.5}, "damping_ratio_noise"),
+    ],
+)
 def test_percent_given_for_a_relative_uncertainty_is_refused(kwargs, name):
     """Case 9: a 500 % frequency uncertainty was accepted in silence."""
     c = _curve()
-    with pytest.raises(ValueError, match=rf"{name} must be a relative standard uncertainty.*"
-                                         "a ratio, not percent"):
-        ie.diagnose_vibration(**c, predicted_frequency=c["frequency"] + 0.01,
-                              predicted_damping_ratio=c["damping_ratio"], **kwargs)
+    with pytest.raises(
+        ValueError,
+        match=rf"{name} must be a relative standard uncertainty.*"
+        "a ratio, not percent",
+    ):
+        ie.diagnose_vibration(
+            **c,
+            predicted_frequency=c["frequency"] + 0.01,
+            predicted_damping_ratio=c["damping_ratio"],
+            **kwargs,
+        )
 
 
 def test_augment_refuses_amplitudes_in_mm_and_a_target_that_is_no_model():
@@ -258,16 +298,22 @@ def test_augment_refuses_amplitudes_in_mm_and_a_target_that_is_no_model():
     too small; augment(None) asked for modal_mass."""
     models = pytest.importorskip("iwan_element.models", reason="needs exudyn")
     spec = models.preset("brake-reuss")
-    X = np.geomspace(5e-6, 6e-5, 20)                         # the specimen's range, metres
+    X = np.geomspace(5e-6, 6e-5, 20)  # the specimen's range, metres
     fp = 80.5 * (1 - 0.01 * np.sqrt(X / X.max()))
     zp = 2e-3 * (1 + np.sqrt(X / X.max()))
-    k3 = 4e-3 * (2 * np.pi * 80.5) ** 2 / X.max() ** 2       # hardening: f^2 rises 0.4 %
-    fm = np.sqrt(fp ** 2 + 0.75 * k3 * X ** 2 / (4 * np.pi ** 2))     # Duffing first harmonic
-    zm = zp * (fp / fm) ** 2                                 # the same loss per cycle
+    k3 = 4e-3 * (2 * np.pi * 80.5) ** 2 / X.max() ** 2  # hardening: f^2 rises 0.4 %
+    fm = np.sqrt(fp**2 + 0.75 * k3 * X**2 / (4 * np.pi**2))  # Duffing first harmonic
+    zm = zp * (fp / fm) ** 2  # the same loss per cycle
     for scale, ok in ((1.0, True), (1e3, False)):
-        g = ie.diagnose_vibration(X * scale, fm, zm, predicted_frequency=fp,
-                                  predicted_damping_ratio=zp, frequency_noise=1e-5,
-                                  damping_ratio_noise=1e-3)
+        g = ie.diagnose_vibration(
+            X * scale,
+            fm,
+            zm,
+            predicted_frequency=fp,
+            predicted_damping_ratio=zp,
+            frequency_noise=1e-5,
+            damping_ratio_noise=1e-3,
+        )
         assert g.effects, g.report()
         if ok:
             assert g.augment(spec).calibrated_range[1] == pytest.approx(X.max())
@@ -282,12 +328,16 @@ def test_augment_refuses_amplitudes_in_mm_and_a_target_that_is_no_model():
 def test_cli_exit_code_follows_success(tmp_path, capsys):
     """Case 12: a pure-noise force exited 0 while the report said nothing is identified."""
     from iwan_element.cli import main
+
     t = np.arange(600) / 50.0
     u = 1e-4 * np.sin(2 * np.pi * 0.5 * t)
     F = np.random.default_rng(0).normal(0.0, 5.0, t.size)
     path = tmp_path / "noise.csv"
-    path.write_text("time [s],displacement [m],force [N]\n" + "\n".join(
-        f"{a:.4f},{b:.6e},{c:.6e}" for a, b, c in zip(t, u, F)) + "\n")
+    path.write_text(
+        "time [s],displacement [m],force [N]\n"
+        + "\n".join(f"{a:.4f},{b:.6e},{c:.6e}" for a, b, c in zip(t, u, F))
+        + "\n"
+    )
     assert main(["diagnose", str(path), "--units", "m,N", "--max-effects", "1"]) == 3
     out = capsys.readouterr().out
     assert "NOT usable: the force is indistinguishable from noise" in out.splitlines()[1]
@@ -296,11 +346,12 @@ def test_cli_exit_code_follows_success(tmp_path, capsys):
 # ------------------------------------------------------------------ smaller findings
 def test_modal_predict_warns_when_it_extrapolates():
     X, f, z = _microslip_curve(12)
-    r = ie.fit_modal_iwan(ie.AmplitudeCurve(X, f, z, frequency_std=1e-5 * f,
-                                            damping_ratio_std=1e-3 * z))
+    r = ie.fit_modal_iwan(
+        ie.AmplitudeCurve(X, f, z, frequency_std=1e-5 * f, damping_ratio_std=1e-3 * z)
+    )
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        r.predict(X)                                         # inside: silent
+        r.predict(X)  # inside: silent
     with pytest.warns(ie.IdentifiabilityWarning, match="extrapolated"):
         r.predict(np.array([X.max(), 3.5 * X.max()]))
 
@@ -334,8 +385,10 @@ def test_microslip_loop_fit_is_not_usable_and_says_why_in_a_testers_words():
         warnings.simplefilter("ignore")
         r = ie.fit_loops(d.t, d.u, d.F)
     assert not r.success and r.identified["KT"] and r.identified["chi"]
-    assert r.failure_reasons() == ("Fs and beta are not identified by these data: the loops "
-                                   "stay in microslip (test to larger amplitudes)",)
+    assert r.failure_reasons() == (
+        "Fs and beta are not identified by these data: the loops "
+        "stay in microslip (test to larger amplitudes)",
+    )
     lines = r.report().splitlines()
     assert lines[0] == r.verdict() and _not_a_convergence_message([lines[0]])
     assert r.to_dict()["failure_reasons"] == list(r.failure_reasons())

@@ -4,6 +4,7 @@ Independent routes: a plain-Python bank of Jenkins sliders with static and kinet
 per direction (tests/_jenkins_bank.py), to which the element is equal on a DiscreteIwan and to
 which dense banks converge on the continuous joint; the element's exact work against the
 trapezoidal rule over its forces; the diagnosis evaluator's run route against the element."""
+
 import numpy as np
 import pytest
 from _helpers import stepped_sine
@@ -18,7 +19,7 @@ A = P.phi_max
 R, ASYM = 1.7, 0.3
 
 
-AMPS = (0.4, 1.6, 0.7, 2.5, 0.3, 1.1)        # fractions of phi_max
+AMPS = (0.4, 1.6, 0.7, 2.5, 0.3, 1.1)  # fractions of phi_max
 
 
 def _drive(per=80):
@@ -27,8 +28,9 @@ def _drive(per=80):
 
 def _bank(u, d, r=R, a=ASYM):
     k, phi = d.slider_stiffness, d.slider_slip
-    return directional_bank(u, k, r * (1 + a) * phi, r * (1 - a) * phi,
-                         kin_up=(1 + a) * phi, kin_dn=(1 - a) * phi)
+    return directional_bank(
+        u, k, r * (1 + a) * phi, r * (1 - a) * phi, kin_up=(1 + a) * phi, kin_dn=(1 - a) * phi
+    )
 
 
 @pytest.mark.parametrize("order", ["breakaway_outside", "asymmetry_outside"])
@@ -42,17 +44,21 @@ def test_on_a_discrete_joint_the_product_law_is_that_bank(order):
     assert el.law() == pytest.approx((R * (1 + ASYM), R * (1 - ASYM), 1 + ASYM, 1 - ASYM))
     np.testing.assert_allclose(el.force_history(u), _bank(u, d), rtol=0, atol=1e-9 * P.Fs)
     # the chain is not the sum of the two effects alone: the laws multiply
-    alone = (AsymmetricSlip(DiscreteIwan(P, 12), asymmetry=ASYM).force_history(u)
-             + BreakAway(DiscreteIwan(P, 12), ratio=R).force_history(u)
-             - DiscreteIwan(P, 12).force_history(u))
+    alone = (
+        AsymmetricSlip(DiscreteIwan(P, 12), asymmetry=ASYM).force_history(u)
+        + BreakAway(DiscreteIwan(P, 12), ratio=R).force_history(u)
+        - DiscreteIwan(P, 12).force_history(u)
+    )
     assert np.max(np.abs(alone - _bank(u, d))) > 0.05 * P.Fs
 
 
 def test_dense_banks_converge_to_the_composed_element():
     u = _drive()
     F = BreakAway(AsymmetricSlip(IwanJoint(P), asymmetry=ASYM), ratio=R).force_history(u)
-    errs = [float(np.sqrt(np.mean((_bank(u, DiscreteIwan(P, n)) - F) ** 2))) / P.Fs
-            for n in (100, 400, 1600)]
+    errs = [
+        float(np.sqrt(np.mean((_bank(u, DiscreteIwan(P, n)) - F) ** 2))) / P.Fs
+        for n in (100, 400, 1600)
+    ]
     # about first order in 1/n (a slider breaks one sample early or late), not smoothly:
     # whether the spike breaks in a half cycle flips with the discretisation
     assert errs[0] > errs[1] > errs[2] and errs[0] / errs[2] > 6.0, errs
@@ -61,8 +67,9 @@ def test_dense_banks_converge_to_the_composed_element():
 
 def test_energy_balance_of_the_chain():
     u = A * np.array([0.0, 0.7, -0.3, 1.2, 0.5, 2.0, -1.4, 0.1, -0.2])
-    uf = np.concatenate([np.linspace(a, b, 3000, endpoint=False) for a, b in zip(u[:-1], u[1:])]
-                        + [u[-1:]])
+    uf = np.concatenate(
+        [np.linspace(a, b, 3000, endpoint=False) for a, b in zip(u[:-1], u[1:])] + [u[-1:]]
+    )
     el = AsymmetricSlip(BreakAway(IwanJoint(P), ratio=R), asymmetry=-ASYM)
     F, D = np.empty(uf.size), np.empty(uf.size)
     for i, x in enumerate(uf):
@@ -85,8 +92,7 @@ def test_run_route_of_the_evaluator_is_the_element():
     names = ("asymmetric_slip", "breakaway")
     assert ev.fast(names) and not ev.fast(("slip_degradation", "breakaway"))
     p1 = IwanParameters(1.0, P.KT / P.Fs, P.chi, P.beta)
-    F = ev.unit_force((p1.phi_max, p1.chi, p1.beta), names,
-                      ({"asymmetry": ASYM}, {"ratio": R}))
+    F = ev.unit_force((p1.phi_max, p1.chi, p1.beta), names, ({"asymmetry": ASYM}, {"ratio": R}))
     F_el = BreakAway(AsymmetricSlip(IwanJoint(p1), asymmetry=ASYM), ratio=R).force_history(u)
     np.testing.assert_allclose(F, F_el[keep], rtol=0, atol=1e-10)
 

@@ -4,6 +4,7 @@ Independent routes: a jointless solid bar against Euler-Bernoulli's closed form;
 model against the full sparse FE model (at the stuck stiffness it was reduced for and away
 from it); the solid against the 1-D beam model under the same interface law and pressure.
 """
+
 from __future__ import annotations
 
 import math
@@ -14,8 +15,9 @@ import pytest
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-pytest.importorskip("ngsolve", reason="the solid specimens need the extra iwan-element[fem] "
-                                      "(ngsolve)")
+pytest.importorskip(
+    "ngsolve", reason="the solid specimens need the extra iwan-element[fem] (ngsolve)"
+)
 
 from iwan_element.models import modal_amplitude_curve, natural_frequencies, preset, solid_preset
 from iwan_element.models.reduced import contact_points
@@ -47,25 +49,28 @@ def _full_frequencies(full, KT, n, kn=None):
     c = (2 * math.pi) ** 2
     K0 = full["K0"] if kn is None else full["Kb"] + full["Gn"].T @ sp.diags(kn) @ full["Gn"]
     K = (K0 + full["G"].T @ sp.diags(KT) @ full["G"]).tocsc()
-    lu = spla.splu((K + c * full["M"]).tocsc(), permc_spec="MMD_AT_PLUS_A",
-                   diag_pivot_thresh=0.0, options={"SymmetricMode": True})
+    lu = spla.splu(
+        (K + c * full["M"]).tocsc(),
+        permc_spec="MMD_AT_PLUS_A",
+        diag_pivot_thresh=0.0,
+        options={"SymmetricMode": True},
+    )
     op = spla.LinearOperator(K.shape, matvec=lu.solve, dtype=float)
-    w2 = spla.eigsh(K, k=n, M=full["M"].tocsc(), sigma=-c, OPinv=op,
-                    return_eigenvectors=False)
+    w2 = spla.eigsh(K, k=n, M=full["M"].tocsc(), sigma=-c, OPinv=op, return_eigenvectors=False)
     return np.sqrt(np.abs(np.sort(w2))) / (2 * math.pi)
 
 
 def test_a_jointless_solid_bar_bends_as_euler_bernoulli():
     L, w, h, E, rho = 0.6, 0.02, 0.01, 2.1e11, 7850.0
     bar = bar_part(L, w, h, youngs_modulus=E, poissons_ratio=0.3, density=rho, mesh_size=0.01)
-    w2 = spla.eigsh(bar.K.tocsc(), k=12, M=bar.M.tocsc(), sigma=-100.0,
-                    return_eigenvectors=False)
+    w2 = spla.eigsh(bar.K.tocsc(), k=12, M=bar.M.tocsc(), sigma=-100.0, return_eigenvectors=False)
     f = np.sort(np.sqrt(np.abs(w2))) / (2 * math.pi)
-    assert np.all(f[:6] < 1.0) and f[6] > 100.0          # six rigid-body modes, free-free
+    assert np.all(f[:6] < 1.0) and f[6] > 100.0  # six rigid-body modes, free-free
 
-    def eb(beta_l, inertia):                              # free-free Euler-Bernoulli [Hz]
-        return beta_l ** 2 / (2 * math.pi * L * L) * math.sqrt(E * inertia / (rho * w * h))
-    height, width = w * h ** 3 / 12, h * w ** 3 / 12
+    def eb(beta_l, inertia):  # free-free Euler-Bernoulli [Hz]
+        return beta_l**2 / (2 * math.pi * L * L) * math.sqrt(E * inertia / (rho * w * h))
+
+    height, width = w * h**3 / 12, h * w**3 / 12
     for ref in (eb(4.730041, height), eb(7.853205, height), eb(4.730041, width)):
         assert np.min(np.abs(f[6:] / ref - 1)) < 0.005
 
@@ -76,7 +81,7 @@ def test_patch_slips_vanish_under_rigid_motion_and_forces_match_the_preload(brb)
     G = solid.model.full["G"]
     for axis in np.eye(3):
         trans = np.tile(axis, len(pos))
-        rot = np.cross(axis, pos).ravel()                 # small rotation about the axis
+        rot = np.cross(axis, pos).ravel()  # small rotation about the axis
         scale = np.max(np.abs(rot))
         assert np.max(np.abs(G @ trans)) < 1e-12
         assert np.max(np.abs(G @ rot)) < 1e-9 * scale
@@ -100,8 +105,10 @@ def test_bolt_holes_are_cut_through_both_lap_halves():
     mass = sum(e @ (p.M @ e) for e, p in zip(ex, cut))
     assert abs(mass - s.density * (boxes - holes)) < 1e-2 * s.density * holes
     for p in cut:
-        d = np.hypot(p.positions[:, 0:1] - s.lap_start - np.array(s.bolt_positions)[None, :],
-                     p.positions[:, 1:2])
+        d = np.hypot(
+            p.positions[:, 0:1] - s.lap_start - np.array(s.bolt_positions)[None, :],
+            p.positions[:, 1:2],
+        )
         assert d.min() >= r * (1 - 1e-9)
     with pytest.raises(TypeError, match="holes"):
         lap_beam_parts(s, **COARSE, holes="yes")
@@ -115,11 +122,15 @@ def test_patches_average_the_contact_area_only(brb):
     s, (a, b), solid = brb
     pos = np.vstack([a.positions, b.positions])
     nodes = np.unique(solid.model.full["Gn"].nonzero()[1] // 3)
-    r = np.min(np.hypot(pos[nodes, 0:1] - s.lap_start - np.array(s.bolt_positions)[None, :],
-                        pos[nodes, 1:2]), axis=1)
+    r = np.min(
+        np.hypot(
+            pos[nodes, 0:1] - s.lap_start - np.array(s.bolt_positions)[None, :], pos[nodes, 1:2]
+        ),
+        axis=1,
+    )
     h = COARSE["lap_mesh_size"]
     assert np.all(r <= s.cone_radius + h) and np.all(r >= 0.5 * s.bolt_diameter - h)
-    p = solid.model.patches                 # patch points: centroids inside their cells
+    p = solid.model.patches  # patch points: centroids inside their cells
     assert np.all(np.abs(p.x - p.cells[:, 0]) <= 0.5 * p.size[0])
     assert np.all(np.abs(p.y - p.cells[:, 1]) <= 0.5 * p.size[1])
 
@@ -132,7 +143,7 @@ def test_reduction_matches_the_full_model_stuck_and_at_other_interface_stiffness
         KT = contact_points(v).KT
         ref = _full_frequencies(full, KT, 12)[6:]
         red = natural_frequencies(v, n_modes=12)[6:]
-        tol = 1e-6 if factor == 1.0 else 1e-3     # exact at the reference; measured 4e-6 away
+        tol = 1e-6 if factor == 1.0 else 1e-3  # exact at the reference; measured 4e-6 away
         assert np.max(np.abs(red / ref - 1)) < tol, (factor, red, ref)
 
 
@@ -146,7 +157,7 @@ def test_reduction_holds_the_normal_compliance(brb):
         v = solid.replace(normal_stiffness_per_area=kn)
         ref = _full_frequencies(full, KT, 12, kn=kn * solid.model.patches.area)[6:]
         red = natural_frequencies(v, n_modes=12)[6:]
-        assert np.max(np.abs(red / ref - 1)) < 3e-4, (kn, red, ref)   # measured 4e-6, 5.6e-5
+        assert np.max(np.abs(red / ref - 1)) < 3e-4, (kn, red, ref)  # measured 4e-6, 5.6e-5
 
 
 def test_normal_compliance_lowers_height_bending_but_not_in_plane_bending(brb):
@@ -157,9 +168,9 @@ def test_normal_compliance_lowers_height_bending_but_not_in_plane_bending(brb):
     _, _, solid = brb
     f = natural_frequencies(solid, n_modes=9)[6:]
     g = natural_frequencies(solid.replace(normal_stiffness_per_area=1e12), n_modes=9)[6:]
-    assert g[0] / f[0] - 1 < -0.005                       # measured -2.3 %
-    assert abs(g[1] / f[1] - 1) < 1e-4                     # measured -5e-6
-    assert g[2] < f[2]                                     # second height bending, lower
+    assert g[0] / f[0] - 1 < -0.005  # measured -2.3 %
+    assert abs(g[1] / f[1] - 1) < 1e-4  # measured -5e-6
+    assert g[2] < f[2]  # second height bending, lower
     # the reduced K0 is rebuilt from the normal gaps, not the build's springs kept
     L, L1 = solid.linear_system(), solid.replace(normal_stiffness_per_area=1e12).linear_system()
     np.testing.assert_allclose(L.K0, solid.model.system.K0, rtol=0, atol=1e-9 * np.abs(L.K0).max())
@@ -218,36 +229,42 @@ def test_a_contact_face_given_as_a_node_set_is_the_named_face(brb):
     s, (a, _), _ = brb
     on_lap = (np.abs(a.positions[:, 2]) < 1e-12) & (a.positions[:, 0] >= s.lap_start - 1e-12)
     part = part_from_fem(a.fem, contact_nodes=np.nonzero(on_lap)[0], name="A from nodes")
-    assert {tuple(sorted(t)) for t in part.face_triangles} == \
-        {tuple(sorted(t)) for t in a.face_triangles}
+    assert {tuple(sorted(t)) for t in part.face_triangles} == {
+        tuple(sorted(t)) for t in a.face_triangles
+    }
     with pytest.raises(ValueError, match="contact_nodes"):
         part_from_fem(a.fem, contact_nodes=[0, 1])
 
 
 def test_a_clamped_solid_has_no_rigid_modes_and_bends_as_the_1d_cantilever():
-    s = preset("two-bolt-aluminium", setup=Setup())       # clamped-free: beam A's end face
+    s = preset("two-bolt-aluminium", setup=Setup())  # clamped-free: beam A's end face
     parts = lap_beam_parts(s, mesh_size=0.0127, lap_mesh_size=0.0064, holes=False)
     solid = solid_specimen(s, parts, patch_size=0.0127, n_modes=4)
     clamped = int(np.sum(parts[0].positions[:, 0] < 1e-12))
-    assert solid.model.info["n_full"] == 3 * (len(parts[0].positions) + len(parts[1].positions)
-                                              - clamped)
+    assert solid.model.info["n_full"] == 3 * (
+        len(parts[0].positions) + len(parts[1].positions) - clamped
+    )
     assert solid.linear_system().rigid_body_modes == 0
     f = natural_frequencies(solid, n_modes=1)[0]
-    assert abs(f / natural_frequencies(s, n_modes=1)[0] - 1) < 0.02   # measured 0.29 %
+    assert abs(f / natural_frequencies(s, n_modes=1)[0] - 1) < 0.02  # measured 0.29 %
     # the preset's setup: clamp springs (on the face's rigid-body fit) and the shaker's moving
     # mass: the solid follows the 1-D model's drop; a clamp stiffened after the build (the
     # face's attachment shapes are in the basis) comes within 1 % of the face held rigidly
     # (measured 0.64 % below: the springs hold the face's rigid-body fit, not its warping)
     p = preset("two-bolt-aluminium")
-    sp_ = solid_specimen(p, lap_beam_parts(p, mesh_size=0.0127, lap_mesh_size=0.0064,
-                                           holes=False), patch_size=0.0127, n_modes=4)
+    sp_ = solid_specimen(
+        p,
+        lap_beam_parts(p, mesh_size=0.0127, lap_mesh_size=0.0064, holes=False),
+        patch_size=0.0127,
+        n_modes=4,
+    )
     f_s, f_1 = natural_frequencies(sp_, n_modes=1)[0], natural_frequencies(p, n_modes=1)[0]
     assert f_s < f and abs(f_s / f_1 - 1) < 0.02
     stiff = replace(p.setup, clamp=Clamp(1e12, 1e10), shaker=None)
     f_r = natural_frequencies(sp_.replace(setup=stiff), n_modes=1)[0]
     assert abs(f_r / f - 1) < 1e-2
     with pytest.raises(ValueError, match="clamp"):
-        sp_.replace(setup=Setup())                        # a rigid clamp needs other bodies
+        sp_.replace(setup=Setup())  # a rigid clamp needs other bodies
 
 
 def test_the_sensor_reads_the_section_deflection_between_nodes():
@@ -256,14 +273,26 @@ def test_the_sensor_reads_the_section_deflection_between_nodes():
     bending shape far closer than the nearest node (which sits up to half an element off).
     Measured on a 12 mm mesh: 6e-15 and 1.2e-6 against the nearest node's 5.6e-3 and 1.8e-2."""
     from iwan_element.models.solid.build import _point_weights
+
     s = preset("brake-reuss")
-    bar = bar_part(0.4, 0.0254, 0.0127, youngs_modulus=2e11, poissons_ratio=0.3,
-                   density=8000.0, mesh_size=0.012)
+    bar = bar_part(
+        0.4,
+        0.0254,
+        0.0127,
+        youngs_modulus=2e11,
+        poissons_ratio=0.3,
+        density=8000.0,
+        mesh_size=0.012,
+    )
     P = bar.positions
     xs = np.linspace(0.03, 0.37, 35)
-    for field, exact in ((lambda p: 1.0 + 3 * p[:, 0] - 7 * p[:, 0] ** 2 + 40 * p[:, 1],
-                          lambda x: 1.0 + 3 * x - 7 * x ** 2),
-                         (lambda p: np.sin(7.85 * p[:, 0]), lambda x: np.sin(7.85 * x))):
+    for field, exact in (
+        (
+            lambda p: 1.0 + 3 * p[:, 0] - 7 * p[:, 0] ** 2 + 40 * p[:, 1],
+            lambda x: 1.0 + 3 * x - 7 * x**2,
+        ),
+        (lambda p: np.sin(7.85 * p[:, 0]), lambda x: np.sin(7.85 * x)),
+    ):
         u = np.zeros(3 * len(P))
         u[2::3] = field(P)
         fit = np.array([w @ u[idx] for idx, w in (_point_weights(s, bar, bar, x) for x in xs)])
@@ -271,7 +300,7 @@ def test_the_sensor_reads_the_section_deflection_between_nodes():
         err_fit = np.max(np.abs(fit - exact(xs)))
         err_near = np.max(np.abs(near - exact(xs)))
         assert err_fit < 1e-4 * np.max(np.abs(exact(xs))), err_fit
-        assert err_near > 10 * err_fit                # the nearest node: up to h/2 off in x
+        assert err_near > 10 * err_fit  # the nearest node: up to h/2 off in x
 
 
 def test_the_setups_masses_shift_the_solid_as_they_shift_the_1d_beams(brb):
@@ -280,10 +309,16 @@ def test_the_setups_masses_shift_the_solid_as_they_shift_the_1d_beams(brb):
     bending modes in both hosts, within 10 % of the shift."""
     s, _, solid = brb
     hammer = preset("brake-reuss").setup
-    d_solid = natural_frequencies(solid.replace(setup=hammer), n_modes=9)[[6, 8]] / \
-        natural_frequencies(solid, n_modes=9)[[6, 8]] - 1
-    d_1d = natural_frequencies(s.replace(setup=hammer), n_modes=5)[3:] / \
-        natural_frequencies(s, n_modes=5)[3:] - 1
+    d_solid = (
+        natural_frequencies(solid.replace(setup=hammer), n_modes=9)[[6, 8]]
+        / natural_frequencies(solid, n_modes=9)[[6, 8]]
+        - 1
+    )
+    d_1d = (
+        natural_frequencies(s.replace(setup=hammer), n_modes=5)[3:]
+        / natural_frequencies(s, n_modes=5)[3:]
+        - 1
+    )
     assert np.all(d_solid < -1e-4) and np.all(d_1d < -1e-4)
     np.testing.assert_allclose(d_solid, d_1d, rtol=0.1)
 

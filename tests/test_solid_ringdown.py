@@ -5,13 +5,15 @@ matrices, the joints' exact records, the floor's work); the stuck interface agai
 eigenproblem and the per-mode floor (each mode decays at its own floor at its stuck
 frequency); the slipping mode 1 against QSMA of the same solid.
 """
+
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-pytest.importorskip("ngsolve", reason="the solid specimens need the extra iwan-element[fem] "
-                                      "(ngsolve)")
+pytest.importorskip(
+    "ngsolve", reason="the solid specimens need the extra iwan-element[fem] (ngsolve)"
+)
 
 from iwan_element.models import Impact, modal_amplitude_curve, natural_frequencies, preset, ringdown
 from iwan_element.models.simulation import port_basis
@@ -42,13 +44,14 @@ def test_the_slip_basis_makes_the_slips_coordinates(solid):
 
 
 def test_a_two_mode_solid_ring_down_closes_its_energy_balance(solid):
-    r = ringdown(solid, amplitude={1: 60e-6, 3: 8e-6}, duration=0.16, steps_per_period=32,
-                 record_energy=True)
+    r = ringdown(
+        solid, amplitude={1: 60e-6, 3: 8e-6}, duration=0.16, steps_per_period=32, record_energy=True
+    )
     e = r.energy
     assert r.metadata["tangential"] == "iwan"
     assert r.metadata["n_coordinates"] == solid.model.info["n_reduced"]
-    assert e["joint_dissipated"][-1] > 0.01 * r.initial_energy      # the joints slipped
-    assert e["floor_dissipated"][-1] > 0.01 * r.initial_energy      # and the floor acted
+    assert e["joint_dissipated"][-1] > 0.01 * r.initial_energy  # the joints slipped
+    assert e["floor_dissipated"][-1] > 0.01 * r.initial_energy  # and the floor acted
     assert r.metadata["overflow_steps"] == 0
     # measured 9e-5 (the trapezoidal rule's quadrature of the joint forces: the same 9e-5)
     assert r.max_energy_error < 1e-3 and r.success
@@ -71,8 +74,13 @@ def test_a_stuck_solid_rings_each_mode_at_its_own_floor_and_stuck_frequency(soli
     stuck = solid.replace(friction=1e4, modal_damping=(0.002, 0.01, 0.004))
     f = natural_frequencies(stuck, n_modes=9)[6:]
     for tangential in ("iwan", "linear"):
-        r = ringdown(stuck, amplitude={1: 20e-6, 3: 4e-6}, duration=0.25, steps_per_period=32,
-                     tangential=tangential)
+        r = ringdown(
+            stuck,
+            amplitude={1: 20e-6, 3: 4e-6},
+            duration=0.25,
+            steps_per_period=32,
+            tangential=tangential,
+        )
         for mode, zeta in ((1, 0.002), (3, 0.004)):
             c = r.mode_curve(mode)
             # measured: frequency within 7e-6, damping within 0.63 % (iwan and linear)
@@ -81,12 +89,14 @@ def test_a_stuck_solid_rings_each_mode_at_its_own_floor_and_stuck_frequency(soli
 
 
 def test_mode_1_of_the_solid_rings_down_as_qsma_says(solid):
-    r = ringdown(solid, amplitude=60e-6, cycles=16, steps_per_period=64,
-                 sensors=(0.1, solid.sensor_position))
+    r = ringdown(
+        solid, amplitude=60e-6, cycles=16, steps_per_period=64, sensors=(0.1, solid.sensor_position)
+    )
     # the sensor rows along the axis read the sensor as S does (interpolated between the
     # stored millimetres: the read-out's curvature over 1 mm); the release amplitude is met
-    assert np.allclose(r.sensor_displacement[1], r.sensor, rtol=0,
-                       atol=1e-4 * np.max(np.abs(r.sensor)))
+    assert np.allclose(
+        r.sensor_displacement[1], r.sensor, rtol=0, atol=1e-4 * np.max(np.abs(r.sensor))
+    )
     assert abs(r.sensor[0] / 60e-6 - 1) < 1e-9 and abs(r.sensor_displacement[0, 0]) > 1e-6
     c = r.curve
     q = modal_amplitude_curve(solid, amplitude=c.amplitude)
@@ -96,7 +106,7 @@ def test_mode_1_of_the_solid_rings_down_as_qsma_says(solid):
     assert np.all(np.abs(c.frequency / q.frequency - 1) < 2e-4)
     assert np.all(np.abs(c.damping_ratio / q.damping_ratio - 1) < 0.02)
     drop = 1 - c.frequency / natural_frequencies(solid, n_modes=7)[-1]
-    assert np.all(drop > 1e-3)                    # it slips: well above the tolerance
+    assert np.all(drop > 1e-3)  # it slips: well above the tolerance
 
 
 def test_the_solid_ring_down_refuses_what_it_cannot_do(solid):
@@ -111,8 +121,13 @@ def test_the_solid_ring_down_refuses_what_it_cannot_do(solid):
 def test_the_solid_takes_a_hammer_impact_and_books_its_work(solid):
     """The host is the 1-D beams' (models/simulation/host.py): an impact is a force on the struck
     point's port coordinate; its work (the trapezoidal rule's) balances the energy."""
-    r = ringdown(solid, impact=Impact(position=0.6438, peak_force=50.0, contact_time=1e-3),
-                 modes=(1,), cycles=8, record_energy=True)
+    r = ringdown(
+        solid,
+        impact=Impact(position=0.6438, peak_force=50.0, contact_time=1e-3),
+        modes=(1,),
+        cycles=8,
+        record_energy=True,
+    )
     assert r.max_energy_error < 1e-3
     assert r.energy["input_work"][-1] > 0
     assert r.curve.amplitude.size >= 1

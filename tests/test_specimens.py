@@ -1,4 +1,5 @@
 """Specimen descriptions, presets, contact pressure and the linear matrices of the beam model."""
+
 import dataclasses
 import math
 
@@ -42,12 +43,21 @@ def test_published_geometry_of_the_thin_brake_reuss_beam():
     assert a.excitation.position == pytest.approx(0.085)
 
 
-@pytest.mark.parametrize("change,match", [
-    ({"beam_length": -1.0}, "beam_length"), ({"overlap": 0.5}, "overlap"),
-    ({"bolt_positions": (0.2,)}, "bolt_positions"), ({"boundary": "pinned"}, "boundary"),
-    ({"friction": float("nan")}, "friction"), ({"amplitude_range": (2e-6, 1e-6)}, "amplitude_range"),
-    ({"chi": -1.5}, "chi"), ({"n_points": 1}, "n_points"), ({"sensor_position": 5.0}, "sensor"),
-    ({"nonsense": 1.0}, "unknown")])
+@pytest.mark.parametrize(
+    "change,match",
+    [
+        ({"beam_length": -1.0}, "beam_length"),
+        ({"overlap": 0.5}, "overlap"),
+        ({"bolt_positions": (0.2,)}, "bolt_positions"),
+        ({"boundary": "pinned"}, "boundary"),
+        ({"friction": float("nan")}, "friction"),
+        ({"amplitude_range": (2e-6, 1e-6)}, "amplitude_range"),
+        ({"chi": -1.5}, "chi"),
+        ({"n_points": 1}, "n_points"),
+        ({"sensor_position": 5.0}, "sensor"),
+        ({"nonsense": 1.0}, "unknown"),
+    ],
+)
 def test_bad_specimens_are_refused_with_the_argument_named(change, match):
     with pytest.raises(ValueError, match=match):
         preset("example").replace(**change)
@@ -93,8 +103,12 @@ def test_pressure_exponent_stiffens_the_pressed_points():
 def test_vectorised_interface_law_equals_the_closed_forms_of_each_point():
     pts = contact_points(preset("brake-reuss"))
     p0 = pts.params[0]
-    u = np.concatenate([-np.geomspace(1e-9, 3 * pts.phi_max.max(), 7),
-                        np.geomspace(1e-9, 3 * pts.phi_max.max(), 7)])
+    u = np.concatenate(
+        [
+            -np.geomspace(1e-9, 3 * pts.phi_max.max(), 7),
+            np.geomspace(1e-9, 3 * pts.phi_max.max(), 7),
+        ]
+    )
     for p in (pts.params[0], pts.params[len(pts) // 2]):
         F, kt = _interface_law(u, p.Fs, p.KT, p.phi_max, p.chi, p.beta)
         np.testing.assert_allclose(F, backbone(u, p), rtol=1e-10, atol=1e-12 * p.Fs)
@@ -111,21 +125,26 @@ def test_the_exudyn_host_has_the_linear_systems_eigenvalues(name):
     L = linear_system(s)
     pts = contact_points(s)
     import scipy.linalg as sla
+
     K = L.K0 + L.G.T @ (pts.KT[:, None] * L.G)
     w2 = sla.eigh(K, L.M, eigvals_only=True, subset_by_index=[0, 5])
     model = build_host(s, tangential="linear", floor=False)
-    w2x, _ = model.mbs.ComputeODE2Eigenvalues(ignoreAlgebraicEquations=True,
-                                              numberOfEigenvalues=6)
+    w2x, _ = model.mbs.ComputeODE2Eigenvalues(ignoreAlgebraicEquations=True, numberOfEigenvalues=6)
     elastic = np.sqrt(np.abs(w2)) > 2 * math.pi
-    np.testing.assert_allclose(np.sqrt(np.abs(w2))[elastic],
-                               np.sqrt(np.abs(np.array(w2x)))[elastic], rtol=1e-6)
+    np.testing.assert_allclose(
+        np.sqrt(np.abs(w2))[elastic], np.sqrt(np.abs(np.array(w2x)))[elastic], rtol=1e-6
+    )
     # the interface stiffness matters: without it no elastic mode is stiffer, and one of the
     # first three is clearly softer
     n_rigid = 3 if s.boundary == "free-free" else 0
-    w_stuck = np.sqrt(np.abs(sla.eigh(K, L.M, eigvals_only=True,
-                                      subset_by_index=[0, n_rigid + 2])))[n_rigid:]
+    w_stuck = np.sqrt(
+        np.abs(sla.eigh(K, L.M, eigvals_only=True, subset_by_index=[0, n_rigid + 2]))
+    )[n_rigid:]
     # (eigenvalue monotonicity: the k-th eigenvalue cannot rise when stiffness is removed)
-    w_free = np.sqrt(np.abs(sla.eigh(L.K0 + 1e-6 * L.M, L.M, eigvals_only=True,
-                                     subset_by_index=[0, n_rigid + 2])))[n_rigid:]
+    w_free = np.sqrt(
+        np.abs(
+            sla.eigh(L.K0 + 1e-6 * L.M, L.M, eigvals_only=True, subset_by_index=[0, n_rigid + 2])
+        )
+    )[n_rigid:]
     assert np.all(w_free <= w_stuck * (1 + 1e-9))
     assert np.min(w_free / w_stuck) < 0.99

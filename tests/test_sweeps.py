@@ -9,6 +9,7 @@ added to the fundamental exactly (a linear, uncoupled contribution). The truth i
 Iwan closed form (``modal_iwan_curve``, first-harmonic stiffness, dashpot floor) at the
 modal amplitude ``X / PHI``: it is not made by the code under test.
 """
+
 import math
 import re
 from pathlib import Path
@@ -19,18 +20,19 @@ import pytest
 from iwan_element import IwanJoint, IwanParameters, fit_modal_iwan, modal_iwan_curve, sweep_curve
 
 F0, KAPPA, CHI, BETA, PHIMAX, ZETA0 = 50.0, 0.15, -0.5, 0.5, 1e-3, 0.008
-PHI, C_RB = 0.8, 1.0                     # mode shape at the drive point; rigid-body residual
+PHI, C_RB = 0.8, 1.0  # mode shape at the drive point; rigid-body residual
 W02 = (2 * math.pi * F0) ** 2
 _KT = KAPPA * W02
 P = IwanParameters(_KT * (BETA + (CHI + 1) / (CHI + 2)) * PHIMAX / (1 + BETA), _KT, CHI, BETA)
 K_INF = W02 - _KT
-STEPS = 160                              # time steps per period: frequency error 6e-5
+STEPS = 160  # time steps per period: frequency error 6e-5
 
 
 def truth(X):
     """True frequency [Hz] and damping ratio at sensor displacement amplitude X [m]."""
-    return modal_iwan_curve(np.asarray(X) / PHI, P, K_inf=K_INF, zeta0=ZETA0,
-                            stiffness="harmonic", floor="dashpot")
+    return modal_iwan_curve(
+        np.asarray(X) / PHI, P, K_inf=K_INF, zeta0=ZETA0, stiffness="harmonic", floor="dashpot"
+    )
 
 
 def simulate_sweep(freqs, forces, settle=100, record=8):
@@ -63,17 +65,19 @@ def simulate_sweep(freqs, forces, settle=100, record=8):
                 acc += q * complex(math.cos(theta), -math.sin(theta))
         v = (q - q_prev) / h
         theta %= 2 * math.pi
-        out.append(PHI * 2.0 * acc / (STEPS * record) / Fa - C_RB / W ** 2)
+        out.append(PHI * 2.0 * acc / (STEPS * record) / Fa - C_RB / W**2)
     return np.array(out)
 
 
 def _rows(levels):
     """Stack per-sweep (f, F, H) into the arrays sweep_curve takes (acceleration, +pi)."""
-    lab, f, F, H = (np.concatenate(x) for x in zip(*[
-        (np.full(len(fl), i), fl, Fl, Hl) for i, (fl, Fl, Hl) in enumerate(levels)]))
+    lab, f, F, H = (
+        np.concatenate(x)
+        for x in zip(*[(np.full(len(fl), i), fl, Fl, Hl) for i, (fl, Fl, Hl) in enumerate(levels)])
+    )
     W = 2 * math.pi * f
     # accelerance A/F = -W^2 H: amplitude |H| F W^2, phase angle(H) + pi
-    return lab, f, F, np.abs(H) * F * W ** 2, np.angle(-H)
+    return lab, f, F, np.abs(H) * F * W**2, np.angle(-H)
 
 
 @pytest.fixture(scope="module")
@@ -84,8 +88,14 @@ def force_controlled():
     f = np.linspace(fq[-1] * (1 - 3 * zq[-1]), fq[0] * (1 + 3 * zq[0]), 21)
     levels = []
     for q, fr, zr in zip(Q, fq, zq):
-        F = q * 2 * zr * (2 * math.pi * fr) ** 2 / PHI * (
-            1 - 0.35 * np.exp(-((f - fr) / (2 * zr * fr)) ** 2))
+        F = (
+            q
+            * 2
+            * zr
+            * (2 * math.pi * fr) ** 2
+            / PHI
+            * (1 - 0.35 * np.exp(-(((f - fr) / (2 * zr * fr)) ** 2)))
+        )
         levels.append((f, F, simulate_sweep(f, F)))
     return _rows(levels)
 
@@ -99,7 +109,7 @@ def response_controlled():
         fr, zr = truth(X)
         f = fr * (1 + np.linspace(-2.5, 2.5, 15) * zr)
         W, wr = 2 * math.pi * f, 2 * math.pi * fr
-        H = PHI ** 2 / (wr ** 2 - W ** 2 + 2j * zr * wr * W) - C_RB / W ** 2
+        H = PHI**2 / (wr**2 - W**2 + 2j * zr * wr * W) - C_RB / W**2
         F = X / np.abs(H)
         levels.append((f, F, simulate_sweep(f, F)))
     return _rows(levels)
@@ -115,22 +125,24 @@ def _check_truth(curve, f_tol, z_tol):
 
 def test_force_controlled_sweeps_give_the_modal_iwan_curve(force_controlled):
     lab, f, F, A, ph = force_controlled
-    assert np.ptp(F[lab == 3]) / F[lab == 3].max() > 0.3          # the force is not held
+    assert np.ptp(F[lab == 3]) / F[lab == 3].max() > 0.3  # the force is not held
     curve = sweep_curve(f, F, A, ph, level=lab, quantity="acceleration")
     assert curve.method == "stepped-sine-sweep" and len(curve) >= 6
-    assert curve.amplitude.min() < 0.05 * PHIMAX * PHI and curve.amplitude.max() > 0.25 * PHIMAX * PHI
+    assert (
+        curve.amplitude.min() < 0.05 * PHIMAX * PHI and curve.amplitude.max() > 0.25 * PHIMAX * PHI
+    )
     # viscous-form inversion of a mode whose damping is partly hysteretic: about 2 % in
     # damping (measured 1.6-2.6 %), 5e-4 in frequency
     _check_truth(curve, 5e-4, 0.04)
     assert "accelerance-like" in curve.notes and not curve.warnings
     c = float(re.search(r"modal constant c = ([0-9.eE+-]+)", curve.notes).group(1))
-    assert c == pytest.approx(PHI ** 2, rel=0.03)                # fitted, not given
+    assert c == pytest.approx(PHI**2, rel=0.03)  # fitted, not given
 
 
 def test_response_controlled_sweeps(response_controlled):
     lab, f, F, A, ph = response_controlled
     X = A / (2 * math.pi * f) ** 2
-    for i in range(3):                                    # the response is held to 6 %
+    for i in range(3):  # the response is held to 6 %
         assert np.ptp(np.log(X[lab == i])) < 0.06
     curve = sweep_curve(f, F, A, ph, level=lab)
     assert len(curve) == 3
@@ -142,12 +154,13 @@ def test_phase_conventions_agree(force_controlled):
     lab, f, F, A, ph = force_controlled
     W = 2 * math.pi * f
     ref = sweep_curve(f, F, A, ph, level=lab)
-    X = A / W ** 2
+    X = A / W**2
     for resp, phase, quantity, word in (
-            (X, ph - math.pi, "displacement", "receptance-like"),
-            (A / W, ph - math.pi / 2, "velocity", "velocity-like"),
-            (A, -ph, "acceleration", "conjugated"),
-            (A, ph - math.pi, "acceleration", "inverted")):    # sensor mounted upside down
+        (X, ph - math.pi, "displacement", "receptance-like"),
+        (A / W, ph - math.pi / 2, "velocity", "velocity-like"),
+        (A, -ph, "acceleration", "conjugated"),
+        (A, ph - math.pi, "acceleration", "inverted"),
+    ):  # sensor mounted upside down
         c = sweep_curve(f, F, resp, np.angle(np.exp(1j * phase)), level=lab, quantity=quantity)
         assert word in c.notes
         np.testing.assert_allclose(c.frequency, ref.frequency, rtol=1e-9)
@@ -157,10 +170,10 @@ def test_phase_conventions_agree(force_controlled):
 def test_phase_that_cannot_be_told_is_refused(force_controlled):
     lab, f, F, A, ph = force_controlled
     with pytest.raises(ValueError, match="convention cannot be told"):
-        sweep_curve(f, F, A, ph + math.pi / 4, level=lab)         # half-way between classes
+        sweep_curve(f, F, A, ph + math.pi / 4, level=lab)  # half-way between classes
     with pytest.raises(ValueError, match="only .* rad along the sweeps"):
-        sweep_curve(f, F, A, np.full_like(ph, 0.3), level=lab)    # flat phase
-    far = f > 50.0                                # above every resonance: no peak inside
+        sweep_curve(f, F, A, np.full_like(ph, 0.3), level=lab)  # flat phase
+    far = f > 50.0  # above every resonance: no peak inside
     with pytest.raises(ValueError, match="peak inside"):
         sweep_curve(f[far], F[far], A[far], ph[far], level=lab[far])
     with pytest.raises(ValueError, match="degrees"):
@@ -195,8 +208,8 @@ def test_bad_input_and_no_mutation(force_controlled):
 
 def test_sweeps_without_labels_split_where_frequency_turns(force_controlled):
     lab, f, F, A, ph = force_controlled
-    o = np.concatenate([np.flatnonzero(lab == i)[::(1 if i % 2 == 0 else -1)] for i in range(4)])
-    c = sweep_curve(f[o], F[o], A[o], ph[o])                  # up, down, up, down
+    o = np.concatenate([np.flatnonzero(lab == i)[:: (1 if i % 2 == 0 else -1)] for i in range(4)])
+    c = sweep_curve(f[o], F[o], A[o], ph[o])  # up, down, up, down
     ref = sweep_curve(f, F, A, ph, level=lab)
     np.testing.assert_allclose(c.damping_ratio, ref.damping_ratio, rtol=1e-6)
 
@@ -222,8 +235,10 @@ SWEEPS = _shared("brb-steppedsine-fc", "fc_sweeps.csv")
 HAMMER = _shared("brb-hammer", "hammer_acc3.csv")
 
 
-@pytest.mark.skipif(SWEEPS is None or HAMMER is None,
-                    reason="GPL-3.0 BRB data are read from ../shared only; not present here")
+@pytest.mark.skipif(
+    SWEEPS is None or HAMMER is None,
+    reason="GPL-3.0 BRB data are read from ../shared only; not present here",
+)
 def test_real_brb_sweeps_against_the_hammer_curve():
     """The four force-controlled sweeps give one curve over about 20-275 um that joins the
     hammer ring-down of the same point where they overlap: within 0.15 % in frequency (the
@@ -232,6 +247,7 @@ def test_real_brb_sweeps_against_the_hammer_curve():
     from iwan_element.models.calibration import measured_amplitude_curve
 
     from iwan_element import read_sweep_csv
+
     sweep = sweep_curve(**read_sweep_csv(SWEEPS))
     hammer = measured_amplitude_curve(HAMMER)
     assert "receptance-like" in sweep.notes and not sweep.warnings

@@ -13,6 +13,7 @@ No tabulated thick-beam frequency from the literature could be read and checked 
 tables of Han, Benaroya and Wei 1999 and of Lee and Schultz 2004 were not accessible), so no
 such test is included; the Ritz route stands in for it.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -36,8 +37,15 @@ E_OVER_KAPPA_G = 2.0 * (1.0 + NU) / KAPPA
 def beam(slenderness, L=1.0, width=0.02):
     """Rectangular steel beam of length ``L`` [m] with ``L / r`` = ``slenderness``."""
     h = L / slenderness * np.sqrt(12.0)
-    return dict(E=E_STEEL, G=E_STEEL / (2.0 * (1.0 + NU)), kappa=KAPPA, rho=RHO,
-                A=width * h, I=width * h**3 / 12.0, L=L)
+    return dict(
+        E=E_STEEL,
+        G=E_STEEL / (2.0 * (1.0 + NU)),
+        kappa=KAPPA,
+        rho=RHO,
+        A=width * h,
+        I=width * h**3 / 12.0,
+        L=L,
+    )
 
 
 def euler_frequencies(p, omega_bar):
@@ -49,9 +57,9 @@ def euler_beta_l(bc, n):
     """First ``n`` roots ``beta L`` of the Euler-Bernoulli frequency equations."""
     if bc == "pinned-pinned":
         return np.pi * np.arange(1, n + 1)
-    sign = -1.0 if bc == "clamped-free" else 1.0       # cos cosh = -1 (cantilever) or +1
+    sign = -1.0 if bc == "clamped-free" else 1.0  # cos cosh = -1 (cantilever) or +1
     f = lambda x: np.cos(x) * np.cosh(x) - sign
-    first = 0 if bc == "clamped-free" else 1           # f changes sign on (k pi, (k+1) pi)
+    first = 0 if bc == "clamped-free" else 1  # f changes sign on (k pi, (k+1) pi)
     brackets = [(max(k, 0.3) * np.pi, (k + 1) * np.pi) for k in range(first, first + n)]
     return np.array([brentq(f, lo, hi, xtol=1e-15) for lo, hi in brackets])
 
@@ -60,11 +68,11 @@ def euler_mode_derivatives(bc, beta, x):
     """``w, w', w'', w'''`` of the Euler-Bernoulli mode with root ``beta`` (``L = 1``)."""
     X = beta * x
     if bc == "pinned-pinned":
-        return [np.sin(X), beta * np.cos(X), -beta**2 * np.sin(X), -beta**3 * np.cos(X)]
+        return [np.sin(X), beta * np.cos(X), -(beta**2) * np.sin(X), -(beta**3) * np.cos(X)]
     ch, sh, c, s = np.cosh(beta), np.sinh(beta), np.cos(beta), np.sin(beta)
     if bc == "clamped-free":
         sigma, t = (ch + c) / (sh + s), -1.0
-    else:                                           # clamped-clamped (t = -1), free-free (+1)
+    else:  # clamped-clamped (t = -1), free-free (+1)
         sigma, t = (ch - c) / (sh - s), (1.0 if bc == "free-free" else -1.0)
     hyp = [np.cosh(X) - sigma * np.sinh(X), np.sinh(X) - sigma * np.cosh(X)]
     cos_d = [np.cos(X), -np.sin(X), -np.cos(X), np.sin(X)]
@@ -77,20 +85,23 @@ def _legendre_tables(degree, L):
     jac = L / 2.0
     eye = np.eye(degree + 1)
     tab = [np.array([leg.legval(t, leg.legder(c, k)) for c in eye]) / jac**k for k in range(3)]
-    ends = {e: [np.array([leg.legval(s, leg.legder(c, k)) for c in eye]) / jac**k
-                for k in range(2)] for e, s in (("left", -1.0), ("right", 1.0))}
+    ends = {
+        e: [np.array([leg.legval(s, leg.legder(c, k)) for c in eye]) / jac**k for k in range(2)]
+        for e, s in (("left", -1.0), ("right", 1.0))
+    }
     gram = lambda X, Y: (X * wq) @ Y.T * jac
     return tab, ends, gram
 
 
-def ritz_frequencies(*, E, G, kappa, rho, A, I, L, bc, n_modes, shear=True,
-                     rotary_inertia=True, degree=40):
+def ritz_frequencies(
+    *, E, G, kappa, rho, A, I, L, bc, n_modes, shear=True, rotary_inertia=True, degree=40
+):
     """Rayleigh-Ritz frequencies [Hz]: Legendre polynomials up to ``degree`` for ``w`` and
     ``psi`` (``psi = w'`` without shear), essential conditions by null-space projection."""
     (P, D1, D2), ends, gram = _legendre_tables(degree, L)
     kinds = dict(zip(("left", "right"), bc.split("-")))
     w_rows = [ends[e][0] for e, k in kinds.items() if k != "free"]
-    if not shear:                                   # Rayleigh / Euler-Bernoulli beam
+    if not shear:  # Rayleigh / Euler-Bernoulli beam
         w_rows += [ends[e][1] for e, k in kinds.items() if k == "clamped"]
         Z = null_space(np.array(w_rows)) if w_rows else np.eye(len(P))
         K = Z.T @ (E * I * gram(D2, D2)) @ Z
@@ -106,18 +117,26 @@ def ritz_frequencies(*, E, G, kappa, rho, A, I, L, bc, n_modes, shear=True,
         Mww = Zw.T @ (rho * A * gram(P, P)) @ Zw
         if rotary_inertia:
             K = np.block([[Kww, Kwp], [Kwp.T, Kpp]])
-            M = np.block([[Mww, np.zeros_like(Kwp)],
-                          [np.zeros_like(Kwp.T), Zp.T @ (rho * I * gram(P, P)) @ Zp]])
-        else:                                       # psi carries no inertia: condense it
+            M = np.block(
+                [
+                    [Mww, np.zeros_like(Kwp)],
+                    [np.zeros_like(Kwp.T), Zp.T @ (rho * I * gram(P, P)) @ Zp],
+                ]
+            )
+        else:  # psi carries no inertia: condense it
             K, M = Kww - Kwp @ np.linalg.solve(Kpp, Kwp.T), Mww
     lam = eigh(K, M, eigvals_only=True)
-    skip = 2 if bc == "free-free" else 0            # translation and rotation at 0 Hz
-    return np.sqrt(np.abs(lam[skip:skip + n_modes])) / (2.0 * np.pi)
+    skip = 2 if bc == "free-free" else 0  # translation and rotation at 0 Hz
+    return np.sqrt(np.abs(lam[skip : skip + n_modes])) / (2.0 * np.pi)
 
 
 def test_euler_roots_match_handbook_values():
-    quoted = {"free-free": [4.7300, 7.8532, 10.9956], "clamped-clamped": [4.7300, 7.8532, 10.9956],
-              "clamped-free": [1.8751, 4.6941, 7.8548], "pinned-pinned": [3.1416, 6.2832, 9.4248]}
+    quoted = {
+        "free-free": [4.7300, 7.8532, 10.9956],
+        "clamped-clamped": [4.7300, 7.8532, 10.9956],
+        "clamped-free": [1.8751, 4.6941, 7.8548],
+        "pinned-pinned": [3.1416, 6.2832, 9.4248],
+    }
     for bc, values in quoted.items():
         np.testing.assert_allclose(euler_beta_l(bc, 3), values, atol=6e-5)
 
@@ -130,8 +149,9 @@ def test_slender_limit_is_euler_bernoulli(bc):
     n = 4
     for slender, flags, tol in ((10.0, False, 1e-10), (1e5, True, 1e-6)):
         p = beam(slender)
-        f = timoshenko_frequencies(**p, bc=bc, n_modes=n, shear=flags, rotary_inertia=flags,
-                                   method="determinant")
+        f = timoshenko_frequencies(
+            **p, bc=bc, n_modes=n, shear=flags, rotary_inertia=flags, method="determinant"
+        )
         np.testing.assert_allclose(f, euler_frequencies(p, euler_beta_l(bc, n) ** 2), rtol=tol)
 
 
@@ -146,15 +166,24 @@ def test_first_order_shift_from_euler_modes(bc):
     x, wq = leg.leggauss(200)
     x, wq = 0.5 * (x + 1.0), 0.5 * wq
     beta = euler_beta_l(bc, n)
-    shift = timoshenko_frequencies(**p, bc=bc, n_modes=n, method="determinant") / \
-        euler_frequencies(p, beta**2) - 1.0
+    shift = (
+        timoshenko_frequencies(**p, bc=bc, n_modes=n, method="determinant")
+        / euler_frequencies(p, beta**2)
+        - 1.0
+    )
     r2 = 1.0 / slender**2
     for k in range(n):
         w, w1, w2, w3 = euler_mode_derivatives(bc, beta[k], x)
         integral = lambda g: np.sum(wq * g)
         assert integral(w2**2) / integral(w**2) == pytest.approx(beta[k] ** 4, rel=1e-9)
-        first_order = -0.5 * r2 * (integral(w1**2) / integral(w**2)
-                                   + E_OVER_KAPPA_G * integral(w3**2) / integral(w2**2))
+        first_order = (
+            -0.5
+            * r2
+            * (
+                integral(w1**2) / integral(w**2)
+                + E_OVER_KAPPA_G * integral(w3**2) / integral(w2**2)
+            )
+        )
         assert shift[k] == pytest.approx(first_order, rel=2e-3)
 
 
@@ -183,8 +212,9 @@ def test_rayleigh_limit(bc):
     ritz = ritz_frequencies(**p, bc=bc, n_modes=n, shear=False, degree=26)
     np.testing.assert_allclose(f, ritz, rtol=5e-9)
     stiff = dict(p, G=1e6 * p["G"])
-    np.testing.assert_allclose(timoshenko_frequencies(**stiff, bc=bc, n_modes=n,
-                                                      method="determinant"), f, rtol=1e-5)
+    np.testing.assert_allclose(
+        timoshenko_frequencies(**stiff, bc=bc, n_modes=n, method="determinant"), f, rtol=1e-5
+    )
     if bc == "pinned-pinned":
         k = np.pi * np.arange(1, n + 1)
         closed = k**2 / np.sqrt(1.0 + k**2 * p["I"] / (p["A"] * p["L"] ** 2))
@@ -196,15 +226,16 @@ def test_shear_beam_limit(bc):
     """Rotary inertia off: the shear beam (Ritz with psi condensed out, and for pinned ends
     Omega^2 = k^4 / (1 + k^2 E I / (kappa G A L^2)))."""
     n, p = 6, beam(8.0)
-    f = timoshenko_frequencies(**p, bc=bc, n_modes=n, rotary_inertia=False,
-                               method="determinant")
-    np.testing.assert_allclose(f, ritz_frequencies(**p, bc=bc, n_modes=n, rotary_inertia=False),
-                               rtol=1e-9)
+    f = timoshenko_frequencies(**p, bc=bc, n_modes=n, rotary_inertia=False, method="determinant")
+    np.testing.assert_allclose(
+        f, ritz_frequencies(**p, bc=bc, n_modes=n, rotary_inertia=False), rtol=1e-9
+    )
     if bc == "pinned-pinned":
         k = np.pi * np.arange(1, n + 1)
         a = p["E"] * p["I"] / (p["kappa"] * p["G"] * p["A"] * p["L"] ** 2)
-        np.testing.assert_allclose(f, euler_frequencies(p, k**2 / np.sqrt(1.0 + a * k**2)),
-                                   rtol=1e-12)
+        np.testing.assert_allclose(
+            f, euler_frequencies(p, k**2 / np.sqrt(1.0 + a * k**2)), rtol=1e-12
+        )
 
 
 @pytest.mark.parametrize("slender", [5.0, 8.2, 10.0, 30.0])
@@ -234,9 +265,19 @@ def test_thick_beam_matches_ritz(bc, slender):
     np.testing.assert_allclose(f, ritz_frequencies(**p, bc=bc, n_modes=8), rtol=1e-9)
 
 
-@pytest.mark.parametrize("field, value", [("E", 0.0), ("G", -1.0), ("kappa", np.nan),
-                                          ("rho", np.inf), ("L", -0.5), ("bc", "free-clamped"),
-                                          ("n_modes", 0), ("method", "fem")])
+@pytest.mark.parametrize(
+    "field, value",
+    [
+        ("E", 0.0),
+        ("G", -1.0),
+        ("kappa", np.nan),
+        ("rho", np.inf),
+        ("L", -0.5),
+        ("bc", "free-clamped"),
+        ("n_modes", 0),
+        ("method", "fem"),
+    ],
+)
 def test_bad_input_names_the_argument(field, value):
     kwargs = dict(beam(20.0), bc="free-free", n_modes=3)
     kwargs[field] = value

@@ -4,6 +4,7 @@ Independent routes: Exudyn's own finite-difference Jacobian of the host against 
 host hands it; the solver's counters (Jacobians, step cuts, Newton iterations) of ring-downs
 at the top of each preset's amplitude range.
 """
+
 from __future__ import annotations
 
 import exudyn as exu

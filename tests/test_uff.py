@@ -4,6 +4,7 @@ The UFF files are written by pyuff itself (an independent writer) in a temporary
 and read back; the signals are analytic (a decaying sinusoid, a single-mode FRF), so what
 is read is checked against the values written, scaled by the units' definitions.
 """
+
 import math
 from pathlib import Path
 
@@ -35,24 +36,48 @@ def _write(path, sets):
 
 def _time_set(t, y, unit, spec=12, xunit="s"):
     return pyuff.prepare_58(
-        func_type=1, id1="ringdown acc3", rsp_node=3, rsp_dir=2, ref_node=3, ref_dir=2,
-        data=y, x=t, abscissa_axis_units_lab=xunit, abscissa_spec_data_type=17,
-        ordinate_axis_units_lab=unit, ordinate_spec_data_type=spec,
-        orddenom_axis_units_lab="NONE", orddenom_spec_data_type=0, binary=0)
+        func_type=1,
+        id1="ringdown acc3",
+        rsp_node=3,
+        rsp_dir=2,
+        ref_node=3,
+        ref_dir=2,
+        data=y,
+        x=t,
+        abscissa_axis_units_lab=xunit,
+        abscissa_spec_data_type=17,
+        ordinate_axis_units_lab=unit,
+        ordinate_spec_data_type=spec,
+        orddenom_axis_units_lab="NONE",
+        orddenom_spec_data_type=0,
+        binary=0,
+    )
 
 
 def _frf_set(f, H, num, den, spec=12, xunit="Hz"):
     return pyuff.prepare_58(
-        func_type=4, id1="frf 3:+Y/3:+Y", rsp_node=3, rsp_dir=2, ref_node=3, ref_dir=2,
-        data=H, x=f, abscissa_axis_units_lab=xunit, abscissa_spec_data_type=18,
-        ordinate_axis_units_lab=num, ordinate_spec_data_type=spec,
-        orddenom_axis_units_lab=den, orddenom_spec_data_type=13, binary=0)
+        func_type=4,
+        id1="frf 3:+Y/3:+Y",
+        rsp_node=3,
+        rsp_dir=2,
+        ref_node=3,
+        ref_dir=2,
+        data=H,
+        x=f,
+        abscissa_axis_units_lab=xunit,
+        abscissa_spec_data_type=18,
+        ordinate_axis_units_lab=num,
+        ordinate_spec_data_type=spec,
+        orddenom_axis_units_lab=den,
+        orddenom_spec_data_type=13,
+        binary=0,
+    )
 
 
 def _ringdown(fs=2000.0, T=4.0, f0=40.0, zeta=0.004, a0=50.0):
     t = np.arange(int(fs * T)) / fs
     w = 2 * math.pi * f0
-    return t, a0 * np.exp(-zeta * w * t) * np.cos(w * math.sqrt(1 - zeta ** 2) * t)
+    return t, a0 * np.exp(-zeta * w * t) * np.cos(w * math.sqrt(1 - zeta**2) * t)
 
 
 def test_time_series_in_g_is_read_in_si_and_feeds_amplitude_curve(tmp_path):
@@ -71,10 +96,12 @@ def test_time_series_in_g_is_read_in_si_and_feeds_amplitude_curve(tmp_path):
 def test_frf_in_mm_s2_per_kN_feeds_stepped_sine_curve(tmp_path):
     f = np.linspace(45.0, 55.0, 41)
     w, wr, zeta, c = 2 * np.pi * f, 2 * np.pi * 50.0, 0.01, 0.5
-    H_si = -w ** 2 * c / (wr ** 2 - w ** 2 + 2j * zeta * wr * wr)      # [m/s^2/N]
-    path = _write(tmp_path / "frf.uff", [_frf_set(f, H_si * 1e3 * 1e3, "mm/s^2", "kN"),
-                                         _time_set(*_ringdown(), "m/s^2")])
-    frf, = read_uff(path, kind="frf")
+    H_si = -(w**2) * c / (wr**2 - w**2 + 2j * zeta * wr * wr)  # [m/s^2/N]
+    path = _write(
+        tmp_path / "frf.uff",
+        [_frf_set(f, H_si * 1e3 * 1e3, "mm/s^2", "kN"), _time_set(*_ringdown(), "m/s^2")],
+    )
+    (frf,) = read_uff(path, kind="frf")
     assert frf.quantity == "acceleration" and frf.units == "Hz; mm/s^2; kN"
     np.testing.assert_allclose(frf.y, H_si, rtol=1e-6)
     curve = stepped_sine_curve([(frf.x, frf.y, 1.0)], quantity=frf.quantity)
@@ -88,7 +115,7 @@ def test_frf_with_unit_in_one_label_and_rad_s_abscissa(tmp_path):
     H = 1e-3 / (1 + 1j * (f - 50.0))
     path = _write(tmp_path / "frf.uff", [_frf_set(2 * np.pi * f, H / G, "g/N", "", xunit="rad/s")])
     (r,) = read_uff(path)
-    np.testing.assert_allclose(r.x, f, rtol=1e-5)          # pyuff writes 6 digits
+    np.testing.assert_allclose(r.x, f, rtol=1e-5)  # pyuff writes 6 digits
     np.testing.assert_allclose(r.y, H, rtol=1e-6)
 
 
@@ -113,8 +140,8 @@ def _sweep_rows():
     f = np.tile(np.linspace(48.0, 52.0, 17), 2)
     lev = np.repeat([1, 2], 17)
     w, wr = 2 * np.pi * f, 2 * np.pi * 50.0 * (1 - 0.004 * (lev - 1))
-    F = lev * (1 - 0.3 * np.exp(-(f - 50.0) ** 2))
-    H = -w ** 2 * 0.5 / (wr ** 2 - w ** 2 + 2j * 0.01 * (1 + 0.3 * (lev - 1)) * wr * w)
+    F = lev * (1 - 0.3 * np.exp(-((f - 50.0) ** 2)))
+    H = -(w**2) * 0.5 / (wr**2 - w**2 + 2j * 0.01 * (1 + 0.3 * (lev - 1)) * wr * w)
     return lev, f, F, np.abs(H) * F, np.angle(H)
 
 
@@ -124,7 +151,8 @@ def test_sweep_csv_columns_found_by_unit_and_converted(tmp_path):
     rows = ["phase [deg],F [kN],sweep,A [mm/s^2],f [rad/s]"] + [
         f"{float(math.degrees(a))!r},{float(b / 1e3)!r},{int(c)},{float(d * 1e3)!r},"
         f"{float(2 * math.pi * e)!r}"
-        for a, b, c, d, e in zip(ph, F, lev, A, f)]
+        for a, b, c, d, e in zip(ph, F, lev, A, f)
+    ]
     p.write_text("\n".join(rows) + "\n")
     d = read_sweep_csv(p)
     assert d["quantity"] == "acceleration"
@@ -150,8 +178,10 @@ def test_sweep_csv_bad_headers(tmp_path):
         read_sweep_csv(p)
 
 
-@pytest.mark.skipif(not (SHARED / "fc_sweeps.csv").is_file(),
-                    reason="GPL-3.0 BRB sweeps are read from ../shared only; not present here")
+@pytest.mark.skipif(
+    not (SHARED / "fc_sweeps.csv").is_file(),
+    reason="GPL-3.0 BRB sweeps are read from ../shared only; not present here",
+)
 def test_shared_brb_sweep_file_reads_by_its_header():
     d = read_sweep_csv(SHARED / "fc_sweeps.csv")
     assert d["quantity"] == "acceleration" and d["f"].size == 164
@@ -162,8 +192,11 @@ def test_shared_brb_sweep_file_reads_by_its_header():
 def test_a_kind_the_file_does_not_hold_is_refused_not_an_empty_list(tmp_path):
     """Issue 34: read_uff(kind="frf") on a file of time series returned [] with no word."""
     path = _write(tmp_path / "ringdown.uff", [_time_set(*_ringdown(), "m/s^2")])
-    with pytest.raises(ValueError, match=r"no dataset 58 of kind='frf'.*1 record\(s\) of kind "
-                                         r"\['time'\]"):
+    with pytest.raises(
+        ValueError,
+        match=r"no dataset 58 of kind='frf'.*1 record\(s\) of kind "
+        r"\['time'\]",
+    ):
         read_uff(path, kind="frf")
     assert len(read_uff(path, kind="time")) == 1
 

@@ -5,6 +5,7 @@ scipy quadrature of the Masing loop and by its microslip Gamma-function form; a 
 integration of the oscillator with the exact IwanJoint against the closed forms; analytic
 decaying sinusoids; harmonic-balance FRFs.
 """
+
 import math
 from pathlib import Path
 
@@ -74,11 +75,13 @@ def _harmonic_by_quad(Q, p):
     def F(th):
         u = Q * math.cos(th)
         return (backbone(Q, p) - 2 * backbone(0.5 * (Q - u), p)) * math.cos(th)
+
     return 2 / math.pi * integrate.quad(F, 0, math.pi, limit=200, epsabs=0)[0] / Q
 
 
-@pytest.mark.parametrize("p", [P_MODAL, IwanParameters(3.0, 2.0, -0.1, 0.1),
-                               IwanParameters(1.0, 1.0, -0.8, 0.0)])
+@pytest.mark.parametrize(
+    "p", [P_MODAL, IwanParameters(3.0, 2.0, -0.1, 0.1), IwanParameters(1.0, 1.0, -0.8, 0.0)]
+)
 def test_harmonic_stiffness_against_quadrature_and_gamma_form(p):
     r = np.array([1e-3, 0.1, 0.7, 1.0, 1.3, 3.0])
     k = harmonic_stiffness(r * p.phi_max, p)
@@ -108,6 +111,7 @@ def test_ringdown_energy_balance():
     stays at its initial value (joint work from a separate IwanJoint fed the sampled path,
     sampled finely so that missed turning points cost little)."""
     from iwan_element import IwanJoint
+
     p, k_inf = _modal_joint()
     t = np.arange(0.0, 3.0, 1 / 8000.0)
     q, v, a = modal_ringdown(t, p, K_inf=k_inf, q0=0.6e-3, zeta0=2e-3)
@@ -118,11 +122,11 @@ def test_ringdown_energy_balance():
         j.commit()
         W[i] = j.work
     c = 2 * 2e-3 * math.sqrt(k_inf + p.KT)
-    dash = np.concatenate([[0.0], integrate.cumulative_trapezoid(c * v ** 2, t)])
-    E = 0.5 * v ** 2 + 0.5 * k_inf * q ** 2 + W + dash
+    dash = np.concatenate([[0.0], integrate.cumulative_trapezoid(c * v**2, t)])
+    E = 0.5 * v**2 + 0.5 * k_inf * q**2 + W + dash
     lost = dash[-1] + j.dissipated_energy
-    assert lost > 0.5 * E[0]                              # it rang down
-    assert j.dissipated_energy > 0.3 * lost               # the joint took a share
+    assert lost > 0.5 * E[0]  # it rang down
+    assert j.dissipated_energy > 0.3 * lost  # the joint took a share
     assert np.max(np.abs(E - E[0])) < 1e-3 * lost
     # and the acceleration is the force balance
     F = np.array([IwanJoint(p).trial(x)[0] for x in q[:1]])
@@ -135,6 +139,7 @@ def _peak_decrement(p, k_inf, q0, zeta0, fs=40000.0, duration=16.0):
     transform; the amplitude of each cycle is half its peak-to-peak (which ignores the slow
     offset that slip leaves), sigma = -d ln X / dt and w_d = 2 pi / (time between maxima)."""
     from scipy import signal as sps
+
     t = np.arange(0.0, duration, 1 / fs)
     q, _, _ = modal_ringdown(t, p, K_inf=k_inf, q0=q0, zeta0=zeta0)
     imax, imin = sps.find_peaks(q)[0], sps.find_peaks(-q)[0]
@@ -162,8 +167,9 @@ def test_ringdown_curve_matches_harmonic_closed_form(ringdown):
     cur = amplitude_curve(t, a, quantity="acceleration", band=(12.0, 30.0))
     assert cur.method == "hilbert" and len(cur) >= 8
     assert "trimmed" in cur.notes
-    f_h, z_h = modal_iwan_curve(cur.amplitude, p, K_inf=k_inf, zeta0=2e-3,
-                                stiffness="harmonic", floor="dashpot")
+    f_h, z_h = modal_iwan_curve(
+        cur.amplitude, p, K_inf=k_inf, zeta0=2e-3, stiffness="harmonic", floor="dashpot"
+    )
     f_s, _ = modal_iwan_curve(cur.amplitude, p, K_inf=k_inf, zeta0=2e-3, floor="dashpot")
     big = cur.amplitude > 2e-6
     err_h = np.abs(cur.frequency / f_h - 1)[big]
@@ -196,7 +202,7 @@ def test_ringdown_curve_matches_harmonic_closed_form(ringdown):
 
 def _decay(t, f, zeta, X, phase=0.3):
     wn = 2 * math.pi * f
-    wd = wn * math.sqrt(1 - zeta ** 2)
+    wd = wn * math.sqrt(1 - zeta**2)
     return X * np.exp(-zeta * wn * t) * np.cos(wd * t + phase)
 
 
@@ -206,8 +212,9 @@ def test_linear_decay_with_noise_and_second_mode():
     t = np.arange(0.0, 8.0, 1 / fs)
     x = _decay(t, 50.0, 0.004, 1e-3) + _decay(t, 80.0, 0.002, 1e-3, 1.0)
     y = x + 0.01 * 1e-3 * rng.standard_normal(t.size)
-    cur = amplitude_curve(t, y, quantity="displacement", band=(38.0, 64.0),
-                          max_damping_ratio_std=0.05)
+    cur = amplitude_curve(
+        t, y, quantity="displacement", band=(38.0, 64.0), max_damping_ratio_std=0.05
+    )
     assert len(cur) >= 4
     np.testing.assert_allclose(cur.frequency[:2], 50.0, rtol=1e-4)
     np.testing.assert_allclose(cur.damping_ratio[:2], 0.004, rtol=0.03)
@@ -223,8 +230,9 @@ def test_linear_decay_with_noise_and_second_mode():
     # max_damping_ratio_std drops the later ones, and says how many in a warning (behaviour
     # changed with the free-decay work: it used to be the default and said so only in notes)
     full = amplitude_curve(t, y, quantity="displacement", band=(38.0, 64.0))
-    strict = amplitude_curve(t, y, quantity="displacement", band=(38.0, 64.0),
-                             max_damping_ratio_std=0.01)
+    strict = amplitude_curve(
+        t, y, quantity="displacement", band=(38.0, 64.0), max_damping_ratio_std=0.01
+    )
     assert len(strict) < len(full) and strict.noise_floor == full.noise_floor
     assert len(strict) >= 3
     dropped = [w for w in strict.warnings if "max_damping_ratio_std=0.01" in w]
@@ -233,10 +241,11 @@ def test_linear_decay_with_noise_and_second_mode():
     assert "noise threshold" in full.notes and "last point at" in full.notes
     # stated uncertainties are of the size of the scatter
     z = (cur.frequency - 50.0) / cur.frequency_std
-    assert 0.2 < np.sqrt(np.mean(z ** 2)) < 3.0
+    assert 0.2 < np.sqrt(np.mean(z**2)) < 3.0
     # the other band picks the other mode
-    c2 = amplitude_curve(t, y, quantity="displacement", band=(66.0, 100.0),
-                         max_damping_ratio_std=0.05)
+    c2 = amplitude_curve(
+        t, y, quantity="displacement", band=(66.0, 100.0), max_damping_ratio_std=0.05
+    )
     np.testing.assert_allclose(c2.frequency[:2], 80.0, rtol=1e-4)
 
 
@@ -251,7 +260,7 @@ def test_amplitude_curve_input_errors():
     with pytest.raises(ValueError, match="strictly increasing"):
         amplitude_curve(bad_t, y, band=(30, 50))
     with pytest.raises(ValueError, match="uniformly sampled"):
-        amplitude_curve(t ** 1.1, y, band=(30, 50))
+        amplitude_curve(t**1.1, y, band=(30, 50))
     with pytest.raises(ValueError, match="Nyquist"):
         amplitude_curve(t, y, band=(30, 600))
     with pytest.raises(ValueError, match="band"):
@@ -262,9 +271,10 @@ def test_amplitude_curve_input_errors():
         amplitude_curve(t[:20], y[:20], band=(30, 50))
     with pytest.raises(ValueError, match="same length"):
         amplitude_curve(t[:-1], y, band=(30, 50))
-    with pytest.raises(ValueError, match="no clear mode"):      # noise only in this band
-        amplitude_curve(t, y + 1e-3 * np.random.default_rng(0).standard_normal(t.size),
-                        band=(100, 200))
+    with pytest.raises(ValueError, match="no clear mode"):  # noise only in this band
+        amplitude_curve(
+            t, y + 1e-3 * np.random.default_rng(0).standard_normal(t.size), band=(100, 200)
+        )
     two = y + _decay(t, 45.0, 0.005, 0.8)
     with pytest.raises(ValueError, match="more than one mode"):
         amplitude_curve(t, two, band=(30, 60))
@@ -279,16 +289,19 @@ def test_jittered_time_stamps_are_accepted():
     """Time written with few digits (as in the BRB files) jitters by < 5 % of a step."""
     fs = 1000.0
     t = np.round(np.arange(0.0, 4.0, 1 / fs) + 1e-4, 4)
-    cur = amplitude_curve(t, _decay(t, 40.0, 0.005, 1.0), quantity="displacement",
-                          band=(30, 50))
+    cur = amplitude_curve(t, _decay(t, 40.0, 0.005, 1.0), quantity="displacement", band=(30, 50))
     np.testing.assert_allclose(cur.frequency, 40.0, rtol=1e-4)
 
 
 # ---------------------------------------------------------------- stepped sine
 def _dyn(X, w, p, k_inf, z0, w0):
     """Harmonic-balance dynamic stiffness of the unit-mass modal Iwan oscillator."""
-    return (k_inf + harmonic_stiffness(X, p) - w ** 2
-            + 1j * (2 * z0 * w0 * w + dissipation(X, p) / (math.pi * X ** 2)))
+    return (
+        k_inf
+        + harmonic_stiffness(X, p)
+        - w**2
+        + 1j * (2 * z0 * w0 * w + dissipation(X, p) / (math.pi * X**2))
+    )
 
 
 def test_stepped_sine_response_controlled_iwan():
@@ -297,15 +310,15 @@ def test_stepped_sine_response_controlled_iwan():
     Xs = np.array([0.01, 0.1, 0.5, 1.0]) * p.phi_max
     levels = []
     for X in Xs:
-        fr, zr = modal_iwan_curve(X, p, K_inf=k_inf, zeta0=1e-3, stiffness="harmonic",
-                                  floor="dashpot")
+        fr, zr = modal_iwan_curve(
+            X, p, K_inf=k_inf, zeta0=1e-3, stiffness="harmonic", floor="dashpot"
+        )
         f = fr * np.linspace(1 - 4 * zr, 1 + 4 * zr, 41)
         w = 2 * math.pi * f
-        H = -w ** 2 / _dyn(X, w, p, k_inf, 1e-3, w0)          # accelerance
-        levels.append((f, H, X * (2 * math.pi * fr) ** 2))    # held acceleration amplitude
+        H = -(w**2) / _dyn(X, w, p, k_inf, 1e-3, w0)  # accelerance
+        levels.append((f, H, X * (2 * math.pi * fr) ** 2))  # held acceleration amplitude
     cur = stepped_sine_curve(levels, quantity="acceleration", control="response")
-    ft, zt = modal_iwan_curve(Xs, p, K_inf=k_inf, zeta0=1e-3, stiffness="harmonic",
-                              floor="dashpot")
+    ft, zt = modal_iwan_curve(Xs, p, K_inf=k_inf, zeta0=1e-3, stiffness="harmonic", floor="dashpot")
     np.testing.assert_allclose(cur.amplitude, Xs, rtol=1e-4)
     np.testing.assert_allclose(cur.frequency, ft, rtol=5e-5)
     np.testing.assert_allclose(cur.damping_ratio, zt, rtol=2e-3)
@@ -322,18 +335,25 @@ def test_stepped_sine_force_controlled_iwan():
         f = np.linspace(44.0, 52.0, 81)
         H = []
         for wi in 2 * math.pi * f:
+
             def g(X):
                 return np.abs(_dyn(X, wi, p, k_inf, 1e-3, w0)) * X - F
-            gg = np.abs(k_inf + k_grid - wi ** 2 + 1j * (2e-3 * w0 * wi + d_grid / (
-                math.pi * grid ** 2))) * grid - F
-            i = int(np.flatnonzero(np.diff(np.sign(gg)) != 0)[0])    # the lower branch
-            X = optimize.brentq(lambda x: float(g(x)), grid[i], grid[i + 1], xtol=1e-16,
-                                rtol=1e-14)
+
+            gg = (
+                np.abs(
+                    k_inf + k_grid - wi**2 + 1j * (2e-3 * w0 * wi + d_grid / (math.pi * grid**2))
+                )
+                * grid
+                - F
+            )
+            i = int(np.flatnonzero(np.diff(np.sign(gg)) != 0)[0])  # the lower branch
+            X = optimize.brentq(lambda x: float(g(x)), grid[i], grid[i + 1], xtol=1e-16, rtol=1e-14)
             H.append(1 / _dyn(X, wi, p, k_inf, 1e-3, w0))
         levels.append((f, np.array(H), F))
     cur = stepped_sine_curve(levels, control="force", modal_constant=1.0)
-    ft, zt = modal_iwan_curve(cur.amplitude, p, K_inf=k_inf, zeta0=1e-3, stiffness="harmonic",
-                              floor="dashpot")
+    ft, zt = modal_iwan_curve(
+        cur.amplitude, p, K_inf=k_inf, zeta0=1e-3, stiffness="harmonic", floor="dashpot"
+    )
     assert cur.amplitude.max() > 0.5 * p.phi_max
     np.testing.assert_allclose(cur.frequency, ft, rtol=1e-9)
     np.testing.assert_allclose(cur.damping_ratio, zt, rtol=1e-3)
@@ -346,7 +366,7 @@ def test_stepped_sine_linear_and_errors():
     wn, zeta = 2 * math.pi * 30.0, 0.01
     f = np.linspace(27, 33, 61)
     w = 2 * math.pi * f
-    H = 2.0 / (wn ** 2 - w ** 2 + 2j * zeta * wn * w) + 1e-7
+    H = 2.0 / (wn**2 - w**2 + 2j * zeta * wn * w) + 1e-7
     levels = [(f, 1j * w * H, F) for F in (1.0, 2.0, 4.0)]
     cur = stepped_sine_curve(levels, quantity="velocity", control="force")
     np.testing.assert_allclose(cur.frequency, 30.0, rtol=1e-4)
@@ -354,7 +374,7 @@ def test_stepped_sine_linear_and_errors():
     np.testing.assert_allclose(cur.amplitude / [1, 2, 4], cur.amplitude[0], rtol=1e-9)
     with pytest.raises(ValueError, match="no resonance peak"):
         fl = np.linspace(5, 10, 30)
-        stepped_sine_curve([(fl, 1 / (wn ** 2 - (2 * math.pi * fl) ** 2 + 0j), 1.0)])
+        stepped_sine_curve([(fl, 1 / (wn**2 - (2 * math.pi * fl) ** 2 + 0j), 1.0)])
     with pytest.raises(ValueError, match="levels\\[0\\]"):
         stepped_sine_curve([(f, H[:-1], 1.0)])
     with pytest.raises(ValueError, match="control"):
@@ -365,8 +385,11 @@ def test_stepped_sine_linear_and_errors():
 
 # ---------------------------------------------------------------- real ring-down
 BRB = brb_file()
-needs_brb = pytest.mark.skipif(BRB is None, reason="../shared/data/brb-hammer is absent "
-                               "(GPL-3.0 data, read from ../shared only, never copied)")
+needs_brb = pytest.mark.skipif(
+    BRB is None,
+    reason="../shared/data/brb-hammer is absent "
+    "(GPL-3.0 data, read from ../shared only, never copied)",
+)
 
 
 @needs_brb
@@ -375,14 +398,18 @@ def test_brb_hammer_curve_matches_published_table():
     d = np.loadtxt(BRB, delimiter=",", skiprows=1)
     cur = amplitude_curve(d[:, 0], d[:, 1], quantity="acceleration", band=(60.0, 120.0))
     s = cur.sorted()
-    table = {50e-6: (80.431, 0.212e-2), 20e-6: (80.470, 0.175e-2), 10e-6: (80.512, 0.158e-2),
-             5e-6: (80.549, 0.147e-2), 2e-6: (80.591, 0.139e-2)}
+    table = {
+        50e-6: (80.431, 0.212e-2),
+        20e-6: (80.470, 0.175e-2),
+        10e-6: (80.512, 0.158e-2),
+        5e-6: (80.549, 0.147e-2),
+        2e-6: (80.591, 0.139e-2),
+    }
     for X, (f, z) in table.items():
         fi = np.interp(np.log(X), np.log(s.amplitude), s.frequency)
         zi = np.interp(np.log(X), np.log(s.amplitude), s.damping_ratio)
         assert fi == pytest.approx(f, abs=0.006)
         assert zi == pytest.approx(z, abs=0.006e-2)
-
 
 
 @needs_brb
@@ -405,17 +432,25 @@ def test_brb_hammer_curve_without_pretrigger():
         s = full.sorted()
         inside = (cur.amplitude > s.amplitude[0]) & (cur.amplitude < s.amplitude[-1])
         zi = np.interp(np.log(cur.amplitude[inside]), np.log(s.amplitude), s.damping_ratio)
-        assert np.all(np.abs(cur.damping_ratio[inside] - zi)
-                      < 4 * np.hypot(cur.damping_ratio_std[inside], np.median(s.damping_ratio_std)) + 2e-5)
+        assert np.all(
+            np.abs(cur.damping_ratio[inside] - zi)
+            < 4 * np.hypot(cur.damping_ratio_std[inside], np.median(s.damping_ratio_std)) + 2e-5
+        )
+
 
 def test_ringdown_example_runs(tmp_path):
     import os
     import subprocess
     import sys
+
     root = Path(__file__).resolve().parents[1]
-    proc = subprocess.run([sys.executable, str(root / "examples" / "ringdown.py"), "--quick",
-                           "--out", str(tmp_path)], capture_output=True, text=True, timeout=300,
-                          env={**os.environ, "MPLBACKEND": "Agg"})
+    proc = subprocess.run(
+        [sys.executable, str(root / "examples" / "ringdown.py"), "--quick", "--out", str(tmp_path)],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        env={**os.environ, "MPLBACKEND": "Agg"},
+    )
     assert proc.returncode == 0, proc.stderr
     assert (tmp_path / "ringdown_synthetic.png").stat().st_size > 10_000
     if BRB is not None:
@@ -430,13 +465,18 @@ def _ringdown_with_other_modes(ringdown, pre):
     frequency) and white noise, optionally after ``pre`` seconds of pre-trigger (noise only).
     Returns t, y and the in-band RMS of the noise alone (through the analysis's band-pass)."""
     from scipy import signal
+
     p, k_inf, t, q, v, a = ringdown
     fs = 1.0 / (t[1] - t[0])
     rng = np.random.default_rng(7)
     y = a.copy()
     for ratio, zeta, phase in ((0.6, 0.02, 0.4), (2.5, 0.01, 1.1)):
-        y += 2.0 * np.abs(a).max() * np.exp(-zeta * 2 * np.pi * 20 * ratio * t) * np.cos(
-            2 * np.pi * 20 * ratio * t + phase)
+        y += (
+            2.0
+            * np.abs(a).max()
+            * np.exp(-zeta * 2 * np.pi * 20 * ratio * t)
+            * np.cos(2 * np.pi * 20 * ratio * t + phase)
+        )
     n_pre = int(round(pre * fs))
     y = np.concatenate([np.zeros(n_pre), y])
     noise = NOISE_STD * rng.standard_normal(y.size)
@@ -446,7 +486,7 @@ def _ringdown_with_other_modes(ringdown, pre):
 
 
 BAND_IWAN = (15.0, 27.0)
-NOISE_STD = 0.003     # m/s^2: far below the out-of-band modes, as on a hammer test
+NOISE_STD = 0.003  # m/s^2: far below the out-of-band modes, as on a hammer test
 
 
 def test_noise_floor_needs_no_pretrigger_and_ignores_other_modes(ringdown):
@@ -462,7 +502,7 @@ def test_noise_floor_needs_no_pretrigger_and_ignores_other_modes(ringdown):
         assert "noise floor" in cur.notes and "stopped" in cur.notes
         curves.append(cur)
     a, b = curves
-    step = np.max(a.amplitude[:-1] / a.amplitude[1:])        # the decay over one window
+    step = np.max(a.amplitude[:-1] / a.amplitude[1:])  # the decay over one window
     for f in (np.max, np.min):
         assert abs(math.log(f(a.amplitude) / f(b.amplitude))) <= math.log(step) * 1.01
     assert abs(len(a) - len(b)) <= 1

@@ -1,6 +1,7 @@
 """diagnose_vibration on seeded curves with a hidden vibration effect (truth from the
 time-domain elements, tests/_vibration_cases.py), clean curves, AmplitudeCurve input,
 candidates from the effects' declarations, and an unexplained mismatch located."""
+
 from __future__ import annotations
 
 import math
@@ -17,7 +18,7 @@ from iwan_element.effects import EFFECTS, ParamSpec, register_effect
 from iwan_element.effects.base import Effect
 
 X = np.geomspace(0.02, 1.5, 30) * vc.BASE.phi_max
-NOISE = float(np.sqrt(0.5 * (vc.F_NOISE ** 2 + vc.Z_NOISE ** 2)))
+NOISE = float(np.sqrt(0.5 * (vc.F_NOISE**2 + vc.Z_NOISE**2)))
 
 
 @pytest.fixture(scope="module")
@@ -28,12 +29,17 @@ def base():
 def _diag(case, stated=True):
     Xc, fm, zm, fp, zp, _ = case
     std = dict(frequency_std=vc.F_NOISE * fm, damping_ratio_std=vc.Z_NOISE * zm) if stated else {}
-    return diagnose_vibration(AmplitudeCurve(Xc, fm, zm, **std), predicted_frequency=fp,
-                              predicted_damping_ratio=zp, predicted_zeta0=vc.ZETA0)
+    return diagnose_vibration(
+        AmplitudeCurve(Xc, fm, zm, **std),
+        predicted_frequency=fp,
+        predicted_damping_ratio=zp,
+        predicted_zeta0=vc.ZETA0,
+    )
 
 
-@pytest.mark.parametrize("name", ["hardening", "macroslip_onset", "pinning_stiffness",
-                                  "viscous_damping"])
+@pytest.mark.parametrize(
+    "name", ["hardening", "macroslip_onset", "pinning_stiffness", "viscous_damping"]
+)
 @pytest.mark.parametrize("size", [0.5, 3.0])
 def test_hidden_effect_is_named_and_the_gap_closes_to_the_noise(base, name, size):
     for seed in (1, 2):
@@ -41,8 +47,11 @@ def test_hidden_effect_is_named_and_the_gap_closes_to_the_noise(base, name, size
         g = _diag(case)
         # at half the noticeable size a dead-zone spring and a cubic one can look alike: the
         # other stiffness effect may lead if the hidden one is reported as nearly as good
-        assert g.effect == name or (name in g.ambiguous_with and g.effect != "none" and
-                                    EFFECTS[g.effect].kind == EFFECTS[name].kind), g.report()
+        assert g.effect == name or (
+            name in g.ambiguous_with
+            and g.effect != "none"
+            and EFFECTS[g.effect].kind == EFFECTS[name].kind
+        ), g.report()
         assert g.error_after <= 1.3 * NOISE, g.report()
         assert g.details["misfit_p_after"] >= g.details["alpha"]
 
@@ -52,14 +61,22 @@ def test_hidden_hardening_sized_like_the_issue_is_named_and_sized(base):
     issue's case that named nothing), noise estimated from the curves' own scatter."""
     for seed, size in ((3, 0.4), (4, 0.9)):
         case = vc.seeded_case(seed, "hardening", size, P=vc.BASE, X=X, base=base)
-        rise = np.sqrt(1 + 0.75 * case[5]["k3_per_mass"] * X.max() ** 2
-                       / (2 * np.pi * case[3][-1]) ** 2) - 1
+        rise = (
+            np.sqrt(
+                1 + 0.75 * case[5]["k3_per_mass"] * X.max() ** 2 / (2 * np.pi * case[3][-1]) ** 2
+            )
+            - 1
+        )
         assert 6e-4 <= rise <= 1.5e-3
         g = _diag(case, stated=False)
         assert g.effect == "hardening", g.report()
         assert g.parameters["hardening"]["k3_per_mass"] == pytest.approx(
-            case[5]["k3_per_mass"], rel=0.35)
-        assert "measured frequency beyond 3 x noise of the prediction: above it from" in g.where.lower()
+            case[5]["k3_per_mass"], rel=0.35
+        )
+        assert (
+            "measured frequency beyond 3 x noise of the prediction: above it from"
+            in g.where.lower()
+        )
         assert "below it" not in g.where.split(";")[0]
 
 
@@ -92,8 +109,17 @@ def test_candidates_come_from_the_effects_declarations():
         effect = "probe_floor"
         kind = "dissipation"
         specs = (ParamSpec("c", "N s/m", "probe"),)
-        modal_specs = (ParamSpec("zeta_x", "1", "probe", ref="zeta_ref", ref_power=-1,
-                                 fit_bounds=(0.0, 10.0), fit_starts=(0.0, 1.0)),)
+        modal_specs = (
+            ParamSpec(
+                "zeta_x",
+                "1",
+                "probe",
+                ref="zeta_ref",
+                ref_power=-1,
+                fit_bounds=(0.0, 10.0),
+                fit_starts=(0.0, 1.0),
+            ),
+        )
 
         @classmethod
         def modal_form(cls, X, frequency, damping, zeta0, *, zeta_x):
@@ -111,11 +137,15 @@ def test_unexplained_mismatch_is_stated_with_its_amplitudes(base):
     warning says so and names the amplitudes."""
     Xc, fm, zm, fp, zp, _ = vc.seeded_case(6, None, 0.0, P=vc.BASE, X=X, base=base)
     mid = np.exp(np.mean(np.log(X)))
-    dip = 1.0 - 2e-3 * np.exp(-(np.log(X / mid) / 0.3) ** 2)
-    g = diagnose_vibration(AmplitudeCurve(Xc, fm * dip, zm, frequency_std=vc.F_NOISE * fm,
-                                          damping_ratio_std=vc.Z_NOISE * zm),
-                           predicted_frequency=fp, predicted_damping_ratio=zp,
-                           predicted_zeta0=vc.ZETA0)
+    dip = 1.0 - 2e-3 * np.exp(-((np.log(X / mid) / 0.3) ** 2))
+    g = diagnose_vibration(
+        AmplitudeCurve(
+            Xc, fm * dip, zm, frequency_std=vc.F_NOISE * fm, damping_ratio_std=vc.Z_NOISE * zm
+        ),
+        predicted_frequency=fp,
+        predicted_damping_ratio=zp,
+        predicted_zeta0=vc.ZETA0,
+    )
     w = [x for x in g.warnings if "remains" in x]
     assert w, g.report()
     assert "frequency off by up to" in w[0] and " m" in w[0]
@@ -147,20 +177,22 @@ def test_augmented_specimen_carries_the_effect_and_its_qsma_is_the_fit():
     augmented specimen's own QSMA reproduces the diagnosis's curve, and the specimen warns
     beyond the amplitudes it was calibrated on."""
     from iwan_element import models
+
     spec = models.preset("brake-reuss")
     Xm = np.geomspace(5e-6, 2.75e-4, 30)
-    k3 = 4e-3 * (2 * np.pi * 80.5) ** 2 / Xm.max() ** 2        # ~0.15 % rise at the top
+    k3 = 4e-3 * (2 * np.pi * 80.5) ** 2 / Xm.max() ** 2  # ~0.15 % rise at the top
     truth = spec.with_effects({"hardening": {"k3_per_mass": k3}})
     pred = models.modal_amplitude_curve(spec.replace(calibrated_range=None), amplitude=Xm)
     meas = models.modal_amplitude_curve(truth.replace(calibrated_range=None), amplitude=Xm)
     rng = np.random.default_rng(3)
     fm = meas.frequency * np.exp(1e-4 * rng.normal(size=Xm.size))
     zm = meas.damping_ratio * np.exp(0.03 * rng.normal(size=Xm.size))
-    g = diagnose_vibration(AmplitudeCurve(Xm, fm, zm, frequency_std=1e-4 * fm,
-                                          damping_ratio_std=0.03 * zm),
-                           predicted_frequency=pred.frequency,
-                           predicted_damping_ratio=pred.damping_ratio,
-                           predicted_zeta0=spec.interface.damping_floor)
+    g = diagnose_vibration(
+        AmplitudeCurve(Xm, fm, zm, frequency_std=1e-4 * fm, damping_ratio_std=0.03 * zm),
+        predicted_frequency=pred.frequency,
+        predicted_damping_ratio=pred.damping_ratio,
+        predicted_zeta0=spec.interface.damping_floor,
+    )
     assert g.effect == "hardening", g.report()
     assert g.parameters["hardening"]["k3_per_mass"] == pytest.approx(k3, rel=0.2)
     aug = g.augment(spec)
@@ -178,14 +210,24 @@ def test_augmented_specimen_carries_the_effect_and_its_qsma_is_the_fit():
 
 
 # the repository's sibling ../shared (main checkout), or the worktrees' /work/shared
-_SHARED = [Path(__file__).resolve().parents[2] / "shared" / "data",
-           Path(__file__).resolve().parents[3] / "shared" / "data"]
-_SWEEPS = next((d / "brb-steppedsine-fc" / "fc_sweeps.csv" for d in _SHARED
-                if (d / "brb-steppedsine-fc" / "fc_sweeps.csv").exists()), None)
+_SHARED = [
+    Path(__file__).resolve().parents[2] / "shared" / "data",
+    Path(__file__).resolve().parents[3] / "shared" / "data",
+]
+_SWEEPS = next(
+    (
+        d / "brb-steppedsine-fc" / "fc_sweeps.csv"
+        for d in _SHARED
+        if (d / "brb-steppedsine-fc" / "fc_sweeps.csv").exists()
+    ),
+    None,
+)
 
 
-@pytest.mark.skipif(_SWEEPS is None, reason="../shared/data/brb-steppedsine-fc (GPL data, read "
-                    "from ../shared only) is absent")
+@pytest.mark.skipif(
+    _SWEEPS is None,
+    reason="../shared/data/brb-steppedsine-fc (GPL data, read from ../shared only) is absent",
+)
 def test_brake_reuss_sweeps_name_an_effect_that_halves_the_mismatch_beyond_the_noise():
     """The hammer-calibrated beam against the force-controlled sweeps (94-275 um): the
     diagnosis names what the sweeps support, and the augmented beam model's mismatch beyond
@@ -193,6 +235,7 @@ def test_brake_reuss_sweeps_name_an_effect_that_halves_the_mismatch_beyond_the_n
     from the vibration-data branch)."""
     import iwan_element as ie
     from iwan_element import models
+
     if not hasattr(ie, "sweep_curve"):
         pytest.skip("iwan_element.sweep_curve is not merged yet")
     level, f, F, A, phase = np.loadtxt(_SWEEPS, delimiter=",", skiprows=1).T
@@ -200,11 +243,15 @@ def test_brake_reuss_sweeps_name_an_effect_that_halves_the_mismatch_beyond_the_n
     spec = models.preset("brake-reuss")
     pred = models.modal_amplitude_curve(spec, amplitude=curve.amplitude)
     assert any("extrapolated" in w for w in pred.warnings)
-    g = diagnose_vibration(curve, predicted_frequency=pred.frequency,
-                           predicted_damping_ratio=pred.damping_ratio,
-                           predicted_zeta0=spec.interface.damping_floor, between_tests=True)
+    g = diagnose_vibration(
+        curve,
+        predicted_frequency=pred.frequency,
+        predicted_damping_ratio=pred.damping_ratio,
+        predicted_zeta0=spec.interface.damping_floor,
+        between_tests=True,
+    )
     assert g.effects, g.report()
-    bt = g.details["between_tests"]          # the sweeps sit below the hammer-calibrated model
+    bt = g.details["between_tests"]  # the sweeps sit below the hammer-calibrated model
     assert bt["frequency_offset"] < 0 and bt["damping_offset"] < 0, g.report()
     assert g.error_after - g.noise_level <= 0.5 * (g.error_before - g.noise_level), g.report()
     aug = g.augment(spec)
@@ -226,11 +273,18 @@ def test_where_names_a_turn_as_two_ranges_of_opposite_sign():
     the largest difference of each range is quoted."""
     X = np.geomspace(1e-5, 3e-4, 16)
     fp = 80.0 - 2.0 * X / X.max()
-    dev = np.where(X < 1e-4, -2e-3, 3e-3)          # -0.2 % then +0.3 %
+    dev = np.where(X < 1e-4, -2e-3, 3e-3)  # -0.2 % then +0.3 %
     fm = fp * np.exp(dev)
     zp = 2e-3 * (1 + X / X.max())
-    g = diagnose_vibration(X, fm, zp.copy(), predicted_frequency=fp, predicted_damping_ratio=zp,
-                           frequency_noise=1e-4, damping_ratio_noise=0.02)
+    g = diagnose_vibration(
+        X,
+        fm,
+        zp.copy(),
+        predicted_frequency=fp,
+        predicted_damping_ratio=zp,
+        frequency_noise=1e-4,
+        damping_ratio_noise=0.02,
+    )
     w = g.where
     assert "measured frequency beyond 3 x noise of the prediction: below it from" in w.lower(), w
     below, above = w.split(", then ")[:2]
@@ -248,30 +302,51 @@ def test_between_test_offsets_are_nuisances_not_effects(base):
     for seed in (40, 41):
         Xc, fm, zm, fp, zp, _ = vc.seeded_case(seed, None, 0.0, P=vc.BASE, X=X, base=base)
         fm2, zm2 = fm * (1 + df), zm * (1 + dz)
-        g = diagnose_vibration(AmplitudeCurve(Xc, fm2, zm2, frequency_std=vc.F_NOISE * fm2,
-                                              damping_ratio_std=vc.Z_NOISE * zm2),
-                               predicted_frequency=fp, predicted_damping_ratio=zp,
-                               predicted_zeta0=vc.ZETA0, between_tests=True)
+        g = diagnose_vibration(
+            AmplitudeCurve(
+                Xc, fm2, zm2, frequency_std=vc.F_NOISE * fm2, damping_ratio_std=vc.Z_NOISE * zm2
+            ),
+            predicted_frequency=fp,
+            predicted_damping_ratio=zp,
+            predicted_zeta0=vc.ZETA0,
+            between_tests=True,
+        )
         assert g.effect == "none", g.report()
         bt = g.details["between_tests"]
         assert abs(bt["frequency_offset"] - df) < 4 * bt["frequency_offset_stderr"]
         assert abs(bt["damping_offset"] - dz) < 4 * bt["damping_offset_stderr"]
         assert bt["untested"] == ["viscous_damping"] and "between-test" in g.report()
-        plain = diagnose_vibration(AmplitudeCurve(Xc, fm2, zm2, frequency_std=vc.F_NOISE * fm2,
-                                                  damping_ratio_std=vc.Z_NOISE * zm2),
-                                   predicted_frequency=fp, predicted_damping_ratio=zp,
-                                   predicted_zeta0=vc.ZETA0)
+        plain = diagnose_vibration(
+            AmplitudeCurve(
+                Xc, fm2, zm2, frequency_std=vc.F_NOISE * fm2, damping_ratio_std=vc.Z_NOISE * zm2
+            ),
+            predicted_frequency=fp,
+            predicted_damping_ratio=zp,
+            predicted_zeta0=vc.ZETA0,
+        )
         assert plain.details["misfit_p"] < 1e-3
     Xc, fm, zm, fp, zp, _ = vc.seeded_case(42, "hardening", 2.0, P=vc.BASE, X=X, base=base)
-    g = diagnose_vibration(AmplitudeCurve(Xc, fm * (1 + df), zm * (1 + dz),
-                                          frequency_std=vc.F_NOISE * fm,
-                                          damping_ratio_std=vc.Z_NOISE * zm),
-                           predicted_frequency=fp, predicted_damping_ratio=zp,
-                           predicted_zeta0=vc.ZETA0, between_tests=True)
+    g = diagnose_vibration(
+        AmplitudeCurve(
+            Xc,
+            fm * (1 + df),
+            zm * (1 + dz),
+            frequency_std=vc.F_NOISE * fm,
+            damping_ratio_std=vc.Z_NOISE * zm,
+        ),
+        predicted_frequency=fp,
+        predicted_damping_ratio=zp,
+        predicted_zeta0=vc.ZETA0,
+        between_tests=True,
+    )
     assert g.effects == ("hardening",), g.report()
     with pytest.raises(ValueError, match="between_tests"):
-        diagnose_vibration(AmplitudeCurve(Xc, fm, zm), predicted_frequency=fp,
-                           predicted_damping_ratio=zp, between_tests="yes")
+        diagnose_vibration(
+            AmplitudeCurve(Xc, fm, zm),
+            predicted_frequency=fp,
+            predicted_damping_ratio=zp,
+            between_tests="yes",
+        )
 
 
 @pytest.mark.parametrize("shape", [0.0, 0.28, 0.45])
@@ -287,14 +362,17 @@ def test_hidden_whole_or_spread_patch_is_named_and_told_apart(base, shape):
         vals = {"kappa_2": 1.0, "X_s": 0.25 * X.max(), "shape": shape}
 
         def rms(k):
-            f, z = EFFECTS["macroslip_onset"].modal_form(X, fp, zp, vc.ZETA0,
-                                                         **dict(vals, kappa_2=k))
-            return np.sqrt(np.mean((np.log(f / fp) / vc.F_NOISE) ** 2
-                                   + (np.log(z / zp) / vc.Z_NOISE) ** 2))
+            f, z = EFFECTS["macroslip_onset"].modal_form(
+                X, fp, zp, vc.ZETA0, **dict(vals, kappa_2=k)
+            )
+            return np.sqrt(
+                np.mean((np.log(f / fp) / vc.F_NOISE) ** 2 + (np.log(z / zp) / vc.Z_NOISE) ** 2)
+            )
 
         vals["kappa_2"] = brentq(lambda k: rms(k) - 2 * vc.NOTICEABLE, 1e-6, 1e6)
-        fm, zm = vc.element_curve(X, vc.BASE, "macroslip_onset",
-                                  **vc.to_joint("macroslip_onset", vals))
+        fm, zm = vc.element_curve(
+            X, vc.BASE, "macroslip_onset", **vc.to_joint("macroslip_onset", vals)
+        )
         fm = fm * np.exp(vc.F_NOISE * rng.normal(size=X.size))
         zm = zm * np.exp(vc.Z_NOISE * rng.normal(size=X.size))
         g = _diag((X, fm, zm, fp, zp, vals))
@@ -321,8 +399,9 @@ def test_a_value_at_the_end_of_its_fit_range_is_not_identified(base):
 
     def rms(k):
         f, z = EFFECTS["macroslip_onset"].modal_form(X, fp, zp, vc.ZETA0, **dict(vals, kappa_2=k))
-        return np.sqrt(np.mean((np.log(f / fp) / vc.F_NOISE) ** 2
-                               + (np.log(z / zp) / vc.Z_NOISE) ** 2))
+        return np.sqrt(
+            np.mean((np.log(f / fp) / vc.F_NOISE) ** 2 + (np.log(z / zp) / vc.Z_NOISE) ** 2)
+        )
 
     vals["kappa_2"] = brentq(lambda k: rms(k) - 2 * vc.NOTICEABLE, 1e-6, 1e6)
     fm, zm = vc.element_curve(X, vc.BASE, "macroslip_onset", **vc.to_joint("macroslip_onset", vals))

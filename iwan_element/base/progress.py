@@ -9,6 +9,7 @@ under continuous integration (the ``CI`` environment variable set, as every CI s
 so scripts and test logs are not cluttered. tqdm is an optional extra:
 ``pip install "iwan-element[progress]"``.
 """
+
 from __future__ import annotations
 
 import os
@@ -44,8 +45,9 @@ def progress_bar(progress, *, total=None, desc: str, unit: str):
     try:
         from tqdm.auto import tqdm
     except ImportError:
-        raise ImportError("progress=True needs tqdm: "
-                          "pip install 'iwan-element[progress]'") from None
+        raise ImportError(
+            "progress=True needs tqdm: pip install 'iwan-element[progress]'"
+        ) from None
     return tqdm(total=None if total is None else int(total), desc=desc, unit=unit)
 
 

@@ -23,6 +23,7 @@ Every fit, curve, diagnosis, ensemble and uncertainty result offers (the contrac
 count from one hook, :meth:`ResultShape._tables` (titled rows built from what the class
 exposes); each class supplies the rest.
 """
+
 from __future__ import annotations
 
 import html
@@ -35,8 +36,19 @@ from typing import ClassVar
 
 import numpy as np
 
-__all__ = ["ResultShape", "panels", "axes_or_new", "table_lines", "unit_label", "format_value",
-           "value_stderr", "parameter_rows", "html_table", "wrap", "PARAMETER_COLUMNS"]
+__all__ = [
+    "ResultShape",
+    "panels",
+    "axes_or_new",
+    "table_lines",
+    "unit_label",
+    "format_value",
+    "value_stderr",
+    "parameter_rows",
+    "html_table",
+    "wrap",
+    "PARAMETER_COLUMNS",
+]
 
 #: Rows an HTML table shows before it shows only its ends.
 HTML_ROWS = 40
@@ -67,8 +79,9 @@ def format_value(x, digits: int = 6) -> str:
 
 def wrap(text: str, *, width: int = 92, indent: str = "  ") -> list[str]:
     """A long report line wrapped to ``width`` columns, continuation lines indented."""
-    return textwrap.wrap(text, width=width, subsequent_indent=indent,
-                         break_on_hyphens=False) or [text]
+    return textwrap.wrap(text, width=width, subsequent_indent=indent, break_on_hyphens=False) or [
+        text
+    ]
 
 
 def value_stderr(pairs) -> dict:
@@ -76,11 +89,13 @@ def value_stderr(pairs) -> dict:
     (stderr ``None`` when not given or not finite): the one layout of offsets and other
     estimated quantities in every ``to_dict``.
     """
+
     def num(x):
         return float(x) if x is not None and math.isfinite(float(x)) else None
+
     out = {}
     for k, v in pairs.items():
-        v, se = (v if isinstance(v, (tuple, list)) else (v, None))
+        v, se = v if isinstance(v, (tuple, list)) else (v, None)
         out[str(k)] = {"value": num(v), "stderr": num(se)}
     return out
 
@@ -89,8 +104,10 @@ def parameter_rows(params) -> list:
     """Rows of :data:`PARAMETER_COLUMNS` for a ``ParameterTable`` (anything with
     ``parameters`` holding ``name, value, stderr, unit, status``).
     """
-    return [(p.name, float(p.value), float(p.stderr), unit_label(p.unit), p.status)
-            for p in params.parameters]
+    return [
+        (p.name, float(p.value), float(p.stderr), unit_label(p.unit), p.status)
+        for p in params.parameters
+    ]
 
 
 @dataclass(frozen=True, eq=False, kw_only=True)
@@ -111,8 +128,11 @@ class ResultShape:
         """
         if self.success:
             return ()
-        return (tuple(getattr(self, "failures", ())) or tuple(self.warnings)
-                or ("the result did not meet its own success rule",))
+        return (
+            tuple(getattr(self, "failures", ()))
+            or tuple(self.warnings)
+            or ("the result did not meet its own success rule",)
+        )
 
     def verdict(self) -> str:
         """One line: whether the result can be used as it stands, and if not, why."""
@@ -135,21 +155,37 @@ class ResultShape:
         d = self.to_dict()
         rows = d.get("rows")
         if isinstance(rows, list) and rows and all(isinstance(r, dict) for r in rows):
-            cols = tuple(dict.fromkeys(k for r in rows for k, v in r.items()
-                                       if not isinstance(v, (dict, list))))
+            cols = tuple(
+                dict.fromkeys(
+                    k for r in rows for k, v in r.items() if not isinstance(v, (dict, list))
+                )
+            )
             out.append(("rows", cols, [tuple(r.get(c) for c in cols) for r in rows]))
         columns = {}
         for k, v in d.items():
-            if k != "rows" and isinstance(v, list) and v and all(
+            if (
+                k != "rows"
+                and isinstance(v, list)
+                and v
+                and all(
                     v_ is None or (isinstance(v_, numbers.Real) and not isinstance(v_, bool))
-                    for v_ in v):
+                    for v_ in v
+                )
+            ):
                 columns.setdefault(len(v), []).append(k)
         for n, keys in sorted(columns.items()):
             title = "data" if len(columns) == 1 else f"data ({n} rows)"
             out.append((title, tuple(keys), list(zip(*(d[k] for k in keys)))))
-        stats = [(k, v) for k, v in d.items() if k not in ("warnings", "success")
-                 and (isinstance(v, (numbers.Real, bool)) or v is None
-                      or (isinstance(v, str) and len(v) <= 200))]
+        stats = [
+            (k, v)
+            for k, v in d.items()
+            if k not in ("warnings", "success")
+            and (
+                isinstance(v, (numbers.Real, bool))
+                or v is None
+                or (isinstance(v, str) and len(v) <= 200)
+            )
+        ]
         if stats:
             out.append(("goodness of fit and run", ("quantity", "value"), stats))
         return out
@@ -178,8 +214,9 @@ class ResultShape:
         try:
             import pandas as pd
         except ImportError:
-            raise ImportError("to_dataframe needs pandas: "
-                              "pip install 'iwan-element[pandas]'") from None
+            raise ImportError(
+                "to_dataframe needs pandas: pip install 'iwan-element[pandas]'"
+            ) from None
         _, cols, rows = tables[titles.index(table)]
         return pd.DataFrame([list(r) for r in rows], columns=list(cols))
 
@@ -187,13 +224,18 @@ class ResultShape:
         """The verdict, the tables and the warnings as HTML (a notebook's display)."""
         ok = "usable" if self.success else "NOT usable"
         color = "#1a7f37" if self.success else "#b42318"
-        parts = [f'<div class="iwan-result"><p><b>{html.escape(type(self).__name__)}</b>: '
-                 f'<span style="color:{color}">{html.escape(self.verdict() or ok)}</span></p>']
+        parts = [
+            f'<div class="iwan-result"><p><b>{html.escape(type(self).__name__)}</b>: '
+            f'<span style="color:{color}">{html.escape(self.verdict() or ok)}</span></p>'
+        ]
         for title, cols, rows in self._tables():
             parts.append(html_table(title, cols, rows))
         if self.warnings:
-            parts.append("<p><b>warnings</b></p><ul>" + "".join(
-                f"<li>{html.escape(str(w))}</li>" for w in self.warnings) + "</ul>")
+            parts.append(
+                "<p><b>warnings</b></p><ul>"
+                + "".join(f"<li>{html.escape(str(w))}</li>" for w in self.warnings)
+                + "</ul>"
+            )
         return "".join(parts) + "</div>"
 
 
@@ -203,9 +245,9 @@ def html_table(title: str, columns, rows) -> str:
     body = []
     rows = list(rows)
     cut = len(rows) > HTML_ROWS
-    if cut:           # a long table shows its ends (to_dataframe has every row)
+    if cut:  # a long table shows its ends (to_dataframe has every row)
         n = len(rows)
-        rows = rows[:HTML_ROWS - 5] + [("...",) * len(columns)] + rows[-5:]
+        rows = rows[: HTML_ROWS - 5] + [("...",) * len(columns)] + rows[-5:]
     for r in rows:
         cells = []
         for v in r:
@@ -216,8 +258,10 @@ def html_table(title: str, columns, rows) -> str:
         body.append("<tr>" + "".join(cells) + "</tr>")
     if cut:
         title = f"{title} ({n} rows; to_dataframe() has them all)"
-    return (f"<table><caption>{html.escape(title)}</caption><thead><tr>{head}</tr></thead>"
-            f"<tbody>{''.join(body)}</tbody></table>")
+    return (
+        f"<table><caption>{html.escape(title)}</caption><thead><tr>{head}</tr></thead>"
+        f"<tbody>{''.join(body)}</tbody></table>"
+    )
 
 
 def table_lines(columns, rows, *, indent: int = 2) -> list[str]:
@@ -256,22 +300,24 @@ def panels(ax, n: int, *, figsize=None, sharex: bool = False) -> list:
     """
     if ax is None:
         import matplotlib.pyplot as plt
-        _, axs = plt.subplots(n, 1, sharex=sharex, squeeze=False,
-                              figsize=figsize or (6.0, 3.2 * n))
+
+        _, axs = plt.subplots(n, 1, sharex=sharex, squeeze=False, figsize=figsize or (6.0, 3.2 * n))
         return list(axs[:, 0])
     if hasattr(ax, "plot"):
         if n != 1:
-            raise TypeError(f"ax must be None or a sequence of {n} Axes (this result draws "
-                            f"{n} panels), got one Axes")
+            raise TypeError(
+                f"ax must be None or a sequence of {n} Axes (this result draws "
+                f"{n} panels), got one Axes"
+            )
         return [ax]
     try:
         axs = list(ax)
     except TypeError:
-        raise TypeError(f"ax must be None, one Axes or a sequence of {n} Axes, got "
-                        f"{type(ax).__name__}") from None
+        raise TypeError(
+            f"ax must be None, one Axes or a sequence of {n} Axes, got {type(ax).__name__}"
+        ) from None
     if len(axs) != n or not all(hasattr(a, "plot") for a in axs):
-        raise TypeError(f"ax must be a sequence of {n} Axes for this result, got {len(axs)} "
-                        "items")
+        raise TypeError(f"ax must be a sequence of {n} Axes for this result, got {len(axs)} items")
     return axs
 
 

@@ -1,4 +1,5 @@
 """JSON-safe conversion shared by every result's ``to_dict()``."""
+
 from __future__ import annotations
 
 import math

@@ -12,6 +12,7 @@ CPU with one thread against 16.3 s with two (``benchmarks/bench_real_damper.py``
 :func:`one_blas_thread` limits the BLAS thread pools for the duration of a fit, through
 threadpoolctl (the library scikit-learn uses for the same purpose), and restores them after.
 """
+
 from __future__ import annotations
 
 from contextlib import contextmanager

@@ -1,4 +1,5 @@
 """Input checks shared by the package: every message names the argument and its allowed range."""
+
 from __future__ import annotations
 
 import math
@@ -7,13 +8,22 @@ from numbers import Real
 import numpy as np
 
 
-def check_scalar(name: str, value, *, low: float | None = None, high: float | None = None,
-                 low_open: bool = False, high_open: bool = False) -> float:
+def check_scalar(
+    name: str,
+    value,
+    *,
+    low: float | None = None,
+    high: float | None = None,
+    low_open: bool = False,
+    high_open: bool = False,
+) -> float:
     """Return ``value`` as a finite float inside the given range, else raise ``ValueError``.
 
     ``low_open=True`` excludes the lower bound itself (``value > low``).
     """
-    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (Real, np.floating, np.integer)):
+    if isinstance(value, (bool, np.bool_)) or not isinstance(
+        value, (Real, np.floating, np.integer)
+    ):
         raise ValueError(f"{name} must be a real number, got {value!r}")
     x = float(value)
     if not math.isfinite(x):
@@ -62,11 +72,17 @@ def _reject_non_real(name: str, value) -> None:
     if isinstance(value, (str, bytes)):
         raise ValueError(f"{name} must be numeric array-like, got text {value!r:.40}")
     kind = np.asarray(value).dtype.kind if not isinstance(value, np.ndarray) else value.dtype.kind
-    if kind in "USc" or (kind == "O" and any(
+    if kind in "USc" or (
+        kind == "O"
+        and any(
             isinstance(v, (str, bytes, complex)) or v is None
-            for v in np.asarray(value, dtype=object).ravel().tolist())):
-        raise ValueError(f"{name} must be real numbers, got an array of "
-                         f"{'complex' if kind == 'c' else 'text or objects'}")
+            for v in np.asarray(value, dtype=object).ravel().tolist()
+        )
+    ):
+        raise ValueError(
+            f"{name} must be real numbers, got an array of "
+            f"{'complex' if kind == 'c' else 'text or objects'}"
+        )
 
 
 def same_length(**arrays: np.ndarray) -> int:
@@ -93,8 +109,10 @@ def check_time(t, n: int, name: str = "t") -> np.ndarray:
     bad = np.flatnonzero(np.diff(tt) <= 0.0)
     if bad.size:
         i = int(bad[0])
-        raise ValueError(f"{name} (time) must be strictly increasing; it goes from {tt[i]:g} to "
-                         f"{tt[i + 1]:g} at samples {i}..{i + 1}")
+        raise ValueError(
+            f"{name} (time) must be strictly increasing; it goes from {tt[i]:g} to "
+            f"{tt[i + 1]:g} at samples {i}..{i + 1}"
+        )
     return tt
 
 
@@ -110,14 +128,18 @@ def check_uniform_time(t, n: int, name: str = "t", data: str = "y") -> tuple[np.
     d = np.diff(tt)
     if np.any(d <= 0):
         i = int(np.flatnonzero(d <= 0)[0])
-        raise ValueError(f"{name} (time) must be strictly increasing; it goes from {tt[i]:g} to "
-                         f"{tt[i + 1]:g} at samples {i}..{i + 1}")
+        raise ValueError(
+            f"{name} (time) must be strictly increasing; it goes from {tt[i]:g} to "
+            f"{tt[i + 1]:g} at samples {i}..{i + 1}"
+        )
     idx = np.arange(n) - 0.5 * (n - 1)
     dt = float(idx @ (tt - tt.mean()) / (idx @ idx))
     jitter = float(np.max(np.abs(tt - tt.mean() - idx * dt)))
     if jitter > 0.05 * dt:
-        raise ValueError(f"{name} must be uniformly sampled: it departs from a uniform grid by "
-                         f"{jitter:.3g} s, more than 5 % of the mean step {dt:.3g} s; resample first")
+        raise ValueError(
+            f"{name} must be uniformly sampled: it departs from a uniform grid by "
+            f"{jitter:.3g} s, more than 5 % of the mean step {dt:.3g} s; resample first"
+        )
     return tt, dt
 
 
@@ -140,8 +162,10 @@ def check_magnitude(name: str, arr: np.ndarray, *, unit: str = "") -> np.ndarray
     peak = float(np.max(np.abs(arr))) if np.size(arr) else 0.0
     if peak > hi or 0.0 < peak < lo:
         u = f" {unit}" if unit else ""
-        raise ValueError(f"{name} must have magnitudes in [{lo:g}, {hi:g}]{u} (largest |{name}| "
-                         f"is {peak:g}{u}); rescale the units")
+        raise ValueError(
+            f"{name} must have magnitudes in [{lo:g}, {hi:g}]{u} (largest |{name}| "
+            f"is {peak:g}{u}); rescale the units"
+        )
     return arr
 
 
@@ -152,6 +176,8 @@ def check_varies(name: str, arr: np.ndarray, *, unit: str = "", what: str = "") 
     """
     if np.size(arr) and float(np.ptp(arr)) == 0.0:
         u = f" {unit}" if unit else ""
-        raise ValueError(f"{name} is constant ({float(arr.flat[0]):g}{u} everywhere)"
-                         + (f": {what}" if what else ""))
+        raise ValueError(
+            f"{name} is constant ({float(arr.flat[0]):g}{u} everywhere)"
+            + (f": {what}" if what else "")
+        )
     return arr

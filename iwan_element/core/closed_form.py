@@ -5,6 +5,7 @@ and energies in joules. Equation numbers refer to the seed paper (Li, Cai, Ruan,
 Segalman (2005), J. Appl. Mech. 72, 752-760. The paper's eq. (15) prints ``(s0 - s)/2``;
 the form consistent with its eq. (14) is ``(s0 + s)/2`` and is used here.
 """
+
 from __future__ import annotations
 
 import warnings
@@ -51,8 +52,10 @@ def _ratio(a, p: IwanParameters):
 def _finite(name, value, what):
     """Raise ``ValueError`` naming ``name`` if an energy overflowed (input far beyond macroslip)."""
     if not np.all(np.isfinite(value)):
-        raise ValueError(f"{name} is too large: the {what} overflows the float range "
-                         f"(|{name}| must be below about 1e300 m / Fs)")
+        raise ValueError(
+            f"{name} is too large: the {what} overflows the float range "
+            f"(|{name}| must be below about 1e300 m / Fs)"
+        )
     return value
 
 
@@ -124,7 +127,7 @@ def secant_stiffness(amplitude, params: IwanParameters):
         raise ValueError("amplitude (the displacement amplitude u0) must be >= 0 [m]")
     r = np.minimum(x / p.phi_max, 1.0)
     micro = p.KT * (1.0 - r ** (p.chi + 1.0) / ((p.chi + 2.0) * (1.0 + p.beta)))
-    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):   # used above phi_max only
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):  # used above phi_max only
         macro = p.Fs / x
     k = np.where(x <= p.phi_max, micro, macro)
     return _out(k, amplitude)
@@ -136,7 +139,13 @@ def slip_energy(y, p: IwanParameters):
     ``R y**(chi+3)/((chi+2)(chi+3))`` below ``phi_max``, growing by ``Fs`` per metre beyond.
     """
     r = _ratio(y, p)
-    e = p.KT * p.phi_max * p.phi_max * (p.chi + 1.0) / ((1.0 + p.beta) * (p.chi + 2.0) * (p.chi + 3.0))
+    e = (
+        p.KT
+        * p.phi_max
+        * p.phi_max
+        * (p.chi + 1.0)
+        / ((1.0 + p.beta) * (p.chi + 2.0) * (p.chi + 3.0))
+    )
     return e * r ** (p.chi + 3.0) + p.Fs * np.maximum(y - p.phi_max, 0.0)
 
 
@@ -173,7 +182,9 @@ def dissipation_slope(amplitude, params: IwanParameters):
     p = _check_params(params)
     x = _as_array("amplitude", amplitude)
     if np.any(x <= 0):
-        raise ValueError("amplitude (the displacement amplitude u0) must be > 0 for a log slope [m]")
+        raise ValueError(
+            "amplitude (the displacement amplitude u0) must be > 0 for a log slope [m]"
+        )
     g = np.minimum(x / p.phi_max, 1.0) ** (p.chi + 1.0)
     with np.errstate(divide="ignore"):
         slope = (p.chi + 3.0) * ((p.beta + 1.0) - g / (p.chi + 2.0)) / (p.beta + 1.0 - g)
@@ -239,7 +250,10 @@ def _dimensionless_check(chi, beta):
     if beta < 0.0:
         warnings.warn(
             f"beta = {beta} < 0 is non-physical (negative spike stiffness); the curve is "
-            "drawn as a dimensionless shape only", UserWarning, stacklevel=3)
+            "drawn as a dimensionless shape only",
+            UserWarning,
+            stacklevel=3,
+        )
     return chi, beta, den
 
 

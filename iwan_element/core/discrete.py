@@ -16,6 +16,7 @@ paper eq. 3 is lumped into bins:
 The Dirac spike ``S delta(phi - phi_max)`` is always one extra slider of stiffness ``S`` at
 ``phi_max`` (if ``beta > 0``).
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -31,8 +32,10 @@ __all__ = ["DiscreteIwan", "slider_distribution"]
 #: docs/equations.md section 4 shows accurate to ~2e-3).
 MAX_SLIDERS = 1_000_000
 
-def slider_distribution(params: IwanParameters, n_sliders: int = 100, *, spacing: str = "log",
-                        lowest_edge: float = 1e-6) -> tuple[np.ndarray, np.ndarray]:
+
+def slider_distribution(
+    params: IwanParameters, n_sliders: int = 100, *, spacing: str = "log", lowest_edge: float = 1e-6
+) -> tuple[np.ndarray, np.ndarray]:
     """Slider stiffnesses ``k`` [N/m] and slip displacements ``phi`` [m] for a discretised joint.
 
     Parameters
@@ -53,8 +56,11 @@ def slider_distribution(params: IwanParameters, n_sliders: int = 100, *, spacing
     """
     if not isinstance(params, IwanParameters):
         raise ValueError(f"params must be an IwanParameters instance, got {type(params).__name__}")
-    if (isinstance(n_sliders, bool) or not isinstance(n_sliders, (int, np.integer))
-            or not 1 <= n_sliders <= MAX_SLIDERS):
+    if (
+        isinstance(n_sliders, bool)
+        or not isinstance(n_sliders, (int, np.integer))
+        or not 1 <= n_sliders <= MAX_SLIDERS
+    ):
         raise ValueError(f"n_sliders must be an integer in [1, {MAX_SLIDERS}], got {n_sliders!r}")
     p = params
     # Written in s = phi/phi_max so that no power of phi_max appears (it overflows for large
@@ -64,9 +70,11 @@ def slider_distribution(params: IwanParameters, n_sliders: int = 100, *, spacing
         ds = 1.0 / n_sliders
         s_mid = (np.arange(n_sliders) + 0.5) * ds
         phi = pm * s_mid
-        k = (c + 1.0) * Ks * s_mid ** c * ds
+        k = (c + 1.0) * Ks * s_mid**c * ds
     elif spacing == "log":
-        lo = check_scalar("lowest_edge", lowest_edge, low=0.0, high=1.0, low_open=True, high_open=True)
+        lo = check_scalar(
+            "lowest_edge", lowest_edge, low=0.0, high=1.0, low_open=True, high_open=True
+        )
         if n_sliders == 1:
             edges = np.array([0.0, 1.0])
         else:
@@ -105,11 +113,18 @@ class DiscreteIwan(CommittedState):
         Lowest log edge as a fraction of ``phi_max`` (``spacing="log"`` only).
     """
 
-    def __init__(self, params: IwanParameters, n_sliders: int = 100, *, spacing: str = "log",
-                 lowest_edge: float = 1e-6):
+    def __init__(
+        self,
+        params: IwanParameters,
+        n_sliders: int = 100,
+        *,
+        spacing: str = "log",
+        lowest_edge: float = 1e-6,
+    ):
         self._p = params
-        self._k, self._phi = slider_distribution(params, n_sliders, spacing=spacing,
-                                                 lowest_edge=lowest_edge)
+        self._k, self._phi = slider_distribution(
+            params, n_sliders, spacing=spacing, lowest_edge=lowest_edge
+        )
         self._kphi = self._k * self._phi
         self.spacing = spacing
         self.n_sliders = int(n_sliders)

@@ -19,6 +19,7 @@ kept, so a decimated fit still uses the exact reversal points of the full record
 
 Used by :mod:`iwan_element.identify.loops.fit`; verified against ``IwanJoint.force_history``.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -87,17 +88,17 @@ class History:
         need = np.zeros(n, dtype=bool)
         need[want] = True
         frontier = anchor[want]
-        while frontier.size:                      # add the chains of anchors
+        while frontier.size:  # add the chains of anchors
             frontier = np.unique(frontier[frontier >= 0])
             frontier = frontier[~need[frontier]]
             need[frontier] = True
             frontier = anchor[frontier]
-        idx = np.flatnonzero(need)                # sorted: anchors precede their samples
+        idx = np.flatnonzero(need)  # sorted: anchors precede their samples
         pos = np.full(n, -1, dtype=np.intp)
         pos[idx] = np.arange(idx.size)
         a_full = anchor[idx]
         self.index = idx
-        self.out = pos[want]                      # where the requested samples sit in idx
+        self.out = pos[want]  # where the requested samples sit in idx
         a = np.where(a_full >= 0, pos[np.maximum(a_full, 0)], -1)
         uu = u[idx]
         branch = a >= 0
@@ -107,8 +108,11 @@ class History:
         lev = level[idx]
         order = np.argsort(lev, kind="stable")
         bounds = np.searchsorted(lev[order], np.arange(1, lev.max() + 2 if lev.size else 1))
-        self.levels = [(order[bounds[k]:bounds[k + 1]], a[order[bounds[k]:bounds[k + 1]]])
-                       for k in range(len(bounds) - 1) if bounds[k + 1] > bounds[k]]
+        self.levels = [
+            (order[bounds[k] : bounds[k + 1]], a[order[bounds[k] : bounds[k + 1]]])
+            for k in range(len(bounds) - 1)
+            if bounds[k + 1] > bounds[k]
+        ]
         self.x_max = float(self.x[self.out].max()) if self.out.size else 0.0
         self.depth = int(lev.max()) if lev.size else 0
 

@@ -22,6 +22,7 @@ against the cached branch, cheaper than any call into compiled code) that gives 
 the numbers of the kernel; its commit reuses ``G`` and ``I_H`` at the committed point, kept
 from the previous commit.
 """
+
 from __future__ import annotations
 
 import math
@@ -79,15 +80,58 @@ class IwanJoint(CommittedState):
     >>> j.commit()
     """
 
-    __slots__ = ("_p", "_tol", "_KT", "_Fs", "_pm", "_e1", "_e3", "_a", "_b", "_g_pm", "_ih_c",
-                 "_ipm", "_KTpm", "_g2", "_g3", "_Fspm", "_rtol", "_c", "_n", "_at",
-                 "_ih_pm", "_u", "_F", "_K", "_us", "_Fr", "_W", "_D",
-                 "_tu", "_tF", "_tK", "_tn", "_tacc", "_has_trial", "_tfast", "_Gc", "_IHc",
-                 "_blo", "_bhi", "_bur", "_bFr", "_bc1", "_bc2", "_bdir")
+    __slots__ = (
+        "_p",
+        "_tol",
+        "_KT",
+        "_Fs",
+        "_pm",
+        "_e1",
+        "_e3",
+        "_a",
+        "_b",
+        "_g_pm",
+        "_ih_c",
+        "_ipm",
+        "_KTpm",
+        "_g2",
+        "_g3",
+        "_Fspm",
+        "_rtol",
+        "_c",
+        "_n",
+        "_at",
+        "_ih_pm",
+        "_u",
+        "_F",
+        "_K",
+        "_us",
+        "_Fr",
+        "_W",
+        "_D",
+        "_tu",
+        "_tF",
+        "_tK",
+        "_tn",
+        "_tacc",
+        "_has_trial",
+        "_tfast",
+        "_Gc",
+        "_IHc",
+        "_blo",
+        "_bhi",
+        "_bur",
+        "_bFr",
+        "_bc1",
+        "_bc2",
+        "_bdir",
+    )
 
     def __init__(self, params: IwanParameters, *, reversal_tol: float = REVERSAL_TOL):
         if not isinstance(params, IwanParameters):
-            raise ValueError(f"params must be an IwanParameters instance, got {type(params).__name__}")
+            raise ValueError(
+                f"params must be an IwanParameters instance, got {type(params).__name__}"
+            )
         tol = check_scalar("reversal_tol", reversal_tol, low=0.0, high=REVERSAL_TOL_MAX)
         self._p = params
         p = params
@@ -103,16 +147,16 @@ class IwanJoint(CommittedState):
         pm = p.phi_max
         Ks = p.K_slider
         self._ipm = 1.0 / pm
-        self._KTpm = p.KT * pm                                # backbone: r (KT pm - a r^(chi+1))
+        self._KTpm = p.KT * pm  # backbone: r (KT pm - a r^(chi+1))
         self._a = Ks * pm / (p.chi + 2.0)
-        self._b = Ks                                          # tangent:  KT - b r^(chi+1)
-        self._g2 = 0.5 * p.KT * pm * pm                       # G = g2 r^2 - g3 r^(chi+3)
+        self._b = Ks  # tangent:  KT - b r^(chi+1)
+        self._g2 = 0.5 * p.KT * pm * pm  # G = g2 r^2 - g3 r^(chi+3)
         self._g3 = Ks * pm * pm / ((p.chi + 2.0) * (p.chi + 3.0))
         self._g_pm = self._g2 - self._g3
-        self._ih_c = (p.chi + 1.0) * self._g3                 # I_H = ih_c r^(chi+3)
+        self._ih_c = (p.chi + 1.0) * self._g3  # I_H = ih_c r^(chi+3)
         self._ih_pm = self._ih_c
         self._Fspm = p.Fs * pm
-        self._c = masing_constants(p, self._tol)     # the same numbers, for the kernel
+        self._c = masing_constants(p, self._tol)  # the same numbers, for the kernel
         self.reset()
 
     # ------------------------------------------------------------------ public protocol
@@ -126,14 +170,14 @@ class IwanJoint(CommittedState):
         self._u = 0.0
         self._F = 0.0
         self._K = self._KT
-        self._us = np.empty(16)     # reversal stack (oldest first), the first _n entries
+        self._us = np.empty(16)  # reversal stack (oldest first), the first _n entries
         self._Fr = np.empty(16)
         self._at = np.empty(16, np.int64)
         self._n = 0
         self._W = 0.0
         self._D = 0.0
-        self._Gc = 0.0          # G and I_H at the committed point, in the coordinate of the
-        self._IHc = 0.0         # branch it lies on (|u| virgin, |u - u_r|/2 otherwise)
+        self._Gc = 0.0  # G and I_H at the committed point, in the coordinate of the
+        self._IHc = 0.0  # branch it lies on (|u| virgin, |u - u_r|/2 otherwise)
         self._set_branch()
         self.revert()
 
@@ -162,15 +206,15 @@ class IwanJoint(CommittedState):
         stiffness : float
             Consistent tangent ``dF/du`` [N/m] for motion from the committed state to ``u``.
         """
-        try:                        # text, complex, None and arrays fail here, at no cost
+        try:  # text, complex, None and arrays fail here, at no cost
             if self._blo < u < self._bhi:
                 # Fast path, the usual case: u continues the current branch without reaching
                 # the point where its loop closes (see _set_branch); the numbers of the walk.
                 u = float(u)
                 x = u - self._bur
-                h = self._bc1 * abs(x)          # r = |x|/phi_max on the branch's scale
+                h = self._bc1 * abs(x)  # r = |x|/phi_max on the branch's scale
                 if h < 1.0:
-                    q = h ** self._e1
+                    q = h**self._e1
                     f = h * (self._KTpm - self._a * q)
                     K = self._KT - self._b * q
                 else:
@@ -202,20 +246,20 @@ class IwanJoint(CommittedState):
         """Accept the last trial as the new committed state (no-op if there is none)."""
         if not self._has_trial:
             return
-        if self._tfast:             # one segment on the current branch (see trial)
+        if self._tfast:  # one segment on the current branch (see trial)
             u = self._tu
             xb = self._bc1 * abs(u - self._bur)
-            if xb < 1.0:            # _G(xb) and _IH(xb), inlined, sharing the power
-                p3 = xb ** self._e3
+            if xb < 1.0:  # _G(xb) and _IH(xb), inlined, sharing the power
+                p3 = xb**self._e3
                 Gb = self._g2 * xb * xb - self._g3 * p3
                 Ib = self._ih_c * p3
             else:
                 Gb = self._g_pm + self._Fspm * (xb - 1.0)
                 Ib = self._ih_pm + self._Fspm * (xb - 1.0)
-            if self._bc2 == 2.0:    # a branch from a reversal point
+            if self._bc2 == 2.0:  # a branch from a reversal point
                 self._W += self._bFr * (u - self._u) + 4.0 * (Gb - self._Gc)
                 self._D += 2.0 * (Ib - self._IHc)
-            else:                   # the virgin curve
+            else:  # the virgin curve
                 self._W += Gb - self._Gc
                 self._D += max(Ib - self._IHc, 0.0)
             self._Gc = Gb
@@ -224,13 +268,13 @@ class IwanJoint(CommittedState):
             self._F = self._tF
             self._K = self._tK
             self._has_trial = False
-            if self._bdir > 0:      # the fast interval now starts at u
+            if self._bdir > 0:  # the fast interval now starts at u
                 self._blo = u
             else:
                 self._bhi = u
             return
         dW, dD, self._Gc, self._IHc = self._tacc
-        self._n = self._tn          # the trial wrote its reversal above the committed stack
+        self._n = self._tn  # the trial wrote its reversal above the committed stack
         self._u = self._tu
         self._F = self._tF
         self._K = self._tK
@@ -272,7 +316,7 @@ class IwanJoint(CommittedState):
             self._blo, self._bhi, self._bdir = uc, bound, 1
         elif d < 0.0:
             self._blo, self._bhi, self._bdir = bound, uc, -1
-        else:                       # no direction yet: always the general walk
+        else:  # no direction yet: always the general walk
             self._blo, self._bhi, self._bdir = 0.0, 0.0, 0
 
     # ------------------------------------------------------------------ state read-out
@@ -289,7 +333,7 @@ class IwanJoint(CommittedState):
 
     def reversal_points(self) -> tuple[np.ndarray, np.ndarray]:
         """Copies of the remembered reversal points ``(u_r [m], F_r [N])``, oldest first."""
-        return self._us[:self._n].copy(), self._Fr[:self._n].copy()
+        return self._us[: self._n].copy(), self._Fr[: self._n].copy()
 
     def force_history(self, u, v=None) -> np.ndarray:
         """Forces [N] for a whole displacement history ``u`` [m], shape (n,), from the virgin
@@ -311,13 +355,24 @@ class IwanJoint(CommittedState):
         state to ``u``: ``(n, F, K, dW, dD, G, I_H)``; the new stack is the first ``n``
         entries of the arrays (a reversal is written above the committed ones).
         """
-        if self._n + 1 >= self._us.size:        # room for one more reversal
+        if self._n + 1 >= self._us.size:  # room for one more reversal
             grow = self._us.size
             self._us = np.concatenate([self._us, np.empty(grow)])
             self._Fr = np.concatenate([self._Fr, np.empty(grow)])
             self._at = np.concatenate([self._at, np.empty(grow, np.int64)])
-        return masing_step(self._c, self._us, self._Fr, self._at, self._n, self._u, self._F,
-                     self._Gc, self._IHc, u, _NOSEG)
+        return masing_step(
+            self._c,
+            self._us,
+            self._Fr,
+            self._at,
+            self._n,
+            self._u,
+            self._F,
+            self._Gc,
+            self._IHc,
+            u,
+            _NOSEG,
+        )
 
     def _walk(self, u: float, acc):
         """The general walk to ``u`` (the fast path's reference in the tests).

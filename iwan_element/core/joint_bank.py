@@ -21,6 +21,7 @@ The bank is the committed state of a multi-contact interface; it never evaluates
 a solver (the solver's trial forces come from the symbolic law of
 :mod:`iwan_element.exudyn._symbolic_law`, which reads the state this bank exposes).
 """
+
 from __future__ import annotations
 
 import math
@@ -60,14 +61,17 @@ class IwanJointBank:
 
     def __init__(self, params, *, reversal_tol: float = REVERSAL_TOL):
         if isinstance(params, (str, bytes, dict)) or not hasattr(params, "__iter__"):
-            raise ValueError(f"params must be a sequence of IwanParameters, got {type(params).__name__}")
+            raise ValueError(
+                f"params must be a sequence of IwanParameters, got {type(params).__name__}"
+            )
         params = list(params)
         if not params:
             raise ValueError("params must hold at least one IwanParameters, got an empty sequence")
         for i, p in enumerate(params):
             if not isinstance(p, IwanParameters):
-                raise ValueError(f"params[{i}] must be an IwanParameters instance, "
-                                 f"got {type(p).__name__}")
+                raise ValueError(
+                    f"params[{i}] must be an IwanParameters instance, got {type(p).__name__}"
+                )
         tol = check_scalar("reversal_tol", reversal_tol, low=0.0, high=REVERSAL_TOL_MAX)
         self._params = tuple(params)
         self._rtol = tol
@@ -79,11 +83,11 @@ class IwanJointBank:
         R = f([p.R for p in params], dtype=float)
         self.e1 = chi + 1.0
         self.e3 = chi + 3.0
-        self.a = R / ((chi + 1.0) * (chi + 2.0))      # backbone x (KT - a x^(chi+1))
-        self.b = R / (chi + 1.0)                       # tangent KT - b x^(chi+1)
-        self.g_pm = 0.5 * self.KT * self.pm ** 2 - self.a * self.pm ** self.e3 / self.e3
+        self.a = R / ((chi + 1.0) * (chi + 2.0))  # backbone x (KT - a x^(chi+1))
+        self.b = R / (chi + 1.0)  # tangent KT - b x^(chi+1)
+        self.g_pm = 0.5 * self.KT * self.pm**2 - self.a * self.pm**self.e3 / self.e3
         self.ih_c = R / ((chi + 2.0) * (chi + 3.0))
-        self.ih_pm = self.ih_c * self.pm ** self.e3
+        self.ih_pm = self.ih_c * self.pm**self.e3
         self.tol = tol * self.pm
         self._halfKT = 0.5 * self.KT
         self._a_e3 = self.a / self.e3
@@ -110,18 +114,24 @@ class IwanJointBank:
         self._F, self._W, self._D = z.copy(), z.copy(), z.copy()
         self._Gc, self._IHc = z.copy(), z.copy()
         # the branch through the committed state and the values where it started
-        self.u0, self.W0, self.D0, self.G0, self.I0 = z.copy(), z.copy(), z.copy(), z.copy(), z.copy()
-        self._us = [np.empty(8) for _ in range(n)]     # reversal stacks, oldest first: the
-        self._Fr = [np.empty(8) for _ in range(n)]     # first _nst[i] entries of point i
+        self.u0, self.W0, self.D0, self.G0, self.I0 = (
+            z.copy(),
+            z.copy(),
+            z.copy(),
+            z.copy(),
+            z.copy(),
+        )
+        self._us = [np.empty(8) for _ in range(n)]  # reversal stacks, oldest first: the
+        self._Fr = [np.empty(8) for _ in range(n)]  # first _nst[i] entries of point i
         self._at = [np.empty(8, np.int64) for _ in range(n)]
         self.bur, self.bFr = z.copy(), z.copy()
         self.bc1, self.bc2 = np.ones(n), np.ones(n)
         self.blo, self.bhi = z.copy(), z.copy()
         self.bdir, self.bound = z.copy(), z.copy()
-        self._c4 = np.ones(n)                  # 4 on a branch from a reversal, 1 virgin
-        self._up = np.zeros(n, dtype=bool)     # the branch runs towards larger u
-        self._down = np.zeros(n, dtype=bool)   # ... towards smaller u
-        self._stale = False                    # F, W, D lag behind u (see _sync)
+        self._c4 = np.ones(n)  # 4 on a branch from a reversal, 1 virgin
+        self._up = np.zeros(n, dtype=bool)  # the branch runs towards larger u
+        self._down = np.zeros(n, dtype=bool)  # ... towards smaller u
+        self._stale = False  # F, W, D lag behind u (see _sync)
         self._nst = np.zeros(n, dtype=np.intp)  # stack lengths
         self.us = _Stacks(self._us, self._nst)  # read-only views of the live entries
         self.Fr = _Stacks(self._Fr, self._nst)
@@ -190,7 +200,7 @@ class IwanJointBank:
             self._stale = True
             return _NONE
         if self._stale:
-            self._sync()                       # the walks start from the committed values
+            self._sync()  # the walks start from the committed values
         slow = np.flatnonzero(~fast)
         if not np.all(np.isfinite(u[slow])):
             bad = slow[~np.isfinite(u[slow])][0]
@@ -219,7 +229,7 @@ class IwanJointBank:
         dr = self.bdir[slow]
         bound = np.where(self._nst[slow] > 0, self.bur[slow], -uc)
         up = du > 0.0
-        plain = (np.sign(du) == -dr) & (dr != 0.0)          # signs: du * dr may underflow
+        plain = (np.sign(du) == -dr) & (dr != 0.0)  # signs: du * dr may underflow
         plain &= np.abs(uc - self.bur[slow]) > self.tol[slow]
         plain &= np.where(up, uu < bound, uu > bound)
         if not plain.any():
@@ -229,7 +239,7 @@ class IwanJointBank:
         eF = self._F[idx]
         x = ub - e
         f, Gb, Ib = self._curves(0.5 * np.abs(x), idx)
-        W = self._W[idx] + (eF * x + 4.0 * Gb)          # as the walk sums it
+        W = self._W[idx] + (eF * x + 4.0 * Gb)  # as the walk sums it
         D = self._D[idx] + 2.0 * Ib
         self.u[idx] = ub
         self._F[idx] = eF + np.copysign(2.0 * f, x)
@@ -258,8 +268,11 @@ class IwanJointBank:
         q = hm ** self.e1[s]
         f = np.where(micro, hm * (self.KT[s] - self.a[s] * q), self.Fs[s])
         p3 = q * hm * hm
-        G = np.where(micro, hm * hm * self._halfKT[s] - self._a_e3[s] * p3,
-                     self.g_pm[s] + self.Fs[s] * (h - pm))
+        G = np.where(
+            micro,
+            hm * hm * self._halfKT[s] - self._a_e3[s] * p3,
+            self.g_pm[s] + self.Fs[s] * (h - pm),
+        )
         I = np.where(micro, self.ih_c[s] * p3, self.ih_pm[s] + self.Fs[s] * (h - pm))
         return f, G, I
 
@@ -276,16 +289,17 @@ class IwanJointBank:
         if micro.all():
             q = h ** (self._e1s if self._e1s is not None else self.e1)
             f = h * (self.KT - self.a * q)
-            p3 = q * h * h                        # h ** e3
+            p3 = q * h * h  # h ** e3
             Gb = h * h * self._halfKT - self._a_e3 * p3
             Ib = self.ih_c * p3
         else:
             hm = np.where(micro, h, pm)
-            q = hm ** self.e1
+            q = hm**self.e1
             f = np.where(micro, hm * (self.KT - self.a * q), self.Fs)
             p3 = q * hm * hm
-            Gb = np.where(micro, hm * hm * self._halfKT - self._a_e3 * p3,
-                          self.g_pm + self.Fs * (h - pm))
+            Gb = np.where(
+                micro, hm * hm * self._halfKT - self._a_e3 * p3, self.g_pm + self.Fs * (h - pm)
+            )
             Ib = np.where(micro, self.ih_c * p3, self.ih_pm + self.Fs * (h - pm))
         bFr = self.bFr
         self._F = bFr + np.copysign(self.bc2 * f, x)
@@ -310,9 +324,18 @@ class IwanJointBank:
         """
         self._room(i)
         n, F, _, dW, dD, G, I = masing_step(
-            self._consts[i], self._us[i], self._Fr[i], self._at[i], int(self._nst[i]),
-            float(self.u[i]), float(self._F[i]), float(self._Gc[i]), float(self._IHc[i]), u,
-            _NOSEG)
+            self._consts[i],
+            self._us[i],
+            self._Fr[i],
+            self._at[i],
+            int(self._nst[i]),
+            float(self.u[i]),
+            float(self._F[i]),
+            float(self._Gc[i]),
+            float(self._IHc[i]),
+            u,
+            _NOSEG,
+        )
         self.u[i] = u
         self._F[i] = F
         self._W[i] += dW
@@ -384,4 +407,4 @@ class _Stacks:
         return len(self._arrs)
 
     def __getitem__(self, i):
-        return self._arrs[i][:self._n[i]]
+        return self._arrs[i][: self._n[i]]

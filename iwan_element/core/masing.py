@@ -23,6 +23,7 @@ sets, e.g. all the perturbations of a finite-difference Jacobian, is one call).
 leaves, and the branch segments walked) for the vectorised evaluation of
 :mod:`iwan_element.core.history`.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -31,8 +32,14 @@ from numba import njit
 from ..base.validation import check_scalar, finite_array
 from .parameters import IwanParameters
 
-__all__ = ["masing_constants", "constants_from_arrays", "masing_history", "masing_rows",
-           "masing_step", "reversal_structure"]
+__all__ = [
+    "masing_constants",
+    "constants_from_arrays",
+    "masing_history",
+    "masing_rows",
+    "masing_step",
+    "reversal_structure",
+]
 
 # Positions in the constants vector of one parameter set (see masing_constants).
 KT, FS, PM, IPM, E1, E3, KTPM, A, B, G2, G3, GPM, IHC, FSPM, TOL = range(15)
@@ -58,9 +65,25 @@ def masing_constants(params: IwanParameters, tol: float) -> np.ndarray:
     Ks = p.K_slider
     g2 = 0.5 * p.KT * pm * pm
     g3 = Ks * pm * pm / ((p.chi + 2.0) * (p.chi + 3.0))
-    return np.array([p.KT, p.Fs, pm, 1.0 / pm, p.chi + 1.0, p.chi + 3.0, p.KT * pm,
-                     Ks * pm / (p.chi + 2.0), Ks, g2, g3, g2 - g3, (p.chi + 1.0) * g3,
-                     p.Fs * pm, float(tol)])
+    return np.array(
+        [
+            p.KT,
+            p.Fs,
+            pm,
+            1.0 / pm,
+            p.chi + 1.0,
+            p.chi + 3.0,
+            p.KT * pm,
+            Ks * pm / (p.chi + 2.0),
+            Ks,
+            g2,
+            g3,
+            g2 - g3,
+            (p.chi + 1.0) * g3,
+            p.Fs * pm,
+            float(tol),
+        ]
+    )
 
 
 def constants_from_arrays(Fs, KT, chi, beta, tol=0.0, phi_max=None) -> np.ndarray:
@@ -69,8 +92,9 @@ def constants_from_arrays(Fs, KT, chi, beta, tol=0.0, phi_max=None) -> np.ndarra
     unless given. The values are not validated here (the callers hold validated parameters).
     ``tol``: relative reversal tolerance (times ``phi_max``).
     """
-    Fs, KT, chi, beta, tol = np.broadcast_arrays(*(np.asarray(x, float).ravel()
-                                                   for x in (Fs, KT, chi, beta, tol)))
+    Fs, KT, chi, beta, tol = np.broadcast_arrays(
+        *(np.asarray(x, float).ravel() for x in (Fs, KT, chi, beta, tol))
+    )
     if phi_max is None:
         pm = Fs / KT * ((1.0 + beta) / (beta + (chi + 1.0) / (chi + 2.0)))
     else:
@@ -78,9 +102,27 @@ def constants_from_arrays(Fs, KT, chi, beta, tol=0.0, phi_max=None) -> np.ndarra
     Ks = KT / (1.0 + beta)
     g2 = 0.5 * KT * pm * pm
     g3 = Ks * pm * pm / ((chi + 2.0) * (chi + 3.0))
-    return np.ascontiguousarray(np.column_stack(
-        [KT, Fs, pm, 1.0 / pm, chi + 1.0, chi + 3.0, KT * pm, Ks * pm / (chi + 2.0), Ks, g2, g3,
-         g2 - g3, (chi + 1.0) * g3, Fs * pm, tol * pm]))
+    return np.ascontiguousarray(
+        np.column_stack(
+            [
+                KT,
+                Fs,
+                pm,
+                1.0 / pm,
+                chi + 1.0,
+                chi + 3.0,
+                KT * pm,
+                Ks * pm / (chi + 2.0),
+                Ks,
+                g2,
+                g3,
+                g2 - g3,
+                (chi + 1.0) * g3,
+                Fs * pm,
+                tol * pm,
+            ]
+        )
+    )
 
 
 @njit(cache=True)
@@ -136,21 +178,21 @@ def _advance(c, us, Fr, at, n, uc, Fc, Gc, IHc, u, i, seg, ns):
     G = Gc
     I = IHc
     if du != 0.0:
-        d = uc - us[n - 1] if n else uc              # direction of the current branch
-        up = du > 0.0                                # signs, not products: d * du underflows
+        d = uc - us[n - 1] if n else uc  # direction of the current branch
+        up = du > 0.0  # signs, not products: d * du underflows
         simple = d != 0.0
-        if (d < 0.0) if up else (d > 0.0):           # the motion reverses at uc
+        if (d < 0.0) if up else (d > 0.0):  # the motion reverses at uc
             simple = False
             if abs(d) <= c[TOL]:
                 if n:
-                    n -= 1                           # ignore a negligible excursion
+                    n -= 1  # ignore a negligible excursion
             else:
                 us[n] = uc
                 Fr[n] = Fc
                 at[n] = i - 1
                 n += 1
         pos = uc
-        while n:                                     # close the loops that u passes
+        while n:  # close the loops that u passes
             bound = us[n - 2] if n >= 2 else -us[n - 1]
             if (u < bound) if up else (u > bound):
                 break
@@ -166,7 +208,7 @@ def _advance(c, us, Fr, at, n, uc, Fc, Gc, IHc, u, i, seg, ns):
         if record:
             seg[0, ns], seg[1, ns], seg[2, ns], seg[3, ns] = i, at[n - 1] if n else -1, pos, u
             ns += 1
-        if simple:                                   # on the committed branch throughout
+        if simple:  # on the committed branch throughout
             if n:
                 G, I = _energies(c, 0.5 * c[IPM] * abs(u - us[n - 1]))
                 W = Fr[n - 1] * du + 4.0 * (G - Gc)
@@ -229,8 +271,9 @@ def _row(c, u, F, K, W, D, ids, seg):
     Wc = 0.0
     Dc = 0.0
     for i in range(m):
-        n, Fc, K[i], dW, dD, Gc, Ic, ns = _advance(c, us, Fr, at, n, uc, Fc, Gc, Ic, u[i],
-                                                   i, seg, ns)
+        n, Fc, K[i], dW, dD, Gc, Ic, ns = _advance(
+            c, us, Fr, at, n, uc, Fc, Gc, Ic, u[i], i, seg, ns
+        )
         uc = u[i]
         Wc += dW
         Dc += dD
@@ -267,8 +310,9 @@ def _as_params(params) -> list:
     if isinstance(params, IwanParameters):
         return [params]
     if isinstance(params, (str, bytes, dict)) or not hasattr(params, "__iter__"):
-        raise ValueError("params must be an IwanParameters or a sequence of them, got "
-                         f"{type(params).__name__}")
+        raise ValueError(
+            f"params must be an IwanParameters or a sequence of them, got {type(params).__name__}"
+        )
     out = list(params)
     if not out or not all(isinstance(p, IwanParameters) for p in out):
         raise ValueError("params must be a non-empty sequence of IwanParameters")
@@ -301,8 +345,9 @@ def masing_history(u, params, *, reversal_tol: float = 1e-12):
     if arr.ndim not in (1, 2):
         raise ValueError(f"u must have shape (n,) or (m, n), got {arr.shape}")
     single = arr.ndim == 1 and len(plist) == 1
-    U = np.ascontiguousarray(np.broadcast_to(arr, (len(plist), arr.shape[-1]))
-                             if arr.ndim == 1 else arr, dtype=float)
+    U = np.ascontiguousarray(
+        np.broadcast_to(arr, (len(plist), arr.shape[-1])) if arr.ndim == 1 else arr, dtype=float
+    )
     if U.shape[0] != len(plist):
         raise ValueError(f"u has {U.shape[0]} rows but params has {len(plist)} sets")
     C = np.array([masing_constants(p, tol * p.phi_max) for p in plist])

@@ -27,6 +27,7 @@ displacement amplitude ``Q`` (docs/equations.md section 7)::
 :func:`modal_ringdown` integrates the oscillator in time with the exact :class:`IwanJoint`
 (an independent route to the same curves).
 """
+
 from __future__ import annotations
 
 import math
@@ -126,9 +127,17 @@ def viscous_floor(zeta0, w0_sq, w_sq, k_e, floor: str):
     return zeta0 * np.sqrt(w0_sq * np.asarray(w_sq)) / k_e
 
 
-def modal_iwan_curve(amplitude, params: IwanParameters, *, K_inf: float, zeta0: float = 0.0,
-                     mass: float = 1.0, stiffness: str = "secant", floor: str = "constant",
-                     damping_form: str = "energy"):
+def modal_iwan_curve(
+    amplitude,
+    params: IwanParameters,
+    *,
+    K_inf: float,
+    zeta0: float = 0.0,
+    mass: float = 1.0,
+    stiffness: str = "secant",
+    floor: str = "constant",
+    damping_form: str = "energy",
+):
     """Natural frequency and damping ratio of a single-mode modal Iwan model.
 
     ``w(Q)**2 = (K_inf + K(Q)) / mass`` and
@@ -204,8 +213,17 @@ def modal_iwan_curve(amplitude, params: IwanParameters, *, K_inf: float, zeta0: 
 _MAX_RINGDOWN_STEPS = 2e7
 
 
-def modal_ringdown(t, params: IwanParameters, *, K_inf: float, q0: float, v0: float = 0.0,
-                   zeta0: float = 0.0, mass: float = 1.0, max_phase_step: float = 0.01):
+def modal_ringdown(
+    t,
+    params: IwanParameters,
+    *,
+    K_inf: float,
+    q0: float,
+    v0: float = 0.0,
+    zeta0: float = 0.0,
+    mass: float = 1.0,
+    max_phase_step: float = 0.01,
+):
     """Free decay of the single-mode modal Iwan oscillator, with the exact :class:`IwanJoint`.
 
     Integrates ``mass q'' + c q' + K_inf q + F_J(q) = 0`` (``c = 2 zeta0 mass w0``, the
@@ -245,9 +263,11 @@ def modal_ringdown(t, params: IwanParameters, *, K_inf: float, q0: float, v0: fl
     w0 = math.sqrt((K_inf + p.KT) / mass)
     steps = w0 * (tt[-1] - tt[0]) / dphi
     if steps > _MAX_RINGDOWN_STEPS:
-        raise ValueError(f"t spans {tt[-1] - tt[0]:g} s = {steps:.3g} integration steps of "
-                         f"max_phase_step/w0 (w0 = sqrt((K_inf + KT)/mass)) = {dphi / w0:.3g} s; at most "
-                         f"{_MAX_RINGDOWN_STEPS:.0e} are allowed (check the unit of t)")
+        raise ValueError(
+            f"t spans {tt[-1] - tt[0]:g} s = {steps:.3g} integration steps of "
+            f"max_phase_step/w0 (w0 = sqrt((K_inf + KT)/mass)) = {dphi / w0:.3g} s; at most "
+            f"{_MAX_RINGDOWN_STEPS:.0e} are allowed (check the unit of t)"
+        )
     n_sub = max(1, math.ceil(w0 * dt.mean() / dphi))
     h = dt.mean() / n_sub
     c = 2.0 * zeta0 * mass * w0

@@ -8,6 +8,7 @@ Li, Cai, Ruan, Cai, "Hysteresis modelling and identification of bolted joints wi
 model" (the seed paper, cited as "paper eq. N"). Its eq. (8) prints ``phi_max**(chi+2)`` in
 ``S``; the correct power is 1 (see ``S`` below).
 """
+
 from __future__ import annotations
 
 import json
@@ -40,21 +41,24 @@ def _derived(Fs: float, KT: float, chi: float, beta: float) -> tuple[float, floa
     normal ``phi_max``, ``1/phi_max``, ``KT phi_max`` and ``KT phi_max**2`` are enough for all
     closed forms and the time-domain elements to stay finite.
     """
-    c = beta + (chi + 1.0) / (chi + 2.0)                    # in (0, inf); ratio below <= 1/c
+    c = beta + (chi + 1.0) / (chi + 2.0)  # in (0, inf); ratio below <= 1/c
     ratio = (1.0 + beta) / c
     with np.errstate(all="ignore"):
         phi_max = float(np.float64(Fs) / np.float64(KT) * np.float64(ratio))  # paper eq. 11
-        checks = {"phi_max = Fs (1+beta)/(KT c)": phi_max,
-                  "1/phi_max": 1.0 / phi_max if phi_max else math.inf,
-                  "KT phi_max": KT * phi_max,
-                  "KT phi_max**2": KT * phi_max * phi_max}
+        checks = {
+            "phi_max = Fs (1+beta)/(KT c)": phi_max,
+            "1/phi_max": 1.0 / phi_max if phi_max else math.inf,
+            "KT phi_max": KT * phi_max,
+            "KT phi_max**2": KT * phi_max * phi_max,
+        }
     for what, v in checks.items():
         if not (math.isfinite(v) and v >= sys.float_info.min):
             raise ValueError(
                 f"IwanParameters(Fs={Fs}, KT={KT}, chi={chi}, beta={beta}) are outside the "
                 f"float range: {what} = {v}; rescale the units (e.g. mm and kN) so that Fs, "
-                f"KT and Fs/KT are between about 1e-150 and 1e150")
-    S = KT * (beta / (1.0 + beta))                          # = (Fs/phi_max) beta / c
+                f"KT and Fs/KT are between about 1e-150 and 1e150"
+            )
+    S = KT * (beta / (1.0 + beta))  # = (Fs/phi_max) beta / c
     return phi_max, S
 
 
@@ -132,16 +136,21 @@ class IwanParameters:
         closed forms never use it (they use ``r = u/phi_max``). Raises ``ValueError`` then.
         """
         pm, chi = self._derived[0], self.chi
-        log_r = (math.log(chi + 1.0) + math.log(self.KT) - math.log1p(self.beta)
-                 - (chi + 1.0) * math.log(pm))
+        log_r = (
+            math.log(chi + 1.0)
+            + math.log(self.KT)
+            - math.log1p(self.beta)
+            - (chi + 1.0) * math.log(pm)
+        )
         if not _LOG_TINY < log_r < _LOG_HUGE:
             raise ValueError(
                 f"R = 10**{log_r / math.log(10.0):.1f} N m**(-chi-2) is outside the float range "
                 f"for chi={chi}, phi_max={pm:g} m; the model itself is well defined (use "
-                f"K_slider and phi_max: R phi_max**(chi+1) = (chi+1) K_slider)")
+                f"K_slider and phi_max: R phi_max**(chi+1) = (chi+1) K_slider)"
+            )
         try:
             return (chi + 1.0) * self.K_slider / pm ** (chi + 1.0)
-        except (OverflowError, ZeroDivisionError):     # R fits but phi_max**(chi+1) does not
+        except (OverflowError, ZeroDivisionError):  # R fits but phi_max**(chi+1) does not
             return math.exp(log_r)
 
     @property
@@ -159,8 +168,13 @@ class IwanParameters:
     # ------------------------------------------------------------------ I/O
     def to_dict(self) -> dict:
         """JSON-safe dict of the four parameters, with units."""
-        return {"Fs": self.Fs, "KT": self.KT, "chi": self.chi, "beta": self.beta,
-                "units": {"Fs": "N", "KT": "N/m", "chi": "1", "beta": "1"}}
+        return {
+            "Fs": self.Fs,
+            "KT": self.KT,
+            "chi": self.chi,
+            "beta": self.beta,
+            "units": {"Fs": "N", "KT": "N/m", "chi": "1", "beta": "1"},
+        }
 
     @classmethod
     def from_dict(cls, data: dict) -> IwanParameters:
@@ -172,14 +186,17 @@ class IwanParameters:
         allowed = {"Fs", "KT", "chi", "beta", "units"}
         unknown = set(data) - allowed
         if unknown:
-            raise ValueError(f"unknown keys in parameter dict: {sorted(unknown)}; "
-                             f"allowed are {sorted(allowed)}")
+            raise ValueError(
+                f"unknown keys in parameter dict: {sorted(unknown)}; allowed are {sorted(allowed)}"
+            )
         missing = {"Fs", "KT", "chi", "beta"} - set(data)
         if missing:
             raise ValueError(f"parameter dict lacks {sorted(missing)}")
         units = data.get("units")
         if units is not None and not isinstance(units, dict):
-            raise ValueError(f"units must be a dict such as {{'Fs': 'N', 'KT': 'N/m'}}, got {units!r}")
+            raise ValueError(
+                f"units must be a dict such as {{'Fs': 'N', 'KT': 'N/m'}}, got {units!r}"
+            )
         if units is not None:
             expected = {"Fs": "N", "KT": "N/m", "chi": "1", "beta": "1"}
             for k, v in units.items():

@@ -26,6 +26,7 @@ returns the force, the tangent, the chain and the dissipation of one period per 
 :func:`periodic_harmonic_jacobian` contracts the exact sample Jacobian with the harmonic
 transforms in one compiled loop.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -55,24 +56,22 @@ def _periodic_row(c, u, F, K, anchor, seg):
     at = np.empty(N + 2, np.int64)
     ids = np.empty(N, np.int64)
     # first loading from the assembled state onto the virgin curve at the extremum
-    n, Fc, Kc, _, _, Gc, Ic, _ = _advance(c, us, Fr, at, 0, 0.0, 0.0, 0.0, 0.0, u[k0], 0,
-                                          seg, 0)
+    n, Fc, Kc, _, _, Gc, Ic, _ = _advance(c, us, Fr, at, 0, 0.0, 0.0, 0.0, 0.0, u[k0], 0, seg, 0)
     F[k0] = Fc
     K[k0] = Kc
     ids[0] = at[n - 1] if n else -1
     uc = u[k0]
     Dp = 0.0
-    for j in range(1, N + 1):                       # rotated sample j; j = N closes the period
+    for j in range(1, N + 1):  # rotated sample j; j = N closes the period
         m = (k0 + j) % N
-        n, Fc, Kc, _, dD, Gc, Ic, _ = _advance(c, us, Fr, at, n, uc, Fc, Gc, Ic, u[m], j,
-                                               seg, 0)
+        n, Fc, Kc, _, dD, Gc, Ic, _ = _advance(c, us, Fr, at, n, uc, Fc, Gc, Ic, u[m], j, seg, 0)
         uc = u[m]
         Dp += dD
         if j < N:
             F[m] = Fc
             K[m] = Kc
             ids[j] = at[n - 1] if n else -1
-    for j in range(N):                              # anchors back in sample order
+    for j in range(N):  # anchors back in sample order
         a = ids[j]
         anchor[(k0 + j) % N] = -1 if a < 0 else (k0 + a) % N
     return Dp
@@ -109,8 +108,9 @@ def periodic_rows(C: np.ndarray, U: np.ndarray):
     C = np.ascontiguousarray(C, dtype=float)
     U = np.ascontiguousarray(U, dtype=float)
     if C.ndim != 2 or C.shape[1] != N_CONST or U.ndim != 2 or U.shape[0] != C.shape[0]:
-        raise ValueError(f"C must be (m, {N_CONST}) and U (m, N) with the same m, got "
-                         f"{C.shape} and {U.shape}")
+        raise ValueError(
+            f"C must be (m, {N_CONST}) and U (m, N) with the same m, got {C.shape} and {U.shape}"
+        )
     F, K = np.empty(U.shape), np.empty(U.shape)
     A = np.empty(U.shape, np.int64)
     D = np.empty(U.shape[0])
@@ -167,10 +167,18 @@ def periodic_harmonic_jacobian(K, anchor, P, E, *, shift=None) -> np.ndarray:
     """
     K = np.ascontiguousarray(K, dtype=float)
     m = K.shape[0]
-    s = np.zeros(m) if shift is None else np.ascontiguousarray(np.broadcast_to(shift, (m,)),
-                                                                dtype=float)
+    s = (
+        np.zeros(m)
+        if shift is None
+        else np.ascontiguousarray(np.broadcast_to(shift, (m,)), dtype=float)
+    )
     out = np.zeros((m, P.shape[0], P.shape[0]))
-    _harmonic_jacobian(K, np.ascontiguousarray(anchor, dtype=np.int64),
-                       np.ascontiguousarray(P, dtype=float), np.ascontiguousarray(E, dtype=float),
-                       s, out)
+    _harmonic_jacobian(
+        K,
+        np.ascontiguousarray(anchor, dtype=np.int64),
+        np.ascontiguousarray(P, dtype=float),
+        np.ascontiguousarray(E, dtype=float),
+        s,
+        out,
+    )
     return out

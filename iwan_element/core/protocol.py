@@ -5,6 +5,7 @@ material. Evaluation never commits: a solver may call :meth:`trial` many times p
 (Newton iterations, finite-difference Jacobians, Runge-Kutta stages, rejected steps) and
 calls :meth:`commit` once per accepted step.
 """
+
 from __future__ import annotations
 
 from typing import Protocol, runtime_checkable
@@ -59,17 +60,28 @@ class JointElement(Protocol):
     def displacement(self) -> float: ...
 
 
-_PROTOCOL = ("trial", "commit", "revert", "reset", "work", "stored_energy", "dissipated_energy",
-             "force", "displacement")
+_PROTOCOL = (
+    "trial",
+    "commit",
+    "revert",
+    "reset",
+    "work",
+    "stored_energy",
+    "dissipated_energy",
+    "force",
+    "displacement",
+)
 
 
 def check_element(obj, *, name: str = "obj") -> None:
     """Raise ``ValueError`` naming ``name`` unless ``obj`` follows :class:`JointElement`."""
     missing = [m for m in _PROTOCOL if not hasattr(obj, m)]
     if missing:
-        raise ValueError(f"{name} must follow the joint element protocol (trial, commit, revert, "
-                         f"reset, force, displacement and energy read-outs); "
-                         f"{type(obj).__name__} lacks {missing}")
+        raise ValueError(
+            f"{name} must follow the joint element protocol (trial, commit, revert, "
+            f"reset, force, displacement and energy read-outs); "
+            f"{type(obj).__name__} lacks {missing}"
+        )
 
 
 class CommittedState:

@@ -7,11 +7,21 @@ probabilities, evidences and model averaging), :mod:`.campaign` (one device mode
 campaign, its parameters laws of the test conditions: :func:`fit_campaign`), and
 :mod:`.generator` (the synthetic test generator).
 """
+
 from .campaign import CampaignFit, fit_campaign
 from .generator import simulate_element_test
 from .loops import BatchDiagnosis, Diagnosis, diagnose, diagnose_many, loop_candidates
 from .vibration import VibrationDiagnosis, diagnose_vibration
 
-__all__ = ["BatchDiagnosis", "CampaignFit", "fit_campaign", "Diagnosis", "VibrationDiagnosis",
-           "diagnose", "diagnose_many", "diagnose_vibration", "loop_candidates",
-           "simulate_element_test"]
+__all__ = [
+    "BatchDiagnosis",
+    "CampaignFit",
+    "fit_campaign",
+    "Diagnosis",
+    "VibrationDiagnosis",
+    "diagnose",
+    "diagnose_many",
+    "diagnose_vibration",
+    "loop_candidates",
+    "simulate_element_test",
+]

@@ -1,4 +1,5 @@
 """The test generator of the package: a displacement-driven test of any joint element."""
+
 from __future__ import annotations
 
 import math
@@ -15,18 +16,22 @@ __all__ = ["simulate_element_test"]
 
 def _drive(amps, cycles, n_per, waveform, envelope):
     """Displacement of the protocol, from and back to rest at 0."""
-    if envelope == "linear":                 # amplitude interpolated continuously
+    if envelope == "linear":  # amplitude interpolated continuously
         n = n_per * cycles * (amps.size - 1 if amps.size > 1 else 1)
         ph = np.arange(n) / n_per
         env = np.interp(np.linspace(0.0, 1.0, n), np.linspace(0.0, 1.0, amps.size), amps)
-        base = (np.sin(2 * np.pi * ph) if waveform == "sine" else
-                np.where((ph + 0.25) % 1.0 < 0.5, 4 * ((ph + 0.25) % 1.0) - 1,
-                         3 - 4 * ((ph + 0.25) % 1.0)))
+        base = (
+            np.sin(2 * np.pi * ph)
+            if waveform == "sine"
+            else np.where(
+                (ph + 0.25) % 1.0 < 0.5, 4 * ((ph + 0.25) % 1.0) - 1, 3 - 4 * ((ph + 0.25) % 1.0)
+            )
+        )
         return np.concatenate([env * base, np.zeros(1)])
     if waveform == "sine":
         ph = np.arange(n_per * cycles) / n_per
         blocks = [a * np.sin(2 * np.pi * ph) for a in amps]
-    else:                        # constant rate 4 max(a) f: shorter periods at small amplitudes
+    else:  # constant rate 4 max(a) f: shorter periods at small amplitudes
         blocks = []
         for a in amps:
             n_a = max(8, int(round(n_per * a / amps.max())))
@@ -42,12 +47,23 @@ def _noise(rng, n, sigma, phi):
     return sigma * e
 
 
-def simulate_element_test(element, amplitude, *, cycles: int = 3, frequency: float = 1.0,
-                          samples_per_cycle: int = 96, waveform: str = "sine",
-                          envelope: str = "steps", force_noise: float = 0.0,
-                          displacement_noise: float = 0.0, noise_correlation: float = 0.0,
-                          force_offset: float = 0.0, displacement_offset: float = 0.0,
-                          rest_samples: int = 0, seed=0) -> TestData:
+def simulate_element_test(
+    element,
+    amplitude,
+    *,
+    cycles: int = 3,
+    frequency: float = 1.0,
+    samples_per_cycle: int = 96,
+    waveform: str = "sine",
+    envelope: str = "steps",
+    force_noise: float = 0.0,
+    displacement_noise: float = 0.0,
+    noise_correlation: float = 0.0,
+    force_offset: float = 0.0,
+    displacement_offset: float = 0.0,
+    rest_samples: int = 0,
+    seed=0,
+) -> TestData:
     """Displacement-driven test of any joint element (an effect stack included), with sensor
     noise and offsets.
 
@@ -88,8 +104,9 @@ def simulate_element_test(element, amplitude, *, cycles: int = 3, frequency: flo
     """
     check_element(element, name="element")
     if not callable(getattr(element, "force_history", None)):
-        raise ValueError(f"element must have a force_history(u[, v]) method; "
-                         f"{type(element).__name__} has none")
+        raise ValueError(
+            f"element must have a force_history(u[, v]) method; {type(element).__name__} has none"
+        )
     amps = check_magnitude("amplitude", finite_array("amplitude", amplitude, ndim=1), unit="m")
     if np.any(amps <= 0.0):
         raise ValueError("amplitude must all be > 0 [m]")

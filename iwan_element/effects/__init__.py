@@ -33,6 +33,7 @@ Asymmetric slip and break-away are one slider law each and may wrap one another 
 thresholds multiply: :mod:`iwan_element.effects.engine.law`); slip degradation stands alone.
 Every effect reduces exactly to the wrapped element at its neutral parameter values.
 """
+
 from __future__ import annotations
 
 import importlib
@@ -50,10 +51,22 @@ from .pinning_stiffness import PinningStiffness
 from .slip_degradation import SlipDegradation
 from .viscous_damping import ViscousDamping
 
-__all__ = ["EFFECTS", "Effect", "ParamSpec", "ViscousDamping", "PinningStiffness", "Backlash",
-           "SlipDegradation", "AsymmetricSlip", "BreakAway", "Hardening", "MacroslipOnset",
-           "make_effect", "base_joint",
-           "register_effect"]
+__all__ = [
+    "EFFECTS",
+    "Effect",
+    "ParamSpec",
+    "ViscousDamping",
+    "PinningStiffness",
+    "Backlash",
+    "SlipDegradation",
+    "AsymmetricSlip",
+    "BreakAway",
+    "Hardening",
+    "MacroslipOnset",
+    "make_effect",
+    "base_joint",
+    "register_effect",
+]
 
 EFFECTS: dict = {}
 """The effect library by name (the names users and reports refer to)."""
@@ -77,8 +90,12 @@ def _discover() -> None:
             continue
         mod = importlib.import_module(f"{__name__}.{info.name}")
         for obj in vars(mod).values():
-            if (inspect.isclass(obj) and issubclass(obj, Effect) and obj.effect
-                    and obj.__module__ == mod.__name__):
+            if (
+                inspect.isclass(obj)
+                and issubclass(obj, Effect)
+                and obj.effect
+                and obj.__module__ == mod.__name__
+            ):
                 register_effect(obj)
 
 
@@ -97,9 +114,11 @@ def make_effect(name: str, inner, **parameters: float):
     cls = EFFECTS[name]
     unknown = set(parameters) - set(cls.parameter_names) - set(cls.options)
     if unknown:
-        raise ValueError(f"effect {name!r} takes parameters {list(cls.parameter_names)}"
-                         + (f" and options {list(cls.options)}" if cls.options else "")
-                         + f", not {sorted(unknown)}")
+        raise ValueError(
+            f"effect {name!r} takes parameters {list(cls.parameter_names)}"
+            + (f" and options {list(cls.options)}" if cls.options else "")
+            + f", not {sorted(unknown)}"
+        )
     missing = [s.name for s in cls.specs if s.default is None and s.name not in parameters]
     if missing:
         raise ValueError(f"effect {name!r} needs parameter(s) {missing}")

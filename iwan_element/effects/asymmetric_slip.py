@@ -16,6 +16,7 @@ Exact on the continuous density (:mod:`iwan_element.effects.engine.law`, law
 multiply: a contact that grips harder one way and whose static friction exceeds its kinetic
 friction (a band brake, whose self-energising wrap favours one direction).
 """
+
 from __future__ import annotations
 
 from .base import ParamSpec
@@ -38,10 +39,20 @@ class AsymmetricSlip(LawEffect):
 
     effect = "asymmetric_slip"
     loop_rank = 50
-    specs = (ParamSpec("asymmetry", "1", "relative difference of the forward and backward "
-                       "slip thresholds", lower=-1.0, upper=1.0, fit_bounds=(-0.9, 0.9),
-                       prior=(-0.9, 0.9), neutral=0.0,
-                       fit_starts=(0.0, 0.1, -0.1), open_range=True),)
+    specs = (
+        ParamSpec(
+            "asymmetry",
+            "1",
+            "relative difference of the forward and backward slip thresholds",
+            lower=-1.0,
+            upper=1.0,
+            fit_bounds=(-0.9, 0.9),
+            prior=(-0.9, 0.9),
+            neutral=0.0,
+            fit_starts=(0.0, 0.1, -0.1),
+            open_range=True,
+        ),
+    )
 
     def __init__(self, inner, *, asymmetry: float):
         super().__init__(inner)

@@ -25,6 +25,7 @@ A compliant Hertz contact closing the gap (``F ~ delta^(3/2)``, a convex re-enga
 tried as the engagement law and rejected by the same records: refitted with the joint's
 shape, its compliance goes to zero (see the project notes of the damper work).
 """
+
 from __future__ import annotations
 
 import copy
@@ -63,16 +64,49 @@ class Backlash(Effect):
     effect = "backlash"
     structure = "series"
     loop_rank = 30
-    specs = (ParamSpec("gap", "m", "half width of the free play in series with the joint",
-                       ref="u_max", ref_power=-1, fit_bounds=(0.0, 0.5),
-                       prior=(0.0, 0.5), neutral=0.0, fit_starts=(0.0, 0.01, 0.08)),
-             ParamSpec("drag", "N", "friction force resisting the motion across the open gap",
-                       default=0.0, fs_power=1, fit_bounds=(0.0, 0.5),
-                       prior=(0.0, 0.5), neutral=0.0, fit_starts=(0.0, 0.05, 0.1)))
+    specs = (
+        ParamSpec(
+            "gap",
+            "m",
+            "half width of the free play in series with the joint",
+            ref="u_max",
+            ref_power=-1,
+            fit_bounds=(0.0, 0.5),
+            prior=(0.0, 0.5),
+            neutral=0.0,
+            fit_starts=(0.0, 0.01, 0.08),
+        ),
+        ParamSpec(
+            "drag",
+            "N",
+            "friction force resisting the motion across the open gap",
+            default=0.0,
+            fs_power=1,
+            fit_bounds=(0.0, 0.5),
+            prior=(0.0, 0.5),
+            neutral=0.0,
+            fit_starts=(0.0, 0.05, 0.1),
+        ),
+    )
     #: Gap values (fraction of the largest |u|) scanned for a start before the fit: the gap
     #: must land near the record's zero-force plateau before the joint's shape can follow.
-    fit_scan = (0.0, 0.003, 0.006, 0.01, 0.015, 0.02, 0.03, 0.045, 0.06, 0.08, 0.1, 0.13, 0.17,
-                0.22, 0.3)
+    fit_scan = (
+        0.0,
+        0.003,
+        0.006,
+        0.01,
+        0.015,
+        0.02,
+        0.03,
+        0.045,
+        0.06,
+        0.08,
+        0.1,
+        0.13,
+        0.17,
+        0.22,
+        0.3,
+    )
 
     def __init__(self, inner, *, gap: float, drag: float = 0.0):
         super().__init__(inner)
@@ -80,11 +114,11 @@ class Backlash(Effect):
         self._reset_own()
 
     def _reset_own(self):
-        self._e = 0.0            # opening of the gap (u - w) while drag acts, in [-gap, gap]
-        self._Dg = 0.0           # energy dissipated by the drag [J]
+        self._e = 0.0  # opening of the gap (u - w) while drag acts, in [-gap, gap]
+        self._Dg = 0.0  # energy dissipated by the drag [J]
         self._w = 0.0
-        self._side = 0           # +1 / -1: in contact pushing forward / back; 0: gap open
-        self._slide_at = None    # joint displacement where the last trial's gap began to slide
+        self._side = 0  # +1 / -1: in contact pushing forward / back; 0: gap open
+        self._slide_at = None  # joint displacement where the last trial's gap began to slide
 
     @property
     def joint_displacement(self) -> float:
@@ -133,18 +167,19 @@ class Backlash(Effect):
         inner, g, fd, wc, ec = self._inner, self.gap, self.drag, self._w, self._e
         self._slide_at = None
         w = u - ec
-        F, K = inner.trial(w, v)                 # gap element stuck
+        F, K = inner.trial(w, v)  # gap element stuck
         for s in (1.0, -1.0):
             if s * F <= fd or self._side == s:  # stuck, or pressed against that stop
                 continue
-            Fc = inner.force - s * fd            # committed joint force is inside +-drag
-            if s * Fc >= 0.0:                    # (up to rounding: at +-drag already)
+            Fc = inner.force - s * fd  # committed joint force is inside +-drag
+            if s * Fc >= 0.0:  # (up to rounding: at +-drag already)
                 w_s = wc
             else:
-                w_s = _find_zero(lambda x: _shifted(inner.trial(x, v), s * fd), wc, Fc, w,
-                                 F - s * fd)
+                w_s = _find_zero(
+                    lambda x: _shifted(inner.trial(x, v), s * fd), wc, Fc, w, F - s * fd
+                )
             self._slide_at = w_s
-            if s * (u - w_s) >= g:               # slid up to the stop: contact there
+            if s * (u - w_s) >= g:  # slid up to the stop: contact there
                 w = u - s * g
                 F, K = inner.trial(w, v)
                 return w, int(s), F, K
@@ -158,7 +193,7 @@ class Backlash(Effect):
         wc = self._w
         side = self._side
         self._slide_at = None
-        if side == 0:                            # resting in the gap at zero joint force
+        if side == 0:  # resting in the gap at zero joint force
             self._slide_at = wc
             w = min(max(wc, u - g), u + g)
             if w == wc:
@@ -168,12 +203,12 @@ class Backlash(Effect):
         w_contact = u - g * side
         F, K = inner.trial(w_contact, v)
         if (w_contact - wc) * side >= 0.0 or F * side > 0.0:
-            return w_contact, side, F, K         # contact kept (loading or partial unloading)
+            return w_contact, side, F, K  # contact kept (loading or partial unloading)
         # the joint unloads to zero force, then the gap opens
         w0 = _find_zero(lambda x: inner.trial(x, v), wc, inner.force, w_contact, F)
         self._slide_at = w0
         w_other = u + g * side
-        if (w_other - w0) * side < 0.0:          # crossed the gap: contact on the other side
+        if (w_other - w0) * side < 0.0:  # crossed the gap: contact on the other side
             F, K = inner.trial(w_other, v)
             return w_other, -side, F, K
         return w0, 0, inner.trial(w0, v)[0], 0.0
@@ -181,8 +216,13 @@ class Backlash(Effect):
     def trial(self, u: float, v: float = 0.0) -> tuple[float, float]:
         """Force [N] and tangent [N/m] (zero tangent while the gap slides open)."""
         w, side, F, K = self._solve(float(u), v)
-        self._te = (0.0 if self.drag == 0.0 else side * self.gap if side
-                    else min(max(float(u) - w, -self.gap), self.gap))
+        self._te = (
+            0.0
+            if self.drag == 0.0
+            else side * self.gap
+            if side
+            else min(max(float(u) - w, -self.gap), self.gap)
+        )
         self._tw = w
         self._tside = side
         self._set_trial(u, v, F)
@@ -195,5 +235,5 @@ class Backlash(Effect):
         self._side = self._tside
         self._Dg += self.drag * abs(self._te - self._e)
         self._e = self._te
-        self._W = self._inner.work + self._Dg          # the drag's work is all dissipated
+        self._W = self._inner.work + self._Dg  # the drag's work is all dissipated
         self._D = self._inner.dissipated_energy + self._Dg

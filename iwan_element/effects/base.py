@@ -3,6 +3,7 @@ parameter description every effect declares, and a safeguarded zero finder.
 
 Private module; the public names live in :mod:`iwan_element.effects`.
 """
+
 from __future__ import annotations
 
 import copy
@@ -90,8 +91,10 @@ class ParamSpec:
     def __post_init__(self):
         lo, hi = self.fit_bounds
         if self.prior is not None and not (lo <= self.prior[0] < self.prior[1] <= hi):
-            raise ValueError(f"prior of {self.name!r} must be a range inside fit_bounds "
-                             f"{self.fit_bounds}, got {self.prior}")
+            raise ValueError(
+                f"prior of {self.name!r} must be a range inside fit_bounds "
+                f"{self.fit_bounds}, got {self.prior}"
+            )
 
         if self.neutral is not None and not lo <= self.neutral <= hi:
             raise ValueError(f"neutral of {self.name!r} must lie in fit_bounds {self.fit_bounds}")
@@ -125,20 +128,21 @@ class ParamSpec:
             return lo + q * (hi - lo)
         n = min(max(self.neutral, lo), hi)
         f = PRIOR_FLOOR * max(n - lo, hi - n)
-        a, b = math.log1p((n - lo) / f), math.log1p((hi - n) / f)     # masses x norm
+        a, b = math.log1p((n - lo) / f), math.log1p((hi - n) / f)  # masses x norm
         m = q * (a + b)
         left = n - f * np.expm1(np.maximum(a - m, 0.0))
         right = n + f * np.expm1(np.maximum(m - a, 0.0))
         return np.clip(np.where(m < a, left, right), lo, hi)
 
 
-def _find_zero(trial, a: float, Fa: float, b: float, Fb: float, *, rtol: float = 1e-13,
-               max_iter: int = 100) -> float:
+def _find_zero(
+    trial, a: float, Fa: float, b: float, Fb: float, *, rtol: float = 1e-13, max_iter: int = 100
+) -> float:
     """Zero of a force monotone along the path ``a -> b`` (``Fa``, ``Fb`` of opposite sign),
     by Newton steps on the element's tangent, safeguarded by bisection. ``trial(x)`` returns
     ``(force, tangent)`` for the move from the committed state to ``x``.
     """
-    lo, hi = (a, b) if Fa < 0.0 else (b, a)          # F(lo) < 0 < F(hi)
+    lo, hi = (a, b) if Fa < 0.0 else (b, a)  # F(lo) < 0 < F(hi)
     x = a
     F = Fa
     K = trial(a + 1e-9 * (b - a))[1]
@@ -179,11 +183,12 @@ def require_plain_joint(inner, subject: str) -> None:
     with ``IwanParameters``): ``subject`` (e.g. ``"break-away"``) changes the joint's own
     sliders, so it must wrap the joint directly.
     """
-    if isinstance(inner, Effect) or not isinstance(getattr(inner, "params", None),
-                                                    IwanParameters):
-        raise ValueError("inner must be a plain Iwan joint (IwanJoint or DiscreteIwan with "
-                         f"IwanParameters): {subject} changes the joint's own sliders, so "
-                         "it wraps the joint directly (put other effects around it)")
+    if isinstance(inner, Effect) or not isinstance(getattr(inner, "params", None), IwanParameters):
+        raise ValueError(
+            "inner must be a plain Iwan joint (IwanJoint or DiscreteIwan with "
+            f"IwanParameters): {subject} changes the joint's own sliders, so "
+            "it wraps the joint directly (put other effects around it)"
+        )
 
 
 #: The ways an effect can sit on the joint (``Effect.structure``).
@@ -239,19 +244,25 @@ class Effect(CommittedState):
     def __init_subclass__(cls, **kw):
         super().__init_subclass__(**kw)
         if cls.structure not in STRUCTURES:
-            raise TypeError(f"{cls.__name__}.structure must be one of {STRUCTURES}, got "
-                            f"{cls.structure!r}")
+            raise TypeError(
+                f"{cls.__name__}.structure must be one of {STRUCTURES}, got {cls.structure!r}"
+            )
         unknown = set(cls.needs) - set(NEEDS)
         if unknown:
-            raise TypeError(f"{cls.__name__}.needs has unknown entries {sorted(unknown)}; "
-                            f"known: {NEEDS}")
+            raise TypeError(
+                f"{cls.__name__}.needs has unknown entries {sorted(unknown)}; known: {NEEDS}"
+            )
         derived = {"slider_level", "needs_energy"} & set(vars(cls))
         if derived:
-            raise TypeError(f"{cls.__name__} sets {sorted(derived)}: these follow from "
-                            "structure; declare structure instead")
+            raise TypeError(
+                f"{cls.__name__} sets {sorted(derived)}: these follow from "
+                "structure; declare structure instead"
+            )
         if cls.structure == "series" and not callable(getattr(cls, "joint_path", None)):
-            raise TypeError(f"{cls.__name__} is in series with the joint (structure "
-                            "'series') and must define joint_path(u)")
+            raise TypeError(
+                f"{cls.__name__} is in series with the joint (structure "
+                "'series') and must define joint_path(u)"
+            )
         cls.parameter_names = tuple(s.name for s in cls.specs)
         cls.slider_level = cls.structure in ("slider", "energy")
         cls.needs_energy = cls.structure == "energy"
@@ -280,7 +291,9 @@ class Effect(CommittedState):
     def describe(self) -> str:
         """One line naming this effect and every effect below it."""
         own = ", ".join(f"{k}={v:.4g}" for k, v in self.parameters.items())
-        below = self._inner.describe() if isinstance(self._inner, Effect) else repr(self._inner.params)
+        below = (
+            self._inner.describe() if isinstance(self._inner, Effect) else repr(self._inner.params)
+        )
         return f"{self.effect}({own}) on {below}"
 
     def reset(self) -> None:
@@ -302,9 +315,18 @@ class Effect(CommittedState):
             val = values[sp.name]
             if val is None:
                 raise ValueError(f"effect {self.effect!r} needs parameter {sp.name!r}")
-            setattr(self, sp.name, check_scalar(
-                sp.name, val, low=sp.lower, high=None if math.isinf(sp.upper) else sp.upper,
-                low_open=sp.open_range, high_open=sp.open_range))
+            setattr(
+                self,
+                sp.name,
+                check_scalar(
+                    sp.name,
+                    val,
+                    low=sp.lower,
+                    high=None if math.isinf(sp.upper) else sp.upper,
+                    low_open=sp.open_range,
+                    high_open=sp.open_range,
+                ),
+            )
 
     @classmethod
     def vector_force(cls, F, u, v, **values):
@@ -354,5 +376,3 @@ class Effect(CommittedState):
 
     def __repr__(self) -> str:
         return f"<{type(self).__name__} {self.describe()}>"
-
-

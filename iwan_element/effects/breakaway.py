@@ -24,6 +24,7 @@ laws multiply (static ``r (1 +- a) phi``, kinetic ``(1 +- a) phi``). Checked aga
 independent plain-Python slider bank, to which a dense bank converges
 (``tests/test_breakaway.py``).
 """
+
 from __future__ import annotations
 
 from .base import ParamSpec
@@ -47,8 +48,18 @@ class BreakAway(LawEffect):
 
     effect = "breakaway"
     loop_rank = 60
-    specs = (ParamSpec("ratio", "1", "static over kinetic slip threshold", lower=1.0,
-                       fit_bounds=(1.0, 3.0), prior=(1.0, 3.0), neutral=1.0, fit_starts=(1.0, 1.2, 1.5, 2.0)),)
+    specs = (
+        ParamSpec(
+            "ratio",
+            "1",
+            "static over kinetic slip threshold",
+            lower=1.0,
+            fit_bounds=(1.0, 3.0),
+            prior=(1.0, 3.0),
+            neutral=1.0,
+            fit_starts=(1.0, 1.2, 1.5, 2.0),
+        ),
+    )
     #: Ratios scanned for a start: the force changes only to second order in ``ratio - 1``
     #: near 1 (the static-kinetic jump and the shift of the break both scale with it), so a
     #: fit started at 1 has no gradient to follow.

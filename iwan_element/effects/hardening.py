@@ -24,6 +24,7 @@ and the dissipation per cycle is unchanged: the hysteretic part of the damping r
 scaled by ``(w_base / w)^2`` (same energy lost, stiffer mode), the viscous floor is not.
 Equations: ``docs/vibration_effects.md``.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -51,15 +52,33 @@ class Hardening(Effect):
     """
 
     effect = "hardening"
-    specs = (ParamSpec("k3", "N/m^3", "cubic stiffness in parallel with the joint",
-                       fs_power=1, ref="u_max", ref_power=3, fit_bounds=(0.0, 5.0),
-                       prior=(0.0, 5.0), neutral=0.0,
-                       fit_starts=(0.0, 0.1, 1.0)),)
-    modal_specs = (ParamSpec("k3_per_mass", "1/(m^2 s^2)",
-                             "cubic modal stiffness over modal mass (amplitude in curve units)",
-                             ref="omega2_per_X2", ref_power=-1, fit_bounds=(0.0, 1.0),
-                             prior=(0.0, 1.0), neutral=0.0,
-                             fit_starts=(0.0, 1e-3, 2e-2)),)
+    specs = (
+        ParamSpec(
+            "k3",
+            "N/m^3",
+            "cubic stiffness in parallel with the joint",
+            fs_power=1,
+            ref="u_max",
+            ref_power=3,
+            fit_bounds=(0.0, 5.0),
+            prior=(0.0, 5.0),
+            neutral=0.0,
+            fit_starts=(0.0, 0.1, 1.0),
+        ),
+    )
+    modal_specs = (
+        ParamSpec(
+            "k3_per_mass",
+            "1/(m^2 s^2)",
+            "cubic modal stiffness over modal mass (amplitude in curve units)",
+            ref="omega2_per_X2",
+            ref_power=-1,
+            fit_bounds=(0.0, 1.0),
+            prior=(0.0, 1.0),
+            neutral=0.0,
+            fit_starts=(0.0, 1e-3, 2e-2),
+        ),
+    )
     kind = "stiffness"
 
     def __init__(self, inner, *, k3: float):
@@ -68,7 +87,7 @@ class Hardening(Effect):
 
     @classmethod
     def vector_force(cls, F, u, v, *, k3):
-        return F + k3 * u ** 3
+        return F + k3 * u**3
 
     @classmethod
     def modal_form(cls, X, frequency, damping, zeta0, *, k3_per_mass):
@@ -76,22 +95,22 @@ class Hardening(Effect):
         the hysteretic damping scaled by ``(f_base / f)^2``, the floor ``zeta0`` unchanged.
         """
         X = np.asarray(X, float)
-        f = np.sqrt(frequency ** 2 + 0.75 * k3_per_mass * X ** 2 / (4 * np.pi ** 2))
+        f = np.sqrt(frequency**2 + 0.75 * k3_per_mass * X**2 / (4 * np.pi**2))
         return f, zeta0 + (damping - zeta0) * (frequency / f) ** 2
 
     @classmethod
     def modal_to_joint(cls, values, *, modal_mass, slip_per_amplitude, omega0):
         """Joint cubic stiffness ``k3 = kappa3 m / r^4`` [N/m^3]."""
-        return {"k3": values["k3_per_mass"] * modal_mass / slip_per_amplitude ** 4}
+        return {"k3": values["k3_per_mass"] * modal_mass / slip_per_amplitude**4}
 
     def trial(self, u: float, v: float = 0.0) -> tuple[float, float]:
         """Force [N] and tangent [N/m]."""
         F, K = self._inner.trial(u, v)
-        F += self.k3 * u ** 3
+        F += self.k3 * u**3
         self._set_trial(u, v, F)
         return F, K + 3.0 * self.k3 * u * u
 
     def _commit(self) -> None:
         self._inner.commit()
-        self._W = self._inner.work + 0.25 * self.k3 * self._tu ** 4
+        self._W = self._inner.work + 0.25 * self.k3 * self._tu**4
         self._D = self._inner.dissipated_energy

@@ -55,6 +55,7 @@ stays below ``u_e`` (``u_e = inf`` is allowed where the total stiffness is finit
 ``v < 1/3``). The stiffness is exact; the dissipation of the bins already sliding is off by
 their spread within the bin, ``O(bins^-2)`` (measured in ``tests/test_vibration_effects.py``).
 """
+
 from __future__ import annotations
 
 import math
@@ -65,8 +66,7 @@ from ..base.validation import check_scalar
 from .base import ParamSpec
 from .engine.jenkins import JenkinsBank, jenkins_gain
 
-__all__ = ["MacroslipOnset", "patch_cumulative", "patch_stiffness_loss",
-           "patch_dissipation"]
+__all__ = ["MacroslipOnset", "patch_cumulative", "patch_stiffness_loss", "patch_dissipation"]
 
 
 _GL = np.polynomial.legendre.leggauss(48)
@@ -172,32 +172,87 @@ class MacroslipOnset(JenkinsBank):
     """
 
     effect = "macroslip_onset"
-    specs = (ParamSpec("k_2", "N/m", "stiffness of the patch that slides between u_s and "
-                       "2 u_s", fs_power=1, ref="u_max", fit_bounds=(0.0, 5.0), prior=(0.0, 5.0), neutral=0.0,
-                       fit_starts=(0.0, 0.3, 1.0)),
-             ParamSpec("u_s", "m", "slip displacement at which the patch starts to slide",
-                       lower=0.0, default=None, ref="u_max", ref_power=-1,
-                       fit_bounds=(0.02, 1.0), prior=(0.02, 1.0), fit_starts=(0.5, 0.3, 0.7)),
-             ParamSpec("shape", "1", "shape of the threshold law (0: slides as a whole, "
-                       "1/2: thresholds spread evenly)", upper=1.0, default=0.0,
-                       fit_bounds=(0.0, 0.5), prior=(0.0, 0.5), fit_starts=(0.0, 0.0, 0.3)),
-             )
-    modal_specs = (ParamSpec("kappa_2", "1/s^2", "stiffness over modal mass that slides "
-                             "between X_s and 2 X_s", ref="omega2_ref", ref_power=-1,
-                             fit_bounds=(0.0, 0.3), prior=(0.0, 0.3), neutral=0.0,
-                             fit_starts=(0.0, 0.01, 0.05, 0.003, 0.02, 0.05, 0.02, 0.01)),
-                   ParamSpec("X_s", "m", "amplitude at which the patch starts to slide",
-                             ref="X_max", ref_power=-1, fit_bounds=(0.02, 1.0), prior=(0.02, 1.0),
-                             fit_starts=(0.5, 0.3, 0.6, 0.8, 0.8, 0.9, 0.4, 0.3)),
-                   ParamSpec("shape", "1", "shape of the threshold law (0: slides as a "
-                             "whole, 1/2: thresholds spread evenly)", upper=1.0,
-                             default=0.0, fit_bounds=(0.0, 0.5), prior=(0.0, 0.5),
-                             fit_starts=(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.3, 0.45)))
+    specs = (
+        ParamSpec(
+            "k_2",
+            "N/m",
+            "stiffness of the patch that slides between u_s and 2 u_s",
+            fs_power=1,
+            ref="u_max",
+            fit_bounds=(0.0, 5.0),
+            prior=(0.0, 5.0),
+            neutral=0.0,
+            fit_starts=(0.0, 0.3, 1.0),
+        ),
+        ParamSpec(
+            "u_s",
+            "m",
+            "slip displacement at which the patch starts to slide",
+            lower=0.0,
+            default=None,
+            ref="u_max",
+            ref_power=-1,
+            fit_bounds=(0.02, 1.0),
+            prior=(0.02, 1.0),
+            fit_starts=(0.5, 0.3, 0.7),
+        ),
+        ParamSpec(
+            "shape",
+            "1",
+            "shape of the threshold law (0: slides as a whole, 1/2: thresholds spread evenly)",
+            upper=1.0,
+            default=0.0,
+            fit_bounds=(0.0, 0.5),
+            prior=(0.0, 0.5),
+            fit_starts=(0.0, 0.0, 0.3),
+        ),
+    )
+    modal_specs = (
+        ParamSpec(
+            "kappa_2",
+            "1/s^2",
+            "stiffness over modal mass that slides between X_s and 2 X_s",
+            ref="omega2_ref",
+            ref_power=-1,
+            fit_bounds=(0.0, 0.3),
+            prior=(0.0, 0.3),
+            neutral=0.0,
+            fit_starts=(0.0, 0.01, 0.05, 0.003, 0.02, 0.05, 0.02, 0.01),
+        ),
+        ParamSpec(
+            "X_s",
+            "m",
+            "amplitude at which the patch starts to slide",
+            ref="X_max",
+            ref_power=-1,
+            fit_bounds=(0.02, 1.0),
+            prior=(0.02, 1.0),
+            fit_starts=(0.5, 0.3, 0.6, 0.8, 0.8, 0.9, 0.4, 0.3),
+        ),
+        ParamSpec(
+            "shape",
+            "1",
+            "shape of the threshold law (0: slides as a whole, 1/2: thresholds spread evenly)",
+            upper=1.0,
+            default=0.0,
+            fit_bounds=(0.0, 0.5),
+            prior=(0.0, 0.5),
+            fit_starts=(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.3, 0.45),
+        ),
+    )
     kind = "dissipation"
     options = ("u_e", "bins")
 
-    def __init__(self, inner, *, k_2: float, u_s: float, shape: float = 0.0,
-                 u_e: float | None = None, bins: int = 32):
+    def __init__(
+        self,
+        inner,
+        *,
+        k_2: float,
+        u_s: float,
+        shape: float = 0.0,
+        u_e: float | None = None,
+        bins: int = 32,
+    ):
         super().__init__(inner)
         self._set_parameters({"k_2": k_2, "u_s": u_s, "shape": shape})
         self.u_e = math.inf if u_e is None else check_scalar("u_e", u_e, low=0.0)
@@ -206,15 +261,17 @@ class MacroslipOnset(JenkinsBank):
         if not self.u_e > self.u_s:
             raise ValueError(f"u_e must be > u_s = {self.u_s!r} [m], got {u_e!r}")
         if math.isinf(self.u_e) and self.shape > 0.0 and _q(self.shape) <= 0.0:
-            raise ValueError(f"u_e [m] must be given for shape >= 1/3 (an unbounded patch "
-                             f"would hold infinite stiffness), got shape={shape!r}")
+            raise ValueError(
+                f"u_e [m] must be given for shape >= 1/3 (an unbounded patch "
+                f"would hold infinite stiffness), got shape={shape!r}"
+            )
         if isinstance(bins, bool) or not isinstance(bins, (int, np.integer)) or bins < 1:
             raise ValueError(f"bins must be an integer >= 1, got {bins!r}")
         if self.shape == 0.0:
             self._set_bank([self.u_s], [self.k_2])
             return
         # bins of equal stiffness over [u_s, u_e], each element at its bin's median threshold
-        top = float(patch_cumulative(self.u_e, self.u_s, self.shape))    # 1 / (q B(2)) at inf
+        top = float(patch_cumulative(self.u_e, self.u_s, self.shape))  # 1 / (q B(2)) at inf
         kap = (np.arange(bins) + 0.5) / bins * top
         self._set_bank(_thresholds(kap, self.u_s, self.shape), np.full(bins, self.k_2 * top / bins))
 
@@ -238,5 +295,9 @@ class MacroslipOnset(JenkinsBank):
         """
         r = slip_per_amplitude
         u_s = values["X_s"] * r
-        return {"k_2": values["kappa_2"] * modal_mass / r ** 2, "u_s": u_s,
-                "shape": values.get("shape", 0.0), "u_e": SPAN * u_s}
+        return {
+            "k_2": values["kappa_2"] * modal_mass / r**2,
+            "u_s": u_s,
+            "shape": values.get("shape", 0.0),
+            "u_e": SPAN * u_s,
+        }

@@ -8,6 +8,7 @@ amplitude). In the amplitude domain the dead-zone spring adds the describing-fun
 stiffness ``k_p g(delta/X)``, ``g(r) = 1 - (2/pi)(asin r + r sqrt(1 - r^2))`` (first
 harmonic of a dead-zone nonlinearity), and leaves the dissipation per cycle unchanged.
 """
+
 from __future__ import annotations
 
 import math
@@ -43,18 +44,53 @@ class PinningStiffness(Effect):
     effect = "pinning_stiffness"
     loop_rank = 20
     kind = "stiffness"
-    specs = (ParamSpec("k_p", "N/m", "stiffness in parallel after the clearance", fs_power=1,
-                       ref="u_max", fit_bounds=(0.0, 20.0),
-                       prior=(0.0, 20.0), neutral=0.0, fit_starts=(0.0, 0.2, 0.3)),
-             ParamSpec("delta", "m", "clearance before the pin bears", default=0.0, ref="u_max", ref_power=-1,
-                       fit_bounds=(0.0, 0.95), prior=(0.0, 0.95), fit_starts=(0.0, 0.0, 0.5)))
-    modal_specs = (ParamSpec("k_p_per_mass", "1/s^2", "added modal stiffness over modal mass",
-                             ref="omega2_ref", ref_power=-1, fit_bounds=(0.0, 10.0),
-                             prior=(0.0, 10.0), neutral=0.0,
-                             fit_starts=(0.0, 0.05, 0.05)),
-                   ParamSpec("delta", "m", "clearance in amplitude units", ref="X_max", ref_power=-1,
-                             fit_bounds=(0.0, 0.99),
-                             prior=(0.0, 0.99), fit_starts=(0.0, 0.0, 0.3)))
+    specs = (
+        ParamSpec(
+            "k_p",
+            "N/m",
+            "stiffness in parallel after the clearance",
+            fs_power=1,
+            ref="u_max",
+            fit_bounds=(0.0, 20.0),
+            prior=(0.0, 20.0),
+            neutral=0.0,
+            fit_starts=(0.0, 0.2, 0.3),
+        ),
+        ParamSpec(
+            "delta",
+            "m",
+            "clearance before the pin bears",
+            default=0.0,
+            ref="u_max",
+            ref_power=-1,
+            fit_bounds=(0.0, 0.95),
+            prior=(0.0, 0.95),
+            fit_starts=(0.0, 0.0, 0.5),
+        ),
+    )
+    modal_specs = (
+        ParamSpec(
+            "k_p_per_mass",
+            "1/s^2",
+            "added modal stiffness over modal mass",
+            ref="omega2_ref",
+            ref_power=-1,
+            fit_bounds=(0.0, 10.0),
+            prior=(0.0, 10.0),
+            neutral=0.0,
+            fit_starts=(0.0, 0.05, 0.05),
+        ),
+        ParamSpec(
+            "delta",
+            "m",
+            "clearance in amplitude units",
+            ref="X_max",
+            ref_power=-1,
+            fit_bounds=(0.0, 0.99),
+            prior=(0.0, 0.99),
+            fit_starts=(0.0, 0.0, 0.3),
+        ),
+    )
 
     def __init__(self, inner, *, k_p: float, delta: float = 0.0):
         super().__init__(inner)
@@ -71,14 +107,14 @@ class PinningStiffness(Effect):
         hysteretic part of the damping ratio scaled by ``(f_old/f_new)^2`` (same dissipation,
         stiffer mode); the viscous floor ``zeta0`` unchanged.
         """
-        f = np.sqrt(frequency ** 2 + k_p_per_mass * dead_zone_gain(X, delta) / (4 * np.pi ** 2))
+        f = np.sqrt(frequency**2 + k_p_per_mass * dead_zone_gain(X, delta) / (4 * np.pi**2))
         return f, zeta0 + (damping - zeta0) * (frequency / f) ** 2
 
     @classmethod
     def modal_to_joint(cls, values, *, modal_mass, slip_per_amplitude, omega0):
         """Joint spring ``k_p = kappa m / r^2`` [N/m] and clearance ``delta r`` [m]."""
         r = slip_per_amplitude
-        return {"k_p": values["k_p_per_mass"] * modal_mass / r ** 2, "delta": values["delta"] * r}
+        return {"k_p": values["k_p_per_mass"] * modal_mass / r**2, "delta": values["delta"] * r}
 
     def _spring(self, u: float) -> tuple[float, float, float]:
         e = abs(u) - self.delta

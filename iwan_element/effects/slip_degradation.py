@@ -9,6 +9,7 @@ is ``lambda phi_i``; its stiffness ``k_i`` is unchanged, so ``KT`` stays and ``F
 ``lambda Fs``. A slider stretched beyond its shrunken threshold slips back to it at the
 commit (the elastic energy released is dissipated).
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -52,7 +53,7 @@ def _degrade_history(e, slip, k, sgn, phi, lam, Wb, rate, u, prev, D_inner):
         e[:] = e_new
         slip[:] = s_new
         Wb += W
-        out[i] = F                                   # the step's force, before the commit
+        out[i] = F  # the step's force, before the commit
         lam, _ = degrade(e, sgn, k, phi, D_inner[i], Wb, rate, caps, caps)
         prev = u[i]
     return out, lam, Wb
@@ -73,9 +74,19 @@ class SlipDegradation(SliderEffect):
 
     effect = "slip_degradation"
     loop_rank = 40
-    specs = (ParamSpec("rate", "1/J", "relative loss of slip capacity per joule dissipated",
-                       fs_power=-1, ref="D_ref", fit_bounds=(0.0, 5.0),
-                       prior=(0.0, 5.0), neutral=0.0, fit_starts=(0.0, 0.2)),)
+    specs = (
+        ParamSpec(
+            "rate",
+            "1/J",
+            "relative loss of slip capacity per joule dissipated",
+            fs_power=-1,
+            ref="D_ref",
+            fit_bounds=(0.0, 5.0),
+            prior=(0.0, 5.0),
+            neutral=0.0,
+            fit_starts=(0.0, 0.2),
+        ),
+    )
 
     def __init__(self, inner, *, rate: float, n_sliders: int = 128):
         super().__init__(inner, n_sliders=n_sliders)
@@ -105,8 +116,18 @@ class SlipDegradation(SliderEffect):
         D_inner = np.ascontiguousarray(D_inner, dtype=float)
         e, slip = self._e.copy(), self._slip.copy()
         out, self._lam, self._Wb = _degrade_history(
-            e, slip, self._k, self._sign, self._phi, self._lam, self._Wb, self.rate,
-            np.ascontiguousarray(u, dtype=float), 0.0, D_inner)
+            e,
+            slip,
+            self._k,
+            self._sign,
+            self._phi,
+            self._lam,
+            self._Wb,
+            self.rate,
+            np.ascontiguousarray(u, dtype=float),
+            0.0,
+            D_inner,
+        )
         self._e, self._slip = e, slip
         self._refresh_caps()
         return out
@@ -117,8 +138,9 @@ class SlipDegradation(SliderEffect):
         """
         if self._cap_up is None:
             self._refresh_caps()
-        self._lam, stored = degrade(self._e, self._sign, self._k, self._phi, D_inner,
-                                     self._Wb, self.rate, *self._cap_up)
+        self._lam, stored = degrade(
+            self._e, self._sign, self._k, self._phi, D_inner, self._Wb, self.rate, *self._cap_up
+        )
         np.copyto(self._cap_dn[0], self._cap_up[0])
         np.copyto(self._cap_dn[1], self._cap_up[1])
         return stored

@@ -5,6 +5,7 @@ friction, ``F = F_j(u) + c v`` (docs/equations.md section 7, the damping floor o
 beam's modal damping at low amplitude, where the joint's hysteresis fades). In the amplitude
 domain it is a constant added modal damping ratio ``zeta_v = c r^2 / (2 m omega)``.
 """
+
 from __future__ import annotations
 
 from .base import Effect, ParamSpec
@@ -33,12 +34,32 @@ class ViscousDamping(Effect):
     loop_rank = 10
     kind = "dissipation"
     modal_floor = True
-    specs = (ParamSpec("c", "N s/m", "dashpot coefficient in parallel with the joint",
-                       fs_power=1, ref="v_rms", fit_bounds=(0.0, 2.0),
-                       prior=(0.0, 2.0), neutral=0.0, fit_starts=(0.0, 0.03)),)
-    modal_specs = (ParamSpec("zeta_v", "1", "added modal viscous damping ratio",
-                             ref="zeta_ref", ref_power=-1, fit_bounds=(0.0, 100.0),
-                             prior=(0.0, 100.0), neutral=0.0, fit_starts=(0.0, 0.5, 5.0)),)
+    specs = (
+        ParamSpec(
+            "c",
+            "N s/m",
+            "dashpot coefficient in parallel with the joint",
+            fs_power=1,
+            ref="v_rms",
+            fit_bounds=(0.0, 2.0),
+            prior=(0.0, 2.0),
+            neutral=0.0,
+            fit_starts=(0.0, 0.03),
+        ),
+    )
+    modal_specs = (
+        ParamSpec(
+            "zeta_v",
+            "1",
+            "added modal viscous damping ratio",
+            ref="zeta_ref",
+            ref_power=-1,
+            fit_bounds=(0.0, 100.0),
+            prior=(0.0, 100.0),
+            neutral=0.0,
+            fit_starts=(0.0, 0.5, 5.0),
+        ),
+    )
 
     def __init__(self, inner, *, c: float):
         super().__init__(inner)
@@ -60,7 +81,7 @@ class ViscousDamping(Effect):
     @classmethod
     def modal_to_joint(cls, values, *, modal_mass, slip_per_amplitude, omega0):
         """Joint dashpot ``c = 2 zeta_v omega0 m / r^2`` [N s/m] from the modal ratio."""
-        return {"c": 2.0 * values["zeta_v"] * omega0 * modal_mass / slip_per_amplitude ** 2}
+        return {"c": 2.0 * values["zeta_v"] * omega0 * modal_mass / slip_per_amplitude**2}
 
     def trial(self, u: float, v: float = 0.0) -> tuple[float, float]:
         """Force [N] and tangent ``dF/du`` [N/m] (the velocity tangent is ``c``)."""

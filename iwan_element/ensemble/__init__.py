@@ -9,12 +9,24 @@ from a fit's covariance, and parameter studies.
 * :func:`parameter_grid`, :func:`parameter_samples` - the parameter sets of a study
   (ready-made tasks for the lap-jointed beams: :mod:`iwan_element.models.studies`).
 """
+
 from .bands import PredictionBands, propagate_uncertainty, response_task
 from .oscillator import SingleModeSystem, modal_curve, peak_response
 from .runner import EnsembleResult, TaskError, run_ensemble
 from .sweep import parameter_grid, parameter_samples
 from .uncertainty import ParameterUncertainty
 
-__all__ = ["run_ensemble", "EnsembleResult", "TaskError", "ParameterUncertainty",
-           "PredictionBands", "propagate_uncertainty", "response_task", "SingleModeSystem",
-           "modal_curve", "peak_response", "parameter_grid", "parameter_samples"]
+__all__ = [
+    "run_ensemble",
+    "EnsembleResult",
+    "TaskError",
+    "ParameterUncertainty",
+    "PredictionBands",
+    "propagate_uncertainty",
+    "response_task",
+    "SingleModeSystem",
+    "modal_curve",
+    "peak_response",
+    "parameter_grid",
+    "parameter_samples",
+]

@@ -1,4 +1,5 @@
 """Prediction bands: a fit's parameter uncertainty run through the structure's response."""
+
 from __future__ import annotations
 
 import functools
@@ -17,8 +18,16 @@ from .uncertainty import ParameterUncertainty
 __all__ = ["PredictionBands", "propagate_uncertainty", "response_task", "modal_fit_task"]
 
 
-def response_task(params: dict, rng, *, system: SingleModeSystem, amplitude, force=None,
-                  cycles: int = 30, steps_per_period: int = 64) -> dict:
+def response_task(
+    params: dict,
+    rng,
+    *,
+    system: SingleModeSystem,
+    amplitude,
+    force=None,
+    cycles: int = 30,
+    steps_per_period: int = 64,
+) -> dict:
     """One ensemble task: ``frequency`` [Hz] and ``damping_ratio`` [-] at ``amplitude`` and, with
     ``force`` [N], the ``peak`` transient displacement [m] (see :mod:`.oscillator`).
     ``params`` holds ``Fs, KT, chi, beta``; ``rng`` is unused (the model is deterministic).
@@ -27,29 +36,48 @@ def response_task(params: dict, rng, *, system: SingleModeSystem, amplitude, for
     f, z = modal_curve(p, system, amplitude)
     out = {"frequency": f, "damping_ratio": z}
     if force is not None:
-        out["peak"] = peak_response(p, system, force=force, cycles=cycles,
-                                    steps_per_period=steps_per_period)
+        out["peak"] = peak_response(
+            p, system, force=force, cycles=cycles, steps_per_period=steps_per_period
+        )
     return out
 
 
-def modal_fit_task(params: dict, rng, *, names, regime: str, conventions: dict, amplitude,
-                   force=None, cycles: int = 30, steps_per_period: int = 64) -> dict:
+def modal_fit_task(
+    params: dict,
+    rng,
+    *,
+    names,
+    regime: str,
+    conventions: dict,
+    amplitude,
+    force=None,
+    cycles: int = 30,
+    steps_per_period: int = 64,
+) -> dict:
     """One ensemble task for a modal Iwan fit (:func:`iwan_element.fit_modal_iwan`): its model
     curve at ``amplitude`` for one sampled fit vector and, in the macroslip regime with
     ``force`` [N per unit modal mass], the peak transient displacement [m] of the fitted
     single-mode oscillator (fixed dashpot ``2 zeta0 w0``).
     """
     from ..identify.modal.result import full_parameters, model_curve
+
     theta = np.array([params[n] for n in names], dtype=float)
-    f, z = model_curve(theta, np.asarray(amplitude, float), regime, conventions["x_ref"],
-                       conventions["stiffness"], conventions["floor"],
-                       conventions.get("damping_form", "energy"))
+    f, z = model_curve(
+        theta,
+        np.asarray(amplitude, float),
+        regime,
+        conventions["x_ref"],
+        conventions["stiffness"],
+        conventions["floor"],
+        conventions.get("damping_form", "energy"),
+    )
     out = {"frequency": np.asarray(f, float), "damping_ratio": np.asarray(z, float)}
     if force is not None:
         p, k_inf = full_parameters(theta)
         system = SingleModeSystem(mass=1.0, stiffness=max(k_inf, 0.0), zeta0=theta[1])
-        out["peak"] = peak_response(p, system, force=force, cycles=cycles,
-                                    steps_per_period=steps_per_period)
+        out["peak"] = peak_response(
+            p, system, force=force, cycles=cycles, steps_per_period=steps_per_period
+        )
     return out
 
 
@@ -93,8 +121,10 @@ class PredictionBands(ResultShape):
 
     @property
     def _source(self) -> str:
-        return getattr(self.uncertainty, "source", None) or \
-            f"modal fit ({getattr(self.uncertainty, 'regime', '?')})"
+        return (
+            getattr(self.uncertainty, "source", None)
+            or f"modal fit ({getattr(self.uncertainty, 'regime', '?')})"
+        )
 
     def band(self, name: str):
         """``(low, median, high)`` quantiles of ``"frequency"``, ``"damping_ratio"`` or ``"peak"``."""
@@ -120,20 +150,39 @@ class PredictionBands(ResultShape):
         return bool(n > 0 and len(self.ensemble.errors) <= n / 3)
 
     def report(self) -> str:
-        lines = [f"Prediction bands ({100 * self.level:.0f} % central) from {self._source}: "
-                 f"{self.frequency.shape[0]} samples on {self.ensemble.executor}, "
-                 f"{len(self.ensemble.errors)} failed"]
+        lines = [
+            f"Prediction bands ({100 * self.level:.0f} % central) from {self._source}: "
+            f"{self.frequency.shape[0]} samples on {self.ensemble.executor}, "
+            f"{len(self.ensemble.errors)} failed"
+        ]
         fl, _, fh = self.band("frequency")
         zl, _, zh = self.band("damping_ratio")
         lines += table_lines(
-            [("X [m]", "10.3e"), ("f nominal", "11.6g"), ("f low", "11.6g"), ("f high", "11.6g"),
-             ("zeta nom.", "10.4e"), ("zeta low", "10.4e"), ("zeta high", "10.4e")],
-            zip(self.amplitude, self.nominal["frequency"], fl, fh,
-                self.nominal["damping_ratio"], zl, zh))
+            [
+                ("X [m]", "10.3e"),
+                ("f nominal", "11.6g"),
+                ("f low", "11.6g"),
+                ("f high", "11.6g"),
+                ("zeta nom.", "10.4e"),
+                ("zeta low", "10.4e"),
+                ("zeta high", "10.4e"),
+            ],
+            zip(
+                self.amplitude,
+                self.nominal["frequency"],
+                fl,
+                fh,
+                self.nominal["damping_ratio"],
+                zl,
+                zh,
+            ),
+        )
         if self.peak is not None:
             pl, pm, ph = self.band("peak")
-            lines.append(f"  peak displacement at F0 = {self.force:g} N: nominal "
-                         f"{self.nominal['peak']:.5g} m, band {pl:.5g} .. {ph:.5g} m")
+            lines.append(
+                f"  peak displacement at F0 = {self.force:g} N: nominal "
+                f"{self.nominal['peak']:.5g} m, band {pl:.5g} .. {ph:.5g} m"
+            )
         return "\n".join(lines + [f"  warning: {w}" for w in self.warnings])
 
     def to_dict(self) -> dict:
@@ -141,14 +190,26 @@ class PredictionBands(ResultShape):
         for name in ("frequency", "damping_ratio") + (("peak",) if self.peak is not None else ()):
             lo, med, hi = self.band(name)
             q[name] = {"low": lo, "median": med, "high": hi, "nominal": self.nominal[name]}
-        return json_safe({"amplitude": self.amplitude, "level": self.level, "force": self.force,
-                      "samples": int(self.frequency.shape[0]),
-                      "failed": len(self.ensemble.errors), "bands": q,
-                      "system": None if self.system is None else
-                      {"mass": self.system.mass, "stiffness": self.system.stiffness,
-                       "zeta0": self.system.zeta0},
-                      "source": self._source, "uncertainty": self.uncertainty.to_dict(),
-                      "warnings": list(self.warnings)})
+        return json_safe(
+            {
+                "amplitude": self.amplitude,
+                "level": self.level,
+                "force": self.force,
+                "samples": int(self.frequency.shape[0]),
+                "failed": len(self.ensemble.errors),
+                "bands": q,
+                "system": None
+                if self.system is None
+                else {
+                    "mass": self.system.mass,
+                    "stiffness": self.system.stiffness,
+                    "zeta0": self.system.zeta0,
+                },
+                "source": self._source,
+                "uncertainty": self.uncertainty.to_dict(),
+                "warnings": list(self.warnings),
+            }
+        )
 
     def plot(self, ax=None, *, color="C0", label=None, relative: bool = False):
         """Bands (shaded) with the median (dashed) and the nominal curve (solid).
@@ -174,26 +235,35 @@ class PredictionBands(ResultShape):
         X = self.amplitude
         pct = f"{100 * self.level:.0f} % band"
         artists = []
-        for a, name, ylabel in ((ax[0], "frequency", "frequency"),
-                                (ax[1], "damping_ratio", "damping ratio")):
+        for a, name, ylabel in (
+            (ax[0], "frequency", "frequency"),
+            (ax[1], "damping_ratio", "damping ratio"),
+        ):
             nom = np.asarray(self.nominal[name], float)
             lo, med, hi = self.band(name)
             if relative:
                 lo, med, hi, nom = (100.0 * (v / nom - 1.0) for v in (lo, med, hi, nom))
-            artists.append(a.fill_between(X, lo, hi, color=color, alpha=0.3,
-                                          label=f"{label + ': ' if label else ''}{pct}"))
+            artists.append(
+                a.fill_between(
+                    X, lo, hi, color=color, alpha=0.3, label=f"{label + ': ' if label else ''}{pct}"
+                )
+            )
             artists += a.plot(X, med, "--", color=color, lw=1, label="median")
             artists += a.plot(X, nom, "-", color=color, lw=1.5, label="nominal fit")
             a.set_xscale("log")
             a.set_xlabel("displacement amplitude X [m]")
             unit = "[Hz]" if name == "frequency" else "[-]"
-            a.set_ylabel(f"{ylabel}: deviation from nominal [%]" if relative
-                         else f"{ylabel} {unit}")
+            a.set_ylabel(
+                f"{ylabel}: deviation from nominal [%]" if relative else f"{ylabel} {unit}"
+            )
         ax[0].legend(fontsize=8)
         if self.peak is not None:
             lo, _, hi = self.band("peak")
-            artists.append(ax[2].hist(self.peak, bins=min(30, max(5, self.peak.size // 5)),
-                                      color=color, alpha=0.6)[2])
+            artists.append(
+                ax[2].hist(
+                    self.peak, bins=min(30, max(5, self.peak.size // 5)), color=color, alpha=0.6
+                )[2]
+            )
             for v, ls in ((lo, ":"), (hi, ":"), (self.nominal["peak"], "-")):
                 artists.append(ax[2].axvline(v, color="k", ls=ls, lw=1))
             ax[2].set_xlabel(f"peak displacement at F0 = {self.force:g} N [m]")
@@ -202,13 +272,23 @@ class PredictionBands(ResultShape):
 
 
 #: Most parameter sets propagate_uncertainty draws (each is one simulation).
-_MAX_SAMPLES = 10 ** 7
+_MAX_SAMPLES = 10**7
 
 
-def propagate_uncertainty(source, *, system: SingleModeSystem | None = None, amplitude,
-                          n_samples: int = 200, force: float | None = None, cycles: int = 30,
-                          steps_per_period: int = 64, level: float = 0.9, seed=None,
-                          executor=None, progress: bool = False) -> PredictionBands:
+def propagate_uncertainty(
+    source,
+    *,
+    system: SingleModeSystem | None = None,
+    amplitude,
+    n_samples: int = 200,
+    force: float | None = None,
+    cycles: int = 30,
+    steps_per_period: int = 64,
+    level: float = 0.9,
+    seed=None,
+    executor=None,
+    progress: bool = False,
+) -> PredictionBands:
     """Sample the parameters of a fit and return prediction bands of the response.
 
     Parameters
@@ -254,57 +334,95 @@ def propagate_uncertainty(source, *, system: SingleModeSystem | None = None, amp
         seed = int(np.random.SeedSequence().entropy)
     rng = np.random.default_rng(seed)
     if hasattr(source, "sample_parameters") and hasattr(source, "regime"):
-        task, nominal_set, sets, unc, warns = _modal_fit_setup(source, X, force, cycles,
-                                                               steps_per_period, n_samples, rng)
+        task, nominal_set, sets, unc, warns = _modal_fit_setup(
+            source, X, force, cycles, steps_per_period, n_samples, rng
+        )
         system = None
     else:
         if not isinstance(source, ParameterUncertainty) and not hasattr(source, "joint"):
-            raise ValueError("source must be a FitResult, a ModalIwanFit or a "
-                             f"ParameterUncertainty, got {type(source).__name__}")
-        unc = source if isinstance(source, ParameterUncertainty) else \
-            ParameterUncertainty.from_fit(source)
+            raise ValueError(
+                "source must be a FitResult, a ModalIwanFit or a "
+                f"ParameterUncertainty, got {type(source).__name__}"
+            )
+        unc = (
+            source
+            if isinstance(source, ParameterUncertainty)
+            else ParameterUncertainty.from_fit(source)
+        )
         if not isinstance(system, SingleModeSystem):
             raise ValueError(f"system must be a SingleModeSystem, got {type(system).__name__}")
         sets, rejected = unc.sample(n_samples, rng=rng)
         warns = list(unc.warnings)
         if rejected > 0.01:
-            warns.append(f"{100 * rejected:.1f} % of the draws fell outside the model's range "
-                         "(beta < 0 or chi <= -1) and were rejected: the bands are those of the "
-                         "truncated distribution")
+            warns.append(
+                f"{100 * rejected:.1f} % of the draws fell outside the model's range "
+                "(beta < 0 or chi <= -1) and were rejected: the bands are those of the "
+                "truncated distribution"
+            )
         if X.max() > unc.valid_amplitude:
-            warns.append(f"amplitudes above {unc.valid_amplitude:.4g} m are beyond the tested "
-                         "range: the fit cannot constrain the joint there (Fs, beta not "
-                         "identified)")
-        task = functools.partial(response_task, system=system, amplitude=X, force=force,
-                                 cycles=cycles, steps_per_period=steps_per_period)
+            warns.append(
+                f"amplitudes above {unc.valid_amplitude:.4g} m are beyond the tested "
+                "range: the fit cannot constrain the joint there (Fs, beta not "
+                "identified)"
+            )
+        task = functools.partial(
+            response_task,
+            system=system,
+            amplitude=X,
+            force=force,
+            cycles=cycles,
+            steps_per_period=steps_per_period,
+        )
         nominal_set = {k: getattr(unc.nominal, k) for k in ("Fs", "KT", "chi", "beta")}
     nominal = task(nominal_set, None)
     ens = run_ensemble(task, sets, executor=executor, seed=seed, progress=progress)
     warns += list(ens.warnings)
     ok = ens.ok
     if ok.sum() < 2:
-        raise RuntimeError(f"only {int(ok.sum())} of {n_samples} runs succeeded; first error: "
-                           f"{ens.errors[0].message if ens.errors else '?'}")
+        raise RuntimeError(
+            f"only {int(ok.sum())} of {n_samples} runs succeeded; first error: "
+            f"{ens.errors[0].message if ens.errors else '?'}"
+        )
     peak = ens.column("peak")[ok] if force is not None else None
-    return PredictionBands(amplitude=X, frequency=ens.column("frequency")[ok],
-                           damping_ratio=ens.column("damping_ratio")[ok], peak=peak, nominal=nominal,
-                           level=level, force=force, system=system, uncertainty=unc,
-                           ensemble=ens, warnings=tuple(warns))
+    return PredictionBands(
+        amplitude=X,
+        frequency=ens.column("frequency")[ok],
+        damping_ratio=ens.column("damping_ratio")[ok],
+        peak=peak,
+        nominal=nominal,
+        level=level,
+        force=force,
+        system=system,
+        uncertainty=unc,
+        ensemble=ens,
+        warnings=tuple(warns),
+    )
 
 
 def _modal_fit_setup(fit, X, force, cycles, steps_per_period, n_samples, rng):
     """Task, nominal set, samples and warnings for a modal Iwan fit."""
     warns = [f"the fit reports: {w}" for w in fit.warnings]
     if force is not None and fit.regime != "macroslip":
-        raise ValueError(f"a peak response needs the whole joint, which a {fit.regime} modal fit "
-                         "does not determine; call without force")
-    task = functools.partial(modal_fit_task, names=tuple(fit.names), regime=fit.regime,
-                             conventions=dict(fit.conventions), amplitude=X, force=force,
-                             cycles=cycles, steps_per_period=steps_per_period)
+        raise ValueError(
+            f"a peak response needs the whole joint, which a {fit.regime} modal fit "
+            "does not determine; call without force"
+        )
+    task = functools.partial(
+        modal_fit_task,
+        names=tuple(fit.names),
+        regime=fit.regime,
+        conventions=dict(fit.conventions),
+        amplitude=X,
+        force=force,
+        cycles=cycles,
+        steps_per_period=steps_per_period,
+    )
     span = fit.data["amplitude"]
     if X.max() > 1.001 * np.max(span) or X.min() < 0.999 * np.min(span):
-        warns.append(f"amplitudes outside the fitted data ({np.min(span):.3g} .. "
-                     f"{np.max(span):.3g} m) are an extrapolation of the modal model")
+        warns.append(
+            f"amplitudes outside the fitted data ({np.min(span):.3g} .. "
+            f"{np.max(span):.3g} m) are an extrapolation of the modal model"
+        )
     sets = fit.sample_parameters(n_samples, rng=rng)
     sets = [{k: float(v) for k, v in s.items()} for s in sets]
     return task, dict(zip(fit.names, map(float, fit.values))), sets, fit, warns

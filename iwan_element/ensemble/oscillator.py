@@ -18,6 +18,7 @@ secant stiffness paper eq. 24, joint dissipation paper eq. 17; evaluated by
 motion with the exact :class:`~iwan_element.IwanJoint` (average-acceleration Newmark, Newton
 iterations with the joint's consistent tangent, one commit per accepted step).
 """
+
 from __future__ import annotations
 
 import math
@@ -55,16 +56,18 @@ class SingleModeSystem:
     def __post_init__(self):
         object.__setattr__(self, "mass", check_scalar("mass", self.mass, low=0.0, low_open=True))
         object.__setattr__(self, "stiffness", check_scalar("stiffness", self.stiffness, low=0.0))
-        object.__setattr__(self, "zeta0", check_scalar("zeta0", self.zeta0, low=0.0, high=1.0,
-                                                       high_open=True))
+        object.__setattr__(
+            self, "zeta0", check_scalar("zeta0", self.zeta0, low=0.0, high=1.0, high_open=True)
+        )
 
     def linear_frequency(self, joint: IwanParameters) -> float:
         """``f0 = w0 / 2 pi`` with the joint at ``KT`` [Hz]."""
         return math.sqrt((self.stiffness + joint.KT) / self.mass) / (2.0 * math.pi)
 
 
-def modal_curve(joint: IwanParameters, system: SingleModeSystem, amplitude, *,
-                stiffness: str = "secant"):
+def modal_curve(
+    joint: IwanParameters, system: SingleModeSystem, amplitude, *, stiffness: str = "secant"
+):
     """Closed-form frequency [Hz] and damping ratio [-] at displacement amplitudes [m].
 
     :func:`iwan_element.modal_iwan_curve` with the system's mass, ``K_inf`` and a fixed
@@ -89,13 +92,27 @@ def modal_curve(joint: IwanParameters, system: SingleModeSystem, amplitude, *,
         raise ValueError("amplitude must be > 0 [m]")
     if not isinstance(system, SingleModeSystem):
         raise ValueError(f"system must be a SingleModeSystem, got {type(system).__name__}")
-    return modal_iwan_curve(X, joint, K_inf=system.stiffness, zeta0=system.zeta0,
-                            mass=system.mass, stiffness=stiffness, floor="dashpot")
+    return modal_iwan_curve(
+        X,
+        joint,
+        K_inf=system.stiffness,
+        zeta0=system.zeta0,
+        mass=system.mass,
+        stiffness=stiffness,
+        floor="dashpot",
+    )
 
 
-def peak_response(joint: IwanParameters, system: SingleModeSystem, *, force: float,
-                  frequency: float | None = None, cycles: int = 30,
-                  steps_per_period: int = 64, return_history: bool = False):
+def peak_response(
+    joint: IwanParameters,
+    system: SingleModeSystem,
+    *,
+    force: float,
+    frequency: float | None = None,
+    cycles: int = 30,
+    steps_per_period: int = 64,
+    return_history: bool = False,
+):
     """Peak displacement [m] of the single-mode system driven from rest by ``F0 sin(2 pi f t)``.
 
     Average-acceleration Newmark (unconditionally stable, no numerical damping) with Newton
@@ -121,13 +138,21 @@ def peak_response(joint: IwanParameters, system: SingleModeSystem, *, force: flo
     float, or (float, ndarray, ndarray) with ``return_history=True``
     """
     F0 = check_scalar("force", force, low=0.0, low_open=True)
-    f = system.linear_frequency(joint) if frequency is None else \
-        check_scalar("frequency", frequency, low=0.0, low_open=True)
+    f = (
+        system.linear_frequency(joint)
+        if frequency is None
+        else check_scalar("frequency", frequency, low=0.0, low_open=True)
+    )
     cycles = check_int("cycles", cycles, 1)
     steps_per_period = check_int("steps_per_period", steps_per_period, 16)
     w = 2.0 * math.pi * f
-    t, xs = _integrate(joint, system, h=1.0 / (f * steps_per_period),
-                       n=cycles * steps_per_period, load=lambda t_: F0 * math.sin(w * t_))
+    t, xs = _integrate(
+        joint,
+        system,
+        h=1.0 / (f * steps_per_period),
+        n=cycles * steps_per_period,
+        load=lambda t_: F0 * math.sin(w * t_),
+    )
     peak = float(np.max(np.abs(xs)))
     return (peak, t, xs) if return_history else peak
 
@@ -143,17 +168,17 @@ def _integrate(joint, system, *, h, n, load, x0=0.0):
     j = IwanJoint(joint)
     x, v = x0, 0.0
     if x0:
-        F, _ = j.trial(x0)                      # loaded monotonically to x0 (backbone)
+        F, _ = j.trial(x0)  # loaded monotonically to x0 (backbone)
         j.commit()
     else:
         F = 0.0
     a = (load(0.0) - k * x - F) / m
     xs = np.empty(n + 1)
     xs[0] = x
-    a0, a1 = 4.0 / (h * h), 2.0 / h             # Newmark gamma = 1/2, beta = 1/4
+    a0, a1 = 4.0 / (h * h), 2.0 / h  # Newmark gamma = 1/2, beta = 1/4
     for i in range(1, n + 1):
         p = load(i * h)
-        xn = x + h * v + 0.25 * h * h * a       # predictor
+        xn = x + h * v + 0.25 * h * h * a  # predictor
         for _ in range(50):
             an = a0 * (xn - x) - 4.0 / h * v - a
             vn = v + 0.5 * h * (a + an)

@@ -20,6 +20,7 @@ Failures
     ``distributed.scheduler.allowed-failures`` limit, 3 by default); a dead process of a
     ``ProcessPoolExecutor`` breaks that pool, and its unfinished tasks are reported as errors.
 """
+
 from __future__ import annotations
 
 import concurrent.futures as cf
@@ -60,8 +61,14 @@ class TaskError:
     traceback: str = ""
 
     def to_dict(self) -> dict:
-        return json_safe({"index": self.index, "params": self.params, "message": self.message,
-                      "traceback": self.traceback})
+        return json_safe(
+            {
+                "index": self.index,
+                "params": self.params,
+                "message": self.message,
+                "traceback": self.traceback,
+            }
+        )
 
 
 @dataclass(frozen=True, eq=False)
@@ -113,8 +120,10 @@ class EnsembleResult(ResultShape):
         outputs. Raises ``ValueError`` for an unknown name or arrays of different shapes.
         """
         if name not in self.outputs and name not in self.parameters:
-            raise ValueError(f"unknown column {name!r}; parameters are {list(self.parameters)}, "
-                             f"outputs are {list(self.outputs)}")
+            raise ValueError(
+                f"unknown column {name!r}; parameters are {list(self.parameters)}, "
+                f"outputs are {list(self.outputs)}"
+            )
         values = [row.get(name, math.nan) for row in self.rows]
         shapes = {np.shape(v) for v in values}
         if len(shapes) > 1:
@@ -153,10 +162,18 @@ class EnsembleResult(ResultShape):
 
     def to_dict(self) -> dict:
         """JSON-safe dict (NaN becomes ``None``)."""
-        return json_safe({"rows": list(self.rows), "errors": [e.to_dict() for e in self.errors],
-                      "outputs": list(self.outputs), "parameters": list(self.parameters),
-                      "seed": self.seed, "executor": self.executor, "wall_time": self.wall_time,
-                      "warnings": list(self.warnings)})
+        return json_safe(
+            {
+                "rows": list(self.rows),
+                "errors": [e.to_dict() for e in self.errors],
+                "outputs": list(self.outputs),
+                "parameters": list(self.parameters),
+                "seed": self.seed,
+                "executor": self.executor,
+                "wall_time": self.wall_time,
+                "warnings": list(self.warnings),
+            }
+        )
 
     @property
     def success(self) -> bool:
@@ -175,7 +192,7 @@ class EnsembleResult(ResultShape):
                 break
         else:
             raise ValueError(f"no scalar output with finite values among {names}")
-        ax, = panels(ax, 1, figsize=(5, 3.5))
+        (ax,) = panels(ax, 1, figsize=(5, 3.5))
         vals = col[np.isfinite(col)]
         arts = list(ax.hist(vals, bins=max(1, min(bins, vals.size)), color="C0", alpha=0.7)[2])
         ax.set_xlabel(name)
@@ -186,9 +203,11 @@ class EnsembleResult(ResultShape):
     def report(self) -> str:
         """Summary: tasks, failures (with their messages), outputs and their ranges."""
         n, nf = len(self.rows), len(self.errors)
-        lines = [f"Ensemble of {n} tasks on {self.executor}: {n - nf} succeeded, {nf} failed, "
-                 f"{self.wall_time:.2f} s (seed {self.seed})",
-                 f"  parameters: {', '.join(self.parameters)}"]
+        lines = [
+            f"Ensemble of {n} tasks on {self.executor}: {n - nf} succeeded, {nf} failed, "
+            f"{self.wall_time:.2f} s (seed {self.seed})",
+            f"  parameters: {', '.join(self.parameters)}",
+        ]
         for name in self.outputs:
             try:
                 col = self.column(name)
@@ -198,8 +217,10 @@ class EnsembleResult(ResultShape):
             if col.dtype == object or col.size == 0 or np.all(np.isnan(col)):
                 lines.append(f"  output {name}")
             else:
-                lines.append(f"  output {name}: shape {col.shape[1:] or 'scalar'}, range "
-                             f"{np.nanmin(col):.6g} .. {np.nanmax(col):.6g}")
+                lines.append(
+                    f"  output {name}: shape {col.shape[1:] or 'scalar'}, range "
+                    f"{np.nanmin(col):.6g} .. {np.nanmax(col):.6g}"
+                )
         for e in self.errors[:10]:
             lines.append(f"  FAILED task {e.index} {e.params}: {e.message}")
         if nf > 10:
@@ -235,8 +256,10 @@ def _check_outputs(out, params: dict) -> dict:
             try:
                 arr = np.array(value, dtype=float)
             except (TypeError, ValueError):
-                raise TypeError(f"output {key!r} must be a number, a str or a numeric array, "
-                                f"got {type(value).__name__}") from None
+                raise TypeError(
+                    f"output {key!r} must be a number, a str or a numeric array, "
+                    f"got {type(value).__name__}"
+                ) from None
             clean[key] = arr if arr.ndim else float(arr)
     return clean
 
@@ -246,16 +269,19 @@ def _run_task(func, index: int, params: dict, seed_seq: np.random.SeedSequence):
     try:
         out = func(params, np.random.default_rng(seed_seq))
         return index, True, _check_outputs(out, params), ""
-    except Exception as exc:        # noqa: BLE001 - any task failure is reported, not raised
+    except Exception as exc:  # noqa: BLE001 - any task failure is reported, not raised
         return index, False, f"{type(exc).__name__}: {exc}", traceback.format_exc()
 
 
 # ================================================================== input checks
 def _check_sets(parameter_sets) -> list[dict]:
-    if isinstance(parameter_sets, (str, bytes, Mapping)) or \
-            not isinstance(parameter_sets, Sequence):
-        raise ValueError("parameter_sets must be a sequence (list or tuple) of dicts, got "
-                         f"{type(parameter_sets).__name__}")
+    if isinstance(parameter_sets, (str, bytes, Mapping)) or not isinstance(
+        parameter_sets, Sequence
+    ):
+        raise ValueError(
+            "parameter_sets must be a sequence (list or tuple) of dicts, got "
+            f"{type(parameter_sets).__name__}"
+        )
     sets = []
     for i, s in enumerate(parameter_sets):
         if not isinstance(s, Mapping):
@@ -263,7 +289,7 @@ def _check_sets(parameter_sets) -> list[dict]:
         bad = [k for k in s if not isinstance(k, str)]
         if bad:
             raise ValueError(f"parameter_sets[{i}] has non-str keys {bad!r}")
-        sets.append(dict(s))                     # a copy: nothing the caller gave is mutated
+        sets.append(dict(s))  # a copy: nothing the caller gave is mutated
     if not sets:
         raise ValueError("parameter_sets is empty: give at least one parameter set")
     return sets
@@ -279,25 +305,29 @@ def _check_seed(seed):
 
 def _is_dask_client(obj) -> bool:
     """True for a ``distributed.Client`` (checked by type name: dask is not imported)."""
-    return any(c.__name__ == "Client" and c.__module__.split(".")[0] == "distributed"
-               for c in type(obj).__mro__)
+    return any(
+        c.__name__ == "Client" and c.__module__.split(".")[0] == "distributed"
+        for c in type(obj).__mro__
+    )
 
 
 def _check_picklable(func) -> None:
     try:
         pickle.dumps(func)
-    except Exception as exc:                 # noqa: BLE001 - pickle raises many types
+    except Exception as exc:  # noqa: BLE001 - pickle raises many types
         raise ValueError(
             f"func {func!r} cannot be sent to worker processes ({type(exc).__name__}: {exc}). "
             "With local processes (executor=None or a ProcessPoolExecutor) func must be "
             "importable: a function defined at module level (not a lambda or a nested "
             "function), or functools.partial of one; use executor='serial' or a Dask Client "
-            "(cloudpickle) for other callables") from None
+            "(cloudpickle) for other callables"
+        ) from None
 
 
 # ================================================================== the runner
-def run_ensemble(func, parameter_sets, *, executor=None, seed=None,
-                 progress: bool = False) -> EnsembleResult:
+def run_ensemble(
+    func, parameter_sets, *, executor=None, seed=None, progress: bool = False
+) -> EnsembleResult:
     """Run ``func(params, rng)`` for every parameter set, on local processes, serially, on any
     ``concurrent.futures.Executor`` or on a ``dask.distributed.Client``.
 
@@ -361,8 +391,10 @@ def _dispatch(func, sets, children, executor, bar):
     warns: list[str] = []
     if isinstance(executor, str):
         if executor != "serial":
-            raise ValueError(f"executor must be None, 'serial', a concurrent.futures.Executor or "
-                             f"a dask.distributed.Client, got {executor!r}")
+            raise ValueError(
+                f"executor must be None, 'serial', a concurrent.futures.Executor or "
+                f"a dask.distributed.Client, got {executor!r}"
+            )
         raw = []
         for i, (s, c) in enumerate(zip(sets, children)):
             raw.append(_run_task(func, i, s, c))
@@ -384,21 +416,28 @@ def _dispatch(func, sets, children, executor, bar):
         if isinstance(executor, cf.ProcessPoolExecutor):
             _check_picklable(func)
         return _collect(executor, func, sets, children, bar), type(executor).__name__, warns
-    raise ValueError(f"executor must be None, 'serial', a concurrent.futures.Executor or a "
-                     f"dask.distributed.Client, got {type(executor).__name__}")
+    raise ValueError(
+        f"executor must be None, 'serial', a concurrent.futures.Executor or a "
+        f"dask.distributed.Client, got {type(executor).__name__}"
+    )
 
 
 def _collect(pool, func, sets, children, bar):
-    futures = {pool.submit(_run_task, func, i, s, c): i
-               for i, (s, c) in enumerate(zip(sets, children))}
+    futures = {
+        pool.submit(_run_task, func, i, s, c): i for i, (s, c) in enumerate(zip(sets, children))
+    }
     raw = [None] * len(sets)
     for fut in cf.as_completed(futures):
         i = futures[fut]
         try:
             raw[i] = fut.result()
-        except Exception as exc:                # noqa: BLE001 - the executor itself failed
-            raw[i] = (i, False, f"{type(exc).__name__}: {exc} (the executor lost the task)",
-                      traceback.format_exc())
+        except Exception as exc:  # noqa: BLE001 - the executor itself failed
+            raw[i] = (
+                i,
+                False,
+                f"{type(exc).__name__}: {exc} (the executor lost the task)",
+                traceback.format_exc(),
+            )
         if bar is not None:
             bar.update(1)
     return raw
@@ -422,13 +461,25 @@ def _assemble(sets, raw, root, where, wall, warns) -> EnsembleResult:
         else:
             errors.append(TaskError(index=i, params=dict(s), message=out, traceback=tb))
             log.warning("ensemble task %d failed: %s", i, out)
-            row.update({k: (math.nan if shapes[k] == () else np.full(shapes[k], math.nan))
-                        for k in outputs})
+            row.update(
+                {
+                    k: (math.nan if shapes[k] == () else np.full(shapes[k], math.nan))
+                    for k in outputs
+                }
+            )
         rows.append(row)
     if errors:
-        warns.append(f"{len(errors)} of {len(sets)} tasks failed (see errors); their rows hold "
-                     "NaN outputs")
+        warns.append(
+            f"{len(errors)} of {len(sets)} tasks failed (see errors); their rows hold NaN outputs"
+        )
     entropy = int(root.entropy)
-    return EnsembleResult(rows=tuple(rows), errors=tuple(errors), outputs=tuple(outputs),
-                          parameters=tuple(params), seed=entropy, executor=where, wall_time=wall,
-                          warnings=tuple(warns))
+    return EnsembleResult(
+        rows=tuple(rows),
+        errors=tuple(errors),
+        outputs=tuple(outputs),
+        parameters=tuple(params),
+        seed=entropy,
+        executor=where,
+        wall_time=wall,
+        warnings=tuple(warns),
+    )

@@ -1,4 +1,5 @@
 """Parameter sets for studies: full grids and space-filling samples (scipy.stats.qmc)."""
+
 from __future__ import annotations
 
 import itertools
@@ -88,6 +89,5 @@ def parameter_samples(n: int, *, seed=None, method: str = "lhs", log=(), **range
     x = qmc.scale(u, lo, hi)
     out = []
     for row in x:
-        out.append({name: float(math.exp(v) if name in log else v)
-                    for name, v in zip(ranges, row)})
+        out.append({name: float(math.exp(v) if name in log else v) for name, v in zip(ranges, row)})
     return out

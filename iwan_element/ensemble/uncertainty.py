@@ -14,6 +14,7 @@ against amplitude of a single-mode structure
 (:func:`~iwan_element.ensemble.oscillator.modal_curve`) and of the peak transient response at
 one forcing level (:func:`~iwan_element.ensemble.oscillator.peak_response`).
 """
+
 from __future__ import annotations
 
 import math
@@ -33,13 +34,13 @@ _COORD = {"Fs": "ln Fs", "KT": "ln KT", "chi": "chi", "beta": "ln(1+beta)", "R":
 
 
 def _to_theta(name, value):
-    return {"Fs": math.log, "KT": math.log, "R": math.log, "chi": float,
-            "beta": math.log1p}[name](value)
+    return {"Fs": math.log, "KT": math.log, "R": math.log, "chi": float, "beta": math.log1p}[name](
+        value
+    )
 
 
 def _from_theta(name, th):
-    return {"Fs": np.exp, "KT": np.exp, "R": np.exp, "chi": np.asarray,
-            "beta": np.expm1}[name](th)
+    return {"Fs": np.exp, "KT": np.exp, "R": np.exp, "chi": np.asarray, "beta": np.expm1}[name](th)
 
 
 def _scale(name, value):
@@ -81,8 +82,9 @@ class ParameterUncertainty(ResultShape):
     success: bool = True
 
     @classmethod
-    def from_mean_cov(cls, mean: IwanParameters, cov, names=PARAM_NAMES, *,
-                      source: str = "generic") -> ParameterUncertainty:
+    def from_mean_cov(
+        cls, mean: IwanParameters, cov, names=PARAM_NAMES, *, source: str = "generic"
+    ) -> ParameterUncertainty:
         """From nominal parameters and a covariance in physical units.
 
         Parameters
@@ -103,26 +105,45 @@ class ParameterUncertainty(ResultShape):
             raise ValueError(f"names must be distinct names among {PARAM_NAMES}, got {names}")
         C = finite_array("cov", cov, ndim=2)
         if C.shape != (len(names), len(names)):
-            raise ValueError(f"cov must have shape ({len(names)}, {len(names)}) for names "
-                             f"{names}, got {C.shape}")
+            raise ValueError(
+                f"cov must have shape ({len(names)}, {len(names)}) for names {names}, got {C.shape}"
+            )
         J = np.array([_scale(n, getattr(mean, n)) for n in names])
         return cls._build(mean, names, C * np.outer(J, J), source=source)
 
     @classmethod
-    def _build(cls, nominal, names, cov_theta, *, source, valid=math.inf, warnings=(),
-               values=None, success=True):
+    def _build(
+        cls,
+        nominal,
+        names,
+        cov_theta,
+        *,
+        source,
+        valid=math.inf,
+        warnings=(),
+        values=None,
+        success=True,
+    ):
         C = 0.5 * (cov_theta + cov_theta.T)
         if not np.allclose(C, cov_theta, rtol=1e-8, atol=1e-300):
             raise ValueError("cov must be symmetric")
         ev = np.linalg.eigvalsh(C)
         if ev.min() < -1e-10 * max(ev.max(), 1e-300):
-            raise ValueError("cov must be positive semi-definite (smallest eigenvalue "
-                             f"{ev.min():.3g})")
+            raise ValueError(
+                f"cov must be positive semi-definite (smallest eigenvalue {ev.min():.3g})"
+            )
         values = values or {n: getattr(nominal, n) for n in names}
         mean = np.array([_to_theta(n, values[n]) for n in names])
-        return cls(nominal=nominal, names=tuple(names), mean=mean, cov=C, source=source,
-                   valid_amplitude=float(valid), warnings=tuple(warnings),
-                   success=bool(success))
+        return cls(
+            nominal=nominal,
+            names=tuple(names),
+            mean=mean,
+            cov=C,
+            source=source,
+            valid_amplitude=float(valid),
+            warnings=tuple(warnings),
+            success=bool(success),
+        )
 
     @classmethod
     def from_fit(cls, fit) -> ParameterUncertainty:
@@ -136,8 +157,10 @@ class ParameterUncertainty(ResultShape):
         """
         for attr in ("joint", "stderr", "correlation"):
             if not hasattr(fit, attr):
-                raise ValueError(f"fit must be a FitResult-like object with joint, stderr and "
-                                 f"correlation; it has no {attr!r}")
+                raise ValueError(
+                    f"fit must be a FitResult-like object with joint, stderr and "
+                    f"correlation; it has no {attr!r}"
+                )
         p = fit.joint
         warns = [f"the fit reports: {w}" for w in getattr(fit, "warnings", ())]
         if not getattr(fit, "success", True):
@@ -149,30 +172,48 @@ class ParameterUncertainty(ResultShape):
             se = np.array([fit.stderr["KT"] / p.KT, fit.stderr["chi"], details["stderr_R"] / p.R])
             corr = np.array(details["corr_KT_chi_R"], dtype=float)
             xm = float(details.get("x_max", math.inf))
-            warns.append("Fs and beta are not identified: each sample is the beta = 0 member of "
-                         f"its (KT, chi, R) family, valid for amplitudes up to {xm:.4g} m")
-            return cls._build(p, ("KT", "chi", "R"), corr * np.outer(se, se), source=src,
-                              valid=xm, warnings=warns,
-                              values={"KT": p.KT, "chi": p.chi, "R": p.R},
-                              success=getattr(fit, "success", True))
+            warns.append(
+                "Fs and beta are not identified: each sample is the beta = 0 member of "
+                f"its (KT, chi, R) family, valid for amplitudes up to {xm:.4g} m"
+            )
+            return cls._build(
+                p,
+                ("KT", "chi", "R"),
+                corr * np.outer(se, se),
+                source=src,
+                valid=xm,
+                warnings=warns,
+                values={"KT": p.KT, "chi": p.chi, "R": p.R},
+                success=getattr(fit, "success", True),
+            )
         fixed = set(getattr(fit, "fixed", ()))
-        names = [n for n in PARAM_NAMES if n not in fixed and ident.get(n, True)
-                 and math.isfinite(fit.stderr.get(n, math.nan))]
+        names = [
+            n
+            for n in PARAM_NAMES
+            if n not in fixed and ident.get(n, True) and math.isfinite(fit.stderr.get(n, math.nan))
+        ]
         held = [n for n in PARAM_NAMES if n not in names]
         if not names:
             raise ValueError("the fit gives no finite standard error: nothing to sample")
         if held:
-            warns.append(f"{', '.join(held)} held at the fitted value (given or without a "
-                         "standard error)")
+            warns.append(
+                f"{', '.join(held)} held at the fitted value (given or without a standard error)"
+            )
         idx = [PARAM_NAMES.index(n) for n in names]
         corr = np.asarray(fit.correlation, float)[np.ix_(idx, idx)]
         se = np.array([fit.stderr[n] * _scale(n, getattr(p, n)) for n in names])
-        return cls._build(p, names, corr * np.outer(se, se), source=src, warnings=warns,
-                          success=getattr(fit, "success", True))
+        return cls._build(
+            p,
+            names,
+            corr * np.outer(se, se),
+            source=src,
+            warnings=warns,
+            success=getattr(fit, "success", True),
+        )
 
     def _params(self, theta) -> IwanParameters:
         v = {n: float(_from_theta(n, t)) for n, t in zip(self.names, theta)}
-        if "R" in v:                    # beta = 0 member: R phi^(chi+1) = (chi+1) KT (eq. 10)
+        if "R" in v:  # beta = 0 member: R phi^(chi+1) = (chi+1) KT (eq. 10)
             KT, chi, R = v["KT"], v["chi"], v["R"]
             phi = ((chi + 1.0) * KT / R) ** (1.0 / (chi + 1.0))
             return IwanParameters(KT * phi * (chi + 1.0) / (chi + 2.0), KT, chi, 0.0)
@@ -193,8 +234,10 @@ class ParameterUncertainty(ResultShape):
         out, drawn = [], 0
         while len(out) < n:
             if drawn > 100 * n:
-                raise RuntimeError(f"fewer than 1 % of the draws are inside the model's range "
-                                   f"({len(out)} of {drawn}); the covariance is too wide")
+                raise RuntimeError(
+                    f"fewer than 1 % of the draws are inside the model's range "
+                    f"({len(out)} of {drawn}); the covariance is too wide"
+                )
             th = rng.multivariate_normal(self.mean, self.cov, size=n, method="eigh")
             for row in th:
                 drawn += 1
@@ -212,18 +255,29 @@ class ParameterUncertainty(ResultShape):
 
     def report(self) -> str:
         se = np.sqrt(np.diag(self.cov))
-        lines = [f"Parameter uncertainty from {self.source}; nominal {self.nominal}",
-                 "  coordinate        mean       std"]
-        lines += [f"  {_COORD[n]:<12} {m:10.5g} {s:9.3g}"
-                  for n, m, s in zip(self.names, self.mean, se)]
+        lines = [
+            f"Parameter uncertainty from {self.source}; nominal {self.nominal}",
+            "  coordinate        mean       std",
+        ]
+        lines += [
+            f"  {_COORD[n]:<12} {m:10.5g} {s:9.3g}" for n, m, s in zip(self.names, self.mean, se)
+        ]
         return "\n".join(lines + [f"  warning: {w}" for w in self.warnings])
 
     def to_dict(self) -> dict:
-        return json_safe({"nominal": self.nominal.to_dict(), "names": list(self.names),
-                      "coordinates": [_COORD[n] for n in self.names], "mean": self.mean,
-                      "cov": self.cov, "source": self.source,
-                      "valid_amplitude": self.valid_amplitude, "warnings": list(self.warnings),
-                      "success": self.success})
+        return json_safe(
+            {
+                "nominal": self.nominal.to_dict(),
+                "names": list(self.names),
+                "coordinates": [_COORD[n] for n in self.names],
+                "mean": self.mean,
+                "cov": self.cov,
+                "source": self.source,
+                "valid_amplitude": self.valid_amplitude,
+                "warnings": list(self.warnings),
+                "success": self.success,
+            }
+        )
 
     def plot(self, ax=None):
         """One standard deviation of each sampled coordinate (``ln Fs``, ``ln KT``, ``chi``,
@@ -231,7 +285,7 @@ class ParameterUncertainty(ResultShape):
         correlation matrix written on them. Returns the artists (one Axes,
         :mod:`iwan_element.base.result_shape`).
         """
-        ax, = panels(ax, 1, figsize=(5, 3.5))
+        (ax,) = panels(ax, 1, figsize=(5, 3.5))
         se = np.sqrt(np.diag(self.cov))
         x = np.arange(len(self.names))
         arts = list(ax.bar(x, se, color="C0", alpha=0.7))
@@ -240,7 +294,14 @@ class ParameterUncertainty(ResultShape):
         with np.errstate(invalid="ignore", divide="ignore"):
             corr = self.cov / np.outer(se, se)
         for i, s in enumerate(se):
-            arts.append(ax.annotate(" ".join(f"{c:+.2f}" for c in corr[i]), (i, s),
-                                    ha="center", va="bottom", fontsize=6))
+            arts.append(
+                ax.annotate(
+                    " ".join(f"{c:+.2f}" for c in corr[i]),
+                    (i, s),
+                    ha="center",
+                    va="bottom",
+                    fontsize=6,
+                )
+            )
         ax.set_title(f"uncertainty from {self.source}", fontsize=9)
         return arts

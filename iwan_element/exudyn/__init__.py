@@ -14,11 +14,20 @@ Inside (bottom to top): :mod:`.slips` (the accepted slips read from Exudyn's coo
 after each step, and their records), :mod:`.laws` (the force laws Exudyn evaluates:
 symbolic, Python, the interface's springs), then this folder's public adapters.
 """
+
 from .cartesian import IwanCartesianConnector, create_iwan_connector
 from .connector import IwanConnector, add_iwan_connector
 from .energy import EnergyBalance, EnergyRecorder, record_energy
 from .interface import IwanInterface, add_iwan_interface
 
-__all__ = ["create_iwan_connector", "IwanCartesianConnector", "add_iwan_connector",
-           "IwanConnector", "add_iwan_interface", "IwanInterface", "record_energy",
-           "EnergyRecorder", "EnergyBalance"]
+__all__ = [
+    "create_iwan_connector",
+    "IwanCartesianConnector",
+    "add_iwan_connector",
+    "IwanConnector",
+    "add_iwan_interface",
+    "IwanInterface",
+    "record_energy",
+    "EnergyRecorder",
+    "EnergyBalance",
+]

@@ -3,6 +3,7 @@ records, read-outs, reset, and the per-step work of the Python force law (the sy
 law's is in :mod:`.laws.symbolic_connector`). See :mod:`iwan_element.exudyn.connector` for how
 the history is kept.
 """
+
 from __future__ import annotations
 
 import logging
@@ -22,8 +23,8 @@ _FORCE = exu.OutputVariableType.Force
 _NAN = math.nan
 _INF = math.inf
 
-_NCOL = 5                   # recorded per step: time, slip, force, dissipated energy, work
-_BLOCK = 5 * 1024           # record values buffered in a list before moving them to the array
+_NCOL = 5  # recorded per step: time, slip, force, dissipated energy, work
+_BLOCK = 5 * 1024  # record values buffered in a list before moving them to the array
 
 
 def _no_pending():
@@ -41,8 +42,9 @@ class IwanConnector:
     connector is created.
     """
 
-    def __init__(self, mbs, markerNumbers, joint, kind, axis, axisMarker, offset, record,
-                 damping=0.0):
+    def __init__(
+        self, mbs, markerNumbers, joint, kind, axis, axisMarker, offset, record, damping=0.0
+    ):
         self._mbs = mbs
         self._markers = tuple(markerNumbers)
         self._joint = joint
@@ -50,33 +52,33 @@ class IwanConnector:
         self._axis = axis
         self._axis_marker = axisMarker
         self._offset = offset
-        self._damping = damping     # dashpot in parallel with the joint [N s/m]
-        self._dash = None           # its (u, v, dissipated) at the last accepted step
+        self._damping = damping  # dashpot in parallel with the joint [N s/m]
+        self._dash = None  # its (u, v, dissipated) at the last accepted step
         self._record_on = record
-        self._rec = array("d")      # the records, row-major, _NCOL values per row
-        self._buf = []              # newest rows, moved to _rec in blocks (list.extend is
-                                    # ~4x faster than array.extend with a tuple)
-        self._guard = _INF          # force evaluations at t < _guard check the set-up first
-        self._t_acc = -_INF         # time of the last accepted step
-        self._lu = _NAN             # cache of the last trial: (u, v) -> F
+        self._rec = array("d")  # the records, row-major, _NCOL values per row
+        self._buf = []  # newest rows, moved to _rec in blocks (list.extend is
+        # ~4x faster than array.extend with a tuple)
+        self._guard = _INF  # force evaluations at t < _guard check the set-up first
+        self._t_acc = -_INF  # time of the last accepted step
+        self._lu = _NAN  # cache of the last trial: (u, v) -> F
         self._lv = _NAN
         self._lF = 0.0
         self._object = None
         self._dispatcher = None
-        self._read = None           # (q, q_t, i0, i1) on the fast route, else None (generic)
-        self._fast_nodes = None     # set for two NodeCoordinate markers; resolved in _refresh
+        self._read = None  # (q, q_t, i0, i1) on the fast route, else None (generic)
+        self._fast_nodes = None  # set for two NodeCoordinate markers; resolved in _refresh
         self._accept = self._generic_accept
         self._route = "python"
-        self._state = None          # symbolic route: the law's variables
+        self._state = None  # symbolic route: the law's variables
         self._overflows = []
-        self._lazy_last = _no_pending   # symbolic route: () -> accepted slip not yet
-                                        # committed (lazy), or None
-        self._window = False        # the law's variables hold a post-Newton window
-        self._risky = False         # the committed stack is deeper than the law holds
-        self._snapshot = None       # copy of the joint where the records start
-        self._replay = None         # cache of the replayed records
-        self._slip = None           # () -> accepted slip (symbolic route)
-        self._n_resolved = 0        # post-Newton re-solves of steps beyond the law's depth
+        self._lazy_last = _no_pending  # symbolic route: () -> accepted slip not yet
+        # committed (lazy), or None
+        self._window = False  # the law's variables hold a post-Newton window
+        self._risky = False  # the committed stack is deeper than the law holds
+        self._snapshot = None  # copy of the joint where the records start
+        self._replay = None  # cache of the replayed records
+        self._slip = None  # () -> accepted slip (symbolic route)
+        self._n_resolved = 0  # post-Newton re-solves of steps beyond the law's depth
 
     # -------------------------------------------------------------- per-step work
     def _generic_accept(self, t):
@@ -140,7 +142,7 @@ class IwanConnector:
                 # the last trial was at the accepted state, bit for bit (the implicit solvers
                 # and explicit ones with end-of-step accelerations end every step there)
                 F = conn._lF
-            else:                   # e.g. an explicit solver whose last call was a stage
+            else:  # e.g. an explicit solver whose last call was a stage
                 F = trial(u, v)[0]
             if t < conn._t_acc:
                 conn._new_run(t, u)
@@ -184,7 +186,13 @@ class IwanConnector:
             _log.warning(
                 "Iwan connector %s: a new run starts at t=%g, before the end (t=%g) of the "
                 "history the joint holds, and the slip jumps from %g to %g; call reset() "
-                "before starting a fresh run", self.objectNumber, t, self._t_acc, held, u)
+                "before starting a fresh run",
+                self.objectNumber,
+                t,
+                self._t_acc,
+                held,
+                u,
+            )
 
     def _refresh(self, mbs, lazy_until=-_INF):
         """Start of a run: resolve the global coordinate indices and take fresh views of the
@@ -198,8 +206,10 @@ class IwanConnector:
             self._read = None
             self._accept = self._generic_accept
             return
-        i0, i1 = [-1 if node is None else mbs.GetNodeODE2Index(node) + coord
-                  for node, coord in self._fast_nodes]
+        i0, i1 = [
+            -1 if node is None else mbs.GetNodeODE2Index(node) + coord
+            for node, coord in self._fast_nodes
+        ]
         sd = mbs.systemData
         q = sd.GetODE2Coordinates(copy=False)
         qt = sd.GetODE2Coordinates_t(copy=False)
@@ -219,10 +229,13 @@ class IwanConnector:
         d = self._dispatcher
         d.refresh(mbs)
         if not d.reachable_from(_installed_post_step(mbs)):
-            _log.debug("connector %s: post-step function was replaced; chaining it behind the "
-                       "connector dispatcher", self.objectNumber)
+            _log.debug(
+                "connector %s: post-step function was replaced; chaining it behind the "
+                "connector dispatcher",
+                self.objectNumber,
+            )
             d.install(mbs)
-        self._guard = math.nextafter(t, -math.inf)     # no second check at this same time
+        self._guard = math.nextafter(t, -math.inf)  # no second check at this same time
 
     # -------------------------------------------------------------- read-only set-up
     @property
@@ -310,12 +323,16 @@ class IwanConnector:
         function; refuse to return records of a run in which the joint was not committed.
         """
         d = self._dispatcher
-        if self._route == "symbolic" and d is not None \
-                and not d.reachable_from(_installed_post_step(self._mbs)):
+        if (
+            self._route == "symbolic"
+            and d is not None
+            and not d.reachable_from(_installed_post_step(self._mbs))
+        ):
             raise RuntimeError(
                 "the connector's post-step dispatcher was replaced by another post-step user "
                 "function, so the joint was not committed; set your post-step function before "
-                "add_iwan_connector (it is then chained) and run again")
+                "add_iwan_connector (it is then chained) and run again"
+            )
 
     @property
     def route(self) -> str:
@@ -391,11 +408,18 @@ class IwanConnector:
         stored_energy [J], dissipated_energy [J], work [J]``.
         """
         data = self._table()
-        return {"time": data[:, 0].copy(), "slip": data[:, 1].copy(),
-                "force": data[:, 2].copy(), "stored_energy": data[:, 4] - data[:, 3],
-                "dissipated_energy": data[:, 3].copy(), "work": data[:, 4].copy()}
+        return {
+            "time": data[:, 0].copy(),
+            "slip": data[:, 1].copy(),
+            "force": data[:, 2].copy(),
+            "stored_energy": data[:, 4] - data[:, 3],
+            "dissipated_energy": data[:, 3].copy(),
+            "work": data[:, 4].copy(),
+        }
 
     def __repr__(self) -> str:
-        return (f"IwanConnector(objectNumber={self.objectNumber}, kind={self.kind!r}, "
-                f"markerNumbers={self.markerNumbers}, joint={self.joint!r}, "
-                f"records={self.n_records})")
+        return (
+            f"IwanConnector(objectNumber={self.objectNumber}, kind={self.kind!r}, "
+            f"markerNumbers={self.markerNumbers}, joint={self.joint!r}, "
+            f"records={self.n_records})"
+        )

@@ -1,6 +1,7 @@
 """The post-step dispatcher shared by all Iwan connectors and interfaces of one system,
 the settings they refuse, and the ownership of joint elements.
 """
+
 from __future__ import annotations
 
 import logging
@@ -13,6 +14,7 @@ __all__: list[str] = []
 
 _log = logging.getLogger("iwan_element.exudyn.connector")
 _NAN = math.nan
+
 
 # ---------------------------------------------------------------------------- dispatcher
 def _installed_post_step(mbs):
@@ -44,25 +46,25 @@ class _PostStepDispatcher:
 
     def __init__(self, chained, mbs):
         self.chained = chained
-        self.connectors = []       # in creation order
-        self.accepts = ()          # their accept functions, renewed with the views
-        self.solo = None           # the accept function if there is exactly one
+        self.connectors = []  # in creation order
+        self.accepts = ()  # their accept functions, renewed with the views
+        self.solo = None  # the accept function if there is exactly one
         self.last_t = _NAN
         self.running = False
-        self.stale = True          # a new solve was announced: check settings, renew views
-        self.solvers = (None, None)    # the solver objects of the run the views belong to
-        self.risky = []            # connectors whose stack is deeper than their law holds
-        self.pn_prev = None        # post-Newton function found when ours was installed
-        self.pn_big = 1e10         # "discontinuous error" that asks for a re-solve
-        self.recorders = []        # energy recorders of this system (follow resets)
-        self.solve_info = None     # (kind, solver type, spectral radius) of the last solve
+        self.stale = True  # a new solve was announced: check settings, renew views
+        self.solvers = (None, None)  # the solver objects of the run the views belong to
+        self.risky = []  # connectors whose stack is deeper than their law holds
+        self.pn_prev = None  # post-Newton function found when ours was installed
+        self.pn_big = 1e10  # "discontinuous error" that asks for a re-solve
+        self.recorders = []  # energy recorders of this system (follow resets)
+        self.solve_info = None  # (kind, solver type, spectral radius) of the last solve
         self.mbs = mbs
         disp = self
-        self.sysd = mbs.sys        # Exudyn's SolveDynamic/SolveStatic store their solver here
+        self.sysd = mbs.sys  # Exudyn's SolveDynamic/SolveStatic store their solver here
 
         def post_step_dispatcher(mbs, t):
             if t > disp.last_t and not disp.stale and not disp.running:
-                disp.last_t = t    # the usual case: the next accepted step of this run
+                disp.last_t = t  # the usual case: the next accepted step of this run
                 solo = disp.solo
                 if solo is not None:
                     solo(t)
@@ -73,7 +75,7 @@ class _PostStepDispatcher:
                 if f is None:
                     return True
             else:
-                if disp.running:   # re-entered through a user function that calls us by hand
+                if disp.running:  # re-entered through a user function that calls us by hand
                     return True
                 disp.slow_step(mbs, t)
                 f = disp.chained
@@ -105,7 +107,7 @@ class _PostStepDispatcher:
         sysd = self.sysd
         solvers = (sysd.get("dynamicSolver"), sysd.get("staticSolver"))
         if self.stale or solvers[0] is not self.solvers[0] or solvers[1] is not self.solvers[1]:
-            self.solvers = solvers     # a new solve (maybe after an Assemble)
+            self.solvers = solvers  # a new solve (maybe after an Assemble)
             self.stale = False
             self.new_solve(mbs)
             self.last_t = t
@@ -115,20 +117,23 @@ class _PostStepDispatcher:
             self.last_t = t
             for a in self.accepts:
                 a(t)
-        elif t != self.last_t:         # a new run (never commit twice at one time)
+        elif t != self.last_t:  # a new run (never commit twice at one time)
             # not announced by the mbs.sys hook (storeSolver=False): a fresh history from
             # here; the solver's initial accelerations still saw the old one
             for c in self.connectors:
                 c.reset()
-            _log.warning("a run starts at t=%g, before the last accepted time, without "
-                         "SolveDynamic's storeSolver=True: the Iwan joints start a fresh "
-                         "history at its first step (its initial accelerations used the old "
-                         "one; keep storeSolver=True)", t)
+            _log.warning(
+                "a run starts at t=%g, before the last accepted time, without "
+                "SolveDynamic's storeSolver=True: the Iwan joints start a fresh "
+                "history at its first step (its initial accelerations used the old "
+                "one; keep storeSolver=True)",
+                t,
+            )
             self.last_t = t
             self.refresh(mbs)
             for a in self.accepts:
                 a(t)
-        else:                          # a run continuing from the last accepted time
+        else:  # a run continuing from the last accepted time
             self.refresh(mbs)
 
     def lazy_until(self) -> float:
@@ -184,8 +189,9 @@ class _PostStepDispatcher:
                 c._refresh(mbs)
         for r in self.recorders:
             r._refresh(mbs)
-        self.accepts = (tuple(c._accept for c in self.connectors)
-                        + tuple(r._record for r in self.recorders))   # after the joints
+        self.accepts = tuple(c._accept for c in self.connectors) + tuple(
+            r._record for r in self.recorders
+        )  # after the joints
         self.solo = self.accepts[0] if len(self.accepts) == 1 else None
 
     def before_solve(self, settings, kind: str) -> None:
@@ -199,14 +205,22 @@ class _PostStepDispatcher:
         check_settings(settings, self.connectors)
         ti = settings.timeIntegration
         self.solve_info = (kind, ti.solverType, ti.generalizedAlpha.spectralRadius)
-        t0 = (settings.timeIntegration.startTime if kind == "dynamicSolver"
-              else settings.staticSolver.loadStepStart)
+        t0 = (
+            settings.timeIntegration.startTime
+            if kind == "dynamicSolver"
+            else settings.staticSolver.loadStepStart
+        )
         last = self.last_t
         if last == last and t0 < last - 1e-12 * max(1.0, abs(last)):
             for c in self.connectors:
                 c.reset()
-            _log.info("a solve starts at t=%g, before the last accepted time t=%g: %d Iwan "
-                      "joint(s) start a fresh history", t0, last, len(self.connectors))
+            _log.info(
+                "a solve starts at t=%g, before the last accepted time t=%g: %d Iwan "
+                "joint(s) start a fresh history",
+                t0,
+                last,
+                len(self.connectors),
+            )
         self.last_t = _NAN
 
     def add_recorder(self, recorder) -> None:
@@ -281,7 +295,8 @@ def check_settings(settings, connectors) -> None:
             f"simulationSettings.parallel.numberOfThreads = {threads}: {len(python)} Iwan "
             "connector(s) use a Python force law, which is not safe with several solver "
             "threads (Exudyn was seen to hang); set numberOfThreads = 1, or use IwanJoint "
-            "elements (symbolic law, law='auto') or add_iwan_interface")
+            "elements (symbolic law, law='auto') or add_iwan_interface"
+        )
     ti = settings.timeIntegration
     if ti.solverType in ADAPTIVE_EXPLICIT and ti.automaticStepSize:
         strict = [c for c in connectors if not getattr(c, "_allow_adaptive_explicit", False)]
@@ -291,7 +306,8 @@ def check_settings(settings, connectors) -> None:
                 "joints: a reversal inside a step is invisible to its error estimate, and the "
                 "result does not converge with the tolerance (errors of 1e-4 to 1e-2 of the "
                 "amplitude were measured); use GeneralizedAlpha, or a fixed step "
-                "(automaticStepSize = False), or pass allow_adaptive_explicit=True")
+                "(automaticStepSize = False), or pass allow_adaptive_explicit=True"
+            )
 
 
 ADAPTIVE_EXPLICIT = frozenset({exu.DynamicSolverType.ODE23, exu.DynamicSolverType.DOPRI5})
@@ -310,7 +326,7 @@ class _SolveHook(dict):
     def __setitem__(self, key, value):
         super().__setitem__(key, value)
         if key in ("dynamicSolver", "staticSolver"):
-            self.kind = key            # the solve about to start
+            self.kind = key  # the solve about to start
             self.pending = True
             mbs = self.mbs
             for d in self.dispatchers:
@@ -342,7 +358,7 @@ def _dispatcher_for(mbs) -> _PostStepDispatcher:
 
 
 # ---------------------------------------------------------------------------- ownership
-_ATTACHED: dict = {}        # id(element) -> (weakref to its connector, the element)
+_ATTACHED: dict = {}  # id(element) -> (weakref to its connector, the element)
 
 
 def _claim(joint, handle) -> None:
@@ -356,7 +372,8 @@ def _claim(joint, handle) -> None:
         if owner is not None:
             raise ValueError(
                 f"joint is already attached to {owner!r} (possibly in another system); its "
-                "history would be shared: give every connector its own element instance")
+                "history would be shared: give every connector its own element instance"
+            )
     _ATTACHED[key] = (weakref.ref(handle), joint)
     for k in [k for k, (ref, _) in _ATTACHED.items() if ref() is None]:
         del _ATTACHED[k]

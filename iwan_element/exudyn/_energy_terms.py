@@ -28,6 +28,7 @@ Per item:
 * everything else (ODE1 objects, full FFRF bodies, kinematic trees, the 3-D geometrically
   exact beam, user functions of flexible bodies ...): named as not booked.
 """
+
 from __future__ import annotations
 
 import exudyn as exu
@@ -40,10 +41,19 @@ _CIT = exu.ComputeItemType
 _CUR = exu.ConfigurationType.Current
 _ORIGIN = [0.0, 0.0, 0.0]
 
-RIGID = frozenset({"Mass1D", "MassPoint", "MassPoint2D", "RigidBody", "RigidBody2D",
-                   "RotationalMass1D"})
-LHS_BODIES = frozenset({"ANCFCable2D", "ANCFCable", "ANCFBeam", "ANCFThinPlate",
-                        "BeamGeometricallyExact2D", "GenericODE2"})
+RIGID = frozenset(
+    {"Mass1D", "MassPoint", "MassPoint2D", "RigidBody", "RigidBody2D", "RotationalMass1D"}
+)
+LHS_BODIES = frozenset(
+    {
+        "ANCFCable2D",
+        "ANCFCable",
+        "ANCFBeam",
+        "ANCFThinPlate",
+        "BeamGeometricallyExact2D",
+        "GenericODE2",
+    }
+)
 LOADS = ("Coordinate", "ForceVector", "TorqueVector", "MassProportional")
 #: Parameters of constraints whose motion is prescribed when set (a user function).
 _PRESCRIBED = ("offsetUserFunction", "offsetUserFunction_t", "constraintUserFunction")
@@ -59,8 +69,10 @@ def check_loads(mbs) -> None:
     for n in range(mbs.systemData.NumberOfLoads()):
         kind = mbs.GetLoad(n)["loadType"]
         if kind not in LOADS:
-            raise ValueError(f"load {n} is a {kind} load; the energy balance books the work of "
-                             f"{', '.join(LOADS)} loads only")
+            raise ValueError(
+                f"load {n} is a {kind} load; the energy balance books the work of "
+                f"{', '.join(LOADS)} loads only"
+            )
 
 
 class Terms:
@@ -77,7 +89,7 @@ class Terms:
         check_loads(mbs)
         self.mbs = mbs
         self.kinetic, self.lhs_bodies, self.reduced = [], [], []
-        self.connectors = []          # (object, ODE2 indices, reports PotentialEnergy)
+        self.connectors = []  # (object, ODE2 indices, reports PotentialEnergy)
         self.missing = []
         sd = mbs.systemData
         for o in range(sd.NumberOfObjects()):
@@ -140,9 +152,11 @@ class Terms:
         mbs = self.mbs
         q = mbs.systemData.GetODE2Coordinates(_CUR)
         qt = mbs.systemData.GetODE2Coordinates_t(_CUR)
-        kin = sum(float(mbs.GetObjectOutputBody(o, _OVT.KineticEnergy, localPosition=_ORIGIN))
-                  for o in self.kinetic)
-        ela, pairs = 0.0, []          # pairs (force, displacement) for trapezoidal works
+        kin = sum(
+            float(mbs.GetObjectOutputBody(o, _OVT.KineticEnergy, localPosition=_ORIGIN))
+            for o in self.kinetic
+        )
+        ela, pairs = 0.0, []  # pairs (force, displacement) for trapezoidal works
         for o, idx in self.lhs_bodies:
             pairs.append(("internal", _lhs(mbs, o), q[idx]))
         for qi, K, D in self.reduced:
@@ -154,10 +168,11 @@ class Terms:
         for o, idx, pe in self.connectors:
             pairs.append((o, _lhs(mbs, o), q[idx]))
             pot.append(float(mbs.GetObjectOutput(o, _OVT.PotentialEnergy)) if pe else 0.0)
-        ext = [self._load_pair(n, kind, m, fixed, body, q, qt)
-               for n, kind, m, fixed, body in self.loads]
-        return {"kinetic": kin, "elastic": ela, "pairs": pairs, "potential": pot,
-                "loads": ext}
+        ext = [
+            self._load_pair(n, kind, m, fixed, body, q, qt)
+            for n, kind, m, fixed, body in self.loads
+        ]
+        return {"kinetic": kin, "elastic": ela, "pairs": pairs, "potential": pot, "loads": ext}
 
     def _load_pair(self, n, kind, m, fixed, body, q, qt):
         """``(force, displacement, power?)`` of a load at the current state."""
@@ -175,7 +190,7 @@ class Terms:
             return value, None, float(value @ np.asarray(w))
         J = np.asarray(mbs.ComputeItem(exu.ObjectIndex(body), _CIT.MassWeightedPositionJacobian))
         idx = _ltg(mbs, body)
-        return J.T @ value[:J.shape[0]], q[idx], None
+        return J.T @ value[: J.shape[0]], q[idx], None
 
 
 def _ltg(mbs, o):
@@ -189,7 +204,7 @@ def _lhs(mbs, o):
 def _reports(mbs, o) -> bool:
     try:
         mbs.GetObjectOutput(o, _OVT.PotentialEnergy)
-    except Exception:      # noqa: BLE001  (Exudyn raises RuntimeError or SystemError)
+    except Exception:  # noqa: BLE001  (Exudyn raises RuntimeError or SystemError)
         return False
     return True
 
@@ -197,7 +212,7 @@ def _reports(mbs, o) -> bool:
 def _has_kinetic(mbs, o) -> bool:
     try:
         mbs.GetObjectOutputBody(o, _OVT.KineticEnergy, localPosition=_ORIGIN)
-    except Exception:      # noqa: BLE001
+    except Exception:  # noqa: BLE001
         return False
     return True
 

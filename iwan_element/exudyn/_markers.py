@@ -1,4 +1,5 @@
 """Checks of markers, axes and visualization arguments of the Exudyn adapters."""
+
 from __future__ import annotations
 
 import operator
@@ -10,20 +11,31 @@ import numpy as np
 __all__: list[str] = []
 
 # Marker types (the ``markerType`` entry of ``mbs.GetMarker``) by what they provide.
-_COORDINATE_MARKERS = frozenset({
-    "NodeCoordinate", "NodeRotationCoordinate",
-    "BodiesRelativeTranslationCoordinate", "BodiesRelativeRotationCoordinate",
-})
-_ORIENTATION_MARKERS = frozenset({"BodyRigid", "NodeRigid", "SuperElementRigid", "KinematicTreeRigid"})
-_POSITION_MARKERS = frozenset({"BodyPosition", "NodePosition", "SuperElementPosition"}) | _ORIENTATION_MARKERS
+_COORDINATE_MARKERS = frozenset(
+    {
+        "NodeCoordinate",
+        "NodeRotationCoordinate",
+        "BodiesRelativeTranslationCoordinate",
+        "BodiesRelativeRotationCoordinate",
+    }
+)
+_ORIENTATION_MARKERS = frozenset(
+    {"BodyRigid", "NodeRigid", "SuperElementRigid", "KinematicTreeRigid"}
+)
+_POSITION_MARKERS = (
+    frozenset({"BodyPosition", "NodePosition", "SuperElementPosition"}) | _ORIENTATION_MARKERS
+)
 _VISUALIZATION_KEYS = ("show", "drawSize", "color")
 
 
 # ---------------------------------------------------------------------------- validation
 #: Exudyn's typed indices that are not markers, and what they number.
-_NOT_MARKERS = ((exu.ObjectIndex, "a body or object (ObjectIndex)"),
-                (exu.NodeIndex, "a node (NodeIndex)"),
-                (exu.LoadIndex, "a load (LoadIndex)"), (exu.SensorIndex, "a sensor (SensorIndex)"))
+_NOT_MARKERS = (
+    (exu.ObjectIndex, "a body or object (ObjectIndex)"),
+    (exu.NodeIndex, "a node (NodeIndex)"),
+    (exu.LoadIndex, "a load (LoadIndex)"),
+    (exu.SensorIndex, "a sensor (SensorIndex)"),
+)
 
 
 def _marker_type(mbs, marker, label: str) -> str:
@@ -39,16 +51,22 @@ def _marker_type(mbs, marker, label: str) -> str:
                 f"{label} = {marker!r} is {what}, but markers belong here (a MarkerIndex as "
                 "mbs.AddMarker returns it): add a marker on it (MarkerBodyPosition, "
                 "MarkerNodePosition, MarkerNodeCoordinate ...), or let "
-                "create_iwan_connector(mbs, bodyNumbers=[...]) make the markers")
-    try:                       # an integer or MarkerIndex; a float (1.7) is not truncated
+                "create_iwan_connector(mbs, bodyNumbers=[...]) make the markers"
+            )
+    try:  # an integer or MarkerIndex; a float (1.7) is not truncated
         idx = operator.index(marker)
     except TypeError:
-        raise ValueError(f"{label} must be a marker number (int or exudyn MarkerIndex), "
-                         f"got {marker!r} ({type(marker).__name__})") from None
+        raise ValueError(
+            f"{label} must be a marker number (int or exudyn MarkerIndex), "
+            f"got {marker!r} ({type(marker).__name__})"
+        ) from None
     n = mbs.systemData.NumberOfMarkers()
     if not 0 <= idx < n:
-        raise ValueError(f"{label} = {idx} is not a marker of this system: allowed range is "
-                         f"[0, {n - 1}]" if n else f"{label} = {idx}: the system has no markers yet")
+        raise ValueError(
+            f"{label} = {idx} is not a marker of this system: allowed range is [0, {n - 1}]"
+            if n
+            else f"{label} = {idx}: the system has no markers yet"
+        )
     return mbs.GetMarker(idx)["markerType"]
 
 
@@ -73,12 +91,15 @@ def _visualization(visualization) -> dict:
     if visualization is None:
         return vis
     if not isinstance(visualization, Mapping):
-        raise ValueError("visualization must be a dict with keys among "
-                         f"{list(_VISUALIZATION_KEYS)}, got {type(visualization).__name__}")
+        raise ValueError(
+            "visualization must be a dict with keys among "
+            f"{list(_VISUALIZATION_KEYS)}, got {type(visualization).__name__}"
+        )
     bad = set(visualization) - set(_VISUALIZATION_KEYS)
     if bad:
-        raise ValueError(f"unknown visualization keys {sorted(bad)}; allowed are "
-                         f"{list(_VISUALIZATION_KEYS)}")
+        raise ValueError(
+            f"unknown visualization keys {sorted(bad)}; allowed are {list(_VISUALIZATION_KEYS)}"
+        )
     vis.update(visualization)
     return vis
 

@@ -13,6 +13,7 @@ diagonal of two axes with the same parameters reaches macroslip at ``sqrt(2) Fs`
 of ``Fs`` (the two laws do not share one friction limit); use one axis along the expected
 slip direction when that matters.
 """
+
 from __future__ import annotations
 
 import logging
@@ -39,8 +40,19 @@ __all__ = ["create_iwan_connector", "IwanCartesianConnector"]
 _log = logging.getLogger(__name__)
 #: Bodies and nodes without an orientation (a rigid marker on them is refused).
 _POINT_BODIES = frozenset({"MassPoint", "MassPoint2D", "Mass1D"})
-_POINT_NODES = frozenset({"Point", "Point2D", "PointGround", "1D", "GenericODE2", "GenericData",
-                          "Point2DSlope1", "Point3DSlope1", "Point3DSlope23"})
+_POINT_NODES = frozenset(
+    {
+        "Point",
+        "Point2D",
+        "PointGround",
+        "1D",
+        "GenericODE2",
+        "GenericData",
+        "Point2DSlope1",
+        "Point3DSlope1",
+        "Point3DSlope23",
+    }
+)
 
 
 class IwanCartesianConnector:
@@ -84,7 +96,8 @@ class IwanCartesianConnector:
     def objectNumbers(self) -> list:
         """Every Exudyn object of the connector (the Iwan laws, then the spring-damper)."""
         return [c.objectNumber for c in self._connectors] + (
-            [] if self._spring is None else [self._spring])
+            [] if self._spring is None else [self._spring]
+        )
 
     @property
     def axes(self) -> np.ndarray:
@@ -110,7 +123,7 @@ class IwanCartesianConnector:
     @property
     def time_history(self) -> np.ndarray:
         """Times of the accepted steps [s], shape (n,)."""
-        return self._connectors[0].time_history[:self.n_records]
+        return self._connectors[0].time_history[: self.n_records]
 
     @property
     def slip_history(self) -> np.ndarray:
@@ -142,9 +155,14 @@ class IwanCartesianConnector:
         ``dissipated_energy``, ``work`` (n,).
         """
         w, d = self.work_history, self.dissipated_energy_history
-        return {"time": self.time_history, "slip": self.slip_history,
-                "force": self.force_history, "stored_energy": w - d,
-                "dissipated_energy": d, "work": w}
+        return {
+            "time": self.time_history,
+            "slip": self.slip_history,
+            "force": self.force_history,
+            "stored_energy": w - d,
+            "dissipated_energy": d,
+            "work": w,
+        }
 
     def reset(self) -> None:
         """Return every Iwan law to its virgin state and clear the records (a solve that
@@ -154,18 +172,34 @@ class IwanCartesianConnector:
             c.reset()
 
     def __repr__(self) -> str:
-        return (f"IwanCartesianConnector(markerNumbers={self._markers}, frame={self._frame!r}, "
-                f"n_axes={len(self._connectors)}, springDamper={self._spring}, "
-                f"records={self.n_records})")
+        return (
+            f"IwanCartesianConnector(markerNumbers={self._markers}, frame={self._frame!r}, "
+            f"n_axes={len(self._connectors)}, springDamper={self._spring}, "
+            f"records={self.n_records})"
+        )
 
 
-def create_iwan_connector(mbs, *, bodyNumbers, localPosition0=(0.0, 0.0, 0.0),
-                          localPosition1=(0.0, 0.0, 0.0), axis=None, parameters,
-                          damping=0.0, stiffness=(0.0, 0.0, 0.0), offset=None,
-                          useGlobalFrame: bool = True, name: str = "", show: bool = True,
-                          drawSize: float = -1.0, color=(-1.0, -1.0, -1.0, -1.0),
-                          record: bool = True, law: str = "auto", depth: int = 8,
-                          allow_adaptive_explicit: bool = False) -> IwanCartesianConnector:
+def create_iwan_connector(
+    mbs,
+    *,
+    bodyNumbers,
+    localPosition0=(0.0, 0.0, 0.0),
+    localPosition1=(0.0, 0.0, 0.0),
+    axis=None,
+    parameters,
+    damping=0.0,
+    stiffness=(0.0, 0.0, 0.0),
+    offset=None,
+    useGlobalFrame: bool = True,
+    name: str = "",
+    show: bool = True,
+    drawSize: float = -1.0,
+    color=(-1.0, -1.0, -1.0, -1.0),
+    record: bool = True,
+    law: str = "auto",
+    depth: int = 8,
+    allow_adaptive_explicit: bool = False,
+) -> IwanCartesianConnector:
     """Put Iwan joints between two bodies, nodes or markers, as ``mbs.CreateCartesianSpringDamper``
     puts a spring-damper.
 
@@ -228,43 +262,65 @@ def create_iwan_connector(mbs, *, bodyNumbers, localPosition0=(0.0, 0.0, 0.0),
         raise ValueError(f"mbs must be an exudyn.MainSystem, got {type(mbs).__name__}")
     if not isinstance(useGlobalFrame, bool):
         raise ValueError(f"useGlobalFrame must be True or False, got {useGlobalFrame!r}")
-    vis = {"show": bool(show), "drawSize": check_scalar("drawSize", drawSize),
-           "color": [float(x) for x in color]}
+    vis = {
+        "show": bool(show),
+        "drawSize": check_scalar("drawSize", drawSize),
+        "color": [float(x) for x in color],
+    }
     items = _items(bodyNumbers, localPosition0, localPosition1)
-    common = dict(record=record, law=law, depth=depth,
-                  allow_adaptive_explicit=allow_adaptive_explicit)
+    common = dict(
+        record=record, law=law, depth=depth, allow_adaptive_explicit=allow_adaptive_explicit
+    )
     check_run_options(**common)
     if not isinstance(name, str):
         raise ValueError(f"name must be a str, got {type(name).__name__}")
     if all(k == "marker" for k, _, _ in items) and all(
-            _marker_type(mbs, it, f"bodyNumbers[{i}]") in _COORDINATE_MARKERS
-            for i, (_, it, _) in enumerate(items)):
-        return _coordinate_connector(mbs, items, axis, parameters, damping, stiffness, offset,
-                                     name, vis, common)
+        _marker_type(mbs, it, f"bodyNumbers[{i}]") in _COORDINATE_MARKERS
+        for i, (_, it, _) in enumerate(items)
+    ):
+        return _coordinate_connector(
+            mbs, items, axis, parameters, damping, stiffness, offset, name, vis, common
+        )
     if axis is None:
-        raise ValueError("axis is required: give the Iwan axis (or up to three orthogonal "
-                         "axes), e.g. axis=[1, 0, 0]")
+        raise ValueError(
+            "axis is required: give the Iwan axis (or up to three orthogonal "
+            "axes), e.g. axis=[1, 0, 0]"
+        )
     axes = _axes(axis)
     params = _parameters(parameters, len(axes))
     k = _vector3("stiffness", stiffness)
     along = [i for i, a in enumerate(axes) if np.linalg.norm(k * a) > 0.0]
     if along:
-        raise ValueError(f"stiffness = {k.tolist()} has a spring along the Iwan axis "
-                         f"{axes[along[0]].tolist()}: stiffness acts on the remaining axes only "
-                         "(a spring in parallel would stiffen the identified joint; fold it into "
-                         "KT)")
+        raise ValueError(
+            f"stiffness = {k.tolist()} has a spring along the Iwan axis "
+            f"{axes[along[0]].tolist()}: stiffness acts on the remaining axes only "
+            "(a spring in parallel would stiffen the identified joint; fold it into "
+            "KT)"
+        )
     d0 = np.zeros(3) if offset is None else _vector3("offset", offset)
     c, dvec = _damping(damping)
     if not useGlobalFrame:
         _check_orientation(mbs, items)
-    m0, m1 = (_marker(mbs, name, i, kind, it, pos, not useGlobalFrame)
-              for i, (kind, it, pos) in enumerate(items))
+    m0, m1 = (
+        _marker(mbs, name, i, kind, it, pos, not useGlobalFrame)
+        for i, (kind, it, pos) in enumerate(items)
+    )
     conns = []
     for j, (a, p) in enumerate(zip(axes, params)):
-        conns.append(add_iwan_connector(
-            mbs, [m0, m1], p, axis=a, axisMarker=None if useGlobalFrame else m0,
-            offset=float(a @ d0), damping=c, name=f"{name}:iwan{j}" if name else "",
-            visualization=vis, **common))
+        conns.append(
+            add_iwan_connector(
+                mbs,
+                [m0, m1],
+                p,
+                axis=a,
+                axisMarker=None if useGlobalFrame else m0,
+                offset=float(a @ d0),
+                damping=c,
+                name=f"{name}:iwan{j}" if name else "",
+                visualization=vis,
+                **common,
+            )
+        )
     spring = None
     if np.any(k) or np.any(dvec):
         spring = _linear_part(mbs, m0, m1, k, dvec, d0, useGlobalFrame, name, vis)
@@ -277,10 +333,15 @@ def create_iwan_connector(mbs, *, bodyNumbers, localPosition0=(0.0, 0.0, 0.0),
 # ---------------------------------------------------------------------------- helpers
 def _items(bodyNumbers, p0, p1):
     """``[(kind, item, localPosition), ...]`` with kind ``body``, ``node`` or ``marker``."""
-    if isinstance(bodyNumbers, (str, bytes)) or not hasattr(bodyNumbers, "__len__") \
-            or len(bodyNumbers) != 2:
-        raise ValueError(f"bodyNumbers must be a list of two items (bodies, nodes or markers), "
-                         f"got {bodyNumbers!r}")
+    if (
+        isinstance(bodyNumbers, (str, bytes))
+        or not hasattr(bodyNumbers, "__len__")
+        or len(bodyNumbers) != 2
+    ):
+        raise ValueError(
+            f"bodyNumbers must be a list of two items (bodies, nodes or markers), "
+            f"got {bodyNumbers!r}"
+        )
     out = []
     for i, (it, pos) in enumerate(zip(bodyNumbers, (p0, p1))):
         pos = _vector3(f"localPosition{i}", pos)
@@ -288,16 +349,21 @@ def _items(bodyNumbers, p0, p1):
             kind = "marker"
         elif isinstance(it, exu.NodeIndex):
             kind = "node"
-        elif isinstance(it, exu.ObjectIndex) or (isinstance(it, Integral)
-                                                 and not isinstance(it, bool)):
+        elif isinstance(it, exu.ObjectIndex) or (
+            isinstance(it, Integral) and not isinstance(it, bool)
+        ):
             kind = "body"
         else:
-            raise ValueError(f"bodyNumbers[{i}] must be a body (ObjectIndex or int), a node "
-                             f"(NodeIndex) or a marker (MarkerIndex), got {it!r} "
-                             f"({type(it).__name__})")
+            raise ValueError(
+                f"bodyNumbers[{i}] must be a body (ObjectIndex or int), a node "
+                f"(NodeIndex) or a marker (MarkerIndex), got {it!r} "
+                f"({type(it).__name__})"
+            )
         if kind != "body" and np.any(pos):
-            raise ValueError(f"localPosition{i} must be (0, 0, 0) for a {kind} "
-                             f"(bodyNumbers[{i}]); got {pos.tolist()}")
+            raise ValueError(
+                f"localPosition{i} must be (0, 0, 0) for a {kind} "
+                f"(bodyNumbers[{i}]); got {pos.tolist()}"
+            )
         out.append((kind, it, pos))
     return out
 
@@ -316,12 +382,14 @@ def _axes(axis) -> np.ndarray:
     try:
         a = np.array(axis, dtype=float)
     except (TypeError, ValueError):
-        raise ValueError(f"axis must be a vector of 3 numbers or up to three of them, "
-                         f"got {axis!r}") from None
+        raise ValueError(
+            f"axis must be a vector of 3 numbers or up to three of them, got {axis!r}"
+        ) from None
     a = a.reshape(1, -1) if a.ndim == 1 else a
     if a.ndim != 2 or a.shape[1] != 3 or not 1 <= a.shape[0] <= 3 or not np.all(np.isfinite(a)):
-        raise ValueError(f"axis must be a finite vector of 3 numbers or up to three of them, "
-                         f"got {axis!r}")
+        raise ValueError(
+            f"axis must be a finite vector of 3 numbers or up to three of them, got {axis!r}"
+        )
     n = np.linalg.norm(a, axis=1)
     if np.any(n == 0.0):
         raise ValueError(f"axis must hold non-zero vectors, got {axis!r}")
@@ -337,8 +405,10 @@ def _parameters(parameters, n) -> list:
         return [parameters] * n
     ps = list(parameters) if isinstance(parameters, (list, tuple)) else None
     if ps is None or len(ps) != n or not all(isinstance(p, IwanParameters) for p in ps):
-        raise ValueError(f"parameters must be IwanParameters or a list of {n} of them "
-                         f"(one per axis), got {parameters!r}")
+        raise ValueError(
+            f"parameters must be IwanParameters or a list of {n} of them "
+            f"(one per axis), got {parameters!r}"
+        )
     return ps
 
 
@@ -359,15 +429,20 @@ def _check_orientation(mbs, items) -> None:
     for i, (kind, item, _) in enumerate(items):
         if kind == "marker":
             if _marker_type(mbs, item, f"bodyNumbers[{i}]") not in _ORIENTATION_MARKERS:
-                raise ValueError(f"bodyNumbers[{i}] is a marker without orientation; "
-                                 "useGlobalFrame=False needs rigid markers (MarkerBodyRigid ...)")
+                raise ValueError(
+                    f"bodyNumbers[{i}] is a marker without orientation; "
+                    "useGlobalFrame=False needs rigid markers (MarkerBodyRigid ...)"
+                )
             continue
-        what = (mbs.GetObject(item)["objectType"] if kind == "body"
-                else mbs.GetNode(item)["nodeType"])
+        what = (
+            mbs.GetObject(item)["objectType"] if kind == "body" else mbs.GetNode(item)["nodeType"]
+        )
         if what in (_POINT_BODIES if kind == "body" else _POINT_NODES):
-            raise ValueError(f"bodyNumbers[{i}] = {item!r} has no orientation (a {what}): "
-                             "useGlobalFrame=False turns the frame with body 0 and needs an "
-                             "orientation on both items")
+            raise ValueError(
+                f"bodyNumbers[{i}] = {item!r} has no orientation (a {what}): "
+                "useGlobalFrame=False turns the frame with body 0 and needs an "
+                "orientation on both items"
+            )
 
 
 def _marker(mbs, name, i, kind, item, pos, rigid):
@@ -388,30 +463,56 @@ def _linear_part(mbs, m0, m1, k, d, d0, global_frame, name, vis):
     """
     label = f"{name}:springDamper" if name else ""
     if global_frame:
-        return mbs.AddObject(ObjectConnectorCartesianSpringDamper(
-            name=label, markerNumbers=[m0, m1], stiffness=k.tolist(), damping=d.tolist(),
-            offset=d0.tolist(), visualization=vis))
+        return mbs.AddObject(
+            ObjectConnectorCartesianSpringDamper(
+                name=label,
+                markerNumbers=[m0, m1],
+                stiffness=k.tolist(),
+                damping=d.tolist(),
+                offset=d0.tolist(),
+                visualization=vis,
+            )
+        )
     K = np.zeros((6, 6))
     D = np.zeros((6, 6))
     K[:3, :3] = np.diag(k)
     D[:3, :3] = np.diag(d)
-    return mbs.AddObject(ObjectConnectorRigidBodySpringDamper(
-        name=label, markerNumbers=[m0, m1], stiffness=K, damping=D,
-        offset=list(d0) + [0.0, 0.0, 0.0], visualization=vis))
+    return mbs.AddObject(
+        ObjectConnectorRigidBodySpringDamper(
+            name=label,
+            markerNumbers=[m0, m1],
+            stiffness=K,
+            damping=D,
+            offset=list(d0) + [0.0, 0.0, 0.0],
+            visualization=vis,
+        )
+    )
 
 
-def _coordinate_connector(mbs, items, axis, parameters, damping, stiffness, offset, name, vis,
-                          common):
+def _coordinate_connector(
+    mbs, items, axis, parameters, damping, stiffness, offset, name, vis, common
+):
     """Two coordinate markers: one joint on ``q1 - q0``."""
     if axis is not None:
-        raise ValueError("axis applies to position markers; bodyNumbers are two coordinate "
-                         "markers (the joint acts on q1 - q0)")
+        raise ValueError(
+            "axis applies to position markers; bodyNumbers are two coordinate "
+            "markers (the joint acts on q1 - q0)"
+        )
     if np.ndim(damping) != 0 or np.any(np.asarray(stiffness, dtype=float)):
-        raise ValueError("coordinate markers take a number as damping and no stiffness "
-                         "(there are no remaining axes)")
+        raise ValueError(
+            "coordinate markers take a number as damping and no stiffness "
+            "(there are no remaining axes)"
+        )
     (params,) = _parameters(parameters, 1)
     m0, m1 = items[0][1], items[1][1]
-    conn = add_iwan_connector(mbs, [m0, m1], params, damping=damping,
-                              offset=0.0 if offset is None else offset,
-                              name=f"{name}:iwan0" if name else "", visualization=vis, **common)
+    conn = add_iwan_connector(
+        mbs,
+        [m0, m1],
+        params,
+        damping=damping,
+        offset=0.0 if offset is None else offset,
+        name=f"{name}:iwan0" if name else "",
+        visualization=vis,
+        **common,
+    )
     return IwanCartesianConnector(mbs, (m0, m1), np.zeros((0, 3)), [conn], None, "coordinate")

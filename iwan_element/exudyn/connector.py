@@ -101,6 +101,7 @@ joint is committed only at reversals and loop closures).
 The handle class :class:`IwanConnector` lives in :mod:`._connector_handle` (records,
 read-outs, the Python law's per-step work); this module places connectors.
 """
+
 from __future__ import annotations
 
 import logging
@@ -137,13 +138,25 @@ from .laws.python_law import (
 __all__ = ["add_iwan_connector", "IwanConnector"]
 
 _log = logging.getLogger(__name__)
-IwanConnector.__module__ = __name__          # documented here (defined in _connector_handle)
+IwanConnector.__module__ = __name__  # documented here (defined in _connector_handle)
 
 
-def add_iwan_connector(mbs, markerNumbers, joint, *, axis=None, axisMarker=None,
-                       offset=0.0, damping: float = 0.0, name: str = "", visualization=None,
-                       record: bool = True, law: str = "auto", depth: int = 8,
-                       allow_adaptive_explicit: bool = False) -> IwanConnector:
+def add_iwan_connector(
+    mbs,
+    markerNumbers,
+    joint,
+    *,
+    axis=None,
+    axisMarker=None,
+    offset=0.0,
+    damping: float = 0.0,
+    name: str = "",
+    visualization=None,
+    record: bool = True,
+    law: str = "auto",
+    depth: int = 8,
+    allow_adaptive_explicit: bool = False,
+) -> IwanConnector:
     """Add a history-dependent joint element between two markers of an Exudyn system.
 
     Parameters
@@ -240,15 +253,24 @@ def add_iwan_connector(mbs, markerNumbers, joint, *, axis=None, axisMarker=None,
     """
     if isinstance(joint, IwanParameters):
         joint = IwanJoint(joint)
-    _check_options(mbs, markerNumbers, joint, name=name, record=record, law=law, depth=depth,
-                   allow_adaptive_explicit=allow_adaptive_explicit)
+    _check_options(
+        mbs,
+        markerNumbers,
+        joint,
+        name=name,
+        record=record,
+        law=law,
+        depth=depth,
+        allow_adaptive_explicit=allow_adaptive_explicit,
+    )
     damping = check_scalar("damping", damping, low=0.0)
     vis = _visualization(visualization)
     kind, unit, axis_marker, rigid = _classify_markers(mbs, markerNumbers, axis, axisMarker)
     offset = _slip_offset(offset, kind, unit)
     dispatcher = _dispatcher_for(mbs)
-    conn = IwanConnector(mbs, markerNumbers, joint, kind, unit, axis_marker, offset, record,
-                         damping)
+    conn = IwanConnector(
+        mbs, markerNumbers, joint, kind, unit, axis_marker, offset, record, damping
+    )
     _claim(joint, conn)
     conn._dispatcher = dispatcher
     conn._allow_adaptive_explicit = allow_adaptive_explicit
@@ -262,27 +284,38 @@ def add_iwan_connector(mbs, markerNumbers, joint, *, axis=None, axisMarker=None,
     return conn
 
 
-def _check_options(mbs, markerNumbers, joint, *, name, record, law, depth,
-                   allow_adaptive_explicit) -> None:
+def _check_options(
+    mbs, markerNumbers, joint, *, name, record, law, depth, allow_adaptive_explicit
+) -> None:
     """The checks of :func:`add_iwan_connector`'s arguments that need no marker types."""
     if not isinstance(mbs, exu.MainSystem):
         raise ValueError(f"mbs must be an exudyn.MainSystem, got {type(mbs).__name__}")
-    if isinstance(markerNumbers, (str, bytes)) or not hasattr(markerNumbers, "__len__") \
-            or len(markerNumbers) != 2:
-        raise ValueError(f"markerNumbers must be a list of two marker numbers, got {markerNumbers!r}")
+    if (
+        isinstance(markerNumbers, (str, bytes))
+        or not hasattr(markerNumbers, "__len__")
+        or len(markerNumbers) != 2
+    ):
+        raise ValueError(
+            f"markerNumbers must be a list of two marker numbers, got {markerNumbers!r}"
+        )
     try:
         check_element(joint, name="joint")
     except ValueError as err:
-        raise ValueError(f"{err}; give IwanParameters (an exact IwanJoint is built) or a "
-                         "joint element such as IwanJoint(params)") from None
+        raise ValueError(
+            f"{err}; give IwanParameters (an exact IwanJoint is built) or a "
+            "joint element such as IwanJoint(params)"
+        ) from None
     missing = [a for a in ("displacement", "force") if not hasattr(joint, a)]
     if missing:
-        raise ValueError(f"joint must expose the committed {missing} (element protocol); "
-                         f"{type(joint).__name__} does not")
+        raise ValueError(
+            f"joint must expose the committed {missing} (element protocol); "
+            f"{type(joint).__name__} does not"
+        )
     if not isinstance(name, str):
         raise ValueError(f"name must be a str, got {type(name).__name__}")
-    check_run_options(record=record, law=law, depth=depth,
-                      allow_adaptive_explicit=allow_adaptive_explicit)
+    check_run_options(
+        record=record, law=law, depth=depth, allow_adaptive_explicit=allow_adaptive_explicit
+    )
 
 
 def check_run_options(*, record, law, depth, allow_adaptive_explicit) -> None:
@@ -292,8 +325,9 @@ def check_run_options(*, record, law, depth, allow_adaptive_explicit) -> None:
     if not isinstance(record, bool):
         raise ValueError(f"record must be True or False, got {record!r}")
     if not isinstance(allow_adaptive_explicit, bool):
-        raise ValueError(f"allow_adaptive_explicit must be True or False, got "
-                         f"{allow_adaptive_explicit!r}")
+        raise ValueError(
+            f"allow_adaptive_explicit must be True or False, got {allow_adaptive_explicit!r}"
+        )
     if law not in ("auto", "symbolic", "python"):
         raise ValueError(f"law must be 'auto', 'symbolic' or 'python', got {law!r}")
     if isinstance(depth, bool) or not isinstance(depth, (int, np.integer)) or not 2 <= depth <= 64:
@@ -307,9 +341,10 @@ def _slip_offset(offset, kind, unit) -> float:
     if kind == "position" and np.ndim(offset) == 1:
         d0 = np.asarray(offset, dtype=float) if np.size(offset) in (2, 3) else None
         if d0 is None or not np.all(np.isfinite(d0)):
-            raise ValueError(f"offset must be a number or a finite vector of 2 or 3 numbers "
-                             f"[m], got {offset!r}")
-        return float(np.dot(np.asarray(unit)[:d0.size], d0))
+            raise ValueError(
+                f"offset must be a number or a finite vector of 2 or 3 numbers [m], got {offset!r}"
+            )
+        return float(np.dot(np.asarray(unit)[: d0.size], d0))
     return check_scalar("offset", offset)
 
 
@@ -323,24 +358,31 @@ def _classify_markers(mbs, markerNumbers, axis, axisMarker):
         raise ValueError(f"markerNumbers must be two different markers, got {list(markerNumbers)}")
     if t0 in _COORDINATE_MARKERS and t1 in _COORDINATE_MARKERS:
         if axis is not None or axisMarker is not None:
-            raise ValueError("axis and axisMarker apply to position markers only; markerNumbers "
-                             f"are coordinate markers ({t0}, {t1})")
+            raise ValueError(
+                "axis and axisMarker apply to position markers only; markerNumbers "
+                f"are coordinate markers ({t0}, {t1})"
+            )
         return "coordinate", None, None, False
     if not (t0 in _POSITION_MARKERS and t1 in _POSITION_MARKERS):
         raise ValueError(
             f"markerNumbers must be two coordinate markers ({sorted(_COORDINATE_MARKERS)}) or two "
-            f"position markers ({sorted(_POSITION_MARKERS)}); got {t0} and {t1}")
+            f"position markers ({sorted(_POSITION_MARKERS)}); got {t0} and {t1}"
+        )
     if axis is None:
-        raise ValueError(f"axis is required for position markers ({t0}, {t1}): give the "
-                         "direction of the joint force, e.g. axis=[1, 0, 0]")
+        raise ValueError(
+            f"axis is required for position markers ({t0}, {t1}): give the "
+            "direction of the joint force, e.g. axis=[1, 0, 0]"
+        )
     unit = _unit_axis(axis, "axis")
     rigid = t0 in _ORIENTATION_MARKERS and t1 in _ORIENTATION_MARKERS
     if axisMarker is None:
         return "position", unit, None, rigid
     ta = _marker_type(mbs, axisMarker, "axisMarker")
     if ta not in _ORIENTATION_MARKERS:
-        raise ValueError(f"axisMarker must be a marker with an orientation "
-                         f"({sorted(_ORIENTATION_MARKERS)}), got {ta}")
+        raise ValueError(
+            f"axisMarker must be a marker with an orientation "
+            f"({sorted(_ORIENTATION_MARKERS)}), got {ta}"
+        )
     return "position", unit, int(axisMarker), rigid
 
 
@@ -359,14 +401,25 @@ def _connector_item(conn, joint, route, depth, name, vis):
         return item
     if conn.kind == "coordinate":
         return ObjectConnectorCoordinateSpringDamper(
-            name=name, markerNumbers=list(conn.markerNumbers), stiffness=0.0, damping=0.0,
-            offset=conn.offset, springForceUserFunction=coordinate_force_function(conn),
-            visualization=vis)
-    uf = (position_force_function(conn) if conn.axisMarker is None
-          else rotating_axis_force_function(conn))
+            name=name,
+            markerNumbers=list(conn.markerNumbers),
+            stiffness=0.0,
+            damping=0.0,
+            offset=conn.offset,
+            springForceUserFunction=coordinate_force_function(conn),
+            visualization=vis,
+        )
+    uf = (
+        position_force_function(conn)
+        if conn.axisMarker is None
+        else rotating_axis_force_function(conn)
+    )
     return ObjectConnectorCartesianSpringDamper(
-        name=name, markerNumbers=list(conn.markerNumbers), springForceUserFunction=uf,
-        visualization=vis)
+        name=name,
+        markerNumbers=list(conn.markerNumbers),
+        springForceUserFunction=uf,
+        visualization=vis,
+    )
 
 
 def _choose_route(law, joint, kind, fast_nodes, axis_marker, frame0) -> str:
@@ -376,8 +429,10 @@ def _choose_route(law, joint, kind, fast_nodes, axis_marker, frame0) -> str:
     elif kind == "coordinate" and fast_nodes is None:
         why = "the coordinate markers are not both MarkerNodeCoordinate"
     elif axis_marker is not None and not frame0:
-        why = ("the axis rotates with an axisMarker that is not markerNumbers[0], or a "
-               "marker has no orientation (the symbolic law turns with marker 0's frame)")
+        why = (
+            "the axis rotates with an axisMarker that is not markerNumbers[0], or a "
+            "marker has no orientation (the symbolic law turns with marker 0's frame)"
+        )
     if law == "symbolic" and why is not None:
         raise ValueError(f"law='symbolic' is not available here: {why}; use law='python'")
     if law == "python" or why is not None:

@@ -27,6 +27,7 @@ energy identity at spectral radius 1 (it closes exactly on a linear model); nume
 damping (spectral radius below 1) dissipates energy that nothing books, and the verdict
 says so.
 """
+
 from __future__ import annotations
 
 import logging
@@ -77,6 +78,7 @@ def record_energy(mbs, joints) -> EnergyRecorder:
     from .cartesian import IwanCartesianConnector
     from .connector import IwanConnector
     from .interface import IwanInterface
+
     kinds = (IwanConnector, IwanInterface, IwanCartesianConnector)
     if not isinstance(mbs, exu.MainSystem):
         raise ValueError(f"mbs must be an exudyn.MainSystem, got {type(mbs).__name__}")
@@ -84,9 +86,11 @@ def record_energy(mbs, joints) -> EnergyRecorder:
         joints = [joints]
     joints = list(joints) if not isinstance(joints, (str, bytes)) else []
     if not joints or not all(isinstance(j, kinds) for j in joints):
-        raise ValueError("joints must be an IwanCartesianConnector, IwanConnector or "
-                         "IwanInterface, or a non-empty sequence of them (from "
-                         "create_iwan_connector / add_iwan_connector / add_iwan_interface)")
+        raise ValueError(
+            "joints must be an IwanCartesianConnector, IwanConnector or "
+            "IwanInterface, or a non-empty sequence of them (from "
+            "create_iwan_connector / add_iwan_connector / add_iwan_interface)"
+        )
     flat = []
     for j in joints:
         flat += list(j.connectors) if isinstance(j, IwanCartesianConnector) else [j]
@@ -107,7 +111,7 @@ class EnergyRecorder:
         self._t = array("d")
         self._q = array("d")
         self._v = array("d")
-        self._n = None                # coordinates per recorded state
+        self._n = None  # coordinates per recorded state
         self._views = None
         ts, qs, vs = self._t, self._q, self._v
 
@@ -135,8 +139,12 @@ class EnergyRecorder:
         sd = mbs.systemData
         q = sd.GetODE2Coordinates(_CUR, copy=False)
         if self._n is not None and q.size != self._n and len(self._t):
-            _log.warning("the system now has %d ODE2 coordinates instead of %d: the energy "
-                         "recording starts again", q.size, self._n)
+            _log.warning(
+                "the system now has %d ODE2 coordinates instead of %d: the energy "
+                "recording starts again",
+                q.size,
+                self._n,
+            )
             self._clear()
         self._n = q.size
         self._views = (q, sd.GetODE2Coordinates_t(_CUR, copy=False))
@@ -179,16 +187,24 @@ class EnergyRecorder:
             raise ValueError(f"tolerance must be in (0, 1), got {tolerance!r}")
         t = np.array(self._t)
         stored, dissipated = self._joint_energies(t)
-        own = set()                   # booked by the joints themselves
+        own = set()  # booked by the joints themselves
         for j in self._joints:
-            own.update(int(o) for o in (j.objectNumbers if hasattr(j, "objectNumbers")
-                                        else [j.objectNumber]))
+            own.update(
+                int(o)
+                for o in (j.objectNumbers if hasattr(j, "objectNumbers") else [j.objectNumber])
+            )
             own.update(int(o) for o in getattr(j, "_spring_objects", ()))  # linear_energy
         terms = Terms(self._mbs, own)
         levels = self._evaluate(terms, t)
-        return EnergyBalance(t=t, joint_stored=stored, joint_dissipated=dissipated,
-                             not_booked=tuple(terms.missing), notes=self._notes(),
-                             tolerance=float(tolerance), **levels)
+        return EnergyBalance(
+            t=t,
+            joint_stored=stored,
+            joint_dissipated=dissipated,
+            not_booked=tuple(terms.missing),
+            notes=self._notes(),
+            tolerance=float(tolerance),
+            **levels,
+        )
 
     def _joint_energies(self, t):
         stored = np.zeros(len(t))
@@ -196,8 +212,10 @@ class EnergyRecorder:
         for j, n0 in zip(self._joints, self._n0):
             tj = j.time_history[n0:]
             if len(tj) != len(t) or not np.allclose(tj, t, rtol=0, atol=1e-12 * max(1, t[-1])):
-                raise RuntimeError("the joints' records are not in step with the energy "
-                                   "recorder (a joint recorded without it: record=False?)")
+                raise RuntimeError(
+                    "the joints' records are not in step with the energy "
+                    "recorder (a joint recorded without it: record=False?)"
+                )
             stored += j.stored_energy_history[n0:]
             dissipated += j.dissipated_energy_history[n0:]
         return stored, dissipated
@@ -235,11 +253,16 @@ class EnergyRecorder:
         if info is None:
             return ()
         kind, solver, rho = info
-        if kind == "dynamicSolver" and solver == exu.DynamicSolverType.GeneralizedAlpha \
-                and rho < 1.0:
-            return (f"the solver damps numerically (generalized-alpha, spectralRadius "
-                    f"{rho:g} < 1): energy that no item books; set 1 (or use "
-                    "TrapezoidalIndex2) for a balance",)
+        if (
+            kind == "dynamicSolver"
+            and solver == exu.DynamicSolverType.GeneralizedAlpha
+            and rho < 1.0
+        ):
+            return (
+                f"the solver damps numerically (generalized-alpha, spectralRadius "
+                f"{rho:g} < 1): energy that no item books; set 1 (or use "
+                "TrapezoidalIndex2) for a balance",
+            )
         return ()
 
 
@@ -251,7 +274,7 @@ def _assemble(states, t) -> dict:
     internal = np.zeros(n)
     dampers = np.zeros(n)
     connectors = np.zeros(n)
-    c = 0                             # connectors in the order of their pairs
+    c = 0  # connectors in the order of their pairs
     for i, (tag, _, _) in enumerate(states[0]["pairs"]):
         f = np.array([s["pairs"][i][1] for s in states])
         x = np.array([s["pairs"][i][2] for s in states])
@@ -275,9 +298,14 @@ def _assemble(states, t) -> dict:
             external += power_work(np.array([s["loads"][i][2] for s in states]), t)
         else:
             external += trapezoid(f, np.array([np.atleast_1d(s["loads"][i][1]) for s in states]))
-    return {"kinetic": kinetic, "elastic": elastic, "internal_work": internal,
-            "damper_dissipation": dampers, "connector_work": connectors,
-            "external_work": external}
+    return {
+        "kinetic": kinetic,
+        "elastic": elastic,
+        "internal_work": internal,
+        "damper_dissipation": dampers,
+        "connector_work": connectors,
+        "external_work": external,
+    }
 
 
 @dataclass(frozen=True, eq=False, kw_only=True)
@@ -327,15 +355,30 @@ class EnergyBalance(ResultShape):
     notes: tuple = ()
     tolerance: float = BALANCE_TOLERANCE
 
-    _PARTS = ("kinetic", "elastic", "internal_work", "damper_dissipation", "connector_work",
-              "joint_stored", "joint_dissipated", "external_work")
+    _PARTS = (
+        "kinetic",
+        "elastic",
+        "internal_work",
+        "damper_dissipation",
+        "connector_work",
+        "joint_stored",
+        "joint_dissipated",
+        "external_work",
+    )
 
     @property
     def total(self) -> np.ndarray:
         """Energy held or dissipated minus the external work [J] (constant when balanced)."""
-        return (self.kinetic + self.elastic + self.internal_work + self.damper_dissipation
-                + self.connector_work + self.joint_stored + self.joint_dissipated
-                - self.external_work)
+        return (
+            self.kinetic
+            + self.elastic
+            + self.internal_work
+            + self.damper_dissipation
+            + self.connector_work
+            + self.joint_stored
+            + self.joint_dissipated
+            - self.external_work
+        )
 
     @property
     def scale(self) -> float:
@@ -378,13 +421,19 @@ class EnergyBalance(ResultShape):
         if self.not_booked:
             out.append("not booked: " + "; ".join(self.not_booked))
         if self.scale == 0:
-            out.append("the joints did no work: there is no energy of theirs to judge the "
-                       "balance against")
+            out.append(
+                "the joints did no work: there is no energy of theirs to judge the balance against"
+            )
         elif self.max_error > self.tolerance:
-            out.append(f"the balance is off by {self.max_error:.2e} of the joints' own energy "
-                       f"({self.scale:.4g} J; tolerance {self.tolerance:.0e}): "
-                       + ("; ".join(self.notes) if self.notes else
-                          "the step is too large (the error falls with its square)"))
+            out.append(
+                f"the balance is off by {self.max_error:.2e} of the joints' own energy "
+                f"({self.scale:.4g} J; tolerance {self.tolerance:.0e}): "
+                + (
+                    "; ".join(self.notes)
+                    if self.notes
+                    else "the step is too large (the error falls with its square)"
+                )
+            )
         return tuple(out)
 
     def _final(self) -> dict:
@@ -392,29 +441,54 @@ class EnergyBalance(ResultShape):
 
     def _tables(self) -> list:
         cols = ("t [s]",) + tuple(f"{p} [J]" for p in self._PARTS) + ("error [-]",)
-        history = ("energies over time", cols,
-                   list(zip(*(map(float, a) for a in (
-                       (self.t,) + tuple(getattr(self, p) for p in self._PARTS)
-                       + (self.error(),))))))
+        history = (
+            "energies over time",
+            cols,
+            list(
+                zip(
+                    *(
+                        map(float, a)
+                        for a in (
+                            (self.t,)
+                            + tuple(getattr(self, p) for p in self._PARTS)
+                            + (self.error(),)
+                        )
+                    )
+                )
+            ),
+        )
         rows = [(k.replace("_", " "), "J", v) for k, v in self._final().items()]
-        stats = [("steps", "-", len(self.t)), ("joints' own energy (scale)", "J", self.scale),
-                 ("model's energy level", "J", self.energy_level),
-                 ("largest balance error", "-", self.max_error),
-                 ("tolerance", "-", self.tolerance)]
-        return [history, ("energies at the end", ("quantity", "unit", "value"), rows),
-                ("balance", ("quantity", "unit", "value"), stats)]
+        stats = [
+            ("steps", "-", len(self.t)),
+            ("joints' own energy (scale)", "J", self.scale),
+            ("model's energy level", "J", self.energy_level),
+            ("largest balance error", "-", self.max_error),
+            ("tolerance", "-", self.tolerance),
+        ]
+        return [
+            history,
+            ("energies at the end", ("quantity", "unit", "value"), rows),
+            ("balance", ("quantity", "unit", "value"), stats),
+        ]
 
     def report(self) -> str:
-        lines = [self.verdict(), f"Energy balance over {len(self.t)} steps, "
-                 f"t = {self.t[0]:.4g} to {self.t[-1]:.4g} s"]
+        lines = [
+            self.verdict(),
+            f"Energy balance over {len(self.t)} steps, t = {self.t[0]:.4g} to {self.t[-1]:.4g} s",
+        ]
         always = ("kinetic", "joint_stored", "joint_dissipated", "external_work")
-        small = 1e-9 * self.energy_level          # the terms this model has
-        rows = [(k.replace("_", " "), v) for k, v in self._final().items()
-                if k in always or np.max(np.abs(getattr(self, k))) > small]
+        small = 1e-9 * self.energy_level  # the terms this model has
+        rows = [
+            (k.replace("_", " "), v)
+            for k, v in self._final().items()
+            if k in always or np.max(np.abs(getattr(self, k))) > small
+        ]
         lines += table_lines([("at the end", "<20"), ("[J]", "12.5g")], rows)
-        lines.append(f"  largest balance error {self.max_error:.2e} [-] of the joints' own "
-                     f"{self.scale:.4g} J (tolerance {self.tolerance:.0e}; the model holds up "
-                     f"to {self.energy_level:.4g} J)")
+        lines.append(
+            f"  largest balance error {self.max_error:.2e} [-] of the joints' own "
+            f"{self.scale:.4g} J (tolerance {self.tolerance:.0e}; the model holds up "
+            f"to {self.energy_level:.4g} J)"
+        )
         for text in self.not_booked:
             lines += wrap(f"  not booked: {text}", indent="    ")
         for text in self.notes + tuple(self.warnings):
@@ -422,11 +496,18 @@ class EnergyBalance(ResultShape):
         return "\n".join(lines)
 
     def to_dict(self) -> dict:
-        return {"success": self.success, "max_error": self.max_error, "scale": self.scale,
-                "energy_level": self.energy_level, "tolerance": self.tolerance,
-                "n_steps": len(self.t), "final": self._final(),
-                "not_booked": list(self.not_booked), "notes": list(self.notes),
-                "warnings": list(self.warnings)}
+        return {
+            "success": self.success,
+            "max_error": self.max_error,
+            "scale": self.scale,
+            "energy_level": self.energy_level,
+            "tolerance": self.tolerance,
+            "n_steps": len(self.t),
+            "final": self._final(),
+            "not_booked": list(self.not_booked),
+            "notes": list(self.notes),
+            "warnings": list(self.warnings),
+        }
 
     def plot(self, ax=None) -> list:
         (a,) = panels(ax, 1)

@@ -28,6 +28,7 @@ accepted slip with the previous state (only for points whose stack was deeper th
 :attr:`IwanInterface.overflow_times`; raise ``depth`` if that happens (it needs
 ``depth // 2`` loop closures inside one time step).
 """
+
 from __future__ import annotations
 
 import logging
@@ -83,18 +84,18 @@ class IwanInterface:
         self._allow_adaptive_explicit = False
         self._rec = SlipRecords(len(pairs), record)
         self._objects = []
-        self._connectors = []       # python route
-        self._bank = None           # symbolic route
+        self._connectors = []  # python route
+        self._bank = None  # symbolic route
         self._states = []
-        self._functions = []        # keep the symbolic functions alive
+        self._functions = []  # keep the symbolic functions alive
         self._overflows = []
         self._t_acc = -math.inf
         self._dispatcher = None
-        self._read = None           # the slip map, once a run started
+        self._read = None  # the slip map, once a run started
         self._map = None
         self._joints = ()
-        self._stiffness = None      # linear springs carried by the interface, (n, 3) or None
-        self._spring_objects = []   # python route: built-in springs carrying them
+        self._stiffness = None  # linear springs carried by the interface, (n, 3) or None
+        self._spring_objects = []  # python route: built-in springs carrying them
 
     # ------------------------------------------------------------------ read-only set-up
     @property
@@ -136,7 +137,8 @@ class IwanInterface:
             raise RuntimeError(
                 "the interface's post-step dispatcher was replaced by another post-step user "
                 "function, so its joints were not committed; set your post-step function "
-                "before add_iwan_interface (it is then chained) and run again")
+                "before add_iwan_interface (it is then chained) and run again"
+            )
 
     def _table(self):
         self._check_running()
@@ -144,11 +146,13 @@ class IwanInterface:
             cs = self._connectors
             recs = [c.records() for c in cs]
             n = min(len(r["time"]) for r in recs)
-            return {"time": recs[0]["time"][:n],
-                    "slip": np.stack([r["slip"][:n] for r in recs], axis=1),
-                    "force": np.stack([r["force"][:n] for r in recs], axis=1),
-                    "work": sum(r["work"][:n] for r in recs),
-                    "diss": sum(r["dissipated_energy"][:n] for r in recs)}
+            return {
+                "time": recs[0]["time"][:n],
+                "slip": np.stack([r["slip"][:n] for r in recs], axis=1),
+                "force": np.stack([r["force"][:n] for r in recs], axis=1),
+                "work": sum(r["work"][:n] for r in recs),
+                "diss": sum(r["dissipated_energy"][:n] for r in recs),
+            }
         return self._rec.table(self._bank)
 
     @property
@@ -194,9 +198,14 @@ class IwanInterface:
         ``stored_energy``, ``dissipated_energy``, ``work [J]`` (n,).
         """
         tab = self._table()
-        return {"time": tab["time"], "slip": tab["slip"], "force": tab["force"],
-                "stored_energy": tab["work"] - tab["diss"], "dissipated_energy": tab["diss"],
-                "work": tab["work"]}
+        return {
+            "time": tab["time"],
+            "slip": tab["slip"],
+            "force": tab["force"],
+            "stored_energy": tab["work"] - tab["diss"],
+            "dissipated_energy": tab["diss"],
+            "work": tab["work"],
+        }
 
     def linear_energy(self) -> float:
         """Potential energy [J] of the linear springs given as ``stiffness`` at the current
@@ -226,14 +235,16 @@ class IwanInterface:
             self._dispatcher.joint_reset(self)
 
     def __repr__(self) -> str:
-        return (f"IwanInterface(n_points={self.n_points}, kind={self._kind!r}, "
-                f"route={self._route!r}, records={self.n_records})")
+        return (
+            f"IwanInterface(n_points={self.n_points}, kind={self._kind!r}, "
+            f"route={self._route!r}, records={self.n_records})"
+        )
 
     # ------------------------------------------------------------------ per-step work
     def _refresh(self, mbs) -> None:
         """Start of a run: the affine map from the system coordinates to the slips."""
         self._map = m = SlipMap(mbs, self._pairs, self._kind, self._axis, self._offsets)
-        self._read = m              # the dispatcher then checks for a re-assembly per step
+        self._read = m  # the dispatcher then checks for a re-assembly per step
         cols = np.unique(m.idx[m.coef != 0.0])
         self._cols = cols
         self._qsub = np.empty(cols.size)
@@ -242,7 +253,7 @@ class IwanInterface:
             for k, cf in zip(m.idx[i], m.coef[i]):
                 if cf != 0.0:
                     C[i, np.searchsorted(cols, k)] += cf
-        self._C = C[:, :cols.size]
+        self._C = C[:, : cols.size]
         self._ubuf = np.empty(self.n_points)
         self._surface = None
         self._generic = list(m.generic)
@@ -270,9 +281,12 @@ class IwanInterface:
         u = self._slips()
         bank = self._bank
         if t < self._t_acc and self._rec.n:
-            _log.warning("Iwan interface: a new run starts at t=%g before the end (t=%g) of the "
-                         "history the joints hold; call reset() before a fresh run", t,
-                         self._t_acc)
+            _log.warning(
+                "Iwan interface: a new run starts at t=%g before the end (t=%g) of the "
+                "history the joints hold; call reset() before a fresh run",
+                t,
+                self._t_acc,
+            )
         events = bank.commit(u)
         if events.size:
             self._events(t, u, events)
@@ -298,9 +312,9 @@ class IwanInterface:
         us_all, Fr_all = bank.us, bank.Fr
         idx = events.tolist()
         br = np.array((bank.bur, bank.bFr, bank.bc1, bank.bc2, bank.bound, bank.bdir))[:, events]
-        br[2:4] *= br[5]                           # s1 = c1 s, s2 = c2 s
+        br[2:4] *= br[5]  # s1 = c1 s, s2 = c2 s
         rest = br[5] == 0.0
-        if rest.any():                             # at rest: bound = u_c (see the law)
+        if rest.any():  # at rest: bound = u_c (see the law)
             br[4, rest] = u[events[rest]]
         br = br.T.tolist()
         for k, i in enumerate(idx):
@@ -311,17 +325,33 @@ class IwanInterface:
             if n1 != held:
                 if n1 < held and held > s.depth and s.disagrees(float(u[i]), float(bank.force[i])):
                     self._overflows.append(t)
-                    _log.warning("Iwan interface point %d at t=%g: the step closed loops beyond "
-                                 "the %d reversal points the symbolic law holds; that step's "
-                                 "force was not exact (raise depth)", i, t, s.depth)
+                    _log.warning(
+                        "Iwan interface point %d at t=%g: the step closed loops beyond "
+                        "the %d reversal points the symbolic law holds; that step's "
+                        "force was not exact (raise depth)",
+                        i,
+                        t,
+                        s.depth,
+                    )
                 s.set_stack(us, Fr_all[i])
             s.set_branch_values(br[k])
 
 
-def add_iwan_interface(mbs, markerPairs, joints, *, axis=None, axisMarker=None, offsets=None,
-                       record: bool = True, depth: int = 8, reversal_tol: float = 1e-12,
-                       name: str = "", allow_adaptive_explicit: bool = False,
-                       stiffness=None) -> IwanInterface:
+def add_iwan_interface(
+    mbs,
+    markerPairs,
+    joints,
+    *,
+    axis=None,
+    axisMarker=None,
+    offsets=None,
+    record: bool = True,
+    depth: int = 8,
+    reversal_tol: float = 1e-12,
+    name: str = "",
+    allow_adaptive_explicit: bool = False,
+    stiffness=None,
+) -> IwanInterface:
     """Add a joint at each of many contact points, committed together once per step.
 
     Parameters
@@ -379,8 +409,10 @@ def add_iwan_interface(mbs, markerPairs, joints, *, axis=None, axisMarker=None, 
     pairs = _pairs(markerPairs)
     joints = list(joints) if not isinstance(joints, (str, bytes)) else None
     if joints is None or len(joints) != len(pairs):
-        raise ValueError(f"joints must be a sequence of {len(pairs)} items (one per marker "
-                         f"pair), got {None if joints is None else len(joints)}")
+        raise ValueError(
+            f"joints must be a sequence of {len(pairs)} items (one per marker "
+            f"pair), got {None if joints is None else len(joints)}"
+        )
     if not isinstance(record, bool):
         raise ValueError(f"record must be True or False, got {record!r}")
     if isinstance(depth, bool) or not isinstance(depth, (int, np.integer)) or not 2 <= depth <= 64:
@@ -393,8 +425,19 @@ def add_iwan_interface(mbs, markerPairs, joints, *, axis=None, axisMarker=None, 
     springs = check_stiffness(stiffness, len(pairs), kind)
     all_params = all(isinstance(j, IwanParameters) for j in joints)
     if not all_params or axisMarker is not None:
-        iface = _python_interface(mbs, pairs, joints, kind, axis, axisMarker, offs, record,
-                                  reversal_tol, name, allow_adaptive_explicit)
+        iface = _python_interface(
+            mbs,
+            pairs,
+            joints,
+            kind,
+            axis,
+            axisMarker,
+            offs,
+            record,
+            reversal_tol,
+            name,
+            allow_adaptive_explicit,
+        )
         if springs is not None:
             iface._stiffness = springs
             iface._spring_objects = add_builtin_springs(mbs, pairs, springs, name)
@@ -446,17 +489,25 @@ def _pair_kind(mbs, pairs, axis, axisMarker) -> str:
         elif t0 in _POSITION_MARKERS and t1 in _POSITION_MARKERS:
             kinds.add("position")
         else:
-            raise ValueError(f"markerPairs[{i}] must be two coordinate markers or two position "
-                             f"markers, got {t0} and {t1}")
+            raise ValueError(
+                f"markerPairs[{i}] must be two coordinate markers or two position "
+                f"markers, got {t0} and {t1}"
+            )
     if len(kinds) != 1:
-        raise ValueError(f"all markerPairs of one interface must be of one kind, got {sorted(kinds)}")
+        raise ValueError(
+            f"all markerPairs of one interface must be of one kind, got {sorted(kinds)}"
+        )
     kind = kinds.pop()
     if kind == "coordinate-other":
-        raise ValueError("add_iwan_interface takes MarkerNodeCoordinate pairs among the coordinate "
-                         "markers; use add_iwan_connector for other coordinate markers")
+        raise ValueError(
+            "add_iwan_interface takes MarkerNodeCoordinate pairs among the coordinate "
+            "markers; use add_iwan_connector for other coordinate markers"
+        )
     if kind == "position" and axis is None:
-        raise ValueError("axis is required for position markers: give the direction of the joint "
-                         "forces, e.g. axis=[1, 0, 0]")
+        raise ValueError(
+            "axis is required for position markers: give the direction of the joint "
+            "forces, e.g. axis=[1, 0, 0]"
+        )
     if kind == "coordinate" and (axis is not None or axisMarker is not None):
         raise ValueError("axis and axisMarker apply to position markers only")
     return kind
@@ -466,37 +517,64 @@ def _symbolic_object(mbs, iface, i, st, name):
     m0, m1 = (int(m) for m in iface._pairs[i])
     off = iface._offsets[i]
     if iface._kind == "coordinate":
-        fn = CreateSymbolicUserFunction(mbs, coordinate_law(st, off), "springForceUserFunction",
-                                        itemTypeName="ObjectConnectorCoordinateSpringDamper")
+        fn = CreateSymbolicUserFunction(
+            mbs,
+            coordinate_law(st, off),
+            "springForceUserFunction",
+            itemTypeName="ObjectConnectorCoordinateSpringDamper",
+        )
         item = ObjectConnectorCoordinateSpringDamper(
-            name=name, markerNumbers=[m0, m1], stiffness=0.0, damping=0.0,
-            springForceUserFunction=fn, visualization=_HIDDEN)
+            name=name,
+            markerNumbers=[m0, m1],
+            stiffness=0.0,
+            damping=0.0,
+            springForceUserFunction=fn,
+            visualization=_HIDDEN,
+        )
     else:
         k = None if iface._stiffness is None else iface._stiffness[i]
-        fn = CreateSymbolicUserFunction(mbs, cartesian_law(st, iface._axis, off, k),
-                                        "springForceUserFunction",
-                                        itemTypeName="ObjectConnectorCartesianSpringDamper")
+        fn = CreateSymbolicUserFunction(
+            mbs,
+            cartesian_law(st, iface._axis, off, k),
+            "springForceUserFunction",
+            itemTypeName="ObjectConnectorCartesianSpringDamper",
+        )
         item = ObjectConnectorCartesianSpringDamper(
-            name=name, markerNumbers=[m0, m1], springForceUserFunction=fn,
-            visualization=_HIDDEN)
+            name=name, markerNumbers=[m0, m1], springForceUserFunction=fn, visualization=_HIDDEN
+        )
     iface._functions.append(fn)
-    st.probe = make_probe(mbs, fn, iface._kind, iface._axis, off,
-                          None if iface._stiffness is None else iface._stiffness[i])
+    st.probe = make_probe(
+        mbs,
+        fn,
+        iface._kind,
+        iface._axis,
+        off,
+        None if iface._stiffness is None else iface._stiffness[i],
+    )
     return mbs.AddObject(item)
 
 
-def _python_interface(mbs, pairs, joints, kind, axis, axisMarker, offs, record, tol, name,
-                      allow_adaptive_explicit):
+def _python_interface(
+    mbs, pairs, joints, kind, axis, axisMarker, offs, record, tol, name, allow_adaptive_explicit
+):
     from ..core.joint import IwanJoint
+
     iface = IwanInterface(mbs, pairs, kind, "python", record)
     iface._offsets = offs
     for i, ((m0, m1), j) in enumerate(zip(pairs, joints)):
         el = IwanJoint(j, reversal_tol=tol) if isinstance(j, IwanParameters) else j
         kw = {} if kind == "coordinate" else {"axis": axis, "axisMarker": axisMarker}
         try:
-            c = add_iwan_connector(mbs, [m0, m1], el, offset=offs[i], record=record,
-                                   name=f"{name}{i}" if name else "",
-                                   allow_adaptive_explicit=bool(allow_adaptive_explicit), **kw)
+            c = add_iwan_connector(
+                mbs,
+                [m0, m1],
+                el,
+                offset=offs[i],
+                record=record,
+                name=f"{name}{i}" if name else "",
+                allow_adaptive_explicit=bool(allow_adaptive_explicit),
+                **kw,
+            )
         except ValueError as err:
             raise ValueError(f"joints[{i}]: {err}") from None
         iface._connectors.append(c)

@@ -17,11 +17,23 @@ in :mod:`iwan_element.identify.loops.noise` (``integrated_time``, ``difference_s
 covariance takes the correlation time as an argument. This subpackage imports only
 :mod:`iwan_element.core`.
 """
+
 from .covariance import Covariance, covariance, normal_inverse
 from .minimize import MinimizeResult, box_lm, minimize
 from .parameters import Parameter, ParameterTable
 from .verdict import MIN_NOISE_DOF, fit_success, noise_dof_warning, verdict
 
-__all__ = ["Covariance", "MIN_NOISE_DOF", "MinimizeResult", "Parameter", "ParameterTable",
-           "box_lm", "covariance", "fit_success", "minimize", "noise_dof_warning",
-           "normal_inverse", "verdict"]
+__all__ = [
+    "Covariance",
+    "MIN_NOISE_DOF",
+    "MinimizeResult",
+    "Parameter",
+    "ParameterTable",
+    "box_lm",
+    "covariance",
+    "fit_success",
+    "minimize",
+    "noise_dof_warning",
+    "normal_inverse",
+    "verdict",
+]

@@ -4,14 +4,21 @@ for :func:`iwan_element.fitting.evidence.laplace_evidence` where its Gaussian is
 (:func:`adaptive_line`), each piece between two evaluated points integrated as an
 exponential (:func:`exp_pieces`).
 """
+
 from __future__ import annotations
 
 import math
 
 import numpy as np
 
-__all__ = ["line_integral", "ridge_integral", "adaptive_line", "exp_pieces", "LINE_STEPS",
-           "LINE_DEPTH"]
+__all__ = [
+    "line_integral",
+    "ridge_integral",
+    "adaptive_line",
+    "exp_pieces",
+    "LINE_STEPS",
+    "LINE_DEPTH",
+]
 
 #: Steps of the line integral from the bound, as fractions of the box width (geometric,
 #: factor sqrt(2)), to which steps of a sixth of the Gaussian's standard deviation around
@@ -52,13 +59,15 @@ def line_integral(chi2_at, theta, d, i, lo, hi, tau, chi0, t_fit, sd, rel, knot)
 
     def logw(t):
         return float(rel(np.clip(theta + t * d, lo, hi))[i])
+
     ts, ll = adaptive_line(loglike, logw, grid, t_fit)
     fine = ts
     if math.isfinite(knot):
         tk = abs(knot - (lo[i] if d[i] > 0 else hi[i]))
         off = w * np.geomspace(1e-7, 1.0, 57)
-        fine = np.unique(np.concatenate([ts, np.clip(np.concatenate([tk - off, [tk], tk + off]),
-                                                     ts[0], ts[-1])]))
+        fine = np.unique(
+            np.concatenate([ts, np.clip(np.concatenate([tk - off, [tk], tk + off]), ts[0], ts[-1])])
+        )
     fs = np.interp(fine, ts, ll) + np.array([logw(t) for t in fine])
     return exp_pieces(fine, fs)
 
@@ -116,12 +125,15 @@ def exp_pieces(ts, fs):
     total = m1 = m2 = 0.0
     for a, b, fa, fb in zip(ts[:-1], ts[1:], fs[:-1] - top, fs[1:] - top):
         h = b - a
-        s = (fb - fa) / h                    # log slope of the piece
+        s = (fb - fa) / h  # log slope of the piece
         ea, eb = math.exp(fa), math.exp(fb)
-        if abs(s * h) < 1e-6:                # flat: the trapezoid
-            i0, i1, i2 = h * 0.5 * (ea + eb), h * 0.5 * (a * ea + b * eb), \
-                h * 0.5 * (a * a * ea + b * b * eb)
-        else:                                # int exp(fa + s (t - a)) t^j dt, j = 0, 1, 2
+        if abs(s * h) < 1e-6:  # flat: the trapezoid
+            i0, i1, i2 = (
+                h * 0.5 * (ea + eb),
+                h * 0.5 * (a * ea + b * eb),
+                h * 0.5 * (a * a * ea + b * b * eb),
+            )
+        else:  # int exp(fa + s (t - a)) t^j dt, j = 0, 1, 2
             i0 = (eb - ea) / s
             i1 = (b * eb - a * ea) / s - i0 / s
             i2 = (b * b * eb - a * a * ea) / s - 2.0 * i1 / s
@@ -159,8 +171,14 @@ def ridge_integral(chi2_at, curve, s_fit, s_lo, s_hi, lo, hi, tau, chi0, rel, wi
         v = -0.5 * (float(chi2_at(th)) - chi0) / tau
         return min(v, 0.0) if math.isfinite(v) else -1e300
 
-    grid = np.concatenate([s_fit - width * LINE_STEPS, s_fit + width * LINE_STEPS,
-                           np.linspace(s_lo, s_hi, 33), [s_fit]])
+    grid = np.concatenate(
+        [
+            s_fit - width * LINE_STEPS,
+            s_fit + width * LINE_STEPS,
+            np.linspace(s_lo, s_hi, 33),
+            [s_fit],
+        ]
+    )
     grid = np.unique(np.clip(grid, s_lo, s_hi))
     ts, ll = adaptive_line(loglike, lambda s: point(s)[1], grid, s_fit)
     # the density ratio on every point of the grid (it costs no evaluation of the model),

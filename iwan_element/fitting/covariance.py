@@ -13,6 +13,7 @@ along it gets a NaN standard error. Optionally:
   plain and the sandwich one;
 * the delta method to physical parameters ``p(theta)`` through their Jacobian ``Jp``.
 """
+
 from __future__ import annotations
 
 import math
@@ -74,7 +75,7 @@ def _scaled_svd(J: np.ndarray, cutoff: float):
     scale = np.sqrt(np.einsum("ij,ij->j", J, J))
     scale[scale == 0] = 1.0
     _, sv, Vt = np.linalg.svd(J / scale, full_matrices=False)
-    if sv.size < p:                                  # fewer residuals than variables
+    if sv.size < p:  # fewer residuals than variables
         sv = np.append(sv, np.zeros(p - sv.size))
         Vt = np.linalg.svd(np.vstack([J / scale, np.zeros((p - m, p))]))[2]
     good = sv > cutoff * sv[0] if sv.size and sv[0] > 0 else np.zeros(p, bool)
@@ -125,7 +126,7 @@ def _sandwich(J, r, A_inv, cov, tau, block):
     nb = m // L
     if nb < 2 * p:
         return cov, 0, False
-    sc = np.einsum("bij,bi->bj", J[:nb * L].reshape(nb, L, p), r[:nb * L].reshape(nb, L))
+    sc = np.einsum("bij,bi->bj", J[: nb * L].reshape(nb, L, p), r[: nb * L].reshape(nb, L))
     S = np.einsum("bj,bk->jk", sc, sc) * (m / (nb * L)) * nb / (nb - p)
     cov_s = A_inv @ S @ A_inv
     ds, dt = np.diag(cov_s), np.diag(cov)
@@ -139,8 +140,17 @@ def _sandwich(J, r, A_inv, cov, tau, block):
     return cov_s * np.outer(big, big), L, bool(np.any(ds > dt))
 
 
-def covariance(J, r=None, *, tau: float = 1.0, s2: float | None = None, dof: int | None = None,
-               block: int | None = None, Jp=None, cutoff: float = CUTOFF) -> Covariance:
+def covariance(
+    J,
+    r=None,
+    *,
+    tau: float = 1.0,
+    s2: float | None = None,
+    dof: int | None = None,
+    block: int | None = None,
+    Jp=None,
+    cutoff: float = CUTOFF,
+) -> Covariance:
     """Covariance, standard errors and correlation of least-squares estimates.
 
     ``cov = tau s^2 (J^T J)^-1`` (docs/fitting.md section 1) through the column-scaled SVD;
@@ -201,11 +211,19 @@ def covariance(J, r=None, *, tau: float = 1.0, s2: float | None = None, dof: int
         if Jp.shape[1] != p:
             raise ValueError(f"Jp must have {p} columns (one per column of J), got {Jp.shape[1]}")
         cov = Jp @ cov @ Jp.T
-        Jp_s = Jp / scale                 # d p / d(scaled theta)
+        Jp_s = Jp / scale  # d p / d(scaled theta)
     bad = _degenerate(Jp_s, null)
     se = np.sqrt(np.clip(np.diag(cov), 0.0, None))
     se[bad] = math.nan
     with np.errstate(invalid="ignore", divide="ignore"):
         corr = cov / np.outer(se, se)
-    return Covariance(covariance=cov, stderr=se, correlation=corr, degenerate=bad, s2=s2,
-                      tau=tau, block=int(L), widened=widened)
+    return Covariance(
+        covariance=cov,
+        stderr=se,
+        correlation=corr,
+        degenerate=bad,
+        s2=s2,
+        tau=tau,
+        block=int(L),
+        widened=widened,
+    )

@@ -27,6 +27,7 @@ What it does not do: a likelihood that is not quadratic over its posterior's wid
 that changes only to second order in a parameter near its bound, a posterior with two
 modes). :mod:`iwan_element.diagnose.nested` checks such cases by nested sampling.
 """
+
 from __future__ import annotations
 
 import math
@@ -79,10 +80,22 @@ class Evidence:
     truncated: tuple
 
 
-def laplace_evidence(J, r, theta, lower, upper, *, tau: float = 1.0,
-                     chi2_at=None, log_prior=None, prior_knots=None,
-                     switched_off=None, lines=None, ridge=None,
-                     open_ends=None) -> Evidence:
+def laplace_evidence(
+    J,
+    r,
+    theta,
+    lower,
+    upper,
+    *,
+    tau: float = 1.0,
+    chi2_at=None,
+    log_prior=None,
+    prior_knots=None,
+    switched_off=None,
+    lines=None,
+    ridge=None,
+    open_ends=None,
+) -> Evidence:
     """Laplace-approximated evidence of a least-squares model on a uniform box prior.
 
     Parameters
@@ -158,8 +171,7 @@ def laplace_evidence(J, r, theta, lower, upper, *, tau: float = 1.0,
     lo = finite_array("lower", lower, ndim=1, min_size=0)
     hi = finite_array("upper", upper, ndim=1, min_size=0)
     if lo.size != k or hi.size != k or not np.all(hi > lo):
-        raise ValueError("lower and upper must have one finite entry per parameter, "
-                         "upper > lower")
+        raise ValueError("lower and upper must have one finite entry per parameter, upper > lower")
     width = hi - lo
     if np.any(theta < lo - 1e-9 * width) or np.any(theta > hi + 1e-9 * width):
         raise ValueError("theta must lie inside the box [lower, upper]")
@@ -168,14 +180,18 @@ def laplace_evidence(J, r, theta, lower, upper, *, tau: float = 1.0,
     if k == 0:
         return Evidence(log_like, log_like, 0.0, np.zeros((0, 0)), ())
     if ridge is not None and chi2_at is not None:
-        return _along_ridge(J, r, theta, lo, hi, tau, chi2_at, log_prior, prior_knots,
-                            switched_off, lines, ridge)
+        return _along_ridge(
+            J, r, theta, lo, hi, tau, chi2_at, log_prior, prior_knots, switched_off, lines, ridge
+        )
     # each parameter's log prior density relative to the uniform box's, as a function
-    rel = (lambda th: np.zeros(k)) if log_prior is None else \
-        (lambda th: np.asarray(log_prior(th), float) + np.log(hi - lo))
-    Ju = J * width / math.sqrt(tau)              # box units: u = (theta - lower) / width
+    rel = (
+        (lambda th: np.zeros(k))
+        if log_prior is None
+        else (lambda th: np.asarray(log_prior(th), float) + np.log(hi - lo))
+    )
+    Ju = J * width / math.sqrt(tau)  # box units: u = (theta - lower) / width
     H = Ju.T @ Ju + RIDGE * np.eye(k)
-    g = Ju.T @ (r / math.sqrt(tau))              # chi2/(2 tau) ~ c + g.d + d.H.d / 2
+    g = Ju.T @ (r / math.sqrt(tau))  # chi2/(2 tau) ~ c + g.d + d.H.d / 2
     # the gradient counts only where the fit sits on a bound (a constrained optimum); inside,
     # it is the fit's stopping tolerance and, along a direction the data hardly determine,
     # would move the quadratic's optimum by box widths for nothing
@@ -183,12 +199,13 @@ def laplace_evidence(J, r, theta, lower, upper, *, tau: float = 1.0,
     on = ((theta <= lo + ON_BOUND * width) | (theta >= hi - ON_BOUND * width)) & ~opened
     g = np.where(on, g, 0.0)
     Hinv, logdet = _inverse(H)
-    shift = -Hinv @ g                            # the quadratic's optimum, from the fit
-    gain = 0.5 * float(g @ Hinv @ g)             # its log-likelihood above the fit's
+    shift = -Hinv @ g  # the quadratic's optimum, from the fit
+    gain = 0.5 * float(g @ Hinv @ g)  # its log-likelihood above the fit's
     centre = (theta - lo) / width + shift
     sd = np.sqrt(np.maximum(np.diag(Hinv), 1e-300))
-    reach = ((np.minimum(centre, 1.0 - centre) < REACH * sd) | (centre < 0) | (centre > 1)) \
-        & ~opened
+    reach = (
+        (np.minimum(centre, 1.0 - centre) < REACH * sd) | (centre < 0) | (centre > 1)
+    ) & ~opened
     idx = np.flatnonzero(reach)
     log_mass = _box_mass(centre[idx], Hinv[np.ix_(idx, idx)])
     log_gauss = 0.5 * k * math.log(2.0 * math.pi) - 0.5 * logdet
@@ -197,16 +214,31 @@ def laplace_evidence(J, r, theta, lower, upper, *, tau: float = 1.0,
     if chi2_at is not None:
         dist = np.minimum(theta - lo, hi - theta) / width
         near = np.flatnonzero((dist < NEAR) | (dist < 3.0 * sd))
-        knots = np.full(k, np.nan) if prior_knots is None else \
-            np.asarray(prior_knots, float).reshape(k)
+        knots = (
+            np.full(k, np.nan) if prior_knots is None else np.asarray(prior_knots, float).reshape(k)
+        )
         spike = np.isfinite(knots) & (np.abs(theta - np.nan_to_num(knots)) < 5.0 * sd * width)
         # a parameter the data hardly determine (its Gaussian wider than a third of the box)
         # is left to the Gaussian, which integrates it over the box
         ok = np.ones(k, bool) if lines is None else np.asarray(lines, bool).reshape(k)
         near = np.flatnonzero(ok & ((dist < NEAR) | ((dist < 3.0 * sd) & (sd < 0.3)) | spike))
         if near.size:
-            return _with_lines(J, r, theta, lo, hi, tau, near, chi2_at, log_like, sd * width,
-                               rel, knots, dict(switched_off or {}), opened)
+            return _with_lines(
+                J,
+                r,
+                theta,
+                lo,
+                hi,
+                tau,
+                near,
+                chi2_at,
+                log_like,
+                sd * width,
+                rel,
+                knots,
+                dict(switched_off or {}),
+                opened,
+            )
     return Evidence(log_like + log_occam, log_like, log_occam, cov, tuple(int(i) for i in idx))
 
 
@@ -217,8 +249,9 @@ NEAR = 1e-3
 ON_BOUND = 1e-6
 
 
-def _with_lines(J, r, theta, lo, hi, tau, at, chi2_at, log_like, sd, rel, knots,
-                groups, opened) -> Evidence:
+def _with_lines(
+    J, r, theta, lo, hi, tau, at, chi2_at, log_like, sd, rel, knots, groups, opened
+) -> Evidence:
     """The evidence with the parameters ``at`` (near a bound) integrated along their profile
     lines from that bound across the box, and the others by the Laplace approximation
     (:func:`laplace_evidence`); ``sd``: the Gaussian's standard deviations, ``rel``: the
@@ -226,44 +259,57 @@ def _with_lines(J, r, theta, lo, hi, tau, at, chi2_at, log_like, sd, rel, knots,
     (see :func:`laplace_evidence`'s ``switched_off``).
     """
     k = theta.size
-    off = {i: g for i, g in groups.items() if i in at and math.isfinite(knots[i])
-           and abs(theta[i] - knots[i]) <= NEAR * (hi[i] - lo[i])}
+    off = {
+        i: g
+        for i, g in groups.items()
+        if i in at
+        and math.isfinite(knots[i])
+        and abs(theta[i] - knots[i]) <= NEAR * (hi[i] - lo[i])
+    }
     deps = sorted({j for dep, _ in off.values() for j in dep} - set(at))
     free = np.setdiff1d(np.arange(k), np.concatenate([at, deps]).astype(int))
-    inner = laplace_evidence(J[:, free], r, theta[free], lo[free], hi[free], tau=tau,
-                             open_ends=opened[free])
+    inner = laplace_evidence(
+        J[:, free], r, theta[free], lo[free], hi[free], tau=tau, open_ends=opened[free]
+    )
     H = J.T @ J
     chi0 = float(r @ r)
     log_occam = inner.log_occam + float(np.sum(rel(theta)[free]))
     cov = np.zeros((k, k))
     cov[np.ix_(free, free)] = inner.covariance
-    for j in deps:                           # their prior's spread (the data say nothing)
+    for j in deps:  # their prior's spread (the data say nothing)
         cov[j, j] = (hi[j] - lo[j]) ** 2 / 12.0
     for i in at:
         d = np.zeros(k)
         d[i] = 1.0 if theta[i] - lo[i] <= hi[i] - theta[i] else -1.0
-        if free.size:                    # the others follow their regression on theta_i,
-            d[free] = _regression(H, free, i) * d[i]      # along determined directions
+        if free.size:  # the others follow their regression on theta_i,
+            d[free] = _regression(H, free, i) * d[i]  # along determined directions
         bound = lo[i] if d[i] > 0 else hi[i]
         t_fit = abs(theta[i] - bound)
-        origin = theta - t_fit * d              # the line through the fit, from the bound
+        origin = theta - t_fit * d  # the line through the fit, from the bound
         dep, values = off.get(i, ((), np.zeros((1, 0))))
         logs, moments = [], []
-        for vals in values:                     # the switched-off parameters over their prior
+        for vals in values:  # the switched-off parameters over their prior
             o = origin.copy()
             o[list(dep)] = vals
-            mean, second, log_int = line_integral(chi2_at, o, d, i, lo, hi, tau, chi0,
-                                                   t_fit, sd[i], rel, knots[i])
+            mean, second, log_int = line_integral(
+                chi2_at, o, d, i, lo, hi, tau, chi0, t_fit, sd[i], rel, knots[i]
+            )
             logs.append(log_int)
             moments.append((mean, second))
         top = max(logs)
         wts = np.exp(np.array(logs) - top)
         log_occam += top + math.log(wts.mean()) - math.log(hi[i] - lo[i])
-        mean, second = (np.average(np.array(moments), axis=0, weights=wts) if wts.sum() > 0
-                        else moments[0])
+        mean, second = (
+            np.average(np.array(moments), axis=0, weights=wts) if wts.sum() > 0 else moments[0]
+        )
         cov[i, i] = min(max(second - mean * mean, 0.0), (hi[i] - lo[i]) ** 2 / 12.0)
-    return Evidence(log_like + log_occam, log_like, log_occam, cov,
-                    tuple(int(i) for i in inner.truncated) + tuple(int(i) for i in at))
+    return Evidence(
+        log_like + log_occam,
+        log_like,
+        log_occam,
+        cov,
+        tuple(int(i) for i in inner.truncated) + tuple(int(i) for i in at),
+    )
 
 
 @dataclass(frozen=True)
@@ -289,8 +335,9 @@ class Ridge:
     upper: float
 
 
-def _along_ridge(J, r, theta, lo, hi, tau, chi2_at, log_prior, knots, switched_off, lines,
-                 ridge) -> Evidence:
+def _along_ridge(
+    J, r, theta, lo, hi, tau, chi2_at, log_prior, knots, switched_off, lines, ridge
+) -> Evidence:
     """:func:`laplace_evidence` with parameter ``ridge.index`` held at the fit, times the
     integral of the likelihood along ``ridge.curve`` (:func:`._lines.ridge_integral`): ``Z =
     int ds Z_others(s)``, ``Z_others(s)`` the others' evidence at ``s``, which is the fit's
@@ -305,9 +352,12 @@ def _along_ridge(J, r, theta, lo, hi, tau, chi2_at, log_prior, knots, switched_o
         th = theta.copy()
         th[keep] = th_sub
         return th
-    groups = {pos[a]: (tuple(pos[j] for j in dep), vals)
-              for a, (dep, vals) in (switched_off or {}).items()
-              if a != i and i not in dep}
+
+    groups = {
+        pos[a]: (tuple(pos[j] for j in dep), vals)
+        for a, (dep, vals) in (switched_off or {}).items()
+        if a != i and i not in dep
+    }
     width = hi[i] - lo[i]
     eps = 1e-6 * width
     tangent = (ridge.curve(theta[i] + eps)[0] - ridge.curve(theta[i] - eps)[0]) / (2 * eps)
@@ -317,24 +367,42 @@ def _along_ridge(J, r, theta, lo, hi, tau, chi2_at, log_prior, knots, switched_o
     moving = (np.abs(tangent) > 1e-9 * (hi - lo) / width)[keep]
     ok = np.ones(k - 1, bool) if lines is None else np.asarray(lines, bool)[keep]
     sub = laplace_evidence(
-        J[:, keep], r, theta[keep], lo[keep], hi[keep], tau=tau, open_ends=moving,
+        J[:, keep],
+        r,
+        theta[keep],
+        lo[keep],
+        hi[keep],
+        tau=tau,
+        open_ends=moving,
         chi2_at=lambda th_sub: chi2_at(full(th_sub)),
-        log_prior=None if log_prior is None else
-        (lambda th_sub: np.asarray(log_prior(full(th_sub)), float)[keep]),
+        log_prior=None
+        if log_prior is None
+        else (lambda th_sub: np.asarray(log_prior(full(th_sub)), float)[keep]),
         prior_knots=None if knots is None else np.asarray(knots, float)[keep],
-        switched_off=groups, lines=ok & ~moving)
-    rel = (lambda th: np.zeros(k)) if log_prior is None else \
-        (lambda th: np.asarray(log_prior(th), float) + np.log(hi - lo))
+        switched_off=groups,
+        lines=ok & ~moving,
+    )
+    rel = (
+        (lambda th: np.zeros(k))
+        if log_prior is None
+        else (lambda th: np.asarray(log_prior(th), float) + np.log(hi - lo))
+    )
     s_lo, s_hi = max(ridge.lower, lo[i]), min(ridge.upper, hi[i])
-    mean, second, log_int = ridge_integral(chi2_at, ridge.curve, theta[i], s_lo, s_hi, lo, hi,
-                                           tau, float(r @ r), rel, width)
+    mean, second, log_int = ridge_integral(
+        chi2_at, ridge.curve, theta[i], s_lo, s_hi, lo, hi, tau, float(r @ r), rel, width
+    )
     log_occam = sub.log_occam + log_int + float(rel(theta)[i])
     cov = np.zeros((k, k))
     cov[np.ix_(keep, keep)] = sub.covariance
-    cov += min(max(second - mean * mean, 0.0), width ** 2 / 12.0) * np.outer(tangent, tangent)
+    cov += min(max(second - mean * mean, 0.0), width**2 / 12.0) * np.outer(tangent, tangent)
     log_like = sub.log_likelihood
-    return Evidence(log_like + log_occam, log_like, log_occam, cov,
-                    tuple(int(keep[j]) for j in sub.truncated) + (i,))
+    return Evidence(
+        log_like + log_occam,
+        log_like,
+        log_occam,
+        cov,
+        tuple(int(keep[j]) for j in sub.truncated) + (i,),
+    )
 
 
 def _regression(H, free, i):
@@ -384,17 +452,23 @@ def _box_mass(centre, cov) -> float:
     corr = cov / np.outer(sd, sd)
     if np.max(np.abs(corr - np.eye(m))) < 1e-3:  # independent: one interval each
         return float(sum(_log_interval(x, y) for x, y in zip(a, b)))
-    mvn = multivariate_normal(mean=np.zeros(m), cov=corr, allow_singular=True,
-                              seed=np.random.default_rng(0), abseps=1e-7, releps=1e-4)
+    mvn = multivariate_normal(
+        mean=np.zeros(m),
+        cov=corr,
+        allow_singular=True,
+        seed=np.random.default_rng(0),
+        abseps=1e-7,
+        releps=1e-4,
+    )
     p = float(mvn.cdf(b, lower_limit=a))
-    if not p > 1e-6:                  # near the integrator's resolution: the tightest bound
-        return float(min(_log_interval(x, y) for x, y in zip(a, b)))   # P(all) <= min P_i
+    if not p > 1e-6:  # near the integrator's resolution: the tightest bound
+        return float(min(_log_interval(x, y) for x, y in zip(a, b)))  # P(all) <= min P_i
     return math.log(p)
 
 
 def _log_interval(a: float, b: float) -> float:
     """``ln (Phi(b) - Phi(a))`` for ``a < b``, accurate in either tail."""
-    if a > 0:                          # both in the upper tail: use the lower by symmetry
+    if a > 0:  # both in the upper tail: use the lower by symmetry
         a, b = -b, -a
     lb, la = float(log_ndtr(b)), float(log_ndtr(a))
     return lb + math.log1p(-math.exp(min(la - lb, 0.0))) if la < lb else -math.inf
@@ -418,8 +492,9 @@ def posterior_probabilities(log_evidence: dict, log_prior: dict | None = None) -
     if not log_evidence:
         raise ValueError("log_evidence must hold at least one model")
     keys = list(log_evidence)
-    lp = np.array([log_evidence[k] + (0.0 if log_prior is None else log_prior[k])
-                   for k in keys], float)
+    lp = np.array(
+        [log_evidence[k] + (0.0 if log_prior is None else log_prior[k]) for k in keys], float
+    )
     if not np.any(np.isfinite(lp)):
         raise ValueError("no model has a finite log evidence")
     lp = np.where(np.isfinite(lp), lp, -np.inf)

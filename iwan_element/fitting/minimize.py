@@ -2,6 +2,7 @@
 trust-region solver (``least_squares(method="trf")``) and :func:`box_lm`, a small box-bounded
 Levenberg-Marquardt kept for the loop fit's speed (its docstring says why).
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -52,9 +53,18 @@ class MinimizeResult:
         return self.status > 0
 
 
-def minimize(fun, x0, lower, upper, *, method: str = "trf", max_nfev: int,
-             ftol: float | None = None, xtol: float | None = None,
-             **options) -> MinimizeResult:
+def minimize(
+    fun,
+    x0,
+    lower,
+    upper,
+    *,
+    method: str = "trf",
+    max_nfev: int,
+    ftol: float | None = None,
+    xtol: float | None = None,
+    **options,
+) -> MinimizeResult:
     """Minimise ``0.5 |fun(x)|^2`` for ``lower <= x <= upper``.
 
     Parameters
@@ -83,25 +93,34 @@ def minimize(fun, x0, lower, upper, *, method: str = "trf", max_nfev: int,
     x0 = finite_array("x0", x0, ndim=1)
     lo = np.asarray(lower, float)
     hi = np.asarray(upper, float)
-    if lo.shape != x0.shape or hi.shape != x0.shape or np.isnan(lo).any() \
-            or np.isnan(hi).any() or np.any(lo >= hi):
+    if (
+        lo.shape != x0.shape
+        or hi.shape != x0.shape
+        or np.isnan(lo).any()
+        or np.isnan(hi).any()
+        or np.any(lo >= hi)
+    ):
         raise ValueError(f"lower and upper must have {x0.size} entries each with lower < upper")
     max_nfev = check_int("max_nfev", max_nfev, 1)
     x0 = np.clip(x0, lo, hi)
-    tol = {k: check_scalar(k, v, low=0.0, high=1.0, low_open=True)
-           for k, v in (("ftol", ftol), ("xtol", xtol)) if v is not None}
+    tol = {
+        k: check_scalar(k, v, low=0.0, high=1.0, low_open=True)
+        for k, v in (("ftol", ftol), ("xtol", xtol))
+        if v is not None
+    }
     if method == "box-lm":
         if options:
             raise ValueError(f"box-lm takes no options, got {sorted(options)}")
         return box_lm(fun, x0, lo, hi, max_nfev=max_nfev, **tol)
-    res = least_squares(fun, x0, bounds=(lo, hi), method="trf", max_nfev=max_nfev, **tol,
-                        **options)
-    return MinimizeResult(res.x, float(res.cost), int(res.status), str(res.message),
-                          int(res.nfev), res.fun, res.jac)
+    res = least_squares(fun, x0, bounds=(lo, hi), method="trf", max_nfev=max_nfev, **tol, **options)
+    return MinimizeResult(
+        res.x, float(res.cost), int(res.status), str(res.message), int(res.nfev), res.fun, res.jac
+    )
 
 
-def box_lm(fun, x0, lower, upper, *, max_nfev: int, ftol: float = 1e-12,
-           xtol: float = 1e-10) -> MinimizeResult:
+def box_lm(
+    fun, x0, lower, upper, *, max_nfev: int, ftol: float = 1e-12, xtol: float = 1e-10
+) -> MinimizeResult:
     """Levenberg-Marquardt with box bounds (projected steps) for a few parameters.
 
     Minimises ``0.5 |fun(x)|^2`` for ``lower <= x <= upper``. The Jacobian is taken by
@@ -123,7 +142,7 @@ def box_lm(fun, x0, lower, upper, *, max_nfev: int, ftol: float = 1e-12,
         for j in range(p):
             h = 1e-7 * max(1.0, abs(x[j]))
             if x[j] + h > upper[j]:
-                h = -h                                   # step inwards at an upper bound
+                h = -h  # step inwards at an upper bound
             xh = x.copy()
             xh[j] += h
             J[:, j] = (fun(xh) - r) / h
@@ -155,14 +174,25 @@ def box_lm(fun, x0, lower, upper, *, max_nfev: int, ftol: float = 1e-12,
                 x, r, cost = x_new, r_new, cost_new
                 lam = max(lam / 3.0, 1e-12)
                 if small_f or small_x:
-                    return MinimizeResult(x, cost, 2, "relative reduction of the cost below "
-                                          f"{ftol:g}" if small_f else
-                                          f"step below xtol = {xtol:g}", nfev, r)
+                    return MinimizeResult(
+                        x,
+                        cost,
+                        2,
+                        f"relative reduction of the cost below {ftol:g}"
+                        if small_f
+                        else f"step below xtol = {xtol:g}",
+                        nfev,
+                        r,
+                    )
                 break
             lam *= 4.0
             if lam > 1e16:
-                return MinimizeResult(x, cost, 3, "no step reduces the cost further (at a "
-                                      "minimum to round-off)", nfev, r)
-    return MinimizeResult(x, cost, 0, f"evaluation budget max_nfev = {max_nfev} used up",
-                          nfev, r)
-
+                return MinimizeResult(
+                    x,
+                    cost,
+                    3,
+                    "no step reduces the cost further (at a minimum to round-off)",
+                    nfev,
+                    r,
+                )
+    return MinimizeResult(x, cost, 0, f"evaluation budget max_nfev = {max_nfev} used up", nfev, r)

@@ -6,6 +6,7 @@ parameter carries its value with its standard error, bounds, unit and what the f
 about it (docs/fitting.md, section 6). Unlike lmfit's, both are immutable results, not
 the fit's input.
 """
+
 from __future__ import annotations
 
 import math
@@ -72,14 +73,20 @@ class Parameter:
         if not math.isfinite(self.value):
             raise ValueError(f"{self.name}: value must be finite, got {self.value}")
         if not (math.isnan(self.stderr) or 0.0 <= self.stderr < math.inf):
-            raise ValueError(f"{self.name}: stderr must be >= 0 and finite, or NaN (not "
-                             f"determined), got {self.stderr}")
+            raise ValueError(
+                f"{self.name}: stderr must be >= 0 and finite, or NaN (not "
+                f"determined), got {self.stderr}"
+            )
         if math.isnan(self.lower) or math.isnan(self.upper) or self.lower > self.upper:
-            raise ValueError(f"{self.name}: bounds must be ordered, lower <= upper, got "
-                             f"[{self.lower}, {self.upper}]")
+            raise ValueError(
+                f"{self.name}: bounds must be ordered, lower <= upper, got "
+                f"[{self.lower}, {self.upper}]"
+            )
         if not self.lower <= self.value <= self.upper:
-            raise ValueError(f"{self.name}: value {self.value:g} must lie in its bounds "
-                             f"[{self.lower:g}, {self.upper:g}]")
+            raise ValueError(
+                f"{self.name}: value {self.value:g} must lie in its bounds "
+                f"[{self.lower:g}, {self.upper:g}]"
+            )
         for k in ("identified", "nuisance", "fixed"):
             v = getattr(self, k)
             if not isinstance(v, (bool, np.bool_)):
@@ -99,10 +106,19 @@ class Parameter:
 
     def to_dict(self) -> dict:
         """JSON-safe dict (NaN and inf become None)."""
-        return json_safe({"name": self.name, "value": self.value, "stderr": self.stderr,
-                          "lower": self.lower, "upper": self.upper, "unit": self.unit,
-                          "identified": self.identified, "nuisance": self.nuisance,
-                          "fixed": self.fixed})
+        return json_safe(
+            {
+                "name": self.name,
+                "value": self.value,
+                "stderr": self.stderr,
+                "lower": self.lower,
+                "upper": self.upper,
+                "unit": self.unit,
+                "identified": self.identified,
+                "nuisance": self.nuisance,
+                "fixed": self.fixed,
+            }
+        )
 
 
 @dataclass(frozen=True, eq=False)
@@ -137,8 +153,9 @@ class ParameterTable:
         if self.correlation is not None:
             c = np.array(self.correlation, float)
             if c.shape != (len(ps), len(ps)):
-                raise ValueError(f"correlation must have shape ({len(ps)}, {len(ps)}), got "
-                                 f"{c.shape}")
+                raise ValueError(
+                    f"correlation must have shape ({len(ps)}, {len(ps)}), got {c.shape}"
+                )
             c.setflags(write=False)
             object.__setattr__(self, "correlation", c)
 
@@ -194,18 +211,30 @@ class ParameterTable:
         """One row per parameter: name [unit], value, std. error, status."""
         labels = [f"{p.name} [{unit_label(p.unit)}]" for p in self.parameters]
         width = max([16] + [len(s) for s in labels])
-        errors = ["" if p.fixed else f"{p.stderr:.4g}" if math.isfinite(p.stderr) else "n/a"
-                  for p in self.parameters]
-        return "\n".join(table_lines(
-            [("parameter", f"<{width}"), ("value", "12.6g"), ("std. error", ">12"),
-             ("  status", "<")],
-            [(lab, p.value, se, f"  {p.status}")
-             for lab, p, se in zip(labels, self.parameters, errors)]))
+        errors = [
+            "" if p.fixed else f"{p.stderr:.4g}" if math.isfinite(p.stderr) else "n/a"
+            for p in self.parameters
+        ]
+        return "\n".join(
+            table_lines(
+                [
+                    ("parameter", f"<{width}"),
+                    ("value", "12.6g"),
+                    ("std. error", ">12"),
+                    ("  status", "<"),
+                ],
+                [
+                    (lab, p.value, se, f"  {p.status}")
+                    for lab, p, se in zip(labels, self.parameters, errors)
+                ],
+            )
+        )
 
     def to_dict(self) -> dict:
         """JSON-safe dict: ``{"parameters": [...], "correlation": ...}``."""
-        return json_safe({"parameters": [p.to_dict() for p in self.parameters],
-                          "correlation": self.correlation})
+        return json_safe(
+            {"parameters": [p.to_dict() for p in self.parameters], "correlation": self.correlation}
+        )
 
     def _repr_html_(self) -> str:
         return html_table("parameters", PARAMETER_COLUMNS, parameter_rows(self))
@@ -217,6 +246,7 @@ class ParameterTable:
         try:
             import pandas as pd
         except ImportError:
-            raise ImportError("to_dataframe needs pandas: "
-                              "pip install 'iwan-element[pandas]'") from None
+            raise ImportError(
+                "to_dataframe needs pandas: pip install 'iwan-element[pandas]'"
+            ) from None
         return pd.DataFrame(parameter_rows(self), columns=list(PARAMETER_COLUMNS))

@@ -21,6 +21,7 @@ A fitted parameter is identified when the data determine it:
 A fit succeeds when its optimiser converged, every reported parameter is identified and no
 misfit beyond the noise is left unexplained (docs/guards.md).
 """
+
 from __future__ import annotations
 
 import math
@@ -43,17 +44,28 @@ def noise_dof_warning(dof: float, source: str = "") -> str | None:
     if dof >= MIN_NOISE_DOF:
         return None
     cover = 100.0 * (1.0 - 2.0 * stats.t.sf(2.0, max(dof, 0.1)))
-    return (f"the noise level rests on {dof:.2g} degrees of freedom{source}: the standard "
-            f"errors are themselves uncertain by about {100 * math.sqrt(0.5 / max(dof, 0.1)):.0f}"
-            f" % and +-2 stderr covers only about {cover:.0f} % (Student t), so no parameter "
-            f"is identified; at least {MIN_NOISE_DOF:g} are needed")
+    return (
+        f"the noise level rests on {dof:.2g} degrees of freedom{source}: the standard "
+        f"errors are themselves uncertain by about {100 * math.sqrt(0.5 / max(dof, 0.1)):.0f}"
+        f" % and +-2 stderr covers only about {cover:.0f} % (Student t), so no parameter "
+        f"is identified; at least {MIN_NOISE_DOF:g} are needed"
+    )
 
 
-def verdict(name: str, value: float, stderr: float, *, at_bound: bool = False,
-            degenerate: bool | None = None, nuisance: bool = False, relative: bool = True,
-            reference: float | None = None, reference_text: str = "its value",
-            why_degenerate: str = "", noise_dof: float | None = None
-            ) -> tuple[bool, str | None]:
+def verdict(
+    name: str,
+    value: float,
+    stderr: float,
+    *,
+    at_bound: bool = False,
+    degenerate: bool | None = None,
+    nuisance: bool = False,
+    relative: bool = True,
+    reference: float | None = None,
+    reference_text: str = "its value",
+    why_degenerate: str = "",
+    noise_dof: float | None = None,
+) -> tuple[bool, str | None]:
     """Whether the fitted parameter ``name`` is identified, and the warning when not.
 
     Parameters
@@ -99,14 +111,20 @@ def verdict(name: str, value: float, stderr: float, *, at_bound: bool = False,
     if not math.isfinite(stderr):
         if degenerate is False:
             return False, f"{name} has no standard error: NOT identified"
-        return False, (f"{name} is not determined by the data (its Jacobian direction is "
-                       f"degenerate){why_degenerate}: NOT identified")
+        return False, (
+            f"{name} is not determined by the data (its Jacobian direction is "
+            f"degenerate){why_degenerate}: NOT identified"
+        )
     if noise_dof is not None and noise_dof < MIN_NOISE_DOF:
-        return False, (f"{name}: its standard error rests on a noise level with "
-                       f"{float(noise_dof):.2g} degrees of freedom: NOT identified")
+        return False, (
+            f"{name}: its standard error rests on a noise level with "
+            f"{float(noise_dof):.2g} degrees of freedom: NOT identified"
+        )
     if relative and not nuisance and stderr > RELATIVE * ref:
-        return False, (f"{name}: std. error {stderr:.3g} exceeds half of {reference_text} "
-                       f"({ref:.3g}): NOT identified")
+        return False, (
+            f"{name}: std. error {stderr:.3g} exceeds half of {reference_text} "
+            f"({ref:.3g}): NOT identified"
+        )
     return True, None
 
 
@@ -127,7 +145,9 @@ def fit_success(converged: bool, identified, required=None, *, explained: bool =
         False when a misfit beyond the noise remains that the result does not explain.
     """
     if isinstance(required, str):
-        raise ValueError(f"required must be an iterable of parameter names, not the str "
-                         f"{required!r} (write ({required!r},))")
+        raise ValueError(
+            f"required must be an iterable of parameter names, not the str "
+            f"{required!r} (write ({required!r},))"
+        )
     keys = identified.keys() if required is None else required
     return bool(converged and explained and all(identified.get(k, False) for k in keys))

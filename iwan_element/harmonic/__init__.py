@@ -7,6 +7,7 @@ frequency-time evaluation of its joints on their exact steady loops
 (:func:`trace`), and nonlinear modes by the extended periodic motion concept
 (:func:`nonlinear_mode`). Equations: ``docs/harmonic_balance.md``.
 """
+
 from .continuation import trace
 from .response import harmonic_balance
 from .result import FrequencyResponse

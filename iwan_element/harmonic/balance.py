@@ -14,6 +14,7 @@ the residual of Krack & Gross (Harmonic Balance for Nonlinear Vibration Problems
 Jacobian (tangent plus reversal columns). Newton's method solves each frequency, starting
 from the previous one's solution.
 """
+
 from __future__ import annotations
 
 import logging
@@ -23,8 +24,15 @@ import numpy as np
 
 from .basis import Harmonics
 
-__all__ = ["HBPoint", "solve_point", "operators", "rate_operators", "residual",
-           "point_outputs", "force_coefficients"]
+__all__ = [
+    "HBPoint",
+    "solve_point",
+    "operators",
+    "rate_operators",
+    "residual",
+    "point_outputs",
+    "force_coefficients",
+]
 
 log = logging.getLogger(__name__)
 
@@ -39,16 +47,22 @@ def operators(system, basis: Harmonics, W: float, *, xi: float = 0.0, exclude=No
     """The receptances at every kept harmonic of ``W`` as real 4-D operators:
     ``(Lzz, Lpz, Lpb)`` with ``p`` the sensor and excitation ports.
     """
-    H = [system.receptance(h * W, xi=xi, exclude=exclude if h == 1 else None)
-         for h in basis.harmonics]
+    H = [
+        system.receptance(h * W, xi=xi, exclude=exclude if h == 1 else None)
+        for h in basis.harmonics
+    ]
     nz = system.n_z
     iz = list(range(nz))
-    return (basis.linear_operator(H, iz, iz), basis.linear_operator(H, [nz, nz + 1], iz),
-            basis.linear_operator(H, iz + [nz, nz + 1], [nz + 1]))
+    return (
+        basis.linear_operator(H, iz, iz),
+        basis.linear_operator(H, [nz, nz + 1], iz),
+        basis.linear_operator(H, iz + [nz, nz + 1], [nz + 1]),
+    )
 
 
-def rate_operators(system, basis: Harmonics, W: float, rows, cols, *, xi: float = 0.0,
-                   exclude=None):
+def rate_operators(
+    system, basis: Harmonics, W: float, rows, cols, *, xi: float = 0.0, exclude=None
+):
     """``(dL/dW, dL/dxi)``: the derivatives of the real operator of the receptances between
     ports ``rows`` and ``cols`` with respect to the fundamental ``W`` [rad/s] and to the
     self-excitation ``xi`` [1/s] (:meth:`ModalSystem.receptance_rate`).
@@ -104,7 +118,7 @@ def solve_point(system, basis, W, force, cz0, *, tol=1e-9, max_iter=40) -> HBPoi
     for it in range(1, max_iter + 1):
         step = np.linalg.solve(J, -R.ravel()).reshape(cz.shape)
         lam = 1.0
-        for _ in range(12):                          # backtracking on the residual norm
+        for _ in range(12):  # backtracking on the residual norm
             trial = cz + lam * step
             R2, J2, cg2, D2 = residual(system, basis, W, force, trial, ops=ops)
             rn2 = float(np.linalg.norm(R2))
@@ -116,8 +130,16 @@ def solve_point(system, basis, W, force, cz0, *, tol=1e-9, max_iter=40) -> HBPoi
         if lam * float(np.linalg.norm(step)) <= tol * size and rn <= 1e3 * tol * size:
             ok = True
             break
-    out = HBPoint(cz=cz, W=W, force=force, converged=ok, iterations=it,
-                  residual=rn / max(float(np.linalg.norm(cz)), 1e-300), cg=cg, D=D)
+    out = HBPoint(
+        cz=cz,
+        W=W,
+        force=force,
+        converged=ok,
+        iterations=it,
+        residual=rn / max(float(np.linalg.norm(cz)), 1e-300),
+        cg=cg,
+        D=D,
+    )
     out.update(point_outputs(system, basis, W, force, cg, D, ops=ops))
     return out
 
@@ -154,10 +176,15 @@ def point_outputs(system, basis, W, force, cg, D, *, ops=None, xi=0.0, modal=Non
         W_self += xi * float(np.sum(q2))
     if modal is not None:
         r, q1 = modal
-        ports = ports + np.outer(Y[nz:, r], basis.real(np.array(
-            [q1 if h == 1 else 0.0 for h, _, _ in basis.cols])))
+        ports = ports + np.outer(
+            Y[nz:, r], basis.real(np.array([q1 if h == 1 else 0.0 for h, _, _ in basis.cols]))
+        )
     sin1 = [ib for h, _, ib in basis.cols if h == 1][0]
-    return {"sensor": ports[0], "excitation": ports[1],
-            "input_work": math.pi * force * float(ports[1][sin1]),
-            "joint_dissipation": float(np.sum(D)), "floor_dissipation": D_floor,
-            "self_excitation_work": W_self}
+    return {
+        "sensor": ports[0],
+        "excitation": ports[1],
+        "input_work": math.pi * force * float(ports[1][sin1]),
+        "joint_dissipation": float(np.sum(D)),
+        "floor_dissipation": D_floor,
+        "self_excitation_work": W_self,
+    }

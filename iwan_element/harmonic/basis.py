@@ -5,6 +5,7 @@ coefficients ``(a_0 | a_h, b_h, ...)``: ``y(tau) = a_0 + sum_h a_h cos(h tau) + 
 ``tau = W t``. Its complex amplitude is ``Y_h = a_h - i b_h`` (so ``y = Re sum Y_h e^{i h tau}``),
 and its ``N`` samples over one period are ``E c`` (``P`` projects samples back: the AFT's DFT).
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -47,8 +48,9 @@ def check_harmonics(harmonics, samples) -> tuple[tuple, int]:
     reversals).
     """
     if isinstance(harmonics, bool):
-        raise ValueError(f"harmonics must be an int >= 1 or a sequence of ints >= 0, got "
-                         f"{harmonics!r}")
+        raise ValueError(
+            f"harmonics must be an int >= 1 or a sequence of ints >= 0, got {harmonics!r}"
+        )
     if isinstance(harmonics, (int, np.integer)):
         if harmonics < 1:
             raise ValueError(f"harmonics must be >= 1, got {harmonics!r}")
@@ -57,17 +59,21 @@ def check_harmonics(harmonics, samples) -> tuple[tuple, int]:
         try:
             hs = tuple(sorted(set(int(h) for h in harmonics)))
         except (TypeError, ValueError):
-            raise ValueError("harmonics must be an int >= 1 or a sequence of ints >= 0, got "
-                             f"{harmonics!r}") from None
+            raise ValueError(
+                f"harmonics must be an int >= 1 or a sequence of ints >= 0, got {harmonics!r}"
+            ) from None
         if not hs or hs[0] < 0 or 1 not in hs or any(h != int(h) for h in harmonics):
-            raise ValueError("harmonics must contain the fundamental 1 and only ints >= 0, "
-                             f"got {harmonics!r}")
+            raise ValueError(
+                f"harmonics must contain the fundamental 1 and only ints >= 0, got {harmonics!r}"
+            )
     if samples is None:
         samples = max(64, 1 << int(np.ceil(np.log2(8 * max(hs)))))
-    if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or \
-            samples < 2 * max(hs) + 1:
-        raise ValueError(f"samples must be an int >= 2 H + 1 = {2 * max(hs) + 1}, got "
-                         f"{samples!r}")
+    if (
+        isinstance(samples, bool)
+        or not isinstance(samples, (int, np.integer))
+        or samples < 2 * max(hs) + 1
+    ):
+        raise ValueError(f"samples must be an int >= 2 H + 1 = {2 * max(hs) + 1}, got {samples!r}")
     return hs, int(samples)
 
 
@@ -135,8 +141,7 @@ class Harmonics:
         F, K, A, D = periodic_rows(system.constants, Z)
         cg = np.empty_like(cz)
         cg[:nj] = (F - system.KT[:, None] * Z) @ self.P.T
-        J = periodic_harmonic_jacobian(K, A, self.P, self.E, shift=system.KT) if jacobian \
-            else None
+        J = periodic_harmonic_jacobian(K, A, self.P, self.E, shift=system.KT) if jacobian else None
         if not system.ports:
             return cg, J, D
         De = np.empty(len(system.ports))

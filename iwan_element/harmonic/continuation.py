@@ -10,6 +10,7 @@ so the curve is traced through turning points where the frequency alone could no
 parametrise it. The step ``ds`` grows when the corrector converges in few iterations and is
 halved when it needs many, fails, or the tangent turns by more than 10 degrees.
 """
+
 from __future__ import annotations
 
 import logging
@@ -50,7 +51,7 @@ def _augmented(system, basis, y, force, sz, sW):
     dzb, _ = rate_operators(system, basis, W, iz, [nz + 1])
     dR_dW = np.einsum("pcqd,qd->pc", dzz, cg) - dzb[:, :, 0, :] @ force_coefficients(basis, force)
     A = np.empty((n, n + 1))
-    A[:, :n] = J                                  # dR/dZ * sz / sz
+    A[:, :n] = J  # dR/dZ * sz / sz
     A[:, n] = dR_dW.ravel() * sW / sz
     return R.ravel() / sz, A, cg, D, ops
 
@@ -64,8 +65,17 @@ def _tangent(A, t_prev):
     return t / np.linalg.norm(t)
 
 
-def trace(system: ModalSystem, force: float, band, *, harmonics=(1, 3, 5), samples=None,
-          step: float = 0.02, max_points: int = 2000, tol: float = 1e-9) -> FrequencyResponse:
+def trace(
+    system: ModalSystem,
+    force: float,
+    band,
+    *,
+    harmonics=(1, 3, 5),
+    samples=None,
+    step: float = 0.02,
+    max_points: int = 2000,
+    tol: float = 1e-9,
+) -> FrequencyResponse:
     """Trace the frequency response curve at one force level through its turning points.
 
     Parameters
@@ -92,8 +102,12 @@ def trace(system: ModalSystem, force: float, band, *, harmonics=(1, 3, 5), sampl
     """
     if not isinstance(system, ModalSystem):
         raise ValueError(f"system must be a ModalSystem, got {type(system).__name__}")
-    if isinstance(force, bool) or not isinstance(force, (int, float)) or \
-            not math.isfinite(force) or force <= 0:
+    if (
+        isinstance(force, bool)
+        or not isinstance(force, (int, float))
+        or not math.isfinite(force)
+        or force <= 0
+    ):
         raise ValueError(f"force must be a finite amplitude > 0 [N], got {force!r}")
     try:
         f0, f1 = (float(b) for b in band)
@@ -106,10 +120,17 @@ def trace(system: ModalSystem, force: float, band, *, harmonics=(1, 3, 5), sampl
     basis = Harmonics(*check_harmonics(harmonics, samples))
     t0 = time.perf_counter()
     with one_blas_thread():
-        points, turns = _walk(system, basis, float(force), f0, f1, float(step), int(max_points),
-                              tol)
-    return assemble_response(points, basis, system, time.perf_counter() - t0,
-                             turning_points=turns, route="pseudo-arclength continuation")
+        points, turns = _walk(
+            system, basis, float(force), f0, f1, float(step), int(max_points), tol
+        )
+    return assemble_response(
+        points,
+        basis,
+        system,
+        time.perf_counter() - t0,
+        turning_points=turns,
+        route="pseudo-arclength continuation",
+    )
 
 
 def _walk(system, basis, force, f0, f1, ds, max_points, tol):
@@ -132,13 +153,18 @@ def _walk(system, basis, force, f0, f1, ds, max_points, tol):
         if not ok:
             ds *= 0.5
             if ds < ds_min:
-                log.warning("continuation stopped at %.6g Hz: the corrector failed",
-                            y[n] * sW / (2 * math.pi))
+                log.warning(
+                    "continuation stopped at %.6g Hz: the corrector failed",
+                    y[n] * sW / (2 * math.pi),
+                )
                 break
             continue
         if yc[n] <= 0 or abs(yc[n] * sW - 0.5 * (W0 + W1)) > 1.5 * sW:
-            log.warning("continuation left the band at %.6g Hz (an unbounded resonance: the "
-                        "joints cannot limit the response at this force)", yc[n] * sW / (2 * math.pi))
+            log.warning(
+                "continuation left the band at %.6g Hz (an unbounded resonance: the "
+                "joints cannot limit the response at this force)",
+                yc[n] * sW / (2 * math.pi),
+            )
             break
         R, A, cg, D, ops = out
         t_new = _tangent(A, t)
@@ -148,12 +174,19 @@ def _walk(system, basis, force, f0, f1, ds, max_points, tol):
         y, t = yc, t_new
         W = y[n] * sW
         cz = y[:n] * sz
-        pt = {"cz": cz.reshape(system.n_z, -1), "W": W, "force": force,
-              "converged": True, "iterations": its, "cg": cg, "D": D}
+        pt = {
+            "cz": cz.reshape(system.n_z, -1),
+            "W": W,
+            "force": force,
+            "converged": True,
+            "iterations": its,
+            "cg": cg,
+            "D": D,
+        }
         pt.update(point_outputs(system, basis, W, force, cg, D, ops=ops))
         points.append(pt)
         big = float(np.abs(cz).max())
-        if big > 2.0 * sz:                        # the amplitude scale follows the response
+        if big > 2.0 * sz:  # the amplitude scale follows the response
             y[:n] *= sz / big
             t[:n] *= sz / big
             t /= np.linalg.norm(t)

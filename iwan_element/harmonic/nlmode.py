@@ -15,6 +15,7 @@ amplitude normalisation: the sensor's fundamental displacement amplitude equals 
 requested ``X`` (the amplitude QSMA and the ring-downs report). Newton with the exact AFT
 Jacobian; each amplitude starts from the previous one's solution.
 """
+
 from __future__ import annotations
 
 import logging
@@ -97,7 +98,7 @@ def _newton(system, basis, y, X, r, *, tol, max_iter):
     scale = np.abs(y).copy()
     n = y.size - 3
     scale[:n] = max(float(np.abs(y[:n]).max()), 1e-300)
-    scale[n + 1] = max(scale[n + 1], 1e-4 * abs(y[n]))     # xi is 0 without a floor
+    scale[n + 1] = max(scale[n + 1], 1e-4 * abs(y[n]))  # xi is 0 without a floor
     R, J, cg, D = _equations(system, basis, y, X, r)
     for it in range(1, max_iter + 1):
         step = np.linalg.solve(J * scale[None, :], -R) * scale
@@ -115,11 +116,11 @@ def _newton(system, basis, y, X, r, *, tol, max_iter):
     return y, cg, D, False, max_iter
 
 
-def epmc_branch(system, basis: Harmonics, amplitude, r: int, *, tol=1e-9, max_iter=40,
-                progress: bool = False):
+def epmc_branch(
+    system, basis: Harmonics, amplitude, r: int, *, tol=1e-9, max_iter=40, progress: bool = False
+):
     """Nonlinear mode ``r`` (a kept-mode column) (one BLAS thread: :func:`_branch`)."""
-    bar = progress_bar(progress, total=np.size(amplitude), desc="nonlinear_mode",
-                       unit="amplitude")
+    bar = progress_bar(progress, total=np.size(amplitude), desc="nonlinear_mode", unit="amplitude")
     try:
         with one_blas_thread():
             return _branch(system, basis, amplitude, r, tol=tol, max_iter=max_iter, bar=bar)
@@ -139,29 +140,39 @@ def _branch(system, basis, amplitude, r, *, tol, max_iter, bar):
     nz, nc = system.n_z, basis.n_coefficients
     Ys = system.modes[nz, r]
     if abs(Ys) < 1e-12 * np.abs(system.modes[:, r]).max():
-        raise ValueError("the sensor sits at a node of this mode: its amplitude cannot set "
-                         "the mode's level")
+        raise ValueError(
+            "the sensor sits at a node of this mode: its amplitude cannot set the mode's level"
+        )
     ia = [c for c in basis.cols if c[0] == 1][0][1]
     w0, z0 = float(system.omega[r]), float(system.zeta[r])
-    last = None                                   # (y, X) of the last converged amplitude
+    last = None  # (y, X) of the last converged amplitude
     out = {k: np.zeros(X.size) for k in ("frequency", "damping_ratio", "xi", "energy_error")}
     out["converged"] = np.zeros(X.size, bool)
     out["iterations"] = np.zeros(X.size, int)
     t0 = time.perf_counter()
     for k in order:
-        if last is None:                          # the linear mode at this amplitude
+        if last is None:  # the linear mode at this amplitude
             cz = np.zeros((nz, nc))
             a0 = X[k] / abs(Ys)
             cz[:, ia] = system.modes[:nz, r] * a0 * np.sign(Ys)
             y = np.concatenate([cz.ravel(), [w0, 2 * z0 * w0, a0 * np.sign(Ys)]])
-        else:                                     # the neighbour, scaled to this amplitude
+        else:  # the neighbour, scaled to this amplitude
             y = last[0].copy()
             y[:-3] *= X[k] / last[1]
             y[-1] *= X[k] / last[1]
         y, cg, D, ok, its = _newton(system, basis, y, X[k], r, tol=tol, max_iter=max_iter)
         W, xi, a = y[-3], y[-2], y[-1]
-        po = point_outputs(system, basis, W, 0.0, cg, D, xi=xi, modal=(r, a),
-                           ops=operators(system, basis, W, xi=xi, exclude=r))
+        po = point_outputs(
+            system,
+            basis,
+            W,
+            0.0,
+            cg,
+            D,
+            xi=xi,
+            modal=(r, a),
+            ops=operators(system, basis, W, xi=xi, exclude=r),
+        )
         # the self-excitation's work per period: xi pi W sum_h h^2 |Q_h|^2 over the modes
         e_in = po["self_excitation_work"]
         d = po["joint_dissipation"] + po["floor_dissipation"]

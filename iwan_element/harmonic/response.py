@@ -1,4 +1,5 @@
 """Frequency response at given frequencies and forces: the harmonic balance driver."""
+
 from __future__ import annotations
 
 import logging
@@ -26,14 +27,14 @@ def check_frequency_force(frequency, force):
     """
     f = np.atleast_1d(finite_array("frequency", frequency, ndim=None)).astype(float)
     if f.ndim != 1 or f.size == 0 or np.any(f <= 0):
-        raise ValueError("frequency must be a non-empty 1-D array of frequencies > 0 [Hz], "
-                         f"got shape {f.shape}")
+        raise ValueError(
+            f"frequency must be a non-empty 1-D array of frequencies > 0 [Hz], got shape {f.shape}"
+        )
     F = np.atleast_1d(finite_array("force", force, ndim=None)).astype(float)
     if F.size == 1:
         F = np.full(f.size, float(F.ravel()[0]))
     if F.shape != f.shape:
-        raise ValueError(f"force must be one value or one per frequency ({f.size}), got "
-                         f"{F.size}")
+        raise ValueError(f"force must be one value or one per frequency ({f.size}), got {F.size}")
     if np.any(F <= 0):
         raise ValueError("force must be amplitudes > 0 [N]")
     return f, F
@@ -42,12 +43,20 @@ def check_frequency_force(frequency, force):
 def linear_start(system, basis, W, force):
     """The stuck (linear) response's joint coefficients at ``W``."""
     _, _, Lb = operators(system, basis, W)
-    return Lb[:system.n_z, :, 0, :] @ force_coefficients(basis, force)
+    return Lb[: system.n_z, :, 0, :] @ force_coefficients(basis, force)
 
 
-def harmonic_balance(system: ModalSystem, frequency, force, *, harmonics=(1, 3, 5),
-                     samples=None, tol: float = 1e-9, max_iter: int = 40,
-                     progress: bool = False) -> FrequencyResponse:
+def harmonic_balance(
+    system: ModalSystem,
+    frequency,
+    force,
+    *,
+    harmonics=(1, 3, 5),
+    samples=None,
+    tol: float = 1e-9,
+    max_iter: int = 40,
+    progress: bool = False,
+) -> FrequencyResponse:
     """Steady response of a :class:`ModalSystem` to ``force cos(2 pi f t)`` at each frequency.
 
     Each point starts from the previous one's solution (scaled by the force ratio; from the
@@ -101,11 +110,25 @@ def _sweep(system, basis, f, F, tol, max_iter, bar):
         W = 2 * math.pi * f[k]
         p = None
         if prev is not None:
-            p = solve_point(system, basis, W, F[k], prev["cz"] * (F[k] / prev["force"]),
-                            tol=tol, max_iter=max_iter)
-        if p is None or not p["converged"]:           # the linear response as the start
-            p = solve_point(system, basis, W, F[k], linear_start(system, basis, W, F[k]),
-                            tol=tol, max_iter=max_iter)
+            p = solve_point(
+                system,
+                basis,
+                W,
+                F[k],
+                prev["cz"] * (F[k] / prev["force"]),
+                tol=tol,
+                max_iter=max_iter,
+            )
+        if p is None or not p["converged"]:  # the linear response as the start
+            p = solve_point(
+                system,
+                basis,
+                W,
+                F[k],
+                linear_start(system, basis, W, F[k]),
+                tol=tol,
+                max_iter=max_iter,
+            )
         if not p["converged"]:
             log.warning("harmonic balance did not converge at %.6g Hz", f[k])
         points.append(p)
@@ -119,15 +142,19 @@ def assemble_response(points, basis, system, wall, **meta) -> FrequencyResponse:
     Z = basis.complex(np.array([p["sensor"] for p in points]))
     k1 = [h for h, _, _ in basis.cols].index(1)
     phase = np.angle(Z[:, k1])
-    phase[phase > 0.5 * math.pi] -= 2 * math.pi          # receptance-like: 0 .. -pi
+    phase[phase > 0.5 * math.pi] -= 2 * math.pi  # receptance-like: 0 .. -pi
     return FrequencyResponse(
         frequency=np.array([p["W"] for p in points]) / (2 * math.pi),
         force=np.array([p["force"] for p in points]),
-        amplitude=np.abs(Z[:, k1]), phase=phase, harmonics=Z,
+        amplitude=np.abs(Z[:, k1]),
+        phase=phase,
+        harmonics=Z,
         harmonic_numbers=basis.harmonics,
         converged=np.array([p["converged"] for p in points], bool),
         iterations=np.array([p["iterations"] for p in points], int),
         input_work=np.array([p["input_work"] for p in points]),
         joint_dissipation=np.array([p["joint_dissipation"] for p in points]),
         floor_dissipation=np.array([p["floor_dissipation"] for p in points]),
-        wall_time=wall, metadata={"samples": basis.samples, "system": system.notes, **meta})
+        wall_time=wall,
+        metadata={"samples": basis.samples, "system": system.notes, **meta},
+    )

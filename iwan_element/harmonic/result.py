@@ -1,4 +1,5 @@
 """The frequency response result of the harmonic balance (the package's result shape)."""
+
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -83,41 +84,75 @@ class FrequencyResponse(ResultShape):
         out = []
         bad = ~self.converged
         if bad.any():
-            out.append(f"{int(bad.sum())} of {bad.size} frequencies did not converge (near a "
-                       "turning point of the response curve: trace it by continuation)")
+            out.append(
+                f"{int(bad.sum())} of {bad.size} frequencies did not converge (near a "
+                "turning point of the response curve: trace it by continuation)"
+            )
         e = np.abs(self.energy_error)
         if np.any(e[self.converged] > ENERGY_TOL):
-            out.append(f"energy balance off by up to {np.nanmax(e):.2g} of the input work: "
-                       "keep more harmonics")
+            out.append(
+                f"energy balance off by up to {np.nanmax(e):.2g} of the input work: "
+                "keep more harmonics"
+            )
         return tuple(out)
 
     def report(self) -> str:
         """Verdict, the points, the energy check, warnings."""
-        lines = [self.verdict(),
-                 f"harmonic balance: {self.frequency.size} frequencies "
-                 f"{self.frequency.min():.5g}-{self.frequency.max():.5g} Hz, harmonics "
-                 f"{', '.join(map(str, self.harmonic_numbers))}, {self.metadata.get('samples')} "
-                 f"samples per period, {self.wall_time:.3g} s"]
-        rows = [(f, F, a, p, bool(c), e) for f, F, a, p, c, e in zip(
-            self.frequency, self.force, self.amplitude, self.phase, self.converged,
-            self.energy_error)]
-        lines += table_lines([("f [Hz]", "10.5f"), ("F [N]", "9.4g"), ("X [m]", "11.4e"),
-                              ("phase [rad]", "11.4f"), ("converged", ">9"),
-                              ("energy err [-]", "14.2e")], rows)
+        lines = [
+            self.verdict(),
+            f"harmonic balance: {self.frequency.size} frequencies "
+            f"{self.frequency.min():.5g}-{self.frequency.max():.5g} Hz, harmonics "
+            f"{', '.join(map(str, self.harmonic_numbers))}, {self.metadata.get('samples')} "
+            f"samples per period, {self.wall_time:.3g} s",
+        ]
+        rows = [
+            (f, F, a, p, bool(c), e)
+            for f, F, a, p, c, e in zip(
+                self.frequency,
+                self.force,
+                self.amplitude,
+                self.phase,
+                self.converged,
+                self.energy_error,
+            )
+        ]
+        lines += table_lines(
+            [
+                ("f [Hz]", "10.5f"),
+                ("F [N]", "9.4g"),
+                ("X [m]", "11.4e"),
+                ("phase [rad]", "11.4f"),
+                ("converged", ">9"),
+                ("energy err [-]", "14.2e"),
+            ],
+            rows,
+        )
         lines += [f"  warning: {w}" for w in self.warnings]
         return "\n".join(lines)
 
     def to_dict(self) -> dict:
         """JSON-safe: every per-point array, the harmonics as real and imaginary parts."""
-        return json_safe({
-            "frequency": self.frequency, "force": self.force, "amplitude": self.amplitude,
-            "phase": self.phase, "harmonic_numbers": list(self.harmonic_numbers),
-            "harmonics_real": self.harmonics.real, "harmonics_imag": self.harmonics.imag,
-            "converged": self.converged, "iterations": self.iterations,
-            "input_work": self.input_work, "joint_dissipation": self.joint_dissipation,
-            "floor_dissipation": self.floor_dissipation, "energy_error": self.energy_error,
-            "wall_time": self.wall_time, "metadata": self.metadata, "success": self.success,
-            "warnings": list(self.warnings)})
+        return json_safe(
+            {
+                "frequency": self.frequency,
+                "force": self.force,
+                "amplitude": self.amplitude,
+                "phase": self.phase,
+                "harmonic_numbers": list(self.harmonic_numbers),
+                "harmonics_real": self.harmonics.real,
+                "harmonics_imag": self.harmonics.imag,
+                "converged": self.converged,
+                "iterations": self.iterations,
+                "input_work": self.input_work,
+                "joint_dissipation": self.joint_dissipation,
+                "floor_dissipation": self.floor_dissipation,
+                "energy_error": self.energy_error,
+                "wall_time": self.wall_time,
+                "metadata": self.metadata,
+                "success": self.success,
+                "warnings": list(self.warnings),
+            }
+        )
 
     def plot(self, ax=None, *, label="harmonic balance"):
         """Amplitude per force [m/N] and phase [rad] against frequency on ``ax = (ax_a,

@@ -24,6 +24,7 @@ MacNeal / Rubin residual-flexibility correction; exact at ``w = 0`` and in the s
 statics). A single-degree-of-freedom oscillator with one joint is the smallest such system
 (:meth:`ModalSystem.oscillator`).
 """
+
 from __future__ import annotations
 
 import math
@@ -40,8 +41,9 @@ __all__ = ["ModalSystem", "ElementPort"]
 def _array(name, v, shape):
     a = np.array(v, dtype=float)
     if a.shape != shape or not np.all(np.isfinite(a)):
-        raise ValueError(f"{name} must be a finite array of shape {shape}, got "
-                         f"{getattr(a, 'shape', None)}")
+        raise ValueError(
+            f"{name} must be a finite array of shape {shape}, got {getattr(a, 'shape', None)}"
+        )
     a.setflags(write=False)
     return a
 
@@ -69,10 +71,15 @@ class ElementPort:
     def __post_init__(self):
         for m in ("trial", "commit", "reset"):
             if not callable(getattr(self.element, m, None)):
-                raise TypeError(f"element must have trial/commit/reset methods (the package's "
-                                f"element protocol), missing {m!r}")
-        if isinstance(self.gain, bool) or not isinstance(self.gain, (int, float)) or \
-                not math.isfinite(self.gain):
+                raise TypeError(
+                    f"element must have trial/commit/reset methods (the package's "
+                    f"element protocol), missing {m!r}"
+                )
+        if (
+            isinstance(self.gain, bool)
+            or not isinstance(self.gain, (int, float))
+            or not math.isfinite(self.gain)
+        ):
             raise ValueError(f"gain must be a finite number, got {self.gain!r}")
 
 
@@ -115,8 +122,7 @@ class ModalSystem:
     def __post_init__(self):
         om = np.array(self.omega, dtype=float).ravel()
         if om.size == 0 or not np.all(np.isfinite(om)) or np.any(om < 0):
-            raise ValueError("omega must be a non-empty array of finite frequencies >= 0 "
-                             "[rad/s]")
+            raise ValueError("omega must be a non-empty array of finite frequencies >= 0 [rad/s]")
         n_m = om.size
         js = tuple(self.joints)
         if not js or not all(isinstance(j, IwanParameters) for j in js):
@@ -129,8 +135,11 @@ class ModalSystem:
         if np.any(z < 0) or np.any(z >= 1):
             raise ValueError("zeta must be damping ratios in [0, 1)")
         Y = _array("modes", self.modes, (n_z + 2, n_m))
-        R = np.zeros((n_z + 2, n_z + 2)) if self.residual is None else \
-            _array("residual", self.residual, (n_z + 2, n_z + 2))
+        R = (
+            np.zeros((n_z + 2, n_z + 2))
+            if self.residual is None
+            else _array("residual", self.residual, (n_z + 2, n_z + 2))
+        )
         om.setflags(write=False)
         object.__setattr__(self, "omega", om)
         object.__setattr__(self, "zeta", z)
@@ -138,28 +147,37 @@ class ModalSystem:
         object.__setattr__(self, "joints", js)
         object.__setattr__(self, "ports", ps)
         object.__setattr__(self, "residual", R)
-        c = constants_from_arrays([j.Fs for j in js], [j.KT for j in js], [j.chi for j in js],
-                                  [j.beta for j in js])
+        c = constants_from_arrays(
+            [j.Fs for j in js], [j.KT for j in js], [j.chi for j in js], [j.beta for j in js]
+        )
         c.setflags(write=False)
         object.__setattr__(self, "constants", c)
 
     @classmethod
-    def oscillator(cls, mass: float, stiffness: float, damping: float,
-                   joint: IwanParameters) -> ModalSystem:
+    def oscillator(
+        cls, mass: float, stiffness: float, damping: float, joint: IwanParameters
+    ) -> ModalSystem:
         """``m x'' + c x' + k x + F_iwan(x) = f``: one mass [kg] on a spring [N/m] and a
         dashpot [N s/m] in parallel with one joint; the slip, the sensor and the excitation
         are all ``x``.
         """
         for n, v in (("mass", mass), ("stiffness", stiffness), ("damping", damping)):
-            if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0) or \
-                    (n == "mass" and v == 0):
+            if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0) or (
+                n == "mass" and v == 0
+            ):
                 raise ValueError(f"{n} must be a finite number >= 0 (mass > 0), got {v!r}")
         if not isinstance(joint, IwanParameters):
             raise ValueError(f"joint must be an IwanParameters, got {type(joint).__name__}")
         w = math.sqrt((stiffness + joint.KT) / mass)
         phi = 1.0 / math.sqrt(mass)
-        return cls(omega=[w], zeta=[damping / (2.0 * mass * w)], modes=[[phi]] * 3,
-                   joints=(joint,), n_full=1, notes="single-degree-of-freedom oscillator")
+        return cls(
+            omega=[w],
+            zeta=[damping / (2.0 * mass * w)],
+            modes=[[phi]] * 3,
+            joints=(joint,),
+            n_full=1,
+            notes="single-degree-of-freedom oscillator",
+        )
 
     @property
     def n_z(self) -> int:
@@ -182,9 +200,16 @@ class ModalSystem:
         R = np.zeros((nj + ne + 2,) * 2)
         keep = list(range(nj)) + [nj + ne, nj + ne + 1]
         R[np.ix_(keep, keep)] = self.residual
-        return ModalSystem(omega=self.omega, zeta=self.zeta, modes=Y, joints=self.joints,
-                           residual=R, n_full=self.n_full, notes=self.notes,
-                           ports=self.ports + tuple(ports))
+        return ModalSystem(
+            omega=self.omega,
+            zeta=self.zeta,
+            modes=Y,
+            joints=self.joints,
+            residual=R,
+            n_full=self.n_full,
+            notes=self.notes,
+            ports=self.ports + tuple(ports),
+        )
 
     def denominators(self, w: float, *, xi: float = 0.0) -> np.ndarray:
         """``w_r^2 - w^2 + i w (2 zeta_r w_r - xi)`` of every kept mode at ``w`` [rad/s];

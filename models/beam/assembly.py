@@ -19,6 +19,7 @@ enter through :func:`~iwan_element.models.linear.attach_setup`. The interface's 
 law is not in these matrices: QSMA, harmonic balance and the Exudyn host
 (:mod:`~iwan_element.models.simulation.host`) add it.
 """
+
 from __future__ import annotations
 
 from functools import lru_cache
@@ -42,9 +43,17 @@ __all__ = ["beam_linear_system", "beam_axis_rows"]
 
 def _structure_key(specimen: Specimen) -> Specimen:
     """The specimen with the fields that do not change K0, G, M normalised (cache key)."""
-    return specimen.replace(friction=1.0, chi=0.0, beta=0.0, damping_floor=0.0, modal_damping=(),
-                            stiffness_per_area=1.0, amplitude_range=(1.0, 2.0),
-                            calibrated_range=None, effects=())
+    return specimen.replace(
+        friction=1.0,
+        chi=0.0,
+        beta=0.0,
+        damping_floor=0.0,
+        modal_damping=(),
+        stiffness_per_area=1.0,
+        amplitude_range=(1.0, 2.0),
+        calibrated_range=None,
+        effects=(),
+    )
 
 
 def beam_linear_system(specimen: Specimen) -> LinearSystem:
@@ -75,8 +84,11 @@ def _linear_system(key: Specimen) -> LinearSystem:
     K0 = Kb + Gn.T @ (pts.normal_stiffness[:, None] * Gn)
     if s.setup.clamp is not None and s.boundary != "free-free":
         c = s.setup.clamp
-        K0[np.arange(NODE_DOFS), np.arange(NODE_DOFS)] += (c.translational, c.translational,
-                                                           c.rotational)
+        K0[np.arange(NODE_DOFS), np.arange(NODE_DOFS)] += (
+            c.translational,
+            c.translational,
+            c.rotational,
+        )
     W = point_rows(s, [s.sensor_position, s.excitation.position], mesh)[1]
     n = mesh.n_coordinates
     drive = None
@@ -85,9 +97,19 @@ def _linear_system(key: Specimen) -> LinearSystem:
         drive[grip_coordinates(mesh)[0]] = 1.0
     free = np.setdiff1d(np.arange(n), _fixed(s, mesh))
     ix = np.ix_(free, free)
-    L = LinearSystem(M=M[ix], K0=K0[ix], Kb=Kb[ix], G=G[:, free], S=W[0, free], E=W[1, free],
-                     Gn=Gn[:, free], drive=None if drive is None else drive[free], free=free,
-                     n_coordinates=n, rigid_body_modes=3 if s.boundary == "free-free" else 0)
+    L = LinearSystem(
+        M=M[ix],
+        K0=K0[ix],
+        Kb=Kb[ix],
+        G=G[:, free],
+        S=W[0, free],
+        E=W[1, free],
+        Gn=Gn[:, free],
+        drive=None if drive is None else drive[free],
+        free=free,
+        n_coordinates=n,
+        rigid_body_modes=3 if s.boundary == "free-free" else 0,
+    )
     L = attach_setup(L, s.setup, lambda x: tuple(r[:, free] for r in point_rows(s, x, mesh)))
     for A in (L.M, L.K0, L.Kb, L.G, L.S, L.E):
         A.setflags(write=False)
@@ -107,7 +129,7 @@ def beam_axis_rows(specimen: Specimen, positions) -> np.ndarray:
 @lru_cache(maxsize=16)
 def _axis_rows(key: Specimen, positions: tuple) -> np.ndarray:
     L = _linear_system(key)
-    W = point_rows(key, positions)[1][:, L.free[:L.free.size - L.n_extra]]
+    W = point_rows(key, positions)[1][:, L.free[: L.free.size - L.n_extra]]
     D = np.concatenate([W, np.zeros((W.shape[0], L.n_extra))], axis=1)
     D.setflags(write=False)
     return D

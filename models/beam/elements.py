@@ -36,6 +36,7 @@ beam A's upper face, ``t = lap_thickness``) and normal gaps ``w_B - w_A``; a poi
 transverse displacement on the axis (beam A up to ``beam_length``, beam B beyond: the
 sensor, the excitation, the attachments).
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -45,13 +46,21 @@ import numpy as np
 from ..specimens.contact import beam_contact_points
 from ..specimens.specimen import Specimen
 
-__all__ = ["BeamMesh", "beam_mesh", "element_matrices", "beam_matrices", "point_rows",
-           "interface_rows", "grip_coordinates", "NODE_DOFS"]
+__all__ = [
+    "BeamMesh",
+    "beam_mesh",
+    "element_matrices",
+    "beam_matrices",
+    "point_rows",
+    "interface_rows",
+    "grip_coordinates",
+    "NODE_DOFS",
+]
 
 _GAUSS_S, _GAUSS_W = np.polynomial.legendre.leggauss(4)
 _GAUSS_S = 0.5 * (_GAUSS_S + 1.0)
 _GAUSS_W = 0.5 * _GAUSS_W
-NODE_DOFS = 3                      # u, w, theta
+NODE_DOFS = 3  # u, w, theta
 
 
 def _bending_shapes(s, l, phi):
@@ -59,27 +68,59 @@ def _bending_shapes(s, l, phi):
     parameter ``phi`` (module docstring); each shape (4,) over ``(w1, th1, w2, th2)``.
     """
     d = 1.0 + phi
-    nw = np.array([1 + phi - phi * s - 3 * s * s + 2 * s ** 3,
-                   l * (s * (1 + phi / 2) - s * s * (2 + phi / 2) + s ** 3),
-                   phi * s + 3 * s * s - 2 * s ** 3,
-                   l * (-s * phi / 2 - s * s * (1 - phi / 2) + s ** 3)]) / d
-    nt = np.array([6 * (s * s - s) / l, 1 + phi - (4 + phi) * s + 3 * s * s,
-                   -6 * (s * s - s) / l, -(2 - phi) * s + 3 * s * s]) / d
+    nw = (
+        np.array(
+            [
+                1 + phi - phi * s - 3 * s * s + 2 * s**3,
+                l * (s * (1 + phi / 2) - s * s * (2 + phi / 2) + s**3),
+                phi * s + 3 * s * s - 2 * s**3,
+                l * (-s * phi / 2 - s * s * (1 - phi / 2) + s**3),
+            ]
+        )
+        / d
+    )
+    nt = (
+        np.array(
+            [
+                6 * (s * s - s) / l,
+                1 + phi - (4 + phi) * s + 3 * s * s,
+                -6 * (s * s - s) / l,
+                -(2 - phi) * s + 3 * s * s,
+            ]
+        )
+        / d
+    )
     return nw, nt
 
 
 def _bending_derivatives(s, l, phi):
     """``(dN_w/dx, dN_theta/dx)`` at ``s`` (the strains' shapes)."""
     d = 1.0 + phi
-    dw = np.array([-phi - 6 * s + 6 * s * s, l * ((1 + phi / 2) - 2 * s * (2 + phi / 2) + 3 * s * s),
-                   phi + 6 * s - 6 * s * s, l * (-phi / 2 - 2 * s * (1 - phi / 2) + 3 * s * s)]) / (d * l)
-    dt = np.array([6 * (2 * s - 1) / l, -(4 + phi) + 6 * s, -6 * (2 * s - 1) / l,
-                   -(2 - phi) + 6 * s]) / (d * l)
+    dw = np.array(
+        [
+            -phi - 6 * s + 6 * s * s,
+            l * ((1 + phi / 2) - 2 * s * (2 + phi / 2) + 3 * s * s),
+            phi + 6 * s - 6 * s * s,
+            l * (-phi / 2 - 2 * s * (1 - phi / 2) + 3 * s * s),
+        ]
+    ) / (d * l)
+    dt = np.array(
+        [6 * (2 * s - 1) / l, -(4 + phi) + 6 * s, -6 * (2 * s - 1) / l, -(2 - phi) + 6 * s]
+    ) / (d * l)
     return dw, dt
 
 
-def element_matrices(length: float, *, E: float, G: float, kappa: float, rho: float,
-                     area: float, inertia: float, timoshenko: bool = True):
+def element_matrices(
+    length: float,
+    *,
+    E: float,
+    G: float,
+    kappa: float,
+    rho: float,
+    area: float,
+    inertia: float,
+    timoshenko: bool = True,
+):
     """Stiffness and mass of one element, ``(K, M)``, each (6, 6) over
     ``(u1, w1, th1, u2, w2, th2)`` [N/m, N, N m; kg, kg m, kg m^2] (module docstring).
     """
@@ -92,8 +133,9 @@ def element_matrices(length: float, *, E: float, G: float, kappa: float, rho: fl
         nw, nt = _bending_shapes(s, l, phi)
         dw, dt = _bending_derivatives(s, l, phi)
         gamma = dw - nt
-        kb += wq * l * (EI * np.outer(dt, dt) + (GA * np.outer(gamma, gamma) if timoshenko
-                                                  else 0.0))
+        kb += (
+            wq * l * (EI * np.outer(dt, dt) + (GA * np.outer(gamma, gamma) if timoshenko else 0.0))
+        )
         mb += wq * l * (rho * area * np.outer(nw, nw) + rot * np.outer(nt, nt))
     K, M = np.zeros((6, 6)), np.zeros((6, 6))
     ia, ib = [0, 3], [1, 2, 4, 5]
@@ -146,7 +188,7 @@ def beam_mesh(specimen: Specimen) -> BeamMesh:
     inner = np.unique(np.clip(beam_contact_points(s).x - s.lap_start, 0.0, s.overlap))
     lap = np.unique(np.concatenate([[0.0, s.overlap], inner]))
     lap = lap[np.concatenate([[True], np.diff(lap) > 1e-9 * s.overlap])]
-    while lap.size < 5:                         # at least 4 elements: halve the longest
+    while lap.size < 5:  # at least 4 elements: halve the longest
         k = int(np.argmax(np.diff(lap)))
         lap = np.insert(lap, k + 1, 0.5 * (lap[k] + lap[k + 1]))
     out = np.linspace(0.0, s.lap_start, n_out + 1)
@@ -163,7 +205,7 @@ def _phi(specimen: Specimen, h: float, l: float) -> float:
         return 0.0
     E, b = specimen.youngs_modulus, specimen.width
     G = E / (2.0 * (1.0 + specimen.poissons_ratio))
-    return 12.0 * E * (b * h ** 3 / 12.0) / (specimen.shear_coefficient * G * b * h * l * l)
+    return 12.0 * E * (b * h**3 / 12.0) / (specimen.shear_coefficient * G * b * h * l * l)
 
 
 def beam_matrices(specimen: Specimen, mesh: BeamMesh | None = None):
@@ -180,12 +222,19 @@ def beam_matrices(specimen: Specimen, mesh: BeamMesh | None = None):
     off = 0
     for x, h in ((mesh.x_a, mesh.h_a), (mesh.x_b, mesh.h_b)):
         for e, he in enumerate(h):
-            ke, me = element_matrices(x[e + 1] - x[e], E=E, G=G, kappa=s.shear_coefficient,
-                                      rho=s.density, area=b * he, inertia=b * he ** 3 / 12.0,
-                                      timoshenko=s.beam_theory == "timoshenko")
+            ke, me = element_matrices(
+                x[e + 1] - x[e],
+                E=E,
+                G=G,
+                kappa=s.shear_coefficient,
+                rho=s.density,
+                area=b * he,
+                inertia=b * he**3 / 12.0,
+                timoshenko=s.beam_theory == "timoshenko",
+            )
             i = off + NODE_DOFS * e
-            K[i:i + 6, i:i + 6] += ke
-            M[i:i + 6, i:i + 6] += me
+            K[i : i + 6, i : i + 6] += ke
+            M[i : i + 6, i : i + 6] += me
         off += NODE_DOFS * x.size
     return K, M
 
@@ -214,8 +263,10 @@ def point_rows(specimen: Specimen, positions, mesh: BeamMesh | None = None):
     its length, beam B beyond), over all beam coordinates.
     """
     mesh = beam_mesh(specimen) if mesh is None else mesh
-    rows = [_beam_rows(specimen, mesh, "a" if x <= specimen.beam_length else "b", float(x))
-            for x in np.atleast_1d(np.asarray(positions, float))]
+    rows = [
+        _beam_rows(specimen, mesh, "a" if x <= specimen.beam_length else "b", float(x))
+        for x in np.atleast_1d(np.asarray(positions, float))
+    ]
     return tuple(np.array([r[k] for r in rows]) for k in range(3))
 
 

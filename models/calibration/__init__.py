@@ -2,10 +2,20 @@
 fitted to it, other modes' floors), from a joint or modal Iwan fit, and a whole hammer test
 predicted from one calibrated mode.
 """
+
 from .hammer import HammerPrediction, mode_bands, predict_hammer_test, release_amplitudes
 from .joint import interface_from_joint, interface_from_modal_iwan
 from .vibration import CalibrationResult, calibrate, measured_amplitude_curve, modal_floor
 
-__all__ = ["calibrate", "CalibrationResult", "measured_amplitude_curve", "modal_floor",
-           "interface_from_joint", "interface_from_modal_iwan", "predict_hammer_test",
-           "HammerPrediction", "mode_bands", "release_amplitudes"]
+__all__ = [
+    "calibrate",
+    "CalibrationResult",
+    "measured_amplitude_curve",
+    "modal_floor",
+    "interface_from_joint",
+    "interface_from_modal_iwan",
+    "predict_hammer_test",
+    "HammerPrediction",
+    "mode_bands",
+    "release_amplitudes",
+]

@@ -34,6 +34,7 @@ section 4:
    amplitude at each other sensor to the calibration sensor's, measured and predicted (a
    mode-shape check, median envelope ratio over the ring-down).
 """
+
 from __future__ import annotations
 
 import math
@@ -80,8 +81,9 @@ def _elastic_frequencies(specimen, n: int) -> np.ndarray:
     return np.array([linear_modes(specimen, mode=k)[0] for k in range(1, n + 1)]) / (2 * math.pi)
 
 
-def release_amplitudes(t, a, bands: dict, *, release_time: float = 0.05,
-                       fit_span: float = 0.3) -> dict:
+def release_amplitudes(
+    t, a, bands: dict, *, release_time: float = 0.05, fit_span: float = 0.3
+) -> dict:
     """``{mode: X}``: each mode's displacement amplitude [m] ``release_time`` [s] after the
     impact (the largest sample of ``a``), from a straight-line fit of its log envelope over
     ``[release_time, release_time + fit_span]`` (module docstring, step 4).
@@ -103,9 +105,11 @@ def release_amplitudes(t, a, bands: dict, *, release_time: float = 0.05,
     t = t - t[np.argmax(np.abs(a))]
     fit = (t >= t_r) & (t <= t_r + span)
     if t[-1] < t_r + span or fit.sum() < 16:
-        raise ValueError(f"release_time + fit_span = {t_r + span:g} s reaches beyond the "
-                         f"record's {t[-1]:.4g} s after the impact (or holds fewer than 16 "
-                         "samples): shorten them or give a longer record")
+        raise ValueError(
+            f"release_time + fit_span = {t_r + span:g} s reaches beyond the "
+            f"record's {t[-1]:.4g} s after the impact (or holds fewer than 16 "
+            "samples): shorten them or give a longer record"
+        )
     out = {}
     for r, band in bands.items():
         env = mode_envelope(t, a, band, integrate=2, span=fit)
@@ -173,13 +177,14 @@ class HammerPrediction(ResultShape):
                 out[key] = {"points": 0}
                 continue
             first = int(np.argmax(e["amplitude"]))
-            out[key] = {"points": n,
-                        "amplitude_range": (float(e["amplitude"].min()),
-                                            float(e["amplitude"].max())),
-                        "max_frequency_error": float(np.max(np.abs(e["frequency_shift"]))),
-                        "max_damping_error": float(np.max(np.abs(e["damping_ratio"] - 1))),
-                        "first_frequency_error": float(e["frequency_shift"][first]),
-                        "first_damping_error": float(e["damping_ratio"][first] - 1)}
+            out[key] = {
+                "points": n,
+                "amplitude_range": (float(e["amplitude"].min()), float(e["amplitude"].max())),
+                "max_frequency_error": float(np.max(np.abs(e["frequency_shift"]))),
+                "max_damping_error": float(np.max(np.abs(e["damping_ratio"] - 1))),
+                "first_frequency_error": float(e["frequency_shift"][first]),
+                "first_damping_error": float(e["damping_ratio"][first] - 1),
+            }
         return out
 
     def report(self) -> str:
@@ -189,65 +194,112 @@ class HammerPrediction(ResultShape):
         lines = [f"Hammer test predicted from mode {self.calibration_mode}: {self.verdict()}"]
         if self.update is not None:
             fitted = ", ".join(n for n, p in self.update.params.items() if p.identified)
-            lines += [f"linear structure ({fitted}) updated on the low-amplitude frequencies of "
-                      "modes " + ", ".join(r["target"][1:] for r in self.update.residuals
-                                           if r["target"].startswith("f")) + ":",
-                      self.update.report()]
-        lines += [f"joint calibrated on the amplitude curve of mode {self.calibration_mode} at "
-                  f"{self.calibration_sensor} (the other modes' curves give only their floors "
-                  "from their lowest amplitudes):",
-                  self.calibration.report(),
-                 "release: " + ", ".join(f"mode {r} {1e6 * x:.4g} um"
-                                         for r, x in self.release.items()),
-                 "prediction against the measured curve at the same amplitudes:"]
+            lines += [
+                f"linear structure ({fitted}) updated on the low-amplitude frequencies of "
+                "modes "
+                + ", ".join(
+                    r["target"][1:] for r in self.update.residuals if r["target"].startswith("f")
+                )
+                + ":",
+                self.update.report(),
+            ]
+        lines += [
+            f"joint calibrated on the amplitude curve of mode {self.calibration_mode} at "
+            f"{self.calibration_sensor} (the other modes' curves give only their floors "
+            "from their lowest amplitudes):",
+            self.calibration.report(),
+            "release: " + ", ".join(f"mode {r} {1e6 * x:.4g} um" for r, x in self.release.items()),
+            "prediction against the measured curve at the same amplitudes:",
+        ]
         rows = []
         for (r, name), s in self.summary().items():
             if not s["points"]:
                 rows.append((r, name, 0, math.nan, math.nan, math.nan, math.nan))
                 continue
-            rows.append((r, name, s["points"], 100 * s["max_frequency_error"],
-                         100 * s["max_damping_error"], 100 * s["first_frequency_error"],
-                         100 * s["first_damping_error"]))
-        lines += table_lines((("mode", "5d"), ("sensor", ">8s"), ("points", "7d"),
-                              ("max|df/f| [%]", "15.3f"), ("max|dz/z| [%]", "14.1f"),
-                              ("first df/f [%]", "15.3f"), ("first dz/z [%]", "15.1f")),
-                             rows, indent=2)
+            rows.append(
+                (
+                    r,
+                    name,
+                    s["points"],
+                    100 * s["max_frequency_error"],
+                    100 * s["max_damping_error"],
+                    100 * s["first_frequency_error"],
+                    100 * s["first_damping_error"],
+                )
+            )
+        lines += table_lines(
+            (
+                ("mode", "5d"),
+                ("sensor", ">8s"),
+                ("points", "7d"),
+                ("max|df/f| [%]", "15.3f"),
+                ("max|dz/z| [%]", "14.1f"),
+                ("first df/f [%]", "15.3f"),
+                ("first dz/z [%]", "15.1f"),
+            ),
+            rows,
+            indent=2,
+        )
         for (r, name), (m, p) in self.ratios.items():
-            lines.append(f"  mode {r} amplitude {name}/calibration sensor: measured {m:.3f}, "
-                         f"predicted {p:.3f} ({100 * (p / m - 1):+.1f} %)")
+            lines.append(
+                f"  mode {r} amplitude {name}/calibration sensor: measured {m:.3f}, "
+                f"predicted {p:.3f} ({100 * (p / m - 1):+.1f} %)"
+            )
         lines += [f"  warning: {w}" for w in self.warnings]
         return "\n".join(lines)
 
     def to_dict(self) -> dict:
         """JSON-safe: bands, release, the summary, ratios, the calibration, verdict."""
-        key = lambda k: f"mode {k[0]} at {k[1]}"   # noqa: E731
-        return json_safe({"calibration_mode": self.calibration_mode,
-                          "calibration_sensor": self.calibration_sensor,
-                          "bands": {str(r): b for r, b in self.bands.items()},
-                          "release": {str(r): x for r, x in self.release.items()},
-                          "summary": {key(k): v for k, v in self.summary().items()},
-                          "ratios": {key(k): v for k, v in self.ratios.items()},
-                          "calibration": self.calibration.to_dict(),
-                          "update": None if self.update is None else self.update.to_dict(),
-                          "success": self.success, "warnings": list(self.warnings)})
+        key = lambda k: f"mode {k[0]} at {k[1]}"  # noqa: E731
+        return json_safe(
+            {
+                "calibration_mode": self.calibration_mode,
+                "calibration_sensor": self.calibration_sensor,
+                "bands": {str(r): b for r, b in self.bands.items()},
+                "release": {str(r): x for r, x in self.release.items()},
+                "summary": {key(k): v for k, v in self.summary().items()},
+                "ratios": {key(k): v for k, v in self.ratios.items()},
+                "calibration": self.calibration.to_dict(),
+                "update": None if self.update is None else self.update.to_dict(),
+                "success": self.success,
+                "warnings": list(self.warnings),
+            }
+        )
 
     def plot(self, ax=None):
         """Measured (points) and predicted (lines) damping ratio [%] and frequency [Hz]
         against amplitude for every curve, on ``ax = (ax_z, ax_f)``; returns the artists.
         """
         ax_z, ax_f = panels(ax, 2, figsize=(6, 6))
-        pairs = [(f"mode {r} at {name}", self.measured[(r, name)], "measured",
-                  self.predicted[(r, name)], "predicted") for r, name in self.predicted]
+        pairs = [
+            (
+                f"mode {r} at {name}",
+                self.measured[(r, name)],
+                "measured",
+                self.predicted[(r, name)],
+                "predicted",
+            )
+            for r, name in self.predicted
+        ]
         return plot_curve_pairs(ax_z, ax_f, pairs, ("o", "-"))
 
 
-def predict_hammer_test(specimen, records: dict, *, modes=(1, 2), calibration_mode: int = 1,
-                        fit=("stiffness_per_area", "friction", "chi", "damping_floor"),
-                        bands: dict | None = None, band_width: float = 0.12,
-                        release_time: float = 0.05, fit_span: float = 0.3,
-                        duration: float = 1.0, calibration_periods: float = 20.0,
-                        update=("youngs_modulus", "stiffness_per_area"),
-                        progress: bool = False) -> HammerPrediction:
+def predict_hammer_test(
+    specimen,
+    records: dict,
+    *,
+    modes=(1, 2),
+    calibration_mode: int = 1,
+    fit=("stiffness_per_area", "friction", "chi", "damping_floor"),
+    bands: dict | None = None,
+    band_width: float = 0.12,
+    release_time: float = 0.05,
+    fit_span: float = 0.3,
+    duration: float = 1.0,
+    calibration_periods: float = 20.0,
+    update=("youngs_modulus", "stiffness_per_area"),
+    progress: bool = False,
+) -> HammerPrediction:
     """Calibrate the interface on one mode of a hammer test and predict every other mode at
     every sensor by the multi-mode ring-down (module docstring; ``docs/multi_mode.md``).
 
@@ -288,42 +340,64 @@ def predict_hammer_test(specimen, records: dict, *, modes=(1, 2), calibration_mo
     -------
     HammerPrediction
     """
-    modes, recs, cal_name, bands, n_cal = _inputs(specimen, records, modes, calibration_mode,
-                                                  bands, band_width, duration,
-                                                  calibration_periods)
+    modes, recs, cal_name, bands, n_cal = _inputs(
+        specimen, records, modes, calibration_mode, bands, band_width, duration, calibration_periods
+    )
     f_cal = float(_elastic_frequencies(specimen, calibration_mode)[-1])
     windows = {r: ({"window": n_cal / f_cal} if r == calibration_mode else {}) for r in modes}
     measured, skipped = _measured_curves(recs, cal_name, bands, windows)
     _, t_c, a_c = recs[cal_name]
-    release = release_amplitudes(t_c, a_c, bands, release_time=release_time,
-                                 fit_span=fit_span)
+    release = release_amplitudes(t_c, a_c, bands, release_time=release_time, fit_span=fit_span)
     upd = None
     if update is not None:
         upd = _linear_update(specimen, recs, cal_name, bands, update)
         specimen = upd.specimen
     floors = {r: measured[(r, cal_name)] for r in modes if r != calibration_mode}
-    cal = calibrate(specimen, measured[(calibration_mode, cal_name)], fit=fit,
-                    mode=calibration_mode, floors=floors or None, progress=progress)
+    cal = calibrate(
+        specimen,
+        measured[(calibration_mode, cal_name)],
+        fit=fit,
+        mode=calibration_mode,
+        floors=floors or None,
+        progress=progress,
+    )
     names = tuple(recs)
-    rd = ringdown(cal.specimen, amplitude=release, duration=duration, progress=progress,
-                  sensors=tuple(recs[n][0] for n in names))
-    predicted = {(r, n): rd.sensor_curve(i, bands[r], n_periods=n_cal if r == calibration_mode
-                                         else None)
-                 for i, n in enumerate(names) for r in modes if (r, n) in measured}
+    rd = ringdown(
+        cal.specimen,
+        amplitude=release,
+        duration=duration,
+        progress=progress,
+        sensors=tuple(recs[n][0] for n in names),
+    )
+    predicted = {
+        (r, n): rd.sensor_curve(i, bands[r], n_periods=n_cal if r == calibration_mode else None)
+        for i, n in enumerate(names)
+        for r in modes
+        if (r, n) in measured
+    }
     errors = {k: compare_curves(predicted[k], measured[k]) for k in predicted}
     ratios = _ratios(recs, cal_name, rd, bands, modes, release_time)
     warns, thin = _warnings(upd, cal, rd, skipped, errors)
-    return HammerPrediction(calibration=cal, calibration_mode=calibration_mode,
-                            calibration_sensor=cal_name, bands=bands, release=release,
-                            ringdown=rd, measured=measured, predicted=predicted, errors=errors,
-                            ratios=ratios, update=upd,
-                            success=bool(cal.success and not thin
-                                         and (upd is None or upd.success)),
-                            warnings=tuple(warns))
+    return HammerPrediction(
+        calibration=cal,
+        calibration_mode=calibration_mode,
+        calibration_sensor=cal_name,
+        bands=bands,
+        release=release,
+        ringdown=rd,
+        measured=measured,
+        predicted=predicted,
+        errors=errors,
+        ratios=ratios,
+        update=upd,
+        success=bool(cal.success and not thin and (upd is None or upd.success)),
+        warnings=tuple(warns),
+    )
 
 
-def _inputs(specimen, records, modes, calibration_mode, bands, band_width, duration,
-            calibration_periods):
+def _inputs(
+    specimen, records, modes, calibration_mode, bands, band_width, duration, calibration_periods
+):
     """:func:`predict_hammer_test`'s checked inputs: ``(modes, records, calibration sensor,
     bands, calibration periods)``.
     """
@@ -332,8 +406,11 @@ def _inputs(specimen, records, modes, calibration_mode, bands, band_width, durat
         raise ValueError(f"calibration_mode must be one of modes {modes}, got {calibration_mode!r}")
     recs = _records(specimen, records)
     cal_name = _calibration_sensor(specimen, recs)
-    bands = mode_bands(specimen, modes, band_width=band_width) if bands is None \
+    bands = (
+        mode_bands(specimen, modes, band_width=band_width)
+        if bands is None
         else _bands(bands, modes)
+    )
     check_scalar("duration", duration, low=0.0, low_open=True)
     n_cal = check_scalar("calibration_periods", calibration_periods, low=3.0)
     return modes, recs, cal_name, bands, n_cal
@@ -348,9 +425,11 @@ def _warnings(upd, cal, rd, skipped, errors):
     warns += skipped
     thin = [f"mode {r} at {n}" for (r, n), e in errors.items() if len(e["amplitude"]) < 3]
     if thin:
-        warns.append(f"fewer than 3 common amplitudes of prediction and measurement: "
-                     f"{', '.join(thin)} (a sensor near a node of the mode, or a band that "
-                     "misses it)")
+        warns.append(
+            f"fewer than 3 common amplitudes of prediction and measurement: "
+            f"{', '.join(thin)} (a sensor near a node of the mode, or a band that "
+            "misses it)"
+        )
     return warns, thin
 
 
@@ -361,14 +440,19 @@ def _linear_update(specimen, recs, cal_name, bands, parameters) -> LinearUpdateR
     _, t_c, a_c = recs[cal_name]
     t_imp = t_c[np.argmax(np.abs(a_c))]
     keep = t_c >= t_imp
-    targets = free_decay_modes(t_c[keep], {n: (x, a[t >= t_imp]) for n, (x, t, a) in recs.items()},
-                               bands={str(r): b for r, b in bands.items()})
+    targets = free_decay_modes(
+        t_c[keep],
+        {n: (x, a[t >= t_imp]) for n, (x, t, a) in recs.items()},
+        bands={str(r): b for r, b in bands.items()},
+    )
     found = {int(m.label): m.index for m in targets.modes}
     missing = sorted(set(bands) - set(found))
     if missing:
-        raise ValueError(f"the linear update needs every mode's low-amplitude frequency; modes "
-                         f"{missing} gave none in their bands (pass update=None, or other "
-                         "bands)")
+        raise ValueError(
+            f"the linear update needs every mode's low-amplitude frequency; modes "
+            f"{missing} gave none in their bands (pass update=None, or other "
+            "bands)"
+        )
     freqs = {r: (targets.frequencies[k], targets.frequency_stderr[k]) for r, k in found.items()}
     return linear_update(specimen, frequencies=freqs, parameters=parameters)
 
@@ -386,14 +470,18 @@ def _measured_curves(recs, cal_name, bands, windows):
         keep = t >= t_imp
         for r, band in bands.items():
             try:
-                out[(r, name)] = amplitude_curve(t[keep], a[keep], quantity="acceleration",
-                                                 band=band, **windows[r])
+                out[(r, name)] = amplitude_curve(
+                    t[keep], a[keep], quantity="acceleration", band=band, **windows[r]
+                )
             except ValueError as exc:
                 if name == cal_name:
-                    raise ValueError(f"records[{name!r}] (the calibration sensor), mode {r}: "
-                                     f"{exc}") from exc
-                skipped.append(f"mode {r} at {name} not read from the record ({exc}); left "
-                               "out of the comparison")
+                    raise ValueError(
+                        f"records[{name!r}] (the calibration sensor), mode {r}: {exc}"
+                    ) from exc
+                skipped.append(
+                    f"mode {r} at {name} not read from the record ({exc}); left "
+                    "out of the comparison"
+                )
     return out, skipped
 
 
@@ -409,17 +497,23 @@ def _ratios(recs, cal_name, rd, bands, modes, release_time) -> dict:
     i_c = tuple(recs).index(cal_name)
     mp = (rd.t >= span[0]) & (rd.t <= span[1])
     # the calibration sensor's envelopes, measured and predicted, once per mode
-    ref = {r: (mode_envelope(t_c, a_c, bands[r], integrate=2),
-               mode_envelope(rd.t, rd.sensor_acceleration[i_c], bands[r], integrate=2)[mp])
-           for r in modes}
+    ref = {
+        r: (
+            mode_envelope(t_c, a_c, bands[r], integrate=2),
+            mode_envelope(rd.t, rd.sensor_acceleration[i_c], bands[r], integrate=2)[mp],
+        )
+        for r in modes
+    }
     for i, (name, (_, t, a)) in enumerate(recs.items()):
         if name == cal_name:
             continue
         m = (t - t0 >= span[0]) & (t - t0 <= span[1])
         for r in modes:
             meas = np.median(mode_envelope(t, a, bands[r], integrate=2)[m] / ref[r][0][m])
-            pred = np.median(mode_envelope(rd.t, rd.sensor_acceleration[i], bands[r],
-                                           integrate=2)[mp] / ref[r][1])
+            pred = np.median(
+                mode_envelope(rd.t, rd.sensor_acceleration[i], bands[r], integrate=2)[mp]
+                / ref[r][1]
+            )
             out[(r, name)] = (float(meas), float(pred))
     return out
 
@@ -429,22 +523,27 @@ def _modes(modes) -> tuple:
         out = tuple(modes)
     except TypeError:
         out = ()
-    if not out or any(isinstance(r, bool) or not isinstance(r, (int, np.integer)) or r < 1
-                      for r in out) or len(set(out)) != len(out):
+    if (
+        not out
+        or any(isinstance(r, bool) or not isinstance(r, (int, np.integer)) or r < 1 for r in out)
+        or len(set(out)) != len(out)
+    ):
         raise ValueError(f"modes must be distinct mode numbers >= 1, got {modes!r}")
     return tuple(sorted(int(r) for r in out))
 
 
 def _bands(bands, modes) -> dict:
     if not isinstance(bands, dict) or set(bands) != set(modes):
-        raise ValueError(f"bands must be a dict {{mode: (low, high)}} [Hz] for modes {modes}, "
-                         f"got {bands!r}")
+        raise ValueError(
+            f"bands must be a dict {{mode: (low, high)}} [Hz] for modes {modes}, got {bands!r}"
+        )
     out = {}
     for r in modes:
         lo, hi = (float(b) for b in bands[r])
         if not (math.isfinite(lo) and math.isfinite(hi) and 0 < lo < hi):
-            raise ValueError(f"bands[{r}] must be (low, high) with 0 < low < high [Hz], "
-                             f"got {bands[r]!r}")
+            raise ValueError(
+                f"bands[{r}] must be (low, high) with 0 < low < high [Hz], got {bands[r]!r}"
+            )
         out[r] = (lo, hi)
     return out
 
@@ -460,8 +559,9 @@ def _series(tn, an, t, a):
 
 def _records(specimen, records) -> dict:
     if not isinstance(records, dict) or not records:
-        raise ValueError("records must be a non-empty dict {name: (position [m], t [s], "
-                         "a [m/s^2])}")
+        raise ValueError(
+            "records must be a non-empty dict {name: (position [m], t [s], a [m/s^2])}"
+        )
     length = 2 * specimen.beam_length - specimen.overlap
     out = {}
     for name, rec in records.items():
@@ -476,8 +576,10 @@ def _records(specimen, records) -> dict:
 def _calibration_sensor(specimen, recs) -> str:
     near = [n for n, (x, _, _) in recs.items() if abs(x - specimen.sensor_position) <= 1e-3]
     if not near:
-        raise ValueError(f"records must hold one record at the specimen's sensor position "
-                         f"{specimen.sensor_position:g} m (within 1 mm): the calibration "
-                         f"sensor; positions given: "
-                         f"{', '.join(f'{n} {x:g}' for n, (x, _, _) in recs.items())}")
+        raise ValueError(
+            f"records must hold one record at the specimen's sensor position "
+            f"{specimen.sensor_position:g} m (within 1 mm): the calibration "
+            f"sensor; positions given: "
+            f"{', '.join(f'{n} {x:g}' for n, (x, _, _) in recs.items())}"
+        )
     return near[0]

@@ -12,6 +12,7 @@ macroslip force, ``sum |g_i| mu N_i = Fs_modal`` (an approximation: the points d
 reach macroslip at once). The calibration from vibration data is
 :func:`~iwan_element.models.calibration.vibration.calibrate`.
 """
+
 from __future__ import annotations
 
 import math
@@ -36,13 +37,18 @@ def interface_from_joint(specimen: Specimen, joint: IwanParameters) -> Specimen:
     if not isinstance(joint, IwanParameters):
         raise ValueError("joint must be IwanParameters")
     pts = contact_points(specimen.replace(stiffness_pressure_exponent=0.0))
-    return specimen.replace(friction=joint.Fs / pts.normal_force.sum(),
-                            stiffness_per_area=joint.KT / pts.area.sum(),
-                            stiffness_pressure_exponent=0.0, chi=joint.chi, beta=joint.beta)
+    return specimen.replace(
+        friction=joint.Fs / pts.normal_force.sum(),
+        stiffness_per_area=joint.KT / pts.area.sum(),
+        stiffness_pressure_exponent=0.0,
+        chi=joint.chi,
+        beta=joint.beta,
+    )
 
 
-def interface_from_modal_iwan(specimen: Specimen, modal: IwanParameters, *,
-                              mode: int = 1) -> Specimen:
+def interface_from_modal_iwan(
+    specimen: Specimen, modal: IwanParameters, *, mode: int = 1
+) -> Specimen:
     """Distributed interface reproducing a modal Iwan joint (modal units, module docstring).
 
     ``modal.KT`` [1/s^2, i.e. N/m per kg with mass-normalised modes] is the joint's share of
@@ -65,9 +71,12 @@ def interface_from_modal_iwan(specimen: Specimen, modal: IwanParameters, *,
     lo, hi = k0 - 8.0, k0 + 8.0
     f_lo, f_hi = modal_stiffness(lo)[0] - modal.KT, modal_stiffness(hi)[0] - modal.KT
     if f_lo > 0 or f_hi < 0:
-        raise ValueError(f"modal.KT = {modal.KT:.4g} is outside what this interface can carry "
-                         f"in mode {mode} ({f_lo + modal.KT:.4g} .. {f_hi + modal.KT:.4g})")
+        raise ValueError(
+            f"modal.KT = {modal.KT:.4g} is outside what this interface can carry "
+            f"in mode {mode} ({f_lo + modal.KT:.4g} .. {f_hi + modal.KT:.4g})"
+        )
     log_kt = optimize.brentq(lambda v: modal_stiffness(v)[0] - modal.KT, lo, hi, xtol=1e-10)
     _, gN = modal_stiffness(log_kt)
-    return specimen.replace(friction=modal.Fs / gN, stiffness_per_area=math.exp(log_kt),
-                            chi=modal.chi, beta=modal.beta)
+    return specimen.replace(
+        friction=modal.Fs / gN, stiffness_per_area=math.exp(log_kt), chi=modal.chi, beta=modal.beta
+    )

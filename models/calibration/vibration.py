@@ -13,6 +13,7 @@
   floor is linear damping, not the joint.
 * From a joint or modal Iwan fit: :mod:`~iwan_element.models.calibration.joint`.
 """
+
 from __future__ import annotations
 
 import math
@@ -39,14 +40,25 @@ from ..specimens.specimen import Specimen
 __all__ = ["measured_amplitude_curve", "CalibrationResult", "calibrate", "modal_floor"]
 
 _FIT = ("stiffness_per_area", "friction", "chi", "damping_floor", "beta")
-_BOUNDS = {"stiffness_per_area": (1e9, 1e15), "friction": (1e-3, 3.0), "chi": (-0.95, 0.0),
-           "damping_floor": (1e-6, 0.05), "beta": (1e-4, 10.0)}
-_UNITS = {"stiffness_per_area": "N/m^3", "friction": "1", "chi": "1", "damping_floor": "1",
-          "beta": "1"}
+_BOUNDS = {
+    "stiffness_per_area": (1e9, 1e15),
+    "friction": (1e-3, 3.0),
+    "chi": (-0.95, 0.0),
+    "damping_floor": (1e-6, 0.05),
+    "beta": (1e-4, 10.0),
+}
+_UNITS = {
+    "stiffness_per_area": "N/m^3",
+    "friction": "1",
+    "chi": "1",
+    "damping_floor": "1",
+    "beta": "1",
+}
 
 
-def measured_amplitude_curve(path, *, band=(60.0, 120.0), window: float = 0.25,
-                             start: float = 0.0) -> AmplitudeCurve:
+def measured_amplitude_curve(
+    path, *, band=(60.0, 120.0), window: float = 0.25, start: float = 0.0
+) -> AmplitudeCurve:
     """f(X), zeta(X) of one mode from a ring-down acceleration record (CSV: t [s], a [m/s^2]).
 
     Reads the file and calls :func:`iwan_element.amplitude_curve` (band-pass, Hilbert,
@@ -111,21 +123,32 @@ class CalibrationResult(ResultShape):
     def report(self) -> str:
         lines = [f"Interface calibration of {self.specimen.name!r}: {self.verdict()}"]
         for k, p in self.params.items():
-            moved = (f"  (from {self.start[k]:.6g}: {100 * (p.value / self.start[k] - 1):+.2f} %)"
-                     if self.start.get(k) else "")
-            lines.append(f"  {k:20s} = {p.value:.6g} +- {p.stderr:.2g} [{unit_label(p.unit)}]  "
-                         f"{p.status}{moved}")
+            moved = (
+                f"  (from {self.start[k]:.6g}: {100 * (p.value / self.start[k] - 1):+.2f} %)"
+                if self.start.get(k)
+                else ""
+            )
+            lines.append(
+                f"  {k:20s} = {p.value:.6g} +- {p.stderr:.2g} [{unit_label(p.unit)}]  "
+                f"{p.status}{moved}"
+            )
         lines.append(f"  max |f/f_meas - 1|      = {self.max_frequency_error:.2e}")
         lines.append(f"  max |zeta/zeta_meas - 1| = {self.max_damping_error:.3f}")
         lines += [f"  warning: {w}" for w in self.warnings]
         return "\n".join(lines)
 
     def to_dict(self) -> dict:
-        return {"params": self.params.to_dict(), "start": dict(self.start),
-                "success": self.success, "converged": self.converged,
-                "max_frequency_error": self.max_frequency_error,
-                "max_damping_error": self.max_damping_error, "warnings": list(self.warnings),
-                "model": self.model.to_dict(), "measured": self.measured.to_dict()}
+        return {
+            "params": self.params.to_dict(),
+            "start": dict(self.start),
+            "success": self.success,
+            "converged": self.converged,
+            "max_frequency_error": self.max_frequency_error,
+            "max_damping_error": self.max_damping_error,
+            "warnings": list(self.warnings),
+            "model": self.model.to_dict(),
+            "measured": self.measured.to_dict(),
+        }
 
     def plot(self, ax=None):
         """Measured and model f(X), zeta(X) on ``ax = (ax_f, ax_z)`` (a new figure if
@@ -149,8 +172,9 @@ def _with(specimen: Specimen, names, values, mode: int = 1) -> Specimen:
     return specimen.replace(**ch)
 
 
-def modal_floor(specimen: Specimen, measured: AmplitudeCurve, *, mode: int,
-                decades: float = 1.0) -> tuple[float, float, list]:
+def modal_floor(
+    specimen: Specimen, measured: AmplitudeCurve, *, mode: int, decades: float = 1.0
+) -> tuple[float, float, list]:
     """A mode's linear damping floor from its own lowest-amplitude points.
 
     The points of ``measured`` (amplitude at ``specimen.sensor_position``) within
@@ -182,14 +206,13 @@ def modal_floor(specimen: Specimen, measured: AmplitudeCurve, *, mode: int,
     if not (isinstance(decades, (int, float)) and 0 < decades <= 3):
         raise ValueError(f"decades must be in (0, 3], got {decades!r}")
     X = measured.amplitude
-    m = X <= X.min() * 10.0 ** decades * (1 + 1e-12)
-    bare = specimen.replace(damping_floor=0.0, modal_damping=(), calibrated_range=None,
-                            effects=())
+    m = X <= X.min() * 10.0**decades * (1 + 1e-12)
+    bare = specimen.replace(damping_floor=0.0, modal_damping=(), calibrated_range=None, effects=())
     joint = modal_amplitude_curve(bare, mode=mode, amplitude=X[m]).damping_ratio
     z = measured.damping_ratio[m] - joint
     sd = measured.damping_ratio_std[m] if measured.damping_ratio_std is not None else None
     ok = sd is not None and np.all(np.isfinite(sd)) and np.all(sd > 0)
-    w = 1.0 / sd ** 2 if ok else np.ones(z.size)
+    w = 1.0 / sd**2 if ok else np.ones(z.size)
     floor = float(np.sum(w * z) / np.sum(w))
     scatter = math.sqrt(float(np.sum(w * (z - floor) ** 2) / np.sum(w)) / max(z.size - 1, 1))
     se = max(scatter, math.sqrt(1.0 / float(np.sum(w)))) if ok else scatter
@@ -198,15 +221,24 @@ def modal_floor(specimen: Specimen, measured: AmplitudeCurve, *, mode: int,
         warns.append(f"mode {mode}'s floor rests on {z.size} point(s) (fewer than 3)")
     share = float(np.max(joint / measured.damping_ratio[m]))
     if share > 0.1:
-        warns.append(f"the joint's share of mode {mode}'s damping at its lowest measured "
-                     f"amplitudes is up to {100 * share:.0f} %: its floor leans on the joint model")
+        warns.append(
+            f"the joint's share of mode {mode}'s damping at its lowest measured "
+            f"amplitudes is up to {100 * share:.0f} %: its floor leans on the joint model"
+        )
     return floor, se, warns
 
 
-def calibrate(specimen: Specimen, measured: AmplitudeCurve, *, fit=("stiffness_per_area",
-              "friction", "chi", "damping_floor"), mode: int = 1, f_tol: float = 2e-4,
-              z_tol: float = 0.05, floors: dict | None = None,
-              progress: bool = False) -> CalibrationResult:
+def calibrate(
+    specimen: Specimen,
+    measured: AmplitudeCurve,
+    *,
+    fit=("stiffness_per_area", "friction", "chi", "damping_floor"),
+    mode: int = 1,
+    f_tol: float = 2e-4,
+    z_tol: float = 0.05,
+    floors: dict | None = None,
+    progress: bool = False,
+) -> CalibrationResult:
     """Fit interface parameters so the QSMA curve matches a measured amplitude curve.
 
     Parameters
@@ -237,14 +269,18 @@ def calibrate(specimen: Specimen, measured: AmplitudeCurve, *, fit=("stiffness_p
     sol, lb, ub = _solve(specimen, fit, mode, X, fm, zm, f_tol, z_tol, progress)
     vals = [_transform(n, v, True) for n, v in zip(fit, sol.x)]
     fitted = _with(specimen, fit, vals, mode).replace(
-        calibrated_range=(float(X.min()), float(X.max())))
+        calibrated_range=(float(X.min()), float(X.max()))
+    )
     curve = modal_amplitude_curve(fitted, mode=mode, amplitude=X)
     warns = []
     # the package's one covariance routine (docs/fitting.md): s^2 (J^T J)^-1, s^2 = SSR/dof,
     # with the delta method from the fitted logarithms
     dlog = np.diag([1.0 if n == "chi" else v for n, v in zip(fit, vals)])
-    se = (covariance(sol.jac, sol.fun, Jp=dlog).stderr if np.all(np.isfinite(sol.jac))
-          else np.full(len(fit), np.nan))
+    se = (
+        covariance(sol.jac, sol.fun, Jp=dlog).stderr
+        if np.all(np.isfinite(sol.jac))
+        else np.full(len(fit), np.nan)
+    )
     if not np.all(np.isfinite(se)):
         warns.append("the Jacobian is singular: some parameters are not identifiable")
     ferr = float(np.max(np.abs(curve.frequency / fm - 1)))
@@ -252,13 +288,18 @@ def calibrate(specimen: Specimen, measured: AmplitudeCurve, *, fit=("stiffness_p
     rows = _rows(fit, sol.x, vals, se, lb, ub, warns)
     fitted, floor_rows = _floors(fitted, mode, floors, warns)
     table = ParameterTable(rows + floor_rows)
-    return CalibrationResult(specimen=fitted, params=table, measured=measured, model=curve,
-                             start={n: float(_get(specimen, n)) for n in fit},
-                             max_frequency_error=ferr, max_damping_error=zerr,
-                             success=fit_success(bool(sol.success) and not warns,
-                                                 table.identified),
-                             converged=bool(sol.success),
-                             warnings=tuple(warns))
+    return CalibrationResult(
+        specimen=fitted,
+        params=table,
+        measured=measured,
+        model=curve,
+        start={n: float(_get(specimen, n)) for n in fit},
+        max_frequency_error=ferr,
+        max_damping_error=zerr,
+        success=fit_success(bool(sol.success) and not warns, table.identified),
+        converged=bool(sol.success),
+        warnings=tuple(warns),
+    )
 
 
 def _fit_points(specimen, measured, floors, fit, mode):
@@ -266,10 +307,13 @@ def _fit_points(specimen, measured, floors, fit, mode):
     specimen's amplitude range: ``(floors, fit, X, f, zeta)``.
     """
     floors = {} if floors is None else dict(floors)
-    if any(isinstance(r, bool) or not isinstance(r, int) or r < 1 or r == mode for r in floors) \
-            or not all(isinstance(c, AmplitudeCurve) for c in floors.values()):
-        raise ValueError(f"floors must map modes >= 1 other than the calibration mode {mode} to "
-                         f"AmplitudeCurves, got {floors!r}")
+    if any(
+        isinstance(r, bool) or not isinstance(r, int) or r < 1 or r == mode for r in floors
+    ) or not all(isinstance(c, AmplitudeCurve) for c in floors.values()):
+        raise ValueError(
+            f"floors must map modes >= 1 other than the calibration mode {mode} to "
+            f"AmplitudeCurves, got {floors!r}"
+        )
     fit = tuple(fit)
     bad = [n for n in fit if n not in _FIT]
     if bad or not fit:
@@ -277,8 +321,10 @@ def _fit_points(specimen, measured, floors, fit, mode):
     lo, hi = specimen.amplitude_range
     m = (measured.amplitude >= lo * (1 - 1e-9)) & (measured.amplitude <= hi * (1 + 1e-9))
     if m.sum() < len(fit) + 2:
-        raise ValueError(f"the measured curve has {m.sum()} points in the specimen's amplitude "
-                         f"range; need at least {len(fit) + 2}")
+        raise ValueError(
+            f"the measured curve has {m.sum()} points in the specimen's amplitude "
+            f"range; need at least {len(fit) + 2}"
+        )
     return floors, fit, measured.amplitude[m], measured.frequency[m], measured.damping_ratio[m]
 
 
@@ -298,8 +344,12 @@ def _solve(specimen, fit, mode, X, fm, zm, f_tol, z_tol, progress):
     """The bounded least squares of :func:`calibrate` over the QSMA curve at the measured
     amplitudes ``X``: ``(solution, lower, upper)`` in the fit's coordinates.
     """
-    x0 = np.array([_transform(n, min(max(_get(specimen, n), _BOUNDS[n][0] * 1.01),
-                                     _BOUNDS[n][1])) for n in fit])
+    x0 = np.array(
+        [
+            _transform(n, min(max(_get(specimen, n), _BOUNDS[n][0] * 1.01), _BOUNDS[n][1]))
+            for n in fit
+        ]
+    )
     lb = np.array([_transform(n, _BOUNDS[n][0]) for n in fit])
     ub = np.array([_transform(n, _BOUNDS[n][1]) for n in fit])
 
@@ -315,8 +365,7 @@ def _solve(specimen, fit, mode, X, fm, zm, f_tol, z_tol, progress):
     # each iteration costs one evaluation and one per fitted parameter (its Jacobian)
     bar = progress_bar(progress, total=200 * (len(fit) + 1), desc="calibrate", unit="QSMA")
     try:
-        sol = minimize(resid, x0, lb, ub, method="trf", max_nfev=200, x_scale=1.0,
-                       diff_step=1e-4)
+        sol = minimize(resid, x0, lb, ub, method="trf", max_nfev=200, x_scale=1.0, diff_step=1e-4)
     finally:
         finish(bar)
     return sol, lb, ub
@@ -332,11 +381,16 @@ def _rows(fit, x, vals, se, lb, ub, warns):
         if at_bound:
             warns.append(f"{n} ended on its bound")
         lo, hi = _BOUNDS[n]
-        val = min(max(vals[k], lo), hi)             # exp(ln b) may round past the bound b
-        ok, why = verdict(n, val, float(se[k]), at_bound=at_bound,
-                          reference=val + 1.0 if n == "chi" else None,
-                          reference_text="chi + 1" if n == "chi" else "its value")
-        if why and not at_bound:                    # (at a bound: said above)
+        val = min(max(vals[k], lo), hi)  # exp(ln b) may round past the bound b
+        ok, why = verdict(
+            n,
+            val,
+            float(se[k]),
+            at_bound=at_bound,
+            reference=val + 1.0 if n == "chi" else None,
+            reference_text="chi + 1" if n == "chi" else "its value",
+        )
+        if why and not at_bound:  # (at a bound: said above)
             warns.append(why)
         rows.append(Parameter(n, val, float(se[k]), lo, hi, _UNITS[n], ok))
     return rows

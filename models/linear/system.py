@@ -9,6 +9,7 @@ for both hosts: point masses through the rows of their positions, a shaker's gau
 the drive point and, when its moving mass is in the model, one more coordinate (the moving
 mass) on the stinger and the suspension (:mod:`~iwan_element.models.specimens.setups`).
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
@@ -103,16 +104,24 @@ def attach_setup(L: LinearSystem, setup: Setup, rows) -> LinearSystem:
     w_d = rows([sh.position])[1][0]
     M, K0 = _pad(np.vstack([M, np.zeros((1, n))]), 1), _pad(np.vstack([K0, np.zeros((1, n))]), 1)
     M[n, n] = sh.moving_mass
-    link = np.append(w_d, -1.0)                 # stinger: drive point minus moving mass
+    link = np.append(w_d, -1.0)  # stinger: drive point minus moving mass
     K0 += sh.stinger_stiffness * np.outer(link, link)
     K0[n, n] += sh.suspension_stiffness
     E = _pad(L.E, 1) if L.E is not None else None
     if sh.force_at == "armature":
         E = np.zeros(n + 1)
         E[n] = 1.0
-    return replace(L, M=M, K0=0.5 * (K0 + K0.T), Kb=_pad(np.vstack([L.Kb, np.zeros((1, n))]), 1),
-                   G=_pad(L.G, 1), S=_pad(L.S, 1), E=E,
-                   Gn=None if L.Gn is None else _pad(L.Gn, 1),
-                   drive=None if L.drive is None else _pad(L.drive, 1),
-                   free=np.append(L.free, L.n_coordinates), n_coordinates=L.n_coordinates + 1,
-                   n_extra=L.n_extra + 1)
+    return replace(
+        L,
+        M=M,
+        K0=0.5 * (K0 + K0.T),
+        Kb=_pad(np.vstack([L.Kb, np.zeros((1, n))]), 1),
+        G=_pad(L.G, 1),
+        S=_pad(L.S, 1),
+        E=E,
+        Gn=None if L.Gn is None else _pad(L.Gn, 1),
+        drive=None if L.drive is None else _pad(L.drive, 1),
+        free=np.append(L.free, L.n_coordinates),
+        n_coordinates=L.n_coordinates + 1,
+        n_extra=L.n_extra + 1,
+    )

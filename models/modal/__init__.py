@@ -3,16 +3,27 @@ analysis (QSMA: one mode's frequency and damping against amplitude), harmonic ba
 frequency responses and nonlinear modes on the reduced model, and the specimen's vibration
 effects in their modal form.
 """
+
 from .effects import ZeroElement, effect_stack
 from .frequency import frequency_response, harmonic_balance, nonlinear_mode, specimen_system
 from .qsma import (
-                   extrapolation_warnings,
-                   linear_modes,
-                   modal_amplitude_curve,
-                   natural_frequencies,
-                   static_modal_load,
+    extrapolation_warnings,
+    linear_modes,
+    modal_amplitude_curve,
+    natural_frequencies,
+    static_modal_load,
 )
 
-__all__ = ["modal_amplitude_curve", "linear_modes", "natural_frequencies", "static_modal_load",
-           "extrapolation_warnings", "harmonic_balance", "frequency_response", "nonlinear_mode",
-           "specimen_system", "ZeroElement", "effect_stack"]
+__all__ = [
+    "modal_amplitude_curve",
+    "linear_modes",
+    "natural_frequencies",
+    "static_modal_load",
+    "extrapolation_warnings",
+    "harmonic_balance",
+    "frequency_response",
+    "nonlinear_mode",
+    "specimen_system",
+    "ZeroElement",
+    "effect_stack",
+]

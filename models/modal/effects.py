@@ -7,6 +7,7 @@ sensor units) driven by the sensor-scaled modal coordinate: the frequency-domain
 element ports read it, and the transient's modal force
 (:class:`~iwan_element.models.simulation.modal_force.ModalEffects`) drives it in Exudyn.
 """
+
 from __future__ import annotations
 
 from iwan_element.effects import EFFECTS
@@ -48,7 +49,11 @@ def effect_stack(specimen: Specimen, mode: int, omega0: float):
     for e in specimen.effects:
         if e.mode == mode:
             cls = EFFECTS[e.name]
-            el = cls(el, **cls.modal_to_joint(e.parameters, modal_mass=1.0,
-                                              slip_per_amplitude=1.0, omega0=omega0))
+            el = cls(
+                el,
+                **cls.modal_to_joint(
+                    e.parameters, modal_mass=1.0, slip_per_amplitude=1.0, omega0=omega0
+                ),
+            )
             names.append(e.name)
     return el, names

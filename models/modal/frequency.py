@@ -10,6 +10,7 @@ modal mass in sensor units) on the sensor-scaled modal coordinate ``Y = s q_r`` 
 mode, ``s = S phi_r``, loading the mode with ``-F(Y)/s``: an element port of the modal
 system with mode shape ``s`` on mode ``r`` and gain ``1/s^2``.
 """
+
 from __future__ import annotations
 
 from dataclasses import replace
@@ -59,12 +60,21 @@ def _with_range_warnings(specimen, response):
     """
     X = response.amplitude[response.converged]
     warns = extrapolation_warnings(specimen, X) if X.size else []
-    return replace(response, warnings=tuple(response.warnings) + tuple(warns)) if warns \
-        else response
+    return (
+        replace(response, warnings=tuple(response.warnings) + tuple(warns)) if warns else response
+    )
 
 
-def harmonic_balance(specimen: Specimen, frequency, force, *, harmonics=(1, 3, 5),
-                     samples=None, n_modes: int = 8, progress: bool = False) -> FrequencyResponse:
+def harmonic_balance(
+    specimen: Specimen,
+    frequency,
+    force,
+    *,
+    harmonics=(1, 3, 5),
+    samples=None,
+    n_modes: int = 8,
+    progress: bool = False,
+) -> FrequencyResponse:
     """Steady forced response of the specimen at given frequencies and forces.
 
     Parameters
@@ -94,25 +104,57 @@ def harmonic_balance(specimen: Specimen, frequency, force, *, harmonics=(1, 3, 5
         amplitudes outside the specimen's calibrated range (or above an effect's).
     """
     _check(specimen)
-    return _with_range_warnings(specimen, _hb_system(
-        specimen_system(specimen, n_modes=n_modes), frequency, force, harmonics=harmonics,
-        samples=samples, progress=progress))
+    return _with_range_warnings(
+        specimen,
+        _hb_system(
+            specimen_system(specimen, n_modes=n_modes),
+            frequency,
+            force,
+            harmonics=harmonics,
+            samples=samples,
+            progress=progress,
+        ),
+    )
 
 
-def frequency_response(specimen: Specimen, force: float, band, *, harmonics=(1, 3, 5),
-                       samples=None, n_modes: int = 8, step: float = 0.02) -> FrequencyResponse:
+def frequency_response(
+    specimen: Specimen,
+    force: float,
+    band,
+    *,
+    harmonics=(1, 3, 5),
+    samples=None,
+    n_modes: int = 8,
+    step: float = 0.02,
+) -> FrequencyResponse:
     """The frequency response curve at one force level [N] over ``band`` (start, end) [Hz],
     traced by pseudo-arclength continuation through its turning points
     (:func:`iwan_element.harmonic.trace`); warned as :func:`harmonic_balance`.
     """
     _check(specimen)
-    return _with_range_warnings(specimen, trace(
-        specimen_system(specimen, n_modes=n_modes), force, band, harmonics=harmonics,
-        samples=samples, step=step))
+    return _with_range_warnings(
+        specimen,
+        trace(
+            specimen_system(specimen, n_modes=n_modes),
+            force,
+            band,
+            harmonics=harmonics,
+            samples=samples,
+            step=step,
+        ),
+    )
 
 
-def nonlinear_mode(specimen: Specimen, amplitude=None, *, mode: int = 1, harmonics=(1, 3, 5),
-                   samples=None, n_modes: int = 8, progress: bool = False) -> AmplitudeCurve:
+def nonlinear_mode(
+    specimen: Specimen,
+    amplitude=None,
+    *,
+    mode: int = 1,
+    harmonics=(1, 3, 5),
+    samples=None,
+    n_modes: int = 8,
+    progress: bool = False,
+) -> AmplitudeCurve:
     """Amplitude-dependent frequency and damping of a mode by EPMC.
 
     Parameters
@@ -140,27 +182,35 @@ def nonlinear_mode(specimen: Specimen, amplitude=None, *, mode: int = 1, harmoni
     else:
         X = np.atleast_1d(np.asarray(amplitude, dtype=float))
         if X.ndim != 1 or X.size == 0 or not np.all(np.isfinite(X)) or np.any(X <= 0):
-            raise ValueError("amplitude must be a non-empty 1-D sequence of finite values > 0 "
-                             "[m]")
+            raise ValueError("amplitude must be a non-empty 1-D sequence of finite values > 0 [m]")
     red = reduced_model(specimen, n_modes=n_modes)
     r = red.mode_index(mode)
     basis = Harmonics(*check_harmonics(harmonics, samples))
-    out = epmc_branch(specimen_system(specimen, n_modes=n_modes), basis, X, r,
-                      progress=progress)
+    out = epmc_branch(specimen_system(specimen, n_modes=n_modes), basis, X, r, progress=progress)
     warns = []
     bad = ~out["converged"]
     if bad.all():
-        raise ValueError(f"EPMC converged at none of the {X.size} amplitudes of mode {mode}; "
-                         "give amplitudes closer to the specimen's amplitude_range")
+        raise ValueError(
+            f"EPMC converged at none of the {X.size} amplitudes of mode {mode}; "
+            "give amplitudes closer to the specimen's amplitude_range"
+        )
     if bad.any():
-        warns.append(f"EPMC did not converge at {int(bad.sum())} of {X.size} amplitudes "
-                     f"({X[bad].min():.3g} .. {X[bad].max():.3g} m); those points are left "
-                     "out")
+        warns.append(
+            f"EPMC did not converge at {int(bad.sum())} of {X.size} amplitudes "
+            f"({X[bad].min():.3g} .. {X[bad].max():.3g} m); those points are left "
+            "out"
+        )
     warns += extrapolation_warnings(specimen, X[~bad])
     ok = ~bad
     return AmplitudeCurve(
-        X[ok], out["frequency"][ok], out["damping_ratio"][ok], method="epmc",
-        notes=(f"{specimen.name}: mode {mode} by EPMC, harmonics {basis.harmonics}, "
-               f"{basis.samples} samples per period, {red.system.notes}; largest energy "
-               f"error per period {np.nanmax(np.abs(out['energy_error'][ok])):.1e}"),
-        warnings=tuple(warns))
+        X[ok],
+        out["frequency"][ok],
+        out["damping_ratio"][ok],
+        method="epmc",
+        notes=(
+            f"{specimen.name}: mode {mode} by EPMC, harmonics {basis.harmonics}, "
+            f"{basis.samples} samples per period, {red.system.notes}; largest energy "
+            f"error per period {np.nanmax(np.abs(out['energy_error'][ok])):.1e}"
+        ),
+        warnings=tuple(warns),
+    )

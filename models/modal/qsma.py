@@ -23,6 +23,7 @@ which the load (``R^T M phi = 0``) and the interface forces (``G R = 0``) never 
 Limits (as the method's): one mode of fixed load shape, Masing rules, no normal-load
 variation or separation, no inertia in the joint.
 """
+
 from __future__ import annotations
 
 import logging
@@ -42,8 +43,13 @@ from ..reduced.dispatch import check_specimen, contact_points, linear_system
 from ..reduced.model import reduced_model, stuck_key, stuck_modes
 from ..specimens.specimen import Specimen
 
-__all__ = ["modal_amplitude_curve", "linear_modes", "natural_frequencies",
-           "static_modal_load", "extrapolation_warnings"]
+__all__ = [
+    "modal_amplitude_curve",
+    "linear_modes",
+    "natural_frequencies",
+    "static_modal_load",
+    "extrapolation_warnings",
+]
 
 log = logging.getLogger(__name__)
 
@@ -78,8 +84,11 @@ def linear_modes(specimen: Specimen, *, mode: int = 1):
     L, pts, w, V, n_low = stuck_modes(specimen)
     n_rigid = L.rigid_body_modes
     if n_low > n_rigid:
-        log.warning("%d elastic mode(s) below 0.5 Hz (the interface lets the beams slide "
-                    "almost freely); mode numbers count from the next one", n_low - n_rigid)
+        log.warning(
+            "%d elastic mode(s) below 0.5 Hz (the interface lets the beams slide "
+            "almost freely); mode numbers count from the next one",
+            n_low - n_rigid,
+        )
     k = max(n_low, n_rigid) + mode - 1
     if k >= w.size:
         raise ValueError(f"mode must be <= {w.size - max(n_low, n_rigid)}, got {mode}")
@@ -89,8 +98,9 @@ def linear_modes(specimen: Specimen, *, mode: int = 1):
     return float(w[k]), phi.copy(), V[:, :n_rigid].copy(), L, pts
 
 
-def natural_frequencies(specimen: Specimen, *, n_modes: int = 3,
-                        interface: str = "stuck") -> np.ndarray:
+def natural_frequencies(
+    specimen: Specimen, *, n_modes: int = 3, interface: str = "stuck"
+) -> np.ndarray:
     """Lowest natural frequencies [Hz] of the linearised specimen, with or without the joint.
 
     Parameters
@@ -113,9 +123,9 @@ def natural_frequencies(specimen: Specimen, *, n_modes: int = 3,
         raise ValueError(f"interface must be 'stuck' or 'none', got {interface!r}")
     if isinstance(n_modes, bool) or not isinstance(n_modes, (int, np.integer)) or n_modes < 1:
         raise ValueError(f"n_modes must be an integer >= 1, got {n_modes!r}")
-    if interface == "stuck":                 # the one stuck eigenproblem (reduced model)
+    if interface == "stuck":  # the one stuck eigenproblem (reduced model)
         w = stuck_modes(specimen)[2]
-        return w[:min(int(n_modes), w.size)] / (2 * math.pi)
+        return w[: min(int(n_modes), w.size)] / (2 * math.pi)
     L = linear_system(specimen)
     top = min(int(n_modes), L.K0.shape[0]) - 1
     with one_blas_thread():
@@ -153,7 +163,7 @@ def _condensed(key):
     coordinate is kept for the release state ``x`` of the transient.
     """
     specimen, mode = key
-    with one_blas_thread():                  # small dense problems: threads only contend
+    with one_blas_thread():  # small dense problems: threads only contend
         w0, phi, R, L, pts = linear_modes(specimen, mode=mode)
         A = L.K0 + L.G.T @ (pts.KT[:, None] * L.G)
         if R.size:
@@ -165,13 +175,24 @@ def _condensed(key):
     nz = sysm.n_z
     H0 = sysm.receptance(0.0).real
     Y = sysm.modes[:, red.mode_index(mode)] / (w0 * w0)
-    return {"w0": w0, "phi": phi, "L": L, "Yb": phi / (w0 * w0), "YG": YG, "C": H0[:nz, :nz],
-            "ub": Y[:nz], "sb": float(Y[nz]), "sG": H0[nz, :nz], "qb": 1.0 / (w0 * w0),
-            "qG": Y[:nz]}
+    return {
+        "w0": w0,
+        "phi": phi,
+        "L": L,
+        "Yb": phi / (w0 * w0),
+        "YG": YG,
+        "C": H0[:nz, :nz],
+        "ub": Y[:nz],
+        "sb": float(Y[nz]),
+        "sG": H0[nz, :nz],
+        "qb": 1.0 / (w0 * w0),
+        "qG": Y[:nz],
+    }
 
 
-def static_modal_load(specimen: Specimen, amplitude, *, mode: int = 1,
-                      tol: float = 1e-12, max_iter: int = 60):
+def static_modal_load(
+    specimen: Specimen, amplitude, *, mode: int = 1, tol: float = 1e-12, max_iter: int = 60
+):
     """Nonlinear static solutions under ``alpha M phi`` reaching sensor amplitudes ``X``.
 
     Newton on the condensed equations (:func:`_condensed`) in the contact slips ``u`` and
@@ -217,20 +238,31 @@ def static_modal_load(specimen: Specimen, amplitude, *, mode: int = 1,
             step = np.linalg.solve(J, -res)
             u += step[:n]
             alpha += step[n]
-            if np.max(np.abs(step[:n])) <= tol * max(np.max(np.abs(u)), 1e-300) and \
-                    abs(step[n]) <= tol * abs(alpha):
+            if np.max(np.abs(step[:n])) <= tol * max(np.max(np.abs(u)), 1e-300) and abs(
+                step[n]
+            ) <= tol * abs(alpha):
                 break
         else:
-            warns.append(f"static solve at X = {Xt:.3e} m did not converge in {max_iter} "
-                         "Newton iterations")
+            warns.append(
+                f"static solve at X = {Xt:.3e} m did not converge in {max_iter} Newton iterations"
+            )
         out_u[j], out_a[j], X_prev = u, alpha, Xt
     F, _ = _interface_law(out_u, Fs, KT, pm, itf.chi, itf.beta)
     d = F - KT * out_u
     x = out_a[:, None] * c["Yb"][None, :] - d @ c["YG"].T
     q = out_a * c["qb"] - d @ c["qG"]
-    return {"amplitude": X, "alpha": out_a, "x": x, "q": q, "slip": out_u,
-            "omega0": c["w0"], "phi": c["phi"], "system": c["L"], "points": pts,
-            "warnings": warns}
+    return {
+        "amplitude": X,
+        "alpha": out_a,
+        "x": x,
+        "q": q,
+        "slip": out_u,
+        "omega0": c["w0"],
+        "phi": c["phi"],
+        "system": c["L"],
+        "points": pts,
+        "warnings": warns,
+    }
 
 
 def modal_amplitude_curve(specimen: Specimen, *, mode: int = 1, amplitude=None) -> AmplitudeCurve:
@@ -272,15 +304,21 @@ def modal_amplitude_curve(specimen: Specimen, *, mode: int = 1, amplitude=None) 
             f, zeta = EFFECTS[e.name].modal_form(X, f, zeta, floor, **e.parameters)
             names.append(e.name)
     warns = list(r["warnings"]) + extrapolation_warnings(specimen, X)
-    for w_ in warns[len(r["warnings"]):]:
+    for w_ in warns[len(r["warnings"]) :]:
         log.warning("%s", w_)
     return AmplitudeCurve(
-        X, f, zeta, method="qsma",
-        notes=(f"{specimen.name}: mode {mode}, {len(r['points'])} contact points, amplitude = "
-               f"transverse displacement at x = {specimen.sensor_position:.4g} m; linear "
-               f"(stuck) frequency {r['omega0'] / (2 * math.pi):.4f} Hz"
-               + (f"; with {' + '.join(names)} (modal form)" if names else "")),
-        warnings=tuple(warns))
+        X,
+        f,
+        zeta,
+        method="qsma",
+        notes=(
+            f"{specimen.name}: mode {mode}, {len(r['points'])} contact points, amplitude = "
+            f"transverse displacement at x = {specimen.sensor_position:.4g} m; linear "
+            f"(stuck) frequency {r['omega0'] / (2 * math.pi):.4f} Hz"
+            + (f"; with {' + '.join(names)} (modal form)" if names else "")
+        ),
+        warnings=tuple(warns),
+    )
 
 
 def extrapolation_warnings(specimen: Specimen, amplitude) -> list:
@@ -292,19 +330,25 @@ def extrapolation_warnings(specimen: Specimen, amplitude) -> list:
     X = np.asarray(amplitude, float)
     out = []
     for label, cr in [("the specimen", specimen.calibrated_range)] + [
-            (f"its {e.name}", e.calibrated_range) for e in specimen.effects]:
+        (f"its {e.name}", e.calibrated_range) for e in specimen.effects
+    ]:
         own = label == "the specimen"
-        if cr is None or (not own and specimen.calibrated_range is not None
-                          and cr[1] == specimen.calibrated_range[1]):
+        if cr is None or (
+            not own
+            and specimen.calibrated_range is not None
+            and cr[1] == specimen.calibrated_range[1]
+        ):
             continue
         lo, hi = cr
         bad = X > hi * (1 + 1e-6)
-        if own:                             # an effect's modal form fades towards X -> 0
+        if own:  # an effect's modal form fades towards X -> 0
             bad |= X < lo * (1 - 1e-6)
         if bad.any():
             k = max(float(X.max() / hi), float(lo / X.min()) if own else 0.0)
-            out.append(f"{int(bad.sum())} of {X.size} amplitudes ({X[bad].min():.3g} .. "
-                       f"{X[bad].max():.3g} m) lie outside the range {lo:.3g} .. {hi:.3g} m "
-                       f"that {label} ({specimen.name}) was calibrated on (up to {k:.3g} x "
-                       "beyond): extrapolated")
+            out.append(
+                f"{int(bad.sum())} of {X.size} amplitudes ({X[bad].min():.3g} .. "
+                f"{X[bad].max():.3g} m) lie outside the range {lo:.3g} .. {hi:.3g} m "
+                f"that {label} ({specimen.name}) was calibrated on (up to {k:.3g} x "
+                "beyond): extrapolated"
+            )
     return out

@@ -17,6 +17,7 @@ its floor and every other mode the floor times its frequency ratio.) The matrix 
 damping matrix of the host's generic body (:mod:`~iwan_element.models.simulation.host`); its work is
 booked exactly by :class:`FloorWork`.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -70,10 +71,9 @@ def floor_damping(specimen: Specimen) -> FloorDamping:
     FloorDamping
     """
     check_specimen(specimen)
-    L, _, w, V, n_low = stuck_modes(stuck_key(specimen))   # the one stuck eigenproblem
+    L, _, w, V, n_low = stuck_modes(stuck_key(specimen))  # the one stuck eigenproblem
     n_skip = max(L.rigid_body_modes, n_low)
-    zeta = np.array([0.0 if k < n_skip else specimen.floor(k - n_skip + 1)
-                     for k in range(w.size)])
+    zeta = np.array([0.0 if k < n_skip else specimen.floor(k - n_skip + 1) for k in range(w.size)])
     MV = L.M @ V
     C = (MV * (2.0 * zeta * w)) @ MV.T
     return FloorDamping(C=0.5 * (C + C.T), omega=w.copy(), zeta=zeta, n_rigid=n_skip)

@@ -8,6 +8,7 @@ functions, which hand each kind to its own room: the 1-D beams' linear system an
 (:mod:`~iwan_element.models.specimens.contact`), or the solid's reduced system, stored axis
 rows and patches (:mod:`~iwan_element.models.solid.specimen`).
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -26,8 +27,9 @@ def check_specimen(specimen):
     analysis of the beam model accepts), else ValueError naming it.
     """
     if not isinstance(specimen, (Specimen, SolidSpecimen)):
-        raise ValueError(f"specimen must be a Specimen or SolidSpecimen, got "
-                         f"{type(specimen).__name__}")
+        raise ValueError(
+            f"specimen must be a Specimen or SolidSpecimen, got {type(specimen).__name__}"
+        )
     return specimen
 
 
@@ -50,14 +52,22 @@ def axis_rows(specimen: Specimen | SolidSpecimen, positions) -> np.ndarray:
     reads its stored rows (:meth:`~iwan_element.models.solid.specimen.SolidSpecimen.axis_rows`).
     """
     x = np.atleast_1d(np.asarray(positions, float))
-    if x.ndim != 1 or x.size == 0 or not np.all(np.isfinite(x)) or np.any(x < 0) \
-            or np.any(x > specimen.total_length):
-        raise ValueError(f"positions must be a non-empty sequence in [0, "
-                         f"{specimen.total_length:.6g}] m, got {positions!r}")
+    if (
+        x.ndim != 1
+        or x.size == 0
+        or not np.all(np.isfinite(x))
+        or np.any(x < 0)
+        or np.any(x > specimen.total_length)
+    ):
+        raise ValueError(
+            f"positions must be a non-empty sequence in [0, "
+            f"{specimen.total_length:.6g}] m, got {positions!r}"
+        )
     if isinstance(specimen, SolidSpecimen):
         rows = specimen.axis_rows(x)
-        return np.concatenate([rows, np.zeros((rows.shape[0], linear_system(specimen).n_extra))],
-                              axis=1)
+        return np.concatenate(
+            [rows, np.zeros((rows.shape[0], linear_system(specimen).n_extra))], axis=1
+        )
     return beam_axis_rows(specimen, x)
 
 

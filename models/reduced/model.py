@@ -17,6 +17,7 @@ The result is an :class:`iwan_element.harmonic.ModalSystem` (``ReducedModel.syst
 the contact points' Iwan parameters on the slips; :func:`reduction_error` states what the
 truncation costs against the full model (``docs/harmonic_balance.md`` section 1).
 """
+
 from __future__ import annotations
 
 import math
@@ -34,7 +35,7 @@ from .dispatch import check_specimen, contact_points, linear_system
 
 __all__ = ["ReducedModel", "reduced_model", "reduction_error", "stuck_modes", "stuck_key"]
 
-_RIGID_HZ = 0.5        # modes below this are the rigid-body ones (free-free), as qsma's
+_RIGID_HZ = 0.5  # modes below this are the rigid-body ones (free-free), as qsma's
 
 
 @dataclass(frozen=True, eq=False)
@@ -68,8 +69,10 @@ class ReducedModel:
             raise ValueError(f"mode must be an integer >= 1, got {mode!r}")
         k = self.n_rigid + int(mode) - 1
         if k >= self.system.omega.size:
-            raise ValueError(f"mode must be <= {self.system.omega.size - self.n_rigid} (the "
-                             f"elastic modes kept), got {mode}")
+            raise ValueError(
+                f"mode must be <= {self.system.omega.size - self.n_rigid} (the "
+                f"elastic modes kept), got {mode}"
+            )
         return k
 
     def frequency(self, mode: int) -> float:
@@ -101,8 +104,16 @@ def stuck_key(specimen):
     (friction, Iwan shape, floors, ranges, effects) set to fixed values: the cache key of
     the routes that read only the stuck modes and the contact points' stiffness.
     """
-    return specimen.replace(friction=1.0, chi=0.0, beta=0.0, damping_floor=0.0, modal_damping=(),
-                            amplitude_range=(1.0, 2.0), calibrated_range=None, effects=())
+    return specimen.replace(
+        friction=1.0,
+        chi=0.0,
+        beta=0.0,
+        damping_floor=0.0,
+        modal_damping=(),
+        amplitude_range=(1.0, 2.0),
+        calibrated_range=None,
+        effects=(),
+    )
 
 
 def stuck_modes(specimen: Specimen):
@@ -119,7 +130,7 @@ def _stuck_modes(specimen: Specimen):
     L = linear_system(specimen)
     pts = contact_points(specimen)
     K = L.K0 + L.G.T @ (pts.KT[:, None] * L.G)
-    with one_blas_thread():                  # small dense problem: threads only contend
+    with one_blas_thread():  # small dense problem: threads only contend
         w2, V = sla.eigh(0.5 * (K + K.T), L.M)
     V = V / np.sqrt(np.einsum("ij,ij->j", V, L.M @ V))[None, :]
     n_rigid = int(np.sum(w2 < (2 * math.pi * _RIGID_HZ) ** 2))
@@ -133,7 +144,7 @@ def _stuck_modes(specimen: Specimen):
 def _reduced(specimen: Specimen, n_modes: int) -> ReducedModel:
     L, pts, w, V, n_rigid = _stuck_modes(specimen)
     w = w.copy()
-    w[:n_rigid] = 0.0                        # rigid-body modes: exactly zero frequency
+    w[:n_rigid] = 0.0  # rigid-body modes: exactly zero frequency
     if L.E is None:
         raise ValueError("the specimen's linear system has no excitation row")
     n_keep = min(n_rigid + n_modes, w.size)
@@ -142,12 +153,23 @@ def _reduced(specimen: Specimen, n_modes: int) -> ReducedModel:
     rest = slice(n_keep, w.size)
     R = (Y[:, rest] / w[rest] ** 2) @ Y[:, rest].T
     zeta = np.array([0.0] * n_rigid + [specimen.floor(r) for r in range(1, n_keep - n_rigid + 1)])
-    system = ModalSystem(omega=w[:n_keep], zeta=zeta, modes=Y[:, :n_keep],
-                         joints=pts.params, residual=0.5 * (R + R.T), n_full=L.M.shape[0],
-                         notes=f"{specimen.name}: {n_keep - n_rigid} elastic modes kept of "
-                               f"{w.size - n_rigid}, {n_rigid} rigid, {len(pts)} contact points")
-    return ReducedModel(specimen=specimen, system=system, n_rigid=n_rigid,
-                        omega_all=w[n_rigid:].copy(), phi=V[:, :n_keep].copy())
+    system = ModalSystem(
+        omega=w[:n_keep],
+        zeta=zeta,
+        modes=Y[:, :n_keep],
+        joints=pts.params,
+        residual=0.5 * (R + R.T),
+        n_full=L.M.shape[0],
+        notes=f"{specimen.name}: {n_keep - n_rigid} elastic modes kept of "
+        f"{w.size - n_rigid}, {n_rigid} rigid, {len(pts)} contact points",
+    )
+    return ReducedModel(
+        specimen=specimen,
+        system=system,
+        n_rigid=n_rigid,
+        omega_all=w[n_rigid:].copy(),
+        phi=V[:, :n_keep].copy(),
+    )
 
 
 def reduction_error(specimen: Specimen, *, n_modes: int = 8, frequencies=None) -> dict:
@@ -170,9 +192,12 @@ def reduction_error(specimen: Specimen, *, n_modes: int = 8, frequencies=None) -
     w = w.copy()
     w[:n_rigid] = 0.0
     n_keep = red.system.omega.size
-    full = ModalSystem(omega=w, zeta=np.concatenate([red.system.zeta, np.zeros(w.size - n_keep)]),
-                       modes=np.vstack([L.G, L.S[None, :], L.E[None, :]]) @ V,
-                       joints=pts.params)
+    full = ModalSystem(
+        omega=w,
+        zeta=np.concatenate([red.system.zeta, np.zeros(w.size - n_keep)]),
+        modes=np.vstack([L.G, L.S[None, :], L.E[None, :]]) @ V,
+        joints=pts.params,
+    )
     top = 0.5 * (w[n_keep - 1] + w[min(n_keep, w.size - 1)]) / (2 * math.pi)
     f = np.linspace(0.0, top, 200) if frequencies is None else np.asarray(frequencies, float)
     err = []
@@ -180,6 +205,10 @@ def reduction_error(specimen: Specimen, *, n_modes: int = 8, frequencies=None) -
         Hr = red.system.receptance(2 * math.pi * fk)
         Hf = full.receptance(2 * math.pi * fk)
         err.append(float(np.abs(Hr - Hf).max() / np.abs(Hf).max()))
-    return {"n_modes": n_keep - n_rigid, "n_full": int(L.M.shape[0]), "f_max_Hz": float(f.max()),
-            "max_relative_error": float(max(err)), "static_relative_error": float(err[0])
-            if f[0] == 0 else None}
+    return {
+        "n_modes": n_keep - n_rigid,
+        "n_full": int(L.M.shape[0]),
+        "f_max_Hz": float(f.max()),
+        "max_relative_error": float(max(err)),
+        "static_relative_error": float(err[0]) if f[0] == 0 else None,
+    }

@@ -9,6 +9,7 @@ uncoupled single-degree-of-freedom system per mode) would give ratio 1; the tran
 whole specimen shows how much one mode's slip raises another's damping
 (``docs/multi_mode.md``).
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -46,14 +47,22 @@ def compare_curves(curve: AmplitudeCurve, reference: AmplitudeCurve) -> dict:
     order = np.argsort(reference.amplitude)
     la = np.log(reference.amplitude[order])
     X = curve.amplitude
-    inside = (len(reference) >= 2) & (X >= reference.amplitude.min()) \
-        & (X <= reference.amplitude.max())
+    inside = (
+        (len(reference) >= 2) & (X >= reference.amplitude.min()) & (X <= reference.amplitude.max())
+    )
     x = np.log(X[inside])
     fr = np.interp(x, la, reference.frequency[order])
     zr = np.interp(x, la, reference.damping_ratio[order])
     f, z = curve.frequency[inside], curve.damping_ratio[inside]
-    return {"amplitude": X[inside], "frequency": f, "frequency_reference": fr, "damping": z,
-            "damping_reference": zr, "damping_ratio": z / zr, "frequency_shift": f / fr - 1.0}
+    return {
+        "amplitude": X[inside],
+        "frequency": f,
+        "frequency_reference": fr,
+        "damping": z,
+        "damping_reference": zr,
+        "damping_ratio": z / zr,
+        "frequency_shift": f / fr - 1.0,
+    }
 
 
 @dataclass(frozen=True)
@@ -82,52 +91,78 @@ class ModeCouplingResult(ResultShape):
     @property
     def success(self) -> bool:
         """True when every run succeeded and every mode's curves overlap in amplitude."""
-        return bool(self.together.success and all(r.success for r in self.alone)
-                    and all(len(f["amplitude"]) for f in self.figures.values()))
+        return bool(
+            self.together.success
+            and all(r.success for r in self.alone)
+            and all(len(f["amplitude"]) for f in self.figures.values())
+        )
 
     def summary(self) -> dict:
         """Per mode: the largest damping raise and frequency shift from the other modes."""
         out = {}
         for r, f in self.figures.items():
             k = int(np.argmax(f["damping_ratio"])) if len(f["amplitude"]) else None
-            out[r] = {"points": len(f["amplitude"]),
-                      "max_damping_ratio": None if k is None else float(f["damping_ratio"][k]),
-                      "at_amplitude": None if k is None else float(f["amplitude"][k]),
-                      "frequency_shift": None if k is None else float(f["frequency_shift"][k])}
+            out[r] = {
+                "points": len(f["amplitude"]),
+                "max_damping_ratio": None if k is None else float(f["damping_ratio"][k]),
+                "at_amplitude": None if k is None else float(f["amplitude"][k]),
+                "frequency_shift": None if k is None else float(f["frequency_shift"][k]),
+            }
         return out
 
     def report(self) -> str:
         """Human-readable account: per mode, its damping with and without the others."""
-        lines = [f"mode coupling through the interface: modes {', '.join(map(str, self.modes))}"
-                 f" released together ({self.together.wall_time:.3g} s wall) and alone"]
+        lines = [
+            f"mode coupling through the interface: modes {', '.join(map(str, self.modes))}"
+            f" released together ({self.together.wall_time:.3g} s wall) and alone"
+        ]
         for r, f in self.figures.items():
             n = len(f["amplitude"])
             k = np.unique(np.linspace(0, n - 1, min(n, 12)).round().astype(int))
-            rows = zip(1e6 * f["amplitude"][k], 100 * f["damping"][k],
-                       100 * f["damping_reference"][k], f["damping_ratio"][k],
-                       1e6 * f["frequency_shift"][k])
+            rows = zip(
+                1e6 * f["amplitude"][k],
+                100 * f["damping"][k],
+                100 * f["damping_reference"][k],
+                f["damping_ratio"][k],
+                1e6 * f["frequency_shift"][k],
+            )
             lines.append(f"  mode {r} ({n} points, {len(k)} shown):")
-            lines += table_lines((("X [um]", "10.4g"), ("zeta together [%]", "18.4f"),
-                                  ("zeta alone [%]", "15.4f"), ("ratio", "7.3f"),
-                                  ("df/f [ppm]", "11.1f")), rows, indent=4)
+            lines += table_lines(
+                (
+                    ("X [um]", "10.4g"),
+                    ("zeta together [%]", "18.4f"),
+                    ("zeta alone [%]", "15.4f"),
+                    ("ratio", "7.3f"),
+                    ("df/f [ppm]", "11.1f"),
+                ),
+                rows,
+                indent=4,
+            )
         lines += [f"  warning: {w}" for w in self.warnings]
         return "\n".join(lines)
 
     def to_dict(self) -> dict:
         """JSON-safe: the figures, the summary, success and warnings."""
-        return json_safe({"modes": list(self.modes), "figures": {str(k): v for k, v in
-                                                                 self.figures.items()},
-                          "summary": {str(k): v for k, v in self.summary().items()},
-                          "wall_time": self.together.wall_time, "success": self.success,
-                          "warnings": list(self.warnings)})
+        return json_safe(
+            {
+                "modes": list(self.modes),
+                "figures": {str(k): v for k, v in self.figures.items()},
+                "summary": {str(k): v for k, v in self.summary().items()},
+                "wall_time": self.together.wall_time,
+                "success": self.success,
+                "warnings": list(self.warnings),
+            }
+        )
 
     def plot(self, ax=None):
         """Each mode's damping ratio [%] and frequency [Hz] against its amplitude, together
         (filled) and alone (open), on ``ax = (ax_z, ax_f)``; returns the artists.
         """
         ax_z, ax_f = panels(ax, 2, figsize=(6, 6))
-        pairs = [(f"mode {r}", self.together.mode_curve(r), "with the other modes", rd.curve,
-                  "alone") for r, rd in zip(self.modes, self.alone)]
+        pairs = [
+            (f"mode {r}", self.together.mode_curve(r), "with the other modes", rd.curve, "alone")
+            for r, rd in zip(self.modes, self.alone)
+        ]
         return plot_curve_pairs(ax_z, ax_f, pairs, ("o-", "s--"))
 
 
@@ -150,8 +185,14 @@ def plot_curve_pairs(ax_z, ax_f, pairs, formats) -> list:
     return arts
 
 
-def mode_coupling(specimen: Specimen, *, amplitude: dict, duration: float,
-                  steps_per_period: int = 64, n_periods: float = 3.0) -> ModeCouplingResult:
+def mode_coupling(
+    specimen: Specimen,
+    *,
+    amplitude: dict,
+    duration: float,
+    steps_per_period: int = 64,
+    n_periods: float = 3.0,
+) -> ModeCouplingResult:
     """Each mode's damping with and without the other modes through the same interface.
 
     Parameters
@@ -172,18 +213,36 @@ def mode_coupling(specimen: Specimen, *, amplitude: dict, duration: float,
     ModeCouplingResult
     """
     if not isinstance(amplitude, dict) or len(amplitude) < 2:
-        raise ValueError(f"amplitude must be a dict of at least two modes {{mode: X [m]}}, "
-                         f"got {amplitude!r}")
-    together = ringdown(specimen, amplitude=amplitude, duration=duration,
-                        steps_per_period=steps_per_period, n_periods=n_periods)
+        raise ValueError(
+            f"amplitude must be a dict of at least two modes {{mode: X [m]}}, got {amplitude!r}"
+        )
+    together = ringdown(
+        specimen,
+        amplitude=amplitude,
+        duration=duration,
+        steps_per_period=steps_per_period,
+        n_periods=n_periods,
+    )
     modes = together.modes
-    alone = tuple(ringdown(specimen, mode=r, amplitude=amplitude[r], duration=duration,
-                           steps_per_period=steps_per_period, n_periods=n_periods)
-                  for r in modes)
+    alone = tuple(
+        ringdown(
+            specimen,
+            mode=r,
+            amplitude=amplitude[r],
+            duration=duration,
+            steps_per_period=steps_per_period,
+            n_periods=n_periods,
+        )
+        for r in modes
+    )
     figures = {r: compare_curves(together.mode_curve(r), a.curve) for r, a in zip(modes, alone)}
-    warns = [f"mode {r}: its curves with and without the other modes do not overlap in "
-             "amplitude" for r, f in figures.items() if not len(f["amplitude"])]
+    warns = [
+        f"mode {r}: its curves with and without the other modes do not overlap in amplitude"
+        for r, f in figures.items()
+        if not len(f["amplitude"])
+    ]
     warns += [f"together: {x}" for x in together.warnings]
     warns += [f"mode {r} alone: {x}" for r, a in zip(modes, alone) for x in a.warnings]
-    return ModeCouplingResult(modes=modes, together=together, alone=alone, figures=figures,
-                              warnings=tuple(warns))
+    return ModeCouplingResult(
+        modes=modes, together=together, alone=alone, figures=figures, warnings=tuple(warns)
+    )

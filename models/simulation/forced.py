@@ -26,6 +26,7 @@ Check (``docs/beam_tests.md``): with the contact points stuck (a friction so hig
 nothing slips) the response is the linear one, whose peak amplitude per force is
 ``|S phi| |E phi| / (2 zeta w^2)`` at ``w`` for the mode's floor ``zeta``.
 """
+
 from __future__ import annotations
 
 import math
@@ -94,25 +95,42 @@ class ForcedResponseResult(ResultShape):
     def summary(self) -> dict:
         """Peaks per level (JSON-safe)."""
         fp, ap = self.peaks()
-        return json_safe({"force_levels_N": self.force_levels, "peak_frequency_Hz": fp,
-                          "peak_amplitude_m": ap, "frequencies_Hz": self.frequencies})
+        return json_safe(
+            {
+                "force_levels_N": self.force_levels,
+                "peak_frequency_Hz": fp,
+                "peak_amplitude_m": ap,
+                "frequencies_Hz": self.frequencies,
+            }
+        )
 
     def report(self) -> str:
         """Human-readable account: the peak of each force level."""
         fp, ap = self.peaks()
         m = self.metadata
-        lines = [f"stepped sine of {self.specimen.name}, mode {m['mode']} (stuck "
-                 f"{m['linear_frequency_Hz']:.4f} Hz), {self.frequencies.size} frequencies "
-                 f"{self.frequencies.min():.4f}-{self.frequencies.max():.4f} Hz"]
-        lines += [f"  F = {F:g} N: peak {a:.4g} m at {f:.4f} Hz ({a / F:.4g} m/N)"
-                  for F, f, a in zip(self.force_levels, fp, ap)]
+        lines = [
+            f"stepped sine of {self.specimen.name}, mode {m['mode']} (stuck "
+            f"{m['linear_frequency_Hz']:.4f} Hz), {self.frequencies.size} frequencies "
+            f"{self.frequencies.min():.4f}-{self.frequencies.max():.4f} Hz"
+        ]
+        lines += [
+            f"  F = {F:g} N: peak {a:.4g} m at {f:.4f} Hz ({a / F:.4g} m/N)"
+            for F, f, a in zip(self.force_levels, fp, ap)
+        ]
         return "\n".join(lines + [f"  warning: {w}" for w in self.warnings])
 
     def to_dict(self) -> dict:
         """JSON-safe: the amplitudes, peaks, metadata, success and warnings."""
-        return json_safe({**self.summary(), "amplitude_m": self.amplitude,
-                          "phase_rad": self.phase, "metadata": self.metadata, "success": self.success,
-                          "warnings": list(self.warnings)})
+        return json_safe(
+            {
+                **self.summary(),
+                "amplitude_m": self.amplitude,
+                "phase_rad": self.phase,
+                "metadata": self.metadata,
+                "success": self.success,
+                "warnings": list(self.warnings),
+            }
+        )
 
     def plot(self, ax=None):
         """Amplitude per force [m/N] against frequency, one line per level; returns the
@@ -162,7 +180,7 @@ def _force_scale(model, F0, freqs) -> float:
     n_eta, m = model.n_eta, len(model.points)
     K = model.Kb + model.Ks
     Kt = K.copy()
-    if model.interface is not None:                 # the Iwan elements' stuck stiffness
+    if model.interface is not None:  # the Iwan elements' stuck stiffness
         i = np.arange(n_eta, n_eta + m)
         Kt[i, i] += model.points.KT
     C = np.zeros_like(K) if model.floor_C is None else model.floor_C
@@ -188,23 +206,25 @@ def _sweep_level(s, F0, freqs, cycles, steps_per_period, rho, bar=None):
     L = linear_system(s)
     rec = {"t": [], "y": []}
 
-    def record(mbs_, t):                         # the sensor, once per accepted step (a
-        rec["t"].append(t)                       # stored sensor of every coordinate grew
-        rec["y"].append(float(read @ mbs_.systemData.GetODE2Coordinates()))   # as n^2)
+    def record(mbs_, t):  # the sensor, once per accepted step (a
+        rec["t"].append(t)  # stored sensor of every coordinate grew
+        rec["y"].append(float(read @ mbs_.systemData.GetODE2Coordinates()))  # as n^2)
         return True
+
     model = build_host(s, ports={"excitation": L.E}, post_step=record, assemble=False)
     mbs = model.mbs
-    read = model.T.T @ L.S                       # the sensor's row in the host's coordinates
+    read = model.T.T @ L.S  # the sensor's row in the host's coordinates
     state = {"w": 2 * math.pi * freqs[0], "t0": 0.0, "phase": 0.0}
-    model.add_port_force("excitation", lambda t: F0 * math.sin(
-        state["phase"] + state["w"] * (t - state["t0"])))
+    model.add_port_force(
+        "excitation", lambda t: F0 * math.sin(state["phase"] + state["w"] * (t - state["t0"]))
+    )
     mbs.Assemble()
     sim = solver_settings(force_scale=_force_scale(model, F0, freqs))
     sim.linearSolver.solverType = exu.LinearSolverType.EigenDense
     sim.timeIntegration.generalizedAlpha.spectralRadius = rho
     ti = sim.timeIntegration
     amp, phase = np.zeros(len(freqs)), np.zeros(len(freqs))
-    counts = np.zeros((len(freqs), 3), int)      # Newton iterations, Jacobians, step cuts
+    counts = np.zeros((len(freqs), 3), int)  # Newton iterations, Jacobians, step cuts
     t_now = 0.0
     for j, f in enumerate(freqs):
         h, w_d = prewarp(2 * math.pi * f, steps_per_period)
@@ -228,10 +248,18 @@ def _sweep_level(s, F0, freqs, cycles, steps_per_period, rho, bar=None):
     return amp, phase, counts
 
 
-def forced_response(specimen: Specimen, *, force_levels=(0.5, 2.0), frequencies=None,
-                    mode: int = 1, settle_cycles: int = 60, measure_cycles: int = 10,
-                    steps_per_period: int = 60, spectral_radius: float = 0.98,
-                    progress: bool = False) -> ForcedResponseResult:
+def forced_response(
+    specimen: Specimen,
+    *,
+    force_levels=(0.5, 2.0),
+    frequencies=None,
+    mode: int = 1,
+    settle_cycles: int = 60,
+    measure_cycles: int = 10,
+    steps_per_period: int = 60,
+    spectral_radius: float = 0.98,
+    progress: bool = False,
+) -> ForcedResponseResult:
     """Transverse force ``F sin(2 pi f t)`` at the excitation point, stepped through a
     resonance at each force level (module docstring).
 
@@ -272,37 +300,58 @@ def forced_response(specimen: Specimen, *, force_levels=(0.5, 2.0), frequencies=
     levels = finite_array("force_levels", force_levels, ndim=1)
     if np.any(levels <= 0):
         raise ValueError(f"force_levels must be > 0 [N], got {force_levels!r}")
-    cycles = (check_int("settle_cycles", settle_cycles, 1),
-              check_int("measure_cycles", measure_cycles, 1))
+    cycles = (
+        check_int("settle_cycles", settle_cycles, 1),
+        check_int("measure_cycles", measure_cycles, 1),
+    )
     spp = check_int("steps_per_period", steps_per_period, 8)
     rho = check_scalar("spectral_radius", spectral_radius, low=0.5, high=1.0)
     f_lin = linear_modes(specimen, mode=mode)[0] / (2 * math.pi)
-    freqs = np.linspace(0.97, 1.01, 15) * f_lin if frequencies is None else \
-        finite_array("frequencies", frequencies, ndim=1)
+    freqs = (
+        np.linspace(0.97, 1.01, 15) * f_lin
+        if frequencies is None
+        else finite_array("frequencies", frequencies, ndim=1)
+    )
     if np.any(freqs <= 0):
         raise ValueError(f"frequencies must be > 0 [Hz], got {frequencies!r}")
     steps = np.diff(freqs)
     if freqs.size < 3 or not (np.all(steps > 0) or np.all(steps < 0)):
-        raise ValueError("frequencies must be at least 3 values stepped up or down (strictly "
-                         f"monotonic) [Hz], got {frequencies!r}")
-    bar = progress_bar(progress, total=levels.size * freqs.size, desc="forced_response",
-                       unit="point")
+        raise ValueError(
+            "frequencies must be at least 3 values stepped up or down (strictly "
+            f"monotonic) [Hz], got {frequencies!r}"
+        )
+    bar = progress_bar(
+        progress, total=levels.size * freqs.size, desc="forced_response", unit="point"
+    )
     try:
-        runs = [_sweep_level(specimen, float(F0), freqs, cycles, spp, rho, bar)
-                for F0 in levels]
+        runs = [_sweep_level(specimen, float(F0), freqs, cycles, spp, rho, bar) for F0 in levels]
     finally:
         finish(bar)
     out = ForcedResponseResult(
-        force_levels=levels, frequencies=freqs, amplitude=np.array([r[0] for r in runs]),
-        phase=np.array([r[1] for r in runs]), specimen=specimen,
-        metadata={"mode": mode, "linear_frequency_Hz": f_lin, "floor": specimen.floor(mode),
-                  "settle_cycles": cycles[0], "measure_cycles": cycles[1],
-                  "steps_per_period": spp,
-                  "newton_iterations": np.array([r[2][:, 0] for r in runs]),
-                  "jacobians": np.array([r[2][:, 1] for r in runs]),
-                  "step_cuts": np.array([r[2][:, 2] for r in runs])})
+        force_levels=levels,
+        frequencies=freqs,
+        amplitude=np.array([r[0] for r in runs]),
+        phase=np.array([r[1] for r in runs]),
+        specimen=specimen,
+        metadata={
+            "mode": mode,
+            "linear_frequency_Hz": f_lin,
+            "floor": specimen.floor(mode),
+            "settle_cycles": cycles[0],
+            "measure_cycles": cycles[1],
+            "steps_per_period": spp,
+            "newton_iterations": np.array([r[2][:, 0] for r in runs]),
+            "jacobians": np.array([r[2][:, 1] for r in runs]),
+            "step_cuts": np.array([r[2][:, 2] for r in runs]),
+        },
+    )
     if not out.success:
-        out = replace(out, warnings=out.warnings + (
-            "a force level's largest amplitude is at the first or last frequency: the "
-            "resonance peak is not inside the sweep; widen frequencies",))
+        out = replace(
+            out,
+            warnings=out.warnings
+            + (
+                "a force level's largest amplitude is at the first or last frequency: the "
+                "resonance peak is not inside the sweep; widen frequencies",
+            ),
+        )
     return out

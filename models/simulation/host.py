@@ -31,6 +31,7 @@ The energy is ``1/2 v'^T M' v'`` (kinetic), ``1/2 z^T T^T Kb T z`` (the bodies' 
 ``1/2 z^T T^T (K0 - Kb) T z`` plus the linear tangential springs' (springs). The system
 (a few hundred coordinates, a full ``K'``) is solved with Exudyn's dense LU.
 """
+
 from __future__ import annotations
 
 import exudyn as exu
@@ -64,9 +65,11 @@ def port_basis(R) -> tuple:
     R = np.asarray(R, float)
     N = sla.null_space(R)
     if N.shape[1] != R.shape[1] - R.shape[0]:
-        raise ValueError(f"the port rows (slips and ports) must have full row rank "
-                         f"{R.shape[0]}, got rank {R.shape[1] - N.shape[1]}: two of them are "
-                         "dependent")
+        raise ValueError(
+            f"the port rows (slips and ports) must have full row rank "
+            f"{R.shape[0]}, got rank {R.shape[1] - N.shape[1]}: two of them are "
+            "dependent"
+        )
     T = np.hstack([N, np.linalg.pinv(R)])
     return T, np.vstack([N.T, R]), N.shape[1]
 
@@ -87,22 +90,30 @@ class HostModel:
 
     def port_marker(self, name: str) -> int:
         """A new marker on port ``name``'s coordinate."""
-        return self.mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=self.node,
-                                                       coordinate=int(self.ports[name])))
+        return self.mbs.AddMarker(
+            MarkerNodeCoordinate(nodeNumber=self.node, coordinate=int(self.ports[name]))
+        )
 
     def add_port_force(self, name: str, force) -> int:
         """A load ``force(t)`` [N] on port ``name`` (module docstring); returns the load."""
-        return self.mbs.AddLoad(LoadCoordinate(
-            markerNumber=self.port_marker(name), load=0.0,
-            loadUserFunction=lambda mbs_, t, load: float(force(t))))
+        return self.mbs.AddLoad(
+            LoadCoordinate(
+                markerNumber=self.port_marker(name),
+                load=0.0,
+                loadUserFunction=lambda mbs_, t, load: float(force(t)),
+            )
+        )
 
     def prescribe_port(self, name: str, motion) -> int:
         """Hold port ``name`` at ``motion(t)`` [m]; returns the constraint (its Force output
         is the reaction on the ground side).
         """
-        return self.mbs.AddObject(CoordinateConstraint(
-            markerNumbers=[self.ground, self.port_marker(name)],
-            offsetUserFunction=lambda mbs_, t, item, off: float(motion(t))))
+        return self.mbs.AddObject(
+            CoordinateConstraint(
+                markerNumbers=[self.ground, self.port_marker(name)],
+                offsetUserFunction=lambda mbs_, t, item, off: float(motion(t)),
+            )
+        )
 
     def beam_energy(self) -> tuple[float, float]:
         """(kinetic, strain) energy of the bodies at the current state [J]."""
@@ -128,9 +139,17 @@ class HostModel:
         return np.asarray(z) @ self.T.T
 
 
-def build_host(specimen, *, tangential: str = "iwan", post_step=None,
-               joint_elements: bool = False, depth: int = 24, floor: bool = True,
-               ports: dict | None = None, assemble: bool = True) -> HostModel:
+def build_host(
+    specimen,
+    *,
+    tangential: str = "iwan",
+    post_step=None,
+    joint_elements: bool = False,
+    depth: int = 24,
+    floor: bool = True,
+    ports: dict | None = None,
+    assemble: bool = True,
+) -> HostModel:
     """Build the Exudyn system of a specimen (module docstring).
 
     Parameters
@@ -166,27 +185,41 @@ def build_host(specimen, *, tangential: str = "iwan", post_step=None,
     def sym(A):
         A = T.T @ A @ T
         return 0.5 * (A + A.T)
+
     Mz, K0, Kb = sym(L.M), sym(L.K0), sym(L.Kb)
     Ks = K0 - Kb
     fl = floor_damping(specimen) if floor else None
     C = sym(fl.C) if fl is not None and fl.active else None
     SC = exu.SystemContainer()
     mbs = SC.AddSystem()
-    node = mbs.AddNode(NodeGenericODE2(referenceCoordinates=[0.0] * n,
-                                       initialCoordinates=[0.0] * n,
-                                       initialCoordinates_t=[0.0] * n,
-                                       numberOfODE2Coordinates=n))
+    node = mbs.AddNode(
+        NodeGenericODE2(
+            referenceCoordinates=[0.0] * n,
+            initialCoordinates=[0.0] * n,
+            initialCoordinates_t=[0.0] * n,
+            numberOfODE2Coordinates=n,
+        )
+    )
     zero = np.zeros((n, n))
 
     def no_more(mbs_, t, item, q, q_t, f_q, f_v):
-        return zero                      # Exudyn adds f_q K' + f_v C' itself
-    mbs.AddObject(ObjectGenericODE2(nodeNumbers=[node], massMatrix=Mz, stiffnessMatrix=K0,
-                                    dampingMatrix=zero if C is None else C,
-                                    jacobianUserFunction=no_more))
+        return zero  # Exudyn adds f_q K' + f_v C' itself
+
+    mbs.AddObject(
+        ObjectGenericODE2(
+            nodeNumbers=[node],
+            massMatrix=Mz,
+            stiffnessMatrix=K0,
+            dampingMatrix=zero if C is None else C,
+            jacobianUserFunction=no_more,
+        )
+    )
     ground = mbs.AddNode(NodePointGround(referenceCoordinates=[0.0, 0.0, 0.0]))
     mg = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=ground, coordinate=0))
-    pairs = [(mg, mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=node, coordinate=n_eta + i)))
-             for i in range(m)]
+    pairs = [
+        (mg, mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=node, coordinate=n_eta + i)))
+        for i in range(m)
+    ]
     if post_step is not None:
         mbs.SetPostStepUserFunction(post_step)
     iface = None
@@ -195,12 +228,30 @@ def build_host(specimen, *, tangential: str = "iwan", post_step=None,
         iface = add_iwan_interface(mbs, pairs, joints, depth=depth)
     else:
         for pair, kt in zip(pairs, pts.KT):
-            mbs.AddObject(ObjectConnectorCoordinateSpringDamper(
-                markerNumbers=list(pair), stiffness=float(kt), damping=0.0))
+            mbs.AddObject(
+                ObjectConnectorCoordinateSpringDamper(
+                    markerNumbers=list(pair), stiffness=float(kt), damping=0.0
+                )
+            )
         Ks = Ks.copy()
-        Ks[n_eta:n_eta + m, n_eta:n_eta + m] += np.diag(pts.KT)
+        Ks[n_eta : n_eta + m, n_eta : n_eta + m] += np.diag(pts.KT)
     if assemble:
         mbs.Assemble()
-    return HostModel(specimen=specimen, SC=SC, mbs=mbs, L=L, points=pts, interface=iface, T=T,
-                     T_inv=T_inv, n_eta=n_eta, node=node, Mz=Mz, Kb=Kb, Ks=Ks, floor_C=C,
-                     ground=mg, ports={k: n_eta + m + j for j, k in enumerate(names)})
+    return HostModel(
+        specimen=specimen,
+        SC=SC,
+        mbs=mbs,
+        L=L,
+        points=pts,
+        interface=iface,
+        T=T,
+        T_inv=T_inv,
+        n_eta=n_eta,
+        node=node,
+        Mz=Mz,
+        Kb=Kb,
+        Ks=Ks,
+        floor_C=C,
+        ground=mg,
+        ports={k: n_eta + m + j for j, k in enumerate(names)},
+    )

@@ -10,6 +10,7 @@ every mode below about ``1 / tau`` alike; an undamped linear mode is left ringin
 modal amplitude ``|phi(x_F)| |F^(w)| / w`` (mass-normalised ``phi``).
 :func:`~iwan_element.models.ringdown` takes an :class:`Impact` instead of a release.
 """
+
 from __future__ import annotations
 
 import math
@@ -45,11 +46,13 @@ class Impact:
         if not finite(self.position) or self.position < 0:
             raise ValueError(f"position must be a finite number >= 0 [m], got {self.position!r}")
         if not finite(self.contact_time) or self.contact_time <= 0:
-            raise ValueError(f"contact_time must be a finite number > 0 [s], got "
-                             f"{self.contact_time!r}")
+            raise ValueError(
+                f"contact_time must be a finite number > 0 [s], got {self.contact_time!r}"
+            )
         if not finite(self.peak_force) or self.peak_force == 0:
-            raise ValueError(f"peak_force must be a finite, non-zero force [N], got "
-                             f"{self.peak_force!r}")
+            raise ValueError(
+                f"peak_force must be a finite, non-zero force [N], got {self.peak_force!r}"
+            )
 
     def force(self, t: float) -> float:
         """The force [N] at time ``t`` [s]."""
@@ -63,6 +66,12 @@ class Impact:
         x = w * tau / math.pi
         near = np.abs(1.0 - x * x) < 1e-9
         safe = np.where(near, 0.0, 1.0 - x * x)
-        val = 2 * P * tau / math.pi * np.abs(np.cos(0.5 * w * tau)) / np.where(near, 1.0,
-                                                                                np.abs(safe))
+        val = (
+            2
+            * P
+            * tau
+            / math.pi
+            * np.abs(np.cos(0.5 * w * tau))
+            / np.where(near, 1.0, np.abs(safe))
+        )
         return np.where(near, 0.5 * P * tau, val)

@@ -8,6 +8,7 @@ loaded through its virgin curve and then its Masing branches. The machine force 
 grip's constraint force; the lap passes it on through the contact points' tangential forces,
 so in axial equilibrium the machine force equals their sum (``docs/beam_tests.md``).
 """
+
 from __future__ import annotations
 
 import math
@@ -90,6 +91,7 @@ class QuasiStaticResult(ResultShape):
         area = np.sum(0.5 * (F[1:] + F[:-1]) * np.diff(s, axis=0), axis=0)
         amp = 0.5 * (s.max(axis=0) - s.min(axis=0))
         from ..reduced.dispatch import contact_points
+
         pts = contact_points(self.specimen)
         return area, np.array([dissipation(a, p) for a, p in zip(amp, pts.params)])
 
@@ -105,31 +107,44 @@ class QuasiStaticResult(ResultShape):
         """The last cycle in numbers (JSON-safe)."""
         m = self.last_cycle()
         d = self.dissipated[m]
-        return json_safe({
-            "amplitude_m": self.metadata["amplitude"], "frequency_Hz": self.metadata["frequency"],
-            "machine_force_amplitude_N": float(np.max(np.abs(self.machine_force[m]))),
-            "mean_slip_amplitude_m": float(0.5 * np.ptp(self.mean_slip[m])),
-            "dissipation_per_cycle_J": float(d[-1] - d[0]),
-            "machine_secant_stiffness_N_per_m": float(np.ptp(self.machine_force[m])
-                                                      / np.ptp(self.machine_displacement[m]))})
+        return json_safe(
+            {
+                "amplitude_m": self.metadata["amplitude"],
+                "frequency_Hz": self.metadata["frequency"],
+                "machine_force_amplitude_N": float(np.max(np.abs(self.machine_force[m]))),
+                "mean_slip_amplitude_m": float(0.5 * np.ptp(self.mean_slip[m])),
+                "dissipation_per_cycle_J": float(d[-1] - d[0]),
+                "machine_secant_stiffness_N_per_m": float(
+                    np.ptp(self.machine_force[m]) / np.ptp(self.machine_displacement[m])
+                ),
+            }
+        )
 
     def report(self) -> str:
         """Human-readable account of the last cycle."""
         s = self.summary()
         area, closed = self.loop_check()
-        lines = [f"quasi-static test of {self.specimen.name}: grip {s['amplitude_m']:.4g} m at "
-                 f"{s['frequency_Hz']:g} Hz, {self.metadata['cycles']} cycle(s) of "
-                 f"{self.metadata['steps_per_cycle']} load steps",
-                 f"  machine force amplitude {s['machine_force_amplitude_N']:.4g} N, mean slip "
-                 f"amplitude {s['mean_slip_amplitude_m']:.4g} m, dissipation "
-                 f"{s['dissipation_per_cycle_J']:.4g} J per cycle",
-                 f"  loop areas vs closed forms: largest gap {np.max(np.abs(area - closed)):.3g} J"]
+        lines = [
+            f"quasi-static test of {self.specimen.name}: grip {s['amplitude_m']:.4g} m at "
+            f"{s['frequency_Hz']:g} Hz, {self.metadata['cycles']} cycle(s) of "
+            f"{self.metadata['steps_per_cycle']} load steps",
+            f"  machine force amplitude {s['machine_force_amplitude_N']:.4g} N, mean slip "
+            f"amplitude {s['mean_slip_amplitude_m']:.4g} m, dissipation "
+            f"{s['dissipation_per_cycle_J']:.4g} J per cycle",
+            f"  loop areas vs closed forms: largest gap {np.max(np.abs(area - closed)):.3g} J",
+        ]
         return "\n".join(lines + [f"  warning: {w}" for w in self.warnings])
 
     def to_dict(self) -> dict:
         """JSON-safe summary, metadata, success and warnings."""
-        return json_safe({**self.summary(), "metadata": self.metadata,
-                          "success": self.success, "warnings": list(self.warnings)})
+        return json_safe(
+            {
+                **self.summary(),
+                "metadata": self.metadata,
+                "success": self.success,
+                "warnings": list(self.warnings),
+            }
+        )
 
     def plot(self, ax=None):
         """The joint's loop (summed force against mean slip) and the machine's loop (force
@@ -143,8 +158,14 @@ class QuasiStaticResult(ResultShape):
         return arts
 
 
-def quasi_static_test(specimen: Specimen, *, amplitude: float = 1e-4, frequency: float = 0.02,
-                      cycles: int = 3, steps_per_cycle: int = 200) -> QuasiStaticResult:
+def quasi_static_test(
+    specimen: Specimen,
+    *,
+    amplitude: float = 1e-4,
+    frequency: float = 0.02,
+    cycles: int = 3,
+    steps_per_cycle: int = 200,
+) -> QuasiStaticResult:
     """Drive beam B's end axially in the machine grip, beam A clamped (module docstring).
 
     Parameters
@@ -177,8 +198,11 @@ def quasi_static_test(specimen: Specimen, *, amplitude: float = 1e-4, frequency:
     model = build_host(s, ports={"grip": linear_system(s).drive}, floor=False, assemble=False)
     mbs = model.mbs
     grip = model.prescribe_port("grip", lambda t: u0 * math.sin(w * t))
-    sensor = mbs.AddSensor(SensorObject(objectNumber=grip, storeInternal=True,
-                                        outputVariableType=exu.OutputVariableType.Force))
+    sensor = mbs.AddSensor(
+        SensorObject(
+            objectNumber=grip, storeInternal=True, outputVariableType=exu.OutputVariableType.Force
+        )
+    )
     mbs.Assemble()
     n, duration = cycles * steps, cycles / f
     sim = solver_settings(force_scale=float(model.points.Fs.sum()), static=True)
@@ -190,15 +214,24 @@ def quasi_static_test(specimen: Specimen, *, amplitude: float = 1e-4, frequency:
     t = np.asarray(rec["time"])
     data = mbs.GetSensorStoredData(sensor)
     out = QuasiStaticResult(
-        t=t, machine_displacement=u0 * np.sin(w * t),
+        t=t,
+        machine_displacement=u0 * np.sin(w * t),
         machine_force=np.interp(t, data[:, 0], data[:, 1]),
-        slip=np.asarray(rec["slip"]), force=np.asarray(rec["force"]),
-        dissipated=np.asarray(model.interface.dissipated_energy_history), specimen=s,
-        metadata={"amplitude": u0, "frequency": f, "cycles": cycles, "steps_per_cycle": steps})
+        slip=np.asarray(rec["slip"]),
+        force=np.asarray(rec["force"]),
+        dissipated=np.asarray(model.interface.dissipated_energy_history),
+        specimen=s,
+        metadata={"amplitude": u0, "frequency": f, "cycles": cycles, "steps_per_cycle": steps},
+    )
     if not out.success:
         area, closed = out.loop_check()
-        out = replace(out, warnings=out.warnings + (
-            f"a contact point's last loop differs from its closed-form dissipation by "
-            f"{np.max(np.abs(area - closed)):.3g} J (more than {LOOP_TOL:g} of the "
-            f"interface's {closed.sum():.3g} J): give more steps_per_cycle",))
+        out = replace(
+            out,
+            warnings=out.warnings
+            + (
+                f"a contact point's last loop differs from its closed-form dissipation by "
+                f"{np.max(np.abs(area - closed)):.3g} J (more than {LOOP_TOL:g} of the "
+                f"interface's {closed.sum():.3g} J): give more steps_per_cycle",
+            ),
+        )
     return out

@@ -11,6 +11,7 @@ units) are driven by the sensor-scaled modal coordinate
 which the
 mass-orthogonality of the modes keeps on this mode. Their work is ``(1/s^2) int F dY``.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -52,10 +53,14 @@ class ModalEffects:
             return self.aa * (K * f_q + c * f_v)
 
         n = av.size
-        model.mbs.AddObject(ObjectGenericODE2(nodeNumbers=[model.node],
-                                              massMatrix=np.zeros((n, n)),
-                                              forceUserFunction=force,
-                                              jacobianUserFunction=jacobian))
+        model.mbs.AddObject(
+            ObjectGenericODE2(
+                nodeNumbers=[model.node],
+                massMatrix=np.zeros((n, n)),
+                forceUserFunction=force,
+                jacobianUserFunction=jacobian,
+            )
+        )
 
     def _stack(self):
         el = self.el
@@ -70,7 +75,7 @@ class ModalEffects:
         for y in np.linspace(0.0, Y0, n + 1)[1:]:
             self.el.trial(float(y), 0.0)
             self.el.commit()
-        return self.el.work / self.s ** 2
+        return self.el.work / self.s**2
 
     def commit(self, z, vz):
         """Commit at the host coordinates ``z`` and their rates ``vz``."""
@@ -79,5 +84,5 @@ class ModalEffects:
 
     def energy(self) -> tuple[float, float]:
         """(stored, dissipated) [J] on the bodies' modal coordinate."""
-        s2 = self.s ** 2
+        s2 = self.s**2
         return self.el.stored_energy / s2, self.el.dissipated_energy / s2

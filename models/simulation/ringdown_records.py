@@ -2,6 +2,7 @@
 solid bodies): the post-step recorder, the time grid, the timed solve, the release energy of
 the joints, and the result built from the records.
 """
+
 from __future__ import annotations
 
 import math
@@ -14,11 +15,27 @@ from iwan_element.base.progress import finish, progress_bar, tick
 
 from .ringdown_result import RingdownResult, decay_curve
 
-__all__ = ["Recorder", "step_grid", "solve_timed", "virgin_joint_energy", "build_result",
-           "joint_records"]
+__all__ = [
+    "Recorder",
+    "step_grid",
+    "solve_timed",
+    "virgin_joint_energy",
+    "build_result",
+    "joint_records",
+]
 
-E_KEYS = ("t", "kinetic", "strain", "springs", "joint_stored", "joint_dissipated",
-           "floor_dissipated", "effect_stored", "effect_dissipated", "input_work")
+E_KEYS = (
+    "t",
+    "kinetic",
+    "strain",
+    "springs",
+    "joint_stored",
+    "joint_dissipated",
+    "floor_dissipated",
+    "effect_stored",
+    "effect_dissipated",
+    "input_work",
+)
 
 
 class Recorder:
@@ -32,9 +49,9 @@ class Recorder:
         self.times, self.coords = [], []
         self.energy = {k: [] for k in E_KEYS}
         self.model = None
-        self.impact = None                 # (Impact, row of its point in z) when one acts
+        self.impact = None  # (Impact, row of its point in z) when one acts
         self.work_in, self.last = 0.0, None
-        self.bar = None                    # a progress bar over the steps, if asked
+        self.bar = None  # a progress bar over the steps, if asked
 
     def __call__(self, mbs_, t):
         sd = mbs_.systemData
@@ -91,13 +108,16 @@ def solve_timed(mbs, sim, rec, n: int, progress: bool) -> dict:
     rec.bar = progress_bar(progress, total=n + 1, desc="ringdown", unit="step")
     try:
         mbs.SolveDynamic(sim)
-        tick(rec.bar, len(rec.times) % 50)            # the steps since the last tick
+        tick(rec.bar, len(rec.times) % 50)  # the steps since the last tick
     finally:
         finish(rec.bar)
     wall = time.perf_counter() - t0
     it = mbs.sys["dynamicSolver"].it
-    return {"wall": wall, "newton_iterations": int(it.newtonStepsCount),
-            "jacobians": int(it.newtonJacobiCount)}
+    return {
+        "wall": wall,
+        "newton_iterations": int(it.newtonStepsCount),
+        "jacobians": int(it.newtonJacobiCount),
+    }
 
 
 def virgin_joint_energy(slip, params) -> float:
@@ -119,7 +139,7 @@ def build_result(specimen, amp, rec, X, rel, rows, positions, h, n, run) -> Ring
     sig = np.vstack([X @ L.S, (X @ (L.M @ np.array(rel["phi"]).T) * s_phi).T, rows @ X.T])
     t, sig, cut = on_step_grid(np.array(rec.times), sig, h, n)
     sig = np.array(sig)
-    modal, disp = sig[1:1 + k], sig[1 + k:]
+    modal, disp = sig[1 : 1 + k], sig[1 + k :]
     curves, warns = [], []
     for i, r in enumerate(modes):
         # several modes: each modally filtered record (the other modes filtered out, so
@@ -129,36 +149,72 @@ def build_result(specimen, amp, rec, X, rel, rows, positions, h, n, run) -> Ring
         # (scipy.signal.decimate) left end effects that cut the short records' curves.
         q = 1 if k == 1 else max(1, int(run["steps_per_period"] * w0.max() / w0[i] / 32))
         ti, yi = t[::q], modal[i][::q]
-        c = decay_curve(ti, yi, h, w0[i] / (2 * math.pi), run["n_periods"], notes=(
-            f"{specimen.name}: Exudyn transient, mode {r}"
-            + (f" of modes {', '.join(map(str, modes))}" if k > 1 else "")
-            + f", {run['steps_per_period']} steps per period of the highest mode, "
-            + (f"released from {amp[r]:.3g} m at the sensor" if amp[r] is not None else
-               f"struck by {run['impact'].peak_force:.4g} N over {run['impact'].contact_time:.3g} s"
-               f" at {run['impact'].position:.4g} m")
-            + "; modal filtering"
-            + (f"; with {' + '.join(run['effects'])}" if run["effects"] else "")))
+        c = decay_curve(
+            ti,
+            yi,
+            h,
+            w0[i] / (2 * math.pi),
+            run["n_periods"],
+            notes=(
+                f"{specimen.name}: Exudyn transient, mode {r}"
+                + (f" of modes {', '.join(map(str, modes))}" if k > 1 else "")
+                + f", {run['steps_per_period']} steps per period of the highest mode, "
+                + (
+                    f"released from {amp[r]:.3g} m at the sensor"
+                    if amp[r] is not None
+                    else f"struck by {run['impact'].peak_force:.4g} N over {run['impact'].contact_time:.3g} s"
+                    f" at {run['impact'].position:.4g} m"
+                )
+                + "; modal filtering"
+                + (f"; with {' + '.join(run['effects'])}" if run["effects"] else "")
+            ),
+        )
         curves.append(c)
         warns += [w if k == 1 else f"mode {r}: {w}" for w in c.warnings]
     return RingdownResult(
-        t=t, sensor=sig[0], modal=modal[0], curve=curves[0],
-        energy={key: np.array(v) for key, v in rec.energy.items()}, initial_energy=run["e0"],
+        t=t,
+        sensor=sig[0],
+        modal=modal[0],
+        curve=curves[0],
+        energy={key: np.array(v) for key, v in rec.energy.items()},
+        initial_energy=run["e0"],
         wall_time=run["solve"]["wall"],
-        metadata={"h": h, "steps": n, "extra_steps": cut, "modes": modes, "amplitude": amp,
-                  "floor": {r: specimen.floor(r) for r in modes}, "n_points": run["n_points"],
-                  "effects": run["effects"], "kinetic_at_release": run["kin0"],
-                  "joint_quadrature_error": run["quad"], "overflow_steps": run["overflow"],
-                  "impact": run["impact"],
-                  "newton_iterations": run["solve"]["newton_iterations"],
-                  "jacobians": run["solve"]["jacobians"], **run.get("extra", {})},
-        modes=modes, curves=tuple(curves), modal_responses=modal, sensor_positions=positions,
-        sensor_displacement=disp, sensor_acceleration=second_derivative(disp, h),
-        warnings=tuple(warns) + cut_warning(cut, n, w0.max() * h) + ((
-            f"{run['overflow']} step(s) closed more slip loops than the compiled interface law "
-            "holds (24 reversal points): their joint forces were not "
-            "exact (the interface's "
-            "overflow_times; the Python route, joint_elements=True, is exact)",)
-            if run["overflow"] else ()))
+        metadata={
+            "h": h,
+            "steps": n,
+            "extra_steps": cut,
+            "modes": modes,
+            "amplitude": amp,
+            "floor": {r: specimen.floor(r) for r in modes},
+            "n_points": run["n_points"],
+            "effects": run["effects"],
+            "kinetic_at_release": run["kin0"],
+            "joint_quadrature_error": run["quad"],
+            "overflow_steps": run["overflow"],
+            "impact": run["impact"],
+            "newton_iterations": run["solve"]["newton_iterations"],
+            "jacobians": run["solve"]["jacobians"],
+            **run.get("extra", {}),
+        },
+        modes=modes,
+        curves=tuple(curves),
+        modal_responses=modal,
+        sensor_positions=positions,
+        sensor_displacement=disp,
+        sensor_acceleration=second_derivative(disp, h),
+        warnings=tuple(warns)
+        + cut_warning(cut, n, w0.max() * h)
+        + (
+            (
+                f"{run['overflow']} step(s) closed more slip loops than the compiled interface law "
+                "holds (24 reversal points): their joint forces were not "
+                "exact (the interface's "
+                "overflow_times; the Python route, joint_elements=True, is exact)",
+            )
+            if run["overflow"]
+            else ()
+        ),
+    )
 
 
 def second_derivative(y, h):
@@ -196,11 +252,13 @@ def cut_warning(cut: int, n: int, wh: float) -> tuple:
     """
     if not cut:
         return ()
-    return (f"the solver took {cut} steps more than the {n} nominal ones (the interface "
-            "slipping hard); the records were interpolated onto the nominal step, whose "
-            f"trapezoidal period correction (up to {wh * wh / 12:.1e} of the frequency) is "
-            "applied as if no step had been cut: give more steps_per_period for a frequency "
-            "closer than that",)
+    return (
+        f"the solver took {cut} steps more than the {n} nominal ones (the interface "
+        "slipping hard); the records were interpolated onto the nominal step, whose "
+        f"trapezoidal period correction (up to {wh * wh / 12:.1e} of the frequency) is "
+        "applied as if no step had been cut: give more steps_per_period for a frequency "
+        "closer than that",
+    )
 
 
 def joint_records(itf, energy: dict, e0: float) -> float:

@@ -1,4 +1,5 @@
 """The result of the specimen's transient ring-down (:func:`~iwan_element.models.ringdown`)."""
+
 from __future__ import annotations
 
 import math
@@ -98,8 +99,9 @@ class RingdownResult(ResultShape):
     sensor_displacement: np.ndarray | None = None
     sensor_acceleration: np.ndarray | None = None
 
-    def sensor_curve(self, sensor: int, band, *, quantity: str = "acceleration",
-                     n_periods: float | None = None) -> AmplitudeCurve:
+    def sensor_curve(
+        self, sensor: int, band, *, quantity: str = "acceleration", n_periods: float | None = None
+    ) -> AmplitudeCurve:
         """The decay curve of the mode in ``band`` [Hz] read from sensor ``sensor`` (an index
         of :attr:`sensor_positions`) the way a measured record is read
         (:func:`iwan_element.amplitude_curve` on its ``quantity``, "acceleration" or
@@ -112,16 +114,29 @@ class RingdownResult(ResultShape):
         """
         if quantity not in ("acceleration", "displacement"):
             raise ValueError(f"quantity must be 'acceleration' or 'displacement', got {quantity!r}")
-        if isinstance(sensor, bool) or not isinstance(sensor, int) or \
-                not 0 <= sensor < len(self.sensor_positions):
-            raise ValueError(f"sensor must be an index below {len(self.sensor_positions)}, "
-                             f"got {sensor!r}")
+        if (
+            isinstance(sensor, bool)
+            or not isinstance(sensor, int)
+            or not 0 <= sensor < len(self.sensor_positions)
+        ):
+            raise ValueError(
+                f"sensor must be an index below {len(self.sensor_positions)}, got {sensor!r}"
+            )
         lo, hi = (float(b) for b in band)
         h = self.metadata["h"]
-        y = (self.sensor_acceleration if quantity == "acceleration"
-             else self.sensor_displacement)[sensor]
-        return decay_curve(self.t, y, h, 0.5 * (lo + hi), n_periods, band=(lo, hi),
-                           quantity=quantity, notes=f"sensor at {self.sensor_positions[sensor]:.4g} m")
+        y = (self.sensor_acceleration if quantity == "acceleration" else self.sensor_displacement)[
+            sensor
+        ]
+        return decay_curve(
+            self.t,
+            y,
+            h,
+            0.5 * (lo + hi),
+            n_periods,
+            band=(lo, hi),
+            quantity=quantity,
+            notes=f"sensor at {self.sensor_positions[sensor]:.4g} m",
+        )
 
     def mode_curve(self, mode: int) -> AmplitudeCurve:
         """The decay curve of elastic mode ``mode`` (one of :attr:`modes`)."""
@@ -140,41 +155,60 @@ class RingdownResult(ResultShape):
         balance (when recorded) closes to :data:`ENERGY_TOL`.
         """
         err = self.max_energy_error
-        return bool(all(len(c) >= 3 for c in self.curves or (self.curve,))
-                    and (err is None or err <= ENERGY_TOL))
+        return bool(
+            all(len(c) >= 3 for c in self.curves or (self.curve,))
+            and (err is None or err <= ENERGY_TOL)
+        )
 
     def report(self) -> str:
         """Human-readable account."""
         m = self.metadata
-        lines = [f"Exudyn ring-down: {m['steps']} steps of {m['h']:.4g} s "
-                 f"({self.t[-1]:.4g} s, {self.wall_time:.3g} s wall), {m['n_points']} contact "
-                 f"points, mode(s) {', '.join(map(str, self.modes))}"
-                 + (f", effects {' + '.join(m['effects'])}" if m["effects"] else "")]
+        lines = [
+            f"Exudyn ring-down: {m['steps']} steps of {m['h']:.4g} s "
+            f"({self.t[-1]:.4g} s, {self.wall_time:.3g} s wall), {m['n_points']} contact "
+            f"points, mode(s) {', '.join(map(str, self.modes))}"
+            + (f", effects {' + '.join(m['effects'])}" if m["effects"] else "")
+        ]
         for mode, c in zip(self.modes, self.curves or (self.curve,)):
             if len(c):
-                lines.append(f"  mode {mode}: {len(c)} points, {c.amplitude.min():.3g}-"
-                             f"{c.amplitude.max():.3g} m, f {c.frequency.min():.6g}-"
-                             f"{c.frequency.max():.6g} Hz, zeta {100 * c.damping_ratio.min():.3g}-"
-                             f"{100 * c.damping_ratio.max():.3g} %")
+                lines.append(
+                    f"  mode {mode}: {len(c)} points, {c.amplitude.min():.3g}-"
+                    f"{c.amplitude.max():.3g} m, f {c.frequency.min():.6g}-"
+                    f"{c.frequency.max():.6g} Hz, zeta {100 * c.damping_ratio.min():.3g}-"
+                    f"{100 * c.damping_ratio.max():.3g} %"
+                )
         err = self.max_energy_error
-        lines.append("  energy balance: " + ("not recorded" if err is None else
-                                             f"max relative error {err:.2e}; the joints' "
-                                             "trapezoidal work is off their exact work by "
-                                             f"{m['joint_quadrature_error']:.2e}"))
+        lines.append(
+            "  energy balance: "
+            + (
+                "not recorded"
+                if err is None
+                else f"max relative error {err:.2e}; the joints' "
+                "trapezoidal work is off their exact work by "
+                f"{m['joint_quadrature_error']:.2e}"
+            )
+        )
         lines += [f"  warning: {w}" for w in self.warnings]
         return "\n".join(lines)
 
     def to_dict(self) -> dict:
         """JSON-safe summary: the curves, the energy balance and the run's metadata."""
         curves = self.curves or (self.curve,)
-        return json_safe({"curve": self.curve.to_dict(), "duration": float(self.t[-1]),
-                          "modes": list(self.modes),
-                          "curves": {str(k): c.to_dict() for k, c in zip(self.modes, curves)},
-                          "sensor_positions": self.sensor_positions,
-                          "initial_energy": self.initial_energy,
-                          "max_energy_error": self.max_energy_error,
-                          "wall_time": self.wall_time, "metadata": self.metadata,
-                          "success": self.success, "warnings": list(self.warnings)})
+        return json_safe(
+            {
+                "curve": self.curve.to_dict(),
+                "duration": float(self.t[-1]),
+                "modes": list(self.modes),
+                "curves": {str(k): c.to_dict() for k, c in zip(self.modes, curves)},
+                "sensor_positions": self.sensor_positions,
+                "initial_energy": self.initial_energy,
+                "max_energy_error": self.max_energy_error,
+                "wall_time": self.wall_time,
+                "metadata": self.metadata,
+                "success": self.success,
+                "warnings": list(self.warnings),
+            }
+        )
 
     def plot(self, ax=None):
         """Each mode's response at the sensor against time, then the decays' frequency and
@@ -198,7 +232,9 @@ class RingdownResult(ResultShape):
         ``(... - E0 - W_in) / (E0 + W_in,end)`` (``W_in`` its input work).
         """
         e = self.energy
-        total = e["kinetic"] + e["strain"] + e["springs"] + e["joint_stored"] + e["joint_dissipated"]
+        total = (
+            e["kinetic"] + e["strain"] + e["springs"] + e["joint_stored"] + e["joint_dissipated"]
+        )
         total = total + e["floor_dissipated"]
         if e.get("effect_stored") is not None and len(e["effect_stored"]):
             total = total + e["effect_stored"] + e["effect_dissipated"]
@@ -214,15 +250,21 @@ def with_energy_warning(out: RingdownResult) -> RingdownResult:
     """
     err = out.max_energy_error
     if err is not None and err > ENERGY_TOL:
-        out = replace(out, warnings=out.warnings + (
-            f"the energy balance is off by {err:.2g} of the release energy (more than "
-            f"{ENERGY_TOL:g}; the time integrator's quadrature of the joint forces accounts for "
-            f"{out.metadata['joint_quadrature_error']:.2g}): refine steps_per_period",))
+        out = replace(
+            out,
+            warnings=out.warnings
+            + (
+                f"the energy balance is off by {err:.2g} of the release energy (more than "
+                f"{ENERGY_TOL:g}; the time integrator's quadrature of the joint forces accounts for "
+                f"{out.metadata['joint_quadrature_error']:.2g}): refine steps_per_period",
+            ),
+        )
     return out
 
 
-def decay_curve(t, y, h, f0, n_periods, *, notes, band=None,
-                quantity: str = "displacement") -> AmplitudeCurve:
+def decay_curve(
+    t, y, h, f0, n_periods, *, notes, band=None, quantity: str = "displacement"
+) -> AmplitudeCurve:
     """Frequency and damping of a computed decay by :func:`iwan_element.amplitude_curve`
     (``quantity`` of the record ``y`` at times ``t`` [s]; band ``(0.5, 1.5) f0`` around the
     stuck frequency ``f0`` [Hz] unless ``band`` is given; windows of ``n_periods``, or
@@ -233,5 +275,6 @@ def decay_curve(t, y, h, f0, n_periods, *, notes, band=None,
     band = (0.5 * f0, 1.5 * f0) if band is None else band
     c = amplitude_curve(t, y, quantity=quantity, band=band, n_periods=n_periods, compare=False)
     f_true = np.tan(math.pi * c.frequency * h) / (math.pi * h)
-    return replace(c, frequency=f_true, method="ringdown",
-                   notes=f"{notes}; {c.notes}" if c.notes else notes)
+    return replace(
+        c, frequency=f_true, method="ringdown", notes=f"{notes}; {c.notes}" if c.notes else notes
+    )

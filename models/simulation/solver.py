@@ -6,6 +6,7 @@
 (:mod:`~iwan_element.models.simulation.forced`). The damping floor is in
 :mod:`~iwan_element.models.reduced.damping`.
 """
+
 from __future__ import annotations
 
 import exudyn as exu

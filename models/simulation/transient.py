@@ -25,6 +25,7 @@ exactly. The specimen's vibration effects on a released mode act as a modal forc
 (:mod:`~iwan_element.models.simulation.modal_force`). ``docs/multi_mode.md`` describes the
 multi-mode run and the coupling of the modes through the interface.
 """
+
 from __future__ import annotations
 
 import math
@@ -64,8 +65,9 @@ def _amplitudes(mode, amplitude) -> dict:
     """``{mode: amplitude}`` (ascending modes) from a float with ``mode`` or a dict."""
     if isinstance(amplitude, dict):
         if mode is not None:
-            raise ValueError("mode must not be given with a dict amplitude (its keys are the "
-                             "modes)")
+            raise ValueError(
+                "mode must not be given with a dict amplitude (its keys are the modes)"
+            )
         amp = dict(amplitude)
     else:
         amp = {1 if mode is None else mode: amplitude}
@@ -74,26 +76,33 @@ def _amplitudes(mode, amplitude) -> dict:
     for r, X in amp.items():
         if isinstance(r, bool) or not isinstance(r, (int, np.integer)) or r < 1:
             raise ValueError(f"mode must be an integer >= 1 (1: first elastic mode), got {r!r}")
-        if isinstance(X, bool) or not (isinstance(X, (int, float)) and math.isfinite(X)
-                                       and X > 0):
-            raise ValueError(f"amplitude must be a finite displacement > 0 [m] for each mode, "
-                             f"got {X!r} for mode {r}")
+        if isinstance(X, bool) or not (isinstance(X, (int, float)) and math.isfinite(X) and X > 0):
+            raise ValueError(
+                f"amplitude must be a finite displacement > 0 [m] for each mode, "
+                f"got {X!r} for mode {r}"
+            )
     return {int(r): float(amp[r]) for r in sorted(amp)}
 
 
 def _check_args(specimen, steps_per_period, n_periods, cycles, duration):
     """Checks of :func:`ringdown`'s other arguments: ``(n_periods, cycles, duration)``."""
     check_specimen(specimen)
-    if isinstance(steps_per_period, bool) or not isinstance(steps_per_period, int) \
-            or steps_per_period < 16:
+    if (
+        isinstance(steps_per_period, bool)
+        or not isinstance(steps_per_period, int)
+        or steps_per_period < 16
+    ):
         raise ValueError(f"steps_per_period must be an integer >= 16, got {steps_per_period!r}")
     n_periods = check_scalar("n_periods", n_periods, low=3.0, high=1000.0)
     if cycles is not None and duration is not None:
         raise ValueError("give cycles or duration, not both")
     if duration is not None:
         return n_periods, None, check_scalar("duration", duration, low=0.0, low_open=True)
-    return n_periods, check_scalar("cycles", 30.0 if cycles is None else cycles, low=2.0,
-                                   low_open=True), None
+    return (
+        n_periods,
+        check_scalar("cycles", 30.0 if cycles is None else cycles, low=2.0, low_open=True),
+        None,
+    )
 
 
 def _release(specimen: Specimen, amp: dict) -> dict:
@@ -101,9 +110,13 @@ def _release(specimen: Specimen, amp: dict) -> dict:
     reaching its amplitude at the sensor (:func:`static_modal_load`), and the modes.
     """
     sts = [static_modal_load(specimen, [X], mode=r) for r, X in amp.items()]
-    return {"x": sum(st["x"][0] for st in sts), "slip": sum(st["slip"][0] for st in sts),
-            "system": sts[0]["system"], "phi": [st["phi"] for st in sts],
-            "omega0": np.array([st["omega0"] for st in sts])}
+    return {
+        "x": sum(st["x"][0] for st in sts),
+        "slip": sum(st["slip"][0] for st in sts),
+        "system": sts[0]["system"],
+        "phi": [st["phi"] for st in sts],
+        "omega0": np.array([st["omega0"] for st in sts]),
+    }
 
 
 def _start(specimen: Specimen, mode, amplitude, impact, modes):
@@ -122,15 +135,21 @@ def _start(specimen: Specimen, mode, amplitude, impact, modes):
     if mode is not None:
         raise ValueError("mode is for a release; give an impact's modes as modes=(1, 2, ...)")
     if impact.position > specimen.total_length:
-        raise ValueError(f"impact position must lie on the assembly (<= "
-                         f"{specimen.total_length:.6g} m), got {impact.position!r}")
+        raise ValueError(
+            f"impact position must lie on the assembly (<= "
+            f"{specimen.total_length:.6g} m), got {impact.position!r}"
+        )
     ms = (1,) if modes is None else tuple(modes)
-    amp = _amplitudes(None, dict.fromkeys(ms, 1.0))          # checks the modes
+    amp = _amplitudes(None, dict.fromkeys(ms, 1.0))  # checks the modes
     lm = [linear_modes(specimen, mode=r) for r in amp]
     L = lm[0][3]
     return dict.fromkeys(amp), {
-        "x": np.zeros(L.M.shape[0]), "slip": np.zeros(L.G.shape[0]), "system": L,
-        "phi": [m[1] for m in lm], "omega0": np.array([m[0] for m in lm])}
+        "x": np.zeros(L.M.shape[0]),
+        "slip": np.zeros(L.G.shape[0]),
+        "system": L,
+        "phi": [m[1] for m in lm],
+        "omega0": np.array([m[0] for m in lm]),
+    }
 
 
 def _initial_energy(model, rel, effs, tangential) -> tuple:
@@ -152,8 +171,10 @@ def check_solid_release(specimen: SolidSpecimen, modes) -> None:
     the sensor could not set it).
     """
     if specimen.model.axis is None:
-        raise ValueError("specimen.model holds no axis rows (SolidModel.axis): build the solid "
-                         "with models.solid.solid_specimen")
+        raise ValueError(
+            "specimen.model holds no axis rows (SolidModel.axis): build the solid "
+            "with models.solid.solid_specimen"
+        )
     for r in modes:
         _, phi, _, L, _ = linear_modes(specimen, mode=r)
         along = np.max(np.abs(axis_rows(specimen, specimen.model.axis[0]) @ phi))
@@ -164,15 +185,27 @@ def check_solid_release(specimen: SolidSpecimen, modes) -> None:
                 "z displacement along the axis (an in-plane or torsion mode): its release "
                 "amplitude at the sensor cannot set it. The solid numbers its stuck modes "
                 "as natural_frequencies does (the Brake-Reuss solid: 1 first height bending, "
-                "2 in-plane bending, 3 second height bending); release height-bending modes")
+                "2 in-plane bending, 3 second height bending); release height-bending modes"
+            )
 
 
-def ringdown(specimen: Specimen | SolidSpecimen, *, mode: int | None = None, amplitude=None,
-             impact: Impact | None = None, modes=None, sensors=None,
-             duration: float | None = None, cycles: float | None = None,
-             steps_per_period: int = 64, n_periods: float = 3.0, record_energy: bool = False,
-             joint_elements: bool = False, progress: bool = False,
-             tangential: str = "iwan") -> RingdownResult:
+def ringdown(
+    specimen: Specimen | SolidSpecimen,
+    *,
+    mode: int | None = None,
+    amplitude=None,
+    impact: Impact | None = None,
+    modes=None,
+    sensors=None,
+    duration: float | None = None,
+    cycles: float | None = None,
+    steps_per_period: int = 64,
+    n_periods: float = 3.0,
+    record_energy: bool = False,
+    joint_elements: bool = False,
+    progress: bool = False,
+    tangential: str = "iwan",
+) -> RingdownResult:
     """Release the specimen from a static deflection in one or several modes' load shapes,
     or strike it (``impact``); let it ring down through the interface.
 
@@ -236,19 +269,28 @@ def ringdown(specimen: Specimen | SolidSpecimen, *, mode: int | None = None, amp
     an explicit function of the slip given the committed state, which changes only in the
     post-step of an accepted step.
     """
-    n_periods, cycles, duration = _check_args(specimen, steps_per_period, n_periods, cycles,
-                                              duration)
+    n_periods, cycles, duration = _check_args(
+        specimen, steps_per_period, n_periods, cycles, duration
+    )
     if tangential not in ("iwan", "linear"):
         raise ValueError(f"tangential must be 'iwan' or 'linear', got {tangential!r}")
     if isinstance(specimen, SolidSpecimen):
         check_solid_release(specimen, () if amplitude is None else _amplitudes(mode, amplitude))
     amp, rel = _start(specimen, mode, amplitude, impact, modes)
-    positions = np.atleast_1d(np.asarray(
-        specimen.sensor_position if sensors is None else sensors, float))
+    positions = np.atleast_1d(
+        np.asarray(specimen.sensor_position if sensors is None else sensors, float)
+    )
     rows = axis_rows(specimen, positions)
-    opts = {"n_periods": n_periods, "steps_per_period": steps_per_period,
-            "duration": duration, "cycles": cycles, "record_energy": record_energy,
-            "joint_elements": joint_elements, "progress": progress, "tangential": tangential}
+    opts = {
+        "n_periods": n_periods,
+        "steps_per_period": steps_per_period,
+        "duration": duration,
+        "cycles": cycles,
+        "record_energy": record_energy,
+        "joint_elements": joint_elements,
+        "progress": progress,
+        "tangential": tangential,
+    }
     return _run(specimen, amp, rel, rows, positions, opts, impact)
 
 
@@ -259,13 +301,22 @@ def _run(specimen, amp, rel, rows, positions, opts, impact):
     """
     tangential, record_energy = opts["tangential"], opts["record_energy"]
     L, w0 = rel["system"], rel["omega0"]
-    effs = [ModalEffects(specimen, r, L, phi, w) for r, phi, w in zip(amp, rel["phi"], w0)
-            if any(e.mode == r for e in specimen.effects)]
+    effs = [
+        ModalEffects(specimen, r, L, phi, w)
+        for r, phi, w in zip(amp, rel["phi"], w0)
+        if any(e.mode == r for e in specimen.effects)
+    ]
     fw = FloorWork(None)
     rec = Recorder(effs, fw, record_energy)
     ports = {"impact": axis_rows(specimen, [impact.position])[0]} if impact is not None else None
-    model = build_host(specimen, tangential=tangential, post_step=rec, ports=ports,
-                       joint_elements=opts["joint_elements"], assemble=False)
+    model = build_host(
+        specimen,
+        tangential=tangential,
+        post_step=rec,
+        ports=ports,
+        joint_elements=opts["joint_elements"],
+        assemble=False,
+    )
     fw.C = model.floor_C
     rec.model = model
     for eff in effs:
@@ -276,21 +327,49 @@ def _run(specimen, amp, rel, rows, positions, opts, impact):
     model.mbs.Assemble()
     model.set_state(rel["x"])
     kin0, e0 = _initial_energy(model, rel, effs, tangential)
-    h, n = step_grid(w0, opts["steps_per_period"], duration=opts["duration"],
-                     cycles=opts["cycles"], impact=impact)
+    h, n = step_grid(
+        w0,
+        opts["steps_per_period"],
+        duration=opts["duration"],
+        cycles=opts["cycles"],
+        impact=impact,
+    )
     z0 = model.T_inv @ rel["x"]
-    sim = solver_settings(force_scale=max(float(np.max(np.abs((model.Kb + model.Ks) @ z0))),
-                                          0.0 if impact is None else abs(impact.peak_force)))
+    sim = solver_settings(
+        force_scale=max(
+            float(np.max(np.abs((model.Kb + model.Ks) @ z0))),
+            0.0 if impact is None else abs(impact.peak_force),
+        )
+    )
     sim.linearSolver.solverType = exu.LinearSolverType.EigenDense
     sim.timeIntegration.numberOfSteps = n
     sim.timeIntegration.endTime = n * h
     solve = solve_timed(model.mbs, sim, rec, n, opts["progress"])
-    quad = joint_records(model.interface, rec.energy, e0 + rec.work_in) if record_energy \
-        else None
+    quad = joint_records(model.interface, rec.energy, e0 + rec.work_in) if record_energy else None
     X = model.to_free(np.array(rec.coords))
-    return with_energy_warning(build_result(specimen, amp, rec, X, rel, rows, positions, h, n, {
-        "n_periods": opts["n_periods"], "steps_per_period": opts["steps_per_period"],
-        "solve": solve, "e0": e0, "kin0": kin0, "quad": quad, "n_points": len(model.points),
-        "overflow": len(getattr(model.interface, "overflow_times", ())),
-        "effects": tuple(nm for eff in effs for nm in eff.names), "impact": impact,
-        "extra": {"tangential": tangential, "n_coordinates": int(model.T.shape[1])}}))
+    return with_energy_warning(
+        build_result(
+            specimen,
+            amp,
+            rec,
+            X,
+            rel,
+            rows,
+            positions,
+            h,
+            n,
+            {
+                "n_periods": opts["n_periods"],
+                "steps_per_period": opts["steps_per_period"],
+                "solve": solve,
+                "e0": e0,
+                "kin0": kin0,
+                "quad": quad,
+                "n_points": len(model.points),
+                "overflow": len(getattr(model.interface, "overflow_times", ())),
+                "effects": tuple(nm for eff in effs for nm in eff.names),
+                "impact": impact,
+                "extra": {"tangential": tangential, "n_coordinates": int(model.T.shape[1])},
+            },
+        )
+    )

@@ -30,6 +30,7 @@
    patches, nothing stiffens the lap. Cost: one sparse factorisation of the full system;
    the reduced size is ``6 + n_modes + 3 n_patches``.
 """
+
 from __future__ import annotations
 
 import logging
@@ -52,8 +53,8 @@ __all__ = ["patch_layout", "solid_specimen", "solid_preset"]
 
 log = logging.getLogger(__name__)
 
-_SHIFT = (2 * math.pi * 1.0) ** 2       # mass shift of the factorised K_ref [1/s^2]
-AXIS_STEP = 1e-3                        # grid of the stored sensor rows along the axis [m]
+_SHIFT = (2 * math.pi * 1.0) ** 2  # mass shift of the factorised K_ref [1/s^2]
+AXIS_STEP = 1e-3  # grid of the stored sensor rows along the axis [m]
 
 
 def patch_layout(specimen: Specimen, *, patch_size: float) -> PatchLayout:
@@ -65,7 +66,7 @@ def patch_layout(specimen: Specimen, *, patch_size: float) -> PatchLayout:
     _check_build(s, patch_size, 1)
     nx = max(1, int(round(s.overlap / patch_size)))
     ny = max(1, int(round(s.width / patch_size)))
-    k = 24                                  # pressure samples per cell and direction
+    k = 24  # pressure samples per cell and direction
     xg, yg, p = pressure_field(s, nx=nx * k, ny=ny * k)
     dA = (s.overlap / xg.size) * (s.width / yg.size)
     N = p.reshape(nx, k, ny, k).sum(axis=(1, 3)) * dA
@@ -80,9 +81,15 @@ def patch_layout(specimen: Specimen, *, patch_size: float) -> PatchLayout:
     yc = (np.arange(ny) + 0.5) * s.width / ny - 0.5 * s.width
     X, Y = np.meshgrid(xc, yc, indexing="ij")
     keep = (N > 1e-9 * s.preload) & (A > 0)
-    return PatchLayout(x=cx[keep], y=cy[keep], normal_force=N[keep], area=A[keep],
-                       preload=s.preload, size=(s.overlap / nx, s.width / ny),
-                       cells=np.column_stack([X[keep], Y[keep]]))
+    return PatchLayout(
+        x=cx[keep],
+        y=cy[keep],
+        normal_force=N[keep],
+        area=A[keep],
+        preload=s.preload,
+        size=(s.overlap / nx, s.width / ny),
+        cells=np.column_stack([X[keep], Y[keep]]),
+    )
 
 
 def _in_contact(specimen: Specimen, xy: np.ndarray) -> np.ndarray:
@@ -90,8 +97,9 @@ def _in_contact(specimen: Specimen, xy: np.ndarray) -> np.ndarray:
     where :func:`~iwan_element.models.specimens.contact.pressure_field` is non-zero).
     """
     s = specimen
-    r = np.hypot(xy[:, None, 0] - s.lap_start - np.asarray(s.bolt_positions)[None, :],
-                 xy[:, None, 1])
+    r = np.hypot(
+        xy[:, None, 0] - s.lap_start - np.asarray(s.bolt_positions)[None, :], xy[:, None, 1]
+    )
     return np.any((r >= 0.5 * s.bolt_diameter) & (r <= s.cone_radius), axis=1)
 
 
@@ -101,13 +109,13 @@ def _face_samples(part: SolidPart, n: int = 6):
     coordinates (m, 3))``: ``sum w u(point)`` integrates the linearly interpolated ``u``.
     """
     i, j = np.meshgrid(np.arange(n), np.arange(n), indexing="ij")
-    up = (i + j <= n - 1)
-    dn = (i + j <= n - 2)
+    up = i + j <= n - 1
+    dn = i + j <= n - 2
     l1 = np.concatenate([(i[up] + 1 / 3), (i[dn] + 2 / 3)]) / n
     l2 = np.concatenate([(j[up] + 1 / 3), (j[dn] + 2 / 3)]) / n
-    lam = np.column_stack([1 - l1 - l2, l1, l2])                   # (n^2, 3)
+    lam = np.column_stack([1 - l1 - l2, l1, l2])  # (n^2, 3)
     _, area = part.face_areas()
-    P = part.positions[part.face_triangles][:, :, :2]               # (n_tri, 3, 2)
+    P = part.positions[part.face_triangles][:, :, :2]  # (n_tri, 3, 2)
     pts = np.einsum("sk,tkd->tsd", lam, P).reshape(-1, 2)
     w = np.repeat(area / len(lam), len(lam))
     nodes = np.repeat(part.face_triangles, len(lam), axis=0)
@@ -131,15 +139,18 @@ def _patch_average(part: SolidPart, patches: PatchLayout, specimen: Specimen) ->
     lookup[ckey[:, 0], ckey[:, 1]] = np.arange(len(patches))
     pat = lookup[key[:, 0], key[:, 1]]
     ok = pat >= 0
-    W = sp.csr_matrix(((w[ok, None] * lam[ok]).ravel(), (np.repeat(pat[ok], 3),
-                                                         nodes[ok].ravel())),
-                      shape=(len(patches), len(part.positions)))
+    W = sp.csr_matrix(
+        ((w[ok, None] * lam[ok]).ravel(), (np.repeat(pat[ok], 3), nodes[ok].ravel())),
+        shape=(len(patches), len(part.positions)),
+    )
     W.sum_duplicates()
     tot = np.asarray(W.sum(axis=1)).ravel()
     if np.any(tot <= 0):
-        raise ValueError(f"{int(np.sum(tot <= 0))} contact patches hold no part of part "
-                         f"{part.name}'s contact face: mesh the face finer than the patch size "
-                         f"{patches.size} m (lap_mesh_size) or enlarge patch_size")
+        raise ValueError(
+            f"{int(np.sum(tot <= 0))} contact patches hold no part of part "
+            f"{part.name}'s contact face: mesh the face finer than the patch size "
+            f"{patches.size} m (lap_mesh_size) or enlarge patch_size"
+        )
     W = (sp.diags(1.0 / tot) @ W).tocsr()
     # least-norm correction of each patch's weights so that its point (the weighted node
     # position in the lap plane) is its contact area's centroid on both faces: a rigid-body
@@ -158,13 +169,15 @@ def _slip_operator(specimen: Specimen, a: SolidPart, b: SolidPart, patches: Patc
     patch average minus A's, on the coordinates [A's, B's] (x, y, z per node).
     """
     Wa, Wb = _patch_average(a, patches, specimen), _patch_average(b, patches, specimen)
+
     def rows(d):
         ea = sp.kron(Wa, sp.csr_matrix(np.eye(3)[d]))
         eb = sp.kron(Wb, sp.csr_matrix(np.eye(3)[d]))
         return sp.hstack([-ea, eb]).tocsr()
+
     gx, gy, gz = rows(0), rows(1), rows(2)
     n = len(patches)
-    order = np.arange(2 * n).reshape(2, n).T.ravel()       # x0, y0, x1, y1, ...
+    order = np.arange(2 * n).reshape(2, n).T.ravel()  # x0, y0, x1, y1, ...
     return sp.vstack([gx, gy]).tocsr()[order], gz
 
 
@@ -195,13 +208,13 @@ def _clamp_rows(specimen: Specimen, a: SolidPart, n: int) -> sp.csr_matrix:
     r = a.positions[nodes] - a.positions[nodes].mean(axis=0)
     B = np.zeros((3 * nodes.size, 6))
     for i, (x, y, z) in enumerate(r):
-        B[3 * i:3 * i + 3, :3] = np.eye(3)
-        B[3 * i:3 * i + 3, 3:] = [[0.0, z, -y], [-z, 0.0, x], [y, -x, 0.0]]
-    P = np.linalg.pinv(B)                                   # (6, 3 n_face)
+        B[3 * i : 3 * i + 3, :3] = np.eye(3)
+        B[3 * i : 3 * i + 3, 3:] = [[0.0, z, -y], [-z, 0.0, x], [y, -x, 0.0]]
+    P = np.linalg.pinv(B)  # (6, 3 n_face)
     cols = (3 * nodes[:, None] + np.arange(3)).ravel()
-    return sp.csr_matrix((P.ravel(), (np.repeat(np.arange(6), cols.size),
-                                      np.tile(cols, 6))), shape=(6, n))
-
+    return sp.csr_matrix(
+        (P.ravel(), (np.repeat(np.arange(6), cols.size), np.tile(cols, 6))), shape=(6, n)
+    )
 
 
 #: Nodes of the section slab that the z read-out at a point is fitted over.
@@ -253,7 +266,7 @@ def _axis_grid(specimen: Specimen, a: SolidPart, b: SolidPart, T, free):
     for k, v in enumerate(x):
         idx, w = _point_weights(specimen, a, b, v)
         pos = np.minimum(np.searchsorted(free, idx), free.size - 1)
-        ok = free[pos] == idx                   # a clamped node reads zero
+        ok = free[pos] == idx  # a clamped node reads zero
         rows[k] = w[ok] @ T[pos[ok]]
     return x, rows
 
@@ -266,8 +279,12 @@ def _factor(A):
     try:
         from ngsolve.la import SparseMatrixd
     except ImportError:
-        lu = spla.splu(A.tocsc(), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
-                       options={"SymmetricMode": True})
+        lu = spla.splu(
+            A.tocsc(),
+            permc_spec="MMD_AT_PLUS_A",
+            diag_pivot_thresh=0.0,
+            options={"SymmetricMode": True},
+        )
         return lu.solve
     C = A.tocoo()
     mat = SparseMatrixd.CreateFromCOO(C.row, C.col, C.data, A.shape[0], A.shape[1])
@@ -283,6 +300,7 @@ def _factor(A):
             v.data = inv * r
             out[:, k] = v.FV().NumPy()
         return out.reshape(b.shape)
+
     return solve
 
 
@@ -308,18 +326,30 @@ def _check_build(specimen, patch_size, n_modes):
     if not isinstance(specimen, Specimen):
         raise TypeError(f"specimen must be a Specimen, got {type(specimen).__name__}")
     if specimen.boundary not in ("free-free", "clamped-free"):
-        raise ValueError(f"specimen.boundary must be 'free-free' or 'clamped-free' for a solid "
-                         f"specimen, got {specimen.boundary!r}")
-    if isinstance(patch_size, bool) or not isinstance(patch_size, (int, float)) or \
-            not 0 < patch_size <= specimen.overlap:
-        raise ValueError(f"patch_size must be a length in (0, overlap={specimen.overlap}] m, "
-                         f"got {patch_size!r}")
+        raise ValueError(
+            f"specimen.boundary must be 'free-free' or 'clamped-free' for a solid "
+            f"specimen, got {specimen.boundary!r}"
+        )
+    if (
+        isinstance(patch_size, bool)
+        or not isinstance(patch_size, (int, float))
+        or not 0 < patch_size <= specimen.overlap
+    ):
+        raise ValueError(
+            f"patch_size must be a length in (0, overlap={specimen.overlap}] m, got {patch_size!r}"
+        )
     if isinstance(n_modes, bool) or not isinstance(n_modes, int) or n_modes < 1:
         raise ValueError(f"n_modes must be an integer >= 1, got {n_modes!r}")
 
 
-def solid_specimen(specimen: Specimen, parts: tuple, *, patch_size: float = 0.005,
-                   n_modes: int = 20, keep_full: bool = False) -> SolidSpecimen:
+def solid_specimen(
+    specimen: Specimen,
+    parts: tuple,
+    *,
+    patch_size: float = 0.005,
+    n_modes: int = 20,
+    keep_full: bool = False,
+) -> SolidSpecimen:
     """A :class:`SolidSpecimen` from a specimen and its two meshed halves.
 
     Parameters
@@ -354,38 +384,86 @@ def solid_specimen(specimen: Specimen, parts: tuple, *, patch_size: float = 0.00
     E = _point_row(specimen, a, b, specimen.excitation.position)
     fixed = _fixed_coordinates(specimen, a)
     free = np.setdiff1d(np.arange(M.shape[0]), fixed)
-    Gc = (_clamp_rows(specimen, a, M.shape[0]) if specimen.setup.clamp is not None
-          else sp.csr_matrix((0, M.shape[0])))
-    M, K0, Kb, Gt, Gn, Gc, S, E = (M[free][:, free], K0[free][:, free], Kb[free][:, free],
-                                   Gt[:, free], Gn[:, free], Gc[:, free], S[free], E[free])
+    Gc = (
+        _clamp_rows(specimen, a, M.shape[0])
+        if specimen.setup.clamp is not None
+        else sp.csr_matrix((0, M.shape[0]))
+    )
+    M, K0, Kb, Gt, Gn, Gc, S, E = (
+        M[free][:, free],
+        K0[free][:, free],
+        Kb[free][:, free],
+        Gt[:, free],
+        Gn[:, free],
+        Gc[:, free],
+        S[free],
+        E[free],
+    )
     if Gc.shape[0]:
         K0 = (K0 + Gc.T @ sp.diags(clamp_stiffness(specimen.setup.clamp)) @ Gc).tocsr()
     KT = solid_contact_points(specimen, patches).KT
     K_ref = (K0 + Gt.T @ sp.diags(KT) @ Gt).tocsr()
     n_rigid = 6 if specimen.boundary == "free-free" else 0
     T, w2 = _ritz_basis(K_ref, M, sp.vstack([Gt, Gn, Gc]).tocsr(), n_rigid + n_modes)
-    red = LinearSystem(M=T.T @ (M @ T), K0=T.T @ (K0 @ T), Kb=T.T @ (Kb @ T), G=Gt @ T,
-                       S=S @ T, free=np.arange(T.shape[1]), n_coordinates=T.shape[1],
-                       rigid_body_modes=n_rigid, E=E @ T)
+    red = LinearSystem(
+        M=T.T @ (M @ T),
+        K0=T.T @ (K0 @ T),
+        Kb=T.T @ (Kb @ T),
+        G=Gt @ T,
+        S=S @ T,
+        free=np.arange(T.shape[1]),
+        n_coordinates=T.shape[1],
+        rigid_body_modes=n_rigid,
+        E=E @ T,
+    )
     axis = _axis_grid(specimen, a, b, T, free)
-    info = {"n_full": int(M.shape[0]), "n_reduced": int(T.shape[1]), "n_modes": n_modes,
-            "n_patches": len(patches), "patch_size": [float(v) for v in patches.size],
-            "reduction_s": time.perf_counter() - t0,
-            "stuck_frequencies_hz": (np.sqrt(np.abs(w2[n_rigid:])) / (2 * math.pi)).tolist()}
-    full = {"M": M, "K0": K0, "Kb": Kb, "G": Gt, "Gn": Gn, "S": S, "basis": T,
-            "free": free} if keep_full else None
-    log.info("solid %s: %d -> %d coordinates, %d patches, %.2f s", specimen.name, M.shape[0],
-             T.shape[1], len(patches), info["reduction_s"])
-    return SolidSpecimen(specimen, SolidModel(system=red, patches=patches, info=info, full=full,
-                                              normal_gaps=Gn @ T, axis=axis,
-                                              material=(specimen.youngs_modulus,
-                                                        specimen.density),
-                                              clamp_rows=Gc @ T if Gc.shape[0] else None))
+    info = {
+        "n_full": int(M.shape[0]),
+        "n_reduced": int(T.shape[1]),
+        "n_modes": n_modes,
+        "n_patches": len(patches),
+        "patch_size": [float(v) for v in patches.size],
+        "reduction_s": time.perf_counter() - t0,
+        "stuck_frequencies_hz": (np.sqrt(np.abs(w2[n_rigid:])) / (2 * math.pi)).tolist(),
+    }
+    full = (
+        {"M": M, "K0": K0, "Kb": Kb, "G": Gt, "Gn": Gn, "S": S, "basis": T, "free": free}
+        if keep_full
+        else None
+    )
+    log.info(
+        "solid %s: %d -> %d coordinates, %d patches, %.2f s",
+        specimen.name,
+        M.shape[0],
+        T.shape[1],
+        len(patches),
+        info["reduction_s"],
+    )
+    return SolidSpecimen(
+        specimen,
+        SolidModel(
+            system=red,
+            patches=patches,
+            info=info,
+            full=full,
+            normal_gaps=Gn @ T,
+            axis=axis,
+            material=(specimen.youngs_modulus, specimen.density),
+            clamp_rows=Gc @ T if Gc.shape[0] else None,
+        ),
+    )
 
 
-def solid_preset(name: str, *, mesh_size: float = 0.008, lap_mesh_size: float | None = None,
-                 patch_size: float = 0.005, n_modes: int = 20,
-                 poissons_ratio: float = 0.3, holes: bool = True) -> SolidSpecimen:
+def solid_preset(
+    name: str,
+    *,
+    mesh_size: float = 0.008,
+    lap_mesh_size: float | None = None,
+    patch_size: float = 0.005,
+    n_modes: int = 20,
+    poissons_ratio: float = 0.3,
+    holes: bool = True,
+) -> SolidSpecimen:
     """A preset (:func:`~iwan_element.models.specimens.presets.preset`) as a solid specimen: its two
     halves meshed from its dimensions (:func:`~iwan_element.models.solid.lap_beam_parts`),
     patched and reduced (:func:`solid_specimen`). Needs the extra ``iwan-element[fem]``.
@@ -408,10 +486,16 @@ def solid_preset(name: str, *, mesh_size: float = 0.008, lap_mesh_size: float | 
     _check_build(s, patch_size, n_modes)
     lms = min(mesh_size, 0.5 * patch_size) if lap_mesh_size is None else lap_mesh_size
     t0 = time.perf_counter()
-    parts = lap_beam_parts(s, mesh_size=mesh_size, lap_mesh_size=lms,
-                           poissons_ratio=poissons_ratio, holes=holes)
+    parts = lap_beam_parts(
+        s, mesh_size=mesh_size, lap_mesh_size=lms, poissons_ratio=poissons_ratio, holes=holes
+    )
     t_mesh = time.perf_counter() - t0
     solid = solid_specimen(s, parts, patch_size=patch_size, n_modes=n_modes)
-    solid.model.info.update(mesh_s=t_mesh, mesh_size=mesh_size, lap_mesh_size=lms,
-                            poissons_ratio=poissons_ratio, holes=holes)
+    solid.model.info.update(
+        mesh_s=t_mesh,
+        mesh_size=mesh_size,
+        lap_mesh_size=lms,
+        poissons_ratio=poissons_ratio,
+        holes=holes,
+    )
     return solid

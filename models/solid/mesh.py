@@ -23,6 +23,7 @@ it, beam B above. :func:`lap_beam_parts` cuts the bolt holes (``holes=True``); b
 washers are not meshed (the cone pressure is zero inside the holes).
 NGsolve is the optional extra ``iwan-element[fem]``; it is imported only when meshing.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -62,8 +63,10 @@ class SolidPart:
     def __post_init__(self):
         n = 3 * len(self.positions)
         if self.M.shape != (n, n) or self.K.shape != (n, n):
-            raise ValueError(f"M and K must be ({n}, {n}) for {n // 3} nodes (x, y, z per node), "
-                             f"got {self.M.shape} and {self.K.shape}")
+            raise ValueError(
+                f"M and K must be ({n}, {n}) for {n // 3} nodes (x, y, z per node), "
+                f"got {self.M.shape} and {self.K.shape}"
+            )
 
     @property
     def n_coordinates(self) -> int:
@@ -92,22 +95,39 @@ def part_from_fem(fem, *, contact_nodes, name: str = "part") -> SolidPart:
     pos = np.asarray(fem.GetNodePositionsAsArray(), float)
     nodes = np.unique(np.asarray(contact_nodes, dtype=int))
     if nodes.size < 3 or nodes.min() < 0 or nodes.max() >= len(pos):
-        raise ValueError(f"contact_nodes must hold >= 3 node indices in [0, {len(pos)}), "
-                         f"got {nodes.size} (range {nodes.min() if nodes.size else None}.."
-                         f"{nodes.max() if nodes.size else None})")
+        raise ValueError(
+            f"contact_nodes must hold >= 3 node indices in [0, {len(pos)}), "
+            f"got {nodes.size} (range {nodes.min() if nodes.size else None}.."
+            f"{nodes.max() if nodes.size else None})"
+        )
     trigs = np.asarray(fem.GetSurfaceTriangles(), dtype=int).reshape(-1, 3)
     inset = np.zeros(len(pos), bool)
     inset[nodes] = True
     face = trigs[inset[trigs].all(axis=1)]
     if face.size == 0:
-        raise ValueError("contact_nodes span no surface triangle of the FE model (call "
-                         "fem.VolumeToSurfaceElements() after an Abaqus/ANSYS import)")
-    return SolidPart(name=name, positions=pos, M=sp.csr_matrix(fem.GetMassMatrix()),
-                     K=sp.csr_matrix(fem.GetStiffnessMatrix()), face_triangles=face, fem=fem)
+        raise ValueError(
+            "contact_nodes span no surface triangle of the FE model (call "
+            "fem.VolumeToSurfaceElements() after an Abaqus/ANSYS import)"
+        )
+    return SolidPart(
+        name=name,
+        positions=pos,
+        M=sp.csr_matrix(fem.GetMassMatrix()),
+        K=sp.csr_matrix(fem.GetStiffnessMatrix()),
+        face_triangles=face,
+        fem=fem,
+    )
 
 
-def part_from_ngsolve(mesh, *, contact_face: str, youngs_modulus: float, poissons_ratio: float,
-                      density: float, name: str = "part") -> SolidPart:
+def part_from_ngsolve(
+    mesh,
+    *,
+    contact_face: str,
+    youngs_modulus: float,
+    poissons_ratio: float,
+    density: float,
+    name: str = "part",
+) -> SolidPart:
     """A part from an NGsolve mesh through ``FEMinterface.ImportMeshFromNGsolve`` (second
     order: the mesh is made second order in place, as exudyn does).
 
@@ -121,18 +141,28 @@ def part_from_ngsolve(mesh, *, contact_face: str, youngs_modulus: float, poisson
     name : str, keyword-only
     """
     from exudyn.FEM import FEMinterface
+
     if contact_face not in set(mesh.GetBoundaries()):
-        raise ValueError(f"contact_face must be a boundary name of the mesh, one of "
-                         f"{sorted(set(mesh.GetBoundaries()))}, got {contact_face!r}")
-    for label, v, lo, hi in (("youngs_modulus", youngs_modulus, 0.0, np.inf),
-                             ("poissons_ratio", poissons_ratio, -1.0, 0.5),
-                             ("density", density, 0.0, np.inf)):
+        raise ValueError(
+            f"contact_face must be a boundary name of the mesh, one of "
+            f"{sorted(set(mesh.GetBoundaries()))}, got {contact_face!r}"
+        )
+    for label, v, lo, hi in (
+        ("youngs_modulus", youngs_modulus, 0.0, np.inf),
+        ("poissons_ratio", poissons_ratio, -1.0, 0.5),
+        ("density", density, 0.0, np.inf),
+    ):
         if not (isinstance(v, (int, float)) and lo < v < hi):
             raise ValueError(f"{label} must be a number in ({lo}, {hi}), got {v!r}")
     fem = FEMinterface()
-    fem.ImportMeshFromNGsolve(mesh, density=float(density), youngsModulus=float(youngs_modulus),
-                              poissonsRatio=float(poissons_ratio), meshOrder=2,
-                              boundaryNamesList=[contact_face])
+    fem.ImportMeshFromNGsolve(
+        mesh,
+        density=float(density),
+        youngsModulus=float(youngs_modulus),
+        poissonsRatio=float(poissons_ratio),
+        meshOrder=2,
+        boundaryNamesList=[contact_face],
+    )
     nodes = next(s["NodeNumbers"] for s in fem.nodeSets if s["Name"] == contact_face)
     return part_from_fem(fem, contact_nodes=nodes, name=name)
 
@@ -147,8 +177,10 @@ def _mesh_boxes(boxes, *, face_z, face_sign, mesh_size, face_mesh_size, holes=()
         import ngsolve as ngs
         from netgen.occ import Box, Cylinder, OCCGeometry, Pnt, Z
     except ImportError as err:
-        raise ImportError("meshing a solid specimen needs NGsolve: pip install "
-                          "\"iwan-element[fem]\" (or pip install ngsolve)") from err
+        raise ImportError(
+            "meshing a solid specimen needs NGsolve: pip install "
+            '"iwan-element[fem]" (or pip install ngsolve)'
+        ) from err
     shape = None
     for lo, hi in boxes:
         b = Box(Pnt(*lo), Pnt(*hi))
@@ -159,7 +191,7 @@ def _mesh_boxes(boxes, *, face_z, face_sign, mesh_size, face_mesh_size, holes=()
         shape = shape - Cylinder(Pnt(x, y, z0 - height), Z, r=r, h=3 * height)
     zmid = np.mean([0.5 * (lo[2] + hi[2]) for lo, hi in boxes])
     for f in shape.faces:
-        lo, hi = f.bounding_box                 # OCC pads it by about 1e-7 m
+        lo, hi = f.bounding_box  # OCC pads it by about 1e-7 m
         flat = abs(lo[2] - face_z) < 1e-6 and abs(hi[2] - face_z) < 1e-6
         if flat and np.sign(face_z - zmid) == face_sign:
             f.name = "lap"
@@ -169,14 +201,24 @@ def _mesh_boxes(boxes, *, face_z, face_sign, mesh_size, face_mesh_size, holes=()
 
 def _check_sizes(specimen, mesh_size, lap_mesh_size):
     for label, v in (("mesh_size", mesh_size), ("lap_mesh_size", lap_mesh_size)):
-        if isinstance(v, bool) or not isinstance(v, (int, float)) or not 0 < v <= specimen.beam_length:
-            raise ValueError(f"{label} must be a length in (0, beam_length="
-                             f"{specimen.beam_length}] m, got {v!r}")
+        if (
+            isinstance(v, bool)
+            or not isinstance(v, (int, float))
+            or not 0 < v <= specimen.beam_length
+        ):
+            raise ValueError(
+                f"{label} must be a length in (0, beam_length={specimen.beam_length}] m, got {v!r}"
+            )
 
 
-def lap_beam_parts(specimen: Specimen, *, mesh_size: float, lap_mesh_size: float,
-                   poissons_ratio: float = 0.3,
-                   holes: bool = True) -> tuple[SolidPart, SolidPart]:
+def lap_beam_parts(
+    specimen: Specimen,
+    *,
+    mesh_size: float,
+    lap_mesh_size: float,
+    poissons_ratio: float = 0.3,
+    holes: bool = True,
+) -> tuple[SolidPart, SolidPart]:
     """The two halves of a specimen's lap-jointed beam, meshed (second-order tetrahedra).
 
     Beam A: ``x`` in ``[0, L]``, height ``thickness`` outside the lap, ``lap_thickness``
@@ -216,26 +258,61 @@ def lap_beam_parts(specimen: Specimen, *, mesh_size: float, lap_mesh_size: float
     cut = [(ls + xb, 0.0, 0.5 * s.bolt_diameter) for xb in s.bolt_positions] if holes else []
     parts = []
     for name, boxes, sign in (("A", a_boxes, +1), ("B", b_boxes, -1)):
-        mesh = _mesh_boxes(boxes, face_z=0.0, face_sign=sign, mesh_size=mesh_size,
-                           face_mesh_size=lap_mesh_size, holes=cut)
-        parts.append(part_from_ngsolve(mesh, contact_face="lap", name=name,
-                                       youngs_modulus=s.youngs_modulus,
-                                       poissons_ratio=poissons_ratio, density=s.density))
+        mesh = _mesh_boxes(
+            boxes,
+            face_z=0.0,
+            face_sign=sign,
+            mesh_size=mesh_size,
+            face_mesh_size=lap_mesh_size,
+            holes=cut,
+        )
+        parts.append(
+            part_from_ngsolve(
+                mesh,
+                contact_face="lap",
+                name=name,
+                youngs_modulus=s.youngs_modulus,
+                poissons_ratio=poissons_ratio,
+                density=s.density,
+            )
+        )
     return parts[0], parts[1]
 
 
-def bar_part(length: float, width: float, height: float, *, youngs_modulus: float,
-             poissons_ratio: float, density: float, mesh_size: float) -> SolidPart:
+def bar_part(
+    length: float,
+    width: float,
+    height: float,
+    *,
+    youngs_modulus: float,
+    poissons_ratio: float,
+    density: float,
+    mesh_size: float,
+) -> SolidPart:
     """A jointless rectangular bar ``[0, length] x [-width/2, width/2] x [-height/2,
     height/2]`` [m], second-order tetrahedra (the Euler-Bernoulli check); its top face is the
     contact face.
     """
-    for label, v in (("length", length), ("width", width), ("height", height),
-                     ("mesh_size", mesh_size)):
+    for label, v in (
+        ("length", length),
+        ("width", width),
+        ("height", height),
+        ("mesh_size", mesh_size),
+    ):
         if isinstance(v, bool) or not isinstance(v, (int, float)) or not v > 0:
             raise ValueError(f"{label} must be a length > 0 [m], got {v!r}")
-    mesh = _mesh_boxes([((0.0, -0.5 * width, -0.5 * height), (length, 0.5 * width, 0.5 * height))],
-                       face_z=0.5 * height, face_sign=+1, mesh_size=mesh_size,
-                       face_mesh_size=mesh_size)
-    return part_from_ngsolve(mesh, contact_face="lap", name="bar", youngs_modulus=youngs_modulus,
-                             poissons_ratio=poissons_ratio, density=density)
+    mesh = _mesh_boxes(
+        [((0.0, -0.5 * width, -0.5 * height), (length, 0.5 * width, 0.5 * height))],
+        face_z=0.5 * height,
+        face_sign=+1,
+        mesh_size=mesh_size,
+        face_mesh_size=mesh_size,
+    )
+    return part_from_ngsolve(
+        mesh,
+        contact_face="lap",
+        name="bar",
+        youngs_modulus=youngs_modulus,
+        poissons_ratio=poissons_ratio,
+        density=density,
+    )

@@ -20,6 +20,7 @@ twice the bolts' preload. Two uncoupled directions make a square friction limit:
 a slip along one axis (the height-bending modes slip along ``x``), ``sqrt(2)`` too strong for a
 diagonal slip (docs/solid.md).
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass, field, fields, replace
@@ -30,16 +31,32 @@ from ..linear.system import attach_setup
 from ..specimens.contact import ContactPoints, points_from_forces
 from ..specimens.specimen import InterfaceModel, Specimen
 
-__all__ = ["PatchLayout", "SolidModel", "SolidSpecimen", "solid_contact_points",
-           "clamp_stiffness"]
+__all__ = ["PatchLayout", "SolidModel", "SolidSpecimen", "solid_contact_points", "clamp_stiffness"]
 
 # Specimen fields a SolidSpecimen may change without rebuilding its bodies: they enter only
 # the Iwan elements, the patches' normal springs (the reduction holds the normal gaps'
 # attachment shapes) and the analyses' damping floor, amplitudes and effects, not M, Kb, G
-_FREE_FIELDS = {"name", "preload", "friction", "amplitude_range", "modal_damping",
-                "calibrated_range", "effects", "reference", "setup", "youngs_modulus", "density"}
-_FREE_INTERFACE = {"stiffness_per_area", "stiffness_pressure_exponent", "chi", "beta",
-                   "damping_floor", "normal_stiffness_per_area"}
+_FREE_FIELDS = {
+    "name",
+    "preload",
+    "friction",
+    "amplitude_range",
+    "modal_damping",
+    "calibrated_range",
+    "effects",
+    "reference",
+    "setup",
+    "youngs_modulus",
+    "density",
+}
+_FREE_INTERFACE = {
+    "stiffness_per_area",
+    "stiffness_pressure_exponent",
+    "chi",
+    "beta",
+    "damping_floor",
+    "normal_stiffness_per_area",
+}
 
 
 @dataclass(frozen=True, eq=False)
@@ -147,13 +164,15 @@ class SolidSpecimen:
             raise TypeError(f"specimen must be a Specimen, got {type(self.specimen).__name__}")
         if not isinstance(self.model, SolidModel):
             raise TypeError(f"model must be a SolidModel, got {type(self.model).__name__}")
-        if (self.specimen.setup.clamp is None) != (self.model.clamp_rows is None) \
-                and self.specimen.boundary != "free-free":
-            raise ValueError("setup.clamp: the solid bodies were built "
-                             + ("with a rigid clamp" if self.model.clamp_rows is None
-                                else "on clamp springs")
-                             + "; a clamp held rigidly and one on springs need different "
-                             "bodies: build the solid with the setup it is to carry")
+        if (self.specimen.setup.clamp is None) != (
+            self.model.clamp_rows is None
+        ) and self.specimen.boundary != "free-free":
+            raise ValueError(
+                "setup.clamp: the solid bodies were built "
+                + ("with a rigid clamp" if self.model.clamp_rows is None else "on clamp springs")
+                + "; a clamp held rigidly and one on springs need different "
+                "bodies: build the solid with the setup it is to carry"
+            )
 
     def __getattr__(self, name):
         if name in ("specimen", "model") or name.startswith("__"):
@@ -173,16 +192,19 @@ class SolidSpecimen:
             old, new = self.specimen.interface, changes["interface"]
             fixed |= {n for n in inames - _FREE_INTERFACE if getattr(old, n) != getattr(new, n)}
         if fixed:
-            raise ValueError(f"{sorted(fixed)} change the solid bodies or their patches; build a "
-                             "new solid (models.solid_preset / models.solid.solid_specimen) "
-                             f"instead; a SolidSpecimen may change {sorted(_FREE_FIELDS | _FREE_INTERFACE)}")
+            raise ValueError(
+                f"{sorted(fixed)} change the solid bodies or their patches; build a "
+                "new solid (models.solid_preset / models.solid.solid_specimen) "
+                f"instead; a SolidSpecimen may change {sorted(_FREE_FIELDS | _FREE_INTERFACE)}"
+            )
         return SolidSpecimen(self.specimen.replace(**changes), self.model)
 
     def with_effects(self, effects: dict, *, mode: int = 1, calibrated_range=None):
         """:meth:`Specimen.with_effects` on the solid (the bodies unchanged)."""
-        return SolidSpecimen(self.specimen.with_effects(effects, mode=mode,
-                                                        calibrated_range=calibrated_range),
-                             self.model)
+        return SolidSpecimen(
+            self.specimen.with_effects(effects, mode=mode, calibrated_range=calibrated_range),
+            self.model,
+        )
 
     def linear_system(self):
         """The reduced :class:`~iwan_element.models.linear.LinearSystem`: the bodies scaled
@@ -205,8 +227,9 @@ class SolidSpecimen:
             Gc = self.model.clamp_rows
             K0 = K0 + Gc.T @ (clamp_stiffness(self.specimen.setup.clamp)[:, None] * Gc)
         L = replace(sysm, M=sR * sysm.M, Kb=Kb, K0=K0, Gn=Gn)
-        return attach_setup(L, self.specimen.setup,
-                            lambda x: (None, self.axis_rows(np.asarray(x, float)), None))
+        return attach_setup(
+            L, self.specimen.setup, lambda x: (None, self.axis_rows(np.asarray(x, float)), None)
+        )
 
     def axis_rows(self, positions) -> np.ndarray:
         """Reduced rows of the z displacement at ``positions`` [m] along the assembly (the
@@ -215,8 +238,9 @@ class SolidSpecimen:
         ``(n, n_reduced)``.
         """
         if self.model.axis is None:
-            raise ValueError("this solid model holds no axis rows: build it with "
-                             "models.solid.solid_specimen")
+            raise ValueError(
+                "this solid model holds no axis rows: build it with models.solid.solid_specimen"
+            )
         x, rows = self.model.axis
         u = np.clip(np.asarray(positions, float) / (x[1] - x[0]), 0, x.size - 1)
         k = np.minimum(np.floor(u).astype(int), x.size - 2)

@@ -1,11 +1,26 @@
 """What a lap-jointed specimen is: its validated description, the published presets, the
 test setup it carries, and the contact pressure and contact points of its lap.
 """
+
 from .contact import ContactPoints, beam_contact_points, points_from_forces, pressure_field
 from .presets import PRESET_SETUPS, PRESETS, preset
 from .setups import Clamp, PointMass, Setup, Shaker
 from .specimen import Excitation, InterfaceModel, Specimen, SpecimenEffect
 
-__all__ = ["Specimen", "InterfaceModel", "Excitation", "SpecimenEffect", "preset", "PRESETS",
-           "PRESET_SETUPS", "Setup", "PointMass", "Shaker", "Clamp", "ContactPoints",
-           "pressure_field", "beam_contact_points", "points_from_forces"]
+__all__ = [
+    "Specimen",
+    "InterfaceModel",
+    "Excitation",
+    "SpecimenEffect",
+    "preset",
+    "PRESETS",
+    "PRESET_SETUPS",
+    "Setup",
+    "PointMass",
+    "Shaker",
+    "Clamp",
+    "ContactPoints",
+    "pressure_field",
+    "beam_contact_points",
+    "points_from_forces",
+]

@@ -18,6 +18,7 @@ over the strip) and contact area ``A_i`` (where ``p > 0``). Its Iwan element has
 element. Points near a cone's edge carry little pressure but comparable area, so they reach
 macroslip first: the microslip of real lap joints.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -59,8 +60,10 @@ def pressure_field(specimen: Specimen, *, nx: int = 600, ny: int = 41):
             shape = inside.astype(float)
         total = shape.sum() * dx * dy
         if total <= 0:
-            raise ValueError("the pressure cone of a bolt has no area on the lap; check the "
-                             "bolt_positions, bolt_diameter and washer_diameter")
+            raise ValueError(
+                "the pressure cone of a bolt has no area on the lap; check the "
+                "bolt_positions, bolt_diameter and washer_diameter"
+            )
         p += shape * (s.preload / total)
     return x, y, p
 
@@ -146,7 +149,14 @@ def points_from_forces(specimen: Specimen, x, normal_force, area) -> ContactPoin
     p_i = N / A
     p_mean = N.sum() / A.sum()
     KT = itf.stiffness_per_area * A * (p_i / p_mean) ** itf.stiffness_pressure_exponent
-    params = tuple(IwanParameters(Fs=float(s.friction * n_), KT=float(k), chi=itf.chi,
-                                  beta=itf.beta) for n_, k in zip(N, KT))
-    return ContactPoints(x=x, normal_force=N, area=A, params=params,
-                         normal_stiffness=itf.normal_stiffness_per_area * A)
+    params = tuple(
+        IwanParameters(Fs=float(s.friction * n_), KT=float(k), chi=itf.chi, beta=itf.beta)
+        for n_, k in zip(N, KT)
+    )
+    return ContactPoints(
+        x=x,
+        normal_force=N,
+        area=A,
+        params=params,
+        normal_stiffness=itf.normal_stiffness_per_area * A,
+    )

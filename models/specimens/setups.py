@@ -32,6 +32,7 @@ includes it (:func:`~iwan_element.models.reduced.dispatch.linear_system`). The r
 Every value has a physical range (``Setup.ranges``, or the defaults of
 :func:`~iwan_element.models.updating.updatable`) that model updating uses as its prior.
 """
+
 from __future__ import annotations
 
 import math
@@ -43,10 +44,14 @@ FORCE_AT = ("gauge", "armature", "passive")
 
 
 def _nonneg(name, v, *, positive=False):
-    if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(float(v)) \
-            or v < 0 or (positive and v == 0):
-        raise ValueError(f"{name} must be a finite number {'>' if positive else '>='} 0, "
-                         f"got {v!r}")
+    if (
+        isinstance(v, bool)
+        or not isinstance(v, (int, float))
+        or not math.isfinite(float(v))
+        or v < 0
+        or (positive and v == 0)
+    ):
+        raise ValueError(f"{name} must be a finite number {'>' if positive else '>='} 0, got {v!r}")
     return float(v)
 
 
@@ -77,8 +82,9 @@ class PointMass:
             raise ValueError(f"name must be a non-empty string, got {self.name!r}")
         object.__setattr__(self, "position", _nonneg("position", self.position))
         object.__setattr__(self, "mass", _nonneg(f"mass of {self.name}", self.mass))
-        object.__setattr__(self, "rotary_inertia",
-                           _nonneg(f"rotary_inertia of {self.name}", self.rotary_inertia))
+        object.__setattr__(
+            self, "rotary_inertia", _nonneg(f"rotary_inertia of {self.name}", self.rotary_inertia)
+        )
 
 
 @dataclass(frozen=True)
@@ -113,14 +119,18 @@ class Shaker:
         object.__setattr__(self, "position", _nonneg("shaker position", self.position))
         for n in ("gauge_mass", "moving_mass", "suspension_stiffness"):
             object.__setattr__(self, n, _nonneg(f"shaker {n}", getattr(self, n)))
-        object.__setattr__(self, "stinger_stiffness",
-                           _nonneg("shaker stinger_stiffness", self.stinger_stiffness,
-                                   positive=True))
+        object.__setattr__(
+            self,
+            "stinger_stiffness",
+            _nonneg("shaker stinger_stiffness", self.stinger_stiffness, positive=True),
+        )
         if self.force_at not in FORCE_AT:
             raise ValueError(f"force_at must be one of {FORCE_AT}, got {self.force_at!r}")
         if self.force_at != "gauge" and self.moving_mass <= 0:
-            raise ValueError(f"moving_mass must be > 0 when the armature is in the model "
-                             f"(force_at={self.force_at!r}), got {self.moving_mass!r}")
+            raise ValueError(
+                f"moving_mass must be > 0 when the armature is in the model "
+                f"(force_at={self.force_at!r}), got {self.moving_mass!r}"
+            )
 
     @property
     def armature(self) -> bool:
@@ -144,10 +154,12 @@ class Clamp:
     rotational: float
 
     def __post_init__(self):
-        object.__setattr__(self, "translational",
-                           _nonneg("clamp translational", self.translational, positive=True))
-        object.__setattr__(self, "rotational",
-                           _nonneg("clamp rotational", self.rotational, positive=True))
+        object.__setattr__(
+            self, "translational", _nonneg("clamp translational", self.translational, positive=True)
+        )
+        object.__setattr__(
+            self, "rotational", _nonneg("clamp rotational", self.rotational, positive=True)
+        )
 
 
 @dataclass(frozen=True)
@@ -194,8 +206,9 @@ class Setup:
         for k, r in rg.items():
             lo, hi = (float(v) for v in r)
             if not (math.isfinite(lo) and math.isfinite(hi) and 0 <= lo < hi):
-                raise ValueError(f"ranges[{k!r}] must be (low, high) with 0 <= low < high, "
-                                 f"got {r!r}")
+                raise ValueError(
+                    f"ranges[{k!r}] must be (low, high) with 0 <= low < high, got {r!r}"
+                )
             rg[k] = (lo, hi)
         object.__setattr__(self, "ranges", tuple(sorted(rg.items())))
 
@@ -209,11 +222,18 @@ class Setup:
         parts = [f"{m.name} {1e3 * m.mass:.3g} g at {m.position:.4g} m" for m in self.masses]
         if self.shaker is not None:
             sh = self.shaker
-            parts.append(f"shaker at {sh.position:.4g} m (gauge {1e3 * sh.gauge_mass:.3g} g"
-                         + (f", moving {1e3 * sh.moving_mass:.3g} g on a stinger of "
-                            f"{sh.stinger_stiffness:.3g} N/m" if sh.armature else "")
-                         + f", force at the {sh.force_at})")
+            parts.append(
+                f"shaker at {sh.position:.4g} m (gauge {1e3 * sh.gauge_mass:.3g} g"
+                + (
+                    f", moving {1e3 * sh.moving_mass:.3g} g on a stinger of "
+                    f"{sh.stinger_stiffness:.3g} N/m"
+                    if sh.armature
+                    else ""
+                )
+                + f", force at the {sh.force_at})"
+            )
         if self.clamp is not None:
-            parts.append(f"clamp {self.clamp.translational:.3g} N/m, "
-                         f"{self.clamp.rotational:.3g} N m/rad")
+            parts.append(
+                f"clamp {self.clamp.translational:.3g} N/m, {self.clamp.rotational:.3g} N m/rad"
+            )
         return f"setup {self.name!r}: " + ("; ".join(parts) if parts else "nothing attached")

@@ -9,6 +9,7 @@ beam A (``x = 0``); beam A occupies ``[0, L]``, beam B ``[L - overlap, 2L - over
 
 The published presets are in :mod:`~iwan_element.models.specimens.presets`.
 """
+
 from __future__ import annotations
 
 import math
@@ -28,8 +29,13 @@ _THEORIES = ("timoshenko", "euler-bernoulli")
 
 
 def _pos(name, v, *, zero=False):
-    if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) \
-            or v < 0 or (v == 0 and not zero):
+    if (
+        isinstance(v, bool)
+        or not isinstance(v, (int, float))
+        or not math.isfinite(v)
+        or v < 0
+        or (v == 0 and not zero)
+    ):
         raise ValueError(f"{name} must be a finite number {'>=' if zero else '>'} 0, got {v!r}")
     return float(v)
 
@@ -83,7 +89,11 @@ class InterfaceModel:
     def __post_init__(self):
         if self.model not in _INTERFACE:
             raise ValueError(f"interface model must be one of {_INTERFACE}, got {self.model!r}")
-        if isinstance(self.n_points, bool) or not isinstance(self.n_points, int) or self.n_points < 2:
+        if (
+            isinstance(self.n_points, bool)
+            or not isinstance(self.n_points, int)
+            or self.n_points < 2
+        ):
             raise ValueError(f"n_points must be an integer >= 2, got {self.n_points!r}")
         _pos("stiffness_per_area", self.stiffness_per_area)
         _pos("normal_stiffness_per_area", self.normal_stiffness_per_area)
@@ -96,7 +106,9 @@ class InterfaceModel:
         _pos("beta", self.beta, zero=True)
         if self.pressure not in _PRESSURE:
             raise ValueError(f"pressure must be one of {_PRESSURE}, got {self.pressure!r}")
-        if not (isinstance(self.cone_angle_deg, (int, float)) and 5.0 <= self.cone_angle_deg <= 60.0):
+        if not (
+            isinstance(self.cone_angle_deg, (int, float)) and 5.0 <= self.cone_angle_deg <= 60.0
+        ):
             raise ValueError(f"cone_angle_deg must be in [5, 60], got {self.cone_angle_deg!r}")
 
 
@@ -146,25 +158,35 @@ class SpecimenEffect:
         cls = EFFECTS.get(self.name)
         if cls is None or not cls.modal_specs:
             known = sorted(n for n, c in EFFECTS.items() if c.modal_specs)
-            raise ValueError(f"name must be an effect with a modal form, one of {known}, "
-                             f"got {self.name!r}")
+            raise ValueError(
+                f"name must be an effect with a modal form, one of {known}, got {self.name!r}"
+            )
         want = {sp.name: sp for sp in cls.modal_specs}
-        vals = {**{k: sp.default for k, sp in want.items() if sp.default is not None},
-                **dict(self.values)}          # a modal value with a default may be left out
+        vals = {
+            **{k: sp.default for k, sp in want.items() if sp.default is not None},
+            **dict(self.values),
+        }  # a modal value with a default may be left out
         if set(vals) != set(want):
             raise ValueError(f"values of {self.name!r} must be {sorted(want)}, got {sorted(vals)}")
         for k, v in vals.items():
             sp = want[k]
-            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) \
-                    or not sp.lower <= v <= sp.upper:
-                raise ValueError(f"{self.name} {k} must be a finite number in [{sp.lower}, "
-                                 f"{sp.upper}] {sp.unit}, got {v!r}")
+            if (
+                isinstance(v, bool)
+                or not isinstance(v, (int, float))
+                or not math.isfinite(v)
+                or not sp.lower <= v <= sp.upper
+            ):
+                raise ValueError(
+                    f"{self.name} {k} must be a finite number in [{sp.lower}, "
+                    f"{sp.upper}] {sp.unit}, got {v!r}"
+                )
         object.__setattr__(self, "values", tuple(sorted((k, float(v)) for k, v in vals.items())))
         if isinstance(self.mode, bool) or not isinstance(self.mode, int) or self.mode < 1:
             raise ValueError(f"mode must be an integer >= 1, got {self.mode!r}")
         if self.calibrated_range is not None:
-            object.__setattr__(self, "calibrated_range",
-                               _range("calibrated_range", self.calibrated_range))
+            object.__setattr__(
+                self, "calibrated_range", _range("calibrated_range", self.calibrated_range)
+            )
 
     @property
     def parameters(self) -> dict:
@@ -275,8 +297,19 @@ class Specimen:
     reference: str = ""
 
     def __post_init__(self):
-        for n in ("beam_length", "width", "thickness", "lap_thickness", "youngs_modulus",
-                  "density", "overlap", "preload", "bolt_diameter", "washer_diameter", "friction"):
+        for n in (
+            "beam_length",
+            "width",
+            "thickness",
+            "lap_thickness",
+            "youngs_modulus",
+            "density",
+            "overlap",
+            "preload",
+            "bolt_diameter",
+            "washer_diameter",
+            "friction",
+        ):
             _pos(n, getattr(self, n))
         nu, kap = self.poissons_ratio, self.shear_coefficient
         if isinstance(nu, bool) or not isinstance(nu, (int, float)) or not -1.0 < nu < 0.5:
@@ -288,15 +321,19 @@ class Specimen:
         if not isinstance(self.setup, Setup):
             raise ValueError(f"setup must be a Setup, got {type(self.setup).__name__}")
         if self.overlap >= self.beam_length:
-            raise ValueError(f"overlap must be < beam_length ({self.beam_length}), got {self.overlap}")
+            raise ValueError(
+                f"overlap must be < beam_length ({self.beam_length}), got {self.overlap}"
+            )
         if self.lap_thickness > self.thickness:
             raise ValueError("lap_thickness must be <= thickness")
         if self.washer_diameter <= self.bolt_diameter:
             raise ValueError("washer_diameter must be > bolt_diameter")
         bp = tuple(float(b) for b in self.bolt_positions)
         if not bp or any(not (0.0 < b < self.overlap) for b in bp):
-            raise ValueError(f"bolt_positions must be a non-empty sequence inside (0, overlap="
-                             f"{self.overlap}) [m], got {self.bolt_positions!r}")
+            raise ValueError(
+                f"bolt_positions must be a non-empty sequence inside (0, overlap="
+                f"{self.overlap}) [m], got {self.bolt_positions!r}"
+            )
         object.__setattr__(self, "bolt_positions", bp)
         if self.boundary not in _BOUNDARIES:
             raise ValueError(f"boundary must be one of {_BOUNDARIES}, got {self.boundary!r}")
@@ -305,35 +342,49 @@ class Specimen:
         if not isinstance(self.interface, InterfaceModel):
             raise ValueError("interface must be an InterfaceModel")
         if not 0.0 <= self.sensor_position <= self.total_length:
-            raise ValueError(f"sensor_position must be in [0, {self.total_length}] m, "
-                             f"got {self.sensor_position!r}")
+            raise ValueError(
+                f"sensor_position must be in [0, {self.total_length}] m, "
+                f"got {self.sensor_position!r}"
+            )
         if self.excitation.position > self.total_length:
             raise ValueError("excitation position must lie on the assembly")
-        for what, x in ([(m.name, m.position) for m in self.setup.masses]
-                        + ([("the shaker", self.setup.shaker.position)]
-                           if self.setup.shaker is not None else [])):
+        for what, x in [(m.name, m.position) for m in self.setup.masses] + (
+            [("the shaker", self.setup.shaker.position)] if self.setup.shaker is not None else []
+        ):
             if not 0.0 <= x <= self.total_length:
-                raise ValueError(f"setup: {what} at {x!r} m must lie on the assembly [0, "
-                                 f"{self.total_length:.6g}] m")
+                raise ValueError(
+                    f"setup: {what} at {x!r} m must lie on the assembly [0, "
+                    f"{self.total_length:.6g}] m"
+                )
         if self.setup.clamp is not None and self.boundary == "free-free":
             raise ValueError("setup.clamp is for a clamped boundary; the specimen is free-free")
         object.__setattr__(self, "amplitude_range", _range("amplitude_range", self.amplitude_range))
         if self.calibrated_range is not None:
-            object.__setattr__(self, "calibrated_range",
-                               _range("calibrated_range", self.calibrated_range))
-        md = tuple(self.modal_damping) if not isinstance(self.modal_damping, (str, bytes)) \
-            else None
-        if md is None or any(isinstance(z, bool) or not isinstance(z, (int, float))
-                             or not math.isfinite(z) or not 0.0 <= z < 0.2 for z in md):
-            raise ValueError("modal_damping must be a sequence of damping ratios in [0, 0.2), "
-                             f"one per elastic mode from mode 1, got {self.modal_damping!r}")
+            object.__setattr__(
+                self, "calibrated_range", _range("calibrated_range", self.calibrated_range)
+            )
+        md = tuple(self.modal_damping) if not isinstance(self.modal_damping, (str, bytes)) else None
+        if md is None or any(
+            isinstance(z, bool)
+            or not isinstance(z, (int, float))
+            or not math.isfinite(z)
+            or not 0.0 <= z < 0.2
+            for z in md
+        ):
+            raise ValueError(
+                "modal_damping must be a sequence of damping ratios in [0, 0.2), "
+                f"one per elastic mode from mode 1, got {self.modal_damping!r}"
+            )
         object.__setattr__(self, "modal_damping", tuple(float(z) for z in md))
         eff = tuple(self.effects)
         if not all(isinstance(e, SpecimenEffect) for e in eff):
             raise ValueError("effects must be a sequence of SpecimenEffect")
         object.__setattr__(self, "effects", eff)
-        if isinstance(self.n_elements, bool) or not isinstance(self.n_elements, int) \
-                or self.n_elements < 4:
+        if (
+            isinstance(self.n_elements, bool)
+            or not isinstance(self.n_elements, int)
+            or self.n_elements < 4
+        ):
             raise ValueError(f"n_elements must be an integer >= 4, got {self.n_elements!r}")
 
     @property
@@ -369,8 +420,9 @@ class Specimen:
         the amplitudes the values were fitted on; the copy's calibrated range then spans
         its own and that one.
         """
-        new = tuple(SpecimenEffect(n, tuple(v.items()), mode, calibrated_range)
-                    for n, v in effects.items())
+        new = tuple(
+            SpecimenEffect(n, tuple(v.items()), mode, calibrated_range) for n, v in effects.items()
+        )
         keep = tuple(e for e in self.effects if not (e.mode == mode and e.name in effects))
         cr = self.calibrated_range
         if calibrated_range is not None:

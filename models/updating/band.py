@@ -1,6 +1,7 @@
 """The natural frequencies a specimen's physical parameter ranges allow (the prior band):
 each parameter drawn from its prior, the stuck modes followed by their shapes (MAC).
 """
+
 from __future__ import annotations
 
 import math
@@ -13,8 +14,15 @@ from .sensitivities import modal_state, pair_modes
 __all__ = ["prior_band"]
 
 
-def prior_band(specimen, *, parameters=("attachments", "boundary"), modes=(1, 2),
-               n: int = 200, rng=None, quantiles=(0.025, 0.5, 0.975)) -> dict:
+def prior_band(
+    specimen,
+    *,
+    parameters=("attachments", "boundary"),
+    modes=(1, 2),
+    n: int = 200,
+    rng=None,
+    quantiles=(0.025, 0.5, 0.975),
+) -> dict:
     """The natural frequencies the physical ranges of ``parameters`` allow: each parameter
     drawn from its prior (:class:`Updatable`: log-normal, or normal for a range from 0,
     clipped to the range), ``n`` draws, the ``quantiles`` of each mode's stuck frequency.
@@ -43,8 +51,9 @@ def prior_band(specimen, *, parameters=("attachments", "boundary"), modes=(1, 2)
     names = (parameters,) if isinstance(parameters, str) else tuple(parameters)
     rows = [u for u in updatable(specimen) if u.group in names or u.name in names]
     if not rows:
-        raise ValueError(f"parameters name no updatable parameter of {specimen.name!r}: "
-                         f"{parameters!r}")
+        raise ValueError(
+            f"parameters name no updatable parameter of {specimen.name!r}: {parameters!r}"
+        )
     gen = np.random.default_rng(rng)
     st0 = modal_state(specimen)
     out = {int(r): [] for r in modes}
@@ -61,6 +70,10 @@ def prior_band(specimen, *, parameters=("attachments", "boundary"), modes=(1, 2)
         pairs = pair_modes(st, st0, out)
         for r, k in pairs.items():
             out[r].append(st.frequency(k))
-    return {r: {"nominal": st0.frequency(st0.index(r)),
-                "quantiles": {float(q): float(np.quantile(v, q)) for q in quantiles}}
-            for r, v in out.items()}
+    return {
+        r: {
+            "nominal": st0.frequency(st0.index(r)),
+            "quantiles": {float(q): float(np.quantile(v, q)) for q in quantiles},
+        }
+        for r, v in out.items()
+    }

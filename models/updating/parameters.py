@@ -12,6 +12,7 @@ Their sensitivities are in :mod:`~iwan_element.models.updating.sensitivities`, t
 their ranges allow in :mod:`~iwan_element.models.updating.band`, the update in
 :mod:`~iwan_element.models.updating.update`.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
@@ -25,17 +26,31 @@ GROUPS = ("material", "boundary", "attachments", "joint")
 
 
 #: Default physical ranges, as factors of the nominal value (when the setup gives none).
-_FACTORS = {"youngs_modulus": (0.9, 1.1), "density": (0.95, 1.05),
-            "stiffness_per_area": (0.1, 10.0), "normal_stiffness_per_area": (0.1, 10.0),
-            "clamp.translational": (0.01, 100.0), "clamp.rotational": (0.01, 100.0),
-            "shaker.stinger_stiffness": (0.1, 10.0), "shaker.suspension_stiffness": (0.1, 10.0)}
-_MASS_RANGE = (0.25, 4.0)           # a mass's range as factors of its nominal
+_FACTORS = {
+    "youngs_modulus": (0.9, 1.1),
+    "density": (0.95, 1.05),
+    "stiffness_per_area": (0.1, 10.0),
+    "normal_stiffness_per_area": (0.1, 10.0),
+    "clamp.translational": (0.01, 100.0),
+    "clamp.rotational": (0.01, 100.0),
+    "shaker.stinger_stiffness": (0.1, 10.0),
+    "shaker.suspension_stiffness": (0.1, 10.0),
+}
+_MASS_RANGE = (0.25, 4.0)  # a mass's range as factors of its nominal
 #: Ranges of values given as 0 (a mass or a suspension not known to be there).
 _ZERO_RANGES = {"mass": (0.0, 0.05), "shaker.suspension_stiffness": (0.0, 2.0e4)}
-_UNITS = {"youngs_modulus": "Pa", "density": "kg/m^3", "stiffness_per_area": "N/m^3",
-          "normal_stiffness_per_area": "N/m^3", "clamp.translational": "N/m",
-          "clamp.rotational": "N m/rad", "shaker.gauge_mass": "kg", "shaker.moving_mass": "kg",
-          "shaker.stinger_stiffness": "N/m", "shaker.suspension_stiffness": "N/m"}
+_UNITS = {
+    "youngs_modulus": "Pa",
+    "density": "kg/m^3",
+    "stiffness_per_area": "N/m^3",
+    "normal_stiffness_per_area": "N/m^3",
+    "clamp.translational": "N/m",
+    "clamp.rotational": "N m/rad",
+    "shaker.gauge_mass": "kg",
+    "shaker.moving_mass": "kg",
+    "shaker.stinger_stiffness": "N/m",
+    "shaker.suspension_stiffness": "N/m",
+}
 
 
 @dataclass(frozen=True)
@@ -74,9 +89,15 @@ class Updatable:
         return self.lower > 0
 
     def to_dict(self) -> dict:
-        return {"name": self.name, "group": self.group, "nominal": self.nominal,
-                "unit": self.unit, "lower": self.lower, "upper": self.upper,
-                "description": self.description}
+        return {
+            "name": self.name,
+            "group": self.group,
+            "nominal": self.nominal,
+            "unit": self.unit,
+            "lower": self.lower,
+            "upper": self.upper,
+            "description": self.description,
+        }
 
 
 def _setup(specimen) -> Setup:
@@ -105,30 +126,67 @@ def updatable(specimen, *, ranges: dict | None = None) -> tuple:
     check_specimen(specimen)
     st = _setup(specimen)
     given = {**dict(st.ranges), **dict(ranges or {})}
-    rows = [("youngs_modulus", "material", specimen.youngs_modulus, "Young's modulus"),
-            ("density", "material", specimen.density, "density")]
+    rows = [
+        ("youngs_modulus", "material", specimen.youngs_modulus, "Young's modulus"),
+        ("density", "material", specimen.density, "density"),
+    ]
     if st.clamp is not None and specimen.boundary != "free-free":
-        rows += [("clamp.translational", "boundary", st.clamp.translational,
-                  "clamp's translational stiffness (axial and transverse)"),
-                 ("clamp.rotational", "boundary", st.clamp.rotational,
-                  "clamp's rotational stiffness")]
-    rows += [(f"mass:{m.name}", "attachments", m.mass, f"point mass at {m.position:.4g} m")
-             for m in st.masses]
+        rows += [
+            (
+                "clamp.translational",
+                "boundary",
+                st.clamp.translational,
+                "clamp's translational stiffness (axial and transverse)",
+            ),
+            ("clamp.rotational", "boundary", st.clamp.rotational, "clamp's rotational stiffness"),
+        ]
+    rows += [
+        (f"mass:{m.name}", "attachments", m.mass, f"point mass at {m.position:.4g} m")
+        for m in st.masses
+    ]
     if st.shaker is not None:
         sh = st.shaker
-        rows += [("shaker.gauge_mass", "attachments", sh.gauge_mass,
-                  "mass below the force gauge's sensing element"),
-                 ("shaker.moving_mass", "attachments", sh.moving_mass,
-                  "shaker's moving mass (armature, stinger, upper gauge)"),
-                 ("shaker.stinger_stiffness", "attachments", sh.stinger_stiffness,
-                  "stinger's axial stiffness"),
-                 ("shaker.suspension_stiffness", "attachments", sh.suspension_stiffness,
-                  "armature's suspension")]
+        rows += [
+            (
+                "shaker.gauge_mass",
+                "attachments",
+                sh.gauge_mass,
+                "mass below the force gauge's sensing element",
+            ),
+            (
+                "shaker.moving_mass",
+                "attachments",
+                sh.moving_mass,
+                "shaker's moving mass (armature, stinger, upper gauge)",
+            ),
+            (
+                "shaker.stinger_stiffness",
+                "attachments",
+                sh.stinger_stiffness,
+                "stinger's axial stiffness",
+            ),
+            (
+                "shaker.suspension_stiffness",
+                "attachments",
+                sh.suspension_stiffness,
+                "armature's suspension",
+            ),
+        ]
     itf = specimen.interface
-    rows += [("stiffness_per_area", "joint", itf.stiffness_per_area,
-              "tangential stiffness per area of the stuck interface"),
-             ("normal_stiffness_per_area", "joint", itf.normal_stiffness_per_area,
-              "normal contact stiffness per area")]
+    rows += [
+        (
+            "stiffness_per_area",
+            "joint",
+            itf.stiffness_per_area,
+            "tangential stiffness per area of the stuck interface",
+        ),
+        (
+            "normal_stiffness_per_area",
+            "joint",
+            itf.normal_stiffness_per_area,
+            "normal contact stiffness per area",
+        ),
+    ]
     out = []
     for name, group, nom, desc in rows:
         unit = "kg" if name.startswith("mass:") else _UNITS[name]
@@ -141,8 +199,9 @@ def updatable(specimen, *, ranges: dict | None = None) -> tuple:
         else:
             lo, hi = _ZERO_RANGES["mass" if unit == "kg" else name]
         if not (0 <= lo <= nom <= hi and lo < hi):
-            raise ValueError(f"the range of {name} must hold its nominal {nom:g} {unit}, "
-                             f"got ({lo:g}, {hi:g})")
+            raise ValueError(
+                f"the range of {name} must hold its nominal {nom:g} {unit}, got ({lo:g}, {hi:g})"
+            )
         out.append(Updatable(name, group, float(nom), unit, lo, hi, desc))
     return tuple(out)
 
@@ -152,8 +211,10 @@ def parameter_value(specimen, name: str) -> float:
     for u in updatable(specimen):
         if u.name == name:
             return u.nominal
-    raise ValueError(f"name must be an updatable parameter of {specimen.name!r} "
-                     f"({[u.name for u in updatable(specimen)]}), got {name!r}")
+    raise ValueError(
+        f"name must be an updatable parameter of {specimen.name!r} "
+        f"({[u.name for u in updatable(specimen)]}), got {name!r}"
+    )
 
 
 def with_parameters(specimen, values: dict):
@@ -165,19 +226,18 @@ def with_parameters(specimen, values: dict):
     sh, cl = st.shaker, st.clamp
     for name, v in values.items():
         v = float(v)
-        if name in ("youngs_modulus", "density", "stiffness_per_area",
-                    "normal_stiffness_per_area"):
+        if name in ("youngs_modulus", "density", "stiffness_per_area", "normal_stiffness_per_area"):
             changes[name] = v
         elif name.startswith("mass:") and name[5:] in masses:
             masses[name[5:]] = replace(masses[name[5:]], mass=v)
         elif name.startswith("shaker.") and sh is not None:
             sh = replace(sh, **{name[7:]: v})
         elif name.startswith("clamp.") and cl is not None:
-            cl = Clamp(**{**{"translational": cl.translational, "rotational": cl.rotational},
-                          name[6:]: v})
+            cl = Clamp(
+                **{**{"translational": cl.translational, "rotational": cl.rotational}, name[6:]: v}
+            )
         else:
-            raise ValueError(f"values: {name!r} is not an updatable parameter of "
-                             f"{specimen.name!r}")
+            raise ValueError(f"values: {name!r} is not an updatable parameter of {specimen.name!r}")
     new_setup = replace(st, masses=tuple(masses.values()), shaker=sh, clamp=cl)
     if new_setup != st:
         changes["setup"] = new_setup

@@ -1,4 +1,5 @@
 """The result of :func:`~iwan_element.models.updating.update.linear_update`."""
+
 from __future__ import annotations
 
 import math
@@ -79,39 +80,73 @@ class LinearUpdateResult(ResultShape):
         return p["frequency"], p["stderr"]
 
     def report(self) -> str:
-        lines = [f"Linear update of {self.initial.name!r}: {self.verdict()}",
-                 f"  {'parameter':34s} {'nominal':>12s} {'updated':>12s} {'stderr':>10s} "
-                 f"{'range':>23s}  status"]
+        lines = [
+            f"Linear update of {self.initial.name!r}: {self.verdict()}",
+            f"  {'parameter':34s} {'nominal':>12s} {'updated':>12s} {'stderr':>10s} "
+            f"{'range':>23s}  status",
+        ]
         for n, p in self.params.items():
             se = f"{p.stderr:.3g}" if math.isfinite(p.stderr) else "n/a"
-            lines.append(f"  {n + ' [' + p.unit + ']':34s} {self.nominal[n]:12.5g} {p.value:12.5g} "
-                         f"{se:>10s} {p.lower:11.4g}..{p.upper:<10.4g}  {p.status}")
-        lines.append("  singular values of the weighted sensitivity: "
-                     + ", ".join(f"{s:.3g}" for s in self.singular_values))
-        lines += table_lines([("target", "<16"), ("measured", "12.6g"), ("before", "12.6g"),
-                              ("after", "12.6g"), ("res. before", "11.3f"),
-                              ("res. after", "10.3f")],
-                             [(r["target"], r["measured"], r["before"], r["after"],
-                               r["residual_before"], r["residual_after"])
-                              for r in self.residuals])
+            lines.append(
+                f"  {n + ' [' + p.unit + ']':34s} {self.nominal[n]:12.5g} {p.value:12.5g} "
+                f"{se:>10s} {p.lower:11.4g}..{p.upper:<10.4g}  {p.status}"
+            )
+        lines.append(
+            "  singular values of the weighted sensitivity: "
+            + ", ".join(f"{s:.3g}" for s in self.singular_values)
+        )
+        lines += table_lines(
+            [
+                ("target", "<16"),
+                ("measured", "12.6g"),
+                ("before", "12.6g"),
+                ("after", "12.6g"),
+                ("res. before", "11.3f"),
+                ("res. after", "10.3f"),
+            ],
+            [
+                (
+                    r["target"],
+                    r["measured"],
+                    r["before"],
+                    r["after"],
+                    r["residual_before"],
+                    r["residual_after"],
+                )
+                for r in self.residuals
+            ],
+        )
         if self.predictions:
-            lines.append("  predicted modes (not targets): frequency +- stderr (parameters "
-                         "only) [Hz], nominal")
-            lines += [f"    mode {m}: {p['frequency']:.5g} +- {p['stderr']:.3g} "
-                      f"({p['parameter_stderr']:.2g}), nominal {p['nominal_frequency']:.5g}"
-                      for m, p in self.predictions.items()]
+            lines.append(
+                "  predicted modes (not targets): frequency +- stderr (parameters "
+                "only) [Hz], nominal"
+            )
+            lines += [
+                f"    mode {m}: {p['frequency']:.5g} +- {p['stderr']:.3g} "
+                f"({p['parameter_stderr']:.2g}), nominal {p['nominal_frequency']:.5g}"
+                for m, p in self.predictions.items()
+            ]
         lines += [f"  warning: {w}" for w in self.warnings]
         return "\n".join(lines)
 
     def to_dict(self) -> dict:
-        return json_safe({"params": self.params.to_dict(), "nominal": self.nominal,
-                          "groups": self.groups, "information": self.information,
-                          "singular_values": list(self.singular_values),
-                          "rows": list(self.residuals),
-                          "predictions": {str(k): v for k, v in self.predictions.items()},
-                          "chi2": self.chi2, "dof": self.dof, "converged": self.converged,
-                          "success": self.success, "model_error": self.model_error,
-                          "warnings": list(self.warnings)})
+        return json_safe(
+            {
+                "params": self.params.to_dict(),
+                "nominal": self.nominal,
+                "groups": self.groups,
+                "information": self.information,
+                "singular_values": list(self.singular_values),
+                "rows": list(self.residuals),
+                "predictions": {str(k): v for k, v in self.predictions.items()},
+                "chi2": self.chi2,
+                "dof": self.dof,
+                "converged": self.converged,
+                "success": self.success,
+                "model_error": self.model_error,
+                "warnings": list(self.warnings),
+            }
+        )
 
     def plot(self, ax=None):
         """Weighted residual of every target before and after (bars); returns the
@@ -119,12 +154,13 @@ class LinearUpdateResult(ResultShape):
         """
         (a,) = panels(ax, 1, figsize=(7, 3.5))
         x = np.arange(len(self.residuals))
-        arts = list(a.bar(x - 0.2, [r["residual_before"] for r in self.residuals], 0.4,
-                          label="before"))
-        arts += list(a.bar(x + 0.2, [r["residual_after"] for r in self.residuals], 0.4,
-                           label="after"))
-        a.set_xticks(x, [r["target"] for r in self.residuals], rotation=45, ha="right",
-                     fontsize=8)
+        arts = list(
+            a.bar(x - 0.2, [r["residual_before"] for r in self.residuals], 0.4, label="before")
+        )
+        arts += list(
+            a.bar(x + 0.2, [r["residual_after"] for r in self.residuals], 0.4, label="after")
+        )
+        a.set_xticks(x, [r["target"] for r in self.residuals], rotation=45, ha="right", fontsize=8)
         a.set(ylabel="residual / stderr [-]")
         a.axhline(0.0, color="k", lw=0.5)
         a.legend(fontsize=8)

@@ -11,6 +11,7 @@ phi_s^T (dK - lambda_r dM) phi_r / (lambda_r - lambda_s) - (phi_r^T dM phi_r / 2
 exact when every mode of the finite system is in the sum, as here (Mottershead, Link,
 Friswell, MSSP 25:2275-2296, 2011; docs/linear_update.md).
 """
+
 from __future__ import annotations
 
 import math
@@ -26,7 +27,7 @@ from .parameters import Updatable, with_parameters
 
 __all__ = ["ModalState", "modal_state", "matrix_derivatives", "modal_sensitivities", "pair_modes"]
 
-_RIGID_HZ = 0.5          # modes below this are not numbered (rigid-body ones), as QSMA's
+_RIGID_HZ = 0.5  # modes below this are not numbered (rigid-body ones), as QSMA's
 
 
 @dataclass(frozen=True, eq=False)
@@ -84,8 +85,15 @@ def modal_state(specimen) -> ModalState:
     s[s == 0] = 1.0
     V = V * s[None, :]
     n_rigid = int(np.sum(lam < (2 * math.pi * _RIGID_HZ) ** 2))
-    return ModalState(K=K, M=M, lam=lam, phi=V, n_rigid=n_rigid, S=np.asarray(L.S),
-                      E=np.asarray(L.E if L.E is not None else L.S))
+    return ModalState(
+        K=K,
+        M=M,
+        lam=lam,
+        phi=V,
+        n_rigid=n_rigid,
+        S=np.asarray(L.S),
+        E=np.asarray(L.E if L.E is not None else L.S),
+    )
 
 
 def _transform(u: Updatable, value: float) -> float:
@@ -107,8 +115,9 @@ def matrix_derivatives(specimen, params, *, step: float = 1e-4) -> list:
         th = _transform(u, u.nominal)
         h = step if u.log else step * max(u.upper - u.lower, 1e-30)
         hi, lo = th + h, (th - h if u.log or u.nominal - h >= u.lower else th)
-        mats = [_matrices(with_parameters(specimen, {u.name: _inverse(u, x)}))[:2]
-                for x in (hi, lo)]
+        mats = [
+            _matrices(with_parameters(specimen, {u.name: _inverse(u, x)}))[:2] for x in (hi, lo)
+        ]
         out.append(((mats[0][0] - mats[1][0]) / (hi - lo), (mats[0][1] - mats[1][1]) / (hi - lo)))
     return out
 
@@ -151,7 +160,7 @@ def modal_sensitivities(specimen, modes, params, *, positions=(), state=None) ->
             coef = (st.phi.T @ (A @ p)) / gap
             dphi[:, j] = st.phi @ coef - 0.5 * (p @ dM @ p) * p
         out["f"][r] = f
-        out["df"][r] = dl / (8 * math.pi ** 2 * f)
+        out["df"][r] = dl / (8 * math.pi**2 * f)
         out["shape"][r] = R @ p
         out["dshape"][r] = R @ dphi
         se, ee = float(st.S @ p), float(st.E @ p)

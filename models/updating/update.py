@@ -25,6 +25,7 @@ docs/linear_update.md) on the specimen's stuck-joint modes
    stderr for every mode that was not a target (the parameters' share, and with the
    model-form error added: the band a measurement should fall in).
 """
+
 from __future__ import annotations
 
 import math
@@ -49,7 +50,7 @@ __all__ = ["MODEL_ERROR", "LinearUpdateResult", "linear_update"]
 #: bending mode with the same parameters; mesh and beam theory by 0.1-0.6 %), shapes 0.05 of
 #: a unit-length shape, modal constants 5 %.
 MODEL_ERROR = {"frequency": 5e-3, "shape": 0.05, "modal_constant": 0.05}
-_PRIOR_SIGMAS = 4.0      # a range is the central 95 %: 4 standard deviations wide
+_PRIOR_SIGMAS = 4.0  # a range is the central 95 %: 4 standard deviations wide
 
 
 def _pair(v):
@@ -77,42 +78,51 @@ def _real_shape(values: dict) -> tuple:
 
 @dataclass(frozen=True)
 class _Targets:
-    freq: dict        # mode -> (Hz, relative stderr)
-    shapes: dict      # mode -> (positions, unit shape, stderr per entry)
-    consts: dict      # mode -> (1/kg, relative stderr)
+    freq: dict  # mode -> (Hz, relative stderr)
+    shapes: dict  # mode -> (positions, unit shape, stderr per entry)
+    consts: dict  # mode -> (1/kg, relative stderr)
     labels: tuple
 
     @classmethod
     def build(cls, frequencies, shapes, modal_constants, err):
         freq, sh, cc, labels = {}, {}, {}, []
-        for name, v in (("frequencies", frequencies), ("shapes", shapes),
-                        ("modal_constants", modal_constants)):
+        for name, v in (
+            ("frequencies", frequencies),
+            ("shapes", shapes),
+            ("modal_constants", modal_constants),
+        ):
             if v is None and name != "frequencies":
                 continue
-            if not isinstance(v, Mapping) or any(isinstance(k, bool) or not isinstance(
-                    k, (int, np.integer)) or k < 1 for k in v):
-                raise ValueError(f"{name} must map elastic mode numbers (integers >= 1) to "
-                                 f"targets, got {v!r}")
+            if not isinstance(v, Mapping) or any(
+                isinstance(k, bool) or not isinstance(k, (int, np.integer)) or k < 1 for k in v
+            ):
+                raise ValueError(
+                    f"{name} must map elastic mode numbers (integers >= 1) to targets, got {v!r}"
+                )
         for r, v in sorted(dict(frequencies).items()):
             f, se = _pair(v)
             if not (math.isfinite(f) and f > 0 and se >= 0):
-                raise ValueError(f"frequencies[{r}] must be a frequency > 0 [Hz] (and a "
-                                 f"stderr >= 0), got {v!r}")
+                raise ValueError(
+                    f"frequencies[{r}] must be a frequency > 0 [Hz] (and a stderr >= 0), got {v!r}"
+                )
             freq[int(r)] = (f, math.hypot(se / f, err["frequency"]))
             labels.append(f"f{r}")
         for r, vals in sorted(dict(shapes or {}).items()):
             pos, amp, se = _real_shape(vals)
             if pos.size < 2 or not np.all(np.isfinite(amp)) or np.linalg.norm(amp) == 0:
-                raise ValueError(f"shapes[{r}] must give a finite, non-zero amplitude at 2 or "
-                                 f"more positions, got {vals!r}")
+                raise ValueError(
+                    f"shapes[{r}] must give a finite, non-zero amplitude at 2 or "
+                    f"more positions, got {vals!r}"
+                )
             n = np.linalg.norm(amp)
             sh[int(r)] = (pos, amp / n, np.hypot(se / n, err["shape"]))
             labels += [f"shape{r}@{p:.4g}" for p in pos]
         for r, v in sorted(dict(modal_constants or {}).items()):
             c, se = _pair(v)
             if not (math.isfinite(c) and c != 0 and se >= 0):
-                raise ValueError(f"modal_constants[{r}] must be a non-zero modal constant "
-                                 f"[1/kg], got {v!r}")
+                raise ValueError(
+                    f"modal_constants[{r}] must be a non-zero modal constant [1/kg], got {v!r}"
+                )
             cc[int(r)] = (c, math.hypot(se / c, err["modal_constant"]))
             labels.append(f"c{r}")
         if not freq and not sh and not cc:
@@ -131,11 +141,14 @@ class _Targets:
 def _select(specimen, parameters, ranges) -> list:
     rows = updatable(specimen, ranges=ranges)
     by_name = {u.name: u for u in rows}
-    if not isinstance(parameters, str) and not (isinstance(parameters, (tuple, list)) and all(
-            isinstance(n, str) for n in parameters)):
-        raise ValueError(f"parameters must be a group or parameter name or a sequence of them "
-                         f"(groups {GROUPS}; updatable(specimen) lists the names), got "
-                         f"{parameters!r}")
+    if not isinstance(parameters, str) and not (
+        isinstance(parameters, (tuple, list)) and all(isinstance(n, str) for n in parameters)
+    ):
+        raise ValueError(
+            f"parameters must be a group or parameter name or a sequence of them "
+            f"(groups {GROUPS}; updatable(specimen) lists the names), got "
+            f"{parameters!r}"
+        )
     names = (parameters,) if isinstance(parameters, str) else tuple(parameters)
     out = []
     for n in names:
@@ -145,11 +158,15 @@ def _select(specimen, parameters, ranges) -> list:
             if by_name[n] not in out:
                 out.append(by_name[n])
         else:
-            raise ValueError(f"parameters must name groups {GROUPS} or parameters "
-                             f"{sorted(by_name)} of {specimen.name!r}, got {n!r}")
+            raise ValueError(
+                f"parameters must name groups {GROUPS} or parameters "
+                f"{sorted(by_name)} of {specimen.name!r}, got {n!r}"
+            )
     if not out:
-        raise ValueError(f"parameters name no updatable parameter of {specimen.name!r} "
-                         f"(groups {GROUPS}; updatable(specimen) lists them)")
+        raise ValueError(
+            f"parameters name no updatable parameter of {specimen.name!r} "
+            f"(groups {GROUPS}; updatable(specimen) lists them)"
+        )
     return out
 
 
@@ -175,8 +192,14 @@ class _Problem:
 
     def specimen(self, theta):
         """The specimen at ``theta`` (a parameter at its starting value is not touched)."""
-        return with_parameters(self.s0, {u.name: _value(u, th) for u, th, t0 in
-                                         zip(self.params, theta, self.theta0) if th != t0})
+        return with_parameters(
+            self.s0,
+            {
+                u.name: _value(u, th)
+                for u, th, t0 in zip(self.params, theta, self.theta0)
+                if th != t0
+            },
+        )
 
     def evaluate(self, theta):
         """``(r, J, raw, (specimen, state, pairs))``: weighted residuals, their Jacobian by
@@ -185,7 +208,7 @@ class _Problem:
         """
         key = tuple(np.asarray(theta, float))
         if self._last[0] != key:
-            with one_blas_thread():         # small dense problems: threads only contend
+            with one_blas_thread():  # small dense problems: threads only contend
                 self._last = (key, self._evaluate(theta))
         return self._last[1]
 
@@ -193,8 +216,10 @@ class _Problem:
         s = self.specimen(theta)
         st = modal_state(s)
         pairs = pair_modes(st, self.ref, self.t.modes)
-        cur = [Updatable(**{**u.to_dict(), "nominal": _value(u, th)})
-               for u, th in zip(self.params, theta)]
+        cur = [
+            Updatable(**{**u.to_dict(), "nominal": _value(u, th)})
+            for u, th in zip(self.params, theta)
+        ]
         sens = modal_sensitivities(s, pairs, cur, positions=self.t.positions, state=st)
         r, J, raw = [], [], []
         pos_all = np.array(self.t.positions)
@@ -216,8 +241,12 @@ class _Problem:
             r.append((sens["c"][m] / c - 1) / se)
             J.append(sens["dc"][m] / (c * se))
             raw.append(sens["c"][m])
-        return np.array(r), np.array(J).reshape(len(r), len(self.params)), np.array(raw), \
-            (s, st, pairs)
+        return (
+            np.array(r),
+            np.array(J).reshape(len(r), len(self.params)),
+            np.array(raw),
+            (s, st, pairs),
+        )
 
 
 def _identifiable(Js, names) -> tuple:
@@ -228,14 +257,23 @@ def _identifiable(Js, names) -> tuple:
         return [], {}
     _, R, piv = sla.qr(Js, mode="economic", pivoting=True)
     d = np.zeros(Js.shape[1])
-    d[:min(R.shape)] = np.abs(np.diag(R))
+    d[: min(R.shape)] = np.abs(np.diag(R))
     gain = {names[p]: float(d[k]) for k, p in enumerate(piv)}
     return sorted(int(p) for k, p in enumerate(piv) if d[k] >= 1.0), gain
 
 
-def linear_update(specimen, *, frequencies, shapes=None, modal_constants=None, parameters,
-                  model_error: dict | None = None, ranges: dict | None = None,
-                  predict=None, max_nfev: int = 60) -> LinearUpdateResult:
+def linear_update(
+    specimen,
+    *,
+    frequencies,
+    shapes=None,
+    modal_constants=None,
+    parameters,
+    model_error: dict | None = None,
+    ranges: dict | None = None,
+    predict=None,
+    max_nfev: int = 60,
+) -> LinearUpdateResult:
     """Update a specimen's linear parameters on low-level test data (module docstring).
 
     Parameters
@@ -270,27 +308,50 @@ def linear_update(specimen, *, frequencies, shapes=None, modal_constants=None, p
     """
     check_specimen(specimen)
     err = {**MODEL_ERROR, **dict(model_error or {})}
-    if set(err) != set(MODEL_ERROR) or not all(isinstance(v, (int, float)) and v > 0
-                                                for v in err.values()):
-        raise ValueError(f"model_error must map {sorted(MODEL_ERROR)} to relative errors > 0, "
-                         f"got {model_error!r}")
+    if set(err) != set(MODEL_ERROR) or not all(
+        isinstance(v, (int, float)) and v > 0 for v in err.values()
+    ):
+        raise ValueError(
+            f"model_error must map {sorted(MODEL_ERROR)} to relative errors > 0, "
+            f"got {model_error!r}"
+        )
     t = _Targets.build(frequencies, shapes, modal_constants, err)
     params = _select(specimen, parameters, ranges)
     ref = modal_state(specimen)
     for m in t.modes:
-        ref.index(m)                                          # a mode the model has
+        ref.index(m)  # a mode the model has
     prob = _Problem(specimen, t, params, ref)
     th0 = np.array([_theta(u, u.nominal) for u in params])
     sig = np.array([_prior_sigma(u) for u in params])
     r0, J0, raw0, _ = prob.evaluate(th0)
     keep, gain = _identifiable(J0 * sig[None, :], [u.name for u in params])
-    warns = [f"{u.name}: the targets cannot see it (new information {gain[u.name]:.2g} of its "
-             "prior's): left at its nominal value" for k, u in enumerate(params) if k not in keep]
+    warns = [
+        f"{u.name}: the targets cannot see it (new information {gain[u.name]:.2g} of its "
+        "prior's): left at its nominal value"
+        for k, u in enumerate(params)
+        if k not in keep
+    ]
     sol_th, conv, nfev = th0.copy(), True, 0
     if keep:
         sol_th, conv, nfev = _solve(prob, params, keep, th0, sig, max_nfev, warns)
-    return _result(specimen, prob, params, keep, sol_th, th0, sig, r0, raw0, gain, warns,
-                   conv, nfev, t, err, predict)
+    return _result(
+        specimen,
+        prob,
+        params,
+        keep,
+        sol_th,
+        th0,
+        sig,
+        r0,
+        raw0,
+        gain,
+        warns,
+        conv,
+        nfev,
+        t,
+        err,
+        predict,
+    )
 
 
 def _solve(prob, params, keep, th0, sig, max_nfev, warns):
@@ -314,8 +375,9 @@ def _solve(prob, params, keep, th0, sig, max_nfev, warns):
         _, J, _, _ = prob.evaluate(full(x))
         return np.vstack([J[:, keep], np.diag(1.0 / sig[keep])])
 
-    sol = minimize(fun, th0[keep], lo, hi, method="trf", max_nfev=max_nfev, jac=jac,
-                   x_scale=sig[keep])
+    sol = minimize(
+        fun, th0[keep], lo, hi, method="trf", max_nfev=max_nfev, jac=jac, x_scale=sig[keep]
+    )
     for k, x in zip(keep, sol.x):
         b = min(x - _theta(params[k], params[k].lower), _theta(params[k], params[k].upper) - x)
         if b < 1e-3 * sig[k]:
@@ -323,8 +385,9 @@ def _solve(prob, params, keep, th0, sig, max_nfev, warns):
     return full(sol.x), bool(sol.success), int(sol.nfev)
 
 
-def _result(specimen, prob, params, keep, th, th0, sig, r0, raw0, gain, warns, conv, nfev, t,
-            err, predict):
+def _result(
+    specimen, prob, params, keep, th, th0, sig, r0, raw0, gain, warns, conv, nfev, t, err, predict
+):
     """Covariance, predictions and the result of :func:`linear_update`."""
     r1, J1, raw1, (spec1, st1, _) = prob.evaluate(th)
     Jk = J1[:, keep]
@@ -332,10 +395,12 @@ def _result(specimen, prob, params, keep, th, th0, sig, r0, raw0, gain, warns, c
     chi2 = float(r1 @ r1)
     scale = max(1.0, chi2 / dof) if dof > 0 else 1.0
     if dof > 0 and chi2 / dof > 4.0:
-        warns.append(f"the targets disagree with the updated model by {math.sqrt(chi2 / dof):.2g}"
-                     " times their stated errors (reduced chi^2 "
-                     f"{chi2 / dof:.3g}): a parameter or an effect the model lacks, or errors "
-                     "stated too small; the stderr are scaled up by it")
+        warns.append(
+            f"the targets disagree with the updated model by {math.sqrt(chi2 / dof):.2g}"
+            " times their stated errors (reduced chi^2 "
+            f"{chi2 / dof:.3g}): a parameter or an effect the model lacks, or errors "
+            "stated too small; the stderr are scaled up by it"
+        )
     cov = np.zeros((len(params), len(params)))
     if keep:
         P = np.diag(1.0 / sig[keep] ** 2)
@@ -345,8 +410,18 @@ def _result(specimen, prob, params, keep, th, th0, sig, r0, raw0, gain, warns, c
     for k, u in enumerate(params):
         v = _value(u, th[k]) if k in keep else u.nominal
         se = (v * sd[k] if u.log else sd[k]) if k in keep else math.nan
-        rows.append(Parameter(u.name, min(max(v, u.lower), u.upper), se, u.lower, u.upper,
-                              u.unit, identified=k in keep, fixed=k not in keep))
+        rows.append(
+            Parameter(
+                u.name,
+                min(max(v, u.lower), u.upper),
+                se,
+                u.lower,
+                u.upper,
+                u.unit,
+                identified=k in keep,
+                fixed=k not in keep,
+            )
+        )
     with np.errstate(invalid="ignore", divide="ignore"):
         corr = cov / np.outer(sd, sd)
     corr[~np.isfinite(corr)] = np.nan
@@ -355,29 +430,50 @@ def _result(specimen, prob, params, keep, th, th0, sig, r0, raw0, gain, warns, c
     modes = t.modes
     top = max(modes) + 2
     pred_modes = tuple(range(1, top + 1)) if predict is None else tuple(int(m) for m in predict)
-    pred_modes = tuple(m for m in pred_modes if m not in t.freq
-                       and st1.n_rigid + m - 1 < st1.lam.size)
+    pred_modes = tuple(
+        m for m in pred_modes if m not in t.freq and st1.n_rigid + m - 1 < st1.lam.size
+    )
     pr = {}
     if pred_modes:
         cur = [Updatable(**{**u.to_dict(), "nominal": _value(u, x)}) for u, x in zip(params, th)]
-        sens = modal_sensitivities(spec1, pair_modes(st1, prob.ref, pred_modes), cur,
-                                   state=st1)
+        sens = modal_sensitivities(spec1, pair_modes(st1, prob.ref, pred_modes), cur, state=st1)
         for m in pred_modes:
             f, g = sens["f"][m], sens["df"][m]
             pse = math.sqrt(max(float(g @ cov @ g), 0.0))
-            pr[m] = {"frequency": f, "stderr": math.hypot(pse, err["frequency"] * f),
-                     "parameter_stderr": pse,
-                     "nominal_frequency": prob.ref.frequency(prob.ref.index(m))}
-    resid = [{"target": lab, "measured": _measured(t, lab), "before": float(b),
-              "after": float(a), "residual_before": float(rb), "residual_after": float(ra)}
-             for lab, b, a, rb, ra in zip(t.labels, raw0, raw1, r0, r1)]
+            pr[m] = {
+                "frequency": f,
+                "stderr": math.hypot(pse, err["frequency"] * f),
+                "parameter_stderr": pse,
+                "nominal_frequency": prob.ref.frequency(prob.ref.index(m)),
+            }
+    resid = [
+        {
+            "target": lab,
+            "measured": _measured(t, lab),
+            "before": float(b),
+            "after": float(a),
+            "residual_before": float(rb),
+            "residual_after": float(ra),
+        }
+        for lab, b, a, rb, ra in zip(t.labels, raw0, raw1, r0, r1)
+    ]
     return LinearUpdateResult(
-        specimen=spec1, initial=specimen,
-        params=ParameterTable(rows, correlation=corr), groups={u.name: u.group for u in params},
-        nominal={u.name: u.nominal for u in params}, information={u.name: gain.get(u.name, 0.0)
-                                                                  for u in params},
-        singular_values=sv, residuals=tuple(resid), predictions=pr, chi2=chi2, dof=dof,
-        converged=conv, nfev=nfev, model_error=dict(err), warnings=tuple(warns))
+        specimen=spec1,
+        initial=specimen,
+        params=ParameterTable(rows, correlation=corr),
+        groups={u.name: u.group for u in params},
+        nominal={u.name: u.nominal for u in params},
+        information={u.name: gain.get(u.name, 0.0) for u in params},
+        singular_values=sv,
+        residuals=tuple(resid),
+        predictions=pr,
+        chi2=chi2,
+        dof=dof,
+        converged=conv,
+        nfev=nfev,
+        model_error=dict(err),
+        warnings=tuple(warns),
+    )
 
 
 def _measured(t: _Targets, label: str) -> float:

@@ -5,6 +5,7 @@ campaign model, its records, its least-squares fit), :mod:`.predict` (prediction
 condition, leave-one-out), :mod:`.result` (:class:`CampaignFit`), :mod:`.assemble` (the
 result from a fit), :mod:`.fit` (:func:`fit_campaign`).
 """
+
 from .fit import fit_campaign
 from .predict import CampaignPrediction, LeaveOneOut
 from .result import CampaignFit

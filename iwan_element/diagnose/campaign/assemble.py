@@ -3,6 +3,7 @@ the coefficients in the conditions' own units, the per-record agreement table an
 record-to-record scatter, gathered into a :class:`~.result.CampaignFit`
 (steps 4-6 of :mod:`.fit`; equations in ``docs/campaign.md``).
 """
+
 from __future__ import annotations
 
 import math
@@ -19,7 +20,7 @@ from .result import CampaignFit, law_at
 
 __all__ = ["assemble", "to_physical"]
 
-Z_AGREE = 3.0                         # |z| above which a record disagrees with a law
+Z_AGREE = 3.0  # |z| above which a record disagrees with a law
 
 
 def _covariance(model, theta, T):
@@ -42,10 +43,9 @@ def _covariance(model, theta, T):
     n, p = J.shape
     s2 = n / max(n - p, 1)
     if not np.all(np.isfinite(Jw)):
-        return (np.full((p, p), np.nan), J, np.array(s), np.array(tau),
-                np.full(T.shape[0], np.nan))
+        return (np.full((p, p), np.nan), J, np.array(s), np.array(tau), np.full(T.shape[0], np.nan))
     Jp = np.zeros((T.shape[0], p))
-    Jp[:, :T.shape[1]] = T
+    Jp[:, : T.shape[1]] = T
     cov = covariance(Jw, s2=s2).covariance
     return cov, J, np.array(s), np.array(tau), covariance(Jw, s2=s2, Jp=Jp).stderr
 
@@ -82,24 +82,36 @@ def _rows(model, theta, cov_int, preps, labels):
             if math.isfinite(est) and math.isfinite(s_est):
                 z[q] = (est - vals[q]) / math.hypot(s_est, se[q]) if (s_est or se[q]) else 0.0
         named = set(p["effects"])
-        row = {"record": labels[r], "conditions": dict(zip(model.cnames, model.X[r].tolist())),
-               "named": " + ".join(p["effects"]) or "none",
-               "missing": sorted(stack - named), "extra": sorted(named - stack),
-               "band_own": p["band_own"], "band_campaign": band,
-               "band_ratio": band / p["band_own"] if p["band_own"] > 0 else math.nan,
-               "force_offset": F0, "start": model.start(theta, r), "z": z,
-               "law": vals, "law_stderr": se}
+        row = {
+            "record": labels[r],
+            "conditions": dict(zip(model.cnames, model.X[r].tolist())),
+            "named": " + ".join(p["effects"]) or "none",
+            "missing": sorted(stack - named),
+            "extra": sorted(named - stack),
+            "band_own": p["band_own"],
+            "band_campaign": band,
+            "band_ratio": band / p["band_own"] if p["band_own"] > 0 else math.nan,
+            "force_offset": F0,
+            "start": model.start(theta, r),
+            "z": z,
+            "law": vals,
+            "law_stderr": se,
+        }
         rows.append(row)
         far = sorted((q for q, v in z.items() if abs(v) > Z_AGREE), key=lambda q: -abs(z[q]))
         if row["missing"] or row["extra"]:
-            warns.append(f"{labels[r]}: named {row['named']}; the campaign stack "
-                         f"{' + '.join(model.names) or 'Iwan'} "
-                         + (f"adds {', '.join(row['missing'])}" if row["missing"] else "")
-                         + (" and " if row["missing"] and row["extra"] else "")
-                         + (f"lacks {', '.join(row['extra'])}" if row["extra"] else ""))
+            warns.append(
+                f"{labels[r]}: named {row['named']}; the campaign stack "
+                f"{' + '.join(model.names) or 'Iwan'} "
+                + (f"adds {', '.join(row['missing'])}" if row["missing"] else "")
+                + (" and " if row["missing"] and row["extra"] else "")
+                + (f"lacks {', '.join(row['extra'])}" if row["extra"] else "")
+            )
         if far:
-            warns.append(f"{labels[r]}: own estimates off the law by more than {Z_AGREE:g} "
-                         "standard errors: " + ", ".join(f"{q} (z = {z[q]:.1f})" for q in far))
+            warns.append(
+                f"{labels[r]}: own estimates off the law by more than {Z_AGREE:g} "
+                "standard errors: " + ", ".join(f"{q} (z = {z[q]:.1f})" for q in far)
+            )
     return rows, warns
 
 
@@ -129,8 +141,9 @@ def _stderr_dict(labels_c, cov_phys):
     return out
 
 
-def assemble(*, model, preps, labels, res, units, stack_from, warnings, options, times, t0,
-             free=None):
+def assemble(
+    *, model, preps, labels, res, units, stack_from, warnings, options, times, t0, free=None
+):
     """Uncertainty, coefficients, the per-record table, the verdict: a :class:`CampaignFit`."""
     theta = res.x
     t1 = time.perf_counter()
@@ -144,47 +157,85 @@ def assemble(*, model, preps, labels, res, units, stack_from, warnings, options,
     rows, awarn = _rows(model, theta, cov_int, preps, labels)
     scatter, S = _scatter(model, theta, free)
     cov_re = None if S is None else CM.scatter_coef_cov(model, theta, S)
-    stderr_scatter = {} if cov_re is None else _stderr_dict(labels_c, T @ (cov_int + cov_re)
-                                                             @ T.T)
+    stderr_scatter = {} if cov_re is None else _stderr_dict(labels_c, T @ (cov_int + cov_re) @ T.T)
     warns = list(warnings)
     converged = bool(res.status > 0)
     if not converged:
         warns.append(f"the campaign fit did not converge: {res.message}")
-    verdicts = [verdict(f"{q}:{t}", float(c), float(e), relative=False)[0] and e > 0
-                for (q, t), c, e in zip(labels_c, coef, se)]
+    verdicts = [
+        verdict(f"{q}:{t}", float(c), float(e), relative=False)[0] and e > 0
+        for (q, t), c, e in zip(labels_c, coef, se)
+    ]
     ident = all(verdicts)
     clipped = model.clipped(theta)
-    table = ParameterTable([Parameter(f"{q}:{t}", float(c), float(e),
-                                      unit=_coef_unit(units.get(q, ""), t),
-                                      identified=ok and q not in clipped)
-                            for (q, t), c, e, ok in zip(labels_c, coef, se, verdicts)])
+    table = ParameterTable(
+        [
+            Parameter(
+                f"{q}:{t}",
+                float(c),
+                float(e),
+                unit=_coef_unit(units.get(q, ""), t),
+                identified=ok and q not in clipped,
+            )
+            for (q, t), c, e, ok in zip(labels_c, coef, se, verdicts)
+        ]
+    )
     for q, recs in clipped.items():
         ident = False
         names = [labels[r] for r in recs]
-        warns.append(f"the {q} law leaves the range the model can take on {len(recs)} of "
-                     f"{len(labels)} records ({', '.join(names[:6])}"
-                     f"{', ...' if len(names) > 6 else ''}): it is clipped there, so those "
-                     "records do not determine its coefficients and their standard errors are "
-                     "not to be trusted; state a law that stays in range (laws=) or drop the "
-                     "condition")
+        warns.append(
+            f"the {q} law leaves the range the model can take on {len(recs)} of "
+            f"{len(labels)} records ({', '.join(names[:6])}"
+            f"{', ...' if len(names) > 6 else ''}): it is clipped there, so those "
+            "records do not determine its coefficients and their standard errors are "
+            "not to be trusted; state a law that stays in range (laws=) or drop the "
+            "condition"
+        )
     if not ident:
         bad = [f"{q}:{t}" for (q, t), e in zip(labels_c, se) if not (math.isfinite(e) and e > 0)]
         warns.append(f"coefficients not identified by the records: {', '.join(bad)}")
     warns += awarn
-    details = {"weights": [rm.weight for rm in model.records], "record_rms": s.tolist(),
-               "record_tau": tau.tolist(), "cost": float(res.cost),
-               "fitted_samples": int(model.rows[-1]), "n_coefficients": ng,
-               "n_starts": len(model.start_pos), "options": options, "times": times}
+    details = {
+        "weights": [rm.weight for rm in model.records],
+        "record_rms": s.tolist(),
+        "record_tau": tau.tolist(),
+        "cost": float(res.cost),
+        "fitted_samples": int(model.rows[-1]),
+        "n_coefficients": ng,
+        "n_starts": len(model.start_pos),
+        "options": options,
+        "times": times,
+    }
     times["total"] = time.perf_counter() - t0
     return CampaignFit(
-        records=tuple(labels), condition_names=model.cnames, effects=model.names,
-        effects_from=stack_from, laws={q: tuple(v) for q, v in model.laws.items()},
-        units=units, params=table, covariance=cov_phys,
-        coefficient_labels=tuple(f"{q}:{t}" for q, t in labels_c), rows=tuple(rows),
-        scatter=scatter, stderr_scatter=stderr_scatter,
-        converged=converged, success=converged and ident, message=str(res.message),
-        nfev=int(res.nfev), wall_time=times["total"], warnings=tuple(warns),
-        details=details, _state={"model": model, "theta": theta, "cov_int": cov_int, "J": J,
-                                 "preps": preps, "cov": cov,
-                                 "free": free, "scatter_cov": S,
-                                 "cov_re": cov_re})
+        records=tuple(labels),
+        condition_names=model.cnames,
+        effects=model.names,
+        effects_from=stack_from,
+        laws={q: tuple(v) for q, v in model.laws.items()},
+        units=units,
+        params=table,
+        covariance=cov_phys,
+        coefficient_labels=tuple(f"{q}:{t}" for q, t in labels_c),
+        rows=tuple(rows),
+        scatter=scatter,
+        stderr_scatter=stderr_scatter,
+        converged=converged,
+        success=converged and ident,
+        message=str(res.message),
+        nfev=int(res.nfev),
+        wall_time=times["total"],
+        warnings=tuple(warns),
+        details=details,
+        _state={
+            "model": model,
+            "theta": theta,
+            "cov_int": cov_int,
+            "J": J,
+            "preps": preps,
+            "cov": cov,
+            "free": free,
+            "scatter_cov": S,
+            "cov_re": cov_re,
+        },
+    )

@@ -35,6 +35,7 @@ condition that was not tested (:meth:`CampaignFit.predict`). The procedure
    random effect the conditions do not predict), carried in the prediction band and in
    the coefficients' ``stderr_scatter``.
 """
+
 from __future__ import annotations
 
 import json
@@ -96,15 +97,19 @@ def _diagnose_records(recs, labels, opts, diagnoses, jobs, client, progress):
     if diagnoses is not None:
         diags = list(diagnoses)
         if len(diags) != len(recs):
-            raise ValueError(f"diagnoses must hold one Diagnosis per record ({len(recs)}), "
-                             f"got {len(diags)}")
+            raise ValueError(
+                f"diagnoses must hold one Diagnosis per record ({len(recs)}), got {len(diags)}"
+            )
         for i, (d, r) in enumerate(zip(diags, recs)):
             if getattr(d, "F", None) is None or np.asarray(d.F).size != r[2].size:
-                raise ValueError(f"diagnoses[{i}] is not a Diagnosis of records[{i}] (its "
-                                 "force has another length)")
+                raise ValueError(
+                    f"diagnoses[{i}] is not a Diagnosis of records[{i}] (its "
+                    "force has another length)"
+                )
         return [CM.record_from_diagnosis(d, max_samples) for d in diags], []
-    sets = [{"t": t, "u": u, "F": F, "options": opts, "max_samples": max_samples}
-            for t, u, F in recs]
+    sets = [
+        {"t": t, "u": u, "F": F, "options": opts, "max_samples": max_samples} for t, u, F in recs
+    ]
     ex = executor_for(jobs, client)
     try:
         res = run_ensemble(_record_task, sets, executor=ex, seed=0, progress=progress)
@@ -134,21 +139,23 @@ def _common_stack(preps, effects, explanations=()):
             raise ValueError(f"effects names {unknown}; known effects are {sorted(EFFECTS)}")
         names = order_stack(dict.fromkeys(names))
         if not stack_ok(names):
-            raise ValueError(f"effects {list(names)} cannot share one joint (at most one "
-                             "slider-level effect unless all are composable)")
+            raise ValueError(
+                f"effects {list(names)} cannot share one joint (at most one "
+                "slider-level effect unless all are composable)"
+            )
         return names, "given"
     if explanations and stack_ok(order_stack(explanations[0].effects)):
         top = explanations[0]
-        return order_stack(top.effects), (f"the most probable explanation over the records, "
-                                          f"probability {top.probability:.3g}")
+        return order_stack(top.effects), (
+            f"the most probable explanation over the records, probability {top.probability:.3g}"
+        )
     count = {}
     for p in preps:
         for nm in p["effects"]:
             count[nm] = count.get(nm, 0) + 1
-    names = [nm for nm, c in sorted(count.items(), key=lambda kv: -kv[1])
-             if 2 * c >= len(preps)]
+    names = [nm for nm, c in sorted(count.items(), key=lambda kv: -kv[1]) if 2 * c >= len(preps)]
     kept = []
-    for nm in names:                          # most named first, as long as they can share
+    for nm in names:  # most named first, as long as they can share
         if stack_ok(tuple(kept) + (nm,)):
             kept.append(nm)
     return order_stack(kept), "named on at least half of the records"
@@ -194,8 +201,9 @@ def record_values(model, theta, preps, *, max_nfev: int = 60):
     """
     out = []
     for r, p in enumerate(preps):
-        sub = build_model([p], model.names, dict.fromkeys(model.qnames, ()), model.cnames,
-                          model.X[[r]])
+        sub = build_model(
+            [p], model.names, dict.fromkeys(model.qnames, ()), model.cnames, model.X[[r]]
+        )
         law = model.law_values(theta, model.X[r])
         th0 = np.zeros(sub.n_theta)
         for q in sub.qnames:
@@ -214,8 +222,7 @@ def record_values(model, theta, preps, *, max_nfev: int = 60):
     return out
 
 
-def _check_input(records, conditions, names, laws, effects, jobs, max_nfev, options,
-                 scatter):
+def _check_input(records, conditions, names, laws, effects, jobs, max_nfev, options, scatter):
     """Everything that can be checked before the records are diagnosed."""
     if not isinstance(scatter, bool):
         raise ValueError(f"scatter must be True or False, got {scatter!r}")
@@ -230,9 +237,21 @@ def _check_input(records, conditions, names, laws, effects, jobs, max_nfev, opti
     return recs, labels, cnames, X, opts
 
 
-def fit_campaign(records, conditions, *, effects=None, laws=None, names=None, diagnoses=None,
-                 jobs: int = 1, client=None, progress: bool = False, max_nfev: int = 100,
-                 scatter: bool = True, **options) -> CampaignFit:
+def fit_campaign(
+    records,
+    conditions,
+    *,
+    effects=None,
+    laws=None,
+    names=None,
+    diagnoses=None,
+    jobs: int = 1,
+    client=None,
+    progress: bool = False,
+    max_nfev: int = 100,
+    scatter: bool = True,
+    **options,
+) -> CampaignFit:
     """Fit one device model over a test campaign, its parameters laws of the conditions.
 
     See the module docstring for the procedure and ``docs/campaign.md`` for the equations.
@@ -290,8 +309,9 @@ def fit_campaign(records, conditions, *, effects=None, laws=None, names=None, di
         that does not vary, or with more coefficients than records, an unknown option.
     """
     t0 = time.perf_counter()
-    recs, labels, cnames, X, opts = _check_input(records, conditions, names, laws, effects,
-                                                 jobs, max_nfev, options, scatter)
+    recs, labels, cnames, X, opts = _check_input(
+        records, conditions, names, laws, effects, jobs, max_nfev, options, scatter
+    )
     preps, warns = _diagnose_records(recs, labels, opts, diagnoses, jobs, client, progress)
     ok = [i for i, p in enumerate(preps) if p is not None]
     preps, labels, X = [preps[i] for i in ok], [labels[i] for i in ok], X[ok]
@@ -300,8 +320,19 @@ def fit_campaign(records, conditions, *, effects=None, laws=None, names=None, di
     t_diag = time.perf_counter() - t0
     expl = campaign_explanations(preps, opts.get("effect_prior"))
     names_, stack_from = _common_stack(preps, effects, expl)
-    args = dict(preps=preps, labels=labels, X=X, laws=laws, cnames=cnames, max_nfev=max_nfev,
-                scatter=scatter, progress=progress, opts=opts, t0=t0, t_diag=t_diag)
+    args = dict(
+        preps=preps,
+        labels=labels,
+        X=X,
+        laws=laws,
+        cnames=cnames,
+        max_nfev=max_nfev,
+        scatter=scatter,
+        progress=progress,
+        opts=opts,
+        t0=t0,
+        t_diag=t_diag,
+    )
     fit = _fit_stack(names_, stack_from, warns, **args)
     alts = {}
     for alt in probable_alternatives(expl, names_):
@@ -310,8 +341,23 @@ def fit_campaign(records, conditions, *, effects=None, laws=None, names=None, di
     return replace(fit, explanations=expl, alternatives=alts)
 
 
-def _fit_stack(names_, stack_from, warns, *, preps, labels, X, laws, cnames, max_nfev,
-               scatter, progress, opts, t0, t_diag):
+def _fit_stack(
+    names_,
+    stack_from,
+    warns,
+    *,
+    preps,
+    labels,
+    X,
+    laws,
+    cnames,
+    max_nfev,
+    scatter,
+    progress,
+    opts,
+    t0,
+    t_diag,
+):
     """The campaign model with the stack ``names_`` fitted to the prepared records: laws,
     joint fit, record scatter, result (steps 2-6 of the module docstring).
     """
@@ -330,6 +376,16 @@ def _fit_stack(names_, stack_from, warns, *, preps, labels, X, laws, cnames, max
     t2 = time.perf_counter()
     free = record_values(model, res.x, preps) if scatter else None
     times = {"diagnoses": t_diag, "joint_fit": t_fit, "scatter": time.perf_counter() - t2}
-    return assemble(model=model, preps=preps, labels=labels, res=res, units=units,
-                    stack_from=stack_from, warnings=warns + lwarn, options=opts,
-                    times=times, t0=t0, free=free)
+    return assemble(
+        model=model,
+        preps=preps,
+        labels=labels,
+        res=res,
+        units=units,
+        stack_from=stack_from,
+        warnings=warns + lwarn,
+        options=opts,
+        times=times,
+        t0=t0,
+        free=free,
+    )

@@ -2,6 +2,7 @@
 as the diagnosis prepared them, the joint residual over all records, and its weighted
 least-squares fit (:func:`build_model`, :func:`solve`; equations: ``docs/campaign.md``).
 """
+
 from __future__ import annotations
 
 import math
@@ -25,7 +26,7 @@ __all__ = ["CampaignModel", "RecordModel", "build_model", "solve", "full_force"]
 #: The joint's quantities every campaign model has a law for (the law's form of each).
 BASE_QUANTITIES = ("Fs", "log_phi_max", "chi", "log1p_beta")
 BASE_UNITS = {"Fs": "N", "log_phi_max": "ln m", "chi": "1", "log1p_beta": "1"}
-BAND = 0.25                          # the band misfit's |F| < BAND max|F|
+BAND = 0.25  # the band misfit's |F| < BAND max|F|
 
 
 def log_form(spec) -> bool:
@@ -72,7 +73,8 @@ def quantities(names) -> tuple:
             k = effect_quantity(nm, sp)
             q.append(k)
             u = {0: sp.unit, 1: f"({sp.unit})/N", -1: f"({sp.unit}) N"}.get(
-                sp.fs_power, f"({sp.unit}) N^{-sp.fs_power}")
+                sp.fs_power, f"({sp.unit}) N^{-sp.fs_power}"
+            )
             units[k] = f"ln({u})" if log_form(sp) else u
             specs[k] = (nm, sp)
     return tuple(q), units, specs
@@ -87,22 +89,24 @@ def check_conditions(conditions, n: int):
     if len(conds) != n:
         raise ValueError(f"conditions must hold one dict per record ({n}), got {len(conds)}")
     if not all(isinstance(c, dict) for c in conds):
-        raise ValueError("conditions must be dicts of named numbers, e.g. "
-                         "{'tension': 30.0, 'frequency': 0.5}")
+        raise ValueError(
+            "conditions must be dicts of named numbers, e.g. {'tension': 30.0, 'frequency': 0.5}"
+        )
     names = tuple(str(k) for k in conds[0])
     if not names:
         raise ValueError("conditions must name at least one condition per record")
     X = np.empty((n, len(names)))
     for i, c in enumerate(conds):
         if set(map(str, c)) != set(names):
-            raise ValueError(f"conditions[{i}] names {sorted(map(str, c))}; every record must "
-                             f"name the same conditions {sorted(names)}")
+            raise ValueError(
+                f"conditions[{i}] names {sorted(map(str, c))}; every record must "
+                f"name the same conditions {sorted(names)}"
+            )
         for j, k in enumerate(names):
             try:
                 X[i, j] = float(c[k])
             except (TypeError, ValueError):
-                raise ValueError(f"conditions[{i}][{k!r}] must be a number, got "
-                                 f"{c[k]!r}") from None
+                raise ValueError(f"conditions[{i}][{k!r}] must be a number, got {c[k]!r}") from None
     finite_array("conditions", X, ndim=2)
     return names, X
 
@@ -114,12 +118,14 @@ def precheck_laws(laws, cnames, X):
     """
     if laws is not None and not isinstance(laws, dict):
         raise ValueError(f"laws must be a dict {{quantity: conditions}}, got {type(laws).__name__}")
-    known = set(BASE_QUANTITIES) | {effect_quantity(nm, sp) for nm, cls in EFFECTS.items()
-                                    for sp in cls.specs}
+    known = set(BASE_QUANTITIES) | {
+        effect_quantity(nm, sp) for nm, cls in EFFECTS.items() for sp in cls.specs
+    }
     unknown = sorted(set(laws or {}) - known)
     if unknown:
-        raise ValueError(f"laws names {unknown}, which are not quantities of any model; "
-                         f"they are {sorted(known)}")
+        raise ValueError(
+            f"laws names {unknown}, which are not quantities of any model; they are {sorted(known)}"
+        )
     laws = dict(laws or {})
     resolve_laws(laws, tuple(dict.fromkeys(BASE_QUANTITIES + tuple(laws))), cnames, X)
 
@@ -132,36 +138,43 @@ def resolve_laws(laws, qnames, cnames, X):
     laws = {} if laws is None else dict(laws)
     out, warns = {}, []
     unknown = sorted(set(laws) - set(qnames))
-    if unknown:              # an effect the campaign's stack does not have (checked before)
-        warns.append(f"laws for {unknown} are not used: the campaign's stack has no such "
-                     "effect")
+    if unknown:  # an effect the campaign's stack does not have (checked before)
+        warns.append(f"laws for {unknown} are not used: the campaign's stack has no such effect")
     for q in qnames:
         if q in laws:
             conds = laws[q]
             conds = (conds,) if isinstance(conds, str) else tuple(conds)
             for c in conds:
                 if c not in cnames:
-                    raise ValueError(f"laws[{q!r}] names the condition {c!r}; the conditions "
-                                     f"are {list(cnames)}")
+                    raise ValueError(
+                        f"laws[{q!r}] names the condition {c!r}; the conditions are {list(cnames)}"
+                    )
                 if not varies[c]:
-                    raise ValueError(f"laws[{q!r}]: the condition {c!r} has one value over "
-                                     "all records; a law in it cannot be identified")
+                    raise ValueError(
+                        f"laws[{q!r}]: the condition {c!r} has one value over "
+                        "all records; a law in it cannot be identified"
+                    )
             out[q] = tuple(dict.fromkeys(conds))
         else:
             out[q] = tuple(c for c in cnames if varies[c])
     for c in cnames:
         if not varies[c]:
-            warns.append(f"the condition {c!r} has one value over all records: every law is "
-                         "constant in it")
+            warns.append(
+                f"the condition {c!r} has one value over all records: every law is constant in it"
+            )
     n = X.shape[0]
     for q, conds in out.items():
         A = design(X, cnames, conds)
         if A.shape[1] > n:
-            raise ValueError(f"the law of {q} has {A.shape[1]} coefficients but there are "
-                             f"only {n} records; give more records or fewer conditions")
+            raise ValueError(
+                f"the law of {q} has {A.shape[1]} coefficients but there are "
+                f"only {n} records; give more records or fewer conditions"
+            )
         if np.linalg.matrix_rank(A) < A.shape[1]:
-            raise ValueError(f"the law of {q} in {list(conds)} cannot be identified: these "
-                             f"conditions are collinear over the {n} records")
+            raise ValueError(
+                f"the law of {q} in {list(conds)} cannot be identified: these "
+                f"conditions are collinear over the {n} records"
+            )
     return out, warns
 
 
@@ -187,8 +200,15 @@ def record_from_diagnosis(d, max_samples: int) -> dict:
     keep = fitted_samples(uj.size, max_samples)
     p = d.fit.joint
     own = F - np.asarray(d.force_after, float)
-    est, se = {"Fs": p.Fs, "log_phi_max": math.log(p.phi_max), "chi": p.chi,
-               "log1p_beta": math.log1p(p.beta)}, {}
+    est, se = (
+        {
+            "Fs": p.Fs,
+            "log_phi_max": math.log(p.phi_max),
+            "chi": p.chi,
+            "log1p_beta": math.log1p(p.beta),
+        },
+        {},
+    )
     fse = d.fit.stderr or {}
     se["Fs"] = fse.get("Fs", math.nan)
     se["chi"] = fse.get("chi", math.nan)
@@ -196,18 +216,28 @@ def record_from_diagnosis(d, max_samples: int) -> dict:
     for e in d.fit.details.get("effects", []):
         for sp in EFFECTS[e["name"]].specs:
             k = effect_quantity(e["name"], sp)
-            val = float(e["parameters"][sp.name]) / p.Fs ** sp.fs_power
-            s_val = float(e["stderr"].get(sp.name) or math.nan) / p.Fs ** sp.fs_power
+            val = float(e["parameters"][sp.name]) / p.Fs**sp.fs_power
+            s_val = float(e["stderr"].get(sp.name) or math.nan) / p.Fs**sp.fs_power
             est[k] = to_law(sp, val)
             se[k] = s_val / (val - sp.lower) if log_form(sp) else s_val
     base = d.base_fit.joint
-    return {"t": t, "u": uj, "F": F, "keep": keep, "effects": tuple(d.effects),
-            "estimates": est, "stderr": se, "start": float(d.details["start_displacement"]),
-            "sigma": float(d.noise_sigma), "rms_own": float(np.sqrt(np.mean(own[keep] ** 2))),
-            "tau_own": max(1.0, integrated_time(own[keep])),
-            "band_own": band_misfit(F, F - own, BAND),
-            "base_shape": (base.phi_max, base.chi, base.beta), "success": bool(d.success),
-            **record_explanations(d)}
+    return {
+        "t": t,
+        "u": uj,
+        "F": F,
+        "keep": keep,
+        "effects": tuple(d.effects),
+        "estimates": est,
+        "stderr": se,
+        "start": float(d.details["start_displacement"]),
+        "sigma": float(d.noise_sigma),
+        "rms_own": float(np.sqrt(np.mean(own[keep] ** 2))),
+        "tau_own": max(1.0, integrated_time(own[keep])),
+        "band_own": band_misfit(F, F - own, BAND),
+        "base_shape": (base.phi_max, base.chi, base.beta),
+        "success": bool(d.success),
+        **record_explanations(d),
+    }
 
 
 class RecordModel:
@@ -264,8 +294,9 @@ class CampaignModel:
         the range a fit may take there).
         """
         x = rm.x_max
-        phi = x * min(max(math.exp(min(vals["log_phi_max"], 700.0)) / x, M.PHI_RANGE[0]),
-                      M.PHI_RANGE[1])
+        phi = x * min(
+            max(math.exp(min(vals["log_phi_max"], 700.0)) / x, M.PHI_RANGE[0]), M.PHI_RANGE[1]
+        )
         chi = min(max(vals["chi"], M.CHI_BOUNDS[0]), M.CHI_BOUNDS[1])
         beta = math.expm1(min(max(vals["log1p_beta"], 0.0), math.log1p(M.BETA_MAX)))
         effs = []
@@ -273,8 +304,10 @@ class CampaignModel:
             d = {}
             for sp in EFFECTS[nm].specs:
                 ref = rm.scales[sp.ref] ** sp.ref_power
-                z = min(max(from_law(sp, vals[effect_quantity(nm, sp)]) * ref,
-                            sp.fit_bounds[0]), sp.fit_bounds[1])
+                z = min(
+                    max(from_law(sp, vals[effect_quantity(nm, sp)]) * ref, sp.fit_bounds[0]),
+                    sp.fit_bounds[1],
+                )
                 d[sp.name] = z / ref
             effs.append(d)
         return vals["Fs"], (phi, chi, beta), effs
@@ -288,10 +321,12 @@ class CampaignModel:
         out = {}
         for r, rm in enumerate(self.records):
             vals = self.law_values(theta, self.X[r])
-            _, (phi, chi, beta), effs = self.physical(vals, rm)    # the one place that clips
-            pairs = {"log_phi_max": (phi, math.exp(min(vals["log_phi_max"], 700.0))),
-                     "chi": (chi, vals["chi"]),
-                     "log1p_beta": (beta, math.expm1(min(vals["log1p_beta"], 700.0)))}
+            _, (phi, chi, beta), effs = self.physical(vals, rm)  # the one place that clips
+            pairs = {
+                "log_phi_max": (phi, math.exp(min(vals["log_phi_max"], 700.0))),
+                "chi": (chi, vals["chi"]),
+                "log1p_beta": (beta, math.expm1(min(vals["log1p_beta"], 700.0))),
+            }
             for nm, d in zip(self.names, effs):
                 for sp in EFFECTS[nm].specs:
                     q = effect_quantity(nm, sp)
@@ -332,17 +367,18 @@ class CampaignModel:
 
     def residual(self, theta):
         """Weighted residual of all records, stacked (the least-squares objective)."""
-        return np.concatenate([rm.weight * self.record_residual(theta, r)
-                               for r, rm in enumerate(self.records)])
+        return np.concatenate(
+            [rm.weight * self.record_residual(theta, r) for r, rm in enumerate(self.records)]
+        )
 
     def sparsity(self):
         """Jacobian structure: every row depends on the law coefficients, a start only on
         its own record's rows.
         """
         S = lil_matrix((int(self.rows[-1]), self.n_theta), dtype=np.int8)
-        S[:, :self.n_glob] = 1
+        S[:, : self.n_glob] = 1
         for r, k in self.start_pos.items():
-            S[self.rows[r]:self.rows[r + 1], k] = 1
+            S[self.rows[r] : self.rows[r + 1], k] = 1
         return S.tocsr()
 
     def jacobian(self, theta):
@@ -357,10 +393,14 @@ class CampaignModel:
                 tp, tm = theta.copy(), theta.copy()
                 tp[j] += f * h
                 tm[j] -= f * h
-                out.append([(self.record_residual(tp, r) - self.record_residual(tm, r))
-                            / (2 * f * h) for r in rs])
+                out.append(
+                    [
+                        (self.record_residual(tp, r) - self.record_residual(tm, r)) / (2 * f * h)
+                        for r in rs
+                    ]
+                )
             for r, d1, d4 in zip(rs, *out):
-                J[self.rows[r]:self.rows[r + 1], j] = np.where(M.jumps(d1, d4), 0.0, d1)
+                J[self.rows[r] : self.rows[r + 1], j] = np.where(M.jumps(d1, d4), 0.0, d1)
 
         every = range(len(self.records))
         for j in range(self.n_glob):
@@ -439,7 +479,7 @@ def scatter_coef_cov(model, theta, S, skip=None) -> np.ndarray:
         if not np.all(var > 0):
             continue
         sl = model.slices[q]
-        C[sl, sl] = normal_inverse(A / np.sqrt(var)[:, None])[0]     # (A^T V^-1 A)^-1
+        C[sl, sl] = normal_inverse(A / np.sqrt(var)[:, None])[0]  # (A^T V^-1 A)^-1
     return C
 
 
@@ -448,25 +488,40 @@ def build_model(preps, names, laws, cnames, X):
     records = [RecordModel(p) for p in preps]
     centre = X.mean(axis=0)
     cscale = np.where(X.std(axis=0) > 0, X.std(axis=0), 1.0)
-    qscale = {"Fs": float(np.median([p["estimates"]["Fs"] for p in preps])),
-              "log_phi_max": 1.0, "chi": 1.0, "log1p_beta": 1.0}
+    qscale = {
+        "Fs": float(np.median([p["estimates"]["Fs"] for p in preps])),
+        "log_phi_max": 1.0,
+        "chi": 1.0,
+        "log1p_beta": 1.0,
+    }
     for nm in names:
         for sp in EFFECTS[nm].specs:
-            qscale[effect_quantity(nm, sp)] = 1.0 if log_form(sp) else float(np.median(
-                [rm.scales[sp.ref] ** -sp.ref_power for rm in records]))
+            qscale[effect_quantity(nm, sp)] = (
+                1.0
+                if log_form(sp)
+                else float(np.median([rm.scales[sp.ref] ** -sp.ref_power for rm in records]))
+            )
     free = [p["start"] != 0.0 for p in preps]
     return CampaignModel(records, names, laws, cnames, X, centre, cscale, qscale, free)
 
 
 def solve(model, theta0, *, max_nfev, bar=None):
     """The joint weighted least-squares fit (trust region, sparse finite differences)."""
+
     def fun(th):
         if bar is not None:
             bar.update(1)
         return model.residual(th)
 
-    return least_squares(fun, theta0, jac_sparsity=model.sparsity(), method="trf",
-                         x_scale="jac", diff_step=1e-6, max_nfev=max_nfev)
+    return least_squares(
+        fun,
+        theta0,
+        jac_sparsity=model.sparsity(),
+        method="trf",
+        x_scale="jac",
+        diff_step=1e-6,
+        max_nfev=max_nfev,
+    )
 
 
 def full_force(model, theta, r, prep, vals=None, start=None):

@@ -11,6 +11,7 @@ condition mixes the campaign models of every probable explanation
 (:mod:`..selection.averaging`), each with its band from the law coefficients and the
 record-to-record scatter.
 """
+
 from __future__ import annotations
 
 import math
@@ -29,11 +30,16 @@ def record_explanations(d) -> dict:
     """What the campaign keeps of a record's diagnosis ``d``: ``{"explanations": [[effects,
     ln Z, chi2, n_params]], "candidates": [...]}`` (JSON-safe).
     """
-    cands = sorted({n for e in d.explanations for n in e.effects}
-                   | set(d.details.get("candidates", ())))
-    return {"explanations": [[list(e.effects), float(e.log_evidence), float(e.chi2),
-                              int(e.n_params)] for e in d.explanations],
-            "candidates": cands}
+    cands = sorted(
+        {n for e in d.explanations for n in e.effects} | set(d.details.get("candidates", ()))
+    )
+    return {
+        "explanations": [
+            [list(e.effects), float(e.log_evidence), float(e.chi2), int(e.n_params)]
+            for e in d.explanations
+        ],
+        "candidates": cands,
+    }
 
 
 def campaign_explanations(preps, effect_prior=None) -> tuple:
@@ -58,18 +64,34 @@ def campaign_explanations(preps, effect_prior=None) -> tuple:
                 lz[k] += z
                 chi2[k] += c
                 npar[k] += q
-    cands = sorted({c for p in preps for c in p.get("candidates", ())} | {n for k in common
-                                                                         for n in k})
-    prior = check_effect_prior({k: v for k, v in effect_prior.items() if k in cands}
-                               if isinstance(effect_prior, dict) else effect_prior,
-                               tuple(cands))
+    cands = sorted(
+        {c for p in preps for c in p.get("candidates", ())} | {n for k in common for n in k}
+    )
+    prior = check_effect_prior(
+        {k: v for k, v in effect_prior.items() if k in cands}
+        if isinstance(effect_prior, dict)
+        else effect_prior,
+        tuple(cands),
+    )
     lp = log_model_prior(list(common), prior)
     post = posterior_probabilities(lz, lp)
-    out = [Explanation(effects=k, stack=k, chi2=chi2[k], n_params=npar[k],
-                       log_likelihood=math.nan, log_occam=math.nan, log_evidence=lz[k],
-                       log_prior=lp[k], probability=post[k], theta=np.zeros(0),
-                       covariance=np.zeros((0, 0)), log_evidence_laplace=lz[k])
-           for k in common]
+    out = [
+        Explanation(
+            effects=k,
+            stack=k,
+            chi2=chi2[k],
+            n_params=npar[k],
+            log_likelihood=math.nan,
+            log_occam=math.nan,
+            log_evidence=lz[k],
+            log_prior=lp[k],
+            probability=post[k],
+            theta=np.zeros(0),
+            covariance=np.zeros((0, 0)),
+            log_evidence_laplace=lz[k],
+        )
+        for k in common
+    ]
     return tuple(sorted(out, key=lambda e: -e.probability))
 
 
@@ -88,29 +110,39 @@ def campaign_band(fit, conditions, t, u, *, level: float = 0.95, **options):
     for e, w in mem:
         f = fits.get(e.effects)
         if f is None:
-            warns.append(f"{' + '.join(e.effects) or 'the plain joint'} (probability "
-                         f"{e.probability:.2g}) has no campaign model and is left out")
+            warns.append(
+                f"{' + '.join(e.effects) or 'the plain joint'} (probability "
+                f"{e.probability:.2g}) has no campaign model and is left out"
+            )
             continue
         pr = f.predict(conditions, t, u, level=level, **options)
-        parts.append((e.effects, w, {"force": (pr.force, (pr.upper - pr.lower) / (2 * z),
-                                               "N")}))
+        parts.append((e.effects, w, {"force": (pr.force, (pr.upper - pr.lower) / (2 * z), "N")}))
         warns += list(pr.warnings)
     if not parts:
         pr = fit.predict(conditions, t, u, level=level, **options)
-        parts = [(tuple(sorted(fit.effects)), 1.0,
-                  {"force": (pr.force, (pr.upper - pr.lower) / (2 * z), "N")})]
+        parts = [
+            (
+                tuple(sorted(fit.effects)),
+                1.0,
+                {"force": (pr.force, (pr.upper - pr.lower) / (2 * z), "N")},
+            )
+        ]
     s = sum(p[1] for p in parts)
     parts = [(a, w / s, c) for a, w, c in parts]
-    return band(np.asarray(t, float), "time [s]", parts, level, warnings=tuple(dict.fromkeys(
-        warns)))
+    return band(
+        np.asarray(t, float), "time [s]", parts, level, warnings=tuple(dict.fromkeys(warns))
+    )
 
 
 def probable_alternatives(explanations, stack) -> list:
     """Explanations other than ``stack`` probable enough to be averaged (their campaign
     models are fitted too).
     """
-    return [e.effects for e in explanations
-            if e.probability >= MIN_WEIGHT and set(e.effects) != set(stack)]
+    return [
+        e.effects
+        for e in explanations
+        if e.probability >= MIN_WEIGHT and set(e.effects) != set(stack)
+    ]
 
 
 __all__ += ["probable_alternatives"]

@@ -2,6 +2,7 @@
 uncertainty, the per-record agreement table, and the methods that predict and cross-check
 (:mod:`.predict`); :mod:`.assemble` builds it.
 """
+
 from __future__ import annotations
 
 import math
@@ -27,8 +28,7 @@ def law_at(model, theta, cov_int, x):
     vals = model.law_values(theta, x)
     se = {}
     for q in model.qnames:
-        a = CM.design(np.atleast_2d(x), model.cnames, model.laws[q], model.centre,
-                      model.cscale)[0]
+        a = CM.design(np.atleast_2d(x), model.cnames, model.laws[q], model.centre, model.cscale)[0]
         sl = model.slices[q]
         se[q] = math.sqrt(max(float(a @ cov_int[sl, sl] @ a), 0.0)) * model.qscale[q]
     return vals, se
@@ -150,8 +150,19 @@ class CampaignFit(Probable, ResultShape):
         vals, se = law_at(st["model"], st["theta"], st["cov_int"], x)
         return vals[quantity], se[quantity]
 
-    def predict(self, conditions, t, u, *, F0: float = 0.0, start: float = 0.0,
-                level: float = 0.95, draws: int = 64, rng=None, scatter: bool = True):
+    def predict(
+        self,
+        conditions,
+        t,
+        u,
+        *,
+        F0: float = 0.0,
+        start: float = 0.0,
+        level: float = 0.95,
+        draws: int = 64,
+        rng=None,
+        scatter: bool = True,
+    ):
         """Force history of the device at ``conditions`` (tested or not) under the drive
         ``(t, u)``, with a band from the law coefficients' uncertainty.
 
@@ -182,12 +193,32 @@ class CampaignFit(Probable, ResultShape):
         CampaignPrediction
             ``.force``, ``.lower``, ``.upper`` [N] and ``warnings`` (e.g. extrapolation).
         """
-        return campaign_predict(self, conditions, t, u, F0=F0, start=start, level=level, draws=draws,
-                       rng=rng, scatter=scatter)
+        return campaign_predict(
+            self,
+            conditions,
+            t,
+            u,
+            F0=F0,
+            start=start,
+            level=level,
+            draws=draws,
+            rng=rng,
+            scatter=scatter,
+        )
 
-    def leave_one_out(self, *, refit: str = "step", jobs: int = 1, client=None,
-                      progress: bool = False, max_nfev: int = 20, coverage: bool = False,
-                      draws: int = 32, level: float = 0.95, seed: int = 0):
+    def leave_one_out(
+        self,
+        *,
+        refit: str = "step",
+        jobs: int = 1,
+        client=None,
+        progress: bool = False,
+        max_nfev: int = 20,
+        coverage: bool = False,
+        draws: int = 32,
+        level: float = 0.95,
+        seed: int = 0,
+    ):
         """Predict each record from the campaign fitted without it.
 
         The device comes from the laws fitted to the other records; the record's nuisances
@@ -226,9 +257,18 @@ class CampaignFit(Probable, ResultShape):
             ``rows`` (record, own and predicted band misfit [N], ratio), ``share_within``,
             ``success``, ``report()``, ``to_dict()``, ``plot()``, ``warnings``.
         """
-        return campaign_leave_one_out(self, refit=refit, jobs=jobs, client=client, progress=progress,
-                             max_nfev=max_nfev, coverage=coverage, draws=draws, level=level,
-                             seed=seed)
+        return campaign_leave_one_out(
+            self,
+            refit=refit,
+            jobs=jobs,
+            client=client,
+            progress=progress,
+            max_nfev=max_nfev,
+            coverage=coverage,
+            draws=draws,
+            level=level,
+            seed=seed,
+        )
 
     def failure_reasons(self) -> tuple:
         """Why ``success`` is False (empty when it is True), in a tester's words."""
@@ -237,44 +277,87 @@ class CampaignFit(Probable, ResultShape):
         out = [] if self.converged else [f"the joint fit did not converge ({self.message})"]
         bad = [k for k, p in self.params.items() if not p.identified]
         if bad:
-            out.append(f"law coefficients {', '.join(bad)} are not identified by the records "
-                       "(see the warnings: a clipped law, or too few records or conditions)")
+            out.append(
+                f"law coefficients {', '.join(bad)} are not identified by the records "
+                "(see the warnings: a clipped law, or too few records or conditions)"
+            )
         return tuple(out) or super().failure_reasons()
 
     def report(self) -> str:
         """Laws with their coefficients, the per-record table, warnings and times."""
         tm = self.details["times"]
-        lines = [self.verdict(), f"Campaign fit of {len(self.records)} records: stack "
-                 f"{' + '.join(self.effects) or 'Iwan'} ({self.effects_from}); "
-                 f"{'converged' if self.converged else 'NOT converged'}, {self.nfev} "
-                 f"evaluations; {self.wall_time:.1f} s (diagnoses {tm['diagnoses']:.1f} s, "
-                 f"joint fit {tm['joint_fit']:.1f} s, uncertainty {tm['uncertainty']:.1f} s)",
-                 "  laws (coefficient +- standard error (with the record scatter)):"]
+        lines = [
+            self.verdict(),
+            f"Campaign fit of {len(self.records)} records: stack "
+            f"{' + '.join(self.effects) or 'Iwan'} ({self.effects_from}); "
+            f"{'converged' if self.converged else 'NOT converged'}, {self.nfev} "
+            f"evaluations; {self.wall_time:.1f} s (diagnoses {tm['diagnoses']:.1f} s, "
+            f"joint fit {tm['joint_fit']:.1f} s, uncertainty {tm['uncertainty']:.1f} s)",
+            "  laws (coefficient +- standard error (with the record scatter)):",
+        ]
         for q, terms in self.coefficients.items():
-            parts = [f"{c:.5g} +- {self.stderr[q][k]:.2g}"
-                     + (f" ({self.stderr_scatter[q][k]:.2g})" if self.stderr_scatter else "")
-                     + ("" if k == "1" else f" x {k}") for k, c in terms.items()]
+            parts = [
+                f"{c:.5g} +- {self.stderr[q][k]:.2g}"
+                + (f" ({self.stderr_scatter[q][k]:.2g})" if self.stderr_scatter else "")
+                + ("" if k == "1" else f" x {k}")
+                for k, c in terms.items()
+            ]
             lines.append(f"    {q} [{unit_label(self.units[q])}] = " + " + ".join(parts))
         if self.scatter:
-            lines.append("  record-to-record scatter about the laws (standard deviation): "
-                         + ", ".join(f"{q} {v:.3g}" for q, v in self.scatter.items()))
-        lines += table_lines([("record", "<26"), ("named", "<40"), ("own band", "9.4g"),
-                              ("campaign", "9.4g"), ("ratio", "6.2f")],
-                             [[r[k] for k in ("record", "named", "band_own", "band_campaign",
-                                              "band_ratio")] for r in self.rows])
+            lines.append(
+                "  record-to-record scatter about the laws (standard deviation): "
+                + ", ".join(f"{q} {v:.3g}" for q, v in self.scatter.items())
+            )
+        lines += table_lines(
+            [
+                ("record", "<26"),
+                ("named", "<40"),
+                ("own band", "9.4g"),
+                ("campaign", "9.4g"),
+                ("ratio", "6.2f"),
+            ],
+            [
+                [r[k] for k in ("record", "named", "band_own", "band_campaign", "band_ratio")]
+                for r in self.rows
+            ],
+        )
         lines += self.probability_lines() + [f"  warning: {w}" for w in self.warnings]
         return "\n".join(lines)
 
     def to_dict(self) -> dict:
         """JSON-safe dict (NaN becomes None)."""
-        return json_safe({"params": self.params.to_dict()} | {k: getattr(self, k) for k in (
-            "records", "condition_names", "effects", "effects_from", "laws", "units",
-            "coefficients", "stderr", "covariance", "coefficient_labels", "rows", "scatter",
-            "stderr_scatter",
-            "converged",
-            "success", "message", "nfev", "wall_time", "warnings", "details")}
-                         | {"failure_reasons": list(self.failure_reasons()),
-                            "probabilities": self.probabilities_dict()})
+        return json_safe(
+            {"params": self.params.to_dict()}
+            | {
+                k: getattr(self, k)
+                for k in (
+                    "records",
+                    "condition_names",
+                    "effects",
+                    "effects_from",
+                    "laws",
+                    "units",
+                    "coefficients",
+                    "stderr",
+                    "covariance",
+                    "coefficient_labels",
+                    "rows",
+                    "scatter",
+                    "stderr_scatter",
+                    "converged",
+                    "success",
+                    "message",
+                    "nfev",
+                    "wall_time",
+                    "warnings",
+                    "details",
+                )
+            }
+            | {
+                "failure_reasons": list(self.failure_reasons()),
+                "probabilities": self.probabilities_dict(),
+            }
+        )
 
     def plot(self, ax=None, *, quantity: str = "Fs", condition: str | None = None):
         """One quantity against one condition: the records' own estimates (with their
@@ -298,16 +381,23 @@ class CampaignFit(Probable, ResultShape):
             raise ValueError(f"quantity must be one of {list(self.laws)}, got {quantity!r}")
         condition = self.condition_names[0] if condition is None else condition
         if condition not in self.condition_names:
-            raise ValueError(f"condition must be one of {list(self.condition_names)}, got "
-                             f"{condition!r}")
+            raise ValueError(
+                f"condition must be one of {list(self.condition_names)}, got {condition!r}"
+            )
         ax = axes_or_new(ax)
         st = self._state
         model, j = st["model"], self.condition_names.index(condition)
         x_rec = model.X[:, j]
         est = np.array([p["estimates"].get(quantity, np.nan) for p in st["preps"]])
         err = np.array([p["stderr"].get(quantity, np.nan) for p in st["preps"]])
-        eb = ax.errorbar(x_rec, est, yerr=np.where(np.isfinite(err), err, 0.0), fmt="o", ms=4,
-                         label="records (own fit)")
+        eb = ax.errorbar(
+            x_rec,
+            est,
+            yerr=np.where(np.isfinite(err), err, 0.0),
+            fmt="o",
+            ms=4,
+            label="records (own fit)",
+        )
         arts = [eb[0], *eb[2]]
         grid = np.linspace(x_rec.min(), x_rec.max(), 50)
         mid, lo, hi = [], [], []

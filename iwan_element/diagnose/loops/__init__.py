@@ -8,16 +8,26 @@ evidences and forces), :mod:`.locate` (where a misfit lies), :mod:`.report` and
 :mod:`.result` (:class:`Diagnosis`), :mod:`.batch` (many records on local processes or
 Dask: :func:`diagnose_many`, :class:`BatchDiagnosis`).
 """
+
 from .batch import (
-                    BatchDiagnosis,
-                    band_misfit,
-                    check_options,
-                    check_records,
-                    diagnose_many,
-                    executor_for,
+    BatchDiagnosis,
+    band_misfit,
+    check_options,
+    check_records,
+    diagnose_many,
+    executor_for,
 )
 from .diagnosis import diagnose, loop_candidates
 from .result import Diagnosis
 
-__all__ = ["BatchDiagnosis", "band_misfit", "check_options", "check_records", "diagnose_many",
-           "executor_for", "diagnose", "loop_candidates", "Diagnosis"]
+__all__ = [
+    "BatchDiagnosis",
+    "band_misfit",
+    "check_options",
+    "check_records",
+    "diagnose_many",
+    "executor_for",
+    "diagnose",
+    "loop_candidates",
+    "Diagnosis",
+]

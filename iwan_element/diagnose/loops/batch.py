@@ -11,6 +11,7 @@ The table's band misfit is the RMS force residual where ``|F| < band * max|F|`` 
 0.25): the part of the cycle where a gap or a break-away acts, which the whole-record NRMSE
 dilutes (the damper benchmark's measure).
 """
+
 from __future__ import annotations
 
 import json
@@ -26,12 +27,29 @@ from ...base.validation import check_scalar, finite_array
 from ...ensemble import run_ensemble
 from .diagnosis import diagnose
 
-__all__ = ["diagnose_many", "BatchDiagnosis", "band_misfit", "check_records", "check_options",
-           "executor_for"]
+__all__ = [
+    "diagnose_many",
+    "BatchDiagnosis",
+    "band_misfit",
+    "check_records",
+    "check_options",
+    "executor_for",
+]
 
 #: Table columns of :class:`BatchDiagnosis` (besides the record's name).
-COLUMNS = ("samples", "named", "error_before", "error_after", "band_before", "band_after",
-           "band_ratio", "noise_sigma", "success", "seconds", "status")
+COLUMNS = (
+    "samples",
+    "named",
+    "error_before",
+    "error_after",
+    "band_before",
+    "band_after",
+    "band_ratio",
+    "noise_sigma",
+    "success",
+    "seconds",
+    "status",
+)
 
 
 def band_misfit(F, F_model, band: float) -> float:
@@ -45,20 +63,32 @@ def band_misfit(F, F_model, band: float) -> float:
 
 def _diagnose_task(params, rng):
     """One record (module level, so that worker processes can import it)."""
-    del rng                                   # the diagnosis is seeded by its own ``seed``
+    del rng  # the diagnosis is seeded by its own ``seed``
     t0 = time.perf_counter()
     try:
         d = diagnose(params["t"], params["u"], params["F"], **params["options"])
-    except ValueError as exc:                 # a refusal is a result, reported as such
-        return {"status": f"refused: {' '.join(str(exc).split())}", "json": "null",
-                "seconds": time.perf_counter() - t0}
+    except ValueError as exc:  # a refusal is a result, reported as such
+        return {
+            "status": f"refused: {' '.join(str(exc).split())}",
+            "json": "null",
+            "seconds": time.perf_counter() - t0,
+        }
     bb = band_misfit(d.F, d.force_before, params["band"])
     ba = band_misfit(d.F, d.force_after, params["band"])
-    return {"status": "ok", "samples": int(d.F.size), "named": " + ".join(d.effects) or "none",
-            "error_before": d.error_before, "error_after": d.error_after,
-            "band_before": bb, "band_after": ba, "band_ratio": ba / bb if bb > 0 else math.nan,
-            "noise_sigma": d.noise_sigma, "success": bool(d.success),
-            "seconds": time.perf_counter() - t0, "json": json.dumps(d.to_dict())}
+    return {
+        "status": "ok",
+        "samples": int(d.F.size),
+        "named": " + ".join(d.effects) or "none",
+        "error_before": d.error_before,
+        "error_after": d.error_after,
+        "band_before": bb,
+        "band_after": ba,
+        "band_ratio": ba / bb if bb > 0 else math.nan,
+        "noise_sigma": d.noise_sigma,
+        "success": bool(d.success),
+        "seconds": time.perf_counter() - t0,
+        "json": json.dumps(d.to_dict()),
+    }
 
 
 def check_records(records, names):
@@ -88,8 +118,10 @@ def check_options(options):
     """``options`` as a dict, every key an option of :func:`~iwan_element.diagnose`."""
     unknown = sorted(set(options) - set(diagnose.__kwdefaults__))
     if unknown:
-        raise ValueError(f"options {unknown} are not options of diagnose(); it takes "
-                         f"{sorted(diagnose.__kwdefaults__)}")
+        raise ValueError(
+            f"options {unknown} are not options of diagnose(); it takes "
+            f"{sorted(diagnose.__kwdefaults__)}"
+        )
     return dict(options)
 
 
@@ -102,11 +134,20 @@ def executor_for(jobs: int, client):
     if jobs == 1:
         return "serial"
     from concurrent.futures import ProcessPoolExecutor
+
     return ProcessPoolExecutor(jobs)
 
 
-def diagnose_many(records, *, names=None, executor=None, progress: bool = False,
-                  band: float = 0.25, seed=None, **options) -> BatchDiagnosis:
+def diagnose_many(
+    records,
+    *,
+    names=None,
+    executor=None,
+    progress: bool = False,
+    band: float = 0.25,
+    seed=None,
+    **options,
+) -> BatchDiagnosis:
     """Diagnose every record of a campaign, on local processes, serially or on Dask.
 
     Parameters
@@ -157,8 +198,14 @@ def diagnose_many(records, *, names=None, executor=None, progress: bool = False,
     n_bad = sum(r["status"] != "ok" for r in rows)
     if n_bad:
         warns.append(f"{n_bad} of {len(rows)} records were not diagnosed (see the status column)")
-    return BatchDiagnosis(rows=tuple(rows), diagnoses=tuple(docs), options=opts,
-                          executor=res.executor, wall_time=res.wall_time, warnings=tuple(warns))
+    return BatchDiagnosis(
+        rows=tuple(rows),
+        diagnoses=tuple(docs),
+        options=opts,
+        executor=res.executor,
+        wall_time=res.wall_time,
+        warnings=tuple(warns),
+    )
 
 
 def _errors_by_index(res):
@@ -212,31 +259,45 @@ class BatchDiagnosis(ResultShape):
 
     def report(self) -> str:
         """The table: one line per record, then the batch's totals and warnings."""
-        head = (f"{'record':<28} {'named':<36} {'NRMSE before':>12} {'after':>8} "
-                f"{'band before':>11} {'after':>9} {'ratio':>6} {'time [s]':>8}")
-        lines = [self.verdict(), f"Batch diagnosis of {len(self.rows)} records on {self.executor} "
-                 f"({self.wall_time:.1f} s)", head]
+        head = (
+            f"{'record':<28} {'named':<36} {'NRMSE before':>12} {'after':>8} "
+            f"{'band before':>11} {'after':>9} {'ratio':>6} {'time [s]':>8}"
+        )
+        lines = [
+            self.verdict(),
+            f"Batch diagnosis of {len(self.rows)} records on {self.executor} "
+            f"({self.wall_time:.1f} s)",
+            head,
+        ]
         for r in self.rows:
             if r["status"] != "ok":
                 lines.append(f"{r['record']:<28} {r['status']}")
                 continue
-            lines.append(f"{r['record']:<28} {r['named']:<36} {100 * r['error_before']:11.3g}% "
-                         f"{100 * r['error_after']:7.3g}% {r['band_before']:11.4g} "
-                         f"{r['band_after']:9.4g} {r['band_ratio']:6.2f} {r['seconds']:8.1f}")
+            lines.append(
+                f"{r['record']:<28} {r['named']:<36} {100 * r['error_before']:11.3g}% "
+                f"{100 * r['error_after']:7.3g}% {r['band_before']:11.4g} "
+                f"{r['band_after']:9.4g} {r['band_ratio']:6.2f} {r['seconds']:8.1f}"
+            )
         lines += [f"warning: {w}" for w in self.warnings]
         return "\n".join(lines)
 
     def to_dict(self) -> dict:
         """JSON-safe dict: the table, the options, every diagnosis."""
+
         def clean(v):
             if isinstance(v, (float, np.floating)) and not math.isfinite(float(v)):
                 return None
             return v.item() if isinstance(v, np.generic) else v
-        return {"rows": [{k: clean(v) for k, v in r.items()} for r in self.rows],
-                "options": {k: clean(v) for k, v in self.options.items()},
-                "executor": self.executor, "wall_time": self.wall_time,
-                "success": self.success, "warnings": list(self.warnings),
-                "diagnoses": list(self.diagnoses)}
+
+        return {
+            "rows": [{k: clean(v) for k, v in r.items()} for r in self.rows],
+            "options": {k: clean(v) for k, v in self.options.items()},
+            "executor": self.executor,
+            "wall_time": self.wall_time,
+            "success": self.success,
+            "warnings": list(self.warnings),
+            "diagnoses": list(self.diagnoses),
+        }
 
     def to_csv(self, path) -> Path:
         """Write the table (one row per record, the columns of :attr:`rows`) as CSV."""
@@ -261,12 +322,13 @@ class BatchDiagnosis(ResultShape):
         list
             The matplotlib artists drawn.
         """
-        ax, = panels(ax, 1, figsize=(max(5.0, 0.5 * len(self.rows) + 2), 4))
+        (ax,) = panels(ax, 1, figsize=(max(5.0, 0.5 * len(self.rows) + 2), 4))
         ok = [r for r in self.rows if r["status"] == "ok"]
         x = np.arange(len(ok))
         artists = list(ax.bar(x - 0.2, [r["band_before"] for r in ok], 0.4, label="Iwan"))
-        artists += list(ax.bar(x + 0.2, [r["band_after"] for r in ok], 0.4,
-                               label="with named effects"))
+        artists += list(
+            ax.bar(x + 0.2, [r["band_after"] for r in ok], 0.4, label="with named effects")
+        )
         ax.set_xticks(x, [r["record"] for r in ok], rotation=60, ha="right", fontsize=7)
         ax.set_ylabel("band misfit [N]")
         ax.set_yscale("log")

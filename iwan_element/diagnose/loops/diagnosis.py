@@ -28,6 +28,7 @@ A property of the test rig is not an effect of the joint: ``lowpass`` removes st
 ringing of the rig (e.g. the 40-50 Hz ringing of the ARTS damper rig after each break-away),
 with a zero-phase Butterworth filter on both channels, stating the reason in the result.
 """
+
 from __future__ import annotations
 
 import logging
@@ -71,8 +72,12 @@ def loop_candidates() -> tuple:
     (read when called, as :func:`~iwan_element.diagnose.vibration.vibration_candidates` is, so
     an effect registered later joins too).
     """
-    return tuple(sorted((n for n, c in EFFECTS.items() if c.loop_rank is not None),
-                        key=lambda n: EFFECTS[n].loop_rank))
+    return tuple(
+        sorted(
+            (n for n, c in EFFECTS.items() if c.loop_rank is not None),
+            key=lambda n: EFFECTS[n].loop_rank,
+        )
+    )
 
 
 @dataclass(frozen=True, eq=False)
@@ -116,11 +121,25 @@ class LoopSelection:
     rule_named: tuple = ()
 
 
-def diagnose(t, u, F, *, candidates=None, max_effects: int = 3, noise: float | None = None,
-             alpha: float = 1e-3, ambiguity: float = 10.0, max_samples: int = 1500,
-             lowpass: float | None = None, seed=0, progress: bool = False,
-             effect_prior=None, probabilities: bool = True, evidence: str = "laplace",
-             nested=None) -> Diagnosis:
+def diagnose(
+    t,
+    u,
+    F,
+    *,
+    candidates=None,
+    max_effects: int = 3,
+    noise: float | None = None,
+    alpha: float = 1e-3,
+    ambiguity: float = 10.0,
+    max_samples: int = 1500,
+    lowpass: float | None = None,
+    seed=0,
+    progress: bool = False,
+    effect_prior=None,
+    probabilities: bool = True,
+    evidence: str = "laplace",
+    nested=None,
+) -> Diagnosis:
     """Find what the four-parameter Iwan model misses in a displacement-driven test.
 
     See the module docstring for the procedure.
@@ -187,16 +206,17 @@ def diagnose(t, u, F, *, candidates=None, max_effects: int = 3, noise: float | N
     t_start = time.perf_counter()
     tt, uu, FF, n, noise, lp = check_record(t, u, F, noise, lowpass)
     cand = _check_candidates(candidates, loop_candidates())
-    opts = dict(alpha=check_scalar("alpha", alpha, low=0.0, high=0.5, low_open=True,
-                                   high_open=True),
-                ambiguity=check_scalar("ambiguity", ambiguity, low=0.0),
-                max_effects=check_int("max_effects", max_effects, 1))
+    opts = dict(
+        alpha=check_scalar("alpha", alpha, low=0.0, high=0.5, low_open=True, high_open=True),
+        ambiguity=check_scalar("ambiguity", ambiguity, low=0.0),
+        max_effects=check_int("max_effects", max_effects, 1),
+    )
     max_samples = check_int("max_samples", max_samples, 100)
-    check_effect_prior(effect_prior, cand)          # a bad prior is refused before any fit
+    check_effect_prior(effect_prior, cand)  # a bad prior is refused before any fit
     nest = nested_options(evidence, nested)
     bar = progress_bar(progress, desc="diagnose", unit="fit")
     try:
-        with one_blas_thread():          # tall, narrow least squares: threads only spin
+        with one_blas_thread():  # tall, narrow least squares: threads only spin
             rec = prepare_record(tt, uu, FF, n, lp, max_samples)
             fitter = StackFitter(rec)
             base = fit_base(fitter, rec, seed=seed)
@@ -206,20 +226,40 @@ def diagnose(t, u, F, *, candidates=None, max_effects: int = 3, noise: float | N
             fitter.scales["D_ref"] = dissipation_scale(rec.ev, shape_b)
             if not isinstance(probabilities, (bool, np.bool_)):
                 raise ValueError(f"probabilities must be True or False, got {probabilities!r}")
-            sel = select(fitter, base, rec, nl, cand, opts, fixed_noise=noise is not None,
-                         bar=bar, explore=bool(probabilities))
+            sel = select(
+                fitter,
+                base,
+                rec,
+                nl,
+                cand,
+                opts,
+                fixed_noise=noise is not None,
+                bar=bar,
+                explore=bool(probabilities),
+            )
             if probabilities:
                 sel = most_probable(sel, base, rec, effect_prior, nest)
-            fits = final_fits(fitter, rec, base, sel.final, noise_only=sel.noise_only,
-                              t_start=t_start)
+            fits = final_fits(
+                fitter, rec, base, sel.final, noise_only=sel.noise_only, t_start=t_start
+            )
             return assemble(rec, sel, fits, opts, t_start)
     finally:
         if bar is not None:
             finish(bar)
 
 
-def select(fitter: StackFitter, base: dict, rec: PreparedRecord, nl: NoiseLevel, cand, opts,
-           *, fixed_noise: bool, bar=None, explore: bool = True) -> LoopSelection:
+def select(
+    fitter: StackFitter,
+    base: dict,
+    rec: PreparedRecord,
+    nl: NoiseLevel,
+    cand,
+    opts,
+    *,
+    fixed_noise: bool,
+    bar=None,
+    explore: bool = True,
+) -> LoopSelection:
     """The selection stage: the rule over the candidates the record can test, repeated with
     the noise re-read from the residual of the model it selected unless the noise was given
     (a large misfit leaks into the plain fit's residual and inflates the noise estimate, which
@@ -228,33 +268,44 @@ def select(fitter: StackFitter, base: dict, rec: PreparedRecord, nl: NoiseLevel,
     why = untestable(rec, cand)
     testable = tuple(c for c in cand if c not in why)
     cycles = record_cycles(rec)
-    set_total(bar, 1 + len(testable) * (opts["max_effects"] + 1))    # base, rounds, pairs
+    set_total(bar, 1 + len(testable) * (opts["max_effects"] + 1))  # base, rounds, pairs
     # a record that is noise can test no effect: the candidates are then fitted only where
     # the rule needs them (never), not for the probabilities
-    explore = explore and not pure_noise(rec.F[rec.keep], base["ssr"] / nl.sigma ** 2,
-                                         nl.sigma, nl.tau_k, nl.n_eff)
+    explore = explore and not pure_noise(
+        rec.F[rec.keep], base["ssr"] / nl.sigma**2, nl.sigma, nl.tau_k, nl.n_eff
+    )
     for k in range(3):
-        fitter.s2 = nl.sigma ** 2
+        fitter.s2 = nl.sigma**2
         base["chi2"] = base["ssr"] / fitter.s2
         rule = _run_rule(fitter, base, rec, testable, nl, opts, bar, explore)
         if fixed_noise or not rule.named or k == 2:
             break
-        new = noise_level(rec, rec.F_raw - record_force(rule.final["state"], rec.uj,
-                                                        rec.v)[0], None)
+        new = noise_level(
+            rec, rec.F_raw - record_force(rule.final["state"], rec.uj, rec.v)[0], None
+        )
         if abs(new.sigma - nl.sigma) <= 0.05 * nl.sigma and abs(new.tau - nl.tau) <= 0.1 * nl.tau:
             break
         nl = replace(new, text=new.text + ", from the residual of the model selected")
     noise_only = pure_noise(rec.F[rec.keep], base["chi2"], nl.sigma, nl.tau_k, nl.n_eff)
     named = () if noise_only else tuple(rule.named)
-    return LoopSelection(named=named, ambiguous=() if noise_only else tuple(rule.ambiguous),
-                         steps=rule.steps, final=rule.final["state"] if named else None,
-                         p_before=rule.p_before, p_after=rule.p_after,
-                         untestable=why, cycles=cycles, noise=nl, noise_only=noise_only,
-                         candidates=testable)
+    return LoopSelection(
+        named=named,
+        ambiguous=() if noise_only else tuple(rule.ambiguous),
+        steps=rule.steps,
+        final=rule.final["state"] if named else None,
+        p_before=rule.p_before,
+        p_after=rule.p_after,
+        untestable=why,
+        cycles=cycles,
+        noise=nl,
+        noise_only=noise_only,
+        candidates=testable,
+    )
 
 
-def most_probable(sel: LoopSelection, base: dict, rec: PreparedRecord,
-                  effect_prior, nested=None) -> LoopSelection:
+def most_probable(
+    sel: LoopSelection, base: dict, rec: PreparedRecord, effect_prior, nested=None
+) -> LoopSelection:
     """The probability stage: every explanation the selection fitted with its posterior
     probability (:mod:`..selection.probabilities`), and the most probable one named (the rule's own
     answer kept in ``rule_named``). A record that is noise names nothing whatever the
@@ -262,19 +313,33 @@ def most_probable(sel: LoopSelection, base: dict, rec: PreparedRecord,
     """
     nl = sel.noise
     fits = collect_fits(base, sel.steps)
-    expl = rank(fits, tau=nl.tau_k, n_eff=nl.n_eff,
-                prior=check_effect_prior(
-                    {k: v for k, v in effect_prior.items() if k in sel.candidates}
-                    if isinstance(effect_prior, dict) else effect_prior, sel.candidates),
-                evaluate=loop_evaluator(nl.sigma, float(np.ptp(rec.F)) or 1.0), nested=nested)
+    expl = rank(
+        fits,
+        tau=nl.tau_k,
+        n_eff=nl.n_eff,
+        prior=check_effect_prior(
+            {k: v for k, v in effect_prior.items() if k in sel.candidates}
+            if isinstance(effect_prior, dict)
+            else effect_prior,
+            sel.candidates,
+        ),
+        evaluate=loop_evaluator(nl.sigma, float(np.ptp(rec.F)) or 1.0),
+        nested=nested,
+    )
     top = expl[0]
     if sel.noise_only or key(top.stack) == key(sel.named):
         return replace(sel, explanations=tuple(expl), rule_named=tuple(sel.named))
     row = fits[top.effects][3]
     q = fits[top.effects][2]
-    return replace(sel, named=tuple(top.stack), ambiguous=(), final=row if top.stack else None,
-                   p_after=misfit_p(row["chi2"], nl.tau_k, nl.n_eff, q),
-                   explanations=tuple(expl), rule_named=tuple(sel.named))
+    return replace(
+        sel,
+        named=tuple(top.stack),
+        ambiguous=(),
+        final=row if top.stack else None,
+        p_after=misfit_p(row["chi2"], nl.tau_k, nl.n_eff, q),
+        explanations=tuple(expl),
+        rule_named=tuple(sel.named),
+    )
 
 
 def _run_rule(fitter, base, rec, testable, nl, opts, bar, explore=True) -> SelectionResult:
@@ -293,12 +358,24 @@ def _run_rule(fitter, base, rec, testable, nl, opts, bar, explore=True) -> Selec
         tick(bar, text=" + ".join(names))
         q = len(EFFECTS[name].specs)
         ssr = row["chi2"] * fitter.s2
-        return {"names": names, "chi2": row["chi2"], "q": q, "state": row,
-                "nrmse": math.sqrt(ssr / nf) / span,
-                "ratio": math.sqrt(row["chi2"] / max(nf - 5 - q, 1)),
-                "message": row["message"]}
+        return {
+            "names": names,
+            "chi2": row["chi2"],
+            "q": q,
+            "state": row,
+            "nrmse": math.sqrt(ssr / nf) / span,
+            "ratio": math.sqrt(row["chi2"] / max(nf - 5 - q, 1)),
+            "message": row["message"],
+        }
 
     base_state = {"names": (), "chi2": base["chi2"], "q": 5, "state": base}
-    return stepwise_select(fit_candidate, testable, base_state, tau=nl.tau_k, n_eff=nl.n_eff,
-                           allowed=lambda names, c: stack_ok(tuple(names) + (c,)),
-                           first_step=explore, **opts)
+    return stepwise_select(
+        fit_candidate,
+        testable,
+        base_state,
+        tau=nl.tau_k,
+        n_eff=nl.n_eff,
+        allowed=lambda names, c: stack_ok(tuple(names) + (c,)),
+        first_step=explore,
+        **opts,
+    )

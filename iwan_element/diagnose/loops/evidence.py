@@ -10,6 +10,7 @@ Their prior box: the loop model's bounds for the shape, each effect variable's d
 for ``Fs`` and ``F0`` (the same for every explanation of the record, so they cancel but for
 what the other variables' correlation with them changes).
 """
+
 from __future__ import annotations
 
 import math
@@ -59,8 +60,8 @@ def _box(model, theta, free_start, span):
         x = model.ev.x_max
         lo.append(-1.5 * x)
         hi.append(1.5 * x)
-    lo += [0.0, -1e3 * span][:theta.size - len(lo)]
-    hi += [1e3 * span, 1e3 * span][:theta.size - len(hi)]
+    lo += [0.0, -1e3 * span][: theta.size - len(lo)]
+    hi += [1e3 * span, 1e3 * span][: theta.size - len(hi)]
     return np.array(lo), np.array(hi)
 
 
@@ -70,6 +71,7 @@ def loop_evaluator(sigma: float, span: float):
     finds it) and residual, the variables and their prior box; ``sigma`` [N]: the noise the
     selection scored against, ``span`` [N]: the force range.
     """
+
     def evaluate(stack, row):
         cache = row.setdefault("cache", {})
         if "jac" not in cache:
@@ -91,11 +93,13 @@ def loop_evaluator(sigma: float, span: float):
                 return math.inf
             finally:
                 model.start = s0
-            return float(res @ res) / sigma ** 2
+            return float(res @ res) / sigma**2
+
         specs = [None] * 3 + [sp for nm in stack for sp in EFFECTS[nm].specs]
         specs += [None] * (theta.size - len(specs))
         rdg = microslip_ridge(stack, np.clip(theta, lo, hi), hi, chi2_at, J=J / sigma)
         return J / sigma, r / sigma, theta, lo, hi, chi2_at, specs, rdg
+
     return evaluate
 
 
@@ -140,16 +144,18 @@ def microslip_ridge(stack, theta, hi, chi2_at, *, J=None) -> Ridge | None:
         th = theta.copy()
         th[0], th[2], th[-2] = s, lb, Fs
         th[3:nz] = theta[3:nz] * (Fs0 / Fs) ** pw
-        return th, d + math.log1p(-1.0 / ((1.0 + beta) * (chi + 2.0))) - \
-            float(pw.sum()) * math.log(Fs / Fs0)
-    s_hi = theta[0] + lb0 / k                     # beta' = 0
-    s_lo = theta[0] + (lb0 - hi[2]) / k           # beta' at its bound
+        return th, d + math.log1p(-1.0 / ((1.0 + beta) * (chi + 2.0))) - float(pw.sum()) * math.log(
+            Fs / Fs0
+        )
+
+    s_hi = theta[0] + lb0 / k  # beta' = 0
+    s_lo = theta[0] + (lb0 - hi[2]) / k  # beta' at its bound
     if J is not None:
         h = 1e-6
         t = (curve(theta[0] + h)[0] - curve(theta[0] - h)[0]) / (2 * h)
         if (RIDGE_STEP * float(np.linalg.norm(J @ t))) ** 2 > 1e4:
             return None
-    for sign in (1.0, -1.0):                      # away from macroslip first
+    for sign in (1.0, -1.0):  # away from macroslip first
         s1, s2 = theta[0] + sign * RIDGE_STEP, theta[0] + 2.0 * sign * RIDGE_STEP
         if not (s_lo <= min(s1, s2) and max(s1, s2) <= s_hi):
             continue
@@ -202,9 +208,12 @@ def loop_band(diag, t, u, level: float):
     """
     from ...base.validation import check_time, finite_array
     from ..selection.averaging import band, linear_spread, members
+
     if not diag.explanations:
-        raise ValueError("this diagnosis has no probabilities (diagnose(..., "
-                         "probabilities=False)): nothing to average")
+        raise ValueError(
+            "this diagnosis has no probabilities (diagnose(..., "
+            "probabilities=False)): nothing to average"
+        )
     if u is None:
         uj = np.asarray(diag.u, float) - float(diag.offsets["displacement"])
         tt = None if diag.details.get("time_given") is False else np.asarray(diag.t, float)
@@ -220,6 +229,7 @@ def loop_band(diag, t, u, level: float):
 
         def predict(th, stack=e.stack):
             return member_force(stack, th, x_max, scales, uj, v)
+
         mu, sd = linear_spread(predict, e.theta, e.covariance)
         parts.append((e.effects, w, {"force": (mu, sd, "N")}))
     s = sum(p[1] for p in parts)

@@ -8,6 +8,7 @@ a fitted stack on the whole record with its uncertainty (:class:`~iwan_element.F
 :func:`record_force` runs the fitted element over the record. Nothing here selects or
 reports: the selection rule and the report read what this stage returns.
 """
+
 from __future__ import annotations
 
 import math
@@ -25,8 +26,16 @@ from ...identify.loops.identifiability import microslip_warning, min_macroslip
 from ...identify.loops.result import failure_list, quiet_fits, required_parameters, settle_verdict
 from . import model as M
 
-__all__ = ["StackFitter", "FinalFits", "fit_base", "z_start", "stack_fit", "record_force",
-           "final_fits"]
+__all__ = [
+    "StackFitter",
+    "FinalFits",
+    "fit_base",
+    "z_start",
+    "stack_fit",
+    "record_force",
+    "final_fits",
+]
+
 
 def _base_start(tt, uj, FF, seed):
     """Shape start ``(phi_max, chi, beta)`` from the plain loop fit, or None."""
@@ -81,9 +90,16 @@ class StackFitter:
             full = self.model(names)
             full.start = start
             r = full.residual(res.x)
-            row = {"names": tuple(names), "ssr": float(r @ r), "z": res.x, "start": start,
-                   "status": int(res.status), "message": str(res.message), "model": full,
-                   "cache": {}}          # shared by the copies handed out (record_force)
+            row = {
+                "names": tuple(names),
+                "ssr": float(r @ r),
+                "z": res.x,
+                "start": start,
+                "status": int(res.status),
+                "message": str(res.message),
+                "model": full,
+                "cache": {},
+            }  # shared by the copies handed out (record_force)
             self._memo[key] = row
         return dict(row, chi2=row["ssr"] / self.s2)
 
@@ -94,7 +110,7 @@ def z_start(names, prev_names, prev_z, which):
     k_prev, pos = 3, {}
     for nm in prev_names:
         q = len(EFFECTS[nm].specs)
-        pos[nm] = prev_z[k_prev:k_prev + q]
+        pos[nm] = prev_z[k_prev : k_prev + q]
         k_prev += q
     for nm in names:
         if nm in pos:
@@ -113,10 +129,16 @@ def fit_base(fitter, rec, *, seed):
     starts = [np.array([0.0, -0.5, math.log1p(0.5)]), np.array([-1.0, -0.8, math.log1p(3.0)])]
     if shape0 is not None:
         phi, chi, beta = shape0
-        starts.insert(0, np.array([math.log(min(max(phi / ev.x_max, M.PHI_RANGE[0]),
-                                                    M.PHI_RANGE[1])),
-                                   min(max(chi, M.CHI_BOUNDS[0]), M.CHI_BOUNDS[1]),
-                                   math.log1p(min(max(beta, 0.0), M.BETA_MAX))]))
+        starts.insert(
+            0,
+            np.array(
+                [
+                    math.log(min(max(phi / ev.x_max, M.PHI_RANGE[0]), M.PHI_RANGE[1])),
+                    min(max(chi, M.CHI_BOUNDS[0]), M.CHI_BOUNDS[1]),
+                    math.log1p(min(max(beta, 0.0), M.BETA_MAX)),
+                ]
+            ),
+        )
     return fitter.run((), starts)
 
 
@@ -132,25 +154,36 @@ def stack_fit(row, fitter, FF, F_model, t_start, *, noise_only=False):
     # the package's one identification rule (identify.result.settle_verdict): finite stderr of at
     # most half the value (chi: of chi + 1), not at a bound (phi_max's bound is KT's)
     ranges = {}
-    ident, settle_warns = settle_verdict({"identified": dict.fromkeys(M.PARAM_NAMES, True),
-                                   "params": p, "stderr": stderr, "ranges": ranges,
-                                   "at_bound": {k for k, b in zip(("KT", "chi", "beta"),
-                                                                  at_bound[:3]) if b}}, ())
+    ident, settle_warns = settle_verdict(
+        {
+            "identified": dict.fromkeys(M.PARAM_NAMES, True),
+            "params": p,
+            "stderr": stderr,
+            "ranges": ranges,
+            "at_bound": {k for k, b in zip(("KT", "chi", "beta"), at_bound[:3]) if b},
+        },
+        (),
+    )
     eff_out, k0 = [], 4
     for nm, d in zip(mdl.names, effs):
         q = len(EFFECTS[nm].specs)
-        eff_out.append({"name": nm, "parameters": dict(d),
-                        "stderr": dict(zip(EFFECTS[nm].parameter_names, se[k0:k0 + q].tolist())),
-                        "units": {s.name: s.unit for s in EFFECTS[nm].specs}})
+        eff_out.append(
+            {
+                "name": nm,
+                "parameters": dict(d),
+                "stderr": dict(zip(EFFECTS[nm].parameter_names, se[k0 : k0 + q].tolist())),
+                "units": {s.name: s.unit for s in EFFECTS[nm].specs},
+            }
+        )
         k0 += q
     warns = list(settle_warns)
-    hist = mdl.ev.hist                   # the backbone argument behind each fitted sample
+    hist = mdl.ev.hist  # the backbone argument behind each fitted sample
     x = hist.x[hist.out]
     n_macro = int(np.count_nonzero(x > p.phi_max))
     if n_macro < min_macroslip(x.size) and (ident["Fs"] or ident["beta"]):
         ident = dict(ident, Fs=False, beta=False)
         warns.append(microslip_warning(n_macro, x.size, float(x.max()), p.phi_max))
-    if noise_only:                       # a force that is noise identifies nothing
+    if noise_only:  # a force that is noise identifies nothing
         ident = dict.fromkeys(M.PARAM_NAMES, False)
         warns.append("the force is indistinguishable from noise: no parameter is identified")
     if row["status"] <= 0:
@@ -158,22 +191,48 @@ def stack_fit(row, fitter, FF, F_model, t_start, *, noise_only=False):
     span = float(np.ptp(FF)) or 1.0
     required = required_parameters(ranges)
     success = fit_success(row["status"] > 0, ident, required)
-    failures = () if success else failure_list(
-        converged=row["status"] > 0, message=row["message"], explains=not noise_only,
-        noise_text="the force is indistinguishable from noise: no parameter is identified",
-        ident=ident, required=required, microslip=n_macro < min_macroslip(x.size))
+    failures = (
+        ()
+        if success
+        else failure_list(
+            converged=row["status"] > 0,
+            message=row["message"],
+            explains=not noise_only,
+            noise_text="the force is indistinguishable from noise: no parameter is identified",
+            ident=ident,
+            required=required,
+            microslip=n_macro < min_macroslip(x.size),
+        )
+    )
     return M.make_fit_result(
-        params=p, stderr=stderr, correlation=corr[:4, :4], identified=ident, fixed=(),
-        ranges=ranges, residual_norm=math.sqrt(float(r @ r)),
+        params=p,
+        stderr=stderr,
+        correlation=corr[:4, :4],
+        identified=ident,
+        fixed=(),
+        ranges=ranges,
+        residual_norm=math.sqrt(float(r @ r)),
         nrmse=float(np.sqrt(np.mean((FF - F_model) ** 2)) / span),
-        success=success, failures=failures,
+        success=success,
+        failures=failures,
         message=row["message"],
-        nfev=int(fitter.nfev), method="loops+" + "+".join(mdl.names) if mdl.names else "loops",
-        n_data=int(r.size), warnings=tuple(warns), wall_time=time.perf_counter() - t_start,
-        details=json_safe({"effects": eff_out, "labels": labels, "force_offset": F0,
-                       "force_offset_stderr": float(se[-1]), "correlation_all": corr,
-                       "start_displacement": float(mdl.start),
-                       "start_displacement_stderr": se_start}))
+        nfev=int(fitter.nfev),
+        method="loops+" + "+".join(mdl.names) if mdl.names else "loops",
+        n_data=int(r.size),
+        warnings=tuple(warns),
+        wall_time=time.perf_counter() - t_start,
+        details=json_safe(
+            {
+                "effects": eff_out,
+                "labels": labels,
+                "force_offset": F0,
+                "force_offset_stderr": float(se[-1]),
+                "correlation_all": corr,
+                "start_displacement": float(mdl.start),
+                "start_displacement_stderr": se_start,
+            }
+        ),
+    )
 
 
 def record_force(row, uj, v):
@@ -229,5 +288,6 @@ def final_fits(fitter, rec, base, selected, *, noise_only, t_start) -> FinalFits
     F_after, model = record_force(final, rec.uj, rec.v)
     base_fit = stack_fit(base, fitter, rec.F, F_base, t_start, noise_only=noise_only)
     fit = base_fit if selected is None else stack_fit(final, fitter, rec.F, F_after, t_start)
-    return FinalFits(final=final, F_base=F_base, F_after=F_after, base_fit=base_fit, fit=fit,
-                     model=model)
+    return FinalFits(
+        final=final, F_base=F_base, F_after=F_after, base_fit=base_fit, fit=fit, model=model
+    )

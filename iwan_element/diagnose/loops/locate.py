@@ -1,4 +1,5 @@
 """Where a loop misfit lies (part of the cycle, amplitudes, direction)."""
+
 from __future__ import annotations
 
 import math
@@ -9,10 +10,11 @@ from ...effects import EFFECTS
 
 __all__: list[str] = []
 
+
 def _locate(t, u, F, Fm, r, cycles, sigma, tau) -> tuple[str, dict]:
     """A sentence saying where the residual exceeds the noise, and the numbers behind it."""
     s2 = sigma * sigma
-    ratio = float(np.mean(r ** 2) / s2)
+    ratio = float(np.mean(r**2) / s2)
     region = np.full(u.size, -1)
     cyc_ratio, amps = [], []
     for c in cycles:
@@ -23,7 +25,7 @@ def _locate(t, u, F, Fm, r, cycles, sigma, tau) -> tuple[str, dict]:
         d = np.where(np.arange(uu.size) <= imin, uu[0] - uu, uu - uu[imin]) / max(2 * c.u0, 1e-300)
         region[sl] = np.where(d < 0.15, 0, np.where(d > 0.85, 2, 1))
         rr = r[sl]
-        cyc_ratio.append(float(np.mean(rr ** 2) / s2))
+        cyc_ratio.append(float(np.mean(rr**2) / s2))
         amps.append(c.u0)
     names = ("just after the reversals", "mid-stroke", "at the ends of the stroke")
     reg = {}
@@ -31,39 +33,60 @@ def _locate(t, u, F, Fm, r, cycles, sigma, tau) -> tuple[str, dict]:
         m = region == k
         if m.sum() >= 5:
             reg[nm] = float(np.mean(r[m] ** 2) / s2)
-    parts = [f"the residual is {math.sqrt(ratio):.2g} x the noise (RMS {math.sqrt(ratio) * sigma:.3g} N "
-             f"vs {sigma:.3g} N)"]
+    parts = [
+        f"the residual is {math.sqrt(ratio):.2g} x the noise (RMS {math.sqrt(ratio) * sigma:.3g} N "
+        f"vs {sigma:.3g} N)"
+    ]
     if reg:
         worst = max(reg, key=reg.get)
-        parts.append(f"largest {worst} ({math.sqrt(reg[worst]):.2g} x noise there"
-                     + ", ".join([""] + [f"{math.sqrt(v):.2g} x {k}" for k, v in reg.items()
-                                         if k != worst]) + ")")
+        parts.append(
+            f"largest {worst} ({math.sqrt(reg[worst]):.2g} x noise there"
+            + ", ".join([""] + [f"{math.sqrt(v):.2g} x {k}" for k, v in reg.items() if k != worst])
+            + ")"
+        )
     amps = np.array(amps)
     cr = np.array(cyc_ratio)
     if amps.size:
         levels = np.unique(np.round(amps / amps.max(), 2))
         grp = {lv: cr[np.round(amps / amps.max(), 2) == lv].mean() for lv in levels}
-        thresh = 1.0 + 3.0 * math.sqrt(2.0 * tau / max(np.mean([c.stop - c.start for c in cycles]), 1))
+        thresh = 1.0 + 3.0 * math.sqrt(
+            2.0 * tau / max(np.mean([c.stop - c.start for c in cycles]), 1)
+        )
         bad = [lv for lv, v in grp.items() if v > thresh]
         if bad and len(bad) == len(grp):
             top = max(grp, key=grp.get)
             parts.append(f"at every amplitude, most at u0 = {top * amps.max() * 1e3:.3g} mm")
         elif bad:
-            parts.append("at amplitudes u0 = " + ", ".join(f"{b * amps.max() * 1e3:.3g}" for b in bad)
-                         + " mm" + (" (the largest)" if min(bad) > np.median(levels) else
-                                    " (the smallest)" if max(bad) < np.median(levels) else ""))
+            parts.append(
+                "at amplitudes u0 = "
+                + ", ".join(f"{b * amps.max() * 1e3:.3g}" for b in bad)
+                + " mm"
+                + (
+                    " (the largest)"
+                    if min(bad) > np.median(levels)
+                    else " (the smallest)"
+                    if max(bad) < np.median(levels)
+                    else ""
+                )
+            )
         else:
             parts.append("spread over all amplitudes")
     # patterns: the share of the excess residual power each one carries
     excess = max(float(r @ r) - u.size * s2, 1e-300)
     pats = {}
     af = np.abs(Fm)
-    pats["the measured force is {} than the model in one direction and {} in the other "
-         "(a forward/back asymmetry)"] = af
+    pats[
+        "the measured force is {} than the model in one direction and {} in the other "
+        "(a forward/back asymmetry)"
+    ] = af
     if t is not None:
-        pats["the loops are {} than the model (a force in phase with the velocity)"] = np.gradient(u)
+        pats["the loops are {} than the model (a force in phase with the velocity)"] = np.gradient(
+            u
+        )
     tc = np.arange(u.size) - 0.5 * u.size
-    pats["the force changes from cycle to cycle ({} cycles carry more force than the model)"] = Fm * tc
+    pats["the force changes from cycle to cycle ({} cycles carry more force than the model)"] = (
+        Fm * tc
+    )
     shares = {}
     for text, g in pats.items():
         gg = float(g @ g)
@@ -82,9 +105,11 @@ def _locate(t, u, F, Fm, r, cycles, sigma, tau) -> tuple[str, dict]:
                 parts.append(text.format("late" if coef > 0 else "early"))
     sentence = "; ".join(parts) + "."
     sentence = sentence[0].upper() + sentence[1:]
-    return sentence, {"ratio": ratio, "regions": reg,
-                      "pattern_shares": {k.split(" (")[0].replace("{}", "..."): v[0]
-                                         for k, v in shares.items()}}
+    return sentence, {
+        "ratio": ratio,
+        "regions": reg,
+        "pattern_shares": {k.split(" (")[0].replace("{}", "..."): v[0] for k, v in shares.items()},
+    }
 
 
 def _check_candidates(candidates, default):
@@ -97,6 +122,3 @@ def _check_candidates(candidates, default):
     if bad or not cand or len(set(cand)) != len(cand):
         raise ValueError(f"candidates must be distinct names of {sorted(EFFECTS)}, got {cand!r}")
     return cand
-
-
-

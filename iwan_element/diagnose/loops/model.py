@@ -1,6 +1,7 @@
 """The loop model every diagnosis step fits: an effect stack on the Iwan joint with the
 force offset and ``Fs`` eliminated in closed form, its fit and its uncertainty.
 """
+
 from __future__ import annotations
 
 import dataclasses
@@ -17,13 +18,12 @@ from ...fitting import covariance
 from ...identify.loops.noise import integrated_time
 from ...identify.loops.result import FitResult, joint_table
 
-__all__ = ["LoopModel", "PARAM_NAMES", "CHI_BOUNDS", "BETA_MAX", "PHI_RANGE", "START_GRID",
-           "jumps"]
+__all__ = ["LoopModel", "PARAM_NAMES", "CHI_BOUNDS", "BETA_MAX", "PHI_RANGE", "START_GRID", "jumps"]
 
 PARAM_NAMES = ("Fs", "KT", "chi", "beta")
 CHI_BOUNDS = (-0.98, 1.0)
 BETA_MAX = 100.0
-PHI_RANGE = (1e-3, 1e4)           # phi_max / x_max
+PHI_RANGE = (1e-3, 1e4)  # phi_max / x_max
 #: Relative stopping tolerance of every fit (``ftol`` and ``xtol`` of ``least_squares``). The
 #: selection rule resolves misfit differences of the order of one information-criterion
 #: penalty, at least ``ln(n_eff)`` (about 5) units of chi2, where a record's chi2 is 1e3-1e6:
@@ -42,7 +42,7 @@ class LoopModel:
 
     def __init__(self, ev: Evaluator, y, names, scales, F0=None):
         self.ev, self.y, self.names, self.scales = ev, y, tuple(names), scales
-        self.F0 = F0                     # a force offset measured at rest, or None: fitted
+        self.F0 = F0  # a force offset measured at rest, or None: fitted
         lo = [math.log(PHI_RANGE[0]), CHI_BOUNDS[0], 0.0]
         hi = [math.log(PHI_RANGE[1]), CHI_BOUNDS[1], math.log1p(BETA_MAX)]
         for nm in self.names:
@@ -51,14 +51,16 @@ class LoopModel:
                 hi.append(sp.fit_bounds[1])
         self.lower, self.upper = np.array(lo), np.array(hi)
         self.yy = float(y @ y)
-        self.start = 0.0                 # the joint's state before the record (Evaluator.set_start)
+        self.start = 0.0  # the joint's state before the record (Evaluator.set_start)
 
     def starts(self, z_prev):
         """Start vectors: the previous model's ``z`` with each of the new effect's starts."""
         new = EFFECTS[self.names[-1]].specs
         k = max(len(s.fit_starts) for s in new)
-        return [np.concatenate([z_prev, [s.fit_starts[min(j, len(s.fit_starts) - 1)]
-                                         for s in new]]) for j in range(k)]
+        return [
+            np.concatenate([z_prev, [s.fit_starts[min(j, len(s.fit_starts) - 1)] for s in new]])
+            for j in range(k)
+        ]
 
     def decode(self, z):
         xm = self.ev.x_max
@@ -112,9 +114,17 @@ def fit(model: LoopModel, starts, *, max_nfev: int):
     best, nfev = None, 0
     for z0 in starts:
         z0 = np.clip(np.asarray(z0, float), model.lower, model.upper)
-        res = least_squares(model.residual, z0, bounds=(model.lower, model.upper), method="trf",
-                            x_scale="jac", max_nfev=max_nfev, diff_step=1e-6,
-                            ftol=FIT_TOL, xtol=FIT_TOL)
+        res = least_squares(
+            model.residual,
+            z0,
+            bounds=(model.lower, model.upper),
+            method="trf",
+            x_scale="jac",
+            max_nfev=max_nfev,
+            diff_step=1e-6,
+            ftol=FIT_TOL,
+            xtol=FIT_TOL,
+        )
         nfev += res.nfev
         if best is None or res.cost < best.cost:
             best = res
@@ -132,8 +142,7 @@ def hop(model: LoopModel, res, *, max_nfev: int, rounds: int = 2):
     +-0.01, +-0.03 and each jumping effect's first variable by the same steps, and keeps
     the best; it stops when a round finds nothing better. Returns ``(result, nfev)``.
     """
-    ks = [0] + [var_index(model.names, nm) for nm in model.names
-                if EFFECTS[nm].force_jumps]
+    ks = [0] + [var_index(model.names, nm) for nm in model.names if EFFECTS[nm].force_jumps]
     nfev = 0
     for _ in range(rounds):
         starts = []
@@ -166,6 +175,7 @@ def fit_start(model: LoopModel, res, *, max_nfev: int):
     start) is kept unless another value lowers the misfit by more than a part in 1e6, so a
     record that starts at rest is fitted exactly as before. Returns ``(start, result, nfev)``.
     """
+
     def cost(sv):
         model.start = float(sv)
         r = model.residual(res.x)
@@ -180,9 +190,13 @@ def fit_start(model: LoopModel, res, *, max_nfev: int):
         model.start = 0.0
         return 0.0, res, nfev
     h = x * (START_GRID[1] - START_GRID[0])
-    for _ in range(3):                 # alternate: the start with the rest held, then the rest
-        opt = minimize_scalar(cost, bounds=(s_best - h, s_best + h), method="bounded",
-                              options={"xatol": 1e-5 * x, "maxiter": 16})
+    for _ in range(3):  # alternate: the start with the rest held, then the rest
+        opt = minimize_scalar(
+            cost,
+            bounds=(s_best - h, s_best + h),
+            method="bounded",
+            options={"xatol": 1e-5 * x, "maxiter": 16},
+        )
         nfev += int(opt.nfev)
         if opt.fun < c_best:
             c_best, s_best = float(opt.fun), float(opt.x)
@@ -214,10 +228,17 @@ def _polish_start(model: LoopModel, s, res, *, max_nfev: int):
 
     zs0 = np.clip(np.append(res.x, s), np.append(model.lower, lo), np.append(model.upper, hi))
     try:
-        joint = least_squares(fun, zs0, bounds=(np.append(model.lower, lo),
-                                                np.append(model.upper, hi)),
-                              method="trf", x_scale="jac", max_nfev=max_nfev, diff_step=1e-6,
-                              ftol=FIT_TOL, xtol=FIT_TOL)
+        joint = least_squares(
+            fun,
+            zs0,
+            bounds=(np.append(model.lower, lo), np.append(model.upper, hi)),
+            method="trf",
+            x_scale="jac",
+            max_nfev=max_nfev,
+            diff_step=1e-6,
+            ftol=FIT_TOL,
+            xtol=FIT_TOL,
+        )
     finally:
         model.start = s
     if not joint.cost < res.cost * (1.0 - 1e-9):
@@ -308,11 +329,11 @@ def jacobian(model: LoopModel, z):
     cols, pcols = [], []
     m = theta.size - (1 if fixed else 0)
     for j in range(m):
-        if j == theta.size - 2:                  # Fs: a relative step that stays positive
+        if j == theta.size - 2:  # Fs: a relative step that stays positive
             h = 1e-5 * theta[j]
         elif j == theta.size - 1:
             h = 1e-5 * max(abs(theta[j]), 1.0)
-        elif j == nz:                            # the start (only when free): metres
+        elif j == nz:  # the start (only when free): metres
             h = 1e-5 * model.ev.x_max
         else:
             h = 1e-5
@@ -363,8 +384,9 @@ def jumps(d1, d4):
     return np.abs(d1 - d4) > 0.1 * np.maximum(np.abs(d1), np.abs(d4)) + 1e-6 * scale
 
 
-def make_fit_result(*, params: IwanParameters, stderr: dict, identified: dict, correlation,
-                    fixed=(), **kw) -> FitResult:
+def make_fit_result(
+    *, params: IwanParameters, stderr: dict, identified: dict, correlation, fixed=(), **kw
+) -> FitResult:
     """A :class:`FitResult` from the fitted joint, its standard errors, verdicts and
     correlation (gathered into its parameter table, :func:`identify.result.joint_table`) and
     the other fields this module knows (others left at None/defaults), so a change of the

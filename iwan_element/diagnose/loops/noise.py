@@ -10,6 +10,7 @@ part of any model error is removed (its corners are outliers for the robust scal
 misfit still leaks in: :func:`iwan_element.diagnose` then re-reads the noise from the
 residual of the model it selected.
 """
+
 from __future__ import annotations
 
 import math
@@ -21,7 +22,7 @@ from ...identify.loops.noise import MIN_WINDOW, estimate_noise, signal_window
 
 __all__ = ["noise_estimate", "NoiseLevel", "noise_level"]
 
-_RESIDUAL_MIN = 25               # samples: the AR(1) match is poorly conditioned below
+_RESIDUAL_MIN = 25  # samples: the AR(1) match is poorly conditioned below
 
 
 def noise_estimate(t, y, channel=None) -> tuple[float, float, str, tuple]:
@@ -45,7 +46,7 @@ def pure_noise(y, chi2_model, sigma, tau, n_eff) -> bool:
     a constant would (BIC with ``n_eff`` independent samples, residuals correlated over
     ``tau`` samples): a record that is noise identifies nothing.
     """
-    chi0 = float(np.sum((y - y.mean()) ** 2)) / sigma ** 2
+    chi0 = float(np.sum((y - y.mean()) ** 2)) / sigma**2
     return (chi0 - chi2_model) / tau < 4.0 * math.log(max(n_eff, 2.0))
 
 
@@ -86,7 +87,7 @@ def noise_level(rec, r, noise) -> NoiseLevel:
     else:
         sigma, tau, method, warns = noise_estimate(rec.t, r, rec.F_raw)
         text = f"estimated from the record ({method})"
-        if rec.lowpass is not None:                  # white noise through the low-pass
+        if rec.lowpass is not None:  # white noise through the low-pass
             fs = 1.0 / float(np.median(np.diff(rec.t)))
             frac = min(2.0 * rec.lowpass / fs, 1.0)
             sigma *= math.sqrt(frac)
@@ -94,8 +95,15 @@ def noise_level(rec, r, noise) -> NoiseLevel:
             text += f", reduced to the {rec.lowpass:g} Hz band"
         if not sigma > 0:
             sigma = 1e-9 * float(np.max(np.abs(rec.F_raw)))
-            warns = tuple(warns) + ("no noise found in the force: a floor of 1e-9 x max|F| "
-                                    "is used",)
+            warns = tuple(warns) + (
+                "no noise found in the force: a floor of 1e-9 x max|F| is used",
+            )
     tau_k = max(1.0, tau * rec.keep.size / rec.n)
-    return NoiseLevel(sigma=float(sigma), tau=float(tau), text=text, warnings=tuple(warns),
-                      tau_k=tau_k, n_eff=rec.keep.size / tau_k)
+    return NoiseLevel(
+        sigma=float(sigma),
+        tau=float(tau),
+        text=text,
+        warnings=tuple(warns),
+        tau_k=tau_k,
+        n_eff=rec.keep.size / tau_k,
+    )

@@ -6,6 +6,7 @@ the joint's rest position (mean displacement before the motion starts) and build
 evaluators of the fitted samples. The result, :class:`PreparedRecord`, is what every later
 step (noise, fit, selection, report) reads; none of them goes back to the raw input.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -28,9 +29,18 @@ from ...effects.engine.evaluate import Evaluator
 from ...identify.loops.cycles import find_reversals, split_cycles
 from .noise import noise_estimate
 
-__all__ = ["PreparedRecord", "check_record", "prepare_record", "fitted_samples",
-           "effect_scales", "dissipation_scale", "drive_structure", "untestable",
-           "record_cycles", "SLOW_FIT_SAMPLES"]
+__all__ = [
+    "PreparedRecord",
+    "check_record",
+    "prepare_record",
+    "fitted_samples",
+    "effect_scales",
+    "dissipation_scale",
+    "drive_structure",
+    "untestable",
+    "record_cycles",
+    "SLOW_FIT_SAMPLES",
+]
 
 #: Samples fitted for stacks without a vectorised form (run element by element).
 SLOW_FIT_SAMPLES = 300
@@ -89,8 +99,12 @@ def effect_scales(uj, v, d_ref: float = 1.0) -> dict:
     [m], RMS velocity [m/s], the plain unit-``Fs`` fit's dissipation over the record ``d_ref``
     [J per N of Fs] and 1.
     """
-    return {"u_max": float(np.abs(uj).max()), "1": 1.0,
-            "v_rms": float(np.sqrt(np.mean(v ** 2))) or 1.0, "D_ref": d_ref}
+    return {
+        "u_max": float(np.abs(uj).max()),
+        "1": 1.0,
+        "v_rms": float(np.sqrt(np.mean(v**2))) or 1.0,
+        "D_ref": d_ref,
+    }
 
 
 def dissipation_scale(ev: Evaluator, shape) -> float:
@@ -115,38 +129,46 @@ def check_record(t, u, F, noise, lowpass):
     n = same_length(u=uu, F=FF)
     tt = None if t is None else check_time(t, n)
     check_varies("u", uu, unit="m", what="a displacement-driven test is needed")
-    check_varies("F", FF, unit="N", what="the joint force does not follow the displacement; "
-                 "check the force channel")
+    check_varies(
+        "F",
+        FF,
+        unit="N",
+        what="the joint force does not follow the displacement; check the force channel",
+    )
     scale_F = max(float(np.max(np.abs(FF))), 1e-300)
     if noise is not None:
         noise = check_scalar("noise", noise, low=MAGNITUDE_RANGE[0], high=MAGNITUDE_RANGE[1])
         if noise < 1e-9 * scale_F:
-            raise ValueError(f"noise = {noise:g} N is below the floating-point resolution of the "
-                             f"force record (1e-9 x max|F| = {1e-9 * scale_F:.3g} N); give a "
-                             "realistic noise level or leave noise=None to estimate it")
+            raise ValueError(
+                f"noise = {noise:g} N is below the floating-point resolution of the "
+                f"force record (1e-9 x max|F| = {1e-9 * scale_F:.3g} N); give a "
+                "realistic noise level or leave noise=None to estimate it"
+            )
     lp = None
     if lowpass is not None:
         if tt is None:
             raise ValueError("lowpass needs the time vector t")
         fs = 1.0 / float(np.median(np.diff(tt)))
-        lp = check_scalar("lowpass", lowpass, low=0.0, high=0.5 * fs, low_open=True,
-                          high_open=True)
+        lp = check_scalar("lowpass", lowpass, low=0.0, high=0.5 * fs, low_open=True, high_open=True)
     return tt, uu, FF, n, noise, lp
 
 
 def _rate_missing(t, v) -> str:
     """Why a record cannot test a rate-dependent force, or "" (the ``"rate"`` need)."""
     if t is None:
-        return ("no time vector was given, so the velocity is unknown; a rate effect cannot "
-                "be tested")
+        return (
+            "no time vector was given, so the velocity is unknown; a rate effect cannot be tested"
+        )
     s = np.abs(v)
     moving = s > 0.05 * s.max()
     med = float(np.median(s[moving])) if moving.any() else 0.0
     if moving.sum() > 10 and np.mean(np.abs(s[moving] - med) <= 0.05 * med) >= 0.9:
-        return ("the record is loaded at a single constant rate (|v| within 5 % of one value "
-                "on 90 % of the samples), so a rate-dependent force cannot be told from a "
-                "rate-independent friction offset; test at several rates or with sinusoidal "
-                "loading")
+        return (
+            "the record is loaded at a single constant rate (|v| within 5 % of one value "
+            "on 90 % of the samples), so a rate-dependent force cannot be told from a "
+            "rate-independent friction offset; test at several rates or with sinusoidal "
+            "loading"
+        )
     return ""
 
 
@@ -199,8 +221,13 @@ def _evaluators(uj, v, max_samples):
     rev, tol = drive_structure(uj)
     keep = fitted_samples(n, max_samples)
     ev = Evaluator(uj, v, keep, rev, tol=tol)
-    sub = keep[np.unique(np.round(np.linspace(0, keep.size - 1,
-                                              min(keep.size, SLOW_FIT_SAMPLES))).astype(np.intp))]
+    sub = keep[
+        np.unique(
+            np.round(np.linspace(0, keep.size - 1, min(keep.size, SLOW_FIT_SAMPLES))).astype(
+                np.intp
+            )
+        )
+    ]
     ev_slow = Evaluator(uj, v, sub, rev, tol=tol)
     return ev, ev_slow, keep, sub
 
@@ -224,5 +251,18 @@ def prepare_record(t, u, F, n, lowpass, max_samples) -> PreparedRecord:
     uj = uu - u_off
     v = np.zeros(n) if t is None else np.gradient(uj, t)
     ev, ev_slow, keep, sub = _evaluators(uj, v, max_samples)
-    return PreparedRecord(t=t, u=uu, F_raw=F, F=FF, n=n, lowpass=lowpass, u_offset=u_off,
-                          uj=uj, v=v, keep=keep, sub=sub, ev=ev, ev_slow=ev_slow)
+    return PreparedRecord(
+        t=t,
+        u=uu,
+        F_raw=F,
+        F=FF,
+        n=n,
+        lowpass=lowpass,
+        u_offset=u_off,
+        uj=uj,
+        v=v,
+        keep=keep,
+        sub=sub,
+        ev=ev,
+        ev_slow=ev_slow,
+    )

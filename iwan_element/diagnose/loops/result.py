@@ -1,6 +1,7 @@
 """Result object of the loop diagnosis, :class:`Diagnosis` (the report pieces both diagnoses
 share are in :mod:`..selection.lines`).
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -109,64 +110,102 @@ class Diagnosis(Probable, ResultShape):
 
     def to_dict(self) -> dict:
         """JSON-safe dict (NaN/inf become None); the fits as :meth:`FitResult.to_dict`."""
-        return json_safe({
-            "effect": self.effect, "effects": list(self.effects),
-            "ambiguous_with": list(self.ambiguous_with), "where": self.where,
-            "success": self.success,
-            "failure_reasons": list(self.failure_reasons()), "params": self.params.to_dict(),
-            "offsets": value_stderr({"force": (self.offsets["force"],
-                                               self.fit.details.get("force_offset_stderr")),
-                                     "displacement": self.offsets["displacement"]}),
-            "error_before": self.error_before, "error_after": self.error_after,
-            "noise_level": self.noise_level, "noise_sigma": self.noise_sigma,
-            "misfit": self.misfit, "steps": list(self.steps), "untestable": dict(self.untestable),
-            "warnings": list(self.warnings), "base_fit": self.base_fit.to_dict(),
-            "fit": self.fit.to_dict(), "model": _describe(self.model), "details": self.details,
-            "probabilities": self.probabilities_dict(),
-        })
+        return json_safe(
+            {
+                "effect": self.effect,
+                "effects": list(self.effects),
+                "ambiguous_with": list(self.ambiguous_with),
+                "where": self.where,
+                "success": self.success,
+                "failure_reasons": list(self.failure_reasons()),
+                "params": self.params.to_dict(),
+                "offsets": value_stderr(
+                    {
+                        "force": (
+                            self.offsets["force"],
+                            self.fit.details.get("force_offset_stderr"),
+                        ),
+                        "displacement": self.offsets["displacement"],
+                    }
+                ),
+                "error_before": self.error_before,
+                "error_after": self.error_after,
+                "noise_level": self.noise_level,
+                "noise_sigma": self.noise_sigma,
+                "misfit": self.misfit,
+                "steps": list(self.steps),
+                "untestable": dict(self.untestable),
+                "warnings": list(self.warnings),
+                "base_fit": self.base_fit.to_dict(),
+                "fit": self.fit.to_dict(),
+                "model": _describe(self.model),
+                "details": self.details,
+                "probabilities": self.probabilities_dict(),
+            }
+        )
 
     def report(self) -> str:
         """Human-readable account: noise, misfit, where, candidates, verdict, before/after."""
         d = self.details
         p = self.base_fit.joint
-        head = [f"{d['samples']} samples; noise {d['noise_from']}, correlation time "
-                f"{d['tau']:.3g} samples ({d['n_eff']:.0f} independent samples fitted)",
-                f"offsets (nuisance): force {self.offsets['force']:.4g} N, displacement "
-                f"{self.offsets['displacement']:.4g} m" + (
-                    f"; low-pass {d['lowpass']:g} Hz ({d['lowpass_reason']})"
-                    if d.get("lowpass") else ""),
-                f"noise: sigma = {self.noise_sigma:.4g} N (NRMSE {100 * self.noise_level:.3g} %)",
-                f"base Iwan fit: Fs={p.Fs:.5g} N, KT={p.KT:.5g} N/m, chi={p.chi:.4f}, "
-                f"beta={p.beta:.4f}; NRMSE {100 * self.error_before:.3g} % "
-                f"= {self.error_before / self.noise_level:.3g} x noise "
-                f"(misfit p-value {d['misfit_p']:.2g}, level {d['alpha']:g})",
-                f"selection: {d['criterion']}", f"where: {self.where}"]
+        head = [
+            f"{d['samples']} samples; noise {d['noise_from']}, correlation time "
+            f"{d['tau']:.3g} samples ({d['n_eff']:.0f} independent samples fitted)",
+            f"offsets (nuisance): force {self.offsets['force']:.4g} N, displacement "
+            f"{self.offsets['displacement']:.4g} m"
+            + (
+                f"; low-pass {d['lowpass']:g} Hz ({d['lowpass_reason']})"
+                if d.get("lowpass")
+                else ""
+            ),
+            f"noise: sigma = {self.noise_sigma:.4g} N (NRMSE {100 * self.noise_level:.3g} %)",
+            f"base Iwan fit: Fs={p.Fs:.5g} N, KT={p.KT:.5g} N/m, chi={p.chi:.4f}, "
+            f"beta={p.beta:.4f}; NRMSE {100 * self.error_before:.3g} % "
+            f"= {self.error_before / self.noise_level:.3g} x noise "
+            f"(misfit p-value {d['misfit_p']:.2g}, level {d['alpha']:g})",
+            f"selection: {d['criterion']}",
+            f"where: {self.where}",
+        ]
         lines = [self.verdict(), "Iwan model diagnosis"]
         for h in head:
             lines += wrap("  " + h, indent="    ")
         if self.steps:
-            lines += wrap("  NRMSE: RMS force residual over the force range; x noise: its "
-                          "ratio to the noise; dIC: information criterion above the step's "
-                          "best candidate (0: the best)", indent="    ")
+            lines += wrap(
+                "  NRMSE: RMS force residual over the force range; x noise: its "
+                "ratio to the noise; dIC: information criterion above the step's "
+                "best candidate (0: the best)",
+                indent="    ",
+            )
         for k, st in enumerate(self.steps):
             lines.append(f"  step {k + 1}: candidates on {' + '.join(st['on']) or 'Iwan'}")
             lines.append("    effect               NRMSE[%]  x noise       dIC  explains  verdict")
             for c in st["candidates"]:
-                lines.append(f"    {c['name']:<20} {100 * c['nrmse']:8.3g} {c['ratio']:8.3g} "
-                             f"{c['dIC']:9.4g} {100 * c['explained']:7.3g} %  {c['verdict']}")
+                lines.append(
+                    f"    {c['name']:<20} {100 * c['nrmse']:8.3g} {c['ratio']:8.3g} "
+                    f"{c['dIC']:9.4g} {100 * c['explained']:7.3g} %  {c['verdict']}"
+                )
         for name, why in self.untestable.items():
             lines.append(f"  cannot test {name}: {why}")
         if self.effects:
-            lines.append(f"  named: {', '.join(self.effects)}"
-                         + (f" (nearly as good: {', '.join(self.ambiguous_with)})"
-                            if self.ambiguous_with else ""))
+            lines.append(
+                f"  named: {', '.join(self.effects)}"
+                + (
+                    f" (nearly as good: {', '.join(self.ambiguous_with)})"
+                    if self.ambiguous_with
+                    else ""
+                )
+            )
             for e in self.fit.details.get("effects", []):
-                ps = ", ".join(f"{k} = {v:.4g} {effect_unit(e['name'], k)} (+- {e['stderr'][k]:.2g})"
-                               for k, v in e["parameters"].items())
+                ps = ", ".join(
+                    f"{k} = {v:.4g} {effect_unit(e['name'], k)} (+- {e['stderr'][k]:.2g})"
+                    for k, v in e["parameters"].items()
+                )
                 lines.append(f"    {e['name']}: {ps}")
             q = self.fit.joint
-            lines.append(f"    Iwan part: Fs={q.Fs:.5g} N, KT={q.KT:.5g} N/m, chi={q.chi:.4f}, "
-                         f"beta={q.beta:.4f}")
+            lines.append(
+                f"    Iwan part: Fs={q.Fs:.5g} N, KT={q.KT:.5g} N/m, chi={q.chi:.4f}, "
+                f"beta={q.beta:.4f}"
+            )
         else:
             lines.append("  named: none")
         lines += self.probability_lines()
@@ -200,6 +239,7 @@ class Diagnosis(Probable, ResultShape):
             and their weights.
         """
         from .evidence import loop_band
+
         return loop_band(self, t, u, level)
 
     def plot(self, ax=None):
@@ -220,28 +260,53 @@ class Diagnosis(Probable, ResultShape):
         step = max(1, self.u.size // 20000)
         u, F = self.u[::step] * 1e3, self.F[::step] * 1e-3
         arts = a1.plot(u, F, ".", ms=1.5, color="0.6", label="measured")
-        arts += a1.plot(u, self.force_before[::step] * 1e-3, "-", lw=0.9, color="C0",
-                        label=f"Iwan fit ({100 * self.error_before:.2g} %)")
+        arts += a1.plot(
+            u,
+            self.force_before[::step] * 1e-3,
+            "-",
+            lw=0.9,
+            color="C0",
+            label=f"Iwan fit ({100 * self.error_before:.2g} %)",
+        )
         lab = " + ".join(self.effects) if self.effects else "no effect named"
-        arts += a1.plot(u, self.force_after[::step] * 1e-3, "--", lw=0.9, color="C3",
-                        label=f"augmented: {lab} ({100 * self.error_after:.2g} %)")
+        arts += a1.plot(
+            u,
+            self.force_after[::step] * 1e-3,
+            "--",
+            lw=0.9,
+            color="C3",
+            label=f"augmented: {lab} ({100 * self.error_after:.2g} %)",
+        )
         a1.set_xlabel("displacement [mm]")
         a1.set_ylabel("force [kN]")
         a1.grid(True, alpha=0.3)
         a1.legend(fontsize=7, loc="upper left")
         tt = self.t[::step]
-        arts += a2.plot(tt, (self.F - self.force_before)[::step], "-", lw=0.6, color="C0",
-                        label="residual before")
-        arts += a2.plot(tt, (self.F - self.force_after)[::step], "-", lw=0.6, color="C3",
-                        label="residual after")
-        arts.append(a2.axhspan(-2 * self.noise_sigma, 2 * self.noise_sigma, color="0.85",
-                               zorder=0, label="+-2 noise"))
+        arts += a2.plot(
+            tt,
+            (self.F - self.force_before)[::step],
+            "-",
+            lw=0.6,
+            color="C0",
+            label="residual before",
+        )
+        arts += a2.plot(
+            tt, (self.F - self.force_after)[::step], "-", lw=0.6, color="C3", label="residual after"
+        )
+        arts.append(
+            a2.axhspan(
+                -2 * self.noise_sigma,
+                2 * self.noise_sigma,
+                color="0.85",
+                zorder=0,
+                label="+-2 noise",
+            )
+        )
         a2.set_xlabel("time [s]", fontsize=7)
         a2.set_ylabel("residual [N]", fontsize=7)
         a2.tick_params(labelsize=6)
         a2.legend(fontsize=6, loc="upper right")
         return arts
-
 
 
 def _describe(model) -> str:

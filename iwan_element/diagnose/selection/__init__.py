@@ -6,13 +6,30 @@
 :mod:`.nested` (nested sampling of the evidences), :mod:`.lines` (the report lines both
 diagnoses share).
 """
+
 from .averaging import MIN_WEIGHT, band, linear_spread, members
 from .lines import effect_unit, verdict_lines
 from .nested import nested_log_evidence, nested_options
 from .probabilities import Explanation, Probable, check_effect_prior, key, log_model_prior, rank
 from .rule import SelectionResult, criterion_text, misfit_p, stepwise_select
 
-__all__ = ["MIN_WEIGHT", "band", "linear_spread", "members", "effect_unit", "verdict_lines",
-           "nested_log_evidence", "nested_options", "Explanation", "Probable",
-           "check_effect_prior", "key", "log_model_prior", "rank", "SelectionResult",
-           "criterion_text", "misfit_p", "stepwise_select"]
+__all__ = [
+    "MIN_WEIGHT",
+    "band",
+    "linear_spread",
+    "members",
+    "effect_unit",
+    "verdict_lines",
+    "nested_log_evidence",
+    "nested_options",
+    "Explanation",
+    "Probable",
+    "check_effect_prior",
+    "key",
+    "log_model_prior",
+    "rank",
+    "SelectionResult",
+    "criterion_text",
+    "misfit_p",
+    "stepwise_select",
+]

@@ -10,6 +10,7 @@ linearised spread of its parameters' posterior covariance (the Laplace covarianc
 probability ``level`` from the mixture's quantiles. Explanations below
 :data:`MIN_WEIGHT` are left out (their weights renormalised), at most :data:`MAX_MEMBERS`.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -21,8 +22,7 @@ from ...base.result_shape import ResultShape, panels
 from ...base.serialize import json_safe
 from ...base.validation import check_scalar
 
-__all__ = ["AveragedBand", "members", "mixture", "linear_spread", "MIN_WEIGHT",
-           "MAX_MEMBERS"]
+__all__ = ["AveragedBand", "members", "mixture", "linear_spread", "MIN_WEIGHT", "MAX_MEMBERS"]
 
 #: Explanations with a smaller probability do not take part in the average.
 MIN_WEIGHT = 1e-3
@@ -76,7 +76,7 @@ def mixture(weights, means, sds, level: float):
     w = np.asarray(weights, float)[:, None]
     mu, sd = np.asarray(means, float), np.maximum(np.asarray(sds, float), 0.0)
     mean = (w * mu).sum(axis=0)
-    var = (w * (sd ** 2 + mu ** 2)).sum(axis=0) - mean ** 2
+    var = (w * (sd**2 + mu**2)).sum(axis=0) - mean**2
     std = np.sqrt(np.maximum(var, 0.0))
     tiny = 1e-12 * (np.abs(mu).max() + 1e-300)
     s = np.maximum(sd, tiny)
@@ -89,6 +89,7 @@ def mixture(weights, means, sds, level: float):
             cdf = (w * ndtr((mid - mu) / s)).sum(axis=0)
             lo, hi = np.where(cdf < q, mid, lo), np.where(cdf < q, hi, mid)
         return 0.5 * (lo + hi)
+
     return mean, std, quantile(0.5 * (1 - level)), quantile(0.5 * (1 + level))
 
 
@@ -126,26 +127,42 @@ class AveragedBand(ResultShape):
     @property
     def success(self) -> bool:
         """True when the prediction and its band are finite everywhere."""
-        return bool(all(np.all(np.isfinite(c[k])) for c in self.channels.values()
-                        for k in ("mean", "lower", "upper")))
+        return bool(
+            all(
+                np.all(np.isfinite(c[k]))
+                for c in self.channels.values()
+                for k in ("mean", "lower", "upper")
+            )
+        )
 
     def to_dict(self) -> dict:
-        return json_safe({"x": self.x, "x_label": self.x_label, "level": self.level,
-                          "members": [{"effects": list(m), "weight": w}
-                                      for m, w in self.members],
-                          "channels": self.channels, "warnings": list(self.warnings),
-                          "success": self.success})
+        return json_safe(
+            {
+                "x": self.x,
+                "x_label": self.x_label,
+                "level": self.level,
+                "members": [{"effects": list(m), "weight": w} for m, w in self.members],
+                "channels": self.channels,
+                "warnings": list(self.warnings),
+                "success": self.success,
+            }
+        )
 
     def report(self) -> str:
         """The explanations averaged and each channel's band width."""
-        lines = [self.verdict(), f"Model-averaged prediction over {len(self.members)} "
-                 f"explanation(s), {self.x.size} points ({self.x_label})"]
+        lines = [
+            self.verdict(),
+            f"Model-averaged prediction over {len(self.members)} "
+            f"explanation(s), {self.x.size} points ({self.x_label})",
+        ]
         for m, w in self.members:
             lines.append(f"  {' + '.join(m) or 'plain model'}: weight {w:.3g}")
         for name, c in self.channels.items():
             width = c["upper"] - c["lower"]
-            lines.append(f"  {name} [{c['unit']}]: {100 * self.level:g} % band mean width "
-                         f"{float(np.mean(width)):.4g}, largest {float(np.max(width)):.4g}")
+            lines.append(
+                f"  {name} [{c['unit']}]: {100 * self.level:g} % band mean width "
+                f"{float(np.mean(width)):.4g}, largest {float(np.max(width)):.4g}"
+            )
         return "\n".join(lines + [f"  warning: {w}" for w in self.warnings])
 
     def _tables(self) -> list:
@@ -155,21 +172,35 @@ class AveragedBand(ResultShape):
             for k in ("mean", "std", "lower", "upper"):
                 cols.append(f"{name} {k} [{c['unit']}]")
                 data.append(c[k])
-        return [("prediction", tuple(cols), list(zip(*(map(float, a) for a in data)))),
-                ("members", ("explanation", "weight"),
-                 [(" + ".join(m) or "plain model", w) for m, w in self.members])]
+        return [
+            ("prediction", tuple(cols), list(zip(*(map(float, a) for a in data)))),
+            (
+                "members",
+                ("explanation", "weight"),
+                [(" + ".join(m) or "plain model", w) for m, w in self.members],
+            ),
+        ]
 
     def plot(self, ax=None):
         """Each channel against ``x``: the mean, the band, each explanation's own mean."""
         axs = panels(ax, len(self.channels), figsize=(6, 3.2 * len(self.channels)))
         arts = []
         for a, (name, c) in zip(axs, self.channels.items()):
-            arts.append(a.fill_between(self.x, c["lower"], c["upper"], color="C1", alpha=0.3,
-                                       label=f"{100 * self.level:g} % band"))
+            arts.append(
+                a.fill_between(
+                    self.x,
+                    c["lower"],
+                    c["upper"],
+                    color="C1",
+                    alpha=0.3,
+                    label=f"{100 * self.level:g} % band",
+                )
+            )
             arts += a.plot(self.x, c["mean"], "-", color="C3", lw=0.9, label="averaged")
             for (m, w), y in zip(self.members, self.member_means[name]):
-                arts += a.plot(self.x, y, ":", lw=0.6,
-                               label=f"{' + '.join(m) or 'plain'} ({w:.2g})")
+                arts += a.plot(
+                    self.x, y, ":", lw=0.6, label=f"{' + '.join(m) or 'plain'} ({w:.2g})"
+                )
             a.set_xlabel(self.x_label)
             a.set_ylabel(f"{name} [{c['unit']}]")
             a.legend(fontsize=6)
@@ -194,9 +225,15 @@ def band(x, x_label, parts, level, warnings=()) -> AveragedBand:
         means[name] = mu
     x = np.array(x, float)
     x.setflags(write=False)
-    return AveragedBand(x=x, x_label=x_label, channels=chans,
-                        members=tuple((tuple(p[0]), float(p[1])) for p in parts),
-                        member_means=means, level=float(level), warnings=tuple(warnings))
+    return AveragedBand(
+        x=x,
+        x_label=x_label,
+        channels=chans,
+        members=tuple((tuple(p[0]), float(p[1])) for p in parts),
+        member_means=means,
+        level=float(level),
+        warnings=tuple(warnings),
+    )
 
 
 __all__ += ["band"]

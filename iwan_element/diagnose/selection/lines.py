@@ -2,6 +2,7 @@
 and :class:`~iwan_element.diagnose.vibration.result.VibrationDiagnosis`): an effect
 parameter's unit label and the closing verdict lines.
 """
+
 from __future__ import annotations
 
 from ...base.result_shape import unit_label, wrap
@@ -18,8 +19,10 @@ def effect_unit(name: str, key: str, modal: bool = False) -> str:
 
 def verdict_lines(word: str, result) -> list:
     """The closing lines of a diagnosis report: misfit before and after, noise, warnings."""
-    lines = [f"  {word} before {100 * result.error_before:.3g} % -> after "
-             f"{100 * result.error_after:.3g} % (noise {100 * result.noise_level:.3g} %)"]
+    lines = [
+        f"  {word} before {100 * result.error_before:.3g} % -> after "
+        f"{100 * result.error_after:.3g} % (noise {100 * result.noise_level:.3g} %)"
+    ]
     if result.warnings:
         lines.append("  warnings:")
         for w in result.warnings:

@@ -16,6 +16,7 @@ size, whose likelihood changes only to second order in its parameter near the bo
 Laplace evidence is checked against it (tests/test_evidence.py, benchmarks/
 bench_diagnosis_calibration.py ``--nested``).
 """
+
 from __future__ import annotations
 
 import math
@@ -48,12 +49,23 @@ def _transform(specs, lo, hi):
             if sp is not None:
                 x[j] = float(sp.prior_quantile(u[j]))
         return x
+
     return transform
 
 
-def nested_log_evidence(chi2_at, lower, upper, specs, *, tau: float = 1.0,
-                        chi2_ref: float = 0.0, sampler: str = "dynesty", nlive: int = 200,
-                        dlogz: float = 0.05, rng=None) -> tuple:
+def nested_log_evidence(
+    chi2_at,
+    lower,
+    upper,
+    specs,
+    *,
+    tau: float = 1.0,
+    chi2_ref: float = 0.0,
+    sampler: str = "dynesty",
+    nlive: int = 200,
+    dlogz: float = 0.05,
+    rng=None,
+) -> tuple:
     """``(ln Z, its standard error)`` by nested sampling.
 
     Parameters
@@ -105,13 +117,22 @@ def nested_log_evidence(chi2_at, lower, upper, specs, *, tau: float = 1.0,
         try:
             import dynesty
         except ImportError:
-            raise ImportError("nested sampling needs dynesty: pip install "
-                              "'iwan-element[nested]'") from None
+            raise ImportError(
+                "nested sampling needs dynesty: pip install 'iwan-element[nested]'"
+            ) from None
         import warnings
-        with warnings.catch_warnings():     # its bound-enlargement notices: not the user's
+
+        with warnings.catch_warnings():  # its bound-enlargement notices: not the user's
             warnings.simplefilter("ignore", UserWarning)
-            s = dynesty.NestedSampler(loglike, transform, lo.size, nlive=nlive, rstate=rng,
-                                      bound="multi", sample="rwalk" if lo.size > 3 else "unif")
+            s = dynesty.NestedSampler(
+                loglike,
+                transform,
+                lo.size,
+                nlive=nlive,
+                rstate=rng,
+                bound="multi",
+                sample="rwalk" if lo.size > 3 else "unif",
+            )
             s.run_nested(dlogz=dlogz, print_progress=False)
         r = s.results
         return float(r.logz[-1]) + shift, float(r.logzerr[-1])
@@ -120,9 +141,9 @@ def nested_log_evidence(chi2_at, lower, upper, specs, *, tau: float = 1.0,
     except ImportError:
         raise ImportError("this sampler needs ultranest: pip install ultranest") from None
     import logging
+
     logging.getLogger("ultranest").setLevel(logging.WARNING)
     names = [f"p{j}" for j in range(lo.size)]
-    s = ultranest.ReactiveNestedSampler(names, loglike, transform,
-                                        vectorized=False, log_dir=None)
+    s = ultranest.ReactiveNestedSampler(names, loglike, transform, vectorized=False, log_dir=None)
     r = s.run(min_num_live_points=nlive, dlogz=dlogz, show_status=False, viz_callback=False)
     return float(r["logz"]) + shift, float(r["logzerr"])

@@ -30,6 +30,7 @@ Sci. 14:382-417):
 The named effects are the most probable explanation; ``effect_probability(name)`` is the
 sum of the probabilities of the explanations that contain it.
 """
+
 from __future__ import annotations
 
 import math
@@ -41,9 +42,20 @@ from ...base.validation import check_scalar
 from ...fitting.evidence import laplace_evidence, posterior_probabilities
 from ...identify.loops.noise import integrated_time
 
-__all__ = ["Explanation", "key", "default_effect_prior", "check_effect_prior",
-           "log_model_prior", "model_error_scale", "rank", "effect_probability",
-           "confidence_text", "CONFIDENT", "NEGLIGIBLE", "Probable"]
+__all__ = [
+    "Explanation",
+    "key",
+    "default_effect_prior",
+    "check_effect_prior",
+    "log_model_prior",
+    "model_error_scale",
+    "rank",
+    "effect_probability",
+    "confidence_text",
+    "CONFIDENT",
+    "NEGLIGIBLE",
+    "Probable",
+]
 
 #: Probability above which a report calls an explanation certain enough to act on.
 CONFIDENT = 0.9
@@ -112,13 +124,19 @@ class Explanation:
     nested_error: float = math.nan
 
     def to_dict(self) -> dict:
-        return {"effects": list(self.effects), "probability": self.probability,
-                "log_evidence": self.log_evidence, "log_likelihood": self.log_likelihood,
-                "log_occam": self.log_occam, "log_prior": self.log_prior,
-                "chi2": self.chi2, "n_params": self.n_params,
-                "log_evidence_laplace": self.log_evidence_laplace,
-                "log_evidence_nested": self.log_evidence_nested,
-                "nested_error": self.nested_error}
+        return {
+            "effects": list(self.effects),
+            "probability": self.probability,
+            "log_evidence": self.log_evidence,
+            "log_likelihood": self.log_likelihood,
+            "log_occam": self.log_occam,
+            "log_prior": self.log_prior,
+            "chi2": self.chi2,
+            "n_params": self.n_params,
+            "log_evidence_laplace": self.log_evidence_laplace,
+            "log_evidence_nested": self.log_evidence_nested,
+            "nested_error": self.nested_error,
+        }
 
 
 def default_effect_prior(n_candidates: int) -> float:
@@ -143,15 +161,17 @@ def check_effect_prior(effect_prior, candidates) -> dict:
     if isinstance(effect_prior, dict):
         unknown = set(effect_prior) - set(candidates)
         if unknown:
-            raise ValueError(f"effect_prior names effects that are not candidates: "
-                             f"{sorted(unknown)} (candidates: {list(candidates)})")
+            raise ValueError(
+                f"effect_prior names effects that are not candidates: "
+                f"{sorted(unknown)} (candidates: {list(candidates)})"
+            )
         out = dict.fromkeys(candidates, p0)
         for k, v in effect_prior.items():
-            out[k] = check_scalar(f"effect_prior[{k!r}]", v, low=0.0, high=1.0,
-                                  low_open=True, high_open=True)
+            out[k] = check_scalar(
+                f"effect_prior[{k!r}]", v, low=0.0, high=1.0, low_open=True, high_open=True
+            )
         return out
-    v = check_scalar("effect_prior", effect_prior, low=0.0, high=1.0, low_open=True,
-                     high_open=True)
+    v = check_scalar("effect_prior", effect_prior, low=0.0, high=1.0, low_open=True, high_open=True)
     return dict.fromkeys(candidates, v)
 
 
@@ -174,8 +194,9 @@ def model_error_scale(chi2: float, tau: float, n_eff: float, q: int) -> float:
     return max(1.0, chi2 / tau / max(n_eff - q, 1.0))
 
 
-def rank(fitted, *, tau: float, n_eff: float, prior: dict, evaluate,
-         nested: dict | None = None) -> list:
+def rank(
+    fitted, *, tau: float, n_eff: float, prior: dict, evaluate, nested: dict | None = None
+) -> list:
     """Evidences and probabilities of the fitted explanations.
 
     Parameters
@@ -220,7 +241,7 @@ def rank(fitted, *, tau: float, n_eff: float, prior: dict, evaluate,
     only = None if only is None else {key(k) for k in only}
     rows, ns = {}, {}
     ll_best = -0.5 * best[1] / ts
-    top = -math.inf                     # the best ln Z + ln prior evaluated in full so far
+    top = -math.inf  # the best ln Z + ln prior evaluated in full so far
     for k in sorted(fitted, key=lambda k: 0.5 * fitted[k][1] / ts - lp[k]):
         stack, chi2, q, state = fitted[k]
         ll = -0.5 * chi2 / ts
@@ -233,31 +254,52 @@ def rank(fitted, *, tau: float, n_eff: float, prior: dict, evaluate,
         log_prior, knots = spec_prior(specs, lo, hi)
         ev = laplace_evidence(J, r, theta, lo, hi, tau=ts, log_prior=log_prior)
         if nested is not None or rdg is not None or ev.log_evidence + lp[k] >= top - BOUNDED:
-            ev = laplace_evidence(J, r, theta, lo, hi, tau=ts, chi2_at=chi2_at,
-                                  log_prior=log_prior, prior_knots=knots,
-                                  switched_off=switched_off(specs),
-                                  lines=[sp is not None for sp in specs], ridge=rdg)
+            ev = laplace_evidence(
+                J,
+                r,
+                theta,
+                lo,
+                hi,
+                tau=ts,
+                chi2_at=chi2_at,
+                log_prior=log_prior,
+                prior_knots=knots,
+                switched_off=switched_off(specs),
+                lines=[sp is not None for sp in specs],
+                ridge=rdg,
+            )
             top = max(top, ev.log_evidence + lp[k])
         rows[k] = (stack, chi2, q, ll, ev.log_occam, theta, ev.covariance)
         if nested is not None and (only is None or k in only):
             from .nested import nested_log_evidence
-            ns[k] = nested_log_evidence(chi2_at, lo, hi, specs, tau=ts, chi2_ref=chi2,
-                                        **nested)
+
+            ns[k] = nested_log_evidence(chi2_at, lo, hi, specs, tau=ts, chi2_ref=chi2, **nested)
     occ = [v[4] for v in rows.values() if math.isfinite(v[4])]
-    floor = min(occ) if occ else 0.0            # an unevaluated one: no better than the worst
+    floor = min(occ) if occ else 0.0  # an unevaluated one: no better than the worst
     le = {k: v[3] + (v[4] if math.isfinite(v[4]) else floor) for k, v in rows.items()}
     use = dict(le)
-    if nested is not None:                      # the nested evidences decide
+    if nested is not None:  # the nested evidences decide
         use.update({k: v[0] for k, v in ns.items()})
     post = posterior_probabilities(use, lp)
-    out = [Explanation(effects=k, stack=tuple(v[0]), chi2=float(v[1]), n_params=int(v[2]),
-                       log_likelihood=float(v[3]), log_occam=float(v[4]),
-                       log_evidence=float(use[k]), log_prior=float(lp[k]),
-                       probability=post[k], theta=v[5], covariance=v[6],
-                       log_evidence_laplace=float(le[k]),
-                       log_evidence_nested=float(ns[k][0]) if k in ns else math.nan,
-                       nested_error=float(ns[k][1]) if k in ns else math.nan)
-           for k, v in rows.items()]
+    out = [
+        Explanation(
+            effects=k,
+            stack=tuple(v[0]),
+            chi2=float(v[1]),
+            n_params=int(v[2]),
+            log_likelihood=float(v[3]),
+            log_occam=float(v[4]),
+            log_evidence=float(use[k]),
+            log_prior=float(lp[k]),
+            probability=post[k],
+            theta=v[5],
+            covariance=v[6],
+            log_evidence_laplace=float(le[k]),
+            log_evidence_nested=float(ns[k][0]) if k in ns else math.nan,
+            nested_error=float(ns[k][1]) if k in ns else math.nan,
+        )
+        for k, v in rows.items()
+    ]
     return sorted(out, key=lambda e: -e.probability)
 
 
@@ -266,8 +308,9 @@ def spec_prior(specs, lo, hi):
     from each variable's ParamSpec (None: uniform over ``[lo, hi]``).
     """
     uniform = -np.log(np.asarray(hi, float) - np.asarray(lo, float))
-    knots = np.array([np.nan if sp is None or sp.neutral is None else float(sp.neutral)
-                      for sp in specs])
+    knots = np.array(
+        [np.nan if sp is None or sp.neutral is None else float(sp.neutral) for sp in specs]
+    )
 
     def log_prior(th):
         out = uniform.copy()
@@ -275,6 +318,7 @@ def spec_prior(specs, lo, hi):
             if sp is not None:
                 out[j] = float(sp.log_prior(th[j]))
         return out
+
     return log_prior, knots
 
 
@@ -298,9 +342,12 @@ def switched_off(specs) -> dict:
         if sp is None:
             j += 1
             continue
-        group = [j]                         # one effect's variables: consecutive, its own
-        while j + len(group) < len(specs) and specs[j + len(group)] is not None and \
-                specs[j + len(group)] in _siblings(sp):
+        group = [j]  # one effect's variables: consecutive, its own
+        while (
+            j + len(group) < len(specs)
+            and specs[j + len(group)] is not None
+            and specs[j + len(group)] in _siblings(sp)
+        ):
             group.append(j + len(group))
         sizes = [g for g in group if specs[g].neutral is not None][:1]
         others = [g for g in group if g not in sizes]
@@ -316,6 +363,7 @@ def switched_off(specs) -> dict:
 def _siblings(sp):
     """The ParamSpecs declared with ``sp`` (of the same effect, loop or modal)."""
     from ...effects import EFFECTS
+
     for cls in EFFECTS.values():
         for specs in (cls.specs, cls.modal_specs):
             if any(s is sp for s in specs):
@@ -341,10 +389,13 @@ def confidence_text(probabilities: dict) -> str:
     name = " + ".join(top) or "the plain joint (no effect)"
     if p > CONFIDENT:
         return f"most probable: {name} (probability {p:.3g})"
-    others = ", ".join(f"{' + '.join(k) or 'plain joint'} {q:.2g}" for k, q in rest[:3]
-                       if q >= 0.01)
-    return (f"NOT SURE: no explanation is above {CONFIDENT:g}; most probable {name} "
-            f"(probability {p:.2g})" + (f", then {others}" if others else ""))
+    others = ", ".join(
+        f"{' + '.join(k) or 'plain joint'} {q:.2g}" for k, q in rest[:3] if q >= 0.01
+    )
+    return (
+        f"NOT SURE: no explanation is above {CONFIDENT:g}; most probable {name} "
+        f"(probability {p:.2g})" + (f", then {others}" if others else "")
+    )
 
 
 class Probable:
@@ -371,6 +422,7 @@ class Probable:
             ``name`` is not an effect of :data:`~iwan_element.EFFECTS`.
         """
         from ...effects import EFFECTS
+
         if name not in EFFECTS:
             raise ValueError(f"name must be one of {sorted(EFFECTS)}, got {name!r}")
         return effect_probability(self.probabilities, name)
@@ -384,19 +436,24 @@ class Probable:
         probs = self.probabilities
         lines = ["  " + confidence_text(probs)]
         shown = [e for e in self.explanations][:rows]
-        lines.append("    explanation                                probability  ln evidence"
-                     "  ln Occam")
+        lines.append(
+            "    explanation                                probability  ln evidence  ln Occam"
+        )
         for e in shown:
             name = " + ".join(e.effects) or "plain joint"
             occ = f"{e.log_occam:9.4g}" if math.isfinite(e.log_occam) else "      n/a"
             lines.append(f"    {name:<42} {e.probability:11.3g} {e.log_evidence:12.6g} {occ}")
         if len(self.explanations) > rows:
-            lines.append(f"    ({len(self.explanations) - rows} more, together "
-                         f"{sum(e.probability for e in self.explanations[rows:]):.2g})")
+            lines.append(
+                f"    ({len(self.explanations) - rows} more, together "
+                f"{sum(e.probability for e in self.explanations[rows:]):.2g})"
+            )
         effs = sorted({n for e in self.explanations for n in e.effects})
         if effs:
-            lines.append("    effect present: " + ", ".join(
-                f"{n} {effect_probability(probs, n):.3g}" for n in effs))
+            lines.append(
+                "    effect present: "
+                + ", ".join(f"{n} {effect_probability(probs, n):.3g}" for n in effs)
+            )
         return lines
 
     def probability_tables(self) -> list:
@@ -405,15 +462,40 @@ class Probable:
         """
         if not self.explanations:
             return []
-        rows = [(" + ".join(e.effects) or "plain joint", e.probability, e.log_evidence,
-                 e.log_likelihood, e.log_occam, e.log_prior, e.n_params)
-                for e in self.explanations]
+        rows = [
+            (
+                " + ".join(e.effects) or "plain joint",
+                e.probability,
+                e.log_evidence,
+                e.log_likelihood,
+                e.log_occam,
+                e.log_prior,
+                e.n_params,
+            )
+            for e in self.explanations
+        ]
         effs = sorted({n for e in self.explanations for n in e.effects})
         probs = self.probabilities
-        return [("probabilities", ("explanation", "probability", "ln evidence",
-                                   "ln likelihood", "ln Occam", "ln prior", "parameters"), rows),
-                ("effect probabilities", ("effect", "probability"),
-                 [(n, effect_probability(probs, n)) for n in effs])]
+        return [
+            (
+                "probabilities",
+                (
+                    "explanation",
+                    "probability",
+                    "ln evidence",
+                    "ln likelihood",
+                    "ln Occam",
+                    "ln prior",
+                    "parameters",
+                ),
+                rows,
+            ),
+            (
+                "effect probabilities",
+                ("effect", "probability"),
+                [(n, effect_probability(probs, n)) for n in effs],
+            ),
+        ]
 
     def probabilities_dict(self) -> list:
         """JSON-safe list of the explanations (``to_dict``'s ``"probabilities"``)."""

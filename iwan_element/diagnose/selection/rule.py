@@ -36,6 +36,7 @@ The rule, stated once:
   own ``q ln n_eff``); the lowest IC among such pairs wins. Clean data and pure noise never
   reach a step, so this cannot name anything there.
 """
+
 from __future__ import annotations
 
 import math
@@ -50,9 +51,11 @@ EXPLAIN_FRACTION = 0.25
 
 def criterion_text(explain_fraction: float = EXPLAIN_FRACTION) -> str:
     """The rule in one line, for reports."""
-    return ("BIC on the noise-normalised residual, IC = chi2/tau + q ln(n_eff); an effect is "
-            f"named when it lowers IC and removes >= {100 * explain_fraction:.0f} % of the "
-            "excess misfit; stop when the rest is noise (chi-square test)")
+    return (
+        "BIC on the noise-normalised residual, IC = chi2/tau + q ln(n_eff); an effect is "
+        f"named when it lowers IC and removes >= {100 * explain_fraction:.0f} % of the "
+        "excess misfit; stop when the rest is noise (chi-square test)"
+    )
 
 
 def misfit_p(chi2: float, tau: float, n_eff: float, q: int) -> float:
@@ -68,7 +71,7 @@ class SelectionResult:
     named: list
     ambiguous: tuple
     steps: list
-    final: dict          # the last accepted model: {"names", "chi2", "q", "state"}
+    final: dict  # the last accepted model: {"names", "chi2", "q", "state"}
     p_before: float
     p_after: float
 
@@ -91,10 +94,22 @@ def _verdicts(rows, best, ambiguity):
             r["verdict"] = "worse"
 
 
-def stepwise_select(fit_candidate, candidates, base: dict, *, tau: float, n_eff: float,
-                    alpha: float = 1e-3, max_effects: int = 2, ambiguity: float = 10.0,
-                    explain_fraction: float = EXPLAIN_FRACTION, allowed=None,
-                    guard=None, pairs: bool = True, first_step: bool = False) -> SelectionResult:
+def stepwise_select(
+    fit_candidate,
+    candidates,
+    base: dict,
+    *,
+    tau: float,
+    n_eff: float,
+    alpha: float = 1e-3,
+    max_effects: int = 2,
+    ambiguity: float = 10.0,
+    explain_fraction: float = EXPLAIN_FRACTION,
+    allowed=None,
+    guard=None,
+    pairs: bool = True,
+    first_step: bool = False,
+) -> SelectionResult:
     """Run the selection rule (module docstring).
 
     Parameters
@@ -128,8 +143,11 @@ def stepwise_select(fit_candidate, candidates, base: dict, *, tau: float, n_eff:
         noise = misfit_p(cur["chi2"], tau, n_eff, cur["q"]) >= alpha
         if noise and not (first_step and not steps):
             break
-        rest = [c for c in candidates if c not in cur["names"]
-                and (allowed is None or allowed(cur["names"], c))]
+        rest = [
+            c
+            for c in candidates
+            if c not in cur["names"] and (allowed is None or allowed(cur["names"], c))
+        ]
         if not rest:
             break
         excess = max(cur["chi2"] / tau - (n_eff - cur["q"]), 0.0)
@@ -162,10 +180,21 @@ def stepwise_select(fit_candidate, candidates, base: dict, *, tau: float, n_eff:
         if not named:
             ambiguous = tuple(r["name"] for r in rows if r["verdict"] == "nearly as good")
         named.append(best["name"])
-        cur = {"names": best["names"], "chi2": best["chi2"], "q": cur["q"] + best["q"],
-               "state": best["state"], "row": best}
-    return SelectionResult(named=named, ambiguous=ambiguous, steps=steps, final=cur,
-                           p_before=p0, p_after=misfit_p(cur["chi2"], tau, n_eff, cur["q"]))
+        cur = {
+            "names": best["names"],
+            "chi2": best["chi2"],
+            "q": cur["q"] + best["q"],
+            "state": best["state"],
+            "row": best,
+        }
+    return SelectionResult(
+        named=named,
+        ambiguous=ambiguous,
+        steps=steps,
+        final=cur,
+        p_before=p0,
+        p_after=misfit_p(cur["chi2"], tau, n_eff, cur["q"]),
+    )
 
 
 def _scorer(cur, excess, ic_cur, tau, pen, explain_fraction, guard):
@@ -173,6 +202,7 @@ def _scorer(cur, excess, ic_cur, tau, pen, explain_fraction, guard):
     its IC, whether it lowers the current IC, the fraction of the excess misfit it explains,
     whether that is enough, and the caller's guard. Returns ``score(r, q) -> r``.
     """
+
     def score(r, q):
         gain = max(cur["chi2"] - r["chi2"], 0.0) / tau
         r["ic"] = r["chi2"] / tau + (cur["q"] + q) * pen
@@ -181,6 +211,7 @@ def _scorer(cur, excess, ic_cur, tau, pen, explain_fraction, guard):
         r["enough"] = gain >= explain_fraction * excess
         r["guard_ok"] = True if guard is None else bool(guard(cur, r))
         return r
+
     return score
 
 
@@ -196,20 +227,35 @@ def _pair_step(fit_candidate, cur, rows, score, allowed):
     for first, second in orders:
         if allowed is not None and not allowed(first["names"], second["name"]):
             continue
-        on = {"names": first["names"], "chi2": first["chi2"], "q": cur["q"] + first["q"],
-              "state": first["state"]}
+        on = {
+            "names": first["names"],
+            "chi2": first["chi2"],
+            "q": cur["q"] + first["q"],
+            "state": first["state"],
+        }
         r = dict(fit_candidate(on, second["name"]))
         q_pair = first["q"] + r["q"]
         r["name"] = f"{first['name']} + {second['name']}"
         score(r, q_pair)
         # each member earns its parameters on top of the other
         earns = r["ic"] < min(first["ic"], second["ic"])
-        r["verdict"] = "NAMED (pair)" if (r["lowers_ic"] and r["enough"] and r["guard_ok"]
-                                          and earns) else "pair explains little"
+        r["verdict"] = (
+            "NAMED (pair)"
+            if (r["lowers_ic"] and r["enough"] and r["guard_ok"] and earns)
+            else "pair explains little"
+        )
         r["dIC"] = r["ic"] - min(first["ic"], second["ic"])
         tried.append(r)
         if r["verdict"].startswith("NAMED") and (best is None or r["ic"] < best[1]["ic"]):
-            best = ((first["name"], second["name"]), r,
-                    {"names": r["names"], "chi2": r["chi2"], "q": cur["q"] + q_pair,
-                     "state": r["state"], "row": r})
+            best = (
+                (first["name"], second["name"]),
+                r,
+                {
+                    "names": r["names"],
+                    "chi2": r["chi2"],
+                    "q": cur["q"] + q_pair,
+                    "state": r["state"],
+                    "row": r,
+                },
+            )
     return best, tried

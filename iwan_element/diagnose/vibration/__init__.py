@@ -5,6 +5,7 @@ shows that the modal Iwan model misses.
 :mod:`.evidence` (the explanations' evidences), :mod:`.result` (:class:`VibrationDiagnosis`),
 :mod:`.augment` (the augmented joint it hands on).
 """
+
 from .diagnosis import diagnose_vibration, vibration_candidates
 from .result import VibrationDiagnosis
 

@@ -1,4 +1,5 @@
 """The body of :meth:`VibrationDiagnosis.augment` and its units guard (docs/guards.md)."""
+
 from __future__ import annotations
 
 import numpy as np
@@ -18,8 +19,10 @@ def augmented(diag, target, *, modal_mass, slip_per_amplitude, mode):
         diagnosed = (float(diag.amplitude.min()), float(diag.amplitude.max()))
         check_amplitude_units(diagnosed, target)
         return target.with_effects(
-            {n: dict(diag.parameters[n]) for n in diag.effects}, mode=mode,
-            calibrated_range=diagnosed)
+            {n: dict(diag.parameters[n]) for n in diag.effects},
+            mode=mode,
+            calibrated_range=diagnosed,
+        )
     check_element(target, name="target")
     if modal_mass is None:
         raise ValueError("modal_mass is required to augment a joint element")
@@ -29,8 +32,12 @@ def augmented(diag, target, *, modal_mass, slip_per_amplitude, mode):
     w0 = 2 * np.pi * float(diag.frequency[np.argmin(diag.amplitude)])
     for name in diag.effects:
         cls = EFFECTS[name]
-        el = cls(el, **cls.modal_to_joint(diag.parameters[name], modal_mass=m,
-                                          slip_per_amplitude=r, omega0=w0))
+        el = cls(
+            el,
+            **cls.modal_to_joint(
+                diag.parameters[name], modal_mass=m, slip_per_amplitude=r, omega0=w0
+            ),
+        )
     return el
 
 
@@ -45,8 +52,14 @@ def check_amplitude_units(diagnosed, specimen) -> None:
     (amplitudes in mm or um given as metres: the effects' amplitude constants and the
     calibrated range would be wrong by the factor and QSMA would stop warning).
     """
-    ranges = [r for r in (getattr(specimen, "amplitude_range", None),
-                          getattr(specimen, "calibrated_range", None)) if r is not None]
+    ranges = [
+        r
+        for r in (
+            getattr(specimen, "amplitude_range", None),
+            getattr(specimen, "calibrated_range", None),
+        )
+        if r is not None
+    ]
     if not ranges:
         return
     lo, hi = min(r[0] for r in ranges), max(r[1] for r in ranges)
@@ -57,5 +70,5 @@ def check_amplitude_units(diagnosed, specimen) -> None:
             f"{far:.3g} times {'above' if diagnosed[0] > hi else 'below'} the target "
             f"specimen's amplitudes ({lo:.3g} to {hi:.3g} m): were they given in mm or um? "
             "diagnose_vibration takes amplitudes in metres; diagnose again in metres (or "
-            "widen the specimen's amplitude_range if the test truly went there)")
-
+            "widen the specimen's amplitude_range if the test truly went there)"
+        )

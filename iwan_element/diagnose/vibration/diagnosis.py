@@ -16,6 +16,7 @@ the scatter the data show about a smooth curve (robust, from second differences 
 amplitude) lies above that statement's 99 % range, then that scatter; with nothing stated,
 the scatter; with too few amplitudes to trust a scatter estimate a warning says so.
 """
+
 from __future__ import annotations
 
 import math
@@ -67,7 +68,7 @@ def _noise(r, stated, n, name):
     scatter's own spread is a factor 1.9, and a noise set too high makes every effect's
     evidence too small.)
     """
-    scatter = difference_sigma(r) if n >= 5 else 0.0    # second differences along amplitude
+    scatter = difference_sigma(r) if n >= 5 else 0.0  # second differences along amplitude
     if stated is None:
         return max(scatter, 1e-12), f"{name}: scatter"
     st = float(np.median(stated))
@@ -88,8 +89,9 @@ def _curve_level(name, r, given, stated, n):
     clearly above it (:func:`_noise`).
     """
     if given is not None:
-        return _relative(f"{name}_noise", name, check_scalar(f"{name}_noise", given, low=0.0,
-                                                             low_open=True)), f"{name}: given"
+        return _relative(
+            f"{name}_noise", name, check_scalar(f"{name}_noise", given, low=0.0, low_open=True)
+        ), f"{name}: given"
     return _noise(r, _stated(f"{name}_uncertainty", stated, n), n, name)
 
 
@@ -100,9 +102,11 @@ def _relative(arg, curve, a):
     top = _RELATIVE_MAX[curve]
     peak = float(np.max(a))
     if peak > top:
-        raise ValueError(f"{arg} must be a relative standard uncertainty in (0, {top:g}] [-], "
-                         f"got {peak:g} ({100 * peak:g} %); a ratio, not percent: give "
-                         f"{peak / 100:g} for {peak:g} %")
+        raise ValueError(
+            f"{arg} must be a relative standard uncertainty in (0, {top:g}] [-], "
+            f"got {peak:g} ({100 * peak:g} %); a ratio, not percent: give "
+            f"{peak / 100:g} for {peak:g} %"
+        )
     return a
 
 
@@ -121,9 +125,14 @@ class _Vib:
     def __init__(self, X, fm, zm, fp, zp, zeta0, sf, sz, between_tests=False):
         self.X, self.fm, self.zm, self.fp, self.zp, self.zeta0 = X, fm, zm, fp, zp, zeta0
         self.sf, self.sz = sf, sz
-        w2 = 4 * np.pi ** 2 * float(np.min(fp)) ** 2
-        self.refs = {"zeta_ref": float(np.median(zp)), "X_max": float(X.max()),
-                     "omega2_ref": w2, "omega2_per_X2": w2 / float(X.max()) ** 2, "1": 1.0}
+        w2 = 4 * np.pi**2 * float(np.min(fp)) ** 2
+        self.refs = {
+            "zeta_ref": float(np.median(zp)),
+            "X_max": float(X.max()),
+            "omega2_ref": w2,
+            "omega2_per_X2": w2 / float(X.max()) ** 2,
+            "1": 1.0,
+        }
         # between-test nuisances (first in every state vector): the log ratios of the other
         # test's frequency and damping to the model's, constant over the amplitudes
         self.nn = 2 if between_tests else 0
@@ -140,8 +149,9 @@ class _Vib:
         if not self.nn:
             return np.zeros(0), float(np.sum(self.resid((), np.zeros(0)) ** 2))
         lo, hi = self.nuisance_bounds
-        res = least_squares(lambda z: self.resid((), z), np.zeros(2), bounds=(lo, hi),
-                            method="trf", x_scale="jac")
+        res = least_squares(
+            lambda z: self.resid((), z), np.zeros(2), bounds=(lo, hi), method="trf", x_scale="jac"
+        )
         return res.x, 2 * float(res.cost)
 
     def decode(self, names, z):
@@ -158,7 +168,7 @@ class _Vib:
         vals = self.decode(names, z)
         for nm in names:
             f, zz = EFFECTS[nm].modal_form(self.X, f, zz, self.zeta0, **vals[nm])
-        if self.nn:                     # the other test: the whole curve by constant factors
+        if self.nn:  # the other test: the whole curve by constant factors
             df, dz = self.nuisance(z)
             f, zz = f * (1.0 + df), zz * (1.0 + dz)
         return f, zz
@@ -181,10 +191,13 @@ class _Vib:
         new = EFFECTS[names[-1]].modal_specs
         best = None
         for j in range(max(len(s.fit_starts) for s in new)):
-            z0 = np.concatenate([z_prev, [s.fit_starts[min(j, len(s.fit_starts) - 1)] for s in new]])
+            z0 = np.concatenate(
+                [z_prev, [s.fit_starts[min(j, len(s.fit_starts) - 1)] for s in new]]
+            )
             z0 = np.clip(z0, lo, hi - 1e-12)
-            res = least_squares(lambda z: self.resid(names, z), z0, bounds=(lo, hi), method="trf",
-                                x_scale="jac")
+            res = least_squares(
+                lambda z: self.resid(names, z), z0, bounds=(lo, hi), method="trf", x_scale="jac"
+            )
             if best is None or res.cost < best.cost:
                 best = res
         return best
@@ -206,17 +219,23 @@ def _where(X, rf0, rz0, sf, sz, misfit):
             j = k
             while j + 1 < sign.size and sign[j + 1] == sign[k]:
                 j += 1
-            if sign[k] != 0 and j > k:            # two or more points in a row
-                i = k + int(np.argmax(np.abs(r[k:j + 1])))
-                runs.append(f"{'above' if sign[k] > 0 else 'below'} it from {xs[k]:.3g} to "
-                            f"{xs[j]:.3g} m (up to {100 * abs(math.expm1(r[i])):.3g} % at "
-                            f"{xs[i]:.3g} m)")
+            if sign[k] != 0 and j > k:  # two or more points in a row
+                i = k + int(np.argmax(np.abs(r[k : j + 1])))
+                runs.append(
+                    f"{'above' if sign[k] > 0 else 'below'} it from {xs[k]:.3g} to "
+                    f"{xs[j]:.3g} m (up to {100 * abs(math.expm1(r[i])):.3g} % at "
+                    f"{xs[i]:.3g} m)"
+                )
             k = j + 1
         if runs:
-            parts.append(f"measured {label} beyond 3 x noise of the prediction: "
-                         + ", then ".join(runs))
-    where = ("; ".join(parts) if (misfit and parts) else
-             "measured and predicted curves agree within the noise") + "."
+            parts.append(
+                f"measured {label} beyond 3 x noise of the prediction: " + ", then ".join(runs)
+            )
+    where = (
+        "; ".join(parts)
+        if (misfit and parts)
+        else "measured and predicted curves agree within the noise"
+    ) + "."
     return where[0].upper() + where[1:]
 
 
@@ -226,23 +245,33 @@ def _left(X, rf, rz, sf, sz):
     for label, r, s in (("frequency", rf, sf), ("damping", rz, sz)):
         big = np.abs(r) > 3 * s
         if big.any():
-            parts.append(f"{label} off by up to {100 * np.max(np.abs(r[big])):.3g} % at "
-                         f"{X[big].min():.3g} .. {X[big].max():.3g} m")
+            parts.append(
+                f"{label} off by up to {100 * np.max(np.abs(r[big])):.3g} % at "
+                f"{X[big].min():.3g} .. {X[big].max():.3g} m"
+            )
     return (": " + "; ".join(parts)) if parts else ""
 
 
 def _inputs(amplitude, frequency, damping_ratio, predicted_frequency, predicted_damping_ratio):
     arrs = {}
-    for nm, a in (("amplitude", amplitude), ("frequency", frequency), ("damping_ratio", damping_ratio),
-                  ("predicted_frequency", predicted_frequency),
-                  ("predicted_damping_ratio", predicted_damping_ratio)):
+    for nm, a in (
+        ("amplitude", amplitude),
+        ("frequency", frequency),
+        ("damping_ratio", damping_ratio),
+        ("predicted_frequency", predicted_frequency),
+        ("predicted_damping_ratio", predicted_damping_ratio),
+    ):
         arrs[nm] = check_magnitude(nm, finite_array(nm, a, ndim=1, min_size=3))
     n = same_length(**arrs)
     for nm, a in arrs.items():
         if np.any(a <= 0):
             raise ValueError(f"{nm} must be > 0 everywhere")
-    _check_units(arrs["frequency"], arrs["predicted_frequency"], arrs["damping_ratio"],
-                 arrs["predicted_damping_ratio"])
+    _check_units(
+        arrs["frequency"],
+        arrs["predicted_frequency"],
+        arrs["damping_ratio"],
+        arrs["predicted_damping_ratio"],
+    )
     return n, arrs
 
 
@@ -250,13 +279,16 @@ def _measurement(amplitude, frequency, damping_ratio, f_unc, z_unc):
     """Arrays and stated relative uncertainties from an AmplitudeCurve or three arrays."""
     if not isinstance(amplitude, AmplitudeCurve):
         if frequency is None or damping_ratio is None:
-            raise ValueError("frequency and damping_ratio are required unless amplitude is an "
-                             "AmplitudeCurve")
+            raise ValueError(
+                "frequency and damping_ratio are required unless amplitude is an AmplitudeCurve"
+            )
         return amplitude, frequency, damping_ratio, f_unc, z_unc
     c = amplitude
     if frequency is not None or damping_ratio is not None:
-        raise ValueError("give either an AmplitudeCurve or three arrays, not both: frequency and "
-                         "damping_ratio must be None when amplitude is an AmplitudeCurve")
+        raise ValueError(
+            "give either an AmplitudeCurve or three arrays, not both: frequency and "
+            "damping_ratio must be None when amplitude is an AmplitudeCurve"
+        )
 
     def rel(std, val):
         r = np.asarray(std, float) / val
@@ -267,14 +299,26 @@ def _measurement(amplitude, frequency, damping_ratio, f_unc, z_unc):
     return c.amplitude, c.frequency, c.damping_ratio, f_unc, z_unc
 
 
-def diagnose_vibration(amplitude, frequency=None, damping_ratio=None, *, predicted_frequency,
-                       predicted_damping_ratio, frequency_noise: float | None = None,
-                       damping_ratio_noise: float | None = None,
-                       frequency_uncertainty=None, damping_ratio_uncertainty=None,
-                       predicted_zeta0: float = 0.0, alpha: float = 1e-3,
-                       ambiguity: float = 10.0, max_effects: int = 2,
-                       between_tests: bool = False, effect_prior=None,
-                       evidence: str = "laplace", nested=None) -> VibrationDiagnosis:
+def diagnose_vibration(
+    amplitude,
+    frequency=None,
+    damping_ratio=None,
+    *,
+    predicted_frequency,
+    predicted_damping_ratio,
+    frequency_noise: float | None = None,
+    damping_ratio_noise: float | None = None,
+    frequency_uncertainty=None,
+    damping_ratio_uncertainty=None,
+    predicted_zeta0: float = 0.0,
+    alpha: float = 1e-3,
+    ambiguity: float = 10.0,
+    max_effects: int = 2,
+    between_tests: bool = False,
+    effect_prior=None,
+    evidence: str = "laplace",
+    nested=None,
+) -> VibrationDiagnosis:
     """Compare measured and predicted amplitude-dependent frequency and damping; name what the
     jointed model misses (see the module docstring).
 
@@ -334,16 +378,30 @@ def diagnose_vibration(amplitude, frequency=None, damping_ratio=None, *, predict
         ``2 pi`` times the prediction (rad/s for Hz) or the other way round, damping ratios
         that look like percent (one >= 1, or none below 0.05), or an option out of range.
     """
-    for arg, v in (("frequency_uncertainty", frequency_uncertainty),
-                   ("damping_ratio_uncertainty", damping_ratio_uncertainty)):
-        if v is not None:          # the caller's (not a curve's own scatter, which may be wide)
+    for arg, v in (
+        ("frequency_uncertainty", frequency_uncertainty),
+        ("damping_ratio_uncertainty", damping_ratio_uncertainty),
+    ):
+        if v is not None:  # the caller's (not a curve's own scatter, which may be wide)
             _relative(arg, arg.rsplit("_", 1)[0], finite_array(arg, v, ndim=None))
-    amplitude, frequency, damping_ratio, frequency_uncertainty, damping_ratio_uncertainty = _measurement(
-        amplitude, frequency, damping_ratio, frequency_uncertainty, damping_ratio_uncertainty)
-    n, a = _inputs(amplitude, frequency, damping_ratio, predicted_frequency,
-                   predicted_damping_ratio)
-    X, fm, zm, fp, zp = (a[k] for k in ("amplitude", "frequency", "damping_ratio",
-                                         "predicted_frequency", "predicted_damping_ratio"))
+    amplitude, frequency, damping_ratio, frequency_uncertainty, damping_ratio_uncertainty = (
+        _measurement(
+            amplitude, frequency, damping_ratio, frequency_uncertainty, damping_ratio_uncertainty
+        )
+    )
+    n, a = _inputs(
+        amplitude, frequency, damping_ratio, predicted_frequency, predicted_damping_ratio
+    )
+    X, fm, zm, fp, zp = (
+        a[k]
+        for k in (
+            "amplitude",
+            "frequency",
+            "damping_ratio",
+            "predicted_frequency",
+            "predicted_damping_ratio",
+        )
+    )
     zeta0 = check_scalar("predicted_zeta0", predicted_zeta0, low=0.0)
     alpha = check_scalar("alpha", alpha, low=0.0, high=0.5, low_open=True, high_open=True)
     ambiguity = check_scalar("ambiguity", ambiguity, low=0.0)
@@ -352,105 +410,195 @@ def diagnose_vibration(amplitude, frequency=None, damping_ratio=None, *, predict
     rf0, rz0 = np.log(fm / fp), np.log(zm / zp)
     warns = []
     sf, src_f = _curve_level("frequency", rf0[o], frequency_noise, frequency_uncertainty, n)
-    sz, src_z = _curve_level("damping_ratio", rz0[o], damping_ratio_noise, damping_ratio_uncertainty, n)
+    sz, src_z = _curve_level(
+        "damping_ratio", rz0[o], damping_ratio_noise, damping_ratio_uncertainty, n
+    )
     if (frequency_noise is None or damping_ratio_noise is None) and n < 12:
-        warns.append(f"only {n} amplitudes: the noise taken from their scatter is uncertain "
-                     "(state the per-point uncertainty or the noise levels)")
+        warns.append(
+            f"only {n} amplitudes: the noise taken from their scatter is uncertain "
+            "(state the per-point uncertainty or the noise levels)"
+        )
     if not isinstance(between_tests, (bool, np.bool_)):
         raise ValueError(f"between_tests must be True or False, got {between_tests!r}")
     vib = _Vib(X, fm, zm, fp, zp, zeta0, sf, sz, bool(between_tests))
     z_b, chi_b = vib.fit_nuisance()
     err_b = vib.error((), z_b)
-    cands = tuple(c for c in vibration_candidates()
-                  if not (between_tests and EFFECTS[c].modal_floor))
+    cands = tuple(
+        c for c in vibration_candidates() if not (between_tests and EFFECTS[c].modal_floor)
+    )
 
     def fit_candidate(cur, name):
         names = cur["names"] + (name,)
         res = vib.fit(names, cur["state"])
-        return {"names": names, "chi2": 2 * float(res.cost), "state": res.x,
-                "q": len(EFFECTS[name].modal_specs), "error": vib.error(names, res.x)}
+        return {
+            "names": names,
+            "chi2": 2 * float(res.cost),
+            "state": res.x,
+            "q": len(EFFECTS[name].modal_specs),
+            "error": vib.error(names, res.x),
+        }
 
     base = {"names": (), "chi2": chi_b, "q": 0, "state": z_b}
     prior = check_effect_prior(effect_prior, cands)
     nest = nested_options(evidence, nested)
-    sel = stepwise_select(fit_candidate, cands, base, tau=1.0, n_eff=2.0 * n,
-                          alpha=alpha, max_effects=max_effects, ambiguity=ambiguity,
-                          first_step=True)
+    sel = stepwise_select(
+        fit_candidate,
+        cands,
+        base,
+        tau=1.0,
+        n_eff=2.0 * n,
+        alpha=alpha,
+        max_effects=max_effects,
+        ambiguity=ambiguity,
+        first_step=True,
+    )
     # never name a set of effects that leaves the unweighted mismatch higher than before (by
     # more than a tenth of the noise: a hidden frequency effect changes the damping-dominated
     # unweighted mismatch by less than the damping noise's own scatter)
-    tol = 0.1 * math.sqrt(0.5 * (sf ** 2 + sz ** 2))
+    tol = 0.1 * math.sqrt(0.5 * (sf**2 + sz**2))
     fits = collect(base, sel.steps)
     raises = {k for k, f in fits.items() if k and vib.error(f[0], f[3]) > err_b + tol}
-    expl = rank({k: f for k, f in fits.items() if k not in raises}, tau=1.0, n_eff=2.0 * n,
-                prior=prior, evaluate=lambda stack, z: evaluate(vib, stack, z), nested=nest)
+    expl = rank(
+        {k: f for k, f in fits.items() if k not in raises},
+        tau=1.0,
+        n_eff=2.0 * n,
+        prior=prior,
+        evaluate=lambda stack, z: evaluate(vib, stack, z),
+        nested=nest,
+    )
     rule_named = tuple(sel.named)
     if sel.named and key(sel.named) in raises:
-        warns.append(f"{' + '.join(sel.named)} lowers the noise-weighted misfit but raises the "
-                     "mismatch; not named")
+        warns.append(
+            f"{' + '.join(sel.named)} lowers the noise-weighted misfit but raises the "
+            "mismatch; not named"
+        )
     for k in sorted(raises - {key(sel.named)}):
         if fits[k][1] < min(f[1] for kk, f in fits.items() if kk not in raises):
-            warns.append(f"{' + '.join(k)} lowers the noise-weighted misfit but raises the "
-                         "mismatch; not considered")
+            warns.append(
+                f"{' + '.join(k)} lowers the noise-weighted misfit but raises the "
+                "mismatch; not considered"
+            )
     top = expl[0]
     if key(top.stack) != key(sel.named):
         f = fits[top.effects]
         sel.named, sel.ambiguous = list(top.stack), ()
         sel.final = {"names": f[0], "chi2": f[1], "q": f[2] - vib.nn, "state": f[3]}
         sel.p_after = misfit_p(f[1], 1.0, 2.0 * n, f[2] - vib.nn)
-    if vib.nn:                          # where: what is left after the between-test offsets
+    if vib.nn:  # where: what is left after the between-test offsets
         f_b, z_b_curve = vib.curves((), z_b)
         rf0, rz0 = np.log(fm / f_b), np.log(zm / z_b_curve)
-    return _vib_result(vib, sel, chi_b, err_b, rf0, rz0, warns, alpha, f"{src_f}; {src_z}",
-                       cands, tuple(expl), rule_named)
+    return _vib_result(
+        vib,
+        sel,
+        chi_b,
+        err_b,
+        rf0,
+        rz0,
+        warns,
+        alpha,
+        f"{src_f}; {src_z}",
+        cands,
+        tuple(expl),
+        rule_named,
+    )
 
 
-def _vib_result(vib, sel, chi_b, err_b, rf0, rz0, warns, alpha, noise_from, cands,
-                explanations=(), rule_named=()):
+def _vib_result(
+    vib,
+    sel,
+    chi_b,
+    err_b,
+    rf0,
+    rz0,
+    warns,
+    alpha,
+    noise_from,
+    cands,
+    explanations=(),
+    rule_named=(),
+):
     names, z = sel.final["names"], sel.final["state"]
     params = vib.decode(names, z)
     f_new, z_new = vib.curves(names, z)
     misfit = sel.p_before < alpha
     if misfit and sel.p_after < alpha:
-        warns.append("mismatch beyond the noise remains" + (
-            f" after {' + '.join(sel.named)}" if sel.named else
-            f"; no candidate ({', '.join(cands)}) explains it")
-            + _left(vib.X, np.log(vib.fm / f_new), np.log(vib.zm / z_new), vib.sf, vib.sz))
+        warns.append(
+            "mismatch beyond the noise remains"
+            + (
+                f" after {' + '.join(sel.named)}"
+                if sel.named
+                else f"; no candidate ({', '.join(cands)}) explains it"
+            )
+            + _left(vib.X, np.log(vib.fm / f_new), np.log(vib.zm / z_new), vib.sf, vib.sz)
+        )
     bound_warns, at_bound = _at_upper_bound(vib, names, z)
     warns.extend(bound_warns)
-    steps = [{"on": st["on"], "candidates": [
-        {k: r.get(k) for k in ("name", "error", "dIC", "explained", "verdict")}
-        for r in st["rows"]]} for st in sel.steps]
+    steps = [
+        {
+            "on": st["on"],
+            "candidates": [
+                {k: r.get(k) for k in ("name", "error", "dIC", "explained", "verdict")}
+                for r in st["rows"]
+            ],
+        }
+        for st in sel.steps
+    ]
     cov, se, nuis_std = _covariance(vib, names, z, sel.final["chi2"])
     ro = lambda a: (a.setflags(write=False), a)[1]  # noqa: E731
-    details = {"noise_from": noise_from, "misfit_p": sel.p_before, "misfit_p_after": sel.p_after,
-               "alpha": alpha, "chi2_before": chi_b, "chi2_after": sel.final["chi2"],
-               "criterion": criterion_text(), "predicted_zeta0": vib.zeta0,
-               "frequency_error_before": float(np.sqrt(np.mean(rf0 ** 2))),
-               "damping_error_before": float(np.sqrt(np.mean(rz0 ** 2))),
-               "frequency_error_after": float(np.sqrt(np.mean(np.log(vib.fm / f_new) ** 2))),
-               "damping_error_after": float(np.sqrt(np.mean(np.log(vib.zm / z_new) ** 2))),
-               "stderr": dict(zip((f"{nm}.{sp.name}" for nm in names
-                                   for sp in EFFECTS[nm].modal_specs), se)),
-               "at_bound": at_bound, "rule_named": list(rule_named),
-               "refs": dict(vib.refs), "nuisances": vib.nn}
+    details = {
+        "noise_from": noise_from,
+        "misfit_p": sel.p_before,
+        "misfit_p_after": sel.p_after,
+        "alpha": alpha,
+        "chi2_before": chi_b,
+        "chi2_after": sel.final["chi2"],
+        "criterion": criterion_text(),
+        "predicted_zeta0": vib.zeta0,
+        "frequency_error_before": float(np.sqrt(np.mean(rf0**2))),
+        "damping_error_before": float(np.sqrt(np.mean(rz0**2))),
+        "frequency_error_after": float(np.sqrt(np.mean(np.log(vib.fm / f_new) ** 2))),
+        "damping_error_after": float(np.sqrt(np.mean(np.log(vib.zm / z_new) ** 2))),
+        "stderr": dict(
+            zip((f"{nm}.{sp.name}" for nm in names for sp in EFFECTS[nm].modal_specs), se)
+        ),
+        "at_bound": at_bound,
+        "rule_named": list(rule_named),
+        "refs": dict(vib.refs),
+        "nuisances": vib.nn,
+    }
     if vib.nn:
         df, dz = vib.nuisance(z)
         details["between_tests"] = {
-            "frequency_offset": df, "frequency_offset_stderr": nuis_std[0],
-            "damping_offset": dz, "damping_offset_stderr": nuis_std[1],
-            "untested": [c for c in vibration_candidates() if c not in cands]}
+            "frequency_offset": df,
+            "frequency_offset_stderr": nuis_std[0],
+            "damping_offset": dz,
+            "damping_offset_stderr": nuis_std[1],
+            "untested": [c for c in vibration_candidates() if c not in cands],
+        }
     return VibrationDiagnosis(
-        effect=sel.named[0] if sel.named else "none", effects=tuple(sel.named),
+        effect=sel.named[0] if sel.named else "none",
+        effects=tuple(sel.named),
         ambiguous_with=sel.ambiguous,
-        where=_where(vib.X, rf0, rz0, vib.sf, vib.sz, misfit), parameters=params,
-        error_before=err_b, error_after=vib.error(names, z),
-        noise_level=math.sqrt(0.5 * (vib.sf ** 2 + vib.sz ** 2)), frequency_noise=vib.sf,
-        damping_ratio_noise=vib.sz, amplitude=ro(vib.X), frequency=ro(vib.fm), damping_ratio=ro(vib.zm),
-        predicted_frequency=ro(vib.fp), predicted_damping_ratio=ro(vib.zp), model_frequency=ro(f_new),
-        model_damping_ratio=ro(z_new), steps=tuple(json_safe(s) for s in steps), warnings=tuple(warns),
-        details=json_safe(details), covariance=None if cov is None else ro(cov),
-        explanations=explanations)
+        where=_where(vib.X, rf0, rz0, vib.sf, vib.sz, misfit),
+        parameters=params,
+        error_before=err_b,
+        error_after=vib.error(names, z),
+        noise_level=math.sqrt(0.5 * (vib.sf**2 + vib.sz**2)),
+        frequency_noise=vib.sf,
+        damping_ratio_noise=vib.sz,
+        amplitude=ro(vib.X),
+        frequency=ro(vib.fm),
+        damping_ratio=ro(vib.zm),
+        predicted_frequency=ro(vib.fp),
+        predicted_damping_ratio=ro(vib.zp),
+        model_frequency=ro(f_new),
+        model_damping_ratio=ro(z_new),
+        steps=tuple(json_safe(s) for s in steps),
+        warnings=tuple(warns),
+        details=json_safe(details),
+        covariance=None if cov is None else ro(cov),
+        explanations=explanations,
+    )
 
 
 def _at_upper_bound(vib, names, z):
@@ -463,9 +611,11 @@ def _at_upper_bound(vib, names, z):
         for sp in EFFECTS[nm].modal_specs:
             lo, hi = sp.fit_bounds
             if z[k] >= hi - 1e-6 * (hi - lo):
-                out.append(f"{nm} {sp.name} sits at the upper end of its fit range "
-                           f"({hi:g} in fit units): the data do not bound it, and predictions "
-                           "beyond the measured amplitudes depend on that end")
+                out.append(
+                    f"{nm} {sp.name} sits at the upper end of its fit range "
+                    f"({hi:g} in fit units): the data do not bound it, and predictions "
+                    "beyond the measured amplitudes depend on that end"
+                )
                 at.append(f"{nm}.{sp.name}")
             k += 1
     return out, at
@@ -487,10 +637,14 @@ def _covariance(vib, names, z, chi2):
     dof = max(r0.size - z.size, 1)
     cz = covariance(J, s2=max(1.0, chi2 / dof), dof=dof)
     Cz, sd = cz.covariance, cz.stderr
-    nuis = () if not vib.nn else (float(sd[0] * math.exp(float(z[0]))),
-                                  float(sd[1] * math.exp(float(z[1]))))
+    nuis = (
+        ()
+        if not vib.nn
+        else (float(sd[0] * math.exp(float(z[0]))), float(sd[1] * math.exp(float(z[1]))))
+    )
     if not names:
         return None, np.zeros(0), nuis
-    scale = np.array([1.0 / vib.refs[sp.ref] ** sp.ref_power
-                      for nm in names for sp in EFFECTS[nm].modal_specs])
-    return Cz[vib.nn:, vib.nn:] * np.outer(scale, scale), sd[vib.nn:] * scale, nuis
+    scale = np.array(
+        [1.0 / vib.refs[sp.ref] ** sp.ref_power for nm in names for sp in EFFECTS[nm].modal_specs]
+    )
+    return Cz[vib.nn :, vib.nn :] * np.outer(scale, scale), sd[vib.nn :] * scale, nuis

@@ -2,6 +2,7 @@
 fitted, each one's Jacobian, prior box and chi-square for the evidence
 (:func:`..selection.probabilities.rank`).
 """
+
 from __future__ import annotations
 
 import math
@@ -53,6 +54,7 @@ def evaluate(vib, names, z):
     def chi2_at(th):
         r = vib.resid(names, th)
         return float(r @ r) if np.all(np.isfinite(r)) else math.inf
+
     return J, r0, np.asarray(z, float), lo, hi, chi2_at, [None] * vib.nn + specs
 
 
@@ -64,6 +66,7 @@ def vibration_band(diag, amplitude, base, level):
     """
     from ...base.validation import finite_array
     from ..selection.averaging import band, linear_spread, members
+
     X = finite_array("amplitude", amplitude, ndim=1, min_size=1)
     if np.any(X <= 0):
         raise ValueError("amplitude must be > 0 [m]")
@@ -92,12 +95,21 @@ def vibration_band(diag, amplitude, base, level):
                     k += 1
                 f, z = EFFECTS[nm].modal_form(X, f, z, z0, **vals)
             return np.concatenate([f, z])
+
         if e.theta.size:
             mu, sd = linear_spread(predict, e.theta, e.covariance)
         else:
             mu, sd = predict(np.zeros(0)), np.zeros(2 * X.size)
-        parts.append((e.effects, w, {"frequency": (mu[:X.size], sd[:X.size], "Hz"),
-                                     "damping_ratio": (mu[X.size:], sd[X.size:], "-")}))
+        parts.append(
+            (
+                e.effects,
+                w,
+                {
+                    "frequency": (mu[: X.size], sd[: X.size], "Hz"),
+                    "damping_ratio": (mu[X.size :], sd[X.size :], "-"),
+                },
+            )
+        )
     s = sum(p[1] for p in parts)
     return band(X, "amplitude [m]", [(a, w / s, c) for a, w, c in parts], level)
 

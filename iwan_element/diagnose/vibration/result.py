@@ -1,6 +1,7 @@
 """Result object of the vibration diagnosis: :class:`VibrationDiagnosis` (measured against
 predicted amplitude-dependent frequency and damping, and what is missing).
 """
+
 from __future__ import annotations
 
 import math
@@ -20,9 +21,11 @@ __all__ = ["VibrationDiagnosis"]
 
 
 #: What a vibration diagnosis' "mismatch" is, said once in its report and its tables.
-MISMATCH = ("mismatch: RMS relative difference between measured and modelled frequency and "
-            "damping ratio together (log residuals, each curve over its own noise), in %; "
-            "dIC: information criterion above the step's best candidate (0: the best)")
+MISMATCH = (
+    "mismatch: RMS relative difference between measured and modelled frequency and "
+    "damping ratio together (log residuals, each curve over its own noise), in %; "
+    "dIC: information criterion above the step's best candidate (0: the best)"
+)
 
 
 def _apply(names, parameters, X, f, z, zeta0):
@@ -114,16 +117,22 @@ class VibrationDiagnosis(Probable, ResultShape):
     @property
     def params(self) -> ParameterTable:
         """The fitted modal values as a :class:`~iwan_element.fitting.ParameterTable`."""
-        rows = [(f"{nm}.{sp.name}", sp, self.parameters[nm][sp.name]) for nm in self.parameters
-                for sp in EFFECTS[nm].modal_specs]
+        rows = [
+            (f"{nm}.{sp.name}", sp, self.parameters[nm][sp.name])
+            for nm in self.parameters
+            for sp in EFFECTS[nm].modal_specs
+        ]
         se = self.details.get("stderr", {})
         at = set(self.details.get("at_bound", ()))
         out = []
         for key, sp, v in rows:
             e = se.get(key)
             e = math.nan if e is None else float(e)
-            out.append(Parameter(key, v, e, unit=sp.unit,
-                                 identified=verdict(key, v, e, at_bound=key in at)[0]))
+            out.append(
+                Parameter(
+                    key, v, e, unit=sp.unit, identified=verdict(key, v, e, at_bound=key in at)[0]
+                )
+            )
         return ParameterTable(out)
 
     @property
@@ -139,18 +148,31 @@ class VibrationDiagnosis(Probable, ResultShape):
         d = self.details
         out = []
         if d["misfit_p"] < d["alpha"] and d["misfit_p_after"] < d["alpha"]:
-            out.append("misfit well beyond the noise remains: "
-                       + (f"after {' + '.join(self.effects)}" if self.effects else
-                          "no tested effect explains it")
-                       + f" (misfit p-value {d['misfit_p_after']:.2g} < {d['alpha']:g})")
+            out.append(
+                "misfit well beyond the noise remains: "
+                + (
+                    f"after {' + '.join(self.effects)}"
+                    if self.effects
+                    else "no tested effect explains it"
+                )
+                + f" (misfit p-value {d['misfit_p_after']:.2g} < {d['alpha']:g})"
+            )
         bad = [k for k, p in self.params.items() if not p.identified]
         if bad:
-            out.append(f"{', '.join(bad)} {'is' if len(bad) == 1 else 'are'} not identified by "
-                       "these data (standard error above half the value, or at a bound)")
+            out.append(
+                f"{', '.join(bad)} {'is' if len(bad) == 1 else 'are'} not identified by "
+                "these data (standard error above half the value, or at a bound)"
+            )
         return tuple(out)
 
-    def augment(self, target, *, modal_mass: float | None = None,
-                slip_per_amplitude: float = 1.0, mode: int = 1):
+    def augment(
+        self,
+        target,
+        *,
+        modal_mass: float | None = None,
+        slip_per_amplitude: float = 1.0,
+        mode: int = 1,
+    ):
         """The model with the named effects added: a beam specimen or a joint element.
 
         Parameters
@@ -185,8 +207,9 @@ class VibrationDiagnosis(Probable, ResultShape):
             more than a factor 30 (amplitudes given in mm or um, docs/guards.md); a target that
             is neither a specimen nor a joint element; a missing or bad ``modal_mass``.
         """
-        return augmented(self, target, modal_mass=modal_mass,
-                         slip_per_amplitude=slip_per_amplitude, mode=mode)
+        return augmented(
+            self, target, modal_mass=modal_mass, slip_per_amplitude=slip_per_amplitude, mode=mode
+        )
 
     def predict(self, amplitude, *, base=None):
         """The augmented model's frequency and damping at new amplitudes, with 1-sigma bands.
@@ -210,6 +233,7 @@ class VibrationDiagnosis(Probable, ResultShape):
         """
         from ...base.validation import finite_array
         from ...identify.modal.curves import AmplitudeCurve
+
         X = finite_array("amplitude", amplitude, ndim=1, min_size=1)
         if np.any(X <= 0):
             raise ValueError("amplitude must be > 0 [m]")
@@ -222,23 +246,34 @@ class VibrationDiagnosis(Probable, ResultShape):
             fb = np.exp(np.interp(np.log(X), lx, np.log(self.predicted_frequency[o])))
             zb = np.exp(np.interp(np.log(X), lx, np.log(self.predicted_damping_ratio[o])))
             if out.any():
-                warns.append(f"{int(out.sum())} amplitudes outside the diagnosed range {lo:.3g} .. "
-                             f"{hi:.3g} m: the base prediction is held at its end values there; "
-                             "pass base= (the model's curve at these amplitudes)")
+                warns.append(
+                    f"{int(out.sum())} amplitudes outside the diagnosed range {lo:.3g} .. "
+                    f"{hi:.3g} m: the base prediction is held at its end values there; "
+                    "pass base= (the model's curve at these amplitudes)"
+                )
         else:
             if not np.allclose(np.asarray(base.amplitude), X, rtol=1e-9, atol=0.0):
                 raise ValueError("base must be the model's curve at exactly these amplitudes")
             fb, zb = np.asarray(base.frequency, float), np.asarray(base.damping_ratio, float)
         if out.any():
-            warns.append(f"the fitted effects ({', '.join(self.effects) or 'none'}) are "
-                         f"extrapolated beyond the diagnosed amplitudes {lo:.3g} .. {hi:.3g} m "
-                         f"(up to {max(X.max() / hi, lo / X.min()):.3g} x beyond)")
+            warns.append(
+                f"the fitted effects ({', '.join(self.effects) or 'none'}) are "
+                f"extrapolated beyond the diagnosed amplitudes {lo:.3g} .. {hi:.3g} m "
+                f"(up to {max(X.max() / hi, lo / X.min()):.3g} x beyond)"
+            )
         z0 = float(self.details.get("predicted_zeta0", 0.0))
         f, z = _apply(self.effects, self.parameters, X, fb, zb, z0)
         sf, sz = self._bands(X, fb, zb, z0, f, z)
-        return AmplitudeCurve(X, f, z, frequency_std=sf, damping_ratio_std=sz, method="diagnosis",
-                              notes="prediction + " + (" + ".join(self.effects) or "nothing"),
-                              warnings=tuple(warns))
+        return AmplitudeCurve(
+            X,
+            f,
+            z,
+            frequency_std=sf,
+            damping_ratio_std=sz,
+            method="diagnosis",
+            notes="prediction + " + (" + ".join(self.effects) or "nothing"),
+            warnings=tuple(warns),
+        )
 
     def averaged_band(self, amplitude, *, base=None, level: float = 0.95):
         """Frequency and damping predicted with the doubt about the model: every probable
@@ -248,6 +283,7 @@ class VibrationDiagnosis(Probable, ResultShape):
         ``"damping_ratio"`` [-]).
         """
         from .evidence import vibration_band
+
         return vibration_band(self, amplitude, base, level)
 
     def _bands(self, X, fb, zb, z0, f, z):
@@ -266,28 +302,54 @@ class VibrationDiagnosis(Probable, ResultShape):
             G[:, j] = np.concatenate([np.log(f1 / f), np.log(z1 / z)]) / h
         var = np.einsum("ij,jk,ik->i", G, C, G)
         s = np.sqrt(np.maximum(var, 0.0))
-        return f * s[:X.size], z * s[X.size:]
+        return f * s[: X.size], z * s[X.size :]
 
     def to_dict(self) -> dict:
         """JSON-safe dict."""
-        return json_safe({"params": self.params.to_dict()} | {k: getattr(self, k) for k in (
-            "effect", "effects", "ambiguous_with", "where", "error_before",
-            "error_after", "noise_level", "frequency_noise", "damping_ratio_noise", "amplitude",
-            "frequency", "damping_ratio", "predicted_frequency", "predicted_damping_ratio",
-            "model_frequency", "model_damping_ratio", "steps", "warnings", "details", "covariance")}
-                         | {"success": self.success,
-                            "failure_reasons": list(self.failure_reasons()),
-                            "probabilities": self.probabilities_dict()})
+        return json_safe(
+            {"params": self.params.to_dict()}
+            | {
+                k: getattr(self, k)
+                for k in (
+                    "effect",
+                    "effects",
+                    "ambiguous_with",
+                    "where",
+                    "error_before",
+                    "error_after",
+                    "noise_level",
+                    "frequency_noise",
+                    "damping_ratio_noise",
+                    "amplitude",
+                    "frequency",
+                    "damping_ratio",
+                    "predicted_frequency",
+                    "predicted_damping_ratio",
+                    "model_frequency",
+                    "model_damping_ratio",
+                    "steps",
+                    "warnings",
+                    "details",
+                    "covariance",
+                )
+            }
+            | {
+                "success": self.success,
+                "failure_reasons": list(self.failure_reasons()),
+                "probabilities": self.probabilities_dict(),
+            }
+        )
 
     def report(self) -> str:
         """Human-readable account."""
-        lines = [self.verdict(),
-                 "Vibration diagnosis (amplitude-dependent frequency and damping)"]
-        lines += wrap(f"  {self.amplitude.size} amplitudes, {self.amplitude.min():.3g} .. "
-                      f"{self.amplitude.max():.3g} m; noise: frequency "
-                      f"{100 * self.frequency_noise:.2g} %, damping "
-                      f"{100 * self.damping_ratio_noise:.2g} % ({self.details['noise_from']})",
-                      indent="    ")
+        lines = [self.verdict(), "Vibration diagnosis (amplitude-dependent frequency and damping)"]
+        lines += wrap(
+            f"  {self.amplitude.size} amplitudes, {self.amplitude.min():.3g} .. "
+            f"{self.amplitude.max():.3g} m; noise: frequency "
+            f"{100 * self.frequency_noise:.2g} %, damping "
+            f"{100 * self.damping_ratio_noise:.2g} % ({self.details['noise_from']})",
+            indent="    ",
+        )
         bt = self.details.get("between_tests")
         if bt:
             lines.append(
@@ -295,25 +357,41 @@ class VibrationDiagnosis(Probable, ResultShape):
                 f"{100 * bt['frequency_offset']:+.3g} % (+- {100 * bt['frequency_offset_stderr']:.2g}),"
                 f" damping offset {100 * bt['damping_offset']:+.3g} % "
                 f"(+- {100 * bt['damping_offset_stderr']:.2g}); not testable against them: "
-                f"{', '.join(bt['untested']) or 'none'}")
+                f"{', '.join(bt['untested']) or 'none'}"
+            )
         lines += wrap(f"  where: {self.where}", indent="    ")
         if self.steps:
             lines += wrap("  " + MISMATCH, indent="    ")
         for k, st in enumerate(self.steps):
             lines.append(f"  step {k + 1}: candidates on {' + '.join(st['on']) or 'prediction'}")
             for c in st["candidates"]:
-                lines.append(f"    {c['name']:<18} mismatch {100 * c['error']:7.3g} %  dIC "
-                             f"{c['dIC']:9.4g}  explains {100 * c['explained']:5.3g} %  "
-                             f"{c['verdict']}")
+                lines.append(
+                    f"    {c['name']:<18} mismatch {100 * c['error']:7.3g} %  dIC "
+                    f"{c['dIC']:9.4g}  explains {100 * c['explained']:5.3g} %  "
+                    f"{c['verdict']}"
+                )
         if self.effects:
-            lines.append("  named: " + ", ".join(
-                f"{n} ({EFFECTS[n].kind})" if getattr(EFFECTS[n], "kind", "") else n
-                for n in self.effects) + (
-                f" (nearly as good: {', '.join(self.ambiguous_with)})"
-                if self.ambiguous_with else ""))
+            lines.append(
+                "  named: "
+                + ", ".join(
+                    f"{n} ({EFFECTS[n].kind})" if getattr(EFFECTS[n], "kind", "") else n
+                    for n in self.effects
+                )
+                + (
+                    f" (nearly as good: {', '.join(self.ambiguous_with)})"
+                    if self.ambiguous_with
+                    else ""
+                )
+            )
             for name, d in self.parameters.items():
-                lines.append("    " + name + ": " + ", ".join(
-                    f"{k} = {v:.4g} {effect_unit(name, k, modal=True)}" for k, v in d.items()))
+                lines.append(
+                    "    "
+                    + name
+                    + ": "
+                    + ", ".join(
+                        f"{k} = {v:.4g} {effect_unit(name, k, modal=True)}" for k, v in d.items()
+                    )
+                )
         else:
             lines.append("  named: none")
         lines += self.probability_lines()
@@ -324,25 +402,79 @@ class VibrationDiagnosis(Probable, ResultShape):
 
     def _tables(self) -> list:
         out = [t for t in super()._tables() if t[0] == "parameters"]
-        cols = ("amplitude [m]", "frequency [Hz]", "predicted frequency [Hz]",
-                "model frequency [Hz]", "damping_ratio [-]", "predicted damping_ratio [-]",
-                "model damping_ratio [-]")
-        out.append(("points", cols, list(zip(*(map(float, a) for a in (
-            self.amplitude, self.frequency, self.predicted_frequency, self.model_frequency,
-            self.damping_ratio, self.predicted_damping_ratio, self.model_damping_ratio))))))
-        steps = [(k + 1, " + ".join(st["on"]) or "prediction", c["name"], 100 * c["error"],
-                  c["dIC"], 100 * c["explained"], c["verdict"])
-                 for k, st in enumerate(self.steps) for c in st["candidates"]]
+        cols = (
+            "amplitude [m]",
+            "frequency [Hz]",
+            "predicted frequency [Hz]",
+            "model frequency [Hz]",
+            "damping_ratio [-]",
+            "predicted damping_ratio [-]",
+            "model damping_ratio [-]",
+        )
+        out.append(
+            (
+                "points",
+                cols,
+                list(
+                    zip(
+                        *(
+                            map(float, a)
+                            for a in (
+                                self.amplitude,
+                                self.frequency,
+                                self.predicted_frequency,
+                                self.model_frequency,
+                                self.damping_ratio,
+                                self.predicted_damping_ratio,
+                                self.model_damping_ratio,
+                            )
+                        )
+                    )
+                ),
+            )
+        )
+        steps = [
+            (
+                k + 1,
+                " + ".join(st["on"]) or "prediction",
+                c["name"],
+                100 * c["error"],
+                c["dIC"],
+                100 * c["explained"],
+                c["verdict"],
+            )
+            for k, st in enumerate(self.steps)
+            for c in st["candidates"]
+        ]
         if steps:
-            out.append(("candidates (" + MISMATCH + ")",
-                        ("step", "on", "candidate", "mismatch [%]", "dIC [-]", "explains [%]",
-                         "verdict"), steps))
-        fit = [("mismatch before [%]", 100 * self.error_before),
-               ("mismatch after [%]", 100 * self.error_after),
-               ("noise [%]", 100 * self.noise_level), ("named", ", ".join(self.effects)
-                                                         or "none"), ("where", self.where)]
-        return out[:1] + self.probability_tables() + out[1:] + [
-            ("goodness of fit", ("quantity", "value"), fit)]
+            out.append(
+                (
+                    "candidates (" + MISMATCH + ")",
+                    (
+                        "step",
+                        "on",
+                        "candidate",
+                        "mismatch [%]",
+                        "dIC [-]",
+                        "explains [%]",
+                        "verdict",
+                    ),
+                    steps,
+                )
+            )
+        fit = [
+            ("mismatch before [%]", 100 * self.error_before),
+            ("mismatch after [%]", 100 * self.error_after),
+            ("noise [%]", 100 * self.noise_level),
+            ("named", ", ".join(self.effects) or "none"),
+            ("where", self.where),
+        ]
+        return (
+            out[:1]
+            + self.probability_tables()
+            + out[1:]
+            + [("goodness of fit", ("quantity", "value"), fit)]
+        )
 
     def plot(self, ax=None):
         """Frequency and damping against amplitude: measured, predicted, augmented.
@@ -353,16 +485,30 @@ class VibrationDiagnosis(Probable, ResultShape):
         a1, a2 = panels(ax, 2, figsize=(6, 7))
         X = self.amplitude
         o = np.argsort(X)
-        arts = a1.semilogx(X[o], self.frequency[o], "o", ms=3, mfc="none", color="k", label="measured")
+        arts = a1.semilogx(
+            X[o], self.frequency[o], "o", ms=3, mfc="none", color="k", label="measured"
+        )
         arts += a1.semilogx(X[o], self.predicted_frequency[o], "-", color="C0", label="predicted")
-        arts += a1.semilogx(X[o], self.model_frequency[o], "--", color="C3",
-                            label="+ " + (" + ".join(self.effects) or "nothing"))
+        arts += a1.semilogx(
+            X[o],
+            self.model_frequency[o],
+            "--",
+            color="C3",
+            label="+ " + (" + ".join(self.effects) or "nothing"),
+        )
         a1.set_xlabel("amplitude [m]")
         a1.set_ylabel("frequency [Hz]")
-        arts += a2.loglog(X[o], self.damping_ratio[o], "o", ms=3, mfc="none", color="k", label="measured")
+        arts += a2.loglog(
+            X[o], self.damping_ratio[o], "o", ms=3, mfc="none", color="k", label="measured"
+        )
         arts += a2.loglog(X[o], self.predicted_damping_ratio[o], "-", color="C0", label="predicted")
-        arts += a2.loglog(X[o], self.model_damping_ratio[o], "--", color="C3",
-                          label="+ " + (" + ".join(self.effects) or "nothing"))
+        arts += a2.loglog(
+            X[o],
+            self.model_damping_ratio[o],
+            "--",
+            color="C3",
+            label="+ " + (" + ".join(self.effects) or "nothing"),
+        )
         a2.set_xlabel("amplitude [m]")
         a2.set_ylabel("damping ratio [-]")
         for a in (a1, a2):

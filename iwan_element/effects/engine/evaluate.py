@@ -24,6 +24,7 @@ force is evaluated
 The routes are checked against the elements in ``tests/test_diagnosis.py`` and
 ``tests/test_kernel.py``.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -43,8 +44,9 @@ __all__: list[str] = []
 def order_stack(names) -> tuple:
     """``names`` with the slider-level effects first (they wrap the joint directly)."""
     names = tuple(names)
-    return (tuple(n for n in names if EFFECTS[n].slider_level)
-            + tuple(n for n in names if not EFFECTS[n].slider_level))
+    return tuple(n for n in names if EFFECTS[n].slider_level) + tuple(
+        n for n in names if not EFFECTS[n].slider_level
+    )
 
 
 def stack_ok(names) -> bool:
@@ -68,10 +70,13 @@ def _layers(names) -> tuple:
         k += 1
     chain, rest = names[:k], names[k:]
     series = ()
-    if (rest and EFFECTS[rest[0]].structure == "series"
-            and not any(EFFECTS[n].needs_energy for n in chain)):
+    if (
+        rest
+        and EFFECTS[rest[0]].structure == "series"
+        and not any(EFFECTS[n].needs_energy for n in chain)
+    ):
         series = rest[:1]
-    return chain, series, rest[len(series):]
+    return chain, series, rest[len(series) :]
 
 
 def wear_behind_gap(names) -> bool:
@@ -79,8 +84,9 @@ def wear_behind_gap(names) -> bool:
     stack :func:`backlash_history` evaluates compiled, sample by sample.
     """
     names = tuple(names)
-    return (names[:2] == ("slip_degradation", "backlash")
-            and all(has_vector_form(n) for n in names[2:]))
+    return names[:2] == ("slip_degradation", "backlash") and all(
+        has_vector_form(n) for n in names[2:]
+    )
 
 
 def has_vector_form(name: str) -> bool:
@@ -108,7 +114,7 @@ def scale_effect(name: str, values: dict, Fs: float, *, to_unit: bool) -> dict:
     out = dict(values)
     for sp in EFFECTS[name].specs:
         if sp.fs_power and sp.name in out:
-            f = Fs ** sp.fs_power
+            f = Fs**sp.fs_power
             out[sp.name] = values[sp.name] / f if to_unit else values[sp.name] * f
     return out
 
@@ -136,8 +142,9 @@ class Evaluator:
         Absolute reversal tolerance [m] (the package-wide ``REVERSAL_TOL`` times the scale).
     """
 
-    def __init__(self, u: np.ndarray, v: np.ndarray, keep: np.ndarray, drive_extra: np.ndarray,
-                 *, tol: float):
+    def __init__(
+        self, u: np.ndarray, v: np.ndarray, keep: np.ndarray, drive_extra: np.ndarray, *, tol: float
+    ):
         self.u = u
         self.v = v
         self.keep = keep
@@ -223,15 +230,20 @@ class Evaluator:
         for name in chain:
             els.append(EFFECTS[name](els[-1], **vals[name]))
         x, hist = u[drive], self.hist
-        if series:                      # the joint sees its own path w, not the drive
-            gap = vals[series[0]]       # (Backlash.joint_path, compiled), new every call:
-            x = backlash_path(np.ascontiguousarray(x), _constants(p1), *_laws(els[1:]),
-                              float(gap["gap"]), float(gap.get("drag", 0.0)))
-            C = masing_constants(p1, self._tol)[None, :]     # the kernel along it directly
+        if series:  # the joint sees its own path w, not the drive
+            gap = vals[series[0]]  # (Backlash.joint_path, compiled), new every call:
+            x = backlash_path(
+                np.ascontiguousarray(x),
+                _constants(p1),
+                *_laws(els[1:]),
+                float(gap["gap"]),
+                float(gap.get("drag", 0.0)),
+            )
+            C = masing_constants(p1, self._tol)[None, :]  # the kernel along it directly
             F = masing_rows(C, x[None, :])[0][0, pos]
         else:
             F = hist.forces(p1)
-        for el in els[1:]:              # each adds its force over the chain below it
+        for el in els[1:]:  # each adds its force over the chain below it
             D = self.unit_dissipation(p1)[drive] if el.needs_energy else None
             F = F + el.correction_history(x, D)[pos]
         for name in rest:
@@ -245,9 +257,17 @@ class Evaluator:
         u, _, drive, pos = self._ext
         wear = EFFECTS["slip_degradation"](IwanJoint(p1), **values[0])
         gap = values[1]
-        F = backlash_history(np.ascontiguousarray(u[drive]), _constants(p1), wear._k,
-                             wear._sign, wear._phi, wear.rate, *_laws([]),
-                             float(gap["gap"]), float(gap.get("drag", 0.0)))[pos]
+        F = backlash_history(
+            np.ascontiguousarray(u[drive]),
+            _constants(p1),
+            wear._k,
+            wear._sign,
+            wear._phi,
+            wear.rate,
+            *_laws([]),
+            float(gap["gap"]),
+            float(gap.get("drag", 0.0)),
+        )[pos]
         for name, vals in zip(names[2:], values[2:]):
             F = EFFECTS[name].vector_force(F, self.uk, self.vk, **vals)
         return F

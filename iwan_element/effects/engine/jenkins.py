@@ -9,6 +9,7 @@ is elastic-perfectly-plastic (Caughey, J. Appl. Mech. 27:640-643, 1960; Iwan, J.
 ``X <= phi``), and it dissipates ``4 k phi (X - phi)`` per cycle. Derivation:
 ``docs/vibration_effects.md``.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -38,14 +39,14 @@ class JenkinsBank(Effect):
 
     def _set_bank(self, phi, k) -> None:
         self._phi = np.asarray(phi, float)
-        self._k = np.asarray(k, float)                    # stiffness of each element [N/m]
+        self._k = np.asarray(k, float)  # stiffness of each element [N/m]
         self._k_total = float(np.sum(self._k))
-        self._lim = self._k * self._phi                   # friction limits [N]
+        self._lim = self._k * self._phi  # friction limits [N]
         self._reset_own()
 
     def _reset_own(self):
-        self._z = np.zeros(self._k.size)    # committed element forces [N]
-        self._Dp = 0.0                      # energy dissipated by the bank's sliders [J]
+        self._z = np.zeros(self._k.size)  # committed element forces [N]
+        self._Dp = 0.0  # energy dissipated by the bank's sliders [J]
 
     def _bank(self, u: float):
         """Trial element forces, the bank's tangent and the slip increment's dissipation."""
@@ -68,7 +69,8 @@ class JenkinsBank(Effect):
         self._inner.commit()
         self._z = self._tz
         self._Dp += self._tdD
-        stored = (0.5 * float(np.sum(self._z ** 2 / self._k)) if self._k_total > 0 else 0.0) \
-            - 0.5 * self._k_total * self._tu ** 2
+        stored = (
+            0.5 * float(np.sum(self._z**2 / self._k)) if self._k_total > 0 else 0.0
+        ) - 0.5 * self._k_total * self._tu**2
         self._W = self._inner.work + self._Dp + stored
         self._D = self._inner.dissipated_energy + self._Dp

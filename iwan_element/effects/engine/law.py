@@ -33,6 +33,7 @@ factors multiply those below (direction-dependent slip on a contact with break-a
 bank minus that of the law below: each element of the chain is exact on its own and their
 sum is the product law on the joint.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -65,14 +66,14 @@ class _Pieces:
         self.C = self.p * params.K_slider
         rows = []
         for law, sg in zip(laws, signs):
-            if atoms is None:                        # continuous part + the spike S
+            if atoms is None:  # continuous part + the spike S
                 rows.append((0.0, self.pm, 0.0, *law, sg))
                 if params.beta > 0.0:
                     rows.append((self.pm, self.pm, params.KT - params.K_slider, *law, sg))
             else:
                 rows.extend((ph, ph, k, *law, sg) for k, ph in zip(*atoms))
         st = np.zeros((K.N_ROWS, len(rows)))
-        st[:K.S] = np.array(rows, float).T          # s, c, slide: 0 (stuck, unstretched)
+        st[: K.S] = np.array(rows, float).T  # s, c, slide: 0 (stuck, unstretched)
         self.state = st
         self._last = None
 
@@ -85,21 +86,21 @@ class _Pieces:
             delta = float(delta)
             last = self._last
             if last is not None and last[0] == d and last[1] == delta:
-                return last[2]           # the same step again (a wrapper re-trials to commit)
+                return last[2]  # the same step again (a wrapper re-trials to commit)
             F, Kt = K.law_force(self.state, float(d), np.array([delta]), self.pm, self.p, self.C)
             out = float(F[0]), float(Kt[0])
             self._last = (d, delta, out)
             return out
-        return K.law_force(self.state, float(d), np.asarray(delta, float), self.pm, self.p,
-                           self.C)
+        return K.law_force(self.state, float(d), np.asarray(delta, float), self.pm, self.p, self.C)
 
     def advance(self, d: float, delta: float) -> float:
         """Move the state by a travel ``delta >= 0`` in direction ``d``; returns the signed
         work done on the banks [J] (exact: stick to ``sigma_d phi``, slide at
         ``kappa_d phi``).
         """
-        self.state, work = K.law_advance(self.state, float(d), float(delta), self.pm, self.p,
-                                         self.C)
+        self.state, work = K.law_advance(
+            self.state, float(d), float(delta), self.pm, self.p, self.C
+        )
         self._last = None
         return float(work)
 
@@ -114,8 +115,9 @@ def law_history(pieces: _Pieces, u) -> np.ndarray:
     within a run, so this equals the step-by-step rule), compiled
     (:func:`.law_kernel.law_history`).
     """
-    out, pieces.state = K.law_history(pieces.state, np.ascontiguousarray(u, dtype=float),
-                                      pieces.pm, pieces.p, pieces.C)
+    out, pieces.state = K.law_history(
+        pieces.state, np.ascontiguousarray(u, dtype=float), pieces.pm, pieces.p, pieces.C
+    )
     pieces._last = None
     return out
 
@@ -142,8 +144,9 @@ class LawEffect(Effect):
             joint = joint.inner
         require_plain_joint(joint, f"{self.effect} (a slider law)")
         self._joint = joint
-        self._atoms = ((joint.slider_stiffness, joint.slider_slip)
-                       if isinstance(joint, DiscreteIwan) else None)
+        self._atoms = (
+            (joint.slider_stiffness, joint.slider_slip) if isinstance(joint, DiscreteIwan) else None
+        )
 
     def own_law(self) -> tuple:
         """``(sigma_up, sigma_down, kappa_up, kappa_down)`` of this effect alone [-]."""
@@ -159,14 +162,15 @@ class LawEffect(Effect):
 
     def _new_pieces(self) -> _Pieces:
         below = self._below()
-        return _Pieces(self._joint.params, self._atoms, (_product(self.own_law(), below), below),
-                       (1.0, -1.0))
+        return _Pieces(
+            self._joint.params, self._atoms, (_product(self.own_law(), below), below), (1.0, -1.0)
+        )
 
     def _reset_own(self):
         self._pieces = self._new_pieces()
-        self._ub = 0.0                            # displacement of the committed state [m]
-        self._dir = 1.0                           # direction of the last move
-        self._Wb = 0.0                            # work of (this law - the law below) [J]
+        self._ub = 0.0  # displacement of the committed state [m]
+        self._dir = 1.0  # direction of the last move
+        self._Wb = 0.0  # work of (this law - the law below) [J]
 
     def trial(self, u: float, v: float = 0.0) -> tuple[float, float]:
         """Force [N] and tangent [N/m]."""

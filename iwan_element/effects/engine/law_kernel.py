@@ -6,6 +6,7 @@ displacement ``phi`` [m] (``a == b`` for a point mass of stiffness ``w`` [N/m]),
 of the bank the row belongs to (static and kinetic factors up and down) and its sign. The
 continuous rows carry the density ``rho = C / pm (phi / pm)^(p - 1)`` (``p = chi + 1``).
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -31,8 +32,8 @@ def _moments(st, r, x, brk, pm, p, Cc):
         return 0.0, 0.0, 0.0
     xr = x / pm
     ar = a / pm
-    px = xr ** p
-    pa = ar ** p
+    px = xr**p
+    pa = ar**p
     M0 = Cc * (px - pa) / p
     px *= xr
     pa *= ar
@@ -131,14 +132,20 @@ def _advance(st, d, delta, pm, p, Cc):
         kap = st[KU, r] if d > 0 else st[KD, r]
         if st[SL, r] == d:
             wk = kap * delta * M1
-        else:      # stick from s phi + c to sigma phi, drop to kappa phi, slide at kappa phi
-            wb = ((0.5 * sig * sig - kap * sig - 0.5 * s_d * s_d + kap * s_d) * Mb2
-                  + (kap * delta + c_d * (kap - s_d)) * Mb1 - 0.5 * c_d * c_d * Mb0)
-            wk = (wb + delta * (s_d * (M1 - Mb1) + c_d * (M0 - Mb0))
-                  + 0.5 * delta * delta * (M0 - Mb0))
+        else:  # stick from s phi + c to sigma phi, drop to kappa phi, slide at kappa phi
+            wb = (
+                (0.5 * sig * sig - kap * sig - 0.5 * s_d * s_d + kap * s_d) * Mb2
+                + (kap * delta + c_d * (kap - s_d)) * Mb1
+                - 0.5 * c_d * c_d * Mb0
+            )
+            wk = (
+                wb
+                + delta * (s_d * (M1 - Mb1) + c_d * (M0 - Mb0))
+                + 0.5 * delta * delta * (M0 - Mb0)
+            )
         work += wk * st[SG, r]
         atom = st[W, r] > 0.0
-        if brk if atom else x > st[A, r]:          # the broken part, now sliding
+        if brk if atom else x > st[A, r]:  # the broken part, now sliding
             out[:, n] = st[:, r]
             if not atom:
                 out[B, n] = x
@@ -146,7 +153,7 @@ def _advance(st, d, delta, pm, p, Cc):
             out[C, n] = 0.0
             out[SL, n] = d
             n += 1
-        if (not brk) if atom else x < st[B, r]:    # the stuck part, carried along
+        if (not brk) if atom else x < st[B, r]:  # the stuck part, carried along
             out[:, n] = st[:, r]
             if not atom:
                 out[A, n] = x

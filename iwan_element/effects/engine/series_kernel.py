@@ -21,6 +21,7 @@ displacement of the slider effects [m], their last direction of motion); gap
 committed force of the inner element [N]). ``L = (table, pm, p, C)``: the slider laws' state
 table (no columns without laws) and its density constants.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -38,14 +39,15 @@ __all__: list[str] = []
 @njit(cache=True)
 def _trial(c, st, J, e, sl, k, sg, caps, S, L, w, e_new, s_new):
     """Force [N] and tangent [N/m] of the inner element at ``w`` from its committed state."""
-    _, F, K, _, _, _, _ = masing_step(c, st[0], st[1], st[2], int(J[0]), J[1], J[2], J[3], J[4],
-                                      w, st[3])
+    _, F, K, _, _, _, _ = masing_step(
+        c, st[0], st[1], st[2], int(J[0]), J[1], J[2], J[3], J[4], w, st[3]
+    )
     du = w - S[2]
     if k.size:
         _, dF, dK = bank_step(e, sl, k, sg, caps, caps, du, e_new, s_new)
         F += dF
         K += dK
-    if L[0].shape[1]:             # no move: the tangent of going on in the last direction
+    if L[0].shape[1]:  # no move: the tangent of going on in the last direction
         d = (1.0 if du > 0.0 else -1.0) if du != 0.0 else S[3]
         dF, dK = _law_force(L[0], d, abs(du), L[1], L[2], L[3])
         F += dF
@@ -59,8 +61,9 @@ def _commit(c, st, J, e, sl, k, sg, phi, caps, S, L, rate, w, e_new, s_new):
     and the slider laws' new state table.
     """
     Fw, _ = _trial(c, st, J, e, sl, k, sg, caps, S, L, w, e_new, s_new)
-    n, F, _, _, dD, G, I = masing_step(c, st[0], st[1], st[2], int(J[0]), J[1], J[2], J[3],
-                                       J[4], w, st[3])
+    n, F, _, _, dD, G, I = masing_step(
+        c, st[0], st[1], st[2], int(J[0]), J[1], J[2], J[3], J[4], w, st[3]
+    )
     J[0], J[1], J[2], J[3], J[4], J[5] = n, w, F, G, I, J[5] + dD
     du = w - S[2]
     table = L[0]
@@ -121,8 +124,25 @@ def _solve(c, st, J, e, sl, k, sg, caps, S, L, B, u, gap, drag, e_new, s_new):
             if s * Fc >= 0.0:
                 w_s = wc
             else:
-                w_s = _zero(c, st, J, e, sl, k, sg, caps, S, L, s * drag, wc, Fc, w, F - s * drag,
-                            e_new, s_new)
+                w_s = _zero(
+                    c,
+                    st,
+                    J,
+                    e,
+                    sl,
+                    k,
+                    sg,
+                    caps,
+                    S,
+                    L,
+                    s * drag,
+                    wc,
+                    Fc,
+                    w,
+                    F - s * drag,
+                    e_new,
+                    s_new,
+                )
             if s * (u - w_s) >= gap:
                 w = u - s * gap
                 return w, s, _trial(c, st, J, e, sl, k, sg, caps, S, L, w, e_new, s_new)[0], w_s
@@ -141,8 +161,12 @@ def _solve(c, st, J, e, sl, k, sg, caps, S, L, B, u, gap, drag, e_new, s_new):
     w0 = _zero(c, st, J, e, sl, k, sg, caps, S, L, 0.0, wc, Fin, w_contact, F, e_new, s_new)
     w_other = u + gap * side
     if (w_other - w0) * side < 0.0:
-        return (w_other, -side,
-                _trial(c, st, J, e, sl, k, sg, caps, S, L, w_other, e_new, s_new)[0], w0)
+        return (
+            w_other,
+            -side,
+            _trial(c, st, J, e, sl, k, sg, caps, S, L, w_other, e_new, s_new)[0],
+            w0,
+        )
     return w0, 0.0, _trial(c, st, J, e, sl, k, sg, caps, S, L, w0, e_new, s_new)[0], w0
 
 
@@ -156,7 +180,7 @@ def _walk_gap(u, c, k, sg, phi, rate, table, pm, p, Cc, gap, drag, ends, out, pa
     slides open, follows the far stop after contact).
     """
     m = u.size
-    st = np.empty((2, m + 2))                       # joint stack: u_r, F_r
+    st = np.empty((2, m + 2))  # joint stack: u_r, F_r
     at = np.empty(m + 2, np.int64)
     J = np.zeros(6)
     S = np.array([1.0, 0.0, 0.0, 1.0])
@@ -173,8 +197,9 @@ def _walk_gap(u, c, k, sg, phi, rate, table, pm, p, Cc, gap, drag, ends, out, pa
         i = ends[r]
         L = (table, pm, p, Cc)
         e0 = (u[a - 1] if a > 0 else 0.0) - B[0]
-        w, side, F, ws = _solve(c, stack, J, e, sl, k, sg, caps, S, L, B, u[i], gap, drag,
-                                e_new, s_new)
+        w, side, F, ws = _solve(
+            c, stack, J, e, sl, k, sg, caps, S, L, B, u[i], gap, drag, e_new, s_new
+        )
         if not path:
             out[r] = F
         else:
@@ -187,8 +212,7 @@ def _walk_gap(u, c, k, sg, phi, rate, table, pm, p, Cc, gap, drag, ends, out, pa
                     out[j] = min(max(u[j] - e0, lim), u[j] + gap)
             out[i] = w
             a = i + 1
-        B[3], table = _commit(c, stack, J, e, sl, k, sg, phi, caps, S, L, rate, w,
-                              e_new, s_new)
+        B[3], table = _commit(c, stack, J, e, sl, k, sg, phi, caps, S, L, rate, w, e_new, s_new)
         if drag > 0.0:
             B[1] = side * gap if side != 0.0 else min(max(u[i] - w, -gap), gap)
         B[0] = w
@@ -206,8 +230,7 @@ def backlash_history(u, c, k, sg, phi, rate, table, pm, p, Cc, gap, drag):
     ``drag`` [N]: the backlash.
     """
     out = np.empty(u.size)
-    _walk_gap(u, c, k, sg, phi, rate, table, pm, p, Cc, gap, drag,
-              np.arange(u.size), out, False)
+    _walk_gap(u, c, k, sg, phi, rate, table, pm, p, Cc, gap, drag, np.arange(u.size), out, False)
     return out
 
 
@@ -218,7 +241,7 @@ def backlash_path(u, c, table, pm, p, Cc, gap, drag):
     trial and commit per monotone run of ``u``.
     """
     starts, dirs, m = monotone_runs(u)
-    ends = starts[1:m + 1] - 1
+    ends = starts[1 : m + 1] - 1
     out = np.zeros(u.size)
     z = np.zeros(0)
     _walk_gap(u, c, z, z, z, 0.0, table, pm, p, Cc, gap, drag, ends, out, True)

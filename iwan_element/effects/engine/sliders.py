@@ -22,6 +22,7 @@ Each slider's step is exact for a linear move: it sticks until its stretch reach
 static threshold of the direction of motion, then slides at the kinetic threshold; the work
 is integrated per slider, and the dissipation is the work minus the stored elastic energy.
 """
+
 from __future__ import annotations
 
 import math
@@ -63,19 +64,19 @@ def bank_step(e, s, k, sgn, cs, ck, du, e_new, s_new):
     d = 1.0 if du > 0.0 else -1.0
     adu = abs(du)
     for i in range(n):
-        ep = d * e[i]                            # stretch in the direction of motion
+        ep = d * e[i]  # stretch in the direction of motion
         end = ep + adu
-        if s[i] == d:                            # sliding: stays at the kinetic cap
+        if s[i] == d:  # sliding: stays at the kinetic cap
             ep_new = ck[i]
             work = k[i] * ck[i] * adu
             s_new[i] = d
-        elif end > cs[i]:                        # breaks: stick up to the static cap, slide
+        elif end > cs[i]:  # breaks: stick up to the static cap, slide
             ep_new = ck[i]
-            work = 0.5 * k[i] * (cs[i] ** 2 - ep ** 2) + k[i] * ck[i] * (end - cs[i])
+            work = 0.5 * k[i] * (cs[i] ** 2 - ep**2) + k[i] * ck[i] * (end - cs[i])
             s_new[i] = d
-        else:                                    # stuck
+        else:  # stuck
             ep_new = end
-            work = 0.5 * k[i] * (end ** 2 - ep ** 2)
+            work = 0.5 * k[i] * (end**2 - ep**2)
             s_new[i] = 0.0
             K += sgn[i] * k[i]
         e_new[i] = d * ep_new
@@ -121,7 +122,7 @@ class SliderEffect(Effect):
         super().__init__(inner)
         require_plain_joint(inner, "a slider-level effect")
         k, phi = slider_distribution(inner.params, n_sliders)
-        self._k = np.concatenate([k, k])         # modified bank, then the plain reference bank
+        self._k = np.concatenate([k, k])  # modified bank, then the plain reference bank
         self._phi = phi
         self._n = k.size
         self._sign = np.concatenate([np.ones(k.size), -np.ones(k.size)])
@@ -138,7 +139,7 @@ class SliderEffect(Effect):
     def _refresh_caps(self) -> None:
         """Cache the thresholds of both banks (call after they change)."""
         n = self._n
-        if getattr(self, "_cap_up", None) is None:      # both banks' caps, filled in place
+        if getattr(self, "_cap_up", None) is None:  # both banks' caps, filled in place
             self._cap_up = (np.tile(self._phi, 2), np.tile(self._phi, 2))
             self._cap_dn = (np.tile(self._phi, 2), np.tile(self._phi, 2))
         su, sd, ku, kd = self._caps()
@@ -148,9 +149,9 @@ class SliderEffect(Effect):
         self._cap_dn[1][:n] = kd
 
     def _reset_own(self):
-        self._e = np.zeros(2 * self._n)          # slider stretches [m]
-        self._slip = np.zeros(2 * self._n)       # +1/-1 sliding forward/back, 0 stuck
-        self._Wb = 0.0                           # work of (modified - plain) bank [J]
+        self._e = np.zeros(2 * self._n)  # slider stretches [m]
+        self._slip = np.zeros(2 * self._n)  # +1/-1 sliding forward/back, 0 stuck
+        self._Wb = 0.0  # work of (modified - plain) bank [J]
         self._Db = 0.0
         self._ub = 0.0
         self._last = None
@@ -192,8 +193,11 @@ class SliderEffect(Effect):
         self._ub = float(self._tu)
         stored = self._after_commit()
         self._W = inner.work + self._Wb
-        self._D = inner.dissipated_energy + self._Wb - (
-            self._stored(self._e) if stored is None else stored)
+        self._D = (
+            inner.dissipated_energy
+            + self._Wb
+            - (self._stored(self._e) if stored is None else stored)
+        )
 
     def _after_commit(self):
         """Update the thresholds after a commit; may return the banks' stored energy [J]."""
@@ -230,8 +234,8 @@ class SliderEffect(Effect):
                 e, s, work, F, _ = self._step(du)
                 self._e, self._slip = e, s
                 self._Wb += work
-                out[i] = F                      # the step's force, before the commit
-                self._after_commit_energy(D_inner[i])   # lowers the thresholds
+                out[i] = F  # the step's force, before the commit
+                self._after_commit_energy(D_inner[i])  # lowers the thresholds
                 prev = x
             else:
                 out[i] = float(sk @ self._e)

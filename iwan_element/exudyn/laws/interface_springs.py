@@ -6,6 +6,7 @@ Cartesian connectors with a zero law cost about a third of the whole linear beam
 replacing its 34 built-in springs by symbolic ones costs about a tenth; so the normal contact
 springs are cheapest inside the joint's object.
 """
+
 from __future__ import annotations
 
 import math
@@ -25,20 +26,26 @@ def check_stiffness(stiffness, n: int, kind: str):
     if stiffness is None:
         return None
     if kind != "position":
-        raise ValueError("stiffness applies to position markers only (linear springs along the "
-                         "global axes); the markerPairs are coordinate markers")
+        raise ValueError(
+            "stiffness applies to position markers only (linear springs along the "
+            "global axes); the markerPairs are coordinate markers"
+        )
     try:
         k = np.array(stiffness, dtype=float)
     except (TypeError, ValueError):
-        raise ValueError(f"stiffness must be a sequence of {n} 3-vectors [N/m], got "
-                         f"{stiffness!r}") from None
+        raise ValueError(
+            f"stiffness must be a sequence of {n} 3-vectors [N/m], got {stiffness!r}"
+        ) from None
     if k.shape != (n, 3):
-        raise ValueError(f"stiffness must have shape ({n}, 3) (one [kx, ky, kz] per marker "
-                         f"pair), got {k.shape}")
+        raise ValueError(
+            f"stiffness must have shape ({n}, 3) (one [kx, ky, kz] per marker pair), got {k.shape}"
+        )
     if not np.all(np.isfinite(k)) or np.any(k < 0.0):
         bad = np.argwhere(~np.isfinite(k) | (k < 0.0))[0]
-        raise ValueError(f"stiffness must be finite and >= 0 [N/m], got stiffness[{bad[0]}]"
-                         f"[{bad[1]}] = {k[tuple(bad)]}")
+        raise ValueError(
+            f"stiffness must be finite and >= 0 [N/m], got stiffness[{bad[0]}]"
+            f"[{bad[1]}] = {k[tuple(bad)]}"
+        )
     return k
 
 
@@ -64,8 +71,15 @@ def add_builtin_springs(mbs, pairs, k, name: str) -> list:
     out = []
     for i, ((m0, m1), ki) in enumerate(zip(pairs, k)):
         if ki.any():
-            out.append(mbs.AddObject(ObjectConnectorCartesianSpringDamper(
-                name=f"{name}spring{i}" if name else "", markerNumbers=[int(m0), int(m1)],
-                stiffness=[float(x) for x in ki], damping=[0.0, 0.0, 0.0],
-                visualization=_HIDDEN)))
+            out.append(
+                mbs.AddObject(
+                    ObjectConnectorCartesianSpringDamper(
+                        name=f"{name}spring{i}" if name else "",
+                        markerNumbers=[int(m0), int(m1)],
+                        stiffness=[float(x) for x in ki],
+                        damping=[0.0, 0.0, 0.0],
+                        visualization=_HIDDEN,
+                    )
+                )
+            )
     return out

@@ -1,6 +1,7 @@
 """The Python force law of the connector: closures calling ``joint.trial`` (the reference
 route, and the only one for elements without a symbolic form).
 """
+
 from __future__ import annotations
 
 import exudyn as exu
@@ -17,8 +18,8 @@ _ROTATION_MATRIX = exu.OutputVariableType.RotationMatrix
 # element's force; the dashpot in parallel (``conn._damping``) is added on return.
 def coordinate_force_function(conn):
     trial = conn._joint.trial
-    off = conn._offset               # fixed at creation (the object's own offset is not read)
-    c = conn._damping                # the dashpot in parallel (0.0: none)
+    off = conn._offset  # fixed at creation (the object's own offset is not read)
+    c = conn._damping  # the dashpot in parallel (0.0: none)
 
     def iwan_coordinate_force(mbs, t, itemNumber, deltaL, deltaL_t, stiffness, damping, offset):
         u = deltaL - off
@@ -72,11 +73,21 @@ def rotating_axis_force_function(conn):
     marker = conn._axis_marker
     get = conn._mbs.GetMarkerOutput
 
-    def iwan_rotating_axis_force(mbs, t, itemNumber, displacement, velocity, stiffness, damping,
-                                 offset):
-        A = get(marker, _ROTATION_MATRIX).tolist()      # row-major 3x3, current configuration
-        return _axial_force(conn, trial, mbs, t, displacement, velocity,
-                            A[0] * l0 + A[1] * l1 + A[2] * l2, A[3] * l0 + A[4] * l1 + A[5] * l2,
-                            A[6] * l0 + A[7] * l1 + A[8] * l2, off)
+    def iwan_rotating_axis_force(
+        mbs, t, itemNumber, displacement, velocity, stiffness, damping, offset
+    ):
+        A = get(marker, _ROTATION_MATRIX).tolist()  # row-major 3x3, current configuration
+        return _axial_force(
+            conn,
+            trial,
+            mbs,
+            t,
+            displacement,
+            velocity,
+            A[0] * l0 + A[1] * l1 + A[2] * l2,
+            A[3] * l0 + A[4] * l1 + A[5] * l2,
+            A[6] * l0 + A[7] * l1 + A[8] * l2,
+            off,
+        )
 
     return iwan_rotating_axis_force

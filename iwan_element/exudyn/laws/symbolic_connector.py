@@ -24,6 +24,7 @@ the joint would have after passing part of the step's loop closures (a state on 
 path, exact around the converged slip) and asks Exudyn for a discontinuous iteration, which
 re-solves the step with it. See :func:`newton_check`.
 """
+
 from __future__ import annotations
 
 import copy
@@ -49,9 +50,20 @@ from .symbolic_law import (
     rigid_law,
 )
 
-__all__ = ["symbolic_item", "joint_tolerance", "symbolic_refresh", "branch_interval",
-           "law_window", "flush_joint", "sync_stack", "walk_states", "newton_check", "stride",
-           "replay_records", "reset_state"]
+__all__ = [
+    "symbolic_item",
+    "joint_tolerance",
+    "symbolic_refresh",
+    "branch_interval",
+    "law_window",
+    "flush_joint",
+    "sync_stack",
+    "walk_states",
+    "newton_check",
+    "stride",
+    "replay_records",
+    "reset_state",
+]
 
 _log = logging.getLogger(__name__)
 _INF = math.inf
@@ -68,27 +80,44 @@ def symbolic_item(conn, depth: int, name: str, vis):
     m = [int(x) for x in conn._markers]
     kind = "rigid" if conn._axis_marker is not None else conn._kind
     if kind == "coordinate":
-        fn = CreateSymbolicUserFunction(conn._mbs, coordinate_law(st, off, c),
-                                        "springForceUserFunction",
-                                        itemTypeName="ObjectConnectorCoordinateSpringDamper")
+        fn = CreateSymbolicUserFunction(
+            conn._mbs,
+            coordinate_law(st, off, c),
+            "springForceUserFunction",
+            itemTypeName="ObjectConnectorCoordinateSpringDamper",
+        )
         item = ObjectConnectorCoordinateSpringDamper(
-            name=name, markerNumbers=m, stiffness=0.0, damping=0.0, offset=off,
-            springForceUserFunction=fn, visualization=vis)
-    elif kind == "rigid":        # the axis turns with marker 0 (RigidBodySpringDamper's J0)
-        fn = CreateSymbolicUserFunction(conn._mbs, rigid_law(st, conn._axis, off, c),
-                                        "springForceTorqueUserFunction",
-                                        itemTypeName="ObjectConnectorRigidBodySpringDamper")
+            name=name,
+            markerNumbers=m,
+            stiffness=0.0,
+            damping=0.0,
+            offset=off,
+            springForceUserFunction=fn,
+            visualization=vis,
+        )
+    elif kind == "rigid":  # the axis turns with marker 0 (RigidBodySpringDamper's J0)
+        fn = CreateSymbolicUserFunction(
+            conn._mbs,
+            rigid_law(st, conn._axis, off, c),
+            "springForceTorqueUserFunction",
+            itemTypeName="ObjectConnectorRigidBodySpringDamper",
+        )
         item = ObjectConnectorRigidBodySpringDamper(
-            name=name, markerNumbers=m, springForceTorqueUserFunction=fn, visualization=vis)
+            name=name, markerNumbers=m, springForceTorqueUserFunction=fn, visualization=vis
+        )
     else:
-        fn = CreateSymbolicUserFunction(conn._mbs, cartesian_law(st, conn._axis, off, c=c),
-                                        "springForceUserFunction",
-                                        itemTypeName="ObjectConnectorCartesianSpringDamper")
+        fn = CreateSymbolicUserFunction(
+            conn._mbs,
+            cartesian_law(st, conn._axis, off, c=c),
+            "springForceUserFunction",
+            itemTypeName="ObjectConnectorCartesianSpringDamper",
+        )
         item = ObjectConnectorCartesianSpringDamper(
-            name=name, markerNumbers=m, springForceUserFunction=fn, visualization=vis)
-    conn._function = fn          # keep the expression tree alive
+            name=name, markerNumbers=m, springForceUserFunction=fn, visualization=vis
+        )
+    conn._function = fn  # keep the expression tree alive
     st.probe = make_probe(conn._mbs, fn, kind, conn._axis, off, st=st)
-    conn._snapshot = copy.deepcopy(joint)     # the records start from this state
+    conn._snapshot = copy.deepcopy(joint)  # the records start from this state
     return item
 
 
@@ -106,11 +135,10 @@ def symbolic_refresh(conn, mbs, lazy_until=-_INF) -> None:
         smap = SlipMap(mbs, [conn._markers], conn._kind, conn._axis, [conn._offset])
         conn._slip = _slip_reader(conn, smap)
     else:
-        smap = None                # the axis turns: read in the joint frame J0
+        smap = None  # the axis turns: read in the joint frame J0
         conn._slip = _output_reader(conn, _OVT.DisplacementLocal, conn._offset)
-    conn._read = smap              # the dispatcher then checks for a re-assembly per step
-    conn._rate = (_rate_reader(conn, mbs, smap) if conn._damping and conn._record_on
-                  else None)
+    conn._read = smap  # the dispatcher then checks for a re-assembly per step
+    conn._rate = _rate_reader(conn, mbs, smap) if conn._damping and conn._record_on else None
     conn._accept = _accept_function(conn, lazy_until)
 
 
@@ -126,6 +154,7 @@ def _output_reader(conn, variable, off):
     def read():
         d = get(obj, variable)
         return float(a0 * d[0] + a1 * d[1] + a2 * d[2]) - off
+
     return read
 
 
@@ -146,6 +175,7 @@ def _rate_reader(conn, mbs, smap):
         for i, c in terms:
             v += c * item(i)
         return v
+
     return rate
 
 
@@ -160,7 +190,7 @@ def _slip_reader(conn, smap):
     c0 = float(smap.c[0])
     if len(terms) == 1 and terms[0][1] == 1.0:
         i = terms[0][0]
-        read = lambda: c0 + item(i)      # noqa: E731
+        read = lambda: c0 + item(i)  # noqa: E731
         read.single = (c0, i)
         return read
     if len(terms) == 2 and terms[0][1] == -1.0 and terms[1][1] == 1.0:
@@ -172,6 +202,7 @@ def _slip_reader(conn, smap):
         for i, c in terms:
             u += c * item(i)
         return u
+
     return read
 
 
@@ -235,7 +266,7 @@ def _commit_event(conn, t, u) -> None:
     joint.commit()
     if joint.reversal_depth != n or conn._window:
         sync_stack(conn, t)
-    else:                        # same stack; the branch may start (from rest)
+    else:  # same stack; the branch may start (from rest)
         us, Fr = joint.reversal_points()
         conn._state.set_branch(*branch_of(us, Fr, u))
         conn._state.uc.SetValue(u)
@@ -258,14 +289,14 @@ def _accept_function(conn, lazy_until):
     joint = conn._joint
     set_uc = conn._state.uc.SetValue
     read = conn._slip
-    buf = conn._buf             # (t, u) of the newest steps; list.append is ~3x faster than
-    rec = buf.append if conn._record_on else None      # array.append (moved at events)
-    rate = conn._rate           # () -> v, recorded with (t, u) when there is a dashpot
+    buf = conn._buf  # (t, u) of the newest steps; list.append is ~3x faster than
+    rec = buf.append if conn._record_on else None  # array.append (moved at events)
+    rate = conn._rate  # () -> v, recorded with (t, u) when there is a dashpot
     keep = conn._rec.fromlist
-    lo = hi = 0.0               # the open interval of plain continuations (empty: slow path)
+    lo = hi = 0.0  # the open interval of plain continuations (empty: slow path)
     up = True
-    dmax = 0.0                  # largest slip increment of one step on this branch segment
-    at_event = None             # slip of the last step that took the slow path
+    dmax = 0.0  # largest slip increment of one step on this branch segment
+    at_event = None  # slip of the last step that took the slow path
 
     def event(t, u):
         nonlocal lo, hi, up, dmax, at_event
@@ -278,7 +309,7 @@ def _accept_function(conn, lazy_until):
             dmax = max(dmax, abs(u - prev))
         at_event = u
         margin = ARM_MARGIN * dmax
-        dmax = 0.0                   # the next branch segment starts its own count
+        dmax = 0.0  # the next branch segment starts its own count
         _commit_event(conn, t, u)
         conn._t_acc = t
         wa, wb, risky = _risk(conn, u, margin)
@@ -291,13 +322,13 @@ def _accept_function(conn, lazy_until):
         else:
             lo = hi = 0.0
 
-    single = getattr(read, "single", None)      # (c0, i): u = c0 + q[i]
+    single = getattr(read, "single", None)  # (c0, i): u = c0 + q[i]
     if single is not None:
         c0, i = single
         item = conn._read.q.item
     else:
         c0, i = 0.0, 0
-        item = lambda _: read()                 # noqa: E731
+        item = lambda _: read()  # noqa: E731
 
     def accept(t):
         nonlocal lo, hi, dmax
@@ -347,12 +378,20 @@ def sync_stack(conn, t=None) -> None:
     us, Fr = joint.reversal_points()
     us, Fr = us.tolist(), Fr.tolist()
     st = conn._state
-    if t is not None and (st.held > st.depth or conn._window) \
-            and st.disagrees(joint.displacement, joint.force):
+    if (
+        t is not None
+        and (st.held > st.depth or conn._window)
+        and st.disagrees(joint.displacement, joint.force)
+    ):
         conn._overflows.append(t)
-        _log.warning("Iwan connector %s at t=%g: the step closed loops beyond the %d reversal "
-                     "points the symbolic law holds and could not be re-solved exactly; that "
-                     "step's force was not exact (raise depth)", conn.objectNumber, t, st.depth)
+        _log.warning(
+            "Iwan connector %s at t=%g: the step closed loops beyond the %d reversal "
+            "points the symbolic law holds and could not be re-solved exactly; that "
+            "step's force was not exact (raise depth)",
+            conn.objectNumber,
+            t,
+            st.depth,
+        )
     st.set_state(us, Fr, joint.displacement)
     conn._window = False
 
@@ -420,17 +459,22 @@ def newton_check(conn, big: float) -> float:
     if abs(st.probe(u) - F) <= 1e-9 * st.Fs:
         return 0.0
     us, Fr = joint.reversal_points()
-    states = walk_states(us.tolist(), Fr.tolist(), joint.displacement, joint.force, u,
-                         joint_tolerance(joint))
+    states = walk_states(
+        us.tolist(), Fr.tolist(), joint.displacement, joint.force, u, joint_tolerance(joint)
+    )
     if not states:
-        return 0.0                   # nothing to re-solve with (cannot happen in depth)
+        return 0.0  # nothing to re-solve with (cannot happen in depth)
     k = max(0, len(states) - 1 - max(0, st.depth // 2 - 2))
     p, su, sF = states[k]
     st.set_state(su, sF, p)
     conn._window = True
     conn._n_resolved += 1
-    _log.debug("Iwan connector %s: a step closes %d loops; re-solved from the state at u=%g",
-               conn.objectNumber, len(states), p)
+    _log.debug(
+        "Iwan connector %s: a step closes %d loops; re-solved from the state at u=%g",
+        conn.objectNumber,
+        len(states),
+        p,
+    )
     return big
 
 
@@ -455,7 +499,7 @@ def replay_records(conn) -> np.ndarray:
     j, done, table, dash = cache
     if done < n:
         new = np.empty((n - done, 5))
-        rows = raw[w * done:w * n].tolist()
+        rows = raw[w * done : w * n].tolist()
         trial, commit = j.trial, j.commit
         c = conn._damping
         for k in range(n - done):

@@ -46,6 +46,7 @@ Exactness: the expression is exact as long as a step reads no reversal point old
 exact force at the accepted slip (needed only for steps that started from a deeper stack and
 closed a loop).
 """
+
 from __future__ import annotations
 
 import itertools
@@ -54,14 +55,22 @@ import math
 import exudyn as exu
 from exudyn.advancedUtilities import CreateSymbolicUserFunction
 
-__all__ = ["VIRGIN", "SymbolicIwanState", "committed_slip_matrix", "branch_of", "make_probe",
-           "coordinate_law", "cartesian_law", "rigid_law"]
+__all__ = [
+    "VIRGIN",
+    "SymbolicIwanState",
+    "committed_slip_matrix",
+    "branch_of",
+    "make_probe",
+    "coordinate_law",
+    "cartesian_law",
+    "rigid_law",
+]
 
 esym = exu.symbolic
 _IDS = itertools.count()
-CHUNK = 6                     # entries per symbolic Vector (longer ones crash Exudyn 1.13.6)
-VIRGIN = (0.0, 0.0, 1.0, 1.0, 0.0, 0.0)     # the branch of an unloaded virgin point
-_VIRGIN_VARS = (0.0, 0.0, 0.0, 0.0, 0.0)     # its (u_r, F_r, s1, s2, bound)
+CHUNK = 6  # entries per symbolic Vector (longer ones crash Exudyn 1.13.6)
+VIRGIN = (0.0, 0.0, 1.0, 1.0, 0.0, 0.0)  # the branch of an unloaded virgin point
+_VIRGIN_VARS = (0.0, 0.0, 0.0, 0.0, 0.0)  # its (u_r, F_r, s1, s2, bound)
 
 
 def _const(x: float):
@@ -95,7 +104,7 @@ def branch_of(us, Fr, uc: float) -> tuple:
         return head + (1.0, bound)
     if d < 0.0:
         return head + (-1.0, bound)
-    return head + (0.0, uc)             # at rest: an empty interval for the shortcut
+    return head + (0.0, uc)  # at rest: an empty interval for the shortcut
 
 
 class SymbolicIwanState:
@@ -118,27 +127,33 @@ class SymbolicIwanState:
         uid = next(_IDS)
         self.depth = depth
         self.uc = esym.Real(f"iwan{uid}_uc", 0.0) if uc is None else uc
-        width = 2 * depth + 1                 # n, then (r_k, R_k) newest first
-        self._stack = [esym.Vector(f"iwan{uid}_st{k}", [0.0] * min(CHUNK, width - k * CHUNK))
-                       for k in range((width + CHUNK - 1) // CHUNK)]
-        self._chunks = [(v.SetVector, k * CHUNK, k * CHUNK + v.NumberOfItems())
-                        for k, v in enumerate(self._stack)]
+        width = 2 * depth + 1  # n, then (r_k, R_k) newest first
+        self._stack = [
+            esym.Vector(f"iwan{uid}_st{k}", [0.0] * min(CHUNK, width - k * CHUNK))
+            for k in range((width + CHUNK - 1) // CHUNK)
+        ]
+        self._chunks = [
+            (v.SetVector, k * CHUNK, k * CHUNK + v.NumberOfItems())
+            for k, v in enumerate(self._stack)
+        ]
         self._vals = [0.0] * width
         entry = [v[k] for v in self._stack for k in range(v.NumberOfItems())]
         self.n = entry[0]
         self.r = entry[1::2]
         self.R = entry[2::2]
-        self._branch = [esym.Real(f"iwan{uid}_{k}", v)
-                        for k, v in zip(("ur", "Fr", "s1", "s2", "bound"), _VIRGIN_VARS)]
+        self._branch = [
+            esym.Real(f"iwan{uid}_{k}", v)
+            for k, v in zip(("ur", "Fr", "s1", "s2", "bound"), _VIRGIN_VARS)
+        ]
         self._branch_set = [v.SetValue for v in self._branch]
-        self.held = 0            # stack length the variables hold
+        self.held = 0  # stack length the variables hold
         self.KT = float(params.KT)
         self.Fs = float(params.Fs)
         self.pm = float(params.phi_max)
         self.e1 = float(params.chi + 1.0)
         self.a = float(params.R / ((params.chi + 1.0) * (params.chi + 2.0)))
         self.tol = float(tol)
-        self.probe = None        # u -> F through the owner's symbolic user function
+        self.probe = None  # u -> F through the owner's symbolic user function
 
     # ------------------------------------------------------------------ state transfer
     def set_stack(self, us, Fr) -> None:
@@ -151,10 +166,10 @@ class SymbolicIwanState:
         v[0] = float(n)
         if m:
             stop = n - m - 1 if n > m else None
-            v[1:2 * m + 1:2] = us[:stop:-1]        # newest first
-            v[2:2 * m + 2:2] = Fr[:stop:-1]
+            v[1 : 2 * m + 1 : 2] = us[:stop:-1]  # newest first
+            v[2 : 2 * m + 2 : 2] = Fr[:stop:-1]
         end = 2 * m + 1
-        for f, a, b in self._chunks:              # entries beyond 2 m are not read
+        for f, a, b in self._chunks:  # entries beyond 2 m are not read
             if a >= end:
                 break
             f(v[a:b])
@@ -199,8 +214,9 @@ class SymbolicIwanState:
     # ------------------------------------------------------------------ the law
     def backbone(self, x):
         """``F_bb(x)`` for ``x >= 0`` (docs/equations.md section 2, paper eq. 12)."""
-        return esym.IfThenElse(x < self.pm, x * (self.KT - self.a * esym.pow(x, self.e1)),
-                               _const(self.Fs))
+        return esym.IfThenElse(
+            x < self.pm, x * (self.KT - self.a * esym.pow(x, self.e1)), _const(self.Fs)
+        )
 
     def _virgin(self, u):
         return esym.sign(u) * self.backbone(esym.abs(u))
@@ -221,22 +237,25 @@ class SymbolicIwanState:
             return ((u - b) * du >= 0.0) * moving
 
         def chain(T, m, j):
-            if j >= len(T):                  # deeper than held: only reached on overflow
+            if j >= len(T):  # deeper than held: only reached on overflow
                 return self._virgin(u)
             r, R = T[j]
             single = esym.IfThenElse(passed(-r), self._virgin(u), self._branch_force(r, R, u))
             if j + 1 < len(T):
-                inner = esym.IfThenElse(passed(T[j + 1][0]), chain(T, m, j + 2),
-                                        self._branch_force(r, R, u))
+                inner = esym.IfThenElse(
+                    passed(T[j + 1][0]), chain(T, m, j + 2), self._branch_force(r, R, u)
+                )
             else:
                 inner = self._branch_force(r, R, u)
-            return esym.IfThenElse(m <= j + 0.5, self._virgin(u),
-                                   esym.IfThenElse(m <= j + 1.5, single, inner))
+            return esym.IfThenElse(
+                m <= j + 0.5, self._virgin(u), esym.IfThenElse(m <= j + 1.5, single, inner)
+            )
 
         held = list(zip(self.r, self.R))
-        d = esym.IfThenElse(n >= 0.5, uc - self.r[0], uc)        # direction of the branch
-        Fc = esym.IfThenElse(n >= 0.5, self._branch_force(self.r[0], self.R[0], uc),
-                             self._virgin(uc))
+        d = esym.IfThenElse(n >= 0.5, uc - self.r[0], uc)  # direction of the branch
+        Fc = esym.IfThenElse(
+            n >= 0.5, self._branch_force(self.r[0], self.R[0], uc), self._virgin(uc)
+        )
         f_cont = chain(held, n, 0)
         f_new = chain([(uc, Fc)] + held, n + 1.0, 0)
         f_small = esym.IfThenElse(n >= 0.5, chain(held[1:], n - 1.0, 0), self._virgin(u))
@@ -261,8 +280,12 @@ def make_probe(mbs, fn, kind, axis, off, k=None, st=None):
     probe.
     """
     if kind == "rigid":
-        fn = CreateSymbolicUserFunction(mbs, coordinate_law(st, 0.0), "springForceUserFunction",
-                                        itemTypeName="ObjectConnectorCoordinateSpringDamper")
+        fn = CreateSymbolicUserFunction(
+            mbs,
+            coordinate_law(st, 0.0),
+            "springForceUserFunction",
+            itemTypeName="ObjectConnectorCoordinateSpringDamper",
+        )
         return lambda u, fn=fn: fn.Evaluate(mbs, 0.0, 0, u, 0.0, 0.0, 0.0, 0.0)
     if kind == "coordinate":
         return lambda u: fn.Evaluate(mbs, 0.0, 0, u + off, 0.0, 0.0, 0.0, 0.0)
@@ -275,6 +298,7 @@ def make_probe(mbs, fn, kind, axis, off, k=None, st=None):
         f = fn.Evaluate(mbs, 0.0, 0, [d * a[0], d * a[1], d * a[2]], zero, zero, zero, zero)
         F = a[0] * f[0] + a[1] * f[1] + a[2] * f[2]
         return F - ka * d if ka else F
+
     return probe
 
 
@@ -282,9 +306,11 @@ def coordinate_law(st: SymbolicIwanState, off: float, c: float = 0.0):
     """Spring-force user function (ObjectConnectorCoordinateSpringDamper) to be traced;
     ``c`` [N s/m]: a dashpot in parallel (``c deltaL_t`` added).
     """
+
     def law(mbs, t, itemNumber, deltaL, deltaL_t, stiffness, damping, offset):
         F = st.force(deltaL - off if off else deltaL)
         return F + c * deltaL_t if c else F
+
     return law
 
 
@@ -320,6 +346,7 @@ def cartesian_law(st: SymbolicIwanState, a, off: float, k=None, c: float = 0.0):
                 f = displacement[i] * k[i] if f is None else f + displacement[i] * k[i]
             out.append(esym.Real(0.0) if f is None else f)
         return out
+
     return law
 
 
@@ -329,13 +356,28 @@ def rigid_law(st: SymbolicIwanState, a, off: float, c: float = 0.0):
     ``velocity`` are given in it): the force ``F a`` in J0, no torque; ``c`` [N s/m]: a
     dashpot in parallel along ``a``.
     """
-    def law(mbs, t, itemNumber, displacement, rotation, velocity, angularVelocity, stiffness,
-            damping, rotJ0, rotJ1, offset):
+
+    def law(
+        mbs,
+        t,
+        itemNumber,
+        displacement,
+        rotation,
+        velocity,
+        angularVelocity,
+        stiffness,
+        damping,
+        rotJ0,
+        rotJ1,
+        offset,
+    ):
         u = _along(a, displacement)
         F = st.force(u - off if off else u)
         if c:
             F = F + c * _along(a, velocity)
-        out = [esym.Real(0.0) if a[i] == 0.0 else (F if a[i] == 1.0 else F * a[i])
-               for i in range(3)]
+        out = [
+            esym.Real(0.0) if a[i] == 0.0 else (F if a[i] == 1.0 else F * a[i]) for i in range(3)
+        ]
         return out + [esym.Real(0.0)] * 3
+
     return law

@@ -5,6 +5,7 @@ and their per-step records.
 :mod:`.surface_slips` (contact points on ANCF Cable2D surfaces, vectorised),
 :mod:`.slip_records` (the interface's per-step slips; forces and energies replayed).
 """
+
 from .slip_map import SlipMap
 from .slip_records import SlipRecords
 from .surface_slips import SurfaceSlips

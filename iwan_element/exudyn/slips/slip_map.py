@@ -2,6 +2,7 @@
 
 Used by the interface and the symbolic connector route; never called in a force law.
 """
+
 from __future__ import annotations
 
 import exudyn as exu
@@ -70,8 +71,7 @@ class SlipMap:
         get = self.mbs.GetMarkerOutput
         for i in points:
             m0, m1 = self.pairs[i]
-            u[i] = float(a @ (get(int(m1), _POSITION) - get(int(m0), _POSITION))) \
-                - self.offsets[i]
+            u[i] = float(a @ (get(int(m1), _POSITION) - get(int(m0), _POSITION))) - self.offsets[i]
 
 
 def _marker_coordinates(mbs, m):
@@ -112,8 +112,13 @@ def _affine_position_row(mbs, m0, m1, axis, off):
     a = np.array(axis)
 
     def proj():
-        return float(a @ (mbs.GetMarkerOutput(m1, _POSITION, _CURRENT)
-                          - mbs.GetMarkerOutput(m0, _POSITION, _CURRENT)))
+        return float(
+            a
+            @ (
+                mbs.GetMarkerOutput(m1, _POSITION, _CURRENT)
+                - mbs.GetMarkerOutput(m0, _POSITION, _CURRENT)
+            )
+        )
 
     q0 = sd.GetODE2Coordinates(_CURRENT)
     base = proj()

@@ -6,6 +6,7 @@ step: they are recomputed from the slips when read, by committing the same rows 
 :class:`~iwan_element.core.joint_bank.IwanJointBank` (an exact replay of the interface's own
 commits). The replay is incremental: rows already replayed are not replayed again.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -70,6 +71,10 @@ class SlipRecords:
         """Copies of ``time``, ``slip``, ``force``, ``work`` and ``diss`` (n rows)."""
         self._advance(bank)
         n = self.n
-        return {"time": self.t[:n].copy(), "slip": self.slip[:n].copy(),
-                "force": self._force[:n].copy(), "work": self._work[:n].copy(),
-                "diss": self._diss[:n].copy()}
+        return {
+            "time": self.t[:n].copy(),
+            "slip": self.slip[:n].copy(),
+            "force": self._force[:n].copy(),
+            "work": self._work[:n].copy(),
+            "diss": self._diss[:n].copy(),
+        }

@@ -10,6 +10,7 @@ two ``GetMarkerOutput`` calls per point, and checks the formula against ``GetMar
 set-up (at the current and at a perturbed configuration); markers that do not match keep the
 Exudyn call.
 """
+
 from __future__ import annotations
 
 import exudyn as exu
@@ -23,10 +24,18 @@ _CURRENT = exu.ConfigurationType.Current
 
 def _hermite(xi, L):
     """Cubic Hermite weights of (r0, r0', r1, r1') and their x-derivatives at ``xi = x / L``."""
-    S = [1 - 3 * xi ** 2 + 2 * xi ** 3, L * (xi - 2 * xi ** 2 + xi ** 3),
-         3 * xi ** 2 - 2 * xi ** 3, L * (-xi ** 2 + xi ** 3)]
-    dS = [(-6 * xi + 6 * xi ** 2) / L, 1 - 4 * xi + 3 * xi ** 2,
-          (6 * xi - 6 * xi ** 2) / L, -2 * xi + 3 * xi ** 2]
+    S = [
+        1 - 3 * xi**2 + 2 * xi**3,
+        L * (xi - 2 * xi**2 + xi**3),
+        3 * xi**2 - 2 * xi**3,
+        L * (-(xi**2) + xi**3),
+    ]
+    dS = [
+        (-6 * xi + 6 * xi**2) / L,
+        1 - 4 * xi + 3 * xi**2,
+        (6 * xi - 6 * xi**2) / L,
+        -2 * xi + 3 * xi**2,
+    ]
     return S, dS
 
 
@@ -51,8 +60,8 @@ def _cable_marker(mbs, m):
     if idx.size != 8 or ref.size != 8:
         return None
     S, dS = _hermite(x / L, L)
-    W = np.zeros((4, 8))                  # rows: r_x, r_y, r'_x, r'_y
-    for k in range(4):                    # node coordinates: [x, y, x', y'] per node
+    W = np.zeros((4, 8))  # rows: r_x, r_y, r'_x, r'_y
+    for k in range(4):  # node coordinates: [x, y, x', y'] per node
         W[0, 2 * k] = S[k]
         W[1, 2 * k + 1] = S[k]
         W[2, 2 * k] = dS[k]
@@ -92,7 +101,9 @@ class SurfaceSlips:
                 rows.append(got)
         self.points = np.array(points, dtype=np.intp)
         self.c = np.array(const)
-        cab = [(k, c, sgn) for k, got in enumerate(rows) for c, sgn in got if not isinstance(c, float)]
+        cab = [
+            (k, c, sgn) for k, got in enumerate(rows) for c, sgn in got if not isinstance(c, float)
+        ]
         for k, got in enumerate(rows):
             for c, sgn in got:
                 if isinstance(c, float):
@@ -102,7 +113,7 @@ class SurfaceSlips:
         self.idx = np.array([c[0] for _, c, _ in cab], dtype=np.intp).reshape(-1, 8)
         self.ref = np.array([c[1] for _, c, _ in cab]).reshape(-1, 8)
         W = np.array([c[2] for _, c, _ in cab]).reshape(-1, 4, 8)
-        self.W = W.transpose(1, 0, 2).copy()         # (4, n_markers, 8)
+        self.W = W.transpose(1, 0, 2).copy()  # (4, n_markers, 8)
         self.y = np.array([c[3] for _, c, _ in cab])
         self.ax, self.ay = float(a[0]), float(a[1])
         self.out = np.zeros(len(points))
@@ -141,9 +152,19 @@ class SurfaceSlips:
             for bump in (0.0, 1e-3):
                 if bump:
                     sd.SetODE2Coordinates(q0 + bump * np.sin(np.arange(q0.size) + 1.0), _CURRENT)
-                want = np.array([float(a @ (get(int(pairs[i][1]), _POSITION, _CURRENT)
-                                            - get(int(pairs[i][0]), _POSITION, _CURRENT)))
-                                 - float(offsets[i]) for i in self.points])
+                want = np.array(
+                    [
+                        float(
+                            a
+                            @ (
+                                get(int(pairs[i][1]), _POSITION, _CURRENT)
+                                - get(int(pairs[i][0]), _POSITION, _CURRENT)
+                            )
+                        )
+                        - float(offsets[i])
+                        for i in self.points
+                    ]
+                )
                 got = self.slips()
                 ok = ok and bool(np.all(np.abs(got - want) <= 1e-12 * (1.0 + np.abs(want))))
         finally:

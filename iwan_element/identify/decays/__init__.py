@@ -7,11 +7,20 @@ envelope (:func:`analytic_signal`, :func:`mode_envelope`).
 
 Imports :mod:`iwan_element.base`, :mod:`iwan_element.fitting` and :mod:`..modal` only.
 """
+
 from .curve import amplitude_curve
 from .envelope import analytic_signal, mode_envelope
 from .fit import fit_decay
 from .modes import free_decay_modes
 from .saturation import cut_clipping, cut_flattened_peaks, find_clipping
 
-__all__ = ["amplitude_curve", "fit_decay", "free_decay_modes", "analytic_signal",
-           "mode_envelope", "find_clipping", "cut_clipping", "cut_flattened_peaks"]
+__all__ = [
+    "amplitude_curve",
+    "fit_decay",
+    "free_decay_modes",
+    "analytic_signal",
+    "mode_envelope",
+    "find_clipping",
+    "cut_clipping",
+    "cut_flattened_peaks",
+]

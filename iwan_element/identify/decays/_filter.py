@@ -10,6 +10,7 @@ transient never becomes small against the mode and no trim removes it.
 runs causally over the time-reversed record, where the decay is a growing signal starting
 in the record's quiet end; see its docstring and ``docs/free_decay.md``.
 """
+
 from __future__ import annotations
 
 import math
@@ -19,8 +20,8 @@ from scipy import signal
 
 from .envelope import _filter_extent, _hilbert, _ramp_ends, analytic_signal
 
-_TRIM_LEVEL = 1e-3        # end-effect error allowed, relative to the mode's local envelope
-_ZERO_PHASE_RATIO = 0.3   # zero-phase if the mode decays at < 0.3 x the filter's ringing rate
+_TRIM_LEVEL = 1e-3  # end-effect error allowed, relative to the mode's local envelope
+_ZERO_PHASE_RATIO = 0.3  # zero-phase if the mode decays at < 0.3 x the filter's ringing rate
 
 
 def _noise_bandwidth(sos, fs):
@@ -35,7 +36,7 @@ def _lp_fit(seg, p):
     Estimation*, 1988; singular values below 1e-7 of the largest dropped).
     """
     m = seg.size
-    A = np.column_stack([seg[p - k:m - k] for k in range(1, p + 1)])
+    A = np.column_stack([seg[p - k : m - k] for k in range(1, p + 1)])
     c, *_ = np.linalg.lstsq(A, seg[p:], rcond=1e-7)
     return c
 
@@ -50,7 +51,7 @@ def _lp_extend(seg, c, n_pad, growth=1e3):
     zi = signal.lfiltic([1.0], a_poly, seg[::-1][:p])
     ext, _ = signal.lfilter([1.0], a_poly, np.zeros(n_pad), zi=zi)
     big = np.flatnonzero(~(np.abs(ext) < growth * np.max(np.abs(seg))))
-    return ext[:big[0]] if big.size else ext
+    return ext[: big[0]] if big.size else ext
 
 
 def _taper_far_end(ext):
@@ -58,7 +59,7 @@ def _taper_far_end(ext):
     m = ext.size // 2
     out = ext.copy()
     if m:
-        out[ext.size - m:] *= 0.5 + 0.5 * np.cos(np.pi * (np.arange(m) + 0.5) / m)
+        out[ext.size - m :] *= 0.5 + 0.5 * np.cos(np.pi * (np.arange(m) + 0.5) / m)
     return out
 
 
@@ -85,8 +86,8 @@ def _continued_pass(sos, decay, p, m, pads, zero_phase):
     n_head, n_tail = pads
     first = decay[:m][::-1]
     c = _lp_fit(first, p)
-    A = np.column_stack([first[p - k:m - k] for k in range(1, p + 1)])
-    eps = float(np.sqrt(np.mean((first[p:] - A @ c) ** 2) / max(np.mean(first ** 2), 1e-300)))
+    A = np.column_stack([first[p - k : m - k] for k in range(1, p + 1)])
+    eps = float(np.sqrt(np.mean((first[p:] - A @ c) ** 2) / max(np.mean(first**2), 1e-300)))
     head = _taper_far_end(_lp_extend(first, c, n_head))
     tail = _taper_far_end(_lp_extend(decay[-m:], _lp_fit(decay[-m:], p), n_tail, growth=1.0))
     x = np.concatenate([head[::-1], decay, tail])
@@ -184,18 +185,18 @@ def _route(yy, yz, sos, spec, zero_phase):
     m = int(min(nd // 2, max(10 * p, round(10 * per))))
     pads = (sh + n_ext, n_ext)
     outs = []
-    n_l = int(round(5 * per))            # output kept (and tapered) beyond the decay's ends
+    n_l = int(round(5 * per))  # output kept (and tapered) beyond the decay's ends
     for mm in (m, max(int(0.6 * m), 4 * p)):
         out, h, eps = _continued_pass(sos, decay, p, mm, pads, zero_phase)
-        j0 = h - sh                       # output index of the decay's first sample
+        j0 = h - sh  # output index of the decay's first sample
         a, b = max(j0 - n_l, 0), min(j0 + nd + n_l, out.size)
         zz = _hilbert(_ramp_ends(out[a:b], n_l, b - (j0 + nd)))
-        got = zz[j0 - a:j0 - a + nd] if j0 >= 0 else zz[:nd + j0]
+        got = zz[j0 - a : j0 - a + nd] if j0 >= 0 else zz[: nd + j0]
         outs.append(np.concatenate([np.full(nd - got.size, np.nan + 0j), got]))
         if len(outs) == 1:
             eps_a, short = eps, j0 < n_l
     za, zb = outs
-    yf[i_pk:] = np.nan_to_num(za.real)      # (NaN: before a cut continuation, trimmed)
+    yf[i_pk:] = np.nan_to_num(za.real)  # (NaN: before a cut continuation, trimmed)
     z[i_pk:] = np.nan_to_num(za)
     # start: the output at sample j draws the share W[sh - j] of its input from before the
     # decay (the backward continuation); with the continuation good to the predictor's
@@ -203,19 +204,19 @@ def _route(yy, yz, sos, spec, zero_phase):
     env = np.abs(za)
     rel = np.abs(za - zb) / np.maximum(env, 1e-300)
     k = min(n_ext + sh, nd // 2)
-    if zero_phase:     # both ends draw on the continuations: where two of them differ
+    if zero_phase:  # both ends draw on the continuations: where two of them differ
         bad = np.flatnonzero(~(rel[:k] <= _TRIM_LEVEL))
     else:
         W = _head_weight(sos, sh + 1)
         j = np.arange(min(sh + 1, nd))
         bad = np.flatnonzero(max(eps_a, 1e-4) * W[sh - j] > _TRIM_LEVEL)
     n_trim = int(bad[-1]) + 1 if bad.size else 0
-    if short:          # the continuation was cut (it grew by 1e3): no output before it
+    if short:  # the continuation was cut (it grew by 1e3): no output before it
         n_trim = max(n_trim, n_l - j0)
     # end: where two continuations (ten and six periods of fit) differ, if it still rings
     n_end = 0
-    if np.nanmean(env[-min(n_ext, k):]) > 0.01 * np.nanmax(env):
-        above = np.flatnonzero(~(rel[nd - k:][::-1] <= _TRIM_LEVEL))
+    if np.nanmean(env[-min(n_ext, k) :]) > 0.01 * np.nanmax(env):
+        above = np.flatnonzero(~(rel[nd - k :][::-1] <= _TRIM_LEVEL))
         n_end = int(above[-1]) + 1 if above.size else 0
     one = int(round(per))
     return yf, z, (max(n_trim, one), max(n_end, one)), (zero_phase, sh)
@@ -225,7 +226,7 @@ def _sos_response(sos, zz):
     """``H(z)`` of second-order sections at a complex ``z``."""
     g = 1.0 + 0j
     for b0, b1, b2, a0, a1, a2 in sos:
-        g *= (b0 + b1 / zz + b2 / zz ** 2) / (a0 + a1 / zz + a2 / zz ** 2)
+        g *= (b0 + b1 / zz + b2 / zz**2) / (a0 + a1 / zz + a2 / zz**2)
     return g
 
 
@@ -238,8 +239,9 @@ def _reverse_gain(sos, fs, sigma, wd, route):
     """
     zero_phase, shift = route
     if zero_phase:
-        zz = complex(math.exp(-sigma / fs) * math.cos(wd / fs),
-                     math.exp(-sigma / fs) * math.sin(wd / fs))
+        zz = complex(
+            math.exp(-sigma / fs) * math.cos(wd / fs), math.exp(-sigma / fs) * math.sin(wd / fs)
+        )
         return abs(_sos_response(sos, zz) * _sos_response(sos, 1.0 / zz))
     zz = complex(math.exp(sigma / fs) * math.cos(wd / fs), math.exp(sigma / fs) * math.sin(wd / fs))
     return abs(_sos_response(sos, zz)) ** 2 * math.exp(sigma * shift / fs)
@@ -275,5 +277,5 @@ def _drift_terms(sos, fs, w, zero_phase=False):
     ph = np.unwrap(2.0 * np.angle(H))
     lg = 2.0 * np.log(np.abs(H))
     dw = 2 * math.pi * h
-    tau1 = 0.0 if zero_phase else float(-(ph[2] - 2 * ph[1] + ph[0]) / dw ** 2)
+    tau1 = 0.0 if zero_phase else float(-(ph[2] - 2 * ph[1] + ph[0]) / dw**2)
     return float((lg[2] - lg[0]) / (2 * dw)), tau1

@@ -5,6 +5,7 @@ Hilbert transform), the averaged modal Iwan decay passed through it, the log-pol
 and their Jacobian, and the covariance for band-passed noise. Equations: the project's
 ``docs/decay_fit.md``.
 """
+
 from __future__ import annotations
 
 import math
@@ -18,8 +19,8 @@ from ...fitting import normal_inverse
 from ..modal.result import model_curve
 from ._filter import _analytic_signal
 
-_GRID = 2000            # log-amplitude grid of the quadrature
-_PER_PERIOD = 8.0       # working rate: samples per period of the band's upper edge
+_GRID = 2000  # log-amplitude grid of the quadrature
+_PER_PERIOD = 8.0  # working rate: samples per period of the band's upper edge
 
 
 class _Problem:
@@ -40,9 +41,9 @@ class _Problem:
         self.nfft = int(2 ** math.ceil(math.log2(2 * (self.n + 2 * self.n_trim))))
         self.z = self.apply(yw)
         w, H = signal.sosfreqz(self.sos, worN=8192, fs=self.fs)
-        self.bw = float(np.trapezoid(np.abs(H) ** 4, w))      # noise bandwidth [Hz]
+        self.bw = float(np.trapezoid(np.abs(H) ** 4, w))  # noise bandwidth [Hz]
         self.span = self.i_s = None
-        self.nb = 0                 # neighbouring out-of-band modes modelled (set by the fit)
+        self.nb = 0  # neighbouring out-of-band modes modelled (set by the fit)
         self.scale = float(np.max(np.abs(yw))) or 1.0
 
     @property
@@ -54,7 +55,7 @@ class _Problem:
 
     def theta(self, x):
         """The curve parameters of the vector ``x`` (without the nuisances)."""
-        return x[:x.size - self.n_nuis]
+        return x[: x.size - self.n_nuis]
 
     def decimate(self, Y):
         return signal.resample_poly(Y, 1, self.q, axis=0) if self.q > 1 else Y
@@ -69,22 +70,34 @@ class _Problem:
         """
         pad = [(self.n_trim, self.n_trim)] + [(0, 0)] * (np.ndim(Y) - 1)
         yf = signal.sosfiltfilt(self.sos, np.pad(Y, pad), axis=0)
-        return signal.hilbert(yf, N=self.nfft, axis=0)[self.n_trim:self.n_trim + self.n]
+        return signal.hilbert(yf, N=self.nfft, axis=0)[self.n_trim : self.n_trim + self.n]
 
     def _segment(self, theta, regime, u, X):
         """Quadrature of one smooth piece of the curves: amplitudes ``X`` at ``u`` (a uniform
         grid, decreasing); returns the time, phase, ln w, asin(zeta), zeta and w on it.
         """
-        f, zeta = model_curve(theta, X, regime, self.conv["x_ref"],
-                              self.conv["stiffness"], self.conv["floor"], "decay")
+        f, zeta = model_curve(
+            theta,
+            X,
+            regime,
+            self.conv["x_ref"],
+            self.conv["stiffness"],
+            self.conv["floor"],
+            "decay",
+        )
         f, zeta = np.asarray(f, float), np.asarray(zeta, float)
-        if not (np.all(np.isfinite(f)) and np.all(f > 0) and np.all(np.isfinite(zeta))
-                and np.all(zeta > 0) and np.all(zeta < 0.5)):
+        if not (
+            np.all(np.isfinite(f))
+            and np.all(f > 0)
+            and np.all(np.isfinite(zeta))
+            and np.all(zeta > 0)
+            and np.all(zeta < 0.5)
+        ):
             raise ValueError("model outside its range")
         w = 2.0 * math.pi * f
         h = u[0] - u[1]
         tu = cumulative_simpson(1.0 / (zeta * w), dx=h, initial=0.0)
-        th = cumulative_simpson(np.sqrt(1.0 - zeta ** 2) / zeta, dx=h, initial=0.0)
+        th = cumulative_simpson(np.sqrt(1.0 - zeta**2) / zeta, dx=h, initial=0.0)
         if not np.all(np.diff(tu) > 0):
             raise ValueError("time grid not increasing")
         return tu, th, np.log(w), np.arcsin(zeta), zeta, w
@@ -103,8 +116,10 @@ class _Problem:
         lp = theta[4] if regime != "microslip" else np.inf
         if u_end < lp < ln_a0 - 1e-9:
             n_a = min(max(int(round(_GRID * (ln_a0 - lp) / self.span)), 5), _GRID - 5)
-            cuts = [(ln_a0, lp, n_a, 1.0, 1.0 + 1e-12),             # phi_max from above
-                    (lp, u_end, _GRID - n_a + 1, 1.0 - 1e-12, 1.0)]    # and from below
+            cuts = [
+                (ln_a0, lp, n_a, 1.0, 1.0 + 1e-12),  # phi_max from above
+                (lp, u_end, _GRID - n_a + 1, 1.0 - 1e-12, 1.0),
+            ]  # and from below
         else:
             cuts = [(ln_a0, u_end, _GRID, 1.0, 1.0)]
         pieces, t0, th0 = [], 0.0, 0.0
@@ -124,7 +139,7 @@ class _Problem:
             out[sel] = spl(t_rel[sel])
             lo = tu[-1]
         beyond = t_rel > t0
-        if np.any(beyond):      # past the grid: continue at the last decay rate and frequency
+        if np.any(beyond):  # past the grid: continue at the last decay rate and frequency
             out[beyond] = pieces[-1][1](np.full(int(beyond.sum()), t0))
             dt = t_rel[beyond] - t0
             out[beyond, 0] = u[-1] - zeta[-1] * w[-1] * dt
@@ -140,8 +155,8 @@ class _Problem:
         u, th, lw, asz = self.trajectory(self.theta(x), regime, x[-2], t_rel).T
         y = np.zeros(self.n_full)
         y[i0:] = np.exp(u + self.k * lw) * np.cos(th + self.k * asz + x[-1])
-        for j in range(self.nb):            # linear out-of-band modes that leak into the band
-            f2, s2, c, s = x[x.size - self.n_nuis + 4 * j:][:4]
+        for j in range(self.nb):  # linear out-of-band modes that leak into the band
+            f2, s2, c, s = x[x.size - self.n_nuis + 4 * j :][:4]
             wt = 2.0 * math.pi * f2 * t_rel
             y[i0:] += self.scale * np.exp(-s2 * t_rel) * (c * np.cos(wt) + s * np.sin(wt))
         return y
@@ -154,10 +169,12 @@ class _Problem:
         t_rel = np.arange(self.n_full - i0) / self.fs_full
         cols = np.zeros((self.n_full, 4 * self.nb))
         for j in range(self.nb):
-            f2, s2, c, s = x[x.size - self.n_nuis + 4 * j:][:4]
+            f2, s2, c, s = x[x.size - self.n_nuis + 4 * j :][:4]
             wt = 2.0 * math.pi * f2 * t_rel
-            ec, es = self.scale * np.exp(-s2 * t_rel) * np.cos(wt), \
-                self.scale * np.exp(-s2 * t_rel) * np.sin(wt)
+            ec, es = (
+                self.scale * np.exp(-s2 * t_rel) * np.cos(wt),
+                self.scale * np.exp(-s2 * t_rel) * np.sin(wt),
+            )
             cols[i0:, 4 * j] = 2.0 * math.pi * t_rel * (s * ec - c * es)
             cols[i0:, 4 * j + 1] = -t_rel * (c * ec + s * es)
             cols[i0:, 4 * j + 2], cols[i0:, 4 * j + 3] = ec, es
@@ -236,7 +253,7 @@ class _Objective:
         try:
             y0, zm = self._model(x)
             cols = []
-            nb0, nb1 = x.size - self.prob.n_nuis, x.size - 2       # neighbours: exact columns
+            nb0, nb1 = x.size - self.prob.n_nuis, x.size - 2  # neighbours: exact columns
             for j in [*range(nb0), nb1, nb1 + 1]:
                 if j == 4 and self.regime != "microslip":
                     cols.append(self._phi_column(x))
@@ -250,17 +267,25 @@ class _Objective:
         except ValueError:
             return np.zeros((2 * self.idx.size, x.size))
         cols = np.column_stack(cols[:nb0] + [self.prob.neighbour_columns(x)] + cols[nb0:])
-        dz = self.prob.apply(self.prob.decimate(cols))[self.sl][self.sel] \
-            / zm[self.sel, None]
+        dz = self.prob.apply(self.prob.decimate(cols))[self.sl][self.sel] / zm[self.sel, None]
         return -np.vstack([self.wgt[:, None] * dz.real, self.wgt[:, None] * dz.imag])
 
 
 def _solve(obj, x0, lb, ub):
     width = np.where(np.isfinite(ub - lb), ub - lb, 0.0)
     x0 = np.clip(x0, lb + 1e-9 * width, ub - 1e-9 * width)
-    return optimize.least_squares(obj.resid, x0, jac=obj.jac, bounds=(lb, ub), x_scale="jac",
-                                  method="trf", xtol=1e-10, ftol=1e-10, gtol=1e-10,
-                                  max_nfev=100)
+    return optimize.least_squares(
+        obj.resid,
+        x0,
+        jac=obj.jac,
+        bounds=(lb, ub),
+        x_scale="jac",
+        method="trf",
+        xtol=1e-10,
+        ftol=1e-10,
+        gtol=1e-10,
+        max_nfev=100,
+    )
 
 
 def _noise_correlation(prob, lags):
@@ -268,10 +293,10 @@ def _noise_correlation(prob, lags):
     (``sum_f |H(f)|**4 exp(2 pi i f tau)`` over ``f >= 0``, normalised to 1 at 0).
     """
     nf = max(16384, int(2 ** math.ceil(math.log2(lags + 1))))
-    _, H = signal.sosfreqz(prob.sos, worN=nf, fs=prob.fs)     # f_j = j fs / (2 nf)
+    _, H = signal.sosfreqz(prob.sos, worN=nf, fs=prob.fs)  # f_j = j fs / (2 nf)
     P = np.zeros(2 * nf)
     P[:nf] = np.abs(H) ** 4
-    return np.fft.ifft(P)[:lags + 1] * (2 * nf) / P.sum()
+    return np.fft.ifft(P)[: lags + 1] * (2 * nf) / P.sum()
 
 
 def _covariance(obj, r, J):
@@ -300,14 +325,17 @@ def _covariance(obj, r, J):
     omega = (Jc.conj().T @ Jc).real
     kappa, tau2 = 1.0, 1.0
     for k in range(1, lags + 1):
-        c = np.conj(rho[k]) * np.exp(1j * (obj.phd[k:] - obj.phd[:-k]))     # C_{i,i+k} / s2
+        c = np.conj(rho[k]) * np.exp(1j * (obj.phd[k:] - obj.phd[:-k]))  # C_{i,i+k} / s2
         g = (Jc[:-k].conj() * c[:, None]).T @ Jc[k:]
-        omega += g.real + g.real.T            # the lag and its Hermitian transpose
+        omega += g.real + g.real.T  # the lag and its Hermitian transpose
         kappa += 2.0 * (1.0 - k / m) * float(np.mean(c.real))
         tau2 += 2.0 * (1.0 - k / m) * abs(rho[k]) ** 2
     omega *= 0.5
-    bread = (normal_inverse(J)[0] if np.all(np.isfinite(J))       # docs/fitting.md section 1
-             else np.full((J.shape[1], J.shape[1]), np.nan))
+    bread = (
+        normal_inverse(J)[0]
+        if np.all(np.isfinite(J))  # docs/fitting.md section 1
+        else np.full((J.shape[1], J.shape[1]), np.nan)
+    )
     dof = m - float(np.trace(bread @ omega))
     s2 = float(np.sum(np.abs(rr) ** 2)) / max(dof, 1.0)
     return bread @ (s2 * omega) @ bread, max(kappa, 1.0), (dof, 2.0 * max(dof, 0.0) / tau2)
@@ -345,11 +373,13 @@ def _local_weights(r, lag):
 
     def local(d2, win):
         d2 = np.concatenate([d2, np.full(m - d2.size, d2[-1])])
-        return np.convolve(d2, np.ones(win), mode="same") / np.convolve(np.ones(m), np.ones(win),
-                                                                       mode="same")
+        return np.convolve(d2, np.ones(win), mode="same") / np.convolve(
+            np.ones(m), np.ones(win), mode="same"
+        )
+
     first = local(np.abs(rr[lag:] - rr[:-lag]) ** 2, 8 * lag)
     h = max(1, lag // 4)
-    second = local(np.abs(rr[2 * h:] - 2.0 * rr[h:-h] + rr[:-2 * h]) ** 2, max(lag, 4))
+    second = local(np.abs(rr[2 * h :] - 2.0 * rr[h:-h] + rr[: -2 * h]) ** 2, max(lag, 4))
     med = float(np.median(second))
     return np.sqrt(med / np.maximum(second, med)), math.sqrt(0.5 * float(np.percentile(first, 25)))
 
@@ -412,8 +442,8 @@ def _neighbour_start(prob, seg, t, f2):
         return None
     sos = signal.butter(2, [f2 - d, f2 + d], btype="bandpass", fs=prob.fs, output="sos")
     z = signal.hilbert(signal.sosfiltfilt(sos, seg), N=int(2 ** math.ceil(math.log2(2 * seg.size))))
-    z = z[:seg.size]
-    m = int(math.ceil(3.0 * prob.fs / d))                 # a few of its filter's time constants
+    z = z[: seg.size]
+    m = int(math.ceil(3.0 * prob.fs / d))  # a few of its filter's time constants
     if seg.size - 2 * m < 16:
         m = seg.size // 4
     sl = slice(m, seg.size - m)

@@ -6,6 +6,7 @@ latest stretch with enough signal over each channel's noise floor, steps 2 and 3
 the window's halves (the linearity check) and the delta-method uncertainties of frequency,
 damping and amplitudes.
 """
+
 from __future__ import annotations
 
 import math
@@ -29,15 +30,15 @@ def _band_pass(Y, fs, lo, hi, order):
     q = max(1, int(fs // (_OVERSAMPLE * hi)))
     yf = signal.sosfilt(sos, Y, axis=1)
     z = signal.sos2zpk(sos)[1]
-    rate = float(np.min(-np.log(np.abs(z)))) * fs              # slowest filter decay [1/s]
+    rate = float(np.min(-np.log(np.abs(z)))) * fs  # slowest filter decay [1/s]
     n_h = int(min(max(12.0 / rate * fs, 64), 20 * fs))
     imp = np.zeros(n_h)
     imp[0] = 1.0
     h = signal.sosfilt(sos, imp)
-    full = np.correlate(h, h, "full")[n_h - 1:]
+    full = np.correlate(h, h, "full")[n_h - 1 :]
     rho = full[::q] / full[0]
     big = np.flatnonzero(np.abs(rho) > 1e-3)
-    rho = rho[:big[-1] + 1] if big.size else rho[:1]
+    rho = rho[: big[-1] + 1] if big.size else rho[:1]
     return yf[:, ::q], q, sos, 8.0 / rate, rho
 
 
@@ -58,7 +59,7 @@ def _fz(s):
 def _block_rms(y, td, i0, n_block):
     """Block centres [s] and rms per channel of consecutive blocks after sample ``i0``."""
     starts = np.arange(i0, y.shape[1] - n_block + 1, n_block)
-    E = np.array([np.sqrt(np.mean(y[:, a:a + n_block] ** 2, axis=1)) for a in starts])
+    E = np.array([np.sqrt(np.mean(y[:, a : a + n_block] ** 2, axis=1)) for a in starts])
     return td[starts] + 0.5 * n_block * (td[1] - td[0]), E.reshape(len(starts), y.shape[0])
 
 
@@ -99,7 +100,7 @@ def _local_rates(tc, e):
         k = max(6, (b + 1) // 4)
         a = max(b + 1 - k, 0)
         if b + 1 - a >= 3:
-            r, sr = _slope(tc[a:b + 1], le[a:b + 1])
+            r, sr = _slope(tc[a : b + 1], le[a : b + 1])
             if -r > 3.0 * sr:
                 out[b] = -r
     return out
@@ -117,16 +118,19 @@ def _auto_windows(y, td, i0, lo, hi, snr_min, span, min_periods, n_max=6):
     n_block = int(max(5.0 / fc, 1.0 / (hi - lo)) / dt) + 1
     tc, E = _block_rms(y, td, i0, n_block)
     if len(tc) < 6:
-        raise _NoWindow(f"the decay after the impact holds only {len(tc)} blocks of "
-                        f"{n_block * dt:.3g} s (6 needed)")
+        raise _NoWindow(
+            f"the decay after the impact holds only {len(tc)} blocks of "
+            f"{n_block * dt:.3g} s (6 needed)"
+        )
     F = _floors(tc, E)
     with np.errstate(invalid="ignore", divide="ignore"):
-        snr = np.sqrt(np.maximum(E ** 2 / F ** 2 - 1.0, 0.0))
+        snr = np.sqrt(np.maximum(E**2 / F**2 - 1.0, 0.0))
     snr = np.where(np.isnan(F)[None, :], np.inf, snr)
     best = np.max(snr, axis=1)
     if best[0] < snr_min:
-        raise _NoWindow(f"the band's SNR is only {best[0]:.3g} (< snr_min = {snr_min:g}) "
-                        "right after the impact")
+        raise _NoWindow(
+            f"the band's SNR is only {best[0]:.3g} (< snr_min = {snr_min:g}) right after the impact"
+        )
     bad = np.flatnonzero(best < snr_min)
     last = int(bad[0]) - 1 if bad.size else len(tc) - 1
     if last < 2:
@@ -171,7 +175,7 @@ def _physical(Yw, dtd, lo, hi, max_order, m):
 
 def _outputs(s, C, scale, sos, dt, k):
     """f, zeta, Re X, Im X, Re shape, Im shape of one pole (C: weighted amplitudes)."""
-    X = C * scale / (_gain(sos, np.array([np.exp(s * dt)]))[0] * s ** k)
+    X = C * scale / (_gain(sos, np.array([np.exp(s * dt)]))[0] * s**k)
     th = 0.5 * np.angle(np.sum(X * X))
     v = X * np.exp(-1j * th)
     if v.real[int(np.argmax(np.abs(v.real)))] < 0:
@@ -183,13 +187,14 @@ def _outputs(s, C, scale, sos, dt, k):
 def _propagate(fit, i, scale, sos, dt, k):
     """Outputs of pole i and their covariance by central differences (delta method)."""
     p, m = fit.C.shape
-    idx = np.concatenate([[i, p + i], 2 * p + i * m + np.arange(m),
-                          2 * p + p * m + i * m + np.arange(m)])
+    idx = np.concatenate(
+        [[i, p + i], 2 * p + i * m + np.arange(m), 2 * p + p * m + i * m + np.arange(m)]
+    )
     x = fit.params()[idx]
     cov = fit.cov[np.ix_(idx, idx)]
 
     def g(v):
-        return _outputs(v[0] + 1j * v[1], v[2:2 + m] + 1j * v[2 + m:], scale, sos, dt, k)
+        return _outputs(v[0] + 1j * v[1], v[2 : 2 + m] + 1j * v[2 + m :], scale, sos, dt, k)
 
     y0 = g(x)
     h = np.sqrt(np.maximum(np.diag(cov), 0.0)) * 1e-3
@@ -221,17 +226,17 @@ def _half_drift(tau, Yw, fit, phys_idx, rho):
         h = fit_sinusoids(tt, Yw[:, sl], fit.s, rho=rho)
         fz = []
         for i in phys_idx:
-            f, z = _fz(h.s[i:i + 1])
+            f, z = _fz(h.s[i : i + 1])
             p = h.s.size
             cov = h.cov[np.ix_([i, p + i], [i, p + i])]
             w = abs(h.s[i])
             # d f = (sigma dsigma + omega domega) / (2 pi w); d zeta = -(omega^2 dsigma -
             # sigma omega domega) / w^3
             gf = np.array([h.s[i].real, h.s[i].imag]) / (2 * math.pi * w)
-            gz = -np.array([h.s[i].imag ** 2, -h.s[i].real * h.s[i].imag]) / w ** 3
+            gz = -np.array([h.s[i].imag ** 2, -h.s[i].real * h.s[i].imag]) / w**3
             vf, vz = float(gf @ cov @ gf), float(gz @ cov @ gz)
             if not (h.converged and vf >= 0 and vz >= 0 and math.isfinite(vf + vz)):
-                return None                     # a half that cannot be fitted: not measured
+                return None  # a half that cannot be fitted: not measured
             fz.append((f[0], math.sqrt(vf), z[0], math.sqrt(vz)))
         out.append(fz)
     return out
@@ -240,19 +245,24 @@ def _half_drift(tau, Yw, fit, phys_idx, rho):
 def _fit_window(tau, yw, dtd, lo, hi, opts, rho):
     """Stabilisation, least squares, significance: (fit, physical indices, weights, info)."""
     m = yw.shape[0]
-    w = np.sqrt(np.mean(yw ** 2, axis=1))               # first weights: channel rms
+    w = np.sqrt(np.mean(yw**2, axis=1))  # first weights: channel rms
     phys, nuis, n_orders = _physical(yw / w[:, None], dtd, lo, hi, opts["max_order"], m)
     if phys.size == 0:
         return None, [], w, (0, 0, n_orders, 0)
     s0 = np.concatenate([phys, nuis])
     fit = fit_sinusoids(tau, yw / w[:, None], s0, rho=rho)
-    w = w * np.maximum(fit.rms, 1e-12 * np.max(fit.rms))     # refit weighted by the noise
+    w = w * np.maximum(fit.rms, 1e-12 * np.max(fit.rms))  # refit weighted by the noise
     fit = fit_sinusoids(tau, yw / w[:, None], fit.s, rho=rho)
-    keep = [i for i in range(phys.size) if lo <= _fz(fit.s[i:i + 1])[0][0] <= hi
-            and fit.s[i].real < 0 and _wald(fit, i) >= opts["snr_min"] ** 2]
+    keep = [
+        i
+        for i in range(phys.size)
+        if lo <= _fz(fit.s[i : i + 1])[0][0] <= hi
+        and fit.s[i].real < 0
+        and _wald(fit, i) >= opts["snr_min"] ** 2
+    ]
     dropped = phys.size - len(keep)
-    if keep and dropped:                                # refit without the spurious poles
-        s1 = np.concatenate([fit.s[keep], fit.s[phys.size:]])
+    if keep and dropped:  # refit without the spurious poles
+        s1 = np.concatenate([fit.s[keep], fit.s[phys.size :]])
         fit = fit_sinusoids(tau, yw / w[:, None], s1, rho=rho)
         keep = list(range(len(keep)))
     return fit, keep, w, (phys.size, nuis.size, n_orders, dropped)
@@ -271,13 +281,16 @@ def _try_window(y, td, t0, t1, dtd, lo, hi, opts, rho):
     if not keep:
         return None
     halves = _half_drift(tau, y[:, sel] / w[:, None], fit, keep, rho)
-    lin = [None if halves is None else _linear(halves[0][j], halves[1][j])
-           for j in range(len(keep))]
+    lin = [
+        None if halves is None else _linear(halves[0][j], halves[1][j]) for j in range(len(keep))
+    ]
     return tw, tau, fit, keep, w, counts, halves, lin
 
 
 def _linear(a, b):
     """Whether frequency and damping of the two halves agree within _DRIFT_Z std."""
     (f1, sf1, z1, sz1), (f2, sf2, z2, sz2) = a, b
-    return bool(abs(f2 - f1) <= _DRIFT_Z * math.hypot(sf1, sf2)
-                and abs(z2 - z1) <= _DRIFT_Z * math.hypot(sz1, sz2))
+    return bool(
+        abs(f2 - f1) <= _DRIFT_Z * math.hypot(sf1, sf2)
+        and abs(z2 - z1) <= _DRIFT_Z * math.hypot(sz1, sz2)
+    )

@@ -2,6 +2,7 @@
 comparison of the two extractions, and the warnings (too few points, too little precision,
 points dropped, an early stop); see :mod:`iwan_element.identify.decays.curve`.
 """
+
 from __future__ import annotations
 
 import logging
@@ -13,8 +14,8 @@ from ..modal.curves import AmplitudeCurve
 
 log = logging.getLogger("iwan_element.identify.decays.curve")
 
-_MIN_POINTS = 10       # fewer points than this (in the decay's first decade) draw a warning
-_F_TARGET, _Z_TARGET = 1e-4, 0.03     # precision below which the curve draws a warning
+_MIN_POINTS = 10  # fewer points than this (in the decay's first decade) draw a warning
+_F_TARGET, _Z_TARGET = 1e-4, 0.03  # precision below which the curve draws a warning
 
 
 def _overlap(wins):
@@ -46,17 +47,23 @@ def _few_points_warning(n_pts, stop, usable, trim_np, noise_stop, x_start, hop):
     """
     x0, x1 = usable
     nep = math.log(x0 / x1) if x1 > 0 else 0.0
-    msg = (f"only {n_pts} curve point(s) (fewer than {_MIN_POINTS}) in the first decade of the "
-           f"decay (from about {x_start:.3g} m): they run from {x0:.3g} m to {x1:.3g} m "
-           f"({nep:.2g} nepers, about {1 / hop:.2g} points per neper)")
+    msg = (
+        f"only {n_pts} curve point(s) (fewer than {_MIN_POINTS}) in the first decade of the "
+        f"decay (from about {x_start:.3g} m): they run from {x0:.3g} m to {x1:.3g} m "
+        f"({nep:.2g} nepers, about {1 / hop:.2g} points per neper)"
+    )
     if noise_stop:
-        msg += ("; it reaches the noise floor there: less noise or a larger initial amplitude "
-                "gives more points")
+        msg += (
+            "; it reaches the noise floor there: less noise or a larger initial amplitude "
+            "gives more points"
+        )
     elif stop.startswith("end"):
         msg += "; the record ends while the mode still rings above the noise: record longer"
     if trim_np > 0.3:
-        msg += (f"; the filter's end effects cost {trim_np:.2g} nepers at the start: a wider "
-                "band or a lower order needs less")
+        msg += (
+            f"; the filter's end effects cost {trim_np:.2g} nepers at the start: a wider "
+            "band or a lower order needs less"
+        )
     return msg
 
 
@@ -72,14 +79,19 @@ def _precision_warning(a):
         bad = np.flatnonzero(rel > target)
         x_ok = x[bad[0] - 1] if bad.size and bad[0] > 0 else (None if bad.size else x[-1])
         if x_ok is None or x_ok > 0.1 * x[0]:
-            where = ("at no point" if x_ok is None else
-                     f"only down to {x_ok:.3g} m ({x_ok / x[0]:.2g} of the first point)")
+            where = (
+                "at no point"
+                if x_ok is None
+                else f"only down to {x_ok:.3g} m ({x_ok / x[0]:.2g} of the first point)"
+            )
             parts.append(f"{name} to {target:g} (relative) {where}")
     if not parts:
         return None
-    return (f"the data (noise, other content in the band) allow {' and '.join(parts)}, less "
-            "than a decade of amplitude: less noise, a larger initial amplitude, or longer "
-            "windows (n_periods) at the cost of amplitude resolution would help")
+    return (
+        f"the data (noise, other content in the band) allow {' and '.join(parts)}, less "
+        "than a decade of amplitude: less noise, a larger initial amplitude, or longer "
+        "windows (n_periods) at the cost of amplitude resolution would help"
+    )
 
 
 def _compare(rows_a, rows_b, names):
@@ -94,13 +106,17 @@ def _compare(rows_a, rows_b, names):
         if df > 3 or dz > 3:
             bad.append((ra[0], df, dz))
     if not bad:
-        return (f"{names[1]} check: agrees with {names[0]} within 3 standard uncertainties at "
-                f"all {n} points"), None
+        return (
+            f"{names[1]} check: agrees with {names[0]} within 3 standard uncertainties at "
+            f"all {n} points"
+        ), None
     where = ", ".join(f"{x:.3g} m (f {df:.1f}, zeta {dz:.1f} sigma)" for x, df, dz in bad[:8])
     more = f" and {len(bad) - 8} more" if len(bad) > 8 else ""
-    return (f"{names[1]} check: differs at {len(bad)} of {n} points",
-            f"the {names[0]} and {names[1]} extractions differ by more than 3 combined standard "
-            f"uncertainties at {len(bad)} of {n} points: {where}{more}")
+    return (
+        f"{names[1]} check: differs at {len(bad)} of {n} points",
+        f"the {names[0]} and {names[1]} extractions differ by more than 3 combined standard "
+        f"uncertainties at {len(bad)} of {n} points: {where}{more}",
+    )
 
 
 def _finish(tt, fits, stops, info, opts):
@@ -113,8 +129,10 @@ def _finish(tt, fits, stops, info, opts):
     keep = [i for i, r in enumerate(main) if r is not None]
     warns = []
     if len(keep) < len(main):
-        warns.append(f"{len(main) - len(keep)} of {len(main)} windows gave no {names[0]} "
-                     "estimate (fewer than five extrema or no decaying mode) and were left out")
+        warns.append(
+            f"{len(main) - len(keep)} of {len(main)} windows gave no {names[0]} "
+            "estimate (fewer than five extrema or no decaying mode) and were left out"
+        )
     if not keep:
         raise ValueError(f"no window gave a {names[0]} estimate; try method='hilbert'")
     rows = [main[i] for i in keep]
@@ -122,17 +140,21 @@ def _finish(tt, fits, stops, info, opts):
     if max_zstd is not None:
         rows, n_drop = _cut_uncertain(rows, max_zstd)
         if n_drop:
-            warns.append(f"max_damping_ratio_std={max_zstd:g}: {n_drop} point(s) above the noise floor "
-                         f"were dropped after {rows[-1][0]:.3g} m, their damping known to worse "
-                         f"than {100 * max_zstd:g} %; leave max_damping_ratio_std unset to keep them "
-                         "with their uncertainty")
+            warns.append(
+                f"max_damping_ratio_std={max_zstd:g}: {n_drop} point(s) above the noise floor "
+                f"were dropped after {rows[-1][0]:.3g} m, their damping known to worse "
+                f"than {100 * max_zstd:g} %; leave max_damping_ratio_std unset to keep them "
+                "with their uncertainty"
+            )
     a = np.array(rows)
     w_ref = 2 * math.pi * float(a[-1, 1])
-    floor = snr_min * noise / w_ref ** k_pow
+    floor = snr_min * noise / w_ref**k_pow
     noise_stop = stop.startswith("envelope") or "of the noise" in stop
     if odd_stop:
-        warns.append(f"the curve stopped early at {a[-1, 0]:.3g} m ({a[-1, 0] / floor:.3g} x the "
-                     f"noise floor), not because of noise: {stop}")
+        warns.append(
+            f"the curve stopped early at {a[-1, 0]:.3g} m ({a[-1, 0] / floor:.3g} x the "
+            f"noise floor), not because of noise: {stop}"
+        )
     prec = _precision_warning(a)
     if prec:
         warns.append(prec)
@@ -140,41 +162,67 @@ def _finish(tt, fits, stops, info, opts):
     s0, e0 = wins[keep[0]]
     t_c0 = 0.5 * (tt[s0] + tt[e0 - 1])
     x_start = float(a[0, 0] * math.exp(2 * math.pi * a[0, 1] * a[0, 2] * (t_c0 - tt[i_pk])))
-    per = int(round(fs / f_peak))         # or the (spoiled) envelope in the first period
+    per = int(round(fs / f_peak))  # or the (spoiled) envelope in the first period
     x_start = max(x_start, float(np.max(env_start[:per])) / (2 * math.pi * a[0, 1]) ** k_pow)
     n_dec = int(np.count_nonzero(a[:, 0] >= 0.1 * x_start))
     if n_dec < _MIN_POINTS:
         trim_np = float(n_start / fs * 2 * math.pi * a[0, 1] * a[0, 2])
-        warns.append(_few_points_warning(n_dec, stop, (a[0, 0], a[n_dec - 1, 0]), trim_np,
-                                         noise_stop and n_dec == a.shape[0], x_start,
-                                         plan.hop))
-    share = _overlap([wins[i] for i in keep][:len(rows)])
+        warns.append(
+            _few_points_warning(
+                n_dec,
+                stop,
+                (a[0, 0], a[n_dec - 1, 0]),
+                trim_np,
+                noise_stop and n_dec == a.shape[0],
+                x_start,
+                plan.hop,
+            )
+        )
+    share = _overlap([wins[i] for i in keep][: len(rows)])
     overlap = float(np.mean(share))
     cmp_note = ""
     if compare and other is not None:
-        cmp_note, cmp_warn = _compare([main[i] for i in keep][:len(rows)],
-                                      [other[i] for i in keep][:len(rows)], names)
+        cmp_note, cmp_warn = _compare(
+            [main[i] for i in keep][: len(rows)], [other[i] for i in keep][: len(rows)], names
+        )
         if cmp_warn:
             warns.append(cmp_warn)
-    how_f = ("zero-phase (sosfiltfilt)" if route[0] else "run twice backwards in time (sosfilt "
-             f"on the reversed record, moved back by the group delay, {route[1] / fs:.4g} s)")
-    notes = (f"band {lo:g}-{hi:g} Hz, Butterworth order {order} {how_f}, on the record "
-             f"continued past its ends by linear prediction; mode at "
-             f"{f_peak:.4g} Hz; decay from t = {tt[i_pk]:.4g} s, trimmed {n_start / fs:.4g} s "
-             f"at its start and {n_end / fs:.4g} s before the end (measured end effects); "
-             f"{a.shape[0]} windows ({'fixed' if plan.fixed else 'following the decay'}, "
-             f"{plan.span:g} nepers each, starting every {plan.hop:g} nepers, "
-             f"{plan.n_min / fs:.4g}-{plan.n_max / fs:.4g} s), "
-             f"overlap {overlap:.2g} (neighbouring points share data when > 1); method "
-             f"{names[0]}; in-band noise RMS {noise:.3g} from {how}; noise floor {floor:.3g} m "
-             f"({snr_min:g} x noise); last point at {a[-1, 0]:.3g} m; stopped: {stop}"
-             + (f"; {cmp_note}" if cmp_note else ""))
+    how_f = (
+        "zero-phase (sosfiltfilt)"
+        if route[0]
+        else "run twice backwards in time (sosfilt "
+        f"on the reversed record, moved back by the group delay, {route[1] / fs:.4g} s)"
+    )
+    notes = (
+        f"band {lo:g}-{hi:g} Hz, Butterworth order {order} {how_f}, on the record "
+        f"continued past its ends by linear prediction; mode at "
+        f"{f_peak:.4g} Hz; decay from t = {tt[i_pk]:.4g} s, trimmed {n_start / fs:.4g} s "
+        f"at its start and {n_end / fs:.4g} s before the end (measured end effects); "
+        f"{a.shape[0]} windows ({'fixed' if plan.fixed else 'following the decay'}, "
+        f"{plan.span:g} nepers each, starting every {plan.hop:g} nepers, "
+        f"{plan.n_min / fs:.4g}-{plan.n_max / fs:.4g} s), "
+        f"overlap {overlap:.2g} (neighbouring points share data when > 1); method "
+        f"{names[0]}; in-band noise RMS {noise:.3g} from {how}; noise floor {floor:.3g} m "
+        f"({snr_min:g} x noise); last point at {a[-1, 0]:.3g} m; stopped: {stop}"
+        + (f"; {cmp_note}" if cmp_note else "")
+    )
     if overlap > 1.05:
-        notes += (f"; the uncertainties include the factor sqrt(overlap) (mean {overlap:.2g}), so "
-                  "that a fit treating the points as independent states its own uncertainty "
-                  "right: one point alone is known better by that factor")
+        notes += (
+            f"; the uncertainties include the factor sqrt(overlap) (mean {overlap:.2g}), so "
+            "that a fit treating the points as independent states its own uncertainty "
+            "right: one point alone is known better by that factor"
+        )
     a[:, 3:6] *= np.sqrt(share)[:, None]
     log.debug("amplitude_curve: %s", notes)
-    return AmplitudeCurve(a[:, 0], a[:, 1], a[:, 2], amplitude_std=a[:, 3],
-                          frequency_std=a[:, 4], damping_ratio_std=a[:, 5], noise_floor=floor,
-                          method=names[0], notes=notes, warnings=tuple(warns))
+    return AmplitudeCurve(
+        a[:, 0],
+        a[:, 1],
+        a[:, 2],
+        amplitude_std=a[:, 3],
+        frequency_std=a[:, 4],
+        damping_ratio_std=a[:, 5],
+        noise_floor=floor,
+        method=names[0],
+        notes=notes,
+        warnings=tuple(warns),
+    )

@@ -8,6 +8,7 @@ points per neper whatever the damping. They overlap (by ``span / hop``, about 3,
 span rule sets the length): neighbouring points share data and their errors are correlated;
 the overlap is stated in the curve's notes.
 """
+
 from __future__ import annotations
 
 import math
@@ -25,9 +26,9 @@ class WindowPlan:
     n_min: int
     n_max: int
     n_half: int
-    span: float          # decay across a window [neper]
-    hop: float           # decay between window starts [neper]
-    fixed: bool          # a window length given by the user: fixed, disjoint windows
+    span: float  # decay across a window [neper]
+    hop: float  # decay between window starts [neper]
+    fixed: bool  # a window length given by the user: fixed, disjoint windows
 
 
 def _line_fit(tw, yv, n_block):
@@ -38,7 +39,7 @@ def _line_fit(tw, yv, n_block):
     block means drop the deterministic ripple of harmonics and are nearly independent
     samples of the noise), at least four blocks.
     """
-    X = np.column_stack([np.ones_like(tw), tw, tw ** 2])
+    X = np.column_stack([np.ones_like(tw), tw, tw**2])
     coef, *_ = np.linalg.lstsq(X, yv, rcond=None)
     nb = max(tw.size // n_block, 4)
     edges = np.linspace(0, tw.size, nb + 1).astype(int)
@@ -74,7 +75,7 @@ def _window_length(plan, sigma, dt):
     """Window length [samples] for a decay rate ``sigma`` [1/s]."""
     if plan.fixed:
         n = plan.n_max
-        if sigma > 0:      # a given window is still shortened where it decays by > e**0.5
+        if sigma > 0:  # a given window is still shortened where it decays by > e**0.5
             n = min(n, max(int(0.5 / (sigma * dt)), plan.n_min))
         return n
     n = int(plan.span / (sigma * dt)) if sigma > 0 else plan.n_max
@@ -104,7 +105,7 @@ def hilbert_windows(tt, env, phase, span, plan, noise_spec, mode):
     i0, i1 = span
     noise, snr_min, bw, n_block = noise_spec
     k_pow, band, sos, fs, route = mode
-    dt = 1.0 / fs                 # the mean step (time stamps may be rounded)
+    dt = 1.0 / fs  # the mean step (time stamps may be rounded)
     rows, wins = [], []
     # a first decay rate: the time the envelope takes to fall by e from the usable start
     below = np.flatnonzero(env[i0:i1] < env[i0] / math.e)
@@ -114,25 +115,28 @@ def hilbert_windows(tt, env, phase, span, plan, noise_spec, mode):
     c = i0 + _window_length(plan, sigma, dt) // (2 if plan.fixed else 4)
     skipped = 0
     while True:
+
         def window(sig):
             n_full = _window_length(plan, sig, dt)
             h = min(n_full // 2, c - i0, i1 - c)
             keep = n_full if plan.fixed else max(plan.n_min, n_full // 2)
             return slice(c - h, c + h) if 2 * h >= keep - 1 else None
+
         sl = window(sigma)
         if sl is None:
-            if c < i0 + plan.n_max:          # at the start, walk on to a full-enough window
+            if c < i0 + plan.n_max:  # at the start, walk on to a full-enough window
                 c += plan.n_half
                 if c < i1:
                     continue
             break
         if np.mean(env[sl]) < snr_min * noise:
             return rows, wins, f"envelope below the noise threshold at t = {tt[c]:.4g} s", False
-        for _ in range(3):            # the length follows the decay rate found in the window
+        for _ in range(3):  # the length follows the decay rate found in the window
             tc, ln_a, sigma, wd, (sa, sp) = _fit_window(tt, env, phase, sl, n_block, noise, bw)
             new = window(sigma)
             if new is None or abs((new.stop - new.start) - (sl.stop - sl.start)) <= 0.1 * (
-                    sl.stop - sl.start):
+                sl.stop - sl.start
+            ):
                 break
             sl = new
         wn = math.hypot(sigma, wd)
@@ -141,27 +145,38 @@ def hilbert_windows(tt, env, phase, span, plan, noise_spec, mode):
             # within three standard errors of a decaying mode in the band: the noise's doing
             z_sd, f_sd = sa[1] / wn, sp[1] / (2 * math.pi)
             noisy = (zeta + 3 * z_sd > 0) and (band[0] - 3 * f_sd < f < band[1] + 3 * f_sd)
-            if noisy:                 # no estimate from this one: skip it, counted
+            if noisy:  # no estimate from this one: skip it, counted
                 skipped += 1
                 sigma = 0.0 if not rows else sigma
-                c += plan.n_half if not rows else max(_hop(plan, sigma, sl.stop - sl.start,
-                                                           dt), 1)
+                c += plan.n_half if not rows else max(_hop(plan, sigma, sl.stop - sl.start, dt), 1)
                 continue
-            return rows, wins, (f"window at t = {tc:.4g} s gives f = {f:.4g} Hz, zeta = "
-                                f"{zeta:.3g} (outside the band or not a decaying mode: beating, "
-                                "forcing or noise)"), True
+            return (
+                rows,
+                wins,
+                (
+                    f"window at t = {tc:.4g} s gives f = {f:.4g} Hz, zeta = "
+                    f"{zeta:.3g} (outside the band or not a decaying mode: beating, "
+                    "forcing or noise)"
+                ),
+                True,
+            )
         gain = _reverse_gain(sos, fs, sigma, wd, route)
-        amp = math.exp(ln_a) / gain / wn ** k_pow
+        amp = math.exp(ln_a) / gain / wn**k_pow
         f_std = math.hypot(sigma * sa[1], wd * sp[1]) / wn / (2 * math.pi)
         rows.append((amp, f, zeta, amp * sa[0], f_std, sa[1] / wn))
         wins.append((sl.start, sl.stop))
         n_full = _window_length(plan, sigma, dt)
-        if plan.fixed:                # disjoint: the next window starts where this one ends
+        if plan.fixed:  # disjoint: the next window starts where this one ends
             c = sl.stop + n_full // 2
         else:
             c += max(_hop(plan, sigma, n_full, dt), 1)
-    return rows, wins, "end of the record (after trimming)" + (
-        f"; {skipped} window(s) within the noise of no decay skipped" if skipped else ""), False
+    return (
+        rows,
+        wins,
+        "end of the record (after trimming)"
+        + (f"; {skipped} window(s) within the noise of no decay skipped" if skipped else ""),
+        False,
+    )
 
 
 def _log_slope(ln_x, ln_w, j, half=1.0):

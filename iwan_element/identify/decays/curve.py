@@ -65,6 +65,7 @@ The band must hold one clear mode: a Welch spectrum peak inside it, not at its e
 least 10 times the band's median level (or 3 times, if the band-passed envelope decays
 tenfold: a heavily damped mode fills a narrow band), with no second peak above a tenth of it.
 """
+
 from __future__ import annotations
 
 import logging
@@ -96,8 +97,9 @@ def _check_band(band, fs):
         raise ValueError(f"band must be a pair (f_lo, f_hi) in Hz, got {band!r}") from None
     nyq = 0.5 * fs
     if not (math.isfinite(lo) and math.isfinite(hi) and 0.0 < lo < hi < nyq):
-        raise ValueError(f"band must satisfy 0 < f_lo < f_hi < Nyquist ({nyq:g} Hz), got "
-                         f"({lo:g}, {hi:g}) Hz")
+        raise ValueError(
+            f"band must satisfy 0 < f_lo < f_hi < Nyquist ({nyq:g} Hz), got ({lo:g}, {hi:g}) Hz"
+        )
     return lo, hi
 
 
@@ -108,7 +110,7 @@ def _decays_in_band(y, fs, lo, hi):
     """
     sos = signal.butter(2, [lo, hi], btype="bandpass", fs=fs, output="sos")
     env = np.abs(signal.hilbert(signal.sosfiltfilt(sos, y)))
-    return bool(env.max() > 10.0 * np.mean(env[-max(env.size // 5, 1):]))
+    return bool(env.max() > 10.0 * np.mean(env[-max(env.size // 5, 1) :]))
 
 
 class _TwoModes(ValueError):
@@ -124,19 +126,27 @@ def _check_mode(y, fs, lo, hi):
     several peaks (a 10 % damped mode at 80 Hz was refused as "81 and 67 Hz").
     """
     # (zero padding at most 16 times the record: a nonsensical time axis cannot blow it up)
-    nfft = int(2 ** min(math.ceil(math.log2(fs / ((hi - lo) / 64.0))),
-                        math.ceil(math.log2(16 * y.size))))
+    nfft = int(
+        2 ** min(math.ceil(math.log2(fs / ((hi - lo) / 64.0))), math.ceil(math.log2(16 * y.size)))
+    )
     nper = int(min(y.size, nfft))
     if (hi - lo) * y.size / fs < 4.0:
-        raise ValueError(f"band ({lo:g}, {hi:g}) Hz is too narrow for the record length "
-                         f"({y.size / fs:.3g} s): it is less than 4 / T wide; widen it")
+        raise ValueError(
+            f"band ({lo:g}, {hi:g}) Hz is too narrow for the record length "
+            f"({y.size / fs:.3g} s): it is less than 4 / T wide; widen it"
+        )
     # a short record (a heavily damped decay) is zero-padded to the same line spacing
     try:
         return _mode_peak(*signal.welch(y, fs=fs, nperseg=nper, nfft=nfft), y, fs, lo, hi)
     except _TwoModes as first:
         try:
-            return _mode_peak(*signal.periodogram(y, fs=fs, window="boxcar",
-                                                  nfft=max(nfft, y.size)), y, fs, lo, hi)
+            return _mode_peak(
+                *signal.periodogram(y, fs=fs, window="boxcar", nfft=max(nfft, y.size)),
+                y,
+                fs,
+                lo,
+                hi,
+            )
         except _TwoModes:
             raise first from None
 
@@ -145,26 +155,34 @@ def _mode_peak(f, P, y, fs, lo, hi):
     """The one clear spectral peak of ``P`` in the band, or a ValueError saying why not."""
     inb = np.flatnonzero((f >= lo) & (f <= hi))
     if inb.size < 8:
-        raise ValueError(f"band ({lo:g}, {hi:g}) Hz is too narrow for the record length "
-                         f"({y.size / fs:.3g} s): it is less than 4 / T wide; widen it")
+        raise ValueError(
+            f"band ({lo:g}, {hi:g}) Hz is too narrow for the record length "
+            f"({y.size / fs:.3g} s): it is less than 4 / T wide; widen it"
+        )
     Pb = P[inb]
     k = int(np.argmax(Pb))
     med = float(np.median(Pb))
     where = f"in band ({lo:g}, {hi:g}) Hz"
     if k < 2 or k > inb.size - 3:
-        raise ValueError(f"no clear mode {where}: the strongest content is at its edge "
-                         f"({f[inb[k]]:.4g} Hz); move or widen the band around one mode")
+        raise ValueError(
+            f"no clear mode {where}: the strongest content is at its edge "
+            f"({f[inb[k]]:.4g} Hz); move or widen the band around one mode"
+        )
     if Pb[k] < 10.0 * med and not (Pb[k] > 3.0 * med and _decays_in_band(y, fs, lo, hi)):
-        raise ValueError(f"no clear mode {where}: the spectral peak at {f[inb[k]]:.4g} Hz is "
-                         f"only {Pb[k] / max(med, 1e-300):.3g} times the band's median level "
-                         "(needs 10, or 3 with an envelope that decays tenfold); a heavily "
-                         "damped mode fills a narrow band (its half-power width is 2 zeta f): "
-                         "widen the band")
+        raise ValueError(
+            f"no clear mode {where}: the spectral peak at {f[inb[k]]:.4g} Hz is "
+            f"only {Pb[k] / max(med, 1e-300):.3g} times the band's median level "
+            "(needs 10, or 3 with an envelope that decays tenfold); a heavily "
+            "damped mode fills a narrow band (its half-power width is 2 zeta f): "
+            "widen the band"
+        )
     peaks, _ = signal.find_peaks(Pb, prominence=0.05 * Pb[k])
     others = [int(j) for j in peaks if abs(int(j) - k) > 3 and Pb[j] > 0.1 * Pb[k]]
     if others:
-        raise _TwoModes(f"band ({lo:g}, {hi:g}) Hz holds more than one mode (peaks at "
-                        f"{f[inb[k]]:.4g} Hz and {f[inb[others[0]]]:.4g} Hz); narrow it to one")
+        raise _TwoModes(
+            f"band ({lo:g}, {hi:g}) Hz holds more than one mode (peaks at "
+            f"{f[inb[k]]:.4g} Hz and {f[inb[others[0]]]:.4g} Hz); narrow it to one"
+        )
     return float(f[inb[k]])
 
 
@@ -182,13 +200,13 @@ def _residual_noise(z, i0, i1, nw):
     out = []
     tw = np.arange(nw) - 0.5 * (nw - 1)
     for s in range(i0, i1 - nw + 1, nw):
-        zw = z[s:s + nw]
+        zw = z[s : s + nw]
         mag = np.abs(zw)
         ca = np.polyfit(tw, np.log(np.maximum(mag, 1e-300)), 1)
         cp = np.polyfit(tw, np.unwrap(np.angle(zw)), 1)
         model = np.exp(np.polyval(ca, tw) + 1j * np.polyval(cp, tw))
         res = float(np.sqrt(np.mean(np.abs(zw - model) ** 2)))
-        total = float(np.sqrt(np.mean(mag ** 2)))
+        total = float(np.sqrt(np.mean(mag**2)))
         # where noise dominates, the fitted phase line follows the noise's own slow phase
         # and the residual understates it: there the whole content is the bound
         out.append((res if res < 0.3 * total else total) / math.sqrt(2.0))
@@ -203,22 +221,22 @@ def _noise_rms(yf, z, fs, span, f_peak):
     noise = float("inf")
     if bounds.size:
         # each window is a noisy upper bound (a few B T samples): the median of the lower half
-        low = np.sort(bounds)[:(bounds.size + 1) // 2]
+        low = np.sort(bounds)[: (bounds.size + 1) // 2]
         noise = float(np.median(low))
-        how.append(f"residual of the analytic signal about its local decaying-sinusoid model "
-                   f"(median of the lower half of {bounds.size} windows): {noise:.3g}")
-    pre = yf[n_trim:max(n_trim, i_pk - n_trim)]
+        how.append(
+            f"residual of the analytic signal about its local decaying-sinusoid model "
+            f"(median of the lower half of {bounds.size} windows): {noise:.3g}"
+        )
+    pre = yf[n_trim : max(n_trim, i_pk - n_trim)]
     if pre.size >= max(64, 3.0 * fs / f_peak):
-        quiet = float(np.sqrt(np.mean(pre ** 2)))
+        quiet = float(np.sqrt(np.mean(pre**2)))
         how.append(f"pre-trigger ({pre.size / fs:.3g} s): {quiet:.3g}")
         noise = min(noise, quiet)
     return noise, "; ".join(how)
 
 
-
-
-_SPAN = 0.5            # decay across a window [neper]
-_HOP = 0.15            # decay between window starts [neper]
+_SPAN = 0.5  # decay across a window [neper]
+_HOP = 0.15  # decay between window starts [neper]
 
 
 def _plan(fs, f_peak, n_periods, window):
@@ -231,8 +249,14 @@ def _plan(fs, f_peak, n_periods, window):
         n_max, fixed = max(int(round(n_periods * per)), 16), True
     else:
         n_max, fixed = max(int(round(200 * per)), n_min), False
-    return WindowPlan(n_min=min(n_min, n_max), n_max=n_max, n_half=max(int(round(per / 2)), 1),
-                      span=_SPAN, hop=_HOP, fixed=fixed)
+    return WindowPlan(
+        n_min=min(n_min, n_max),
+        n_max=n_max,
+        n_half=max(int(round(per / 2)), 1),
+        span=_SPAN,
+        hop=_HOP,
+        fixed=fixed,
+    )
 
 
 def _check_options(quantity, order, n_periods, window, snr_min, max_damping_ratio_std, method):
@@ -248,16 +272,26 @@ def _check_options(quantity, order, n_periods, window, snr_min, max_damping_rati
         window = check_scalar("window", window, low=0.0, low_open=True)
     snr_min = check_scalar("snr_min", snr_min, low=2.0, high=1e6)
     if max_damping_ratio_std is not None:
-        max_damping_ratio_std = check_scalar("max_damping_ratio_std", max_damping_ratio_std, low=0.0, high=1.0,
-                                       low_open=True)
+        max_damping_ratio_std = check_scalar(
+            "max_damping_ratio_std", max_damping_ratio_std, low=0.0, high=1.0, low_open=True
+        )
     return n_periods, window, snr_min, max_damping_ratio_std
 
 
-def amplitude_curve(t, y, *, quantity: str = "acceleration", band,
-                    n_periods: float | None = None, window: float | None = None,
-                    order: int = 4, snr_min: float = 10.0,
-                    max_damping_ratio_std: float | None = None, method: str = "hilbert",
-                    compare: bool = True):
+def amplitude_curve(
+    t,
+    y,
+    *,
+    quantity: str = "acceleration",
+    band,
+    n_periods: float | None = None,
+    window: float | None = None,
+    order: int = 4,
+    snr_min: float = 10.0,
+    max_damping_ratio_std: float | None = None,
+    method: str = "hilbert",
+    compare: bool = True,
+):
     """Frequency and damping ratio against amplitude from a free-decay record of one mode.
 
     Band-pass run backwards in time, Hilbert transform, straight-line fits of log-envelope
@@ -326,7 +360,8 @@ def amplitude_curve(t, y, *, quantity: str = "acceleration", band,
     n = yy.size
     fs = 1.0 / dt
     n_periods, window, snr_min, max_damping_ratio_std = _check_options(
-        quantity, order, n_periods, window, snr_min, max_damping_ratio_std, method)
+        quantity, order, n_periods, window, snr_min, max_damping_ratio_std, method
+    )
     k_pow = _QUANTITY_POWER[quantity]
     lo, hi = _check_band(band, fs)
     tt, yy, flat_note = cut_flattened_peaks(tt, yy, (lo, hi))
@@ -338,11 +373,13 @@ def amplitude_curve(t, y, *, quantity: str = "acceleration", band,
     plan = _plan(fs, f_peak, n_periods, window)
     i0, i1 = i_pk + n_start, n - n_end
     if i1 - i0 < (plan.n_max if plan.fixed else plan.n_min):
-        raise ValueError(f"record too short: after trimming {n_start / fs:.3g} s of filter end "
-                         f"effects at the start and {n_end / fs:.3g} s at the end, "
-                         f"{max(i1 - i0, 0) / fs:.3g} s remain, less than one window "
-                         f"({(plan.n_max if plan.fixed else plan.n_min) / fs:.3g} s); give a "
-                         "longer record, a wider band or a shorter window")
+        raise ValueError(
+            f"record too short: after trimming {n_start / fs:.3g} s of filter end "
+            f"effects at the start and {n_end / fs:.3g} s at the end, "
+            f"{max(i1 - i0, 0) / fs:.3g} s remain, less than one window "
+            f"({(plan.n_max if plan.fixed else plan.n_min) / fs:.3g} s); give a "
+            "longer record, a wider band or a shorter window"
+        )
     env = np.abs(z)
     phase = np.unwrap(np.angle(z))
     # noise windows of 20 periods (at least 10 / B): each bound rests on enough independent
@@ -353,34 +390,65 @@ def amplitude_curve(t, y, *, quantity: str = "acceleration", band,
     noise = max(noise, 1e-7 * float(env[i0:i1].max()))
     n_block = max(1, int(round(fs / f_peak)), int(round(fs / bw)))
     rows, wins, stop, odd_stop = hilbert_windows(
-        tt, env, phase, (i0, i1), plan, (noise, snr_min, bw, n_block),
-        (k_pow, (lo, hi), sos, fs, route))
+        tt,
+        env,
+        phase,
+        (i0, i1),
+        plan,
+        (noise, snr_min, bw, n_block),
+        (k_pow, (lo, hi), sos, fs, route),
+    )
     if not rows and stop.startswith("end"):
-        raise ValueError(f"record too short: after trimming {n_start / fs:.3g} s of filter end "
-                         f"effects at the start and {n_end / fs:.3g} s at the end, "
-                         f"{(i1 - i0) / fs:.3g} s remain, not enough for one window that follows "
-                         f"the decay (0.5 nepers of it, at least 3 periods, at least half of it "
-                         "inside the record); give a longer record or a fixed, shorter window "
-                         "(n_periods)")
+        raise ValueError(
+            f"record too short: after trimming {n_start / fs:.3g} s of filter end "
+            f"effects at the start and {n_end / fs:.3g} s at the end, "
+            f"{(i1 - i0) / fs:.3g} s remain, not enough for one window that follows "
+            f"the decay (0.5 nepers of it, at least 3 periods, at least half of it "
+            "inside the record); give a longer record or a fixed, shorter window "
+            "(n_periods)"
+        )
     if not rows:
-        raise ValueError(f"no usable window in band ({lo:g}, {hi:g}) Hz after the trimmed start: "
-                         f"{stop}; the signal does not rise above {snr_min:g} x the in-band noise "
-                         f"({noise:.3g} in units of y) or holds no decaying mode there")
-    pff = pff_windows(tt, yf, wins, (k_pow, sos, fs, route),
-                      lambda amp, T: _noise_std(noise, amp, T, bw)) \
-        if (method == "pff" or compare) else None
+        raise ValueError(
+            f"no usable window in band ({lo:g}, {hi:g}) Hz after the trimmed start: "
+            f"{stop}; the signal does not rise above {snr_min:g} x the in-band noise "
+            f"({noise:.3g} in units of y) or holds no decaying mode there"
+        )
+    pff = (
+        pff_windows(
+            tt, yf, wins, (k_pow, sos, fs, route), lambda amp, T: _noise_std(noise, amp, T, bw)
+        )
+        if (method == "pff" or compare)
+        else None
+    )
+
     def terms(w):
         return _drift_terms(sos, fs, w, route[0])
+
     rows = drift_correct(rows, k_pow, terms)
     if pff is not None:
         pff = drift_correct(pff, k_pow, terms)
     names = (method, "pff" if method == "hilbert" else "hilbert")
     main, other = (rows, pff) if method == "hilbert" else (pff, rows)
-    curve = _finish(tt, (main, other, wins, names), (stop, odd_stop),
-                    (lo, hi, order, f_peak, fs, n_start, n_end, i_pk, noise, how, snr_min, k_pow,
-                     route, env[i_pk:i_pk + n_start + 1]),
-                    (max_damping_ratio_std, compare, plan))
+    curve = _finish(
+        tt,
+        (main, other, wins, names),
+        (stop, odd_stop),
+        (
+            lo,
+            hi,
+            order,
+            f_peak,
+            fs,
+            n_start,
+            n_end,
+            i_pk,
+            noise,
+            how,
+            snr_min,
+            k_pow,
+            route,
+            env[i_pk : i_pk + n_start + 1],
+        ),
+        (max_damping_ratio_std, compare, plan),
+    )
     return replace(curve, warnings=notes + curve.warnings) if notes else curve
-
-
-

@@ -26,6 +26,7 @@ Users: the free-decay filter (:mod:`._filter`, tapered and padded), the flattene
 detector (:mod:`.saturation`, plain) and the hammer-test prediction
 (:mod:`iwan_element.models.hammer`, a displacement envelope from acceleration).
 """
+
 from __future__ import annotations
 
 import math
@@ -48,7 +49,7 @@ def _filter_extent(sos, fs, lo, hi):
 
 def _hilbert(y):
     """Analytic signal, zero-padded to at least twice the length (no circular wrap)."""
-    return signal.hilbert(y, N=int(2 ** math.ceil(math.log2(2 * y.size))))[:y.size]
+    return signal.hilbert(y, N=int(2 ** math.ceil(math.log2(2 * y.size))))[: y.size]
 
 
 def _ramp_ends(x, n0, n1):
@@ -61,8 +62,9 @@ def _ramp_ends(x, n0, n1):
     return out
 
 
-def analytic_signal(y, fs: float, band, *, order: int = 4, taper_ends: bool = False,
-                    pad: bool = False):
+def analytic_signal(
+    y, fs: float, band, *, order: int = 4, taper_ends: bool = False, pad: bool = False
+):
     """Zero-phase band-passed record and its analytic signal (module docstring).
 
     Parameters

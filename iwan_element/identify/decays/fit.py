@@ -48,6 +48,7 @@ sources are in the project's ``docs/decay_fit.md``; in short:
    a factor e) below the release amplitude but is not reported, the microslip result is
    returned with ``success=False`` and a warning: its closed forms hold for ``X << phi_max``.
 """
+
 from __future__ import annotations
 
 import dataclasses
@@ -92,13 +93,22 @@ def _windows(prob, i_a, i_b, nw):
     rows = []
     tw = (np.arange(nw) - 0.5 * (nw - 1)) / prob.fs
     for s in range(i_a, i_b - nw + 1, nw):
-        zw = prob.z[s:s + nw]
+        zw = prob.z[s : s + nw]
         lnA, ph = _polar(zw)
         ca = np.polyfit(tw, lnA, 1)
         cp = np.polyfit(tw, ph, 1)
         res = np.abs(zw - np.exp(np.polyval(ca, tw) + 1j * np.polyval(cp, tw)))
-        rows.append((s + 0.5 * (nw - 1), math.exp(ca[1]), -ca[0], cp[0], cp[1],
-                     float(np.sqrt(np.mean(res ** 2))), float(np.sqrt(np.mean(np.abs(zw) ** 2)))))
+        rows.append(
+            (
+                s + 0.5 * (nw - 1),
+                math.exp(ca[1]),
+                -ca[0],
+                cp[0],
+                cp[1],
+                float(np.sqrt(np.mean(res**2))),
+                float(np.sqrt(np.mean(np.abs(zw) ** 2))),
+            )
+        )
     return np.array(rows).reshape(-1, 7)
 
 
@@ -116,23 +126,41 @@ def _starts(X, f, zeta, conv):
     starts, full = [], None
     if X.size >= 4 and np.unique(np.round(np.log(X), 6)).size >= 3:
         try:
-            fit = fit_modal_iwan(X, f, np.maximum(zeta, 1e-7), stiffness=conv["stiffness"],
-                                 floor=conv["floor"], x_ref=conv["x_ref"], damping_form="decay")
+            fit = fit_modal_iwan(
+                X,
+                f,
+                np.maximum(zeta, 1e-7),
+                stiffness=conv["stiffness"],
+                floor=conv["floor"],
+                x_ref=conv["x_ref"],
+                damping_form="decay",
+            )
             p = fit.parameters
             if fit.regime == "microslip":
                 starts.append(np.array(fit.values, dtype=float))
             elif fit.regime == "macroslip":
                 full = np.array(fit.values, dtype=float)
-                delta = p["kappa"] * (conv["x_ref"] / p["phi_max"]) ** (p["chi"] + 1) \
+                delta = (
+                    p["kappa"]
+                    * (conv["x_ref"] / p["phi_max"]) ** (p["chi"] + 1)
                     / ((p["chi"] + 2) * (1 + p["beta"]))
+                )
                 starts.append(np.array([p["f0"], p["zeta0"], p["chi"], min(delta, 0.5)]))
         except ValueError:
             pass
     zmin = float(np.min(zeta)) if zeta.size else 1e-3
-    for x in starts:              # keep chi off the corner chi -> -1 where f0 and delta trade
+    for x in starts:  # keep chi off the corner chi -> -1 where f0 and delta trade
         x[2] = min(max(x[2], -0.8), 0.8)
-    starts.append(np.array([float(np.max(f)) * 1.00001, 0.8 * max(zmin, 1e-6), -0.5,
-                            max(1.0 - (np.median(f) / np.max(f)) ** 2, 1e-6)]))
+    starts.append(
+        np.array(
+            [
+                float(np.max(f)) * 1.00001,
+                0.8 * max(zmin, 1e-6),
+                -0.5,
+                max(1.0 - (np.median(f) / np.max(f)) ** 2, 1e-6),
+            ]
+        )
+    )
     return starts, full
 
 
@@ -165,8 +193,9 @@ def _full_starts(micro_x, X_max, x_ref, curve_full):
             phimax, beta = ratio * X_max, 0.5
             kappa = delta * (chi + 2.0) * (1.0 + beta) * (phimax / x_ref) ** (chi + 1.0)
             if 0.0 < kappa < 1.0:
-                out.append(np.concatenate([[f0, z0, chi, kappa, math.log(phimax), beta],
-                                           micro_x[4:]]))
+                out.append(
+                    np.concatenate([[f0, z0, chi, kappa, math.log(phimax), beta], micro_x[4:]])
+                )
     return out
 
 
@@ -202,39 +231,67 @@ def _prepare(t, y, quantity, band, order, stiffness, floor, x_ref, t_start):
     _check_options(quantity, order, stiffness, floor)
     lo, hi = _check_band(band, 1.0 / dt)
     if hi * dt < 1e-5:
-        raise ValueError(f"band ({lo:g}, {hi:g}) Hz is below 1e-5 of the sampling rate "
-                         f"{1.0 / dt:.3g} Hz (from t): check the unit of t")
+        raise ValueError(
+            f"band ({lo:g}, {hi:g}) Hz is below 1e-5 of the sampling rate "
+            f"{1.0 / dt:.3g} Hz (from t): check the unit of t"
+        )
     tt, yy, flat_note = cut_flattened_peaks(tt, yy, (lo, hi))
     clip_note = " ".join(x for x in (clip_note, flat_note) if x)
-    conv = dict(stiffness=stiffness, floor=floor, x_ref=None, damping_form="decay",
-                method="direct signal fit",
-                quantity=quantity, band=[lo, hi], order=int(order))
-    prob = _Problem(yy - yy.mean(), 1.0 / dt, (lo, hi), int(order), _QUANTITY_POWER[quantity],
-                    conv)
+    conv = dict(
+        stiffness=stiffness,
+        floor=floor,
+        x_ref=None,
+        damping_form="decay",
+        method="direct signal fit",
+        quantity=quantity,
+        band=[lo, hi],
+        order=int(order),
+    )
+    prob = _Problem(yy - yy.mean(), 1.0 / dt, (lo, hi), int(order), _QUANTITY_POWER[quantity], conv)
     fs = prob.fs
     i_s = prob.i_s = _decay_start(prob, t_start, float(tt[0]))
-    nw = max(16, int(round(2.0 * fs / math.sqrt(lo * hi))))          # two periods
+    nw = max(16, int(round(2.0 * fs / math.sqrt(lo * hi))))  # two periods
     env = np.convolve(np.abs(prob.z), np.ones(nw) / nw, mode="same")
-    i_top = i_s + int(np.argmax(env[i_s:]))          # the filter spreads the start
+    i_top = i_s + int(np.argmax(env[i_s:]))  # the filter spreads the start
     low = np.flatnonzero(env[i_top:] < 0.05 * env[i_top])
     i_a = prob.n if low.size == 0 else i_top + int(low[0])
     X, f, zeta, rows = _window_curve(prob, i_s, i_a, nw)
     if X.size == 0 or i_a - i_s < nw:
-        raise ValueError(f"no decaying mode in band ({lo:g}, {hi:g}) Hz after "
-                         f"t = {tt[0] + i_s / fs:.4g} s (record too short or no clear mode)")
-    conv["x_ref"] = float(np.exp(np.mean(np.log(X)))) if x_ref is None else \
-        check_scalar("x_ref", x_ref, low=0.0, low_open=True)
+        raise ValueError(
+            f"no decaying mode in band ({lo:g}, {hi:g}) Hz after "
+            f"t = {tt[0] + i_s / fs:.4g} s (record too short or no clear mode)"
+        )
+    conv["x_ref"] = (
+        float(np.exp(np.mean(np.log(X))))
+        if x_ref is None
+        else check_scalar("x_ref", x_ref, low=0.0, low_open=True)
+    )
     m = prob.n_trim
     first = rows[0] if rows[0, 0] > m or i_s >= m else rows[int(np.argmax(rows[:, 1]))]
     wn = math.hypot(first[2], first[3])
     tc = (first[0] - i_s) / fs
-    nuis = [math.log(first[1] / wn ** prob.k) + max(first[2], 0.0) * tc,
-            first[4] - first[3] * tc - prob.k * math.asin(min(max(first[2] / wn, 0.0), 0.5))]
+    nuis = [
+        math.log(first[1] / wn**prob.k) + max(first[2], 0.0) * tc,
+        first[4] - first[3] * tc - prob.k * math.asin(min(max(first[2] / wn, 0.0), 0.5)),
+    ]
     prob.nb_starts = _neighbours(prob, i_s)
     prob.nb = len(prob.nb_starts)
     nuis = [v for nb in prob.nb_starts for v in nb] + nuis
-    return prob, conv, dict(clip_note=clip_note, t0=float(tt[0]), i_s=i_s, i_top=i_top, i_a=i_a, env=env, nw=nw,
-                            nuis=nuis, data=(X, f, zeta))
+    return (
+        prob,
+        conv,
+        dict(
+            clip_note=clip_note,
+            t0=float(tt[0]),
+            i_s=i_s,
+            i_top=i_top,
+            i_a=i_a,
+            env=env,
+            nw=nw,
+            nuis=nuis,
+            data=(X, f, zeta),
+        ),
+    )
 
 
 def _window_curve(prob, i_s, i_b, nw):
@@ -242,19 +299,24 @@ def _window_curve(prob, i_s, i_b, nw):
     where possible (the fit itself models it): start values and the plot's data.
     """
     m = prob.n_trim
-    a, b = (max(i_s, m), min(i_b, prob.n - m)) if min(i_b, prob.n - m) - max(i_s, m) >= 2 * nw \
+    a, b = (
+        (max(i_s, m), min(i_b, prob.n - m))
+        if min(i_b, prob.n - m) - max(i_s, m) >= 2 * nw
         else (i_s, i_b)
-    rows = _windows(prob, a, b, max(nw, (b - a) // 16))                 # at most 16 windows
+    )
+    rows = _windows(prob, a, b, max(nw, (b - a) // 16))  # at most 16 windows
     return (*_summary(prob, rows), rows)
 
 
 def _span(prob, info, i_b, spc):
     """Decimated sample indices of the fit and the log-amplitude span of the quadrature."""
     i_s, env = info["i_s"], info["env"]
-    step = max(1, min(int(prob.fs / (spc * prob.bw)), (i_b - i_s) // 400),
-               math.ceil((i_b - i_s) / 4000))
-    decay = math.log(env[info["i_top"]] / max(env[i_b - 1], 1e-300)) \
-        + max(0.0, math.log(env[info["i_top"]] / max(env[i_s], 1e-300)))
+    step = max(
+        1, min(int(prob.fs / (spc * prob.bw)), (i_b - i_s) // 400), math.ceil((i_b - i_s) / 4000)
+    )
+    decay = math.log(env[info["i_top"]] / max(env[i_b - 1], 1e-300)) + max(
+        0.0, math.log(env[info["i_top"]] / max(env[i_s], 1e-300))
+    )
     prob.span = max(3.0 * decay, decay + 5.0)
     return np.arange(i_s, i_b, step), step
 
@@ -266,7 +328,7 @@ def _bounds(prob, regime, X, x_max, ln_a0):
     else:
         lb = [0.5 * lo, 0.0, -0.999, 1e-9, math.log(1e-3 * X.min()), 0.0]
         ub = [2.0 * hi, 0.999, 1.0, 1.0 - 1e-9, math.log(1e3 * x_max), 100.0]
-    for f2, s2, _, _ in prob.nb_starts:     # a neighbour stays near its spectral estimate
+    for f2, s2, _, _ in prob.nb_starts:  # a neighbour stays near its spectral estimate
         df = 0.02 * f2
         lb += [f2 - df, 0.0, -np.inf, -np.inf]
         ub += [f2 + df, 2.0 * s2 + 2.0 * math.pi * df, np.inf, np.inf]
@@ -278,12 +340,17 @@ def _no_mode(prob, snr_min, ratio):
     without the mode): a ValueError naming ``y`` and the band, not the model's inner range.
     """
     lo, hi = prob.band
-    found = "no decay curve fits it" if not math.isfinite(ratio) else \
-        f"its largest envelope is {ratio:.2g} times the noise RMS a decay model leaves"
-    raise ValueError(f"y holds no decaying mode in band ({lo:g}, {hi:g}) Hz above snr_min = "
-                     f"{snr_min:g} times the in-band noise: {found} (pure noise or a band "
-                     "without the mode); check the band around the mode and the record, or "
-                     "lower snr_min")
+    found = (
+        "no decay curve fits it"
+        if not math.isfinite(ratio)
+        else f"its largest envelope is {ratio:.2g} times the noise RMS a decay model leaves"
+    )
+    raise ValueError(
+        f"y holds no decaying mode in band ({lo:g}, {hi:g}) Hz above snr_min = "
+        f"{snr_min:g} times the in-band noise: {found} (pure noise or a band "
+        "without the mode); check the band around the mode and the record, or "
+        "lower snr_min"
+    )
 
 
 def _fit_micro(prob, info, snr_min, spc):
@@ -300,7 +367,7 @@ def _fit_micro(prob, info, snr_min, spc):
     ref = float(np.abs(prob.z[idx]).max())
     first = _fit_regime(_Objective(prob, "microslip", idx, ref, bnd), starts, bnd)
     lag = math.ceil(2.0 * prob.fs / (prob.bw * step))
-    with np.errstate(invalid="ignore", divide="ignore"):    # the weights are not used here
+    with np.errstate(invalid="ignore", divide="ignore"):  # the weights are not used here
         noise = ref * _local_weights(first.fun, lag)[1] * math.sqrt(2.0)
     if not env[i_top] >= snr_min * noise > 0.0:
         _no_mode(prob, snr_min, env[i_top] / noise if noise > 0 else math.nan)
@@ -312,13 +379,25 @@ def _fit_micro(prob, info, snr_min, spc):
     lag = math.ceil(2.0 * prob.fs / (prob.bw * step))
     weights, _ = _local_weights(obj.resid(first.x), lag)
     try:
-        envelope = obj.envelope(first.x)      # weights free of each sample's own noise
-    except ValueError:                        # no decay curve fits: f or zeta out of range
+        envelope = obj.envelope(first.x)  # weights free of each sample's own noise
+    except ValueError:  # no decay curve fits: f or zeta out of range
         _no_mode(prob, snr_min, math.nan)
     obj = _Objective(prob, "microslip", idx, ref, bnd, weights, envelope)
     micro = _fit_regime(obj, [first.x], bnd)
-    return micro, obj, dict(idx=idx, step=step, i_b=i_b, noise=noise, ref=ref,
-                            curve_full=curve_full, weights=weights, envelope=envelope)
+    return (
+        micro,
+        obj,
+        dict(
+            idx=idx,
+            step=step,
+            i_b=i_b,
+            noise=noise,
+            ref=ref,
+            curve_full=curve_full,
+            weights=weights,
+            envelope=envelope,
+        ),
+    )
 
 
 def _fit_models(prob, info, alpha, snr_min, spc, bar=None):
@@ -335,12 +414,11 @@ def _fit_models(prob, info, alpha, snr_min, spc, bar=None):
     full_starts = _full_starts(micro.x, x_max, prob.conv["x_ref"], span["curve_full"])
     if 2 * idx.size > 12 and full_starts:
         bnd = _bounds(prob, "macroslip", X, x_max, info["nuis"][-2])
-        obj_f = _Objective(prob, "macroslip", idx, ref, bnd, span["weights"],
-                           span["envelope"])
+        obj_f = _Objective(prob, "macroslip", idx, ref, bnd, span["weights"], span["envelope"])
         full = _fit_regime(obj_f, full_starts, bnd)
         tick(bar, text="full model fitted")
         cov_f, kappa_f, dof_f = _covariance(obj_f, full.fun, full.jac)
-        s2 = float(np.mean(full.fun ** 2))
+        s2 = float(np.mean(full.fun**2))
         stat = 2.0 * (micro.cost - full.cost) / max(s2 * kappa_f, 1e-300)
         p_val = float(stats.chi2.sf(max(stat, 0.0), 2))
         log.debug("fit_decay: likelihood-ratio statistic %.3g, p %.3g", stat, p_val)
@@ -349,22 +427,32 @@ def _fit_models(prob, info, alpha, snr_min, spc, bar=None):
         a_end = math.exp(prob.trajectory(prob.theta(full.x), "macroslip", full.x[-2], t_end)[0, 0])
         inside = a_end < math.exp(full.x[4]) < math.e * math.exp(full.x[-2])
         complete = False
-        if p_val < alpha and phi_known and inside:     # every joint parameter must be fixed
-            trial = ModalIwanFit.from_solution(full.x[:6], cov_f[:6, :6], "macroslip", {},
-                                               prob.conv, chi2_red=1.0, weights=(), warnings=(),
-                                               optimizer_ok=True)
+        if p_val < alpha and phi_known and inside:  # every joint parameter must be fixed
+            trial = ModalIwanFit.from_solution(
+                full.x[:6],
+                cov_f[:6, :6],
+                "macroslip",
+                {},
+                prob.conv,
+                chi2_red=1.0,
+                weights=(),
+                warnings=(),
+                optimizer_ok=True,
+            )
             complete = len(trial.identified) == len(trial.parameters)
         if complete:
             chosen, regime, cov, kappa, dof = full, "macroslip", cov_f, kappa_f, dof_f
-        elif p_val < alpha or (p_val < 0.05 and phi_known and inside
-                               and math.exp(full.x[4]) < math.exp(full.x[-2])):
+        elif p_val < alpha or (
+            p_val < 0.05 and phi_known and inside and math.exp(full.x[4]) < math.exp(full.x[-2])
+        ):
             # microslip closed forms hold for X << phi_max only
             guard.append(
                 f"the record leaves microslip (likelihood-ratio p = {p_val:.2g}; the full "
                 f"model puts phi_max at {math.exp(full.x[4]):.3g} m against a release "
                 f"amplitude of {math.exp(full.x[-2]):.3g} m) but does not fix the full model: "
                 "the microslip parameters f0, zeta0, chi and delta describe amplitudes beyond "
-                "the validity of the microslip model and may be biased; not a success")
+                "the validity of the microslip model and may be biased; not a success"
+            )
             warns.append(guard[-1])
         else:
             warns.append(
@@ -373,25 +461,40 @@ def _fit_models(prob, info, alpha, snr_min, spc, bar=None):
                 f"{'' if inside else ', outside the decay amplitudes'}"
                 f"{'' if complete or not (phi_known and inside) else ', joint not fixed'}"
                 "): KT, phi_max, beta "
-                "and Fs are not identified; reported f0, zeta0, chi and delta")
+                "and Fs are not identified; reported f0, zeta0, chi and delta"
+            )
     if regime == "microslip" and _microslip_saturates(micro.x, prob.conv["x_ref"]):
-        guard.append("the microslip curve's tangent stiffness vanishes inside the record: "
-                     "its largest amplitudes are beyond phi_max for any joint not stiffer "
-                     "than the mode; the microslip parameters may be biased; not a success")
+        guard.append(
+            "the microslip curve's tangent stiffness vanishes inside the record: "
+            "its largest amplitudes are beyond phi_max for any joint not stiffer "
+            "than the mode; the microslip parameters may be biased; not a success"
+        )
         warns.append(guard[-1])
     chi2_red = _misfit_ratio(chosen.fun, lags)
-    if chi2_red > 1.0:          # structure beyond the noise model: widen (as fit_modal_iwan)
+    if chi2_red > 1.0:  # structure beyond the noise model: widen (as fit_modal_iwan)
         cov = cov * chi2_red
-    span.update(kappa=kappa, dof=dof, chi2_red=chi2_red, regime=regime, warns=warns, cov=cov,
-                guard=guard)
+    span.update(
+        kappa=kappa, dof=dof, chi2_red=chi2_red, regime=regime, warns=warns, cov=cov, guard=guard
+    )
     return chosen, span
 
 
-def fit_decay(t, y, *, quantity: str = "acceleration", band, order: int = 4,
-              stiffness: str = "harmonic", floor: str = "dashpot", x_ref: float | None = None,
-              t_start: float | None = None, snr_min: float = 10.0,
-              samples_per_correlation: float = 4.0, significance: float = 1e-3,
-              progress: bool = False) -> ModalIwanFit:
+def fit_decay(
+    t,
+    y,
+    *,
+    quantity: str = "acceleration",
+    band,
+    order: int = 4,
+    stiffness: str = "harmonic",
+    floor: str = "dashpot",
+    x_ref: float | None = None,
+    t_start: float | None = None,
+    snr_min: float = 10.0,
+    samples_per_correlation: float = 4.0,
+    significance: float = 1e-3,
+    progress: bool = False,
+) -> ModalIwanFit:
     """Fit the modal Iwan model directly to a free-decay record of one mode.
 
     The slowly varying amplitude and phase of the mode (averaging) with the modal Iwan
@@ -461,14 +564,14 @@ def fit_decay(t, y, *, quantity: str = "acceleration", band, order: int = 4,
     """
     snr_min = check_scalar("snr_min", snr_min, low=2.0, high=1e6)
     spc = check_scalar("samples_per_correlation", samples_per_correlation, low=1.0, high=100.0)
-    alpha = check_scalar("significance", significance, low=0.0, high=0.5, low_open=True,
-                         high_open=True)
+    alpha = check_scalar(
+        "significance", significance, low=0.0, high=0.5, low_open=True, high_open=True
+    )
     bar = progress_bar(progress, total=4, desc="fit_decay", unit="stage")
     try:
-        prob, conv, info = _prepare(t, y, quantity, band, order, stiffness, floor, x_ref,
-                                    t_start)
+        prob, conv, info = _prepare(t, y, quantity, band, order, stiffness, floor, x_ref, t_start)
         tick(bar, text="record prepared")
-        with one_blas_thread():          # the Jacobian's SVD per step is small: threads cost
+        with one_blas_thread():  # the Jacobian's SVD per step is small: threads cost
             best, span = _fit_models(prob, info, alpha, snr_min, spc, bar)
         tick(bar, text="uncertainty")
     finally:
@@ -476,33 +579,61 @@ def fit_decay(t, y, *, quantity: str = "acceleration", band, order: int = 4,
     regime, warns, i_s, i_b = span["regime"], span["warns"], info["i_s"], span["i_b"]
     t0 = info["t0"]
     n_th = best.x.size - prob.n_nuis
-    a_end = float(np.exp(prob.trajectory(best.x[:n_th], regime, best.x[-2],
-                                         np.array([(i_b - 1 - i_s) / prob.fs]))[0, 0]))
-    conv.update(t_fit=[t0 + i_s / prob.fs, t0 + (i_b - 1) / prob.fs],
-                samples=int(span["idx"].size), sample_step=float(span["step"] / prob.fs),
-                noise_rms=span["noise"] / math.sqrt(2.0),
-                correlation_factor=float(span["kappa"]),
-                residual_dof=float(span["dof"][0]), noise_dof=float(span["dof"][1]),
-                amplitude_range=[math.exp(best.x[-2]), a_end],
-                neighbour_modes=[dict(frequency=float(v[0]), decay_rate=float(v[1]))
-                                 for v in best.x[n_th:n_th + 4 * prob.nb].reshape(-1, 4)])
+    a_end = float(
+        np.exp(
+            prob.trajectory(
+                best.x[:n_th], regime, best.x[-2], np.array([(i_b - 1 - i_s) / prob.fs])
+            )[0, 0]
+        )
+    )
+    conv.update(
+        t_fit=[t0 + i_s / prob.fs, t0 + (i_b - 1) / prob.fs],
+        samples=int(span["idx"].size),
+        sample_step=float(span["step"] / prob.fs),
+        noise_rms=span["noise"] / math.sqrt(2.0),
+        correlation_factor=float(span["kappa"]),
+        residual_dof=float(span["dof"][0]),
+        noise_dof=float(span["dof"][1]),
+        amplitude_range=[math.exp(best.x[-2]), a_end],
+        neighbour_modes=[
+            dict(frequency=float(v[0]), decay_rate=float(v[1]))
+            for v in best.x[n_th : n_th + 4 * prob.nb].reshape(-1, 4)
+        ],
+    )
     if best.x[-2] - math.log(a_end) < 0.1:
         change = 100 * (math.exp(best.x[-2]) / a_end - 1)
-        warns.append(f"the amplitude changes by only {change:.2g} % over the fitted span: the "
-                     "amplitude dependence rests on very little")
+        warns.append(
+            f"the amplitude changes by only {change:.2g} % over the fitted span: the "
+            "amplitude dependence rests on very little"
+        )
     X, f, zeta, _ = _window_curve(prob, i_s, i_b, info["nw"])
-    data = dict(amplitude=X, frequency=f, damping_ratio=zeta,
-                frequency_std=np.full(X.size, np.nan), damping_ratio_std=np.full(X.size, np.nan))
-    fit = ModalIwanFit.from_solution(best.x[:n_th], span["cov"][:n_th, :n_th], regime, data, conv,
-                                     chi2_red=span["chi2_red"], weights=(),
-                                     warnings=tuple(w for w in [info["clip_note"]] + warns if w),
-                                     optimizer_ok=bool(best.success),
-                                     noise_dof=span["dof"][1], noise_source=(
-                                         " (the record holds few independent noise samples "
-                                         "beyond what the fit absorbs; a longer record, a "
-                                         "wider band or less noise would help)"))
+    data = dict(
+        amplitude=X,
+        frequency=f,
+        damping_ratio=zeta,
+        frequency_std=np.full(X.size, np.nan),
+        damping_ratio_std=np.full(X.size, np.nan),
+    )
+    fit = ModalIwanFit.from_solution(
+        best.x[:n_th],
+        span["cov"][:n_th, :n_th],
+        regime,
+        data,
+        conv,
+        chi2_red=span["chi2_red"],
+        weights=(),
+        warnings=tuple(w for w in [info["clip_note"]] + warns if w),
+        optimizer_ok=bool(best.success),
+        noise_dof=span["dof"][1],
+        noise_source=(
+            " (the record holds few independent noise samples "
+            "beyond what the fit absorbs; a longer record, a "
+            "wider band or less noise would help)"
+        ),
+    )
     if span["guard"]:
-        fit = dataclasses.replace(fit, success=False,
-                                  failures=tuple(span["guard"]) + fit.failure_reasons())
+        fit = dataclasses.replace(
+            fit, success=False, failures=tuple(span["guard"]) + fit.failure_reasons()
+        )
     log.debug("fit_decay: %s", conv)
     return fit

@@ -45,6 +45,7 @@ poles interactively or nearest to a guess, and has no notion of an amplitude win
 (GPL-3.0) cannot be an extra of a BSD package. The free-decay route, its window rule and its
 uncertainties are written here.
 """
+
 from __future__ import annotations
 
 import logging
@@ -70,16 +71,19 @@ def _position(name, p):
     if isinstance(p, (tuple, list, np.ndarray)):
         arr = finite_array(f"records[{name!r}] position", p)
         if not 1 <= arr.size <= 3:
-            raise ValueError(f"records[{name!r}] position must be a number or 1-3 coordinates "
-                             f"[m], got {arr.size}")
+            raise ValueError(
+                f"records[{name!r}] position must be a number or 1-3 coordinates "
+                f"[m], got {arr.size}"
+            )
         return float(arr[0]) if arr.size == 1 else tuple(map(float, arr))
     return check_scalar(f"records[{name!r}] position", p)
 
 
 def _records(t, records, directions, quantity):
     if not isinstance(records, Mapping) or not records:
-        raise ValueError("records must be a non-empty mapping {sensor name: (position [m], "
-                         "record)}")
+        raise ValueError(
+            "records must be a non-empty mapping {sensor name: (position [m], record)}"
+        )
     if directions is not None and not isinstance(directions, Mapping):
         raise ValueError("directions must be a mapping {sensor name: +1 or -1} or None")
     directions = dict(directions or {})
@@ -92,15 +96,19 @@ def _records(t, records, directions, quantity):
         try:
             p, y = val
         except (TypeError, ValueError):
-            raise ValueError(f"records[{name!r}] must be a pair (position [m], {quantity} "
-                             "record)") from None
-        y = check_magnitude(f"records[{name!r}]", finite_array(f"records[{name!r}]", y,
-                                                                min_size=64))
+            raise ValueError(
+                f"records[{name!r}] must be a pair (position [m], {quantity} record)"
+            ) from None
+        y = check_magnitude(
+            f"records[{name!r}]", finite_array(f"records[{name!r}]", y, min_size=64)
+        )
         if n is None:
             n = y.size
         elif y.size != n:
-            raise ValueError(f"records must all have the same length: records[{name!r}] has "
-                             f"{y.size} samples, the first has {n}")
+            raise ValueError(
+                f"records must all have the same length: records[{name!r}] has "
+                f"{y.size} samples, the first has {n}"
+            )
         if float(np.ptp(y)) == 0.0:
             raise ValueError(f"records[{name!r}] is constant: no decay to identify")
         d = directions.get(name, 1)
@@ -128,13 +136,17 @@ def _bands(bands, fs, Y, t):
         except (TypeError, ValueError):
             raise ValueError(f"bands[{label!r}] must be a pair (f_lo, f_hi) in Hz") from None
         if not (math.isfinite(lo) and math.isfinite(hi) and 0 < lo < hi < 0.8 * nyq):
-            raise ValueError(f"bands[{label!r}] must satisfy 0 < f_lo < f_hi < 0.8 x Nyquist "
-                             f"({0.8 * nyq:g} Hz), got ({lo:g}, {hi:g})")
+            raise ValueError(
+                f"bands[{label!r}] must satisfy 0 < f_lo < f_hi < 0.8 x Nyquist "
+                f"({0.8 * nyq:g} Hz), got ({lo:g}, {hi:g})"
+            )
         span = float(t[-1] - t[0])
         if span * lo < 5.0:
-            raise ValueError(f"t spans {span:.3g} s: fewer than 5 periods of bands[{label!r}]'s "
-                             f"lower edge ({lo:g} Hz); check the unit of t (ms given as s?) "
-                             "and the band")
+            raise ValueError(
+                f"t spans {span:.3g} s: fewer than 5 periods of bands[{label!r}]'s "
+                f"lower edge ({lo:g} Hz); check the unit of t (ms given as s?) "
+                "and the band"
+            )
         out[str(label)] = (lo, hi)
     return out
 
@@ -153,14 +165,14 @@ def _auto_bands(Y, fs, duration, *, width=0.08, prominence=10.0):
     ls = np.log(np.maximum(S, 1e-300))
     floor = float(np.median(ls[ok]))
     ls = np.where(ok, ls, floor)
-    idx, _ = signal.find_peaks(ls, prominence=math.log(prominence),
-                               height=floor + math.log(prominence))
+    idx, _ = signal.find_peaks(
+        ls, prominence=math.log(prominence), height=floor + math.log(prominence)
+    )
     fp = np.sort(f[idx])
     out = {}
     for k, fk in enumerate(fp):
         lo = fk * (1 - width) if k == 0 else max(fk * (1 - width), 0.5 * (fp[k - 1] + fk))
-        hi = fk * (1 + width) if k == fp.size - 1 else min(fk * (1 + width),
-                                                             0.5 * (fp[k + 1] + fk))
+        hi = fk * (1 + width) if k == fp.size - 1 else min(fk * (1 + width), 0.5 * (fp[k + 1] + fk))
         out[f"{fk:.4g} Hz"] = (lo, hi)
     return out
 
@@ -177,15 +189,18 @@ def _band(t, dt, Y, label, lo, hi, opts):
     warns = []
     if opts["window"] is None:
         try:
-            cands = _auto_windows(y, td, i0, lo, hi, opts["snr_min"], opts["span"],
-                                  opts["min_periods"])
+            cands = _auto_windows(
+                y, td, i0, lo, hi, opts["snr_min"], opts["span"], opts["min_periods"]
+            )
         except _NoWindow as exc:
             return [], f"{head}: no usable decay ({exc})", [f"{head}: no usable decay ({exc})"]
     else:
         cands = [(*opts["window"], "window given")]
         if opts["window"][0] < t_first:
-            warns.append(f"{head}: the given window starts at {opts['window'][0]:g} s, before "
-                         f"the band-pass has settled after the impact ({t_first:.4g} s)")
+            warns.append(
+                f"{head}: the given window starts at {opts['window'][0]:g} s, before "
+                f"the band-pass has settled after the impact ({t_first:.4g} s)"
+            )
     first = None
     for t0, t1, why in cands:
         res = _try_window(y, td, t0, t1, q * dt, lo, hi, opts, rho)
@@ -197,49 +212,71 @@ def _band(t, dt, Y, label, lo, hi, opts):
     else:
         if first is None:
             t0, t1 = cands[0][:2]
-            return [], f"{head}: no mode", [
-                f"{head}: no pole was stable and significant in the window {t0:.4g}-"
-                f"{t1:.4g} s" + (" or in earlier ones" if len(cands) > 1 else "")
-                + ": no mode"]
-        res, why = first                         # none linear: keep the latest
+            return (
+                [],
+                f"{head}: no mode",
+                [
+                    f"{head}: no pole was stable and significant in the window {t0:.4g}-"
+                    f"{t1:.4g} s" + (" or in earlier ones" if len(cands) > 1 else "") + ": no mode"
+                ],
+            )
+        res, why = first  # none linear: keep the latest
     tw, tau, fit, keep, w, (n_phys, n_nuis, n_orders, dropped), halves, _ = res
     modes = []
     for j, i in enumerate(keep):
         vals, std = _propagate(fit, i, w, sos, dt, opts["power"])
         mode = _mode_dict(vals, std, Y.shape[0], fit.s[i], tw, label, halves, j)
-        mode["snr"] = float(np.max(np.abs(fit.C[i]) * math.exp(fit.s[i].real * tau[-1])
-                                   / np.maximum(fit.rms, 1e-300)))
+        mode["snr"] = float(
+            np.max(
+                np.abs(fit.C[i]) * math.exp(fit.s[i].real * tau[-1]) / np.maximum(fit.rms, 1e-300)
+            )
+        )
         modes.append(mode)
-    note = (f"{head}, decimated x{q}: window {tw[0]:.4g}-{tw[-1]:.4g} s ({why}); {n_phys} "
-            f"physical and {n_nuis} nuisance pole(s) stable over orders 2-{2 * n_orders}"
-            + (f"; {dropped} not significant, dropped" if dropped else ""))
+    note = (
+        f"{head}, decimated x{q}: window {tw[0]:.4g}-{tw[-1]:.4g} s ({why}); {n_phys} "
+        f"physical and {n_nuis} nuisance pole(s) stable over orders 2-{2 * n_orders}"
+        + (f"; {dropped} not significant, dropped" if dropped else "")
+    )
     if not fit.converged:
         warns.append(f"{head}: the least-squares fit did not converge")
     for md in modes:
         if md["snr"] < opts["snr_min"] / 3:
-            warns.append(f"{head}: the mode at {md['frequency']:.5g} Hz ends its window at an "
-                         f"SNR of only {md['snr']:.2g}")
+            warns.append(
+                f"{head}: the mode at {md['frequency']:.5g} Hz ends its window at an "
+                f"SNR of only {md['snr']:.2g}"
+            )
     return modes, note, warns
 
 
 def _mode_dict(vals, std, m, s, tw, label, halves, j):
-    X = vals[2:2 + m] + 1j * vals[2 + m:2 + 2 * m]
-    shape = vals[2 + 2 * m:2 + 3 * m] + 1j * vals[2 + 3 * m:]
+    X = vals[2 : 2 + m] + 1j * vals[2 + m : 2 + 2 * m]
+    shape = vals[2 + 2 * m : 2 + 3 * m] + 1j * vals[2 + 3 * m :]
     Xa = float(np.max(np.abs(X)))
-    d = {"label": label, "frequency": vals[0], "frequency_std": std[0],
-         "damping_ratio": vals[1], "damping_ratio_std": std[1], "amplitude": X,
-         "amplitude_std": np.column_stack([std[2:2 + m], std[2 + m:2 + 2 * m]]),
-         "shape": shape, "shape_std": np.column_stack([std[2 + 2 * m:2 + 3 * m],
-                                                       std[2 + 3 * m:]]),
-         "t_ref": float(tw[0]), "window": (float(tw[0]), float(tw[-1])),
-         "amplitude_range": (Xa, Xa * math.exp(s.real * (tw[-1] - tw[0]))),
-         "complexity": float(np.linalg.norm(shape.imag) / np.linalg.norm(shape)),
-         "method": "LS-ESPRIT stabilisation + least squares"}
+    d = {
+        "label": label,
+        "frequency": vals[0],
+        "frequency_std": std[0],
+        "damping_ratio": vals[1],
+        "damping_ratio_std": std[1],
+        "amplitude": X,
+        "amplitude_std": np.column_stack([std[2 : 2 + m], std[2 + m : 2 + 2 * m]]),
+        "shape": shape,
+        "shape_std": np.column_stack([std[2 + 2 * m : 2 + 3 * m], std[2 + 3 * m :]]),
+        "t_ref": float(tw[0]),
+        "window": (float(tw[0]), float(tw[-1])),
+        "amplitude_range": (Xa, Xa * math.exp(s.real * (tw[-1] - tw[0]))),
+        "complexity": float(np.linalg.norm(shape.imag) / np.linalg.norm(shape)),
+        "method": "LS-ESPRIT stabilisation + least squares",
+    }
     # (the end-of-window SNR is added by _band and removed before the ModeTarget is made)
     if halves is not None:
         (f1, sf1, z1, sz1), (f2, sf2, z2, sz2) = halves[0][j], halves[1][j]
-        d.update(frequency_drift=f2 - f1, frequency_drift_std=math.hypot(sf1, sf2),
-                 damping_drift=z2 - z1, damping_drift_std=math.hypot(sz1, sz2))
+        d.update(
+            frequency_drift=f2 - f1,
+            frequency_drift_std=math.hypot(sf1, sf2),
+            damping_drift=z2 - z1,
+            damping_drift_std=math.hypot(sz1, sz2),
+        )
         d["linear"] = _linear(halves[0][j], halves[1][j])
     return d
 
@@ -252,23 +289,37 @@ def _options(quantity, window, span, snr_min, max_order, min_periods, filter_ord
         try:
             t0, t1 = (float(x) for x in window)
         except (TypeError, ValueError):
-            raise ValueError(f"window must be None or a pair (t0, t1) in s, got "
-                             f"{window!r}") from None
+            raise ValueError(
+                f"window must be None or a pair (t0, t1) in s, got {window!r}"
+            ) from None
         if not (math.isfinite(t0) and math.isfinite(t1) and t[0] <= t0 < t1 <= t[-1]):
-            raise ValueError(f"window must satisfy {t[0]:g} <= t0 < t1 <= {t[-1]:g} s (the "
-                             f"record), got ({t0:g}, {t1:g})")
+            raise ValueError(
+                f"window must satisfy {t[0]:g} <= t0 < t1 <= {t[-1]:g} s (the "
+                f"record), got ({t0:g}, {t1:g})"
+            )
         window = (t0, t1)
-    if isinstance(max_order, bool) or not isinstance(max_order, (int, np.integer)) \
-            or not 8 <= max_order <= 80 or max_order % 2:
+    if (
+        isinstance(max_order, bool)
+        or not isinstance(max_order, (int, np.integer))
+        or not 8 <= max_order <= 80
+        or max_order % 2
+    ):
         raise ValueError(f"max_order must be an even integer in [8, 80], got {max_order!r}")
-    if isinstance(filter_order, bool) or not isinstance(filter_order, (int, np.integer)) \
-            or not 2 <= filter_order <= 8:
+    if (
+        isinstance(filter_order, bool)
+        or not isinstance(filter_order, (int, np.integer))
+        or not 2 <= filter_order <= 8
+    ):
         raise ValueError(f"filter_order must be an integer in [2, 8], got {filter_order!r}")
-    return {"power": _POWER[quantity], "window": window,
-            "span": check_scalar("span", span, low=0.1, high=5.0),
-            "snr_min": check_scalar("snr_min", snr_min, low=2.0, high=1e4),
-            "max_order": int(max_order), "filter_order": int(filter_order),
-            "min_periods": check_scalar("min_periods", min_periods, low=5.0, high=1e4)}
+    return {
+        "power": _POWER[quantity],
+        "window": window,
+        "span": check_scalar("span", span, low=0.1, high=5.0),
+        "snr_min": check_scalar("snr_min", snr_min, low=2.0, high=1e4),
+        "max_order": int(max_order),
+        "filter_order": int(filter_order),
+        "min_periods": check_scalar("min_periods", min_periods, low=5.0, high=1e4),
+    }
 
 
 def _cross_warnings(modes, envelopes):
@@ -292,10 +343,20 @@ def _cross_warnings(modes, envelopes):
     return warns
 
 
-def free_decay_modes(t, records, *, quantity: str = "acceleration", directions=None,
-                     bands=None, window=None, span: float = 1.0, snr_min: float = 10.0,
-                     max_order: int = 20, min_periods: float = 30.0,
-                     filter_order: int = 4) -> ModalTargets:
+def free_decay_modes(
+    t,
+    records,
+    *,
+    quantity: str = "acceleration",
+    directions=None,
+    bands=None,
+    window=None,
+    span: float = 1.0,
+    snr_min: float = 10.0,
+    max_order: int = 20,
+    min_periods: float = 30.0,
+    filter_order: int = 4,
+) -> ModalTargets:
     """Natural frequencies, damping ratios and shapes from a multi-sensor free decay.
 
     The linear targets of a ring-down without measured force (a hammer impact), each from
@@ -366,22 +427,35 @@ def free_decay_modes(t, records, *, quantity: str = "acceleration", directions=N
             envelopes[label] = (tt[::q], env)
     modes.sort(key=lambda d: d["frequency"])
     for a, b, ratio in _cross_warnings(modes, envelopes):
-        warns.append(f"the window of the mode at {a['frequency']:.5g} Hz "
-                     f"({a['window'][0]:.3g}-{a['window'][1]:.3g} s) lies where the mode at "
-                     f"{b['frequency']:.5g} Hz rings at {ratio:.3g} times the level of its "
-                     "own window: the joint is loaded by that mode then, so this mode is "
-                     "linear in its own amplitude only")
+        warns.append(
+            f"the window of the mode at {a['frequency']:.5g} Hz "
+            f"({a['window'][0]:.3g}-{a['window'][1]:.3g} s) lies where the mode at "
+            f"{b['frequency']:.5g} Hz rings at {ratio:.3g} times the level of its "
+            "own window: the joint is loaded by that mode then, so this mode is "
+            "linear in its own amplitude only"
+        )
     for d in modes:
         if d.get("linear") is False:
-            warns.append(f"the mode at {d['frequency']:.5g} Hz drifts across its window "
-                         f"({d['window'][0]:.3g}-{d['window'][1]:.3g} s): frequency "
-                         f"{d['frequency_drift']:+.3g} Hz (+-{d['frequency_drift_std']:.2g}), "
-                         f"damping {d['damping_drift']:+.3g} (+-{d['damping_drift_std']:.2g}) "
-                         "between its halves; not yet linear there, its stderr includes the "
-                         "drift")
-    targets = tuple(ModeTarget(index=i + 1, sensors=tuple(names), positions=tuple(pos),
-                               **{k: v for k, v in d.items() if k != "snr"})
-                    for i, d in enumerate(modes))
-    return ModalTargets(modes=targets, source="free decay",
-                        notes=f"{quantity} records of {', '.join(names)}; " + "; ".join(notes),
-                        warnings=tuple(warns))
+            warns.append(
+                f"the mode at {d['frequency']:.5g} Hz drifts across its window "
+                f"({d['window'][0]:.3g}-{d['window'][1]:.3g} s): frequency "
+                f"{d['frequency_drift']:+.3g} Hz (+-{d['frequency_drift_std']:.2g}), "
+                f"damping {d['damping_drift']:+.3g} (+-{d['damping_drift_std']:.2g}) "
+                "between its halves; not yet linear there, its stderr includes the "
+                "drift"
+            )
+    targets = tuple(
+        ModeTarget(
+            index=i + 1,
+            sensors=tuple(names),
+            positions=tuple(pos),
+            **{k: v for k, v in d.items() if k != "snr"},
+        )
+        for i, d in enumerate(modes)
+    )
+    return ModalTargets(
+        modes=targets,
+        source="free decay",
+        notes=f"{quantity} records of {', '.join(names)}; " + "; ".join(notes),
+        warnings=tuple(warns),
+    )

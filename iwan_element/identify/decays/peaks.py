@@ -18,6 +18,7 @@ window holding ``K >= 5`` extrema:
 * ``w_n = sqrt(sigma**2 + w_d**2)``, ``zeta = sigma / w_n``, and the amplitude at the window
   centre is ``exp(intercept) w_n / w_d``.
 """
+
 from __future__ import annotations
 
 import math
@@ -37,7 +38,7 @@ def extrema(yf, i0, i1):
     ``yf`` or of ``-yf``; only alternating signs are kept (a noise wiggle between two true
     extrema of one sign is dropped in favour of the larger).
     """
-    seg = yf[max(i0 - 1, 0):i1 + 1]
+    seg = yf[max(i0 - 1, 0) : i1 + 1]
     off = max(i0 - 1, 0)
     idx = np.sort(np.concatenate([signal.find_peaks(seg)[0], signal.find_peaks(-seg)[0]]))
     if idx.size == 0:
@@ -50,7 +51,7 @@ def extrema(yf, i0, i1):
     pos = idx + d + off
     val = y0 - 0.25 * (ym - yp) * d
     keep = [0]
-    for j in range(1, pos.size):          # alternate signs: keep the larger of a same-sign run
+    for j in range(1, pos.size):  # alternate signs: keep the larger of a same-sign run
         if np.sign(val[j]) == np.sign(val[keep[-1]]):
             if abs(val[j]) > abs(val[keep[-1]]):
                 keep[-1] = j
@@ -81,7 +82,7 @@ def pff_windows(tt, yf, wins, mode, noise_std):
     decaying mode.
     """
     k_pow, sos, fs, route = mode
-    dt = 1.0 / fs                 # the mean step (time stamps may be rounded)
+    dt = 1.0 / fs  # the mean step (time stamps may be rounded)
     pos, val = extrema(yf, wins[0][0], wins[-1][1]) if wins else (np.empty(0), np.empty(0))
     times = tt[0] + pos * dt
     rows = []
@@ -105,7 +106,7 @@ def pff_windows(tt, yf, wins, mode, noise_std):
         n0, n1 = noise_std(amp_f, (e - s) * dt)
         sa0, sa1 = max(s_a[0], n0), max(s_a[1], n1)
         swd = max(wd * s_t[1] / c_t[1], n1)
-        amp = amp_f / _reverse_gain(sos, fs, sigma, wd, route) / wn ** k_pow
+        amp = amp_f / _reverse_gain(sos, fs, sigma, wd, route) / wn**k_pow
         f_std = math.hypot(sigma * sa1, wd * swd) / wn / (2 * math.pi)
         rows.append((amp, wn / (2 * math.pi), sigma / wn, amp * sa0, f_std, sa1 / wn))
     return rows

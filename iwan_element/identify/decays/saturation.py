@@ -23,6 +23,7 @@ run of cycles from the decay's start in which at least 80 % are flattened (at le
 A nonlinear joint's own harmonics at the peaks stay far below 1 % of the fundamental in
 microslip.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -60,8 +61,10 @@ class Clipping:
     def text(self, t) -> str:
         """What a warning says: how many samples, at which level(s), until when (``t`` [s])."""
         lv = " and ".join(f"{v:.4g}" for v in self.levels)
-        return (f"the record is clipped (saturated): {self.n} samples sit at its extreme "
-                f"value(s) {lv} (flat tops) until t = {float(t[self.last]):.4g} s")
+        return (
+            f"the record is clipped (saturated): {self.n} samples sit at its extreme "
+            f"value(s) {lv} (flat tops) until t = {float(t[self.last]):.4g} s"
+        )
 
 
 def find_clipping(y) -> Clipping | None:
@@ -96,13 +99,17 @@ def cut_clipping(t, y, *, min_samples: int = 64):
         return t, y, ""
     rest = y.size - clip.last - 1
     if rest < min_samples:
-        raise ValueError(f"y: {clip.text(t)}, and only {rest} samples follow it (at least "
-                         f"{min_samples} needed); every amplitude measured would be wrong. "
-                         "Record again with a larger input range (or a softer excitation)")
-    note = (f"{clip.text(t)}: the record was used from the next sample on, so the results "
-            "start below the clip level; record again with a larger input range to measure "
-            "the amplitudes above it")
-    return t[clip.last + 1:], y[clip.last + 1:], note
+        raise ValueError(
+            f"y: {clip.text(t)}, and only {rest} samples follow it (at least "
+            f"{min_samples} needed); every amplitude measured would be wrong. "
+            "Record again with a larger input range (or a softer excitation)"
+        )
+    note = (
+        f"{clip.text(t)}: the record was used from the next sample on, so the results "
+        "start below the clip level; record again with a larger input range to measure "
+        "the amplitudes above it"
+    )
+    return t[clip.last + 1 :], y[clip.last + 1 :], note
 
 
 def _flattened_cycles(y, fs, band):
@@ -134,8 +141,8 @@ def _flattened_cycles(y, fs, band):
     envs = esum[ok] / nall[ok]
     ends = last[ok] + edge
     flat = np.zeros(dm.size, bool)
-    for j in range(dm.size):               # five cycles around each: a consistent shortfall
-        b = dm[max(0, j - 2):j + 3]
+    for j in range(dm.size):  # five cycles around each: a consistent shortfall
+        b = dm[max(0, j - 2) : j + 3]
         se = b.std(ddof=1) / np.sqrt(b.size) if b.size > 2 else np.inf
         flat[j] = b.mean() > max(5 * se, 0.01 * envs[j]) and dm[j] > 0.01 * envs[j]
     return flat, np.array(ends, int), envs
@@ -153,22 +160,28 @@ def cut_flattened_peaks(t, y, band, *, min_samples: int = 64):
     flat, ends, envs = _flattened_cycles(y - y.mean(), fs, band)
     if flat.sum() < 2:
         return t, y, ""
-    start = int(np.argmax(envs))               # the decay starts at the largest cycle
+    start = int(np.argmax(envs))  # the decay starts at the largest cycle
     share = np.cumsum(flat[start:]) / np.arange(1, flat.size - start + 1)
     run = np.flatnonzero((share >= 0.8) & flat[start:])
-    if run.size == 0 or flat[start:start + run[-1] + 1].sum() < 2:
+    if run.size == 0 or flat[start : start + run[-1] + 1].sum() < 2:
         return t, y, ""
     cut = int(ends[start + run[-1]])
-    n_flat = int(flat[start:start + run[-1] + 1].sum())
+    n_flat = int(flat[start : start + run[-1] + 1].sum())
     rest = y.size - cut - 1
-    text = (f"the record's peaks are flattened below its {band[0]:g}-{band[1]:g} Hz mode on "
-            f"{n_flat} cycles until t = {t[cut]:.4g} s (clipping under noise: the band's "
-            "oscillation overshoots the record at its peaks)")
+    text = (
+        f"the record's peaks are flattened below its {band[0]:g}-{band[1]:g} Hz mode on "
+        f"{n_flat} cycles until t = {t[cut]:.4g} s (clipping under noise: the band's "
+        "oscillation overshoots the record at its peaks)"
+    )
     if rest < min_samples:
-        raise ValueError(f"y: {text}, and only {rest} samples follow (at least {min_samples} "
-                         "needed); every amplitude measured would be wrong. Record again with a "
-                         "larger input range (or a softer excitation)")
-    note = (f"{text}: the record was used from the next sample on, so the results start "
-            "below the clip level; record again with a larger input range to measure the "
-            "amplitudes above it")
-    return t[cut + 1:], y[cut + 1:], note
+        raise ValueError(
+            f"y: {text}, and only {rest} samples follow (at least {min_samples} "
+            "needed); every amplitude measured would be wrong. Record again with a "
+            "larger input range (or a softer excitation)"
+        )
+    note = (
+        f"{text}: the record was used from the next sample on, so the results start "
+        "below the clip level; record again with a larger input range to measure the "
+        "amplitudes above it"
+    )
+    return t[cut + 1 :], y[cut + 1 :], note

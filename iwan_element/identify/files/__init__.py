@@ -4,9 +4,16 @@ and the unit checks of vibration data (damping in percent, frequency in rad/s).
 
 Imports :mod:`iwan_element.base` and :mod:`..loops` (the test record it builds) only.
 """
+
 from .csv_input import load_test
 from .formats import UffRecord, read_sweep_csv, read_uff
 from .units import check_damping_ratio, check_frequency_ratio
 
-__all__ = ["load_test", "read_uff", "UffRecord", "read_sweep_csv", "check_damping_ratio",
-           "check_frequency_ratio"]
+__all__ = [
+    "load_test",
+    "read_uff",
+    "UffRecord",
+    "read_sweep_csv",
+    "check_damping_ratio",
+    "check_frequency_ratio",
+]

@@ -1,4 +1,5 @@
 """CSV input: a file of time, displacement and force in, a :class:`TestData` in SI out."""
+
 from __future__ import annotations
 
 import csv
@@ -54,20 +55,25 @@ def _resolve_columns(header: list[str] | None, columns, ncol: int) -> list[int]:
     if columns is None:
         if header is None:
             if ncol < 3:
-                raise ValueError(f"the file has {ncol} column(s); time, displacement and force "
-                                 "are needed")
+                raise ValueError(
+                    f"the file has {ncol} column(s); time, displacement and force are needed"
+                )
             return [0, 1, 2]
         idx = []
         for q in _QUANTITIES:
             hits = [k for k, h in enumerate(header) if _bare(h) in _NAME_HINTS[q]]
             if len(hits) != 1:
-                raise ValueError(f"cannot tell which column is the {q} from the header {header}; "
-                                 "pass columns=(time, displacement, force) as names or indices")
+                raise ValueError(
+                    f"cannot tell which column is the {q} from the header {header}; "
+                    "pass columns=(time, displacement, force) as names or indices"
+                )
             idx.append(hits[0])
         return idx
     if isinstance(columns, (str, bytes)) or len(columns) != 3:
-        raise ValueError("columns must be a sequence of three names or indices "
-                         f"(time, displacement, force), got {columns!r}")
+        raise ValueError(
+            "columns must be a sequence of three names or indices "
+            f"(time, displacement, force), got {columns!r}"
+        )
     idx = []
     for q, c in zip(_QUANTITIES, columns):
         if isinstance(c, (int, np.integer)) and not isinstance(c, bool):
@@ -97,28 +103,42 @@ def _header_units(header, idx, given: dict) -> dict:
         said = _column_unit(header[k]) if header is not None else None
         unit = given[q]
         if unit is not None and said is not None and said != unit.strip():
-            raise ValueError(f"column {header[k]!r} is labelled in {said!r} but "
-                             f"{q}_unit={unit!r}; pass the unit of the file")
+            raise ValueError(
+                f"column {header[k]!r} is labelled in {said!r} but "
+                f"{q}_unit={unit!r}; pass the unit of the file"
+            )
         if unit is None and said is None:
             missing.append(q)
         units[q] = unit if unit is not None else said
     if missing:
-        found = (f"the header names the columns {header} without a unit in brackets"
-                 if header is not None else "the file has no header")
+        found = (
+            f"the header names the columns {header} without a unit in brackets"
+            if header is not None
+            else "the file has no header"
+        )
         example = {"time": "s", "displacement": "mm", "force": "kN"}
         raise ValueError(
             f"the unit of the {', '.join(missing)} column(s) is not stated: {found}, and a "
             "unit is never guessed (SI and mm/kN records look alike); pass "
             + ", ".join(f"{q}_unit='{example[q]}'" for q in missing)
             + " (the file's units) or label the header as "
-            + ", ".join(f"'{q} [{example[q]}]'" for q in missing))
+            + ", ".join(f"'{q} [{example[q]}]'" for q in missing)
+        )
     return units
 
 
-def load_test(path: str | PathLike, *, displacement_unit: str | None = None,
-              force_unit: str | None = None, time_unit: str | None = None, columns: Sequence | None = None, delimiter: str | None = None,
-              hysteresis: float | None = None, close_tol: float = 0.02,
-              drift_tol: float = 0.05) -> TestData:
+def load_test(
+    path: str | PathLike,
+    *,
+    displacement_unit: str | None = None,
+    force_unit: str | None = None,
+    time_unit: str | None = None,
+    columns: Sequence | None = None,
+    delimiter: str | None = None,
+    hysteresis: float | None = None,
+    close_tol: float = 0.02,
+    drift_tol: float = 0.05,
+) -> TestData:
     """Read a CSV of time, displacement and force, convert to SI and split into cycles.
 
     Lines starting with ``#`` are comments. If the first other line is not numeric it is a
@@ -159,17 +179,23 @@ def load_test(path: str | PathLike, *, displacement_unit: str | None = None,
         an all-zero force column, a constant displacement, or fewer than two cycles.
     """
     given = {"time": time_unit, "displacement": displacement_unit, "force": force_unit}
-    for q, table in (("time", TIME_UNITS), ("displacement", DISPLACEMENT_UNITS),
-                     ("force", FORCE_UNITS)):
+    for q, table in (
+        ("time", TIME_UNITS),
+        ("displacement", DISPLACEMENT_UNITS),
+        ("force", FORCE_UNITS),
+    ):
         if given[q] is not None:
             _unit_factor(q, given[q], table)
     p = Path(path)
     try:
-        text = p.read_text(encoding="utf-8-sig")       # tolerate a byte-order mark
+        text = p.read_text(encoding="utf-8-sig")  # tolerate a byte-order mark
     except (OSError, UnicodeDecodeError) as exc:
         raise ValueError(f"cannot read {str(p)!r}: {exc}") from None
-    lines = [(k + 1, ln) for k, ln in enumerate(text.splitlines())
-             if ln.strip() and not ln.lstrip().startswith("#")]
+    lines = [
+        (k + 1, ln)
+        for k, ln in enumerate(text.splitlines())
+        if ln.strip() and not ln.lstrip().startswith("#")
+    ]
     if not lines:
         raise ValueError(f"{str(p)!r} contains no data lines")
     if delimiter is None:
@@ -205,22 +231,33 @@ def load_test(path: str | PathLike, *, displacement_unit: str | None = None,
             try:
                 data[r, j] = float(row[k])
             except IndexError:
-                raise ValueError(f"line {lineno} of {str(p)!r} has {len(row)} fields; column "
-                                 f"{k} ({_QUANTITIES[j]}) is missing") from None
+                raise ValueError(
+                    f"line {lineno} of {str(p)!r} has {len(row)} fields; column "
+                    f"{k} ({_QUANTITIES[j]}) is missing"
+                ) from None
             except ValueError:
-                raise ValueError(f"line {lineno} of {str(p)!r}: {_QUANTITIES[j]} value "
-                                 f"{row[k]!r} is not a number") from None
+                raise ValueError(
+                    f"line {lineno} of {str(p)!r}: {_QUANTITIES[j]} value "
+                    f"{row[k]!r} is not a number"
+                ) from None
     for j, q in enumerate(_QUANTITIES):
         bad = ~np.isfinite(data[:, j])
         if bad.any():
             lineno = lines[int(np.flatnonzero(bad)[0])][0]
-            raise ValueError(f"the {q} column contains NaN or infinite values (first at line "
-                             f"{lineno} of {str(p)!r})")
+            raise ValueError(
+                f"the {q} column contains NaN or infinite values (first at line "
+                f"{lineno} of {str(p)!r})"
+            )
     if not np.any(data[:, 2] != 0.0):
         raise ValueError(f"the force column of {str(p)!r} is all zero")
     units = {q: u.strip() for q, u in units.items()}
-    return TestData.from_arrays(data[:, 0] * ft, data[:, 1] * fu, data[:, 2] * ff, units=units,
-                                source=str(p), hysteresis=hysteresis, close_tol=close_tol,
-                                drift_tol=drift_tol)
-
-
+    return TestData.from_arrays(
+        data[:, 0] * ft,
+        data[:, 1] * fu,
+        data[:, 2] * ff,
+        units=units,
+        source=str(p),
+        hysteresis=hysteresis,
+        close_tol=close_tol,
+        drift_tol=drift_tol,
+    )

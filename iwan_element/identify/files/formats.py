@@ -16,6 +16,7 @@ unit per column (``level,f [Hz],F [N],A [m/s^2],phase [rad]``): the columns are 
 their units, not their positions, and converted to SI; the result is the keyword arguments
 of :func:`~iwan_element.sweep_curve`. The equations and units are in ``docs/sweeps.md``.
 """
+
 from __future__ import annotations
 
 import csv
@@ -37,15 +38,30 @@ _G = 9.80665
 RESPONSE_UNITS = {
     **{u: ("displacement", k) for u, k in DISPLACEMENT_UNITS.items()},
     **{u: ("velocity", k) for u, k in {"m/s": 1.0, "mm/s": 1e-3, "in/s": 0.0254}.items()},
-    **{u: ("acceleration", k) for u, k in {"m/s^2": 1.0, "m/s2": 1.0, "m/s**2": 1.0,
-                                           "mm/s^2": 1e-3, "mm/s2": 1e-3, "g": _G,
-                                           "in/s^2": 0.0254}.items()},
+    **{
+        u: ("acceleration", k)
+        for u, k in {
+            "m/s^2": 1.0,
+            "m/s2": 1.0,
+            "m/s**2": 1.0,
+            "mm/s^2": 1e-3,
+            "mm/s2": 1e-3,
+            "g": _G,
+            "in/s^2": 0.0254,
+        }.items()
+    },
 }
 _FREQUENCY_UNITS = {"Hz": 1.0, "hz": 1.0, "rad/s": 1.0 / (2 * math.pi)}
 _PHASE_UNITS = {"rad": 1.0, "deg": math.pi / 180, "°": math.pi / 180}
 #: UFF specific data types (record 8 of dataset 58) of the quantities read here.
-_SPEC_TYPE = {8: "displacement", 11: "velocity", 12: "acceleration", 13: "force", 17: "time",
-              18: "frequency"}
+_SPEC_TYPE = {
+    8: "displacement",
+    11: "velocity",
+    12: "acceleration",
+    13: "force",
+    17: "time",
+    18: "frequency",
+}
 _FUNC_TYPE = {1: "time", 4: "frf"}
 
 
@@ -85,10 +101,17 @@ class UffRecord:
     def to_dict(self) -> dict:
         """Plain dictionary (complex values as [real, imag] pairs)."""
         y = self.y.tolist() if self.kind == "time" else [[v.real, v.imag] for v in self.y]
-        return {"kind": self.kind, "x": self.x.tolist(), "y": y, "quantity": self.quantity,
-                "name": self.name, "response": list(self.response),
-                "reference": list(self.reference), "units": self.units,
-                "warnings": list(self.warnings)}
+        return {
+            "kind": self.kind,
+            "x": self.x.tolist(),
+            "y": y,
+            "quantity": self.quantity,
+            "name": self.name,
+            "response": list(self.response),
+            "reference": list(self.reference),
+            "units": self.units,
+            "warnings": list(self.warnings),
+        }
 
 
 def _label(raw) -> str:
@@ -103,12 +126,16 @@ def _ordinate(label: str, spec: int, where: str):
     elif label in RESPONSE_UNITS:
         q, k = RESPONSE_UNITS[label]
     else:
-        raise ValueError(f"{where}: ordinate unit {label!r} is not known; allowed: "
-                         f"{sorted(RESPONSE_UNITS) + sorted(FORCE_UNITS)}")
+        raise ValueError(
+            f"{where}: ordinate unit {label!r} is not known; allowed: "
+            f"{sorted(RESPONSE_UNITS) + sorted(FORCE_UNITS)}"
+        )
     typed = _SPEC_TYPE.get(int(spec or 0))
     if typed is not None and typed != q:
-        raise ValueError(f"{where}: ordinate unit {label!r} is a {q} but the record's specific "
-                         f"data type {spec} says {typed}")
+        raise ValueError(
+            f"{where}: ordinate unit {label!r} is a {q} but the record's specific "
+            f"data type {spec} says {typed}"
+        )
     return q, k
 
 
@@ -118,8 +145,10 @@ def _split_frf_label(num: str, den: str):
         return num, den
     m = re.fullmatch(r"\(?(.+?)\)?\s*/\s*(N|kN|lbf)", num)
     if not m:
-        raise ValueError(f"FRF ordinate unit {num!r} names no force in its denominator "
-                         "(e.g. 'm/s^2/N' or a denominator label 'N')")
+        raise ValueError(
+            f"FRF ordinate unit {num!r} names no force in its denominator "
+            "(e.g. 'm/s^2/N' or a denominator label 'N')"
+        )
     return m.group(1), m.group(2)
 
 
@@ -127,14 +156,17 @@ def _record(i, d) -> UffRecord:
     where = f"record {i} (dataset 58, {_label(d.get('id1')) or 'no name'})"
     kind = _FUNC_TYPE.get(int(d.get("func_type", 0)))
     if kind is None:
-        raise ValueError(f"{where}: function type {d.get('func_type')} is not read (1: time "
-                         "series, 4: FRF)")
+        raise ValueError(
+            f"{where}: function type {d.get('func_type')} is not read (1: time series, 4: FRF)"
+        )
     x = finite_array("abscissa", np.real(np.asarray(d["x"])), min_size=2)
     xlab = _label(d.get("abscissa_axis_units_lab"))
     table = TIME_UNITS if kind == "time" else _FREQUENCY_UNITS
     if xlab not in table:
-        raise ValueError(f"{where}: abscissa unit {xlab!r} is not known for a {kind} record; "
-                         f"allowed: {sorted(table)}")
+        raise ValueError(
+            f"{where}: abscissa unit {xlab!r} is not known for a {kind} record; "
+            f"allowed: {sorted(table)}"
+        )
     num, den = _label(d.get("ordinate_axis_units_lab")), _label(d.get("orddenom_axis_units_lab"))
     data = np.asarray(d["data"])
     if kind == "time":
@@ -144,18 +176,36 @@ def _record(i, d) -> UffRecord:
         num, den = _split_frf_label(num, den)
         q, k = _ordinate(num, d.get("ordinate_spec_data_type"), where)
         if den not in FORCE_UNITS:
-            raise ValueError(f"{where}: FRF denominator unit {den!r} is not a force; allowed: "
-                             f"{sorted(FORCE_UNITS)}")
-        y = k / FORCE_UNITS[den] * (finite_array("ordinate real part", data.real)
-                                    + 1j * finite_array("ordinate imaginary part", data.imag))
+            raise ValueError(
+                f"{where}: FRF denominator unit {den!r} is not a force; allowed: "
+                f"{sorted(FORCE_UNITS)}"
+            )
+        y = (
+            k
+            / FORCE_UNITS[den]
+            * (
+                finite_array("ordinate real part", data.real)
+                + 1j * finite_array("ordinate imaginary part", data.imag)
+            )
+        )
     if y.shape != x.shape:
         raise ValueError(f"{where}: abscissa and ordinate lengths differ ({x.size}, {y.size})")
-    warns = () if np.iscomplexobj(data) or kind == "time" else (
-        "FRF stored as real values: the phase is lost",)
-    return UffRecord(kind, x * table[xlab], y, q, _label(d.get("id1")),
-                     (int(d.get("rsp_node", 0)), int(d.get("rsp_dir", 0))),
-                     (int(d.get("ref_node", 0)), int(d.get("ref_dir", 0))),
-                     f"{xlab}; {num}" + (f"; {den}" if kind == "frf" else ""), warns)
+    warns = (
+        ()
+        if np.iscomplexobj(data) or kind == "time"
+        else ("FRF stored as real values: the phase is lost",)
+    )
+    return UffRecord(
+        kind,
+        x * table[xlab],
+        y,
+        q,
+        _label(d.get("id1")),
+        (int(d.get("rsp_node", 0)), int(d.get("rsp_dir", 0))),
+        (int(d.get("ref_node", 0)), int(d.get("ref_dir", 0))),
+        f"{xlab}; {num}" + (f"; {den}" if kind == "frf" else ""),
+        warns,
+    )
 
 
 def read_uff(path: str | PathLike, *, kind: str | None = None) -> list:
@@ -185,7 +235,7 @@ def read_uff(path: str | PathLike, *, kind: str | None = None) -> list:
         raise ValueError(f"kind must be None, 'time' or 'frf', got {kind!r}")
     try:
         import pyuff
-    except ImportError as exc:                     # pragma: no cover - optional extra
+    except ImportError as exc:  # pragma: no cover - optional extra
         raise ImportError("read_uff needs pyuff: pip install iwan-element[uff]") from exc
     p = Path(path)
     if not p.is_file():
@@ -195,13 +245,18 @@ def read_uff(path: str | PathLike, *, kind: str | None = None) -> list:
     found = [(i, d) for i, d in enumerate(sets) if int(d.get("type", 0)) == 58]
     if not found:
         raise ValueError(f"{p.name}: no dataset 58 (function at nodal DOF) in the file")
-    out = [_record(i, d) for i, d in found if kind is None or
-           _FUNC_TYPE.get(int(d.get("func_type", 0))) in (kind, None)]
+    out = [
+        _record(i, d)
+        for i, d in found
+        if kind is None or _FUNC_TYPE.get(int(d.get("func_type", 0))) in (kind, None)
+    ]
     if not out:
         held = sorted({str(_FUNC_TYPE.get(int(d.get("func_type", 0)))) for _, d in found})
-        raise ValueError(f"{p.name}: no dataset 58 of kind={kind!r} in the file; it holds "
-                         f"{len(found)} record(s) of kind {held}: pass kind=None or the kind "
-                         "the file holds")
+        raise ValueError(
+            f"{p.name}: no dataset 58 of kind={kind!r} in the file; it holds "
+            f"{len(found)} record(s) of kind {held}: pass kind=None or the kind "
+            "the file holds"
+        )
     return out
 
 
@@ -222,9 +277,11 @@ def _classify(name: str):
     if unit in RESPONSE_UNITS:
         q, k = RESPONSE_UNITS[unit]
         return "response", q, k
-    raise ValueError(f"column {name!r}: unit {unit!r} is not known; allowed: frequency "
-                     f"{sorted(_FREQUENCY_UNITS)}, force {sorted(FORCE_UNITS)}, response "
-                     f"{sorted(RESPONSE_UNITS)}, phase {sorted(_PHASE_UNITS)}")
+    raise ValueError(
+        f"column {name!r}: unit {unit!r} is not known; allowed: frequency "
+        f"{sorted(_FREQUENCY_UNITS)}, force {sorted(FORCE_UNITS)}, response "
+        f"{sorted(RESPONSE_UNITS)}, phase {sorted(_PHASE_UNITS)}"
+    )
 
 
 def read_sweep_csv(path: str | PathLike) -> dict:
@@ -272,9 +329,11 @@ def read_sweep_csv(path: str | PathLike) -> dict:
     width = len(rows[0])
     ragged = next((k for k, r in enumerate(rows[1:], start=2) if len(r) != width), None)
     if ragged is not None:
-        raise ValueError(f"{p.name}: line {ragged} has {len(rows[ragged - 1])} fields where the "
-                         f"header has {width} ({', '.join(c.strip() for c in rows[0])}); "
-                         "every row needs one value per column")
+        raise ValueError(
+            f"{p.name}: line {ragged} has {len(rows[ragged - 1])} fields where the "
+            f"header has {width} ({', '.join(c.strip() for c in rows[0])}); "
+            "every row needs one value per column"
+        )
     try:
         data = np.array([[float(c) for c in r] for r in rows[1:]])
     except ValueError as exc:

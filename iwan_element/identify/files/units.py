@@ -14,6 +14,7 @@ Frequency in rad/s instead of Hz is caught only against a second frequency (the 
 of :func:`~iwan_element.diagnose_vibration`): a ratio of the two near 2 pi. A single curve
 ``f(X)`` has no absolute scale to tell them apart.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -30,13 +31,16 @@ def check_damping_ratio(name: str, value) -> None:
     if z.size == 0:
         return
     if np.nanmax(z) >= 1.0:
-        raise ValueError(f"{name} has values up to {np.nanmax(z):.3g}: a damping ratio is "
-                         "dimensionless and below 1; it looks like percent (divide by 100)")
+        raise ValueError(
+            f"{name} has values up to {np.nanmax(z):.3g}: a damping ratio is "
+            "dimensionless and below 1; it looks like percent (divide by 100)"
+        )
     if np.nanmin(z) >= MAX_DAMPING_FLOOR:
         raise ValueError(
             f"{name} is never below {np.nanmin(z):.3g}: the damping floor of a jointed metal "
             f"structure is far below {MAX_DAMPING_FLOOR:g}; it looks like percent (divide by "
-            "100). The light-damping single-mode relations used here would not hold either")
+            "100). The light-damping single-mode relations used here would not hold either"
+        )
 
 
 def check_frequency_ratio(name: str, value, other_name: str, other) -> None:
@@ -45,5 +49,6 @@ def check_frequency_ratio(name: str, value, other_name: str, other) -> None:
     for k, a, b in ((2 * np.pi, name, other_name), (1 / (2 * np.pi), other_name, name)):
         if abs(ratio / k - 1.0) < 0.15:
             r = ratio if k > 1 else 1 / ratio
-            raise ValueError(f"{a} is {r:.3g} x {b}, close to 2 pi: {a} looks like rad/s; "
-                             "give both in Hz")
+            raise ValueError(
+                f"{a} is {r:.3g} x {b}, close to 2 pi: {a} looks like rad/s; give both in Hz"
+            )

@@ -7,6 +7,7 @@ test records (:func:`simulate_test`).
 Imports :mod:`iwan_element.base`, :mod:`iwan_element.core` and :mod:`iwan_element.fitting`
 only (and :mod:`iwan_element.plotting` inside the ``plot`` methods).
 """
+
 from .cycles import Cycle, find_reversals, split_cycles
 from .dissipation import fit_dissipation
 from .fit import fit_loops
@@ -15,6 +16,18 @@ from .noise import NoiseEstimate, estimate_noise
 from .result import FitResult, IdentifiabilityWarning
 from .testdata import TestData, simulate_test
 
-__all__ = ["fit_loops", "fit_dissipation", "FitResult", "IdentifiabilityWarning",
-           "fit_force_model", "ModelFit", "estimate_noise", "NoiseEstimate", "split_cycles",
-           "find_reversals", "Cycle", "simulate_test", "TestData"]
+__all__ = [
+    "fit_loops",
+    "fit_dissipation",
+    "FitResult",
+    "IdentifiabilityWarning",
+    "fit_force_model",
+    "ModelFit",
+    "estimate_noise",
+    "NoiseEstimate",
+    "split_cycles",
+    "find_reversals",
+    "Cycle",
+    "simulate_test",
+    "TestData",
+]

@@ -12,6 +12,7 @@
 
 All arrays are in SI units: time [s], displacement [m], force [N], energy [J].
 """
+
 from __future__ import annotations
 
 import math
@@ -103,8 +104,10 @@ def _noise_sigma(u: np.ndarray) -> float:
 
 def check_varies(u: np.ndarray) -> None:
     if u.size and np.ptp(u) == 0.0:
-        raise ValueError(f"u (displacement) does not vary: it is {u[0]:g} m everywhere; cycles "
-                         "need a displacement that goes up and down (check the column and its unit)")
+        raise ValueError(
+            f"u (displacement) does not vary: it is {u[0]:g} m everywhere; cycles "
+            "need a displacement that goes up and down (check the column and its unit)"
+        )
 
 
 def default_hysteresis(u: np.ndarray) -> float:
@@ -136,12 +139,15 @@ def find_reversals(u, *, hysteresis: float | None = None) -> np.ndarray:
     """
     x = check_magnitude("u", finite_array("u", u, ndim=1, min_size=2), unit="m")
     check_varies(x)
-    h = default_hysteresis(x) if hysteresis is None else check_scalar(
-        "hysteresis", hysteresis, low=0.0, low_open=True)
+    h = (
+        default_hysteresis(x)
+        if hysteresis is None
+        else check_scalar("hysteresis", hysteresis, low=0.0, low_open=True)
+    )
     vals = x.tolist()
     out = []
     i_max = i_min = 0
-    direction = 0                       # +1 rising (looking for a max), -1 falling, 0 unknown
+    direction = 0  # +1 rising (looking for a max), -1 falling, 0 unknown
     for i, v in enumerate(vals):
         if v > vals[i_max]:
             i_max = i
@@ -174,8 +180,16 @@ def _window(u: np.ndarray, i: int, lo: int, hi: int, band: float, sign: float) -
     return a, b
 
 
-def _refine_peak(tau: np.ndarray, u: np.ndarray, F: np.ndarray, i: int, lo: int, hi: int,
-                 band: float, sign: float) -> tuple[float, float]:
+def _refine_peak(
+    tau: np.ndarray,
+    u: np.ndarray,
+    F: np.ndarray,
+    i: int,
+    lo: int,
+    hi: int,
+    band: float,
+    sign: float,
+) -> tuple[float, float]:
     """Displacement and force at the turning point ``i`` from local least-squares fits.
 
     The displacement is a parabola in time around its extremum; the force has a parabola on
@@ -185,22 +199,22 @@ def _refine_peak(tau: np.ndarray, u: np.ndarray, F: np.ndarray, i: int, lo: int,
     a, b = _window(u, i, lo, hi, band, sign)
     if b - a < 6:
         return float(u[i]), float(F[i])
-    s = tau[a:b + 1] - tau[i]
+    s = tau[a : b + 1] - tau[i]
     scale = max(abs(s[0]), abs(s[-1]))
     s = s / scale
-    c2, c1, c0 = np.polyfit(s, u[a:b + 1], 2)
+    c2, c1, c0 = np.polyfit(s, u[a : b + 1], 2)
     if sign * c2 >= 0.0:
         return float(u[i]), float(F[i])
     s_star = -c1 / (2.0 * c2)
     if not s[0] < s_star < s[-1]:
         return float(u[i]), float(F[i])
-    u_pk = c0 + c1 * s_star + c2 * s_star ** 2
+    u_pk = c0 + c1 * s_star + c2 * s_star**2
     q = (s - s_star) ** 2
     left = s < s_star
     A = np.column_stack([np.ones_like(s), np.where(left, q, 0.0), np.where(left, 0.0, q)])
     if left.sum() < 2 or (~left).sum() < 2:
         return float(u_pk), float(F[i])
-    coef = np.linalg.lstsq(A, F[a:b + 1], rcond=None)[0]
+    coef = np.linalg.lstsq(A, F[a : b + 1], rcond=None)[0]
     return float(u_pk), float(coef[0])
 
 
@@ -211,8 +225,9 @@ def _loop_area(u: np.ndarray, F: np.ndarray) -> float:
     return float(0.5 * np.sum((FF[1:] + FF[:-1]) * np.diff(uu)))
 
 
-def split_cycles(t, u, F, *, hysteresis: float | None = None, close_tol: float = 0.02,
-                 drift_tol: float = 0.05) -> tuple[Cycle, ...]:
+def split_cycles(
+    t, u, F, *, hysteresis: float | None = None, close_tol: float = 0.02, drift_tol: float = 0.05
+) -> tuple[Cycle, ...]:
     """Split a displacement-driven record into cycles (maximum to next maximum).
 
     Parameters
@@ -240,10 +255,17 @@ def split_cycles(t, u, F, *, hysteresis: float | None = None, close_tol: float =
     same_length(u=uu, F=FF)
     check_varies(uu)
     tt = np.arange(uu.size, dtype=float) if t is None else check_time(t, uu.size)
-    close_tol = check_scalar("close_tol", close_tol, low=0.0, high=1.0, low_open=True, high_open=True)
-    drift_tol = check_scalar("drift_tol", drift_tol, low=0.0, high=1.0, low_open=True, high_open=True)
-    h = default_hysteresis(uu) if hysteresis is None else check_scalar(
-        "hysteresis", hysteresis, low=0.0, low_open=True)
+    close_tol = check_scalar(
+        "close_tol", close_tol, low=0.0, high=1.0, low_open=True, high_open=True
+    )
+    drift_tol = check_scalar(
+        "drift_tol", drift_tol, low=0.0, high=1.0, low_open=True, high_open=True
+    )
+    h = (
+        default_hysteresis(uu)
+        if hysteresis is None
+        else check_scalar("hysteresis", hysteresis, low=0.0, low_open=True)
+    )
     rev = find_reversals(uu, hysteresis=h)
     if rev.size == 0:
         return ()
@@ -255,7 +277,9 @@ def split_cycles(t, u, F, *, hysteresis: float | None = None, close_tol: float =
         lo = (bounds[k] + i) // 2
         hi = (i + bounds[k + 2]) // 2
         sign = 1.0 if uu[i] >= uu[bounds[k + 2]] else -1.0
-        rng_local = abs(uu[i] - uu[bounds[k + 2]]) if k + 1 < rev.size else abs(uu[i] - uu[bounds[k]])
+        rng_local = (
+            abs(uu[i] - uu[bounds[k + 2]]) if k + 1 < rev.size else abs(uu[i] - uu[bounds[k]])
+        )
         band = max(0.02 * rng_local, 3.0 * sigma)
         peaks.append(_refine_peak(tt, uu, FF, int(i), int(lo), int(hi), band, sign))
     first_max = 0 if rev.size < 2 or uu[rev[0]] > uu[rev[1]] else 1
@@ -265,11 +289,24 @@ def split_cycles(t, u, F, *, hysteresis: float | None = None, close_tol: float =
         (u_a, F_a), (u_b, F_b), (u_c, F_c) = peaks[k], peaks[k + 1], peaks[k + 2]
         u0 = 0.5 * (u_a - u_b)
         F0 = 0.5 * (F_a - F_b)
-        D = _loop_area(uu[i0:i2 + 1], FF[i0:i2 + 1])
-        closure = max(abs(u_c - u_a) / (2.0 * u0) if u0 > 0 else math.inf,
-                      abs(F_c - F_a) / (2.0 * abs(F0)) if F0 != 0 else math.inf)
-        raw.append((int(i0), int(i2) + 1, float(tt[i0]), u0, F0, D, 0.5 * (u_a + u_b),
-                    0.5 * (F_a + F_b), closure))
+        D = _loop_area(uu[i0 : i2 + 1], FF[i0 : i2 + 1])
+        closure = max(
+            abs(u_c - u_a) / (2.0 * u0) if u0 > 0 else math.inf,
+            abs(F_c - F_a) / (2.0 * abs(F0)) if F0 != 0 else math.inf,
+        )
+        raw.append(
+            (
+                int(i0),
+                int(i2) + 1,
+                float(tt[i0]),
+                u0,
+                F0,
+                D,
+                0.5 * (u_a + u_b),
+                0.5 * (F_a + F_b),
+                closure,
+            )
+        )
     if not raw:
         return ()
     uc_med = float(np.median([r[6] for r in raw]))
@@ -277,10 +314,23 @@ def split_cycles(t, u, F, *, hysteresis: float | None = None, close_tol: float =
     cycles = []
     for n, (start, stop, t0, u0, F0, D, uc, Fc, closure) in enumerate(raw):
         drifting = (abs(uc - uc_med) > drift_tol * u0) or (abs(Fc - Fc_med) > drift_tol * abs(F0))
-        cycles.append(Cycle(index=n, start=start, stop=stop, t_start=t0, u0=u0, F0=F0, D=D,
-                            k_sec=F0 / u0 if u0 > 0 else math.nan, u_center=uc, F_center=Fc,
-                            closure=float(closure), closed=bool(closure <= close_tol),
-                            drifting=bool(drifting)))
+        cycles.append(
+            Cycle(
+                index=n,
+                start=start,
+                stop=stop,
+                t_start=t0,
+                u0=u0,
+                F0=F0,
+                D=D,
+                k_sec=F0 / u0 if u0 > 0 else math.nan,
+                u_center=uc,
+                F_center=Fc,
+                closure=float(closure),
+                closed=bool(closure <= close_tol),
+                drifting=bool(drifting),
+            )
+        )
     return tuple(cycles)
 
 

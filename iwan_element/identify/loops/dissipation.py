@@ -13,6 +13,7 @@ four parameters need at least three distinct amplitudes (two for the seed method
 given ``Fs``); fewer are refused. A fit whose relative RMS error exceeds
 :data:`NRMSE_LIMIT` does not describe the data and is not successful.
 """
+
 from __future__ import annotations
 
 import math
@@ -31,7 +32,7 @@ from .solver import _Problem, _uncertainty
 
 __all__ = ["fit_dissipation", "NRMSE_LIMIT"]
 
-_SEED_PLATEAU = 0.01                  # seed method: cycles with F0 >= (1 - this) Fs are macroslip
+_SEED_PLATEAU = 0.01  # seed method: cycles with F0 >= (1 - this) Fs are macroslip
 #: Largest relative RMS error [-] of a successful dissipation fit.
 NRMSE_LIMIT = 0.25
 
@@ -44,9 +45,11 @@ def _distinct(u0: np.ndarray, rtol: float = 0.02) -> int:
 
 def _misfit_warning(nrmse: float) -> list[str]:
     if nrmse > NRMSE_LIMIT:
-        return [f"the fit does not describe the data: relative RMS error {100 * nrmse:.3g} % "
-                f"> {100 * NRMSE_LIMIT:g} %; the Iwan closed forms do not follow this table "
-                "(wrong units, mixed tests, or a joint this model does not cover)"]
+        return [
+            f"the fit does not describe the data: relative RMS error {100 * nrmse:.3g} % "
+            f"> {100 * NRMSE_LIMIT:g} %; the Iwan closed forms do not follow this table "
+            "(wrong units, mixed tests, or a joint this model does not cover)"
+        ]
     return []
 
 
@@ -66,7 +69,7 @@ def _seed_gamma(F0n, chi, beta):
         d = (beta + 1.0 - q) / c
         with np.errstate(divide="ignore", invalid="ignore"):
             g_new = g - f / d
-        bis = ~((g_new >= lo) & (g_new <= hi))            # also catches NaN
+        bis = ~((g_new >= lo) & (g_new <= hi))  # also catches NaN
         g_new = np.where(bis, 0.5 * (lo + hi), g_new)
         if np.all(np.abs(g_new - g) <= 1e-14 * g):
             return g_new
@@ -78,9 +81,15 @@ def _seed_model(F0, u0, Fs, KT, chi, beta):
     """Paper eqs. 20, 17 and 24: ``gamma`` from ``F0``, then ``D`` and the secant stiffness."""
     c = beta + (chi + 1.0) / (chi + 2.0)
     g = _seed_gamma(F0 / Fs, chi, beta)
-    D = (4.0 * g ** (chi + 3.0) * Fs ** 2 * (beta + 1.0) * (chi + 1.0)
-         / (KT * c ** 2 * (chi + 3.0) * (chi + 2.0)))                          # eq. 17
-    K = KT * (1.0 - g ** (chi + 1.0) / ((chi + 2.0) * (beta + 1.0)))            # eq. 24
+    D = (
+        4.0
+        * g ** (chi + 3.0)
+        * Fs**2
+        * (beta + 1.0)
+        * (chi + 1.0)
+        / (KT * c**2 * (chi + 3.0) * (chi + 2.0))
+    )  # eq. 17
+    K = KT * (1.0 - g ** (chi + 1.0) / ((chi + 2.0) * (beta + 1.0)))  # eq. 24
     return D, K
 
 
@@ -92,10 +101,11 @@ def _seed_solve(F0, D, u0, Fs, counter, *, max_newton=50):
     lnK = np.log(F0 / u0)
 
     def decode(z):
-        return -1.0 + math.exp(z[0]), z[1] * z[1]          # chi > -1, beta >= 0, unconstrained z
+        return -1.0 + math.exp(z[0]), z[1] * z[1]  # chi > -1, beta >= 0, unconstrained z
 
     def inner(KT, z0):
         """Fminsearch for chi(KT), beta(KT): least squares of ln D (eqs. 17, 20)."""
+
         def obj(z):
             chi, beta = decode(z)
             if not -1.0 < chi < 50.0:
@@ -103,8 +113,10 @@ def _seed_solve(F0, D, u0, Fs, counter, *, max_newton=50):
             counter[0] += 1
             Dm, _ = _seed_model(F0, u0, Fs, KT, chi, beta)
             return float(np.sum((np.log(Dm) - lnD) ** 2))
-        res = optimize.minimize(obj, z0, method="Nelder-Mead",
-                                options={"xatol": 1e-9, "fatol": 1e-15, "maxiter": 2000})
+
+        res = optimize.minimize(
+            obj, z0, method="Nelder-Mead", options={"xatol": 1e-9, "fatol": 1e-15, "maxiter": 2000}
+        )
         return res.x
 
     def h(lnKT, z0):
@@ -114,8 +126,8 @@ def _seed_solve(F0, D, u0, Fs, counter, *, max_newton=50):
         _, Km = _seed_model(F0, u0, Fs, KT, *decode(z))
         return float(np.mean(np.log(Km) - lnK)), z
 
-    lnKT = math.log(1.2 * float(np.max(F0 / u0)))       # K_sec < KT always (eq. 24)
-    z = np.array([math.log(0.5), math.sqrt(0.5)])       # chi = -0.5, beta = 0.5
+    lnKT = math.log(1.2 * float(np.max(F0 / u0)))  # K_sec < KT always (eq. 24)
+    z = np.array([math.log(0.5), math.sqrt(0.5)])  # chi = -0.5, beta = 0.5
     dh = 1e-4
     for it in range(1, max_newton + 1):
         hv, z = h(lnKT, z)
@@ -125,10 +137,20 @@ def _seed_solve(F0, D, u0, Fs, counter, *, max_newton=50):
         lnKT += step
         if abs(step) < 1e-9:
             hv, z = h(lnKT, z)
-            return (math.exp(lnKT), *decode(z), True,
-                    f"Newton on KT converged in {it} iterations (|h| = {abs(hv):.1e})", it)
-    return (math.exp(lnKT), *decode(z), False,
-            f"Newton on KT did not converge in {max_newton} iterations", max_newton)
+            return (
+                math.exp(lnKT),
+                *decode(z),
+                True,
+                f"Newton on KT converged in {it} iterations (|h| = {abs(hv):.1e})",
+                it,
+            )
+    return (
+        math.exp(lnKT),
+        *decode(z),
+        False,
+        f"Newton on KT did not converge in {max_newton} iterations",
+        max_newton,
+    )
 
 
 def _fit_seed(F0, D, u0, Fs, *, t0):
@@ -141,22 +163,30 @@ def _fit_seed(F0, D, u0, Fs, *, t0):
     warns = []
     keep = F0 < (1.0 - _SEED_PLATEAU) * Fs
     if not keep.all():
-        warns.append(f"{int((~keep).sum())} cycle(s) with F0 >= {1 - _SEED_PLATEAU:g} Fs were left "
-                     "out: eqs. 17 and 20 of the seed method hold only in microslip")
+        warns.append(
+            f"{int((~keep).sum())} cycle(s) with F0 >= {1 - _SEED_PLATEAU:g} Fs were left "
+            "out: eqs. 17 and 20 of the seed method hold only in microslip"
+        )
     for round_ in range(4):
         if keep.sum() < 2:
-            raise ValueError(f"method='seed' needs at least 2 microslip cycles (F0 < 0.99 Fs = "
-                             f"{0.99 * Fs:g} N, u0 < phi_max), got {int(keep.sum())}")
+            raise ValueError(
+                f"method='seed' needs at least 2 microslip cycles (F0 < 0.99 Fs = "
+                f"{0.99 * Fs:g} N, u0 < phi_max), got {int(keep.sum())}"
+            )
         KT, chi, beta, converged, msg, it = _seed_solve(F0[keep], D[keep], u0[keep], Fs, counter)
         phi = IwanParameters(Fs, KT, chi, beta).phi_max
         macro = keep & (u0 > phi)
         if not macro.any():
             break
         if round_ == 3:
-            warns.append(f"{int(macro.sum())} cycle(s) still have u0 > phi_max = {phi * 1e3:.4g} mm")
+            warns.append(
+                f"{int(macro.sum())} cycle(s) still have u0 > phi_max = {phi * 1e3:.4g} mm"
+            )
             break
-        warns.append(f"{int(macro.sum())} cycle(s) with u0 > phi_max = {phi * 1e3:.4g} mm "
-                     "(macroslip) were left out and the fit repeated")
+        warns.append(
+            f"{int(macro.sum())} cycle(s) with u0 > phi_max = {phi * 1e3:.4g} mm "
+            "(macroslip) were left out and the fit repeated"
+        )
         keep = keep & ~macro
     F0, D, u0 = F0[keep], D[keep], u0[keep]
     params = IwanParameters(Fs, KT, chi, beta)
@@ -167,7 +197,7 @@ def _fit_seed(F0, D, u0, Fs, *, t0):
     def resid(th):
         counter[0] += 1
         Dm, Km = _seed_model(F0, u0, Fs, math.exp(th[0]), th[1], math.expm1(th[2]))
-        with np.errstate(invalid="ignore", divide="ignore"):   # NaN marks an invalid step
+        with np.errstate(invalid="ignore", divide="ignore"):  # NaN marks an invalid step
             return np.concatenate([np.log(Dm) - lnD, np.log(Km) - lnK])
 
     theta = np.array([math.log(KT), chi, math.log1p(beta)])
@@ -176,32 +206,61 @@ def _fit_seed(F0, D, u0, Fs, *, t0):
     stderr = {"Fs": math.nan, "KT": float(se[0]), "chi": float(se[1]), "beta": float(se[2])}
     corr = np.full((4, 4), np.nan)
     corr[1:, 1:] = c3
-    warns.append(f"beta = {beta:.4g} follows from the given Fs = {Fs:.6g} N: microslip data "
-                 f"determine only KT, chi and R = {params.R:.5g}; a different Fs gives a "
-                 "different beta with the same fit")
+    warns.append(
+        f"beta = {beta:.4g} follows from the given Fs = {Fs:.6g} N: microslip data "
+        f"determine only KT, chi and R = {params.R:.5g}; a different Fs gives a "
+        "different beta with the same fit"
+    )
     warns += _range_warnings(params)
     Dm, Km = _seed_model(F0, u0, Fs, KT, chi, beta)
     nrmse = math.sqrt(np.mean(np.concatenate([Dm / D - 1.0, Km / (F0 / u0) - 1.0]) ** 2))
     warns += _misfit_warning(nrmse)
     if beta < 1e-6:
-        warns.append(f"beta is at its bound 0: if the given Fs exceeds the largest slip force "
-                     f"compatible with the data (the beta = 0 one), no beta can compensate and KT "
-                     f"and chi come out distorted; compare the NRMSE ({100 * nrmse:.3g} %) with "
-                     "the noise or use method='least_squares'")
-    out = {"params": params, "stderr": stderr, "correlation": corr,
-           "identified": {"Fs": False, "KT": True, "chi": True, "beta": False}, "ranges": {},
-           "r": r, "warnings": warns,
-           "details": {"newton_iterations": it, "cycles_used": n, "x_max": float(u0.max())},
-           "at_bound": ["chi"] if chi <= -1.0 + 1e-6 else [], "explains": nrmse <= NRMSE_LIMIT}
+        warns.append(
+            f"beta is at its bound 0: if the given Fs exceeds the largest slip force "
+            f"compatible with the data (the beta = 0 one), no beta can compensate and KT "
+            f"and chi come out distorted; compare the NRMSE ({100 * nrmse:.3g} %) with "
+            "the noise or use method='least_squares'"
+        )
+    out = {
+        "params": params,
+        "stderr": stderr,
+        "correlation": corr,
+        "identified": {"Fs": False, "KT": True, "chi": True, "beta": False},
+        "ranges": {},
+        "r": r,
+        "warnings": warns,
+        "details": {"newton_iterations": it, "cycles_used": n, "x_max": float(u0.max())},
+        "at_bound": ["chi"] if chi <= -1.0 + 1e-6 else [],
+        "explains": nrmse <= NRMSE_LIMIT,
+    }
     curves = {"F0": F0, "D": D, "F0_fit": F0, "D_fit": Dm}
-    return _finish("seed", out, converged=converged, message=msg, nfev=counter[0], nrmse=nrmse,
-                   t0=t0, fixed=("Fs",), stacklevel=4, curves=curves)
+    return _finish(
+        "seed",
+        out,
+        converged=converged,
+        message=msg,
+        nfev=counter[0],
+        nrmse=nrmse,
+        t0=t0,
+        fixed=("Fs",),
+        stacklevel=4,
+        curves=curves,
+    )
 
 
-def fit_dissipation(amplitude, force, dissipation, *, method: str = "least_squares",
-                    Fs: float | None = None,
-                    n_starts: int = 6, seed=0, alpha: float = 1e-3,
-                    max_nfev: int = 300) -> FitResult:
+def fit_dissipation(
+    amplitude,
+    force,
+    dissipation,
+    *,
+    method: str = "least_squares",
+    Fs: float | None = None,
+    n_starts: int = 6,
+    seed=0,
+    alpha: float = 1e-3,
+    max_nfev: int = 300,
+) -> FitResult:
     """Fit the Iwan parameters to per-cycle force amplitude and dissipation (paper Fig. 7).
 
     Parameters
@@ -244,11 +303,13 @@ def fit_dissipation(amplitude, force, dissipation, *, method: str = "least_squar
         given ``Fs``.
     """
     t0 = time.perf_counter()
-    ua = check_magnitude("amplitude", finite_array("amplitude", amplitude, ndim=1, min_size=2),
-                         unit="m")
+    ua = check_magnitude(
+        "amplitude", finite_array("amplitude", amplitude, ndim=1, min_size=2), unit="m"
+    )
     F0a = check_magnitude("force", finite_array("force", force, ndim=1, min_size=2), unit="N")
-    Da = check_magnitude("dissipation", finite_array("dissipation", dissipation, ndim=1,
-                                                     min_size=2), unit="J")
+    Da = check_magnitude(
+        "dissipation", finite_array("dissipation", dissipation, ndim=1, min_size=2), unit="J"
+    )
     same_length(amplitude=ua, force=F0a, dissipation=Da)
     for name, arr in (("amplitude", ua), ("force", F0a), ("dissipation", Da)):
         if np.any(arr <= 0):
@@ -258,14 +319,18 @@ def fit_dissipation(amplitude, force, dissipation, *, method: str = "least_squar
     need = 2 if method == "seed" else 3
     k = _distinct(ua)
     if k < need:
-        raise ValueError(f"amplitude holds {k} distinct value(s) (2 % apart); method={method!r} "
-                         f"needs at least {need}: each amplitude gives two numbers (F0, D), "
-                         f"too few for {'three' if method == 'seed' else 'four'} parameters. "
-                         "Test at more amplitudes, or fit the force history with fit_loops")
+        raise ValueError(
+            f"amplitude holds {k} distinct value(s) (2 % apart); method={method!r} "
+            f"needs at least {need}: each amplitude gives two numbers (F0, D), "
+            f"too few for {'three' if method == 'seed' else 'four'} parameters. "
+            "Test at more amplitudes, or fit the force history with fit_loops"
+        )
     if method == "seed":
         if Fs is None:
-            raise ValueError("method='seed' needs Fs [N]: the paper takes the slip force as known "
-                             "(eq. 20 is normalised by it)")
+            raise ValueError(
+                "method='seed' needs Fs [N]: the paper takes the slip force as known "
+                "(eq. 20 is normalised by it)"
+            )
         Fs = check_scalar("Fs", Fs, low=0.0, low_open=True)
         return _fit_seed(F0a, Da, ua, Fs, t0=t0)
     if Fs is not None:
@@ -278,10 +343,15 @@ def fit_dissipation(amplitude, force, dissipation, *, method: str = "least_squar
     def unit(p1):
         return np.concatenate([force_amplitude(ua, p1), cycle_dissipation(ua, p1)])
 
-    prob = _Problem(np.concatenate([F0a, Da]), unit, w=np.ones(2 * ua.size), log_space=True,
-                    entry_x=np.concatenate([ua, ua]), min_macro=MIN_MACRO_POINTS)
-    out = _identify(prob, n_starts=n_starts, rng=rng, alpha=alpha, max_nfev=max_nfev,
-                    initial=None)
+    prob = _Problem(
+        np.concatenate([F0a, Da]),
+        unit,
+        w=np.ones(2 * ua.size),
+        log_space=True,
+        entry_x=np.concatenate([ua, ua]),
+        min_macro=MIN_MACRO_POINTS,
+    )
+    out = _identify(prob, n_starts=n_starts, rng=rng, alpha=alpha, max_nfev=max_nfev, initial=None)
     fit = unit(out["params"])
     nrmse = math.sqrt(np.mean((fit / prob.y - 1.0) ** 2))
     out["details"]["cycles"] = int(ua.size)
@@ -289,6 +359,13 @@ def fit_dissipation(amplitude, force, dissipation, *, method: str = "least_squar
     out["explains"] = nrmse <= NRMSE_LIMIT
     m = ua.size
     curves = {"F0": F0a, "D": Da, "F0_fit": fit[:m], "D_fit": fit[m:]}
-    return _finish("least_squares", out, converged=out["res"].status > 0,
-                   message=out["res"].message, nfev=prob.nfev, nrmse=nrmse, t0=t0, curves=curves)
-
+    return _finish(
+        "least_squares",
+        out,
+        converged=out["res"].status > 0,
+        message=out["res"].message,
+        nfev=prob.nfev,
+        nrmse=nrmse,
+        t0=t0,
+        curves=curves,
+    )

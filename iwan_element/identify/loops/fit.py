@@ -25,6 +25,7 @@ Start of the record and offsets
 
 Identifiability, uncertainties and the verdict: :mod:`iwan_element.identify.loops.identifiability`.
 """
+
 from __future__ import annotations
 
 import copy
@@ -63,12 +64,18 @@ def _check_record(t, u, F):
     if not np.any(FF != 0.0):
         raise ValueError("F is all zero: there is no force to fit")
     check_varies("u", uu, unit="m", what="a loop fit needs cycles of displacement")
-    check_varies("F", FF, unit="N", what="the joint force does not follow the displacement; "
-                 "check the force channel")
+    check_varies(
+        "F",
+        FF,
+        unit="N",
+        what="the joint force does not follow the displacement; check the force channel",
+    )
     c = np.corrcoef(uu, FF)[0, 1] if np.ptp(FF) > 0 else 0.0
     if c < -0.2:
-        raise ValueError(f"F decreases with u (correlation {c:.2f}): the joint force must have "
-                         "the sign of the displacement; flip the sign of one of them")
+        raise ValueError(
+            f"F decreases with u (correlation {c:.2f}): the joint force must have "
+            "the sign of the displacement; flip the sign of one of them"
+        )
     return tt, uu, FF
 
 
@@ -85,9 +92,16 @@ def _weights(noise, n):
 
 def _setup(u_drive, FF, w_full, keep, hysteresis_tol):
     hist = History(u_drive, keep=keep, tol=hysteresis_tol)
-    prob = _Problem(FF[keep], hist.forces, w=w_full[keep], log_space=False,
-                    entry_x=hist.x[hist.out], min_macro=min_macroslip(keep.size),
-                    offset=True, timeseries=True)
+    prob = _Problem(
+        FF[keep],
+        hist.forces,
+        w=w_full[keep],
+        log_space=False,
+        entry_x=hist.x[hist.out],
+        min_macro=min_macroslip(keep.size),
+        offset=True,
+        timeseries=True,
+    )
     return hist, prob
 
 
@@ -113,7 +127,8 @@ def _ssr_at(hist, u_drive, shift, prob, params):
     ``Fs`` and ``dF0`` re-projected.
     """
     g = _shifted(hist, u_drive, shift).forces(
-        IwanParameters(1.0, params.KT / params.Fs, params.chi, params.beta))
+        IwanParameters(1.0, params.KT / params.Fs, params.chi, params.beta)
+    )
     _, r = prob.project_g(g)
     return float(np.einsum("i,i->", r, r))
 
@@ -154,9 +169,21 @@ def _explains(out, prob):
     return float(fdtrc(k, m_eff - k - 1, F_stat)), 1.0 - ssr / ssr0
 
 
-def fit_loops(t, u, F, *, noise=None, smooth="auto", max_samples: int | None = 20000,
-              n_starts: int = 6, seed=0, alpha: float = 1e-3, hysteresis: float | None = None,
-              initial: IwanParameters | None = None, max_nfev: int = 300) -> FitResult:
+def fit_loops(
+    t,
+    u,
+    F,
+    *,
+    noise=None,
+    smooth="auto",
+    max_samples: int | None = 20000,
+    n_starts: int = 6,
+    seed=0,
+    alpha: float = 1e-3,
+    hysteresis: float | None = None,
+    initial: IwanParameters | None = None,
+    max_nfev: int = 300,
+) -> FitResult:
     """Fit all four Iwan parameters and the sensor offsets to a measured force history.
 
     Parameters
@@ -231,20 +258,26 @@ def fit_loops(t, u, F, *, noise=None, smooth="auto", max_samples: int | None = 2
     warns = []
     bad = [c.index for c in cycles if not c.closed or c.drifting]
     if len(bad) > len(cycles) // 2:
-        warns.append(f"{len(bad)} of {len(cycles)} cycles do not close or their centre moves "
-                     f"relative to the others (cycles {bad[:8]}); constant sensor offsets are "
-                     "fitted and do not cause this")
+        warns.append(
+            f"{len(bad)} of {len(cycles)} cycles do not close or their centre moves "
+            f"relative to the others (cycles {bad[:8]}); constant sensor offsets are "
+            "fitted and do not cause this"
+        )
     noise_F = estimate_noise(tt, FF)
     u_drive, dinfo = drive_displacement(tt, uu, smooth)
     sigma_u = dinfo["displacement_noise"]
     amp = 0.5 * float(np.ptp(uu))
     if dinfo["smooth"] == 0 and sigma_u > 1e-3 * amp:
-        warns.append(f"displacement noise ({sigma_u:.2g} m, {100 * sigma_u / amp:.2g} % of the "
-                     "half range) drives the model unfiltered (only a dead band of 3 sigma keeps "
-                     "its reversals out); use smooth='auto'")
+        warns.append(
+            f"displacement noise ({sigma_u:.2g} m, {100 * sigma_u / amp:.2g} % of the "
+            "half range) drives the model unfiltered (only a dead band of 3 sigma keeps "
+            "its reversals out); use smooth='auto'"
+        )
     b = burn_in_index(u_drive, hysteresis=hysteresis)
     m_all = n - b
-    keep = b + np.unique(np.round(np.linspace(0, m_all - 1, min(m_all, max_samples))).astype(np.intp))
+    keep = b + np.unique(
+        np.round(np.linspace(0, m_all - 1, min(m_all, max_samples))).astype(np.intp)
+    )
     # reversals smaller than the noise left in the driving displacement are noise, not the
     # joint's: a dead band of 3 sigma keeps them from adding stiff micro-loops (errors in
     # variables: they bias KT low and chi high)
@@ -252,37 +285,72 @@ def fit_loops(t, u, F, *, noise=None, smooth="auto", max_samples: int | None = 2
     hist, prob = _setup(u_drive, FF, w_full, keep, tol)
     half = int(keep.size / max(2 * len(cycles), 1))
     prob.block = half
-    out = _identify(prob, n_starts=n_starts, rng=rng, alpha=alpha, max_nfev=max_nfev,
-                    initial=initial)
+    out = _identify(
+        prob, n_starts=n_starts, rng=rng, alpha=alpha, max_nfev=max_nfev, initial=initial
+    )
     du0, se_du0, hist, prob, out = _fit_displacement_offset(
-        (hist, prob), out, u_drive, FF, w_full, keep, tol, amp,
-        dict(rng=rng, alpha=alpha, max_nfev=max_nfev))
+        (hist, prob),
+        out,
+        u_drive,
+        FF,
+        w_full,
+        keep,
+        tol,
+        amp,
+        dict(rng=rng, alpha=alpha, max_nfev=max_nfev),
+    )
     p_noise, r2 = _explains(out, prob)
     dF0, se_dF0 = out["dF0"]
     if p_noise >= alpha:
         out["explains"] = False
-        warns.append(f"the force is indistinguishable from noise: the joint explains "
-                     f"{100 * r2:.2g} % of its variance, not significantly more than a constant "
-                     f"(p = {p_noise:.2g} >= {alpha:g}); nothing is identified")
+        warns.append(
+            f"the force is indistinguishable from noise: the joint explains "
+            f"{100 * r2:.2g} % of its variance, not significantly more than a constant "
+            f"(p = {p_noise:.2g} >= {alpha:g}); nothing is identified"
+        )
     F_fit = hist.forces(out["params"])
     y = prob.y
     nrmse = math.sqrt(np.mean((y - dF0 - F_fit) ** 2)) / float(np.ptp(y))
     if out["tau"] > 3.0 and nrmse > 1e-6:
-        warns.append(f"the residuals are correlated over {out['tau']:.3g} samples (a systematic "
-                     f"misfit or coloured noise): the std. errors are widened by "
-                     f"sqrt(tau) = {math.sqrt(out['tau']):.3g}")
-    out["details"].update({"samples": n, "fitted_samples": int(keep.size), "burn_in": int(b),
-                           "model_samples": int(hist.index.size), "reversal_depth": hist.depth,
-                           "cycles": len(cycles), "weighted": noise is not None,
-                           "p_explains": p_noise, "r_squared": r2, **dinfo})
-    noise_out = {"force": noise_F.sigma if noise is None else float(np.median(1.0 / w_full)),
-             "displacement": sigma_u, "tau": out["tau"],
-             "force_method": noise_F.method if noise is None else "given"}
+        warns.append(
+            f"the residuals are correlated over {out['tau']:.3g} samples (a systematic "
+            f"misfit or coloured noise): the std. errors are widened by "
+            f"sqrt(tau) = {math.sqrt(out['tau']):.3g}"
+        )
+    out["details"].update(
+        {
+            "samples": n,
+            "fitted_samples": int(keep.size),
+            "burn_in": int(b),
+            "model_samples": int(hist.index.size),
+            "reversal_depth": hist.depth,
+            "cycles": len(cycles),
+            "weighted": noise is not None,
+            "p_explains": p_noise,
+            "r_squared": r2,
+            **dinfo,
+        }
+    )
+    noise_out = {
+        "force": noise_F.sigma if noise is None else float(np.median(1.0 / w_full)),
+        "displacement": sigma_u,
+        "tau": out["tau"],
+        "force_method": noise_F.method if noise is None else "given",
+    }
     curves = {"u": u_drive[keep] - du0, "F": y - dF0, "F_fit": F_fit}
-    return _finish("loops", out, converged=out["res"].status > 0, message=out["res"].message,
-                   nfev=prob.nfev, nrmse=nrmse, t0=t0, extra_warnings=warns,
-                   offsets={"force": (dF0, se_dF0), "displacement": (du0, se_du0)},
-                   noise=noise_out, curves=curves)
+    return _finish(
+        "loops",
+        out,
+        converged=out["res"].status > 0,
+        message=out["res"].message,
+        nfev=prob.nfev,
+        nrmse=nrmse,
+        t0=t0,
+        extra_warnings=warns,
+        offsets={"force": (dF0, se_dF0), "displacement": (du0, se_du0)},
+        noise=noise_out,
+        curves=curves,
+    )
 
 
 def _fit_displacement_offset(setup, out, u_drive, FF, w_full, keep, tol, amp, opts):
@@ -303,7 +371,7 @@ def _fit_displacement_offset(setup, out, u_drive, FF, w_full, keep, tol, amp, op
         trial[1].block = half
         out_t = _identify(trial[1], n_starts=1, initial=out["params"], **opts)
         if out_t["ssr"] >= out["ssr"]:
-            break                          # the shift does not improve the fit: keep what we have
+            break  # the shift does not improve the fit: keep what we have
         du0 += step
         (hist, prob), out = trial, out_t
     return du0, se_du0, hist, prob, out

@@ -32,6 +32,7 @@ Verdict
     finite standard error of at most half the value (``chi + 1`` for ``chi``) and not at a
     bound of the search range.
 """
+
 from __future__ import annotations
 
 import math
@@ -46,9 +47,9 @@ from .noise import integrated_time
 from .result import PARAM_NAMES
 from .solver import _multistart, _Problem, _q_to_shape, _uncertainty
 
-_CHI_BOUNDS = (-0.98, 1.0)            # search range of chi (physical joints: -1 < chi <= 0)
+_CHI_BOUNDS = (-0.98, 1.0)  # search range of chi (physical joints: -1 < chi <= 0)
 _BETA_MAX = 100.0
-_PHI_RANGE = (1e-3, 1e4)              # search range of phi_max / x_max
+_PHI_RANGE = (1e-3, 1e4)  # search range of phi_max / x_max
 
 
 #: Fewest amplitude points (of a dissipation or modal curve) beyond the fitted ``phi_max``
@@ -70,11 +71,13 @@ def microslip_warning(n_macro: int, n: int, x_max: float, phi_max: float) -> str
     """Why ``Fs`` and ``beta`` are not identified when only ``n_macro`` of ``n`` samples
     reach macroslip (the tester's words of :func:`min_macroslip`).
     """
-    return (f"Fs and beta are NOT identified by these data: the loops stay in microslip (only "
-            f"{n_macro} of {n} fitted samples beyond the fitted slip onset phi_max = "
-            f"{phi_max:.4g} m, largest excursion {x_max:.4g} m; {min_macroslip(n)} needed); "
-            "only KT, chi and their microslip combination are fixed. Test to larger amplitudes "
-            "to identify them")
+    return (
+        f"Fs and beta are NOT identified by these data: the loops stay in microslip (only "
+        f"{n_macro} of {n} fitted samples beyond the fitted slip onset phi_max = "
+        f"{phi_max:.4g} m, largest excursion {x_max:.4g} m; {min_macroslip(n)} needed); "
+        "only KT, chi and their microslip combination are fixed. Test to larger amplitudes "
+        "to identify them"
+    )
 
 
 def _range_warnings(params: IwanParameters) -> list[str]:
@@ -84,19 +87,24 @@ def _range_warnings(params: IwanParameters) -> list[str]:
     return out
 
 
-def _identify(prob: _Problem, *, n_starts: int, rng: np.random.Generator, alpha: float,
-              max_nfev: int, initial: IwanParameters | None):
+def _identify(
+    prob: _Problem,
+    *,
+    n_starts: int,
+    rng: np.random.Generator,
+    alpha: float,
+    max_nfev: int,
+    initial: IwanParameters | None,
+):
     """Microslip-only fit, four-parameter multi-start fit, macroslip test, covariance.
 
     Returns a dict with the chosen params, stderr, correlation, identified, ranges, residuals
     and diagnostics.
     """
     micro = _fit_microslip(prob, max_nfev=max_nfev)
-    full = _fit_full(prob, micro, n_starts=n_starts, rng=rng, max_nfev=max_nfev,
-                     initial=initial)
+    full = _fit_full(prob, micro, n_starts=n_starts, rng=rng, max_nfev=max_nfev, initial=initial)
     macro, details = _macroslip_test(prob, micro, full, alpha)
-    out = _macro_result(prob, full, details) if macro else _micro_result(prob, micro, full,
-                                                                         details)
+    out = _macro_result(prob, full, details) if macro else _micro_result(prob, micro, full, details)
     out["warnings"] += _range_warnings(out["params"])
     details["tau"] = out["tau"]
     r = out["r"]
@@ -110,35 +118,62 @@ def _fit_microslip(prob: _Problem, *, max_nfev: int) -> dict:
     """
     lower = np.array([0.0, _CHI_BOUNDS[0]])
     upper = np.array([math.log(_PHI_RANGE[1]), _CHI_BOUNDS[1]])
-    starts = [(math.log(2.0), -0.5), (math.log(1.2), -0.2), (math.log(5.0), -0.8),
-              (math.log(1.5), 0.3)]
+    starts = [
+        (math.log(2.0), -0.5),
+        (math.log(1.2), -0.2),
+        (math.log(5.0), -0.8),
+        (math.log(1.5), 0.3),
+    ]
     res = _multistart(prob, starts, lower, upper, beta_fixed=0.0, max_nfev=max_nfev)
     phi, chi, _ = _q_to_shape(res.x, prob.x_max, 0.0)
     Fs, r = prob.projected(phi, chi, 0.0)
     return {"res": res, "phi": phi, "chi": chi, "Fs": Fs, "r": r}
 
 
-def _fit_full(prob: _Problem, micro: dict, *, n_starts: int, rng: np.random.Generator,
-              max_nfev: int, initial: IwanParameters | None) -> dict:
+def _fit_full(
+    prob: _Problem,
+    micro: dict,
+    *,
+    n_starts: int,
+    rng: np.random.Generator,
+    max_nfev: int,
+    initial: IwanParameters | None,
+) -> dict:
     """The four-parameter multi-start fit, started from the microslip fit, the user's
     ``initial`` and random shapes.
     """
     xm, chi_m = prob.x_max, micro["chi"]
     lower = np.array([math.log(_PHI_RANGE[0]), _CHI_BOUNDS[0], 0.0])
     upper = np.array([math.log(_PHI_RANGE[1]), _CHI_BOUNDS[1], math.log1p(_BETA_MAX)])
-    starts = [(micro["res"].x[0], chi_m, 0.0), (math.log(0.7), chi_m, math.log(2.0)),
-              (math.log(0.4), chi_m, 0.0), (math.log(0.9), chi_m, math.log(4.0))]
+    starts = [
+        (micro["res"].x[0], chi_m, 0.0),
+        (math.log(0.7), chi_m, math.log(2.0)),
+        (math.log(0.4), chi_m, 0.0),
+        (math.log(0.9), chi_m, math.log(4.0)),
+    ]
     if initial is not None:
         starts.insert(0, (math.log(initial.phi_max / xm), initial.chi, math.log1p(initial.beta)))
     while len(starts) < n_starts:
-        starts.append((rng.uniform(math.log(0.2), math.log(2.0)), rng.uniform(-0.9, -0.05),
-                       rng.uniform(0.0, math.log(4.0))))
-    starts = starts[:max(n_starts, 1 if initial is None else 2)]
+        starts.append(
+            (
+                rng.uniform(math.log(0.2), math.log(2.0)),
+                rng.uniform(-0.9, -0.05),
+                rng.uniform(0.0, math.log(4.0)),
+            )
+        )
+    starts = starts[: max(n_starts, 1 if initial is None else 2)]
     res = _multistart(prob, starts, lower, upper, beta_fixed=None, max_nfev=max_nfev)
     phi, chi, beta = _q_to_shape(res.x, xm, None)
     Fs, r = prob.projected(phi, chi, beta)
-    return {"res": res, "phi": phi, "chi": chi, "beta": beta, "Fs": Fs, "r": r,
-            "starts": len(starts)}
+    return {
+        "res": res,
+        "phi": phi,
+        "chi": chi,
+        "beta": beta,
+        "Fs": Fs,
+        "r": r,
+        "starts": len(starts),
+    }
 
 
 def _tau(prob: _Problem, r) -> float:
@@ -156,16 +191,24 @@ def _macroslip_test(prob: _Problem, micro: dict, full: dict, alpha: float):
     m = r_f.size
     n_macro = prob.n_macro(full["phi"])
     tau_f = _tau(prob, r_f)
-    m_eff = m / tau_f                      # correlated residuals carry fewer independent data
+    m_eff = m / tau_f  # correlated residuals carry fewer independent data
     if ssr_f > 0 and m_eff > 5:
         F_stat = max(ssr_m - ssr_f, 0.0) / (ssr_f / (m - 4)) / tau_f
-        p_value = float(fdtrc(1, m_eff - 4, F_stat))      # F-distribution survival
+        p_value = float(fdtrc(1, m_eff - 4, F_stat))  # F-distribution survival
     else:
         F_stat, p_value = (math.inf, 0.0) if ssr_m > ssr_f else (0.0, 1.0)
-    macro = (full["phi"] < xm and n_macro >= prob.min_macro and p_value < alpha)
-    details = {"x_max": xm, "ssr_microslip": ssr_m, "ssr_full": ssr_f, "F_statistic": F_stat,
-               "p_value": p_value, "alpha": alpha, "macroslip_residuals": n_macro,
-               "macroslip_reached": bool(macro), "starts": full["starts"]}
+    macro = full["phi"] < xm and n_macro >= prob.min_macro and p_value < alpha
+    details = {
+        "x_max": xm,
+        "ssr_microslip": ssr_m,
+        "ssr_full": ssr_f,
+        "F_statistic": F_stat,
+        "p_value": p_value,
+        "alpha": alpha,
+        "macroslip_residuals": n_macro,
+        "macroslip_reached": bool(macro),
+        "starts": full["starts"],
+    }
     return macro, details
 
 
@@ -181,21 +224,42 @@ def _macro_result(prob: _Problem, full: dict, details: dict) -> dict:
     theta = np.array([math.log(Fs), math.log(KT), chi, math.log1p(beta)] + ([dF0] if off else []))
 
     def fun(th):
-        return prob.residual(IwanParameters(math.exp(th[0]), math.exp(th[1]), th[2],
-                                            math.expm1(th[3])), th[4] if off else 0.0)
+        return prob.residual(
+            IwanParameters(math.exp(th[0]), math.exp(th[1]), th[2], math.expm1(th[3])),
+            th[4] if off else 0.0,
+        )
 
-    se, corr = _uncertainty(fun, theta, r, [Fs, KT, 1.0, 1.0 + beta] + ([1.0] if off else []),
-                            at_lower_bound=3, tau=tau,
-                            timeseries=prob.timeseries, block=prob.block)
-    at_bound = [k for k, v, (lo, hi) in (("chi", chi, _CHI_BOUNDS), ("beta", beta, (0, _BETA_MAX)))
-                if min(abs(v - lo), abs(v - hi)) < 1e-6]
+    se, corr = _uncertainty(
+        fun,
+        theta,
+        r,
+        [Fs, KT, 1.0, 1.0 + beta] + ([1.0] if off else []),
+        at_lower_bound=3,
+        tau=tau,
+        timeseries=prob.timeseries,
+        block=prob.block,
+    )
+    at_bound = [
+        k
+        for k, v, (lo, hi) in (("chi", chi, _CHI_BOUNDS), ("beta", beta, (0, _BETA_MAX)))
+        if min(abs(v - lo), abs(v - hi)) < 1e-6
+    ]
     if phi_f <= xm * _PHI_RANGE[0] * (1 + 1e-6):
         at_bound += ["Fs", "KT"]
     details["macroslip_fraction"] = details["macroslip_residuals"] / r.size
-    return {"params": params, "stderr": dict(zip(PARAM_NAMES, se[:4].tolist())),
-            "correlation": corr[:4, :4], "identified": dict.fromkeys(PARAM_NAMES, True),
-            "ranges": {}, "res": full["res"], "r": r, "warnings": [], "at_bound": at_bound,
-            "dF0": (dF0, float(se[4]) if off else math.nan), "tau": tau}
+    return {
+        "params": params,
+        "stderr": dict(zip(PARAM_NAMES, se[:4].tolist())),
+        "correlation": corr[:4, :4],
+        "identified": dict.fromkeys(PARAM_NAMES, True),
+        "ranges": {},
+        "res": full["res"],
+        "r": r,
+        "warnings": [],
+        "at_bound": at_bound,
+        "dF0": (dF0, float(se[4]) if off else math.nan),
+        "tau": tau,
+    }
 
 
 def _micro_result(prob: _Problem, micro: dict, full: dict, details: dict) -> dict:
@@ -208,7 +272,7 @@ def _micro_result(prob: _Problem, micro: dict, full: dict, details: dict) -> dic
     params = IwanParameters(Fs0, KT, chi, 0.0)
     R = params.R
     r = micro["r"]
-    prob.projected(phi0, chi, 0.0)               # the offset of this member (prob.dF0)
+    prob.projected(phi0, chi, 0.0)  # the offset of this member (prob.dF0)
     dF0 = prob.dF0 if off else 0.0
     tau = _tau(prob, r)
     theta = np.array([math.log(KT), chi, math.log(R)] + ([dF0] if off else []))
@@ -217,40 +281,62 @@ def _micro_result(prob: _Problem, micro: dict, full: dict, details: dict) -> dic
         # the beta = 0 member for (KT, chi, R): R phi^(chi+1) = (chi+1) KT, eq. 10
         KT_, chi_, R_ = math.exp(th[0]), th[1], math.exp(th[2])
         phi_ = ((chi_ + 1.0) * KT_ / R_) ** (1.0 / (chi_ + 1.0))
-        return prob.residual(IwanParameters(KT_ * phi_ * (chi_ + 1.0) / (chi_ + 2.0), KT_,
-                                            chi_, 0.0), th[3] if off else 0.0)
+        return prob.residual(
+            IwanParameters(KT_ * phi_ * (chi_ + 1.0) / (chi_ + 2.0), KT_, chi_, 0.0),
+            th[3] if off else 0.0,
+        )
 
-    se3, c3 = _uncertainty(fun, theta, r, [KT, 1.0, R] + ([1.0] if off else []), tau=tau,
-                           timeseries=prob.timeseries, block=prob.block)
+    se3, c3 = _uncertainty(
+        fun,
+        theta,
+        r,
+        [KT, 1.0, R] + ([1.0] if off else []),
+        tau=tau,
+        timeseries=prob.timeseries,
+        block=prob.block,
+    )
     corr = np.full((4, 4), np.nan)
     corr[1:3, 1:3] = c3[:2, :2]
-    at_bound = [k for k, v, (lo, hi) in (("chi", chi, _CHI_BOUNDS),)
-                if min(abs(v - lo), abs(v - hi)) < 1e-6]
+    at_bound = [
+        k for k, v, (lo, hi) in (("chi", chi, _CHI_BOUNDS),) if min(abs(v - lo), abs(v - hi)) < 1e-6
+    ]
     # family members that fit equally: phi_max in [x_max, phi0], beta = (phi0/phi)^(chi+1) - 1
     beta_hi = (phi0 / xm) ** (chi + 1.0) - 1.0
-    Fs_lo = backbone(xm, params)             # phi_max = x_max: Fs is the force reached
+    Fs_lo = backbone(xm, params)  # phi_max = x_max: Fs is the force reached
     details.update({"R": R, "stderr_R": se3[2], "corr_KT_chi_R": c3[:3, :3]})
     p_value, alpha = details["p_value"], details["alpha"]
     if details["macroslip_residuals"] >= prob.min_macro and full["phi"] < xm:
-        why = (f"the four-parameter fit puts macroslip in the data but does not improve "
-               f"the residual significantly (p = {p_value:.2g} >= {alpha:g})")
+        why = (
+            f"the four-parameter fit puts macroslip in the data but does not improve "
+            f"the residual significantly (p = {p_value:.2g} >= {alpha:g})"
+        )
     else:
-        why = ("the data do not reach macroslip (largest backbone argument "
-               f"{xm * 1e3:.4g} mm <= phi_max)")
-    warns = [f"Fs and beta are NOT identified: {why}; the data determine only KT, chi "
-             f"and R = {R:.5g}. Any Fs in [{Fs_lo:.5g}, {Fs0:.5g}] N with beta in "
-             f"[0, {beta_hi:.4g}] fits equally; params reports the beta = 0 member. "
-             "Test to larger amplitudes to identify them."]
+        why = (
+            "the data do not reach macroslip (largest backbone argument "
+            f"{xm * 1e3:.4g} mm <= phi_max)"
+        )
+    warns = [
+        f"Fs and beta are NOT identified: {why}; the data determine only KT, chi "
+        f"and R = {R:.5g}. Any Fs in [{Fs_lo:.5g}, {Fs0:.5g}] N with beta in "
+        f"[0, {beta_hi:.4g}] fits equally; params reports the beta = 0 member. "
+        "Test to larger amplitudes to identify them."
+    ]
     if phi0 <= xm * (1 + 1e-9):
-        warns.append("the microslip fit sits at its bound phi_max = x_max: the backbone's "
-                     "tangent vanishes at the largest excursion; more data near macroslip "
-                     "would settle Fs")
-    return {"params": params, "stderr": {"Fs": math.nan, "KT": se3[0], "chi": se3[1],
-                                         "beta": math.nan},
-            "correlation": corr, "identified": {"Fs": False, "KT": True, "chi": True,
-                                                "beta": False},
-            "ranges": {"Fs": (float(Fs_lo), float(Fs0)), "beta": (0.0, float(beta_hi))},
-            "res": micro["res"], "r": r, "warnings": warns, "at_bound": at_bound,
-            "dF0": (dF0, float(se3[3]) if off else math.nan), "tau": tau}
-
-
+        warns.append(
+            "the microslip fit sits at its bound phi_max = x_max: the backbone's "
+            "tangent vanishes at the largest excursion; more data near macroslip "
+            "would settle Fs"
+        )
+    return {
+        "params": params,
+        "stderr": {"Fs": math.nan, "KT": se3[0], "chi": se3[1], "beta": math.nan},
+        "correlation": corr,
+        "identified": {"Fs": False, "KT": True, "chi": True, "beta": False},
+        "ranges": {"Fs": (float(Fs_lo), float(Fs0)), "beta": (0.0, float(beta_hi))},
+        "res": micro["res"],
+        "r": r,
+        "warnings": warns,
+        "at_bound": at_bound,
+        "dF0": (dF0, float(se3[3]) if off else math.nan),
+        "tau": tau,
+    }

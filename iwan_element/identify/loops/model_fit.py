@@ -34,6 +34,7 @@ Uncertainty (documented choice: residual-based, widened by the residual's correl
     (:func:`iwan_element.fitting.covariance`, :func:`iwan_element.fitting.verdict`,
     docs/fitting.md).
 """
+
 from __future__ import annotations
 
 import logging
@@ -97,12 +98,13 @@ def drive_displacement(t, u, smooth="auto"):
     else:
         w = check_int("smooth", smooth, 0)
         if w and (w < 7 or w % 2 == 0 or w >= n):
-            raise ValueError(f"smooth must be 'auto', 0 or an odd window of at least 7 samples "
-                             f"below the record length {n}, got {smooth}")
+            raise ValueError(
+                f"smooth must be 'auto', 0 or an odd window of at least 7 samples "
+                f"below the record length {n}, got {smooth}"
+            )
     u_drive = savgol_filter(u, w, 5) if w else u
     left = sig * math.sqrt(float(savgol_coeffs(w, 5)[w // 2])) if w else sig
-    return u_drive, {"smooth": int(w), "displacement_noise": float(sig),
-                     "drive_noise": float(left)}
+    return u_drive, {"smooth": int(w), "displacement_noise": float(sig), "drive_noise": float(left)}
 
 
 @dataclass(frozen=True, eq=False)
@@ -157,28 +159,45 @@ class ModelFit(ResultShape):
     def to_dict(self) -> dict:
         """JSON-safe dict (NaN becomes None)."""
         from ...base.serialize import json_safe
-        return json_safe({"params": self.params.to_dict(),
-                      "offsets": value_stderr(self.offsets),
-                      "rms": self.rms, "tau": self.tau, "n_eff": self.n_eff,
-                      "success": self.success, "message": self.message, "nfev": self.nfev,
-                      "warnings": list(self.warnings), "details": self.details})
+
+        return json_safe(
+            {
+                "params": self.params.to_dict(),
+                "offsets": value_stderr(self.offsets),
+                "rms": self.rms,
+                "tau": self.tau,
+                "n_eff": self.n_eff,
+                "success": self.success,
+                "message": self.message,
+                "nfev": self.nfev,
+                "warnings": list(self.warnings),
+                "details": self.details,
+            }
+        )
 
     def report(self) -> str:
         """Parameter table with standard errors and status, residual and warnings."""
         from .result import status_text
-        lines = [f"force-model fit: {'success' if self.success else 'NOT successful'} "
-                 f"({self.message}), RMS residual {self.rms:.4g} N, tau {self.tau:.3g} samples, "
-                 f"n_eff {self.n_eff:.4g}", "  parameter        value    std. error   status"]
+
+        lines = [
+            f"force-model fit: {'success' if self.success else 'NOT successful'} "
+            f"({self.message}), RMS residual {self.rms:.4g} N, tau {self.tau:.3g} samples, "
+            f"n_eff {self.n_eff:.4g}",
+            "  parameter        value    std. error   status",
+        ]
         for p in self.params.parameters:
             lab = f"{p.name} [{p.unit or '-'}]"
-            lines.append(f"  {lab:<14} {p.value:>11.5g} {p.stderr:>12.3g}   "
-                         f"{status_text(p.identified, p.nuisance)}")
+            lines.append(
+                f"  {lab:<14} {p.value:>11.5g} {p.stderr:>12.3g}   "
+                f"{status_text(p.identified, p.nuisance)}"
+            )
         lines += [f"  - {w}" for w in self.warnings]
         return "\n".join(lines)
 
     def plot(self, ax=None):
         """Residual [N] vs time [s]; returns the list of artists."""
         from ...base.result_shape import axes_or_new
+
         ax = axes_or_new(ax)
         lines = ax.plot(self.t, self.residual, "-", lw=0.6, label="measured - model")
         ax.set_xlabel("t [s]")
@@ -193,20 +212,43 @@ def _identified(names, x, se, at_bound, degenerate, warns) -> dict:
     """
     ident = {}
     for k, name in enumerate(names):
-        why = (" (a joint with no absolute position reference depends on displacement "
-               "differences only)" if name == "du0" else "")
-        ident[name], warn = verdict(name, float(x[k]), float(se[k]), at_bound=bool(at_bound[k]),
-                                    degenerate=bool(degenerate[k]),
-                                    nuisance=name in OFFSET_NAMES, why_degenerate=why)
+        why = (
+            " (a joint with no absolute position reference depends on displacement "
+            "differences only)"
+            if name == "du0"
+            else ""
+        )
+        ident[name], warn = verdict(
+            name,
+            float(x[k]),
+            float(se[k]),
+            at_bound=bool(at_bound[k]),
+            degenerate=bool(degenerate[k]),
+            nuisance=name in OFFSET_NAMES,
+            why_degenerate=why,
+        )
         if warn:
             warns.append(warn)
     return ident
 
 
-def fit_force_model(t, u, F, model: Callable, theta0, *, lower=None, upper=None,
-                    names: Sequence[str] | None = None, units: dict | None = None,
-                    fit_offsets: bool = True, smooth="auto", burn_in: int | str = "auto",
-                    max_samples: int | None = 5000, max_nfev: int = 200) -> ModelFit:
+def fit_force_model(
+    t,
+    u,
+    F,
+    model: Callable,
+    theta0,
+    *,
+    lower=None,
+    upper=None,
+    names: Sequence[str] | None = None,
+    units: dict | None = None,
+    fit_offsets: bool = True,
+    smooth="auto",
+    burn_in: int | str = "auto",
+    max_samples: int | None = 5000,
+    max_nfev: int = 200,
+) -> ModelFit:
     """Least-squares fit of ``model`` plus force and displacement offsets (module docstring).
 
     Parameters
@@ -286,25 +328,57 @@ def fit_force_model(t, u, F, model: Callable, theta0, *, lower=None, upper=None,
     c = covariance(res.jac, r, tau=tau)
     se, cov, degenerate = c.stderr, c.covariance, c.degenerate
     warns = []
-    at_bound = (np.isclose(res.x, lo_x, rtol=1e-6, atol=1e-12)
-                | np.isclose(res.x, hi_x, rtol=1e-6, atol=1e-12))
+    at_bound = np.isclose(res.x, lo_x, rtol=1e-6, atol=1e-12) | np.isclose(
+        res.x, hi_x, rtol=1e-6, atol=1e-12
+    )
     ident = _identified(all_names, res.x, se, at_bound, degenerate, warns)
     unit_of = {"dF0": "N", "du0": "m", **dict(units or {})}
-    table = ParameterTable([Parameter(k, float(v), float(e), float(a), float(b),
-                                      unit_of.get(k, ""), ident[k], nuisance=k in OFFSET_NAMES)
-                            for k, v, e, a, b in zip(all_names, res.x, se, lo_x, hi_x)],
-                           correlation=c.correlation)
+    table = ParameterTable(
+        [
+            Parameter(
+                k,
+                float(v),
+                float(e),
+                float(a),
+                float(b),
+                unit_of.get(k, ""),
+                ident[k],
+                nuisance=k in OFFSET_NAMES,
+            )
+            for k, v, e, a, b in zip(all_names, res.x, se, lo_x, hi_x)
+        ],
+        correlation=c.correlation,
+    )
     values, stderr = table.values, table.stderr
     if tau > 3.0:
-        warns.append(f"the residuals are correlated over {tau:.3g} samples (a systematic misfit "
-                     f"or coloured noise): the std. errors are widened by sqrt(tau) = "
-                     f"{math.sqrt(tau):.3g}")
+        warns.append(
+            f"the residuals are correlated over {tau:.3g} samples (a systematic misfit "
+            f"or coloured noise): the std. errors are widened by sqrt(tau) = "
+            f"{math.sqrt(tau):.3g}"
+        )
     success = fit_success(res.success, ident, names)
-    offs = {"force": (values.get("dF0", 0.0), stderr.get("dF0", math.nan)),
-            "displacement": (values.get("du0", 0.0), stderr.get("du0", math.nan))}
-    return ModelFit(params=table, offsets=offs, t=tt[keep], residual=-r, rms=float(np.sqrt(np.mean(r * r))),
-                    tau=float(tau), n_eff=float(r.size / tau), success=success,
-                    message=str(res.message), nfev=int(nfev[0]), warnings=tuple(warns),
-                    details={"burn_in": int(b), "fitted_samples": int(keep.size),
-                             "units": dict(units or {}), "covariance": cov.tolist(),
-                             "wall_time": time.perf_counter() - t_start, **dinfo})
+    offs = {
+        "force": (values.get("dF0", 0.0), stderr.get("dF0", math.nan)),
+        "displacement": (values.get("du0", 0.0), stderr.get("du0", math.nan)),
+    }
+    return ModelFit(
+        params=table,
+        offsets=offs,
+        t=tt[keep],
+        residual=-r,
+        rms=float(np.sqrt(np.mean(r * r))),
+        tau=float(tau),
+        n_eff=float(r.size / tau),
+        success=success,
+        message=str(res.message),
+        nfev=int(nfev[0]),
+        warnings=tuple(warns),
+        details={
+            "burn_in": int(b),
+            "fitted_samples": int(keep.size),
+            "units": dict(units or {}),
+            "covariance": cov.tolist(),
+            "wall_time": time.perf_counter() - t_start,
+            **dinfo,
+        },
+    )

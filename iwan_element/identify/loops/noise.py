@@ -37,6 +37,7 @@ Method (``method="savgol"``, what ``"auto"`` uses)
 ``method="difference"``: ``1.4826 MAD`` of the second differences divided by ``sqrt(6)``
 (white noise only; kept for comparison). The result is in the units of ``y``.
 """
+
 from __future__ import annotations
 
 import math
@@ -51,7 +52,7 @@ from ...base.validation import check_magnitude, check_scalar, check_time, finite
 
 __all__ = ["NoiseEstimate", "estimate_noise", "integrated_time", "difference_sigma"]
 
-_MAD = 1.482602218505602          # 1 / Phi^-1(3/4): MAD -> standard deviation of a Gaussian
+_MAD = 1.482602218505602  # 1 / Phi^-1(3/4): MAD -> standard deviation of a Gaussian
 _POLY = 5
 MIN_WINDOW = 9
 
@@ -104,21 +105,26 @@ class NoiseEstimate(ResultShape):
         samples (then its relative standard error, about ``1 / sqrt(2 n_eff)``, is below
         about 22 %).
         """
-        return bool(math.isfinite(self.sigma) and self.sigma > 0
-                    and self.n_eff >= MIN_EFFECTIVE)
+        return bool(math.isfinite(self.sigma) and self.sigma > 0 and self.n_eff >= MIN_EFFECTIVE)
 
     def plot(self, ax=None, *, lags: int | None = None):
         """The noise model's autocorrelation ``rho**|k|`` (AR(1)) against the lag [s], with the
         integrated correlation time marked. Returns the artists (one Axes,
         :mod:`iwan_element.base.result_shape`).
         """
-        ax, = panels(ax, 1, figsize=(5, 3.5))
+        (ax,) = panels(ax, 1, figsize=(5, 3.5))
         dt = self.correlation_time / self.tau if self.tau > 0 else 1.0
         k = np.arange(lags if lags is not None else max(10, int(6 * self.tau)) + 1)
-        rho = self.lag_one ** k if self.lag_one > 0 else (k == 0).astype(float)
+        rho = self.lag_one**k if self.lag_one > 0 else (k == 0).astype(float)
         arts = ax.plot(k * dt, rho, "o-", ms=3, label=f"AR(1), rho = {self.lag_one:.2f}")
-        arts.append(ax.axvline(self.correlation_time, color="k", ls=":",
-                               label=f"correlation time {self.correlation_time:.3g} s"))
+        arts.append(
+            ax.axvline(
+                self.correlation_time,
+                color="k",
+                ls=":",
+                label=f"correlation time {self.correlation_time:.3g} s",
+            )
+        )
         ax.set_xlabel("lag [s]")
         ax.set_ylabel("noise autocorrelation [-]")
         ax.set_title(f"sigma = {self.sigma:.4g} ({self.method})", fontsize=9)
@@ -127,17 +133,26 @@ class NoiseEstimate(ResultShape):
 
     def to_dict(self) -> dict:
         """JSON-safe dict."""
-        return {"sigma": float(self.sigma), "method": self.method, "success": self.success,
-                "correlation_time": float(self.correlation_time), "n": int(self.n),
-                "n_eff": float(self.n_eff), "window": float(self.window),
-                "lag_one": float(self.lag_one), "warnings": list(self.warnings)}
+        return {
+            "sigma": float(self.sigma),
+            "method": self.method,
+            "success": self.success,
+            "correlation_time": float(self.correlation_time),
+            "n": int(self.n),
+            "n_eff": float(self.n_eff),
+            "window": float(self.window),
+            "lag_one": float(self.lag_one),
+            "warnings": list(self.warnings),
+        }
 
     def report(self) -> str:
         """One-paragraph summary."""
-        lines = [f"noise sigma = {self.sigma:.4g} (method {self.method}, window "
-                 f"{self.window:.4g} s), correlation time {self.correlation_time:.3g} s "
-                 f"(lag-one correlation {self.lag_one:.2f}), "
-                 f"{self.n_eff:.4g} effective of {self.n} samples"]
+        lines = [
+            f"noise sigma = {self.sigma:.4g} (method {self.method}, window "
+            f"{self.window:.4g} s), correlation time {self.correlation_time:.3g} s "
+            f"(lag-one correlation {self.lag_one:.2f}), "
+            f"{self.n_eff:.4g} effective of {self.n} samples"
+        ]
         lines += [f"  - {w}" for w in self.warnings]
         return "\n".join(lines)
 
@@ -152,7 +167,7 @@ def signal_window(y: np.ndarray) -> int:
     tot = p.sum()
     if tot <= 0.0:
         return MIN_WINDOW
-    k95 = int(np.searchsorted(np.cumsum(p), 0.95 * tot)) + 1       # cycles per record
+    k95 = int(np.searchsorted(np.cumsum(p), 0.95 * tot)) + 1  # cycles per record
     w = int(n / (8.0 * k95))
     w = max(MIN_WINDOW, min(w, n // 4))
     return w if w % 2 else w - 1 if w > MIN_WINDOW else MIN_WINDOW
@@ -164,7 +179,7 @@ def _clean_blocks(r: np.ndarray, L: int) -> np.ndarray:
     break-away peaks), signal leaks and bursts of load-frame chatter are left out.
     """
     m = r.size // L
-    B = r[:m * L].reshape(m, L)
+    B = r[: m * L].reshape(m, L)
     B = B - np.median(B, axis=1, keepdims=True)
     sc = np.median(np.abs(B), axis=1)
     med = np.median(sc)
@@ -178,7 +193,7 @@ def _filtered_ar1_acf(w: int, rho: float, lags: int) -> np.ndarray:
     """
     c = -savgol_coeffs(w, _POLY)
     c[w // 2] += 1.0
-    a = np.correlate(c, c, mode="full")          # filter autocorrelation, lags -(w-1)..w-1
+    a = np.correlate(c, c, mode="full")  # filter autocorrelation, lags -(w-1)..w-1
     lag = np.arange(-(w - 1), w)
     return np.array([float(a @ rho ** np.abs(lag + k)) for k in range(lags + 1)])
 
@@ -191,7 +206,7 @@ def _block_acf(B: np.ndarray, lags: int) -> np.ndarray:
     """
     out = np.ones(lags + 1)
     for k in range(1, lags + 1):
-        a, b = B[:, k:].ravel(), B[:, :B.shape[1] - k].ravel()
+        a, b = B[:, k:].ravel(), B[:, : B.shape[1] - k].ravel()
         S = float(np.median(np.abs(a + b - np.median(a + b)))) ** 2
         D = float(np.median(np.abs(a - b - np.median(a - b)))) ** 2
         out[k] = (S - D) / (S + D) if S + D > 0 else 0.0
@@ -207,11 +222,15 @@ def _ar1_match(w: int, rho_hat: np.ndarray) -> tuple[float, float, bool]:
     def cost(rho):
         m = _filtered_ar1_acf(w, rho, K)
         return float(np.sum((m[1:] / m[0] - rho_hat[1:]) ** 2))
+
     grid = np.linspace(-0.9, _RHO_MAX, 38)
     j = int(np.argmin([cost(r) for r in grid]))
     lo, hi = grid[max(j - 1, 0)], grid[min(j + 1, grid.size - 1)]
-    rho = float(minimize_scalar(cost, bounds=(lo, hi), method="bounded",
-                                options={"xatol": 1e-5}).x) if hi > lo else float(grid[j])
+    rho = (
+        float(minimize_scalar(cost, bounds=(lo, hi), method="bounded", options={"xatol": 1e-5}).x)
+        if hi > lo
+        else float(grid[j])
+    )
     capped = rho > _RHO_MAX - 1e-3
     return rho, _filtered_ar1_acf(w, rho, 0)[0], capped
 
@@ -241,11 +260,11 @@ def _correlation_time(B: np.ndarray, sigma: float) -> float:
     L = x.shape[1]
     f = np.fft.rfft(x, 2 * L, axis=1)
     acf = np.fft.irfft(f * np.conj(f), axis=1)[:, :L].sum(axis=0)
-    acf /= L - np.arange(L)                     # unbiased lag estimates
+    acf /= L - np.arange(L)  # unbiased lag estimates
     if acf[0] <= 0.0:
         return 1.0
     rho = acf / acf[0]
-    tau = -1.0                 # 1 + 2 sum_k>=1 rho_k = -1 + 2 sum_m (rho_2m + rho_2m+1)
+    tau = -1.0  # 1 + 2 sum_k>=1 rho_k = -1 + 2 sum_m (rho_2m + rho_2m+1)
     for m in range(L // 4):
         pair = rho[2 * m] + rho[2 * m + 1]
         if pair <= 0.0:
@@ -314,12 +333,23 @@ def estimate_noise(t, y, *, method: str = "auto", window: float | None = None) -
     dt = float(np.median(dt_all))
     warns = []
     if np.max(np.abs(dt_all - dt)) > 0.05 * dt:
-        warns.append("the sampling is not uniform (time steps vary by more than 5 %); the "
-                     "estimate treats the samples as equally spaced")
+        warns.append(
+            "the sampling is not uniform (time steps vary by more than 5 %); the "
+            "estimate treats the samples as equally spaced"
+        )
     if np.ptp(yy) == 0.0:
-        return NoiseEstimate(0.0, "savgol+ar1" if method != "difference" else "difference", dt, n,
-                             float(n), dt, warnings=tuple(warns + ["y is constant: no noise is visible "
-                                                          "(a quantised or switched-off channel?)"]))
+        return NoiseEstimate(
+            0.0,
+            "savgol+ar1" if method != "difference" else "difference",
+            dt,
+            n,
+            float(n),
+            dt,
+            warnings=tuple(
+                warns
+                + ["y is constant: no noise is visible (a quantised or switched-off channel?)"]
+            ),
+        )
     if method == "difference":
         d2 = np.diff(yy, 2)
         s = difference_sigma(yy)
@@ -331,8 +361,10 @@ def estimate_noise(t, y, *, method: str = "auto", window: float | None = None) -
         win = check_scalar("window", window, low=0.0, low_open=True)
         w = int(round(win / dt)) | 1
         if not MIN_WINDOW <= w <= n // 4:
-            raise ValueError(f"window = {win:g} s is {w} samples; it must span "
-                             f"{MIN_WINDOW} to {n // 4} samples (a quarter of the record)")
+            raise ValueError(
+                f"window = {win:g} s is {w} samples; it must span "
+                f"{MIN_WINDOW} to {n // 4} samples (a quarter of the record)"
+            )
     s, rho, capped = _savgol_sigma(yy, w)
     w2 = max(MIN_WINDOW, (w // 2) | 1)
     if w2 < w and s > 0:
@@ -341,20 +373,29 @@ def estimate_noise(t, y, *, method: str = "auto", window: float | None = None) -
             # AR(1) noise reads the same through both windows (the model accounts for the
             # filter); what the longer window adds is signal (or misfit) leaking in
             use = s2 < s
-            warns.append(f"the estimate changes from {s:.3g} to {s2:.3g} when the window is "
-                         f"halved ({w} -> {w2} samples): "
-                         + ("the signal leaks into the longer window's residual; the halved "
-                            "window is used" if use else "the noise is not AR(1)-like on the "
-                            "window's time scale"))
+            warns.append(
+                f"the estimate changes from {s:.3g} to {s2:.3g} when the window is "
+                f"halved ({w} -> {w2} samples): "
+                + (
+                    "the signal leaks into the longer window's residual; the halved window is used"
+                    if use
+                    else "the noise is not AR(1)-like on the window's time scale"
+                )
+            )
             if use:
                 s, rho, capped, w = s2, rho2, capped2, w2
     if s == 0.0:
-        warns.append("more than half of the residual is exactly zero: the channel is "
-                     "quantised more coarsely than its noise, or noise-free")
+        warns.append(
+            "more than half of the residual is exactly zero: the channel is "
+            "quantised more coarsely than its noise, or noise-free"
+        )
     if capped:
-        warns.append(f"the noise is strongly correlated (lag-one correlation >= {_RHO_MAX}): "
-                     f"noise slower than the {w}-sample window is not counted and the level "
-                     "is uncertain")
+        warns.append(
+            f"the noise is strongly correlated (lag-one correlation >= {_RHO_MAX}): "
+            f"noise slower than the {w}-sample window is not counted and the level "
+            "is uncertain"
+        )
     tau = (1.0 + rho) / (1.0 - rho) if rho > 0.0 else 1.0
-    return NoiseEstimate(s, "savgol+ar1", tau * dt, n, n / tau, w * dt, warnings=tuple(warns),
-                         lag_one=float(rho))
+    return NoiseEstimate(
+        s, "savgol+ar1", tau * dt, n, n / tau, w * dt, warnings=tuple(warns), lag_one=float(rho)
+    )

@@ -1,4 +1,5 @@
 """The result of an Iwan identification: :class:`FitResult`, its report, dict and plot."""
+
 from __future__ import annotations
 
 import math
@@ -140,41 +141,56 @@ class FitResult(ResultShape):
         """JSON-safe dict (NaN and inf become ``None``): ``params`` is the parameter table's
         dict; ``IwanParameters.from_dict(d["joint"])`` rebuilds the joint.
         """
-        return json_safe({
-            "method": self.method,
-            "params": self.params.to_dict(),
-            "joint": self.joint.to_dict(),
-            "correlation": {"order": list(PARAM_NAMES), "matrix": self.correlation},
-            "ranges": {k: list(v) for k, v in self.ranges.items()},
-            "residual_norm": self.residual_norm,
-            "nrmse": self.nrmse,
-            "success": self.success,
-            "failure_reasons": list(self.failure_reasons()),
-            "message": self.message,
-            "nfev": self.nfev,
-            "n_data": self.n_data,
-            "warnings": list(self.warnings),
-            "wall_time": self.wall_time,
-            "details": self.details,
-            "offsets": value_stderr(self.offsets),
-            "noise": dict(self.noise),
-        })
+        return json_safe(
+            {
+                "method": self.method,
+                "params": self.params.to_dict(),
+                "joint": self.joint.to_dict(),
+                "correlation": {"order": list(PARAM_NAMES), "matrix": self.correlation},
+                "ranges": {k: list(v) for k, v in self.ranges.items()},
+                "residual_norm": self.residual_norm,
+                "nrmse": self.nrmse,
+                "success": self.success,
+                "failure_reasons": list(self.failure_reasons()),
+                "message": self.message,
+                "nfev": self.nfev,
+                "n_data": self.n_data,
+                "warnings": list(self.warnings),
+                "wall_time": self.wall_time,
+                "details": self.details,
+                "offsets": value_stderr(self.offsets),
+                "noise": dict(self.noise),
+            }
+        )
 
     def plot(self, ax=None):
         """Loop fits: measured and fitted force [kN] vs displacement [mm]; dissipation fits:
         measured and fitted ``D`` [J] vs ``F0`` [N] (log-log). Returns the list of artists.
         """
         from ...base.result_shape import axes_or_new
+
         ax = axes_or_new(ax)
         c = self._curves
         if not c:
             raise ValueError("this result carries no data to plot (rebuilt from a dict?)")
         if self.method == "loops":
             step = max(1, c["u"].size // 20000)
-            arts = ax.plot(c["u"][::step] * 1e3, c["F"][::step] * 1e-3, ".", ms=1.5,
-                           color="0.55", label="measured")
-            arts += ax.plot(c["u"][::step] * 1e3, c["F_fit"][::step] * 1e-3, "-", lw=1.0,
-                            color="C3", label="fit (offsets removed from the data)")
+            arts = ax.plot(
+                c["u"][::step] * 1e3,
+                c["F"][::step] * 1e-3,
+                ".",
+                ms=1.5,
+                color="0.55",
+                label="measured",
+            )
+            arts += ax.plot(
+                c["u"][::step] * 1e3,
+                c["F_fit"][::step] * 1e-3,
+                "-",
+                lw=1.0,
+                color="C3",
+                label="fit (offsets removed from the data)",
+            )
             ax.set_xlabel("u [mm]")
             ax.set_ylabel("F [kN]")
         else:
@@ -190,17 +206,25 @@ class FitResult(ResultShape):
         and warnings.
         """
         p = self.joint
-        title = {"loops": "loop fit (exact IwanJoint on the measured displacement)",
-                 "seed": "dissipation fit, seed-paper procedure (Nelder-Mead + Newton on KT)",
-                 "least_squares": "dissipation fit, least squares on the exact F0(u0), D(u0)"}
-        lines = [self.verdict(),
-                 f"Iwan joint identification: {title.get(self.method, self.method)}",
-                 f"  {self.n_data} residuals, {self.nfev} model evaluations, {self.wall_time:.2f} s, "
-                 f"optimiser stop: {self.message}",
-                 "",
-                 "  parameter        value        std. error   status"]
-        fmt = {"Fs": ("Fs   [N]  ", "{:.6g}"), "KT": ("KT   [N/m]", "{:.6g}"),
-               "chi": ("chi  [-]  ", "{:.4f}"), "beta": ("beta [-]  ", "{:.4f}")}
+        title = {
+            "loops": "loop fit (exact IwanJoint on the measured displacement)",
+            "seed": "dissipation fit, seed-paper procedure (Nelder-Mead + Newton on KT)",
+            "least_squares": "dissipation fit, least squares on the exact F0(u0), D(u0)",
+        }
+        lines = [
+            self.verdict(),
+            f"Iwan joint identification: {title.get(self.method, self.method)}",
+            f"  {self.n_data} residuals, {self.nfev} model evaluations, {self.wall_time:.2f} s, "
+            f"optimiser stop: {self.message}",
+            "",
+            "  parameter        value        std. error   status",
+        ]
+        fmt = {
+            "Fs": ("Fs   [N]  ", "{:.6g}"),
+            "KT": ("KT   [N/m]", "{:.6g}"),
+            "chi": ("chi  [-]  ", "{:.4f}"),
+            "beta": ("beta [-]  ", "{:.4f}"),
+        }
         for k in PARAM_NAMES:
             label, f = fmt[k]
             v = getattr(p, k)
@@ -211,21 +235,28 @@ class FitResult(ResultShape):
             elif not self.identified.get(k, False):
                 lo, hi = self.ranges.get(k, (math.nan, math.nan))
                 status = status_text(False) + (
-                    f" (data fit equally for {f.format(lo)} .. {f.format(hi)})" if k in self.ranges
-                    else "")
+                    f" (data fit equally for {f.format(lo)} .. {f.format(hi)})"
+                    if k in self.ranges
+                    else ""
+                )
             else:
                 rel = f" {100 * se / abs(v):.2g} %" if v != 0 and k in ("Fs", "KT") else ""
                 status = status_text(True) + rel
             lines.append(f"  {label}  {f.format(v):>12}  {se_txt:>12}   {status}")
-        for name, (key, unit, scale) in {"dF0 [N]  ": ("force", "N", 1.0),
-                                         "du0 [um] ": ("displacement", "um", 1e6)}.items():
+        for name, (key, unit, scale) in {
+            "dF0 [N]  ": ("force", "N", 1.0),
+            "du0 [um] ": ("displacement", "um", 1e6),
+        }.items():
             if key in self.offsets:
                 v, se = self.offsets[key]
                 se_txt = f"{se * scale:.4g}" if math.isfinite(se) else "n/a"
-                lines.append(f"  {name}   {v * scale:>12.5g}  {se_txt:>12}   "
-                             f"{status_text(math.isfinite(se), nuisance=True)}")
-        lines.append(f"  derived: phi_max = {p.phi_max * 1e3:.5g} mm, R = {p.R:.5g}, "
-                     f"S = {p.S:.5g} N/m")
+                lines.append(
+                    f"  {name}   {v * scale:>12.5g}  {se_txt:>12}   "
+                    f"{status_text(math.isfinite(se), nuisance=True)}"
+                )
+        lines.append(
+            f"  derived: phi_max = {p.phi_max * 1e3:.5g} mm, R = {p.R:.5g}, S = {p.S:.5g} N/m"
+        )
         have = [k for k in PARAM_NAMES if math.isfinite(self.stderr.get(k, math.nan))]
         if len(have) > 1:
             lines += ["", "  correlation     " + "".join(f"{k:>8}" for k in have)]
@@ -233,30 +264,56 @@ class FitResult(ResultShape):
                 if k in have:
                     row = "".join(f"{self.correlation[i, PARAM_NAMES.index(j)]:8.3f}" for j in have)
                     lines.append(f"  {k:<15} {row}")
-        unit = "[-]" if self.method != "loops" else "[N]" if not self.details.get("weighted") else "[-]"
-        lines += ["", f"  residual norm {self.residual_norm:.4g} {unit}, NRMSE {100 * self.nrmse:.3g} %"]
+        unit = (
+            "[-]"
+            if self.method != "loops"
+            else "[N]"
+            if not self.details.get("weighted")
+            else "[-]"
+        )
+        lines += [
+            "",
+            f"  residual norm {self.residual_norm:.4g} {unit}, NRMSE {100 * self.nrmse:.3g} %",
+        ]
         if self.noise:
-            lines.append(f"  noise: force {self.noise.get('force', math.nan):.3g} N, displacement "
-                         f"{self.noise.get('displacement', math.nan):.3g} m; residual correlation "
-                         f"time {self.noise.get('tau', math.nan):.3g} samples (variances x tau)")
+            lines.append(
+                f"  noise: force {self.noise.get('force', math.nan):.3g} N, displacement "
+                f"{self.noise.get('displacement', math.nan):.3g} m; residual correlation "
+                f"time {self.noise.get('tau', math.nan):.3g} samples (variances x tau)"
+            )
         if self.warnings:
             lines += ["", "  warnings:"] + [f"  - {w}" for w in self.warnings]
         return "\n".join(lines)
 
 
 #: Domain of each Iwan parameter (``IwanParameters``), the bounds in its table.
-_DOMAIN = {"Fs": (0.0, math.inf), "KT": (0.0, math.inf), "chi": (-1.0, math.inf),
-           "beta": (0.0, math.inf)}
+_DOMAIN = {
+    "Fs": (0.0, math.inf),
+    "KT": (0.0, math.inf),
+    "chi": (-1.0, math.inf),
+    "beta": (0.0, math.inf),
+}
 
 
-def joint_table(params: IwanParameters, stderr: dict, identified: dict, *, fixed=(),
-                correlation=None) -> ParameterTable:
+def joint_table(
+    params: IwanParameters, stderr: dict, identified: dict, *, fixed=(), correlation=None
+) -> ParameterTable:
     """The :class:`~iwan_element.fitting.ParameterTable` of a fitted joint: ``Fs`` [N],
     ``KT`` [N/m], ``chi``, ``beta`` with their standard errors, verdicts, the ones given
     (``fixed``) and their correlation (order :data:`PARAM_NAMES`).
     """
-    rows = [Parameter(k, getattr(params, k), stderr.get(k, math.nan), *_DOMAIN[k], _UNITS[k],
-                      bool(identified.get(k, False)), fixed=k in fixed) for k in PARAM_NAMES]
+    rows = [
+        Parameter(
+            k,
+            getattr(params, k),
+            stderr.get(k, math.nan),
+            *_DOMAIN[k],
+            _UNITS[k],
+            bool(identified.get(k, False)),
+            fixed=k in fixed,
+        )
+        for k in PARAM_NAMES
+    ]
     return ParameterTable(rows, correlation=correlation)
 
 
@@ -275,9 +332,14 @@ def settle_verdict(out: dict, fixed) -> tuple[dict, list[str]]:
         v = getattr(out["params"], k)
         se = out["stderr"].get(k, math.nan)
         at_bound = k in out.get("at_bound", ())
-        ok, warn = verdict(k, v, se, at_bound=at_bound,
-                           reference=v + 1.0 if k == "chi" else None,
-                           reference_text="chi + 1" if k == "chi" else "its value")
+        ok, warn = verdict(
+            k,
+            v,
+            se,
+            at_bound=at_bound,
+            reference=v + 1.0 if k == "chi" else None,
+            reference_text="chi + 1" if k == "chi" else "its value",
+        )
         if ok:
             continue
         ident[k] = False
@@ -310,21 +372,32 @@ def not_identified_reason(missing, *, microslip: bool) -> str:
     """
     names = ", ".join(missing[:-1]) + " and " + missing[-1] if len(missing) > 1 else missing[0]
     verb = "is" if len(missing) == 1 else "are"
-    why = ("the loops stay in microslip (test to larger amplitudes)" if microslip else
-           "their standard errors are too large or they sit at a bound of the search range "
-           "(see the warnings)")
+    why = (
+        "the loops stay in microslip (test to larger amplitudes)"
+        if microslip
+        else "their standard errors are too large or they sit at a bound of the search range "
+        "(see the warnings)"
+    )
     return f"{names} {verb} not identified by these data: {why}"
 
 
-def failure_list(*, converged: bool, message: str, explains: bool, noise_text: str,
-                 ident: dict, required, microslip: bool) -> tuple:
+def failure_list(
+    *,
+    converged: bool,
+    message: str,
+    explains: bool,
+    noise_text: str,
+    ident: dict,
+    required,
+    microslip: bool,
+) -> tuple:
     """The reasons ``success`` is False for a fitted joint (empty when it is True)."""
     out = []
     if not converged:
         out.append(f"the optimiser did not converge ({message})")
     if not explains:
         out.append(noise_text)
-    if microslip:                 # beta's range then reaches 0 only because Fs is free too
+    if microslip:  # beta's range then reaches 0 only because Fs is free too
         required = [k for k in PARAM_NAMES if k in required or k == "beta"]
     missing = [k for k in required if not ident.get(k, False)]
     if missing and explains:
@@ -332,9 +405,22 @@ def failure_list(*, converged: bool, message: str, explains: bool, noise_text: s
     return tuple(out)
 
 
-def _finish(method, out, *, converged, message, nfev, nrmse, t0, extra_warnings=(),
-            fixed=(), stacklevel=3, offsets=None, noise=None,
-            curves=None) -> FitResult:
+def _finish(
+    method,
+    out,
+    *,
+    converged,
+    message,
+    nfev,
+    nrmse,
+    t0,
+    extra_warnings=(),
+    fixed=(),
+    stacklevel=3,
+    offsets=None,
+    noise=None,
+    curves=None,
+) -> FitResult:
     """Build the FitResult from the dict of :func:`_identify` (or its seed-method twin) and
     issue one IdentifiabilityWarning carrying every warning.
 
@@ -352,27 +438,51 @@ def _finish(method, out, *, converged, message, nfev, nrmse, t0, extra_warnings=
     explains = out.get("explains", True)
     if not explains:
         ident = dict.fromkeys(ident, False)
-    success = fit_success(converged and explains, ident,
-                          required_parameters(out["ranges"], fixed))
-    table = joint_table(out["params"], out["stderr"], ident, fixed=fixed,
-                        correlation=out["correlation"])
-    failures = failure_list(
-        converged=converged, message=str(message), explains=explains,
-        noise_text=next((w for w in warns if "indistinguishable from noise" in w),
-                        f"misfit well beyond the noise remains: the joint does not follow the "
-                        f"data (NRMSE {float(nrmse):.3g})"),
-        ident=ident, required=required_parameters(out["ranges"], fixed),
-        microslip=out["details"].get("macroslip_reached") is False) if not success else ()
-    result = FitResult(params=table, ranges=out["ranges"],
-                       residual_norm=float(np.sqrt(out["r"] @ out["r"])), nrmse=float(nrmse),
-                       success=success, message=str(message), nfev=int(nfev),
-                       method=method, n_data=int(out["r"].size), warnings=tuple(warns),
-                       wall_time=time.perf_counter() - t0, details=json_safe(out["details"]),
-                       offsets=dict(offsets or {}), noise=dict(noise or {}),
-                       _curves=dict(curves or {}), failures=failures)
+    success = fit_success(converged and explains, ident, required_parameters(out["ranges"], fixed))
+    table = joint_table(
+        out["params"], out["stderr"], ident, fixed=fixed, correlation=out["correlation"]
+    )
+    failures = (
+        failure_list(
+            converged=converged,
+            message=str(message),
+            explains=explains,
+            noise_text=next(
+                (w for w in warns if "indistinguishable from noise" in w),
+                f"misfit well beyond the noise remains: the joint does not follow the "
+                f"data (NRMSE {float(nrmse):.3g})",
+            ),
+            ident=ident,
+            required=required_parameters(out["ranges"], fixed),
+            microslip=out["details"].get("macroslip_reached") is False,
+        )
+        if not success
+        else ()
+    )
+    result = FitResult(
+        params=table,
+        ranges=out["ranges"],
+        residual_norm=float(np.sqrt(out["r"] @ out["r"])),
+        nrmse=float(nrmse),
+        success=success,
+        message=str(message),
+        nfev=int(nfev),
+        method=method,
+        n_data=int(out["r"].size),
+        warnings=tuple(warns),
+        wall_time=time.perf_counter() - t0,
+        details=json_safe(out["details"]),
+        offsets=dict(offsets or {}),
+        noise=dict(noise or {}),
+        _curves=dict(curves or {}),
+        failures=failures,
+    )
     if warns and _EMIT.get():
-        warnings.warn("Iwan identification: " + " | ".join(warns), IdentifiabilityWarning,
-                      stacklevel=stacklevel)
+        warnings.warn(
+            "Iwan identification: " + " | ".join(warns),
+            IdentifiabilityWarning,
+            stacklevel=stacklevel,
+        )
     return result
 
 
@@ -390,5 +500,3 @@ def quiet_fits():
         yield
     finally:
         _EMIT.reset(token)
-
-

@@ -6,6 +6,7 @@ for loop fits) with ``Fs`` and the offset eliminated in closed form (variable pr
 :func:`iwan_element.fitting.minimize` (``method="box-lm"``) from several starts; :func:`_uncertainty` takes the
 Jacobian at the optimum to :func:`iwan_element.fitting.covariance`.
 """
+
 from __future__ import annotations
 
 import logging
@@ -30,8 +31,18 @@ class _Problem:
     macroslip when it exceeds ``phi_max``.
     """
 
-    def __init__(self, y, unit: Callable, *, w, log_space: bool, entry_x, min_macro: int,
-                 offset: bool = False, timeseries: bool = False):
+    def __init__(
+        self,
+        y,
+        unit: Callable,
+        *,
+        w,
+        log_space: bool,
+        entry_x,
+        min_macro: int,
+        offset: bool = False,
+        timeseries: bool = False,
+    ):
         self.y = y
         self.ly = np.log(y) if log_space else None
         self.unit = unit
@@ -39,13 +50,13 @@ class _Problem:
         self.w2 = w * w
         self.log = log_space
         self.offset = bool(offset) and not log_space
-        self.timeseries = bool(timeseries)   # residuals in time order: their correlation counts
-        self.block = 0                        # residuals per half cycle (block sandwich)
+        self.timeseries = bool(timeseries)  # residuals in time order: their correlation counts
+        self.block = 0  # residuals per half cycle (block sandwich)
         self.entry_x = entry_x
         self.x_max = float(entry_x.max())
         self.min_macro = min_macro
         self.nfev = 0
-        self.dF0 = 0.0                  # force offset of the last projection [N]
+        self.dF0 = 0.0  # force offset of the last projection [N]
         self.sw = float(self.w2.sum())
         self.sy = float(np.einsum("i,i->", self.w2, y))
 
@@ -63,7 +74,7 @@ class _Problem:
             lg = np.log(g)
             lnFs = np.sum(self.w2 * (self.ly - lg)) / np.sum(self.w2)
             return math.exp(lnFs), self.w * (self.ly - lnFs - lg)
-        if self.offset:                 # weighted 2x2 normal equations for (Fs, dF0)
+        if self.offset:  # weighted 2x2 normal equations for (Fs, dF0)
             # einsum, not @: BLAS dot products are slow on a busy multi-threaded OpenBLAS
             wg = self.w2 * g
             sw, sg, sgg = self.sw, float(wg.sum()), float(np.einsum("i,i->", wg, g))
@@ -104,8 +115,7 @@ def _multistart(prob: _Problem, starts, lower, upper, *, beta_fixed, max_nfev):
         return prob.projected(*_q_to_shape(q, prob.x_max, beta_fixed))[1]
 
     for q0 in starts:
-        res = minimize(fun, np.asarray(q0, float), lower, upper, method="box-lm",
-                       max_nfev=max_nfev)
+        res = minimize(fun, np.asarray(q0, float), lower, upper, method="box-lm", max_nfev=max_nfev)
         log.debug("start %s -> cost %.6g (%s)", np.round(q0, 3), res.cost, res.message)
         if best is None or res.cost < best.cost:
             best = res
@@ -124,8 +134,17 @@ def _fd_jacobian(fun, theta, steps):
     return np.column_stack(cols)
 
 
-def _uncertainty(fun, theta, r, scale, *, at_lower_bound=None, tau: float = 1.0,
-                 timeseries: bool = False, block: int = 0):
+def _uncertainty(
+    fun,
+    theta,
+    r,
+    scale,
+    *,
+    at_lower_bound=None,
+    tau: float = 1.0,
+    timeseries: bool = False,
+    block: int = 0,
+):
     """Standard errors and correlations from the Jacobian (see :mod:`.identifiability`).
 
     The central-difference Jacobian of ``fun`` (transformed parameters ``theta`` ->
@@ -142,8 +161,9 @@ def _uncertainty(fun, theta, r, scale, *, at_lower_bound=None, tau: float = 1.0,
     if at_lower_bound is not None:
         th[at_lower_bound] = max(th[at_lower_bound], h)
     J = _fd_jacobian(fun, th, np.full(th.size, h))
-    if not np.all(np.isfinite(J)):            # the model failed next to the optimum
+    if not np.all(np.isfinite(J)):  # the model failed next to the optimum
         return np.full(th.size, math.nan), np.full((th.size, th.size), math.nan)
-    c = covariance(J, r, tau=tau, block=block if timeseries else None,
-                   Jp=np.diag(np.asarray(scale, float)))
+    c = covariance(
+        J, r, tau=tau, block=block if timeseries else None, Jp=np.diag(np.asarray(scale, float))
+    )
     return c.stderr, c.correlation

@@ -9,6 +9,7 @@ exact Iwan joint.
 
 All arrays are in SI units: time [s], displacement [m], force [N], energy [J].
 """
+
 from __future__ import annotations
 
 import html
@@ -31,6 +32,7 @@ from ...core.parameters import IwanParameters
 from .cycles import Cycle, check_varies, default_hysteresis, split_cycles
 
 __all__ = ["TestData", "simulate_test"]
+
 
 def _readonly(a: np.ndarray) -> np.ndarray:
     a.setflags(write=False)
@@ -62,7 +64,7 @@ class TestData:
         Dead band used to find the reversals [m].
     """
 
-    __test__ = False                    # not a pytest test class despite its name
+    __test__ = False  # not a pytest test class despite its name
 
     t: np.ndarray
     u: np.ndarray
@@ -83,9 +85,18 @@ class TestData:
             object.__setattr__(self, name, _readonly(arr))
 
     @classmethod
-    def from_arrays(cls, t, u, F, *, units: dict | None = None, source: str | None = None,
-                    hysteresis: float | None = None, close_tol: float = 0.02,
-                    drift_tol: float = 0.05) -> TestData:
+    def from_arrays(
+        cls,
+        t,
+        u,
+        F,
+        *,
+        units: dict | None = None,
+        source: str | None = None,
+        hysteresis: float | None = None,
+        close_tol: float = 0.02,
+        drift_tol: float = 0.05,
+    ) -> TestData:
         """Validate SI arrays and split them into cycles.
 
         Parameters
@@ -112,15 +123,26 @@ class TestData:
         if not np.any(FF != 0.0):
             raise ValueError("F (force) is all zero: check the force column and its unit")
         check_varies(uu)
-        h = default_hysteresis(uu) if hysteresis is None else check_scalar(
-            "hysteresis", hysteresis, low=0.0, low_open=True)
+        h = (
+            default_hysteresis(uu)
+            if hysteresis is None
+            else check_scalar("hysteresis", hysteresis, low=0.0, low_open=True)
+        )
         cycles = split_cycles(tt, uu, FF, hysteresis=h, close_tol=close_tol, drift_tol=drift_tol)
         if len(cycles) < 2:
-            raise ValueError(f"found {len(cycles)} complete cycle(s) (maximum to maximum of the "
-                             f"displacement, dead band {h:.3g} m); at least 2 are needed")
-        return cls(t=_readonly(tt), u=_readonly(uu), F=_readonly(FF), cycles=tuple(cycles),
-                   units=dict(units or {"time": "s", "displacement": "m", "force": "N"}),
-                   source=source, hysteresis=float(h))
+            raise ValueError(
+                f"found {len(cycles)} complete cycle(s) (maximum to maximum of the "
+                f"displacement, dead band {h:.3g} m); at least 2 are needed"
+            )
+        return cls(
+            t=_readonly(tt),
+            u=_readonly(uu),
+            F=_readonly(FF),
+            cycles=tuple(cycles),
+            units=dict(units or {"time": "s", "displacement": "m", "force": "N"}),
+            source=source,
+            hysteresis=float(h),
+        )
 
     def usable_cycles(self) -> tuple[Cycle, ...]:
         """Cycles that close and do not drift."""
@@ -149,9 +171,12 @@ class TestData:
         good = self.usable_cycles()
         if len(good) < min_cycles:
             bad = [f"cycle {c.index}: {', '.join(c.flags)}" for c in self.cycles if not c.usable]
-            raise ValueError(f"only {len(good)} of {len(self.cycles)} cycles close without drift "
-                             f"(at least {min_cycles} needed); " + "; ".join(bad[:5])
-                             + (" ..." if len(bad) > 5 else ""))
+            raise ValueError(
+                f"only {len(good)} of {len(self.cycles)} cycles close without drift "
+                f"(at least {min_cycles} needed); "
+                + "; ".join(bad[:5])
+                + (" ..." if len(bad) > 5 else "")
+            )
         return {k: np.array([getattr(c, k) for c in good]) for k in ("u0", "F0", "D", "k_sec")}
 
     #: Column titles of the cycle table (SI units), :meth:`summary` and :meth:`to_dataframe`.
@@ -159,47 +184,71 @@ class TestData:
 
     def cycle_rows(self) -> list:
         """One row per cycle, in :attr:`CYCLE_COLUMNS` (SI units; flags ``"ok"`` if none)."""
-        return [(c.index, c.t_start, c.u0, c.F0, c.D, c.k_sec, "; ".join(c.flags) or "ok")
-                for c in self.cycles]
+        return [
+            (c.index, c.t_start, c.u0, c.F0, c.D, c.k_sec, "; ".join(c.flags) or "ok")
+            for c in self.cycles
+        ]
 
     def summary(self) -> str:
         """Text table of the cycles in SI units (4 significant digits)."""
-        lines = [f"{len(self.u)} samples, {self.t[-1] - self.t[0]:.4g} s, {len(self.cycles)} cycles "
-                 f"({len(self.usable_cycles())} usable); source: {self.source or 'arrays'}"]
-        lines += table_lines([(self.CYCLE_COLUMNS[0], "5d")]
-                             + [(c, "11.4g") for c in self.CYCLE_COLUMNS[1:-1]]
-                             + [("  flags", "<")],
-                             [r[:-1] + ("  " + r[-1],) for r in self.cycle_rows()])
+        lines = [
+            f"{len(self.u)} samples, {self.t[-1] - self.t[0]:.4g} s, {len(self.cycles)} cycles "
+            f"({len(self.usable_cycles())} usable); source: {self.source or 'arrays'}"
+        ]
+        lines += table_lines(
+            [(self.CYCLE_COLUMNS[0], "5d")]
+            + [(c, "11.4g") for c in self.CYCLE_COLUMNS[1:-1]]
+            + [("  flags", "<")],
+            [r[:-1] + ("  " + r[-1],) for r in self.cycle_rows()],
+        )
         return "\n".join(lines)
 
     def to_dict(self) -> dict:
         """JSON-safe dict: samples, duration [s], source units, source and the cycles (SI)."""
         keys = ("index", "t0", "u0", "F0", "D", "k_sec", "flags")
-        return json_safe({"samples": len(self.u), "duration": float(self.t[-1] - self.t[0]),
-                          "units": dict(self.units), "source": self.source,
-                          "cycles": [dict(zip(keys, r)) for r in self.cycle_rows()]})
+        return json_safe(
+            {
+                "samples": len(self.u),
+                "duration": float(self.t[-1] - self.t[0]),
+                "units": dict(self.units),
+                "source": self.source,
+                "cycles": [dict(zip(keys, r)) for r in self.cycle_rows()],
+            }
+        )
 
     def to_dataframe(self):
         """The cycle table as a ``pandas.DataFrame`` (SI units; pandas imported only here)."""
         try:
             import pandas as pd
         except ImportError:
-            raise ImportError("to_dataframe needs pandas: "
-                              "pip install 'iwan-element[pandas]'") from None
+            raise ImportError(
+                "to_dataframe needs pandas: pip install 'iwan-element[pandas]'"
+            ) from None
         return pd.DataFrame(self.cycle_rows(), columns=list(self.CYCLE_COLUMNS))
 
     def _repr_html_(self) -> str:
-        head = html.escape(f"{len(self.u)} samples, {self.t[-1] - self.t[0]:.4g} s, "
-                           f"{len(self.usable_cycles())} of {len(self.cycles)} cycles usable; "
-                           f"source: {self.source or 'arrays'}")
-        return (f"<p><b>TestData</b>: {head}</p>"
-                + html_table("cycles", self.CYCLE_COLUMNS, self.cycle_rows()))
+        head = html.escape(
+            f"{len(self.u)} samples, {self.t[-1] - self.t[0]:.4g} s, "
+            f"{len(self.usable_cycles())} of {len(self.cycles)} cycles usable; "
+            f"source: {self.source or 'arrays'}"
+        )
+        return f"<p><b>TestData</b>: {head}</p>" + html_table(
+            "cycles", self.CYCLE_COLUMNS, self.cycle_rows()
+        )
 
 
 # --------------------------------------------------------------------------- synthetic tests
-def simulate_test(params: IwanParameters, amplitude, *, cycles: int = 3, frequency: float = 0.02,
-                  sample_rate: float = 20.0, force_noise: float = 0.0,
-                  displacement_noise: float = 0.0, seed=0) -> TestData:
+def simulate_test(
+    params: IwanParameters,
+    amplitude,
+    *,
+    cycles: int = 3,
+    frequency: float = 0.02,
+    sample_rate: float = 20.0,
+    force_noise: float = 0.0,
+    displacement_noise: float = 0.0,
+    seed=0,
+) -> TestData:
     """Simulate a displacement-controlled quasi-static test with the exact :class:`IwanJoint`.
 
     The protocol is the seed paper's (sec. 3.2): ``u(t) = u0 sin(2 pi f t)`` from rest, here
@@ -246,8 +295,9 @@ def simulate_test(params: IwanParameters, amplitude, *, cycles: int = 3, frequen
     F = IwanJoint(params).force_history(u)
     u_meas = u + rng.normal(0.0, su, u.size) if su > 0 else u
     F_meas = F + rng.normal(0.0, sf, u.size) if sf > 0 else F
-    src = (f"simulate_test({params!r}, amplitude={np.round(amps, 12).tolist()} m, cycles={cycles}, "
-           f"frequency={f:g} Hz, sample_rate={fs:g} Hz, force_noise={sf:g} N, "
-           f"displacement_noise={su:g} m)")
+    src = (
+        f"simulate_test({params!r}, amplitude={np.round(amps, 12).tolist()} m, cycles={cycles}, "
+        f"frequency={f:g} Hz, sample_rate={fs:g} Hz, force_noise={sf:g} N, "
+        f"displacement_noise={su:g} m)"
+    )
     return TestData.from_arrays(t, u_meas, F_meas, source=src)
-

@@ -7,10 +7,18 @@ routes share (:mod:`.poles`).
 Imports :mod:`iwan_element.base`, :mod:`iwan_element.core`, :mod:`iwan_element.fitting`,
 :mod:`..loops` (the identifiability rule and warning) and :mod:`..files` (unit checks).
 """
+
 from .curves import DECAY_METHODS, AmplitudeCurve
 from .fit import fit_modal_iwan
 from .result import ModalIwanFit
 from .targets import ModalTargets, ModeTarget, mac
 
-__all__ = ["AmplitudeCurve", "DECAY_METHODS", "fit_modal_iwan", "ModalIwanFit",
-           "ModalTargets", "ModeTarget", "mac"]
+__all__ = [
+    "AmplitudeCurve",
+    "DECAY_METHODS",
+    "fit_modal_iwan",
+    "ModalIwanFit",
+    "ModalTargets",
+    "ModeTarget",
+    "mac",
+]

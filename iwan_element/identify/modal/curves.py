@@ -6,6 +6,7 @@ the natural frequency f(X) [Hz], the damping ratio zeta(X) [-] and, where known,
 uncertainty. :class:`AmplitudeCurve` holds them, validated, with the noise floor below which
 the measurement stops and a statement of how it was made.
 """
+
 from __future__ import annotations
 
 import json
@@ -89,7 +90,9 @@ class AmplitudeCurve(ResultShape):
     failures: tuple = ()
 
     def __post_init__(self):
-        amp = check_magnitude("amplitude", finite_array("amplitude", self.amplitude).copy(), unit="m")
+        amp = check_magnitude(
+            "amplitude", finite_array("amplitude", self.amplitude).copy(), unit="m"
+        )
         if amp.ndim != 1 or amp.size == 0:
             raise ValueError(f"amplitude must be a non-empty 1-D array, got shape {amp.shape}")
         n = amp.size
@@ -104,7 +107,9 @@ class AmplitudeCurve(ResultShape):
         if np.any(arrays["frequency"] <= 0):
             raise ValueError("frequency must be > 0 [Hz]")
         if np.any(arrays["damping_ratio"] > 1):
-            raise ValueError("damping_ratio must be a ratio (<= 1); values above 1 look like percent")
+            raise ValueError(
+                "damping_ratio must be a ratio (<= 1); values above 1 look like percent"
+            )
         for name, arr in arrays.items():
             arr.flags.writeable = False
             object.__setattr__(self, name, arr)
@@ -115,8 +120,12 @@ class AmplitudeCurve(ResultShape):
             raise ValueError(f"noise_floor must be >= 0 [m] or NaN, got {self.noise_floor!r}")
         object.__setattr__(self, "noise_floor", floor)
         object.__setattr__(self, "failures", tuple(str(w) for w in self.failures))
-        object.__setattr__(self, "warnings", tuple(str(w) for w in self.warnings)
-                           + tuple(w for w in self.failures if w not in self.warnings))
+        object.__setattr__(
+            self,
+            "warnings",
+            tuple(str(w) for w in self.warnings)
+            + tuple(w for w in self.failures if w not in self.warnings),
+        )
 
     def __len__(self) -> int:
         return int(self.amplitude.size)
@@ -125,11 +134,18 @@ class AmplitudeCurve(ResultShape):
         """The same curve with the points in increasing amplitude."""
         order = np.argsort(self.amplitude, kind="stable")
         return AmplitudeCurve(
-            self.amplitude[order], self.frequency[order], self.damping_ratio[order],
-            amplitude_std=self.amplitude_std[order], frequency_std=self.frequency_std[order],
-            damping_ratio_std=self.damping_ratio_std[order], noise_floor=self.noise_floor,
-            method=self.method, notes=self.notes, warnings=self.warnings,
-            failures=self.failures)
+            self.amplitude[order],
+            self.frequency[order],
+            self.damping_ratio[order],
+            amplitude_std=self.amplitude_std[order],
+            frequency_std=self.frequency_std[order],
+            damping_ratio_std=self.damping_ratio_std[order],
+            noise_floor=self.noise_floor,
+            method=self.method,
+            notes=self.notes,
+            warnings=self.warnings,
+            failures=self.failures,
+        )
 
     @property
     def success(self) -> bool:
@@ -143,23 +159,35 @@ class AmplitudeCurve(ResultShape):
         """Why the curve is not usable: its ``failures``, and too few points."""
         ok = np.isfinite(self.frequency) & np.isfinite(self.damping_ratio)
         n = int(np.count_nonzero(ok))
-        few = () if n >= MIN_POINTS else (
-            f"only {n} point(s) with a finite frequency and damping ratio: a modal fit needs "
-            f"{MIN_POINTS}",)
+        few = (
+            ()
+            if n >= MIN_POINTS
+            else (
+                f"only {n} point(s) with a finite frequency and damping ratio: a modal fit needs "
+                f"{MIN_POINTS}",
+            )
+        )
         return tuple(self.failures) + few
 
     def to_dict(self) -> dict:
         """Plain JSON-ready dictionary (NaN written as ``None``)."""
+
         def clean(a):
             return [None if np.isnan(x) else float(x) for x in np.asarray(a, dtype=float)]
+
         return {
-            "amplitude": clean(self.amplitude), "frequency": clean(self.frequency),
+            "amplitude": clean(self.amplitude),
+            "frequency": clean(self.frequency),
             "damping_ratio": clean(self.damping_ratio),
-            "amplitude_std": clean(self.amplitude_std), "frequency_std": clean(self.frequency_std),
+            "amplitude_std": clean(self.amplitude_std),
+            "frequency_std": clean(self.frequency_std),
             "damping_ratio_std": clean(self.damping_ratio_std),
             "noise_floor": None if np.isnan(self.noise_floor) else self.noise_floor,
-            "method": self.method, "notes": self.notes, "warnings": list(self.warnings),
-            "failures": list(self.failures), "success": self.success,
+            "method": self.method,
+            "notes": self.notes,
+            "warnings": list(self.warnings),
+            "failures": list(self.failures),
+            "success": self.success,
         }
 
     def to_json(self) -> str:
@@ -167,32 +195,67 @@ class AmplitudeCurve(ResultShape):
 
     def report(self) -> str:
         """A short table of the curve: amplitude, frequency and damping with uncertainties."""
-        lines = [self.verdict(),
-                 f"Amplitude curve ({self.method or 'unspecified method'}), {len(self)} points"]
+        lines = [
+            self.verdict(),
+            f"Amplitude curve ({self.method or 'unspecified method'}), {len(self)} points",
+        ]
         if self.notes:
             lines += wrap(f"  {self.notes}", indent="    ")
         if not np.isnan(self.noise_floor):
             lines.append(f"  noise floor: {self.noise_floor:.3e} m")
-        lines += table_lines([("X [m]", "11.4e"), ("f [Hz]", "12.6g"), ("+-", "9.2e"),
-                              ("zeta [-]", "11.4e"), ("+-", "9.2e")],
-                             zip(self.amplitude, self.frequency, self.frequency_std,
-                                 self.damping_ratio, self.damping_ratio_std))
+        lines += table_lines(
+            [
+                ("X [m]", "11.4e"),
+                ("f [Hz]", "12.6g"),
+                ("+-", "9.2e"),
+                ("zeta [-]", "11.4e"),
+                ("+-", "9.2e"),
+            ],
+            zip(
+                self.amplitude,
+                self.frequency,
+                self.frequency_std,
+                self.damping_ratio,
+                self.damping_ratio_std,
+            ),
+        )
         for w in self.warnings:
             lines += wrap(f"  warning: {w}", indent="    ")
         return "\n".join(lines)
 
     #: Column titles of the curve's points (:meth:`to_dataframe`).
-    POINT_COLUMNS = ("amplitude [m]", "amplitude_std [m]", "frequency [Hz]",
-                     "frequency_std [Hz]", "damping_ratio [-]", "damping_ratio_std [-]")
+    POINT_COLUMNS = (
+        "amplitude [m]",
+        "amplitude_std [m]",
+        "frequency [Hz]",
+        "frequency_std [Hz]",
+        "damping_ratio [-]",
+        "damping_ratio_std [-]",
+    )
 
     def _tables(self) -> list:
-        rows = list(zip(*(map(float, a) for a in (
-            self.amplitude, self.amplitude_std, self.frequency, self.frequency_std,
-            self.damping_ratio, self.damping_ratio_std))))
+        rows = list(
+            zip(
+                *(
+                    map(float, a)
+                    for a in (
+                        self.amplitude,
+                        self.amplitude_std,
+                        self.frequency,
+                        self.frequency_std,
+                        self.damping_ratio,
+                        self.damping_ratio_std,
+                    )
+                )
+            )
+        )
         out = [("points", self.POINT_COLUMNS, rows)]
-        info = [("method", self.method or "unspecified"), ("points", len(self)),
-                ("noise floor [m]", None if np.isnan(self.noise_floor) else
-                 float(self.noise_floor)), ("notes", self.notes)]
+        info = [
+            ("method", self.method or "unspecified"),
+            ("points", len(self)),
+            ("noise floor [m]", None if np.isnan(self.noise_floor) else float(self.noise_floor)),
+            ("notes", self.notes),
+        ]
         return out + [("curve", ("quantity", "value"), info)]
 
     def plot(self, ax=None, *, label=None, **kwargs):
@@ -215,8 +278,10 @@ class AmplitudeCurve(ResultShape):
         kw = {"marker": "o", "ms": 3, "ls": "-"}
         kw.update(kwargs)
         artists = []
-        for a, y, s in ((ax_f, self.frequency, self.frequency_std),
-                        (ax_z, self.damping_ratio, self.damping_ratio_std)):
+        for a, y, s in (
+            (ax_f, self.frequency, self.frequency_std),
+            (ax_z, self.damping_ratio, self.damping_ratio_std),
+        ):
             if np.all(np.isnan(s)):
                 artists += a.plot(self.amplitude, y, label=label, **kw)
             else:

@@ -23,6 +23,7 @@ says so; the full six (``f0, zeta0, chi, kappa = KT/w0**2, phi_max, beta``) are 
 only when the curve visibly leaves microslip (a significant F-test and ``phi_max`` known to
 within a factor e).
 """
+
 from __future__ import annotations
 
 import math
@@ -39,23 +40,34 @@ from .result import ModalIwanFit, model_curve
 
 __all__ = ["fit_modal_iwan", "ModalIwanFit"]
 
+
 def _as_data(amplitude, frequency, damping_ratio):
     if isinstance(amplitude, AmplitudeCurve):
         if frequency is not None or damping_ratio is not None:
             raise ValueError("give either an AmplitudeCurve or three arrays, not both")
         c = amplitude
-        return (c.amplitude, c.frequency, c.damping_ratio, c.frequency_std, c.damping_ratio_std,
-                tuple(c.warnings))
+        return (
+            c.amplitude,
+            c.frequency,
+            c.damping_ratio,
+            c.frequency_std,
+            c.damping_ratio_std,
+            tuple(c.warnings),
+        )
     if frequency is None or damping_ratio is None:
         raise ValueError("frequency and damping_ratio are required with an amplitude array")
-    c = AmplitudeCurve(amplitude, frequency, damping_ratio)   # the shared checks and messages
+    c = AmplitudeCurve(amplitude, frequency, damping_ratio)  # the shared checks and messages
     return c.amplitude, c.frequency, c.damping_ratio, c.frequency_std, c.damping_ratio_std, ()
 
 
 def _weights(f, z, fstd, zstd):
     """Per-point standard deviations; unknown ones are filled later from the residuals."""
-    known = np.all(np.isfinite(fstd)) and np.all(np.isfinite(zstd)) \
-        and np.all(fstd > 0) and np.all(zstd > 0)
+    known = (
+        np.all(np.isfinite(fstd))
+        and np.all(np.isfinite(zstd))
+        and np.all(fstd > 0)
+        and np.all(zstd > 0)
+    )
     if known:
         return np.array(fstd, dtype=float), np.array(zstd, dtype=float), True
     return np.full(f.size, 1e-4 * np.median(f)), np.full(z.size, 0.02 * np.median(np.abs(z))), False
@@ -68,9 +80,19 @@ def _solve(regime, x0, lb, ub, X, f, z, sf, sz, x_ref, stiffness, floor, damping
         except ValueError:
             return np.full(2 * X.size, 1e6)
         return np.concatenate([(fm - f) / sf, (zm - z) / sz])
+
     x0 = np.clip(x0, lb + 1e-9 * (ub - lb), ub - 1e-9 * (ub - lb))
-    return optimize.least_squares(resid, x0, bounds=(lb, ub), x_scale="jac", method="trf",
-                                  xtol=1e-10, ftol=1e-12, gtol=1e-12, max_nfev=200)
+    return optimize.least_squares(
+        resid,
+        x0,
+        bounds=(lb, ub),
+        x_scale="jac",
+        method="trf",
+        xtol=1e-10,
+        ftol=1e-12,
+        gtol=1e-12,
+        max_nfev=200,
+    )
 
 
 def _fit_micro(X, f, z, sf, sz, x_ref, stiffness, floor, damping_form):
@@ -120,9 +142,17 @@ def _covariance(r, n_data):
     return covariance(J, s2=max(chi2_red, 1.0)).covariance, chi2_red
 
 
-def fit_modal_iwan(amplitude, frequency=None, damping_ratio=None, *, stiffness: str = "harmonic",
-                   floor: str = "dashpot", x_ref: float | None = None,
-                   significance: float = 1e-3, damping_form: str = "auto") -> ModalIwanFit:
+def fit_modal_iwan(
+    amplitude,
+    frequency=None,
+    damping_ratio=None,
+    *,
+    stiffness: str = "harmonic",
+    floor: str = "dashpot",
+    x_ref: float | None = None,
+    significance: float = 1e-3,
+    damping_form: str = "auto",
+) -> ModalIwanFit:
     """Identify a single-mode modal Iwan model with a viscous floor from f(X) and zeta(X).
 
     Model (Segalman 2005, J. Appl. Mech. 72:752-760; docs/equations.md section 7):
@@ -172,8 +202,7 @@ def fit_modal_iwan(amplitude, frequency=None, damping_ratio=None, *, stiffness: 
     ModalIwanFit
     """
     if damping_form not in ("auto", "decay", "energy"):
-        raise ValueError(f"damping_form must be 'auto', 'decay' or 'energy', got "
-                         f"{damping_form!r}")
+        raise ValueError(f"damping_form must be 'auto', 'decay' or 'energy', got {damping_form!r}")
     if damping_form == "auto":
         decay = isinstance(amplitude, AmplitudeCurve) and amplitude.method in DECAY_METHODS
         damping_form = "decay" if decay else "energy"
@@ -183,23 +212,35 @@ def fit_modal_iwan(amplitude, frequency=None, damping_ratio=None, *, stiffness: 
         raise ValueError(f"stiffness must be 'harmonic' or 'secant', got {stiffness!r}")
     if floor not in ("dashpot", "constant"):
         raise ValueError(f"floor must be 'dashpot' or 'constant', got {floor!r}")
-    alpha = check_scalar("significance", significance, low=0.0, high=0.5, low_open=True,
-                         high_open=True)
+    alpha = check_scalar(
+        "significance", significance, low=0.0, high=0.5, low_open=True, high_open=True
+    )
     if np.any(z < 0):
         raise ValueError("damping_ratio must be >= 0 for a modal Iwan fit")
-    x_ref = float(np.exp(np.mean(np.log(X)))) if x_ref is None else \
-        check_scalar("x_ref", x_ref, low=0.0, low_open=True)
+    x_ref = (
+        float(np.exp(np.mean(np.log(X))))
+        if x_ref is None
+        else check_scalar("x_ref", x_ref, low=0.0, low_open=True)
+    )
     conv = dict(stiffness=stiffness, floor=floor, x_ref=x_ref, damping_form=damping_form)
-    data = dict(amplitude=X, frequency=f, damping_ratio=z, frequency_std=fstd, damping_ratio_std=zstd)
+    data = dict(
+        amplitude=X, frequency=f, damping_ratio=z, frequency_std=fstd, damping_ratio_std=zstd
+    )
     n_amp = np.unique(np.round(np.log(X), 9)).size
     if n_amp < 3:
-        return ModalIwanFit.linear(data, conv, warnings=in_warn + (
-            f"only {n_amp} distinct amplitude(s): the amplitude dependence cannot be "
-            "identified; reported the mean frequency and damping ratio only",))
+        return ModalIwanFit.linear(
+            data,
+            conv,
+            warnings=in_warn
+            + (
+                f"only {n_amp} distinct amplitude(s): the amplitude dependence cannot be "
+                "identified; reported the mean frequency and damping ratio only",
+            ),
+        )
     sf, sz, known = _weights(f, z, fstd, zstd)
     micro = _fit_micro(X, f, z, sf, sz, x_ref, stiffness, floor, damping_form)
     noise_dof = None
-    if not known:                      # weights from each curve's own residual scatter
+    if not known:  # weights from each curve's own residual scatter
         fm, zm = model_curve(micro.x, X, "microslip", x_ref, stiffness, floor, damping_form)
         dof = noise_dof = max(X.size - 2, 1)
         sf = np.full(X.size, max(math.sqrt(np.sum((fm - f) ** 2) / dof), 1e-9 * np.median(f)))
@@ -208,25 +249,41 @@ def fit_modal_iwan(amplitude, frequency=None, damping_ratio=None, *, stiffness: 
     warns = list(in_warn)
     chosen, regime = micro, "microslip"
     n_data = 2 * X.size
-    full = _fit_full(micro, X, f, z, sf, sz, x_ref, stiffness, floor, damping_form) if n_data > 7 \
+    full = (
+        _fit_full(micro, X, f, z, sf, sz, x_ref, stiffness, floor, damping_form)
+        if n_data > 7
         else None
+    )
     if full is not None:
         cov_f, chi2_f = _covariance(full, n_data)
-        F_stat = (micro.cost - full.cost) / max(chi2_f, 1e-300)   # (dchi2 / 2) / chi2_red
+        F_stat = (micro.cost - full.cost) / max(chi2_f, 1e-300)  # (dchi2 / 2) / chi2_red
         p_val = float(stats.f.sf(F_stat, 2, max(n_data - 6, 1)))
         phi_known = math.sqrt(max(cov_f[4, 4], 0.0)) < 1.0
         beyond = int(np.count_nonzero(X > math.exp(full.x[4])))
         if p_val < alpha and phi_known and beyond >= MIN_MACRO_POINTS:
             chosen, regime = full, "macroslip"
         else:
-            few = "" if beyond >= MIN_MACRO_POINTS else \
-                f", {beyond} amplitude(s) beyond it where {MIN_MACRO_POINTS} are needed"
+            few = (
+                ""
+                if beyond >= MIN_MACRO_POINTS
+                else f", {beyond} amplitude(s) beyond it where {MIN_MACRO_POINTS} are needed"
+            )
             warns.append(
                 f"the data never leave microslip (F-test p = {p_val:.2g}, phi_max "
                 f"{'not ' if not phi_known else ''}bounded{few}): KT, phi_max, beta and Fs are "
-                "not identified; reported f0, zeta0, chi and the microslip coefficient delta")
+                "not identified; reported f0, zeta0, chi and the microslip coefficient delta"
+            )
     cov, chi2_red = _covariance(chosen, n_data)
-    return ModalIwanFit.from_solution(chosen.x, cov, regime, data, conv, chi2_red=chi2_red,
-                                      weights=(sf, sz), warnings=tuple(warns),
-                                      optimizer_ok=bool(chosen.success),
-                                      jac=chosen.jac, noise_dof=noise_dof)
+    return ModalIwanFit.from_solution(
+        chosen.x,
+        cov,
+        regime,
+        data,
+        conv,
+        chi2_red=chi2_red,
+        weights=(sf, sz),
+        warnings=tuple(warns),
+        optimizer_ok=bool(chosen.success),
+        jac=chosen.jac,
+        noise_dof=noise_dof,
+    )

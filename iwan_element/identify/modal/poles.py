@@ -19,6 +19,7 @@ The numerical core of :func:`~iwan_element.identify.free_decay.free_decay_modes`
   noise autocorrelation ``rho(k)`` of each channel (the sandwich form for correlated errors,
   G. A. F. Seber, C. J. Wild, *Nonlinear Regression*, Wiley 1989, section 2.1.4).
 """
+
 from __future__ import annotations
 
 import math
@@ -34,7 +35,7 @@ def _hankel(y, rows):
     """Block Hankel matrix of ``y`` (m, N): ``rows`` block rows of m channels each."""
     m, n = y.shape
     k = n - rows + 1
-    win = np.lib.stride_tricks.sliding_window_view(y, k, axis=1)   # (m, rows, k)
+    win = np.lib.stride_tricks.sliding_window_view(y, k, axis=1)  # (m, rows, k)
     return np.ascontiguousarray(win.transpose(1, 0, 2)).reshape(rows * m, k)
 
 
@@ -65,7 +66,7 @@ def subspace_poles(y, dt, orders, *, rows=None):
         rows = max(int(math.ceil(3 * (nmax + m) / m)), 4)
     rows = int(min(rows, max(n // 2, 2)))
     Hk = _hankel(y, rows)
-    lam, U = np.linalg.eigh(Hk @ Hk.T)          # left singular vectors, from the Gram matrix
+    lam, U = np.linalg.eigh(Hk @ Hk.T)  # left singular vectors, from the Gram matrix
     U = U[:, np.argsort(lam)[::-1]]
     out = {}
     for order in orders:
@@ -102,7 +103,7 @@ def stable_poles(poles, *, f_tol=2e-3, z_tol=0.2, z_abs=2e-4, min_orders=4):
         w = np.abs(s)
         return w / (2 * math.pi), -s.real / np.maximum(w, 1e-300)
 
-    members = []                                   # (f, pole, order)
+    members = []  # (f, pole, order)
     for lower, order in zip(orders[:-1], orders[1:]):
         cand, cur = poles[lower], poles[order]
         if cand.size == 0 or cur.size == 0:
@@ -168,28 +169,27 @@ class SinusoidFit:
 
     def params(self):
         """The parameter vector the covariance refers to."""
-        return np.concatenate([self.s.real, self.s.imag, self.C.real.ravel(),
-                               self.C.imag.ravel()])
+        return np.concatenate([self.s.real, self.s.imag, self.C.real.ravel(), self.C.imag.ravel()])
 
 
 def _unpack(x, p, m):
-    s = x[:p] + 1j * x[p:2 * p]
-    a = x[2 * p:2 * p + p * m].reshape(p, m)
-    b = x[2 * p + p * m:].reshape(p, m)
+    s = x[:p] + 1j * x[p : 2 * p]
+    a = x[2 * p : 2 * p + p * m].reshape(p, m)
+    b = x[2 * p + p * m :].reshape(p, m)
     return s, a + 1j * b
 
 
 def _model_jac(x, tau, p, m):
     """Model (N, m) and Jacobian (N, m, P) of ``Re(sum_i C_ij exp(s_i tau))``."""
     s, C = _unpack(x, p, m)
-    E = np.exp(np.outer(tau, s))                        # (N, p) complex
-    Ec, Es = E.real, E.imag                             # e cos, e sin
-    model = Ec @ C.real - Es @ C.imag                   # (N, m)
+    E = np.exp(np.outer(tau, s))  # (N, p) complex
+    Ec, Es = E.real, E.imag  # e cos, e sin
+    model = Ec @ C.real - Es @ C.imag  # (N, m)
     n = tau.size
     J = np.zeros((n, m, x.size))
     # d/dsigma_i: tau Re(C E); d/domega_i: tau Re(i C E) = -tau Im(C E)
     for i in range(p):
-        ce = E[:, i, None] * C[i][None, :]              # (N, m)
+        ce = E[:, i, None] * C[i][None, :]  # (N, m)
         J[:, :, i] = tau[:, None] * ce.real
         J[:, :, p + i] = -tau[:, None] * ce.imag
         for j in range(m):
@@ -206,10 +206,13 @@ def _correlated_cov(J, rho, s2):
     A = np.einsum("tjp,tjq->pq", J, J)
     if rho.size > 1:
         kern = np.concatenate([rho[:0:-1], rho])
-        RJ = signal.fftconvolve(J, kern[:, None, None], mode="same", axes=0) \
-            if kern.size <= 2 * n - 1 else None
+        RJ = (
+            signal.fftconvolve(J, kern[:, None, None], mode="same", axes=0)
+            if kern.size <= 2 * n - 1
+            else None
+        )
         if RJ is None:
-            kern = kern[kern.size // 2 - (n - 1):kern.size // 2 + n]
+            kern = kern[kern.size // 2 - (n - 1) : kern.size // 2 + n]
             RJ = signal.fftconvolve(J, kern[:, None, None], mode="same", axes=0)
         M = np.einsum("tjp,tjq->pq", J, RJ)
         M = 0.5 * (M + M.T)
@@ -237,21 +240,29 @@ def fit_sinusoids(tau, Y, s0, *, rho=None, max_nfev=200):
     def jac(x):
         return _model_jac(x, tau, p, m)[1].reshape(n * m, x.size)
 
-    scale = np.concatenate([np.full(2 * p, 1.0 / max(tau[-1] - tau[0], 1e-300)),
-                            np.full(2 * p * m, max(float(np.abs(C0).max()), 1e-300))])
+    scale = np.concatenate(
+        [
+            np.full(2 * p, 1.0 / max(tau[-1] - tau[0], 1e-300)),
+            np.full(2 * p * m, max(float(np.abs(C0).max()), 1e-300)),
+        ]
+    )
     with np.errstate(over="ignore", invalid="ignore"):
-        sol = optimize.least_squares(fun, x0, jac=jac, method="lm", x_scale=scale,
-                                     xtol=1e-12, ftol=1e-12, max_nfev=max_nfev)
+        sol = optimize.least_squares(
+            fun, x0, jac=jac, method="lm", x_scale=scale, xtol=1e-12, ftol=1e-12, max_nfev=max_nfev
+        )
         x, ok = sol.x, bool(sol.success)
         model, J = _model_jac(x, tau, p, m)
-    if not (np.all(np.isfinite(model)) and np.all(np.isfinite(J)) and sol.cost
-            <= 0.5 * float(np.sum(fun(x0) ** 2))):     # diverged: keep the subspace start
+    if not (
+        np.all(np.isfinite(model))
+        and np.all(np.isfinite(J))
+        and sol.cost <= 0.5 * float(np.sum(fun(x0) ** 2))
+    ):  # diverged: keep the subspace start
         x, ok = x0, False
         model, J = _model_jac(x, tau, p, m)
     resid = (target - model).T
     dof = max(n * m - x.size, 1)
-    s2 = float(np.sum(resid ** 2)) / dof
-    rms = np.sqrt(np.sum(resid ** 2, axis=1) / max(n - x.size / m, 1.0))
+    s2 = float(np.sum(resid**2)) / dof
+    rms = np.sqrt(np.sum(resid**2, axis=1) / max(n - x.size / m, 1.0))
     rho = np.ones(1) if rho is None else np.asarray(rho, float)
     cov = _correlated_cov(J, rho, s2)
     s, C = _unpack(x, p, m)

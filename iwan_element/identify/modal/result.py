@@ -1,4 +1,5 @@
 """The modal Iwan model in fit coordinates and the result object of :func:`fit_modal_iwan`."""
+
 from __future__ import annotations
 
 import json
@@ -26,17 +27,35 @@ __all__ = ["ModalIwanFit", "model_curve", "full_parameters", "harmonic_factor"]
 
 MICRO = ("f0", "zeta0", "chi", "delta")
 FULL = ("f0", "zeta0", "chi", "kappa", "log_phi_max", "beta")
-_BOUNDS = {"f0": (0.0, math.inf), "zeta0": (0.0, 1.0), "chi": (-1.0, math.inf),
-           "delta": (0.0, 1.0), "kappa": (0.0, 1.0), "log_phi_max": (-math.inf, math.inf),
-           "beta": (0.0, math.inf)}
-_UNITS = {"f0": "Hz", "zeta0": "-", "chi": "-", "delta": "-", "kappa": "-", "beta": "-",
-          "phi_max": "m", "KT": "1/s^2", "K_inf": "1/s^2", "Fs": "m/s^2"}
+_BOUNDS = {
+    "f0": (0.0, math.inf),
+    "zeta0": (0.0, 1.0),
+    "chi": (-1.0, math.inf),
+    "delta": (0.0, 1.0),
+    "kappa": (0.0, 1.0),
+    "log_phi_max": (-math.inf, math.inf),
+    "beta": (0.0, math.inf),
+}
+_UNITS = {
+    "f0": "Hz",
+    "zeta0": "-",
+    "chi": "-",
+    "delta": "-",
+    "kappa": "-",
+    "beta": "-",
+    "phi_max": "m",
+    "KT": "1/s^2",
+    "K_inf": "1/s^2",
+    "Fs": "m/s^2",
+}
 
 
 def harmonic_factor(chi):
     """Ratio of the first-harmonic to the secant stiffness drop in microslip (n = chi+2)."""
     n = chi + 2.0
-    return 4.0 * n * math.exp(special.gammaln(n + 0.5) - special.gammaln(n + 2.0)) / math.sqrt(math.pi)
+    return (
+        4.0 * n * math.exp(special.gammaln(n + 0.5) - special.gammaln(n + 2.0)) / math.sqrt(math.pi)
+    )
 
 
 def full_parameters(theta):
@@ -66,8 +85,9 @@ def model_curve(theta, X, regime, x_ref, stiffness, floor, damping_form="energy"
         zeta = zv + w02 * g * 2.0 * (chi + 1.0) / (math.pi * (chi + 3.0)) / k_e
         return np.sqrt(w2) / (2.0 * math.pi), zeta
     p, k_inf = full_parameters(theta)
-    return modal_iwan_curve(X, p, K_inf=k_inf, zeta0=z0, stiffness=stiffness,
-                            floor=floor, damping_form=damping_form)
+    return modal_iwan_curve(
+        X, p, K_inf=k_inf, zeta0=z0, stiffness=stiffness, floor=floor, damping_form=damping_form
+    )
 
 
 def _derived(theta, regime):
@@ -133,8 +153,22 @@ class ModalIwanFit(ResultShape):
 
     # ------------------------------------------------------------------ construction
     @classmethod
-    def from_solution(cls, theta, cov, regime, data, conv, *, chi2_red, weights, warnings,
-                      optimizer_ok, jac=None, noise_dof=None, noise_source=None):
+    def from_solution(
+        cls,
+        theta,
+        cov,
+        regime,
+        data,
+        conv,
+        *,
+        chi2_red,
+        weights,
+        warnings,
+        optimizer_ok,
+        jac=None,
+        noise_dof=None,
+        noise_source=None,
+    ):
         """The result of a weighted least-squares solution ``theta`` with covariance ``cov``;
         with the solution's Jacobian ``jac`` the reported parameters' standard errors come
         from :func:`iwan_element.fitting.covariance` with the delta method (NaN along a
@@ -153,44 +187,80 @@ class ModalIwanFit(ResultShape):
         stderr = dict(zip(params, map(float, se)))
         warns = list(warnings)
         if chi2_red > 4.0:
-            warns.append(f"systematic misfit: reduced chi-square {chi2_red:.3g}; the model does "
-                         "not follow the data within their stated uncertainty and the standard "
-                         f"errors were widened by {math.sqrt(chi2_red):.3g}")
+            warns.append(
+                f"systematic misfit: reduced chi-square {chi2_red:.3g}; the model does "
+                "not follow the data within their stated uncertainty and the standard "
+                f"errors were widened by {math.sqrt(chi2_red):.3g}"
+            )
         if not optimizer_ok:
             warns.append("the optimiser did not report convergence")
         bad = _unidentified(params, stderr, theta, names, noise_dof)
         few = None
         if noise_dof is not None:
-            few = noise_dof_warning(noise_dof, noise_source if noise_source is not None else (
-                f" (weights from the residuals of {len(data['amplitude'])} amplitudes; state "
-                "the per-point uncertainties or measure more amplitudes)"))
+            few = noise_dof_warning(
+                noise_dof,
+                noise_source
+                if noise_source is not None
+                else (
+                    f" (weights from the residuals of {len(data['amplitude'])} amplitudes; state "
+                    "the per-point uncertainties or measure more amplitudes)"
+                ),
+            )
         if few:
             warns.append(few)
         else:
-            warns += [f"{n} is not identified by these data (value {params[n]:.4g}, stderr "
-                      f"{stderr[n]:.3g})" for n in bad]
+            warns += [
+                f"{n} is not identified by these data (value {params[n]:.4g}, stderr "
+                f"{stderr[n]:.3g})"
+                for n in bad
+            ]
         if params["zeta0"] < 1e-9:
             warns.append("zeta0 is at its bound 0: no viscous floor is visible in the data")
         table = _table(params, stderr, bad)
         success = fit_success(optimizer_ok, table.identified, explained=chi2_red <= 4.0)
         failures = () if success else _failures(optimizer_ok, chi2_red, few, bad, regime)
-        return cls(regime, names, theta, np.asarray(cov, dtype=float), data, conv, chi2_red,
-                   weights, success, table, warnings=tuple(warns), failures=failures)
+        return cls(
+            regime,
+            names,
+            theta,
+            np.asarray(cov, dtype=float),
+            data,
+            conv,
+            chi2_red,
+            weights,
+            success,
+            table,
+            warnings=tuple(warns),
+            failures=failures,
+        )
 
     @classmethod
     def linear(cls, data, conv, *, warnings):
         f, z = data["frequency"], data["damping_ratio"]
         n = f.size
         theta = np.array([f.mean(), z.mean()])
-        sd = np.array([f.std(ddof=1), z.std(ddof=1)]) / math.sqrt(n) if n > 1 else \
-            np.full(2, np.nan)
-        cov = np.diag(sd ** 2)
+        sd = (
+            np.array([f.std(ddof=1), z.std(ddof=1)]) / math.sqrt(n) if n > 1 else np.full(2, np.nan)
+        )
+        cov = np.diag(sd**2)
         params, stderr = _derived(theta, "linear"), {"f0": sd[0], "zeta0": sd[1]}
-        return cls("linear", ("f0", "zeta0"), theta, cov, data, conv, float("nan"), (), False,
-                   _table(params, stderr, _unidentified(params, stderr, theta, ())),
-                   warnings=tuple(warnings), failures=(
-                       f"the amplitude dependence is not identified: only {n} point(s) at too "
-                       "few distinct amplitudes (at least 3 are needed)",))
+        return cls(
+            "linear",
+            ("f0", "zeta0"),
+            theta,
+            cov,
+            data,
+            conv,
+            float("nan"),
+            (),
+            False,
+            _table(params, stderr, _unidentified(params, stderr, theta, ())),
+            warnings=tuple(warnings),
+            failures=(
+                f"the amplitude dependence is not identified: only {n} point(s) at too "
+                "few distinct amplitudes (at least 3 are needed)",
+            ),
+        )
 
     # ------------------------------------------------------------------ model access
     @property
@@ -217,8 +287,15 @@ class ModalIwanFit(ResultShape):
         if self.regime == "linear":
             return np.full(X.shape, theta[0]), np.full(X.shape, theta[1])
         c = self.conventions
-        return model_curve(theta, X, self.regime, c["x_ref"], c["stiffness"], c["floor"],
-                           c.get("damping_form", "energy"))
+        return model_curve(
+            theta,
+            X,
+            self.regime,
+            c["x_ref"],
+            c["stiffness"],
+            c["floor"],
+            c.get("damping_form", "energy"),
+        )
 
     @property
     def fitted_range(self) -> tuple:
@@ -243,10 +320,14 @@ class ModalIwanFit(ResultShape):
             raise ValueError("amplitude must be finite and > 0 [m]")
         lo, hi = self.fitted_range
         if np.any(X < lo * (1 - 1e-9)) or np.any(X > hi * (1 + 1e-9)):
-            warnings.warn(f"ModalIwanFit.predict: amplitudes {X.min():.3g} .. {X.max():.3g} m "
-                          f"reach beyond the fitted ones ({lo:.3g} .. {hi:.3g} m, up to "
-                          f"{max(X.max() / hi, lo / X.min()):.3g} x): the {self.regime} model "
-                          "is extrapolated there", IdentifiabilityWarning, stacklevel=2)
+            warnings.warn(
+                f"ModalIwanFit.predict: amplitudes {X.min():.3g} .. {X.max():.3g} m "
+                f"reach beyond the fitted ones ({lo:.3g} .. {hi:.3g} m, up to "
+                f"{max(X.max() / hi, lo / X.min()):.3g} x): the {self.regime} model "
+                "is extrapolated there",
+                IdentifiabilityWarning,
+                stacklevel=2,
+            )
         f, z = (np.asarray(v, dtype=float) for v in self._curve(self.values, X))
         if band is None:
             return f, z
@@ -255,7 +336,7 @@ class ModalIwanFit(ResultShape):
         q = stats.norm.ppf(0.5 + 0.5 * float(band))
         J = _gradient(lambda th: np.concatenate(self._curve(th, X)), self.values)
         sd = np.sqrt(np.maximum(np.einsum("ij,jk,ik->i", J, self.covariance, J), 0.0))
-        sf, sz = sd[:X.size], sd[X.size:]
+        sf, sz = sd[: X.size], sd[X.size :]
         return f, z, (f - q * sf, f + q * sf), (z - q * sz, z + q * sz)
 
     def sample_parameters(self, n: int, *, rng: np.random.Generator) -> list[dict]:
@@ -266,14 +347,16 @@ class ModalIwanFit(ResultShape):
         lo = np.array([_BOUNDS[k][0] for k in self.names])
         hi = np.array([_BOUNDS[k][1] for k in self.names])
         for _ in range(100):
-            d = rng.multivariate_normal(self.values, self.covariance, size=max(int(n), 1),
-                                        method="eigh")
+            d = rng.multivariate_normal(
+                self.values, self.covariance, size=max(int(n), 1), method="eigh"
+            )
             d = d[np.all((d > lo) & (d < hi), axis=1)]
             out += [dict(zip(self.names, row)) for row in d]
             if len(out) >= n:
                 return out[:n]
-        raise ValueError("could not draw parameter sets inside the bounds; the covariance is "
-                         "too wide")
+        raise ValueError(
+            "could not draw parameter sets inside the bounds; the covariance is too wide"
+        )
 
     # ------------------------------------------------------------------ reporting
     def rms_errors(self) -> dict:
@@ -281,34 +364,46 @@ class ModalIwanFit(ResultShape):
         f, z = self._curve(self.values, self.data["amplitude"])
         rf = (f - self.data["frequency"]) / self.data["frequency"]
         rz = (z - self.data["damping_ratio"]) / self.data["damping_ratio"]
-        return {"frequency": float(np.sqrt(np.mean(rf ** 2))),
-                "damping_ratio": float(np.sqrt(np.mean(rz ** 2)))}
+        return {
+            "frequency": float(np.sqrt(np.mean(rf**2))),
+            "damping_ratio": float(np.sqrt(np.mean(rz**2))),
+        }
 
     def to_dict(self) -> dict:
         def num(x):
             return None if not np.isfinite(x) else float(x)
-        return {"regime": self.regime, "success": self.success,
-                "failure_reasons": list(self.failure_reasons()),
-                "params": self.params.to_dict(), "names": list(self.names),
-                "covariance": [[float(x) for x in row] for row in self.covariance],
-                "chi2_red": num(self.chi2_red), "rms_errors": self.rms_errors(),
-                "conventions": dict(self.conventions), "warnings": list(self.warnings)}
+
+        return {
+            "regime": self.regime,
+            "success": self.success,
+            "failure_reasons": list(self.failure_reasons()),
+            "params": self.params.to_dict(),
+            "names": list(self.names),
+            "covariance": [[float(x) for x in row] for row in self.covariance],
+            "chi2_red": num(self.chi2_red),
+            "rms_errors": self.rms_errors(),
+            "conventions": dict(self.conventions),
+            "warnings": list(self.warnings),
+        }
 
     def to_json(self) -> str:
         return json.dumps(self.to_dict(), indent=2)
 
     def report(self) -> str:
         c = self.conventions
-        lines = [self.verdict(),
-                 f"Modal Iwan fit ({self.regime}; {c['stiffness']} stiffness, {c['floor']} "
-                 "floor)"]
+        lines = [
+            self.verdict(),
+            f"Modal Iwan fit ({self.regime}; {c['stiffness']} stiffness, {c['floor']} floor)",
+        ]
         lines += self.params.report().splitlines()
         if self.regime == "microslip":
             lines.append(f"  delta = relative drop of w^2 at X_ref = {c['x_ref']:.4g} m")
-        lines.append(f"  goodness of fit: {len(self.data['amplitude'])} amplitudes, reduced "
-                     f"chi-square {self.chi2_red:.3g}, RMS error f "
-                     f"{100 * self.rms_errors()['frequency']:.4f} %, zeta "
-                     f"{100 * self.rms_errors()['damping_ratio']:.2f} %")
+        lines.append(
+            f"  goodness of fit: {len(self.data['amplitude'])} amplitudes, reduced "
+            f"chi-square {self.chi2_red:.3g}, RMS error f "
+            f"{100 * self.rms_errors()['frequency']:.4f} %, zeta "
+            f"{100 * self.rms_errors()['damping_ratio']:.2f} %"
+        )
         for w in self.warnings:
             lines += wrap(f"  warning: {w}", indent="    ")
         return "\n".join(lines)
@@ -321,18 +416,25 @@ class ModalIwanFit(ResultShape):
         """
         ax = panels(ax, 2, sharex=True, figsize=(6, 6))
         from matplotlib.ticker import NullFormatter
+
         d = self.data
         X = np.geomspace(d["amplitude"].min(), d["amplitude"].max(), 200)
         f, z, fb, zb = self.predict(X, band=band)
         artists = []
-        for a, y, s, m, b in ((ax[0], d["frequency"], d["frequency_std"], f, fb),
-                              (ax[1], d["damping_ratio"], d["damping_ratio_std"], z, zb)):
-            eb = a.errorbar(d["amplitude"], y, yerr=np.nan_to_num(s), fmt="o", ms=3, color="k",
-                            label="data")
+        for a, y, s, m, b in (
+            (ax[0], d["frequency"], d["frequency_std"], f, fb),
+            (ax[1], d["damping_ratio"], d["damping_ratio_std"], z, zb),
+        ):
+            eb = a.errorbar(
+                d["amplitude"], y, yerr=np.nan_to_num(s), fmt="o", ms=3, color="k", label="data"
+            )
             artists += [eb.lines[0], *eb.lines[2]]
             artists += a.plot(X, m, "r-", label=label)
-            artists.append(a.fill_between(X, b[0], b[1], color="r", alpha=0.25,
-                                          label=f"{100 * band:.0f} % band"))
+            artists.append(
+                a.fill_between(
+                    X, b[0], b[1], color="r", alpha=0.25, label=f"{100 * band:.0f} % band"
+                )
+            )
             a.set_xscale("log")
             a.xaxis.set_minor_formatter(NullFormatter())
         ax[0].set_ylabel("frequency [Hz]")
@@ -348,16 +450,23 @@ def _failures(optimizer_ok, chi2_red, few, bad, regime) -> tuple:
     if not optimizer_ok:
         out.append("the optimiser did not converge")
     if chi2_red > 4.0:
-        out.append(f"misfit well beyond the noise remains: reduced chi-square {chi2_red:.3g} "
-                   "(the model does not follow the data within their uncertainty)")
+        out.append(
+            f"misfit well beyond the noise remains: reduced chi-square {chi2_red:.3g} "
+            "(the model does not follow the data within their uncertainty)"
+        )
     if few:
         out.append(few)
     elif bad:
-        why = ("the curve shows too little amplitude dependence to fix them (standard "
-               "errors above half their values)" if regime == "microslip" else
-               "their standard errors exceed half their values")
-        out.append(f"{', '.join(bad)} {'is' if len(bad) == 1 else 'are'} not identified by "
-                   f"these data: {why}")
+        why = (
+            "the curve shows too little amplitude dependence to fix them (standard "
+            "errors above half their values)"
+            if regime == "microslip"
+            else "their standard errors exceed half their values"
+        )
+        out.append(
+            f"{', '.join(bad)} {'is' if len(bad) == 1 else 'are'} not identified by "
+            f"these data: {why}"
+        )
     return tuple(out)
 
 
@@ -377,9 +486,14 @@ def _gradient(fun, theta):
 
 def _table(params, stderr, bad) -> ParameterTable:
     """The reported parameters as a :class:`~iwan_element.fitting.ParameterTable`."""
-    return ParameterTable([Parameter(k, float(v), float(stderr.get(k, math.nan)),
-                                     unit=_UNITS[k], identified=k not in bad)
-                           for k, v in params.items()])
+    return ParameterTable(
+        [
+            Parameter(
+                k, float(v), float(stderr.get(k, math.nan)), unit=_UNITS[k], identified=k not in bad
+            )
+            for k, v in params.items()
+        ]
+    )
 
 
 def _unidentified(params, stderr, theta, names, noise_dof=None):
@@ -390,10 +504,18 @@ def _unidentified(params, stderr, theta, names, noise_dof=None):
     """
     bad = []
     for k, v in params.items():
-        ref, text = {"chi": (v + 1.0, "chi + 1"),
-                     "beta": (max(v, 0.2), "max(beta, 0.2)")}.get(k, (None, "its value"))
-        ok, _ = verdict(k, float(v), float(stderr.get(k, math.nan)), reference=ref,
-                        reference_text=text, nuisance=k == "zeta0", noise_dof=noise_dof)
+        ref, text = {"chi": (v + 1.0, "chi + 1"), "beta": (max(v, 0.2), "max(beta, 0.2)")}.get(
+            k, (None, "its value")
+        )
+        ok, _ = verdict(
+            k,
+            float(v),
+            float(stderr.get(k, math.nan)),
+            reference=ref,
+            reference_text=text,
+            nuisance=k == "zeta0",
+            noise_dof=noise_dof,
+        )
         if not ok:
             bad.append(k)
     return bad

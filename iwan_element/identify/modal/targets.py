@@ -13,6 +13,7 @@ Modes are numbered 1, 2, ... by ascending frequency of the identified physical p
 not a model's mode number (an in-plane mode, a mode no sensor sees): pair them with a model's
 modes by frequency and MAC (:func:`mac`).
 """
+
 from __future__ import annotations
 
 import math
@@ -36,26 +37,32 @@ def mac(a, b) -> float:
     """
     if isinstance(a, dict) or isinstance(b, dict):
         if not (isinstance(a, dict) and isinstance(b, dict)):
-            raise ValueError("a and b must both be arrays or both be {position: amplitude} "
-                             "mappings")
+            raise ValueError(
+                "a and b must both be arrays or both be {position: amplitude} mappings"
+            )
         if set(a) != set(b):
-            raise ValueError(f"a and b must hold the same positions, got {sorted(map(str, a))} "
-                             f"and {sorted(map(str, b))}")
+            raise ValueError(
+                f"a and b must hold the same positions, got {sorted(map(str, a))} "
+                f"and {sorted(map(str, b))}"
+            )
         keys = list(a)
         a, b = [a[k] for k in keys], [b[k] for k in keys]
     try:
         a = np.asarray(a, dtype=complex).ravel()
     except (TypeError, ValueError):
-        raise ValueError(f"a must be an array of (complex) amplitudes, got {type(a).__name__}") \
-            from None
+        raise ValueError(
+            f"a must be an array of (complex) amplitudes, got {type(a).__name__}"
+        ) from None
     try:
         b = np.asarray(b, dtype=complex).ravel()
     except (TypeError, ValueError):
-        raise ValueError(f"b must be an array of (complex) amplitudes, got {type(b).__name__}") \
-            from None
+        raise ValueError(
+            f"b must be an array of (complex) amplitudes, got {type(b).__name__}"
+        ) from None
     if a.shape != b.shape or a.size == 0:
-        raise ValueError(f"a and b must be shapes at the same sensors, got sizes {a.size} and "
-                         f"{b.size}")
+        raise ValueError(
+            f"a and b must be shapes at the same sensors, got sizes {a.size} and {b.size}"
+        )
     den = float(np.vdot(a, a).real * np.vdot(b, b).real)
     if not (den > 0 and math.isfinite(den)):
         raise ValueError("a and b must be finite and not all zero")
@@ -145,20 +152,35 @@ class ModeTarget:
         if not (self.frequency > 0 and math.isfinite(self.frequency)):
             raise ValueError(f"frequency must be > 0 and finite [Hz], got {self.frequency!r}")
         if not (math.isfinite(self.damping_ratio) and abs(self.damping_ratio) < 1):
-            raise ValueError(f"damping_ratio must be a finite ratio below 1, got "
-                             f"{self.damping_ratio!r}")
+            raise ValueError(
+                f"damping_ratio must be a finite ratio below 1, got {self.damping_ratio!r}"
+            )
         m = len(self.sensors)
         if len(self.positions) != m:
             raise ValueError("positions must hold one position per sensor")
-        for name, dt, shp in (("amplitude", complex, (m,)), ("shape", complex, (m,)),
-                              ("amplitude_std", float, (m, 2)), ("shape_std", float, (m, 2))):
+        for name, dt, shp in (
+            ("amplitude", complex, (m,)),
+            ("shape", complex, (m,)),
+            ("amplitude_std", float, (m, 2)),
+            ("shape_std", float, (m, 2)),
+        ):
             arr = np.array(getattr(self, name), dtype=dt, copy=True).reshape(shp)
             arr.flags.writeable = False
             object.__setattr__(self, name, arr)
-        for name in ("frequency", "frequency_std", "damping_ratio", "damping_ratio_std",
-                     "modal_constant", "modal_constant_std", "t_ref", "frequency_drift",
-                     "frequency_drift_std", "damping_drift", "damping_drift_std",
-                     "complexity"):
+        for name in (
+            "frequency",
+            "frequency_std",
+            "damping_ratio",
+            "damping_ratio_std",
+            "modal_constant",
+            "modal_constant_std",
+            "t_ref",
+            "frequency_drift",
+            "frequency_drift_std",
+            "damping_drift",
+            "damping_drift_std",
+            "complexity",
+        ):
             object.__setattr__(self, name, _nan(getattr(self, name)))
         object.__setattr__(self, "window", tuple(map(float, self.window)))
         object.__setattr__(self, "amplitude_range", tuple(map(float, self.amplitude_range)))
@@ -186,34 +208,41 @@ class ModeTarget:
 
     def to_dict(self) -> dict:
         """JSON-safe dictionary (complex numbers as ``[re, im]``, NaN as ``None``)."""
+
         def num(x):
             return float(x) if x is not None and math.isfinite(float(x)) else None
 
         def cplx(z):
             return [[num(v.real), num(v.imag)] for v in np.asarray(z).ravel()]
 
-        return {"index": self.index, "label": self.label, "method": self.method,
-                "frequency": num(self.frequency), "frequency_std": num(self.frequency_std),
-                "frequency_stderr": num(self.frequency_stderr),
-                "damping_ratio": num(self.damping_ratio),
-                "damping_ratio_std": num(self.damping_ratio_std),
-                "damping_ratio_stderr": num(self.damping_ratio_stderr),
-                "sensors": list(self.sensors),
-                "positions": [list(p) if isinstance(p, tuple) else num(p)
-                              for p in self.positions],
-                "amplitude": cplx(self.amplitude),
-                "amplitude_std": [[num(a), num(b)] for a, b in self.amplitude_std],
-                "shape": cplx(self.shape),
-                "shape_std": [[num(a), num(b)] for a, b in self.shape_std],
-                "modal_constant": num(self.modal_constant),
-                "modal_constant_std": num(self.modal_constant_std),
-                "t_ref": num(self.t_ref), "window": [num(w) for w in self.window],
-                "amplitude_range": [num(a) for a in self.amplitude_range],
-                "frequency_drift": num(self.frequency_drift),
-                "frequency_drift_std": num(self.frequency_drift_std),
-                "damping_drift": num(self.damping_drift),
-                "damping_drift_std": num(self.damping_drift_std),
-                "linear": self.linear, "complexity": num(self.complexity)}
+        return {
+            "index": self.index,
+            "label": self.label,
+            "method": self.method,
+            "frequency": num(self.frequency),
+            "frequency_std": num(self.frequency_std),
+            "frequency_stderr": num(self.frequency_stderr),
+            "damping_ratio": num(self.damping_ratio),
+            "damping_ratio_std": num(self.damping_ratio_std),
+            "damping_ratio_stderr": num(self.damping_ratio_stderr),
+            "sensors": list(self.sensors),
+            "positions": [list(p) if isinstance(p, tuple) else num(p) for p in self.positions],
+            "amplitude": cplx(self.amplitude),
+            "amplitude_std": [[num(a), num(b)] for a, b in self.amplitude_std],
+            "shape": cplx(self.shape),
+            "shape_std": [[num(a), num(b)] for a, b in self.shape_std],
+            "modal_constant": num(self.modal_constant),
+            "modal_constant_std": num(self.modal_constant_std),
+            "t_ref": num(self.t_ref),
+            "window": [num(w) for w in self.window],
+            "amplitude_range": [num(a) for a in self.amplitude_range],
+            "frequency_drift": num(self.frequency_drift),
+            "frequency_drift_std": num(self.frequency_drift_std),
+            "damping_drift": num(self.damping_drift),
+            "damping_drift_std": num(self.damping_drift_std),
+            "linear": self.linear,
+            "complexity": num(self.complexity),
+        }
 
 
 @dataclass(frozen=True, eq=False)
@@ -250,8 +279,12 @@ class ModalTargets(ResultShape):
             raise ValueError("modes must be indexed 1, 2, ... in order")
         object.__setattr__(self, "modes", modes)
         object.__setattr__(self, "failures", tuple(str(w) for w in self.failures))
-        object.__setattr__(self, "warnings", tuple(str(w) for w in self.warnings)
-                           + tuple(w for w in self.failures if w not in self.warnings))
+        object.__setattr__(
+            self,
+            "warnings",
+            tuple(str(w) for w in self.warnings)
+            + tuple(w for w in self.failures if w not in self.warnings),
+        )
 
     # ---- views for the updater ---------------------------------------------------------
     @property
@@ -279,38 +312,49 @@ class ModalTargets(ResultShape):
         """``{mode index: {position: signed real amplitude [m]}}``: the real part of
         :attr:`ModeTarget.shape` (modes with sensors only).
         """
-        return {m.index: {p: float(v.real) for p, v in zip(m.positions, m.shape)}
-                for m in self.modes if m.positions}
+        return {
+            m.index: {p: float(v.real) for p, v in zip(m.positions, m.shape)}
+            for m in self.modes
+            if m.positions
+        }
 
     @property
     def shape_stderr(self) -> dict:
         """``{mode index: {position: standard error of the real amplitude [m]}}``."""
-        return {m.index: {p: float(s[0]) for p, s in zip(m.positions, m.shape_std)}
-                for m in self.modes if m.positions}
+        return {
+            m.index: {p: float(s[0]) for p, s in zip(m.positions, m.shape_std)}
+            for m in self.modes
+            if m.positions
+        }
 
     @property
     def complex_shapes(self) -> dict:
         """``{mode index: {position: complex amplitude [m]}}`` (:attr:`ModeTarget.shape`)."""
-        return {m.index: {p: complex(v) for p, v in zip(m.positions, m.shape)}
-                for m in self.modes if m.positions}
+        return {
+            m.index: {p: complex(v) for p, v in zip(m.positions, m.shape)}
+            for m in self.modes
+            if m.positions
+        }
 
     @property
     def modal_constants(self) -> dict:
         """``{mode index: modal constant [1/kg]}`` (modes with a measured force only)."""
-        return {m.index: m.modal_constant for m in self.modes
-                if math.isfinite(m.modal_constant)}
+        return {m.index: m.modal_constant for m in self.modes if math.isfinite(m.modal_constant)}
 
     @property
     def modal_constant_stderr(self) -> dict:
         """``{mode index: standard error [1/kg]}``."""
-        return {m.index: m.modal_constant_std for m in self.modes
-                if math.isfinite(m.modal_constant)}
+        return {
+            m.index: m.modal_constant_std for m in self.modes if math.isfinite(m.modal_constant)
+        }
 
     def mac(self, index: int, shape) -> float:
         """MAC of mode ``index``'s complex shape with ``shape`` ({position: amplitude})."""
         if index not in self.complex_shapes:
-            raise ValueError(f"index must be a mode with a shape, one of "
-                             f"{sorted(self.complex_shapes)}, got {index!r}")
+            raise ValueError(
+                f"index must be a mode with a shape, one of "
+                f"{sorted(self.complex_shapes)}, got {index!r}"
+            )
         return mac(self.complex_shapes[index], dict(shape))
 
     # ---- result shape --------------------------------------------------------------------
@@ -324,39 +368,97 @@ class ModalTargets(ResultShape):
         return tuple(self.failures) + none
 
     def to_dict(self) -> dict:
-        return {"source": self.source, "notes": self.notes,
-                "modes": [m.to_dict() for m in self.modes],
-                "warnings": list(self.warnings), "failures": list(self.failures),
-                "success": self.success}
+        return {
+            "source": self.source,
+            "notes": self.notes,
+            "modes": [m.to_dict() for m in self.modes],
+            "warnings": list(self.warnings),
+            "failures": list(self.failures),
+            "success": self.success,
+        }
 
     def _mode_rows(self):
-        return [(m.index, m.label, m.frequency, m.frequency_stderr, m.damping_ratio,
-                 m.damping_ratio_stderr, m.modal_constant if math.isfinite(m.modal_constant)
-                 else None, m.modal_constant_std if math.isfinite(m.modal_constant_std)
-                 else None, m.window[0], m.window[1], m.amplitude_range[0],
-                 m.amplitude_range[1], m.frequency_drift if math.isfinite(m.frequency_drift)
-                 else None, "-" if m.linear is None else ("yes" if m.linear else "no"))
-                for m in self.modes]
+        return [
+            (
+                m.index,
+                m.label,
+                m.frequency,
+                m.frequency_stderr,
+                m.damping_ratio,
+                m.damping_ratio_stderr,
+                m.modal_constant if math.isfinite(m.modal_constant) else None,
+                m.modal_constant_std if math.isfinite(m.modal_constant_std) else None,
+                m.window[0],
+                m.window[1],
+                m.amplitude_range[0],
+                m.amplitude_range[1],
+                m.frequency_drift if math.isfinite(m.frequency_drift) else None,
+                "-" if m.linear is None else ("yes" if m.linear else "no"),
+            )
+            for m in self.modes
+        ]
 
     def _shape_rows(self):
-        return [(m.index, s, p if not isinstance(p, tuple) else str(p), float(v.real),
-                 float(e[0]), float(v.imag), float(e[1]))
-                for m in self.modes for s, p, v, e in zip(m.sensors, m.positions, m.shape,
-                                                           m.shape_std)]
+        return [
+            (
+                m.index,
+                s,
+                p if not isinstance(p, tuple) else str(p),
+                float(v.real),
+                float(e[0]),
+                float(v.imag),
+                float(e[1]),
+            )
+            for m in self.modes
+            for s, p, v, e in zip(m.sensors, m.positions, m.shape, m.shape_std)
+        ]
 
     def _tables(self) -> list:
-        out = [("modes", ("mode", "label", "frequency [Hz]", "stderr [Hz]", "damping [-]",
-                          "stderr [-]", "modal constant [1/kg]", "stderr [1/kg]",
-                          "window start", "window end", "amplitude start [m]",
-                          "amplitude end [m]", "frequency drift [Hz]", "linear"),
-                self._mode_rows())]
+        out = [
+            (
+                "modes",
+                (
+                    "mode",
+                    "label",
+                    "frequency [Hz]",
+                    "stderr [Hz]",
+                    "damping [-]",
+                    "stderr [-]",
+                    "modal constant [1/kg]",
+                    "stderr [1/kg]",
+                    "window start",
+                    "window end",
+                    "amplitude start [m]",
+                    "amplitude end [m]",
+                    "frequency drift [Hz]",
+                    "linear",
+                ),
+                self._mode_rows(),
+            )
+        ]
         if any(m.positions for m in self.modes):
-            out.append(("shapes", ("mode", "sensor", "position [m]", "real [m]",
-                                   "stderr real [m]", "imag [m]", "stderr imag [m]"),
-                        self._shape_rows()))
-        out.append(("run", ("quantity", "value"), [("source", self.source),
-                                                    ("modes", len(self.modes)),
-                                                    ("notes", self.notes)]))
+            out.append(
+                (
+                    "shapes",
+                    (
+                        "mode",
+                        "sensor",
+                        "position [m]",
+                        "real [m]",
+                        "stderr real [m]",
+                        "imag [m]",
+                        "stderr imag [m]",
+                    ),
+                    self._shape_rows(),
+                )
+            )
+        out.append(
+            (
+                "run",
+                ("quantity", "value"),
+                [("source", self.source), ("modes", len(self.modes)), ("notes", self.notes)],
+            )
+        )
         return out
 
     def report(self) -> str:
@@ -365,23 +467,59 @@ class ModalTargets(ResultShape):
         if self.notes:
             lines += wrap(f"  {self.notes}", indent="    ")
         lines += table_lines(
-            [("mode", "4d"), ("f [Hz]", "11.6g"), ("+-", "8.2g"), ("zeta [-]", "10.4g"),
-             ("+-", "8.2g"), ("c [1/kg]", "9.4g"), ("+-", "8.2g"), ("window", "<19"),
-             ("X [m]", "<19"), ("linear", "<6")],
-            [(m.index, m.frequency, m.frequency_stderr, m.damping_ratio,
-              m.damping_ratio_stderr, m.modal_constant, m.modal_constant_std,
-              f"{format_value(m.window[0], 4)}-{format_value(m.window[1], 4)}",
-              f"{format_value(m.amplitude_range[0], 3)}-{format_value(m.amplitude_range[1], 3)}",
-              "-" if m.linear is None else ("yes" if m.linear else "no"))
-             for m in self.modes])
+            [
+                ("mode", "4d"),
+                ("f [Hz]", "11.6g"),
+                ("+-", "8.2g"),
+                ("zeta [-]", "10.4g"),
+                ("+-", "8.2g"),
+                ("c [1/kg]", "9.4g"),
+                ("+-", "8.2g"),
+                ("window", "<19"),
+                ("X [m]", "<19"),
+                ("linear", "<6"),
+            ],
+            [
+                (
+                    m.index,
+                    m.frequency,
+                    m.frequency_stderr,
+                    m.damping_ratio,
+                    m.damping_ratio_stderr,
+                    m.modal_constant,
+                    m.modal_constant_std,
+                    f"{format_value(m.window[0], 4)}-{format_value(m.window[1], 4)}",
+                    f"{format_value(m.amplitude_range[0], 3)}-{format_value(m.amplitude_range[1], 3)}",
+                    "-" if m.linear is None else ("yes" if m.linear else "no"),
+                )
+                for m in self.modes
+            ],
+        )
         if any(m.positions for m in self.modes):
             lines.append("  shapes (displacement at the window start, one phase per mode):")
-            lines += table_lines([("mode", "4d"), ("sensor", "<8"), ("x [m]", "<8"),
-                                  ("real [m]", "11.4e"), ("+-", "9.2e"), ("imag [m]", "11.4e"),
-                                  ("+-", "9.2e")],
-                                 [(i, s, format_value(p, 4) if not isinstance(p, tuple)
-                                   else str(p), r, er, im, ei)
-                                  for i, s, p, r, er, im, ei in self._shape_rows()])
+            lines += table_lines(
+                [
+                    ("mode", "4d"),
+                    ("sensor", "<8"),
+                    ("x [m]", "<8"),
+                    ("real [m]", "11.4e"),
+                    ("+-", "9.2e"),
+                    ("imag [m]", "11.4e"),
+                    ("+-", "9.2e"),
+                ],
+                [
+                    (
+                        i,
+                        s,
+                        format_value(p, 4) if not isinstance(p, tuple) else str(p),
+                        r,
+                        er,
+                        im,
+                        ei,
+                    )
+                    for i, s, p, r, er, im, ei in self._shape_rows()
+                ],
+            )
         for w in self.warnings:
             lines += wrap(f"  warning: {w}", indent="    ")
         return "\n".join(lines)
@@ -399,10 +537,16 @@ class ModalTargets(ResultShape):
             order = np.argsort(x)
             v = m.shape.real[order]
             scale = float(np.max(np.abs(v))) or 1.0
-            eb = a.errorbar(x[order], v / scale, yerr=m.shape_std[order, 0] / scale,
-                            marker="o", ls="-", label=f"mode {m.index}: {m.frequency:.5g} Hz")
+            eb = a.errorbar(
+                x[order],
+                v / scale,
+                yerr=m.shape_std[order, 0] / scale,
+                marker="o",
+                ls="-",
+                label=f"mode {m.index}: {m.frequency:.5g} Hz",
+            )
             artists += [eb.lines[0], *eb.lines[2]]
-        if not artists:        # no shapes (an FRF fit): the frequencies with their errors
+        if not artists:  # no shapes (an FRF fit): the frequencies with their errors
             f = [m.frequency for m in self.modes] or [0.0]
             artists += a.plot(range(1, len(f) + 1), f, "o")
             a.set_xlabel("mode")

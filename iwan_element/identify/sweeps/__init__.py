@@ -4,6 +4,7 @@
 
 Imports :mod:`iwan_element.base`, :mod:`iwan_element.fitting` and :mod:`..modal` only.
 """
+
 from .frf_modes import frf_modes, sweep_modes
 from .stepped_sine import stepped_sine_curve
 from .sweep import sweep_curve

@@ -14,6 +14,7 @@ of the complex receptance with relative residuals ``(H_model - H) / |H|``
 level where the structure is linear: a sweep's response range is reported with the result,
 and a fit whose relative misfit exceeds 5 % is flagged.
 """
+
 from __future__ import annotations
 
 import math
@@ -56,9 +57,15 @@ def _fit(W, H, residual):
         return np.concatenate([r.real, r.imag])
 
     n_p = 4 if residual else 3
-    sol = optimize.least_squares(lambda x: res(np.append(x, 0.0) if n_p == 3 else x),
-                                 x0[:n_p], method="lm", x_scale="jac", xtol=1e-14,
-                                 ftol=1e-14, max_nfev=4000)
+    sol = optimize.least_squares(
+        lambda x: res(np.append(x, 0.0) if n_p == 3 else x),
+        x0[:n_p],
+        method="lm",
+        x_scale="jac",
+        xtol=1e-14,
+        ftol=1e-14,
+        max_nfev=4000,
+    )
     x = sol.x if n_p == 4 else np.append(sol.x, 0.0)
     r = res(x)
     dof = max(r.size - n_p, 1)
@@ -76,24 +83,39 @@ def _targets(W, H, X, label, residual, source, notes):
     if not ok:
         warns.append("the single-mode fit did not converge")
     if not (W.min() <= p[0] <= W.max()):
-        raise ValueError(f"the points hold no resonance: the fitted natural frequency "
-                         f"{p[0] / 2 / math.pi:.5g} Hz lies outside f "
-                         f"({W.min() / 2 / math.pi:.5g}-{W.max() / 2 / math.pi:.5g} Hz)")
+        raise ValueError(
+            f"the points hold no resonance: the fitted natural frequency "
+            f"{p[0] / 2 / math.pi:.5g} Hz lies outside f "
+            f"({W.min() / 2 / math.pi:.5g}-{W.max() / 2 / math.pi:.5g} Hz)"
+        )
     if not 0 < p[1] < 0.5:
-        raise ValueError(f"the single-mode fit gives a damping ratio of {p[1]:.3g}: not a "
-                         "lightly damped resonance (check the phase convention)")
+        raise ValueError(
+            f"the single-mode fit gives a damping ratio of {p[1]:.3g}: not a "
+            "lightly damped resonance (check the phase convention)"
+        )
     if rms > _MISFIT:
-        warns.append(f"one linear mode fits the points to only {100 * rms:.2g} % rms: the "
-                     "level is not linear, another mode is near, or the phase is not that of "
-                     "the response relative to the force")
-    mode = ModeTarget(index=1, label=label, frequency=p[0] / (2 * math.pi),
-                      frequency_std=se[0] / (2 * math.pi), damping_ratio=p[1],
-                      damping_ratio_std=se[1], modal_constant=p[2], modal_constant_std=se[2],
-                      window=(float(W.min() / 2 / math.pi), float(W.max() / 2 / math.pi)),
-                      amplitude_range=(float(X.min()), float(X.max())),
-                      method="single-mode receptance least squares")
-    notes = (f"{notes}; {W.size} points, residual B = {p[3]:.4g} m/N (+-{se[3]:.2g}); "
-             f"rms relative misfit {rms:.2g}")
+        warns.append(
+            f"one linear mode fits the points to only {100 * rms:.2g} % rms: the "
+            "level is not linear, another mode is near, or the phase is not that of "
+            "the response relative to the force"
+        )
+    mode = ModeTarget(
+        index=1,
+        label=label,
+        frequency=p[0] / (2 * math.pi),
+        frequency_std=se[0] / (2 * math.pi),
+        damping_ratio=p[1],
+        damping_ratio_std=se[1],
+        modal_constant=p[2],
+        modal_constant_std=se[2],
+        window=(float(W.min() / 2 / math.pi), float(W.max() / 2 / math.pi)),
+        amplitude_range=(float(X.min()), float(X.max())),
+        method="single-mode receptance least squares",
+    )
+    notes = (
+        f"{notes}; {W.size} points, residual B = {p[3]:.4g} m/N (+-{se[3]:.2g}); "
+        f"rms relative misfit {rms:.2g}"
+    )
     return ModalTargets(modes=(mode,), source=source, notes=notes, warnings=tuple(warns))
 
 
@@ -102,12 +124,14 @@ def _complex_array(name, v) -> np.ndarray:
     try:
         return np.array(v, dtype=complex, copy=True)
     except (TypeError, ValueError):
-        raise ValueError(f"{name} must be an array of complex numbers, got "
-                         f"{type(v).__name__}") from None
+        raise ValueError(
+            f"{name} must be an array of complex numbers, got {type(v).__name__}"
+        ) from None
 
 
-def frf_modes(f, H, *, quantity: str = "displacement", residual: bool = True,
-              label: str = "frf") -> ModalTargets:
+def frf_modes(
+    f, H, *, quantity: str = "displacement", residual: bool = True, label: str = "frf"
+) -> ModalTargets:
     """Natural frequency, damping ratio and modal constant from a low-level complex FRF.
 
     Parameters
@@ -142,17 +166,26 @@ def frf_modes(f, H, *, quantity: str = "displacement", residual: bool = True,
         raise ValueError("f must be > 0 [Hz] and distinct")
     Hc = _complex_array("H", H)
     if Hc.shape != ff.shape or not np.all(np.isfinite(Hc)) or np.any(Hc == 0):
-        raise ValueError(f"H must be finite, non-zero and of the shape of f {ff.shape}, got "
-                         f"{Hc.shape}")
+        raise ValueError(
+            f"H must be finite, non-zero and of the shape of f {ff.shape}, got {Hc.shape}"
+        )
     order = np.argsort(ff)
     W = 2 * math.pi * ff[order]
     Hd = Hc[order] / (1j * W) ** _POWER[quantity]
-    return _targets(W, Hd, np.abs(Hd), str(label), residual, "frf",
-                    f"complex FRF ({quantity})")
+    return _targets(W, Hd, np.abs(Hd), str(label), residual, "frf", f"complex FRF ({quantity})")
 
 
-def sweep_modes(f, F, response, phase, *, level=None, quantity: str = "acceleration",
-                residual: bool = True, label: str = "sweep") -> ModalTargets:
+def sweep_modes(
+    f,
+    F,
+    response,
+    phase,
+    *,
+    level=None,
+    quantity: str = "acceleration",
+    residual: bool = True,
+    label: str = "sweep",
+) -> ModalTargets:
     """Natural frequency, damping ratio and modal constant from low-level sweep points.
 
     Every point (drive frequency, fundamental force and response amplitudes, response phase
@@ -193,12 +226,17 @@ def sweep_modes(f, F, response, phase, *, level=None, quantity: str = "accelerat
     X = arrs["response"] / W ** _POWER[quantity]
     phd, conv_note, _ = _convention(W, X, arrs["F"], arrs["phase"], sweeps, quantity)
     H = X * np.exp(1j * phd) / arrs["F"]
-    out = _targets(W, H, X, str(label), residual, "sweep",
-                   f"{len(sweeps)} sweep(s), {conv_note}")
+    out = _targets(W, H, X, str(label), residual, "sweep", f"{len(sweeps)} sweep(s), {conv_note}")
     if np.ptp(np.log(X)) > math.log(3.0):
-        out = ModalTargets(modes=out.modes, source=out.source, notes=out.notes,
-                           warnings=out.warnings + (
-                               f"the points span displacement amplitudes "
-                               f"{X.min():.3g}-{X.max():.3g} m (more than a factor of 3): a "
-                               "nonlinear structure is not linear over all of them",))
+        out = ModalTargets(
+            modes=out.modes,
+            source=out.source,
+            notes=out.notes,
+            warnings=out.warnings
+            + (
+                f"the points span displacement amplitudes "
+                f"{X.min():.3g}-{X.max():.3g} m (more than a factor of 3): a "
+                "nonlinear structure is not linear over all of them",
+            ),
+        )
     return out

@@ -32,6 +32,7 @@ smallest peak response (assumed nearly linear: a warning says so), and each leve
 at its peak line ``w_p``, where the response is ``X = |H_d(w_p)| F``, by inverting the
 single-mode model there, other modes neglected: ``A / H_d = w_r**2 - w_p**2 + 2 i zeta w_r**2``.
 """
+
 from __future__ import annotations
 
 import math
@@ -52,13 +53,16 @@ def _level_arrays(i, level):
     try:
         f, H, amp = level
     except (TypeError, ValueError):
-        raise ValueError(f"levels[{i}] must be a triple (frequency [Hz], complex FRF, "
-                         "amplitude)") from None
+        raise ValueError(
+            f"levels[{i}] must be a triple (frequency [Hz], complex FRF, amplitude)"
+        ) from None
     f = np.array(f, dtype=float, copy=True)
     H = np.array(H, dtype=complex, copy=True)
     if f.ndim != 1 or H.shape != f.shape or f.size < 5:
-        raise ValueError(f"levels[{i}]: frequency and FRF must be 1-D of the same length >= 5, "
-                         f"got shapes {f.shape} and {H.shape}")
+        raise ValueError(
+            f"levels[{i}]: frequency and FRF must be 1-D of the same length >= 5, "
+            f"got shapes {f.shape} and {H.shape}"
+        )
     if not (np.all(np.isfinite(f)) and np.all(np.isfinite(H))):
         raise ValueError(f"levels[{i}]: frequency and FRF must be finite (no NaN)")
     if np.any(f <= 0) or np.unique(f).size != f.size:
@@ -78,14 +82,14 @@ def _peak_lines(Hd, frac):
     hi = k
     while hi < mag.size - 1 and mag[hi + 1] >= frac * mag[k]:
         hi += 1
-    if hi - lo + 1 < 5:                       # too few: the five lines nearest the peak
+    if hi - lo + 1 < 5:  # too few: the five lines nearest the peak
         lo = max(0, min(k - 2, mag.size - 5))
         hi = lo + 4
     return np.arange(lo, hi + 1), k
 
 
 def _linear_part(w, Hd, wr, zeta):
-    basis = np.column_stack([1.0 / (wr ** 2 - w ** 2 + 2j * zeta * wr * wr), np.ones_like(w)])
+    basis = np.column_stack([1.0 / (wr**2 - w**2 + 2j * zeta * wr * wr), np.ones_like(w)])
     coef, *_ = np.linalg.lstsq(basis, Hd, rcond=None)
     return coef, basis
 
@@ -99,19 +103,28 @@ def _fit_sdof(w, Hd, wr0, z0):
         r = (basis @ coef - Hd) / scale
         return np.concatenate([r.real, r.imag])
 
-    sol = optimize.least_squares(res2, [1.0, z0], bounds=([0.5, 1e-7], [2.0, 0.5]),
-                                 x_scale=[1e-3, z0], xtol=1e-14, ftol=1e-14, gtol=1e-14)
+    sol = optimize.least_squares(
+        res2,
+        [1.0, z0],
+        bounds=([0.5, 1e-7], [2.0, 0.5]),
+        x_scale=[1e-3, z0],
+        xtol=1e-14,
+        ftol=1e-14,
+        gtol=1e-14,
+    )
     wr, zeta = sol.x[0] * wr0, sol.x[1]
     (A, B), _ = _linear_part(w, Hd, wr, zeta)
 
     def res6(p):
-        m = (p[2] + 1j * p[3]) / (p[0] ** 2 - w ** 2 + 2j * p[1] * p[0] ** 2) + (p[4] + 1j * p[5])
+        m = (p[2] + 1j * p[3]) / (p[0] ** 2 - w**2 + 2j * p[1] * p[0] ** 2) + (p[4] + 1j * p[5])
         r = (m - Hd) / scale
         return np.concatenate([r.real, r.imag])
 
     p = np.array([wr, zeta, A.real, A.imag, B.real, B.imag])
-    steps = np.maximum(np.abs(p) * 1e-7, [1e-9 * wr, 1e-9, 1e-9 * abs(A), 1e-9 * abs(A),
-                                          1e-12 * scale, 1e-12 * scale])
+    steps = np.maximum(
+        np.abs(p) * 1e-7,
+        [1e-9 * wr, 1e-9, 1e-9 * abs(A), 1e-9 * abs(A), 1e-12 * scale, 1e-12 * scale],
+    )
     r0 = res6(p)
     J = np.empty((r0.size, 6))
     for j in range(6):
@@ -119,7 +132,7 @@ def _fit_sdof(w, Hd, wr0, z0):
         dp[j] = steps[j]
         J[:, j] = (res6(p + dp) - res6(p - dp)) / (2 * steps[j])
     dof = max(r0.size - 6, 1)
-    cov = covariance(J, r0, dof=dof).covariance        # docs/fitting.md section 1
+    cov = covariance(J, r0, dof=dof).covariance  # docs/fitting.md section 1
     return wr, zeta, A, B, math.sqrt(max(cov[0, 0], 0.0)), math.sqrt(max(cov[1, 1], 0.0))
 
 
@@ -148,9 +161,14 @@ def _force_levels(fits, modal_constant):
     return np.array(out)
 
 
-def stepped_sine_curve(levels, *, quantity: str = "displacement", control: str = "force",
-                       peak_fraction: float = 0.5,
-                       modal_constant: float | None = None) -> AmplitudeCurve:
+def stepped_sine_curve(
+    levels,
+    *,
+    quantity: str = "displacement",
+    control: str = "force",
+    peak_fraction: float = 0.5,
+    modal_constant: float | None = None,
+) -> AmplitudeCurve:
     """Resonance frequency and damping ratio per stepped-sine level, as an amplitude curve.
 
     Parameters
@@ -192,11 +210,16 @@ def stepped_sine_curve(levels, *, quantity: str = "displacement", control: str =
     if control not in ("force", "response"):
         raise ValueError(f"control must be 'force' or 'response', got {control!r}")
     frac = check_scalar("peak_fraction", peak_fraction, low=0.1, high=0.95)
-    A_given = None if modal_constant is None else check_scalar(
-        "modal_constant", modal_constant, low=0.0, low_open=True)
+    A_given = (
+        None
+        if modal_constant is None
+        else check_scalar("modal_constant", modal_constant, low=0.0, low_open=True)
+    )
     if isinstance(levels, (str, bytes, dict)) or not hasattr(levels, "__iter__"):
-        raise ValueError(f"levels must be a sequence of (frequency, frf, amplitude) triples, "
-                         f"got {type(levels).__name__}")
+        raise ValueError(
+            f"levels must be a sequence of (frequency, frf, amplitude) triples, "
+            f"got {type(levels).__name__}"
+        )
     levels = list(levels)
     if not levels:
         raise ValueError("levels must hold at least one (frequency, frf, amplitude) triple")
@@ -211,25 +234,54 @@ def stepped_sine_curve(levels, *, quantity: str = "displacement", control: str =
         span = (w[idx[-1]] - w[idx[0]]) / wr0
         wr, zeta, A, B, swr, sz = _fit_sdof(w[idx], Hd[idx], wr0, max(0.25 * span, 1e-5))
         if not (w[0] <= wr <= w[-1]) or zeta >= 0.5 or zeta <= 1.5e-7:
-            raise ValueError(f"levels[{i}] holds no resonance peak within its lines "
-                             f"({f[0]:.4g}-{f[-1]:.4g} Hz): the single-mode fit gives "
-                             f"f_r = {wr / 2 / math.pi:.4g} Hz, zeta = {zeta:.3g}")
-        rows.append((amp / wr ** k, wr / (2 * math.pi), zeta, swr / (2 * math.pi), sz))
-        fits.append((w[kp], Hd[kp], amp, A, B, abs(A / (2j * zeta * wr * wr) + B) * amp, wr,
-                     zeta, swr / (2 * math.pi), sz))
+            raise ValueError(
+                f"levels[{i}] holds no resonance peak within its lines "
+                f"({f[0]:.4g}-{f[-1]:.4g} Hz): the single-mode fit gives "
+                f"f_r = {wr / 2 / math.pi:.4g} Hz, zeta = {zeta:.3g}"
+            )
+        rows.append((amp / wr**k, wr / (2 * math.pi), zeta, swr / (2 * math.pi), sz))
+        fits.append(
+            (
+                w[kp],
+                Hd[kp],
+                amp,
+                A,
+                B,
+                abs(A / (2j * zeta * wr * wr) + B) * amp,
+                wr,
+                zeta,
+                swr / (2 * math.pi),
+                sz,
+            )
+        )
     a = np.array(rows)
     warns = []
     if control == "force":
         a = _force_levels(fits, A_given)
         if A_given is None and len(levels) > 1:
-            warns.append("force control without modal_constant: the modal constant was taken "
-                         "from the smallest level, assumed linear; if that level is already "
-                         "nonlinear the damping ratios are biased (give modal_constant)")
-    notes = (f"{len(levels)} {control}-controlled levels ({quantity}); single-mode receptance "
-             f"fit A/(w_r^2 - w^2 + 2i zeta w_r^2) + B on the lines above {frac:g} x peak"
-             + ("; force control: each level read at its peak line with one real modal constant"
-                if control == "force" else ""))
+            warns.append(
+                "force control without modal_constant: the modal constant was taken "
+                "from the smallest level, assumed linear; if that level is already "
+                "nonlinear the damping ratios are biased (give modal_constant)"
+            )
+    notes = (
+        f"{len(levels)} {control}-controlled levels ({quantity}); single-mode receptance "
+        f"fit A/(w_r^2 - w^2 + 2i zeta w_r^2) + B on the lines above {frac:g} x peak"
+        + (
+            "; force control: each level read at its peak line with one real modal constant"
+            if control == "force"
+            else ""
+        )
+    )
     if len(levels) < 3:
         warns.append(f"only {len(levels)} level(s): too few to show an amplitude dependence")
-    return AmplitudeCurve(a[:, 0], a[:, 1], a[:, 2], frequency_std=a[:, 3], damping_ratio_std=a[:, 4],
-                          method="stepped-sine", notes=notes, warnings=tuple(warns))
+    return AmplitudeCurve(
+        a[:, 0],
+        a[:, 1],
+        a[:, 2],
+        frequency_std=a[:, 3],
+        damping_ratio_std=a[:, 4],
+        method="stepped-sine",
+        notes=notes,
+        warnings=tuple(warns),
+    )

@@ -25,6 +25,7 @@ fitted ``c`` and ``B``, and the points are averaged in bins of ``ln X`` (inverse
 weights from the propagated receptance error); the bin's standard error combines the larger
 of the propagated and the observed scatter with the uncertainty of ``c`` and ``B``.
 """
+
 from __future__ import annotations
 
 import logging
@@ -44,10 +45,14 @@ log = logging.getLogger(__name__)
 
 _POWER = {"displacement": 0, "velocity": 1, "acceleration": 2}
 #: phase of each response quantity at a resonance, for a positive modal constant
-_CLASS = {-0.5: "receptance-like (displacement)", 0.0: "velocity-like (mobility)",
-          0.5: "accelerance-like", 1.0: "inverted velocity-like"}
+_CLASS = {
+    -0.5: "receptance-like (displacement)",
+    0.0: "velocity-like (mobility)",
+    0.5: "accelerance-like",
+    1.0: "inverted velocity-like",
+}
 _EXPECTED = {"displacement": -0.5, "velocity": 0.0, "acceleration": 0.5}
-_PHASE_TOL = math.pi / 6          # largest distance of the resonance phase from its class
+_PHASE_TOL = math.pi / 6  # largest distance of the resonance phase from its class
 #: Largest velocity amplitude [m/s] a vibration test of a jointed structure reaches; a
 #: response read as displacement beyond it is another quantity (issue 34 case 7: acceleration
 #: declared displacement moved at thousands of m/s).
@@ -63,12 +68,15 @@ def _inputs(f, F, response, phase, level):
         if np.any(arrs[name] <= 0):
             raise ValueError(f"{name} must be > 0 [{unit}] (amplitudes, not signed values)")
     if np.max(np.abs(arrs["phase"])) > 2 * math.pi + 1e-9:
-        raise ValueError(f"phase must be in radians (|phase| <= 2 pi), got values up to "
-                         f"{np.max(np.abs(arrs['phase'])):.4g}: it looks like degrees")
+        raise ValueError(
+            f"phase must be in radians (|phase| <= 2 pi), got values up to "
+            f"{np.max(np.abs(arrs['phase'])):.4g}: it looks like degrees"
+        )
     lab = _split(arrs["f"]) if level is None else np.asarray(level)
     if lab.shape != arrs["f"].shape:
-        raise ValueError(f"level must hold one label per point ({arrs['f'].size}), "
-                         f"got shape {lab.shape}")
+        raise ValueError(
+            f"level must hold one label per point ({arrs['f'].size}), got shape {lab.shape}"
+        )
     sweeps = []
     for v in dict.fromkeys(lab.tolist()):
         idx = np.flatnonzero(lab == v)
@@ -77,12 +85,18 @@ def _inputs(f, F, response, phase, level):
         n_distinct = np.unique(fv).size
         if idx.size < 5 or n_distinct != idx.size:
             rep = np.unique(fv[1:][np.diff(fv) == 0])
-            again = (f"; f repeats {rep.size} frequenc{'y' if rep.size == 1 else 'ies'} "
-                     f"({', '.join(f'{x:g}' for x in rep[:4])} Hz): give level= to tell "
-                     "sweeps apart, or average the repeats" if rep.size else "")
-            raise ValueError(f"level {v!r}: a sweep must have >= 5 points at distinct "
-                             f"frequencies, got {idx.size} points at {n_distinct} distinct "
-                             f"frequencies{again}")
+            again = (
+                f"; f repeats {rep.size} frequenc{'y' if rep.size == 1 else 'ies'} "
+                f"({', '.join(f'{x:g}' for x in rep[:4])} Hz): give level= to tell "
+                "sweeps apart, or average the repeats"
+                if rep.size
+                else ""
+            )
+            raise ValueError(
+                f"level {v!r}: a sweep must have >= 5 points at distinct "
+                f"frequencies, got {idx.size} points at {n_distinct} distinct "
+                f"frequencies{again}"
+            )
         sweeps.append(idx)
     return arrs, sweeps
 
@@ -116,8 +130,7 @@ def _groups(lx, n_bins):
     for a, b in zip(cuts[:-1], cuts[1:]):
         seg = srt[a:b]
         k = max(1, int(math.ceil((seg[-1] - seg[0]) / width - 1e-9)))
-        piece = np.minimum(((seg - seg[0]) / max(seg[-1] - seg[0], 1e-300) * k).astype(int),
-                           k - 1)
+        piece = np.minimum(((seg - seg[0]) / max(seg[-1] - seg[0], 1e-300) * k).astype(int), k - 1)
         out[order[a:b]] = g + piece
         g += k
     return out, g
@@ -146,16 +159,22 @@ def _convention(W, X, F, ph, sweeps, quantity):
     """
     stats = [s for s in (_sweep_phase(W[i], X[i] / F[i], ph[i]) for i in sweeps) if s]
     if not stats:
-        raise ValueError("no sweep has its response peak inside its frequencies: the phase "
-                         "convention cannot be told (sweep through the resonance)")
+        raise ValueError(
+            "no sweep has its response peak inside its frequencies: the phase "
+            "convention cannot be told (sweep through the resonance)"
+        )
     span = max(s[2] for s in stats)
     if span < math.pi / 4:
-        raise ValueError(f"phase varies by only {span:.3g} rad along the sweeps: it does not "
-                         "pass through a resonance, so its convention cannot be told")
+        raise ValueError(
+            f"phase varies by only {span:.3g} rad along the sweeps: it does not "
+            "pass through a resonance, so its convention cannot be told"
+        )
     signs = {s[1] for s in stats}
     if len(signs) != 1 or 0.0 in signs:
-        raise ValueError("phase falls with frequency in some sweeps and rises in others: "
-                         "the phase convention cannot be told")
+        raise ValueError(
+            "phase falls with frequency in some sweeps and rises in others: "
+            "the phase convention cannot be told"
+        )
     sign = signs.pop()
     res = np.array([s[0] for s in stats]) * (-sign)
     mean = math.atan2(np.mean(np.sin(math.pi * res)), np.mean(np.cos(math.pi * res))) / math.pi
@@ -163,16 +182,20 @@ def _convention(W, X, F, ph, sweeps, quantity):
     cls = 1.0 if cls == -1.0 else cls
     dist = abs((mean - cls + 1) % 2 - 1) * math.pi
     if dist > _PHASE_TOL:
-        raise ValueError(f"phase at the response peak is {mean * math.pi:.3g} rad, "
-                         f"{dist:.2g} rad from the nearest of -pi/2, 0, pi/2, pi: the phase "
-                         "convention cannot be told (is it the phase of the response relative "
-                         "to the force, in rad?)")
+        raise ValueError(
+            f"phase at the response peak is {mean * math.pi:.3g} rad, "
+            f"{dist:.2g} rad from the nearest of -pi/2, 0, pi/2, pi: the phase "
+            "convention cannot be told (is it the phase of the response relative "
+            "to the force, in rad?)"
+        )
     phd = -sign * ph - (cls + 0.5) * math.pi
     note = f"phase {_CLASS[cls]}" + (", rising with frequency (conjugated)" if sign > 0 else "")
     if cls != _EXPECTED[quantity]:
-        note += (f" although the response is {quantity}: the sign of the response or of the "
-                 "force is inverted, or the phase is not that of the given quantity; read as "
-                 f"the displacement phase after adding {-(cls + 0.5) % 2:g} pi")
+        note += (
+            f" although the response is {quantity}: the sign of the response or of the "
+            "force is inverted, or the phase is not that of the given quantity; read as "
+            f"the displacement phase after adding {-(cls + 0.5) % 2:g} pi"
+        )
     return phd, note, cls
 
 
@@ -190,12 +213,17 @@ def _quantity_failure(cls, quantity, W, X):
     v = float(np.max(W * X))
     if shift == 1 and v <= _V_MAX:
         return ""
-    why = (f"read as {quantity} it moves at up to {v:.3g} m/s, beyond any vibration test "
-           f"({_V_MAX:g} m/s)" if shift == 1 else "a quarter period off, which no sign "
-           "convention gives")
-    return (f"the phase at resonance is {_CLASS[cls]} although quantity={quantity!r} ({why}): "
-            + (f"the response is likely {fits[0]} (give quantity={fits[0]!r}); " if fits
-               else "") + "the curve is not usable until the quantity is checked")
+    why = (
+        f"read as {quantity} it moves at up to {v:.3g} m/s, beyond any vibration test "
+        f"({_V_MAX:g} m/s)"
+        if shift == 1
+        else "a quarter period off, which no sign convention gives"
+    )
+    return (
+        f"the phase at resonance is {_CLASS[cls]} although quantity={quantity!r} ({why}): "
+        + (f"the response is likely {fits[0]} (give quantity={fits[0]!r}); " if fits else "")
+        + "the curve is not usable until the quantity is checked"
+    )
 
 
 class _Model:
@@ -216,15 +244,15 @@ class _Model:
     def curves(self, p, V=None):
         V = self.V if V is None else V
         n = self.deg + 1
-        wr2 = self.w0 ** 2 * (1.0 + V @ p[2:2 + n])
-        zeta = np.exp(np.clip(V @ p[2 + n:], -50, 5))
+        wr2 = self.w0**2 * (1.0 + V @ p[2 : 2 + n])
+        zeta = np.exp(np.clip(V @ p[2 + n :], -50, 5))
         return wr2, zeta
 
     def receptance(self, p):
         c = math.exp(p[0])
         wr2, zeta = self.curves(p)
         wr = np.sqrt(np.abs(wr2))
-        return c / (wr2 - self.W ** 2 + 2j * zeta * wr * self.W) + p[1] * c / self.w0 ** 2
+        return c / (wr2 - self.W**2 + 2j * zeta * wr * self.W) + p[1] * c / self.w0**2
 
     def resid(self, p):
         if not self.residual:
@@ -249,14 +277,22 @@ def _fit(W, X, H, sweeps, deg, residual):
     wr0, z0, c0, B0 = _start(W, X, H, sweeps)
     m = _Model(W, X, H, wr0, deg, residual)
     n = deg + 1
-    x0 = np.concatenate([[math.log(c0)], [B0 * wr0 ** 2 / c0] if residual else [],
-                         np.zeros(n), [math.log(z0)], np.zeros(n - 1)])
-    sol = optimize.least_squares(m.resid, x0, method="lm", x_scale="jac", xtol=1e-12,
-                                 ftol=1e-12, max_nfev=2000 * x0.size)
+    x0 = np.concatenate(
+        [
+            [math.log(c0)],
+            [B0 * wr0**2 / c0] if residual else [],
+            np.zeros(n),
+            [math.log(z0)],
+            np.zeros(n - 1),
+        ]
+    )
+    sol = optimize.least_squares(
+        m.resid, x0, method="lm", x_scale="jac", xtol=1e-12, ftol=1e-12, max_nfev=2000 * x0.size
+    )
     dof = max(2 * W.size - x0.size, 1)
     rms = math.sqrt(2.0 * sol.cost / dof)
     J = sol.jac
-    cov = covariance(J, s2=rms ** 2).covariance         # docs/fitting.md section 1
+    cov = covariance(J, s2=rms**2).covariance  # docs/fitting.md section 1
     log.debug("sweep fit: %s, rms relative error %.3g", sol.message, rms)
     return m, m.full(sol.x), cov, rms, bool(sol.success)
 
@@ -264,14 +300,14 @@ def _fit(W, X, H, sweeps, deg, residual):
 def _invert(W, H, c, B):
     """Natural frequency [rad/s] and damping ratio of each point (single-mode inversion)."""
     G = c / (H - B)
-    wr = np.sqrt(np.maximum(W ** 2 + G.real, 1e-300))
+    wr = np.sqrt(np.maximum(W**2 + G.real, 1e-300))
     return wr, G.imag / (2.0 * wr * W)
 
 
 def _point_std(W, H, c, B, rel):
     """Std of each point's w_r and zeta from a relative receptance error ``rel`` per component."""
     G = c / (H - B)
-    wr = np.sqrt(np.maximum(W ** 2 + G.real, 1e-300))
+    wr = np.sqrt(np.maximum(W**2 + G.real, 1e-300))
     dG = np.abs(G) * rel * np.abs(H) / np.abs(H - B)
     return dG / (2.0 * wr), dG / (2.0 * wr * W)
 
@@ -321,9 +357,19 @@ def _binned(W, F, H, keep, c, B, cov_cB, rel, n_bins):
     return amp, mw[ok, 0], mz[ok, 0], sw, sz, excess
 
 
-def sweep_curve(f, F, response, phase, *, level=None, quantity: str = "acceleration",
-                peak_fraction: float = 0.2, degree: int = 3, residual: bool = True,
-                bins: int | None = None) -> AmplitudeCurve:
+def sweep_curve(
+    f,
+    F,
+    response,
+    phase,
+    *,
+    level=None,
+    quantity: str = "acceleration",
+    peak_fraction: float = 0.2,
+    degree: int = 3,
+    residual: bool = True,
+    bins: int | None = None,
+) -> AmplitudeCurve:
     """Frequency and damping ratio against amplitude from every point of stepped-sine sweeps.
 
     Single-nonlinear-mode reading of force- or response-controlled sweeps measured at the
@@ -385,8 +431,9 @@ def sweep_curve(f, F, response, phase, *, level=None, quantity: str = "accelerat
     deg = int(check_scalar("degree", degree, low=1, high=5))
     if deg != degree:
         raise ValueError(f"degree must be an integer in [1, 5], got {degree!r}")
-    if bins is not None and (isinstance(bins, bool) or not isinstance(bins, (int, np.integer))
-                             or not 1 <= bins <= 50):
+    if bins is not None and (
+        isinstance(bins, bool) or not isinstance(bins, (int, np.integer)) or not 1 <= bins <= 50
+    ):
         raise ValueError(f"bins must be an integer in [1, 50] or None, got {bins!r}")
     arrs, sweeps = _inputs(f, F, response, phase, level)
     W = 2.0 * math.pi * arrs["f"]
@@ -395,27 +442,39 @@ def sweep_curve(f, F, response, phase, *, level=None, quantity: str = "accelerat
     failure = _quantity_failure(cls, quantity, W, X)
     H = X * np.exp(1j * phd) / arrs["F"]
     if max(float(np.ptp(np.log(X[i]))) for i in sweeps) < 0.1:
-        deg = min(deg, len(sweeps) - 1)     # response held within 10 %: one amplitude a sweep
+        deg = min(deg, len(sweeps) - 1)  # response held within 10 %: one amplitude a sweep
     r = _identify(W, H, arrs["F"], sweeps, deg, residual, frac, bins)
     amp, wr, z, sw, sz = r["curve"]
     c, B, keep, n_bins, rms = r["c"], r["B"], r["keep"], r["n_bins"], r["rms"]
     if np.any(z >= 0.1):
-        raise ValueError(f"the single-mode inversion gives damping ratios up to {z.max():.3g}: "
-                         "not a lightly damped single mode (check the phase and that the "
-                         "response is co-located with the force)")
+        raise ValueError(
+            f"the single-mode inversion gives damping ratios up to {z.max():.3g}: "
+            "not a lightly damped single mode (check the phase and that the "
+            "response is co-located with the force)"
+        )
     deg = r["deg"]
-    notes = (f"{len(sweeps)} sweeps, {W.size} points ({keep.sum()} inverted, |X/F| >= {frac:g} "
-             f"x sweep peak, X {r['span'][0]:.3g}-{r['span'][1]:.3g} m); {conv_note}; modal constant c = {c:.5g} 1/kg, residual B = "
-             f"{B:.4g} m/N; smooth curves of degree {deg} in ln X; fit rms relative error "
-             f"{rms:.2g}; bins: {len(amp)} of {n_bins} in ln X")
-    return AmplitudeCurve(amp, wr / (2 * math.pi), z, frequency_std=sw / (2 * math.pi),
-                          damping_ratio_std=sz, method="stepped-sine-sweep", notes=notes,
-                          warnings=r["warnings"], failures=(failure,) if failure else ())
+    notes = (
+        f"{len(sweeps)} sweeps, {W.size} points ({keep.sum()} inverted, |X/F| >= {frac:g} "
+        f"x sweep peak, X {r['span'][0]:.3g}-{r['span'][1]:.3g} m); {conv_note}; modal constant c = {c:.5g} 1/kg, residual B = "
+        f"{B:.4g} m/N; smooth curves of degree {deg} in ln X; fit rms relative error "
+        f"{rms:.2g}; bins: {len(amp)} of {n_bins} in ln X"
+    )
+    return AmplitudeCurve(
+        amp,
+        wr / (2 * math.pi),
+        z,
+        frequency_std=sw / (2 * math.pi),
+        damping_ratio_std=sz,
+        method="stepped-sine-sweep",
+        notes=notes,
+        warnings=r["warnings"],
+        failures=(failure,) if failure else (),
+    )
 
 
 def _identify(W, H, F, sweeps, deg, residual, frac, bins):
     """Fit ``c`` and ``B``, invert the kept points and bin them (see the module docstring)."""
-    scale = float(np.max(np.abs(H)))        # fit in units of the largest receptance
+    scale = float(np.max(np.abs(H)))  # fit in units of the largest receptance
     H = H / scale
     X = np.abs(H) * F * scale
     warns = []
@@ -423,7 +482,7 @@ def _identify(W, H, F, sweeps, deg, residual, frac, bins):
         deg = 1
         warns.append("one sweep at one amplitude: the amplitude dependence is not identified")
     m, x, cov, rms, ok = _fit(W, X, H, sweeps, deg, residual)
-    c, B = math.exp(x[0]), x[1] * math.exp(x[0]) / m.w0 ** 2
+    c, B = math.exp(x[0]), x[1] * math.exp(x[0]) / m.w0**2
     cov_cB = _cov_cB(x, cov, m.w0, residual)
     keep = np.zeros(W.size, bool)
     for i in sweeps:
@@ -433,9 +492,17 @@ def _identify(W, H, F, sweeps, deg, residual, frac, bins):
     log.debug("bin scatter / propagated error: median %.3g", excess)
     warns += _warnings(ok, rms, z, amp)
     Xk = np.abs(H[keep] - B) * F[keep] * scale
-    return {"curve": (amp, wr, z, sw, sz), "c": c * scale, "B": B * scale, "keep": keep,
-            "span": (float(Xk.min()), float(Xk.max())),
-            "n_bins": n_bins, "rms": rms, "deg": deg, "warnings": tuple(warns)}
+    return {
+        "curve": (amp, wr, z, sw, sz),
+        "c": c * scale,
+        "B": B * scale,
+        "keep": keep,
+        "span": (float(Xk.min()), float(Xk.max())),
+        "n_bins": n_bins,
+        "rms": rms,
+        "deg": deg,
+        "warnings": tuple(warns),
+    }
 
 
 def _cov_cB(x, cov, w0, residual):
@@ -443,7 +510,7 @@ def _cov_cB(x, cov, w0, residual):
     c = math.exp(x[0])
     if not residual:
         return np.array([[c * c * cov[0, 0]]])
-    Jt = np.array([[c, 0.0], [x[1] * c / w0 ** 2, c / w0 ** 2]])
+    Jt = np.array([[c, 0.0], [x[1] * c / w0**2, c / w0**2]])
     return Jt @ cov[:2, :2] @ Jt.T
 
 
@@ -452,8 +519,10 @@ def _warnings(ok, rms, z, amp):
     if not ok:
         warns.append("the fit of the modal constant did not converge")
     if rms > 0.1:
-        warns.append(f"the single nonlinear mode fits the sweeps to only {100 * rms:.2g} % rms "
-                     "(another mode nearby, or not a drive-point measurement?)")
+        warns.append(
+            f"the single nonlinear mode fits the sweeps to only {100 * rms:.2g} % rms "
+            "(another mode nearby, or not a drive-point measurement?)"
+        )
     if np.any(z <= 0):
         warns.append("some bins have a damping ratio <= 0 (noise or a wrong phase reference)")
     if amp.size < 3:
