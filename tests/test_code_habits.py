@@ -61,11 +61,6 @@ def test_ruff_check_finds_nothing():
     assert res.returncode == 0, f"ruff check: {counts}\n{res.stdout[-3000:]}"
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="issue 44: `ruff format` rewrites 282 of the 287 Python "
-    "files on the tree of 2026-12-07; applied once after the rooms' merge",
-)
 def test_ruff_format_changes_nothing():
     res = _run("ruff", "format", "--check", "--no-cache", ".")
     assert res.returncode == 0, f"ruff format would change:\n{res.stdout[-3000:]}"
