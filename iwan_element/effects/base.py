@@ -48,7 +48,8 @@ class ParamSpec:
         Reference scale of the dimensionless fitting variable: ``"u_max"`` (largest |u|),
         ``"v_rms"``, ``"D_ref"`` (energy dissipated by the plain unit-``Fs`` fit over the
         record) or ``"1"`` for loops; ``"zeta_ref"``, ``"omega2_ref"``, ``"X_max"``,
-        ``"omega2_per_X2"`` (``omega2_ref / X_max**2``) for modal forms. The fit works on ``z = (value / Fs**fs_power) * ref**ref_power``.
+        ``"omega2_per_X2"`` (``omega2_ref / X_max**2``) for modal forms. The fit works on
+        ``z = (value / Fs**fs_power) * ref**ref_power``.
     ref_power : int
         Exponent of ``ref`` in the fitting variable.
     fit_bounds : tuple of float

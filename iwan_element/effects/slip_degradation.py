@@ -74,6 +74,8 @@ class SlipDegradation(SliderEffect):
 
     effect = "slip_degradation"
     loop_rank = 40
+    # the parameters, stored by _set_parameters from specs (SI units)
+    rate: float
     specs = (
         ParamSpec(
             "rate",

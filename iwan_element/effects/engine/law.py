@@ -199,7 +199,7 @@ class LawEffect(Effect):
         return int(self._pieces.state.shape[1])
 
     def correction_history(self, u, D_inner=None) -> np.ndarray:
-        """This element's force minus its inner element's [N] along a displacement history
+        """The element's force minus its inner element's [N] along a displacement history
         ``u`` [m] from the virgin state (private state; this element is untouched): one
         vectorised evaluation per monotone run of ``u`` (:func:`law_history`), equal to the
         step-by-step rule of :meth:`trial`/:meth:`commit`. ``D_inner`` is not used.
