@@ -126,6 +126,10 @@ class IwanJoint(CommittedState):
         "_bc2",
         "_bdir",
     )
+    # the fast-path interval (_set_branch assigns the three in one tuple)
+    _blo: float
+    _bhi: float
+    _bdir: int
 
     def __init__(self, params: IwanParameters, *, reversal_tol: float = REVERSAL_TOL):
         if not isinstance(params, IwanParameters):

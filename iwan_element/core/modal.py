@@ -85,8 +85,8 @@ def harmonic_stiffness(amplitude, params: IwanParameters):
     macro = q > p.phi_max
     if np.any(macro):
         out[macro] = _harmonic_quadrature(q[macro], p)
-    out = out.reshape(np.shape(x))
-    return float(out) if np.ndim(amplitude) == 0 else out
+    shaped = out.reshape(np.shape(x))
+    return float(shaped) if np.ndim(amplitude) == 0 else shaped
 
 
 def _harmonic_quadrature(q, p):

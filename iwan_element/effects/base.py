@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import copy
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -204,6 +205,11 @@ class Effect(CommittedState):
     effect = ""
     #: ParamSpec of each parameter, in the constructor's order.
     specs: tuple = ()
+    #: Names of :attr:`specs`, in order (set on each subclass by ``__init_subclass__``).
+    parameter_names: tuple[str, ...]
+    #: ``trial(u, v=0.0) -> (force [N], tangent [N/m])``: each effect defines it
+    #: (:class:`~iwan_element.core.protocol.JointElement`).
+    trial: Callable[..., tuple[float, float]]
     #: Keyword options of the constructor that are not physical parameters (discretisation,
     #: extent of a time-domain bank); :func:`make_effect` passes them through.
     options: tuple = ()

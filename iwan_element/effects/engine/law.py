@@ -75,7 +75,8 @@ class _Pieces:
         st = np.zeros((K.N_ROWS, len(rows)))
         st[: K.S] = np.array(rows, float).T  # s, c, slide: 0 (stuck, unstretched)
         self.state = st
-        self._last = None
+        # the last scalar step (d, delta, (force, tangent)), replayed when asked again
+        self._last: tuple[float, float, tuple[float, float]] | None = None
 
     def force(self, d: float, delta):
         """Signed force of the banks (sum of ``sg`` x bank force) after a travel ``delta``
