@@ -151,8 +151,9 @@ def plot_dissipation_fit(force, dissipation, params, *, ax=None, slope: bool = T
     """Log-log dissipation per cycle against force amplitude with the fitted curve (Fig. 7).
 
     The curve is the exact relation ``(F0(u0), D(u0))`` of the fitted joint (vertical at
-    ``F0 = Fs`` in macroslip); with ``slope=True`` its local slope ``d ln D / d ln F0`` (paper eq. 21, which
-    tends to ``chi + 3`` only as ``F0 -> 0``) is drawn on a second y axis with the asymptote.
+    ``F0 = Fs`` in macroslip); with ``slope=True`` its local slope ``d ln D / d ln F0`` (paper eq.
+    21, which tends to ``chi + 3`` only as ``F0 -> 0``) is drawn on a second y axis with the
+    asymptote.
 
     Parameters
     ----------

@@ -32,7 +32,7 @@ import math
 import numbers
 import textwrap
 from dataclasses import dataclass
-from typing import ClassVar
+from typing import TYPE_CHECKING, ClassVar
 
 import numpy as np
 
@@ -120,6 +120,17 @@ class ResultShape:
     plot_panels: ClassVar[int] = 1
     warnings: tuple = ()
 
+    if TYPE_CHECKING:  # every result defines these (a field or a property; a method)
+
+        @property
+        def success(self) -> bool:
+            """True when the result can be used as it stands."""
+            ...
+
+        def to_dict(self) -> dict:
+            """The result as plain Python values (JSON-ready)."""
+            ...
+
     def failure_reasons(self) -> tuple:
         """Why ``success`` is False, each reason in a tester's words (empty when it is True).
         The base reads the result's ``failures`` (the reasons its maker stated where it
@@ -148,9 +159,9 @@ class ResultShape:
         and run" (quantity, value). Classes with data of their own (curves, bands) put
         those first.
         """
-        out = []
+        out: list[tuple[str, tuple, list]] = []
         params = getattr(self, "params", None)
-        if hasattr(params, "parameters") and len(params.parameters):
+        if params is not None and hasattr(params, "parameters") and len(params.parameters):
             out.append(("parameters", PARAMETER_COLUMNS, parameter_rows(params)))
         d = self.to_dict()
         rows = d.get("rows")
@@ -161,7 +172,7 @@ class ResultShape:
                 )
             )
             out.append(("rows", cols, [tuple(r.get(c) for c in cols) for r in rows]))
-        columns = {}
+        columns: dict[int, list[str]] = {}  # keys of the numeric lists, by length
         for k, v in d.items():
             if (
                 k != "rows"
@@ -301,8 +312,10 @@ def panels(ax, n: int, *, figsize=None, sharex: bool = False) -> list:
     if ax is None:
         import matplotlib.pyplot as plt
 
-        _, axs = plt.subplots(n, 1, sharex=sharex, squeeze=False, figsize=figsize or (6.0, 3.2 * n))
-        return list(axs[:, 0])
+        _, grid = plt.subplots(
+            n, 1, sharex=sharex, squeeze=False, figsize=figsize or (6.0, 3.2 * n)
+        )
+        return list(grid[:, 0])
     if hasattr(ax, "plot"):
         if n != 1:
             raise TypeError(

@@ -134,8 +134,9 @@ def secant_stiffness(amplitude, params: IwanParameters):
 
 
 def slip_energy(y, p: IwanParameters):
-    """``I_H(y) = int_0^y int_0^q phi rho(phi) dphi dq`` [J]; dissipation per cycle is ``4 I_H(u0)``.
+    """``I_H(y) = int_0^y int_0^q phi rho(phi) dphi dq`` [J].
 
+    The dissipation per cycle is ``4 I_H(u0)``. ``I_H`` is
     ``R y**(chi+3)/((chi+2)(chi+3))`` below ``phi_max``, growing by ``Fs`` per metre beyond.
     """
     r = _ratio(y, p)
@@ -158,7 +159,8 @@ def dissipation(amplitude, params: IwanParameters):
 
     Macroslip, ``u0 > phi_max``::
 
-        D = 4 R [u0 phi_max**(chi+2)/(chi+2) - phi_max**(chi+3)/(chi+3)] + 4 S phi_max (u0 - phi_max)
+        D = 4 R [u0 phi_max**(chi+2)/(chi+2) - phi_max**(chi+3)/(chi+3)]
+            + 4 S phi_max (u0 - phi_max)
 
     Parameters
     ----------
@@ -263,7 +265,9 @@ def _f(s, chi, beta, den):
 
 
 def normalized_backbone(s, chi: float, beta: float):
-    """Dimensionless backbone ``f(s) = F(s phi_max)/Fs`` (paper eq. 12)::
+    """Dimensionless backbone ``f(s) = F(s phi_max)/Fs`` (paper eq. 12).
+
+    ::
 
         f(s) = s (beta chi + 2 beta + chi + 2 - s**(chi+1)) / (beta chi + 2 beta + chi + 1)
 
@@ -276,9 +280,11 @@ def normalized_backbone(s, chi: float, beta: float):
 
 
 def masing_descending(s, s0: float, chi: float, beta: float):
-    """Descending (unloading) branch from the reversal ``(s0, f(s0))`` (paper eq. 13)::
+    """Descending (unloading) branch from the reversal ``(s0, f(s0))`` (paper eq. 13).
 
-    f_u(s) = f(s0) - 2 f((s0 - s)/2)
+    ::
+
+        f_u(s) = f(s0) - 2 f((s0 - s)/2)
     """
     chi, beta, den = _dimensionless_check(chi, beta)
     s0 = check_scalar("s0", s0)
@@ -287,7 +293,9 @@ def masing_descending(s, s0: float, chi: float, beta: float):
 
 
 def masing_ascending(s, s0: float, chi: float, beta: float):
-    """Ascending (reloading) branch from the reversal ``(-s0, -f(s0))`` (paper eq. 15, corrected)::
+    """Ascending (reloading) branch from the reversal ``(-s0, -f(s0))`` (paper eq. 15).
+
+    Corrected::
 
         f_d(s) = -f(s0) + 2 f((s0 + s)/2)
 

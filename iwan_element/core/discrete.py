@@ -157,7 +157,7 @@ class DiscreteIwan(CommittedState):
 
     def revert(self) -> None:
         """Discard the last trial."""
-        self._tz = None
+        self._tz: np.ndarray | None = None
         self._tu = self._u
         self._tF = self._F
         self._tK = self._K

@@ -126,6 +126,10 @@ class IwanJoint(CommittedState):
         "_bc2",
         "_bdir",
     )
+    # the fast-path interval (_set_branch assigns the three in one tuple)
+    _blo: float
+    _bhi: float
+    _bdir: int
 
     def __init__(self, params: IwanParameters, *, reversal_tol: float = REVERSAL_TOL):
         if not isinstance(params, IwanParameters):
@@ -142,8 +146,8 @@ class IwanJoint(CommittedState):
         self._pm = p.phi_max
         self._e1 = p.chi + 1.0
         self._e3 = p.chi + 3.0
-        # Everything is written in r = x/phi_max <= 1 (docs/equations.md section 2): powers of phi_max
-        # itself overflow for large chi (IwanParameters.R). With Ks = KT/(1+beta):
+        # Everything is written in r = x/phi_max <= 1 (docs/equations.md section 2): powers of
+        # phi_max itself overflow for large chi (IwanParameters.R). With Ks = KT/(1+beta):
         pm = p.phi_max
         Ks = p.K_slider
         self._ipm = 1.0 / pm

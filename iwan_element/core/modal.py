@@ -85,8 +85,8 @@ def harmonic_stiffness(amplitude, params: IwanParameters):
     macro = q > p.phi_max
     if np.any(macro):
         out[macro] = _harmonic_quadrature(q[macro], p)
-    out = out.reshape(np.shape(x))
-    return float(out) if np.ndim(amplitude) == 0 else out
+    shaped = out.reshape(np.shape(x))
+    return float(shaped) if np.ndim(amplitude) == 0 else shaped
 
 
 def _harmonic_quadrature(q, p):
@@ -157,8 +157,8 @@ def modal_iwan_curve(
     mass : float, keyword-only
         Modal mass [kg], ``> 0`` (1 for a mass-normalised mode).
     stiffness : {"secant", "harmonic"}, keyword-only
-        ``"secant"`` (docs/equations.md section 7, QSMA) or ``"harmonic"`` (first-harmonic stiffness,
-        what a ring-down or stepped-sine test measures; see :func:`harmonic_stiffness`).
+        ``"secant"`` (docs/equations.md section 7, QSMA) or ``"harmonic"`` (first-harmonic
+        stiffness, what a ring-down or stepped-sine test measures; see :func:`harmonic_stiffness`).
     floor : {"constant", "dashpot"}, keyword-only
         ``"constant"``: the floor adds ``zeta0`` at every amplitude (docs/equations.md section 7);
         ``"dashpot"``: a fixed dashpot ``c = 2 zeta0 mass w0`` adds ``zeta0 w0 / w(Q)``.

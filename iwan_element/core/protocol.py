@@ -36,28 +36,46 @@ class JointElement(Protocol):
         Committed force [N] and displacement [m].
     """
 
-    def trial(self, u: float, v: float = 0.0) -> tuple[float, float]: ...
+    def trial(self, u: float, v: float = 0.0) -> tuple[float, float]:
+        """Trial force [N] and tangent [N/m] at ``u`` [m], ``v`` [m/s]; commits nothing."""
+        ...
 
-    def commit(self) -> None: ...
+    def commit(self) -> None:
+        """Accept the last trial as the committed state; returns nothing."""
+        ...
 
-    def revert(self) -> None: ...
+    def revert(self) -> None:
+        """Discard the last trial, keeping the committed state; returns nothing."""
+        ...
 
-    def reset(self) -> None: ...
-
-    @property
-    def work(self) -> float: ...
-
-    @property
-    def stored_energy(self) -> float: ...
-
-    @property
-    def dissipated_energy(self) -> float: ...
-
-    @property
-    def force(self) -> float: ...
+    def reset(self) -> None:
+        """Return to the virgin state with the energy counters at 0 J; returns nothing."""
+        ...
 
     @property
-    def displacement(self) -> float: ...
+    def work(self) -> float:
+        """Work done on the element since the last reset [J] (committed)."""
+        ...
+
+    @property
+    def stored_energy(self) -> float:
+        """Recoverable energy since the last reset [J] (committed)."""
+        ...
+
+    @property
+    def dissipated_energy(self) -> float:
+        """Energy dissipated since the last reset [J] (committed)."""
+        ...
+
+    @property
+    def force(self) -> float:
+        """Committed force [N]."""
+        ...
+
+    @property
+    def displacement(self) -> float:
+        """Committed displacement [m]."""
+        ...
 
 
 _PROTOCOL = (
@@ -92,6 +110,12 @@ class CommittedState:
     """
 
     __slots__ = ()
+
+    # set by each element (annotations only: no slot, no default)
+    _u: float
+    _F: float
+    _W: float
+    _D: float
 
     @property
     def displacement(self) -> float:

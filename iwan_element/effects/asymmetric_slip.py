@@ -39,6 +39,8 @@ class AsymmetricSlip(LawEffect):
 
     effect = "asymmetric_slip"
     loop_rank = 50
+    # the parameters, stored by _set_parameters from specs (SI units)
+    asymmetry: float
     specs = (
         ParamSpec(
             "asymmetry",
@@ -60,5 +62,6 @@ class AsymmetricSlip(LawEffect):
         self._reset_own()
 
     def own_law(self) -> tuple:
+        """Threshold factors ``(sigma_up, sigma_down, kappa_up, kappa_down)`` [-], ``1 +- a``."""
         a = self.asymmetry
         return (1.0 + a, 1.0 - a, 1.0 + a, 1.0 - a)

@@ -64,6 +64,9 @@ class Backlash(Effect):
     effect = "backlash"
     structure = "series"
     loop_rank = 30
+    # the parameters, stored by _set_parameters from specs (SI units)
+    gap: float
+    drag: float
     specs = (
         ParamSpec(
             "gap",
@@ -176,7 +179,7 @@ class Backlash(Effect):
                 w_s = wc
             else:
                 w_s = _find_zero(
-                    lambda x: _shifted(inner.trial(x, v), s * fd), wc, Fc, w, F - s * fd
+                    lambda x, s=s: _shifted(inner.trial(x, v), s * fd), wc, Fc, w, F - s * fd
                 )
             self._slide_at = w_s
             if s * (u - w_s) >= g:  # slid up to the stop: contact there

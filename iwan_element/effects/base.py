@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import copy
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -48,7 +49,8 @@ class ParamSpec:
         Reference scale of the dimensionless fitting variable: ``"u_max"`` (largest |u|),
         ``"v_rms"``, ``"D_ref"`` (energy dissipated by the plain unit-``Fs`` fit over the
         record) or ``"1"`` for loops; ``"zeta_ref"``, ``"omega2_ref"``, ``"X_max"``,
-        ``"omega2_per_X2"`` (``omega2_ref / X_max**2``) for modal forms. The fit works on ``z = (value / Fs**fs_power) * ref**ref_power``.
+        ``"omega2_per_X2"`` (``omega2_ref / X_max**2``) for modal forms. The fit works on
+        ``z = (value / Fs**fs_power) * ref**ref_power``.
     ref_power : int
         Exponent of ``ref`` in the fitting variable.
     fit_bounds : tuple of float
@@ -203,6 +205,11 @@ class Effect(CommittedState):
     effect = ""
     #: ParamSpec of each parameter, in the constructor's order.
     specs: tuple = ()
+    #: Names of :attr:`specs`, in order (set on each subclass by ``__init_subclass__``).
+    parameter_names: tuple[str, ...]
+    #: ``trial(u, v=0.0) -> (force [N], tangent [N/m])``: each effect defines it
+    #: (:class:`~iwan_element.core.protocol.JointElement`).
+    trial: Callable[..., tuple[float, float]]
     #: Keyword options of the constructor that are not physical parameters (discretisation,
     #: extent of a time-domain bank); :func:`make_effect` passes them through.
     options: tuple = ()

@@ -48,6 +48,8 @@ class BreakAway(LawEffect):
 
     effect = "breakaway"
     loop_rank = 60
+    # the parameters, stored by _set_parameters from specs (SI units)
+    ratio: float
     specs = (
         ParamSpec(
             "ratio",
@@ -74,5 +76,6 @@ class BreakAway(LawEffect):
         self._reset_own()
 
     def own_law(self) -> tuple:
+        """Threshold factors ``(sigma_up, sigma_down, kappa_up, kappa_down) = (r, r, 1, 1)``."""
         r = self.ratio
         return (r, r, 1.0, 1.0)

@@ -52,6 +52,8 @@ class Hardening(Effect):
     """
 
     effect = "hardening"
+    # the parameters, stored by _set_parameters from specs (SI units)
+    k3: float
     specs = (
         ParamSpec(
             "k3",
@@ -87,6 +89,7 @@ class Hardening(Effect):
 
     @classmethod
     def vector_force(cls, F, u, v, *, k3):
+        """Force [N]: the inner force ``F`` [N] plus ``k3 u**3`` (``u`` [m], ``k3`` [N/m^3])."""
         return F + k3 * u**3
 
     @classmethod

@@ -18,14 +18,14 @@ law with a shape ``v`` in ``[0, 1]`` (``q = 1/v - 3``):
 slides as a whole (one Jenkins element of stiffness ``k_2`` at ``u_s``); ``0 < v < 1/3``
 thresholds that thin out above the onset (finite total stiffness ``k_2 / (1 - 2^-q)``);
 ``v = 1/3`` a density ``~ 1/phi``; ``v = 1/2`` thresholds spread evenly; ``v > 1/2``
-thresholds that crowd in with the slip, up to a density ``~ phi`` at ``v = 1``. Reading: uniform tangential
-stiffness per area and a slip threshold proportional to the contact pressure (``phi = mu p /
-k_t``), so the law is the pressure profile inside the radius where the pressure equals the
-onset pressure: a pressure peaked as ``r^-m`` gives ``q = 2/m``; a parabolic fall-off from
-the peak (``p_0 (1 - r^2/a^2)``: equal areas in equal pressure steps) gives ``v = 1/2``; a
-Hertzian dome (``p_0 sqrt(1 - r^2/a^2)``) gives ``v = 1``. The slip front moves inward as
-the amplitude grows, as in Cattaneo-Mindlin partial slip (Mindlin, J. Appl. Mech.
-16:259-268, 1949). The patch replaces the part of the joint's stuck stiffness it holds,
+thresholds that crowd in with the slip, up to a density ``~ phi`` at ``v = 1``. Reading: uniform
+tangential stiffness per area and a slip threshold proportional to the contact pressure (``phi = mu
+p / k_t``), so the law is the pressure profile inside the radius where the pressure equals the onset
+pressure: a pressure peaked as ``r^-m`` gives ``q = 2/m``; a parabolic fall-off from the peak (``p_0
+(1 - r^2/a^2)``: equal areas in equal pressure steps) gives ``v = 1/2``; a Hertzian dome (``p_0
+sqrt(1 - r^2/a^2)``) gives ``v = 1``. The slip front moves inward as the amplitude grows, as in
+Cattaneo-Mindlin partial slip (Mindlin, J. Appl. Mech. 16:259-268, 1949). The patch replaces the
+part of the joint's stuck stiffness it holds,
 
     F = F_j(u) + P(u) - k_P u,
 
@@ -172,6 +172,10 @@ class MacroslipOnset(JenkinsBank):
     """
 
     effect = "macroslip_onset"
+    # the parameters, stored by _set_parameters from specs (SI units)
+    k_2: float
+    u_s: float
+    shape: float
     specs = (
         ParamSpec(
             "k_2",

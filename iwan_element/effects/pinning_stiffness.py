@@ -44,6 +44,9 @@ class PinningStiffness(Effect):
     effect = "pinning_stiffness"
     loop_rank = 20
     kind = "stiffness"
+    # the parameters, stored by _set_parameters from specs (SI units)
+    k_p: float
+    delta: float
     specs = (
         ParamSpec(
             "k_p",
@@ -98,6 +101,7 @@ class PinningStiffness(Effect):
 
     @classmethod
     def vector_force(cls, F, u, v, *, k_p, delta):
+        """Force [N]: the inner force ``F`` [N] plus ``k_p sign(u) max(|u| - delta, 0)``."""
         e = np.maximum(np.abs(u) - delta, 0.0)
         return F + k_p * np.sign(u) * e
 

@@ -74,6 +74,8 @@ class SlipDegradation(SliderEffect):
 
     effect = "slip_degradation"
     loop_rank = 40
+    # the parameters, stored by _set_parameters from specs (SI units)
+    rate: float
     specs = (
         ParamSpec(
             "rate",
@@ -109,9 +111,9 @@ class SlipDegradation(SliderEffect):
     def _after_commit(self) -> float:
         return self._after_commit_energy(self._inner.dissipated_energy)
 
-    def _correction_energy(self, u: np.ndarray, D_inner) -> np.ndarray:
-        """The per-sample rule of :meth:`_SliderEffect._correction_energy`, compiled
-        (:func:`_degrade_history`), from the virgin state.
+    def _correction_energy(self, u: np.ndarray, D_inner, prev: float = 0.0) -> np.ndarray:
+        """The per-sample rule of :meth:`SliderEffect._correction_energy`, compiled
+        (:func:`_degrade_history`), from the state committed at ``prev`` [m].
         """
         D_inner = np.ascontiguousarray(D_inner, dtype=float)
         e, slip = self._e.copy(), self._slip.copy()
@@ -125,7 +127,7 @@ class SlipDegradation(SliderEffect):
             self._Wb,
             self.rate,
             np.ascontiguousarray(u, dtype=float),
-            0.0,
+            float(prev),
             D_inner,
         )
         self._e, self._slip = e, slip
@@ -138,9 +140,11 @@ class SlipDegradation(SliderEffect):
         """
         if self._cap_up is None:
             self._refresh_caps()
+        up, dn = self._cap_up, self._cap_dn
+        assert up is not None and dn is not None  # allocated by _refresh_caps
         self._lam, stored = degrade(
-            self._e, self._sign, self._k, self._phi, D_inner, self._Wb, self.rate, *self._cap_up
+            self._e, self._sign, self._k, self._phi, D_inner, self._Wb, self.rate, *up
         )
-        np.copyto(self._cap_dn[0], self._cap_up[0])
-        np.copyto(self._cap_dn[1], self._cap_up[1])
+        np.copyto(dn[0], up[0])
+        np.copyto(dn[1], up[1])
         return stored

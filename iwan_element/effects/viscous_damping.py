@@ -34,6 +34,8 @@ class ViscousDamping(Effect):
     loop_rank = 10
     kind = "dissipation"
     modal_floor = True
+    # the parameters, stored by _set_parameters from specs (SI units)
+    c: float
     specs = (
         ParamSpec(
             "c",
@@ -71,6 +73,7 @@ class ViscousDamping(Effect):
 
     @classmethod
     def vector_force(cls, F, u, v, *, c):
+        """Force [N]: the inner force ``F`` [N] plus ``c v`` (``v`` [m/s], ``c`` [N s/m])."""
         return F + c * v
 
     @classmethod

@@ -16,10 +16,10 @@ to second order about the fitted ``theta*`` with the Gauss-Newton Hessian ``J^T 
 (``J = dr/dtheta``) **and, for the parameters fitted on a bound, its gradient** ``2 J^T r``:
 there the fitted value is a constrained optimum whose gradient does not vanish, and the
 quadratic's own optimum lies outside the box. The Gaussian is then integrated over the
-box (a truncated multivariate normal, :func:`scipy.stats.multivariate_normal.cdf` over the parameters whose Gaussian
-reaches a bound), so an effect fitted at zero size (its parameter at the bound) gets the
-half-Gaussian (or less) it has, not a whole one. For a model linear in ``theta`` this is
-exact (tests/test_evidence.py checks it against the closed form and a quadrature). A
+box (a truncated multivariate normal, :func:`scipy.stats.multivariate_normal.cdf` over the
+parameters whose Gaussian reaches a bound), so an effect fitted at zero size (its parameter at the
+bound) gets the half-Gaussian (or less) it has, not a whole one. For a model linear in ``theta``
+this is exact (tests/test_evidence.py checks it against the closed form and a quadrature). A
 direction the data do not determine (a singular ``J^T J``) integrates to the box's width
 along it: the Occam factor of a parameter the data say nothing about is 1.
 

@@ -139,6 +139,7 @@ class ParameterTable:
 
     parameters: tuple
     correlation: np.ndarray | None = field(default=None, repr=False)
+    _index: dict[str, int] = field(init=False, repr=False)  # name -> position
 
     def __post_init__(self):
         ps = tuple(self.parameters)

@@ -8,7 +8,8 @@ excitation (``F`` on the fundamental's cosine)::
     R_h = Z_h + H_zz(h W) G_h(Z) - H_zb(h W) F_h = 0          for every kept harmonic h,
 
 the residual of Krack & Gross (Harmonic Balance for Nonlinear Vibration Problems, Springer
-2019, ch. 2; ``docs/harmonic_balance.md`` section 3) multiplied by the dynamic compliance, which is exact for the linear part.
+2019, ch. 2; ``docs/harmonic_balance.md`` section 3) multiplied by the dynamic compliance,
+which is exact for the linear part.
 ``G(Z)`` is the alternating frequency-time evaluation on the exact steady loop of each joint
 (:mod:`iwan_element.core.periodic`), and the Jacobian ``I + H_zz dG/dZ`` uses its exact sample
 Jacobian (tangent plus reversal columns). Newton's method solves each frequency, starting
@@ -115,7 +116,7 @@ def solve_point(system, basis, W, force, cz0, *, tol=1e-9, max_iter=40) -> HBPoi
     rn = float(np.linalg.norm(R))
     it = 0
     ok = False
-    for it in range(1, max_iter + 1):
+    for it in range(1, max_iter + 1):  # noqa: B007  the count is reported after the loop
         step = np.linalg.solve(J, -R.ravel()).reshape(cz.shape)
         lam = 1.0
         for _ in range(12):  # backtracking on the residual norm

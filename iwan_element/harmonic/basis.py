@@ -57,7 +57,7 @@ def check_harmonics(harmonics, samples) -> tuple[tuple, int]:
         hs = tuple(range(0, int(harmonics) + 1))
     else:
         try:
-            hs = tuple(sorted(set(int(h) for h in harmonics)))
+            hs = tuple(sorted({int(h) for h in harmonics}))
         except (TypeError, ValueError):
             raise ValueError(
                 f"harmonics must be an int >= 1 or a sequence of ints >= 0, got {harmonics!r}"
@@ -109,19 +109,20 @@ class Harmonics:
 
     @property
     def n_coefficients(self) -> int:
+        """Number of real coefficients per signal (cosine and sine of each harmonic) [-]."""
         return self.E.shape[1]
 
     def complex(self, c: np.ndarray) -> np.ndarray:
         """Complex amplitudes ``(..., n_h)`` of real coefficients ``(..., nc)``."""
         out = np.empty(c.shape[:-1] + (len(self.cols),), complex)
-        for k, (h, ia, ib) in enumerate(self.cols):
+        for k, (_h, ia, ib) in enumerate(self.cols):
             out[..., k] = c[..., ia] if ib is None else c[..., ia] - 1j * c[..., ib]
         return out
 
     def real(self, Z: np.ndarray) -> np.ndarray:
         """Real coefficients of complex amplitudes (the inverse of :meth:`complex`)."""
         out = np.empty(Z.shape[:-1] + (self.n_coefficients,))
-        for k, (h, ia, ib) in enumerate(self.cols):
+        for k, (_h, ia, ib) in enumerate(self.cols):
             out[..., ia] = Z[..., k].real
             if ib is not None:
                 out[..., ib] = -Z[..., k].imag
@@ -170,7 +171,7 @@ class Harmonics:
         nr, nq = len(rows), len(cols_)
         nc = self.n_coefficients
         L = np.zeros((nr, nc, nq, nc))
-        for k, (h, ia, ib) in enumerate(self.cols):
+        for k, (_h, ia, ib) in enumerate(self.cols):
             H = H_list[k][np.ix_(rows, cols_)]
             if ib is None:
                 L[:, ia, :, ia] = H.real

@@ -81,6 +81,7 @@ class FrequencyResponse(ResultShape):
         return bool(np.all(self.converged) and np.all(np.abs(self.energy_error) <= ENERGY_TOL))
 
     def failure_reasons(self) -> tuple:
+        """Why :attr:`success` is False (unconverged points, energy balance), or ``()``."""
         out = []
         bad = ~self.converged
         if bad.any():

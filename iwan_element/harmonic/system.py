@@ -171,9 +171,9 @@ class ModalSystem:
         w = math.sqrt((stiffness + joint.KT) / mass)
         phi = 1.0 / math.sqrt(mass)
         return cls(
-            omega=[w],
-            zeta=[damping / (2.0 * mass * w)],
-            modes=[[phi]] * 3,
+            omega=np.array([w]),
+            zeta=np.array([damping / (2.0 * mass * w)]),
+            modes=np.full((3, 1), phi),
             joints=(joint,),
             n_full=1,
             notes="single-degree-of-freedom oscillator",

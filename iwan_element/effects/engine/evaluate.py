@@ -27,6 +27,9 @@ The routes are checked against the elements in ``tests/test_diagnosis.py`` and
 
 from __future__ import annotations
 
+from types import MethodType
+from typing import Any, cast
+
 import numpy as np
 
 from ...core.closed_form import slip_energy
@@ -91,7 +94,9 @@ def wear_behind_gap(names) -> bool:
 
 def has_vector_form(name: str) -> bool:
     """True if the effect has a history-free vectorised force."""
-    return EFFECTS[name].vector_force.__func__ is not Effect.vector_force.__func__
+    # a classmethod read from its class is a bound method (mypy sees the plain function)
+    base = cast(MethodType, Effect.vector_force).__func__
+    return EFFECTS[name].vector_force.__func__ is not base
 
 
 def dissipation_segments(u: np.ndarray, tol: float):
@@ -151,7 +156,8 @@ class Evaluator:
         self.hist = History(u, keep=keep, tol=tol)
         self.x_max = self.hist.x_max
         self._tol = tol
-        self._segs = None
+        # (step, virgin, xa, xb) of dissipation_segments, computed on first use
+        self._segs: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None = None
         drive = np.union1d(keep, drive_extra)
         self.drive = drive
         self.drive_pos = np.searchsorted(drive, keep)
@@ -159,7 +165,7 @@ class Evaluator:
         self.vk = v[keep]
         self.n_eval = 0
         self._hist0 = self.hist
-        self._starts = {}
+        self._starts: dict[float, History] = {}  # histories per start [m]
         self.start = 0.0
         self._ext = (u, v, drive, self.drive_pos)
 
@@ -226,7 +232,7 @@ class Evaluator:
             return F[pos]
         chain, series, rest = _layers(names)
         vals = dict(zip(names, values))
-        els = [IwanJoint(p1)]
+        els: list[Any] = [IwanJoint(p1)]  # the joint, then its slider-level effects
         for name in chain:
             els.append(EFFECTS[name](els[-1], **vals[name]))
         x, hist = u[drive], self.hist

@@ -75,7 +75,8 @@ class _Pieces:
         st = np.zeros((K.N_ROWS, len(rows)))
         st[: K.S] = np.array(rows, float).T  # s, c, slide: 0 (stuck, unstretched)
         self.state = st
-        self._last = None
+        # the last scalar step (d, delta, (force, tangent)), replayed when asked again
+        self._last: tuple[float, float, tuple[float, float]] | None = None
 
     def force(self, d: float, delta):
         """Signed force of the banks (sum of ``sg`` x bank force) after a travel ``delta``
@@ -199,7 +200,7 @@ class LawEffect(Effect):
         return int(self._pieces.state.shape[1])
 
     def correction_history(self, u, D_inner=None) -> np.ndarray:
-        """This element's force minus its inner element's [N] along a displacement history
+        """The element's force minus its inner element's [N] along a displacement history
         ``u`` [m] from the virgin state (private state; this element is untouched): one
         vectorised evaluation per monotone run of ``u`` (:func:`law_history`), equal to the
         step-by-step rule of :meth:`trial`/:meth:`commit`. ``D_inner`` is not used.

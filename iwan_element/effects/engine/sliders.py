@@ -126,7 +126,9 @@ class SliderEffect(Effect):
         self._phi = phi
         self._n = k.size
         self._sign = np.concatenate([np.ones(k.size), -np.ones(k.size)])
-        self._cap_up = self._cap_dn = None
+        # thresholds (static, kinetic) of both banks, allocated by _refresh_caps
+        self._cap_up: tuple[np.ndarray, np.ndarray] | None = None
+        self._cap_dn: tuple[np.ndarray, np.ndarray] | None = None
         self._sk = self._sign * self._k
 
     # ---- thresholds
@@ -136,17 +138,25 @@ class SliderEffect(Effect):
         """
         raise NotImplementedError
 
+    def _after_commit_energy(self, D_inner: float) -> float:
+        """Update the thresholds from the wrapped joint's dissipated energy ``D_inner`` [J];
+        returns the banks' stored energy after the update [J].
+        """
+        raise NotImplementedError
+
     def _refresh_caps(self) -> None:
         """Cache the thresholds of both banks (call after they change)."""
         n = self._n
         if getattr(self, "_cap_up", None) is None:  # both banks' caps, filled in place
             self._cap_up = (np.tile(self._phi, 2), np.tile(self._phi, 2))
             self._cap_dn = (np.tile(self._phi, 2), np.tile(self._phi, 2))
+        up, dn = self._cap_up, self._cap_dn
+        assert up is not None and dn is not None  # allocated just above
         su, sd, ku, kd = self._caps()
-        self._cap_up[0][:n] = su
-        self._cap_up[1][:n] = ku
-        self._cap_dn[0][:n] = sd
-        self._cap_dn[1][:n] = kd
+        up[0][:n] = su
+        up[1][:n] = ku
+        dn[0][:n] = sd
+        dn[1][:n] = kd
 
     def _reset_own(self):
         self._e = np.zeros(2 * self._n)  # slider stretches [m]
@@ -161,7 +171,9 @@ class SliderEffect(Effect):
         """Stretches, slip states and the signed work, force and stiffness of both banks for a
         linear move ``du`` [m] (:func:`bank_step`).
         """
-        cs, ck = self._cap_up if du > 0.0 else self._cap_dn
+        caps = self._cap_up if du > 0.0 else self._cap_dn
+        assert caps is not None  # _reset_own allocates them (_refresh_caps)
+        cs, ck = caps
         e, s = np.empty(self._e.size), np.empty(self._e.size)
         W, F, K = bank_step(self._e, self._slip, self._k, self._sign, cs, ck, du, e, s)
         return e, s, W, F, K
