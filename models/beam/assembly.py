@@ -111,6 +111,7 @@ def _linear_system(key: Specimen) -> LinearSystem:
         rigid_body_modes=3 if s.boundary == "free-free" else 0,
     )
     L = attach_setup(L, s.setup, lambda x: tuple(r[:, free] for r in point_rows(s, x, mesh)))
+    assert L.E is not None  # the excitation row given above (attach_setup keeps or pads it)
     for A in (L.M, L.K0, L.Kb, L.G, L.S, L.E):
         A.setflags(write=False)
     return L

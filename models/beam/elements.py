@@ -168,6 +168,7 @@ class BeamMesh:
 
     @property
     def n_nodes(self) -> int:
+        """Number of nodes of both beams (``x_a.size + x_b.size``)."""
         return int(self.x_a.size + self.x_b.size)
 
     @property

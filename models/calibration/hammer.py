@@ -39,6 +39,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -170,7 +171,7 @@ class HammerPrediction(ResultShape):
         the largest relative errors [-] over the common amplitudes and the first (largest
         amplitude) common window's.
         """
-        out = {}
+        out: dict[Any, dict[str, Any]] = {}  # {(mode, sensor name): {quantity: value}}
         for key, e in self.errors.items():
             n = len(e["amplitude"])
             if not n:

@@ -19,6 +19,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -121,6 +122,7 @@ class CalibrationResult(ResultShape):
         return own + tuple(self.warnings) or super().failure_reasons()
 
     def report(self) -> str:
+        """Human-readable account: the fitted parameters [their units] and the misfits."""
         lines = [f"Interface calibration of {self.specimen.name!r}: {self.verdict()}"]
         for k, p in self.params.items():
             moved = (
@@ -138,6 +140,7 @@ class CalibrationResult(ResultShape):
         return "\n".join(lines)
 
     def to_dict(self) -> dict:
+        """As a dict: the parameters, start values, success, misfits, warnings and curves."""
         return {
             "params": self.params.to_dict(),
             "start": dict(self.start),
@@ -164,7 +167,7 @@ def _with(specimen: Specimen, names, values, mode: int = 1) -> Specimen:
     """``specimen`` with the named parameters set; ``damping_floor`` is the calibration
     mode's floor, so it also sets that mode's entry of ``modal_damping`` when there is one.
     """
-    ch = {n: float(v) for n, v in zip(names, values)}
+    ch: dict[str, Any] = {n: float(v) for n, v in zip(names, values)}  # Specimen fields
     md = list(specimen.modal_damping)
     if "damping_floor" in ch and mode <= len(md):
         md[mode - 1] = ch["damping_floor"]
@@ -212,7 +215,7 @@ def modal_floor(
     z = measured.damping_ratio[m] - joint
     sd = measured.damping_ratio_std[m] if measured.damping_ratio_std is not None else None
     ok = sd is not None and np.all(np.isfinite(sd)) and np.all(sd > 0)
-    w = 1.0 / sd**2 if ok else np.ones(z.size)
+    w = 1.0 / sd**2 if ok and sd is not None else np.ones(z.size)
     floor = float(np.sum(w * z) / np.sum(w))
     scatter = math.sqrt(float(np.sum(w * (z - floor) ** 2) / np.sum(w)) / max(z.size - 1, 1))
     se = max(scatter, math.sqrt(1.0 / float(np.sum(w)))) if ok else scatter

@@ -25,16 +25,17 @@ class ZeroElement:
     force = displacement = work = stored_energy = dissipated_energy = 0.0
 
     def trial(self, u, v=0.0):
+        """``(force [N], stiffness [N/m])`` at displacement ``u`` [m]: always ``(0, 0)``."""
         return 0.0, 0.0
 
     def commit(self):
-        pass
+        """Accept the last trial; returns None (no state to keep)."""
 
     def revert(self):
-        pass
+        """Discard the last trial; returns None (no state to keep)."""
 
     def reset(self):
-        pass
+        """Return to the virgin state; returns None (no state to keep)."""
 
 
 def effect_stack(specimen: Specimen, mode: int, omega0: float):

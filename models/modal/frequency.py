@@ -178,7 +178,8 @@ def nonlinear_mode(
     """
     _check(specimen)
     if amplitude is None:
-        X = np.geomspace(*specimen.amplitude_range, 20)
+        lo, hi = specimen.amplitude_range  # [m]
+        X = np.geomspace(lo, hi, 20)
     else:
         X = np.atleast_1d(np.asarray(amplitude, dtype=float))
         if X.ndim != 1 or X.size == 0 or not np.all(np.isfinite(X)) or np.any(X <= 0):

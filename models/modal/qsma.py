@@ -9,9 +9,9 @@ the contact points:
    coupling), so ``x0 = 0`` and the stuck tangent is ``K = K0 + G^T diag(KT_i) G``;
 2. mass-normalised eigenpair ``(w_k, phi)`` of ``(K, M)`` for the requested elastic mode;
 3. static load ``alpha M phi``: ``K0 x + G^T F(G x) = alpha M phi`` with ``F_i`` the virgin
-   backbone of point ``i`` (docs/equations.md section 2), condensed statically onto the contact slips
-   ``u = G x`` and solved by Newton with the backbones' tangents, bordered with ``S x = X`` so
-   that each requested sensor amplitude ``X`` is hit exactly;
+   backbone of point ``i`` (docs/equations.md section 2), condensed statically onto the
+   contact slips ``u = G x`` and solved by Newton with the backbones' tangents, bordered with
+   ``S x = X`` so that each requested sensor amplitude ``X`` is hit exactly;
 4. ``q = phi^T M x`` and secant ``w^2 = alpha / q``;
 5. Masing damping from the sum of the contact points' dissipations at their slip
    amplitudes ``u_i = |G_i x|`` (closed form, docs/equations.md section 2) rather than the modal
@@ -41,6 +41,7 @@ from iwan_element.effects import EFFECTS
 
 from ..reduced.dispatch import check_specimen, contact_points, linear_system
 from ..reduced.model import reduced_model, stuck_key, stuck_modes
+from ..solid.specimen import SolidSpecimen
 from ..specimens.specimen import Specimen
 
 __all__ = [
@@ -60,7 +61,7 @@ def _check_mode(mode) -> int:
     return int(mode)
 
 
-def _amplitudes(specimen: Specimen, amplitude) -> np.ndarray:
+def _amplitudes(specimen: Specimen | SolidSpecimen, amplitude) -> np.ndarray:
     if amplitude is None:
         lo, hi = specimen.amplitude_range
         return np.geomspace(lo, hi, 20)
@@ -71,7 +72,7 @@ def _amplitudes(specimen: Specimen, amplitude) -> np.ndarray:
     return a
 
 
-def linear_modes(specimen: Specimen, *, mode: int = 1):
+def linear_modes(specimen: Specimen | SolidSpecimen, *, mode: int = 1):
     """Stuck-interface mode of a specimen: ``(omega [rad/s], phi, rigid, L, points)``.
 
     Read from the specimen's reduced model's eigenproblem
@@ -145,7 +146,7 @@ def _interface_law(u, Fs, KT, phimax, chi, beta):
     return F.reshape(u.shape), K.reshape(u.shape)
 
 
-def _prepare_key(specimen: Specimen, mode: int):
+def _prepare_key(specimen: Specimen | SolidSpecimen, mode: int):
     return stuck_key(specimen), mode
 
 
@@ -191,7 +192,12 @@ def _condensed(key):
 
 
 def static_modal_load(
-    specimen: Specimen, amplitude, *, mode: int = 1, tol: float = 1e-12, max_iter: int = 60
+    specimen: Specimen | SolidSpecimen,
+    amplitude,
+    *,
+    mode: int = 1,
+    tol: float = 1e-12,
+    max_iter: int = 60,
 ):
     """Nonlinear static solutions under ``alpha M phi`` reaching sensor amplitudes ``X``.
 

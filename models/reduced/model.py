@@ -30,6 +30,7 @@ import scipy.linalg as sla
 from iwan_element.base.threads import one_blas_thread
 from iwan_element.harmonic import ModalSystem
 
+from ..solid.specimen import SolidSpecimen
 from ..specimens.specimen import Specimen
 from .dispatch import check_specimen, contact_points, linear_system
 
@@ -44,7 +45,7 @@ class ReducedModel:
 
     Attributes
     ----------
-    specimen : Specimen
+    specimen : Specimen or SolidSpecimen
     system : ModalSystem
         Kept modes (rigid first), floors, port shapes, residual flexibility and the contact
         points' Iwan parameters.
@@ -57,7 +58,7 @@ class ReducedModel:
         elastic one with a positive sensor displacement).
     """
 
-    specimen: Specimen
+    specimen: Specimen | SolidSpecimen
     system: ModalSystem
     n_rigid: int
     omega_all: np.ndarray
@@ -80,12 +81,12 @@ class ReducedModel:
         return float(self.system.omega[self.mode_index(mode)] / (2.0 * math.pi))
 
 
-def reduced_model(specimen: Specimen, *, n_modes: int = 8) -> ReducedModel:
+def reduced_model(specimen: Specimen | SolidSpecimen, *, n_modes: int = 8) -> ReducedModel:
     """The reduced model of a specimen (cached on the specimen).
 
     Parameters
     ----------
-    specimen : Specimen
+    specimen : Specimen or SolidSpecimen
     n_modes : int, keyword-only
         Elastic modes kept (>= 1); the others enter as static residual flexibility.
 
@@ -116,7 +117,7 @@ def stuck_key(specimen):
     )
 
 
-def stuck_modes(specimen: Specimen):
+def stuck_modes(specimen: Specimen | SolidSpecimen):
     """Every mode of the specimen with its joints stuck: ``(L, points, omega [rad/s], Phi,
     n_low)``, ``Phi`` mass-normalised (columns, each with a non-negative sensor
     displacement), ``n_low`` the modes below 0.5 Hz (rigid-body ones, or an interface that
@@ -126,7 +127,7 @@ def stuck_modes(specimen: Specimen):
 
 
 @lru_cache(maxsize=16)
-def _stuck_modes(specimen: Specimen):
+def _stuck_modes(specimen: Specimen | SolidSpecimen):
     L = linear_system(specimen)
     pts = contact_points(specimen)
     K = L.K0 + L.G.T @ (pts.KT[:, None] * L.G)
@@ -141,7 +142,7 @@ def _stuck_modes(specimen: Specimen):
 
 
 @lru_cache(maxsize=16)
-def _reduced(specimen: Specimen, n_modes: int) -> ReducedModel:
+def _reduced(specimen: Specimen | SolidSpecimen, n_modes: int) -> ReducedModel:
     L, pts, w, V, n_rigid = _stuck_modes(specimen)
     w = w.copy()
     w[:n_rigid] = 0.0  # rigid-body modes: exactly zero frequency

@@ -3,10 +3,10 @@ amplitude with and without the other modes ringing through the same joint.
 
 :func:`mode_coupling` runs the multi-mode ring-down (:func:`~iwan_element.models.ringdown`
 with ``amplitude={mode: X, ...}``) and one single-mode ring-down per mode from the same
-amplitude, for the same duration (each at ``steps_per_period`` of its own period), and compares each mode's
-decay curves at the same amplitudes (:func:`compare_curves`). A modal Iwan model (one
-uncoupled single-degree-of-freedom system per mode) would give ratio 1; the transient of the
-whole specimen shows how much one mode's slip raises another's damping
+amplitude, for the same duration (each at ``steps_per_period`` of its own period), and
+compares each mode's decay curves at the same amplitudes (:func:`compare_curves`). A modal
+Iwan model (one uncoupled single-degree-of-freedom system per mode) would give ratio 1; the
+transient of the whole specimen shows how much one mode's slip raises another's damping
 (``docs/multi_mode.md``).
 """
 

@@ -11,10 +11,11 @@ gives the rigid body a net momentum ``F / (W m)``, and its drift, read as half t
 peak-to-peak displacement (as before), put up to six times the steady amplitude into the
 Brake-Reuss beam's results. The
 beams carry the specimen's damping floor, one ratio per mode, as the modal damping matrix
-of the stuck system (the ring-down's, :func:`~iwan_element.models.reduced.damping.floor_damping`);
-the joint damps through the contact points' Iwan elements. Time integration: generalized-alpha at spectral radius 0.98 (a little
-numerical damping of the kHz axial and contact modes the force's switch-on excites). The
-trapezoidal rule answers a force at ``W_d`` as the continuous system answers one at
+of the stuck system (the ring-down's,
+:func:`~iwan_element.models.reduced.damping.floor_damping`); the joint damps through the
+contact points' Iwan elements. Time integration: generalized-alpha at spectral radius 0.98
+(a little numerical damping of the kHz axial and contact modes the force's switch-on
+excites). The trapezoidal rule answers a force at ``W_d`` as the continuous system answers one at
 ``W = (2/h) tan(W_d h / 2)`` (the bilinear map; for the ring-down, the period correction of
 ``docs/beam_tests.md``): each frequency ``W`` is driven at ``W_d`` with
 ``steps_per_period`` steps a period of ``W_d`` (:func:`prewarp`), so the amplitudes are read

@@ -34,6 +34,9 @@ The energy is ``1/2 v'^T M' v'`` (kinetic), ``1/2 z^T T^T Kb T z`` (the bodies' 
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+from typing import Any
+
 import exudyn as exu
 import numpy as np
 import scipy.linalg as sla
@@ -48,11 +51,14 @@ from exudyn.itemInterface import (
 )
 
 from iwan_element import IwanJoint
-from iwan_element.exudyn import add_iwan_interface
+from iwan_element.exudyn import IwanInterface, add_iwan_interface
 
 from ..linear.system import LinearSystem
 from ..reduced.damping import floor_damping
 from ..reduced.dispatch import contact_points, linear_system
+from ..solid.specimen import SolidSpecimen
+from ..specimens.contact import ContactPoints
+from ..specimens.specimen import Specimen
 
 __all__ = ["port_basis", "HostModel", "build_host"]
 
@@ -74,6 +80,7 @@ def port_basis(R) -> tuple:
     return T, np.vstack([N.T, R]), N.shape[1]
 
 
+@dataclass(eq=False, repr=False)
 class HostModel:
     """The assembled Exudyn system of a specimen (:func:`build_host`).
 
@@ -85,8 +92,24 @@ class HostModel:
     its coordinate in ``z``).
     """
 
-    def __init__(self, **kw):
-        self.__dict__.update(kw)
+    # eq=False, repr=False: an assembled system compares and hashes by identity, and its
+    # repr does not print the matrices
+    specimen: Specimen | SolidSpecimen
+    SC: Any  # exudyn.SystemContainer
+    mbs: Any  # exudyn.MainSystem
+    L: LinearSystem
+    points: ContactPoints
+    interface: IwanInterface | None
+    T: np.ndarray
+    T_inv: np.ndarray
+    n_eta: int
+    node: Any  # exudyn.NodeIndex
+    Mz: np.ndarray
+    Kb: np.ndarray
+    Ks: np.ndarray
+    floor_C: np.ndarray | None
+    ground: Any  # exudyn.MarkerIndex
+    ports: dict[str, int]
 
     def port_marker(self, name: str) -> int:
         """A new marker on port ``name``'s coordinate."""
@@ -177,8 +200,9 @@ def build_host(
         raise ValueError(f"tangential must be 'iwan' or 'linear', got {tangential!r}")
     L: LinearSystem = linear_system(specimen)
     pts = contact_points(specimen)
-    names = list(ports or {})
-    extra = [np.asarray(ports[k], float) for k in names]
+    rows = ports or {}
+    names = list(rows)
+    extra = [np.asarray(rows[k], dtype=np.float64) for k in names]
     T, T_inv, n_eta = port_basis(np.vstack([L.G] + extra) if extra else L.G)
     n, m = T.shape[1], len(pts)
 

@@ -210,7 +210,9 @@ def quasi_static_test(
     sim.staticSolver.loadStepDuration = duration
     sim.solution.sensors.writePeriod = duration / n
     mbs.SolveStatic(sim)
-    rec = model.interface.records()
+    iface = model.interface
+    assert iface is not None  # built with the Iwan elements (tangential="iwan")
+    rec = iface.records()
     t = np.asarray(rec["time"])
     data = mbs.GetSensorStoredData(sensor)
     out = QuasiStaticResult(
@@ -219,7 +221,7 @@ def quasi_static_test(
         machine_force=np.interp(t, data[:, 0], data[:, 1]),
         slip=np.asarray(rec["slip"]),
         force=np.asarray(rec["force"]),
-        dissipated=np.asarray(model.interface.dissipated_energy_history),
+        dissipated=np.asarray(iface.dissipated_energy_history),
         specimen=s,
         metadata={"amplitude": u0, "frequency": f, "cycles": cycles, "steps_per_cycle": steps},
     )

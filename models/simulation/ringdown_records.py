@@ -46,14 +46,16 @@ class Recorder:
 
     def __init__(self, effs, floor_work, record_energy: bool):
         self.effs, self.floor_work, self.record = effs, floor_work, record_energy
-        self.times, self.coords = [], []
-        self.energy = {k: [] for k in E_KEYS}
+        self.times: list[float] = []  # [s]
+        self.coords: list[np.ndarray] = []  # the host's coordinates z
+        self.energy: dict[str, list[float]] = {k: [] for k in E_KEYS}  # [J]
         self.model = None
         self.impact = None  # (Impact, row of its point in z) when one acts
         self.work_in, self.last = 0.0, None
         self.bar = None  # a progress bar over the steps, if asked
 
     def __call__(self, mbs_, t):
+        """Record the step accepted at time ``t`` [s]; returns True (Exudyn goes on)."""
         sd = mbs_.systemData
         self.times.append(t)
         if self.bar is not None and len(self.times) % 50 == 0:
@@ -162,8 +164,8 @@ def build_result(specimen, amp, rec, X, rel, rows, positions, h, n, run) -> Ring
                 + (
                     f"released from {amp[r]:.3g} m at the sensor"
                     if amp[r] is not None
-                    else f"struck by {run['impact'].peak_force:.4g} N over {run['impact'].contact_time:.3g} s"
-                    f" at {run['impact'].position:.4g} m"
+                    else f"struck by {run['impact'].peak_force:.4g} N over "
+                    f"{run['impact'].contact_time:.3g} s at {run['impact'].position:.4g} m"
                 )
                 + "; modal filtering"
                 + (f"; with {' + '.join(run['effects'])}" if run["effects"] else "")

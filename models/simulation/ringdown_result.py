@@ -114,19 +114,24 @@ class RingdownResult(ResultShape):
         """
         if quantity not in ("acceleration", "displacement"):
             raise ValueError(f"quantity must be 'acceleration' or 'displacement', got {quantity!r}")
+        positions = self.sensor_positions
+        records = (
+            self.sensor_acceleration if quantity == "acceleration" else self.sensor_displacement
+        )
+        if positions is None or records is None:
+            raise ValueError(
+                "sensor_curve needs the result's sensor records (sensor_positions, "
+                f"sensor_{quantity}), which this result does not hold"
+            )
         if (
             isinstance(sensor, bool)
             or not isinstance(sensor, int)
-            or not 0 <= sensor < len(self.sensor_positions)
+            or not 0 <= sensor < len(positions)
         ):
-            raise ValueError(
-                f"sensor must be an index below {len(self.sensor_positions)}, got {sensor!r}"
-            )
+            raise ValueError(f"sensor must be an index below {len(positions)}, got {sensor!r}")
         lo, hi = (float(b) for b in band)
         h = self.metadata["h"]
-        y = (self.sensor_acceleration if quantity == "acceleration" else self.sensor_displacement)[
-            sensor
-        ]
+        y = records[sensor]
         return decay_curve(
             self.t,
             y,
@@ -135,7 +140,7 @@ class RingdownResult(ResultShape):
             n_periods,
             band=(lo, hi),
             quantity=quantity,
-            notes=f"sensor at {self.sensor_positions[sensor]:.4g} m",
+            notes=f"sensor at {positions[sensor]:.4g} m",
         )
 
     def mode_curve(self, mode: int) -> AmplitudeCurve:
@@ -255,8 +260,9 @@ def with_energy_warning(out: RingdownResult) -> RingdownResult:
             warnings=out.warnings
             + (
                 f"the energy balance is off by {err:.2g} of the release energy (more than "
-                f"{ENERGY_TOL:g}; the time integrator's quadrature of the joint forces accounts for "
-                f"{out.metadata['joint_quadrature_error']:.2g}): refine steps_per_period",
+                f"{ENERGY_TOL:g}; the time integrator's quadrature of the joint forces "
+                f"accounts for {out.metadata['joint_quadrature_error']:.2g}): "
+                "refine steps_per_period",
             ),
         )
     return out

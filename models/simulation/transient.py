@@ -105,7 +105,7 @@ def _check_args(specimen, steps_per_period, n_periods, cycles, duration):
     )
 
 
-def _release(specimen: Specimen, amp: dict) -> dict:
+def _release(specimen: Specimen | SolidSpecimen, amp: dict) -> dict:
     """The release state: the sum of each mode's static deflection under ``alpha_r M phi_r``
     reaching its amplitude at the sensor (:func:`static_modal_load`), and the modes.
     """
@@ -119,7 +119,7 @@ def _release(specimen: Specimen, amp: dict) -> dict:
     }
 
 
-def _start(specimen: Specimen, mode, amplitude, impact, modes):
+def _start(specimen: Specimen | SolidSpecimen, mode, amplitude, impact, modes):
     """``(amp, state)``: ``{mode: release amplitude or None}`` and the start state (the
     release of :func:`_release`, or rest for an impact, with the stuck modes of ``modes``).
     """

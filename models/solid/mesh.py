@@ -70,6 +70,7 @@ class SolidPart:
 
     @property
     def n_coordinates(self) -> int:
+        """Coordinates of the mesh: ``x, y, z`` per node (``3 * len(positions)``)."""
         return 3 * len(self.positions)
 
     def face_areas(self) -> tuple[np.ndarray, np.ndarray]:

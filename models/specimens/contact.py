@@ -95,14 +95,17 @@ class ContactPoints:
 
     @property
     def Fs(self) -> np.ndarray:
+        """Slip force ``Fs`` of each point's Iwan element [N], shape (n,)."""
         return np.array([p.Fs for p in self.params])
 
     @property
     def KT(self) -> np.ndarray:
+        """Tangential stiffness ``KT`` of each point's Iwan element [N/m], shape (n,)."""
         return np.array([p.KT for p in self.params])
 
     @property
     def phi_max(self) -> np.ndarray:
+        """Slip displacement ``phi_max`` of each point's strongest slider [m], shape (n,)."""
         return np.array([p.phi_max for p in self.params])
 
 
@@ -117,15 +120,17 @@ def beam_contact_points(specimen: Specimen) -> ContactPoints:
     """
     s, itf = specimen, specimen.interface
     if itf.model == "lumped":
-        xs, N, A = [], [], []
+        xs: list[float] = []  # [m]
+        Ns: list[float] = []  # [N]
+        As: list[float] = []  # [m^2]
         rc, rh = s.cone_radius, 0.5 * s.bolt_diameter
         cone_area = np.pi * (rc * rc - rh * rh)
         for xb in s.bolt_positions:
             for d in (-0.5 * rc, 0.5 * rc):
                 xs.append(min(max(xb + d, 0.0), s.overlap))
-                N.append(0.5 * s.preload)
-                A.append(0.5 * cone_area)
-        x, N, A = np.array(xs), np.array(N), np.array(A)
+                Ns.append(0.5 * s.preload)
+                As.append(0.5 * cone_area)
+        x, N, A = np.array(xs), np.array(Ns), np.array(As)
     else:
         n = itf.n_points
         xg, _, p = pressure_field(s, nx=max(600, 15 * n))

@@ -56,7 +56,7 @@ def prior_band(
         )
     gen = np.random.default_rng(rng)
     st0 = modal_state(specimen)
-    out = {int(r): [] for r in modes}
+    out: dict[int, list[float]] = {int(r): [] for r in modes}  # {mode: frequencies [Hz]}
     for _ in range(int(n)):
         vals = {}
         for u in rows:

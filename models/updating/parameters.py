@@ -16,6 +16,7 @@ their ranges allow in :mod:`~iwan_element.models.updating.band`, the update in
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from typing import Any
 
 from ..reduced.dispatch import check_specimen
 from ..specimens.setups import Clamp, Setup
@@ -89,6 +90,7 @@ class Updatable:
         return self.lower > 0
 
     def to_dict(self) -> dict:
+        """The fields by name (nominal and range in ``unit``)."""
         return {
             "name": self.name,
             "group": self.group,
@@ -221,7 +223,8 @@ def with_parameters(specimen, values: dict):
     """A copy of ``specimen`` with the updatable parameters ``values`` ({name: value}) set
     (the same type: a solid keeps its bodies, scaled for the material).
     """
-    changes, st = {}, _setup(specimen)
+    changes: dict[str, Any] = {}  # the specimen's fields: values, or a new setup
+    st = _setup(specimen)
     masses = {m.name: m for m in st.masses}
     sh, cl = st.shaker, st.clamp
     for name, v in values.items():
@@ -231,7 +234,8 @@ def with_parameters(specimen, values: dict):
         elif name.startswith("mass:") and name[5:] in masses:
             masses[name[5:]] = replace(masses[name[5:]], mass=v)
         elif name.startswith("shaker.") and sh is not None:
-            sh = replace(sh, **{name[7:]: v})
+            shaker_change: dict[str, Any] = {name[7:]: v}  # one of its numeric fields
+            sh = replace(sh, **shaker_change)
         elif name.startswith("clamp.") and cl is not None:
             cl = Clamp(
                 **{**{"translational": cl.translational, "rotational": cl.rotational}, name[6:]: v}

@@ -11,6 +11,9 @@ from iwan_element.base.result_shape import ResultShape, panels, table_lines
 from iwan_element.base.serialize import json_safe
 from iwan_element.fitting import ParameterTable
 
+from ..solid.specimen import SolidSpecimen
+from ..specimens.specimen import Specimen
+
 __all__ = ["LinearUpdateResult"]
 
 
@@ -47,8 +50,8 @@ class LinearUpdateResult(ResultShape):
 
     plot_panels = 1
 
-    specimen: object
-    initial: object
+    specimen: Specimen | SolidSpecimen
+    initial: Specimen | SolidSpecimen
     params: ParameterTable
     groups: dict
     nominal: dict
@@ -70,6 +73,7 @@ class LinearUpdateResult(ResultShape):
         return self.converged and not self.warnings
 
     def failure_reasons(self) -> tuple:
+        """Why ``success`` is False: no convergence, then every warning (empty when usable)."""
         if self.success:
             return ()
         return (() if self.converged else ("the update did not converge",)) + tuple(self.warnings)
@@ -80,6 +84,7 @@ class LinearUpdateResult(ResultShape):
         return p["frequency"], p["stderr"]
 
     def report(self) -> str:
+        """Human-readable account: the parameters, the targets and the predictions [Hz]."""
         lines = [
             f"Linear update of {self.initial.name!r}: {self.verdict()}",
             f"  {'parameter':34s} {'nominal':>12s} {'updated':>12s} {'stderr':>10s} "
@@ -130,6 +135,7 @@ class LinearUpdateResult(ResultShape):
         return "\n".join(lines)
 
     def to_dict(self) -> dict:
+        """JSON-safe: the parameters, residuals, predictions, chi2, success and warnings."""
         return json_safe(
             {
                 "params": self.params.to_dict(),

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import scipy.linalg as sla
@@ -147,7 +148,7 @@ def modal_sensitivities(specimen, modes, params, *, positions=(), state=None) ->
     st = modal_state(specimen) if state is None else state
     D = matrix_derivatives(specimen, params)
     R = axis_rows(specimen, list(positions)) if len(positions) else np.zeros((0, st.M.shape[0]))
-    out = {k: {} for k in ("f", "df", "shape", "dshape", "c", "dc")}
+    out: dict[str, Any] = {k: {} for k in ("f", "df", "shape", "dshape", "c", "dc")}
     for r, k in modes.items():
         lam, p = st.lam[k], st.phi[:, k]
         f = math.sqrt(abs(lam)) / (2 * math.pi)
