@@ -127,7 +127,7 @@ class PredictionBands(ResultShape):
         )
 
     def band(self, name: str):
-        """``(low, median, high)`` quantiles of ``"frequency"``, ``"damping_ratio"`` or ``"peak"``."""
+        """``(low, median, high)`` quantiles of ``"frequency"``, ``"damping_ratio"``, ``"peak"``."""
         if name not in ("frequency", "damping_ratio", "peak"):
             raise ValueError(f"name must be 'frequency', 'damping_ratio' or 'peak', got {name!r}")
         data = getattr(self, name)
@@ -150,6 +150,7 @@ class PredictionBands(ResultShape):
         return bool(n > 0 and len(self.ensemble.errors) <= n / 3)
 
     def report(self) -> str:
+        """Plain-text table of the bands: frequency [Hz], damping ratio [-], peak, per amplitude."""
         lines = [
             f"Prediction bands ({100 * self.level:.0f} % central) from {self._source}: "
             f"{self.frequency.shape[0]} samples on {self.ensemble.executor}, "
@@ -186,6 +187,7 @@ class PredictionBands(ResultShape):
         return "\n".join(lines + [f"  warning: {w}" for w in self.warnings])
 
     def to_dict(self) -> dict:
+        """The bands as a JSON-safe dict (low, median, high, nominal per quantity)."""
         q = {}
         for name in ("frequency", "damping_ratio") + (("peak",) if self.peak is not None else ()):
             lo, med, hi = self.band(name)

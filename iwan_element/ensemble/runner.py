@@ -61,6 +61,7 @@ class TaskError:
     traceback: str = ""
 
     def to_dict(self) -> dict:
+        """The failed member as a JSON-safe dict (index, parameters, message, traceback)."""
         return json_safe(
             {
                 "index": self.index,

@@ -7,8 +7,12 @@ from __future__ import annotations
 import logging
 import math
 import weakref
+from typing import TYPE_CHECKING
 
 import exudyn as exu
+
+if TYPE_CHECKING:
+    from ._connector_handle import IwanConnector
 
 __all__: list[str] = []
 

@@ -113,6 +113,7 @@ class IwanCartesianConnector:
 
     @property
     def n_records(self) -> int:
+        """Number of recorded steps common to every direction's connector."""
         return min(c.n_records for c in self._connectors)
 
     def _stack(self, name: str) -> np.ndarray:

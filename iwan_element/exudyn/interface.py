@@ -24,8 +24,8 @@ of each point, so it is exact for any step from a stack of at most ``depth`` poi
 from a deeper stack that closes so many loops that it needs an older point is detected
 after the exact commit (the bank walks the full stack), by evaluating the law at the
 accepted slip with the previous state (only for points whose stack was deeper than
-``depth`` and got shorter, i.e. that closed a loop). Such a step is logged as a warning and its time is listed in
-:attr:`IwanInterface.overflow_times`; raise ``depth`` if that happens (it needs
+``depth`` and got shorter, i.e. that closed a loop). Such a step is logged as a warning and its
+time is listed in :attr:`IwanInterface.overflow_times`; raise ``depth`` if that happens (it needs
 ``depth // 2`` loop closures inside one time step).
 """
 

@@ -13,8 +13,9 @@ condition that was not tested (:meth:`CampaignFit.predict`). The procedure
    (the product of the records' evidences, :mod:`.probability`; the effects named
    on at least half of the records when they were diagnosed without probabilities), or
    ``effects=``; every other explanation probable enough to be averaged gets its own
-   campaign model (``CampaignFit.alternatives``, for :meth:`CampaignFit.averaged_band`); each quantity ``q`` of the stack (``Fs``, ``ln phi_max``, ``chi``,
-   ``ln(1 + beta)``, every effect parameter per ``Fs**fs_power``, as ``ln(value - lower)``
+   campaign model (``CampaignFit.alternatives``, for :meth:`CampaignFit.averaged_band`);
+   each quantity ``q`` of the stack (``Fs``, ``ln phi_max``, ``chi``, ``ln(1 + beta)``, every effect
+   parameter per ``Fs**fs_power``, as ``ln(value - lower)``
    when it is bounded on one side only, e.g. a gap or a drag) follows a law linear in
    the conditions, ``q = a + sum_c b_c x_c`` (by default in every condition that varies;
    ``laws=`` states others, e.g. ``{"chi": ()}`` for a constant);

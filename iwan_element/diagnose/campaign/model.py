@@ -337,6 +337,7 @@ class CampaignModel:
         return out
 
     def start(self, theta, r) -> float:
+        """Slip ``u0`` [m] at the start of record ``r`` (fitted start times ``x_max``; 0: none)."""
         k = self.start_pos.get(r)
         return 0.0 if k is None else float(theta[k]) * self.records[r].x_max
 

@@ -122,6 +122,7 @@ class AveragedBand(ResultShape):
 
     @property
     def plot_panels(self) -> int:
+        """Number of axes :meth:`plot` draws on: one per channel."""
         return len(self.channels)
 
     @property
@@ -136,6 +137,7 @@ class AveragedBand(ResultShape):
         )
 
     def to_dict(self) -> dict:
+        """The averaged prediction as a JSON-safe dict (channels in their own units)."""
         return json_safe(
             {
                 "x": self.x,

@@ -27,6 +27,7 @@ class SlipRecords:
         self.clear()
 
     def clear(self) -> None:
+        """Drop every row and the replay; return None."""
         cap = _START if self.on else 0
         self.n = 0
         self.t = np.empty(cap)
@@ -38,6 +39,7 @@ class SlipRecords:
         self._diss = np.empty(0)
 
     def append(self, t, u) -> None:
+        """Append the row ``(t [s], u [m])``, growing the buffers; return None."""
         k = self.n
         if k == len(self.t):
             cap = 2 * max(k, _START // 2)

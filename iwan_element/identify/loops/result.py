@@ -243,7 +243,7 @@ class FitResult(ResultShape):
                 rel = f" {100 * se / abs(v):.2g} %" if v != 0 and k in ("Fs", "KT") else ""
                 status = status_text(True) + rel
             lines.append(f"  {label}  {f.format(v):>12}  {se_txt:>12}   {status}")
-        for name, (key, unit, scale) in {
+        for name, (key, _unit, scale) in {
             "dF0 [N]  ": ("force", "N", 1.0),
             "du0 [um] ": ("displacement", "um", 1e6),
         }.items():

@@ -191,6 +191,7 @@ class AmplitudeCurve(ResultShape):
         }
 
     def to_json(self) -> str:
+        """The curve as a JSON string (:meth:`to_dict`, indented)."""
         return json.dumps(self.to_dict(), indent=2)
 
     def report(self) -> str:
