@@ -231,7 +231,8 @@ class ParameterUncertainty(ResultShape):
         n = check_int("n", n, 1)
         if not isinstance(rng, np.random.Generator):
             raise ValueError(f"rng must be a numpy Generator, got {type(rng).__name__}")
-        out, drawn = [], 0
+        out: list[dict] = []
+        drawn = 0
         while len(out) < n:
             if drawn > 100 * n:
                 raise RuntimeError(

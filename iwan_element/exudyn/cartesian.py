@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import logging
 from numbers import Integral
+from typing import Any
 
 import exudyn as exu
 import numpy as np
@@ -269,7 +270,7 @@ def create_iwan_connector(
         "color": [float(x) for x in color],
     }
     items = _items(bodyNumbers, localPosition0, localPosition1)
-    common = dict(
+    common: dict[str, Any] = dict(
         record=record, law=law, depth=depth, allow_adaptive_explicit=allow_adaptive_explicit
     )
     check_run_options(**common)

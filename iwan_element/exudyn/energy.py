@@ -187,7 +187,7 @@ class EnergyRecorder:
             raise ValueError(f"tolerance must be in (0, 1), got {tolerance!r}")
         t = np.array(self._t)
         stored, dissipated = self._joint_energies(t)
-        own = set()  # booked by the joints themselves
+        own: set[int] = set()  # booked by the joints themselves
         for j in self._joints:
             own.update(
                 int(o)

@@ -75,7 +75,7 @@ def _record_task(params, rng):
 
 
 def _pack(prep: dict) -> dict:
-    out = {f"prep_{k}": np.asarray(prep[k], float) for k in _ARRAYS}
+    out: dict[str, np.ndarray | str] = {f"prep_{k}": np.asarray(prep[k], float) for k in _ARRAYS}
     out["meta"] = json.dumps(json_safe({k: v for k, v in prep.items() if k not in _ARRAYS}))
     return out
 
@@ -200,7 +200,7 @@ def record_values(model, theta, preps, *, max_nfev: int = 60):
     :func:`.model.in_range` gives; None where that fit fails. The record-to-record
     scatter about the laws is read from them (:func:`.model.deviations`).
     """
-    out = []
+    out: list[dict | None] = []
     for r, p in enumerate(preps):
         sub = build_model(
             [p], model.names, dict.fromkeys(model.qnames, ()), model.cnames, model.X[[r]]

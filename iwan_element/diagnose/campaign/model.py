@@ -318,7 +318,7 @@ class CampaignModel:
         value, the misfit no longer depends on the law's coefficients, and their standard
         errors claim a precision the records do not give.
         """
-        out = {}
+        out: dict[str, list[int]] = {}
         for r, rm in enumerate(self.records):
             vals = self.law_values(theta, self.X[r])
             _, (phi, chi, beta), effs = self.physical(vals, rm)  # the one place that clips

@@ -121,7 +121,7 @@ class AveragedBand(ResultShape):
     level: float
 
     @property
-    def plot_panels(self) -> int:
+    def plot_panels(self) -> int:  # type: ignore[override]  # read-only: one per channel
         """Number of axes :meth:`plot` draws on: one per channel."""
         return len(self.channels)
 

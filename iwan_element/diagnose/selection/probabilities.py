@@ -405,6 +405,9 @@ class Probable:
     :class:`~.campaign.CampaignFit`; reads the result's ``explanations``).
     """
 
+    # declared for the type checker only (no default: each result's dataclass field holds it)
+    explanations: tuple  # of Explanation, most probable first
+
     @property
     def probabilities(self) -> dict:
         """``{explanation: posterior probability}``: each explanation the diagnosis fitted,

@@ -133,7 +133,7 @@ class VibrationDiagnosis(Probable, ResultShape):
                     key, v, e, unit=sp.unit, identified=verdict(key, v, e, at_bound=key in at)[0]
                 )
             )
-        return ParameterTable(out)
+        return ParameterTable(tuple(out))
 
     @property
     def success(self) -> bool:

@@ -21,6 +21,8 @@ _START = 1024
 class SlipRecords:
     """Rows ``(t, slip[n_points])`` and the replayed ``force``, ``work``, ``diss``."""
 
+    _replay: IwanJointBank | None  # the bank the rows are replayed on (None: not yet)
+
     def __init__(self, n_points: int, on: bool):
         self.on = on
         self.n_points = n_points

@@ -492,12 +492,12 @@ def _gradient(fun, theta):
 def _table(params, stderr, bad) -> ParameterTable:
     """The reported parameters as a :class:`~iwan_element.fitting.ParameterTable`."""
     return ParameterTable(
-        [
+        tuple(
             Parameter(
                 k, float(v), float(stderr.get(k, math.nan)), unit=_UNITS[k], identified=k not in bad
             )
             for k, v in params.items()
-        ]
+        )
     )
 
 

@@ -416,7 +416,7 @@ class ModalTargets(ResultShape):
         ]
 
     def _tables(self) -> list:
-        out = [
+        out: list[tuple[str, tuple[str, ...], list]] = [
             (
                 "modes",
                 (
