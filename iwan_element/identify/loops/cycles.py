@@ -112,7 +112,7 @@ def check_varies(u: np.ndarray) -> None:
 
 
 def default_hysteresis(u: np.ndarray) -> float:
-    """Default reversal hysteresis [m]: 10 noise sigmas or 1 % of the half range."""
+    """Default reversal hysteresis [m]: the larger of 10 noise sigmas and 1 % of the half range."""
     half_range = 0.5 * float(u.max() - u.min())
     return max(10.0 * _noise_sigma(u), 0.01 * half_range)
 
