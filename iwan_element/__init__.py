@@ -6,7 +6,6 @@ connector lives in :mod:`iwan_element.exudyn`, which is the only module importin
 
 from importlib.metadata import version as _version
 
-from .core import closed_form
 from .core.closed_form import (
     backbone,
     backbone_work,
@@ -83,7 +82,18 @@ from .identify.sweeps.sweep import sweep_curve
 __version__ = _version("iwan-element")
 
 __all__ = [
-    *closed_form.__all__,  # the paper's closed forms, as that module lists them
+    # the paper's closed forms, in the order of core.closed_form.__all__
+    "backbone",
+    "tangent_stiffness",
+    "secant_stiffness",
+    "force_amplitude",
+    "dissipation",
+    "dissipation_slope",
+    "masing_loop",
+    "backbone_work",
+    "normalized_backbone",
+    "masing_descending",
+    "masing_ascending",
     "IwanParameters",
     "IwanJoint",
     "IwanJointBank",

@@ -175,7 +175,7 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _run_diagnose(args) -> int:
+def _run_diagnose(args) -> tuple[int, list[str]]:
     from .diagnose import diagnose
     from .identify.files.csv_input import FORCE_UNITS, load_test
 
@@ -221,7 +221,7 @@ def _run_diagnose(args) -> int:
     ] + wrote
 
 
-def _run_diagnose_many(args) -> int:
+def _run_diagnose_many(args) -> tuple[int, list[str]]:
     """Several records: one table on stdout, one JSON (and CSV table) for the run."""
     from concurrent.futures import ProcessPoolExecutor
 
@@ -320,7 +320,7 @@ def _write_plot(path: Path, data, result) -> None:
     fig.savefig(path, dpi=120)
 
 
-def _run_fit(args) -> int:
+def _run_fit(args) -> tuple[int, list[str]]:
     from .identify.files.csv_input import FORCE_UNITS, load_test
     from .identify.loops.dissipation import fit_dissipation
     from .identify.loops.fit import fit_loops

@@ -194,6 +194,14 @@ def test_every_public_result_class_is_covered():
     assert public - {"IwanParameters", "UffRecord", "ModeTarget"} == set(RESULTS)
 
 
+def test_top_level_exports_every_closed_form():
+    """The top level's ``__all__`` names each closed form (written out for static tools)."""
+    from iwan_element.core import closed_form
+
+    assert set(closed_form.__all__) <= set(ie.__all__)
+    assert all(getattr(ie, n) is getattr(closed_form, n) for n in closed_form.__all__)
+
+
 @functools.cache
 def _built(name):
     """One result per class, built once (the parts below only read it)."""

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import functools
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, cast
 
 import numpy as np
 
@@ -14,6 +15,9 @@ from ..core.parameters import IwanParameters
 from .oscillator import SingleModeSystem, modal_curve, peak_response
 from .runner import EnsembleResult, run_ensemble
 from .uncertainty import ParameterUncertainty
+
+if TYPE_CHECKING:
+    from ..identify.modal.result import ModalIwanFit
 
 __all__ = ["PredictionBands", "propagate_uncertainty", "response_task", "modal_fit_task"]
 
@@ -116,7 +120,7 @@ class PredictionBands(ResultShape):
     level: float
     force: float | None
     system: SingleModeSystem | None
-    uncertainty: object
+    uncertainty: ParameterUncertainty | ModalIwanFit
     ensemble: EnsembleResult
 
     @property
@@ -127,7 +131,7 @@ class PredictionBands(ResultShape):
         )
 
     def band(self, name: str):
-        """``(low, median, high)`` quantiles of ``"frequency"``, ``"damping_ratio"`` or ``"peak"``."""
+        """``(low, median, high)`` quantiles of ``"frequency"``, ``"damping_ratio"``, ``"peak"``."""
         if name not in ("frequency", "damping_ratio", "peak"):
             raise ValueError(f"name must be 'frequency', 'damping_ratio' or 'peak', got {name!r}")
         data = getattr(self, name)
@@ -137,7 +141,7 @@ class PredictionBands(ResultShape):
         return tuple(np.quantile(data, q, axis=0))
 
     @property
-    def plot_panels(self) -> int:
+    def plot_panels(self) -> int:  # type: ignore[override]  # read-only: set by ``peak``
         """Frequency and damping, and the peak response when there is one."""
         return 3 if self.peak is not None else 2
 
@@ -150,6 +154,7 @@ class PredictionBands(ResultShape):
         return bool(n > 0 and len(self.ensemble.errors) <= n / 3)
 
     def report(self) -> str:
+        """Plain-text table of the bands: frequency [Hz], damping ratio [-], peak, per amplitude."""
         lines = [
             f"Prediction bands ({100 * self.level:.0f} % central) from {self._source}: "
             f"{self.frequency.shape[0]} samples on {self.ensemble.executor}, "
@@ -186,6 +191,7 @@ class PredictionBands(ResultShape):
         return "\n".join(lines + [f"  warning: {w}" for w in self.warnings])
 
     def to_dict(self) -> dict:
+        """The bands as a JSON-safe dict (low, median, high, nominal per quantity)."""
         q = {}
         for name in ("frequency", "damping_ratio") + (("peak",) if self.peak is not None else ()):
             lo, med, hi = self.band(name)
@@ -331,7 +337,7 @@ def propagate_uncertainty(
     if force is not None:
         force = check_scalar("force", force, low=0.0, low_open=True)
     if seed is None:
-        seed = int(np.random.SeedSequence().entropy)
+        seed = int(cast(int, np.random.SeedSequence().entropy))  # drawn: always an int
     rng = np.random.default_rng(seed)
     if hasattr(source, "sample_parameters") and hasattr(source, "regime"):
         task, nominal_set, sets, unc, warns = _modal_fit_setup(

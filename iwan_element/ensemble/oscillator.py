@@ -13,10 +13,10 @@ secant stiffness paper eq. 24, joint dissipation paper eq. 17; evaluated by
     w(X)^2  = (K_inf + K_sec(X)) / m
     zeta(X) = zeta0 w0 / w(X) + D(X) / (2 pi m w(X)^2 X^2)
 
-(the dashpot dissipates ``pi c w X^2`` per cycle, hence ``zeta0 w0 / w``; docs/equations.md section 7 writes
-``zeta0`` for the same floor at ``w ~ w0``). :func:`peak_response` integrates the equation of
-motion with the exact :class:`~iwan_element.IwanJoint` (average-acceleration Newmark, Newton
-iterations with the joint's consistent tangent, one commit per accepted step).
+(the dashpot dissipates ``pi c w X^2`` per cycle, hence ``zeta0 w0 / w``; docs/equations.md
+section 7 writes ``zeta0`` for the same floor at ``w ~ w0``). :func:`peak_response` integrates
+the equation of motion with the exact :class:`~iwan_element.IwanJoint` (average-acceleration
+Newmark, Newton iterations with the joint's consistent tangent, one commit per accepted step).
 """
 
 from __future__ import annotations

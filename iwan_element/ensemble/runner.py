@@ -36,6 +36,7 @@ from dataclasses import dataclass
 from numbers import Number
 from os import PathLike
 from pathlib import Path
+from typing import Any, SupportsFloat, cast
 
 import numpy as np
 
@@ -61,6 +62,7 @@ class TaskError:
     traceback: str = ""
 
     def to_dict(self) -> dict:
+        """The failed member as a JSON-safe dict (index, parameters, message, traceback)."""
         return json_safe(
             {
                 "index": self.index,
@@ -138,7 +140,7 @@ class EnsembleResult(ResultShape):
         expanded to ``name[0], name[1], ...``) to ``path``; return the path.
         """
         p = Path(path)
-        expanded = []
+        expanded: list[tuple[str, tuple[str, int] | None]] = []
         for name in self.parameters + self.outputs:
             shape = next((np.shape(r[name]) for r in self.rows if name in r), ())
             if len(shape) == 0:
@@ -150,7 +152,7 @@ class EnsembleResult(ResultShape):
             w = csv.writer(fh)
             w.writerow(["index", "ok"] + [h for h, _ in expanded])
             for i, row in enumerate(self.rows):
-                cells = [i, bool(ok[i])]
+                cells: list[Any] = [i, bool(ok[i])]
                 for header, src in expanded:
                     if src is None:
                         cells.append(_cell(row.get(header, "")))
@@ -242,7 +244,7 @@ def _check_outputs(out, params: dict) -> dict:
     """Validate the dict ``func`` returned; arrays are copied to float ndarrays."""
     if not isinstance(out, Mapping):
         raise TypeError(f"func must return a dict of outputs, got {type(out).__name__}")
-    clean = {}
+    clean: dict[str, Any] = {}
     for key, value in out.items():
         if not isinstance(key, str):
             raise TypeError(f"output names must be str, got {key!r}")
@@ -251,7 +253,9 @@ def _check_outputs(out, params: dict) -> dict:
         if isinstance(value, (str, bool, np.bool_)):
             clean[key] = value if isinstance(value, str) else bool(value)
         elif isinstance(value, (Number, np.number)):
-            clean[key] = float(value) if not isinstance(value, (int, np.integer)) else int(value)
+            # numbers.Number declares no __float__ (typeshed); the real numbers all have one
+            real = cast(SupportsFloat, value)
+            clean[key] = float(real) if not isinstance(value, (int, np.integer)) else int(value)
         else:
             try:
                 arr = np.array(value, dtype=float)
@@ -385,7 +389,7 @@ def run_ensemble(
     return _assemble(sets, raw, root, where, time.perf_counter() - t0, warns)
 
 
-def _dispatch(func, sets, children, executor, bar):
+def _dispatch(func, sets, children, executor, bar) -> tuple[list, str, list[str]]:
     """Run the tasks; return ``(list of raw task results, description, warnings)``."""
     n = len(sets)
     warns: list[str] = []
@@ -395,7 +399,7 @@ def _dispatch(func, sets, children, executor, bar):
                 f"executor must be None, 'serial', a concurrent.futures.Executor or "
                 f"a dask.distributed.Client, got {executor!r}"
             )
-        raw = []
+        raw: list = []
         for i, (s, c) in enumerate(zip(sets, children)):
             raw.append(_run_task(func, i, s, c))
             if bar is not None:

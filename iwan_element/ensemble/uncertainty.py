@@ -1,8 +1,8 @@
 """From a fit's parameters and covariance to prediction bands of the structure's response.
 
 :class:`ParameterUncertainty` holds a Gaussian in the coordinates the fits use for their
-covariance (``ln Fs, ln KT, chi, ln(1 + beta)``, see :mod:`iwan_element.identify.loops.fit`), so that
-samples keep ``Fs, KT > 0`` and ``1 + beta > 0`` by construction; the remaining bounds
+covariance (``ln Fs, ln KT, chi, ln(1 + beta)``, see :mod:`iwan_element.identify.loops.fit`),
+so that samples keep ``Fs, KT > 0`` and ``1 + beta > 0`` by construction; the remaining bounds
 (``beta >= 0``, ``chi > -1``) are kept by rejection, which makes the distribution the
 truncated normal (the rejected fraction is reported). A fit that did not reach macroslip
 determines only ``(KT, chi, R)``: it is sampled in ``(ln KT, chi, ln R)`` and each sample is
@@ -231,7 +231,8 @@ class ParameterUncertainty(ResultShape):
         n = check_int("n", n, 1)
         if not isinstance(rng, np.random.Generator):
             raise ValueError(f"rng must be a numpy Generator, got {type(rng).__name__}")
-        out, drawn = [], 0
+        out: list[dict] = []
+        drawn = 0
         while len(out) < n:
             if drawn > 100 * n:
                 raise RuntimeError(
@@ -254,6 +255,7 @@ class ParameterUncertainty(ResultShape):
         return out, 1.0 - n / drawn if drawn else 0.0
 
     def report(self) -> str:
+        """Plain-text table of the coordinates' mean and standard deviation."""
         se = np.sqrt(np.diag(self.cov))
         lines = [
             f"Parameter uncertainty from {self.source}; nominal {self.nominal}",
@@ -265,6 +267,7 @@ class ParameterUncertainty(ResultShape):
         return "\n".join(lines + [f"  warning: {w}" for w in self.warnings])
 
     def to_dict(self) -> dict:
+        """The uncertainty as a JSON-safe dict (nominal, coordinates, mean, covariance)."""
         return json_safe(
             {
                 "nominal": self.nominal.to_dict(),

@@ -65,6 +65,7 @@ class IwanConnector:
         self._lF = 0.0
         self._object = None
         self._dispatcher = None
+        self._allow_adaptive_explicit = False  # set by add_iwan_connector
         self._read = None  # (q, q_t, i0, i1) on the fast route, else None (generic)
         self._fast_nodes = None  # set for two NodeCoordinate markers; resolved in _refresh
         self._accept = self._generic_accept

@@ -7,8 +7,13 @@ from __future__ import annotations
 import logging
 import math
 import weakref
+from typing import TYPE_CHECKING, Any
 
 import exudyn as exu
+
+if TYPE_CHECKING:
+    from ._connector_handle import IwanConnector
+    from .interface import IwanInterface
 
 __all__: list[str] = []
 
@@ -169,7 +174,7 @@ class _PostStepDispatcher:
             mbs.SetPostNewtonUserFunction(0 if self.pn_prev is None else self.pn_prev)
             self.pn_prev = None
 
-    def add(self, connector: IwanConnector) -> None:
+    def add(self, connector: IwanConnector | IwanInterface) -> None:
         self.connectors.append(connector)
         self.stale = True
 
@@ -322,6 +327,12 @@ class _SolveHook(dict):
     (:meth:`_PostStepDispatcher.before_solve`) - a ``ValueError`` raised here leaves
     ``SolveDynamic`` before the solver starts.
     """
+
+    # set on the instance by _dispatcher_for (annotations only: a dict subclass's attributes)
+    mbs: Any  # the exudyn MainSystem
+    dispatchers: list[_PostStepDispatcher]
+    kind: str
+    pending: bool
 
     def __setitem__(self, key, value):
         super().__setitem__(key, value)

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import logging
 from numbers import Integral
+from typing import Any
 
 import exudyn as exu
 import numpy as np
@@ -113,6 +114,7 @@ class IwanCartesianConnector:
 
     @property
     def n_records(self) -> int:
+        """Number of recorded steps common to every direction's connector."""
         return min(c.n_records for c in self._connectors)
 
     def _stack(self, name: str) -> np.ndarray:
@@ -268,7 +270,7 @@ def create_iwan_connector(
         "color": [float(x) for x in color],
     }
     items = _items(bodyNumbers, localPosition0, localPosition1)
-    common = dict(
+    common: dict[str, Any] = dict(
         record=record, law=law, depth=depth, allow_adaptive_explicit=allow_adaptive_explicit
     )
     check_run_options(**common)

@@ -187,7 +187,7 @@ class EnergyRecorder:
             raise ValueError(f"tolerance must be in (0, 1), got {tolerance!r}")
         t = np.array(self._t)
         stored, dissipated = self._joint_energies(t)
-        own = set()  # booked by the joints themselves
+        own: set[int] = set()  # booked by the joints themselves
         for j in self._joints:
             own.update(
                 int(o)
@@ -415,6 +415,7 @@ class EnergyBalance(ResultShape):
         return bool(not self.not_booked and self.scale > 0 and self.max_error <= self.tolerance)
 
     def failure_reasons(self) -> tuple:
+        """Why the balance fails, one sentence each (empty when it holds)."""
         if self.success:
             return ()
         out = []
@@ -472,6 +473,7 @@ class EnergyBalance(ResultShape):
         ]
 
     def report(self) -> str:
+        """Plain-text energy balance: the verdict, then each term's final value [J]."""
         lines = [
             self.verdict(),
             f"Energy balance over {len(self.t)} steps, t = {self.t[0]:.4g} to {self.t[-1]:.4g} s",
@@ -496,6 +498,7 @@ class EnergyBalance(ResultShape):
         return "\n".join(lines)
 
     def to_dict(self) -> dict:
+        """The balance as a dict (errors [-], energies [J])."""
         return {
             "success": self.success,
             "max_error": self.max_error,
@@ -510,6 +513,7 @@ class EnergyBalance(ResultShape):
         }
 
     def plot(self, ax=None) -> list:
+        """Draw each energy term [J] against time [s] on ``ax``; return the artists."""
         (a,) = panels(ax, 1)
         out = []
         for name in self._PARTS:

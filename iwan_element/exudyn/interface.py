@@ -24,8 +24,8 @@ of each point, so it is exact for any step from a stack of at most ``depth`` poi
 from a deeper stack that closes so many loops that it needs an older point is detected
 after the exact commit (the bank walks the full stack), by evaluating the law at the
 accepted slip with the previous state (only for points whose stack was deeper than
-``depth`` and got shorter, i.e. that closed a loop). Such a step is logged as a warning and its time is listed in
-:attr:`IwanInterface.overflow_times`; raise ``depth`` if that happens (it needs
+``depth`` and got shorter, i.e. that closed a loop). Such a step is logged as a warning and its
+time is listed in :attr:`IwanInterface.overflow_times`; raise ``depth`` if that happens (it needs
 ``depth // 2`` loop closures inside one time step).
 """
 
@@ -33,6 +33,8 @@ from __future__ import annotations
 
 import logging
 import math
+from collections.abc import Callable
+from typing import Any
 
 import exudyn as exu
 import numpy as np
@@ -75,6 +77,13 @@ class IwanInterface:
     interface totals :attr:`stored_energy_history`, :attr:`dissipated_energy_history`,
     :attr:`work_history` (n,).
     """
+
+    # set by add_iwan_interface after construction (annotations only; _axis, _uc_matrix and
+    # _set_uc on the symbolic route)
+    _offsets: list[float]  # slip offset of each point [m]
+    _axis: tuple[float, float, float] | None  # unit axis of a position interface
+    _uc_matrix: Any  # exudyn.symbolic Matrix of the committed slips
+    _set_uc: Callable[[list[list[float]]], None]  # its SetMatrix
 
     def __init__(self, mbs, pairs, kind, route, record):
         self._mbs = mbs

@@ -1,5 +1,7 @@
 """Identification, by the data a tester holds (bottom to top; a room imports only rooms below
-it):
+it).
+
+The rooms:
 
 * :mod:`.loops`: force-displacement loops (a quasi-static or cyclic test): the loop and
   dissipation fits of the four parameters, their identifiability and uncertainty, the

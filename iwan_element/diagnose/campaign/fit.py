@@ -13,8 +13,9 @@ condition that was not tested (:meth:`CampaignFit.predict`). The procedure
    (the product of the records' evidences, :mod:`.probability`; the effects named
    on at least half of the records when they were diagnosed without probabilities), or
    ``effects=``; every other explanation probable enough to be averaged gets its own
-   campaign model (``CampaignFit.alternatives``, for :meth:`CampaignFit.averaged_band`); each quantity ``q`` of the stack (``Fs``, ``ln phi_max``, ``chi``,
-   ``ln(1 + beta)``, every effect parameter per ``Fs**fs_power``, as ``ln(value - lower)``
+   campaign model (``CampaignFit.alternatives``, for :meth:`CampaignFit.averaged_band`);
+   each quantity ``q`` of the stack (``Fs``, ``ln phi_max``, ``chi``, ``ln(1 + beta)``, every effect
+   parameter per ``Fs**fs_power``, as ``ln(value - lower)``
    when it is bounded on one side only, e.g. a gap or a drag) follows a law linear in
    the conditions, ``q = a + sum_c b_c x_c`` (by default in every condition that varies;
    ``laws=`` states others, e.g. ``{"chi": ()}`` for a constant);
@@ -74,7 +75,7 @@ def _record_task(params, rng):
 
 
 def _pack(prep: dict) -> dict:
-    out = {f"prep_{k}": np.asarray(prep[k], float) for k in _ARRAYS}
+    out: dict[str, np.ndarray | str] = {f"prep_{k}": np.asarray(prep[k], float) for k in _ARRAYS}
     out["meta"] = json.dumps(json_safe({k: v for k, v in prep.items() if k not in _ARRAYS}))
     return out
 
@@ -199,7 +200,7 @@ def record_values(model, theta, preps, *, max_nfev: int = 60):
     :func:`.model.in_range` gives; None where that fit fails. The record-to-record
     scatter about the laws is read from them (:func:`.model.deviations`).
     """
-    out = []
+    out: list[dict | None] = []
     for r, p in enumerate(preps):
         sub = build_model(
             [p], model.names, dict.fromkeys(model.qnames, ()), model.cnames, model.X[[r]]

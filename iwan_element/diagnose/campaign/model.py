@@ -318,7 +318,7 @@ class CampaignModel:
         value, the misfit no longer depends on the law's coefficients, and their standard
         errors claim a precision the records do not give.
         """
-        out = {}
+        out: dict[str, list[int]] = {}
         for r, rm in enumerate(self.records):
             vals = self.law_values(theta, self.X[r])
             _, (phi, chi, beta), effs = self.physical(vals, rm)  # the one place that clips
@@ -337,6 +337,7 @@ class CampaignModel:
         return out
 
     def start(self, theta, r) -> float:
+        """Slip ``u0`` [m] at the start of record ``r`` (fitted start times ``x_max``; 0: none)."""
         k = self.start_pos.get(r)
         return 0.0 if k is None else float(theta[k]) * self.records[r].x_max
 

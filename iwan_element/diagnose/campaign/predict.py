@@ -70,6 +70,7 @@ class CampaignPrediction(ResultShape):
         )
 
     def to_dict(self) -> dict:
+        """The prediction as a JSON-safe dict (times [s], displacements [m], forces [N])."""
         return json_safe(
             {
                 k: getattr(self, k)
@@ -367,6 +368,7 @@ class LeaveOneOut(ResultShape):
         return self.share_within >= 0.8
 
     def report(self) -> str:
+        """Plain-text table: each record's leave-one-out band misfit [N] against its own fit's."""
         lines = [
             f"Leave-one-out ({self.refit}): {100 * self.share_within:.0f} % of "
             f"{len(self.rows)} records predicted within {LOO_TARGET:g}x their own fit's "
@@ -419,6 +421,7 @@ class LeaveOneOut(ResultShape):
         return arts
 
     def to_dict(self) -> dict:
+        """The leave-one-out result as a JSON-safe dict (misfits [N], shares in 0..1)."""
         return json_safe(
             {
                 "rows": list(self.rows),

@@ -125,7 +125,7 @@ class CampaignFit(Probable, ResultShape):
         return base[:1] + self.probability_tables() + base[1:]
 
     def _nested(self, what: str) -> dict:
-        out = {}
+        out: dict[str, dict] = {}
         for p in self.params.parameters:
             q, term = p.name.split(":", 1)
             out.setdefault(q, {})[term] = getattr(p, what)

@@ -34,6 +34,7 @@ from __future__ import annotations
 import logging
 import math
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -98,7 +99,7 @@ class LoopSelection:
         Misfit-test probabilities of the plain and of the selected model.
     untestable : dict
         ``{effect: why}`` for candidates the record cannot test.
-    cycles : list
+    cycles : sequence of Cycle
         The record's load cycles (for the report's location of the misfit).
     noise : NoiseLevel
         The noise the fits were scored against (re-read from the selected model's residual).
@@ -113,7 +114,7 @@ class LoopSelection:
     p_before: float
     p_after: float
     untestable: dict
-    cycles: list
+    cycles: Sequence
     noise: NoiseLevel
     noise_only: bool
     candidates: tuple = ()

@@ -59,6 +59,7 @@ class StackFitter:
         self.nfev = 0
 
     def model(self, names, *, full=True):
+        """The :class:`LoopModel` of effects ``names`` on the full keep set or the subsample."""
         fast = Evaluator.fast(names)
         if full or fast:
             return M.LoopModel(self.ev, self.y, names, self.scales, self.F0)

@@ -16,7 +16,7 @@ def _locate(t, u, F, Fm, r, cycles, sigma, tau) -> tuple[str, dict]:
     s2 = sigma * sigma
     ratio = float(np.mean(r**2) / s2)
     region = np.full(u.size, -1)
-    cyc_ratio, amps = [], []
+    cyc_ratio, amp_list = [], []
     for c in cycles:
         sl = slice(c.start, c.stop)
         uu = u[sl]
@@ -26,9 +26,9 @@ def _locate(t, u, F, Fm, r, cycles, sigma, tau) -> tuple[str, dict]:
         region[sl] = np.where(d < 0.15, 0, np.where(d > 0.85, 2, 1))
         rr = r[sl]
         cyc_ratio.append(float(np.mean(rr**2) / s2))
-        amps.append(c.u0)
+        amp_list.append(c.u0)
     names = ("just after the reversals", "mid-stroke", "at the ends of the stroke")
-    reg = {}
+    reg: dict[str, float] = {}
     for k, nm in enumerate(names):
         m = region == k
         if m.sum() >= 5:
@@ -38,13 +38,13 @@ def _locate(t, u, F, Fm, r, cycles, sigma, tau) -> tuple[str, dict]:
         f"vs {sigma:.3g} N)"
     ]
     if reg:
-        worst = max(reg, key=reg.get)
+        worst = max(reg, key=reg.__getitem__)
         parts.append(
             f"largest {worst} ({math.sqrt(reg[worst]):.2g} x noise there"
             + ", ".join([""] + [f"{math.sqrt(v):.2g} x {k}" for k, v in reg.items() if k != worst])
             + ")"
         )
-    amps = np.array(amps)
+    amps = np.array(amp_list)
     cr = np.array(cyc_ratio)
     if amps.size:
         levels = np.unique(np.round(amps / amps.max(), 2))
@@ -54,7 +54,7 @@ def _locate(t, u, F, Fm, r, cycles, sigma, tau) -> tuple[str, dict]:
         )
         bad = [lv for lv, v in grp.items() if v > thresh]
         if bad and len(bad) == len(grp):
-            top = max(grp, key=grp.get)
+            top = max(grp, key=grp.__getitem__)
             parts.append(f"at every amplitude, most at u0 = {top * amps.max() * 1e3:.3g} mm")
         elif bad:
             parts.append(

@@ -63,6 +63,7 @@ class LoopModel:
         ]
 
     def decode(self, z):
+        """``((phi_max [m], chi, beta), [effect parameters, ...])`` of the vector ``z``."""
         xm = self.ev.x_max
         shape = (xm * math.exp(z[0]), float(z[1]), math.expm1(z[2]))
         vals, k = [], 3
@@ -75,6 +76,7 @@ class LoopModel:
         return shape, vals
 
     def unit(self, z):
+        """Unit-``Fs`` force ``g(z)`` [-] at the fitted samples."""
         shape, vals = self.decode(z)
         self.ev.set_start(self.start)
         return self.ev.unit_force(shape, self.names, vals)
@@ -93,6 +95,7 @@ class LoopModel:
         return float(Fs), float(F0)
 
     def residual(self, z):
+        """Force residual ``y - Fs g(z) - F0`` [N] (large and finite where ``z`` fails)."""
         try:
             g = self.unit(z)
         except (ValueError, ZeroDivisionError, OverflowError, FloatingPointError):

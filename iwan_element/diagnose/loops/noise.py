@@ -83,7 +83,8 @@ def noise_level(rec, r, noise) -> NoiseLevel:
     estimator the smooth rest of any model error), or ``noise`` [N] when given (white).
     """
     if noise is not None:
-        sigma, tau, text, warns = noise, 1.0, "given", ()
+        warns: tuple[str, ...] = ()
+        sigma, tau, text = noise, 1.0, "given"
     else:
         sigma, tau, method, warns = noise_estimate(rec.t, r, rec.F_raw)
         text = f"estimated from the record ({method})"

@@ -9,6 +9,7 @@ step (noise, fit, selection, report) reads; none of them goes back to the raw in
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -26,7 +27,7 @@ from ...base.validation import (
 from ...core.history import REVERSAL_TOL, unit_params
 from ...effects import EFFECTS
 from ...effects.engine.evaluate import Evaluator
-from ...identify.loops.cycles import find_reversals, split_cycles
+from ...identify.loops.cycles import Cycle, find_reversals, split_cycles
 from .noise import noise_estimate
 
 __all__ = [
@@ -185,7 +186,7 @@ def untestable(rec: PreparedRecord, candidates) -> dict:
     return out
 
 
-def record_cycles(rec: PreparedRecord) -> list:
+def record_cycles(rec: PreparedRecord) -> Sequence[Cycle]:
     """The record's load cycles (:func:`~iwan_element.identify.loops.cycles.split_cycles`; the
     sample index stands for the time when there is none), or [] when it has none.
     """

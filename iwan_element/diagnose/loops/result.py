@@ -5,6 +5,7 @@ share are in :mod:`..selection.lines`).
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -12,6 +13,9 @@ from ...base.result_shape import ResultShape, panels, value_stderr, wrap
 from ...base.serialize import json_safe
 from ..selection.lines import effect_unit, verdict_lines
 from ..selection.probabilities import Probable
+
+if TYPE_CHECKING:
+    from ...identify.loops.result import FitResult
 
 __all__ = ["Diagnosis"]
 

@@ -121,7 +121,8 @@ class AveragedBand(ResultShape):
     level: float
 
     @property
-    def plot_panels(self) -> int:
+    def plot_panels(self) -> int:  # type: ignore[override]  # read-only: one per channel
+        """Number of axes :meth:`plot` draws on: one per channel."""
         return len(self.channels)
 
     @property
@@ -136,6 +137,7 @@ class AveragedBand(ResultShape):
         )
 
     def to_dict(self) -> dict:
+        """The averaged prediction as a JSON-safe dict (channels in their own units)."""
         return json_safe(
             {
                 "x": self.x,

@@ -124,6 +124,7 @@ class Explanation:
     nested_error: float = math.nan
 
     def to_dict(self) -> dict:
+        """The candidate's scores as a dict (probability in 0..1, log-evidence terms [-])."""
         return {
             "effects": list(self.effects),
             "probability": self.probability,
@@ -404,6 +405,9 @@ class Probable:
     :class:`~.campaign.CampaignFit`; reads the result's ``explanations``).
     """
 
+    # declared for the type checker only (no default: each result's dataclass field holds it)
+    explanations: tuple  # of Explanation, most probable first
+
     @property
     def probabilities(self) -> dict:
         """``{explanation: posterior probability}``: each explanation the diagnosis fitted,
@@ -435,7 +439,7 @@ class Probable:
             return []
         probs = self.probabilities
         lines = ["  " + confidence_text(probs)]
-        shown = [e for e in self.explanations][:rows]
+        shown = list(self.explanations)[:rows]
         lines.append(
             "    explanation                                probability  ln evidence  ln Occam"
         )

@@ -137,7 +137,9 @@ def stepwise_select(
     """
     cur = dict(base)
     p0 = misfit_p(cur["chi2"], tau, n_eff, cur["q"])
-    named, ambiguous, steps = [], (), []
+    named: list[str] = []
+    steps: list[dict] = []
+    ambiguous: tuple = ()
     pen = math.log(max(n_eff, 2.0))
     while len(named) < max_effects:
         noise = misfit_p(cur["chi2"], tau, n_eff, cur["q"]) >= alpha

@@ -66,7 +66,7 @@ def _noise(r, stated, n, name):
     the scatter when none is stated. (Taking the larger of the two whenever the scatter
     happens to exceed the stated value would bias the noise upwards: with 12 points the
     scatter's own spread is a factor 1.9, and a noise set too high makes every effect's
-    evidence too small.)
+    evidence too small).
     """
     scatter = difference_sigma(r) if n >= 5 else 0.0  # second differences along amplitude
     if stated is None:

@@ -133,7 +133,7 @@ class VibrationDiagnosis(Probable, ResultShape):
                     key, v, e, unit=sp.unit, identified=verdict(key, v, e, at_bound=key in at)[0]
                 )
             )
-        return ParameterTable(out)
+        return ParameterTable(tuple(out))
 
     @property
     def success(self) -> bool:
@@ -354,7 +354,8 @@ class VibrationDiagnosis(Probable, ResultShape):
         if bt:
             lines.append(
                 f"  between-test nuisances (not named): frequency offset "
-                f"{100 * bt['frequency_offset']:+.3g} % (+- {100 * bt['frequency_offset_stderr']:.2g}),"
+                f"{100 * bt['frequency_offset']:+.3g} % "
+                f"(+- {100 * bt['frequency_offset_stderr']:.2g}),"
                 f" damping offset {100 * bt['damping_offset']:+.3g} % "
                 f"(+- {100 * bt['damping_offset_stderr']:.2g}); not testable against them: "
                 f"{', '.join(bt['untested']) or 'none'}"

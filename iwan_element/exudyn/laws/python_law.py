@@ -17,6 +17,7 @@ _ROTATION_MATRIX = exu.OutputVariableType.RotationMatrix
 # no numpy and no allocation beyond the return value. The cache ``conn._lF`` holds the
 # element's force; the dashpot in parallel (``conn._damping``) is added on return.
 def coordinate_force_function(conn):
+    """The user function giving the force [N] of a coordinate connector (on ``deltaL``)."""
     trial = conn._joint.trial
     off = conn._offset  # fixed at creation (the object's own offset is not read)
     c = conn._damping  # the dashpot in parallel (0.0: none)
@@ -56,6 +57,7 @@ def _axial_force(conn, trial, mbs, t, displacement, velocity, a0, a1, a2, off):
 
 
 def position_force_function(conn):
+    """The user function giving the force [N] of a position connector along its fixed axis."""
     trial = conn._joint.trial
     a0, a1, a2 = conn._axis
     off = conn._offset
@@ -67,6 +69,7 @@ def position_force_function(conn):
 
 
 def rotating_axis_force_function(conn):
+    """The user function giving the force [N] along an axis turning with its marker."""
     trial = conn._joint.trial
     l0, l1, l2 = conn._axis
     off = conn._offset

@@ -51,6 +51,7 @@ from __future__ import annotations
 
 import itertools
 import math
+from collections.abc import Callable
 
 import exudyn as exu
 from exudyn.advancedUtilities import CreateSymbolicUserFunction
@@ -153,7 +154,8 @@ class SymbolicIwanState:
         self.e1 = float(params.chi + 1.0)
         self.a = float(params.R / ((params.chi + 1.0) * (params.chi + 2.0)))
         self.tol = float(tol)
-        self.probe = None  # u -> F through the owner's symbolic user function
+        # u [m] -> F [N] through the owner's symbolic user function (set by the owner)
+        self.probe: Callable[[float], float] | None = None
 
     # ------------------------------------------------------------------ state transfer
     def set_stack(self, us, Fr) -> None:
@@ -209,6 +211,7 @@ class SymbolicIwanState:
         a stack deeper than ``depth`` can (:attr:`held`); evaluated through :attr:`probe`
         (``u -> F``, set by the owner to evaluate its symbolic user function).
         """
+        assert self.probe is not None, "the owner sets probe when it places the law"
         return not abs(self.probe(u) - force) <= 1e-9 * self.Fs
 
     # ------------------------------------------------------------------ the law

@@ -58,6 +58,7 @@ class SlipMap:
         return _affine_position_row(mbs, m0, m1, self.axis, off)
 
     def slips(self) -> np.ndarray:
+        """Accepted slips ``u`` [m] of all points from the current coordinates."""
         u = (self.q[self.idx] * self.coef).sum(axis=1) + self.c
         if self.generic:
             self.marker_slips(u, self.generic)
@@ -108,7 +109,7 @@ def _affine_position_row(mbs, m0, m1, axis, off):
         if got is None:
             return None
         cols += got
-    cols = sorted(set(int(c) for c in cols))
+    cols = sorted({int(c) for c in cols})
     a = np.array(axis)
 
     def proj():

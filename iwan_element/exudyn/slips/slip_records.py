@@ -21,12 +21,15 @@ _START = 1024
 class SlipRecords:
     """Rows ``(t, slip[n_points])`` and the replayed ``force``, ``work``, ``diss``."""
 
+    _replay: IwanJointBank | None  # the bank the rows are replayed on (None: not yet)
+
     def __init__(self, n_points: int, on: bool):
         self.on = on
         self.n_points = n_points
         self.clear()
 
     def clear(self) -> None:
+        """Drop every row and the replay; return None."""
         cap = _START if self.on else 0
         self.n = 0
         self.t = np.empty(cap)
@@ -38,6 +41,7 @@ class SlipRecords:
         self._diss = np.empty(0)
 
     def append(self, t, u) -> None:
+        """Append the row ``(t [s], u [m])``, growing the buffers; return None."""
         k = self.n
         if k == len(self.t):
             cap = 2 * max(k, _START // 2)

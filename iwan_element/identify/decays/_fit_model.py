@@ -401,8 +401,9 @@ def _neighbours(prob, i_s, max_modes=2):
     steady leak (spectrum times ``|H|**2``) on each side, if that leak is above 1e-3 of the
     noise level: a mode that starts abruptly with the decay leaks far more through the
     band-pass at the start than its steady ``|H|**2`` says (a 16 % neighbour with a steady
-    leak below the noise biased the joint parameters by 30 standard errors). Each is a linear decaying sinusoid: frequency and decay rate from straight lines
-    through the phase and log-envelope of its own narrow band's analytic signal (clear of
+    leak below the noise biased the joint parameters by 30 standard errors). Each is a linear
+    decaying sinusoid: frequency and decay rate from straight lines through the phase and
+    log-envelope of its own narrow band's analytic signal (clear of
     that filter's end effects), amplitudes by linear least squares on the record.
     """
     lo, hi = prob.band

@@ -114,15 +114,16 @@ def hilbert_windows(tt, env, phase, span, plan, noise_spec, mode):
     # from the trimmed start, as asked
     c = i0 + _window_length(plan, sigma, dt) // (2 if plan.fixed else 4)
     skipped = 0
+
+    def window(sig, c):
+        """The window about the centre ``c`` for the decay rate ``sig`` [1/s], or None."""
+        n_full = _window_length(plan, sig, dt)
+        h = min(n_full // 2, c - i0, i1 - c)
+        keep = n_full if plan.fixed else max(plan.n_min, n_full // 2)
+        return slice(c - h, c + h) if 2 * h >= keep - 1 else None
+
     while True:
-
-        def window(sig):
-            n_full = _window_length(plan, sig, dt)
-            h = min(n_full // 2, c - i0, i1 - c)
-            keep = n_full if plan.fixed else max(plan.n_min, n_full // 2)
-            return slice(c - h, c + h) if 2 * h >= keep - 1 else None
-
-        sl = window(sigma)
+        sl = window(sigma, c)
         if sl is None:
             if c < i0 + plan.n_max:  # at the start, walk on to a full-enough window
                 c += plan.n_half
@@ -133,7 +134,7 @@ def hilbert_windows(tt, env, phase, span, plan, noise_spec, mode):
             return rows, wins, f"envelope below the noise threshold at t = {tt[c]:.4g} s", False
         for _ in range(3):  # the length follows the decay rate found in the window
             tc, ln_a, sigma, wd, (sa, sp) = _fit_window(tt, env, phase, sl, n_block, noise, bw)
-            new = window(sigma)
+            new = window(sigma, c)
             if new is None or abs((new.stop - new.start) - (sl.stop - sl.start)) <= 0.1 * (
                 sl.stop - sl.start
             ):

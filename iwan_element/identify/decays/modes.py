@@ -21,8 +21,9 @@ Per frequency band (given, or one per spectral peak):
    enough signal, where a joint's amplitude dependence is weakest. If a mode in it is not
    linear (step 5), the next window, one window length earlier, is tried (up to six) and the
    latest linear one is kept; else the latest, flagged. ``window=(t0, t1)`` overrides it.
-4. In the window (channels weighted by their rms, then by their residual noise): the stabilisation diagram of
-   multi-channel LS-ESPRIT over model orders 2 ... ``max_order``; the poles of the highest
+4. In the window (channels weighted by their rms, then by their residual noise): the
+   stabilisation diagram of multi-channel LS-ESPRIT over model orders 2 ... ``max_order``; the poles
+   of the highest
    order that were stable over its last four orders are physical (in the band, damped below
    20 %) or nuisance (stable, outside the band: another mode's leakage through the
    filter's skirts, kept in the fit so that it biases nothing). Then least squares of all

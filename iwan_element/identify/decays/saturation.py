@@ -14,8 +14,9 @@ stage) has no exactly flat tops. :func:`cut_flattened_peaks` finds it by what it
 mode in the analysed band: the record's peaks fall short of the band's own oscillation
 (``Re z``, the band-passed analytic signal of :func:`.envelope.analytic_signal`). Per cycle
 of ``z`` the deficit ``d = (Re z - y) sign(cos phase)`` is averaged over the samples near
-the peaks (``|cos phase| >= 0.975``); for an unclipped record it is the out-of-band content (other modes) and the noise there,
-of either sign from cycle to cycle; a clipped cycle falls short systematically. A cycle
+the peaks (``|cos phase| >= 0.975``); for an unclipped record it is the out-of-band content
+(other modes) and the noise there, of either sign from cycle to cycle; a clipped cycle falls short
+systematically. A cycle
 counts as flattened when its mean deficit exceeds 1 % of the envelope and the mean over the
 five cycles around it exceeds five of its standard errors (their scatter) and 1 % of the
 envelope; the record is cut after the longest

@@ -317,7 +317,7 @@ def read_sweep_csv(path: str | PathLike) -> dict:
         rows = [r for r in csv.reader(fh) if r and any(c.strip() for c in r)]
     if len(rows) < 2:
         raise ValueError(f"{p.name}: a header line and data rows are needed")
-    cols = {}
+    cols: dict[str, tuple] = {}
     for j, name in enumerate(rows[0]):
         role, q, k = _classify(name.strip())
         if role in cols:

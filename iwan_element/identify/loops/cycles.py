@@ -103,6 +103,7 @@ def _noise_sigma(u: np.ndarray) -> float:
 
 
 def check_varies(u: np.ndarray) -> None:
+    """Raise a ValueError if the displacement ``u`` [m] is constant; return None."""
     if u.size and np.ptp(u) == 0.0:
         raise ValueError(
             f"u (displacement) does not vary: it is {u[0]:g} m everywhere; cycles "
@@ -111,6 +112,7 @@ def check_varies(u: np.ndarray) -> None:
 
 
 def default_hysteresis(u: np.ndarray) -> float:
+    """Default reversal hysteresis [m]: the larger of 10 noise sigmas and 1 % of the half range."""
     half_range = 0.5 * float(u.max() - u.min())
     return max(10.0 * _noise_sigma(u), 0.01 * half_range)
 
@@ -219,7 +221,7 @@ def _refine_peak(
 
 
 def _loop_area(u: np.ndarray, F: np.ndarray) -> float:
-    """``closed integral F du`` by trapezoids, closed by the chord from the last to the first point."""
+    """``closed integral F du`` [J] by trapezoids, closed by the chord from last to first point."""
     uu = np.append(u, u[0])
     FF = np.append(F, F[0])
     return float(0.5 * np.sum((FF[1:] + FF[:-1]) * np.diff(uu)))

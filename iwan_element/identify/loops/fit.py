@@ -216,7 +216,8 @@ def fit_loops(
         Significance level, in ``(0, 0.5)``, of the test that the data reach macroslip and of
         the test that the joint explains more than noise.
     hysteresis : float, optional, keyword-only
-        Dead band [m] to count cycles (see :func:`iwan_element.identify.loops.cycles.find_reversals`).
+        Dead band [m] to count cycles (see
+        :func:`iwan_element.identify.loops.cycles.find_reversals`).
     initial : IwanParameters, optional, keyword-only
         An extra start (for instance a previous fit).
     max_nfev : int, keyword-only

@@ -3,8 +3,9 @@
 Identifiability
     If the data never reach macroslip, the loops (and ``F0``, ``D``) depend on ``KT``, ``chi``
     and ``R`` only; ``Fs`` and ``beta`` enter only through ``R`` and cannot be separated
-    (docs/equations.md section 2). Every fit therefore also fits the microslip-only model (``beta = 0``
-    with ``phi_max`` above the largest backbone argument reached by the data, which represents
+    (docs/equations.md section 2). Every fit therefore also fits the microslip-only model
+    (``beta = 0`` with ``phi_max`` above the largest backbone argument reached by the data, which
+    represents
     the whole family) and keeps the four-parameter fit only if it reaches macroslip on enough
     data and improves the residual significantly (F-test at level ``alpha``). Otherwise the
     result marks ``Fs`` and ``beta`` as not identified, gives their range compatible with the
@@ -263,7 +264,8 @@ def _macro_result(prob: _Problem, full: dict, details: dict) -> dict:
 
 
 def _micro_result(prob: _Problem, micro: dict, full: dict, details: dict) -> dict:
-    """Microslip only: KT, chi and R identified (docs/equations.md section 2 (seed paper eq. 10)); Fs and beta given as
+    """Microslip only: KT, chi and R identified (docs/equations.md section 2 (seed paper
+    eq. 10)); Fs and beta given as
     the range of the family that fits equally, with a warning that says why.
     """
     xm, off = prob.x_max, prob.offset

@@ -324,17 +324,18 @@ def fit_force_model(
         x0, lo_x, hi_x, all_names = np.clip(th0, lo, hi), lo, hi, names
     res = minimize(resid, x0, lo_x, hi_x, method="trf", max_nfev=max_nfev, x_scale="jac")
     r = res.fun
+    assert r is not None  # method "trf" returns the residuals
     tau = integrated_time(r)
     c = covariance(res.jac, r, tau=tau)
     se, cov, degenerate = c.stderr, c.covariance, c.degenerate
-    warns = []
+    warns: list[str] = []
     at_bound = np.isclose(res.x, lo_x, rtol=1e-6, atol=1e-12) | np.isclose(
         res.x, hi_x, rtol=1e-6, atol=1e-12
     )
     ident = _identified(all_names, res.x, se, at_bound, degenerate, warns)
     unit_of = {"dF0": "N", "du0": "m", **dict(units or {})}
     table = ParameterTable(
-        [
+        tuple(
             Parameter(
                 k,
                 float(v),
@@ -346,7 +347,7 @@ def fit_force_model(
                 nuisance=k in OFFSET_NAMES,
             )
             for k, v, e, a, b in zip(all_names, res.x, se, lo_x, hi_x)
-        ],
+        ),
         correlation=c.correlation,
     )
     values, stderr = table.values, table.stderr

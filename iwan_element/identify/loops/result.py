@@ -128,8 +128,10 @@ class FitResult(ResultShape):
         return self.params.identified
 
     @property
-    def correlation(self) -> np.ndarray:
-        """Correlation matrix in the order of :data:`PARAM_NAMES` (read-only)."""
+    def correlation(self) -> np.ndarray | None:
+        """Correlation matrix in the order of :data:`PARAM_NAMES` (read-only; None when the
+        parameter table holds none, which the package's fits never build).
+        """
         return self.params.correlation
 
     @property
@@ -243,7 +245,7 @@ class FitResult(ResultShape):
                 rel = f" {100 * se / abs(v):.2g} %" if v != 0 and k in ("Fs", "KT") else ""
                 status = status_text(True) + rel
             lines.append(f"  {label}  {f.format(v):>12}  {se_txt:>12}   {status}")
-        for name, (key, unit, scale) in {
+        for name, (key, _unit, scale) in {
             "dF0 [N]  ": ("force", "N", 1.0),
             "du0 [um] ": ("displacement", "um", 1e6),
         }.items():
@@ -258,11 +260,12 @@ class FitResult(ResultShape):
             f"  derived: phi_max = {p.phi_max * 1e3:.5g} mm, R = {p.R:.5g}, S = {p.S:.5g} N/m"
         )
         have = [k for k in PARAM_NAMES if math.isfinite(self.stderr.get(k, math.nan))]
-        if len(have) > 1:
+        corr = self.correlation
+        if len(have) > 1 and corr is not None:
             lines += ["", "  correlation     " + "".join(f"{k:>8}" for k in have)]
             for i, k in enumerate(PARAM_NAMES):
                 if k in have:
-                    row = "".join(f"{self.correlation[i, PARAM_NAMES.index(j)]:8.3f}" for j in have)
+                    row = "".join(f"{corr[i, PARAM_NAMES.index(j)]:8.3f}" for j in have)
                     lines.append(f"  {k:<15} {row}")
         unit = (
             "[-]"
@@ -314,7 +317,7 @@ def joint_table(
         )
         for k in PARAM_NAMES
     ]
-    return ParameterTable(rows, correlation=correlation)
+    return ParameterTable(tuple(rows), correlation=correlation)
 
 
 def settle_verdict(out: dict, fixed) -> tuple[dict, list[str]]:
@@ -342,6 +345,7 @@ def settle_verdict(out: dict, fixed) -> tuple[dict, list[str]]:
         )
         if ok:
             continue
+        assert warn is not None  # verdict gives its reason whenever it refuses
         ident[k] = False
         if at_bound and k == "beta" and v < 1e-6:
             hi = 1.96 * se if math.isfinite(se) else math.nan

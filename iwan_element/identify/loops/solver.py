@@ -3,8 +3,8 @@
 :class:`_Problem` holds data modelled as ``Fs g(phi_max, chi, beta)`` (plus a force offset
 for loop fits) with ``Fs`` and the offset eliminated in closed form (variable projection);
 :func:`_multistart` runs the box-bounded Levenberg-Marquardt of
-:func:`iwan_element.fitting.minimize` (``method="box-lm"``) from several starts; :func:`_uncertainty` takes the
-Jacobian at the optimum to :func:`iwan_element.fitting.covariance`.
+:func:`iwan_element.fitting.minimize` (``method="box-lm"``) from several starts;
+:func:`_uncertainty` takes the Jacobian at the optimum to :func:`iwan_element.fitting.covariance`.
 """
 
 from __future__ import annotations
@@ -108,7 +108,10 @@ def _q_to_shape(q, x_max, beta_fixed):
 
 
 def _multistart(prob: _Problem, starts, lower, upper, *, beta_fixed, max_nfev):
-    """Least squares on ``q = (ln(phi_max/x_max), chi[, ln(1+beta)])`` from each start; best wins."""
+    """Least squares on ``q = (ln(phi_max/x_max), chi[, ln(1+beta)])`` from each start.
+
+    The best wins.
+    """
     best = None
 
     def fun(q):

@@ -130,16 +130,24 @@ class AmplitudeCurve(ResultShape):
     def __len__(self) -> int:
         return int(self.amplitude.size)
 
+    def _stds(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The standard uncertainties of amplitude [m], frequency [Hz] and damping ratio [-]."""
+        a_sd, f_sd, z_sd = self.amplitude_std, self.frequency_std, self.damping_ratio_std
+        # __post_init__ stores an array for every one (NaN where the caller gave None)
+        assert a_sd is not None and f_sd is not None and z_sd is not None
+        return a_sd, f_sd, z_sd
+
     def sorted(self) -> AmplitudeCurve:
         """The same curve with the points in increasing amplitude."""
         order = np.argsort(self.amplitude, kind="stable")
+        a_sd, f_sd, z_sd = self._stds()
         return AmplitudeCurve(
             self.amplitude[order],
             self.frequency[order],
             self.damping_ratio[order],
-            amplitude_std=self.amplitude_std[order],
-            frequency_std=self.frequency_std[order],
-            damping_ratio_std=self.damping_ratio_std[order],
+            amplitude_std=a_sd[order],
+            frequency_std=f_sd[order],
+            damping_ratio_std=z_sd[order],
             noise_floor=self.noise_floor,
             method=self.method,
             notes=self.notes,
@@ -191,6 +199,7 @@ class AmplitudeCurve(ResultShape):
         }
 
     def to_json(self) -> str:
+        """The curve as a JSON string (:meth:`to_dict`, indented)."""
         return json.dumps(self.to_dict(), indent=2)
 
     def report(self) -> str:
@@ -214,9 +223,9 @@ class AmplitudeCurve(ResultShape):
             zip(
                 self.amplitude,
                 self.frequency,
-                self.frequency_std,
+                self._stds()[1],
                 self.damping_ratio,
-                self.damping_ratio_std,
+                self._stds()[2],
             ),
         )
         for w in self.warnings:
@@ -234,17 +243,18 @@ class AmplitudeCurve(ResultShape):
     )
 
     def _tables(self) -> list:
+        a_sd, f_sd, z_sd = self._stds()
         rows = list(
             zip(
                 *(
                     map(float, a)
                     for a in (
                         self.amplitude,
-                        self.amplitude_std,
+                        a_sd,
                         self.frequency,
-                        self.frequency_std,
+                        f_sd,
                         self.damping_ratio,
-                        self.damping_ratio_std,
+                        z_sd,
                     )
                 )
             )

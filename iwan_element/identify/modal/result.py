@@ -236,6 +236,7 @@ class ModalIwanFit(ResultShape):
 
     @classmethod
     def linear(cls, data, conv, *, warnings):
+        """Linear fit (mean ``f0`` [Hz], ``zeta0`` [-]): no amplitude dependence identified."""
         f, z = data["frequency"], data["damping_ratio"]
         n = f.size
         theta = np.array([f.mean(), z.mean()])
@@ -370,6 +371,8 @@ class ModalIwanFit(ResultShape):
         }
 
     def to_dict(self) -> dict:
+        """The fit as a JSON-safe dict (parameters in SI units, None for non-finite values)."""
+
         def num(x):
             return None if not np.isfinite(x) else float(x)
 
@@ -387,9 +390,11 @@ class ModalIwanFit(ResultShape):
         }
 
     def to_json(self) -> str:
+        """The fit as a JSON string (:meth:`to_dict`, indented)."""
         return json.dumps(self.to_dict(), indent=2)
 
     def report(self) -> str:
+        """Plain-text report: the verdict, the parameters with their units and standard errors."""
         c = self.conventions
         lines = [
             self.verdict(),
@@ -487,12 +492,12 @@ def _gradient(fun, theta):
 def _table(params, stderr, bad) -> ParameterTable:
     """The reported parameters as a :class:`~iwan_element.fitting.ParameterTable`."""
     return ParameterTable(
-        [
+        tuple(
             Parameter(
                 k, float(v), float(stderr.get(k, math.nan)), unit=_UNITS[k], identified=k not in bad
             )
             for k, v in params.items()
-        ]
+        )
     )
 
 

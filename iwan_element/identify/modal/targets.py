@@ -364,10 +364,12 @@ class ModalTargets(ResultShape):
         return not self.failure_reasons()
 
     def failure_reasons(self) -> tuple:
+        """Why the targets are not usable, one sentence each (empty when they are)."""
         none = () if self.modes else ("no physical mode was identified",)
         return tuple(self.failures) + none
 
     def to_dict(self) -> dict:
+        """The targets as a dict (frequencies [Hz], damping ratios [-], mode shapes)."""
         return {
             "source": self.source,
             "notes": self.notes,
@@ -414,7 +416,7 @@ class ModalTargets(ResultShape):
         ]
 
     def _tables(self) -> list:
-        out = [
+        out: list[tuple[str, tuple[str, ...], list]] = [
             (
                 "modes",
                 (
@@ -489,7 +491,8 @@ class ModalTargets(ResultShape):
                     m.modal_constant,
                     m.modal_constant_std,
                     f"{format_value(m.window[0], 4)}-{format_value(m.window[1], 4)}",
-                    f"{format_value(m.amplitude_range[0], 3)}-{format_value(m.amplitude_range[1], 3)}",
+                    f"{format_value(m.amplitude_range[0], 3)}-"
+                    f"{format_value(m.amplitude_range[1], 3)}",
                     "-" if m.linear is None else ("yes" if m.linear else "no"),
                 )
                 for m in self.modes

@@ -455,7 +455,8 @@ def sweep_curve(
     deg = r["deg"]
     notes = (
         f"{len(sweeps)} sweeps, {W.size} points ({keep.sum()} inverted, |X/F| >= {frac:g} "
-        f"x sweep peak, X {r['span'][0]:.3g}-{r['span'][1]:.3g} m); {conv_note}; modal constant c = {c:.5g} 1/kg, residual B = "
+        f"x sweep peak, X {r['span'][0]:.3g}-{r['span'][1]:.3g} m); {conv_note}; "
+        f"modal constant c = {c:.5g} 1/kg, residual B = "
         f"{B:.4g} m/N; smooth curves of degree {deg} in ln X; fit rms relative error "
         f"{rms:.2g}; bins: {len(amp)} of {n_bins} in ln X"
     )
