@@ -177,7 +177,7 @@ def measure(kinds, repeat) -> dict:
     """``{label: {"iwan": counters, "linear": counters or None}}``."""
     out = {}
     for label, run in _rows(kinds):
-        out[label] = {t: _measure(lambda: run(t), repeat) for t in ("iwan", "linear")}
+        out[label] = {t: _measure(lambda run=run, t=t: run(t), repeat) for t in ("iwan", "linear")}
     return out
 
 

@@ -130,7 +130,9 @@ def test_dissipation_slope_eq21_and_reference_values():
     # invert the backbone for u0
     from scipy.optimize import brentq
 
-    u0 = np.array([brentq(lambda x: backbone(x, p) - f * p.Fs, 0, p.phi_max) for f in F0_over_Fs])
+    u0 = np.array(
+        [brentq(lambda x, f=f: backbone(x, p) - f * p.Fs, 0, p.phi_max) for f in F0_over_Fs]
+    )
     np.testing.assert_allclose(dissipation_slope(u0, p), [2.516, 2.703, 2.975, 3.333], atol=6e-4)
     # against a numerical derivative of the closed forms
     h = 1e-6

@@ -475,7 +475,7 @@ def test_offset_shifts_the_unloaded_position():
         conn = chain.joint(-1, 0, IwanJoint(P), offset=offset, law="python")
         positions = []
         chain.mbs.SetPostStepUserFunction(
-            lambda mbs, t: (
+            lambda mbs, t, positions=positions, chain=chain: (
                 positions.append(
                     mbs.GetNodeOutput(chain.nodes[0], exu.OutputVariableType.Coordinates)
                 )
