@@ -215,7 +215,7 @@ def _ancf_strip(use_interface):
         mbs.AddObject(CoordinateConstraint(markerNumbers=[mg, mc]))
     ground = mbs.AddObject(ObjectGround())
     pairs = []
-    for k, x in enumerate((0.15, 0.25, 0.35)):
+    for x in (0.15, 0.25, 0.35):
         e = int(x / le)
         m_beam = mbs.AddMarker(
             MarkerBodyPosition(bodyNumber=elems[e], localPosition=[x - e * le, -0.5 * h, 0.0])

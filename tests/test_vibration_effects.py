@@ -1,7 +1,7 @@
 """Vibration effects (hardening, macroslip onset, whole or spread): their modal forms against
 independent routes (the time-domain elements driven through steady cycles, first harmonic and
-loop area by quadrature; adaptive quadrature over the patch's thresholds; the Duffing oscillator integrated in time), energy bookkeeping, neutral
-values and bad input."""
+loop area by quadrature; adaptive quadrature over the patch's thresholds; the Duffing
+oscillator integrated in time), energy bookkeeping, neutral values and bad input."""
 
 from __future__ import annotations
 
