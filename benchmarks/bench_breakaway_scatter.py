@@ -1,4 +1,4 @@
-"""Benchmark: does the stated standard error of a diagnosed break-away hold?
+"""Benchmark: whether the stated standard error of a diagnosed break-away holds.
 
 Seeded repeats of one held-out record (joint and envelope of ``bench_diagnosis.py``, the
 break-away ratio set to ``--size`` x noticeable, force noise 0.4 % of Fs, offsets), each

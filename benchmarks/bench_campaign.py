@@ -260,7 +260,7 @@ def attribute(fit):
         own, law = p["band_own"], model.law_values(theta, model.X[r])
         f = free[r] if free[r] is not None else law
 
-        def ratio(vals):
+        def ratio(vals, r=r, p=p, own=own):
             return predict_record(model, theta, r, p, vals=vals)[0] / own
 
         out = {"laws": ratio(law), "free": ratio(dict(f))}

@@ -108,8 +108,9 @@ def main(argv=None):
         with open(a.save, "w") as fh:
             json.dump(res, fh)
     print(
-        f"{a.cases} cases (from case {a.start}), force noise {a.force_noise:g} x F0max, displacement noise "
-        f"{a.disp_noise:g} x u0max, offsets 50-300 N and 5-20 um (scaled to phi_max = 1 mm)"
+        f"{a.cases} cases (from case {a.start}), force noise {a.force_noise:g} x F0max, "
+        f"displacement noise {a.disp_noise:g} x u0max, offsets 50-300 N and 5-20 um "
+        "(scaled to phi_max = 1 mm)"
     )
     print(f"{'parameter':>10} {'coverage 95%':>13} {'identified':>11} {'rms z':>7}")
     for n in NAMES:

@@ -1,4 +1,4 @@
-"""Benchmark: does :func:`iwan_element.diagnose` name the right effect on held-out tests?
+"""Benchmark: whether :func:`iwan_element.diagnose` names the right effect on held-out tests.
 
 Held out from the tests (``tests/_diagnosis_cases.py`` uses the joint (1000 N, 1e6 N/m,
 -0.5, 0.2), step protocols of 96 samples per cycle, effects at 6 x noise, seeds < 600):

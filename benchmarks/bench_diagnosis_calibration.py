@@ -1,4 +1,4 @@
-"""Benchmark: are the diagnosis' probabilities calibrated on cases with a known answer?
+"""Benchmark: whether the diagnosis' probabilities are calibrated on cases with a known answer.
 
 Generated cases with a known truth, held out from the tests (other joints, envelopes and
 seeds than ``tests/_diagnosis_cases.py``):
@@ -10,7 +10,8 @@ seeds than ``tests/_diagnosis_cases.py``):
   noise: from below the noise to dominant), at two noise levels (0.2 % and 1 % of Fs), each
   on one of two record lengths (1-3 cycles of 64 samples per amplitude, or 3-6 of 128;
   alternating over the sizes, so every effect meets both lengths at both noise levels); and
-  as many records with no effect (the default prior gives the plain joint even odds, and so does the case mix);
+  as many records with no effect (the default prior gives the plain joint even odds, and so
+  does the case mix);
 * **vibration curves** (:func:`iwan_element.diagnose_vibration`): the modal joint of
   ``bench_vibration_diagnosis.py``, curves from the time-domain elements (not the modal
   forms the diagnosis fits), one hidden effect of the four with a modal form at a size from
@@ -88,6 +89,7 @@ VIB_P = IwanParameters(250.0, 1.8e5, -0.35, 0.5)
 VIB_NOISE = (0.01, 0.03)  # damping noise (frequency: 1e-4)
 VIB_LENGTHS = (12, 36)
 CLIP = 1e-3
+RELIABILITY_EDGES = np.linspace(0.0, 1.0, 11)  # bins of the stated probability
 
 
 def _loop_record(p, env, length, el, noise, seed):
@@ -166,7 +168,7 @@ def loop_cases(repeats: int):
 
 def vibration_cases(repeats: int):
     cases, seed = [], 70_000
-    for rep in range(repeats):
+    for _ in range(repeats):
         for name in vibration_candidates():
             for size in SIZES:
                 for noise in VIB_NOISE:
@@ -235,7 +237,7 @@ def score(d, truth, candidates):
     }
 
 
-def reliability(pairs, edges=np.linspace(0.0, 1.0, 11)):
+def reliability(pairs, edges=RELIABILITY_EDGES):
     """Rows (bin, count, mean stated, fraction true) of (probability, outcome) pairs."""
     p = np.array([a for a, _ in pairs])
     y = np.array([float(b) for _, b in pairs])
@@ -423,7 +425,7 @@ def main(argv=None):
             d, cpu = run_vibration(case)
             name, size, cands = case[1], case[2], vcands
         r = score(d, () if name is None else (name,), cands)
-        r.update(kind=case[0], effect=name, size=size, cpu=cpu, case=[x for x in case[1:]])
+        r.update(kind=case[0], effect=name, size=size, cpu=cpu, case=list(case[1:]))
         rows.append(r)
         print(
             f"{i + 1:4d}/{len(cases)} {case[0]:<9} {str(name):<18} {size:5.2f} "

@@ -71,7 +71,8 @@ def _cell(errs, ok, fmt):
 
 def bench_methods(n_seeds: int) -> list[str]:
     lines = [
-        "| chi | beta | protocol | method | KT err | chi err | Fs err | beta err | time | success |",
+        "| chi | beta | protocol | method | KT err | chi err | Fs err | beta err | time "
+        "| success |",
         "| ---: | ---: | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: |",
     ]
     for p in SETS:
@@ -115,7 +116,8 @@ def bench_methods(n_seeds: int) -> list[str]:
                 a = acc[m]
                 fs = "given" if "Fs" in a["fixed"] else _cell(a["Fs"], a["idFs"], "{:.2%}")
                 lines.append(
-                    f"| {p.chi:g} | {p.beta:g} | {proto} | {m} | {_cell(a['KT'], True, '{:.2%}')} | "
+                    f"| {p.chi:g} | {p.beta:g} | {proto} | {m} | "
+                    f"{_cell(a['KT'], True, '{:.2%}')} | "
                     f"{_cell(a['chi'], True, '{:.4f}')} | {fs} | "
                     f"{_cell(a['beta'], a['idbeta'], '{:.3f}')} | "
                     f"{1e3 * statistics.median(a['t']):.0f} ms | {a['ok']}/{n_seeds} |"
@@ -129,7 +131,8 @@ def bench_example(repeats: int = 5) -> list[str]:
     data = load_test(EXAMPLE)
     truth = IwanParameters.load(EXAMPLE.with_name("example_test_30kN_params.json"))
     lines = [
-        "| fit on models/example_test_30kN.csv | median wall time | CPU time | Fs | KT | chi | beta |",
+        "| fit on models/example_test_30kN.csv | median wall time | CPU time | Fs | KT | chi "
+        "| beta |",
         "| --- | ---: | ---: | ---: | ---: | ---: | ---: |",
     ]
     for label, kwargs in (("fit_loops", {}), ("fit_loops, smooth=15", {"smooth": 15})):

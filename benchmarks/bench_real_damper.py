@@ -1,18 +1,17 @@
 """Diagnose every real friction-damper record in ../shared/data/arts-damper.
 
-Per record: the effect(s) named, the wall and the process CPU time of its diagnosis, the RMS misfit in the band |F| < 0.25 max|F| (where backlash
-acts) before and after, and their ratio. The rig's 40-50 Hz ringing is removed first by a
-zero-phase low-pass (``--lowpass``, default 20 Hz; the joint is driven at 0.5-1 Hz), and the
-band misfit is measured on that low-passed force. The last column is the force-channel lag
-[samples] that would minimise the band misfit after (the fitted force shifted by -10..10
-samples) and the band misfit after at that lag: a channel time lag is a nuisance worth fitting
-only if that misfit is much smaller than the unshifted one. ``at speed`` is the share [%] of
-the band's squared misfit after that lies where the drive moves at over 90 % of its top speed,
-away from the reversals and gap crossings: a rate-independent joint slides there at its
-friction level, so a large share puts the misfit in the sliding phase, not in the transitions
-(a sliding level inside the band, as on the decreasing branch of the 0 lb records, or the
-chatter after the gap closes at full speed in the velocity-limited 1-2 Hz ds2 records: see
-docs/damper_range.md).
+Per record: the effect(s) named, the wall and the process CPU time of its diagnosis, the RMS misfit
+in the band |F| < 0.25 max|F| (where backlash acts) before and after, and their ratio. The rig's
+40-50 Hz ringing is removed first by a zero-phase low-pass (``--lowpass``, default 20 Hz; the joint
+is driven at 0.5-1 Hz), and the band misfit is measured on that low-passed force. The last column is
+the force-channel lag [samples] that would minimise the band misfit after (the fitted force shifted
+by -10..10 samples) and the band misfit after at that lag: a channel time lag is a nuisance worth
+fitting only if that misfit is much smaller than the unshifted one. ``at speed`` is the share [%] of
+the band's squared misfit after that lies where the drive moves at over 90 % of its top speed, away
+from the reversals and gap crossings: a rate-independent joint slides there at its friction level,
+so a large share puts the misfit in the sliding phase, not in the transitions (a sliding level
+inside the band, as on the decreasing branch of the 0 lb records, or the chatter after the gap
+closes at full speed in the velocity-limited 1-2 Hz ds2 records: see docs/damper_range.md).
 
     python benchmarks/bench_real_damper.py [--data DIR] [--lowpass 20] [--jobs 1]
 """

@@ -135,7 +135,9 @@ def run_wave_speed(solid, factors):
         "in-plane, 2nd and 4th height bending against 221.7, 297.7, 845.6 Hz"
     )
     for c in factors:
-        lk = brentq(lambda lk: targets(10**lk, 10**lk, kn)[0] - PEAKS[0] / c, 10.0, 16.0, xtol=1e-6)
+        lk = brentq(
+            lambda lk, c=c: targets(10**lk, 10**lk, kn)[0] - PEAKS[0] / c, 10.0, 16.0, xtol=1e-6
+        )
         err = 100 * (c * targets(10**lk, 10**lk, kn)[1:] / PEAKS[1:] - 1)
         print(
             f"    c = {c:.3f} (E / rho x {c * c:.4f}): k_t {10**lk:.3g} N/m^3 (x c^2: "
@@ -154,7 +156,10 @@ def run_stiffness_scan(solid, decades=(11, 16)):
     rows = []
     for ky in 10.0 ** np.arange(decades[0], decades[1] + 1):
         for kn in 10.0 ** np.arange(decades[0], decades[1] + 1):
-            g = lambda lk: targets(10**lk, ky, kn)[0] - PEAKS[0]
+
+            def g(lk, ky=ky, kn=kn):
+                return targets(10**lk, ky, kn)[0] - PEAKS[0]
+
             if g(8.0) > 0 or g(18.0) < 0:
                 continue
             kx = 10 ** brentq(g, 8.0, 18.0, xtol=1e-6)
@@ -191,7 +196,7 @@ def run_normal_ratio(solid, ratios, exponents, h=1e-3):
     for m in exponents:
         for r in ratios:
 
-            def at(kt, kn):
+            def at(kt, kn, m=m):
                 return solid.replace(
                     stiffness_per_area=kt,
                     normal_stiffness_per_area=kn,
@@ -199,7 +204,7 @@ def run_normal_ratio(solid, ratios, exponents, h=1e-3):
                 )
 
             k = brentq(
-                lambda v: natural_frequencies(at(v, r * v), n_modes=7)[6] - PEAKS[0],
+                lambda v, r=r: natural_frequencies(at(v, r * v), n_modes=7)[6] - PEAKS[0],
                 1e10,
                 1e15,
                 rtol=1e-9,

@@ -39,8 +39,8 @@ def _cost(label, r):
     err = r.max_energy_error
     print(
         f"  {label:<34s} {m['steps']:6d} steps {r.wall_time:7.2f} s "
-        f"{1e3 * r.wall_time / m['steps']:6.3f} ms/step, Newton {m['newton_iterations'] / m['steps']:.2f}"
-        f"/step, {m['jacobians']} Jacobian(s)"
+        f"{1e3 * r.wall_time / m['steps']:6.3f} ms/step, "
+        f"Newton {m['newton_iterations'] / m['steps']:.2f}/step, {m['jacobians']} Jacobian(s)"
         + ("" if err is None else f", energy error {err:.1e}")
     )
 

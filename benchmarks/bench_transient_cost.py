@@ -177,7 +177,7 @@ def measure(kinds, repeat) -> dict:
     """``{label: {"iwan": counters, "linear": counters or None}}``."""
     out = {}
     for label, run in _rows(kinds):
-        out[label] = {t: _measure(lambda: run(t), repeat) for t in ("iwan", "linear")}
+        out[label] = {t: _measure(lambda run=run, t=t: run(t), repeat) for t in ("iwan", "linear")}
     return out
 
 
@@ -191,7 +191,10 @@ def _line(label, d, other=None):
         f"{a['wall_min']:7.2f} {a['wall_median']:7.2f} {ms:7.3f}"
     )
     if b is not None:
-        txt += f" {1e3 * b['wall_median'] / b['steps']:7.3f} {a['wall_median'] / b['wall_median']:5.2f}"
+        txt += (
+            f" {1e3 * b['wall_median'] / b['steps']:7.3f}"
+            f" {a['wall_median'] / b['wall_median']:5.2f}"
+        )
     else:
         txt += f" {'-':>7s} {'-':>5s}"
     txt += "".join(

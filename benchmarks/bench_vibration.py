@@ -3,7 +3,8 @@
 Part A (synthetic, truth known): a single-mode modal Iwan oscillator is integrated in time
 with the exact IwanJoint (core.modal.modal_ringdown, independent of the curve extraction),
 its acceleration gets a second, linear mode nearby (1.3 f0, half the peak) and white Gaussian
-noise of RMS 1 % of the record's RMS, sampled at 12.8 kHz. Per seeded case the parameters are drawn at random;
+noise of RMS 1 % of the record's RMS, sampled at 12.8 kHz. Per seeded case the parameters are
+drawn at random;
 the benchmark reports the extracted curve's frequency and damping errors against the closed
 form (first-harmonic stiffness, dashpot floor) at the extracted amplitudes, and whether each
 identified parameter lies within 2 standard errors of the truth.

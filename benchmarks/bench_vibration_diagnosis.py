@@ -1,16 +1,16 @@
-"""Benchmark: does :func:`iwan_element.diagnose_vibration` name the hidden vibration effect?
+"""Benchmark: whether :func:`iwan_element.diagnose_vibration` names the hidden vibration effect.
 
-Held out from the tests (``tests/test_vibration_diagnosis.py`` uses the modal joint
-``(400 N, 2.5266e5 N/m, -0.5, 1.0)``, 30 amplitudes over 0.02-1.5 phi_max, seeds < 100): here
-another modal joint ``(250, 1.8e5, -0.35, 0.5)`` on ``K_inf = 1.2e5`` [1/s^2], 36 amplitudes
-over 0.01-1.2 phi_max, seeds from 1000 (a separate block per effect and size). The measured
-curves come from the time-domain elements (steady driven cycles, harmonic balance by
-quadrature: ``tests/_vibration_cases.py``), not from the modal forms the diagnosis fits; each hidden effect's size is ``size`` x
-"noticeable", noticeable meaning an RMS change over the points of 4 noise standard
-deviations (frequency and damping curves together), sizes 0.5-3; half the hidden macroslip
+Held out from the tests (``tests/test_vibration_diagnosis.py`` uses the modal joint ``(400 N,
+2.5266e5 N/m, -0.5, 1.0)``, 30 amplitudes over 0.02-1.5 phi_max, seeds < 100): here another modal
+joint ``(250, 1.8e5, -0.35, 0.5)`` on ``K_inf = 1.2e5`` [1/s^2], 36 amplitudes over 0.01-1.2
+phi_max, seeds from 1000 (a separate block per effect and size). The measured curves come from the
+time-domain elements (steady driven cycles, harmonic balance by quadrature:
+``tests/_vibration_cases.py``), not from the modal forms the diagnosis fits; each hidden effect's
+size is ``size`` x "noticeable", noticeable meaning an RMS change over the points of 4 noise
+standard deviations (frequency and damping curves together), sizes 0.5-3; half the hidden macroslip
 patches slide as a whole, half are spread (``shape`` drawn in 0.15-0.5). Noise like a real curve:
-frequency 1e-4 relative, damping 3 % relative, stated on the ``AmplitudeCurve`` (as an
-extraction states it). Clean curves (no effect) must name nothing.
+frequency 1e-4 relative, damping 3 % relative, stated on the ``AmplitudeCurve`` (as an extraction
+states it). Clean curves (no effect) must name nothing.
 
 Pass per hidden case: the effect named first is the hidden one and the RMS mismatch after is
 within 1.3 x the nominal noise RMS. Also reported: named or reported "nearly as good". Clean cases
@@ -60,7 +60,7 @@ def main(argv=None):
         f"{'hidden':<18}{'size':>5}{'df max %':>10}{'dz max %':>10}{'named':>8}"
         f"{'or amb.':>8}{'after/noise':>13}  misnamed as"
     )
-    rows, hidden_ok, hidden_n, clean_ok, clean_n = [], 0, 0, 0, 0
+    hidden_ok, hidden_n, clean_ok, clean_n = 0, 0, 0, 0
     for ke, name in enumerate(vibration_candidates() + (None,)):
         sizes = a.sizes if name else [0.0]
         for ks, size in enumerate(sizes):

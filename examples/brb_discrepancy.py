@@ -107,7 +107,8 @@ def main(argv=None):
             f"  {1e6 * x:6.0f}  {qb.frequency[i]:13.3f}  {qa.frequency[i]:8.3f} +- "
             f"{band.frequency_std[i]:.3f}  {100 * (qa.frequency[i] / qb.frequency[i] - 1):+.3f} %"
             f"  {100 * qb.damping_ratio[i]:15.3f}  {100 * qa.damping_ratio[i]:8.3f} +- "
-            f"{100 * band.damping_ratio_std[i]:.3f}  {qa.damping_ratio[i] / qb.damping_ratio[i]:5.2f}"
+            f"{100 * band.damping_ratio_std[i]:.3f}  "
+            f"{qa.damping_ratio[i] / qb.damping_ratio[i]:5.2f}"
         )
     X0 = float(sweeps.amplitude.max())
     rd = models.ringdown(aug, amplitude=X0, cycles=20 if a.quick else 60)

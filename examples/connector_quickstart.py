@@ -38,6 +38,8 @@ sim.timeIntegration.numberOfSteps, sim.timeIntegration.endTime = steps, steps * 
 sim.timeIntegration.verboseMode, sim.solution.file.write = 0, False
 mbs.SolveDynamic(sim)
 print(
-    f"peak slip {1e3 * abs(joint.slip_history).max():.4f} mm (phi_max {1e3 * params.phi_max:.4f} mm), "
-    f"dissipated {joint.dissipated_energy_history[-1]:.4f} J, stored {joint.stored_energy_history[-1]:.4f} J"
+    f"peak slip {1e3 * abs(joint.slip_history).max():.4f} mm "
+    f"(phi_max {1e3 * params.phi_max:.4f} mm), "
+    f"dissipated {joint.dissipated_energy_history[-1]:.4f} J, "
+    f"stored {joint.stored_energy_history[-1]:.4f} J"
 )

@@ -3,9 +3,9 @@
 Run:  python examples/diagnose_beam_vibration.py [--effect viscous|pinning] [--quick] [--out DIR]
 
 The "measured" free decays are Exudyn ring-downs (``iwan_element.models.ringdown``) of the
-example specimen with a loosened bolt (3 kN instead of 30 kN, so the joint's amplitude dependence is clearly
-visible), released at several amplitudes, with an effect the plain specimen lacks, hidden
-from the workflow:
+example specimen with a loosened bolt (3 kN instead of 30 kN, so the joint's amplitude
+dependence is clearly visible), released at several amplitudes, with an effect the plain
+specimen lacks, hidden from the workflow:
 
 * ``viscous``: a damping floor (material damping, as the modal damping matrix of the floor;
   1e-5 of critical in the first mode), which shows at low amplitude where the joint's

@@ -1,9 +1,9 @@
 """Synthetic test records with a hidden effect, shared by tests/test_diagnosis.py and
 benchmarks/bench_diagnosis.py. The diagnosis is never told which effect is hidden.
 
-Joint: the docs/equations.md section 5 test vector (Fs, KT, chi, beta) = (1000 N, 1e6 N/m, -0.5, 0.2),
-phi_max = 2.25 mm. Each amplitude is applied for three cycles of 96 samples at 1 Hz; the force
-noise is 5 N (0.5 % of Fs), white or AR(1)-coloured.
+Joint: the docs/equations.md section 5 test vector (Fs, KT, chi, beta) =
+(1000 N, 1e6 N/m, -0.5, 0.2), phi_max = 2.25 mm. Each amplitude is applied for three cycles
+of 96 samples at 1 Hz; the force noise is 5 N (0.5 % of Fs), white or AR(1)-coloured.
 
 The magnitude of an effect is the RMS of the force it adds on the protocol,
 ``rms(F_effect - F_iwan)`` with the same Iwan parameters, in units of the noise RMS.

@@ -948,7 +948,7 @@ def test_magnitude_check_refuses_only_what_floats_cannot_carry():
         ie.split_cycles(d.t * 1e200, d.u, d.F)
 
 
-# ---------------------------------------------------------------- models (the lap-jointed specimens)
+# ------------------------------------------------------------ models (the lap-jointed specimens)
 def _models():
     pytest.importorskip("exudyn", reason="iwan_element.models needs exudyn")
     import iwan_element.models as models

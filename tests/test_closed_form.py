@@ -1,4 +1,5 @@
-"""Closed forms against the test vectors of docs/equations.md section 5 and against independent routes (quadrature)."""
+"""Closed forms against the test vectors of docs/equations.md section 5 and against independent
+routes (quadrature)."""
 
 import numpy as np
 import pytest
@@ -101,7 +102,8 @@ def test_secant_eq24(p):
 
 @pytest.mark.parametrize("p", PARAMS)
 def test_dissipation_equals_masing_integral(p):
-    """Any Masing model: D = 8 int_0^u0 F dx - 4 u0 F(u0) (docs/equations.md section 2), by quadrature."""
+    """Any Masing model: D = 8 int_0^u0 F dx - 4 u0 F(u0) (docs/equations.md section 2), by
+    quadrature."""
     for r in [1e-3, 0.2, 0.9, 1.0, 1.7, 4.0]:
         u0 = r * p.phi_max
         pts = [p.phi_max] if u0 > p.phi_max else None
@@ -130,7 +132,9 @@ def test_dissipation_slope_eq21_and_reference_values():
     # invert the backbone for u0
     from scipy.optimize import brentq
 
-    u0 = np.array([brentq(lambda x: backbone(x, p) - f * p.Fs, 0, p.phi_max) for f in F0_over_Fs])
+    u0 = np.array(
+        [brentq(lambda x, f=f: backbone(x, p) - f * p.Fs, 0, p.phi_max) for f in F0_over_Fs]
+    )
     np.testing.assert_allclose(dissipation_slope(u0, p), [2.516, 2.703, 2.975, 3.333], atol=6e-4)
     # against a numerical derivative of the closed forms
     h = 1e-6

@@ -250,7 +250,7 @@ def test_microslip_ridge_keeps_the_force_and_states_its_density():
         )
         F = member_force(stack, theta, x_max, scales, u, v)
 
-        def chi2_at(th):
+        def chi2_at(th, F=F, x_max=x_max, scales=scales, u=u, v=v):
             return float(np.sum((F - member_force(stack, th, x_max, scales, u, v)) ** 2))
 
         hi = np.array([math.log(1e4), 1.0, math.log(101.0), 20.0, 0.95, 1e9, 1e9])

@@ -48,7 +48,7 @@ KINDS = {
 
 def test_each_effect_declares_what_its_physics_is():
     assert {n: (c.structure, tuple(c.needs)) for n, c in EFFECTS.items()} == KINDS
-    assert set(s for s, _ in KINDS.values()) == set(STRUCTURES)
+    assert {s for s, _ in KINDS.values()} == set(STRUCTURES)
 
 
 @pytest.mark.parametrize("name", sorted(n for n in EFFECTS if EFFECTS[n].structure == "parallel"))

@@ -196,12 +196,14 @@ def test_declared_priors_are_normalised_and_invertible():
         for sp in cls.specs + cls.modal_specs:
             lo, hi = sp.prior_range
             pts = [sp.neutral] if sp.neutral is not None and lo < sp.neutral < hi else None
-            mass, _ = quad(lambda z: float(np.exp(sp.log_prior(z))), lo, hi, points=pts, limit=400)
+            mass, _ = quad(
+                lambda z, sp=sp: float(np.exp(sp.log_prior(z))), lo, hi, points=pts, limit=400
+            )
             assert mass == pytest.approx(1.0, abs=1e-6), (name, sp.name)
             for q in (0.05, 0.5, 0.95):
                 z = float(sp.prior_quantile(q))
                 cdf, _ = quad(
-                    lambda t: float(np.exp(sp.log_prior(t))),
+                    lambda t, sp=sp: float(np.exp(sp.log_prior(t))),
                     lo,
                     z,
                     limit=400,

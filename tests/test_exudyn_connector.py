@@ -86,7 +86,9 @@ def test_dashpot_in_parallel_equals_exudyns_damper_and_is_booked(law):
                 )
             )
         vel = []
-        chain.mbs.SetPostStepUserFunction(lambda mbs, t: vel.append(chain.velocity(0)) or True)
+        chain.mbs.SetPostStepUserFunction(
+            lambda mbs, t, vel=vel, chain=chain: vel.append(chain.velocity(0)) or True
+        )
         conn = chain.joint(-1, 0, IwanJoint(P), law=law, damping=c if own else 0.0)
         assert conn.route == law and conn.damping == (c if own else 0.0)
         chain.solve(settings(h, n))

@@ -349,7 +349,7 @@ def test_symbolic_route_refuses_records_when_its_post_step_was_replaced():
     chain.mbs.Assemble()
     chain.mbs.SolveDynamic(settings(1e-4, 50), storeSolver=False)
     with pytest.raises(RuntimeError, match="post-step dispatcher was replaced"):
-        conn.slip_history
+        _ = conn.slip_history
 
 
 def test_post_step_function_set_after_the_connectors_is_chained_and_can_stop_the_run():
@@ -475,7 +475,7 @@ def test_offset_shifts_the_unloaded_position():
         conn = chain.joint(-1, 0, IwanJoint(P), offset=offset, law="python")
         positions = []
         chain.mbs.SetPostStepUserFunction(
-            lambda mbs, t: (
+            lambda mbs, t, positions=positions, chain=chain: (
                 positions.append(
                     mbs.GetNodeOutput(chain.nodes[0], exu.OutputVariableType.Coordinates)
                 )

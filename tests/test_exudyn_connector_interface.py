@@ -169,13 +169,13 @@ def test_position_markers_with_an_oblique_axis_equal_the_python_law():
             pairs.append((m0, m1))
         if use_interface:
             h = add_iwan_interface(mbs, pairs, [P] * 3, axis=a)
-            slips = lambda: h.slip_history  # noqa: E731
+            slips = lambda h=h: h.slip_history  # noqa: E731
         else:
             cs = [
                 add_iwan_connector(mbs, list(pr), IwanJoint(P), axis=a, law="python")
                 for pr in pairs
             ]
-            slips = lambda: np.stack([c.slip_history for c in cs], axis=1)  # noqa: E731
+            slips = lambda cs=cs: np.stack([c.slip_history for c in cs], axis=1)  # noqa: E731
         mbs.Assemble()
         mbs.SolveDynamic(settings(1e-5, 2000))
         results.append(slips())
@@ -215,7 +215,7 @@ def _ancf_strip(use_interface):
         mbs.AddObject(CoordinateConstraint(markerNumbers=[mg, mc]))
     ground = mbs.AddObject(ObjectGround())
     pairs = []
-    for k, x in enumerate((0.15, 0.25, 0.35)):
+    for x in (0.15, 0.25, 0.35):
         e = int(x / le)
         m_beam = mbs.AddMarker(
             MarkerBodyPosition(bodyNumber=elems[e], localPosition=[x - e * le, -0.5 * h, 0.0])

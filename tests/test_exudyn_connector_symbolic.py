@@ -86,8 +86,9 @@ def _random_walk(rng, n):
 
 def test_symbolic_expression_equals_trial_when_within_depth_and_overflow_is_detected():
     """Random steps from random committed states: the law equals IwanJoint.trial to round-off
-    (the joint computes in u/phi_max, the expression in u) except where a step needs more reversal points than it holds (depth 2: it happens, and
-    the check flags exactly those steps; depth 8: never on this history)."""
+    (the joint computes in u/phi_max, the expression in u) except where a step needs more
+    reversal points than it holds (depth 2: it happens, and the check flags exactly those steps;
+    depth 8: never on this history)."""
     rng = np.random.default_rng(7)
     for depth, expect_overflow in ((2, True), (8, False)):
         st, uvar, expr = _state_expression(depth)

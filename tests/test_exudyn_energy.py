@@ -201,7 +201,7 @@ def test_a_pendulum_on_a_revolute_joint_with_gravity_balances():
         rec = record_energy(mbs, conn)
         seen = []
         mbs.SetPostStepUserFunction(
-            lambda m, t: (
+            lambda m, t, seen=seen, rod=rod: (
                 seen.append(
                     (
                         m.GetObjectOutputBody(

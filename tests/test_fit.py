@@ -103,7 +103,7 @@ def test_box_lm_reaches_the_scipy_least_squares_minimum():
         lower = np.array([math.log(1e-3), -0.98, 0.0])
         upper = np.array([math.log(1e4), 1.0, math.log(101)])
 
-        def fun(q):
+        def fun(q, prob=prob):
             return prob.projected(*_q_to_shape(q, prob.x_max, None))[1]
 
         q0 = np.array([math.log(1.5), -0.7, 1.0])

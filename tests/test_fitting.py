@@ -141,7 +141,7 @@ def test_monte_carlo_coverage_of_a_nonlinear_model():
     hits, est, ses = np.zeros(2), [], []
     for _ in range(300):
         y = a * np.exp(-b * t) + sig * rng.normal(size=t.size)
-        res = least_squares(lambda x: x[0] * np.exp(-x[1] * t) - y, [1.0, 1.0])
+        res = least_squares(lambda x, y=y: x[0] * np.exp(-x[1] * t) - y, [1.0, 1.0])
         c = covariance(res.jac, res.fun)
         hits += np.abs(res.x - [a, b]) <= 1.96 * c.stderr
         est.append(res.x)

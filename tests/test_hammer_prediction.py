@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from iwan_element.models.calibration import mode_bands, release_amplitudes
 
 from iwan_element import models
 
@@ -20,7 +21,6 @@ needs_data = pytest.mark.skipif(
     reason="the measured Brake-Reuss hammer record (GPL-3.0) is read from "
     "../shared only and is absent here",
 )
-from iwan_element.models.calibration import mode_bands, release_amplitudes
 
 FS = 12800.0
 

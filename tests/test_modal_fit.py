@@ -1,7 +1,8 @@
 """Modal Iwan identification from f(X), zeta(X).
 
-Truth comes from the closed forms of core.modal (checked against docs/equations.md section 5 and a time
-simulation in test_vibration.py) and, end to end, from a ring-down of the exact IwanJoint.
+Truth comes from the closed forms of core.modal (checked against docs/equations.md section 5
+and a time simulation in test_vibration.py) and, end to end, from a ring-down of the exact
+IwanJoint.
 """
 
 import json

@@ -196,7 +196,7 @@ def test_result_shape_and_views():
 
     json.dumps(d, allow_nan=False)
     assert set(r.shape_stderr[1]) == set(POS)
-    assert r.mac(1, {p: v for p, v in zip(POS, AMPS[0])}) > 0.9999
+    assert r.mac(1, dict(zip(POS, AMPS[0]))) > 0.9999
     assert r.modal_constants == {}
 
 

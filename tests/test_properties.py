@@ -208,7 +208,8 @@ def test_closed_forms_are_finite_and_monotone(p):
     assert np.all((Kt >= 0.0) & (Kt <= p.KT))
     assert np.all(np.diff(Ks) <= 1e-12 * p.KT)
     assert np.all(np.diff(D) >= 0.0) and D[0] == 0.0
-    # any Masing model: D = 8 int_0^u0 F - 4 u0 F(u0) (docs/equations.md section 2), an independent route
+    # any Masing model: D = 8 int_0^u0 F - 4 u0 F(u0) (docs/equations.md section 2), an
+    # independent route
     assert np.allclose(D, 8.0 * G - 4.0 * u * F, rtol=1e-7, atol=1e-12 * p.Fs * p.phi_max)
     slope = dissipation_slope(u[1:], p)
     assert np.all(slope[_r[1:] < 1.0] >= (p.chi + 3.0) * (1.0 - 1e-9))

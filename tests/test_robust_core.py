@@ -156,7 +156,7 @@ def test_large_chi_computes_correctly(chi, Fs, KT):
 def test_R_out_of_float_range_is_a_clear_error():
     p = IwanParameters(1e3, 1e6, 120.0, 0.1)
     with pytest.raises(ValueError, match="R = 10\\*\\*370.*outside the float range"):
-        p.R
+        _ = p.R
     q = IwanParameters(1e3, 1e6, -0.5, 0.2)
     assert q.R == pytest.approx(8.784105e6, rel=1e-6)  # docs/equations.md section 5
 

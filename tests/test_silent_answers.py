@@ -77,7 +77,8 @@ def test_amplitude_curve_on_a_clipped_decay_measures_only_below_the_clip():
 @pytest.mark.parametrize("seed", [1, 2])
 def test_clipping_under_noise_is_cut_and_a_noisy_or_two_mode_decay_is_not(seed):
     """Clipping with noise added after it has no flat tops: the first point's damping was
-    0.00047-0.00049 against 0.002 at a 0.6 clip level (16 s records, seeds 1-3), success True, silent.
+    0.00047-0.00049 against 0.002 at a 0.6 clip level (16 s records, seeds 1-3), success True,
+    silent.
     Now the record is cut after its last flattened cycle (truth: the last sample beyond the
     clip, 0.506 s), and nothing is cut from
     an unclipped decay with 3 % noise or from a small mode read beside a 20 x larger one."""

@@ -1,4 +1,5 @@
-"""The Exudyn ring-down of a solid specimen (models.simulation.transient, issue 36) on the coarse mesh.
+"""The Exudyn ring-down of a solid specimen (models.simulation.transient, issue 36) on the
+coarse mesh.
 
 Independent routes: the energy balance (the bodies' kinetic and strain energy from the reduced
 matrices, the joints' exact records, the floor's work); the stuck interface against the stuck

@@ -30,8 +30,8 @@ def test_presets_are_frozen_validated_and_replaceable(name):
 
 def test_published_geometry_of_the_thin_brake_reuss_beam():
     s = preset("brake-reuss")
-    # docs/equations.md section 7: 72.0 cm long, lap 12 cm starting 30 cm from one end, acc3 at 7.62 cm
-    # from the other end; cone radius at the interface 12.4 mm for t = 6.35 mm
+    # docs/equations.md section 7: 72.0 cm long, lap 12 cm starting 30 cm from one end, acc3 at
+    # 7.62 cm from the other end; cone radius at the interface 12.4 mm for t = 6.35 mm
     assert s.total_length == pytest.approx(0.72)
     assert s.lap_start == pytest.approx(0.30)
     assert s.total_length - s.sensor_position == pytest.approx(0.0762)

@@ -58,7 +58,10 @@ def euler_beta_l(bc, n):
     if bc == "pinned-pinned":
         return np.pi * np.arange(1, n + 1)
     sign = -1.0 if bc == "clamped-free" else 1.0  # cos cosh = -1 (cantilever) or +1
-    f = lambda x: np.cos(x) * np.cosh(x) - sign
+
+    def f(x):
+        return np.cos(x) * np.cosh(x) - sign
+
     first = 0 if bc == "clamped-free" else 1  # f changes sign on (k pi, (k+1) pi)
     brackets = [(max(k, 0.3) * np.pi, (k + 1) * np.pi) for k in range(first, first + n)]
     return np.array([brentq(f, lo, hi, xtol=1e-15) for lo, hi in brackets])
@@ -89,7 +92,10 @@ def _legendre_tables(degree, L):
         e: [np.array([leg.legval(s, leg.legder(c, k)) for c in eye]) / jac**k for k in range(2)]
         for e, s in (("left", -1.0), ("right", 1.0))
     }
-    gram = lambda X, Y: (X * wq) @ Y.T * jac
+
+    def gram(X, Y):
+        return (X * wq) @ Y.T * jac
+
     return tab, ends, gram
 
 
@@ -172,9 +178,12 @@ def test_first_order_shift_from_euler_modes(bc):
         - 1.0
     )
     r2 = 1.0 / slender**2
+
+    def integral(g):
+        return np.sum(wq * g)
+
     for k in range(n):
         w, w1, w2, w3 = euler_mode_derivatives(bc, beta[k], x)
-        integral = lambda g: np.sum(wq * g)
         assert integral(w2**2) / integral(w**2) == pytest.approx(beta[k] ** 4, rel=1e-9)
         first_order = (
             -0.5

@@ -336,7 +336,7 @@ def test_stepped_sine_force_controlled_iwan():
         H = []
         for wi in 2 * math.pi * f:
 
-            def g(X):
+            def g(X, wi=wi, F=F):
                 return np.abs(_dyn(X, wi, p, k_inf, 1e-3, w0)) * X - F
 
             gg = (

@@ -361,7 +361,7 @@ def test_hidden_whole_or_spread_patch_is_named_and_told_apart(base, shape):
         rng = np.random.default_rng(seed)
         vals = {"kappa_2": 1.0, "X_s": 0.25 * X.max(), "shape": shape}
 
-        def rms(k):
+        def rms(k, vals=vals):
             f, z = EFFECTS["macroslip_onset"].modal_form(
                 X, fp, zp, vc.ZETA0, **dict(vals, kappa_2=k)
             )

@@ -1,7 +1,7 @@
 """Vibration effects (hardening, macroslip onset, whole or spread): their modal forms against
 independent routes (the time-domain elements driven through steady cycles, first harmonic and
-loop area by quadrature; adaptive quadrature over the patch's thresholds; the Duffing oscillator integrated in time), energy bookkeeping, neutral
-values and bad input."""
+loop area by quadrature; adaptive quadrature over the patch's thresholds; the Duffing
+oscillator integrated in time), energy bookkeeping, neutral values and bad input."""
 
 from __future__ import annotations
 
@@ -63,7 +63,7 @@ def test_hardening_first_harmonic_against_duffing_time_integration():
     for eps in (0.005, 0.02):
         k3 = eps * w0**2 / A**2
         sol = solve_ivp(
-            lambda t, y: [y[1], -(w0**2) * y[0] - k3 * y[0] ** 3],
+            lambda t, y, k3=k3: [y[1], -(w0**2) * y[0] - k3 * y[0] ** 3],
             (0, 0.2),
             [A, 0.0],
             rtol=1e-11,
@@ -125,7 +125,7 @@ def test_spread_patch_modal_form_converges_to_the_driven_jenkins_bank(shape, u_e
     gaps = []
     for bins in (32, 128):
         fe, ze = curve(
-            lambda: MacroslipOnset(
+            lambda bins=bins: MacroslipOnset(
                 IwanJoint(P),
                 k_2=ks,
                 u_s=us,
@@ -173,14 +173,14 @@ def test_spread_patch_integrals_against_adaptive_quadrature(shape):
         top = max(math.log(x / Xs), 0.0)
         f = lambda t: dens(Xs * math.exp(t)) * Xs * math.exp(t)  # noqa: E731
         lq = quad(
-            lambda t: (1.0 - jenkins_gain(x, Xs * math.exp(t))) * f(t),
+            lambda t, x=x, f=f: (1.0 - jenkins_gain(x, Xs * math.exp(t))) * f(t),
             0.0,
             top,
             limit=200,
             epsabs=1e-14,
         )[0]
         dq = quad(
-            lambda t: 4.0 * Xs * math.exp(t) * (x - Xs * math.exp(t)) * f(t),
+            lambda t, x=x, f=f: 4.0 * Xs * math.exp(t) * (x - Xs * math.exp(t)) * f(t),
             0.0,
             top,
             limit=200,
