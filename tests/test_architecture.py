@@ -75,11 +75,30 @@ MODULES = _modules()
 TREES = {name: ast.parse(path.read_text(encoding="utf-8")) for name, path in MODULES.items()}
 
 
+def _runtime_nodes(tree: ast.AST):
+    """Every node of ``tree`` except those under ``if TYPE_CHECKING:`` (imports a type
+    checker reads and Python never runs: an annotation may name a module above or beside
+    without an import at run time)."""
+    stack = [tree]
+    while stack:
+        node = stack.pop()
+        yield node
+        for child in ast.iter_child_nodes(node):
+            if isinstance(child, ast.If) and (
+                (isinstance(child.test, ast.Name) and child.test.id == "TYPE_CHECKING")
+                or (isinstance(child.test, ast.Attribute) and child.test.attr == "TYPE_CHECKING")
+            ):
+                stack.extend(child.orelse)
+                continue
+            stack.append(child)
+
+
 def _imports(name: str):
     """``(target module, imported name or None, line)`` of every import of module ``name``
-    inside the package, relative imports resolved."""
+    inside the package that runs (module level or in a function; not the type checker's),
+    relative imports resolved."""
     package = name if MODULES[name].name == "__init__.py" else name.rpartition(".")[0]
-    for node in ast.walk(TREES[name]):
+    for node in _runtime_nodes(TREES[name]):
         if isinstance(node, ast.Import):
             items = [(a.name, None) for a in node.names]
         elif isinstance(node, ast.ImportFrom):
@@ -268,3 +287,6 @@ def test_the_checks_find_what_they_claim():
     assert _sub_room("iwan_element.models.studies", "iwan_element.models") == "(modules)"
     assert _sub_room("iwan_element.cli", "iwan_element") == "cli"
     assert _sub_room("iwan_element.cli", "iwan_element.models") is None
+    tree = ast.parse("import a\nif TYPE_CHECKING:\n    import b\nelse:\n    import c\n")
+    names = {a.name for n in _runtime_nodes(tree) if isinstance(n, ast.Import) for a in n.names}
+    assert names == {"a", "c"}
