@@ -354,14 +354,23 @@ MODEL_RESULTS = {
 def test_every_model_result_class_is_covered():
     """Every result class the beam model's public functions return is in MODEL_RESULTS."""
     from iwan_element.models import calibration
-    from iwan_element.models.calibration import hammer
+    from iwan_element.models.calibration import hammer_result
     from iwan_element.models.simulation import coupling, forced, machine, transient
 
     from iwan_element import harmonic, models
 
     public = {
         n
-        for mod in (models, calibration, transient, machine, forced, coupling, hammer, harmonic)
+        for mod in (
+            models,
+            calibration,
+            transient,
+            machine,
+            forced,
+            coupling,
+            hammer_result,
+            harmonic,
+        )
         for n in getattr(mod, "__all__", ())
         if n.endswith(("Result", "Response", "Prediction"))
         and inspect.isclass(getattr(mod, n))

@@ -272,7 +272,7 @@ def test_the_sensor_reads_the_section_deflection_between_nodes():
     nodes: exact for a deflection quadratic in x plus a twist (linear in y), and on a smooth
     bending shape far closer than the nearest node (which sits up to half an element off).
     Measured on a 12 mm mesh: 6e-15 and 1.2e-6 against the nearest node's 5.6e-3 and 1.8e-2."""
-    from iwan_element.models.solid.build import _point_weights
+    from iwan_element.models.solid.readout import _point_weights
 
     s = preset("brake-reuss")
     bar = bar_part(

@@ -34,10 +34,9 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.special import log_ndtr
-from scipy.stats import multivariate_normal
 
 from ..base.validation import check_scalar, finite_array
+from ._gaussian import _box_mass, _capped, _inverse, _regression
 from ._lines import line_integral, ridge_integral
 
 __all__ = ["Evidence", "Ridge", "laplace_evidence", "posterior_probabilities"]
@@ -164,17 +163,8 @@ def laplace_evidence(
     ValueError
         Shapes that do not match, a box that is not finite or empty, ``theta`` outside it.
     """
-    r = finite_array("r", r, ndim=1)
-    theta = finite_array("theta", theta, ndim=1, min_size=0)
-    k = theta.size
-    J = finite_array("J", J, ndim=None, min_size=0).reshape(r.size, k)
-    lo = finite_array("lower", lower, ndim=1, min_size=0)
-    hi = finite_array("upper", upper, ndim=1, min_size=0)
-    if lo.size != k or hi.size != k or not np.all(hi > lo):
-        raise ValueError("lower and upper must have one finite entry per parameter, upper > lower")
-    width = hi - lo
-    if np.any(theta < lo - 1e-9 * width) or np.any(theta > hi + 1e-9 * width):
-        raise ValueError("theta must lie inside the box [lower, upper]")
+    J, r, theta, lo, hi = _checked(J, r, theta, lower, upper)
+    k, width = theta.size, hi - lo
     tau = check_scalar("tau", tau, low=1.0)
     log_like = -0.5 * float(r @ r) / tau
     if k == 0:
@@ -212,16 +202,7 @@ def laplace_evidence(
     log_occam = gain + log_gauss + log_mass + float(np.sum(rel(theta)))
     cov = _capped(Hinv, 1.0) * np.outer(width, width)
     if chi2_at is not None:
-        dist = np.minimum(theta - lo, hi - theta) / width
-        near = np.flatnonzero((dist < NEAR) | (dist < 3.0 * sd))
-        knots = (
-            np.full(k, np.nan) if prior_knots is None else np.asarray(prior_knots, float).reshape(k)
-        )
-        spike = np.isfinite(knots) & (np.abs(theta - np.nan_to_num(knots)) < 5.0 * sd * width)
-        # a parameter the data hardly determine (its Gaussian wider than a third of the box)
-        # is left to the Gaussian, which integrates it over the box
-        ok = np.ones(k, bool) if lines is None else np.asarray(lines, bool).reshape(k)
-        near = np.flatnonzero(ok & ((dist < NEAR) | ((dist < 3.0 * sd) & (sd < 0.3)) | spike))
+        near, knots = _near_bound(theta, lo, hi, sd, prior_knots, lines)
         if near.size:
             return _with_lines(
                 J,
@@ -240,6 +221,39 @@ def laplace_evidence(
                 opened,
             )
     return Evidence(log_like + log_occam, log_like, log_occam, cov, tuple(int(i) for i in idx))
+
+
+def _checked(J, r, theta, lower, upper):
+    """:func:`laplace_evidence`'s arrays checked: ``(J, r, theta, lower, upper)``."""
+    r = finite_array("r", r, ndim=1)
+    theta = finite_array("theta", theta, ndim=1, min_size=0)
+    k = theta.size
+    J = finite_array("J", J, ndim=None, min_size=0).reshape(r.size, k)
+    lo = finite_array("lower", lower, ndim=1, min_size=0)
+    hi = finite_array("upper", upper, ndim=1, min_size=0)
+    if lo.size != k or hi.size != k or not np.all(hi > lo):
+        raise ValueError("lower and upper must have one finite entry per parameter, upper > lower")
+    width = hi - lo
+    if np.any(theta < lo - 1e-9 * width) or np.any(theta > hi + 1e-9 * width):
+        raise ValueError("theta must lie inside the box [lower, upper]")
+    return J, r, theta, lo, hi
+
+
+def _near_bound(theta, lo, hi, sd, prior_knots, lines):
+    """``(near, knots)``: the parameters :func:`laplace_evidence` integrates along their lines
+    (near a bound, or whose Gaussian reaches their prior's knot; ``sd`` in box widths), and
+    the knots (NaN: none).
+    """
+    k, width = theta.size, hi - lo
+    dist = np.minimum(theta - lo, hi - theta) / width
+    near = np.flatnonzero((dist < NEAR) | (dist < 3.0 * sd))
+    knots = np.full(k, np.nan) if prior_knots is None else np.asarray(prior_knots, float).reshape(k)
+    spike = np.isfinite(knots) & (np.abs(theta - np.nan_to_num(knots)) < 5.0 * sd * width)
+    # a parameter the data hardly determine (its Gaussian wider than a third of the box)
+    # is left to the Gaussian, which integrates it over the box
+    ok = np.ones(k, bool) if lines is None else np.asarray(lines, bool).reshape(k)
+    near = np.flatnonzero(ok & ((dist < NEAR) | ((dist < 3.0 * sd) & (sd < 0.3)) | spike))
+    return near, knots
 
 
 #: A parameter this close to a bound (fraction of the box width) is integrated along its line.
@@ -403,75 +417,6 @@ def _along_ridge(
         cov,
         tuple(int(keep[j]) for j in sub.truncated) + (i,),
     )
-
-
-def _regression(H, free, i):
-    """``-H_ff^+ H_fi``: how the parameters ``free`` follow parameter ``i`` at the quadratic's
-    optimum, through the pseudo-inverse of the diagonally scaled ``H_ff`` (a direction the
-    data do not determine, 1e-9 of the largest, does not follow).
-    """
-    Hff = H[np.ix_(free, free)]
-    dsc = np.sqrt(np.maximum(np.diag(Hff), 1e-300))
-    inv = np.linalg.pinv(Hff / np.outer(dsc, dsc), rcond=1e-9, hermitian=True)
-    return -(inv @ (H[free, i] / dsc)) / dsc
-
-
-def _capped(cov, width):
-    """``cov`` with each standard deviation at most the uniform box's, ``width / sqrt(12)``
-    (a direction the data do not determine has the prior's spread, not the ridge's).
-    """
-    sd = np.sqrt(np.maximum(np.diag(cov), 0.0))
-    cap = np.minimum(sd, np.asarray(width, float) / math.sqrt(12.0))
-    f = np.where(sd > 0, cap / np.where(sd > 0, sd, 1.0), 0.0)
-    return cov * np.outer(f, f)
-
-
-def _inverse(H):
-    """``(H^-1, ln det H)`` of a symmetric positive definite ``H`` whose diagonal may span
-    many decades (the ridge along an undetermined direction next to a well-determined one):
-    scaled to a unit diagonal first, then by its eigenvalues (no cut-off, which would drop
-    the ridge's direction).
-    """
-    d = np.sqrt(np.diag(H))
-    Hs = H / np.outer(d, d)
-    w, V = np.linalg.eigh(Hs)
-    w = np.maximum(w, 1e-300)
-    inv = (V / w) @ V.T / np.outer(d, d)
-    return 0.5 * (inv + inv.T), float(np.sum(np.log(w)) + 2.0 * np.sum(np.log(d)))
-
-
-def _box_mass(centre, cov) -> float:
-    """``ln P(N(centre, cov) in [0, 1]^m)``."""
-    m = centre.size
-    if m == 0:
-        return 0.0
-    sd = np.sqrt(np.diag(cov))
-    a, b = (0.0 - centre) / sd, (1.0 - centre) / sd
-    if m == 1:
-        return float(_log_interval(a[0], b[0]))
-    corr = cov / np.outer(sd, sd)
-    if np.max(np.abs(corr - np.eye(m))) < 1e-3:  # independent: one interval each
-        return float(sum(_log_interval(x, y) for x, y in zip(a, b)))
-    mvn = multivariate_normal(
-        mean=np.zeros(m),
-        cov=corr,
-        allow_singular=True,
-        seed=np.random.default_rng(0),
-        abseps=1e-7,
-        releps=1e-4,
-    )
-    p = float(mvn.cdf(b, lower_limit=a))
-    if not p > 1e-6:  # near the integrator's resolution: the tightest bound
-        return float(min(_log_interval(x, y) for x, y in zip(a, b)))  # P(all) <= min P_i
-    return math.log(p)
-
-
-def _log_interval(a: float, b: float) -> float:
-    """``ln (Phi(b) - Phi(a))`` for ``a < b``, accurate in either tail."""
-    if a > 0:  # both in the upper tail: use the lower by symmetry
-        a, b = -b, -a
-    lb, la = float(log_ndtr(b)), float(log_ndtr(a))
-    return lb + math.log1p(-math.exp(min(la - lb, 0.0))) if la < lb else -math.inf
 
 
 def posterior_probabilities(log_evidence: dict, log_prior: dict | None = None) -> dict:

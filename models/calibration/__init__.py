@@ -3,7 +3,8 @@ fitted to it, other modes' floors), from a joint or modal Iwan fit, and a whole 
 predicted from one calibrated mode.
 """
 
-from .hammer import HammerPrediction, mode_bands, predict_hammer_test, release_amplitudes
+from .hammer import mode_bands, predict_hammer_test, release_amplitudes
+from .hammer_result import HammerPrediction
 from .joint import interface_from_joint, interface_from_modal_iwan
 from .vibration import CalibrationResult, calibrate, measured_amplitude_curve, modal_floor
 

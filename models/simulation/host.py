@@ -162,6 +162,35 @@ class HostModel:
         return np.asarray(z) @ self.T.T
 
 
+def _add_bodies(mbs, n: int, Mz, K0, C):
+    """The bodies as one generic ODE2 object on ``n`` coordinates (mass ``Mz``, stiffness
+    ``K0``, damping ``C`` or none); returns its node.
+    """
+    node = mbs.AddNode(
+        NodeGenericODE2(
+            referenceCoordinates=[0.0] * n,
+            initialCoordinates=[0.0] * n,
+            initialCoordinates_t=[0.0] * n,
+            numberOfODE2Coordinates=n,
+        )
+    )
+    zero = np.zeros((n, n))
+
+    def no_more(mbs_, t, item, q, q_t, f_q, f_v):
+        return zero  # Exudyn adds f_q K' + f_v C' itself
+
+    mbs.AddObject(
+        ObjectGenericODE2(
+            nodeNumbers=[node],
+            massMatrix=Mz,
+            stiffnessMatrix=K0,
+            dampingMatrix=zero if C is None else C,
+            jacobianUserFunction=no_more,
+        )
+    )
+    return node
+
+
 def build_host(
     specimen,
     *,
@@ -216,28 +245,7 @@ def build_host(
     C = sym(fl.C) if fl is not None and fl.active else None
     SC = exu.SystemContainer()
     mbs = SC.AddSystem()
-    node = mbs.AddNode(
-        NodeGenericODE2(
-            referenceCoordinates=[0.0] * n,
-            initialCoordinates=[0.0] * n,
-            initialCoordinates_t=[0.0] * n,
-            numberOfODE2Coordinates=n,
-        )
-    )
-    zero = np.zeros((n, n))
-
-    def no_more(mbs_, t, item, q, q_t, f_q, f_v):
-        return zero  # Exudyn adds f_q K' + f_v C' itself
-
-    mbs.AddObject(
-        ObjectGenericODE2(
-            nodeNumbers=[node],
-            massMatrix=Mz,
-            stiffnessMatrix=K0,
-            dampingMatrix=zero if C is None else C,
-            jacobianUserFunction=no_more,
-        )
-    )
+    node = _add_bodies(mbs, n, Mz, K0, C)
     ground = mbs.AddNode(NodePointGround(referenceCoordinates=[0.0, 0.0, 0.0]))
     mg = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=ground, coordinate=0))
     pairs = [

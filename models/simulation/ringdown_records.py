@@ -157,19 +157,7 @@ def build_result(specimen, amp, rec, X, rel, rows, positions, h, n, run) -> Ring
             h,
             w0[i] / (2 * math.pi),
             run["n_periods"],
-            notes=(
-                f"{specimen.name}: Exudyn transient, mode {r}"
-                + (f" of modes {', '.join(map(str, modes))}" if k > 1 else "")
-                + f", {run['steps_per_period']} steps per period of the highest mode, "
-                + (
-                    f"released from {amp[r]:.3g} m at the sensor"
-                    if amp[r] is not None
-                    else f"struck by {run['impact'].peak_force:.4g} N over "
-                    f"{run['impact'].contact_time:.3g} s at {run['impact'].position:.4g} m"
-                )
-                + "; modal filtering"
-                + (f"; with {' + '.join(run['effects'])}" if run["effects"] else "")
-            ),
+            notes=_curve_notes(specimen, amp, r, modes, run),
         )
         curves.append(c)
         warns += [w if k == 1 else f"mode {r}: {w}" for w in c.warnings]
@@ -216,6 +204,24 @@ def build_result(specimen, amp, rec, X, rel, rows, positions, h, n, run) -> Ring
             if run["overflow"]
             else ()
         ),
+    )
+
+
+def _curve_notes(specimen, amp, r, modes, run) -> str:
+    """The notes of mode ``r``'s decay curve: the run, the release or impact, the effects."""
+    k = len(modes)
+    return (
+        f"{specimen.name}: Exudyn transient, mode {r}"
+        + (f" of modes {', '.join(map(str, modes))}" if k > 1 else "")
+        + f", {run['steps_per_period']} steps per period of the highest mode, "
+        + (
+            f"released from {amp[r]:.3g} m at the sensor"
+            if amp[r] is not None
+            else f"struck by {run['impact'].peak_force:.4g} N over "
+            f"{run['impact'].contact_time:.3g} s at {run['impact'].position:.4g} m"
+        )
+        + "; modal filtering"
+        + (f"; with {' + '.join(run['effects'])}" if run["effects"] else "")
     )
 
 

@@ -47,6 +47,7 @@ from ..specimens.contact import pressure_field
 from ..specimens.presets import preset
 from ..specimens.specimen import Specimen
 from .mesh import SolidPart, lap_beam_parts
+from .readout import _axis_grid, _point_row
 from .specimen import PatchLayout, SolidModel, SolidSpecimen, clamp_stiffness, solid_contact_points
 
 __all__ = ["patch_layout", "solid_specimen", "solid_preset"]
@@ -54,7 +55,6 @@ __all__ = ["patch_layout", "solid_specimen", "solid_preset"]
 log = logging.getLogger(__name__)
 
 _SHIFT = (2 * math.pi * 1.0) ** 2  # mass shift of the factorised K_ref [1/s^2]
-AXIS_STEP = 1e-3  # grid of the stored sensor rows along the axis [m]
 
 
 def patch_layout(specimen: Specimen, *, patch_size: float) -> PatchLayout:
@@ -217,60 +217,6 @@ def _clamp_rows(specimen: Specimen, a: SolidPart, n: int) -> sp.csr_matrix:
     )
 
 
-#: Nodes of the section slab that the z read-out at a point is fitted over.
-SLAB_NODES = 24
-
-
-def _point_weights(specimen: Specimen, a: SolidPart, b: SolidPart, xs: float):
-    """``(idx, w)``: the z coordinates (in the coordinates [A's, B's], x, y, z per node) and
-    weights whose sum ``w . u[idx]`` reads the section's z displacement at ``xs`` [m] along
-    the assembly: a least-squares fit ``u_z = c0 + c1 dx + c2 dx^2 + c3 y`` over the
-    :data:`SLAB_NODES` nodes of the section slab nearest ``xs`` (``dx = x - xs``; the ``y``
-    term takes out a twist's z motion), evaluated at ``dx = 0``, ``y = 0``. A bending
-    mode's z displacement is uniform over the section, so this is the beam's deflection
-    there, wherever a face accelerometer sits; the nearest node alone is up to half an
-    element off in x (2.3 mm at acc3 on a 12 mm mesh, 13 % of the second height-bending
-    mode's reading there).
-    """
-    s = specimen
-    on_b = xs > s.beam_length
-    part, off = (b, 3 * len(a.positions)) if on_b else (a, 0)
-    P = part.positions
-    dx = P[:, 0] - xs
-    near = np.argsort(np.abs(dx), kind="stable")[:SLAB_NODES]
-    h = max(float(np.max(np.abs(dx[near]))), 1e-12)
-    u = dx[near] / h
-    V = np.column_stack([np.ones(near.size), u, u * u, P[near, 1] / h])
-    w = np.linalg.pinv(V)[0]
-    return off + 3 * near + 2, w
-
-
-def _point_row(specimen: Specimen, a: SolidPart, b: SolidPart, xs: float) -> np.ndarray:
-    """Row reading the z displacement at ``xs`` [m] along the assembly
-    (:func:`_point_weights`): the sensor's, or the excitation's (a unit force there has
-    this row as its load vector: its work is the force times that displacement).
-    """
-    S = np.zeros(3 * (len(a.positions) + len(b.positions)))
-    idx, w = _point_weights(specimen, a, b, xs)
-    np.add.at(S, idx, w)
-    return S
-
-
-def _axis_grid(specimen: Specimen, a: SolidPart, b: SolidPart, T, free):
-    """``(x, rows)``: the reduced rows of the z displacement read as :func:`_point_row` reads
-    the sensor's, at every millimetre ``x`` [m] along the assembly (where a ring-down's
-    sensors are read).
-    """
-    x = np.arange(0.0, specimen.total_length + 0.5 * AXIS_STEP, AXIS_STEP)
-    rows = np.zeros((x.size, T.shape[1]))
-    for k, v in enumerate(x):
-        idx, w = _point_weights(specimen, a, b, v)
-        pos = np.minimum(np.searchsorted(free, idx), free.size - 1)
-        ok = free[pos] == idx  # a clamped node reads zero
-        rows[k] = w[ok] @ T[pos[ok]]
-    return x, rows
-
-
 def _factor(A):
     """Solver of the sparse symmetric positive definite ``A``: NGsolve's sparse Cholesky
     (nested dissection; 2 s for 55k coordinates here) when NGsolve is installed, else
@@ -342,6 +288,40 @@ def _check_build(specimen, patch_size, n_modes):
         raise ValueError(f"n_modes must be an integer >= 1, got {n_modes!r}")
 
 
+def _full_system(specimen: Specimen, a: SolidPart, b: SolidPart, patches: PatchLayout):
+    """Steps 1-2 on the full mesh: ``(M, K0, Kb, G_t, G_n, G_c, S, E, free)`` on the free
+    coordinates (the clamped face's held ones left out), the normal springs and the setup's
+    clamp springs in ``K0``.
+    """
+    Gt, Gn = _slip_operator(specimen, a, b, patches)
+    kn = specimen.interface.normal_stiffness_per_area * patches.area
+    M = sp.block_diag([a.M, b.M], format="csr")
+    Kb = sp.block_diag([a.K, b.K], format="csr")
+    K0 = (Kb + Gn.T @ sp.diags(kn) @ Gn).tocsr()
+    S = _point_row(specimen, a, b, specimen.sensor_position)
+    E = _point_row(specimen, a, b, specimen.excitation.position)
+    fixed = _fixed_coordinates(specimen, a)
+    free = np.setdiff1d(np.arange(M.shape[0]), fixed)
+    Gc = (
+        _clamp_rows(specimen, a, M.shape[0])
+        if specimen.setup.clamp is not None
+        else sp.csr_matrix((0, M.shape[0]))
+    )
+    M, K0, Kb, Gt, Gn, Gc, S, E = (
+        M[free][:, free],
+        K0[free][:, free],
+        Kb[free][:, free],
+        Gt[:, free],
+        Gn[:, free],
+        Gc[:, free],
+        S[free],
+        E[free],
+    )
+    if Gc.shape[0]:
+        K0 = (K0 + Gc.T @ sp.diags(clamp_stiffness(specimen.setup.clamp)) @ Gc).tocsr()
+    return M, K0, Kb, Gt, Gn, Gc, S, E, free
+
+
 def solid_specimen(
     specimen: Specimen,
     parts: tuple,
@@ -375,32 +355,7 @@ def solid_specimen(
     t0 = time.perf_counter()
     a, b = parts
     patches = patch_layout(specimen, patch_size=patch_size)
-    Gt, Gn = _slip_operator(specimen, a, b, patches)
-    kn = specimen.interface.normal_stiffness_per_area * patches.area
-    M = sp.block_diag([a.M, b.M], format="csr")
-    Kb = sp.block_diag([a.K, b.K], format="csr")
-    K0 = (Kb + Gn.T @ sp.diags(kn) @ Gn).tocsr()
-    S = _point_row(specimen, a, b, specimen.sensor_position)
-    E = _point_row(specimen, a, b, specimen.excitation.position)
-    fixed = _fixed_coordinates(specimen, a)
-    free = np.setdiff1d(np.arange(M.shape[0]), fixed)
-    Gc = (
-        _clamp_rows(specimen, a, M.shape[0])
-        if specimen.setup.clamp is not None
-        else sp.csr_matrix((0, M.shape[0]))
-    )
-    M, K0, Kb, Gt, Gn, Gc, S, E = (
-        M[free][:, free],
-        K0[free][:, free],
-        Kb[free][:, free],
-        Gt[:, free],
-        Gn[:, free],
-        Gc[:, free],
-        S[free],
-        E[free],
-    )
-    if Gc.shape[0]:
-        K0 = (K0 + Gc.T @ sp.diags(clamp_stiffness(specimen.setup.clamp)) @ Gc).tocsr()
+    M, K0, Kb, Gt, Gn, Gc, S, E, free = _full_system(specimen, a, b, patches)
     KT = solid_contact_points(specimen, patches).KT
     K_ref = (K0 + Gt.T @ sp.diags(KT) @ Gt).tocsr()
     n_rigid = 6 if specimen.boundary == "free-free" else 0

@@ -118,7 +118,7 @@ class SolidModel:
         (for checking the reduction), else ``None``.
     axis : tuple or None
         ``(x, rows)``: positions [m] every millimetre along the assembly and, per position,
-        the reduced row of the section's z displacement there (``solid.build._point_weights``)
+        the reduced row of the section's z displacement there (``solid.readout._point_weights``)
         (read as ``S``; the ring-down's sensors), shape ``(len(x), n_reduced)``.
     material : tuple or None
         ``(youngs_modulus [Pa], density [kg/m^3])`` the bodies were built with; a specimen
@@ -233,7 +233,7 @@ class SolidSpecimen:
 
     def axis_rows(self, positions) -> np.ndarray:
         """Reduced rows of the z displacement at ``positions`` [m] along the assembly (the
-        section's deflection, read as the sensor's ``S`` is: ``solid.build._point_weights``),
+        section's deflection, read as the sensor's ``S`` is: ``solid.readout._point_weights``),
         interpolated linearly between the millimetres of :attr:`SolidModel.axis`: shape
         ``(n, n_reduced)``.
         """

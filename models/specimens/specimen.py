@@ -297,6 +297,46 @@ class Specimen:
     reference: str = ""
 
     def __post_init__(self):
+        self._check_beam()
+        bp = tuple(float(b) for b in self.bolt_positions)
+        if not bp or any(not (0.0 < b < self.overlap) for b in bp):
+            raise ValueError(
+                f"bolt_positions must be a non-empty sequence inside (0, overlap="
+                f"{self.overlap}) [m], got {self.bolt_positions!r}"
+            )
+        object.__setattr__(self, "bolt_positions", bp)
+        self._check_placements()
+        object.__setattr__(self, "amplitude_range", _range("amplitude_range", self.amplitude_range))
+        if self.calibrated_range is not None:
+            object.__setattr__(
+                self, "calibrated_range", _range("calibrated_range", self.calibrated_range)
+            )
+        md = tuple(self.modal_damping) if not isinstance(self.modal_damping, (str, bytes)) else None
+        if md is None or any(
+            isinstance(z, bool)
+            or not isinstance(z, (int, float))
+            or not math.isfinite(z)
+            or not 0.0 <= z < 0.2
+            for z in md
+        ):
+            raise ValueError(
+                "modal_damping must be a sequence of damping ratios in [0, 0.2), "
+                f"one per elastic mode from mode 1, got {self.modal_damping!r}"
+            )
+        object.__setattr__(self, "modal_damping", tuple(float(z) for z in md))
+        eff = tuple(self.effects)
+        if not all(isinstance(e, SpecimenEffect) for e in eff):
+            raise ValueError("effects must be a sequence of SpecimenEffect")
+        object.__setattr__(self, "effects", eff)
+        if (
+            isinstance(self.n_elements, bool)
+            or not isinstance(self.n_elements, int)
+            or self.n_elements < 4
+        ):
+            raise ValueError(f"n_elements must be an integer >= 4, got {self.n_elements!r}")
+
+    def _check_beam(self):
+        """The material, section, beam theory, setup type and lap dimensions."""
         for n in (
             "beam_length",
             "width",
@@ -328,13 +368,11 @@ class Specimen:
             raise ValueError("lap_thickness must be <= thickness")
         if self.washer_diameter <= self.bolt_diameter:
             raise ValueError("washer_diameter must be > bolt_diameter")
-        bp = tuple(float(b) for b in self.bolt_positions)
-        if not bp or any(not (0.0 < b < self.overlap) for b in bp):
-            raise ValueError(
-                f"bolt_positions must be a non-empty sequence inside (0, overlap="
-                f"{self.overlap}) [m], got {self.bolt_positions!r}"
-            )
-        object.__setattr__(self, "bolt_positions", bp)
+
+    def _check_placements(self):
+        """The boundary, excitation, interface and sensor, the setup's attachments on the
+        assembly, its clamp only on a clamped beam.
+        """
         if self.boundary not in _BOUNDARIES:
             raise ValueError(f"boundary must be one of {_BOUNDARIES}, got {self.boundary!r}")
         if not isinstance(self.excitation, Excitation):
@@ -358,34 +396,6 @@ class Specimen:
                 )
         if self.setup.clamp is not None and self.boundary == "free-free":
             raise ValueError("setup.clamp is for a clamped boundary; the specimen is free-free")
-        object.__setattr__(self, "amplitude_range", _range("amplitude_range", self.amplitude_range))
-        if self.calibrated_range is not None:
-            object.__setattr__(
-                self, "calibrated_range", _range("calibrated_range", self.calibrated_range)
-            )
-        md = tuple(self.modal_damping) if not isinstance(self.modal_damping, (str, bytes)) else None
-        if md is None or any(
-            isinstance(z, bool)
-            or not isinstance(z, (int, float))
-            or not math.isfinite(z)
-            or not 0.0 <= z < 0.2
-            for z in md
-        ):
-            raise ValueError(
-                "modal_damping must be a sequence of damping ratios in [0, 0.2), "
-                f"one per elastic mode from mode 1, got {self.modal_damping!r}"
-            )
-        object.__setattr__(self, "modal_damping", tuple(float(z) for z in md))
-        eff = tuple(self.effects)
-        if not all(isinstance(e, SpecimenEffect) for e in eff):
-            raise ValueError("effects must be a sequence of SpecimenEffect")
-        object.__setattr__(self, "effects", eff)
-        if (
-            isinstance(self.n_elements, bool)
-            or not isinstance(self.n_elements, int)
-            or self.n_elements < 4
-        ):
-            raise ValueError(f"n_elements must be an integer >= 4, got {self.n_elements!r}")
 
     @property
     def total_length(self) -> float:

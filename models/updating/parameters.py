@@ -106,28 +106,10 @@ def _setup(specimen) -> Setup:
     return specimen.setup
 
 
-def updatable(specimen, *, ranges: dict | None = None) -> tuple:
-    """Every updatable linear parameter of ``specimen`` (module docstring).
-
-    Parameters
-    ----------
-    specimen : Specimen or SolidSpecimen
-    ranges : dict, optional, keyword-only
-        ``{name: (lower, upper)}`` overriding the setup's ranges and the defaults.
-
-    Returns
-    -------
-    tuple of Updatable
-        Material (Young's modulus, density), boundary (the setup's clamp springs, when the
-        specimen is clamped and the setup declares a
-        :class:`~iwan_element.models.specimens.setups.Clamp`), attachments (each point mass, the
-        shaker's gauge mass, moving mass, stinger and suspension
-        stiffness), joint (the tangential stiffness per area of the stuck interface, the
-        normal contact stiffness per area).
+def _rows(specimen, st: Setup) -> list:
+    """``[(name, group, nominal, description)]``: the updatable parameters of ``specimen``
+    and its setup ``st``, by group (material, boundary, attachments, joint).
     """
-    check_specimen(specimen)
-    st = _setup(specimen)
-    given = {**dict(st.ranges), **dict(ranges or {})}
     rows = [
         ("youngs_modulus", "material", specimen.youngs_modulus, "Young's modulus"),
         ("density", "material", specimen.density, "density"),
@@ -189,6 +171,32 @@ def updatable(specimen, *, ranges: dict | None = None) -> tuple:
             "normal contact stiffness per area",
         ),
     ]
+    return rows
+
+
+def updatable(specimen, *, ranges: dict | None = None) -> tuple:
+    """Every updatable linear parameter of ``specimen`` (module docstring).
+
+    Parameters
+    ----------
+    specimen : Specimen or SolidSpecimen
+    ranges : dict, optional, keyword-only
+        ``{name: (lower, upper)}`` overriding the setup's ranges and the defaults.
+
+    Returns
+    -------
+    tuple of Updatable
+        Material (Young's modulus, density), boundary (the setup's clamp springs, when the
+        specimen is clamped and the setup declares a
+        :class:`~iwan_element.models.specimens.setups.Clamp`), attachments (each point mass, the
+        shaker's gauge mass, moving mass, stinger and suspension
+        stiffness), joint (the tangential stiffness per area of the stuck interface, the
+        normal contact stiffness per area).
+    """
+    check_specimen(specimen)
+    st = _setup(specimen)
+    given = {**dict(st.ranges), **dict(ranges or {})}
+    rows = _rows(specimen, st)
     out = []
     for name, group, nom, desc in rows:
         unit = "kg" if name.startswith("mass:") else _UNITS[name]

@@ -29,8 +29,6 @@ docs/linear_update.md) on the specimen's stuck-joint modes
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
-from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg as sla
@@ -39,6 +37,7 @@ from iwan_element.base.threads import one_blas_thread
 from iwan_element.fitting import Parameter, ParameterTable, minimize
 
 from ..reduced.dispatch import check_specimen
+from ._targets import _measured, _Targets
 from .parameters import GROUPS, Updatable, updatable, with_parameters
 from .result import LinearUpdateResult
 from .sensitivities import modal_sensitivities, modal_state, pair_modes
@@ -51,91 +50,6 @@ __all__ = ["MODEL_ERROR", "LinearUpdateResult", "linear_update"]
 #: a unit-length shape, modal constants 5 %.
 MODEL_ERROR = {"frequency": 5e-3, "shape": 0.05, "modal_constant": 0.05}
 _PRIOR_SIGMAS = 4.0  # a range is the central 95 %: 4 standard deviations wide
-
-
-def _pair(v):
-    """``(value, stderr)`` of a target given as a number or a pair."""
-    if isinstance(v, (tuple, list)):
-        if len(v) != 2:
-            raise ValueError(f"a target must be a number or (value, stderr), got {v!r}")
-        return float(v[0]), float(v[1])
-    return float(v), 0.0
-
-
-def _real_shape(values: dict) -> tuple:
-    """Positions, real signed amplitudes and stderr of a measured shape ``{position [m]:
-    amplitude or (amplitude, stderr)}`` (complex amplitudes rotated to the real axis by their
-    mean phase).
-    """
-    items = sorted(((float(p), v) for p, v in values.items()), key=lambda pv: pv[0])
-    pos = np.array([p for p, _ in items])
-    vals = [v if isinstance(v, (tuple, list)) else (v, 0.0) for _, v in items]
-    amp = np.array([complex(v[0]) for v in vals])
-    amp = np.real(amp * np.exp(-0.5j * np.angle(np.sum(amp * amp))))
-    se = np.array([float(v[1]) for v in vals])
-    return pos, amp, se
-
-
-@dataclass(frozen=True)
-class _Targets:
-    freq: dict  # mode -> (Hz, relative stderr)
-    shapes: dict  # mode -> (positions, unit shape, stderr per entry)
-    consts: dict  # mode -> (1/kg, relative stderr)
-    labels: tuple
-
-    @classmethod
-    def build(cls, frequencies, shapes, modal_constants, err):
-        freq, sh, cc, labels = {}, {}, {}, []
-        for name, v in (
-            ("frequencies", frequencies),
-            ("shapes", shapes),
-            ("modal_constants", modal_constants),
-        ):
-            if v is None and name != "frequencies":
-                continue
-            if not isinstance(v, Mapping) or any(
-                isinstance(k, bool) or not isinstance(k, (int, np.integer)) or k < 1 for k in v
-            ):
-                raise ValueError(
-                    f"{name} must map elastic mode numbers (integers >= 1) to targets, got {v!r}"
-                )
-        for r, v in sorted(dict(frequencies).items()):
-            f, se = _pair(v)
-            if not (math.isfinite(f) and f > 0 and se >= 0):
-                raise ValueError(
-                    f"frequencies[{r}] must be a frequency > 0 [Hz] (and a stderr >= 0), got {v!r}"
-                )
-            freq[int(r)] = (f, math.hypot(se / f, err["frequency"]))
-            labels.append(f"f{r}")
-        for r, vals in sorted(dict(shapes or {}).items()):
-            pos, amp, se = _real_shape(vals)
-            if pos.size < 2 or not np.all(np.isfinite(amp)) or np.linalg.norm(amp) == 0:
-                raise ValueError(
-                    f"shapes[{r}] must give a finite, non-zero amplitude at 2 or "
-                    f"more positions, got {vals!r}"
-                )
-            n = np.linalg.norm(amp)
-            sh[int(r)] = (pos, amp / n, np.hypot(se / n, err["shape"]))
-            labels += [f"shape{r}@{p:.4g}" for p in pos]
-        for r, v in sorted(dict(modal_constants or {}).items()):
-            c, se = _pair(v)
-            if not (math.isfinite(c) and c != 0 and se >= 0):
-                raise ValueError(
-                    f"modal_constants[{r}] must be a non-zero modal constant [1/kg], got {v!r}"
-                )
-            cc[int(r)] = (c, math.hypot(se / c, err["modal_constant"]))
-            labels.append(f"c{r}")
-        if not freq and not sh and not cc:
-            raise ValueError("give at least one target (frequencies, shapes, modal_constants)")
-        return cls(freq, sh, cc, tuple(labels))
-
-    @property
-    def modes(self) -> tuple:
-        return tuple(sorted(set(self.freq) | set(self.shapes) | set(self.consts)))
-
-    @property
-    def positions(self) -> tuple:
-        return tuple(sorted({float(p) for pos, _, _ in self.shapes.values() for p in pos}))
 
 
 def _select(specimen, parameters, ranges) -> list:
@@ -406,46 +320,13 @@ def _result(
         P = np.diag(1.0 / sig[keep] ** 2)
         cov[np.ix_(keep, keep)] = scale * np.linalg.inv(Jk.T @ Jk + P)
     sd = np.sqrt(np.diag(cov))
-    rows = []
-    for k, u in enumerate(params):
-        v = _value(u, th[k]) if k in keep else u.nominal
-        se = (v * sd[k] if u.log else sd[k]) if k in keep else math.nan
-        rows.append(
-            Parameter(
-                u.name,
-                min(max(v, u.lower), u.upper),
-                se,
-                u.lower,
-                u.upper,
-                u.unit,
-                identified=k in keep,
-                fixed=k not in keep,
-            )
-        )
+    rows = _parameter_rows(params, keep, th, sd)
     with np.errstate(invalid="ignore", divide="ignore"):
         corr = cov / np.outer(sd, sd)
     corr[~np.isfinite(corr)] = np.nan
     Js = J1 * sig[None, :]
     sv = sla.svdvals(Js) if Js.size else np.zeros(0)
-    modes = t.modes
-    top = max(modes) + 2
-    pred_modes = tuple(range(1, top + 1)) if predict is None else tuple(int(m) for m in predict)
-    pred_modes = tuple(
-        m for m in pred_modes if m not in t.freq and st1.n_rigid + m - 1 < st1.lam.size
-    )
-    pr = {}
-    if pred_modes:
-        cur = [Updatable(**{**u.to_dict(), "nominal": _value(u, x)}) for u, x in zip(params, th)]
-        sens = modal_sensitivities(spec1, pair_modes(st1, prob.ref, pred_modes), cur, state=st1)
-        for m in pred_modes:
-            f, g = sens["f"][m], sens["df"][m]
-            pse = math.sqrt(max(float(g @ cov @ g), 0.0))
-            pr[m] = {
-                "frequency": f,
-                "stderr": math.hypot(pse, err["frequency"] * f),
-                "parameter_stderr": pse,
-                "nominal_frequency": prob.ref.frequency(prob.ref.index(m)),
-            }
+    pr = _predictions(prob, params, th, t, spec1, st1, cov, err, predict)
     resid = [
         {
             "target": lab,
@@ -476,11 +357,50 @@ def _result(
     )
 
 
-def _measured(t: _Targets, label: str) -> float:
-    if label.startswith("f"):
-        return t.freq[int(label[1:])][0]
-    if label.startswith("c"):
-        return t.consts[int(label[1:])][0]
-    r, p = label[5:].split("@")
-    pos, unit, _ = t.shapes[int(r)]
-    return float(unit[int(np.argmin(np.abs(pos - float(p))))])
+def _parameter_rows(params, keep, th, sd) -> list:
+    """The parameter table's rows: the updated values (clipped to their ranges) and stderr
+    of the parameters ``keep``, the others fixed at their nominal values.
+    """
+    rows = []
+    for k, u in enumerate(params):
+        v = _value(u, th[k]) if k in keep else u.nominal
+        se = (v * sd[k] if u.log else sd[k]) if k in keep else math.nan
+        rows.append(
+            Parameter(
+                u.name,
+                min(max(v, u.lower), u.upper),
+                se,
+                u.lower,
+                u.upper,
+                u.unit,
+                identified=k in keep,
+                fixed=k not in keep,
+            )
+        )
+    return rows
+
+
+def _predictions(prob, params, th, t, spec1, st1, cov, err, predict) -> dict:
+    """``{mode: {frequency, stderr, parameter_stderr, nominal_frequency}}`` of the modes not
+    among the targets (default: up to two above the highest target), from the updated model.
+    """
+    modes = t.modes
+    top = max(modes) + 2
+    pred_modes = tuple(range(1, top + 1)) if predict is None else tuple(int(m) for m in predict)
+    pred_modes = tuple(
+        m for m in pred_modes if m not in t.freq and st1.n_rigid + m - 1 < st1.lam.size
+    )
+    pr = {}
+    if pred_modes:
+        cur = [Updatable(**{**u.to_dict(), "nominal": _value(u, x)}) for u, x in zip(params, th)]
+        sens = modal_sensitivities(spec1, pair_modes(st1, prob.ref, pred_modes), cur, state=st1)
+        for m in pred_modes:
+            f, g = sens["f"][m], sens["df"][m]
+            pse = math.sqrt(max(float(g @ cov @ g), 0.0))
+            pr[m] = {
+                "frequency": f,
+                "stderr": math.hypot(pse, err["frequency"] * f),
+                "parameter_stderr": pse,
+                "nominal_frequency": prob.ref.frequency(prob.ref.index(m)),
+            }
+    return pr
