@@ -145,6 +145,8 @@ class SpecimenEffect:
     calibrated_range : tuple of 2 floats or None
         Sensor amplitudes [m] the values were fitted on.
 
+    Notes
+    -----
     The effect's modal form (``modal_form(X, f, zeta, zeta_floor, **values)``) is applied on
     top of the QSMA curve of that mode (:func:`~iwan_element.models.modal.modal_amplitude_curve`).
     """

@@ -73,6 +73,8 @@ class AmplitudeCurve(ResultShape):
         Why the curve is not usable as it stands (each also among ``warnings``): e.g. a
         response whose phase contradicts its declared quantity. Empty by default.
 
+    Notes
+    -----
     The arrays are copied and made read-only; nothing the caller passed is changed.
     """
 

@@ -262,6 +262,8 @@ class ModalTargets(ResultShape):
     failures : tuple of str
         Why the targets are not usable as they stand (also among ``warnings``).
 
+    Notes
+    -----
     The views for a model update (:attr:`frequencies`, :attr:`shapes`,
     :attr:`modal_constants` and their ``*_stderr``) map the mode index to the value.
     """
