@@ -7,13 +7,9 @@ from __future__ import annotations
 import logging
 import math
 import weakref
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import exudyn as exu
-
-if TYPE_CHECKING:
-    from ._connector_handle import IwanConnector
-    from .interface import IwanInterface
 
 __all__: list[str] = []
 
@@ -174,7 +170,10 @@ class _PostStepDispatcher:
             mbs.SetPostNewtonUserFunction(0 if self.pn_prev is None else self.pn_prev)
             self.pn_prev = None
 
-    def add(self, connector: IwanConnector | IwanInterface) -> None:
+    def add(self, connector) -> None:
+        """Join ``connector`` (an ``IwanConnector`` or an ``IwanInterface``: duck-typed, not
+        imported, as they import this module) to the system's dispatch; return None.
+        """
         self.connectors.append(connector)
         self.stale = True
 

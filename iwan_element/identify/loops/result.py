@@ -260,8 +260,7 @@ class FitResult(ResultShape):
             f"  derived: phi_max = {p.phi_max * 1e3:.5g} mm, R = {p.R:.5g}, S = {p.S:.5g} N/m"
         )
         have = [k for k in PARAM_NAMES if math.isfinite(self.stderr.get(k, math.nan))]
-        corr = self.correlation
-        if len(have) > 1 and corr is not None:
+        if len(have) > 1 and (corr := self.correlation) is not None:
             lines += ["", "  correlation     " + "".join(f"{k:>8}" for k in have)]
             for i, k in enumerate(PARAM_NAMES):
                 if k in have:
