@@ -13,7 +13,7 @@ import exudyn as exu
 
 if TYPE_CHECKING:
     from ._connector_handle import IwanConnector
-    from .interface import IwanInterface
+    from .interface_handle import IwanInterface
 
 __all__: list[str] = []
 

@@ -77,7 +77,7 @@ def record_energy(mbs, joints) -> EnergyRecorder:
     """
     from .cartesian import IwanCartesianConnector
     from .connector import IwanConnector
-    from .interface import IwanInterface
+    from .interface_handle import IwanInterface
 
     kinds = (IwanConnector, IwanInterface, IwanCartesianConnector)
     if not isinstance(mbs, exu.MainSystem):
