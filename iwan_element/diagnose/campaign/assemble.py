@@ -17,6 +17,7 @@ from ..loops.batch import band_misfit
 from . import model as CM
 from .model import full_force
 from .result import CampaignFit, law_at
+from .scatter import deviations, scatter_coef_cov, scatter_cov
 
 __all__ = ["assemble", "to_physical"]
 
@@ -121,8 +122,8 @@ def _scatter(model, theta, free):
     """
     if free is None or sum(f is not None for f in free) < 2:
         return {}, None
-    D, dof = CM.deviations(model, theta, free)
-    S = CM.scatter_cov(D, dof)
+    D, dof = deviations(model, theta, free)
+    S = scatter_cov(D, dof)
     names = ["ln Fs"] + list(model.qnames[1:])
     return {q: float(math.sqrt(S[k, k])) for k, q in enumerate(names)}, S
 
@@ -156,7 +157,7 @@ def assemble(
     cov_phys = T @ cov_int @ T.T
     rows, awarn = _rows(model, theta, cov_int, preps, labels)
     scatter, S = _scatter(model, theta, free)
-    cov_re = None if S is None else CM.scatter_coef_cov(model, theta, S)
+    cov_re = None if S is None else scatter_coef_cov(model, theta, S)
     stderr_scatter = {} if cov_re is None else _stderr_dict(labels_c, T @ (cov_int + cov_re) @ T.T)
     warns = list(warnings)
     converged = bool(res.status > 0)
