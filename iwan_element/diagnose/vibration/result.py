@@ -14,7 +14,7 @@ from ...base.serialize import json_safe
 from ...effects import EFFECTS
 from ...fitting import Parameter, ParameterTable, verdict
 from ..selection.lines import effect_unit, verdict_lines
-from ..selection.probabilities import Probable
+from ..selection.probable import Probable
 from ._prediction import predicted_curve
 from .augment import augmented
 
