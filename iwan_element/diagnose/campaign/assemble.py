@@ -142,27 +142,10 @@ def _stderr_dict(labels_c, cov_phys):
     return out
 
 
-def assemble(
-    *, model, preps, labels, res, units, stack_from, warnings, options, times, t0, free=None
-):
-    """Uncertainty, coefficients, the per-record table, the verdict: a :class:`CampaignFit`."""
-    theta = res.x
-    t1 = time.perf_counter()
-    T, labels_c = to_physical(model)
-    cov, J, s, tau, se = _covariance(model, theta, T)
-    times = dict(times, uncertainty=time.perf_counter() - t1)
-    ng = model.n_glob
-    cov_int = cov[:ng, :ng]
-    coef = T @ theta[:ng]
-    cov_phys = T @ cov_int @ T.T
-    rows, awarn = _rows(model, theta, cov_int, preps, labels)
-    scatter, S = _scatter(model, theta, free)
-    cov_re = None if S is None else scatter_coef_cov(model, theta, S)
-    stderr_scatter = {} if cov_re is None else _stderr_dict(labels_c, T @ (cov_int + cov_re) @ T.T)
-    warns = list(warnings)
-    converged = bool(res.status > 0)
-    if not converged:
-        warns.append(f"the campaign fit did not converge: {res.message}")
+def _coefficient_table(model, theta, labels_c, coef, se, units, labels, warns):
+    """The law coefficients' table with their verdicts, and whether all are identified
+    (warnings for a law clipped on some records and for coefficients not identified).
+    """
     verdicts = [
         verdict(f"{q}:{t}", float(c), float(e), relative=False)[0] and e > 0
         for (q, t), c, e in zip(labels_c, coef, se)
@@ -195,6 +178,31 @@ def assemble(
     if not ident:
         bad = [f"{q}:{t}" for (q, t), e in zip(labels_c, se) if not (math.isfinite(e) and e > 0)]
         warns.append(f"coefficients not identified by the records: {', '.join(bad)}")
+    return table, ident
+
+
+def assemble(
+    *, model, preps, labels, res, units, stack_from, warnings, options, times, t0, free=None
+):
+    """Uncertainty, coefficients, the per-record table, the verdict: a :class:`CampaignFit`."""
+    theta = res.x
+    t1 = time.perf_counter()
+    T, labels_c = to_physical(model)
+    cov, J, s, tau, se = _covariance(model, theta, T)
+    times = dict(times, uncertainty=time.perf_counter() - t1)
+    ng = model.n_glob
+    cov_int = cov[:ng, :ng]
+    coef = T @ theta[:ng]
+    cov_phys = T @ cov_int @ T.T
+    rows, awarn = _rows(model, theta, cov_int, preps, labels)
+    scatter, S = _scatter(model, theta, free)
+    cov_re = None if S is None else scatter_coef_cov(model, theta, S)
+    stderr_scatter = {} if cov_re is None else _stderr_dict(labels_c, T @ (cov_int + cov_re) @ T.T)
+    warns = list(warnings)
+    converged = bool(res.status > 0)
+    if not converged:
+        warns.append(f"the campaign fit did not converge: {res.message}")
+    table, ident = _coefficient_table(model, theta, labels_c, coef, se, units, labels, warns)
     warns += awarn
     details = {
         "weights": [rm.weight for rm in model.records],
