@@ -14,11 +14,8 @@ from _diagnosis_cases import SIGMA, ZETA0, record, vibration_case
 
 from iwan_element import diagnose, diagnose_vibration
 from iwan_element.diagnose.selection.averaging import mixture
-from iwan_element.diagnose.selection.probabilities import (
-    confidence_text,
-    default_effect_prior,
-    log_model_prior,
-)
+from iwan_element.diagnose.selection.probabilities import default_effect_prior, log_model_prior
+from iwan_element.diagnose.selection.probable import confidence_text
 
 
 @pytest.fixture(scope="module")

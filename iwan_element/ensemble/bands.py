@@ -345,41 +345,9 @@ def propagate_uncertainty(
         )
         system = None
     else:
-        if not isinstance(source, ParameterUncertainty) and not hasattr(source, "joint"):
-            raise ValueError(
-                "source must be a FitResult, a ModalIwanFit or a "
-                f"ParameterUncertainty, got {type(source).__name__}"
-            )
-        unc = (
-            source
-            if isinstance(source, ParameterUncertainty)
-            else ParameterUncertainty.from_fit(source)
+        task, nominal_set, sets, unc, warns = _fit_setup(
+            source, system, X, force, cycles, steps_per_period, n_samples, rng
         )
-        if not isinstance(system, SingleModeSystem):
-            raise ValueError(f"system must be a SingleModeSystem, got {type(system).__name__}")
-        sets, rejected = unc.sample(n_samples, rng=rng)
-        warns = list(unc.warnings)
-        if rejected > 0.01:
-            warns.append(
-                f"{100 * rejected:.1f} % of the draws fell outside the model's range "
-                "(beta < 0 or chi <= -1) and were rejected: the bands are those of the "
-                "truncated distribution"
-            )
-        if X.max() > unc.valid_amplitude:
-            warns.append(
-                f"amplitudes above {unc.valid_amplitude:.4g} m are beyond the tested "
-                "range: the fit cannot constrain the joint there (Fs, beta not "
-                "identified)"
-            )
-        task = functools.partial(
-            response_task,
-            system=system,
-            amplitude=X,
-            force=force,
-            cycles=cycles,
-            steps_per_period=steps_per_period,
-        )
-        nominal_set = {k: getattr(unc.nominal, k) for k in ("Fs", "KT", "chi", "beta")}
     nominal = task(nominal_set, None)
     ens = run_ensemble(task, sets, executor=executor, seed=seed, progress=progress)
     warns += list(ens.warnings)
@@ -403,6 +371,48 @@ def propagate_uncertainty(
         ensemble=ens,
         warnings=tuple(warns),
     )
+
+
+def _fit_setup(source, system, X, force, cycles, steps_per_period, n_samples, rng):
+    """Task, nominal set, samples, distribution and warnings for a loop or dissipation fit
+    or a prepared :class:`ParameterUncertainty`.
+    """
+    if not isinstance(source, ParameterUncertainty) and not hasattr(source, "joint"):
+        raise ValueError(
+            "source must be a FitResult, a ModalIwanFit or a "
+            f"ParameterUncertainty, got {type(source).__name__}"
+        )
+    unc = (
+        source
+        if isinstance(source, ParameterUncertainty)
+        else ParameterUncertainty.from_fit(source)
+    )
+    if not isinstance(system, SingleModeSystem):
+        raise ValueError(f"system must be a SingleModeSystem, got {type(system).__name__}")
+    sets, rejected = unc.sample(n_samples, rng=rng)
+    warns = list(unc.warnings)
+    if rejected > 0.01:
+        warns.append(
+            f"{100 * rejected:.1f} % of the draws fell outside the model's range "
+            "(beta < 0 or chi <= -1) and were rejected: the bands are those of the "
+            "truncated distribution"
+        )
+    if X.max() > unc.valid_amplitude:
+        warns.append(
+            f"amplitudes above {unc.valid_amplitude:.4g} m are beyond the tested "
+            "range: the fit cannot constrain the joint there (Fs, beta not "
+            "identified)"
+        )
+    task = functools.partial(
+        response_task,
+        system=system,
+        amplitude=X,
+        force=force,
+        cycles=cycles,
+        steps_per_period=steps_per_period,
+    )
+    nominal_set = {k: getattr(unc.nominal, k) for k in ("Fs", "KT", "chi", "beta")}
+    return task, nominal_set, sets, unc, warns
 
 
 def _modal_fit_setup(fit, X, force, cycles, steps_per_period, n_samples, rng):

@@ -15,6 +15,7 @@ import numpy as np
 
 from ._dispatch import _installed_post_step
 from .laws import symbolic_connector as _symbolic
+from .laws.symbolic_records import replay_records, stride
 
 __all__: list[str] = []
 
@@ -355,7 +356,7 @@ class IwanConnector:
         self._check_running()
         self._flush()
         if self._route == "symbolic":
-            return _symbolic.replay_records(self)
+            return replay_records(self)
         return np.array(self._rec, dtype=float).reshape(-1, _NCOL)
 
     def _column(self, i: int) -> np.ndarray:
@@ -365,7 +366,7 @@ class IwanConnector:
     def n_records(self) -> int:
         """Number of recorded rows."""
         if self._route == "symbolic":
-            return (len(self._rec) + len(self._buf)) // _symbolic.stride(self)
+            return (len(self._rec) + len(self._buf)) // stride(self)
         return (len(self._rec) + len(self._buf)) // _NCOL
 
     @property

@@ -17,7 +17,6 @@ slip direction when that matters.
 from __future__ import annotations
 
 import logging
-from numbers import Integral
 from typing import Any
 
 import exudyn as exu
@@ -32,28 +31,13 @@ from exudyn.itemInterface import (
 )
 
 from ..base.validation import check_scalar
-from ..core.parameters import IwanParameters
-from ._markers import _COORDINATE_MARKERS, _ORIENTATION_MARKERS, _marker_type
+from ._cartesian_args import _check_orientation, _damping, _items, _iwan_axes, _parameters, _vector3
+from ._markers import _COORDINATE_MARKERS, _marker_type
 from .connector import add_iwan_connector, check_run_options
 
 __all__ = ["create_iwan_connector", "IwanCartesianConnector"]
 
 _log = logging.getLogger(__name__)
-#: Bodies and nodes without an orientation (a rigid marker on them is refused).
-_POINT_BODIES = frozenset({"MassPoint", "MassPoint2D", "Mass1D"})
-_POINT_NODES = frozenset(
-    {
-        "Point",
-        "Point2D",
-        "PointGround",
-        "1D",
-        "GenericODE2",
-        "GenericData",
-        "Point2DSlope1",
-        "Point3DSlope1",
-        "Point3DSlope23",
-    }
-)
 
 
 class IwanCartesianConnector:
@@ -283,22 +267,7 @@ def create_iwan_connector(
         return _coordinate_connector(
             mbs, items, axis, parameters, damping, stiffness, offset, name, vis, common
         )
-    if axis is None:
-        raise ValueError(
-            "axis is required: give the Iwan axis (or up to three orthogonal "
-            "axes), e.g. axis=[1, 0, 0]"
-        )
-    axes = _axes(axis)
-    params = _parameters(parameters, len(axes))
-    k = _vector3("stiffness", stiffness)
-    along = [i for i, a in enumerate(axes) if np.linalg.norm(k * a) > 0.0]
-    if along:
-        raise ValueError(
-            f"stiffness = {k.tolist()} has a spring along the Iwan axis "
-            f"{axes[along[0]].tolist()}: stiffness acts on the remaining axes only "
-            "(a spring in parallel would stiffen the identified joint; fold it into "
-            "KT)"
-        )
+    axes, params, k = _iwan_axes(axis, parameters, stiffness)
     d0 = np.zeros(3) if offset is None else _vector3("offset", offset)
     c, dvec = _damping(damping)
     if not useGlobalFrame:
@@ -307,22 +276,7 @@ def create_iwan_connector(
         _marker(mbs, name, i, kind, it, pos, not useGlobalFrame)
         for i, (kind, it, pos) in enumerate(items)
     )
-    conns = []
-    for j, (a, p) in enumerate(zip(axes, params)):
-        conns.append(
-            add_iwan_connector(
-                mbs,
-                [m0, m1],
-                p,
-                axis=a,
-                axisMarker=None if useGlobalFrame else m0,
-                offset=float(a @ d0),
-                damping=c,
-                name=f"{name}:iwan{j}" if name else "",
-                visualization=vis,
-                **common,
-            )
-        )
+    conns = _iwan_connectors(mbs, m0, m1, axes, params, d0, c, useGlobalFrame, name, vis, common)
     spring = None
     if np.any(k) or np.any(dvec):
         spring = _linear_part(mbs, m0, m1, k, dvec, d0, useGlobalFrame, name, vis)
@@ -333,118 +287,25 @@ def create_iwan_connector(
 
 
 # ---------------------------------------------------------------------------- helpers
-def _items(bodyNumbers, p0, p1):
-    """``[(kind, item, localPosition), ...]`` with kind ``body``, ``node`` or ``marker``."""
-    if (
-        isinstance(bodyNumbers, (str, bytes))
-        or not hasattr(bodyNumbers, "__len__")
-        or len(bodyNumbers) != 2
-    ):
-        raise ValueError(
-            f"bodyNumbers must be a list of two items (bodies, nodes or markers), "
-            f"got {bodyNumbers!r}"
-        )
-    out = []
-    for i, (it, pos) in enumerate(zip(bodyNumbers, (p0, p1))):
-        pos = _vector3(f"localPosition{i}", pos)
-        if isinstance(it, exu.MarkerIndex):
-            kind = "marker"
-        elif isinstance(it, exu.NodeIndex):
-            kind = "node"
-        elif isinstance(it, exu.ObjectIndex) or (
-            isinstance(it, Integral) and not isinstance(it, bool)
-        ):
-            kind = "body"
-        else:
-            raise ValueError(
-                f"bodyNumbers[{i}] must be a body (ObjectIndex or int), a node "
-                f"(NodeIndex) or a marker (MarkerIndex), got {it!r} "
-                f"({type(it).__name__})"
+def _iwan_connectors(mbs, m0, m1, axes, params, d0, c, global_frame, name, vis, common):
+    """One Iwan connector per axis between the markers (offset: ``d0`` along the axis)."""
+    conns = []
+    for j, (a, p) in enumerate(zip(axes, params)):
+        conns.append(
+            add_iwan_connector(
+                mbs,
+                [m0, m1],
+                p,
+                axis=a,
+                axisMarker=None if global_frame else m0,
+                offset=float(a @ d0),
+                damping=c,
+                name=f"{name}:iwan{j}" if name else "",
+                visualization=vis,
+                **common,
             )
-        if kind != "body" and np.any(pos):
-            raise ValueError(
-                f"localPosition{i} must be (0, 0, 0) for a {kind} "
-                f"(bodyNumbers[{i}]); got {pos.tolist()}"
-            )
-        out.append((kind, it, pos))
-    return out
-
-
-def _vector3(label, value) -> np.ndarray:
-    try:
-        v = np.array(value, dtype=float).ravel()
-    except (TypeError, ValueError):
-        raise ValueError(f"{label} must be a vector of 3 numbers, got {value!r}") from None
-    if v.size != 3 or not np.all(np.isfinite(v)):
-        raise ValueError(f"{label} must be a finite vector of 3 numbers, got {value!r}")
-    return v
-
-
-def _axes(axis) -> np.ndarray:
-    try:
-        a = np.array(axis, dtype=float)
-    except (TypeError, ValueError):
-        raise ValueError(
-            f"axis must be a vector of 3 numbers or up to three of them, got {axis!r}"
-        ) from None
-    a = a.reshape(1, -1) if a.ndim == 1 else a
-    if a.ndim != 2 or a.shape[1] != 3 or not 1 <= a.shape[0] <= 3 or not np.all(np.isfinite(a)):
-        raise ValueError(
-            f"axis must be a finite vector of 3 numbers or up to three of them, got {axis!r}"
         )
-    n = np.linalg.norm(a, axis=1)
-    if np.any(n == 0.0):
-        raise ValueError(f"axis must hold non-zero vectors, got {axis!r}")
-    a = a / n[:, None]
-    gram = a @ a.T - np.eye(len(a))
-    if np.max(np.abs(gram)) > 1e-9:
-        raise ValueError(f"the Iwan axes must be mutually orthogonal, got {a.tolist()}")
-    return a
-
-
-def _parameters(parameters, n) -> list:
-    if isinstance(parameters, IwanParameters):
-        return [parameters] * n
-    ps = list(parameters) if isinstance(parameters, (list, tuple)) else None
-    if ps is None or len(ps) != n or not all(isinstance(p, IwanParameters) for p in ps):
-        raise ValueError(
-            f"parameters must be IwanParameters or a list of {n} of them "
-            f"(one per axis), got {parameters!r}"
-        )
-    return ps
-
-
-def _damping(damping):
-    """``(c, [dx, dy, dz])``: the dashpot along the Iwan axes, or Exudyn's dampers."""
-    if np.ndim(damping) == 0:
-        return check_scalar("damping", damping, low=0.0), np.zeros(3)
-    d = _vector3("damping", damping)
-    if np.any(d < 0):
-        raise ValueError(f"damping must be >= 0 [N s/m], got {d.tolist()}")
-    return 0.0, d
-
-
-def _check_orientation(mbs, items) -> None:
-    """useGlobalFrame=False: refuse items without an orientation before any marker is made
-    (Exudyn would refuse a rigid marker on them only at ``Assemble``).
-    """
-    for i, (kind, item, _) in enumerate(items):
-        if kind == "marker":
-            if _marker_type(mbs, item, f"bodyNumbers[{i}]") not in _ORIENTATION_MARKERS:
-                raise ValueError(
-                    f"bodyNumbers[{i}] is a marker without orientation; "
-                    "useGlobalFrame=False needs rigid markers (MarkerBodyRigid ...)"
-                )
-            continue
-        what = (
-            mbs.GetObject(item)["objectType"] if kind == "body" else mbs.GetNode(item)["nodeType"]
-        )
-        if what in (_POINT_BODIES if kind == "body" else _POINT_NODES):
-            raise ValueError(
-                f"bodyNumbers[{i}] = {item!r} has no orientation (a {what}): "
-                "useGlobalFrame=False turns the frame with body 0 and needs an "
-                "orientation on both items"
-            )
+    return conns
 
 
 def _marker(mbs, name, i, kind, item, pos, rigid):

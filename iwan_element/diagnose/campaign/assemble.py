@@ -17,6 +17,7 @@ from ..loops.batch import band_misfit
 from . import model as CM
 from .model import full_force
 from .result import CampaignFit, law_at
+from .scatter import deviations, scatter_coef_cov, scatter_cov
 
 __all__ = ["assemble", "to_physical"]
 
@@ -121,8 +122,8 @@ def _scatter(model, theta, free):
     """
     if free is None or sum(f is not None for f in free) < 2:
         return {}, None
-    D, dof = CM.deviations(model, theta, free)
-    S = CM.scatter_cov(D, dof)
+    D, dof = deviations(model, theta, free)
+    S = scatter_cov(D, dof)
     names = ["ln Fs"] + list(model.qnames[1:])
     return {q: float(math.sqrt(S[k, k])) for k, q in enumerate(names)}, S
 
@@ -141,27 +142,10 @@ def _stderr_dict(labels_c, cov_phys):
     return out
 
 
-def assemble(
-    *, model, preps, labels, res, units, stack_from, warnings, options, times, t0, free=None
-):
-    """Uncertainty, coefficients, the per-record table, the verdict: a :class:`CampaignFit`."""
-    theta = res.x
-    t1 = time.perf_counter()
-    T, labels_c = to_physical(model)
-    cov, J, s, tau, se = _covariance(model, theta, T)
-    times = dict(times, uncertainty=time.perf_counter() - t1)
-    ng = model.n_glob
-    cov_int = cov[:ng, :ng]
-    coef = T @ theta[:ng]
-    cov_phys = T @ cov_int @ T.T
-    rows, awarn = _rows(model, theta, cov_int, preps, labels)
-    scatter, S = _scatter(model, theta, free)
-    cov_re = None if S is None else CM.scatter_coef_cov(model, theta, S)
-    stderr_scatter = {} if cov_re is None else _stderr_dict(labels_c, T @ (cov_int + cov_re) @ T.T)
-    warns = list(warnings)
-    converged = bool(res.status > 0)
-    if not converged:
-        warns.append(f"the campaign fit did not converge: {res.message}")
+def _coefficient_table(model, theta, labels_c, coef, se, units, labels, warns):
+    """The law coefficients' table with their verdicts, and whether all are identified
+    (warnings for a law clipped on some records and for coefficients not identified).
+    """
     verdicts = [
         verdict(f"{q}:{t}", float(c), float(e), relative=False)[0] and e > 0
         for (q, t), c, e in zip(labels_c, coef, se)
@@ -194,6 +178,31 @@ def assemble(
     if not ident:
         bad = [f"{q}:{t}" for (q, t), e in zip(labels_c, se) if not (math.isfinite(e) and e > 0)]
         warns.append(f"coefficients not identified by the records: {', '.join(bad)}")
+    return table, ident
+
+
+def assemble(
+    *, model, preps, labels, res, units, stack_from, warnings, options, times, t0, free=None
+):
+    """Uncertainty, coefficients, the per-record table, the verdict: a :class:`CampaignFit`."""
+    theta = res.x
+    t1 = time.perf_counter()
+    T, labels_c = to_physical(model)
+    cov, J, s, tau, se = _covariance(model, theta, T)
+    times = dict(times, uncertainty=time.perf_counter() - t1)
+    ng = model.n_glob
+    cov_int = cov[:ng, :ng]
+    coef = T @ theta[:ng]
+    cov_phys = T @ cov_int @ T.T
+    rows, awarn = _rows(model, theta, cov_int, preps, labels)
+    scatter, S = _scatter(model, theta, free)
+    cov_re = None if S is None else scatter_coef_cov(model, theta, S)
+    stderr_scatter = {} if cov_re is None else _stderr_dict(labels_c, T @ (cov_int + cov_re) @ T.T)
+    warns = list(warnings)
+    converged = bool(res.status > 0)
+    if not converged:
+        warns.append(f"the campaign fit did not converge: {res.message}")
+    table, ident = _coefficient_table(model, theta, labels_c, coef, se, units, labels, warns)
     warns += awarn
     details = {
         "weights": [rm.weight for rm in model.records],

@@ -60,6 +60,7 @@ from .assemble import assemble
 from .model import build_model, solve
 from .probability import campaign_explanations, probable_alternatives
 from .result import CampaignFit
+from .scatter import in_range
 
 __all__ = ["fit_campaign", "CampaignFit"]
 
@@ -197,7 +198,7 @@ def _no_effect(model, q) -> float:
 def record_values(model, theta, preps, *, max_nfev: int = 60):
     """Each record's own values with the campaign's stack (its quantities fitted to it alone,
     every law a constant; warm-started at its own estimates, else at the laws), in the form
-    :func:`.model.in_range` gives; None where that fit fails. The record-to-record
+    :func:`.scatter.in_range` gives; None where that fit fails. The record-to-record
     scatter about the laws is read from them (:func:`.model.deviations`).
     """
     out: list[dict | None] = []
@@ -219,7 +220,7 @@ def record_values(model, theta, preps, *, max_nfev: int = 60):
             out.append(None)
             continue
         vals = sub.law_values(res.x, sub.X[0])
-        out.append(CM.in_range(model, vals, model.records[r]) if vals["Fs"] > 0 else None)
+        out.append(in_range(model, vals, model.records[r]) if vals["Fs"] > 0 else None)
     return out
 
 

@@ -13,10 +13,10 @@ import numpy as np
 from ...base.result_shape import ResultShape, axes_or_new, table_lines, unit_label
 from ...base.serialize import json_safe
 from ...fitting import ParameterTable
-from ..selection.probabilities import Probable
+from ..selection.probable import Probable
 from . import model as CM
+from .holdout import leave_one_out as campaign_leave_one_out
 from .predict import condition_vector
-from .predict import leave_one_out as campaign_leave_one_out
 from .predict import predict as campaign_predict
 from .probability import campaign_band
 

@@ -143,6 +143,43 @@ def fit_base(fitter, rec, *, seed):
     return fitter.run((), starts)
 
 
+def _effect_rows(mdl, effs, se):
+    """Each fitted effect's values, standard errors and units (the details' ``effects``)."""
+    eff_out, k0 = [], 4
+    for nm, d in zip(mdl.names, effs):
+        q = len(EFFECTS[nm].specs)
+        eff_out.append(
+            {
+                "name": nm,
+                "parameters": dict(d),
+                "stderr": dict(zip(EFFECTS[nm].parameter_names, se[k0 : k0 + q].tolist())),
+                "units": {s.name: s.unit for s in EFFECTS[nm].specs},
+            }
+        )
+        k0 += q
+    return eff_out
+
+
+def _verdict(row, ident, ranges, noise_only, microslip):
+    """``(success, failure reasons)`` of a fitted stack."""
+    required = required_parameters(ranges)
+    success = fit_success(row["status"] > 0, ident, required)
+    failures = (
+        ()
+        if success
+        else failure_list(
+            converged=row["status"] > 0,
+            message=row["message"],
+            explains=not noise_only,
+            noise_text="the force is indistinguishable from noise: no parameter is identified",
+            ident=ident,
+            required=required,
+            microslip=microslip,
+        )
+    )
+    return success, failures
+
+
 def stack_fit(row, fitter, FF, F_model, t_start, *, noise_only=False):
     """FitResult of a fitted stack on the whole record, with stderr and identification."""
     mdl, z = row["model"], row["z"]
@@ -165,18 +202,7 @@ def stack_fit(row, fitter, FF, F_model, t_start, *, noise_only=False):
         },
         (),
     )
-    eff_out, k0 = [], 4
-    for nm, d in zip(mdl.names, effs):
-        q = len(EFFECTS[nm].specs)
-        eff_out.append(
-            {
-                "name": nm,
-                "parameters": dict(d),
-                "stderr": dict(zip(EFFECTS[nm].parameter_names, se[k0 : k0 + q].tolist())),
-                "units": {s.name: s.unit for s in EFFECTS[nm].specs},
-            }
-        )
-        k0 += q
+    eff_out = _effect_rows(mdl, effs, se)
     warns = list(settle_warns)
     hist = mdl.ev.hist  # the backbone argument behind each fitted sample
     x = hist.x[hist.out]
@@ -190,21 +216,7 @@ def stack_fit(row, fitter, FF, F_model, t_start, *, noise_only=False):
     if row["status"] <= 0:
         warns.append(f"the fit did not converge: {row['message']}")
     span = float(np.ptp(FF)) or 1.0
-    required = required_parameters(ranges)
-    success = fit_success(row["status"] > 0, ident, required)
-    failures = (
-        ()
-        if success
-        else failure_list(
-            converged=row["status"] > 0,
-            message=row["message"],
-            explains=not noise_only,
-            noise_text="the force is indistinguishable from noise: no parameter is identified",
-            ident=ident,
-            required=required,
-            microslip=n_macro < min_macroslip(x.size),
-        )
-    )
+    success, failures = _verdict(row, ident, ranges, noise_only, n_macro < min_macroslip(x.size))
     return M.make_fit_result(
         params=p,
         stderr=stderr,

@@ -15,18 +15,7 @@ def _locate(t, u, F, Fm, r, cycles, sigma, tau) -> tuple[str, dict]:
     """A sentence saying where the residual exceeds the noise, and the numbers behind it."""
     s2 = sigma * sigma
     ratio = float(np.mean(r**2) / s2)
-    region = np.full(u.size, -1)
-    cyc_ratio, amp_list = [], []
-    for c in cycles:
-        sl = slice(c.start, c.stop)
-        uu = u[sl]
-        imin = int(np.argmin(uu))
-        # displacement travelled since the last turning point, relative to the stroke
-        d = np.where(np.arange(uu.size) <= imin, uu[0] - uu, uu - uu[imin]) / max(2 * c.u0, 1e-300)
-        region[sl] = np.where(d < 0.15, 0, np.where(d > 0.85, 2, 1))
-        rr = r[sl]
-        cyc_ratio.append(float(np.mean(rr**2) / s2))
-        amp_list.append(c.u0)
+    region, cyc_ratio, amp_list = _cycle_regions(u, r, cycles, s2)
     names = ("just after the reversals", "mid-stroke", "at the ends of the stroke")
     reg: dict[str, float] = {}
     for k, nm in enumerate(names):
@@ -46,6 +35,39 @@ def _locate(t, u, F, Fm, r, cycles, sigma, tau) -> tuple[str, dict]:
         )
     amps = np.array(amp_list)
     cr = np.array(cyc_ratio)
+    _amplitude_parts(amps, cr, cycles, tau, parts)
+    shares = _pattern_parts(t, u, Fm, r, s2, parts)
+    sentence = "; ".join(parts) + "."
+    sentence = sentence[0].upper() + sentence[1:]
+    return sentence, {
+        "ratio": ratio,
+        "regions": reg,
+        "pattern_shares": {k.split(" (")[0].replace("{}", "..."): v[0] for k, v in shares.items()},
+    }
+
+
+def _cycle_regions(u, r, cycles, s2):
+    """Each sample's part of the stroke (0 just after a reversal, 1 mid-stroke, 2 at the
+    end; -1 outside the cycles), and each cycle's residual power over the noise's and
+    amplitude.
+    """
+    region = np.full(u.size, -1)
+    cyc_ratio, amp_list = [], []
+    for c in cycles:
+        sl = slice(c.start, c.stop)
+        uu = u[sl]
+        imin = int(np.argmin(uu))
+        # displacement travelled since the last turning point, relative to the stroke
+        d = np.where(np.arange(uu.size) <= imin, uu[0] - uu, uu - uu[imin]) / max(2 * c.u0, 1e-300)
+        region[sl] = np.where(d < 0.15, 0, np.where(d > 0.85, 2, 1))
+        rr = r[sl]
+        cyc_ratio.append(float(np.mean(rr**2) / s2))
+        amp_list.append(c.u0)
+    return region, cyc_ratio, amp_list
+
+
+def _amplitude_parts(amps, cr, cycles, tau, parts):
+    """Append to ``parts`` at which amplitudes the residual exceeds the noise."""
     if amps.size:
         levels = np.unique(np.round(amps / amps.max(), 2))
         grp = {lv: cr[np.round(amps / amps.max(), 2) == lv].mean() for lv in levels}
@@ -71,6 +93,12 @@ def _locate(t, u, F, Fm, r, cycles, sigma, tau) -> tuple[str, dict]:
             )
         else:
             parts.append("spread over all amplitudes")
+
+
+def _pattern_parts(t, u, Fm, r, s2, parts):
+    """Append to ``parts`` the patterns carrying at least a quarter of the excess residual
+    power; return each pattern's ``(share, coefficient)``.
+    """
     # patterns: the share of the excess residual power each one carries
     excess = max(float(r @ r) - u.size * s2, 1e-300)
     pats = {}
@@ -103,13 +131,7 @@ def _locate(t, u, F, Fm, r, cycles, sigma, tau) -> tuple[str, dict]:
                 parts.append(text.format("wider" if coef > 0 else "narrower"))
             else:
                 parts.append(text.format("late" if coef > 0 else "early"))
-    sentence = "; ".join(parts) + "."
-    sentence = sentence[0].upper() + sentence[1:]
-    return sentence, {
-        "ratio": ratio,
-        "regions": reg,
-        "pattern_shares": {k.split(" (")[0].replace("{}", "..."): v[0] for k, v in shares.items()},
-    }
+    return shares
 
 
 def _check_candidates(candidates, default):

@@ -12,7 +12,7 @@ import numpy as np
 from ...base.result_shape import ResultShape, panels, value_stderr, wrap
 from ...base.serialize import json_safe
 from ..selection.lines import effect_unit, verdict_lines
-from ..selection.probabilities import Probable
+from ..selection.probable import Probable
 
 if TYPE_CHECKING:
     from ...identify.loops.result import FitResult

@@ -23,19 +23,16 @@ import math
 
 import numpy as np
 from scipy.optimize import least_squares
-from scipy.stats import chi2 as _chi2
 
 from ...base.serialize import json_safe
-from ...base.validation import check_int, check_magnitude, check_scalar, finite_array, same_length
+from ...base.validation import check_int, check_scalar, finite_array
 from ...effects import EFFECTS
-from ...fitting import covariance
-from ...identify.files.units import check_damping_ratio, check_frequency_ratio
-from ...identify.loops.noise import difference_sigma
-from ...identify.modal.curves import AmplitudeCurve
 from ..selection.nested import nested_options
 from ..selection.probabilities import check_effect_prior, key, rank
-from ..selection.rule import criterion_text, misfit_p, stepwise_select
-from .evidence import collect, evaluate, jacobian
+from ..selection.rule import misfit_p, stepwise_select
+from ._measurement import _curve_level, _inputs, _measurement, _relative
+from ._outcome import _at_upper_bound, _covariance, _details, _left, _steps, _where
+from .evidence import collect, evaluate
 from .result import VibrationDiagnosis
 
 __all__ = ["diagnose_vibration", "vibration_candidates"]
@@ -44,79 +41,6 @@ __all__ = ["diagnose_vibration", "vibration_candidates"]
 def vibration_candidates() -> tuple:
     """Names of the effects with a modal form."""
     return tuple(n for n, c in EFFECTS.items() if c.modal_specs)
-
-
-def _check_units(fm, fp, zm, zp):
-    """Clear errors for rad/s given as Hz and percent given as a ratio."""
-    check_frequency_ratio("frequency", fm, "predicted_frequency", fp)
-    check_damping_ratio("damping_ratio", zm)
-    check_damping_ratio("predicted_damping_ratio", zp)
-
-
-#: Efficiency of the second differences' MAD scale against the standard deviation: its
-#: sampling spread is that of a chi-square with about this fraction of the differences'
-#: count as degrees of freedom.
-MAD_EFFICIENCY = 0.37
-
-
-def _noise(r, stated, n, name):
-    """Noise of one log-residual curve [-] and its source text: the stated uncertainty when
-    there is one, unless the curve's own scatter (second differences along amplitude) lies
-    above the stated value's 99 % range (then the scatter: the curve is noisier than stated);
-    the scatter when none is stated. (Taking the larger of the two whenever the scatter
-    happens to exceed the stated value would bias the noise upwards: with 12 points the
-    scatter's own spread is a factor 1.9, and a noise set too high makes every effect's
-    evidence too small).
-    """
-    scatter = difference_sigma(r) if n >= 5 else 0.0  # second differences along amplitude
-    if stated is None:
-        return max(scatter, 1e-12), f"{name}: scatter"
-    st = float(np.median(stated))
-    dof = max(MAD_EFFICIENCY * (n - 2), 1.0)
-    if scatter > st * math.sqrt(float(_chi2.ppf(0.99, dof)) / dof):
-        return scatter, f"{name}: scatter (above the stated uncertainty's 99 % range)"
-    return max(st, 1e-12), f"{name}: stated"
-
-
-#: Largest relative standard uncertainty or noise [-] accepted per curve: a frequency known
-#: to 50 % or a damping ratio to 100 % carries no amplitude dependence; larger values are
-#: percent given for a ratio (5.0 for 5 %).
-_RELATIVE_MAX = {"frequency": 0.5, "damping_ratio": 1.0}
-
-
-def _curve_level(name, r, given, stated, n):
-    """Noise of one curve: ``given`` if set, else the stated uncertainty unless the scatter is
-    clearly above it (:func:`_noise`).
-    """
-    if given is not None:
-        return _relative(
-            f"{name}_noise", name, check_scalar(f"{name}_noise", given, low=0.0, low_open=True)
-        ), f"{name}: given"
-    return _noise(r, _stated(f"{name}_uncertainty", stated, n), n, name)
-
-
-def _relative(arg, curve, a):
-    """``a`` (a relative standard deviation [-] of ``curve``), or a ValueError naming ``arg``
-    when it exceeds :data:`_RELATIVE_MAX` (most likely percent).
-    """
-    top = _RELATIVE_MAX[curve]
-    peak = float(np.max(a))
-    if peak > top:
-        raise ValueError(
-            f"{arg} must be a relative standard uncertainty in (0, {top:g}] [-], "
-            f"got {peak:g} ({100 * peak:g} %); a ratio, not percent: give "
-            f"{peak / 100:g} for {peak:g} %"
-        )
-    return a
-
-
-def _stated(name, value, n):
-    if value is None:
-        return None
-    a = np.broadcast_to(finite_array(name, value, ndim=None), (n,)).astype(float)
-    if np.any(a <= 0):
-        raise ValueError(f"{name} must be > 0 (relative standard uncertainty [-])")
-    return a
 
 
 class _Vib:
@@ -203,102 +127,6 @@ class _Vib:
         return best
 
 
-def _where(X, rf0, rz0, sf, sz, misfit):
-    """Where the measured curves leave the prediction by more than 3 x noise: per curve, the
-    amplitude ranges (in increasing amplitude) where the measurement is above or below, with
-    the largest relative difference in each (a turn, e.g. a frequency that falls and then
-    rises again, shows as two ranges of opposite sign).
-    """
-    order = np.argsort(X)
-    parts = []
-    for label, r, s in (("frequency", rf0[order], sf), ("damping", rz0[order], sz)):
-        xs = X[order]
-        sign = np.where(r > 3 * s, 1, np.where(r < -3 * s, -1, 0))
-        runs, k = [], 0
-        while k < sign.size:
-            j = k
-            while j + 1 < sign.size and sign[j + 1] == sign[k]:
-                j += 1
-            if sign[k] != 0 and j > k:  # two or more points in a row
-                i = k + int(np.argmax(np.abs(r[k : j + 1])))
-                runs.append(
-                    f"{'above' if sign[k] > 0 else 'below'} it from {xs[k]:.3g} to "
-                    f"{xs[j]:.3g} m (up to {100 * abs(math.expm1(r[i])):.3g} % at "
-                    f"{xs[i]:.3g} m)"
-                )
-            k = j + 1
-        if runs:
-            parts.append(
-                f"measured {label} beyond 3 x noise of the prediction: " + ", then ".join(runs)
-            )
-    where = (
-        "; ".join(parts)
-        if (misfit and parts)
-        else "measured and predicted curves agree within the noise"
-    ) + "."
-    return where[0].upper() + where[1:]
-
-
-def _left(X, rf, rz, sf, sz):
-    """Where residuals left after the fit exceed 3 x noise: amplitude ranges per curve."""
-    parts = []
-    for label, r, s in (("frequency", rf, sf), ("damping", rz, sz)):
-        big = np.abs(r) > 3 * s
-        if big.any():
-            parts.append(
-                f"{label} off by up to {100 * np.max(np.abs(r[big])):.3g} % at "
-                f"{X[big].min():.3g} .. {X[big].max():.3g} m"
-            )
-    return (": " + "; ".join(parts)) if parts else ""
-
-
-def _inputs(amplitude, frequency, damping_ratio, predicted_frequency, predicted_damping_ratio):
-    arrs = {}
-    for nm, a in (
-        ("amplitude", amplitude),
-        ("frequency", frequency),
-        ("damping_ratio", damping_ratio),
-        ("predicted_frequency", predicted_frequency),
-        ("predicted_damping_ratio", predicted_damping_ratio),
-    ):
-        arrs[nm] = check_magnitude(nm, finite_array(nm, a, ndim=1, min_size=3))
-    n = same_length(**arrs)
-    for nm, a in arrs.items():
-        if np.any(a <= 0):
-            raise ValueError(f"{nm} must be > 0 everywhere")
-    _check_units(
-        arrs["frequency"],
-        arrs["predicted_frequency"],
-        arrs["damping_ratio"],
-        arrs["predicted_damping_ratio"],
-    )
-    return n, arrs
-
-
-def _measurement(amplitude, frequency, damping_ratio, f_unc, z_unc):
-    """Arrays and stated relative uncertainties from an AmplitudeCurve or three arrays."""
-    if not isinstance(amplitude, AmplitudeCurve):
-        if frequency is None or damping_ratio is None:
-            raise ValueError(
-                "frequency and damping_ratio are required unless amplitude is an AmplitudeCurve"
-            )
-        return amplitude, frequency, damping_ratio, f_unc, z_unc
-    c = amplitude
-    if frequency is not None or damping_ratio is not None:
-        raise ValueError(
-            "give either an AmplitudeCurve or three arrays, not both: frequency and "
-            "damping_ratio must be None when amplitude is an AmplitudeCurve"
-        )
-
-    def rel(std, val):
-        r = np.asarray(std, float) / val
-        return r if np.all(np.isfinite(r)) and np.all(r > 0) else None
-
-    f_unc = rel(c.frequency_std, c.frequency) if f_unc is None else f_unc
-    z_unc = rel(c.damping_ratio_std, c.damping_ratio) if z_unc is None else z_unc
-    return c.amplitude, c.frequency, c.damping_ratio, f_unc, z_unc
-
-
 def diagnose_vibration(
     amplitude,
     frequency=None,
@@ -378,46 +206,29 @@ def diagnose_vibration(
         ``2 pi`` times the prediction (rad/s for Hz) or the other way round, damping ratios
         that look like percent (one >= 1, or none below 0.05), or an option out of range.
     """
-    for arg, v in (
-        ("frequency_uncertainty", frequency_uncertainty),
-        ("damping_ratio_uncertainty", damping_ratio_uncertainty),
-    ):
-        if v is not None:  # the caller's (not a curve's own scatter, which may be wide)
-            _relative(arg, arg.rsplit("_", 1)[0], finite_array(arg, v, ndim=None))
-    amplitude, frequency, damping_ratio, frequency_uncertainty, damping_ratio_uncertainty = (
-        _measurement(
-            amplitude, frequency, damping_ratio, frequency_uncertainty, damping_ratio_uncertainty
-        )
-    )
-    n, a = _inputs(
-        amplitude, frequency, damping_ratio, predicted_frequency, predicted_damping_ratio
-    )
-    X, fm, zm, fp, zp = (
-        a[k]
-        for k in (
-            "amplitude",
-            "frequency",
-            "damping_ratio",
-            "predicted_frequency",
-            "predicted_damping_ratio",
-        )
+    amplitude, frequency_uncertainty, damping_ratio_uncertainty, n, X, fm, zm, fp, zp = _arrays(
+        amplitude,
+        frequency,
+        damping_ratio,
+        predicted_frequency,
+        predicted_damping_ratio,
+        frequency_uncertainty,
+        damping_ratio_uncertainty,
     )
     zeta0 = check_scalar("predicted_zeta0", predicted_zeta0, low=0.0)
     alpha = check_scalar("alpha", alpha, low=0.0, high=0.5, low_open=True, high_open=True)
     ambiguity = check_scalar("ambiguity", ambiguity, low=0.0)
     max_effects = check_int("max_effects", max_effects, 1)
-    o = np.argsort(X)
-    rf0, rz0 = np.log(fm / fp), np.log(zm / zp)
-    warns = []
-    sf, src_f = _curve_level("frequency", rf0[o], frequency_noise, frequency_uncertainty, n)
-    sz, src_z = _curve_level(
-        "damping_ratio", rz0[o], damping_ratio_noise, damping_ratio_uncertainty, n
+    rf0, rz0, sf, sz, src_f, src_z, warns = _noise_levels(
+        X,
+        fm,
+        zm,
+        fp,
+        zp,
+        n,
+        (frequency_noise, damping_ratio_noise),
+        (frequency_uncertainty, damping_ratio_uncertainty),
     )
-    if (frequency_noise is None or damping_ratio_noise is None) and n < 12:
-        warns.append(
-            f"only {n} amplitudes: the noise taken from their scatter is uncertain "
-            "(state the per-point uncertainty or the noise levels)"
-        )
     if not isinstance(between_tests, (bool, np.bool_)):
         raise ValueError(f"between_tests must be True or False, got {between_tests!r}")
     vib = _Vib(X, fm, zm, fp, zp, zeta0, sf, sz, bool(between_tests))
@@ -426,6 +237,37 @@ def diagnose_vibration(
     cands = tuple(
         c for c in vibration_candidates() if not (between_tests and EFFECTS[c].modal_floor)
     )
+
+    base, prior, nest, sel = _select(
+        vib, cands, chi_b, z_b, n, alpha, max_effects, ambiguity, effect_prior, evidence, nested
+    )
+    fits, expl, rule_named = _explanations(vib, sel, base, err_b, n, prior, nest, warns)
+    _adopt_top(vib, sel, fits, expl, n)
+    if vib.nn:  # where: what is left after the between-test offsets
+        f_b, z_b_curve = vib.curves((), z_b)
+        rf0, rz0 = np.log(fm / f_b), np.log(zm / z_b_curve)
+    return _vib_result(
+        vib,
+        sel,
+        chi_b,
+        err_b,
+        rf0,
+        rz0,
+        warns,
+        alpha,
+        f"{src_f}; {src_z}",
+        cands,
+        tuple(expl),
+        rule_named,
+    )
+
+
+def _select(
+    vib, cands, chi_b, z_b, n, alpha, max_effects, ambiguity, effect_prior, evidence, nested
+):
+    """The stepwise selection over the candidates from the base state: ``(base, prior,
+    nested options, selection)``.
+    """
 
     def fit_candidate(cur, name):
         names = cur["names"] + (name,)
@@ -452,6 +294,74 @@ def diagnose_vibration(
         ambiguity=ambiguity,
         first_step=True,
     )
+    return base, prior, nest, sel
+
+
+def _arrays(
+    amplitude,
+    frequency,
+    damping_ratio,
+    predicted_frequency,
+    predicted_damping_ratio,
+    frequency_uncertainty,
+    damping_ratio_uncertainty,
+):
+    """The checked measurement and prediction: ``(amplitude as given or the curve's, the
+    stated uncertainties, n, X, fm, zm, fp, zp)``.
+    """
+    for arg, v in (
+        ("frequency_uncertainty", frequency_uncertainty),
+        ("damping_ratio_uncertainty", damping_ratio_uncertainty),
+    ):
+        if v is not None:  # the caller's (not a curve's own scatter, which may be wide)
+            _relative(arg, arg.rsplit("_", 1)[0], finite_array(arg, v, ndim=None))
+    amplitude, frequency, damping_ratio, frequency_uncertainty, damping_ratio_uncertainty = (
+        _measurement(
+            amplitude, frequency, damping_ratio, frequency_uncertainty, damping_ratio_uncertainty
+        )
+    )
+    n, a = _inputs(
+        amplitude, frequency, damping_ratio, predicted_frequency, predicted_damping_ratio
+    )
+    X, fm, zm, fp, zp = (
+        a[k]
+        for k in (
+            "amplitude",
+            "frequency",
+            "damping_ratio",
+            "predicted_frequency",
+            "predicted_damping_ratio",
+        )
+    )
+    return amplitude, frequency_uncertainty, damping_ratio_uncertainty, n, X, fm, zm, fp, zp
+
+
+def _noise_levels(X, fm, zm, fp, zp, n, noise, uncertainty):
+    """The log residuals before any effect, each curve's noise and its source, and the
+    warning when the noise rests on too few amplitudes.
+    """
+    frequency_noise, damping_ratio_noise = noise
+    frequency_uncertainty, damping_ratio_uncertainty = uncertainty
+    o = np.argsort(X)
+    rf0, rz0 = np.log(fm / fp), np.log(zm / zp)
+    warns = []
+    sf, src_f = _curve_level("frequency", rf0[o], frequency_noise, frequency_uncertainty, n)
+    sz, src_z = _curve_level(
+        "damping_ratio", rz0[o], damping_ratio_noise, damping_ratio_uncertainty, n
+    )
+    if (frequency_noise is None or damping_ratio_noise is None) and n < 12:
+        warns.append(
+            f"only {n} amplitudes: the noise taken from their scatter is uncertain "
+            "(state the per-point uncertainty or the noise levels)"
+        )
+    return rf0, rz0, sf, sz, src_f, src_z, warns
+
+
+def _explanations(vib, sel, base, err_b, n, prior, nest, warns):
+    """The explanations fitted, ranked by probability, without those that raise the
+    unweighted mismatch (each such one a warning): ``(fits, ranked, the rule's naming)``.
+    """
+    sf, sz = vib.sf, vib.sz
     # never name a set of effects that leaves the unweighted mismatch higher than before (by
     # more than a tenth of the noise: a hidden frequency effect changes the damping-dominated
     # unweighted mismatch by less than the damping noise's own scatter)
@@ -478,29 +388,17 @@ def diagnose_vibration(
                 f"{' + '.join(k)} lowers the noise-weighted misfit but raises the "
                 "mismatch; not considered"
             )
+    return fits, expl, rule_named
+
+
+def _adopt_top(vib, sel, fits, expl, n):
+    """Name the most probable explanation when the rule named another (in ``sel``)."""
     top = expl[0]
     if key(top.stack) != key(sel.named):
         f = fits[top.effects]
         sel.named, sel.ambiguous = list(top.stack), ()
         sel.final = {"names": f[0], "chi2": f[1], "q": f[2] - vib.nn, "state": f[3]}
         sel.p_after = misfit_p(f[1], 1.0, 2.0 * n, f[2] - vib.nn)
-    if vib.nn:  # where: what is left after the between-test offsets
-        f_b, z_b_curve = vib.curves((), z_b)
-        rf0, rz0 = np.log(fm / f_b), np.log(zm / z_b_curve)
-    return _vib_result(
-        vib,
-        sel,
-        chi_b,
-        err_b,
-        rf0,
-        rz0,
-        warns,
-        alpha,
-        f"{src_f}; {src_z}",
-        cands,
-        tuple(expl),
-        rule_named,
-    )
 
 
 def _vib_result(
@@ -533,39 +431,12 @@ def _vib_result(
         )
     bound_warns, at_bound = _at_upper_bound(vib, names, z)
     warns.extend(bound_warns)
-    steps = [
-        {
-            "on": st["on"],
-            "candidates": [
-                {k: r.get(k) for k in ("name", "error", "dIC", "explained", "verdict")}
-                for r in st["rows"]
-            ],
-        }
-        for st in sel.steps
-    ]
+    steps = _steps(sel)
     cov, se, nuis_std = _covariance(vib, names, z, sel.final["chi2"])
     ro = lambda a: (a.setflags(write=False), a)[1]  # noqa: E731
-    details = {
-        "noise_from": noise_from,
-        "misfit_p": sel.p_before,
-        "misfit_p_after": sel.p_after,
-        "alpha": alpha,
-        "chi2_before": chi_b,
-        "chi2_after": sel.final["chi2"],
-        "criterion": criterion_text(),
-        "predicted_zeta0": vib.zeta0,
-        "frequency_error_before": float(np.sqrt(np.mean(rf0**2))),
-        "damping_error_before": float(np.sqrt(np.mean(rz0**2))),
-        "frequency_error_after": float(np.sqrt(np.mean(np.log(vib.fm / f_new) ** 2))),
-        "damping_error_after": float(np.sqrt(np.mean(np.log(vib.zm / z_new) ** 2))),
-        "stderr": dict(
-            zip((f"{nm}.{sp.name}" for nm in names for sp in EFFECTS[nm].modal_specs), se)
-        ),
-        "at_bound": at_bound,
-        "rule_named": list(rule_named),
-        "refs": dict(vib.refs),
-        "nuisances": vib.nn,
-    }
+    details = _details(
+        vib, sel, names, se, at_bound, rule_named, chi_b, rf0, rz0, f_new, z_new, alpha, noise_from
+    )
     if vib.nn:
         df, dz = vib.nuisance(z)
         details["between_tests"] = {
@@ -599,52 +470,3 @@ def _vib_result(
         covariance=None if cov is None else ro(cov),
         explanations=explanations,
     )
-
-
-def _at_upper_bound(vib, names, z):
-    """Fitted values at the upper end of their fit range (the data do not bound them, and
-    predictions beyond the measured amplitudes depend on that end): ``(warnings, names as
-    "effect.parameter")``.
-    """
-    out, at, k = [], [], vib.nn
-    for nm in names:
-        for sp in EFFECTS[nm].modal_specs:
-            lo, hi = sp.fit_bounds
-            if z[k] >= hi - 1e-6 * (hi - lo):
-                out.append(
-                    f"{nm} {sp.name} sits at the upper end of its fit range "
-                    f"({hi:g} in fit units): the data do not bound it, and predictions "
-                    "beyond the measured amplitudes depend on that end"
-                )
-                at.append(f"{nm}.{sp.name}")
-            k += 1
-    return out, at
-
-
-def _covariance(vib, names, z, chi2):
-    """Covariance of the fitted modal values: ``(J^T J)^-1`` of the noise-normalised residual
-    in the fitting variables (:func:`iwan_element.fitting.covariance`, docs/fitting.md;
-    NaN errors along a degenerate direction), scaled by the reduced chi-square when above 1,
-    mapped to the values (each value is its variable over a fixed reference scale). Returns
-    that matrix (None without effects; a pseudo-inverse along a degenerate direction, used
-    for the prediction bands), the values' standard errors (NaN for a value the data do not
-    determine) and the standard errors of the between-test nuisances (relative frequency and
-    damping offsets; empty without them).
-    """
-    if z.size == 0:
-        return None, np.zeros(0), ()
-    J, r0 = jacobian(vib, names, z)
-    dof = max(r0.size - z.size, 1)
-    cz = covariance(J, s2=max(1.0, chi2 / dof), dof=dof)
-    Cz, sd = cz.covariance, cz.stderr
-    nuis = (
-        ()
-        if not vib.nn
-        else (float(sd[0] * math.exp(float(z[0]))), float(sd[1] * math.exp(float(z[1]))))
-    )
-    if not names:
-        return None, np.zeros(0), nuis
-    scale = np.array(
-        [1.0 / vib.refs[sp.ref] ** sp.ref_power for nm in names for sp in EFFECTS[nm].modal_specs]
-    )
-    return Cz[vib.nn :, vib.nn :] * np.outer(scale, scale), sd[vib.nn :] * scale, nuis

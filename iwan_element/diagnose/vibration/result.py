@@ -14,7 +14,8 @@ from ...base.serialize import json_safe
 from ...effects import EFFECTS
 from ...fitting import Parameter, ParameterTable, verdict
 from ..selection.lines import effect_unit, verdict_lines
-from ..selection.probabilities import Probable
+from ..selection.probable import Probable
+from ._prediction import predicted_curve
 from .augment import augmented
 
 __all__ = ["VibrationDiagnosis"]
@@ -26,13 +27,6 @@ MISMATCH = (
     "damping ratio together (log residuals, each curve over its own noise), in %; "
     "dIC: information criterion above the step's best candidate (0: the best)"
 )
-
-
-def _apply(names, parameters, X, f, z, zeta0):
-    """The named effects' modal forms on a base curve, in order."""
-    for n in names:
-        f, z = EFFECTS[n].modal_form(X, f, z, zeta0, **parameters[n])
-    return f, z
 
 
 @dataclass(frozen=True, eq=False)
@@ -231,49 +225,7 @@ class VibrationDiagnosis(Probable, ResultShape):
             (1 sigma) from the fitted parameters' covariance (linearised), ``warnings`` states
             extrapolation beyond the diagnosed amplitudes.
         """
-        from ...base.validation import finite_array
-        from ...identify.modal.curves import AmplitudeCurve
-
-        X = finite_array("amplitude", amplitude, ndim=1, min_size=1)
-        if np.any(X <= 0):
-            raise ValueError("amplitude must be > 0 [m]")
-        warns = []
-        lo, hi = float(self.amplitude.min()), float(self.amplitude.max())
-        out = (X < lo * (1 - 1e-9)) | (X > hi * (1 + 1e-9))
-        if base is None:
-            o = np.argsort(self.amplitude)
-            lx = np.log(self.amplitude[o])
-            fb = np.exp(np.interp(np.log(X), lx, np.log(self.predicted_frequency[o])))
-            zb = np.exp(np.interp(np.log(X), lx, np.log(self.predicted_damping_ratio[o])))
-            if out.any():
-                warns.append(
-                    f"{int(out.sum())} amplitudes outside the diagnosed range {lo:.3g} .. "
-                    f"{hi:.3g} m: the base prediction is held at its end values there; "
-                    "pass base= (the model's curve at these amplitudes)"
-                )
-        else:
-            if not np.allclose(np.asarray(base.amplitude), X, rtol=1e-9, atol=0.0):
-                raise ValueError("base must be the model's curve at exactly these amplitudes")
-            fb, zb = np.asarray(base.frequency, float), np.asarray(base.damping_ratio, float)
-        if out.any():
-            warns.append(
-                f"the fitted effects ({', '.join(self.effects) or 'none'}) are "
-                f"extrapolated beyond the diagnosed amplitudes {lo:.3g} .. {hi:.3g} m "
-                f"(up to {max(X.max() / hi, lo / X.min()):.3g} x beyond)"
-            )
-        z0 = float(self.details.get("predicted_zeta0", 0.0))
-        f, z = _apply(self.effects, self.parameters, X, fb, zb, z0)
-        sf, sz = self._bands(X, fb, zb, z0, f, z)
-        return AmplitudeCurve(
-            X,
-            f,
-            z,
-            frequency_std=sf,
-            damping_ratio_std=sz,
-            method="diagnosis",
-            notes="prediction + " + (" + ".join(self.effects) or "nothing"),
-            warnings=tuple(warns),
-        )
+        return predicted_curve(self, amplitude, base)
 
     def averaged_band(self, amplitude, *, base=None, level: float = 0.95):
         """Frequency and damping predicted with the doubt about the model: every probable
@@ -285,24 +237,6 @@ class VibrationDiagnosis(Probable, ResultShape):
         from .evidence import vibration_band
 
         return vibration_band(self, amplitude, base, level)
-
-    def _bands(self, X, fb, zb, z0, f, z):
-        """Linearised 1-sigma bands [Hz], [-] from the covariance of the fitted values."""
-        keys = [(n, k) for n in self.effects for k in self.parameters[n]]
-        C = self.covariance
-        if not keys or C is None or C.shape != (len(keys), len(keys)):
-            return np.zeros_like(f), np.zeros_like(z)
-        G = np.empty((2 * X.size, len(keys)))
-        for j, (n, k) in enumerate(keys):
-            v = self.parameters[n][k]
-            h = max(1e-6 * abs(v), 1e-6 * math.sqrt(max(C[j, j], 0.0)), 1e-300)
-            p = {a: dict(b) for a, b in self.parameters.items()}
-            p[n][k] = v + h
-            f1, z1 = _apply(self.effects, p, X, fb, zb, z0)
-            G[:, j] = np.concatenate([np.log(f1 / f), np.log(z1 / z)]) / h
-        var = np.einsum("ij,jk,ik->i", G, C, G)
-        s = np.sqrt(np.maximum(var, 0.0))
-        return f * s[: X.size], z * s[X.size :]
 
     def to_dict(self) -> dict:
         """JSON-safe dict."""

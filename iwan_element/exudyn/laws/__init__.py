@@ -2,9 +2,10 @@
 
 :mod:`.symbolic_law` (the exact Iwan law as an Exudyn symbolic expression, no Python call per
 evaluation), :mod:`.symbolic_connector` (its per-step work for one connector: the accepted
-slip written to the law, the joint committed lazily), :mod:`.python_law` (the reference
-route: closures calling ``joint.trial``), :mod:`.interface_springs` (linear springs carried
-by the interface's own objects).
+slip written to the law, the joint committed lazily), :mod:`.symbolic_records` (its records,
+replayed when read), :mod:`.python_law` (the reference route: closures calling
+``joint.trial``), :mod:`.interface_springs` (linear springs carried by the interface's own
+objects).
 """
 
 from .interface_springs import add_builtin_springs, check_stiffness, linear_energy

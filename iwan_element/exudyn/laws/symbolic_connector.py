@@ -14,7 +14,7 @@ Only such events rewrite the law's branch and reversal stack.
 
 Records hold ``(t, u)`` per accepted step; force and energies are replayed from a copy of
 the joint taken when the records start (the same ``trial``/``commit`` sequence, so the
-same numbers as a per-step commit) when they are read.
+same numbers as a per-step commit) when they are read (:mod:`.symbolic_records`).
 
 Depth overflow (a step needs an older reversal point than the expression holds) can only
 happen while the committed stack is deeper than ``depth``. Only then a post-Newton user
@@ -32,7 +32,6 @@ import logging
 import math
 
 import exudyn as exu
-import numpy as np
 from exudyn.advancedUtilities import CreateSymbolicUserFunction
 from exudyn.itemInterface import (
     ObjectConnectorCartesianSpringDamper,
@@ -60,8 +59,6 @@ __all__ = [
     "sync_stack",
     "walk_states",
     "newton_check",
-    "stride",
-    "replay_records",
     "reset_state",
 ]
 
@@ -476,47 +473,6 @@ def newton_check(conn, big: float) -> float:
         p,
     )
     return big
-
-
-# ---------------------------------------------------------------------------- records
-def stride(conn) -> int:
-    """Values recorded per step: ``(t, u)``, or ``(t, u, v)`` with a dashpot."""
-    return 3 if conn._damping else 2
-
-
-def replay_records(conn) -> np.ndarray:
-    """The records as rows ``(t, u, F, dissipated, work)``: the rows ``(t, u[, v])``
-    replayed on a copy of the joint taken where the records start (cached, extended
-    incrementally); a dashpot adds ``c v`` to the force and ``c (v0 + v) / 2 (u - u0)`` per
-    step to the dissipation and the work (as the Python law books it).
-    """
-    raw = conn._rec
-    w = stride(conn)
-    n = len(raw) // w
-    cache = conn._replay
-    if cache is None or cache[1] > n:
-        cache = conn._replay = [copy.deepcopy(conn._snapshot), 0, np.empty((0, 5)), None]
-    j, done, table, dash = cache
-    if done < n:
-        new = np.empty((n - done, 5))
-        rows = raw[w * done : w * n].tolist()
-        trial, commit = j.trial, j.commit
-        c = conn._damping
-        for k in range(n - done):
-            t, u = rows[w * k], rows[w * k + 1]
-            F = trial(u)[0]
-            commit()
-            if c:
-                v = rows[w * k + 2]
-                d = 0.0 if dash is None else dash[2] + c * 0.5 * (dash[1] + v) * (u - dash[0])
-                dash = (u, v, d)
-                F += c * v
-            else:
-                d = 0.0
-            new[k] = (t, u, F, j.dissipated_energy + d, j.work + d)
-        table = np.concatenate([table, new]) if done else new
-        cache[1], cache[2], cache[3] = n, table, dash
-    return table
 
 
 def _none():
