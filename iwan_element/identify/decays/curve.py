@@ -79,9 +79,8 @@ from ...base.validation import check_magnitude, check_scalar, check_uniform_time
 from ..modal.curves import DECAY_METHODS
 from ._filter import _decay_signal, _drift_terms, _noise_bandwidth
 from ._report import _finish
-from ._windows import WindowPlan, _noise_std, drift_correct, hilbert_windows
-from .peaks import pff_windows
 from .saturation import cut_clipping, cut_flattened_peaks
+from .windows import WindowPlan, _noise_std, drift_correct, hilbert_windows, pff_windows
 
 __all__ = ["amplitude_curve"]
 
@@ -327,7 +326,7 @@ def amplitude_curve(
         its stated uncertainty.
     method : {"hilbert", "pff"}, keyword-only
         Envelope and phase of the analytic signal (default), or peak finding and fitting on
-        the extrema of the filtered decay (:mod:`iwan_element.identify.decays.peaks`).
+        the extrema of the filtered decay (:mod:`iwan_element.identify.decays.windows`).
     compare : bool, keyword-only
         Also run the other method in the same windows and warn where the two differ by more
         than three combined standard uncertainties (default True).
