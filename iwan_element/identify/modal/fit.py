@@ -36,7 +36,8 @@ from ...fitting import covariance
 from ..files.units import check_damping_ratio
 from ..loops.identifiability import MIN_MACRO_POINTS
 from .curves import DECAY_METHODS, AmplitudeCurve
-from .result import ModalIwanFit, model_curve
+from .model import model_curve
+from .result import ModalIwanFit
 
 __all__ = ["fit_modal_iwan", "ModalIwanFit"]
 
