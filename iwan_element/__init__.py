@@ -74,7 +74,8 @@ from .identify.loops.result import FitResult, IdentifiabilityWarning
 from .identify.loops.testdata import TestData, simulate_test
 from .identify.modal.curves import AmplitudeCurve
 from .identify.modal.fit import ModalIwanFit, fit_modal_iwan
-from .identify.modal.targets import ModalTargets, ModeTarget, mac
+from .identify.modal.mode_target import ModeTarget, mac
+from .identify.modal.targets import ModalTargets
 from .identify.sweeps.frf_modes import frf_modes, sweep_modes
 from .identify.sweeps.stepped_sine import stepped_sine_curve
 from .identify.sweeps.sweep import sweep_curve

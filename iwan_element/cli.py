@@ -80,14 +80,8 @@ def _add_record_args(parser, *, many: bool = False) -> None:
     parser.add_argument("--delimiter", help="field separator (default: guessed)")
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """The argument parser (subcommands; more will be added, e.g. ``diagnose``)."""
-    from . import __version__
-
-    parser = _Parser(prog=PROG, description="Segalman's four-parameter Iwan bolted-joint model.")
-    parser.add_argument("--version", action="version", version=f"{PROG} {__version__}")
-    sub = parser.add_subparsers(dest="command", metavar="<command>", parser_class=_Parser)
-    sub.required = True
+def _add_fit_command(sub):
+    """The ``fit`` command and its options."""
     fit = sub.add_parser(
         "fit",
         help="identify Fs, KT, chi, beta from a quasi-static test record (CSV)",
@@ -128,6 +122,10 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="FILE",
         help="write the result as JSON (params loadable with IwanParameters.from_dict(d['joint']))",
     )
+
+
+def _add_diagnose_command(sub):
+    """The ``diagnose`` command and its options."""
     dg = sub.add_parser(
         "diagnose",
         help="find which physical effect the Iwan fit misses (CSV test record)",
@@ -172,6 +170,18 @@ def build_parser() -> argparse.ArgumentParser:
         "--table", type=Path, metavar="CSV", help="with several records: write the table as CSV"
     )
     dg.add_argument("--progress", action="store_true", help="show a progress bar (needs tqdm)")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser (subcommands; more will be added, e.g. ``diagnose``)."""
+    from . import __version__
+
+    parser = _Parser(prog=PROG, description="Segalman's four-parameter Iwan bolted-joint model.")
+    parser.add_argument("--version", action="version", version=f"{PROG} {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="<command>", parser_class=_Parser)
+    sub.required = True
+    _add_fit_command(sub)
+    _add_diagnose_command(sub)
     return parser
 
 

@@ -20,7 +20,7 @@ from _decays import joint_case, svam_case
 
 from iwan_element import amplitude_curve
 from iwan_element.identify.decays._report import _compare
-from iwan_element.identify.decays.peaks import extrema
+from iwan_element.identify.decays.windows import extrema
 
 RATIOS = (0.8, 1.25, 1.4)
 CASES = [

@@ -20,7 +20,7 @@ from iwan_element import (
     modal_iwan_curve,
     modal_ringdown,
 )
-from iwan_element.identify.modal.result import model_curve
+from iwan_element.identify.modal.model import model_curve
 
 
 def _joint(f0=20.0, kappa=0.3, chi=-0.5, beta=0.5, phimax=1e-3):

@@ -63,7 +63,7 @@ def modal_fit_task(
     ``force`` [N per unit modal mass], the peak transient displacement [m] of the fitted
     single-mode oscillator (fixed dashpot ``2 zeta0 w0``).
     """
-    from ..identify.modal.result import full_parameters, model_curve
+    from ..identify.modal.model import full_parameters, model_curve
 
     theta = np.array([params[n] for n in names], dtype=float)
     f, z = model_curve(

@@ -26,7 +26,7 @@ from ..base.result_shape import ResultShape, panels
 from ..base.serialize import json_safe
 from ..base.validation import check_int, finite_array
 from ..core.parameters import IwanParameters
-from ..identify.loops.result import PARAM_NAMES
+from ..identify.loops.joint_verdict import PARAM_NAMES
 
 __all__ = ["ParameterUncertainty"]
 

@@ -23,7 +23,8 @@ from ...effects.engine.evaluate import Evaluator, build_element
 from ...fitting import fit_success
 from ...identify.loops.fit import fit_loops
 from ...identify.loops.identifiability import microslip_warning, min_macroslip
-from ...identify.loops.result import failure_list, quiet_fits, required_parameters, settle_verdict
+from ...identify.loops.joint_verdict import failure_list, required_parameters, settle_verdict
+from ...identify.loops.result import quiet_fits
 from . import model as M
 
 __all__ = [
@@ -189,8 +190,9 @@ def stack_fit(row, fitter, FF, F_model, t_start, *, noise_only=False):
     vals, labels = M.flat(p, effs, mdl.names, F0)
     stderr = dict(zip(M.PARAM_NAMES, se[:4].tolist()))
     at_bound = np.isclose(z, mdl.lower, atol=1e-6) | np.isclose(z, mdl.upper, atol=1e-6)
-    # the package's one identification rule (identify.result.settle_verdict): finite stderr of at
-    # most half the value (chi: of chi + 1), not at a bound (phi_max's bound is KT's)
+    # the package's one identification rule (identify.loops.joint_verdict.settle_verdict):
+    # finite stderr of at most half the value (chi: of chi + 1), not at a bound (phi_max's
+    # bound is KT's)
     ranges = {}
     ident, settle_warns = settle_verdict(
         {

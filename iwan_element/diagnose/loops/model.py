@@ -15,8 +15,9 @@ from ...core.parameters import IwanParameters
 from ...effects import EFFECTS
 from ...effects.engine.evaluate import Evaluator, scale_effect
 from ...fitting import covariance
+from ...identify.loops.joint_verdict import joint_table
 from ...identify.loops.noise import integrated_time
-from ...identify.loops.result import FitResult, joint_table
+from ...identify.loops.result import FitResult
 
 __all__ = ["LoopModel", "PARAM_NAMES", "CHI_BOUNDS", "BETA_MAX", "PHI_RANGE", "START_GRID", "jumps"]
 
@@ -391,9 +392,10 @@ def make_fit_result(
     *, params: IwanParameters, stderr: dict, identified: dict, correlation, fixed=(), **kw
 ) -> FitResult:
     """A :class:`FitResult` from the fitted joint, its standard errors, verdicts and
-    correlation (gathered into its parameter table, :func:`identify.result.joint_table`) and
-    the other fields this module knows (others left at None/defaults), so a change of the
-    fit module's result fields does not break the diagnosis.
+    correlation (gathered into its parameter table,
+    :func:`identify.loops.joint_verdict.joint_table`) and the other fields this module knows
+    (others left at None/defaults), so a change of the fit module's result fields does not
+    break the diagnosis.
     """
     kw["params"] = joint_table(params, stderr, identified, fixed=fixed, correlation=correlation)
     args = {}

@@ -16,7 +16,7 @@ from scipy.integrate import cumulative_simpson
 from scipy.interpolate import CubicSpline
 
 from ...fitting import normal_inverse
-from ..modal.result import model_curve
+from ..modal.model import model_curve
 from ._filter import _analytic_signal
 
 _GRID = 2000  # log-amplitude grid of the quadrature

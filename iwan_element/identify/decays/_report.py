@@ -119,13 +119,8 @@ def _compare(rows_a, rows_b, names):
     )
 
 
-def _finish(tt, fits, stops, info, opts):
-    """The curve, its notes and its warnings from the window estimates."""
-    main, other, wins, names = fits
-    stop, odd_stop = stops
-    lo, hi, order, f_peak, fs, n_start, n_end, i_pk, noise, how, snr_min, k_pow, route = info[:13]
-    env_start = info[13]
-    max_zstd, compare, plan = opts
+def _kept_rows(main, names, max_zstd):
+    """The windows with an estimate, without those too uncertain, and their warnings."""
     keep = [i for i, r in enumerate(main) if r is not None]
     warns = []
     if len(keep) < len(main):
@@ -146,24 +141,22 @@ def _finish(tt, fits, stops, info, opts):
                 f"than {100 * max_zstd:g} %; leave max_damping_ratio_std unset to keep them "
                 "with their uncertainty"
             )
-    a = np.array(rows)
-    w_ref = 2 * math.pi * float(a[-1, 1])
-    floor = snr_min * noise / w_ref**k_pow
-    noise_stop = stop.startswith("envelope") or "of the noise" in stop
-    if odd_stop:
-        warns.append(
-            f"the curve stopped early at {a[-1, 0]:.3g} m ({a[-1, 0] / floor:.3g} x the "
-            f"noise floor), not because of noise: {stop}"
-        )
-    prec = _precision_warning(a)
-    if prec:
-        warns.append(prec)
+    return keep, rows, warns
+
+
+def _start_amplitude(a, wins, keep, tt, i_pk, fs, f_peak, env_start, k_pow):
+    """The displacement amplitude at the decay's start [m]."""
     # the amplitude at the decay's start, from the first point and its decay rate
     s0, e0 = wins[keep[0]]
     t_c0 = 0.5 * (tt[s0] + tt[e0 - 1])
     x_start = float(a[0, 0] * math.exp(2 * math.pi * a[0, 1] * a[0, 2] * (t_c0 - tt[i_pk])))
     per = int(round(fs / f_peak))  # or the (spoiled) envelope in the first period
     x_start = max(x_start, float(np.max(env_start[:per])) / (2 * math.pi * a[0, 1]) ** k_pow)
+    return x_start
+
+
+def _decay_points(a, x_start, n_start, fs, stop, noise_stop, plan, warns):
+    """A warning when the decay's first decade holds fewer than ``_MIN_POINTS`` points."""
     n_dec = int(np.count_nonzero(a[:, 0] >= 0.1 * x_start))
     if n_dec < _MIN_POINTS:
         trim_np = float(n_start / fs * 2 * math.pi * a[0, 1] * a[0, 2])
@@ -178,6 +171,40 @@ def _finish(tt, fits, stops, info, opts):
                 plan.hop,
             )
         )
+
+
+def _filter_text(route, fs):
+    """How the band-pass ran: zero-phase, or twice backwards in time."""
+    return (
+        "zero-phase (sosfiltfilt)"
+        if route[0]
+        else "run twice backwards in time (sosfilt "
+        f"on the reversed record, moved back by the group delay, {route[1] / fs:.4g} s)"
+    )
+
+
+def _finish(tt, fits, stops, info, opts):
+    """The curve, its notes and its warnings from the window estimates."""
+    main, other, wins, names = fits
+    stop, odd_stop = stops
+    lo, hi, order, f_peak, fs, n_start, n_end, i_pk, noise, how, snr_min, k_pow, route = info[:13]
+    env_start = info[13]
+    max_zstd, compare, plan = opts
+    keep, rows, warns = _kept_rows(main, names, max_zstd)
+    a = np.array(rows)
+    w_ref = 2 * math.pi * float(a[-1, 1])
+    floor = snr_min * noise / w_ref**k_pow
+    noise_stop = stop.startswith("envelope") or "of the noise" in stop
+    if odd_stop:
+        warns.append(
+            f"the curve stopped early at {a[-1, 0]:.3g} m ({a[-1, 0] / floor:.3g} x the "
+            f"noise floor), not because of noise: {stop}"
+        )
+    prec = _precision_warning(a)
+    if prec:
+        warns.append(prec)
+    x_start = _start_amplitude(a, wins, keep, tt, i_pk, fs, f_peak, env_start, k_pow)
+    _decay_points(a, x_start, n_start, fs, stop, noise_stop, plan, warns)
     share = _overlap([wins[i] for i in keep][: len(rows)])
     overlap = float(np.mean(share))
     cmp_note = ""
@@ -187,12 +214,7 @@ def _finish(tt, fits, stops, info, opts):
         )
         if cmp_warn:
             warns.append(cmp_warn)
-    how_f = (
-        "zero-phase (sosfiltfilt)"
-        if route[0]
-        else "run twice backwards in time (sosfilt "
-        f"on the reversed record, moved back by the group delay, {route[1] / fs:.4g} s)"
-    )
+    how_f = _filter_text(route, fs)
     notes = (
         f"band {lo:g}-{hi:g} Hz, Butterworth order {order} {how_f}, on the record "
         f"continued past its ends by linear prediction; mode at "

@@ -79,9 +79,8 @@ from ...base.validation import check_magnitude, check_scalar, check_uniform_time
 from ..modal.curves import DECAY_METHODS
 from ._filter import _decay_signal, _drift_terms, _noise_bandwidth
 from ._report import _finish
-from ._windows import WindowPlan, _noise_std, drift_correct, hilbert_windows
-from .peaks import pff_windows
 from .saturation import cut_clipping, cut_flattened_peaks
+from .windows import WindowPlan, _noise_std, drift_correct, hilbert_windows, pff_windows
 
 __all__ = ["amplitude_curve"]
 
@@ -278,6 +277,68 @@ def _check_options(quantity, order, n_periods, window, snr_min, max_damping_rati
     return n_periods, window, snr_min, max_damping_ratio_std
 
 
+def _check_length(i0, i1, n_start, n_end, plan, fs):
+    """Refuse a record whose trimmed span is shorter than one window."""
+    if i1 - i0 < (plan.n_max if plan.fixed else plan.n_min):
+        raise ValueError(
+            f"record too short: after trimming {n_start / fs:.3g} s of filter end "
+            f"effects at the start and {n_end / fs:.3g} s at the end, "
+            f"{max(i1 - i0, 0) / fs:.3g} s remain, less than one window "
+            f"({(plan.n_max if plan.fixed else plan.n_min) / fs:.3g} s); give a "
+            "longer record, a wider band or a shorter window"
+        )
+
+
+def _noise(yf, z, env, sos, fs, f_peak, plan, i_pk, i0, i1, n_start):
+    """The in-band noise RMS and how it was found, and the filter's noise bandwidth."""
+    # noise windows of 20 periods (at least 10 / B): each bound rests on enough independent
+    # samples for the median of the lower half not to undershoot; at least three windows
+    bw = _noise_bandwidth(sos, fs)
+    nw_noise = int(max(min(max(20 * fs / f_peak, 10 * fs / bw), (i1 - i0) / 3), plan.n_min))
+    noise, how = _noise_rms(yf, z, fs, (i_pk, i0, i1, n_start, nw_noise), f_peak)
+    noise = max(noise, 1e-7 * float(env[i0:i1].max()))
+    return bw, noise, how
+
+
+def _check_windows(rows, stop, i0, i1, n_start, n_end, fs, band, snr_min, noise):
+    """Refuse a record without one usable window, saying why (too short, or no signal)."""
+    lo, hi = band
+    if not rows and stop.startswith("end"):
+        raise ValueError(
+            f"record too short: after trimming {n_start / fs:.3g} s of filter end "
+            f"effects at the start and {n_end / fs:.3g} s at the end, "
+            f"{(i1 - i0) / fs:.3g} s remain, not enough for one window that follows "
+            f"the decay (0.5 nepers of it, at least 3 periods, at least half of it "
+            "inside the record); give a longer record or a fixed, shorter window "
+            "(n_periods)"
+        )
+    if not rows:
+        raise ValueError(
+            f"no usable window in band ({lo:g}, {hi:g}) Hz after the trimmed start: "
+            f"{stop}; the signal does not rise above {snr_min:g} x the in-band noise "
+            f"({noise:.3g} in units of y) or holds no decaying mode there"
+        )
+
+
+def _drift_corrected(tt, yf, rows, wins, method, compare, k_pow, sos, fs, route, noise, bw):
+    """The peak-fit windows when asked for, and both estimates corrected for drift."""
+    pff = (
+        pff_windows(
+            tt, yf, wins, (k_pow, sos, fs, route), lambda amp, T: _noise_std(noise, amp, T, bw)
+        )
+        if (method == "pff" or compare)
+        else None
+    )
+
+    def terms(w):
+        return _drift_terms(sos, fs, w, route[0])
+
+    rows = drift_correct(rows, k_pow, terms)
+    if pff is not None:
+        pff = drift_correct(pff, k_pow, terms)
+    return rows, pff
+
+
 def amplitude_curve(
     t,
     y,
@@ -327,7 +388,7 @@ def amplitude_curve(
         its stated uncertainty.
     method : {"hilbert", "pff"}, keyword-only
         Envelope and phase of the analytic signal (default), or peak finding and fitting on
-        the extrema of the filtered decay (:mod:`iwan_element.identify.decays.peaks`).
+        the extrema of the filtered decay (:mod:`iwan_element.identify.decays.windows`).
     compare : bool, keyword-only
         Also run the other method in the same windows and warn where the two differ by more
         than three combined standard uncertainties (default True).
@@ -372,22 +433,10 @@ def amplitude_curve(
     sos, yf, z, (n_start, n_end), i_pk, route = _decay_signal(yy, fs, lo, hi, int(order))
     plan = _plan(fs, f_peak, n_periods, window)
     i0, i1 = i_pk + n_start, n - n_end
-    if i1 - i0 < (plan.n_max if plan.fixed else plan.n_min):
-        raise ValueError(
-            f"record too short: after trimming {n_start / fs:.3g} s of filter end "
-            f"effects at the start and {n_end / fs:.3g} s at the end, "
-            f"{max(i1 - i0, 0) / fs:.3g} s remain, less than one window "
-            f"({(plan.n_max if plan.fixed else plan.n_min) / fs:.3g} s); give a "
-            "longer record, a wider band or a shorter window"
-        )
+    _check_length(i0, i1, n_start, n_end, plan, fs)
     env = np.abs(z)
     phase = np.unwrap(np.angle(z))
-    # noise windows of 20 periods (at least 10 / B): each bound rests on enough independent
-    # samples for the median of the lower half not to undershoot; at least three windows
-    bw = _noise_bandwidth(sos, fs)
-    nw_noise = int(max(min(max(20 * fs / f_peak, 10 * fs / bw), (i1 - i0) / 3), plan.n_min))
-    noise, how = _noise_rms(yf, z, fs, (i_pk, i0, i1, n_start, nw_noise), f_peak)
-    noise = max(noise, 1e-7 * float(env[i0:i1].max()))
+    bw, noise, how = _noise(yf, z, env, sos, fs, f_peak, plan, i_pk, i0, i1, n_start)
     n_block = max(1, int(round(fs / f_peak)), int(round(fs / bw)))
     rows, wins, stop, odd_stop = hilbert_windows(
         tt,
@@ -398,35 +447,10 @@ def amplitude_curve(
         (noise, snr_min, bw, n_block),
         (k_pow, (lo, hi), sos, fs, route),
     )
-    if not rows and stop.startswith("end"):
-        raise ValueError(
-            f"record too short: after trimming {n_start / fs:.3g} s of filter end "
-            f"effects at the start and {n_end / fs:.3g} s at the end, "
-            f"{(i1 - i0) / fs:.3g} s remain, not enough for one window that follows "
-            f"the decay (0.5 nepers of it, at least 3 periods, at least half of it "
-            "inside the record); give a longer record or a fixed, shorter window "
-            "(n_periods)"
-        )
-    if not rows:
-        raise ValueError(
-            f"no usable window in band ({lo:g}, {hi:g}) Hz after the trimmed start: "
-            f"{stop}; the signal does not rise above {snr_min:g} x the in-band noise "
-            f"({noise:.3g} in units of y) or holds no decaying mode there"
-        )
-    pff = (
-        pff_windows(
-            tt, yf, wins, (k_pow, sos, fs, route), lambda amp, T: _noise_std(noise, amp, T, bw)
-        )
-        if (method == "pff" or compare)
-        else None
+    _check_windows(rows, stop, i0, i1, n_start, n_end, fs, (lo, hi), snr_min, noise)
+    rows, pff = _drift_corrected(
+        tt, yf, rows, wins, method, compare, k_pow, sos, fs, route, noise, bw
     )
-
-    def terms(w):
-        return _drift_terms(sos, fs, w, route[0])
-
-    rows = drift_correct(rows, k_pow, terms)
-    if pff is not None:
-        pff = drift_correct(pff, k_pow, terms)
     names = (method, "pff" if method == "hilbert" else "hilbert")
     main, other = (rows, pff) if method == "hilbert" else (pff, rows)
     curve = _finish(

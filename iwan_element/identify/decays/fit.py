@@ -60,124 +60,14 @@ from scipy import stats
 
 from ...base.progress import finish, progress_bar, tick
 from ...base.threads import one_blas_thread
-from ...base.validation import check_magnitude, check_scalar, check_uniform_time, finite_array
-from ..modal.fit import fit_modal_iwan
+from ...base.validation import check_scalar
 from ..modal.result import ModalIwanFit
-from ._fit_model import (
-    _covariance,
-    _fit_regime,
-    _local_weights,
-    _misfit_ratio,
-    _neighbours,
-    _Objective,
-    _polar,
-    _Problem,
-)
-from .curve import _check_band
-from .saturation import cut_clipping, cut_flattened_peaks
+from ._fit_model import _covariance, _fit_regime, _local_weights, _misfit_ratio, _Objective
+from ._fit_prepare import _prepare, _starts, _window_curve
 
 __all__ = ["fit_decay"]
 
 log = logging.getLogger(__name__)
-
-_QUANTITY_POWER = {"displacement": 0, "velocity": 1, "acceleration": 2}
-
-
-def _windows(prob, i_a, i_b, nw):
-    """Local decaying-sinusoid fits in consecutive windows of ``nw`` samples.
-
-    Returns rows ``(i_centre, envelope, sigma, w_d, phase, rms|z - local model|, rms|z|)``
-    at the window centres (start values, noise and the data summary of the result; the fit
-    itself does not use them).
-    """
-    rows = []
-    tw = (np.arange(nw) - 0.5 * (nw - 1)) / prob.fs
-    for s in range(i_a, i_b - nw + 1, nw):
-        zw = prob.z[s : s + nw]
-        lnA, ph = _polar(zw)
-        ca = np.polyfit(tw, lnA, 1)
-        cp = np.polyfit(tw, ph, 1)
-        res = np.abs(zw - np.exp(np.polyval(ca, tw) + 1j * np.polyval(cp, tw)))
-        rows.append(
-            (
-                s + 0.5 * (nw - 1),
-                math.exp(ca[1]),
-                -ca[0],
-                cp[0],
-                cp[1],
-                float(np.sqrt(np.mean(res**2))),
-                float(np.sqrt(np.mean(np.abs(zw) ** 2))),
-            )
-        )
-    return np.array(rows).reshape(-1, 7)
-
-
-def _summary(prob, rows):
-    """Window estimates as a curve: displacement amplitude [m], frequency [Hz], zeta."""
-    wn = np.hypot(rows[:, 2], rows[:, 3])
-    ok = (rows[:, 2] > 0) & (wn > 2 * math.pi * prob.band[0]) & (wn < 2 * math.pi * prob.band[1])
-    return rows[ok, 1] / wn[ok] ** prob.k, wn[ok] / (2 * math.pi), rows[ok, 2] / wn[ok]
-
-
-def _starts(X, f, zeta, conv):
-    """Curve start values from the modal Iwan fit of the window estimates (microslip ones,
-    and the full vector when that fit leaves microslip) and a near-linear mode.
-    """
-    starts, full = [], None
-    if X.size >= 4 and np.unique(np.round(np.log(X), 6)).size >= 3:
-        try:
-            fit = fit_modal_iwan(
-                X,
-                f,
-                np.maximum(zeta, 1e-7),
-                stiffness=conv["stiffness"],
-                floor=conv["floor"],
-                x_ref=conv["x_ref"],
-                damping_form="decay",
-            )
-            p = fit.parameters
-            if fit.regime == "microslip":
-                starts.append(np.array(fit.values, dtype=float))
-            elif fit.regime == "macroslip":
-                full = np.array(fit.values, dtype=float)
-                delta = (
-                    p["kappa"]
-                    * (conv["x_ref"] / p["phi_max"]) ** (p["chi"] + 1)
-                    / ((p["chi"] + 2) * (1 + p["beta"]))
-                )
-                starts.append(np.array([p["f0"], p["zeta0"], p["chi"], min(delta, 0.5)]))
-        except ValueError:
-            pass
-    zmin = float(np.min(zeta)) if zeta.size else 1e-3
-    for x in starts:  # keep chi off the corner chi -> -1 where f0 and delta trade
-        x[2] = min(max(x[2], -0.8), 0.8)
-    starts.append(
-        np.array(
-            [
-                float(np.max(f)) * 1.00001,
-                0.8 * max(zmin, 1e-6),
-                -0.5,
-                max(1.0 - (np.median(f) / np.max(f)) ** 2, 1e-6),
-            ]
-        )
-    )
-    return starts, full
-
-
-def _decay_start(prob, t_start, t0):
-    """Working-rate index of the start of the free decay: given, else the first sample above
-    0.3 of the record's largest magnitude (an impact or a release), taken as the record's
-    start when it is within the first period (a release, or a record cropped in the decay,
-    whose first samples may be near a zero crossing).
-    """
-    if t_start is not None:
-        t_end = t0 + (prob.n - 1) / prob.fs
-        t_start = check_scalar("t_start", t_start, low=t0, high=t_end)
-        return int(round((t_start - t0) * prob.fs))
-    mag = np.abs(prob.y)
-    i_on = int(np.argmax(mag > 0.3 * mag.max()))
-    period = prob.fs / math.sqrt(prob.band[0] * prob.band[1])
-    return 0 if i_on <= period else i_on
 
 
 def _full_starts(micro_x, X_max, x_ref, curve_full):
@@ -207,105 +97,6 @@ def _microslip_saturates(x, x_ref):
     """
     chi, delta = x[2], x[3]
     return (chi + 2.0) * delta * (math.exp(x[-2]) / x_ref) ** (chi + 1.0) >= 1.0
-
-
-def _check_options(quantity, order, stiffness, floor):
-    if quantity not in _QUANTITY_POWER:
-        raise ValueError(f"quantity must be one of {sorted(_QUANTITY_POWER)}, got {quantity!r}")
-    if isinstance(order, bool) or not isinstance(order, (int, np.integer)) or not 1 <= order <= 10:
-        raise ValueError(f"order must be an integer in [1, 10], got {order!r}")
-    if stiffness not in ("harmonic", "secant"):
-        raise ValueError(f"stiffness must be 'harmonic' or 'secant', got {stiffness!r}")
-    if floor not in ("dashpot", "constant"):
-        raise ValueError(f"floor must be 'dashpot' or 'constant', got {floor!r}")
-
-
-def _prepare(t, y, quantity, band, order, stiffness, floor, x_ref, t_start):
-    """Checks, analytic signal, start of the decay, first span and start values."""
-    yy = check_magnitude("y", finite_array("y", y))
-    if yy.size < 64:
-        raise ValueError(f"y must have at least 64 samples, got {yy.size}")
-    tt, dt = check_uniform_time(t, yy.size)
-    check_magnitude("t", tt, unit="s")
-    tt, yy, clip_note = cut_clipping(tt, yy)
-    _check_options(quantity, order, stiffness, floor)
-    lo, hi = _check_band(band, 1.0 / dt)
-    if hi * dt < 1e-5:
-        raise ValueError(
-            f"band ({lo:g}, {hi:g}) Hz is below 1e-5 of the sampling rate "
-            f"{1.0 / dt:.3g} Hz (from t): check the unit of t"
-        )
-    tt, yy, flat_note = cut_flattened_peaks(tt, yy, (lo, hi))
-    clip_note = " ".join(x for x in (clip_note, flat_note) if x)
-    conv = dict(
-        stiffness=stiffness,
-        floor=floor,
-        x_ref=None,
-        damping_form="decay",
-        method="direct signal fit",
-        quantity=quantity,
-        band=[lo, hi],
-        order=int(order),
-    )
-    prob = _Problem(yy - yy.mean(), 1.0 / dt, (lo, hi), int(order), _QUANTITY_POWER[quantity], conv)
-    fs = prob.fs
-    i_s = prob.i_s = _decay_start(prob, t_start, float(tt[0]))
-    nw = max(16, int(round(2.0 * fs / math.sqrt(lo * hi))))  # two periods
-    env = np.convolve(np.abs(prob.z), np.ones(nw) / nw, mode="same")
-    i_top = i_s + int(np.argmax(env[i_s:]))  # the filter spreads the start
-    low = np.flatnonzero(env[i_top:] < 0.05 * env[i_top])
-    i_a = prob.n if low.size == 0 else i_top + int(low[0])
-    X, f, zeta, rows = _window_curve(prob, i_s, i_a, nw)
-    if X.size == 0 or i_a - i_s < nw:
-        raise ValueError(
-            f"no decaying mode in band ({lo:g}, {hi:g}) Hz after "
-            f"t = {tt[0] + i_s / fs:.4g} s (record too short or no clear mode)"
-        )
-    conv["x_ref"] = (
-        float(np.exp(np.mean(np.log(X))))
-        if x_ref is None
-        else check_scalar("x_ref", x_ref, low=0.0, low_open=True)
-    )
-    m = prob.n_trim
-    first = rows[0] if rows[0, 0] > m or i_s >= m else rows[int(np.argmax(rows[:, 1]))]
-    wn = math.hypot(first[2], first[3])
-    tc = (first[0] - i_s) / fs
-    nuis = [
-        math.log(first[1] / wn**prob.k) + max(first[2], 0.0) * tc,
-        first[4] - first[3] * tc - prob.k * math.asin(min(max(first[2] / wn, 0.0), 0.5)),
-    ]
-    prob.nb_starts = _neighbours(prob, i_s)
-    prob.nb = len(prob.nb_starts)
-    nuis = [v for nb in prob.nb_starts for v in nb] + nuis
-    return (
-        prob,
-        conv,
-        dict(
-            clip_note=clip_note,
-            t0=float(tt[0]),
-            i_s=i_s,
-            i_top=i_top,
-            i_a=i_a,
-            env=env,
-            nw=nw,
-            nuis=nuis,
-            data=(X, f, zeta),
-        ),
-    )
-
-
-def _window_curve(prob, i_s, i_b, nw):
-    """Window estimates over ``[i_s, i_b)``, clear of the filter's end effects
-    where possible (the fit itself models it): start values and the plot's data.
-    """
-    m = prob.n_trim
-    a, b = (
-        (max(i_s, m), min(i_b, prob.n - m))
-        if min(i_b, prob.n - m) - max(i_s, m) >= 2 * nw
-        else (i_s, i_b)
-    )
-    rows = _windows(prob, a, b, max(nw, (b - a) // 16))  # at most 16 windows
-    return (*_summary(prob, rows), rows)
 
 
 def _span(prob, info, i_b, spc):
@@ -479,6 +270,79 @@ def _fit_models(prob, info, alpha, snr_min, spc, bar=None):
     return chosen, span
 
 
+def _describe_span(prob, conv, info, span, best):
+    """The fitted span into ``conv`` (times, samples, noise, amplitudes, neighbour modes),
+    with a warning when the amplitude hardly changes over it; the number of model parameters.
+    """
+    regime, warns, i_s, i_b = span["regime"], span["warns"], info["i_s"], span["i_b"]
+    t0 = info["t0"]
+    n_th = best.x.size - prob.n_nuis
+    a_end = float(
+        np.exp(
+            prob.trajectory(
+                best.x[:n_th], regime, best.x[-2], np.array([(i_b - 1 - i_s) / prob.fs])
+            )[0, 0]
+        )
+    )
+    conv.update(
+        t_fit=[t0 + i_s / prob.fs, t0 + (i_b - 1) / prob.fs],
+        samples=int(span["idx"].size),
+        sample_step=float(span["step"] / prob.fs),
+        noise_rms=span["noise"] / math.sqrt(2.0),
+        correlation_factor=float(span["kappa"]),
+        residual_dof=float(span["dof"][0]),
+        noise_dof=float(span["dof"][1]),
+        amplitude_range=[math.exp(best.x[-2]), a_end],
+        neighbour_modes=[
+            dict(frequency=float(v[0]), decay_rate=float(v[1]))
+            for v in best.x[n_th : n_th + 4 * prob.nb].reshape(-1, 4)
+        ],
+    )
+    if best.x[-2] - math.log(a_end) < 0.1:
+        change = 100 * (math.exp(best.x[-2]) / a_end - 1)
+        warns.append(
+            f"the amplitude changes by only {change:.2g} % over the fitted span: the "
+            "amplitude dependence rests on very little"
+        )
+    return n_th
+
+
+def _decay_fit_result(prob, conv, info, span, best, n_th):
+    """The window estimates over the fitted span as data, and the :class:`ModalIwanFit`
+    (not a success when a guard holds).
+    """
+    X, f, zeta, _ = _window_curve(prob, info["i_s"], span["i_b"], info["nw"])
+    data = dict(
+        amplitude=X,
+        frequency=f,
+        damping_ratio=zeta,
+        frequency_std=np.full(X.size, np.nan),
+        damping_ratio_std=np.full(X.size, np.nan),
+    )
+    fit = ModalIwanFit.from_solution(
+        best.x[:n_th],
+        span["cov"][:n_th, :n_th],
+        span["regime"],
+        data,
+        conv,
+        chi2_red=span["chi2_red"],
+        weights=(),
+        warnings=tuple(w for w in [info["clip_note"]] + span["warns"] if w),
+        optimizer_ok=bool(best.success),
+        noise_dof=span["dof"][1],
+        noise_source=(
+            " (the record holds few independent noise samples "
+            "beyond what the fit absorbs; a longer record, a "
+            "wider band or less noise would help)"
+        ),
+    )
+    if span["guard"]:
+        fit = dataclasses.replace(
+            fit, success=False, failures=tuple(span["guard"]) + fit.failure_reasons()
+        )
+    return fit
+
+
 def fit_decay(
     t,
     y,
@@ -576,64 +440,7 @@ def fit_decay(
         tick(bar, text="uncertainty")
     finally:
         finish(bar)
-    regime, warns, i_s, i_b = span["regime"], span["warns"], info["i_s"], span["i_b"]
-    t0 = info["t0"]
-    n_th = best.x.size - prob.n_nuis
-    a_end = float(
-        np.exp(
-            prob.trajectory(
-                best.x[:n_th], regime, best.x[-2], np.array([(i_b - 1 - i_s) / prob.fs])
-            )[0, 0]
-        )
-    )
-    conv.update(
-        t_fit=[t0 + i_s / prob.fs, t0 + (i_b - 1) / prob.fs],
-        samples=int(span["idx"].size),
-        sample_step=float(span["step"] / prob.fs),
-        noise_rms=span["noise"] / math.sqrt(2.0),
-        correlation_factor=float(span["kappa"]),
-        residual_dof=float(span["dof"][0]),
-        noise_dof=float(span["dof"][1]),
-        amplitude_range=[math.exp(best.x[-2]), a_end],
-        neighbour_modes=[
-            dict(frequency=float(v[0]), decay_rate=float(v[1]))
-            for v in best.x[n_th : n_th + 4 * prob.nb].reshape(-1, 4)
-        ],
-    )
-    if best.x[-2] - math.log(a_end) < 0.1:
-        change = 100 * (math.exp(best.x[-2]) / a_end - 1)
-        warns.append(
-            f"the amplitude changes by only {change:.2g} % over the fitted span: the "
-            "amplitude dependence rests on very little"
-        )
-    X, f, zeta, _ = _window_curve(prob, i_s, i_b, info["nw"])
-    data = dict(
-        amplitude=X,
-        frequency=f,
-        damping_ratio=zeta,
-        frequency_std=np.full(X.size, np.nan),
-        damping_ratio_std=np.full(X.size, np.nan),
-    )
-    fit = ModalIwanFit.from_solution(
-        best.x[:n_th],
-        span["cov"][:n_th, :n_th],
-        regime,
-        data,
-        conv,
-        chi2_red=span["chi2_red"],
-        weights=(),
-        warnings=tuple(w for w in [info["clip_note"]] + warns if w),
-        optimizer_ok=bool(best.success),
-        noise_dof=span["dof"][1],
-        noise_source=(
-            " (the record holds few independent noise samples "
-            "beyond what the fit absorbs; a longer record, a "
-            "wider band or less noise would help)"
-        ),
-    )
-    if span["guard"]:
-        fit = dataclasses.replace(
-            fit, success=False, failures=tuple(span["guard"]) + fit.failure_reasons()
-        )
+    n_th = _describe_span(prob, conv, info, span, best)
+    fit = _decay_fit_result(prob, conv, info, span, best, n_th)
     log.debug("fit_decay: %s", conv)
     return fit

@@ -57,7 +57,8 @@ import numpy as np
 from scipy import signal
 
 from ...base.validation import check_magnitude, check_scalar, check_uniform_time, finite_array
-from ..modal.targets import ModalTargets, ModeTarget
+from ..modal.mode_target import ModeTarget
+from ..modal.targets import ModalTargets
 from ._mode_window import _auto_windows, _band_pass, _linear, _NoWindow, _propagate, _try_window
 
 __all__ = ["free_decay_modes"]

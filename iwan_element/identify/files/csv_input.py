@@ -127,6 +127,62 @@ def _header_units(header, idx, given: dict) -> dict:
     return units
 
 
+def _check_given_units(given):
+    """Each unit given by the caller checked against its table."""
+    for q, table in (
+        ("time", TIME_UNITS),
+        ("displacement", DISPLACEMENT_UNITS),
+        ("force", FORCE_UNITS),
+    ):
+        if given[q] is not None:
+            _unit_factor(q, given[q], table)
+
+
+def _data_lines(p):
+    """The file's non-blank, non-comment lines with their line numbers."""
+    try:
+        text = p.read_text(encoding="utf-8-sig")  # tolerate a byte-order mark
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ValueError(f"cannot read {str(p)!r}: {exc}") from None
+    lines = [
+        (k + 1, ln)
+        for k, ln in enumerate(text.splitlines())
+        if ln.strip() and not ln.lstrip().startswith("#")
+    ]
+    if not lines:
+        raise ValueError(f"{str(p)!r} contains no data lines")
+    return lines
+
+
+def _numbers(lines, fields, idx, p):
+    """The time, displacement and force columns as numbers, each finite."""
+    data = np.empty((len(lines), 3))
+    for r, (lineno, line) in enumerate(lines):
+        row = fields(line)
+        for j, k in enumerate(idx):
+            try:
+                data[r, j] = float(row[k])
+            except IndexError:
+                raise ValueError(
+                    f"line {lineno} of {str(p)!r} has {len(row)} fields; column "
+                    f"{k} ({_QUANTITIES[j]}) is missing"
+                ) from None
+            except ValueError:
+                raise ValueError(
+                    f"line {lineno} of {str(p)!r}: {_QUANTITIES[j]} value "
+                    f"{row[k]!r} is not a number"
+                ) from None
+    for j, q in enumerate(_QUANTITIES):
+        bad = ~np.isfinite(data[:, j])
+        if bad.any():
+            lineno = lines[int(np.flatnonzero(bad)[0])][0]
+            raise ValueError(
+                f"the {q} column contains NaN or infinite values (first at line "
+                f"{lineno} of {str(p)!r})"
+            )
+    return data
+
+
 def load_test(
     path: str | PathLike,
     *,
@@ -179,25 +235,9 @@ def load_test(
         an all-zero force column, a constant displacement, or fewer than two cycles.
     """
     given = {"time": time_unit, "displacement": displacement_unit, "force": force_unit}
-    for q, table in (
-        ("time", TIME_UNITS),
-        ("displacement", DISPLACEMENT_UNITS),
-        ("force", FORCE_UNITS),
-    ):
-        if given[q] is not None:
-            _unit_factor(q, given[q], table)
+    _check_given_units(given)
     p = Path(path)
-    try:
-        text = p.read_text(encoding="utf-8-sig")  # tolerate a byte-order mark
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ValueError(f"cannot read {str(p)!r}: {exc}") from None
-    lines = [
-        (k + 1, ln)
-        for k, ln in enumerate(text.splitlines())
-        if ln.strip() and not ln.lstrip().startswith("#")
-    ]
-    if not lines:
-        raise ValueError(f"{str(p)!r} contains no data lines")
+    lines = _data_lines(p)
     if delimiter is None:
         first = lines[0][1]
         delimiter = next((d for d in (",", ";", "\t") if d in first), None)
@@ -224,30 +264,7 @@ def load_test(
     ft = _unit_factor("time", units["time"], TIME_UNITS)
     fu = _unit_factor("displacement", units["displacement"], DISPLACEMENT_UNITS)
     ff = _unit_factor("force", units["force"], FORCE_UNITS)
-    data = np.empty((len(lines), 3))
-    for r, (lineno, line) in enumerate(lines):
-        row = fields(line)
-        for j, k in enumerate(idx):
-            try:
-                data[r, j] = float(row[k])
-            except IndexError:
-                raise ValueError(
-                    f"line {lineno} of {str(p)!r} has {len(row)} fields; column "
-                    f"{k} ({_QUANTITIES[j]}) is missing"
-                ) from None
-            except ValueError:
-                raise ValueError(
-                    f"line {lineno} of {str(p)!r}: {_QUANTITIES[j]} value "
-                    f"{row[k]!r} is not a number"
-                ) from None
-    for j, q in enumerate(_QUANTITIES):
-        bad = ~np.isfinite(data[:, j])
-        if bad.any():
-            lineno = lines[int(np.flatnonzero(bad)[0])][0]
-            raise ValueError(
-                f"the {q} column contains NaN or infinite values (first at line "
-                f"{lineno} of {str(p)!r})"
-            )
+    data = _numbers(lines, fields, idx, p)
     if not np.any(data[:, 2] != 0.0):
         raise ValueError(f"the force column of {str(p)!r} is all zero")
     units = {q: u.strip() for q, u in units.items()}

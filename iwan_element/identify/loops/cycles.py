@@ -227,6 +227,54 @@ def _loop_area(u: np.ndarray, F: np.ndarray) -> float:
     return float(0.5 * np.sum((FF[1:] + FF[:-1]) * np.diff(uu)))
 
 
+def _reversal_peaks(tt, uu, FF, rev):
+    """The refined ``(u, F)`` at every reversal."""
+    sigma = _noise_sigma(uu)
+    # refined (u, F) at every reversal; the window may reach halfway to the neighbours
+    peaks = []
+    bounds = np.concatenate([[0], rev, [uu.size - 1]])
+    for k, i in enumerate(rev):
+        lo = (bounds[k] + i) // 2
+        hi = (i + bounds[k + 2]) // 2
+        sign = 1.0 if uu[i] >= uu[bounds[k + 2]] else -1.0
+        rng_local = (
+            abs(uu[i] - uu[bounds[k + 2]]) if k + 1 < rev.size else abs(uu[i] - uu[bounds[k]])
+        )
+        band = max(0.02 * rng_local, 3.0 * sigma)
+        peaks.append(_refine_peak(tt, uu, FF, int(i), int(lo), int(hi), band, sign))
+    return peaks
+
+
+def _raw_cycles(tt, uu, FF, rev, peaks):
+    """Each cycle from a maximum to the next: span, amplitudes, area, centre and closure."""
+    first_max = 0 if rev.size < 2 or uu[rev[0]] > uu[rev[1]] else 1
+    raw = []
+    for k in range(first_max, rev.size - 2, 2):
+        i0, i2 = rev[k], rev[k + 2]
+        (u_a, F_a), (u_b, F_b), (u_c, F_c) = peaks[k], peaks[k + 1], peaks[k + 2]
+        u0 = 0.5 * (u_a - u_b)
+        F0 = 0.5 * (F_a - F_b)
+        D = _loop_area(uu[i0 : i2 + 1], FF[i0 : i2 + 1])
+        closure = max(
+            abs(u_c - u_a) / (2.0 * u0) if u0 > 0 else math.inf,
+            abs(F_c - F_a) / (2.0 * abs(F0)) if F0 != 0 else math.inf,
+        )
+        raw.append(
+            (
+                int(i0),
+                int(i2) + 1,
+                float(tt[i0]),
+                u0,
+                F0,
+                D,
+                0.5 * (u_a + u_b),
+                0.5 * (F_a + F_b),
+                closure,
+            )
+        )
+    return raw
+
+
 def split_cycles(
     t, u, F, *, hysteresis: float | None = None, close_tol: float = 0.02, drift_tol: float = 0.05
 ) -> tuple[Cycle, ...]:
@@ -271,44 +319,8 @@ def split_cycles(
     rev = find_reversals(uu, hysteresis=h)
     if rev.size == 0:
         return ()
-    sigma = _noise_sigma(uu)
-    # refined (u, F) at every reversal; the window may reach halfway to the neighbours
-    peaks = []
-    bounds = np.concatenate([[0], rev, [uu.size - 1]])
-    for k, i in enumerate(rev):
-        lo = (bounds[k] + i) // 2
-        hi = (i + bounds[k + 2]) // 2
-        sign = 1.0 if uu[i] >= uu[bounds[k + 2]] else -1.0
-        rng_local = (
-            abs(uu[i] - uu[bounds[k + 2]]) if k + 1 < rev.size else abs(uu[i] - uu[bounds[k]])
-        )
-        band = max(0.02 * rng_local, 3.0 * sigma)
-        peaks.append(_refine_peak(tt, uu, FF, int(i), int(lo), int(hi), band, sign))
-    first_max = 0 if rev.size < 2 or uu[rev[0]] > uu[rev[1]] else 1
-    raw = []
-    for k in range(first_max, rev.size - 2, 2):
-        i0, i2 = rev[k], rev[k + 2]
-        (u_a, F_a), (u_b, F_b), (u_c, F_c) = peaks[k], peaks[k + 1], peaks[k + 2]
-        u0 = 0.5 * (u_a - u_b)
-        F0 = 0.5 * (F_a - F_b)
-        D = _loop_area(uu[i0 : i2 + 1], FF[i0 : i2 + 1])
-        closure = max(
-            abs(u_c - u_a) / (2.0 * u0) if u0 > 0 else math.inf,
-            abs(F_c - F_a) / (2.0 * abs(F0)) if F0 != 0 else math.inf,
-        )
-        raw.append(
-            (
-                int(i0),
-                int(i2) + 1,
-                float(tt[i0]),
-                u0,
-                F0,
-                D,
-                0.5 * (u_a + u_b),
-                0.5 * (F_a + F_b),
-                closure,
-            )
-        )
+    peaks = _reversal_peaks(tt, uu, FF, rev)
+    raw = _raw_cycles(tt, uu, FF, rev, peaks)
     if not raw:
         return ()
     uc_med = float(np.median([r[6] for r in raw]))

@@ -153,14 +153,10 @@ def _seed_solve(F0, D, u0, Fs, counter, *, max_newton=50):
     )
 
 
-def _fit_seed(F0, D, u0, Fs, *, t0):
-    """The seed paper's identification (sec. 2) with a microslip guard: cycles with
-    ``F0 >= 0.99 Fs`` (at or near the macroslip plateau) are left out, and cycles whose
-    measured ``u0`` exceeds the fitted ``phi_max`` are dropped and the fit repeated (up to three
-    times): eqs. 17 and 20 hold only in microslip.
+def _microslip_fit(F0, D, u0, Fs, counter, warns):
+    """The seed solution on the microslip cycles: cycles near ``Fs`` left out, then those
+    beyond the fitted ``phi_max`` (up to 4 rounds).
     """
-    counter = [0]
-    warns = []
     keep = F0 < (1.0 - _SEED_PLATEAU) * Fs
     if not keep.all():
         warns.append(
@@ -188,6 +184,18 @@ def _fit_seed(F0, D, u0, Fs, *, t0):
             "(macroslip) were left out and the fit repeated"
         )
         keep = keep & ~macro
+    return keep, KT, chi, beta, converged, msg, it
+
+
+def _fit_seed(F0, D, u0, Fs, *, t0):
+    """The seed paper's identification (sec. 2) with a microslip guard: cycles with
+    ``F0 >= 0.99 Fs`` (at or near the macroslip plateau) are left out, and cycles whose
+    measured ``u0`` exceeds the fitted ``phi_max`` are dropped and the fit repeated (up to three
+    times): eqs. 17 and 20 hold only in microslip.
+    """
+    counter = [0]
+    warns = []
+    keep, KT, chi, beta, converged, msg, it = _microslip_fit(F0, D, u0, Fs, counter, warns)
     F0, D, u0 = F0[keep], D[keep], u0[keep]
     params = IwanParameters(Fs, KT, chi, beta)
     n = F0.size

@@ -169,6 +169,85 @@ def _explains(out, prob):
     return float(fdtrc(k, m_eff - k - 1, F_stat)), 1.0 - ssr / ssr0
 
 
+def _check_cycles(tt, uu, FF, hysteresis):
+    """The record's cycles, and a warning when most do not close or drift."""
+    cycles = split_cycles(tt, uu, FF, hysteresis=hysteresis)
+    if len(cycles) < 2:
+        raise ValueError(f"u contains {len(cycles)} complete cycle(s); at least 2 are needed")
+    warns = []
+    bad = [c.index for c in cycles if not c.closed or c.drifting]
+    if len(bad) > len(cycles) // 2:
+        warns.append(
+            f"{len(bad)} of {len(cycles)} cycles do not close or their centre moves "
+            f"relative to the others (cycles {bad[:8]}); constant sensor offsets are "
+            "fitted and do not cause this"
+        )
+    return cycles, warns
+
+
+def _drive(tt, uu, smooth, warns):
+    """The displacement that drives the model, its noise and the record's half range."""
+    u_drive, dinfo = drive_displacement(tt, uu, smooth)
+    sigma_u = dinfo["displacement_noise"]
+    amp = 0.5 * float(np.ptp(uu))
+    if dinfo["smooth"] == 0 and sigma_u > 1e-3 * amp:
+        warns.append(
+            f"displacement noise ({sigma_u:.2g} m, {100 * sigma_u / amp:.2g} % of the "
+            "half range) drives the model unfiltered (only a dead band of 3 sigma keeps "
+            "its reversals out); use smooth='auto'"
+        )
+    return u_drive, dinfo, sigma_u, amp
+
+
+def _fitted_samples(u_drive, n, max_samples, hysteresis):
+    """The burn-in index and at most ``max_samples`` fitted samples after it."""
+    b = burn_in_index(u_drive, hysteresis=hysteresis)
+    m_all = n - b
+    keep = b + np.unique(
+        np.round(np.linspace(0, m_all - 1, min(m_all, max_samples))).astype(np.intp)
+    )
+    return b, keep
+
+
+def _misfit(out, prob, hist, alpha, warns):
+    """Whether the joint explains the force, the fitted force and the NRMSE, with warnings."""
+    p_noise, r2 = _explains(out, prob)
+    dF0, se_dF0 = out["dF0"]
+    if p_noise >= alpha:
+        out["explains"] = False
+        warns.append(
+            f"the force is indistinguishable from noise: the joint explains "
+            f"{100 * r2:.2g} % of its variance, not significantly more than a constant "
+            f"(p = {p_noise:.2g} >= {alpha:g}); nothing is identified"
+        )
+    F_fit = hist.forces(out["params"])
+    y = prob.y
+    nrmse = math.sqrt(np.mean((y - dF0 - F_fit) ** 2)) / float(np.ptp(y))
+    if out["tau"] > 3.0 and nrmse > 1e-6:
+        warns.append(
+            f"the residuals are correlated over {out['tau']:.3g} samples (a systematic "
+            f"misfit or coloured noise): the std. errors are widened by "
+            f"sqrt(tau) = {math.sqrt(out['tau']):.3g}"
+        )
+    return dF0, se_dF0, F_fit, y, nrmse, p_noise, r2
+
+
+def _details(n, keep, b, hist, cycles, noise, p_noise, r2, dinfo):
+    """The fit's details: samples, burn-in, model samples, cycles, noise test, drive."""
+    return {
+        "samples": n,
+        "fitted_samples": int(keep.size),
+        "burn_in": int(b),
+        "model_samples": int(hist.index.size),
+        "reversal_depth": hist.depth,
+        "cycles": len(cycles),
+        "weighted": noise is not None,
+        "p_explains": p_noise,
+        "r_squared": r2,
+        **dinfo,
+    }
+
+
 def fit_loops(
     t,
     u,
@@ -253,32 +332,10 @@ def fit_loops(
     if initial is not None and not isinstance(initial, IwanParameters):
         raise ValueError(f"initial must be an IwanParameters or None, got {type(initial).__name__}")
     rng = np.random.default_rng(seed)
-    cycles = split_cycles(tt, uu, FF, hysteresis=hysteresis)
-    if len(cycles) < 2:
-        raise ValueError(f"u contains {len(cycles)} complete cycle(s); at least 2 are needed")
-    warns = []
-    bad = [c.index for c in cycles if not c.closed or c.drifting]
-    if len(bad) > len(cycles) // 2:
-        warns.append(
-            f"{len(bad)} of {len(cycles)} cycles do not close or their centre moves "
-            f"relative to the others (cycles {bad[:8]}); constant sensor offsets are "
-            "fitted and do not cause this"
-        )
+    cycles, warns = _check_cycles(tt, uu, FF, hysteresis)
     noise_F = estimate_noise(tt, FF)
-    u_drive, dinfo = drive_displacement(tt, uu, smooth)
-    sigma_u = dinfo["displacement_noise"]
-    amp = 0.5 * float(np.ptp(uu))
-    if dinfo["smooth"] == 0 and sigma_u > 1e-3 * amp:
-        warns.append(
-            f"displacement noise ({sigma_u:.2g} m, {100 * sigma_u / amp:.2g} % of the "
-            "half range) drives the model unfiltered (only a dead band of 3 sigma keeps "
-            "its reversals out); use smooth='auto'"
-        )
-    b = burn_in_index(u_drive, hysteresis=hysteresis)
-    m_all = n - b
-    keep = b + np.unique(
-        np.round(np.linspace(0, m_all - 1, min(m_all, max_samples))).astype(np.intp)
-    )
+    u_drive, dinfo, sigma_u, amp = _drive(tt, uu, smooth, warns)
+    b, keep = _fitted_samples(u_drive, n, max_samples, hysteresis)
     # reversals smaller than the noise left in the driving displacement are noise, not the
     # joint's: a dead band of 3 sigma keeps them from adding stiff micro-loops (errors in
     # variables: they bias KT low and chi high)
@@ -300,38 +357,8 @@ def fit_loops(
         amp,
         dict(rng=rng, alpha=alpha, max_nfev=max_nfev),
     )
-    p_noise, r2 = _explains(out, prob)
-    dF0, se_dF0 = out["dF0"]
-    if p_noise >= alpha:
-        out["explains"] = False
-        warns.append(
-            f"the force is indistinguishable from noise: the joint explains "
-            f"{100 * r2:.2g} % of its variance, not significantly more than a constant "
-            f"(p = {p_noise:.2g} >= {alpha:g}); nothing is identified"
-        )
-    F_fit = hist.forces(out["params"])
-    y = prob.y
-    nrmse = math.sqrt(np.mean((y - dF0 - F_fit) ** 2)) / float(np.ptp(y))
-    if out["tau"] > 3.0 and nrmse > 1e-6:
-        warns.append(
-            f"the residuals are correlated over {out['tau']:.3g} samples (a systematic "
-            f"misfit or coloured noise): the std. errors are widened by "
-            f"sqrt(tau) = {math.sqrt(out['tau']):.3g}"
-        )
-    out["details"].update(
-        {
-            "samples": n,
-            "fitted_samples": int(keep.size),
-            "burn_in": int(b),
-            "model_samples": int(hist.index.size),
-            "reversal_depth": hist.depth,
-            "cycles": len(cycles),
-            "weighted": noise is not None,
-            "p_explains": p_noise,
-            "r_squared": r2,
-            **dinfo,
-        }
-    )
+    dF0, se_dF0, F_fit, y, nrmse, p_noise, r2 = _misfit(out, prob, hist, alpha, warns)
+    out["details"].update(_details(n, keep, b, hist, cycles, noise, p_noise, r2, dinfo))
     noise_out = {
         "force": noise_F.sigma if noise is None else float(np.median(1.0 / w_full)),
         "displacement": sigma_u,

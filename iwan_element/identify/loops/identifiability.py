@@ -28,7 +28,7 @@ Uncertainties
     along a degenerate direction gets a NaN error.
 
 Verdict
-    :func:`~iwan_element.identify.loops.result.settle_verdict` applies the package's one rule
+    :func:`~iwan_element.identify.loops.joint_verdict.settle_verdict` applies the package's one rule
     (:func:`iwan_element.fitting.verdict`, docs/fitting.md section 5): identified means a
     finite standard error of at most half the value (``chi + 1`` for ``chi``) and not at a
     bound of the search range.
@@ -44,8 +44,8 @@ from scipy.special import fdtrc
 from ...core.closed_form import backbone
 from ...core.history import unit_params
 from ...core.parameters import IwanParameters
+from .joint_verdict import PARAM_NAMES
 from .noise import integrated_time
-from .result import PARAM_NAMES
 from .solver import _multistart, _Problem, _q_to_shape, _uncertainty
 
 _CHI_BOUNDS = (-0.98, 1.0)  # search range of chi (physical joints: -1 < chi <= 0)

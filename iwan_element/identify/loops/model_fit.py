@@ -232,6 +232,83 @@ def _identified(names, x, se, at_bound, degenerate, warns) -> dict:
     return ident
 
 
+def _check_parameters(model, theta0, lower, upper, names):
+    """The model, the start vector, its bounds and the parameter names, checked."""
+    if not callable(model):
+        raise ValueError(f"model must be callable model(u, theta), got {type(model).__name__}")
+    th0 = finite_array("theta0", theta0, ndim=1)
+    p = th0.size
+    lo = np.full(p, -np.inf) if lower is None else finite_array("lower", lower, ndim=1)
+    hi = np.full(p, np.inf) if upper is None else np.array(upper, float)
+    if lo.size != p or hi.size != p or np.any(lo >= hi):
+        raise ValueError(f"lower and upper must have {p} entries with lower < upper")
+    names = tuple(names) if names is not None else tuple(f"p{k}" for k in range(p))
+    if len(names) != p:
+        raise ValueError(f"names must have {p} entries, got {len(names)}")
+    return th0, p, lo, hi, names
+
+
+def _fitted_samples(tt, uu, n, smooth, burn_in, max_samples):
+    """The driving displacement, the burn-in index and the fitted samples after it."""
+    u_drive, dinfo = drive_displacement(tt, uu, smooth)
+    b = burn_in_index(u_drive) if burn_in == "auto" else check_int("burn_in", burn_in, 0)
+    if b >= n - 20:
+        raise ValueError(f"burn_in leaves {n - b} samples; at least 20 are needed")
+    m_all = n - b
+    ms = m_all if max_samples is None else min(m_all, check_int("max_samples", max_samples, 100))
+    keep = b + np.unique(np.round(np.linspace(0, m_all - 1, ms)).astype(np.intp))
+    return u_drive, dinfo, b, keep
+
+
+def _start(model, u_drive, keep, y, th0, lo, hi, names, amp, fit_offsets):
+    """Start vector, bounds and names of the fit, with the offsets when they are fitted."""
+    p = th0.size
+    if fit_offsets:
+        x0 = np.r_[np.clip(th0, lo, hi), 0.0, 0.0]
+        x0[p] = float(np.median(y - np.asarray(model(u_drive, x0[:p]), float)[keep]))
+        lo_x, hi_x = np.r_[lo, -np.inf, -0.5 * amp], np.r_[hi, np.inf, 0.5 * amp]
+        all_names = names + OFFSET_NAMES
+    else:
+        x0, lo_x, hi_x, all_names = np.clip(th0, lo, hi), lo, hi, names
+    return x0, lo_x, hi_x, all_names
+
+
+def _parameter_table(all_names, res, c, se, degenerate, lo_x, hi_x, units, warns):
+    """The fitted parameters' table (values, errors, bounds, units, verdicts)."""
+    at_bound = np.isclose(res.x, lo_x, rtol=1e-6, atol=1e-12) | np.isclose(
+        res.x, hi_x, rtol=1e-6, atol=1e-12
+    )
+    ident = _identified(all_names, res.x, se, at_bound, degenerate, warns)
+    unit_of = {"dF0": "N", "du0": "m", **dict(units or {})}
+    table = ParameterTable(
+        tuple(
+            Parameter(
+                k,
+                float(v),
+                float(e),
+                float(a),
+                float(b),
+                unit_of.get(k, ""),
+                ident[k],
+                nuisance=k in OFFSET_NAMES,
+            )
+            for k, v, e, a, b in zip(all_names, res.x, se, lo_x, hi_x)
+        ),
+        correlation=c.correlation,
+    )
+    return table, ident
+
+
+def _correlation_warning(tau, warns):
+    """A warning when the residuals are correlated over more than 3 samples."""
+    if tau > 3.0:
+        warns.append(
+            f"the residuals are correlated over {tau:.3g} samples (a systematic misfit "
+            f"or coloured noise): the std. errors are widened by sqrt(tau) = "
+            f"{math.sqrt(tau):.3g}"
+        )
+
+
 def fit_force_model(
     t,
     u,
@@ -286,24 +363,8 @@ def fit_force_model(
     FF = check_magnitude("F", finite_array("F", F, ndim=1, min_size=32), unit="N")
     n = same_length(u=uu, F=FF)
     tt = check_time(t, n)
-    if not callable(model):
-        raise ValueError(f"model must be callable model(u, theta), got {type(model).__name__}")
-    th0 = finite_array("theta0", theta0, ndim=1)
-    p = th0.size
-    lo = np.full(p, -np.inf) if lower is None else finite_array("lower", lower, ndim=1)
-    hi = np.full(p, np.inf) if upper is None else np.array(upper, float)
-    if lo.size != p or hi.size != p or np.any(lo >= hi):
-        raise ValueError(f"lower and upper must have {p} entries with lower < upper")
-    names = tuple(names) if names is not None else tuple(f"p{k}" for k in range(p))
-    if len(names) != p:
-        raise ValueError(f"names must have {p} entries, got {len(names)}")
-    u_drive, dinfo = drive_displacement(tt, uu, smooth)
-    b = burn_in_index(u_drive) if burn_in == "auto" else check_int("burn_in", burn_in, 0)
-    if b >= n - 20:
-        raise ValueError(f"burn_in leaves {n - b} samples; at least 20 are needed")
-    m_all = n - b
-    ms = m_all if max_samples is None else min(m_all, check_int("max_samples", max_samples, 100))
-    keep = b + np.unique(np.round(np.linspace(0, m_all - 1, ms)).astype(np.intp))
+    th0, p, lo, hi, names = _check_parameters(model, theta0, lower, upper, names)
+    u_drive, dinfo, b, keep = _fitted_samples(tt, uu, n, smooth, burn_in, max_samples)
     y = FF[keep]
     nfev = [0]
     amp = max(float(np.ptp(uu)), 1e-300)
@@ -315,13 +376,9 @@ def fit_force_model(
         Fm = np.asarray(model(u_drive - du0, x[:p]), float)
         return Fm[keep] + dF0 - y
 
-    if fit_offsets:
-        x0 = np.r_[np.clip(th0, lo, hi), 0.0, 0.0]
-        x0[p] = float(np.median(y - np.asarray(model(u_drive, x0[:p]), float)[keep]))
-        lo_x, hi_x = np.r_[lo, -np.inf, -0.5 * amp], np.r_[hi, np.inf, 0.5 * amp]
-        all_names = names + OFFSET_NAMES
-    else:
-        x0, lo_x, hi_x, all_names = np.clip(th0, lo, hi), lo, hi, names
+    x0, lo_x, hi_x, all_names = _start(
+        model, u_drive, keep, y, th0, lo, hi, names, amp, fit_offsets
+    )
     res = minimize(resid, x0, lo_x, hi_x, method="trf", max_nfev=max_nfev, x_scale="jac")
     r = res.fun
     assert r is not None  # method "trf" returns the residuals
@@ -329,34 +386,9 @@ def fit_force_model(
     c = covariance(res.jac, r, tau=tau)
     se, cov, degenerate = c.stderr, c.covariance, c.degenerate
     warns: list[str] = []
-    at_bound = np.isclose(res.x, lo_x, rtol=1e-6, atol=1e-12) | np.isclose(
-        res.x, hi_x, rtol=1e-6, atol=1e-12
-    )
-    ident = _identified(all_names, res.x, se, at_bound, degenerate, warns)
-    unit_of = {"dF0": "N", "du0": "m", **dict(units or {})}
-    table = ParameterTable(
-        tuple(
-            Parameter(
-                k,
-                float(v),
-                float(e),
-                float(a),
-                float(b),
-                unit_of.get(k, ""),
-                ident[k],
-                nuisance=k in OFFSET_NAMES,
-            )
-            for k, v, e, a, b in zip(all_names, res.x, se, lo_x, hi_x)
-        ),
-        correlation=c.correlation,
-    )
+    table, ident = _parameter_table(all_names, res, c, se, degenerate, lo_x, hi_x, units, warns)
     values, stderr = table.values, table.stderr
-    if tau > 3.0:
-        warns.append(
-            f"the residuals are correlated over {tau:.3g} samples (a systematic misfit "
-            f"or coloured noise): the std. errors are widened by sqrt(tau) = "
-            f"{math.sqrt(tau):.3g}"
-        )
+    _correlation_warning(tau, warns)
     success = fit_success(res.success, ident, names)
     offs = {
         "force": (values.get("dF0", 0.0), stderr.get("dF0", math.nan)),

@@ -10,8 +10,9 @@ Imports :mod:`iwan_element.base`, :mod:`iwan_element.core`, :mod:`iwan_element.f
 
 from .curves import DECAY_METHODS, AmplitudeCurve
 from .fit import fit_modal_iwan
+from .mode_target import ModeTarget, mac
 from .result import ModalIwanFit
-from .targets import ModalTargets, ModeTarget, mac
+from .targets import ModalTargets
 
 __all__ = [
     "AmplitudeCurve",

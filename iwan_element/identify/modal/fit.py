@@ -36,7 +36,8 @@ from ...fitting import covariance
 from ..files.units import check_damping_ratio
 from ..loops.identifiability import MIN_MACRO_POINTS
 from .curves import DECAY_METHODS, AmplitudeCurve
-from .result import ModalIwanFit, model_curve
+from .model import model_curve
+from .result import ModalIwanFit
 
 __all__ = ["fit_modal_iwan", "ModalIwanFit"]
 
@@ -142,6 +143,67 @@ def _covariance(r, n_data):
     return covariance(J, s2=max(chi2_red, 1.0)).covariance, chi2_red
 
 
+def _damping_form(damping_form, amplitude):
+    """The damping form checked, ``"auto"`` resolved by where the curve came from."""
+    if damping_form not in ("auto", "decay", "energy"):
+        raise ValueError(f"damping_form must be 'auto', 'decay' or 'energy', got {damping_form!r}")
+    if damping_form == "auto":
+        decay = isinstance(amplitude, AmplitudeCurve) and amplitude.method in DECAY_METHODS
+        damping_form = "decay" if decay else "energy"
+    return damping_form
+
+
+def _check_model(stiffness, floor):
+    """The stiffness and floor options checked."""
+    if stiffness not in ("harmonic", "secant"):
+        raise ValueError(f"stiffness must be 'harmonic' or 'secant', got {stiffness!r}")
+    if floor not in ("dashpot", "constant"):
+        raise ValueError(f"floor must be 'dashpot' or 'constant', got {floor!r}")
+
+
+def _scatter_weights(micro, X, f, z, sf, sz, known, x_ref, stiffness, floor, damping_form):
+    """Without given errors, weights from each curve's residual scatter and the refit."""
+    noise_dof = None
+    if not known:  # weights from each curve's own residual scatter
+        fm, zm = model_curve(micro.x, X, "microslip", x_ref, stiffness, floor, damping_form)
+        dof = noise_dof = max(X.size - 2, 1)
+        sf = np.full(X.size, max(math.sqrt(np.sum((fm - f) ** 2) / dof), 1e-9 * np.median(f)))
+        sz = np.full(X.size, max(math.sqrt(np.sum((zm - z) ** 2) / dof), 1e-9 * np.median(z)))
+        micro = _fit_micro(X, f, z, sf, sz, x_ref, stiffness, floor, damping_form)
+    return micro, sf, sz, noise_dof
+
+
+def _regime(micro, X, f, z, sf, sz, x_ref, stiffness, floor, damping_form, alpha, warns):
+    """The full model, taken when an F-test rejects microslip and ``phi_max`` is fixed."""
+    chosen, regime = micro, "microslip"
+    n_data = 2 * X.size
+    full = (
+        _fit_full(micro, X, f, z, sf, sz, x_ref, stiffness, floor, damping_form)
+        if n_data > 7
+        else None
+    )
+    if full is not None:
+        cov_f, chi2_f = _covariance(full, n_data)
+        F_stat = (micro.cost - full.cost) / max(chi2_f, 1e-300)  # (dchi2 / 2) / chi2_red
+        p_val = float(stats.f.sf(F_stat, 2, max(n_data - 6, 1)))
+        phi_known = math.sqrt(max(cov_f[4, 4], 0.0)) < 1.0
+        beyond = int(np.count_nonzero(X > math.exp(full.x[4])))
+        if p_val < alpha and phi_known and beyond >= MIN_MACRO_POINTS:
+            chosen, regime = full, "macroslip"
+        else:
+            few = (
+                ""
+                if beyond >= MIN_MACRO_POINTS
+                else f", {beyond} amplitude(s) beyond it where {MIN_MACRO_POINTS} are needed"
+            )
+            warns.append(
+                f"the data never leave microslip (F-test p = {p_val:.2g}, phi_max "
+                f"{'not ' if not phi_known else ''}bounded{few}): KT, phi_max, beta and Fs are "
+                "not identified; reported f0, zeta0, chi and the microslip coefficient delta"
+            )
+    return chosen, regime, n_data
+
+
 def fit_modal_iwan(
     amplitude,
     frequency=None,
@@ -201,17 +263,10 @@ def fit_modal_iwan(
     -------
     ModalIwanFit
     """
-    if damping_form not in ("auto", "decay", "energy"):
-        raise ValueError(f"damping_form must be 'auto', 'decay' or 'energy', got {damping_form!r}")
-    if damping_form == "auto":
-        decay = isinstance(amplitude, AmplitudeCurve) and amplitude.method in DECAY_METHODS
-        damping_form = "decay" if decay else "energy"
+    damping_form = _damping_form(damping_form, amplitude)
     X, f, z, fstd, zstd, in_warn = _as_data(amplitude, frequency, damping_ratio)
     check_damping_ratio("damping_ratio", z)
-    if stiffness not in ("harmonic", "secant"):
-        raise ValueError(f"stiffness must be 'harmonic' or 'secant', got {stiffness!r}")
-    if floor not in ("dashpot", "constant"):
-        raise ValueError(f"floor must be 'dashpot' or 'constant', got {floor!r}")
+    _check_model(stiffness, floor)
     alpha = check_scalar(
         "significance", significance, low=0.0, high=0.5, low_open=True, high_open=True
     )
@@ -239,40 +294,13 @@ def fit_modal_iwan(
         )
     sf, sz, known = _weights(f, z, fstd, zstd)
     micro = _fit_micro(X, f, z, sf, sz, x_ref, stiffness, floor, damping_form)
-    noise_dof = None
-    if not known:  # weights from each curve's own residual scatter
-        fm, zm = model_curve(micro.x, X, "microslip", x_ref, stiffness, floor, damping_form)
-        dof = noise_dof = max(X.size - 2, 1)
-        sf = np.full(X.size, max(math.sqrt(np.sum((fm - f) ** 2) / dof), 1e-9 * np.median(f)))
-        sz = np.full(X.size, max(math.sqrt(np.sum((zm - z) ** 2) / dof), 1e-9 * np.median(z)))
-        micro = _fit_micro(X, f, z, sf, sz, x_ref, stiffness, floor, damping_form)
-    warns = list(in_warn)
-    chosen, regime = micro, "microslip"
-    n_data = 2 * X.size
-    full = (
-        _fit_full(micro, X, f, z, sf, sz, x_ref, stiffness, floor, damping_form)
-        if n_data > 7
-        else None
+    micro, sf, sz, noise_dof = _scatter_weights(
+        micro, X, f, z, sf, sz, known, x_ref, stiffness, floor, damping_form
     )
-    if full is not None:
-        cov_f, chi2_f = _covariance(full, n_data)
-        F_stat = (micro.cost - full.cost) / max(chi2_f, 1e-300)  # (dchi2 / 2) / chi2_red
-        p_val = float(stats.f.sf(F_stat, 2, max(n_data - 6, 1)))
-        phi_known = math.sqrt(max(cov_f[4, 4], 0.0)) < 1.0
-        beyond = int(np.count_nonzero(X > math.exp(full.x[4])))
-        if p_val < alpha and phi_known and beyond >= MIN_MACRO_POINTS:
-            chosen, regime = full, "macroslip"
-        else:
-            few = (
-                ""
-                if beyond >= MIN_MACRO_POINTS
-                else f", {beyond} amplitude(s) beyond it where {MIN_MACRO_POINTS} are needed"
-            )
-            warns.append(
-                f"the data never leave microslip (F-test p = {p_val:.2g}, phi_max "
-                f"{'not ' if not phi_known else ''}bounded{few}): KT, phi_max, beta and Fs are "
-                "not identified; reported f0, zeta0, chi and the microslip coefficient delta"
-            )
+    warns = list(in_warn)
+    chosen, regime, n_data = _regime(
+        micro, X, f, z, sf, sz, x_ref, stiffness, floor, damping_form, alpha, warns
+    )
     cov, chi2_red = _covariance(chosen, n_data)
     return ModalIwanFit.from_solution(
         chosen.x,

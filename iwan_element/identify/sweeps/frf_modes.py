@@ -24,7 +24,8 @@ from scipy import optimize
 
 from ...base.validation import check_magnitude, finite_array
 from ...fitting import covariance
-from ..modal.targets import ModalTargets, ModeTarget
+from ..modal.mode_target import ModeTarget
+from ..modal.targets import ModalTargets
 from .sweep import _convention, _inputs
 
 __all__ = ["frf_modes", "sweep_modes"]

@@ -161,6 +161,37 @@ def _force_levels(fits, modal_constant):
     return np.array(out)
 
 
+def _fit_level(i, level, k, frac):
+    """The single-mode receptance fit of one level: its curve point and its fit."""
+    f, H, amp = _level_arrays(i, level)
+    w = 2.0 * math.pi * f
+    Hd = H / (1j * w) ** k
+    idx, kp = _peak_lines(Hd, frac)
+    wr0 = w[kp]
+    span = (w[idx[-1]] - w[idx[0]]) / wr0
+    wr, zeta, A, B, swr, sz = _fit_sdof(w[idx], Hd[idx], wr0, max(0.25 * span, 1e-5))
+    if not (w[0] <= wr <= w[-1]) or zeta >= 0.5 or zeta <= 1.5e-7:
+        raise ValueError(
+            f"levels[{i}] holds no resonance peak within its lines "
+            f"({f[0]:.4g}-{f[-1]:.4g} Hz): the single-mode fit gives "
+            f"f_r = {wr / 2 / math.pi:.4g} Hz, zeta = {zeta:.3g}"
+        )
+    row = (amp / wr**k, wr / (2 * math.pi), zeta, swr / (2 * math.pi), sz)
+    fit = (
+        w[kp],
+        Hd[kp],
+        amp,
+        A,
+        B,
+        abs(A / (2j * zeta * wr * wr) + B) * amp,
+        wr,
+        zeta,
+        swr / (2 * math.pi),
+        sz,
+    )
+    return row, fit
+
+
 def stepped_sine_curve(
     levels,
     *,
@@ -226,34 +257,9 @@ def stepped_sine_curve(
     k = _POWER[quantity]
     rows, fits = [], []
     for i, level in enumerate(levels):
-        f, H, amp = _level_arrays(i, level)
-        w = 2.0 * math.pi * f
-        Hd = H / (1j * w) ** k
-        idx, kp = _peak_lines(Hd, frac)
-        wr0 = w[kp]
-        span = (w[idx[-1]] - w[idx[0]]) / wr0
-        wr, zeta, A, B, swr, sz = _fit_sdof(w[idx], Hd[idx], wr0, max(0.25 * span, 1e-5))
-        if not (w[0] <= wr <= w[-1]) or zeta >= 0.5 or zeta <= 1.5e-7:
-            raise ValueError(
-                f"levels[{i}] holds no resonance peak within its lines "
-                f"({f[0]:.4g}-{f[-1]:.4g} Hz): the single-mode fit gives "
-                f"f_r = {wr / 2 / math.pi:.4g} Hz, zeta = {zeta:.3g}"
-            )
-        rows.append((amp / wr**k, wr / (2 * math.pi), zeta, swr / (2 * math.pi), sz))
-        fits.append(
-            (
-                w[kp],
-                Hd[kp],
-                amp,
-                A,
-                B,
-                abs(A / (2j * zeta * wr * wr) + B) * amp,
-                wr,
-                zeta,
-                swr / (2 * math.pi),
-                sz,
-            )
-        )
+        row, fit = _fit_level(i, level, k, frac)
+        rows.append(row)
+        fits.append(fit)
     a = np.array(rows)
     warns = []
     if control == "force":
