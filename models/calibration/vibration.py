@@ -17,6 +17,7 @@
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -311,12 +312,14 @@ def _fit_points(specimen, measured, floors, fit, mode):
     """
     floors = {} if floors is None else dict(floors)
     if any(
-        isinstance(r, bool) or not isinstance(r, int) or r < 1 or r == mode for r in floors
+        isinstance(r, bool) or not isinstance(r, numbers.Integral) or r < 1 or r == mode
+        for r in floors
     ) or not all(isinstance(c, AmplitudeCurve) for c in floors.values()):
         raise ValueError(
             f"floors must map modes >= 1 other than the calibration mode {mode} to "
             f"AmplitudeCurves, got {floors!r}"
         )
+    floors = {int(r): c for r, c in floors.items()}
     fit = tuple(fit)
     bad = [n for n in fit if n not in _FIT]
     if bad or not fit:

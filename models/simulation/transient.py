@@ -29,6 +29,7 @@ multi-mode run and the coupling of the modes through the interface.
 from __future__ import annotations
 
 import math
+import numbers
 
 import exudyn as exu
 import numpy as np
@@ -76,7 +77,9 @@ def _amplitudes(mode, amplitude) -> dict:
     for r, X in amp.items():
         if isinstance(r, bool) or not isinstance(r, (int, np.integer)) or r < 1:
             raise ValueError(f"mode must be an integer >= 1 (1: first elastic mode), got {r!r}")
-        if isinstance(X, bool) or not (isinstance(X, (int, float)) and math.isfinite(X) and X > 0):
+        if isinstance(X, bool) or not (
+            isinstance(X, numbers.Real) and math.isfinite(float(X)) and float(X) > 0
+        ):
             raise ValueError(
                 f"amplitude must be a finite displacement > 0 [m] for each mode, "
                 f"got {X!r} for mode {r}"
