@@ -246,7 +246,6 @@ def _near_bound(theta, lo, hi, sd, prior_knots, lines):
     """
     k, width = theta.size, hi - lo
     dist = np.minimum(theta - lo, hi - theta) / width
-    near = np.flatnonzero((dist < NEAR) | (dist < 3.0 * sd))
     knots = np.full(k, np.nan) if prior_knots is None else np.asarray(prior_knots, float).reshape(k)
     spike = np.isfinite(knots) & (np.abs(theta - np.nan_to_num(knots)) < 5.0 * sd * width)
     # a parameter the data hardly determine (its Gaussian wider than a third of the box)
