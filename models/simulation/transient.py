@@ -28,13 +28,10 @@ multi-mode run and the coupling of the modes through the interface.
 
 from __future__ import annotations
 
-import math
-import numbers
-
 import exudyn as exu
 import numpy as np
 
-from iwan_element.base.validation import check_scalar
+from iwan_element.base.validation import check_int, check_scalar
 
 from ..modal.qsma import linear_modes, static_modal_load
 from ..reduced.damping import FloorWork
@@ -74,17 +71,14 @@ def _amplitudes(mode, amplitude) -> dict:
         amp = {1 if mode is None else mode: amplitude}
     if not amp:
         raise ValueError("amplitude must name at least one mode")
-    for r, X in amp.items():
-        if isinstance(r, bool) or not isinstance(r, (int, np.integer)) or r < 1:
-            raise ValueError(f"mode must be an integer >= 1 (1: first elastic mode), got {r!r}")
-        if isinstance(X, bool) or not (
-            isinstance(X, numbers.Real) and math.isfinite(float(X)) and float(X) > 0
-        ):
-            raise ValueError(
-                f"amplitude must be a finite displacement > 0 [m] for each mode, "
-                f"got {X!r} for mode {r}"
-            )
-    return {int(r): float(amp[r]) for r in sorted(amp)}
+    # the package's scalar checks: numpy integers and floats count as numbers
+    checked = {
+        check_int("mode (1: first elastic mode)", r, 1): check_scalar(
+            f"amplitude of mode {r} [m]", X, low=0.0, low_open=True
+        )
+        for r, X in amp.items()
+    }
+    return dict(sorted(checked.items()))
 
 
 def _check_args(specimen, steps_per_period, n_periods, cycles, duration):
