@@ -13,13 +13,14 @@ so scripts and test logs are not cluttered. tqdm is an optional extra:
 from __future__ import annotations
 
 import os
+from typing import Any
 
 import numpy as np
 
 __all__ = ["progress_bar", "tick", "set_total", "finish"]
 
 
-def progress_bar(progress, *, total=None, desc: str, unit: str):
+def progress_bar(progress, *, total=None, desc: str, unit: str) -> Any:
     """A tqdm bar when ``progress`` is True (and not under CI), else ``None``.
 
     Parameters
