@@ -23,6 +23,7 @@ import math
 import time
 
 import numpy as np
+from numpy.typing import NDArray
 
 from ..base.progress import finish, progress_bar, tick
 from ..base.threads import one_blas_thread
@@ -118,7 +119,7 @@ def _newton(system, basis, y, X, r, *, tol, max_iter):
 
 def epmc_branch(
     system, basis: Harmonics, amplitude, r: int, *, tol=1e-9, max_iter=40, progress: bool = False
-):
+) -> dict[str, NDArray[np.float64]]:
     """Nonlinear mode ``r`` (a kept-mode column) (one BLAS thread: :func:`_branch`)."""
     bar = progress_bar(progress, total=np.size(amplitude), desc="nonlinear_mode", unit="amplitude")
     try:

@@ -7,6 +7,7 @@ import math
 import time
 
 import numpy as np
+from numpy.typing import NDArray
 
 from ..base.progress import finish, progress_bar, tick
 from ..base.threads import one_blas_thread
@@ -21,7 +22,7 @@ __all__ = ["harmonic_balance", "check_frequency_force", "assemble_response", "li
 log = logging.getLogger(__name__)
 
 
-def check_frequency_force(frequency, force):
+def check_frequency_force(frequency, force) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Validated ``(frequency [Hz], force [N])`` arrays of one length (a scalar force is
     repeated).
     """
@@ -40,7 +41,7 @@ def check_frequency_force(frequency, force):
     return f, F
 
 
-def linear_start(system, basis, W, force):
+def linear_start(system, basis, W, force) -> NDArray[np.float64]:
     """The stuck (linear) response's joint coefficients at ``W``."""
     _, _, Lb = operators(system, basis, W)
     return Lb[: system.n_z, :, 0, :] @ force_coefficients(basis, force)

@@ -3,11 +3,15 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..base.result_shape import ResultShape, panels, table_lines
 from ..base.serialize import json_safe
+
+if TYPE_CHECKING:
+    from matplotlib.artist import Artist
 
 __all__ = ["FrequencyResponse", "ENERGY_TOL"]
 
@@ -155,7 +159,7 @@ class FrequencyResponse(ResultShape):
             }
         )
 
-    def plot(self, ax=None, *, label="harmonic balance"):
+    def plot(self, ax=None, *, label="harmonic balance") -> list[Artist]:
         """Amplitude per force [m/N] and phase [rad] against frequency on ``ax = (ax_a,
         ax_p)``; returns the artists.
         """

@@ -31,6 +31,7 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
+from numpy.typing import NDArray
 
 from ..core.masing import constants_from_arrays
 from ..core.parameters import IwanParameters
@@ -232,7 +233,9 @@ class ModalSystem:
         inv[keep] = 1.0 / d[keep]
         return (self.modes * inv) @ self.modes.T + self.residual
 
-    def receptance_rate(self, w: float, h: int, *, xi: float = 0.0, exclude=None):
+    def receptance_rate(
+        self, w: float, h: int, *, xi: float = 0.0, exclude=None
+    ) -> tuple[NDArray[np.complex128], NDArray[np.complex128]]:
         """``(dH/dW, dH/dxi)`` of the receptance at the ``h``-th harmonic ``w = h W`` with
         respect to the fundamental ``W`` [rad/s] and to ``xi``.
         """
