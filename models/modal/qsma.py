@@ -29,9 +29,11 @@ from __future__ import annotations
 import logging
 import math
 from functools import lru_cache
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import scipy.linalg as sla
+from numpy.typing import NDArray
 
 from iwan_element import AmplitudeCurve, dissipation
 from iwan_element.base.threads import one_blas_thread
@@ -43,6 +45,10 @@ from ..reduced.dispatch import check_specimen, contact_points, linear_system
 from ..reduced.model import reduced_model, stuck_key, stuck_modes
 from ..solid.specimen import SolidSpecimen
 from ..specimens.specimen import Specimen
+
+if TYPE_CHECKING:
+    from ..linear.system import LinearSystem
+    from ..specimens.contact import ContactPoints
 
 __all__ = [
     "modal_amplitude_curve",
@@ -72,7 +78,9 @@ def _amplitudes(specimen: Specimen | SolidSpecimen, amplitude) -> np.ndarray:
     return a
 
 
-def linear_modes(specimen: Specimen | SolidSpecimen, *, mode: int = 1):
+def linear_modes(
+    specimen: Specimen | SolidSpecimen, *, mode: int = 1
+) -> tuple[float, NDArray[np.float64], NDArray[np.float64], LinearSystem, ContactPoints]:
     """Stuck-interface mode of a specimen: ``(omega [rad/s], phi, rigid, L, points)``.
 
     Read from the specimen's reduced model's eigenproblem
@@ -198,7 +206,7 @@ def static_modal_load(
     mode: int = 1,
     tol: float = 1e-12,
     max_iter: int = 60,
-):
+) -> dict[str, Any]:
     """Nonlinear static solutions under ``alpha M phi`` reaching sensor amplitudes ``X``.
 
     Newton on the condensed equations (:func:`_condensed`) in the contact slips ``u`` and

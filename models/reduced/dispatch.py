@@ -22,7 +22,7 @@ from ..specimens.specimen import Specimen
 __all__ = ["check_specimen", "linear_system", "axis_rows", "contact_points"]
 
 
-def check_specimen(specimen):
+def check_specimen(specimen) -> Specimen | SolidSpecimen:
     """``specimen`` if it is a 1-D :class:`Specimen` or a :class:`SolidSpecimen` (what every
     analysis of the beam model accepts), else ValueError naming it.
     """

@@ -23,6 +23,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from functools import lru_cache
+from typing import Any
 
 import numpy as np
 import scipy.linalg as sla
@@ -100,7 +101,7 @@ def reduced_model(specimen: Specimen | SolidSpecimen, *, n_modes: int = 8) -> Re
     return _reduced(specimen, int(n_modes))
 
 
-def stuck_key(specimen):
+def stuck_key(specimen) -> Specimen | SolidSpecimen:
     """The specimen with the fields that do not change its stuck-interface eigenproblem
     (friction, Iwan shape, floors, ranges, effects) set to fixed values: the cache key of
     the routes that read only the stuck modes and the contact points' stiffness.
@@ -117,7 +118,7 @@ def stuck_key(specimen):
     )
 
 
-def stuck_modes(specimen: Specimen | SolidSpecimen):
+def stuck_modes(specimen: Specimen | SolidSpecimen) -> Any:
     """Every mode of the specimen with its joints stuck: ``(L, points, omega [rad/s], Phi,
     n_low)``, ``Phi`` mass-normalised (columns, each with a non-negative sensor
     displacement), ``n_low`` the modes below 0.5 Hz (rigid-body ones, or an interface that

@@ -13,6 +13,7 @@ transient of the whole specimen shows how much one mode's slip raises another's 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -23,6 +24,9 @@ from iwan_element.base.serialize import json_safe
 from ..specimens.specimen import Specimen
 from .ringdown_result import RingdownResult
 from .transient import ringdown
+
+if TYPE_CHECKING:
+    from matplotlib.artist import Artist
 
 __all__ = ["compare_curves", "ModeCouplingResult", "mode_coupling", "plot_curve_pairs"]
 
@@ -154,7 +158,7 @@ class ModeCouplingResult(ResultShape):
             }
         )
 
-    def plot(self, ax=None):
+    def plot(self, ax=None) -> list[Artist]:
         """Each mode's damping ratio [%] and frequency [Hz] against its amplitude, together
         (filled) and alone (open), on ``ax = (ax_z, ax_f)``; returns the artists.
         """

@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
+from typing import TYPE_CHECKING
 
 import exudyn as exu
 import numpy as np
@@ -46,6 +47,9 @@ from ..reduced.dispatch import linear_system
 from ..specimens.specimen import Specimen
 from .host import build_host
 from .solver import solver_settings
+
+if TYPE_CHECKING:
+    from matplotlib.artist import Artist
 
 __all__ = ["ForcedResponseResult", "forced_response", "prewarp"]
 
@@ -133,7 +137,7 @@ class ForcedResponseResult(ResultShape):
             }
         )
 
-    def plot(self, ax=None):
+    def plot(self, ax=None) -> list[Artist]:
         """Amplitude per force [m/N] against frequency, one line per level; returns the
         artists.
         """

@@ -86,7 +86,9 @@ class Recorder:
         return True
 
 
-def step_grid(w0, steps_per_period: int, *, duration=None, cycles=None, impact=None):
+def step_grid(
+    w0, steps_per_period: int, *, duration=None, cycles=None, impact=None
+) -> tuple[float, int]:
     """``(h, n)``: the time step [s] (``steps_per_period`` per period of the highest of the
     modes' stuck frequencies ``w0`` [rad/s]; at most a sixteenth of an impact's contact time)
     and the number of steps (``duration`` [s], or ``cycles`` periods of the lowest mode).
