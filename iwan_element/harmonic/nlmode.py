@@ -21,6 +21,7 @@ from __future__ import annotations
 import logging
 import math
 import time
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -119,7 +120,7 @@ def _newton(system, basis, y, X, r, *, tol, max_iter):
 
 def epmc_branch(
     system, basis: Harmonics, amplitude, r: int, *, tol=1e-9, max_iter=40, progress: bool = False
-) -> dict[str, NDArray[np.float64]]:
+) -> dict[str, NDArray[Any]]:
     """Nonlinear mode ``r`` (a kept-mode column) (one BLAS thread: :func:`_branch`)."""
     bar = progress_bar(progress, total=np.size(amplitude), desc="nonlinear_mode", unit="amplitude")
     try:
