@@ -28,6 +28,7 @@ from .core.discrete import DiscreteIwan, slider_distribution
 from .core.joint import IwanJoint
 from .core.joint_bank import IwanJointBank
 from .core.modal import harmonic_stiffness, modal_iwan_curve, modal_ringdown
+from .core.modal_ringdown import ModalRingdown
 from .core.parameters import IwanParameters
 from .core.protocol import JointElement, check_element
 from .diagnose import (
@@ -173,6 +174,7 @@ __all__ = [
     "modal_iwan_curve",
     "harmonic_stiffness",
     "modal_ringdown",
+    "ModalRingdown",
     "amplitude_curve",
     "fit_modal_iwan",
     "fit_decay",
