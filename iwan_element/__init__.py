@@ -71,6 +71,7 @@ from .identify.decays.fit import fit_decay
 from .identify.decays.modes import free_decay_modes
 from .identify.files.csv_input import load_test
 from .identify.files.formats import UffRecord, read_sweep_csv, read_uff
+from .identify.files.vibration import read_vibration_csv
 from .identify.loops.cycles import Cycle, find_reversals, split_cycles
 from .identify.loops.dissipation import fit_dissipation
 from .identify.loops.fit import fit_loops
@@ -183,6 +184,7 @@ __all__ = [
     "read_uff",
     "UffRecord",
     "read_sweep_csv",
+    "read_vibration_csv",
     "ModalIwanFit",
     "free_decay_modes",
     "frf_modes",

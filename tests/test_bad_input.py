@@ -186,6 +186,10 @@ REGISTRY: dict[str, Entry] = {
         skip="reads a file: unknown units, missing or repeated columns are "
         "tested in tests/test_uff.py"
     ),
+    "read_vibration_csv": Entry(
+        skip="reads a file: wrong kinds, missing units and columns are tested in "
+        "tests/test_cli_curve.py"
+    ),
     "UffRecord": Entry(skip="a plain record built by read_uff"),
     "split_cycles": Entry(
         lambda: (
