@@ -75,13 +75,11 @@ def spectral_band(t, y) -> tuple[float, tuple[float, float]]:
     return peak, (BAND_RATIO[0] * peak, min(BAND_RATIO[1] * peak, 0.45 / dt))
 
 
-def _pair(text: str | None, flag: str, what: str) -> tuple | None:
-    if text is None:
-        return None
+def _pair(text: str, flag: str, what: str) -> tuple[str, str]:
     parts = [s.strip() for s in text.split(",")]
     if len(parts) != 2 or not all(parts):
         raise ValueError(f"{flag} must be {what}, got {text!r}")
-    return tuple(parts)
+    return parts[0], parts[1]
 
 
 def _ringdown_curve(rec: dict, args):
@@ -128,7 +126,12 @@ def run_curve(args) -> tuple[bool, list[str]]:
         raise ValueError(f"--units must be RESP or RESP,TIME (e.g. m/s^2,s), got {args.units!r}")
     rec = read_vibration_csv(
         args.csv,
-        columns=_pair(args.columns, "--columns", "two columns T,Y (names or 0-based indices)"),
+        columns=None
+        if args.columns is None
+        else [
+            int(c) if c.isdigit() else c
+            for c in _pair(args.columns, "--columns", "two columns T,Y (names or 0-based indices)")
+        ],
         response_unit=None if units is None else units[0],
         time_unit=None if units is None or len(units) < 2 else units[1],
     )

@@ -140,3 +140,24 @@ def test_exit_status_3_when_the_curve_is_not_usable(tmp_path, capsys):
     curve = ie.sweep_curve(f, F, A, ph, quantity="acceleration")
     assert not curve.success
     assert status == 3 and printed.splitlines()[1].startswith("NOT usable")
+
+
+def test_a_ring_down_without_a_header_takes_columns_and_units_from_the_flags(tmp_path, capsys):
+    """A synthetic ring-down (the exact modal Iwan oscillator, 0.2 % noise) in a file with a
+    comment and no header: --columns and --units say what it holds; the curve is the Python
+    route's on the same arrays."""
+    p = ie.IwanParameters(Fs=3.0, KT=2.5e4, chi=-0.5, beta=0.3)
+    t = np.arange(0, 2.0, 1 / 2000)
+    rd = ie.modal_ringdown(t, p, K_inf=(2 * np.pi * 80.0) ** 2 - p.KT, zeta0=1e-3, q0=2e-4)
+    acc = rd.acceleration * (1 + 0.002 * np.random.default_rng(0).standard_normal(t.size))
+    f = tmp_path / "ring.csv"
+    np.savetxt(f, np.column_stack([np.zeros(t.size), t, acc]), delimiter=",", header="rig 4")
+    out = tmp_path / "curve.csv"
+    args = ["curve", str(f), "--columns", "1,2", "--units", "m/s^2,s", "--band", "60,100"]
+    assert main([*args, "--out", str(out)]) == 0
+    assert "(given)" in capsys.readouterr().out
+    keep = t >= t[np.argmax(np.abs(acc))]
+    curve = ie.amplitude_curve(t[keep], acc[keep], quantity="acceleration", band=(60.0, 100.0))
+    _same_curve(_table(out), curve)
+    assert main(["curve", str(f), "--band", "60,100"]) == 1  # no units: never guessed
+    assert "never guessed" in capsys.readouterr().err
