@@ -65,8 +65,10 @@ def stepped_system(spec):
 
 def _solve(spec, f, F):
     if spec[0] == "stepped":
-        return harmonic_balance(spec[1], f, F, harmonics=HARMONICS)
-    return models.harmonic_balance(spec[1], f, F, harmonics=HARMONICS, n_modes=N_MODES)
+        return harmonic_balance(spec[1], frequency=f, force=F, harmonics=HARMONICS)
+    return models.harmonic_balance(
+        spec[1], frequency=f, force=F, harmonics=HARMONICS, n_modes=N_MODES
+    )
 
 
 def _level(spec, f, F, X, ph, repeat):

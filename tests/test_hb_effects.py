@@ -202,8 +202,8 @@ def test_harmonic_balance_through_the_compiled_port_is_the_stepped_routes():
     stepped = replace(sysm, ports=(ElementPort(Stepped(sysm.ports[0].element), 1.3),))
     f0 = sysm.omega[0] / (2 * math.pi)
     f = np.linspace(0.9 * f0, 1.1 * f0, 9)
-    a = harmonic_balance(sysm, f, 40.0)
-    b = harmonic_balance(stepped, f, 40.0)
+    a = harmonic_balance(sysm, frequency=f, force=40.0)
+    b = harmonic_balance(stepped, frequency=f, force=40.0)
     assert a.success and b.success
     np.testing.assert_allclose(a.amplitude, b.amplitude, rtol=1e-8)
     np.testing.assert_allclose(a.phase, b.phase, atol=1e-8)
