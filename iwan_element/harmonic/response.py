@@ -49,9 +49,9 @@ def linear_start(system, basis, W, force) -> NDArray[np.float64]:
 
 def harmonic_balance(
     system: ModalSystem,
+    *,
     frequency,
     force,
-    *,
     harmonics=(1, 3, 5),
     samples=None,
     tol: float = 1e-9,

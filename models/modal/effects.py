@@ -12,6 +12,7 @@ from __future__ import annotations
 
 from typing import Any
 
+from iwan_element.core.periodic import PeriodicForm
 from iwan_element.effects import EFFECTS
 
 from ..specimens.specimen import Specimen
@@ -38,6 +39,12 @@ class ZeroElement:
 
     def reset(self) -> None:
         """Return to the virgin state; returns None (no state to keep)."""
+
+    def periodic_form(self) -> PeriodicForm:
+        """The zero force in the compiled periodic kernel's terms: no rows, no laws (the
+        effects around it add theirs; the harmonic balance then runs the stack compiled).
+        """
+        return PeriodicForm()
 
 
 def effect_stack(specimen: Specimen, mode: int, omega0: float) -> tuple[Any, list[str]]:
