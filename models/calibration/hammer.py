@@ -49,7 +49,7 @@ from iwan_element.identify.decays.envelope import mode_envelope
 from ..modal.qsma import linear_modes
 from ..reduced.dispatch import linear_system
 from ..simulation.coupling import compare_curves
-from ..simulation.ringdown_records import check_run_length
+from ..simulation.ringdown_records import check_run_length, min_record
 from ..simulation.solver import MAX_STEPS
 from ..simulation.transient import ringdown
 from ..updating.result import LinearUpdateResult
@@ -289,7 +289,29 @@ def _inputs(
         max_steps=run["max_steps"],
     )
     n_cal = check_scalar("calibration_periods", calibration_periods, low=3.0)
+    _check_read_length(specimen, modes, calibration_mode, bands, n_cal, duration)
     return modes, recs, cal_name, bands, n_cal
+
+
+def _check_read_length(specimen, modes, calibration_mode, bands, n_cal, duration) -> None:
+    """Refuse a ``duration`` [s] too short for the predicted records to be read in their
+    bands (:func:`~iwan_element.models.simulation.ringdown_records.min_record`: the
+    calibration mode in windows of ``n_cal`` periods, the others in windows of at least 3
+    periods), before any stage runs.
+    """
+    f = _elastic_frequencies(specimen, max(modes))
+    for r in modes:
+        periods = n_cal if r == calibration_mode else 3.0
+        need = min_record(bands[r], periods / f[r - 1])
+        if duration < need:
+            lo, hi = bands[r]
+            raise ValueError(
+                f"duration must be >= {need:.4g} s to read the predicted mode {r} in its "
+                f"band ({lo:.4g}, {hi:.4g}) Hz: the reader needs 6 / B (B = {hi - lo:.4g} Hz, "
+                f"the band's width) to find the mode, and 1.5 / B of filter end effects at "
+                f"each end around one window of {periods:g} periods; got {duration!r} "
+                "(or widen the band: band_width, bands)"
+            )
 
 
 def _warnings(upd, cal, rd, skipped, errors):

@@ -13,6 +13,7 @@ transient of the whole specimen shows how much one mode's slip raises another's 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -198,6 +199,9 @@ def mode_coupling(
 ) -> ModeCouplingResult:
     """Each mode's damping with and without the other modes through the same interface.
 
+    Every run's release, length and cost are checked before the first one starts (the
+    errors of :func:`~iwan_element.models.ringdown`).
+
     Parameters
     ----------
     specimen : Specimen
@@ -215,9 +219,6 @@ def mode_coupling(
         Most time steps of all the runs together (default
         :data:`~iwan_element.models.simulation.solver.MAX_STEPS`, as ``ringdown``'s).
 
-    Every run's release, length and cost are checked before the first one starts (the
-    errors of :func:`~iwan_element.models.ringdown`).
-
     Returns
     -------
     ModeCouplingResult
@@ -226,7 +227,11 @@ def mode_coupling(
         raise ValueError(
             f"amplitude must be a dict of at least two modes {{mode: X [m]}}, got {amplitude!r}"
         )
-    run = {"duration": duration, "steps_per_period": steps_per_period, "n_periods": n_periods}
+    run: dict[str, Any] = {
+        "duration": duration,
+        "steps_per_period": steps_per_period,
+        "n_periods": n_periods,
+    }
     steps = preflight(specimen, amplitude, max_steps=max_steps, **run) + sum(
         preflight(specimen, {r: X}, max_steps=max_steps, **run) for r, X in amplitude.items()
     )
