@@ -117,9 +117,9 @@ def release_state(specimen: Specimen | SolidSpecimen, amp: dict) -> dict:
     stop_at(
         "release",
         [
-            f"amplitude of mode {r} = {X:.4g} m: {w} (the interface cannot hold the mode's "
-            f"static deflection there: it slips through); give a smaller amplitude (the "
-            f"specimen's amplitude_range is {lo:.3g}-{hi:.3g} m)"
+            f"amplitude of mode {r} = {X:.4g} m: {w}, so the state to release from is not "
+            f"known; give a smaller amplitude (the specimen's amplitude_range is "
+            f"{lo:.3g}-{hi:.3g} m)"
             for (r, X), st in zip(amp.items(), sts)
             for w in st["warnings"]
         ],
@@ -291,8 +291,8 @@ def ringdown(
     ValueError
         An argument out of its range (named), a run too short for its curves or longer than
         ``max_steps``; :class:`~iwan_element.base.stages.StageFailed` (a ValueError) when
-        the release's static solve does not converge (the amplitude named): the interface
-        cannot hold that deflection, and no time step is taken.
+        the release's static solve does not converge (the amplitude named): no time step
+        is taken.
 
     Notes
     -----
