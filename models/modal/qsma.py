@@ -261,7 +261,7 @@ def static_modal_load(
             ) <= tol * abs(alpha):
                 break
         else:
-            warns.append(_unsolved(Xt, max_iter, np.abs(u) / pm, X_prev, out_u, out_a, X, pm))
+            warns.append(_unsolved(Xt, max_iter, np.abs(u) / pm, X_prev, out_u, X, pm))
         out_u[j], out_a[j], X_prev = u, alpha, Xt
     F, _ = _interface_law(out_u, Fs, KT, pm, itf.chi, itf.beta)
     d = F - KT * out_u
@@ -282,7 +282,7 @@ def static_modal_load(
     }
 
 
-def _unsolved(Xt, max_iter, ratio, X_prev, out_u, out_a, X, pm) -> str:
+def _unsolved(Xt, max_iter, ratio, X_prev, out_u, X, pm) -> str:
     """Why the static solve at ``Xt`` [m] stopped: the slip state of its last iterate
     (``ratio``: slip over ``phi_max`` per point) and the largest amplitude solved before it.
     """
@@ -325,7 +325,16 @@ def modal_amplitude_curve(specimen: Specimen, *, mode: int = 1, amplitude=None) 
         ``damping_ratio`` the Masing damping of the contact points plus the specimen's
         damping floor, with the modal forms of the specimen's ``effects`` on this mode
         applied on top (``docs/vibration_effects.md``). ``warnings`` states amplitudes
-        outside the specimen's (or an effect's) calibrated range (also logged).
+        outside the specimen's (or an effect's) calibrated range (its documented
+        ``amplitude_range`` when it has none) or its size, and the bolts whose contact is
+        fully slipped (:mod:`~iwan_element.models.modal.limits`; also logged); a whole lap
+        fully slipped makes it not usable (``failures``).
+
+    Raises
+    ------
+    ValueError
+        Where the static solve does not converge (the interface lost in macroslip): the
+        amplitude, its slip state and the largest amplitude solved.
     """
     check_specimen(specimen)
     r = static_modal_load(specimen, amplitude, mode=mode)
