@@ -46,7 +46,7 @@ def test_an_oscillator_says_when_its_joint_is_fully_slipped(level):
     pm = _phi_max(10.0, 1.2e5, -0.5, 0.1)
     sysm = ModalSystem.oscillator(1.0, 4.0e4, 8.0, p)
     f = np.array([20.0, 25.0, 30.0])  # below the stuck resonance (64 Hz): quasi-static
-    r = hb_system(sysm, f, level * 10.0)
+    r = hb_system(sysm, frequency=f, force=level * 10.0)
     t = np.linspace(0.0, 2 * np.pi, 513)
     x = np.array(
         [
@@ -66,7 +66,7 @@ def test_an_oscillator_says_when_its_joint_is_fully_slipped(level):
 def test_case_4_a_fully_slipped_lap_is_not_a_usable_response():
     """Was: success True, a 1.0 m peak and no warning (the issue's 48.2 m at 2 kN)."""
     s = preset(TWO_BOLT)
-    r = harmonic_balance(s, [20.4, 20.5, 20.55], 50.0, harmonics=(1, 3))
+    r = harmonic_balance(s, frequency=[20.4, 20.5, 20.55], force=50.0, harmonics=(1, 3))
     assert np.max(r.amplitude) > 0.9
     assert not r.success
     v = r.verdict()
@@ -79,7 +79,7 @@ def test_case_4_a_fully_slipped_lap_is_not_a_usable_response():
     # (a mode below 0.5 Hz), so only the floor damping bounds the resonance
     assert natural_frequencies(s, n_modes=1, interface="none")[0] < 0.5
     # and a small force far from resonance stays in microslip: usable, nothing said
-    quiet = harmonic_balance(s, [10.0, 12.0], 0.01, harmonics=(1, 3))
+    quiet = harmonic_balance(s, frequency=[10.0, 12.0], force=0.01, harmonics=(1, 3))
     assert quiet.success and not any("slipped" in w for w in quiet.warnings)
 
 
@@ -88,12 +88,12 @@ def test_case_5_amplitudes_outside_an_uncalibrated_range_are_warned():
     s = preset(TWO_BOLT)
     assert s.calibrated_range is None
     lo, hi = s.amplitude_range
-    c = nonlinear_mode(s, [0.005, 0.05, 0.5])
+    c = nonlinear_mode(s, amplitude=[0.005, 0.05, 0.5])
     text = " ".join(c.warnings)
     assert "documented amplitude_range" in text and f"{0.5 / hi:.3g} x beyond" in text
     assert "likely mm given as metres" in text
     assert not c.success and "fully slipped" in c.verdict()  # 0.5 m: the whole lap slips
-    inside = nonlinear_mode(s, [lo, 10 * lo, 100 * lo])
+    inside = nonlinear_mode(s, amplitude=[lo, 10 * lo, 100 * lo])
     assert inside.success and not inside.warnings
     q = modal_amplitude_curve(s, amplitude=[5e-3, 5e-2])
     assert any("documented amplitude_range" in w for w in q.warnings)

@@ -85,9 +85,9 @@ def _with_range_warnings(specimen, response):
 
 def harmonic_balance(
     specimen: Specimen,
+    *,
     frequency,
     force,
-    *,
     harmonics=(1, 3, 5),
     samples=None,
     n_modes: int = 8,
@@ -129,8 +129,8 @@ def harmonic_balance(
         specimen,
         _hb_system(
             specimen_system(specimen, n_modes=n_modes),
-            frequency,
-            force,
+            frequency=frequency,
+            force=force,
             harmonics=harmonics,
             samples=samples,
             progress=progress,
@@ -140,9 +140,9 @@ def harmonic_balance(
 
 def frequency_response(
     specimen: Specimen,
+    *,
     force: float,
     band,
-    *,
     harmonics=(1, 3, 5),
     samples=None,
     n_modes: int = 8,
@@ -157,8 +157,8 @@ def frequency_response(
         specimen,
         trace(
             specimen_system(specimen, n_modes=n_modes),
-            force,
-            band,
+            force=force,
+            band=band,
             harmonics=harmonics,
             samples=samples,
             step=step,
@@ -168,8 +168,8 @@ def frequency_response(
 
 def nonlinear_mode(
     specimen: Specimen,
-    amplitude=None,
     *,
+    amplitude=None,
     mode: int = 1,
     harmonics=(1, 3, 5),
     samples=None,
