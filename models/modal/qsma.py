@@ -289,9 +289,9 @@ def _unsolved(Xt, max_iter, ratio, X_prev, out_u, X, pm) -> str:
     n, full = ratio.size, int(np.sum(ratio >= 1.0))
     if full == n:
         state = (
-            f"the interface is fully slipped there (macroslip: all {n} contact points at or "
-            "beyond their slip displacement phi_max): past its slip forces mu N the lap holds "
-            "no more load, so no static equilibrium reaches this amplitude"
+            f"the interface fully slipped at its last iterate (macroslip: all {n} contact "
+            "points at or beyond their slip displacement phi_max), where the lap holds no "
+            "more than its slip forces mu N"
         )
     else:
         state = f"{full} of {n} contact points fully slipped (beyond phi_max) at its last iterate"
