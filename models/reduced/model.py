@@ -33,7 +33,13 @@ from iwan_element.harmonic import ModalSystem
 
 from ..solid.specimen import SolidSpecimen
 from ..specimens.specimen import Specimen
-from .dispatch import check_specimen, contact_points, linear_system
+from .dispatch import (
+    bolt_groups,
+    check_kept_mode,
+    check_specimen,
+    contact_points,
+    linear_system,
+)
 
 __all__ = ["ReducedModel", "reduced_model", "reduction_error", "stuck_modes", "stuck_key"]
 
@@ -70,6 +76,13 @@ class ReducedModel:
         if isinstance(mode, bool) or not isinstance(mode, (int, np.integer)) or mode < 1:
             raise ValueError(f"mode must be an integer >= 1, got {mode!r}")
         k = self.n_rigid + int(mode) - 1
+        check_kept_mode(
+            self.specimen,
+            k,
+            name="mode",
+            value=mode,
+            offset=self.n_rigid,
+        )
         if k >= self.system.omega.size:
             raise ValueError(
                 f"mode must be <= {self.system.omega.size - self.n_rigid} (the "
@@ -162,6 +175,7 @@ def _reduced(specimen: Specimen | SolidSpecimen, n_modes: int) -> ReducedModel:
         joints=pts.params,
         residual=0.5 * (R + R.T),
         n_full=L.M.shape[0],
+        joint_groups=bolt_groups(specimen),
         notes=f"{specimen.name}: {n_keep - n_rigid} elastic modes kept of "
         f"{w.size - n_rigid}, {n_rigid} rigid, {len(pts)} contact points",
     )
