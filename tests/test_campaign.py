@@ -223,12 +223,14 @@ def test_a_law_that_leaves_the_model_range_is_found(fitted):
     assert not any("leaves the range" in w for w in fit.warnings)
 
 
-def test_record_scatter_is_estimated_and_carried_in_the_band():
+def test_record_scatter_is_estimated_and_carried_in_the_band(fitted):
     """Devices whose slip force scatters from test to test by a known factor (ln Fs standard
     deviation 0.15, no condition predicts it): each record's own value with the campaign
     stack finds its device's Fs, the stated scatter is the sample scatter of those factors
     about a law (computed here by numpy's lstsq on the generator's factors), and only the
-    band that carries it holds a device 1.2x off the law."""
+    band that carries it holds a device 1.2x off the law. The scatter-free reference is the
+    module's campaign without scatter (``fitted``, seed 1: 3.1e-4 in ln Fs, 2.6e-4 with seed
+    5), not a fit of its own."""
     from _campaign_cases import CONDITIONS, fs_factors
 
     s_true = 0.15
@@ -249,7 +251,7 @@ def test_record_scatter_is_estimated_and_carried_in_the_band():
     res = y - A @ np.linalg.lstsq(A, y, rcond=None)[0]
     s_ref = math.sqrt(res @ res / (len(conds) - 3))
     assert fit.scatter["ln Fs"] == pytest.approx(s_ref, rel=0.25)
-    assert fit.scatter["ln Fs"] > 5 * _plain_scatter()
+    assert fit.scatter["ln Fs"] > 5 * fitted[0].scatter["ln Fs"]
     cond = {"tension": 25.0, "frequency": 0.75}
     t = np.arange(600) / 200.0
     phi = math.exp(truth(cond)["log_phi_max"])
@@ -287,11 +289,6 @@ def test_record_scatter_is_estimated_and_carried_in_the_band():
         fit.leave_one_out(coverage="yes")
     with pytest.raises(ValueError, match="scatter"):
         fit.predict(cond, t, u, scatter=1)
-
-
-def _plain_scatter():
-    recs, conds = campaign(5)
-    return fit_campaign(recs, conds, **OPTS).scatter["ln Fs"]
 
 
 def test_campaign_probabilities_and_model_averaged_band(fitted):
