@@ -75,6 +75,7 @@ from dataclasses import replace
 import numpy as np
 from scipy import signal
 
+from ...base.plausibility import level_failure, record_failure
 from ...base.validation import check_magnitude, check_scalar, check_uniform_time, finite_array
 from ..modal.curves import DECAY_METHODS
 from ._filter import _decay_signal, _drift_terms, _noise_bandwidth
@@ -475,4 +476,12 @@ def amplitude_curve(
         ),
         (max_damping_ratio_std, compare, plan),
     )
-    return replace(curve, warnings=notes + curve.warnings) if notes else curve
+    implausible = tuple(
+        w
+        for w in (
+            record_failure(yy, dt, quantity=quantity, name="y"),
+            level_failure(curve.amplitude, curve.frequency, quantity=quantity, name="y"),
+        )
+        if w
+    )[:1]
+    return replace(curve, warnings=notes + curve.warnings, failures=implausible + curve.failures)

@@ -29,12 +29,14 @@ Identifiability, uncertainties and the verdict: :mod:`iwan_element.identify.loop
 from __future__ import annotations
 
 import copy
+import dataclasses
 import math
 import time
 
 import numpy as np
 from scipy.special import fdtrc
 
+from ...base.plausibility import record_failure
 from ...base.validation import (
     check_int,
     check_magnitude,
@@ -366,7 +368,7 @@ def fit_loops(
         "force_method": noise_F.method if noise is None else "given",
     }
     curves = {"u": u_drive[keep] - du0, "F": y - dF0, "F_fit": F_fit}
-    return _finish(
+    result = _finish(
         "loops",
         out,
         converged=out["res"].status > 0,
@@ -379,6 +381,15 @@ def fit_loops(
         noise=noise_out,
         curves=curves,
     )
+    why = record_failure(uu, tt, quantity="displacement", name="u")
+    if why:  # a displacement in mm or um given as m, or another quantity
+        result = dataclasses.replace(
+            result,
+            success=False,
+            failures=(why,) + result.failures,
+            warnings=(why,) + result.warnings,
+        )
+    return result
 
 
 def _fit_displacement_offset(setup, out, u_drive, FF, w_full, keep, tol, amp, opts):
