@@ -10,6 +10,7 @@ import numpy as np
 from iwan_element import AmplitudeCurve, amplitude_curve
 from iwan_element.base.result_shape import ResultShape, panels
 from iwan_element.base.serialize import json_safe
+from iwan_element.base.validation import plain_number
 
 __all__ = ["RingdownResult", "ENERGY_TOL", "with_energy_warning", "decay_curve"]
 
@@ -123,6 +124,7 @@ class RingdownResult(ResultShape):
                 "sensor_curve needs the result's sensor records (sensor_positions, "
                 f"sensor_{quantity}), which this result does not hold"
             )
+        sensor = plain_number(sensor)
         if (
             isinstance(sensor, bool)
             or not isinstance(sensor, int)
