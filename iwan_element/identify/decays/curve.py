@@ -476,12 +476,15 @@ def amplitude_curve(
         ),
         (max_damping_ratio_std, compare, plan),
     )
-    implausible = tuple(
-        w
-        for w in (
-            record_failure(yy, dt, quantity=quantity, name="y"),
-            level_failure(curve.amplitude, curve.frequency, quantity=quantity, name="y"),
-        )
-        if w
-    )[:1]
-    return replace(curve, warnings=notes + curve.warnings, failures=implausible + curve.failures)
+    failures = _implausible(yy, dt, curve, quantity) + curve.failures
+    return replace(curve, warnings=notes + curve.warnings, failures=failures)
+
+
+def _implausible(yy, dt, curve, quantity) -> tuple:
+    """The record's plausibility (:mod:`iwan_element.base.plausibility`): its own
+    derivatives, then the curve's velocity and acceleration; the first failure or ().
+    """
+    why = record_failure(yy, dt, quantity=quantity, name="y") or level_failure(
+        curve.amplitude, curve.frequency, quantity=quantity, name="y"
+    )
+    return (why,) if why else ()

@@ -381,15 +381,20 @@ def fit_loops(
         noise=noise_out,
         curves=curves,
     )
+    return _plausible(result, uu, tt)
+
+
+def _plausible(result, uu, tt):
+    """``result``, not usable when the displacement ``uu`` [m] at times ``tt`` [s] moves
+    faster than a jointed structure's test (:mod:`iwan_element.base.plausibility`): a
+    displacement in mm or um given as m, or another quantity.
+    """
     why = record_failure(uu, tt, quantity="displacement", name="u")
-    if why:  # a displacement in mm or um given as m, or another quantity
-        result = dataclasses.replace(
-            result,
-            success=False,
-            failures=(why,) + result.failures,
-            warnings=(why,) + result.warnings,
-        )
-    return result
+    if not why:
+        return result
+    return dataclasses.replace(
+        result, success=False, failures=(why,) + result.failures, warnings=(why,) + result.warnings
+    )
 
 
 def _fit_displacement_offset(setup, out, u_drive, FF, w_full, keep, tol, amp, opts):
