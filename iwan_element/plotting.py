@@ -7,6 +7,8 @@ matplotlib is imported only when a function here is called. Every function takes
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from .base.result_shape import axes_or_new
@@ -22,10 +24,14 @@ from .core.closed_form import (
 )
 from .core.parameters import IwanParameters
 
+if TYPE_CHECKING:
+    from matplotlib.artist import Artist
+    from matplotlib.lines import Line2D
+
 __all__ = ["plot_normalized_loops", "plot_loop", "plot_fitted_loops", "plot_dissipation_fit"]
 
 
-def plot_normalized_loops(cases, *, s0: float = 1.0, step: float = 0.002, ax=None):
+def plot_normalized_loops(cases, *, s0: float = 1.0, step: float = 0.002, ax=None) -> list[Line2D]:
     """Draw normalised hysteresis loops ``f(s), f_u(s), f_d(s)`` (paper eqs. 12, 13, 15; Fig. 3).
 
     Parameters
@@ -67,7 +73,7 @@ def plot_normalized_loops(cases, *, s0: float = 1.0, step: float = 0.002, ax=Non
 
 def plot_loop(
     amplitude: float, params: IwanParameters, *, n: int = 401, ax=None, label: str | None = None
-):
+) -> list[Line2D]:
     """Draw the steady Masing loop of amplitude ``u0`` [m] in mm and kN.
 
     Returns
@@ -95,7 +101,7 @@ def _fit_params(params) -> IwanParameters:
     return p
 
 
-def plot_fitted_loops(u, F, params, *, ax=None, max_points: int = 20000):
+def plot_fitted_loops(u, F, params, *, ax=None, max_points: int = 20000) -> list[Line2D]:
     """Measured against fitted force-displacement loops, in mm and kN (paper Fig. 8).
 
     The fitted force is the exact :class:`~iwan_element.IwanJoint` driven by the measured
@@ -147,7 +153,9 @@ def plot_fitted_loops(u, F, params, *, ax=None, max_points: int = 20000):
     return [meas, fit]
 
 
-def plot_dissipation_fit(force, dissipation, params, *, ax=None, slope: bool = True, n: int = 200):
+def plot_dissipation_fit(
+    force, dissipation, params, *, ax=None, slope: bool = True, n: int = 200
+) -> list[Artist]:
     """Log-log dissipation per cycle against force amplitude with the fitted curve (Fig. 7).
 
     The curve is the exact relation ``(F0(u0), D(u0))`` of the fitted joint (vertical at
@@ -186,7 +194,7 @@ def plot_dissipation_fit(force, dissipation, params, *, ax=None, slope: bool = T
         F0a * 1e-3, Da * 1e3, "o", ms=4, mfc="none", color="k", label="measured cycles"
     )
     F_curve = force_amplitude(u_grid, p)
-    D_curve = cycle_dissipation(u_grid, p)
+    D_curve = np.asarray(cycle_dissipation(u_grid, p))
     if Da.max() > D_curve[-1]:  # macroslip: F0 stays at Fs while D keeps growing
         F_curve = np.append(F_curve, p.Fs)
         D_curve = np.append(D_curve, Da.max())

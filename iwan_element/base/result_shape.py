@@ -36,6 +36,10 @@ from typing import TYPE_CHECKING, ClassVar
 
 import numpy as np
 
+if TYPE_CHECKING:
+    import pandas as pd
+    from matplotlib.axes import Axes
+
 __all__ = [
     "ResultShape",
     "panels",
@@ -201,7 +205,7 @@ class ResultShape:
             out.append(("goodness of fit and run", ("quantity", "value"), stats))
         return out
 
-    def to_dataframe(self, table: str | None = None):
+    def to_dataframe(self, table: str | None = None) -> pd.DataFrame:
         """One of the result's tables (:meth:`_tables`) as a ``pandas.DataFrame``.
 
         Parameters
@@ -334,7 +338,7 @@ def panels(ax, n: int, *, figsize=None, sharex: bool = False) -> list:
     return axs
 
 
-def axes_or_new(ax):
+def axes_or_new(ax) -> Axes:
     """One matplotlib Axes: ``ax`` itself, or a new figure's if ``None`` (the one-panel case
     of the axes contract, :func:`panels`).
     """

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import html
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -30,6 +31,9 @@ from ...base.validation import (
 from ...core.joint import IwanJoint
 from ...core.parameters import IwanParameters
 from .cycles import Cycle, check_varies, default_hysteresis, split_cycles
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 __all__ = ["TestData", "simulate_test"]
 
@@ -216,7 +220,7 @@ class TestData:
             }
         )
 
-    def to_dataframe(self):
+    def to_dataframe(self) -> pd.DataFrame:
         """The cycle table as a ``pandas.DataFrame`` (SI units; pandas imported only here)."""
         try:
             import pandas as pd
