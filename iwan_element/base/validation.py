@@ -184,7 +184,7 @@ def check_varies(name: str, arr: np.ndarray, *, unit: str = "", what: str = "") 
     return arr
 
 
-def plain_number(value):
+def plain_number(value: object) -> object:
     """``value`` as a Python ``int`` or ``float`` when it is a numpy integer or floating
     scalar (what indexing an array or reading a file gives), else unchanged (``bool`` and
     ``np.bool_`` too, so that the callers' checks still refuse them). The checks that follow
