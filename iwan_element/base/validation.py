@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 from dataclasses import fields
 from numbers import Real
+from typing import Any
 
 import numpy as np
 
@@ -184,7 +185,7 @@ def check_varies(name: str, arr: np.ndarray, *, unit: str = "", what: str = "") 
     return arr
 
 
-def plain_number(value: object) -> object:
+def plain_number(value: Any) -> Any:
     """``value`` as a Python ``int`` or ``float`` when it is a numpy integer or floating
     scalar (what indexing an array or reading a file gives), else unchanged (``bool`` and
     ``np.bool_`` too, so that the callers' checks still refuse them). The checks that follow

@@ -11,8 +11,6 @@ rows and patches (:mod:`~iwan_element.models.solid.specimen`).
 
 from __future__ import annotations
 
-from typing import cast
-
 import numpy as np
 
 from ..beam.assembly import beam_axis_rows, beam_linear_system
@@ -109,7 +107,7 @@ def kept_modes(specimen: Specimen | SolidSpecimen) -> int | None:
 
 def _rigid(solid: SolidSpecimen) -> int:
     """Rigid-body modes of a solid's reduced system (6 free-free, 0 clamped)."""
-    return int(cast(LinearSystem, solid.model.system).rigid_body_modes)
+    return int(solid.model.system.rigid_body_modes)
 
 
 def check_kept_mode(

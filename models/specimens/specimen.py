@@ -320,11 +320,8 @@ class Specimen:
             object.__setattr__(
                 self, "calibrated_range", _range("calibrated_range", self.calibrated_range)
             )
-        md = (
-            tuple(plain_number(z) for z in self.modal_damping)
-            if not isinstance(self.modal_damping, (str, bytes))
-            else None
-        )
+        md = self.modal_damping
+        md = None if isinstance(md, (str, bytes)) else tuple(plain_number(z) for z in md)
         if md is None or any(
             isinstance(z, bool)
             or not isinstance(z, (int, float))
