@@ -9,6 +9,7 @@ import functools
 import html
 import inspect
 import json
+import re
 import warnings
 
 import matplotlib
@@ -184,16 +185,6 @@ RESULTS = {
 }
 
 
-def test_every_public_result_class_is_covered():
-    """Every public class with a report is a result and is in RESULTS (a new one must join)."""
-    public = {
-        n
-        for n in ie.__all__
-        if inspect.isclass(getattr(ie, n)) and hasattr(getattr(ie, n), "report")
-    }
-    assert public - {"IwanParameters", "UffRecord", "ModeTarget"} == set(RESULTS)
-
-
 def test_top_level_exports_every_closed_form():
     """The top level's ``__all__`` names each closed form (written out for static tools)."""
     from iwan_element.core import closed_form
@@ -212,21 +203,30 @@ def _built(name):
 
 @pytest.mark.parametrize("name", sorted(RESULTS))
 @pytest.mark.parametrize(
-    "part", ["report", "html", "dataframe", "to_dict", "warnings", "success", "plot"]
+    "part", ["report", "html", "columns", "dataframe", "to_dict", "warnings", "success", "plot"]
 )
 def test_result_objects_have_one_shape(name, part):
     res = _built(name)
-    if part == "report":
+    if part == "report":  # opens with the verdict, usable or NOT usable and why
         assert isinstance(res.report(), str) and res.report().strip()
-    elif part == "html":  # real tables, the verdict on top
+        assert res.report().splitlines()[0] == res.verdict()
+        assert res.verdict() == "usable" if res.success else res.verdict().startswith("NOT usable")
+    elif part == "html":  # real tables, the verdict on top, each caption its fixed title
         page = res._repr_html_()
         assert "<pre>" not in page and page.count("<table>") == len(res._tables()) >= 1
         assert page.index(html.escape(res.verdict())) < page.index("<table>")
+        captions = re.findall(r"<caption>(.*?)</caption>", page)
+        assert captions == [html.escape(t) for t, _, _ in res._tables()]
         if res.warnings:
             assert page.count("<li>") >= len(res.warnings)
+    elif part == "columns":  # one style: "name [unit]", SI, [-] dimensionless
+        _check_column_titles(res)
     elif part == "dataframe":  # every table reaches pandas as it stands
         pd = pytest.importorskip("pandas")
-        for title, cols, rows in res._tables():
+        tables = res._tables()
+        if len(tables) > 1:  # the main table first, the run's quantities after it
+            assert tables[0][0] not in ("goodness of fit and run", "run")
+        for title, cols, rows in tables:
             frame = pd.DataFrame([list(r) for r in rows], columns=list(cols))
             assert frame.shape == (len(rows), len(cols)) and all(len(r) == len(cols) for r in rows)
             assert res.to_dataframe(title).equals(frame)
@@ -253,6 +253,36 @@ def test_result_objects_have_one_shape(name, part):
         wrong = axes + [fig.add_subplot(1, n + 1, n + 1)]
         with pytest.raises(TypeError, match="Axes"):
             res.plot(ax=wrong)
+
+
+_TITLE = re.compile(r"[^\[\]]+( \[[^\[\]]+\])?")
+_SUFFIX_UNIT = re.compile(r"_(N|Hz|m|s|J|rad|Pa|per_m)$")
+
+
+def _check_column_titles(res):
+    """Every column and quantity title of every table: ``name [unit]`` or a bare name; no
+    unit glued on with an underscore (``force_levels_N``); a title that holds non-integer
+    numbers names their unit (``[-]`` dimensionless), unless the table has a unit column.
+    The ensemble's rows are titled by the user's own parameter and output names."""
+    own = set(getattr(res, "parameters", ())) | set(getattr(res, "outputs", ()))
+    for title, cols, rows in res._tables():
+        assert not re.search(r"\d+ rows", title), title
+        if "unit" in cols:
+            continue
+        if tuple(cols) == ("quantity", "value"):
+            pairs = [(q, [v]) for q, v in rows]
+        else:
+            pairs = [(c, [r[i] for r in rows]) for i, c in enumerate(cols)]
+        for name, values in pairs:
+            name = str(name)
+            assert _TITLE.fullmatch(name) and not _SUFFIX_UNIT.search(name), (title, name)
+            real = [
+                v
+                for v in values
+                if isinstance(v, float | np.floating) and np.isfinite(v) and v != round(v)
+            ]
+            if real and name not in own:
+                assert name.endswith("]"), f"{type(res).__name__} table {title!r}: {name!r}"
 
 
 @pytest.mark.parametrize("fn", [ie.diagnose, ie.fit_loops, ie.split_cycles, ie.TestData])
@@ -351,34 +381,6 @@ MODEL_RESULTS = {
 }
 
 
-def test_every_model_result_class_is_covered():
-    """Every result class the beam model's public functions return is in MODEL_RESULTS."""
-    from iwan_element.models import calibration
-    from iwan_element.models.calibration import hammer_result
-    from iwan_element.models.simulation import coupling, forced, machine, transient
-
-    from iwan_element import harmonic, models
-
-    public = {
-        n
-        for mod in (
-            models,
-            calibration,
-            transient,
-            machine,
-            forced,
-            coupling,
-            hammer_result,
-            harmonic,
-        )
-        for n in getattr(mod, "__all__", ())
-        if n.endswith(("Result", "Response", "Prediction"))
-        and inspect.isclass(getattr(mod, n))
-        and issubclass(getattr(mod, n), ResultShape)
-    }
-    assert public == set(MODEL_RESULTS)
-
-
 def _prediction():
     fit = _campaign()
     t = np.linspace(0.0, 2.0, 400)
@@ -415,12 +417,49 @@ def _energy_balance():
 #: Results of the Exudyn adapter (``iwan_element.exudyn``), with the same shape.
 EXUDYN_RESULTS = {"EnergyBalance": _energy_balance}
 
-ALL_RESULTS = {**RESULTS, **MODEL_RESULTS, **METHOD_RESULTS, **EXUDYN_RESULTS}
+#: The record load_test returns (a ResultShape too: its cycles are its main table).
+DATA_RESULTS = {"TestData": _record}
+
+ALL_RESULTS = {**RESULTS, **MODEL_RESULTS, **METHOD_RESULTS, **EXUDYN_RESULTS, **DATA_RESULTS}
+
+#: Public classes with a report that are parts of results, not results: a fit's parameter
+#: table (shown inside its result's tables).
+NOT_RESULTS = {"ParameterTable"}
 
 
-@pytest.mark.parametrize("name", sorted({**MODEL_RESULTS, **METHOD_RESULTS, **EXUDYN_RESULTS}))
+def _public_classes_with_reports():
+    """Every class a module of the package (``iwan_element`` and its ``models``) names in
+    its ``__all__`` that is a :class:`ResultShape` or has a ``report``: found by walking the
+    package, so that a new result joins the contract without being listed here.
+    """
+    import importlib
+    import pkgutil
+
+    from iwan_element import models
+
+    found = set()
+    for pkg in (ie, models):
+        for info in pkgutil.walk_packages(pkg.__path__, pkg.__name__ + "."):
+            mod = importlib.import_module(info.name)
+            for n in getattr(mod, "__all__", ()):
+                obj = getattr(mod, n, None)
+                if inspect.isclass(obj) and obj is not ResultShape:
+                    if issubclass(obj, ResultShape) or hasattr(obj, "report"):
+                        found.add(obj.__name__)
+    return found
+
+
+def test_every_public_result_class_is_covered():
+    """The package's public result classes, found by walking it, are exactly the ones built
+    here (a new result class must join ALL_RESULTS and so the contract below)."""
+    assert _public_classes_with_reports() - NOT_RESULTS == set(ALL_RESULTS)
+
+
 @pytest.mark.parametrize(
-    "part", ["report", "html", "dataframe", "to_dict", "warnings", "success", "plot"]
+    "name", sorted({**MODEL_RESULTS, **METHOD_RESULTS, **EXUDYN_RESULTS, **DATA_RESULTS})
+)
+@pytest.mark.parametrize(
+    "part", ["report", "html", "columns", "dataframe", "to_dict", "warnings", "success", "plot"]
 )
 def test_other_result_objects_have_the_same_shape(name, part):
     """The beam model's results and the results of public methods, by the same test."""
@@ -443,19 +482,6 @@ def test_report_tables_align_their_titles_with_their_columns():
     assert lines[2].split() == ["bb", "1e-07", "12.35"]
 
 
-def test_every_exudyn_result_class_is_covered():
-    """Every result class of the Exudyn adapter's public names is in EXUDYN_RESULTS."""
-    from iwan_element import exudyn as ex
-    from iwan_element.base.result_shape import ResultShape
-
-    public = {
-        n
-        for n in ex.__all__
-        if inspect.isclass(getattr(ex, n)) and issubclass(getattr(ex, n), ResultShape)
-    }
-    assert public == set(EXUDYN_RESULTS)
-
-
 def test_test_data_reaches_notebooks_and_pandas():
     """The record load_test returns: an HTML table of its cycles, a JSON-safe dict and a
     data frame in SI units, one row per cycle."""
@@ -464,5 +490,8 @@ def test_test_data_reaches_notebooks_and_pandas():
     frame = d.to_dataframe()
     assert isinstance(frame, pd.DataFrame) and len(frame) == len(d.cycles)
     assert frame["u0 [m]"].tolist() == [c.u0 for c in d.cycles]
+    assert d.to_dataframe("cycles").equals(frame)
     json.dumps(d.to_dict(), allow_nan=False)
-    assert d._repr_html_().count("<tr>") == len(d.cycles) + 1
+    cycles = d._repr_html_().split("<caption>cycles</caption>")[1].split("</table>")[0]
+    assert cycles.count("<tr>") == len(d.cycles) + 1
+    assert d.report().splitlines()[0] == "usable" and not hasattr(d, "summary")

@@ -36,7 +36,10 @@ from typing import TYPE_CHECKING, ClassVar
 
 import numpy as np
 
+from .columns import column, title_of, unit_label
+
 __all__ = [
+    "column",
     "ResultShape",
     "panels",
     "axes_or_new",
@@ -55,12 +58,6 @@ HTML_ROWS = 40
 
 #: Column titles of a parameter table (:func:`parameter_rows`).
 PARAMETER_COLUMNS = ("parameter", "value", "std. error", "unit", "status")
-
-
-def unit_label(unit) -> str:
-    """A unit as reports print it: ``"-"`` for dimensionless (``""``, ``"1"``, ``"-"``)."""
-    unit = "" if unit is None else str(unit).strip("[] ")
-    return "-" if unit in ("", "1", "-") else unit
 
 
 def format_value(x, digits: int = 6) -> str:
@@ -118,6 +115,9 @@ class ResultShape:
     """
 
     plot_panels: ClassVar[int] = 1
+    #: ``{to_dict key: (title, unit[, scale])}``: the class's own column and quantity
+    #: titles, over the shared :data:`~iwan_element.base.columns.QUANTITIES`.
+    COLUMNS: ClassVar[dict] = {}
     warnings: tuple = ()
 
     if TYPE_CHECKING:  # every result defines these (a field or a property; a method)
@@ -164,29 +164,24 @@ class ResultShape:
         if params is not None and hasattr(params, "parameters") and len(params.parameters):
             out.append(("parameters", PARAMETER_COLUMNS, parameter_rows(params)))
         d = self.to_dict()
-        rows = d.get("rows")
-        if isinstance(rows, list) and rows and all(isinstance(r, dict) for r in rows):
-            cols = tuple(
-                dict.fromkeys(
-                    k for r in rows for k, v in r.items() if not isinstance(v, (dict, list))
-                )
-            )
-            out.append(("rows", cols, [tuple(r.get(c) for c in cols) for r in rows]))
+        out += self._row_table(d.get("rows"))
         columns: dict[int, list[str]] = {}  # keys of the numeric lists, by length
         for k, v in d.items():
-            if (
-                k != "rows"
-                and isinstance(v, list)
-                and v
-                and all(
-                    v_ is None or (isinstance(v_, numbers.Real) and not isinstance(v_, bool))
-                    for v_ in v
-                )
-            ):
+            if k != "rows" and isinstance(v, list) and v and all(_number(x) for x in v):
                 columns.setdefault(len(v), []).append(k)
-        for n, keys in sorted(columns.items()):
-            title = "data" if len(columns) == 1 else f"data ({n} rows)"
-            out.append((title, tuple(keys), list(zip(*(d[k] for k in keys)))))
+        for i, (_, keys) in enumerate(sorted(columns.items(), reverse=True)):
+            titled = [title_of(k, self.COLUMNS) for k in keys]
+            rows = [
+                tuple(_scaled(x, s) for x, (_, s) in zip(r, titled))
+                for r in zip(*(d[k] for k in keys))
+            ]
+            out.append(
+                (
+                    "data" if i == 0 else ", ".join(t for t, _ in titled),
+                    tuple(t for t, _ in titled),
+                    rows,
+                )
+            )
         stats = [
             (k, v)
             for k, v in d.items()
@@ -198,7 +193,35 @@ class ResultShape:
             )
         ]
         if stats:
-            out.append(("goodness of fit and run", ("quantity", "value"), stats))
+            out.append(
+                ("goodness of fit and run", ("quantity", "value"), self._quantity_rows(stats))
+            )
+        return out
+
+    def _row_table(self, rows) -> list:
+        """``[("rows", titles, rows)]`` from a list of dicts (one per row), or ``[]``."""
+        if not (isinstance(rows, list) and rows and all(isinstance(r, dict) for r in rows)):
+            return []
+        keys = tuple(
+            dict.fromkeys(k for r in rows for k, v in r.items() if not isinstance(v, (dict, list)))
+        )
+        titled = [title_of(k, self.COLUMNS) for k in keys]
+        return [
+            (
+                "rows",
+                tuple(t for t, _ in titled),
+                [tuple(_scaled(r.get(k), s) for k, (_, s) in zip(keys, titled)) for r in rows],
+            )
+        ]
+
+    def _quantity_rows(self, pairs) -> list:
+        """``(title, value)`` rows of a quantity table from ``(to_dict key, value)`` pairs:
+        titles and scales of :meth:`COLUMNS` and the shared quantities.
+        """
+        out = []
+        for k, v in pairs:
+            title, scale = title_of(k, self.COLUMNS)
+            out.append((title, _scaled(v, scale)))
         return out
 
     def to_dataframe(self, table: str | None = None):
@@ -250,6 +273,17 @@ class ResultShape:
         return "".join(parts) + "</div>"
 
 
+def _number(x) -> bool:
+    return x is None or (isinstance(x, numbers.Real) and not isinstance(x, (bool, np.bool_)))
+
+
+def _scaled(x, scale: float):
+    """``x * scale`` for a number (``scale`` 100: a fraction shown in %), else ``x``."""
+    if scale == 1.0 or x is None or not _number(x):
+        return x
+    return float(x) * scale
+
+
 def html_table(title: str, columns, rows) -> str:
     """One titled HTML table; numbers right-aligned and formatted (:func:`format_value`)."""
     head = "".join(f"<th>{html.escape(str(c))}</th>" for c in columns)
@@ -258,7 +292,10 @@ def html_table(title: str, columns, rows) -> str:
     cut = len(rows) > HTML_ROWS
     if cut:  # a long table shows its ends (to_dataframe has every row)
         n = len(rows)
-        rows = rows[: HTML_ROWS - 5] + [("...",) * len(columns)] + rows[-5:]
+        gap = (f"... {n - HTML_ROWS + 4} rows more in to_dataframe()",) + ("...",) * (
+            len(columns) - 1
+        )
+        rows = rows[: HTML_ROWS - 5] + [gap] + rows[-5:]
     for r in rows:
         cells = []
         for v in r:
@@ -267,8 +304,6 @@ def html_table(title: str, columns, rows) -> str:
             align = ' style="text-align:right"' if num else ""
             cells.append(f"<td{align}>{html.escape(text)}</td>")
         body.append("<tr>" + "".join(cells) + "</tr>")
-    if cut:
-        title = f"{title} ({n} rows; to_dataframe() has them all)"
     return (
         f"<table><caption>{html.escape(title)}</caption><thead><tr>{head}</tr></thead>"
         f"<tbody>{''.join(body)}</tbody></table>"

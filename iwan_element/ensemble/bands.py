@@ -156,9 +156,10 @@ class PredictionBands(ResultShape):
     def report(self) -> str:
         """Plain-text table of the bands: frequency [Hz], damping ratio [-], peak, per amplitude."""
         lines = [
+            self.verdict(),
             f"Prediction bands ({100 * self.level:.0f} % central) from {self._source}: "
             f"{self.frequency.shape[0]} samples on {self.ensemble.executor}, "
-            f"{len(self.ensemble.errors)} failed"
+            f"{len(self.ensemble.errors)} failed",
         ]
         fl, _, fh = self.band("frequency")
         zl, _, zh = self.band("damping_ratio")

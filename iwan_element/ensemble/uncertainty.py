@@ -258,6 +258,7 @@ class ParameterUncertainty(ResultShape):
         """Plain-text table of the coordinates' mean and standard deviation."""
         se = np.sqrt(np.diag(self.cov))
         lines = [
+            self.verdict(),
             f"Parameter uncertainty from {self.source}; nominal {self.nominal}",
             "  coordinate        mean       std",
         ]

@@ -6,7 +6,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..base.result_shape import ResultShape, panels, table_lines
+from ..base.result_shape import ResultShape, column, panels, table_lines
 from ..base.serialize import json_safe
 
 __all__ = ["FrequencyResponse", "ENERGY_TOL"]
@@ -154,6 +154,40 @@ class FrequencyResponse(ResultShape):
                 "warnings": list(self.warnings),
             }
         )
+
+    def _tables(self) -> list:
+        """The response, one row per frequency (the main table), then the run."""
+        cols = (
+            column("frequency", "Hz"),
+            column("force", "N"),
+            column("amplitude", "m"),
+            column("phase", "rad"),
+            "converged",
+            "iterations",
+            column("input work", "J"),
+            column("joint dissipation", "J"),
+            column("floor dissipation", "J"),
+            column("energy error", "-"),
+        )
+        arrays = (self.frequency, self.force, self.amplitude, self.phase)
+        rows = [
+            (*map(float, r[:4]), bool(c), int(i), *map(float, r[4:]))
+            for *r, c, i in zip(
+                *arrays,
+                self.input_work,
+                self.joint_dissipation,
+                self.floor_dissipation,
+                self.energy_error,
+                self.converged,
+                self.iterations,
+            )
+        ]
+        run = [
+            ("harmonics", ", ".join(map(str, self.harmonic_numbers))),
+            ("samples per period", self.metadata.get("samples")),
+            (column("wall time", "s"), float(self.wall_time)),
+        ]
+        return [("response", cols, rows), ("run", ("quantity", "value"), run)]
 
     def plot(self, ax=None, *, label="harmonic balance"):
         """Amplitude per force [m/N] and phase [rad] against frequency on ``ax = (ax_a,

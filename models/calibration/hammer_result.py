@@ -95,7 +95,7 @@ class HammerPrediction(ResultShape):
         """The verdict, the calibration, the release, and each predicted curve against the
         measured one; the mode-shape check.
         """
-        lines = [f"Hammer test predicted from mode {self.calibration_mode}: {self.verdict()}"]
+        lines = [self.verdict(), f"Hammer test predicted from mode {self.calibration_mode}"]
         if self.update is not None:
             fitted = ", ".join(n for n, p in self.update.params.items() if p.identified)
             lines += [

@@ -113,8 +113,9 @@ class ModeCouplingResult(ResultShape):
     def report(self) -> str:
         """Human-readable account: per mode, its damping with and without the others."""
         lines = [
+            self.verdict(),
             f"mode coupling through the interface: modes {', '.join(map(str, self.modes))}"
-            f" released together ({self.together.wall_time:.3g} s wall) and alone"
+            f" released together ({self.together.wall_time:.3g} s wall) and alone",
         ]
         for r, f in self.figures.items():
             n = len(f["amplitude"])

@@ -75,6 +75,13 @@ class ForcedResponseResult(ResultShape):
         A peak at the first or last frequency (the resonance is not inside the sweep).
     """
 
+    COLUMNS = {
+        "force_levels_N": ("force level", "N"),
+        "peak_frequency_Hz": ("peak frequency", "Hz"),
+        "peak_amplitude_m": ("peak amplitude", "m"),
+        "frequencies_Hz": ("frequency", "Hz"),
+    }
+
     force_levels: np.ndarray
     frequencies: np.ndarray
     amplitude: np.ndarray
@@ -110,9 +117,10 @@ class ForcedResponseResult(ResultShape):
         fp, ap = self.peaks()
         m = self.metadata
         lines = [
+            self.verdict(),
             f"stepped sine of {self.specimen.name}, mode {m['mode']} (stuck "
             f"{m['linear_frequency_Hz']:.4f} Hz), {self.frequencies.size} frequencies "
-            f"{self.frequencies.min():.4f}-{self.frequencies.max():.4f} Hz"
+            f"{self.frequencies.min():.4f}-{self.frequencies.max():.4f} Hz",
         ]
         lines += [
             f"  F = {F:g} N: peak {a:.4g} m at {f:.4f} Hz ({a / F:.4g} m/N)"

@@ -56,6 +56,15 @@ class QuasiStaticResult(ResultShape):
     warnings : tuple of str
     """
 
+    COLUMNS = {
+        "amplitude_m": ("grip amplitude", "m"),
+        "frequency_Hz": ("frequency", "Hz"),
+        "machine_force_amplitude_N": ("machine force amplitude", "N"),
+        "mean_slip_amplitude_m": ("mean slip amplitude", "m"),
+        "dissipation_per_cycle_J": ("dissipation per cycle", "J"),
+        "machine_secant_stiffness_N_per_m": ("machine secant stiffness", "N/m"),
+    }
+
     plot_panels = 2
 
     t: np.ndarray
@@ -125,6 +134,7 @@ class QuasiStaticResult(ResultShape):
         s = self.summary()
         area, closed = self.loop_check()
         lines = [
+            self.verdict(),
             f"quasi-static test of {self.specimen.name}: grip {s['amplitude_m']:.4g} m at "
             f"{s['frequency_Hz']:g} Hz, {self.metadata['cycles']} cycle(s) of "
             f"{self.metadata['steps_per_cycle']} load steps",

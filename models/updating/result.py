@@ -86,7 +86,8 @@ class LinearUpdateResult(ResultShape):
     def report(self) -> str:
         """Human-readable account: the parameters, the targets and the predictions [Hz]."""
         lines = [
-            f"Linear update of {self.initial.name!r}: {self.verdict()}",
+            self.verdict(),
+            f"Linear update of {self.initial.name!r}",
             f"  {'parameter':34s} {'nominal':>12s} {'updated':>12s} {'stderr':>10s} "
             f"{'range':>23s}  status",
         ]

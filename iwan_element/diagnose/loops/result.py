@@ -219,8 +219,37 @@ class Diagnosis(Probable, ResultShape):
         return "\n".join(lines + verdict_lines("error", self))
 
     def _tables(self) -> list:
+        """The Iwan part's parameters, the named effects' values with their standard
+        errors, the candidates of every step, the probabilities, then the run.
+        """
         base = super()._tables()
-        return base[:1] + self.probability_tables() + base[1:]
+        named = [
+            (e["name"], k, float(v), e["stderr"].get(k), effect_unit(e["name"], k))
+            for e in self.fit.details.get("effects", [])
+            for k, v in e["parameters"].items()
+        ]
+        cands = [
+            (
+                k + 1,
+                " + ".join(st["on"]) or "Iwan",
+                c["name"],
+                100 * c["nrmse"],
+                c["ratio"],
+                c["dIC"],
+                100 * c["explained"],
+                c["verdict"],
+            )
+            for k, st in enumerate(self.steps)
+            for c in st["candidates"]
+        ]
+        cols = ("step", "on", "candidate", "NRMSE [%]", "x noise [-]", "dIC [-]", "explains [%]")
+        return (
+            base[:1]
+            + [("named effects", ("effect", "parameter", "value", "std. error", "unit"), named)]
+            + [("candidates", cols + ("verdict",), cands)]
+            + self.probability_tables()
+            + base[1:]
+        )
 
     def averaged_band(self, t=None, u=None, *, level: float = 0.95):
         """The force predicted with the doubt about the model: every probable explanation's

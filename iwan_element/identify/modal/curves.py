@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ...base.result_shape import ResultShape, panels, table_lines, wrap
+from ...base.result_shape import ResultShape, column, panels, table_lines, wrap
 from ...base.validation import check_magnitude, finite_array
 
 __all__ = ["AmplitudeCurve", "MIN_POINTS", "DECAY_METHODS"]
@@ -236,12 +236,12 @@ class AmplitudeCurve(ResultShape):
 
     #: Column titles of the curve's points (:meth:`to_dataframe`).
     POINT_COLUMNS = (
-        "amplitude [m]",
-        "amplitude_std [m]",
-        "frequency [Hz]",
-        "frequency_std [Hz]",
-        "damping_ratio [-]",
-        "damping_ratio_std [-]",
+        column("amplitude", "m"),
+        column("amplitude_std", "m"),
+        column("frequency", "Hz"),
+        column("frequency_std", "Hz"),
+        column("damping_ratio", "-"),
+        column("damping_ratio_std", "-"),
     )
 
     def _tables(self) -> list:
@@ -265,7 +265,10 @@ class AmplitudeCurve(ResultShape):
         info = [
             ("method", self.method or "unspecified"),
             ("points", len(self)),
-            ("noise floor [m]", None if np.isnan(self.noise_floor) else float(self.noise_floor)),
+            (
+                column("noise floor", "m"),
+                None if np.isnan(self.noise_floor) else float(self.noise_floor),
+            ),
             ("notes", self.notes),
         ]
         return out + [("curve", ("quantity", "value"), info)]
