@@ -211,6 +211,7 @@ def test_result_objects_have_one_shape(name, part):
         assert isinstance(res.report(), str) and res.report().strip()
         assert res.report().splitlines()[0] == res.verdict()
         assert res.verdict() == "usable" if res.success else res.verdict().startswith("NOT usable")
+        _check_verdict_agrees_with_table(res)
     elif part == "html":  # real tables, the verdict on top, each caption its fixed title
         page = res._repr_html_()
         assert "<pre>" not in page and page.count("<table>") == len(res._tables()) >= 1
@@ -253,6 +254,23 @@ def test_result_objects_have_one_shape(name, part):
         wrong = axes + [fig.add_subplot(1, n + 1, n + 1)]
         with pytest.raises(TypeError, match="Axes"):
             res.plot(ax=wrong)
+
+
+def _check_verdict_agrees_with_table(res):
+    """A verdict of NOT usable names every fitted parameter its table marks not identified,
+    and says nothing twice (no "misfit beyond the noise remains: misfit beyond the noise
+    remains after ...")."""
+    for reason in res.verdict().split("; "):
+        parts = [re.findall(r"[\w.+-]+", p.lower()) for p in reason.split(": ")]
+        for head, tail in zip(parts, parts[1:]):
+            last = " ".join(head[-3:])
+            assert len(head) < 3 or last not in " ".join(tail), reason
+    params = getattr(res, "params", None)
+    if res.success or not hasattr(params, "parameters"):
+        return
+    for p in params.parameters:
+        if not (p.identified or p.fixed or p.nuisance):
+            assert re.search(rf"\b{re.escape(p.name)}\b", res.verdict()), (p.name, res.verdict())
 
 
 _TITLE = re.compile(r"[^\[\]]+( \[[^\[\]]+\])?")
@@ -495,3 +513,19 @@ def test_test_data_reaches_notebooks_and_pandas():
     cycles = d._repr_html_().split("<caption>cycles</caption>")[1].split("</table>")[0]
     assert cycles.count("<tr>") == len(d.cycles) + 1
     assert d.report().splitlines()[0] == "usable" and not hasattr(d, "summary")
+
+
+def test_a_fit_verdict_names_every_parameter_its_table_marks():
+    """beta, not required when its range reaches 0, is still NOT identified in the table: the
+    verdict that names KT and chi names it too (it said "KT and chi are not identified")."""
+    from iwan_element.identify.loops.joint_verdict import failure_list
+
+    ident = {"Fs": True, "KT": False, "chi": False, "beta": False}
+    common = dict(converged=True, message="", explains=True, noise_text="", ident=ident)
+    (reason,) = failure_list(**common, required=["Fs", "KT", "chi"], microslip=False)
+    assert reason.startswith("KT, chi and beta are not identified")
+    # a given beta is not fitted: not named
+    (reason,) = failure_list(
+        **common, required=["Fs", "KT", "chi"], microslip=False, fixed=("beta",)
+    )
+    assert reason.startswith("KT and chi are not identified")

@@ -349,6 +349,7 @@ def _finish(
             ident=ident,
             required=required_parameters(out["ranges"], fixed),
             microslip=out["details"].get("macroslip_reached") is False,
+            fixed=fixed,
         )
         if not success
         else ()
