@@ -529,3 +529,14 @@ def test_a_fit_verdict_names_every_parameter_its_table_marks():
         **common, required=["Fs", "KT", "chi"], microslip=False, fixed=("beta",)
     )
     assert reason.startswith("KT and chi are not identified")
+
+
+def test_iwan_parameters_have_an_html_view():
+    """A notebook shows IwanParameters as a table: the four parameters and the derived ones
+    with their SI units, the values as the object holds them."""
+    page = P._repr_html_()
+    cells = re.findall(r"<tr><td>(\w+)</td><td[^>]*>([^<]+)</td><td>([^<]+)</td>", page)
+    got = {n: (float(v), u) for n, v, u in cells}
+    assert got["Fs"] == (P.Fs, "N") and got["KT"] == (P.KT, "N/m") and got["chi"][1] == "-"
+    assert got["phi_max"][0] == pytest.approx(P.phi_max, rel=1e-5) and got["phi_max"][1] == "m"
+    assert set(got) == {"Fs", "KT", "chi", "beta", "phi_max", "R", "S"}

@@ -1,5 +1,6 @@
 """Column and quantity titles of the result tables: one style, ``name [unit]``, SI units,
-``[-]`` for dimensionless numbers and ``[%]`` where the value is shown in percent.
+``[-]`` for dimensionless numbers and ``[%]`` where the value is shown in percent; counts
+and labels (samples, modes, seeds) have no unit.
 
 :func:`column` writes a title; :data:`QUANTITIES` holds the titles of the quantities that
 several results put in their tables (their ``to_dict`` keys), so that a residual norm or a
@@ -56,11 +57,11 @@ QUANTITIES = {
     "noise_sigma": ("noise sigma", "N", 1.0),
     "noise_level": ("noise level", "-", 1.0),
     "misfit": ("misfit over the noise", "-", 1.0),
-    "nfev": ("model evaluations", "-", 1.0),
-    "n_data": ("residuals", "-", 1.0),
-    "samples": ("samples", "-", 1.0),
-    "failed": ("failed samples", "-", 1.0),
-    "seed": ("seed", "-", 1.0),
+    "nfev": ("model evaluations", None, 1.0),
+    "n_data": ("residuals", None, 1.0),
+    "samples": ("samples", None, 1.0),
+    "failed": ("failed samples", None, 1.0),
+    "seed": ("seed", None, 1.0),
     "level": ("level", "-", 1.0),
     "share_within": ("share within the band", "%", 100.0),
     "coverage": ("coverage", "%", 100.0),
@@ -68,10 +69,10 @@ QUANTITIES = {
     "start": ("start", "s", 1.0),
     "chi2": ("chi-square", "-", 1.0),
     "chi2_red": ("reduced chi-square", "-", 1.0),
-    "dof": ("degrees of freedom", "-", 1.0),
+    "dof": ("degrees of freedom", None, 1.0),
     "tau": ("correlation time", "samples", 1.0),
     "n_eff": ("effective samples", "-", 1.0),
-    "n": ("samples", "-", 1.0),
+    "n": ("samples", None, 1.0),
     "rms": ("RMS residual", "N", 1.0),
     "lag_one": ("lag-one correlation", "-", 1.0),
     "initial_energy": ("initial energy", "J", 1.0),
@@ -83,8 +84,8 @@ QUANTITIES = {
     "after": ("after", "Hz", 1.0),
     "residual_before": ("weighted residual before", "-", 1.0),
     "residual_after": ("weighted residual after", "-", 1.0),
-    "modes": ("modes", "-", 1.0),
-    "mode": ("mode", "-", 1.0),
+    "modes": ("modes", None, 1.0),
+    "mode": ("mode", None, 1.0),
     "probability": ("probability", "-", 1.0),
 }
 

@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ...base.result_shape import ResultShape, panels, value_stderr, wrap
+from ...base.result_shape import ResultShape, panels, table_lines, value_stderr, wrap
 from ...base.serialize import json_safe
 from ..selection.lines import effect_unit, verdict_lines
 from ..selection.probable import Probable
@@ -182,12 +182,29 @@ class Diagnosis(Probable, ResultShape):
             )
         for k, st in enumerate(self.steps):
             lines.append(f"  step {k + 1}: candidates on {' + '.join(st['on']) or 'Iwan'}")
-            lines.append("    effect               NRMSE[%]  x noise       dIC  explains  verdict")
-            for c in st["candidates"]:
-                lines.append(
-                    f"    {c['name']:<20} {100 * c['nrmse']:8.3g} {c['ratio']:8.3g} "
-                    f"{c['dIC']:9.4g} {100 * c['explained']:7.3g} %  {c['verdict']}"
-                )
+            width = max([20] + [len(c["name"]) for c in st["candidates"]])
+            lines += table_lines(
+                [
+                    ("effect", f"<{width}"),
+                    ("NRMSE [%]", "9.3g"),
+                    ("x noise", "8.3g"),
+                    ("dIC", "9.4g"),
+                    ("explains [%]", "12.3g"),
+                    ("  verdict", "<"),
+                ],
+                [
+                    (
+                        c["name"],
+                        100 * c["nrmse"],
+                        c["ratio"],
+                        c["dIC"],
+                        100 * c["explained"],
+                        "  " + c["verdict"],
+                    )
+                    for c in st["candidates"]
+                ],
+                indent=4,
+            )
         for name, why in self.untestable.items():
             lines.append(f"  cannot test {name}: {why}")
         if self.effects:
