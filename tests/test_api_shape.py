@@ -203,7 +203,18 @@ def _built(name):
 
 @pytest.mark.parametrize("name", sorted(RESULTS))
 @pytest.mark.parametrize(
-    "part", ["report", "html", "columns", "dataframe", "to_dict", "warnings", "success", "plot"]
+    "part",
+    [
+        "report",
+        "html",
+        "columns",
+        "dataframe",
+        "to_dict",
+        "warnings",
+        "success",
+        "plot",
+        "figure",
+    ],
 )
 def test_result_objects_have_one_shape(name, part):
     res = _built(name)
@@ -245,6 +256,8 @@ def test_result_objects_have_one_shape(name, part):
         assert isinstance(res.warnings, tuple)
     elif part == "success":
         assert isinstance(res.success, bool)
+    elif part == "figure":  # a figure a tester can put in a report as it stands
+        _check_figure(res)
     else:  # the one axes contract (core.result_shape)
         n = res.plot_panels
         fig = Figure()
@@ -254,6 +267,17 @@ def test_result_objects_have_one_shape(name, part):
         wrong = axes + [fig.add_subplot(1, n + 1, n + 1)]
         with pytest.raises(TypeError, match="Axes"):
             res.plot(ax=wrong)
+        if "label" in inspect.signature(res.plot).parameters:  # a label draws a legend
+            fig = Figure()
+            axes = [fig.add_subplot(1, n, k + 1) for k in range(n)]
+            artists = res.plot(ax=axes[0] if n == 1 else axes, label="this curve")
+            texts = [
+                t.get_text()
+                for a in {a.axes for a in artists}
+                if a.get_legend() is not None
+                for t in a.get_legend().get_texts()
+            ]
+            assert any(t.startswith("this curve") for t in texts), (name, texts)
 
 
 def _check_verdict_agrees_with_table(res):
@@ -271,6 +295,45 @@ def _check_verdict_agrees_with_table(res):
     for p in params.parameters:
         if not (p.identified or p.fixed or p.nuisance):
             assert re.search(rf"\b{re.escape(p.name)}\b", res.verdict()), (p.name, res.verdict())
+
+
+def _check_figure(res):
+    """``plot()`` on a new figure: every Axes with its labels, ticks and legend inside the
+    figure (no clipped y-label, no overlapping panels), every drawn Axes labelled, and no
+    offset tick labels ("+7.701e1") on a linear axis."""
+    import matplotlib.pyplot as plt
+    from matplotlib.ticker import ScalarFormatter
+
+    before = set(plt.get_fignums())
+    artists = res.plot()
+    (num,) = set(plt.get_fignums()) - before
+    fig = plt.figure(num)
+    try:
+        fig.canvas.draw()
+        renderer = fig.canvas.get_renderer()
+        box = fig.bbox
+        drawn = [a for a in fig.axes if a.get_visible() and a.axison]
+        boxes = [a.get_tightbbox(renderer) for a in drawn]
+        for a, b in zip(drawn, boxes):
+            assert b.x0 >= box.x0 - 1 and b.y0 >= box.y0 - 1, (a.get_ylabel(), b, box)
+            assert b.x1 <= box.x1 + 1 and b.y1 <= box.y1 + 1, (a.get_ylabel(), b, box)
+            for axis in (a.xaxis, a.yaxis):
+                fmt = axis.get_major_formatter()
+                if isinstance(fmt, ScalarFormatter) and axis.get_scale() == "linear":
+                    assert fmt.offset == 0, (a.get_ylabel(), axis.get_offset_text().get_text())
+        for a in {x.axes for x in artists}:
+            assert a.get_ylabel() or a.get_xlabel(), type(res).__name__
+        # the panels' labels and ticks do not run into each other (a twin shares its panel)
+        for i in range(len(drawn)):
+            for j in range(i + 1, len(drawn)):
+                if drawn[i].get_position().overlaps(drawn[j].get_position()):
+                    continue
+                bi, bj = boxes[i], boxes[j]
+                w = min(bi.x1, bj.x1) - max(bi.x0, bj.x0)
+                h = min(bi.y1, bj.y1) - max(bi.y0, bj.y0)
+                assert w <= 2 or h <= 2, (type(res).__name__, i, j, w, h)
+    finally:
+        plt.close(fig)
 
 
 _TITLE = re.compile(r"[^\[\]]+( \[[^\[\]]+\])?")
@@ -477,7 +540,18 @@ def test_every_public_result_class_is_covered():
     "name", sorted({**MODEL_RESULTS, **METHOD_RESULTS, **EXUDYN_RESULTS, **DATA_RESULTS})
 )
 @pytest.mark.parametrize(
-    "part", ["report", "html", "columns", "dataframe", "to_dict", "warnings", "success", "plot"]
+    "part",
+    [
+        "report",
+        "html",
+        "columns",
+        "dataframe",
+        "to_dict",
+        "warnings",
+        "success",
+        "plot",
+        "figure",
+    ],
 )
 def test_other_result_objects_have_the_same_shape(name, part):
     """The beam model's results and the results of public methods, by the same test."""
@@ -540,3 +614,58 @@ def test_iwan_parameters_have_an_html_view():
     assert got["Fs"] == (P.Fs, "N") and got["KT"] == (P.KT, "N/m") and got["chi"][1] == "-"
     assert got["phi_max"][0] == pytest.approx(P.phi_max, rel=1e-5) and got["phi_max"][1] == "m"
     assert set(got) == {"Fs", "KT", "chi", "beta", "phi_max", "R", "S"}
+
+
+def test_ringdown_plot_reads_alone_with_modes_far_apart():
+    """Two modes at 21 and 133 Hz: the time panel has its y-label and a legend naming each
+    mode, the frequency axis is logarithmic (one linear axis squashed each curve flat), and
+    no tick label carries an offset ("+7.701e1")."""
+    import dataclasses
+
+    import matplotlib.pyplot as plt
+
+    rd = _built("RingdownResult")
+    a = np.geomspace(1e-6, 1e-5, 6)
+    curves = tuple(
+        ie.AmplitudeCurve(a, f * (1 - 1e-4 * a / a[-1]), 1e-3 + 0 * a) for f in (21.0, 133.0)
+    )
+    two = dataclasses.replace(
+        rd, modes=(1, 2), curves=curves, modal_responses=np.vstack([rd.modal, 0.3 * rd.modal])
+    )
+    two.plot()
+    fig = plt.gcf()
+    try:
+        fig.canvas.draw()
+        ax_t, ax_f, ax_z = fig.axes[:3]
+        assert ax_t.get_ylabel().endswith("[m]") and ax_t.get_xlabel() == "time [s]"
+        texts = [t.get_text() for t in ax_t.get_legend().get_texts()]
+        assert any("mode 1" in t for t in texts) and any("mode 2" in t for t in texts)
+        assert ax_f.get_yscale() == "log" and ax_z.get_yscale() == "linear"
+        assert ax_z.yaxis.get_major_formatter().offset == 0
+    finally:
+        plt.close(fig)
+
+
+def test_cli_fit_plot_is_the_python_plot_with_its_dissipation_panel():
+    """``iwan-element fit --plot`` draws the loops with FitResult.plot (the fitted force
+    offset removed: the CLI's own copy drew the model 1.1 kN off the data of ARTS
+    ds1_0p5Hz_25lb), beside the dissipation panel."""
+    import matplotlib.pyplot as plt
+
+    from iwan_element.cli import fit_figure
+
+    d = _record()
+    off = ie.TestData.from_arrays(d.t, d.u, d.F + 300.0)  # a 300 N force-sensor offset
+    res = ie.fit_loops(off.t, off.u, off.F, n_starts=1, max_nfev=60)
+    assert abs(res.offsets["force"][0] - 300.0) < 10.0
+    fig, notes = fit_figure(off, res)
+    ax1, ax2 = fig.axes[:2]
+    ref = Figure().add_subplot()
+    res.plot(ax=ref)
+    for mine, python in zip(ax1.get_lines(), ref.get_lines(), strict=True):
+        np.testing.assert_array_equal(mine.get_ydata(), python.get_ydata())
+    measured, model = ax1.get_lines()[:2]
+    gap = np.mean(measured.get_ydata() - model.get_ydata()) * 1e3  # kN -> N
+    assert abs(gap) < 5.0  # the offset (300 N) is not between data and model
+    assert notes == [] and ax2.get_xscale() == "log" and len(ax2.get_lines()) >= 2
+    plt.close("all")

@@ -347,8 +347,13 @@ def panels(ax, n: int, *, figsize=None, sharex: bool = False) -> list:
     if ax is None:
         import matplotlib.pyplot as plt
 
-        _, grid = plt.subplots(
-            n, 1, sharex=sharex, squeeze=False, figsize=figsize or (6.0, 3.2 * n)
+        _, grid = plt.subplots(  # constrained: labels and legends fit inside the figure
+            n,
+            1,
+            sharex=sharex,
+            squeeze=False,
+            figsize=figsize or (6.0, 3.2 * n),
+            layout="constrained",
         )
         return list(grid[:, 0])
     if hasattr(ax, "plot"):

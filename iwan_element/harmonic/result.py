@@ -198,4 +198,7 @@ class FrequencyResponse(ResultShape):
         arts += p.plot(self.frequency, self.phase, "-", label=label)
         a.set(ylabel="amplitude / force [m/N]")
         p.set(xlabel="frequency [Hz]", ylabel="phase [rad]")
+        if label is not None:
+            a.legend(fontsize=8)
+            p.legend(fontsize=8)
         return arts

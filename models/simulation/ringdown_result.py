@@ -267,7 +267,11 @@ class RingdownResult(ResultShape):
             arts += ax_t.plot(self.t, y, lw=0.6, label=f"mode {mode} at the sensor")
             arts += c.plot((ax_f, ax_z), label=f"ring-down, mode {mode}")
         ax_t.set_xlabel("time [s]")
-        ax_t.set_ylabel("displacement [m]")
+        ax_t.set_ylabel("displacement at the sensor [m]")
+        ax_t.legend(fontsize=8, loc="upper right")
+        f = np.concatenate([c.frequency for c in self.curves or (self.curve,)])
+        if f.size and np.nanmax(f) > 3 * np.nanmin(f):  # modes far apart (21 and 133 Hz)
+            ax_f.set_yscale("log")
         return arts
 
     def energy_error(self) -> np.ndarray:

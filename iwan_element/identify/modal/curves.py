@@ -303,6 +303,10 @@ class AmplitudeCurve(ResultShape):
                 eb = a.errorbar(self.amplitude, y, yerr=np.nan_to_num(s), label=label, **kw)
                 artists += [eb.lines[0], *eb.lines[2]]
             a.set_xscale("log")
+            if a.get_yscale() == "linear":  # 79.05 .. 79.06 Hz, not "+7.9e1" and 0.01 steps
+                a.ticklabel_format(axis="y", useOffset=False)
+            if label is not None:
+                a.legend(fontsize=8)
         ax_f.set_ylabel("frequency [Hz]")
         ax_z.set_ylabel("damping ratio [-]")
         ax_z.set_xlabel("amplitude [m]")
