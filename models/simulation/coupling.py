@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from iwan_element import AmplitudeCurve
-from iwan_element.base.result_shape import ResultShape, panels, table_lines
+from iwan_element.base.result_shape import ResultShape, column, panels, table_lines
 from iwan_element.base.serialize import json_safe
 
 from ..specimens.specimen import Specimen
@@ -109,6 +109,35 @@ class ModeCouplingResult(ResultShape):
                 "frequency_shift": None if k is None else float(f["frequency_shift"][k]),
             }
         return out
+
+    def _tables(self) -> list:
+        """Per mode and amplitude, the damping together and alone and the frequency shift
+        (the main table), then the run.
+        """
+        rows = [
+            (int(r), float(a), float(z), float(z0), float(q), float(df))
+            for r, f in self.figures.items()
+            for a, z, z0, q, df in zip(
+                f["amplitude"],
+                f["damping"],
+                f["damping_reference"],
+                f["damping_ratio"],
+                f["frequency_shift"],
+            )
+        ]
+        cols = (
+            "mode",
+            column("amplitude", "m"),
+            column("damping together", "-"),
+            column("damping alone", "-"),
+            column("damping ratio together/alone", "-"),
+            column("frequency shift df/f", "-"),
+        )
+        run = [
+            ("modes", ", ".join(map(str, self.modes))),
+            (column("wall time", "s"), float(self.together.wall_time)),
+        ]
+        return [("modes", cols, rows), ("run", ("quantity", "value"), run)]
 
     def report(self) -> str:
         """Human-readable account: per mode, its damping with and without the others."""
