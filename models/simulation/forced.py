@@ -37,7 +37,7 @@ import exudyn as exu
 import numpy as np
 
 from iwan_element.base.progress import finish, progress_bar, tick
-from iwan_element.base.result_shape import ResultShape, panels
+from iwan_element.base.result_shape import ResultShape, column, panels
 from iwan_element.base.serialize import json_safe
 from iwan_element.base.validation import check_int, check_scalar, finite_array
 
@@ -75,19 +75,38 @@ class ForcedResponseResult(ResultShape):
         A peak at the first or last frequency (the resonance is not inside the sweep).
     """
 
-    COLUMNS = {
-        "force_levels_N": ("force level", "N"),
-        "peak_frequency_Hz": ("peak frequency", "Hz"),
-        "peak_amplitude_m": ("peak amplitude", "m"),
-        "frequencies_Hz": ("frequency", "Hz"),
-    }
-
     force_levels: np.ndarray
     frequencies: np.ndarray
     amplitude: np.ndarray
     specimen: Specimen
     phase: np.ndarray | None = None
     metadata: dict = field(default_factory=dict)
+
+    def _tables(self) -> list:
+        """The response, one row per force level and frequency (the main table), then the
+        peak of each level.
+        """
+        phase = self.phase if self.phase is not None else np.full(self.amplitude.shape, np.nan)
+        rows = [
+            (float(F), float(f), float(a), float(a / F), float(ph))
+            for F, amp, phs in zip(self.force_levels, self.amplitude, phase)
+            for f, a, ph in zip(self.frequencies, amp, phs)
+        ]
+        cols = (
+            column("force level", "N"),
+            column("frequency", "Hz"),
+            column("amplitude", "m"),
+            column("amplitude / force", "m/N"),
+            column("phase", "rad"),
+        )
+        fp, ap = self.peaks()
+        peaks = [(float(F), float(f), float(a)) for F, f, a in zip(self.force_levels, fp, ap)]
+        head = (
+            column("force level", "N"),
+            column("peak frequency", "Hz"),
+            column("peak amplitude", "m"),
+        )
+        return [("response", cols, rows), ("peaks", head, peaks)]
 
     def peaks(self) -> tuple[np.ndarray, np.ndarray]:
         """(peak frequency [Hz], peak amplitude [m]) per force level."""

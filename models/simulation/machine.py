@@ -19,7 +19,7 @@ import numpy as np
 from exudyn.itemInterface import SensorObject
 
 from iwan_element import dissipation
-from iwan_element.base.result_shape import ResultShape, panels
+from iwan_element.base.result_shape import ResultShape, column, panels
 from iwan_element.base.serialize import json_safe
 from iwan_element.base.validation import check_int, check_scalar
 
@@ -111,6 +111,30 @@ class QuasiStaticResult(ResultShape):
         """
         area, closed = self.loop_check()
         return bool(np.max(np.abs(area - closed)) <= LOOP_TOL * max(closed.sum(), 1e-300))
+
+    def _tables(self) -> list:
+        """The test's time series (the main table: grip and machine force, the joint's
+        mean slip and summed force, the dissipated energy), then the last cycle in numbers.
+        """
+        cols = (
+            column("t", "s"),
+            column("machine displacement", "m"),
+            column("machine force", "N"),
+            column("mean slip", "m"),
+            column("joint force", "N"),
+            column("dissipated", "J"),
+        )
+        arrays = (
+            self.t,
+            self.machine_displacement,
+            self.machine_force,
+            self.mean_slip,
+            self.joint_force,
+            self.dissipated,
+        )
+        rows = [tuple(map(float, r)) for r in zip(*arrays)]
+        last = self._quantity_rows(self.summary().items())
+        return [("time series", cols, rows), ("last cycle", ("quantity", "value"), last)]
 
     def summary(self) -> dict:
         """The last cycle in numbers (JSON-safe)."""
