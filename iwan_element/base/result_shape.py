@@ -3,7 +3,8 @@
 Every fit, curve, diagnosis, ensemble and uncertainty result offers (the contract checked by
 ``tests/test_api_shape.py`` on every public result class):
 
-* ``report() -> str``: a human-readable summary, units in brackets;
+* ``report() -> str``: a human-readable summary opening with the verdict line, units in
+  brackets;
 * ``to_dict() -> dict``: JSON-safe (``json.dumps(..., allow_nan=False)`` works);
 * ``warnings``: a tuple of str, what the data could not support;
 * ``success``: bool, whether the result can be used as it stands;
@@ -16,8 +17,11 @@ Every fit, curve, diagnosis, ensemble and uncertainty result offers (the contrac
 * ``_repr_html_()``: the result in a notebook as HTML tables: the verdict on top, then
   the tables of :meth:`ResultShape._tables` (parameters, goodness of fit, data), then the
   warnings;
-* ``to_dataframe(table=None)``: one of those tables as a ``pandas.DataFrame`` (pandas is
-  imported only then: ``pip install "iwan-element[pandas]"``).
+* ``to_dataframe(table=None)``: one of those tables as a ``pandas.DataFrame``, by default
+  the first, the main one (pandas is imported only then: ``pip install
+  "iwan-element[pandas]"``). Column titles read ``name [unit]``, SI, ``[-]`` for a
+  dimensionless number (:func:`~iwan_element.base.columns.column`); captions are the
+  tables' fixed titles.
 
 :class:`ResultShape` supplies the notebook representation, the data frames and the panel
 count from one hook, :meth:`ResultShape._tables` (titled rows built from what the class
@@ -155,9 +159,12 @@ class ResultShape:
         shows and :meth:`to_dataframe` returns. The default reads what the class exposes:
         its ``params`` (a ``ParameterTable``) as "parameters", the ``rows`` of its
         ``to_dict()`` (one dict per row) as "rows", its flat numeric lists of one length as
-        "data" (one column each), and its scalar ``to_dict()`` entries as "goodness of fit
-        and run" (quantity, value). Classes with data of their own (curves, bands) put
-        those first.
+        "data" (one column each; the longest group, lists of other lengths after it, titled
+        by their columns), and its scalar ``to_dict()`` entries as "goodness of fit and run"
+        (quantity, value). Columns and quantities are titled by :attr:`COLUMNS` and the
+        shared :data:`~iwan_element.base.columns.QUANTITIES` (``name [unit]``, a fraction
+        shown in % where the title says so). Classes with data of their own (curves, bands,
+        time series) put those first: the first table is the main one.
         """
         out: list[tuple[str, tuple, list]] = []
         params = getattr(self, "params", None)
