@@ -51,8 +51,8 @@ def main(argv=None):
     )
     a = ap.parse_args(argv)
     s = models.preset("brake-reuss")
-    models.harmonic_balance(s, GRID[:3], 0.1)  # warm-up: compile, reduce
-    models.nonlinear_mode(s, [1e-5, 2e-5])
+    models.harmonic_balance(s, frequency=GRID[:3], force=0.1)  # warm-up: compile, reduce
+    models.nonlinear_mode(s, amplitude=[1e-5, 2e-5])
     print("(a) harmonic balance, one 41-point level (79.2-81.2 Hz)")
     print(
         f"{'F [N]':>7} {'wall [s]':>9} {'cpu [s]':>8} {'Newton':>7} {'peak [Hz]':>10} "
@@ -94,7 +94,7 @@ def main(argv=None):
         )
         _, wall_hb, _ = _timed(models.harmonic_balance, s, f, F)
         h = 1.0 / (f * 64)
-        hb = models.harmonic_balance(s, np.tan(np.pi * f * h) / (np.pi * h), F)
+        hb = models.harmonic_balance(s, frequency=np.tan(np.pi * f * h) / (np.pi * h), force=F)
         print(
             f"\n(c) time-stepped stepped sine (Exudyn, 60 + 10 periods a point) at F = {F} N, "
             f"{f.size} frequencies: {wall_ts:.1f} s ({wall_ts / f.size:.2f} s a point, "

@@ -168,8 +168,8 @@ def run_ours(case: Case, force: float, repeat: int):
     def sweep():
         return harmonic_balance(
             system,
-            case.frequency,
-            force,
+            frequency=case.frequency,
+            force=force,
             harmonics=case.harmonics,
             samples=case.samples,
             tol=case.tol,

@@ -42,7 +42,7 @@ def read_levels():
 
 def errors(spec, f, F, A, ph):
     X = A / (2 * math.pi * f) ** 2
-    r = models.harmonic_balance(spec, f, F, harmonics=(1, 3, 5), n_modes=8)
+    r = models.harmonic_balance(spec, frequency=f, force=F, harmonics=(1, 3, 5), n_modes=8)
     ok = r.converged
     e = np.log(r.amplitude[ok] / X[ok])
     dph = np.angle(np.exp(1j * (r.phase[ok] - ph[ok])))

@@ -103,7 +103,7 @@ def linear_receptance(spec, curve, *, f=80.3):
 def compare(spec, f, F, X, ph):
     """Harmonic balance of ``spec`` at the measured ``f`` and ``F``, and its errors."""
     t0 = time.perf_counter()
-    r = models.harmonic_balance(spec, f, F, harmonics=HARMONICS, n_modes=N_MODES)
+    r = models.harmonic_balance(spec, frequency=f, force=F, harmonics=HARMONICS, n_modes=N_MODES)
     wall = time.perf_counter() - t0
     ok = r.converged
     e_amp = np.log(r.amplitude / X)
@@ -127,7 +127,9 @@ def compare(spec, f, F, X, ph):
 
 def reverse_difference(spec, f, F, r):
     """Largest relative amplitude difference when the same points are solved downwards."""
-    q = models.harmonic_balance(spec, f[::-1], F[::-1], harmonics=HARMONICS, n_modes=N_MODES)
+    q = models.harmonic_balance(
+        spec, frequency=f[::-1], force=F[::-1], harmonics=HARMONICS, n_modes=N_MODES
+    )
     return float(np.max(np.abs(q.amplitude[::-1] / r.amplitude - 1)))
 
 

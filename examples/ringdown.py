@@ -68,7 +68,7 @@ def synthetic(out, duration):
     p = IwanParameters(KT * c * phimax / (1 + beta), KT, chi, beta)
     k_inf, zeta0 = w02 - KT, 1.5e-3
     t = np.arange(0.0, duration, 1 / 12800.0)
-    _, _, a = modal_ringdown(t, p, K_inf=k_inf, q0=0.1 * phimax, zeta0=zeta0)
+    a = modal_ringdown(t, p, K_inf=k_inf, q0=0.1 * phimax, zeta0=zeta0).acceleration
     a = a + 0.01 * np.std(a) * np.random.default_rng(0).standard_normal(t.size)
     cur = amplitude_curve(t, a, quantity="acceleration", band=(70.0, 92.0))
     fit = fit_modal_iwan(cur)

@@ -78,7 +78,7 @@ def main(argv=None):
     spec = cal.specimen
     _frequencies("stuck, calibrated", spec)
     X = np.geomspace(2e-6, 60e-6, 8)
-    m1 = models.nonlinear_mode(spec, X, mode=1)
+    m1 = models.nonlinear_mode(spec, amplitude=X, mode=1)
     print(
         "mode 1 (EPMC) at the sensor: "
         + ", ".join(
@@ -93,7 +93,7 @@ def main(argv=None):
         ref = dict(zip(meas3.amplitude, zip(meas3.frequency, meas3.damping_ratio)))
     else:
         X3, ref = np.geomspace(1e-8, 3e-6, 4), {}
-    m3 = models.nonlinear_mode(spec, X3, mode=3)
+    m3 = models.nonlinear_mode(spec, amplitude=X3, mode=3)
     for x, f, z in zip(m3.amplitude, m3.frequency, m3.damping_ratio):
         seen = f" (record {ref[x][0]:.2f} Hz, {100 * ref[x][1]:.3f} %)" if x in ref else ""
         print(f"2nd height bending at {x:.2e} m: {f:.2f} Hz, {100 * z:.3f} %{seen}")

@@ -4,7 +4,12 @@ The physics core (this package's top level) depends only on numpy, scipy and num
 connector lives in :mod:`iwan_element.exudyn`, which is the only module importing exudyn.
 """
 
+import importlib.abc
+import importlib.util
+import sys
+from importlib.machinery import ModuleSpec
 from importlib.metadata import version as _version
+from pathlib import Path
 
 from .core.closed_form import (
     backbone,
@@ -23,6 +28,7 @@ from .core.discrete import DiscreteIwan, slider_distribution
 from .core.joint import IwanJoint
 from .core.joint_bank import IwanJointBank
 from .core.modal import harmonic_stiffness, modal_iwan_curve, modal_ringdown
+from .core.modal_ringdown import ModalRingdown
 from .core.parameters import IwanParameters
 from .core.protocol import JointElement, check_element
 from .diagnose import (
@@ -65,6 +71,7 @@ from .identify.decays.fit import fit_decay
 from .identify.decays.modes import free_decay_modes
 from .identify.files.csv_input import load_test
 from .identify.files.formats import UffRecord, read_sweep_csv, read_uff
+from .identify.files.vibration import read_vibration_csv
 from .identify.loops.cycles import Cycle, find_reversals, split_cycles
 from .identify.loops.dissipation import fit_dissipation
 from .identify.loops.fit import fit_loops
@@ -81,6 +88,47 @@ from .identify.sweeps.stepped_sine import stepped_sine_curve
 from .identify.sweeps.sweep import sweep_curve
 
 __version__ = _version("iwan-element")
+
+
+class _SourceTreeModels(importlib.abc.MetaPathFinder):
+    """Finds ``iwan_element.models`` in the checkout's top-level ``models/`` folder.
+
+    An install maps ``models/`` into the package (pyproject's ``package-dir``), but a Python
+    started at the checkout's root (a notebook, ``python -c``, a REPL) imports this package from
+    the source tree, which hides the installed one and has no ``models`` inside, so
+    ``iwan_element.models`` was not found after a non-editable install. This finder answers that
+    one name only, with the ``models/`` beside the ``iwan_element/`` actually imported, so the
+    package and its models always come from the same tree; the subpackages of ``models`` then
+    follow from its ``__path__`` as usual. It is installed only when the package is imported from
+    a source tree (never from an installed package, which holds ``models/`` itself) and is put
+    first so that an editable install of another checkout cannot pair this tree's package with
+    its models. Extending this package's ``__path__`` with the checkout's root would do the same
+    but also make ``tests``, ``examples`` and ``setup`` importable as ``iwan_element.*``.
+    """
+
+    def __init__(self, folder: Path) -> None:
+        self.folder = folder
+
+    def find_spec(self, fullname, path=None, target=None) -> ModuleSpec | None:
+        if fullname != f"{__name__}.models":
+            return None
+        return importlib.util.spec_from_file_location(
+            fullname, self.folder / "__init__.py", submodule_search_locations=[str(self.folder)]
+        )
+
+
+def _find_models_in_the_source_tree() -> None:
+    here = Path(__file__).resolve().parent
+    models = here.parent / "models"
+    if (here / "models").exists() or not (models / "__init__.py").is_file():
+        return  # an installed package (models inside) or no checkout around it
+    if not (here.parent / "pyproject.toml").is_file():
+        return
+    if not any(isinstance(f, _SourceTreeModels) for f in sys.meta_path):
+        sys.meta_path.insert(0, _SourceTreeModels(models))
+
+
+_find_models_in_the_source_tree()
 
 __all__ = [
     # the paper's closed forms, in the order of core.closed_form.__all__
@@ -127,6 +175,7 @@ __all__ = [
     "modal_iwan_curve",
     "harmonic_stiffness",
     "modal_ringdown",
+    "ModalRingdown",
     "amplitude_curve",
     "fit_modal_iwan",
     "fit_decay",
@@ -135,6 +184,7 @@ __all__ = [
     "read_uff",
     "UffRecord",
     "read_sweep_csv",
+    "read_vibration_csv",
     "ModalIwanFit",
     "free_decay_modes",
     "frf_modes",

@@ -22,6 +22,12 @@ diagnose
         iwan-element diagnose runs/*.csv --units in,lbf --lowpass 20 --jobs 2 --progress
                      [--json campaign.json] [--table campaign.csv]
 
+curve
+    Frequency and damping ratio against amplitude from a ring-down or stepped-sine sweep file
+    (:mod:`iwan_element.cli_curve`)::
+
+        iwan-element curve hammer.csv [--band 60,120] [--out curve.csv] [--plot curve.png]
+
 Units are read from the header (``time [s],displacement [mm],force [kN]``) or given with
 ``--units``; a unit neither given nor labelled is refused (exit status 1), never guessed.
 
@@ -39,6 +45,8 @@ import sys
 import textwrap
 import warnings
 from pathlib import Path
+
+from .cli_curve import add_curve_command, run_curve
 
 __all__ = ["main", "build_parser", "fit_figure"]
 
@@ -183,24 +191,17 @@ def build_parser() -> argparse.ArgumentParser:
     sub.required = True
     _add_fit_command(sub)
     _add_diagnose_command(sub)
+    add_curve_command(sub)
     return parser
 
 
 def _run_diagnose(args) -> tuple[int, list[str]]:
     from .diagnose import diagnose
-    from .identify.files.csv_input import FORCE_UNITS, load_test
+    from .identify.files.csv_input import FORCE_UNITS
 
     if len(args.csv) > 1 or args.jobs is not None or args.table is not None:
         return _run_diagnose_many(args)
-    du, fu, tu = _parse_units(args.units)
-    data = load_test(
-        args.csv[0],
-        displacement_unit=du,
-        force_unit=fu,
-        time_unit=tu,
-        columns=_parse_columns(args.columns),
-        delimiter=args.delimiter,
-    )
+    data = _load_loops(args.csv[0], args)
     noise = None if args.noise is None else args.noise * FORCE_UNITS[data.units["force"]]
     result = diagnose(
         data.t,
@@ -237,7 +238,7 @@ def _run_diagnose_many(args) -> tuple[int, list[str]]:
     from concurrent.futures import ProcessPoolExecutor
 
     from .diagnose import diagnose_many
-    from .identify.files.csv_input import FORCE_UNITS, load_test
+    from .identify.files.csv_input import FORCE_UNITS
 
     if args.plot is not None:
         raise ValueError(
@@ -246,18 +247,9 @@ def _run_diagnose_many(args) -> tuple[int, list[str]]:
         )
     if args.jobs is not None and args.jobs < 1:
         raise ValueError(f"--jobs must be >= 1, got {args.jobs}")
-    du, fu, tu = _parse_units(args.units)
-    cols = _parse_columns(args.columns)
     records = []
     for path in args.csv:
-        data = load_test(
-            path,
-            displacement_unit=du,
-            force_unit=fu,
-            time_unit=tu,
-            columns=cols,
-            delimiter=args.delimiter,
-        )
+        data = _load_loops(path, args)
         records.append((data.t, data.u, data.F))
     noise = None if args.noise is None else args.noise * FORCE_UNITS[data.units["force"]]
     opts = {
@@ -283,6 +275,42 @@ def _run_diagnose_many(args) -> tuple[int, list[str]]:
     if args.table is not None:
         wrote.append(f"wrote {batch.to_csv(args.table)}")
     return EXIT_OK if batch.success else EXIT_NOT_USABLE, [batch.report()] + wrote
+
+
+def _run_curve(args) -> tuple[int, list[str]]:
+    ok, lines = run_curve(args)
+    return EXIT_OK if ok else EXIT_NOT_USABLE, lines
+
+
+def _load_loops(path: Path, args):
+    """A loop record (``load_test``) with the flags' units and columns; a ring-down or sweep
+    file is refused naming ``curve``, and the columns are spoken of as the flag.
+    """
+    from .identify.files.csv_input import load_test
+    from .identify.files.vibration import file_kind
+
+    kind = file_kind(path)
+    if kind in ("ringdown", "sweep"):
+        raise ValueError(
+            f"{path} is a {'ring-down' if kind == 'ringdown' else 'stepped-sine sweep'} record "
+            f"(its header has no displacement and force columns): `{PROG} {args.command}` reads "
+            f"force-displacement loops; use `{PROG} curve {path}` for its frequency and damping "
+            "against amplitude"
+        )
+    du, fu, tu = _parse_units(args.units)
+    try:
+        return load_test(
+            path,
+            displacement_unit=du,
+            force_unit=fu,
+            time_unit=tu,
+            columns=_parse_columns(args.columns),
+            delimiter=args.delimiter,
+        )
+    except ValueError as exc:
+        text = str(exc).replace("columns=(time, displacement, force)", "--columns T,U,F")
+        text = text.replace("read by read_vibration_csv", f"read by `{PROG} curve`")
+        raise ValueError(text) from None
 
 
 def _units_text(data) -> str:
@@ -359,19 +387,11 @@ def fit_figure(data, result):
 
 
 def _run_fit(args) -> tuple[int, list[str]]:
-    from .identify.files.csv_input import FORCE_UNITS, load_test
+    from .identify.files.csv_input import FORCE_UNITS
     from .identify.loops.dissipation import fit_dissipation
     from .identify.loops.fit import fit_loops
 
-    du, fu, tu = _parse_units(args.units)
-    data = load_test(
-        args.csv,
-        displacement_unit=du,
-        force_unit=fu,
-        time_unit=tu,
-        columns=_parse_columns(args.columns),
-        delimiter=args.delimiter,
-    )
+    data = _load_loops(args.csv, args)
     if args.method != "seed" and args.slip_force is not None:
         raise ValueError("--slip-force is only used by --method seed")
     if args.slip_force is not None:
@@ -445,7 +465,7 @@ def main(argv: list[str] | None = None) -> int:
     except _UsageError as exc:
         print(f"{PROG}: error: {exc} (see {PROG} --help)", file=sys.stderr)
         return EXIT_USAGE
-    runners = {"fit": _run_fit, "diagnose": _run_diagnose}
+    runners = {"fit": _run_fit, "diagnose": _run_diagnose, "curve": _run_curve}
     try:
         status, lines = runners[args.command](args)
     except (ValueError, OSError) as exc:

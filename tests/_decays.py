@@ -178,7 +178,8 @@ def joint_decay(
     measures to first order in the damping).
     """
     t = np.arange(int(round(duration * fs))) / fs
-    q, v, acc = modal_ringdown(t, params, K_inf=K_inf, q0=q0, zeta0=zeta0)
+    rd = modal_ringdown(t, params, K_inf=K_inf, q0=q0, zeta0=zeta0)
+    q, v, acc = rd.displacement, rd.velocity, rd.acceleration
     sig = {"displacement": q, "velocity": v, "acceleration": acc}[quantity]
 
     def curve(a):

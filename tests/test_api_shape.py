@@ -168,8 +168,15 @@ def _targets():
     return ie.frf_modes(f, H * (1 + 0.01 * np.cos(7 * f)))
 
 
+def _modal_ringdown():
+    return ie.modal_ringdown(
+        np.arange(400) / 4000.0, ie.IwanParameters(3.0, 2.5e4, -0.5, 0.3), K_inf=2.3e5, q0=2e-4
+    )
+
+
 RESULTS = {
     "FitResult": _fit,
+    "ModalRingdown": _modal_ringdown,
     "ModalTargets": _targets,
     "AmplitudeCurve": _curve,
     "VibrationDiagnosis": _vib,
@@ -431,7 +438,7 @@ def _frequency_response():
     from iwan_element import models
 
     s = models.preset("brake-reuss").replace(n_points=8)
-    return models.harmonic_balance(s, np.linspace(80.0, 80.8, 5), 0.3)
+    return models.harmonic_balance(s, frequency=np.linspace(80.0, 80.8, 5), force=0.3)
 
 
 def _hammer():

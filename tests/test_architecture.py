@@ -30,6 +30,7 @@ LAYERS = {
         "ensemble",
         "diagnose",
         "__init__",
+        "cli_curve",
         "cli",
         "models",
     ],

@@ -47,7 +47,7 @@ def test_stuck_specimen_is_its_linear_frf():
     s = BRB.replace(friction=1e6, chi=1.0)
     red = reduced_model(s)
     f = np.linspace(75, 85, 11)
-    r = models.harmonic_balance(s, f, 0.7)
+    r = models.harmonic_balance(s, frequency=f, force=0.7)
     nz = red.system.n_z
     H = np.array([red.system.receptance(2 * np.pi * fk)[nz, nz + 1] for fk in f])
     np.testing.assert_allclose(r.amplitude, 0.7 * np.abs(H), rtol=1e-9)
@@ -63,7 +63,7 @@ def test_stuck_specimen_is_its_linear_frf():
 
 def test_nonlinear_mode_agrees_with_qsma_in_microslip():
     X = np.geomspace(2e-6, 60e-6, 8)
-    c = models.nonlinear_mode(BRB, X)
+    c = models.nonlinear_mode(BRB, amplitude=X)
     q = models.modal_amplitude_curve(BRB, amplitude=X)
     assert c.method == "epmc" and len(c) == X.size
     np.testing.assert_allclose(c.frequency, q.frequency, rtol=2e-4)
@@ -72,7 +72,7 @@ def test_nonlinear_mode_agrees_with_qsma_in_microslip():
 
 def test_second_mode_has_its_own_floor():
     s = BRB.replace(modal_damping=(BRB.floor(1), 9.7e-4))
-    c = models.nonlinear_mode(s, [1e-8], mode=2)
+    c = models.nonlinear_mode(s, amplitude=[1e-8], mode=2)
     assert c.frequency[0] == pytest.approx(reduced_model(s).frequency(2), rel=1e-5)
     assert c.damping_ratio[0] == pytest.approx(9.7e-4, rel=0.02)
 
@@ -82,9 +82,9 @@ def test_effects_run_through_the_nonlinear_mode_as_in_their_modal_form():
         {"hardening": {"k3_per_mass": 2e12}}, mode=1, calibrated_range=(2e-6, 60e-6)
     )
     X = np.geomspace(5e-6, 50e-6, 5)
-    c = models.nonlinear_mode(s, X)
+    c = models.nonlinear_mode(s, amplitude=X)
     q = models.modal_amplitude_curve(s, amplitude=X)
-    plain = models.nonlinear_mode(BRB, X)
+    plain = models.nonlinear_mode(BRB, amplitude=X)
     assert np.all(c.frequency[-2:] > plain.frequency[-2:] + 0.05)  # it hardens
     np.testing.assert_allclose(c.frequency, q.frequency, rtol=2e-4)
     np.testing.assert_allclose(c.damping_ratio, q.damping_ratio, rtol=0.05)
@@ -94,23 +94,23 @@ def test_phase_resonance_lies_on_the_nonlinear_mode():
     """Where the forced response's phase crosses -pi/2 the drive balances the damping: its
     frequency is the nonlinear mode's at that amplitude (light damping)."""
     f = np.linspace(80.0, 80.6, 61)
-    r = models.harmonic_balance(BRB, f, 0.3)
+    r = models.harmonic_balance(BRB, frequency=f, force=0.3)
     assert r.success
     k = int(np.argmax(r.phase < -np.pi / 2))
     t = (-np.pi / 2 - r.phase[k - 1]) / (r.phase[k] - r.phase[k - 1])
     f90 = f[k - 1] + t * (f[k] - f[k - 1])
     X90 = r.amplitude[k - 1] + t * (r.amplitude[k] - r.amplitude[k - 1])
-    c = models.nonlinear_mode(BRB, [X90])
+    c = models.nonlinear_mode(BRB, amplitude=[X90])
     assert f90 == pytest.approx(c.frequency[0], rel=2e-4)
 
 
 def test_specimen_entries_refuse_bad_input():
     with pytest.raises(ValueError, match="specimen"):
-        models.harmonic_balance("beam", [80.0], 1.0)
+        models.harmonic_balance("beam", frequency=[80.0], force=1.0)
     with pytest.raises(ValueError, match="mode"):
-        models.nonlinear_mode(BRB, [1e-5], mode=12)
+        models.nonlinear_mode(BRB, amplitude=[1e-5], mode=12)
     with pytest.raises(ValueError, match="amplitude"):
-        models.nonlinear_mode(BRB, [-1e-5])
+        models.nonlinear_mode(BRB, amplitude=[-1e-5])
     with pytest.raises(ValueError, match="n_modes"):
         reduced_model(BRB, n_modes=0)
 
@@ -131,7 +131,7 @@ def test_harmonic_balance_matches_the_exudyn_stepped_sine():
         steps_per_period=64,
         spectral_radius=1.0,
     )
-    hb = models.harmonic_balance(s, f, 0.02)
+    hb = models.harmonic_balance(s, frequency=f, force=0.02)
     np.testing.assert_allclose(ts.amplitude[0], hb.amplitude, rtol=5e-3)
     np.testing.assert_allclose(ts.phase[0], hb.phase, atol=1e-2)
     # Newton's tolerance above the residual's round-off: one Jacobian per frequency (it had
@@ -144,7 +144,7 @@ def test_nonlinear_mode_agrees_with_the_transient_ring_down():
     Brake-Reuss beam from the top of its range, with the tolerances QSMA meets there."""
     s = BRB.replace(n_points=20)
     tr = models.ringdown(s, amplitude=s.amplitude_range[1], cycles=12, steps_per_period=48).curve
-    c = models.nonlinear_mode(s, tr.amplitude)
+    c = models.nonlinear_mode(s, amplitude=tr.amplitude)
     assert len(tr) >= 3 and tr.amplitude.max() / tr.amplitude.min() > 1.02
     np.testing.assert_array_less(np.abs(tr.frequency / c.frequency - 1), 1e-3)
     np.testing.assert_array_less(np.abs(tr.damping_ratio / c.damping_ratio - 1), 0.10)

@@ -72,7 +72,7 @@ def test_stuck_oscillator_is_the_linear_receptance():
     stuck = IwanParameters(Fs=1e12, KT=2e4, chi=1.0, beta=0.1)  # microslip ~ (u/phi_max)^2
     sysm = ModalSystem.oscillator(m, k, c, stuck)
     f = np.linspace(10, 40, 13)
-    r = harmonic_balance(sysm, f, 3.0)
+    r = harmonic_balance(sysm, frequency=f, force=3.0)
     w = 2 * np.pi * f
     H = 1.0 / (k + stuck.KT - m * w * w + 1j * c * w)
     np.testing.assert_allclose(r.amplitude, 3.0 * np.abs(H), rtol=1e-9)
@@ -120,7 +120,7 @@ def test_oscillator_matches_a_time_integration_to_steady_state(ratio):
     m, k, c, F = 1.0, 1e5, 20.0, 4.0  # zeta 2.2 %: settles in tens of periods
     sysm = ModalSystem.oscillator(m, k, c, JOINT)
     f = ratio * sysm.omega[0] / (2 * np.pi)
-    r = harmonic_balance(sysm, [f], F, harmonics=(1, 3, 5, 7, 9))
+    r = harmonic_balance(sysm, frequency=[f], force=F, harmonics=(1, 3, 5, 7, 9))
     Z = _newmark_steady(m, k, c, JOINT, F, f, periods=120)
     assert r.converged[0]
     assert r.amplitude[0] == pytest.approx(abs(Z), rel=5e-3)
@@ -131,7 +131,7 @@ def test_energy_error_shrinks_with_the_harmonics():
     sysm = ModalSystem.oscillator(1.0, 1e5, 2.0, JOINT)
     f = 0.95 * sysm.omega[0] / (2 * np.pi)
     errs = [
-        abs(harmonic_balance(sysm, [f], 8.0, harmonics=hs).energy_error[0])
+        abs(harmonic_balance(sysm, frequency=[f], force=8.0, harmonics=hs).energy_error[0])
         for hs in ((1,), (1, 3, 5), (1, 3, 5, 7, 9, 11))
     ]
     assert errs[0] > errs[1] > errs[2]
@@ -149,7 +149,7 @@ def test_continuation_traces_a_duffing_fold():
     base = ModalSystem.oscillator(1.0, 1e4, c, stuck)
     sysd = base.with_ports([ElementPort(EFFECTS["hardening"](ZeroElement(), k3=k3), 1.0)], [[1.0]])
     f0 = base.omega[0] / (2 * np.pi)
-    r = trace(sysd, F, (0.8 * f0, 2.0 * f0), harmonics=(1,))
+    r = trace(sysd, force=F, band=(0.8 * f0, 2.0 * f0), harmonics=(1,))
     assert r.metadata["turning_points"] == 2
     W, a = 2 * np.pi * r.frequency, r.amplitude
     lhs = a * a * ((base.omega[0] ** 2 + 0.75 * k3 * a * a - W * W) ** 2 + (c * W) ** 2)
@@ -174,11 +174,11 @@ def test_bad_input_is_refused_naming_the_argument(bad, match):
     kw = dict(frequency=[50.0, 51.0], force=1.0)
     kw.update(bad)
     with pytest.raises(ValueError, match=match):
-        harmonic_balance(sysm, kw.pop("frequency"), kw.pop("force"), **kw)
+        harmonic_balance(sysm, **kw)
     with pytest.raises(ValueError, match="system"):
-        harmonic_balance("beam", [50.0], 1.0)
+        harmonic_balance("beam", frequency=[50.0], force=1.0)
     with pytest.raises(ValueError, match="band"):
-        trace(sysm, 1.0, (50.0, 50.0))
+        trace(sysm, force=1.0, band=(50.0, 50.0))
 
 
 def test_specimen_response_warns_outside_its_calibrated_range():
@@ -189,8 +189,8 @@ def test_specimen_response_warns_outside_its_calibrated_range():
 
     spec = models.preset("brake-reuss")
     lo, hi = spec.calibrated_range
-    r = models.harmonic_balance(spec, [79.0, 80.0], [0.05, 1.5])
+    r = models.harmonic_balance(spec, frequency=[79.0, 80.0], force=[0.05, 1.5])
     assert r.converged.all() and r.amplitude[0] < hi < r.amplitude[1]
     assert any("calibrated on" in w and "extrapolated" in w for w in r.warnings), r.warnings
-    quiet = models.harmonic_balance(spec, [79.0], [0.05])
+    quiet = models.harmonic_balance(spec, frequency=[79.0], force=[0.05])
     assert lo < quiet.amplitude[0] < hi and quiet.warnings == ()

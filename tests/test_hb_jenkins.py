@@ -75,7 +75,7 @@ def reference_hb(f_hz, force, start):
 def test_harmonic_balance_of_the_jenkins_oscillator(force):
     f = np.array([30.0, 45.0, 55.0, 60.0, 63.0, 70.0])
     system = ModalSystem.oscillator(M, K, C, IwanParameters(FS, KT, 0.0, BETA))
-    r = harmonic_balance(system, f, force, harmonics=HARM, samples=N)
+    r = harmonic_balance(system, frequency=f, force=force, harmonics=HARM, samples=N)
     assert r.converged.all()
     for k, fk in enumerate(f):
         Z = r.harmonics[k]

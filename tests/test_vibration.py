@@ -102,7 +102,8 @@ def test_harmonic_stiffness_against_quadrature_and_gamma_form(p):
 def ringdown():
     p, k_inf = _modal_joint()
     t = np.arange(0.0, 16.0, 1 / 400.0)
-    q, v, a = modal_ringdown(t, p, K_inf=k_inf, q0=0.6e-3, zeta0=2e-3)
+    rd = modal_ringdown(t, p, K_inf=k_inf, q0=0.6e-3, zeta0=2e-3)
+    q, v, a = rd.displacement, rd.velocity, rd.acceleration
     return p, k_inf, t, q, v, a
 
 
@@ -114,7 +115,8 @@ def test_ringdown_energy_balance():
 
     p, k_inf = _modal_joint()
     t = np.arange(0.0, 3.0, 1 / 8000.0)
-    q, v, a = modal_ringdown(t, p, K_inf=k_inf, q0=0.6e-3, zeta0=2e-3)
+    rd = modal_ringdown(t, p, K_inf=k_inf, q0=0.6e-3, zeta0=2e-3)
+    q, v, a = rd.displacement, rd.velocity, rd.acceleration
     j = IwanJoint(p)
     W = np.empty(t.size)
     for i, x in enumerate(q):
@@ -141,7 +143,7 @@ def _peak_decrement(p, k_inf, q0, zeta0, fs=40000.0, duration=16.0):
     from scipy import signal as sps
 
     t = np.arange(0.0, duration, 1 / fs)
-    q, _, _ = modal_ringdown(t, p, K_inf=k_inf, q0=q0, zeta0=zeta0)
+    q = modal_ringdown(t, p, K_inf=k_inf, q0=q0, zeta0=zeta0).displacement
     imax, imin = sps.find_peaks(q)[0], sps.find_peaks(-q)[0]
     X, T = [], []
     for i in imax[:-1]:

@@ -35,6 +35,7 @@ from .parameters import IwanParameters
 __all__ = [
     "masing_constants",
     "constants_from_arrays",
+    "jenkins_constants",
     "masing_history",
     "masing_rows",
     "masing_step",
@@ -123,6 +124,26 @@ def constants_from_arrays(Fs, KT, chi, beta, tol=0.0, phi_max=None) -> np.ndarra
             ]
         )
     )
+
+
+def jenkins_constants(k, phi) -> np.ndarray:
+    """:func:`masing_constants` of Jenkins elements (a spring ``k`` [N/m] in series with a
+    Coulomb slider that slides at stretch ``phi`` [m], force ``k phi``), shape ``(m, 15)``.
+
+    A Jenkins element is the Iwan joint whose sliders all sit in the Dirac mass at
+    ``phi_max`` (``beta -> inf``, no continuous density: Segalman 2005, eq. 3): its backbone
+    is ``k x`` up to ``phi`` and ``k phi`` beyond, it follows Masing's rules (Iwan, J. Appl.
+    Mech. 33:893-900, 1966), and the kernel walks it exactly with ``K_s = 0``; the
+    dissipation is then that of sliding alone. The reversal tolerance is 0 (every reversal
+    kept, as the stepped element keeps it), so every such row shares one reversal structure.
+    """
+    k = np.asarray(k, float).ravel()
+    phi = np.asarray(phi, float).ravel()
+    if k.shape != phi.shape or np.any(~np.isfinite(k)) or np.any(k < 0):
+        raise ValueError("k must be finite stiffnesses >= 0 [N/m], one per phi")
+    if np.any(~np.isfinite(phi)) or np.any(phi <= 0):
+        raise ValueError("phi must be finite slip displacements > 0 [m]")
+    return constants_from_arrays(k * phi, k, 0.0, np.inf, 0.0, phi_max=phi)
 
 
 @njit(cache=True)

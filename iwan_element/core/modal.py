@@ -37,6 +37,7 @@ import numpy as np
 from ..base.validation import check_magnitude, check_scalar, finite_array
 from .closed_form import backbone, dissipation, secant_stiffness, tangent_stiffness
 from .joint import IwanJoint
+from .modal_ringdown import ModalRingdown
 from .parameters import IwanParameters
 
 __all__ = ["harmonic_stiffness", "modal_iwan_curve", "modal_ringdown", "viscous_floor"]
@@ -246,8 +247,9 @@ def modal_ringdown(
 
     Returns
     -------
-    q, v, a : ndarray
-        Displacement [m], velocity [m/s] and acceleration [m/s^2] at ``t``.
+    ModalRingdown
+        ``t``, ``displacement`` [m], ``velocity`` [m/s] and ``acceleration`` [m/s^2] at
+        ``t``, with the run's settings (``report()``, ``to_dataframe()``, ``plot()``).
     """
     p = _check(params)
     tt = check_magnitude("t", finite_array("t", t, min_size=2), unit="s")
@@ -299,4 +301,15 @@ def modal_ringdown(
         v = v + 0.5 * h * a
         a = -(c * v + K_inf * q + F) / mass
         q_out[i], v_out[i], a_out[i] = q, v, a
-    return q_out, v_out, a_out
+    return ModalRingdown(
+        t=tt.copy(),
+        displacement=q_out,
+        velocity=v_out,
+        acceleration=a_out,
+        joint=p,
+        K_inf=K_inf,
+        zeta0=zeta0,
+        mass=mass,
+        q0=q0,
+        v0=v0,
+    )

@@ -25,16 +25,28 @@ reversal sample of the chain (REFERENCE: "NOT only the tangent"). :func:`periodi
 returns the force, the tangent, the chain and the dissipation of one period per row;
 :func:`periodic_harmonic_jacobian` contracts the exact sample Jacobian with the harmonic
 transforms in one compiled loop.
+
+A *bank* of Masing rows driven by one coordinate (the Jenkins elements of a patch that
+starts to slide, :func:`~iwan_element.core.masing.jenkins_constants`) is the sum of its
+rows; rows with one reversal tolerance share one reversal structure (it depends on the
+path and the tolerance alone), so the bank's sample Jacobian is the one above with the
+rows' tangents summed. :class:`PeriodicForm` is how an element states its force in these
+terms (Masing rows, a linear stiffness taken off, history-free laws beside them), so that
+the harmonic balance evaluates it here, compiled and with its exact Jacobian, instead of
+stepping the element sample by sample.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
+from typing import NamedTuple
+
 import numpy as np
 from numba import njit
 
-from .masing import N_CONST, _advance
+from .masing import KT, N_CONST, PM, TOL, B, _advance
 
-__all__ = ["periodic_rows", "periodic_harmonic_jacobian"]
+__all__ = ["periodic_rows", "periodic_harmonic_jacobian", "PeriodicForm", "PeriodicLoop"]
 
 _NOSEG = np.empty((4, 0))
 
@@ -182,3 +194,117 @@ def periodic_harmonic_jacobian(K, anchor, P, E, *, shift=None) -> np.ndarray:
         out,
     )
     return out
+
+
+class PeriodicLoop(NamedTuple):
+    """One period of a :class:`PeriodicForm` on its steady loop (arrays of the ``N`` samples).
+
+    Attributes
+    ----------
+    force : ndarray
+        The element's force [N] (rows, shift and laws).
+    tangent : ndarray
+        The Masing rows' summed tangent [N/m] (the shift and the laws left out; rows that
+        stayed linear over the period are in :attr:`shift` instead).
+    anchor : ndarray of int
+        The rows' reversal chain (:func:`periodic_rows`; ``-1`` everywhere without rows).
+    dissipation : float
+        The rows' dissipation over the period [J] (the laws' is the caller's: it needs the
+        rate of the slip, ``int f du``).
+    law_force, law_du, law_dv : ndarray
+        The history-free laws' summed force [N] and its derivatives by the displacement
+        [N/m] and the velocity [N s/m].
+    shift : float
+        The linear stiffness taken off [N/m], less that of the rows that stayed linear.
+    """
+
+    force: np.ndarray
+    tangent: np.ndarray
+    anchor: np.ndarray
+    dissipation: float
+    law_force: np.ndarray
+    law_du: np.ndarray
+    law_dv: np.ndarray
+    shift: float
+
+
+@dataclass(frozen=True, eq=False)
+class PeriodicForm:
+    """An element's force in the compiled kernel's terms (module docstring).
+
+    ``F(u, v) = sum_r F_r(u) - shift u + sum_l f_l(u, v)``: Masing rows, a linear stiffness
+    taken off, history-free laws.
+
+    Parameters
+    ----------
+    constants : array_like, shape (m, 15), optional
+        Masing rows driven by the element's displacement ``u`` (kernel constants,
+        :func:`~iwan_element.core.masing.masing_constants`), all with one reversal
+        tolerance; default none.
+    shift : float, optional
+        Linear stiffness taken off [N/m] (a bank that replaces stiffness it already holds).
+    laws : tuple of callables, optional
+        History-free parts ``law(u, v) -> (f [N], df/du [N/m], df/dv [N s/m])`` on arrays
+        of displacement [m] and velocity [m/s].
+    """
+
+    constants: np.ndarray = field(default_factory=lambda: np.empty((0, N_CONST)))
+    shift: float = 0.0
+    laws: tuple = ()
+
+    def __post_init__(self):
+        C = np.ascontiguousarray(np.array(self.constants, dtype=float).reshape(-1, N_CONST))
+        if not np.all(np.isfinite(C)):
+            raise ValueError("constants must be finite kernel constants, shape (m, 15)")
+        if C.shape[0] and np.any(C[:, TOL] != C[0, TOL]):
+            raise ValueError("constants must share one reversal tolerance (one reversal structure)")
+        if not np.isfinite(self.shift):
+            raise ValueError(f"shift must be a finite stiffness [N/m], got {self.shift!r}")
+        if not all(callable(f) for f in self.laws):
+            raise ValueError("laws must be callables law(u, v) -> (f, df/du, df/dv)")
+        C.setflags(write=False)
+        object.__setattr__(self, "constants", C)
+        object.__setattr__(self, "shift", float(self.shift))
+        object.__setattr__(self, "laws", tuple(self.laws))
+
+    def plus(self, other: PeriodicForm) -> PeriodicForm | None:
+        """The form of the two elements' forces added (parallel), or None when their rows'
+        reversal tolerances differ.
+        """
+        a, b = self.constants, other.constants
+        if a.shape[0] and b.shape[0] and a[0, TOL] != b[0, TOL]:
+            return None
+        return PeriodicForm(np.vstack([a, b]), self.shift + other.shift, self.laws + other.laws)
+
+    def loop(self, u: np.ndarray, v: np.ndarray) -> PeriodicLoop:
+        """The steady loop over one period of samples ``u`` [m] (the rows started at the
+        sample of the largest ``|u|``, :func:`periodic_rows`) and velocities ``v`` [m/s].
+
+        A row without continuous slider density (a Jenkins element) whose slip
+        displacement the period never exceeds stays on its elastic line, ``F = KT u``: it
+        is taken as that line (into :attr:`PeriodicLoop.shift`) instead of being walked, an
+        exact shortcut.
+        """
+        u = np.ascontiguousarray(u, dtype=float)
+        N = u.size
+        C, shift = self.constants, self.shift
+        if C.shape[0]:
+            elastic = (C[:, B] == 0.0) & (C[:, PM] >= float(np.abs(u).max()))
+            if elastic.any():
+                shift -= float(C[elastic, KT].sum())
+                C = C[~elastic]
+        m = C.shape[0]
+        if m:
+            F, K, A, D = periodic_rows(C, np.broadcast_to(u, (m, N)))
+            force, tangent, anchor, diss = F.sum(axis=0), K.sum(axis=0), A[0], float(D.sum())
+        else:
+            force, tangent = np.zeros(N), np.zeros(N)
+            anchor, diss = np.full(N, -1, np.int64), 0.0
+        force -= shift * u
+        lf, lu, lv = np.zeros(N), np.zeros(N), np.zeros(N)
+        for law in self.laws:
+            f, fu, fv = law(u, v)
+            lf += f
+            lu += fu
+            lv += fv
+        return PeriodicLoop(force + lf, tangent, anchor, diss, lf, lu, lv, shift)

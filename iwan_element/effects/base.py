@@ -10,14 +10,17 @@ import copy
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from types import MethodType
+from typing import cast
 
 import numpy as np
 
 from ..base.validation import check_scalar, finite_array, same_length
 from ..core.parameters import IwanParameters
+from ..core.periodic import PeriodicForm
 from ..core.protocol import CommittedState, check_element
 
-__all__ = ["ParamSpec", "Effect", "_find_zero"]
+__all__ = ["ParamSpec", "Effect", "VectorLaw", "declares_vector_form", "_find_zero"]
 
 
 #: The smallest size an effect's size prior spreads its decades down to, as a fraction of
@@ -193,6 +196,31 @@ def require_plain_joint(inner, subject: str) -> None:
         )
 
 
+class VectorLaw:
+    """A history-free effect's added force as a law of the compiled periodic form:
+    ``law(u, v) -> (f [N], df/du [N/m], df/dv [N s/m])`` from the class's ``vector_force``
+    (around a zero inner force) and ``vector_tangent`` at its parameter ``values``.
+    """
+
+    def __init__(self, cls, values: dict):
+        self.cls = cls
+        self.values = dict(values)
+
+    def __call__(self, u, v):
+        """``(f, df/du, df/dv)`` at displacements ``u`` [m] and velocities ``v`` [m/s]."""
+        u = np.asarray(u, float)
+        f = self.cls.vector_force(np.zeros(u.shape), u, v, **self.values)
+        fu, fv = self.cls.vector_tangent(u, v, **self.values)
+        return f, np.broadcast_to(fu, u.shape), np.broadcast_to(fv, u.shape)
+
+
+def declares_vector_form(cls) -> bool:
+    """True if the effect class ``cls`` defines a history-free vectorised force."""
+    # a classmethod read from its class is a bound method (mypy sees the plain function)
+    base = cast(MethodType, Effect.vector_force).__func__
+    return getattr(cls.vector_force, "__func__", None) is not base
+
+
 #: The ways an effect can sit on the joint (``Effect.structure``).
 STRUCTURES = ("parallel", "series", "slider", "energy")
 #: The data requirements an effect can declare (``Effect.needs``).
@@ -298,8 +326,11 @@ class Effect(CommittedState):
     def describe(self) -> str:
         """One line naming this effect and every effect below it."""
         own = ", ".join(f"{k}={v:.4g}" for k, v in self.parameters.items())
+        inner = self._inner
         below = (
-            self._inner.describe() if isinstance(self._inner, Effect) else repr(self._inner.params)
+            inner.describe()
+            if isinstance(inner, Effect)
+            else repr(getattr(inner, "params", type(inner).__name__))
         )
         return f"{self.effect}({own}) on {below}"
 
@@ -342,6 +373,41 @@ class Effect(CommittedState):
         history-free vectorised form (the evaluator then runs the element itself).
         """
         return None
+
+    @classmethod
+    def vector_tangent(cls, u, v, **values):
+        """``(dF/du [N/m], dF/dv [N s/m])`` of the force :meth:`vector_force` adds, at
+        displacements ``u`` [m] and velocities ``v`` [m/s] (arrays), or ``None`` when the
+        effect declares none. With :meth:`vector_force` it is the effect's compiled periodic
+        form (:meth:`periodic_form`).
+        """
+        return None
+
+    def periodic_form(self) -> PeriodicForm | None:
+        """The whole stack's force as the compiled periodic kernel evaluates it
+        (:class:`~iwan_element.core.periodic.PeriodicForm`: the harmonic balance's steady
+        loops with exact Jacobians), or ``None`` when some layer has no such form (then the
+        elements are stepped sample by sample). A parallel effect adds its own form
+        (:meth:`_periodic_own`) to the wrapped element's (``periodic_form()`` of the inner
+        element, which must define it too).
+        """
+        below = getattr(self._inner, "periodic_form", None)
+        below = below() if callable(below) else None
+        own = self._periodic_own() if self.structure == "parallel" else None
+        if below is None or own is None:
+            return None
+        return below.plus(own)
+
+    def _periodic_own(self) -> PeriodicForm | None:
+        """The effect's own added force as a :class:`PeriodicForm`: by default its history-
+        free :meth:`vector_force` with its :meth:`vector_tangent`, when it declares both.
+        """
+        cls = type(self)
+        vals = self.parameters
+        probe = np.zeros(1)
+        if not declares_vector_form(cls) or cls.vector_tangent(probe, probe, **vals) is None:
+            return None
+        return PeriodicForm(laws=(VectorLaw(cls, vals),))
 
     def revert(self) -> None:
         """Discard the last trial."""

@@ -93,6 +93,11 @@ class Hardening(Effect):
         return F + k3 * u**3
 
     @classmethod
+    def vector_tangent(cls, u, v, *, k3):
+        """``(3 k3 u^2 [N/m], 0)``: the cubic spring's tangents."""
+        return 3.0 * k3 * np.asarray(u, float) ** 2, 0.0
+
+    @classmethod
     def modal_form(cls, X, frequency, damping, zeta0, *, k3_per_mass):
         """Frequency [Hz] raised by the Duffing first harmonic ``(3/4) kappa3 X^2`` [1/s^2];
         the hysteretic damping scaled by ``(f_base / f)^2``, the floor ``zeta0`` unchanged.

@@ -106,6 +106,11 @@ class PinningStiffness(Effect):
         return F + k_p * np.sign(u) * e
 
     @classmethod
+    def vector_tangent(cls, u, v, *, k_p, delta):
+        """``(k_p where |u| > delta else 0 [N/m], 0)``: the dead-zone spring's tangents."""
+        return np.where(np.abs(u) > delta, k_p, 0.0), 0.0
+
+    @classmethod
     def modal_form(cls, X, frequency, damping, zeta0, *, k_p_per_mass, delta):
         """Frequency [Hz] raised by the dead-zone spring's describing-function stiffness; the
         hysteretic part of the damping ratio scaled by ``(f_old/f_new)^2`` (same dissipation,

@@ -77,6 +77,11 @@ class ViscousDamping(Effect):
         return F + c * v
 
     @classmethod
+    def vector_tangent(cls, u, v, *, c):
+        """``(0, c [N s/m])``: the dashpot's tangents."""
+        return 0.0, c
+
+    @classmethod
     def modal_form(cls, X, frequency, damping, zeta0, *, zeta_v):
         """Frequency [Hz] and damping ratio [-] with ``zeta_v`` added (frequency unchanged)."""
         return frequency, damping + zeta_v

@@ -131,10 +131,12 @@ class Harmonics:
     def nonlinear_forces(self, system, cz, W, *, jacobian=True):
         """AFT of the nonlinear coordinates' forces from their coefficients ``cz`` (n_z, nc):
         the joints' deficits ``g = F(z) - KT z`` on their exact steady loops (exact
-        Jacobian), then the element ports' ``gain F(y, y')`` on the steady loop of their
-        elements (:func:`element_loop`; Jacobian by forward differences: the elements'
-        tangents alone leave out their reversal columns, and Newton then failed on the
-        measured Brake-Reuss sweeps).
+        Jacobian), then the element ports' ``gain F(y, y')``: compiled with the exact
+        Jacobian where the element states its periodic form (:meth:`_compiled_port`),
+        otherwise on the steady loop of the element stepped sample by sample
+        (:func:`element_loop`; Jacobian by forward differences: the elements' tangents alone
+        leave out their reversal columns, and Newton then failed on the measured
+        Brake-Reuss sweeps).
         Returns ``(cg, dcg/dcz or None, dissipation per period [J] per coordinate)``.
         """
         nj = len(system.joints)
@@ -149,6 +151,11 @@ class Harmonics:
         Je = np.zeros((len(system.ports),) + J.shape[1:]) if jacobian else None
         for k, port in enumerate(system.ports):
             c = cz[nj + k]
+            if port.form is not None:
+                cg[nj + k], De[k], Jk = self._compiled_port(port, c, W, jacobian)
+                if jacobian:
+                    Je[k] = Jk
+                continue
             f, De[k] = self._port(port, c, W)
             cg[nj + k] = f
             if jacobian:
@@ -158,6 +165,26 @@ class Harmonics:
                     cp[d] += h
                     Je[k, :, d] = (self._port(port, cp, W)[0] - f) / h
         return cg, (np.concatenate([J, Je]) if jacobian else None), np.concatenate([D, De])
+
+    def _compiled_port(self, port, c, W, jacobian):
+        """Force coefficients, dissipation [J] and (with ``jacobian``) the exact Jacobian of
+        an element port whose element states its periodic form (``port.form``): its Masing
+        rows on their steady loop (:func:`~iwan_element.core.periodic.periodic_rows`, the
+        joints' kernel) with the reversal columns of their sample Jacobian, its history-free
+        laws ``f(y, y')`` with ``P (f_y E + W f_v E')``; the laws' dissipation is the work
+        of their force over the period, ``(2 pi / N) sum f dy/dtau``.
+        """
+        y, dy = self.E @ c, self.dE @ c
+        lp = port.form.loop(y, W * dy)
+        g = port.gain
+        D = lp.dissipation + 2.0 * np.pi / self.samples * float(lp.law_force @ dy)
+        if not jacobian:
+            return g * (self.P @ lp.force), g * D, None
+        J = periodic_harmonic_jacobian(
+            lp.tangent[None], lp.anchor[None], self.P, self.E, shift=np.array([lp.shift])
+        )[0]
+        J += self.P @ (lp.law_du[:, None] * self.E + W * lp.law_dv[:, None] * self.dE)
+        return g * (self.P @ lp.force), g * D, g * J
 
     def _port(self, port, c, W):
         """Force coefficients and dissipation of an element port with coefficients ``c``."""

@@ -67,9 +67,9 @@ def _tangent(A, t_prev):
 
 def trace(
     system: ModalSystem,
+    *,
     force: float,
     band,
-    *,
     harmonics=(1, 3, 5),
     samples=None,
     step: float = 0.02,

@@ -26,7 +26,7 @@ import numpy as np
 
 from ..base.progress import finish, progress_bar, tick
 from ..base.threads import one_blas_thread
-from .balance import operators, point_outputs, rate_operators
+from .balance import compose, operators, point_outputs, rate_operators
 from .basis import Harmonics
 
 __all__ = ["epmc_branch"]
@@ -68,7 +68,7 @@ def _equations(system, basis, y, X, r, *, jacobian=True):
     if not jacobian:
         return R, None, cg, D
     J = np.zeros((n + 3, n + 3))
-    Jzz = np.einsum("pcqd,qde->pcqe", Lzz, dcg).reshape(n, n)
+    Jzz = compose(Lzz, dcg)
     Jzz[np.diag_indices(n)] += 1.0
     J[:n, :n] = Jzz
     (dLzz_W, dLpz_W), (dLzz_X, dLpz_X) = _rate_ops(system, basis, W, xi, r)
@@ -84,7 +84,7 @@ def _equations(system, basis, y, X, r, *, jacobian=True):
         J[row, n] = part(dden_W * a)
         J[row, n + 1] = part(-1j * W * a)
         J[row, n + 2] = part(den)
-    dcs = -np.einsum("cqd,qde->cqe", Lpz[0], dcg).reshape(nc, n)
+    dcs = -compose(Lpz[:1], dcg)
     g = np.array([cs[ia], cs[ib]]) / max(amp, 1e-300)
     J[n + 2, :n] = g @ dcs[[ia, ib]]
     for col, dL in ((n, dLpz_W), (n + 1, dLpz_X)):

@@ -48,9 +48,9 @@ def linear_start(system, basis, W, force):
 
 def harmonic_balance(
     system: ModalSystem,
+    *,
     frequency,
     force,
-    *,
     harmonics=(1, 3, 5),
     samples=None,
     tol: float = 1e-9,

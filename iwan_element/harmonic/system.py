@@ -34,6 +34,7 @@ import numpy as np
 
 from ..core.masing import constants_from_arrays
 from ..core.parameters import IwanParameters
+from ..core.periodic import PeriodicForm
 
 __all__ = ["ModalSystem", "ElementPort"]
 
@@ -57,7 +58,11 @@ class ElementPort:
     element : object
         An element of the package's protocol (``trial(u, v) -> (F, K)``, ``commit()``,
         ``reset()``, ``dissipated_energy``), driven by the port coordinate ``y`` [port
-        units] and its rate.
+        units] and its rate. When it states its force in the compiled kernel's terms
+        (``periodic_form()`` returning a :class:`~iwan_element.core.periodic.PeriodicForm`,
+        as an effect stack around a zero or Jenkins-bank base does) the AFT evaluates that
+        form, compiled and with its exact Jacobian (:attr:`form`); otherwise it steps the
+        element sample by sample with a finite-difference Jacobian.
     gain : float
         The structure's generalized force at the port is ``-gain F`` (``gain = 1/s^2`` for a
         modal effect read at the sensor, ``y = s q``).
@@ -67,6 +72,7 @@ class ElementPort:
     element: object
     gain: float
     label: str = ""
+    form: PeriodicForm | None = field(init=False, repr=False)
 
     def __post_init__(self):
         for m in ("trial", "commit", "reset"):
@@ -81,6 +87,14 @@ class ElementPort:
             or not math.isfinite(self.gain)
         ):
             raise ValueError(f"gain must be a finite number, got {self.gain!r}")
+        declared = getattr(self.element, "periodic_form", None)
+        form = declared() if callable(declared) else None
+        if form is not None and not isinstance(form, PeriodicForm):
+            raise TypeError(
+                f"element.periodic_form() must return a PeriodicForm or None, got "
+                f"{type(form).__name__}"
+            )
+        object.__setattr__(self, "form", form)
 
 
 @dataclass(frozen=True, eq=False)

@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 
 from iwan_element import AmplitudeCurve, amplitude_curve
-from iwan_element.base.progress import finish, progress_bar, tick
+from iwan_element.base.progress import complete, finish, progress_bar, tick
 from iwan_element.base.result_shape import ResultShape, panels, unit_label
 from iwan_element.fitting import (
     Parameter,
@@ -377,6 +377,7 @@ def _solve(specimen, fit, mode, X, fm, zm, f_tol, z_tol, progress):
     bar = progress_bar(progress, total=200 * (len(fit) + 1), desc="calibrate", unit="QSMA")
     try:
         sol = minimize(resid, x0, lb, ub, method="trf", max_nfev=200, x_scale=1.0, diff_step=1e-4)
+        complete(bar, "converged")  # the budget's evaluations not needed
     finally:
         finish(bar)
     return sol, lb, ub

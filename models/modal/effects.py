@@ -10,6 +10,7 @@ element ports read it, and the transient's modal force
 
 from __future__ import annotations
 
+from iwan_element.core.periodic import PeriodicForm
 from iwan_element.effects import EFFECTS
 
 from ..specimens.specimen import Specimen
@@ -36,6 +37,12 @@ class ZeroElement:
 
     def reset(self):
         """Return to the virgin state; returns None (no state to keep)."""
+
+    def periodic_form(self) -> PeriodicForm:
+        """The zero force in the compiled periodic kernel's terms: no rows, no laws (the
+        effects around it add theirs; the harmonic balance then runs the stack compiled).
+        """
+        return PeriodicForm()
 
 
 def effect_stack(specimen: Specimen, mode: int, omega0: float):

@@ -67,9 +67,9 @@ def _with_range_warnings(specimen, response):
 
 def harmonic_balance(
     specimen: Specimen,
+    *,
     frequency,
     force,
-    *,
     harmonics=(1, 3, 5),
     samples=None,
     n_modes: int = 8,
@@ -108,8 +108,8 @@ def harmonic_balance(
         specimen,
         _hb_system(
             specimen_system(specimen, n_modes=n_modes),
-            frequency,
-            force,
+            frequency=frequency,
+            force=force,
             harmonics=harmonics,
             samples=samples,
             progress=progress,
@@ -119,9 +119,9 @@ def harmonic_balance(
 
 def frequency_response(
     specimen: Specimen,
+    *,
     force: float,
     band,
-    *,
     harmonics=(1, 3, 5),
     samples=None,
     n_modes: int = 8,
@@ -136,8 +136,8 @@ def frequency_response(
         specimen,
         trace(
             specimen_system(specimen, n_modes=n_modes),
-            force,
-            band,
+            force=force,
+            band=band,
             harmonics=harmonics,
             samples=samples,
             step=step,
@@ -147,8 +147,8 @@ def frequency_response(
 
 def nonlinear_mode(
     specimen: Specimen,
-    amplitude=None,
     *,
+    amplitude=None,
     mode: int = 1,
     harmonics=(1, 3, 5),
     samples=None,

@@ -47,7 +47,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from ...base.progress import finish, progress_bar
+from ...base.progress import complete, finish, progress_bar
 from ...base.serialize import json_safe
 from ...base.validation import check_int
 from ...effects import EFFECTS
@@ -367,14 +367,17 @@ def _fit_stack(
     laws_, lwarn = CM.resolve_laws(laws, qnames, cnames, X)
     model = build_model(preps, names_, laws_, cnames, X)
     theta0 = _start_values(model, preps)
-    bar = progress_bar(progress, desc="campaign fit", unit="eval")
+    # the budget: max_nfev iterations, each one evaluation and at most one per coefficient for
+    # the finite-difference Jacobian (the ETA is an upper bound; a converged fit completes it)
+    budget = max_nfev * (1 + np.size(theta0))
+    bar = progress_bar(progress, total=budget, desc="campaign fit", unit="eval")
     try:
         t1 = time.perf_counter()
         res = solve(model, theta0, max_nfev=max_nfev, bar=bar)
         t_fit = time.perf_counter() - t1
+        complete(bar, "converged" if res.status > 0 else "stopped")
     finally:
-        if bar is not None:
-            finish(bar)
+        finish(bar)
     t2 = time.perf_counter()
     free = record_values(model, res.x, preps) if scatter else None
     times = {"diagnoses": t_diag, "joint_fit": t_fit, "scatter": time.perf_counter() - t2}

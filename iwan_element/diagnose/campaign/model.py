@@ -11,6 +11,7 @@ import numpy as np
 from scipy.optimize import least_squares
 from scipy.sparse import lil_matrix
 
+from ...base.progress import tick
 from ...base.validation import finite_array
 from ...effects import EFFECTS
 from ...effects.engine.evaluate import Evaluator
@@ -436,8 +437,7 @@ def solve(model, theta0, *, max_nfev, bar=None):
     """The joint weighted least-squares fit (trust region, sparse finite differences)."""
 
     def fun(th):
-        if bar is not None:
-            bar.update(1)
+        tick(bar)
         return model.residual(th)
 
     return least_squares(

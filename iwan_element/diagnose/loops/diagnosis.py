@@ -39,7 +39,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ...base.progress import finish, progress_bar, set_total, tick
+from ...base.progress import complete, finish, progress_bar, tick
 from ...base.threads import one_blas_thread
 from ...base.validation import check_int, check_scalar
 from ...effects import EFFECTS
@@ -215,10 +215,16 @@ def diagnose(
     max_samples = check_int("max_samples", max_samples, 100)
     check_effect_prior(effect_prior, cand)  # a bad prior is refused before any fit
     nest = nested_options(evidence, nested)
-    bar = progress_bar(progress, desc="diagnose", unit="fit")
+    bar = None
     try:
         with one_blas_thread():  # tall, narrow least squares: threads only spin
             rec = prepare_record(tt, uu, FF, n, lp, max_samples)
+            # the budget, fixed before the first fit: the base fit, then per round every
+            # testable candidate, and the pairs; the fits the selection does not need are
+            # counted done when it stops
+            n_test = sum(1 for c in cand if c not in untestable(rec, cand))
+            budget = 1 + n_test * (opts["max_effects"] + 1)
+            bar = progress_bar(progress, total=budget, desc="diagnose", unit="fit")
             fitter = StackFitter(rec)
             base = fit_base(fitter, rec, seed=seed)
             tick(bar, text="Iwan")
@@ -243,10 +249,10 @@ def diagnose(
             fits = final_fits(
                 fitter, rec, base, sel.final, noise_only=sel.noise_only, t_start=t_start
             )
+            complete(bar)
             return assemble(rec, sel, fits, opts, t_start)
     finally:
-        if bar is not None:
-            finish(bar)
+        finish(bar)
 
 
 def select(
@@ -269,7 +275,6 @@ def select(
     why = untestable(rec, cand)
     testable = tuple(c for c in cand if c not in why)
     cycles = record_cycles(rec)
-    set_total(bar, 1 + len(testable) * (opts["max_effects"] + 1))  # base, rounds, pairs
     # a record that is noise can test no effect: the candidates are then fitted only where
     # the rule needs them (never), not for the probabilities
     explore = explore and not pure_noise(

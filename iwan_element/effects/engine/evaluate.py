@@ -27,8 +27,7 @@ The routes are checked against the elements in ``tests/test_diagnosis.py`` and
 
 from __future__ import annotations
 
-from types import MethodType
-from typing import Any, cast
+from typing import Any
 
 import numpy as np
 
@@ -38,7 +37,7 @@ from ...core.joint import IwanJoint
 from ...core.masing import masing_constants, masing_rows, reversal_structure
 from ...core.parameters import IwanParameters
 from .. import EFFECTS
-from ..base import Effect
+from ..base import declares_vector_form
 from .series_kernel import backlash_history, backlash_path
 
 __all__: list[str] = []
@@ -94,9 +93,7 @@ def wear_behind_gap(names) -> bool:
 
 def has_vector_form(name: str) -> bool:
     """True if the effect has a history-free vectorised force."""
-    # a classmethod read from its class is a bound method (mypy sees the plain function)
-    base = cast(MethodType, Effect.vector_force).__func__
-    return EFFECTS[name].vector_force.__func__ is not base
+    return declares_vector_form(EFFECTS[name])
 
 
 def dissipation_segments(u: np.ndarray, tol: float):

@@ -14,6 +14,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ...core.masing import jenkins_constants
+from ...core.periodic import PeriodicForm
 from ..base import Effect
 
 __all__ = ["jenkins_gain", "JenkinsBank"]
@@ -43,6 +45,13 @@ class JenkinsBank(Effect):
         self._k_total = float(np.sum(self._k))
         self._lim = self._k * self._phi  # friction limits [N]
         self._reset_own()
+
+    def _periodic_own(self) -> PeriodicForm:
+        """The bank as Masing rows, one per Jenkins element
+        (:func:`~iwan_element.core.masing.jenkins_constants`), with the stiffness it replaces
+        taken off: ``sum_i z_i - (sum_i k_i) u``.
+        """
+        return PeriodicForm(jenkins_constants(self._k, self._phi), self._k_total)
 
     def _reset_own(self):
         self._z = np.zeros(self._k.size)  # committed element forces [N]

@@ -58,7 +58,7 @@ import math
 import numpy as np
 from scipy import stats
 
-from ...base.progress import finish, progress_bar, tick
+from ...base.progress import complete, finish, progress_bar, tick
 from ...base.threads import one_blas_thread
 from ...base.validation import check_scalar
 from ..modal.result import ModalIwanFit
@@ -438,6 +438,7 @@ def fit_decay(
         with one_blas_thread():  # the Jacobian's SVD per step is small: threads cost
             best, span = _fit_models(prob, info, alpha, snr_min, spc, bar)
         tick(bar, text="uncertainty")
+        complete(bar, "done (no full model to fit)")  # the full model's stage when skipped
     finally:
         finish(bar)
     n_th = _describe_span(prob, conv, info, span, best)

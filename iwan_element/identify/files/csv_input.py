@@ -65,7 +65,8 @@ def _resolve_columns(header: list[str] | None, columns, ncol: int) -> list[int]:
             if len(hits) != 1:
                 raise ValueError(
                     f"cannot tell which column is the {q} from the header {header}; "
-                    "pass columns=(time, displacement, force) as names or indices"
+                    "pass columns=(time, displacement, force) as names or indices (a "
+                    "ring-down or sweep file is read by read_vibration_csv)"
                 )
             idx.append(hits[0])
         return idx

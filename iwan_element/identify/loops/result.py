@@ -372,12 +372,13 @@ def _finish(
         _curves=dict(curves or {}),
         failures=failures,
     )
-    if warns and _EMIT.get():
-        warnings.warn(
-            "Iwan identification: " + " | ".join(warns),
-            IdentifiabilityWarning,
-            stacklevel=stacklevel,
-        )
+    if _EMIT.get():
+        for w in warns:  # one warning each: one line each on stderr, filtered one by one
+            warnings.warn(
+                "Iwan identification: " + " ".join(w.split()),
+                IdentifiabilityWarning,
+                stacklevel=stacklevel,
+            )
     return result
 
 
