@@ -676,3 +676,21 @@ def test_cli_fit_plot_is_the_python_plot_with_its_dissipation_panel():
     assert abs(gap) < 5.0  # the offset (300 N) is not between data and model
     assert notes == [] and ax2.get_xscale() == "log" and len(ax2.get_lines()) >= 2
     plt.close("all")
+
+
+@pytest.mark.parametrize("name", ["Diagnosis", "VibrationDiagnosis"])
+def test_step_tables_keep_their_columns_with_long_names(name):
+    """A pair's long name ("slip_degradation + asymmetric_slip") does not push its row's
+    numbers out of their columns: every candidate's verdict starts in one column."""
+    import dataclasses
+
+    d = _built(name)
+    st = d.steps[0]
+    long = dict(st["candidates"][0], name="slip_degradation + asymmetric_slip")
+    cands = [long] + list(st["candidates"])
+    rep = dataclasses.replace(d, steps=[dict(st, candidates=cands)] + list(d.steps[1:])).report()
+    lines = rep.splitlines()
+    start = next(i for i, s in enumerate(lines) if s.strip().startswith(long["name"]))
+    rows = lines[start : start + len(cands)]
+    assert [r.split()[0] for r in rows] == [c["name"].split()[0] for c in cands]
+    assert len({r.index(c["verdict"]) for r, c in zip(rows, cands)}) == 1, rows
