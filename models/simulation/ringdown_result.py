@@ -233,12 +233,16 @@ class RingdownResult(ResultShape):
             [tuple(map(float, r)) for r in zip(self.t, self.sensor, *resp)],
         )
         err = self.max_energy_error
+        where = () if self.sensor_positions is None else np.atleast_1d(self.sensor_positions)
         run = [
             (column("duration", "s"), float(self.t[-1])),
             (column("initial energy", "J"), float(self.initial_energy)),
             (column("largest energy error", "-"), err),
             (column("wall time", "s"), float(self.wall_time)),
-            (column("sensor positions", "m"), ", ".join(f"{x:.4g}" for x in self.sensor_positions)),
+            (
+                column("sensor positions", "m"),
+                ", ".join(f"{x:.4g}" for x in where),
+            ),
         ]
         return [
             (

@@ -148,6 +148,38 @@ class Diagnosis(Probable, ResultShape):
             }
         )
 
+    def _step_lines(self) -> list:
+        """The report's table of each selection step: the candidates, their misfit and
+        verdict (the effect column as wide as the longest name, a pair's too).
+        """
+        lines = []
+        for k, st in enumerate(self.steps):
+            lines.append(f"  step {k + 1}: candidates on {' + '.join(st['on']) or 'Iwan'}")
+            width = max([20] + [len(c["name"]) for c in st["candidates"]])
+            lines += table_lines(
+                [
+                    ("effect", f"<{width}"),
+                    ("NRMSE [%]", "9.3g"),
+                    ("x noise", "8.3g"),
+                    ("dIC", "9.4g"),
+                    ("explains [%]", "12.3g"),
+                    ("  verdict", "<"),
+                ],
+                [
+                    (
+                        c["name"],
+                        100 * c["nrmse"],
+                        c["ratio"],
+                        c["dIC"],
+                        100 * c["explained"],
+                        "  " + c["verdict"],
+                    )
+                    for c in st["candidates"]
+                ],
+                indent=4,
+            )
+        return lines
+
     def report(self) -> str:
         """Human-readable account: noise, misfit, where, candidates, verdict, before/after."""
         d = self.details
@@ -180,31 +212,7 @@ class Diagnosis(Probable, ResultShape):
                 "best candidate (0: the best)",
                 indent="    ",
             )
-        for k, st in enumerate(self.steps):
-            lines.append(f"  step {k + 1}: candidates on {' + '.join(st['on']) or 'Iwan'}")
-            width = max([20] + [len(c["name"]) for c in st["candidates"]])
-            lines += table_lines(
-                [
-                    ("effect", f"<{width}"),
-                    ("NRMSE [%]", "9.3g"),
-                    ("x noise", "8.3g"),
-                    ("dIC", "9.4g"),
-                    ("explains [%]", "12.3g"),
-                    ("  verdict", "<"),
-                ],
-                [
-                    (
-                        c["name"],
-                        100 * c["nrmse"],
-                        c["ratio"],
-                        c["dIC"],
-                        100 * c["explained"],
-                        "  " + c["verdict"],
-                    )
-                    for c in st["candidates"]
-                ],
-                indent=4,
-            )
+        lines += self._step_lines()
         for name, why in self.untestable.items():
             lines.append(f"  cannot test {name}: {why}")
         if self.effects:

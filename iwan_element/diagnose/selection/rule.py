@@ -230,7 +230,7 @@ def _pair_step(fit_candidate, cur, rows, score, allowed):
     if len(singles) < 2:
         return None, []
     orders = [(singles[0], r) for r in singles[1:]] + [(singles[1], singles[0])]
-    fits: dict = {}  # {pair (frozenset): (row, first, second, q of the pair)}
+    fits = {}  # {pair (frozenset): (row, first, second, q of the pair)}
     for first, second in orders:
         if allowed is not None and not allowed(first["names"], second["name"]):
             continue
