@@ -42,13 +42,12 @@ import argparse
 import json
 import os
 import sys
-import textwrap
 import warnings
 from pathlib import Path
 
 from .cli_curve import add_curve_command, run_curve
 
-__all__ = ["main", "build_parser", "fit_figure"]
+__all__ = ["main", "build_parser"]
 
 PROG = "iwan-element"
 EXIT_OK, EXIT_INPUT, EXIT_USAGE, EXIT_NOT_USABLE = 0, 1, 2, 3
@@ -338,54 +337,6 @@ def _parse_columns(text: str | None):
     return tuple(int(p) if p.lstrip("-").isdigit() else p for p in parts)
 
 
-def fit_figure(data, result):
-    """The figure ``iwan-element fit --plot`` writes: the fit's own plot
-    (:meth:`FitResult.plot`: a loop fit's model and data with the fitted offsets removed, as
-    in Python), beside the dissipation per cycle against the force amplitude (measured
-    cycles and the fitted joint's closed form; a dissipation fit's own plot, beside its loops).
-    When the record has too few usable cycles for the dissipation panel, the panel says
-    why instead of vanishing.
-
-    Returns
-    -------
-    (matplotlib.figure.Figure, list of str)
-        The figure and notes for the command's output (a panel left empty and why).
-    """
-    from matplotlib.figure import Figure
-
-    from .plotting import plot_dissipation_fit, plot_fitted_loops
-
-    fig = Figure(figsize=(11, 4.5), layout="constrained")
-    ax1, ax2 = fig.subplots(1, 2)
-    notes = []
-    if result.method == "loops":
-        result.plot(ax=ax1)
-        try:
-            table = data.amplitude_table(min_cycles=1)  # every closed cycle, one or more
-        except ValueError as exc:
-            table, why = None, str(exc)
-        if table is not None:
-            plot_dissipation_fit(table["F0"], table["D"], result, ax=ax2)
-        else:
-            ax2.text(
-                0.5,
-                0.5,
-                "no dissipation panel:\n" + "\n".join(textwrap.wrap(why, width=50)),
-                ha="center",
-                va="center",
-                fontsize=8,
-                transform=ax2.transAxes,
-            )
-            ax2.set_axis_off()
-            notes.append(f"--plot: no dissipation panel ({why})")
-    else:
-        plot_fitted_loops(data.u, data.F, result, ax=ax1)
-        result.plot(ax=ax2)
-    ax1.set_title("measured vs fitted loops", fontsize=9)
-    ax2.set_title("dissipation per cycle", fontsize=9)
-    return fig, notes
-
-
 def _run_fit(args) -> tuple[int, list[str]]:
     from .identify.files.csv_input import FORCE_UNITS
     from .identify.loops.dissipation import fit_dissipation
@@ -447,6 +398,8 @@ def _run_fit(args) -> tuple[int, list[str]]:
         args.json.write_text(json.dumps(out, indent=2, allow_nan=False) + "\n")
         wrote.append(f"wrote {args.json}")
     if args.plot is not None:
+        from .plotting import fit_figure
+
         fig, notes = fit_figure(data, result)
         fig.savefig(args.plot, dpi=120)
         wrote += notes + [f"wrote {args.plot}"]

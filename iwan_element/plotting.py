@@ -7,6 +7,9 @@ matplotlib is imported only when a function here is called. Every function takes
 
 from __future__ import annotations
 
+import textwrap
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from .base.result_shape import axes_or_new
@@ -22,10 +25,21 @@ from .core.closed_form import (
 )
 from .core.parameters import IwanParameters
 
-__all__ = ["plot_normalized_loops", "plot_loop", "plot_fitted_loops", "plot_dissipation_fit"]
+if TYPE_CHECKING:
+    from matplotlib.artist import Artist
+    from matplotlib.figure import Figure
+    from matplotlib.lines import Line2D
+
+__all__ = [
+    "plot_normalized_loops",
+    "plot_loop",
+    "plot_fitted_loops",
+    "plot_dissipation_fit",
+    "fit_figure",
+]
 
 
-def plot_normalized_loops(cases, *, s0: float = 1.0, step: float = 0.002, ax=None):
+def plot_normalized_loops(cases, *, s0: float = 1.0, step: float = 0.002, ax=None) -> list[Line2D]:
     """Draw normalised hysteresis loops ``f(s), f_u(s), f_d(s)`` (paper eqs. 12, 13, 15; Fig. 3).
 
     Parameters
@@ -67,7 +81,7 @@ def plot_normalized_loops(cases, *, s0: float = 1.0, step: float = 0.002, ax=Non
 
 def plot_loop(
     amplitude: float, params: IwanParameters, *, n: int = 401, ax=None, label: str | None = None
-):
+) -> list[Line2D]:
     """Draw the steady Masing loop of amplitude ``u0`` [m] in mm and kN.
 
     Returns
@@ -95,7 +109,7 @@ def _fit_params(params) -> IwanParameters:
     return p
 
 
-def plot_fitted_loops(u, F, params, *, ax=None, max_points: int = 20000):
+def plot_fitted_loops(u, F, params, *, ax=None, max_points: int = 20000) -> list[Line2D]:
     """Measured against fitted force-displacement loops, in mm and kN (paper Fig. 8).
 
     The fitted force is the exact :class:`~iwan_element.IwanJoint` driven by the measured
@@ -147,7 +161,9 @@ def plot_fitted_loops(u, F, params, *, ax=None, max_points: int = 20000):
     return [meas, fit]
 
 
-def plot_dissipation_fit(force, dissipation, params, *, ax=None, slope: bool = True, n: int = 200):
+def plot_dissipation_fit(
+    force, dissipation, params, *, ax=None, slope: bool = True, n: int = 200
+) -> list[Artist]:
     """Log-log dissipation per cycle against force amplitude with the fitted curve (Fig. 7).
 
     The curve is the exact relation ``(F0(u0), D(u0))`` of the fitted joint (vertical at
@@ -186,7 +202,7 @@ def plot_dissipation_fit(force, dissipation, params, *, ax=None, slope: bool = T
         F0a * 1e-3, Da * 1e3, "o", ms=4, mfc="none", color="k", label="measured cycles"
     )
     F_curve = force_amplitude(u_grid, p)
-    D_curve = cycle_dissipation(u_grid, p)
+    D_curve = np.asarray(cycle_dissipation(u_grid, p))
     if Da.max() > D_curve[-1]:  # macroslip: F0 stays at Fs while D keeps growing
         F_curve = np.append(F_curve, p.Fs)
         D_curve = np.append(D_curve, Da.max())
@@ -217,3 +233,49 @@ def plot_dissipation_fit(force, dissipation, params, *, ax=None, slope: bool = T
     else:
         ax.legend(fontsize=7, loc="upper left")
     return artists
+
+
+def fit_figure(data, result) -> tuple[Figure, list[str]]:
+    """The figure ``iwan-element fit --plot`` writes: the fit's own plot
+    (:meth:`FitResult.plot`: a loop fit's model and data with the fitted offsets removed, as
+    in Python), beside the dissipation per cycle against the force amplitude (measured
+    cycles and the fitted joint's closed form; a dissipation fit's own plot, beside its loops).
+    When the record has too few usable cycles for the dissipation panel, the panel says
+    why instead of vanishing.
+
+    Returns
+    -------
+    (matplotlib.figure.Figure, list of str)
+        The figure and notes for the command's output (a panel left empty and why).
+    """
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(11, 4.5), layout="constrained")
+    ax1, ax2 = fig.subplots(1, 2)
+    notes = []
+    if result.method == "loops":
+        result.plot(ax=ax1)
+        try:
+            table = data.amplitude_table(min_cycles=1)  # every closed cycle, one or more
+        except ValueError as exc:
+            table, why = None, str(exc)
+        if table is not None:
+            plot_dissipation_fit(table["F0"], table["D"], result, ax=ax2)
+        else:
+            ax2.text(
+                0.5,
+                0.5,
+                "no dissipation panel:\n" + "\n".join(textwrap.wrap(why, width=50)),
+                ha="center",
+                va="center",
+                fontsize=8,
+                transform=ax2.transAxes,
+            )
+            ax2.set_axis_off()
+            notes.append(f"--plot: no dissipation panel ({why})")
+    else:
+        plot_fitted_loops(data.u, data.F, result, ax=ax1)
+        result.plot(ax=ax2)
+    ax1.set_title("measured vs fitted loops", fontsize=9)
+    ax2.set_title("dissipation per cycle", fontsize=9)
+    return fig, notes

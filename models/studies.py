@@ -15,6 +15,8 @@ preload, friction coefficient, bolt count or an interface parameter can be swept
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from .modal import modal_amplitude_curve
@@ -22,7 +24,7 @@ from .modal import modal_amplitude_curve
 __all__ = ["specimen_curve_task", "with_changes"]
 
 
-def with_changes(specimen, params: dict):
+def with_changes(specimen, params: dict) -> Any:
     """The specimen with ``params`` applied: any ``Specimen`` or ``InterfaceModel`` field by
     name (``preload`` [N], ``friction`` [-], ``chi``, ``stiffness_per_area``, ...) and
     ``n_bolts``, which places that many bolts evenly along the lap (centres at

@@ -659,7 +659,7 @@ def test_cli_fit_plot_is_the_python_plot_with_its_dissipation_panel():
     ds1_0p5Hz_25lb), beside the dissipation panel."""
     import matplotlib.pyplot as plt
 
-    from iwan_element.cli import fit_figure
+    from iwan_element.plotting import fit_figure
 
     d = _record()
     off = ie.TestData.from_arrays(d.t, d.u, d.F + 300.0)  # a 300 N force-sensor offset

@@ -976,7 +976,7 @@ MODEL_REGISTRY = {
     "ringdown": (
         lambda m: (
             m.ringdown,
-            dict(specimen=m.preset("example"), amplitude=1e-5, cycles=3, steps_per_period=16),
+            dict(specimen=m.preset("example"), amplitude=1e-5, cycles=6, steps_per_period=16),
         ),
         {"specimen": "object", "amplitude": "scalar", "cycles": "scalar"},
         True,

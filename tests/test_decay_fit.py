@@ -297,11 +297,18 @@ def test_stderr_is_not_smaller_than_the_scatter_of_repeated_fits():
     not larger than the stated stderr, nor their mean further from the truth than the
     stderr of a mean allows.
 
-    Found here: the stated stderr is conservative for f0 (the scatter is about 0.1-0.2 of it
-    in this configuration), close for chi; reported, not hidden by a two-sided bound.
+    Found here: the stated stderr is conservative (scatter / stderr for f0, zeta0, chi: 0.48,
+    0.67, 0.55 over seeds 0-9; 0.55, 0.75, 0.68 over the six kept, so the test fails once the
+    stderr is understated by 2.1x); reported, not hidden by a two-sided bound.
+
+    Six repetitions (were ten; each fit takes about 5.6 s): the ratio of the sample standard
+    deviation to the stated stderr then follows sqrt(chi2_5 / 5) for calibrated errors, so
+    the bound 1.6 passes a true stderr with probability 0.975 (per parameter) and catches one
+    understated 2x, 2.5x, 3x with probability 0.67, 0.84, 0.92 (0.76, 0.93, 0.98 with ten;
+    scipy.stats.chi2.sf(5 * (1.6 / k)**2, 5)).
     """
     est, sds = [], []
-    for seed in range(10):
+    for seed in range(6):
         d = _svam(zeta0=3e-3, a0=1e-4, duration=0.6, quantity="velocity", seed=seed)
         fit = fit_decay(d.t, d.y, quantity="velocity", band=d.band)
         est.append([fit.parameters[k] for k in ("f0", "zeta0", "chi")])

@@ -15,13 +15,14 @@ optional extra: ``pip install "iwan-element[progress]"``.
 from __future__ import annotations
 
 import os
+from typing import Any
 
 import numpy as np
 
 __all__ = ["progress_bar", "tick", "complete", "finish"]
 
 
-def progress_bar(progress, *, total=None, desc: str, unit: str):
+def progress_bar(progress, *, total=None, desc: str, unit: str) -> Any:
     """A tqdm bar when ``progress`` is True (and not under CI), else ``None``.
 
     Parameters

@@ -42,6 +42,10 @@ import numpy as np
 
 from .columns import column, title_of, unit_label
 
+if TYPE_CHECKING:
+    import pandas as pd
+    from matplotlib.axes import Axes
+
 __all__ = [
     "column",
     "ResultShape",
@@ -231,7 +235,7 @@ class ResultShape:
             out.append((title, _scaled(v, scale)))
         return out
 
-    def to_dataframe(self, table: str | None = None):
+    def to_dataframe(self, table: str | None = None) -> pd.DataFrame:
         """One of the result's tables (:meth:`_tables`) as a ``pandas.DataFrame``.
 
         Parameters
@@ -381,7 +385,7 @@ def panels(ax, n: int, *, figsize=None, sharex: bool = False) -> list:
     return axs
 
 
-def axes_or_new(ax):
+def axes_or_new(ax) -> Axes:
     """One matplotlib Axes: ``ax`` itself, or a new figure's if ``None`` (the one-panel case
     of the axes contract, :func:`panels`).
     """

@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 
 __all__ = ["json_safe"]
 
 
-def json_safe(x):
+def json_safe(x) -> Any:
     """Recursively convert to JSON-safe Python types: dicts (keys as str), lists, bool, int,
     float (NaN and inf become None), None and str; an object with ``to_dict()`` becomes that
     dict; anything else its ``str``.

@@ -15,6 +15,7 @@ threadpoolctl (the library scikit-learn uses for the same purpose), and restores
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from contextlib import contextmanager
 
 from threadpoolctl import threadpool_limits
@@ -23,7 +24,7 @@ __all__ = ["one_blas_thread"]
 
 
 @contextmanager
-def one_blas_thread():
+def one_blas_thread() -> Iterator[None]:
     """Context manager: at most one BLAS thread inside, the previous limits restored after."""
     with threadpool_limits(limits=1, user_api="blas"):
         yield

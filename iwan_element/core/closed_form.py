@@ -11,6 +11,7 @@ from __future__ import annotations
 import warnings
 
 import numpy as np
+from numpy.typing import NDArray
 
 from ..base.validation import check_scalar, finite_array
 from .parameters import CHI_MAX, IwanParameters
@@ -64,7 +65,7 @@ def _out(x, like):
     return float(x) if np.ndim(like) == 0 else x
 
 
-def backbone(u, params: IwanParameters):
+def backbone(u, params: IwanParameters) -> float | NDArray[np.float64]:
     """Virgin-loading (backbone) force ``F(u)`` [N] (Segalman 2005 eq. 17; paper eqs. 12, 18).
 
     ``F(u) = KT u - R |u|**(chi+2) sign(u) / ((chi+1)(chi+2))`` for ``|u| < phi_max`` and
@@ -91,7 +92,7 @@ def backbone(u, params: IwanParameters):
     return _out(f, u)
 
 
-def tangent_stiffness(u, params: IwanParameters):
+def tangent_stiffness(u, params: IwanParameters) -> float | NDArray[np.float64]:
     """Tangent stiffness of the virgin curve ``dF/du`` [N/m] (derivative of eq. 17).
 
     ``KT - R |u|**(chi+1)/(chi+1)`` for ``|u| < phi_max`` (it tends to ``S`` as
@@ -105,7 +106,7 @@ def tangent_stiffness(u, params: IwanParameters):
     return _out(k, u)
 
 
-def force_amplitude(amplitude, params: IwanParameters):
+def force_amplitude(amplitude, params: IwanParameters) -> float | NDArray[np.float64]:
     """Force amplitude ``F0`` [N] of a steady cycle of displacement amplitude ``u0`` [m]
     (paper eqs. 18-20): the backbone at ``u0``.
     """
@@ -115,7 +116,7 @@ def force_amplitude(amplitude, params: IwanParameters):
     return backbone(amplitude, params)
 
 
-def secant_stiffness(amplitude, params: IwanParameters):
+def secant_stiffness(amplitude, params: IwanParameters) -> float | NDArray[np.float64]:
     """Secant stiffness ``F0/u0`` [N/m] of a cycle of amplitude ``u0`` (paper eq. 24).
 
     ``K_sec = KT [1 - r**(chi+1) / ((chi+2)(1+beta))]`` with ``r = u0/phi_max <= 1``;
@@ -150,7 +151,7 @@ def slip_energy(y, p: IwanParameters):
     return e * r ** (p.chi + 3.0) + p.Fs * np.maximum(y - p.phi_max, 0.0)
 
 
-def dissipation(amplitude, params: IwanParameters):
+def dissipation(amplitude, params: IwanParameters) -> float | NDArray[np.float64]:
     """Energy dissipated per steady cycle of displacement amplitude ``u0`` [J].
 
     Microslip, ``u0 <= phi_max`` (paper eq. 17, Segalman 2005 eq. 20)::
@@ -175,7 +176,7 @@ def dissipation(amplitude, params: IwanParameters):
     return _finite("amplitude", _out(4.0 * slip_energy(x, p), amplitude), "dissipation")
 
 
-def dissipation_slope(amplitude, params: IwanParameters):
+def dissipation_slope(amplitude, params: IwanParameters) -> float | NDArray[np.float64]:
     """Local slope ``d ln D / d ln F0`` of dissipation vs force amplitude (paper eq. 21).
 
     Tends to ``chi + 3`` only as ``F0 -> 0`` (paper eq. 22); ``inf`` in macroslip, where
@@ -194,7 +195,7 @@ def dissipation_slope(amplitude, params: IwanParameters):
     return _out(slope, amplitude)
 
 
-def backbone_work(u, params: IwanParameters):
+def backbone_work(u, params: IwanParameters) -> float | NDArray[np.float64]:
     """Work along the virgin curve ``G(u) = int_0^|u| F(x) dx`` [J] (even in ``u``).
 
     Used for energy bookkeeping of Masing branches: along a branch leaving the reversal
@@ -210,7 +211,9 @@ def backbone_work(u, params: IwanParameters):
     return _finite("u", _out(g, u), "backbone work")
 
 
-def masing_loop(amplitude: float, params: IwanParameters, *, n: int = 401):
+def masing_loop(
+    amplitude: float, params: IwanParameters, *, n: int = 401
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """One closed steady-state hysteresis loop of amplitude ``u0`` (paper eqs. 13-15).
 
     The loop starts at ``(u0, F0)``, follows the descending branch
@@ -264,7 +267,7 @@ def _f(s, chi, beta, den):
     return np.sign(s) * a * (beta * chi + 2.0 * beta + chi + 2.0 - a ** (chi + 1.0)) / den
 
 
-def normalized_backbone(s, chi: float, beta: float):
+def normalized_backbone(s, chi: float, beta: float) -> float | NDArray[np.float64]:
     """Dimensionless backbone ``f(s) = F(s phi_max)/Fs`` (paper eq. 12).
 
     ::
@@ -279,7 +282,7 @@ def normalized_backbone(s, chi: float, beta: float):
     return _out(_f(s_arr, chi, beta, den), s)
 
 
-def masing_descending(s, s0: float, chi: float, beta: float):
+def masing_descending(s, s0: float, chi: float, beta: float) -> float | NDArray[np.float64]:
     """Descending (unloading) branch from the reversal ``(s0, f(s0))`` (paper eq. 13).
 
     ::
@@ -292,7 +295,7 @@ def masing_descending(s, s0: float, chi: float, beta: float):
     return _out(_f(s0, chi, beta, den) - 2.0 * _f((s0 - s_arr) / 2.0, chi, beta, den), s)
 
 
-def masing_ascending(s, s0: float, chi: float, beta: float):
+def masing_ascending(s, s0: float, chi: float, beta: float) -> float | NDArray[np.float64]:
     """Ascending (reloading) branch from the reversal ``(-s0, -f(s0))`` (paper eq. 15).
 
     Corrected::

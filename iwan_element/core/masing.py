@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import numpy as np
 from numba import njit
+from numpy.typing import NDArray
 
 from ..base.validation import check_scalar, finite_array
 from .parameters import IwanParameters
@@ -256,7 +257,9 @@ _NOSEG = np.empty((4, 0))
 
 
 @njit(cache=True)
-def masing_step(c, us, Fr, at, n, uc, Fc, Gc, IHc, u, seg):
+def masing_step(
+    c, us, Fr, at, n, uc, Fc, Gc, IHc, u, seg
+) -> tuple[int, float, float, float, float, float, float]:
     """One element's move from its committed state to ``u`` (:func:`_advance`; the compiled
     entry point from Python and from other compiled elements).
 
@@ -315,7 +318,9 @@ def _rows(C, U, F, K, W, D):
         _row(C[k], U[k], F[k], K[k], W[k], D[k], ids, seg)
 
 
-def masing_rows(C: np.ndarray, U: np.ndarray):
+def masing_rows(
+    C: np.ndarray, U: np.ndarray
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
     """The kernel on raw arrays (no validation): constants ``C`` of shape ``(m, 15)``
     (:func:`constants_from_arrays`) and histories ``U`` of shape ``(m, n)`` [m], each from
     the virgin state. Returns ``F, K, W, D``, each ``(m, n)`` (see :func:`masing_history`).
@@ -340,7 +345,9 @@ def _as_params(params) -> list:
     return out
 
 
-def masing_history(u, params, *, reversal_tol: float = 1e-12):
+def masing_history(
+    u, params, *, reversal_tol: float = 1e-12
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
     """Exact force, tangent, work and dissipation of Iwan joints along displacement histories.
 
     Parameters
@@ -381,7 +388,12 @@ def masing_history(u, params, *, reversal_tol: float = 1e-12):
 _UNIT = masing_constants(IwanParameters(1.0, 1.0, 0.0, 0.0), 0.0)
 
 
-def reversal_structure(u: np.ndarray, tol: float, *, segments: bool = False):
+def reversal_structure(
+    u: np.ndarray, tol: float, *, segments: bool = False
+) -> tuple[
+    NDArray[np.intp],
+    tuple[NDArray[np.intp], NDArray[np.intp], NDArray[np.float64], NDArray[np.float64]] | None,
+]:
     """Reversal structure of the history ``u`` [m] from the virgin state (parameter free).
 
     Parameters

@@ -33,6 +33,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from numpy.typing import NDArray
 
 from ..base.validation import check_magnitude, check_scalar, finite_array
 from .closed_form import backbone, dissipation, secant_stiffness, tangent_stiffness
@@ -51,7 +52,7 @@ def _check(params):
     return params
 
 
-def harmonic_stiffness(amplitude, params: IwanParameters):
+def harmonic_stiffness(amplitude, params: IwanParameters) -> float | NDArray[np.float64]:
     """First-harmonic (describing-function) stiffness of the Iwan joint [N/m].
 
     For ``u = Q cos(theta)`` the steady Masing loop has the descending branch
@@ -105,7 +106,7 @@ def _harmonic_quadrature(q, p):
     return (2.0 / math.pi) * total[:, 0] / q
 
 
-def viscous_floor(zeta0, w0_sq, w_sq, k_e, floor: str):
+def viscous_floor(zeta0, w0_sq, w_sq, k_e, floor: str) -> float | NDArray[np.float64]:
     """The viscous part of a mode's damping ratio (the package's one copy of the rule;
     ``docs/equations.md`` section 7).
 
@@ -138,7 +139,7 @@ def modal_iwan_curve(
     stiffness: str = "secant",
     floor: str = "constant",
     damping_form: str = "energy",
-):
+) -> tuple[float | NDArray[np.float64], float | NDArray[np.float64]]:
     """Natural frequency and damping ratio of a single-mode modal Iwan model.
 
     ``w(Q)**2 = (K_inf + K(Q)) / mass`` and
@@ -224,7 +225,7 @@ def modal_ringdown(
     zeta0: float = 0.0,
     mass: float = 1.0,
     max_phase_step: float = 0.01,
-):
+) -> ModalRingdown:
     """Free decay of the single-mode modal Iwan oscillator, with the exact :class:`IwanJoint`.
 
     Integrates ``mass q'' + c q' + K_inf q + F_J(q) = 0`` (``c = 2 zeta0 mass w0``, the

@@ -7,11 +7,15 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..base.result_shape import ResultShape, axes_or_new, format_value
 from .parameters import IwanParameters
+
+if TYPE_CHECKING:
+    from matplotlib.lines import Line2D
 
 __all__ = ["ModalRingdown"]
 
@@ -119,7 +123,7 @@ class ModalRingdown(ResultShape):
         ]
         return [("time series", cols, rows), ("run", ("quantity", "value"), run)]
 
-    def plot(self, ax=None, *, label: str | None = None):
+    def plot(self, ax=None, *, label: str | None = None) -> list[Line2D]:
         """The modal displacement against time on ``ax`` (a new figure if ``None``);
         returns the artists.
         """

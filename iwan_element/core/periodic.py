@@ -43,6 +43,7 @@ from typing import NamedTuple
 
 import numpy as np
 from numba import njit
+from numpy.typing import NDArray
 
 from .masing import KT, N_CONST, PM, TOL, B, _advance
 
@@ -96,7 +97,9 @@ def _rows(C, U, F, K, A, D):
         D[r] = _periodic_row(C[r], U[r], F[r], K[r], A[r], seg)
 
 
-def periodic_rows(C: np.ndarray, U: np.ndarray):
+def periodic_rows(
+    C: np.ndarray, U: np.ndarray
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.intp], NDArray[np.float64]]:
     """Steady-loop force of Iwan joints over one period of periodic slips.
 
     Parameters

@@ -39,6 +39,7 @@ from __future__ import annotations
 import importlib
 import inspect
 import pkgutil
+from typing import Any
 
 from ..core.protocol import check_element
 from .asymmetric_slip import AsymmetricSlip
@@ -72,7 +73,7 @@ EFFECTS: dict = {}
 """The effect library by name (the names users and reports refer to)."""
 
 
-def register_effect(cls):
+def register_effect(cls) -> type[Effect]:
     """Add an effect class (a subclass of the shared base with a unique ``effect`` name and
     ``specs``) to :data:`EFFECTS`; returns it, so it can be used as a decorator.
     """
@@ -102,7 +103,7 @@ def _discover() -> None:
 _discover()
 
 
-def make_effect(name: str, inner, **parameters: float):
+def make_effect(name: str, inner, **parameters: float) -> Effect:
     """Wrap ``inner`` in the effect called ``name`` with the given parameters.
 
     ``parameters`` must be the effect's parameter names (``EFFECTS[name].parameter_names``;
@@ -125,7 +126,7 @@ def make_effect(name: str, inner, **parameters: float):
     return cls(inner, **parameters)
 
 
-def base_joint(element):
+def base_joint(element) -> Any:
     """The innermost element below any stack of effects (``ValueError`` if ``element`` is no
     joint element).
     """

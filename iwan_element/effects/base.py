@@ -11,9 +11,10 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from types import MethodType
-from typing import cast
+from typing import Any, cast
 
 import numpy as np
+from numpy.typing import NDArray
 
 from ..base.validation import check_scalar, finite_array, same_length
 from ..core.parameters import IwanParameters
@@ -109,7 +110,7 @@ class ParamSpec:
         """``(low, high)`` of the prior in fitting units (``prior`` or ``fit_bounds``)."""
         return tuple(float(x) for x in (self.prior or self.fit_bounds))
 
-    def log_prior(self, z):
+    def log_prior(self, z) -> float | NDArray[np.float64]:
         """Log prior density of the fitting variable ``z`` (array or float) over
         :attr:`prior_range` [1 / fitting unit]: uniform, or log-uniform in the distance
         from :attr:`neutral` (see there).
@@ -123,7 +124,7 @@ class ParamSpec:
         norm = sum(math.log1p(d / f) for d in (n - lo, hi - n) if d > 0)
         return -np.log(np.abs(z - n) + f) - math.log(norm)
 
-    def prior_quantile(self, q):
+    def prior_quantile(self, q) -> float | NDArray[np.float64]:
         """The fitting variable at prior probability ``q`` in [0, 1] (the inverse of the
         prior's distribution function; for nested sampling's prior transform).
         """
@@ -309,7 +310,7 @@ class Effect(CommittedState):
         self._has_trial = False
 
     @property
-    def inner(self):
+    def inner(self) -> Any:
         """The wrapped joint element."""
         return self._inner
 
@@ -319,7 +320,7 @@ class Effect(CommittedState):
         return {k: getattr(self, k) for k in self.parameter_names}
 
     @property
-    def params(self):
+    def params(self) -> IwanParameters:
         """Parameters of the underlying Iwan joint."""
         return self._inner.params
 

@@ -61,6 +61,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from numpy.typing import NDArray
 
 from ..base.validation import check_scalar
 from .base import ParamSpec
@@ -94,7 +95,7 @@ def _b2(q):
     return _E(-q, np.log(2.0))
 
 
-def patch_cumulative(phi, X_s, shape):
+def patch_cumulative(phi, X_s, shape) -> NDArray[np.float64]:
     """Stiffness fraction ``K(phi) / k_2`` [-] of the patch with slip displacement in
     ``[X_s, phi]``: ``B(phi / X_s) / B(2)``, ``B(r) = (1 - r^-q) / q`` (module docstring;
     0 below ``X_s``, 1 above it at ``shape = 0``).
@@ -116,7 +117,7 @@ def _thresholds(kappa, X_s, shape):
     return X_s * np.exp(t)
 
 
-def patch_stiffness_loss(X, X_s, shape):
+def patch_stiffness_loss(X, X_s, shape) -> NDArray[np.float64]:
     """Lost first-harmonic stiffness at amplitude ``X`` [m] per unit ``k_2`` [-]:
     ``int_0^K(X) (1 - g(X, phi(K))) dK`` over the stiffness that slides, by 48-point
     Gauss-Legendre quadrature (``shape = 0``: ``1 - jenkins_gain(X, X_s)``).
@@ -131,7 +132,7 @@ def patch_stiffness_loss(X, X_s, shape):
     return 0.5 * kx * np.sum(w * (1.0 - jenkins_gain(X[..., None], phi)), axis=-1)
 
 
-def patch_dissipation(X, X_s, shape):
+def patch_dissipation(X, X_s, shape) -> NDArray[np.float64]:
     """Energy dissipated per cycle at amplitude ``X`` [m] per unit ``k_2`` [m^2]:
     ``4 int phi (X - phi) dK = 4 c [X X_s E(1 - q) - X_s^2 E(2 - q)]``, ``c = 1 / B(2)``, in
     closed form (module docstring; ``shape = 0``: ``4 X_s (X - X_s)``).

@@ -14,13 +14,14 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from numpy.typing import NDArray
 
 from .base import Effect, ParamSpec
 
 __all__ = ["PinningStiffness", "dead_zone_gain"]
 
 
-def dead_zone_gain(X, delta):
+def dead_zone_gain(X, delta) -> NDArray[np.float64]:
     """Describing function of ``sign(u) max(|u| - delta, 0)`` at amplitude ``X``: the
     equivalent linear stiffness per unit ``k_p`` [-] (1 for ``delta = 0``).
     """

@@ -4,9 +4,10 @@ from __future__ import annotations
 
 import functools
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, cast
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
+from numpy.typing import NDArray
 
 from ..base.result_shape import ResultShape, column, panels, table_lines
 from ..base.serialize import json_safe
@@ -17,6 +18,8 @@ from .runner import EnsembleResult, run_ensemble
 from .uncertainty import ParameterUncertainty
 
 if TYPE_CHECKING:
+    from matplotlib.artist import Artist
+
     from ..identify.modal.result import ModalIwanFit
 
 __all__ = ["PredictionBands", "propagate_uncertainty", "response_task", "modal_fit_task"]
@@ -38,7 +41,7 @@ def response_task(
     """
     p = IwanParameters(params["Fs"], params["KT"], params["chi"], params["beta"])
     f, z = modal_curve(p, system, amplitude)
-    out = {"frequency": f, "damping_ratio": z}
+    out: dict[str, Any] = {"frequency": f, "damping_ratio": z}
     if force is not None:
         out["peak"] = peak_response(
             p, system, force=force, cycles=cycles, steps_per_period=steps_per_period
@@ -75,7 +78,7 @@ def modal_fit_task(
         conventions["floor"],
         conventions.get("damping_form", "energy"),
     )
-    out = {"frequency": np.asarray(f, float), "damping_ratio": np.asarray(z, float)}
+    out: dict[str, Any] = {"frequency": np.asarray(f, float), "damping_ratio": np.asarray(z, float)}
     if force is not None:
         p, k_inf = full_parameters(theta)
         system = SingleModeSystem(mass=1.0, stiffness=max(k_inf, 0.0), zeta0=theta[1])
@@ -130,7 +133,9 @@ class PredictionBands(ResultShape):
             or f"modal fit ({getattr(self.uncertainty, 'regime', '?')})"
         )
 
-    def band(self, name: str):
+    def band(
+        self, name: str
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
         """``(low, median, high)`` quantiles of ``"frequency"``, ``"damping_ratio"``, ``"peak"``."""
         if name not in ("frequency", "damping_ratio", "peak"):
             raise ValueError(f"name must be 'frequency', 'damping_ratio' or 'peak', got {name!r}")
@@ -247,7 +252,7 @@ class PredictionBands(ResultShape):
             }
         )
 
-    def plot(self, ax=None, *, color="C0", label=None, relative: bool = False):
+    def plot(self, ax=None, *, color="C0", label=None, relative: bool = False) -> list[Artist]:
         """Bands (shaded) with the median (dashed) and the nominal curve (solid).
 
         Parameters

@@ -25,6 +25,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import NDArray
 
 from ..base.validation import check_int, check_scalar, finite_array
 from ..core.joint import IwanJoint
@@ -67,7 +68,7 @@ class SingleModeSystem:
 
 def modal_curve(
     joint: IwanParameters, system: SingleModeSystem, amplitude, *, stiffness: str = "secant"
-):
+) -> tuple[float | NDArray[np.float64], float | NDArray[np.float64]]:
     """Closed-form frequency [Hz] and damping ratio [-] at displacement amplitudes [m].
 
     :func:`iwan_element.modal_iwan_curve` with the system's mass, ``K_inf`` and a fixed
@@ -112,7 +113,7 @@ def peak_response(
     cycles: int = 30,
     steps_per_period: int = 64,
     return_history: bool = False,
-):
+) -> float | tuple[float, NDArray[np.float64], NDArray[np.float64]]:
     """Peak displacement [m] of the single-mode system driven from rest by ``F0 sin(2 pi f t)``.
 
     Average-acceleration Newmark (unconditionally stable, no numerical damping) with Newton

@@ -36,13 +36,16 @@ from dataclasses import dataclass
 from numbers import Number
 from os import PathLike
 from pathlib import Path
-from typing import Any, SupportsFloat, cast
+from typing import TYPE_CHECKING, Any, SupportsFloat, cast
 
 import numpy as np
 
 from ..base.progress import finish, progress_bar
 from ..base.result_shape import ResultShape, panels
 from ..base.serialize import json_safe
+
+if TYPE_CHECKING:
+    from matplotlib.artist import Artist
 
 __all__ = ["run_ensemble", "EnsembleResult", "TaskError"]
 
@@ -182,7 +185,7 @@ class EnsembleResult(ResultShape):
         """True when every task ran (failed tasks are in ``errors``)."""
         return bool(len(self.rows) > 0 and not self.errors)
 
-    def plot(self, ax=None, *, output: str | None = None, bins: int = 30):
+    def plot(self, ax=None, *, output: str | None = None, bins: int = 30) -> list[Artist]:
         """Histogram of one scalar output over the successful tasks (default: the first
         scalar output). Returns the artists (one Axes, :mod:`iwan_element.base.result_shape`).
         Raises ``ValueError`` when there is no scalar output to draw.

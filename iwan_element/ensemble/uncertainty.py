@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -27,6 +28,9 @@ from ..base.serialize import json_safe
 from ..base.validation import check_int, finite_array
 from ..core.parameters import IwanParameters
 from ..identify.loops.joint_verdict import PARAM_NAMES
+
+if TYPE_CHECKING:
+    from matplotlib.artist import Artist
 
 __all__ = ["ParameterUncertainty"]
 
@@ -299,7 +303,7 @@ class ParameterUncertainty(ResultShape):
             }
         )
 
-    def plot(self, ax=None):
+    def plot(self, ax=None) -> list[Artist]:
         """One standard deviation of each sampled coordinate (``ln Fs``, ``ln KT``, ``chi``,
         ``ln(1 + beta)``, ``ln R``; a logarithm's is a relative error) as bars, with the
         correlation matrix written on them. Returns the artists (one Axes,

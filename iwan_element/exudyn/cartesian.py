@@ -70,7 +70,7 @@ class IwanCartesianConnector:
         return self._connectors
 
     @property
-    def springDamper(self):
+    def springDamper(self) -> Any:
         """Exudyn's built-in spring-damper on the remaining axes (``ObjectIndex``), or
         ``None``. Exudyn reports its potential energy; :func:`record_energy` books its
         damping.

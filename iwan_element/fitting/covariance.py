@@ -20,6 +20,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import NDArray
 
 from ..base.validation import check_int, check_scalar, finite_array
 
@@ -83,7 +84,7 @@ def _scaled_svd(J: np.ndarray, cutoff: float):
     return A_inv, Vt[~good], scale
 
 
-def normal_inverse(J, *, cutoff: float = CUTOFF):
+def normal_inverse(J, *, cutoff: float = CUTOFF) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
     """``(J^T J)^+`` through the SVD of the column-scaled ``J``, and the degenerate mask.
 
     Parameters

@@ -10,7 +10,9 @@ the fit's input.
 from __future__ import annotations
 
 import math
+from collections.abc import Iterator
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -22,6 +24,9 @@ from ..base.result_shape import (
     unit_label,
 )
 from ..base.serialize import json_safe
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 __all__ = ["Parameter", "ParameterTable"]
 
@@ -176,11 +181,11 @@ class ParameterTable:
         """Parameter names in order."""
         return self.names
 
-    def items(self):
+    def items(self) -> Iterator[tuple[str, Parameter]]:
         """``(name, Parameter)`` pairs in order."""
         return ((p.name, p) for p in self.parameters)
 
-    def get(self, name: str, default=None):
+    def get(self, name: str, default=None) -> Parameter | Any:
         """The parameter ``name``, or ``default``."""
         return self[name] if name in self._index else default
 
@@ -240,7 +245,7 @@ class ParameterTable:
     def _repr_html_(self) -> str:
         return html_table("parameters", PARAMETER_COLUMNS, parameter_rows(self))
 
-    def to_dataframe(self):
+    def to_dataframe(self) -> pd.DataFrame:
         """The table as a ``pandas.DataFrame`` (one row per parameter: value, std. error,
         unit, status; pandas imported only here: ``pip install "iwan-element[pandas]"``).
         """

@@ -10,7 +10,14 @@ frequency-time evaluation of its joints on their exact steady loops
 
 from .continuation import trace
 from .response import harmonic_balance
-from .result import FrequencyResponse
+from .result import FrequencyResponse, macroslip_lines, slip_ratio
 from .system import ModalSystem
 
-__all__ = ["ModalSystem", "FrequencyResponse", "harmonic_balance", "trace"]
+__all__ = [
+    "ModalSystem",
+    "FrequencyResponse",
+    "harmonic_balance",
+    "trace",
+    "macroslip_lines",
+    "slip_ratio",
+]

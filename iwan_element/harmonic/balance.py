@@ -20,8 +20,10 @@ from __future__ import annotations
 
 import logging
 import math
+from typing import Any, Literal, overload
 
 import numpy as np
+from numpy.typing import NDArray
 
 from .basis import Harmonics
 
@@ -45,7 +47,9 @@ class HBPoint(dict):
     """
 
 
-def operators(system, basis: Harmonics, W: float, *, xi: float = 0.0, exclude=None):
+def operators(
+    system, basis: Harmonics, W: float, *, xi: float = 0.0, exclude=None
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
     """The receptances at every kept harmonic of ``W`` as real 4-D operators:
     ``(Lzz, Lpz, Lpb)`` with ``p`` the sensor and excitation ports.
     """
@@ -64,7 +68,7 @@ def operators(system, basis: Harmonics, W: float, *, xi: float = 0.0, exclude=No
 
 def rate_operators(
     system, basis: Harmonics, W: float, rows, cols, *, xi: float = 0.0, exclude=None
-):
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """``(dL/dW, dL/dxi)``: the derivatives of the real operator of the receptances between
     ports ``rows`` and ``cols`` with respect to the fundamental ``W`` [rad/s] and to the
     self-excitation ``xi`` [1/s] (:meth:`ModalSystem.receptance_rate`).
@@ -102,7 +106,19 @@ def force_coefficients(basis: Harmonics, force: float) -> np.ndarray:
     return cf
 
 
-def residual(system, basis, W, force, cz, *, ops=None, jacobian=True):
+@overload
+def residual(
+    system, basis, W, force, cz, *, ops=None, jacobian: Literal[True] = True
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]: ...
+@overload
+def residual(
+    system, basis, W, force, cz, *, ops=None, jacobian: Literal[False]
+) -> tuple[NDArray[np.float64], None, NDArray[np.float64], NDArray[np.float64]]: ...
+def residual(
+    system, basis, W, force, cz, *, ops=None, jacobian: bool = True
+) -> tuple[
+    NDArray[np.float64], NDArray[np.float64] | None, NDArray[np.float64], NDArray[np.float64]
+]:
     """``(R, J, cg, D)`` of the harmonic balance at ``W`` [rad/s] (module docstring);
     ``R`` shape ``(n_z, nc)``, ``J`` shape ``(n_z nc, n_z nc)``.
     """
@@ -157,7 +173,9 @@ def solve_point(system, basis, W, force, cz0, *, tol=1e-9, max_iter=40) -> HBPoi
     return out
 
 
-def point_outputs(system, basis, W, force, cg, D, *, ops=None, xi=0.0, modal=None):
+def point_outputs(
+    system, basis, W, force, cg, D, *, ops=None, xi=0.0, modal=None
+) -> dict[str, Any]:
     """Sensor and excitation-point coefficients and the energy per period of a solution.
 
     Returns a dict: ``sensor`` (nc,) [m], ``excitation`` (nc,) [m], ``input_work``,

@@ -11,13 +11,14 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+from numpy.typing import NDArray
 
 from ..core.periodic import periodic_harmonic_jacobian, periodic_rows
 
 __all__ = ["Harmonics", "check_harmonics", "element_loop"]
 
 
-def element_loop(element, y, v):
+def element_loop(element, y, v) -> tuple[NDArray[np.float64], float]:
     """Steady-loop force of a history-dependent element over one period of samples.
 
     The element is reset, loaded to the sample of the largest ``|y|`` (its first loading)
@@ -128,7 +129,9 @@ class Harmonics:
                 out[..., ib] = -Z[..., k].imag
         return out
 
-    def nonlinear_forces(self, system, cz, W, *, jacobian=True):
+    def nonlinear_forces(
+        self, system, cz, W, *, jacobian=True
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64] | None, NDArray[np.float64]]:
         """AFT of the nonlinear coordinates' forces from their coefficients ``cz`` (n_z, nc):
         the joints' deficits ``g = F(z) - KT z`` on their exact steady loops (exact
         Jacobian), then the element ports' ``gain F(y, y')``: compiled with the exact
@@ -148,17 +151,17 @@ class Harmonics:
         if not system.ports:
             return cg, J, D
         De = np.empty(len(system.ports))
-        Je = np.zeros((len(system.ports),) + J.shape[1:]) if jacobian else None
+        Je = np.zeros((len(system.ports),) + J.shape[1:]) if J is not None else None
         for k, port in enumerate(system.ports):
             c = cz[nj + k]
             if port.form is not None:
                 cg[nj + k], De[k], Jk = self._compiled_port(port, c, W, jacobian)
-                if jacobian:
+                if Je is not None:
                     Je[k] = Jk
                 continue
             f, De[k] = self._port(port, c, W)
             cg[nj + k] = f
-            if jacobian:
+            if Je is not None:
                 h = 1e-7 * max(float(np.abs(c).max()), 1e-300)
                 for d in range(c.size):
                     cp = c.copy()
@@ -191,7 +194,7 @@ class Harmonics:
         F, D = element_loop(port.element, self.E @ c, W * (self.dE @ c))
         return port.gain * (self.P @ F), port.gain * D
 
-    def linear_operator(self, H_list, rows, cols_):
+    def linear_operator(self, H_list, rows, cols_) -> NDArray[np.float64]:
         """The real 4-D operator ``L[p, c, q, c']`` of the complex port receptances
         ``H_list[k][rows][:, cols_]`` (one per kept harmonic ``k``).
         """

@@ -21,13 +21,16 @@ from __future__ import annotations
 import logging
 import math
 import time
+from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from ..base.progress import finish, progress_bar, tick
 from ..base.threads import one_blas_thread
 from .balance import compose, operators, point_outputs, rate_operators
 from .basis import Harmonics
+from .result import slip_ratio
 
 __all__ = ["epmc_branch"]
 
@@ -118,7 +121,7 @@ def _newton(system, basis, y, X, r, *, tol, max_iter):
 
 def epmc_branch(
     system, basis: Harmonics, amplitude, r: int, *, tol=1e-9, max_iter=40, progress: bool = False
-):
+) -> dict[str, NDArray[Any]]:
     """Nonlinear mode ``r`` (a kept-mode column) (one BLAS thread: :func:`_branch`)."""
     bar = progress_bar(progress, total=np.size(amplitude), desc="nonlinear_mode", unit="amplitude")
     try:
@@ -133,7 +136,8 @@ def _branch(system, basis, amplitude, r, *, tol, max_iter, bar):
     (solved in increasing order). Returns a dict of arrays: ``amplitude``, ``frequency``
     [Hz], ``damping_ratio`` [-], ``xi`` [1/s], ``converged``, ``iterations``,
     ``energy_error`` (self-excitation work against the joints' and the floor's loss),
-    ``wall_time``.
+    ``slip_ratio`` (n, n_j: each joint's slip amplitude over its ``phi_max``,
+    :func:`~.result.slip_ratio`; NaN where Newton did not converge), ``wall_time``.
     """
     X = np.asarray(amplitude, float)
     order = np.argsort(X)
@@ -149,6 +153,7 @@ def _branch(system, basis, amplitude, r, *, tol, max_iter, bar):
     out = {k: np.zeros(X.size) for k in ("frequency", "damping_ratio", "xi", "energy_error")}
     out["converged"] = np.zeros(X.size, bool)
     out["iterations"] = np.zeros(X.size, int)
+    out["slip_ratio"] = np.full((X.size, len(system.joints)), np.nan)
     t0 = time.perf_counter()
     for k in order:
         if last is None:  # the linear mode at this amplitude
@@ -184,6 +189,7 @@ def _branch(system, basis, amplitude, r, *, tol, max_iter, bar):
         out["iterations"][k] = its
         if ok:
             last = (y, X[k])
+            out["slip_ratio"][k] = slip_ratio(system, basis, y[: nz * nc].reshape(nz, nc))
         if not ok:
             log.warning("EPMC did not converge at amplitude %.3g m", X[k])
         tick(bar, text=f"{X[k]:.3g} m")

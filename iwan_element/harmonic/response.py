@@ -7,13 +7,14 @@ import math
 import time
 
 import numpy as np
+from numpy.typing import NDArray
 
 from ..base.progress import finish, progress_bar, tick
 from ..base.threads import one_blas_thread
 from ..base.validation import finite_array
 from .balance import force_coefficients, operators, solve_point
 from .basis import Harmonics, check_harmonics
-from .result import FrequencyResponse
+from .result import FrequencyResponse, macroslip_lines, slip_ratio
 from .system import ModalSystem
 
 __all__ = ["harmonic_balance", "check_frequency_force", "assemble_response", "linear_start"]
@@ -21,7 +22,7 @@ __all__ = ["harmonic_balance", "check_frequency_force", "assemble_response", "li
 log = logging.getLogger(__name__)
 
 
-def check_frequency_force(frequency, force):
+def check_frequency_force(frequency, force) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Validated ``(frequency [Hz], force [N])`` arrays of one length (a scalar force is
     repeated).
     """
@@ -40,7 +41,7 @@ def check_frequency_force(frequency, force):
     return f, F
 
 
-def linear_start(system, basis, W, force):
+def linear_start(system, basis, W, force) -> NDArray[np.float64]:
     """The stuck (linear) response's joint coefficients at ``W``."""
     _, _, Lb = operators(system, basis, W)
     return Lb[: system.n_z, :, 0, :] @ force_coefficients(basis, force)
@@ -143,8 +144,16 @@ def assemble_response(points, basis, system, wall, **meta) -> FrequencyResponse:
     k1 = [h for h, _, _ in basis.cols].index(1)
     phase = np.angle(Z[:, k1])
     phase[phase > 0.5 * math.pi] -= 2 * math.pi  # receptance-like: 0 .. -pi
+    ok = np.array([p["converged"] for p in points], bool)
+    ratio = np.array(
+        [
+            slip_ratio(system, basis, p["cz"]) if c else np.full(len(system.joints), np.nan)
+            for p, c in zip(points, ok)
+        ]
+    )
+    f = np.array([p["W"] for p in points]) / (2 * math.pi)
     return FrequencyResponse(
-        frequency=np.array([p["W"] for p in points]) / (2 * math.pi),
+        frequency=f,
         force=np.array([p["force"] for p in points]),
         amplitude=np.abs(Z[:, k1]),
         phase=phase,
@@ -157,4 +166,8 @@ def assemble_response(points, basis, system, wall, **meta) -> FrequencyResponse:
         floor_dissipation=np.array([p["floor_dissipation"] for p in points]),
         wall_time=wall,
         metadata={"samples": basis.samples, "system": system.notes, **meta},
+        slip_ratio=ratio,
+        warnings=macroslip_lines(
+            ratio, f, unit="Hz", what="frequencies", groups=system.joint_groups
+        ),
     )

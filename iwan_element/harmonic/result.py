@@ -3,13 +3,17 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..base.result_shape import ResultShape, column, panels, table_lines
 from ..base.serialize import json_safe
 
-__all__ = ["FrequencyResponse", "ENERGY_TOL"]
+if TYPE_CHECKING:
+    from matplotlib.artist import Artist
+
+__all__ = ["FrequencyResponse", "ENERGY_TOL", "macroslip_lines", "slip_ratio"]
 
 #: Largest relative energy error per period (input work against the joints' and the floor's
 #: dissipation) a converged point may show and the response still count as a success.
@@ -46,6 +50,13 @@ class FrequencyResponse(ResultShape):
         Seconds for the whole response.
     metadata : dict
         ``samples`` per period, the system's notes, and the route's settings.
+    slip_ratio : ndarray, shape (n, n_j), optional
+        Each joint's slip amplitude (half its peak-to-peak slip over the period) over its
+        ``phi_max`` [-] (:func:`slip_ratio`): ``>= 1`` where the joint is fully slipped
+        (macroslip); NaN at points that did not converge.
+    failures : tuple of str
+        Why the response is not usable beyond the solver's own checks (each also among
+        ``warnings``), e.g. a specimen whose whole interface is fully slipped.
     """
 
     plot_panels = 2
@@ -63,6 +74,17 @@ class FrequencyResponse(ResultShape):
     floor_dissipation: np.ndarray
     wall_time: float
     metadata: dict = field(default_factory=dict)
+    slip_ratio: np.ndarray | None = None
+    failures: tuple = ()
+
+    def __post_init__(self):
+        object.__setattr__(self, "failures", tuple(str(w) for w in self.failures))
+        object.__setattr__(
+            self,
+            "warnings",
+            tuple(str(w) for w in self.warnings)
+            + tuple(w for w in self.failures if w not in self.warnings),
+        )
 
     @property
     def energy_error(self) -> np.ndarray:
@@ -78,11 +100,16 @@ class FrequencyResponse(ResultShape):
     @property
     def success(self) -> bool:
         """Every point converged and closes its energy balance to :data:`ENERGY_TOL`."""
-        return bool(np.all(self.converged) and np.all(np.abs(self.energy_error) <= ENERGY_TOL))
+        return (
+            bool(np.all(self.converged) and np.all(np.abs(self.energy_error) <= ENERGY_TOL))
+            and not self.failures
+        )
 
     def failure_reasons(self) -> tuple:
-        """Why :attr:`success` is False (unconverged points, energy balance), or ``()``."""
-        out = []
+        """Why :attr:`success` is False (unconverged points, energy balance, the maker's
+        ``failures``), or ``()``.
+        """
+        out = list(self.failures)
         bad = ~self.converged
         if bad.any():
             out.append(
@@ -150,6 +177,8 @@ class FrequencyResponse(ResultShape):
                 "energy_error": self.energy_error,
                 "wall_time": self.wall_time,
                 "metadata": self.metadata,
+                "slip_ratio": self.slip_ratio,
+                "failures": list(self.failures),
                 "success": self.success,
                 "warnings": list(self.warnings),
             }
@@ -189,7 +218,7 @@ class FrequencyResponse(ResultShape):
         ]
         return [("response", cols, rows), ("run", ("quantity", "value"), run)]
 
-    def plot(self, ax=None, *, label="harmonic balance"):
+    def plot(self, ax=None, *, label="harmonic balance") -> list[Artist]:
         """Amplitude per force [m/N] and phase [rad] against frequency on ``ax = (ax_a,
         ax_p)``; returns the artists.
         """
@@ -202,3 +231,72 @@ class FrequencyResponse(ResultShape):
             a.legend(fontsize=8)
             p.legend(fontsize=8)
         return arts
+
+
+def slip_ratio(system, basis, cz) -> np.ndarray:
+    """Each joint's slip amplitude over its ``phi_max`` [-], shape ``(n_j,)``, from the joint
+    coefficients ``cz`` (n_z, nc) of one periodic solution: half the peak-to-peak slip of
+    the sampled period (the Masing loop's amplitude, a static offset left out).
+    """
+    nj = len(system.joints)
+    z = np.asarray(cz)[:nj] @ basis.E.T
+    amp = 0.5 * (z.max(axis=1) - z.min(axis=1))
+    return amp / np.array([j.phi_max for j in system.joints])
+
+
+def _span(values, unit: str) -> str:
+    v = np.asarray(values, float)
+    lo, hi = float(v.min()), float(v.max())
+    return f"{lo:.4g} {unit}" if lo == hi else f"{lo:.4g} .. {hi:.4g} {unit}"
+
+
+def macroslip_lines(ratio, at, *, unit: str, what: str = "points", groups=()) -> tuple:
+    """What a result says of its fully slipped joints (macroslip: a joint's slip amplitude
+    at or beyond its ``phi_max``, where every slider slides and the joint carries ``Fs``
+    whatever the slip).
+
+    Parameters
+    ----------
+    ratio : array_like, shape (n, n_j)
+        Slip amplitude over ``phi_max`` of every joint at each of the ``n`` points (NaN:
+        not solved, counted as not slipped).
+    at : array_like, shape (n,)
+        The points' abscissa (amplitude [m], frequency [Hz]) in ``unit``.
+    unit : str, keyword-only
+    what : str, keyword-only
+        What the points are ("amplitudes", "frequencies").
+    groups : sequence of (str, sequence of int), keyword-only
+        Named groups of joints (:attr:`ModalSystem.joint_groups`); default each joint.
+
+    Returns
+    -------
+    tuple of str
+        Empty when no group is fully slipped anywhere; else one line for the whole set of
+        joints fully slipped (when it is) and one naming each fully slipped group with
+        where it is.
+    """
+    r = np.nan_to_num(np.atleast_2d(np.asarray(ratio, float)), nan=0.0)
+    at = np.asarray(at, float)
+    full = r >= 1.0
+    nj = r.shape[1]
+    groups = tuple(groups) or tuple((f"joint {j + 1}", (j,)) for j in range(nj))
+    lines = []
+    every = full.all(axis=1)
+    if every.any():
+        who = (
+            "the joint is fully slipped (macroslip: at or beyond its"
+            if nj == 1
+            else f"the interface is fully slipped (macroslip: all {nj} joints at or beyond their"
+        )
+        lines.append(
+            f"{who} slip displacement phi_max) at {int(every.sum())} of {every.size} {what} "
+            f"({_span(at[every], unit)})"
+        )
+    parts = []
+    for label, idx in groups:
+        g = full[:, list(idx)].all(axis=1)
+        if g.any():
+            parts.append(f"{label} at {int(g.sum())} {what} ({_span(at[g], unit)})")
+    if parts and not (every.any() and len(parts) == 1 and len(groups) == 1):
+        lines.append("fully slipped (macroslip of every joint in it): " + "; ".join(parts))
+    return tuple(lines)

@@ -31,6 +31,7 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
+from numpy.typing import NDArray
 
 from ..core.masing import constants_from_arrays
 from ..core.parameters import IwanParameters
@@ -97,6 +98,25 @@ class ElementPort:
         object.__setattr__(self, "form", form)
 
 
+def _groups(groups, n_j: int) -> tuple:
+    """Validated joint groups ``((label, (indices...)), ...)``, each index in ``[0, n_j)``."""
+    out = []
+    for g in groups:
+        try:
+            label, idx = g
+            idx = tuple(int(i) for i in idx)
+        except (TypeError, ValueError):
+            raise ValueError(
+                f"joint_groups must hold (label, joint indices) pairs, got {g!r}"
+            ) from None
+        if not idx or min(idx) < 0 or max(idx) >= n_j:
+            raise ValueError(
+                f"joint_groups: group {label!r} must hold joint indices in [0, {n_j}), got {idx}"
+            )
+        out.append((str(label), idx))
+    return tuple(out)
+
+
 @dataclass(frozen=True, eq=False)
 class ModalSystem:
     """A stuck-joint linear structure in modal form, seen at its ports (module docstring).
@@ -121,6 +141,10 @@ class ModalSystem:
     notes : str, optional
     ports : sequence of ElementPort, optional
         The element ports (default none).
+    joint_groups : sequence of (str, sequence of int), optional
+        Named groups of joints (e.g. the contact points around one bolt): the results say
+        when a whole group is fully slipped (:func:`~iwan_element.harmonic.result.macroslip_lines`);
+        default each joint on its own.
     """
 
     omega: np.ndarray
@@ -131,6 +155,7 @@ class ModalSystem:
     n_full: int | None = None
     notes: str = ""
     ports: tuple = ()
+    joint_groups: tuple = ()
     constants: np.ndarray = field(init=False, repr=False)
 
     def __post_init__(self):
@@ -161,6 +186,7 @@ class ModalSystem:
         object.__setattr__(self, "joints", js)
         object.__setattr__(self, "ports", ps)
         object.__setattr__(self, "residual", R)
+        object.__setattr__(self, "joint_groups", _groups(self.joint_groups, len(js)))
         c = constants_from_arrays(
             [j.Fs for j in js], [j.KT for j in js], [j.chi for j in js], [j.beta for j in js]
         )
@@ -223,6 +249,7 @@ class ModalSystem:
             n_full=self.n_full,
             notes=self.notes,
             ports=self.ports + tuple(ports),
+            joint_groups=self.joint_groups,
         )
 
     def denominators(self, w: float, *, xi: float = 0.0) -> np.ndarray:
@@ -246,7 +273,9 @@ class ModalSystem:
         inv[keep] = 1.0 / d[keep]
         return (self.modes * inv) @ self.modes.T + self.residual
 
-    def receptance_rate(self, w: float, h: int, *, xi: float = 0.0, exclude=None):
+    def receptance_rate(
+        self, w: float, h: int, *, xi: float = 0.0, exclude=None
+    ) -> tuple[NDArray[np.complex128], NDArray[np.complex128]]:
         """``(dH/dW, dH/dxi)`` of the receptance at the ``h``-th harmonic ``w = h W`` with
         respect to the fundamental ``W`` [rad/s] and to ``xi``.
         """

@@ -42,6 +42,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import NDArray
 
 from ..specimens.contact import beam_contact_points
 from ..specimens.specimen import Specimen
@@ -120,7 +121,7 @@ def element_matrices(
     area: float,
     inertia: float,
     timoshenko: bool = True,
-):
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Stiffness and mass of one element, ``(K, M)``, each (6, 6) over
     ``(u1, w1, th1, u2, w2, th2)`` [N/m, N, N m; kg, kg m, kg m^2] (module docstring).
     """
@@ -209,7 +210,9 @@ def _phi(specimen: Specimen, h: float, l: float) -> float:
     return 12.0 * E * (b * h**3 / 12.0) / (specimen.shear_coefficient * G * b * h * l * l)
 
 
-def beam_matrices(specimen: Specimen, mesh: BeamMesh | None = None):
+def beam_matrices(
+    specimen: Specimen, mesh: BeamMesh | None = None
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Stiffness and mass of both beams on all their coordinates, ``(K, M)`` (dense,
     ``(3 n_nodes, 3 n_nodes)``; beam A's nodes first), with no boundary condition and no
     interface.
@@ -258,7 +261,9 @@ def _beam_rows(specimen: Specimen, mesh: BeamMesh, beam: str, x: float):
     return ru, rw, rt
 
 
-def point_rows(specimen: Specimen, positions, mesh: BeamMesh | None = None):
+def point_rows(
+    specimen: Specimen, positions, mesh: BeamMesh | None = None
+) -> tuple[NDArray[np.float64], ...]:
     """``(U, W, Theta)``: rows (one per position) of the axial and transverse displacement and
     the rotation on the beams' axis at ``positions`` [m] along the assembly (beam A up to
     its length, beam B beyond), over all beam coordinates.
@@ -271,7 +276,9 @@ def point_rows(specimen: Specimen, positions, mesh: BeamMesh | None = None):
     return tuple(np.array([r[k] for r in rows]) for k in range(3))
 
 
-def interface_rows(specimen: Specimen, x, mesh: BeamMesh | None = None):
+def interface_rows(
+    specimen: Specimen, x, mesh: BeamMesh | None = None
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """``(G, G_n)``: the tangential slips and normal gaps of the contact points at ``x`` [m]
     (module docstring), rows over all beam coordinates.
     """

@@ -42,11 +42,15 @@ import math
 import numpy as np
 
 from iwan_element import amplitude_curve, free_decay_modes
+from iwan_element.base.stages import require_usable
 from iwan_element.base.validation import check_scalar, check_uniform_time, finite_array
 from iwan_element.identify.decays.envelope import mode_envelope
 
 from ..modal.qsma import linear_modes
+from ..reduced.dispatch import linear_system
 from ..simulation.coupling import compare_curves
+from ..simulation.ringdown_records import check_run_length, min_record
+from ..simulation.solver import MAX_STEPS
 from ..simulation.transient import ringdown
 from ..updating.result import LinearUpdateResult
 from ..updating.update import linear_update
@@ -54,6 +58,9 @@ from .hammer_result import HammerPrediction
 from .vibration import calibrate
 
 __all__ = ["mode_bands", "release_amplitudes", "predict_hammer_test"]
+
+#: The keyword that lets :func:`predict_hammer_test` go on past an unusable stage.
+_GO_ON = "allow_unusable=True"
 
 
 def mode_bands(specimen, modes, *, band_width: float = 0.12) -> dict:
@@ -130,6 +137,8 @@ def predict_hammer_test(
     calibration_periods: float = 20.0,
     update=("youngs_modulus", "stiffness_per_area"),
     progress: bool = False,
+    allow_unusable: bool = False,
+    max_steps: int = MAX_STEPS,
 ) -> HammerPrediction:
     """Calibrate the interface on one mode of a hammer test and predict every other mode at
     every sensor by the multi-mode ring-down (module docstring; ``docs/multi_mode.md``).
@@ -157,7 +166,9 @@ def predict_hammer_test(
         When the prediction starts after the impact and the span of the envelope fit that
         reads its amplitudes [s] (:func:`release_amplitudes`).
     duration : float, keyword-only
-        Length of the predicted ring-down [s] (> 0).
+        Length of the predicted ring-down [s]: at least 6 periods of the lowest mode
+        (:func:`~iwan_element.models.ringdown`'s minimum at its windows of 3 periods),
+        checked with its cost (``max_steps``) on the given specimen before any stage runs.
     calibration_periods : float, keyword-only
         Window of the calibration mode's curves in its periods (>= 3).
     update : sequence of str or None, keyword-only
@@ -166,13 +177,30 @@ def predict_hammer_test(
         docstring, step 1a); ``None``: the specimen's linear structure as given.
     progress : bool, keyword-only
         Progress bars of the calibration and the ring-down.
+    allow_unusable : bool, keyword-only
+        Go on to the ring-down after a linear update or a calibration that is not usable
+        (default False: the route stops there, below). For an expert who wants to see what
+        such parameters predict; the result then says so in its warnings and is no success.
+    max_steps : int, keyword-only
+        Most time steps of the predicted ring-down (``ringdown``'s ``max_steps``).
 
     Returns
     -------
     HammerPrediction
+
+    Raises
+    ------
+    ValueError
+        An argument out of its range (named), a ``duration`` too short for the curves or
+        longer than ``max_steps`` allows (before any stage runs).
+    iwan_element.base.stages.StageFailed
+        (a ValueError) The linear update or the calibration is not usable (a parameter on
+        its bound, not identified, no convergence): the route stops there with that stage's
+        reasons, before the ring-down, unless ``allow_unusable=True``.
     """
+    run = {"duration": duration, "max_steps": max_steps, "allow_unusable": allow_unusable}
     modes, recs, cal_name, bands, n_cal = _inputs(
-        specimen, records, modes, calibration_mode, bands, band_width, duration, calibration_periods
+        specimen, records, modes, calibration_mode, bands, band_width, calibration_periods, run
     )
     f_cal = float(_elastic_frequencies(specimen, calibration_mode)[-1])
     windows = {r: ({"window": n_cal / f_cal} if r == calibration_mode else {}) for r in modes}
@@ -182,6 +210,7 @@ def predict_hammer_test(
     upd = None
     if update is not None:
         upd = _linear_update(specimen, recs, cal_name, bands, update)
+        require_usable("linear update", upd, allow=allow_unusable, override=_GO_ON)
         specimen = upd.specimen
     floors = {r: measured[(r, cal_name)] for r in modes if r != calibration_mode}
     cal = calibrate(
@@ -192,6 +221,7 @@ def predict_hammer_test(
         floors=floors or None,
         progress=progress,
     )
+    require_usable("calibration", cal, allow=allow_unusable, override=_GO_ON)
     names = tuple(recs)
     rd = ringdown(
         cal.specimen,
@@ -199,6 +229,7 @@ def predict_hammer_test(
         duration=duration,
         progress=progress,
         sensors=tuple(recs[n][0] for n in names),
+        max_steps=max_steps,
     )
     predicted = {
         (r, n): rd.sensor_curve(i, bands[r], n_periods=n_cal if r == calibration_mode else None)
@@ -227,11 +258,15 @@ def predict_hammer_test(
 
 
 def _inputs(
-    specimen, records, modes, calibration_mode, bands, band_width, duration, calibration_periods
+    specimen, records, modes, calibration_mode, bands, band_width, calibration_periods, run
 ):
     """:func:`predict_hammer_test`'s checked inputs: ``(modes, records, calibration sensor,
-    bands, calibration periods)``.
+    bands, calibration periods)``; ``run``: the ring-down's ``duration`` and ``max_steps``,
+    checked on the given specimen's stuck frequencies before any stage runs (the
+    ring-down checks them again on the calibrated one), and ``allow_unusable``.
     """
+    if not isinstance(run["allow_unusable"], (bool, np.bool_)):
+        raise ValueError(f"allow_unusable must be True or False, got {run['allow_unusable']!r}")
     modes = _modes(modes)
     if calibration_mode not in modes:
         raise ValueError(f"calibration_mode must be one of modes {modes}, got {calibration_mode!r}")
@@ -242,9 +277,41 @@ def _inputs(
         if bands is None
         else _bands(bands, modes)
     )
-    check_scalar("duration", duration, low=0.0, low_open=True)
+    duration = check_scalar("duration", run["duration"], low=0.0, low_open=True)
+    check_run_length(
+        2 * math.pi * _elastic_frequencies(specimen, max(modes))[[r - 1 for r in modes]],
+        64,  # ringdown's default, which the prediction runs
+        n_periods=3.0,
+        duration=duration,
+        cycles=None,
+        impact=None,
+        n_coordinates=linear_system(specimen).M.shape[0],
+        max_steps=run["max_steps"],
+    )
     n_cal = check_scalar("calibration_periods", calibration_periods, low=3.0)
+    _check_read_length(specimen, modes, calibration_mode, bands, n_cal, duration)
     return modes, recs, cal_name, bands, n_cal
+
+
+def _check_read_length(specimen, modes, calibration_mode, bands, n_cal, duration) -> None:
+    """Refuse a ``duration`` [s] too short for the predicted records to be read in their
+    bands (:func:`~iwan_element.models.simulation.ringdown_records.min_record`: the
+    calibration mode in windows of ``n_cal`` periods, the others in windows of at least 3
+    periods), before any stage runs.
+    """
+    f = _elastic_frequencies(specimen, max(modes))
+    for r in modes:
+        periods = n_cal if r == calibration_mode else 3.0
+        need = min_record(bands[r], periods / f[r - 1])
+        if duration < need:
+            lo, hi = bands[r]
+            raise ValueError(
+                f"duration must be >= {need:.4g} s to read the predicted mode {r} in its "
+                f"band ({lo:.4g}, {hi:.4g}) Hz: the reader needs 6 / B (B = {hi - lo:.4g} Hz, "
+                f"the band's width) to find the mode, and 1.5 / B of filter end effects at "
+                f"each end around one window of {periods:g} periods; got {duration!r} "
+                "(or widen the band: band_width, bands)"
+            )
 
 
 def _warnings(upd, cal, rd, skipped, errors):
@@ -254,6 +321,11 @@ def _warnings(upd, cal, rd, skipped, errors):
     warns = [f"linear update: {w}" for w in (upd.warnings if upd is not None else ())]
     warns += [f"calibration: {w}" for w in cal.warnings] + [f"ring-down: {w}" for w in rd.warnings]
     warns += skipped
+    warns += [
+        f"the {what} is not usable and the prediction was run anyway ({_GO_ON})"
+        for what, res in (("linear update", upd), ("calibration", cal))
+        if res is not None and not res.success
+    ]
     thin = [f"mode {r} at {n}" for (r, n), e in errors.items() if len(e["amplitude"]) < 3]
     if thin:
         warns.append(

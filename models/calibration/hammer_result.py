@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -18,6 +18,9 @@ from ..simulation.coupling import plot_curve_pairs
 from ..simulation.ringdown_result import RingdownResult
 from ..updating.result import LinearUpdateResult
 from .vibration import CalibrationResult
+
+if TYPE_CHECKING:
+    from matplotlib.artist import Artist
 
 __all__ = ["HammerPrediction"]
 
@@ -194,7 +197,7 @@ class HammerPrediction(ResultShape):
             }
         )
 
-    def plot(self, ax=None):
+    def plot(self, ax=None) -> list[Artist]:
         """Measured (points) and predicted (lines) damping ratio [%] and frequency [Hz]
         against amplitude for every curve, on ``ax = (ax_z, ax_f)``; returns the artists.
         """

@@ -20,7 +20,7 @@ import math
 import numbers
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -38,6 +38,9 @@ from iwan_element.fitting import (
 
 from ..modal.qsma import modal_amplitude_curve
 from ..specimens.specimen import Specimen
+
+if TYPE_CHECKING:
+    from matplotlib.artist import Artist
 
 __all__ = ["measured_amplitude_curve", "CalibrationResult", "calibrate", "modal_floor"]
 
@@ -159,7 +162,7 @@ class CalibrationResult(ResultShape):
             "measured": self.measured.to_dict(),
         }
 
-    def plot(self, ax=None):
+    def plot(self, ax=None) -> list[Artist]:
         """Measured and model f(X), zeta(X) on ``ax = (ax_f, ax_z)`` (a new figure if
         ``None``; :mod:`iwan_element.base.result_shape`); returns the artists.
         """

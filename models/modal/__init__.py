@@ -6,6 +6,7 @@ effects in their modal form.
 
 from .effects import ZeroElement, effect_stack
 from .frequency import frequency_response, harmonic_balance, nonlinear_mode, specimen_system
+from .limits import SIZE_LENGTH_FRACTION, macroslip_report, size_limit, size_warnings
 from .qsma import (
     extrapolation_warnings,
     linear_modes,
@@ -26,4 +27,8 @@ __all__ = [
     "specimen_system",
     "ZeroElement",
     "effect_stack",
+    "size_limit",
+    "size_warnings",
+    "macroslip_report",
+    "SIZE_LENGTH_FRACTION",
 ]

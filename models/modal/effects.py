@@ -10,6 +10,8 @@ element ports read it, and the transient's modal force
 
 from __future__ import annotations
 
+from typing import Any
+
 from iwan_element.core.periodic import PeriodicForm
 from iwan_element.effects import EFFECTS
 
@@ -25,17 +27,17 @@ class ZeroElement:
 
     force = displacement = work = stored_energy = dissipated_energy = 0.0
 
-    def trial(self, u, v=0.0):
+    def trial(self, u, v=0.0) -> tuple[float, float]:
         """``(force [N], stiffness [N/m])`` at displacement ``u`` [m]: always ``(0, 0)``."""
         return 0.0, 0.0
 
-    def commit(self):
+    def commit(self) -> None:
         """Accept the last trial; returns None (no state to keep)."""
 
-    def revert(self):
+    def revert(self) -> None:
         """Discard the last trial; returns None (no state to keep)."""
 
-    def reset(self):
+    def reset(self) -> None:
         """Return to the virgin state; returns None (no state to keep)."""
 
     def periodic_form(self) -> PeriodicForm:
@@ -45,7 +47,7 @@ class ZeroElement:
         return PeriodicForm()
 
 
-def effect_stack(specimen: Specimen, mode: int, omega0: float):
+def effect_stack(specimen: Specimen, mode: int, omega0: float) -> tuple[Any, list[str]]:
     """``(element, names)``: the specimen's effects on ``mode`` as one element stack around a
     :class:`ZeroElement` (joint values from ``modal_to_joint`` at unit modal mass in sensor
     units; ``omega0`` the stuck circular frequency [rad/s]), driven by the sensor-scaled

@@ -28,6 +28,7 @@ from ..reduced.dispatch import check_specimen
 from ..reduced.model import reduced_model
 from ..specimens.specimen import Specimen
 from .effects import effect_stack
+from .limits import macroslip_report, size_warnings
 from .qsma import extrapolation_warnings
 
 __all__ = ["harmonic_balance", "frequency_response", "nonlinear_mode", "specimen_system"]
@@ -56,12 +57,29 @@ def _check(specimen):
 
 def _with_range_warnings(specimen, response):
     """The response with a warning where its converged amplitudes leave the specimen's (or an
-    effect's) calibrated range, as QSMA and the nonlinear modes warn.
+    effect's) calibrated range or its size (:func:`~.limits.size_warnings`), as QSMA and the
+    nonlinear modes warn, and not usable where the whole lap is fully slipped
+    (:func:`~.limits.macroslip_report`; where each bolt is, the engine's own warning says).
     """
-    X = response.amplitude[response.converged]
-    warns = extrapolation_warnings(specimen, X) if X.size else []
-    return (
-        replace(response, warnings=tuple(response.warnings) + tuple(warns)) if warns else response
+    ok = response.converged
+    X = response.amplitude[ok]
+    warns = (
+        extrapolation_warnings(specimen, X)
+        + size_warnings(specimen, X, what="response amplitude", given=False)
+        if X.size
+        else []
+    )
+    failures = []
+    if response.slip_ratio is not None and X.size:
+        _, failures = macroslip_report(
+            specimen, response.slip_ratio[ok], response.frequency[ok], unit="Hz", what="frequencies"
+        )
+    if not warns and not failures:
+        return response
+    return replace(
+        response,
+        warnings=tuple(response.warnings) + tuple(warns),
+        failures=tuple(response.failures) + tuple(failures),
     )
 
 
@@ -101,7 +119,10 @@ def harmonic_balance(
     FrequencyResponse
         ``amplitude`` [m] and ``phase`` [rad] of the sensor's fundamental displacement, every
         harmonic, per point ``converged`` and the energy per period. ``warnings``: converged
-        amplitudes outside the specimen's calibrated range (or above an effect's).
+        amplitudes outside the specimen's calibrated (or documented) range (or above an
+        effect's) or its size, and the bolts whose contact is fully slipped (with the
+        frequencies); a whole lap fully slipped makes it not usable
+        (:mod:`~iwan_element.models.modal.limits`).
     """
     _check(specimen)
     return _with_range_warnings(
@@ -173,8 +194,10 @@ def nonlinear_mode(
     AmplitudeCurve
         ``method="epmc"``; frequency [Hz] and damping ratio ``xi / (2 W)`` [-] (the floor
         and the joints' and effects' dissipation), ready for ``diagnose_vibration`` and
-        ``calibrate``. ``warnings``: amplitudes where Newton did not converge, or outside the
-        specimen's calibrated range.
+        ``calibrate``. ``warnings``: amplitudes where Newton did not converge, outside the
+        specimen's calibrated (or documented) range or its size, and the bolts whose contact
+        is fully slipped (:mod:`~iwan_element.models.modal.limits`); a whole lap fully
+        slipped makes it not usable (``failures``).
     """
     _check(specimen)
     if amplitude is None:
@@ -201,8 +224,11 @@ def nonlinear_mode(
             f"({X[bad].min():.3g} .. {X[bad].max():.3g} m); those points are left "
             "out"
         )
-    warns += extrapolation_warnings(specimen, X[~bad])
     ok = ~bad
+    slipped, failures = macroslip_report(
+        specimen, out["slip_ratio"][ok], X[ok], unit="m", what="amplitudes"
+    )
+    warns += extrapolation_warnings(specimen, X[ok]) + size_warnings(specimen, X) + slipped
     return AmplitudeCurve(
         X[ok],
         out["frequency"][ok],
@@ -214,4 +240,5 @@ def nonlinear_mode(
             f"error per period {np.nanmax(np.abs(out['energy_error'][ok])):.1e}"
         ),
         warnings=tuple(warns),
+        failures=tuple(failures),
     )

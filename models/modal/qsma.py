@@ -29,9 +29,11 @@ from __future__ import annotations
 import logging
 import math
 from functools import lru_cache
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import scipy.linalg as sla
+from numpy.typing import NDArray
 
 from iwan_element import AmplitudeCurve, dissipation
 from iwan_element.base.threads import one_blas_thread
@@ -39,10 +41,20 @@ from iwan_element.base.validation import check_magnitude, finite_array
 from iwan_element.core.masing import constants_from_arrays, masing_rows
 from iwan_element.effects import EFFECTS
 
-from ..reduced.dispatch import check_specimen, contact_points, linear_system
+from ..reduced.dispatch import (
+    check_kept_mode,
+    check_specimen,
+    contact_points,
+    linear_system,
+)
 from ..reduced.model import reduced_model, stuck_key, stuck_modes
 from ..solid.specimen import SolidSpecimen
 from ..specimens.specimen import Specimen
+from .limits import macroslip_report, size_warnings
+
+if TYPE_CHECKING:
+    from ..linear.system import LinearSystem
+    from ..specimens.contact import ContactPoints
 
 __all__ = [
     "modal_amplitude_curve",
@@ -72,14 +84,18 @@ def _amplitudes(specimen: Specimen | SolidSpecimen, amplitude) -> np.ndarray:
     return a
 
 
-def linear_modes(specimen: Specimen | SolidSpecimen, *, mode: int = 1):
+def linear_modes(
+    specimen: Specimen | SolidSpecimen, *, mode: int = 1
+) -> tuple[float, NDArray[np.float64], NDArray[np.float64], LinearSystem, ContactPoints]:
     """Stuck-interface mode of a specimen: ``(omega [rad/s], phi, rigid, L, points)``.
 
     Read from the specimen's reduced model's eigenproblem
     (:func:`~iwan_element.models.reduced.model.stuck_modes`: the same modes harmonic balance, EPMC
     and the transient use). ``phi`` (free coordinates)
     is mass-normalised with a positive sensor displacement; ``rigid`` holds the rigid-body
-    modes (columns, mass-normalised; empty when clamped).
+    modes (columns, mass-normalised; empty when clamped). A mode beyond those a solid's
+    reduction kept is refused
+    (:func:`~iwan_element.models.reduced.dispatch.check_kept_mode`).
     """
     mode = _check_mode(mode)
     L, pts, w, V, n_low = stuck_modes(specimen)
@@ -91,6 +107,7 @@ def linear_modes(specimen: Specimen | SolidSpecimen, *, mode: int = 1):
             n_low - n_rigid,
         )
     k = max(n_low, n_rigid) + mode - 1
+    check_kept_mode(specimen, k, name="mode", value=mode, offset=max(n_low, n_rigid))
     if k >= w.size:
         raise ValueError(f"mode must be <= {w.size - max(n_low, n_rigid)}, got {mode}")
     phi = V[:, k]
@@ -108,7 +125,9 @@ def natural_frequencies(
     ----------
     specimen : Specimen
     n_modes : int, keyword-only
-        How many (>= 1), rigid-body modes of a free-free specimen included (about 0 Hz).
+        How many (>= 1), rigid-body modes of a free-free specimen included (about 0 Hz). A
+        solid gives no more than its reduction kept (``kept_modes``: ValueError beyond, the
+        rest of its basis being attachment shapes, not modes).
     interface : {"stuck", "none"}, keyword-only
         ``"stuck"``: every contact point at its tangential stiffness ``KT_i`` (the small-
         amplitude limit, ``K0 + G^T diag(KT) G``; :func:`linear_modes` gives the shapes);
@@ -124,6 +143,7 @@ def natural_frequencies(
         raise ValueError(f"interface must be 'stuck' or 'none', got {interface!r}")
     if isinstance(n_modes, bool) or not isinstance(n_modes, (int, np.integer)) or n_modes < 1:
         raise ValueError(f"n_modes must be an integer >= 1, got {n_modes!r}")
+    check_kept_mode(specimen, int(n_modes) - 1, name="n_modes", value=n_modes, offset=0)
     if interface == "stuck":  # the one stuck eigenproblem (reduced model)
         w = stuck_modes(specimen)[2]
         return w[: min(int(n_modes), w.size)] / (2 * math.pi)
@@ -198,7 +218,7 @@ def static_modal_load(
     mode: int = 1,
     tol: float = 1e-12,
     max_iter: int = 60,
-):
+) -> dict[str, Any]:
     """Nonlinear static solutions under ``alpha M phi`` reaching sensor amplitudes ``X``.
 
     Newton on the condensed equations (:func:`_condensed`) in the contact slips ``u`` and
@@ -249,9 +269,7 @@ def static_modal_load(
             ) <= tol * abs(alpha):
                 break
         else:
-            warns.append(
-                f"static solve at X = {Xt:.3e} m did not converge in {max_iter} Newton iterations"
-            )
+            warns.append(_unsolved(Xt, max_iter, np.abs(u) / pm, X_prev, out_u, X, pm))
         out_u[j], out_a[j], X_prev = u, alpha, Xt
     F, _ = _interface_law(out_u, Fs, KT, pm, itf.chi, itf.beta)
     d = F - KT * out_u
@@ -267,8 +285,33 @@ def static_modal_load(
         "phi": c["phi"],
         "system": c["L"],
         "points": pts,
+        "slip_ratio": np.abs(out_u) / pm,
         "warnings": warns,
     }
+
+
+def _unsolved(Xt, max_iter, ratio, X_prev, out_u, X, pm) -> str:
+    """Why the static solve at ``Xt`` [m] stopped: the slip state of its last iterate
+    (``ratio``: slip over ``phi_max`` per point) and the largest amplitude solved before it.
+    """
+    n, full = ratio.size, int(np.sum(ratio >= 1.0))
+    if full == n:
+        state = (
+            f"the interface fully slipped at its last iterate (macroslip: all {n} contact "
+            "points at or beyond their slip displacement phi_max), where the lap holds no "
+            "more than its slip forces mu N"
+        )
+    else:
+        state = f"{full} of {n} contact points fully slipped (beyond phi_max) at its last iterate"
+    if X_prev is not None:
+        k = int(np.flatnonzero(X == X_prev)[0])
+        n_prev = int(np.sum(np.abs(out_u[k]) / pm >= 1.0))
+        state += (
+            f"; the largest amplitude solved: X = {X_prev:.3e} m ({n_prev} of {n} fully slipped)"
+        )
+    return (
+        f"static solve at X = {Xt:.3e} m did not converge in {max_iter} Newton iterations: {state}"
+    )
 
 
 def modal_amplitude_curve(specimen: Specimen, *, mode: int = 1, amplitude=None) -> AmplitudeCurve:
@@ -290,10 +333,21 @@ def modal_amplitude_curve(specimen: Specimen, *, mode: int = 1, amplitude=None) 
         ``damping_ratio`` the Masing damping of the contact points plus the specimen's
         damping floor, with the modal forms of the specimen's ``effects`` on this mode
         applied on top (``docs/vibration_effects.md``). ``warnings`` states amplitudes
-        outside the specimen's (or an effect's) calibrated range (also logged).
+        outside the specimen's (or an effect's) calibrated range (its documented
+        ``amplitude_range`` when it has none) or its size, and the bolts whose contact is
+        fully slipped (:mod:`~iwan_element.models.modal.limits`; also logged); a whole lap
+        fully slipped makes it not usable (``failures``).
+
+    Raises
+    ------
+    ValueError
+        Where the static solve does not converge (the interface lost in macroslip): the
+        amplitude, its slip state and the largest amplitude solved.
     """
     check_specimen(specimen)
     r = static_modal_load(specimen, amplitude, mode=mode)
+    if r["warnings"]:
+        raise ValueError("amplitude: QSMA stops here: " + "; ".join(r["warnings"]))
     slip = np.abs(r["slip"])
     D = np.zeros(r["amplitude"].size)
     for i, p in enumerate(r["points"].params):
@@ -309,8 +363,9 @@ def modal_amplitude_curve(specimen: Specimen, *, mode: int = 1, amplitude=None) 
         if e.mode == mode:
             f, zeta = EFFECTS[e.name].modal_form(X, f, zeta, floor, **e.parameters)
             names.append(e.name)
-    warns = list(r["warnings"]) + extrapolation_warnings(specimen, X)
-    for w_ in warns[len(r["warnings"]) :]:
+    slipped, failures = macroslip_report(specimen, r["slip_ratio"], X, unit="m", what="amplitudes")
+    warns = extrapolation_warnings(specimen, X) + size_warnings(specimen, X) + slipped
+    for w_ in warns + failures:
         log.warning("%s", w_)
     return AmplitudeCurve(
         X,
@@ -324,17 +379,29 @@ def modal_amplitude_curve(specimen: Specimen, *, mode: int = 1, amplitude=None) 
             + (f"; with {' + '.join(names)} (modal form)" if names else "")
         ),
         warnings=tuple(warns),
+        failures=tuple(failures),
     )
 
 
 def extrapolation_warnings(specimen: Specimen, amplitude) -> list:
-    """Warnings for sensor amplitudes [m] outside the range the specimen was calibrated on,
-    or above the range an effect it carries was fitted on (below it the effects' modal forms
-    fade or stay constant, and the specimen's own range governs); empty when inside, or when
-    no calibrated range is known.
+    """Warnings for sensor amplitudes [m] outside the range the specimen was calibrated on
+    (its documented ``amplitude_range`` when it has no ``calibrated_range``), or above the
+    range an effect it carries was fitted on (below it the effects' modal forms fade or stay
+    constant, and the specimen's own range governs); empty when inside.
     """
     X = np.asarray(amplitude, float)
     out = []
+    if specimen.calibrated_range is None:  # not calibrated: its documented range
+        lo, hi = specimen.amplitude_range
+        bad = (X > hi * (1 + 1e-6)) | (X < lo * (1 - 1e-6))
+        if bad.any():
+            k = max(float(X.max() / hi), float(lo / X.min()))
+            out.append(
+                f"{int(bad.sum())} of {X.size} amplitudes ({X[bad].min():.3g} .. "
+                f"{X[bad].max():.3g} m) lie outside the documented amplitude_range "
+                f"{lo:.3g} .. {hi:.3g} m of {specimen.name} (up to {k:.3g} x beyond), "
+                "which has no calibrated_range: extrapolated beyond what its tests covered"
+            )
     for label, cr in [("the specimen", specimen.calibrated_range)] + [
         (f"its {e.name}", e.calibrated_range) for e in specimen.effects
     ]:

@@ -4,7 +4,15 @@ the linear damping floor as a modal damping matrix.
 """
 
 from .damping import FloorDamping, FloorWork, floor_damping
-from .dispatch import axis_rows, check_specimen, contact_points, linear_system
+from .dispatch import (
+    axis_rows,
+    bolt_groups,
+    check_kept_mode,
+    check_specimen,
+    contact_points,
+    kept_modes,
+    linear_system,
+)
 from .model import ReducedModel, reduced_model, reduction_error, stuck_key, stuck_modes
 
 __all__ = [
@@ -12,6 +20,9 @@ __all__ = [
     "linear_system",
     "axis_rows",
     "contact_points",
+    "kept_modes",
+    "check_kept_mode",
+    "bolt_groups",
     "ReducedModel",
     "reduced_model",
     "reduction_error",

@@ -23,6 +23,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from functools import lru_cache
+from typing import Any
 
 import numpy as np
 import scipy.linalg as sla
@@ -32,7 +33,13 @@ from iwan_element.harmonic import ModalSystem
 
 from ..solid.specimen import SolidSpecimen
 from ..specimens.specimen import Specimen
-from .dispatch import check_specimen, contact_points, linear_system
+from .dispatch import (
+    bolt_groups,
+    check_kept_mode,
+    check_specimen,
+    contact_points,
+    linear_system,
+)
 
 __all__ = ["ReducedModel", "reduced_model", "reduction_error", "stuck_modes", "stuck_key"]
 
@@ -69,6 +76,13 @@ class ReducedModel:
         if isinstance(mode, bool) or not isinstance(mode, (int, np.integer)) or mode < 1:
             raise ValueError(f"mode must be an integer >= 1, got {mode!r}")
         k = self.n_rigid + int(mode) - 1
+        check_kept_mode(
+            self.specimen,
+            k,
+            name="mode",
+            value=mode,
+            offset=self.n_rigid,
+        )
         if k >= self.system.omega.size:
             raise ValueError(
                 f"mode must be <= {self.system.omega.size - self.n_rigid} (the "
@@ -100,7 +114,7 @@ def reduced_model(specimen: Specimen | SolidSpecimen, *, n_modes: int = 8) -> Re
     return _reduced(specimen, int(n_modes))
 
 
-def stuck_key(specimen):
+def stuck_key(specimen) -> Specimen | SolidSpecimen:
     """The specimen with the fields that do not change its stuck-interface eigenproblem
     (friction, Iwan shape, floors, ranges, effects) set to fixed values: the cache key of
     the routes that read only the stuck modes and the contact points' stiffness.
@@ -117,7 +131,7 @@ def stuck_key(specimen):
     )
 
 
-def stuck_modes(specimen: Specimen | SolidSpecimen):
+def stuck_modes(specimen: Specimen | SolidSpecimen) -> Any:
     """Every mode of the specimen with its joints stuck: ``(L, points, omega [rad/s], Phi,
     n_low)``, ``Phi`` mass-normalised (columns, each with a non-negative sensor
     displacement), ``n_low`` the modes below 0.5 Hz (rigid-body ones, or an interface that
@@ -161,6 +175,7 @@ def _reduced(specimen: Specimen | SolidSpecimen, n_modes: int) -> ReducedModel:
         joints=pts.params,
         residual=0.5 * (R + R.T),
         n_full=L.M.shape[0],
+        joint_groups=bolt_groups(specimen),
         notes=f"{specimen.name}: {n_keep - n_rigid} elastic modes kept of "
         f"{w.size - n_rigid}, {n_rigid} rigid, {len(pts)} contact points",
     )

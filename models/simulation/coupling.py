@@ -13,6 +13,7 @@ transient of the whole specimen shows how much one mode's slip raises another's 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -20,9 +21,14 @@ from iwan_element import AmplitudeCurve
 from iwan_element.base.result_shape import ResultShape, column, panels, table_lines
 from iwan_element.base.serialize import json_safe
 
+from ..reduced.dispatch import linear_system
 from ..specimens.specimen import Specimen
 from .ringdown_result import RingdownResult
-from .transient import ringdown
+from .solver import MAX_STEPS, check_steps
+from .transient import preflight, ringdown
+
+if TYPE_CHECKING:
+    from matplotlib.artist import Artist
 
 __all__ = ["compare_curves", "ModeCouplingResult", "mode_coupling", "plot_curve_pairs"]
 
@@ -184,7 +190,7 @@ class ModeCouplingResult(ResultShape):
             }
         )
 
-    def plot(self, ax=None):
+    def plot(self, ax=None) -> list[Artist]:
         """Each mode's damping ratio [%] and frequency [Hz] against its amplitude, together
         (filled) and alone (open), on ``ax = (ax_z, ax_f)``; returns the artists.
         """
@@ -222,8 +228,12 @@ def mode_coupling(
     duration: float,
     steps_per_period: int = 64,
     n_periods: float = 3.0,
+    max_steps: int = MAX_STEPS,
 ) -> ModeCouplingResult:
     """Each mode's damping with and without the other modes through the same interface.
+
+    Every run's release, length and cost are checked before the first one starts (the
+    errors of :func:`~iwan_element.models.ringdown`).
 
     Parameters
     ----------
@@ -231,12 +241,16 @@ def mode_coupling(
     amplitude : dict, keyword-only
         ``{mode: amplitude at the sensor [m]}``, at least two modes.
     duration : float, keyword-only
-        Duration of every run [s] (> 0).
+        Duration of every run [s]: at least ``max(6, n_periods + 3)`` periods of the
+        lowest mode (:func:`~iwan_element.models.ringdown`'s minimum).
     steps_per_period : int, keyword-only
         Steps per period of the highest mode in the multi-mode run, of its own mode in each
         single-mode run (>= 16).
     n_periods : float, keyword-only
         Periods per window of the decay curves (range [3, 1000]).
+    max_steps : int, keyword-only
+        Most time steps of all the runs together (default
+        :data:`~iwan_element.models.simulation.solver.MAX_STEPS`, as ``ringdown``'s).
 
     Returns
     -------
@@ -246,22 +260,30 @@ def mode_coupling(
         raise ValueError(
             f"amplitude must be a dict of at least two modes {{mode: X [m]}}, got {amplitude!r}"
         )
-    together = ringdown(
-        specimen,
-        amplitude=amplitude,
-        duration=duration,
-        steps_per_period=steps_per_period,
-        n_periods=n_periods,
+    run: dict[str, Any] = {
+        "duration": duration,
+        "steps_per_period": steps_per_period,
+        "n_periods": n_periods,
+    }
+    steps = preflight(specimen, amplitude, max_steps=max_steps, **run) + sum(
+        preflight(specimen, {r: X}, max_steps=max_steps, **run) for r, X in amplitude.items()
     )
+    check_steps(
+        steps,
+        n_coordinates=linear_system(specimen).M.shape[0],
+        max_steps=max_steps,
+        what=f"mode_coupling's {len(amplitude) + 1} ring-downs",
+        shorten="shorten duration or lower steps_per_period",
+    )
+    together = ringdown(specimen, amplitude=amplitude, max_steps=max_steps, **run)
     modes = together.modes
     alone = tuple(
         ringdown(
             specimen,
             mode=r,
             amplitude=amplitude[r],
-            duration=duration,
-            steps_per_period=steps_per_period,
-            n_periods=n_periods,
+            max_steps=max_steps,
+            **run,
         )
         for r in modes
     )

@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
+from typing import TYPE_CHECKING
 
 import exudyn as exu
 import numpy as np
@@ -45,7 +46,10 @@ from ..modal.qsma import linear_modes
 from ..reduced.dispatch import linear_system
 from ..specimens.specimen import Specimen
 from .host import build_host
-from .solver import solver_settings
+from .solver import MAX_STEPS, check_steps, solver_settings
+
+if TYPE_CHECKING:
+    from matplotlib.artist import Artist
 
 __all__ = ["ForcedResponseResult", "forced_response", "prewarp"]
 
@@ -160,7 +164,7 @@ class ForcedResponseResult(ResultShape):
             }
         )
 
-    def plot(self, ax=None):
+    def plot(self, ax=None) -> list[Artist]:
         """Amplitude per force [m/N] against frequency, one line per level; returns the
         artists.
         """
@@ -287,6 +291,7 @@ def forced_response(
     steps_per_period: int = 60,
     spectral_radius: float = 0.98,
     progress: bool = False,
+    max_steps: int = MAX_STEPS,
 ) -> ForcedResponseResult:
     """Transverse force ``F sin(2 pi f t)`` at the excitation point, stepped through a
     resonance at each force level (module docstring).
@@ -318,6 +323,11 @@ def forced_response(
         against 1.9 % off one bandwidth from the peak without the pre-warp.
     progress : bool, keyword-only
         Show a tqdm bar over the (level, frequency) points with its ETA; needs tqdm.
+    max_steps : int, keyword-only
+        Most time steps over all levels and frequencies, ``levels x frequencies x
+        (settle_cycles + measure_cycles) x steps_per_period`` (default
+        :data:`~iwan_element.models.simulation.solver.MAX_STEPS`; the defaults take
+        126,000); a longer sweep is refused before it starts with its estimated wall time.
 
     Returns
     -------
@@ -348,6 +358,13 @@ def forced_response(
             "frequencies must be at least 3 values stepped up or down (strictly "
             f"monotonic) [Hz], got {frequencies!r}"
         )
+    check_steps(
+        levels.size * freqs.size * sum(cycles) * spp,
+        n_coordinates=None,  # it records the sensor alone
+        max_steps=max_steps,
+        what="forced_response",
+        shorten="fewer force_levels or frequencies, fewer settle_cycles or measure_cycles",
+    )
     bar = progress_bar(
         progress, total=levels.size * freqs.size, desc="forced_response", unit="point"
     )

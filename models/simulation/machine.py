@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
+from typing import TYPE_CHECKING
 
 import exudyn as exu
 import numpy as np
@@ -27,6 +28,9 @@ from ..reduced.dispatch import linear_system
 from ..specimens.specimen import Specimen
 from .host import build_host
 from .solver import solver_settings
+
+if TYPE_CHECKING:
+    from matplotlib.artist import Artist
 
 __all__ = ["QuasiStaticResult", "quasi_static_test"]
 
@@ -180,7 +184,7 @@ class QuasiStaticResult(ResultShape):
             }
         )
 
-    def plot(self, ax=None):
+    def plot(self, ax=None) -> list[Artist]:
         """The joint's loop (summed force against mean slip) and the machine's loop (force
         against grip displacement) on ``ax = (ax_joint, ax_machine)``; returns the artists.
         """

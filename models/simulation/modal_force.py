@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 from exudyn.itemInterface import ObjectGenericODE2
+from numpy.typing import NDArray
 
 from ..modal.effects import ZeroElement, effect_stack
 from ..specimens.specimen import Specimen
@@ -32,9 +33,9 @@ class ModalEffects:
         self.el, self.names = effect_stack(specimen, mode, omega0)
         self.s = float(L.S @ phi)
         self.a_free = L.M @ phi
-        self.a = None
+        self.a: NDArray[np.float64] | None = None
 
-    def attach(self, model):
+    def attach(self, model) -> None:
         """Add the ObjectGenericODE2 on the host's node (:class:`~.host.HostModel`; the
         system must be assembled again afterwards): the row ``a = T^T M phi`` in the host's
         coordinates.
@@ -77,7 +78,7 @@ class ModalEffects:
             self.el.commit()
         return self.el.work / self.s**2
 
-    def commit(self, z, vz):
+    def commit(self, z, vz) -> None:
         """Commit at the host coordinates ``z`` and their rates ``vz``."""
         self.el.trial(self.s * float(self.a @ z), self.s * float(self.a @ vz))
         self.el.commit()

@@ -1,6 +1,7 @@
 """The pieces every ring-down shares (:func:`~iwan_element.models.ringdown`, 1-D beams and
-solid bodies): the post-step recorder, the time grid, the timed solve, the release energy of
-the joints, and the result built from the records.
+solid bodies): the post-step recorder, the time grid and the run's length checked against
+what its reader needs and what it costs, the timed solve, the release energy of the joints,
+and the result built from the records.
 """
 
 from __future__ import annotations
@@ -14,10 +15,14 @@ from iwan_element import backbone_work
 from iwan_element.base.progress import finish, progress_bar, tick
 
 from .ringdown_result import RingdownResult, decay_curve
+from .solver import check_steps
 
 __all__ = [
     "Recorder",
     "step_grid",
+    "min_record",
+    "min_cycles",
+    "check_run_length",
     "solve_timed",
     "virgin_joint_energy",
     "build_result",
@@ -86,7 +91,9 @@ class Recorder:
         return True
 
 
-def step_grid(w0, steps_per_period: int, *, duration=None, cycles=None, impact=None):
+def step_grid(
+    w0, steps_per_period: int, *, duration=None, cycles=None, impact=None
+) -> tuple[float, int]:
     """``(h, n)``: the time step [s] (``steps_per_period`` per period of the highest of the
     modes' stuck frequencies ``w0`` [rad/s]; at most a sixteenth of an impact's contact time)
     and the number of steps (``duration`` [s], or ``cycles`` periods of the lowest mode).
@@ -99,6 +106,67 @@ def step_grid(w0, steps_per_period: int, *, duration=None, cycles=None, impact=N
     if impact is None:
         return h, int(round(cycles * steps_per_period * w0.max() / w0.min()))
     return h, int(round(cycles * 2 * math.pi / (w0.min() * h)))
+
+
+#: The decay reader's (:func:`iwan_element.amplitude_curve`) trims of the band-pass's end
+#: effects at the record's two ends, in units of ``1 / B`` for a band ``B`` [Hz] wide:
+#: measured 1.16 (example beam, 66.5 Hz, 16-64 steps a period) and 1.2 (two-bolt beam) at
+#: each end in the ring-down's band ``(0.5, 1.5) f0``; allowed 1.5 each.
+TRIM_CELLS = 3.0
+#: The record length, in units of ``1 / B``, at which the reader finds the mode in its band
+#: (a Welch peak 10 times the band's median level): in the ring-down's band the example
+#: beam's record gave a ratio of 4.05 at 4 periods and 9.92 at 5, a curve at 5.5; in the
+#: two-bolt beam's hammer band (18.1, 23.1) Hz, a curve at 5.44 / B and none at 4.94 / B.
+MODE_CELLS = 6.0
+
+
+def min_record(band, window: float) -> float:
+    """Shortest record [s] from which the decay reader gives one window of ``window`` [s] in
+    ``band`` ``(low, high)`` [Hz]: ``max(6 / B, 3 / B + window)``, ``B = high - low``
+    (:data:`MODE_CELLS`, :data:`TRIM_CELLS`).
+    """
+    width = float(band[1]) - float(band[0])
+    return max(MODE_CELLS / width, TRIM_CELLS / width + window)
+
+
+def min_cycles(n_periods: float) -> float:
+    """Fewest periods of the lowest mode a ring-down's record must last for its decay curve
+    (band ``(0.5, 1.5) f0``, ``B = f0``) to hold one window of ``n_periods``:
+    ``max(6, n_periods + 3)`` (:func:`min_record`). Measured: 6, 9, 12 periods gave 1, 2, 3
+    points at ``n_periods = 3``; 12 periods were refused ("record too short") and 13 gave one
+    point at ``n_periods = 10``. ``k`` points take about ``3 + k n_periods`` periods.
+    """
+    return min_record((0.5, 1.5), n_periods)
+
+
+def check_run_length(
+    w0, steps_per_period: int, *, n_periods, duration, cycles, impact, **cost
+) -> tuple[float, int]:
+    """``(h, n)`` of :func:`step_grid` once the run is long enough for its decay curves
+    (:func:`min_cycles` periods of the lowest of the stuck frequencies ``w0`` [rad/s]; a
+    ValueError naming ``duration`` or ``cycles`` and the minimum otherwise) and within its
+    step budget (``cost``: ``n_coordinates`` and ``max_steps`` of :func:`check_steps`).
+    """
+    w0 = np.atleast_1d(np.asarray(w0, float))
+    need, f_low = min_cycles(n_periods), float(w0.min()) / (2 * math.pi)
+    why = (
+        f"{need:g} periods of the lowest mode ({f_low:.4g} Hz): its decay curve's reader "
+        f"trims about {TRIM_CELLS / 2:g} periods of filter end effects at each end and needs "
+        f"one window of n_periods = {n_periods:g} periods between them, and at least "
+        f"{MODE_CELLS:g} periods to find the mode in its band"
+    )
+    if duration is not None and duration * f_low < need:
+        raise ValueError(f"duration must be >= {need / f_low:.4g} s ({why}), got {duration!r}")
+    if duration is None and cycles < need:
+        raise ValueError(f"cycles must be >= {need:g} ({why}), got {cycles!r}")
+    h, n = step_grid(w0, steps_per_period, duration=duration, cycles=cycles, impact=impact)
+    check_steps(
+        n,
+        what="the ring-down",
+        shorten="shorten duration (or cycles) or lower steps_per_period",
+        **cost,
+    )
+    return h, n
 
 
 def solve_timed(mbs, sim, rec, n: int, progress: bool) -> dict:

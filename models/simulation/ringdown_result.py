@@ -4,12 +4,16 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from iwan_element import AmplitudeCurve, amplitude_curve
 from iwan_element.base.result_shape import ResultShape, column, panels
 from iwan_element.base.serialize import json_safe
+
+if TYPE_CHECKING:
+    from matplotlib.artist import Artist
 
 __all__ = ["RingdownResult", "ENERGY_TOL", "with_energy_warning", "decay_curve"]
 
@@ -259,7 +263,7 @@ class RingdownResult(ResultShape):
             ("run", ("quantity", "value"), run),
         ]
 
-    def plot(self, ax=None):
+    def plot(self, ax=None) -> list[Artist]:
         """Each mode's response at the sensor against time, then the decays' frequency and
         damping against amplitude, on ``ax = (ax_t, ax_f, ax_z)`` (a new figure if
         ``None``; :mod:`iwan_element.base.result_shape`); returns the artists.

@@ -31,6 +31,7 @@ from __future__ import annotations
 import exudyn as exu
 import numpy as np
 
+from iwan_element.base.stages import stop_at
 from iwan_element.base.validation import check_int, check_scalar
 
 from ..modal.qsma import linear_modes, static_modal_load
@@ -44,15 +45,15 @@ from .modal_force import ModalEffects
 from .ringdown_records import (
     Recorder,
     build_result,
+    check_run_length,
     joint_records,
     solve_timed,
-    step_grid,
     virgin_joint_energy,
 )
 from .ringdown_result import RingdownResult, with_energy_warning
-from .solver import solver_settings
+from .solver import MAX_STEPS, solver_settings
 
-__all__ = ["RingdownResult", "ringdown", "check_solid_release"]
+__all__ = ["RingdownResult", "ringdown", "check_solid_release", "release_state", "preflight"]
 
 #: Smallest share of a mode's largest z displacement along the axis that the sensor must see
 #: for a solid's release amplitude to be set there.
@@ -95,18 +96,34 @@ def _check_args(specimen, steps_per_period, n_periods, cycles, duration):
         raise ValueError("give cycles or duration, not both")
     if duration is not None:
         return n_periods, None, check_scalar("duration", duration, low=0.0, low_open=True)
+    # the least cycles the curves need is checked with the run's length (check_run_length)
     return (
         n_periods,
-        check_scalar("cycles", 30.0 if cycles is None else cycles, low=2.0, low_open=True),
+        check_scalar("cycles", 30.0 if cycles is None else cycles, low=0.0, low_open=True),
         None,
     )
 
 
-def _release(specimen: Specimen | SolidSpecimen, amp: dict) -> dict:
+def release_state(specimen: Specimen | SolidSpecimen, amp: dict) -> dict:
     """The release state: the sum of each mode's static deflection under ``alpha_r M phi_r``
     reaching its amplitude at the sensor (:func:`static_modal_load`), and the modes.
+
+    A static solve that did not converge is the release stage's failure: the run stops
+    here (:class:`~iwan_element.base.stages.StageFailed`, naming the mode's amplitude),
+    before any time step.
     """
     sts = [static_modal_load(specimen, [X], mode=r) for r, X in amp.items()]
+    lo, hi = specimen.amplitude_range
+    stop_at(
+        "release",
+        [
+            f"amplitude of mode {r} = {X:.4g} m: {w}, so the state to release from is not "
+            f"known; give a smaller amplitude (the specimen's amplitude_range is "
+            f"{lo:.3g}-{hi:.3g} m)"
+            for (r, X), st in zip(amp.items(), sts)
+            for w in st["warnings"]
+        ],
+    )
     return {
         "x": sum(st["x"][0] for st in sts),
         "slip": sum(st["slip"][0] for st in sts),
@@ -118,7 +135,7 @@ def _release(specimen: Specimen | SolidSpecimen, amp: dict) -> dict:
 
 def _start(specimen: Specimen | SolidSpecimen, mode, amplitude, impact, modes):
     """``(amp, state)``: ``{mode: release amplitude or None}`` and the start state (the
-    release of :func:`_release`, or rest for an impact, with the stuck modes of ``modes``).
+    release of :func:`release_state`, or rest for an impact, with the stuck modes of ``modes``).
     """
     if (amplitude is None) == (impact is None):
         raise ValueError("give amplitude (a release) or impact (a force pulse), one of them")
@@ -126,7 +143,7 @@ def _start(specimen: Specimen | SolidSpecimen, mode, amplitude, impact, modes):
         if modes is not None:
             raise ValueError("modes is for an impact; a release names its modes in amplitude")
         amp = _amplitudes(mode, amplitude)
-        return amp, _release(specimen, amp)
+        return amp, release_state(specimen, amp)
     if not isinstance(impact, Impact):
         raise ValueError(f"impact must be an Impact, got {type(impact).__name__}")
     if mode is not None:
@@ -202,6 +219,7 @@ def ringdown(
     joint_elements: bool = False,
     progress: bool = False,
     tangential: str = "iwan",
+    max_steps: int = MAX_STEPS,
 ) -> RingdownResult:
     """Release the specimen from a static deflection in one or several modes' load shapes,
     or strike it (``impact``); let it ring down through the interface.
@@ -229,10 +247,16 @@ def ringdown(
         Positions [m] along the beams' axis (the axis of ``sensor_position``) where the
         displacement and acceleration are recorded (default: ``sensor_position``).
     duration : float, optional, keyword-only
-        Duration [s] (> 0); or give ``cycles``.
+        Duration [s]; or give ``cycles``. At least ``max(6, n_periods + 3)`` periods of the
+        lowest mode (0.09 s for the example beam's first mode at the default ``n_periods``),
+        refused before any step otherwise (:func:`~.ringdown_records.min_cycles`: the
+        decay reader trims about 1.5 periods of filter end effects at each end, needs one
+        window of ``n_periods`` between them and 6 periods to find the mode in its band).
+        A curve of ``k`` points takes about ``3 + k n_periods`` periods.
     cycles : float, optional, keyword-only
-        Duration in periods of the lowest released mode's stuck frequency (> 2; default 30
-        when ``duration`` is not given).
+        Duration in periods of the lowest mode's stuck frequency (default 30 when
+        ``duration`` is not given), at least ``max(6, n_periods + 3)`` (6 at the default
+        ``n_periods``; as ``duration``).
     steps_per_period : int, keyword-only
         Time steps per period of the highest released mode (>= 16).
     n_periods : float, keyword-only
@@ -249,12 +273,26 @@ def ringdown(
         The contact points' tangential law: the Iwan elements (default), or linear springs
         at their stuck stiffness ``KT_i`` (the same bodies with the stuck interface: the
         linear reference of cost and decay; the release state is still the Iwan one).
+    max_steps : int, keyword-only
+        Most time steps the run may take (default
+        :data:`~iwan_element.models.simulation.solver.MAX_STEPS`, 200,000: about 1.2 GB of
+        records on the 253-coordinate two-bolt beam and 3-7 minutes; the longest run the
+        project documents takes 30,720). A longer run is refused before it starts with its
+        estimated steps, wall time (2 ms a step, the most measured) and memory.
 
     Returns
     -------
     RingdownResult
         One decay curve per released mode (``curves``; ``curve`` is the lowest's), the
         sensors' records and the energy balance.
+
+    Raises
+    ------
+    ValueError
+        An argument out of its range (named), a run too short for its curves or longer than
+        ``max_steps``; :class:`~iwan_element.base.stages.StageFailed` (a ValueError) when
+        the release's static solve does not converge (the amplitude named): no time step
+        is taken.
 
     Notes
     -----
@@ -274,6 +312,16 @@ def ringdown(
     if isinstance(specimen, SolidSpecimen):
         check_solid_release(specimen, () if amplitude is None else _amplitudes(mode, amplitude))
     amp, rel = _start(specimen, mode, amplitude, impact, modes)
+    h, n = check_run_length(
+        rel["omega0"],
+        steps_per_period,
+        n_periods=n_periods,
+        duration=duration,
+        cycles=cycles,
+        impact=impact,
+        n_coordinates=rel["system"].M.shape[0],
+        max_steps=max_steps,
+    )
     positions = np.atleast_1d(
         np.asarray(specimen.sensor_position if sensors is None else sensors, float)
     )
@@ -281,14 +329,41 @@ def ringdown(
     opts = {
         "n_periods": n_periods,
         "steps_per_period": steps_per_period,
-        "duration": duration,
-        "cycles": cycles,
+        "grid": (h, n),
         "record_energy": record_energy,
         "joint_elements": joint_elements,
         "progress": progress,
         "tangential": tangential,
     }
     return _run(specimen, amp, rel, rows, positions, opts, impact)
+
+
+def preflight(
+    specimen: Specimen | SolidSpecimen,
+    amplitude: dict,
+    *,
+    duration: float,
+    steps_per_period: int,
+    n_periods: float,
+    max_steps: int = MAX_STEPS,
+) -> int:
+    """The time steps of :func:`ringdown`'s release of ``amplitude`` ({mode: X [m]}) over
+    ``duration`` [s], once its release converged and its length passed the checks of
+    :func:`ringdown` (the same errors); nothing is simulated. A route that runs several
+    ring-downs checks them all first.
+    """
+    n_periods, _, duration = _check_args(specimen, steps_per_period, n_periods, None, duration)
+    rel = release_state(specimen, _amplitudes(None, amplitude))
+    return check_run_length(
+        rel["omega0"],
+        steps_per_period,
+        n_periods=n_periods,
+        duration=duration,
+        cycles=None,
+        impact=None,
+        n_coordinates=rel["system"].M.shape[0],
+        max_steps=max_steps,
+    )[1]
 
 
 def _run(specimen, amp, rel, rows, positions, opts, impact):
@@ -324,13 +399,7 @@ def _run(specimen, amp, rel, rows, positions, opts, impact):
     model.mbs.Assemble()
     model.set_state(rel["x"])
     kin0, e0 = _initial_energy(model, rel, effs, tangential)
-    h, n = step_grid(
-        w0,
-        opts["steps_per_period"],
-        duration=opts["duration"],
-        cycles=opts["cycles"],
-        impact=impact,
-    )
+    h, n = opts["grid"]
     z0 = model.T_inv @ rel["x"]
     sim = solver_settings(
         force_scale=max(

@@ -146,10 +146,15 @@ def _patch_average(part: SolidPart, patches: PatchLayout, specimen: Specimen) ->
     W.sum_duplicates()
     tot = np.asarray(W.sum(axis=1)).ravel()
     if np.any(tot <= 0):
+        empty = np.flatnonzero(tot <= 0)
+        where = ", ".join(f"({patches.x[i]:.4g}, {patches.y[i]:.4g})" for i in empty[:4])
         raise ValueError(
-            f"{int(np.sum(tot <= 0))} contact patches hold no part of part "
-            f"{part.name}'s contact face: mesh the face finer than the patch size "
-            f"{patches.size} m (lap_mesh_size) or enlarge patch_size"
+            f"{empty.size} contact patches (at x, y = {where}{' ...' if empty.size > 4 else ''}"
+            f" m) hold no part of part {part.name}'s contact face: either the part has no face "
+            "where the specimen's bolts press (a hole, edge or cut of the mesh that the "
+            "specimen's bolt_positions, bolt_diameter and washer_diameter do not describe: "
+            "make them match the part), or its face is meshed coarser than the patch size "
+            f"{patches.size} m (mesh it finer, lap_mesh_size, or enlarge patch_size)"
         )
     W = (sp.diags(1.0 / tot) @ W).tocsr()
     # least-norm correction of each patch's weights so that its point (the weighted node

@@ -24,12 +24,16 @@ diagonal slip (docs/solid.md).
 from __future__ import annotations
 
 from dataclasses import dataclass, field, fields, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..linear.system import attach_setup
 from ..specimens.contact import ContactPoints, points_from_forces
 from ..specimens.specimen import InterfaceModel, Specimen
+
+if TYPE_CHECKING:
+    from ..linear.system import LinearSystem
 
 __all__ = ["PatchLayout", "SolidModel", "SolidSpecimen", "solid_contact_points", "clamp_stiffness"]
 
@@ -131,7 +135,7 @@ class SolidModel:
         build); ``None``: a rigid clamp, or free-free.
     """
 
-    system: object
+    system: LinearSystem
     patches: PatchLayout
     normal_gaps: np.ndarray
     info: dict = field(default_factory=dict)
@@ -199,14 +203,14 @@ class SolidSpecimen:
             )
         return SolidSpecimen(self.specimen.replace(**changes), self.model)
 
-    def with_effects(self, effects: dict, *, mode: int = 1, calibrated_range=None):
+    def with_effects(self, effects: dict, *, mode: int = 1, calibrated_range=None) -> SolidSpecimen:
         """:meth:`Specimen.with_effects` on the solid (the bodies unchanged)."""
         return SolidSpecimen(
             self.specimen.with_effects(effects, mode=mode, calibrated_range=calibrated_range),
             self.model,
         )
 
-    def linear_system(self):
+    def linear_system(self) -> LinearSystem:
         """The reduced :class:`~iwan_element.models.linear.LinearSystem`: the bodies scaled
         to this specimen's ``youngs_modulus`` and ``density`` (:attr:`SolidModel.material`),
         ``K0`` holding the patches' normal springs at its

@@ -24,6 +24,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import NDArray
 
 from iwan_element import IwanParameters
 
@@ -32,7 +33,9 @@ from .specimen import Specimen
 __all__ = ["ContactPoints", "pressure_field", "beam_contact_points", "points_from_forces"]
 
 
-def pressure_field(specimen: Specimen, *, nx: int = 600, ny: int = 41):
+def pressure_field(
+    specimen: Specimen, *, nx: int = 600, ny: int = 41
+) -> tuple[NDArray[np.floating], NDArray[np.floating], NDArray[np.floating]]:
     """Contact pressure on a grid over the lap.
 
     Returns

@@ -307,6 +307,7 @@ class Specimen:
                 f"{self.overlap}) [m], got {self.bolt_positions!r}"
             )
         object.__setattr__(self, "bolt_positions", bp)
+        self._check_holes()
         self._check_placements()
         object.__setattr__(self, "amplitude_range", _range("amplitude_range", self.amplitude_range))
         if self.calibrated_range is not None:
@@ -370,6 +371,42 @@ class Specimen:
             raise ValueError("lap_thickness must be <= thickness")
         if self.washer_diameter <= self.bolt_diameter:
             raise ValueError("washer_diameter must be > bolt_diameter")
+
+    def _check_holes(self):
+        """The bolt holes and washers against the part they go through: every hole (diameter
+        ``bolt_diameter``) narrower than the beam's ``width`` and inside the lap, no two holes
+        overlapping, the washer no wider than the beam. The one geometry rule of the 1-D
+        strips and the solid bodies (:func:`~iwan_element.models.solid.lap_beam_parts` cuts
+        these holes): a hole as wide as the beam cuts it in two, and a washer wider than the
+        beam hangs over its edges, where the pressure cone that starts at the washer
+        (``cone_radius``) has no material to press.
+        """
+        d, w = self.bolt_diameter, self.width
+        if d >= w:
+            raise ValueError(
+                f"bolt_diameter {d * 1e3:.4g} mm does not fit the beam: a hole as wide as or "
+                f"wider than the beam's width {w * 1e3:.4g} mm cuts the lap in two (the "
+                "hole must be narrower than the width)"
+            )
+        if self.washer_diameter > w:
+            raise ValueError(
+                f"washer_diameter {self.washer_diameter * 1e3:.4g} mm is wider than the "
+                f"beam's width {w * 1e3:.4g} mm: the washer would hang over the lap's edges, "
+                "where the pressure cone that starts at it has no material"
+            )
+        for k, b in enumerate(self.bolt_positions):
+            if b - 0.5 * d <= 0.0 or b + 0.5 * d >= self.overlap:
+                raise ValueError(
+                    f"bolt_positions: the hole of bolt {k + 1} at {b * 1e3:.4g} mm (diameter "
+                    f"{d * 1e3:.4g} mm) reaches beyond the lap [0, {self.overlap * 1e3:.4g}] mm"
+                )
+        bp = sorted(self.bolt_positions)
+        for b0, b1 in zip(bp, bp[1:]):
+            if b1 - b0 <= d:
+                raise ValueError(
+                    f"bolt_positions: the holes at {b0 * 1e3:.4g} and {b1 * 1e3:.4g} mm "
+                    f"(diameter {d * 1e3:.4g} mm) overlap"
+                )
 
     def _check_placements(self):
         """The boundary, excitation, interface and sensor, the setup's attachments on the

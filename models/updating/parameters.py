@@ -227,7 +227,7 @@ def parameter_value(specimen, name: str) -> float:
     )
 
 
-def with_parameters(specimen, values: dict):
+def with_parameters(specimen, values: dict) -> Any:
     """A copy of ``specimen`` with the updatable parameters ``values`` ({name: value}) set
     (the same type: a solid keeps its bodies, scaled for the material).
     """

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -13,6 +14,9 @@ from iwan_element.fitting import ParameterTable
 
 from ..solid.specimen import SolidSpecimen
 from ..specimens.specimen import Specimen
+
+if TYPE_CHECKING:
+    from matplotlib.artist import Artist
 
 __all__ = ["LinearUpdateResult"]
 
@@ -155,7 +159,7 @@ class LinearUpdateResult(ResultShape):
             }
         )
 
-    def plot(self, ax=None):
+    def plot(self, ax=None) -> list[Artist]:
         """Weighted residual of every target before and after (bars); returns the
         artists.
         """

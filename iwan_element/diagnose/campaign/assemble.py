@@ -10,6 +10,7 @@ import math
 import time
 
 import numpy as np
+from numpy.typing import NDArray
 
 from ...fitting import Parameter, ParameterTable, covariance, verdict
 from ...identify.loops.noise import integrated_time
@@ -51,7 +52,7 @@ def _covariance(model, theta, T):
     return cov, J, np.array(s), np.array(tau), covariance(Jw, s2=s2, Jp=Jp).stderr
 
 
-def to_physical(model):
+def to_physical(model) -> tuple[NDArray[np.float64], list[tuple[str, str]]]:
     """Matrix ``T`` with ``coefficients = T theta[:n_glob]`` (laws in the conditions' own
     units: ``q = a + sum_c b_c x_c``) and the coefficient labels ``(quantity, term)``.
     """
@@ -183,7 +184,7 @@ def _coefficient_table(model, theta, labels_c, coef, se, units, labels, warns):
 
 def assemble(
     *, model, preps, labels, res, units, stack_from, warnings, options, times, t0, free=None
-):
+) -> CampaignFit:
     """Uncertainty, coefficients, the per-record table, the verdict: a :class:`CampaignFit`."""
     theta = res.x
     t1 = time.perf_counter()

@@ -9,6 +9,7 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -20,6 +21,9 @@ from ..loops.batch import executor_for
 from .model import build_model, solve
 from .predict import predict_record
 from .scatter import deviations, scatter_coef_cov, scatter_cov
+
+if TYPE_CHECKING:
+    from matplotlib.artist import Artist
 
 __all__ = ["LeaveOneOut", "leave_one_out"]
 
@@ -158,7 +162,7 @@ class LeaveOneOut(ResultShape):
         lines += [f"  warning: {w}" for w in self.warnings]
         return "\n".join(lines)
 
-    def plot(self, ax=None):
+    def plot(self, ax=None) -> list[Artist]:
         """Ratio of the prediction's band misfit to the own fit's per record (bars), with the
         1.5 target. Returns the artists.
         """
@@ -199,7 +203,7 @@ def leave_one_out(
     draws=32,
     level=0.95,
     seed=0,
-):
+) -> LeaveOneOut:
     """Predict each record from the campaign fitted without it.
 
     ``refit="step"``: one Gauss-Newton step from the full fit on the normal equations without

@@ -6,8 +6,10 @@ least-squares fit (:func:`build_model`, :func:`solve`; equations: ``docs/campaig
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+from numpy.typing import NDArray
 from scipy.optimize import least_squares
 from scipy.sparse import lil_matrix
 
@@ -20,6 +22,9 @@ from ..loops import model as M
 from ..loops.batch import band_misfit
 from ..loops.prepare import dissipation_scale, drive_structure, effect_scales, fitted_samples
 from .probability import record_explanations
+
+if TYPE_CHECKING:
+    from scipy.sparse import csr_matrix
 
 __all__ = ["CampaignModel", "RecordModel", "build_model", "solve", "full_force"]
 
@@ -289,7 +294,9 @@ class CampaignModel:
             out[q] = float(a @ theta[self.slices[q]]) * self.qscale[q]
         return out
 
-    def physical(self, vals, rm):
+    def physical(
+        self, vals, rm
+    ) -> tuple[float, tuple[float, float, float], list[dict[str, float]]]:
         """``(Fs, shape, effect dicts)`` of law values on record model ``rm`` (clipped into
         the range a fit may take there).
         """
@@ -341,7 +348,7 @@ class CampaignModel:
         k = self.start_pos.get(r)
         return 0.0 if k is None else float(theta[k]) * self.records[r].x_max
 
-    def record_force(self, theta, r, vals=None, start=None):
+    def record_force(self, theta, r, vals=None, start=None) -> NDArray[np.float64] | None:
         """``Fs g`` [N] of record ``r`` at its fitted samples (no offset), or None if the
         model cannot be evaluated there.
         """
@@ -357,7 +364,7 @@ class CampaignModel:
             return None
         return Fs * g if np.all(np.isfinite(g)) else None
 
-    def record_residual(self, theta, r):
+    def record_residual(self, theta, r) -> NDArray[np.float64]:
         """Unweighted residual of record ``r``, the offset eliminated (its mean)."""
         rm = self.records[r]
         m = self.record_force(theta, r)
@@ -366,13 +373,13 @@ class CampaignModel:
         e = rm.y - m
         return e - e.mean()
 
-    def residual(self, theta):
+    def residual(self, theta) -> NDArray[np.float64]:
         """Weighted residual of all records, stacked (the least-squares objective)."""
         return np.concatenate(
             [rm.weight * self.record_residual(theta, r) for r, rm in enumerate(self.records)]
         )
 
-    def sparsity(self):
+    def sparsity(self) -> csr_matrix:
         """Jacobian structure: every row depends on the law coefficients, a start only on
         its own record's rows.
         """
@@ -382,7 +389,7 @@ class CampaignModel:
             S[self.rows[r] : self.rows[r + 1], k] = 1
         return S.tocsr()
 
-    def jacobian(self, theta):
+    def jacobian(self, theta) -> NDArray[np.float64]:
         """Unweighted Jacobian ``d residual / d theta`` by central differences (two steps;
         samples whose force jumps between them are left out, :func:`..loops.model.jumps`).
         """
@@ -411,7 +418,7 @@ class CampaignModel:
         return J
 
 
-def build_model(preps, names, laws, cnames, X):
+def build_model(preps, names, laws, cnames, X) -> CampaignModel:
     """The :class:`CampaignModel` of prepared records (scales and centring from them)."""
     records = [RecordModel(p) for p in preps]
     centre = X.mean(axis=0)
@@ -433,7 +440,7 @@ def build_model(preps, names, laws, cnames, X):
     return CampaignModel(records, names, laws, cnames, X, centre, cscale, qscale, free)
 
 
-def solve(model, theta0, *, max_nfev, bar=None):
+def solve(model, theta0, *, max_nfev, bar=None) -> Any:
     """The joint weighted least-squares fit (trust region, sparse finite differences)."""
 
     def fun(th):
@@ -451,7 +458,9 @@ def solve(model, theta0, *, max_nfev, bar=None):
     )
 
 
-def full_force(model, theta, r, prep, vals=None, start=None):
+def full_force(
+    model, theta, r, prep, vals=None, start=None
+) -> tuple[NDArray[np.float64] | None, float]:
     """Campaign force [N] of record ``r`` at every sample, offset included (fitted on the
     record's fitted samples), and the offset.
     """

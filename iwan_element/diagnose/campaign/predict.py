@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -18,6 +19,9 @@ from ..loops.batch import band_misfit
 from . import model as CM
 from .model import full_force
 from .scatter import perturb
+
+if TYPE_CHECKING:
+    from matplotlib.artist import Artist
 
 __all__ = [
     "CampaignPrediction",
@@ -98,7 +102,7 @@ class CampaignPrediction(ResultShape):
         ]
         return "\n".join(lines + [f"  warning: {w}" for w in self.warnings])
 
-    def plot(self, ax=None, *, measured=None):
+    def plot(self, ax=None, *, measured=None) -> list[Artist]:
         """Force against displacement: the prediction, its band (as a shaded envelope in
         time order) and ``measured`` (a force array of the same length) if given. Returns
         the artists.
@@ -146,7 +150,7 @@ def _force(model, rm, vals, start):
     return Fs * rm.ev.unit_force(shape, model.names, effs)
 
 
-def draw_values(model, theta, cov, S, x, rng, draws):
+def draw_values(model, theta, cov, S, x, rng, draws) -> list[dict[str, float]]:
     """``draws`` law-value dicts at conditions ``x``: coefficients from ``N(theta, cov)`` and,
     when ``S`` (the scatter covariance) is given, a record-to-record deviation from
     ``N(0, S)`` (:func:`.scatter.perturb`). Draws with ``Fs <= 0`` are left out.
@@ -168,7 +172,7 @@ def draw_values(model, theta, cov, S, x, rng, draws):
 
 def predict(
     fit, conditions, t, u, *, F0=0.0, start=0.0, level=0.95, draws=64, rng=None, scatter=True
-):
+) -> CampaignPrediction:
     """See :meth:`CampaignFit.predict`."""
     st = fit._state
     model, theta, cov = st["model"], st["theta"], st["cov_int"]
@@ -236,7 +240,7 @@ def _chol(cov):
     return V * np.sqrt(np.clip(w, 0.0, None))
 
 
-def predict_record(model, theta, r, prep, bands=(), vals=None):
+def predict_record(model, theta, r, prep, bands=(), vals=None) -> tuple[float, list[float]]:
     """``(band misfit [N], coverages)`` of the device predicted from ``theta`` on record
     ``r``; the record's nuisances (force offset, starting state) are fitted to it once, with
     the device held. Each of ``bands``, ``(cov, S, draws, level, rng)``, gives one coverage:

@@ -15,6 +15,7 @@ record-to-record scatter.
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy.special import ndtri
@@ -22,6 +23,9 @@ from scipy.special import ndtri
 from ...fitting.evidence import posterior_probabilities
 from ..selection.averaging import MIN_WEIGHT, band, members
 from ..selection.probabilities import Explanation, check_effect_prior, log_model_prior
+
+if TYPE_CHECKING:
+    from ..selection.averaging import AveragedBand
 
 __all__ = ["record_explanations", "campaign_explanations", "campaign_band"]
 
@@ -95,7 +99,7 @@ def campaign_explanations(preps, effect_prior=None) -> tuple:
     return tuple(sorted(out, key=lambda e: -e.probability))
 
 
-def campaign_band(fit, conditions, t, u, *, level: float = 0.95, **options):
+def campaign_band(fit, conditions, t, u, *, level: float = 0.95, **options) -> AveragedBand:
     """The model-averaged force at ``conditions`` under the drive ``(t, u)``: each probable
     explanation's campaign model (:attr:`CampaignFit.alternatives`, the fit itself for its
     own stack) predicts with its band (:meth:`CampaignFit.predict`, ``options`` passed on),

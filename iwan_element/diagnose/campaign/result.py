@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -20,10 +21,17 @@ from .predict import condition_vector
 from .predict import predict as campaign_predict
 from .probability import campaign_band
 
+if TYPE_CHECKING:
+    from matplotlib.artist import Artist
+
+    from ..selection.averaging import AveragedBand
+    from .holdout import LeaveOneOut
+    from .predict import CampaignPrediction
+
 __all__ = ["CampaignFit", "law_at"]
 
 
-def law_at(model, theta, cov_int, x):
+def law_at(model, theta, cov_int, x) -> tuple[dict[str, float], dict[str, float]]:
     """Law values and their standard errors at conditions ``x``."""
     vals = model.law_values(theta, x)
     se = {}
@@ -113,7 +121,7 @@ class CampaignFit(Probable, ResultShape):
     explanations: tuple = ()
     alternatives: dict = field(default_factory=dict)
 
-    def averaged_band(self, conditions, t, u, *, level: float = 0.95, **options):
+    def averaged_band(self, conditions, t, u, *, level: float = 0.95, **options) -> AveragedBand:
         """The force at ``conditions`` (tested or not) under ``(t, u)`` averaged over the
         probable explanations, each campaign model with its own band (:meth:`predict`,
         ``options`` passed on): :class:`~iwan_element.diagnose.averaging.AveragedBand`.
@@ -141,7 +149,7 @@ class CampaignFit(Probable, ResultShape):
         """The coefficients' standard errors, nested as :attr:`coefficients`."""
         return self._nested("stderr")
 
-    def law(self, quantity: str, conditions: dict):
+    def law(self, quantity: str, conditions: dict) -> tuple[float, float]:
         """``(value, stderr)`` of one quantity's law at ``conditions``."""
         st = self._state
         x = condition_vector(self.condition_names, conditions)
@@ -162,7 +170,7 @@ class CampaignFit(Probable, ResultShape):
         draws: int = 64,
         rng=None,
         scatter: bool = True,
-    ):
+    ) -> CampaignPrediction:
         """Force history of the device at ``conditions`` (tested or not) under the drive
         ``(t, u)``, with a band from the law coefficients' uncertainty.
 
@@ -218,7 +226,7 @@ class CampaignFit(Probable, ResultShape):
         draws: int = 32,
         level: float = 0.95,
         seed: int = 0,
-    ):
+    ) -> LeaveOneOut:
         """Predict each record from the campaign fitted without it.
 
         The device comes from the laws fitted to the other records; the record's nuisances
@@ -359,7 +367,7 @@ class CampaignFit(Probable, ResultShape):
             }
         )
 
-    def plot(self, ax=None, *, quantity: str = "Fs", condition: str | None = None):
+    def plot(self, ax=None, *, quantity: str = "Fs", condition: str | None = None) -> list[Artist]:
         """One quantity against one condition: the records' own estimates (with their
         standard errors) and the law with its 95 % band, the other conditions held at their
         mean over the records.

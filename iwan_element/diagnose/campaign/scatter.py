@@ -9,6 +9,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from numpy.typing import NDArray
 
 from ...effects import EFFECTS
 from ...fitting import normal_inverse
@@ -29,7 +30,7 @@ def in_range(model, vals, rm) -> dict:
     return out
 
 
-def deviations(model, theta, free, skip=None):
+def deviations(model, theta, free, skip=None) -> tuple[NDArray[np.float64], int]:
     """``(D, dof)``: per record (``skip`` left out) the deviation of its own values with the
     campaign's stack (``free[r]``, :func:`in_range` form; None: no such fit) from the laws at
     its conditions, one column per quantity (``Fs`` as ``ln(Fs_r / Fs_law)``: the slip

@@ -19,13 +19,18 @@ import math
 import time
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from ...base.result_shape import ResultShape, panels
 from ...base.validation import check_scalar, finite_array
 from ...ensemble import run_ensemble
 from .diagnosis import diagnose
+
+if TYPE_CHECKING:
+    from matplotlib.artist import Artist
 
 __all__ = [
     "diagnose_many",
@@ -97,7 +102,7 @@ def _diagnose_task(params, rng):
     }
 
 
-def check_records(records, names):
+def check_records(records, names) -> tuple[list[tuple[NDArray[np.float64], ...]], list[str]]:
     """The records as triples of finite arrays and their labels (``names`` or ``record i``)."""
     try:
         recs = list(records)
@@ -120,18 +125,18 @@ def check_records(records, names):
     return out, names
 
 
-def check_options(options):
+def check_options(options) -> dict[str, Any]:
     """``options`` as a dict, every key an option of :func:`~iwan_element.diagnose`."""
-    unknown = sorted(set(options) - set(diagnose.__kwdefaults__))
+    unknown = sorted(set(options) - set(diagnose.__kwdefaults__ or ()))
     if unknown:
         raise ValueError(
             f"options {unknown} are not options of diagnose(); it takes "
-            f"{sorted(diagnose.__kwdefaults__)}"
+            f"{sorted(diagnose.__kwdefaults__ or ())}"
         )
     return dict(options)
 
 
-def executor_for(jobs: int, client):
+def executor_for(jobs: int, client) -> Any:
     """The executor of ``run_ensemble`` for ``jobs`` local processes or a Dask ``client``
     (``"serial"`` for one job); the caller shuts down a process pool it gets.
     """
@@ -318,7 +323,7 @@ class BatchDiagnosis(ResultShape):
         path.write_text("\n".join(lines) + "\n")
         return path
 
-    def plot(self, ax=None):
+    def plot(self, ax=None) -> list[Artist]:
         """Band misfit before and after per record (bars, log scale).
 
         Parameters

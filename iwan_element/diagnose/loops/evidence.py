@@ -14,8 +14,11 @@ what the other variables' correlation with them changes).
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from ...core.history import unit_params
 from ...core.parameters import IwanParameters
@@ -24,6 +27,9 @@ from ...effects.engine.evaluate import build_element, scale_effect
 from ...fitting.evidence import Ridge
 from ..selection.probabilities import key
 from . import model as M
+
+if TYPE_CHECKING:
+    from ..selection.averaging import AveragedBand
 
 __all__ = ["loop_evaluator", "collect_fits", "member_force", "n_variables"]
 
@@ -65,7 +71,7 @@ def _box(model, theta, free_start, span):
     return np.array(lo), np.array(hi)
 
 
-def loop_evaluator(sigma: float, span: float):
+def loop_evaluator(sigma: float, span: float) -> Callable[..., Any]:
     """``evaluate(stack, row)`` for :func:`.probabilities.rank` on a loop record: the
     noise-normalised Jacobian (kept in the row's cache, where the final fit's uncertainty
     finds it) and residual, the variables and their prior box; ``sigma`` [N]: the noise the
@@ -167,7 +173,9 @@ def microslip_ridge(stack, theta, hi, chi2_at, *, J=None) -> Ridge | None:
 __all__ += ["microslip_ridge"]
 
 
-def member_physical(stack, theta, x_max: float, scales: dict):
+def member_physical(
+    stack, theta, x_max: float, scales: dict
+) -> tuple[IwanParameters, list[dict[str, float]], float, float]:
     """``(IwanParameters, effect dicts [SI], F0 [N], start [m])`` of a loop fit's variables
     ``theta`` (module docstring) on a record of largest |u| ``x_max`` and fit scales
     ``scales``.
@@ -188,7 +196,7 @@ def member_physical(stack, theta, x_max: float, scales: dict):
     return p, effs, F0, start
 
 
-def member_force(stack, theta, x_max, scales, u, v):
+def member_force(stack, theta, x_max, scales, u, v) -> NDArray[np.float64]:
     """Force [N] of a loop fit's variables ``theta`` on the drive ``u`` [m], ``v`` [m/s]
     from the joint's rest, its fitted starting state and force offset included.
     """
@@ -202,7 +210,7 @@ def member_force(stack, theta, x_max, scales, u, v):
 __all__ += ["member_physical"]
 
 
-def loop_band(diag, t, u, level: float):
+def loop_band(diag, t, u, level: float) -> AveragedBand:
     """The model-averaged force of a loop diagnosis ``diag`` on the drive ``(t, u)`` (None:
     the record as fitted): :class:`.averaging.AveragedBand` with channel ``"force"`` [N].
     """

@@ -14,8 +14,10 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from ...base.serialize import json_safe
 from ...effects import EFFECTS
@@ -26,6 +28,10 @@ from ...identify.loops.identifiability import microslip_warning, min_macroslip
 from ...identify.loops.joint_verdict import failure_list, required_parameters, settle_verdict
 from ...identify.loops.result import quiet_fits
 from . import model as M
+
+if TYPE_CHECKING:
+    from ...identify.loops.result import FitResult
+    from .model import LoopModel
 
 __all__ = [
     "StackFitter",
@@ -52,6 +58,8 @@ def _base_start(tt, uj, FF, seed):
 class StackFitter:
     """Fits stacks on one record; scores them as noise-normalised chi2 on the full keep set."""
 
+    _memo: dict[tuple, dict[str, Any]]  # the rows fitted so far (made on first use, in run)
+
     def __init__(self, rec, sigma=1.0, F0=None):
         self.ev, self.ev_slow, self.scales = rec.ev, rec.ev_slow, rec.scales
         self.s2 = sigma * sigma
@@ -59,14 +67,14 @@ class StackFitter:
         self.y, self.y_sub = rec.F[rec.keep], rec.F[rec.sub]
         self.nfev = 0
 
-    def model(self, names, *, full=True):
+    def model(self, names, *, full=True) -> LoopModel:
         """The :class:`LoopModel` of effects ``names`` on the full keep set or the subsample."""
         fast = Evaluator.fast(names)
         if full or fast:
             return M.LoopModel(self.ev, self.y, names, self.scales, self.F0)
         return M.LoopModel(self.ev_slow, self.y_sub, names, self.scales, self.F0)
 
-    def run(self, names, starts, scan=None):
+    def run(self, names, starts, scan=None) -> dict[str, Any]:
         """Fit ``names`` from ``starts``; ``scan``: the newly added effect, whose ``fit_scan``
         grid (if it has one) seeds the starts by a 1-D scan (:func:`.model.scan_starts`).
         Fits do not depend on sigma, so a re-selection reuses them (memo).
@@ -106,7 +114,7 @@ class StackFitter:
         return dict(row, chi2=row["ssr"] / self.s2)
 
 
-def z_start(names, prev_names, prev_z, which):
+def z_start(names, prev_names, prev_z, which) -> NDArray[np.float64]:
     """Start vector for ``names`` from a previous fit (effects it had keep their values)."""
     z = list(prev_z[:3])
     k_prev, pos = 3, {}
@@ -122,7 +130,7 @@ def z_start(names, prev_names, prev_z, which):
     return np.array(z, float)
 
 
-def fit_base(fitter, rec, *, seed):
+def fit_base(fitter, rec, *, seed) -> dict[str, Any]:
     """The plain Iwan model (with the force offset) on the prepared record ``rec``, from the
     plain loop fit's shape (:func:`~iwan_element.fit_loops`, ``seed`` its random starts) and
     from defaults.
@@ -181,7 +189,7 @@ def _verdict(row, ident, ranges, noise_only, microslip):
     return success, failures
 
 
-def stack_fit(row, fitter, FF, F_model, t_start, *, noise_only=False):
+def stack_fit(row, fitter, FF, F_model, t_start, *, noise_only=False) -> FitResult:
     """FitResult of a fitted stack on the whole record, with stderr and identification."""
     mdl, z = row["model"], row["z"]
     p, effs, F0 = mdl.physical(z)
@@ -193,7 +201,7 @@ def stack_fit(row, fitter, FF, F_model, t_start, *, noise_only=False):
     # the package's one identification rule (identify.loops.joint_verdict.settle_verdict):
     # finite stderr of at most half the value (chi: of chi + 1), not at a bound (phi_max's
     # bound is KT's)
-    ranges = {}
+    ranges: dict[str, Any] = {}
     ident, settle_warns = settle_verdict(
         {
             "identified": dict.fromkeys(M.PARAM_NAMES, True),
@@ -250,7 +258,7 @@ def stack_fit(row, fitter, FF, F_model, t_start, *, noise_only=False):
     )
 
 
-def record_force(row, uj, v):
+def record_force(row, uj, v) -> tuple[NDArray[np.float64], Any]:
     """Force [N] of a fitted stack on the whole record ``uj``, ``v`` (the fitter's record),
     offset included, and the element. Kept in the row's ``cache``: the noise re-reading of
     the selection and the final fits ask for the same stack's force.

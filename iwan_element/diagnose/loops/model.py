@@ -8,6 +8,7 @@ import dataclasses
 import math
 
 import numpy as np
+from numpy.typing import NDArray
 from scipy.optimize import least_squares, minimize_scalar
 
 from ...core.history import unit_params
@@ -54,7 +55,7 @@ class LoopModel:
         self.yy = float(y @ y)
         self.start = 0.0  # the joint's state before the record (Evaluator.set_start)
 
-    def starts(self, z_prev):
+    def starts(self, z_prev) -> list[NDArray[np.float64]]:
         """Start vectors: the previous model's ``z`` with each of the new effect's starts."""
         new = EFFECTS[self.names[-1]].specs
         k = max(len(s.fit_starts) for s in new)
@@ -63,7 +64,7 @@ class LoopModel:
             for j in range(k)
         ]
 
-    def decode(self, z):
+    def decode(self, z) -> tuple[tuple[float, float, float], list[dict[str, float]]]:
         """``((phi_max [m], chi, beta), [effect parameters, ...])`` of the vector ``z``."""
         xm = self.ev.x_max
         shape = (xm * math.exp(z[0]), float(z[1]), math.expm1(z[2]))
@@ -76,13 +77,13 @@ class LoopModel:
             vals.append(d)
         return shape, vals
 
-    def unit(self, z):
+    def unit(self, z) -> NDArray[np.float64]:
         """Unit-``Fs`` force ``g(z)`` [-] at the fitted samples."""
         shape, vals = self.decode(z)
         self.ev.set_start(self.start)
         return self.ev.unit_force(shape, self.names, vals)
 
-    def linear(self, g):
+    def linear(self, g) -> tuple[float, float]:
         """``(Fs, F0)`` minimising ``|y - Fs g - F0|`` (``Fs > 0``; ``F0`` fixed if measured)."""
         if self.F0 is not None:
             gg = float(g @ g)
@@ -95,7 +96,7 @@ class LoopModel:
             F0 = self.F0 if self.F0 is not None else float(np.mean(self.y))
         return float(Fs), float(F0)
 
-    def residual(self, z):
+    def residual(self, z) -> NDArray[np.float64]:
         """Force residual ``y - Fs g(z) - F0`` [N] (large and finite where ``z`` fails)."""
         try:
             g = self.unit(z)
@@ -104,7 +105,7 @@ class LoopModel:
         Fs, F0 = self.linear(g)
         return self.y - Fs * g - F0
 
-    def physical(self, z):
+    def physical(self, z) -> tuple[IwanParameters, list[dict[str, float]], float]:
         """``(IwanParameters, [effect dicts in SI], F0)``."""
         shape, vals = self.decode(z)
         Fs, F0 = self.linear(self.unit(z))
@@ -377,7 +378,7 @@ def _difference(fn, theta, j, h, lo, hi):
     return (fn(tp) - fn(tm)) / (tp[j] - tm[j])
 
 
-def jumps(d1, d4):
+def jumps(d1, d4) -> NDArray[np.bool_]:
     """Samples whose force jumps between the two difference steps (quotients that do not
     agree; a jump gives ``jump / step``): a force that is discontinuous in a parameter
     (sliders breaking at once at one sample or the next, e.g. the spike ``S`` of a joint

@@ -11,8 +11,10 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 from scipy.signal import butter, sosfiltfilt
 
 from ...base.validation import (
@@ -115,7 +117,7 @@ def dissipation_scale(ev: Evaluator, shape) -> float:
     return float(ev.unit_dissipation(unit_params(*shape))[-1]) or 1.0
 
 
-def drive_structure(uj):
+def drive_structure(uj) -> tuple[NDArray[np.intp], float]:
     """``(reversal indices, absolute reversal tolerance [m])`` of a record's displacement from
     its rest position, as every evaluator of it uses them.
     """
@@ -123,7 +125,11 @@ def drive_structure(uj):
     return rev, REVERSAL_TOL * float(np.abs(uj).max())
 
 
-def check_record(t, u, F, noise, lowpass):
+def check_record(
+    t, u, F, noise, lowpass
+) -> tuple[
+    NDArray[np.float64] | None, NDArray[np.float64], NDArray[np.float64], int, Any, float | None
+]:
     """Checked ``(t, u, F, n, noise, lowpass)``; ``ValueError`` naming the bad argument."""
     uu = check_magnitude("u", finite_array("u", u, ndim=1, min_size=40), unit="m")
     FF = check_magnitude("F", finite_array("F", F, ndim=1, min_size=40), unit="N")

@@ -15,7 +15,11 @@ from ..selection.lines import effect_unit, verdict_lines
 from ..selection.probable import Probable
 
 if TYPE_CHECKING:
+    from matplotlib.artist import Artist
+
+    from ...fitting.parameters import ParameterTable
     from ...identify.loops.result import FitResult
+    from ..selection.averaging import AveragedBand
 
 __all__ = ["Diagnosis"]
 
@@ -108,7 +112,7 @@ class Diagnosis(Probable, ResultShape):
     explanations: tuple = ()
 
     @property
-    def params(self):
+    def params(self) -> ParameterTable:
         """The augmented fit's parameters (``fit.params``, a ``ParameterTable``)."""
         return self.fit.params
 
@@ -276,7 +280,7 @@ class Diagnosis(Probable, ResultShape):
             + base[1:]
         )
 
-    def averaged_band(self, t=None, u=None, *, level: float = 0.95):
+    def averaged_band(self, t=None, u=None, *, level: float = 0.95) -> AveragedBand:
         """The force predicted with the doubt about the model: every probable explanation's
         fitted model weighted by its probability, each with its parameters' posterior
         covariance (:mod:`~iwan_element.diagnose.averaging`).
@@ -300,7 +304,7 @@ class Diagnosis(Probable, ResultShape):
 
         return loop_band(self, t, u, level)
 
-    def plot(self, ax=None):
+    def plot(self, ax=None) -> list[Artist]:
         """Data, base fit and augmented fit (force-displacement, mm and kN) and the residual
         before and after against time.
 

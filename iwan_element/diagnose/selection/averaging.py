@@ -14,13 +14,18 @@ probability ``level`` from the mixture's quantiles. Explanations below
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
+from numpy.typing import NDArray
 from scipy.special import ndtr
 
 from ...base.result_shape import ResultShape, panels
 from ...base.serialize import json_safe
 from ...base.validation import check_scalar
+
+if TYPE_CHECKING:
+    from matplotlib.artist import Artist
 
 __all__ = ["AveragedBand", "members", "mixture", "linear_spread", "MIN_WEIGHT", "MAX_MEMBERS"]
 
@@ -68,7 +73,9 @@ def linear_spread(predict, theta, cov, lower=None, upper=None) -> tuple:
     return y0, np.sqrt(np.maximum(var, 0.0))
 
 
-def mixture(weights, means, sds, level: float):
+def mixture(
+    weights, means, sds, level: float
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
     """Mean, standard deviation and the central ``level`` band of a Gaussian mixture at each
     sample: ``weights`` (m,), ``means`` and ``sds`` (m, n). The band's ends are the
     mixture's quantiles (bisection on its distribution function).
@@ -183,7 +190,7 @@ class AveragedBand(ResultShape):
             ),
         ]
 
-    def plot(self, ax=None):
+    def plot(self, ax=None) -> list[Artist]:
         """Each channel against ``x``: the mean, the band, each explanation's own mean."""
         axs = panels(ax, len(self.channels), figsize=(6, 3.2 * len(self.channels)))
         arts = []

@@ -20,6 +20,7 @@ bench_diagnosis_calibration.py ``--nested``).
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 
@@ -29,7 +30,7 @@ __all__ = ["nested_log_evidence", "nested_options", "SAMPLERS"]
 SAMPLERS = ("dynesty", "ultranest")
 
 
-def nested_options(evidence, nested):
+def nested_options(evidence, nested) -> dict[str, Any] | None:
     """The nested sampler's options (None: Laplace only); ValueError for a bad choice."""
     if evidence not in ("laplace", "nested"):
         raise ValueError(f"evidence must be 'laplace' or 'nested', got {evidence!r}")

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from ...base.validation import check_scalar
@@ -11,7 +13,7 @@ from ...effects import EFFECTS
 __all__ = ["augmented", "check_amplitude_units"]
 
 
-def augmented(diag, target, *, modal_mass, slip_per_amplitude, mode):
+def augmented(diag, target, *, modal_mass, slip_per_amplitude, mode) -> Any:
     """:meth:`VibrationDiagnosis.augment` of the diagnosis ``diag`` (see there)."""
     if hasattr(target, "with_effects"):
         if not diag.effects:

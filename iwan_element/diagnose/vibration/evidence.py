@@ -6,11 +6,17 @@ fitted, each one's Jacobian, prior box and chi-square for the evidence
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from ...effects import EFFECTS
 from ..selection.probabilities import key
+
+if TYPE_CHECKING:
+    from ..selection.averaging import AveragedBand
 
 __all__ = ["collect", "jacobian", "evaluate"]
 
@@ -26,7 +32,7 @@ def collect(base, steps) -> dict:
     return out
 
 
-def jacobian(vib, names, z):
+def jacobian(vib, names, z) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Forward-difference Jacobian of the noise-normalised residual in ``z``."""
     h = 1e-6 * np.maximum(np.abs(z), 1e-3)
     r0 = vib.resid(names, z)
@@ -38,7 +44,17 @@ def jacobian(vib, names, z):
     return J, r0
 
 
-def evaluate(vib, names, z):
+def evaluate(
+    vib, names, z
+) -> tuple[
+    NDArray[np.float64],
+    NDArray[np.float64],
+    NDArray[np.float64],
+    NDArray[np.float64],
+    NDArray[np.float64],
+    Callable[[NDArray[np.float64]], float],
+    list[Any],
+]:
     """What :func:`.probabilities.rank` needs of a vibration fit: Jacobian, residual,
     variables, prior box (the nuisances' fit bounds, each effect variable's declared prior
     range) and the chi-square as a function of the variables.
@@ -58,7 +74,7 @@ def evaluate(vib, names, z):
     return J, r0, np.asarray(z, float), lo, hi, chi2_at, [None] * vib.nn + specs
 
 
-def vibration_band(diag, amplitude, base, level):
+def vibration_band(diag, amplitude, base, level) -> AveragedBand:
     """The model-averaged frequency and damping of a vibration diagnosis ``diag`` at
     ``amplitude`` (:class:`.averaging.AveragedBand`, channels ``"frequency"`` [Hz] and
     ``"damping_ratio"`` [-]); ``base``: the model without effects there (None: the

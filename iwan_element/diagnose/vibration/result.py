@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -17,6 +18,12 @@ from ..selection.lines import effect_unit, verdict_lines
 from ..selection.probable import Probable
 from ._prediction import predicted_curve
 from .augment import augmented
+
+if TYPE_CHECKING:
+    from matplotlib.artist import Artist
+
+    from ...identify.modal.curves import AmplitudeCurve
+    from ..selection.averaging import AveragedBand
 
 __all__ = ["VibrationDiagnosis"]
 
@@ -166,7 +173,7 @@ class VibrationDiagnosis(Probable, ResultShape):
         modal_mass: float | None = None,
         slip_per_amplitude: float = 1.0,
         mode: int = 1,
-    ):
+    ) -> Any:
         """The model with the named effects added: a beam specimen or a joint element.
 
         Parameters
@@ -205,7 +212,7 @@ class VibrationDiagnosis(Probable, ResultShape):
             self, target, modal_mass=modal_mass, slip_per_amplitude=slip_per_amplitude, mode=mode
         )
 
-    def predict(self, amplitude, *, base=None):
+    def predict(self, amplitude, *, base=None) -> AmplitudeCurve:
         """The augmented model's frequency and damping at new amplitudes, with 1-sigma bands.
 
         Parameters
@@ -227,7 +234,7 @@ class VibrationDiagnosis(Probable, ResultShape):
         """
         return predicted_curve(self, amplitude, base)
 
-    def averaged_band(self, amplitude, *, base=None, level: float = 0.95):
+    def averaged_band(self, amplitude, *, base=None, level: float = 0.95) -> AveragedBand:
         """Frequency and damping predicted with the doubt about the model: every probable
         explanation's modal forms weighted by its probability, each with its parameters'
         posterior covariance (:mod:`~iwan_element.diagnose.averaging`); ``base`` as in
@@ -412,7 +419,7 @@ class VibrationDiagnosis(Probable, ResultShape):
             + [("goodness of fit", ("quantity", "value"), fit)]
         )
 
-    def plot(self, ax=None):
+    def plot(self, ax=None) -> list[Artist]:
         """Frequency and damping against amplitude: measured, predicted, augmented.
 
         ``ax``: ``None`` (new figure, two panels) or a sequence of two Axes (frequency,

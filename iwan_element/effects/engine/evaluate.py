@@ -104,7 +104,9 @@ def dissipation_segments(u: np.ndarray, tol: float):
     virgin curve (dissipation ``I_H(xb) - I_H(xa)``, clipped at 0) and False on a branch
     (``2 (I_H(xb) - I_H(xa))``), and the backbone arguments at its ends [m].
     """
-    _, (step, anchor, ua, ub) = reversal_structure(u, tol, segments=True)
+    _, segs = reversal_structure(u, tol, segments=True)
+    assert segs is not None  # segments=True always returns them
+    step, anchor, ua, ub = segs
     virgin = anchor < 0
     ur = np.where(virgin, 0.0, u[np.maximum(anchor, 0)])
     scale = np.where(virgin, 1.0, 0.5)

@@ -13,6 +13,7 @@ is elastic-perfectly-plastic (Caughey, J. Appl. Mech. 27:640-643, 1960; Iwan, J.
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import NDArray
 
 from ...core.masing import jenkins_constants
 from ...core.periodic import PeriodicForm
@@ -21,7 +22,7 @@ from ..base import Effect
 __all__ = ["jenkins_gain", "JenkinsBank"]
 
 
-def jenkins_gain(X, phi):
+def jenkins_gain(X, phi) -> NDArray[np.float64]:
     """First-harmonic (in-phase) stiffness of a Jenkins element at amplitude ``X`` [m] per
     unit spring stiffness [-]: 1 while stuck (``X <= phi``), ``(theta - sin theta cos
     theta)/pi`` with ``cos theta = 1 - 2 phi / X`` above.

@@ -14,6 +14,7 @@ import math
 import exudyn as exu
 import numpy as np
 from exudyn.itemInterface import ObjectConnectorCartesianSpringDamper
+from numpy.typing import NDArray
 
 __all__ = ["check_stiffness", "linear_energy", "add_builtin_springs"]
 
@@ -21,7 +22,7 @@ _POSITION = exu.OutputVariableType.Position
 _HIDDEN = {"show": False, "drawSize": -1.0, "color": [-1.0, -1.0, -1.0, -1.0]}
 
 
-def check_stiffness(stiffness, n: int, kind: str):
+def check_stiffness(stiffness, n: int, kind: str) -> NDArray[np.float64] | None:
     """``None``, or the stiffnesses as an array of shape (n, 3) [N/m] (finite, >= 0)."""
     if stiffness is None:
         return None

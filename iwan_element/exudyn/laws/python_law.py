@@ -4,6 +4,8 @@ route, and the only one for elements without a symbolic form).
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import exudyn as exu
 
 __all__ = ["coordinate_force_function", "position_force_function", "rotating_axis_force_function"]
@@ -16,7 +18,7 @@ _ROTATION_MATRIX = exu.OutputVariableType.RotationMatrix
 # read the connector's small state by attribute access and call the bound trial method;
 # no numpy and no allocation beyond the return value. The cache ``conn._lF`` holds the
 # element's force; the dashpot in parallel (``conn._damping``) is added on return.
-def coordinate_force_function(conn):
+def coordinate_force_function(conn) -> Callable[..., float]:
     """The user function giving the force [N] of a coordinate connector (on ``deltaL``)."""
     trial = conn._joint.trial
     off = conn._offset  # fixed at creation (the object's own offset is not read)
@@ -56,7 +58,7 @@ def _axial_force(conn, trial, mbs, t, displacement, velocity, a0, a1, a2, off):
     return [F * a0, F * a1, F * a2]
 
 
-def position_force_function(conn):
+def position_force_function(conn) -> Callable[..., float]:
     """The user function giving the force [N] of a position connector along its fixed axis."""
     trial = conn._joint.trial
     a0, a1, a2 = conn._axis
@@ -68,7 +70,7 @@ def position_force_function(conn):
     return iwan_position_force
 
 
-def rotating_axis_force_function(conn):
+def rotating_axis_force_function(conn) -> Callable[..., list[float]]:
     """The user function giving the force [N] along an axis turning with its marker."""
     trial = conn._joint.trial
     l0, l1, l2 = conn._axis

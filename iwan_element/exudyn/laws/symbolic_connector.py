@@ -30,6 +30,7 @@ from __future__ import annotations
 import copy
 import logging
 import math
+from typing import Any
 
 import exudyn as exu
 from exudyn.advancedUtilities import CreateSymbolicUserFunction
@@ -67,7 +68,7 @@ _INF = math.inf
 _OVT = exu.OutputVariableType
 
 
-def symbolic_item(conn, depth: int, name: str, vis):
+def symbolic_item(conn, depth: int, name: str, vis) -> Any:
     """The Exudyn connector item with the symbolic law; sets ``conn._state``."""
     joint = conn._joint
     st = SymbolicIwanState(joint.params, depth, joint_tolerance(joint))
@@ -394,7 +395,7 @@ def sync_stack(conn, t=None) -> None:
 
 
 # ---------------------------------------------------------------------------- overflow
-def walk_states(us, Fr, uc, Fc, u, tol, limit=None):
+def walk_states(us, Fr, uc, Fc, u, tol, limit=None) -> list[tuple[int, list[float], list[float]]]:
     """The committed states the joint passes through on the monotone move ``uc -> u``.
 
     Mirrors :meth:`IwanJoint._walk` (extended Masing rules, docs/equations.md section 2): a

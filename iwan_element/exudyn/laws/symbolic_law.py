@@ -52,6 +52,7 @@ from __future__ import annotations
 import itertools
 import math
 from collections.abc import Callable
+from typing import Any
 
 import exudyn as exu
 from exudyn.advancedUtilities import CreateSymbolicUserFunction
@@ -78,7 +79,7 @@ def _const(x: float):
     return esym.Real(float(x))
 
 
-def committed_slip_matrix(n: int):
+def committed_slip_matrix(n: int) -> Any:
     """A symbolic 1 x ``n`` matrix holding the committed slips of ``n`` points: one
     ``SetMatrix`` per accepted step (``Get(0, i)`` reads entry ``i`` live; unlike a
     ``Vector``, a long ``Matrix`` row did not crash Exudyn 1.13.6 and costs 1 call instead
@@ -215,7 +216,7 @@ class SymbolicIwanState:
         return not abs(self.probe(u) - force) <= 1e-9 * self.Fs
 
     # ------------------------------------------------------------------ the law
-    def backbone(self, x):
+    def backbone(self, x) -> Any:
         """``F_bb(x)`` for ``x >= 0`` (docs/equations.md section 2, paper eq. 12)."""
         return esym.IfThenElse(
             x < self.pm, x * (self.KT - self.a * esym.pow(x, self.e1)), _const(self.Fs)
@@ -228,7 +229,7 @@ class SymbolicIwanState:
         x = u - r
         return R + esym.sign(x) * (2.0 * self.backbone(0.5 * esym.abs(x)))
 
-    def exact(self, u):
+    def exact(self, u) -> Any:
         """Trial force [N] at the symbolic slip ``u`` by the full reversal-point law (no
         shortcut).
         """
@@ -265,7 +266,7 @@ class SymbolicIwanState:
         f_rev = esym.IfThenElse(esym.abs(d) <= self.tol, f_small, f_new)
         return esym.IfThenElse(d * du < 0.0, f_rev, f_cont)
 
-    def force(self, u):
+    def force(self, u) -> Any:
         """Trial force [N] at the symbolic slip ``u`` (an expression of the solver's marker
         quantities): the branch shortcut in front of :meth:`exact`.
         """
@@ -275,7 +276,7 @@ class SymbolicIwanState:
         return esym.IfThenElse(fast, cont, self.exact(u))
 
 
-def make_probe(mbs, fn, kind, axis, off, k=None, st=None):
+def make_probe(mbs, fn, kind, axis, off, k=None, st=None) -> Callable[..., Any]:
     """``u -> F`` through the symbolic user function ``fn`` (no new expression); ``k``: the
     linear springs the function also carries (see :func:`cartesian_law`), taken out again.
     ``kind="rigid"`` (a ``RigidBodySpringDamper`` law, whose ``Evaluate`` takes no matrix
@@ -305,7 +306,7 @@ def make_probe(mbs, fn, kind, axis, off, k=None, st=None):
     return probe
 
 
-def coordinate_law(st: SymbolicIwanState, off: float, c: float = 0.0):
+def coordinate_law(st: SymbolicIwanState, off: float, c: float = 0.0) -> Callable[..., Any]:
     """Spring-force user function (ObjectConnectorCoordinateSpringDamper) to be traced;
     ``c`` [N s/m]: a dashpot in parallel (``c deltaL_t`` added).
     """
@@ -327,7 +328,9 @@ def _along(a, vec):
     return u
 
 
-def cartesian_law(st: SymbolicIwanState, a, off: float, k=None, c: float = 0.0):
+def cartesian_law(
+    st: SymbolicIwanState, a, off: float, k=None, c: float = 0.0
+) -> Callable[..., Any]:
     """Spring-force user function (ObjectConnectorCartesianSpringDamper) along the unit
     axis ``a``; components with ``a_k = 0`` are constant zeros (a shared sub-expression is
     evaluated once per appearance, so the law appears only in the non-zero components).
@@ -353,7 +356,7 @@ def cartesian_law(st: SymbolicIwanState, a, off: float, k=None, c: float = 0.0):
     return law
 
 
-def rigid_law(st: SymbolicIwanState, a, off: float, c: float = 0.0):
+def rigid_law(st: SymbolicIwanState, a, off: float, c: float = 0.0) -> Callable[..., Any]:
     """Spring-force-torque user function (ObjectConnectorRigidBodySpringDamper) along the
     unit axis ``a`` fixed in the frame of marker 0 (the joint frame J0; ``displacement`` and
     ``velocity`` are given in it): the force ``F a`` in J0, no torque; ``c`` [N s/m]: a

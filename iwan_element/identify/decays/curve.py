@@ -71,6 +71,7 @@ from __future__ import annotations
 import logging
 import math
 from dataclasses import replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy import signal
@@ -81,6 +82,9 @@ from ._filter import _decay_signal, _drift_terms, _noise_bandwidth
 from ._report import _finish
 from .saturation import cut_clipping, cut_flattened_peaks
 from .windows import WindowPlan, _noise_std, drift_correct, hilbert_windows, pff_windows
+
+if TYPE_CHECKING:
+    from ..modal.curves import AmplitudeCurve
 
 __all__ = ["amplitude_curve"]
 
@@ -352,7 +356,7 @@ def amplitude_curve(
     max_damping_ratio_std: float | None = None,
     method: str = "hilbert",
     compare: bool = True,
-):
+) -> AmplitudeCurve:
     """Frequency and damping ratio against amplitude from a free-decay record of one mode.
 
     Band-pass run backwards in time, Hilbert transform, straight-line fits of log-envelope

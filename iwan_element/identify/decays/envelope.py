@@ -32,6 +32,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from numpy.typing import NDArray
 from scipy import signal
 
 __all__ = ["analytic_signal", "mode_envelope"]
@@ -64,7 +65,7 @@ def _ramp_ends(x, n0, n1):
 
 def analytic_signal(
     y, fs: float, band, *, order: int = 4, taper_ends: bool = False, pad: bool = False
-):
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.complex128]]:
     """Zero-phase band-passed record and its analytic signal (module docstring).
 
     Parameters
@@ -101,7 +102,9 @@ def analytic_signal(
     return sos, yf, z
 
 
-def mode_envelope(t, y, band, *, order: int = 4, integrate: int = 0, span=None):
+def mode_envelope(
+    t, y, band, *, order: int = 4, integrate: int = 0, span=None
+) -> NDArray[np.float64]:
     """Envelope of the mode in ``band`` [Hz] of the record ``y`` at times ``t`` [s].
 
     ``|z| / w**integrate`` with ``z`` the zero-phase band-passed analytic signal

@@ -30,6 +30,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import NDArray
 
 from .envelope import analytic_signal
 
@@ -90,7 +91,9 @@ def find_clipping(y) -> Clipping | None:
     return Clipping(n=int(idx.size), last=int(idx[-1]), levels=tuple(levels))
 
 
-def cut_clipping(t, y, *, min_samples: int = 64):
+def cut_clipping(
+    t, y, *, min_samples: int = 64
+) -> tuple[NDArray[np.float64], NDArray[np.float64], str]:
     """``(t, y, note)``: the record after its last clipped sample and the warning saying so,
     or the record unchanged and ``""``. ValueError naming ``y`` when fewer than
     ``min_samples`` samples follow the clipping.
@@ -149,7 +152,9 @@ def _flattened_cycles(y, fs, band):
     return flat, np.array(ends, int), envs
 
 
-def cut_flattened_peaks(t, y, band, *, min_samples: int = 64):
+def cut_flattened_peaks(
+    t, y, band, *, min_samples: int = 64
+) -> tuple[NDArray[np.float64], NDArray[np.float64], str]:
     """``(t, y, note)``: the record after its last clipped cycle when its peaks are
     flattened below the mode in ``band`` [Hz] (clipping under noise, module docstring) and
     the warning saying so, or the record unchanged and ``""``. ValueError naming ``y`` when

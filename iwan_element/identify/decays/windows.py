@@ -38,6 +38,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import NDArray
 from scipy import signal
 
 from ._filter import _reverse_gain
@@ -114,7 +115,9 @@ def _hop(plan, sigma, n_w, dt):
     return int(min(n_w, max(plan.hop / (sigma * dt), plan.n_half)))
 
 
-def hilbert_windows(tt, env, phase, span, plan, noise_spec, mode):
+def hilbert_windows(
+    tt, env, phase, span, plan, noise_spec, mode
+) -> tuple[list[tuple[float, ...]], list[tuple[int, int]], str, bool]:
     """Window estimates in time order until the signal meets the noise or stops being a mode.
 
     The windows are laid by their centres, every ``plan.hop`` nepers; near the two ends of
@@ -132,7 +135,8 @@ def hilbert_windows(tt, env, phase, span, plan, noise_spec, mode):
     noise, snr_min, bw, n_block = noise_spec
     k_pow, band, sos, fs, route = mode
     dt = 1.0 / fs  # the mean step (time stamps may be rounded)
-    rows, wins = [], []
+    rows: list[tuple[float, ...]] = []
+    wins: list[tuple[int, int]] = []
     # a first decay rate: the time the envelope takes to fall by e from the usable start
     below = np.flatnonzero(env[i0:i1] < env[i0] / math.e)
     sigma = 1.0 / (below[0] * dt) if below.size and below[0] > 0 else 0.0
@@ -220,7 +224,7 @@ def _log_slope(ln_x, ln_w, j, half=1.0):
     return float(c[-2])
 
 
-def drift_correct(rows, k_pow, drift_terms):
+def drift_correct(rows, k_pow, drift_terms) -> list[tuple[float, ...]]:
     """Decay rates corrected for a frequency that drifts with the amplitude.
 
     Two first-order effects of ``dw/dt = -sigma w (d ln w / d ln X)`` (the curve's own slope,
@@ -257,7 +261,7 @@ def drift_correct(rows, k_pow, drift_terms):
     return out
 
 
-def extrema(yf, i0, i1):
+def extrema(yf, i0, i1) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Times (in fractional samples) and values of the extrema of ``yf[i0:i1]``, in order.
 
     Each is the vertex of the parabola through the three samples around a local maximum of
@@ -283,9 +287,9 @@ def extrema(yf, i0, i1):
                 keep[-1] = j
         else:
             keep.append(j)
-    keep = np.array(keep)
-    inside = (pos[keep] >= i0) & (pos[keep] < i1)
-    return pos[keep][inside], val[keep][inside]
+    kept = np.array(keep)
+    inside = (pos[kept] >= i0) & (pos[kept] < i1)
+    return pos[kept][inside], val[kept][inside]
 
 
 def _ols(x, y):
@@ -297,7 +301,7 @@ def _ols(x, y):
     return coef, np.sqrt(np.diag(np.linalg.inv(X.T @ X) * s2))
 
 
-def pff_windows(tt, yf, wins, mode, noise_std):
+def pff_windows(tt, yf, wins, mode, noise_std) -> list[tuple[float, ...] | None]:
     """Peak-finding-and-fitting estimates in the given windows.
 
     ``wins`` are ``(start, stop)`` sample ranges, ``mode = (k_pow, sos, fs, route)`` (the
@@ -311,7 +315,7 @@ def pff_windows(tt, yf, wins, mode, noise_std):
     dt = 1.0 / fs  # the mean step (time stamps may be rounded)
     pos, val = extrema(yf, wins[0][0], wins[-1][1]) if wins else (np.empty(0), np.empty(0))
     times = tt[0] + pos * dt
-    rows = []
+    rows: list[tuple[float, ...] | None] = []
     for s, e in wins:
         sel = (pos >= s) & (pos < e)
         if np.count_nonzero(sel) < 5:

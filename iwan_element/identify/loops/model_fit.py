@@ -42,8 +42,10 @@ import math
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
+from numpy.typing import NDArray
 from scipy.signal import savgol_coeffs, savgol_filter
 
 from ...base.result_shape import ResultShape, value_stderr
@@ -51,6 +53,9 @@ from ...base.validation import check_int, check_magnitude, check_time, finite_ar
 from ...fitting import Parameter, ParameterTable, covariance, fit_success, minimize, verdict
 from .cycles import find_reversals
 from .noise import estimate_noise, integrated_time
+
+if TYPE_CHECKING:
+    from matplotlib.artist import Artist
 
 __all__ = ["ModelFit", "fit_force_model", "drive_displacement", "burn_in_index"]
 
@@ -64,7 +69,7 @@ def burn_in_index(u: np.ndarray, *, hysteresis: float | None = None) -> int:
     return int(rev[1]) if rev.size >= 2 else 0
 
 
-def drive_displacement(t, u, smooth="auto"):
+def drive_displacement(t, u, smooth="auto") -> tuple[NDArray[np.float64], dict[str, float]]:
     """The displacement that drives the model, and what was done to it.
 
     Parameters
@@ -194,7 +199,7 @@ class ModelFit(ResultShape):
         lines += [f"  - {w}" for w in self.warnings]
         return "\n".join(lines)
 
-    def plot(self, ax=None):
+    def plot(self, ax=None) -> list[Artist]:
         """Residual [N] vs time [s]; returns the list of artists."""
         from ...base.result_shape import axes_or_new
 

@@ -42,6 +42,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy.optimize import minimize_scalar
@@ -49,6 +50,9 @@ from scipy.signal import savgol_coeffs, savgol_filter
 
 from ...base.result_shape import ResultShape, panels
 from ...base.validation import check_magnitude, check_scalar, check_time, finite_array, same_length
+
+if TYPE_CHECKING:
+    from matplotlib.artist import Artist
 
 __all__ = ["NoiseEstimate", "estimate_noise", "integrated_time", "difference_sigma"]
 
@@ -114,7 +118,7 @@ class NoiseEstimate(ResultShape):
         """
         return bool(math.isfinite(self.sigma) and self.sigma > 0 and self.n_eff >= MIN_EFFECTIVE)
 
-    def plot(self, ax=None, *, lags: int | None = None):
+    def plot(self, ax=None, *, lags: int | None = None) -> list[Artist]:
         """The noise model's autocorrelation ``rho**|k|`` (AR(1)) against the lag [s], with the
         integrated correlation time marked. Returns the artists (one Axes,
         :mod:`iwan_element.base.result_shape`).

@@ -8,6 +8,7 @@ import warnings
 from contextlib import contextmanager
 from contextvars import ContextVar
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -22,6 +23,9 @@ from .joint_verdict import (
     required_parameters,
     settle_verdict,
 )
+
+if TYPE_CHECKING:
+    from matplotlib.artist import Artist
 
 __all__ = ["FitResult", "IdentifiabilityWarning"]
 
@@ -170,7 +174,7 @@ class FitResult(ResultShape):
             }
         )
 
-    def plot(self, ax=None):
+    def plot(self, ax=None) -> list[Artist]:
         """Loop fits: measured and fitted force [kN] vs displacement [mm]; dissipation fits:
         measured and fitted ``D`` [J] vs ``F0`` [N] (log-log). Returns the list of artists.
         """

@@ -13,6 +13,7 @@ All arrays are in SI units: time [s], displacement [m], force [N], energy [J].
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -29,6 +30,9 @@ from ...base.validation import (
 from ...core.joint import IwanJoint
 from ...core.parameters import IwanParameters
 from .cycles import Cycle, check_varies, default_hysteresis, split_cycles
+
+if TYPE_CHECKING:
+    from matplotlib.artist import Artist
 
 __all__ = ["TestData", "simulate_test"]
 
@@ -250,7 +254,7 @@ class TestData(ResultShape):
             ("record", ("quantity", "value"), record),
         ]
 
-    def plot(self, ax=None):
+    def plot(self, ax=None) -> list[Artist]:
         """The force against the displacement, usable cycles solid, flagged ones grey, on
         one Axes (a new figure if ``None``); returns the artists.
         """

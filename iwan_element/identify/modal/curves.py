@@ -11,11 +11,15 @@ from __future__ import annotations
 
 import json
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ...base.result_shape import ResultShape, column, panels, table_lines, wrap
 from ...base.validation import check_magnitude, finite_array
+
+if TYPE_CHECKING:
+    from matplotlib.artist import Artist
 
 __all__ = ["AmplitudeCurve", "MIN_POINTS", "DECAY_METHODS"]
 
@@ -273,7 +277,7 @@ class AmplitudeCurve(ResultShape):
         ]
         return out + [("curve", ("quantity", "value"), info)]
 
-    def plot(self, ax=None, *, label=None, **kwargs):
+    def plot(self, ax=None, *, label=None, **kwargs) -> list[Artist]:
         """Frequency and damping ratio against amplitude on log amplitude axes.
 
         Parameters
@@ -297,6 +301,7 @@ class AmplitudeCurve(ResultShape):
             (ax_f, self.frequency, self.frequency_std),
             (ax_z, self.damping_ratio, self.damping_ratio_std),
         ):
+            assert s is not None  # __post_init__ made every std an array (NaN: not given)
             if np.all(np.isnan(s)):
                 artists += a.plot(self.amplitude, y, label=label, **kw)
             else:

@@ -9,6 +9,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from numpy.typing import NDArray
 from scipy import special
 
 from ...core.modal import modal_iwan_curve, viscous_floor
@@ -20,7 +21,7 @@ MICRO = ("f0", "zeta0", "chi", "delta")
 FULL = ("f0", "zeta0", "chi", "kappa", "log_phi_max", "beta")
 
 
-def harmonic_factor(chi):
+def harmonic_factor(chi) -> float:
     """Ratio of the first-harmonic to the secant stiffness drop in microslip (n = chi+2)."""
     n = chi + 2.0
     return (
@@ -28,7 +29,7 @@ def harmonic_factor(chi):
     )
 
 
-def full_parameters(theta):
+def full_parameters(theta) -> tuple[IwanParameters, float]:
     """(IwanParameters, K_inf) in sensor units with unit mass from the full parameter vector."""
     f0, _, chi, kappa, logphi, beta = theta
     w02 = (2.0 * math.pi * f0) ** 2
@@ -38,7 +39,9 @@ def full_parameters(theta):
     return IwanParameters(KT * c * phimax / (1.0 + beta), KT, chi, beta), w02 - KT
 
 
-def model_curve(theta, X, regime, x_ref, stiffness, floor, damping_form="energy"):
+def model_curve(
+    theta, X, regime, x_ref, stiffness, floor, damping_form="energy"
+) -> tuple[float | NDArray[np.float64], float | NDArray[np.float64]]:
     """Frequency [Hz] and damping ratio of the model at amplitudes ``X`` (``damping_form``: the
     energy form or the form a free decay shows, :func:`~iwan_element.modal_iwan_curve`).
     """

@@ -26,6 +26,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import NDArray
 from scipy import optimize, signal
 
 __all__ = ["subspace_poles", "stable_poles", "fit_sinusoids", "SinusoidFit", "basis", "amplitudes"]
@@ -39,7 +40,7 @@ def _hankel(y, rows):
     return np.ascontiguousarray(win.transpose(1, 0, 2)).reshape(rows * m, k)
 
 
-def subspace_poles(y, dt, orders, *, rows=None):
+def subspace_poles(y, dt, orders, *, rows=None) -> dict[int, NDArray[np.complex128]]:
     """Continuous-time poles of the multichannel decay ``y`` at each model order.
 
     Parameters
@@ -80,7 +81,9 @@ def subspace_poles(y, dt, orders, *, rows=None):
     return out
 
 
-def stable_poles(poles, *, f_tol=2e-3, z_tol=0.2, z_abs=2e-4, min_orders=4):
+def stable_poles(
+    poles, *, f_tol=2e-3, z_tol=0.2, z_abs=2e-4, min_orders=4
+) -> tuple[NDArray[np.complex128], NDArray[np.int_]]:
     """Physical poles of a stabilisation diagram: clusters of stable poles.
 
     A pole at order ``n`` is stable when the next lower order has a pole within ``f_tol``
@@ -133,7 +136,7 @@ def stable_poles(poles, *, f_tol=2e-3, z_tol=0.2, z_abs=2e-4, min_orders=4):
     return np.array(out, dtype=complex), np.array(counts, dtype=int)
 
 
-def basis(tau, s):
+def basis(tau, s) -> NDArray[np.float64]:
     """Real regressors ``exp(sigma tau) cos(w tau)`` and ``-exp(sigma tau) sin(w tau)``,
     shape (N, 2p): the model ``Re(C exp(s tau))`` with ``C = a + i b`` is ``basis @ [a; b]``.
     """
@@ -142,7 +145,7 @@ def basis(tau, s):
     return np.hstack([e * np.cos(ph), -e * np.sin(ph)])
 
 
-def amplitudes(tau, Y, s):
+def amplitudes(tau, Y, s) -> NDArray[np.complex128]:
     """Least-squares complex amplitudes ``C`` (p, m) of the poles ``s`` in ``Y`` (m, N)."""
     B = basis(tau, s)
     coef = np.linalg.lstsq(B, Y.T, rcond=None)[0]
@@ -167,7 +170,7 @@ class SinusoidFit:
     resid: np.ndarray
     converged: bool
 
-    def params(self):
+    def params(self) -> NDArray[np.float64]:
         """The parameter vector the covariance refers to."""
         return np.concatenate([self.s.real, self.s.imag, self.C.real.ravel(), self.C.imag.ravel()])
 
@@ -222,7 +225,7 @@ def _correlated_cov(J, rho, s2):
     return s2 * Ainv @ M @ Ainv
 
 
-def fit_sinusoids(tau, Y, s0, *, rho=None, max_nfev=200):
+def fit_sinusoids(tau, Y, s0, *, rho=None, max_nfev=200) -> SinusoidFit:
     """Least squares of all poles and amplitudes of ``Y`` (m, N) at times ``tau`` (N,) [s].
 
     ``Y``'s channels are assumed weighted to equal noise variance; ``rho`` is the noise

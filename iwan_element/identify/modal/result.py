@@ -6,8 +6,10 @@ import json
 import math
 import warnings
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, overload
 
 import numpy as np
+from numpy.typing import NDArray
 from scipy import stats
 
 from ...base.result_shape import ResultShape, panels, wrap
@@ -22,6 +24,9 @@ from ...fitting import (
 )
 from ..loops.result import IdentifiabilityWarning
 from .model import FULL, MICRO, _derived, full_parameters, model_curve
+
+if TYPE_CHECKING:
+    from matplotlib.artist import Artist
 
 __all__ = ["ModalIwanFit"]
 
@@ -252,7 +257,30 @@ class ModalIwanFit(ResultShape):
         span = list(self.conventions.get("amplitude_range", ())) + [X.min(), X.max()]
         return float(min(span)), float(max(span))
 
-    def predict(self, amplitude, band: float | None = None):
+    @overload
+    def predict(
+        self, amplitude, band: None = None
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]: ...
+    @overload
+    def predict(
+        self, amplitude, band: float
+    ) -> tuple[
+        NDArray[np.float64],
+        NDArray[np.float64],
+        tuple[NDArray[np.float64], NDArray[np.float64]],
+        tuple[NDArray[np.float64], NDArray[np.float64]],
+    ]: ...
+    def predict(
+        self, amplitude, band: float | None = None
+    ) -> (
+        tuple[NDArray[np.float64], NDArray[np.float64]]
+        | tuple[
+            NDArray[np.float64],
+            NDArray[np.float64],
+            tuple[NDArray[np.float64], NDArray[np.float64]],
+            tuple[NDArray[np.float64], NDArray[np.float64]],
+        ]
+    ):
         """Frequency [Hz] and damping ratio [-] of the fitted model at ``amplitude`` [m].
 
         With ``band`` (a probability in (0, 1), e.g. 0.95) also returns the two-sided band
@@ -358,7 +386,7 @@ class ModalIwanFit(ResultShape):
             lines += wrap(f"  warning: {w}", indent="    ")
         return "\n".join(lines)
 
-    def plot(self, ax=None, *, band: float = 0.95, label: str = "fit"):
+    def plot(self, ax=None, *, band: float = 0.95, label: str = "fit") -> list[Artist]:
         """Data (with error bars), fitted curves and their band against amplitude.
 
         ``ax`` is a sequence of two Axes ``(ax_frequency, ax_damping)``; a new figure if

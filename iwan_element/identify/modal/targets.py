@@ -18,11 +18,15 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ...base.result_shape import ResultShape, format_value, panels, table_lines, wrap
 from .mode_target import ModeTarget, mac
+
+if TYPE_CHECKING:
+    from matplotlib.artist import Artist
 
 __all__ = ["ModalTargets"]
 
@@ -311,7 +315,7 @@ class ModalTargets(ResultShape):
             lines += wrap(f"  warning: {w}", indent="    ")
         return "\n".join(lines)
 
-    def plot(self, ax=None):
+    def plot(self, ax=None) -> list[Artist]:
         """The signed real shapes against sensor position, each scaled to its largest
         amplitude, with error bars; returns the artists. One panel.
         """
