@@ -66,7 +66,7 @@ QUANTITIES = {
     "share_within": ("share within the band", "%", 100.0),
     "coverage": ("coverage", "%", 100.0),
     "coverage_coef": ("coverage, coefficients only", "%", 100.0),
-    "start": ("start", "s", 1.0),
+    "start": ("starting slip", "m", 1.0),
     "chi2": ("chi-square", "-", 1.0),
     "chi2_red": ("reduced chi-square", "-", 1.0),
     "dof": ("degrees of freedom", None, 1.0),
