@@ -696,3 +696,16 @@ def test_step_tables_keep_their_columns_with_long_names(name):
     rows = lines[start : start + len(cands)]
     assert [r.split()[0] for r in rows] == [c["name"].split()[0] for c in cands]
     assert len({r.index(c["verdict"]) for r, c in zip(rows, cands)}) == 1, rows
+
+
+def test_a_long_html_table_keeps_its_caption_and_counts_what_it_leaves_out():
+    """The caption is the table's title whatever its length (it said "data (41 rows)");
+    the rows left out are counted in the gap row."""
+    from iwan_element.base.result_shape import HTML_ROWS, html_table
+
+    page = html_table("response", ("f [Hz]",), [(float(k),) for k in range(100)])
+    assert "<caption>response</caption>" in page
+    assert page.count("<tr>") == 1 + HTML_ROWS + 1
+    assert f"... {100 - HTML_ROWS} rows more in to_dataframe()" in page
+    shown = [float(x) for x in re.findall(r'text-align:right">([\d.]+)<', page)]
+    assert len(shown) == HTML_ROWS and 100 - HTML_ROWS == 100 - len(set(shown))

@@ -303,9 +303,7 @@ def html_table(title: str, columns, rows) -> str:
     cut = len(rows) > HTML_ROWS
     if cut:  # a long table shows its ends (to_dataframe has every row)
         n = len(rows)
-        gap = (f"... {n - HTML_ROWS + 4} rows more in to_dataframe()",) + ("...",) * (
-            len(columns) - 1
-        )
+        gap = (f"... {n - HTML_ROWS} rows more in to_dataframe()",) + ("...",) * (len(columns) - 1)
         rows = rows[: HTML_ROWS - 5] + [gap] + rows[-5:]
     for r in rows:
         cells = []
