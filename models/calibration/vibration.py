@@ -27,6 +27,7 @@ import numpy as np
 from iwan_element import AmplitudeCurve, amplitude_curve
 from iwan_element.base.progress import complete, finish, progress_bar, tick
 from iwan_element.base.result_shape import ResultShape, panels, unit_label
+from iwan_element.base.validation import check_scalar
 from iwan_element.fitting import (
     Parameter,
     ParameterTable,
@@ -215,8 +216,7 @@ def modal_floor(
     """
     if not isinstance(measured, AmplitudeCurve) or len(measured) == 0:
         raise ValueError("measured must be a non-empty AmplitudeCurve")
-    if not (isinstance(decades, (int, float)) and 0 < decades <= 3):
-        raise ValueError(f"decades must be in (0, 3], got {decades!r}")
+    decades = check_scalar("decades", decades, low=0.0, high=3.0, low_open=True)
     X = measured.amplitude
     m = X <= X.min() * 10.0**decades * (1 + 1e-12)
     bare = specimen.replace(damping_floor=0.0, modal_damping=(), calibrated_range=None, effects=())

@@ -11,6 +11,7 @@ import numpy as np
 from iwan_element import AmplitudeCurve, amplitude_curve
 from iwan_element.base.result_shape import ResultShape, column, panels
 from iwan_element.base.serialize import json_safe
+from iwan_element.base.validation import plain_number
 
 if TYPE_CHECKING:
     from matplotlib.artist import Artist
@@ -127,6 +128,7 @@ class RingdownResult(ResultShape):
                 "sensor_curve needs the result's sensor records (sensor_positions, "
                 f"sensor_{quantity}), which this result does not hold"
             )
+        sensor = plain_number(sensor)
         if (
             isinstance(sensor, bool)
             or not isinstance(sensor, int)
