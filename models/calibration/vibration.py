@@ -105,6 +105,11 @@ class CalibrationResult(ResultShape):
         identified included.
     """
 
+    COLUMNS = {
+        "max_frequency_error": ("max |f/f_meas - 1|", "-"),
+        "max_damping_error": ("max |zeta/zeta_meas - 1|", "-"),
+    }
+
     plot_panels = 2
 
     specimen: Specimen
@@ -128,7 +133,7 @@ class CalibrationResult(ResultShape):
 
     def report(self) -> str:
         """Human-readable account: the fitted parameters [their units] and the misfits."""
-        lines = [f"Interface calibration of {self.specimen.name!r}: {self.verdict()}"]
+        lines = [self.verdict(), f"Interface calibration of {self.specimen.name!r}"]
         for k, p in self.params.items():
             moved = (
                 f"  (from {self.start[k]:.6g}: {100 * (p.value / self.start[k] - 1):+.2f} %)"
