@@ -208,21 +208,12 @@ def _built(name):
         return ALL_RESULTS[name]()
 
 
+#: The parts of the one result shape every result class is checked for.
+PARTS = "report html columns dataframe to_dict warnings success plot figure".split()
+
+
 @pytest.mark.parametrize("name", sorted(RESULTS))
-@pytest.mark.parametrize(
-    "part",
-    [
-        "report",
-        "html",
-        "columns",
-        "dataframe",
-        "to_dict",
-        "warnings",
-        "success",
-        "plot",
-        "figure",
-    ],
-)
+@pytest.mark.parametrize("part", PARTS)
 def test_result_objects_have_one_shape(name, part):
     res = _built(name)
     if part == "report":  # opens with the verdict, usable or NOT usable and why
@@ -546,20 +537,7 @@ def test_every_public_result_class_is_covered():
 @pytest.mark.parametrize(
     "name", sorted({**MODEL_RESULTS, **METHOD_RESULTS, **EXUDYN_RESULTS, **DATA_RESULTS})
 )
-@pytest.mark.parametrize(
-    "part",
-    [
-        "report",
-        "html",
-        "columns",
-        "dataframe",
-        "to_dict",
-        "warnings",
-        "success",
-        "plot",
-        "figure",
-    ],
-)
+@pytest.mark.parametrize("part", PARTS)
 def test_other_result_objects_have_the_same_shape(name, part):
     """The beam model's results and the results of public methods, by the same test."""
     test_result_objects_have_one_shape(name, part)
