@@ -353,21 +353,23 @@ def main(argv=None) -> dict:
     (args.out / "summary.json").write_text(json.dumps(summary, indent=2))
 
     print("\n  f(X), zeta(X) by QSMA (first and last amplitude of each curve)")
-    print("  specimen             mode   X [um]      f [Hz]     zeta")
+    width = max(len(label) for entries in curves.values() for label, _, _ in entries)
+    print(f"  {'specimen':20s} {'curve':{width}s}   X [um]      f [Hz]  zeta [%]")
     for name, entries in curves.items():
         for label, c, _ in entries:
             for i in (0, -1):
                 print(
-                    f"  {name:20s} {label[-1]:>4s} {c.amplitude[i] * 1e6:8.2f} "
-                    f"{c.frequency[i]:11.4f}  {c.damping_ratio[i]:.3e}"
+                    f"  {name:20s} {label:{width}s} {c.amplitude[i] * 1e6:8.2f} "
+                    f"{c.frequency[i]:11.4f}  {100 * c.damping_ratio[i]:8.4f}"
                 )
     print("\n  Brake-Reuss ring-down vs QSMA")
-    print("  X [um]    f ring [Hz]  f pred [Hz]  zeta ring  zeta pred")
+    print("  X [um]    f ring [Hz]  f pred [Hz]  zeta ring [%]  zeta pred [%]")
     qp = modal_amplitude_curve(brb, amplitude=rd.curve.amplitude)
     for i in np.unique(np.linspace(0, len(qp) - 1, 5).astype(int)):
         print(
             f"  {rd.curve.amplitude[i] * 1e6:7.2f}  {rd.curve.frequency[i]:11.4f}  "
-            f"{qp.frequency[i]:11.4f}  {rd.curve.damping_ratio[i]:.3e}  {qp.damping_ratio[i]:.3e}"
+            f"{qp.frequency[i]:11.4f}  {100 * rd.curve.damping_ratio[i]:13.4f}  "
+            f"{100 * qp.damping_ratio[i]:13.4f}"
         )
     qsum = summary["quasi_static"]
     print(

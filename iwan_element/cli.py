@@ -337,27 +337,6 @@ def _parse_columns(text: str | None):
     return tuple(int(p) if p.lstrip("-").isdigit() else p for p in parts)
 
 
-def _write_plot(path: Path, data, result) -> None:
-    from matplotlib.figure import Figure
-
-    from .plotting import plot_dissipation_fit, plot_fitted_loops
-
-    try:
-        table = data.amplitude_table()
-    except ValueError:
-        table = None
-    fig = Figure(figsize=(11, 4.5) if table is not None else (6, 4.5))
-    ax1 = fig.add_subplot(1, 2 if table is not None else 1, 1)
-    plot_fitted_loops(data.u, data.F, result, ax=ax1)
-    ax1.set_title("measured vs fitted loops", fontsize=9)
-    if table is not None:
-        ax2 = fig.add_subplot(1, 2, 2)
-        plot_dissipation_fit(table["F0"], table["D"], result, ax=ax2)
-        ax2.set_title("dissipation per cycle", fontsize=9)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-
-
 def _run_fit(args) -> tuple[int, list[str]]:
     from .identify.files.csv_input import FORCE_UNITS
     from .identify.loops.dissipation import fit_dissipation
@@ -419,8 +398,11 @@ def _run_fit(args) -> tuple[int, list[str]]:
         args.json.write_text(json.dumps(out, indent=2, allow_nan=False) + "\n")
         wrote.append(f"wrote {args.json}")
     if args.plot is not None:
-        _write_plot(args.plot, data, result)
-        wrote.append(f"wrote {args.plot}")
+        from .plotting import fit_figure
+
+        fig, notes = fit_figure(data, result)
+        fig.savefig(args.plot, dpi=120)
+        wrote += notes + [f"wrote {args.plot}"]
     head = (
         f"{data.source}: {len(data.u)} samples, {len(data.cycles)} cycles "
         f"({len(data.usable_cycles())} usable), units {_units_text(data)} (converted to SI)"

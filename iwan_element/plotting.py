@@ -7,6 +7,7 @@ matplotlib is imported only when a function here is called. Every function takes
 
 from __future__ import annotations
 
+import textwrap
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -26,9 +27,16 @@ from .core.parameters import IwanParameters
 
 if TYPE_CHECKING:
     from matplotlib.artist import Artist
+    from matplotlib.figure import Figure
     from matplotlib.lines import Line2D
 
-__all__ = ["plot_normalized_loops", "plot_loop", "plot_fitted_loops", "plot_dissipation_fit"]
+__all__ = [
+    "plot_normalized_loops",
+    "plot_loop",
+    "plot_fitted_loops",
+    "plot_dissipation_fit",
+    "fit_figure",
+]
 
 
 def plot_normalized_loops(cases, *, s0: float = 1.0, step: float = 0.002, ax=None) -> list[Line2D]:
@@ -225,3 +233,49 @@ def plot_dissipation_fit(
     else:
         ax.legend(fontsize=7, loc="upper left")
     return artists
+
+
+def fit_figure(data, result) -> tuple[Figure, list[str]]:
+    """The figure ``iwan-element fit --plot`` writes: the fit's own plot
+    (:meth:`FitResult.plot`: a loop fit's model and data with the fitted offsets removed, as
+    in Python), beside the dissipation per cycle against the force amplitude (measured
+    cycles and the fitted joint's closed form; a dissipation fit's own plot, beside its loops).
+    When the record has too few usable cycles for the dissipation panel, the panel says
+    why instead of vanishing.
+
+    Returns
+    -------
+    (matplotlib.figure.Figure, list of str)
+        The figure and notes for the command's output (a panel left empty and why).
+    """
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(11, 4.5), layout="constrained")
+    ax1, ax2 = fig.subplots(1, 2)
+    notes = []
+    if result.method == "loops":
+        result.plot(ax=ax1)
+        try:
+            table = data.amplitude_table(min_cycles=1)  # every closed cycle, one or more
+        except ValueError as exc:
+            table, why = None, str(exc)
+        if table is not None:
+            plot_dissipation_fit(table["F0"], table["D"], result, ax=ax2)
+        else:
+            ax2.text(
+                0.5,
+                0.5,
+                "no dissipation panel:\n" + "\n".join(textwrap.wrap(why, width=50)),
+                ha="center",
+                va="center",
+                fontsize=8,
+                transform=ax2.transAxes,
+            )
+            ax2.set_axis_off()
+            notes.append(f"--plot: no dissipation panel ({why})")
+    else:
+        plot_fitted_loops(data.u, data.F, result, ax=ax1)
+        result.plot(ax=ax2)
+    ax1.set_title("measured vs fitted loops", fontsize=9)
+    ax2.set_title("dissipation per cycle", fontsize=9)
+    return fig, notes

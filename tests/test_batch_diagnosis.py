@@ -48,7 +48,9 @@ def test_batch_equals_record_by_record_and_keeps_refusals():
     assert not b.success and any("not diagnosed" in w for w in b.warnings)
     for i, name in enumerate(("gap", "clean")):
         alone = diagnose(*recs[i])
-        assert rows[name]["status"] == "ok"
+        # the status is the diagnosis's verdict, never "ok" beside success False
+        assert rows[name]["status"] == ("usable" if alone.success else "NOT usable")
+        assert rows[name]["success"] == alone.success
         assert rows[name]["named"] == (" + ".join(alone.effects) or "none")
         assert rows[name]["error_after"] == pytest.approx(alone.error_after, rel=1e-12)
         assert b.diagnoses[i]["effects"] == list(alone.effects)
@@ -120,6 +122,14 @@ def test_cli_diagnoses_several_records_with_one_table_and_json(tmp_path, capsys)
     assert [r["record"] for r in doc["rows"]] == ["rec0.csv", "rec1.csv"]
     lines = tab.read_text().splitlines()
     assert lines[0].startswith("record,samples,named") and len(lines) == 3
+    # every number under a heading with its unit, the NRMSE in % as the heading says
+    head = lines[0].split(",")
+    assert "NRMSE before [%]" in head and "misfit band before [N]" in head
+    cell = dict(zip(head, lines[1].split(",")))
+    assert float(cell["NRMSE before [%]"]) == pytest.approx(
+        100 * doc["rows"][0]["error_before"], rel=1e-12
+    )
+    assert cell["status"] == ("usable" if doc["rows"][0]["success"] else "NOT usable")
     assert main(["diagnose", *paths, "--units", "mm,kN", "--plot", str(tmp_path / "x.png")]) == 1
 
 

@@ -305,7 +305,7 @@ def test_campaign_probabilities_and_model_averaged_band(fitted):
             sum(z for pr in preps for eff, z, *_ in pr["explanations"] if tuple(eff) == e.effects)
         )
     assert "most probable: backlash" in fit.report()
-    assert fit.to_dataframe("probabilities")["probability"].sum() == pytest.approx(1.0)
+    assert fit.to_dataframe("probabilities")["probability [-]"].sum() == pytest.approx(1.0)
     cond = {"tension": 25.0, "frequency": 0.75}
     t = np.arange(300) / 200.0
     u = 2e-3 * np.sin(2 * np.pi * 0.75 * t)

@@ -243,6 +243,16 @@ def test_result_reports_serialises_and_plots(tmp_path):
     true = calibrated("slip_degradation", 8.0, "ladder")
     se = g.fit.details["effects"][0]["stderr"]["rate"]
     assert abs(rate - true) < 3 * se + 0.05 * true
+    # the tables hold what the report names: the effect's values with their standard
+    # errors and every step's candidates, not only the Iwan part
+    pd = pytest.importorskip("pandas")
+    named = g.to_dataframe("named effects").set_index("parameter")
+    assert named.loc["rate", "value"] == rate and named.loc["rate", "std. error"] == se
+    assert set(named["effect"]) == {"slip_degradation"}
+    cands = g.to_dataframe("candidates")
+    assert len(cands) == sum(len(st["candidates"]) for st in g.steps)
+    assert (cands["verdict"] == "NAMED").sum() == 1 and isinstance(cands, pd.DataFrame)
+    assert "named effects" in g._repr_html_()
     import matplotlib
 
     matplotlib.use("Agg")

@@ -78,7 +78,7 @@ def test_dominant_effect_puts_itself_above_0_99(dominant):
 
 def test_tables_html_and_dict_show_the_probabilities(dominant):
     df = dominant.to_dataframe("probabilities")
-    assert df["probability"].sum() == pytest.approx(1.0)
+    assert df["probability [-]"].sum() == pytest.approx(1.0)
     assert df.iloc[0]["explanation"] == "backlash"
     eff = dominant.to_dataframe("effect probabilities")
     assert set(eff["effect"]) >= {"backlash"}
@@ -212,7 +212,7 @@ def test_vibration_averaged_band_mixes_the_explanations():
     assert np.all(z["lower"] <= z["mean"]) and np.all(z["mean"] <= z["upper"])
     plain = [m[0] for m in b.members].index(())
     assert np.allclose(b.member_means["damping_ratio"][plain], zp, rtol=1e-12)
-    assert b.to_dataframe("members")["weight"].sum() == pytest.approx(1.0)
+    assert b.to_dataframe("members")["weight [-]"].sum() == pytest.approx(1.0)
 
 
 def _drive(amplitudes):

@@ -39,7 +39,15 @@ def test_jointed_beam_main_job_quick(tmp_path):
     summary = json.loads((tmp_path / "summary.json").read_text())
     assert summary["data"]["synthetic"] is True
     assert abs(summary["identified"]["joint"]["Fs"] / 9000.0 - 1) < 0.01
-    assert "zeta pred" in proc.stdout
+    assert "zeta pred [%]" in proc.stdout
+    # the printed damping is in % as in the plots, each curve named whole (not mode "t")
+    out = proc.stdout.splitlines()
+    head = next(i for i, s in enumerate(out) if s.split()[:2] == ["specimen", "curve"])
+    assert "zeta [%]" in out[head]
+    labels = {s[22:].split("  ")[0].strip() for s in out[head + 1 : head + 11] if s.strip()}
+    assert "mode 2, identified joint" in labels and "t" not in labels
+    zeta = [float(s.split()[-1]) for s in out[head + 1 : head + 11] if s.strip()]
+    assert all(0.01 < z < 20 for z in zeta), zeta  # % (a fraction would print below 0.01)
 
 
 @pytest.mark.parametrize(

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 import time
 import warnings
 from pathlib import Path
@@ -493,7 +494,10 @@ def test_sensor_offsets_are_absorbed_and_reported(dF0, du0):
     text = " ".join(r.warnings)
     assert "at rest" not in text and "drift" not in text
     rep = r.report()
-    assert "dF0 [N]" in rep and "du0 [um]" in rep and "Fs   [N]" in rep
+    assert "dF0 [N]" in rep and "du0 [m]" in rep and "Fs   [N]" in rep
+    # one unit system in the report: SI lengths beside SI offsets (no mm beside um)
+    assert f"phi_max = {r.joint.phi_max:.5g} m" in rep
+    assert not re.search(r"\d (mm|um)\b|\[(mm|um)\]", rep)
 
 
 def test_offset_of_a_record_that_does_not_start_at_rest():

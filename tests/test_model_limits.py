@@ -17,6 +17,7 @@ import math
 import numpy as np
 import pytest
 from iwan_element.models import (
+    frequency_response,
     harmonic_balance,
     modal_amplitude_curve,
     natural_frequencies,
@@ -81,6 +82,22 @@ def test_case_4_a_fully_slipped_lap_is_not_a_usable_response():
     # and a small force far from resonance stays in microslip: usable, nothing said
     quiet = harmonic_balance(s, frequency=[10.0, 12.0], force=0.01, harmonics=(1, 3))
     assert quiet.success and not any("slipped" in w for w in quiet.warnings)
+
+
+def test_case_4_as_written_a_force_past_macroslip_is_named_not_a_turning_point():
+    """The issue's own call: continuation stops at its first point with an iterate of
+    metres; the engine's advice (a turning point: trace it by continuation) cannot help
+    there, and the result says why (was: 'did not converge' alone, no warning)."""
+    s = preset(TWO_BOLT)
+    r = frequency_response(s, force=2000.0, band=(21, 22))
+    assert not r.success
+    X = np.max(r.amplitude)
+    assert X > s.thickness  # the truth of the case: an iterate far beyond the beam's size
+    v = r.verdict()
+    assert "past macroslip" in v and "lower the force" in v
+    # a force the joint holds keeps quiet about it
+    ok = frequency_response(s, force=0.05, band=(19.0, 20.0))
+    assert not any("past macroslip" in f for f in ok.failures)
 
 
 def test_case_5_amplitudes_outside_an_uncalibrated_range_are_warned():

@@ -63,7 +63,7 @@ def test_pair_whose_partner_does_not_earn_its_parameter_is_not_named():
     assert 38.0 - 33.0 < math.log(N_EFF) < 38.0 / 2
     sel = _run(_table(a, b, base - 1.0, ab), base)
     assert sel.named == []
-    assert [r["verdict"] for r in sel.steps[-1]["rows"]] == ["pair explains little"] * 2
+    assert [r["verdict"] for r in sel.steps[-1]["rows"]] == ["pair explains little"]
     # with "b" earning its parameter, the same pair is named
     assert set(_run(_table(a, b, base - 1.0, base - 45.0), base).named) == {"a", "b"}
 
@@ -78,11 +78,7 @@ def test_pair_partner_need_not_be_the_runner_up_alone():
     sel = _run(_table(a, b, c, a, ac=10000.0 - 0.6 * excess, bc=b), 10000.0)
     assert set(sel.named) == {"a", "c"}
     tried = {r["name"]: r["verdict"] for r in sel.steps[-1]["rows"]}
-    assert tried == {
-        "a + b": "pair explains little",
-        "a + c": "NAMED (pair)",
-        "b + a": "pair explains little",
-    }
+    assert tried == {"a + b": "pair explains little", "a + c": "NAMED (pair)"}
 
 
 def test_pair_partner_that_does_not_lower_the_ic_alone_is_not_tried():
@@ -93,4 +89,49 @@ def test_pair_partner_that_does_not_lower_the_ic_alone_is_not_tried():
     c = 10000.0 - 0.5 * math.log(N_EFF)
     sel = _run(_table(a, b, c, a, ac=10000.0 - 0.6 * excess, bc=b), 10000.0)
     assert sel.named == []
-    assert {r["name"] for r in sel.steps[-1]["rows"]} == {"a + b", "b + a"}
+    assert [r["name"] for r in sel.steps[-1]["rows"]] == ["a + b"]
+
+
+def _ordered(table):
+    """fit_candidate from a table {stack (tuple, in fit order): chi2}: the second member
+    fitted on top of the first may land elsewhere than the other way round."""
+
+    def fit(cur, name):
+        names = tuple(cur["names"]) + (name,)
+        key = names if names in table else frozenset(names)
+        return {"names": names, "chi2": table[key], "q": 1, "state": names}
+
+    return fit
+
+
+def test_a_pair_is_listed_once_in_one_order_with_its_better_fit():
+    # both orders of b + a qualify, with different chi2 (the fit path differs): one row,
+    # titled "a + b" (sorted), the better order's chi2, NAMED
+    excess = 10000.0 - (N_EFF - 5)
+    a, b = (10000.0 - f * excess for f in (0.20, 0.15))
+    c = 10000.0 - 0.5 * math.log(N_EFF)  # no partner (does not lower the IC alone)
+    table = {
+        **_table(a, b, c, 0.0),
+        ("a", "b"): 10000.0 - 0.6 * excess,
+        ("b", "a"): 10000.0 - 0.7 * excess,
+    }
+    base = {"names": (), "chi2": 10000.0, "q": 5, "state": ()}
+    sel = stepwise_select(_ordered(table), ("a", "b", "c"), base, tau=1.0, n_eff=N_EFF)
+    rows = sel.steps[-1]["rows"]
+    assert [r["name"] for r in rows] == ["a + b"]
+    assert rows[0]["chi2"] == table[("b", "a")] and rows[0]["verdict"] == "NAMED (pair)"
+    assert sel.final["chi2"] == table[("b", "a")] and set(sel.named) == {"a", "b"}
+
+
+def test_only_the_named_pair_is_marked_named():
+    # a + b and a + c both pass every test; a + c is better: it alone is NAMED
+    excess = 10000.0 - (N_EFF - 5)
+    a, b, c = (10000.0 - f * excess for f in (0.20, 0.15, 0.10))
+    t = _table(a, b, c, 10000.0 - 0.6 * excess, ac=10000.0 - 0.7 * excess)
+    sel = _run(t, 10000.0)
+    verdicts = {r["name"]: r["verdict"] for r in sel.steps[-1]["rows"]}
+    assert verdicts == {
+        "a + b": "qualifies, less good than the named pair",
+        "a + c": "NAMED (pair)",
+    }
+    assert set(sel.named) == {"a", "c"}

@@ -103,7 +103,7 @@ def test_load_test_converts_units_and_records_them(tmp_path, clean):
     assert len(data.cycles) == len(clean.cycles)
     assert data.source == str(path)
     assert not data.u.flags.writeable  # results are read-only
-    assert "usable" in data.summary()
+    assert "usable" in data.report()
 
 
 def test_load_test_columns_by_index_and_other_units(tmp_path, clean):

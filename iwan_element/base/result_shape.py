@@ -3,7 +3,8 @@
 Every fit, curve, diagnosis, ensemble and uncertainty result offers (the contract checked by
 ``tests/test_api_shape.py`` on every public result class):
 
-* ``report() -> str``: a human-readable summary, units in brackets;
+* ``report() -> str``: a human-readable summary opening with the verdict line, units in
+  brackets;
 * ``to_dict() -> dict``: JSON-safe (``json.dumps(..., allow_nan=False)`` works);
 * ``warnings``: a tuple of str, what the data could not support;
 * ``success``: bool, whether the result can be used as it stands;
@@ -16,8 +17,11 @@ Every fit, curve, diagnosis, ensemble and uncertainty result offers (the contrac
 * ``_repr_html_()``: the result in a notebook as HTML tables: the verdict on top, then
   the tables of :meth:`ResultShape._tables` (parameters, goodness of fit, data), then the
   warnings;
-* ``to_dataframe(table=None)``: one of those tables as a ``pandas.DataFrame`` (pandas is
-  imported only then: ``pip install "iwan-element[pandas]"``).
+* ``to_dataframe(table=None)``: one of those tables as a ``pandas.DataFrame``, by default
+  the first, the main one (pandas is imported only then: ``pip install
+  "iwan-element[pandas]"``). Column titles read ``name [unit]``, SI, ``[-]`` for a
+  dimensionless number (:func:`~iwan_element.base.columns.column`); captions are the
+  tables' fixed titles.
 
 :class:`ResultShape` supplies the notebook representation, the data frames and the panel
 count from one hook, :meth:`ResultShape._tables` (titled rows built from what the class
@@ -36,11 +40,14 @@ from typing import TYPE_CHECKING, ClassVar
 
 import numpy as np
 
+from .columns import column, title_of, unit_label
+
 if TYPE_CHECKING:
     import pandas as pd
     from matplotlib.axes import Axes
 
 __all__ = [
+    "column",
     "ResultShape",
     "panels",
     "axes_or_new",
@@ -59,12 +66,6 @@ HTML_ROWS = 40
 
 #: Column titles of a parameter table (:func:`parameter_rows`).
 PARAMETER_COLUMNS = ("parameter", "value", "std. error", "unit", "status")
-
-
-def unit_label(unit) -> str:
-    """A unit as reports print it: ``"-"`` for dimensionless (``""``, ``"1"``, ``"-"``)."""
-    unit = "" if unit is None else str(unit).strip("[] ")
-    return "-" if unit in ("", "1", "-") else unit
 
 
 def format_value(x, digits: int = 6) -> str:
@@ -122,6 +123,9 @@ class ResultShape:
     """
 
     plot_panels: ClassVar[int] = 1
+    #: ``{to_dict key: (title, unit[, scale])}``: the class's own column and quantity
+    #: titles, over the shared :data:`~iwan_element.base.columns.QUANTITIES`.
+    COLUMNS: ClassVar[dict] = {}
     warnings: tuple = ()
 
     if TYPE_CHECKING:  # every result defines these (a field or a property; a method)
@@ -159,38 +163,36 @@ class ResultShape:
         shows and :meth:`to_dataframe` returns. The default reads what the class exposes:
         its ``params`` (a ``ParameterTable``) as "parameters", the ``rows`` of its
         ``to_dict()`` (one dict per row) as "rows", its flat numeric lists of one length as
-        "data" (one column each), and its scalar ``to_dict()`` entries as "goodness of fit
-        and run" (quantity, value). Classes with data of their own (curves, bands) put
-        those first.
+        "data" (one column each; the longest group, lists of other lengths after it, titled
+        by their columns), and its scalar ``to_dict()`` entries as "goodness of fit and run"
+        (quantity, value). Columns and quantities are titled by :attr:`COLUMNS` and the
+        shared :data:`~iwan_element.base.columns.QUANTITIES` (``name [unit]``, a fraction
+        shown in % where the title says so). Classes with data of their own (curves, bands,
+        time series) put those first: the first table is the main one.
         """
         out: list[tuple[str, tuple, list]] = []
         params = getattr(self, "params", None)
         if params is not None and hasattr(params, "parameters") and len(params.parameters):
             out.append(("parameters", PARAMETER_COLUMNS, parameter_rows(params)))
         d = self.to_dict()
-        rows = d.get("rows")
-        if isinstance(rows, list) and rows and all(isinstance(r, dict) for r in rows):
-            cols = tuple(
-                dict.fromkeys(
-                    k for r in rows for k, v in r.items() if not isinstance(v, (dict, list))
-                )
-            )
-            out.append(("rows", cols, [tuple(r.get(c) for c in cols) for r in rows]))
+        out += self._row_table(d.get("rows"))
         columns: dict[int, list[str]] = {}  # keys of the numeric lists, by length
         for k, v in d.items():
-            if (
-                k != "rows"
-                and isinstance(v, list)
-                and v
-                and all(
-                    v_ is None or (isinstance(v_, numbers.Real) and not isinstance(v_, bool))
-                    for v_ in v
-                )
-            ):
+            if k != "rows" and isinstance(v, list) and v and all(_number(x) for x in v):
                 columns.setdefault(len(v), []).append(k)
-        for n, keys in sorted(columns.items()):
-            title = "data" if len(columns) == 1 else f"data ({n} rows)"
-            out.append((title, tuple(keys), list(zip(*(d[k] for k in keys)))))
+        for i, (_, keys) in enumerate(sorted(columns.items(), reverse=True)):
+            titled = [title_of(k, self.COLUMNS) for k in keys]
+            rows = [
+                tuple(_scaled(x, s) for x, (_, s) in zip(r, titled))
+                for r in zip(*(d[k] for k in keys))
+            ]
+            out.append(
+                (
+                    "data" if i == 0 else ", ".join(t for t, _ in titled),
+                    tuple(t for t, _ in titled),
+                    rows,
+                )
+            )
         stats = [
             (k, v)
             for k, v in d.items()
@@ -202,7 +204,35 @@ class ResultShape:
             )
         ]
         if stats:
-            out.append(("goodness of fit and run", ("quantity", "value"), stats))
+            out.append(
+                ("goodness of fit and run", ("quantity", "value"), self._quantity_rows(stats))
+            )
+        return out
+
+    def _row_table(self, rows) -> list:
+        """``[("rows", titles, rows)]`` from a list of dicts (one per row), or ``[]``."""
+        if not (isinstance(rows, list) and rows and all(isinstance(r, dict) for r in rows)):
+            return []
+        keys = tuple(
+            dict.fromkeys(k for r in rows for k, v in r.items() if not isinstance(v, (dict, list)))
+        )
+        titled = [title_of(k, self.COLUMNS) for k in keys]
+        return [
+            (
+                "rows",
+                tuple(t for t, _ in titled),
+                [tuple(_scaled(r.get(k), s) for k, (_, s) in zip(keys, titled)) for r in rows],
+            )
+        ]
+
+    def _quantity_rows(self, pairs) -> list:
+        """``(title, value)`` rows of a quantity table from ``(to_dict key, value)`` pairs:
+        titles and scales of :meth:`COLUMNS` and the shared quantities.
+        """
+        out = []
+        for k, v in pairs:
+            title, scale = title_of(k, self.COLUMNS)
+            out.append((title, _scaled(v, scale)))
         return out
 
     def to_dataframe(self, table: str | None = None) -> pd.DataFrame:
@@ -254,6 +284,17 @@ class ResultShape:
         return "".join(parts) + "</div>"
 
 
+def _number(x) -> bool:
+    return x is None or (isinstance(x, numbers.Real) and not isinstance(x, (bool, np.bool_)))
+
+
+def _scaled(x, scale: float):
+    """``x * scale`` for a number (``scale`` 100: a fraction shown in %), else ``x``."""
+    if scale == 1.0 or x is None or not _number(x):
+        return x
+    return float(x) * scale
+
+
 def html_table(title: str, columns, rows) -> str:
     """One titled HTML table; numbers right-aligned and formatted (:func:`format_value`)."""
     head = "".join(f"<th>{html.escape(str(c))}</th>" for c in columns)
@@ -262,7 +303,8 @@ def html_table(title: str, columns, rows) -> str:
     cut = len(rows) > HTML_ROWS
     if cut:  # a long table shows its ends (to_dataframe has every row)
         n = len(rows)
-        rows = rows[: HTML_ROWS - 5] + [("...",) * len(columns)] + rows[-5:]
+        gap = (f"... {n - HTML_ROWS} rows more in to_dataframe()",) + ("...",) * (len(columns) - 1)
+        rows = rows[: HTML_ROWS - 5] + [gap] + rows[-5:]
     for r in rows:
         cells = []
         for v in r:
@@ -271,8 +313,6 @@ def html_table(title: str, columns, rows) -> str:
             align = ' style="text-align:right"' if num else ""
             cells.append(f"<td{align}>{html.escape(text)}</td>")
         body.append("<tr>" + "".join(cells) + "</tr>")
-    if cut:
-        title = f"{title} ({n} rows; to_dataframe() has them all)"
     return (
         f"<table><caption>{html.escape(title)}</caption><thead><tr>{head}</tr></thead>"
         f"<tbody>{''.join(body)}</tbody></table>"
@@ -316,8 +356,13 @@ def panels(ax, n: int, *, figsize=None, sharex: bool = False) -> list:
     if ax is None:
         import matplotlib.pyplot as plt
 
-        _, grid = plt.subplots(
-            n, 1, sharex=sharex, squeeze=False, figsize=figsize or (6.0, 3.2 * n)
+        _, grid = plt.subplots(  # constrained: labels and legends fit inside the figure
+            n,
+            1,
+            sharex=sharex,
+            squeeze=False,
+            figsize=figsize or (6.0, 3.2 * n),
+            layout="constrained",
         )
         return list(grid[:, 0])
     if hasattr(ax, "plot"):

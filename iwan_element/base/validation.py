@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import math
+from dataclasses import fields
 from numbers import Real
+from typing import Any
 
 import numpy as np
 
@@ -181,3 +183,28 @@ def check_varies(name: str, arr: np.ndarray, *, unit: str = "", what: str = "") 
             + (f": {what}" if what else "")
         )
     return arr
+
+
+def plain_number(value: Any) -> Any:
+    """``value`` as a Python ``int`` or ``float`` when it is a numpy integer or floating
+    scalar (what indexing an array or reading a file gives), else unchanged (``bool`` and
+    ``np.bool_`` too, so that the callers' checks still refuse them). The checks that follow
+    then treat ``np.float32(2e-4)`` and ``np.int64(3)`` as the numbers they are.
+    """
+    if isinstance(value, np.integer):
+        return int(value)
+    if isinstance(value, np.floating):
+        return float(value)
+    return value
+
+
+def plain_fields(obj) -> None:
+    """Replace, in place, every field of the frozen dataclass ``obj`` that holds a numpy
+    integer or floating scalar by the Python number (:func:`plain_number`); call it first in
+    ``__post_init__`` so that the field checks and ``to_dict`` see plain numbers.
+    """
+    for f in fields(obj):
+        v = getattr(obj, f.name)
+        p = plain_number(v)
+        if p is not v:
+            object.__setattr__(obj, f.name, p)

@@ -20,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..base.result_shape import html_table
 from ..base.validation import check_scalar
 
 __all__ = ["IwanParameters"]
@@ -175,6 +176,23 @@ class IwanParameters:
             "beta": self.beta,
             "units": {"Fs": "N", "KT": "N/m", "chi": "1", "beta": "1"},
         }
+
+    def _repr_html_(self) -> str:
+        """The four parameters and the derived ones as an HTML table (a notebook's view),
+        SI units.
+        """
+        rows = [
+            ("Fs", self.Fs, "N", "macroslip force"),
+            ("KT", self.KT, "N/m", "stuck tangential stiffness"),
+            ("chi", self.chi, "-", "slider density exponent"),
+            ("beta", self.beta, "-", "spike strength over the continuous part"),
+            ("phi_max", self.phi_max, "m", "slip of the strongest slider (derived)"),
+            ("R", self.R, "N m^(-chi-2)", "density coefficient (derived)"),
+            ("S", self.S, "N/m", "spike strength (derived)"),
+        ]
+        return "<p><b>IwanParameters</b></p>" + html_table(
+            "Iwan parameters", ("parameter", "value", "unit", "meaning"), rows
+        )
 
     @classmethod
     def from_dict(cls, data: dict) -> IwanParameters:

@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING, Any, cast
 import numpy as np
 from numpy.typing import NDArray
 
-from ..base.result_shape import ResultShape, panels, table_lines
+from ..base.result_shape import ResultShape, column, panels, table_lines
 from ..base.serialize import json_safe
 from ..base.validation import check_int, check_magnitude, check_scalar, finite_array
 from ..core.parameters import IwanParameters
@@ -158,12 +158,42 @@ class PredictionBands(ResultShape):
         n = len(self.ensemble)
         return bool(n > 0 and len(self.ensemble.errors) <= n / 3)
 
+    def _tables(self) -> list:
+        """The bands per amplitude (nominal, low, median, high of the frequency and the
+        damping ratio, and of the peak when computed), then the run.
+        """
+        cols, data = [column("amplitude", "m")], [self.amplitude]
+        names = ("frequency", "damping_ratio") + (("peak",) if self.peak is not None else ())
+        units = {"frequency": "Hz", "damping_ratio": "-", "peak": "m"}
+        for name in names:
+            lo, med, hi = self.band(name)
+            for k, v in (
+                ("nominal", self.nominal[name]),
+                ("low", lo),
+                ("median", med),
+                ("high", hi),
+            ):
+                if np.ndim(v) == 0:
+                    v = np.full(len(self.amplitude), float(v))
+                cols.append(column(f"{name} {k}", units[name]))
+                data.append(v)
+        rows = [tuple(map(float, r)) for r in zip(*data)]
+        run = [
+            (column("level", "-"), float(self.level)),
+            (column("force", "N"), self.force),
+            ("samples", int(self.frequency.shape[0])),
+            ("failed", len(self.ensemble.errors)),
+            ("source", self._source),
+        ]
+        return [("bands", tuple(cols), rows), ("run", ("quantity", "value"), run)]
+
     def report(self) -> str:
         """Plain-text table of the bands: frequency [Hz], damping ratio [-], peak, per amplitude."""
         lines = [
+            self.verdict(),
             f"Prediction bands ({100 * self.level:.0f} % central) from {self._source}: "
             f"{self.frequency.shape[0]} samples on {self.ensemble.executor}, "
-            f"{len(self.ensemble.errors)} failed"
+            f"{len(self.ensemble.errors)} failed",
         ]
         fl, _, fh = self.band("frequency")
         zl, _, zh = self.band("damping_ratio")

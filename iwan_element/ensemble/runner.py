@@ -209,6 +209,7 @@ class EnsembleResult(ResultShape):
         """Summary: tasks, failures (with their messages), outputs and their ranges."""
         n, nf = len(self.rows), len(self.errors)
         lines = [
+            self.verdict(),
             f"Ensemble of {n} tasks on {self.executor}: {n - nf} succeeded, {nf} failed, "
             f"{self.wall_time:.2f} s (seed {self.seed})",
             f"  parameters: {', '.join(self.parameters)}",

@@ -23,7 +23,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..base.result_shape import ResultShape, panels
+from ..base.result_shape import ResultShape, column, panels
 from ..base.serialize import json_safe
 from ..base.validation import check_int, finite_array
 from ..core.parameters import IwanParameters
@@ -258,10 +258,27 @@ class ParameterUncertainty(ResultShape):
                     break
         return out, 1.0 - n / drawn if drawn else 0.0
 
+    def _tables(self) -> list:
+        """The sampled coordinates (mean, standard deviation; a logarithm's is relative),
+        then the source.
+        """
+        se = np.sqrt(np.diag(self.cov))
+        coords = [(_COORD[n], float(m), float(s)) for n, m, s in zip(self.names, self.mean, se)]
+        run = [
+            ("source", self.source),
+            (column("valid up to amplitude", "m"), self.valid_amplitude),
+            ("nominal", str(self.nominal)),
+        ]
+        return [
+            ("coordinates", ("coordinate", column("mean", "-"), column("std", "-")), coords),
+            ("run", ("quantity", "value"), run),
+        ]
+
     def report(self) -> str:
         """Plain-text table of the coordinates' mean and standard deviation."""
         se = np.sqrt(np.diag(self.cov))
         lines = [
+            self.verdict(),
             f"Parameter uncertainty from {self.source}; nominal {self.nominal}",
             "  coordinate        mean       std",
         ]

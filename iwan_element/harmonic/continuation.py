@@ -20,6 +20,7 @@ import time
 import numpy as np
 
 from ..base.threads import one_blas_thread
+from ..base.validation import plain_number
 from .balance import (
     force_coefficients,
     operators,
@@ -102,6 +103,7 @@ def trace(
     """
     if not isinstance(system, ModalSystem):
         raise ValueError(f"system must be a ModalSystem, got {type(system).__name__}")
+    force = plain_number(force)
     if (
         isinstance(force, bool)
         or not isinstance(force, (int, float))
@@ -115,7 +117,8 @@ def trace(
         raise ValueError(f"band must be (start, end) frequencies [Hz], got {band!r}") from None
     if not (f0 > 0 and f1 > 0 and f0 != f1 and math.isfinite(f0) and math.isfinite(f1)):
         raise ValueError(f"band must be two different frequencies > 0 [Hz], got {band!r}")
-    if not (isinstance(step, (int, float)) and 0 < step <= 0.5):
+    step = plain_number(step)
+    if not (isinstance(step, (int, float)) and not isinstance(step, bool) and 0 < step <= 0.5):
         raise ValueError(f"step must be in (0, 0.5], got {step!r}")
     basis = Harmonics(*check_harmonics(harmonics, samples))
     t0 = time.perf_counter()

@@ -11,7 +11,7 @@ from numpy.typing import NDArray
 
 from ..base.progress import finish, progress_bar, tick
 from ..base.threads import one_blas_thread
-from ..base.validation import finite_array
+from ..base.validation import finite_array, plain_number
 from .balance import force_coefficients, operators, solve_point
 from .basis import Harmonics, check_harmonics
 from .result import FrequencyResponse, macroslip_lines, slip_ratio
@@ -92,6 +92,7 @@ def harmonic_balance(
         raise ValueError(f"system must be a ModalSystem, got {type(system).__name__}")
     f, F = check_frequency_force(frequency, force)
     basis = Harmonics(*check_harmonics(harmonics, samples))
+    tol = plain_number(tol)
     if not (isinstance(tol, float) and 0 < tol < 1e-3):
         raise ValueError(f"tol must be a float in (0, 1e-3), got {tol!r}")
     t0 = time.perf_counter()

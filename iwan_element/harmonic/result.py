@@ -7,7 +7,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..base.result_shape import ResultShape, panels, table_lines
+from ..base.result_shape import ResultShape, column, panels, table_lines
 from ..base.serialize import json_safe
 
 if TYPE_CHECKING:
@@ -184,6 +184,40 @@ class FrequencyResponse(ResultShape):
             }
         )
 
+    def _tables(self) -> list:
+        """The response, one row per frequency (the main table), then the run."""
+        cols = (
+            column("frequency", "Hz"),
+            column("force", "N"),
+            column("amplitude", "m"),
+            column("phase", "rad"),
+            "converged",
+            "iterations",
+            column("input work", "J"),
+            column("joint dissipation", "J"),
+            column("floor dissipation", "J"),
+            column("energy error", "-"),
+        )
+        arrays = (self.frequency, self.force, self.amplitude, self.phase)
+        rows = [
+            (*map(float, r[:4]), bool(c), int(i), *map(float, r[4:]))
+            for *r, c, i in zip(
+                *arrays,
+                self.input_work,
+                self.joint_dissipation,
+                self.floor_dissipation,
+                self.energy_error,
+                self.converged,
+                self.iterations,
+            )
+        ]
+        run = [
+            ("harmonics", ", ".join(map(str, self.harmonic_numbers))),
+            ("samples per period", self.metadata.get("samples")),
+            (column("wall time", "s"), float(self.wall_time)),
+        ]
+        return [("response", cols, rows), ("run", ("quantity", "value"), run)]
+
     def plot(self, ax=None, *, label="harmonic balance") -> list[Artist]:
         """Amplitude per force [m/N] and phase [rad] against frequency on ``ax = (ax_a,
         ax_p)``; returns the artists.
@@ -193,6 +227,9 @@ class FrequencyResponse(ResultShape):
         arts += p.plot(self.frequency, self.phase, "-", label=label)
         a.set(ylabel="amplitude / force [m/N]")
         p.set(xlabel="frequency [Hz]", ylabel="phase [rad]")
+        if label is not None:
+            a.legend(fontsize=8)
+            p.legend(fontsize=8)
         return arts
 
 

@@ -33,6 +33,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
+from ..base.validation import check_scalar, plain_number
 from ..core.masing import constants_from_arrays
 from ..core.parameters import IwanParameters
 from ..core.periodic import PeriodicForm
@@ -82,12 +83,10 @@ class ElementPort:
                     f"element must have trial/commit/reset methods (the package's "
                     f"element protocol), missing {m!r}"
                 )
-        if (
-            isinstance(self.gain, bool)
-            or not isinstance(self.gain, (int, float))
-            or not math.isfinite(self.gain)
-        ):
-            raise ValueError(f"gain must be a finite number, got {self.gain!r}")
+        try:
+            object.__setattr__(self, "gain", check_scalar("gain", self.gain))
+        except ValueError:
+            raise ValueError(f"gain must be a finite number, got {self.gain!r}") from None
         declared = getattr(self.element, "periodic_form", None)
         form = declared() if callable(declared) else None
         if form is not None and not isinstance(form, PeriodicForm):
@@ -201,6 +200,7 @@ class ModalSystem:
         dashpot [N s/m] in parallel with one joint; the slip, the sensor and the excitation
         are all ``x``.
         """
+        mass, stiffness, damping = (plain_number(v) for v in (mass, stiffness, damping))
         for n, v in (("mass", mass), ("stiffness", stiffness), ("damping", damping)):
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0) or (
                 n == "mass" and v == 0

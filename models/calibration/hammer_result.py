@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from iwan_element.base.result_shape import ResultShape, panels, table_lines
+from iwan_element.base.result_shape import ResultShape, column, panels, table_lines
 from iwan_element.base.serialize import json_safe
 
 from ..simulation.coupling import plot_curve_pairs
@@ -94,11 +94,50 @@ class HammerPrediction(ResultShape):
             }
         return out
 
+    def _prediction_rows(self) -> list:
+        """Per mode and sensor: points, the largest and the first relative errors [%]."""
+        rows = []
+        for (r, name), s in self.summary().items():
+            if not s["points"]:
+                rows.append((r, name, 0, math.nan, math.nan, math.nan, math.nan))
+                continue
+            rows.append(
+                (
+                    r,
+                    name,
+                    s["points"],
+                    100 * s["max_frequency_error"],
+                    100 * s["max_damping_error"],
+                    100 * s["first_frequency_error"],
+                    100 * s["first_damping_error"],
+                )
+            )
+        return rows
+
+    def _tables(self) -> list:
+        """The prediction against the measured curves per mode and sensor (the main
+        table), then the calibration's mode and sensor.
+        """
+        cols = (
+            "mode",
+            "sensor",
+            "points",
+            column("max |df/f|", "%"),
+            column("max |dzeta/zeta|", "%"),
+            column("first df/f", "%"),
+            column("first dzeta/zeta", "%"),
+        )
+        run = [
+            ("calibration mode", self.calibration_mode),
+            ("calibration sensor", self.calibration_sensor),
+        ] + [(column(f"release, mode {r}", "m"), float(x)) for r, x in self.release.items()]
+        return [("prediction", cols, self._prediction_rows()), ("run", ("quantity", "value"), run)]
+
     def report(self) -> str:
         """The verdict, the calibration, the release, and each predicted curve against the
         measured one; the mode-shape check.
         """
-        lines = [f"Hammer test predicted from mode {self.calibration_mode}: {self.verdict()}"]
+        lines = [self.verdict(), f"Hammer test predicted from mode {self.calibration_mode}"]
         if self.update is not None:
             fitted = ", ".join(n for n, p in self.update.params.items() if p.identified)
             lines += [
@@ -118,22 +157,7 @@ class HammerPrediction(ResultShape):
             "release: " + ", ".join(f"mode {r} {1e6 * x:.4g} um" for r, x in self.release.items()),
             "prediction against the measured curve at the same amplitudes:",
         ]
-        rows = []
-        for (r, name), s in self.summary().items():
-            if not s["points"]:
-                rows.append((r, name, 0, math.nan, math.nan, math.nan, math.nan))
-                continue
-            rows.append(
-                (
-                    r,
-                    name,
-                    s["points"],
-                    100 * s["max_frequency_error"],
-                    100 * s["max_damping_error"],
-                    100 * s["first_frequency_error"],
-                    100 * s["first_damping_error"],
-                )
-            )
+        rows = self._prediction_rows()
         lines += table_lines(
             (
                 ("mode", "5d"),

@@ -27,6 +27,7 @@ import numpy as np
 from iwan_element import AmplitudeCurve, amplitude_curve
 from iwan_element.base.progress import complete, finish, progress_bar, tick
 from iwan_element.base.result_shape import ResultShape, panels, unit_label
+from iwan_element.base.validation import check_scalar
 from iwan_element.fitting import (
     Parameter,
     ParameterTable,
@@ -104,6 +105,11 @@ class CalibrationResult(ResultShape):
         identified included.
     """
 
+    COLUMNS = {
+        "max_frequency_error": ("max |f/f_meas - 1|", "-"),
+        "max_damping_error": ("max |zeta/zeta_meas - 1|", "-"),
+    }
+
     plot_panels = 2
 
     specimen: Specimen
@@ -127,7 +133,7 @@ class CalibrationResult(ResultShape):
 
     def report(self) -> str:
         """Human-readable account: the fitted parameters [their units] and the misfits."""
-        lines = [f"Interface calibration of {self.specimen.name!r}: {self.verdict()}"]
+        lines = [self.verdict(), f"Interface calibration of {self.specimen.name!r}"]
         for k, p in self.params.items():
             moved = (
                 f"  (from {self.start[k]:.6g}: {100 * (p.value / self.start[k] - 1):+.2f} %)"
@@ -210,8 +216,7 @@ def modal_floor(
     """
     if not isinstance(measured, AmplitudeCurve) or len(measured) == 0:
         raise ValueError("measured must be a non-empty AmplitudeCurve")
-    if not (isinstance(decades, (int, float)) and 0 < decades <= 3):
-        raise ValueError(f"decades must be in (0, 3], got {decades!r}")
+    decades = check_scalar("decades", decades, low=0.0, high=3.0, low_open=True)
     X = measured.amplitude
     m = X <= X.min() * 10.0**decades * (1 + 1e-12)
     bare = specimen.replace(damping_floor=0.0, modal_damping=(), calibrated_range=None, effects=())

@@ -28,7 +28,7 @@ from ..reduced.dispatch import check_specimen
 from ..reduced.model import reduced_model
 from ..specimens.specimen import Specimen
 from .effects import effect_stack
-from .limits import macroslip_report, size_warnings
+from .limits import macroslip_report, size_limit, size_warnings
 from .qsma import extrapolation_warnings
 
 __all__ = ["harmonic_balance", "frequency_response", "nonlinear_mode", "specimen_system"]
@@ -74,6 +74,7 @@ def _with_range_warnings(specimen, response):
         _, failures = macroslip_report(
             specimen, response.slip_ratio[ok], response.frequency[ok], unit="Hz", what="frequencies"
         )
+    failures += _runaway(specimen, response)
     if not warns and not failures:
         return response
     return replace(
@@ -81,6 +82,26 @@ def _with_range_warnings(specimen, response):
         warnings=tuple(response.warnings) + tuple(warns),
         failures=tuple(response.failures) + tuple(failures),
     )
+
+
+def _runaway(specimen, response) -> list:
+    """A failure naming the likely cause when points that did not converge left their last
+    iterate beyond the specimen's size (:func:`~.limits.size_limit`): the load drives the lap
+    past macroslip, where only the floor damping bounds the response, so tracing a turning
+    point by continuation (the engine's own advice) cannot help.
+    """
+    bad = ~np.asarray(response.converged, bool)
+    X = np.asarray(response.amplitude, float)[bad]
+    X = X[np.isfinite(X)]
+    lim = size_limit(specimen)
+    if not X.size or X.max() <= lim:
+        return []
+    return [
+        f"{int((X > lim).sum())} of {bad.size} frequencies stopped with their last iterate "
+        f"at {X.max():.3g} m, {X.max() / lim:.3g} x the beam's size ({lim * 1e3:.3g} mm): at "
+        "this force the lap is driven past macroslip, where nothing but the floor damping "
+        "bounds the slip, so no response of the joint is there to find: lower the force"
+    ]
 
 
 def harmonic_balance(

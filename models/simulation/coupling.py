@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from iwan_element import AmplitudeCurve
-from iwan_element.base.result_shape import ResultShape, panels, table_lines
+from iwan_element.base.result_shape import ResultShape, column, panels, table_lines
 from iwan_element.base.serialize import json_safe
 
 from ..reduced.dispatch import linear_system
@@ -116,11 +116,41 @@ class ModeCouplingResult(ResultShape):
             }
         return out
 
+    def _tables(self) -> list:
+        """Per mode and amplitude, the damping together and alone and the frequency shift
+        (the main table), then the run.
+        """
+        rows = [
+            (int(r), float(a), float(z), float(z0), float(q), float(df))
+            for r, f in self.figures.items()
+            for a, z, z0, q, df in zip(
+                f["amplitude"],
+                f["damping"],
+                f["damping_reference"],
+                f["damping_ratio"],
+                f["frequency_shift"],
+            )
+        ]
+        cols = (
+            "mode",
+            column("amplitude", "m"),
+            column("damping together", "-"),
+            column("damping alone", "-"),
+            column("damping ratio together/alone", "-"),
+            column("frequency shift df/f", "-"),
+        )
+        run = [
+            ("modes", ", ".join(map(str, self.modes))),
+            (column("wall time", "s"), float(self.together.wall_time)),
+        ]
+        return [("modes", cols, rows), ("run", ("quantity", "value"), run)]
+
     def report(self) -> str:
         """Human-readable account: per mode, its damping with and without the others."""
         lines = [
+            self.verdict(),
             f"mode coupling through the interface: modes {', '.join(map(str, self.modes))}"
-            f" released together ({self.together.wall_time:.3g} s wall) and alone"
+            f" released together ({self.together.wall_time:.3g} s wall) and alone",
         ]
         for r, f in self.figures.items():
             n = len(f["amplitude"])

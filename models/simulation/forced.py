@@ -38,7 +38,7 @@ import exudyn as exu
 import numpy as np
 
 from iwan_element.base.progress import finish, progress_bar, tick
-from iwan_element.base.result_shape import ResultShape, panels
+from iwan_element.base.result_shape import ResultShape, column, panels
 from iwan_element.base.serialize import json_safe
 from iwan_element.base.validation import check_int, check_scalar, finite_array
 
@@ -86,6 +86,32 @@ class ForcedResponseResult(ResultShape):
     phase: np.ndarray | None = None
     metadata: dict = field(default_factory=dict)
 
+    def _tables(self) -> list:
+        """The response, one row per force level and frequency (the main table), then the
+        peak of each level.
+        """
+        phase = self.phase if self.phase is not None else np.full(self.amplitude.shape, np.nan)
+        rows = [
+            (float(F), float(f), float(a), float(a / F), float(ph))
+            for F, amp, phs in zip(self.force_levels, self.amplitude, phase)
+            for f, a, ph in zip(self.frequencies, amp, phs)
+        ]
+        cols = (
+            column("force level", "N"),
+            column("frequency", "Hz"),
+            column("amplitude", "m"),
+            column("amplitude / force", "m/N"),
+            column("phase", "rad"),
+        )
+        fp, ap = self.peaks()
+        peaks = [(float(F), float(f), float(a)) for F, f, a in zip(self.force_levels, fp, ap)]
+        head = (
+            column("force level", "N"),
+            column("peak frequency", "Hz"),
+            column("peak amplitude", "m"),
+        )
+        return [("response", cols, rows), ("peaks", head, peaks)]
+
     def peaks(self) -> tuple[np.ndarray, np.ndarray]:
         """(peak frequency [Hz], peak amplitude [m]) per force level."""
         j = np.argmax(self.amplitude, axis=1)
@@ -114,9 +140,10 @@ class ForcedResponseResult(ResultShape):
         fp, ap = self.peaks()
         m = self.metadata
         lines = [
+            self.verdict(),
             f"stepped sine of {self.specimen.name}, mode {m['mode']} (stuck "
             f"{m['linear_frequency_Hz']:.4f} Hz), {self.frequencies.size} frequencies "
-            f"{self.frequencies.min():.4f}-{self.frequencies.max():.4f} Hz"
+            f"{self.frequencies.min():.4f}-{self.frequencies.max():.4f} Hz",
         ]
         lines += [
             f"  F = {F:g} N: peak {a:.4g} m at {f:.4f} Hz ({a / F:.4g} m/N)"

@@ -18,6 +18,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from iwan_element.base.validation import plain_fields
+
 __all__ = ["Impact"]
 
 
@@ -40,6 +42,8 @@ class Impact:
     contact_time: float
 
     def __post_init__(self):
+        plain_fields(self)
+
         def finite(v):
             return not isinstance(v, bool) and isinstance(v, (int, float)) and math.isfinite(v)
 

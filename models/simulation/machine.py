@@ -20,7 +20,7 @@ import numpy as np
 from exudyn.itemInterface import SensorObject
 
 from iwan_element import dissipation
-from iwan_element.base.result_shape import ResultShape, panels
+from iwan_element.base.result_shape import ResultShape, column, panels
 from iwan_element.base.serialize import json_safe
 from iwan_element.base.validation import check_int, check_scalar
 
@@ -59,6 +59,15 @@ class QuasiStaticResult(ResultShape):
         ``amplitude`` [m], ``frequency`` [Hz], ``cycles``, ``steps_per_cycle``.
     warnings : tuple of str
     """
+
+    COLUMNS = {
+        "amplitude_m": ("grip amplitude", "m"),
+        "frequency_Hz": ("frequency", "Hz"),
+        "machine_force_amplitude_N": ("machine force amplitude", "N"),
+        "mean_slip_amplitude_m": ("mean slip amplitude", "m"),
+        "dissipation_per_cycle_J": ("dissipation per cycle", "J"),
+        "machine_secant_stiffness_N_per_m": ("machine secant stiffness", "N/m"),
+    }
 
     plot_panels = 2
 
@@ -107,6 +116,30 @@ class QuasiStaticResult(ResultShape):
         area, closed = self.loop_check()
         return bool(np.max(np.abs(area - closed)) <= LOOP_TOL * max(closed.sum(), 1e-300))
 
+    def _tables(self) -> list:
+        """The test's time series (the main table: grip and machine force, the joint's
+        mean slip and summed force, the dissipated energy), then the last cycle in numbers.
+        """
+        cols = (
+            column("t", "s"),
+            column("machine displacement", "m"),
+            column("machine force", "N"),
+            column("mean slip", "m"),
+            column("joint force", "N"),
+            column("dissipated", "J"),
+        )
+        arrays = (
+            self.t,
+            self.machine_displacement,
+            self.machine_force,
+            self.mean_slip,
+            self.joint_force,
+            self.dissipated,
+        )
+        rows = [tuple(map(float, r)) for r in zip(*arrays)]
+        last = self._quantity_rows(self.summary().items())
+        return [("time series", cols, rows), ("last cycle", ("quantity", "value"), last)]
+
     def summary(self) -> dict:
         """The last cycle in numbers (JSON-safe)."""
         m = self.last_cycle()
@@ -129,6 +162,7 @@ class QuasiStaticResult(ResultShape):
         s = self.summary()
         area, closed = self.loop_check()
         lines = [
+            self.verdict(),
             f"quasi-static test of {self.specimen.name}: grip {s['amplitude_m']:.4g} m at "
             f"{s['frequency_Hz']:g} Hz, {self.metadata['cycles']} cycle(s) of "
             f"{self.metadata['steps_per_cycle']} load steps",

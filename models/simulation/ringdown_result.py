@@ -9,8 +9,9 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from iwan_element import AmplitudeCurve, amplitude_curve
-from iwan_element.base.result_shape import ResultShape, panels
+from iwan_element.base.result_shape import ResultShape, column, panels
 from iwan_element.base.serialize import json_safe
+from iwan_element.base.validation import plain_number
 
 if TYPE_CHECKING:
     from matplotlib.artist import Artist
@@ -127,6 +128,7 @@ class RingdownResult(ResultShape):
                 "sensor_curve needs the result's sensor records (sensor_positions, "
                 f"sensor_{quantity}), which this result does not hold"
             )
+        sensor = plain_number(sensor)
         if (
             isinstance(sensor, bool)
             or not isinstance(sensor, int)
@@ -173,10 +175,11 @@ class RingdownResult(ResultShape):
         """Human-readable account."""
         m = self.metadata
         lines = [
+            self.verdict(),
             f"Exudyn ring-down: {m['steps']} steps of {m['h']:.4g} s "
             f"({self.t[-1]:.4g} s, {self.wall_time:.3g} s wall), {m['n_points']} contact "
             f"points, mode(s) {', '.join(map(str, self.modes))}"
-            + (f", effects {' + '.join(m['effects'])}" if m["effects"] else "")
+            + (f", effects {' + '.join(m['effects'])}" if m["effects"] else ""),
         ]
         for mode, c in zip(self.modes, self.curves or (self.curve,)):
             if len(c):
@@ -219,6 +222,49 @@ class RingdownResult(ResultShape):
             }
         )
 
+    def _tables(self) -> list:
+        """The modes' decay curves (the main table: one row per curve point, by mode), the
+        time series at the sensor (all modes, then each mode's share), then the run.
+        """
+        curves = self.curves or (self.curve,)
+        points = [
+            (int(mode), float(a), float(f), float(z))
+            for mode, c in zip(self.modes, curves)
+            for a, f, z in zip(c.amplitude, c.frequency, c.damping_ratio)
+        ]
+        resp = self.modal_responses if self.modal_responses is not None else self.modal[None]
+        series = (
+            (column("t", "s"), column("sensor", "m"))
+            + tuple(column(f"mode {m}", "m") for m in self.modes),
+            [tuple(map(float, r)) for r in zip(self.t, self.sensor, *resp)],
+        )
+        err = self.max_energy_error
+        where = () if self.sensor_positions is None else np.atleast_1d(self.sensor_positions)
+        run = [
+            (column("duration", "s"), float(self.t[-1])),
+            (column("initial energy", "J"), float(self.initial_energy)),
+            (column("largest energy error", "-"), err),
+            (column("wall time", "s"), float(self.wall_time)),
+            (
+                column("sensor positions", "m"),
+                ", ".join(f"{x:.4g}" for x in where),
+            ),
+        ]
+        return [
+            (
+                "curves",
+                (
+                    "mode",
+                    column("amplitude", "m"),
+                    column("frequency", "Hz"),
+                    column("damping_ratio", "-"),
+                ),
+                points,
+            ),
+            ("time series", *series),
+            ("run", ("quantity", "value"), run),
+        ]
+
     def plot(self, ax=None) -> list[Artist]:
         """Each mode's response at the sensor against time, then the decays' frequency and
         damping against amplitude, on ``ax = (ax_t, ax_f, ax_z)`` (a new figure if
@@ -231,7 +277,11 @@ class RingdownResult(ResultShape):
             arts += ax_t.plot(self.t, y, lw=0.6, label=f"mode {mode} at the sensor")
             arts += c.plot((ax_f, ax_z), label=f"ring-down, mode {mode}")
         ax_t.set_xlabel("time [s]")
-        ax_t.set_ylabel("displacement [m]")
+        ax_t.set_ylabel("displacement at the sensor [m]")
+        ax_t.legend(fontsize=8, loc="upper right")
+        f = np.concatenate([c.frequency for c in self.curves or (self.curve,)])
+        if f.size and np.nanmax(f) > 3 * np.nanmin(f):  # modes far apart (21 and 133 Hz)
+            ax_f.set_yscale("log")
         return arts
 
     def energy_error(self) -> np.ndarray:

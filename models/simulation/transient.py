@@ -85,12 +85,7 @@ def _amplitudes(mode, amplitude) -> dict:
 def _check_args(specimen, steps_per_period, n_periods, cycles, duration):
     """Checks of :func:`ringdown`'s other arguments: ``(n_periods, cycles, duration)``."""
     check_specimen(specimen)
-    if (
-        isinstance(steps_per_period, bool)
-        or not isinstance(steps_per_period, int)
-        or steps_per_period < 16
-    ):
-        raise ValueError(f"steps_per_period must be an integer >= 16, got {steps_per_period!r}")
+    check_int("steps_per_period", steps_per_period, 16)
     n_periods = check_scalar("n_periods", n_periods, low=3.0, high=1000.0)
     if cycles is not None and duration is not None:
         raise ValueError("give cycles or duration, not both")

@@ -42,6 +42,8 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from iwan_element.base.validation import check_int, plain_number
+
 from ..linear.system import LinearSystem
 from ..specimens.contact import pressure_field
 from ..specimens.presets import preset
@@ -281,6 +283,7 @@ def _check_build(specimen, patch_size, n_modes):
             f"specimen.boundary must be 'free-free' or 'clamped-free' for a solid "
             f"specimen, got {specimen.boundary!r}"
         )
+    patch_size = plain_number(patch_size)
     if (
         isinstance(patch_size, bool)
         or not isinstance(patch_size, (int, float))
@@ -289,8 +292,7 @@ def _check_build(specimen, patch_size, n_modes):
         raise ValueError(
             f"patch_size must be a length in (0, overlap={specimen.overlap}] m, got {patch_size!r}"
         )
-    if isinstance(n_modes, bool) or not isinstance(n_modes, int) or n_modes < 1:
-        raise ValueError(f"n_modes must be an integer >= 1, got {n_modes!r}")
+    check_int("n_modes", n_modes, 1)
 
 
 def _full_system(specimen: Specimen, a: SolidPart, b: SolidPart, patches: PatchLayout):

@@ -31,6 +31,8 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.sparse as sp
 
+from iwan_element.base.validation import plain_number
+
 from ..specimens.specimen import Specimen
 
 __all__ = ["SolidPart", "part_from_fem", "part_from_ngsolve", "lap_beam_parts", "bar_part"]
@@ -153,6 +155,7 @@ def part_from_ngsolve(
         ("poissons_ratio", poissons_ratio, -1.0, 0.5),
         ("density", density, 0.0, np.inf),
     ):
+        v = plain_number(v)
         if not (isinstance(v, (int, float)) and lo < v < hi):
             raise ValueError(f"{label} must be a number in ({lo}, {hi}), got {v!r}")
     fem = FEMinterface()
@@ -202,6 +205,7 @@ def _mesh_boxes(boxes, *, face_z, face_sign, mesh_size, face_mesh_size, holes=()
 
 def _check_sizes(specimen, mesh_size, lap_mesh_size):
     for label, v in (("mesh_size", mesh_size), ("lap_mesh_size", lap_mesh_size)):
+        v = plain_number(v)
         if (
             isinstance(v, bool)
             or not isinstance(v, (int, float))
@@ -300,6 +304,7 @@ def bar_part(
         ("height", height),
         ("mesh_size", mesh_size),
     ):
+        v = plain_number(v)
         if isinstance(v, bool) or not isinstance(v, (int, float)) or not v > 0:
             raise ValueError(f"{label} must be a length > 0 [m], got {v!r}")
     mesh = _mesh_boxes(

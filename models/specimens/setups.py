@@ -38,6 +38,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+from iwan_element.base.validation import plain_fields
+
 __all__ = ["PointMass", "Shaker", "Clamp", "Setup", "FORCE_AT"]
 
 FORCE_AT = ("gauge", "armature", "passive")
@@ -78,6 +80,7 @@ class PointMass:
     rotary_inertia: float = 0.0
 
     def __post_init__(self):
+        plain_fields(self)
         if not isinstance(self.name, str) or not self.name:
             raise ValueError(f"name must be a non-empty string, got {self.name!r}")
         object.__setattr__(self, "position", _nonneg("position", self.position))
@@ -116,6 +119,7 @@ class Shaker:
     force_at: str = "gauge"
 
     def __post_init__(self):
+        plain_fields(self)
         object.__setattr__(self, "position", _nonneg("shaker position", self.position))
         for n in ("gauge_mass", "moving_mass", "suspension_stiffness"):
             object.__setattr__(self, n, _nonneg(f"shaker {n}", getattr(self, n)))
@@ -154,6 +158,7 @@ class Clamp:
     rotational: float
 
     def __post_init__(self):
+        plain_fields(self)
         object.__setattr__(
             self, "translational", _nonneg("clamp translational", self.translational, positive=True)
         )
@@ -191,6 +196,7 @@ class Setup:
     reference: str = ""
 
     def __post_init__(self):
+        plain_fields(self)
         ms = tuple(self.masses)
         if not all(isinstance(m, PointMass) for m in ms):
             raise ValueError("masses must be a sequence of PointMass")

@@ -15,6 +15,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field, fields, replace
 
+from iwan_element.base.validation import check_int, plain_fields, plain_number
 from iwan_element.effects import EFFECTS
 
 from .setups import Setup
@@ -87,6 +88,7 @@ class InterfaceModel:
     cone_angle_deg: float = 30.0
 
     def __post_init__(self):
+        plain_fields(self)
         if self.model not in _INTERFACE:
             raise ValueError(f"interface model must be one of {_INTERFACE}, got {self.model!r}")
         if (
@@ -122,6 +124,7 @@ class Excitation:
     position: float = 0.0
 
     def __post_init__(self):
+        plain_fields(self)
         if self.kind not in _EXCITATIONS:
             raise ValueError(f"excitation kind must be one of {_EXCITATIONS}, got {self.kind!r}")
         _pos("excitation position", self.position, zero=True)
@@ -157,6 +160,7 @@ class SpecimenEffect:
     calibrated_range: tuple | None = None
 
     def __post_init__(self):
+        plain_fields(self)
         cls = EFFECTS.get(self.name)
         if cls is None or not cls.modal_specs:
             known = sorted(n for n, c in EFFECTS.items() if c.modal_specs)
@@ -170,6 +174,7 @@ class SpecimenEffect:
         }  # a modal value with a default may be left out
         if set(vals) != set(want):
             raise ValueError(f"values of {self.name!r} must be {sorted(want)}, got {sorted(vals)}")
+        vals = {k: plain_number(v) for k, v in vals.items()}
         for k, v in vals.items():
             sp = want[k]
             if (
@@ -299,6 +304,7 @@ class Specimen:
     reference: str = ""
 
     def __post_init__(self):
+        plain_fields(self)
         self._check_beam()
         bp = tuple(float(b) for b in self.bolt_positions)
         if not bp or any(not (0.0 < b < self.overlap) for b in bp):
@@ -314,7 +320,8 @@ class Specimen:
             object.__setattr__(
                 self, "calibrated_range", _range("calibrated_range", self.calibrated_range)
             )
-        md = tuple(self.modal_damping) if not isinstance(self.modal_damping, (str, bytes)) else None
+        md = self.modal_damping
+        md = None if isinstance(md, (str, bytes)) else tuple(plain_number(z) for z in md)
         if md is None or any(
             isinstance(z, bool)
             or not isinstance(z, (int, float))
@@ -458,8 +465,7 @@ class Specimen:
         """Linear damping ratio [-] of elastic mode ``mode`` (1: lowest): its entry of
         ``modal_damping``, else ``interface.damping_floor``.
         """
-        if isinstance(mode, bool) or not isinstance(mode, int) or mode < 1:
-            raise ValueError(f"mode must be an integer >= 1, got {mode!r}")
+        mode = check_int("mode", mode, 1)
         md = self.modal_damping
         return md[mode - 1] if mode <= len(md) else self.interface.damping_floor
 

@@ -87,10 +87,43 @@ class LinearUpdateResult(ResultShape):
         p = self.predictions[int(mode)]
         return p["frequency"], p["stderr"]
 
+    def _tables(self) -> list:
+        """The parameters, then the targets (measured, before and after the update, each in
+        its own unit: a frequency [Hz], a unit-normalised shape entry [-], a modal constant
+        [1/kg]; the residuals weighted by the targets' errors [-]), then the rest.
+        """
+        units = {"f": "Hz", "s": "-", "c": "1/kg"}
+        rows = [
+            (
+                r["target"],
+                units.get(r["target"][:1], "-"),
+                r["measured"],
+                r["before"],
+                r["after"],
+                r["residual_before"],
+                r["residual_after"],
+            )
+            for r in self.residuals
+        ]
+        cols = (
+            "target",
+            "unit",
+            "measured",
+            "before",
+            "after",
+            "weighted residual before",
+            "weighted residual after",
+        )
+        out = super()._tables()
+        at = next(i for i, t in enumerate(out) if t[0] == "rows")
+        out[at] = ("targets", cols, rows)
+        return out
+
     def report(self) -> str:
         """Human-readable account: the parameters, the targets and the predictions [Hz]."""
         lines = [
-            f"Linear update of {self.initial.name!r}: {self.verdict()}",
+            self.verdict(),
+            f"Linear update of {self.initial.name!r}",
             f"  {'parameter':34s} {'nominal':>12s} {'updated':>12s} {'stderr':>10s} "
             f"{'range':>23s}  status",
         ]

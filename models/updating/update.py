@@ -34,6 +34,7 @@ import numpy as np
 import scipy.linalg as sla
 
 from iwan_element.base.threads import one_blas_thread
+from iwan_element.base.validation import plain_number
 from iwan_element.fitting import Parameter, ParameterTable, minimize
 
 from ..reduced.dispatch import check_specimen
@@ -223,7 +224,7 @@ def linear_update(
     check_specimen(specimen)
     err = {**MODEL_ERROR, **dict(model_error or {})}
     if set(err) != set(MODEL_ERROR) or not all(
-        isinstance(v, (int, float)) and v > 0 for v in err.values()
+        isinstance(plain_number(v), (int, float)) and plain_number(v) > 0 for v in err.values()
     ):
         raise ValueError(
             f"model_error must map {sorted(MODEL_ERROR)} to relative errors > 0, "

@@ -123,9 +123,10 @@ class LeaveOneOut(ResultShape):
     def report(self) -> str:
         """Plain-text table: each record's leave-one-out band misfit [N] against its own fit's."""
         lines = [
+            self.verdict(),
             f"Leave-one-out ({self.refit}): {100 * self.share_within:.0f} % of "
             f"{len(self.rows)} records predicted within {LOO_TARGET:g}x their own fit's "
-            f"band misfit ({self.wall_time:.1f} s)"
+            f"band misfit ({self.wall_time:.1f} s)",
         ]
         lines += table_lines(
             [

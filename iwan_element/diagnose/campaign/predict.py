@@ -50,6 +50,8 @@ class CampaignPrediction(ResultShape):
     law values used and ``warnings`` (extrapolation).
     """
 
+    COLUMNS = {"lower": ("lower", "N"), "upper": ("upper", "N")}
+
     t: np.ndarray
     u: np.ndarray
     force: np.ndarray
@@ -92,6 +94,7 @@ class CampaignPrediction(ResultShape):
         """Conditions, the law values used, the band's mean width, warnings."""
         vals = ", ".join(f"{k} = {v:.4g}" for k, v in self.values.items())
         lines = [
+            self.verdict(),
             f"Prediction at {self.conditions} over {self.force.size} samples: {vals}",
             f"  {100 * self.level:g} % band: mean width "
             f"{float(np.mean(self.upper - self.lower)):.4g} N, largest "

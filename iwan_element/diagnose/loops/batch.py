@@ -39,6 +39,7 @@ __all__ = [
     "check_records",
     "check_options",
     "executor_for",
+    "diagnosed",
 ]
 
 #: Table columns of :class:`BatchDiagnosis` (besides the record's name).
@@ -55,6 +56,11 @@ COLUMNS = (
     "seconds",
     "status",
 )
+
+
+def diagnosed(row: dict) -> bool:
+    """The record's diagnosis ran (its status is its verdict, not a refusal or a failure)."""
+    return not str(row["status"]).startswith(("refused", "failed"))
 
 
 def band_misfit(F, F_model, band: float) -> float:
@@ -81,7 +87,7 @@ def _diagnose_task(params, rng):
     bb = band_misfit(d.F, d.force_before, params["band"])
     ba = band_misfit(d.F, d.force_after, params["band"])
     return {
-        "status": "ok",
+        "status": "usable" if d.success else "NOT usable",
         "samples": int(d.F.size),
         "named": " + ".join(d.effects) or "none",
         "error_before": d.error_before,
@@ -200,7 +206,7 @@ def diagnose_many(
             out["status"] = f"failed: {err}"
         docs.append(None if err is not None else json.loads(row.get("json", "null")))
         rows.append(out)
-    n_bad = sum(r["status"] != "ok" for r in rows)
+    n_bad = sum(not diagnosed(r) for r in rows)
     if n_bad:
         warns.append(f"{n_bad} of {len(rows)} records were not diagnosed (see the status column)")
     return BatchDiagnosis(
@@ -228,7 +234,8 @@ class BatchDiagnosis(ResultShape):
         Per record: ``record`` (its name), ``samples``, ``named`` (effects, ``" + "``-joined),
         ``error_before``/``error_after`` (NRMSE [-]), ``band_before``/``band_after`` [N] and
         their ratio, ``noise_sigma`` [N], ``success``, ``seconds`` (wall time of that
-        diagnosis) and ``status`` (``"ok"``, ``"refused: ..."`` or ``"failed: ..."``).
+        diagnosis) and ``status`` (``"usable"``, ``"NOT usable"`` (the diagnosis ran; its
+        verdict, as ``success``), ``"refused: ..."`` or ``"failed: ..."``).
     diagnoses : tuple of dict or None
         :meth:`Diagnosis.to_dict` of each record (None where it was not diagnosed).
     options : dict
@@ -249,13 +256,13 @@ class BatchDiagnosis(ResultShape):
     @property
     def success(self) -> bool:
         """True when every record was diagnosed and every diagnosis succeeded."""
-        return all(r["status"] == "ok" and bool(r["success"]) for r in self.rows)
+        return all(diagnosed(r) and bool(r["success"]) for r in self.rows)
 
     def failure_reasons(self) -> tuple:
         """Which records are not usable and why (empty when every one is)."""
         out = []
         for r, d in zip(self.rows, self.diagnoses):
-            if r["status"] != "ok":
+            if not diagnosed(r):
                 out.append(f"{r['record']}: {r['status']}")
             elif not r["success"]:
                 why = "; ".join((d or {}).get("failure_reasons") or ()) or "not usable"
@@ -275,7 +282,7 @@ class BatchDiagnosis(ResultShape):
             head,
         ]
         for r in self.rows:
-            if r["status"] != "ok":
+            if not diagnosed(r):
                 lines.append(f"{r['record']:<28} {r['status']}")
                 continue
             lines.append(
@@ -305,11 +312,13 @@ class BatchDiagnosis(ResultShape):
         }
 
     def to_csv(self, path) -> Path:
-        """Write the table (one row per record, the columns of :attr:`rows`) as CSV."""
-        cols = ("record",) + COLUMNS
-        lines = [",".join(cols)]
-        for r in self.rows:
-            lines.append(",".join(_csv_cell(r.get(c)) for c in cols))
+        """Write the table (one row per record) as CSV: the columns of the "rows" table
+        (:meth:`to_dataframe`), titled with their units, the NRMSE in % as its title says.
+        """
+        _, cols, rows = self._tables()[0]
+        lines = [",".join(_csv_cell(c) for c in cols)]
+        for r in rows:
+            lines.append(",".join(_csv_cell(v) for v in r))
         path = Path(path)
         path.write_text("\n".join(lines) + "\n")
         return path
@@ -328,7 +337,7 @@ class BatchDiagnosis(ResultShape):
             The matplotlib artists drawn.
         """
         (ax,) = panels(ax, 1, figsize=(max(5.0, 0.5 * len(self.rows) + 2), 4))
-        ok = [r for r in self.rows if r["status"] == "ok"]
+        ok = [r for r in self.rows if diagnosed(r)]
         x = np.arange(len(ok))
         artists = list(ax.bar(x - 0.2, [r["band_before"] for r in ok], 0.4, label="Iwan"))
         artists += list(

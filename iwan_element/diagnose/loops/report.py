@@ -102,18 +102,16 @@ def _failures(sel, fit, unexplained) -> tuple:
     """Why the diagnosis is not usable (docs/guards.md), in a tester's words."""
     if sel.noise_only:
         return ("the force is indistinguishable from noise: nothing is identified",)
-    return tuple(f"misfit well beyond the noise remains: {w}" for w in unexplained) + tuple(
-        fit.failure_reasons()
-    )
+    return tuple(unexplained) + tuple(fit.failure_reasons())
 
 
 def _verdict_warnings(sel, misfit, alpha) -> list:
     """What the selection leaves unexplained."""
     if misfit and sel.named and sel.p_after < alpha:
-        return [f"misfit beyond the noise remains after {' + '.join(sel.named)}"]
+        return [f"misfit well beyond the noise remains after {' + '.join(sel.named)}"]
     if misfit and not sel.named:
         return [
-            "the misfit is more than noise but no tested effect explains it"
+            "misfit well beyond the noise remains: no tested effect explains it"
             + (f"; this record cannot reveal {', '.join(sel.untestable)}" if sel.untestable else "")
         ]
     return []

@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ...base.result_shape import ResultShape, panels, value_stderr, wrap
+from ...base.result_shape import ResultShape, panels, table_lines, value_stderr, wrap
 from ...base.serialize import json_safe
 from ..selection.lines import effect_unit, verdict_lines
 from ..selection.probable import Probable
@@ -152,6 +152,38 @@ class Diagnosis(Probable, ResultShape):
             }
         )
 
+    def _step_lines(self) -> list:
+        """The report's table of each selection step: the candidates, their misfit and
+        verdict (the effect column as wide as the longest name, a pair's too).
+        """
+        lines = []
+        for k, st in enumerate(self.steps):
+            lines.append(f"  step {k + 1}: candidates on {' + '.join(st['on']) or 'Iwan'}")
+            width = max([20] + [len(c["name"]) for c in st["candidates"]])
+            lines += table_lines(
+                [
+                    ("effect", f"<{width}"),
+                    ("NRMSE [%]", "9.3g"),
+                    ("x noise", "8.3g"),
+                    ("dIC", "9.4g"),
+                    ("explains [%]", "12.3g"),
+                    ("  verdict", "<"),
+                ],
+                [
+                    (
+                        c["name"],
+                        100 * c["nrmse"],
+                        c["ratio"],
+                        c["dIC"],
+                        100 * c["explained"],
+                        "  " + c["verdict"],
+                    )
+                    for c in st["candidates"]
+                ],
+                indent=4,
+            )
+        return lines
+
     def report(self) -> str:
         """Human-readable account: noise, misfit, where, candidates, verdict, before/after."""
         d = self.details
@@ -184,14 +216,7 @@ class Diagnosis(Probable, ResultShape):
                 "best candidate (0: the best)",
                 indent="    ",
             )
-        for k, st in enumerate(self.steps):
-            lines.append(f"  step {k + 1}: candidates on {' + '.join(st['on']) or 'Iwan'}")
-            lines.append("    effect               NRMSE[%]  x noise       dIC  explains  verdict")
-            for c in st["candidates"]:
-                lines.append(
-                    f"    {c['name']:<20} {100 * c['nrmse']:8.3g} {c['ratio']:8.3g} "
-                    f"{c['dIC']:9.4g} {100 * c['explained']:7.3g} %  {c['verdict']}"
-                )
+        lines += self._step_lines()
         for name, why in self.untestable.items():
             lines.append(f"  cannot test {name}: {why}")
         if self.effects:
@@ -223,8 +248,37 @@ class Diagnosis(Probable, ResultShape):
         return "\n".join(lines + verdict_lines("error", self))
 
     def _tables(self) -> list:
+        """The Iwan part's parameters, the named effects' values with their standard
+        errors, the candidates of every step, the probabilities, then the run.
+        """
         base = super()._tables()
-        return base[:1] + self.probability_tables() + base[1:]
+        named = [
+            (e["name"], k, float(v), e["stderr"].get(k), effect_unit(e["name"], k))
+            for e in self.fit.details.get("effects", [])
+            for k, v in e["parameters"].items()
+        ]
+        cands = [
+            (
+                k + 1,
+                " + ".join(st["on"]) or "Iwan",
+                c["name"],
+                100 * c["nrmse"],
+                c["ratio"],
+                c["dIC"],
+                100 * c["explained"],
+                c["verdict"],
+            )
+            for k, st in enumerate(self.steps)
+            for c in st["candidates"]
+        ]
+        cols = ("step", "on", "candidate", "NRMSE [%]", "x noise [-]", "dIC [-]", "explains [%]")
+        return (
+            base[:1]
+            + [("named effects", ("effect", "parameter", "value", "std. error", "unit"), named)]
+            + [("candidates", cols + ("verdict",), cands)]
+            + self.probability_tables()
+            + base[1:]
+        )
 
     def averaged_band(self, t=None, u=None, *, level: float = 0.95) -> AveragedBand:
         """The force predicted with the doubt about the model: every probable explanation's

@@ -185,7 +185,7 @@ class AveragedBand(ResultShape):
             ("prediction", tuple(cols), list(zip(*(map(float, a) for a in data)))),
             (
                 "members",
-                ("explanation", "weight"),
+                ("explanation", "weight [-]"),
                 [(" + ".join(m) or "plain model", w) for m, w in self.members],
             ),
         ]

@@ -220,12 +220,17 @@ def _scorer(cur, excess, ic_cur, tau, pen, explain_fraction, guard):
 def _pair_step(fit_candidate, cur, rows, score, allowed):
     """The pair step of the rule (module docstring): ``((names, row, new current) or None,
     rows of the pairs tried)``; ``score`` is the step's :func:`_scorer`.
+
+    A pair may be fitted in both orders (each member on top of the other: the fits start
+    from different points); the table keeps one row per pair, the better order's, titled
+    in one order (the names sorted), and only the pair named is marked NAMED (another that
+    passes every test too is "qualifies, less good than the named pair").
     """
     singles = sorted((r for r in rows if r["lowers_ic"]), key=lambda r: r["ic"])
     if len(singles) < 2:
         return None, []
     orders = [(singles[0], r) for r in singles[1:]] + [(singles[1], singles[0])]
-    best, tried = None, []
+    fits = {}  # {pair (frozenset): (row, first, second, q of the pair)}
     for first, second in orders:
         if allowed is not None and not allowed(first["names"], second["name"]):
             continue
@@ -237,27 +242,37 @@ def _pair_step(fit_candidate, cur, rows, score, allowed):
         }
         r = dict(fit_candidate(on, second["name"]))
         q_pair = first["q"] + r["q"]
-        r["name"] = f"{first['name']} + {second['name']}"
+        r["name"] = " + ".join(sorted((first["name"], second["name"])))
         score(r, q_pair)
         # each member earns its parameters on top of the other
         earns = r["ic"] < min(first["ic"], second["ic"])
+        r["qualifies"] = bool(r["lowers_ic"] and r["enough"] and r["guard_ok"] and earns)
+        r["dIC"] = r["ic"] - min(first["ic"], second["ic"])
+        key = frozenset((first["name"], second["name"]))
+        if key not in fits or r["ic"] < fits[key][0]["ic"]:
+            fits[key] = (r, first, second, q_pair)
+    tried = [f[0] for f in fits.values()]
+    good = [f for f in fits.values() if f[0]["qualifies"]]
+    top = min(good, key=lambda f: f[0]["ic"]) if good else None
+    for r in tried:
         r["verdict"] = (
             "NAMED (pair)"
-            if (r["lowers_ic"] and r["enough"] and r["guard_ok"] and earns)
+            if top is not None and r is top[0]
+            else "qualifies, less good than the named pair"
+            if r["qualifies"]
             else "pair explains little"
         )
-        r["dIC"] = r["ic"] - min(first["ic"], second["ic"])
-        tried.append(r)
-        if r["verdict"].startswith("NAMED") and (best is None or r["ic"] < best[1]["ic"]):
-            best = (
-                (first["name"], second["name"]),
-                r,
-                {
-                    "names": r["names"],
-                    "chi2": r["chi2"],
-                    "q": cur["q"] + q_pair,
-                    "state": r["state"],
-                    "row": r,
-                },
-            )
-    return best, tried
+    if top is None:
+        return None, tried
+    r, first, second, q_pair = top
+    return (
+        (first["name"], second["name"]),
+        r,
+        {
+            "names": r["names"],
+            "chi2": r["chi2"],
+            "q": cur["q"] + q_pair,
+            "state": r["state"],
+            "row": r,
+        },
+    ), tried

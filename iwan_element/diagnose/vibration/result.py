@@ -306,9 +306,10 @@ class VibrationDiagnosis(Probable, ResultShape):
             lines += wrap("  " + MISMATCH, indent="    ")
         for k, st in enumerate(self.steps):
             lines.append(f"  step {k + 1}: candidates on {' + '.join(st['on']) or 'prediction'}")
+            width = max([18] + [len(c["name"]) for c in st["candidates"]])
             for c in st["candidates"]:
                 lines.append(
-                    f"    {c['name']:<18} mismatch {100 * c['error']:7.3g} %  dIC "
+                    f"    {c['name']:<{width}} mismatch {100 * c['error']:7.3g} %  dIC "
                     f"{c['dIC']:9.4g}  explains {100 * c['explained']:5.3g} %  "
                     f"{c['verdict']}"
                 )

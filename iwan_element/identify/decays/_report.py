@@ -224,7 +224,8 @@ def _finish(tt, fits, stops, info, opts):
         f"{plan.span:g} nepers each, starting every {plan.hop:g} nepers, "
         f"{plan.n_min / fs:.4g}-{plan.n_max / fs:.4g} s), "
         f"overlap {overlap:.2g} (neighbouring points share data when > 1); method "
-        f"{names[0]}; in-band noise RMS {noise:.3g} from {how}; noise floor {floor:.3g} m "
+        f"{names[0]}; in-band noise RMS {noise:.3g} {('m', 'm/s', 'm/s^2')[k_pow]} from {how}; "
+        f"noise floor {floor:.3g} m "
         f"({snr_min:g} x noise); last point at {a[-1, 0]:.3g} m; stopped: {stop}"
         + (f"; {cmp_note}" if cmp_note else "")
     )

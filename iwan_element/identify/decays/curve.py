@@ -76,6 +76,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from scipy import signal
 
+from ...base.plausibility import level_failure, record_failure
 from ...base.validation import check_magnitude, check_scalar, check_uniform_time, finite_array
 from ..modal.curves import DECAY_METHODS
 from ._filter import _decay_signal, _drift_terms, _noise_bandwidth
@@ -479,4 +480,15 @@ def amplitude_curve(
         ),
         (max_damping_ratio_std, compare, plan),
     )
-    return replace(curve, warnings=notes + curve.warnings) if notes else curve
+    failures = _implausible(yy, dt, curve, quantity) + curve.failures
+    return replace(curve, warnings=notes + curve.warnings, failures=failures)
+
+
+def _implausible(yy, dt, curve, quantity) -> tuple:
+    """The record's plausibility (:mod:`iwan_element.base.plausibility`): its own
+    derivatives, then the curve's velocity and acceleration; the first failure or ().
+    """
+    why = record_failure(yy, dt, quantity=quantity, name="y") or level_failure(
+        curve.amplitude, curve.frequency, quantity=quantity, name="y"
+    )
+    return (why,) if why else ()

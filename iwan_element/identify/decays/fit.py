@@ -58,6 +58,7 @@ import math
 import numpy as np
 from scipy import stats
 
+from ...base.plausibility import level_failure, record_failure
 from ...base.progress import complete, finish, progress_bar, tick
 from ...base.threads import one_blas_thread
 from ...base.validation import check_scalar
@@ -336,11 +337,26 @@ def _decay_fit_result(prob, conv, info, span, best, n_th):
             "wider band or less noise would help)"
         ),
     )
-    if span["guard"]:
+    guard = _implausible(prob, X, f) + tuple(span["guard"])
+    if guard:
         fit = dataclasses.replace(
-            fit, success=False, failures=tuple(span["guard"]) + fit.failure_reasons()
+            fit,
+            success=False,
+            failures=guard + fit.failure_reasons(),
+            warnings=tuple(w for w in guard if w not in fit.warnings) + fit.warnings,
         )
     return fit
+
+
+def _implausible(prob, X, f) -> tuple:
+    """The record's plausibility (:mod:`iwan_element.base.plausibility`): its derivatives
+    at the working rate and the window estimates' velocity and acceleration.
+    """
+    quantity = ("displacement", "velocity", "acceleration")[prob.k]
+    why = record_failure(prob.y, 1.0 / prob.fs, quantity=quantity, name="y") or level_failure(
+        X, f, quantity=quantity, name="y"
+    )
+    return (why,) if why else ()
 
 
 def fit_decay(

@@ -56,6 +56,7 @@ from collections.abc import Mapping
 import numpy as np
 from scipy import signal
 
+from ...base.plausibility import level_failure, record_failure
 from ...base.validation import check_magnitude, check_scalar, check_uniform_time, finite_array
 from ..modal.mode_target import ModeTarget
 from ..modal.targets import ModalTargets
@@ -460,4 +461,21 @@ def free_decay_modes(
         source="free decay",
         notes=f"{quantity} records of {', '.join(names)}; " + "; ".join(notes),
         warnings=tuple(warns),
+        failures=_implausible(Y, dt, names, modes, quantity),
     )
+
+
+def _implausible(Y, dt, names, modes, quantity) -> tuple:
+    """The first record (or, failing that, mode) whose levels no jointed structure's
+    vibration test reaches (:mod:`iwan_element.base.plausibility`).
+    """
+    for name, y in zip(names, Y):
+        why = record_failure(y, dt, quantity=quantity, name=f"records[{name!r}]")
+        if why:
+            return (why,)
+    for d in modes:
+        X = np.abs(np.asarray(d["amplitude"]))
+        why = level_failure(X, np.full(X.shape, d["frequency"]), quantity=quantity, name="records")
+        if why:
+            return (why,)
+    return ()

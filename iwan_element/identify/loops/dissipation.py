@@ -175,12 +175,10 @@ def _microslip_fit(F0, D, u0, Fs, counter, warns):
         if not macro.any():
             break
         if round_ == 3:
-            warns.append(
-                f"{int(macro.sum())} cycle(s) still have u0 > phi_max = {phi * 1e3:.4g} mm"
-            )
+            warns.append(f"{int(macro.sum())} cycle(s) still have u0 > phi_max = {phi:.4g} m")
             break
         warns.append(
-            f"{int(macro.sum())} cycle(s) with u0 > phi_max = {phi * 1e3:.4g} mm "
+            f"{int(macro.sum())} cycle(s) with u0 > phi_max = {phi:.4g} m "
             "(macroslip) were left out and the fit repeated"
         )
         keep = keep & ~macro

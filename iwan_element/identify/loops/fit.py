@@ -29,12 +29,14 @@ Identifiability, uncertainties and the verdict: :mod:`iwan_element.identify.loop
 from __future__ import annotations
 
 import copy
+import dataclasses
 import math
 import time
 
 import numpy as np
 from scipy.special import fdtrc
 
+from ...base.plausibility import record_failure
 from ...base.validation import (
     check_int,
     check_magnitude,
@@ -366,7 +368,7 @@ def fit_loops(
         "force_method": noise_F.method if noise is None else "given",
     }
     curves = {"u": u_drive[keep] - du0, "F": y - dF0, "F_fit": F_fit}
-    return _finish(
+    result = _finish(
         "loops",
         out,
         converged=out["res"].status > 0,
@@ -378,6 +380,20 @@ def fit_loops(
         offsets={"force": (dF0, se_dF0), "displacement": (du0, se_du0)},
         noise=noise_out,
         curves=curves,
+    )
+    return _plausible(result, uu, tt)
+
+
+def _plausible(result, uu, tt):
+    """``result``, not usable when the displacement ``uu`` [m] at times ``tt`` [s] moves
+    faster than a jointed structure's test (:mod:`iwan_element.base.plausibility`): a
+    displacement in mm or um given as m, or another quantity.
+    """
+    why = record_failure(uu, tt, quantity="displacement", name="u")
+    if not why:
+        return result
+    return dataclasses.replace(
+        result, success=False, failures=(why,) + result.failures, warnings=(why,) + result.warnings
     )
 
 

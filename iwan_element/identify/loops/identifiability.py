@@ -313,10 +313,7 @@ def _micro_result(prob: _Problem, micro: dict, full: dict, details: dict) -> dic
             f"the residual significantly (p = {p_value:.2g} >= {alpha:g})"
         )
     else:
-        why = (
-            "the data do not reach macroslip (largest backbone argument "
-            f"{xm * 1e3:.4g} mm <= phi_max)"
-        )
+        why = f"the data do not reach macroslip (largest backbone argument {xm:.4g} m <= phi_max)"
     warns = [
         f"Fs and beta are NOT identified: {why}; the data determine only KT, chi "
         f"and R = {R:.5g}. Any Fs in [{Fs_lo:.5g}, {Fs0:.5g}] N with beta in "

@@ -129,8 +129,13 @@ def failure_list(
     ident: dict,
     required,
     microslip: bool,
+    fixed=(),
 ) -> tuple:
-    """The reasons ``success`` is False for a fitted joint (empty when it is True)."""
+    """The reasons ``success`` is False for a fitted joint (empty when it is True). A
+    reason about parameters the data do not identify names every one the parameter table
+    marks NOT identified (``beta``, not required when its range reaches 0, too), so that
+    the verdict and the table agree; ``fixed`` (given) parameters are not fitted.
+    """
     out = []
     if not converged:
         out.append(f"the optimiser did not converge ({message})")
@@ -140,5 +145,10 @@ def failure_list(
         required = [k for k in PARAM_NAMES if k in required or k == "beta"]
     missing = [k for k in required if not ident.get(k, False)]
     if missing and explains:
-        out.append(not_identified_reason(missing, microslip=microslip))
+        marked = set(missing) | {
+            k for k in PARAM_NAMES if k not in fixed and not ident.get(k, True)
+        }
+        out.append(
+            not_identified_reason([k for k in PARAM_NAMES if k in marked], microslip=microslip)
+        )
     return tuple(out)

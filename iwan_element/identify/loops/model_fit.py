@@ -185,9 +185,9 @@ class ModelFit(ResultShape):
         from .result import status_text
 
         lines = [
-            f"force-model fit: {'success' if self.success else 'NOT successful'} "
-            f"({self.message}), RMS residual {self.rms:.4g} N, tau {self.tau:.3g} samples, "
-            f"n_eff {self.n_eff:.4g}",
+            self.verdict(),
+            f"force-model fit ({self.message}), RMS residual {self.rms:.4g} N, "
+            f"tau {self.tau:.3g} samples, n_eff {self.n_eff:.4g}",
             "  parameter        value    std. error   status",
         ]
         for p in self.params.parameters:

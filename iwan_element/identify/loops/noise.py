@@ -90,6 +90,13 @@ class NoiseEstimate(ResultShape):
         Lag-one correlation ``rho`` of the AR(1) noise model (0: white).
     """
 
+    COLUMNS = {
+        "sigma": ("noise sigma", "unit of the signal"),
+        "correlation_time": ("correlation time", "s"),
+        "window": ("window", "s"),
+        "n_eff": ("effective samples", "-"),
+    }
+
     sigma: float
     method: str
     correlation_time: float
@@ -152,10 +159,11 @@ class NoiseEstimate(ResultShape):
     def report(self) -> str:
         """One-paragraph summary."""
         lines = [
+            self.verdict(),
             f"noise sigma = {self.sigma:.4g} (method {self.method}, window "
             f"{self.window:.4g} s), correlation time {self.correlation_time:.3g} s "
             f"(lag-one correlation {self.lag_one:.2f}), "
-            f"{self.n_eff:.4g} effective of {self.n} samples"
+            f"{self.n_eff:.4g} effective of {self.n} samples",
         ]
         lines += [f"  - {w}" for w in self.warnings]
         return "\n".join(lines)

@@ -241,7 +241,7 @@ class FitResult(ResultShape):
             lines.append(f"  {label}  {f.format(v):>12}  {se_txt:>12}   {status}")
         for name, (key, _unit, scale) in {
             "dF0 [N]  ": ("force", "N", 1.0),
-            "du0 [um] ": ("displacement", "um", 1e6),
+            "du0 [m]  ": ("displacement", "m", 1.0),
         }.items():
             if key in self.offsets:
                 v, se = self.offsets[key]
@@ -272,7 +272,7 @@ class FitResult(ResultShape):
         ]
         lines += self._parameter_lines(p)
         lines.append(
-            f"  derived: phi_max = {p.phi_max * 1e3:.5g} mm, R = {p.R:.5g}, S = {p.S:.5g} N/m"
+            f"  derived: phi_max = {p.phi_max:.5g} m, R = {p.R:.5g} N m^(-chi-2), S = {p.S:.5g} N/m"
         )
         have = [k for k in PARAM_NAMES if math.isfinite(self.stderr.get(k, math.nan))]
         if len(have) > 1 and (corr := self.correlation) is not None:
@@ -353,6 +353,7 @@ def _finish(
             ident=ident,
             required=required_parameters(out["ranges"], fixed),
             microslip=out["details"].get("macroslip_reached") is False,
+            fixed=fixed,
         )
         if not success
         else ()

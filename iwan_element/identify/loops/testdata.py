@@ -12,13 +12,12 @@ All arrays are in SI units: time [s], displacement [m], force [N], energy [J].
 
 from __future__ import annotations
 
-import html
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ...base.result_shape import html_table, table_lines
+from ...base.result_shape import ResultShape, axes_or_new, table_lines
 from ...base.serialize import json_safe
 from ...base.validation import (
     check_int,
@@ -33,7 +32,7 @@ from ...core.parameters import IwanParameters
 from .cycles import Cycle, check_varies, default_hysteresis, split_cycles
 
 if TYPE_CHECKING:
-    import pandas as pd
+    from matplotlib.artist import Artist
 
 __all__ = ["TestData", "simulate_test"]
 
@@ -44,7 +43,7 @@ def _readonly(a: np.ndarray) -> np.ndarray:
 
 
 @dataclass(frozen=True, eq=False)
-class TestData:
+class TestData(ResultShape):
     """A quasi-static joint test in SI units, split into cycles.
 
     Build it with :func:`load_test` (from a CSV file) or :meth:`from_arrays`.
@@ -66,6 +65,10 @@ class TestData:
         Where the data came from (file path), for reports.
     hysteresis : float
         Dead band used to find the reversals [m].
+
+    It has the package's result shape (:mod:`iwan_element.base.result_shape`): usable when
+    at least two cycles close without drift (what a loop fit needs); its main table is the
+    cycle table.
     """
 
     __test__ = False  # not a pytest test class despite its name
@@ -193,12 +196,29 @@ class TestData:
             for c in self.cycles
         ]
 
-    def summary(self) -> str:
-        """Text table of the cycles in SI units (4 significant digits)."""
-        lines = [
+    @property
+    def success(self) -> bool:
+        """At least two cycles close without drift (what a loop fit needs)."""
+        return len(self.usable_cycles()) >= 2
+
+    def failure_reasons(self) -> tuple:
+        """Why the record is not usable for a loop fit, or ``()``."""
+        if self.success:
+            return ()
+        return (
+            f"only {len(self.usable_cycles())} of {len(self.cycles)} cycles close without "
+            "drift (at least 2 needed for a loop fit)",
+        )
+
+    def _head(self) -> str:
+        return (
             f"{len(self.u)} samples, {self.t[-1] - self.t[0]:.4g} s, {len(self.cycles)} cycles "
             f"({len(self.usable_cycles())} usable); source: {self.source or 'arrays'}"
-        ]
+        )
+
+    def report(self) -> str:
+        """The verdict, then the cycle table in SI units (4 significant digits)."""
+        lines = [self.verdict(), self._head()]
         lines += table_lines(
             [(self.CYCLE_COLUMNS[0], "5d")]
             + [(c, "11.4g") for c in self.CYCLE_COLUMNS[1:-1]]
@@ -220,25 +240,32 @@ class TestData:
             }
         )
 
-    def to_dataframe(self) -> pd.DataFrame:
-        """The cycle table as a ``pandas.DataFrame`` (SI units; pandas imported only here)."""
-        try:
-            import pandas as pd
-        except ImportError:
-            raise ImportError(
-                "to_dataframe needs pandas: pip install 'iwan-element[pandas]'"
-            ) from None
-        return pd.DataFrame(self.cycle_rows(), columns=list(self.CYCLE_COLUMNS))
+    def _tables(self) -> list:
+        """The cycle table (the main one), then the record's size and source."""
+        record = [
+            ("samples", len(self.u)),
+            ("duration [s]", float(self.t[-1] - self.t[0])),
+            ("usable cycles", len(self.usable_cycles())),
+            ("dead band [m]", float(self.hysteresis)),
+            ("source", self.source or "arrays"),
+        ]
+        return [
+            ("cycles", self.CYCLE_COLUMNS, self.cycle_rows()),
+            ("record", ("quantity", "value"), record),
+        ]
 
-    def _repr_html_(self) -> str:
-        head = html.escape(
-            f"{len(self.u)} samples, {self.t[-1] - self.t[0]:.4g} s, "
-            f"{len(self.usable_cycles())} of {len(self.cycles)} cycles usable; "
-            f"source: {self.source or 'arrays'}"
-        )
-        return f"<p><b>TestData</b>: {head}</p>" + html_table(
-            "cycles", self.CYCLE_COLUMNS, self.cycle_rows()
-        )
+    def plot(self, ax=None) -> list[Artist]:
+        """The force against the displacement, usable cycles solid, flagged ones grey, on
+        one Axes (a new figure if ``None``); returns the artists.
+        """
+        ax = axes_or_new(ax)
+        arts = []
+        for c in self.cycles:
+            sl = slice(c.start, c.stop)
+            kw = {"color": "C0", "lw": 0.8} if c.usable else {"color": "0.6", "lw": 0.6}
+            arts += ax.plot(self.u[sl], self.F[sl], **kw)
+        ax.set(xlabel="displacement [m]", ylabel="force [N]")
+        return arts
 
 
 # --------------------------------------------------------------------------- synthetic tests

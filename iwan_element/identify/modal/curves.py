@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ...base.result_shape import ResultShape, panels, table_lines, wrap
+from ...base.result_shape import ResultShape, column, panels, table_lines, wrap
 from ...base.validation import check_magnitude, finite_array
 
 if TYPE_CHECKING:
@@ -240,12 +240,12 @@ class AmplitudeCurve(ResultShape):
 
     #: Column titles of the curve's points (:meth:`to_dataframe`).
     POINT_COLUMNS = (
-        "amplitude [m]",
-        "amplitude_std [m]",
-        "frequency [Hz]",
-        "frequency_std [Hz]",
-        "damping_ratio [-]",
-        "damping_ratio_std [-]",
+        column("amplitude", "m"),
+        column("amplitude_std", "m"),
+        column("frequency", "Hz"),
+        column("frequency_std", "Hz"),
+        column("damping_ratio", "-"),
+        column("damping_ratio_std", "-"),
     )
 
     def _tables(self) -> list:
@@ -269,7 +269,10 @@ class AmplitudeCurve(ResultShape):
         info = [
             ("method", self.method or "unspecified"),
             ("points", len(self)),
-            ("noise floor [m]", None if np.isnan(self.noise_floor) else float(self.noise_floor)),
+            (
+                column("noise floor", "m"),
+                None if np.isnan(self.noise_floor) else float(self.noise_floor),
+            ),
             ("notes", self.notes),
         ]
         return out + [("curve", ("quantity", "value"), info)]
@@ -305,6 +308,10 @@ class AmplitudeCurve(ResultShape):
                 eb = a.errorbar(self.amplitude, y, yerr=np.nan_to_num(s), label=label, **kw)
                 artists += [eb.lines[0], *eb.lines[2]]
             a.set_xscale("log")
+            if a.get_yscale() == "linear":  # 79.05 .. 79.06 Hz, not "+7.9e1" and 0.01 steps
+                a.ticklabel_format(axis="y", useOffset=False)
+            if label is not None:
+                a.legend(fontsize=8)
         ax_f.set_ylabel("frequency [Hz]")
         ax_z.set_ylabel("damping ratio [-]")
         ax_z.set_xlabel("amplitude [m]")

@@ -22,6 +22,7 @@ import math
 import numpy as np
 from scipy import optimize
 
+from ...base.plausibility import level_failure
 from ...base.validation import check_magnitude, finite_array
 from ...fitting import covariance
 from ..modal.mode_target import ModeTarget
@@ -228,16 +229,21 @@ def sweep_modes(
     phd, conv_note, _ = _convention(W, X, arrs["F"], arrs["phase"], sweeps, quantity)
     H = X * np.exp(1j * phd) / arrs["F"]
     out = _targets(W, H, X, str(label), residual, "sweep", f"{len(sweeps)} sweep(s), {conv_note}")
-    if np.ptp(np.log(X)) > math.log(3.0):
+    wide = (
+        (
+            f"the points span displacement amplitudes {X.min():.3g}-{X.max():.3g} m (more "
+            "than a factor of 3): a nonlinear structure is not linear over all of them",
+        )
+        if np.ptp(np.log(X)) > math.log(3.0)
+        else ()
+    )
+    bad = level_failure(X, arrs["f"], quantity=quantity, name="response")
+    if wide or bad:
         out = ModalTargets(
             modes=out.modes,
             source=out.source,
             notes=out.notes,
-            warnings=out.warnings
-            + (
-                f"the points span displacement amplitudes "
-                f"{X.min():.3g}-{X.max():.3g} m (more than a factor of 3): a "
-                "nonlinear structure is not linear over all of them",
-            ),
+            warnings=out.warnings + wide,
+            failures=out.failures + ((bad,) if bad else ()),
         )
     return out

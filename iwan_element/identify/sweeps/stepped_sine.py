@@ -40,6 +40,7 @@ import math
 import numpy as np
 from scipy import optimize
 
+from ...base.plausibility import level_failure
 from ...base.validation import check_scalar
 from ...fitting import covariance
 from ..modal.curves import AmplitudeCurve
@@ -290,4 +291,7 @@ def stepped_sine_curve(
         method="stepped-sine",
         notes=notes,
         warnings=tuple(warns),
+        failures=tuple(
+            w for w in [level_failure(a[:, 0], a[:, 1], quantity=quantity, name="levels")] if w
+        ),
     )

@@ -32,6 +32,7 @@ import math
 
 import numpy as np
 
+from ...base.plausibility import V_MAX, level_failure
 from ...base.validation import check_magnitude, check_scalar, finite_array, same_length
 from ..modal.curves import AmplitudeCurve
 from ._sweep_fit import _identify
@@ -48,10 +49,6 @@ _CLASS = {
 }
 _EXPECTED = {"displacement": -0.5, "velocity": 0.0, "acceleration": 0.5}
 _PHASE_TOL = math.pi / 6  # largest distance of the resonance phase from its class
-#: Largest velocity amplitude [m/s] a vibration test of a jointed structure reaches; a
-#: response read as displacement beyond it is another quantity (issue 34 case 7: acceleration
-#: declared displacement moved at thousands of m/s).
-_V_MAX = 10.0
 
 
 def _inputs(f, F, response, phase, level):
@@ -180,18 +177,19 @@ def _quantity_failure(cls, quantity, W, X):
     class ``cls`` at resonance is a quarter period off (no sign convention does that), or
     half a period off (a sign convention, as in many real records, or displacement and
     acceleration swapped) with displacement amplitudes ``X`` [m] whose velocity ``W X``
-    exceeds :data:`_V_MAX`.
+    exceeds :data:`~iwan_element.base.plausibility.V_MAX` (issue 34 case 7: acceleration
+    declared displacement moved at thousands of m/s).
     """
     shift = (cls - _EXPECTED[quantity]) % 2
     if shift == 0:
         return ""
     fits = [q for q, c in _EXPECTED.items() if c == cls]
     v = float(np.max(W * X))
-    if shift == 1 and v <= _V_MAX:
+    if shift == 1 and v <= V_MAX:
         return ""
     why = (
         f"read as {quantity} it moves at up to {v:.3g} m/s, beyond any vibration test "
-        f"({_V_MAX:g} m/s)"
+        f"({V_MAX:g} m/s)"
         if shift == 1
         else "a quarter period off, which no sign convention gives"
     )
@@ -284,7 +282,9 @@ def sweep_curve(
     W = 2.0 * math.pi * arrs["f"]
     X = arrs["response"] / W ** _POWER[quantity]
     phd, conv_note, cls = _convention(W, X, arrs["F"], arrs["phase"], sweeps, quantity)
-    failure = _quantity_failure(cls, quantity, W, X)
+    failure = _quantity_failure(cls, quantity, W, X) or level_failure(
+        X, arrs["f"], quantity=quantity, name="response"
+    )
     H = X * np.exp(1j * phd) / arrs["F"]
     if max(float(np.ptp(np.log(X[i]))) for i in sweeps) < 0.1:
         deg = min(deg, len(sweeps) - 1)  # response held within 10 %: one amplitude a sweep
