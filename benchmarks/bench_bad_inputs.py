@@ -23,7 +23,9 @@ graded:
 ``git worktree add /tmp/probe-before d23532e``), bypassing the installed package.
 The first table holds new cases; the second the 16 cases of issue 45 (case 13, the hammer
 route on a linear structure, needs the issue's records and is not reproduced).
-``benchmarks/bad_inputs_before.json`` is the run against commit d23532e.
+``benchmarks/bad_inputs_before.json`` is the run against commit d23532e,
+``benchmarks/bad_inputs_after.json`` the run against the tree that closed issue 45
+(``--compare`` prints the two side by side).
 """
 
 from __future__ import annotations
