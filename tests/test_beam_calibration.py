@@ -46,7 +46,7 @@ def test_brake_reuss_calibrated_from_neutral_start_reproduces_the_measured_curve
     res = calibrate(start, measured)
     assert res.success, res.report()
     head = res.report().splitlines()
-    assert head[0].endswith(": usable") and "[1]" not in res.report()
+    assert head[0] == res.verdict() == "usable" and "[1]" not in res.report()
     assert any("friction" in line and "[-]" in line for line in head)
     lo, hi = start.amplitude_range
     m = (measured.amplitude >= lo) & (measured.amplitude <= hi)
