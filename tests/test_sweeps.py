@@ -281,3 +281,24 @@ def test_noisy_sweeps_stay_within_their_stated_errors(force_controlled):
     assert np.all(np.abs(curve.frequency - ft) < 3 * curve.frequency_std + 2e-4 * ft)
     assert np.all(np.abs(curve.damping_ratio - zt) < 3 * curve.damping_ratio_std + 0.03 * zt)
     assert np.all(curve.damping_ratio_std < 0.1 * zt)
+
+
+def test_a_resonance_narrower_than_the_frequency_step_is_refused_naming_it():
+    """A linear mode with zeta = 1e-4 at 80 Hz swept in 0.05 Hz steps: its half-power width
+    (2 zeta f = 0.016 Hz) is a third of the step, so only the point at the peak lies above 0.2
+    of it (the neighbours at +-0.05 Hz are at 0.16, from the closed-form receptance). Was: a
+    ValueError about an empty 'amplitude' the caller never gave."""
+    f = np.arange(79.2, 81.2001, 0.05)
+    w, w0, z = 2 * np.pi * f, 2 * np.pi * 80.0, 1e-4
+    H = 0.5 / (w0**2 - w**2 + 2j * z * w0 * w)
+    F = np.full(f.size, 0.1)
+    A = np.abs(H) * F * w**2
+    assert np.sum(np.abs(H) >= 0.2 * np.abs(H).max()) == 1  # the truth of the case
+    with pytest.raises(ValueError, match=r"peak_fraction: only 1 point.*sweep more finely"):
+        sweep_curve(f, F, A, np.angle(H))
+    # the same mode swept finely is read (the refusal is about the steps, not the mode)
+    f2 = np.arange(79.9, 80.1001, 0.002)
+    w2 = 2 * np.pi * f2
+    H2 = 0.5 / (w0**2 - w2**2 + 2j * z * w0 * w2)
+    c = sweep_curve(f2, np.full(f2.size, 0.1), np.abs(H2) * 0.1 * w2**2, np.angle(H2))
+    np.testing.assert_allclose(c.frequency, 80.0, rtol=1e-5)

@@ -187,6 +187,15 @@ def _identify(W, H, F, sweeps, deg, residual, frac, bins):
     keep = np.zeros(W.size, bool)
     for i in sweeps:
         keep[i] = np.abs(H[i]) >= frac * np.max(np.abs(H[i]))
+    if keep.sum() < 3:
+        steps = [float(np.median(np.diff(np.sort(W[i])))) / (2 * math.pi) for i in sweeps]
+        raise ValueError(
+            f"peak_fraction: only {int(keep.sum())} point(s) of the sweeps lie at or above "
+            f"{frac:g} x their sweep's peak |X/F|, and at least 3 are needed to read a "
+            f"frequency and a damping ratio: the frequency steps (median {min(steps):.3g} Hz) "
+            "are coarse against the resonance's width; sweep more finely near the peak or "
+            "lower peak_fraction"
+        )
     n_bins = int(np.clip(round(keep.sum() / 8), 3, 12)) if bins is None else bins
     amp, wr, z, sw, sz, excess = _binned(W, F * scale, H, keep, c, B, cov_cB, rms, n_bins)
     log.debug("bin scatter / propagated error: median %.3g", excess)
