@@ -51,6 +51,22 @@ def _bare(name: str) -> str:
     return _UNIT_IN_NAME.sub("", name).strip().lower()
 
 
+def column_index(header: list[str], spec, what: str, *, ncol: int | None = None) -> int:
+    """The column ``spec`` names: an index below ``ncol`` (default: the header's length), or
+    a header entry, whole or without its bracketed unit (case-insensitive), found once.
+    ``ValueError`` naming ``what`` otherwise.
+    """
+    if isinstance(spec, (int, np.integer)) and not isinstance(spec, bool):
+        n = len(header) if ncol is None else ncol
+        if not 0 <= spec < n:
+            raise ValueError(f"{what} column index {spec} is out of range [0, {n - 1}]")
+        return int(spec)
+    hits = [k for k, h in enumerate(header) if h == spec or _bare(h) == str(spec).strip().lower()]
+    if len(hits) != 1:
+        raise ValueError(f"{what} column {spec!r} not found in the header {header}")
+    return hits[0]
+
+
 def _resolve_columns(header: list[str] | None, columns, ncol: int) -> list[int]:
     if columns is None:
         if header is None:
@@ -77,18 +93,9 @@ def _resolve_columns(header: list[str] | None, columns, ncol: int) -> list[int]:
         )
     idx = []
     for q, c in zip(_QUANTITIES, columns):
-        if isinstance(c, (int, np.integer)) and not isinstance(c, bool):
-            if not 0 <= c < ncol:
-                raise ValueError(f"{q} column index {c} is out of range [0, {ncol - 1}]")
-            idx.append(int(c))
-        elif isinstance(c, str):
-            names = header or []
-            hits = [k for k, h in enumerate(names) if h == c or _bare(h) == c.strip().lower()]
-            if len(hits) != 1:
-                raise ValueError(f"{q} column {c!r} not found in the header {names}")
-            idx.append(hits[0])
-        else:
+        if not isinstance(c, (str, int, np.integer)) or isinstance(c, bool):
             raise ValueError(f"{q} column must be a name or an index, got {c!r}")
+        idx.append(column_index(header or [], c, q, ncol=ncol))
     if len(set(idx)) != 3:
         raise ValueError(f"time, displacement and force must be different columns, got {columns!r}")
     return idx

@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from ...base.validation import finite_array
-from .csv_input import FORCE_UNITS, TIME_UNITS, _bare, _column_unit, _data_lines
+from .csv_input import FORCE_UNITS, TIME_UNITS, _bare, _column_unit, _data_lines, column_index
 from .formats import _FREQUENCY_UNITS, _PHASE_UNITS, RESPONSE_UNITS, read_sweep_csv
 
 __all__ = ["file_kind", "read_vibration_csv", "KIND_READERS"]
@@ -40,11 +40,16 @@ def _guess_delimiter(line: str) -> str | None:
     return next((d for d in (",", ";", "\t") if d in line), None)
 
 
+def _is_time(name: str) -> bool:
+    """A header entry in a unit of time, or named time."""
+    return _column_unit(name) in TIME_UNITS or _bare(name) in ("time", "t")
+
+
 def _header_kind(header: list[str]) -> str | None:
     """The kind of record a header describes from its units and names, or None."""
     units = [_column_unit(h) for h in header]
     bare = [_bare(h) for h in header]
-    has_time = any(u in TIME_UNITS for u in units) or any(b in ("time", "t") for b in bare)
+    has_time = any(_is_time(h) for h in header)
     has_force = any(u in FORCE_UNITS for u in units) or any(b in ("force", "load") for b in bare)
     has_response = any(u in RESPONSE_UNITS for u in units)
     if any(u in _FREQUENCY_UNITS for u in units) and any(u in _PHASE_UNITS for u in units):
@@ -70,26 +75,18 @@ def file_kind(path: str | PathLike) -> str | None:
         return _header_kind(header)
 
 
-def _column(header, spec, what: str) -> int:
-    if isinstance(spec, (int, np.integer)) and not isinstance(spec, bool):
-        if not 0 <= spec < len(header):
-            raise ValueError(f"{what} column index {spec} is out of range [0, {len(header) - 1}]")
-        return int(spec)
-    hits = [k for k, h in enumerate(header) if h == spec or _bare(h) == str(spec).strip().lower()]
-    if len(hits) != 1:
-        raise ValueError(f"{what} column {spec!r} not found in the header {header}")
-    return hits[0]
-
-
 def _ringdown_columns(header, columns) -> tuple[int, int]:
     if columns is not None:
         if isinstance(columns, (str, bytes)) or len(columns) != 2:
             raise ValueError(
                 f"columns must be two names or indices (time, response), got {columns!r}"
             )
-        return _column(header, columns[0], "time"), _column(header, columns[1], "response")
+        return (
+            column_index(header, columns[0], "time"),
+            column_index(header, columns[1], "response"),
+        )
     units = [_column_unit(h) for h in header]
-    times = [k for k, h in enumerate(header) if units[k] in TIME_UNITS or _bare(h) in ("time", "t")]
+    times = [k for k, h in enumerate(header) if _is_time(h)]
     resp = [k for k, u in enumerate(units) if u in RESPONSE_UNITS and k not in times]
     if len(times) != 1 or len(resp) != 1:
         raise ValueError(
