@@ -139,6 +139,20 @@ class ResultShape:
             """The result as plain Python values (JSON-ready)."""
             ...
 
+    def _fold_failures(self) -> None:
+        """In ``__post_init__`` of a result with a ``failures`` field: ``failures`` and
+        ``warnings`` made tuples of str, each failure also among the warnings (once), so a
+        reader of the warnings alone sees why the result is not usable.
+        """
+        failures = tuple(str(w) for w in getattr(self, "failures", ()))
+        object.__setattr__(self, "failures", failures)
+        object.__setattr__(
+            self,
+            "warnings",
+            tuple(str(w) for w in self.warnings)
+            + tuple(w for w in failures if w not in self.warnings),
+        )
+
     def failure_reasons(self) -> tuple:
         """Why ``success`` is False, each reason in a tester's words (empty when it is True).
         The base reads the result's ``failures`` (the reasons its maker stated where it

@@ -78,13 +78,7 @@ class FrequencyResponse(ResultShape):
     failures: tuple = ()
 
     def __post_init__(self):
-        object.__setattr__(self, "failures", tuple(str(w) for w in self.failures))
-        object.__setattr__(
-            self,
-            "warnings",
-            tuple(str(w) for w in self.warnings)
-            + tuple(w for w in self.failures if w not in self.warnings),
-        )
+        self._fold_failures()
 
     @property
     def energy_error(self) -> np.ndarray:

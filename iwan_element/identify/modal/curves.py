@@ -125,13 +125,7 @@ class AmplitudeCurve(ResultShape):
         if not (np.isnan(floor) or (np.isfinite(floor) and floor >= 0)):
             raise ValueError(f"noise_floor must be >= 0 [m] or NaN, got {self.noise_floor!r}")
         object.__setattr__(self, "noise_floor", floor)
-        object.__setattr__(self, "failures", tuple(str(w) for w in self.failures))
-        object.__setattr__(
-            self,
-            "warnings",
-            tuple(str(w) for w in self.warnings)
-            + tuple(w for w in self.failures if w not in self.warnings),
-        )
+        self._fold_failures()
 
     def __len__(self) -> int:
         return int(self.amplitude.size)

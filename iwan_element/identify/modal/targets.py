@@ -66,13 +66,7 @@ class ModalTargets(ResultShape):
         if [m.index for m in modes] != list(range(1, len(modes) + 1)):
             raise ValueError("modes must be indexed 1, 2, ... in order")
         object.__setattr__(self, "modes", modes)
-        object.__setattr__(self, "failures", tuple(str(w) for w in self.failures))
-        object.__setattr__(
-            self,
-            "warnings",
-            tuple(str(w) for w in self.warnings)
-            + tuple(w for w in self.failures if w not in self.warnings),
-        )
+        self._fold_failures()
 
     # ---- views for the updater ---------------------------------------------------------
     @property
