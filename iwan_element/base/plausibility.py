@@ -37,14 +37,16 @@ import math
 
 import numpy as np
 
-__all__ = ["A_MAX", "V_MAX", "level_failure", "record_failure"]
+__all__ = ["A_MAX", "V_MAX", "QUANTITY_POWER", "level_failure", "record_failure"]
 
 #: Largest velocity amplitude [m/s] a vibration test of a jointed structure reaches.
 V_MAX = 10.0
 #: Largest acceleration amplitude [m/s^2] of one mode in such a test (about 2000 g).
 A_MAX = 2.0e4
 
-_POWER = {"displacement": 0, "velocity": 1, "acceleration": 2}
+#: The power of the angular frequency that turns a displacement amplitude into each
+#: quantity's amplitude (``Y = w**k X``).
+QUANTITY_POWER = {"displacement": 0, "velocity": 1, "acceleration": 2}
 _UNIT = {"displacement": "m", "velocity": "m/s", "acceleration": "m/s^2"}
 _MILLI = {"displacement": "mm", "velocity": "mm/s", "acceleration": "mm/s^2"}
 _MICRO = {"displacement": "um", "velocity": "um/s", "acceleration": "um/s^2"}
@@ -63,8 +65,8 @@ def _likely_slip(X, w, quantity: str) -> str:
     """The first reading of the same numbers that gives plausible levels: another quantity
     in SI units, the same quantity in milli- or micro-units, another quantity in milli-units.
     """
-    k = _POWER[quantity]
-    others = [q for q in _POWER if q != quantity]
+    k = QUANTITY_POWER[quantity]
+    others = [q for q in QUANTITY_POWER if q != quantity]
     tries = [(q, 1.0, f"{q} in {_UNIT[q]} (give quantity={q!r})") for q in others]
     tries += [
         (
@@ -83,7 +85,7 @@ def _likely_slip(X, w, quantity: str) -> str:
         (q, 1e-3, f"{q} in {_MILLI[q]} (give quantity={q!r} and divide by 1000)") for q in others
     ]
     for q, scale, text in tries:
-        if _plausible(scale * X * w ** (k - _POWER[q]), w):
+        if _plausible(scale * X * w ** (k - QUANTITY_POWER[q]), w):
             return f"it is likely {text}"
     return "check the quantity and the units of the record"
 
@@ -149,7 +151,7 @@ def record_failure(y, dt: float, *, quantity: str, name: str) -> str:
     name : str
         The argument that holds the record, named in the message.
     """
-    k = _POWER[quantity]
+    k = QUANTITY_POWER[quantity]
     if k == 2 or np.size(y) < 3:
         return ""
     d1 = np.gradient(np.asarray(y, dtype=float), dt)

@@ -13,13 +13,12 @@ import math
 
 import numpy as np
 
+from ...base.plausibility import QUANTITY_POWER
 from ...base.validation import check_magnitude, check_scalar, check_uniform_time, finite_array
 from ..modal.fit import fit_modal_iwan
 from ._fit_model import _neighbours, _polar, _Problem
 from .curve import _check_band
 from .saturation import cut_clipping, cut_flattened_peaks
-
-_QUANTITY_POWER = {"displacement": 0, "velocity": 1, "acceleration": 2}
 
 
 def _windows(prob, i_a, i_b, nw):
@@ -120,8 +119,8 @@ def _decay_start(prob, t_start, t0):
 
 
 def _check_options(quantity, order, stiffness, floor):
-    if quantity not in _QUANTITY_POWER:
-        raise ValueError(f"quantity must be one of {sorted(_QUANTITY_POWER)}, got {quantity!r}")
+    if quantity not in QUANTITY_POWER:
+        raise ValueError(f"quantity must be one of {sorted(QUANTITY_POWER)}, got {quantity!r}")
     if isinstance(order, bool) or not isinstance(order, (int, np.integer)) or not 1 <= order <= 10:
         raise ValueError(f"order must be an integer in [1, 10], got {order!r}")
     if stiffness not in ("harmonic", "secant"):
@@ -157,7 +156,7 @@ def _prepare(t, y, quantity, band, order, stiffness, floor, x_ref, t_start):
         band=[lo, hi],
         order=int(order),
     )
-    prob = _Problem(yy - yy.mean(), 1.0 / dt, (lo, hi), int(order), _QUANTITY_POWER[quantity], conv)
+    prob = _Problem(yy - yy.mean(), 1.0 / dt, (lo, hi), int(order), QUANTITY_POWER[quantity], conv)
     fs = prob.fs
     i_s = prob.i_s = _decay_start(prob, t_start, float(tt[0]))
     nw = max(16, int(round(2.0 * fs / math.sqrt(lo * hi))))  # two periods

@@ -76,7 +76,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from scipy import signal
 
-from ...base.plausibility import level_failure, record_failure
+from ...base.plausibility import QUANTITY_POWER, level_failure, record_failure
 from ...base.validation import check_magnitude, check_scalar, check_uniform_time, finite_array
 from ..modal.curves import DECAY_METHODS
 from ._filter import _decay_signal, _drift_terms, _noise_bandwidth
@@ -90,8 +90,6 @@ if TYPE_CHECKING:
 __all__ = ["amplitude_curve"]
 
 log = logging.getLogger(__name__)
-
-_QUANTITY_POWER = {"displacement": 0, "velocity": 1, "acceleration": 2}
 
 
 def _check_band(band, fs):
@@ -264,8 +262,8 @@ def _plan(fs, f_peak, n_periods, window):
 
 
 def _check_options(quantity, order, n_periods, window, snr_min, max_damping_ratio_std, method):
-    if quantity not in _QUANTITY_POWER:
-        raise ValueError(f"quantity must be one of {sorted(_QUANTITY_POWER)}, got {quantity!r}")
+    if quantity not in QUANTITY_POWER:
+        raise ValueError(f"quantity must be one of {sorted(QUANTITY_POWER)}, got {quantity!r}")
     if isinstance(order, bool) or not isinstance(order, (int, np.integer)) or not 1 <= order <= 10:
         raise ValueError(f"order must be an integer in [1, 10], got {order!r}")
     if method not in DECAY_METHODS:
@@ -428,7 +426,7 @@ def amplitude_curve(
     n_periods, window, snr_min, max_damping_ratio_std = _check_options(
         quantity, order, n_periods, window, snr_min, max_damping_ratio_std, method
     )
-    k_pow = _QUANTITY_POWER[quantity]
+    k_pow = QUANTITY_POWER[quantity]
     lo, hi = _check_band(band, fs)
     tt, yy, flat_note = cut_flattened_peaks(tt, yy, (lo, hi))
     notes = tuple(x for x in (clip_note, flat_note) if x)

@@ -56,7 +56,7 @@ from collections.abc import Mapping
 import numpy as np
 from scipy import signal
 
-from ...base.plausibility import level_failure, record_failure
+from ...base.plausibility import QUANTITY_POWER, level_failure, record_failure
 from ...base.validation import check_magnitude, check_scalar, check_uniform_time, finite_array
 from ..modal.mode_target import ModeTarget
 from ..modal.targets import ModalTargets
@@ -65,8 +65,6 @@ from ._mode_window import _auto_windows, _band_pass, _linear, _NoWindow, _propag
 __all__ = ["free_decay_modes"]
 
 log = logging.getLogger(__name__)
-
-_POWER = {"displacement": 0, "velocity": 1, "acceleration": 2}
 
 
 # ---------------------------------------------------------------------------- inputs
@@ -286,8 +284,8 @@ def _mode_dict(vals, std, m, s, tw, label, halves, j):
 
 # ---------------------------------------------------------------------------- driver
 def _options(quantity, window, span, snr_min, max_order, min_periods, filter_order, t):
-    if quantity not in _POWER:
-        raise ValueError(f"quantity must be one of {sorted(_POWER)}, got {quantity!r}")
+    if quantity not in QUANTITY_POWER:
+        raise ValueError(f"quantity must be one of {sorted(QUANTITY_POWER)}, got {quantity!r}")
     if window is not None:
         try:
             t0, t1 = (float(x) for x in window)
@@ -315,7 +313,7 @@ def _options(quantity, window, span, snr_min, max_order, min_periods, filter_ord
     ):
         raise ValueError(f"filter_order must be an integer in [2, 8], got {filter_order!r}")
     return {
-        "power": _POWER[quantity],
+        "power": QUANTITY_POWER[quantity],
         "window": window,
         "span": check_scalar("span", span, low=0.1, high=5.0),
         "snr_min": check_scalar("snr_min", snr_min, low=2.0, high=1e4),

@@ -22,7 +22,7 @@ import math
 import numpy as np
 from scipy import optimize
 
-from ...base.plausibility import level_failure
+from ...base.plausibility import QUANTITY_POWER, level_failure
 from ...base.validation import check_magnitude, finite_array
 from ...fitting import covariance
 from ..modal.mode_target import ModeTarget
@@ -31,7 +31,6 @@ from .sweep import _convention, _inputs
 
 __all__ = ["frf_modes", "sweep_modes"]
 
-_POWER = {"displacement": 0, "velocity": 1, "acceleration": 2}
 #: Relative rms misfit above which a single linear mode does not describe the points.
 _MISFIT = 0.05
 
@@ -161,8 +160,8 @@ def frf_modes(
     ValueError
         Malformed input (naming the argument), or points that hold no resonance.
     """
-    if quantity not in _POWER:
-        raise ValueError(f"quantity must be one of {sorted(_POWER)}, got {quantity!r}")
+    if quantity not in QUANTITY_POWER:
+        raise ValueError(f"quantity must be one of {sorted(QUANTITY_POWER)}, got {quantity!r}")
     ff = check_magnitude("f", finite_array("f", f, min_size=6), unit="Hz")
     if np.any(ff <= 0) or np.unique(ff).size != ff.size:
         raise ValueError("f must be > 0 [Hz] and distinct")
@@ -173,7 +172,7 @@ def frf_modes(
         )
     order = np.argsort(ff)
     W = 2 * math.pi * ff[order]
-    Hd = Hc[order] / (1j * W) ** _POWER[quantity]
+    Hd = Hc[order] / (1j * W) ** QUANTITY_POWER[quantity]
     return _targets(W, Hd, np.abs(Hd), str(label), residual, "frf", f"complex FRF ({quantity})")
 
 
@@ -221,11 +220,11 @@ def sweep_modes(
         Malformed input, a phase convention that cannot be told, or points without a
         resonance.
     """
-    if quantity not in _POWER:
-        raise ValueError(f"quantity must be one of {sorted(_POWER)}, got {quantity!r}")
+    if quantity not in QUANTITY_POWER:
+        raise ValueError(f"quantity must be one of {sorted(QUANTITY_POWER)}, got {quantity!r}")
     arrs, sweeps = _inputs(f, F, response, phase, level)
     W = 2.0 * math.pi * arrs["f"]
-    X = arrs["response"] / W ** _POWER[quantity]
+    X = arrs["response"] / W ** QUANTITY_POWER[quantity]
     phd, conv_note, _ = _convention(W, X, arrs["F"], arrs["phase"], sweeps, quantity)
     H = X * np.exp(1j * phd) / arrs["F"]
     out = _targets(W, H, X, str(label), residual, "sweep", f"{len(sweeps)} sweep(s), {conv_note}")

@@ -40,14 +40,12 @@ import math
 import numpy as np
 from scipy import optimize
 
-from ...base.plausibility import level_failure
+from ...base.plausibility import QUANTITY_POWER, level_failure
 from ...base.validation import check_scalar
 from ...fitting import covariance
 from ..modal.curves import AmplitudeCurve
 
 __all__ = ["stepped_sine_curve"]
-
-_POWER = {"displacement": 0, "velocity": 1, "acceleration": 2}
 
 
 def _level_arrays(i, level):
@@ -237,8 +235,8 @@ def stepped_sine_curve(
         Malformed levels, or a level whose fitted resonance lies outside its frequency lines
         (no peak in the data).
     """
-    if quantity not in _POWER:
-        raise ValueError(f"quantity must be one of {sorted(_POWER)}, got {quantity!r}")
+    if quantity not in QUANTITY_POWER:
+        raise ValueError(f"quantity must be one of {sorted(QUANTITY_POWER)}, got {quantity!r}")
     if control not in ("force", "response"):
         raise ValueError(f"control must be 'force' or 'response', got {control!r}")
     frac = check_scalar("peak_fraction", peak_fraction, low=0.1, high=0.95)
@@ -255,7 +253,7 @@ def stepped_sine_curve(
     levels = list(levels)
     if not levels:
         raise ValueError("levels must hold at least one (frequency, frf, amplitude) triple")
-    k = _POWER[quantity]
+    k = QUANTITY_POWER[quantity]
     rows, fits = [], []
     for i, level in enumerate(levels):
         row, fit = _fit_level(i, level, k, frac)

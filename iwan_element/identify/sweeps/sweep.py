@@ -32,14 +32,13 @@ import math
 
 import numpy as np
 
-from ...base.plausibility import V_MAX, level_failure
+from ...base.plausibility import QUANTITY_POWER, V_MAX, level_failure
 from ...base.validation import check_magnitude, check_scalar, finite_array, same_length
 from ..modal.curves import AmplitudeCurve
 from ._sweep_fit import _identify
 
 __all__ = ["sweep_curve"]
 
-_POWER = {"displacement": 0, "velocity": 1, "acceleration": 2}
 #: phase of each response quantity at a resonance, for a positive modal constant
 _CLASS = {
     -0.5: "receptance-like (displacement)",
@@ -268,8 +267,8 @@ def sweep_curve(
         single-mode inversion that gives damping ratios above 0.1 (not a lightly damped
         mode).
     """
-    if quantity not in _POWER:
-        raise ValueError(f"quantity must be one of {sorted(_POWER)}, got {quantity!r}")
+    if quantity not in QUANTITY_POWER:
+        raise ValueError(f"quantity must be one of {sorted(QUANTITY_POWER)}, got {quantity!r}")
     frac = check_scalar("peak_fraction", peak_fraction, low=0.05, high=0.9)
     deg = int(check_scalar("degree", degree, low=1, high=5))
     if deg != degree:
@@ -280,7 +279,7 @@ def sweep_curve(
         raise ValueError(f"bins must be an integer in [1, 50] or None, got {bins!r}")
     arrs, sweeps = _inputs(f, F, response, phase, level)
     W = 2.0 * math.pi * arrs["f"]
-    X = arrs["response"] / W ** _POWER[quantity]
+    X = arrs["response"] / W ** QUANTITY_POWER[quantity]
     phd, conv_note, cls = _convention(W, X, arrs["F"], arrs["phase"], sweeps, quantity)
     failure = _quantity_failure(cls, quantity, W, X) or level_failure(
         X, arrs["f"], quantity=quantity, name="response"
