@@ -46,6 +46,7 @@ from .modal import (
     modal_amplitude_curve,
     natural_frequencies,
     nonlinear_mode,
+    resolve_interface_effects,
 )
 from .reduced import ReducedModel, reduced_model, reduction_error
 from .simulation import (
@@ -60,7 +61,17 @@ from .simulation import (
     ringdown,
 )
 from .solid import SolidSpecimen, solid_preset
-from .specimens import Clamp, Excitation, InterfaceModel, PointMass, Setup, Shaker, Specimen, preset
+from .specimens import (
+    Clamp,
+    Excitation,
+    InterfaceEffect,
+    InterfaceModel,
+    PointMass,
+    Setup,
+    Shaker,
+    Specimen,
+    preset,
+)
 from .updating import LinearUpdateResult, linear_update, updatable
 
 __all__ = [
@@ -75,6 +86,8 @@ __all__ = [
     "forced_response",
     "Specimen",
     "InterfaceModel",
+    "InterfaceEffect",
+    "resolve_interface_effects",
     "Excitation",
     "RingdownResult",
     "ModeCouplingResult",

@@ -1,17 +1,20 @@
 """The analyses that read a specimen's modes without a time simulation: quasi-static modal
 analysis (QSMA: one mode's frequency and damping against amplitude), harmonic balance,
 frequency responses and nonlinear modes on the reduced model, and the specimen's vibration
-effects in their modal form.
+effects in their modal form and in the joint (:mod:`.interface`, :mod:`.interface_fit`).
 """
 
 from .effects import ZeroElement, effect_stack
 from .frequency import frequency_response, harmonic_balance, nonlinear_mode, specimen_system
+from .interface import InterfaceLaws, interface_laws, point_weights
+from .interface_fit import map_modal_effect
 from .limits import SIZE_LENGTH_FRACTION, macroslip_report, size_limit, size_warnings
 from .qsma import (
     extrapolation_warnings,
     linear_modes,
     modal_amplitude_curve,
     natural_frequencies,
+    resolve_interface_effects,
     static_modal_load,
 )
 
@@ -27,6 +30,11 @@ __all__ = [
     "specimen_system",
     "ZeroElement",
     "effect_stack",
+    "InterfaceLaws",
+    "interface_laws",
+    "point_weights",
+    "map_modal_effect",
+    "resolve_interface_effects",
     "size_limit",
     "size_warnings",
     "macroslip_report",

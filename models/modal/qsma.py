@@ -50,6 +50,8 @@ from ..reduced.dispatch import (
 from ..reduced.model import reduced_model, stuck_key, stuck_modes
 from ..solid.specimen import SolidSpecimen
 from ..specimens.specimen import Specimen
+from .interface import interface_laws
+from .interface_fit import fit_interface_effects
 from .limits import macroslip_report, size_warnings
 
 if TYPE_CHECKING:
@@ -62,6 +64,7 @@ __all__ = [
     "natural_frequencies",
     "static_modal_load",
     "extrapolation_warnings",
+    "resolve_interface_effects",
 ]
 
 log = logging.getLogger(__name__)
@@ -233,6 +236,8 @@ def static_modal_load(
     """
     X = _amplitudes(specimen, amplitude)
     mode = _check_mode(mode)
+    specimen = resolve_interface_effects(specimen)
+    laws = interface_laws(specimen)
     c = _condensed(_prepare_key(specimen, mode))
     pts = contact_points(specimen)
     itf = specimen.interface
@@ -254,6 +259,9 @@ def static_modal_load(
             u, alpha = u * r, alpha * r
         for _ in range(max_iter):
             F, kt = _interface_law(u, Fs, KT, pm, itf.chi, itf.beta)
+            if laws is not None:  # the interface effects beside each point's joint
+                Fe, Ke = laws.backbone(u)
+                F, kt = F + Fe, kt + Ke
             d = F - KT * u
             res = np.concatenate([u - alpha * ub + C @ d, [alpha * sb - sG @ d - Xt]])
             J = np.empty((n + 1, n + 1))
@@ -272,6 +280,8 @@ def static_modal_load(
             warns.append(_unsolved(Xt, max_iter, np.abs(u) / pm, X_prev, out_u, X, pm))
         out_u[j], out_a[j], X_prev = u, alpha, Xt
     F, _ = _interface_law(out_u, Fs, KT, pm, itf.chi, itf.beta)
+    if laws is not None:
+        F = F + laws.backbone(out_u)[0]
     d = F - KT * out_u
     x = out_a[:, None] * c["Yb"][None, :] - d @ c["YG"].T
     q = out_a * c["qb"] - d @ c["qG"]
@@ -287,6 +297,7 @@ def static_modal_load(
         "points": pts,
         "slip_ratio": np.abs(out_u) / pm,
         "warnings": warns,
+        "laws": laws,
     }
 
 
@@ -345,24 +356,10 @@ def modal_amplitude_curve(specimen: Specimen, *, mode: int = 1, amplitude=None) 
         amplitude, its slip state and the largest amplitude solved.
     """
     check_specimen(specimen)
-    r = static_modal_load(specimen, amplitude, mode=mode)
-    if r["warnings"]:
-        raise ValueError("amplitude: QSMA stops here: " + "; ".join(r["warnings"]))
-    slip = np.abs(r["slip"])
-    D = np.zeros(r["amplitude"].size)
-    for i, p in enumerate(r["points"].params):
-        D += dissipation(slip[:, i], p)
-    alpha, q = r["alpha"], r["q"]
-    w = np.sqrt(alpha / q)
-    floor = specimen.floor(mode)
-    zeta = floor + D / (2 * math.pi * alpha * q)
-    f = w / (2 * math.pi)
+    specimen = resolve_interface_effects(specimen)
+    r, f, zeta = _curve(specimen, mode, amplitude)
     X = r["amplitude"]
-    names = []
-    for e in specimen.effects:
-        if e.mode == mode:
-            f, zeta = EFFECTS[e.name].modal_form(X, f, zeta, floor, **e.parameters)
-            names.append(e.name)
+    names = [e.name for e in specimen.effects if e.mode == mode]
     slipped, failures = macroslip_report(specimen, r["slip_ratio"], X, unit="m", what="amplitudes")
     warns = extrapolation_warnings(specimen, X) + size_warnings(specimen, X) + slipped
     for w_ in warns + failures:
@@ -377,10 +374,66 @@ def modal_amplitude_curve(specimen: Specimen, *, mode: int = 1, amplitude=None) 
             f"transverse displacement at x = {specimen.sensor_position:.4g} m; linear "
             f"(stuck) frequency {r['omega0'] / (2 * math.pi):.4f} Hz"
             + (f"; with {' + '.join(names)} (modal form)" if names else "")
+            + (
+                f"; with {' + '.join(e.name for e in specimen.interface_effects)} in the joint"
+                if specimen.interface_effects
+                else ""
+            )
         ),
         warnings=tuple(warns),
         failures=tuple(failures),
     )
+
+
+def _curve(specimen, mode, amplitude):
+    """``(static solution, frequency [Hz], damping ratio [-])`` of QSMA (steps 3-6, module
+    docstring) with the interface effects' backbones in the static solve and their energy
+    per cycle in the damping (at the secant frequency), then the modal forms of ``mode``'s
+    effects on top. ``specimen``'s interface effects must have their joint values.
+    """
+    r = static_modal_load(specimen, amplitude, mode=mode)
+    if r["warnings"]:
+        raise ValueError("amplitude: QSMA stops here: " + "; ".join(r["warnings"]))
+    slip = np.abs(r["slip"])
+    D = np.zeros(r["amplitude"].size)
+    for i, p in enumerate(r["points"].params):
+        D += dissipation(slip[:, i], p)
+    alpha, q = r["alpha"], r["q"]
+    w = np.sqrt(alpha / q)
+    if r["laws"] is not None:
+        D += r["laws"].dissipation(slip, w).sum(axis=1)
+    floor = specimen.floor(mode)
+    zeta = floor + D / (2 * math.pi * alpha * q)
+    f = w / (2 * math.pi)
+    for e in specimen.effects:
+        if e.mode == mode:
+            f, zeta = EFFECTS[e.name].modal_form(r["amplitude"], f, zeta, floor, **e.parameters)
+    return r, f, zeta
+
+
+def _fit_curve(specimen, mode, X):
+    """QSMA's ``(frequency, damping ratio)`` for the interface fit."""
+    _, f, zeta = _curve(specimen, mode, X)
+    return f, zeta
+
+
+def resolve_interface_effects(specimen: Specimen | SolidSpecimen) -> Specimen | SolidSpecimen:
+    """``specimen`` with every interface effect given by its modal fit (``fitted_on``, e.g.
+    from ``VibrationDiagnosis.augment``) mapped to the contact points and fitted so that the
+    physical interface's QSMA reproduces the modal form on that mode
+    (:mod:`~iwan_element.models.modal.interface_fit`; each fitted effect states its
+    ``fit_misfit``); ``specimen`` itself when every effect has joint values. Every analysis
+    calls it; call it once to keep the joint values when carrying the joint to another
+    specimen (cached).
+    """
+    if all(e.resolved for e in specimen.interface_effects):
+        return specimen
+    return _resolved(specimen)
+
+
+@lru_cache(maxsize=16)
+def _resolved(specimen):
+    return fit_interface_effects(specimen, curve=_fit_curve)
 
 
 def extrapolation_warnings(specimen: Specimen, amplitude) -> list:

@@ -128,6 +128,7 @@ def stuck_key(specimen) -> Specimen | SolidSpecimen:
         amplitude_range=(1.0, 2.0),
         calibrated_range=None,
         effects=(),
+        interface_effects=(),
     )
 
 

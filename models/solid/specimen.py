@@ -48,6 +48,7 @@ _FREE_FIELDS = {
     "modal_damping",
     "calibrated_range",
     "effects",
+    "interface_effects",
     "reference",
     "setup",
     "youngs_modulus",
@@ -203,10 +204,14 @@ class SolidSpecimen:
             )
         return SolidSpecimen(self.specimen.replace(**changes), self.model)
 
-    def with_effects(self, effects: dict, *, mode: int = 1, calibrated_range=None) -> SolidSpecimen:
+    def with_effects(
+        self, effects: dict, *, mode: int = 1, calibrated_range=None, form: str = "modal"
+    ) -> SolidSpecimen:
         """:meth:`Specimen.with_effects` on the solid (the bodies unchanged)."""
         return SolidSpecimen(
-            self.specimen.with_effects(effects, mode=mode, calibrated_range=calibrated_range),
+            self.specimen.with_effects(
+                effects, mode=mode, calibrated_range=calibrated_range, form=form
+            ),
             self.model,
         )
 

@@ -16,11 +16,11 @@ import math
 from dataclasses import dataclass, field, fields, replace
 
 from iwan_element.base.validation import check_int, plain_fields, plain_number
-from iwan_element.effects import EFFECTS
 
+from .effects import InterfaceEffect, SpecimenEffect, check_range
 from .setups import Setup
 
-__all__ = ["InterfaceModel", "Excitation", "Specimen", "SpecimenEffect"]
+__all__ = ["InterfaceModel", "Excitation", "Specimen"]
 
 _BOUNDARIES = ("free-free", "clamped-free", "clamped-driven")
 _EXCITATIONS = ("hammer", "shaker", "base")
@@ -131,84 +131,6 @@ class Excitation:
 
 
 @dataclass(frozen=True)
-class SpecimenEffect:
-    """A named vibration effect carried by a specimen, in its modal (amplitude-domain) form.
-
-    Parameters
-    ----------
-    name : str
-        A name of :data:`iwan_element.EFFECTS` with a modal form (``modal_specs``).
-    values : mapping or tuple of (str, float) pairs
-        The effect's modal parameters (``EFFECTS[name].modal_specs``; amplitudes in metres
-        at the specimen's sensor point), each inside its declared bounds; those with a
-        declared default (e.g. the ``shape`` of ``macroslip_onset``) may be left out;
-        stored as a sorted tuple of pairs (hashable).
-    mode : int
-        Elastic mode the effect acts on (1: lowest).
-    calibrated_range : tuple of 2 floats or None
-        Sensor amplitudes [m] the values were fitted on.
-
-    Notes
-    -----
-    The effect's modal form (``modal_form(X, f, zeta, zeta_floor, **values)``) is applied on
-    top of the QSMA curve of that mode (:func:`~iwan_element.models.modal.modal_amplitude_curve`).
-    """
-
-    name: str
-    values: tuple
-    mode: int = 1
-    calibrated_range: tuple | None = None
-
-    def __post_init__(self):
-        plain_fields(self)
-        cls = EFFECTS.get(self.name)
-        if cls is None or not cls.modal_specs:
-            known = sorted(n for n, c in EFFECTS.items() if c.modal_specs)
-            raise ValueError(
-                f"name must be an effect with a modal form, one of {known}, got {self.name!r}"
-            )
-        want = {sp.name: sp for sp in cls.modal_specs}
-        vals = {
-            **{k: sp.default for k, sp in want.items() if sp.default is not None},
-            **dict(self.values),
-        }  # a modal value with a default may be left out
-        if set(vals) != set(want):
-            raise ValueError(f"values of {self.name!r} must be {sorted(want)}, got {sorted(vals)}")
-        vals = {k: plain_number(v) for k, v in vals.items()}
-        for k, v in vals.items():
-            sp = want[k]
-            if (
-                isinstance(v, bool)
-                or not isinstance(v, (int, float))
-                or not math.isfinite(v)
-                or not sp.lower <= v <= sp.upper
-            ):
-                raise ValueError(
-                    f"{self.name} {k} must be a finite number in [{sp.lower}, "
-                    f"{sp.upper}] {sp.unit}, got {v!r}"
-                )
-        object.__setattr__(self, "values", tuple(sorted((k, float(v)) for k, v in vals.items())))
-        if isinstance(self.mode, bool) or not isinstance(self.mode, int) or self.mode < 1:
-            raise ValueError(f"mode must be an integer >= 1, got {self.mode!r}")
-        if self.calibrated_range is not None:
-            object.__setattr__(
-                self, "calibrated_range", _range("calibrated_range", self.calibrated_range)
-            )
-
-    @property
-    def parameters(self) -> dict:
-        """The modal parameters as a dict (SI units)."""
-        return dict(self.values)
-
-
-def _range(name, r):
-    rr = tuple(float(a) for a in r)
-    if len(rr) != 2 or not (0 < rr[0] < rr[1]) or not all(map(math.isfinite, rr)):
-        raise ValueError(f"{name} must be (low, high) with 0 < low < high [m], got {r!r}")
-    return rr
-
-
-@dataclass(frozen=True)
 class Specimen:
     """A two-beam bolted lap-joint specimen (SI units). See the module docstring.
 
@@ -264,7 +186,12 @@ class Specimen:
         amplitudes outside it.
     effects : tuple of SpecimenEffect
         Vibration effects beyond the Iwan interface (hardening, macroslip onset, ...) in their
-        modal form, e.g. from ``VibrationDiagnosis.augment``; QSMA applies them.
+        modal form on one mode (``VibrationDiagnosis.augment(..., form="modal")``); QSMA, the
+        frequency-domain routes and the transient apply them to that mode.
+    interface_effects : tuple of InterfaceEffect
+        The same effects in the joint (physical form, ``VibrationDiagnosis.augment``'s
+        default): a law at contact points that every analysis runs, in every mode
+        (:mod:`~iwan_element.models.specimens.effects`).
     interface : InterfaceModel
     setup : Setup
         What the test attaches (sensor masses, a shaker, a clamp that is not rigid;
@@ -299,6 +226,7 @@ class Specimen:
     modal_damping: tuple = ()
     calibrated_range: tuple | None = None
     effects: tuple = ()
+    interface_effects: tuple = ()
     setup: Setup = field(default_factory=Setup)
     n_elements: int = 16
     reference: str = ""
@@ -315,10 +243,12 @@ class Specimen:
         object.__setattr__(self, "bolt_positions", bp)
         self._check_holes()
         self._check_placements()
-        object.__setattr__(self, "amplitude_range", _range("amplitude_range", self.amplitude_range))
+        object.__setattr__(
+            self, "amplitude_range", check_range("amplitude_range", self.amplitude_range)
+        )
         if self.calibrated_range is not None:
             object.__setattr__(
-                self, "calibrated_range", _range("calibrated_range", self.calibrated_range)
+                self, "calibrated_range", check_range("calibrated_range", self.calibrated_range)
             )
         md = self.modal_damping
         md = None if isinstance(md, (str, bytes)) else tuple(plain_number(z) for z in md)
@@ -338,6 +268,12 @@ class Specimen:
         if not all(isinstance(e, SpecimenEffect) for e in eff):
             raise ValueError("effects must be a sequence of SpecimenEffect")
         object.__setattr__(self, "effects", eff)
+        ife = tuple(self.interface_effects)
+        if not all(isinstance(e, InterfaceEffect) for e in ife):
+            raise ValueError("interface_effects must be a sequence of InterfaceEffect")
+        if len({e.name for e in ife}) != len(ife):
+            raise ValueError("interface_effects: each effect at most once")
+        object.__setattr__(self, "interface_effects", ife)
         if (
             isinstance(self.n_elements, bool)
             or not isinstance(self.n_elements, int)
@@ -469,20 +405,33 @@ class Specimen:
         md = self.modal_damping
         return md[mode - 1] if mode <= len(md) else self.interface.damping_floor
 
-    def with_effects(self, effects: dict, *, mode: int = 1, calibrated_range=None) -> Specimen:
-        """A copy carrying ``effects`` ({name: modal values}) on ``mode`` in addition to its
-        own (an effect already carried on that mode is replaced). ``calibrated_range`` [m]:
-        the amplitudes the values were fitted on; the copy's calibrated range then spans
+    def with_effects(
+        self, effects: dict, *, mode: int = 1, calibrated_range=None, form: str = "modal"
+    ) -> Specimen:
+        """A copy carrying ``effects`` ({name: modal values}, fitted on ``mode``) in addition to
+        its own (an effect already carried on that mode, or in the joint, is replaced).
+
+        ``form="modal"``: as :class:`SpecimenEffect` entries (a correction of ``mode``'s
+        curve). ``form="physical"``: as :class:`InterfaceEffect` entries in the joint, defined
+        by that modal fit (``fitted_on``) until the model maps them to joint values
+        (:func:`~iwan_element.models.modal.resolve_interface_effects`). ``calibrated_range``
+        [m]: the amplitudes the values were fitted on; the copy's calibrated range then spans
         its own and that one.
         """
+        if form not in ("modal", "physical"):
+            raise ValueError(f"form must be 'modal' or 'physical', got {form!r}")
         new = tuple(
             SpecimenEffect(n, tuple(v.items()), mode, calibrated_range) for n, v in effects.items()
         )
-        keep = tuple(e for e in self.effects if not (e.mode == mode and e.name in effects))
         cr = self.calibrated_range
         if calibrated_range is not None:
-            lo, hi = _range("calibrated_range", calibrated_range)
+            lo, hi = check_range("calibrated_range", calibrated_range)
             cr = (lo, hi) if cr is None else (min(cr[0], lo), max(cr[1], hi))
+        if form == "physical":
+            keep_i = tuple(e for e in self.interface_effects if e.name not in effects)
+            ife = keep_i + tuple(InterfaceEffect(e.name, fitted_on=e) for e in new)
+            return replace(self, interface_effects=ife, calibrated_range=cr)
+        keep = tuple(e for e in self.effects if not (e.mode == mode and e.name in effects))
         return replace(self, effects=keep + new, calibrated_range=cr)
 
     def replace(self, **changes) -> Specimen:
