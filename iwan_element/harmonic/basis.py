@@ -134,12 +134,12 @@ class Harmonics:
     ) -> tuple[NDArray[np.float64], NDArray[np.float64] | None, NDArray[np.float64]]:
         """AFT of the nonlinear coordinates' forces from their coefficients ``cz`` (n_z, nc):
         the joints' deficits ``g = F(z) - KT z`` on their exact steady loops (exact
+        Jacobian) with any force beside a joint (``system.joint_forms``, compiled, exact
         Jacobian), then the element ports' ``gain F(y, y')``: compiled with the exact
-        Jacobian where the element states its periodic form (:meth:`_compiled_port`),
-        otherwise on the steady loop of the element stepped sample by sample
-        (:func:`element_loop`; Jacobian by forward differences: the elements' tangents alone
-        leave out their reversal columns, and Newton then failed on the measured
-        Brake-Reuss sweeps).
+        Jacobian where the element states its periodic form (:meth:`_form`), otherwise on
+        the steady loop of the element stepped sample by sample (:func:`element_loop`;
+        Jacobian by forward differences: the elements' tangents alone leave out their
+        reversal columns, and Newton then failed on the measured Brake-Reuss sweeps).
         Returns ``(cg, dcg/dcz or None, dissipation per period [J] per coordinate)``.
         """
         nj = len(system.joints)
@@ -148,6 +148,13 @@ class Harmonics:
         cg = np.empty_like(cz)
         cg[:nj] = (F - system.KT[:, None] * Z) @ self.P.T
         J = periodic_harmonic_jacobian(K, A, self.P, self.E, shift=system.KT) if jacobian else None
+        for i, form in enumerate(system.joint_forms):
+            if form is not None:
+                f, d, Jf = self._form(form, cz[i], W, jacobian)
+                cg[i] += f
+                D[i] += d
+                if J is not None:
+                    J[i] += Jf
         if not system.ports:
             return cg, J, D
         De = np.empty(len(system.ports))
@@ -155,9 +162,10 @@ class Harmonics:
         for k, port in enumerate(system.ports):
             c = cz[nj + k]
             if port.form is not None:
-                cg[nj + k], De[k], Jk = self._compiled_port(port, c, W, jacobian)
+                f, d, Jk = self._form(port.form, c, W, jacobian)
+                cg[nj + k], De[k] = port.gain * f, port.gain * d
                 if Je is not None:
-                    Je[k] = Jk
+                    Je[k] = port.gain * Jk
                 continue
             f, De[k] = self._port(port, c, W)
             cg[nj + k] = f
@@ -169,25 +177,25 @@ class Harmonics:
                     Je[k, :, d] = (self._port(port, cp, W)[0] - f) / h
         return cg, (np.concatenate([J, Je]) if jacobian else None), np.concatenate([D, De])
 
-    def _compiled_port(self, port, c, W, jacobian):
+    def _form(self, form, c, W, jacobian):
         """Force coefficients, dissipation [J] and (with ``jacobian``) the exact Jacobian of
-        an element port whose element states its periodic form (``port.form``): its Masing
-        rows on their steady loop (:func:`~iwan_element.core.periodic.periodic_rows`, the
-        joints' kernel) with the reversal columns of their sample Jacobian, its history-free
-        laws ``f(y, y')`` with ``P (f_y E + W f_v E')``; the laws' dissipation is the work
-        of their force over the period, ``(2 pi / N) sum f dy/dtau``.
+        a force stated in the compiled kernel's terms (a :class:`~iwan_element.core.periodic.
+        PeriodicForm`) on a coordinate with coefficients ``c``: its Masing rows on their
+        steady loop (:func:`~iwan_element.core.periodic.periodic_rows`, the joints' kernel)
+        with the reversal columns of their sample Jacobian, its history-free laws
+        ``f(y, y')`` with ``P (f_y E + W f_v E')``; the laws' dissipation is the work of
+        their force over the period, ``(2 pi / N) sum f dy/dtau``.
         """
         y, dy = self.E @ c, self.dE @ c
-        lp = port.form.loop(y, W * dy)
-        g = port.gain
+        lp = form.loop(y, W * dy)
         D = lp.dissipation + 2.0 * np.pi / self.samples * float(lp.law_force @ dy)
         if not jacobian:
-            return g * (self.P @ lp.force), g * D, None
+            return self.P @ lp.force, D, None
         J = periodic_harmonic_jacobian(
             lp.tangent[None], lp.anchor[None], self.P, self.E, shift=np.array([lp.shift])
         )[0]
         J += self.P @ (lp.law_du[:, None] * self.E + W * lp.law_dv[:, None] * self.dE)
-        return g * (self.P @ lp.force), g * D, g * J
+        return self.P @ lp.force, D, J
 
     def _port(self, port, c, W):
         """Force coefficients and dissipation of an element port with coefficients ``c``."""

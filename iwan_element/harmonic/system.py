@@ -144,6 +144,11 @@ class ModalSystem:
         Named groups of joints (e.g. the contact points around one bolt): the results say
         when a whole group is fully slipped (:func:`~iwan_element.harmonic.result.macroslip_lines`);
         default each joint on its own.
+    joint_forms : sequence of PeriodicForm or None, optional
+        A force beside each joint on its own coordinate (length ``n_j``, None where there is
+        none; default none): e.g. the vibration effects a contact point carries, stated in
+        the compiled kernel's terms, evaluated with the joint's exact steady loop and exact
+        Jacobian on the same slip (:meth:`.basis.Harmonics.nonlinear_forces`).
     """
 
     omega: np.ndarray
@@ -155,6 +160,7 @@ class ModalSystem:
     notes: str = ""
     ports: tuple = ()
     joint_groups: tuple = ()
+    joint_forms: tuple = ()
     constants: np.ndarray = field(init=False, repr=False)
 
     def __post_init__(self):
@@ -186,6 +192,14 @@ class ModalSystem:
         object.__setattr__(self, "ports", ps)
         object.__setattr__(self, "residual", R)
         object.__setattr__(self, "joint_groups", _groups(self.joint_groups, len(js)))
+        jf = tuple(self.joint_forms)
+        if jf and (
+            len(jf) != len(js) or not all(f is None or isinstance(f, PeriodicForm) for f in jf)
+        ):
+            raise ValueError(
+                f"joint_forms must hold a PeriodicForm or None for each of the {len(js)} joints"
+            )
+        object.__setattr__(self, "joint_forms", jf if any(f is not None for f in jf) else ())
         c = constants_from_arrays(
             [j.Fs for j in js], [j.KT for j in js], [j.chi for j in js], [j.beta for j in js]
         )
@@ -250,6 +264,7 @@ class ModalSystem:
             notes=self.notes,
             ports=self.ports + tuple(ports),
             joint_groups=self.joint_groups,
+            joint_forms=self.joint_forms,
         )
 
     def denominators(self, w: float, *, xi: float = 0.0) -> np.ndarray:

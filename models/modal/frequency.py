@@ -3,7 +3,9 @@
 Every route reads the specimen's one reduced model (:func:`~iwan_element.models.reduced.
 reduced_model`: stuck modes with their own floors, residual flexibility, the contact points'
 exact Iwan elements on the slips) and the engine of :mod:`iwan_element.harmonic`
-(``docs/harmonic_balance.md``). The specimen's vibration effects (``specimen.effects``, e.g.
+(``docs/harmonic_balance.md``). The specimen's interface effects (``specimen.interface_effects``,
+physical form) sit beside each contact point's joint on its slip, in the compiled kernel
+with exact Jacobians. The specimen's modal vibration effects (``specimen.effects``, e.g.
 from ``VibrationDiagnosis.augment``) act as in the transient (:mod:`.transient`): their
 time-domain elements (``EFFECTS[name]`` with the joint values of ``modal_to_joint`` at unit
 modal mass in sensor units) on the sensor-scaled modal coordinate ``Y = s q_r`` of their
@@ -28,16 +30,31 @@ from ..reduced.dispatch import check_specimen
 from ..reduced.model import reduced_model
 from ..specimens.specimen import Specimen
 from .effects import effect_stack
+from .interface import interface_laws
 from .limits import macroslip_report, size_limit, size_warnings
-from .qsma import extrapolation_warnings
+from .qsma import extrapolation_warnings, resolve_interface_effects
 
 __all__ = ["harmonic_balance", "frequency_response", "nonlinear_mode", "specimen_system"]
 
 
 def specimen_system(specimen: Specimen, *, n_modes: int = 8) -> ModalSystem:
-    """The specimen's modal system: its reduced model with its effects as element ports."""
+    """The specimen's modal system: its reduced model, its interface effects beside each
+    contact point's joint (``joint_forms``: each point's effect stack in the compiled kernel's
+    terms, :meth:`~iwan_element.models.modal.interface.InterfaceLaws.forms`), and its modal
+    effects as element ports.
+    """
+    specimen = resolve_interface_effects(specimen)
     red = reduced_model(specimen, n_modes=n_modes)
     sysm = red.system
+    laws = interface_laws(specimen)
+    if laws is not None:
+        forms = laws.forms()
+        if any(f is None for f, st in zip(forms, laws.stacks) if st):
+            raise ValueError(
+                f"interface_effects {list(laws.names)}: every effect in the joint must state "
+                "its periodic form (Effect.periodic_form) for the frequency-domain routes"
+            )
+        sysm = replace(sysm, joint_forms=forms)
     ports, rows = [], []
     nz = sysm.n_z
     for mode in sorted({e.mode for e in specimen.effects}):

@@ -14,7 +14,10 @@ basis of the null space of ``R`` and ``R^+`` its pseudo-inverse (``R T = [0 | I]
 ``C' = T^T C T`` (:mod:`~iwan_element.models.reduced.damping`), and each tangential Iwan element is
 a coordinate-marker pair (the slip coordinate against a ground coordinate) of
 :func:`iwan_element.exudyn.add_iwan_interface`: the compiled per-point law, one commit of all
-points per accepted step and the energy records. The interface force ``-F_i`` acts on slip
+points per accepted step and the energy records. A specimen with interface effects
+(``specimen.interface_effects``) puts each point's effect stack around its ``IwanJoint``
+(:meth:`~iwan_element.models.modal.interface.InterfaceLaws.elements`): the interface's
+Python route, one connector per point. The interface force ``-F_i`` acts on slip
 coordinate ``u_i``, which is ``G^T F`` in ``x``. A force ``F(t)`` on a port coordinate ``p_j``
 is the force ``F R_j^T`` in ``x`` (its virtual work is ``F dp_j``); a prescribed port is a
 coordinate constraint, whose force is the reaction. With ``tangential="linear"`` a built-in
@@ -54,6 +57,8 @@ from iwan_element import IwanJoint
 from iwan_element.exudyn import IwanInterface, add_iwan_interface
 
 from ..linear.system import LinearSystem
+from ..modal.interface import interface_laws
+from ..modal.qsma import resolve_interface_effects
 from ..reduced.damping import floor_damping
 from ..reduced.dispatch import contact_points, linear_system
 from ..solid.specimen import SolidSpecimen
@@ -227,6 +232,7 @@ def build_host(
     """
     if tangential not in ("iwan", "linear"):
         raise ValueError(f"tangential must be 'iwan' or 'linear', got {tangential!r}")
+    specimen = resolve_interface_effects(specimen)
     L: LinearSystem = linear_system(specimen)
     pts = contact_points(specimen)
     rows = ports or {}
@@ -256,7 +262,13 @@ def build_host(
         mbs.SetPostStepUserFunction(post_step)
     iface = None
     if tangential == "iwan":
-        joints = [IwanJoint(p) for p in pts.params] if joint_elements else list(pts.params)
+        laws = interface_laws(specimen)
+        if laws is not None:  # each point's joint with its interface effects (Python route)
+            joints = laws.elements(pts.params)
+        elif joint_elements:
+            joints = [IwanJoint(p) for p in pts.params]
+        else:
+            joints = list(pts.params)
         iface = add_iwan_interface(mbs, pairs, joints, depth=depth)
     else:
         for pair, kt in zip(pairs, pts.KT):

@@ -34,6 +34,7 @@ import numpy as np
 from iwan_element.base.stages import stop_at
 from iwan_element.base.validation import check_int, check_scalar
 
+from ..modal.interface import interface_laws
 from ..modal.qsma import linear_modes, static_modal_load
 from ..reduced.damping import FloorWork
 from ..reduced.dispatch import axis_rows, check_specimen
@@ -168,7 +169,13 @@ def _initial_energy(model, rel, effs, tangential) -> tuple:
     """
     kin0, pot0 = model.beam_energy()
     e0 = pot0 + model.spring_energy()
-    if tangential == "iwan":
+    laws = interface_laws(model.specimen)
+    if tangential == "iwan" and laws is not None:  # each point's stack loaded from rest
+        for el, u in zip(laws.elements(model.points.params), rel["slip"]):
+            el.trial(float(u))
+            el.commit()
+            e0 += el.work
+    elif tangential == "iwan":
         e0 += virgin_joint_energy(rel["slip"], model.points.params)
     for eff in effs:
         e0 += eff.start(eff.s * float(eff.a_free @ rel["x"]))
