@@ -174,8 +174,9 @@ def test_predict_bands_cover_the_hidden_truth_and_extrapolation_is_stated(base):
 def test_augmented_specimen_carries_the_effect_and_its_qsma_is_the_fit():
     """Diagnosis against the beam model: the prediction is the Brake-Reuss specimen's QSMA,
     the 'measurement' the same specimen carrying a hidden hardening (plus noise). The
-    augmented specimen's own QSMA reproduces the diagnosis's curve, and the specimen warns
-    beyond the amplitudes it was calibrated on."""
+    specimen augmented in the modal form reproduces the diagnosis's curve by QSMA exactly,
+    and the specimen warns beyond the amplitudes it was calibrated on (the joint's form:
+    tests/test_interface_effects.py)."""
     from iwan_element import models
 
     spec = models.preset("brake-reuss")
@@ -195,7 +196,7 @@ def test_augmented_specimen_carries_the_effect_and_its_qsma_is_the_fit():
     )
     assert g.effect == "hardening", g.report()
     assert g.parameters["hardening"]["k3_per_mass"] == pytest.approx(k3, rel=0.2)
-    aug = g.augment(spec)
+    aug = g.augment(spec, form="modal")
     assert [e.name for e in aug.effects] == ["hardening"]
     assert aug.calibrated_range == pytest.approx((2e-6, Xm.max()))
     q = models.modal_amplitude_curve(aug, amplitude=Xm)

@@ -13,8 +13,10 @@ from ...effects import EFFECTS
 __all__ = ["augmented", "check_amplitude_units"]
 
 
-def augmented(diag, target, *, modal_mass, slip_per_amplitude, mode) -> Any:
+def augmented(diag, target, *, modal_mass, slip_per_amplitude, mode, form) -> Any:
     """:meth:`VibrationDiagnosis.augment` of the diagnosis ``diag`` (see there)."""
+    if form not in ("physical", "modal"):
+        raise ValueError(f"form must be 'physical' or 'modal', got {form!r}")
     if hasattr(target, "with_effects"):
         if not diag.effects:
             return target
@@ -24,6 +26,7 @@ def augmented(diag, target, *, modal_mass, slip_per_amplitude, mode) -> Any:
             {n: dict(diag.parameters[n]) for n in diag.effects},
             mode=mode,
             calibrated_range=diagnosed,
+            form=form,
         )
     check_element(target, name="target")
     if modal_mass is None:

@@ -173,6 +173,7 @@ class VibrationDiagnosis(Probable, ResultShape):
         modal_mass: float | None = None,
         slip_per_amplitude: float = 1.0,
         mode: int = 1,
+        form: str = "physical",
     ) -> Any:
         """The model with the named effects added: a beam specimen or a joint element.
 
@@ -180,11 +181,17 @@ class VibrationDiagnosis(Probable, ResultShape):
         ----------
         target : Specimen or joint element
             A :class:`~iwan_element.models.specimens.Specimen` (anything with
-            ``with_effects``): returned carrying the named effects in their modal form with
-            the fitted values, on ``mode``, calibrated over the diagnosed amplitudes (its QSMA
-            curve is then the diagnosis's ``model_frequency``/``model_damping_ratio`` when the
-            prediction was that specimen's QSMA). Or a joint element, wrapped in the effects
-            converted to joint terms.
+            ``with_effects``): returned carrying the named effects fitted on ``mode``,
+            calibrated over the diagnosed amplitudes, in the joint (``form="physical"``:
+            ``InterfaceEffect`` entries, a law at the contact points that every analysis
+            runs in every mode; the model maps the fitted values to the points through the
+            slip per sensor amplitude of ``mode`` and fits them so that the joint's QSMA on
+            ``mode`` reproduces the fitted curve, :func:`~iwan_element.models.
+            resolve_interface_effects`, docs/vibration_effects.md) or in their modal form
+            (``form="modal"``: ``SpecimenEffect`` entries acting on ``mode`` alone; its QSMA
+            curve is then the diagnosis's ``model_frequency``/``model_damping_ratio`` when
+            the prediction was that specimen's QSMA). Or a joint element, wrapped in the
+            effects converted to joint terms.
         modal_mass : float, keyword-only
             For a joint: modal mass [kg] of the mode the curves describe, ``> 0``.
         slip_per_amplitude : float, keyword-only
@@ -192,6 +199,9 @@ class VibrationDiagnosis(Probable, ResultShape):
             spring ``k`` adds ``k r^2`` to the modal stiffness, a dashpot ``c`` adds ``c r^2``.
         mode : int, keyword-only
             For a specimen: the elastic mode the curves describe (1: lowest).
+        form : {"physical", "modal"}, keyword-only
+            For a specimen: the effects in the joint (default) or on ``mode`` alone (where a
+            user has one mode and wants the fitted curve exactly).
 
         Returns
         -------
@@ -209,7 +219,12 @@ class VibrationDiagnosis(Probable, ResultShape):
             is neither a specimen nor a joint element; a missing or bad ``modal_mass``.
         """
         return augmented(
-            self, target, modal_mass=modal_mass, slip_per_amplitude=slip_per_amplitude, mode=mode
+            self,
+            target,
+            modal_mass=modal_mass,
+            slip_per_amplitude=slip_per_amplitude,
+            mode=mode,
+            form=form,
         )
 
     def predict(self, amplitude, *, base=None) -> AmplitudeCurve:
