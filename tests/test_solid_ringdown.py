@@ -132,3 +132,61 @@ def test_the_solid_takes_a_hammer_impact_and_books_its_work(solid):
     assert r.max_energy_error < 1e-3
     assert r.energy["input_work"][-1] > 0
     assert r.curve.amplitude.size >= 1
+
+
+def _replayed_interface(spec, X=60e-6, n=150):
+    """A free decay of ``spec`` from mode 1's static state at ``X`` [m] in Exudyn (the host of
+    the transient, 32 steps a period), then every contact point's law (its effects around its
+    IwanJoint) replayed alone on the point's recorded slips: the largest force difference
+    over the largest force, and the points' stacks."""
+    import exudyn as exu
+    from iwan_element.models.modal import interface_laws, static_modal_load
+    from iwan_element.models.simulation import build_host
+    from iwan_element.models.simulation.solver import solver_settings
+
+    from iwan_element import IwanJoint
+
+    model = build_host(spec)
+    rel = static_modal_load(spec, [X], mode=1)
+    model.set_state(rel["x"][0])
+    h = 2 * np.pi / rel["omega0"] / 32
+    z0 = model.T_inv @ rel["x"][0]
+    sim = solver_settings(force_scale=float(np.max(np.abs((model.Kb + model.Ks) @ z0))))
+    sim.linearSolver.solverType = exu.LinearSolverType.EigenDense
+    sim.timeIntegration.numberOfSteps = n
+    sim.timeIntegration.endTime = n * h
+    model.mbs.SolveDynamic(sim)
+    u, F = model.interface.slip_history, model.interface.force_history
+    laws = interface_laws(spec)
+    worst = 0.0
+    for i, p in enumerate(model.points.params):
+        el = laws.stack(i, IwanJoint(p))
+        again = []
+        for ui in u[:, i]:
+            again.append(el.trial(float(ui))[0])
+            el.commit()
+        worst = max(worst, float(np.max(np.abs(np.array(again) - F[:, i]))))
+    return worst / float(np.max(np.abs(F))), laws.stacks, float(np.max(np.abs(u)))
+
+
+def test_the_interface_effects_run_the_same_law_on_the_beam_and_on_the_solid(solid):
+    """One element, two hosts: the same interface effects (a pin at the bolts, a spread patch
+    that starts to slide, a cubic spring) on the 1-D beam's strips and on the solid's patches.
+    In a free decay from 60 um each point's recorded force is its law (the effect classes
+    around its IwanJoint) replayed alone on its recorded slips, to the last bit, on both; the
+    pin sits at the two points nearest each bolt (the solid's along-beam elements), the rest
+    at every point."""
+    from iwan_element.models import InterfaceEffect
+
+    effects = (
+        InterfaceEffect("pinning_stiffness", values={"k_p": 7.8e7, "delta": 6.8e-8}),
+        InterfaceEffect("macroslip_onset", values={"k_2": 5e7, "u_s": 1.27e-7, "shape": 0.45}),
+        InterfaceEffect("hardening", values={"k3": 1.7e20}),
+    )
+    for spec in (preset("brake-reuss").replace(n_points=24), solid):
+        err, stacks, umax = _replayed_interface(spec.replace(interface_effects=effects))
+        assert umax > 2 * 1.27e-7  # the patches slid
+        assert err < 1e-12
+        pinned = [i for i, s in enumerate(stacks) if any(n == "pinning_stiffness" for n, _ in s)]
+        assert len(pinned) == 2 * len(spec.bolt_positions)
+        assert all(len(s) >= 2 for s in stacks)
