@@ -203,7 +203,7 @@ def interface_laws(specimen: Specimen | SolidSpecimen) -> InterfaceLaws | None:
 
 
 @lru_cache(maxsize=32)
-def _laws(specimen):
+def _laws(specimen) -> InterfaceLaws:
     bad = [e.name for e in specimen.interface_effects if not e.resolved]
     if bad:
         raise ValueError(

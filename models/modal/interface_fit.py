@@ -46,6 +46,16 @@ log = logging.getLogger(__name__)
 #: Amplitudes (log-spaced over the calibrated range) the physical form is fitted on.
 FIT_POINTS = 12
 _LENGTHS = ("delta", "u_s")
+#: How far [log factor] the fit may move each scalar from the mapping.
+FIT_BOUND = 3.0
+
+#: Where an effect sits at the bolts (the pin), the least slip its points must have in the
+#: mode it was found on, as a fraction of the interface's (``r`` of the mapping): below it
+#: (a bolt at the lap's centre, where a bending mode's slip changes sign) a pin there could
+#: stiffen that mode only with an absurd stiffness, and the effect goes to every contact
+#: point instead (logged; the result's ``where`` says so).
+BOLT_SLIP_SHARE = 0.25
+
 #: ``(frequency, damping ratio)``: the relative misfits [-] the fit weighs alike, a test's
 #: precision (the Brake-Reuss sweeps: 1e-4 in frequency, 3.7 % in damping per point).
 #: A stiffness effect in the joint carries load the joint's points then do not, lowering
@@ -65,6 +75,13 @@ def _mode_slips(specimen, mode: int):
     return sysm.modes[:nj, r].copy(), float(sysm.modes[sysm.n_z, r]), float(sysm.omega[r])
 
 
+def _slip_scale(specimen, effect, a, s) -> tuple[float, float]:
+    """``(A_2, r)`` of the mapping (module docstring) for the points where ``effect`` sits."""
+    w = point_weights(specimen, effect)
+    A2 = float(np.sum(w * a * a))
+    return A2, float(np.sum(w * a * a * np.abs(a)) / (abs(s) * A2))
+
+
 def map_modal_effect(specimen, effect: SpecimenEffect, *, where: str = "") -> InterfaceEffect:
     """The joint-level form of a modal effect by the closed-form mapping (module docstring)
     on the effect's mode of ``specimen``; ``where`` as :class:`InterfaceEffect` (default the
@@ -72,9 +89,21 @@ def map_modal_effect(specimen, effect: SpecimenEffect, *, where: str = "") -> In
     """
     probe = InterfaceEffect(effect.name, fitted_on=effect, where=where)
     a, s, w0 = _mode_slips(specimen, effect.mode)
+    if probe.where == "bolts":
+        rb = _slip_scale(specimen, probe, a, s)[1]
+        rc = _slip_scale(specimen, replace(probe, where="contact"), a, s)[1]
+        if rb < BOLT_SLIP_SHARE * rc:
+            log.warning(
+                "%s: the bolts' points slip %.2g of the interface's in mode %d (below %g: "
+                "the mode barely moves the shanks); placed at every contact point instead",
+                effect.name,
+                rb / rc,
+                effect.mode,
+                BOLT_SLIP_SHARE,
+            )
+            probe = replace(probe, where="contact")
     w = point_weights(specimen, probe)
-    A2 = float(np.sum(w * a * a))
-    r = float(np.sum(w * a * a * np.abs(a)) / (abs(s) * A2))
+    A2, r = _slip_scale(specimen, probe, a, s)
     mv = effect.parameters
     if effect.name == "pinning_stiffness":
         vals = {"k_p": mv["k_p_per_mass"] / A2, "delta": mv["delta"] * r}
@@ -150,9 +179,27 @@ def _fit_mode(specimen, pending, curve):
 
     p = np.zeros(len(slots))
     if slots:
-        p = least_squares(resid, p, bounds=(-3.0, 3.0), x_scale=1.0, diff_step=1e-3).x
+        p = least_squares(resid, p, bounds=(-FIT_BOUND, FIT_BOUND), x_scale=1.0, diff_step=1e-3).x
+    if np.any(np.abs(p) >= 0.99 * FIT_BOUND):
+        log.warning(
+            "interface effects %s on mode %d: the fit reached a factor e^%g from the mapping "
+            "(the joint cannot reproduce the modal form well; see fit_misfit)",
+            sorted(names),
+            mode,
+            FIT_BOUND,
+        )
     f, z = model(p)
     mis = (float(np.max(np.abs(f / ft - 1))), float(np.max(np.abs(z / zt - 1))))
+    if mis[0] > 10 * PRECISION[0] or mis[1] > 3 * PRECISION[1]:
+        log.warning(
+            "interface effects %s on mode %d miss their modal form by up to %.2g in frequency "
+            "and %.2g in damping after the fit: the effect found on the curve does not act "
+            "through the joint's slip as its modal form assumes (augment(..., form='modal') "
+            "keeps the curve on that mode alone)",
+            sorted(names),
+            mode,
+            *mis,
+        )
     log.info(
         "interface effects %s on mode %d fitted: misfit %.2e (frequency), %.2e (damping)",
         sorted(names),

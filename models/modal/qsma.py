@@ -29,7 +29,7 @@ from __future__ import annotations
 import logging
 import math
 from functools import lru_cache
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, TypeVar
 
 import numpy as np
 import scipy.linalg as sla
@@ -68,6 +68,9 @@ __all__ = [
 ]
 
 log = logging.getLogger(__name__)
+
+#: A 1-D or solid specimen, the same kind in and out.
+SpecimenT = TypeVar("SpecimenT", bound=Specimen | SolidSpecimen)
 
 
 def _check_mode(mode) -> int:
@@ -417,7 +420,7 @@ def _fit_curve(specimen, mode, X):
     return f, zeta
 
 
-def resolve_interface_effects(specimen: Specimen | SolidSpecimen) -> Specimen | SolidSpecimen:
+def resolve_interface_effects(specimen: SpecimenT) -> SpecimenT:
     """``specimen`` with every interface effect given by its modal fit (``fitted_on``, e.g.
     from ``VibrationDiagnosis.augment``) mapped to the contact points and fitted so that the
     physical interface's QSMA reproduces the modal form on that mode
