@@ -126,6 +126,19 @@ def drive_at(shaker, c_target):
     return models.updating.with_parameters(shaker, {"shaker.position": x}), x
 
 
+def level_one_in_full(moved, nl):
+    """``moved`` with level 1's stuck-equivalent frequency (Young's modulus scaled) and its
+    damping factor (on the floor): level 1 fitted in full, a diagnosis of what its
+    frequency and damping offsets do to the other levels.
+    """
+    n = nl.modes[0]
+    f0 = models.reduced_model(moved).frequency(1)
+    return moved.replace(
+        youngs_modulus=moved.youngs_modulus * (n.frequency / f0) ** 2,
+        damping_floor=n.damping_ratio,
+    )
+
+
 def backbone_offsets(levels, shaker, c):
     """Per level and amplitude bin: mean offset [%] of the points' natural frequency
     (inverted at modal constant ``c``, docs/sweeps.md eq. 2) from the joint's backbone.
@@ -163,12 +176,14 @@ def main():
     upd5 = update(shaker, nl, 0.05)
     upd2 = update(shaker, nl, 0.02)
     moved, x = drive_at(shaker, nl.modes[0].modal_constant)
+    full = level_one_in_full(moved, nl)
     specs = {
         "(a) hammer setup": hammer,
         "(b) shaker setup, nominal": shaker,
         "(c) shaker, updated on level 1 (c error 5 %)": upd5,
         "(d) shaker, updated on level 1 (c error 2 %)": upd2,
         f"(e) drive point at {1e3 * (x - 0.6438):+.1f} mm (c alone)": moved,
+        "(f) (e) + level 1's frequency and damping": full,
     }
     print(
         "\nharmonic balance at the measured f and F: rms log(X_pred / X_meas) / rms phase "
