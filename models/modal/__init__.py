@@ -1,7 +1,9 @@
 """The analyses that read a specimen's modes without a time simulation: quasi-static modal
 analysis (QSMA: one mode's frequency and damping against amplitude), harmonic balance,
 frequency responses and nonlinear modes on the reduced model, and the specimen's vibration
-effects in their modal form and in the joint (:mod:`.interface`, :mod:`.interface_fit`).
+effects in their modal form and in the joint (:mod:`.interface`, :mod:`.interface_fit`), and
+the linear targets of a stepped-sine level read through the specimen's own amplitude
+dependence.
 """
 
 from .effects import ZeroElement, effect_stack
@@ -17,6 +19,7 @@ from .qsma import (
     resolve_interface_effects,
     static_modal_load,
 )
+from .sweep_targets import drive_point_modes, sweep_level_targets
 
 __all__ = [
     "modal_amplitude_curve",
@@ -39,4 +42,6 @@ __all__ = [
     "size_warnings",
     "macroslip_report",
     "SIZE_LENGTH_FRACTION",
+    "sweep_level_targets",
+    "drive_point_modes",
 ]
