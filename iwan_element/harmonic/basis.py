@@ -179,12 +179,13 @@ class Harmonics:
 
     def _form(self, form, c, W, jacobian):
         """Force coefficients, dissipation [J] and (with ``jacobian``) the exact Jacobian of
-        a force stated in the compiled kernel's terms (a :class:`~iwan_element.core.periodic.
-        PeriodicForm`) on a coordinate with coefficients ``c``: its Masing rows on their
-        steady loop (:func:`~iwan_element.core.periodic.periodic_rows`, the joints' kernel)
-        with the reversal columns of their sample Jacobian, its history-free laws
-        ``f(y, y')`` with ``P (f_y E + W f_v E')``; the laws' dissipation is the work of
-        their force over the period, ``(2 pi / N) sum f dy/dtau``.
+        a force stated in the compiled kernel's terms (a
+        :class:`~iwan_element.core.periodic.PeriodicForm`) on a coordinate with
+        coefficients ``c``: its Masing rows on their steady loop
+        (:func:`~iwan_element.core.periodic.periodic_rows`, the joints' kernel) with the
+        reversal columns of their sample Jacobian, its history-free laws ``f(y, y')`` with
+        ``P (f_y E + W f_v E')``; the laws' dissipation is the work of their force over the
+        period, ``(2 pi / N) sum f dy/dtau``.
         """
         y, dy = self.E @ c, self.dE @ c
         lp = form.loop(y, W * dy)

@@ -1,10 +1,11 @@
 """A specimen's interface effects at its contact points: one law per point, every route.
 
 Each :class:`~iwan_element.models.specimens.effects.InterfaceEffect` (joint-level values) is
-shared among the contact points where it sits (:data:`~iwan_element.models.specimens.effects.
-WHERE`): a stiffness, cubic stiffness or dashpot (``k_p``, ``k_2``, ``k3``, ``c``) in
-proportion to the weights ``w_i`` (``KT_i / sum KT`` over every contact point, or equal shares
-on the two points nearest each bolt's centre), a length or shape the same at each of them.
+shared among the contact points where it sits
+(:data:`~iwan_element.models.specimens.effects.WHERE`): a stiffness, cubic stiffness or
+dashpot (``k_p``, ``k_2``, ``k3``, ``c``) in proportion to the weights ``w_i`` (``KT_i /
+sum KT`` over every contact point, or equal shares on the two points nearest each bolt's
+centre), a length or shape the same at each of them.
 Point ``i`` then carries ``EFFECTS[name]`` with those values, stacked in the order the
 specimen declares them. :class:`InterfaceLaws` gives that one law to every route:
 

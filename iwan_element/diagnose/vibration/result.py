@@ -186,8 +186,9 @@ class VibrationDiagnosis(Probable, ResultShape):
             ``InterfaceEffect`` entries, a law at the contact points that every analysis
             runs in every mode; the model maps the fitted values to the points through the
             slip per sensor amplitude of ``mode`` and fits them so that the joint's QSMA on
-            ``mode`` reproduces the fitted curve, :func:`~iwan_element.models.
-            resolve_interface_effects`, docs/vibration_effects.md) or in their modal form
+            ``mode`` reproduces the fitted curve,
+            :func:`~iwan_element.models.resolve_interface_effects`,
+            docs/vibration_effects.md) or in their modal form
             (``form="modal"``: ``SpecimenEffect`` entries acting on ``mode`` alone; its QSMA
             curve is then the diagnosis's ``model_frequency``/``model_damping_ratio`` when
             the prediction was that specimen's QSMA). Or a joint element, wrapped in the
