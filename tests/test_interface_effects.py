@@ -179,3 +179,29 @@ def test_augment_round_trip_recovers_a_pin_in_the_joint_and_predicts_mode_2(brb)
     np.testing.assert_allclose(q2.damping_ratio, t2.damping_ratio, rtol=1e-3)
     modal = g.augment(brb, form="modal")
     assert modal.interface_effects == () and modal.effects
+
+
+def test_nonlinear_mode_with_a_sliding_patch_and_a_cubic_spring_is_the_ring_down():
+    """The nonlinear laws in the frequency domain against the time domain: EPMC (each
+    point's macroslip bank as Masing rows and its cubic spring, compiled beside its joint)
+    against the Exudyn ring-down of the same interface (each point's stack stepped around its
+    IwanJoint) from 50 um at the tip, read at amplitudes inside the decay. Measured (40
+    cycles, 64 steps a period): frequency within 4e-6, damping within 0.6 %, where the patch
+    lowers the frequency by up to 350 ppm and raises the damping by up to 40 %."""
+    s = models.preset("brake-reuss").replace(n_points=24)
+    p = s.replace(
+        interface_effects=(
+            InterfaceEffect("macroslip_onset", values={"k_2": 5e7, "u_s": 1.27e-7, "shape": 0.45}),
+            InterfaceEffect("hardening", values={"k3": 1.7e20}),
+        )
+    )
+    c = models.ringdown(p, amplitude=5e-5, cycles=24, steps_per_period=48).curve
+    X = np.geomspace(c.amplitude.min() * 1.1, c.amplitude.max() * 0.9, 4)
+    order = np.argsort(c.amplitude)
+    f_r = np.interp(np.log(X), np.log(c.amplitude[order]), c.frequency[order])
+    z_r = np.interp(np.log(X), np.log(c.amplitude[order]), c.damping_ratio[order])
+    e = models.nonlinear_mode(p, amplitude=X)
+    plain = models.nonlinear_mode(s, amplitude=X)
+    assert np.all(e.damping_ratio > 1.15 * plain.damping_ratio)  # the patch slides
+    np.testing.assert_allclose(e.frequency, f_r, rtol=2e-5)
+    np.testing.assert_allclose(e.damping_ratio, z_r, rtol=0.02)
