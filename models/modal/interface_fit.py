@@ -179,7 +179,11 @@ def _fit_mode(specimen, pending, curve):
 
     p = np.zeros(len(slots))
     if slots:
-        p = least_squares(resid, p, bounds=(-FIT_BOUND, FIT_BOUND), x_scale=1.0, diff_step=1e-3).x
+        fit = least_squares(
+            resid, p, bounds=(-FIT_BOUND, FIT_BOUND), x_scale=1.0, diff_step=1e-3, xtol=1e-4
+        )
+        p = fit.x
+        log.debug("interface fit: %d residual evaluations", fit.nfev)
     if np.any(np.abs(p) >= 0.99 * FIT_BOUND):
         log.warning(
             "interface effects %s on mode %d: the fit reached a factor e^%g from the mapping "
