@@ -205,3 +205,36 @@ def test_nonlinear_mode_with_a_sliding_patch_and_a_cubic_spring_is_the_ring_down
     assert np.all(e.damping_ratio > 1.15 * plain.damping_ratio)  # the patch slides
     np.testing.assert_allclose(e.frequency, f_r, rtol=2e-5)
     np.testing.assert_allclose(e.damping_ratio, z_r, rtol=0.02)
+
+
+def test_the_joint_forms_exact_jacobian_is_the_finite_difference_one(brb):
+    """Harmonic balance's residual with every effect in the joint (the points' forms batched
+    beside their joints): its exact Jacobian (the Masing rows' reversal columns, the laws'
+    displacement and velocity derivatives) against central differences, at a state where
+    the patches slide and the pins bear."""
+    from iwan_element.models.modal import specimen_system
+
+    from iwan_element.harmonic.balance import residual
+    from iwan_element.harmonic.basis import Harmonics
+
+    s = specimen_system(_every_effect(brb))
+    assert s.form_batch is not None
+    basis = Harmonics((1, 3, 5), 64)
+    W = 2 * math.pi * 80.4
+    rng = np.random.default_rng(1)
+    nj = len(s.joints)
+    cz = np.zeros((s.n_z, basis.n_coefficients))
+    r1 = models.reduced_model(brb).mode_index(1)
+    a = s.modes[:nj, r1]
+    cz[:nj, 0] = a * 4e-7 / np.abs(a).max()  # mode 1's slips, up to 0.4 um: beyond the onsets
+    cz[:nj, 1:] = 2e-9 * rng.normal(size=(nj, basis.n_coefficients - 1))
+    _, J, _, _ = residual(s, basis, W, 1.0, cz)
+    h = 1e-12
+    cols = rng.choice(cz.size, 12, replace=False)
+    for col in cols:
+        d = np.zeros(cz.size)
+        d[col] = h
+        Rp = residual(s, basis, W, 1.0, cz + d.reshape(cz.shape), jacobian=False)[0].ravel()
+        Rm = residual(s, basis, W, 1.0, cz - d.reshape(cz.shape), jacobian=False)[0].ravel()
+        fd = (Rp - Rm) / (2 * h)
+        assert np.max(np.abs(J[:, col] - fd)) <= 1e-4 * max(np.max(np.abs(fd)), 1.0)

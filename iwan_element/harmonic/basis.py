@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
+from ..core.masing import KT, PM, B
 from ..core.periodic import periodic_harmonic_jacobian, periodic_rows
 
 __all__ = ["Harmonics", "check_harmonics", "element_loop"]
@@ -148,13 +149,16 @@ class Harmonics:
         cg = np.empty_like(cz)
         cg[:nj] = (F - system.KT[:, None] * Z) @ self.P.T
         J = periodic_harmonic_jacobian(K, A, self.P, self.E, shift=system.KT) if jacobian else None
-        for i, form in enumerate(system.joint_forms):
-            if form is not None:
-                f, d, Jf = self._form(form, cz[i], W, jacobian)
-                cg[i] += f
-                D[i] += d
-                if J is not None:
-                    J[i] += Jf
+        if system.form_batch is not None:
+            self._joint_forms(system.form_batch, cz, Z, W, cg, D, J)
+        else:
+            for i, form in enumerate(system.joint_forms):
+                if form is not None:
+                    f, d, Jf = self._form(form, cz[i], W, jacobian)
+                    cg[i] += f
+                    D[i] += d
+                    if J is not None:
+                        J[i] += Jf
         if not system.ports:
             return cg, J, D
         De = np.empty(len(system.ports))
@@ -176,6 +180,51 @@ class Harmonics:
                     cp[d] += h
                     Je[k, :, d] = (self._port(port, cp, W)[0] - f) / h
         return cg, (np.concatenate([J, Je]) if jacobian else None), np.concatenate([D, De])
+
+    def _joint_forms(self, batch, cz, Z, W, cg, D, J) -> None:
+        """Add the joints' forms (``system.form_batch``) to their force coefficients
+        ``cg``, dissipation ``D`` and Jacobian ``J`` (None: none), all joints at once: one
+        walk of every Masing row on its joint's slip ``Z`` (rows that stay elastic over the
+        period taken as their line, as :meth:`~iwan_element.core.periodic.PeriodicForm.loop`
+        does), the rows' tangents summed per joint (the rows of one joint share its reversal
+        chain) into one exact Jacobian call, then the laws (the same as :meth:`_form`, joint
+        by joint).
+        """
+        joints, C, owner, shift, laws = batch
+        Zf = Z[joints]
+        n, N = Zf.shape
+        sh = shift.copy()
+        force = np.zeros((n, N))
+        tangent = np.zeros((n, N))
+        anchor = np.full((n, N), -1, np.int64)
+        Dj = np.zeros(n)
+        if owner.size:
+            elastic = (C[:, B] == 0.0) & (C[:, PM] >= np.abs(Zf).max(axis=1)[owner])
+            sh -= np.bincount(owner[elastic], C[elastic, KT], n)
+            act = ~elastic
+            if act.any():
+                o = owner[act]
+                F, K, A, Dr = periodic_rows(C[act], Zf[o])
+                sel = (o[None, :] == np.arange(n)[:, None]).astype(float)
+                force, tangent, Dj = sel @ F, sel @ K, sel @ Dr
+                ks, first = np.unique(o, return_index=True)
+                anchor[ks] = A[first]
+        force -= sh[:, None] * Zf
+        dZ = cz[joints] @ self.dE.T
+        lf = np.zeros((n, N))
+        lu, lv = np.zeros((n, N)), np.zeros((n, N))
+        for k, law in laws:
+            f, fu, fv = law(Zf[k], W * dZ[k])
+            lf[k] += f
+            lu[k] += fu
+            lv[k] += fv
+        cg[joints] += (force + lf) @ self.P.T
+        D[joints] += Dj + 2.0 * np.pi / self.samples * np.sum(lf * dZ, axis=1)
+        if J is not None:
+            Jf = periodic_harmonic_jacobian(tangent, anchor, self.P, self.E, shift=sh)
+            Jf += np.einsum("cn,kn,nd->kcd", self.P, lu, self.E)
+            Jf += W * np.einsum("cn,kn,nd->kcd", self.P, lv, self.dE)
+            J[joints] += Jf
 
     def _form(self, form, c, W, jacobian):
         """Force coefficients, dissipation [J] and (with ``jacobian``) the exact Jacobian of

@@ -34,7 +34,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..base.validation import check_scalar, plain_number
-from ..core.masing import constants_from_arrays
+from ..core.masing import TOL, constants_from_arrays
 from ..core.parameters import IwanParameters
 from ..core.periodic import PeriodicForm
 
@@ -116,6 +116,26 @@ def _groups(groups, n_j: int) -> tuple:
     return tuple(out)
 
 
+def _form_batch(forms) -> tuple | None:
+    """The joints' forms batched for one evaluation: ``(joints, C, owner, shift, laws)``:
+    the joints that carry a form, every Masing row of theirs stacked (``C``) with the index
+    among ``joints`` of the one it belongs to (``owner``), each one's shift [N/m], and the
+    laws ``(index, law)``; None without forms or when the rows' reversal tolerances differ
+    (then each form is evaluated on its own).
+    """
+    idx = [i for i, f in enumerate(forms) if f is not None]
+    if not idx:
+        return None
+    rows = [forms[i].constants for i in idx]
+    C = np.vstack(rows)
+    if C.shape[0] and np.any(C[:, TOL] != C[0, TOL]):
+        return None
+    owner = np.concatenate([np.full(r.shape[0], k) for k, r in enumerate(rows)]).astype(np.int64)
+    shift = np.array([forms[i].shift for i in idx])
+    laws = tuple((k, law) for k, i in enumerate(idx) for law in forms[i].laws)
+    return np.array(idx), C, owner, shift, laws
+
+
 @dataclass(frozen=True, eq=False)
 class ModalSystem:
     """A stuck-joint linear structure in modal form, seen at its ports (module docstring).
@@ -162,6 +182,7 @@ class ModalSystem:
     joint_groups: tuple = ()
     joint_forms: tuple = ()
     constants: np.ndarray = field(init=False, repr=False)
+    form_batch: tuple | None = field(init=False, repr=False)
 
     def __post_init__(self):
         om = np.array(self.omega, dtype=float).ravel()
@@ -200,6 +221,7 @@ class ModalSystem:
                 f"joint_forms must hold a PeriodicForm or None for each of the {len(js)} joints"
             )
         object.__setattr__(self, "joint_forms", jf if any(f is not None for f in jf) else ())
+        object.__setattr__(self, "form_batch", _form_batch(self.joint_forms))
         c = constants_from_arrays(
             [j.Fs for j in js], [j.KT for j in js], [j.chi for j in js], [j.beta for j in js]
         )
