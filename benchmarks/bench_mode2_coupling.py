@@ -1,0 +1,283 @@
+"""Which interface makes mode 2 see mode 1's slip: a measured probe on the hammer record.
+
+Run:  python benchmarks/bench_mode2_coupling.py [--candidates baseline,m1,...] [--screen-only]
+      [--duration 1.2] [--json out.json]
+
+The Brake-Reuss hammer record's mode 2 (297.7 Hz) rings in its first windows at 297.40 Hz
+and 0.155 %, against 297.70 Hz and 0.10 % late: it sees mode 1's slip (mode 1 at 70-87 um at
+acc3). The beam calibrated on mode 1 gives mode 2's first window 0.100 % and 297.68 Hz. Each
+candidate below is an interface variant of ``models.preset("brake-reuss")`` (options of
+``InterfaceModel``), and each runs the SAME route (``examples/brb_every_mode.py``:
+``models.predict_hammer_test``: linear update on the low-amplitude frequencies, the joint
+calibrated on mode 1's curve at acc3, each other mode's floor from its lowest amplitudes;
+mode 2's curve is never fitted).
+
+For each candidate it prints
+
+* a linear screen of the calibrated beam (seconds): the stuck frequencies' changes for
+  -10 % of the tangential stiffness per area (how much each mode loads the interface), the
+  ratio of that loading of mode 2 to mode 1's, and mode 2's stuck shape ratio acc2/acc1;
+* the route's figures: mode 1's largest frequency and damping errors at acc3, mode 2's first
+  predicted window at acc2 and acc3 (frequency, damping) against the record's first window,
+  and mode 2's largest errors at acc2 and acc3.
+
+``--screen-only`` runs the screen on the uncalibrated variants (no route), for many variants
+at once. The data (GPL-3.0) are read in place from ``../shared/data``; nothing runs without.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "examples"))
+
+import brb_every_mode as hammer_example  # noqa: E402
+from iwan_element.models.modal import linear_modes  # noqa: E402
+from iwan_element.models.reduced.dispatch import axis_rows  # noqa: E402
+from iwan_element.models.simulation import compare_curves  # noqa: E402
+from iwan_element.models.specimens.contact import pressure_field  # noqa: E402
+
+from iwan_element import models  # noqa: E402
+
+#: interface variants of the preset: {name: Specimen.replace changes}
+CANDIDATES = {
+    "baseline": {},
+    "m0.5": {"stiffness_pressure_exponent": 0.5},
+    "m1": {"stiffness_pressure_exponent": 1.0},
+    "m2": {"stiffness_pressure_exponent": 2.0},
+    "uniform30": {"pressure": "uniform-cone"},
+    "linear25": {"cone_angle_deg": 25.0},
+    "linear45": {"cone_angle_deg": 45.0},
+    "uniform45": {"pressure": "uniform-cone", "cone_angle_deg": 45.0},
+    "uniform60": {"pressure": "uniform-cone", "cone_angle_deg": 60.0},
+    "linear60": {"cone_angle_deg": 60.0},
+    "n80": {"n_points": 80},
+    "kn0.1": {"normal_stiffness_per_area": 1.0e12},
+    "kn10": {"normal_stiffness_per_area": 1.0e14},
+}
+
+
+def _stuck(spec, n: int = 2) -> np.ndarray:
+    """The ``n`` lowest elastic stuck frequencies [Hz]."""
+    return np.array([linear_modes(spec, mode=k)[0] for k in range(1, n + 1)]) / (2 * math.pi)
+
+
+def screen(spec) -> dict:
+    """Linear figures of ``spec`` (module docstring): the stuck frequencies' relative changes
+    for -10 % of the tangential and of the normal stiffness per area, the tangential one's
+    ratio mode 2 / mode 1, and mode 2's stuck shape ratio acc2/acc1 (and acc2/acc3).
+    """
+    itf = spec.interface
+    f0 = _stuck(spec)
+    ft = _stuck(spec.replace(stiffness_per_area=0.9 * itf.stiffness_per_area))
+    fn = _stuck(spec.replace(normal_stiffness_per_area=0.9 * itf.normal_stiffness_per_area))
+    _, phi, _, L, pts = linear_modes(spec, mode=2)
+    rows = axis_rows(spec, [hammer_example.SENSORS[n] for n in ("acc1", "acc2", "acc3")])
+    w1, w2, w3 = np.abs(rows @ phi)
+    dt, dn = ft / f0 - 1, fn / f0 - 1
+    return {
+        "f_stuck": f0.tolist(),
+        "dkt": dt.tolist(),
+        "dkn": dn.tolist(),
+        "load_ratio": float(dt[1] / dt[0]),
+        "shape2_acc2_acc1": float(w2 / w1),
+        "shape2_acc2_acc3": float(w2 / w3),
+        "n_points": len(pts),
+        "kt": itf.stiffness_per_area,
+    }
+
+
+def opening_estimate(spec, amplitudes=(87e-6, 60e-6, 30e-6)) -> dict:
+    """What an opening lap edge would do to the stuck frequencies, estimated (the 1-D host's
+    normal springs are linear and bilateral: no gap opens in any route).
+
+    On the pressure grid of the lap (``pressure_field``, 600 x 41 cells, so the estimate does
+    not hang on where the strips' edges fall): each contact cell's normal spring
+    ``k_n dA`` is compressed by the preload, ``delta = p / k_n``; mode 1 at sensor amplitude
+    ``X1`` moves the normal gap by ``g = |Gn phi_1 / S phi_1| X1`` (the contact points'
+    gaps, linear between them), and where ``g > delta`` the cell opens for part of the cycle.
+    Mode 1 on itself: the cell's first-harmonic (describing-function) stiffness of
+    ``F = -k min(g, delta)``; mode 2, small and riding on mode 1: the fraction of mode 1's
+    cycle the cell is open. Each scales the cell's share of the mode's stiffness,
+    ``e = k_n dA (Gn phi)^2 / w^2``: ``df/f = -1/2 sum loss e``.
+    """
+    m = [linear_modes(spec, mode=r) for r in (1, 2)]
+    L, pts = m[0][3], m[0][4]
+    x, _, p = pressure_field(spec)
+    dA = (spec.overlap / p.shape[0]) * (spec.width / p.shape[1])
+    xp = pts.x - spec.lap_start
+    on = p > 0
+    kn = spec.interface.normal_stiffness_per_area
+    delta = p[on] / kn
+    xc = np.broadcast_to(x[:, None], p.shape)[on]
+    gaps = [np.interp(xc, xp, L.Gn @ phi) for _, phi, *_ in m]
+    e = [kn * dA * g**2 / w**2 for (w, *_), g in zip(m, gaps)]
+    g1 = np.abs(gaps[0] / (L.S @ m[0][1]))
+    s = np.sin(np.linspace(0.0, 2 * np.pi, 721)[:-1])
+    out = {"normal_share": [float(e[0].sum()), float(e[1].sum())]}
+    for X1 in amplitudes:
+        G = g1 * X1
+        opens = G > delta
+        Go, do = G[opens, None], delta[opens, None]
+        own = 1 - np.mean(np.minimum(Go * s, do) * s, axis=1) / (0.5 * Go[:, 0])
+        riding = np.mean(Go * s > do, axis=1)
+        out[X1] = (
+            float(-0.5 * (own * e[0][opens]).sum()),
+            float(-0.5 * (riding * e[1][opens]).sum()),
+        )
+    return out
+
+
+def first_window(curve) -> tuple:
+    """``(amplitude [m], frequency [Hz], damping [-])`` of a curve's first window."""
+    return float(curve.amplitude[0]), float(curve.frequency[0]), float(curve.damping_ratio[0])
+
+
+def max_errors(out, key) -> tuple:
+    """Largest |df/f| and |dzeta/zeta| [-] of the predicted curve ``key`` against the record."""
+    e = compare_curves(out.predicted[key], out.measured[key])
+    if not len(e["amplitude"]):
+        return math.nan, math.nan
+    return float(np.abs(e["frequency_shift"]).max()), float(np.abs(e["damping_ratio"] - 1).max())
+
+
+def route(spec, d, duration: float) -> dict:
+    """The hammer route on ``spec`` (``brb_every_mode.predict``'s call) and its figures."""
+    out = models.predict_hammer_test(
+        spec,
+        hammer_example.records(d),
+        modes=(1, 2),
+        bands=hammer_example.BANDS,
+        release_time=0.05,
+        fit_span=0.3,
+        duration=duration,
+    )
+    res = {"success": bool(out.success), "release_um": {k: 1e6 * v for k, v in out.release.items()}}
+    res["mode1_acc3"] = max_errors(out, (1, "acc3"))
+    for n in ("acc2", "acc3"):
+        res[f"mode2_{n}"] = max_errors(out, (2, n))
+        res[f"first2_{n}_pred"] = first_window(out.predicted[(2, n)])
+        res[f"first2_{n}_meas"] = first_window(out.measured[(2, n)])
+        res[f"ratio2_{n}"] = out.ratios.get((2, n))
+    res["ratio2_acc1"] = out.ratios.get((2, "acc1"))
+    cal = out.calibration.specimen
+    res["calibrated"] = {
+        "stiffness_per_area": cal.interface.stiffness_per_area,
+        "friction": cal.friction,
+        "chi": cal.interface.chi,
+        "floors": [cal.floor(1), cal.floor(2)],
+        "youngs_modulus": cal.youngs_modulus,
+    }
+    res["screen"] = screen(cal)
+    res["opening"] = {str(k): v for k, v in opening_estimate(cal).items()}
+    return res
+
+
+def print_screen(rows: dict) -> None:
+    print(
+        "\n| candidate | points | f1, f2 stuck [Hz] | df1, df2 for -10 % k_t | ratio 2/1 "
+        "| df1, df2 for -10 % k_n | mode 2 acc2/acc1 |"
+    )
+    print("|---|---|---|---|---|---|---|")
+    for name, s in rows.items():
+        print(
+            f"| {name} | {s['n_points']} | {s['f_stuck'][0]:.2f}, {s['f_stuck'][1]:.2f} | "
+            f"{100 * s['dkt'][0]:+.3f}, {100 * s['dkt'][1]:+.3f} % | {s['load_ratio']:.3f} | "
+            f"{100 * s['dkn'][0]:+.3f}, {100 * s['dkn'][1]:+.3f} % | "
+            f"{s['shape2_acc2_acc1']:.3f} |"
+        )
+
+
+def print_route(rows: dict) -> None:
+    meas = next(iter(rows.values()))
+    print(
+        "\nmeasured mode 2 first window: "
+        + "; ".join(
+            f"{n} {1e6 * meas[f'first2_{n}_meas'][0]:.2f} um {meas[f'first2_{n}_meas'][1]:.3f} Hz "
+            f"{100 * meas[f'first2_{n}_meas'][2]:.4f} %"
+            for n in ("acc2", "acc3")
+        )
+    )
+    print(
+        "\n| candidate | mode 1 acc3 max df/f, dzeta/zeta | mode 2 first window acc2 "
+        "(um, Hz, %) | acc3 | mode 2 max errors acc2; acc3 | load ratio 2/1 | k_t, mu, chi |"
+    )
+    print("|---|---|---|---|---|---|---|")
+    for name, r in rows.items():
+        cells = []
+        for n in ("acc2", "acc3"):
+            x, f, z = r[f"first2_{n}_pred"]
+            cells.append(f"{1e6 * x:.2f}, {f:.3f}, {100 * z:.4f}")
+        e2 = "; ".join(
+            f"{100 * r[f'mode2_{n}'][0]:.3f} %, {100 * r[f'mode2_{n}'][1]:.1f} %"
+            for n in ("acc2", "acc3")
+        )
+        c = r["calibrated"]
+        print(
+            f"| {name} | {100 * r['mode1_acc3'][0]:.3f} %, {100 * r['mode1_acc3'][1]:.1f} % | "
+            f"{cells[0]} | {cells[1]} | {e2} | {r['screen']['load_ratio']:.3f} | "
+            f"{c['stiffness_per_area']:.3g}, {c['friction']:.3f}, {c['chi']:.3f} |"
+        )
+
+
+def print_opening(rows: dict) -> None:
+    print(
+        "\nan opening lap edge, estimated (opening_estimate): stuck df/f of mode 1 on itself, "
+        "of mode 2 riding on mode 1, at mode 1's amplitude at acc3"
+    )
+    for name, o in rows.items():
+        cells = "; ".join(
+            f"{1e6 * float(k):.0f} um: {100 * v[0]:+.3f} %, {100 * v[1]:+.3f} %"
+            for k, v in o.items()
+            if k != "normal_share"
+        )
+        share = o["normal_share"]
+        print(f"  {name} (normal springs' share {share[0]:.4f}, {share[1]:.4f}): {cells}")
+
+
+def main(argv=None) -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--candidates", default=",".join(CANDIDATES))
+    ap.add_argument("--screen-only", action="store_true")
+    ap.add_argument("--duration", type=float, default=1.2)
+    ap.add_argument("--json", type=Path, default=None, help="append each route's figures here")
+    a = ap.parse_args(argv)
+    names = [c.strip() for c in a.candidates.split(",") if c.strip()]
+    unknown = set(names) - set(CANDIDATES)
+    if unknown:
+        raise SystemExit(f"unknown candidates {sorted(unknown)}; known: {list(CANDIDATES)}")
+    base = models.preset("brake-reuss")
+    if a.screen_only:
+        specs = {n: base.replace(**CANDIDATES[n]) for n in names}
+        print_screen({n: screen(v) for n, v in specs.items()})
+        print_opening({n: opening_estimate(v) for n, v in specs.items()})
+        return
+    d = hammer_example.data_dir()
+    if d is None:
+        print("../shared/data/brb-hammer not found (GPL data, read in place): nothing to do")
+        return
+    rows = {}
+    for n in names:
+        t0 = time.perf_counter()
+        rows[n] = route(base.replace(**CANDIDATES[n]), d, a.duration)
+        rows[n]["seconds"] = time.perf_counter() - t0
+        print(f"{n}: {rows[n]['seconds']:.0f} s", flush=True)
+        if a.json is not None:
+            done = json.loads(a.json.read_text()) if a.json.exists() else {}
+            done[n] = rows[n]
+            a.json.write_text(json.dumps(done, indent=1, default=str))
+    print_screen({n: r["screen"] for n, r in rows.items()})
+    print_route(rows)
+    print_opening({n: r["opening"] for n, r in rows.items()})
+
+
+if __name__ == "__main__":
+    main()
