@@ -45,7 +45,7 @@ from iwan_element.models.reduced.dispatch import axis_rows  # noqa: E402
 from iwan_element.models.simulation import compare_curves  # noqa: E402
 from iwan_element.models.specimens.contact import pressure_field  # noqa: E402
 
-from iwan_element import models  # noqa: E402
+from iwan_element import amplitude_curve, models  # noqa: E402
 
 #: interface variants of the preset: {name: Specimen.replace changes}
 CANDIDATES = {
@@ -136,9 +136,85 @@ def opening_estimate(spec, amplitudes=(87e-6, 60e-6, 30e-6)) -> dict:
     return out
 
 
+def interface_shares(spec) -> dict:
+    """``{"tangential": (mode 1, mode 2), "normal": (...)}``: the stuck interface's share of
+    each mode's stiffness, ``sum k_i (G_i phi)^2 / w^2`` over the contact points' tangential
+    (``KT_i``) and normal (``k_n,i``) springs [-]; ``1/2`` of a share is the mode's
+    ``d ln f / d ln k`` for that spring set.
+    """
+    m = [linear_modes(spec, mode=r) for r in (1, 2)]
+    L, pts = m[0][3], m[0][4]
+    return {
+        "tangential": tuple(float((pts.KT * (L.G @ p) ** 2).sum() / w**2) for w, p, *_ in m),
+        "normal": tuple(
+            float((pts.normal_stiffness * (L.Gn @ p) ** 2).sum() / w**2) for w, p, *_ in m
+        ),
+    }
+
+
+def measured_bound(d, spec) -> dict:
+    """What the record's first windows ask of each mode's interface (``--bound``).
+
+    The record's mode 1 at acc3 (windows of 20 periods, as the calibration reads it) and
+    mode 2 at acc3 and acc2 (windows that follow the decay): the first window's frequency
+    drop ``df/f`` and damping excess ``dzeta`` against the curve at a tenth of the first
+    window's amplitude (:func:`reference_window`). With ``s`` the mode's interface share
+    (:func:`interface_shares`, tangential plus normal), the interface must lose
+    ``2 |df/f| / s`` of its stiffness on average over the cycle and dissipate
+    ``eta = 4 pi dzeta / s`` of its peak strain energy per cycle (``zeta = D / (4 pi E)``),
+    whatever the mechanism.
+    """
+    recs = hammer_example.records(d)
+    sh = interface_shares(spec)
+    out = {}
+    for r, n in ((1, "acc3"), (2, "acc3"), (2, "acc2")):
+        _, t, a = recs[n]
+        i0 = int(np.argmax(np.abs(recs["acc3"][2])))
+        band = hammer_example.BANDS[r]
+        kw = {"window": 20.0 / 80.5} if r == 1 else {}
+        c = amplitude_curve(t[i0:], a[i0:], quantity="acceleration", band=band, **kw)
+        _, f, z = first_window(c)
+        fl, zl = reference_window(c)
+        share = sh["tangential"][r - 1] + sh["normal"][r - 1]
+        out[(r, n)] = {
+            "first_um": 1e6 * float(c.amplitude[0]),
+            "drop": f / fl - 1,
+            "excess": z - zl,
+            "share": share,
+            "stiffness_loss": 2 * abs(f / fl - 1) / share,
+            "eta": 4 * math.pi * (z - zl) / share,
+        }
+    return out
+
+
 def first_window(curve) -> tuple:
     """``(amplitude [m], frequency [Hz], damping [-])`` of a curve's first window."""
     return float(curve.amplitude[0]), float(curve.frequency[0]), float(curve.damping_ratio[0])
+
+
+def reference_window(curve, factor: float = 10.0) -> tuple:
+    """``(frequency [Hz], damping [-])`` at ``1/factor`` of the curve's first amplitude
+    (linear in log amplitude, clipped to the curve's range): the mode once the coupled start
+    has decayed. Not the lowest windows: the record's mode 2 keeps drifting up in frequency
+    at its smallest amplitudes (297.70 Hz at 0.06 um, 297.74 Hz at 0.01 um, acc3), and the
+    predicted ring-down (1.2 s) reaches about a tenth of its first amplitude.
+    """
+    order = np.argsort(curve.amplitude)
+    x = math.log(max(curve.amplitude[0] / factor, curve.amplitude.min()))
+    la = np.log(curve.amplitude[order])
+    return (
+        float(np.interp(x, la, curve.frequency[order])),
+        float(np.interp(x, la, curve.damping_ratio[order])),
+    )
+
+
+def curve_dict(curve) -> dict:
+    """A curve's amplitude [m], frequency [Hz] and damping [-] as lists (for ``--json``)."""
+    return {
+        "amplitude": curve.amplitude.tolist(),
+        "frequency": curve.frequency.tolist(),
+        "damping_ratio": curve.damping_ratio.tolist(),
+    }
 
 
 def max_errors(out, key) -> tuple:
@@ -166,6 +242,9 @@ def route(spec, d, duration: float) -> dict:
         res[f"mode2_{n}"] = max_errors(out, (2, n))
         res[f"first2_{n}_pred"] = first_window(out.predicted[(2, n)])
         res[f"first2_{n}_meas"] = first_window(out.measured[(2, n)])
+        res[f"ref2_{n}_pred"] = reference_window(out.predicted[(2, n)])
+        res[f"ref2_{n}_meas"] = reference_window(out.measured[(2, n)])
+        res[f"curve2_{n}_pred"] = curve_dict(out.predicted[(2, n)])
         res[f"ratio2_{n}"] = out.ratios.get((2, n))
     res["ratio2_acc1"] = out.ratios.get((2, "acc1"))
     cal = out.calibration.specimen
@@ -196,26 +275,33 @@ def print_screen(rows: dict) -> None:
         )
 
 
+def _coupled(r: dict, n: str, what: str) -> tuple:
+    """Mode 2's first window at sensor ``n`` against a tenth of its amplitude: frequency drop
+    [-] and damping excess [-] (``what``: "pred" or "meas").
+    """
+    _, f, z = r[f"first2_{n}_{what}"]
+    fl, zl = r[f"ref2_{n}_{what}"]
+    return f / fl - 1, z - zl
+
+
+def _window_cell(r: dict, n: str, what: str) -> str:
+    x, f, z = r[f"first2_{n}_{what}"]
+    d, e = _coupled(r, n, what)
+    return f"{1e6 * x:.2f}, {f:.3f}, {100 * z:.4f} ({100 * d:+.3f} %, {100 * e:+.4f})"
+
+
 def print_route(rows: dict) -> None:
     meas = next(iter(rows.values()))
     print(
-        "\nmeasured mode 2 first window: "
-        + "; ".join(
-            f"{n} {1e6 * meas[f'first2_{n}_meas'][0]:.2f} um {meas[f'first2_{n}_meas'][1]:.3f} Hz "
-            f"{100 * meas[f'first2_{n}_meas'][2]:.4f} %"
-            for n in ("acc2", "acc3")
-        )
+        "\nrecord, mode 2's first window: um, Hz, % (drop, excess against a tenth of its "
+        "amplitude): " + "; ".join(f"{n} {_window_cell(meas, n, 'meas')}" for n in ("acc2", "acc3"))
     )
     print(
-        "\n| candidate | mode 1 acc3 max df/f, dzeta/zeta | mode 2 first window acc2 "
-        "(um, Hz, %) | acc3 | mode 2 max errors acc2; acc3 | load ratio 2/1 | k_t, mu, chi |"
+        "\n| candidate | mode 1 acc3 max df/f, dzeta/zeta | mode 2 first window acc2: um, Hz, % "
+        "(drop, excess) | acc3 | mode 2 max errors acc2; acc3 | load ratio 2/1 | k_t, mu, chi |"
     )
     print("|---|---|---|---|---|---|---|")
     for name, r in rows.items():
-        cells = []
-        for n in ("acc2", "acc3"):
-            x, f, z = r[f"first2_{n}_pred"]
-            cells.append(f"{1e6 * x:.2f}, {f:.3f}, {100 * z:.4f}")
         e2 = "; ".join(
             f"{100 * r[f'mode2_{n}'][0]:.3f} %, {100 * r[f'mode2_{n}'][1]:.1f} %"
             for n in ("acc2", "acc3")
@@ -223,9 +309,25 @@ def print_route(rows: dict) -> None:
         c = r["calibrated"]
         print(
             f"| {name} | {100 * r['mode1_acc3'][0]:.3f} %, {100 * r['mode1_acc3'][1]:.1f} % | "
-            f"{cells[0]} | {cells[1]} | {e2} | {r['screen']['load_ratio']:.3f} | "
+            f"{_window_cell(r, 'acc2', 'pred')} | {_window_cell(r, 'acc3', 'pred')} | {e2} | "
+            f"{r['screen']['load_ratio']:.3f} | "
             f"{c['stiffness_per_area']:.3g}, {c['friction']:.3f}, {c['chi']:.3f} |"
         )
+
+
+def print_bound(rows: dict) -> None:
+    print(
+        "\n| candidate | curve | first window | df/f, dzeta (against a tenth of its amplitude) "
+        "| interface share | stiffness lost | energy dissipated per cycle |"
+    )
+    print("|---|---|---|---|---|---|---|")
+    for name, b in rows.items():
+        for (r, n), v in b.items():
+            print(
+                f"| {name} | mode {r} at {n} | {v['first_um']:.2f} um | {100 * v['drop']:+.3f} %, "
+                f"{100 * v['excess']:+.4f} points | {100 * v['share']:.2f} % | "
+                f"{100 * v['stiffness_loss']:.1f} % | {100 * v['eta']:.1f} % |"
+            )
 
 
 def print_opening(rows: dict) -> None:
@@ -247,6 +349,9 @@ def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--candidates", default=",".join(CANDIDATES))
     ap.add_argument("--screen-only", action="store_true")
+    ap.add_argument(
+        "--bound", action="store_true", help="what the record's first windows ask of the interface"
+    )
     ap.add_argument("--duration", type=float, default=1.2)
     ap.add_argument("--json", type=Path, default=None, help="append each route's figures here")
     a = ap.parse_args(argv)
@@ -255,6 +360,13 @@ def main(argv=None) -> None:
     if unknown:
         raise SystemExit(f"unknown candidates {sorted(unknown)}; known: {list(CANDIDATES)}")
     base = models.preset("brake-reuss")
+    if a.bound:
+        d = hammer_example.data_dir()
+        if d is None:
+            print("../shared/data/brb-hammer not found (GPL data, read in place): nothing to do")
+            return
+        print_bound({n: measured_bound(d, base.replace(**CANDIDATES[n])) for n in names})
+        return
     if a.screen_only:
         specs = {n: base.replace(**CANDIDATES[n]) for n in names}
         print_screen({n: screen(v) for n, v in specs.items()})
