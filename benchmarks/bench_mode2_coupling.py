@@ -62,6 +62,9 @@ CANDIDATES = {
     "n80": {"n_points": 80},
     "kn0.1": {"normal_stiffness_per_area": 1.0e12},
     "kn10": {"normal_stiffness_per_area": 1.0e14},
+    "kn0.03": {"normal_stiffness_per_area": 3.0e11},
+    "kn0.01": {"normal_stiffness_per_area": 1.0e11},
+    "kn0.1-linear60": {"normal_stiffness_per_area": 1.0e12, "cone_angle_deg": 60.0},
 }
 
 
@@ -152,12 +155,13 @@ def interface_shares(spec) -> dict:
     }
 
 
-def measured_bound(d, spec) -> dict:
-    """What the record's first windows ask of each mode's interface (``--bound``).
+def measured_bound(d, specs: dict) -> dict:
+    """What the record's first windows ask of each mode's interface (``--bound``), for each
+    specimen of ``specs`` ({name: Specimen}).
 
     The record's mode 1 at acc3 (windows of 20 periods, as the calibration reads it) and
     mode 2 at acc3 and acc2 (windows that follow the decay): the first window's frequency
-    drop ``df/f`` and damping excess ``dzeta`` against the curve at a tenth of the first
+    drop ``df/f`` and damping excess ``dzeta`` against the curve at a fifth of the first
     window's amplitude (:func:`reference_window`). With ``s`` the mode's interface share
     (:func:`interface_shares`, tangential plus normal), the interface must lose
     ``2 |df/f| / s`` of its stiffness on average over the cycle and dissipate
@@ -165,26 +169,43 @@ def measured_bound(d, spec) -> dict:
     whatever the mechanism.
     """
     recs = hammer_example.records(d)
-    sh = interface_shares(spec)
-    out = {}
+    i0 = int(np.argmax(np.abs(recs["acc3"][2])))
+    curves = {}
     for r, n in ((1, "acc3"), (2, "acc3"), (2, "acc2")):
         _, t, a = recs[n]
-        i0 = int(np.argmax(np.abs(recs["acc3"][2])))
-        band = hammer_example.BANDS[r]
         kw = {"window": 20.0 / 80.5} if r == 1 else {}
-        c = amplitude_curve(t[i0:], a[i0:], quantity="acceleration", band=band, **kw)
-        _, f, z = first_window(c)
-        fl, zl = reference_window(c)
-        share = sh["tangential"][r - 1] + sh["normal"][r - 1]
-        out[(r, n)] = {
-            "first_um": 1e6 * float(c.amplitude[0]),
-            "drop": f / fl - 1,
-            "excess": z - zl,
-            "share": share,
-            "stiffness_loss": 2 * abs(f / fl - 1) / share,
-            "eta": 4 * math.pi * (z - zl) / share,
-        }
+        band = hammer_example.BANDS[r]
+        curves[(r, n)] = amplitude_curve(t[i0:], a[i0:], quantity="acceleration", band=band, **kw)
+    out = {}
+    for name, spec in specs.items():
+        sh = interface_shares(spec)
+        out[name] = {}
+        for (r, n), c in curves.items():
+            _, f, z = first_window(c)
+            fl, zl = reference_window(c)
+            share = sh["tangential"][r - 1] + sh["normal"][r - 1]
+            out[name][(r, n)] = {
+                "first_um": 1e6 * float(c.amplitude[0]),
+                "drop": f / fl - 1,
+                "excess": z - zl,
+                "share": share,
+                "stiffness_loss": 2 * abs(f / fl - 1) / share,
+                "eta": 4 * math.pi * (z - zl) / share,
+            }
     return out
+
+
+def calibrated_variant(base, name: str, calibrated: dict):
+    """The candidate ``name`` with the route's updated and calibrated values (``--json``'s
+    ``calibrated``): its stuck interface as the route left it.
+    """
+    return base.replace(
+        **CANDIDATES[name],
+        stiffness_per_area=calibrated["stiffness_per_area"],
+        friction=calibrated["friction"],
+        chi=calibrated["chi"],
+        youngs_modulus=calibrated["youngs_modulus"],
+    )
 
 
 def first_window(curve) -> tuple:
@@ -192,20 +213,21 @@ def first_window(curve) -> tuple:
     return float(curve.amplitude[0]), float(curve.frequency[0]), float(curve.damping_ratio[0])
 
 
-def reference_window(curve, factor: float = 10.0) -> tuple:
+def reference_window(curve, factor: float = 5.0) -> tuple:
     """``(frequency [Hz], damping [-])`` at ``1/factor`` of the curve's first amplitude
-    (linear in log amplitude, clipped to the curve's range): the mode once the coupled start
-    has decayed. Not the lowest windows: the record's mode 2 keeps drifting up in frequency
-    at its smallest amplitudes (297.70 Hz at 0.06 um, 297.74 Hz at 0.01 um, acc3), and the
-    predicted ring-down (1.2 s) reaches about a tenth of its first amplitude.
+    (linear in log amplitude, its last window left out: the read-out's end effects; clipped
+    to the rest of its range): the mode once the coupled start has decayed. Not the lowest
+    windows: the record's mode 2 keeps drifting up in frequency at its smallest amplitudes
+    (297.70 Hz at 0.06 um, 297.74 Hz at 0.01 um, acc3), and the predicted ring-down (1.2 s)
+    reaches a sixth of its first amplitude. ``curve``: an ``AmplitudeCurve`` or
+    :func:`curve_dict`'s dict.
     """
-    order = np.argsort(curve.amplitude)
-    x = math.log(max(curve.amplitude[0] / factor, curve.amplitude.min()))
-    la = np.log(curve.amplitude[order])
-    return (
-        float(np.interp(x, la, curve.frequency[order])),
-        float(np.interp(x, la, curve.damping_ratio[order])),
-    )
+    c = curve if isinstance(curve, dict) else curve_dict(curve)
+    a, f, z = (np.asarray(c[k][:-1]) for k in ("amplitude", "frequency", "damping_ratio"))
+    order = np.argsort(a)
+    x = math.log(max(a[0] / factor, a.min()))
+    la = np.log(a[order])
+    return float(np.interp(x, la, f[order])), float(np.interp(x, la, z[order]))
 
 
 def curve_dict(curve) -> dict:
@@ -245,6 +267,7 @@ def route(spec, d, duration: float) -> dict:
         res[f"ref2_{n}_pred"] = reference_window(out.predicted[(2, n)])
         res[f"ref2_{n}_meas"] = reference_window(out.measured[(2, n)])
         res[f"curve2_{n}_pred"] = curve_dict(out.predicted[(2, n)])
+        res[f"curve2_{n}_meas"] = curve_dict(out.measured[(2, n)])
         res[f"ratio2_{n}"] = out.ratios.get((2, n))
     res["ratio2_acc1"] = out.ratios.get((2, "acc1"))
     cal = out.calibration.specimen
@@ -276,7 +299,7 @@ def print_screen(rows: dict) -> None:
 
 
 def _coupled(r: dict, n: str, what: str) -> tuple:
-    """Mode 2's first window at sensor ``n`` against a tenth of its amplitude: frequency drop
+    """Mode 2's first window at sensor ``n`` against a fifth of its amplitude: frequency drop
     [-] and damping excess [-] (``what``: "pred" or "meas").
     """
     _, f, z = r[f"first2_{n}_{what}"]
@@ -293,7 +316,7 @@ def _window_cell(r: dict, n: str, what: str) -> str:
 def print_route(rows: dict) -> None:
     meas = next(iter(rows.values()))
     print(
-        "\nrecord, mode 2's first window: um, Hz, % (drop, excess against a tenth of its "
+        "\nrecord, mode 2's first window: um, Hz, % (drop, excess against a fifth of its "
         "amplitude): " + "; ".join(f"{n} {_window_cell(meas, n, 'meas')}" for n in ("acc2", "acc3"))
     )
     print(
@@ -317,7 +340,7 @@ def print_route(rows: dict) -> None:
 
 def print_bound(rows: dict) -> None:
     print(
-        "\n| candidate | curve | first window | df/f, dzeta (against a tenth of its amplitude) "
+        "\n| candidate | curve | first window | df/f, dzeta (against a fifth of its amplitude) "
         "| interface share | stiffness lost | energy dissipated per cycle |"
     )
     print("|---|---|---|---|---|---|---|")
@@ -354,6 +377,9 @@ def main(argv=None) -> None:
     )
     ap.add_argument("--duration", type=float, default=1.2)
     ap.add_argument("--json", type=Path, default=None, help="append each route's figures here")
+    ap.add_argument(
+        "--from-json", type=Path, default=None, help="print the tables of an earlier --json run"
+    )
     a = ap.parse_args(argv)
     names = [c.strip() for c in a.candidates.split(",") if c.strip()]
     unknown = set(names) - set(CANDIDATES)
@@ -365,7 +391,26 @@ def main(argv=None) -> None:
         if d is None:
             print("../shared/data/brb-hammer not found (GPL data, read in place): nothing to do")
             return
-        print_bound({n: measured_bound(d, base.replace(**CANDIDATES[n])) for n in names})
+        if a.from_json is not None:  # the shares of the stuck interface the route calibrated
+            done = json.loads(a.from_json.read_text())
+            specs = {
+                n: calibrated_variant(base, n, done[n]["calibrated"]) for n in names if n in done
+            }
+        else:
+            specs = {n: base.replace(**CANDIDATES[n]) for n in names}
+        print_bound(measured_bound(d, specs))
+        return
+    if a.from_json is not None:
+        rows = json.loads(a.from_json.read_text())
+        rows = {n: rows[n] for n in names if n in rows}
+        for r in rows.values():  # the reference windows as this version reads them
+            for n in ("acc2", "acc3"):
+                for what in ("pred", "meas"):
+                    if f"curve2_{n}_{what}" in r:
+                        r[f"ref2_{n}_{what}"] = reference_window(r[f"curve2_{n}_{what}"])
+        print_screen({n: r["screen"] for n, r in rows.items()})
+        print_route(rows)
+        print_opening({n: r["opening"] for n, r in rows.items()})
         return
     if a.screen_only:
         specs = {n: base.replace(**CANDIDATES[n]) for n in names}
