@@ -1,28 +1,35 @@
 """Which interface makes mode 2 see mode 1's slip: a measured probe on the hammer record.
 
-Run:  python benchmarks/bench_mode2_coupling.py [--candidates baseline,m1,...] [--screen-only]
-      [--duration 1.2] [--json out.json]
+Run:  python benchmarks/bench_mode2_coupling.py [--candidates baseline,m1,...] [--json out.json]
+      python benchmarks/bench_mode2_coupling.py --screen-only [--candidates ...]
+      python benchmarks/bench_mode2_coupling.py --from-json out.json [--bound] [--candidates ...]
 
 The Brake-Reuss hammer record's mode 2 (297.7 Hz) rings in its first windows at 297.40 Hz
 and 0.155 %, against 297.70 Hz and 0.10 % late: it sees mode 1's slip (mode 1 at 70-87 um at
 acc3). The beam calibrated on mode 1 gives mode 2's first window 0.100 % and 297.68 Hz. Each
-candidate below is an interface variant of ``models.preset("brake-reuss")`` (options of
-``InterfaceModel``), and each runs the SAME route (``examples/brb_every_mode.py``:
+candidate (:data:`CANDIDATES`) is an interface variant of ``models.preset("brake-reuss")``
+(options of ``InterfaceModel``), and each runs the SAME route (``examples/brb_every_mode.py``:
 ``models.predict_hammer_test``: linear update on the low-amplitude frequencies, the joint
 calibrated on mode 1's curve at acc3, each other mode's floor from its lowest amplitudes;
-mode 2's curve is never fitted).
+mode 2's curve is never fitted). A variant the route refuses (a stage not usable) is
+reported with the reason.
 
 For each candidate it prints
 
-* a linear screen of the calibrated beam (seconds): the stuck frequencies' changes for
-  -10 % of the tangential stiffness per area (how much each mode loads the interface), the
-  ratio of that loading of mode 2 to mode 1's, and mode 2's stuck shape ratio acc2/acc1;
+* a linear screen of the calibrated beam: the stuck frequencies' changes for -10 % of the
+  tangential and of the normal stiffness per area (how much each mode loads the interface),
+  the tangential one's ratio mode 2 / mode 1 ("load"), mode 2's stuck shape ratio acc2/acc1;
 * the route's figures: mode 1's largest frequency and damping errors at acc3, mode 2's first
-  predicted window at acc2 and acc3 (frequency, damping) against the record's first window,
-  and mode 2's largest errors at acc2 and acc3.
+  predicted window at acc2 and acc3 (frequency, damping; its drop and excess against the
+  curve at a fifth of that amplitude) against the record's, and mode 2's largest errors;
+* an estimate of what an opening lap edge would do (:func:`opening_estimate`: the hosts'
+  normal springs are bilateral, no gap opens in any route).
 
-``--screen-only`` runs the screen on the uncalibrated variants (no route), for many variants
-at once. The data (GPL-3.0) are read in place from ``../shared/data``; nothing runs without.
+``--screen-only``: the screen and the opening estimate on the uncalibrated variants (seconds).
+``--from-json``: the tables of an earlier ``--json`` run; with ``--bound``, what the record's
+first windows ask of each mode's interface (:func:`measured_bound`) with the calibrated
+interfaces' shares. The data (GPL-3.0) are read in place from ``../shared/data``; nothing runs
+without them.
 """
 
 from __future__ import annotations
@@ -46,6 +53,7 @@ from iwan_element.models.simulation import compare_curves  # noqa: E402
 from iwan_element.models.specimens.contact import pressure_field  # noqa: E402
 
 from iwan_element import amplitude_curve, models  # noqa: E402
+from iwan_element.base.stages import StageFailed  # noqa: E402
 
 #: interface variants of the preset: {name: Specimen.replace changes}
 CANDIDATES = {
@@ -421,10 +429,15 @@ def main(argv=None) -> None:
     if d is None:
         print("../shared/data/brb-hammer not found (GPL data, read in place): nothing to do")
         return
-    rows = {}
+    rows, failed = {}, {}
     for n in names:
         t0 = time.perf_counter()
-        rows[n] = route(base.replace(**CANDIDATES[n]), d, a.duration)
+        try:
+            rows[n] = route(base.replace(**CANDIDATES[n]), d, a.duration)
+        except StageFailed as exc:  # a variant the route refuses is a finding too
+            failed[n] = str(exc)
+            print(f"{n}: {exc}", flush=True)
+            continue
         rows[n]["seconds"] = time.perf_counter() - t0
         print(f"{n}: {rows[n]['seconds']:.0f} s", flush=True)
         if a.json is not None:
@@ -434,6 +447,8 @@ def main(argv=None) -> None:
     print_screen({n: r["screen"] for n, r in rows.items()})
     print_route(rows)
     print_opening({n: r["opening"] for n, r in rows.items()})
+    for n, why in failed.items():
+        print(f"\n{n}: the route stopped: {why}")
 
 
 if __name__ == "__main__":
