@@ -14,6 +14,7 @@ from iwan_element.models.calibration import modal_floor
 from iwan_element.models.modal import linear_modes, modal_amplitude_curve
 from iwan_element.models.reduced import axis_rows, floor_damping
 from iwan_element.models.simulation import compare_curves, solver_settings
+from iwan_element.models.specimens import SpecimenEffect
 
 from iwan_element import AmplitudeCurve, IwanJoint, IwanParameters, amplitude_curve, models
 from iwan_element.exudyn import add_iwan_interface
@@ -277,3 +278,23 @@ def test_an_impact_leaves_each_mode_ringing_at_its_linear_impulse_amplitude():
             ringdown(s, impact=imp, duration=0.1, **kw)
     with pytest.raises(ValueError, match="contact_time"):
         models.Impact(position=0.3, peak_force=50.0, contact_time=0.0)
+
+
+def test_mode_coupling_shows_what_each_named_effect_adds_to_each_mode():
+    """A modal viscous effect on mode 1 (``zeta_v``, added to mode 1's damping ratio and to
+    no other mode's: its declared modal form) seen through ``effects=True``: mode 1's damping
+    with it minus without it is ``zeta_v``, mode 2's unchanged."""
+    zv = 5e-4
+    s = TWO_BOLT.replace(effects=(SpecimenEffect("viscous_damping", (("zeta_v", zv),), mode=1),))
+    with pytest.raises(ValueError, match="carries none"):
+        mode_coupling(TWO_BOLT, amplitude={1: 1e-4, 2: 1e-5}, duration=0.5, effects=True)
+    c = mode_coupling(s, amplitude={1: 1e-4, 2: 1e-5}, duration=0.8, effects=True)
+    assert set(c.without) == {"viscous_damping"}
+    f1, f2 = c.effect_figures[(1, "viscous_damping")], c.effect_figures[(2, "viscous_damping")]
+    assert len(f1["amplitude"]) >= 3 and len(f2["amplitude"]) >= 3
+    np.testing.assert_allclose(f1["damping"] - f1["damping_reference"], zv, rtol=0.05)
+    np.testing.assert_allclose(f2["damping_ratio"], 1.0, atol=2e-3)
+    assert c.effect_summary()[(1, "viscous_damping")]["max_damping_ratio"] > 1.1
+    assert "mode 1, viscous_damping: damping x" in c.report()
+    assert len(c.to_dataframe("effects")) == len(f1["amplitude"]) + len(f2["amplitude"])
+    assert "1:viscous_damping" in c.to_dict()["effect_summary"]

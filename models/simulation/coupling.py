@@ -1,5 +1,6 @@
 """Mode coupling through the interface, made visible: each mode's damping against its own
-amplitude with and without the other modes ringing through the same joint.
+amplitude with and without the other modes ringing through the same joint, and with and
+without each effect the joint carries.
 
 :func:`mode_coupling` runs the multi-mode ring-down (:func:`~iwan_element.models.ringdown`
 with ``amplitude={mode: X, ...}``) and one single-mode ring-down per mode from the same
@@ -7,12 +8,15 @@ amplitude, for the same duration (each at ``steps_per_period`` of its own period
 compares each mode's decay curves at the same amplitudes (:func:`compare_curves`). A modal
 Iwan model (one uncoupled single-degree-of-freedom system per mode) would give ratio 1; the
 transient of the whole specimen shows how much one mode's slip raises another's damping
-(``docs/multi_mode.md``).
+(``docs/multi_mode.md``). With ``effects=True`` the multi-mode ring-down is run again once
+per named effect of the specimen (``interface_effects``, the effects in the joint, and
+``effects``, the modal ones) with that effect taken out, and each mode's curve with every
+effect is compared with the curve without it: what each effect adds to each mode.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -84,6 +88,11 @@ class ModeCouplingResult(ResultShape):
         One single-mode ring-down per mode of ``modes``, same amplitude and duration.
     figures : dict
         ``{mode: compare_curves(with the other modes, alone)}``.
+    without : dict
+        ``{effect name: RingdownResult}``: the multi-mode ring-down with that effect taken
+        out (``mode_coupling(..., effects=True)``; empty otherwise).
+    effect_figures : dict
+        ``{(mode, effect name): compare_curves(with every effect, without that one)}``.
     warnings : tuple of str
     """
 
@@ -93,6 +102,8 @@ class ModeCouplingResult(ResultShape):
     together: RingdownResult
     alone: tuple
     figures: dict
+    without: dict = field(default_factory=dict)
+    effect_figures: dict = field(default_factory=dict)
 
     @property
     def success(self) -> bool:
@@ -100,21 +111,21 @@ class ModeCouplingResult(ResultShape):
         return bool(
             self.together.success
             and all(r.success for r in self.alone)
+            and all(r.success for r in self.without.values())
             and all(len(f["amplitude"]) for f in self.figures.values())
+            and all(len(f["amplitude"]) for f in self.effect_figures.values())
         )
+
+    def effect_summary(self) -> dict:
+        """``{(mode, effect): {"points", "max_damping_ratio", "at_amplitude",
+        "frequency_shift"}}``: per mode, how much each effect raises its damping (the largest
+        ratio with the effect over without it) and shifts its frequency there.
+        """
+        return {key: _largest(f) for key, f in self.effect_figures.items()}
 
     def summary(self) -> dict:
         """Per mode: the largest damping raise and frequency shift from the other modes."""
-        out = {}
-        for r, f in self.figures.items():
-            k = int(np.argmax(f["damping_ratio"])) if len(f["amplitude"]) else None
-            out[r] = {
-                "points": len(f["amplitude"]),
-                "max_damping_ratio": None if k is None else float(f["damping_ratio"][k]),
-                "at_amplitude": None if k is None else float(f["amplitude"][k]),
-                "frequency_shift": None if k is None else float(f["frequency_shift"][k]),
-            }
-        return out
+        return {r: _largest(f) for r, f in self.figures.items()}
 
     def _tables(self) -> list:
         """Per mode and amplitude, the damping together and alone and the frequency shift
@@ -143,7 +154,30 @@ class ModeCouplingResult(ResultShape):
             ("modes", ", ".join(map(str, self.modes))),
             (column("wall time", "s"), float(self.together.wall_time)),
         ]
-        return [("modes", cols, rows), ("run", ("quantity", "value"), run)]
+        out = [("modes", cols, rows)]
+        if self.effect_figures:
+            eff = [
+                (int(r), name, float(a), float(z), float(z0), float(q), float(df))
+                for (r, name), f in self.effect_figures.items()
+                for a, z, z0, q, df in zip(
+                    f["amplitude"],
+                    f["damping"],
+                    f["damping_reference"],
+                    f["damping_ratio"],
+                    f["frequency_shift"],
+                )
+            ]
+            ecols = (
+                "mode",
+                "effect",
+                column("amplitude", "m"),
+                column("damping with every effect", "-"),
+                column("damping without the effect", "-"),
+                column("damping ratio with/without", "-"),
+                column("frequency shift df/f", "-"),
+            )
+            out.append(("effects", ecols, eff))
+        return out + [("run", ("quantity", "value"), run)]
 
     def report(self) -> str:
         """Human-readable account: per mode, its damping with and without the others."""
@@ -174,16 +208,29 @@ class ModeCouplingResult(ResultShape):
                 rows,
                 indent=4,
             )
+        for (r, name), e in self.effect_summary().items():
+            q = e["max_damping_ratio"]
+            lines.append(
+                f"  mode {r}, {name}: "
+                + (
+                    "no common amplitudes with and without it"
+                    if q is None
+                    else f"damping x{q:.3f} with it at {1e6 * e['at_amplitude']:.4g} um "
+                    f"(df/f {1e6 * e['frequency_shift']:+.1f} ppm)"
+                )
+            )
         lines += [f"  warning: {w}" for w in self.warnings]
         return "\n".join(lines)
 
     def to_dict(self) -> dict:
-        """JSON-safe: the figures, the summary, success and warnings."""
+        """JSON-safe: the figures, the summaries, success and warnings."""
         return json_safe(
             {
                 "modes": list(self.modes),
                 "figures": {str(k): v for k, v in self.figures.items()},
                 "summary": {str(k): v for k, v in self.summary().items()},
+                "effect_figures": {f"{r}:{n}": v for (r, n), v in self.effect_figures.items()},
+                "effect_summary": {f"{r}:{n}": v for (r, n), v in self.effect_summary().items()},
                 "wall_time": self.together.wall_time,
                 "success": self.success,
                 "warnings": list(self.warnings),
@@ -200,6 +247,40 @@ class ModeCouplingResult(ResultShape):
             for r, rd in zip(self.modes, self.alone)
         ]
         return plot_curve_pairs(ax_z, ax_f, pairs, ("o-", "s--"))
+
+
+def _largest(f: dict) -> dict:
+    """The largest damping ratio of a :func:`compare_curves` figure, its amplitude and the
+    frequency shift there (None where the curves do not overlap).
+    """
+    k = int(np.argmax(f["damping_ratio"])) if len(f["amplitude"]) else None
+    return {
+        "points": len(f["amplitude"]),
+        "max_damping_ratio": None if k is None else float(f["damping_ratio"][k]),
+        "at_amplitude": None if k is None else float(f["amplitude"][k]),
+        "frequency_shift": None if k is None else float(f["frequency_shift"][k]),
+    }
+
+
+def named_effects(specimen) -> tuple:
+    """The names of the effects a specimen carries, in the joint (``interface_effects``)
+    and in modal form (``effects``), each once, in order.
+    """
+    names = [e.name for e in getattr(specimen, "interface_effects", ())]
+    names += [e.name for e in getattr(specimen, "effects", ())]
+    return tuple(dict.fromkeys(names))
+
+
+def without_effect(specimen, name: str) -> Any:
+    """A copy of ``specimen`` with the effect ``name`` taken out of its joint and modal
+    effects (the rest kept).
+    """
+    changes = {
+        k: tuple(e for e in getattr(specimen, k) if e.name != name)
+        for k in ("interface_effects", "effects")
+        if hasattr(specimen, k)
+    }
+    return specimen.replace(**changes)
 
 
 def plot_curve_pairs(ax_z, ax_f, pairs, formats) -> list:
@@ -228,9 +309,11 @@ def mode_coupling(
     duration: float,
     steps_per_period: int = 64,
     n_periods: float = 3.0,
+    effects: bool = False,
     max_steps: int = MAX_STEPS,
 ) -> ModeCouplingResult:
-    """Each mode's damping with and without the other modes through the same interface.
+    """Each mode's damping with and without the other modes through the same interface, and
+    with and without each effect the specimen carries.
 
     Every run's release, length and cost are checked before the first one starts (the
     errors of :func:`~iwan_element.models.ringdown`).
@@ -248,6 +331,9 @@ def mode_coupling(
         single-mode run (>= 16).
     n_periods : float, keyword-only
         Periods per window of the decay curves (range [3, 1000]).
+    effects : bool, keyword-only
+        Also run the multi-mode ring-down once per named effect of the specimen with that
+        effect taken out (module docstring); the specimen must carry at least one.
     max_steps : int, keyword-only
         Most time steps of all the runs together (default
         :data:`~iwan_element.models.simulation.solver.MAX_STEPS`, as ``ringdown``'s).
@@ -265,14 +351,24 @@ def mode_coupling(
         "steps_per_period": steps_per_period,
         "n_periods": n_periods,
     }
-    steps = preflight(specimen, amplitude, max_steps=max_steps, **run) + sum(
+    if not isinstance(effects, (bool, np.bool_)):
+        raise ValueError(f"effects must be True or False, got {effects!r}")
+    names = named_effects(specimen) if effects else ()
+    if effects and not names:
+        raise ValueError(
+            "effects=True compares runs with and without each named effect, and the "
+            "specimen carries none (no interface_effects, no effects): augment it first "
+            "(VibrationDiagnosis.augment) or pass effects=False"
+        )
+    multi = preflight(specimen, amplitude, max_steps=max_steps, **run)
+    steps = multi * (1 + len(names)) + sum(
         preflight(specimen, {r: X}, max_steps=max_steps, **run) for r, X in amplitude.items()
     )
     check_steps(
         steps,
         n_coordinates=linear_system(specimen).M.shape[0],
         max_steps=max_steps,
-        what=f"mode_coupling's {len(amplitude) + 1} ring-downs",
+        what=f"mode_coupling's {len(amplitude) + 1 + len(names)} ring-downs",
         shorten="shorten duration or lower steps_per_period",
     )
     together = ringdown(specimen, amplitude=amplitude, max_steps=max_steps, **run)
@@ -288,6 +384,15 @@ def mode_coupling(
         for r in modes
     )
     figures = {r: compare_curves(together.mode_curve(r), a.curve) for r, a in zip(modes, alone)}
+    without = {
+        n: ringdown(without_effect(specimen, n), amplitude=amplitude, max_steps=max_steps, **run)
+        for n in names
+    }
+    effect_figures = {
+        (r, n): compare_curves(together.mode_curve(r), w.mode_curve(r))
+        for n, w in without.items()
+        for r in modes
+    }
     warns = [
         f"mode {r}: its curves with and without the other modes do not overlap in amplitude"
         for r, f in figures.items()
@@ -295,6 +400,18 @@ def mode_coupling(
     ]
     warns += [f"together: {x}" for x in together.warnings]
     warns += [f"mode {r} alone: {x}" for r, a in zip(modes, alone) for x in a.warnings]
+    warns += [f"without {n}: {x}" for n, w in without.items() for x in w.warnings]
+    warns += [
+        f"mode {r}: its curves with and without {n} do not overlap in amplitude"
+        for (r, n), f in effect_figures.items()
+        if not len(f["amplitude"])
+    ]
     return ModeCouplingResult(
-        modes=modes, together=together, alone=alone, figures=figures, warnings=tuple(warns)
+        modes=modes,
+        together=together,
+        alone=alone,
+        figures=figures,
+        without=without,
+        effect_figures=effect_figures,
+        warnings=tuple(warns),
     )
