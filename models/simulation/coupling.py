@@ -154,7 +154,7 @@ class ModeCouplingResult(ResultShape):
             ("modes", ", ".join(map(str, self.modes))),
             (column("wall time", "s"), float(self.together.wall_time)),
         ]
-        out = [("modes", cols, rows)]
+        out: list[tuple[str, tuple, list]] = [("modes", cols, rows)]
         if self.effect_figures:
             eff = [
                 (int(r), name, float(a), float(z), float(z0), float(q), float(df))
@@ -374,13 +374,7 @@ def mode_coupling(
     together = ringdown(specimen, amplitude=amplitude, max_steps=max_steps, **run)
     modes = together.modes
     alone = tuple(
-        ringdown(
-            specimen,
-            mode=r,
-            amplitude=amplitude[r],
-            max_steps=max_steps,
-            **run,
-        )
+        ringdown(specimen, mode=r, amplitude=amplitude[r], max_steps=max_steps, **run)
         for r in modes
     )
     figures = {r: compare_curves(together.mode_curve(r), a.curve) for r, a in zip(modes, alone)}
