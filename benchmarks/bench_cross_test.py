@@ -24,7 +24,6 @@ The data (GPL-3.0) are read in place from ``../shared/data``; nothing runs when 
 from __future__ import annotations
 
 import argparse
-import inspect
 import sys
 import time
 from pathlib import Path
@@ -44,11 +43,7 @@ from iwan_element import models  # noqa: E402
 
 def augment(diag, specimen, form: str):
     """The calibrated specimen with the diagnosis's effects in the requested form."""
-    if "form" in inspect.signature(diag.augment).parameters:
-        return diag.augment(specimen, form=form)
-    if form != "modal":
-        raise SystemExit("this checkout's augment has the modal form only")
-    return diag.augment(specimen)
+    return diag.augment(specimen, form=form)
 
 
 def predicted_curves(spec, out, duration: float) -> tuple:

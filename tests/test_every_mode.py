@@ -11,10 +11,10 @@ import pytest
 from exudyn.itemInterface import MarkerNodeCoordinate, NodeGenericODE2, ObjectGenericODE2
 from iwan_element.models import mode_coupling, preset, ringdown
 from iwan_element.models.calibration import modal_floor
-from iwan_element.models.modal import linear_modes, modal_amplitude_curve
+from iwan_element.models.modal import linear_modes, modal_amplitude_curve, point_weights
 from iwan_element.models.reduced import axis_rows, floor_damping
 from iwan_element.models.simulation import compare_curves, solver_settings
-from iwan_element.models.specimens import SpecimenEffect
+from iwan_element.models.specimens import InterfaceEffect, SpecimenEffect
 
 from iwan_element import AmplitudeCurve, IwanJoint, IwanParameters, amplitude_curve, models
 from iwan_element.exudyn import add_iwan_interface
@@ -298,3 +298,21 @@ def test_mode_coupling_shows_what_each_named_effect_adds_to_each_mode():
     assert "mode 1, viscous_damping: damping x" in c.report()
     assert len(c.to_dataframe("effects")) == len(f1["amplitude"]) + len(f2["amplitude"])
     assert "1:viscous_damping" in c.to_dict()["effect_summary"]
+
+
+def test_an_effect_in_the_joint_shows_in_every_mode_it_slips():
+    """A dashpot in the joint (``InterfaceEffect``, shared by ``KT_i``) seen through
+    ``effects=True`` adds to each mode ``sum_i c_i (G phi_r)_i^2 / (2 w_r)`` (light damping,
+    mass-normalised stuck modes; an independent first-order route): to mode 2 as well,
+    which the modal form on mode 1 never reaches."""
+    c = 2e4
+    eff = InterfaceEffect("viscous_damping", values={"c": c})
+    s = TWO_BOLT.replace(interface_effects=(eff,))
+    res = mode_coupling(s, amplitude={1: 1e-4, 2: 1e-5}, duration=0.8, effects=True)
+    share = point_weights(s, eff)
+    for r in (1, 2):
+        w, phi, _, L, _ = linear_modes(s, mode=r)
+        added = float(np.sum(c * share * (L.G @ phi) ** 2) / (2 * w))
+        f = res.effect_figures[(r, "viscous_damping")]
+        assert len(f["amplitude"]) >= 3
+        np.testing.assert_allclose(f["damping"] - f["damping_reference"], added, rtol=0.06)

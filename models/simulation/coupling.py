@@ -25,6 +25,7 @@ from iwan_element import AmplitudeCurve
 from iwan_element.base.result_shape import ResultShape, column, panels, table_lines
 from iwan_element.base.serialize import json_safe
 
+from ..modal.qsma import resolve_interface_effects
 from ..reduced.dispatch import linear_system
 from ..specimens.specimen import Specimen
 from .ringdown_result import RingdownResult
@@ -333,7 +334,10 @@ def mode_coupling(
         Periods per window of the decay curves (range [3, 1000]).
     effects : bool, keyword-only
         Also run the multi-mode ring-down once per named effect of the specimen with that
-        effect taken out (module docstring); the specimen must carry at least one.
+        effect taken out (module docstring); the specimen must carry at least one. Effects
+        in the joint given by their modal fit are resolved first
+        (:func:`~iwan_element.models.modal.resolve_interface_effects`), so that the others
+        keep their joint values when one is taken out.
     max_steps : int, keyword-only
         Most time steps of all the runs together (default
         :data:`~iwan_element.models.simulation.solver.MAX_STEPS`, as ``ringdown``'s).
@@ -360,6 +364,8 @@ def mode_coupling(
             "specimen carries none (no interface_effects, no effects): augment it first "
             "(VibrationDiagnosis.augment) or pass effects=False"
         )
+    if names:  # the joint values fitted once, so that taking one out keeps the others'
+        specimen = resolve_interface_effects(specimen)
     multi = preflight(specimen, amplitude, max_steps=max_steps, **run)
     steps = multi * (1 + len(names)) + sum(
         preflight(specimen, {r: X}, max_steps=max_steps, **run) for r, X in amplitude.items()
