@@ -65,6 +65,7 @@ def pytest_configure(config):
         return
     _warm_kernel_caches()
 
+
 settings.register_profile(
     "ci",
     max_examples=40,
