@@ -24,7 +24,11 @@ checkout's interpreter): nominal steps, accepted steps beyond them (step cuts), 
 iterations, Jacobians, and the seconds in Jacobians (``totalJacobian`` + ``factorization``)
 in residuals (``ODE2RHS``) and in Python (the post-step commit and records), printed as
 shares of the fastest run's wall. Wall time is the time inside ``SolveDynamic``, min and median
-over ``--repeat`` runs in this process.
+over ``--repeat`` runs in this process. The runs with the joint and with linear springs
+alternate (joint, springs, joint, springs ...), and the ratio is the median over the repeats of
+each pair's ratio of CPU seconds inside ``SolveDynamic`` (``time.process_time``): on a machine
+shared with other work, the wall of runs made one after the other moves with the load, and a
+ratio of walls measured minutes apart moved by 2x between runs of this file.
 
 ``--before PATH``: run the same rows under the interpreter ``PATH`` (e.g. a virtual
 environment with an older checkout installed), or read them from a ``--json`` file of an
@@ -65,14 +69,15 @@ _SOLVE = exu.MainSystem.SolveDynamic
 def _counted(self, sim, *args, **kw):
     """``SolveDynamic`` with Exudyn's timers on; its counters appended to ``_COUNTS``."""
     sim.show.computationTime = True
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     out = _SOLVE(self, sim, *args, **kw)
-    wall = time.perf_counter() - t0
+    wall, cpu = time.perf_counter() - t0, time.process_time() - c0
     s = self.sys["dynamicSolver"]
     it, tm = s.it, s.timer
     _COUNTS.append(
         {
             "wall": wall,
+            "cpu": cpu,
             "n": int(s.GetODE2size()),
             "steps": int(sim.timeIntegration.numberOfSteps),
             "taken": int(it.currentStepIndex) - 1,
@@ -157,28 +162,50 @@ def _rows(kinds):
     return rows
 
 
+def _counters(run):
+    """Counters of one run (summed over its solves), or None when the row has no such run."""
+    _COUNTS.clear()
+    if run() is None:
+        return None
+    out = {
+        k: sum(c[k] for c in _COUNTS)
+        for k in ("wall", "cpu", "steps", "taken", "newton", "jacobians", "t_jac", "t_rhs", "t_py")
+    }
+    out["n"] = _COUNTS[0]["n"]
+    return out
+
+
 def _measure(run, repeat):
-    """Counters of one run (summed over its solves) with the wall's min and median."""
-    walls, last = [], None
+    """``{"iwan": counters, "linear": counters or None}`` of a row: the two runs alternate
+    ``repeat`` times; each gets the min and median of its walls and CPU seconds, the joint's
+    run the median over the pairs of its CPU ratio to the springs' (``ratio_cpu``).
+    """
+    runs = {"iwan": [], "linear": []}
     for _ in range(repeat):
-        _COUNTS.clear()
-        if run() is None:
-            return None
-        walls.append(sum(c["wall"] for c in _COUNTS))
-        last = {
-            k: sum(c[k] for c in _COUNTS)
-            for k in ("steps", "taken", "newton", "jacobians", "t_jac", "t_rhs", "t_py")
+        for t in runs:
+            runs[t].append(_counters(lambda t=t: run(t)))
+    out = {}
+    for t, rs in runs.items():
+        if rs[0] is None:
+            out[t] = None
+            continue
+        walls, cpus = [r["wall"] for r in rs], [r["cpu"] for r in rs]
+        out[t] = {
+            **rs[-1],
+            "wall_min": min(walls),
+            "wall_median": statistics.median(walls),
+            "cpu_median": statistics.median(cpus),
         }
-        last["n"] = _COUNTS[0]["n"]
-    return {**last, "wall_min": min(walls), "wall_median": statistics.median(walls)}
+    if out["linear"] is not None:
+        out["iwan"]["ratio_cpu"] = statistics.median(
+            a["cpu"] / b["cpu"] for a, b in zip(runs["iwan"], runs["linear"])
+        )
+    return out
 
 
 def measure(kinds, repeat) -> dict:
     """``{label: {"iwan": counters, "linear": counters or None}}``."""
-    out = {}
-    for label, run in _rows(kinds):
-        out[label] = {t: _measure(lambda run=run, t=t: run(t), repeat) for t in ("iwan", "linear")}
-    return out
+    return {label: _measure(run, repeat) for label, run in _rows(kinds)}
 
 
 def _line(label, d, other=None):
@@ -194,9 +221,10 @@ def _line(label, d, other=None):
         txt += (
             f" {1e3 * b['wall_median'] / b['steps']:7.3f}"
             f" {a['wall_median'] / b['wall_median']:5.2f}"
+            f" {a['ratio_cpu']:5.2f} {b['newton'] / b['taken']:5.2f}"
         )
     else:
-        txt += f" {'-':>7s} {'-':>5s}"
+        txt += f" {'-':>7s} {'-':>5s} {'-':>5s} {'-':>5s}"
     txt += "".join(
         f" {100 * a.get(k, 0.0) / a['wall_min']:4.0f}" for k in ("t_jac", "t_rhs", "t_py")
     )
@@ -332,10 +360,15 @@ def main(argv=None):
             )
         with open(path) as fh:
             before = json.load(fh)
-    print(f"exudyn {exu.__version__}; wall = seconds in SolveDynamic over {a.repeat} runs")
+    print(
+        f"exudyn {exu.__version__}; wall = seconds in SolveDynamic over {a.repeat} runs; "
+        "ratio = median walls, r cpu = median of the paired CPU ratios, l it = Newton "
+        "iterations a step with linear springs"
+    )
     head = (
         f"{'row':36s} {'n':>4s} {'steps':>6s} {'cuts':>5s} {'it/st':>5s} {'jacs':>5s} "
         f"{'ms/jac':>7s} {'min s':>7s} {'med s':>7s} {'ms/st':>7s} {'lin ms':>7s} {'ratio':>5s} "
+        f"{'r cpu':>5s} {'l it':>5s} "
         f"{'%jac':>4s} {'%res':>4s} {'%py':>4s}"
     )
     if before:

@@ -24,7 +24,8 @@ before it; ``docs/architecture.md``):
 * :mod:`~iwan_element.models.modal` - quasi-static modal analysis
   (:func:`modal_amplitude_curve`, :func:`natural_frequencies`), harmonic balance
   (:func:`harmonic_balance`), continuation (:func:`frequency_response`) and nonlinear
-  modes by EPMC (:func:`nonlinear_mode`), the vibration effects' modal form;
+  modes by EPMC (:func:`nonlinear_mode`), the vibration effects' modal form, a
+  stepped-sine level's linear targets through the joint (:func:`sweep_level_targets`);
 * :mod:`~iwan_element.models.simulation` - a specimen in Exudyn: the ring-down after a
   release or a hammer :class:`Impact` (:func:`ringdown`), modes ringing together
   (:func:`mode_coupling`), the stepped-sine forced response (:func:`forced_response`), the
@@ -46,6 +47,7 @@ from .modal import (
     modal_amplitude_curve,
     natural_frequencies,
     nonlinear_mode,
+    sweep_level_targets,
 )
 from .reduced import ReducedModel, reduced_model, reduction_error
 from .simulation import (
@@ -97,6 +99,7 @@ __all__ = [
     "linear_update",
     "LinearUpdateResult",
     "updatable",
+    "sweep_level_targets",
 ]
 
 

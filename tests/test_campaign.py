@@ -6,6 +6,7 @@ known linear laws and white noise; the fit is never told the laws' values. Plus 
 three real damper records (skipped when ../shared/data is absent).
 """
 
+import dataclasses
 import json
 import math
 from pathlib import Path
@@ -60,6 +61,20 @@ def test_predict_an_untested_condition_matches_the_generator(fitted):
     assert pred.values["Fs"] == pytest.approx(fit.law("Fs", cond)[0])
     far = fit.predict({"tension": 60.0, "frequency": 0.75}, t, u, draws=8)
     assert any("tension" in w and "extrapolated" in w for w in far.warnings)
+
+
+def test_a_prediction_from_an_unusable_fit_says_so(fitted):
+    # the fit's own success rule decides; the prediction must carry its reasons, not a
+    # clean verdict (here: the same fit, declared not converged)
+    fit = dataclasses.replace(fitted[0], converged=False, success=False, message="max nfev")
+    t = np.arange(200) / 200.0
+    u = 1e-3 * np.sin(2 * np.pi * t)
+    pred = fit.predict({"tension": 25.0, "frequency": 0.75}, t, u)
+    assert not pred.success
+    assert pred.verdict().startswith("NOT usable") and "max nfev" in pred.verdict()
+    assert any("campaign fit it comes from is not usable" in w for w in pred.warnings)
+    assert pred.to_dict()["failures"] == list(pred.failures)
+    assert fitted[0].predict({"tension": 25.0, "frequency": 0.75}, t, u).success
 
 
 def test_leave_one_out_step_agrees_with_a_full_refit(fitted):

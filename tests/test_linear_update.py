@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 from iwan_element.models import (
     Clamp,
+    Excitation,
     PointMass,
     Setup,
     Shaker,
@@ -77,6 +78,7 @@ def _fd(specimen, name, modes, positions, h=1e-3):
         "mass:acc",
         "shaker.moving_mass",
         "shaker.stinger_stiffness",
+        "shaker.position",
         "stiffness_per_area",
         "normal_stiffness_per_area",
     ],
@@ -95,6 +97,32 @@ def test_sensitivities_equal_finite_differences_of_the_whole_solution(name):
         # relative to each quantity's own size; the derivative itself must not be negligible
         np.testing.assert_allclose(an / scale, fd[i] / scale, atol=2e-6, rtol=2e-4)
     assert np.max(np.abs(sens["df"][1] / sens["f"][1])) > 1e-6
+
+
+def test_the_drive_point_moves_the_excitation_row_and_the_modal_constant():
+    """A force-measured shaker (force_at="gauge") is the drive point: ``shaker.position``
+    moves the gauge mass and the excitation row, so the modal constant's derivative holds
+    ``dE phi``; checked against finite differences of the re-solved modes (the sensor
+    stays). A passive shaker moves alone (the hammer's excitation stays)."""
+    x0 = 0.306  # on beam B, 44 mm from its free end, inside an element
+    base = preset("example").replace(n_points=12, excitation=Excitation("shaker", x0))
+    spec = base.replace(setup=Setup(shaker=Shaker(x0, gauge_mass=0.004, force_at="gauge")))
+    moved = with_parameters(spec, {"shaker.position": x0 - 0.01})
+    assert moved.excitation.position == pytest.approx(x0 - 0.01)
+    assert moved.sensor_position == spec.sensor_position
+    passive = base.replace(setup=Setup(shaker=Shaker(x0, moving_mass=0.05, force_at="passive")))
+    assert with_parameters(passive, {"shaker.position": x0 - 0.01}).excitation.position == x0
+    u = next(u for u in updatable(spec) if u.name == "shaker.position")
+    assert (u.lower, u.upper) == pytest.approx((x0 - 0.005, x0 + 0.005))
+    modes = (1, 2, 3)
+    st = modal_state(spec)
+    sens = modal_sensitivities(spec, {r: st.index(r) for r in modes}, [u], state=st)
+    fd = _fd(spec, "shaker.position", modes, [0.3], h=1e-4)
+    for i, r in enumerate(modes):
+        assert sens["dc"][r][0] == pytest.approx(fd[i][-1], rel=1e-4, abs=1e-6 * abs(sens["c"][r]))
+        assert sens["df"][r][0] == pytest.approx(fd[i][0], rel=1e-4, abs=1e-7 * sens["f"][r])
+    # not negligible: mode 1's modal constant moves by 0.46 % per mm there
+    assert abs(sens["dc"][1][0] / x0 * 1e-3 / sens["c"][1]) > 0.003
 
 
 def test_a_point_mass_is_the_closed_form_tip_mass_cantilever():

@@ -1,7 +1,8 @@
 """The analyses that read a specimen's modes without a time simulation: quasi-static modal
 analysis (QSMA: one mode's frequency and damping against amplitude), harmonic balance,
 frequency responses and nonlinear modes on the reduced model, and the specimen's vibration
-effects in their modal form.
+effects in their modal form, and the linear targets of a stepped-sine level read through
+the specimen's own amplitude dependence.
 """
 
 from .effects import ZeroElement, effect_stack
@@ -14,6 +15,7 @@ from .qsma import (
     natural_frequencies,
     static_modal_load,
 )
+from .sweep_targets import drive_point_modes, sweep_level_targets
 
 __all__ = [
     "modal_amplitude_curve",
@@ -31,4 +33,6 @@ __all__ = [
     "size_warnings",
     "macroslip_report",
     "SIZE_LENGTH_FRACTION",
+    "sweep_level_targets",
+    "drive_point_modes",
 ]

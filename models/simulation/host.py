@@ -8,9 +8,10 @@ the tangential slips of the contact points. The slips, and the rows of any ports
 ``x = T z`` with ``T = [N, R^+]`` for the port rows ``R = [G; ports]``, ``N`` an orthonormal
 basis of the null space of ``R`` and ``R^+`` its pseudo-inverse (``R T = [0 | I]``,
 ``T^-1 = [N^T; R]``), so ``z = (eta, u, p)``: the body coordinates no port reads, the slips
-``u = G x`` and the ports ``p``. ``M' = T^T M T`` is block diagonal (``N^T R^+ = 0``),
-``K' = T^T K0 T``. One Exudyn ``NodeGenericODE2`` carries every ``z``; one
-``ObjectGenericODE2`` carries ``M'``, ``K'`` and the floor's modal damping matrix
+``u = G x`` and the ports ``p``. ``M' = T^T M T`` and ``K' = T^T K0 T`` (both full: the
+basis is orthogonal, ``N^T R^+ = 0``, not ``M``-orthogonal). One Exudyn
+``NodeGenericODE2`` carries every ``z``; one ``ObjectGenericODE2`` carries ``M'``, ``K'`` and
+the floor's modal damping matrix
 ``C' = T^T C T`` (:mod:`~iwan_element.models.reduced.damping`), and each tangential Iwan element is
 a coordinate-marker pair (the slip coordinate against a ground coordinate) of
 :func:`iwan_element.exudyn.add_iwan_interface`: the compiled per-point law, one commit of all

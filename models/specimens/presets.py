@@ -165,8 +165,11 @@ def _brb_setups() -> dict:
             + (("shaker.gauge_mass", (0.0005, 0.03)), ("shaker.moving_mass", (0.03, 0.6))),
             reference="force-controlled stepped sine: a shaker at acc3 with a force gauge "
             "(mass below its sensing element 5 g, range 0.5-30 g: typical of an "
-            "ICP force gauge and its mounting stud; not stated in the source) and "
-            "the moving parts behind it (not seen by a force-measured test); " + _BRB_SENSOR_REF,
+            "ICP force gauge and its mounting stud; not stated in the source), its stinger "
+            "attached at the drawing's 76.2 mm from the end (range +-5 mm: half a force "
+            "gauge's 12-17 mm mounting base and the hand placement of a stinger; the drive "
+            "point moves with it, acc3 on the other face stays) and the moving parts behind "
+            "the gauge (not seen by a force-measured test); " + _BRB_SENSOR_REF,
         ),
     }
 

@@ -19,6 +19,7 @@ from dataclasses import dataclass, replace
 from typing import Any
 
 from ..reduced.dispatch import check_specimen
+from ..solid.specimen import SolidSpecimen
 from ..specimens.setups import Clamp, Setup
 
 __all__ = ["Updatable", "GROUPS", "updatable", "parameter_value", "with_parameters"]
@@ -38,6 +39,10 @@ _FACTORS = {
     "shaker.suspension_stiffness": (0.1, 10.0),
 }
 _MASS_RANGE = (0.25, 4.0)  # a mass's range as factors of its nominal
+#: Default half-widths of position ranges [m] (when the setup gives none): a shaker's
+#: attachment is known to about half a force gauge's mounting base (12-17 mm across) and the
+#: hand placement of a stinger against a drawing's position.
+_OFFSETS = {"shaker.position": 0.005}
 #: Ranges of values given as 0 (a mass or a suspension not known to be there).
 _ZERO_RANGES = {"mass": (0.0, 0.05), "shaker.suspension_stiffness": (0.0, 2.0e4)}
 _UNITS = {
@@ -51,6 +56,7 @@ _UNITS = {
     "shaker.moving_mass": "kg",
     "shaker.stinger_stiffness": "N/m",
     "shaker.suspension_stiffness": "N/m",
+    "shaker.position": "m",
 }
 
 
@@ -156,6 +162,17 @@ def _rows(specimen, st: Setup) -> list:
                 "armature's suspension",
             ),
         ]
+        if not (isinstance(specimen, SolidSpecimen) and _drives(specimen, sh)):
+            # a solid's excitation row is part of its built bodies
+            rows.append(
+                (
+                    "shaker.position",
+                    "attachments",
+                    sh.position,
+                    "the stinger's attachment point along the axis (the drive point when the "
+                    "force acts through the shaker)",
+                )
+            )
     itf = specimen.interface
     rows += [
         (
@@ -202,6 +219,8 @@ def updatable(specimen, *, ranges: dict | None = None) -> tuple:
         unit = "kg" if name.startswith("mass:") else _UNITS[name]
         if name in given:
             lo, hi = (float(v) for v in given[name])
+        elif name in _OFFSETS:
+            lo, hi = nom - _OFFSETS[name], nom + _OFFSETS[name]
         elif nom > 0 and unit == "kg":
             lo, hi = nom * _MASS_RANGE[0], nom * _MASS_RANGE[1]
         elif nom > 0:
@@ -227,9 +246,20 @@ def parameter_value(specimen, name: str) -> float:
     )
 
 
+def _drives(specimen, sh) -> bool:
+    """True when the force of ``specimen``'s test acts at the shaker ``sh``'s attachment."""
+    return sh.force_at != "passive" and abs(specimen.excitation.position - sh.position) < 1e-9
+
+
 def with_parameters(specimen, values: dict) -> Any:
     """A copy of ``specimen`` with the updatable parameters ``values`` ({name: value}) set
     (the same type: a solid keeps its bodies, scaled for the material).
+
+    ``shaker.position`` moves the shaker's gauge mass and stinger and, when the test's force
+    acts through the shaker (``force_at`` ``"gauge"`` or ``"armature"``) and the
+    specimen's excitation point is the shaker's, the excitation point with it: the drive
+    point is where the stinger is attached. The sensor stays where it is (an accelerometer
+    on the other face is placed on its own).
     """
     changes: dict[str, Any] = {}  # the specimen's fields: values, or a new setup
     st = _setup(specimen)
@@ -242,6 +272,8 @@ def with_parameters(specimen, values: dict) -> Any:
         elif name.startswith("mass:") and name[5:] in masses:
             masses[name[5:]] = replace(masses[name[5:]], mass=v)
         elif name.startswith("shaker.") and sh is not None:
+            if name == "shaker.position" and _drives(specimen, sh):
+                changes["excitation"] = replace(specimen.excitation, position=v)
             shaker_change: dict[str, Any] = {name[7:]: v}  # one of its numeric fields
             sh = replace(sh, **shaker_change)
         elif name.startswith("clamp.") and cl is not None:

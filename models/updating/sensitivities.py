@@ -9,7 +9,9 @@ the parameter, as it is for all but the contact layout), then the eigenvalue der
 every mode of the (reduced) system (Fox and Kapoor 1968), ``d phi_r = sum_{s != r} phi_s
 phi_s^T (dK - lambda_r dM) phi_r / (lambda_r - lambda_s) - (phi_r^T dM phi_r / 2) phi_r``,
 exact when every mode of the finite system is in the sum, as here (Mottershead, Link,
-Friswell, MSSP 25:2275-2296, 2011; docs/linear_update.md).
+Friswell, MSSP 25:2275-2296, 2011; docs/linear_update.md). A position (the shaker's
+attachment point) also moves the excitation row ``E``: the modal constant's derivative holds
+``(dE phi)`` beside ``(E dphi)``.
 """
 
 from __future__ import annotations
@@ -76,6 +78,10 @@ def _matrices(specimen):
     return 0.5 * (K + K.T), np.asarray(L.M, float), L
 
 
+def _excitation(L) -> np.ndarray:
+    return np.asarray(L.E if L.E is not None else L.S, float)
+
+
 def modal_state(specimen) -> ModalState:
     """:class:`ModalState` of ``specimen`` (every mode of its linear system)."""
     K, M, L = _matrices(specimen)
@@ -93,7 +99,7 @@ def modal_state(specimen) -> ModalState:
         phi=V,
         n_rigid=n_rigid,
         S=np.asarray(L.S),
-        E=np.asarray(L.E if L.E is not None else L.S),
+        E=_excitation(L),
     )
 
 
@@ -106,20 +112,26 @@ def _inverse(u: Updatable, theta: float) -> float:
 
 
 def matrix_derivatives(specimen, params, *, step: float = 1e-4) -> list:
-    """``[(dK, dM), ...]``: the stuck stiffness's and the mass's derivatives by each
-    parameter's transformed value (``ln p``, or ``p`` for a range from 0), by central
-    differences of the assembled system (one-sided where a step would leave the range: a
-    mass at 0); module docstring. ``params``: Updatable rows.
+    """``[(dK, dM, dS, dE), ...]``: the stuck stiffness's, the mass's and the sensor and
+    excitation rows' derivatives by each parameter's transformed value (``ln p``, or ``p``
+    for a range from 0), by central differences of the assembled system (one-sided where a
+    step would leave the range: a mass at 0); module docstring. The rows move only with a
+    position (the shaker's attachment, where the force acts). ``params``: Updatable rows.
     """
     out = []
     for u in params:
         th = _transform(u, u.nominal)
         h = step if u.log else step * max(u.upper - u.lower, 1e-30)
         hi, lo = th + h, (th - h if u.log or u.nominal - h >= u.lower else th)
-        mats = [
-            _matrices(with_parameters(specimen, {u.name: _inverse(u, x)}))[:2] for x in (hi, lo)
+        mats = [_matrices(with_parameters(specimen, {u.name: _inverse(u, x)})) for x in (hi, lo)]
+        d = [
+            (a - b) / (hi - lo)
+            for a, b in zip(
+                (mats[0][0], mats[0][1], mats[0][2].S, _excitation(mats[0][2])),
+                (mats[1][0], mats[1][1], mats[1][2].S, _excitation(mats[1][2])),
+            )
         ]
-        out.append(((mats[0][0] - mats[1][0]) / (hi - lo), (mats[0][1] - mats[1][1]) / (hi - lo)))
+        out.append(tuple(d))
     return out
 
 
@@ -155,7 +167,7 @@ def modal_sensitivities(specimen, modes, params, *, positions=(), state=None) ->
         gap = lam - st.lam
         gap[k] = np.inf
         dl, dphi = np.zeros(len(params)), np.zeros((p.size, len(params)))
-        for j, (dK, dM) in enumerate(D):
+        for j, (dK, dM, _, _) in enumerate(D):
             A = dK - lam * dM
             dl[j] = p @ A @ p
             coef = (st.phi.T @ (A @ p)) / gap
@@ -166,7 +178,9 @@ def modal_sensitivities(specimen, modes, params, *, positions=(), state=None) ->
         out["dshape"][r] = R @ dphi
         se, ee = float(st.S @ p), float(st.E @ p)
         out["c"][r] = se * ee
-        out["dc"][r] = (st.S @ dphi) * ee + se * (st.E @ dphi)
+        dS = np.array([d[2] @ p for d in D])
+        dE = np.array([d[3] @ p for d in D])
+        out["dc"][r] = (st.S @ dphi + dS) * ee + se * (st.E @ dphi + dE)
     out["state"] = st
     return out
 

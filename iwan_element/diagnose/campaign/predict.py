@@ -47,7 +47,9 @@ def condition_vector(cnames, conditions) -> np.ndarray:
 class CampaignPrediction(ResultShape):
     """Predicted force history at a condition: ``force`` [N] and its band ``lower``,
     ``upper`` [N] (probability ``level``, from the law coefficients' uncertainty), with the
-    law values used and ``warnings`` (extrapolation).
+    law values used and ``warnings`` (extrapolation). ``failures``: why the prediction is
+    not usable (the campaign fit it comes from is not usable: its reasons), each also among
+    the warnings.
     """
 
     COLUMNS = {"lower": ("lower", "N"), "upper": ("upper", "N")}
@@ -60,12 +62,19 @@ class CampaignPrediction(ResultShape):
     conditions: dict
     values: dict
     level: float
+    failures: tuple = ()
+
+    def __post_init__(self):
+        self._fold_failures()
 
     @property
     def success(self) -> bool:
-        """True when the force and its band are finite at every sample."""
+        """True when the fit it comes from is usable and the force and its band are finite
+        at every sample.
+        """
         return bool(
-            np.all(np.isfinite(self.force))
+            not self.failures
+            and np.all(np.isfinite(self.force))
             and np.all(np.isfinite(self.lower))
             and np.all(np.isfinite(self.upper))
         )
@@ -85,6 +94,7 @@ class CampaignPrediction(ResultShape):
                     "values",
                     "level",
                     "warnings",
+                    "failures",
                 )
             }
             | {"success": self.success}
@@ -232,6 +242,9 @@ def predict(
         values=model.law_values(theta, x),
         level=level,
         warnings=tuple(warns),
+        failures=tuple(
+            f"the campaign fit it comes from is not usable ({r})" for r in fit.failure_reasons()
+        ),
     )
 
 

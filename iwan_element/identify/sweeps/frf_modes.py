@@ -29,7 +29,7 @@ from ..modal.mode_target import ModeTarget
 from ..modal.targets import ModalTargets
 from .sweep import _convention, _inputs
 
-__all__ = ["frf_modes", "sweep_modes"]
+__all__ = ["frf_modes", "sweep_modes", "sweep_receptance"]
 
 #: Relative rms misfit above which a single linear mode does not describe the points.
 _MISFIT = 0.05
@@ -220,13 +220,9 @@ def sweep_modes(
         Malformed input, a phase convention that cannot be told, or points without a
         resonance.
     """
-    if quantity not in QUANTITY_POWER:
-        raise ValueError(f"quantity must be one of {sorted(QUANTITY_POWER)}, got {quantity!r}")
-    arrs, sweeps = _inputs(f, F, response, phase, level)
-    W = 2.0 * math.pi * arrs["f"]
-    X = arrs["response"] / W ** QUANTITY_POWER[quantity]
-    phd, conv_note, _ = _convention(W, X, arrs["F"], arrs["phase"], sweeps, quantity)
-    H = X * np.exp(1j * phd) / arrs["F"]
+    pts = sweep_receptance(f, F, response, phase, level=level, quantity=quantity)
+    W, X, H = 2.0 * math.pi * pts["f"], pts["X"], pts["H"]
+    sweeps, conv_note = pts["sweeps"], pts["note"]
     out = _targets(W, H, X, str(label), residual, "sweep", f"{len(sweeps)} sweep(s), {conv_note}")
     wide = (
         (
@@ -236,7 +232,7 @@ def sweep_modes(
         if np.ptp(np.log(X)) > math.log(3.0)
         else ()
     )
-    bad = level_failure(X, arrs["f"], quantity=quantity, name="response")
+    bad = level_failure(X, pts["f"], quantity=quantity, name="response")
     if wide or bad:
         out = ModalTargets(
             modes=out.modes,
@@ -246,3 +242,41 @@ def sweep_modes(
             failures=out.failures + ((bad,) if bad else ()),
         )
     return out
+
+
+def sweep_receptance(f, F, response, phase, *, level=None, quantity: str = "acceleration") -> dict:
+    """Stepped-sine points as a displacement receptance, the phase convention read from the
+    data by the rule of :func:`~iwan_element.sweep_curve` (``docs/sweeps.md`` section 3).
+
+    Parameters
+    ----------
+    f, F, response, phase, level, quantity
+        As :func:`sweep_modes`.
+
+    Returns
+    -------
+    dict
+        ``f`` [Hz], ``F`` [N], ``X`` (the response's displacement amplitude [m]) and ``H``
+        (complex receptance ``X e^{i phi} / F`` [m/N], ``exp(+i W t)``, positive modal
+        constant), in the order given; ``sweeps`` (index arrays of each sweep, by
+        frequency) and ``note`` (the convention read).
+
+    Raises
+    ------
+    ValueError
+        Malformed input or a phase convention that cannot be told (naming the argument).
+    """
+    if quantity not in QUANTITY_POWER:
+        raise ValueError(f"quantity must be one of {sorted(QUANTITY_POWER)}, got {quantity!r}")
+    arrs, sweeps = _inputs(f, F, response, phase, level)
+    W = 2.0 * math.pi * arrs["f"]
+    X = arrs["response"] / W ** QUANTITY_POWER[quantity]
+    phd, note, _ = _convention(W, X, arrs["F"], arrs["phase"], sweeps, quantity)
+    return {
+        "f": arrs["f"],
+        "F": arrs["F"],
+        "X": X,
+        "H": X * np.exp(1j * phd) / arrs["F"],
+        "sweeps": sweeps,
+        "note": note,
+    }
