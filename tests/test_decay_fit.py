@@ -211,6 +211,46 @@ def test_model_record_is_smooth_in_phi_max():
     assert d2.max() < 0.05 * d1.min()
 
 
+@pytest.mark.parametrize("regime", ["microslip", "macroslip"])
+def test_jacobian_columns_equal_central_differences_of_the_record(regime):
+    """The record's derivatives the fit's Jacobian is made of (one quadrature of all the
+    curve parameters' steps, the time shift of ln a0, phi_s exactly) equal central
+    differences of the model record itself, in microslip and released at 3 phi_max (two
+    grid pieces); a record longer than the grid checks the continuation past it."""
+    prob = D._Problem(
+        np.zeros(4000),
+        2000.0,
+        (70.0, 90.0),
+        4,
+        2 if regime == "microslip" else 1,
+        dict(stiffness="harmonic", floor="dashpot", x_ref=3e-4),
+    )
+    prob.span, prob.i_s = 8.0, 0
+    w02 = K_INF + P.KT
+    f0 = math.sqrt(w02) / (2 * math.pi)
+    if regime == "microslip":
+        delta = P.KT * (3e-4 / P.phi_max) ** (P.chi + 1) / (w02 * (P.chi + 2) * (1 + P.beta))
+        x = np.array([f0, 2e-3, P.chi, delta, math.log(3e-4), 0.3])
+    else:
+        theta = [f0, 2e-3, P.chi, P.KT / w02, math.log(P.phi_max), P.beta]
+        x = np.array([*theta, math.log(3 * PHI_MAX), 0.3])
+    curve = [j for j in range(x.size - 2) if regime == "microslip" or j != 4]
+    for span, ends in ((8.0, True), (1.0, False)):  # 1.0: the record runs past the grid
+        prob.span = span
+        steps = [(j, 1e-7 * max(abs(x[j]), 1e-2)) for j in curve]
+        _, dy = prob.record(x, regime, steps)
+        for c, j in enumerate(curve + [x.size - 2, x.size - 1]):
+            if j == x.size - 2 and not ends:
+                continue  # ln a0 also moves the grid's end, where the continuation starts
+            h = 1e-5 * max(abs(x[j]), 1e-2)
+            xp, xm = x.copy(), x.copy()
+            xp[j] += h
+            xm[j] -= h
+            ref = (prob.record(xp, regime) - prob.record(xm, regime)) / (2 * h)
+            err = np.linalg.norm(dy[:, c] - ref) / np.linalg.norm(ref)
+            assert err < 3e-5, (regime, span, j, err)
+
+
 def test_noise_correlation_matches_simulated_noise():
     """rho(tau) from |H|^4 equals the correlation of band-passed white noise's analytic signal."""
     prob = D._Problem(

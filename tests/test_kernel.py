@@ -224,6 +224,61 @@ print("ok")
     assert out.stdout.strip() == "ok"
 
 
+def test_the_warm_up_reaches_every_compiled_kernel(tmp_path):
+    """tests/_warm_kernels.py (run by tests/conftest.py before the xdist workers start)
+    compiles every kernel of the package: in a fresh process, after :func:`warm`, each
+    ``@njit`` function of the package holds a compiled signature, or is called by one that
+    does (a caller loaded from the cache carries its callees' code)."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    code = """
+import importlib, sys
+from pathlib import Path
+from numba.core.dispatcher import Dispatcher
+import iwan_element
+sys.path.insert(0, sys.argv[1])
+from _warm_kernels import warm
+root = Path(iwan_element.__file__).resolve().parent
+kernels = {}
+for f in sorted(root.rglob("*.py")):
+    if "@njit" in f.read_text(encoding="utf-8"):
+        mod = importlib.import_module(
+            "iwan_element." + ".".join(f.relative_to(root).with_suffix("").parts)
+        )
+        for name, obj in vars(mod).items():
+            if isinstance(obj, Dispatcher) and obj.py_func.__module__ == mod.__name__:
+                kernels[mod.__name__ + "." + name] = obj
+warm()
+reached = {k for k, d in kernels.items() if d.signatures}
+grew = True
+while grew:
+    callees = {
+        k
+        for k, d in kernels.items()
+        for c in reached
+        if any(
+            kernels[c].py_func.__globals__.get(n) is d
+            for n in kernels[c].py_func.__code__.co_names
+        )
+    }
+    grew = not callees <= reached
+    reached |= callees
+print(len(kernels), sorted(set(kernels) - reached))
+"""
+    out = subprocess.run(
+        [sys.executable, "-c", code, str(Path(__file__).resolve().parent)],
+        capture_output=True,
+        text=True,
+        cwd=tmp_path,
+        timeout=600,
+    )
+    assert out.returncode == 0, out.stderr[-2000:]
+    n, missing = out.stdout.strip().split(" ", 1)
+    assert int(n) >= 30 and missing == "[]", out.stdout
+
+
 @pytest.mark.parametrize("drag", [0.0, 0.05, 0.3])
 def test_compiled_wear_behind_a_gap_equals_the_elements(drag):
     """The diagnosis evaluates slip degradation inside backlash (then a spring and a dashpot)

@@ -33,6 +33,10 @@ class _Problem:
         # made at the record's rate and decimated by the same resample_poly: its anti-alias
         # filter smears an abrupt release, which leaks into the band (1 % near the start)
         self.q = max(1, int(fs // (_PER_PERIOD * band[1])))
+        # resample_poly's own anti-alias filter (Kaiser, beta 5), designed once: it designed
+        # it anew at every call (7 % of a Jacobian's time in the decay fit, by cProfile)
+        q = self.q
+        self.fir = signal.firwin(20 * q + 1, 1.0 / q, window=("kaiser", 5.0)) if q > 1 else None
         self.n_full, self.fs_full = yy.size, fs
         yw = self.decimate(yy)
         self.fs, self.band, self.order, self.k, self.conv = fs / self.q, band, order, k, conv
@@ -58,7 +62,7 @@ class _Problem:
         return x[: x.size - self.n_nuis]
 
     def decimate(self, Y):
-        return signal.resample_poly(Y, 1, self.q, axis=0) if self.q > 1 else Y
+        return signal.resample_poly(Y, 1, self.q, axis=0, window=self.fir) if self.q > 1 else Y
 
     def apply(self, Y):
         """``L``: the record (column by column) as zero outside its span, padded with zeros
@@ -72,20 +76,19 @@ class _Problem:
         yf = signal.sosfiltfilt(self.sos, np.pad(Y, pad), axis=0)
         return signal.hilbert(yf, N=self.nfft, axis=0)[self.n_trim : self.n_trim + self.n]
 
-    def _segment(self, theta, regime, u, X):
-        """Quadrature of one smooth piece of the curves: amplitudes ``X`` at ``u`` (a uniform
-        grid, decreasing); returns the time, phase, ln w, asin(zeta), zeta and w on it.
+    def _segment(self, thetas, regime, u, X):
+        """Quadrature of one smooth piece of the curves for each parameter vector (the rows
+        of ``thetas``): amplitudes ``X`` at ``u`` (a uniform grid, decreasing); returns the
+        time, phase, ln w and asin(zeta) on it (columns: the rows of ``thetas``), and zeta
+        and w of each.
         """
-        f, zeta = model_curve(
-            theta,
-            X,
-            regime,
-            self.conv["x_ref"],
-            self.conv["stiffness"],
-            self.conv["floor"],
-            "decay",
-        )
-        f, zeta = np.asarray(f, float), np.asarray(zeta, float)
+        cv = self.conv
+        fz = [
+            model_curve(t, X, regime, cv["x_ref"], cv["stiffness"], cv["floor"], "decay")
+            for t in thetas
+        ]
+        f = np.column_stack([np.asarray(c[0], float) for c in fz])
+        zeta = np.column_stack([np.asarray(c[1], float) for c in fz])
         if not (
             np.all(np.isfinite(f))
             and np.all(f > 0)
@@ -95,71 +98,126 @@ class _Problem:
         ):
             raise ValueError("model outside its range")
         w = 2.0 * math.pi * f
-        h = u[0] - u[1]
-        tu = cumulative_simpson(1.0 / (zeta * w), dx=h, initial=0.0)
-        th = cumulative_simpson(np.sqrt(1.0 - zeta**2) / zeta, dx=h, initial=0.0)
-        if not np.all(np.diff(tu) > 0):
+        ig = np.hstack([1.0 / (zeta * w), np.sqrt(1.0 - zeta**2) / zeta])
+        tq = cumulative_simpson(ig, dx=u[0] - u[1], initial=0.0, axis=0)
+        tu, th = tq[:, : len(thetas)], tq[:, len(thetas) :]
+        if not np.all(np.diff(tu, axis=0) > 0):
             raise ValueError("time grid not increasing")
         return tu, th, np.log(w), np.arcsin(zeta), zeta, w
 
-    def trajectory(self, theta, regime, ln_a0, t_rel):
-        """Ln a, theta, ln w and asin(zeta) at ``t_rel`` [s] after the start of the decay.
+    def _cuts(self, lp, ln_a0):
+        """The grid's pieces ``(ln a from, to, nodes, first, last)``: one, or two with a node
+        at ``ln phi_max = lp`` (:meth:`trajectory`).
+        """
+        u_end = ln_a0 - self.span
+        if u_end < lp < ln_a0 - 1e-9:
+            n_a = min(max(int(round(_GRID * (ln_a0 - lp) / self.span)), 5), _GRID - 5)
+            return [
+                (ln_a0, lp, n_a, 1.0, 1.0 + 1e-12),  # phi_max from above
+                (lp, u_end, _GRID - n_a + 1, 1.0 - 1e-12, 1.0),
+            ]  # and from below
+        return [(ln_a0, u_end, _GRID, 1.0, 1.0)]
+
+    def trajectory(self, theta, regime, ln_a0, t_rel, steps=()):
+        """Ln a, theta, ln w and asin(zeta) at ``t_rel`` [s] after the start of the decay,
+        shape ``(n, 4)``, and their derivatives by the curve parameters ``steps`` (pairs
+        ``(index in theta, step)``) and by ``ln_a0``, shape ``(n, 4, len(steps) + 1)``,
+        when any are asked.
 
         Quadrature in ``u = ln a`` on a fixed grid (cumulative Simpson), cubic spline in time.
         The decay-form damping of the full model jumps at ``X = phi_max`` (the joint's tangent
         loses the sliders at ``phi_max`` at once): a grid node sits there and each side is
         integrated with its own one-sided values, so the trajectory is smooth in ``phi_max``
         (a fixed grid made the residual step whenever ``phi_max`` crossed a node, and finite
-        differences then overstated its sensitivity some 50-fold).
+        differences then overstated its sensitivity some 50-fold). A curve parameter other
+        than ``phi_max`` leaves the grid in ``u`` as it is and moves its nodes in time: the
+        quadratures of all the stepped parameter vectors are one call, and at a fixed time
+        ``dY = dY_node - (dY/dt) dt_node``, the nodes' sensitivities interpolated in ``u`` at
+        ``u(t)`` (linear on the grid: they vary over the decay, error ~1e-6), which saves a
+        spline per parameter. Raised by ``d``, ``ln a0`` is passed ``d / (zeta w)`` (at the
+        release) later, and the decay follows the base delayed by that time (the grid moves
+        with it): ``dY/d ln a0 = -(dY/dt) / (zeta w)``, plus the phase ``w sqrt(1 - zeta**2)
+        / (zeta w)`` gained meanwhile.
         """
-        u_end = ln_a0 - self.span
+        thetas = np.tile(np.asarray(theta, float), (len(steps) + 1, 1))
+        for c, (j, h) in enumerate(steps):
+            thetas[c + 1, j] += h
+        hs = np.array([h for _, h in steps])
         lp = theta[4] if regime != "microslip" else np.inf
-        if u_end < lp < ln_a0 - 1e-9:
-            n_a = min(max(int(round(_GRID * (ln_a0 - lp) / self.span)), 5), _GRID - 5)
-            cuts = [
-                (ln_a0, lp, n_a, 1.0, 1.0 + 1e-12),  # phi_max from above
-                (lp, u_end, _GRID - n_a + 1, 1.0 - 1e-12, 1.0),
-            ]  # and from below
-        else:
-            cuts = [(ln_a0, u_end, _GRID, 1.0, 1.0)]
-        pieces, t0, th0 = [], 0.0, 0.0
-        for ua, ub, m, first, last in cuts:
+        pieces, t0, th0, start = [], np.zeros(len(thetas)), np.zeros(len(thetas)), None
+        for ua, ub, m, first, last in self._cuts(lp, ln_a0):
             u = np.linspace(ua, ub, m)
             X = np.exp(u)
             X[0] *= first
             X[-1] *= last
-            tu, th, lw, asz, zeta, w = self._segment(theta, regime, u, X)
+            tu, th, lw, asz, zeta, w = self._segment(thetas, regime, u, X)
             tu, th = tu + t0, th + th0
-            pieces.append((tu, CubicSpline(tu, np.column_stack([u, th, lw, asz]))))
+            if start is None:  # ln a0 moves the release along the curve: dt = d ln a0 / zeta w
+                start = (zeta[0, 0] * w[0, 0], w[0, 0] * math.sqrt(1.0 - zeta[0, 0] ** 2))
+            node = np.hstack([(v[:, 1:] - v[:, :1]) / hs for v in (th, lw, asz, tu)])
+            spl = CubicSpline(tu[:, 0], np.column_stack([u, th[:, 0], lw[:, 0], asz[:, 0]]))
+            pieces.append((tu[:, 0], spl, ua, (ua - ub) / (m - 1), node))
             t0, th0 = tu[-1], th[-1]
-        out = np.empty((t_rel.size, 4))
+        out, sens = np.empty((t_rel.size, 4)), np.zeros((t_rel.size, 4, hs.size + 1))
+        rate = np.zeros((t_rel.size, 4))  # dY/dt
         lo = -np.inf
-        for tu, spl in pieces:
+        for tu, spl, ua, du, node in pieces:
             sel = (t_rel > lo) & (t_rel <= tu[-1]) if lo > -np.inf else t_rel <= tu[-1]
             out[sel] = spl(t_rel[sel])
+            if steps:  # the nodes' sensitivities at u(t), linear in u (error ~ du**2 / 8)
+                rate[sel] = spl(t_rel[sel], 1)
+                s = np.clip((ua - out[sel, 0]) / du, 0.0, tu.size - 1.0)
+                i = np.minimum(s.astype(int), tu.size - 2)
+                f = (s - i)[:, None]
+                nd = (node[i] * (1.0 - f) + node[i + 1] * f).reshape(-1, 4, hs.size)
+                sens[sel, 1:, :-1] = nd[:, :3]  # th, ln w, asin(zeta); minus dY/dt dt_node
+                sens[sel, :, :-1] -= rate[sel, :, None] * nd[:, 3][:, None, :]
             lo = tu[-1]
-        beyond = t_rel > t0
+        beyond = t_rel > t0[0]
         if np.any(beyond):  # past the grid: continue at the last decay rate and frequency
-            out[beyond] = pieces[-1][1](np.full(int(beyond.sum()), t0))
-            dt = t_rel[beyond] - t0
-            out[beyond, 0] = u[-1] - zeta[-1] * w[-1] * dt
-            out[beyond, 1] = th0 + w[-1] * math.sqrt(1 - zeta[-1] ** 2) * dt
-        return out
+            dt = t_rel[beyond] - t0[0]
+            r, o = zeta[-1] * w[-1], w[-1] * np.sqrt(1 - zeta[-1] ** 2)
+            out[beyond, 2:] = [lw[-1, 0], asz[-1, 0]]
+            out[beyond, 0] = u[-1] - r[0] * dt
+            out[beyond, 1] = th0[0] + o[0] * dt
+            rate[beyond, :2] = [-r[0], o[0]]
+            dr, do, dt0, dth0, dlw, dasz = (
+                (v[1:] - v[0]) / hs for v in (r, o, t0, th0, lw[-1], asz[-1])
+            )
+            sens[beyond, 0, :-1] = -dt[:, None] * dr + r[0] * dt0
+            sens[beyond, 1, :-1] = dt[:, None] * do + dth0 - o[0] * dt0
+            sens[beyond, 2:, :-1] = np.stack([dlw, dasz])
+        if not steps:
+            return out
+        sens[:, :, -1] = -rate / start[0]  # from a0 + d: the base, d / (zeta w) later,
+        sens[:, 1, -1] += start[1] / start[0]  # after the phase of that time
+        return out, sens
 
-    def record(self, x, regime):
+    def record(self, x, regime, steps=()):
         """Model record ``a w**k cos(theta + k asin(zeta) + phi_s)`` at the record's rate,
-        zero before the start.
+        zero before the start; with ``steps`` (:meth:`trajectory`) also its derivatives by
+        those curve parameters, ``ln a0`` and ``phi_s``, shape ``(n_full, len(steps) + 2)``.
         """
         i0 = self.i_s * self.q
         t_rel = np.arange(self.n_full - i0) / self.fs_full
-        u, th, lw, asz = self.trajectory(self.theta(x), regime, x[-2], t_rel).T
+        tr = self.trajectory(self.theta(x), regime, x[-2], t_rel, steps)
+        tr, sens = tr if steps else (tr, None)
+        u, th, lw, asz = tr.T
         y = np.zeros(self.n_full)
-        y[i0:] = np.exp(u + self.k * lw) * np.cos(th + self.k * asz + x[-1])
+        amp, arg = np.exp(u + self.k * lw), th + self.k * asz + x[-1]
+        y[i0:] = amp * np.cos(arg)
         for j in range(self.nb):  # linear out-of-band modes that leak into the band
             f2, s2, c, s = x[x.size - self.n_nuis + 4 * j :][:4]
             wt = 2.0 * math.pi * f2 * t_rel
             y[i0:] += self.scale * np.exp(-s2 * t_rel) * (c * np.cos(wt) + s * np.sin(wt))
-        return y
+        if not steps:
+            return y
+        c, s = amp * np.cos(arg), amp * np.sin(arg)
+        dy = np.zeros((self.n_full, len(steps) + 2))
+        dy[i0:, :-1] = c[:, None] * (sens[:, 0] + self.k * sens[:, 2])
+        dy[i0:, :-1] -= s[:, None] * (sens[:, 1] + self.k * sens[:, 3])
+        dy[i0:, -1] = -s
+        return y, dy
 
     def neighbour_columns(self, x):
         """Exact derivatives of :meth:`record` by the neighbours' four entries each
@@ -187,7 +245,7 @@ def _polar(z):
 
 class _Objective:
     """Log-polar residuals on the samples ``idx`` and their Jacobian (``L`` is linear, so
-    ``dz/dx = L(dy/dx)``; ``dy/dx`` by forward differences of the model record).
+    ``dz/dx = L(dy/dx)``; ``dy/dx`` from :meth:`_Problem.record`'s sensitivities).
     """
 
     def __init__(self, prob, regime, idx, ref, bounds, weights=None, envelope=None):
@@ -250,20 +308,23 @@ class _Objective:
         return (self.prob.record(xp, self.regime) - self.prob.record(xm, self.regime)) / (hp + hm)
 
     def jac(self, x):
+        """Jacobian of :meth:`resid`: the record's derivatives by the curve parameters and
+        ``ln a0`` from one quadrature of all their steps (:meth:`_Problem.trajectory`), by
+        ``ln phi_max`` by differences (:meth:`_phi_column`), by ``phi_s`` and the neighbours
+        exactly; ``L`` is linear, so ``dz/dx = L(dy/dx)``.
+        """
+        nb0 = x.size - self.prob.n_nuis  # neighbours: exact columns
+        full = self.regime != "microslip"
+        steps = []
+        for j in range(nb0):
+            h = 1e-7 * max(abs(x[j]), 1e-2)
+            if not (full and j == 4):
+                steps.append((j, -h if x[j] + h > self.ub[j] else h))
         try:
-            y0, zm = self._model(x)
-            cols = []
-            nb0, nb1 = x.size - self.prob.n_nuis, x.size - 2  # neighbours: exact columns
-            for j in [*range(nb0), nb1, nb1 + 1]:
-                if j == 4 and self.regime != "microslip":
-                    cols.append(self._phi_column(x))
-                    continue
-                h = 1e-7 * max(abs(x[j]), 1e-2 if j < x.size - 2 else 1.0)
-                if x[j] + h > self.ub[j]:
-                    h = -h
-                xp = np.array(x, dtype=float)
-                xp[j] += h
-                cols.append((self.prob.record(xp, self.regime) - y0) / h)
+            _, zm = self._model(x)
+            cols = list(self.prob.record(x, self.regime, steps)[1].T)
+            if full:
+                cols.insert(4, self._phi_column(x))
         except ValueError:
             return np.zeros((2 * self.idx.size, x.size))
         cols = np.column_stack(cols[:nb0] + [self.prob.neighbour_columns(x)] + cols[nb0:])
@@ -391,71 +452,3 @@ def _fit_regime(obj, starts, bounds):
         if best is None or r.cost < best.cost:
             best = r
     return best
-
-
-def _neighbours(prob, i_s, max_modes=2):
-    """Out-of-band modes that leak into the band: start values ``[f, sigma, c, s]`` of each.
-
-    Peaks of the record's amplitude spectrum (from the start of the decay) outside the band,
-    at least 10 times the median out-of-band level (the noise), the one with the strongest
-    steady leak (spectrum times ``|H|**2``) on each side, if that leak is above 1e-3 of the
-    noise level: a mode that starts abruptly with the decay leaks far more through the
-    band-pass at the start than its steady ``|H|**2`` says (a 16 % neighbour with a steady
-    leak below the noise biased the joint parameters by 30 standard errors). Each is a linear
-    decaying sinusoid: frequency and decay rate from straight lines through the phase and
-    log-envelope of its own narrow band's analytic signal (clear of
-    that filter's end effects), amplitudes by linear least squares on the record.
-    """
-    lo, hi = prob.band
-    seg = prob.y[i_s:]
-    n = seg.size
-    if n < 64:
-        return []
-    nfft = int(2 ** math.ceil(math.log2(4 * n)))
-    f = np.fft.rfftfreq(nfft, 1.0 / prob.fs)
-    Y = np.abs(np.fft.rfft(seg * signal.windows.hann(n), nfft))
-    _, H = signal.sosfreqz(prob.sos, worN=f, fs=prob.fs)
-    H2 = np.abs(H) ** 2
-    out_band = ((f < lo) | (f > hi)) & (f > 0.25 * lo) & (f < 0.45 * prob.fs)
-    if not np.any(out_band):
-        return []
-    floor = float(np.median(Y[out_band]))
-    pk, _ = signal.find_peaks(Y)
-    pk = pk[out_band[pk] & (Y[pk] > 10.0 * floor) & (Y[pk] * H2[pk] > 1e-3 * floor)]
-    starts = []
-    t = np.arange(n) / prob.fs
-    for side in (pk[f[pk] < lo], pk[f[pk] > hi]):
-        if side.size == 0:
-            continue
-        j = side[np.argmax(Y[side] * H2[side])]
-        est = _neighbour_start(prob, seg, t, float(f[j]))
-        if est is not None:
-            starts.append(est)
-    return starts[:max_modes]
-
-
-def _neighbour_start(prob, seg, t, f2):
-    """Frequency, decay rate and amplitudes of a linear mode near ``f2`` [Hz] in ``seg``."""
-    lo, hi = prob.band
-    gap = (lo - f2) if f2 < lo else (f2 - hi)
-    d = min(0.5 * gap, 0.1 * f2)
-    if d <= 0.0 or f2 + d >= 0.5 * prob.fs:
-        return None
-    sos = signal.butter(2, [f2 - d, f2 + d], btype="bandpass", fs=prob.fs, output="sos")
-    z = signal.hilbert(signal.sosfiltfilt(sos, seg), N=int(2 ** math.ceil(math.log2(2 * seg.size))))
-    z = z[: seg.size]
-    m = int(math.ceil(3.0 * prob.fs / d))  # a few of its filter's time constants
-    if seg.size - 2 * m < 16:
-        m = seg.size // 4
-    sl = slice(m, seg.size - m)
-    lnA, ph = _polar(z[sl])
-    w = np.abs(z[sl]) ** 2
-    cs = np.polyfit(t[sl], lnA, 1, w=np.sqrt(w))
-    cp = np.polyfit(t[sl], ph, 1, w=np.sqrt(w))
-    fr, sig = cp[0] / (2.0 * math.pi), max(-cs[0], 0.0)
-    if not (f2 - d < fr < f2 + d):
-        return None
-    env = np.exp(-sig * t)
-    A = np.column_stack([env * np.cos(2 * math.pi * fr * t), env * np.sin(2 * math.pi * fr * t)])
-    coef, *_ = np.linalg.lstsq(A, seg, rcond=None)
-    return np.array([fr, sig, coef[0] / prob.scale, coef[1] / prob.scale])
