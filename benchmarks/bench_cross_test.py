@@ -121,6 +121,11 @@ def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--duration", type=float, default=1.2)
     ap.add_argument("--form", choices=("modal", "physical"), default="physical")
+    ap.add_argument(
+        "--coupling",
+        action="store_true",
+        help="also models.mode_coupling(augmented, effects=True) from the same release",
+    )
     a = ap.parse_args(argv)
     d = hammer_example.data_dir()
     shared = sweeps_example.data_dir()
@@ -147,6 +152,11 @@ def main(argv=None) -> None:
         early_windows(out, out.predicted, n)
         print("augmented joint:")
         early_windows(out, curves, n)
+    if a.coupling:
+        t2 = time.perf_counter()
+        c = models.mode_coupling(aug, amplitude=out.release, duration=a.duration, effects=True)
+        print(f"\nmode coupling and each effect's share ({time.perf_counter() - t2:.0f} s):")
+        print(c.report())
     f1 = float(np.median(out.measured[(1, "acc3")].frequency))
     f2 = float(np.median(out.measured[(2, "acc2")].frequency))
     recs = hammer_example.records(d)
