@@ -132,17 +132,7 @@ class ModeCouplingResult(ResultShape):
         """Per mode and amplitude, the damping together and alone and the frequency shift
         (the main table), then the run.
         """
-        rows = [
-            (int(r), float(a), float(z), float(z0), float(q), float(df))
-            for r, f in self.figures.items()
-            for a, z, z0, q, df in zip(
-                f["amplitude"],
-                f["damping"],
-                f["damping_reference"],
-                f["damping_ratio"],
-                f["frequency_shift"],
-            )
-        ]
+        rows = [(int(r), *vals) for r, vals in _figure_rows(self.figures)]
         cols = (
             "mode",
             column("amplitude", "m"),
@@ -157,17 +147,7 @@ class ModeCouplingResult(ResultShape):
         ]
         out: list[tuple[str, tuple, list]] = [("modes", cols, rows)]
         if self.effect_figures:
-            eff = [
-                (int(r), name, float(a), float(z), float(z0), float(q), float(df))
-                for (r, name), f in self.effect_figures.items()
-                for a, z, z0, q, df in zip(
-                    f["amplitude"],
-                    f["damping"],
-                    f["damping_reference"],
-                    f["damping_ratio"],
-                    f["frequency_shift"],
-                )
-            ]
+            eff = [(int(r), name, *vals) for (r, name), vals in _figure_rows(self.effect_figures)]
             ecols = (
                 "mode",
                 "effect",
@@ -248,6 +228,18 @@ class ModeCouplingResult(ResultShape):
             for r, rd in zip(self.modes, self.alone)
         ]
         return plot_curve_pairs(ax_z, ax_f, pairs, ("o-", "s--"))
+
+
+def _figure_rows(figures: dict) -> list:
+    """``[(key, (amplitude, damping, reference damping, ratio, df/f)), ...]``: every
+    amplitude of every :func:`compare_curves` figure of ``figures`` (``{key: figure}``).
+    """
+    names = ("amplitude", "damping", "damping_reference", "damping_ratio", "frequency_shift")
+    return [
+        (key, tuple(float(v) for v in row))
+        for key, f in figures.items()
+        for row in zip(*(f[n] for n in names))
+    ]
 
 
 def _largest(f: dict) -> dict:
