@@ -87,24 +87,18 @@ class LinearUpdateResult(ResultShape):
         p = self.predictions[int(mode)]
         return p["frequency"], p["stderr"]
 
+    def _target_rows(self) -> list:
+        """Per target: ``(name, measured, before, after, weighted residual before, after)``."""
+        keys = ("measured", "before", "after", "residual_before", "residual_after")
+        return [(r["target"], *(r[k] for k in keys)) for r in self.residuals]
+
     def _tables(self) -> list:
         """The parameters, then the targets (measured, before and after the update, each in
         its own unit: a frequency [Hz], a unit-normalised shape entry [-], a modal constant
         [1/kg]; the residuals weighted by the targets' errors [-]), then the rest.
         """
         units = {"f": "Hz", "s": "-", "c": "1/kg"}
-        rows = [
-            (
-                r["target"],
-                units.get(r["target"][:1], "-"),
-                r["measured"],
-                r["before"],
-                r["after"],
-                r["residual_before"],
-                r["residual_after"],
-            )
-            for r in self.residuals
-        ]
+        rows = [(t, units.get(t[:1], "-"), *vals) for t, *vals in self._target_rows()]
         cols = (
             "target",
             "unit",
@@ -146,17 +140,7 @@ class LinearUpdateResult(ResultShape):
                 ("res. before", "11.3f"),
                 ("res. after", "10.3f"),
             ],
-            [
-                (
-                    r["target"],
-                    r["measured"],
-                    r["before"],
-                    r["after"],
-                    r["residual_before"],
-                    r["residual_after"],
-                )
-                for r in self.residuals
-            ],
+            self._target_rows(),
         )
         if self.predictions:
             lines.append(
