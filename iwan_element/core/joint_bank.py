@@ -17,9 +17,11 @@ new displacement at once:
 * the few points that close a loop (or start from rest) walk their reversal stack one by
   one with the compiled kernel every exact element shares (:mod:`iwan_element.core.masing`).
 
-The bank is the committed state of a multi-contact interface; it never evaluates trials for
-a solver (the solver's trial forces come from the symbolic law of
-:mod:`iwan_element.exudyn._symbolic_law`, which reads the state this bank exposes).
+The bank is the committed state of a multi-contact interface. The solver's trial forces come
+from the symbolic law of :mod:`iwan_element.exudyn.laws.symbolic_law`, which reads the state
+this bank exposes; a Newton iteration that needs trial forces and consistent tangents of all
+points reads them from the same state (:mod:`iwan_element.exudyn.laws.condensed`, with
+:meth:`IwanJointBank.trial`, the compiled walk of every point's stack).
 """
 
 from __future__ import annotations
@@ -31,7 +33,7 @@ import numpy as np
 from ..base.validation import check_scalar, finite_array
 from .history import REVERSAL_TOL
 from .joint import REVERSAL_TOL_MAX
-from .masing import _NOSEG, masing_constants, masing_step
+from .masing import _NOSEG, bank_trial_rows, masing_constants, masing_step
 from .parameters import IwanParameters
 
 __all__ = ["IwanJointBank"]
@@ -93,6 +95,7 @@ class IwanJointBank:
         self._a_e3 = self.a / self.e3
         self._e1s = float(self.e1[0]) if np.all(self.e1 == self.e1[0]) else None
         self._consts = [masing_constants(p, tol * p.phi_max) for p in params]
+        self._C = np.array(self._consts)
         self.reset()
 
     # ------------------------------------------------------------------ state
@@ -121,9 +124,9 @@ class IwanJointBank:
             z.copy(),
             z.copy(),
         )
-        self._us = [np.empty(8) for _ in range(n)]  # reversal stacks, oldest first: the
-        self._Fr = [np.empty(8) for _ in range(n)]  # first _nst[i] entries of point i
-        self._at = [np.empty(8, np.int64) for _ in range(n)]
+        self._us = np.empty((n, 8))  # reversal stacks, oldest first: the first _nst[i]
+        self._Fr = np.empty((n, 8))  # entries of row i (one more column than the deepest)
+        self._at = np.empty((n, 8), np.int64)
         self.bur, self.bFr = z.copy(), z.copy()
         self.bc1, self.bc2 = np.ones(n), np.ones(n)
         self.blo, self.bhi = z.copy(), z.copy()
@@ -133,8 +136,8 @@ class IwanJointBank:
         self._down = np.zeros(n, dtype=bool)  # ... towards smaller u
         self._stale = False  # F, W, D lag behind u (see _sync)
         self._nst = np.zeros(n, dtype=np.intp)  # stack lengths
-        self.us = _Stacks(self._us, self._nst)  # read-only views of the live entries
-        self.Fr = _Stacks(self._Fr, self._nst)
+        self.us = _Stacks(self, "_us")  # read-only views of the live entries
+        self.Fr = _Stacks(self, "_Fr")
         self._fast_buf = np.zeros(n, dtype=bool)
         self._above_buf = np.zeros(n, dtype=bool)
         for i in range(n):
@@ -255,8 +258,8 @@ class IwanJointBank:
         for i, ei, Fi in zip(idx.tolist(), e.tolist(), eF.tolist()):
             self._room(i)
             k = self._nst[i]
-            self._us[i][k] = ei
-            self._Fr[i][k] = Fi
+            self._us[i, k] = ei
+            self._Fr[i, k] = Fi
             self._nst[i] = k + 1
         return slow[~plain]
 
@@ -312,11 +315,30 @@ class IwanJointBank:
     # ------------------------------------------------------------------ one point
     def _room(self, i: int) -> None:
         """Make room for one more reversal point on the stack of point ``i``."""
-        if self._nst[i] + 1 >= self._us[i].size:
-            grow = self._us[i].size
-            self._us[i] = np.concatenate([self._us[i], np.empty(grow)])
-            self._Fr[i] = np.concatenate([self._Fr[i], np.empty(grow)])
-            self._at[i] = np.concatenate([self._at[i], np.empty(grow, np.int64)])
+        if self._nst[i] + 1 >= self._us.shape[1]:  # every row grows (a 2-D array)
+            grow = (self.n_points, self._us.shape[1])
+            self._us = np.hstack([self._us, np.empty(grow)])
+            self._Fr = np.hstack([self._Fr, np.empty(grow)])
+            self._at = np.hstack([self._at, np.empty(grow, np.int64)])
+
+    def trial(self, u, F=None, K=None) -> tuple[np.ndarray, np.ndarray]:
+        """Forces [N] and consistent tangents [N/m] of every point at the trial
+        displacements ``u`` [m] (shape (n_points,)) from the committed state; nothing changes.
+
+        The exact walk of each point's reversal stack (:func:`~.masing.bank_trial_rows`, the
+        kernel every exact element shares): the tangent is the derivative of the force the
+        walk gives (the consistent tangent a Newton iteration needs). ``F`` and ``K``: arrays
+        of shape (n_points,) to fill (new ones if None).
+        """
+        u = np.ascontiguousarray(u, dtype=float)
+        if u.shape != (self.n_points,):
+            raise ValueError(f"u must have shape ({self.n_points},), got {u.shape}")
+        if self._stale:
+            self._sync()
+        F = np.empty_like(u) if F is None else F
+        K = np.empty_like(u) if K is None else K
+        bank_trial_rows(self._C, self._us, self._Fr, self._at, self._nst, self.u, self._F, u, F, K)
+        return F, K
 
     def _walk_commit(self, i: int, u: float) -> None:
         """Exact Masing walk of point ``i`` from its committed state to ``u`` (the compiled
@@ -398,13 +420,13 @@ class _Stacks:
     committed entries of point ``i`` (oldest first).
     """
 
-    __slots__ = ("_arrs", "_n")
+    __slots__ = ("_bank", "_name")
 
-    def __init__(self, arrs, n):
-        self._arrs, self._n = arrs, n
+    def __init__(self, bank, name):
+        self._bank, self._name = bank, name
 
     def __len__(self) -> int:
-        return len(self._arrs)
+        return self._bank.n_points
 
     def __getitem__(self, i):
-        return self._arrs[i][: self._n[i]]
+        return getattr(self._bank, self._name)[i, : self._bank._nst[i]]

@@ -16,7 +16,9 @@ Every exact element of the package moves the same reversal stack (Masing 1926; I
   the slider density; both in closed form.
 
 :func:`_advance` is the one walk; :func:`masing_step` applies it to one element's stack (the
-slow path of :class:`~iwan_element.IwanJoint` and :class:`~iwan_element.IwanJointBank`) and
+slow path of :class:`~iwan_element.IwanJoint` and :class:`~iwan_element.IwanJointBank`),
+:func:`bank_trial_rows` to trials of every element of a bank (a Newton iteration's forces and
+consistent tangents), and
 :func:`masing_history` to whole histories, one parameter set per row (a batch of parameter
 sets, e.g. all the perturbations of a finite-difference Jacobian, is one call).
 :func:`reversal_structure` gives the parameter-free part (which reversal each sample's branch
@@ -40,6 +42,7 @@ __all__ = [
     "masing_history",
     "masing_rows",
     "masing_step",
+    "bank_trial_rows",
     "reversal_structure",
 ]
 
@@ -271,6 +274,20 @@ def masing_step(
     """
     m, F, K, W, D, G, I, _ = _advance(c, us, Fr, at, n, uc, Fc, Gc, IHc, u, 0, seg, 0)
     return m, F, K, W, D, G, I
+
+
+@njit(cache=True)
+def bank_trial_rows(C, us, Fr, at, nst, uc, Fc, u, F, K) -> None:
+    """Trial force ``F[i]`` [N] and tangent ``K[i]`` [N/m] of every element ``i`` of a bank at
+    ``u[i]``: the walk of :func:`_advance` from the committed state ``(uc[i], Fc[i])`` and
+    stack ``us[i, :nst[i]], Fr[i, :nst[i]]`` (constants ``C[i]``; each row with room for one
+    more entry, which is all a trial writes), the committed entries unchanged.
+    """
+    seg = np.empty((4, 0))
+    for i in range(u.size):
+        _, F[i], K[i], _, _, _, _, _ = _advance(
+            C[i], us[i], Fr[i], at[i], nst[i], uc[i], Fc[i], 0.0, 0.0, u[i], 0, seg, 0
+        )
 
 
 @njit(cache=True)
