@@ -45,6 +45,9 @@ def _masing_and_periodic() -> None:
     bank = IwanJointBank([p, unit_params(0.01, -0.4, 0.3)])
     for x in (1e-3, 3e-3, -2e-3):
         bank.commit(np.array([x, 0.5 * x]))
+    from iwan_element.exudyn.laws.condensed import condensed_slips
+
+    condensed_slips(bank, bank.u + 1e-4, 1e-3 * np.eye(2), ftol=1e-12)  # bank trials too
     for uu in (u, _readonly(u)):
         masing_history(uu, p)
         masing_history(np.vstack([uu, 0.5 * uu]), [p, p])

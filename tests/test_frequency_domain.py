@@ -134,8 +134,9 @@ def test_harmonic_balance_matches_the_exudyn_stepped_sine():
     hb = models.harmonic_balance(s, frequency=f, force=0.02)
     np.testing.assert_allclose(ts.amplitude[0], hb.amplitude, rtol=5e-3)
     np.testing.assert_allclose(ts.phase[0], hb.phase, atol=1e-2)
-    # Newton's tolerance above the residual's round-off: one Jacobian per frequency (it had
-    # stalled at 1.012 x and taken 233-560 of them, docs/transient_cost.md), no step cut
+    # Newton's tolerance above the residual's round-off: no step cut, at most one Jacobian
+    # per frequency (Exudyn's route had stalled at 1.012 x and taken 233-560 of them,
+    # docs/transient_cost.md; the condensed route takes none)
     assert ts.metadata["jacobians"].max() <= 2 and ts.metadata["step_cuts"].max() == 0
 
 

@@ -13,6 +13,7 @@ from typing import Any
 
 import numpy as np
 
+from ..core.joint_bank import IwanJointBank
 from ._dispatch import _installed_post_step
 from .laws.interface_springs import linear_energy
 from .laws.symbolic_law import VIRGIN
@@ -87,6 +88,14 @@ class IwanInterface:
     def connectors(self) -> list:
         """The per-point :class:`IwanConnector` handles (python route; empty otherwise)."""
         return list(self._connectors)
+
+    @property
+    def bank(self) -> IwanJointBank | None:
+        """The points' committed state, an :class:`~iwan_element.IwanJointBank` (symbolic
+        route; None on the python route). Read it, never commit to it: the interface commits
+        once per accepted step.
+        """
+        return self._bank
 
     @property
     def overflow_times(self) -> np.ndarray:

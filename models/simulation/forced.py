@@ -46,6 +46,7 @@ from ..modal.qsma import linear_modes
 from ..reduced.dispatch import linear_system
 from ..specimens.specimen import Specimen
 from .host import build_host
+from .newton import NEWTON_ROUTES, choose_newton, solve_dynamic
 from .solver import MAX_STEPS, check_steps, solver_settings
 
 if TYPE_CHECKING:
@@ -225,7 +226,7 @@ def _force_scale(model, F0, freqs) -> float:
     return scale
 
 
-def _sweep_level(s, F0, freqs, cycles, steps_per_period, rho, bar=None):
+def _sweep_level(s, F0, freqs, cycles, steps_per_period, rho, bar=None, newton="auto"):
     """Steady fundamental amplitude [m] and phase [rad] at the sensor at each frequency of
     ``freqs`` for one force level ``F0`` [N], each frequency continuing from the state the
     previous one left, and the solver's counts per frequency (Newton iterations, Jacobians,
@@ -255,6 +256,7 @@ def _sweep_level(s, F0, freqs, cycles, steps_per_period, rho, bar=None):
     sim.linearSolver.solverType = exu.LinearSolverType.EigenDense
     sim.timeIntegration.generalizedAlpha.spectralRadius = rho
     ti = sim.timeIntegration
+    step = choose_newton(model, sim, newton)
     amp, phase = np.zeros(len(freqs)), np.zeros(len(freqs))
     counts = np.zeros((len(freqs), 3), int)  # Newton iterations, Jacobians, step cuts
     t_now = 0.0
@@ -268,7 +270,7 @@ def _sweep_level(s, F0, freqs, cycles, steps_per_period, rho, bar=None):
             ti.initialStepSize = h
         rec["t"].clear()
         rec["y"].clear()
-        mbs.SolveDynamic(sim, updateInitialValues=True)
+        solve_dynamic(mbs, sim, newton=step, update_initial_values=True)
         tt, yy = np.array(rec["t"]), np.array(rec["y"])
         keep = tt >= t_now + settle * steps_per_period * h * (1 - 1e-12)
         tk = tt[keep]
@@ -278,6 +280,27 @@ def _sweep_level(s, F0, freqs, cycles, steps_per_period, rho, bar=None):
         tick(bar, text=f"{F0:.3g} N, {f:.5g} Hz")
         t_now = ti.endTime
     return amp, phase, counts
+
+
+def _sweep_frequencies(specimen, frequencies, mode) -> tuple[float, np.ndarray]:
+    """``(f_lin, freqs)``: the stuck frequency of ``mode`` [Hz] and the checked frequencies
+    of the sweep (default: 15 from 0.97 to 1.01 times it).
+    """
+    f_lin = linear_modes(specimen, mode=mode)[0] / (2 * math.pi)
+    freqs = (
+        np.linspace(0.97, 1.01, 15) * f_lin
+        if frequencies is None
+        else finite_array("frequencies", frequencies, ndim=1)
+    )
+    if np.any(freqs <= 0):
+        raise ValueError(f"frequencies must be > 0 [Hz], got {frequencies!r}")
+    steps = np.diff(freqs)
+    if freqs.size < 3 or not (np.all(steps > 0) or np.all(steps < 0)):
+        raise ValueError(
+            "frequencies must be at least 3 values stepped up or down (strictly "
+            f"monotonic) [Hz], got {frequencies!r}"
+        )
+    return f_lin, freqs
 
 
 def forced_response(
@@ -291,6 +314,7 @@ def forced_response(
     steps_per_period: int = 60,
     spectral_radius: float = 0.98,
     progress: bool = False,
+    newton: str = "auto",
     max_steps: int = MAX_STEPS,
 ) -> ForcedResponseResult:
     """Transverse force ``F sin(2 pi f t)`` at the excitation point, stepped through a
@@ -323,6 +347,11 @@ def forced_response(
         against 1.9 % off one bandwidth from the peak without the pre-warp.
     progress : bool, keyword-only
         Show a tqdm bar over the (level, frequency) points with its ETA; needs tqdm.
+    newton : {"auto", "condensed", "exudyn"}, keyword-only
+        How each time step is solved, as in :func:`~iwan_element.models.ringdown`: on the
+        joints' slips, by Exudyn's modified Newton on the whole model, or (default) the
+        first where it can serve and pays
+        (:func:`~iwan_element.models.simulation.newton.choose_newton`).
     max_steps : int, keyword-only
         Most time steps over all levels and frequencies, ``levels x frequencies x
         (settle_cycles + measure_cycles) x steps_per_period`` (default
@@ -344,20 +373,9 @@ def forced_response(
     )
     spp = check_int("steps_per_period", steps_per_period, 8)
     rho = check_scalar("spectral_radius", spectral_radius, low=0.5, high=1.0)
-    f_lin = linear_modes(specimen, mode=mode)[0] / (2 * math.pi)
-    freqs = (
-        np.linspace(0.97, 1.01, 15) * f_lin
-        if frequencies is None
-        else finite_array("frequencies", frequencies, ndim=1)
-    )
-    if np.any(freqs <= 0):
-        raise ValueError(f"frequencies must be > 0 [Hz], got {frequencies!r}")
-    steps = np.diff(freqs)
-    if freqs.size < 3 or not (np.all(steps > 0) or np.all(steps < 0)):
-        raise ValueError(
-            "frequencies must be at least 3 values stepped up or down (strictly "
-            f"monotonic) [Hz], got {frequencies!r}"
-        )
+    if newton not in NEWTON_ROUTES:
+        raise ValueError(f"newton must be one of {NEWTON_ROUTES}, got {newton!r}")
+    f_lin, freqs = _sweep_frequencies(specimen, frequencies, mode)
     check_steps(
         levels.size * freqs.size * sum(cycles) * spp,
         n_coordinates=None,  # it records the sensor alone
@@ -369,7 +387,9 @@ def forced_response(
         progress, total=levels.size * freqs.size, desc="forced_response", unit="point"
     )
     try:
-        runs = [_sweep_level(specimen, float(F0), freqs, cycles, spp, rho, bar) for F0 in levels]
+        runs = [
+            _sweep_level(specimen, float(F0), freqs, cycles, spp, rho, bar, newton) for F0 in levels
+        ]
     finally:
         finish(bar)
     out = ForcedResponseResult(

@@ -14,6 +14,7 @@ import numpy as np
 from iwan_element import backbone_work
 from iwan_element.base.progress import finish, progress_bar, tick
 
+from .newton import solve_dynamic
 from .ringdown_result import RingdownResult, decay_curve
 from .solver import check_steps
 
@@ -169,15 +170,16 @@ def check_run_length(
     return h, n
 
 
-def solve_timed(mbs, sim, rec, n: int, progress: bool) -> dict:
-    """``mbs.SolveDynamic(sim)`` over ``n`` steps with the recorder's progress bar (if asked):
-    ``{"wall": seconds in SolveDynamic, "newton_iterations": total, "jacobians": Newton
-    Jacobians computed}``.
+def solve_timed(mbs, sim, rec, n: int, progress: bool, *, newton=None) -> dict:
+    """The run over ``n`` steps (:func:`~.newton.solve_dynamic`, with the Newton step
+    ``newton`` or Exudyn's) with the recorder's progress bar (if asked): ``{"wall": seconds
+    in the solve, "newton_iterations": total, "jacobians": Newton Jacobians computed,
+    "condensed_iterations": iterations on the joints' slips (0 on Exudyn's route)}``.
     """
     t0 = time.perf_counter()
     rec.bar = progress_bar(progress, total=n + 1, desc="ringdown", unit="step")
     try:
-        mbs.SolveDynamic(sim)
+        solve_dynamic(mbs, sim, newton=newton)
         tick(rec.bar, len(rec.times) % 50)  # the steps since the last tick
     finally:
         finish(rec.bar)
@@ -187,6 +189,7 @@ def solve_timed(mbs, sim, rec, n: int, progress: bool) -> dict:
         "wall": wall,
         "newton_iterations": int(it.newtonStepsCount),
         "jacobians": int(it.newtonJacobiCount),
+        "condensed_iterations": 0 if newton is None else newton.condensed_iterations,
     }
 
 
@@ -252,6 +255,7 @@ def build_result(specimen, amp, rec, X, rel, rows, positions, h, n, run) -> Ring
             "impact": run["impact"],
             "newton_iterations": run["solve"]["newton_iterations"],
             "jacobians": run["solve"]["jacobians"],
+            "condensed_iterations": run["solve"]["condensed_iterations"],
             **run.get("extra", {}),
         },
         modes=modes,

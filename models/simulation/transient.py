@@ -43,6 +43,7 @@ from ..specimens.specimen import Specimen
 from .host import build_host
 from .impact import Impact
 from .modal_force import ModalEffects
+from .newton import NEWTON_ROUTES, choose_newton
 from .ringdown_records import (
     Recorder,
     build_result,
@@ -221,6 +222,7 @@ def ringdown(
     joint_elements: bool = False,
     progress: bool = False,
     tangential: str = "iwan",
+    newton: str = "auto",
     max_steps: int = MAX_STEPS,
 ) -> RingdownResult:
     """Release the specimen from a static deflection in one or several modes' load shapes,
@@ -275,6 +277,13 @@ def ringdown(
         The contact points' tangential law: the Iwan elements (default), or linear springs
         at their stuck stiffness ``KT_i`` (the same bodies with the stuck interface: the
         linear reference of cost and decay; the release state is still the Iwan one).
+    newton : {"auto", "condensed", "exudyn"}, keyword-only
+        How each time step's equations are solved: ``"condensed"`` on the joints' slips with
+        their consistent tangents (:mod:`~iwan_element.models.simulation.newton`; a step
+        costs 1.4-2 times a step with linear springs on the 1-D beams), ``"exudyn"`` by
+        Exudyn's modified Newton on the whole model (the reference route), ``"auto"``
+        (default) condensed where it can serve and pays
+        (:func:`~iwan_element.models.simulation.newton.choose_newton`).
     max_steps : int, keyword-only
         Most time steps the run may take (default
         :data:`~iwan_element.models.simulation.solver.MAX_STEPS`, 200,000: about 1.2 GB of
@@ -298,7 +307,7 @@ def ringdown(
 
     Notes
     -----
-    Newton (modified Newton, relative tolerance 1e-10) stops when the residual norm falls
+    Newton (either route; relative tolerance 1e-10) stops when Exudyn's residual norm falls
     below ``1e-7 F`` [N], ``F = max |K0 x0|`` the largest elastic force of the release state
     (or an impact's peak force): it scales with the amplitude. The host's coordinates are
     displacements, so the residual's round-off stays far below that at any amplitude. No
@@ -311,6 +320,8 @@ def ringdown(
     )
     if tangential not in ("iwan", "linear"):
         raise ValueError(f"tangential must be 'iwan' or 'linear', got {tangential!r}")
+    if newton not in NEWTON_ROUTES:
+        raise ValueError(f"newton must be one of {NEWTON_ROUTES}, got {newton!r}")
     if isinstance(specimen, SolidSpecimen):
         check_solid_release(specimen, () if amplitude is None else _amplitudes(mode, amplitude))
     amp, rel = _start(specimen, mode, amplitude, impact, modes)
@@ -336,6 +347,7 @@ def ringdown(
         "joint_elements": joint_elements,
         "progress": progress,
         "tangential": tangential,
+        "newton": newton,
     }
     return _run(specimen, amp, rel, rows, positions, opts, impact)
 
@@ -412,7 +424,8 @@ def _run(specimen, amp, rel, rows, positions, opts, impact):
     sim.linearSolver.solverType = exu.LinearSolverType.EigenDense
     sim.timeIntegration.numberOfSteps = n
     sim.timeIntegration.endTime = n * h
-    solve = solve_timed(model.mbs, sim, rec, n, opts["progress"])
+    step = choose_newton(model, sim, opts["newton"], other_forces=bool(effs))
+    solve = solve_timed(model.mbs, sim, rec, n, opts["progress"], newton=step)
     quad = joint_records(model.interface, rec.energy, e0 + rec.work_in) if record_energy else None
     X = model.to_free(np.array(rec.coords))
     return with_energy_warning(
