@@ -63,16 +63,18 @@ RINGDOWN = (
     ("two-bolt-aluminium", 200e-6),
 )
 _COUNTS = []
-_SOLVE = exu.MainSystem.SolveDynamic
+_SOLVE = exu.MainSolverImplicitSecondOrder.SolveSystem
 
 
-def _counted(self, sim, *args, **kw):
-    """``SolveDynamic`` with Exudyn's timers on; its counters appended to ``_COUNTS``."""
+def _counted(s, mbs, sim):
+    """The implicit solver's ``SolveSystem`` (under ``SolveDynamic`` and the condensed
+    route's ``solve_dynamic`` alike) with Exudyn's timers on; its counters appended to
+    ``_COUNTS``.
+    """
     sim.show.computationTime = True
     t0, c0 = time.perf_counter(), time.process_time()
-    out = _SOLVE(self, sim, *args, **kw)
+    out = _SOLVE(s, mbs, sim)
     wall, cpu = time.perf_counter() - t0, time.process_time() - c0
-    s = self.sys["dynamicSolver"]
     it, tm = s.it, s.timer
     _COUNTS.append(
         {
@@ -91,7 +93,7 @@ def _counted(self, sim, *args, **kw):
     return out
 
 
-exu.MainSystem.SolveDynamic = _counted
+exu.MainSolverImplicitSecondOrder.SolveSystem = _counted
 
 
 def _solid():
@@ -102,8 +104,13 @@ def _solid():
     return solid_specimen(s, parts, patch_size=0.0085, n_modes=8)
 
 
+#: The runs of a row: the joint on the default (condensed) route, linear springs, and the
+#: joint on Exudyn's own modified Newton (the route before the condensed one).
+RUNS = {"iwan": {}, "linear": {"tangential": "linear"}, "exudyn": {"newton": "exudyn"}}
+
+
 def _rows(kinds):
-    """``[(label, run(tangential))]`` of the chosen kinds."""
+    """``[(label, run(kind))]`` of the chosen kinds (``kind`` a key of :data:`RUNS`)."""
     rows = []
     if "ringdown" in kinds:
         for name, X in RINGDOWN:
@@ -112,7 +119,7 @@ def _rows(kinds):
                 (
                     f"{name} {X * 1e6:g} um",
                     lambda t, p=p, X=X: models.ringdown(
-                        p, amplitude=X, cycles=10, steps_per_period=32, tangential=t
+                        p, amplitude=X, cycles=10, steps_per_period=32, **RUNS[t]
                     ),
                 )
             )
@@ -122,7 +129,7 @@ def _rows(kinds):
             (
                 "solid brake-reuss 60 um",
                 lambda t: models.ringdown(
-                    solid, amplitude=60e-6, duration=0.1, steps_per_period=32, tangential=t
+                    solid, amplitude=60e-6, duration=0.1, steps_per_period=32, **RUNS[t]
                 ),
             )
         )
@@ -132,7 +139,7 @@ def _rows(kinds):
             (
                 "brake-reuss modes 1+2 (60 + 15 um)",
                 lambda t: models.ringdown(
-                    p, amplitude={1: 60e-6, 2: 15e-6}, cycles=10, steps_per_period=32, tangential=t
+                    p, amplitude={1: 60e-6, 2: 15e-6}, cycles=10, steps_per_period=32, **RUNS[t]
                 ),
             )
         )
@@ -155,6 +162,7 @@ def _rows(kinds):
                         measure_cycles=10,
                         steps_per_period=64,
                         spectral_radius=1.0,
+                        **RUNS[t],
                     )
                 ),
             )
@@ -163,9 +171,14 @@ def _rows(kinds):
 
 
 def _counters(run):
-    """Counters of one run (summed over its solves), or None when the row has no such run."""
+    """Counters of one run (summed over its solves), or None when the row has no such run
+    (or an older checkout has no such option).
+    """
     _COUNTS.clear()
-    if run() is None:
+    try:
+        if run() is None:
+            return None
+    except TypeError:  # an older checkout: no ``newton`` option
         return None
     out = {
         k: sum(c[k] for c in _COUNTS)
@@ -180,7 +193,7 @@ def _measure(run, repeat):
     ``repeat`` times; each gets the min and median of its walls and CPU seconds, the joint's
     run the median over the pairs of its CPU ratio to the springs' (``ratio_cpu``).
     """
-    runs = {"iwan": [], "linear": []}
+    runs = {t: [] for t in RUNS}
     for _ in range(repeat):
         for t in runs:
             runs[t].append(_counters(lambda t=t: run(t)))
@@ -197,9 +210,11 @@ def _measure(run, repeat):
             "cpu_median": statistics.median(cpus),
         }
     if out["linear"] is not None:
-        out["iwan"]["ratio_cpu"] = statistics.median(
-            a["cpu"] / b["cpu"] for a, b in zip(runs["iwan"], runs["linear"])
-        )
+        for t in ("iwan", "exudyn"):
+            if out[t] is not None:
+                out[t]["ratio_cpu"] = statistics.median(
+                    a["cpu"] / b["cpu"] for a, b in zip(runs[t], runs["linear"])
+                )
     return out
 
 
@@ -228,6 +243,15 @@ def _line(label, d, other=None):
     txt += "".join(
         f" {100 * a.get(k, 0.0) / a['wall_min']:4.0f}" for k in ("t_jac", "t_rhs", "t_py")
     )
+    e = d.get("exudyn")
+    if e is not None:  # the joint on Exudyn's modified Newton, in the same run
+        txt += (
+            f" | {e['newton'] / e['taken']:5.2f} {e['jacobians']:5d}"
+            f" {1e3 * e['wall_median'] / e['steps']:7.3f}"
+            f" {e['ratio_cpu'] if 'ratio_cpu' in e else float('nan'):5.2f}"
+        )
+    else:
+        txt += f" | {'-':>5s} {'-':>5s} {'-':>7s} {'-':>5s}"
     if other is not None:
         o = other["iwan"]
         txt += (
@@ -361,15 +385,18 @@ def main(argv=None):
         with open(path) as fh:
             before = json.load(fh)
     print(
-        f"exudyn {exu.__version__}; wall = seconds in SolveDynamic over {a.repeat} runs; "
+        f"exudyn {exu.__version__}; wall = seconds in the solver over {a.repeat} runs; "
         "ratio = median walls, r cpu = median of the paired CPU ratios, l it = Newton "
-        "iterations a step with linear springs"
+        "iterations a step with linear springs; the e columns: the joint on Exudyn's "
+        "modified Newton (newton='exudyn'), its iterations a step, Jacobians, ms a step "
+        "and paired CPU ratio to linear springs"
     )
     head = (
         f"{'row':36s} {'n':>4s} {'steps':>6s} {'cuts':>5s} {'it/st':>5s} {'jacs':>5s} "
         f"{'ms/jac':>7s} {'min s':>7s} {'med s':>7s} {'ms/st':>7s} {'lin ms':>7s} {'ratio':>5s} "
         f"{'r cpu':>5s} {'l it':>5s} "
         f"{'%jac':>4s} {'%res':>4s} {'%py':>4s}"
+        f" | {'e it':>5s} {'ejacs':>5s} {'e ms':>7s} {'e cpu':>5s}"
     )
     if before:
         head += f" | {'bef s':>7s} {'ms/st':>7s} {'cuts':>5s} {'jacs':>5s}"
