@@ -18,17 +18,17 @@ stiffness, ``tangential="linear"``, on the same bodies):
   (Brake-Reuss, floor 0.02, 0.02 N, 0.985 / 1.0 / 1.012 x the stuck frequency, spectral
   radius 1, 64 steps a period), with 20 settling and 10 measured periods per frequency.
 
-Every ``SolveDynamic`` is counted with Exudyn's own solver counters and timers (the same
-counters for any version of the package, so ``--before`` can run this file under another
-checkout's interpreter): nominal steps, accepted steps beyond them (step cuts), Newton
-iterations, Jacobians, and the seconds in Jacobians (``totalJacobian`` + ``factorization``)
-in residuals (``ODE2RHS``) and in Python (the post-step commit and records), printed as
-shares of the fastest run's wall. Wall time is the time inside ``SolveDynamic``, min and median
-over ``--repeat`` runs in this process. The runs with the joint and with linear springs
+Every solve (``SolveDynamic`` or the condensed route's) is counted with Exudyn's own solver
+counters and timers (the same counters for any version of the package, so ``--before`` can run
+this file under another checkout's interpreter): nominal steps, accepted steps beyond them
+(step cuts), Newton iterations, Jacobians, and the seconds in Jacobians (``totalJacobian`` +
+``factorization``) in residuals (``ODE2RHS``) and in Python (the post-step commit and records),
+printed as shares of the fastest run's wall. Wall time is the time inside the solver, min and
+median over ``--repeat`` runs in this process. The runs with the joint and with linear springs
 alternate (joint, springs, joint, springs ...), and the ratio is the median over the repeats of
-each pair's ratio of CPU seconds inside ``SolveDynamic`` (``time.process_time``): on a machine
-shared with other work, the wall of runs made one after the other moves with the load, and a
-ratio of walls measured minutes apart moved by 2x between runs of this file.
+each pair's ratio of CPU seconds inside the solver (``time.process_time``): on a machine shared
+with other work, the wall of runs made one after the other moves with the load, and a ratio of
+walls measured minutes apart moved by 2x between runs of this file.
 
 ``--before PATH``: run the same rows under the interpreter ``PATH`` (e.g. a virtual
 environment with an older checkout installed), or read them from a ``--json`` file of an

@@ -46,7 +46,7 @@ from ..modal.qsma import linear_modes
 from ..reduced.dispatch import linear_system
 from ..specimens.specimen import Specimen
 from .host import build_host
-from .newton import NEWTON_ROUTES, choose_newton, solve_dynamic
+from .newton import check_newton, choose_newton, solve_dynamic
 from .solver import MAX_STEPS, check_steps, solver_settings
 
 if TYPE_CHECKING:
@@ -373,8 +373,7 @@ def forced_response(
     )
     spp = check_int("steps_per_period", steps_per_period, 8)
     rho = check_scalar("spectral_radius", spectral_radius, low=0.5, high=1.0)
-    if newton not in NEWTON_ROUTES:
-        raise ValueError(f"newton must be one of {NEWTON_ROUTES}, got {newton!r}")
+    check_newton(newton)
     f_lin, freqs = _sweep_frequencies(specimen, frequencies, mode)
     check_steps(
         levels.size * freqs.size * sum(cycles) * spp,

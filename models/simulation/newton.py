@@ -40,7 +40,7 @@ from scipy.linalg.lapack import dgetrs
 
 from iwan_element.exudyn.laws.condensed import condensed_slips
 
-__all__ = ["HostNewton", "NEWTON_ROUTES", "choose_newton", "solve_dynamic"]
+__all__ = ["HostNewton", "NEWTON_ROUTES", "check_newton", "choose_newton", "solve_dynamic"]
 
 #: The ``newton`` options of the transient runs (:func:`choose_newton`).
 NEWTON_ROUTES = ("auto", "condensed", "exudyn")
@@ -134,7 +134,7 @@ class HostNewton:
         Fp, _ = self.bank.trial(sp)
         r[sl] -= Fp - KT * sp
         d_free = -self._solve(r)
-        s, F, k, ok = condensed_slips(
+        s, F, k, _ = condensed_slips(
             self.bank, sp + d_free[sl], self.S, ftol=1e-3 * self.abs_tol, max_iter=self.max_iter
         )
         self.condensed_iterations += k
@@ -175,6 +175,15 @@ class HostNewton:
         return solver.ComputeNewtonResidual(mbs, sim)
 
 
+def check_newton(newton) -> str:
+    """``newton`` if it is one of :data:`NEWTON_ROUTES`, else a ValueError naming it (the
+    runs check it before any work, :func:`choose_newton` when it builds the step).
+    """
+    if newton not in NEWTON_ROUTES:
+        raise ValueError(f"newton must be one of {NEWTON_ROUTES}, got {newton!r}")
+    return newton
+
+
 def choose_newton(model, sim, newton: str, *, other_forces: bool = False) -> HostNewton | None:
     """The Newton step of a run on ``model``: a :class:`HostNewton`, or None for Exudyn's.
 
@@ -184,13 +193,11 @@ def choose_newton(model, sim, newton: str, *, other_forces: bool = False) -> Hos
     effects), or ``"auto"``: condensed where it can serve and where a condensed iteration's
     ``m x m`` factorisation (about ``m^3 / 3`` operations on ``m`` slips) costs less than one
     residual of the ``n``-coordinate model (about ``n^2``). Measured
-    (docs/transient_cost.md): on the 1-D beams (``m = 30``, ``n = 276``) a step costs 1.4-2.0
-    times linear springs condensed against 1.3-3.9 times on Exudyn's route; on the coarse
-    solid (``m = 60``, ``n = 104``) 0.33 ms against 0.26 ms a step.
+    (docs/transient_cost.md): on the 1-D beams (``m = 30``, ``n = 253-276``) a step costs
+    1.3-2.0 times linear springs condensed against 1.1-3.5 times on Exudyn's route; the
+    coarse solid (``m = 60``, ``n = 104``) took 0.33 ms a step condensed against 0.26 ms.
     """
-    if newton not in NEWTON_ROUTES:
-        raise ValueError(f"newton must be one of {NEWTON_ROUTES}, got {newton!r}")
-    if newton == "exudyn":
+    if check_newton(newton) == "exudyn":
         return None
     bank = model.interface.bank if model.interface is not None else None
     why = (
@@ -204,7 +211,7 @@ def choose_newton(model, sim, newton: str, *, other_forces: bool = False) -> Hos
         if newton == "condensed":
             raise ValueError(f"newton='condensed' cannot serve this run: {why}")
         return None
-    assert bank is not None  # why is None
+    assert bank is not None  # a missing bank returned above
     n, m = model.T.shape[1], bank.n_points
     if newton == "auto" and m**3 / 3.0 >= n**2:
         return None
