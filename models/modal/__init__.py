@@ -8,7 +8,7 @@ dependence.
 
 from .effects import ZeroElement, effect_stack
 from .frequency import frequency_response, harmonic_balance, nonlinear_mode, specimen_system
-from .interface import InterfaceLaws, interface_laws, point_weights
+from .interface import InterfaceLaws, interface_laws, point_weights, stiffness_cap
 from .interface_fit import map_modal_effect
 from .limits import SIZE_LENGTH_FRACTION, macroslip_report, size_limit, size_warnings
 from .qsma import (
@@ -36,6 +36,7 @@ __all__ = [
     "InterfaceLaws",
     "interface_laws",
     "point_weights",
+    "stiffness_cap",
     "map_modal_effect",
     "resolve_interface_effects",
     "size_limit",

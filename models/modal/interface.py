@@ -33,15 +33,15 @@ from iwan_element import IwanJoint
 from iwan_element.core.masing import masing_rows
 from iwan_element.core.periodic import periodic_rows
 from iwan_element.effects import EFFECTS
-from iwan_element.effects.macroslip_onset import SPAN
+from iwan_element.effects.macroslip_onset import SPAN, patch_cumulative
 
 from ..reduced.dispatch import bolt_groups, contact_points
 from ..solid.specimen import SolidSpecimen
-from ..specimens.effects import SHARED, InterfaceEffect
+from ..specimens.effects import SHARED, InterfaceEffect, placement
 from ..specimens.specimen import Specimen
 from .effects import ZeroElement
 
-__all__ = ["InterfaceLaws", "interface_laws", "point_weights", "CYCLE_SAMPLES"]
+__all__ = ["InterfaceLaws", "interface_laws", "point_weights", "stiffness_cap", "CYCLE_SAMPLES"]
 
 #: Samples per cycle of the energy per cycle of a point's effects (:meth:`InterfaceLaws.
 #: dissipation`): the Masing rows' loop is exact at its reversals (two per cycle, both
@@ -51,21 +51,39 @@ CYCLE_SAMPLES = 64
 
 def point_weights(specimen: Specimen | SolidSpecimen, effect: InterfaceEffect) -> np.ndarray:
     """Share of ``effect``'s shared value at each contact point [-], shape (n_points,), sum 1
-    (module docstring): ``KT_i / sum KT`` (``"contact"``) or ``1 / (2 n_bolts)`` on the two
+    (module docstring): ``KT_i / sum KT`` (``"contact"``), ``1 / (2 n_bolts)`` on the two
     points nearest each bolt's centre (``"bolts"``; on a solid its patches' ``x`` elements,
-    the slip along the beam, :func:`~iwan_element.models.reduced.dispatch.bolt_groups`).
+    the slip along the beam, :func:`~iwan_element.models.reduced.dispatch.bolt_groups`),
+    ``1/2`` on bolt ``k``'s two (``"bolt<k>"``) or ``KT_i`` over the sum of bolt ``k``'s
+    group (``"under<k>"``). ValueError when the specimen has no bolt ``k``.
     """
     pts = contact_points(specimen)
     if effect.where == "contact":
         return pts.KT / pts.KT.sum()
     w = np.zeros(len(pts))
-    groups = bolt_groups(specimen)
     xb = specimen.lap_start + np.asarray(specimen.bolt_positions)
-    for _, idx in groups:
+    kind, k = placement(effect.where)
+    if k is not None and k > xb.size:
+        raise ValueError(
+            f"{effect.name}: where={effect.where!r}, but the specimen has {xb.size} bolt(s)"
+        )
+    chosen = []
+    for _, idx in bolt_groups(specimen):
         idx = np.asarray(idx)
-        xk = xb[np.argmin(np.abs(xb - pts.x[idx].mean()))]  # the group's bolt
-        near = idx[np.argsort(np.abs(pts.x[idx] - xk), kind="stable")[:2]]
-        w[near] += 1.0 / (near.size * len(groups))
+        kb = int(np.argmin(np.abs(xb - pts.x[idx].mean())))  # the group's bolt
+        if k is None or kb == k - 1:
+            chosen.append(
+                idx
+                if kind == "under"
+                else idx[np.argsort(np.abs(pts.x[idx] - xb[kb]), kind="stable")[:2]]
+            )
+    if not chosen:
+        raise ValueError(f"{effect.name}: no contact point near bolt {k}")
+    if kind == "under":
+        w[chosen[0]] = pts.KT[chosen[0]] / pts.KT[chosen[0]].sum()
+        return w
+    for near in chosen:
+        w[near] += 1.0 / (near.size * len(chosen))
     return w
 
 
@@ -78,6 +96,40 @@ def _point_values(effect: InterfaceEffect, weight: float) -> dict:
     if effect.name == "macroslip_onset":
         vals["u_e"] = SPAN * vals["u_s"]
     return vals
+
+
+def _check_patch(effect: InterfaceEffect, vals: dict, KT: float, x: float) -> None:
+    """ValueError when a macroslip-onset patch at a contact point holds more stiffness (its
+    bank's total, ``k_2`` times :func:`~iwan_element.effects.macroslip_onset.
+    patch_cumulative` at ``u_e``) than the point's stuck stiffness ``KT`` [N/m]: the patch
+    replaces part of the stuck stiffness it sits in (``F = F_j + P - k_P u``), so beyond it
+    the sliding point's tangent turns negative, a point that gives way under load.
+    """
+    if effect.name != "macroslip_onset":
+        return
+    held = vals["k_2"] * float(patch_cumulative(vals["u_e"], vals["u_s"], vals["shape"]))
+    if held > KT:
+        raise ValueError(
+            f"macroslip_onset at {effect.where}: its patch holds {held:.3g} N/m at the contact "
+            f"point at x = {x:.4g} m, more than the point's stuck stiffness {KT:.3g} N/m (a "
+            "patch replaces part of the stiffness it sits in): lower k_2 or spread it wider"
+        )
+
+
+def stiffness_cap(specimen: Specimen | SolidSpecimen, effect: InterfaceEffect) -> float:
+    """The largest shared ``k_2`` [N/m] a macroslip-onset patch may have where ``effect``
+    sits (its bank at no point holding more than the point's stuck stiffness,
+    :func:`_check_patch`); ``inf`` for every other effect.
+    """
+    if effect.name != "macroslip_onset":
+        return math.inf
+    shape = effect.parameters.get(
+        "shape", effect.fitted_on and effect.fitted_on.parameters["shape"]
+    )
+    top = float(patch_cumulative(SPAN, 1.0, float(shape or 0.0)))
+    w = point_weights(specimen, effect)
+    on = w > 0
+    return float(np.min(contact_points(specimen).KT[on] / (w[on] * top)))
 
 
 @dataclass(frozen=True, eq=False)
@@ -211,12 +263,14 @@ def _laws(specimen) -> InterfaceLaws:
             f"interface_effects {bad} have no joint values yet: map their modal fit with "
             "models.resolve_interface_effects(specimen)"
         )
-    n = len(contact_points(specimen))
-    stacks: list[list] = [[] for _ in range(n)]
+    pts = contact_points(specimen)
+    stacks: list[list] = [[] for _ in range(len(pts))]
     for e in specimen.interface_effects:
         w = point_weights(specimen, e)
         for i in np.flatnonzero(w > 0):
-            stacks[i].append((e.name, _point_values(e, float(w[i]))))
+            vals = _point_values(e, float(w[i]))
+            _check_patch(e, vals, float(pts.KT[i]), float(pts.x[i]))
+            stacks[i].append((e.name, vals))
     return InterfaceLaws(
         stacks=tuple(tuple(s) for s in stacks),
         names=tuple(e.name for e in specimen.interface_effects),

@@ -27,6 +27,7 @@ mapping. The misfit left is stated on the effect (``fit_misfit``).
 from __future__ import annotations
 
 import logging
+import math
 from dataclasses import replace
 from typing import Any
 
@@ -37,7 +38,7 @@ from iwan_element.effects import EFFECTS
 
 from ..reduced.model import reduced_model
 from ..specimens.effects import SHARED, InterfaceEffect, SpecimenEffect
-from .interface import point_weights
+from .interface import point_weights, stiffness_cap
 
 __all__ = ["map_modal_effect", "fit_interface_effects", "FIT_POINTS"]
 
@@ -89,7 +90,7 @@ def map_modal_effect(specimen, effect: SpecimenEffect, *, where: str = "") -> In
     """
     probe = InterfaceEffect(effect.name, fitted_on=effect, where=where)
     a, s, w0 = _mode_slips(specimen, effect.mode)
-    if probe.where == "bolts":
+    if probe.where != "contact":
         rb = _slip_scale(specimen, probe, a, s)[1]
         rc = _slip_scale(specimen, replace(probe, where="contact"), a, s)[1]
         if rb < BOLT_SLIP_SHARE * rc:
@@ -142,6 +143,29 @@ def _scaled(effects, p, slots):
     return [replace(e, values=tuple(v.items())) for e, v in zip(effects, vals)]
 
 
+def _bounds(base, mapped, slots) -> tuple:
+    """``(lower, upper, start)`` of the fitted log-scales: ``FIT_BOUND`` either way, a
+    macroslip-onset patch's ``k_2`` at most its placement's :func:`stiffness_cap` (the
+    mapping's value clipped below it to start). ValueError when even ``e^-FIT_BOUND`` of
+    the mapping is above the cap: the placement cannot hold the mode's patch.
+    """
+    lb = np.full(len(slots), -FIT_BOUND)
+    ub = np.full(len(slots), FIT_BOUND)
+    for j, (k, key) in enumerate(slots):
+        if key != "k_2":
+            continue
+        cap = stiffness_cap(base, mapped[k]) * (1.0 - 1e-6)
+        top = math.log(cap / mapped[k].parameters["k_2"])
+        if top <= -FIT_BOUND + 0.1:
+            raise ValueError(
+                f"{mapped[k].name} at {mapped[k].where}: the patch the mode asks for holds "
+                f"{math.exp(-top):.3g} times the stiffness of the points there "
+                f"(stiffness_cap {cap:.3g} N/m)"
+            )
+        ub[j] = min(ub[j], top)
+    return lb, ub, np.minimum(0.0, ub - 0.05)
+
+
 def _fit_mode(specimen, pending, curve):
     """The pending effects of one mode mapped and fitted (module docstring); returns them
     resolved.
@@ -163,6 +187,7 @@ def _fit_mode(specimen, pending, curve):
         if (key in SHARED or key in _LENGTHS) and v > 0
     ]
     sf, sz = PRECISION
+    lb, ub, p0 = _bounds(base, mapped, slots)
 
     def model(p):
         trial = base.replace(
@@ -177,14 +202,12 @@ def _fit_mode(specimen, pending, curve):
             return np.full(2 * X.size, 1e3)
         return np.concatenate([np.log(f / ft) / sf, np.log(z / zt) / sz])
 
-    p = np.zeros(len(slots))
+    p = p0
     if slots:
-        fit = least_squares(
-            resid, p, bounds=(-FIT_BOUND, FIT_BOUND), x_scale=1.0, diff_step=1e-3, xtol=1e-4
-        )
+        fit = least_squares(resid, p, bounds=(lb, ub), x_scale=1.0, diff_step=1e-3, xtol=1e-4)
         p = fit.x
         log.debug("interface fit: %d residual evaluations", fit.nfev)
-    if np.any(np.abs(p) >= 0.99 * FIT_BOUND):
+    if np.any(np.abs(p) >= 0.99 * FIT_BOUND) or np.any(p >= ub - 1e-9):
         log.warning(
             "interface effects %s on mode %d: the fit reached a factor e^%g from the mapping "
             "(the joint cannot reproduce the modal form well; see fit_misfit)",

@@ -15,17 +15,23 @@ Two declarations of the same named effects (``docs/vibration_effects.md``):
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass
 
 from iwan_element.base.validation import plain_fields, plain_number
 from iwan_element.effects import EFFECTS
 
-__all__ = ["SpecimenEffect", "InterfaceEffect", "check_range", "WHERE"]
+__all__ = ["SpecimenEffect", "InterfaceEffect", "check_range", "placement", "WHERE"]
 
 #: Where an interface effect sits (:class:`InterfaceEffect`): ``"contact"``, every contact
 #: point, a shared value in proportion to the point's tangential stiffness ``KT_i``;
 #: ``"bolts"``, each bolt's shank, a shared value equally among the bolts and, within a
-#: bolt, equally on the two contact points nearest its centre (the slip at the shank).
+#: bolt, equally on the two contact points nearest its centre (the slip at the shank);
+#: ``"bolt<k>"`` (``"bolt1"``, ``"bolt2"``, ...), one bolt's shank, numbered along the lap
+#: from its start (:func:`placement`), the whole value on its two points (a pin bearing on
+#: one hole); ``"under<k>"``, the contact under bolt ``k`` (the points nearer that bolt than
+#: any other), shared in proportion to ``KT_i`` (a region under one bolt that slips on its
+#: own).
 WHERE = ("contact", "bolts")
 
 #: Where each effect sits unless told: the pin is the bolt shank bearing on its hole.
@@ -35,6 +41,21 @@ DEFAULT_WHERE = {"pinning_stiffness": "bolts"}
 #: [N/m^3], [N s/m]); every other value (a clearance, an onset slip [m], a shape) is the
 #: same at every point where the effect sits.
 SHARED = ("k_p", "k_2", "k3", "c")
+
+
+def placement(where: str) -> tuple[str, int | None]:
+    """``(kind, k)`` of a placement: ``("contact", None)``, ``("bolts", None)``,
+    ``("bolt", k)`` (bolt ``k``'s shank) or ``("under", k)`` (the contact under bolt ``k``),
+    ``k`` 1-based along the lap. ValueError for anything else.
+    """
+    if where in WHERE:
+        return where, None
+    m = re.fullmatch(r"(bolt|under)([1-9][0-9]*)", where) if isinstance(where, str) else None
+    if m is None:
+        raise ValueError(
+            f"where must be one of {WHERE}, 'bolt<k>' or 'under<k>' (k >= 1), got {where!r}"
+        )
+    return m.group(1), int(m.group(2))
 
 
 def check_range(name, r) -> tuple:
@@ -147,10 +168,14 @@ class InterfaceEffect:
         (``fitted_on``): the model then maps and fits it
         (:func:`~iwan_element.models.modal.resolve_interface_effects`) the first time an
         analysis needs it.
-    where : {"contact", "bolts"} or ""
+    where : {"contact", "bolts", "bolt<k>", "under<k>"} or ""
         Where the effect sits (:data:`WHERE`): every contact point (shared in proportion to
-        ``KT_i``) or each bolt's shank (shared equally among the bolts, on the two points
-        nearest each bolt's centre). Default ``""``: ``"bolts"`` for ``pinning_stiffness``,
+        ``KT_i``), each bolt's shank (shared equally among the bolts, on the two points
+        nearest each bolt's centre), bolt ``k``'s shank alone (``"bolt2"``: the second bolt
+        from the lap's start) or the contact under bolt ``k`` (``"under2"``: its points,
+        in proportion to ``KT_i``); a specimen with fewer bolts refuses ``k`` where it is
+        used.
+        Default ``""``: ``"bolts"`` for ``pinning_stiffness``,
         else ``"contact"``.
     fitted_on : SpecimenEffect or None
         The modal fit the values come from (its mode, modal values and calibrated range):
@@ -172,8 +197,7 @@ class InterfaceEffect:
         cls = _modal_class(self.name)
         if not self.where:
             object.__setattr__(self, "where", DEFAULT_WHERE.get(self.name, "contact"))
-        if self.where not in WHERE:
-            raise ValueError(f"where must be one of {WHERE}, got {self.where!r}")
+        placement(self.where)
         if self.fitted_on is not None:
             if not isinstance(self.fitted_on, SpecimenEffect) or self.fitted_on.name != self.name:
                 raise ValueError(

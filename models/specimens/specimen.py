@@ -406,7 +406,13 @@ class Specimen:
         return md[mode - 1] if mode <= len(md) else self.interface.damping_floor
 
     def with_effects(
-        self, effects: dict, *, mode: int = 1, calibrated_range=None, form: str = "modal"
+        self,
+        effects: dict,
+        *,
+        mode: int = 1,
+        calibrated_range=None,
+        form: str = "modal",
+        where: str = "",
     ) -> Specimen:
         """A copy carrying ``effects`` ({name: modal values}, fitted on ``mode``) in addition to
         its own (an effect already carried on that mode, or in the joint, is replaced).
@@ -416,7 +422,8 @@ class Specimen:
         by that modal fit (``fitted_on``) until the model maps them to joint values
         (:func:`~iwan_element.models.modal.resolve_interface_effects`). ``calibrated_range``
         [m]: the amplitudes the values were fitted on; the copy's calibrated range then spans
-        its own and that one.
+        its own and that one. ``where``: where the physical form sits
+        (:class:`InterfaceEffect`; default each effect's own).
         """
         if form not in ("modal", "physical"):
             raise ValueError(f"form must be 'modal' or 'physical', got {form!r}")
@@ -429,7 +436,7 @@ class Specimen:
             cr = (lo, hi) if cr is None else (min(cr[0], lo), max(cr[1], hi))
         if form == "physical":
             keep_i = tuple(e for e in self.interface_effects if e.name not in effects)
-            ife = keep_i + tuple(InterfaceEffect(e.name, fitted_on=e) for e in new)
+            ife = keep_i + tuple(InterfaceEffect(e.name, fitted_on=e, where=where) for e in new)
             return replace(self, interface_effects=ife, calibrated_range=cr)
         keep = tuple(e for e in self.effects if not (e.mode == mode and e.name in effects))
         return replace(self, effects=keep + new, calibrated_range=cr)
