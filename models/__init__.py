@@ -40,7 +40,7 @@ before it; ``docs/architecture.md``):
 from importlib import resources
 from pathlib import Path
 
-from .calibration import HammerPrediction, predict_hammer_test
+from .calibration import HammerPrediction, ModesDiagnosis, diagnose_modes, predict_hammer_test
 from .modal import (
     frequency_response,
     harmonic_balance,
@@ -104,6 +104,8 @@ __all__ = [
     "reduction_error",
     "ReducedModel",
     "predict_hammer_test",
+    "diagnose_modes",
+    "ModesDiagnosis",
     "HammerPrediction",
     "Setup",
     "PointMass",

@@ -1,11 +1,14 @@
 """A specimen's interface calibrated on test data: from a measured amplitude curve (QSMA
 fitted to it, other modes' floors), from a joint or modal Iwan fit, and a whole hammer test
-predicted from one calibrated mode.
+predicted from one calibrated mode, and the discrepancy workflow across its modes (an effect
+named on one mode, placed in the joint, checked on every mode).
 """
 
 from .hammer import mode_bands, predict_hammer_test, release_amplitudes
 from .hammer_result import HammerPrediction
 from .joint import interface_from_joint, interface_from_modal_iwan
+from .mode_diagnosis import default_placements, diagnose_modes
+from .mode_diagnosis_result import ModesDiagnosis
 from .vibration import CalibrationResult, calibrate, measured_amplitude_curve, modal_floor
 
 __all__ = [
@@ -19,4 +22,7 @@ __all__ = [
     "HammerPrediction",
     "mode_bands",
     "release_amplitudes",
+    "diagnose_modes",
+    "ModesDiagnosis",
+    "default_placements",
 ]

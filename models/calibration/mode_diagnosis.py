@@ -1,0 +1,266 @@
+"""The discrepancy workflow across modes: where one interface misses a mode, name the effect
+in the joint that closes that mode's gap without opening another's.
+
+A specimen calibrated on one mode predicts the others (:func:`predict_hammer_test`); where a
+mode's measured curve leaves the prediction, the vibration diagnosis
+(:func:`~iwan_element.diagnose_vibration`) names the effects whose modal form closes that
+mode's gap. A modal form acts on its mode alone; the joint model needs the mechanism, and the
+mechanism sits somewhere in the interface. Each named effect is therefore tried in the joint
+at every placement (:data:`~iwan_element.models.specimens.effects.WHERE`: every contact
+point, every bolt's shank, one bolt's shank, ``"bolt<k>"``, or the contact under one bolt,
+``"under<k>"``), its joint values mapped from the
+modal fit and fitted so that the joint's QSMA reproduces it on the mode it was found on
+(:func:`~iwan_element.models.modal.resolve_interface_effects`), and every mode is then read
+again through the augmented joint. A mechanism sits where the modes' slips say: a law at a
+bolt where one mode slips and another hardly moves changes the first alone; the same law on
+every contact point changes both.
+
+Selection. Each candidate (and the plain joint) is scored on every mode's curve at once,
+``chi2 = sum_modes sum_points (ln f/f_m / s_f)^2 + (ln zeta/zeta_m / s_z)^2`` with each mode's
+noise as its diagnosis states it, and an information criterion ``IC = chi2 + k ln N`` (``k``
+the effect's modal values, ``N`` all points of all modes); the probabilities are
+``exp(-IC/2)`` normalised over the plain joint and the candidates (Schwarz, Ann. Stat.
+6:461-464, 1978). A candidate that makes another mode worse by more than one noise unit
+(RMS of that mode's normalised residuals, :data:`SPOIL`) trades one mode for the other and
+is not named. The named effect's gap on the mode it was found on is a fit, not a
+prediction: the other modes, and tests held out of the workflow, are its check
+(``docs/multi_mode.md`` section 6).
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from collections.abc import Mapping
+
+import numpy as np
+
+from iwan_element import diagnose_vibration
+from iwan_element.base.validation import check_int
+
+from ..modal.qsma import modal_amplitude_curve, resolve_interface_effects
+from ..specimens.effects import check_range, placement
+from .mode_diagnosis_result import Candidate, ModesDiagnosis
+
+__all__ = ["diagnose_modes", "default_placements", "SPOIL"]
+
+log = logging.getLogger(__name__)
+
+#: How much worse [noise units, RMS of the normalised log residuals] a candidate may make a
+#: mode it was not found on before it is refused as trading that mode for its own.
+SPOIL = 1.0
+
+
+def default_placements(specimen) -> tuple:
+    """Every placement of an effect in ``specimen``'s joint: ``"contact"``, ``"bolts"``, each
+    bolt's shank alone (``"bolt1"`` ... along the lap) and the contact under each bolt
+    (``"under1"`` ...).
+    """
+    n = len(specimen.bolt_positions)
+    if not n:
+        return ("contact",)
+    one = range(1, n + 1)
+    return ("contact", "bolts") + tuple(f"bolt{k}" for k in one) + tuple(f"under{k}" for k in one)
+
+
+def _placements(specimen, placements) -> tuple:
+    if placements is None:
+        return default_placements(specimen)
+    out = tuple(placements)
+    if not out:
+        raise ValueError("placements must name at least one placement")
+    n = len(specimen.bolt_positions)
+    for p in out:
+        k = placement(p)[1]  # ValueError for an unknown name
+        if k is not None and k > n:
+            raise ValueError(f"placements: {p!r}, but the specimen has {n} bolt(s)")
+    return tuple(dict.fromkeys(out))
+
+
+def _curves(measured, ranges) -> dict:
+    """``{mode: (X, f, zeta)}`` of the measured curves within ``ranges``, checked."""
+    if not isinstance(measured, Mapping) or not measured:
+        raise ValueError("measured must be a non-empty {mode: AmplitudeCurve} mapping")
+    out = {}
+    for m, c in measured.items():
+        mode = check_int("measured mode", m, 1)
+        try:
+            X, f, z = (
+                np.asarray(getattr(c, k), float)
+                for k in ("amplitude", "frequency", "damping_ratio")
+            )
+        except AttributeError as e:
+            raise ValueError(
+                f"measured[{m!r}] must be an AmplitudeCurve (amplitude, frequency, "
+                f"damping_ratio), got {type(c).__name__}"
+            ) from e
+        if m in ranges:
+            lo, hi = check_range(f"amplitude_range[{m!r}]", ranges[m])
+            keep = (X >= lo) & (X <= hi)
+            X, f, z = X[keep], f[keep], z[keep]
+        if X.size < 3:
+            raise ValueError(
+                f"measured[{m!r}] holds {X.size} amplitudes (within its amplitude_range); "
+                "at least 3 are needed"
+            )
+        out[mode] = (X, f, z)
+    return dict(sorted(out.items()))
+
+
+def _read(specimen, curves) -> dict | str:
+    """``{mode: (f, zeta)}``: the specimen's QSMA at each measured curve's amplitudes; the
+    reason as a str when a static solve fails.
+    """
+    out = {}
+    for m, (X, _, _) in curves.items():
+        try:
+            c = modal_amplitude_curve(specimen, mode=m, amplitude=X)
+        except ValueError as e:
+            return f"mode {m}: {e}"
+        out[m] = (np.asarray(c.frequency, float), np.asarray(c.damping_ratio, float))
+    return out
+
+
+def _score(read, curves, noise) -> dict:
+    """Per mode: chi-square, RMS in noise units, largest relative frequency and damping
+    errors [-] of ``read`` against the measured curves.
+    """
+    out = {}
+    for m, (_, fm, zm) in curves.items():
+        f, z = read[m]
+        rf, rz = np.log(f / fm) / noise[m][0], np.log(z / zm) / noise[m][1]
+        chi2 = float(np.sum(rf**2) + np.sum(rz**2))
+        out[m] = {
+            "chi2": chi2,
+            "rms": math.sqrt(chi2 / (2 * fm.size)),
+            "frequency_error": float(np.max(np.abs(f / fm - 1))),
+            "damping_error": float(np.max(np.abs(z / zm - 1))),
+        }
+    return out
+
+
+def _diagnoses(specimen, curves, base, options) -> dict:
+    """Each mode's vibration diagnosis against the plain joint's QSMA."""
+    out = {}
+    for m, (X, fm, zm) in curves.items():
+        out[m] = diagnose_vibration(
+            X,
+            fm,
+            zm,
+            predicted_frequency=base[m][0],
+            predicted_damping_ratio=base[m][1],
+            **options,
+        )
+        log.info("mode %d: %s", m, out[m].verdict())
+    return out
+
+
+def _candidate(specimen, curves, noise, diag, mode, where) -> Candidate:
+    """The effects ``diag`` named on ``mode``, in the joint at ``where``, read on every mode."""
+    X = curves[mode][0]
+    names = tuple(diag.effects)
+    try:
+        spec = resolve_interface_effects(
+            specimen.with_effects(
+                {n: dict(diag.parameters[n]) for n in names},
+                mode=mode,
+                calibrated_range=(float(X.min()), float(X.max())),
+                form="physical",
+                where=where,
+            )
+        )
+    except ValueError as e:
+        return Candidate(names, mode, where, reason=f"not mapped into the joint: {e}")
+    placed = tuple(e.where for e in spec.interface_effects if e.name in names)
+    read = _read(spec, curves)
+    if isinstance(read, str):
+        return Candidate(names, mode, where, placed=placed, reason=read)
+    k = sum(len(diag.parameters[n]) for n in names)
+    return Candidate(
+        names,
+        mode,
+        where,
+        placed=placed,
+        scores=_score(read, curves, noise),
+        n_values=k,
+        specimen=spec,
+        read=read,
+        values={e.name: e.parameters for e in spec.interface_effects if e.name in names},
+    )
+
+
+def diagnose_modes(
+    specimen,
+    measured,
+    *,
+    placements=None,
+    amplitude_range=None,
+    max_effects: int = 1,
+    alpha: float = 1e-3,
+    frequency_noise: float | None = None,
+    damping_ratio_noise: float | None = None,
+) -> ModesDiagnosis:
+    """Name the effect in the joint that closes the gaps between a specimen's modes and
+    their measured curves (module docstring; ``docs/multi_mode.md`` section 6).
+
+    Parameters
+    ----------
+    specimen : Specimen
+        The calibrated specimen (joint and floors; e.g. ``HammerPrediction.calibration.
+        specimen``). Not changed.
+    measured : mapping
+        ``{mode: AmplitudeCurve}``: each mode's measured curve at the specimen's sensor
+        (amplitudes [m], frequencies [Hz], damping ratios [-]; at least 3 amplitudes), over
+        the amplitudes the record resolves.
+    placements : sequence of str, optional, keyword-only
+        Where each named effect is tried (``"contact"``, ``"bolts"``, ``"bolt<k>"``,
+        ``"under<k>"``);
+        default :func:`default_placements`.
+    amplitude_range : mapping, optional, keyword-only
+        ``{mode: (low, high)}`` [m]: the amplitudes of each mode's curve the workflow reads
+        (default all): the record's resolved amplitudes, above its noise floor.
+    max_effects, alpha : keyword-only
+        As in :func:`~iwan_element.diagnose_vibration`, for each mode's diagnosis.
+    frequency_noise, damping_ratio_noise : float, optional, keyword-only
+        Relative noise of every mode's curves [-]; default each diagnosis's estimate.
+
+    Returns
+    -------
+    ModesDiagnosis
+
+    Raises
+    ------
+    ValueError
+        A measured curve that is not an AmplitudeCurve or has fewer than 3 amplitudes, an
+        unknown placement or a bolt the specimen lacks, or a plain joint whose QSMA fails at
+        a measured amplitude.
+    """
+    places = _placements(specimen, placements)
+    if amplitude_range is not None and not isinstance(amplitude_range, Mapping):
+        raise ValueError("amplitude_range must be a {mode: (low, high)} mapping [m]")
+    curves = _curves(measured, dict(amplitude_range or {}))
+    options = {
+        "max_effects": check_int("max_effects", max_effects, 1),
+        "alpha": alpha,
+        "frequency_noise": frequency_noise,
+        "damping_ratio_noise": damping_ratio_noise,
+    }
+    base = _read(specimen, curves)
+    if isinstance(base, str):
+        raise ValueError(f"specimen: the plain joint's QSMA fails at a measured amplitude: {base}")
+    diags = _diagnoses(specimen, curves, base, options)
+    noise = {m: (d.frequency_noise, d.damping_ratio_noise) for m, d in diags.items()}
+    plain = Candidate((), 0, "", scores=_score(base, curves, noise), specimen=specimen, read=base)
+    cands = []
+    for m, d in diags.items():
+        if not d.effects:
+            continue
+        seen = set()
+        for p in places:
+            c = _candidate(specimen, curves, noise, d, m, p)
+            if c.placed and c.placed in seen:  # the mapping moved it where another went
+                continue
+            seen.add(c.placed)
+            cands.append(c)
+            log.info("%s", c.line())
+    return ModesDiagnosis.build(plain, tuple(cands), diags, curves, spoil=SPOIL)
