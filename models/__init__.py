@@ -40,7 +40,13 @@ before it; ``docs/architecture.md``):
 from importlib import resources
 from pathlib import Path
 
-from .calibration import HammerPrediction, ModesDiagnosis, diagnose_modes, predict_hammer_test
+from .calibration import (
+    HammerPrediction,
+    ModesDiagnosis,
+    diagnose_hammer_test,
+    diagnose_modes,
+    predict_hammer_test,
+)
 from .modal import (
     frequency_response,
     harmonic_balance,
@@ -105,6 +111,7 @@ __all__ = [
     "ReducedModel",
     "predict_hammer_test",
     "diagnose_modes",
+    "diagnose_hammer_test",
     "ModesDiagnosis",
     "HammerPrediction",
     "Setup",

@@ -438,6 +438,12 @@ def _hammer():
     return round_trip()[1]
 
 
+def _modes():
+    from test_mode_diagnosis import workflow
+
+    return workflow(True)[2]
+
+
 def _linear_update():
     from iwan_element import models
 
@@ -456,6 +462,7 @@ MODEL_RESULTS = {
     "ModeCouplingResult": _coupling,
     "FrequencyResponse": _frequency_response,
     "HammerPrediction": _hammer,
+    "ModesDiagnosis": _modes,
     "LinearUpdateResult": _linear_update,
 }
 

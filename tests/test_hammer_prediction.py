@@ -172,3 +172,27 @@ def test_the_hammer_route_updates_the_linear_structure_on_the_low_amplitude_wind
         assert p.identified and abs(p.value - upd.nominal[n]) < 2 * p.stderr, (n, upd.report())
     f2 = next(r for r in upd.residuals if r["target"] == "f2")
     assert abs(f2["residual_after"]) < 1.0 and f2["measured"] == pytest.approx(297.78, abs=0.1)
+
+
+def test_predict_with_the_calibrated_joint_gives_the_prediction_back():
+    """The same release on the same specimen, read the same way: the route's own curves."""
+    _, p = round_trip()
+    again = p.predict_with(p.calibration.specimen)
+    assert set(again) == set(p.predicted)
+    for k, c in p.predicted.items():
+        np.testing.assert_allclose(again[k].amplitude, c.amplitude, rtol=1e-9)
+        np.testing.assert_allclose(again[k].damping_ratio, c.damping_ratio, rtol=1e-9)
+
+
+def test_a_test_the_model_made_without_a_hidden_effect_has_nothing_named():
+    """The workflow across modes on the round trip: QSMA against the model's own ring-down
+    within the two routes' agreement (1e-4 in frequency, 2 % in damping) names nothing.
+    """
+    _, p = round_trip()
+    r = models.diagnose_hammer_test(p, frequency_noise=1e-4, damping_ratio_noise=0.02)
+    assert r.named is None and r.success, r.report()
+    assert set(r.curves) == {1, 2}
+    with pytest.raises(ValueError, match="HammerPrediction"):
+        models.diagnose_hammer_test(r)
+    with pytest.raises(ValueError, match="top"):
+        models.diagnose_hammer_test(p, top=0)

@@ -72,7 +72,7 @@ def test_the_hidden_patch_under_one_bolt_is_named_with_its_bolt():
     assert r.success, r.report()
     assert r.named is not None and r.named.effects == ("macroslip_onset",)
     assert r.named.placed == ("bolt2",), r.report()
-    assert r.named.probability > 0.99
+    assert r.named.probability > 0.99 and not r.named.capped
     # every placement was tried; the same law on every contact point is worse
     tried = {c.where for c in r.candidates if c.mode == 2}
     assert tried == set(default_placements(start))
@@ -86,7 +86,7 @@ def test_the_hidden_patch_under_one_bolt_is_named_with_its_bolt():
 def test_the_named_patch_closes_mode_2_and_leaves_mode_1():
     _, _, r = workflow(True)
     g = r.gaps()
-    assert g[2]["before"]["damping_error"] > 0.15
+    assert g[2]["before"]["damping_error"] > 0.12
     assert g[2]["after"]["damping_error"] < 0.06
     assert g[2]["after"]["rms"] < 0.25 * g[2]["before"]["rms"]
     assert g[1]["after"]["rms"] <= g[1]["before"]["rms"] + 0.2

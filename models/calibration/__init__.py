@@ -5,6 +5,7 @@ named on one mode, placed in the joint, checked on every mode).
 """
 
 from .hammer import mode_bands, predict_hammer_test, release_amplitudes
+from .hammer_modes import diagnose_hammer_test
 from .hammer_result import HammerPrediction
 from .joint import interface_from_joint, interface_from_modal_iwan
 from .mode_diagnosis import default_placements, diagnose_modes
@@ -23,6 +24,7 @@ __all__ = [
     "mode_bands",
     "release_amplitudes",
     "diagnose_modes",
+    "diagnose_hammer_test",
     "ModesDiagnosis",
     "default_placements",
 ]

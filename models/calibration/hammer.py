@@ -252,6 +252,8 @@ def predict_hammer_test(
         errors=errors,
         ratios=ratios,
         update=upd,
+        sensors=tuple((n, float(recs[n][0])) for n in names),
+        calibration_periods=float(n_cal),
         success=bool(cal.success and not thin and (upd is None or upd.success)),
         warnings=tuple(warns),
     )

@@ -16,6 +16,8 @@ from iwan_element.base.serialize import json_safe
 
 from ..simulation.coupling import plot_curve_pairs
 from ..simulation.ringdown_result import RingdownResult
+from ..simulation.solver import MAX_STEPS
+from ..simulation.transient import ringdown
 from ..updating.result import LinearUpdateResult
 from .vibration import CalibrationResult
 
@@ -54,6 +56,10 @@ class HammerPrediction(ResultShape):
         curve overlaps its measured one in at least 3 amplitudes.
     update : LinearUpdateResult or None
         The linear update on the modes' low-amplitude frequencies (``None``: not made).
+    sensors : tuple of (str, float)
+        Each record's name and position [m] along the beam, in the ring-down's order.
+    calibration_periods : float
+        Window of the calibration mode's curves in its periods.
     warnings : tuple of str
     """
 
@@ -71,6 +77,33 @@ class HammerPrediction(ResultShape):
     ratios: dict
     success: bool
     update: LinearUpdateResult | None = None
+    sensors: tuple = ()
+    calibration_periods: float = 20.0
+
+    def predict_with(self, specimen, *, max_steps: int | None = None) -> dict:
+        """``{(mode, sensor): AmplitudeCurve}``: the same release rung down on ``specimen``
+        (another joint on the same beam: an augmented one, a candidate) for as long as the
+        prediction, every record's position a sensor, read like the record (the
+        calibration mode in windows of ``calibration_periods``).
+        """
+        t = self.ringdown.t
+        rd = ringdown(
+            specimen,
+            amplitude=self.release,
+            duration=float(t[-1] - t[0]),
+            sensors=tuple(x for _, x in self.sensors),
+            max_steps=MAX_STEPS if max_steps is None else max_steps,
+        )
+        return {
+            (r, n): rd.sensor_curve(
+                i,
+                self.bands[r],
+                n_periods=self.calibration_periods if r == self.calibration_mode else None,
+            )
+            for i, (n, _) in enumerate(self.sensors)
+            for r in self.bands
+            if (r, n) in self.measured
+        }
 
     def summary(self) -> dict:
         """``{(mode, sensor): {points, max_frequency_error, max_damping_error, first_...}}``:

@@ -20,11 +20,15 @@ Selection. Each candidate (and the plain joint) is scored on every mode's curve 
 noise as its diagnosis states it, and an information criterion ``IC = chi2 + k ln N`` (``k``
 the effect's modal values, ``N`` all points of all modes); the probabilities are
 ``exp(-IC/2)`` normalised over the plain joint and the candidates (Schwarz, Ann. Stat.
-6:461-464, 1978). A candidate that makes another mode worse by more than one noise unit
-(RMS of that mode's normalised residuals, :data:`SPOIL`) trades one mode for the other and
-is not named. The named effect's gap on the mode it was found on is a fit, not a
-prediction: the other modes, and tests held out of the workflow, are its check
-(``docs/multi_mode.md`` section 6).
+6:461-464, 1978); with ``offsets`` (default) each curve's constant relative offsets of
+frequency and damping are taken out first (the mean log residuals: a floor read from the
+mode's lowest amplitudes, another route's period error). A candidate that makes another
+mode worse by more than :data:`SPOIL` of that mode's noise trades one mode for the other and
+is not named; where the plain joint already misses that mode by ``r > 1`` noise units (RMS),
+its noise is taken as ``r`` times the stated one (the Birge ratio: the model cannot be held
+to less than it already misses), so the tolerance is ``SPOIL max(1, r)``. The named
+effect's gap on the mode it was found on is a fit, not a prediction: the other modes, and
+tests held out of the workflow, are its check (``docs/multi_mode.md`` section 6).
 """
 
 from __future__ import annotations
@@ -38,17 +42,19 @@ import numpy as np
 from iwan_element import diagnose_vibration
 from iwan_element.base.validation import check_int
 
+from ..modal.interface import stiffness_cap
 from ..modal.qsma import modal_amplitude_curve, resolve_interface_effects
 from ..specimens.effects import check_range, placement
 from .mode_diagnosis_result import Candidate, ModesDiagnosis
 
-__all__ = ["diagnose_modes", "default_placements", "SPOIL"]
+__all__ = ["diagnose_modes", "default_placements", "score_logs", "SPOIL"]
 
 log = logging.getLogger(__name__)
 
-#: How much worse [noise units, RMS of the normalised log residuals] a candidate may make a
-#: mode it was not found on before it is refused as trading that mode for its own.
-SPOIL = 1.0
+#: How much worse a candidate may make a mode it was not found on, in that mode's noise
+#: units (RMS of the normalised log residuals, inflated by the plain joint's RMS misfit when
+#: above 1), before it is refused as trading that mode for its own.
+SPOIL = 0.5
 
 
 def default_placements(specimen) -> tuple:
@@ -121,20 +127,36 @@ def _read(specimen, curves) -> dict | str:
     return out
 
 
-def _score(read, curves, noise) -> dict:
+def _score(read, curves, noise, offsets: bool = False) -> dict:
     """Per mode: chi-square, RMS in noise units, largest relative frequency and damping
-    errors [-] of ``read`` against the measured curves.
+    errors [-] of ``read`` against the measured curves (:func:`score_logs`).
     """
-    out = {}
+    logs = {}
     for m, (_, fm, zm) in curves.items():
         f, z = read[m]
-        rf, rz = np.log(f / fm) / noise[m][0], np.log(z / zm) / noise[m][1]
-        chi2 = float(np.sum(rf**2) + np.sum(rz**2))
+        logs[m] = (np.log(f / fm), np.log(z / zm))
+    return score_logs(logs, noise, offsets)
+
+
+def score_logs(logs: dict, noise: dict, offsets: bool = False) -> dict:
+    """Per mode, from the log residuals ``{mode: (ln f/f_m, ln zeta/zeta_m)}`` and the
+    relative noise ``{mode: (s_f, s_z)}``: ``chi2``, ``rms`` (noise units), the largest
+    relative errors ``frequency_error`` and ``damping_error`` [-], and the offsets [-]; with
+    ``offsets``, after each curve's constant relative offset (the mean log residual, its
+    least-squares value) is taken out.
+    """
+    out = {}
+    for m, (lf, lz) in logs.items():
+        of, oz = (float(np.mean(lf)), float(np.mean(lz))) if offsets else (0.0, 0.0)
+        lf, lz = lf - of, lz - oz
+        chi2 = float(np.sum((lf / noise[m][0]) ** 2) + np.sum((lz / noise[m][1]) ** 2))
         out[m] = {
             "chi2": chi2,
-            "rms": math.sqrt(chi2 / (2 * fm.size)),
-            "frequency_error": float(np.max(np.abs(f / fm - 1))),
-            "damping_error": float(np.max(np.abs(z / zm - 1))),
+            "rms": math.sqrt(chi2 / (2 * max(lf.size, 1))),
+            "frequency_error": float(np.max(np.abs(np.expm1(lf)), initial=0.0)),
+            "damping_error": float(np.max(np.abs(np.expm1(lz)), initial=0.0)),
+            "frequency_offset": -of,
+            "damping_offset": -oz,
         }
     return out
 
@@ -155,7 +177,7 @@ def _diagnoses(specimen, curves, base, options) -> dict:
     return out
 
 
-def _candidate(specimen, curves, noise, diag, mode, where) -> Candidate:
+def _candidate(specimen, curves, noise, diag, mode, where, offsets) -> Candidate:
     """The effects ``diag`` named on ``mode``, in the joint at ``where``, read on every mode."""
     X = curves[mode][0]
     names = tuple(diag.effects)
@@ -176,16 +198,22 @@ def _candidate(specimen, curves, noise, diag, mode, where) -> Candidate:
     if isinstance(read, str):
         return Candidate(names, mode, where, placed=placed, reason=read)
     k = sum(len(diag.parameters[n]) for n in names)
+    capped = tuple(
+        e.name
+        for e in spec.interface_effects
+        if e.name in names and e.parameters.get("k_2", 0.0) >= 0.999 * stiffness_cap(spec, e)
+    )
     return Candidate(
         names,
         mode,
         where,
         placed=placed,
-        scores=_score(read, curves, noise),
+        scores=_score(read, curves, noise, offsets),
         n_values=k,
         specimen=spec,
         read=read,
         values={e.name: e.parameters for e in spec.interface_effects if e.name in names},
+        capped=capped,
     )
 
 
@@ -199,6 +227,7 @@ def diagnose_modes(
     alpha: float = 1e-3,
     frequency_noise: float | None = None,
     damping_ratio_noise: float | None = None,
+    offsets: bool = True,
 ) -> ModesDiagnosis:
     """Name the effect in the joint that closes the gaps between a specimen's modes and
     their measured curves (module docstring; ``docs/multi_mode.md`` section 6).
@@ -223,6 +252,13 @@ def diagnose_modes(
         As in :func:`~iwan_element.diagnose_vibration`, for each mode's diagnosis.
     frequency_noise, damping_ratio_noise : float, optional, keyword-only
         Relative noise of every mode's curves [-]; default each diagnosis's estimate.
+    offsets : bool, keyword-only
+        Fit a constant relative offset of each mode's frequency and damping as nuisances,
+        in every diagnosis (``between_tests``) and every candidate's score: for a floor read
+        from a mode's own lowest amplitudes, or curves from another route or test (a
+        transient's period error). A constant floor (viscous damping) is then not named.
+        Default True: the workflow names what depends on amplitude; the constant part is
+        the linear structure's (its update and floors).
 
     Returns
     -------
@@ -244,20 +280,23 @@ def diagnose_modes(
         "alpha": alpha,
         "frequency_noise": frequency_noise,
         "damping_ratio_noise": damping_ratio_noise,
+        "between_tests": offsets,
     }
     base = _read(specimen, curves)
     if isinstance(base, str):
         raise ValueError(f"specimen: the plain joint's QSMA fails at a measured amplitude: {base}")
     diags = _diagnoses(specimen, curves, base, options)
     noise = {m: (d.frequency_noise, d.damping_ratio_noise) for m, d in diags.items()}
-    plain = Candidate((), 0, "", scores=_score(base, curves, noise), specimen=specimen, read=base)
+    plain = Candidate(
+        (), 0, "", scores=_score(base, curves, noise, offsets), specimen=specimen, read=base
+    )
     cands = []
     for m, d in diags.items():
         if not d.effects:
             continue
         seen = set()
         for p in places:
-            c = _candidate(specimen, curves, noise, d, m, p)
+            c = _candidate(specimen, curves, noise, d, m, p, offsets)
             if c.placed and c.placed in seen:  # the mapping moved it where another went
                 continue
             seen.add(c.placed)

@@ -43,8 +43,15 @@ class Candidate:
         The specimen carrying the effects in its joint.
     read : dict
         ``{mode: (frequency [Hz], damping ratio [-])}``: its QSMA at the measured amplitudes.
+    predicted : dict
+        ``{(mode, sensor): AmplitudeCurve}``: its ring-down read like the record (a
+        candidate checked by :func:`~iwan_element.models.calibration.diagnose_hammer_test`;
+        empty otherwise).
     values : dict
         ``{effect: {name: value}}``: the joint values (SI units).
+    capped : tuple of str
+        Its effects whose patch holds as much stiffness as its points have
+        (:func:`~iwan_element.models.modal.stiffness_cap`): the mode asked for more.
     ic, probability : float
         Information criterion and probability among the candidates and the plain joint
         (set by :meth:`ModesDiagnosis.build`).
@@ -60,8 +67,10 @@ class Candidate:
     n_values: int = 0
     specimen: Any = field(default=None, repr=False)
     read: dict = field(default_factory=dict, repr=False)
+    predicted: dict = field(default_factory=dict, repr=False)
     values: dict = field(default_factory=dict)
     reason: str = ""
+    capped: tuple = ()
     ic: float = math.nan
     probability: float = 0.0
     spoils: tuple = ()
@@ -95,9 +104,9 @@ class Candidate:
             "probability": self.probability,
         }
         for m, s in (self.scores or {}).items():
-            r[f"mode{m}_rms"] = s["rms"]
-            r[f"mode{m}_frequency_error"] = s["frequency_error"]
-            r[f"mode{m}_damping_error"] = s["damping_error"]
+            r[f"mode {m} rms [-]"] = s["rms"]
+            r[f"mode {m} max |df/f| [-]"] = s["frequency_error"]
+            r[f"mode {m} max |dzeta/zeta| [-]"] = s["damping_error"]
         r["note"] = self.reason or (
             "spoils mode " + ", ".join(map(str, self.spoils)) if self.spoils else ""
         )
@@ -125,7 +134,8 @@ def _scored(plain, cands, n_total, spoil) -> tuple:
             bad = tuple(
                 m
                 for m, s in c.scores.items()
-                if m != c.mode and s["rms"] > plain.scores[m]["rms"] + spoil
+                if m != c.mode
+                and s["rms"] > plain.scores[m]["rms"] + spoil * max(1.0, plain.scores[m]["rms"])
             )
         out.append(replace(c, probability=float(p), spoils=bad))
     return out[0], tuple(out[1:])
@@ -143,11 +153,16 @@ class ModesDiagnosis(ResultShape):
         Each named effect at each placement, read on every mode.
     named : Candidate or None
         The candidate of least information criterion that lowers the plain joint's and
-        spoils no other mode; ``None`` when none does (or no mode had a gap).
+        spoils no other mode (read by the ring-down when ``checked``); ``None`` when none
+        does (or no mode had a gap).
     diagnoses : dict
         ``{mode: VibrationDiagnosis}`` of each mode against the plain joint.
     curves : dict
         ``{mode: (amplitude [m], frequency [Hz], damping ratio [-])}`` measured.
+    checked : tuple of Candidate
+        The plain joint and the best candidates by QSMA read again by the multi-mode
+        ring-down of the test (:func:`~iwan_element.models.calibration.
+        diagnose_hammer_test`), which then names; empty when not run.
     success : bool
         A candidate was named, or no mode's diagnosis named an effect.
     warnings : tuple of str
@@ -165,35 +180,38 @@ class ModesDiagnosis(ResultShape):
     diagnoses: dict
     curves: dict
     success: bool
+    checked: tuple = ()
 
     @classmethod
-    def build(cls, plain, cands, diagnoses, curves, *, spoil: float) -> ModesDiagnosis:
-        """Score the candidates (:mod:`.mode_diagnosis` docstring) and name one."""
+    def build(
+        cls, plain, cands, diagnoses, curves, *, spoil: float, checked=(), checked_points=0
+    ) -> ModesDiagnosis:
+        """Score the candidates (:mod:`.mode_diagnosis` docstring) and name one: among
+        ``checked`` (the plain joint first, then candidates read by the multi-mode
+        ring-down on ``checked_points`` amplitudes in all) when given, else among all.
+        """
         n_total = sum(2 * c[0].size for c in curves.values())
         plain, cands = _scored(plain, cands, n_total, spoil)
-        ok = [c for c in cands if c.scores is not None and not c.spoils and c.ic < plain.ic]
+        base, final = plain, cands
+        if checked:
+            base, final = _scored(checked[0], tuple(checked[1:]), checked_points, spoil)
+        ok = [c for c in final if c.scores is not None and not c.spoils and c.ic < base.ic]
         named = min(ok, key=lambda c: c.ic) if ok else None
         gaps = [m for m, d in diagnoses.items() if d.effects]
-        warns = []
-        if gaps and named is None:
-            warns.append(
-                "no effect named on modes "
-                + ", ".join(map(str, gaps))
-                + " closes its gap in the joint without spoiling another mode (see the "
-                "candidates)"
+        warns = _warnings(gaps, base, named)
+        if checked:
+            best_q = min(
+                (c for c in cands if c.scores is not None and not c.spoils),
+                key=lambda c: c.ic,
+                default=None,
             )
-        best = named or plain
-        for m, s in (best.scores or {}).items():
-            if s["rms"] > 3.0:
-                warns.append(
-                    f"mode {m}: misfit of {s['rms']:.3g} noise units left "
-                    f"({'after ' + best.label if named else 'plain joint'}; max df/f "
-                    f"{100 * s['frequency_error']:.3g} %, dz/z {100 * s['damping_error']:.3g} %)"
-                )
-        if named is not None:
             warns.append(
-                f"the named effect was fitted on mode {named.mode}'s curve: its gap there is a "
-                "fit, not a prediction; the other modes and held-out tests are its check"
+                f"named by the multi-mode ring-down among the {len(checked) - 1} best by QSMA"
+                + (
+                    f" (QSMA alone: {best_q.label})"
+                    if best_q is not None and (named is None or best_q.label != named.label)
+                    else ""
+                )
             )
         return cls(
             plain=plain,
@@ -201,6 +219,7 @@ class ModesDiagnosis(ResultShape):
             named=named,
             diagnoses=dict(diagnoses),
             curves=dict(curves),
+            checked=(base,) + tuple(final) if checked else (),
             success=named is not None or not gaps,
             warnings=tuple(warns),
         )
@@ -212,10 +231,12 @@ class ModesDiagnosis(ResultShape):
 
     def gaps(self) -> dict:
         """``{mode: {"before": scores, "after": scores}}`` of the plain joint and the named
-        candidate (``after`` is ``before`` when none was named).
+        candidate (``after`` is ``before`` when none was named), by the ring-down when
+        ``checked``.
         """
-        before = self.plain.scores or {}
-        after = (self.named or self.plain).scores or before
+        base = self.checked[0] if self.checked else self.plain
+        before = base.scores or {}
+        after = (self.named or base).scores or before
         return {m: {"before": s, "after": after[m]} for m, s in before.items()}
 
     def report(self) -> str:
@@ -224,24 +245,18 @@ class ModesDiagnosis(ResultShape):
         for m, d in self.diagnoses.items():
             named = ", ".join(d.effects) or "nothing"
             lines += wrap(f"  mode {m}: diagnosis names {named} ({d.verdict()})", indent="    ")
-        ic0 = min(c.ic for c in (self.plain,) + self.candidates)
-        rows = [
-            (c.label[:44], c.ic - ic0, 100 * c.probability, c.reason or _spoil_note(c))
-            for c in (self.plain,) + self.candidates
-        ]
-        lines += table_lines(
-            (("candidate", "<44s"), ("dIC", "12.4g"), ("prob. [%]", "10.3g"), ("note", "s")),
-            rows,
-            indent=2,
+        lines.append("  read by QSMA, each mode on its own:")
+        lines += _table((self.plain,) + self.candidates)
+        if self.checked:
+            lines.append("  read by the multi-mode ring-down of the test (names):")
+            lines += _table(self.checked)
+        lines.append(
+            "  gap per mode, plain -> named (max |df/f| [%], max |dz/z| [%], rms [noise "
+            "units], after each curve's constant offsets [%] in f and zeta, given last):"
         )
-        lines.append("  gap per mode (max |df/f| [%], max |dz/z| [%], rms [noise units]):")
         for m, g in self.gaps().items():
             b, a = g["before"], g["after"]
-            lines.append(
-                f"    mode {m}: {100 * b['frequency_error']:.3g}, {100 * b['damping_error']:.3g}, "
-                f"{b['rms']:.3g} -> {100 * a['frequency_error']:.3g}, "
-                f"{100 * a['damping_error']:.3g}, {a['rms']:.3g}"
-            )
+            lines.append(f"    mode {m}: {_gap(b)} -> {_gap(a)}")
         if self.named is not None:
             lines.append(f"  named: {self.named.label}; joint values {self.named.values}")
         lines += [f"  warning: {w}" for w in self.warnings]
@@ -250,9 +265,11 @@ class ModesDiagnosis(ResultShape):
     def to_dict(self) -> dict:
         """JSON-safe: the candidates' rows, the named one, the gaps, verdict."""
         ic0 = min(c.ic for c in (self.plain,) + self.candidates)
+        ic1 = min((c.ic for c in self.checked), default=0.0)
         return json_safe(
             {
                 "rows": [c.row(ic0) for c in (self.plain,) + self.candidates],
+                "checked_rows": [c.row(ic1) for c in self.checked],
                 "named": None if self.named is None else self.named.label,
                 "named_values": None if self.named is None else self.named.values,
                 "gaps": {str(m): g for m, g in self.gaps().items()},
@@ -287,6 +304,58 @@ class ModesDiagnosis(ResultShape):
         ax_f.set_ylabel("frequency shift [%]")
         ax_z.legend(fontsize=7)
         return arts
+
+
+def _gap(s: dict) -> str:
+    """One mode's gap: largest errors [%], RMS [noise units], offsets [%]."""
+    return (
+        f"{100 * s['frequency_error']:.3g}, {100 * s['damping_error']:.3g}, {s['rms']:.3g} "
+        f"(offsets {100 * s['frequency_offset']:+.3g}, {100 * s['damping_offset']:+.3g})"
+    )
+
+
+def _table(cands) -> list:
+    """The candidates' lines: label, IC above the least, probability, note."""
+    ic0 = min(c.ic for c in cands)
+    rows = [
+        (c.label[:44], c.ic - ic0, 100 * c.probability, c.reason or _spoil_note(c)) for c in cands
+    ]
+    return table_lines(
+        (("candidate", "<44s"), ("dIC", "12.4g"), ("prob. [%]", "10.3g"), ("note", "s")),
+        rows,
+        indent=4,
+    )
+
+
+def _warnings(gaps, base, named) -> list:
+    """What the named candidate (or the plain joint) leaves, and what it rests on."""
+    warns = []
+    if gaps and named is None:
+        warns.append(
+            "no effect named on modes "
+            + ", ".join(map(str, gaps))
+            + " closes its gap in the joint without spoiling another mode (see the candidates)"
+        )
+    best = named or base
+    for m, s in (best.scores or {}).items():
+        if s["rms"] > 3.0:
+            warns.append(
+                f"mode {m}: misfit of {s['rms']:.3g} noise units left "
+                f"({'after ' + best.label if named else 'plain joint'}; max df/f "
+                f"{100 * s['frequency_error']:.3g} %, dz/z {100 * s['damping_error']:.3g} %)"
+            )
+    if named is not None and named.capped:
+        warns.append(
+            f"{named.label}: {', '.join(named.capped)} holds all the stiffness of its "
+            "points (stiffness_cap): the mode asks for a larger patch than that placement "
+            "has, so the named effect closes only part of the gap"
+        )
+    if named is not None:
+        warns.append(
+            f"the named effect was fitted on mode {named.mode}'s curve: its gap there is a "
+            "fit, not a prediction; the other modes and held-out tests are its check"
+        )
+    return warns
 
 
 def _spoil_note(c) -> str:
