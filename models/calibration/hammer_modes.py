@@ -28,7 +28,7 @@ from ..simulation.coupling import compare_curves
 from .hammer_result import HammerPrediction
 from .mode_diagnosis import SPOIL, diagnose_modes, score_logs
 from .mode_diagnosis_result import Candidate, ModesDiagnosis
-from .vibration import modal_floor
+from .vibration import _floors
 
 __all__ = ["diagnose_hammer_test"]
 
@@ -57,20 +57,18 @@ def _transient(c: Candidate, predicted: dict, prediction, noise, offsets) -> Can
 
 def _refloored(c: Candidate, prediction) -> Candidate:
     """``c`` with every other mode's floor read again from its lowest measured amplitudes
-    with ``c``'s joint (:func:`~iwan_element.models.calibration.modal_floor`, as the
-    calibration read it with the plain joint): a law that acts there changes the joint's
-    share the floor is the rest of.
+    with ``c``'s joint, by the calibration's own rule (:func:`~iwan_element.models.
+    calibration.modal_floor`, clipped to the floor's range): a law that acts there changes
+    the joint's share the floor is the rest of.
     """
-    spec = c.specimen
-    modes = sorted(prediction.bands)
-    md = [spec.floor(r) for r in range(1, max(modes) + 1)]
-    for r in modes:
-        if r != prediction.calibration_mode:
-            z, _, _ = modal_floor(
-                spec, prediction.measured[(r, prediction.calibration_sensor)], mode=r
-            )
-            md[r - 1] = max(z, 0.0)
-    return replace(c, specimen=spec.replace(modal_damping=tuple(md)))
+    sensor = prediction.calibration_sensor
+    floors = {
+        r: prediction.measured[(r, sensor)]
+        for r in prediction.bands
+        if r != prediction.calibration_mode
+    }
+    spec, _ = _floors(c.specimen, prediction.calibration_mode, floors, [])
+    return replace(c, specimen=spec)
 
 
 def diagnose_hammer_test(
@@ -134,7 +132,7 @@ def diagnose_hammer_test(
         checked.append(
             _transient(c, prediction.predict_with(c.specimen), prediction, noise, offsets)
         )
-    n_points = sum(2 * len(s) for s in _common_sizes(prediction, noise))
+    n_points = sum(2 * len(prediction.errors[(m, sensor)]["amplitude"]) for m in noise)
     return ModesDiagnosis.build(
         first.plain,
         first.candidates,
@@ -144,9 +142,3 @@ def diagnose_hammer_test(
         checked=tuple(checked),
         checked_points=n_points,
     )
-
-
-def _common_sizes(prediction, noise) -> list:
-    """The common amplitudes of each mode's plain prediction and record."""
-    s = prediction.calibration_sensor
-    return [prediction.errors[(m, s)]["amplitude"] for m in noise]

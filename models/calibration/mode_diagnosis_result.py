@@ -107,9 +107,7 @@ class Candidate:
             r[f"mode {m} rms [-]"] = s["rms"]
             r[f"mode {m} max |df/f| [-]"] = s["frequency_error"]
             r[f"mode {m} max |dzeta/zeta| [-]"] = s["damping_error"]
-        r["note"] = self.reason or (
-            "spoils mode " + ", ".join(map(str, self.spoils)) if self.spoils else ""
-        )
+        r["note"] = self.reason or _spoil_note(self)
         return r
 
 

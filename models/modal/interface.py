@@ -100,14 +100,14 @@ def _point_values(effect: InterfaceEffect, weight: float) -> dict:
 
 def _check_patch(effect: InterfaceEffect, vals: dict, KT: float, x: float) -> None:
     """ValueError when a macroslip-onset patch at a contact point holds more stiffness (its
-    bank's total, ``k_2`` times :func:`~iwan_element.effects.macroslip_onset.
-    patch_cumulative` at ``u_e``) than the point's stuck stiffness ``KT`` [N/m]: the patch
-    replaces part of the stuck stiffness it sits in (``F = F_j + P - k_P u``), so beyond it
-    the sliding point's tangent turns negative, a point that gives way under load.
+    bank's total, ``k_2`` times :func:`_held_per_k2`) than the point's stuck stiffness
+    ``KT`` [N/m]: the patch replaces part of the stuck stiffness it sits in (``F = F_j + P -
+    k_P u``), so beyond it the sliding point's tangent turns negative, a point that gives way
+    under load.
     """
     if effect.name != "macroslip_onset":
         return
-    held = vals["k_2"] * float(patch_cumulative(vals["u_e"], vals["u_s"], vals["shape"]))
+    held = vals["k_2"] * _held_per_k2(vals["shape"])
     if held > KT:
         raise ValueError(
             f"macroslip_onset at {effect.where}: its patch holds {held:.3g} N/m at the contact "
@@ -123,13 +123,19 @@ def stiffness_cap(specimen: Specimen | SolidSpecimen, effect: InterfaceEffect) -
     """
     if effect.name != "macroslip_onset":
         return math.inf
-    shape = effect.parameters.get(
-        "shape", effect.fitted_on and effect.fitted_on.parameters["shape"]
-    )
-    top = float(patch_cumulative(SPAN, 1.0, float(shape or 0.0)))
+    fit = effect.fitted_on
+    values = fit.parameters if fit is not None and not effect.resolved else effect.parameters
     w = point_weights(specimen, effect)
     on = w > 0
-    return float(np.min(contact_points(specimen).KT[on] / (w[on] * top)))
+    held = _held_per_k2(float(values.get("shape", 0.0)))
+    return float(np.min(contact_points(specimen).KT[on] / (w[on] * held)))
+
+
+def _held_per_k2(shape: float) -> float:
+    """A macroslip-onset bank's total stiffness per unit ``k_2`` [-]: its cumulative
+    fraction at ``u_e = SPAN u_s`` (:func:`_point_values`), whatever the onset.
+    """
+    return float(patch_cumulative(SPAN, 1.0, shape))
 
 
 @dataclass(frozen=True, eq=False)
